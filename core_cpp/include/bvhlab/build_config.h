@@ -1,0 +1,59 @@
+// build_config.h — everything a build can be asked to do, with documented defaults.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <string_view>
+
+namespace bvhlab {
+
+/// How a node's primitives are split in two (one small function each, see split_*.cpp).
+enum class SplitMethod {
+    Median,    ///< equal counts at the median centroid, std::nth_element, O(n) (report §2.3.1)
+    Mean,      ///< partition at the mean centroid (report §2.3.1)
+    Midpoint,  ///< partition at the middle of the centroid bounds (PBRT "Middle")
+    Sah,       ///< binned surface area heuristic, O(n + B) sweep (report §2.3.2, PBRT)
+    SweepSah,  ///< exact SAH over centroids sorted on the axis (every split position)
+    Lbvh,      ///< linear BVH: Morton-sorted centroids split at the highest differing bit (report §5.2)
+};
+
+/// Which axis a node is split on (report §2.3).
+enum class AxisPolicy {
+    Largest,  ///< largest centroid extent (PBRT; the report's default)
+    Random,   ///< a seeded random axis per node (Shirley 2020), reproducible
+    Best,     ///< try all three and keep the lowest SAH (the report's unimplemented option)
+};
+
+/// Progress callback: fraction done in [0, 1]; return false to cancel the build (Embree's shape).
+using ProgressCallback = std::function<bool(double)>;
+
+/// Build arguments. Defaults reproduce the report: binned SAH, 12 bins, largest axis, 1 per leaf.
+struct BuildConfig {
+    SplitMethod method = SplitMethod::Sah;
+    AxisPolicy axis = AxisPolicy::Largest;
+    std::uint32_t bins = 12;           ///< binned SAH buckets, 2..256 (PBRT's default is 12)
+    std::uint32_t max_leaf_size = 1;   ///< leaves hold at most this many primitives (>= 1)
+    std::uint64_t seed = 0;            ///< for AxisPolicy::Random
+    std::uint32_t threads = 0;         ///< 0 = every hardware thread; the tree never depends on it
+    float traversal_cost = 1.0f;       ///< C_trav of the SAH
+    float intersection_cost = 1.0f;    ///< C_isect of the SAH
+    ProgressCallback progress;         ///< optional; called from the calling thread only
+};
+
+inline constexpr std::uint32_t kMinBins = 2;
+inline constexpr std::uint32_t kMaxBins = 256;
+
+/// Names as the Python API and the CLI spell them. parse_* throw std::invalid_argument
+/// listing the valid names.
+SplitMethod parse_split_method(std::string_view name);
+AxisPolicy parse_axis_policy(std::string_view name);
+std::string to_string(SplitMethod method);
+std::string to_string(AxisPolicy axis);
+
+/// Throws std::invalid_argument when a field is out of range.
+void validate(const BuildConfig& config);
+
+/// True for the methods that evaluate the SAH (and may stop early at a leaf, PBRT §4.3.2).
+inline bool uses_sah(SplitMethod m) { return m == SplitMethod::Sah || m == SplitMethod::SweepSah; }
+
+}  // namespace bvhlab

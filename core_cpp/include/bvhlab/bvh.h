@@ -1,0 +1,55 @@
+// bvh.h — the built tree: flattened depth-first nodes, leaf-ordered references, per-node depth.
+#pragma once
+#include <cstdint>
+#include <vector>
+#include "bvhlab/build_config.h"
+#include "bvhlab/geometry.h"
+#include "gpu_types.h"
+
+namespace bvhlab {
+
+using gpu::BvhNode;
+
+/// A bounding volume hierarchy over triangles and spheres.
+/// Layout (DESIGN.md, report §3.1): nodes in depth-first order, root at 0, first child at i + 1,
+/// second child in `index`; leaves reference the contiguous slice refs[index, index + count).
+/// Depth of the root is 0; height is the largest leaf depth + 1 (an empty tree has height 0).
+struct Bvh {
+    std::vector<BvhNode> nodes;
+    std::vector<std::uint32_t> refs;     ///< primitive references in leaf order
+    std::vector<std::uint8_t> depths;    ///< depth of each node
+    std::vector<PackedPrim> prims;       ///< geometry in leaf order, for the CPU traversal
+    std::uint32_t triangle_count = 0, sphere_count = 0;
+    BuildConfig config;                  ///< what it was built with (progress callback dropped)
+    double build_ms = 0;                 ///< wall time of the tree build (refs in → nodes out)
+
+    bool empty() const { return nodes.empty(); }
+    std::uint32_t node_count() const { return static_cast<std::uint32_t>(nodes.size()); }
+};
+
+inline bool is_leaf(const BvhNode& n) { return (n.info & gpu::NODE_INTERNAL_BIT) == 0; }
+inline std::uint32_t leaf_count(const BvhNode& n) { return n.info; }
+/// Next node in depth-first order after node i's subtree.
+inline std::uint32_t skip_index(const BvhNode& n, std::uint32_t i) {
+    return is_leaf(n) ? i + 1 : (n.info & ~gpu::NODE_INTERNAL_BIT);
+}
+inline Aabb node_box(const BvhNode& n) { return {{n.lo.x, n.lo.y, n.lo.z}, {n.hi.x, n.hi.y, n.hi.z}}; }
+inline void set_box(BvhNode& n, const Aabb& b) {
+    n.lo = {b.lo.x, b.lo.y, b.lo.z};
+    n.hi = {b.hi.x, b.hi.y, b.hi.z};
+}
+
+/// Validates the geometry and the config, then builds (see builder.cpp).
+/// Throws std::invalid_argument on bad input, BuildCancelled when the progress callback says stop.
+Bvh build_bvh(const GeometryView& geometry, const BuildConfig& config = {});
+
+/// Recomputes every box bottom-up for moved geometry with the same primitive counts, keeping the
+/// topology (report §1: the refitting it names as future work; Bikker). O(nodes).
+void refit(Bvh& bvh, const GeometryView& geometry);
+
+/// Thrown when a build is cancelled through its progress callback.
+struct BuildCancelled : std::exception {
+    const char* what() const noexcept override { return "build cancelled"; }
+};
+
+}  // namespace bvhlab

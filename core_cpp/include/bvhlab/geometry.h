@@ -1,0 +1,47 @@
+// geometry.h — the input primitives (triangles and spheres, one tree, report §5.1), checked once.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+#include "bvhlab/prim_ref.h"
+
+namespace bvhlab {
+
+/// Borrowed views of the caller's arrays (zero-copy from numpy): triangles are T×3×3 floats
+/// (three world-space vertices each), spheres S×4 floats (centre x, y, z, radius).
+struct GeometryView {
+    const float* triangles = nullptr;
+    std::size_t triangle_count = 0;
+    const float* spheres = nullptr;
+    std::size_t sphere_count = 0;
+
+    std::size_t primitive_count() const { return triangle_count + sphere_count; }
+    Vec3 vertex(std::size_t tri, int corner) const {
+        const float* v = triangles + 9 * tri + 3 * corner;
+        return {v[0], v[1], v[2]};
+    }
+    Vec3 sphere_center(std::size_t s) const { return {spheres[4 * s], spheres[4 * s + 1], spheres[4 * s + 2]}; }
+    float sphere_radius(std::size_t s) const { return spheres[4 * s + 3]; }
+};
+
+/// Throws std::invalid_argument naming the first bad primitive: a NaN or infinite coordinate,
+/// a radius that is not a positive finite number, or more primitives than a reference can index.
+/// Degenerate (zero-area) triangles are valid: they are built into the tree and never hit.
+void validate(const GeometryView& geometry);
+
+/// One PrimRef per primitive: triangles first (refs 0..T-1), then spheres (REF_SPHERE_BIT | i).
+std::vector<PrimRef> make_prim_refs(const GeometryView& geometry);
+
+/// A primitive laid out for the CPU traversal, in leaf order (40 bytes).
+/// Triangle: v0 and the two edges (Möller–Trumbore needs no more). Sphere: centre in `p`, radius in e1[0].
+struct PackedPrim {
+    float p[3];
+    float e1[3];
+    float e2[3];
+    std::uint32_t ref;
+};
+
+/// Geometry reordered into the order of `refs` (the tree's leaf order).
+std::vector<PackedPrim> pack_prims(const GeometryView& geometry, const std::vector<std::uint32_t>& refs);
+
+}  // namespace bvhlab

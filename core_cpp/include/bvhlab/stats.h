@@ -1,0 +1,30 @@
+// stats.h — what a tree looks like, in numbers (the report's Table 1 columns and more).
+#pragma once
+#include <cstdint>
+#include <vector>
+#include "bvhlab/bvh.h"
+
+namespace bvhlab {
+
+struct BvhStats {
+    std::uint64_t primitives = 0, triangles = 0, spheres = 0;
+    std::uint64_t nodes = 0, leaves = 0;
+    std::uint32_t height = 0;      ///< largest leaf depth + 1 (root depth 0); 0 for an empty tree
+    double sah_cost = 0;           ///< see sah_cost()
+    double build_ms = 0;
+    double avg_leaf_size = 0;
+    std::uint32_t max_leaf_size = 0;
+    std::vector<std::uint64_t> nodes_per_depth;      ///< [d] = nodes at depth d
+    std::vector<std::uint64_t> leaves_per_depth;     ///< [d] = leaves at depth d
+    std::vector<std::uint64_t> leaf_size_histogram;  ///< [k] = leaves holding k primitives
+    std::uint64_t memory_bytes = 0;  ///< nodes, references, depths and leaf-ordered geometry
+};
+
+BvhStats compute_stats(const Bvh& bvh);
+
+/// The SAH cost of a whole tree with root box R (DESIGN.md, one formula everywhere):
+///   C = Σ_internal A(n)/A(R)·C_trav + Σ_leaf A(n)/A(R)·N(n)·C_isect,  C_trav = C_isect = 1.
+/// 0 for an empty tree; a root of zero area counts every node as hit.
+double sah_cost(const Bvh& bvh);
+
+}  // namespace bvhlab

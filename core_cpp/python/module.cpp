@@ -1,0 +1,154 @@
+// The nanobind module `bvhlab._core`: thin bindings; checks of Python-side types live in
+// python/bvhlab (clear messages), checks of values in the C++ core (std::invalid_argument →
+// ValueError). The GIL is released for builds and traversal.
+#include <memory>
+
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+#include <nanobind/stl/string.h>
+#include <nanobind/stl/function.h>
+#include <nanobind/stl/optional.h>
+#include <nanobind/stl/vector.h>
+
+#include "bvhlab/bvh.h"
+#include "bvhlab/depth_order.h"
+#include "bvhlab/stats.h"
+#include "bvhlab/traverse.h"
+
+namespace nb = nanobind;
+using namespace nb::literals;
+using namespace bvhlab;
+
+namespace {
+
+using Triangles = nb::ndarray<const float, nb::shape<-1, 3, 3>, nb::c_contig, nb::device::cpu>;
+using Spheres = nb::ndarray<const float, nb::shape<-1, 4>, nb::c_contig, nb::device::cpu>;
+using Vectors = nb::ndarray<const float, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
+template <class T>
+using Out1D = nb::ndarray<T, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
+
+GeometryView view_of(const Triangles& tris, const std::optional<Spheres>& spheres) {
+    GeometryView g;
+    g.triangles = tris.data();
+    g.triangle_count = tris.shape(0);
+    if (spheres) g.spheres = spheres->data(), g.sphere_count = spheres->shape(0);
+    return g;
+}
+
+/// A Bvh plus the depth order the overlay queries need, computed once on first use.
+struct PyBvh {
+    Bvh bvh;
+    std::optional<DepthOrder> depth_order;
+    const DepthOrder& order() {
+        if (!depth_order) depth_order = make_depth_order(bvh);
+        return *depth_order;
+    }
+};
+
+nb::dict stats_dict(const Bvh& bvh) {
+    BvhStats s = compute_stats(bvh);
+    nb::dict d;
+    d["primitives"] = s.primitives, d["triangles"] = s.triangles, d["spheres"] = s.spheres;
+    d["nodes"] = s.nodes, d["leaves"] = s.leaves, d["height"] = s.height;
+    d["sah_cost"] = s.sah_cost, d["build_ms"] = s.build_ms;
+    d["avg_leaf_size"] = s.avg_leaf_size, d["max_leaf_size"] = s.max_leaf_size;
+    d["nodes_per_depth"] = s.nodes_per_depth, d["leaves_per_depth"] = s.leaves_per_depth;
+    d["leaf_size_histogram"] = s.leaf_size_histogram;
+    d["memory_bytes"] = s.memory_bytes;
+    d["method"] = to_string(bvh.config.method), d["axis"] = to_string(bvh.config.axis);
+    d["bins"] = bvh.config.bins, d["max_leaf_size_config"] = bvh.config.max_leaf_size;
+    return d;
+}
+
+PyBvh* build(const Triangles& tris, const std::optional<Spheres>& spheres, const std::string& method,
+             const std::string& axis, std::uint32_t bins, std::int64_t max_leaf_size, std::uint64_t seed,
+             std::uint32_t threads, std::optional<nb::callable> progress) {
+    BuildConfig cfg;
+    cfg.method = parse_split_method(method);
+    cfg.axis = parse_axis_policy(axis);
+    cfg.bins = bins;
+    if (max_leaf_size < 1 || max_leaf_size > 0x7fffffff)
+        throw std::invalid_argument("max_leaf_size must be at least 1, got " + std::to_string(max_leaf_size));
+    cfg.max_leaf_size = static_cast<std::uint32_t>(max_leaf_size);
+    cfg.seed = seed;
+    cfg.threads = threads;
+    std::optional<nb::python_error> callback_error;
+    if (progress) {
+        cfg.progress = [&](double done) {
+            nb::gil_scoped_acquire gil;
+            try {
+                nb::object r = (*progress)(done);
+                return r.is_none() || nb::cast<bool>(r);
+            } catch (nb::python_error& e) {
+                callback_error.emplace(std::move(e));
+                return false;
+            }
+        };
+    }
+    auto out = std::make_unique<PyBvh>();
+    GeometryView g = view_of(tris, spheres);
+    try {
+        nb::gil_scoped_release release;
+        out->bvh = build_bvh(g, cfg);
+    } catch (const BuildCancelled&) {
+        if (callback_error) throw std::move(*callback_error);
+        throw;
+    }
+    return out.release();
+}
+
+void py_intersect(PyBvh& self, const Vectors& origins, const Vectors& dirs, float tmin, float tmax,
+               const std::string& traversal, std::uint32_t threads, Out1D<float> t, Out1D<std::int32_t> prim,
+               Out1D<std::uint8_t> kind, Out1D<float> u, Out1D<float> v, Out1D<std::uint32_t> visited) {
+    const std::size_t n = origins.shape(0);
+    if (dirs.shape(0) != n) throw std::invalid_argument("origins and directions differ in length");
+    for (std::size_t len : {t.shape(0), prim.shape(0), kind.shape(0), u.shape(0), v.shape(0), visited.shape(0)})
+        if (len != n) throw std::invalid_argument("output arrays must have one entry per ray");
+    Traversal mode;
+    if (traversal == "stack") mode = Traversal::Stack;
+    else if (traversal == "stackless") mode = Traversal::Stackless;
+    else throw std::invalid_argument("unknown traversal '" + traversal + "'; expected one of: stack stackless");
+    RayBatch rays{origins.data(), dirs.data(), n, tmin, tmax};
+    HitBatch hits{t.data(), prim.data(), kind.data(), u.data(), v.data(), visited.data()};
+    nb::gil_scoped_release release;
+    intersect_batch(self.bvh, rays, hits, mode, threads);
+}
+
+template <class T>
+nb::ndarray<nb::numpy, const T> view(const std::vector<T>& v) {
+    return nb::ndarray<nb::numpy, const T>(v.data(), {v.size()});
+}
+
+}  // namespace
+
+NB_MODULE(_core, m) {
+    m.doc() = "bvhlab C++ core: BVH construction, stats and CPU traversal";
+    nb::exception<BuildCancelled>(m, "BuildCancelled");
+
+    nb::class_<PyBvh>(m, "Bvh")
+        .def("stats", [](const PyBvh& b) { return stats_dict(b.bvh); })
+        .def_prop_ro("node_count", [](const PyBvh& b) { return b.bvh.nodes.size(); })
+        .def_prop_ro("build_ms", [](const PyBvh& b) { return b.bvh.build_ms; })
+        .def("nodes_bytes", [](const PyBvh& b) {
+                 return nb::ndarray<nb::numpy, const std::uint8_t, nb::ndim<2>>(
+                     b.bvh.nodes.data(), {b.bvh.nodes.size(), sizeof(BvhNode)});
+             }, nb::rv_policy::reference_internal)
+        .def("refs", [](const PyBvh& b) { return view(b.bvh.refs); }, nb::rv_policy::reference_internal)
+        .def("depths", [](const PyBvh& b) { return view(b.bvh.depths); }, nb::rv_policy::reference_internal)
+        .def("depth_order", [](PyBvh& b) { return view(b.order().nodes); }, nb::rv_policy::reference_internal)
+        .def("depth_range", [](PyBvh& b, std::uint32_t lo, std::uint32_t hi) { return b.order().range(lo, hi); })
+        .def("intersect", &py_intersect, "origins"_a.noconvert(), "directions"_a.noconvert(), "tmin"_a, "tmax"_a,
+             "traversal"_a, "threads"_a, "t"_a.noconvert(), "prim"_a.noconvert(), "kind"_a.noconvert(),
+             "u"_a.noconvert(), "v"_a.noconvert(), "visited"_a.noconvert())
+        .def("refit", [](PyBvh& b, const Triangles& tris, const std::optional<Spheres>& spheres) {
+                 GeometryView g = view_of(tris, spheres);
+                 nb::gil_scoped_release release;
+                 refit(b.bvh, g);
+             }, "triangles"_a.noconvert(), "spheres"_a.noconvert().none());
+
+    m.def("build", &build, "triangles"_a.noconvert(), "spheres"_a.noconvert().none(), "method"_a, "axis"_a,
+          "bins"_a, "max_leaf_size"_a, "seed"_a, "threads"_a, "progress"_a.none());
+    m.attr("MAX_TREE_HEIGHT") = gpu::MAX_TREE_HEIGHT;
+    m.attr("NODE_INTERNAL_BIT") = gpu::NODE_INTERNAL_BIT;
+    m.attr("REF_SPHERE_BIT") = gpu::REF_SPHERE_BIT;
+}

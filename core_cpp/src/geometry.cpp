@@ -1,0 +1,82 @@
+#include "bvhlab/geometry.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace bvhlab {
+namespace {
+
+bool finite_floats(const float* p, int n) {
+    for (int i = 0; i < n; ++i)
+        if (!std::isfinite(p[i])) return false;
+    return true;
+}
+
+PrimRef triangle_ref(const GeometryView& g, std::size_t i) {
+    Aabb box;
+    for (int c = 0; c < 3; ++c) box.grow(g.vertex(i, c));
+    return {{box.lo.x, box.lo.y, box.lo.z}, static_cast<std::uint32_t>(i),
+            {box.hi.x, box.hi.y, box.hi.z}, 0};
+}
+
+PrimRef sphere_ref(const GeometryView& g, std::size_t i) {
+    Vec3 c = g.sphere_center(i);
+    float r = g.sphere_radius(i);
+    return {{c.x - r, c.y - r, c.z - r}, gpu::REF_SPHERE_BIT | static_cast<std::uint32_t>(i),
+            {c.x + r, c.y + r, c.z + r}, 0};
+}
+
+}  // namespace
+
+void validate(const GeometryView& g) {
+    if (g.primitive_count() > gpu::REF_INDEX_MASK)
+        throw std::invalid_argument("too many primitives: at most 2^31 - 1 fit a reference");
+    if ((g.triangle_count && !g.triangles) || (g.sphere_count && !g.spheres))
+        throw std::invalid_argument("primitive count given without data");
+    for (std::size_t i = 0; i < g.triangle_count; ++i)
+        if (!finite_floats(g.triangles + 9 * i, 9))
+            throw std::invalid_argument("triangle " + std::to_string(i) +
+                                        " has a NaN or infinite vertex coordinate");
+    for (std::size_t i = 0; i < g.sphere_count; ++i) {
+        if (!finite_floats(g.spheres + 4 * i, 3))
+            throw std::invalid_argument("sphere " + std::to_string(i) + " has a NaN or infinite centre");
+        float r = g.sphere_radius(i);
+        if (!(r > 0.0f) || !std::isfinite(r))
+            throw std::invalid_argument("sphere " + std::to_string(i) + " has radius " + std::to_string(r) +
+                                        "; a radius must be a positive finite number");
+        Aabb box = sphere_ref(g, i).box();
+        if (!all_finite(box.lo) || !all_finite(box.hi))
+            throw std::invalid_argument("sphere " + std::to_string(i) + " reaches beyond the float range");
+    }
+}
+
+std::vector<PrimRef> make_prim_refs(const GeometryView& g) {
+    std::vector<PrimRef> refs(g.primitive_count());
+    for (std::size_t i = 0; i < g.triangle_count; ++i) refs[i] = triangle_ref(g, i);
+    for (std::size_t i = 0; i < g.sphere_count; ++i) refs[g.triangle_count + i] = sphere_ref(g, i);
+    return refs;
+}
+
+std::vector<PackedPrim> pack_prims(const GeometryView& g, const std::vector<std::uint32_t>& refs) {
+    std::vector<PackedPrim> out(refs.size());
+    for (std::size_t k = 0; k < refs.size(); ++k) {
+        std::uint32_t ref = refs[k];
+        std::size_t i = ref_index(ref);
+        PackedPrim& p = out[k];
+        p.ref = ref;
+        if (is_sphere_ref(ref)) {
+            Vec3 c = g.sphere_center(i);
+            p = {{c.x, c.y, c.z}, {g.sphere_radius(i), 0, 0}, {0, 0, 0}, ref};
+        } else {
+            Vec3 v0 = g.vertex(i, 0), e1 = g.vertex(i, 1) - v0, e2 = g.vertex(i, 2) - v0;
+            // A zero-area triangle keeps zero edges, so its determinant is exactly 0: never hit.
+            Vec3 n = cross(e1, e2);
+            if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) e1 = e2 = Vec3{};
+            p = {{v0.x, v0.y, v0.z}, {e1.x, e1.y, e1.z}, {e2.x, e2.y, e2.z}, ref};
+        }
+    }
+    return out;
+}
+
+}  // namespace bvhlab

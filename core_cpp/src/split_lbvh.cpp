@@ -1,0 +1,20 @@
+// LBVH (report §5.2, Karras 2012 / PBRT's HLBVH): the builder sorts the references by the Morton
+// code of their centroid once (see morton.cpp); a node then splits where the highest bit that
+// differs between its first and last code flips. The axis policy plays no part.
+#include <algorithm>
+#include <bit>
+
+#include "bvhlab/split.h"
+
+namespace bvhlab {
+
+std::optional<Split> split_lbvh(SplitContext& ctx, Range r, const NodeBounds& b, int /*axis*/) {
+    std::uint32_t first = ctx.refs[r.begin].code, last = ctx.refs[r.end - 1].code;
+    if (first == last) return std::nullopt;  // equal codes: the builder splits them evenly
+    std::uint32_t bit = 1u << (31 - std::countl_zero(first ^ last));
+    const PrimRef* mid = std::partition_point(ctx.refs + r.begin, ctx.refs + r.end,
+                                              [bit](const PrimRef& p) { return (p.code & bit) == 0; });
+    return split_at(ctx, r, b, static_cast<std::uint32_t>(mid - ctx.refs));
+}
+
+}  // namespace bvhlab

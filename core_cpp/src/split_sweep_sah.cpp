@@ -1,0 +1,70 @@
+// Full-sweep SAH: sort the centroids on the axis and evaluate the SAH at every one of the n - 1
+// split positions, with one suffix sweep and one prefix sweep (the exact version of §2.3.2 that
+// the report describes before turning to binning). O(n log n) per node: the quality reference.
+#include <algorithm>
+#include <limits>
+
+#include "bvhlab/split.h"
+
+namespace bvhlab {
+namespace {
+
+struct Best {
+    float cost = std::numeric_limits<float>::infinity();
+    int axis = -1;
+    std::uint32_t mid = 0;
+};
+
+void sort_on_axis(PrimRef* first, PrimRef* last, int axis) {
+    // Ties keep a fixed order (by reference), so the result depends on nothing but the input.
+    std::sort(first, last, [axis](const PrimRef& p, const PrimRef& q) {
+        float cp = p.centroid(axis), cq = q.centroid(axis);
+        return cp < cq || (cp == cq && p.ref < q.ref);
+    });
+}
+
+/// Sweeps one sorted axis and records its cheapest split position in `best`.
+void sweep(SplitContext& ctx, Range r, const NodeBounds& b, int axis, Best& best) {
+    const PrimRef* p = ctx.refs + r.begin;
+    const std::uint32_t n = r.size();
+    auto& right_area = ctx.scratch.areas;
+    right_area.resize(n);
+    Aabb box;
+    for (std::uint32_t i = n; i-- > 1;) {
+        box.grow(p[i].box());
+        right_area[i] = box.half_area();
+    }
+    box = Aabb{};
+    const float parent_area = b.box.half_area();
+    const BuildConfig& cfg = ctx.config;
+    for (std::uint32_t i = 1; i < n; ++i) {  // left = [0, i), right = [i, n)
+        box.grow(p[i - 1].box());
+        float weighted = box.half_area() * float(i) + right_area[i] * float(n - i);
+        float ratio = parent_area > 0 ? weighted / parent_area : float(n);
+        float cost = cfg.traversal_cost + ratio * cfg.intersection_cost;
+        if (cost < best.cost) best = {cost, axis, r.begin + i};
+    }
+}
+
+}  // namespace
+
+std::optional<Split> split_sweep_sah(SplitContext& ctx, Range r, const NodeBounds& b, int axis) {
+    PrimRef* first = ctx.refs + r.begin;
+    PrimRef* last = ctx.refs + r.end;
+    Vec3 extent = b.centroids.extent();
+    Best best;
+    int sorted_axis = -1;
+    for (int a = 0; a < 3; ++a) {
+        if ((axis != kAllAxes && a != axis) || !(extent[a] > 0.0f)) continue;
+        sort_on_axis(first, last, a);
+        sorted_axis = a;
+        sweep(ctx, r, b, a, best);
+    }
+    if (best.axis < 0) return std::nullopt;
+    if (sorted_axis != best.axis) sort_on_axis(first, last, best.axis);
+    Split s = split_at(ctx, r, b, best.mid);
+    s.cost = best.cost;
+    return s;
+}
+
+}  // namespace bvhlab

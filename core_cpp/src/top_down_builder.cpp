@@ -1,0 +1,105 @@
+#include "top_down_builder.h"
+
+#include <bit>
+
+namespace bvhlab {
+namespace {
+
+SplitFunction method_function(SplitMethod m) {
+    switch (m) {
+        case SplitMethod::Median: return split_median;
+        case SplitMethod::Mean: return split_mean;
+        case SplitMethod::Midpoint: return split_midpoint;
+        case SplitMethod::Sah: return split_binned_sah;
+        case SplitMethod::SweepSah: return split_sweep_sah;
+        case SplitMethod::Lbvh: return split_lbvh;
+    }
+    return split_median;
+}
+
+/// Methods that take kAllAxes themselves (and LBVH, which has no axis).
+bool handles_all_axes(SplitMethod m) {
+    return m == SplitMethod::Sah || m == SplitMethod::SweepSah || m == SplitMethod::Lbvh;
+}
+
+std::uint64_t mix(std::uint64_t x) {  // splitmix64 finaliser
+    x ^= x >> 30, x *= 0xbf58476d1ce4e5b9ull;
+    x ^= x >> 27, x *= 0x94d049bb133111ebull;
+    return x ^ (x >> 31);
+}
+
+/// The axis policy (report §2.3). Random hashes the node's own range and depth, not a shared
+/// generator, so the tree is the same whichever thread builds which subtree.
+int choose_axis(const BuildConfig& cfg, const WorkItem& item) {
+    Vec3 extent = item.bounds.centroids.extent();
+    switch (cfg.axis) {
+        case AxisPolicy::Largest: return largest_axis(extent);
+        case AxisPolicy::Best: return kAllAxes;
+        case AxisPolicy::Random: {
+            int axes[3], n = 0;
+            for (int a = 0; a < 3; ++a)
+                if (extent[a] > 0.0f) axes[n++] = a;
+            std::uint64_t h = mix(cfg.seed ^ mix(item.range.begin ^ (std::uint64_t(item.range.end) << 32)) ^ item.depth);
+            return axes[h % n];
+        }
+    }
+    return 0;
+}
+
+/// Median splits keep every leaf within depth + ceil(log2 n) (report §3.1: the GPU stack is
+/// MAX_TREE_HEIGHT deep), so once a branch could outgrow that, it continues with them.
+bool too_deep(std::uint32_t depth, std::uint32_t n) {
+    std::uint32_t median_height = std::bit_width(n - 1);  // ceil(log2 n) for n >= 1
+    return depth + median_height >= gpu::MAX_TREE_HEIGHT - 1;
+}
+
+/// Two primitives: every method splits them 1 | 1; order them by centroid on the largest axis.
+Split split_pair(SplitContext& ctx, const WorkItem& item) {
+    PrimRef* p = ctx.refs + item.range.begin;
+    int axis = largest_axis(item.bounds.centroids.extent());
+    if (p[1].centroid(axis) < p[0].centroid(axis)) std::swap(p[0], p[1]);
+    Split s;
+    s.mid = item.range.begin + 1;
+    s.left = {p[0].box(), {p[0].centroid(), p[0].centroid()}};
+    s.right = {p[1].box(), {p[1].centroid(), p[1].centroid()}};
+    s.cost = split_cost(ctx.config, item.bounds, s.left.box, 1, s.right.box, 1);
+    return s;
+}
+
+Split find_split(SplitContext& ctx, const WorkItem& item) {
+    const Range r = item.range;
+    const NodeBounds& b = item.bounds;
+    Vec3 extent = b.centroids.extent();
+    if (!(extent.x > 0.0f || extent.y > 0.0f || extent.z > 0.0f)) return split_even(ctx, r, b);
+    if (r.size() == 2) return split_pair(ctx, item);
+    if (too_deep(item.depth, r.size())) return *split_median(ctx, r, b, largest_axis(extent));
+
+    const SplitMethod method = ctx.config.method;
+    const int axis = choose_axis(ctx.config, item);
+    std::optional<Split> s = axis == kAllAxes && !handles_all_axes(method)
+                                 ? split_best_of_axes(method_function(method), ctx, r, b)
+                                 : method_function(method)(ctx, r, b, axis);
+    return s ? *s : split_even(ctx, r, b);
+}
+
+}  // namespace
+
+std::optional<Split> choose_split(SplitContext& ctx, const WorkItem& item) {
+    const BuildConfig& cfg = ctx.config;
+    const std::uint32_t n = item.range.size();
+    if (n <= 1) return std::nullopt;
+    const bool fits_leaf = n <= cfg.max_leaf_size;
+    if (fits_leaf && !uses_sah(cfg.method)) return std::nullopt;
+    Split s = find_split(ctx, item);
+    // SAH leaf termination (report §5.1, PBRT): a range that may be a leaf becomes one when
+    // intersecting all of it costs no more than the best split.
+    if (fits_leaf && float(n) * cfg.intersection_cost <= s.cost) return std::nullopt;
+    return s;
+}
+
+void make_leaf(BvhNode& node, const WorkItem& item) {
+    node.index = item.range.begin;
+    node.info = item.range.size();
+}
+
+}  // namespace bvhlab

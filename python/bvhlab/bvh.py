@@ -1,0 +1,170 @@
+"""`bvhlab.build` and the `Bvh` it returns: a thin, checked layer over the C++ core."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from . import _checks, _core
+
+METHODS = ("median", "mean", "midpoint", "sah", "sweep_sah", "lbvh")
+AXES = ("largest", "random", "best")
+TRAVERSALS = ("stack", "stackless")
+MAX_TREE_HEIGHT = _core.MAX_TREE_HEIGHT
+
+#: One flattened node, 32 bytes (shaders/gpu_types.h): for a leaf `index` is the first slot in
+#: `Bvh.refs` and `info` the primitive count; for an internal node `index` is the second child
+#: (the first is the next node) and `info` is NODE_INTERNAL_BIT | skip index.
+NODE_DTYPE = np.dtype([("lo", "<f4", (3,)), ("index", "<u4"), ("hi", "<f4", (3,)), ("info", "<u4")])
+NODE_INTERNAL_BIT = _core.NODE_INTERNAL_BIT
+REF_SPHERE_BIT = _core.REF_SPHERE_BIT
+
+
+@dataclass(frozen=True)
+class BuildConfig:
+    """What a tree was built with (the arguments of `build`)."""
+    method: str = "sah"
+    bins: int = 12
+    axis: str = "largest"
+    max_leaf_size: int = 1
+    seed: int = 0
+    threads: int = 0
+
+
+def build(scene_or_triangles, spheres: np.ndarray | None = None, *, method: str = "sah", bins: int = 12,
+          axis: str = "largest", max_leaf_size: int = 1, seed: int = 0, threads: int = 0,
+          progress: Callable[[float], bool | None] | None = None) -> "Bvh":
+    """Build a BVH over triangles (float32 (T,3,3)) and spheres (float32 (S,4): centre, radius).
+
+    `scene_or_triangles` is a `bvhlab.Scene` or a triangle array. `method` is one of METHODS,
+    `axis` one of AXES; `bins` (2..256) is used by "sah"; leaves hold at most `max_leaf_size`
+    primitives, and the SAH methods may stop earlier when a leaf is cheaper. `threads` = 0 uses
+    every core; the tree never depends on it. `progress(fraction)` is called now and then; return
+    False to cancel (raises BuildCancelled). Bad input raises TypeError or ValueError.
+    """
+    from .scene import Scene  # local import: scene imports this module
+
+    if isinstance(scene_or_triangles, Scene):
+        if spheres is not None:
+            raise ValueError("pass spheres inside the Scene, not beside it")
+        triangles, spheres = scene_or_triangles.triangles, scene_or_triangles.spheres
+    else:
+        triangles = scene_or_triangles
+    triangles = _checks.float32_array("triangles", triangles, (3, 3))
+    if spheres is not None:
+        spheres = _checks.float32_array("spheres", spheres, (4,))
+    config = BuildConfig(
+        method=_checks.choice("method", method, METHODS),
+        bins=_checks.integer("bins", bins, 2, 256),
+        axis=_checks.choice("axis", axis, AXES),
+        max_leaf_size=_checks.integer("max_leaf_size", max_leaf_size, 1, 2**31 - 1),
+        seed=_checks.integer("seed", seed, 0, 2**64 - 1),
+        threads=_checks.integer("threads", threads, 0, 4096),
+    )
+    if progress is not None and not callable(progress):
+        raise TypeError("progress must be callable (fraction -> bool) or None")
+    core = _core.build(triangles, spheres, config.method, config.axis, config.bins, config.max_leaf_size,
+                       config.seed, config.threads, progress)
+    return Bvh(core, config)
+
+
+class Bvh:
+    """A built tree. Arrays returned by its properties are read-only views of the C++ data."""
+
+    def __init__(self, core: "_core.Bvh", config: BuildConfig):
+        self._core = core
+        self.config = config
+        self._stats: dict | None = None
+
+    def __repr__(self) -> str:
+        s = self.stats
+        return (f"<bvhlab.Bvh {self.config.method} {s['primitives']} primitives, {s['nodes']} nodes, "
+                f"height {s['height']}, SAH {s['sah_cost']:.2f}>")
+
+    # -- numbers ---------------------------------------------------------------------------
+    @property
+    def stats(self) -> dict:
+        """primitives, triangles, spheres, nodes, leaves, height (largest leaf depth + 1, root depth 0),
+        sah_cost (Σ_internal A/A_root + Σ_leaf A/A_root·N), build_ms, avg_leaf_size, max_leaf_size,
+        nodes_per_depth, leaves_per_depth, leaf_size_histogram ([k] = leaves with k primitives),
+        memory_bytes, and the build settings."""
+        if self._stats is None:
+            self._stats = self._core.stats()
+            self._stats["threads"] = self.config.threads
+        return dict(self._stats)
+
+    # -- the tree as arrays ------------------------------------------------------------------
+    @property
+    def nodes(self) -> np.ndarray:
+        """Structured view (NODE_DTYPE) of the flattened depth-first nodes, zero-copy."""
+        return _readonly(self._core.nodes_bytes().view(NODE_DTYPE).reshape(-1))
+
+    @property
+    def refs(self) -> np.ndarray:
+        """uint32 primitive references in leaf order; REF_SPHERE_BIT marks a sphere."""
+        return _readonly(self._core.refs())
+
+    @property
+    def depths(self) -> np.ndarray:
+        """uint8 depth of each node (root 0)."""
+        return _readonly(self._core.depths())
+
+    @property
+    def is_leaf(self) -> np.ndarray:
+        return (self.nodes["info"] & NODE_INTERNAL_BIT) == 0
+
+    @property
+    def skip(self) -> np.ndarray:
+        """Skip (miss) index of each node: the first node after its subtree."""
+        info = self.nodes["info"]
+        leaf = (info & NODE_INTERNAL_BIT) == 0
+        return np.where(leaf, np.arange(len(info), dtype=np.uint32) + 1, info & ~np.uint32(NODE_INTERNAL_BIT))
+
+    def boxes(self, depth_min: int = 0, depth_max: int | None = None):
+        """Boxes of the nodes whose depth d satisfies depth_min <= d <= depth_max, sorted by depth
+        (depth-first order within a depth; report §3.3.1). Returns (lo (K,3), hi (K,3), depth (K,))."""
+        depth_min = _checks.integer("depth_min", depth_min, 0, 255)
+        depth_max = 255 if depth_max is None else _checks.integer("depth_max", depth_max, 0, 255)
+        first, last = self._core.depth_range(depth_min, depth_max)
+        index = self._core.depth_order()[first:last]
+        nodes = self.nodes[index]
+        return nodes["lo"].copy(), nodes["hi"].copy(), self.depths[index].copy()
+
+    # -- queries -----------------------------------------------------------------------------
+    def intersect(self, origins: np.ndarray, directions: np.ndarray, *, tmin: float = 0.0,
+                  tmax: float = np.inf, traversal: str = "stack", threads: int = 0) -> dict:
+        """Closest hits of rays origin + t·direction, t in (tmin, tmax), on every core.
+
+        Returns a dict of arrays: t (inf on a miss), prim (index within its kind, -1 on a miss),
+        kind (0 triangle, 1 sphere), u, v (triangle barycentrics; sphere longitude/2π, colatitude/π),
+        nodes_visited (box tests, for heatmaps)."""
+        origins = _checks.float32_array("origins", origins, (3,))
+        directions = _checks.float32_array("directions", directions, (3,))
+        if len(origins) != len(directions):
+            raise ValueError(f"origins ({len(origins)}) and directions ({len(directions)}) differ in length")
+        _checks.choice("traversal", traversal, TRAVERSALS)
+        if not np.all(np.isfinite(origins)) or not np.all(np.isfinite(directions)):
+            raise ValueError("ray origins and directions must be finite")
+        n = len(origins)
+        out = {"t": np.empty(n, np.float32), "prim": np.empty(n, np.int32), "kind": np.empty(n, np.uint8),
+               "u": np.empty(n, np.float32), "v": np.empty(n, np.float32),
+               "nodes_visited": np.empty(n, np.uint32)}
+        self._core.intersect(origins, directions, float(tmin), float(tmax), traversal,
+                             _checks.integer("threads", threads, 0, 4096), out["t"], out["prim"], out["kind"],
+                             out["u"], out["v"], out["nodes_visited"])
+        return out
+
+    def refit(self, triangles: np.ndarray, spheres: np.ndarray | None = None) -> None:
+        """Move the geometry (same counts) and recompute every box, keeping the topology."""
+        triangles = _checks.float32_array("triangles", triangles, (3, 3))
+        if spheres is not None:
+            spheres = _checks.float32_array("spheres", spheres, (4,))
+        self._core.refit(triangles, spheres)
+        self._stats = None
+
+
+def _readonly(a: np.ndarray) -> np.ndarray:
+    a = a.view()
+    a.flags.writeable = False
+    return a

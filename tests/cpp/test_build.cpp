@@ -1,0 +1,162 @@
+// Tree invariants for every split method × axis policy × leaf size, determinism, hard inputs.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <tuple>
+
+#include "bvhlab/bvh.h"
+#include "bvhlab/stats.h"
+#include "test_scenes.h"
+#include "tree_checks.h"
+
+using namespace bvhlab;
+using bvhlab::test::check_tree;
+using bvhlab::test::random_scene;
+
+namespace {
+
+const SplitMethod kMethods[] = {SplitMethod::Median, SplitMethod::Mean,     SplitMethod::Midpoint,
+                                SplitMethod::Sah,    SplitMethod::SweepSah, SplitMethod::Lbvh};
+const AxisPolicy kAxes[] = {AxisPolicy::Largest, AxisPolicy::Random, AxisPolicy::Best};
+
+BuildConfig config(SplitMethod m, AxisPolicy a, std::uint32_t leaf, std::uint32_t threads = 1) {
+    BuildConfig c;
+    c.method = m, c.axis = a, c.max_leaf_size = leaf, c.threads = threads, c.seed = 7;
+    return c;
+}
+
+bool same_tree(const Bvh& a, const Bvh& b) {
+    return a.nodes.size() == b.nodes.size() && a.refs == b.refs && a.depths == b.depths &&
+           std::memcmp(a.nodes.data(), b.nodes.data(), a.nodes.size() * sizeof(BvhNode)) == 0;
+}
+
+using Param = std::tuple<SplitMethod, AxisPolicy, std::uint32_t>;
+class EveryConfig : public ::testing::TestWithParam<Param> {};
+
+TEST_P(EveryConfig, InvariantsHold) {
+    auto [method, axis, leaf] = GetParam();
+    auto scene = random_scene(1500, 300, 42);
+    Bvh bvh = build_bvh(scene.view(), config(method, axis, leaf));
+    check_tree(bvh, scene.view(), leaf);
+}
+
+TEST_P(EveryConfig, SameTreeOnEveryThreadCount) {
+    auto [method, axis, leaf] = GetParam();
+    auto scene = random_scene(6000, 500, 3);
+    Bvh one = build_bvh(scene.view(), config(method, axis, leaf, 1));
+    for (std::uint32_t threads : {2u, 3u, 8u}) {
+        Bvh many = build_bvh(scene.view(), config(method, axis, leaf, threads));
+        EXPECT_TRUE(same_tree(one, many)) << threads << " threads";
+    }
+    check_tree(one, scene.view(), leaf);
+}
+
+INSTANTIATE_TEST_SUITE_P(AllMethods, EveryConfig,
+                         ::testing::Combine(::testing::ValuesIn(kMethods), ::testing::ValuesIn(kAxes),
+                                            ::testing::Values(1u, 4u)),
+                         [](const auto& info) {
+                             return to_string(std::get<0>(info.param)) + "_" + to_string(std::get<1>(info.param)) +
+                                    "_leaf" + std::to_string(std::get<2>(info.param));
+                         });
+
+class EveryMethod : public ::testing::TestWithParam<SplitMethod> {};
+
+TEST_P(EveryMethod, AllCentroidsEqualStillTerminates) {
+    test::Scene s;
+    for (int i = 0; i < 1000; ++i) s.add_triangle({0, 0, 0}, {1, 0, 0}, {0, 1, 0});  // duplicates
+    Bvh bvh = build_bvh(s.view(), config(GetParam(), AxisPolicy::Largest, 1));
+    check_tree(bvh, s.view(), 1);
+    EXPECT_EQ(compute_stats(bvh).height, 11u);  // even split by index: ceil(log2 1000) + 1
+}
+
+TEST_P(EveryMethod, CentroidsOnALine) {
+    test::Scene s;
+    for (int i = 0; i < 300; ++i) s.add_sphere({0, 0, float(i % 17)}, 0.5f);
+    for (AxisPolicy axis : kAxes) {
+        Bvh bvh = build_bvh(s.view(), config(GetParam(), axis, 2));
+        check_tree(bvh, s.view(), 2);
+    }
+}
+
+TEST_P(EveryMethod, HeightStaysWithinTheGpuStack) {
+    // Exponentially spaced primitives: a mean or midpoint split peels off one at a time, so
+    // without the depth guard the tree would be 400 levels deep.
+    test::Scene s;
+    for (int i = 0; i < 400; ++i) {
+        float x = std::ldexp(1.0f, i / 4) * (1.0f + 0.1f * float(i % 4));
+        s.add_triangle({x, 0, 0}, {x, 1, 0}, {x, 0, 1});
+    }
+    Bvh bvh = build_bvh(s.view(), config(GetParam(), AxisPolicy::Largest, 1));
+    check_tree(bvh, s.view(), 1);
+    EXPECT_LE(compute_stats(bvh).height, gpu::MAX_TREE_HEIGHT);
+}
+
+TEST_P(EveryMethod, EmptyAndSingle) {
+    test::Scene empty;
+    Bvh e = build_bvh(empty.view(), config(GetParam(), AxisPolicy::Largest, 1));
+    EXPECT_TRUE(e.nodes.empty());
+    EXPECT_EQ(compute_stats(e).height, 0u);
+
+    test::Scene one;
+    one.add_sphere({1, 2, 3}, 0.5f);
+    Bvh b = build_bvh(one.view(), config(GetParam(), AxisPolicy::Largest, 1));
+    check_tree(b, one.view(), 1);
+    EXPECT_EQ(b.nodes.size(), 1u);
+    EXPECT_EQ(compute_stats(b).height, 1u);
+}
+
+INSTANTIATE_TEST_SUITE_P(AllMethods, EveryMethod, ::testing::ValuesIn(kMethods),
+                         [](const auto& info) { return to_string(info.param); });
+
+/// SAH of a tree computed from its definition, independently of stats.cpp.
+double reference_sah(const Bvh& bvh) {
+    auto area = [](const BvhNode& n) {
+        double x = double(n.hi.x) - n.lo.x, y = double(n.hi.y) - n.lo.y, z = double(n.hi.z) - n.lo.z;
+        return 2 * (x * y + y * z + z * x);
+    };
+    double root = area(bvh.nodes[0]), c = 0;
+    for (const BvhNode& n : bvh.nodes) c += area(n) / root * (is_leaf(n) ? double(n.info) : 1.0);
+    return c;
+}
+
+TEST(Stats, SahCostMatchesTheFormula) {
+    auto scene = random_scene(2000, 100, 9);
+    for (SplitMethod m : kMethods) {
+        Bvh bvh = build_bvh(scene.view(), config(m, AxisPolicy::Largest, 1));
+        EXPECT_NEAR(compute_stats(bvh).sah_cost, reference_sah(bvh), 1e-6 * reference_sah(bvh));
+    }
+}
+
+TEST(Stats, SahMethodsBeatMedianOnClusteredScenes) {
+    auto scene = random_scene(20000, 0, 5);
+    double median = compute_stats(build_bvh(scene.view(), config(SplitMethod::Median, AxisPolicy::Largest, 1))).sah_cost;
+    double sah = compute_stats(build_bvh(scene.view(), config(SplitMethod::Sah, AxisPolicy::Largest, 1))).sah_cost;
+    double sweep = compute_stats(build_bvh(scene.view(), config(SplitMethod::SweepSah, AxisPolicy::Largest, 1))).sah_cost;
+    EXPECT_LT(sah, median);
+    EXPECT_LT(sweep, median);
+}
+
+TEST(Stats, LeafTerminationMakesSahLeavesWhenCheaper) {
+    auto scene = random_scene(20000, 0, 5);
+    BvhStats one = compute_stats(build_bvh(scene.view(), config(SplitMethod::Sah, AxisPolicy::Largest, 1)));
+    BvhStats four = compute_stats(build_bvh(scene.view(), config(SplitMethod::Sah, AxisPolicy::Largest, 4)));
+    EXPECT_GT(four.avg_leaf_size, 1.0);
+    EXPECT_LT(four.sah_cost, one.sah_cost);  // every early leaf was chosen because it was cheaper
+    EXPECT_LT(four.nodes, one.nodes);
+}
+
+TEST(Refit, BoxesFollowMovedGeometry) {
+    auto scene = random_scene(3000, 200, 11);
+    Bvh bvh = build_bvh(scene.view(), config(SplitMethod::Sah, AxisPolicy::Largest, 2));
+    auto moved = scene;
+    for (std::size_t i = 0; i < moved.triangles.size(); ++i) moved.triangles[i] += 0.5f * float(i % 3) + 1.0f;
+    for (std::size_t i = 0; i < moved.spheres.size(); i += 4) moved.spheres[i] -= 3.0f;
+    auto nodes_before = bvh.nodes.size();
+    refit(bvh, moved.view());
+    EXPECT_EQ(bvh.nodes.size(), nodes_before);
+    check_tree(bvh, moved.view(), 2);
+    test::Scene wrong = random_scene(10, 0, 1);
+    EXPECT_THROW(refit(bvh, wrong.view()), std::invalid_argument);
+}
+
+}  // namespace

@@ -1,0 +1,141 @@
+// Closest-hit traversal against brute force over every primitive, both traversal modes.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "bvhlab/bvh.h"
+#include "bvhlab/traverse.h"
+#include "test_scenes.h"
+
+using namespace bvhlab;
+
+namespace {
+
+/// The oracle: every primitive, no tree.
+Hit brute_force(const Bvh& bvh, const Ray& ray) {
+    RayQuery q(ray);
+    Hit hit;
+    hit.t = ray.tmax;
+    for (std::uint32_t k = 0; k < bvh.prims.size(); ++k)
+        if (hit_prim(bvh.prims[k], q, hit)) hit.slot = k;
+    if (hit.ref == kNoHit) hit.t = kInfinity;
+    return hit;
+}
+
+std::vector<Ray> random_rays(std::uint32_t n, std::uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(-2.0f, 12.0f);
+    std::normal_distribution<float> g(0.0f, 1.0f);
+    std::vector<Ray> rays;
+    for (std::uint32_t i = 0; i < n; ++i) {
+        Vec3 d{g(rng), g(rng), g(rng)};
+        if (i % 7 == 0) d.y = 0;                 // axis-parallel components
+        if (i % 11 == 0) d = {0, 0, i % 2 ? 1.0f : -1.0f};
+        if (i % 5 == 0) d = d * 3.7f;            // unnormalised
+        rays.push_back({{u(rng), u(rng), u(rng)}, d});
+    }
+    return rays;
+}
+
+void expect_same_hits(const Bvh& bvh, const std::vector<Ray>& rays) {
+    int hits = 0;
+    for (const Ray& ray : rays) {
+        Hit want = brute_force(bvh, ray);
+        hits += want.ref != kNoHit;
+        for (Traversal mode : {Traversal::Stack, Traversal::Stackless}) {
+            Hit got = intersect(bvh, ray, mode);
+            ASSERT_EQ(got.t, want.t);  // the same float arithmetic on the same primitive
+            if (got.ref != want.ref) {  // a tie: another primitive at exactly the same distance
+                EXPECT_EQ(got.t, want.t);
+            } else if (!(got.ref & gpu::REF_SPHERE_BIT)) {
+                EXPECT_EQ(got.u, want.u);
+                EXPECT_EQ(got.v, want.v);
+            }
+        }
+    }
+    EXPECT_GT(hits, int(rays.size()) / 10) << "too few hits to test anything";
+}
+
+class EveryMethod : public ::testing::TestWithParam<SplitMethod> {};
+
+TEST_P(EveryMethod, ClosestHitEqualsBruteForce) {
+    auto scene = test::random_scene(3000, 400, 17);
+    for (std::uint32_t leaf : {1u, 3u}) {
+        BuildConfig cfg;
+        cfg.method = GetParam();
+        cfg.max_leaf_size = leaf;
+        Bvh bvh = build_bvh(scene.view(), cfg);
+        expect_same_hits(bvh, random_rays(3000, 5 + leaf));
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(AllMethods, EveryMethod,
+                         ::testing::Values(SplitMethod::Median, SplitMethod::Mean, SplitMethod::Midpoint,
+                                           SplitMethod::Sah, SplitMethod::SweepSah, SplitMethod::Lbvh),
+                         [](const auto& info) { return to_string(info.param); });
+
+TEST(Traverse, TminTmaxBoundTheHits) {
+    test::Scene s;
+    for (int i = 0; i < 10; ++i) s.add_triangle({-1, -1, float(i)}, {3, -1, float(i)}, {-1, 3, float(i)});
+    Bvh bvh = build_bvh(s.view());
+    for (Traversal mode : {Traversal::Stack, Traversal::Stackless}) {
+        Hit h = intersect(bvh, {{0, 0, -5}, {0, 0, 1}, 7.5f, 100.0f}, mode);
+        EXPECT_FLOAT_EQ(h.t, 8.0f);  // z = 3, the first plane past t = 7.5
+        Hit none = intersect(bvh, {{0, 0, -5}, {0, 0, 1}, 0.0f, 4.5f}, mode);
+        EXPECT_EQ(none.ref, kNoHit);
+        EXPECT_EQ(none.t, kInfinity);
+    }
+}
+
+TEST(Traverse, DegenerateTrianglesAreNeverHit) {
+    test::Scene s;
+    s.add_triangle({0, 0, 0}, {1, 1, 1}, {2, 2, 2});     // collinear
+    s.add_triangle({0, 0, 0}, {0, 0, 0}, {1, 0, 0});     // repeated vertex
+    s.add_triangle({0.5f, 0.5f, 0}, {0.5f, 0.5f, 0}, {0.5f, 0.5f, 0});  // a point
+    Bvh bvh = build_bvh(s.view());
+    for (const Ray& r : random_rays(2000, 3)) EXPECT_EQ(intersect(bvh, r, Traversal::Stack).ref, kNoHit);
+    EXPECT_EQ(intersect(bvh, {{0.5f, 0.5f, -1}, {0, 0, 1}}, Traversal::Stack).ref, kNoHit);
+    EXPECT_EQ(intersect(bvh, {{1, 1, 5}, {0, 0, -1}}, Traversal::Stackless).ref, kNoHit);
+}
+
+TEST(Traverse, EmptyTreeMisses) {
+    test::Scene s;
+    Bvh bvh = build_bvh(s.view());
+    Hit h = intersect(bvh, {{0, 0, 0}, {1, 0, 0}}, Traversal::Stackless);
+    EXPECT_EQ(h.ref, kNoHit);
+    EXPECT_EQ(h.t, kInfinity);
+}
+
+TEST(Traverse, SphereFromInsideHitsTheFarSide) {
+    test::Scene s;
+    s.add_sphere({0, 0, 0}, 2.0f);
+    Bvh bvh = build_bvh(s.view());
+    Hit h = intersect(bvh, {{0, 0, 0}, {1, 0, 0}}, Traversal::Stack);
+    EXPECT_FLOAT_EQ(h.t, 2.0f);
+    EXPECT_EQ(h.ref, gpu::REF_SPHERE_BIT | 0u);
+    EXPECT_NEAR(h.u, 0.5f, 1e-6);  // longitude 0
+    EXPECT_NEAR(h.v, 0.5f, 1e-6);  // on the equator
+}
+
+TEST(Traverse, BatchAgreesWithSingleRaysOnAnyThreadCount) {
+    auto scene = test::random_scene(2000, 100, 23);
+    Bvh bvh = build_bvh(scene.view());
+    auto rays = random_rays(5000, 77);
+    std::vector<float> o, d;
+    for (const Ray& r : rays) o.insert(o.end(), {r.origin.x, r.origin.y, r.origin.z}), d.insert(d.end(), {r.dir.x, r.dir.y, r.dir.z});
+    for (std::uint32_t threads : {1u, 2u, 5u}) {
+        std::vector<float> t(rays.size()), u(rays.size()), v(rays.size());
+        std::vector<std::int32_t> prim(rays.size());
+        std::vector<std::uint8_t> kind(rays.size());
+        intersect_batch(bvh, {o.data(), d.data(), rays.size()}, {t.data(), prim.data(), kind.data(), u.data(), v.data()},
+                        Traversal::Stackless, threads);
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+            Hit h = intersect(bvh, rays[i], Traversal::Stack);
+            ASSERT_EQ(t[i], h.t);
+            ASSERT_EQ(prim[i], h.ref == kNoHit ? -1 : std::int32_t(h.ref & gpu::REF_INDEX_MASK));
+            ASSERT_EQ(kind[i], h.ref != kNoHit && (h.ref & gpu::REF_SPHERE_BIT) ? 1 : 0);
+        }
+    }
+}
+
+}  // namespace
