@@ -4,12 +4,19 @@
 
 namespace bvhlab {
 
+namespace {
+double half_area(const BvhNode& n) {  // in double: the stats must not depend on float rounding
+    double x = double(n.hi.x) - n.lo.x, y = double(n.hi.y) - n.lo.y, z = double(n.hi.z) - n.lo.z;
+    return x * y + y * z + z * x;
+}
+}  // namespace
+
 double sah_cost(const Bvh& bvh) {
     if (bvh.empty()) return 0.0;
-    double root_area = node_box(bvh.nodes[0]).half_area();
+    double root_area = half_area(bvh.nodes[0]);
     double cost = 0.0;
     for (const BvhNode& n : bvh.nodes) {
-        double p = root_area > 0 ? node_box(n).half_area() / root_area : 1.0;
+        double p = root_area > 0 ? half_area(n) / root_area : 1.0;
         cost += is_leaf(n) ? p * leaf_count(n) : p;
     }
     return cost;

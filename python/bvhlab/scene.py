@@ -154,9 +154,9 @@ class Scene:
         arrays = {
             "format_version": np.array(FORMAT_VERSION),
             "triangles": self.triangles, "spheres": self.spheres,
-            "materials": self.material_table(),
+            "materials": np.array([m.as_row() for m in self.materials], np.float64).reshape(-1, 6),
             "tri_material": self.tri_material, "sphere_material": self.sphere_material,
-            "sky": np.array(self.sky, np.float32),
+            "sky": np.array(self.sky, np.float64),
         }
         if self.camera is not None:
             arrays["camera"] = np.array(self.camera.as_row(), np.float64)

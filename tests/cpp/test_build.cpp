@@ -136,13 +136,31 @@ TEST(Stats, SahMethodsBeatMedianOnClusteredScenes) {
     EXPECT_LT(sweep, median);
 }
 
-TEST(Stats, LeafTerminationMakesSahLeavesWhenCheaper) {
+TEST(Stats, LeafTerminationFollowsTheCosts) {
     auto scene = random_scene(20000, 0, 5);
-    BvhStats one = compute_stats(build_bvh(scene.view(), config(SplitMethod::Sah, AxisPolicy::Largest, 1)));
-    BvhStats four = compute_stats(build_bvh(scene.view(), config(SplitMethod::Sah, AxisPolicy::Largest, 4)));
-    EXPECT_GT(four.avg_leaf_size, 1.0);
-    EXPECT_LT(four.sah_cost, one.sah_cost);  // every early leaf was chosen because it was cheaper
-    EXPECT_LT(four.nodes, one.nodes);
+    for (SplitMethod m : {SplitMethod::Sah, SplitMethod::SweepSah}) {
+        // Default costs: some ranges that fit a leaf are still split, some become leaves.
+        BuildConfig c = config(m, AxisPolicy::Largest, 4);
+        Bvh bvh = build_bvh(scene.view(), c);
+        check_tree(bvh, scene.view(), 4);
+        BvhStats s = compute_stats(bvh);
+        EXPECT_GT(s.avg_leaf_size, 1.0);
+        EXPECT_GT(s.leaf_size_histogram.at(1), 0u);
+        // Traversal far dearer than intersection: every range that fits a leaf becomes one,
+        // so no internal node holds 4 or fewer primitives.
+        c.traversal_cost = 100.0f;
+        Bvh lazy = build_bvh(scene.view(), c);
+        std::vector<std::uint32_t> size(lazy.nodes.size());
+        for (std::size_t i = lazy.nodes.size(); i-- > 0;) {
+            const BvhNode& n = lazy.nodes[i];
+            size[i] = is_leaf(n) ? leaf_count(n) : size[i + 1] + size[n.index];
+            if (!is_leaf(n)) EXPECT_GT(size[i], 4u) << "node " << i;
+        }
+        // Intersection far dearer: splitting always wins, leaves hold one primitive.
+        c.traversal_cost = 0.0f;
+        c.intersection_cost = 100.0f;
+        EXPECT_EQ(compute_stats(build_bvh(scene.view(), c)).max_leaf_size, 1u);
+    }
 }
 
 TEST(Refit, BoxesFollowMovedGeometry) {

@@ -1,0 +1,115 @@
+"""Bad input gets a clear TypeError or ValueError, never a crash or a silent copy."""
+import numpy as np
+import pytest
+
+import bvhlab
+
+
+@pytest.fixture
+def tris():
+    return np.random.default_rng(0).random((50, 3, 3), np.float32)
+
+
+def test_nan_and_inf_name_the_primitive(tris):
+    tris[17, 1, 2] = np.nan
+    with pytest.raises(ValueError, match="triangle 17"):
+        bvhlab.build(tris)
+    tris[17, 1, 2] = 0
+    tris[3, 0, 0] = np.inf
+    with pytest.raises(ValueError, match="triangle 3 .*NaN or infinite"):
+        bvhlab.build(tris)
+
+
+@pytest.mark.parametrize("radius", [0.0, -1.0, np.nan, np.inf])
+def test_bad_radius(tris, radius):
+    spheres = np.array([[0, 0, 0, 1], [1, 1, 1, radius]], np.float32)
+    with pytest.raises(ValueError, match="sphere 1"):
+        bvhlab.build(tris, spheres)
+
+
+@pytest.mark.parametrize("bad, error, match", [
+    (np.zeros((4, 3, 3), np.float64), TypeError, "float32"),
+    (np.zeros((4, 9), np.float32), ValueError, r"shape \(N, 3, 3\)"),
+    (np.zeros((4, 3, 4), np.float32), ValueError, "shape"),
+    (np.zeros((3, 3, 4), np.float32)[:, :, :3], ValueError, "C-contiguous"),
+    ([[[0, 0, 0], [1, 0, 0], [0, 1, 0]]], TypeError, "numpy float32 array"),
+    (np.zeros((4, 3, 3), np.int32), TypeError, "float32"),
+])
+def test_wrong_arrays(bad, error, match):
+    with pytest.raises(error, match=match):
+        bvhlab.build(bad)
+
+
+def test_wrong_sphere_array(tris):
+    with pytest.raises(ValueError, match=r"spheres must have shape \(N, 4\)"):
+        bvhlab.build(tris, np.zeros((3, 3), np.float32))
+
+
+@pytest.mark.parametrize("kwargs, error, match", [
+    (dict(bins=0), ValueError, "bins must be between 2 and 256"),
+    (dict(bins=1), ValueError, "bins"),
+    (dict(bins=257), ValueError, "bins"),
+    (dict(bins=10**12), ValueError, "bins"),
+    (dict(bins=12.0), TypeError, "bins must be an integer"),
+    (dict(bins=True), TypeError, "bins must be an integer"),
+    (dict(method="sha"), ValueError, "unknown method 'sha'; expected one of: median, mean"),
+    (dict(method=None), TypeError, "method must be a string"),
+    (dict(axis="longest"), ValueError, "unknown axis"),
+    (dict(max_leaf_size=0), ValueError, "max_leaf_size"),
+    (dict(max_leaf_size=-3), ValueError, "max_leaf_size"),
+    (dict(threads=-1), ValueError, "threads"),
+    (dict(progress=5), TypeError, "progress must be callable"),
+])
+def test_bad_config(tris, kwargs, error, match):
+    with pytest.raises(error, match=match):
+        bvhlab.build(tris, **kwargs)
+
+
+def test_bad_rays(tris):
+    bvh = bvhlab.build(tris)
+    o = np.zeros((4, 3), np.float32)
+    with pytest.raises(TypeError, match="float32"):
+        bvh.intersect(o.astype(np.float64), o)
+    with pytest.raises(ValueError, match="differ in length"):
+        bvh.intersect(o, o[:3])
+    bad = o.copy()
+    bad[2, 1] = np.nan
+    with pytest.raises(ValueError, match="finite"):
+        bvh.intersect(o, bad)
+    with pytest.raises(ValueError, match="unknown traversal"):
+        bvh.intersect(o, o, traversal="bfs")
+
+
+def test_degenerate_triangles_build_and_are_never_hit():
+    tris = np.array([
+        [[0, 0, 0], [1, 1, 1], [2, 2, 2]],          # collinear
+        [[0, 0, 0], [0, 0, 0], [1, 0, 0]],          # repeated vertex
+        [[5, 5, 5], [5, 5, 5], [5, 5, 5]],          # a point
+    ], np.float32)
+    bvh = bvhlab.build(tris)
+    assert bvh.stats["primitives"] == 3
+    o = np.array([[0.5, 0.5, -1], [1, 1, 5], [5, 5, 0], [0.5, 0, 1]], np.float32)
+    d = np.array([[0, 0, 1], [0, 0, -1], [0, 0, 1], [0, 0, -1]], np.float32)
+    assert np.all(bvh.intersect(o, d)["prim"] == -1)
+
+
+def test_every_centroid_equal():
+    tris = np.tile(np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]]], np.float32), (1000, 1, 1))
+    for method in bvhlab.METHODS:
+        s = bvhlab.build(tris, method=method).stats
+        assert s["height"] == 11 and s["leaves"] == 1000
+
+
+def test_bad_scene_parts():
+    with pytest.raises(ValueError, match="tri_material"):
+        bvhlab.Scene(triangles=np.zeros((2, 3, 3), np.float32), tri_material=[0, 5])
+    with pytest.raises(ValueError, match="fov_y"):
+        bvhlab.Camera((0, 0, 0), (1, 0, 0), fov_y=0)
+    with pytest.raises(ValueError, match="coincide"):
+        bvhlab.Camera((1, 1, 1), (1, 1, 1))
+    with pytest.raises(ValueError, match="finite"):
+        bvhlab.Camera((np.nan, 0, 0), (1, 0, 0))
+    with pytest.raises(ValueError, match="reflective"):
+        bvhlab.Material(reflective=1.5)
+    with pytest.raises(ValueError, match="no geometry"):
+        bvhlab.Scene().bounds()

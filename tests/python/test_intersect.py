@@ -1,0 +1,135 @@
+"""Bvh.intersect against two independent oracles: a float64 numpy brute force, and Embree."""
+import numpy as np
+import pytest
+
+import bvhlab
+from bvhlab import procedural
+
+
+def brute_force(tris, spheres, origins, dirs):
+    """Closest hit over every primitive, float64, vectorised Möller–Trumbore and sphere roots."""
+    o = origins.astype(np.float64)[:, None, :]
+    d = dirs.astype(np.float64)[:, None, :]
+    best_t = np.full(len(origins), np.inf)
+    best_id = np.full(len(origins), -1)
+    best_kind = np.zeros(len(origins), int)
+    if len(tris):
+        v0, v1, v2 = (tris[:, k].astype(np.float64)[None] for k in range(3))
+        e1, e2 = v1 - v0, v2 - v0
+        p = np.cross(d, e2)
+        det = np.einsum("rtk,rtk->rt", e1.repeat(len(o), 0), p)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inv = 1.0 / det
+            tv = o - v0
+            u = np.einsum("rtk,rtk->rt", tv, p) * inv
+            q = np.cross(tv, e1)
+            v = np.einsum("rtk,rtk->rt", d.repeat(e1.shape[1], 1), q) * inv
+            t = np.einsum("rtk,rtk->rt", e2.repeat(len(o), 0), q) * inv
+        ok = (det != 0) & (u >= 0) & (u <= 1) & (v >= 0) & (u + v <= 1) & (t > 0)
+        t = np.where(ok, t, np.inf)
+        best_id = t.argmin(1)
+        best_t = t[np.arange(len(o)), best_id]
+        best_id = np.where(np.isfinite(best_t), best_id, -1)
+    if len(spheres):
+        c = spheres[:, :3].astype(np.float64)[None]
+        r = spheres[:, 3].astype(np.float64)[None]
+        oc = o - c
+        a = np.einsum("rk,rk->r", d[:, 0], d[:, 0])[:, None]
+        b = np.einsum("rsk,rk->rs", oc, d[:, 0])
+        cc = np.einsum("rsk,rsk->rs", oc, oc) - r * r
+        disc = b * b - a * cc
+        with np.errstate(invalid="ignore"):
+            s = np.sqrt(disc)
+            t0, t1 = (-b - s) / a, (-b + s) / a
+        t = np.where(t0 > 0, t0, t1)
+        t = np.where((disc >= 0) & (t > 0), t, np.inf)
+        sid = t.argmin(1)
+        st = t[np.arange(len(o)), sid]
+        closer = st < best_t
+        best_t = np.where(closer, st, best_t)
+        best_id = np.where(closer, sid, best_id)
+        best_kind = np.where(closer, 1, best_kind)
+    return best_t, best_id, best_kind
+
+
+@pytest.mark.parametrize("method", bvhlab.METHODS)
+@pytest.mark.parametrize("traversal", bvhlab.TRAVERSALS)
+def test_equals_brute_force(small_scene, method, traversal):
+    tris, spheres = small_scene
+    bvh = bvhlab.build(tris, spheres, method=method, max_leaf_size=3)
+    o, d = procedural.random_rays(tris, 1500, seed=11)
+    d[::7, 0] = 0  # axis-parallel components
+    got = bvh.intersect(o, d, traversal=traversal)
+    want_t, want_id, want_kind = brute_force(tris, spheres, o, d)
+    assert np.array_equal(np.isfinite(got["t"]), np.isfinite(want_t))
+    hit = np.isfinite(want_t)
+    assert hit.mean() > 0.2, "the rays must hit something to test anything"
+    np.testing.assert_allclose(got["t"][hit], want_t[hit], rtol=1e-4)
+    same = (got["prim"] == want_id) & (got["kind"] == want_kind)
+    # a different primitive only where two lie at (nearly) the same distance
+    assert np.all(same | ~hit)
+    assert np.all(got["prim"][~hit] == -1)
+
+
+def test_stack_and_stackless_agree_exactly(knot_mesh):
+    bvh = bvhlab.build(knot_mesh, method="mean")
+    o, d = procedural.random_rays(knot_mesh, 20000, seed=2)
+    a = bvh.intersect(o, d, traversal="stack")
+    b = bvh.intersect(o, d, traversal="stackless")
+    for k in ("t", "prim", "kind", "u", "v"):
+        np.testing.assert_array_equal(a[k], b[k])
+
+
+def test_barycentrics_reconstruct_the_hit_point(knot_mesh):
+    bvh = bvhlab.build(knot_mesh)
+    o, d = procedural.camera_rays(knot_mesh, 64, 48)
+    h = bvh.intersect(o, d)
+    hit = h["prim"] >= 0
+    assert hit.sum() > 200
+    tri = knot_mesh[h["prim"][hit]].astype(np.float64)
+    u, v = h["u"][hit, None], h["v"][hit, None]
+    p_bary = tri[:, 0] * (1 - u - v) + tri[:, 1] * u + tri[:, 2] * v
+    p_ray = o[hit] + d[hit] * h["t"][hit, None]
+    np.testing.assert_allclose(p_bary, p_ray, atol=1e-4)
+
+
+def test_tmin_tmax():
+    tris = np.array([[[-1, -1, z], [3, -1, z], [-1, 3, z]] for z in range(10)], np.float32)
+    bvh = bvhlab.build(tris)
+    o = np.array([[0, 0, -5]], np.float32)
+    d = np.array([[0, 0, 1]], np.float32)
+    assert bvh.intersect(o, d, tmin=7.5)["t"][0] == 8.0
+    assert bvh.intersect(o, d, tmax=4.5)["prim"][0] == -1
+
+
+embreex = pytest.importorskip("embreex", reason="embreex is installed by make test")
+
+
+def embree_hits(tris, origins, dirs):
+    from embreex import rtcore_scene as rtcs
+    from embreex.mesh_construction import TriangleMesh
+
+    scene = rtcs.EmbreeScene()
+    TriangleMesh(scene, tris)
+    out = scene.run(origins, dirs, output=1)
+    t = np.where(out["primID"] >= 0, out["tfar"], np.inf)
+    return t, out["primID"]
+
+
+@pytest.mark.parametrize("rays", ["camera", "random"])
+def test_agrees_with_embree_on_a_real_mesh(knot_mesh, rays):
+    assert len(knot_mesh) >= 50000
+    if rays == "camera":
+        o, d = procedural.camera_rays(knot_mesh, 320, 240)
+    else:
+        o, d = procedural.random_rays(knot_mesh, 100000, seed=7)
+    want_t, want_id = embree_hits(knot_mesh, o, d)
+    assert np.isfinite(want_t).sum() > 5000
+    for method in ("median", "mean", "sah"):
+        got = bvhlab.build(knot_mesh, method=method).intersect(o, d)
+        same_hit = np.isfinite(got["t"]) == np.isfinite(want_t)
+        both = np.isfinite(got["t"]) & np.isfinite(want_t)
+        close = np.abs(got["t"][both] - want_t[both]) <= 1e-4 * want_t[both]
+        assert same_hit.mean() >= 0.9999, f"{method}: {np.count_nonzero(~same_hit)} rays disagree on hit/miss"
+        assert close.mean() >= 0.9999, f"{method}: {np.count_nonzero(~close)} rays disagree on t"
+        assert (got["prim"][both] == want_id[both]).mean() >= 0.999
