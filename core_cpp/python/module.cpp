@@ -115,8 +115,9 @@ void py_intersect(PyBvh& self, const Vectors& origins, const Vectors& dirs, floa
     intersect_batch(self.bvh, rays, hits, mode, threads);
 }
 
-template <class T>
-nb::ndarray<nb::numpy, const T> view(const std::vector<T>& v) {
+template <class Vector>
+auto view(const Vector& v) {
+    using T = typename Vector::value_type;
     return nb::ndarray<nb::numpy, const T>(v.data(), {v.size()});
 }
 

@@ -1,6 +1,7 @@
 // build_bvh: input checks, primitive references, the top-down build (on several threads when
 // asked), and the finishing touches (skip indices, leaf-ordered geometry).
 #include <chrono>
+#include <memory>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
@@ -94,7 +95,7 @@ void assemble(Subtree& top, std::vector<Subtree>& parts, Bvh& out) {
 }
 
 /// Skip index of every internal node: the skip of its second child (leaves skip to i + 1).
-void fill_skip_indices(std::vector<BvhNode>& nodes) {
+void fill_skip_indices(BigVector<BvhNode>& nodes) {
     for (std::size_t i = nodes.size(); i-- > 0;) {
         BvhNode& n = nodes[i];
         if (is_leaf(n)) continue;
@@ -102,13 +103,15 @@ void fill_skip_indices(std::vector<BvhNode>& nodes) {
     }
 }
 
-void build_tree(std::vector<PrimRef>& prim_refs, const BuildConfig& cfg, Bvh& out) {
+void build_tree(BigVector<PrimRef>& prim_refs, const BuildConfig& cfg, Bvh& out) {
+    out.refs.resize(prim_refs.size());
     if (prim_refs.empty()) return;
     const auto n = static_cast<std::uint32_t>(prim_refs.size());
-    WorkItem root{{0, n}, bounds_of(prim_refs.data(), n), 0, 0, false};
+    WorkItem root{{0, n}, bounds_of(prim_refs.data(), n), 0, 0, false, 0};
     if (cfg.method == SplitMethod::Lbvh) sort_by_morton_code(prim_refs, root.bounds.centroids);
 
-    BuildShared shared{prim_refs.data(), cfg};
+    BigVector<PrimRef> other(n);  // not zeroed (BigAllocator): every slot is written before it is read
+    BuildShared shared{{prim_refs.data(), other.data()}, out.refs.data(), cfg};
     ProgressReporter progress(shared, n);
     const std::uint32_t threads = thread_count(cfg);
     // With several threads, the top of the tree is built here and ranges of at most
@@ -132,8 +135,7 @@ void build_tree(std::vector<PrimRef>& prim_refs, const BuildConfig& cfg, Bvh& ou
 }  // namespace
 
 Bvh build_bvh(const GeometryView& geometry, const BuildConfig& config) {
-    validate(config);
-    validate(geometry);
+    validate(config);  // the geometry is checked while its references are made
     auto start = Clock::now();
     Bvh bvh;
     bvh.triangle_count = static_cast<std::uint32_t>(geometry.triangle_count);
@@ -141,10 +143,8 @@ Bvh build_bvh(const GeometryView& geometry, const BuildConfig& config) {
     bvh.config = config;
     bvh.config.progress = nullptr;
 
-    std::vector<PrimRef> prim_refs = make_prim_refs(geometry);
+    BigVector<PrimRef> prim_refs = make_prim_refs(geometry);
     build_tree(prim_refs, config, bvh);
-    bvh.refs.resize(prim_refs.size());
-    for (std::size_t i = 0; i < prim_refs.size(); ++i) bvh.refs[i] = prim_refs[i].ref;
     bvh.prims = pack_prims(geometry, bvh.refs);
     bvh.build_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     if (config.progress) config.progress(1.0);

@@ -27,17 +27,15 @@ PrimRef sphere_ref(const GeometryView& g, std::size_t i) {
             {c.x + r, c.y + r, c.z + r}, 0};
 }
 
-}  // namespace
-
-void validate(const GeometryView& g) {
-    if (g.primitive_count() > gpu::REF_INDEX_MASK)
-        throw std::invalid_argument("too many primitives: at most 2^31 - 1 fit a reference");
-    if ((g.triangle_count && !g.triangles) || (g.sphere_count && !g.spheres))
-        throw std::invalid_argument("primitive count given without data");
+/// Throws naming the first non-finite triangle (the slow, exact search behind the fast check).
+[[noreturn]] void throw_bad_triangle(const GeometryView& g) {
     for (std::size_t i = 0; i < g.triangle_count; ++i)
         if (!finite_floats(g.triangles + 9 * i, 9))
-            throw std::invalid_argument("triangle " + std::to_string(i) +
-                                        " has a NaN or infinite vertex coordinate");
+            throw std::invalid_argument("triangle " + std::to_string(i) + " has a NaN or infinite vertex coordinate");
+    throw std::logic_error("throw_bad_triangle: no bad triangle");
+}
+
+void validate_spheres(const GeometryView& g) {
     for (std::size_t i = 0; i < g.sphere_count; ++i) {
         if (!finite_floats(g.spheres + 4 * i, 3))
             throw std::invalid_argument("sphere " + std::to_string(i) + " has a NaN or infinite centre");
@@ -51,15 +49,41 @@ void validate(const GeometryView& g) {
     }
 }
 
-std::vector<PrimRef> make_prim_refs(const GeometryView& g) {
-    std::vector<PrimRef> refs(g.primitive_count());
-    for (std::size_t i = 0; i < g.triangle_count; ++i) refs[i] = triangle_ref(g, i);
+void validate_counts(const GeometryView& g) {
+    if (g.primitive_count() > gpu::REF_INDEX_MASK)
+        throw std::invalid_argument("too many primitives: at most 2^31 - 1 fit a reference");
+    if ((g.triangle_count && !g.triangles) || (g.sphere_count && !g.spheres))
+        throw std::invalid_argument("primitive count given without data");
+}
+
+}  // namespace
+
+void validate(const GeometryView& g) {
+    validate_counts(g);
+    for (std::size_t i = 0; i < g.triangle_count; ++i)
+        if (!finite_floats(g.triangles + 9 * i, 9)) throw_bad_triangle(g);
+    validate_spheres(g);
+}
+
+BigVector<PrimRef> make_prim_refs(const GeometryView& g) {
+    validate_counts(g);
+    BigVector<PrimRef> refs(g.primitive_count());
+    // Checked on the way: x·0 is 0 for finite x and NaN otherwise, so one sum tells whether any
+    // coordinate was NaN or infinite, without a separate pass over the input.
+    float poison = 0.0f;
+    for (std::size_t i = 0; i < g.triangle_count; ++i) {
+        const float* v = g.triangles + 9 * i;
+        for (int k = 0; k < 9; ++k) poison += v[k] * 0.0f;
+        refs[i] = triangle_ref(g, i);
+    }
+    if (poison != 0.0f) throw_bad_triangle(g);
+    validate_spheres(g);
     for (std::size_t i = 0; i < g.sphere_count; ++i) refs[g.triangle_count + i] = sphere_ref(g, i);
     return refs;
 }
 
-std::vector<PackedPrim> pack_prims(const GeometryView& g, const std::vector<std::uint32_t>& refs) {
-    std::vector<PackedPrim> out(refs.size());
+BigVector<PackedPrim> pack_prims(const GeometryView& g, const BigVector<std::uint32_t>& refs) {
+    BigVector<PackedPrim> out(refs.size());
     for (std::size_t k = 0; k < refs.size(); ++k) {
         std::uint32_t ref = refs[k];
         std::size_t i = ref_index(ref);

@@ -22,7 +22,7 @@ std::uint32_t quantize(float x, float lo, float scale) {
 
 }  // namespace
 
-void sort_by_morton_code(std::vector<PrimRef>& refs, const Aabb& centroid_bounds) {
+void sort_by_morton_code(BigVector<PrimRef>& refs, const Aabb& centroid_bounds) {
     Vec3 extent = centroid_bounds.extent();
     float scale[3];
     for (int a = 0; a < 3; ++a) scale[a] = extent[a] > 0 ? 1024.0f / extent[a] : 0.0f;
@@ -32,7 +32,7 @@ void sort_by_morton_code(std::vector<PrimRef>& refs, const Aabb& centroid_bounds
         p.code = spread_bits(q[0]) << 2 | spread_bits(q[1]) << 1 | spread_bits(q[2]);
     }
     // Three passes of 10 bits cover the 30-bit codes.
-    std::vector<PrimRef> tmp(refs.size());
+    BigVector<PrimRef> tmp(refs.size());
     for (int shift = 0; shift < 30; shift += 10) {
         std::array<std::size_t, 1025> start{};
         for (const PrimRef& p : refs) ++start[((p.code >> shift) & 1023u) + 1];

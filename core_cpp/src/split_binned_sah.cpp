@@ -9,34 +9,46 @@
 namespace bvhlab {
 namespace {
 
-/// B buckets on one axis: the box of the primitives and of their centroids, and a count.
+/// One bucket: the box of its primitives and of their centroids (64 bytes, one cache line).
+struct alignas(64) Bin {
+    F4 lo, hi, clo, chi;
+};
+
+/// B buckets on one axis. Consecutive references alternate between two copies so that runs of
+/// references in the same bucket do not wait on each other's stores; the copies merge after.
 struct Bins {
-    F4 lo[kMaxBins], hi[kMaxBins], clo[kMaxBins], chi[kMaxBins];
-    std::uint32_t count[kMaxBins];
+    Bin bin[2][kMaxBins];
+    std::uint32_t count[2][kMaxBins];
 
     void reset(std::uint32_t n) {
         const F4 inf = F4::splat(std::numeric_limits<float>::infinity()), ninf = F4::splat(-std::numeric_limits<float>::infinity());
-        for (std::uint32_t k = 0; k < n; ++k) lo[k] = clo[k] = inf, hi[k] = chi[k] = ninf, count[k] = 0;
+        for (auto& set : bin)
+            for (std::uint32_t k = 0; k < n; ++k) set[k] = {inf, ninf, inf, ninf};
+        for (auto& set : count) std::fill(set, set + n, 0u);
     }
-    void add(std::uint32_t k, F4 plo, F4 phi, F4 c) {
-        lo[k] = min(lo[k], plo), hi[k] = max(hi[k], phi);
-        clo[k] = min(clo[k], c), chi[k] = max(chi[k], c);
-        ++count[k];
+    void add(int copy, std::uint32_t k, F4 lo, F4 hi, F4 c) {
+        Bin& b = bin[copy][k];
+        b.lo = min(b.lo, lo), b.hi = max(b.hi, hi), b.clo = min(b.clo, c), b.chi = max(b.chi, c);
+        ++count[copy][k];
+    }
+    void merge_copies(std::uint32_t n) {
+        for (std::uint32_t k = 0; k < n; ++k) {
+            Bin& a = bin[0][k];
+            const Bin& b = bin[1][k];
+            a.lo = min(a.lo, b.lo), a.hi = max(a.hi, b.hi), a.clo = min(a.clo, b.clo), a.chi = max(a.chi, b.chi);
+            count[0][k] += count[1][k];
+        }
     }
 };
-
-float half_area(F4 lo, F4 hi) {
-    float e[4];
-    (hi - lo).store(e);
-    return e[0] > 0 || e[1] > 0 || e[2] > 0 ? e[0] * e[1] + e[1] * e[2] + e[2] * e[0] : 0.0f;
-}
 
 /// Union of buckets [first, last) as NodeBounds.
 NodeBounds merge(const Bins& bins, std::uint32_t first, std::uint32_t last) {
     const float inf = std::numeric_limits<float>::infinity();
     F4 lo = F4::splat(inf), hi = F4::splat(-inf), clo = lo, chi = hi;
-    for (std::uint32_t k = first; k < last; ++k)
-        lo = min(lo, bins.lo[k]), hi = max(hi, bins.hi[k]), clo = min(clo, bins.clo[k]), chi = max(chi, bins.chi[k]);
+    for (std::uint32_t k = first; k < last; ++k) {
+        const Bin& b = bins.bin[0][k];
+        lo = min(lo, b.lo), hi = max(hi, b.hi), clo = min(clo, b.clo), chi = max(chi, b.chi);
+    }
     auto vec = [](F4 v) { return Vec3{v.lane(0), v.lane(1), v.lane(2)}; };
     return {{vec(lo), vec(hi)}, {vec(clo), vec(chi)}};
 }
@@ -56,13 +68,13 @@ void sweep(const Bins& bins, std::uint32_t n_bins, int axis, const BuildConfig& 
     F4 lo = F4::splat(inf), hi = F4::splat(-inf);
     std::uint32_t n = 0;
     for (std::uint32_t k = n_bins - 1; k > 0; --k) {
-        lo = min(lo, bins.lo[k]), hi = max(hi, bins.hi[k]), n += bins.count[k];
+        lo = min(lo, bins.bin[0][k].lo), hi = max(hi, bins.bin[0][k].hi), n += bins.count[0][k];
         right_area[k] = half_area(lo, hi), right_count[k] = n;
     }
     lo = F4::splat(inf), hi = F4::splat(-inf), n = 0;
     const float inv_parent = parent_area > 0 ? 1.0f / parent_area : 0.0f;
     for (std::uint32_t k = 0; k + 1 < n_bins; ++k) {
-        lo = min(lo, bins.lo[k]), hi = max(hi, bins.hi[k]), n += bins.count[k];
+        lo = min(lo, bins.bin[0][k].lo), hi = max(hi, bins.bin[0][k].hi), n += bins.count[0][k];
         if (n == 0 || right_count[k + 1] == 0) continue;
         float weighted = half_area(lo, hi) * float(n) + right_area[k + 1] * float(right_count[k + 1]);
         float ratio = parent_area > 0 ? weighted * inv_parent : float(n + right_count[k + 1]);
@@ -71,66 +83,90 @@ void sweep(const Bins& bins, std::uint32_t n_bins, int axis, const BuildConfig& 
     }
 }
 
-/// Bucket index of each centroid on all three axes, 4-wide; lanes with no extent get bucket 0.
-struct Binner {
-    F4 origin, scale, top;
-    Binner(const Aabb& centroids, std::uint32_t n_bins) {
-        Vec3 e = centroids.extent();
-        float s[4] = {0, 0, 0, 0}, o[4] = {centroids.lo.x, centroids.lo.y, centroids.lo.z, 0};
-        for (int a = 0; a < 3; ++a) {
-            float inv = float(n_bins) / e[a];
-            s[a] = e[a] > 0 && std::isfinite(inv) ? inv : 0.0f;
-        }
-        origin = F4::load(o), scale = F4::load(s), top = F4::splat(float(n_bins - 1));
+/// Bucket of a reference on one axis, from 2·centroid (one add, no multiply by ½). Binning and
+/// partitioning call this same function, so both see the same bucket.
+struct Bucketer {
+    float origin = 0, scale = 0, top = 0;
+    Bucketer() = default;
+    Bucketer(const Aabb& centroids, int axis, std::uint32_t n_bins) {
+        float extent = centroids.hi[axis] - centroids.lo[axis];
+        float s = float(n_bins) / (2.0f * extent);
+        origin = 2.0f * centroids.lo[axis];
+        scale = extent > 0 && std::isfinite(s) ? s : 0.0f;
+        top = float(n_bins - 1);
     }
-    /// Bucket indices packed one byte per axis (bits 0-7 x, 8-15 y, 16-23 z).
-    std::uint32_t operator()(F4 c) const {
-        F4 k = min(max((c - origin) * scale, F4::splat(0.0f)), top);
-        float f[4];
-        k.store(f);
-        return std::uint32_t(f[0]) | std::uint32_t(f[1]) << 8 | std::uint32_t(f[2]) << 16;
+    std::uint32_t operator()(const PrimRef& p, int axis) const {
+        float k = (p.lo[axis] + p.hi[axis] - origin) * scale;
+        return static_cast<std::uint32_t>(std::min(std::max(k, 0.0f), top));
     }
 };
 
-inline std::uint32_t bucket(std::uint32_t packed, int axis) { return (packed >> (8 * axis)) & 0xffu; }
+/// Bins every reference on the axes [first, last] (those with an extent) and stores its bucket
+/// on each axis in `code` (one byte per axis), so the partition reads rather than recomputes it.
+template <bool kOneAxis>
+void bin_range(PrimRef* refs, Range r, int first, int last, const Vec3& extent, Bins* bins, const Bucketer* bucket) {
+    const F4 half = F4::splat(0.5f);
+    for (std::uint32_t i = r.begin; i < r.end; ++i) {
+        PrimRef& p = refs[i];
+        F4 lo = p.lo4(), hi = p.hi4(), c = (lo + hi) * half;
+        if constexpr (kOneAxis) {
+            std::uint32_t k = bucket[first](p, first);
+            p.code = k << (8 * first);
+            bins[first].add(int(i & 1), k, lo, hi, c);
+        } else {
+            std::uint32_t code = 0;
+            for (int a = first; a <= last; ++a) {
+                if (!(extent[a] > 0.0f)) continue;
+                std::uint32_t k = bucket[a](p, a);
+                code |= k << (8 * a);
+                bins[a].add(int(i & 1), k, lo, hi, c);
+            }
+            p.code = code;
+        }
+    }
+}
 
 }  // namespace
 
-std::optional<Split> split_binned_sah(SplitContext& ctx, Range r, const NodeBounds& b, int axis) {
+std::optional<Split> split_binned_sah(SplitContext& ctx, Range r, int src, const NodeBounds& b, int axis) {
+    if (r.size() <= kSmallExact) return split_small_exact(ctx, r, src, b, axis);
     const std::uint32_t n_bins = ctx.config.bins;
     const int first_axis = axis == kAllAxes ? 0 : axis, last_axis = axis == kAllAxes ? 2 : axis;
+    const Vec3 extent = b.centroids.extent();
+    PrimRef* in = ctx.buffers[src];
     Bins bins[3];
-    for (int a = first_axis; a <= last_axis; ++a) bins[a].reset(n_bins);
+    Bucketer bucket[3];
 
-    // Binning: one pass; each reference remembers its buckets (in `code`) so the partition below
-    // uses exactly the bucket the sweep counted it in.
-    const Binner binner(b.centroids, n_bins);
-    const F4 half = F4::splat(0.5f);
-    for (std::uint32_t i = r.begin; i < r.end; ++i) {
-        PrimRef& p = ctx.refs[i];
-        F4 lo = p.lo4(), hi = p.hi4(), c = (lo + hi) * half;
-        p.code = binner(c);
-        for (int a = first_axis; a <= last_axis; ++a) bins[a].add(bucket(p.code, a), lo, hi, c);
+    // Binning: one pass over the references, per axis asked for.
+    for (int a = first_axis; a <= last_axis; ++a) {
+        if (!(extent[a] > 0.0f)) continue;
+        bins[a].reset(n_bins);
+        bucket[a] = Bucketer(b.centroids, a, n_bins);
     }
+    if (first_axis == last_axis) bin_range<true>(in, r, first_axis, last_axis, extent, bins, bucket);
+    else bin_range<false>(in, r, first_axis, last_axis, extent, bins, bucket);
 
-    // Sweep every binned axis that has an extent; keep the cheapest boundary.
+    // Sweep every binned axis; keep the cheapest boundary.
     Candidate best;
     const float parent_area = b.box.half_area();
-    Vec3 extent = b.centroids.extent();
-    for (int a = first_axis; a <= last_axis; ++a)
-        if (extent[a] > 0.0f) sweep(bins[a], n_bins, a, ctx.config, parent_area, best);
+    for (int a = first_axis; a <= last_axis; ++a) {
+        if (!(extent[a] > 0.0f)) continue;
+        bins[a].merge_copies(n_bins);
+        sweep(bins[a], n_bins, a, ctx.config, parent_area, best);
+    }
     if (best.axis < 0) return std::nullopt;
 
-    // Partition on the stored buckets; the child bounds are the unions of their buckets.
+    // Scatter into the other buffer by bucket; the child bounds are the unions of their buckets.
     const int a = best.axis;
     const std::uint32_t last_left = best.last_left_bin;
-    PrimRef* mid = std::partition(ctx.refs + r.begin, ctx.refs + r.end,
-                                  [=](const PrimRef& p) { return bucket(p.code, a) <= last_left; });
+    const int shift = 8 * a;
     Split s;
-    s.mid = static_cast<std::uint32_t>(mid - ctx.refs);
+    s.mid = scatter_partition(in, ctx.buffers[1 - src], r,
+                              [=](const PrimRef& p) { return ((p.code >> shift) & 0xffu) <= last_left; });
     s.left = merge(bins[a], 0, last_left + 1);
     s.right = merge(bins[a], last_left + 1, n_bins);
     s.cost = best.cost;
+    s.buffer = static_cast<std::uint8_t>(1 - src);
     return s;
 }
 

@@ -1,6 +1,6 @@
 // LBVH (report §5.2, Karras 2012 / PBRT's HLBVH): the builder sorts the references by the Morton
 // code of their centroid once (see morton.cpp); a node then splits where the highest bit that
-// differs between its first and last code flips. The axis policy plays no part.
+// differs between its first and last code flips — in place, nothing moves. No axis policy.
 #include <algorithm>
 #include <bit>
 
@@ -8,13 +8,14 @@
 
 namespace bvhlab {
 
-std::optional<Split> split_lbvh(SplitContext& ctx, Range r, const NodeBounds& b, int /*axis*/) {
-    std::uint32_t first = ctx.refs[r.begin].code, last = ctx.refs[r.end - 1].code;
+std::optional<Split> split_lbvh(SplitContext& ctx, Range r, int src, const NodeBounds& b, int /*axis*/) {
+    const PrimRef* refs = ctx.buffers[src];
+    std::uint32_t first = refs[r.begin].code, last = refs[r.end - 1].code;
     if (first == last) return std::nullopt;  // equal codes: the builder splits them evenly
     std::uint32_t bit = 1u << (31 - std::countl_zero(first ^ last));
-    const PrimRef* mid = std::partition_point(ctx.refs + r.begin, ctx.refs + r.end,
+    const PrimRef* mid = std::partition_point(refs + r.begin, refs + r.end,
                                               [bit](const PrimRef& p) { return (p.code & bit) == 0; });
-    return split_at(ctx, r, b, static_cast<std::uint32_t>(mid - ctx.refs));
+    return split_at(ctx, r, src, b, static_cast<std::uint32_t>(mid - refs));
 }
 
 }  // namespace bvhlab

@@ -1,16 +1,62 @@
-// Median split (report §2.3.1, PBRT "EqualCounts"): reorder so the first half has the smaller
-// centroids on the axis, in O(n) with std::nth_element instead of a full sort.
+// Median split (report §2.3.1, PBRT "EqualCounts"): the first half gets the smaller centroids on
+// the axis, in O(n) — never a sort. A histogram of the centroids finds the bucket that holds the
+// median; one branch-free scatter puts everything below it left and above it right; then
+// std::nth_element (the report's select_nth_unstable) orders just that bucket around the median.
 #include <algorithm>
+#include <cmath>
 
 #include "bvhlab/split.h"
 
 namespace bvhlab {
+namespace {
 
-std::optional<Split> split_median(SplitContext& ctx, Range r, const NodeBounds& b, int axis) {
-    std::uint32_t mid = r.begin + r.size() / 2;
-    std::nth_element(ctx.refs + r.begin, ctx.refs + mid, ctx.refs + r.end,
-                     [axis](const PrimRef& p, const PrimRef& q) { return p.centroid(axis) < q.centroid(axis); });
-    return split_at(ctx, r, b, mid);
+/// Ranges smaller than this are selected directly; a histogram would cost more than it saves.
+constexpr std::uint32_t kDirectSelect = 128;
+
+struct Bucketer {
+    float origin, scale, top;
+    int axis;
+    std::uint32_t operator()(const PrimRef& p) const {
+        float k = ((p.lo[axis] + p.hi[axis]) - origin) * scale;  // on 2·centroid
+        return static_cast<std::uint32_t>(std::clamp(k, 0.0f, top));
+    }
+};
+
+bool less_on(int axis, const PrimRef& p, const PrimRef& q) { return p.lo[axis] + p.hi[axis] < q.lo[axis] + q.hi[axis]; }
+
+}  // namespace
+
+std::optional<Split> split_median(SplitContext& ctx, Range r, int src, const NodeBounds& b, int axis) {
+    const PrimRef* in = ctx.buffers[src];
+    PrimRef* out = ctx.buffers[1 - src];
+    const std::uint32_t mid = r.begin + r.size() / 2;
+    auto less = [axis](const PrimRef& p, const PrimRef& q) { return less_on(axis, p, q); };
+    if (r.size() < kDirectSelect) {
+        std::copy(in + r.begin, in + r.end, out + r.begin);
+        std::nth_element(out + r.begin, out + mid, out + r.end, less);
+        return split_at(ctx, r, 1 - src, b, mid);
+    }
+    const std::uint32_t buckets = std::min<std::uint32_t>(1024, r.size() / 16);
+    const float extent = b.centroids.extent()[axis];
+    const float scale = extent > 0 ? float(buckets) / (2.0f * extent) : 0.0f;
+    const Bucketer bucket{2.0f * b.centroids.lo[axis], std::isfinite(scale) ? scale : 0.0f, float(buckets - 1), axis};
+
+    // 1. histogram, and the bucket holding the median
+    auto& count = ctx.scratch.counts;
+    count.assign(buckets, 0);
+    for (std::uint32_t i = r.begin; i < r.end; ++i) ++count[bucket(in[i])];
+    std::uint32_t median_bucket = 0, below = 0;
+    while (below + count[median_bucket] <= mid - r.begin) below += count[median_bucket++];
+
+    // 2. scatter: below | the median's bucket | above, each in input order
+    std::uint32_t cursor[3] = {r.begin, r.begin + below, r.begin + below + count[median_bucket]};
+    for (std::uint32_t i = r.begin; i < r.end; ++i) {
+        std::uint32_t k = bucket(in[i]);
+        out[cursor[(k >= median_bucket) + (k > median_bucket)]++] = in[i];
+    }
+    // 3. select within the median's bucket
+    std::nth_element(out + cursor[0], out + mid, out + r.begin + below + count[median_bucket], less);
+    return split_at(ctx, r, 1 - src, b, mid);
 }
 
 }  // namespace bvhlab

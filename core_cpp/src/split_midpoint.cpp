@@ -3,9 +3,9 @@
 
 namespace bvhlab {
 
-std::optional<Split> split_midpoint(SplitContext& ctx, Range r, const NodeBounds& b, int axis) {
+std::optional<Split> split_midpoint(SplitContext& ctx, Range r, int src, const NodeBounds& b, int axis) {
     float middle = 0.5f * (b.centroids.lo[axis] + b.centroids.hi[axis]);
-    return split_at_position(ctx, r, b, axis, middle);
+    return split_at_position(ctx, r, src, b, axis, middle);
 }
 
 }  // namespace bvhlab

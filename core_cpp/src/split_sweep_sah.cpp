@@ -12,21 +12,20 @@ namespace {
 struct Best {
     float cost = std::numeric_limits<float>::infinity();
     int axis = -1;
-    std::uint32_t mid = 0;
+    std::uint32_t mid = 0;  ///< offset within the range
 };
 
-void sort_on_axis(PrimRef* first, PrimRef* last, int axis) {
+void sort_on_axis(std::vector<PrimRef>& refs, int axis) {
     // Ties keep a fixed order (by reference), so the result depends on nothing but the input.
-    std::sort(first, last, [axis](const PrimRef& p, const PrimRef& q) {
-        float cp = p.centroid(axis), cq = q.centroid(axis);
+    std::sort(refs.begin(), refs.end(), [axis](const PrimRef& p, const PrimRef& q) {
+        float cp = p.lo[axis] + p.hi[axis], cq = q.lo[axis] + q.hi[axis];
         return cp < cq || (cp == cq && p.ref < q.ref);
     });
 }
 
 /// Sweeps one sorted axis and records its cheapest split position in `best`.
-void sweep(SplitContext& ctx, Range r, const NodeBounds& b, int axis, Best& best) {
-    const PrimRef* p = ctx.refs + r.begin;
-    const std::uint32_t n = r.size();
+void sweep(SplitContext& ctx, const std::vector<PrimRef>& p, const NodeBounds& b, int axis, Best& best) {
+    const auto n = static_cast<std::uint32_t>(p.size());
     auto& right_area = ctx.scratch.areas;
     right_area.resize(n);
     Aabb box;
@@ -42,27 +41,30 @@ void sweep(SplitContext& ctx, Range r, const NodeBounds& b, int axis, Best& best
         float weighted = box.half_area() * float(i) + right_area[i] * float(n - i);
         float ratio = parent_area > 0 ? weighted / parent_area : float(n);
         float cost = cfg.traversal_cost + ratio * cfg.intersection_cost;
-        if (cost < best.cost) best = {cost, axis, r.begin + i};
+        if (cost < best.cost) best = {cost, axis, i};
     }
 }
 
 }  // namespace
 
-std::optional<Split> split_sweep_sah(SplitContext& ctx, Range r, const NodeBounds& b, int axis) {
-    PrimRef* first = ctx.refs + r.begin;
-    PrimRef* last = ctx.refs + r.end;
+std::optional<Split> split_sweep_sah(SplitContext& ctx, Range r, int src, const NodeBounds& b, int axis) {
+    if (r.size() <= kSmallExact) return split_small_exact(ctx, r, src, b, axis);
+    const PrimRef* in = ctx.buffers[src];
+    auto& sorted = ctx.scratch.sorted;
     Vec3 extent = b.centroids.extent();
     Best best;
     int sorted_axis = -1;
     for (int a = 0; a < 3; ++a) {
         if ((axis != kAllAxes && a != axis) || !(extent[a] > 0.0f)) continue;
-        sort_on_axis(first, last, a);
+        sorted.assign(in + r.begin, in + r.end);
+        sort_on_axis(sorted, a);
         sorted_axis = a;
-        sweep(ctx, r, b, a, best);
+        sweep(ctx, sorted, b, a, best);
     }
     if (best.axis < 0) return std::nullopt;
-    if (sorted_axis != best.axis) sort_on_axis(first, last, best.axis);
-    Split s = split_at(ctx, r, b, best.mid);
+    if (sorted_axis != best.axis) sorted.assign(in + r.begin, in + r.end), sort_on_axis(sorted, best.axis);
+    std::copy(sorted.begin(), sorted.end(), ctx.buffers[1 - src] + r.begin);
+    Split s = split_at(ctx, r, 1 - src, b, r.begin + best.mid);
     s.cost = best.cost;
     return s;
 }

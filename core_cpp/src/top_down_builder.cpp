@@ -55,7 +55,7 @@ bool too_deep(std::uint32_t depth, std::uint32_t n) {
 
 /// Two primitives: every method splits them 1 | 1; order them by centroid on the largest axis.
 Split split_pair(SplitContext& ctx, const WorkItem& item) {
-    PrimRef* p = ctx.refs + item.range.begin;
+    PrimRef* p = ctx.buffers[item.buffer] + item.range.begin;
     int axis = largest_axis(item.bounds.centroids.extent());
     if (p[1].centroid(axis) < p[0].centroid(axis)) std::swap(p[0], p[1]);
     Split s;
@@ -63,23 +63,25 @@ Split split_pair(SplitContext& ctx, const WorkItem& item) {
     s.left = {p[0].box(), {p[0].centroid(), p[0].centroid()}};
     s.right = {p[1].box(), {p[1].centroid(), p[1].centroid()}};
     s.cost = split_cost(ctx.config, item.bounds, s.left.box, 1, s.right.box, 1);
+    s.buffer = item.buffer;
     return s;
 }
 
 Split find_split(SplitContext& ctx, const WorkItem& item) {
     const Range r = item.range;
+    const int src = item.buffer;
     const NodeBounds& b = item.bounds;
     Vec3 extent = b.centroids.extent();
-    if (!(extent.x > 0.0f || extent.y > 0.0f || extent.z > 0.0f)) return split_even(ctx, r, b);
+    if (!(extent.x > 0.0f || extent.y > 0.0f || extent.z > 0.0f)) return split_even(ctx, r, src, b);
     if (r.size() == 2) return split_pair(ctx, item);
-    if (too_deep(item.depth, r.size())) return *split_median(ctx, r, b, largest_axis(extent));
+    if (too_deep(item.depth, r.size())) return *split_median(ctx, r, src, b, largest_axis(extent));
 
     const SplitMethod method = ctx.config.method;
     const int axis = choose_axis(ctx.config, item);
     std::optional<Split> s = axis == kAllAxes && !handles_all_axes(method)
-                                 ? split_best_of_axes(method_function(method), ctx, r, b)
-                                 : method_function(method)(ctx, r, b, axis);
-    return s ? *s : split_even(ctx, r, b);
+                                 ? split_best_of_axes(method_function(method), ctx, r, src, b)
+                                 : method_function(method)(ctx, r, src, b, axis);
+    return s ? *s : split_even(ctx, r, src, b);
 }
 
 }  // namespace
@@ -97,9 +99,93 @@ std::optional<Split> choose_split(SplitContext& ctx, const WorkItem& item) {
     return s;
 }
 
-void make_leaf(BvhNode& node, const WorkItem& item) {
-    node.index = item.range.begin;
-    node.info = item.range.size();
+namespace {
+
+/// Writes the nodes of one subtree in depth-first order.
+class SubtreeWriter {
+public:
+    SubtreeWriter(BuildShared& shared, Subtree& out) : shared_(shared), out_(out) {}
+    ~SubtreeWriter() { flush_leaf_count(); }
+
+    /// Appends the node of `item` (box and depth) and links it to its parent.
+    std::uint32_t open(const WorkItem& item) {
+        auto index = static_cast<std::uint32_t>(out_.nodes.size());
+        BvhNode node{};
+        set_box(node, item.bounds.box);
+        out_.nodes.push_back(node);
+        out_.depths.push_back(static_cast<std::uint8_t>(item.depth));
+        if (item.second_child) out_.nodes[item.parent].index = index;
+        return index;
+    }
+    void make_internal(std::uint32_t index) { out_.nodes[index].info = gpu::NODE_INTERNAL_BIT; }  // skip: at the end
+    void make_leaf(std::uint32_t index, const WorkItem& item) {
+        BvhNode& node = out_.nodes[index];
+        node.index = item.range.begin;
+        node.info = item.range.size();
+        const PrimRef* refs = shared_.buffers[item.buffer];
+        for (std::uint32_t i = item.range.begin; i < item.range.end; ++i) shared_.leaf_refs[i] = refs[i].ref;
+        leaf_primitives_ += item.range.size();
+    }
+    void flush_leaf_count() {
+        shared_.primitives_in_leaves.fetch_add(leaf_primitives_, std::memory_order_relaxed);
+        leaf_primitives_ = 0;
+    }
+
+private:
+    BuildShared& shared_;
+    Subtree& out_;
+    std::uint64_t leaf_primitives_ = 0;
+};
+
+/// A range that is a leaf without asking the split method: one primitive, or few enough for a
+/// leaf under a method that does not weigh leaves against splits.
+bool obviously_leaf(const BuildConfig& cfg, std::uint32_t n) {
+    return n == 1 || (n <= cfg.max_leaf_size && !uses_sah(cfg.method));
+}
+
+}  // namespace
+
+void build_subtree(BuildShared& shared, SplitScratch& scratch, const WorkItem& root, Subtree& out,
+                   std::uint32_t defer_size, const std::function<void()>& on_progress) {
+    SplitContext ctx{{shared.buffers[0], shared.buffers[1]}, shared.config, scratch};
+    SubtreeWriter writer(shared, out);
+    out.nodes.reserve(2 * std::size_t(root.range.size()) - 1);  // a binary tree with n leaves at most
+    out.depths.reserve(out.nodes.capacity());
+    std::vector<WorkItem> stack{root};
+    std::uint32_t since_progress = 0;
+    while (!stack.empty()) {
+        WorkItem item = stack.back();
+        stack.pop_back();
+        const std::uint32_t index = writer.open(item);
+        if (index > 0 && item.range.size() <= defer_size) {
+            out.deferred.emplace_back(index, item);
+            continue;
+        }
+        if (++since_progress == 4096) {
+            since_progress = 0;
+            writer.flush_leaf_count();
+            on_progress();
+            if (shared.cancelled.load(std::memory_order_relaxed)) return;
+        }
+        std::optional<Split> split = obviously_leaf(shared.config, item.range.size()) ? std::nullopt : choose_split(ctx, item);
+        if (!split) {
+            writer.make_leaf(index, item);
+            continue;
+        }
+        writer.make_internal(index);
+        const std::uint32_t d = item.depth + 1;
+        WorkItem left{{item.range.begin, split->mid}, split->left, index, d, false, split->buffer};
+        WorkItem right{{split->mid, item.range.end}, split->right, index, d, true, split->buffer};
+        // Children that are plainly leaves (most leaves) are written at once, without a work item.
+        if (!obviously_leaf(shared.config, left.range.size())) {
+            stack.push_back(right);
+            stack.push_back(left);
+            continue;
+        }
+        writer.make_leaf(writer.open(left), left);
+        if (obviously_leaf(shared.config, right.range.size())) writer.make_leaf(writer.open(right), right);
+        else stack.push_back(right);
+    }
 }
 
 }  // namespace bvhlab

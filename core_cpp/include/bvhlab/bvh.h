@@ -15,10 +15,10 @@ using gpu::BvhNode;
 /// second child in `index`; leaves reference the contiguous slice refs[index, index + count).
 /// Depth of the root is 0; height is the largest leaf depth + 1 (an empty tree has height 0).
 struct Bvh {
-    std::vector<BvhNode> nodes;
-    std::vector<std::uint32_t> refs;     ///< primitive references in leaf order
-    std::vector<std::uint8_t> depths;    ///< depth of each node
-    std::vector<PackedPrim> prims;       ///< geometry in leaf order, for the CPU traversal
+    BigVector<BvhNode> nodes;
+    BigVector<std::uint32_t> refs;       ///< primitive references in leaf order
+    BigVector<std::uint8_t> depths;      ///< depth of each node
+    BigVector<PackedPrim> prims;         ///< geometry in leaf order, for the CPU traversal
     std::uint32_t triangle_count = 0, sphere_count = 0;
     BuildConfig config;                  ///< what it was built with (progress callback dropped)
     double build_ms = 0;                 ///< wall time of the tree build (refs in → nodes out)

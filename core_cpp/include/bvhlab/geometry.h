@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <vector>
+#include "bvhlab/big_vector.h"
 #include "bvhlab/prim_ref.h"
 
 namespace bvhlab {
@@ -30,7 +31,8 @@ struct GeometryView {
 void validate(const GeometryView& geometry);
 
 /// One PrimRef per primitive: triangles first (refs 0..T-1), then spheres (REF_SPHERE_BIT | i).
-std::vector<PrimRef> make_prim_refs(const GeometryView& geometry);
+/// Checks the geometry as validate() does, throwing the same errors.
+BigVector<PrimRef> make_prim_refs(const GeometryView& geometry);
 
 /// A primitive laid out for the CPU traversal, in leaf order (40 bytes).
 /// Triangle: v0 and the two edges (Möller–Trumbore needs no more). Sphere: centre in `p`, radius in e1[0].
@@ -42,6 +44,6 @@ struct PackedPrim {
 };
 
 /// Geometry reordered into the order of `refs` (the tree's leaf order).
-std::vector<PackedPrim> pack_prims(const GeometryView& geometry, const std::vector<std::uint32_t>& refs);
+BigVector<PackedPrim> pack_prims(const GeometryView& geometry, const BigVector<std::uint32_t>& refs);
 
 }  // namespace bvhlab

@@ -29,6 +29,12 @@ inline F4 operator-(F4 a, F4 b) { return {_mm_sub_ps(a.v, b.v)}; }
 inline F4 operator*(F4 a, F4 b) { return {_mm_mul_ps(a.v, b.v)}; }
 inline F4 min(F4 a, F4 b) { return {_mm_min_ps(a.v, b.v)}; }
 inline F4 max(F4 a, F4 b) { return {_mm_max_ps(a.v, b.v)}; }
+/// Half the surface area of the box [lo, hi] (lanes 0-2); 0 for an empty box.
+inline float half_area(F4 lo, F4 hi) {
+    __m128 e = _mm_max_ps(_mm_sub_ps(hi.v, lo.v), _mm_setzero_ps());
+    __m128 p = _mm_mul_ps(e, _mm_shuffle_ps(e, e, _MM_SHUFFLE(3, 0, 2, 1)));  // x·y, y·z, z·x
+    return _mm_cvtss_f32(_mm_add_ss(_mm_add_ss(p, _mm_shuffle_ps(p, p, 1)), _mm_movehl_ps(p, p)));
+}
 #else
 struct F4 {
     float v[4];
@@ -50,6 +56,11 @@ BVHLAB_F4_OP(operator*, x * y)
 BVHLAB_F4_OP(min, std::min(x, y))
 BVHLAB_F4_OP(max, std::max(x, y))
 #undef BVHLAB_F4_OP
+inline float half_area(F4 lo, F4 hi) {
+    float e[3];
+    for (int i = 0; i < 3; ++i) e[i] = std::max(hi.v[i] - lo.v[i], 0.0f);
+    return e[0] * e[1] + e[1] * e[2] + e[2] * e[0];
+}
 #endif
 
 }  // namespace bvhlab

@@ -1,0 +1,106 @@
+"""Shared helpers of the benchmarks: timing, Embree as the peer, tables, JSON."""
+from __future__ import annotations
+
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+RESULTS = Path(__file__).resolve().parent / "results"
+
+
+def median_time(fn, repeat: int) -> tuple[float, object]:
+    """Median wall time of `repeat` calls, in seconds, and the last result."""
+    times, result = [], None
+    for _ in range(repeat):
+        t = time.perf_counter()
+        result = fn()
+        times.append(time.perf_counter() - t)
+    return statistics.median(times), result
+
+
+def pin_to_cores(n: int) -> None:
+    """Restrict this process (and Embree's TBB pool, created later) to the first n cores."""
+    cores = sorted(os.sched_getaffinity(0))[:n]
+    os.sched_setaffinity(0, cores)
+
+
+class Embree:
+    """Embree 4 through embreex: build time is the lazy commit at the first query, measured alone
+    (the Python-speed copy into the TriangleMesh is excluded, ENVIRONMENT.md)."""
+
+    def __init__(self, tris: np.ndarray):
+        from embreex import rtcore_scene as rtcs
+        from embreex.mesh_construction import TriangleMesh
+
+        self._rtcs, self._mesh = rtcs, TriangleMesh
+        self.tris = tris
+        self.scene = None
+
+    def build(self) -> float:
+        scene = self._rtcs.EmbreeScene()
+        self._mesh(scene, self.tris)
+        o = np.zeros((1, 3), np.float32)
+        d = np.ones((1, 3), np.float32)
+        t = time.perf_counter()
+        scene.run(o, d)  # commits the BVH
+        elapsed = time.perf_counter() - t
+        self.scene = scene
+        return elapsed
+
+    def trace(self, origins, dirs) -> np.ndarray:
+        return self.scene.run(origins, dirs)  # primID per ray, rtcIntersect1 per ray
+
+
+def machine() -> dict:
+    cpu = "unknown"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return {"cpu": cpu, "cores": os.cpu_count(), "python": platform.python_version(),
+            "date": time.strftime("%Y-%m-%d %H:%M:%S")}
+
+
+def print_table(headers: list[str], rows: list[list], title: str = "") -> str:
+    cells = [[_fmt(c) for c in r] for r in rows]
+    widths = [max(len(h), *(len(r[i]) for r in cells)) if cells else len(h) for i, h in enumerate(headers)]
+    lines = []
+    if title:
+        lines.append(title)
+    lines.append("  ".join(h.rjust(w) if i else h.ljust(w) for i, (h, w) in enumerate(zip(headers, widths))))
+    lines.append("  ".join("-" * w for w in widths))
+    for r in cells:
+        lines.append("  ".join(c.rjust(w) if i else c.ljust(w) for i, (c, w) in enumerate(zip(r, widths))))
+    text = "\n".join(lines)
+    print(text, flush=True)
+    return text
+
+
+def _fmt(c) -> str:
+    if isinstance(c, float):
+        return f"{c:.3g}" if abs(c) < 10 else f"{c:.1f}" if abs(c) < 1000 else f"{c:.0f}"
+    return str(c)
+
+
+def write_json(name: str, data: dict) -> Path:
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    path = RESULTS / name
+    path.write_text(json.dumps(data, indent=1))
+    return path
+
+
+def run_child(script: str, args: list[str]) -> dict:
+    """Run a benchmark part in a fresh process (so core pinning and Embree's pool start clean)."""
+    out = subprocess.run([sys.executable, script, *args], check=True, capture_output=True, text=True)
+    sys.stderr.write(out.stderr)
+    return json.loads(out.stdout.strip().splitlines()[-1])
