@@ -15,6 +15,7 @@
 #include "bvhlab/depth_order.h"
 #include "bvhlab/stats.h"
 #include "bvhlab/traverse.h"
+#include "bvhlab/wide_bvh.h"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -40,10 +41,16 @@ GeometryView view_of(const Triangles& tris, const std::optional<Spheres>& sphere
 struct PyBvh {
     Bvh bvh;
     std::optional<DepthOrder> depth_order;
+    std::optional<WideBvh> wide_bvh;
     const DepthOrder& order() {
         if (!depth_order) depth_order = make_depth_order(bvh);
         return *depth_order;
     }
+    const WideBvh& wide() {  // built on first use, with the GIL held
+        if (!wide_bvh) wide_bvh = make_wide(bvh);
+        return *wide_bvh;
+    }
+    void invalidate() { depth_order.reset(), wide_bvh.reset(); }
 };
 
 nb::dict stats_dict(const Bvh& bvh) {
@@ -108,11 +115,13 @@ void py_intersect(PyBvh& self, const Vectors& origins, const Vectors& dirs, floa
     Traversal mode;
     if (traversal == "stack") mode = Traversal::Stack;
     else if (traversal == "stackless") mode = Traversal::Stackless;
-    else throw std::invalid_argument("unknown traversal '" + traversal + "'; expected one of: stack stackless");
+    else if (traversal == "wide") mode = Traversal::Wide;
+    else throw std::invalid_argument("unknown traversal '" + traversal + "'; expected one of: stack stackless wide");
+    const WideBvh* wide = mode == Traversal::Wide ? &self.wide() : nullptr;
     RayBatch rays{origins.data(), dirs.data(), n, tmin, tmax};
     HitBatch hits{t.data(), prim.data(), kind.data(), u.data(), v.data(), visited.data()};
     nb::gil_scoped_release release;
-    intersect_batch(self.bvh, rays, hits, mode, threads);
+    intersect_batch(self.bvh, rays, hits, mode, threads, wide);
 }
 
 template <class Vector>
@@ -144,6 +153,7 @@ NB_MODULE(_core, m) {
              "u"_a.noconvert(), "v"_a.noconvert(), "visited"_a.noconvert())
         .def("refit", [](PyBvh& b, const Triangles& tris, const std::optional<Spheres>& spheres) {
                  GeometryView g = view_of(tris, spheres);
+                 b.invalidate();
                  nb::gil_scoped_release release;
                  refit(b.bvh, g);
              }, "triangles"_a.noconvert(), "spheres"_a.noconvert().none());

@@ -1,5 +1,9 @@
 #include "bvhlab/traverse.h"
 
+#include <stdexcept>
+
+#include "bvhlab/wide_bvh.h"
+
 #include <atomic>
 #include <numbers>
 #include <thread>
@@ -86,6 +90,7 @@ Hit intersect(const Bvh& bvh, const Ray& ray, Traversal mode, std::uint32_t* nod
     std::uint32_t visited = 0;
     if (!bvh.empty()) {
         RayQuery q(ray);
+        if (mode == Traversal::Wide) throw std::invalid_argument("use intersect_wide for Traversal::Wide");
         visited = mode == Traversal::Stack ? traverse_stack(bvh, q, hit) : traverse_stackless(bvh, q, hit);
     }
     if (hit.ref == kNoHit) hit.t = kInfinity;
@@ -95,7 +100,8 @@ Hit intersect(const Bvh& bvh, const Ray& ray, Traversal mode, std::uint32_t* nod
 }
 
 void intersect_batch(const Bvh& bvh, const RayBatch& rays, const HitBatch& out, Traversal mode,
-                     std::uint32_t threads) {
+                     std::uint32_t threads, const WideBvh* wide) {
+    if (mode == Traversal::Wide && !wide) throw std::invalid_argument("Traversal::Wide needs the wide tree");
     constexpr std::size_t kChunk = 1024;
     std::atomic<std::size_t> next{0};
     auto worker = [&] {
@@ -106,7 +112,8 @@ void intersect_batch(const Bvh& bvh, const RayBatch& rays, const HitBatch& out, 
                 const float* d = rays.directions + 3 * i;
                 Ray ray{{o[0], o[1], o[2]}, {d[0], d[1], d[2]}, rays.tmin, rays.tmax};
                 std::uint32_t visited;
-                Hit h = intersect(bvh, ray, mode, &visited);
+                Hit h = mode == Traversal::Wide ? intersect_wide(*wide, bvh, ray, &visited)
+                                                : intersect(bvh, ray, mode, &visited);
                 bool miss = h.ref == kNoHit;
                 out.t[i] = h.t;
                 out.prim[i] = miss ? -1 : std::int32_t(h.ref & gpu::REF_INDEX_MASK);

@@ -10,7 +10,7 @@ from . import _checks, _core
 
 METHODS = ("median", "mean", "midpoint", "sah", "sweep_sah", "lbvh")
 AXES = ("largest", "random", "best")
-TRAVERSALS = ("stack", "stackless")
+TRAVERSALS = ("stack", "stackless", "wide")
 MAX_TREE_HEIGHT = _core.MAX_TREE_HEIGHT
 
 #: One flattened node, 32 bytes (shaders/gpu_types.h): for a leaf `index` is the first slot in
@@ -133,8 +133,12 @@ class Bvh:
 
     # -- queries -----------------------------------------------------------------------------
     def intersect(self, origins: np.ndarray, directions: np.ndarray, *, tmin: float = 0.0,
-                  tmax: float = np.inf, traversal: str = "stack", threads: int = 0) -> dict:
+                  tmax: float = np.inf, traversal: str = "wide", threads: int = 0) -> dict:
         """Closest hits of rays origin + t·direction, t in (tmin, tmax), on every core.
+
+        `traversal`: "stack" (binary tree, nearer child first), "stackless" (skip indices,
+        report §3.1), or "wide" (a 4-wide copy of the tree made on first use; the fastest).
+        All three return the same hits.
 
         Returns a dict of arrays: t (inf on a miss), prim (index within its kind, -1 on a miss),
         kind (0 triangle, 1 sphere), u, v (triangle barycentrics; sphere longitude/2π, colatitude/π),

@@ -5,6 +5,7 @@
 
 #include "bvhlab/bvh.h"
 #include "bvhlab/traverse.h"
+#include "bvhlab/wide_bvh.h"
 #include "test_scenes.h"
 
 using namespace bvhlab;
@@ -38,12 +39,13 @@ std::vector<Ray> random_rays(std::uint32_t n, std::uint32_t seed) {
 }
 
 void expect_same_hits(const Bvh& bvh, const std::vector<Ray>& rays) {
+    const WideBvh wide = make_wide(bvh);
     int hits = 0;
     for (const Ray& ray : rays) {
         Hit want = brute_force(bvh, ray);
         hits += want.ref != kNoHit;
-        for (Traversal mode : {Traversal::Stack, Traversal::Stackless}) {
-            Hit got = intersect(bvh, ray, mode);
+        for (Traversal mode : {Traversal::Stack, Traversal::Stackless, Traversal::Wide}) {
+            Hit got = mode == Traversal::Wide ? intersect_wide(wide, bvh, ray) : intersect(bvh, ray, mode);
             ASSERT_EQ(got.t, want.t);  // the same float arithmetic on the same primitive
             if (got.ref != want.ref) {  // a tie: another primitive at exactly the same distance
                 EXPECT_EQ(got.t, want.t);
@@ -104,6 +106,25 @@ TEST(Traverse, EmptyTreeMisses) {
     Hit h = intersect(bvh, {{0, 0, 0}, {1, 0, 0}}, Traversal::Stackless);
     EXPECT_EQ(h.ref, kNoHit);
     EXPECT_EQ(h.t, kInfinity);
+    EXPECT_EQ(intersect_wide(make_wide(bvh), bvh, {{0, 0, 0}, {1, 0, 0}}).ref, kNoHit);
+}
+
+TEST(Traverse, WideTreeOfOneLeafAndOfFewChildren) {
+    for (int n : {1, 2, 3, 5}) {
+        test::Scene s;
+        for (int i = 0; i < n; ++i) s.add_sphere({float(3 * i), 0, 0}, 1.0f);
+        BuildConfig c;
+        c.max_leaf_size = 4;
+        c.traversal_cost = 100;  // everything that fits one leaf is one leaf
+        Bvh bvh = build_bvh(s.view(), c);
+        WideBvh wide = make_wide(bvh);
+        for (int i = 0; i < n; ++i) {
+            Hit h = intersect_wide(wide, bvh, {{float(3 * i), 0, -5}, {0, 0, 1}});
+            EXPECT_EQ(h.ref, gpu::REF_SPHERE_BIT | std::uint32_t(i)) << n << " spheres";
+            EXPECT_FLOAT_EQ(h.t, 4.0f);
+        }
+        EXPECT_EQ(intersect_wide(wide, bvh, {{1.5f, 0, -5}, {0, 0, 1}}).ref, kNoHit);
+    }
 }
 
 TEST(Traverse, SphereFromInsideHitsTheFarSide) {

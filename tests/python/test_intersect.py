@@ -71,13 +71,14 @@ def test_equals_brute_force(small_scene, method, traversal):
     assert np.all(got["prim"][~hit] == -1)
 
 
-def test_stack_and_stackless_agree_exactly(knot_mesh):
+def test_traversals_agree_exactly(knot_mesh):
     bvh = bvhlab.build(knot_mesh, method="mean")
     o, d = procedural.random_rays(knot_mesh, 20000, seed=2)
     a = bvh.intersect(o, d, traversal="stack")
-    b = bvh.intersect(o, d, traversal="stackless")
-    for k in ("t", "prim", "kind", "u", "v"):
-        np.testing.assert_array_equal(a[k], b[k])
+    for other in ("stackless", "wide"):
+        b = bvh.intersect(o, d, traversal=other)
+        for k in ("t", "prim", "kind", "u", "v"):
+            np.testing.assert_array_equal(a[k], b[k])
 
 
 def test_barycentrics_reconstruct_the_hit_point(knot_mesh):
