@@ -101,6 +101,7 @@ def write_json(name: str, data: dict) -> Path:
 
 def run_child(script: str, args: list[str]) -> dict:
     """Run a benchmark part in a fresh process (so core pinning and Embree's pool start clean)."""
-    out = subprocess.run([sys.executable, script, *args], check=True, capture_output=True, text=True)
+    out = subprocess.run([sys.executable, script, *args], capture_output=True, text=True)
     sys.stderr.write(out.stderr)
+    out.check_returncode()
     return json.loads(out.stdout.strip().splitlines()[-1])

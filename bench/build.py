@@ -66,7 +66,7 @@ def measure(threads: int, sizes: list[int], repeat: int) -> dict:
                    "nodes": s["nodes"], "height": s["height"], "sah_cost": s["sah_cost"]}
             for rays_name, rays in (("camera", cam), ("random", rnd)):
                 for trav in ("stack", "stackless", "wide"):
-                    bvh.intersect(*rays[:1], traversal=trav)  # the wide copy is made on first use
+                    bvh.intersect(rays[0][:1], rays[1][:1], traversal=trav)  # the wide copy is made on first use
                     tt, _ = _common.median_time(lambda: bvh.intersect(*rays, traversal=trav, threads=threads), repeat)
                     row[f"{rays_name}_{trav}_mrays_s"] = len(rays[0]) / tt / 1e6
             scene["methods"].append(row)
