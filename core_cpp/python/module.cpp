@@ -16,42 +16,18 @@
 #include "bvhlab/stats.h"
 #include "bvhlab/traverse.h"
 #include "bvhlab/wide_bvh.h"
+#include "py_bvh.h"
 
 namespace nb = nanobind;
 using namespace nb::literals;
 using namespace bvhlab;
+using namespace bvhlab::python;
 
 namespace {
 
-using Triangles = nb::ndarray<const float, nb::shape<-1, 3, 3>, nb::c_contig, nb::device::cpu>;
-using Spheres = nb::ndarray<const float, nb::shape<-1, 4>, nb::c_contig, nb::device::cpu>;
 using Vectors = nb::ndarray<const float, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
 template <class T>
 using Out1D = nb::ndarray<T, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
-
-GeometryView view_of(const Triangles& tris, const std::optional<Spheres>& spheres) {
-    GeometryView g;
-    g.triangles = tris.data();
-    g.triangle_count = tris.shape(0);
-    if (spheres) g.spheres = spheres->data(), g.sphere_count = spheres->shape(0);
-    return g;
-}
-
-/// A Bvh plus the depth order the overlay queries need, computed once on first use.
-struct PyBvh {
-    Bvh bvh;
-    std::optional<DepthOrder> depth_order;
-    std::optional<WideBvh> wide_bvh;
-    const DepthOrder& order() {
-        if (!depth_order) depth_order = make_depth_order(bvh);
-        return *depth_order;
-    }
-    const WideBvh& wide() {  // built on first use, with the GIL held
-        if (!wide_bvh) wide_bvh = make_wide(bvh);
-        return *wide_bvh;
-    }
-    void invalidate() { depth_order.reset(), wide_bvh.reset(); }
-};
 
 nb::dict stats_dict(const Bvh& bvh) {
     BvhStats s = compute_stats(bvh);
@@ -132,8 +108,11 @@ auto view(const Vector& v) {
 
 }  // namespace
 
+void bind_render(nb::module_& m);  // render_bindings.cpp
+
 NB_MODULE(_core, m) {
-    m.doc() = "bvhlab C++ core: BVH construction, stats and CPU traversal";
+    m.doc() = "bvhlab C++ core: BVH construction, stats, CPU traversal and the renderers";
+    bind_render(m);
     nb::exception<BuildCancelled>(m, "BuildCancelled");
 
     nb::class_<PyBvh>(m, "Bvh")

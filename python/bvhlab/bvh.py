@@ -166,6 +166,7 @@ class Bvh:
             spheres = _checks.float32_array("spheres", spheres, (4,))
         self._core.refit(triangles, spheres)
         self._stats = None
+        self._render_cache = None  # boxes and geometry changed
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:

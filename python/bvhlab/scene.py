@@ -121,6 +121,8 @@ class Scene:
         if value is None:
             return np.zeros(n, np.int32)
         value = np.asarray(value)
+        if n == 0 and value.size == 0:
+            return np.zeros(0, np.int32)
         if value.shape != (n,) or not np.issubdtype(value.dtype, np.integer):
             raise ValueError(f"{name} must be {n} integers, got shape {value.shape} dtype {value.dtype}")
         if n and (value.min() < 0 or value.max() >= len(self.materials)):

@@ -1,0 +1,67 @@
+// vulkan_renderer.h — the report's renderer on any Vulkan device (report §3.2, Figure 2): the
+// overlay pass (graphics pipeline, instanced LINE_LIST) and the trace pass (compute, the shared
+// tracer code in shaders/tracer/), headless, read back into a float RGBA array. On machines
+// without a GPU it runs on Mesa's lavapipe.
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "bvhlab/render.h"
+
+namespace bvhlab {
+
+/// No Vulkan loader, no driver, or no usable device; the message says what to install.
+struct VulkanUnavailable : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+struct VulkanOptions {
+    /// Device to use: an index into the enumeration or a substring of the device name. Empty:
+    /// the environment variable BVHLAB_VULKAN_DEVICE, else the first discrete GPU, else
+    /// integrated, else virtual, else a CPU driver (lavapipe).
+    std::string device;
+    /// Enable VK_LAYER_KHRONOS_validation (also when BVHLAB_VULKAN_VALIDATION=1) and collect its
+    /// messages; throws VulkanUnavailable if the layer is asked for but not installed.
+    bool validation = false;
+    /// Upload through a staging buffer even where device memory is host-visible (tests the path
+    /// real GPUs take).
+    bool force_staging = false;
+};
+
+/// Is the Vulkan loader present (cheap; does not create an instance)?
+bool vulkan_loader_available();
+
+class VulkanRenderer {
+public:
+    explicit VulkanRenderer(const VulkanOptions& options = {});
+    ~VulkanRenderer();
+    VulkanRenderer(const VulkanRenderer&) = delete;
+    VulkanRenderer& operator=(const VulkanRenderer&) = delete;
+
+    std::string device_name() const;
+    std::string device_type() const;  ///< "discrete", "integrated", "virtual", "cpu" or "other"
+    std::uint32_t max_image_dimension() const;
+
+    /// Copies the scene to the device, replacing any earlier one; returns milliseconds. The
+    /// RenderScene may be destroyed afterwards.
+    double upload(const RenderScene& scene);
+
+    /// Renders the uploaded scene: overlay pass (if settings.overlay), trace pass, read back.
+    /// rgba: settings.width × settings.height × 4 floats, row 0 at the top. Throws
+    /// std::invalid_argument for bad settings (validate(settings, max_image_dimension())).
+    RenderTimings render(const RenderSettings& settings, float* rgba);
+
+    /// Validation-layer messages (warnings and errors) since the last call; clears them.
+    std::vector<std::string> take_validation_messages();
+    /// Validation errors since construction.
+    std::uint32_t validation_error_count() const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace bvhlab

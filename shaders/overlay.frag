@@ -1,0 +1,13 @@
+#version 460
+// overlay.frag — line colour in rgb, distance from the camera in alpha (report §3.3): the trace
+// pass keeps a primary hit only if it is nearer than that distance.
+#include "gpu_types.h"
+
+layout(set = 0, binding = BINDING_FRAME, std140) uniform FrameBlock { FrameParams frame; };
+layout(location = 0) in vec3 world_position;
+layout(location = 1) flat in vec3 line_color;
+layout(location = 0) out vec4 color_distance;
+
+void main() {
+    color_distance = vec4(line_color, length(world_position - frame.camera_position.xyz));
+}

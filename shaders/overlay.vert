@@ -1,0 +1,26 @@
+#version 460
+// overlay.vert — the BVH overlay pass (report §3.3): instanced LINE_LIST, 24 vertices per box
+// (its 12 edges); instance i is box first_box + i of the depth-sorted box array, so a depth range
+// is one offset and one count (§3.3.1).
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_buffer_reference_uvec2 : require
+
+#include "gpu_types.h"
+#include "glsl_prelude.glsl"
+
+layout(set = 0, binding = BINDING_FRAME, std140) uniform FrameBlock { FrameParams frame; };
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer BoxArray { GpuBox v[]; };
+
+#include "tracer/overlay.glsl"
+#include "tracer/shade_colors.glsl"
+
+layout(location = 0) out vec3 world_position;
+layout(location = 1) flat out vec3 line_color;
+
+void main() {
+    GpuBox box = BoxArray(frame.addr_materials_boxes.zw).v[gl_InstanceIndex];
+    uint depth = uint(box.lo_depth.w);
+    world_position = corner_position(box.lo_depth.xyz, box.hi.xyz, box_corner(uint(gl_VertexIndex)));
+    line_color = frame.overlay_range.z != 0u ? depth_color(depth) : vec3(1.0f, 0.85f, 0.2f);
+    gl_Position = overlay_clip(world_position);
+}

@@ -1,0 +1,237 @@
+"""The tracer's algorithm, checked on the CPU reference against geometry and optics computed here
+independently: shadow transmission, Snell refraction, the overlay's occlusion, the sky."""
+import math
+
+import numpy as np
+import pytest
+
+import bvhlab
+from bvhlab import showcase
+from bvhlab.render import _core
+
+SKY = (0.25, 0.5, 0.75)
+
+
+def project(camera: bvhlab.Camera, width: int, height: int, point) -> tuple[float, float]:
+    """Image position (x right, y down, in pixels) of a world point under the tracer's camera."""
+    pos, look, up = (np.array(v, np.float64) for v in (camera.position, camera.look_at, camera.up))
+    fwd = (look - pos) / np.linalg.norm(look - pos)
+    right = np.cross(fwd, up)
+    right /= np.linalg.norm(right)
+    true_up = np.cross(right, fwd)
+    v = np.array(point, np.float64) - pos
+    tan = math.tan(math.radians(camera.fov_y) / 2)
+    x = v @ right / (v @ fwd) / (tan * width / height)
+    y = v @ true_up / (v @ fwd) / tan
+    return (x + 1) / 2 * width, (1 - y) / 2 * height
+
+
+def render(scene, width=96, height=64, **kw):
+    image, _ = bvhlab.render(scene, bvhlab.build(scene), width, height, backend="cpu", **kw)
+    return image
+
+
+def test_sky_where_nothing_is_hit():
+    scene = showcase.five_spheres()
+    scene.sky = SKY
+    image = render(scene)
+    np.testing.assert_array_equal(image[0, 0], [*np.float32(SKY), 1.0])  # the top-left corner is sky
+    assert np.any(np.abs(image[..., :3] - np.float32(SKY)).sum(-1) > 0.1), "and the spheres are not"
+
+
+def test_empty_scene_renders_sky_only():
+    scene = bvhlab.Scene(camera=bvhlab.Camera((0, -5, 1), (0, 0, 0)), sky=SKY)
+    image = render(scene, 16, 8)
+    assert np.all(image[..., :3] == np.float32(SKY)) and np.all(image[..., 3] == 1)
+
+
+def shadow_scene(transparent: float | None):
+    """A floor, a sphere above it (or none), a light off to the side."""
+    floor = showcase.quad((-10, -10, 0), (10, -10, 0), (10, 10, 0), (-10, 10, 0))
+    spheres = np.zeros((0, 4), np.float32) if transparent is None else np.array([[0, 0, 1.5, 0.5]], np.float32)
+    return bvhlab.Scene(
+        triangles=floor, spheres=spheres,
+        materials=[bvhlab.Material((0.8, 0.8, 0.8)), bvhlab.Material((0.3, 0.9, 0.3), transparent=transparent or 0.0)],
+        tri_material=[0, 0], sphere_material=[1] * len(spheres),
+        camera=bvhlab.Camera((0, -8, 6), (0, 0, 0.5)), light=bvhlab.Light((2, 0, 4.5)))
+
+
+@pytest.mark.parametrize("transparent", [0.5, 0.3])
+def test_transparent_shadow_is_lighter_by_the_product_of_transparencies(transparent):
+    # The shadow centre: the floor point on the line from the light through the sphere's centre.
+    light, center = np.array([2, 0, 4.5]), np.array([0, 0, 1.5])
+    d = center - light
+    shadow = light + d * (light[2] / -d[2])
+    camera = shadow_scene(None).camera
+    x, y = project(camera, 96, 64, shadow)
+    px = int(x), int(y)
+    lit = render(shadow_scene(None))[px[1], px[0], :3]
+    dark = render(shadow_scene(0.0))[px[1], px[0], :3]
+    half = render(shadow_scene(transparent))[px[1], px[0], :3]
+    assert np.all(dark < lit - 0.1), "the opaque sphere casts a shadow there"
+    # The shadow ray crosses the sphere's surface twice: transmission = transparent².
+    np.testing.assert_allclose((half - dark) / (lit - dark), transparent ** 2, rtol=1e-3)
+
+
+def slab_scene(ior: float, with_slab: bool = True):
+    """A red | green wall (boundary at x = 0), a glass slab tilted 35° about z in front of it."""
+    wall_red = showcase.quad((-20, 6, -10), (0, 6, -10), (0, 6, 10), (-20, 6, 10))
+    wall_green = showcase.quad((0, 6, -10), (20, 6, -10), (20, 6, 10), (0, 6, 10))
+    tris, mats = [wall_red, wall_green], [0, 0, 1, 1]
+    if with_slab:
+        slab = showcase.box_mesh((-3, -1, -3), (3, 1, 3)).astype(np.float64)
+        a = math.radians(35)
+        rot = np.array([[math.cos(a), -math.sin(a), 0], [math.sin(a), math.cos(a), 0], [0, 0, 1]])
+        tris.append((slab @ rot.T).astype(np.float32))
+        mats += [2] * 12
+    return bvhlab.Scene(
+        triangles=np.concatenate(tris), tri_material=np.array(mats),
+        materials=[bvhlab.Material((1, 0, 0)), bvhlab.Material((0, 1, 0)),
+                   bvhlab.Material((1, 1, 1), transparent=1.0, ior=ior)],
+        camera=bvhlab.Camera((0, -6, 0), (0, 0, 0), fov_y=20), light=bvhlab.Light((0, -5, 0)))
+
+
+def boundary_column(image) -> float:
+    """Where the wall turns from red to green along the middle row, in pixels, to a fraction of a
+    pixel: the boundary pixel's share of green samples places it inside the pixel."""
+    row = image[image.shape[0] // 2, :, :3].astype(np.float64)
+    green = row[:, 1] / np.maximum(row[:, 0] + row[:, 1], 1e-9)
+    w = len(green)
+    k = w // 4 + int(np.argmax(green[w // 4: 3 * w // 4] > 0.5))  # first mostly-green pixel
+    g_red, g_green = green[k - 3], green[k + 3]
+    covered = np.clip((green[k - 1] - g_red) / (g_green - g_red), 0, 1)  # green share of pixel k-1
+    return k - covered
+
+
+def snell_boundary_column(ior: float, width: int) -> float:
+    """Independent optics: the image column whose centre ray, refracted through the tilted slab,
+    lands on x = 0 of the wall (bisection on the column)."""
+    cam = slab_scene(ior).camera
+    a = math.radians(35)
+    n = np.array([-math.sin(a), math.cos(a), 0.0])  # slab face normal (rotated +y)
+
+    def wall_x(col: float) -> float:
+        tan = math.tan(math.radians(cam.fov_y) / 2)
+        d = np.array([(2 * col / width - 1) * tan * width / 64, 1.0, 0.0])
+        d /= np.linalg.norm(d)
+        p = np.array(cam.position, np.float64)
+        for face, eta in ((-1.0, 1 / ior), (1.0, ior)):  # enter the front face, leave the back
+            t = (face - p @ n) / (d @ n)
+            p = p + t * d
+            nn = n if d @ n < 0 else -n  # the normal facing the incoming ray
+            k = 1 - eta ** 2 * (1 - (d @ nn) ** 2)
+            d = eta * d - (eta * (d @ nn) + math.sqrt(k)) * nn
+        t = (6 - p[1]) / d[1]
+        return (p + t * d)[0]
+
+    lo, hi = 0.0, float(width)
+    for _ in range(60):
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if wall_x(mid) < 0 else (lo, mid)
+    return lo
+
+
+def test_refraction_through_a_slab_follows_snell():
+    width = 200
+    plain = boundary_column(render(slab_scene(1.0, with_slab=False), width, 64, spp=16))
+    assert plain == pytest.approx(width / 2, abs=0.1), "no slab: the boundary is straight ahead"
+    same = boundary_column(render(slab_scene(1.0), width, 64, spp=16))
+    assert same == pytest.approx(plain, abs=0.1), "IOR 1.0: the ray passes straight"
+    bent = boundary_column(render(slab_scene(1.5), width, 64, spp=16))
+    expected = snell_boundary_column(1.5, width)
+    assert abs(expected - plain) > 5, "the test geometry must displace the ray visibly"
+    assert bent == pytest.approx(expected, abs=0.3)
+
+
+def overlay_scene():
+    """A small sphere in front of a large one, seen from close by: the small sphere's box has its
+    front edges in front of the big sphere (visible) and its back edges behind itself (hidden)."""
+    spheres = np.array([[0, 0, 0, 0.5], [0, 6, 0, 3]], np.float32)
+    return bvhlab.Scene(spheres=spheres, materials=[bvhlab.Material((0.9, 0.3, 0.3)), bvhlab.Material((0.3, 0.3, 0.9))],
+                        sphere_material=[0, 1], camera=bvhlab.Camera((0, -3, 0), (0, 0, 0), fov_y=30),
+                        light=bvhlab.Light((0, -10, 5)), sky=SKY)
+
+
+def near_pixels(camera, w, h, point):
+    x, y = project(camera, w, h, point)
+    return [(int(y) + dy, int(x) + dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1)]
+
+
+def test_overlay_lines_occlude_and_are_occluded():
+    scene = overlay_scene()
+    bvh = bvhlab.build(scene)
+    w, h = 160, 120
+    plain, _ = bvhlab.render(scene, bvh, w, h, backend="cpu")
+    lines, _ = bvhlab.render(scene, bvh, w, h, backend="cpu", overlay_depth=(1, 1), color_by_depth=False)
+    line_color = np.float32([1.0, 0.85, 0.2])
+    is_line = np.all(np.abs(lines[..., :3] - line_color) < 1e-6, -1)
+    # every pixel is either unchanged or shows the line colour; some lines are drawn
+    assert np.all(is_line | np.all(lines == plain, -1))
+    assert is_line.sum() > 50
+    # the small sphere's box is [-0.5, 0.5]³; midpoints of its right vertical edges:
+    front = (0.5, -0.5, 0.0)  # the ray there misses the small sphere and meets the big one farther
+    back = (0.5, 0.5, 0.0)    # the ray there passes through the small sphere first
+    assert any(is_line[p] for p in near_pixels(scene.camera, w, h, front))
+    assert not any(is_line[p] for p in near_pixels(scene.camera, w, h, back))
+
+
+def test_stack_and_stackless_images_are_identical():
+    scene = showcase.whitted()
+    bvh = bvhlab.build(scene, method="mean")
+    a, _ = bvhlab.render(scene, bvh, 64, 48, backend="cpu", traversal="stack")
+    b, _ = bvhlab.render(scene, bvh, 64, 48, backend="cpu", traversal="stackless")
+    np.testing.assert_array_equal(a, b)
+
+
+def test_heatmap_shows_more_box_tests_where_the_geometry_is():
+    scene = showcase.whitted()
+    heat = render(scene, 64, 48, mode="heatmap")
+    assert np.all(heat[..., 3] == 1)
+    sky_row, floor_row = heat[1, :, :3], heat[-2, :, :3]
+    # the ramp runs blue (few) → red (many): the floor gets more red than the sky
+    assert floor_row[:, 0].mean() + floor_row[:, 1].mean() > sky_row[:, 0].mean() + sky_row[:, 1].mean()
+
+
+def test_supersampling_averages_samples():
+    scene = showcase.five_spheres()
+    one = render(scene, 48, 32, spp=1)
+    many = render(scene, 48, 32, spp=16)
+    assert np.abs(one - many).mean() < 0.03  # same picture...
+    assert np.any(np.abs(one - many) > 0.05)  # ...with smoother silhouettes
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(width=0), "width"), (dict(height=-3), "height"), (dict(spp=2), "square number"),
+    (dict(max_depth=99), "max_depth"), (dict(overlay_depth=(5, 2)), "greater"),
+    (dict(mode="xray"), "unknown mode"), (dict(traversal="bfs"), "unknown traversal"),
+    (dict(width=20000, height=10), "exceeds the device limit"),
+])
+def test_bad_settings(kwargs, match):
+    scene = showcase.five_spheres()
+    args = dict(width=32, height=32) | kwargs
+    with pytest.raises(ValueError, match=match):
+        bvhlab.render(scene, bvhlab.build(scene), backend="cpu", **args)
+
+
+def test_nan_camera_is_rejected():
+    with pytest.raises(ValueError, match="finite"):
+        bvhlab.Camera((np.nan, 0, 0), (0, 0, 0))
+
+
+def test_png_round_trip(tmp_path):
+    from bvhlab.png import read_png
+
+    image = np.random.default_rng(0).random((5, 7, 4)).astype(np.float32)
+    bvhlab.save_png(image, tmp_path / "x.png")
+    back = read_png(tmp_path / "x.png")
+    assert back.shape == (5, 7, 4)
+    srgb = np.where(image[..., :3] <= 0.0031308, 12.92 * image[..., :3], 1.055 * image[..., :3] ** (1 / 2.4) - 0.055)
+    np.testing.assert_array_equal(back[..., :3], (srgb * 255 + 0.5).astype(np.uint8))
+
+
+def test_auto_backend_falls_back_or_uses_vulkan():
+    scene = showcase.five_spheres()
+    image, t = bvhlab.render(scene, bvhlab.build(scene), 16, 16, backend="auto")
+    assert t["backend"] in ("vulkan", "cpu")
+    assert ("fallback" in t) == (t["backend"] == "cpu")
+    assert not _core.HAS_VULKAN or t["backend"] == "vulkan"
