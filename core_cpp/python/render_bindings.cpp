@@ -12,6 +12,13 @@
 #include "bvhlab/vulkan_renderer.h"
 #endif
 
+namespace bvhlab::gpu {
+/// The colour ramps of shaders/tracer/shade_colors.glsl, for the raster previews and Blender.
+struct Palette {
+#include "tracer/shade_colors.glsl"
+};
+}  // namespace bvhlab::gpu
+
 namespace nb = nanobind;
 using namespace nb::literals;
 using namespace bvhlab;
@@ -91,6 +98,17 @@ void bind_render(nb::module_& m) {
                  auto r = s.scene.box_range(lo, hi);
                  return nb::make_tuple(r.first, r.second);
              });
+
+    m.def("depth_colors", [](const nb::ndarray<const std::uint32_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>& depths) {
+              auto* out = new float[depths.shape(0) * 3];
+              gpu::Palette palette;
+              for (std::size_t i = 0; i < depths.shape(0); ++i) {
+                  gpu::vec3 c = palette.depth_color(depths.data()[i]);
+                  out[3 * i] = c.x, out[3 * i + 1] = c.y, out[3 * i + 2] = c.z;
+              }
+              nb::capsule owner(out, [](void* p) noexcept { delete[] static_cast<float*>(p); });
+              return nb::ndarray<nb::numpy, float, nb::ndim<2>>(out, {depths.shape(0), 3}, owner);
+          }, "depths"_a.noconvert(), "Overlay line colour of each tree depth (the shaders' palette).");
 
     m.def("render_cpu", [](const PyRenderScene& scene, const nb::dict& settings, const Image& out, std::uint32_t threads) {
               RenderSettings s = settings_from(settings);

@@ -1,0 +1,51 @@
+"""Build and render a scene with each split method: the numbers behind Table 1."""
+from __future__ import annotations
+
+import statistics
+from typing import Callable
+
+from ..bvh import build
+from ..render import Renderer
+from ..scene import Scene
+
+
+def method_kwargs(label: str) -> dict:
+    """'sah32' → method sah with 32 bins; other labels are method names."""
+    from ..cli.options import method_kwargs as parse
+
+    return parse(label)
+
+
+def measure_methods(scene: Scene, labels: list[str], *, frames: int = 5, builds: int = 5, width: int = 800,
+                    height: int = 600, renderer: Renderer | None = None, spp: int = 1, max_depth: int = 5,
+                    progress: Callable[[str], None] | None = None) -> list[dict]:
+    """For each method: build time (median of `builds` builds), average frame time over `frames`
+    frames after one warm-up frame (the report's protocol: same camera, 800×600), and the tree's
+    height, SAH cost, nodes and leaves."""
+    renderer = renderer or Renderer("auto")
+    rows = []
+    for label in labels:
+        kwargs = method_kwargs(label)
+        if progress:
+            progress(f"{label}: building")
+        trees = [build(scene, **kwargs) for _ in range(max(1, builds))]
+        bvh = trees[-1]
+        stats = bvh.stats
+        if progress:
+            progress(f"{label}: rendering {frames} frames")
+        renderer.render(scene, bvh, width, height, spp=spp, max_depth=max_depth)  # warm-up (and upload)
+        frame_ms = []
+        for _ in range(max(1, frames)):
+            _, t = renderer.render(scene, bvh, width, height, spp=spp, max_depth=max_depth)
+            frame_ms.append(t["overlay_ms"] + t["trace_ms"] + t["readback_ms"])
+        mean_frame = statistics.fmean(frame_ms)
+        rows.append({
+            "method": label, "split_method": kwargs["method"], "bins": kwargs.get("bins"),
+            "frame_ms": mean_frame, "frame_ms_all": frame_ms,
+            "build_ms": statistics.median(t.stats["build_ms"] for t in trees),
+            "height": stats["height"], "sah_cost": stats["sah_cost"], "nodes": stats["nodes"],
+            "leaves": stats["leaves"], "nodes_per_depth": stats["nodes_per_depth"],
+            "primary_mrays_s": width * height * spp / (mean_frame * 1e3),
+            "device": t["device"], "backend": t["backend"],
+        })
+    return rows

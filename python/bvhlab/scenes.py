@@ -1,0 +1,98 @@
+"""Named scenes: the bundled `.blend` files (blender_scenes/), generated scenes (`gen:...`, no
+Blender needed), and files (`.blend` read through bpy with the add-on's exporter, `.npz`)."""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from .scene import Scene
+
+
+@dataclass(frozen=True)
+class SceneInfo:
+    name: str
+    description: str
+    triangles: int
+    spheres: int
+    source: str  # "bundled .blend" or "generated"
+
+
+def bundled_dir() -> Path | None:
+    """blender_scenes/: inside the installed package (wheels) or beside python/ in a checkout."""
+    here = Path(__file__).resolve().parent
+    for candidate in (here / "blender_scenes", here.parents[1] / "blender_scenes"):
+        if (candidate / "scenes.json").exists():
+            return candidate
+    return None
+
+
+def _bundled() -> dict:
+    d = bundled_dir()
+    return json.loads((d / "scenes.json").read_text()) if d else {}
+
+
+def _generated() -> dict[str, tuple[str, Callable[[], Scene]]]:
+    from . import procedural, showcase
+
+    def triangles_scene(make):
+        return lambda: Scene(triangles=make())
+
+    return {
+        "gen:five_spheres": ("the report's five spheres (Figures 3-4)", showcase.five_spheres),
+        "gen:whitted": ("reflective and transparent spheres over a checker floor", showcase.whitted),
+        "gen:room": ("a detailed torus knot in a large room, 250k triangles", _room),
+        "gen:knot": ("a bumpy torus knot, 250k triangles", triangles_scene(lambda: procedural.torus_knot(250_000))),
+        "gen:random_spheres": ("2000 spheres uniformly at random in a cube (report §4.2)",
+                               lambda: Scene(spheres=procedural.random_spheres(2000, radius=0.015, seed=1))),
+    }
+
+
+def _room() -> Scene:
+    """procedural.model_in_room seen from inside the room, looking at the knot."""
+    from . import procedural
+    from .scene import Camera, Light
+
+    return Scene(triangles=procedural.model_in_room(250_000), camera=Camera((-25, -40, -20), (20, 25, -50), fov_y=50),
+                 light=Light((-10, -30, 40)))
+
+
+def list_scenes() -> list[SceneInfo]:
+    out = [SceneInfo(k, v.get("description", ""), v.get("triangles", 0), v.get("spheres", 0), "bundled .blend")
+           for k, v in _bundled().items()]
+    for name, (description, _) in _generated().items():
+        out.append(SceneInfo(name, description, -1, -1, "generated"))
+    return out
+
+
+def load_scene(spec: str) -> tuple[Scene, str]:
+    """A Scene from a bundled name, a `gen:` name, a `.blend` or an `.npz` path; and a short name."""
+    path = Path(spec)
+    if spec.endswith(".npz"):
+        return Scene.load(path), path.stem
+    if spec.endswith(".blend"):
+        return load_blend(path), path.stem
+    generated = _generated()
+    if spec in generated:
+        return generated[spec][1](), spec.split(":", 1)[1]
+    bundled = _bundled()
+    if spec in bundled:
+        return load_blend(bundled_dir() / bundled[spec]["file"]), spec
+    names = ", ".join(sorted([*bundled, *generated]))
+    raise FileNotFoundError(f"no scene '{spec}': give a .blend or .npz file, or one of: {names}")
+
+
+def load_blend(path: Path) -> Scene:
+    """Open a .blend with bpy (Blender as a Python module) and export it with the add-on's code."""
+    if not path.exists():
+        raise FileNotFoundError(f"no such file: {path}")
+    try:
+        import bpy
+    except ImportError as e:
+        raise RuntimeError("reading .blend files needs Blender's Python module: pip install bpy==5.0.1 "
+                           "(Python 3.11)") from e
+    from .blender import export_scene
+
+    bpy.ops.wm.open_mainfile(filepath=str(path.resolve()), load_ui=False)
+    return export_scene(bpy.context, scope="visible")

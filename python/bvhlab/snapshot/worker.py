@@ -1,0 +1,76 @@
+"""The child process of bvhlab.snapshot: builds the tree and draws with moderngl."""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("npz")
+    ap.add_argument("--name", default="scene")
+    ap.add_argument("--build", default="{}")
+    ap.add_argument("--out", required=True)
+    ap.add_argument("--depth", nargs=2, type=int)
+    ap.add_argument("--sheet", action="store_true")
+    ap.add_argument("--size", nargs=2, type=int, default=(800, 600))
+    args = ap.parse_args(argv)
+
+    import bvhlab
+    from .._core import depth_colors
+    from .raster import Rasterizer
+
+    scene = bvhlab.Scene.load(args.npz)
+    bvh = bvhlab.build(scene, **json.loads(args.build))
+    raster = Rasterizer(scene, *args.size)
+
+    def boxes(a, b):
+        lo, hi, depth = bvh.boxes(a, b)
+        return lo, hi, depth_colors(depth.astype(np.uint32))
+
+    if not args.sheet:
+        image = raster.draw(*boxes(*args.depth))
+        _save_srgb(image, args.out)
+        return
+    height = bvh.stats["height"]
+    panels = [(d, raster.draw(*boxes(d, d)), bvh.stats["nodes_per_depth"][d]) for d in range(height)]
+    _sheet(panels, args.out, f"{args.name}: {bvh.config.method} — boxes per depth (height {height})")
+
+
+def _save_srgb(image: np.ndarray, path) -> None:
+    """The raster image is already display-referred 8-bit: write it as it is."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    plt.imsave(path, image)
+
+
+def _sheet(panels, path, title: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    cols = math.ceil(math.sqrt(len(panels) * 4 / 3))
+    rows = math.ceil(len(panels) / cols)
+    h, w = panels[0][1].shape[:2]
+    fig, axes = plt.subplots(rows, cols, figsize=(cols * w / 100, rows * (h + 40) / 100 + 0.4), squeeze=False)
+    for ax in axes.flat:
+        ax.axis("off")
+    for ax, (depth, image, count) in zip(axes.flat, panels):
+        ax.imshow(image)
+        ax.set_title(f"depth {depth}: {count} boxes", fontsize=8)
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+if __name__ == "__main__":
+    main()
