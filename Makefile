@@ -11,12 +11,13 @@ CMAKE_GEN := -G Ninja
 CORE_SOURCES := $(shell find core_cpp shaders -type f \( -name '*.cpp' -o -name '*.h' -o -name '*.txt' -o -name '*.comp' -o -name '*.glsl' -o -name '*.vert' -o -name '*.frag' \) 2>/dev/null)
 PY_SOURCES   := $(shell find python -type f -name '*.py' 2>/dev/null)
 
-.PHONY: help setup system venv build test cpp-test asan-test pytest demo bench clean
+.PHONY: help setup system venv build test cpp-test asan-test pytest demo bench addon scenes clean
 
 help:
 	@echo "make test   install what is missing, build, run all tests (C++, ASan/UBSan, pytest)"
 	@echo "make demo   install what is missing, build, run the demo on a bundled scene"
-	@echo "make bench  build benchmarks against Embree (bench/results/*.json)"
+	@echo "make bench  build and traversal benchmark against Embree (bench/results/*.json)"
+	@echo "make addon  the Blender extension zip in dist/"
 
 setup: system venv
 
@@ -60,6 +61,14 @@ demo: build
 
 bench: build
 	$(PY) bench/build.py
+
+# The Blender extension zip (dist/), with the compiled core as a bundled wheel.
+addon: build
+	$(PY) scripts/build_addon.py
+
+# Regenerate the bundled .blend scenes.
+scenes: build
+	$(PY) blender_scenes/make_scenes.py
 
 clean:
 	rm -rf build dist out $(VENV)/.built

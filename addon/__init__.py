@@ -1,0 +1,50 @@
+"""bvhlab for Blender: build bounding volume hierarchies over the scene with the split methods of
+Sandén's report, draw their boxes by depth in the viewport, ray trace with bvhlab's Whitted
+tracer, export statistics and compare methods (View3D ▸ Sidebar ▸ BVH).
+
+Everything the panel does is an operator (bvhlab.build, bvhlab.render, bvhlab.export_stats,
+bvhlab.compare), so scripts drive the same code as the buttons. The compiled core comes from the
+bundled bvhlab wheel and is imported only when an operator runs.
+"""
+from __future__ import annotations
+
+import bpy
+from bpy.app.handlers import persistent
+
+from . import overlay, state
+from .ops_build import BVHLAB_OT_build
+from .ops_compare import BVHLAB_OT_compare
+from .ops_export_stats import BVHLAB_OT_export_stats
+from .ops_render import BVHLAB_OT_render
+from .panels import (BVHLAB_PT_compare, BVHLAB_PT_export, BVHLAB_PT_main, BVHLAB_PT_object, BVHLAB_PT_overlay,
+                     BVHLAB_PT_render)
+from .properties import BVHLAB_PG_settings, register_properties, unregister_properties
+
+classes = (
+    BVHLAB_PG_settings,
+    BVHLAB_OT_build, BVHLAB_OT_render, BVHLAB_OT_export_stats, BVHLAB_OT_compare,
+    BVHLAB_PT_main, BVHLAB_PT_overlay, BVHLAB_PT_render, BVHLAB_PT_compare, BVHLAB_PT_export, BVHLAB_PT_object,
+)
+_register_classes, _unregister_classes = bpy.utils.register_classes_factory(classes)
+
+
+@persistent
+def _forget_trees(*_args) -> None:
+    """Trees belong to the scenes of the open file: drop them when another file loads."""
+    state.clear()
+
+
+def register() -> None:
+    _register_classes()
+    register_properties()
+    bpy.app.handlers.load_pre.append(_forget_trees)
+    overlay.add_handler()
+
+
+def unregister() -> None:
+    overlay.remove_handler()
+    if _forget_trees in bpy.app.handlers.load_pre:
+        bpy.app.handlers.load_pre.remove(_forget_trees)
+    unregister_properties()
+    _unregister_classes()
+    state.clear()

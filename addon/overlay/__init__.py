@@ -1,0 +1,81 @@
+"""The viewport overlay: a POST_VIEW draw handler that draws the boxes of the scene's tree in the
+panel's depth range (report §3.3). The GPU batch is remade only when the tree or the leaves-only
+choice changes; the depth range only picks a slice of it."""
+from __future__ import annotations
+
+import bpy
+
+from .. import state
+
+_handle = None
+_cached: dict = {"key": None, "batch": None}
+_failed: set = set()  # trees whose overlay failed: report once, not on every redraw
+
+
+def batch_for(built, leaves_only: bool):
+    """The BoxBatch of a built tree, made on first use and whenever the tree or leaves-only changes."""
+    from .batch import BoxBatch
+
+    key = (built.serial, leaves_only)
+    if _cached["key"] != key:
+        _cached["batch"] = None  # free the old texture before making the new one
+        _cached["batch"] = BoxBatch.from_bvh(built.bvh, leaves_only)
+        _cached["key"] = key
+    return _cached["batch"]
+
+
+def draw_scene_overlay(scene, view_projection) -> int:
+    """Draw the scene's boxes as its settings say; returns the number of boxes drawn."""
+    settings = scene.bvhlab
+    built = state.tree_for(scene)
+    if not settings.overlay_show or built is None:
+        return 0
+    batch = batch_for(built, settings.overlay_leaves_only)
+    return batch.draw(view_projection, settings.overlay_depth_min, settings.overlay_depth_max,
+                      color=settings.overlay_color, color_by_depth=settings.overlay_color_by_depth,
+                      xray=settings.overlay_xray, line_width=settings.overlay_line_width)
+
+
+def _draw_callback() -> None:
+    context = bpy.context
+    built = state.tree_for(context.scene)
+    if built is None or built.serial in _failed or context.region_data is None:
+        return
+    try:
+        draw_scene_overlay(context.scene, context.region_data.perspective_matrix)
+    except Exception:  # a draw callback must not raise on every redraw; say it once
+        import traceback
+        traceback.print_exc()
+        _failed.add(built.serial)
+        state.messages[state.key(context.scene)] = ("ERROR", "the BVH overlay failed to draw; see the console")
+
+
+def add_handler() -> None:
+    global _handle
+    if _handle is None:
+        _handle = bpy.types.SpaceView3D.draw_handler_add(_draw_callback, (), "WINDOW", "POST_VIEW")
+
+
+def remove_handler() -> None:
+    """Remove the draw handler and free the GPU batch."""
+    global _handle
+    if _handle is not None:
+        bpy.types.SpaceView3D.draw_handler_remove(_handle, "WINDOW")
+        _handle = None
+    _cached.update(key=None, batch=None)
+    _failed.clear()
+    from .shader import forget_shader
+    forget_shader()
+
+
+def handler_installed() -> bool:
+    return _handle is not None
+
+
+def tag_redraw() -> None:
+    """Ask every 3D viewport to redraw (after a settings or tree change)."""
+    window_manager = bpy.context.window_manager
+    for window in (window_manager.windows if window_manager else ()):
+        for area in window.screen.areas:
+            if area.type == "VIEW_3D":
+                area.tag_redraw()

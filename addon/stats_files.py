@@ -1,0 +1,42 @@
+"""BVH statistics and method comparisons as JSON and CSV files (no bpy)."""
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+#: Per-depth and per-size lists in `Bvh.stats`; every other entry is one value.
+LIST_METRICS = ("nodes_per_depth", "leaves_per_depth", "leaf_size_histogram")
+
+COMPARE_COLUMNS = ("label", "method", "bins", "frame_ms", "build_ms", "height", "sah_cost", "nodes",
+                   "total_ms", "backend", "device")
+
+
+def write_stats_json(path: Path, stats: dict, about: dict) -> None:
+    """{"about": {...scene, file, scope...}, "stats": <Bvh.stats, unchanged>}."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps({"about": about, "stats": stats}, indent=1) + "\n")
+
+
+def write_stats_csv(path: Path, stats: dict) -> None:
+    """Long format, one value per row: `metric,index,value`. Single values leave `index` empty;
+    nodes_per_depth and leaves_per_depth have the depth as index, leaf_size_histogram the leaf size."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("w", newline="") as f:
+        out = csv.writer(f)
+        out.writerow(["metric", "index", "value"])
+        for name, value in stats.items():
+            if name in LIST_METRICS:
+                out.writerows([name, i, v] for i, v in enumerate(value))
+            else:
+                out.writerow([name, "", value])
+
+
+def write_compare_csv(path: Path, rows: list[dict]) -> None:
+    """One row per split method with the report's Table 1 columns (frame time, build time, height)
+    and the SAH cost."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("w", newline="") as f:
+        out = csv.DictWriter(f, COMPARE_COLUMNS, extrasaction="ignore")
+        out.writeheader()
+        out.writerows(rows)

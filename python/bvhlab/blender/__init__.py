@@ -1,0 +1,18 @@
+"""Blender scene → `bvhlab.Scene` (the only part of bvhlab, beside the add-on, that imports `bpy`).
+
+    from bvhlab.blender import export_scene, export_scene_file
+    scene = export_scene(bpy.context, scope="visible")      # a bvhlab.Scene
+    export_scene_file("scene.npz", bpy.context)             # the file the CLI reads
+
+One small module per kind of Blender data (glTF-Blender-IO style): `scope` picks the objects,
+`mesh`, `sphere`, `material`, `camera`, `light` and `world` each gather one thing, `export`
+puts them together.
+"""
+from .errors import ExportError, ExportWarning, SubstituteWarning
+from .export import export_scene, export_scene_file
+from .light import intensity_from_watts
+from .scope import SCOPES
+from .sphere import SPHERE_PROPERTY, is_analytic_sphere
+
+__all__ = ["export_scene", "export_scene_file", "ExportError", "ExportWarning", "SubstituteWarning", "SCOPES",
+           "SPHERE_PROPERTY", "is_analytic_sphere", "intensity_from_watts"]

@@ -1,0 +1,34 @@
+"""One `bvhlab.Material` per Blender material used, and the slot → table index of each object."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..scene import Material
+from .material import gather_material
+
+
+class MaterialTable:
+    """Collects materials in first-use order; every Blender material is read once."""
+
+    def __init__(self):
+        self.materials: list[Material] = []
+        self._index: dict[str, int] = {}  # original material's full name ('' for an empty slot)
+
+    def index_of(self, material) -> int:
+        """Table index of a Blender material (evaluated or original; None = empty slot)."""
+        key = "" if material is None else material.original.name_full
+        if key not in self._index:
+            self._index[key] = len(self.materials)
+            self.materials.append(gather_material(material))
+        return self._index[key]
+
+    def slot_indices(self, obj) -> np.ndarray:
+        """int32 table index of each material slot of an evaluated object (one entry if it has none)."""
+        slots = [slot.material for slot in obj.material_slots] or [None]
+        return np.array([self.index_of(m) for m in slots], np.int32)
+
+    def map_slots(self, obj, slots: np.ndarray) -> np.ndarray:
+        """Per-triangle slot numbers → table indices; numbers past the last slot use the last one,
+        as Blender does."""
+        table = self.slot_indices(obj)
+        return table[np.clip(slots, 0, len(table) - 1)]

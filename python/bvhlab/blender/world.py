@@ -1,0 +1,35 @@
+"""The world colour → the atmosphere colour (`Scene.sky`) that misses see (report §2.1)."""
+from __future__ import annotations
+
+import warnings
+
+from ..scene import DEFAULT_SKY
+from .errors import ExportWarning
+
+
+def gather_sky(scene) -> tuple[float, float, float]:
+    """Colour × strength of the world's Background node when it is a plain colour; the world's
+    viewport colour when the background is a texture (with an ExportWarning); bvhlab's default
+    sky when the scene has no world."""
+    world = scene.world
+    if world is None:
+        return DEFAULT_SKY
+    background = _background_node(world)
+    if background is None:
+        return tuple(world.color)
+    color, strength = background.inputs["Color"], background.inputs["Strength"]
+    if color.is_linked or strength.is_linked:
+        warnings.warn(f"world '{world.name}': the background is not a plain colour; using the world's "
+                      f"viewport colour", ExportWarning, stacklevel=2)
+        return tuple(world.color)
+    return tuple(max(c, 0.0) * strength.default_value for c in color.default_value[:3])
+
+
+def _background_node(world):
+    tree = world.node_tree
+    output = tree.get_output_node("ALL") if tree is not None else None
+    surface = output.inputs.get("Surface") if output is not None else None
+    if surface is None or not surface.is_linked:
+        return None
+    node = surface.links[0].from_node
+    return node if node.bl_idname == "ShaderNodeBackground" else None

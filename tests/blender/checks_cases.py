@@ -1,0 +1,154 @@
+"""Export checks on small scenes made on the spot: scope, instances, material slots, spheres,
+camera sensor fits, files, and bad input (clear errors, warnings for substitutes)."""
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+
+import harness
+import bpy
+import bvhlab
+from bvhlab.blender import SPHERE_PROPERTY, ExportError, SubstituteWarning, export_scene, export_scene_file
+
+
+def _expect_error(fragment: str, **kwargs) -> str:
+    try:
+        export_scene(bpy.context, **kwargs)
+    except ExportError as error:
+        assert fragment in str(error), f"'{fragment}' not in '{error}'"
+        return str(error)
+    raise AssertionError(f"no ExportError ('{fragment}')")
+
+
+def _world_cube_corners(obj) -> np.ndarray:
+    """The 8 corners of a harness cube through mathutils (independent of bvhlab's numpy)."""
+    return np.array([tuple(obj.matrix_world @ v.co) for v in obj.data.vertices])
+
+
+def check_scope_selected_and_visible() -> None:
+    harness.boxes_scene()
+    objects = bpy.context.scene.objects
+    for obj in objects:
+        obj.select_set(obj.name == "Box B")
+    selected = export_scene(bpy.context, scope="selected")
+    assert len(selected.triangles) == 12
+    corners = _world_cube_corners(objects["Box B"])
+    np.testing.assert_allclose(np.sort(np.unique(selected.triangles.reshape(-1, 3), axis=0), 0),
+                               np.sort(corners, 0), atol=1e-5)
+    assert len(export_scene(bpy.context, scope="visible").triangles) == 36
+    objects["Box C"].hide_set(True)
+    assert len(export_scene(bpy.context, scope="visible").triangles) == 24
+
+
+def check_collection_instances() -> None:
+    """A collection instanced twice by empties exports twice, at each instance's transform."""
+    harness.boxes_scene()
+    source = bpy.data.collections.new("Source")
+    mesh = bpy.data.objects["Box A"].data
+    prototype = bpy.data.objects.new("Prototype", mesh)
+    source.objects.link(prototype)
+    prototype.location = (0.5, 0.0, 0.0)
+    for i, location in enumerate([(10.0, 0.0, 0.0), (0.0, 10.0, 2.0)]):
+        empty = bpy.data.objects.new(f"Instance {i}", None)
+        empty.instance_type, empty.instance_collection = "COLLECTION", source
+        empty.location = location
+        bpy.context.scene.collection.objects.link(empty)
+    exported = export_scene(bpy.context)
+    assert len(exported.triangles) == 36 + 24
+    points = exported.triangles.reshape(-1, 3)
+    for location in [(10.0, 0.0, 0.0), (0.0, 10.0, 2.0)]:
+        corner = np.add(location, (0.5 + 0.5, 0.5, 0.5))  # instance offset + prototype offset + corner
+        assert np.abs(points - corner).max(1).min() < 1e-5, f"instance at {location} missing"
+
+
+def check_material_slots_per_triangle() -> None:
+    """Faces with material_index 0/1 export to the two materials, triangle by triangle."""
+    harness.boxes_scene()
+    box = bpy.data.objects["Box A"]
+    for name, color, metallic in (("Red", (1.0, 0.0, 0.0), 0.0), ("Chrome", (0.9, 0.9, 0.9), 1.0)):
+        material = bpy.data.materials.new(name)  # with a Principled BSDF node tree (Blender 5)
+        bsdf = material.node_tree.nodes["Principled BSDF"]
+        bsdf.inputs["Base Color"].default_value = (*color, 1.0)
+        bsdf.inputs["Metallic"].default_value = metallic
+        box.data.materials.append(material)
+    face_slots = [0, 1, 1, 0, 1, 0]
+    box.data.polygons.foreach_set("material_index", face_slots)
+    box.data.update()
+    for obj in bpy.context.scene.objects:
+        obj.select_set(obj is box)
+    exported = export_scene(bpy.context, scope="selected")
+    rows = exported.material_table()[exported.tri_material]
+    assert np.array_equal(rows[:, 3], np.repeat(face_slots, 2).astype(np.float32))  # reflective = slot 1
+    assert np.allclose(rows[np.repeat(face_slots, 2) == 0, :3], (1.0, 0.0, 0.0))
+
+
+def check_analytic_sphere_radius() -> None:
+    """Centre = world location; radius = largest scaled half extent of the bounds."""
+    harness.boxes_scene()
+    bpy.ops.mesh.primitive_uv_sphere_add(radius=0.5, location=(3.0, 1.0, 2.0))
+    ball = bpy.context.object
+    ball.scale = (2.0, 3.0, 1.0)
+    ball[SPHERE_PROPERTY] = True
+    exported = export_scene(bpy.context)
+    assert len(exported.spheres) == 1 and len(exported.triangles) == 36
+    np.testing.assert_allclose(exported.spheres[0], (3.0, 1.0, 2.0, 1.5), atol=1e-5)
+
+
+def check_camera_sensor_fits() -> None:
+    """Vertical field of view for every sensor fit, landscape and portrait, against view_frame."""
+    scene = harness.boxes_scene()
+    camera = scene.camera
+    camera.data.sensor_height = 20.0
+    for fit in ("AUTO", "HORIZONTAL", "VERTICAL"):
+        for resolution in ((64, 48), (48, 64), (100, 100)):
+            camera.data.sensor_fit = fit
+            scene.render.resolution_x, scene.render.resolution_y = resolution
+            frame = np.array([tuple(v) for v in camera.data.view_frame(scene=scene)])
+            expected = math.degrees(2 * math.atan(np.abs(frame[:, 1]).max() / abs(frame[0, 2])))
+            got = export_scene(bpy.context).camera.fov_y
+            assert abs(got - expected) < 1e-4, (fit, resolution, got, expected)
+
+
+def check_scene_file_round_trip(tmp_dir) -> None:
+    harness.boxes_scene()
+    path = tmp_dir / "boxes.npz"
+    exported = export_scene_file(path, bpy.context)
+    loaded = bvhlab.Scene.load(path)
+    assert np.array_equal(loaded.triangles, exported.triangles)
+    assert loaded.camera == exported.camera and loaded.light == exported.light
+    assert loaded.materials == exported.materials
+
+
+def check_bad_input_errors() -> None:
+    harness.boxes_scene()
+    for obj in bpy.context.scene.objects:
+        obj.select_set(False)
+    _expect_error("no mesh in scope", scope="selected")
+    _expect_error("unknown scope", scope="everything")
+    box = bpy.data.objects["Box B"]
+    box.data.vertices[3].co.x = float("nan")
+    message = _expect_error("not a finite number")
+    assert "Box B" in message
+    box.data.vertices[3].co.x = 0.6
+    bpy.context.scene.camera = None
+    _expect_error("no camera")
+
+
+def check_missing_camera_and_light_substituted() -> None:
+    """Without a camera (when not required) or a light, bvhlab's defaults stand in, with warnings."""
+    harness.boxes_scene()
+    bpy.context.scene.camera = None
+    bpy.data.objects.remove(bpy.data.objects["Light"])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        exported = export_scene(bpy.context, require_camera=False)
+    messages = [str(w.message) for w in caught if issubclass(w.category, SubstituteWarning)]
+    assert any("no camera" in m for m in messages) and any("no visible light" in m for m in messages), messages
+    assert exported.camera is not None and exported.light is not None
+
+
+CASE_CHECKS = (check_scope_selected_and_visible, check_collection_instances, check_material_slots_per_triangle,
+               check_analytic_sphere_radius, check_camera_sensor_fits, check_bad_input_errors,
+               check_missing_camera_and_light_substituted)

@@ -1,0 +1,50 @@
+"""The add-on's operators under bpy, enabled in place from addon/ (the zip is tested in
+test_addon_install.py, drawing in test_addon_gpu.py)."""
+import pytest
+
+import blender_checks  # noqa: F401
+import harness
+import checks_addon  # noqa: E402
+
+
+@pytest.fixture(scope="module", autouse=True)
+def addon_enabled():
+    harness.enable_addon_from_source()
+
+
+def test_enum_items_match_bvhlab():
+    import bvhlab
+
+    properties = __import__(harness.addon().__name__ + ".properties", fromlist=["METHOD_ITEMS"])
+    assert [item[0] for item in properties.METHOD_ITEMS] == list(bvhlab.METHODS)
+    assert [item[0] for item in properties.AXIS_ITEMS] == list(bvhlab.AXES)
+    assert properties.MAX_DEPTH == bvhlab.bvh.MAX_TREE_HEIGHT - 1
+
+
+@pytest.mark.parametrize("name", list(checks_addon.BUILD_SCENES))
+def test_build_operator_equals_direct_build(name):
+    checks_addon.check_build_matches_direct(name, checks_addon.BUILD_SCENES[name])
+
+
+def test_overlay_depth_ranges():
+    checks_addon.check_overlay_ranges()
+
+
+def test_export_stats_files(tmp_path):
+    checks_addon.check_export_stats(tmp_path)
+
+
+def test_render_operator():
+    checks_addon.check_render()
+
+
+def test_compare_operator(tmp_path):
+    checks_addon.check_compare(tmp_path)
+
+
+def test_bad_input_is_reported():
+    checks_addon.check_bad_input_reports()
+
+
+def test_render_without_light_warns():
+    checks_addon.check_render_without_light()
