@@ -1,21 +1,18 @@
-"""Compare methods (`bvhlab.compare`): the report's Table 1 for the open scene: every split method
-built and rendered, with frame time, build time, tree height and SAH cost."""
+"""Compare methods (`bvhlab.compare`): the report's Table 1 for the open scene — every split method
+built and rendered with bvhlab.compare's protocol (the same as `bvhlab compare` on the command
+line), with frame time, build time, tree height and SAH cost."""
 from __future__ import annotations
-
-import statistics
 
 import bpy
 
 from . import state
-from .operator_support import build_tree, export_scene, output_path, run_reported
-from .ops_render import render_with_settings
-from .stats_files import write_compare_csv
+from .operator_support import export_scene, output_path, run_reported
+from .ops_render import render_size
 
-#: (label, method, bins): every split method, SAH at the report's 12 and 32 bins.
-COMPARE_CONFIGS = (
-    ("Median", "median", 12), ("Mean", "mean", 12), ("Midpoint", "midpoint", 12),
-    ("SAH 12 bins", "sah", 12), ("SAH 32 bins", "sah", 32), ("SAH full sweep", "sweep_sah", 12),
-    ("LBVH", "lbvh", 12),
+#: (label, method label of bvhlab.compare): every split method, SAH at the report's 12 and 32 bins.
+COMPARE_METHODS = (
+    ("Median", "median"), ("Mean", "mean"), ("Midpoint", "midpoint"), ("SAH 12 bins", "sah12"),
+    ("SAH 32 bins", "sah32"), ("SAH full sweep", "sweep_sah"), ("LBVH", "lbvh"),
 )
 
 
@@ -30,29 +27,37 @@ class BVHLAB_OT_compare(bpy.types.Operator):
         return run_reported(self, context, lambda: self._compare(context))
 
     def _compare(self, context):
+        from bvhlab.compare import measure_methods, write_csv
+        from bvhlab.render import default_renderer
+
         settings = context.scene.bvhlab
         exported = export_scene(context, require_camera=True)
-        rows = [self._measure(context, exported, *config) for config in COMPARE_CONFIGS]
+        width, height = render_size(context.scene)
+        labels = {method: label for label, method in COMPARE_METHODS}
+        window_manager = context.window_manager
+        started = []
+
+        def progress(text: str) -> None:  # "<method>: building" starts each method
+            if text.endswith("building"):
+                started.append(text)
+                window_manager.progress_update(len(started))
+
+        window_manager.progress_begin(0, len(labels))
+        try:
+            rows = measure_methods(
+                exported, list(labels), frames=settings.compare_frames, builds=1, width=width, height=height,
+                renderer=default_renderer(settings.backend), spp=settings.render_supersampling ** 2,
+                max_depth=settings.render_bounces, progress=progress,
+                build_options={"axis": settings.axis, "max_leaf_size": settings.max_leaf_size})
+        finally:
+            window_manager.progress_end()
+        for row in rows:
+            row["label"] = labels[row["method"]]
         state.comparisons[state.key(context.scene)] = rows
-        path = output_path(settings.compare_filepath, "bvh_compare.csv")
-        write_compare_csv(path, rows)
+        path = write_csv(rows, output_path(settings.compare_filepath, "bvh_compare.csv"))
         best = min(rows, key=lambda row: row["frame_ms"])
         message = (f"Compared {len(rows)} methods; fastest frame: {best['label']} ({best['frame_ms']:.1f} ms); "
                    f"wrote {path}")
         self.report({"INFO"}, message)
         state.messages[state.key(context.scene)] = ("INFO", message)
         return {"FINISHED"}
-
-    @staticmethod
-    def _measure(context, exported, label: str, method: str, bins: int) -> dict:
-        """Build once, render `compare_frames` times. The frame time is the mean of overlay + trace
-        time per frame (the per-frame work of the report's real-time loop, without the one-off
-        upload and the readback)."""
-        bvh = build_tree(context, exported, method=method, bins=bins)
-        frames = [render_with_settings(context, exported, bvh)[1] for _ in range(context.scene.bvhlab.compare_frames)]
-        s = bvh.stats
-        return {"label": label, "method": method, "bins": bins, "build_ms": s["build_ms"], "height": s["height"],
-                "sah_cost": s["sah_cost"], "nodes": s["nodes"],
-                "frame_ms": statistics.fmean(t.get("overlay_ms", 0.0) + t["trace_ms"] for t in frames),
-                "total_ms": statistics.fmean(t["total_ms"] for t in frames),
-                "backend": frames[-1]["backend"], "device": frames[-1]["device"]}

@@ -1,4 +1,4 @@
-"""BVH statistics and method comparisons as JSON and CSV files (no bpy)."""
+"""BVH statistics as JSON and CSV files (no bpy). Method comparisons are written by bvhlab.compare."""
 from __future__ import annotations
 
 import csv
@@ -7,10 +7,6 @@ from pathlib import Path
 
 #: Per-depth and per-size lists in `Bvh.stats`; every other entry is one value.
 LIST_METRICS = ("nodes_per_depth", "leaves_per_depth", "leaf_size_histogram")
-
-COMPARE_COLUMNS = ("label", "method", "bins", "frame_ms", "build_ms", "height", "sah_cost", "nodes",
-                   "total_ms", "backend", "device")
-
 
 def write_stats_json(path: Path, stats: dict, about: dict) -> None:
     """{"about": {...scene, file, scope...}, "stats": <Bvh.stats, unchanged>}."""
@@ -30,13 +26,3 @@ def write_stats_csv(path: Path, stats: dict) -> None:
                 out.writerows([name, i, v] for i, v in enumerate(value))
             else:
                 out.writerow([name, "", value])
-
-
-def write_compare_csv(path: Path, rows: list[dict]) -> None:
-    """One row per split method with the report's Table 1 columns (frame time, build time, height)
-    and the SAH cost."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w", newline="") as f:
-        out = csv.DictWriter(f, COMPARE_COLUMNS, extrasaction="ignore")
-        out.writeheader()
-        out.writerows(rows)

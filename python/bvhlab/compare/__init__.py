@@ -2,6 +2,6 @@
 Figures 3–5, with more columns: SAH cost, nodes, leaves, primary-ray throughput, device."""
 from .checks import report_checks
 from .measure import measure_methods
-from .report import REPORT_TABLE1, write_tables
+from .report import REPORT_TABLE1, write_csv, write_tables
 
-__all__ = ["measure_methods", "report_checks", "write_tables", "REPORT_TABLE1"]
+__all__ = ["measure_methods", "report_checks", "write_csv", "write_tables", "REPORT_TABLE1"]

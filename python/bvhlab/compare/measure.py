@@ -18,14 +18,15 @@ def method_kwargs(label: str) -> dict:
 
 def measure_methods(scene: Scene, labels: list[str], *, frames: int = 5, builds: int = 5, width: int = 800,
                     height: int = 600, renderer: Renderer | None = None, spp: int = 1, max_depth: int = 5,
-                    progress: Callable[[str], None] | None = None) -> list[dict]:
+                    build_options: dict | None = None, progress: Callable[[str], None] | None = None) -> list[dict]:
     """For each method: build time (median of `builds` builds), average frame time over `frames`
     frames after one warm-up frame (the report's protocol: same camera, 800×600), and the tree's
-    height, SAH cost, nodes and leaves."""
+    height, SAH cost, nodes and leaves. A frame is the overlay pass, the trace pass and the read
+    back (our stand-in for the report's present). `build_options`: axis, max_leaf_size, ..."""
     renderer = renderer or Renderer("auto")
     rows = []
     for label in labels:
-        kwargs = method_kwargs(label)
+        kwargs = {**(build_options or {}), **method_kwargs(label)}
         if progress:
             progress(f"{label}: building")
         trees = [build(scene, **kwargs) for _ in range(max(1, builds))]

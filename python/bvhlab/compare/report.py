@@ -16,14 +16,21 @@ REPORT_TABLE1 = {
 COLUMNS = ["method", "frame_ms", "build_ms", "height", "sah_cost", "nodes", "leaves", "primary_mrays_s", "device"]
 
 
-def write_tables(rows: list[dict], out: Path, meta: dict, checks: list[dict]) -> dict[str, Path]:
-    out.mkdir(parents=True, exist_ok=True)
-    paths = {"csv": out / "table.csv", "md": out / "table.md", "json": out / "table.json"}
-    with paths["csv"].open("w", newline="") as f:
+def write_csv(rows: list[dict], path: Path) -> Path:
+    """One row per method, the report's Table 1 columns first."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("w", newline="") as f:
         w = csv.writer(f)
         w.writerow(COLUMNS)
         for r in rows:
             w.writerow([_cell(r[c]) for c in COLUMNS])
+    return path
+
+
+def write_tables(rows: list[dict], out: Path, meta: dict, checks: list[dict]) -> dict[str, Path]:
+    out.mkdir(parents=True, exist_ok=True)
+    paths = {"csv": out / "table.csv", "md": out / "table.md", "json": out / "table.json"}
+    write_csv(rows, paths["csv"])
     paths["md"].write_text(markdown(rows, meta, checks))
     paths["json"].write_text(json.dumps({"meta": meta, "rows": rows, "checks": checks,
                                          "report_table1": REPORT_TABLE1}, indent=1))
