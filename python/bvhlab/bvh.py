@@ -21,6 +21,16 @@ NODE_INTERNAL_BIT = _core.NODE_INTERNAL_BIT
 REF_SPHERE_BIT = _core.REF_SPHERE_BIT
 
 
+def method_from_label(label: str) -> dict:
+    """Build arguments of a method label as tables and the CLI write them: 'sah32' → method sah
+    with 32 bins; every other label is a method name."""
+    if label.startswith("sah") and label[3:].isdigit():
+        return {"method": "sah", "bins": int(label[3:])}
+    if label not in METHODS:
+        raise ValueError(f"unknown method '{label}'; expected one of: {', '.join(METHODS)}, or sah<B> such as sah32")
+    return {"method": label}
+
+
 @dataclass(frozen=True)
 class BuildConfig:
     """What a tree was built with (the arguments of `build`)."""

@@ -12,7 +12,7 @@ import numpy as np
 import harness
 import bpy
 import bvhlab
-from bvhlab.cli.options import method_kwargs
+from bvhlab.bvh import method_from_label as method_kwargs
 from bvhlab.blender import export_scene
 
 BUILD_VARIANTS = ({"method": "sah", "bins": 12}, {"method": "median"}, {"method": "mean", "max_leaf_size": 4},

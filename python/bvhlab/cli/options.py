@@ -3,10 +3,7 @@ from __future__ import annotations
 
 import argparse
 
-from ..bvh import AXES, METHODS
-
-#: method labels of compare/build: "sah12" means method sah with 12 bins
-METHOD_LABELS = ("median", "mean", "midpoint", "lbvh", "sweep_sah", "sah", "sah<B>")
+from ..bvh import AXES, METHODS, method_from_label
 
 
 def add_scene(p: argparse.ArgumentParser) -> None:
@@ -27,13 +24,7 @@ def build_kwargs(args) -> dict:
     return {**kw, "axis": args.axis, "max_leaf_size": args.max_leaf_size}
 
 
-def method_kwargs(label: str) -> dict:
-    """'sah32' → {'method': 'sah', 'bins': 32}; other labels are method names."""
-    if label.startswith("sah") and label[3:].isdigit():
-        return {"method": "sah", "bins": int(label[3:])}
-    if label not in METHODS:
-        raise ValueError(f"unknown method '{label}'; expected one of: {', '.join(METHODS)}, or sah<B> such as sah32")
-    return {"method": label}
+method_kwargs = method_from_label
 
 
 def depth_range(text: str) -> tuple[int, int]:

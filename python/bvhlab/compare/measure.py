@@ -5,15 +5,9 @@ import statistics
 from typing import Callable
 
 from ..bvh import build
+from ..bvh import method_from_label as method_kwargs  # 'sah32' → sah with 32 bins
 from ..render import Renderer
 from ..scene import Scene
-
-
-def method_kwargs(label: str) -> dict:
-    """'sah32' → method sah with 32 bins; other labels are method names."""
-    from ..cli.options import method_kwargs as parse
-
-    return parse(label)
 
 
 def measure_methods(scene: Scene, labels: list[str], *, frames: int = 5, builds: int = 5, width: int = 800,
