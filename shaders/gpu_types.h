@@ -64,7 +64,7 @@ struct GpuBox {
     vec4 hi;        ///< xyz = maximum
 };
 
-// ---- per-frame parameters (a uniform buffer) ---------------------------------------------
+// ---- per-frame parameters (a read-only storage buffer: see trace.comp) -------------------
 
 BVHLAB_CONST uint MODE_SHADE = 0u;
 BVHLAB_CONST uint MODE_HEATMAP = 1u;
@@ -90,7 +90,7 @@ struct FrameParams {
 
 // ---- bindings and workgroups -------------------------------------------------------------
 
-BVHLAB_CONST uint BINDING_FRAME = 0u;   ///< uniform FrameParams (trace and overlay)
+BVHLAB_CONST uint BINDING_FRAME = 0u;   ///< FrameParams, read-only storage buffer (trace and overlay)
 BVHLAB_CONST uint BINDING_IMAGE = 1u;   ///< rgba32f storage image: overlay in, colour out (trace)
 BVHLAB_CONST uint TRACE_GROUP_X = 8u;
 BVHLAB_CONST uint TRACE_GROUP_Y = 8u;

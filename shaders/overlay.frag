@@ -3,7 +3,9 @@
 // pass keeps a primary hit only if it is nearer than that distance.
 #include "gpu_types.h"
 
-layout(set = 0, binding = BINDING_FRAME, std140) uniform FrameBlock { FrameParams frame; };
+// A storage buffer, not a uniform one: Mesa 22.3 lavapipe recompiles (and leaks) a shader whose
+// branches read uniform-buffer values, at every command buffer execution.
+layout(set = 0, binding = BINDING_FRAME, std430) readonly buffer FrameBlock { FrameParams frame; };
 layout(location = 0) in vec3 world_position;
 layout(location = 1) flat in vec3 line_color;
 layout(location = 0) out vec4 color_distance;

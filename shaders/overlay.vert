@@ -8,7 +8,9 @@
 #include "gpu_types.h"
 #include "glsl_prelude.glsl"
 
-layout(set = 0, binding = BINDING_FRAME, std140) uniform FrameBlock { FrameParams frame; };
+// A storage buffer, not a uniform one: Mesa 22.3 lavapipe recompiles (and leaks) a shader whose
+// branches read uniform-buffer values, at every command buffer execution.
+layout(set = 0, binding = BINDING_FRAME, std430) readonly buffer FrameBlock { FrameParams frame; };
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer BoxArray { GpuBox v[]; };
 
 #include "tracer/overlay.glsl"

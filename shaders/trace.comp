@@ -13,7 +13,9 @@
 layout(constant_id = 0) const uint TRAVERSAL = TRAVERSAL_STACK;
 layout(local_size_x = 8, local_size_y = 8) in;  // = TRACE_GROUP_X, TRACE_GROUP_Y
 
-layout(set = 0, binding = BINDING_FRAME, std140) uniform FrameBlock { FrameParams frame; };
+// A storage buffer, not a uniform one: Mesa 22.3 lavapipe recompiles (and leaks) a shader whose
+// branches read uniform-buffer values, at every command buffer execution.
+layout(set = 0, binding = BINDING_FRAME, std430) readonly buffer FrameBlock { FrameParams frame; };
 layout(set = 0, binding = BINDING_IMAGE, rgba32f) uniform image2D image;
 
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer NodeArray { BvhNode v[]; };

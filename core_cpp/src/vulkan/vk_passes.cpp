@@ -1,0 +1,112 @@
+// The commands of a frame and the image layouts/barriers between them (report §3.2, Figure 2).
+#include "vk_passes.h"
+
+#include "vk_commands.h"
+
+namespace bvhlab::vk {
+namespace {
+
+// The colour image's states through a frame. A frame starts by discarding the previous contents,
+// after the previous frame's copy read them.
+constexpr ImageState kColorDiscarded{VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_NONE, VK_IMAGE_LAYOUT_UNDEFINED};
+constexpr ImageState kColorAttachment{VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                                      VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
+constexpr ImageState kColorCleared{VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                                   VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL};
+constexpr ImageState kColorTraced{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                                  VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                                  VK_IMAGE_LAYOUT_GENERAL};
+constexpr ImageState kColorCopied{VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
+                                  VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL};
+// Depth: discarded after the previous frame's depth tests, then tested and written.
+constexpr VkPipelineStageFlags2 kDepthStages =
+    VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT;
+constexpr ImageState kDepthDiscarded{kDepthStages, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, VK_IMAGE_LAYOUT_UNDEFINED};
+constexpr ImageState kDepthAttachment{
+    kDepthStages, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
+    VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL};
+
+VkRenderingAttachmentInfo attachment(VkImageView view, VkImageLayout layout, VkAttachmentStoreOp store,
+                                     VkClearValue clear) {
+    VkRenderingAttachmentInfo info{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    info.imageView = view;
+    info.imageLayout = layout;
+    info.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+    info.storeOp = store;
+    info.clearValue = clear;
+    return info;
+}
+
+void begin_overlay_rendering(const PassContext& pass, VkCommandBuffer cmd) {
+    const FrameTargets& t = pass.targets;
+    VkClearValue no_line{}, far_depth{};
+    far_depth.depthStencil.depth = 1.0f;
+    // colour (0,0,0,0): alpha 0 tells the trace pass "no line here" (report §3.3)
+    VkRenderingAttachmentInfo color =
+        attachment(t.color.view(), kColorAttachment.layout, VK_ATTACHMENT_STORE_OP_STORE, no_line);
+    VkRenderingAttachmentInfo depth =
+        attachment(t.depth.view(), kDepthAttachment.layout, VK_ATTACHMENT_STORE_OP_DONT_CARE, far_depth);
+    VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
+    info.renderArea = {{0, 0}, {t.width, t.height}};
+    info.layerCount = 1;
+    info.colorAttachmentCount = 1;
+    info.pColorAttachments = &color;
+    info.pDepthAttachment = &depth;
+    pass.fn.vkCmdBeginRendering(cmd, &info);
+}
+
+}  // namespace
+
+void record_overlay(const PassContext& pass, VkCommandBuffer cmd, const gpu::FrameParams& frame, float line_width) {
+    const Functions& fn = pass.fn;
+    const FrameTargets& t = pass.targets;
+    image_barrier(fn, cmd, t.color.handle(), VK_IMAGE_ASPECT_COLOR_BIT, kColorDiscarded, kColorAttachment);
+    image_barrier(fn, cmd, t.depth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT, kDepthDiscarded, kDepthAttachment);
+    begin_overlay_rendering(pass, cmd);
+    fn.vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pass.pipelines.overlay());
+    VkDescriptorSet set = pass.set;
+    fn.vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pass.pipelines.layout(), 0, 1, &set, 0, nullptr);
+    VkViewport viewport{0, 0, float(t.width), float(t.height), 0, 1};
+    VkRect2D scissor{{0, 0}, {t.width, t.height}};
+    fn.vkCmdSetViewport(cmd, 0, 1, &viewport);
+    fn.vkCmdSetScissor(cmd, 0, 1, &scissor);
+    fn.vkCmdSetLineWidth(cmd, line_width);
+    // overlay.vert reads box gl_InstanceIndex, which starts at firstInstance
+    fn.vkCmdDraw(cmd, 24, frame.overlay_range.y, 0, frame.overlay_range.x);
+    fn.vkCmdEndRendering(cmd);
+    image_barrier(fn, cmd, t.color.handle(), VK_IMAGE_ASPECT_COLOR_BIT, kColorAttachment, kColorTraced);
+}
+
+void record_clear(const PassContext& pass, VkCommandBuffer cmd) {
+    const Functions& fn = pass.fn;
+    VkImage image = pass.targets.color.handle();
+    image_barrier(fn, cmd, image, VK_IMAGE_ASPECT_COLOR_BIT, kColorDiscarded, kColorCleared);
+    VkClearColorValue zero{};
+    VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+    fn.vkCmdClearColorImage(cmd, image, kColorCleared.layout, &zero, 1, &range);
+    image_barrier(fn, cmd, image, VK_IMAGE_ASPECT_COLOR_BIT, kColorCleared, kColorTraced);
+}
+
+void record_trace(const PassContext& pass, VkCommandBuffer cmd, std::uint32_t traversal) {
+    const Functions& fn = pass.fn;
+    const FrameTargets& t = pass.targets;
+    fn.vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pass.pipelines.trace(traversal));
+    VkDescriptorSet set = pass.set;
+    fn.vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pass.pipelines.layout(), 0, 1, &set, 0, nullptr);
+    // rounded up; trace.comp returns early outside the image
+    fn.vkCmdDispatch(cmd, (t.width + gpu::TRACE_GROUP_X - 1) / gpu::TRACE_GROUP_X,
+                     (t.height + gpu::TRACE_GROUP_Y - 1) / gpu::TRACE_GROUP_Y, 1);
+    image_barrier(fn, cmd, t.color.handle(), VK_IMAGE_ASPECT_COLOR_BIT, kColorTraced, kColorCopied);
+}
+
+void record_readback(const PassContext& pass, VkCommandBuffer cmd) {
+    const FrameTargets& t = pass.targets;
+    VkBufferImageCopy region{};
+    region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    region.imageExtent = {t.width, t.height, 1};
+    pass.fn.vkCmdCopyImageToBuffer(cmd, t.color.handle(), kColorCopied.layout, t.readback.handle(), 1, &region);
+    memory_barrier(pass.fn, cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT,
+                   VK_ACCESS_2_HOST_READ_BIT);
+}
+
+}  // namespace bvhlab::vk

@@ -1,0 +1,28 @@
+// vk_physical_device.h — which device renders: the one asked for (VulkanOptions::device or
+// BVHLAB_VULKAN_DEVICE), else the first usable discrete GPU, integrated, virtual, then CPU driver.
+#pragma once
+#include <cstdint>
+#include <string>
+
+#include "vk_functions.h"
+
+namespace bvhlab::vk {
+
+struct PhysicalDevice {
+    VkPhysicalDevice handle = VK_NULL_HANDLE;
+    VkPhysicalDeviceProperties properties{};
+    VkPhysicalDeviceMemoryProperties memory{};
+    std::uint32_t queue_family = 0;     ///< graphics + compute (+ transfer, implied)
+    bool wide_lines = false;            ///< line widths other than 1 (the overlay's line_width)
+    VkDeviceSize max_allocation = 0;    ///< maxMemoryAllocationSize
+
+    std::string name() const { return properties.deviceName; }
+    std::string type_name() const;      ///< "discrete", "integrated", "virtual", "cpu" or "other"
+};
+
+/// `spec`: an index into the enumeration or a substring of the device name (case-insensitive);
+/// empty: BVHLAB_VULKAN_DEVICE, else by type. Throws VulkanUnavailable listing the devices when
+/// none matches, or naming what the chosen device lacks.
+PhysicalDevice select_physical_device(const Functions& fn, VkInstance instance, std::string spec);
+
+}  // namespace bvhlab::vk

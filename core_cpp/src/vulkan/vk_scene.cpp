@@ -1,0 +1,46 @@
+// The scene arrays uploaded to device buffers; FrameParams with their device addresses.
+#include "vk_scene.h"
+
+namespace bvhlab::vk {
+namespace {
+
+template <class Array>
+Buffer upload_vector(const Device& device, CommandRunner& runner, const Array& array, bool force_staging) {
+    return upload_array(device, runner, array.data(), array.size() * sizeof(array[0]), force_staging);
+}
+
+/// The (lo, hi) words of two device addresses, as the shaders' uvec2 buffer references read them.
+gpu::uvec4 address_pair(VkDeviceAddress a, VkDeviceAddress b) {
+    return {std::uint32_t(a), std::uint32_t(a >> 32), std::uint32_t(b), std::uint32_t(b >> 32)};
+}
+
+}  // namespace
+
+SceneBuffers::SceneBuffers(const Device& device, CommandRunner& runner, const RenderScene& scene, bool force_staging) {
+    static const Bvh kNoTree;
+    const Bvh& tree = scene.bvh ? *scene.bvh : kNoTree;
+    nodes_ = upload_vector(device, runner, tree.nodes, force_staging);
+    refs_ = upload_vector(device, runner, tree.refs, force_staging);
+    triangles_ = upload_vector(device, runner, scene.triangles, force_staging);
+    spheres_ = upload_vector(device, runner, scene.spheres, force_staging);
+    materials_ = upload_vector(device, runner, scene.materials, force_staging);
+    boxes_ = upload_vector(device, runner, scene.boxes, force_staging);
+    summary_.bounds = scene.bounds;
+    summary_.depth_offset = scene.depth_offset;
+    const gpu::FrameParams defaults = make_frame_params(scene, RenderSettings{});
+    node_count_ = defaults.flags.z;
+    default_heat_scale_ = defaults.flags.w;
+}
+
+gpu::FrameParams SceneBuffers::frame_params(const RenderSettings& settings) const {
+    gpu::FrameParams frame = make_frame_params(summary_, settings);
+    // make_frame_params takes these from scene.bvh, which is gone (see summary_)
+    frame.flags.z = node_count_;
+    if (!(settings.heatmap_scale > 0)) frame.flags.w = default_heat_scale_;
+    frame.addr_nodes_refs = address_pair(nodes_.address(), refs_.address());
+    frame.addr_triangles_spheres = address_pair(triangles_.address(), spheres_.address());
+    frame.addr_materials_boxes = address_pair(materials_.address(), boxes_.address());
+    return frame;
+}
+
+}  // namespace bvhlab::vk

@@ -1,0 +1,29 @@
+// vk_scene.h — the scene on the device (report §3.2, §5.1): one buffer per array — nodes,
+// references, triangles, spheres, materials, overlay boxes — read by the shaders through buffer
+// device addresses in FrameParams, so no storage-buffer binding limit (128 MiB on lavapipe) caps
+// the scene size.
+#pragma once
+#include <cstdint>
+
+#include "bvhlab/render.h"
+#include "vk_upload.h"
+
+namespace bvhlab::vk {
+
+class SceneBuffers {
+public:
+    /// Uploads the arrays; `scene` (and its tree) may be destroyed afterwards.
+    SceneBuffers(const Device& device, CommandRunner& runner, const RenderScene& scene, bool force_staging);
+
+    /// make_frame_params for this scene, with the device addresses filled in.
+    gpu::FrameParams frame_params(const RenderSettings& settings) const;
+
+private:
+    Buffer nodes_, refs_, triangles_, spheres_, materials_, boxes_;
+    /// What make_frame_params reads besides the tree: bounds and depth offsets (tree left null).
+    RenderScene summary_;
+    /// What it reads from the tree, taken at upload: node count and the default heatmap scale.
+    std::uint32_t node_count_ = 0, default_heat_scale_ = 0;
+};
+
+}  // namespace bvhlab::vk

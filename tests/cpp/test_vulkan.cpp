@@ -1,0 +1,379 @@
+// The Vulkan renderer on lavapipe, with the Khronos validation layer on and zero validation errors
+// after every test: images against the CPU reference (same FrameParams, same tracer code), stack vs
+// stackless, staging vs direct uploads, the overlay pass (report §3.3), bad settings, memory over
+// many frames, scenes beyond the 128 MiB binding limit, device selection.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+#include <string>
+
+#include "bvhlab/vulkan_renderer.h"
+#include "render_scenes.h"
+#include "vulkan_test_env.h"
+
+using namespace bvhlab;
+
+namespace {
+
+VulkanOptions validated(VulkanOptions options = {}) {
+    options.validation = true;
+    return options;
+}
+
+/// Prints what the validation layer said and fails on any error.
+void expect_no_validation_errors(VulkanRenderer& r) {
+    for (const std::string& m : r.take_validation_messages()) std::printf("[validation] %s\n", m.c_str());
+    EXPECT_EQ(r.validation_error_count(), 0u);
+}
+
+std::vector<float> render_vulkan(VulkanRenderer& r, const RenderSettings& s) {
+    std::vector<float> image(std::size_t(s.width) * s.height * 4);
+    r.render(s, image.data());
+    return image;
+}
+
+std::vector<float> render_reference(const RenderScene& scene, const RenderSettings& s) {
+    std::vector<float> image(std::size_t(s.width) * s.height * 4);
+    render_cpu(scene, s, image.data());
+    return image;
+}
+
+std::size_t resident_bytes() {
+    long pages = 0, resident = 0;
+    FILE* f = std::fopen("/proc/self/statm", "r");
+    if (!f || std::fscanf(f, "%ld %ld", &pages, &resident) != 2) resident = 0;
+    if (f) std::fclose(f);
+    return std::size_t(resident) * std::size_t(sysconf(_SC_PAGESIZE));
+}
+
+/// The pixel (column, row) through which the camera of `s` sees p: the tracer's pinhole camera
+/// (camera_ray_dir in shaders/tracer/shade.glsl), row 0 at the top.
+std::pair<int, int> project(const RenderSettings& s, Vec3 p) {
+    const Camera& c = s.camera;
+    Vec3 forward = normalize(c.look_at - c.position), right = normalize(cross(forward, c.up));
+    Vec3 up = cross(right, forward), v = p - c.position;
+    float tan_half = std::tan(c.fov_y_degrees * 3.14159265f / 360), aspect = float(s.width) / float(s.height);
+    float x = dot(v, right) / (dot(v, forward) * tan_half * aspect), y = dot(v, up) / (dot(v, forward) * tan_half);
+    return {int(std::floor((x + 1) / 2 * float(s.width))), int(std::floor((1 - y) / 2 * float(s.height)))};
+}
+
+bool same_rgb(const float* a, const float* b) { return a[0] == b[0] && a[1] == b[1] && a[2] == b[2]; }
+
+/// A scene whose triangle array is larger than lavapipe's 128 MiB storage-buffer binding limit;
+/// the tree's only leaf holds the last triangle, which only a buffer device address can reach.
+struct BeyondBindingLimit {
+    Bvh tree;
+    RenderScene scene;
+    BeyondBindingLimit() {
+        const std::uint32_t count = std::uint32_t((std::size_t(128) << 20) / sizeof(gpu::GpuTriangle) + 1024);
+        scene.triangles.resize(count);
+        // in the plane y = 0, covering the view's centre, material 0 (the bits of v0.w)
+        scene.triangles[count - 1] = {{-2, 0, -2, 0}, {5, 0, 0, 0}, {0, 0, 5, 0}};
+        scene.materials = {{{0.8f, 0.4f, 0.3f, 0}, {0, 1.5f, 0, 0}}};
+        tree.triangle_count = count;
+        tree.nodes.push_back({{-2, 0, -2}, 0, {3, 0, 3}, 1});  // a leaf of one reference
+        tree.refs.push_back(count - 1);
+        tree.depths.push_back(0);
+        scene.bvh = &tree;
+        scene.boxes.push_back({{-2, 0, -2, 0}, {3, 0, 3, 0}});
+        scene.depth_offset = {0, 1};
+        scene.bounds = {{-2, 0, -2}, {3, 0, 3}};
+    }
+};
+
+/// One validated renderer shared by the tests of the suite (an instance with the validation layer
+/// takes a while to create).
+class Vulkan : public ::testing::Test {
+protected:
+    static void SetUpTestSuite() {
+        test::prepare_vulkan_environment();
+        if (vulkan_loader_available()) renderer_ = new VulkanRenderer(validated());
+    }
+    static void TearDownTestSuite() {
+        delete renderer_;
+        renderer_ = nullptr;
+    }
+    void SetUp() override {
+        if (!renderer_) GTEST_SKIP() << "no Vulkan loader: install libvulkan1 and mesa-vulkan-drivers";
+    }
+    void TearDown() override {
+        if (renderer_) expect_no_validation_errors(*renderer_);
+    }
+    VulkanRenderer& renderer() { return *renderer_; }
+
+    /// Vulkan vs CPU reference, both traversals.
+    void expect_matches_reference(const test::RenderTestScene& scene, RenderSettings s) {
+        renderer().upload(scene.render);
+        for (std::uint32_t traversal : {gpu::TRAVERSAL_STACK, gpu::TRAVERSAL_STACKLESS}) {
+            s.traversal = traversal;
+            std::vector<float> vulkan = render_vulkan(renderer(), s), reference = render_reference(scene.render, s);
+            test::ImageDiff d = test::compare_images(vulkan, reference, kFlipThreshold);
+            std::printf("traversal %u: mean abs %.3g, max abs %.3g, pixels above %.2g: %.3g%%\n", traversal, d.mean_abs,
+                        d.max_abs, kFlipThreshold, 100 * d.fraction_above);
+            EXPECT_LE(d.mean_abs, kMeanTolerance);
+            EXPECT_LE(d.max_abs, kMaxTolerance);
+            EXPECT_LE(d.fraction_above, kFlipFraction);
+        }
+    }
+
+    // Tolerances, Vulkan vs CPU. Both run the same tracer source on the same FrameParams, but
+    // lavapipe's LLVM may contract a*b+c into FMAs and evaluates sqrt/pow/normalize with its own
+    // rounding, while the CPU build forbids contraction (-ffp-contract=off). Measured on lavapipe
+    // (Mesa 22.3): mean 1e-7, max 8e-5 (a Blinn-Phong highlight: pow(x, 48) multiplies relative
+    // errors by 48), no pixel above 1e-3. Elsewhere a few ulps may move a ray that grazes a
+    // silhouette or a shared triangle edge to the other side: that pixel (and what its reflections
+    // see) may then differ by up to the whole colour range. Hence: the fraction of pixels off by
+    // more than 1e-3 is bounded (flips), the maximum only catches garbage (NaN, a wrong buffer:
+    // colours lie in about [0, 1.3]), and the mean catches systematic errors (a wrong shading term
+    // moves it by more than 1e-2).
+    static constexpr double kMeanTolerance = 1e-3;
+    static constexpr float kMaxTolerance = 1.5f;
+    static constexpr float kFlipThreshold = 1e-3f;  // far above float noise, far below a visible error
+    static constexpr double kFlipFraction = 0.01;   // 1% of the pixels: 30 of 64×48
+
+    static VulkanRenderer* renderer_;
+};
+
+VulkanRenderer* Vulkan::renderer_ = nullptr;
+
+}  // namespace
+
+TEST_F(Vulkan, ReportsTheDeviceUsed) {
+    EXPECT_FALSE(renderer().device_name().empty());
+    EXPECT_GE(renderer().max_image_dimension(), 4096u);
+    std::printf("device: %s (%s)\n", renderer().device_name().c_str(), renderer().device_type().c_str());
+}
+
+TEST_F(Vulkan, FiveSpheresMatchCpuReference) {
+    auto scene = test::five_spheres();
+    expect_matches_reference(*scene, scene->settings);
+}
+
+TEST_F(Vulkan, WhittedShowcaseMatchesCpuReference) {
+    auto scene = test::whitted_showcase();
+    expect_matches_reference(*scene, scene->settings);
+}
+
+TEST_F(Vulkan, BumpyMeshMatchesCpuReference) {
+    auto scene = test::bumpy_mesh();
+    ASSERT_GE(scene->bvh.triangle_count, 50000u);
+    expect_matches_reference(*scene, scene->settings);
+}
+
+TEST_F(Vulkan, HeatmapMatchesCpuReference) {
+    auto scene = test::bumpy_mesh();
+    RenderSettings s = scene->settings;
+    s.mode = RenderMode::Heatmap;  // also checks the default full scale (8 × tree height) survives upload
+    expect_matches_reference(*scene, s);
+}
+
+TEST_F(Vulkan, StackAndStacklessGiveIdenticalImages) {
+    for (auto make : {test::whitted_showcase, +[] { return test::bumpy_mesh(); }}) {
+        auto scene = make();
+        renderer().upload(scene->render);
+        RenderSettings s = scene->settings;
+        s.traversal = gpu::TRAVERSAL_STACK;
+        std::vector<float> stack = render_vulkan(renderer(), s);
+        s.traversal = gpu::TRAVERSAL_STACKLESS;
+        EXPECT_EQ(stack, render_vulkan(renderer(), s));
+    }
+}
+
+TEST_F(Vulkan, StagingUploadGivesTheSameImage) {
+    auto scene = test::whitted_showcase();
+    renderer().upload(scene->render);
+    std::vector<float> direct = render_vulkan(renderer(), scene->settings);
+    VulkanRenderer staged(validated({.force_staging = true}));
+    staged.upload(scene->render);
+    EXPECT_EQ(direct, render_vulkan(staged, scene->settings));
+    expect_no_validation_errors(staged);
+}
+
+TEST_F(Vulkan, OverlayLinesInFrontShowBehindAreHiddenElsewhereUnchanged) {
+    auto scene = test::overlay_sphere();
+    renderer().upload(scene->render);
+    RenderSettings s = scene->settings;
+    std::vector<float> lines = render_vulkan(renderer(), s);
+    s.overlay = false;
+    std::vector<float> plain = render_vulkan(renderer(), s);
+    const float line_color[3] = {1.0f, 0.85f, 0.2f};  // overlay.vert's colour when not by depth
+    const float sky[3] = {s.sky.x, s.sky.y, s.sky.z};
+    // Every pixel either shows the line colour exactly (a primary ray that stopped at the line)
+    // or is bit-for-bit what it is without the overlay.
+    std::size_t line_pixels = 0;
+    for (std::size_t p = 0; p < lines.size(); p += 4) {
+        if (same_rgb(&lines[p], &plain[p])) continue;
+        ASSERT_TRUE(same_rgb(&lines[p], line_color)) << "pixel " << p / 4 << " changed but is not a line";
+        ++line_pixels;
+    }
+    EXPECT_GT(line_pixels, 100u);
+    auto at = [&](const std::vector<float>& image, int x, int y) { return &image[4 * (std::size_t(y) * s.width + x)]; };
+    // Points on the 3 box edges from the corner nearest the camera (in front of the sphere) and on
+    // the 3 from the farthest corner (behind it), all over the sphere's image: with 1-pixel lines,
+    // look in the 3×3 neighbourhood of their projection.
+    const Vec3 near_corner{-1, -1, 1}, far_corner{1, 1, -1};
+    for (int axis = 0; axis < 3; ++axis) {
+        Vec3 along{};  // the edge from near_corner along `axis`, reversed from far_corner
+        along[axis] = far_corner[axis] - near_corner[axis];
+        for (float t : {0.15f, 0.3f}) {
+            auto [x, y] = project(s, near_corner + along * t);
+            ASSERT_FALSE(same_rgb(at(plain, x, y), sky)) << "the test's geometry: not over the sphere";
+            bool shown = false;
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) shown |= same_rgb(at(lines, x + dx, y + dy), line_color);
+            EXPECT_TRUE(shown) << "edge point in front of the sphere not drawn near pixel " << x << "," << y;
+        }
+        for (float t : {0.3f, 0.5f}) {
+            auto [x, y] = project(s, far_corner - along * t);
+            ASSERT_FALSE(same_rgb(at(plain, x, y), sky)) << "the test's geometry: not over the sphere";
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx)
+                    EXPECT_TRUE(same_rgb(at(lines, x + dx, y + dy), at(plain, x + dx, y + dy)))
+                        << "edge behind the sphere shows at pixel " << x + dx << "," << y + dy;
+        }
+    }
+}
+
+TEST_F(Vulkan, BadSettingsThrowInvalidArgument) {
+    auto scene = test::five_spheres();
+    renderer().upload(scene->render);
+    const RenderSettings good = scene->settings;
+    std::vector<float> image(std::size_t(good.width) * good.height * 4);
+    auto bad = [&](auto change) {
+        RenderSettings s = good;
+        change(s);
+        EXPECT_THROW(renderer().render(s, image.data()), std::invalid_argument);
+    };
+    bad([](RenderSettings& s) { s.width = 0; });
+    bad([](RenderSettings& s) { s.height = 0; });
+    bad([&](RenderSettings& s) { s.width = renderer().max_image_dimension() + 1; });
+    bad([&](RenderSettings& s) { s.height = renderer().max_image_dimension() + 1; });
+    bad([](RenderSettings& s) { s.camera.position.x = std::numeric_limits<float>::quiet_NaN(); });
+    bad([](RenderSettings& s) { s.camera.look_at = s.camera.position; });
+    // the renderer is still usable
+    EXPECT_EQ(render_vulkan(renderer(), good), render_vulkan(renderer(), good));
+}
+
+TEST_F(Vulkan, ManyFramesDoNotGrowMemory) {
+    if (test::kAddressSanitizer)
+        GTEST_SKIP() << "ASan's quarantine keeps freed memory resident; LeakSanitizer checks leaks there";
+    auto scene = test::five_spheres();
+    renderer().upload(scene->render);
+    RenderSettings s = scene->settings;
+    s.overlay_depth_max = 4;
+    std::vector<float> image(std::size_t(s.width) * s.height * 4);
+    auto frame = [&](int i) {  // both passes' variants, both traversals
+        s.overlay = i % 2;
+        s.traversal = (i / 2) % 2;
+        renderer().render(s, image.data());
+    };
+    for (int i = 0; i < 8; ++i) frame(i);  // warm-up: pipelines compiled, pools sized
+    const std::size_t before = resident_bytes();
+    for (int i = 0; i < 30; ++i) frame(i);
+    const std::size_t after = resident_bytes();
+    const long growth = long(after) - long(before);
+    std::printf("resident: %.1f MiB, growth over 30 frames: %ld KiB\n", double(after) / (1 << 20), growth / 1024);
+    EXPECT_LT(growth, 512 * 1024);
+}
+
+TEST_F(Vulkan, TrianglesBeyondTheBindingLimitRender) {
+    BeyondBindingLimit big;
+    RenderSettings s;
+    test::small_image(s);
+    s.camera = {{0, -4, 0}, {0, 0, 0}, {0, 0, 1}, 45};
+    s.light.position = {1, -3, 2};
+    std::vector<float> reference = render_reference(big.scene, s);
+    const std::size_t centre = 4 * (std::size_t(s.height / 2) * s.width + s.width / 2);
+    ASSERT_NE(reference[centre], s.sky.x) << "the test's geometry: the triangle is not in view";
+    for (bool staging : {false, true}) {
+        VulkanRenderer r(validated({.force_staging = staging}));  // staging: in several chunks
+        r.upload(big.scene);
+        test::ImageDiff d = test::compare_images(render_vulkan(r, s), reference, kFlipThreshold);
+        EXPECT_LE(d.mean_abs, kMeanTolerance) << "staging " << staging;
+        EXPECT_LE(d.fraction_above, kFlipFraction) << "staging " << staging;
+        expect_no_validation_errors(r);
+    }
+}
+
+TEST_F(Vulkan, RenderBeforeUploadAndEmptySceneGiveSky) {
+    VulkanRenderer fresh(validated());
+    RenderSettings s;
+    test::small_image(s, 16, 8);
+    std::vector<float> image = render_vulkan(fresh, s);
+    for (std::size_t p = 0; p < image.size(); p += 4) ASSERT_EQ(image[p + 2], s.sky.z) << "pixel " << p / 4;
+    Bvh empty_tree = build_bvh(GeometryView{});
+    RenderScene empty = make_render_scene(empty_tree, GeometryView{}, MaterialView{});
+    fresh.upload(empty);
+    EXPECT_EQ(render_vulkan(fresh, s), image);
+    expect_no_validation_errors(fresh);
+}
+
+class VulkanDevice : public ::testing::Test {
+protected:
+    void SetUp() override {
+        test::prepare_vulkan_environment();
+        if (!vulkan_loader_available()) GTEST_SKIP() << "no Vulkan loader: install libvulkan1 and mesa-vulkan-drivers";
+    }
+    /// Expects VulkanUnavailable whose message contains every one of `needles`.
+    static void expect_unavailable(const VulkanOptions& options, std::initializer_list<const char*> needles) {
+        try {
+            VulkanRenderer r(options);
+            ADD_FAILURE() << "no exception; got device " << r.device_name();
+        } catch (const VulkanUnavailable& e) {
+            for (const char* needle : needles) EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+        }
+    }
+};
+
+TEST_F(VulkanDevice, SelectedByNameSubstringIgnoringCase) {
+    VulkanRenderer r(validated({.device = "LLVMpipe"}));
+    EXPECT_NE(r.device_name().find("llvmpipe"), std::string::npos);
+    EXPECT_EQ(r.device_type(), "cpu");
+    expect_no_validation_errors(r);
+}
+
+TEST_F(VulkanDevice, SelectedByIndex) {
+    VulkanRenderer r(validated({.device = "0"}));
+    EXPECT_FALSE(r.device_name().empty());
+    expect_no_validation_errors(r);
+}
+
+TEST_F(VulkanDevice, IndexOutOfRangeIsAClearError) {
+    expect_unavailable(validated({.device = "99"}), {"index 99 is out of range", "0: llvmpipe"});
+}
+
+TEST_F(VulkanDevice, UnknownNameIsAClearError) {
+    expect_unavailable(validated({.device = "no-such-gpu"}), {"no Vulkan device name contains 'no-such-gpu'", "llvmpipe"});
+}
+
+TEST_F(VulkanDevice, EnvironmentVariableChoosesWhenOptionsDoNot) {
+    setenv("BVHLAB_VULKAN_DEVICE", "7", 1);
+    expect_unavailable(validated(), {"index 7 is out of range"});
+    unsetenv("BVHLAB_VULKAN_DEVICE");
+}
+
+TEST_F(VulkanDevice, NoDriverIsAClearError) {
+    const char* chosen = std::getenv("VK_DRIVER_FILES");
+    const std::string drivers = chosen ? chosen : "";
+    setenv("VK_DRIVER_FILES", "/nonexistent/icd.json", 1);  // the loader then finds no driver
+    expect_unavailable(VulkanOptions{}, {"no Vulkan 1.3 driver found", "mesa-vulkan-drivers"});
+    if (chosen) setenv("VK_DRIVER_FILES", drivers.c_str(), 1);
+    else unsetenv("VK_DRIVER_FILES");
+}
+
+// Where there is no Vulkan (no loader, or bvhlab built with BVHLAB_VULKAN=OFF), constructing a
+// renderer says what to install; the Python side then falls back to the CPU reference.
+TEST(VulkanUnavailable, ConstructorSaysWhatToInstall) {
+    if (vulkan_loader_available()) GTEST_SKIP() << "Vulkan is available here";
+    try {
+        VulkanRenderer r;
+        ADD_FAILURE() << "no exception";
+    } catch (const VulkanUnavailable& e) {
+        EXPECT_NE(std::string(e.what()).find("install"), std::string::npos) << e.what();
+    }
+}
