@@ -1,5 +1,13 @@
+import os
+from pathlib import Path
+
 import numpy as np
 import pytest
+
+# Mesa's shader cache inside the build tree, never in ~/.cache (lavapipe compiles on first use).
+_cache = Path(__file__).resolve().parents[2] / "build" / "mesa-cache"
+os.environ.setdefault("MESA_SHADER_CACHE_DIR", str(_cache))
+os.environ.setdefault("XDG_CACHE_HOME", str(_cache))
 
 from bvhlab import procedural
 
