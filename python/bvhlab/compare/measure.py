@@ -12,11 +12,13 @@ from ..scene import Scene
 
 def measure_methods(scene: Scene, labels: list[str], *, frames: int = 5, builds: int = 5, width: int = 800,
                     height: int = 600, renderer: Renderer | None = None, spp: int = 1, max_depth: int = 5,
-                    build_options: dict | None = None, progress: Callable[[str], None] | None = None) -> list[dict]:
+                    build_options: dict | None = None, render_options: dict | None = None,
+                    progress: Callable[[str], None] | None = None) -> list[dict]:
     """For each method: build time (median of `builds` builds), average frame time over `frames`
     frames after one warm-up frame (the report's protocol: same camera, 800×600), and the tree's
     height, SAH cost, nodes and leaves. A frame is the overlay pass, the trace pass and the read
-    back (our stand-in for the report's present). `build_options`: axis, max_leaf_size, ..."""
+    back (our stand-in for the report's present). `build_options`: axis, max_leaf_size, ...;
+    `render_options`: traversal, ..."""
     renderer = renderer or Renderer("auto")
     rows = []
     for label in labels:
@@ -28,10 +30,11 @@ def measure_methods(scene: Scene, labels: list[str], *, frames: int = 5, builds:
         stats = bvh.stats
         if progress:
             progress(f"{label}: rendering {frames} frames")
-        renderer.render(scene, bvh, width, height, spp=spp, max_depth=max_depth)  # warm-up (and upload)
+        options = {"spp": spp, "max_depth": max_depth, **(render_options or {})}
+        renderer.render(scene, bvh, width, height, **options)  # warm-up (and upload)
         frame_ms = []
         for _ in range(max(1, frames)):
-            _, t = renderer.render(scene, bvh, width, height, spp=spp, max_depth=max_depth)
+            _, t = renderer.render(scene, bvh, width, height, **options)
             frame_ms.append(t["overlay_ms"] + t["trace_ms"] + t["readback_ms"])
         mean_frame = statistics.fmean(frame_ms)
         rows.append({
