@@ -66,12 +66,12 @@ void traverse_stack(TraceRay r, bool shadow, INOUT(Hit) hit) {
     hit.visited += 1u;
     if (box_entry(root.lo, root.hi, r, hit.t) < 0.0f) return;
     uint i = 0u;
-    bool alive = true;
+    BvhNode n = root;
     // "while-while" (Aila and Laine 2009): descend through inner nodes in one loop, then handle
     // the leaf, so SIMD lanes at different kinds of node run fewer masked-off instructions.
-    while (alive) {
-        BvhNode n = load_node(i);
-        while ((n.info & NODE_INTERNAL_BIT) != 0u && alive) {
+    for (;;) {
+        bool dead_end = false;
+        while ((n.info & NODE_INTERNAL_BIT) != 0u && !dead_end) {
             uint a = i + 1u;
             uint b = n.index;
             BvhNode na = load_node(a);
@@ -85,28 +85,24 @@ void traverse_stack(TraceRay r, bool shadow, INOUT(Hit) hit) {
                 stack_t[sp] = b_first ? ta : tb;
                 sp += 1u;
                 i = b_first ? b : a;
+                n = load_node(i);
             } else if (ta >= 0.0f || tb >= 0.0f) {
                 i = ta >= 0.0f ? a : b;
+                n = load_node(i);
             } else {
-                bool popped = false;
-                while (sp > 0u && !popped) {
-                    sp -= 1u;
-                    popped = stack_t[sp] <= hit.t;
-                    i = stack_node[sp];
-                }
-                alive = popped;
+                dead_end = true;
             }
-            n = load_node(i);
         }
-        if (!alive) break;
-        if (visit_leaf(n, r, shadow, hit)) return;
+        if (!dead_end && visit_leaf(n, r, shadow, hit)) return;
+        // pop, skipping entries farther than the closest hit so far
         bool popped = false;
         while (sp > 0u && !popped) {
             sp -= 1u;
             popped = stack_t[sp] <= hit.t;
             i = stack_node[sp];
         }
-        alive = popped;
+        if (!popped) return;
+        n = load_node(i);
     }
 }
 
