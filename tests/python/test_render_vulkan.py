@@ -104,3 +104,27 @@ def test_many_frames_do_not_grow_memory(vulkan):
     for _ in range(25):
         vulkan.render(scene, bvh, 64, 48)
     assert rss_kib() - before < 8 * 1024
+
+
+def test_scene_larger_than_one_storage_buffer_binding(vulkan):
+    """lavapipe binds at most 128 MiB per storage buffer; the tracer reads through buffer device
+    addresses, so a triangle array past that size still renders (and matches the CPU)."""
+    n = 2_900_000  # × 48 bytes per GPU triangle = 139 MB
+    tris = procedural.random_triangles(n, size=0.004, seed=5)
+    assert n * 48 > 128 * 2**20
+    scene = bvhlab.Scene(triangles=tris, camera=bvhlab.Camera((0.5, -1.2, 0.5), (0.5, 0.5, 0.5), fov_y=50))
+    bvh = bvhlab.build(scene, method="lbvh")
+    vk_image, _ = vulkan.render(scene, bvh, 48, 32, max_depth=0)
+    cpu_image, _ = bvhlab.render(scene, bvh, 48, 32, backend="cpu", max_depth=0)
+    compare(vk_image, cpu_image)
+    # and the pixels do show triangles stored beyond the 128 MiB mark
+    cam = scene.camera
+    fwd = np.subtract(cam.look_at, cam.position) / np.linalg.norm(np.subtract(cam.look_at, cam.position))
+    right = np.cross(fwd, cam.up) / np.linalg.norm(np.cross(fwd, cam.up))
+    up = np.cross(right, fwd)
+    tan = np.tan(np.radians(cam.fov_y) / 2)
+    ys, xs = np.mgrid[0:32, 0:48]
+    d = fwd + ((xs + 0.5) / 48 * 2 - 1)[..., None] * tan * 1.5 * right + (1 - (ys + 0.5) / 32 * 2)[..., None] * tan * up
+    hits = bvh.intersect(np.tile(np.float32(cam.position), (48 * 32, 1)), np.float32(d.reshape(-1, 3)))
+    assert hits["prim"].max() * 48 > 128 * 2**20
+    assert not np.all(vk_image[..., :3] == vk_image[0, 0, :3]), "triangles are visible"
