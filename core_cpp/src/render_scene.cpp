@@ -65,6 +65,7 @@ RenderScene make_render_scene(const Bvh& bvh, const GeometryView& g, const Mater
         s.boxes[k] = {{n.lo.x, n.lo.y, n.lo.z, float(bvh.depths[order.nodes[k]])}, {n.hi.x, n.hi.y, n.hi.z, 0}};
     }
     if (!bvh.empty()) s.bounds = node_box(bvh.nodes[0]);
+    s.node_count = bvh.node_count();
     return s;
 }
 
@@ -122,10 +123,10 @@ gpu::FrameParams make_frame_params(const RenderScene& scene, const RenderSetting
     f.light_color = v4(s.light.color * s.light.intensity, 1);
     f.sky = v4(s.sky, 1);
     f.size = {s.width, s.height, s.samples_per_axis, s.max_depth};
-    std::uint32_t height = scene.bvh ? std::uint32_t(scene.depth_offset.size() ? scene.depth_offset.size() - 1 : 0) : 0;
+    auto height = std::uint32_t(scene.depth_offset.empty() ? 0 : scene.depth_offset.size() - 1);
     float heat = s.heatmap_scale > 0 ? s.heatmap_scale : float(std::max<std::uint32_t>(8 * height, 8));
     f.flags = {s.mode == RenderMode::Heatmap ? gpu::MODE_HEATMAP : gpu::MODE_SHADE, s.overlay ? 1u : 0u,
-               scene.bvh ? scene.bvh->node_count() : 0u, std::uint32_t(heat)};
+               scene.node_count, std::uint32_t(heat)};
     f.scale = {eps, std::max(1e-3f * diagonal, 1e-6f), far, 0};
     auto [first, count] = scene.box_range(s.overlay_depth_min, s.overlay_depth_max);
     f.overlay_range = {first, s.overlay ? count : 0u, s.overlay_color_by_depth ? 1u : 0u, 0};

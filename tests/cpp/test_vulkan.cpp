@@ -83,6 +83,7 @@ struct BeyondBindingLimit {
         scene.boxes.push_back({{-2, 0, -2, 0}, {3, 0, 3, 0}});
         scene.depth_offset = {0, 1};
         scene.bounds = {{-2, 0, -2}, {3, 0, 3}};
+        scene.node_count = 1;
     }
 };
 

@@ -43,6 +43,7 @@ struct RenderScene {
     BigVector<gpu::GpuBox> boxes;
     std::vector<std::uint32_t> depth_offset;  ///< boxes of depth d: [depth_offset[d], depth_offset[d + 1])
     Aabb bounds;
+    std::uint32_t node_count = 0;  ///< of the tree (kept here: make_frame_params never reads `bvh`)
 
     /// [first, count) of the boxes whose depth lies in [depth_min, depth_max].
     std::pair<std::uint32_t, std::uint32_t> box_range(std::uint32_t depth_min, std::uint32_t depth_max) const;

@@ -27,16 +27,11 @@ SceneBuffers::SceneBuffers(const Device& device, CommandRunner& runner, const Re
     boxes_ = upload_vector(device, runner, scene.boxes, force_staging);
     summary_.bounds = scene.bounds;
     summary_.depth_offset = scene.depth_offset;
-    const gpu::FrameParams defaults = make_frame_params(scene, RenderSettings{});
-    node_count_ = defaults.flags.z;
-    default_heat_scale_ = defaults.flags.w;
+    summary_.node_count = scene.node_count;
 }
 
 gpu::FrameParams SceneBuffers::frame_params(const RenderSettings& settings) const {
     gpu::FrameParams frame = make_frame_params(summary_, settings);
-    // make_frame_params takes these from scene.bvh, which is gone (see summary_)
-    frame.flags.z = node_count_;
-    if (!(settings.heatmap_scale > 0)) frame.flags.w = default_heat_scale_;
     frame.addr_nodes_refs = address_pair(nodes_.address(), refs_.address());
     frame.addr_triangles_spheres = address_pair(triangles_.address(), spheres_.address());
     frame.addr_materials_boxes = address_pair(materials_.address(), boxes_.address());

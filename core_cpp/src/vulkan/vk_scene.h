@@ -20,10 +20,9 @@ public:
 
 private:
     Buffer nodes_, refs_, triangles_, spheres_, materials_, boxes_;
-    /// What make_frame_params reads besides the tree: bounds and depth offsets (tree left null).
+    /// What make_frame_params reads: bounds, depth offsets, node count (no arrays, no tree).
     RenderScene summary_;
     /// What it reads from the tree, taken at upload: node count and the default heatmap scale.
-    std::uint32_t node_count_ = 0, default_heat_scale_ = 0;
 };
 
 }  // namespace bvhlab::vk
