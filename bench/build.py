@@ -33,7 +33,7 @@ CONFIGS = [  # (label, build kwargs)
 
 
 def scenes(sizes):
-    from bvhlab import procedural
+    from bvhlab.library import procedural
 
     for n in sizes:
         yield f"room {n // 1000}k", procedural.model_in_room(n)
@@ -44,7 +44,7 @@ def measure(threads: int, sizes: list[int], repeat: int) -> dict:
     """One process, pinned to `threads` cores."""
     _common.pin_to_cores(threads)
     import bvhlab
-    from bvhlab import procedural
+    from bvhlab.library import procedural
 
     out = {"threads": threads, "scenes": []}
     for name, tris in scenes(sizes):

@@ -29,7 +29,7 @@ def main() -> None:
 
     import bvhlab
     from bvhlab.compare import REPORT_TABLE1, measure_methods
-    from bvhlab.scenes import load_scene
+    from bvhlab.library import load_scene
 
     scene, name = load_scene(args.scene)
     threads = os.cpu_count()

@@ -11,7 +11,7 @@ import numpy as np
 import harness
 import bpy
 import bvhlab
-from bvhlab import procedural
+from bvhlab.library import procedural
 from bvhlab.blender import export_scene
 
 #: The 12 edges of a box as pairs of corner selectors (0 = min, 1 = max per axis).

@@ -9,7 +9,7 @@ _cache = Path(__file__).resolve().parents[2] / "build" / "mesa-cache"
 os.environ.setdefault("MESA_SHADER_CACHE_DIR", str(_cache))
 os.environ.setdefault("XDG_CACHE_HOME", str(_cache))
 
-from bvhlab import procedural
+from bvhlab.library import procedural
 
 
 @pytest.fixture(scope="session")

@@ -11,7 +11,7 @@ import pytest
 import bvhlab
 from bvhlab.cli import main
 from bvhlab.png import linear_to_srgb, read_png
-from bvhlab.scenes import load_scene
+from bvhlab.library import load_scene
 
 
 def run_cli(*args, timeout=300):

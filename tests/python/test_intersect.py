@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 import bvhlab
-from bvhlab import procedural
+from bvhlab.library import procedural
 
 
 def brute_force(tris, spheres, origins, dirs):

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import bvhlab
-from bvhlab import showcase
+from bvhlab.library import showcase
 from bvhlab.render import _core
 
 SKY = (0.25, 0.5, 0.75)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import bvhlab
-from bvhlab import procedural, showcase
+from bvhlab.library import procedural, showcase
 
 @pytest.fixture(scope="module")
 def vulkan():
@@ -74,7 +74,7 @@ def test_no_driver_gives_a_clear_error_and_auto_falls_back(tmp_path):
     naming what to install; backend="auto" renders on the CPU and says so."""
     code = (
         "import bvhlab\n"
-        "from bvhlab import showcase\n"
+        "from bvhlab.library import showcase\n"
         "s = showcase.five_spheres(); b = bvhlab.build(s)\n"
         "try:\n"
         "    bvhlab.render(s, b, 8, 8, backend='vulkan')\n"

@@ -39,7 +39,7 @@ inline void set_box(BvhNode& n, const Aabb& b) {
     n.hi = {b.hi.x, b.hi.y, b.hi.z};
 }
 
-/// Validates the geometry and the config, then builds (see builder.cpp).
+/// Validates the geometry and the config, then builds (see build/build_bvh.cpp).
 /// Throws std::invalid_argument on bad input, BuildCancelled when the progress callback says stop.
 Bvh build_bvh(const GeometryView& geometry, const BuildConfig& config = {});
 

@@ -56,7 +56,7 @@ inline constexpr int kAllAxes = -1;
 
 /// Splits the references of `r` held in buffer `src` on `axis` (or all axes with kAllAxes when
 /// the method supports it). Returns nothing when this method cannot split the range (e.g. every
-/// centroid lies on one side); the builder then falls back (see top_down_builder.cpp).
+/// centroid lies on one side); the builder then falls back (see subtree_builder.cpp).
 using SplitFunction = std::optional<Split> (*)(SplitContext&, Range, int src, const NodeBounds&, int axis);
 
 std::optional<Split> split_median(SplitContext&, Range, int src, const NodeBounds&, int axis);

@@ -6,7 +6,7 @@ from pathlib import Path
 
 from .. import build
 from .._progress import ProgressBar
-from ..scenes import load_scene
+from ..library import load_scene
 from . import options
 
 

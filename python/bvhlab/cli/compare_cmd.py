@@ -10,7 +10,7 @@ from pathlib import Path
 from ..compare import charts, figures
 from ..compare import measure_methods, report_checks, write_tables
 from ..render import BACKENDS, Renderer
-from ..scenes import bundled_dir, load_scene
+from ..library import bundled_dir, load_scene
 from . import options
 
 

@@ -7,7 +7,7 @@ from pathlib import Path
 from .. import build, render, save_png
 from .._progress import ProgressBar
 from ..render import BACKENDS
-from ..scenes import load_scene
+from ..library import load_scene
 from . import options
 
 

@@ -1,7 +1,7 @@
 """`bvhlab scenes`: the bundled and generated scenes a SCENE argument can name."""
 from __future__ import annotations
 
-from ..scenes import bundled_dir, list_scenes
+from ..library import bundled_dir, list_scenes
 
 
 def add_parser(sub) -> None:

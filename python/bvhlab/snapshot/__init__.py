@@ -26,7 +26,7 @@ def run_sheet(scene_spec: str, build_kwargs: dict, out: Path, panel_width: int =
 
 
 def _run(scene_spec: str, build_kwargs: dict, out: Path, extra: list[str]) -> Path:
-    from ..scenes import load_scene
+    from ..library import load_scene
 
     scene, name = load_scene(scene_spec)
     if not scene.primitive_count:

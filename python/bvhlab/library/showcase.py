@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .scene import Camera, Light, Material, Scene
+from ..scene import Camera, Light, Material, Scene
 
 
 def quad(a, b, c, d) -> np.ndarray:

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from .scene import Scene
+from ..scene import Scene
 
 
 @dataclass(frozen=True)
@@ -21,8 +21,8 @@ class SceneInfo:
 
 def bundled_dir() -> Path | None:
     """blender_scenes/: inside the installed package (wheels) or beside python/ in a checkout."""
-    here = Path(__file__).resolve().parent
-    for candidate in (here / "blender_scenes", here.parents[1] / "blender_scenes"):
+    package = Path(__file__).resolve().parents[1]  # bvhlab/
+    for candidate in (package / "blender_scenes", package.parents[1] / "blender_scenes"):
         if (candidate / "scenes.json").exists():
             return candidate
     return None
@@ -52,7 +52,7 @@ def _generated() -> dict[str, tuple[str, Callable[[], Scene]]]:
 def _room() -> Scene:
     """procedural.model_in_room seen from inside the room, looking at the knot."""
     from . import procedural
-    from .scene import Camera, Light
+    from ..scene import Camera, Light
 
     return Scene(triangles=procedural.model_in_room(250_000), camera=Camera((-25, -40, -20), (20, 25, -50), fov_y=50),
                  light=Light((-10, -30, 40)))
@@ -72,27 +72,18 @@ def load_scene(spec: str) -> tuple[Scene, str]:
     if spec.endswith(".npz"):
         return Scene.load(path), path.stem
     if spec.endswith(".blend"):
-        return load_blend(path), path.stem
+        return _load_blend(path), path.stem
     generated = _generated()
     if spec in generated:
         return generated[spec][1](), spec.split(":", 1)[1]
     bundled = _bundled()
     if spec in bundled:
-        return load_blend(bundled_dir() / bundled[spec]["file"]), spec
+        return _load_blend(bundled_dir() / bundled[spec]["file"]), spec
     names = ", ".join(sorted([*bundled, *generated]))
     raise FileNotFoundError(f"no scene '{spec}': give a .blend or .npz file, or one of: {names}")
 
 
-def load_blend(path: Path) -> Scene:
-    """Open a .blend with bpy (Blender as a Python module) and export it with the add-on's code."""
-    if not path.exists():
-        raise FileNotFoundError(f"no such file: {path}")
-    try:
-        import bpy
-    except ImportError as e:
-        raise RuntimeError("reading .blend files needs Blender's Python module: pip install bpy==5.0.1 "
-                           "(Python 3.11)") from e
-    from .blender import export_scene
+def _load_blend(path: Path) -> Scene:
+    from ..blender.load import load_blend  # needs bpy: imported only for .blend files
 
-    bpy.ops.wm.open_mainfile(filepath=str(path.resolve()), load_ui=False)
-    return export_scene(bpy.context, scope="visible")
+    return load_blend(path)

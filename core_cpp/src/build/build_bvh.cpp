@@ -1,4 +1,4 @@
-// build_bvh: input checks, primitive references, the top-down build (on several threads when
+// build_bvh.cpp — build_bvh: input checks, primitive references, the top-down build (on several threads when
 // asked), and the finishing touches (skip indices, leaf-ordered geometry).
 #include <chrono>
 #include <memory>
@@ -8,7 +8,7 @@
 
 #include "bvhlab/bvh.h"
 #include "morton.h"
-#include "top_down_builder.h"
+#include "subtree_builder.h"
 
 namespace bvhlab {
 namespace {

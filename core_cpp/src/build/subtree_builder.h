@@ -1,4 +1,4 @@
-// top_down_builder.h — the one top-down builder (report §2.3): it owns the work stack, asks the
+// subtree_builder.h — the one top-down builder (report §2.3): it owns the work stack, asks the
 // configured split method where to split, and writes nodes in depth-first order.
 #pragma once
 #include <atomic>

@@ -1,4 +1,4 @@
-#include "top_down_builder.h"
+#include "subtree_builder.h"
 
 #include <bit>
 

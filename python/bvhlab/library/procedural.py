@@ -103,7 +103,7 @@ def random_spheres(n: int, radius: float = 0.02, seed: int = 0) -> np.ndarray:
 
 def camera_rays(tris: np.ndarray, width: int, height: int, fov_y: float = 45.0):
     """Coherent primary rays of a pinhole camera that frames the geometry (the default camera)."""
-    from .scene import default_camera
+    from ..scene import default_camera
 
     lo, hi = tris.reshape(-1, 3).min(0), tris.reshape(-1, 3).max(0)
     cam = default_camera((lo, hi))

@@ -1,0 +1,22 @@
+"""Reading a `.blend` file outside Blender: open it with bpy (Blender as a Python module) and export
+it with the same code the add-on uses."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..scene import Scene
+
+
+def load_blend(path: Path) -> Scene:
+    """Open a .blend with bpy (Blender as a Python module) and export it with the add-on's code."""
+    if not path.exists():
+        raise FileNotFoundError(f"no such file: {path}")
+    try:
+        import bpy
+    except ImportError as e:
+        raise RuntimeError("reading .blend files needs Blender's Python module: pip install bpy==5.0.1 "
+                           "(Python 3.11)") from e
+    from .export import export_scene
+
+    bpy.ops.wm.open_mainfile(filepath=str(path.resolve()), load_ui=False)
+    return export_scene(bpy.context, scope="visible")
