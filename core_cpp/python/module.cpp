@@ -17,6 +17,7 @@
 #include "bvhlab/traverse.h"
 #include "bvhlab/wide_bvh.h"
 #include "py_bvh.h"
+#include "py_cancel.h"
 
 namespace nb = nanobind;
 using namespace nb::literals;

@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "bvhlab/bvh.h"
+#include "bvhlab/cancel.h"
 #include "morton.h"
 #include "subtree_builder.h"
 
