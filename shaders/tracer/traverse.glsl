@@ -22,6 +22,13 @@ Hit empty_hit(float tmax) {
     return h;
 }
 
+/// The closest-hit rule (the same as closer_hit in core_cpp/include/bvhlab/ray.h): nearer, or as
+/// near and of a smaller primitive reference (triangles before spheres, then the lower index), so
+/// every traversal order picks the same primitive when distances tie.
+bool closer(float t, uint ref, Hit hit) {
+    return t < hit.t || (t == hit.t && hit.ref != NO_HIT && ref < hit.ref);
+}
+
 uint material_of(uint ref) {
     if ((ref & REF_SPHERE_BIT) != 0u) return load_sphere(ref & REF_INDEX_MASK).material.x;
     return floatBitsToUint(load_triangle(ref).v0.w);
@@ -38,12 +45,12 @@ bool visit_leaf(BvhNode n, TraceRay r, bool shadow, INOUT(Hit) hit) {
             GpuSphere s = load_sphere(ref & REF_INDEX_MASK);
             float t;
             if (shadow) crossings = sphere_crossings(s, r, hit.t);
-            else if (hit_sphere(s, r, hit.t, t)) { hit.t = t; hit.ref = ref; }
+            else if (hit_sphere(s, r, hit.t, t) && closer(t, ref, hit)) { hit.t = t; hit.ref = ref; }
         } else {
             vec3 tuv;
             if (hit_triangle(load_triangle(ref), r, hit.t, tuv)) {
-                if (shadow) crossings = 1u;
-                else { hit.t = tuv.x; hit.u = tuv.y; hit.v = tuv.z; hit.ref = ref; }
+                if (shadow) crossings = tuv.x < hit.t ? 1u : 0u;
+                else if (closer(tuv.x, ref, hit)) { hit.t = tuv.x; hit.u = tuv.y; hit.v = tuv.z; hit.ref = ref; }
             }
         }
         if (crossings > 0u) {

@@ -1,6 +1,7 @@
 // Closest-hit traversal against brute force over every primitive, both traversal modes.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 #include "bvhlab/bvh.h"
@@ -47,9 +48,8 @@ void expect_same_hits(const Bvh& bvh, const std::vector<Ray>& rays) {
         for (Traversal mode : {Traversal::Stack, Traversal::Stackless, Traversal::Wide}) {
             Hit got = mode == Traversal::Wide ? intersect_wide(wide, bvh, ray) : intersect(bvh, ray, mode);
             ASSERT_EQ(got.t, want.t);  // the same float arithmetic on the same primitive
-            if (got.ref != want.ref) {  // a tie: another primitive at exactly the same distance
-                EXPECT_EQ(got.t, want.t);
-            } else if (!(got.ref & gpu::REF_SPHERE_BIT)) {
+            ASSERT_EQ(got.ref, want.ref);  // ties go to the smaller reference in every traversal
+            if (!(got.ref & gpu::REF_SPHERE_BIT)) {
                 EXPECT_EQ(got.u, want.u);
                 EXPECT_EQ(got.v, want.v);
             }
@@ -98,6 +98,60 @@ TEST(Traverse, DegenerateTrianglesAreNeverHit) {
     for (const Ray& r : random_rays(2000, 3)) EXPECT_EQ(intersect(bvh, r, Traversal::Stack).ref, kNoHit);
     EXPECT_EQ(intersect(bvh, {{0.5f, 0.5f, -1}, {0, 0, 1}}, Traversal::Stack).ref, kNoHit);
     EXPECT_EQ(intersect(bvh, {{1, 1, 5}, {0, 0, -1}}, Traversal::Stackless).ref, kNoHit);
+}
+
+/// Every traversal on one ray: stack, stackless and wide.
+std::vector<Hit> all_traversals(const Bvh& bvh, const WideBvh& wide, const Ray& ray) {
+    return {intersect(bvh, ray, Traversal::Stack), intersect(bvh, ray, Traversal::Stackless),
+            intersect_wide(wide, bvh, ray)};
+}
+
+TEST(Traverse, RaysOnBoxFacesAndEdgesHit) {
+    // The unit square as two triangles: rays straight down on its edges, x = 1 and y = 1 included,
+    // lie in the root box's faces (a zero direction component on a slab plane) and must hit.
+    test::Scene s;
+    s.add_triangle({0, 0, 0}, {1, 0, 0}, {1, 1, 0});
+    s.add_triangle({0, 0, 0}, {1, 1, 0}, {0, 1, 0});
+    for (std::uint32_t leaf : {1u, 2u}) {
+        BuildConfig c;
+        c.max_leaf_size = leaf;
+        Bvh bvh = build_bvh(s.view(), c);
+        WideBvh wide = make_wide(bvh);
+        for (float x : {0.0f, 0.25f, 0.5f, 1.0f})
+            for (float y : {0.0f, 0.5f, 0.75f, 1.0f})
+                for (Vec3 d : {Vec3{0, 0, -1}, Vec3{-0.0f, -0.0f, -2.0f}}) {
+                    Ray ray{{x, y, 1}, d};
+                    for (const Hit& h : all_traversals(bvh, wide, ray)) {
+                        EXPECT_NE(h.ref, kNoHit) << "x " << x << " y " << y << " leaf " << leaf;
+                        EXPECT_EQ(h.t, 1.0f / std::fabs(d.z));
+                    }
+                }
+        // just outside the faces: misses
+        for (Vec3 o : {Vec3{1.0001f, 0.5f, 1}, Vec3{0.5f, -0.0001f, 1}})
+            for (const Hit& h : all_traversals(bvh, wide, {o, {0, 0, -1}})) EXPECT_EQ(h.ref, kNoHit);
+    }
+}
+
+TEST(Traverse, TiesGoToTheSmallestReferenceInEveryTraversal) {
+    // Forty copies of one triangle and a sphere touching its plane: every ray through the overlap
+    // hits them all at the same distance; all traversals must report triangle 0.
+    test::Scene s;
+    test::Scene scattered = test::random_scene(200, 0, 4);
+    s.triangles = scattered.triangles;
+    for (int i = 0; i < 40; ++i) s.add_triangle({20, 20, 5}, {24, 20, 5}, {20, 24, 5});
+    s.add_sphere({21, 21, 4}, 1.0f);  // top at z = 5, under the copies
+    for (std::uint32_t leaf : {1u, 4u})
+        for (SplitMethod m : {SplitMethod::Sah, SplitMethod::Median, SplitMethod::Lbvh}) {
+            BuildConfig c;
+            c.method = m, c.max_leaf_size = leaf;
+            Bvh bvh = build_bvh(s.view(), c);
+            WideBvh wide = make_wide(bvh);
+            for (float x : {20.5f, 21.0f, 22.0f})
+                for (const Hit& h : all_traversals(bvh, wide, {{x, 21, 10}, {0, 0, -1}})) {
+                    EXPECT_EQ(h.ref, 200u) << to_string(m) << " leaf " << leaf << " x " << x;  // the first copy
+                    EXPECT_EQ(h.t, 5.0f);
+                }
+        }
 }
 
 TEST(Traverse, EmptyTreeMisses) {

@@ -134,3 +134,33 @@ def test_agrees_with_embree_on_a_real_mesh(knot_mesh, rays):
         assert same_hit.mean() >= 0.9999, f"{method}: {np.count_nonzero(~same_hit)} rays disagree on hit/miss"
         assert close.mean() >= 0.9999, f"{method}: {np.count_nonzero(~close)} rays disagree on t"
         assert (got["prim"][both] == want_id[both]).mean() >= 0.999
+
+
+@pytest.mark.parametrize("traversal", bvhlab.TRAVERSALS)
+def test_rays_along_the_edges_of_a_square_hit(traversal):
+    """Issue 8.6: rays straight down on the x = 1 / y = 1 edges of the unit square lie in the root
+    box's upper faces and were dropped, while those on x = 0 / y = 0 hit."""
+    square = np.array([[[0, 0, 0], [1, 0, 0], [1, 1, 0]], [[0, 0, 0], [1, 1, 0], [0, 1, 0]]], np.float32)
+    grid = np.array([(x, y, 1.0) for x in (0, 0.5, 1) for y in (0, 0.5, 1)], np.float32)
+    down = np.tile(np.array([0, 0, -1], np.float32), (len(grid), 1))
+    hits = bvhlab.build(square).intersect(grid, down, traversal=traversal)
+    np.testing.assert_array_equal(hits["t"], 1.0)
+
+
+def test_every_traversal_picks_the_same_primitive_on_ties():
+    """Issue 8.7: on equal distances the smaller primitive index wins, whatever the traversal."""
+    rng = np.random.default_rng(5)
+    copies = np.tile(np.array([[[0, 0, 0], [4, 0, 0], [0, 4, 0]]], np.float32), (30, 1, 1))
+    tris = np.concatenate([procedural.random_triangles(300, seed=3) * 8 - 4, copies]).astype(np.float32)
+    tris = np.ascontiguousarray(tris[rng.permutation(len(tris))])
+    first_copy = int(np.flatnonzero((tris == copies[0]).all(axis=(1, 2)))[0])
+    o = np.column_stack([rng.uniform(0.1, 1.5, 60), rng.uniform(0.1, 1.5, 60), np.full(60, 9.0)]).astype(np.float32)
+    d = np.tile(np.array([0, 0, -1], np.float32), (60, 1))
+    for method in ("sah", "median", "lbvh"):
+        bvh = bvhlab.build(tris, method=method)
+        results = [bvh.intersect(o, d, traversal=t)["prim"] for t in bvhlab.TRAVERSALS]
+        for prim in results:
+            covered = prim >= 0
+            assert covered.sum() > 40
+            np.testing.assert_array_equal(prim, results[0])
+            assert (prim[np.isin(prim, np.flatnonzero((tris == copies[0]).all(axis=(1, 2))))] == first_copy).all()

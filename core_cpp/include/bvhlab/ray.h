@@ -31,25 +31,46 @@ struct RayQuery {
     Vec3 origin, dir, inv_dir;
     float tmin, tmax;
 
-    explicit RayQuery(const Ray& r) : origin(r.origin), dir(r.dir), tmin(r.tmin), tmax(r.tmax) {
-        // A zero component would give 0·inf = NaN on a slab plane; a huge finite inverse is exact enough.
-        auto inv = [](float d) { return 1.0f / (std::fabs(d) < 1e-30f ? std::copysign(1e-30f, d) : d); };
-        inv_dir = {inv(dir.x), inv(dir.y), inv(dir.z)};
-    }
+    /// inv_dir is the exact IEEE inverse: ±inf for a zero component (see hit_box for why that is safe).
+    explicit RayQuery(const Ray& r)
+        : origin(r.origin), dir(r.dir), inv_dir{1.0f / r.dir.x, 1.0f / r.dir.y, 1.0f / r.dir.z},
+          tmin(r.tmin), tmax(r.tmax) {}
 };
 
-/// Slab test; on a hit, `t_enter` is where the ray enters the box (clamped to tmin).
+/// `acc` raised to `t`, ignoring a NaN `t` (then `acc` is kept): the order of the comparison matters.
+inline float raise_to(float acc, float t) { return t > acc ? t : acc; }
+/// `acc` lowered to `t`, ignoring a NaN `t`.
+inline float lower_to(float acc, float t) { return t < acc ? t : acc; }
+
+/// Slab test (Kay and Kajiya 1986), closed on every face; on a hit, `t_enter` is where the ray
+/// enters the box (clamped to tmin). A ray parallel to a slab has an infinite inverse direction:
+/// inside the slab its planes give -inf and +inf (no constraint), outside both give the same
+/// infinity (a miss), and exactly on a plane 0·inf = NaN, which raise_to/lower_to ignore, so a ray
+/// lying in a face counts as inside: the box test agrees with the closed triangle test
+/// (Williams et al. 2005; Barnes 2022, "Fast, branchless ray/bounding box intersections, part 3").
 inline bool hit_box(const gpu::BvhNode& n, const RayQuery& q, float tmax, float& t_enter) {
-    float tx0 = (n.lo.x - q.origin.x) * q.inv_dir.x, tx1 = (n.hi.x - q.origin.x) * q.inv_dir.x;
-    float ty0 = (n.lo.y - q.origin.y) * q.inv_dir.y, ty1 = (n.hi.y - q.origin.y) * q.inv_dir.y;
-    float tz0 = (n.lo.z - q.origin.z) * q.inv_dir.z, tz1 = (n.hi.z - q.origin.z) * q.inv_dir.z;
-    float t0 = std::max(std::max(std::min(tx0, tx1), std::min(ty0, ty1)), std::max(std::min(tz0, tz1), q.tmin));
-    float t1 = std::min(std::min(std::max(tx0, tx1), std::max(ty0, ty1)), std::min(std::max(tz0, tz1), tmax));
+    const bool nx = std::signbit(q.inv_dir.x), ny = std::signbit(q.inv_dir.y), nz = std::signbit(q.inv_dir.z);
+    const float near_x = ((nx ? n.hi.x : n.lo.x) - q.origin.x) * q.inv_dir.x;
+    const float near_y = ((ny ? n.hi.y : n.lo.y) - q.origin.y) * q.inv_dir.y;
+    const float near_z = ((nz ? n.hi.z : n.lo.z) - q.origin.z) * q.inv_dir.z;
+    const float far_x = ((nx ? n.lo.x : n.hi.x) - q.origin.x) * q.inv_dir.x;
+    const float far_y = ((ny ? n.lo.y : n.hi.y) - q.origin.y) * q.inv_dir.y;
+    const float far_z = ((nz ? n.lo.z : n.hi.z) - q.origin.z) * q.inv_dir.z;
+    const float t0 = raise_to(raise_to(raise_to(q.tmin, near_x), near_y), near_z);
+    const float t1 = lower_to(lower_to(lower_to(tmax, far_x), far_y), far_z);
     t_enter = t0;
     return t0 <= t1;
 }
 
-/// Möller–Trumbore on a packed triangle; updates `hit` when closer than hit.t.
+/// The closest-hit rule of every traversal, CPU and GPU (one rule, so that the three traversals
+/// and the tracer agree when distances tie): a candidate at distance t in (tmin, tmax) replaces
+/// the current hit when it is nearer, or as near and of a smaller primitive reference
+/// (triangles before spheres, then the lower index).
+inline bool closer_hit(float t, std::uint32_t ref, const Hit& hit) {
+    return t < hit.t || (t == hit.t && hit.ref != kNoHit && ref < hit.ref);
+}
+
+/// Möller–Trumbore on a packed triangle; updates `hit` when closer_hit() says so.
 inline bool hit_triangle(const PackedPrim& p, const RayQuery& q, Hit& hit) {
     Vec3 e1{p.e1[0], p.e1[1], p.e1[2]}, e2{p.e2[0], p.e2[1], p.e2[2]};
     Vec3 pvec = cross(q.dir, e2);
@@ -63,7 +84,7 @@ inline bool hit_triangle(const PackedPrim& p, const RayQuery& q, Hit& hit) {
     float v = dot(q.dir, qvec) * inv_det;
     if (!(v >= 0.0f && u + v <= 1.0f)) return false;
     float t = dot(e2, qvec) * inv_det;
-    if (!(t > q.tmin && t < hit.t)) return false;
+    if (!(t > q.tmin && closer_hit(t, p.ref, hit))) return false;
     hit.t = t, hit.ref = p.ref, hit.u = u, hit.v = v;
     return true;
 }
@@ -78,7 +99,7 @@ inline bool hit_sphere(const PackedPrim& p, const RayQuery& q, Hit& hit) {
     float s = std::sqrt(disc);
     float t = (-b - s) / a;
     if (!(t > q.tmin)) t = (-b + s) / a;
-    if (!(t > q.tmin && t < hit.t)) return false;
+    if (!(t > q.tmin && closer_hit(t, p.ref, hit))) return false;
     hit.t = t, hit.ref = p.ref;
     return true;
 }

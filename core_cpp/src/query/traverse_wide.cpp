@@ -1,5 +1,6 @@
 // Closest-hit traversal of the 4-wide tree: four slab tests per SSE instruction sequence, the
-// near plane of each axis chosen once per ray from the sign of the direction (no min/max).
+// near plane of each axis chosen once per ray from the sign of the direction (no min/max), with
+// the same closed faces as hit_box (ray.h).
 #include <emmintrin.h>
 
 #include "bvhlab/traverse.h"
@@ -50,8 +51,10 @@ Hit intersect_wide(const WideBvh& wide, const Bvh& bvh, const Ray& ray, std::uin
                 __m128 tfx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(f + fx), ox), ix);
                 __m128 tfy = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(f + fy), oy), iy);
                 __m128 tfz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(f + fz), oz), iz);
-                __m128 tnear = _mm_max_ps(_mm_max_ps(tnx, tny), _mm_max_ps(tnz, tmin));
-                __m128 tfar = _mm_min_ps(_mm_min_ps(tfx, tfy), _mm_min_ps(tfz, _mm_set1_ps(hit.t)));
+                // maxps/minps return their second operand when either is NaN: with the plane
+                // distances first, the NaN of a ray lying in a face (0·inf) is ignored, as in hit_box.
+                __m128 tnear = _mm_max_ps(tnz, _mm_max_ps(tny, _mm_max_ps(tnx, tmin)));
+                __m128 tfar = _mm_min_ps(tfz, _mm_min_ps(tfy, _mm_min_ps(tfx, _mm_set1_ps(hit.t))));
                 int mask = _mm_movemask_ps(_mm_cmple_ps(tnear, tfar));
                 if (mask) {
                     alignas(16) float t[4];
