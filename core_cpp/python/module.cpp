@@ -70,21 +70,21 @@ PyBvh* build(const Triangles& tris, const std::optional<Spheres>& spheres, const
             }
         };
     }
-    auto out = std::make_unique<PyBvh>();
     GeometryView g = view_of(tris, spheres);
+    Bvh bvh;
     try {
         nb::gil_scoped_release release;
-        out->bvh = build_bvh(g, cfg);
+        bvh = build_bvh(g, cfg);
     } catch (const BuildCancelled&) {
         if (callback_error) throw std::move(*callback_error);
         throw;
     }
-    return out.release();
+    return new PyBvh(std::move(bvh));
 }
 
-void py_intersect(PyBvh& self, const Vectors& origins, const Vectors& dirs, float tmin, float tmax,
-               const std::string& traversal, std::uint32_t threads, Out1D<float> t, Out1D<std::int32_t> prim,
-               Out1D<std::uint8_t> kind, Out1D<float> u, Out1D<float> v, Out1D<std::uint32_t> visited) {
+void py_intersect(const PyBvh& self, const Vectors& origins, const Vectors& dirs, float tmin, float tmax,
+                  const std::string& traversal, std::uint32_t threads, Out1D<float> t, Out1D<std::int32_t> prim,
+                  Out1D<std::uint8_t> kind, Out1D<float> u, Out1D<float> v, Out1D<std::uint32_t> visited) {
     const std::size_t n = origins.shape(0);
     if (dirs.shape(0) != n) throw std::invalid_argument("origins and directions differ in length");
     for (std::size_t len : {t.shape(0), prim.shape(0), kind.shape(0), u.shape(0), v.shape(0), visited.shape(0)})
@@ -94,17 +94,43 @@ void py_intersect(PyBvh& self, const Vectors& origins, const Vectors& dirs, floa
     else if (traversal == "stackless") mode = Traversal::Stackless;
     else if (traversal == "wide") mode = Traversal::Wide;
     else throw std::invalid_argument("unknown traversal '" + traversal + "'; expected one of: stack stackless wide");
-    const WideBvh* wide = mode == Traversal::Wide ? &self.wide() : nullptr;
     RayBatch rays{origins.data(), dirs.data(), n, tmin, tmax};
     HitBatch hits{t.data(), prim.data(), kind.data(), u.data(), v.data(), visited.data()};
+    TreePtr tree = self.current();  // this version stays alive (and unchanged) until the rays are done
     nb::gil_scoped_release release;
-    intersect_batch(self.bvh, rays, hits, mode, threads, wide);
+    const WideBvh* wide = mode == Traversal::Wide ? &tree->wide() : nullptr;
+    intersect_batch(tree->bvh, rays, hits, mode, threads, wide);
 }
 
-template <class Vector>
-auto view(const Vector& v) {
-    using T = typename Vector::value_type;
-    return nb::ndarray<nb::numpy, const T>(v.data(), {v.size()});
+/// Boxes of the nodes whose depth is in [depth_min, depth_max], by depth (report §3.3.1), read
+/// from one version of the tree: (lo (K,3), hi (K,3), depth (K,)).
+nb::tuple py_boxes(const PyBvh& self, std::uint32_t depth_min, std::uint32_t depth_max) {
+    TreePtr tree = self.current();
+    const DepthOrder& order = tree->order();
+    auto [first, last] = order.range(depth_min, depth_max);
+    const std::size_t k = last - first;
+    auto* lo = new float[3 * k];
+    auto* hi = new float[3 * k];
+    auto* depth = new std::uint8_t[k];
+    for (std::size_t j = 0; j < k; ++j) {
+        const std::uint32_t i = order.nodes[first + j];
+        const BvhNode& n = tree->bvh.nodes[i];
+        lo[3 * j] = n.lo.x, lo[3 * j + 1] = n.lo.y, lo[3 * j + 2] = n.lo.z;
+        hi[3 * j] = n.hi.x, hi[3 * j + 1] = n.hi.y, hi[3 * j + 2] = n.hi.z;
+        depth[j] = tree->bvh.depths[i];
+    }
+    auto owned = [](auto* p) {
+        return nb::capsule(p, [](void* q) noexcept { delete[] static_cast<decltype(p)>(q); });
+    };
+    return nb::make_tuple(nb::ndarray<nb::numpy, float, nb::ndim<2>>(lo, {k, 3}, owned(lo)),
+                          nb::ndarray<nb::numpy, float, nb::ndim<2>>(hi, {k, 3}, owned(hi)),
+                          nb::ndarray<nb::numpy, std::uint8_t, nb::ndim<1>>(depth, {k}, owned(depth)));
+}
+
+void py_refit(PyBvh& self, const Triangles& tris, const std::optional<Spheres>& spheres) {
+    GeometryView g = view_of(tris, spheres);
+    nb::gil_scoped_release release;
+    self.update([&](Bvh& tree) { refit(tree, g); });
 }
 
 }  // namespace
@@ -117,27 +143,29 @@ NB_MODULE(_core, m) {
     nb::exception<BuildCancelled>(m, "BuildCancelled");
 
     nb::class_<PyBvh>(m, "Bvh")
-        .def("stats", [](const PyBvh& b) { return stats_dict(b.bvh); })
-        .def_prop_ro("node_count", [](const PyBvh& b) { return b.bvh.nodes.size(); })
-        .def_prop_ro("build_ms", [](const PyBvh& b) { return b.bvh.build_ms; })
+        .def("stats", [](const PyBvh& b) { return stats_dict(b.current()->bvh); })
+        .def_prop_ro("node_count", [](const PyBvh& b) { return b.current()->bvh.nodes.size(); })
+        .def_prop_ro("build_ms", [](const PyBvh& b) { return b.current()->bvh.build_ms; })
+        .def_prop_ro("revision", [](const PyBvh& b) { return b.current()->revision; })
+        .def_prop_ro("geometry_fingerprint", [](const PyBvh& b) { return b.current()->bvh.geometry_fingerprint; })
         .def("nodes_bytes", [](const PyBvh& b) {
-                 return nb::ndarray<nb::numpy, const std::uint8_t, nb::ndim<2>>(
-                     b.bvh.nodes.data(), {b.bvh.nodes.size(), sizeof(BvhNode)});
-             }, nb::rv_policy::reference_internal)
-        .def("refs", [](const PyBvh& b) { return view(b.bvh.refs); }, nb::rv_policy::reference_internal)
-        .def("depths", [](const PyBvh& b) { return view(b.bvh.depths); }, nb::rv_policy::reference_internal)
-        .def("depth_order", [](PyBvh& b) { return view(b.order().nodes); }, nb::rv_policy::reference_internal)
-        .def("depth_range", [](PyBvh& b, std::uint32_t lo, std::uint32_t hi) { return b.order().range(lo, hi); })
+                 TreePtr t = b.current();
+                 return array_owned_by(t, reinterpret_cast<const std::uint8_t*>(t->bvh.nodes.data()),
+                                       {t->bvh.nodes.size(), sizeof(BvhNode)});
+             })
+        .def("refs", [](const PyBvh& b) { TreePtr t = b.current(); return array_owned_by(t, t->bvh.refs.data(), {t->bvh.refs.size()}); })
+        .def("depths", [](const PyBvh& b) { TreePtr t = b.current(); return array_owned_by(t, t->bvh.depths.data(), {t->bvh.depths.size()}); })
+        .def("boxes", &py_boxes, "depth_min"_a, "depth_max"_a)
         .def("intersect", &py_intersect, "origins"_a.noconvert(), "directions"_a.noconvert(), "tmin"_a, "tmax"_a,
              "traversal"_a, "threads"_a, "t"_a.noconvert(), "prim"_a.noconvert(), "kind"_a.noconvert(),
              "u"_a.noconvert(), "v"_a.noconvert(), "visited"_a.noconvert())
-        .def("refit", [](PyBvh& b, const Triangles& tris, const std::optional<Spheres>& spheres) {
-                 GeometryView g = view_of(tris, spheres);
-                 b.invalidate();
-                 nb::gil_scoped_release release;
-                 refit(b.bvh, g);
-             }, "triangles"_a.noconvert(), "spheres"_a.noconvert().none());
+        .def("refit", &py_refit, "triangles"_a.noconvert(), "spheres"_a.noconvert().none());
 
+    m.def("geometry_fingerprint", [](const Triangles& tris, const std::optional<Spheres>& spheres) {
+              GeometryView g = view_of(tris, spheres);
+              nb::gil_scoped_release release;
+              return geometry_fingerprint(g);
+          }, "triangles"_a.noconvert(), "spheres"_a.noconvert().none());
     m.def("build", &build, "triangles"_a.noconvert(), "spheres"_a.noconvert().none(), "method"_a, "axis"_a,
           "bins"_a, "max_leaf_size"_a, "seed"_a, "threads"_a, "progress"_a.none());
     m.attr("MAX_TREE_HEIGHT") = gpu::MAX_TREE_HEIGHT;

@@ -1,5 +1,15 @@
 // py_bvh.h — what the Python module keeps per tree, shared by the binding files.
+//
+// A Python Bvh may be used from several threads at once (intersect on one, refit on another,
+// boxes on a third). Each operation takes the current TreeVersion, a shared_ptr to an immutable
+// tree, and works on that: a refit builds a new version and publishes it, so a reader sees the
+// old tree or the new one, never freed or half-written memory. Arrays handed to Python keep
+// their version alive.
 #pragma once
+#include <cstdint>
+#include <initializer_list>
+#include <memory>
+#include <mutex>
 #include <optional>
 
 #include <nanobind/nanobind.h>
@@ -23,20 +33,66 @@ inline GeometryView view_of(const Triangles& tris, const std::optional<Spheres>&
     return g;
 }
 
-/// A Bvh plus the depth order the overlay queries need, computed once on first use.
-struct PyBvh {
-    Bvh bvh;
-    std::optional<DepthOrder> depth_order;
-    std::optional<WideBvh> wide_bvh;
-    const DepthOrder& order() {
-        if (!depth_order) depth_order = make_depth_order(bvh);
-        return *depth_order;
+/// One immutable version of a tree, with the views made of it on first use (thread-safe).
+class TreeVersion {
+public:
+    TreeVersion(Bvh tree, std::uint64_t revision) : bvh(std::move(tree)), revision(revision) {}
+
+    const Bvh bvh;
+    const std::uint64_t revision;  ///< 0 when built, +1 per refit
+
+    const DepthOrder& order() const {
+        std::call_once(order_once_, [this] { order_.emplace(make_depth_order(bvh)); });
+        return *order_;
     }
-    const WideBvh& wide() {  // built on first use, with the GIL held
-        if (!wide_bvh) wide_bvh = make_wide(bvh);
-        return *wide_bvh;
+    const WideBvh& wide() const {
+        std::call_once(wide_once_, [this] { wide_.emplace(make_wide(bvh)); });
+        return *wide_;
     }
-    void invalidate() { depth_order.reset(), wide_bvh.reset(); }
+
+private:
+    mutable std::once_flag order_once_, wide_once_;
+    mutable std::optional<DepthOrder> order_;
+    mutable std::optional<WideBvh> wide_;
 };
+
+using TreePtr = std::shared_ptr<const TreeVersion>;
+
+/// The Python-side tree: the current version, replaced as a whole by refit.
+class PyBvh {
+public:
+    explicit PyBvh(Bvh tree) : current_(std::make_shared<const TreeVersion>(std::move(tree), 0)) {}
+
+    TreePtr current() const {
+        std::lock_guard<std::mutex> lock(mutex_);
+        return current_;
+    }
+    /// Makes a new version with `change` applied to a copy of the current tree and publishes it.
+    /// Changes are serialised (the last call wins, as it would without threads); readers are never
+    /// blocked by them. Call without the GIL.
+    template <class Change>
+    void update(Change&& change) {
+        std::lock_guard<std::mutex> writer(writer_mutex_);
+        TreePtr old = current();
+        Bvh next = old->bvh;  // copy on write: readers of the old version are not disturbed
+        change(next);
+        auto version = std::make_shared<const TreeVersion>(std::move(next), old->revision + 1);
+        std::lock_guard<std::mutex> lock(mutex_);
+        current_ = std::move(version);
+    }
+
+private:
+    mutable std::mutex mutex_;  ///< guards current_ (held only to copy or swap the pointer)
+    std::mutex writer_mutex_;   ///< one update at a time
+    TreePtr current_;
+};
+
+/// A read-only numpy array over `data` that keeps `owner` (a tree version) alive.
+template <class T>
+nb::ndarray<nb::numpy, const T> array_owned_by(const TreePtr& owner, const T* data, std::initializer_list<size_t> shape) {
+    auto* keep = new TreePtr(owner);
+    nb::capsule capsule(keep, [](void* p) noexcept { delete static_cast<TreePtr*>(p); });
+    return nb::ndarray<nb::numpy, const T>(data, shape, capsule);
+}
 
 }  // namespace bvhlab::python

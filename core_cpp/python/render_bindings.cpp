@@ -30,8 +30,10 @@ using Materials = nb::ndarray<const float, nb::shape<-1, 6>, nb::c_contig, nb::d
 using Indices = nb::ndarray<const std::int32_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
 using Image = nb::ndarray<float, nb::shape<-1, -1, 4>, nb::c_contig, nb::device::cpu>;
 
-/// A RenderScene; keeps its tree alive (nb::keep_alive on construction).
+/// A RenderScene and the version of the tree it was made from (kept alive: RenderScene borrows it;
+/// a later refit of the Python Bvh makes a new version and leaves this one intact).
 struct PyRenderScene {
+    TreePtr tree;
     RenderScene scene;
 };
 
@@ -75,25 +77,26 @@ nb::dict timings_dict(const RenderTimings& t) {
     return d;
 }
 
-RenderScene make_scene(PyBvh& bvh, const Triangles& tris, const std::optional<Spheres>& spheres,
+RenderScene make_scene(const TreeVersion& tree, const Triangles& tris, const std::optional<Spheres>& spheres,
                        const Materials& materials, const Indices& tri_material, const Indices& sphere_material) {
     GeometryView g = view_of(tris, spheres);
     if (tri_material.shape(0) != g.triangle_count || sphere_material.shape(0) != g.sphere_count)
         throw std::invalid_argument("one material index per triangle and per sphere is needed");
     MaterialView mv{materials.data(), materials.shape(0), tri_material.data(), sphere_material.data()};
     nb::gil_scoped_release release;
-    return make_render_scene(bvh.bvh, g, mv);
+    return make_render_scene(tree.bvh, g, mv);
 }
 
 }  // namespace
 
 void bind_render(nb::module_& m) {
     nb::class_<PyRenderScene>(m, "RenderScene")
-        .def("__init__", [](PyRenderScene* self, PyBvh& bvh, const Triangles& tris, const std::optional<Spheres>& spheres,
+        .def("__init__", [](PyRenderScene* self, const PyBvh& bvh, const Triangles& tris, const std::optional<Spheres>& spheres,
                             const Materials& materials, const Indices& tri_material, const Indices& sphere_material) {
-                 new (self) PyRenderScene{make_scene(bvh, tris, spheres, materials, tri_material, sphere_material)};
+                 TreePtr tree = bvh.current();
+                 new (self) PyRenderScene{tree, make_scene(*tree, tris, spheres, materials, tri_material, sphere_material)};
              }, "bvh"_a, "triangles"_a.noconvert(), "spheres"_a.noconvert().none(), "materials"_a.noconvert(),
-             "tri_material"_a.noconvert(), "sphere_material"_a.noconvert(), nb::keep_alive<1, 2>())
+             "tri_material"_a.noconvert(), "sphere_material"_a.noconvert())
         .def("box_range", [](const PyRenderScene& s, std::uint32_t lo, std::uint32_t hi) {
                  auto r = s.scene.box_range(lo, hi);
                  return nb::make_tuple(r.first, r.second);

@@ -80,7 +80,10 @@ def build(scene_or_triangles, spheres: np.ndarray | None = None, *, method: str 
 
 
 class Bvh:
-    """A built tree. Arrays returned by its properties are read-only views of the C++ data."""
+    """A built tree. Arrays returned by its properties are read-only views of the C++ data.
+
+    A Bvh may be shared between threads: `intersect`, `boxes` and the arrays read one version of
+    the tree; `refit` publishes a new version, so a reader sees the old tree or the new one."""
 
     def __init__(self, core: "_core.Bvh", config: BuildConfig):
         self._core = core
@@ -103,6 +106,12 @@ class Bvh:
             self._stats = self._core.stats()
             self._stats["threads"] = self.config.threads
         return dict(self._stats)
+
+    @property
+    def revision(self) -> int:
+        """0 when built; each refit makes a new version of the tree and adds 1. Arrays taken from an
+        older version stay valid (and unchanged)."""
+        return self._core.revision
 
     # -- the tree as arrays ------------------------------------------------------------------
     @property
@@ -136,10 +145,7 @@ class Bvh:
         (depth-first order within a depth; report §3.3.1). Returns (lo (K,3), hi (K,3), depth (K,))."""
         depth_min = _checks.integer("depth_min", depth_min, 0, 255)
         depth_max = 255 if depth_max is None else _checks.integer("depth_max", depth_max, 0, 255)
-        first, last = self._core.depth_range(depth_min, depth_max)
-        index = self._core.depth_order()[first:last]
-        nodes = self.nodes[index]
-        return nodes["lo"].copy(), nodes["hi"].copy(), self.depths[index].copy()
+        return self._core.boxes(depth_min, depth_max)
 
     # -- queries -----------------------------------------------------------------------------
     def intersect(self, origins: np.ndarray, directions: np.ndarray, *, tmin: float = 0.0,
@@ -176,7 +182,6 @@ class Bvh:
             spheres = _checks.float32_array("spheres", spheres, (4,))
         self._core.refit(triangles, spheres)
         self._stats = None
-        self._render_cache = None  # boxes and geometry changed
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:

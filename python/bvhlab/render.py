@@ -171,7 +171,7 @@ def _settings(scene: Scene, bvh: Bvh, width, height, *, spp=1, max_depth=5, over
 
 def _render_scene(scene: Scene, bvh: Bvh):
     """The scene in GPU layout, cached on the tree for as long as the scene's arrays are the same."""
-    key = (id(scene.triangles), id(scene.spheres), id(scene.tri_material), id(scene.sphere_material),
+    key = (bvh.revision, id(scene.triangles), id(scene.spheres), id(scene.tri_material), id(scene.sphere_material),
            tuple(scene.materials))  # frozen dataclasses: compared by value
     cached = getattr(bvh, "_render_cache", None)
     if cached is not None and cached[0] == key:

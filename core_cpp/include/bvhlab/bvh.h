@@ -20,6 +20,7 @@ struct Bvh {
     BigVector<std::uint8_t> depths;      ///< depth of each node
     BigVector<PackedPrim> prims;         ///< geometry in leaf order, for the CPU traversal
     std::uint32_t triangle_count = 0, sphere_count = 0;
+    std::uint64_t geometry_fingerprint = 0;  ///< of the geometry built over (or last refitted to)
     BuildConfig config;                  ///< what it was built with (progress callback dropped)
     double build_ms = 0;                 ///< wall time of the tree build (refs in → nodes out)
 

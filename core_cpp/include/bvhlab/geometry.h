@@ -34,6 +34,11 @@ void validate(const GeometryView& geometry);
 /// Checks the geometry as validate() does, throwing the same errors.
 BigVector<PrimRef> make_prim_refs(const GeometryView& geometry);
 
+/// A 64-bit fingerprint of the geometry (counts and every coordinate's bits), so that a tree can
+/// tell whether it is used with the geometry it was built for (a render of another scene with the
+/// same primitive counts would be silently wrong). Reads the arrays once, ~10 GB/s.
+std::uint64_t geometry_fingerprint(const GeometryView& geometry);
+
 /// A primitive laid out for the CPU traversal, in leaf order (40 bytes).
 /// Triangle: v0 and the two edges (Möller–Trumbore needs no more). Sphere: centre in `p`, radius in e1[0].
 struct PackedPrim {

@@ -147,6 +147,7 @@ Bvh build_bvh(const GeometryView& geometry, const BuildConfig& config) {
     BigVector<PrimRef> prim_refs = make_prim_refs(geometry);
     build_tree(prim_refs, config, bvh);
     bvh.prims = pack_prims(geometry, bvh.refs);
+    bvh.geometry_fingerprint = bvhlab::geometry_fingerprint(geometry);
     bvh.build_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     if (config.progress) config.progress(1.0);
     return bvh;

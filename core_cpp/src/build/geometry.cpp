@@ -1,6 +1,7 @@
 #include "bvhlab/geometry.h"
 
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
@@ -80,6 +81,54 @@ BigVector<PrimRef> make_prim_refs(const GeometryView& g) {
     validate_spheres(g);
     for (std::size_t i = 0; i < g.sphere_count; ++i) refs[g.triangle_count + i] = sphere_ref(g, i);
     return refs;
+}
+
+namespace {
+
+/// Four independent multiply-rotate lanes over 8-byte words (the structure of xxHash64, Collet
+/// 2014), so the loop runs at memory speed; the lanes are folded and avalanched at the end.
+class Fingerprint {
+public:
+    void add(const void* data, std::size_t n) {
+        const auto* bytes = static_cast<const unsigned char*>(data);
+        std::size_t i = 0;
+        for (; i + 32 <= n; i += 32)
+            for (int k = 0; k < 4; ++k) lane_[k] = round(lane_[k], word(bytes + i + 8 * k));
+        for (; i + 8 <= n; i += 8) lane_[0] = round(lane_[0], word(bytes + i));
+        if (i < n) lane_[1] = round(lane_[1], std::uint64_t(word4(bytes + i)));
+        total_ += n;
+    }
+    std::uint64_t finish() const {
+        std::uint64_t h = total_ * kPrime1;
+        for (std::uint64_t lane : lane_) h = (h ^ round(0, lane)) * kPrime1 + kPrime2;
+        h ^= h >> 33, h *= kPrime2, h ^= h >> 29, h *= kPrime3;
+        return h ^ (h >> 32);
+    }
+
+private:
+    static constexpr std::uint64_t kPrime1 = 0x9E3779B185EBCA87ull, kPrime2 = 0xC2B2AE3D27D4EB4Full,
+                                   kPrime3 = 0x165667B19E3779F9ull;
+    static std::uint64_t round(std::uint64_t acc, std::uint64_t w) {
+        acc += w * kPrime2;
+        acc = (acc << 31) | (acc >> 33);
+        return acc * kPrime1;
+    }
+    static std::uint64_t word(const unsigned char* p) { std::uint64_t w; std::memcpy(&w, p, 8); return w; }
+    static std::uint32_t word4(const unsigned char* p) { std::uint32_t w; std::memcpy(&w, p, 4); return w; }
+
+    std::uint64_t lane_[4] = {kPrime1 + kPrime2, kPrime2, 0, 0 - kPrime1};
+    std::uint64_t total_ = 0;
+};
+
+}  // namespace
+
+std::uint64_t geometry_fingerprint(const GeometryView& g) {
+    Fingerprint f;
+    const std::uint64_t counts[2] = {g.triangle_count, g.sphere_count};
+    f.add(counts, sizeof(counts));
+    if (g.triangle_count) f.add(g.triangles, 9 * sizeof(float) * g.triangle_count);
+    if (g.sphere_count) f.add(g.spheres, 4 * sizeof(float) * g.sphere_count);
+    return f.finish();
 }
 
 BigVector<PackedPrim> pack_prims(const GeometryView& g, const BigVector<std::uint32_t>& refs) {

@@ -24,6 +24,7 @@ void refit(Bvh& bvh, const GeometryView& geometry) {
         set_box(n, box);
     }
     bvh.prims = pack_prims(geometry, bvh.refs);
+    bvh.geometry_fingerprint = geometry_fingerprint(geometry);
 }
 
 }  // namespace bvhlab

@@ -40,6 +40,9 @@ std::vector<gpu::GpuMaterial> gpu_materials(const MaterialView& mv) {
 RenderScene make_render_scene(const Bvh& bvh, const GeometryView& g, const MaterialView& mv) {
     if (g.triangle_count != bvh.triangle_count || g.sphere_count != bvh.sphere_count)
         throw std::invalid_argument("the geometry does not match the tree (different primitive counts)");
+    if (geometry_fingerprint(g) != bvh.geometry_fingerprint)
+        throw std::invalid_argument("the tree was built for other geometry (same counts, different coordinates): "
+                                    "build it again, or refit it, for these triangles and spheres");
     RenderScene s;
     s.bvh = &bvh;
     s.materials = gpu_materials(mv);
