@@ -93,7 +93,7 @@ in_root() {
       PATH=/opt/py313/bin:/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin \
       PIP_CERT=/etc/ssl/host/ca-certificates.crt PIP_DISABLE_PIP_VERSION_CHECK=1 PIP_DEFAULT_TIMEOUT=180 \
       BVHLAB_IN_TRIXIE=1 ${BVHLAB_ROOT_ENV:-} \
-      bash -euo pipefail -c "cd /src && $*"
+      bash -euo pipefail -c "cd /src; $*"
   ' in_root "$TRIXIE" "$ROOT_DIR" "$@"
 }
 
