@@ -1,8 +1,8 @@
 """Text that fits the sidebar: messages wrapped to the region's width instead of cut off."""
 from __future__ import annotations
 
-#: Pixels a panel takes from the region's width for its margins and an icon (at UI scale 1).
-PANEL_MARGIN_PX = 48
+#: Pixels the sidebar takes from a label (at UI scale 1): category tabs, panel margins, an icon.
+PANEL_MARGIN_PX = 90
 
 
 def wrap_text(text: str, max_width: float, measure) -> list[str]:
@@ -32,14 +32,14 @@ def ui_text_measure(context):
     import blf
 
     preferences = context.preferences
-    points = preferences.ui_styles[0].widget.points * preferences.view.ui_scale
+    points = preferences.ui_styles[0].widget.points * preferences.system.ui_scale
     blf.size(0, points)
     return lambda text: blf.dimensions(0, text)[0]
 
 
 def available_width(context) -> float:
     """Text width a label gets in the current sidebar region."""
-    scale = context.preferences.view.ui_scale
+    scale = context.preferences.system.ui_scale
     return context.region.width - PANEL_MARGIN_PX * scale
 
 
