@@ -11,15 +11,27 @@ CMAKE_GEN := -G Ninja
 CORE_SOURCES := $(shell find core_cpp shaders -type f \( -name '*.cpp' -o -name '*.h' -o -name '*.txt' -o -name '*.comp' -o -name '*.glsl' -o -name '*.vert' -o -name '*.frag' \) 2>/dev/null)
 PY_SOURCES   := $(shell find python -type f -name '*.py' 2>/dev/null)
 
-.PHONY: help setup system venv build test cpp-test asan-test pytest demo bench addon scenes clean
+# The Debian 13 root (scripts/trixie.sh): Python 3.13 and a real Blender binary.
+TRIXIE    := scripts/trixie.sh
+ADDON_SOURCES := $(shell find addon -type f -not -path '*/__pycache__/*' -not -path 'addon/wheels/*' 2>/dev/null)
+WHEEL_INPUTS  := $(CORE_SOURCES) $(PY_SOURCES) CMakeLists.txt pyproject.toml $(wildcard blender_scenes/*.blend blender_scenes/scenes.json)
+
+.PHONY: help setup system venv trixie build test cpp-test asan-test pytest blender-test bpy313-test \
+        blender-binary-test blender-ui-test demo bench addon screenshots scenes clean
 
 help:
-	@echo "make test   install what is missing, build, run all tests (C++, ASan/UBSan, pytest)"
-	@echo "make demo   install what is missing, build, reproduce the report's Table 1 on the bundled atrium (out/demo)"
-	@echo "make bench  build and traversal benchmark against Embree (bench/results/*.json)"
-	@echo "make addon  the Blender extension zip in dist/"
+	@echo "make test         install what is missing, build, run all tests (C++, ASan/UBSan, pytest on bpy 4.2,"
+	@echo "                  bpy 5.2 on Python 3.13, a real Blender binary headless and with its UI)"
+	@echo "make demo         install what is missing, build, reproduce the report's Table 1 on the bundled atrium (out/demo)"
+	@echo "make bench        build and traversal benchmark against Embree (bench/results/*.json)"
+	@echo "make addon        the Blender extension zip in dist/ (wheels for Python 3.11 and 3.13)"
+	@echo "make screenshots  the sidebar panel in a real Blender window → docs/panel.png"
 
-setup: system venv
+setup: system venv trixie
+
+# Created once and updated only when its package list or requirements-py313.txt change (stamps).
+trixie: | system
+	@$(TRIXIE) setup
 
 system:
 	@scripts/install_system_packages.sh
@@ -51,10 +63,21 @@ asan-test: build/asan/build.ninja
 	cmake --build build/asan -j $(JOBS)
 	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --test-dir build/asan --output-on-failure -j $(JOBS)
 
-pytest: build
+# bpy 4.2 LTS (Python 3.11, the oldest supported line) in .venv; the zip's install test needs dist/.
+pytest: build addon
 	$(PY) -m pytest -q
 
-test: cpp-test asan-test pytest
+# The add-on checks (tests/blender/run.py) on the zip, in the Debian 13 root: the bpy module 5.2 LTS
+# on Python 3.13, the Blender binary headless, and the Blender binary with its UI under Xvfb.
+bpy313-test: addon
+	$(TRIXIE) run python tests/blender/run.py --zip dist/bvhlab.zip
+blender-binary-test: addon
+	$(TRIXIE) run blender --background --factory-startup --python-exit-code 1 --python tests/blender/run.py -- --zip dist/bvhlab.zip
+blender-ui-test: addon
+	$(TRIXIE) run python tests/blender/ui/run_ui.py --zip dist/bvhlab.zip --out build/ui
+blender-test: bpy313-test blender-binary-test blender-ui-test
+
+test: cpp-test asan-test pytest blender-test
 
 # The report's Table 1, its checks, charts, Figures 3-5 and level sheets for the bundled atrium,
 # and the README's picture.
@@ -65,13 +88,25 @@ demo: build
 bench: build
 	$(PY) bench/build.py
 
-# The Blender extension zip (dist/), with the compiled core as a bundled wheel.
-addon: build
-	$(PY) scripts/build_addon.py
+# The Blender extension zip (dist/bvhlab.zip, a copy of dist/bvhlab-<version>.zip) with a wheel for
+# each Python Blender embeds: cp311 built here, cp313 in the Debian 13 root.
+addon: dist/bvhlab.zip
+build/wheels/.cp311: $(VENV)/.deps $(WHEEL_INPUTS)
+	$(PY) scripts/build_addon.py wheel
+	@touch $@
+build/wheels/.cp313: $(WHEEL_INPUTS) | trixie
+	$(TRIXIE) run python scripts/build_addon.py wheel
+	@touch $@
+dist/bvhlab.zip: build/wheels/.cp311 build/wheels/.cp313 $(ADDON_SOURCES) scripts/build_addon.py
+	cp "$$($(PY) scripts/build_addon.py package)" $@
+
+# The sidebar panel in a real Blender window (Xvfb) → docs/panel.png.
+screenshots: addon
+	$(TRIXIE) run python tests/blender/ui/run_ui.py --zip dist/bvhlab.zip --out build/ui --screenshots docs
 
 # Regenerate the bundled .blend scenes.
 scenes: build
 	$(PY) blender_scenes/make_scenes.py
 
 clean:
-	rm -rf build dist out $(VENV)/.built
+	rm -rf build/cpp build/asan build/wheel* build/wheels build/addon-stage dist out $(VENV)/.built  # keeps build/trixie

@@ -22,6 +22,7 @@ class BVHLAB_OT_build(bpy.types.Operator):
         exported = export_scene(context, require_camera=False)  # a tree needs no camera
         bvh = build_tree(context, exported)
         remember_tree(context, bvh, exported)
+        context.scene.bvhlab.overlay_show = True  # the user pressed Build to see the boxes
         s = bvh.stats
         message = (f"Built {s['method']} BVH over {s['primitives']} primitives: {s['nodes']} nodes, "
                    f"height {s['height']}, SAH cost {s['sah_cost']:.2f}, {s['build_ms']:.1f} ms")

@@ -4,6 +4,7 @@ from __future__ import annotations
 import bpy
 
 from . import state
+from .text_layout import wrapped_label
 
 
 class _BvhPanel:
@@ -35,21 +36,28 @@ class BVHLAB_PT_main(_BvhPanel, bpy.types.Panel):
         message = state.messages.get(state.key(context.scene))
         if message is not None:
             icon = {"ERROR": "ERROR", "WARNING": "INFO"}.get(message[0], "CHECKMARK")
-            layout.label(text=message[1], icon=icon)
+            wrapped_label(layout, context, message[1], icon=icon)
+
+
+def stats_rows(stats: dict) -> list[tuple[str, str]]:
+    """(label, value) of each statistic the panel shows, in order."""
+    s = stats
+    return [("Primitives", f"{s['primitives']:,}"), ("Nodes", f"{s['nodes']:,}"), ("Leaves", f"{s['leaves']:,}"),
+            ("Height", str(s["height"])), ("SAH cost", f"{s['sah_cost']:.2f}"),
+            ("Build", f"{s['build_ms']:.1f} ms"), ("Memory", f"{s['memory_bytes'] / 2**20:.1f} MiB"),
+            ("Method", s["method"])]
 
 
 def _stats_box(layout, built, settings) -> None:
-    s = built.bvh.stats
+    """One row per statistic, label | value (a grid_flow would fill columns first)."""
     box = layout.box()
-    grid = box.grid_flow(columns=2, even_columns=True)
-    for label, value in (("Primitives", f"{s['primitives']:,}"), ("Nodes", f"{s['nodes']:,}"),
-                         ("Leaves", f"{s['leaves']:,}"), ("Height", str(s["height"])),
-                         ("SAH cost", f"{s['sah_cost']:.2f}"), ("Build", f"{s['build_ms']:.1f} ms"),
-                         ("Memory", f"{s['memory_bytes'] / 2**20:.1f} MiB"), ("Method", s["method"])):
-        grid.label(text=label)
-        grid.label(text=value)
+    col = box.column(align=True)
+    for label, value in stats_rows(built.bvh.stats):
+        row = col.split(factor=0.5)
+        row.label(text=label)
+        row.label(text=value)
     if built.settings != settings.build_settings():
-        box.label(text="Settings changed since this build", icon="INFO")
+        box.label(text="Settings changed; build again", icon="INFO")
 
 
 class BVHLAB_PT_overlay(_BvhPanel, bpy.types.Panel):
@@ -91,7 +99,7 @@ class BVHLAB_PT_render(_BvhPanel, bpy.types.Panel):
         settings = context.scene.bvhlab
         layout = self.layout
         width, height = render_size(context.scene)
-        layout.label(text=f"Resolution {width} × {height} (from the scene's output)")
+        layout.label(text=f"Output {width} × {height} px", icon="OUTPUT")
         col = layout.column()
         col.use_property_split = True
         for name in ("render_bounces", "render_supersampling", "backend", "traversal", "render_mode", "render_overlay"):
@@ -121,13 +129,16 @@ class BVHLAB_PT_compare(_BvhPanel, bpy.types.Panel):
         layout.operator("bvhlab.compare", icon="SORTTIME")
         rows = state.comparisons.get(state.key(context.scene))
         if rows:
-            grid = layout.box().grid_flow(columns=5, row_major=True, even_columns=False)
-            for header in ("Method", "Frame ms", "Build ms", "Height", "SAH"):
-                grid.label(text=header)
-            for r in rows:
-                for text in (r["label"], f"{r['frame_ms']:.1f}", f"{r['build_ms']:.1f}", str(r["height"]),
-                             f"{r['sah_cost']:.2f}"):
-                    grid.label(text=text)
+            col = layout.box().column(align=True)
+            for texts in [("Method", "Frame", "Build", "Height", "SAH")] + [
+                    (r["method"], f"{r['frame_ms']:.0f}", f"{r['build_ms']:.0f}", str(r["height"]),
+                     f"{r['sah_cost']:.1f}") for r in rows]:
+                row = col.split(factor=0.32)  # one table row: method | four numbers
+                row.label(text=texts[0])
+                numbers = row.row(align=True)
+                for text in texts[1:]:
+                    numbers.label(text=text)
+            col.label(text="Frame and build in ms")
 
 
 class BVHLAB_PT_export(_BvhPanel, bpy.types.Panel):

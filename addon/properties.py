@@ -75,7 +75,7 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
 
     render_bounces: IntProperty(name="Bounces", min=0, max=15, default=5,
                                 description="Reflection and refraction depth of the Whitted tracer")
-    render_supersampling: IntProperty(name="Supersampling", min=1, max=8, default=1,
+    render_supersampling: IntProperty(name="Samples", min=1, max=8, default=1,
                                       description="n × n samples per pixel")
     backend: EnumProperty(name="Backend", default="auto", items=[
         ("auto", "Auto", "Vulkan when a driver is present, otherwise the CPU reference tracer"),

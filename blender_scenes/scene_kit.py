@@ -9,6 +9,7 @@ import numpy as np
 from mathutils import Vector
 
 from bvhlab.blender import SPHERE_PROPERTY
+from bvhlab.blender.compat import ensure_shader_tree
 
 
 def reset(sky=(0.55, 0.7, 0.9), resolution=(800, 600)):
@@ -17,8 +18,8 @@ def reset(sky=(0.55, 0.7, 0.9), resolution=(800, 600)):
     scene = bpy.context.scene
     scene.render.resolution_x, scene.render.resolution_y = resolution
     scene.render.resolution_percentage = 100
-    world = bpy.data.worlds.new("World")  # with a Background node (Blender 5)
-    background = world.node_tree.nodes["Background"]
+    world = bpy.data.worlds.new("World")
+    background = ensure_shader_tree(world).nodes["Background"]
     background.inputs["Color"].default_value = (*sky, 1.0)
     background.inputs["Strength"].default_value = 1.0
     world.color = sky
@@ -28,8 +29,8 @@ def reset(sky=(0.55, 0.7, 0.9), resolution=(800, 600)):
 
 def material(name, color, metallic=0.0, transmission=0.0, ior=1.45, roughness=0.4):
     """A Principled BSDF material; also returns what bvhlab should read from it (for scenes.json)."""
-    mat = bpy.data.materials.new(name)  # Blender 5 gives it a Principled BSDF node tree
-    bsdf = mat.node_tree.nodes["Principled BSDF"]
+    mat = bpy.data.materials.new(name)
+    bsdf = ensure_shader_tree(mat).nodes["Principled BSDF"]
     bsdf.inputs["Base Color"].default_value = (*color, 1.0)
     bsdf.inputs["Metallic"].default_value = metallic
     bsdf.inputs["Transmission Weight"].default_value = transmission
@@ -147,7 +148,11 @@ def material_rows(scene):
 
 
 def save(path: Path):
-    """Save compressed, without unused data blocks, and without a .blend1 backup of the old file."""
+    """Save compressed, without unused data blocks, and without a .blend1 backup of the old file.
+    Run with the oldest supported Blender (the project's .venv has bpy 4.2): newer versions read
+    its files, but 4.x cannot open a file saved by 5.x."""
+    if bpy.app.version[:2] != (4, 2):
+        raise SystemExit(f"save the bundled scenes with bpy 4.2 (the oldest supported Blender), not {bpy.app.version_string}")
     bpy.context.preferences.filepaths.save_version = 0
     bpy.data.orphans_purge(do_recursive=True)
     bpy.ops.wm.save_as_mainfile(filepath=str(path), compress=True, relative_remap=False)

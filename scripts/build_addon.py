@@ -1,28 +1,101 @@
-"""Build the installable Blender extension zip (`make addon`):
+"""Build the installable Blender extension zip (`make addon`), one bvhlab wheel per Python that
+Blender embeds (cp311 for Blender 4.2-5.0, cp313 for 5.1 and later):
 
-    .venv/bin/python scripts/build_addon.py [--output-dir dist]
+    PYTHON scripts/build_addon.py wheel [--into build/wheels]     # a wheel for the running Python
+    .venv/bin/python scripts/build_addon.py package [--wheels build/wheels] [--output-dir dist]
 
-1. builds the bvhlab wheel (the compiled core plus bvhlab.blender) in its own CMake build folder,
-   build/wheel, so the editable install's build folder is never touched;
-2. puts it in addon/wheels/ under the name addon/blender_manifest.toml lists;
-3. validates and packages addon/ with Blender's extension tool, which ships in the bpy wheel
-   (no Blender binary needed).
-Prints the path of the zip. Install it with Edit ▸ Preferences ▸ Get Extensions ▸ Install from
-Disk, or headless with bpy.ops.extensions.package_install_files(filepath=ZIP, repo="user_default").
+`wheel` builds the bvhlab wheel (the compiled core plus bvhlab.blender) for the interpreter that
+runs it, in a CMake build folder of its own (build/wheel-cpXY), so the editable install's build is
+never touched; `make addon` runs it with the project's Python 3.11 and with Python 3.13 inside
+the Debian 13 root (scripts/trixie.sh).
+
+`package` copies addon/ to build/addon-stage, adds the wheels (one for each of PYTHON_TAGS, all of
+the current version), writes the stage's manifest with the version from python/bvhlab/__init__.py
+(the one source of the version) and `wheels = [...]`, then validates and packages it with Blender's
+extension tool, which ships in the bpy wheel (no Blender binary needed). Prints the zip's path.
+Install it with Edit ▸ Preferences ▸ Get Extensions ▸ Install from Disk, or headless with
+bpy.ops.extensions.package_install_files(filepath=ZIP, repo="user_default").
 """
 from __future__ import annotations
 
 import argparse
+import re
 import shutil
 import subprocess
 import sys
 import tempfile
-import tomllib
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 ADDON = ROOT / "addon"
-WHEEL_BUILD_DIR = "build/wheel"
+VERSION_FILE = ROOT / "python" / "bvhlab" / "__init__.py"
+#: The Pythons Blender embeds: 3.11 in 4.2 LTS to 5.0, 3.13 in 5.1, 5.2 LTS and 5.3.
+PYTHON_TAGS = ("cp311", "cp313")
+
+
+def project_version() -> str:
+    """`__version__` of python/bvhlab/__init__.py, the one place the version is written."""
+    found = re.search(r'^__version__ = "([^"]+)"$', VERSION_FILE.read_text(), re.M)
+    if found is None:
+        raise SystemExit(f"no __version__ = \"...\" line in {VERSION_FILE}")
+    return found.group(1)
+
+
+def build_wheel(into: Path) -> Path:
+    """The bvhlab wheel for the running Python, copied into `into` (older ones of that tag removed)."""
+    tag = f"cp{sys.version_info.major}{sys.version_info.minor}"
+    with tempfile.TemporaryDirectory() as tmp:
+        subprocess.run([sys.executable, "-m", "pip", "wheel", str(ROOT), "--no-build-isolation", "--no-deps",
+                        "-q", "-w", tmp, f"--config-settings=build-dir=build/wheel-{tag}"], cwd=ROOT, check=True)
+        built = list(Path(tmp).glob(f"bvhlab-*-{tag}-*.whl"))
+        if len(built) != 1:
+            raise SystemExit(f"expected one {tag} bvhlab wheel from pip, found {built}")
+        into.mkdir(parents=True, exist_ok=True)
+        for stale in into.glob(f"bvhlab-*-{tag}-*.whl"):
+            stale.unlink()
+        return Path(shutil.copy2(built[0], into))
+
+
+def wheels_for_version(wheels_dir: Path, version: str) -> list[Path]:
+    """One wheel per tag of PYTHON_TAGS, of this version; a clear error naming what is missing."""
+    found, missing = [], []
+    for tag in PYTHON_TAGS:
+        matches = sorted(wheels_dir.glob(f"bvhlab-{version}-{tag}-{tag}-*.whl"))
+        if len(matches) != 1:
+            missing.append(f"{tag} ({len(matches)} found)")
+        else:
+            found.append(matches[0])
+    if missing:
+        raise SystemExit(f"{wheels_dir} needs exactly one bvhlab-{version} wheel for each of {', '.join(PYTHON_TAGS)}; "
+                         f"missing: {', '.join(missing)}. `make addon` builds both (cp313 in the Debian 13 root).")
+    return found
+
+
+def stage_manifest(source: str, version: str, wheel_names: list[str]) -> str:
+    """The source manifest with the project's version and the bundled wheels filled in."""
+    if re.search(r"^wheels\s*=", source, re.M):
+        raise SystemExit("addon/blender_manifest.toml must not list wheels: scripts/build_addon.py writes them")
+    text, count = re.subn(r'^version = "[^"]*"$', f'version = "{version}"', source, flags=re.M)
+    if count != 1:
+        raise SystemExit("addon/blender_manifest.toml needs one top-level `version = \"...\"` line")
+    wheels = "wheels = [\n" + "".join(f'  "./wheels/{name}",\n' for name in wheel_names) + "]\n"
+    text, count = re.subn(r"^(platforms = .*\n)", lambda m: m.group(1) + wheels, text, flags=re.M)
+    if count != 1:
+        raise SystemExit("addon/blender_manifest.toml needs a `platforms = [...]` line")
+    return text
+
+
+def stage(wheels: list[Path], version: str) -> Path:
+    """addon/ copied to build/addon-stage with the wheels and the generated manifest."""
+    staged = ROOT / "build" / "addon-stage" / "bvhlab"
+    shutil.rmtree(staged.parent, ignore_errors=True)
+    shutil.copytree(ADDON, staged, ignore=shutil.ignore_patterns("__pycache__", "wheels", "*.pyc"))
+    (staged / "wheels").mkdir()
+    for wheel in wheels:
+        shutil.copy2(wheel, staged / "wheels" / wheel.name)
+    manifest = staged / "blender_manifest.toml"
+    manifest.write_text(stage_manifest(manifest.read_text(), version, [w.name for w in wheels]))
+    return staged
 
 
 def extension_tool() -> Path:
@@ -38,63 +111,35 @@ def extension_tool() -> Path:
     return tools[-1]
 
 
-def manifest_wheel() -> Path:
-    """The one wheel path addon/blender_manifest.toml lists."""
-    manifest = tomllib.loads((ADDON / "blender_manifest.toml").read_text())
-    wheels = manifest.get("wheels", [])
-    if len(wheels) != 1:
-        raise SystemExit(f"addon/blender_manifest.toml must list exactly one wheel, found {wheels}")
-    return ADDON / wheels[0]
-
-
-def build_wheel(into: Path) -> Path:
-    subprocess.run([sys.executable, "-m", "pip", "wheel", str(ROOT), "--no-build-isolation", "--no-deps",
-                    "-q", "-w", str(into), f"--config-settings=build-dir={WHEEL_BUILD_DIR}"],
-                   cwd=ROOT, check=True)
-    wheels = list(into.glob("bvhlab-*.whl"))
-    if len(wheels) != 1:
-        raise SystemExit(f"expected one bvhlab wheel from pip, found {wheels}")
-    return wheels[0]
-
-
-def place_wheel(wheel: Path) -> Path:
-    """Copy the wheel to the manifest's path (removing stale wheels); refuse a name mismatch, which
-    would mean the version changed without the manifest."""
-    target = manifest_wheel()
-    if wheel.name != target.name:
-        raise SystemExit(f"pip built {wheel.name} but addon/blender_manifest.toml lists {target.name}: "
-                         f"update the manifest's `wheels` (and `version`)")
-    target.parent.mkdir(exist_ok=True)
-    for stale in target.parent.glob("*.whl"):
-        stale.unlink()
-    shutil.copy2(wheel, target)
-    return target
-
-
-def package(output_dir: Path) -> Path:
+def package(wheels_dir: Path, output_dir: Path) -> Path:
+    version = project_version()
+    staged = stage(wheels_for_version(wheels_dir, version), version)
     tool = [sys.executable, str(extension_tool())]
-    subprocess.run([*tool, "validate", str(ADDON)], check=True)
+    subprocess.run([*tool, "validate", str(staged)], check=True, stdout=subprocess.DEVNULL)
     output_dir.mkdir(parents=True, exist_ok=True)
-    subprocess.run([*tool, "build", "--source-dir", str(ADDON), "--output-dir", str(output_dir)], check=True)
-    version = tomllib.loads((ADDON / "blender_manifest.toml").read_text())["version"]
+    for stale in output_dir.glob("bvhlab-*.zip"):
+        stale.unlink()
+    subprocess.run([*tool, "build", "--source-dir", str(staged), "--output-dir", str(output_dir)], check=True,
+                   stdout=subprocess.DEVNULL)
     zips = list(output_dir.glob(f"bvhlab-{version}*.zip"))
     if len(zips) != 1:
         raise SystemExit(f"expected one bvhlab-{version} zip in {output_dir}, found {zips}")
     return zips[0]
 
 
-def build_addon(output_dir: Path) -> Path:
-    """Steps 1-3 of the module docstring; returns the zip's path."""
-    with tempfile.TemporaryDirectory() as tmp:
-        place_wheel(build_wheel(Path(tmp)))
-    return package(output_dir)
-
-
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--output-dir", type=Path, default=ROOT / "dist")
+    sub = ap.add_subparsers(dest="command", required=True)
+    wheel = sub.add_parser("wheel", help="build the bvhlab wheel for the running Python")
+    wheel.add_argument("--into", type=Path, default=ROOT / "build" / "wheels")
+    pack = sub.add_parser("package", help="stage addon/ with the wheels and build the zip")
+    pack.add_argument("--wheels", type=Path, default=ROOT / "build" / "wheels")
+    pack.add_argument("--output-dir", type=Path, default=ROOT / "dist")
     args = ap.parse_args(argv)
-    print(build_addon(args.output_dir.resolve()))
+    if args.command == "wheel":
+        print(build_wheel(args.into.resolve()))
+    else:
+        print(package(args.wheels.resolve(), args.output_dir.resolve()))
 
 
 if __name__ == "__main__":

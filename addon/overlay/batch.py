@@ -1,4 +1,6 @@
-"""The boxes of a tree on the GPU, ready to draw any depth range with one instanced call."""
+"""The boxes of a tree on the GPU, ready to draw any depth range with one instanced call. The
+boxes, their depth order and the depth palette all come from the core (`Bvh.boxes`,
+`bvhlab._core.depth_colors`); this module only lays them out for Blender's `gpu` module."""
 from __future__ import annotations
 
 import numpy as np
@@ -14,75 +16,96 @@ CUBE_EDGES = np.array([
 
 #: The widest texture rows GPUs must support (GL_MAX_TEXTURE_SIZE ≥ 16384 on GL 4.5 hardware).
 TEXTURE_WIDTH = 16384
+#: Depths the palette covers (trees are at most 64 levels deep: bvhlab.bvh.MAX_TREE_HEIGHT).
+PALETTE_SIZE = 64
 
 
-def box_table(bvh, leaves_only: bool = False, rows_multiple_of: int = 1) -> np.ndarray:
-    """float32 (N, 8) rows (min.xyz, depth, max.xyz, is_leaf) of the tree's nodes sorted by depth
-    (depth-first order within a depth, as `Bvh.boxes`), only leaves when `leaves_only`; then
-    copies of the last row up to a multiple of `rows_multiple_of` (texture padding, never drawn)."""
-    depths = bvh.depths
-    order = np.argsort(depths, kind="stable")
-    is_leaf = bvh.is_leaf[order]
-    if leaves_only:
-        order, is_leaf = order[is_leaf], is_leaf[is_leaf]
-    count = len(order)
-    padding = -count % rows_multiple_of
-    if padding:
-        order = np.concatenate([order, np.full(padding, order[-1] if count else 0, order.dtype)])
-    # A node is 32 bytes (lo, index, hi, info): taking whole 32-byte records is several times
-    # faster than gathering the structured fields; the two integer slots are then overwritten.
-    table = np.take(bvh.nodes.view(np.dtype("V32")).reshape(-1), order).view(np.float32).reshape(-1, 8)
-    table[:, 3] = depths[order]
-    table[:count, 7] = is_leaf
-    return table
+class BoxTable:
+    """float32 rows (min.xyz, depth, max.xyz, 0) of a tree's boxes in the core's depth order
+    (`Bvh.boxes`: by depth, depth-first within a depth), only the leaves when `leaves_only`, and
+    where each depth starts, so a depth range is one offset and one count (report §3.3.1)."""
+
+    def __init__(self, bvh, leaves_only: bool = False):
+        lo, hi, depth = bvh.boxes()
+        per_depth = bvh.stats["leaves_per_depth" if leaves_only else "nodes_per_depth"]
+        if leaves_only:  # the leaf flags in the same order as Bvh.boxes: the core's depth order
+            keep = bvh.is_leaf[bvh._core.depth_order()]
+            lo, hi, depth = lo[keep], hi[keep], depth[keep]
+        self.rows = np.zeros((len(lo), 8), np.float32)
+        self.rows[:, 0:3], self.rows[:, 3], self.rows[:, 4:7] = lo, depth, hi
+        self.depth_starts = np.concatenate([[0], np.cumsum(per_depth)]).astype(np.int64)
+        assert self.depth_starts[-1] == len(self.rows), "stats and boxes disagree"
+
+    def depth_slice(self, depth_min: int, depth_max: int) -> tuple[int, int]:
+        """(first, count) of the rows whose depth d satisfies depth_min <= d <= depth_max."""
+        deepest = len(self.depth_starts) - 1
+        lo, hi = min(max(depth_min, 0), deepest), min(max(depth_max + 1, 0), deepest)
+        first = int(self.depth_starts[lo])
+        return first, max(int(self.depth_starts[hi]) - first, 0)
+
+    def padded(self, rows_multiple_of: int) -> np.ndarray:
+        """The rows, then zero rows up to a multiple of `rows_multiple_of` (texture padding, never drawn)."""
+        padding = -len(self.rows) % rows_multiple_of
+        return np.concatenate([self.rows, np.zeros((padding, 8), np.float32)]) if padding else self.rows
 
 
-def depth_slice(sorted_depths: np.ndarray, depth_min: int, depth_max: int) -> tuple[int, int]:
-    """(first, count) of the rows whose depth d satisfies depth_min <= d <= depth_max."""
-    first, last = np.searchsorted(sorted_depths, [depth_min, depth_max + 1])
-    return int(first), int(last - first)
+def depth_palette() -> np.ndarray:
+    """RGBA float32 (PALETTE_SIZE, 4): the core's overlay colour of each depth (the Vulkan overlay
+    pass and the CLI's pictures use the same one)."""
+    from bvhlab._core import depth_colors
+
+    rgb = depth_colors(np.arange(PALETTE_SIZE, dtype=np.uint32))
+    return np.concatenate([rgb, np.ones((PALETTE_SIZE, 1), np.float32)], 1).astype(np.float32)
+
+
+def _texture(rows: np.ndarray, width: int):
+    import gpu
+
+    texels = rows.reshape(-1, 4)
+    height = len(texels) // width
+    assert width * height == len(texels), "rows must fill whole texture rows"
+    return gpu.types.GPUTexture((width, height), format="RGBA32F",
+                                data=gpu.types.Buffer("FLOAT", texels.size, texels.reshape(-1)))
 
 
 class BoxBatch:
-    """A tree's boxes in an RGBA32F texture plus a 24-vertex line batch. Made when the tree or the
-    leaves-only choice changes; a depth range is then only an offset and a count (report §3.3.1)."""
+    """A BoxTable in an RGBA32F texture (two texels per box), the depth palette in another, and a
+    24-vertex line batch drawn once per box. Made when the tree or the leaves-only choice changes."""
 
-    def __init__(self, table: np.ndarray, count: int):
-        """`table`: box_table rows, the first `count` real, padded to whole texture rows."""
-        import gpu
+    def __init__(self, table: BoxTable):
         from gpu_extras.batch import batch_for_shader
 
-        self.count = count
-        self.depths = table[:count, 3].astype(np.uint8)  # sorted: a depth range is a slice
-        width = min(TEXTURE_WIDTH, max(2 * len(table), 2))
-        height = -(-2 * len(table) // width)
-        assert width * height == 2 * len(table), "table rows must fill whole texture rows"
-        self.texture = gpu.types.GPUTexture((width, height), format="RGBA32F",
-                                            data=gpu.types.Buffer("FLOAT", table.size, table.reshape(-1)))
+        self.table = table
+        self.count = len(table.rows)
+        rows = table.padded(TEXTURE_WIDTH // 2) if self.count > TEXTURE_WIDTH // 2 else table.padded(1)
+        if len(rows) == 0:
+            rows = np.zeros((1, 8), np.float32)
+        self.texture = _texture(rows, min(TEXTURE_WIDTH, 2 * len(rows)))
+        self.palette = _texture(depth_palette(), PALETTE_SIZE)
         self.shader = box_shader()
         self.batch = batch_for_shader(self.shader, "LINES", {"corner": CUBE_EDGES})
 
     @classmethod
     def from_bvh(cls, bvh, leaves_only: bool = False) -> "BoxBatch":
-        count = bvh.stats["leaves" if leaves_only else "nodes"]
-        rows_per_texture_row = TEXTURE_WIDTH // 2
-        table = box_table(bvh, leaves_only, rows_per_texture_row if count > rows_per_texture_row else 1)
-        return cls(table, count)
+        return cls(BoxTable(bvh, leaves_only))
 
     def draw(self, view_projection, depth_min: int, depth_max: int, *, color=(1.0, 0.55, 0.1, 1.0),
              color_by_depth: bool = True, xray: bool = True, line_width: float = 1.0) -> int:
-        """Draw the boxes in the depth range with the current framebuffer; returns how many."""
+        """Draw the boxes in the depth range with the current framebuffer; returns how many.
+        Deepest boxes first: a child shares edges with its parent, and drawn last it would paint
+        them all in its colour; this way every depth of the range keeps its own lines."""
         import gpu
 
-        first, count = depth_slice(self.depths, depth_min, depth_max)
+        first, count = self.table.depth_slice(depth_min, depth_max)
         if count == 0:
             return 0
         shader = self.shader
         shader.bind()
         shader.uniform_sampler("boxes", self.texture)
+        shader.uniform_sampler("palette", self.palette)
         shader.uniform_float("view_projection", view_projection)
         shader.uniform_float("uniform_color", tuple(color))
-        shader.uniform_int("first_box", first)
+        shader.uniform_int("last_box", first + count - 1)
         shader.uniform_int("color_by_depth", int(color_by_depth))
         gpu.state.blend_set("ALPHA")
         gpu.state.depth_test_set("NONE" if xray else "LESS_EQUAL")

@@ -1,23 +1,22 @@
 """The box-edge shader: one instance per box, 24 vertices (12 edges) per instance.
 
 The Python `gpu` API has no per-instance vertex attributes, so the boxes live in an RGBA32F
-texture, two texels per box (min.xyz + depth, max.xyz + leaf flag), fetched by instance index.
+texture, two texels per box (min.xyz + depth, max.xyz), fetched by instance index, counted back
+from the last box of the range (deepest first, see BoxBatch.draw). The colour of each depth comes
+from a palette texture filled from the core (`bvhlab._core.depth_colors`).
 """
 from __future__ import annotations
 
 _VERTEX = """
 void main()
 {
-  int texel = 2 * (first_box + gl_InstanceID);
+  int texel = 2 * (last_box - gl_InstanceID);
   int width = textureSize(boxes, 0).x;  /* even, so both texels of a box share a row */
   vec4 lo = texelFetch(boxes, ivec2(texel % width, texel / width), 0);
   vec4 hi = texelFetch(boxes, ivec2(texel % width + 1, texel / width), 0);
   gl_Position = view_projection * vec4(mix(lo.xyz, hi.xyz, corner), 1.0);
   if (color_by_depth != 0) {
-    /* golden-ratio hue steps keep neighbouring depths apart */
-    float hue = fract(lo.w * 0.618034);
-    vec3 rgb = clamp(abs(fract(hue + vec3(0.0, 2.0 / 3.0, 1.0 / 3.0)) * 6.0 - 3.0) - 1.0, 0.0, 1.0);
-    edge_color = vec4(mix(vec3(1.0), rgb, 0.85), uniform_color.a);
+    edge_color = vec4(texelFetch(palette, ivec2(int(lo.w), 0), 0).rgb, uniform_color.a);
   }
   else {
     edge_color = uniform_color;
@@ -47,9 +46,10 @@ def box_shader():
         info.vertex_in(0, "VEC3", "corner")
         info.vertex_out(interface)
         info.sampler(0, "FLOAT_2D", "boxes")
+        info.sampler(1, "FLOAT_2D", "palette")
         info.push_constant("MAT4", "view_projection")
         info.push_constant("VEC4", "uniform_color")
-        info.push_constant("INT", "first_box")
+        info.push_constant("INT", "last_box")
         info.push_constant("INT", "color_by_depth")
         info.fragment_out(0, "VEC4", "frag_color")
         info.vertex_source(_VERTEX)

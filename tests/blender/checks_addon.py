@@ -60,16 +60,21 @@ def check_overlay_ranges() -> None:
     bvh = _built().bvh
     stats = bvh.stats
     height = stats["height"]
-    table, leaves = batch.box_table(bvh), batch.box_table(bvh, leaves_only=True)
+    table, leaves = batch.BoxTable(bvh), batch.BoxTable(bvh, leaves_only=True)
+    leaf_set = {(tuple(node["lo"]), tuple(node["hi"])) for node in bvh.nodes[bvh.is_leaf]}
     for depth_min, depth_max in ((0, 0), (1, 2), (3, height - 1), (0, height - 1), (height - 1, height - 1)):
-        first, count = batch.depth_slice(table[:, 3], depth_min, depth_max)
+        first, count = table.depth_slice(depth_min, depth_max)
         assert count == sum(stats["nodes_per_depth"][depth_min:depth_max + 1])
         lo, hi, depth = bvh.boxes(depth_min, depth_max)
-        rows = table[first:first + count]
+        rows = table.rows[first:first + count]
         assert np.array_equal(rows[:, 0:3], lo) and np.array_equal(rows[:, 4:7], hi)
         assert np.array_equal(rows[:, 3], depth)
-        _, leaf_count = batch.depth_slice(leaves[:, 3], depth_min, depth_max)
+        first, leaf_count = leaves.depth_slice(depth_min, depth_max)
         assert leaf_count == sum(stats["leaves_per_depth"][depth_min:depth_max + 1])
+        leaf_rows = leaves.rows[first:first + leaf_count]
+        assert np.all((leaf_rows[:, 3] >= depth_min) & (leaf_rows[:, 3] <= depth_max))
+        assert all((tuple(r[0:3]), tuple(r[4:7])) in leaf_set for r in leaf_rows), "a non-leaf in the leaves"
+    assert table.depth_slice(height, height + 3)[1] == 0
     settings = bpy.context.scene.bvhlab
     settings.overlay_depth_max = 60
     assert settings.overlay_depth_max == height - 1
@@ -77,6 +82,16 @@ def check_overlay_ranges() -> None:
     assert settings.overlay_depth_min == height - 1 and settings.overlay_depth_max == height - 1
     settings.overlay_depth_max = 1
     assert settings.overlay_depth_min == 1
+
+
+def check_build_shows_overlay() -> None:
+    """Pressing Build is asking to see the boxes: the overlay is on afterwards, even when the user
+    had never ticked "Viewport Boxes"."""
+    harness.boxes_scene()
+    settings = bpy.context.scene.bvhlab
+    assert not settings.overlay_show, "the overlay must start off (nothing to show before a build)"
+    assert bpy.ops.bvhlab.build() == {"FINISHED"}
+    assert settings.overlay_show, "Build left the overlay off"
 
 
 def check_export_stats(tmp_dir) -> None:

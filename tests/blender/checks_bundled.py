@@ -101,26 +101,20 @@ BUNDLED_CHECKS = (check_counts, check_world_positions, check_materials, check_ca
 
 
 def check_bundled_scene(name: str) -> None:
-    """Open and export the scene once, then run every check above on it."""
+    """Open and export the scene once, then run every check above on it. The file must have been
+    saved by the oldest supported Blender (4.2): 4.x cannot open files saved by 5.x."""
     scene, exported = export_bundled(name)
+    assert tuple(bpy.data.version[:2]) <= (4, 2), f"{name} was saved by Blender {bpy.data.version}"
     for check in BUNDLED_CHECKS:
         check(name, scene, exported)
 
 
-def check_export_speed(name: str = "suzanne_1m", budget_s: float = 0.5) -> float:
-    """The issue's target: a million evaluated triangles exported in at most half a second, with
-    the modifiers already evaluated (as in an open Blender session). Best of three."""
-    import time
-
+def check_large_export(name: str = "suzanne_1m") -> None:
+    """A million evaluated triangles (Subdivision Surface level 5) export completely, twice in a
+    row with the same result (the second from Blender's evaluated cache). Its speed is measured in
+    bench/blender_export.py, not here."""
     harness.open_scene(name)
-    export_scene(bpy.context)  # evaluates the Subdivision Surface modifier once
-    times = []
-    for _ in range(3):
-        start = time.perf_counter()
-        exported = export_scene(bpy.context)
-        times.append(time.perf_counter() - start)
-    assert len(exported.triangles) >= 1_000_000
-    print(f"export of {len(exported.triangles)} triangles: {min(times) * 1e3:.0f} ms (best of "
-          f"{[round(t * 1e3) for t in times]} ms)")
-    assert min(times) <= budget_s, f"export took {min(times):.2f} s"
-    return min(times)
+    first = export_scene(bpy.context)
+    second = export_scene(bpy.context)
+    assert len(first.triangles) == harness.scenes_index()[name]["triangles"] >= 1_000_000
+    assert np.array_equal(first.triangles, second.triangles)

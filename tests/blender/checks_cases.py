@@ -11,6 +11,7 @@ import harness
 import bpy
 import bvhlab
 from bvhlab.blender import SPHERE_PROPERTY, ExportError, SubstituteWarning, export_scene, export_scene_file
+from bvhlab.blender.compat import ensure_shader_tree
 
 
 def _expect_error(fragment: str, **kwargs) -> str:
@@ -68,8 +69,8 @@ def check_material_slots_per_triangle() -> None:
     harness.boxes_scene()
     box = bpy.data.objects["Box A"]
     for name, color, metallic in (("Red", (1.0, 0.0, 0.0), 0.0), ("Chrome", (0.9, 0.9, 0.9), 1.0)):
-        material = bpy.data.materials.new(name)  # with a Principled BSDF node tree (Blender 5)
-        bsdf = material.node_tree.nodes["Principled BSDF"]
+        material = bpy.data.materials.new(name)
+        bsdf = ensure_shader_tree(material).nodes["Principled BSDF"]
         bsdf.inputs["Base Color"].default_value = (*color, 1.0)
         bsdf.inputs["Metallic"].default_value = metallic
         box.data.materials.append(material)

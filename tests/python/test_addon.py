@@ -30,6 +30,10 @@ def test_overlay_depth_ranges():
     checks_addon.check_overlay_ranges()
 
 
+def test_build_shows_the_overlay():
+    checks_addon.check_build_shows_overlay()
+
+
 def test_export_stats_files(tmp_path):
     checks_addon.check_export_stats(tmp_path)
 

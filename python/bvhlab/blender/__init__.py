@@ -6,7 +6,8 @@
 
 One small module per kind of Blender data (glTF-Blender-IO style): `scope` picks the objects,
 `mesh`, `sphere`, `material`, `camera`, `light` and `world` each gather one thing, `export`
-puts them together.
+puts them together. `compat` holds what differs between the supported Blender versions (4.2 LTS
+to 5.3); nothing else checks `bpy.app.version`.
 """
 from .errors import ExportError, ExportWarning, SubstituteWarning
 from .export import export_scene, export_scene_file

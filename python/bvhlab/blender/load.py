@@ -14,8 +14,8 @@ def load_blend(path: Path) -> Scene:
     try:
         import bpy
     except ImportError as e:
-        raise RuntimeError("reading .blend files needs Blender's Python module: pip install bpy==5.0.1 "
-                           "(Python 3.11)") from e
+        raise RuntimeError("reading .blend files needs Blender's Python module: pip install bpy (4.2 to "
+                           "5.0 for Python 3.11, 5.1 and later for Python 3.13)") from e
     from .export import export_scene
 
     bpy.ops.wm.open_mainfile(filepath=str(path.resolve()), load_ui=False)

@@ -6,6 +6,7 @@ import warnings
 import numpy as np
 
 from ..scene import Material
+from .compat import shader_tree
 from .errors import ExportWarning
 
 
@@ -16,6 +17,8 @@ def gather_material(material) -> Material:
     viewport display colour and metallic, with an ExportWarning. `None` (an empty slot) is matte grey."""
     if material is None:
         return Material()
+    if shader_tree(material) is None:  # no nodes (4.x): Blender renders the viewport colour
+        return _material(material.diffuse_color[:3], reflective=material.metallic)
     shader = _surface_shader(material)
     reader = _READERS.get(shader.bl_idname) if shader is not None else None
     if reader is None:
@@ -27,9 +30,7 @@ def gather_material(material) -> Material:
 
 
 def _surface_shader(material):
-    tree = material.node_tree
-    if tree is None:
-        return None
+    tree = shader_tree(material)
     output = tree.get_output_node("ALL") or tree.get_output_node("CYCLES") or tree.get_output_node("EEVEE")
     surface = output.inputs.get("Surface") if output is not None else None
     if surface is None or not surface.is_linked:

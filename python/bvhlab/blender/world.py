@@ -4,6 +4,7 @@ from __future__ import annotations
 import warnings
 
 from ..scene import DEFAULT_SKY
+from .compat import shader_tree
 from .errors import ExportWarning
 
 
@@ -26,7 +27,7 @@ def gather_sky(scene) -> tuple[float, float, float]:
 
 
 def _background_node(world):
-    tree = world.node_tree
+    tree = shader_tree(world)
     output = tree.get_output_node("ALL") if tree is not None else None
     surface = output.inputs.get("Surface") if output is not None else None
     if surface is None or not surface.is_linked:
