@@ -26,11 +26,8 @@ class BoxTable:
     where each depth starts, so a depth range is one offset and one count (report §3.3.1)."""
 
     def __init__(self, bvh, leaves_only: bool = False):
-        lo, hi, depth = bvh.boxes()
+        lo, hi, depth = bvh.boxes(leaves_only=leaves_only)
         per_depth = bvh.stats["leaves_per_depth" if leaves_only else "nodes_per_depth"]
-        if leaves_only:  # the leaf flags in the same order as Bvh.boxes: the core's depth order
-            keep = bvh.is_leaf[bvh._core.depth_order()]
-            lo, hi, depth = lo[keep], hi[keep], depth[keep]
         self.rows = np.zeros((len(lo), 8), np.float32)
         self.rows[:, 0:3], self.rows[:, 3], self.rows[:, 4:7] = lo, depth, hi
         self.depth_starts = np.concatenate([[0], np.cumsum(per_depth)]).astype(np.int64)

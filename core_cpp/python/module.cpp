@@ -102,22 +102,25 @@ void py_intersect(const PyBvh& self, const Vectors& origins, const Vectors& dirs
     intersect_batch(tree->bvh, rays, hits, mode, threads, wide);
 }
 
-/// Boxes of the nodes whose depth is in [depth_min, depth_max], by depth (report §3.3.1), read
-/// from one version of the tree: (lo (K,3), hi (K,3), depth (K,)).
-nb::tuple py_boxes(const PyBvh& self, std::uint32_t depth_min, std::uint32_t depth_max) {
+/// Boxes of the nodes (only the leaves if asked) whose depth is in [depth_min, depth_max], by
+/// depth (report §3.3.1), read from one version of the tree: (lo (K,3), hi (K,3), depth (K,)).
+nb::tuple py_boxes(const PyBvh& self, std::uint32_t depth_min, std::uint32_t depth_max, bool leaves_only) {
     TreePtr tree = self.current();
     const DepthOrder& order = tree->order();
     auto [first, last] = order.range(depth_min, depth_max);
-    const std::size_t k = last - first;
+    std::vector<std::uint32_t> picked;
+    picked.reserve(last - first);
+    for (std::uint32_t j = first; j < last; ++j)
+        if (!leaves_only || is_leaf(tree->bvh.nodes[order.nodes[j]])) picked.push_back(order.nodes[j]);
+    const std::size_t k = picked.size();
     auto* lo = new float[3 * k];
     auto* hi = new float[3 * k];
     auto* depth = new std::uint8_t[k];
     for (std::size_t j = 0; j < k; ++j) {
-        const std::uint32_t i = order.nodes[first + j];
-        const BvhNode& n = tree->bvh.nodes[i];
+        const BvhNode& n = tree->bvh.nodes[picked[j]];
         lo[3 * j] = n.lo.x, lo[3 * j + 1] = n.lo.y, lo[3 * j + 2] = n.lo.z;
         hi[3 * j] = n.hi.x, hi[3 * j + 1] = n.hi.y, hi[3 * j + 2] = n.hi.z;
-        depth[j] = tree->bvh.depths[i];
+        depth[j] = tree->bvh.depths[picked[j]];
     }
     auto owned = [](auto* p) {
         return nb::capsule(p, [](void* q) noexcept { delete[] static_cast<decltype(p)>(q); });
@@ -155,7 +158,7 @@ NB_MODULE(_core, m) {
              })
         .def("refs", [](const PyBvh& b) { TreePtr t = b.current(); return array_owned_by(t, t->bvh.refs.data(), {t->bvh.refs.size()}); })
         .def("depths", [](const PyBvh& b) { TreePtr t = b.current(); return array_owned_by(t, t->bvh.depths.data(), {t->bvh.depths.size()}); })
-        .def("boxes", &py_boxes, "depth_min"_a, "depth_max"_a)
+        .def("boxes", &py_boxes, "depth_min"_a, "depth_max"_a, "leaves_only"_a)
         .def("intersect", &py_intersect, "origins"_a.noconvert(), "directions"_a.noconvert(), "tmin"_a, "tmax"_a,
              "traversal"_a, "threads"_a, "t"_a.noconvert(), "prim"_a.noconvert(), "kind"_a.noconvert(),
              "u"_a.noconvert(), "v"_a.noconvert(), "visited"_a.noconvert())

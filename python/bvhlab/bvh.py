@@ -140,12 +140,13 @@ class Bvh:
         leaf = (info & NODE_INTERNAL_BIT) == 0
         return np.where(leaf, np.arange(len(info), dtype=np.uint32) + 1, info & ~np.uint32(NODE_INTERNAL_BIT))
 
-    def boxes(self, depth_min: int = 0, depth_max: int | None = None):
-        """Boxes of the nodes whose depth d satisfies depth_min <= d <= depth_max, sorted by depth
-        (depth-first order within a depth; report §3.3.1). Returns (lo (K,3), hi (K,3), depth (K,))."""
+    def boxes(self, depth_min: int = 0, depth_max: int | None = None, *, leaves_only: bool = False):
+        """Boxes of the nodes whose depth d satisfies depth_min <= d <= depth_max (only the leaves
+        with `leaves_only`), sorted by depth (depth-first order within a depth; report §3.3.1).
+        Returns new arrays (lo (K,3) float32, hi (K,3) float32, depth (K,) uint8)."""
         depth_min = _checks.integer("depth_min", depth_min, 0, 255)
         depth_max = 255 if depth_max is None else _checks.integer("depth_max", depth_max, 0, 255)
-        return self._core.boxes(depth_min, depth_max)
+        return self._core.boxes(depth_min, depth_max, bool(leaves_only))
 
     # -- queries -----------------------------------------------------------------------------
     def intersect(self, origins: np.ndarray, directions: np.ndarray, *, tmin: float = 0.0,
