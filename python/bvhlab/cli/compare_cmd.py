@@ -1,32 +1,46 @@
 """`bvhlab compare SCENE --out DIR`: the report's Table 1 for SCENE (frame time, build time and
-tree height per split method, plus SAH cost, nodes, leaves, primary-ray throughput), the
-report's claims checked on it, charts, Figures 3–5 per method, and one level sheet per method."""
+tree height per split method, plus SAH cost, nodes, leaves, primary-ray throughput) measured with
+a protocol (warm-up, interleaved rounds, medians with their spread; a verdict only when a
+difference exceeds the spread), the report's claims checked on it, its §4.1 overlay claim and
+Figure 5 on a model of over 700,000 triangles, charts, Figures 3–6 and one level sheet per method."""
 from __future__ import annotations
 
 import sys
 import time
 from pathlib import Path
 
-from ..compare import charts, figures
+from .. import build
+from ..compare import charts, figures, overlay
 from ..compare import measure_methods, report_checks, write_tables
-from ..render import BACKENDS, Renderer
-from ..library import bundled_dir, load_scene
+from ..compare.measure import REPORT_BUILD, build_settings, render_frame
+from ..compare.protocol import DEFAULT_BUILDS, DEFAULT_FRAMES, MIN_SAMPLES
+from ..library import load_scene
+from ..render import BACKENDS, Renderer, VulkanUnavailable, save_png
+from . import compare_args as cargs
 from . import options
 
 
 def add_parser(sub) -> None:
     p = sub.add_parser("compare", help="reproduce the report's Table 1 and figures", description=__doc__)
     options.add_scene(p)
-    p.add_argument("--methods", default="median,mean,sah12,sah32",
-                   help="comma-separated: median, mean, midpoint, lbvh, sweep_sah, sah<B> (default: the report's)")
-    p.add_argument("--frames", type=int, default=5, help="frames averaged per method, after one warm-up")
-    p.add_argument("--builds", type=int, default=5, help="builds per method; the median build time is reported")
-    p.add_argument("--width", type=int, default=800)
-    p.add_argument("--height", type=int, default=600)
-    p.add_argument("--backend", default="auto", choices=BACKENDS)
-    p.add_argument("--no-figures", action="store_true", help="skip Figures 3-5 and the level sheets")
+    p.add_argument("--methods", type=cargs.method_list, default=cargs.DEFAULT_METHODS,
+                   help="comma-separated: median, mean, midpoint, lbvh, sweep_sah, sah<B> "
+                        f"(default: {cargs.DEFAULT_METHODS}, the report's with both readings of 'mean')")
+    p.add_argument("--frames", type=cargs.sample_count, default=DEFAULT_FRAMES,
+                   help=f"frames per method after one warm-up, at least {MIN_SAMPLES} (default {DEFAULT_FRAMES})")
+    p.add_argument("--builds", type=cargs.sample_count, default=DEFAULT_BUILDS,
+                   help=f"builds per method after one warm-up, at least {MIN_SAMPLES} (default {DEFAULT_BUILDS})")
+    p.add_argument("--width", type=cargs.image_size, default=800)
+    p.add_argument("--height", type=cargs.image_size, default=600)
+    p.add_argument("--backend", default="auto", choices=BACKENDS, help="renderer of Table 1's frame times")
+    p.add_argument("--threads", type=cargs.thread_count, default=1,
+                   help="CPU reference threads per frame (default 1, like the builds: on a shared machine one "
+                        "thread's CPU time measures the work, not the neighbours; 0 = every core)")
+    p.add_argument("--overlay-backends", type=cargs.backend_list, default="cpu,vulkan",
+                   help="backends for the §4.1 overlay measurement (Figure 5), or 'none' (default: cpu,vulkan)")
+    p.add_argument("--no-figures", action="store_true", help="skip Figures 3-6 and the level sheets")
     p.add_argument("--no-uniform", action="store_true", help="skip the random-spheres check (report §4.2)")
-    p.add_argument("--out", type=Path, required=True, help="directory for tables, charts and figures")
+    p.add_argument("--out", type=cargs.output_dir, required=True, help="directory for tables, charts and figures")
     p.set_defaults(run=run)
 
 
@@ -35,62 +49,108 @@ def say(text: str) -> None:
 
 
 def run(args) -> int:
-    labels = [m.strip() for m in args.methods.split(",") if m.strip()]
-    for label in labels:
-        options.method_kwargs(label)  # unknown names fail before any work
     scene, name = load_scene(args.scene)
     if not scene.primitive_count:
         raise ValueError(f"scene '{name}' has no geometry")
     out = args.out
+    if out.exists():
+        say(f"writing into the existing directory {out}")
     out.mkdir(parents=True, exist_ok=True)
     renderer = Renderer(args.backend)
     if renderer.fallback:
         say(renderer.fallback)
     started = time.perf_counter()
-    rows = measure_methods(scene, labels, frames=args.frames, builds=args.builds, width=args.width,
-                           height=args.height, renderer=renderer, progress=lambda s: say(f"[{name}] {s}"))
-    uniform = None
-    if not args.no_uniform:
-        spheres, _ = load_scene("gen:random_spheres")
-        uniform = measure_methods(spheres, labels, frames=max(1, args.frames // 2), builds=1, width=args.width // 2,
-                                  height=args.height // 2, renderer=renderer, progress=lambda s: say(f"[random spheres] {s}"))
-    checks = report_checks(rows, uniform)
-    meta = {"scene": name, "triangles": len(scene.triangles), "spheres": len(scene.spheres), "width": args.width,
-            "height": args.height, "frames": args.frames, "builds": args.builds, "device": renderer.device,
-            "backend": renderer.backend, "uniform_rows": uniform}
-    paths = write_tables(rows, out, meta, checks)
+    rows = measure_methods(scene, args.methods, frames=args.frames, builds=args.builds, width=args.width,
+                           height=args.height, renderer=renderer, render_options={"threads": args.threads},
+                           progress=lambda s: say(f"[{name}] {s}"))
+    uniform = None if args.no_uniform else _uniform_rows(args, renderer)
+    overlay_results, overlay_md = _overlay_check(args, out)
+    meta = _meta(args, name, scene, renderer, uniform, overlay_results)
+    paths = write_tables(rows, out, meta, report_checks(rows, uniform), overlay_md)
     print(paths["md"].read_text())
-    charts.times_chart(rows, out / "times.png", f"{name}: frame and build time per split method")
-    charts.nodes_per_depth_chart(rows, out / "nodes_per_depth.png", f"{name}: nodes per depth")
+    _write_charts(rows, scene, name, out)
     if not args.no_figures:
-        write_figures(labels, out, renderer)
-        write_sheets(args.scene, labels, out)
+        _figure6(scene, name, renderer, args, out)
+        _write_figures(args.methods, out, renderer)
+        _write_sheets(args.scene, args.methods, out)
     say(f"compare finished in {time.perf_counter() - started:.0f} s; wrote {out}")
     return 0
 
 
-def write_figures(labels: list[str], out: Path, renderer: Renderer) -> None:
-    bundled = bundled_dir() is not None and _has_bpy()
-    spheres, _ = load_scene("five_spheres" if bundled else "gen:five_spheres")
-    mesh, mesh_name = load_scene("suzanne_250k" if bundled else "gen:knot")
+def _uniform_rows(args, renderer) -> list[dict]:
+    """Report §4.2: spheres uniformly at random in a cube, measured with the same protocol."""
+    spheres, _ = load_scene("gen:random_spheres")
+    return measure_methods(spheres, args.methods, frames=args.frames, builds=args.builds, width=args.width,
+                           height=args.height, renderer=renderer, render_options={"threads": args.threads},
+                           progress=lambda s: say(f"[random spheres] {s}"))
+
+
+def _meta(args, name, scene, renderer, uniform, overlay_results) -> dict:
+    return {"scene": name, "triangles": len(scene.triangles), "spheres": len(scene.spheres), "width": args.width,
+            "height": args.height, "frames": args.frames, "builds": args.builds, "device": renderer.device,
+            "backend": renderer.backend, "build_threads": REPORT_BUILD["threads"],
+            "render_threads": args.threads if renderer.backend == "cpu" else None,
+            "build_settings": "one primitive per leaf, split axis of largest centroid extent, SAH with the "
+                              "bins of its label (12 or 32)",
+            "uniform_rows": uniform,
+            "overlay": [{k: v for k, v in res.items() if k != "images"} for res in overlay_results]}
+
+
+def _overlay_check(args, out: Path) -> tuple[list[dict], str]:
+    """Report §4.1 and Figure 5 on each backend asked for (skipping one that is unavailable)."""
+    if not args.overlay_backends:
+        return [], ""
+    scene, model = figures.figure5_scene()
+    bvh = build(scene, **{**build_settings("sah12"), "threads": 0})  # the tree does not depend on threads
+    results = []
+    for backend in args.overlay_backends:
+        try:
+            renderer = Renderer(backend)
+        except VulkanUnavailable as e:
+            say(f"[§4.1] {backend} skipped: {e}")
+            continue
+        res = overlay.measure_overlay(scene, bvh, renderer, frames=args.frames, width=args.width,
+                                      height=args.height, threads=args.threads,
+                                      progress=lambda s: say(f"[§4.1 {model}] {s}"))
+        widest = res["rows"][-1]["setting"]  # the report's screenshots: line width doubled
+        save_png(res["images"][widest], out / f"figure5_overlay_{backend}.png")
+        results.append(res)
+    return results, overlay.markdown(results, model, len(scene.triangles), "SAH 12 bins", bvh.stats["height"])
+
+
+def _write_charts(rows: list[dict], scene, name: str, out: Path) -> None:
+    charts.times_chart(rows, out / "times.png", f"{name}: frame and build time per split method (median, interval)")
+    charts.nodes_per_depth_chart(rows, out / "nodes_per_depth.png", f"{name}: nodes per depth")
+    charts.sah_per_depth_chart(rows, out / "sah_per_depth.png", f"{name}: SAH cost per depth")
+    # §5.1: what SAH leaf termination (dropped by the report) would make of the leaves
+    terminated = build(scene, **{**build_settings("sah12", {"max_leaf_size": 8}), "threads": 0})
+    extra = {"method": "sah12, leaves ≤ 8 (§5.1)", "leaf_size_histogram": terminated.stats["leaf_size_histogram"]}
+    charts.leaf_size_chart([*rows, extra], out / "leaf_sizes.png", f"{name}: leaf sizes")
+
+
+def _figure6(scene, name: str, renderer: Renderer, args, out: Path) -> None:
+    """The report's Figure 6: the Table 1 scene itself, rendered at the table's size (SAH 12)."""
+    bvh = build(scene, **{**build_settings("sah12"), "threads": 0})
+    image, ms, _, _ = render_frame(renderer, scene, bvh, args.width, args.height, threads=args.threads)
+    save_png(image, out / "figure6.png")
+    say(f"[figures] figure6: {name} at {args.width}×{args.height}, {ms:.0f} ms")
+
+
+def _write_figures(labels: list[str], out: Path, renderer: Renderer) -> None:
+    spheres, _ = figures.five_spheres_scene()
+    mesh, _ = figures.figure5_scene()
     for fig, scene in (("figure3", spheres), ("figure4", spheres), ("figure5", mesh)):
         say(f"[figures] {fig}: {figures.FIGURES[fig][0]}")
         figures.render_figure(fig, scene, labels, out, renderer, line_width=2.0)
 
 
-def write_sheets(scene_spec: str, labels: list[str], out: Path) -> None:
+def _write_sheets(scene_spec: str, labels: list[str], out: Path) -> None:
     from ..snapshot import run_sheet
 
     for label in labels:
         say(f"[sheets] {label}")
         try:
-            run_sheet(scene_spec, options.method_kwargs(label), out / f"sheet_{label}.png")
+            run_sheet(scene_spec, {**build_settings(label), "threads": 0}, out / f"sheet_{label}.png")
         except RuntimeError as e:  # no OpenGL (EGL) on this machine: say so, keep the rest
             say(f"[sheets] skipped: {e}")
             return
-
-
-def _has_bpy() -> bool:
-    import importlib.util
-
-    return importlib.util.find_spec("bpy") is not None

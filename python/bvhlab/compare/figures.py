@@ -1,14 +1,16 @@
 """Figures like the report's, rendered with the overlay pass (one PNG per method):
 Figure 3, the five spheres after one split; Figure 4, all depths but the root; Figure 5, depths
-8–9 of a high-poly mesh."""
+8–9 of a model of over 700,000 triangles."""
 from __future__ import annotations
 
+import importlib.util
 from pathlib import Path
 
 from ..bvh import build
+from ..library import bundled_dir, load_scene
 from ..render import Renderer, save_png
 from ..scene import Scene
-from .measure import method_kwargs
+from .measure import build_settings, render_frame
 
 FIGURES = {
     "figure3": ("the BVs after splitting the five spheres once", lambda height: (1, 1)),
@@ -17,15 +19,29 @@ FIGURES = {
 }
 
 
+def _bundled_blend_readable() -> bool:
+    return bundled_dir() is not None and importlib.util.find_spec("bpy") is not None
+
+
+def five_spheres_scene() -> tuple[Scene, str]:
+    return load_scene("five_spheres" if _bundled_blend_readable() else "gen:five_spheres")
+
+
+def figure5_scene() -> tuple[Scene, str]:
+    """The report's Figure 5 model has over 700,000 triangles: the bundled Suzanne at subdivision
+    level 5 (1,007,628) where Blender's bpy can read it, else a generated 1M-triangle knot."""
+    return load_scene("suzanne_1m" if _bundled_blend_readable() else "gen:knot_1m")
+
+
 def render_figure(name: str, scene: Scene, labels: list[str], out: Path, renderer: Renderer,
                   width: int = 640, height: int = 480, line_width: float = 1.0) -> list[Path]:
-    """One PNG per method: `<name>_<method>.png`."""
+    """One PNG per method: `<name>_<method>.png`, trees built with the report's settings."""
     _, depths_of = FIGURES[name]
     paths = []
     for label in labels:
-        bvh = build(scene, **method_kwargs(label))
+        bvh = build(scene, **{**build_settings(label), "threads": 0})  # the tree does not depend on threads
         depths = depths_of(bvh.stats["height"])
-        image, _ = renderer.render(scene, bvh, width, height, overlay_depth=depths, line_width=line_width)
+        image, *_ = render_frame(renderer, scene, bvh, width, height, overlay_depth=depths, line_width=line_width)
         path = out / f"{name}_{label}.png"
         save_png(image, path)
         paths.append(path)

@@ -1,49 +1,138 @@
-"""Build and render a scene with each split method: the numbers behind Table 1."""
+"""Build and render a scene with each split method: the numbers behind Table 1, taken with the
+protocol of `protocol.py` (warm-up round, interleaved rounds, medians with their intervals)."""
 from __future__ import annotations
 
-import statistics
+import time
 from typing import Callable
 
 from ..bvh import build
 from ..bvh import method_from_label as method_kwargs  # 'sah32' → sah with 32 bins
 from ..render import Renderer
 from ..scene import Scene
+from .protocol import DEFAULT_BUILDS, DEFAULT_FRAMES, median_interval, rounds
+from .tree_stats import sah_cost_per_depth
+
+#: The report's build settings (§2.3, §4.2), stated here rather than taken from the library's
+#: defaults: one primitive per leaf, the axis of largest centroid extent; the bins come from the
+#: method label (sah12, sah32). Builds run on one thread, like the report's builder.
+REPORT_BUILD = {"axis": "largest", "max_leaf_size": 1, "threads": 1}
+DEFAULT_BINS = 12  # the report's (PBRT's) value, for a bare "sah"
 
 
-def measure_methods(scene: Scene, labels: list[str], *, frames: int = 5, builds: int = 5, width: int = 800,
-                    height: int = 600, renderer: Renderer | None = None, spp: int = 1, max_depth: int = 5,
-                    build_options: dict | None = None, render_options: dict | None = None,
+def build_settings(label: str, build_options: dict | None = None) -> dict:
+    """Every argument of `bvhlab.build` for a method label, none left to the library's defaults."""
+    kwargs = {**REPORT_BUILD, "bins": DEFAULT_BINS, **(build_options or {}), **method_kwargs(label)}
+    kwargs.setdefault("seed", 0)
+    return kwargs
+
+
+def render_frame(renderer: Renderer, scene: Scene, bvh, width: int, height: int, samples: int = 1, **options):
+    """The one place compare calls the tracer. Returns (image, wall ms, CPU ms, timings): a frame is
+    the overlay pass, the trace pass and the read-back (our stand-in for the report's present); its
+    CPU time is that of every thread of this process meanwhile (the CPU reference's, lavapipe's),
+    less the scene upload."""
+    cpu_start = time.process_time()
+    image, t = renderer.render(scene, bvh, width, height, spp=samples, **options)
+    cpu_ms = (time.process_time() - cpu_start) * 1e3 - t.get("upload_ms", 0.0) - t.get("prepare_ms", 0.0)
+    return image, t["overlay_ms"] + t["trace_ms"] + t["readback_ms"], max(cpu_ms, 0.0), t
+
+
+def frame_clock(renderer: Renderer) -> str:
+    """"cpu" where the frames run on this machine's CPU (the CPU reference, a CPU Vulkan driver such
+    as lavapipe): there the process's CPU time measures a frame's work, while wall time also
+    measures whoever else uses the cores. "wall" for a GPU, whose work no CPU clock sees."""
+    if renderer.backend == "cpu":
+        return "cpu"
+    device_type = getattr(renderer, "device_type", None) or getattr(getattr(renderer, "_vulkan", None),
+                                                                    "device_type", "")
+    return "cpu" if device_type == "cpu" else "wall"
+
+
+def timed_build(scene: Scene, settings: dict):
+    """(tree, CPU ms of the build): builds run on the CPU, so CPU time is their cost."""
+    start = time.process_time()
+    bvh = build(scene, **settings)
+    return bvh, (time.process_time() - start) * 1e3
+
+
+def measure_methods(scene: Scene, labels: list[str], *, frames: int = DEFAULT_FRAMES, builds: int = DEFAULT_BUILDS,
+                    width: int = 800, height: int = 600, renderer: Renderer | None = None, spp: int = 1,
+                    max_depth: int = 5, build_options: dict | None = None, render_options: dict | None = None,
                     progress: Callable[[str], None] | None = None) -> list[dict]:
-    """For each method: build time (median of `builds` builds), average frame time over `frames`
-    frames after one warm-up frame (the report's protocol: same camera, 800×600), and the tree's
-    height, SAH cost, nodes and leaves. A frame is the overlay pass, the trace pass and the read
-    back (our stand-in for the report's present). `build_options`: axis, max_leaf_size, ...;
-    `render_options`: traversal, ..."""
+    """For each method: `builds` build times and `frames` frame times, each after a warm-up that is
+    not counted, taken in interleaved rounds; reported as medians with their intervals, in wall
+    time (frame_ms, frame_ms_lo, frame_ms_hi, frame_ms_all; build_ms, ...) and in CPU time
+    (frame_cpu_ms, ...; build_cpu_ms, ...), every sample kept in round order (paired across
+    methods). `frame_clock` says which clock measures a frame's work (`frame_clock()`); builds
+    are always measured by CPU time. Plus the tree's height, SAH cost, nodes, leaves, per depth.
+    `build_options` override the report's settings (REPORT_BUILD); `render_options`: traversal, ..."""
+    if len(set(labels)) != len(labels) or not labels:
+        raise ValueError(f"methods must be distinct and at least one, got {labels}")
     renderer = renderer or Renderer("auto")
+    say = progress or (lambda text: None)
+    settings = {label: build_settings(label, build_options) for label in labels}
+    trees, build_times = _build_rounds(scene, settings, builds, say)
+    options = {"samples": spp, "max_depth": max_depth, **(render_options or {})}
+    frame_times, timings = _render_rounds(scene, trees, frames, width, height, renderer, options, say)
     rows = []
     for label in labels:
-        kwargs = {**(build_options or {}), **method_kwargs(label)}
-        if progress:
-            progress(f"{label}: building")
-        trees = [build(scene, **kwargs) for _ in range(max(1, builds))]
-        bvh = trees[-1]
-        stats = bvh.stats
-        if progress:
-            progress(f"{label}: rendering {frames} frames")
-        options = {"spp": spp, "max_depth": max_depth, **(render_options or {})}
-        renderer.render(scene, bvh, width, height, **options)  # warm-up (and upload)
-        frame_ms = []
-        for _ in range(max(1, frames)):
-            _, t = renderer.render(scene, bvh, width, height, **options)
-            frame_ms.append(t["overlay_ms"] + t["trace_ms"] + t["readback_ms"])
-        mean_frame = statistics.fmean(frame_ms)
-        rows.append({
-            "method": label, "split_method": kwargs["method"], "bins": kwargs.get("bins"),
-            "frame_ms": mean_frame, "frame_ms_all": frame_ms,
-            "build_ms": statistics.median(t.stats["build_ms"] for t in trees),
-            "height": stats["height"], "sah_cost": stats["sah_cost"], "nodes": stats["nodes"],
-            "leaves": stats["leaves"], "nodes_per_depth": stats["nodes_per_depth"],
-            "primary_mrays_s": width * height * spp / (mean_frame * 1e3),
-            "device": t["device"], "backend": t["backend"],
-        })
+        row = _row(label, settings[label], trees[label], timings[label])
+        row.update(samples_columns("frame", *frame_times[label]), frame_clock=frame_clock(renderer))
+        row.update(samples_columns("build", *build_times[label]))
+        row["primary_mrays_s"] = width * height * spp / (row["frame_ms"] * 1e3)
+        rows.append(row)
     return rows
+
+
+def samples_columns(name: str, wall_ms: list[float], cpu_ms: list[float]) -> dict:
+    """<name>_ms (wall) and <name>_cpu_ms: median, _lo, _hi (its interval) and _all (every sample)."""
+    out = {}
+    for key, samples in ((f"{name}_ms", wall_ms), (f"{name}_cpu_ms", cpu_ms)):
+        interval = median_interval(samples)
+        out.update({key: interval.median, f"{key}_lo": interval.lo, f"{key}_hi": interval.hi,
+                    f"{key}_all": list(samples)})
+    return out
+
+
+def _build_rounds(scene, settings: dict, builds: int, say) -> tuple[dict, dict]:
+    """Trees of the warm-up round (not counted), and per label ([wall ms], [CPU ms]) of the rest."""
+    labels = list(settings)
+    trees, times = {}, {label: ([], []) for label in labels}
+    for label in labels:
+        say(f"{label}: building")
+        trees[label] = build(scene, **settings[label])
+    for r, order in enumerate(rounds(labels, max(1, builds))):
+        say(f"builds: round {r + 1}/{builds}")
+        for label in order:
+            bvh, cpu_ms = timed_build(scene, settings[label])
+            times[label][0].append(bvh.stats["build_ms"])
+            times[label][1].append(cpu_ms)
+    return trees, times
+
+
+def _render_rounds(scene, trees: dict, frames: int, width, height, renderer, options, say):
+    """Per label ([wall ms], [CPU ms]) of the counted frames, and the timings of its last frame."""
+    labels = list(trees)
+    times, last = {label: ([], []) for label in labels}, {}
+    for label in labels:  # warm-up round (upload, shader compile, caches), not counted
+        say(f"{label}: warm-up frame")
+        render_frame(renderer, scene, trees[label], width, height, **options)
+    for r, order in enumerate(rounds(labels, max(1, frames))):
+        say(f"frames: round {r + 1}/{frames}")
+        for label in order:
+            _, wall_ms, cpu_ms, last[label] = render_frame(renderer, scene, trees[label], width, height, **options)
+            times[label][0].append(wall_ms)
+            times[label][1].append(cpu_ms)
+    return times, last
+
+
+def _row(label, settings, bvh, timings) -> dict:
+    stats = bvh.stats
+    return {
+        "method": label, "split_method": settings["method"],
+        "bins": settings["bins"] if settings["method"] == "sah" else None, "build_settings": settings,
+        "height": stats["height"], "sah_cost": stats["sah_cost"], "nodes": stats["nodes"],
+        "leaves": stats["leaves"], "nodes_per_depth": stats["nodes_per_depth"],
+        "leaf_size_histogram": stats["leaf_size_histogram"], "sah_cost_per_depth": sah_cost_per_depth(bvh),
+        "device": timings["device"], "backend": timings["backend"],
+    }

@@ -1,5 +1,6 @@
-"""Named scenes: the bundled `.blend` files (blender_scenes/), generated scenes (`gen:...`, no
-Blender needed), and files (`.blend` read through bpy with the add-on's exporter, `.npz`)."""
+"""Named scenes: the bundled `.blend` files (blender_scenes/), Crytek Sponza (`sponza`, bundled as
+an `.npz`, no Blender needed), generated scenes (`gen:...`, no Blender needed), and files (`.blend`
+read through bpy with the add-on's exporter, `.npz`)."""
 from __future__ import annotations
 
 import json
@@ -8,6 +9,7 @@ from pathlib import Path
 from typing import Callable
 
 from ..scene import Scene
+from . import sponza
 
 
 @dataclass(frozen=True)
@@ -16,7 +18,7 @@ class SceneInfo:
     description: str
     triangles: int
     spheres: int
-    source: str  # "bundled .blend" or "generated"
+    source: str  # "bundled .blend", "bundled .npz" or "generated"
 
 
 def bundled_dir() -> Path | None:
@@ -44,6 +46,8 @@ def _generated() -> dict[str, tuple[str, Callable[[], Scene]]]:
         "gen:whitted": ("reflective and transparent spheres over a checker floor", showcase.whitted),
         "gen:room": ("a detailed torus knot in a large room, 250k triangles", _room),
         "gen:knot": ("a bumpy torus knot, 250k triangles", triangles_scene(lambda: procedural.torus_knot(250_000))),
+        "gen:knot_1m": ("a bumpy torus knot, 1M triangles (report Figure 5: over 700,000)",
+                        triangles_scene(lambda: procedural.torus_knot(1_000_000))),
         "gen:random_spheres": ("2000 spheres uniformly at random in a cube (report §4.2)",
                                lambda: Scene(spheres=procedural.random_spheres(2000, radius=0.015, seed=1))),
     }
@@ -61,6 +65,9 @@ def _room() -> Scene:
 def list_scenes() -> list[SceneInfo]:
     out = [SceneInfo(k, v.get("description", ""), v.get("triangles", 0), v.get("spheres", 0), "bundled .blend")
            for k, v in _bundled().items()]
+    if _sponza_path() is not None:
+        out.append(SceneInfo("sponza", f"the report's Table 1 scene: {sponza.ATTRIBUTION}", sponza.TRIANGLES, 0,
+                             "bundled .npz"))
     for name, (description, _) in _generated().items():
         out.append(SceneInfo(name, description, -1, -1, "generated"))
     return out
@@ -76,11 +83,19 @@ def load_scene(spec: str) -> tuple[Scene, str]:
     generated = _generated()
     if spec in generated:
         return generated[spec][1](), spec.split(":", 1)[1]
+    if spec == "sponza" and _sponza_path() is not None:
+        return sponza.scene(_sponza_path()), spec
     bundled = _bundled()
     if spec in bundled:
         return _load_blend(bundled_dir() / bundled[spec]["file"]), spec
-    names = ", ".join(sorted([*bundled, *generated]))
+    names = ", ".join(sorted([*bundled, *generated, *(["sponza"] if _sponza_path() else [])]))
     raise FileNotFoundError(f"no scene '{spec}': give a .blend or .npz file, or one of: {names}")
+
+
+def _sponza_path() -> Path | None:
+    d = bundled_dir()
+    path = d / sponza.FILE_NAME if d else None
+    return path if path is not None and path.exists() else None
 
 
 def _load_blend(path: Path) -> Scene:

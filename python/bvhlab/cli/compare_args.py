@@ -1,0 +1,84 @@
+"""Argument types of `bvhlab compare`: each rejects bad input with argparse's own error
+("bvhlab compare: error: argument --frames: ...", exit 2) before any work starts."""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ..bvh import method_from_label
+from ..compare.protocol import MIN_SAMPLES
+
+DEFAULT_METHODS = "median,mean,midpoint,sah12,sah32"
+MAX_IMAGE_SIZE = 16384
+
+
+def _integer(text: str) -> int:
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got '{text}'") from None
+
+
+def sample_count(text: str) -> int:
+    """Frames or builds per method: the protocol needs at least MIN_SAMPLES for a spread."""
+    n = _integer(text)
+    if n < MIN_SAMPLES:
+        raise argparse.ArgumentTypeError(f"must be at least {MIN_SAMPLES} (the protocol reports a median and its "
+                                         f"spread, which needs {MIN_SAMPLES} samples), got {n}")
+    return n
+
+
+def thread_count(text: str) -> int:
+    n = _integer(text)
+    if not 0 <= n <= 4096:
+        raise argparse.ArgumentTypeError(f"must be between 0 (every core) and 4096, got {n}")
+    return n
+
+
+def image_size(text: str) -> int:
+    n = _integer(text)
+    if not 1 <= n <= MAX_IMAGE_SIZE:
+        raise argparse.ArgumentTypeError(f"must be between 1 and {MAX_IMAGE_SIZE} pixels, got {n}")
+    return n
+
+
+def method_list(text: str) -> list[str]:
+    """'median,sah12' → ['median', 'sah12']; empty, unknown or repeated names are errors."""
+    labels = [m.strip() for m in text.split(",")]
+    if not any(labels):
+        raise argparse.ArgumentTypeError(f"no methods given in '{text}' (e.g. median,mean,sah12)")
+    if "" in labels:
+        raise argparse.ArgumentTypeError(f"empty method name in '{text}'")
+    for label in labels:
+        try:
+            method_from_label(label)
+        except ValueError as e:
+            raise argparse.ArgumentTypeError(str(e)) from None
+    repeated = sorted({m for m in labels if labels.count(m) > 1})
+    if repeated:
+        raise argparse.ArgumentTypeError(f"method given more than once: {', '.join(repeated)}")
+    return labels
+
+
+def backend_list(text: str) -> list[str]:
+    """'cpu,vulkan' → ['cpu', 'vulkan']; 'none' → []."""
+    if text.strip() == "none":
+        return []
+    names = [b.strip() for b in text.split(",")]
+    bad = [b for b in names if b not in ("cpu", "vulkan")]
+    if bad or not names:
+        raise argparse.ArgumentTypeError(f"expected cpu, vulkan, both (cpu,vulkan) or none, got '{text}'")
+    return list(dict.fromkeys(names))
+
+
+def output_dir(text: str) -> Path:
+    """A directory to write into: it may exist (as a directory), but neither it nor a folder above it
+    may be a file. The path is used as given, never renamed."""
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise argparse.ArgumentTypeError(f"{path} exists and is not a directory (compare writes a directory of "
+                                         f"tables, charts and figures)")
+    for parent in path.parents:
+        if parent.exists() and not parent.is_dir():
+            raise argparse.ArgumentTypeError(f"cannot create {path}: {parent} is a file")
+    return path
