@@ -40,7 +40,8 @@ TEST(BadInput, NanOrInfiniteVertexNamesTheTriangle) {
 }
 
 TEST(BadInput, SphereRadiusMustBePositiveAndFinite) {
-    for (float r : {0.0f, -1.0f, std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
+    for (float r : {0.0f, -1.0f, std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
+                    6.9e-41f, 0x1p-61f}) {  // below kMinRadius (2^-60) r² underflows
         auto scene = test::random_scene(10, 10, 1);
         scene.spheres[4 * 3 + 3] = r;
         expect_invalid([&] { build_bvh(scene.view()); }, "sphere 3");

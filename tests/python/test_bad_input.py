@@ -20,7 +20,7 @@ def test_nan_and_inf_name_the_primitive(tris):
         bvhlab.build(tris)
 
 
-@pytest.mark.parametrize("radius", [0.0, -1.0, np.nan, np.inf])
+@pytest.mark.parametrize("radius", [0.0, -1.0, np.nan, np.inf, 6.9e-41, 2.0**-61])
 def test_bad_radius(tris, radius):
     spheres = np.array([[0, 0, 0, 1], [1, 1, 1, radius]], np.float32)
     with pytest.raises(ValueError, match="sphere 1"):

@@ -22,6 +22,9 @@
 //    is huge or ±inf and the product may overflow to ±inf: that is the right answer (the slab
 //    puts no limit, or excludes the ray, on that side), and 0·inf = NaN on a face is ignored by
 //    raise_to/lower_to. The slab test only compares, so infinities are safe there.
+// Spheres: a radius of at least kMinRadius = 2^-60 keeps r² ≥ 2^-120 a normal float. A smaller
+// one underflows: c = |oc|² - r² then rounds to 0 for a ray passing ~1e-37 away, and the quadratic
+// counts that as a hit (the fuzzer found a 7e-41 sphere "hit" from 4e-37 away).
 // Directions: the rescaled t is t' · 2^-e where d's largest component is f·2^e, f in [0.5, 1).
 // With that component in [kMinDirection, kMaxDirection] = [2^-80, 2^80], t ≤ 2^43 · 2^80 = 2^123
 // cannot overflow (below about 2^-84 it could), and a hit farther than 2^-45 from the origin of
@@ -37,6 +40,7 @@ namespace bvhlab {
 inline constexpr float kMaxCoordinate = 0x1p40f;  ///< |x| ≤ 2^40 ≈ 1.0995e12 for every point
 inline constexpr float kMinDirection = 0x1p-80f;  ///< smallest allowed largest |component| of a direction
 inline constexpr float kMaxDirection = 0x1p80f;   ///< largest allowed largest |component| of a direction
+inline constexpr float kMinRadius = 0x1p-60f;     ///< smallest sphere radius (≈ 8.7e-19)
 
 /// True when every component of p lies in [-kMaxCoordinate, kMaxCoordinate] (false for NaN).
 inline bool in_coordinate_range(Vec3 p) {

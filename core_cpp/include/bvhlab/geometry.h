@@ -27,7 +27,7 @@ struct GeometryView {
 
 /// Throws std::invalid_argument naming the first bad primitive: a NaN or infinite coordinate, a
 /// coordinate (or sphere extent) outside ±kMaxCoordinate (coordinate_range.h), a radius that is
-/// not a positive finite number, or more primitives than a reference can index.
+/// not a finite number of at least kMinRadius, or more primitives than a reference can index.
 /// Degenerate (zero-area) triangles are valid: they are built into the tree and never hit.
 void validate(const GeometryView& geometry);
 
