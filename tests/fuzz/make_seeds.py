@@ -21,7 +21,8 @@ def case(method, axis, bins, leaf, threads, tris, spheres, rays, encoding, extra
                   len(rays), encoding])
     body = b"".join(put(x) for t in tris for v in t for x in v)
     body += b"".join(put(x) for s in spheres for x in s)
-    body += b"".join(put(o) + put(d) for o, dd in rays for o, d in zip(o, dd))
+    # fuzz_input.h reads each ray's origin and direction component by component, interleaved
+    body += b"".join(put(oc) + put(dc) for origin, direction in rays for oc, dc in zip(origin, direction))
     return head + body + extra
 
 
