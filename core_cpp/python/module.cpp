@@ -177,6 +177,7 @@ NB_MODULE(_core, m) {
     m.attr("MAX_COORDINATE") = kMaxCoordinate;  // coordinate_range.h
     m.attr("MIN_DIRECTION") = kMinDirection;
     m.attr("MAX_DIRECTION") = kMaxDirection;
+    m.attr("MIN_RADIUS") = kMinRadius;
     m.attr("NODE_INTERNAL_BIT") = gpu::NODE_INTERNAL_BIT;
     m.attr("REF_SPHERE_BIT") = gpu::REF_SPHERE_BIT;
 }

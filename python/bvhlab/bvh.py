@@ -15,6 +15,7 @@ MAX_TREE_HEIGHT = _core.MAX_TREE_HEIGHT
 #: Supported coordinates and ray directions (core_cpp/include/bvhlab/coordinate_range.h).
 MAX_COORDINATE = float(_core.MAX_COORDINATE)
 MIN_DIRECTION, MAX_DIRECTION = float(_core.MIN_DIRECTION), float(_core.MAX_DIRECTION)
+MIN_RADIUS = float(_core.MIN_RADIUS)
 
 #: One flattened node, 32 bytes (shaders/gpu_types.h): for a leaf `index` is the first slot in
 #: `Bvh.refs` and `info` the primitive count; for an internal node `index` is the second child
@@ -54,8 +55,8 @@ def build(scene_or_triangles, spheres: np.ndarray | None = None, *, method: str 
     `axis` one of AXES; `bins` (2..256) is used by "sah"; leaves hold at most `max_leaf_size`
     primitives, and the SAH methods may stop earlier when a leaf is cheaper. `threads` = 0 uses
     every core; the tree never depends on it. Bad input raises TypeError or ValueError; a vertex
-    or sphere outside ±MAX_COORDINATE (2^40 ≈ 1.1e12, where float32 ray tests would overflow) is
-    bad input.
+    or sphere outside ±MAX_COORDINATE (2^40 ≈ 1.1e12, where float32 ray tests would overflow) and a
+    sphere radius below MIN_RADIUS (2^-60, where its square underflows) are bad input.
 
     `progress(fraction)` is called on this thread now and then, last with 1.0; its result is taken
     by its truth value (None means go on), and a false one cancels the build (BuildCancelled),

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import bvhlab
-from bvhlab.bvh import MAX_COORDINATE, MAX_DIRECTION, MIN_DIRECTION
+from bvhlab.bvh import MAX_COORDINATE, MAX_DIRECTION, MIN_DIRECTION, MIN_RADIUS
 from bvhlab.library import procedural
 from oracles import brute_force
 
@@ -14,7 +14,7 @@ L = MAX_COORDINATE
 
 
 def test_the_range_is_2_to_the_40():
-    assert L == 2.0**40 and MIN_DIRECTION == 2.0**-80 and MAX_DIRECTION == 2.0**80
+    assert L == 2.0**40 and MIN_DIRECTION == 2.0**-80 and MAX_DIRECTION == 2.0**80 and MIN_RADIUS == 2.0**-60
 
 
 @pytest.mark.parametrize("size", [1e13, 1e15, 3.4e38])
