@@ -114,31 +114,45 @@ bool within_ulps(float a, float b, float ulps) {
     return a == b || std::fabs(a - b) <= ulps * std::numeric_limits<float>::epsilon() * std::fmax(std::fabs(a), std::fabs(b));
 }
 
-/// True when, in double precision, the ray only grazes primitive `k` — it passes within a relative
-/// 1e-4 of an edge or the silhouette, runs (nearly) in its plane, or starts (nearly) on it — so that
-/// float32 rounding may decide either way between a hit and a miss.
+/// Double-precision 3-vectors for the grazing judgement below.
+struct D3 {
+    double x, y, z;
+    D3 operator-(const D3& b) const { return {x - b.x, y - b.y, z - b.z}; }
+    D3 operator+(const D3& b) const { return {x + b.x, y + b.y, z + b.z}; }
+    D3 operator*(double s) const { return {x * s, y * s, z * s}; }
+    double dot(const D3& b) const { return x * b.x + y * b.y + z * b.z; }
+    D3 cross(const D3& b) const { return {y * b.z - z * b.y, z * b.x - x * b.z, x * b.y - y * b.x}; }
+    double norm() const { return std::sqrt(dot(*this)); }
+    double largest() const { return std::max({std::fabs(x), std::fabs(y), std::fabs(z)}); }
+};
+
+double segment_distance(const D3& p, const D3& a, const D3& b) {
+    const D3 e = b - a;
+    const double len2 = e.dot(e), u = len2 > 0 ? std::clamp((p - a).dot(e) / len2, 0.0, 1.0) : 0.0;
+    return (p - (a + e * u)).norm();
+}
+
+/// True when, in double precision, the ray passes within a relative 1e-5 of primitive `k`'s
+/// boundary (an edge, the silhouette), runs (nearly) in its plane, or starts (nearly) on it,
+/// relative to the largest coordinate involved: there float32 rounding may decide either way
+/// between a hit and a miss.
 bool grazes(const Bvh& bvh, std::uint32_t k, const Ray& r) {
     const PackedPrim& p = bvh.prims[k];
-    const double o[3] = {r.origin.x, r.origin.y, r.origin.z}, d[3] = {r.dir.x, r.dir.y, r.dir.z};
-    auto dot = [](const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
-    auto cross = [](const double* a, const double* b, double* out) {
-        out[0] = a[1] * b[2] - a[2] * b[1], out[1] = a[2] * b[0] - a[0] * b[2], out[2] = a[0] * b[1] - a[1] * b[0];
-    };
-    const double v0[3] = {p.p[0], p.p[1], p.p[2]}, tv[3] = {o[0] - v0[0], o[1] - v0[1], o[2] - v0[2]};
-    const double scale = std::sqrt(dot(d, d)) * (std::sqrt(dot(tv, tv)) + 1e-300);
+    const D3 o{r.origin.x, r.origin.y, r.origin.z}, d{r.dir.x, r.dir.y, r.dir.z}, v0{p.p[0], p.p[1], p.p[2]};
+    const double near = 1e-5 * std::max(o.largest(), v0.largest() + (is_sphere_ref(p.ref) ? p.e1[0] : 0.0));
     if (is_sphere_ref(p.ref)) {
-        const double radius = p.e1[0], a = dot(d, d), b = dot(tv, d), c = dot(tv, tv) - radius * radius;
-        const double disc = b * b - a * c;
-        return std::fabs(disc) <= 1e-4 * (b * b + std::fabs(a * c)) || std::fabs(c) <= 1e-4 * radius * radius;
+        const double radius = p.e1[0];
+        const D3 closest = o + d * ((v0 - o).dot(d) / d.dot(d));
+        return std::fabs((v0 - closest).norm() - radius) <= near || std::fabs((o - v0).norm() - radius) <= near;
     }
-    const double e1[3] = {p.e1[0], p.e1[1], p.e1[2]}, e2[3] = {p.e2[0], p.e2[1], p.e2[2]};
-    double pv[3], qv[3], n[3];
-    cross(d, e2, pv), cross(tv, e1, qv), cross(e1, e2, n);
-    const double det = dot(e1, pv), area = std::sqrt(dot(n, n));
-    if (std::fabs(det) <= 1e-4 * area * std::sqrt(dot(d, d)) || area == 0) return true;  // in its plane
-    const double u = dot(tv, pv) / det, v = dot(d, qv) / det, t = dot(e2, qv) / det;
-    const double margin = std::min({std::fabs(u), std::fabs(v), std::fabs(1 - u - v)});
-    return margin <= 1e-4 || std::fabs(t) * scale <= 1e-4 * dot(tv, tv);  // at an edge, or starting on it
+    const D3 v1 = v0 + D3{p.e1[0], p.e1[1], p.e1[2]}, v2 = v0 + D3{p.e2[0], p.e2[1], p.e2[2]};
+    const D3 n = (v1 - v0).cross(v2 - v0);
+    const double denom = n.dot(d);
+    if (std::fabs(denom) <= 1e-6 * n.norm() * d.norm()) return true;  // degenerate, or along its plane
+    const double t = n.dot(v0 - o) / denom;
+    const D3 hit = o + d * t;
+    return std::fabs(t) * d.norm() <= near || segment_distance(hit, v0, v1) <= near ||
+           segment_distance(hit, v1, v2) <= near || segment_distance(hit, v2, v0) <= near;
 }
 
 /// The closest hit of ray i through the tree is the brute force's (the same primitive tests over
@@ -147,7 +161,8 @@ bool grazes(const Bvh& bvh, std::uint32_t k, const Ray& r) {
 /// t, so a box is culled by a hit at the same distance and the tie rule (ray.h closer_hit) picks
 /// another primitive there (corpus/found_tie_at_box_entry); and a grazing ray (grazes()) may be a
 /// hit for the primitive test and a miss for its box (corpus/found_grazing_underflow: an
-/// underflowing u of -1e-48 rounds to -0 and passes u >= 0).
+/// underflowing u of -1e-48 rounds to -0 and passes u >= 0; found_grazing_sliver: 1e-19 beside
+/// the long edge of a 1e-16-wide sliver).
 void check_hit(const Bvh& bvh, const FuzzCase& c, std::size_t i, const Hits& hits) {
     const float* o = &c.origins[3 * i];
     const float* d = &c.directions[3 * i];
