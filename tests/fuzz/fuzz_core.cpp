@@ -139,13 +139,13 @@ double segment_distance(const D3& p, const D3& a, const D3& b) {
 bool grazes(const Bvh& bvh, std::uint32_t k, const Ray& r) {
     const PackedPrim& p = bvh.prims[k];
     const D3 o{r.origin.x, r.origin.y, r.origin.z}, d{r.dir.x, r.dir.y, r.dir.z}, v0{p.p[0], p.p[1], p.p[2]};
-    const double near = 1e-5 * std::max(o.largest(), v0.largest() + (is_sphere_ref(p.ref) ? p.e1[0] : 0.0));
     if (is_sphere_ref(p.ref)) {
-        const double radius = p.e1[0];
+        const double radius = p.e1[0], near = 1e-5 * std::max(o.largest(), v0.largest() + radius);
         const D3 closest = o + d * ((v0 - o).dot(d) / d.dot(d));
         return std::fabs((v0 - closest).norm() - radius) <= near || std::fabs((o - v0).norm() - radius) <= near;
     }
     const D3 v1 = v0 + D3{p.e1[0], p.e1[1], p.e1[2]}, v2 = v0 + D3{p.e2[0], p.e2[1], p.e2[2]};
+    const double near = 1e-5 * std::max({o.largest(), v0.largest(), v1.largest(), v2.largest()});
     const D3 n = (v1 - v0).cross(v2 - v0);
     const double denom = n.dot(d);
     if (std::fabs(denom) <= 1e-6 * n.norm() * d.norm()) return true;  // degenerate, or along its plane
