@@ -140,7 +140,10 @@ bool grazes(const Bvh& bvh, std::uint32_t k, const Ray& r) {
     const PackedPrim& p = bvh.prims[k];
     const D3 o{r.origin.x, r.origin.y, r.origin.z}, d{r.dir.x, r.dir.y, r.dir.z}, v0{p.p[0], p.p[1], p.p[2]};
     if (is_sphere_ref(p.ref)) {
-        const double radius = p.e1[0], near = 1e-5 * std::max(o.largest(), v0.largest() + radius);
+        // The sphere test's b² - a·c cancels: float32 resolves the ray's distance from the centre to
+        // about sqrt(eps)·|origin - centre| only (corpus/found_sphere_halo; a strict xfail in
+        // test_intersect.py until ray.h uses Haines et al.'s form). Tolerated here, 1e-3 of it.
+        const double radius = p.e1[0], near = 1e-3 * std::max(o.largest(), v0.largest() + radius);
         const D3 closest = o + d * ((v0 - o).dot(d) / d.dot(d));
         return std::fabs((v0 - closest).norm() - radius) <= near || std::fabs((o - v0).norm() - radius) <= near;
     }
