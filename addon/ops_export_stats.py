@@ -7,7 +7,6 @@ from bpy_extras.io_utils import ExportHelper
 
 from . import state
 from .operator_support import build_tree, export_scene, output_path, remember_tree, run_reported
-from .stats_files import write_stats_csv, write_stats_json
 
 
 class BVHLAB_OT_export_stats(bpy.types.Operator, ExportHelper):
@@ -26,11 +25,13 @@ class BVHLAB_OT_export_stats(bpy.types.Operator, ExportHelper):
         return run_reported(self, context, lambda: self._export(context), quiet=(SubstituteWarning,))
 
     def _export(self, context):
+        from bvhlab.stats_files import write_stats_csv, write_stats_json
+
+        json_path = stats_json_path(self.filepath)  # refused before any work
         built = state.tree_for(context.scene)
         if built is None:
             exported = export_scene(context, require_camera=False)
             built = remember_tree(context, build_tree(context, exported), exported)
-        json_path = output_path(self.filepath, "bvh_stats.json").with_suffix(".json")
         csv_path = json_path.with_suffix(".csv")
         stats = built.bvh.stats
         about = {"scene": context.scene.name, "blend_file": bpy.data.filepath, "settings": built.settings}
@@ -40,3 +41,14 @@ class BVHLAB_OT_export_stats(bpy.types.Operator, ExportHelper):
         self.report({"INFO"}, message)
         state.messages[state.key(context.scene)] = ("INFO", message)
         return {"FINISHED"}
+
+
+def stats_json_path(filepath: str):
+    """Where the JSON goes: the path as given, or with .json added when it has no suffix (the file
+    browser's convention); a folder or another suffix is refused, never rewritten (issue 8.10)."""
+    from bvhlab.stats_files import json_path
+
+    path = output_path(filepath, "bvh_stats.json")
+    if not path.suffix and not path.is_dir():
+        path = path.with_name(path.name + ".json")
+    return json_path(path)

@@ -12,6 +12,8 @@ packages=(
   libegl1 libegl-mesa0 libgl1-mesa-dri
   # Vulkan on lavapipe, the shader compiler and the validation layer
   mesa-vulkan-drivers libvulkan-dev glslc vulkan-validationlayers vulkan-tools libstb-dev
+  # clang for the sanitizer build (GCC's UBSan lacks float-cast-overflow) and libFuzzer
+  clang libclang-rt-14-dev
 )
 
 missing=()

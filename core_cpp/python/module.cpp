@@ -12,6 +12,8 @@
 #include <nanobind/stl/vector.h>
 
 #include "bvhlab/bvh.h"
+#include "bvhlab/cancel.h"
+#include "bvhlab/coordinate_range.h"
 #include "bvhlab/depth_order.h"
 #include "bvhlab/stats.h"
 #include "bvhlab/traverse.h"
@@ -57,26 +59,16 @@ PyBvh* build(const Triangles& tris, const std::optional<Spheres>& spheres, const
     cfg.max_leaf_size = static_cast<std::uint32_t>(max_leaf_size);
     cfg.seed = seed;
     cfg.threads = threads;
-    std::optional<nb::python_error> callback_error;
-    if (progress) {
-        cfg.progress = [&](double done) {
-            nb::gil_scoped_acquire gil;
-            try {
-                nb::object r = (*progress)(done);
-                return r.is_none() || nb::cast<bool>(r);
-            } catch (nb::python_error& e) {
-                callback_error.emplace(std::move(e));
-                return false;
-            }
-        };
-    }
+    // Always a check, with or without a callable: Ctrl-C stops the build (KeyboardInterrupt).
+    PyStopCheck stop(progress ? nb::object(*progress) : nb::none());
+    cfg.progress = [&stop](double done) { return !stop(done); };
     GeometryView g = view_of(tris, spheres);
     Bvh bvh;
     try {
         nb::gil_scoped_release release;
         bvh = build_bvh(g, cfg);
     } catch (const BuildCancelled&) {
-        if (callback_error) throw std::move(*callback_error);
+        stop.rethrow();  // what the callable (or Ctrl-C) raised, as itself
         throw;
     }
     return new PyBvh(std::move(bvh));
@@ -97,9 +89,16 @@ void py_intersect(const PyBvh& self, const Vectors& origins, const Vectors& dirs
     RayBatch rays{origins.data(), dirs.data(), n, tmin, tmax};
     HitBatch hits{t.data(), prim.data(), kind.data(), u.data(), v.data(), visited.data()};
     TreePtr tree = self.current();  // this version stays alive (and unchanged) until the rays are done
-    nb::gil_scoped_release release;
-    const WideBvh* wide = mode == Traversal::Wide ? &tree->wide() : nullptr;
-    intersect_batch(tree->bvh, rays, hits, mode, threads, wide);
+    PyStopCheck stop;                // Ctrl-C stops a long batch
+    Cancellation cancel([&stop] { return stop(0.0); });
+    try {
+        nb::gil_scoped_release release;
+        const WideBvh* wide = mode == Traversal::Wide ? &tree->wide() : nullptr;
+        intersect_batch(tree->bvh, rays, hits, mode, threads, wide, &cancel);
+    } catch (const Cancelled&) {
+        stop.rethrow();
+        throw;
+    }
 }
 
 /// Boxes of the nodes (only the leaves if asked) whose depth is in [depth_min, depth_max], by
@@ -169,9 +168,19 @@ NB_MODULE(_core, m) {
               nb::gil_scoped_release release;
               return geometry_fingerprint(g);
           }, "triangles"_a.noconvert(), "spheres"_a.noconvert().none());
+    m.def("validate_geometry", [](const Triangles& tris, const std::optional<Spheres>& spheres) {
+              GeometryView g = view_of(tris, spheres);
+              nb::gil_scoped_release release;
+              validate(g);
+          }, "triangles"_a.noconvert(), "spheres"_a.noconvert().none(),
+          "Raises ValueError naming the first primitive that is not finite or lies outside MAX_COORDINATE.");
     m.def("build", &build, "triangles"_a.noconvert(), "spheres"_a.noconvert().none(), "method"_a, "axis"_a,
           "bins"_a, "max_leaf_size"_a, "seed"_a, "threads"_a, "progress"_a.none());
     m.attr("MAX_TREE_HEIGHT") = gpu::MAX_TREE_HEIGHT;
+    m.attr("MAX_COORDINATE") = kMaxCoordinate;  // coordinate_range.h
+    m.attr("MIN_DIRECTION") = kMinDirection;
+    m.attr("MAX_DIRECTION") = kMaxDirection;
+    m.attr("MIN_RADIUS") = kMinRadius;
     m.attr("NODE_INTERNAL_BIT") = gpu::NODE_INTERNAL_BIT;
     m.attr("REF_SPHERE_BIT") = gpu::REF_SPHERE_BIT;
 }

@@ -1,7 +1,9 @@
 """Argument checks with messages that say what was expected and what came instead."""
 from __future__ import annotations
 
+import math
 import numbers
+from pathlib import Path
 
 import numpy as np
 
@@ -41,3 +43,36 @@ def choice(name: str, value, options: tuple[str, ...]) -> str:
     if value not in options:
         raise ValueError(f"unknown {name} '{value}'; expected one of: {', '.join(options)}")
     return value
+
+
+def real(name: str, value, lo: float = -math.inf, hi: float = math.inf) -> float:
+    """A real number (int or float, not bool) in [lo, hi]; NaN is rejected."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{name} must be a number, got {type(value).__name__}")
+    value = float(value)
+    if not lo <= value <= hi:
+        raise ValueError(f"{name} must be between {lo} and {hi}, got {value}")
+    return value
+
+
+class OutputPathError(OSError, ValueError):
+    """An output path that cannot be written as given (a folder, under a file, a wrong suffix).
+    Both an OSError (it is about the file system) and a ValueError (it is a bad argument)."""
+
+
+def output_file(path, suffixes: tuple[str, ...], what: str) -> Path:
+    """`path` as a Path, checked before any work is done: not an existing folder, no existing file
+    where a parent folder must be, and a name ending in one of `suffixes` (the file is written
+    exactly where asked, never renamed). Raises OutputPathError saying what is wrong."""
+    path = Path(path)
+    if path.is_dir():
+        raise OutputPathError(f"{path} is a folder; give a file name for the {what}, e.g. {path / ('out' + suffixes[0])}")
+    if path.suffix.lower() not in suffixes:
+        raise OutputPathError(f"{path}: a {what} is written as {' or '.join(suffixes)}; name the file so "
+                              f"(e.g. {path.with_name(path.stem + suffixes[0])}), it is not renamed for you")
+    for parent in path.parents:
+        if parent.exists():
+            if not parent.is_dir():
+                raise OutputPathError(f"{path}: {parent} is a file, not a folder")
+            break
+    return path

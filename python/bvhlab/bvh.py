@@ -12,6 +12,10 @@ METHODS = ("median", "mean", "midpoint", "sah", "sweep_sah", "lbvh")
 AXES = ("largest", "random", "best")
 TRAVERSALS = ("stack", "stackless", "wide")
 MAX_TREE_HEIGHT = _core.MAX_TREE_HEIGHT
+#: Supported coordinates and ray directions (core_cpp/include/bvhlab/coordinate_range.h).
+MAX_COORDINATE = float(_core.MAX_COORDINATE)
+MIN_DIRECTION, MAX_DIRECTION = float(_core.MIN_DIRECTION), float(_core.MAX_DIRECTION)
+MIN_RADIUS = float(_core.MIN_RADIUS)
 
 #: One flattened node, 32 bytes (shaders/gpu_types.h): for a leaf `index` is the first slot in
 #: `Bvh.refs` and `info` the primitive count; for an internal node `index` is the second child
@@ -50,8 +54,14 @@ def build(scene_or_triangles, spheres: np.ndarray | None = None, *, method: str 
     `scene_or_triangles` is a `bvhlab.Scene` or a triangle array. `method` is one of METHODS,
     `axis` one of AXES; `bins` (2..256) is used by "sah"; leaves hold at most `max_leaf_size`
     primitives, and the SAH methods may stop earlier when a leaf is cheaper. `threads` = 0 uses
-    every core; the tree never depends on it. `progress(fraction)` is called now and then; return
-    False to cancel (raises BuildCancelled). Bad input raises TypeError or ValueError.
+    every core; the tree never depends on it. Bad input raises TypeError or ValueError; a vertex
+    or sphere outside ±MAX_COORDINATE (2^40 ≈ 1.1e12, where float32 ray tests would overflow) and a
+    sphere radius below MIN_RADIUS (2^-60, where its square underflows) are bad input.
+
+    `progress(fraction)` is called on this thread now and then, last with 1.0; its result is taken
+    by its truth value (None means go on), and a false one cancels the build (BuildCancelled),
+    even at 1.0. What the callable raises is raised again, as itself, once the build has stopped.
+    Ctrl-C stops a build promptly (KeyboardInterrupt), with or without `progress`.
     """
     from .scene import Scene  # local import: scene imports this module
 
@@ -153,6 +163,11 @@ class Bvh:
                   tmax: float = np.inf, traversal: str = "wide", threads: int = 0) -> dict:
         """Closest hits of rays origin + t·direction, t in (tmin, tmax), on every core.
 
+        Origins lie within ±MAX_COORDINATE (2^40) and the largest component of each direction in
+        [2^-80, 2^80]; directions need not be normalised (each ray is scaled by a power of two for
+        the arithmetic, exactly, so t is in units of the given direction). Anything else raises
+        ValueError naming the ray. Ctrl-C stops a long batch (KeyboardInterrupt).
+
         `traversal`: "stack" (binary tree, nearer child first), "stackless" (skip indices,
         report §3.1), or "wide" (a 4-wide copy of the tree made on first use; the fastest).
         All three return the same hits.
@@ -165,13 +180,12 @@ class Bvh:
         if len(origins) != len(directions):
             raise ValueError(f"origins ({len(origins)}) and directions ({len(directions)}) differ in length")
         _checks.choice("traversal", traversal, TRAVERSALS)
-        if not np.all(np.isfinite(origins)) or not np.all(np.isfinite(directions)):
-            raise ValueError("ray origins and directions must be finite")
+        tmin, tmax = _checks.real("tmin", tmin), _checks.real("tmax", tmax)
         n = len(origins)
         out = {"t": np.empty(n, np.float32), "prim": np.empty(n, np.int32), "kind": np.empty(n, np.uint8),
                "u": np.empty(n, np.float32), "v": np.empty(n, np.float32),
                "nodes_visited": np.empty(n, np.uint32)}
-        self._core.intersect(origins, directions, float(tmin), float(tmax), traversal,
+        self._core.intersect(origins, directions, tmin, tmax, traversal,
                              _checks.integer("threads", threads, 0, 4096), out["t"], out["prim"], out["kind"],
                              out["u"], out["v"], out["nodes_visited"])
         return out

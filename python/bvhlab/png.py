@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ._checks import output_file
+
 
 def linear_to_srgb(x: np.ndarray) -> np.ndarray:
     x = np.clip(x, 0.0, 1.0)
@@ -24,6 +26,9 @@ def to_rgba8(image: np.ndarray) -> np.ndarray:
 
 
 def write_png(image: np.ndarray, path) -> None:
+    """Write `image` (see to_rgba8) to `path`, which must end in .png (OutputPathError otherwise:
+    the bytes are PNG, so a .jpg name would be a lie)."""
+    path = output_file(path, (".png",), "PNG image")
     rgba = to_rgba8(image)
     h, w, _ = rgba.shape
     raw = np.zeros((h, 1 + 4 * w), np.uint8)  # filter byte 0 per row
@@ -34,7 +39,7 @@ def write_png(image: np.ndarray, path) -> None:
 
     png = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 6, 0, 0, 0))
            + chunk(b"IDAT", zlib.compress(raw.tobytes(), 6)) + chunk(b"IEND", b""))
-    Path(path).write_bytes(png)
+    path.write_bytes(png)
 
 
 def read_png(path) -> np.ndarray:

@@ -2,14 +2,19 @@
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from . import _checks
+from . import _checks, _core
+from ._npz import MAX_EXPANSION, Member, SceneFileError, read_npz
 
 FORMAT_VERSION = 1
+#: Points (vertices, sphere extents, ray origins, the camera) lie within ±MAX_COORDINATE, where
+#: bvhlab's float32 ray tests cannot overflow (core_cpp/include/bvhlab/coordinate_range.h says why).
+MAX_COORDINATE = float(_core.MAX_COORDINATE)
 
 
 def _vec3(name: str, value) -> tuple[float, float, float]:
@@ -59,9 +64,14 @@ class Camera:
             object.__setattr__(self, name, _vec3(f"camera {name}", getattr(self, name)))
         if not (0.0 < float(self.fov_y) < 180.0):
             raise ValueError(f"camera fov_y must be in (0, 180) degrees, got {self.fov_y}")
-        forward = np.subtract(self.look_at, self.position)
+        if max(abs(x) for x in self.position) > MAX_COORDINATE:
+            raise ValueError(f"camera position {self.position} lies outside the supported coordinate range "
+                             f"±{MAX_COORDINATE:.5g} (2^40)")
+        # the tracer works in float32: the two points must differ there, not only in float64
+        forward = np.subtract(np.float32(self.look_at), np.float32(self.position)).astype(np.float64)
         if np.linalg.norm(forward) == 0:
-            raise ValueError("camera position and look_at coincide")
+            raise ValueError(f"camera position and look_at coincide (in float32, the tracer's precision): "
+                             f"{self.position}, {self.look_at}")
         if np.linalg.norm(np.cross(forward, self.up)) == 0:
             raise ValueError("camera up is parallel to the viewing direction")
 
@@ -103,15 +113,13 @@ class Scene:
     light: Light | None = None
     sky: tuple[float, float, float] = DEFAULT_SKY
 
+    def __setattr__(self, name, value):
+        # Every field is checked when it is set, in the constructor and after it, so a scene never
+        # holds a float64 array, a NaN vertex or a camera that is a tuple (the error names the field).
+        check = _FIELD_CHECKS.get(name)
+        object.__setattr__(self, name, check(self, value) if check else value)
+
     def __post_init__(self):
-        self.triangles = _checks.float32_array("triangles", self.triangles, (3, 3))
-        self.spheres = _checks.float32_array("spheres", self.spheres, (4,))
-        if not self.materials:
-            self.materials = [Material()]
-        self.materials = [m if isinstance(m, Material) else Material(*m) for m in self.materials]
-        self.tri_material = self._material_index("tri_material", self.tri_material, len(self.triangles))
-        self.sphere_material = self._material_index("sphere_material", self.sphere_material, len(self.spheres))
-        self.sky = _vec3("sky", self.sky)
         if self.camera is None and self.primitive_count:
             self.camera = default_camera(self.bounds())
         if self.light is None and self.camera is not None:
@@ -153,8 +161,11 @@ class Scene:
         return np.array([m.as_row() for m in self.materials], np.float32).reshape(-1, 6)
 
     # -- files ---------------------------------------------------------------------------------
-    def save(self, path) -> None:
-        """Write an `.npz` (no pickled objects) that `Scene.load` and the CLI read."""
+    def save(self, path) -> Path:
+        """Write an `.npz` (no pickled objects) that `Scene.load` and the CLI read, exactly at `path`,
+        which must end in .npz (never renamed); an existing file is replaced only once the new one
+        is complete. Returns the path."""
+        path = _checks.output_file(path, (".npz",), "scene file")
         arrays = {
             "format_version": np.array(FORMAT_VERSION),
             "triangles": self.triangles, "spheres": self.spheres,
@@ -166,19 +177,31 @@ class Scene:
             arrays["camera"] = np.array(self.camera.as_row(), np.float64)
         if self.light is not None:
             arrays["light"] = np.array(self.light.as_row(), np.float64)
-        np.savez_compressed(Path(path), **arrays)
+        partial = path.with_name(path.name + ".partial")
+        try:
+            with partial.open("wb") as f:  # a file object: numpy adds no suffix
+                np.savez_compressed(f, **arrays)
+            os.replace(partial, path)
+        finally:
+            partial.unlink(missing_ok=True)
+        return path
 
     @classmethod
-    def load(cls, path) -> "Scene":
+    def load(cls, path, *, max_expansion: float = MAX_EXPANSION) -> "Scene":
+        """Read a scene written by `save`. Headers are checked before data is read: dtypes, shapes,
+        counts that agree, and no more than `max_expansion` times the file's size once over 64 MiB
+        (a small crafted file cannot claim gigabytes). Raises FileNotFoundError, or SceneFileError
+        (a ValueError) naming the file and the problem."""
         path = Path(path)
         if not path.exists():
             raise FileNotFoundError(f"no scene file at {path}")
-        with np.load(path, allow_pickle=False) as f:
-            version = int(f["format_version"]) if "format_version" in f else None
-            if version != FORMAT_VERSION:
-                raise ValueError(f"{path} is not a bvhlab scene of format {FORMAT_VERSION} (found {version})")
-            cam = f["camera"] if "camera" in f else None
-            light = f["light"] if "light" in f else None
+        f = read_npz(path, _FILE_MEMBERS, optional=("camera", "light"), max_expansion=max_expansion,
+                     same_length=(("triangles", "tri_material"), ("spheres", "sphere_material")))
+        if int(f["format_version"]) != FORMAT_VERSION:
+            raise SceneFileError(f"{path} is a bvhlab scene of format {int(f['format_version'])}; "
+                                 f"this version reads format {FORMAT_VERSION}")
+        try:
+            cam, light = f.get("camera"), f.get("light")
             return cls(
                 triangles=np.ascontiguousarray(f["triangles"], np.float32),
                 spheres=np.ascontiguousarray(f["spheres"], np.float32),
@@ -188,6 +211,59 @@ class Scene:
                 light=Light(light[0:3], light[3:6], light[6]) if light is not None else None,
                 sky=tuple(f["sky"]),
             )
+        except (ValueError, TypeError) as e:
+            raise SceneFileError(f"{path}: {e}") from None
+
+
+#: The arrays of a scene file: dtype kinds and shapes (None: any length).
+_FILE_MEMBERS = {
+    "format_version": Member("iu", ()),
+    "triangles": Member("f", (None, 3, 3)), "spheres": Member("f", (None, 4)),
+    "materials": Member("f", (None, 6)),
+    "tri_material": Member("iu", (None,)), "sphere_material": Member("iu", (None,)),
+    "sky": Member("f", (3,)), "camera": Member("f", (10,)), "light": Member("f", (7,)),
+}
+
+
+def _triangles(scene: Scene, value) -> np.ndarray:
+    value = _checks.float32_array("triangles", value, (3, 3))
+    _core.validate_geometry(value, None)  # NaN, inf or out of range: names the triangle
+    return value
+
+
+def _spheres(scene: Scene, value) -> np.ndarray:
+    value = _checks.float32_array("spheres", value, (4,))
+    _core.validate_geometry(np.zeros((0, 3, 3), np.float32), value)
+    return value
+
+
+def _materials(scene: Scene, value) -> list[Material]:
+    if value is None or (hasattr(value, "__len__") and len(value) == 0):
+        return [Material()]
+    if isinstance(value, (str, bytes, Material)) or not hasattr(value, "__iter__"):
+        raise TypeError(f"materials must be a list of bvhlab.Material, got {type(value).__name__}")
+    return [m if isinstance(m, Material) else Material(*m) for m in value]
+
+
+def _instance_of(kind: type, name: str):
+    def check(scene: Scene, value):
+        if value is not None and not isinstance(value, kind):
+            raise TypeError(f"{name} must be a bvhlab.{kind.__name__} or None, got {type(value).__name__} "
+                            f"{value!r:.60} (make one with bvhlab.{kind.__name__}(...))")
+        return value
+    return check
+
+
+_FIELD_CHECKS = {
+    "triangles": _triangles,
+    "spheres": _spheres,
+    "materials": _materials,
+    "tri_material": lambda scene, v: scene._material_index("tri_material", v, len(scene.triangles)),
+    "sphere_material": lambda scene, v: scene._material_index("sphere_material", v, len(scene.spheres)),
+    "camera": _instance_of(Camera, "camera"),
+    "light": _instance_of(Light, "light"),
+    "sky": lambda scene, v: _vec3("sky", v),
+}
 
 
 def default_camera(bounds) -> Camera:
@@ -195,7 +271,9 @@ def default_camera(bounds) -> Camera:
     front = -Y as in Blender), far enough back that the bounding sphere fits the view."""
     lo, hi = (np.asarray(b, np.float64) for b in bounds)
     center = (lo + hi) / 2
-    radius = max(float(np.linalg.norm(hi - lo)) / 2, 1e-6)
+    # A point-like scene still gets a camera some way off, measurably so in float32 even far from
+    # the origin (at 1e12 a float32 step is 65536).
+    radius = max(float(np.linalg.norm(hi - lo)) / 2, 1e-6, 1e-5 * float(np.abs(center).max()))
     direction = np.array([0.35, -1.0, 0.7])
     direction /= np.linalg.norm(direction)
     fov = 45.0

@@ -1,11 +1,18 @@
 // Bad input gets a clear std::invalid_argument naming what is wrong; cancellation stops a build.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <tuple>
+#include <vector>
 #include <limits>
 #include <string>
 
 #include "bvhlab/bvh.h"
+#include "bvhlab/cancel.h"
+#include "bvhlab/coordinate_range.h"
+#include "bvhlab/traverse.h"
 #include "test_scenes.h"
 
 using namespace bvhlab;
@@ -33,7 +40,8 @@ TEST(BadInput, NanOrInfiniteVertexNamesTheTriangle) {
 }
 
 TEST(BadInput, SphereRadiusMustBePositiveAndFinite) {
-    for (float r : {0.0f, -1.0f, std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
+    for (float r : {0.0f, -1.0f, std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
+                    6.9e-41f, 0x1p-61f}) {  // below kMinRadius (2^-60) r² underflows
         auto scene = test::random_scene(10, 10, 1);
         scene.spheres[4 * 3 + 3] = r;
         expect_invalid([&] { build_bvh(scene.view()); }, "sphere 3");
@@ -44,6 +52,97 @@ TEST(BadInput, SphereRadiusMustBePositiveAndFinite) {
     scene = test::random_scene(10, 10, 1);
     scene.spheres[4 * 2] = 3e38f, scene.spheres[4 * 2 + 3] = 3e38f;
     expect_invalid([&] { build_bvh(scene.view()); }, "sphere 2");
+}
+
+// Issue 8.5: coordinates past ±2^40 overflow the float32 tests (coordinate_range.h): refused.
+TEST(BadInput, CoordinatesOutsideTheRangeNameThePrimitive) {
+    auto scene = test::random_scene(20, 5, 1);
+    scene.triangles[9 * 11 + 7] = 1e13f;
+    expect_invalid([&] { build_bvh(scene.view()); }, "triangle 11 has a vertex coordinate outside the supported range");
+    expect_invalid([&] { validate(scene.view()); }, "triangle 11");
+    scene.triangles[9 * 11 + 7] = kMaxCoordinate;  // the edge itself is inside
+    EXPECT_NO_THROW(build_bvh(scene.view()));
+    scene.spheres[4 * 3 + 3] = 2e19f;
+    expect_invalid([&] { build_bvh(scene.view()); }, "sphere 3 (centre ± radius) reaches outside");
+    scene.spheres[4 * 3 + 3] = 0x1p20f, scene.spheres[4 * 3] = -kMaxCoordinate;  // centre on the edge, radius past it
+    expect_invalid([&] { build_bvh(scene.view()); }, "sphere 3");
+}
+
+TEST(BadInput, RaysOutsideTheRangeAreRefusedByIndex) {
+    auto scene = test::random_scene(50, 5, 1);
+    Bvh bvh = build_bvh(scene.view());
+    std::vector<float> o(3 * 4, 1.0f), d(3 * 4, 1.0f), t(4);
+    std::vector<std::int32_t> prim(4);
+    auto run = [&] { intersect_batch(bvh, {o.data(), d.data(), 4}, {t.data(), prim.data()}, Traversal::Stack); };
+    EXPECT_NO_THROW(run());
+    o[3 * 2 + 1] = 2e12f;
+    expect_invalid(run, "ray 2 starts outside the supported coordinate range");
+    o[3 * 2 + 1] = 1.0f;
+    d[3 * 1] = d[3 * 1 + 1] = d[3 * 1 + 2] = 0.0f;
+    expect_invalid(run, "ray 1: the largest |component| of a direction must be in");
+    d[3 * 1] = 1e-30f;
+    expect_invalid(run, "ray 1");
+    d[3 * 1] = std::numeric_limits<float>::quiet_NaN(), d[3 * 1 + 1] = 1.0f;
+    expect_invalid(run, "ray 1: origin and direction must be finite");
+}
+
+// A ray is scaled by a power of two for the arithmetic: exact, so hits are bit for bit the same.
+TEST(BadInput, DirectionLengthDoesNotChangeHits) {
+    auto scene = test::random_scene(300, 40, 2);
+    Bvh bvh = build_bvh(scene.view());
+    std::vector<float> o, d;
+    for (std::uint32_t i = 0; i < 500; ++i) {
+        o.insert(o.end(), {float(i % 10), float(i % 7) + 0.5f, -3.0f});
+        d.insert(d.end(), {0.01f * float(i % 13), 0.02f * float(i % 5), 0.9f});
+    }
+    auto run = [&](float scale) {
+        std::vector<float> ds(d), t(500), u(500), v(500);
+        for (float& x : ds) x *= scale;
+        std::vector<std::int32_t> prim(500);
+        intersect_batch(bvh, {o.data(), ds.data(), 500}, {t.data(), prim.data(), nullptr, u.data(), v.data()},
+                        Traversal::Stack);
+        for (float& x : t) x *= scale;
+        return std::tuple(t, prim, u, v);
+    };
+    const auto unit = run(1.0f);
+    int hits = 0;
+    for (std::int32_t p : std::get<1>(unit)) hits += p >= 0;
+    EXPECT_GT(hits, 50);
+    for (float scale : {0x1p-79f, 0x1p-30f, 0x1p20f, 0x1p79f}) EXPECT_TRUE(run(scale) == unit) << scale;
+}
+
+// Issue 8.2: the last progress call (1.0) may cancel too.
+TEST(BadInput, ProgressFalseAtTheEndCancels) {
+    auto scene = test::random_scene(3000, 10, 1);
+    for (std::uint32_t threads : {1u, 2u}) {
+        BuildConfig c;
+        c.threads = threads;
+        c.progress = [](double f) { return f < 1.0; };
+        EXPECT_THROW(build_bvh(scene.view(), c), BuildCancelled);
+    }
+    BuildConfig c;
+    c.progress = [](double) { return false; };
+    EXPECT_THROW(build_bvh(test::Scene{}.view(), c), BuildCancelled);  // an empty build reports 1.0 too
+}
+
+// Issue 8.12: a batch of rays stops when its Cancellation says so, on every thread.
+TEST(BadInput, CancellationStopsARayBatch) {
+    auto scene = test::random_scene(2000, 0, 1);
+    Bvh bvh = build_bvh(scene.view());
+    const std::size_t n = 200000;
+    std::vector<float> o(3 * n, 1.0f), d(3 * n), t(n, -1.0f);
+    for (std::size_t i = 0; i < n; ++i) d[3 * i] = 1.0f, d[3 * i + 1] = float(i % 17) - 8.0f, d[3 * i + 2] = 0.5f;
+    std::vector<std::int32_t> prim(n);
+    for (std::uint32_t threads : {1u, 2u}) {
+        int polls = 0;
+        Cancellation cancel([&] { return ++polls == 3; }, std::chrono::milliseconds(0));
+        std::fill(t.begin(), t.end(), -1.0f);
+        EXPECT_THROW(intersect_batch(bvh, {o.data(), d.data(), n}, {t.data(), prim.data()}, Traversal::Stack, threads,
+                                     nullptr, &cancel),
+                     Cancelled);
+        EXPECT_EQ(polls, 3);
+        EXPECT_GT(std::count(t.begin(), t.end(), -1.0f), std::ptrdiff_t(n / 2)) << "stopped early, threads " << threads;
+    }
 }
 
 TEST(BadInput, ConfigOutOfRange) {

@@ -7,7 +7,14 @@
 
 namespace bvhlab::test {
 
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(__SANITIZE_ADDRESS__)  // GCC
+#define BVHLAB_TEST_ASAN 1
+#elif defined(__has_feature)  // clang
+#if __has_feature(address_sanitizer)
+#define BVHLAB_TEST_ASAN 1
+#endif
+#endif
+#if defined(BVHLAB_TEST_ASAN)
 constexpr bool kAddressSanitizer = true;
 #else
 constexpr bool kAddressSanitizer = false;

@@ -20,7 +20,7 @@ def test_nan_and_inf_name_the_primitive(tris):
         bvhlab.build(tris)
 
 
-@pytest.mark.parametrize("radius", [0.0, -1.0, np.nan, np.inf])
+@pytest.mark.parametrize("radius", [0.0, -1.0, np.nan, np.inf, 6.9e-41, 2.0**-61])
 def test_bad_radius(tris, radius):
     spheres = np.array([[0, 0, 0, 1], [1, 1, 1, radius]], np.float32)
     with pytest.raises(ValueError, match="sphere 1"):
@@ -68,16 +68,50 @@ def test_bad_config(tris, kwargs, error, match):
 def test_bad_rays(tris):
     bvh = bvhlab.build(tris)
     o = np.zeros((4, 3), np.float32)
+    d = np.ones((4, 3), np.float32)
     with pytest.raises(TypeError, match="float32"):
-        bvh.intersect(o.astype(np.float64), o)
+        bvh.intersect(o.astype(np.float64), d)
     with pytest.raises(ValueError, match="differ in length"):
-        bvh.intersect(o, o[:3])
-    bad = o.copy()
+        bvh.intersect(o, d[:3])
+    bad = d.copy()
     bad[2, 1] = np.nan
-    with pytest.raises(ValueError, match="finite"):
+    with pytest.raises(ValueError, match="ray 2: origin and direction must be finite"):
         bvh.intersect(o, bad)
     with pytest.raises(ValueError, match="unknown traversal"):
-        bvh.intersect(o, o, traversal="bfs")
+        bvh.intersect(o, d, traversal="bfs")
+    with pytest.raises(ValueError, match=r"ray 1: the largest \|component\| of a direction must be in"):
+        bvh.intersect(o, np.array([[1, 0, 0], [0, 0, 0], [1, 0, 0], [1, 0, 0]], np.float32))  # no direction
+    for name in ("tmin", "tmax"):
+        with pytest.raises(TypeError, match=f"{name} must be a number, got NoneType"):
+            bvh.intersect(o, d, **{name: None})
+        with pytest.raises(ValueError, match=name):
+            bvh.intersect(o, d, **{name: float("nan")})
+
+
+def test_scene_parts_of_the_wrong_type_name_the_part():
+    tris = np.random.default_rng(1).random((20, 3, 3), np.float32)
+    with pytest.raises(TypeError, match="camera must be a bvhlab.Camera or None, got tuple"):
+        bvhlab.Scene(triangles=tris, camera=((0, -5, 0), (0, 0, 0)))
+    with pytest.raises(TypeError, match="camera must be a bvhlab.Camera or None, got dict"):
+        bvhlab.Scene(triangles=tris, camera={"position": (0, -5, 0), "look_at": (0, 0, 0)})
+    with pytest.raises(TypeError, match="light must be a bvhlab.Light or None, got str"):
+        bvhlab.Scene(triangles=tris, light="sun")
+    scene = bvhlab.Scene(triangles=tris)
+    with pytest.raises(TypeError, match="triangles must have dtype float32, got float64"):
+        scene.triangles = tris.astype(np.float64)  # checked on assignment, not deep in a render
+    with pytest.raises(TypeError, match="light must be a bvhlab.Light"):
+        scene.light = "sun"
+    assert scene.triangles is tris and isinstance(scene.light, bvhlab.Light)  # nothing changed
+
+
+def test_scene_with_a_nan_triangle_names_the_triangle_not_the_camera():
+    tris = np.random.default_rng(1).random((20, 3, 3), np.float32)
+    tris[7, 2, 1] = np.nan
+    with pytest.raises(ValueError, match="triangle 7 has a NaN or infinite"):
+        bvhlab.Scene(triangles=tris)
+    spheres = np.array([[0, 0, 0, 1], [np.inf, 0, 0, 1]], np.float32)
+    with pytest.raises(ValueError, match="sphere 1"):
+        bvhlab.Scene(spheres=spheres)
 
 
 def test_degenerate_triangles_build_and_are_never_hit():

@@ -4,14 +4,19 @@ import pytest
 
 import bvhlab
 from bvhlab.library import procedural
+from child import check_python
 
 
-def check_structure(bvh, n_prims):
-    """Independent checks on the numpy views: each primitive once, skip and depth consistent."""
+def check_structure(bvh, tris, spheres=None):
+    """Independent checks on the numpy views: each primitive in exactly one leaf, every box inside
+    its parent's and around its primitives, skip and depth consistent."""
+    spheres = np.zeros((0, 4), np.float32) if spheres is None else spheres
+    n_prims = len(tris) + len(spheres)
     nodes, depths, refs = bvh.nodes, bvh.depths, bvh.refs
     leaf = bvh.is_leaf
     assert len(refs) == n_prims
-    assert np.array_equal(np.sort(refs & 0x7FFFFFFF), np.sort(refs & 0x7FFFFFFF))
+    expected_refs = np.concatenate([np.arange(len(tris)), np.arange(len(spheres)) | bvhlab.bvh.REF_SPHERE_BIT])
+    assert np.array_equal(np.sort(refs), np.sort(expected_refs.astype(np.uint32))), "each primitive exactly once"
     slots = np.concatenate([np.arange(n["index"], n["index"] + n["info"]) for n in nodes[leaf]])
     assert np.array_equal(np.sort(slots), np.arange(n_prims)), "every slot in exactly one leaf"
     skip = bvh.skip
@@ -22,8 +27,10 @@ def check_structure(bvh, n_prims):
     assert np.array_equal(skip[internal], skip[second])
     assert np.all(depths[internal + 1] == depths[internal] + 1)
     assert np.all(depths[second] == depths[internal] + 1)
-    assert np.all(nodes["lo"][internal + 1] >= nodes["lo"][internal])
-    assert np.all(nodes["hi"][second] <= nodes["hi"][internal])
+    for child in (internal + 1, second):  # both children, both corners
+        assert np.all(nodes["lo"][child] >= nodes["lo"][internal])
+        assert np.all(nodes["hi"][child] <= nodes["hi"][internal])
+    check_leaf_boxes(bvh, tris, spheres)
     s = bvh.stats
     assert s["nodes"] == len(nodes) == 2 * s["leaves"] - 1
     assert s["height"] == depths.max() + 1 <= 64
@@ -31,12 +38,30 @@ def check_structure(bvh, n_prims):
     assert sum(k * c for k, c in enumerate(s["leaf_size_histogram"])) == n_prims
 
 
+def check_leaf_boxes(bvh, tris, spheres):
+    """Every primitive lies inside the box of the leaf that holds it (boxes from the input arrays)."""
+    refs = bvh.refs
+    is_sphere = (refs & bvhlab.bvh.REF_SPHERE_BIT) != 0
+    index = refs & ~np.uint32(bvhlab.bvh.REF_SPHERE_BIT)
+    prim_lo = np.empty((len(refs), 3), np.float32)
+    prim_hi = np.empty((len(refs), 3), np.float32)
+    prim_lo[~is_sphere] = tris[index[~is_sphere]].min(axis=1)
+    prim_hi[~is_sphere] = tris[index[~is_sphere]].max(axis=1)
+    centre, radius = spheres[index[is_sphere], :3], spheres[index[is_sphere], 3:]
+    prim_lo[is_sphere], prim_hi[is_sphere] = centre - radius, centre + radius
+    nodes = bvh.nodes[bvh.is_leaf]
+    leaf_of_slot = np.repeat(np.arange(len(nodes)), nodes["info"].astype(np.int64))
+    order = np.concatenate([np.arange(n["index"], n["index"] + n["info"]) for n in nodes])
+    assert np.all(prim_lo[order] >= nodes["lo"][leaf_of_slot])
+    assert np.all(prim_hi[order] <= nodes["hi"][leaf_of_slot])
+
+
 @pytest.mark.parametrize("method", bvhlab.METHODS)
 @pytest.mark.parametrize("axis", bvhlab.AXES)
 def test_every_method_and_axis(small_scene, method, axis):
     tris, spheres = small_scene
     bvh = bvhlab.build(tris, spheres, method=method, axis=axis, max_leaf_size=2, threads=2)
-    check_structure(bvh, len(tris) + len(spheres))
+    check_structure(bvh, tris, spheres)
     s = bvh.stats
     assert s["method"] == method and s["axis"] == axis
     assert s["triangles"] == len(tris) and s["spheres"] == len(spheres)
@@ -72,6 +97,7 @@ def test_views_are_zero_copy_and_read_only(small_scene):
 
 def test_boxes_by_depth_range(knot_mesh):
     bvh = bvhlab.build(knot_mesh, method="median")
+    check_structure(bvh, knot_mesh)
     per_depth = bvh.stats["nodes_per_depth"]
     lo, hi, depth = bvh.boxes(3, 5)
     assert len(lo) == sum(per_depth[3:6])
@@ -107,7 +133,9 @@ def test_method_quality_ordering_on_non_uniform_scene():
 def test_refit_follows_moved_geometry(knot_mesh):
     bvh = bvhlab.build(knot_mesh, method="sah")
     moved = knot_mesh + np.float32(5.0)
+    moved[::3] *= np.float32(1.5)  # not just a translation: boxes change shape
     bvh.refit(moved)
+    check_structure(bvh, moved)
     fresh = bvhlab.build(moved, method="sah")
     o, d = procedural.random_rays(moved, 2000, seed=4)
     np.testing.assert_array_equal(bvh.intersect(o, d)["t"], fresh.intersect(o, d)["t"])
@@ -126,6 +154,53 @@ def test_progress_reports_and_cancels(knot_mesh):
 
     with pytest.raises(KeyError, match="from the callback"):
         bvhlab.build(knot_mesh, progress=boom)
+
+
+PROGRESS_RESULTS = """
+    import numpy as np, bvhlab
+    from bvhlab.library import procedural
+
+    class Falsy:
+        def __bool__(self): return False
+
+    class BadTruth:
+        def __bool__(self): raise ZeroDivisionError("truth of BadTruth")
+
+    def at_the_end(result):  # `result` for the final call (1.0), True before
+        return lambda f: result(f) if f == 1.0 else True
+
+    def raising_at_the_end(f):
+        if f == 1.0:
+            raise KeyError("raised at 1.0")
+
+    tris = procedural.torus_knot(60000)
+    for threads in (1, 2):
+        # anything with a truth value: numpy scalars, numbers, containers
+        for progress in (lambda f: f < np.float64(2.0), lambda f: np.bool_(True), lambda f: 1, lambda f: [0]):
+            bvhlab.build(tris, threads=threads, progress=progress)
+        for progress in (lambda f: f > np.float64(2.0), lambda f: np.bool_(False), lambda f: 0, lambda f: Falsy(),
+                         at_the_end(lambda f: np.bool_(False)), lambda f: f < 1.0):
+            try:
+                bvhlab.build(tris, threads=threads, progress=progress)
+                raise SystemExit(f"not cancelled by a false result, threads={threads}")
+            except bvhlab.BuildCancelled:
+                pass
+        for progress, error, text in ((lambda f: np.array([1, 2]), ValueError, "ambiguous"),
+                                      (lambda f: BadTruth(), ZeroDivisionError, "truth of BadTruth"),
+                                      (raising_at_the_end, KeyError, "raised at 1.0")):
+            try:
+                bvhlab.build(tris, threads=threads, progress=progress)
+                raise SystemExit(f"{error.__name__} not raised, threads={threads}")
+            except error as e:
+                assert text in str(e), e
+    print("ok")
+"""
+
+
+def test_progress_result_by_truth_value_and_errors_as_themselves():
+    """Issue 8.2: a callback returning np.bool_ or a numpy comparison aborted the process; raising
+    (or returning False) at the final call was ignored. Run in a child: an abort fails the test."""
+    assert check_python(PROGRESS_RESULTS, timeout=300).strip() == "ok"
 
 
 def test_empty_scene_builds_an_empty_tree():

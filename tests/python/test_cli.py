@@ -11,7 +11,7 @@ import pytest
 import bvhlab
 from bvhlab.cli import main
 from bvhlab.png import linear_to_srgb, read_png
-from bvhlab.library import load_scene
+from bvhlab.library import load_scene, procedural
 from bvhlab.render import HAS_VULKAN
 
 
@@ -30,14 +30,23 @@ def test_help_and_scenes(capsys):
     assert "gen:five_spheres" in listed and "atrium" in listed
 
 
-def test_build_json_equals_the_api(tmp_path, capsys):
-    path = tmp_path / "stats.json"
-    assert main(["build", "gen:whitted", "--method", "sah32", "--max-leaf-size", "2", "--json", str(path)]) == 0
-    stats = json.loads(path.read_text())
+def test_build_json_and_csv_equal_the_api(tmp_path, capsys):
+    """One stats writer (bvhlab.stats_files) for the CLI and the add-on's Export stats: the JSON is
+    {"about": ..., "stats": Bvh.stats}, the CSV metric,index,value."""
+    path, table = tmp_path / "stats.json", tmp_path / "stats.csv"
+    assert main(["build", "gen:whitted", "--method", "sah32", "--max-leaf-size", "2", "--json", str(path),
+                 "--csv", str(table)]) == 0
+    written = json.loads(path.read_text())
     scene, _ = load_scene("gen:whitted")
     api = bvhlab.build(scene, method="sah", bins=32, max_leaf_size=2).stats
-    for key in ("nodes", "leaves", "height", "sah_cost", "nodes_per_depth", "bins", "method"):
-        assert stats[key] == api[key], key
+    assert set(written) == {"about", "stats"} and written["about"]["scene"] == "whitted"
+    assert written["about"]["settings"] == {"method": "sah", "bins": 32, "axis": "largest", "max_leaf_size": 2}
+    for key in api:
+        if key not in ("build_ms",):
+            assert written["stats"][key] == api[key], key
+    rows = list(csv.DictReader(table.open()))
+    assert [int(r["value"]) for r in rows if r["metric"] == "nodes_per_depth"] == api["nodes_per_depth"]
+    assert float(next(r["value"] for r in rows if r["metric"] == "sah_cost")) == pytest.approx(api["sah_cost"])
     assert "nodes/depth" in capsys.readouterr().out
 
 
@@ -165,3 +174,48 @@ def test_compare_at_width_one(tmp_path):
                                    "--no-figures", "--overlay-backends", "none", "--out", out)
     assert code == 0, stderr
     assert "got 0" not in stderr and "1×1" in stdout and "random spheres" in stderr
+
+
+@pytest.fixture(scope="module")
+def bad_scene_files(tmp_path_factory):
+    d = tmp_path_factory.mktemp("cli_files")
+    good = d / "good.npz"
+    bvhlab.Scene(triangles=procedural.random_triangles(50, seed=1)).save(good)
+    with np.load(good) as f:
+        arrays = dict(f)
+    np.savez(d / "no_triangles.npz", **{k: v for k, v in arrays.items() if k != "triangles"})
+    np.savez(d / "materials5.npz", **{**arrays, "materials": np.zeros((1, 5))})
+    (d / "truncated.npz").write_bytes(good.read_bytes()[:300])
+    (d / "a_file").write_text("")
+    (d / "a_folder").mkdir()
+    return d
+
+
+@pytest.mark.parametrize("args, message", [
+    (["build", "{d}/truncated.npz"], "truncated.npz is not an .npz file"),
+    (["build", "{d}/no_triangles.npz"], "no_triangles.npz has no 'triangles'"),
+    (["build", "{d}/materials5.npz"], r"'materials' has shape \(1, 5\); expected \(N, 6\)"),
+    (["build", "{d}/good.npz", "--json", "{d}/a_file/stats.json"], "a_file is a file, not a folder"),
+    (["build", "{d}/good.npz", "--json", "{d}/a_folder"], "a_folder is a folder"),
+    (["build", "{d}/good.npz", "--csv", "{d}/stats.json"], "written as .csv"),
+    (["render", "{d}/good.npz", "--out", "{d}/r.jpg"], r"r.jpg: a PNG image is written as .png"),
+    (["render", "{d}/good.npz", "--out", "{d}/a_folder"], "a_folder is a folder"),
+    (["render", "{d}/good.npz", "--out", "{d}/a_file/r.png"], "a_file is a file, not a folder"),
+    (["render", "{d}/good.npz", "--bvh-depth", "-1:2", "--out", "{d}/r.png"], "depth range -1:2: need 0 <= A <= B"),
+    (["render", "{d}/good.npz", "--width", "100000", "--out", "{d}/r.png"], "between 1 and 16384 pixels, got 100000"),
+    (["snapshot", "{d}/good.npz", "--width", "0", "--out", "{d}/s.png"], "between 1 and 16384 pixels, got 0"),
+    (["snapshot", "{d}/good.npz", "--height", "100000", "--out", "{d}/s.png"], "between 1 and 16384 pixels"),
+])
+def test_bad_files_and_paths_are_one_error_line(bad_scene_files, args, message):
+    """Issue 8: BadZipFile, KeyError and IndexError tracebacks, --json under a file or on a folder,
+    PNG bytes written to r.jpg, argparse's "expected one argument", moderngl errors: now
+    `bvhlab CMD: error: ...`, exit 2, nothing written, no traceback."""
+    import re
+
+    before = sorted(p.name for p in bad_scene_files.iterdir())
+    code, out, err = run_cli(*[a.format(d=bad_scene_files) for a in args], timeout=120)
+    assert code == 2, (code, out, err)
+    assert "Traceback" not in err
+    last = err.strip().splitlines()[-1]
+    assert last.startswith(f"bvhlab {args[0]}: error: ") and re.search(message, last), err
+    assert sorted(p.name for p in bad_scene_files.iterdir()) == before

@@ -62,3 +62,142 @@ def test_empty_scene_has_no_camera_until_given_one():
     assert scene.primitive_count == 0 and scene.camera is None
     scene = bvhlab.Scene(spheres=procedural.random_spheres(3))
     assert scene.camera is not None
+
+
+def _scene_file(tmp_path, **replace):
+    """A valid scene file with some arrays replaced (or removed with None)."""
+    good = tmp_path / "good.npz"
+    bvhlab.Scene(triangles=procedural.random_triangles(40, seed=1)).save(good)
+    with np.load(good) as f:
+        arrays = dict(f)
+    for key, value in replace.items():
+        if value is None:
+            del arrays[key]
+        else:
+            arrays[key] = value
+    path = tmp_path / "changed.npz"
+    np.savez(path, **arrays)
+    return path
+
+
+def _bad_files(tmp_path):
+    good = tmp_path / "good.npz"
+    bvhlab.Scene(triangles=procedural.random_triangles(40, seed=1)).save(good)
+    (tmp_path / "folder.npz").mkdir()
+    (tmp_path / "empty.npz").write_bytes(b"")
+    (tmp_path / "truncated.npz").write_bytes(good.read_bytes()[:300])
+    (tmp_path / "random.npz").write_bytes(np.random.default_rng(0).bytes(3000))
+    np.save(tmp_path / "array.npy", np.zeros(5))
+    (tmp_path / "array.npy").rename(tmp_path / "renamed_npy.npz")
+    return {
+        "folder.npz": "is a folder",
+        "empty.npz": "not an .npz file",
+        "truncated.npz": "not an .npz file",
+        "random.npz": "not an .npz file",
+        "renamed_npy.npz": "not an .npz file",
+        _scene_file(tmp_path, triangles=None).rename(tmp_path / "no_triangles.npz").name: "has no 'triangles'",
+        _scene_file(tmp_path, materials=np.zeros((1, 5))).rename(tmp_path / "m5.npz").name: r"'materials' has shape \(1, 5\); expected \(N, 6\)",
+        _scene_file(tmp_path, camera=np.zeros(4)).rename(tmp_path / "cam.npz").name: r"'camera' has shape \(4,\)",
+        _scene_file(tmp_path, tri_material=np.zeros(3, np.int32)).rename(tmp_path / "tm.npz").name: "'triangles' has 40 rows but 'tri_material' has 3",
+        _scene_file(tmp_path, triangles=np.zeros((2, 3, 3), object)).rename(tmp_path / "obj.npz").name: "dtype object",
+        _scene_file(tmp_path, triangles=np.zeros((2, 3, 3), np.int32)).rename(tmp_path / "int.npz").name: "expected a float type",
+        _scene_file(tmp_path, format_version=np.array(7)).rename(tmp_path / "v7.npz").name: "format 7",
+        _scene_file(tmp_path, triangles=np.full((2, 3, 3), 1e13, np.float32), tri_material=np.zeros(2, np.int32)
+                    ).rename(tmp_path / "far.npz").name: "triangle 0 has a vertex coordinate outside",
+    }
+
+
+def test_load_names_the_file_and_the_problem(tmp_path):
+    """Issue 8: every unreadable file gives one ValueError subclass naming the file and the problem
+    (it was IsADirectoryError, EOFError, BadZipFile, KeyError, IndexError, "pickled data")."""
+    from bvhlab.scene import SceneFileError
+
+    for name, problem in _bad_files(tmp_path).items():
+        with pytest.raises(SceneFileError, match=problem) as caught:
+            bvhlab.Scene.load(tmp_path / name)
+        assert str(tmp_path / name) in str(caught.value), caught.value
+        assert isinstance(caught.value, ValueError)
+
+
+def _write_bomb(path, rows: int) -> None:
+    """A valid scene file whose triangles are `rows` × 36 bytes of zeros: deflate shrinks them ~1000×."""
+    import io
+    import zipfile
+
+    arrays = {"format_version": np.array(1), "spheres": np.zeros((0, 4), np.float32), "materials": np.ones((1, 6)),
+              "sphere_material": np.zeros(0, np.int32), "sky": np.ones(3), "tri_material": np.zeros(rows, np.int8)}
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as archive:
+        for key, value in arrays.items():
+            buffer = io.BytesIO()
+            np.save(buffer, value)
+            archive.writestr(key + ".npy", buffer.getvalue())
+        with archive.open("triangles.npy", "w", force_zip64=True) as f:
+            header = io.BytesIO()
+            np.lib.format.write_array_header_1_0(header, {"descr": "<f4", "fortran_order": False, "shape": (rows, 3, 3)})
+            f.write(header.getvalue())
+            block = bytes(36 << 16)
+            for _ in range(rows >> 16):
+                f.write(block)
+
+
+def test_load_checks_sizes_before_reading_data(tmp_path):
+    """Issue 8.13: a 3.85 MB file expanded to 3.9 GB before the first check. Headers are read first,
+    and a file may not expand past 100x its size (once over 64 MiB)."""
+    from bvhlab.scene import SceneFileError
+
+    bomb = tmp_path / "bomb.npz"
+    _write_bomb(bomb, rows=1 << 25)  # 1.2 GB of zeros in about 1.2 MB
+    assert bomb.stat().st_size < 2 << 20
+    with pytest.raises(SceneFileError, match=r"would take 1184 MiB, \d+ times the file's"):
+        bvhlab.Scene.load(bomb)  # refused from the headers: reading it took seconds and 1.2 GB
+    small = tmp_path / "small.npz"  # the same kind of file, small: read
+    _write_bomb(small, rows=1 << 16)
+    assert len(bvhlab.Scene.load(small).triangles) == 1 << 16
+    with pytest.raises(SceneFileError, match="declares shape"):  # a header that lies about its size
+        _write_bomb(small, rows=(1 << 16) + 5)
+        bvhlab.Scene.load(small)
+
+
+def test_save_writes_exactly_the_path_given(tmp_path):
+    """Issue 8.10: save(dir) wrote dir.npz, save('x.txt') wrote x.txt.npz, silently."""
+    from bvhlab._checks import OutputPathError
+
+    scene = bvhlab.Scene(triangles=procedural.random_triangles(10))
+    (tmp_path / "folder").mkdir()
+    (tmp_path / "a_file").write_text("keep me")
+    for path, problem in ((tmp_path / "folder", "is a folder"), (tmp_path / "x.txt", "written as .npz"),
+                          (tmp_path / "a_file" / "x.npz", "is a file, not a folder")):
+        with pytest.raises(OutputPathError, match=problem):
+            scene.save(path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file", "folder"]  # nothing written
+    assert scene.save(tmp_path / "x.npz") == tmp_path / "x.npz"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file", "folder", "x.npz"]
+
+
+def test_a_failed_save_keeps_the_old_file(tmp_path, monkeypatch):
+    path = tmp_path / "scene.npz"
+    bvhlab.Scene(triangles=procedural.random_triangles(10)).save(path)
+    before = path.read_bytes()
+
+    def disk_full(*args, **kwargs):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(np, "savez_compressed", disk_full)
+    with pytest.raises(OSError, match="No space left"):
+        bvhlab.Scene(triangles=procedural.random_triangles(20)).save(path)
+    assert path.read_bytes() == before and sorted(p.name for p in tmp_path.iterdir()) == ["scene.npz"]
+
+
+def test_default_camera_far_from_the_origin():
+    """Objects at 1e12 used to give "camera position and look_at coincide" (a 1e-6 minimum radius)."""
+    tris = (procedural.random_triangles(20) * np.float32(1e-3) + np.float32(1e12)).astype(np.float32)
+    scene = bvhlab.Scene(triangles=tris)
+    position, look_at = np.float32(scene.camera.position), np.float32(scene.camera.look_at)
+    assert np.linalg.norm(position - look_at) > 0
+
+
+def test_camera_outside_the_range_or_coinciding_in_float32_is_refused():
+    with pytest.raises(ValueError, match="camera position .* outside the supported coordinate range"):
+        bvhlab.Camera((2e12, 0, 0), (0, 0, 0))
+    with pytest.raises(ValueError, match="coincide"):
+        bvhlab.Camera((1e12, 0, 0), (1e12 + 1, 0, 0))  # distinct in float64, not in float32

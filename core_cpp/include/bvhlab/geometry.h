@@ -25,8 +25,9 @@ struct GeometryView {
     float sphere_radius(std::size_t s) const { return spheres[4 * s + 3]; }
 };
 
-/// Throws std::invalid_argument naming the first bad primitive: a NaN or infinite coordinate,
-/// a radius that is not a positive finite number, or more primitives than a reference can index.
+/// Throws std::invalid_argument naming the first bad primitive: a NaN or infinite coordinate, a
+/// coordinate (or sphere extent) outside ±kMaxCoordinate (coordinate_range.h), a radius that is
+/// not a finite number of at least kMinRadius, or more primitives than a reference can index.
 /// Degenerate (zero-area) triangles are valid: they are built into the tree and never hit.
 void validate(const GeometryView& geometry);
 

@@ -13,6 +13,7 @@ enum class Traversal {
 };
 
 struct WideBvh;
+class Cancellation;
 
 /// Closest hit of one ray; `nodes_visited` (if given) counts the box tests.
 Hit intersect(const Bvh& bvh, const Ray& ray, Traversal mode, std::uint32_t* nodes_visited = nullptr);
@@ -34,9 +35,17 @@ struct HitBatch {
 };
 
 /// Closest hits of a batch, spread over `threads` threads (0 = all). Results do not depend on it.
-/// Traversal::Wide needs `wide` (make_wide(bvh)).
+/// Traversal::Wide needs `wide` (make_wide(bvh)). Throws std::invalid_argument naming the first
+/// ray whose origin lies outside ±kMaxCoordinate or whose direction's largest component lies
+/// outside [kMinDirection, kMaxDirection] (coordinate_range.h); each ray is scaled by a power of
+/// two for the arithmetic (scale_ray), which changes no result but keeps it in range.
+/// With `cancel`, the calling thread polls it between chunks of rays and every thread stops
+/// soon after a stop is requested; then it throws Cancelled (the outputs are left incomplete).
 void intersect_batch(const Bvh& bvh, const RayBatch& rays, const HitBatch& hits, Traversal mode,
-                     std::uint32_t threads = 0, const WideBvh* wide = nullptr);
+                     std::uint32_t threads = 0, const WideBvh* wide = nullptr, Cancellation* cancel = nullptr);
+
+/// Throws std::invalid_argument naming the first ray of `rays` that intersect_batch refuses.
+void check_rays(const RayBatch& rays);
 
 /// Sphere u, v from the hit point (done once per ray, not per candidate).
 void finish_hit(const Bvh& bvh, const Ray& ray, Hit& hit);

@@ -149,7 +149,7 @@ Bvh build_bvh(const GeometryView& geometry, const BuildConfig& config) {
     bvh.prims = pack_prims(geometry, bvh.refs);
     bvh.geometry_fingerprint = bvhlab::geometry_fingerprint(geometry);
     bvh.build_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-    if (config.progress) config.progress(1.0);
+    if (config.progress && !config.progress(1.0)) throw BuildCancelled();  // the last word may be "stop"
     return bvh;
 }
 

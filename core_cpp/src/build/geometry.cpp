@@ -1,9 +1,12 @@
 #include "bvhlab/geometry.h"
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <stdexcept>
 #include <string>
+
+#include "bvhlab/coordinate_range.h"
 
 namespace bvhlab {
 namespace {
@@ -36,17 +39,38 @@ PrimRef sphere_ref(const GeometryView& g, std::size_t i) {
     throw std::logic_error("throw_bad_triangle: no bad triangle");
 }
 
+std::string range_text() {
+    char text[96];
+    std::snprintf(text, sizeof text, "the supported range [-%.5g, %.5g] (2^40)", kMaxCoordinate, kMaxCoordinate);
+    return text;
+}
+
+/// Throws naming the first triangle with a coordinate outside ±kMaxCoordinate (coordinate_range.h).
+[[noreturn]] void throw_far_triangle(const GeometryView& g) {
+    for (std::size_t i = 0; i < g.triangle_count; ++i)
+        for (int c = 0; c < 3; ++c)
+            if (!in_coordinate_range(g.vertex(i, c)))
+                throw std::invalid_argument("triangle " + std::to_string(i) + " has a vertex coordinate outside " +
+                                            range_text() + ", where float32 ray tests would overflow; move or scale "
+                                            "the scene nearer the origin");
+    throw std::logic_error("throw_far_triangle: no such triangle");
+}
+
 void validate_spheres(const GeometryView& g) {
     for (std::size_t i = 0; i < g.sphere_count; ++i) {
         if (!finite_floats(g.spheres + 4 * i, 3))
             throw std::invalid_argument("sphere " + std::to_string(i) + " has a NaN or infinite centre");
         float r = g.sphere_radius(i);
-        if (!(r > 0.0f) || !std::isfinite(r))
-            throw std::invalid_argument("sphere " + std::to_string(i) + " has radius " + std::to_string(r) +
-                                        "; a radius must be a positive finite number");
+        if (!(r >= kMinRadius) || !std::isfinite(r)) {
+            char text[160];
+            std::snprintf(text, sizeof text, "sphere %zu has radius %g; a radius must be a finite number of at "
+                          "least 2^-60 (8.7e-19), below which its square underflows", i, double(r));
+            throw std::invalid_argument(text);
+        }
         Aabb box = sphere_ref(g, i).box();
-        if (!all_finite(box.lo) || !all_finite(box.hi))
-            throw std::invalid_argument("sphere " + std::to_string(i) + " reaches beyond the float range");
+        if (!in_coordinate_range(box.lo) || !in_coordinate_range(box.hi))
+            throw std::invalid_argument("sphere " + std::to_string(i) + " (centre ± radius) reaches outside " +
+                                        range_text() + ", where float32 ray tests would overflow");
     }
 }
 
@@ -63,6 +87,9 @@ void validate(const GeometryView& g) {
     validate_counts(g);
     for (std::size_t i = 0; i < g.triangle_count; ++i)
         if (!finite_floats(g.triangles + 9 * i, 9)) throw_bad_triangle(g);
+    for (std::size_t i = 0; i < g.triangle_count; ++i)
+        for (int c = 0; c < 3; ++c)
+            if (!in_coordinate_range(g.vertex(i, c))) throw_far_triangle(g);
     validate_spheres(g);
 }
 
@@ -71,13 +98,15 @@ BigVector<PrimRef> make_prim_refs(const GeometryView& g) {
     BigVector<PrimRef> refs(g.primitive_count());
     // Checked on the way: x·0 is 0 for finite x and NaN otherwise, so one sum tells whether any
     // coordinate was NaN or infinite, without a separate pass over the input.
-    float poison = 0.0f;
+    // The largest |coordinate| is tracked the same way, for the range check.
+    float poison = 0.0f, reach = 0.0f;
     for (std::size_t i = 0; i < g.triangle_count; ++i) {
         const float* v = g.triangles + 9 * i;
-        for (int k = 0; k < 9; ++k) poison += v[k] * 0.0f;
+        for (int k = 0; k < 9; ++k) poison += v[k] * 0.0f, reach = std::max(reach, std::fabs(v[k]));
         refs[i] = triangle_ref(g, i);
     }
     if (poison != 0.0f) throw_bad_triangle(g);
+    if (reach > kMaxCoordinate) throw_far_triangle(g);
     validate_spheres(g);
     for (std::size_t i = 0; i < g.sphere_count; ++i) refs[g.triangle_count + i] = sphere_ref(g, i);
     return refs;

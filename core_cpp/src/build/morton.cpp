@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 
 namespace bvhlab {
 namespace {
@@ -25,7 +26,10 @@ std::uint32_t quantize(float x, float lo, float scale) {
 void sort_by_morton_code(BigVector<PrimRef>& refs, const Aabb& centroid_bounds) {
     Vec3 extent = centroid_bounds.extent();
     float scale[3];
-    for (int a = 0; a < 3; ++a) scale[a] = extent[a] > 0 ? 1024.0f / extent[a] : 0.0f;
+    for (int a = 0; a < 3; ++a) {  // a subnormal extent would make the scale inf, and 0·inf = NaN
+        const float s = 1024.0f / extent[a];
+        scale[a] = extent[a] > 0 && std::isfinite(s) ? s : 0.0f;
+    }
     for (PrimRef& p : refs) {
         std::uint32_t q[3];
         for (int a = 0; a < 3; ++a) q[a] = quantize(p.centroid(a), centroid_bounds.lo[a], scale[a]);

@@ -29,9 +29,17 @@ def gather_camera(scene, depsgraph) -> Camera:
         warnings.warn(f"camera '{camera.name}': lens shift is ignored", ExportWarning, stacklevel=2)
     matrix = np.array(evaluated.matrix_world, np.float64)
     position = matrix[:3, 3]
-    forward = -matrix[:3, 2] / np.linalg.norm(matrix[:3, 2])
-    up = matrix[:3, 1] / np.linalg.norm(matrix[:3, 1])
-    return Camera(tuple(position), tuple(position + forward), tuple(up), vertical_fov_degrees(scene, data))
+    z_length, y_length = np.linalg.norm(matrix[:3, 2]), np.linalg.norm(matrix[:3, 1])
+    if not (np.isfinite(matrix).all() and z_length > 0 and y_length > 0):
+        raise ExportError(f"camera '{camera.name}' has no usable orientation (a scale of 0, or a location, rotation "
+                          f"or scale that is not a number)")
+    forward, up = -matrix[:3, 2] / z_length, matrix[:3, 1] / y_length
+    # look_at far enough ahead to differ from the position in float32 (the tracer's precision)
+    ahead = max(1.0, float(np.abs(position).max()) * 2.0**-10)
+    try:
+        return Camera(tuple(position), tuple(position + forward * ahead), tuple(up), vertical_fov_degrees(scene, data))
+    except ValueError as error:
+        raise ExportError(f"camera '{camera.name}': {error}") from None
 
 
 def vertical_fov_degrees(scene, camera_data) -> float:

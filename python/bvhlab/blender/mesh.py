@@ -38,8 +38,28 @@ def _mesh_triangles(mesh, matrix_world: np.ndarray, name: str):
     corners, face_of_triangle = _loop_triangles(mesh)
     # Transform the vertices (fewer than 3 per triangle) before gathering them into triangles.
     linear, offset = matrix_world[:3, :3].astype(np.float32), matrix_world[:3, 3].astype(np.float32)
-    world = positions @ linear.T + offset
+    with np.errstate(over="ignore", invalid="ignore"):
+        world = positions @ linear.T + offset
+    check_world_positions(world, name)
     return world[corners].reshape(-1, 3, 3), _triangle_material_slots(mesh, face_of_triangle)
+
+
+def check_world_positions(world: np.ndarray, name: str) -> None:
+    """Raises ExportError naming the object when a world-space point is NaN (a NaN location,
+    rotation or scale) or lies outside ±MAX_COORDINATE, where bvhlab's float32 ray tests would
+    overflow (Blender stores an infinite coordinate as ±3.4e38: it lands here too)."""
+    from ..scene import MAX_COORDINATE
+
+    inside = np.abs(world) <= MAX_COORDINATE  # False for NaN
+    if inside.all():
+        return
+    bad = int(np.flatnonzero(~inside.all(1))[0])
+    where = f"vertex {bad} at {tuple(float(x) for x in world[bad])}"
+    if np.isnan(world[bad]).any():
+        raise ExportError(f"object '{name}' has a vertex that is not a number in world space ({where}): check its "
+                          "location, rotation and scale, and its parents'")
+    raise ExportError(f"object '{name}' reaches outside the supported coordinate range ±{MAX_COORDINATE:.5g} (2^40) "
+                      f"({where}): move or scale it nearer the origin")
 
 
 def _loop_triangles(mesh):

@@ -28,4 +28,7 @@ def gather_sphere(obj, matrix_world: np.ndarray, name: str) -> np.ndarray:
         raise ExportError(f"analytic sphere '{name}' has a centre or radius that is not a finite number")
     if radius <= 0:
         raise ExportError(f"analytic sphere '{name}' has no extent (radius 0): give it a mesh or a scale")
+    from .mesh import check_world_positions
+
+    check_world_positions(np.array([centre - radius, centre + radius]), name)  # its box, centre ± radius
     return np.array([*centre, radius], np.float32)

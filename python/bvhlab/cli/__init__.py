@@ -1,7 +1,7 @@
 """The `bvhlab` command line: build, render, compare (the report's Table 1 and figures),
 snapshot (raster level sheets) and scenes.
 
-    bvhlab build SCENE [--method M] [--bins B] [--axis A] [--max-leaf-size N] [--json PATH]
+    bvhlab build SCENE [--method M] [--bins B] [--axis A] [--max-leaf-size N] [--json PATH] [--csv PATH]
     bvhlab render SCENE --out PNG [--method M] [--width W --height H] [--backend B] [--spp N]
                   [--bvh-depth A:B] [--heatmap]
     bvhlab compare SCENE --out DIR [--methods median,mean,sah12,sah32] [--frames N]
@@ -13,7 +13,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from . import build_cmd, compare_cmd, render_cmd, scenes_cmd, snapshot_cmd
+from .._core import BuildCancelled
+from . import build_cmd, compare_cmd, options, render_cmd, scenes_cmd, snapshot_cmd
 
 COMMANDS = (build_cmd, render_cmd, compare_cmd, snapshot_cmd, scenes_cmd)
 
@@ -27,15 +28,27 @@ def parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
-    args = parser().parse_args(argv)
+    """Runs one command. Bad input (a file that cannot be read or written, a wrong value) prints one
+    line `bvhlab CMD: error: ...` and returns 2; Ctrl-C prints `bvhlab CMD: interrupted` and
+    returns 130 (the shell's code for SIGINT); neither shows a traceback."""
+    args = parser().parse_args(options.join_dash_values(sys.argv[1:] if argv is None else list(argv)))
     try:
         return args.run(args) or 0
-    except (FileNotFoundError, ValueError, TypeError, RuntimeError) as e:
-        print(f"bvhlab {args.command}: error: {e}", file=sys.stderr)
-        return 2
+    except (OSError, ValueError, TypeError, RuntimeError, BuildCancelled) as e:
+        return _error(args.command, e)
+    except MemoryError as e:
+        return _error(args.command, f"out of memory{': ' + str(e) if str(e) else ''} (try a smaller image or scene)")
     except KeyboardInterrupt:
         print(f"bvhlab {args.command}: interrupted", file=sys.stderr)
         return 130
+
+
+def _error(command: str, error) -> int:
+    text = str(error)
+    if isinstance(error, OSError) and error.strerror and error.filename and not text.startswith(str(error.filename)):
+        text = f"{error.filename}: {error.strerror}"  # no "[Errno 21]"
+    print(f"bvhlab {command}: error: {text}", file=sys.stderr)
+    return 2
 
 
 if __name__ == "__main__":

@@ -1,12 +1,10 @@
 """`bvhlab build SCENE`: build one tree and print its stats (optionally as JSON)."""
 from __future__ import annotations
 
-import json
-from pathlib import Path
-
 from .. import build
 from .._progress import ProgressBar
 from ..library import load_scene
+from ..stats_files import write_stats_csv, write_stats_json
 from . import options
 
 
@@ -14,7 +12,10 @@ def add_parser(sub) -> None:
     p = sub.add_parser("build", help="build a BVH and print its stats", description=__doc__)
     options.add_scene(p)
     options.add_build(p)
-    p.add_argument("--json", type=Path, help="also write the stats to this JSON file")
+    p.add_argument("--json", type=options.output_file_type(".json", "stats file"), metavar="PATH",
+                   help="also write the stats to this JSON file ({\"about\": ..., \"stats\": ...}, as the add-on's Export stats)")
+    p.add_argument("--csv", type=options.output_file_type(".csv", "stats file"), metavar="PATH",
+                   help="also write the stats to this CSV file (metric,index,value)")
     p.set_defaults(run=run)
 
 
@@ -29,8 +30,11 @@ def run(args) -> int:
         value = stats[key]
         print(f"  {key:<14}{value:.3f}" if isinstance(value, float) else f"  {key:<14}{value}")
     print(f"  {'nodes/depth':<14}{' '.join(str(n) for n in stats['nodes_per_depth'])}")
+    about = {"scene": name, "source": args.scene, "settings": options.build_kwargs(args)}
     if args.json:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps({"scene": name, **stats}, indent=1))
+        write_stats_json(args.json, stats, about)
         print(f"wrote {args.json}")
+    if args.csv:
+        write_stats_csv(args.csv, stats)
+        print(f"wrote {args.csv}")
     return 0

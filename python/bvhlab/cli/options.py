@@ -2,8 +2,15 @@
 from __future__ import annotations
 
 import argparse
+import re
+from pathlib import Path
+from typing import Callable
 
+from .._checks import OutputPathError, output_file
 from ..bvh import AXES, METHODS, method_from_label
+
+#: Largest image side the CLI accepts (OpenGL's and most Vulkan drivers' framebuffer limit).
+MAX_IMAGE_SIDE = 16384
 
 
 def add_scene(p: argparse.ArgumentParser) -> None:
@@ -37,3 +44,41 @@ def depth_range(text: str) -> tuple[int, int]:
     if lo < 0 or hi < lo:
         raise argparse.ArgumentTypeError(f"depth range {text}: need 0 <= A <= B")
     return lo, hi
+
+
+def image_side(text: str) -> int:
+    """An image width or height: an integer in 1..MAX_IMAGE_SIDE, checked before any work."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number of pixels, got '{text}'") from None
+    if not 1 <= value <= MAX_IMAGE_SIDE:
+        raise argparse.ArgumentTypeError(f"must be between 1 and {MAX_IMAGE_SIDE} pixels, got {value}")
+    return value
+
+
+def output_file_type(suffix: str, what: str) -> Callable[[str], Path]:
+    """An argparse type: a file path to be written, ending in `suffix`, checked before any work
+    (not a folder, not under a file, never renamed)."""
+    def parse(text: str) -> Path:
+        try:
+            return output_file(text, (suffix,), what)
+        except OutputPathError as e:
+            raise argparse.ArgumentTypeError(str(e)) from None
+    return parse
+
+
+#: Options whose value may start with '-' (a depth range such as -1:2 would otherwise be taken
+#: for an option by argparse, which then says "expected one argument" instead of what is wrong).
+_DASH_VALUE_OPTIONS = ("--bvh-depth",)
+
+
+def join_dash_values(argv: list[str]) -> list[str]:
+    """['--bvh-depth', '-1:2'] → ['--bvh-depth=-1:2'], so the depth range's own check explains."""
+    out: list[str] = []
+    for arg in argv:
+        if out and out[-1] in _DASH_VALUE_OPTIONS and re.fullmatch(r"-[\d:]+", arg):
+            out[-1] = f"{out[-1]}={arg}"
+        else:
+            out.append(arg)
+    return out

@@ -2,8 +2,6 @@
 optionally with the BVH overlay (--bvh-depth A:B) or as a heatmap of box tests (--heatmap)."""
 from __future__ import annotations
 
-from pathlib import Path
-
 from .. import build, render, save_png
 from .._progress import ProgressBar
 from ..render import BACKENDS
@@ -15,15 +13,16 @@ def add_parser(sub) -> None:
     p = sub.add_parser("render", help="render a scene to a PNG", description=__doc__)
     options.add_scene(p)
     options.add_build(p)
-    p.add_argument("--width", type=int, default=800)
-    p.add_argument("--height", type=int, default=600)
+    p.add_argument("--width", type=options.image_side, default=800)
+    p.add_argument("--height", type=options.image_side, default=600)
     p.add_argument("--backend", default="auto", choices=BACKENDS, help="vulkan, cpu, or auto (Vulkan, else the CPU)")
     p.add_argument("--spp", type=int, default=1, help="samples per pixel, a square number (1, 4, 9, ...)")
     p.add_argument("--max-depth", type=int, default=5, help="bounces of reflection and refraction")
     p.add_argument("--bvh-depth", type=options.depth_range, metavar="A:B", help="draw the boxes of depths A..B")
     p.add_argument("--heatmap", action="store_true", help="colour pixels by the box tests of their primary ray")
     p.add_argument("--traversal", default="stack", choices=("stack", "stackless"))
-    p.add_argument("--out", type=Path, required=True, help="PNG file to write")
+    p.add_argument("--out", type=options.output_file_type(".png", "PNG image"), required=True,
+                   help="PNG file to write (the name must end in .png)")
     p.set_defaults(run=run)
 
 

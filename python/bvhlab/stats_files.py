@@ -1,12 +1,27 @@
-"""BVH statistics as JSON and CSV files (no bpy). Method comparisons are written by bvhlab.compare."""
+"""BVH statistics as JSON and CSV files: the one writer of `bvhlab build --json/--csv` and the
+add-on's Export stats (no bpy). Method comparisons are written by bvhlab.compare."""
 from __future__ import annotations
 
 import csv
 import json
 from pathlib import Path
 
+from ._checks import output_file
+
 #: Per-depth and per-size lists in `Bvh.stats`; every other entry is one value.
 LIST_METRICS = ("nodes_per_depth", "leaves_per_depth", "leaf_size_histogram")
+
+
+def json_path(path) -> Path:
+    """`path` checked as a stats JSON file before any work: OutputPathError when it is a folder,
+    lies under a file, or does not end in .json (it is never renamed)."""
+    return output_file(path, (".json",), "stats file")
+
+
+def csv_path(path) -> Path:
+    """As json_path, for the CSV."""
+    return output_file(path, (".csv",), "stats file")
+
 
 def write_stats_json(path: Path, stats: dict, about: dict) -> None:
     """{"about": {...scene, file, scope...}, "stats": <Bvh.stats, unchanged>}."""

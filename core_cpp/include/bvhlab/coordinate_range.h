@@ -1,0 +1,76 @@
+// coordinate_range.h — the coordinates and ray directions for which bvhlab's float32 ray tests
+// cannot overflow, and the exact rescaling that makes any direction length safe.
+//
+// Why a range at all: every test is float32 arithmetic, and products of coordinates grow like
+// their cube. Outside this range a hit is silently lost (a 1e13 triangle, a 2e19 sphere, a ray
+// direction of length 1e-28 used to miss everything). Inside it nothing can overflow:
+//
+// Let every point — vertices, sphere extents (centre ± radius), ray origins — lie in [-L, L]³
+// with L = kMaxCoordinate = 2^40 ≈ 1.1e12, and let the ray direction d be scaled by a power of
+// two so that its largest component lies in [0.5, 1) (scale_ray below; exact, see there), so
+// every |d_i| < 1 and |d|² < 3. Then:
+//  - Möller–Trumbore (ray.h hit_triangle): e1, e2 and s = origin - v0 are differences of two
+//    points, components ≤ 2L = 2^41; p = d × e2 ≤ 2·2^41 = 2^42; det = e1·p and u·det = s·p
+//    ≤ 3·2^41·2^42 < 2^85; q = s × e1 ≤ 2·2^41·2^41 = 2^83; v·det = d·q < 2^85; and the largest
+//    product, t·det = e2·q ≤ 3·2^41·2^83 < 2^126, stays below FLT_MAX ≈ 2^128. (With L = 2^41 the
+//    bound is 3·2^127 > FLT_MAX: 2^40 is the largest power of two that is safe.) A hit's t is a
+//    distance over |d| ≤ 2√3·L / 0.5 < 2^43, so t = (t·det)/det cannot overflow either.
+//  - Sphere quadratic (hit_sphere): oc = origin - centre ≤ 2^41; a = d·d < 3 (and ≥ 0.25, so it
+//    never underflows, which an unscaled |d| = 1e-20 did: a = 1e-40 is subnormal);
+//    b = oc·d < 2^43; c = oc·oc - r² < 2^84; b² and a·c < 2^86.
+//  - Slab test (hit_box): (plane - origin) ≤ 2^41 times 1/d_i. For a (nearly) parallel axis 1/d_i
+//    is huge or ±inf and the product may overflow to ±inf: that is the right answer (the slab
+//    puts no limit, or excludes the ray, on that side), and 0·inf = NaN on a face is ignored by
+//    raise_to/lower_to. The slab test only compares, so infinities are safe there.
+// Spheres: a radius of at least kMinRadius = 2^-60 keeps r² ≥ 2^-120 a normal float. A smaller
+// one underflows: c = |oc|² - r² then rounds to 0 for a ray passing ~1e-37 away, and the quadratic
+// counts that as a hit (the fuzzer found a 7e-41 sphere "hit" from 4e-37 away).
+// Directions: the rescaled t is t' · 2^-e where d's largest component is f·2^e, f in [0.5, 1).
+// With that component in [kMinDirection, kMaxDirection] = [2^-80, 2^80], t ≤ 2^43 · 2^80 = 2^123
+// cannot overflow (below about 2^-84 it could), and a hit farther than 2^-45 from the origin of
+// the ray keeps a normal (not subnormal) t even for the longest directions.
+#pragma once
+#include <cmath>
+
+#include "bvhlab/ray.h"
+#include "bvhlab/vec3.h"
+
+namespace bvhlab {
+
+inline constexpr float kMaxCoordinate = 0x1p40f;  ///< |x| ≤ 2^40 ≈ 1.0995e12 for every point
+inline constexpr float kMinDirection = 0x1p-80f;  ///< smallest allowed largest |component| of a direction
+inline constexpr float kMaxDirection = 0x1p80f;   ///< largest allowed largest |component| of a direction
+inline constexpr float kMinRadius = 0x1p-60f;     ///< smallest sphere radius (≈ 8.7e-19)
+
+/// True when every component of p lies in [-kMaxCoordinate, kMaxCoordinate] (false for NaN).
+inline bool in_coordinate_range(Vec3 p) {
+    return std::fabs(p.x) <= kMaxCoordinate && std::fabs(p.y) <= kMaxCoordinate && std::fabs(p.z) <= kMaxCoordinate;
+}
+
+/// The largest |component| of d.
+inline float largest_component(Vec3 d) { return std::max({std::fabs(d.x), std::fabs(d.y), std::fabs(d.z)}); }
+
+/// True when d's largest |component| lies in [kMinDirection, kMaxDirection] (false for NaN, 0, inf).
+inline bool direction_in_range(Vec3 d) {
+    const float m = largest_component(d);  // ignores a NaN component: checked on its own
+    return m >= kMinDirection && m <= kMaxDirection && all_finite(d);
+}
+
+/// Scales a ray's direction by 2^-e so that its largest component lies in [0.5, 1), and its
+/// (tmin, tmax) by 2^e, so it describes the same points; returns 2^-e, by which the t of a hit
+/// must be multiplied to be in the caller's units. Powers of two scale exactly, and every test is
+/// homogeneous in d (Möller–Trumbore's u, v and the sphere's roots are ratios), so the hit,
+/// u, v and t are bit for bit what the unscaled arithmetic gives whenever that does not over- or
+/// underflow; and where it would, the scaled arithmetic stays in range (see the top of this file).
+/// Needs direction_in_range(dir).
+inline float scale_ray(Ray& ray) {
+    int e;
+    std::frexp(largest_component(ray.dir), &e);
+    if (e == 0) return 1.0f;  // already in [0.5, 1): nothing to do
+    ray.dir = ray.dir * std::ldexp(1.0f, -e);  // e in [-79, 81]: both factors are normal floats
+    ray.tmin = std::ldexp(ray.tmin, e);
+    ray.tmax = std::ldexp(ray.tmax, e);
+    return std::ldexp(1.0f, -e);
+}
+
+}  // namespace bvhlab

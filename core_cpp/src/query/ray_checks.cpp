@@ -1,0 +1,30 @@
+// ray_checks.cpp — the rays intersect_batch accepts (coordinate_range.h says why these).
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+
+#include "bvhlab/coordinate_range.h"
+#include "bvhlab/traverse.h"
+
+namespace bvhlab {
+
+void check_rays(const RayBatch& rays) {
+    for (std::size_t i = 0; i < rays.count; ++i) {
+        const float* o = rays.origins + 3 * i;
+        const float* d = rays.directions + 3 * i;
+        const Vec3 origin{o[0], o[1], o[2]}, dir{d[0], d[1], d[2]};
+        if (in_coordinate_range(origin) && direction_in_range(dir)) continue;
+        const std::string ray = "ray " + std::to_string(i);
+        if (!all_finite(origin) || !all_finite(dir))
+            throw std::invalid_argument(ray + ": origin and direction must be finite (no NaN or inf)");
+        if (!in_coordinate_range(origin))
+            throw std::invalid_argument(ray + " starts outside the supported coordinate range [-2^40, 2^40] "
+                                        "(±1.0995e12), where float32 ray tests would overflow");
+        char got[32];
+        std::snprintf(got, sizeof got, "%g", double(largest_component(dir)));
+        throw std::invalid_argument(ray + ": the largest |component| of a direction must be in [2^-80, 2^80] "
+                                    "(8.3e-25 to 1.2e24), got " + got);
+    }
+}
+
+}  // namespace bvhlab

@@ -1,0 +1,48 @@
+"""Independent answers the tests compare bvhlab with."""
+import numpy as np
+
+
+def brute_force(tris, spheres, origins, dirs):
+    """Closest hit over every primitive, float64, vectorised Möller–Trumbore and sphere roots."""
+    o = origins.astype(np.float64)[:, None, :]
+    d = dirs.astype(np.float64)[:, None, :]
+    best_t = np.full(len(origins), np.inf)
+    best_id = np.full(len(origins), -1)
+    best_kind = np.zeros(len(origins), int)
+    if len(tris):
+        v0, v1, v2 = (tris[:, k].astype(np.float64)[None] for k in range(3))
+        e1, e2 = v1 - v0, v2 - v0
+        p = np.cross(d, e2)
+        det = np.einsum("rtk,rtk->rt", e1.repeat(len(o), 0), p)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inv = 1.0 / det
+            tv = o - v0
+            u = np.einsum("rtk,rtk->rt", tv, p) * inv
+            q = np.cross(tv, e1)
+            v = np.einsum("rtk,rtk->rt", d.repeat(e1.shape[1], 1), q) * inv
+            t = np.einsum("rtk,rtk->rt", e2.repeat(len(o), 0), q) * inv
+        ok = (det != 0) & (u >= 0) & (u <= 1) & (v >= 0) & (u + v <= 1) & (t > 0)
+        t = np.where(ok, t, np.inf)
+        best_id = t.argmin(1)
+        best_t = t[np.arange(len(o)), best_id]
+        best_id = np.where(np.isfinite(best_t), best_id, -1)
+    if len(spheres):
+        c = spheres[:, :3].astype(np.float64)[None]
+        r = spheres[:, 3].astype(np.float64)[None]
+        oc = o - c
+        a = np.einsum("rk,rk->r", d[:, 0], d[:, 0])[:, None]
+        b = np.einsum("rsk,rk->rs", oc, d[:, 0])
+        cc = np.einsum("rsk,rsk->rs", oc, oc) - r * r
+        disc = b * b - a * cc
+        with np.errstate(invalid="ignore"):
+            s = np.sqrt(disc)
+            t0, t1 = (-b - s) / a, (-b + s) / a
+        t = np.where(t0 > 0, t0, t1)
+        t = np.where((disc >= 0) & (t > 0), t, np.inf)
+        sid = t.argmin(1)
+        st = t[np.arange(len(o)), sid]
+        closer = st < best_t
+        best_t = np.where(closer, st, best_t)
+        best_id = np.where(closer, sid, best_id)
+        best_kind = np.where(closer, 1, best_kind)
+    return best_t, best_id, best_kind

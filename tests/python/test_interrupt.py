@@ -1,0 +1,88 @@
+"""Issue 8.12: Ctrl-C stops long work promptly. A child process starts a build or a batch of rays,
+says when it has begun, and gets SIGINT; it must end with KeyboardInterrupt long before the work
+could have finished (the full run is timed in the same child first), and the CLI must exit 130
+with one line and no traceback."""
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import pytest
+
+#: The child times a full run, then starts another, prints "started" and waits to be interrupted.
+CHILD = """
+    import sys, time
+    import bvhlab
+    from bvhlab.library import procedural
+
+    work = sys.argv[1]
+    if work == "build":
+        tris = procedural.random_triangles(1_500_000, seed=1)
+        run = lambda progress=None: bvhlab.build(tris, method="sah", threads=2, progress=progress)
+    else:
+        tris = procedural.torus_knot(20000)
+        bvh = bvhlab.build(tris)
+        o, d = procedural.random_rays(tris, 3_000_000, seed=1)
+        run = lambda progress=None: bvh.intersect(o, d, threads=2)
+    start = time.monotonic()
+    run()
+    print(f"full {time.monotonic() - start:.3f}", flush=True)
+    print("started", flush=True)
+    try:
+        run()
+        print("finished", flush=True)
+    except KeyboardInterrupt:
+        print("interrupted", flush=True)
+"""
+
+
+def interrupt(args: list[str], ready: str, delay: float = 0.3) -> tuple[subprocess.CompletedProcess, float, list[str]]:
+    """Starts a child, waits for the line `ready` (and `delay`), sends SIGINT; returns the finished
+    process, the seconds from SIGINT to its end, and the lines it printed before `ready`."""
+    child = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    lines = []
+    for line in child.stdout:
+        if line.strip() == ready:
+            break
+        lines.append(line.strip())
+    time.sleep(delay)
+    sent = time.monotonic()
+    child.send_signal(signal.SIGINT)
+    out, err = child.communicate(timeout=300)
+    elapsed = time.monotonic() - sent
+    return subprocess.CompletedProcess(args, child.returncode, out, err), elapsed, lines
+
+
+@pytest.mark.parametrize("work", ["build", "intersect"])
+def test_ctrl_c_stops_the_work_promptly(work):
+    done, elapsed, lines = interrupt([sys.executable, "-c", textwrap.dedent(CHILD), work], "started", delay=0.2)
+    full = float(lines[-1].split()[1])
+    assert done.stdout.strip() == "interrupted", (done.stdout, done.stderr[-2000:])
+    # Prompt means well before the work would have ended on its own (it used to run to the end:
+    # 6.5 s for a large build). The full run takes seconds; the stop, tens of milliseconds.
+    assert elapsed < 0.2 + full / 2, f"{work}: {elapsed:.2f} s after SIGINT; the whole run takes {full:.2f} s"
+
+
+#: The CLI with its progress bar replaced by one that says when the build has started.
+CLI_CHILD = """
+    import sys
+    import bvhlab.cli.build_cmd as build_cmd
+
+    class TellingBar(build_cmd.ProgressBar):
+        def __call__(self, fraction):
+            if not getattr(self, "told", False):
+                print("started", flush=True)
+                self.told = True
+            return super().__call__(fraction)
+
+    build_cmd.ProgressBar = TellingBar
+    from bvhlab.cli import main
+    sys.exit(main(["build", "gen:room", "--method", "sweep_sah"]))
+"""
+
+
+def test_cli_exits_130_with_one_line():
+    done, _, _ = interrupt([sys.executable, "-c", textwrap.dedent(CLI_CHILD)], "started", delay=0.05)
+    assert done.returncode == 130, (done.returncode, done.stderr[-2000:])
+    assert done.stderr.strip() == "bvhlab build: interrupted", done.stderr[-2000:]
