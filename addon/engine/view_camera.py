@@ -49,10 +49,10 @@ def view_frustum(view_matrix, window_matrix, region_width: int, region_height: i
     right, up, back = (to_world[:3, k] / np.linalg.norm(to_world[:3, k]) for k in range(3))
     forward = -back
     eye = to_world[:3, 3]
-    # The region spans x/z in [(-1 - cx) / sx, (1 - cx) / sx] (tangents; y alike) for a perspective
-    # projection; an orthographic one spans x in view units, divided by the pinhole's distance here.
+    # Along each axis the region's NDC is s·t + c, t the tangent x/-z (perspective: c = -P[0][2]
+    # as clip w = -z) or, orthographic, the view-space x over the pinhole's distance (c = P[0][3]).
     if perspective:
-        sx, cx, sy, cy = projection[0, 0], projection[0, 2], projection[1, 1], projection[1, 2]
+        sx, cx, sy, cy = projection[0, 0], -projection[0, 2], projection[1, 1], -projection[1, 2]
         position = eye
     else:
         half_height = 1.0 / projection[1, 1]

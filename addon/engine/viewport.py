@@ -78,10 +78,11 @@ class ViewportSession:
 
     # -- the UI thread -------------------------------------------------------------------------
     def set_scene(self, scene, report) -> None:
-        """A newly exported scene and its LiveScene report (a scene change resumes after Esc)."""
+        """A newly exported scene and its LiveScene report (None: unknown changes, the tree is
+        built again unless the geometry is equal). A scene change resumes after Esc."""
         with self._cv:
-            geometry = report is None or report.geometry
-            self._refittable = self._refittable and (not geometry or report.refittable)
+            refittable = report is not None and (not report.geometry or report.refittable)
+            self._refittable = self._refittable and refittable
             self._scene, self._error, self._paused = scene, None, False
             self._scene_serial += 1
             self._cv.notify_all()
@@ -209,9 +210,11 @@ class ViewportSession:
         import bvhlab
 
         def progress(fraction: float) -> bool:
-            self._set_status(f"Building BVH ({request.build.method}) {fraction:.0%}")
             with self._cv:
-                return not self._closed and not self._paused and scene_serial == self._scene_serial
+                if self._closed or self._paused or scene_serial != self._scene_serial:
+                    return False
+                self._status, self._redraw = f"Building BVH ({request.build.method}) {fraction:.0%}", True
+                return True
 
         try:
             return self.tree.update(scene, request.build, refittable, progress)
