@@ -9,6 +9,7 @@ from __future__ import annotations
 import bpy
 
 from . import panels, records
+from .blender_panels import engine_panels
 from .engine import ENGINE_ID, BVHLAB_RE_whitted
 from .operators import BVHLAB_OT_viewport_cancel
 
@@ -17,8 +18,6 @@ _keymaps: list = []
 
 
 def register() -> None:
-    from bvhlab.blender.compat import engine_panels
-
     for cls in classes:
         bpy.utils.register_class(cls)
     for panel in engine_panels():
@@ -27,8 +26,6 @@ def register() -> None:
 
 
 def unregister() -> None:
-    from bvhlab.blender.compat import engine_panels
-
     from .tracer import forget_tracers
     from .viewport import close_all
 

@@ -14,6 +14,7 @@ import harness
 import bpy
 import bvhlab
 from bvhlab.blender import export_scene
+from bvhlab.blender.compat import use_multilayer_exr
 
 ENGINE = "BVHLAB_WHITTED"
 #: Blender's value for "no surface" in a Depth pass (render_result.cc fills passes named Depth with it).
@@ -42,7 +43,8 @@ def render_passes(tmp_dir, name: str = "render") -> dict:
     compression; returns {pass name: top-row-first float32 array} for the first view layer."""
     assert bpy.ops.render.render() == {"FINISHED"}
     settings = bpy.context.scene.render.image_settings
-    settings.file_format, settings.exr_codec, settings.color_depth = "OPEN_EXR_MULTILAYER", "NONE", "32"
+    use_multilayer_exr(settings)
+    settings.exr_codec, settings.color_depth = "NONE", "32"
     path = tmp_dir / f"{name}.exr"
     bpy.data.images["Render Result"].save_render(str(path))
     channels = exr.read_exr(path)

@@ -9,10 +9,8 @@
   5.0; `buffer_to_array` flattens first, which every version reads correctly.
 - `gpu` builtin shaders: the `3D_` prefixes of 3.x are gone (4.0+): `builtin_shader` takes the
   unprefixed name everywhere.
-- Panels a render engine shows: Blender's generic ones (output, format, dimensions, camera, light
-  data...) list the pseudo-engine 'BLENDER_RENDER' in COMPAT_ENGINES in every version; the
-  material and world surface panels belong to EEVEE, under names that differ between versions.
-  `engine_panels` finds both.
+- Multilayer OpenEXR output: from 5.0 a media type must be chosen before the file format:
+  `use_multilayer_exr`.
 Mesh attributes (`attributes["position"]`, `loop_triangle_polygons`, `material_index`) and the
 Principled BSDF socket names ("Transmission Weight") are the same from 4.2 on.
 """
@@ -64,27 +62,11 @@ def builtin_shader(name: str):
     return gpu.shader.from_builtin(name)
 
 
-#: Panels of other engines that a render engine reading Blender's shader nodes should show too: the
-#: material slots and surface, the world surface (EEVEE's; names as of 4.2 and later, those that
-#: exist are taken).
-SHADING_PANELS = ("EEVEE_MATERIAL_PT_context_material", "EEVEE_MATERIAL_PT_surface", "EEVEE_WORLD_PT_surface",
-                  "EEVEE_NEXT_MATERIAL_PT_context_material", "EEVEE_NEXT_MATERIAL_PT_surface",
-                  "EEVEE_NEXT_WORLD_PT_surface")
-#: Generic panels that make no sense for an engine with its own pass panel.
-EXCLUDED_PANELS = ("VIEWLAYER_PT_filter", "VIEWLAYER_PT_layer_passes")
 
-
-def engine_panels() -> list:
-    """Panel classes that a third-party render engine adds itself to (COMPAT_ENGINES): Blender's
-    generic ones (output, format, frame range, colour management, camera and light data, ...) and
-    the material and world surface panels."""
-    panels, stack = [], list(bpy.types.Panel.__subclasses__())
-    while stack:
-        panel = stack.pop()
-        stack.extend(panel.__subclasses__())
-        engines = getattr(panel, "COMPAT_ENGINES", None)
-        if not isinstance(engines, set) or panel.__name__ in EXCLUDED_PANELS:
-            continue
-        if "BLENDER_RENDER" in engines or panel.__name__ in SHADING_PANELS:
-            panels.append(panel)
-    return panels
+def use_multilayer_exr(image_settings) -> None:
+    """Make `image_settings` (ImageFormatSettings) write a multilayer OpenEXR, every pass of every
+    view layer: file format 'OPEN_EXR_MULTILAYER'; from 5.0 the media type 'MULTI_LAYER_IMAGE'
+    must be chosen first (it leaves that format the only one)."""
+    if "media_type" in image_settings.bl_rna.properties:
+        image_settings.media_type = "MULTI_LAYER_IMAGE"
+    image_settings.file_format = "OPEN_EXR_MULTILAYER"
