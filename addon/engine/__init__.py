@@ -26,11 +26,13 @@ def register() -> None:
 
 
 def unregister() -> None:
+    from .display import forget_shader
     from .tracer import forget_tracers
     from .viewport import close_all
 
     _remove_keymap()
     close_all()
+    forget_shader()
     for panel in engine_panels():
         panel.COMPAT_ENGINES.discard(ENGINE_ID)
     for cls in reversed(classes):

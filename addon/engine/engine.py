@@ -79,7 +79,7 @@ class BVHLAB_RE_whitted(bpy.types.RenderEngine):
         if frame is not None:
             if self._display is None:
                 self._display = FrameDisplay()
-            self._display.draw(self, blender_scene, frame)
+            self._display.draw(frame)
             _record(blender_scene, frame, self._display)
         self.update_stats("", _status(self._viewport.status(), frame, self._display))
 

@@ -45,6 +45,7 @@ class TraceSettings:
     line_width: float = 1.0
     traversal: str = "stackless"
     mode: str = "shade"
+    threads: int = 0  # CPU reference threads; 0 = every core
 
     def heatmap(self) -> "TraceSettings":
         return replace(self, mode="heatmap")
@@ -52,7 +53,7 @@ class TraceSettings:
     def options(self) -> dict:
         return {"spp": self.spp, "max_depth": self.max_depth, "overlay_depth": self.overlay,
                 "color_by_depth": self.color_by_depth, "line_width": self.line_width,
-                "traversal": self.traversal, "mode": self.mode}
+                "traversal": self.traversal, "mode": self.mode, "threads": self.threads}
 
 
 class Tracer:
