@@ -9,10 +9,14 @@ which does the same work synchronously.
 """
 from __future__ import annotations
 
+import os
 import threading
 
 #: How often (s) a modal operator looks at its task.
 POLL_S = 0.1
+#: Threads for work started from the UI: one core stays with Blender's UI thread (drawing the
+#: window, which on a software OpenGL takes CPU too), or the UI stalls while the work runs.
+UI_WORK_THREADS = max(1, (os.cpu_count() or 2) - 1)
 
 
 class TaskCancelled(Exception):
@@ -86,7 +90,7 @@ class ModalTaskMixin:
             task.cancel()
             self._show(context)
             return {"RUNNING_MODAL"}
-        if event.type != "TIMER" or event.timer is not self._timer:
+        if event.type != "TIMER":  # any window timer: looking at the task is cheap
             return {"PASS_THROUGH"}
         if not task.done:
             self._show(context)

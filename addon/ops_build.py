@@ -6,7 +6,7 @@ from __future__ import annotations
 import bpy
 
 from . import state
-from .background import ModalTaskMixin, TaskCancelled
+from .background import UI_WORK_THREADS, ModalTaskMixin, TaskCancelled
 from .operator_support import build_tree, export_scene, remember_tree, run_reported
 
 
@@ -31,7 +31,8 @@ class BVHLAB_OT_build(ModalTaskMixin, bpy.types.Operator):
 
         self._exported = exported = export_scene(context, require_camera=False)  # bpy: on the UI thread
         s = context.scene.bvhlab
-        options = {"method": s.method, "bins": s.bins, "axis": s.axis, "max_leaf_size": s.max_leaf_size}
+        options = {"method": s.method, "bins": s.bins, "axis": s.axis, "max_leaf_size": s.max_leaf_size,
+                   "threads": UI_WORK_THREADS}
 
         def work(task):
             return bvhlab.build(exported, **options, progress=lambda fraction: task.progress(fraction))

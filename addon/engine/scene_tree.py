@@ -42,10 +42,11 @@ class SceneTree:
         self._source: tuple = (None, None)  # the triangle and sphere arrays the tree is over
         self._built_sah = 0.0
 
-    def update(self, scene, settings: BuildSettings, refittable: bool = False, progress=None) -> TreeUpdate:
+    def update(self, scene, settings: BuildSettings, refittable: bool = False, progress=None,
+               threads: int = 0) -> TreeUpdate:
         """Make the tree fit `scene` (a bvhlab.Scene). `refittable`: the primitives are those of the
         last scene, in the same order, only moved (LiveScene's report). `progress(fraction)`
-        returning False cancels a build (bvhlab.BuildCancelled)."""
+        returning False cancels a build (bvhlab.BuildCancelled). `threads`: for a build (0: all)."""
         start = time.perf_counter()
         if self.bvh is not None and settings == self.settings:
             if self._same_geometry(scene):
@@ -53,7 +54,7 @@ class SceneTree:
                 return TreeUpdate("kept")
             if refittable and self._refit(scene):
                 return TreeUpdate("refit", (time.perf_counter() - start) * 1e3)
-        self._build(scene, settings, progress)
+        self._build(scene, settings, progress, threads)
         return TreeUpdate("built", (time.perf_counter() - start) * 1e3)
 
     def _same_geometry(self, scene) -> bool:
@@ -74,12 +75,12 @@ class SceneTree:
         self._source = (scene.triangles, scene.spheres)
         return self.bvh.stats["sah_cost"] <= REFIT_LIMIT * self._built_sah
 
-    def _build(self, scene, settings: BuildSettings, progress) -> None:
+    def _build(self, scene, settings: BuildSettings, progress, threads: int) -> None:
         import bvhlab
 
         self.bvh = None  # a cancelled build leaves no stale tree behind
         bvh = bvhlab.build(scene, method=settings.method, bins=settings.bins, axis=settings.axis,
-                           max_leaf_size=settings.max_leaf_size, progress=progress)
+                           max_leaf_size=settings.max_leaf_size, threads=threads, progress=progress)
         self.bvh, self.settings = bvh, settings
         self._source = (scene.triangles, scene.spheres)
         self._built_sah = bvh.stats["sah_cost"]

@@ -6,7 +6,8 @@ import os
 
 from .tracer import TraceSettings
 
-#: The viewport leaves one core to Blender's UI thread (orbiting stays fluid while a frame traces).
+#: The viewport leaves one core to Blender's UI thread (orbiting stays fluid while a frame traces
+#: or the tree builds).
 VIEWPORT_THREADS = max(1, (os.cpu_count() or 2) - 1)
 
 

@@ -217,7 +217,7 @@ class ViewportSession:
                 return True
 
         try:
-            return self.tree.update(scene, request.build, refittable, progress)
+            return self.tree.update(scene, request.build, refittable, progress, threads=request.settings.threads)
         except bvhlab.BuildCancelled:
             return None
 
