@@ -48,7 +48,8 @@ class BVHLAB_RE_whitted(bpy.types.RenderEngine):
             self._final.render(self, depsgraph)
 
     def update_render_passes(self, scene=None, renderlayer=None):
-        passes.register(self, scene, renderlayer)
+        if scene is not None and renderlayer is not None:
+            passes.register(self, scene, renderlayer)
 
     # -- the viewport ----------------------------------------------------------------------------
     def view_update(self, context, depsgraph):

@@ -200,7 +200,8 @@ class ViewportSession:
             wall_ms = (time.perf_counter() - started) * 1e3
             self._ms_per_sample = timings["trace_ms"] / (width * height * spp)
             frame_timings = {"level": level, "width": width, "height": height, "spp": spp,
-                             "trace_ms": timings["trace_ms"], "frame_ms": wall_ms, "tree": update.action,
+                             "trace_ms": timings["trace_ms"], "overlay_ms": timings.get("overlay_ms", 0.0),
+                             "total_ms": timings["total_ms"], "frame_ms": wall_ms, "tree": update.action,
                              "build_ms": update.ms, "device": tracer.device, "note": tracer.note,
                              "latency_ms": (time.monotonic() - self._request_time) * 1e3}
             self._publish(ViewFrame(image, request, level, scale, frame_timings, scene_serial))

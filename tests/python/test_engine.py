@@ -6,6 +6,7 @@ import pytest
 import blender_checks  # noqa: F401
 import harness
 import checks_engine  # noqa: E402
+import checks_engine_viewport  # noqa: E402
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -42,12 +43,12 @@ def test_render_errors_are_reported():
 
 
 def test_viewport_frustum_matches_blenders_projection():
-    checks_engine.check_view_frustum()
+    checks_engine_viewport.check_view_frustum()
 
 
 def test_viewport_worker_preview_full_refined():
-    checks_engine.check_viewport_worker_levels()
+    checks_engine_viewport.check_viewport_worker_levels()
 
 
 def test_viewport_build_cancels_with_esc():
-    checks_engine.check_viewport_build_cancels()
+    checks_engine_viewport.check_viewport_build_cancels()
