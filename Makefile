@@ -25,7 +25,7 @@ help:
 	@echo "make demo         install what is missing, build, reproduce the report's Table 1 on Crytek Sponza (out/demo)"
 	@echo "make bench        build and traversal benchmark against Embree (bench/results/*.json)"
 	@echo "make addon        the Blender extension zip in dist/ (wheels for Python 3.11 and 3.13)"
-	@echo "make screenshots  the sidebar panel in a real Blender window → docs/panel.png"
+	@echo "make screenshots  the sidebar panel and the Rendered viewport in a real Blender window → docs/panel.png, docs/viewport.png"
 	@echo "make fuzz         libFuzzer over the core for FUZZ_SECONDS (default 300) under ASan/UBSan"
 
 setup: system venv trixie
@@ -132,7 +132,8 @@ build/wheels/.cp313: $(WHEEL_INPUTS) | trixie
 dist/bvhlab.zip: build/wheels/.cp311 build/wheels/.cp313 $(ADDON_SOURCES) scripts/build_addon.py
 	cp "$$($(PY) scripts/build_addon.py package)" $@
 
-# The sidebar panel in a real Blender window (Xvfb) → docs/panel.png.
+# The sidebar panel and the render engine's Rendered viewport in a real Blender window (Xvfb) →
+# docs/panel.png, docs/viewport.png.
 screenshots: addon
 	$(TRIXIE) run python tests/blender/ui/run_ui.py --zip dist/bvhlab.zip --out build/ui --screenshots docs
 

@@ -1,6 +1,8 @@
 """bvhlab for Blender: build bounding volume hierarchies over the scene with the split methods of
 Sandén's report, draw their boxes by depth in the viewport, ray trace with bvhlab's Whitted
-tracer, export statistics and compare methods (View3D ▸ Sidebar ▸ BVH).
+tracer, export statistics and compare methods (View3D ▸ Sidebar ▸ BVH); and the render engine
+"bvhlab Whitted" (Render Properties ▸ Render Engine) for F12, the command line and the viewport's
+Rendered shading (engine/).
 
 Everything the panel does is an operator (bvhlab.build, bvhlab.render, bvhlab.export_stats,
 bvhlab.compare), so scripts drive the same code as the buttons. The compiled core comes from the
@@ -11,7 +13,7 @@ from __future__ import annotations
 import bpy
 from bpy.app.handlers import persistent
 
-from . import overlay, state
+from . import engine, overlay, state
 from .ops_build import BVHLAB_OT_build
 from .ops_compare import BVHLAB_OT_compare
 from .ops_export_stats import BVHLAB_OT_export_stats
@@ -32,11 +34,13 @@ _register_classes, _unregister_classes = bpy.utils.register_classes_factory(clas
 def _forget_trees(*_args) -> None:
     """Trees belong to the scenes of the open file: drop them when another file loads."""
     state.clear()
+    engine.forget()
 
 
 def register() -> None:
     _register_classes()
     register_properties()
+    engine.register()
     bpy.app.handlers.load_pre.append(_forget_trees)
     overlay.add_handler()
 
@@ -45,6 +49,7 @@ def unregister() -> None:
     overlay.remove_handler()
     if _forget_trees in bpy.app.handlers.load_pre:
         bpy.app.handlers.load_pre.remove(_forget_trees)
+    engine.unregister()
     unregister_properties()
     _unregister_classes()
     state.clear()

@@ -1,11 +1,13 @@
 """Compare methods (`bvhlab.compare`): the report's Table 1 for the open scene — every split method
 built and rendered with bvhlab.compare's protocol (the same as `bvhlab compare` on the command
-line), with frame time, build time, tree height and SAH cost."""
+line), with frame time, build time, tree height and SAH cost. From the UI the measurement runs on a
+thread (Esc stops it between steps); from a script at once."""
 from __future__ import annotations
 
 import bpy
 
 from . import state
+from .background import ModalTaskMixin, TaskCancelled
 from .operator_support import export_scene, output_path, run_reported
 from .ops_render import render_size
 
@@ -16,45 +18,87 @@ COMPARE_METHODS = (
 )
 
 
-class BVHLAB_OT_compare(bpy.types.Operator):
+class BVHLAB_OT_compare(ModalTaskMixin, bpy.types.Operator):
     """Build and render the scene with every split method; show the table (frame time, build time,
-    height, SAH cost) in the panel and write it as CSV"""
+    height, SAH cost) in the panel and write it as CSV (Esc stops)"""
     bl_idname = "bvhlab.compare"
     bl_label = "Compare Methods"
     bl_options = {"REGISTER"}
 
     def execute(self, context):
-        return run_reported(self, context, lambda: self._compare(context))
+        def work():
+            window_manager = context.window_manager
+            window_manager.progress_begin(0, len(COMPARE_METHODS))
+            try:
+                measure = self._measurement(context)
+                return self._done(context, measure(lambda fraction, text: window_manager.progress_update(
+                    int(fraction * len(COMPARE_METHODS))) or True))
+            finally:
+                window_manager.progress_end()
 
-    def _compare(self, context):
-        from bvhlab.compare import measure_methods, write_csv
+        return run_reported(self, context, work)
+
+    def invoke(self, context, event):
+        def start():
+            measure = self._measurement(context)  # exports on the UI thread
+
+            def work(task):
+                def progress(fraction, text):
+                    task.progress(fraction, text)
+                    task.check()  # Esc: TaskCancelled at the next step
+                return measure(progress)
+
+            return self.start_task(context, work, "Comparing methods")
+
+        return run_reported(self, context, start)
+
+    def finish_task(self, context, task):
+        def finish():
+            if isinstance(task.error, TaskCancelled):
+                message = "Comparison cancelled (Esc)"
+                self.report({"WARNING"}, message)
+                state.messages[state.key(context.scene)] = ("WARNING", message)
+                return {"CANCELLED"}
+            if task.error is not None:
+                raise task.error
+            return self._done(context, task.result)
+
+        return run_reported(self, context, finish)
+
+    def _measurement(self, context):
+        """measure(progress) → rows; everything read from bpy is read here, on the UI thread."""
+        from bvhlab.compare import measure_methods
         from bvhlab.render import default_renderer
 
         settings = context.scene.bvhlab
         exported = export_scene(context, require_camera=True)
         width, height = render_size(context.scene)
+        options = {"frames": settings.compare_frames, "builds": 1, "width": width, "height": height,
+                   "spp": settings.render_supersampling ** 2, "max_depth": settings.render_bounces,
+                   "build_options": {"axis": settings.axis, "max_leaf_size": settings.max_leaf_size}}
+        backend, labels = settings.backend, [method for _, method in COMPARE_METHODS]
+        self._csv_path = output_path(settings.compare_filepath, "bvh_compare.csv")
+
+        def measure(progress):
+            started = []
+
+            def on_step(text: str) -> None:  # "<method>: building" starts each method
+                if text.endswith("building"):
+                    started.append(text)
+                progress(len(started) / len(labels), text)
+
+            return measure_methods(exported, labels, renderer=default_renderer(backend), progress=on_step, **options)
+
+        return measure
+
+    def _done(self, context, rows):
+        from bvhlab.compare import write_csv
+
         labels = {method: label for label, method in COMPARE_METHODS}
-        window_manager = context.window_manager
-        started = []
-
-        def progress(text: str) -> None:  # "<method>: building" starts each method
-            if text.endswith("building"):
-                started.append(text)
-                window_manager.progress_update(len(started))
-
-        window_manager.progress_begin(0, len(labels))
-        try:
-            rows = measure_methods(
-                exported, list(labels), frames=settings.compare_frames, builds=1, width=width, height=height,
-                renderer=default_renderer(settings.backend), spp=settings.render_supersampling ** 2,
-                max_depth=settings.render_bounces, progress=progress,
-                build_options={"axis": settings.axis, "max_leaf_size": settings.max_leaf_size})
-        finally:
-            window_manager.progress_end()
         for row in rows:
             row["label"] = labels[row["method"]]
         state.comparisons[state.key(context.scene)] = rows
-        path = write_csv(rows, output_path(settings.compare_filepath, "bvh_compare.csv"))
+        path = write_csv(rows, self._csv_path)
         best = min(rows, key=lambda row: row["frame_ms"])
         message = (f"Compared {len(rows)} methods; fastest frame: {best['label']} ({best['frame_ms']:.1f} ms); "
                    f"wrote {path}")

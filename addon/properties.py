@@ -87,6 +87,9 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
         ("shade", "Shade", "Whitted shading"), ("heatmap", "Heatmap", "Box tests per pixel")])
     render_overlay: BoolProperty(name="Boxes in image", default=False,
                                  description="Draw the overlay's depth range into the rendered image")
+    viewport_budget_ms: FloatProperty(name="Preview ms", min=5.0, max=1000.0, default=40.0, precision=0, description=(
+        "Rendered viewport: while the view moves, trace at the resolution that takes about this many "
+        "milliseconds; full resolution (then n × n samples) once it stops"))
 
     compare_frames: IntProperty(name="Frames", min=1, max=50, default=3,
                                 description="Renders per method; the frame time is their mean")
@@ -109,8 +112,16 @@ def _set_sphere(obj, value: bool) -> None:
     obj[SPHERE_PROPERTY] = bool(value)
 
 
+def _passes_changed(view_layer, _context) -> None:
+    view_layer.update_render_passes()  # the compositor's Render Layers node shows the pass
+
+
 def register_properties() -> None:
     bpy.types.Scene.bvhlab = bpy.props.PointerProperty(type=BVHLAB_PG_settings)
+    # A pass switch lives on the view layer, like Blender's own (use_pass_z); the engine reads it.
+    bpy.types.ViewLayer.bvhlab_use_pass_heatmap = BoolProperty(
+        name="BVH Heatmap", default=True, update=_passes_changed,
+        description="The bvhlab render engine's traversal-cost heatmap (box tests of the primary rays) as a pass")
     # Stored as the plain custom property bvhlab.blender reads, so files and the CLI need no add-on.
     bpy.types.Object.bvhlab_analytic_sphere = BoolProperty(
         name="Analytic sphere", get=_get_sphere, set=_set_sphere,
@@ -118,5 +129,6 @@ def register_properties() -> None:
 
 
 def unregister_properties() -> None:
+    del bpy.types.ViewLayer.bvhlab_use_pass_heatmap
     del bpy.types.Object.bvhlab_analytic_sphere
     del bpy.types.Scene.bvhlab

@@ -148,6 +148,25 @@ def whitted():
     return scene, {"points": [[-5, -5, 0], [5, 5, 0]]}
 
 
+def moving_ball():
+    """Frames 1-3 for animation renders: a mesh ball rolls along x and an analytic sphere rises,
+    over a floor, seen by a still camera (keyframes with linear interpolation)."""
+    scene = kit.reset(sky=(0.5, 0.65, 0.85), resolution=(160, 120))
+    scene.frame_start, scene.frame_end = 1, 3
+    kit.box("Floor", (-5.0, -5.0, -0.2), (5.0, 5.0, 0.0), [kit.material("Floor", (0.6, 0.6, 0.55))])
+    bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=3, radius=0.7, location=(-2.0, 0.0, 0.7))
+    ball = bpy.context.object
+    ball.name = "Ball"
+    ball.data.materials.append(kit.material("Red", (0.8, 0.15, 0.1)))
+    kit.animate(ball, "location", {1: (-2.0, 0.0, 0.7), 2: (0.0, 0.0, 0.7), 3: (2.0, 0.0, 0.7)})
+    bubble = kit.uv_sphere("Bubble", (0.0, 2.0, 0.6), 0.5, kit.material("Blue", (0.15, 0.3, 0.85)))
+    kit.animate(bubble, "location", {1: (0.0, 2.0, 0.6), 2: (0.0, 2.0, 1.2), 3: (0.0, 2.0, 1.8)})
+    scene.frame_set(1)
+    kit.camera((0.0, -9.0, 3.5), (0.0, 0.5, 0.8), lens=35)
+    kit.point_light((2.0, -4.0, 6.0), 1500)
+    return scene, {"points": [[-5, -5, 0], [5, 5, -0.2]]}
+
+
 SCENES = {
     "five_spheres": (five_spheres, "Five analytic spheres in a row: the report's Figures 3-4, where the "
                      "median split differs from mean and SAH"),
@@ -157,6 +176,8 @@ SCENES = {
     "atrium": (atrium, "An atrium with columns, arches, floor tiles and hanging cloth (the Sponza role "
                "of the report's Table 1)"),
     "whitted": (whitted, "Reflective and transparent spheres over a checkerboard (Whitted 1980)"),
+    "moving_ball": (moving_ball, "Frames 1-3: a mesh ball and an analytic sphere move over a floor "
+                    "(animation renders)"),
 }
 
 

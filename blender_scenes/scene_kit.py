@@ -83,6 +83,16 @@ def uv_sphere(name, location, radius, mat, segments=32, rings=16, analytic=True,
     return obj
 
 
+def animate(obj, path, keys: dict):
+    """Keyframes {frame: value} on a property of `obj`, interpolated linearly."""
+    for frame, value in keys.items():
+        setattr(obj, path, value)
+        obj.keyframe_insert(path, frame=frame)
+    for curve in obj.animation_data.action.fcurves:
+        for point in curve.keyframe_points:
+            point.interpolation = "LINEAR"
+
+
 def modifier(obj, kind, **settings):
     mod = obj.modifiers.new(kind.title(), kind)
     for key, value in settings.items():

@@ -41,6 +41,8 @@ def _draw_callback() -> None:
     built = state.tree_for(context.scene)
     if built is None or built.serial in _failed or context.region_data is None:
         return
+    if context.space_data.shading.type == "RENDERED" and context.engine == "BVHLAB_WHITTED":
+        return  # the engine traces the boxes into its image, depth-correct (report §3.3)
     try:
         draw_scene_overlay(context.scene, context.region_data.perspective_matrix)
     except Exception:  # a draw callback must not raise on every redraw; say it once

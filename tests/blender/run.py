@@ -4,8 +4,10 @@
     .venv/bin/python tests/blender/run.py [--only GROUP ...] [--zip dist/bvhlab-0.1.0.zip]
 
 Groups: install (the built zip installs, unregisters cleanly, enables again), export (bundled and
-small scenes), addon (operators), no_vulkan (backend "vulkan" without a driver), gpu (overlay drawn
-into a GPUOffScreen; batch time for a million boxes). Under a Blender binary the add-on (and with
+small scenes), addon (operators), engine (the render engine: passes against the CPU reference,
+re-renders, animation, `blender -b ... -a` under a binary, the viewport's camera and worker),
+no_vulkan (backend "vulkan" without a driver), gpu (overlay drawn into a GPUOffScreen; batch time
+for a million boxes). Under a Blender binary the add-on (and with
 it the bvhlab wheel) comes from the zip, so `make addon` first; under Python, from addon/ in place
 unless the install group ran. The checks are the ones pytest runs (tests/python/test_blender_*.py,
 test_addon*.py). Blender binaries re-run themselves with BLENDER_USER_RESOURCES set to a temporary
@@ -24,7 +26,7 @@ from pathlib import Path
 IN_BLENDER = "bpy" in sys.modules  # a Blender binary imports bpy before running scripts
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-GROUPS = ("install", "export", "addon", "no_vulkan", "gpu")
+GROUPS = ("install", "export", "addon", "engine", "no_vulkan", "gpu")
 
 
 def _arguments():
@@ -70,7 +72,7 @@ def _checks(groups, zip_path: Path, tmp: Path):
             yield "export", check.__name__, check
         yield "export", "scene_file_round_trip", lambda: checks_cases.check_scene_file_round_trip(tmp)
         yield "export", "large_export", checks_bundled.check_large_export
-    if groups & {"addon", "no_vulkan", "gpu"} and harness._addon_module is None:
+    if groups & {"addon", "engine", "no_vulkan", "gpu"} and harness._addon_module is None:
         harness.enable_addon_from_source()
     if "addon" in groups:
         import checks_addon
@@ -83,6 +85,10 @@ def _checks(groups, zip_path: Path, tmp: Path):
             yield "addon", check.__name__, check
         yield "addon", "export_stats", lambda: checks_addon.check_export_stats(tmp)
         yield "addon", "compare", lambda: checks_addon.check_compare(tmp)
+    if "engine" in groups:
+        import checks_engine
+        for check in checks_engine.engine_checks(binary=IN_BLENDER):
+            yield "engine", check.__name__, lambda c=check: _in_own_folder(c, tmp / c.__name__)
     if "no_vulkan" in groups:
         import checks_addon
         # Read when the first Vulkan instance is made, which no earlier check does (they use the CPU).
@@ -93,6 +99,14 @@ def _checks(groups, zip_path: Path, tmp: Path):
         yield "gpu", "overlay_pixels", checks_gpu.check_overlay_pixels
         yield "gpu", "overlay_colour_by_depth", checks_gpu.check_overlay_colour_by_depth
         yield "gpu", "overlay_million_boxes", checks_gpu.check_overlay_million_boxes
+
+
+def _in_own_folder(check, folder: Path):
+    """Run a check, handing it an empty folder of its own when it takes one."""
+    if not check.__code__.co_argcount:
+        return check()
+    folder.mkdir(parents=True, exist_ok=True)
+    return check(folder)
 
 
 def main() -> int:

@@ -3,17 +3,20 @@
     from bvhlab.blender import export_scene, export_scene_file
     scene = export_scene(bpy.context, scope="visible")      # a bvhlab.Scene
     export_scene_file("scene.npz", bpy.context)             # the file the CLI reads
+    live = LiveScene(); live.sync(depsgraph)                # kept between frames (render engine)
 
 One small module per kind of Blender data (glTF-Blender-IO style): `scope` picks the objects,
-`mesh`, `sphere`, `material`, `camera`, `light` and `world` each gather one thing, `export`
-puts them together. `compat` holds what differs between the supported Blender versions (4.2 LTS
-to 5.3); nothing else checks `bpy.app.version`.
+`mesh`, `sphere`, `material`, `camera`, `light` and `world` each gather one thing, `live` puts
+them together and keeps them between frames, `export` is one sync of a new LiveScene. `compat`
+holds what differs between the supported Blender versions (4.2 LTS to 5.3); nothing else checks
+`bpy.app.version`.
 """
 from .errors import ExportError, ExportWarning, SubstituteWarning
 from .export import export_scene, export_scene_file
 from .light import intensity_from_watts
+from .live import LiveScene, SyncReport
 from .scope import SCOPES
 from .sphere import SPHERE_PROPERTY, is_analytic_sphere
 
-__all__ = ["export_scene", "export_scene_file", "ExportError", "ExportWarning", "SubstituteWarning", "SCOPES",
-           "SPHERE_PROPERTY", "is_analytic_sphere", "intensity_from_watts"]
+__all__ = ["export_scene", "export_scene_file", "LiveScene", "SyncReport", "ExportError", "ExportWarning",
+           "SubstituteWarning", "SCOPES", "SPHERE_PROPERTY", "is_analytic_sphere", "intensity_from_watts"]

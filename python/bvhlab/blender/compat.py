@@ -9,6 +9,8 @@
   5.0; `buffer_to_array` flattens first, which every version reads correctly.
 - `gpu` builtin shaders: the `3D_` prefixes of 3.x are gone (4.0+): `builtin_shader` takes the
   unprefixed name everywhere.
+- Multilayer OpenEXR output: from 5.0 a media type must be chosen before the file format:
+  `use_multilayer_exr`.
 Mesh attributes (`attributes["position"]`, `loop_triangle_polygons`, `material_index`) and the
 Principled BSDF socket names ("Transmission Weight") are the same from 4.2 on.
 """
@@ -58,3 +60,13 @@ def builtin_shader(name: str):
     import gpu
 
     return gpu.shader.from_builtin(name)
+
+
+
+def use_multilayer_exr(image_settings) -> None:
+    """Make `image_settings` (ImageFormatSettings) write a multilayer OpenEXR, every pass of every
+    view layer: file format 'OPEN_EXR_MULTILAYER'; from 5.0 the media type 'MULTI_LAYER_IMAGE'
+    must be chosen first (it leaves that format the only one)."""
+    if "media_type" in image_settings.bl_rna.properties:
+        image_settings.media_type = "MULTI_LAYER_IMAGE"
+    image_settings.file_format = "OPEN_EXR_MULTILAYER"

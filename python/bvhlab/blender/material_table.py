@@ -8,18 +8,25 @@ from .material import gather_material
 
 
 class MaterialTable:
-    """Collects materials in first-use order; every Blender material is read once."""
+    """Collects materials in first-use order; every Blender material is read once. `known` (name →
+    Material) holds materials read before and still valid: they are taken from it instead of read
+    again, and every material read is added to it (`reads` counts them)."""
 
-    def __init__(self):
+    def __init__(self, known: dict[str, Material] | None = None):
         self.materials: list[Material] = []
+        self.known = {} if known is None else known
+        self.reads = 0
         self._index: dict[str, int] = {}  # original material's full name ('' for an empty slot)
 
     def index_of(self, material) -> int:
         """Table index of a Blender material (evaluated or original; None = empty slot)."""
         key = "" if material is None else material.original.name_full
         if key not in self._index:
+            if key not in self.known:
+                self.known[key] = gather_material(material)
+                self.reads += 1
             self._index[key] = len(self.materials)
-            self.materials.append(gather_material(material))
+            self.materials.append(self.known[key])
         return self._index[key]
 
     def slot_indices(self, obj) -> np.ndarray:

@@ -1,5 +1,11 @@
-"""Evaluated mesh → world-space triangles, with bulk `foreach_get` into numpy (no per-vertex Python)."""
+"""Evaluated mesh → world-space triangles, with bulk `foreach_get` into numpy (no per-vertex Python).
+
+Reading (`read_mesh`: object-space vertices, triangle corners, material slots) is kept apart from
+placing (`MeshData.world_triangles`), so a scene kept between frames (`live.LiveScene`) reads a
+mesh again only when its geometry changed and only re-places it when the object moved."""
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -9,24 +15,59 @@ from .errors import ExportError
 CONVERTIBLE_TYPES = frozenset({"CURVE", "SURFACE", "FONT", "META"})
 
 
+@dataclass(frozen=True)
+class MeshData:
+    """One evaluated mesh as read from Blender: float32 object-space vertices (V,3), int32 vertex
+    index of each triangle corner (3T,), int32 material slot of each triangle (T,)."""
+    positions: np.ndarray
+    corners: np.ndarray
+    slots: np.ndarray
+
+    @property
+    def triangle_count(self) -> int:
+        return len(self.slots)
+
+    def world_triangles(self, matrix_world: np.ndarray, name: str) -> np.ndarray:
+        """float32 (T,3,3) world-space triangles. The vertices (fewer than 3 per triangle) are
+        transformed before they are gathered into triangles. Raises ExportError naming the object
+        when a transformed vertex is NaN or outside the supported range (check_world_positions)."""
+        if not len(self.slots):
+            return np.zeros((0, 3, 3), np.float32)
+        linear, offset = matrix_world[:3, :3].astype(np.float32), matrix_world[:3, 3].astype(np.float32)
+        with np.errstate(over="ignore", invalid="ignore"):
+            world = self.positions @ linear.T + offset
+        check_world_positions(world, name)
+        return world[self.corners].reshape(-1, 3, 3)
+
+
+EMPTY_MESH = MeshData(np.zeros((0, 3), np.float32), np.zeros(0, np.int32), np.zeros(0, np.int32))
+
+
 def gather_mesh_triangles(obj, matrix_world: np.ndarray, name: str):
     """World-space triangles of an evaluated object (modifiers applied) and, for each triangle, the
     index of its material slot. Returns (float32 (T,3,3), int32 (T,)); T may be 0.
     Raises ExportError naming the object when a vertex is NaN or infinite."""
+    data = read_mesh(obj, name)
+    return data.world_triangles(matrix_world, name), data.slots
+
+
+def read_mesh(obj, name: str) -> MeshData:
+    """The evaluated geometry of an object in its own space (EMPTY_MESH for objects without any).
+    Raises ExportError naming the object when a vertex is NaN or infinite."""
     if obj.type == "MESH":
-        return _mesh_triangles(obj.data, matrix_world, name)
+        return _read(obj.data, name)
     if obj.type not in CONVERTIBLE_TYPES:
-        return np.zeros((0, 3, 3), np.float32), np.zeros(0, np.int32)
+        return EMPTY_MESH
     mesh = obj.to_mesh()
     try:
-        return _mesh_triangles(mesh, matrix_world, name)
+        return _read(mesh, name)
     finally:
         obj.to_mesh_clear()
 
 
-def _mesh_triangles(mesh, matrix_world: np.ndarray, name: str):
+def _read(mesh, name: str) -> MeshData:
     if len(mesh.polygons) == 0:
-        return np.zeros((0, 3, 3), np.float32), np.zeros(0, np.int32)
+        return EMPTY_MESH
     positions = np.empty(len(mesh.vertices) * 3, np.float32)
     mesh.attributes["position"].data.foreach_get("vector", positions)
     positions = positions.reshape(-1, 3)
@@ -36,12 +77,7 @@ def _mesh_triangles(mesh, matrix_world: np.ndarray, name: str):
         raise ExportError(f"object '{name}' has a vertex that is not a finite number (vertex {bad}: "
                           f"{tuple(float(x) for x in positions[bad])}); fix or delete it before building")
     corners, face_of_triangle = _loop_triangles(mesh)
-    # Transform the vertices (fewer than 3 per triangle) before gathering them into triangles.
-    linear, offset = matrix_world[:3, :3].astype(np.float32), matrix_world[:3, 3].astype(np.float32)
-    with np.errstate(over="ignore", invalid="ignore"):
-        world = positions @ linear.T + offset
-    check_world_positions(world, name)
-    return world[corners].reshape(-1, 3, 3), _triangle_material_slots(mesh, face_of_triangle)
+    return MeshData(positions, corners, _triangle_material_slots(mesh, face_of_triangle))
 
 
 def check_world_positions(world: np.ndarray, name: str) -> None:

@@ -2,7 +2,7 @@
 (collection instances, instancing by vertices or geometry nodes) included."""
 from __future__ import annotations
 
-from typing import Iterator
+from typing import Iterator, NamedTuple
 
 import numpy as np
 
@@ -11,23 +11,42 @@ from .errors import ExportError
 SCOPES = ("selected", "visible")
 
 
+class InScope(NamedTuple):
+    """One object or instance an export covers. `key` names it across depsgraph evaluations:
+    (owner's name, object's name, persistent id of the instance or ())."""
+    obj: object
+    matrix: np.ndarray
+    name: str
+    key: tuple
+
+
 def objects_in_scope(depsgraph, view_layer, scope: str) -> Iterator[tuple[object, np.ndarray, str]]:
     """Yield (evaluated object, 4×4 float64 world matrix, name for messages) for every object and
     instance the depsgraph shows whose owner (the object itself, or the object that instances it)
     is in `scope`. An instance's data is only valid until the next item: use it before moving on."""
+    for item in instances_in_scope(depsgraph, view_layer, scope):
+        yield item.obj, item.matrix, item.name
+
+
+def instances_in_scope(depsgraph, view_layer, scope: str) -> Iterator[InScope]:
+    """`objects_in_scope`, with a key for each item (see InScope)."""
     if scope not in SCOPES:
         raise ExportError(f"unknown scope '{scope}'; expected one of: {', '.join(SCOPES)}")
     in_scope = _selected if scope == "selected" else _visible
     decided: dict[str, bool] = {}  # instancers own thousands of instances: ask Blender once each
     for instance in depsgraph.object_instances:
         owner = (instance.parent if instance.is_instance else instance.object).original
-        key = owner.name_full
-        if key not in decided:
-            decided[key] = in_scope(owner, view_layer)
-        if decided[key]:
+        owner_name = owner.name_full
+        if owner_name not in decided:
+            decided[owner_name] = in_scope(owner, view_layer)
+        if decided[owner_name]:
             obj = instance.object
-            name = f"{obj.name} (instanced by {owner.name})" if instance.is_instance else obj.name
-            yield obj, np.array(instance.matrix_world, np.float64), name
+            if instance.is_instance:
+                name, key = f"{obj.name} (instanced by {owner.name})", (owner_name, obj.original.name_full,
+                                                                          tuple(instance.persistent_id))
+            else:
+                name, key = obj.name, (owner_name, owner_name, ())
+            yield InScope(obj, np.array(instance.matrix_world, np.float64), name, key)
 
 
 def _selected(obj, view_layer) -> bool:

@@ -19,8 +19,18 @@ def gather_sphere(obj, matrix_world: np.ndarray, name: str) -> np.ndarray:
     """(cx, cy, cz, radius) float32 of a flagged evaluated object: the centre is the world position
     of its bounds' centre (its location, for a sphere mesh around its origin), the radius the
     largest world-space half extent of its bounds (scale and modifiers included)."""
+    return place_sphere(sphere_bounds(obj), matrix_world, name)
+
+
+def sphere_bounds(obj) -> np.ndarray:
+    """float64 (2,3): the object-space bounds (min, max) of an evaluated object."""
     corners = np.array([tuple(c) for c in obj.bound_box], np.float64)  # 8 local-space corners
-    lo, hi = corners.min(0), corners.max(0)
+    return np.stack([corners.min(0), corners.max(0)])
+
+
+def place_sphere(bounds: np.ndarray, matrix_world: np.ndarray, name: str) -> np.ndarray:
+    """The sphere of `gather_sphere` from object-space bounds and a world matrix."""
+    lo, hi = bounds
     centre = matrix_world[:3, :3] @ ((lo + hi) / 2) + matrix_world[:3, 3]
     axis_scales = np.linalg.norm(matrix_world[:3, :3], axis=0)  # world length of each local axis
     radius = float(np.max((hi - lo) / 2 * axis_scales))

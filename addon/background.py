@@ -1,0 +1,112 @@
+"""Long operator work off Blender's UI thread, with progress and Esc (the panel's Build and Compare).
+
+Blender's `wm.progress_*` has no cancel, and an operator's `execute` blocks the UI until it
+returns. So an operator started from the UI (`invoke`) prepares what needs bpy on the UI thread
+(the export), hands the rest to a `BackgroundTask` thread, and runs modally: a timer event updates
+the progress (window manager cursor and the status bar), Esc asks the task to stop, and when the
+thread is done the operator finishes on the UI thread. Scripts calling the operator get `execute`,
+which does the same work synchronously.
+"""
+from __future__ import annotations
+
+import os
+import threading
+
+#: How often (s) a modal operator looks at its task.
+POLL_S = 0.1
+#: Threads for work started from the UI: one core stays with Blender's UI thread (drawing the
+#: window, which on a software OpenGL takes CPU too), or the UI stalls while the work runs.
+UI_WORK_THREADS = max(1, (os.cpu_count() or 2) - 1)
+
+
+class TaskCancelled(Exception):
+    """The user pressed Esc; the work stopped at its next progress report."""
+
+
+class BackgroundTask:
+    """`work(task)` on a daemon thread. The work reports with `task.progress(fraction, text)`, which
+    returns False once cancelled (for callbacks such as bvhlab.build's) and `task.check()`, which
+    raises TaskCancelled then. Exceptions are kept for the UI thread (`error`), never lost."""
+
+    def __init__(self, work):
+        self.fraction, self.text = 0.0, ""
+        self.result, self.error = None, None
+        self._cancel = threading.Event()
+        self._thread = threading.Thread(target=self._run, args=(work,), name="bvhlab task", daemon=True)
+        self._thread.start()
+
+    def _run(self, work) -> None:
+        try:
+            self.result = work(self)
+        except BaseException as error:  # handed to the UI thread
+            self.error = error
+
+    def progress(self, fraction: float | None = None, text: str | None = None) -> bool:
+        if fraction is not None:
+            self.fraction = min(max(float(fraction), 0.0), 1.0)
+        if text is not None:
+            self.text = text
+        return not self._cancel.is_set()
+
+    def check(self) -> None:
+        if self._cancel.is_set():
+            raise TaskCancelled()
+
+    def cancel(self) -> None:
+        self._cancel.set()
+
+    @property
+    def cancelled(self) -> bool:
+        return self._cancel.is_set()
+
+    @property
+    def done(self) -> bool:
+        return not self._thread.is_alive()
+
+    def wait(self) -> None:
+        self._thread.join()
+
+
+class ModalTaskMixin:
+    """For operators: `start_task(context, work, label)` from `invoke`; implement
+    `finish_task(context, task)` (UI thread, returns the operator's result set)."""
+
+    _task: BackgroundTask | None = None
+    _timer = None
+    _label = ""
+
+    def start_task(self, context, work, label: str) -> set[str]:
+        self._task, self._label = BackgroundTask(work), label
+        window_manager = context.window_manager
+        self._timer = window_manager.event_timer_add(POLL_S, window=context.window)
+        window_manager.modal_handler_add(self)
+        window_manager.progress_begin(0, 100)
+        self._show(context)
+        return {"RUNNING_MODAL"}
+
+    def modal(self, context, event):
+        task = self._task
+        if event.type == "ESC" and event.value == "PRESS":
+            task.cancel()
+            self._show(context)
+            return {"RUNNING_MODAL"}
+        if event.type != "TIMER":  # any window timer: looking at the task is cheap
+            return {"PASS_THROUGH"}
+        if not task.done:
+            self._show(context)
+            return {"RUNNING_MODAL"}
+        self._end(context)
+        return self.finish_task(context, task)
+
+    def _show(self, context) -> None:
+        task = self._task
+        context.window_manager.progress_update(int(task.fraction * 100))
+        state = "cancelling…" if task.cancelled else f"{task.fraction:.0%}"
+        text = f"{self._label}: {task.text} {state}" if task.text else f"{self._label} {state}"
+        context.workspace.status_text_set(f"{text}   (Esc to cancel)")
+
+    def _end(self, context) -> None:
+        window_manager = context.window_manager
+        window_manager.event_timer_remove(self._timer)
+        window_manager.progress_end()
+        context.workspace.status_text_set(None)

@@ -1,0 +1,37 @@
+"""The engine's render passes: Combined, Depth (Blender's Z pass, when the view layer asks for it)
+and the traversal-cost heatmap as a pass of its own, so they can be saved (multilayer EXR) and
+composited (Render Layers node)."""
+from __future__ import annotations
+
+import numpy as np
+
+COMBINED, DEPTH, HEATMAP = "Combined", "Depth", "BVH Heatmap"
+#: The view layer's switch for the heatmap pass (a property the add-on adds to ViewLayer).
+HEATMAP_PROPERTY = "bvhlab_use_pass_heatmap"
+
+
+def wanted(view_layer) -> list[tuple[str, int, str, str]]:
+    """(name, channels, channel ids, socket type) of each pass the view layer asks for."""
+    passes = [(COMBINED, 4, "RGBA", "COLOR")]
+    if view_layer.use_pass_z:
+        passes.append((DEPTH, 1, "Z", "VALUE"))
+    if getattr(view_layer, HEATMAP_PROPERTY, False):
+        passes.append((HEATMAP, 4, "RGBA", "COLOR"))
+    return passes
+
+
+def register(engine, scene, view_layer) -> None:
+    """RenderEngine.update_render_passes: Blender allocates these in the Render Result and shows
+    them as sockets of the compositor's Render Layers node."""
+    for name, channels, ids, kind in wanted(view_layer):
+        engine.register_pass(scene, view_layer, name, channels, ids, kind)
+
+
+def write(layer, name: str, pixels: np.ndarray) -> bool:
+    """Copy a top-row-first image (H, W) or (H, W, C) into a pass of a RenderLayer (Blender's row 0
+    is the bottom). False when the layer has no such pass (the view layer did not ask for it)."""
+    render_pass = layer.passes.get(name)
+    if render_pass is None:
+        return False
+    render_pass.rect.foreach_set(np.ascontiguousarray(pixels[::-1], np.float32).reshape(-1))
+    return True

@@ -1,0 +1,363 @@
+"""The render engine "bvhlab Whitted" under Blender's own render pipeline (bpy.ops.render.render, as
+F12 and `blender -b` run it): the passes read back from a multilayer EXR Blender wrote (read by
+tests/blender/exr.py, not by Blender), against the CPU reference tracer on the same export, a
+brute-force depth and Bvh.intersect's box-test counts; what a re-render reads again; animation
+frames. The add-on must be enabled (harness.enable_addon_from_source or an installed zip)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+import exr
+import harness
+import bpy
+import bvhlab
+from bvhlab.blender import export_scene
+from bvhlab.blender.compat import use_multilayer_exr
+
+ENGINE = "BVHLAB_WHITTED"
+#: Blender's value for "no surface" in a Depth pass (render_result.cc fills passes named Depth with it).
+MISS_DEPTH = 10e10
+
+
+def _records():
+    return harness.addon().engine.records
+
+
+def _last_final(scene=None) -> dict:
+    scene = scene or bpy.context.scene
+    return _records().last_final[scene.session_uid]
+
+
+def use_engine(scene, **settings):
+    """Select the engine on `scene`, with the Depth pass and the given scene.bvhlab settings."""
+    scene.render.engine = ENGINE
+    bpy.context.view_layer.use_pass_z = True
+    for name, value in settings.items():
+        setattr(scene.bvhlab, name, value)
+
+
+def render_passes(tmp_dir, name: str = "render") -> dict:
+    """F12 (bpy.ops.render.render), then the Render Result saved as a 32-bit multilayer EXR without
+    compression; returns {pass name: top-row-first float32 array} for the first view layer."""
+    assert bpy.ops.render.render() == {"FINISHED"}
+    settings = bpy.context.scene.render.image_settings
+    use_multilayer_exr(settings)
+    settings.exr_codec, settings.color_depth = "NONE", "32"
+    path = tmp_dir / f"{name}.exr"
+    bpy.data.images["Render Result"].save_render(str(path))
+    channels = exr.read_exr(path)
+    layer = bpy.context.view_layer.name
+    out = {}
+    for pass_name, ids in (("Combined", "RGBA"), ("Depth", "Z"), ("BVH Heatmap", "RGBA")):
+        names = [f"{layer}.{pass_name}.{c}" for c in ids]
+        if all(n in channels for n in names):
+            out[pass_name] = np.stack([channels[n] for n in names], -1) if len(ids) > 1 else channels[names[0]]
+    return out
+
+
+def reference(scene, spp: int, overlay=None, mode="shade", **build):
+    """bvhlab.render on the CPU reference of a fresh export, tree built directly: the oracle."""
+    exported = export_scene(bpy.context)
+    settings = scene.bvhlab
+    bvh = bvhlab.build(exported, method=settings.method, bins=settings.bins, axis=settings.axis,
+                       max_leaf_size=settings.max_leaf_size, **build)
+    width, height = scene.render.resolution_x, scene.render.resolution_y
+    image, _ = bvhlab.render(exported, bvh, width, height, backend="cpu", spp=spp, max_depth=settings.render_bounces,
+                             overlay_depth=overlay, traversal=settings.traversal, mode=mode,
+                             color_by_depth=settings.overlay_color_by_depth, line_width=settings.overlay_line_width)
+    return image, exported, bvh
+
+
+def compare_images(ours: np.ndarray, oracle: np.ndarray, backend: str) -> None:
+    """Exactly equal on the CPU reference (same code, same inputs); on a GPU within the tolerance
+    of tests/python/test_render_vulkan.py."""
+    diff = np.abs(ours - oracle)
+    if backend == "cpu":
+        assert diff.max() == 0.0, f"differs from the CPU reference by up to {diff.max()}"
+    else:
+        assert diff.mean() <= 1e-3 and (diff.max(-1) > 1e-3).mean() <= 0.01, (diff.mean(), diff.max())
+
+
+def check_engine_selectable() -> None:
+    """The engine is a RenderEngine Blender lists; Blender's own output panels and the material
+    surface panel show for it."""
+    assert ENGINE in {getattr(cls, "bl_idname", None) for cls in bpy.types.RenderEngine.__subclasses__()}
+    scene = harness.boxes_scene()
+    scene.render.engine = ENGINE
+    assert scene.render.engine == ENGINE
+    for panel in ("RENDER_PT_format", "RENDER_PT_output", "RENDER_PT_frame_range", "DATA_PT_lens", "DATA_PT_light",
+                  "EEVEE_MATERIAL_PT_surface"):
+        assert ENGINE in getattr(bpy.types, panel).COMPAT_ENGINES, panel
+
+
+def check_combined_and_heatmap_match_the_tracer(tmp_dir) -> None:
+    """Whitted scene (mirror, glass, analytic spheres), 2×2 samples, 5 bounces, boxes of depths 1-3
+    in the image, backend auto: Combined and BVH Heatmap equal bvhlab.render of the exported
+    scene from the same camera (the CPU reference; exactly, when auto rendered on the CPU)."""
+    scene = harness.open_scene("whitted")
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 160, 120, 100
+    use_engine(scene, backend="auto", render_supersampling=2, render_bounces=5, render_overlay=True,
+               overlay_depth_min=1, overlay_depth_max=3, traversal="stackless")
+    got = render_passes(tmp_dir)
+    record = _last_final(scene)
+    combined, _, _ = reference(scene, spp=4, overlay=(1, 3))
+    heat, _, _ = reference(scene, spp=4, overlay=(1, 3), mode="heatmap")
+    assert got["Combined"].shape == (120, 160, 4)
+    compare_images(got["Combined"], combined, record["backend"])
+    compare_images(got["BVH Heatmap"], heat, record["backend"])
+    sky = np.abs(combined[..., :3] - np.array(export_scene(bpy.context).sky)).max(-1) < 1e-6
+    assert 0.1 < sky.mean() < 0.9, "the picture must show both geometry and sky"
+    print(f"engine: whitted 160×120, 4 spp on {record['device']} ({record['backend']}); {record.get('note')}")
+
+
+def heat_color(x: np.ndarray) -> np.ndarray:
+    """shaders/tracer/shade_colors.glsl heat_color, in numpy."""
+    t = np.clip(x, 0.0, 1.0)[..., None]
+    return np.clip(1.5 - np.abs(4.0 * t - np.array([3.0, 2.0, 1.0])), 0.0, 1.0)
+
+
+def check_heatmap_is_box_tests(tmp_dir) -> None:
+    """At one sample per pixel the heatmap pass is heat_color(box tests / (8 × tree height)) of the
+    primary rays, the box tests counted by Bvh.intersect (the core's traversal, not the tracer's)."""
+    scene = harness.open_scene("suzanne_250k")
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 96, 72, 100
+    use_engine(scene, backend="cpu", render_supersampling=1, render_overlay=False, traversal="stack")
+    got = render_passes(tmp_dir)
+    exported = export_scene(bpy.context)
+    bvh = bvhlab.build(exported)
+    directions = _primary_directions(exported.camera, 96, 72)
+    origins = np.ascontiguousarray(np.broadcast_to(np.float32(exported.camera.position), directions.shape))
+    visited = bvh.intersect(origins, directions, traversal="stack")["nodes_visited"].reshape(72, 96)
+    expected = heat_color(visited / (8.0 * bvh.stats["height"]))
+    np.testing.assert_allclose(got["BVH Heatmap"][..., :3], expected, atol=1e-6)
+    assert len(np.unique(visited)) > 10, "the heatmap must vary over the picture"
+
+
+def _primary_directions(camera, width: int, height: int) -> np.ndarray:
+    """Pixel-centre directions with unit component along the view axis (written here again, not
+    taken from the engine)."""
+    position, look_at, up = (np.array(v, np.float64) for v in (camera.position, camera.look_at, camera.up))
+    forward = (look_at - position) / np.linalg.norm(look_at - position)
+    right = np.cross(forward, up)
+    right /= np.linalg.norm(right)
+    true_up = np.cross(right, forward)
+    tan = math.tan(math.radians(camera.fov_y) / 2)
+    xs = ((np.arange(width) + 0.5) / width * 2 - 1) * tan * width / height
+    ys = (1 - (np.arange(height) + 0.5) / height * 2) * tan
+    d = forward + xs[None, :, None] * right + ys[:, None, None] * true_up
+    return np.ascontiguousarray(d.reshape(-1, 3), np.float32)
+
+
+def brute_force_depth(exported, width: int, height: int) -> np.ndarray:
+    """Camera-space depth of the nearest triangle or sphere through each pixel centre, testing every
+    primitive (Möller-Trumbore; the sphere quadratic), float64; MISS_DEPTH for none."""
+    directions = _primary_directions(exported.camera, width, height).astype(np.float64)
+    origin = np.array(exported.camera.position, np.float64)
+    best = np.full(len(directions), np.inf)
+    tris = exported.triangles.astype(np.float64)
+    for chunk in np.array_split(np.arange(len(tris)), max(1, len(tris) // 64)):
+        a, b, c = tris[chunk, 0], tris[chunk, 1], tris[chunk, 2]
+        e1, e2 = b - a, c - a
+        p = np.cross(directions[:, None], e2[None])
+        det = (p * e1[None]).sum(-1)
+        inv = 1.0 / np.where(np.abs(det) < 1e-12, np.nan, det)
+        s = origin - a
+        u = (p * s[None]).sum(-1) * inv
+        q = np.cross(s, e1)
+        v = (directions @ q.T) * inv
+        t = (e2 * q).sum(-1)[None] * inv
+        hit = (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 1e-6)
+        best = np.minimum(best, np.where(hit, t, np.inf).min(1))
+    for cx, cy, cz, r in exported.spheres.astype(np.float64):
+        oc = origin - (cx, cy, cz)
+        a2, b2, c2 = (directions ** 2).sum(1), 2 * directions @ oc, oc @ oc - r * r
+        disc = b2 * b2 - 4 * a2 * c2
+        t = (-b2 - np.sqrt(np.maximum(disc, 0))) / (2 * a2)
+        best = np.minimum(best, np.where((disc >= 0) & (t > 1e-6), t, np.inf))
+    return np.where(np.isfinite(best), best, MISS_DEPTH).reshape(height, width)
+
+
+def check_depth_is_camera_z(tmp_dir) -> None:
+    """Depth pass = distance along the view axis to the nearest surface through each pixel centre
+    (Blender's Z pass; Blender's "no surface" value where there is none), against a brute-force
+    test of every triangle and sphere."""
+    scene = harness.open_scene("whitted")
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 80, 60, 100
+    use_engine(scene, backend="cpu", render_supersampling=2, render_overlay=True, overlay_depth_min=0,
+               overlay_depth_max=2)
+    depth = render_passes(tmp_dir)["Depth"]
+    expected = brute_force_depth(export_scene(bpy.context), 80, 60)
+    hit = expected < MISS_DEPTH
+    assert 0.2 < hit.mean() < 0.95
+    agree = np.where(hit, np.abs(depth - expected) <= 1e-4 * expected, depth == np.float32(MISS_DEPTH))
+    assert agree.mean() >= 0.995, f"only {agree.mean():.4f} of the pixels have the brute-force depth"
+
+
+def _principled(name: str, color):
+    from bvhlab.blender.compat import ensure_shader_tree
+
+    material = bpy.data.materials.new(name)
+    ensure_shader_tree(material).nodes["Principled BSDF"].inputs["Base Color"].default_value = (*color, 1.0)
+    return material
+
+
+def check_rerender_reads_only_what_changed(tmp_dir) -> None:
+    """Persistent Data on (Blender keeps the engine and its depsgraph between renders): a changed
+    material reaches the next render with no object read again, a moved object is placed again
+    (tree refit, not rebuilt), an edited mesh is read again; every render equals bvhlab.render of
+    a full export. Off: every render exports everything, and the tree is still kept."""
+    scene = harness.boxes_scene()
+    box = bpy.data.objects["Box A"]
+    box.data.materials.append(_principled("Paint", (0.8, 0.1, 0.1)))
+    use_engine(scene, backend="cpu", render_supersampling=1, render_overlay=False)
+    scene.render.use_persistent_data = True
+    steps = [("first", None), ("material", lambda: _set_color("Paint", (0.1, 0.8, 0.1))),
+             ("move", lambda: setattr(bpy.data.objects["Box B"], "location", (1.0, 0.3, 0.9))),
+             ("edit", lambda: _move_vertex("Box C")), ("nothing", None)]
+    seen, images = [], []
+    for step, change in steps:
+        if change:
+            change()
+        images.append(render_passes(tmp_dir, step)["Combined"])
+        record = _last_final(scene)
+        totals = record["totals"]
+        seen.append((step, totals.full_syncs, totals.objects_read, totals.objects_moved, totals.materials_read,
+                     record["tree"]))
+        compare_images(images[-1], reference(scene, spp=1)[0], "cpu")
+    print(f"engine re-renders (step, full exports, objects read, moved, materials read, tree): {seen}")
+    # materials: the empty slot's default and "Paint" at first; the edited mesh keeps its triangle
+    # count and order, so the tree is refit for it too
+    assert [row[1:] for row in seen] == [(1, 3, 0, 2, "built"), (1, 3, 0, 3, "kept"), (1, 3, 1, 3, "refit"),
+                                         (1, 4, 1, 3, "refit"), (1, 4, 1, 3, "kept")], seen
+    assert np.abs(images[1] - images[0]).max() > 0.1, "the new colour did not reach the render"
+    scene.render.use_persistent_data = False
+    render_passes(tmp_dir, "fresh")
+    record = _last_final(scene)
+    assert record["totals"].full_syncs == 1 and record["tree"] == "kept", record
+
+
+def _set_color(material: str, color) -> None:
+    bpy.data.materials[material].node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (*color, 1)
+
+
+def _move_vertex(name: str) -> None:
+    mesh = bpy.data.objects[name].data
+    mesh.vertices[0].co.z += 0.3
+    mesh.update()
+
+
+def _exr_rgba(path) -> np.ndarray:
+    channels = exr.read_exr(path)
+    return np.stack([channels[c] for c in "RGBA"], -1)
+
+
+def _red_centroid_x(image: np.ndarray) -> float:
+    """Mean column of the red ball's pixels (red well above green and blue)."""
+    red = (image[..., 0] > image[..., 1] + 0.15) & (image[..., 0] > image[..., 2] + 0.15)
+    assert red.sum() > 30, "the red ball is not in the picture"
+    return float(np.nonzero(red)[1].mean())
+
+
+def _exr_output(scene, path_prefix) -> None:
+    scene.render.filepath = str(path_prefix)
+    settings = scene.render.image_settings
+    settings.file_format, settings.exr_codec, settings.color_depth, settings.color_mode = "OPEN_EXR", "NONE", "32", "RGBA"
+
+
+def check_animation_frames(tmp_dir) -> None:
+    """bpy.ops.render.render(animation=True) over frames 1-3 of the animated bundled scene (what
+    `blender -b moving_ball.blend -a` runs), Persistent Data on: three EXR files, each equal to
+    bvhlab.render of that frame's export; the red ball moves right from frame to frame; between
+    frames the two moving objects are placed again, none read again, and the tree is refit."""
+    scene = harness.open_scene("moving_ball")
+    use_engine(scene, backend="cpu", render_supersampling=1)
+    scene.render.use_persistent_data = True
+    _exr_output(scene, tmp_dir / "anim_")
+    assert bpy.ops.render.render(animation=True) == {"FINISHED"}
+    files = sorted(tmp_dir.glob("anim_*.exr"))
+    assert [f.name for f in files] == ["anim_0001.exr", "anim_0002.exr", "anim_0003.exr"], files
+    record = _last_final(scene)
+    totals = record["totals"]
+    assert (totals.full_syncs, totals.objects_read, totals.objects_moved) == (1, 3, 4), totals
+    assert record["tree"] == "refit", record["tree"]
+    centroids = []
+    for frame, path in zip((1, 2, 3), files):
+        scene.frame_set(frame)
+        image = _exr_rgba(path)
+        compare_images(image, reference(scene, spp=1)[0], "cpu")
+        centroids.append(_red_centroid_x(image))
+    assert centroids[0] + 10 < centroids[1] < centroids[2] - 10, f"the ball does not move right: {centroids}"
+
+
+def check_command_line_frames(tmp_dir) -> None:
+    """A real Blender binary: `blender -b moving_ball.blend -E BVHLAB_WHITTED -o ... -F OPEN_EXR -f 1
+    -a` in a child process with the installed extension enabled by --addons: frame 1, then the
+    animation (frame 1 again, 2, 3): three files, each equal to bvhlab.render of its frame's export."""
+    import os
+    import subprocess
+
+    blend = harness.SCENES_DIR / harness.scenes_index()["moving_ball"]["file"]
+    command = [bpy.app.binary_path, "--background", "--factory-startup", str(blend), "--addons",
+               harness._addon_module, "--engine", ENGINE, "--render-output", str(tmp_dir / "cli_####"),
+               "--render-format", "OPEN_EXR", "--python-expr", _CLI_SETUP, "--render-frame", "1", "--render-anim"]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=600, env=dict(os.environ))
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
+    files = sorted(p.name for p in tmp_dir.glob("cli_*.exr"))
+    assert files == ["cli_0001.exr", "cli_0002.exr", "cli_0003.exr"], (files, done.stdout[-2000:])
+    scene = harness.open_scene("moving_ball")
+    use_engine(scene, backend="auto", render_supersampling=1)
+    for frame in (1, 2, 3):
+        scene.frame_set(frame)
+        compare_images(_exr_rgba(tmp_dir / f"cli_{frame:04d}.exr"), reference(scene, spp=1)[0], _auto_backend())
+
+
+#: Run by the child Blender before it renders: lossless EXR output (the file's own settings are PNG).
+_CLI_SETUP = ("import bpy; s = bpy.context.scene.render.image_settings; "
+              "s.exr_codec, s.color_depth, s.color_mode = 'NONE', '32', 'RGBA'")
+
+
+def _auto_backend() -> str:
+    return harness.addon().engine.tracer.open_tracer("auto").backend
+
+
+def check_errors_are_reported() -> None:
+    """No camera, and nothing to render: the render stops with Blender's error report naming the
+    problem (a RuntimeError for a script), and Blender renders again once it is fixed."""
+    scene = harness.boxes_scene()
+    use_engine(scene, backend="cpu")
+    camera = scene.camera
+    scene.camera = None
+    _expect_render_error("camera")
+    scene.camera = camera
+    for obj in list(scene.objects):
+        if obj.type == "MESH":
+            obj.hide_render = obj.hide_viewport = True
+            obj.hide_set(True)
+    _expect_render_error("no mesh in scope")
+    for obj in scene.objects:
+        obj.hide_render = obj.hide_viewport = False
+        obj.hide_set(False)
+    assert bpy.ops.render.render() == {"FINISHED"}
+
+
+def _expect_render_error(fragment: str) -> None:
+    try:
+        bpy.ops.render.render()
+    except RuntimeError as error:
+        assert fragment in str(error), f"'{fragment}' not in '{error}'"
+        return
+    raise AssertionError(f"the render did not fail with '{fragment}'")
+
+
+def engine_checks(binary: bool) -> list:
+    """The checks in run order (each taking a fresh folder when it has a parameter); the command
+    line one only under a Blender binary."""
+    import checks_engine_viewport as viewport
+
+    checks = [check_engine_selectable, check_combined_and_heatmap_match_the_tracer, check_heatmap_is_box_tests,
+              check_depth_is_camera_z, check_rerender_reads_only_what_changed, check_animation_frames,
+              check_errors_are_reported, viewport.check_view_frustum, viewport.check_viewport_worker_levels,
+              viewport.check_viewport_build_cancels]
+    return checks + [check_command_line_frames] if binary else checks

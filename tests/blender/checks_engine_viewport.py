@@ -1,0 +1,160 @@
+"""The render engine's Rendered viewport without a window: the camera it traces for a region
+(against Blender's own projection) and its worker thread (levels, the final image against
+bvhlab.render, Esc during a build). The add-on must be enabled."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+import harness
+import bpy
+import bvhlab
+from checks_engine import compare_images
+
+
+def _engine_module(name: str):
+    from importlib import import_module
+
+    return import_module(f"{harness.addon().__name__}.engine.{name}")
+
+
+def _camera_matrices(scene, width: int, height: int):
+    """view_matrix and window_matrix of the scene camera, as a viewport looking through it has them."""
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    camera = scene.camera.evaluated_get(depsgraph)
+    window = camera.calc_matrix_camera(depsgraph, x=width, y=height)
+    return np.array(camera.matrix_world.inverted()), np.array(window)
+
+
+def _project_pinhole(points: np.ndarray, frustum) -> np.ndarray:
+    """Traced-image pixel coordinates (x right, y up, origin at the bottom left) of world points
+    through the frustum's pinhole camera."""
+    camera = frustum.camera()
+    position, look_at, up = (np.array(v, np.float64) for v in (camera.position, camera.look_at, camera.up))
+    forward = (look_at - position) / np.linalg.norm(look_at - position)
+    right = np.cross(forward, up)
+    right /= np.linalg.norm(right)
+    true_up = np.cross(right, forward)
+    d = points - position
+    tan = math.tan(math.radians(camera.fov_y) / 2)
+    x = (d @ right) / (d @ forward) / (tan * frustum.width / frustum.height)
+    y = (d @ true_up) / (d @ forward) / tan
+    return np.stack([(x + 1) / 2 * frustum.width, (y + 1) / 2 * frustum.height], -1)
+
+
+def check_view_frustum() -> None:
+    """Where a world point lands in the region by Blender's own projection (window @ view) is
+    where the traced image, drawn at the frustum's rectangle, shows it: centred, with lens shift
+    (an off-centre projection) and orthographic (within the pinhole stand-in's 1/500)."""
+    view_camera = _engine_module("view_camera")
+    scene = harness.boxes_scene()
+    cam = scene.camera.data
+    points = np.random.default_rng(4).uniform(-2, 2, (200, 3)) + (0, 0.5, 1)
+    errors = []
+    for shift, kind, tolerance in (((0, 0), "PERSP", 1e-3), ((0.2, -0.1), "PERSP", 1e-3), ((0.1, 0), "ORTHO", 0.5)):
+        cam.type, (cam.shift_x, cam.shift_y), cam.ortho_scale = kind, shift, 6.0
+        width, height = 320, 200
+        view, window = _camera_matrices(scene, width, height)
+        frustum = view_camera.view_frustum(view, window, width, height, perspective=kind == "PERSP",
+                                           view_distance=8.0)
+        clip = (window @ view @ np.c_[points, np.ones(len(points))].T).T
+        blender_px = (clip[:, :2] / clip[:, 3:] + 1) / 2 * (width, height)
+        x0, y0, w, h = frustum.draw_rect
+        ours = _project_pinhole(points, frustum) * (w / frustum.width, h / frustum.height) + (x0, y0)
+        error = np.abs(ours - blender_px).max()
+        errors.append(f"{kind} shift {shift}: {error:.2g} px")
+        assert error < tolerance, (shift, kind, error)
+        if shift == (0, 0) and kind == "PERSP":
+            assert (frustum.width, frustum.height) == (width, height) and frustum.draw_rect == (0, 0, width, height)
+    cam.type, cam.shift_x, cam.shift_y = "PERSP", 0.0, 0.0
+    print("view frustum against Blender's projection:", "; ".join(errors))
+
+
+def _wait(condition, timeout: float = 120.0, what: str = "the viewport worker"):
+    import time
+
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        value = condition()
+        if value:
+            return value
+        time.sleep(0.02)
+    raise AssertionError(f"{what} did not get there within {timeout} s")
+
+
+def _session_for(scene, width: int, height: int, spp: int, overlay=None):
+    """A viewport worker fed the way view_update / view_draw feed it, looking through the scene
+    camera; returns (session, request)."""
+    from bvhlab.blender import LiveScene
+
+    viewport, view_camera, tracer = _engine_module("viewport"), _engine_module("view_camera"), _engine_module("tracer")
+    live = LiveScene("visible", require_camera=False)
+    report = live.sync(bpy.context.evaluated_depsgraph_get(), scene, bpy.context.view_layer)
+    view, window = _camera_matrices(scene, width, height)
+    frustum = view_camera.view_frustum(view, window, width, height)
+    settings = tracer.TraceSettings(spp=spp, max_depth=5, overlay=overlay, traversal="stackless")
+    build = _engine_module("scene_tree").BuildSettings()
+    request = viewport.ViewRequest(frustum, settings, "cpu", build, budget_ms=5.0)
+    session = viewport.ViewportSession()
+    session.set_scene(live.scene, report)
+    session.request(request)
+    return session, request, live
+
+
+def check_viewport_worker_levels() -> None:
+    """The viewport's worker, fed one scene and one view: a preview at a fraction of the resolution,
+    then full resolution, then 2×2 samples; the last equals bvhlab.render from the view's camera
+    (with the boxes of depths 8-9 traced in). Frame times are printed, not asserted."""
+    scene = harness.open_scene("atrium")
+    session, request, live = _session_for(scene, 240, 160, spp=4, overlay=(8, 9))
+    try:
+        levels = []
+
+        def refined():
+            frame = session.latest_frame()
+            if frame is not None and (not levels or levels[-1][0] != frame.level):
+                levels.append((frame.level, frame.image.shape[:2], round(frame.timings["trace_ms"], 1)))
+            return frame if frame is not None and frame.level == "refined" else None
+
+        frame = _wait(refined)
+        expected, _ = bvhlab.render(live.scene.__class__(**_scene_fields(live.scene, request.frustum.camera())),
+                                    session.tree.bvh, 240, 160, backend="cpu", spp=4, max_depth=5,
+                                    overlay_depth=(8, 9), traversal="stackless")
+        compare_images(frame.image, expected, "cpu")
+        names = [name for name, _, _ in levels]
+        assert names[-2:] == ["full", "refined"] and set(names) <= {"preview", "full", "refined"}, levels
+        if "preview" in names:
+            assert levels[names.index("preview")][1][1] < 240
+        print(f"viewport worker levels on the atrium at 240×160 (level, size, trace ms): {levels}")
+    finally:
+        session.close()
+
+
+def _at_level(session, level: str):
+    frame = session.latest_frame()
+    return frame if frame is not None and frame.level == level else None
+
+
+def _scene_fields(scene, camera) -> dict:
+    return {"triangles": scene.triangles, "spheres": scene.spheres, "materials": scene.materials,
+            "tri_material": scene.tri_material, "sphere_material": scene.sphere_material, "camera": camera,
+            "light": scene.light, "sky": scene.sky}
+
+
+def check_viewport_build_cancels() -> None:
+    """Esc (session.cancel) during the build of a million triangles stops it (no tree, a status
+    that says so) and nothing is traced until the scene changes; then it builds and traces."""
+    scene = harness.open_scene("suzanne_1m")
+    session, request, live = _session_for(scene, 64, 48, spp=1)
+    try:
+        _wait(lambda: session.status().startswith("Building BVH"), what="the build")
+        session.cancel()
+        _wait(lambda: not session.busy, what="the cancelled build")
+        assert session.tree.bvh is None and session.latest_frame() is None
+        assert session.status().startswith("Cancelled"), session.status()
+        session.set_scene(live.scene, None)  # what view_update does after an edit
+        frame = _wait(lambda: _at_level(session, "full"), what="the build after the edit")
+        assert session.tree.bvh is not None and frame.image.shape[:2] == (48, 64)
+    finally:
+        session.close()
