@@ -46,7 +46,7 @@ class BVHLAB_OT_compare(bpy.types.Operator):
         try:
             rows = measure_methods(
                 exported, list(labels), frames=settings.compare_frames, builds=1, width=width, height=height,
-                renderer=default_renderer(settings.backend), spp=settings.render_supersampling ** 2,
+                renderer=default_renderer(settings.backend), samples_per_axis=settings.render_supersampling,
                 max_depth=settings.render_bounces, progress=progress,
                 build_options={"axis": settings.axis, "max_leaf_size": settings.max_leaf_size})
         finally:

@@ -11,7 +11,7 @@ from ..scene import Scene
 
 
 def measure_methods(scene: Scene, labels: list[str], *, frames: int = 5, builds: int = 5, width: int = 800,
-                    height: int = 600, renderer: Renderer | None = None, spp: int = 1, max_depth: int = 5,
+                    height: int = 600, renderer: Renderer | None = None, samples_per_axis: int = 1, max_depth: int = 5,
                     build_options: dict | None = None, render_options: dict | None = None,
                     progress: Callable[[str], None] | None = None) -> list[dict]:
     """For each method: build time (median of `builds` builds), average frame time over `frames`
@@ -30,7 +30,7 @@ def measure_methods(scene: Scene, labels: list[str], *, frames: int = 5, builds:
         stats = bvh.stats
         if progress:
             progress(f"{label}: rendering {frames} frames")
-        options = {"spp": spp, "max_depth": max_depth, **(render_options or {})}
+        options = {"samples_per_axis": samples_per_axis, "max_depth": max_depth, **(render_options or {})}
         renderer.render(scene, bvh, width, height, **options)  # warm-up (and upload)
         frame_ms = []
         for _ in range(max(1, frames)):
@@ -43,7 +43,7 @@ def measure_methods(scene: Scene, labels: list[str], *, frames: int = 5, builds:
             "build_ms": statistics.median(t.stats["build_ms"] for t in trees),
             "height": stats["height"], "sah_cost": stats["sah_cost"], "nodes": stats["nodes"],
             "leaves": stats["leaves"], "nodes_per_depth": stats["nodes_per_depth"],
-            "primary_mrays_s": width * height * spp / (mean_frame * 1e3),
+            "primary_mrays_s": width * height * samples_per_axis ** 2 / (mean_frame * 1e3),
             "device": t["device"], "backend": t["backend"],
         })
     return rows
