@@ -145,12 +145,15 @@ BVHLAB_CONST uint TRACE_GROUP_Y = 8u;
 BVHLAB_CONST uint RAY_STACK_SIZE = 16u;
 BVHLAB_CONST uint MAX_RAY_DEPTH = 15u;   ///< bounces; keeps the ray stack within RAY_STACK_SIZE
 BVHLAB_CONST uint MAX_SAMPLES_PER_AXIS = 16u;
-/// Loop iterations one shader invocation may run in one dispatch. Mesa's llvmpipe (lavapipe) ends
-/// every loop of an invocation once they have run LP_MAX_TGSI_LOOP_ITERATIONS = 65535 iterations
-/// together (gallivm/lp_bld_limits.h; the counter is shared by all loops of the shader and taken
-/// once per iteration of the SIMD vector); trace.comp has exactly one loop, so this bound, with
-/// a margin, keeps every dispatch complete there. Real GPUs have a watchdog instead: the host
-/// also shortens the budget to keep each dispatch brief (vulkan_renderer.cpp).
+/// Loop iterations one shader invocation may run in one dispatch (trace_steps' budget). Mesa's
+/// llvmpipe (lavapipe) ends every loop of an invocation once they have run
+/// LP_MAX_TGSI_LOOP_ITERATIONS = 65535 iterations together (gallivm/lp_bld_limits.h: one counter
+/// for all loops of the shader, taken once per iteration of the SIMD vector, also for a loop that
+/// no lane enters); trace_steps counts every iteration of its loops as the SIMD vector runs them
+/// (shade.glsl); trace.comp has no other loop, and the margin covers trace_steps' last few steps
+/// (it may end a few steps past its budget). Real
+/// GPUs have a watchdog instead: the host also shortens the budget to keep each dispatch brief
+/// (vk_trace_job.cpp).
 BVHLAB_CONST uint MAX_STEPS_PER_DISPATCH = 60000u;
 /// Words (uvec4) of a slot's saved trace state (state.glsl).
 BVHLAB_CONST uint STATE_WORDS = 11u;

@@ -43,7 +43,11 @@ vec4 overlay_at(uvec2 p) { return frame.overlay_enabled != 0u ? imageLoad(overla
 // The step count of the lanes of a SIMD vector (a subgroup on lavapipe) after a loop: the largest.
 uint sync_steps(uint steps) { return subgroupMax(steps); }
 
-// This invocation's slot: its suspended state and its two stacks.
+// The pixel's sums live in private memory during a dispatch (copied in at the start, out at the
+// end); the stacks stay in the slot: dynamically indexed private arrays are slower on lavapipe.
+vec4 g_sum;        // colour (rgb) and box tests (a) of the samples so far
+float g_depth;     // nearest primary hit
+uint g_samples;
 uint g_slot;
 uvec4 state_load(uint k) { return Uvec4Array(frame.addr.slot_state).v[g_slot * STATE_WORDS + k]; }
 void state_store(uint k, uvec4 w) { Uvec4Array(frame.addr.slot_state).v[g_slot * STATE_WORDS + k] = w; }
@@ -51,18 +55,27 @@ uvec4 ray_word_load(uint k) { return Uvec4Array(frame.addr.slot_rays).v[g_slot *
 void ray_word_store(uint k, uvec4 w) { Uvec4Array(frame.addr.slot_rays).v[g_slot * 3u * frame.ray_stack_entries + k] = w; }
 uvec2 node_stack_load(uint k) { return Uvec2Array(frame.addr.slot_nodes).v[g_slot * frame.node_stack_entries + k]; }
 void node_stack_store(uint k, uvec2 e) { Uvec2Array(frame.addr.slot_nodes).v[g_slot * frame.node_stack_entries + k] = e; }
-
-// The pixel's sums over its samples (a pixel is in one slot at a time: no races).
-uint pixel_index(uvec2 p) { return p.y * frame.width + p.x; }
-uint samples_done(uvec2 p) { return UintArray(frame.addr.accum_samples).v[pixel_index(p)]; }
+uint samples_done(uvec2 p) { return g_samples; }
 void accumulate_sample(uvec2 p, vec3 color, float visits, float depth) {
+    g_sum = g_sum + vec4(color, visits);  // in sample order, as the CPU reference adds them
+    g_depth = min(g_depth, depth);
+    g_samples = g_samples + 1u;
+}
+
+uint pixel_index(uvec2 p) { return p.y * frame.width + p.x; }
+
+void load_sums(uvec2 p) {
     uint i = pixel_index(p);
-    Vec4Array sums = Vec4Array(frame.addr.accum_color);
-    sums.v[i] = sums.v[i] + vec4(color, visits);
-    FloatArray depths = FloatArray(frame.addr.accum_depth);
-    depths.v[i] = min(depths.v[i], depth);
-    UintArray samples = UintArray(frame.addr.accum_samples);
-    samples.v[i] = samples.v[i] + 1u;
+    g_sum = Vec4Array(frame.addr.accum_color).v[i];
+    g_depth = FloatArray(frame.addr.accum_depth).v[i];
+    g_samples = UintArray(frame.addr.accum_samples).v[i];
+}
+
+void store_sums(uvec2 p) {
+    uint i = pixel_index(p);
+    Vec4Array(frame.addr.accum_color).v[i] = g_sum;
+    FloatArray(frame.addr.accum_depth).v[i] = g_depth;
+    UintArray(frame.addr.accum_samples).v[i] = g_samples;
 }
 
 #include "tracer/geometry.glsl"
@@ -77,9 +90,16 @@ void main() {
     if (local.x >= frame.tile_width || local.y >= frame.tile_height) return;
     uvec2 p = uvec2(frame.tile_x, frame.tile_y) + local;
     g_slot = local.y * frame.tile_width + local.x;
-    TraceState s = slot_stamp() == frame.stamp ? load_state() : begin_pixel(p, samples_done(p), frame.sample_target);
-    if (s.phase == PHASE_DONE) return;
+    bool resumed = slot_stamp() == frame.stamp;
+    TraceState s;
+    if (resumed) {
+        s = load_state();
+        if (s.phase == PHASE_DONE) return;
+    }
+    load_sums(p);
+    if (!resumed) s = begin_pixel(p, g_samples, frame.sample_target);
     trace_steps(s, frame.steps_per_dispatch);
+    store_sums(p);
     save_state(s, frame.stamp);
     if (s.phase != PHASE_DONE) atomicAdd(Counter(frame.addr.unfinished).unfinished, 1u);
 }

@@ -22,6 +22,7 @@ LOCAL_CONST uint PHASE_CLOSEST = 1u;   ///< walking the closest-hit query of `ta
 LOCAL_CONST uint PHASE_SHADOW = 2u;    ///< walking the shadow ray of the hit in `closest`
 LOCAL_CONST uint PHASE_NEXT_RAY = 3u;  ///< take the next ray off the ray stack, or end the sample
 LOCAL_CONST uint PHASE_DONE = 4u;      ///< every sample of the pass is accumulated
+LOCAL_CONST uint PHASE_START = 5u;     ///< start the closest-hit query of `task`
 
 /// One pixel's trace in progress. The ray stack (`rays` entries) and the traversal stack live in
 /// the slot's storage (ray_word_load/store, node_stack_load/store).
@@ -137,6 +138,7 @@ void start_closest(INOUT(TraceState) s) {
     s.phase = PHASE_CLOSEST;
 }
 
+/// The pixel's next sample: its primary ray becomes the task; or the pass is done.
 void start_sample(INOUT(TraceState) s) {
     if (s.sample_index >= s.target) {
         s.phase = PHASE_DONE;
@@ -146,11 +148,12 @@ void start_sample(INOUT(TraceState) s) {
     s.color = vec3(0.0f);
     s.visits = 0.0f;
     s.depth = infinity();
-    start_closest(s);
+    s.phase = PHASE_START;
 }
 
-/// The next ray off the stack, or the sample is complete: its colour, box tests and depth go into
-/// the pixel's sums (whole samples only, so a stopped render leaves consistent sums).
+/// The next ray off the stack becomes the task, or the sample is complete: its colour, box tests
+/// and depth go into the pixel's sums (whole samples only, so a stopped render leaves consistent
+/// sums).
 void next_ray(INOUT(TraceState) s) {
     if (s.rays == 0u) {
         accumulate_sample(s.pixel, s.color, s.visits, s.depth);
@@ -159,7 +162,7 @@ void next_ray(INOUT(TraceState) s) {
         return;
     }
     s.task = pop_ray(s);
-    start_closest(s);
+    s.phase = PHASE_START;
 }
 
 /// Direct light at the surface `f` of `closest` (the shadow ray's transmission in `hit`), then its
@@ -199,34 +202,33 @@ bool after_closest(INOUT(TraceState) s) {
     return false;
 }
 
-/// A shadow ray toward the light where it lights an opaque part of the surface `f` of the hit in
-/// `hit` (report §2.1); otherwise the hit is shaded at once.
-void shadow_or_shade(INOUT(TraceState) s, Surface f) {
-    s.closest = s.hit;
+/// Starts a shadow ray toward the light where it lights an opaque part of the surface `f` of the
+/// closest hit (report §2.1); returns false where there is none to trace.
+bool start_shadow(INOUT(TraceState) s, Surface f) {
     vec3 to_light = frame.light_position - f.p;
     float dist = length(to_light);
     vec3 l = to_light / dist;
-    if (f.opaque > 0.0f && dot(f.facing, l) > 0.0f) {
-        float eps = frame.ray_epsilon;
-        s.ray = make_ray(f.p + f.facing * eps, l, 0.0f);
-        s.hit = empty_hit(dist - eps);
-        s.walk = start_walk();
-        s.phase = PHASE_SHADOW;
-        return;
-    }
-    s.hit.transmission = 0.0f;  // no shadow ray: direct_light then adds ambient only
-    finish_shading(s, f);
+    if (!(f.opaque > 0.0f && dot(f.facing, l) > 0.0f)) return false;
+    float eps = frame.ray_epsilon;
+    s.ray = make_ray(f.p + f.facing * eps, l, 0.0f);
+    s.hit = empty_hit(dist - eps);
+    s.walk = start_walk();
+    s.phase = PHASE_SHADOW;
+    return true;
 }
 
-/// A walk is over: what it found decides what comes next. The surface is looked at once (the
-/// closest hit's, also after its shadow ray), which lavapipe's masked SIMD execution rewards.
+/// A walk is over: what it found decides what comes next. Each piece of the shading appears once
+/// (lavapipe runs every branch of a SIMD vector under a mask, whichever lanes take it).
 void answer(INOUT(TraceState) s) {
     bool shadow = s.phase == PHASE_SHADOW;
-    if (shadow || after_closest(s)) {
-        Surface f = surface_at(s.task, shadow ? s.closest : s.hit);
-        if (shadow) finish_shading(s, f);
-        else shadow_or_shade(s, f);
+    if (!shadow && !after_closest(s)) return;  // a miss: sky or line
+    if (!shadow) s.closest = s.hit;
+    Surface f = surface_at(s.task, s.closest);
+    if (!shadow) {
+        if (start_shadow(s, f)) return;
+        s.hit.transmission = 0.0f;  // no shadow ray: direct_light adds ambient only
     }
+    finish_shading(s, f);
 }
 
 /// Loops of walk() that may run once even where no lane of the SIMD vector walks (lavapipe runs
@@ -247,6 +249,7 @@ void trace_steps(INOUT(TraceState) s, uint budget) {
         if ((s.phase == PHASE_CLOSEST || shadow) && s.walk.state == WALK_FINISHED) answer(s);
         if (s.phase == PHASE_NEXT_RAY) next_ray(s);
         if (s.phase == PHASE_SAMPLE) start_sample(s);
+        if (s.phase == PHASE_START) start_closest(s);
     }
 }
 

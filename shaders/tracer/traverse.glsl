@@ -93,11 +93,11 @@ void enter_leaf(INOUT(Walk) w, BvhNode n) {
     w.state = WALK_LEAF;
 }
 
-/// Stack traversal at an inner node: both children's boxes are tested, the nearer is entered
-/// and the farther pushed with its entry distance (dropped at the pop if a closer hit is found
-/// meanwhile). A leaf is entered.
-void step_stack_node(INOUT(Walk) w, TraceRay r, INOUT(Hit) hit) {
-    BvhNode n = load_node(w.node);
+/// Stack traversal at node `n` (= load_node(w.node)): at an inner node both children's boxes are
+/// tested, the nearer is entered and the farther pushed with its entry distance (dropped at the pop
+/// if a closer hit is found meanwhile); `n` becomes the entered child, fetched already. A leaf is
+/// entered (at the root or when popped; a leaf child is entered at once, saving a step).
+void step_stack_node(INOUT(Walk) w, TraceRay r, INOUT(Hit) hit, INOUT(BvhNode) n) {
     if ((n.info & NODE_INTERNAL_BIT) == 0u) {
         enter_leaf(w, n);
         return;
@@ -109,16 +109,18 @@ void step_stack_node(INOUT(Walk) w, TraceRay r, INOUT(Hit) hit) {
     float ta = box_entry(na.lo, na.hi, r, hit.t);
     float tb = box_entry(nb.lo, nb.hi, r, hit.t);
     hit.visited += 2u;
-    if (ta >= 0.0f && tb >= 0.0f) {
-        bool b_first = tb < ta;
-        node_stack_store(w.stacked, uvec2(b_first ? a : b, floatBitsToUint(b_first ? ta : tb)));
-        w.stacked += 1u;
-        w.node = b_first ? b : a;
-    } else if (ta >= 0.0f || tb >= 0.0f) {
-        w.node = ta >= 0.0f ? a : b;
-    } else {
+    if (ta < 0.0f && tb < 0.0f) {
         w.state = WALK_POP;
+        return;
     }
+    bool b_next = ta < 0.0f || (tb >= 0.0f && tb < ta);
+    if (ta >= 0.0f && tb >= 0.0f) {
+        node_stack_store(w.stacked, uvec2(b_next ? a : b, floatBitsToUint(b_next ? ta : tb)));
+        w.stacked += 1u;
+    }
+    w.node = b_next ? b : a;
+    n = b_next ? nb : na;
+    if ((n.info & NODE_INTERNAL_BIT) == 0u) enter_leaf(w, n);
 }
 
 /// Stackless (report §3.1) at node `node` of the depth-first order: a missed box continues at
@@ -169,7 +171,9 @@ void step_pop(INOUT(Walk) w, Hit hit) {
 /// largest count among them (sync_steps), plus one for the loop's exit. So `steps` never falls
 /// below the iterations the SIMD vector ran, which is what lavapipe's loop limit counts (see
 /// MAX_STEPS_PER_DISPATCH), and a walk cut short by the budget continues from `w` later.
-void walk(INOUT(Walk) w, TraceRay r, bool shadow, INOUT(Hit) hit, INOUT(uint) steps, uint budget) {
+void walk(INOUT(Walk) walk_state, TraceRay r, bool shadow, INOUT(Hit) query, INOUT(uint) steps, uint budget) {
+    Walk w = walk_state;  // locals: the CPU build keeps them in registers (the state may alias the slot)
+    Hit hit = query;
     if (w.state == WALK_ROOT) {
         BvhNode root = load_node(0u);
         hit.visited += 1u;
@@ -178,10 +182,11 @@ void walk(INOUT(Walk) w, TraceRay r, bool shadow, INOUT(Hit) hit, INOUT(uint) st
     }
     while (w.state != WALK_FINISHED && steps < budget) {
         steps += 1u;
+        BvhNode n = load_node(w.state == WALK_NODE ? w.node : 0u);
         while (w.state == WALK_NODE && steps < budget) {
             steps += 1u;
             if (TRAVERSAL == TRAVERSAL_STACKLESS) step_stackless_node(w, r, hit);
-            else step_stack_node(w, r, hit);
+            else step_stack_node(w, r, hit, n);
         }
         steps = sync_steps(steps) + 1u;
         while (w.state == WALK_LEAF && steps < budget) {
@@ -195,4 +200,6 @@ void walk(INOUT(Walk) w, TraceRay r, bool shadow, INOUT(Hit) hit, INOUT(uint) st
         }
         steps = sync_steps(steps) + 1u;
     }
+    walk_state = w;
+    query = hit;
 }
