@@ -172,8 +172,11 @@ class Renderer:
     def validation_errors(self) -> int:
         return self._vulkan.validation_error_count if self._vulkan else 0
 
-    def start(self, scene: Scene, bvh: Bvh, width: int = 800, height: int = 600, **options) -> RenderJob:
-        """A RenderJob (sample passes, nothing traced yet). Options as for `bvhlab.render`."""
+    def start(self, scene: Scene, bvh: Bvh, width: int = 800, height: int = 600, *, threads: int | None = None,
+              **options) -> RenderJob:
+        """A RenderJob (sample passes, nothing traced yet). Options as for `bvhlab.render`;
+        `threads` (CPU reference; default: the Renderer's, 0 = every core)."""
+        threads = self.threads if threads is None else _checks.integer("threads", threads, 0, 4096)
         settings = render_settings(scene, bvh, width, height, **options)
         start = time.perf_counter()
         with self._lock:
@@ -181,7 +184,7 @@ class Renderer:
             prepare_ms = (time.perf_counter() - start) * 1e3
             upload_ms = 0.0
             if self._vulkan is None:
-                job = _core.start_cpu(render_scene, settings, self.threads)
+                job = _core.start_cpu(render_scene, settings, threads)
             else:
                 if self._uploaded is not render_scene:
                     upload_ms = self._vulkan.upload(render_scene)
@@ -246,8 +249,7 @@ def _make_vulkan(device, validation, force_staging):
 
 def render_settings(scene: Scene, bvh: Bvh, width, height, *, camera=None, samples_per_axis=1, max_depth=5,
                     overlay_depth=None, traversal="stack", mode="shade", color_by_depth=True, line_width=1.0,
-                    heatmap_scale=None, steps_per_dispatch=None, max_steps_per_pixel=None,
-                    threads=None) -> "_core.RenderSettings":
+                    heatmap_scale=None, steps_per_dispatch=None, max_steps_per_pixel=None) -> "_core.RenderSettings":
     """The typed settings of a render. Types are checked here; values once, in C++ (ValueError)."""
     if not isinstance(scene, Scene):
         raise TypeError(f"scene must be a bvhlab.Scene, got {type(scene).__name__}")
@@ -280,6 +282,16 @@ def _name(what: str, value) -> str:
     return value
 
 
+def _triple(name: str, value) -> tuple[float, float, float]:
+    try:
+        v = tuple(_real(name, x) for x in value)
+    except TypeError:
+        raise TypeError(f"{name} must be three numbers, got {value!r}") from None
+    if len(v) != 3:
+        raise ValueError(f"{name} must be three numbers, got {len(v)}")
+    return v
+
+
 def _real(name: str, value) -> float:
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise TypeError(f"{name} must be a number, got {type(value).__name__}")
@@ -298,7 +310,8 @@ def _camera(scene: Scene, camera) -> "_core.Camera":
         c.position, c.up, c.fov_y = camera.position, camera.up, camera.fov_y
         c.forward = tuple(np.subtract(camera.look_at, camera.position))
     elif isinstance(camera, View):
-        c.position, c.forward, c.up = camera.position, camera.forward, camera.up
+        c.position, c.forward = _triple("camera position", camera.position), _triple("camera forward", camera.forward)
+        c.up = _triple("camera up", camera.up)
         c.fov_y = _real("camera fov_y", camera.fov_y)
         c.aspect = 0.0 if camera.aspect is None else _real("camera aspect", camera.aspect)
         c.shift_x, c.shift_y = _real("camera shift_x", camera.shift_x), _real("camera shift_y", camera.shift_y)

@@ -57,32 +57,34 @@ vec3 camera_ray_dir(uvec2 p, uint sample_index) {
     return normalize(frame.camera_forward + x * frame.camera_right + y * frame.camera_up);
 }
 
-/// Geometric normal at a hit, unit length, facing outwards (triangles: by winding).
-vec3 surface_normal(Hit hit, vec3 p) {
-    if ((hit.ref & REF_SPHERE_BIT) != 0u) {
-        vec4 s = load_sphere(hit.ref & REF_INDEX_MASK).center_radius;
-        return normalize(p - xyz(s));
-    }
-    GpuTriangle tri = load_triangle(hit.ref);
-    return normalize(cross(xyz(tri.e1), xyz(tri.e2)));
-}
-
 /// A hit as shading sees it.
 struct Surface {
     vec3 p;
-    vec3 facing;     ///< the normal on the side the ray came from
+    vec3 facing;     ///< the geometric normal on the side the ray came from
     bool entering;   ///< the ray hit the outside
     GpuMaterial m;
     float opaque;    ///< what is neither reflected nor transmitted
 };
 
+/// The hit point, its geometric normal (unit, outwards; triangles: by winding) and material, the
+/// primitive fetched once.
 Surface surface_at(RayTask task, Hit hit) {
     Surface s;
     s.p = task.origin + task.dir * hit.t;
-    vec3 n = surface_normal(hit, s.p);
+    vec3 n;
+    uint material;
+    if ((hit.ref & REF_SPHERE_BIT) != 0u) {
+        GpuSphere sphere = load_sphere(hit.ref & REF_INDEX_MASK);
+        n = normalize(s.p - xyz(sphere.center_radius));
+        material = sphere.material.x;
+    } else {
+        GpuTriangle tri = load_triangle(hit.ref);
+        n = normalize(cross(xyz(tri.e1), xyz(tri.e2)));
+        material = floatBitsToUint(tri.v0.w);
+    }
     s.entering = dot(n, task.dir) < 0.0f;
     s.facing = s.entering ? n : -n;
-    s.m = load_material(material_of(hit.ref));
+    s.m = load_material(material);
     s.opaque = max(1.0f - s.m.color_reflective.w - s.m.transparent_ior.x, 0.0f);
     return s;
 }

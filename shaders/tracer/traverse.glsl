@@ -182,7 +182,8 @@ void walk(INOUT(Walk) walk_state, TraceRay r, bool shadow, INOUT(Hit) query, INO
     }
     while (w.state != WALK_FINISHED && steps < budget) {
         steps += 1u;
-        BvhNode n = load_node(w.state == WALK_NODE ? w.node : 0u);
+        // the stack walk's node (the stackless walk fetches its own; its `node` may be one past the end)
+        BvhNode n = load_node(TRAVERSAL == TRAVERSAL_STACK && w.state == WALK_NODE ? w.node : 0u);
         while (w.state == WALK_NODE && steps < budget) {
             steps += 1u;
             if (TRAVERSAL == TRAVERSAL_STACKLESS) step_stackless_node(w, r, hit);
