@@ -161,3 +161,18 @@ def test_the_scene_cache_sees_in_place_edits():
     moved, _ = renderer.render(scene, bvh, 32, 24)
     assert not np.array_equal(moved, after)
     np.testing.assert_array_equal(moved, bvhlab.Renderer("cpu").render(scene, bvh, 32, 24)[0])
+
+
+def test_depth_order_one_convention():
+    """The one depth order (core_cpp/src/tree/depth_order.cpp) behind Bvh.boxes and the overlay
+    pass, exposed for the add-on: nodes by depth, [first, last) ranges."""
+    bvh = bvhlab.build(procedural.random_triangles(500, seed=4))
+    nodes, offset = bvh._core.depth_order()
+    depths = bvh.depths
+    assert sorted(nodes.tolist()) == list(range(len(depths)))
+    np.testing.assert_array_equal(depths[nodes], np.sort(depths, kind="stable"))
+    assert offset[0] == 0 and offset[-1] == len(depths) and len(offset) == bvh.stats["height"] + 1
+    for lo, hi in [(0, 0), (2, 5), (3, 200), (9, 2)]:
+        first, last = bvh._core.depth_range(lo, hi)
+        assert last - first == len(bvh.boxes(lo, hi)[2]) if lo <= hi else (first, last) == (0, 0)
+        assert np.all((depths[nodes[first:last]] >= lo) & (depths[nodes[first:last]] <= hi))
