@@ -90,12 +90,12 @@ struct DeviceAddresses {
     uvec2 slot_state;     ///< uvec4[STATE_WORDS] per slot: a pixel's suspended trace (see state.glsl)
     uvec2 slot_rays;      ///< uvec4[3 × ray_stack_entries] per slot: its Whitted ray stack
     uvec2 slot_nodes;     ///< uvec2[node_stack_entries] per slot: its traversal stack (node, entry t)
-    uvec2 unfinished;     ///< uint: slots that ended a dispatch with work left (atomic counter)
+    uvec2 counters;       ///< uint[2], atomic: slots that ended a dispatch with work left, that failed
     uvec2 unused;
 };
 
 /// Everything a frame reads, field by field (std430 and C++ agree: each vec3 is followed by a
-/// 4-byte scalar, each group of four scalars is 16 bytes, the addresses start 16-aligned).
+/// 4-byte scalar, then come 4-byte scalars, then the addresses, 8-aligned).
 struct FrameParams {
     vec3 camera_position;
     float tan_half_fov_y;       ///< tan(vertical field of view / 2)
@@ -131,6 +131,8 @@ struct FrameParams {
     uint tile_y;
     uint tile_width;
     uint tile_height;
+    uint max_work_per_pixel;    ///< a trace with more steps of work in a pass fails (0xffffffff: no cap)
+    uint padding;               ///< keeps `addr` 8-byte aligned in std430, as in C++
     DeviceAddresses addr;
 };
 
@@ -155,6 +157,10 @@ BVHLAB_CONST uint MAX_SAMPLES_PER_AXIS = 16u;
 /// GPUs have a watchdog instead: the host also shortens the budget to keep each dispatch brief
 /// (vk_trace_job.cpp).
 BVHLAB_CONST uint MAX_STEPS_PER_DISPATCH = 60000u;
+/// The least budget: enough for a step of work after the loops' own counting (no livelock).
+BVHLAB_CONST uint MIN_STEPS_PER_DISPATCH = 16u;
+/// FrameParams::max_work_per_pixel meaning "no cap".
+BVHLAB_CONST uint NO_WORK_CAP = 0xffffffffu;
 /// Words (uvec4) of a slot's saved trace state (state.glsl).
 BVHLAB_CONST uint STATE_WORDS = 11u;
 BVHLAB_CONST uint NO_HIT = 0xffffffffu;
@@ -172,8 +178,8 @@ BVHLAB_CONST vec3 OVERLAY_LINE_COLOR = vec3(1.0f, 0.85f, 0.2f);
 static_assert(sizeof(BvhNode) == 32, "BvhNode must stay 32 bytes (std430 layout)");
 static_assert(sizeof(GpuTriangle) == 48 && sizeof(GpuSphere) == 32 && sizeof(GpuMaterial) == 32);
 static_assert(sizeof(GpuBox) == 32 && sizeof(DeviceAddresses) == 14 * 8);
-static_assert(offsetof(FrameParams, width) == 112 && offsetof(FrameParams, addr) == 192 && offsetof(FrameParams, addr) % 16 == 0);
-static_assert(sizeof(FrameParams) == 192 + sizeof(DeviceAddresses));
+static_assert(offsetof(FrameParams, width) == 112 && offsetof(FrameParams, addr) == 200);
+static_assert(sizeof(FrameParams) == 200 + sizeof(DeviceAddresses));
 }  // namespace bvhlab::gpu
 #endif
 #endif  // BVHLAB_GPU_TYPES_H

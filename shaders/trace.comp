@@ -83,23 +83,24 @@ void store_sums(uvec2 p) {
 #include "tracer/shade.glsl"
 #include "tracer/state.glsl"
 
-layout(buffer_reference, std430, buffer_reference_align = 4) buffer Counter { uint unfinished; };
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer Counters { uint unfinished; uint failed; };
 
 void main() {
     uvec2 local = gl_GlobalInvocationID.xy;
     if (local.x >= frame.tile_width || local.y >= frame.tile_height) return;
     uvec2 p = uvec2(frame.tile_x, frame.tile_y) + local;
     g_slot = local.y * frame.tile_width + local.x;
+    if (slot_done(frame.stamp)) return;
     bool resumed = slot_stamp() == frame.stamp;
-    TraceState s;
-    if (resumed) {
-        s = load_state();
-        if (s.phase == PHASE_DONE) return;
-    }
     load_sums(p);
-    if (!resumed) s = begin_pixel(p, g_samples, frame.sample_target);
+    TraceState s = resumed ? load_state() : begin_pixel(p, g_samples, frame.sample_target);
     trace_steps(s, frame.steps_per_dispatch);
     store_sums(p);
+    if (s.phase >= PHASE_DONE) {
+        save_done(s, frame.stamp);
+        if (s.phase == PHASE_FAILED) atomicAdd(Counters(frame.addr.counters).failed, 1u);
+        return;
+    }
     save_state(s, frame.stamp);
-    if (s.phase != PHASE_DONE) atomicAdd(Counter(frame.addr.unfinished).unfinished, 1u);
+    atomicAdd(Counters(frame.addr.counters).unfinished, 1u);
 }

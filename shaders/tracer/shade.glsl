@@ -18,11 +18,13 @@ struct RayTask {
 
 // What a trace does next (TraceState::phase).
 LOCAL_CONST uint PHASE_SAMPLE = 0u;    ///< start the pixel's next sample, or finish the pass
-LOCAL_CONST uint PHASE_CLOSEST = 1u;   ///< walking the closest-hit query of `task`
-LOCAL_CONST uint PHASE_SHADOW = 2u;    ///< walking the shadow ray of the hit in `closest`
-LOCAL_CONST uint PHASE_NEXT_RAY = 3u;  ///< take the next ray off the ray stack, or end the sample
-LOCAL_CONST uint PHASE_DONE = 4u;      ///< every sample of the pass is accumulated
-LOCAL_CONST uint PHASE_START = 5u;     ///< start the closest-hit query of `task`
+LOCAL_CONST uint PHASE_START = 1u;     ///< start the closest-hit query of `task`
+LOCAL_CONST uint PHASE_CLOSEST = 2u;   ///< walking the closest-hit query of `task`
+LOCAL_CONST uint PHASE_SHADOW = 3u;    ///< walking the shadow ray of the hit in `closest`
+LOCAL_CONST uint PHASE_NEXT_RAY = 4u;  ///< take the next ray off the ray stack, or end the sample
+LOCAL_CONST uint PHASE_DONE = 5u;      ///< every sample of the pass is accumulated (the phases from
+                                       ///< here on are final)
+LOCAL_CONST uint PHASE_FAILED = 6u;    ///< stopped: more work than frame.max_work_per_pixel
 
 /// One pixel's trace in progress. The ray stack (`rays` entries) and the traversal stack live in
 /// the slot's storage (ray_word_load/store, node_stack_load/store).
@@ -32,6 +34,7 @@ struct TraceState {
     uint sample_index;  ///< the sample being traced: sx + n·sy on the n×n grid
     uint target;      ///< the pass ends before this sample
     uint rays;        ///< entries on the ray stack
+    uint work;        ///< steps of work in this pass so far (checked against max_work_per_pixel)
     Walk walk;        ///< the query in progress (traverse.glsl)
     TraceRay ray;     ///< the ray it follows
     Hit hit;          ///< its result so far
@@ -219,18 +222,13 @@ bool start_shadow(INOUT(TraceState) s, Surface f) {
     return true;
 }
 
-/// A walk is over: what it found decides what comes next. Each piece of the shading appears once
-/// (lavapipe runs every branch of a SIMD vector under a mask, whichever lanes take it).
-void answer(INOUT(TraceState) s) {
-    bool shadow = s.phase == PHASE_SHADOW;
-    if (!shadow && !after_closest(s)) return;  // a miss: sky or line
-    if (!shadow) s.closest = s.hit;
-    Surface f = surface_at(s.task, s.closest);
-    if (!shadow) {
-        if (start_shadow(s, f)) return;
-        s.hit.transmission = 0.0f;  // no shadow ray: direct_light adds ambient only
-    }
-    finish_shading(s, f);
+/// The closest hit is known: a shadow ray starts where the light may reach the surface, else the
+/// hit is shaded (returns true: finish_shading now, with no light but the ambient).
+bool shade_or_shadow(INOUT(TraceState) s) {
+    s.closest = s.hit;
+    if (start_shadow(s, surface_at(s.task, s.closest))) return false;
+    s.hit.transmission = 0.0f;  // no shadow ray: direct_light adds ambient only
+    return true;
 }
 
 /// Loops of walk() that may run once even where no lane of the SIMD vector walks (lavapipe runs
@@ -238,17 +236,28 @@ void answer(INOUT(TraceState) s) {
 LOCAL_CONST uint WALK_LOOPS = 4u;
 
 /// Traces for about `budget` steps (each loop iteration of walk() and of this loop is one), or
-/// until the pass is done for this pixel: walk the query in progress; when it is answered, the
-/// bookkeeping up to the start of the next query (no loops there). The count stays an upper bound
-/// of the loop iterations the SIMD vector ran (see walk); it ends at most a few steps past `budget`.
+/// until the pass is done for this pixel. One iteration follows a ray as the report's recursion
+/// does (§2.1): its closest-hit walk, then its shadow walk, then the shading and the next ray;
+/// a walk cut short by the budget goes on in the next iteration (or dispatch). Each piece of the
+/// shading appears once: lavapipe runs every branch of a SIMD vector under a mask, whichever lanes
+/// take it. The count stays an upper bound of the loop iterations the SIMD vector ran (see walk);
+/// it ends at most a few steps past `budget`. A trace whose work passes max_work_per_pixel fails
+/// (the same steps on both backends: the work count is not the synchronised one).
 void trace_steps(INOUT(TraceState) s, uint budget) {
     uint steps = 0u;
-    while (s.phase != PHASE_DONE && steps < budget) {
+    while (s.phase < PHASE_DONE && steps < budget) {
         steps += 1u;
-        bool shadow = s.phase == PHASE_SHADOW;
-        if (s.phase == PHASE_CLOSEST || shadow) walk(s.walk, s.ray, shadow, s.hit, steps, budget);
+        s.work += 1u;
+        bool finish = false;
+        if (s.phase == PHASE_CLOSEST) walk(s.walk, s.ray, false, s.hit, s.work, steps, budget);
         steps = sync_steps(steps) + WALK_LOOPS;
-        if ((s.phase == PHASE_CLOSEST || shadow) && s.walk.state == WALK_FINISHED) answer(s);
+        if (s.work > frame.max_work_per_pixel) s.phase = PHASE_FAILED;
+        if (s.phase == PHASE_CLOSEST && s.walk.state == WALK_FINISHED && after_closest(s)) finish = shade_or_shadow(s);
+        if (s.phase == PHASE_SHADOW) walk(s.walk, s.ray, true, s.hit, s.work, steps, budget);
+        steps = sync_steps(steps) + WALK_LOOPS;
+        if (s.work > frame.max_work_per_pixel) s.phase = PHASE_FAILED;
+        if (s.phase == PHASE_SHADOW && s.walk.state == WALK_FINISHED) finish = true;
+        if (finish) finish_shading(s, surface_at(s.task, s.closest));
         if (s.phase == PHASE_NEXT_RAY) next_ray(s);
         if (s.phase == PHASE_SAMPLE) start_sample(s);
         if (s.phase == PHASE_START) start_closest(s);
@@ -263,6 +272,7 @@ TraceState begin_pixel(uvec2 p, uint first, uint target) {
     s.sample_index = first;
     s.target = target;
     s.rays = 0u;
+    s.work = 0u;
     s.walk = start_walk();
     s.ray = make_ray(vec3(0.0f), vec3(0.0f, 0.0f, 1.0f), 0.0f);
     s.hit = empty_hit(0.0f);

@@ -19,10 +19,20 @@ void save_state(TraceState s, uint stamp) {
     state_store(7u, word3(s.task.origin, s.task.depth));
     state_store(8u, word3(s.task.dir, floatBitsToUint(s.visits)));
     state_store(9u, word3(s.task.weight, floatBitsToUint(s.depth)));
-    state_store(10u, word3(s.color, 0u));
+    state_store(10u, word3(s.color, s.work));
 }
 
 uint slot_stamp() { return state_load(2u).w; }
+
+/// A trace that is over (done or failed) keeps only what says so (words 0 and 2 of save_state's layout): most
+/// pixels finish in their first dispatch, and a done slot is only ever asked whether it is done.
+void save_done(TraceState s, uint stamp) {
+    state_store(0u, uvec4(s.pixel.x, s.pixel.y, s.phase, s.sample_index));
+    state_store(2u, uvec4(0u, 0u, 0u, stamp));
+}
+
+/// Whether the slot holds a trace of this tile and pass (`stamp`) that is over (done or failed).
+bool slot_done(uint stamp) { return slot_stamp() == stamp && state_load(0u).z >= PHASE_DONE; }
 
 /// The state save_state stored. (The closest hit's barycentrics and transmission are not kept:
 /// shading never reads them.)
@@ -58,6 +68,8 @@ TraceState load_state() {
     s.task = ray_task(vec3_of(w7), vec3_of(w8), vec3_of(w9), w7.w);
     s.visits = uintBitsToFloat(w8.w);
     s.depth = uintBitsToFloat(w9.w);
-    s.color = vec3_of(state_load(10u));
+    uvec4 w10 = state_load(10u);
+    s.color = vec3_of(w10);
+    s.work = w10.w;
     return s;
 }

@@ -170,8 +170,10 @@ void step_pop(INOUT(Walk) w, Hit hit) {
 /// instructions). Every loop iteration counts one step; after each inner loop the lanes take the
 /// largest count among them (sync_steps), plus one for the loop's exit. So `steps` never falls
 /// below the iterations the SIMD vector ran, which is what lavapipe's loop limit counts (see
-/// MAX_STEPS_PER_DISPATCH), and a walk cut short by the budget continues from `w` later.
-void walk(INOUT(Walk) walk_state, TraceRay r, bool shadow, INOUT(Hit) query, INOUT(uint) steps, uint budget) {
+/// MAX_STEPS_PER_DISPATCH), and a walk cut short by the budget continues from `w` later. `work`
+/// counts this lane's own steps (a node, a primitive, a pop).
+void walk(INOUT(Walk) walk_state, TraceRay r, bool shadow, INOUT(Hit) query, INOUT(uint) work, INOUT(uint) steps,
+          uint budget) {
     Walk w = walk_state;  // locals: the CPU build keeps them in registers (the state may alias the slot)
     Hit hit = query;
     if (w.state == WALK_ROOT) {
@@ -179,6 +181,7 @@ void walk(INOUT(Walk) walk_state, TraceRay r, bool shadow, INOUT(Hit) query, INO
         hit.visited += 1u;
         w.state = box_entry(root.lo, root.hi, r, hit.t) < 0.0f ? WALK_FINISHED : WALK_NODE;
         steps += 1u;
+        work += 1u;
     }
     while (w.state != WALK_FINISHED && steps < budget) {
         steps += 1u;
@@ -186,17 +189,20 @@ void walk(INOUT(Walk) walk_state, TraceRay r, bool shadow, INOUT(Hit) query, INO
         BvhNode n = load_node(TRAVERSAL == TRAVERSAL_STACK && w.state == WALK_NODE ? w.node : 0u);
         while (w.state == WALK_NODE && steps < budget) {
             steps += 1u;
+            work += 1u;
             if (TRAVERSAL == TRAVERSAL_STACKLESS) step_stackless_node(w, r, hit);
             else step_stack_node(w, r, hit, n);
         }
         steps = sync_steps(steps) + 1u;
         while (w.state == WALK_LEAF && steps < budget) {
             steps += 1u;
+            work += 1u;
             step_leaf(w, r, shadow, hit);
         }
         steps = sync_steps(steps) + 1u;
         while (w.state == WALK_POP && steps < budget) {
             steps += 1u;
+            work += 1u;
             step_pop(w, hit);
         }
         steps = sync_steps(steps) + 1u;

@@ -184,6 +184,8 @@ TEST_F(Vulkan, BadSettingsThrowInvalidArgument) {
     bad([](RenderSettings& s) { s.heatmap_scale = 0.0f; });
     bad([](RenderSettings& s) { s.heatmap_scale = 5e9f; });
     bad([](RenderSettings& s) { s.traversal = Traversal::Wide; });
+    bad([](RenderSettings& s) { s.steps_per_dispatch = gpu::MIN_STEPS_PER_DISPATCH - 1; });
+    bad([](RenderSettings& s) { s.steps_per_dispatch = gpu::MAX_STEPS_PER_DISPATCH + 1; });
     // the renderer is still usable
     EXPECT_EQ(render_vulkan(renderer(), good), render_vulkan(renderer(), good));
 }

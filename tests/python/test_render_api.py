@@ -42,7 +42,7 @@ def test_progress_is_reported_and_false_cancels_then_the_job_goes_on(renderer):
     job = renderer.start(scene, bvh, 32, 24, samples_per_axis=2)
     job.run(progress=seen.append)  # None means go on
     assert seen[-1] == 1.0 and all(0 <= f <= 1 for f in seen) and seen == sorted(seen)
-    job = renderer.start(scene, bvh, 32, 24, samples_per_axis=2, steps_per_dispatch=20)
+    job = renderer.start(scene, bvh, 32, 24, samples_per_axis=2, steps_per_dispatch=16)
     with pytest.raises(bvhlab.RenderCancelled):
         job.run(progress=lambda f: False)
     assert job.samples_done < 4

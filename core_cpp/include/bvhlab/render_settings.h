@@ -56,11 +56,13 @@ struct RenderSettings {
     Traversal traversal = Traversal::Stack;  ///< Stack or Stackless (report §3.1); the tracer has no Wide
     RenderMode mode = RenderMode::Shade;
     std::optional<float> heatmap_scale;  ///< box tests shown as full red; unset: 8 × tree height
-    /// Tracer steps one pixel may run per dispatch (1..gpu::MAX_STEPS_PER_DISPATCH); unset: chosen
-    /// by the renderer. Only how the work is cut changes, never the image.
+    /// Tracer steps one pixel may run per dispatch (gpu::MIN_STEPS_PER_DISPATCH ..
+    /// MAX_STEPS_PER_DISPATCH); unset: chosen by the renderer. Only how the work is cut changes,
+    /// never the image.
     std::optional<std::uint32_t> steps_per_dispatch;
-    /// A pixel needing more tracer steps than this in one RenderJob::run is an error
-    /// (RenderIncomplete); unset: the most a correct trace of this scene can take.
+    /// A pixel needing more steps of work (a node, a primitive, a pop, a ray's bookkeeping) than this
+    /// in one RenderJob::run is an error (RenderIncomplete), the same on both backends; unset: the
+    /// most a correct trace of this scene can take (none above 2^32 - 2).
     std::optional<std::uint64_t> max_steps_per_pixel;
 };
 

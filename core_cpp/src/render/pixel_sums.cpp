@@ -52,8 +52,9 @@ std::uint64_t step_bound(const RenderScene& scene, const RenderSettings& setting
     return saturating_mul(per_sample, samples) + 1;
 }
 
-std::uint64_t step_cap(const RenderScene& scene, const RenderSettings& settings, std::uint32_t samples) {
-    return settings.max_steps_per_pixel ? *settings.max_steps_per_pixel : step_bound(scene, settings, samples);
+std::uint32_t work_cap(const RenderScene& scene, const RenderSettings& settings, std::uint32_t samples) {
+    const std::uint64_t cap = settings.max_steps_per_pixel ? *settings.max_steps_per_pixel : step_bound(scene, settings, samples);
+    return cap >= gpu::NO_WORK_CAP ? gpu::NO_WORK_CAP : std::uint32_t(cap);
 }
 
 std::string incomplete_message(std::uint64_t pixels, std::uint64_t cap) {

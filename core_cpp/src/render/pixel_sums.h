@@ -29,8 +29,9 @@ void resolve(const PixelSums& sums, const gpu::FrameParams& frame, const RenderI
 /// push), plus the step that starts the sample. Saturates at UINT64_MAX.
 std::uint64_t step_bound(const RenderScene& scene, const RenderSettings& settings, std::uint32_t samples);
 
-/// The cap of a run: settings.max_steps_per_pixel, else step_bound.
-std::uint64_t step_cap(const RenderScene& scene, const RenderSettings& settings, std::uint32_t samples);
+/// FrameParams::max_work_per_pixel of a run of `samples` samples: settings.max_steps_per_pixel,
+/// else step_bound; gpu::NO_WORK_CAP where that does not fit 32 bits.
+std::uint32_t work_cap(const RenderScene& scene, const RenderSettings& settings, std::uint32_t samples);
 
 /// The message of RenderIncomplete.
 std::string incomplete_message(std::uint64_t pixels, std::uint64_t cap);

@@ -51,15 +51,15 @@ public:
         const auto start = Clock::now();
         gpu::FrameParams frame = frame_;
         frame.sample_target = target;
-        const std::uint64_t cap = step_cap(scene_, settings_, target - samples_done_);
+        frame.max_work_per_pixel = work_cap(scene_, settings_, target - samples_done_);
         RunShared shared;
-        run_threads(frame, cap, shared, cancel, progress);
+        run_threads(frame, shared, cancel, progress);
         timings_.trace_ms += ms_since(start);
         timings_.total_ms = timings_.overlay_ms + timings_.trace_ms;
         timings_.dispatches += shared.most_budgets.load();
         if (shared.error) std::rethrow_exception(shared.error);
         if (cancel && cancel->stop_requested()) throw Cancelled();
-        if (shared.pixels_failed) throw RenderIncomplete(incomplete_message(shared.pixels_failed, cap));
+        if (shared.pixels_failed) throw RenderIncomplete(incomplete_message(shared.pixels_failed, frame.max_work_per_pixel));
         samples_done_ = target;
     }
 
@@ -77,19 +77,14 @@ private:
 
     /// One pixel's samples up to frame.sample_target, in budgets of steps; between budgets the
     /// trace is saved and loaded back (what a dispatch boundary does on the GPU).
-    PixelResult trace_pixel(gpu::CpuTracer& tracer, gpu::uvec2 p, std::uint64_t cap, RunShared& shared,
-                            const Cancellation* cancel) const {
-        const std::uint32_t budget = timings_.steps_per_dispatch;
+    PixelResult trace_pixel(gpu::CpuTracer& tracer, gpu::uvec2 p, RunShared& shared, const Cancellation* cancel) const {
         gpu::CpuTracer::TraceState s = tracer.begin_pixel(p, tracer.samples_done(p), tracer.frame.sample_target);
-        for (std::uint64_t given = 0, budgets = 1;; ++budgets) {
-            const auto steps = std::uint32_t(std::min<std::uint64_t>(budget, cap - given));
-            tracer.trace_steps(s, steps);
-            given += steps;
-            if (s.phase == gpu::CpuTracer::PHASE_DONE) {
+        for (std::uint32_t budgets = 1;; ++budgets) {
+            tracer.trace_steps(s, timings_.steps_per_dispatch);
+            if (s.phase >= gpu::CpuTracer::PHASE_DONE) {
                 note_budgets(shared, budgets);
-                return PixelResult::Done;
+                return s.phase == gpu::CpuTracer::PHASE_DONE ? PixelResult::Done : PixelResult::Failed;
             }
-            if (given >= cap) return PixelResult::Failed;
             if (cancel && cancel->stop_requested()) return PixelResult::Stopped;
             tracer.save_state(s, 1u);
             s = tracer.load_state();
@@ -98,8 +93,8 @@ private:
 
     /// Rows are handed out one at a time; the calling thread also polls `cancel` (at most every
     /// 20 ms, Cancellation::poll) between pixels.
-    void trace_rows(const gpu::FrameParams& frame, std::uint64_t cap, RunShared& shared, Cancellation* cancel,
-                    double* progress, bool caller) {
+    void trace_rows(const gpu::FrameParams& frame, RunShared& shared, Cancellation* cancel, double* progress,
+                    bool caller) {
         gpu::CpuTracer tracer(scene_, frame, overlay_.data(), &sums_, gpu_traversal(settings_.traversal));
         const double pixels = double(frame.width) * frame.height;
         for (std::uint32_t y; (y = shared.next_row.fetch_add(1)) < frame.height;) {
@@ -109,7 +104,7 @@ private:
                     cancel->poll();
                 }
                 if ((cancel && cancel->stop_requested()) || shared.abort.load()) return;
-                PixelResult r = trace_pixel(tracer, gpu::uvec2(x, y), cap, shared, cancel);
+                PixelResult r = trace_pixel(tracer, gpu::uvec2(x, y), shared, cancel);
                 if (r == PixelResult::Done) shared.pixels_done.fetch_add(1);
                 if (r == PixelResult::Failed) {
                     shared.pixels_failed.fetch_add(1);
@@ -121,11 +116,10 @@ private:
 
     /// The calling thread traces rows too; when they run out it keeps polling `cancel` until the
     /// other threads are done, so Ctrl-C stops a render promptly whichever thread holds the work.
-    void run_threads(const gpu::FrameParams& frame, std::uint64_t cap, RunShared& shared, Cancellation* cancel,
-                     double* progress) {
+    void run_threads(const gpu::FrameParams& frame, RunShared& shared, Cancellation* cancel, double* progress) {
         auto work = [&](bool caller) {
             try {
-                trace_rows(frame, cap, shared, cancel, progress, caller);
+                trace_rows(frame, shared, cancel, progress, caller);
             } catch (...) {  // never let an exception escape a thread: rethrown by run()
                 std::lock_guard<std::mutex> lock(shared.error_mutex);
                 if (!shared.error) shared.error = std::current_exception();

@@ -134,6 +134,7 @@ gpu::FrameParams make_frame_params(const RenderScene& scene, const RenderSetting
     f.overlay_first_box = first;
     f.overlay_last_box = s.overlay ? last : first;
     f.ray_stack_entries = s.max_ray_depth + 1;
+    f.max_work_per_pixel = gpu::NO_WORK_CAP;  // set per run (pixel_sums.h work_cap)
     f.node_stack_entries = std::max(scene.height(), 2u) - 1;
     return f;
 }

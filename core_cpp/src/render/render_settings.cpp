@@ -60,8 +60,10 @@ void validate_work(const RenderSettings& s) {
         fail("samples per pixel axis must be 1.." + std::to_string(gpu::MAX_SAMPLES_PER_AXIS));
     if (s.max_ray_depth > gpu::MAX_RAY_DEPTH) fail("max_ray_depth must be at most " + std::to_string(gpu::MAX_RAY_DEPTH));
     if (s.traversal == Traversal::Wide) fail("the tracer has no 'wide' traversal; expected one of: stack stackless");
-    if (s.steps_per_dispatch && (*s.steps_per_dispatch < 1 || *s.steps_per_dispatch > gpu::MAX_STEPS_PER_DISPATCH))
-        fail("steps_per_dispatch must be 1.." + std::to_string(gpu::MAX_STEPS_PER_DISPATCH));
+    if (s.steps_per_dispatch &&
+        (*s.steps_per_dispatch < gpu::MIN_STEPS_PER_DISPATCH || *s.steps_per_dispatch > gpu::MAX_STEPS_PER_DISPATCH))
+        fail("steps_per_dispatch must be " + std::to_string(gpu::MIN_STEPS_PER_DISPATCH) + ".." +
+             std::to_string(gpu::MAX_STEPS_PER_DISPATCH));
     if (s.max_steps_per_pixel && *s.max_steps_per_pixel < 1) fail("max_steps_per_pixel must be at least 1");
 }
 

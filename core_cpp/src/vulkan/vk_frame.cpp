@@ -71,9 +71,9 @@ void FrameBindings::bind_overlay(VkImageView color) {
 
 TraceSlots::TraceSlots(const Device& device)
     : device_(device),
-      counter_(device, 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT,
-               MemoryUse::PerFrame) {
-    reset_counter();
+      counters_(device, 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT,
+                MemoryUse::PerFrame) {
+    reset_counters();
 }
 
 bool TraceSlots::reserve(std::uint32_t slots, std::uint32_t ray_entries, std::uint32_t node_entries) {
@@ -94,21 +94,27 @@ void TraceSlots::address(gpu::FrameParams& frame) const {
     frame.addr.slot_state = words(state_.address());
     frame.addr.slot_rays = words(rays_.address());
     frame.addr.slot_nodes = words(nodes_.address());
-    frame.addr.unfinished = words(counter_.address());
+    frame.addr.counters = words(counters_.address());
     // the stacks are laid out for the reserved sizes (trace.comp indexes slot · entries + k)
     frame.ray_stack_entries = ray_entries_;
     frame.node_stack_entries = node_entries_;
 }
 
-void TraceSlots::reset_counter() {
-    const std::uint32_t zero = 0;
-    counter_.write(&zero, sizeof(zero));
+void TraceSlots::reset_counters() {
+    const std::uint32_t zero[2] = {0, 0};
+    counters_.write(zero, sizeof(zero));
 }
 
 std::uint32_t TraceSlots::unfinished() const {
-    std::uint32_t n = 0;
-    counter_.read(&n, sizeof(n));
-    return n;
+    std::uint32_t n[2] = {0, 0};
+    counters_.read(n, sizeof(n));
+    return n[0];
+}
+
+std::uint32_t TraceSlots::failed() const {
+    std::uint32_t n[2] = {0, 0};
+    counters_.read(n, sizeof(n));
+    return n[1];
 }
 
 SumBuffers::SumBuffers(const Device& device, std::size_t pixels)

@@ -37,7 +37,8 @@ private:
 };
 
 /// Where suspended traces wait between dispatches (trace.comp, state.glsl): per slot, the state
-/// words, the ray stack and the traversal stack; and the counter of slots with work left.
+/// words, the ray stack and the traversal stack; and the counters of slots with work left and of
+/// traces that failed.
 class TraceSlots {
 public:
     explicit TraceSlots(const Device& device);
@@ -48,13 +49,14 @@ public:
     bool reserve(std::uint32_t slots, std::uint32_t ray_entries, std::uint32_t node_entries);
     /// Fills the addresses of FrameParams::addr that point here.
     void address(gpu::FrameParams& frame) const;
-    void reset_counter();
+    void reset_counters();
     std::uint32_t unfinished() const;
+    std::uint32_t failed() const;
     const Buffer& state() const { return state_; }
 
 private:
     const Device& device_;
-    Buffer state_, rays_, nodes_, counter_;
+    Buffer state_, rays_, nodes_, counters_;
     std::uint32_t slots_ = 0, ray_entries_ = 0, node_entries_ = 0;
 };
 

@@ -66,9 +66,9 @@ public:
         std::lock_guard<std::mutex> lock(core_->mutex);
         gpu::FrameParams frame = frame_;
         frame.sample_target = target;
+        frame.max_work_per_pixel = work_cap(scene_->summary(), settings_, target - samples_done_);
         prepare(frame);
-        const std::uint64_t cap = step_cap(scene_->summary(), settings_, target - samples_done_);
-        for (std::uint32_t t = 0; t < tiles_.count(); ++t) run_tile(frame, t, cap, cancel, progress);
+        for (std::uint32_t t = 0; t < tiles_.count(); ++t) run_tile(frame, t, cancel, progress);
         timings_.total_ms = timings_.overlay_ms + timings_.trace_ms;
         samples_done_ = target;
     }
@@ -112,8 +112,8 @@ private:
     }
 
     /// Rounds over tile `index` until each of its pixels has its samples, or `cancel` says stop
-    /// (Cancelled), or a pixel passes `cap` steps (RenderIncomplete).
-    void run_tile(gpu::FrameParams frame, std::uint32_t index, std::uint64_t cap, Cancellation* cancel, double* progress) {
+    /// (Cancelled), or a pixel's trace failed: more work than frame.max_work_per_pixel (RenderIncomplete).
+    void run_tile(gpu::FrameParams frame, std::uint32_t index, Cancellation* cancel, double* progress) {
         RendererCore& c = *core_;
         frame.tile_x = index % tiles_.columns * tiles_.width;
         frame.tile_y = index / tiles_.columns * tiles_.height;
@@ -122,23 +122,23 @@ private:
         frame.stamp = c.next_stamp();
         const double tile_pixels = double(frame.tile_width) * frame.tile_height;
         std::uint32_t unfinished = std::uint32_t(tile_pixels);
-        for (std::uint64_t given = 0;;) {
+        for (;;) {
             if (progress) *progress = (index + 1.0 - unfinished / tile_pixels) / tiles_.count();
             if (cancel && cancel->poll()) throw Cancelled();
-            frame.steps_per_dispatch = std::uint32_t(std::min<std::uint64_t>(budget_, cap - given));
+            frame.steps_per_dispatch = budget_;
             c.bindings.write_params(frame);
-            c.slots.reset_counter();
+            c.slots.reset_counters();
             const PassContext pass = c.pass();
             const double ms = c.runner.run([&](VkCommandBuffer cmd) {
                 record_trace_round(pass, cmd, gpu_traversal(settings_.traversal), frame.tile_width, frame.tile_height);
             });
-            given += frame.steps_per_dispatch;
             timings_.trace_ms += ms;
             timings_.dispatches += 1;
             timings_.steps_per_dispatch = frame.steps_per_dispatch;
+            if (const std::uint32_t failed = c.slots.failed())
+                throw RenderIncomplete(incomplete_message(failed, frame.max_work_per_pixel));
             unfinished = c.slots.unfinished();
             if (unfinished == 0) return;
-            if (given >= cap) throw RenderIncomplete(incomplete_message(unfinished, cap));
             adapt_budget(ms);
         }
     }
