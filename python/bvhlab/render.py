@@ -174,8 +174,11 @@ class Renderer:
 
     def start(self, scene: Scene, bvh: Bvh, width: int = 800, height: int = 600, *, threads: int | None = None,
               **options) -> RenderJob:
-        """A RenderJob (sample passes, nothing traced yet). Options as for `bvhlab.render`;
-        `threads` (CPU reference; default: the Renderer's, 0 = every core)."""
+        """A RenderJob (sample passes, nothing traced yet). Options as for `bvhlab.render`, and
+        steps_per_dispatch (16..60000: how the work is cut, never the image; default: adaptive)
+        and max_steps_per_pixel (a pixel needing more work in one run raises RenderIncomplete;
+        default: the most a correct trace of the scene can take). `threads`: CPU reference
+        threads (default: the Renderer's, 0 = every core)."""
         threads = self.threads if threads is None else _checks.integer("threads", threads, 0, 4096)
         settings = render_settings(scene, bvh, width, height, **options)
         start = time.perf_counter()

@@ -176,3 +176,16 @@ def test_depth_order_one_convention():
         first, last = bvh._core.depth_range(lo, hi)
         assert last - first == len(bvh.boxes(lo, hi)[2]) if lo <= hi else (first, last) == (0, 0)
         assert np.all((depths[nodes[first:last]] >= lo) & (depths[nodes[first:last]] <= hi))
+
+
+def test_a_pixel_that_cannot_finish_is_an_error(renderer):
+    """Ten thousand copies of one triangle: a primary ray alone takes some 20,000 steps of work; with
+    max_steps_per_pixel below that the render raises instead of returning an unfinished image."""
+    one = np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]]], np.float32)
+    scene = bvhlab.Scene(triangles=np.ascontiguousarray(np.repeat(one, 10000, 0)),
+                         camera=bvhlab.Camera((0.3, 0.3, 2), (0.3, 0.3, 0), up=(0, 1, 0), fov_y=30))
+    bvh = bvhlab.build(scene)
+    with pytest.raises(bvhlab.RenderIncomplete, match="did not finish within 5000"):
+        renderer.render(scene, bvh, 8, 8, max_steps_per_pixel=5000)
+    image, _ = renderer.render(scene, bvh, 8, 8)  # with the default cap it finishes
+    assert np.all(image[..., 3] == 1)
