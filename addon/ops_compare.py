@@ -74,7 +74,7 @@ class BVHLAB_OT_compare(ModalTaskMixin, bpy.types.Operator):
         exported = export_scene(context, require_camera=True)
         width, height = render_size(context.scene)
         options = {"frames": settings.compare_frames, "builds": 1, "width": width, "height": height,
-                   "spp": settings.render_supersampling ** 2, "max_depth": settings.render_bounces,
+                   "samples_per_axis": settings.render_supersampling, "max_depth": settings.render_bounces,
                    "build_options": {"axis": settings.axis, "max_leaf_size": settings.max_leaf_size}}
         backend, labels = settings.backend, [method for _, method in COMPARE_METHODS]
         self._csv_path = output_path(settings.compare_filepath, "bvh_compare.csv")

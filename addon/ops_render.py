@@ -23,7 +23,7 @@ def render_with_settings(context, exported, bvh):
     width, height = render_size(context.scene)
     overlay = (settings.overlay_depth_min, settings.overlay_depth_max) if settings.render_overlay else None
     return bvhlab.render(exported, bvh, width, height, backend=settings.backend,
-                         spp=settings.render_supersampling ** 2, max_depth=settings.render_bounces,
+                         samples_per_axis=settings.render_supersampling, max_depth=settings.render_bounces,
                          overlay_depth=overlay, traversal=settings.traversal, mode=settings.render_mode,
                          color_by_depth=settings.overlay_color_by_depth, line_width=settings.overlay_line_width)
 

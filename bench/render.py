@@ -4,7 +4,13 @@
 
 For median, mean, SAH 12 and SAH 32 (the report's Table 1 rows): average frame ms after a warm-up,
 stack and stackless traversal, on Vulkan (lavapipe here) and on the CPU reference with the same
-thread count, primary-ray Mrays/s, and the report's frame time beside. Writes bench/results/render.json.
+thread count, primary-ray Mrays/s, and the report's frame time beside.
+
+Then the cost of bounded dispatches (issue 8): the SAH 12 tree rendered with the steps one pixel
+may run per dispatch fixed at 60000 (most frames: one round per tile), 4096, 512 and 64, and left to
+the renderer (adaptive), interleaved and repeated; frame ms, trace dispatches, and the ratio to
+the 60000 budget. On the CPU reference the budget only decides how often a trace is saved and
+loaded. Writes bench/results/render.json.
 """
 from __future__ import annotations
 
@@ -25,6 +31,8 @@ def main() -> None:
     ap.add_argument("--width", type=int, default=800)
     ap.add_argument("--height", type=int, default=600)
     ap.add_argument("--frames", type=int, default=3)
+    ap.add_argument("--samples-per-axis", type=int, default=1, help="for the bounded-dispatch table")
+    ap.add_argument("--skip-table1", action="store_true", help="only the bounded-dispatch table")
     args = ap.parse_args()
 
     import bvhlab
@@ -36,6 +44,10 @@ def main() -> None:
     results = {"machine": _common.machine(), "scene": name, "triangles": len(scene.triangles),
                "width": args.width, "height": args.height, "threads": threads, "rows": []}
     renderers = {"vulkan": bvhlab.Renderer("vulkan"), "cpu": bvhlab.Renderer("cpu")}
+    results["budgets"] = budget_rows(bvhlab, scene, name, renderers, args)
+    if args.skip_table1:
+        print(f"\nwrote {_common.write_json('render_budgets.json', results)}")
+        return
     for backend, renderer in renderers.items():
         for traversal in ("stack", "stackless"):
             rows = measure_methods(scene, METHODS, frames=args.frames, builds=1, width=args.width,
@@ -56,6 +68,41 @@ def main() -> None:
                         title=f"\n{name}: frame ms at {args.width}x{args.height}; Vulkan on "
                               f"{renderers['vulkan'].device}, CPU reference on {threads} threads")
     print(f"\nwrote {_common.write_json('render.json', results)}")
+
+
+BUDGETS = [60000, 4096, 512, 64, None]
+
+
+def budget_rows(bvhlab, scene, name, renderers, args) -> list[dict]:
+    """Frame ms per steps-per-dispatch budget, interleaved over `frames` rounds (min of each)."""
+    bvh = bvhlab.build(scene, method="sah", bins=12)
+    options = {"samples_per_axis": args.samples_per_axis}
+    times = {(b, k): [] for b in renderers for k in range(len(BUDGETS))}
+    dispatches = {}
+    for backend, renderer in renderers.items():  # warm-up: shaders compiled, scene uploaded
+        renderer.render(scene, bvh, args.width, args.height, **options)
+    for _ in range(max(1, args.frames)):
+        for k, budget in enumerate(BUDGETS):
+            for backend, renderer in renderers.items():
+                extra = {} if budget is None else {"steps_per_dispatch": budget}
+                _, t = renderer.render(scene, bvh, args.width, args.height, **options, **extra)
+                times[(backend, k)].append(t["overlay_ms"] + t["trace_ms"] + t["readback_ms"])
+                dispatches[(backend, k)] = t["dispatches"]
+    rows, table = [], []
+    for k, budget in enumerate(BUDGETS):
+        row = {"steps_per_dispatch": budget or "adaptive"}
+        for backend in renderers:
+            row[f"{backend}_ms"] = min(times[(backend, k)])
+            row[f"{backend}_ratio"] = row[f"{backend}_ms"] / min(times[(backend, 0)])
+            row[f"{backend}_dispatches"] = dispatches[(backend, k)]
+        rows.append(row)
+        table.append([row["steps_per_dispatch"], row["vulkan_ms"], row["vulkan_dispatches"], row["vulkan_ratio"],
+                      row["cpu_ms"], row["cpu_ratio"]])
+    _common.print_table(["steps/dispatch", "vulkan ms", "dispatches", "vs 60000", "cpu ms", "vs 60000"], table,
+                        title=f"\n{name}, SAH 12, {args.width}x{args.height}, {args.samples_per_axis}x"
+                              f"{args.samples_per_axis} samples: frame ms by steps per dispatch "
+                              f"(min of {max(1, args.frames)}, interleaved)")
+    return rows
 
 
 if __name__ == "__main__":

@@ -108,8 +108,10 @@ inline float uintBitsToFloat(uint u) { return std::bit_cast<float>(u); }
 
 }  // namespace bvhlab::gpu
 
-// Parameter qualifiers of the shared code.
+// Parameter qualifiers of the shared code, and its constants (the shared code is compiled as
+// members of a class, see core_cpp/src/render/cpu_tracer.h).
 #define INOUT(T) T&
 #define OUT(T) T&
+#define LOCAL_CONST static constexpr
 
 #endif  // BVHLAB_GLSL_COMPAT_H

@@ -2,4 +2,5 @@
 // GLSL spells differently from C++.
 #define INOUT(T) inout T
 #define OUT(T) out T
+#define LOCAL_CONST const
 vec3 xyz(vec4 v) { return v.xyz; }

@@ -6,6 +6,8 @@
 #define BVHLAB_GPU_TYPES_H
 
 #ifdef __cplusplus
+#include <cstddef>
+
 #include "glsl_compat.h"
 namespace bvhlab::gpu {
 #define BVHLAB_CONST inline constexpr
@@ -66,38 +68,101 @@ struct GpuBox {
 
 // ---- per-frame parameters (a read-only storage buffer: see trace.comp) -------------------
 
+/// RenderSettings::mode: the Whitted image, or the box tests of the primary rays as colours.
 BVHLAB_CONST uint MODE_SHADE = 0u;
 BVHLAB_CONST uint MODE_HEATMAP = 1u;
+/// The traversal variant (report §3.1), a specialization constant of trace.comp.
 BVHLAB_CONST uint TRAVERSAL_STACK = 0u;
 BVHLAB_CONST uint TRAVERSAL_STACKLESS = 1u;
 
-struct FrameParams {
-    vec4 camera_position;  ///< xyz; w = tan(vertical field of view / 2)
-    vec4 camera_forward;   ///< xyz (unit); w = aspect ratio, width / height
-    vec4 camera_right;     ///< xyz (unit)
-    vec4 camera_up;        ///< xyz (unit, orthogonal to forward and right)
-    vec4 light_position;   ///< xyz
-    vec4 light_color;      ///< rgb, already multiplied by the intensity
-    vec4 sky;              ///< rgb: the atmosphere colour of rays that hit nothing
-    uvec4 size;            ///< width, height, samples per pixel axis (n×n), max ray depth
-    uvec4 flags;           ///< mode, overlay present (0/1), node count, heatmap full scale (box tests)
-    vec4 scale;            ///< x = ray offset epsilon, y = overlay near plane, z = overlay far plane
-    uvec4 addr_nodes_refs;        ///< device addresses (lo, hi words) of the nodes and the references
-    uvec4 addr_triangles_spheres; ///< ... of the triangles and the spheres
-    uvec4 addr_materials_boxes;   ///< ... of the materials and the overlay boxes
-    uvec4 overlay_range;          ///< first box, box count, line colour by depth (0/1), unused
+/// Device addresses (buffer_reference_uvec2: low word, high word) of every array the shaders
+/// read or write, so no storage-buffer binding limit (128 MiB on lavapipe) caps a scene.
+struct DeviceAddresses {
+    uvec2 nodes;          ///< BvhNode[node_count]
+    uvec2 refs;           ///< uint, primitive references in leaf order
+    uvec2 triangles;      ///< GpuTriangle
+    uvec2 spheres;        ///< GpuSphere
+    uvec2 materials;      ///< GpuMaterial
+    uvec2 boxes;          ///< GpuBox, sorted by depth (overlay pass)
+    uvec2 accum_color;    ///< vec4 per pixel: sum of sample colours (rgb), sum of box tests (a)
+    uvec2 accum_depth;    ///< float per pixel: nearest view-axis depth of a primary ray's hit
+    uvec2 accum_samples;  ///< uint per pixel: samples accumulated
+    uvec2 slot_state;     ///< uvec4[STATE_WORDS] per slot: a pixel's suspended trace (see state.glsl)
+    uvec2 slot_rays;      ///< uvec4[3 × ray_stack_entries] per slot: its Whitted ray stack
+    uvec2 slot_nodes;     ///< uvec2[node_stack_entries] per slot: its traversal stack (node, entry t)
+    uvec2 counters;       ///< uint[2], atomic: slots that ended a dispatch with work left, that failed
+    uvec2 unused;
 };
 
-// ---- bindings and workgroups -------------------------------------------------------------
+/// Everything a frame reads, field by field (std430 and C++ agree: each vec3 is followed by a
+/// 4-byte scalar, then come 4-byte scalars, then the addresses, 8-aligned).
+struct FrameParams {
+    vec3 camera_position;
+    float tan_half_fov_y;       ///< tan(vertical field of view / 2)
+    vec3 camera_forward;        ///< unit; the view axis
+    float aspect;               ///< width / height of the image plane
+    vec3 camera_right;          ///< unit, orthogonal to forward
+    float shift_x;              ///< centre of the image plane at unit distance, right of the view axis
+    vec3 camera_up;             ///< unit, orthogonal to forward and right
+    float shift_y;              ///< ... above the view axis (Blender's lens shift, in tangent units)
+    vec3 light_position;
+    float ray_epsilon;          ///< offset of secondary and shadow ray origins from a surface
+    vec3 light_color;           ///< rgb, already multiplied by the intensity
+    float heatmap_scale;        ///< box tests per primary ray shown as full red (MODE_HEATMAP)
+    vec3 sky;                   ///< rgb: the atmosphere colour of rays that hit nothing (report §2.1)
+    float overlay_near;         ///< overlay pass: distance of the near clipping plane
+    uint width;                 ///< image size in pixels
+    uint height;
+    uint samples_per_axis;      ///< n: n×n samples per pixel on a regular grid
+    uint max_ray_depth;         ///< bounces of reflection and refraction (0 = primary rays only)
+    uint mode;                  ///< MODE_SHADE or MODE_HEATMAP
+    uint node_count;            ///< of the tree (the stackless traversal stops there)
+    uint overlay_enabled;       ///< 1: the trace pass reads the overlay pass's lines
+    uint overlay_color_by_depth;  ///< 1: line colour by tree depth (depth_color), else OVERLAY_LINE_COLOR
+    float overlay_far;          ///< overlay pass: distance of the far clipping plane
+    uint overlay_first_box;     ///< the boxes drawn: [overlay_first_box, overlay_last_box) (report §3.3.1)
+    uint overlay_last_box;
+    uint sample_target;         ///< this pass traces each pixel's samples up to (not including) this index
+    uint steps_per_dispatch;    ///< trace_steps() iterations one invocation may run in one dispatch
+    uint stamp;                 ///< tells a slot's state from an earlier tile's or pass's (never 0)
+    uint ray_stack_entries;     ///< per slot: max_ray_depth + 1
+    uint node_stack_entries;    ///< per slot: tree height - 1 (at least 1)
+    uint tile_x;                ///< the tile of this dispatch: first pixel, size; slot = local y · width + x
+    uint tile_y;
+    uint tile_width;
+    uint tile_height;
+    uint max_work_per_pixel;    ///< a trace with more steps of work in a pass fails (0xffffffff: no cap)
+    uint padding;               ///< keeps `addr` 8-byte aligned in std430, as in C++
+    DeviceAddresses addr;
+};
+
+// ---- bindings, workgroups, limits ------------------------------------------------------
 
 BVHLAB_CONST uint BINDING_FRAME = 0u;   ///< FrameParams, read-only storage buffer (trace and overlay)
-BVHLAB_CONST uint BINDING_IMAGE = 1u;   ///< rgba32f storage image: overlay in, colour out (trace)
-BVHLAB_CONST uint TRACE_GROUP_X = 8u;
+BVHLAB_CONST uint BINDING_OVERLAY = 1u; ///< rgba32f storage image: the overlay pass's lines (trace reads)
+BVHLAB_CONST uint TRACE_GROUP_X = 8u;   ///< trace.comp's workgroup: 8×8 pixels of a tile
 BVHLAB_CONST uint TRACE_GROUP_Y = 8u;
-/// Entries of the Whitted ray stack: each bounce pops one ray and pushes at most two.
-BVHLAB_CONST uint RAY_STACK_SIZE = 32u;
-BVHLAB_CONST uint MAX_RAY_DEPTH = 15u;   ///< keeps the ray stack within RAY_STACK_SIZE
+/// Entries of the Whitted ray stack: each bounce pops one ray and pushes at most two, so at most
+/// max_ray_depth + 1 wait at once.
+BVHLAB_CONST uint RAY_STACK_SIZE = 16u;
+BVHLAB_CONST uint MAX_RAY_DEPTH = 15u;   ///< bounces; keeps the ray stack within RAY_STACK_SIZE
 BVHLAB_CONST uint MAX_SAMPLES_PER_AXIS = 16u;
+/// Loop iterations one shader invocation may run in one dispatch (trace_steps' budget). Mesa's
+/// llvmpipe (lavapipe) ends every loop of an invocation once they have run
+/// LP_MAX_TGSI_LOOP_ITERATIONS = 65535 iterations together (gallivm/lp_bld_limits.h: one counter
+/// for all loops of the shader, taken once per iteration of the SIMD vector, also for a loop that
+/// no lane enters); trace_steps counts every iteration of its loops as the SIMD vector runs them
+/// (shade.glsl); trace.comp has no other loop, and the margin covers trace_steps' last few steps
+/// (it may end a few steps past its budget). Real
+/// GPUs have a watchdog instead: the host also shortens the budget to keep each dispatch brief
+/// (vk_trace_job.cpp).
+BVHLAB_CONST uint MAX_STEPS_PER_DISPATCH = 60000u;
+/// The least budget: enough for a step of work after the loops' own counting (no livelock).
+BVHLAB_CONST uint MIN_STEPS_PER_DISPATCH = 16u;
+/// FrameParams::max_work_per_pixel meaning "no cap".
+BVHLAB_CONST uint NO_WORK_CAP = 0xffffffffu;
+/// Words (uvec4) of a slot's saved trace state (state.glsl).
+BVHLAB_CONST uint STATE_WORDS = 11u;
 BVHLAB_CONST uint NO_HIT = 0xffffffffu;
 BVHLAB_CONST uint NODE_SKIP_MASK = 0x7fffffffu;
 BVHLAB_CONST float FAR_AWAY = 3.0e38f;       ///< tmax of a ray that may go anywhere
@@ -106,11 +171,15 @@ BVHLAB_CONST float FAR_AWAY = 3.0e38f;       ///< tmax of a ray that may go anyw
 BVHLAB_CONST float AMBIENT = 0.1f;     ///< light every opaque surface gets, lit or not
 BVHLAB_CONST float SPECULAR = 0.25f;   ///< Blinn-Phong highlight strength
 BVHLAB_CONST float SHININESS = 48.0f;  ///< Blinn-Phong exponent
+/// Overlay line colour when lines are not coloured by depth (report §3.3).
+BVHLAB_CONST vec3 OVERLAY_LINE_COLOR = vec3(1.0f, 0.85f, 0.2f);
 
 #ifdef __cplusplus
 static_assert(sizeof(BvhNode) == 32, "BvhNode must stay 32 bytes (std430 layout)");
 static_assert(sizeof(GpuTriangle) == 48 && sizeof(GpuSphere) == 32 && sizeof(GpuMaterial) == 32);
-static_assert(sizeof(GpuBox) == 32 && sizeof(FrameParams) == 14 * 16);
+static_assert(sizeof(GpuBox) == 32 && sizeof(DeviceAddresses) == 14 * 8);
+static_assert(offsetof(FrameParams, width) == 112 && offsetof(FrameParams, addr) == 200);
+static_assert(sizeof(FrameParams) == 200 + sizeof(DeviceAddresses));
 }  // namespace bvhlab::gpu
 #endif
 #endif  // BVHLAB_GPU_TYPES_H

@@ -11,5 +11,5 @@ layout(location = 1) flat in vec3 line_color;
 layout(location = 0) out vec4 color_distance;
 
 void main() {
-    color_distance = vec4(line_color, length(world_position - frame.camera_position.xyz));
+    color_distance = vec4(line_color, length(world_position - frame.camera_position));
 }

@@ -20,9 +20,9 @@ layout(location = 0) out vec3 world_position;
 layout(location = 1) flat out vec3 line_color;
 
 void main() {
-    GpuBox box = BoxArray(frame.addr_materials_boxes.zw).v[gl_InstanceIndex];
+    GpuBox box = BoxArray(frame.addr.boxes).v[gl_InstanceIndex];
     uint depth = uint(box.lo_depth.w);
     world_position = corner_position(box.lo_depth.xyz, box.hi.xyz, box_corner(uint(gl_VertexIndex)));
-    line_color = frame.overlay_range.z != 0u ? depth_color(depth) : vec3(1.0f, 0.85f, 0.2f);
+    line_color = frame.overlay_color_by_depth != 0u ? depth_color(depth) : OVERLAY_LINE_COLOR;
     gl_Position = overlay_clip(world_position);
 }

@@ -1,44 +1,106 @@
 #version 460
-// trace.comp — the trace pass (report §3.2, Figure 2): one invocation per pixel runs the shared
-// Whitted tracer (tracer/*.glsl) over the scene, read through buffer device addresses so no
-// binding limit (128 MiB on lavapipe) caps the scene size. The image holds the overlay pass's
-// lines (rgb + distance) on entry and the final colour on exit.
+// trace.comp — the trace pass (report §3.2, Figure 2): one invocation per pixel of a tile runs the
+// shared Whitted tracer (tracer/*.glsl) for at most frame.steps_per_dispatch steps, then saves
+// where it stands in its slot; the host dispatches again until every pixel of the tile has traced
+// its samples of the pass (issue 8: no dispatch holds unbounded work). The scene, the per-pixel
+// sums and the slots are read through buffer device addresses, so no binding limit (128 MiB on
+// lavapipe) caps their size. The overlay pass's lines (rgb + distance) come in the storage image.
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_buffer_reference_uvec2 : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
 
 #include "gpu_types.h"
 #include "glsl_prelude.glsl"
 
 /// TRAVERSAL_STACK or TRAVERSAL_STACKLESS (report §3.1).
 layout(constant_id = 0) const uint TRAVERSAL = TRAVERSAL_STACK;
-layout(local_size_x = 8, local_size_y = 8) in;  // = TRACE_GROUP_X, TRACE_GROUP_Y
+layout(local_size_x = TRACE_GROUP_X, local_size_y = TRACE_GROUP_Y) in;
 
 // A storage buffer, not a uniform one: Mesa 22.3 lavapipe recompiles (and leaks) a shader whose
 // branches read uniform-buffer values, at every command buffer execution.
 layout(set = 0, binding = BINDING_FRAME, std430) readonly buffer FrameBlock { FrameParams frame; };
-layout(set = 0, binding = BINDING_IMAGE, rgba32f) uniform image2D image;
+layout(set = 0, binding = BINDING_OVERLAY, rgba32f) readonly uniform image2D overlay;
 
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer NodeArray { BvhNode v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer RefArray { uint v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer TriangleArray { GpuTriangle v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer SphereArray { GpuSphere v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer MaterialArray { GpuMaterial v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer Vec4Array { vec4 v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer FloatArray { float v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer UintArray { uint v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer Uvec4Array { uvec4 v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 8) buffer Uvec2Array { uvec2 v[]; };
 
-BvhNode load_node(uint i) { return NodeArray(frame.addr_nodes_refs.xy).v[i]; }
-uint load_ref(uint i) { return RefArray(frame.addr_nodes_refs.zw).v[i]; }
-GpuTriangle load_triangle(uint i) { return TriangleArray(frame.addr_triangles_spheres.xy).v[i]; }
-GpuSphere load_sphere(uint i) { return SphereArray(frame.addr_triangles_spheres.zw).v[i]; }
-GpuMaterial load_material(uint i) { return MaterialArray(frame.addr_materials_boxes.xy).v[i]; }
-uint node_count() { return frame.flags.z; }
-vec4 overlay_at(uvec2 p) { return imageLoad(image, ivec2(p)); }
+BvhNode load_node(uint i) { return NodeArray(frame.addr.nodes).v[i]; }
+uint load_ref(uint i) { return RefArray(frame.addr.refs).v[i]; }
+GpuTriangle load_triangle(uint i) { return TriangleArray(frame.addr.triangles).v[i]; }
+GpuSphere load_sphere(uint i) { return SphereArray(frame.addr.spheres).v[i]; }
+GpuMaterial load_material(uint i) { return MaterialArray(frame.addr.materials).v[i]; }
+uint node_count() { return frame.node_count; }
+vec4 overlay_at(uvec2 p) { return frame.overlay_enabled != 0u ? imageLoad(overlay, ivec2(p)) : vec4(0.0f); }
+
+// The step count of the lanes of a SIMD vector (a subgroup on lavapipe) after a loop: the largest.
+uint sync_steps(uint steps) { return subgroupMax(steps); }
+
+// The pixel's sums live in private memory during a dispatch (copied in at the start, out at the
+// end); the stacks stay in the slot: dynamically indexed private arrays are slower on lavapipe.
+vec4 g_sum;        // colour (rgb) and box tests (a) of the samples so far
+float g_depth;     // nearest primary hit
+uint g_samples;
+uint g_slot;
+uvec4 state_load(uint k) { return Uvec4Array(frame.addr.slot_state).v[g_slot * STATE_WORDS + k]; }
+void state_store(uint k, uvec4 w) { Uvec4Array(frame.addr.slot_state).v[g_slot * STATE_WORDS + k] = w; }
+uvec4 ray_word_load(uint k) { return Uvec4Array(frame.addr.slot_rays).v[g_slot * 3u * frame.ray_stack_entries + k]; }
+void ray_word_store(uint k, uvec4 w) { Uvec4Array(frame.addr.slot_rays).v[g_slot * 3u * frame.ray_stack_entries + k] = w; }
+uvec2 node_stack_load(uint k) { return Uvec2Array(frame.addr.slot_nodes).v[g_slot * frame.node_stack_entries + k]; }
+void node_stack_store(uint k, uvec2 e) { Uvec2Array(frame.addr.slot_nodes).v[g_slot * frame.node_stack_entries + k] = e; }
+uint samples_done(uvec2 p) { return g_samples; }
+void accumulate_sample(uvec2 p, vec3 color, float visits, float depth) {
+    g_sum = g_sum + vec4(color, visits);  // in sample order, as the CPU reference adds them
+    g_depth = min(g_depth, depth);
+    g_samples = g_samples + 1u;
+}
+
+uint pixel_index(uvec2 p) { return p.y * frame.width + p.x; }
+
+void load_sums(uvec2 p) {
+    uint i = pixel_index(p);
+    g_sum = Vec4Array(frame.addr.accum_color).v[i];
+    g_depth = FloatArray(frame.addr.accum_depth).v[i];
+    g_samples = UintArray(frame.addr.accum_samples).v[i];
+}
+
+void store_sums(uvec2 p) {
+    uint i = pixel_index(p);
+    Vec4Array(frame.addr.accum_color).v[i] = g_sum;
+    FloatArray(frame.addr.accum_depth).v[i] = g_depth;
+    UintArray(frame.addr.accum_samples).v[i] = g_samples;
+}
 
 #include "tracer/geometry.glsl"
 #include "tracer/traverse.glsl"
-#include "tracer/shade_colors.glsl"
 #include "tracer/shade.glsl"
+#include "tracer/state.glsl"
+
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer Counters { uint unfinished; uint failed; };
 
 void main() {
-    uvec2 p = gl_GlobalInvocationID.xy;
-    if (p.x >= frame.size.x || p.y >= frame.size.y) return;
-    imageStore(image, ivec2(p), trace_pixel(p));
+    uvec2 local = gl_GlobalInvocationID.xy;
+    if (local.x >= frame.tile_width || local.y >= frame.tile_height) return;
+    uvec2 p = uvec2(frame.tile_x, frame.tile_y) + local;
+    g_slot = local.y * frame.tile_width + local.x;
+    if (slot_done(frame.stamp)) return;
+    bool resumed = slot_stamp() == frame.stamp;
+    load_sums(p);
+    TraceState s = resumed ? load_state() : begin_pixel(p, g_samples, frame.sample_target);
+    trace_steps(s, frame.steps_per_dispatch);
+    store_sums(p);
+    if (s.phase >= PHASE_DONE) {
+        save_done(s, frame.stamp);
+        if (s.phase == PHASE_FAILED) atomicAdd(Counters(frame.addr.counters).failed, 1u);
+        return;
+    }
+    save_state(s, frame.stamp);
+    atomicAdd(Counters(frame.addr.counters).unfinished, 1u);
 }

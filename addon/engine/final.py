@@ -14,7 +14,7 @@ import warnings
 from . import passes, records
 from .scene_tree import BuildSettings, SceneTree
 from .settings import backend, trace_settings
-from .tracer import TraceCancelled, depth, open_tracer
+from .tracer import TraceCancelled, open_tracer
 
 #: Progress (RenderEngine.update_progress) at the start of each stage.
 BUILD_START, TRACE_START, PASSES_START = 0.05, 0.35, 0.85
@@ -74,23 +74,25 @@ class FinalRender:
         width, height = engine.resolution_x, engine.resolution_y
         settings = trace_settings(blender_scene, viewport=False)
         engine.update_progress(TRACE_START)
-        engine.update_stats("", f"Tracing {width} × {height}, {settings.spp} spp on {tracer.device}")
-        image, timings = tracer.trace(scene, tree.bvh, scene.camera, width, height, settings,
-                                      cancelled=engine.test_break)
+        engine.update_stats("", f"Tracing {width} × {height}, {settings.samples} samples per pixel on {tracer.device}")
         result = engine.begin_result(0, 0, width, height, layer=depsgraph.view_layer.name)
         try:
             layer = result.layers[0]
-            passes.write(layer, passes.COMBINED, image)
-            engine.update_result(result)
+            images, timings = tracer.trace(scene, tree.bvh, scene.camera, width, height, settings,
+                                           cancelled=engine.test_break,
+                                           depth=layer.passes.get(passes.DEPTH) is not None,
+                                           heat=layer.passes.get(passes.HEATMAP) is not None)
+            passes.write(layer, passes.COMBINED, images.color)
             engine.update_progress(PASSES_START)
-            extra = self._extra_passes(engine, layer, tracer, scene, tree.bvh, settings, width, height)
-        finally:  # Combined is in the result even when Esc stopped the other passes
+            extra = self._extra_passes(layer, images)
+            engine.update_result(result)
+        finally:
             engine.end_result(result)
         engine.update_progress(1.0)
         record = {"device": tracer.device, "backend": tracer.backend, "note": tracer.note,
                   "tree": update.action, "build_ms": update.ms, "trace_ms": timings["trace_ms"],
                   "total_ms": timings["total_ms"], **extra, "sync": self.report, "totals": self.live.totals,
-                  "size": (width, height), "spp": settings.spp}
+                  "size": (width, height), "samples": settings.samples}
         with records.lock:
             records.last_final[key] = record
         engine.update_stats("", _summary(record))
@@ -113,19 +115,14 @@ class FinalRender:
             engine.update_stats("", f"BVH {update.action} in {(time.perf_counter() - started) * 1e3:.0f} ms")
         return tree, update
 
-    def _extra_passes(self, engine, layer, tracer, scene, bvh, settings, width, height) -> dict:
-        """Depth and heatmap, when the view layer asks for them; their times."""
-        extra = {}
-        if layer.passes.get(passes.DEPTH) is not None and not engine.test_break():
-            started = time.perf_counter()
-            passes.write(layer, passes.DEPTH, depth(bvh, scene.camera, width, height))
-            extra["depth_ms"] = (time.perf_counter() - started) * 1e3
-        if layer.passes.get(passes.HEATMAP) is not None and not engine.test_break():
-            heat, timings = tracer.trace(scene, bvh, scene.camera, width, height, settings.heatmap(),
-                                         cancelled=engine.test_break)
-            passes.write(layer, passes.HEATMAP, heat)
-            extra["heatmap_ms"] = timings["trace_ms"]
-        return extra
+    @staticmethod
+    def _extra_passes(layer, images) -> dict:
+        """Depth and heatmap, when the view layer asks for them (the same render made them)."""
+        if images.depth is not None:
+            passes.write(layer, passes.DEPTH, images.depth)
+        if images.heat is not None:
+            passes.write(layer, passes.HEATMAP, images.heat)
+        return {}
 
 
 def _summary(record: dict) -> str:

@@ -101,7 +101,7 @@ class BVHLAB_PT_engine_status(_EnginePanel, bpy.types.Panel):
         if final is None and not viewport:
             col.label(text="Nothing rendered yet")
         if final is not None:
-            col.label(text=f"{final['size'][0]} × {final['size'][1]}, {final['spp']} spp on {final['device']}")
+            col.label(text=f"{final['size'][0]} × {final['size'][1]}, {final['samples']} samples per pixel on {final['device']}")
             col.label(text=f"BVH {final['tree']} {final['build_ms']:.0f} ms, trace {final['trace_ms']:.0f} ms")
             if final.get("note"):
                 col.label(text=final["note"], icon="INFO")

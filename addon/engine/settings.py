@@ -18,7 +18,7 @@ def trace_settings(blender_scene, *, viewport: bool, refined: bool = True) -> Tr
     s = blender_scene.bvhlab
     show_boxes = s.overlay_show if viewport else s.render_overlay
     return TraceSettings(
-        spp=s.render_supersampling ** 2 if refined else 1,
+        samples_per_axis=s.render_supersampling if refined else 1,
         max_depth=s.render_bounces,
         overlay=(s.overlay_depth_min, s.overlay_depth_max) if show_boxes else None,
         color_by_depth=s.overlay_color_by_depth,

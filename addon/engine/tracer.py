@@ -1,34 +1,19 @@
 """The render engine's one door to bvhlab's tracer: every call the engine makes into
-`bvhlab.Renderer`, `Renderer.render` and `Bvh.intersect` is in this file, so moving to the tracer's
-pass API (bounded work per dispatch, passes that accumulate and cancel, the camera given directly,
-depth and heatmap outputs in the same render) changes this file only.
+`bvhlab.Renderer` is in this file.
 
-Today's API and what this adapter does about it:
-- A Renderer takes its camera from the Scene: `trace` renders a shallow copy of the scene with the
-  view's camera (the arrays are shared, so the renderer's upload cache still hits).
-- `backend="auto"` still picks a CPU Vulkan driver (lavapipe, ~9× slower than the CPU reference
-  on this kind of machine): `open_tracer` takes the CPU reference instead and says why.
-- A render cannot be stopped once started: `trace(..., cancelled=)` runs it on a helper thread and
-  returns as soon as `cancelled()` says so (TraceCancelled); the abandoned render finishes on its
-  own and its image is dropped. One render at a time per Tracer (a lock).
-- Depth is not a tracer output: `depth` intersects the primary rays through the pixel centres
-  with `Bvh.intersect` (the rays of `shaders/tracer/shade.glsl`'s camera_ray_dir).
-- The heatmap is a second render with mode="heatmap".
+A render is a job in sample passes (`Renderer.start`): it is traced in bounded dispatches, the
+camera is given directly, and the Combined image, Blender's Depth (the view-axis distance of the
+nearest primary hit, 1e10 where nothing was hit, as Cycles writes) and the traversal-cost heatmap
+come out of the same render. `cancelled()` is polled between dispatches, so Esc and a moved view
+stop a render within one dispatch (TraceCancelled). `backend="auto"` picks the CPU reference
+itself where the only Vulkan device is a CPU driver (lavapipe), and says why.
 """
 from __future__ import annotations
 
-import copy
-import math
 import threading
 from dataclasses import dataclass, replace
 
 import numpy as np
-
-#: What Blender's render pipeline fills a Depth pass with before an engine writes it (its value
-#: for "nothing here"); misses get it too.
-MISS_DEPTH = 10e10
-#: Vulkan device types on which the CPU reference is the faster tracer.
-CPU_DEVICE_TYPES = ("cpu",)
 
 
 class TraceCancelled(Exception):
@@ -38,7 +23,7 @@ class TraceCancelled(Exception):
 @dataclass(frozen=True)
 class TraceSettings:
     """One render's options, in the tracer's terms. `overlay`: (depth_min, depth_max) or None."""
-    spp: int = 1
+    samples_per_axis: int = 1  # n of the n×n supersampling
     max_depth: int = 5
     overlay: tuple | None = None
     color_by_depth: bool = True
@@ -47,30 +32,35 @@ class TraceSettings:
     mode: str = "shade"
     threads: int = 0  # CPU reference threads; 0 = every core
 
-    def heatmap(self) -> "TraceSettings":
-        return replace(self, mode="heatmap")
+    @property
+    def samples(self) -> int:
+        """Samples per pixel."""
+        return self.samples_per_axis ** 2
 
     def options(self) -> dict:
-        return {"spp": self.spp, "max_depth": self.max_depth, "overlay_depth": self.overlay,
-                "color_by_depth": self.color_by_depth, "line_width": self.line_width,
-                "traversal": self.traversal, "mode": self.mode, "threads": self.threads}
+        return {"samples_per_axis": self.samples_per_axis, "max_depth": self.max_depth,
+                "overlay_depth": self.overlay, "color_by_depth": self.color_by_depth,
+                "line_width": self.line_width, "traversal": self.traversal, "mode": self.mode}
+
+
+@dataclass(frozen=True)
+class TraceImages:
+    """Row 0 at the top. color: float32 (H, W, 4); depth: float32 (H, W) or None; heat: float32
+    (H, W, 4) heat colours of the box tests per primary ray, or None."""
+    color: np.ndarray
+    depth: np.ndarray | None
+    heat: np.ndarray | None
 
 
 class Tracer:
-    """One backend, shared by final renders and viewports (renders run one at a time)."""
+    """One backend, shared by final renders and viewports (the Renderer is thread-safe)."""
 
     def __init__(self, requested: str):
         import bvhlab
 
         self.requested = requested
-        renderer = bvhlab.Renderer(requested)
-        self.note = renderer.fallback
-        if requested == "auto" and renderer.backend == "vulkan" and _device_type(renderer) in CPU_DEVICE_TYPES:
-            self.note = (f"{renderer.device} is a CPU Vulkan driver; auto uses the CPU reference, which traces "
-                         f"faster there")
-            renderer = bvhlab.Renderer("cpu")
-        self.renderer = renderer
-        self._lock = threading.Lock()
+        self.renderer = bvhlab.Renderer(requested)
+        self.note = self.renderer.fallback
 
     @property
     def device(self) -> str:
@@ -81,17 +71,20 @@ class Tracer:
     def backend(self) -> str:
         return self.renderer.backend
 
-    def trace(self, scene, bvh, camera, width: int, height: int, settings: TraceSettings, cancelled=None):
-        """(image float32 (height, width, 4) row 0 at the top, timings) of `scene` seen from `camera`
-        (a bvhlab.Camera). With `cancelled`, raises TraceCancelled as soon as it returns True."""
-        view = copy.copy(scene)  # shallow: same arrays, so the renderer's scene cache still hits
-        view.camera = camera
+    def trace(self, scene, bvh, camera, width: int, height: int, settings: TraceSettings, cancelled=None,
+              depth: bool = False, heat: bool = False):
+        """(TraceImages, timings) of `scene` seen from `camera` (a bvhlab.Camera or View). With
+        `cancelled`, raises TraceCancelled within one dispatch of it returning True."""
+        import bvhlab
 
-        def render():
-            with self._lock:
-                return self.renderer.render(view, bvh, width, height, **settings.options())
-
-        return render() if cancelled is None else _run_cancellable(render, cancelled)
+        job = self.renderer.start(scene, bvh, width, height, camera=camera, threads=settings.threads,
+                                  **settings.options())
+        try:
+            job.run(progress=None if cancelled is None else (lambda fraction: not cancelled()))
+        except bvhlab.RenderCancelled:
+            raise TraceCancelled() from None
+        result = job.result(color=True, depth=depth, cost=False, heat=heat)
+        return TraceImages(result.color, result.depth, result.heat), result.timings
 
 
 _tracers: dict[str, Tracer] = {}
@@ -110,60 +103,3 @@ def open_tracer(backend: str) -> Tracer:
 def forget_tracers() -> None:
     with _tracers_lock:
         _tracers.clear()
-
-
-def _device_type(renderer) -> str:
-    vulkan = getattr(renderer, "_vulkan", None)  # bridging until the tracer's auto does this itself
-    return getattr(vulkan, "device_type", "") if vulkan is not None else ""
-
-
-def _run_cancellable(work, cancelled, poll_s: float = 0.05):
-    outcome: dict = {}
-
-    def run():
-        try:
-            outcome["value"] = work()
-        except BaseException as error:  # handed to the waiting thread, never lost in this one
-            outcome["error"] = error
-
-    thread = threading.Thread(target=run, name="bvhlab trace", daemon=True)
-    thread.start()
-    while thread.is_alive():
-        if cancelled():
-            raise TraceCancelled()
-        thread.join(poll_s)
-    if "error" in outcome:
-        raise outcome["error"]
-    return outcome["value"]
-
-
-# -- depth ------------------------------------------------------------------------------------
-def camera_basis(camera) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """forward, right, up (unit, float64) of a bvhlab.Camera, as the tracer makes them
-    (core_cpp/src/render/render_scene.cpp make_frame_params)."""
-    position, look_at, up = (np.asarray(v, np.float64) for v in (camera.position, camera.look_at, camera.up))
-    forward = (look_at - position) / np.linalg.norm(look_at - position)
-    right = np.cross(forward, up)
-    right /= np.linalg.norm(right)
-    return forward, right, np.cross(right, forward)
-
-
-def primary_directions(camera, width: int, height: int) -> np.ndarray:
-    """float32 (height·width, 3), row 0 at the top: the direction through each pixel centre,
-    scaled so its component along the view axis is 1 (t along it is then the camera-space depth)."""
-    forward, right, up = camera_basis(camera)
-    tan_half = math.tan(math.radians(camera.fov_y) / 2)
-    x = (2 * (np.arange(width) + 0.5) / width - 1) * tan_half * width / height
-    y = (1 - 2 * (np.arange(height) + 0.5) / height) * tan_half
-    dirs = forward + x[None, :, None] * right + y[:, None, None] * up
-    return np.ascontiguousarray(dirs.reshape(-1, 3), np.float32)
-
-
-def depth(bvh, camera, width: int, height: int) -> np.ndarray:
-    """Blender's Depth (Z) pass, float32 (height, width), row 0 at the top: the distance along the
-    view axis from the camera to the surface seen through each pixel centre (one sample per pixel,
-    as Blender's Z pass), MISS_DEPTH where the ray hits nothing."""
-    directions = primary_directions(camera, width, height)
-    origins = np.ascontiguousarray(np.broadcast_to(np.asarray(camera.position, np.float32), directions.shape))
-    t = bvh.intersect(origins, directions)["t"]
-    return np.where(np.isfinite(t), t, MISS_DEPTH).astype(np.float32).reshape(height, width)

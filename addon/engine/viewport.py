@@ -7,9 +7,9 @@ latest view; the worker always works on the newest of both. For one view it trac
   budget (from the speed measured on the previous frames), 1 sample per pixel;
 - "full": the region's resolution, 1 sample, once the view has stayed still for SETTLE_S;
 - "refined": full resolution with n×n samples (only when n > 1).
-A new view or scene drops the levels not yet started; a level already tracing finishes first (the
-current tracer API cannot be interrupted: see tracer.py). A build in progress is cancelled at once
-when a newer scene arrives, when the session closes, or by Esc (`cancel`).
+A new view or scene drops the levels not yet started and stops the level tracing now within one
+dispatch (the tracer polls between its bounded dispatches: see tracer.py). A build in progress is
+cancelled at once when a newer scene arrives, when the session closes, or by Esc (`cancel`).
 """
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ import weakref
 from dataclasses import dataclass, replace
 
 from .scene_tree import BuildSettings, SceneTree
-from .tracer import TraceSettings, open_tracer
+from .tracer import TraceCancelled, TraceSettings, open_tracer
 from .view_camera import ViewFrustum
 
 #: Seconds the view must stay still before the full-resolution level starts.
@@ -187,16 +187,22 @@ class ViewportSession:
         update = self._update_tree(scene, scene_serial, request, request_serial, refittable)
         if update is None:
             return
-        for level, scale, spp in _levels(request, self._ms_per_sample):
+        for level, scale, samples_per_axis in _levels(request, self._ms_per_sample):
             if level != "preview" and not self._settled(scene_serial, request_serial):
                 return
             if not self._current(scene_serial, request_serial):
                 return
             width, height = request.frustum.scaled(scale)
-            settings = replace(request.settings, spp=spp)
+            settings = replace(request.settings, samples_per_axis=samples_per_axis)
+            spp = settings.samples
             self._set_status(f"Tracing {level} {width} × {height}" + (f", {spp} spp" if spp > 1 else ""))
             started = time.perf_counter()
-            image, timings = tracer.trace(scene, self.tree.bvh, request.frustum.camera(), width, height, settings)
+            try:
+                images, timings = tracer.trace(scene, self.tree.bvh, request.frustum.camera(), width, height, settings,
+                                               cancelled=lambda: not self._current(scene_serial, request_serial))
+            except TraceCancelled:
+                return
+            image = images.color
             wall_ms = (time.perf_counter() - started) * 1e3
             self._ms_per_sample = timings["trace_ms"] / (width * height * spp)
             frame_timings = {"level": level, "width": width, "height": height, "spp": spp,
@@ -241,7 +247,7 @@ class ViewportSession:
 
 
 def _levels(request: ViewRequest, ms_per_sample: float | None) -> list[tuple[str, float, int]]:
-    """(level, scale, samples per pixel) to trace for a view, coarse to fine."""
+    """(level, scale, samples per pixel axis) to trace for a view, coarse to fine."""
     pixels = request.frustum.width * request.frustum.height
     if ms_per_sample is None:
         scale = 1 / 4
@@ -250,8 +256,8 @@ def _levels(request: ViewRequest, ms_per_sample: float | None) -> list[tuple[str
     scale = min(max(scale, 1 / MAX_PREVIEW_DIVISOR), 1.0)
     levels = [] if scale > 0.7 else [("preview", scale, 1)]
     levels.append(("full", 1.0, 1))
-    if request.settings.spp > 1:
-        levels.append(("refined", 1.0, request.settings.spp))
+    if request.settings.samples_per_axis > 1:
+        levels.append(("refined", 1.0, request.settings.samples_per_axis))
     return levels
 
 

@@ -15,6 +15,7 @@
 #include "bvhlab/cancel.h"
 #include "bvhlab/coordinate_range.h"
 #include "bvhlab/depth_order.h"
+#include "bvhlab/render_settings.h"
 #include "bvhlab/stats.h"
 #include "bvhlab/traverse.h"
 #include "bvhlab/wide_bvh.h"
@@ -81,11 +82,7 @@ void py_intersect(const PyBvh& self, const Vectors& origins, const Vectors& dirs
     if (dirs.shape(0) != n) throw std::invalid_argument("origins and directions differ in length");
     for (std::size_t len : {t.shape(0), prim.shape(0), kind.shape(0), u.shape(0), v.shape(0), visited.shape(0)})
         if (len != n) throw std::invalid_argument("output arrays must have one entry per ray");
-    Traversal mode;
-    if (traversal == "stack") mode = Traversal::Stack;
-    else if (traversal == "stackless") mode = Traversal::Stackless;
-    else if (traversal == "wide") mode = Traversal::Wide;
-    else throw std::invalid_argument("unknown traversal '" + traversal + "'; expected one of: stack stackless wide");
+    const Traversal mode = parse_traversal(traversal);  // names parsed in one place (render_settings.h)
     RayBatch rays{origins.data(), dirs.data(), n, tmin, tmax};
     HitBatch hits{t.data(), prim.data(), kind.data(), u.data(), v.data(), visited.data()};
     TreePtr tree = self.current();  // this version stays alive (and unchanged) until the rays are done
@@ -158,6 +155,15 @@ NB_MODULE(_core, m) {
         .def("refs", [](const PyBvh& b) { TreePtr t = b.current(); return array_owned_by(t, t->bvh.refs.data(), {t->bvh.refs.size()}); })
         .def("depths", [](const PyBvh& b) { TreePtr t = b.current(); return array_owned_by(t, t->bvh.depths.data(), {t->bvh.depths.size()}); })
         .def("boxes", &py_boxes, "depth_min"_a, "depth_max"_a, "leaves_only"_a)
+        .def("depth_order", [](const PyBvh& b) {
+                 TreePtr t = b.current();
+                 const DepthOrder& o = t->order();
+                 return nb::make_tuple(array_owned_by(t, o.nodes.data(), {o.nodes.size()}),
+                                       array_owned_by(t, o.offset.data(), {o.offset.size()}));
+             }, "(nodes, offset): node indices by depth; the nodes of depth d are nodes[offset[d]:offset[d + 1]]")
+        .def("depth_range", [](const PyBvh& b, std::uint32_t depth_min, std::uint32_t depth_max) {
+                 return b.current()->order().range(depth_min, depth_max);
+             }, "depth_min"_a, "depth_max"_a, "[first, last) in depth_order()'s nodes of the depths depth_min..depth_max")
         .def("intersect", &py_intersect, "origins"_a.noconvert(), "directions"_a.noconvert(), "tmin"_a, "tmax"_a,
              "traversal"_a, "threads"_a, "t"_a.noconvert(), "prim"_a.noconvert(), "kind"_a.noconvert(),
              "u"_a.noconvert(), "v"_a.noconvert(), "visited"_a.noconvert())

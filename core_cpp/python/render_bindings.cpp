@@ -1,23 +1,22 @@
-// Bindings of the renderers: the scene in GPU layout, the CPU reference, the Vulkan renderer.
-// Settings arrive as a dict from python/bvhlab/render.py, which checks their types.
+// Bindings of the renderers: the scene in GPU layout, render jobs (sample passes with progress and
+// cancel), the CPU reference and the Vulkan renderer, the palettes. Settings arrive as a typed
+// RenderSettings (render_settings_bindings.cpp).
+#include <mutex>
+
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/optional.h>
 #include <nanobind/stl/string.h>
+#include <nanobind/stl/unique_ptr.h>
 #include <nanobind/stl/vector.h>
 
+#include "bvhlab/palette.h"
 #include "bvhlab/render.h"
 #include "py_bvh.h"
+#include "py_cancel.h"
 #ifdef BVHLAB_VULKAN
 #include "bvhlab/vulkan_renderer.h"
 #endif
-
-namespace bvhlab::gpu {
-/// The colour ramps of shaders/tracer/shade_colors.glsl, for the raster previews and Blender.
-struct Palette {
-#include "tracer/shade_colors.glsl"
-};
-}  // namespace bvhlab::gpu
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -28,7 +27,8 @@ namespace {
 
 using Materials = nb::ndarray<const float, nb::shape<-1, 6>, nb::c_contig, nb::device::cpu>;
 using Indices = nb::ndarray<const std::int32_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
-using Image = nb::ndarray<float, nb::shape<-1, -1, 4>, nb::c_contig, nb::device::cpu>;
+using Rgba = nb::ndarray<float, nb::shape<-1, -1, 4>, nb::c_contig, nb::device::cpu>;
+using Plane = nb::ndarray<float, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
 
 /// A RenderScene and the version of the tree it was made from (kept alive: RenderScene borrows it;
 /// a later refit of the Python Bvh makes a new version and leaves this one intact).
@@ -37,45 +37,19 @@ struct PyRenderScene {
     RenderScene scene;
 };
 
-Vec3 vec3_of(const nb::handle& seq) {
-    auto v = nb::cast<std::vector<float>>(seq);
-    if (v.size() != 3) throw std::invalid_argument("expected three numbers");
-    return {v[0], v[1], v[2]};
-}
+/// A RenderJob used from Python: one call at a time (a job's sums are not for two threads). The
+/// mutex is only ever taken without the GIL (a running job takes the GIL to check for Ctrl-C).
+struct PyRenderJob {
+    std::unique_ptr<RenderJob> job;
+    std::mutex mutex;
 
-RenderSettings settings_from(const nb::dict& d) {
-    RenderSettings s;
-    s.width = nb::cast<std::uint32_t>(d["width"]);
-    s.height = nb::cast<std::uint32_t>(d["height"]);
-    s.samples_per_axis = nb::cast<std::uint32_t>(d["samples_per_axis"]);
-    s.max_depth = nb::cast<std::uint32_t>(d["max_depth"]);
-    s.camera = {vec3_of(d["camera_position"]), vec3_of(d["camera_look_at"]), vec3_of(d["camera_up"]),
-                nb::cast<float>(d["camera_fov_y"])};
-    s.light = {vec3_of(d["light_position"]), vec3_of(d["light_color"]), nb::cast<float>(d["light_intensity"])};
-    s.sky = vec3_of(d["sky"]);
-    s.overlay = nb::cast<bool>(d["overlay"]);
-    s.overlay_depth_min = nb::cast<std::uint32_t>(d["overlay_depth_min"]);
-    s.overlay_depth_max = nb::cast<std::uint32_t>(d["overlay_depth_max"]);
-    s.overlay_color_by_depth = nb::cast<bool>(d["overlay_color_by_depth"]);
-    s.line_width = nb::cast<float>(d["line_width"]);
-    s.traversal = nb::cast<std::uint32_t>(d["traversal"]);
-    s.mode = nb::cast<std::uint32_t>(d["mode"]) == gpu::MODE_HEATMAP ? RenderMode::Heatmap : RenderMode::Shade;
-    s.heatmap_scale = nb::cast<float>(d["heatmap_scale"]);
-    return s;
-}
-
-float* image_for(const Image& out, const RenderSettings& s) {
-    if (out.shape(0) != s.height || out.shape(1) != s.width)
-        throw std::invalid_argument("output image does not have the requested size");
-    return out.data();
-}
-
-nb::dict timings_dict(const RenderTimings& t) {
-    nb::dict d;
-    d["upload_ms"] = t.upload_ms, d["overlay_ms"] = t.overlay_ms, d["trace_ms"] = t.trace_ms;
-    d["readback_ms"] = t.readback_ms, d["total_ms"] = t.total_ms, d["device"] = t.device;
-    return d;
-}
+    template <class F>
+    auto locked(F&& f) {
+        nb::gil_scoped_release release;
+        std::lock_guard<std::mutex> lock(mutex);
+        return f(*job);
+    }
+};
 
 RenderScene make_scene(const TreeVersion& tree, const Triangles& tris, const std::optional<Spheres>& spheres,
                        const Materials& materials, const Indices& tri_material, const Indices& sphere_material) {
@@ -87,21 +61,70 @@ RenderScene make_scene(const TreeVersion& tree, const Triangles& tris, const std
     return make_render_scene(tree.bvh, g, mv);
 }
 
-}  // namespace
+nb::dict timings_dict(const RenderTimings& t) {
+    nb::dict d;
+    d["upload_ms"] = t.upload_ms, d["overlay_ms"] = t.overlay_ms, d["trace_ms"] = t.trace_ms;
+    d["readback_ms"] = t.readback_ms, d["total_ms"] = t.total_ms, d["device"] = t.device;
+    d["dispatches"] = t.dispatches, d["steps_per_dispatch"] = t.steps_per_dispatch;
+    return d;
+}
 
-void bind_render(nb::module_& m) {
-    nb::class_<PyRenderScene>(m, "RenderScene")
-        .def("__init__", [](PyRenderScene* self, const PyBvh& bvh, const Triangles& tris, const std::optional<Spheres>& spheres,
-                            const Materials& materials, const Indices& tri_material, const Indices& sphere_material) {
-                 TreePtr tree = bvh.current();
-                 new (self) PyRenderScene{tree, make_scene(*tree, tris, spheres, materials, tri_material, sphere_material)};
-             }, "bvh"_a, "triangles"_a.noconvert(), "spheres"_a.noconvert().none(), "materials"_a.noconvert(),
-             "tri_material"_a.noconvert(), "sphere_material"_a.noconvert())
-        .def("box_range", [](const PyRenderScene& s, std::uint32_t lo, std::uint32_t hi) {
-                 auto r = s.scene.box_range(lo, hi);
-                 return nb::make_tuple(r.first, r.second);
-             });
+/// Runs the job until every pixel has `samples` samples, without the GIL. Ctrl-C (Python's signal
+/// handlers) and `progress` (called with the fraction done; a false result stops) are checked
+/// between dispatches or budgets of steps. Returns false when `progress` stopped it; raises what
+/// Python raised (KeyboardInterrupt, the callable's exception) once the work has stopped.
+bool run_job(PyRenderJob& self, std::uint32_t samples, nb::object progress) {
+    PyStopCheck check(std::move(progress));
+    double fraction = 0.0;
+    Cancellation cancel([&] { return check(fraction); });
+    bool finished = self.locked([&](RenderJob& job) {
+        try {
+            job.run(samples, &cancel, &fraction);
+            return true;
+        } catch (const Cancelled&) {
+            return false;
+        }
+    });
+    check.rethrow();
+    if (finished && check(1.0)) finished = false;  // the final call counts too: its "stop", its exception
+    check.rethrow();
+    return finished;
+}
 
+template <class Array>
+float* pixels_of(const std::optional<Array>& a, const RenderSettings& s, const char* what) {
+    if (!a) return nullptr;
+    if (a->shape(0) != s.height || a->shape(1) != s.width)
+        throw std::invalid_argument(std::string(what) + " does not have the render's size");
+    return a->data();
+}
+
+void resolve_job(PyRenderJob& self, const std::optional<Rgba>& color, const std::optional<Plane>& depth,
+                 const std::optional<Plane>& cost, const std::optional<Rgba>& heat) {
+    const RenderSettings& s = self.job->settings();
+    RenderImages out{pixels_of(color, s, "color"), pixels_of(depth, s, "depth"), pixels_of(cost, s, "cost"),
+                     pixels_of(heat, s, "heat")};
+    self.locked([&](RenderJob& job) { job.resolve(out); });
+}
+
+void bind_job(nb::module_& m) {
+    nb::class_<PyRenderJob>(m, "RenderJob", "A render in sample passes (render.h RenderJob).")
+        .def("run", &run_job, "samples"_a, "progress"_a = nb::none(),
+             "Traces until every pixel has `samples` samples; False when `progress` said stop.")
+        .def("resolve", &resolve_job, "color"_a.noconvert().none(), "depth"_a.noconvert().none(),
+             "cost"_a.noconvert().none(), "heat"_a.noconvert().none() = nb::none(),
+             "Writes the images of the samples so far into the given arrays.")
+        .def_prop_ro("samples_done", [](PyRenderJob& j) { return j.locked([](RenderJob& job) { return job.samples_done(); }); })
+        .def_prop_ro("samples_per_pixel", [](PyRenderJob& j) { return j.job->samples_per_pixel(); })
+        .def_prop_ro("timings", [](PyRenderJob& j) {
+            RenderTimings t = j.locked([](RenderJob& job) { return job.timings(); });
+            return timings_dict(t);
+        });
+}
+
+PyRenderJob* wrap(std::unique_ptr<RenderJob> job) { return new PyRenderJob{std::move(job), {}}; }
+
+void bind_palettes(nb::module_& m) {
     m.def("depth_colors", [](const nb::ndarray<const std::uint32_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>& depths) {
               auto* out = new float[depths.shape(0) * 3];
               gpu::Palette palette;
@@ -112,19 +135,20 @@ void bind_render(nb::module_& m) {
               nb::capsule owner(out, [](void* p) noexcept { delete[] static_cast<float*>(p); });
               return nb::ndarray<nb::numpy, float, nb::ndim<2>>(out, {depths.shape(0), 3}, owner);
           }, "depths"_a.noconvert(), "Overlay line colour of each tree depth (the shaders' palette).");
-
-    m.def("render_cpu", [](const PyRenderScene& scene, const nb::dict& settings, const Image& out, std::uint32_t threads) {
-              RenderSettings s = settings_from(settings);
-              float* rgba = image_for(out, s);
-              RenderTimings t;
-              {
-                  nb::gil_scoped_release release;
-                  t = render_cpu(scene.scene, s, rgba, threads);
+    m.def("heat_colors", [](const nb::ndarray<const float, nb::ndim<1>, nb::c_contig, nb::device::cpu>& x) {
+              auto* out = new float[x.shape(0) * 3];
+              gpu::Palette palette;
+              for (std::size_t i = 0; i < x.shape(0); ++i) {
+                  gpu::vec3 c = palette.heat_color(x.data()[i]);
+                  out[3 * i] = c.x, out[3 * i + 1] = c.y, out[3 * i + 2] = c.z;
               }
-              return timings_dict(t);
-          }, "scene"_a, "settings"_a, "out"_a.noconvert(), "threads"_a);
+              nb::capsule owner(out, [](void* p) noexcept { delete[] static_cast<float*>(p); });
+              return nb::ndarray<nb::numpy, float, nb::ndim<2>>(out, {x.shape(0), 3}, owner);
+          }, "x"_a.noconvert(), "Heatmap colours of values in [0, 1] (blue → red; the heatmap mode's ramp).");
+}
 
 #ifdef BVHLAB_VULKAN
+void bind_vulkan(nb::module_& m) {
     nb::exception<VulkanUnavailable>(m, "VulkanUnavailable", PyExc_RuntimeError);
     m.def("vulkan_loader_available", &vulkan_loader_available);
     m.attr("HAS_VULKAN") = true;
@@ -142,18 +166,40 @@ void bind_render(nb::module_& m) {
                  nb::gil_scoped_release release;
                  return r.upload(scene.scene);
              })
-        .def("render", [](VulkanRenderer& r, const nb::dict& settings, const Image& out) {
-                 RenderSettings s = settings_from(settings);
-                 float* rgba = image_for(out, s);
-                 RenderTimings t;
-                 {
-                     nb::gil_scoped_release release;
-                     t = r.render(s, rgba);
-                 }
-                 return timings_dict(t);
-             })
+        .def("start", [](VulkanRenderer& r, const RenderSettings& settings) {
+                 nb::gil_scoped_release release;
+                 return wrap(r.start(settings));
+             }, "settings"_a, "A RenderJob of the scene uploaded last.")
         .def("take_validation_messages", &VulkanRenderer::take_validation_messages)
         .def_prop_ro("validation_error_count", &VulkanRenderer::validation_error_count);
+}
+#endif
+
+}  // namespace
+
+void bind_render_settings(nb::module_& m);  // render_settings_bindings.cpp
+
+void bind_render(nb::module_& m) {
+    bind_render_settings(m);
+    nb::exception<RenderIncomplete>(m, "RenderIncomplete", PyExc_RuntimeError);
+    nb::class_<PyRenderScene>(m, "RenderScene")
+        .def("__init__", [](PyRenderScene* self, const PyBvh& bvh, const Triangles& tris, const std::optional<Spheres>& spheres,
+                            const Materials& materials, const Indices& tri_material, const Indices& sphere_material) {
+                 TreePtr tree = bvh.current();
+                 new (self) PyRenderScene{tree, make_scene(*tree, tris, spheres, materials, tri_material, sphere_material)};
+             }, "bvh"_a, "triangles"_a.noconvert(), "spheres"_a.noconvert().none(), "materials"_a.noconvert(),
+             "tri_material"_a.noconvert(), "sphere_material"_a.noconvert())
+        .def_prop_ro("revision", [](const PyRenderScene& s) { return s.tree->revision; })
+        .def_prop_ro("height", [](const PyRenderScene& s) { return s.scene.height(); });
+    bind_job(m);
+    bind_palettes(m);
+    m.def("start_cpu", [](const PyRenderScene& scene, const RenderSettings& settings, std::uint32_t threads) {
+              nb::gil_scoped_release release;
+              return wrap(start_cpu(scene.scene, settings, threads));
+          }, "scene"_a, "settings"_a, "threads"_a = 0, nb::keep_alive<0, 1>(),
+          "A RenderJob on the CPU reference (keeps `scene` alive).");
+#ifdef BVHLAB_VULKAN
+    bind_vulkan(m);
 #else
     m.attr("HAS_VULKAN") = false;
 #endif

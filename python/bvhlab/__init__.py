@@ -2,9 +2,11 @@
 Sandén's report (median, mean, binned SAH) and more (midpoint, full-sweep SAH, LBVH, refit)."""
 from ._core import BuildCancelled
 from .bvh import AXES, METHODS, NODE_DTYPE, TRAVERSALS, Bvh, BuildConfig, build
-from .render import Renderer, VulkanUnavailable, render, save_png
+from .render import (RenderCancelled, Renderer, RenderIncomplete, RenderJob, RenderResult, View, VulkanUnavailable,
+                     render, save_png)
 from .scene import Camera, Light, Material, Scene
 
 __version__ = "0.1.0"
 __all__ = ["build", "Bvh", "BuildConfig", "BuildCancelled", "Scene", "Camera", "Light", "Material",
-           "METHODS", "AXES", "TRAVERSALS", "NODE_DTYPE", "render", "Renderer", "VulkanUnavailable", "save_png"]
+           "METHODS", "AXES", "TRAVERSALS", "NODE_DTYPE", "render", "Renderer", "RenderJob", "RenderResult", "View",
+           "RenderCancelled", "RenderIncomplete", "VulkanUnavailable", "save_png"]

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import _checks, _core
+from . import _checks, _core, defaults
 from ._npz import MAX_EXPANSION, Member, SceneFileError, read_npz
 
 FORMAT_VERSION = 1
@@ -32,10 +32,10 @@ def _vec3(name: str, value) -> tuple[float, float, float]:
 @dataclass(frozen=True)
 class Material:
     """Whitted material (report §2.1): a colour, a reflective and a transparent factor, an IOR."""
-    color: tuple[float, float, float] = (0.8, 0.8, 0.8)
-    reflective: float = 0.0
-    transparent: float = 0.0
-    ior: float = 1.5
+    color: tuple[float, float, float] = defaults.MATERIAL[:3]
+    reflective: float = defaults.MATERIAL[3]
+    transparent: float = defaults.MATERIAL[4]
+    ior: float = defaults.MATERIAL[5]
 
     def __post_init__(self):
         object.__setattr__(self, "color", _vec3("material color", self.color))
@@ -96,7 +96,7 @@ class Light:
         return [*self.position, *self.color, float(self.intensity)]
 
 
-DEFAULT_SKY = (0.55, 0.7, 0.9)
+DEFAULT_SKY = defaults.SKY
 
 
 @dataclass
@@ -267,25 +267,12 @@ _FIELD_CHECKS = {
 
 
 def default_camera(bounds) -> Camera:
-    """45° vertical field of view, looking at the centre from the front-upper diagonal (Z up,
-    front = -Y as in Blender), far enough back that the bounding sphere fits the view."""
-    lo, hi = (np.asarray(b, np.float64) for b in bounds)
-    center = (lo + hi) / 2
-    # A point-like scene still gets a camera some way off, measurably so in float32 even far from
-    # the origin (at 1e12 a float32 step is 65536).
-    radius = max(float(np.linalg.norm(hi - lo)) / 2, 1e-6, 1e-5 * float(np.abs(center).max()))
-    direction = np.array([0.35, -1.0, 0.7])
-    direction /= np.linalg.norm(direction)
-    fov = 45.0
-    distance = radius / math.sin(math.radians(fov) / 2) * 1.05
-    return Camera(tuple(center + direction * distance), tuple(center), (0.0, 0.0, 1.0), fov)
+    """The camera that frames `bounds` (bvhlab.defaults.camera_placement: 45° vertical field of
+    view, looking at the centre from the front-upper diagonal)."""
+    position, target, up, fov = defaults.camera_placement(bounds)
+    return Camera(position, target, up, fov)
 
 
 def default_light(camera: Camera) -> Light:
     """A point light a little above and to the right of the camera."""
-    pos = np.array(camera.position)
-    forward = np.array(camera.look_at) - pos
-    right = np.cross(forward, camera.up)
-    right /= np.linalg.norm(right)
-    dist = np.linalg.norm(forward)
-    return Light(tuple(pos + right * 0.3 * dist + np.array(camera.up) * 0.3 * dist))
+    return Light(defaults.light_position(camera.position, camera.look_at, camera.up))

@@ -17,15 +17,16 @@ vec3 corner_position(vec3 lo, vec3 hi, uint corner) {
     return vec3((corner & 1u) != 0u ? hi.x : lo.x, (corner & 2u) != 0u ? hi.y : lo.y, (corner & 4u) != 0u ? hi.z : lo.z);
 }
 
-/// Clip-space position under the tracer's pinhole camera (camera_ray_dir), Vulkan conventions:
-/// y down, depth 0 at the near plane (frame.scale.y) and 1 at the far plane (frame.scale.z).
+/// Clip-space position under the tracer's pinhole camera (camera_ray_dir in shade.glsl, with its
+/// shifted image plane), Vulkan conventions: y down, depth 0 at the near plane (overlay_near) and 1
+/// at the far plane (overlay_far).
 vec4 overlay_clip(vec3 p) {
-    vec3 v = p - xyz(frame.camera_position);
-    float x = dot(v, xyz(frame.camera_right));
-    float y = dot(v, xyz(frame.camera_up));
-    float z = dot(v, xyz(frame.camera_forward));
-    float tan_half = frame.camera_position.w;
-    float near = frame.scale.y;
-    float far = frame.scale.z;
-    return vec4(x / (tan_half * frame.camera_forward.w), -y / tan_half, far / (far - near) * (z - near), z);
+    vec3 v = p - frame.camera_position;
+    float x = dot(v, frame.camera_right);
+    float y = dot(v, frame.camera_up);
+    float z = dot(v, frame.camera_forward);
+    float near = frame.overlay_near;
+    float far = frame.overlay_far;
+    return vec4((x - frame.shift_x * z) / (frame.tan_half_fov_y * frame.aspect),
+                (frame.shift_y * z - y) / frame.tan_half_fov_y, far / (far - near) * (z - near), z);
 }

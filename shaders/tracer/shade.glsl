@@ -1,50 +1,108 @@
 // shade.glsl — the Whitted tracer of the report (§2.1): reflection and refraction kept on an
 // explicit ray stack (GLSL has no recursion, §3.1), one shadow ray to the point light attenuated by
 // the transparencies it crosses, the atmosphere colour for rays that hit nothing, n×n
-// supersampling, the BVH overlay lookup (§3.3) and the heatmap mode. Shared code: see geometry.glsl.
+// supersampling and the BVH overlay lookup (§3.3).
+//
+// Written as a state machine over a TraceState so that no dispatch holds unbounded work (issue 8):
+// trace_steps() runs a budget of steps (every loop iteration of the shader counts against it), and
+// a trace suspended after any step continues from its saved state (state.glsl) in the next dispatch
+// with the same result.
+// Shared code: see geometry.glsl.
 
 struct RayTask {
     vec3 origin;
     vec3 dir;
     vec3 weight;  ///< how much this ray contributes to the pixel
-    uint depth;   ///< bounces so far
+    uint depth;   ///< bounces so far (0: the primary ray)
 };
 
-/// Direction of the primary ray through sample (sx, sy) of pixel p: a pinhole camera with vertical
-/// field of view 2·atan(camera_position.w), image row 0 at the top.
-vec3 camera_ray_dir(uvec2 p, uint sx, uint sy) {
-    float n = float(frame.size.z);
-    float px = (float(p.x) + (float(sx) + 0.5f) / n) / float(frame.size.x);
-    float py = (float(p.y) + (float(sy) + 0.5f) / n) / float(frame.size.y);
-    float x = (2.0f * px - 1.0f) * frame.camera_position.w * frame.camera_forward.w;
-    float y = (1.0f - 2.0f * py) * frame.camera_position.w;
-    return normalize(xyz(frame.camera_forward) + x * xyz(frame.camera_right) + y * xyz(frame.camera_up));
+// What a trace does next (TraceState::phase).
+LOCAL_CONST uint PHASE_SAMPLE = 0u;    ///< start the pixel's next sample, or finish the pass
+LOCAL_CONST uint PHASE_START = 1u;     ///< start the closest-hit query of `task`
+LOCAL_CONST uint PHASE_CLOSEST = 2u;   ///< walking the closest-hit query of `task`
+LOCAL_CONST uint PHASE_SHADOW = 3u;    ///< walking the shadow ray of the hit in `closest`
+LOCAL_CONST uint PHASE_NEXT_RAY = 4u;  ///< take the next ray off the ray stack, or end the sample
+LOCAL_CONST uint PHASE_DONE = 5u;      ///< every sample of the pass is accumulated (the phases from
+                                       ///< here on are final)
+LOCAL_CONST uint PHASE_FAILED = 6u;    ///< stopped: more work than frame.max_work_per_pixel
+
+/// One pixel's trace in progress. The ray stack (`rays` entries) and the traversal stack live in
+/// the slot's storage (ray_word_load/store, node_stack_load/store).
+struct TraceState {
+    uvec2 pixel;
+    uint phase;       ///< PHASE_*
+    uint sample_index;  ///< the sample being traced: sx + n·sy on the n×n grid
+    uint target;      ///< the pass ends before this sample
+    uint rays;        ///< entries on the ray stack
+    uint work;        ///< steps of work in this pass so far (checked against max_work_per_pixel)
+    Walk walk;        ///< the query in progress (traverse.glsl)
+    TraceRay ray;     ///< the ray it follows
+    Hit hit;          ///< its result so far
+    Hit closest;      ///< the closest hit of `task`, kept while its shadow ray is walked
+    RayTask task;     ///< the ray being traced
+    vec4 overlay;     ///< the overlay pass's line at this pixel: rgb, distance (w = 0: none)
+    vec3 color;       ///< of this sample so far
+    float visits;     ///< box tests of this sample's primary ray (heatmap)
+    float depth;      ///< view-axis depth of what this sample's primary ray shows (inf: sky)
+};
+
+float infinity() { return uintBitsToFloat(0x7f800000u); }
+
+/// Direction of the primary ray of a sample of pixel p: a pinhole camera with vertical field of
+/// view 2·atan(tan_half_fov_y), the image plane's centre shifted by (shift_x, shift_y) at unit
+/// distance, image row 0 at the top.
+vec3 camera_ray_dir(uvec2 p, uint sample_index) {
+    uint n = frame.samples_per_axis;
+    float px = (float(p.x) + (float(sample_index % n) + 0.5f) / float(n)) / float(frame.width);
+    float py = (float(p.y) + (float(sample_index / n) + 0.5f) / float(n)) / float(frame.height);
+    float x = (2.0f * px - 1.0f) * frame.tan_half_fov_y * frame.aspect + frame.shift_x;
+    float y = (1.0f - 2.0f * py) * frame.tan_half_fov_y + frame.shift_y;
+    return normalize(frame.camera_forward + x * frame.camera_right + y * frame.camera_up);
 }
 
-/// Geometric normal at a hit, unit length, facing outwards (triangles: by winding).
-vec3 surface_normal(Hit hit, vec3 p) {
+/// A hit as shading sees it.
+struct Surface {
+    vec3 p;
+    vec3 facing;     ///< the geometric normal on the side the ray came from
+    bool entering;   ///< the ray hit the outside
+    GpuMaterial m;
+    float opaque;    ///< what is neither reflected nor transmitted
+};
+
+/// The hit point, its geometric normal (unit, outwards; triangles: by winding) and material, the
+/// primitive fetched once.
+Surface surface_at(RayTask task, Hit hit) {
+    Surface s;
+    s.p = task.origin + task.dir * hit.t;
+    vec3 n;
+    uint material;
     if ((hit.ref & REF_SPHERE_BIT) != 0u) {
-        vec4 s = load_sphere(hit.ref & REF_INDEX_MASK).center_radius;
-        return normalize(p - xyz(s));
+        GpuSphere sphere = load_sphere(hit.ref & REF_INDEX_MASK);
+        n = normalize(s.p - xyz(sphere.center_radius));
+        material = sphere.material.x;
+    } else {
+        GpuTriangle tri = load_triangle(hit.ref);
+        n = normalize(cross(xyz(tri.e1), xyz(tri.e2)));
+        material = floatBitsToUint(tri.v0.w);
     }
-    GpuTriangle tri = load_triangle(hit.ref);
-    return normalize(cross(xyz(tri.e1), xyz(tri.e2)));
+    s.entering = dot(n, task.dir) < 0.0f;
+    s.facing = s.entering ? n : -n;
+    s.m = load_material(material);
+    s.opaque = max(1.0f - s.m.color_reflective.w - s.m.transparent_ior.x, 0.0f);
+    return s;
 }
 
-/// Ambient, plus diffuse and a Blinn-Phong highlight from the point light, scaled by the shadow
-/// ray's transmission. `n` faces the viewer.
-vec3 direct_light(vec3 p, vec3 n, vec3 view_dir, vec3 albedo) {
-    vec3 to_light = xyz(frame.light_position) - p;
-    float dist = length(to_light);
-    vec3 l = to_light / dist;
+/// Ambient, plus diffuse and a Blinn-Phong highlight from the point light scaled by the shadow
+/// ray's transmission (only traced where the light is in front: lambert > 0). `n` faces the viewer.
+vec3 direct_light(vec3 p, vec3 n, vec3 view_dir, vec3 albedo, float transmission) {
+    vec3 to_light = frame.light_position - p;
+    vec3 l = to_light / length(to_light);
     float lambert = dot(n, l);
     vec3 color = albedo * AMBIENT;
     if (!(lambert > 0.0f)) return color;
-    float eps = frame.scale.x;
-    float transmission = shadow_transmission(make_ray(p + n * eps, l, 0.0f), dist - eps);
     if (transmission <= 0.0f) return color;
     float highlight = pow(max(dot(n, normalize(l - view_dir)), 0.0f), SHININESS) * SPECULAR;
-    return color + xyz(frame.light_color) * (transmission * (1.0f - AMBIENT)) * (albedo * lambert + vec3(highlight));
+    return color + frame.light_color * (transmission * (1.0f - AMBIENT)) * (albedo * lambert + vec3(highlight));
 }
 
 RayTask ray_task(vec3 origin, vec3 dir, vec3 weight, uint depth) {
@@ -56,72 +114,173 @@ RayTask ray_task(vec3 origin, vec3 dir, vec3 weight, uint depth) {
     return t;
 }
 
-/// Colour of one primary ray. `overlay.w` > 0 means the overlay pass drew a BVH line in this
-/// pixel at that distance: a primary hit farther away is discarded and the line shows (§3.3).
-vec3 trace_sample(vec3 dir, vec4 overlay, INOUT(uint) visited) {
-    // Each popped ray pushes at most two, depth first, so at most max_depth + 1 wait at once
-    // (MAX_RAY_DEPTH keeps that within RAY_STACK_SIZE).
-    RayTask stack[RAY_STACK_SIZE];
-    stack[0] = ray_task(xyz(frame.camera_position), dir, vec3(1.0f), 0u);
-    uint sp = 1u;
-    vec3 color = vec3(0.0f);
-    bool primary = true;
-    float eps = frame.scale.x;
-    while (sp > 0u) {
-        sp -= 1u;
-        RayTask task = stack[sp];
-        bool line = primary && overlay.w > 0.0f;
-        Hit hit = closest_hit(make_ray(task.origin, task.dir, 0.0f), line ? overlay.w : FAR_AWAY);
-        if (primary) visited = hit.visited;
-        primary = false;
-        if (hit.ref == NO_HIT) {
-            color += task.weight * (line ? xyz(overlay) : xyz(frame.sky));
-            continue;
-        }
-        GpuMaterial m = load_material(material_of(hit.ref));
-        float reflective = m.color_reflective.w;
-        float transparent = m.transparent_ior.x;
-        vec3 p = task.origin + task.dir * hit.t;
-        vec3 n = surface_normal(hit, p);
-        bool entering = dot(n, task.dir) < 0.0f;
-        vec3 facing = entering ? n : -n;
-        float opaque = max(1.0f - reflective - transparent, 0.0f);
-        if (opaque > 0.0f) color += task.weight * opaque * direct_light(p, facing, task.dir, xyz(m.color_reflective));
-        if (task.depth >= frame.size.w) continue;
-        // refraction (Snell; total internal reflection turns it into reflection), then reflection
-        float reflect_weight = reflective;
-        if (transparent > 0.0f) {
-            float eta = entering ? 1.0f / m.transparent_ior.y : m.transparent_ior.y;
-            vec3 refracted = refract(task.dir, facing, eta);
-            if (dot(refracted, refracted) > 0.0f) {
-                stack[sp] = ray_task(p - facing * eps, normalize(refracted), task.weight * transparent, task.depth + 1u);
-                sp += 1u;
-            } else {
-                reflect_weight += transparent;
-            }
-        }
-        if (reflect_weight > 0.0f) {
-            stack[sp] = ray_task(p + facing * eps, reflect(task.dir, facing), task.weight * reflect_weight, task.depth + 1u);
-            sp += 1u;
-        }
-    }
-    return color;
+void push_ray(INOUT(TraceState) s, RayTask t) {
+    uint k = 3u * s.rays;
+    ray_word_store(k, uvec4(floatBitsToUint(t.origin.x), floatBitsToUint(t.origin.y), floatBitsToUint(t.origin.z), t.depth));
+    ray_word_store(k + 1u, uvec4(floatBitsToUint(t.dir.x), floatBitsToUint(t.dir.y), floatBitsToUint(t.dir.z), 0u));
+    ray_word_store(k + 2u, uvec4(floatBitsToUint(t.weight.x), floatBitsToUint(t.weight.y), floatBitsToUint(t.weight.z), 0u));
+    s.rays += 1u;
 }
 
-/// The pixel: the average of n×n samples; in heatmap mode, the box tests of the primary rays.
-vec4 trace_pixel(uvec2 p) {
-    vec4 overlay = overlay_at(p);
-    uint n = frame.size.z;
-    vec3 sum = vec3(0.0f);
-    float visits = 0.0f;
-    for (uint sy = 0u; sy < n; ++sy) {
-        for (uint sx = 0u; sx < n; ++sx) {
-            uint visited = 0u;
-            sum += trace_sample(camera_ray_dir(p, sx, sy), overlay, visited);
-            visits += float(visited);
-        }
+RayTask pop_ray(INOUT(TraceState) s) {
+    s.rays -= 1u;
+    uint k = 3u * s.rays;
+    uvec4 a = ray_word_load(k);
+    uvec4 b = ray_word_load(k + 1u);
+    uvec4 c = ray_word_load(k + 2u);
+    return ray_task(vec3(uintBitsToFloat(a.x), uintBitsToFloat(a.y), uintBitsToFloat(a.z)),
+                    vec3(uintBitsToFloat(b.x), uintBitsToFloat(b.y), uintBitsToFloat(b.z)),
+                    vec3(uintBitsToFloat(c.x), uintBitsToFloat(c.y), uintBitsToFloat(c.z)), a.w);
+}
+
+/// Starts the closest-hit query of `task`. Where the overlay drew a line in front of the primary
+/// ray's surface, the line wins: the query only looks up to the line's distance (report §3.3).
+void start_closest(INOUT(TraceState) s) {
+    bool line = s.task.depth == 0u && s.overlay.w > 0.0f;
+    s.ray = make_ray(s.task.origin, s.task.dir, 0.0f);
+    s.hit = empty_hit(line ? s.overlay.w : FAR_AWAY);
+    s.walk = start_walk();
+    s.phase = PHASE_CLOSEST;
+}
+
+/// The pixel's next sample: its primary ray becomes the task; or the pass is done.
+void start_sample(INOUT(TraceState) s) {
+    if (s.sample_index >= s.target) {
+        s.phase = PHASE_DONE;
+        return;
     }
-    float count = float(n * n);
-    if (frame.flags.x == MODE_HEATMAP) return vec4(heat_color(visits / count / float(frame.flags.w)), 1.0f);
-    return vec4(sum / count, 1.0f);
+    s.task = ray_task(frame.camera_position, camera_ray_dir(s.pixel, s.sample_index), vec3(1.0f), 0u);
+    s.color = vec3(0.0f);
+    s.visits = 0.0f;
+    s.depth = infinity();
+    s.phase = PHASE_START;
+}
+
+/// The next ray off the stack becomes the task, or the sample is complete: its colour, box tests
+/// and depth go into the pixel's sums (whole samples only, so a stopped render leaves consistent
+/// sums).
+void next_ray(INOUT(TraceState) s) {
+    if (s.rays == 0u) {
+        accumulate_sample(s.pixel, s.color, s.visits, s.depth);
+        s.sample_index += 1u;
+        s.phase = PHASE_SAMPLE;
+        return;
+    }
+    s.task = pop_ray(s);
+    s.phase = PHASE_START;
+}
+
+/// Direct light at the surface `f` of `closest` (the shadow ray's transmission in `hit`), then its
+/// refraction (Snell; total internal reflection turns it into reflection) and reflection rays.
+void finish_shading(INOUT(TraceState) s, Surface f) {
+    if (f.opaque > 0.0f)
+        s.color += s.task.weight * f.opaque * direct_light(f.p, f.facing, s.task.dir, xyz(f.m.color_reflective), s.hit.transmission);
+    s.phase = PHASE_NEXT_RAY;
+    if (s.task.depth >= frame.max_ray_depth) return;
+    float eps = frame.ray_epsilon;
+    float transparent = f.m.transparent_ior.x;
+    float reflect_weight = f.m.color_reflective.w;
+    if (transparent > 0.0f) {
+        float eta = f.entering ? 1.0f / f.m.transparent_ior.y : f.m.transparent_ior.y;
+        vec3 refracted = refract(s.task.dir, f.facing, eta);
+        if (dot(refracted, refracted) > 0.0f)
+            push_ray(s, ray_task(f.p - f.facing * eps, normalize(refracted), s.task.weight * transparent, s.task.depth + 1u));
+        else
+            reflect_weight += transparent;
+    }
+    if (reflect_weight > 0.0f)
+        push_ray(s, ray_task(f.p + f.facing * eps, reflect(s.task.dir, f.facing), s.task.weight * reflect_weight, s.task.depth + 1u));
+}
+
+/// The closest-hit query of `task` is answered: the primary ray's box tests and depth; the sky
+/// (or the overlay's line, report §3.3) for a miss. Returns true for a hit.
+bool after_closest(INOUT(TraceState) s) {
+    bool line = s.task.depth == 0u && s.overlay.w > 0.0f;
+    float cos_view = dot(s.task.dir, frame.camera_forward);
+    if (s.task.depth == 0u) {
+        s.visits = float(s.hit.visited);
+        s.depth = s.hit.ref != NO_HIT ? s.hit.t * cos_view : (line ? s.overlay.w * cos_view : infinity());
+    }
+    if (s.hit.ref != NO_HIT) return true;
+    s.color += s.task.weight * (line ? xyz(s.overlay) : frame.sky);
+    s.phase = PHASE_NEXT_RAY;
+    return false;
+}
+
+/// Starts a shadow ray toward the light where it lights an opaque part of the surface `f` of the
+/// closest hit (report §2.1); returns false where there is none to trace.
+bool start_shadow(INOUT(TraceState) s, Surface f) {
+    vec3 to_light = frame.light_position - f.p;
+    float dist = length(to_light);
+    vec3 l = to_light / dist;
+    if (!(f.opaque > 0.0f && dot(f.facing, l) > 0.0f)) return false;
+    float eps = frame.ray_epsilon;
+    s.ray = make_ray(f.p + f.facing * eps, l, 0.0f);
+    s.hit = empty_hit(dist - eps);
+    s.walk = start_walk();
+    s.phase = PHASE_SHADOW;
+    return true;
+}
+
+/// The closest hit is known: a shadow ray starts where the light may reach the surface, else the
+/// hit is shaded (returns true: finish_shading now, with no light but the ambient).
+bool shade_or_shadow(INOUT(TraceState) s) {
+    s.closest = s.hit;
+    if (start_shadow(s, surface_at(s.task, s.closest))) return false;
+    s.hit.transmission = 0.0f;  // no shadow ray: direct_light adds ambient only
+    return true;
+}
+
+/// Loops of walk() that may run once even where no lane of the SIMD vector walks (lavapipe runs
+/// both sides of a branch under a mask, loops included).
+LOCAL_CONST uint WALK_LOOPS = 4u;
+
+/// Traces for about `budget` steps (each loop iteration of walk() and of this loop is one), or
+/// until the pass is done for this pixel. One iteration follows a ray as the report's recursion
+/// does (§2.1): its closest-hit walk, then its shadow walk, then the shading and the next ray;
+/// a walk cut short by the budget goes on in the next iteration (or dispatch). Each piece of the
+/// shading appears once: lavapipe runs every branch of a SIMD vector under a mask, whichever lanes
+/// take it. The count stays an upper bound of the loop iterations the SIMD vector ran (see walk);
+/// it ends at most a few steps past `budget`. A trace whose work passes max_work_per_pixel fails
+/// (the same steps on both backends: the work count is not the synchronised one).
+void trace_steps(INOUT(TraceState) s, uint budget) {
+    uint steps = 0u;
+    while (s.phase < PHASE_DONE && steps < budget) {
+        steps += 1u;
+        s.work += 1u;
+        bool finish = false;
+        if (s.phase == PHASE_CLOSEST) walk(s.walk, s.ray, false, s.hit, s.work, steps, budget);
+        steps = sync_steps(steps) + WALK_LOOPS;
+        if (s.work > frame.max_work_per_pixel) s.phase = PHASE_FAILED;
+        if (s.phase == PHASE_CLOSEST && s.walk.state == WALK_FINISHED && after_closest(s)) finish = shade_or_shadow(s);
+        if (s.phase == PHASE_SHADOW) walk(s.walk, s.ray, true, s.hit, s.work, steps, budget);
+        steps = sync_steps(steps) + WALK_LOOPS;
+        if (s.work > frame.max_work_per_pixel) s.phase = PHASE_FAILED;
+        if (s.phase == PHASE_SHADOW && s.walk.state == WALK_FINISHED) finish = true;
+        if (finish) finish_shading(s, surface_at(s.task, s.closest));
+        if (s.phase == PHASE_NEXT_RAY) next_ray(s);
+        if (s.phase == PHASE_SAMPLE) start_sample(s);
+        if (s.phase == PHASE_START) start_closest(s);
+    }
+}
+
+/// A pixel's trace at the start of a pass: its samples `first` .. `target` - 1 are to be traced.
+TraceState begin_pixel(uvec2 p, uint first, uint target) {
+    TraceState s;
+    s.pixel = p;
+    s.phase = PHASE_SAMPLE;
+    s.sample_index = first;
+    s.target = target;
+    s.rays = 0u;
+    s.work = 0u;
+    s.walk = start_walk();
+    s.ray = make_ray(vec3(0.0f), vec3(0.0f, 0.0f, 1.0f), 0.0f);
+    s.hit = empty_hit(0.0f);
+    s.closest = s.hit;
+    s.task = ray_task(vec3(0.0f), vec3(0.0f), vec3(0.0f), 0u);
+    s.overlay = overlay_at(p);
+    s.color = vec3(0.0f);
+    s.visits = 0.0f;
+    s.depth = infinity();
+    return s;
 }

@@ -1,6 +1,9 @@
 // traverse.glsl — BVH traversal over the flattened depth-first nodes (report §2.2, §3.1), with a
-// fixed-size stack or stackless via skip indices (TRAVERSAL, a specialization constant on the
-// GPU). One loop serves closest-hit queries and shadow rays. Shared code: see geometry.glsl.
+// stack or stackless via skip indices (TRAVERSAL, a specialization constant on the GPU), written
+// as a resumable walk: each step does one bounded unit of work (a node, a primitive or a pop) and
+// the walk's whole state lives in a Walk, so a trace can stop after any step and continue in the
+// next dispatch (issue 8: lavapipe stops long loops, GPUs have a watchdog). One walk serves
+// closest-hit queries and shadow rays. Shared code: see geometry.glsl.
 
 struct Hit {
     float t;        ///< closest-hit: distance so far; shadow: the end of the segment
@@ -34,120 +37,176 @@ uint material_of(uint ref) {
     return floatBitsToUint(load_triangle(ref).v0.w);
 }
 
-/// The primitives of a leaf. Closest-hit keeps the nearest; a shadow ray multiplies its
+/// One primitive of a leaf. Closest-hit keeps the nearest; a shadow ray multiplies its
 /// transmission by the transparent factor of every surface it crosses (a sphere can be crossed
-/// twice). Returns true when traversal may stop (a shadow ray that is fully blocked).
-bool visit_leaf(BvhNode n, TraceRay r, bool shadow, INOUT(Hit) hit) {
-    for (uint k = n.index; k < n.index + n.info; ++k) {
-        uint ref = load_ref(k);
-        uint crossings = 0u;
-        if ((ref & REF_SPHERE_BIT) != 0u) {
-            GpuSphere s = load_sphere(ref & REF_INDEX_MASK);
-            float t;
-            if (shadow) crossings = sphere_crossings(s, r, hit.t);
-            else if (hit_sphere(s, r, hit.t, t) && closer(t, ref, hit)) { hit.t = t; hit.ref = ref; }
-        } else {
-            vec3 tuv;
-            if (hit_triangle(load_triangle(ref), r, hit.t, tuv)) {
-                if (shadow) crossings = tuv.x < hit.t ? 1u : 0u;
-                else if (closer(tuv.x, ref, hit)) { hit.t = tuv.x; hit.u = tuv.y; hit.v = tuv.z; hit.ref = ref; }
-            }
-        }
-        if (crossings > 0u) {
-            float transparent = load_material(material_of(ref)).transparent_ior.x;
-            hit.transmission *= crossings == 2u ? transparent * transparent : transparent;
-            if (hit.transmission <= 0.0f) return true;
+/// twice). Returns true when the walk may stop (a shadow ray that is fully blocked).
+bool visit_primitive(uint ref, TraceRay r, bool shadow, INOUT(Hit) hit) {
+    uint crossings = 0u;
+    if ((ref & REF_SPHERE_BIT) != 0u) {
+        GpuSphere s = load_sphere(ref & REF_INDEX_MASK);
+        float t;
+        if (shadow) crossings = sphere_crossings(s, r, hit.t);
+        else if (hit_sphere(s, r, hit.t, t) && closer(t, ref, hit)) { hit.t = t; hit.ref = ref; }
+    } else {
+        vec3 tuv;
+        if (hit_triangle(load_triangle(ref), r, hit.t, tuv)) {
+            if (shadow) crossings = tuv.x < hit.t ? 1u : 0u;
+            else if (closer(tuv.x, ref, hit)) { hit.t = tuv.x; hit.u = tuv.y; hit.v = tuv.z; hit.ref = ref; }
         }
     }
-    return false;
+    if (crossings == 0u) return false;
+    float transparent = load_material(material_of(ref)).transparent_ior.x;
+    hit.transmission *= crossings == 2u ? transparent * transparent : transparent;
+    return hit.transmission <= 0.0f;
 }
 
-/// Depth first with a stack of MAX_TREE_HEIGHT entries: both children's boxes are tested, the
-/// nearer is entered and the farther pushed with its entry distance (dropped if a closer hit
-/// is found meanwhile).
-void traverse_stack(TraceRay r, bool shadow, INOUT(Hit) hit) {
-    uint stack_node[MAX_TREE_HEIGHT];
-    float stack_t[MAX_TREE_HEIGHT];
-    uint sp = 0u;
-    BvhNode root = load_node(0u);
+// Where a walk stands (TraceState::walk).
+LOCAL_CONST uint WALK_ROOT = 0u;      ///< stack traversal: the root's box is still to be tested
+LOCAL_CONST uint WALK_NODE = 1u;      ///< at node `node`: test its box (stackless) or its children's (stack)
+LOCAL_CONST uint WALK_LEAF = 2u;      ///< testing primitives leaf_next .. leaf_end - 1 of a leaf
+LOCAL_CONST uint WALK_POP = 3u;       ///< stack traversal: take the next entry off the stack
+LOCAL_CONST uint WALK_FINISHED = 4u;  ///< the query is answered
+
+/// The state of a query in progress; the traversal stack itself lives in the slot's storage
+/// (node_stack_load/store), `stacked` entries of it.
+struct Walk {
+    uint state;      ///< WALK_*
+    uint node;
+    uint stacked;    ///< entries on the traversal stack
+    uint leaf_next;
+    uint leaf_end;
+};
+
+Walk start_walk() {
+    Walk w;
+    w.state = node_count() == 0u ? WALK_FINISHED : (TRAVERSAL == TRAVERSAL_STACKLESS ? WALK_NODE : WALK_ROOT);
+    w.node = 0u;
+    w.stacked = 0u;
+    w.leaf_next = 0u;
+    w.leaf_end = 0u;
+    return w;
+}
+
+void enter_leaf(INOUT(Walk) w, BvhNode n) {
+    w.leaf_next = n.index;
+    w.leaf_end = n.index + n.info;
+    w.state = WALK_LEAF;
+}
+
+/// Stack traversal at node `n` (= load_node(w.node)): at an inner node both children's boxes are
+/// tested, the nearer is entered and the farther pushed with its entry distance (dropped at the pop
+/// if a closer hit is found meanwhile); `n` becomes the entered child, fetched already. A leaf is
+/// entered (at the root or when popped; a leaf child is entered at once, saving a step).
+void step_stack_node(INOUT(Walk) w, TraceRay r, INOUT(Hit) hit, INOUT(BvhNode) n) {
+    if ((n.info & NODE_INTERNAL_BIT) == 0u) {
+        enter_leaf(w, n);
+        return;
+    }
+    uint a = w.node + 1u;
+    uint b = n.index;
+    BvhNode na = load_node(a);
+    BvhNode nb = load_node(b);
+    float ta = box_entry(na.lo, na.hi, r, hit.t);
+    float tb = box_entry(nb.lo, nb.hi, r, hit.t);
+    hit.visited += 2u;
+    if (ta < 0.0f && tb < 0.0f) {
+        w.state = WALK_POP;
+        return;
+    }
+    bool b_next = ta < 0.0f || (tb >= 0.0f && tb < ta);
+    if (ta >= 0.0f && tb >= 0.0f) {
+        node_stack_store(w.stacked, uvec2(b_next ? a : b, floatBitsToUint(b_next ? ta : tb)));
+        w.stacked += 1u;
+    }
+    w.node = b_next ? b : a;
+    n = b_next ? nb : na;
+    if ((n.info & NODE_INTERNAL_BIT) == 0u) enter_leaf(w, n);
+}
+
+/// Stackless (report §3.1) at node `node` of the depth-first order: a missed box continues at
+/// its skip index, the first node after its subtree; a leaf's skip index is the next node.
+void step_stackless_node(INOUT(Walk) w, TraceRay r, INOUT(Hit) hit) {
+    if (w.node >= node_count()) {
+        w.state = WALK_FINISHED;
+        return;
+    }
+    BvhNode n = load_node(w.node);
+    bool leaf = (n.info & NODE_INTERNAL_BIT) == 0u;
     hit.visited += 1u;
-    if (box_entry(root.lo, root.hi, r, hit.t) < 0.0f) return;
-    uint i = 0u;
-    BvhNode n = root;
-    // "while-while" (Aila and Laine 2009): descend through inner nodes in one loop, then handle
-    // the leaf, so SIMD lanes at different kinds of node run fewer masked-off instructions.
-    for (;;) {
-        bool dead_end = false;
-        while ((n.info & NODE_INTERNAL_BIT) != 0u && !dead_end) {
-            uint a = i + 1u;
-            uint b = n.index;
-            BvhNode na = load_node(a);
-            BvhNode nb = load_node(b);
-            float ta = box_entry(na.lo, na.hi, r, hit.t);
-            float tb = box_entry(nb.lo, nb.hi, r, hit.t);
-            hit.visited += 2u;
-            if (ta >= 0.0f && tb >= 0.0f) {
-                bool b_first = tb < ta;
-                stack_node[sp] = b_first ? a : b;
-                stack_t[sp] = b_first ? ta : tb;
-                sp += 1u;
-                i = b_first ? b : a;
-                n = load_node(i);
-            } else if (ta >= 0.0f || tb >= 0.0f) {
-                i = ta >= 0.0f ? a : b;
-                n = load_node(i);
-            } else {
-                dead_end = true;
-            }
-        }
-        if (!dead_end && visit_leaf(n, r, shadow, hit)) return;
-        // pop, skipping entries farther than the closest hit so far
-        bool popped = false;
-        while (sp > 0u && !popped) {
-            sp -= 1u;
-            popped = stack_t[sp] <= hit.t;
-            i = stack_node[sp];
-        }
-        if (!popped) return;
-        n = load_node(i);
+    if (box_entry(n.lo, n.hi, r, hit.t) < 0.0f) w.node = leaf ? w.node + 1u : (n.info & NODE_SKIP_MASK);
+    else if (leaf) enter_leaf(w, n);
+    else w.node += 1u;
+}
+
+/// The next primitive of the leaf; after the last, the stack traversal pops and the stackless
+/// one goes on with the next node in depth-first order.
+void step_leaf(INOUT(Walk) w, TraceRay r, bool shadow, INOUT(Hit) hit) {
+    uint ref = load_ref(w.leaf_next);
+    w.leaf_next += 1u;
+    if (visit_primitive(ref, r, shadow, hit)) w.state = WALK_FINISHED;
+    else if (w.leaf_next >= w.leaf_end) {
+        w.state = TRAVERSAL == TRAVERSAL_STACKLESS ? WALK_NODE : WALK_POP;
+        w.node += 1u;  // stackless: past the leaf; the stack traversal sets node at the pop
     }
 }
 
-/// Stackless (report §3.1): nodes in depth-first order; a missed box continues at its skip
-/// index, the first node after its subtree; a leaf's skip index is the next node.
-void traverse_stackless(TraceRay r, bool shadow, INOUT(Hit) hit) {
-    uint count = node_count();
-    uint i = 0u;
-    while (i < count) {
-        BvhNode n = load_node(i);
-        bool leaf = (n.info & NODE_INTERNAL_BIT) == 0u;
+/// Takes one entry off the stack; an entry farther than the closest hit so far is dropped.
+void step_pop(INOUT(Walk) w, Hit hit) {
+    if (w.stacked == 0u) {
+        w.state = WALK_FINISHED;
+        return;
+    }
+    w.stacked -= 1u;
+    uvec2 entry = node_stack_load(w.stacked);
+    if (uintBitsToFloat(entry.y) <= hit.t) {
+        w.node = entry.x;
+        w.state = WALK_NODE;
+    }
+}
+
+/// The walk, until the query is answered or `steps` reaches `budget`, as "while-while" loops
+/// (Aila and Laine 2009: descend through inner nodes in one loop, test a leaf's primitives in
+/// another, pop in a third, so SIMD lanes at different kinds of work run fewer masked-off
+/// instructions). Every loop iteration counts one step; after each inner loop the lanes take the
+/// largest count among them (sync_steps), plus one for the loop's exit. So `steps` never falls
+/// below the iterations the SIMD vector ran, which is what lavapipe's loop limit counts (see
+/// MAX_STEPS_PER_DISPATCH), and a walk cut short by the budget continues from `w` later. `work`
+/// counts this lane's own steps (a node, a primitive, a pop).
+void walk(INOUT(Walk) walk_state, TraceRay r, bool shadow, INOUT(Hit) query, INOUT(uint) work, INOUT(uint) steps,
+          uint budget) {
+    Walk w = walk_state;  // locals: the CPU build keeps them in registers (the state may alias the slot)
+    Hit hit = query;
+    if (w.state == WALK_ROOT) {
+        BvhNode root = load_node(0u);
         hit.visited += 1u;
-        if (box_entry(n.lo, n.hi, r, hit.t) < 0.0f) {
-            i = leaf ? i + 1u : (n.info & NODE_SKIP_MASK);
-            continue;
-        }
-        if (leaf && visit_leaf(n, r, shadow, hit)) return;
-        i += 1u;
+        w.state = box_entry(root.lo, root.hi, r, hit.t) < 0.0f ? WALK_FINISHED : WALK_NODE;
+        steps += 1u;
+        work += 1u;
     }
-}
-
-void traverse(TraceRay r, bool shadow, INOUT(Hit) hit) {
-    if (node_count() == 0u) return;
-    if (TRAVERSAL == TRAVERSAL_STACKLESS) traverse_stackless(r, shadow, hit);
-    else traverse_stack(r, shadow, hit);
-}
-
-/// Closest hit in (r.tmin, tmax).
-Hit closest_hit(TraceRay r, float tmax) {
-    Hit hit = empty_hit(tmax);
-    traverse(r, false, hit);
-    return hit;
-}
-
-/// Light let through along r up to `dist`: the product of the transparencies of every surface
-/// crossed (report §2.1; refraction is not taken into account, as in the report).
-float shadow_transmission(TraceRay r, float dist) {
-    Hit hit = empty_hit(dist);
-    traverse(r, true, hit);
-    return hit.transmission;
+    while (w.state != WALK_FINISHED && steps < budget) {
+        steps += 1u;
+        // the stack walk's node (the stackless walk fetches its own; its `node` may be one past the end)
+        BvhNode n = load_node(TRAVERSAL == TRAVERSAL_STACK && w.state == WALK_NODE ? w.node : 0u);
+        while (w.state == WALK_NODE && steps < budget) {
+            steps += 1u;
+            work += 1u;
+            if (TRAVERSAL == TRAVERSAL_STACKLESS) step_stackless_node(w, r, hit);
+            else step_stack_node(w, r, hit, n);
+        }
+        steps = sync_steps(steps) + 1u;
+        while (w.state == WALK_LEAF && steps < budget) {
+            steps += 1u;
+            work += 1u;
+            step_leaf(w, r, shadow, hit);
+        }
+        steps = sync_steps(steps) + 1u;
+        while (w.state == WALK_POP && steps < budget) {
+            steps += 1u;
+            work += 1u;
+            step_pop(w, hit);
+        }
+        steps = sync_steps(steps) + 1u;
+    }
+    walk_state = w;
+    query = hit;
 }

@@ -18,7 +18,7 @@ from bvhlab.blender.compat import use_multilayer_exr
 
 ENGINE = "BVHLAB_WHITTED"
 #: Blender's value for "no surface" in a Depth pass (render_result.cc fills passes named Depth with it).
-MISS_DEPTH = 10e10
+MISS_DEPTH = float(np.float32(bvhlab._core.NO_DEPTH))  # what the tracer (and Cycles) write where nothing is hit
 
 
 def _records():
@@ -57,14 +57,15 @@ def render_passes(tmp_dir, name: str = "render") -> dict:
     return out
 
 
-def reference(scene, spp: int, overlay=None, mode="shade", **build):
+def reference(scene, samples_per_axis: int, overlay=None, mode="shade", **build):
     """bvhlab.render on the CPU reference of a fresh export, tree built directly: the oracle."""
     exported = export_scene(bpy.context)
     settings = scene.bvhlab
     bvh = bvhlab.build(exported, method=settings.method, bins=settings.bins, axis=settings.axis,
                        max_leaf_size=settings.max_leaf_size, **build)
     width, height = scene.render.resolution_x, scene.render.resolution_y
-    image, _ = bvhlab.render(exported, bvh, width, height, backend="cpu", spp=spp, max_depth=settings.render_bounces,
+    image, _ = bvhlab.render(exported, bvh, width, height, backend="cpu", samples_per_axis=samples_per_axis,
+                             max_depth=settings.render_bounces,
                              overlay_depth=overlay, traversal=settings.traversal, mode=mode,
                              color_by_depth=settings.overlay_color_by_depth, line_width=settings.overlay_line_width)
     return image, exported, bvh
@@ -102,8 +103,8 @@ def check_combined_and_heatmap_match_the_tracer(tmp_dir) -> None:
                overlay_depth_min=1, overlay_depth_max=3, traversal="stackless")
     got = render_passes(tmp_dir)
     record = _last_final(scene)
-    combined, _, _ = reference(scene, spp=4, overlay=(1, 3))
-    heat, _, _ = reference(scene, spp=4, overlay=(1, 3), mode="heatmap")
+    combined, _, _ = reference(scene, samples_per_axis=2, overlay=(1, 3))
+    heat, _, _ = reference(scene, samples_per_axis=2, overlay=(1, 3), mode="heatmap")
     assert got["Combined"].shape == (120, 160, 4)
     compare_images(got["Combined"], combined, record["backend"])
     compare_images(got["BVH Heatmap"], heat, record["backend"])
@@ -135,25 +136,30 @@ def check_heatmap_is_box_tests(tmp_dir) -> None:
     assert len(np.unique(visited)) > 10, "the heatmap must vary over the picture"
 
 
-def _primary_directions(camera, width: int, height: int) -> np.ndarray:
-    """Pixel-centre directions with unit component along the view axis (written here again, not
-    taken from the engine)."""
+def _primary_directions(camera, width: int, height: int, samples_per_axis: int = 1) -> np.ndarray:
+    """Directions with unit component along the view axis through the n×n sample positions of
+    every pixel ((sx + 0.5) / n across the pixel, as the tracer places them), pixel by pixel, row 0
+    at the top: (height·width·n², 3). At n = 1, the pixel centres. Written here again, not taken
+    from the engine or the tracer."""
     position, look_at, up = (np.array(v, np.float64) for v in (camera.position, camera.look_at, camera.up))
     forward = (look_at - position) / np.linalg.norm(look_at - position)
     right = np.cross(forward, up)
     right /= np.linalg.norm(right)
     true_up = np.cross(right, forward)
     tan = math.tan(math.radians(camera.fov_y) / 2)
-    xs = ((np.arange(width) + 0.5) / width * 2 - 1) * tan * width / height
-    ys = (1 - (np.arange(height) + 0.5) / height * 2) * tan
-    d = forward + xs[None, :, None] * right + ys[:, None, None] * true_up
+    n = samples_per_axis
+    offsets = (np.arange(n) + 0.5) / n
+    xs = (((np.arange(width)[:, None] + offsets[None]) / width * 2 - 1) * tan * width / height).reshape(-1)
+    ys = ((1 - (np.arange(height)[:, None] + offsets[None]) / height * 2) * tan).reshape(-1)
+    d = forward + xs[None, :, None] * right + ys[:, None, None] * true_up  # (height·n, width·n, 3)
+    d = d.reshape(height, n, width, n, 3).transpose(0, 2, 1, 3, 4)
     return np.ascontiguousarray(d.reshape(-1, 3), np.float32)
 
 
-def brute_force_depth(exported, width: int, height: int) -> np.ndarray:
-    """Camera-space depth of the nearest triangle or sphere through each pixel centre, testing every
-    primitive (Möller-Trumbore; the sphere quadratic), float64; MISS_DEPTH for none."""
-    directions = _primary_directions(exported.camera, width, height).astype(np.float64)
+def brute_force_depth(exported, width: int, height: int, samples_per_axis: int = 1) -> np.ndarray:
+    """Camera-space depth of the nearest triangle or sphere over each pixel's n×n sample rays,
+    testing every primitive (Möller-Trumbore; the sphere quadratic), float64; MISS_DEPTH for none."""
+    directions = _primary_directions(exported.camera, width, height, samples_per_axis).astype(np.float64)
     origin = np.array(exported.camera.position, np.float64)
     best = np.full(len(directions), np.inf)
     tris = exported.triangles.astype(np.float64)
@@ -176,19 +182,19 @@ def brute_force_depth(exported, width: int, height: int) -> np.ndarray:
         disc = b2 * b2 - 4 * a2 * c2
         t = (-b2 - np.sqrt(np.maximum(disc, 0))) / (2 * a2)
         best = np.minimum(best, np.where((disc >= 0) & (t > 1e-6), t, np.inf))
-    return np.where(np.isfinite(best), best, MISS_DEPTH).reshape(height, width)
+    best = best.reshape(height, width, samples_per_axis ** 2).min(-1)
+    return np.where(np.isfinite(best), best, MISS_DEPTH)
 
 
 def check_depth_is_camera_z(tmp_dir) -> None:
-    """Depth pass = distance along the view axis to the nearest surface through each pixel centre
-    (Blender's Z pass; Blender's "no surface" value where there is none), against a brute-force
-    test of every triangle and sphere."""
+    """Depth pass = distance along the view axis to the nearest surface over each pixel's 2×2
+    sample rays (Blender's Z pass; 1e10, what Cycles writes, where nothing is hit), against a
+    brute-force test of every triangle and sphere."""
     scene = harness.open_scene("whitted")
     scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 80, 60, 100
-    use_engine(scene, backend="cpu", render_supersampling=2, render_overlay=True, overlay_depth_min=0,
-               overlay_depth_max=2)
+    use_engine(scene, backend="cpu", render_supersampling=2, render_overlay=False)
     depth = render_passes(tmp_dir)["Depth"]
-    expected = brute_force_depth(export_scene(bpy.context), 80, 60)
+    expected = brute_force_depth(export_scene(bpy.context), 80, 60, samples_per_axis=2)
     hit = expected < MISS_DEPTH
     assert 0.2 < hit.mean() < 0.95
     agree = np.where(hit, np.abs(depth - expected) <= 1e-4 * expected, depth == np.float32(MISS_DEPTH))
@@ -225,7 +231,7 @@ def check_rerender_reads_only_what_changed(tmp_dir) -> None:
         totals = record["totals"]
         seen.append((step, totals.full_syncs, totals.objects_read, totals.objects_moved, totals.materials_read,
                      record["tree"]))
-        compare_images(images[-1], reference(scene, spp=1)[0], "cpu")
+        compare_images(images[-1], reference(scene, samples_per_axis=1)[0], "cpu")
     print(f"engine re-renders (step, full exports, objects read, moved, materials read, tree): {seen}")
     # materials: the empty slot's default and "Paint" at first; the edited mesh keeps its triangle
     # count and order, so the tree is refit for it too
@@ -286,7 +292,7 @@ def check_animation_frames(tmp_dir) -> None:
     for frame, path in zip((1, 2, 3), files):
         scene.frame_set(frame)
         image = _exr_rgba(path)
-        compare_images(image, reference(scene, spp=1)[0], "cpu")
+        compare_images(image, reference(scene, samples_per_axis=1)[0], "cpu")
         centroids.append(_red_centroid_x(image))
     assert centroids[0] + 10 < centroids[1] < centroids[2] - 10, f"the ball does not move right: {centroids}"
 
@@ -310,7 +316,7 @@ def check_command_line_frames(tmp_dir) -> None:
     use_engine(scene, backend="auto", render_supersampling=1)
     for frame in (1, 2, 3):
         scene.frame_set(frame)
-        compare_images(_exr_rgba(tmp_dir / f"cli_{frame:04d}.exr"), reference(scene, spp=1)[0], _auto_backend())
+        compare_images(_exr_rgba(tmp_dir / f"cli_{frame:04d}.exr"), reference(scene, samples_per_axis=1)[0], _auto_backend())
 
 
 #: Run by the child Blender before it renders: lossless EXR output (the file's own settings are PNG).

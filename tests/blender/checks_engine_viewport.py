@@ -83,7 +83,7 @@ def _wait(condition, timeout: float = 120.0, what: str = "the viewport worker"):
     raise AssertionError(f"{what} did not get there within {timeout} s")
 
 
-def _session_for(scene, width: int, height: int, spp: int, overlay=None):
+def _session_for(scene, width: int, height: int, samples_per_axis: int, overlay=None):
     """A viewport worker fed the way view_update / view_draw feed it, looking through the scene
     camera; returns (session, request)."""
     from bvhlab.blender import LiveScene
@@ -93,7 +93,7 @@ def _session_for(scene, width: int, height: int, spp: int, overlay=None):
     report = live.sync(bpy.context.evaluated_depsgraph_get(), scene, bpy.context.view_layer)
     view, window = _camera_matrices(scene, width, height)
     frustum = view_camera.view_frustum(view, window, width, height)
-    settings = tracer.TraceSettings(spp=spp, max_depth=5, overlay=overlay, traversal="stackless")
+    settings = tracer.TraceSettings(samples_per_axis=samples_per_axis, max_depth=5, overlay=overlay, traversal="stackless")
     build = _engine_module("scene_tree").BuildSettings()
     request = viewport.ViewRequest(frustum, settings, "cpu", build, budget_ms=5.0)
     session = viewport.ViewportSession()
@@ -107,7 +107,7 @@ def check_viewport_worker_levels() -> None:
     then full resolution, then 2×2 samples; the last equals bvhlab.render from the view's camera
     (with the boxes of depths 8-9 traced in). Frame times are printed, not asserted."""
     scene = harness.open_scene("atrium")
-    session, request, live = _session_for(scene, 240, 160, spp=4, overlay=(8, 9))
+    session, request, live = _session_for(scene, 240, 160, samples_per_axis=2, overlay=(8, 9))
     try:
         levels = []
 
@@ -119,7 +119,7 @@ def check_viewport_worker_levels() -> None:
 
         frame = _wait(refined)
         expected, _ = bvhlab.render(live.scene.__class__(**_scene_fields(live.scene, request.frustum.camera())),
-                                    session.tree.bvh, 240, 160, backend="cpu", spp=4, max_depth=5,
+                                    session.tree.bvh, 240, 160, backend="cpu", samples_per_axis=2, max_depth=5,
                                     overlay_depth=(8, 9), traversal="stackless")
         compare_images(frame.image, expected, "cpu")
         names = [name for name, _, _ in levels]
@@ -146,7 +146,7 @@ def check_viewport_build_cancels() -> None:
     """Esc (session.cancel) during the build of a million triangles stops it (no tree, a status
     that says so) and nothing is traced until the scene changes; then it builds and traces."""
     scene = harness.open_scene("suzanne_1m")
-    session, request, live = _session_for(scene, 64, 48, spp=1)
+    session, request, live = _session_for(scene, 64, 48, samples_per_axis=1)
     try:
         _wait(lambda: session.status().startswith("Building BVH"), what="the build")
         session.cancel()

@@ -66,7 +66,7 @@ inline ScenePtr five_spheres() {
     for (int i = 0; i < 5; ++i) s->sphere({-4.0f + 2.0f * float(i), 0, 0.8f}, 0.8f, s->material(colors[i]));
     s->checker_floor(8, 0, 1, s->material({0.8f, 0.8f, 0.8f}), 0);
     s->build();
-    s->settings.camera = {{0, -9, 4}, {0, 0, 0.8f}, {0, 0, 1}, 45};
+    s->settings.camera = look_at({0, -9, 4}, {0, 0, 0.8f}, {0, 0, 1}, 45);
     s->settings.light.position = {4, -6, 8};
     small_image(s->settings);
     return s;
@@ -82,9 +82,9 @@ inline ScenePtr whitted_showcase() {
     s->sphere({2.8f, -1.0f, 0.5f}, 0.5f, s->material({0.3f, 0.5f, 0.9f}, 0, 0.5f, 1.0f));
     s->checker_floor(6, 0, 8, s->material({0.9f, 0.9f, 0.9f}), s->material({0.2f, 0.2f, 0.2f}, 0.2f));
     s->build();
-    s->settings.camera = {{0, -7, 3}, {0, 0.5f, 0.8f}, {0, 0, 1}, 50};
+    s->settings.camera = look_at({0, -7, 3}, {0, 0.5f, 0.8f}, {0, 0, 1}, 50);
     s->settings.light.position = {-3, -4, 7};
-    s->settings.max_depth = 6;
+    s->settings.max_ray_depth = 6;
     s->settings.samples_per_axis = 2;
     small_image(s->settings);
     return s;
@@ -104,7 +104,7 @@ inline ScenePtr bumpy_mesh(int n = 160) {
             s->triangle(point(i, j), point(i + 1, j + 1), point(i, j + 1), m);
         }
     s->build();
-    s->settings.camera = {{0.5f, -4.5f, 2.2f}, {0, 0, 0}, {0, 0, 1}, 45};
+    s->settings.camera = look_at({0.5f, -4.5f, 2.2f}, {0, 0, 0}, {0, 0, 1}, 45);
     s->settings.light.position = {3, -2, 4};
     small_image(s->settings);
     return s;
@@ -116,7 +116,7 @@ inline ScenePtr overlay_sphere() {
     auto s = std::make_unique<RenderTestScene>();
     s->sphere({0, 0, 0}, 1, s->material({0.3f, 0.5f, 0.8f}));
     s->build();
-    s->settings.camera = {{-4, -4, 4}, {0, 0, 0}, {0, 0, 1}, 45};
+    s->settings.camera = look_at({-4, -4, 4}, {0, 0, 0}, {0, 0, 1}, 45);
     s->settings.light.position = {-6, -2, 6};
     s->settings.overlay = true;
     s->settings.overlay_color_by_depth = false;  // one known line colour

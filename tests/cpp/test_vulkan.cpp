@@ -12,36 +12,13 @@
 #include <limits>
 #include <string>
 
-#include "bvhlab/vulkan_renderer.h"
-#include "render_scenes.h"
-#include "vulkan_test_env.h"
+#include "vulkan_fixture.h"
 
 using namespace bvhlab;
 
 namespace {
 
-VulkanOptions validated(VulkanOptions options = {}) {
-    options.validation = true;
-    return options;
-}
-
-/// Prints what the validation layer said and fails on any error.
-void expect_no_validation_errors(VulkanRenderer& r) {
-    for (const std::string& m : r.take_validation_messages()) std::printf("[validation] %s\n", m.c_str());
-    EXPECT_EQ(r.validation_error_count(), 0u);
-}
-
-std::vector<float> render_vulkan(VulkanRenderer& r, const RenderSettings& s) {
-    std::vector<float> image(std::size_t(s.width) * s.height * 4);
-    r.render(s, image.data());
-    return image;
-}
-
-std::vector<float> render_reference(const RenderScene& scene, const RenderSettings& s) {
-    std::vector<float> image(std::size_t(s.width) * s.height * 4);
-    render_cpu(scene, s, image.data());
-    return image;
-}
+using namespace test;
 
 std::size_t resident_bytes() {
     long pages = 0, resident = 0;
@@ -55,7 +32,7 @@ std::size_t resident_bytes() {
 /// (camera_ray_dir in shaders/tracer/shade.glsl), row 0 at the top.
 std::pair<int, int> project(const RenderSettings& s, Vec3 p) {
     const Camera& c = s.camera;
-    Vec3 forward = normalize(c.look_at - c.position), right = normalize(cross(forward, c.up));
+    Vec3 forward = normalize(c.forward), right = normalize(cross(forward, c.up));
     Vec3 up = cross(right, forward), v = p - c.position;
     float tan_half = std::tan(c.fov_y_degrees * 3.14159265f / 360), aspect = float(s.width) / float(s.height);
     float x = dot(v, right) / (dot(v, forward) * tan_half * aspect), y = dot(v, up) / (dot(v, forward) * tan_half);
@@ -81,67 +58,13 @@ struct BeyondBindingLimit {
         tree.depths.push_back(0);
         scene.bvh = &tree;
         scene.boxes.push_back({{-2, 0, -2, 0}, {3, 0, 3, 0}});
-        scene.depth_offset = {0, 1};
+        scene.order = {{0}, {0, 1}};
         scene.bounds = {{-2, 0, -2}, {3, 0, 3}};
         scene.node_count = 1;
+        scene.ref_count = 1;
     }
 };
 
-/// One validated renderer shared by the tests of the suite (an instance with the validation layer
-/// takes a while to create).
-class Vulkan : public ::testing::Test {
-protected:
-    static void SetUpTestSuite() {
-        test::prepare_vulkan_environment();
-        if (vulkan_loader_available()) renderer_ = new VulkanRenderer(validated());
-    }
-    static void TearDownTestSuite() {
-        delete renderer_;
-        renderer_ = nullptr;
-    }
-    void SetUp() override {
-        // make test installs lavapipe: a missing loader is a failure, not a reason to skip
-        ASSERT_NE(renderer_, nullptr) << "no Vulkan loader: install libvulkan1 and mesa-vulkan-drivers";
-    }
-    void TearDown() override {
-        if (renderer_) expect_no_validation_errors(*renderer_);
-    }
-    VulkanRenderer& renderer() { return *renderer_; }
-
-    /// Vulkan vs CPU reference, both traversals.
-    void expect_matches_reference(const test::RenderTestScene& scene, RenderSettings s) {
-        renderer().upload(scene.render);
-        for (std::uint32_t traversal : {gpu::TRAVERSAL_STACK, gpu::TRAVERSAL_STACKLESS}) {
-            s.traversal = traversal;
-            std::vector<float> vulkan = render_vulkan(renderer(), s), reference = render_reference(scene.render, s);
-            test::ImageDiff d = test::compare_images(vulkan, reference, kFlipThreshold);
-            std::printf("traversal %u: mean abs %.3g, max abs %.3g, pixels above %.2g: %.3g%%\n", traversal, d.mean_abs,
-                        d.max_abs, kFlipThreshold, 100 * d.fraction_above);
-            EXPECT_LE(d.mean_abs, kMeanTolerance);
-            EXPECT_LE(d.max_abs, kMaxTolerance);
-            EXPECT_LE(d.fraction_above, kFlipFraction);
-        }
-    }
-
-    // Tolerances, Vulkan vs CPU. Both run the same tracer source on the same FrameParams, but
-    // lavapipe's LLVM may contract a*b+c into FMAs and evaluates sqrt/pow/normalize with its own
-    // rounding, while the CPU build forbids contraction (-ffp-contract=off). Measured on lavapipe
-    // (Mesa 22.3): mean 1e-7, max 8e-5 (a Blinn-Phong highlight: pow(x, 48) multiplies relative
-    // errors by 48), no pixel above 1e-3. Elsewhere a few ulps may move a ray that grazes a
-    // silhouette or a shared triangle edge to the other side: that pixel (and what its reflections
-    // see) may then differ by up to the whole colour range. Hence: the fraction of pixels off by
-    // more than 1e-3 is bounded (flips), the maximum only catches garbage (NaN, a wrong buffer:
-    // colours lie in about [0, 1.3]), and the mean catches systematic errors (a wrong shading term
-    // moves it by more than 1e-2).
-    static constexpr double kMeanTolerance = 1e-3;
-    static constexpr float kMaxTolerance = 1.5f;
-    static constexpr float kFlipThreshold = 1e-3f;  // far above float noise, far below a visible error
-    static constexpr double kFlipFraction = 0.01;   // 1% of the pixels: 30 of 64×48
-
-    static VulkanRenderer* renderer_;
-};
-
-VulkanRenderer* Vulkan::renderer_ = nullptr;
 
 }  // namespace
 
@@ -179,9 +102,9 @@ TEST_F(Vulkan, StackAndStacklessGiveIdenticalImages) {
         auto scene = make();
         renderer().upload(scene->render);
         RenderSettings s = scene->settings;
-        s.traversal = gpu::TRAVERSAL_STACK;
+        s.traversal = Traversal::Stack;
         std::vector<float> stack = render_vulkan(renderer(), s);
-        s.traversal = gpu::TRAVERSAL_STACKLESS;
+        s.traversal = Traversal::Stackless;
         EXPECT_EQ(stack, render_vulkan(renderer(), s));
     }
 }
@@ -203,7 +126,7 @@ TEST_F(Vulkan, OverlayLinesInFrontShowBehindAreHiddenElsewhereUnchanged) {
     std::vector<float> lines = render_vulkan(renderer(), s);
     s.overlay = false;
     std::vector<float> plain = render_vulkan(renderer(), s);
-    const float line_color[3] = {1.0f, 0.85f, 0.2f};  // overlay.vert's colour when not by depth
+    const float line_color[3] = {gpu::OVERLAY_LINE_COLOR.x, gpu::OVERLAY_LINE_COLOR.y, gpu::OVERLAY_LINE_COLOR.z};
     const float sky[3] = {s.sky.x, s.sky.y, s.sky.z};
     // Every pixel either shows the line colour exactly (a primary ray that stopped at the line)
     // or is bit-for-bit what it is without the overlay.
@@ -249,14 +172,20 @@ TEST_F(Vulkan, BadSettingsThrowInvalidArgument) {
     auto bad = [&](auto change) {
         RenderSettings s = good;
         change(s);
-        EXPECT_THROW(renderer().render(s, image.data()), std::invalid_argument);
+        EXPECT_THROW(renderer().render(s, {image.data()}), std::invalid_argument);
     };
     bad([](RenderSettings& s) { s.width = 0; });
     bad([](RenderSettings& s) { s.height = 0; });
     bad([&](RenderSettings& s) { s.width = renderer().max_image_dimension() + 1; });
     bad([&](RenderSettings& s) { s.height = renderer().max_image_dimension() + 1; });
     bad([](RenderSettings& s) { s.camera.position.x = std::numeric_limits<float>::quiet_NaN(); });
-    bad([](RenderSettings& s) { s.camera.look_at = s.camera.position; });
+    bad([](RenderSettings& s) { s.camera.forward = {}; });
+    bad([](RenderSettings& s) { s.heatmap_scale = std::numeric_limits<float>::infinity(); });
+    bad([](RenderSettings& s) { s.heatmap_scale = 0.0f; });
+    bad([](RenderSettings& s) { s.heatmap_scale = 5e9f; });
+    bad([](RenderSettings& s) { s.traversal = Traversal::Wide; });
+    bad([](RenderSettings& s) { s.steps_per_dispatch = gpu::MIN_STEPS_PER_DISPATCH - 1; });
+    bad([](RenderSettings& s) { s.steps_per_dispatch = gpu::MAX_STEPS_PER_DISPATCH + 1; });
     // the renderer is still usable
     EXPECT_EQ(render_vulkan(renderer(), good), render_vulkan(renderer(), good));
 }
@@ -271,8 +200,8 @@ TEST_F(Vulkan, ManyFramesDoNotGrowMemory) {
     std::vector<float> image(std::size_t(s.width) * s.height * 4);
     auto frame = [&](int i) {  // both passes' variants, both traversals
         s.overlay = i % 2;
-        s.traversal = (i / 2) % 2;
-        renderer().render(s, image.data());
+        s.traversal = (i / 2) % 2 ? Traversal::Stackless : Traversal::Stack;
+        renderer().render(s, {image.data()});
     };
     for (int i = 0; i < 8; ++i) frame(i);  // warm-up: pipelines compiled, pools sized
     const std::size_t before = resident_bytes();
@@ -287,7 +216,7 @@ TEST_F(Vulkan, TrianglesBeyondTheBindingLimitRender) {
     BeyondBindingLimit big;
     RenderSettings s;
     test::small_image(s);
-    s.camera = {{0, -4, 0}, {0, 0, 0}, {0, 0, 1}, 45};
+    s.camera = look_at({0, -4, 0}, {0, 0, 0});
     s.light.position = {1, -3, 2};
     std::vector<float> reference = render_reference(big.scene, s);
     const std::size_t centre = 4 * (std::size_t(s.height / 2) * s.width + s.width / 2);

@@ -31,13 +31,13 @@ void time_scene(VulkanRenderer& vulkan, const char* name, const test::RenderTest
     std::vector<float> image(std::size_t(s.width) * s.height * 4);
     std::printf("upload %s: %.1f ms\n", name, vulkan.upload(scene.render));
     const double pixels = double(s.width) * s.height;
-    for (std::uint32_t traversal : {gpu::TRAVERSAL_STACK, gpu::TRAVERSAL_STACKLESS}) {
+    for (Traversal traversal : {Traversal::Stack, Traversal::Stackless}) {
         s.traversal = traversal;
-        RenderTimings v = best_of(3, [&] { return vulkan.render(s, image.data()); });
-        RenderTimings c = best_of(3, [&] { return render_cpu(scene.render, s, image.data(), 0); });
+        RenderTimings v = best_of(3, [&] { return vulkan.render(s, {image.data()}); });
+        RenderTimings c = best_of(3, [&] { return render_cpu(scene.render, s, {image.data()}, 0); });
         std::printf("%-16s %-9s  Vulkan %7.1f ms (overlay %.1f, trace %.1f, readback %.1f; %.2f Mrays/s primary)"
                     "  CPU %7.1f ms (%.2f Mrays/s)  ratio %.2f\n",
-                    name, traversal == gpu::TRAVERSAL_STACK ? "stack" : "stackless", v.total_ms, v.overlay_ms, v.trace_ms,
+                    name, to_string(traversal).c_str(), v.total_ms, v.overlay_ms, v.trace_ms,
                     v.readback_ms, pixels / v.trace_ms / 1e3, c.total_ms, pixels / c.trace_ms / 1e3, v.total_ms / c.total_ms);
     }
 }

@@ -133,11 +133,11 @@ def snell_boundary_column(ior: float, width: int) -> float:
 
 def test_refraction_through_a_slab_follows_snell():
     width = 200
-    plain = boundary_column(render(slab_scene(1.0, with_slab=False), width, 64, spp=16))
+    plain = boundary_column(render(slab_scene(1.0, with_slab=False), width, 64, samples_per_axis=4))
     assert plain == pytest.approx(width / 2, abs=0.1), "no slab: the boundary is straight ahead"
-    same = boundary_column(render(slab_scene(1.0), width, 64, spp=16))
+    same = boundary_column(render(slab_scene(1.0), width, 64, samples_per_axis=4))
     assert same == pytest.approx(plain, abs=0.1), "IOR 1.0: the ray passes straight"
-    bent = boundary_column(render(slab_scene(1.5), width, 64, spp=16))
+    bent = boundary_column(render(slab_scene(1.5), width, 64, samples_per_axis=4))
     expected = snell_boundary_column(1.5, width)
     assert abs(expected - plain) > 5, "the test geometry must displace the ray visibly"
     assert bent == pytest.approx(expected, abs=0.3)
@@ -194,17 +194,21 @@ def test_heatmap_shows_more_box_tests_where_the_geometry_is():
 
 def test_supersampling_averages_samples():
     scene = showcase.five_spheres()
-    one = render(scene, 48, 32, spp=1)
-    many = render(scene, 48, 32, spp=16)
+    one = render(scene, 48, 32, samples_per_axis=1)
+    many = render(scene, 48, 32, samples_per_axis=4)
     assert np.abs(one - many).mean() < 0.03  # same picture...
     assert np.any(np.abs(one - many) > 0.05)  # ...with smoother silhouettes
 
 
 @pytest.mark.parametrize("kwargs, match", [
-    (dict(width=0), "width"), (dict(height=-3), "height"), (dict(spp=2), "square number"),
-    (dict(max_depth=99), "max_depth"), (dict(overlay_depth=(5, 2)), "greater"),
+    (dict(width=0), "width"), (dict(height=-3), "height"), (dict(samples_per_axis=0), "samples per pixel axis"),
+    (dict(samples_per_axis=17), "samples per pixel axis"),
+    (dict(max_depth=99), "max_ray_depth"), (dict(overlay_depth=(5, 2)), "greater"),
     (dict(mode="xray"), "unknown mode"), (dict(traversal="bfs"), "unknown traversal"),
-    (dict(width=20000, height=10), "exceeds the device limit"),
+    (dict(width=20000, height=10), "exceeds the device limit"), (dict(width=100000, height=100000), "exceeds"),
+    (dict(heatmap_scale=0.0), "heatmap_scale"), (dict(heatmap_scale=float("inf")), "heatmap_scale"),
+    (dict(heatmap_scale=-1.0), "heatmap_scale"), (dict(heatmap_scale=5e9), "heatmap_scale"),
+    (dict(traversal="wide"), "no 'wide' traversal"),
 ])
 def test_bad_settings(kwargs, match):
     scene = showcase.five_spheres()
@@ -229,9 +233,20 @@ def test_png_round_trip(tmp_path):
     np.testing.assert_array_equal(back[..., :3], (srgb * 255 + 0.5).astype(np.uint8))
 
 
-def test_auto_backend_falls_back_or_uses_vulkan():
+def test_auto_backend_prefers_a_gpu_and_says_which_device_and_why():
+    """auto renders on a Vulkan GPU when there is one; when the only Vulkan device is a CPU driver
+    (lavapipe) or there is none, on the CPU reference; the timings name the device and the reason."""
     scene = showcase.five_spheres()
     image, t = bvhlab.render(scene, bvhlab.build(scene), 16, 16, backend="auto")
-    assert t["backend"] in ("vulkan", "cpu")
+    try:
+        device = _core.VulkanRenderer("", False, False) if _core.HAS_VULKAN else None
+    except bvhlab.VulkanUnavailable:
+        device = None
+    if device is None:
+        assert t["backend"] == "cpu" and "Vulkan unavailable" in t["reason"]
+    elif device.device_type == "cpu":
+        assert t["backend"] == "cpu" and "CPU driver" in t["reason"] and device.device_name in t["reason"]
+    else:
+        assert t["backend"] == "vulkan" and t["device"] == device.device_name
+    assert t["device"].startswith("CPU reference") == (t["backend"] == "cpu")
     assert ("fallback" in t) == (t["backend"] == "cpu")
-    assert not _core.HAS_VULKAN or t["backend"] == "vulkan"

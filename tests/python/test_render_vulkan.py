@@ -35,8 +35,8 @@ def test_vulkan_matches_the_cpu_reference(vulkan, make):
     bvh = bvhlab.build(scene)
     cpu = bvhlab.Renderer("cpu")
     for traversal in ("stack", "stackless"):
-        vk_image, t = vulkan.render(scene, bvh, 96, 64, traversal=traversal, spp=4)
-        cpu_image, _ = cpu.render(scene, bvh, 96, 64, traversal=traversal, spp=4)
+        vk_image, t = vulkan.render(scene, bvh, 96, 64, traversal=traversal, samples_per_axis=2)
+        cpu_image, _ = cpu.render(scene, bvh, 96, 64, traversal=traversal, samples_per_axis=2)
         compare(vk_image, cpu_image)
         assert t["backend"] == "vulkan" and "llvmpipe" in t["device"]
     assert vulkan.validation_errors == 0, vulkan.validation_messages()
@@ -81,7 +81,7 @@ def test_no_driver_gives_a_clear_error_and_auto_falls_back(tmp_path):
         "except bvhlab.VulkanUnavailable as e:\n"
         "    print('ERROR', e)\n"
         "image, t = bvhlab.render(s, b, 8, 8, backend='auto')\n"
-        "print('AUTO', t['backend'], t['fallback'])\n"
+        "print('AUTO', t['backend'], t['reason'])\n"
     )
     env = dict(os.environ, VK_DRIVER_FILES=str(tmp_path / "missing_icd.json"), VK_ICD_FILENAMES=str(tmp_path / "missing_icd.json"))
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)

@@ -1,28 +1,23 @@
-// render.h — what a frame is made of (scene in GPU layout, camera, light, settings) and the CPU
+// render.h — what a frame is made of (scene in GPU layout, camera, light, settings), what a render
+// produces (colour, depth, traversal cost), renders in sample passes (RenderJob), and the CPU
 // reference renderer. The Vulkan renderer (vulkan_renderer.h) reads the same RenderScene and
 // FrameParams, and runs the same tracer code (shaders/tracer/*.glsl).
 #pragma once
 #include <cstdint>
+#include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "bvhlab/big_vector.h"
 #include "bvhlab/bvh.h"
+#include "bvhlab/cancel.h"
+#include "bvhlab/depth_order.h"
+#include "bvhlab/render_defaults.h"
+#include "bvhlab/render_settings.h"
 #include "gpu_types.h"
 
 namespace bvhlab {
-
-/// Pinhole camera; fov_y_degrees is the vertical field of view.
-struct Camera {
-    Vec3 position{0, -5, 2}, look_at{0, 0, 0}, up{0, 0, 1};
-    float fov_y_degrees = 45.0f;
-};
-
-struct PointLight {
-    Vec3 position{5, -5, 5};
-    Vec3 color{1, 1, 1};
-    float intensity = 1.0f;
-};
 
 /// Per-primitive materials, borrowed from the caller: M×6 floats (r, g, b, reflective,
 /// transparent, ior) and one material index per triangle and per sphere.
@@ -40,51 +35,82 @@ struct RenderScene {
     BigVector<gpu::GpuTriangle> triangles;
     std::vector<gpu::GpuSphere> spheres;
     std::vector<gpu::GpuMaterial> materials;
-    BigVector<gpu::GpuBox> boxes;
-    std::vector<std::uint32_t> depth_offset;  ///< boxes of depth d: [depth_offset[d], depth_offset[d + 1])
+    BigVector<gpu::GpuBox> boxes;  ///< in `order`: the boxes of depth d are order.range(d, d)
+    DepthOrder order;              ///< of the tree's nodes (depth_order.h)
     Aabb bounds;
-    std::uint32_t node_count = 0;  ///< of the tree (kept here: make_frame_params never reads `bvh`)
+    std::uint32_t node_count = 0;   ///< of the tree (kept here: make_frame_params never reads `bvh`)
+    std::uint32_t ref_count = 0;    ///< primitive references in the tree's leaves
 
-    /// [first, count) of the boxes whose depth lies in [depth_min, depth_max].
-    std::pair<std::uint32_t, std::uint32_t> box_range(std::uint32_t depth_min, std::uint32_t depth_max) const;
+    std::uint32_t height() const { return order.height(); }
 };
 
-/// Throws std::invalid_argument for material indices out of range or bad material values.
+/// Throws std::invalid_argument for material indices out of range, bad material values, or a tree
+/// built for other geometry.
 RenderScene make_render_scene(const Bvh& bvh, const GeometryView& geometry, const MaterialView& materials);
 
-enum class RenderMode { Shade, Heatmap };
+/// The per-frame parameters both renderers read (device addresses and the per-dispatch fields
+/// left zero; the Vulkan side fills them).
+gpu::FrameParams make_frame_params(const RenderScene& scene, const RenderSettings& settings);
 
-struct RenderSettings {
-    std::uint32_t width = 800, height = 600;
-    std::uint32_t samples_per_axis = 1;  ///< n×n supersampling
-    std::uint32_t max_depth = 5;         ///< bounces of reflection and refraction
-    Camera camera;
-    PointLight light;
-    Vec3 sky{0.55f, 0.7f, 0.9f};         ///< the atmosphere colour (report §2.1)
-    bool overlay = false;                ///< draw the boxes of depths [overlay_depth_min, overlay_depth_max]
-    std::uint32_t overlay_depth_min = 0, overlay_depth_max = 0;
-    bool overlay_color_by_depth = true;
-    float line_width = 1.0f;
-    std::uint32_t traversal = gpu::TRAVERSAL_STACK;  ///< or gpu::TRAVERSAL_STACKLESS
-    RenderMode mode = RenderMode::Shade;
-    float heatmap_scale = 0.0f;          ///< box tests shown as full red; 0 = 8 × tree height
+/// Where a render writes: width×height pixels, row 0 at the top. Null outputs are skipped.
+struct RenderImages {
+    float* color = nullptr;  ///< RGBA; MODE_SHADE: the Whitted image (alpha 1); MODE_HEATMAP: heat colours
+    float* depth = nullptr;  ///< view-axis depth of the nearest primary hit over the pixel's samples
+                             ///< (Blender's Z pass); kNoDepth where no sample hit anything
+    float* cost = nullptr;   ///< box tests per primary ray, averaged over the pixel's samples
+    float* heat = nullptr;   ///< RGBA: `cost` as heat colours (what MODE_HEATMAP shows), in either mode
 };
 
-/// Throws std::invalid_argument naming the bad setting (size zero or above max_dimension, NaN
-/// camera, camera looking along its up vector, too many samples or bounces).
-void validate(const RenderSettings& settings, std::uint32_t max_dimension = 16384);
-
-/// The per-frame parameters both renderers read (addresses left zero; the GPU side fills them).
-gpu::FrameParams make_frame_params(const RenderScene& scene, const RenderSettings& settings);
+/// The depth of a pixel where nothing was hit: what Cycles writes into its Depth pass there.
+inline constexpr float kNoDepth = 1e10f;
 
 struct RenderTimings {
     double upload_ms = 0, overlay_ms = 0, trace_ms = 0, readback_ms = 0, total_ms = 0;
-    std::string device;
+    std::string device;          ///< which device rendered
+    std::uint32_t dispatches = 0;      ///< trace dispatches (CPU: the most budgets of steps a pixel needed)
+    std::uint32_t steps_per_dispatch = 0;  ///< the last budget of steps per pixel and dispatch
+};
+
+/// A pixel did not finish within RenderSettings::max_steps_per_pixel; no image is returned.
+struct RenderIncomplete : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+/// A render in sample passes (issue 12: a viewport shows a coarse image first and refines, an F12
+/// render honours Esc). Each pixel keeps running sums over its samples; run() adds samples to
+/// every pixel, resolve() turns the sums into images at any time. Whole samples only are summed,
+/// so a run stopped half-way leaves every pixel averaged over the samples it completed.
+class RenderJob {
+public:
+    virtual ~RenderJob() = default;
+
+    /// Traces until every pixel has min(samples, samples_per_pixel()) samples. `cancel` is polled
+    /// between dispatches (Vulkan) or budgets of steps (CPU); when it asks to stop, throws Cancelled.
+    /// `progress` (if given) receives the fraction of this run done before each poll.
+    virtual void run(std::uint32_t samples, Cancellation* cancel = nullptr, double* progress = nullptr) = 0;
+    /// The images of the samples so far (each pixel averaged over its own count).
+    virtual void resolve(const RenderImages& out) = 0;
+
+    const RenderSettings& settings() const { return settings_; }
+    std::uint32_t samples_per_pixel() const { return settings_.samples_per_axis * settings_.samples_per_axis; }
+    /// Every pixel has at least this many samples.
+    std::uint32_t samples_done() const { return samples_done_; }
+    const RenderTimings& timings() const { return timings_; }
+
+protected:
+    explicit RenderJob(const RenderSettings& settings) : settings_(settings) {}
+    RenderSettings settings_;
+    std::uint32_t samples_done_ = 0;
+    RenderTimings timings_;
 };
 
 /// The CPU reference renderer: the same tracer code as the compute shader, on `threads` threads
-/// (0 = all). Writes width×height RGBA floats, row 0 at the top.
-RenderTimings render_cpu(const RenderScene& scene, const RenderSettings& settings, float* rgba,
-                         std::uint32_t threads = 0);
+/// (0 = all). `scene` is borrowed and must outlive the job. Throws std::invalid_argument for bad
+/// settings (validate).
+std::unique_ptr<RenderJob> start_cpu(const RenderScene& scene, const RenderSettings& settings, std::uint32_t threads = 0);
+
+/// start_cpu, every sample, resolve: the whole render at once.
+RenderTimings render_cpu(const RenderScene& scene, const RenderSettings& settings, const RenderImages& out,
+                         std::uint32_t threads = 0, Cancellation* cancel = nullptr);
 
 }  // namespace bvhlab

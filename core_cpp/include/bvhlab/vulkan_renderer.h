@@ -1,7 +1,7 @@
 // vulkan_renderer.h — the report's renderer on any Vulkan device (report §3.2, Figure 2): the
 // overlay pass (graphics pipeline, instanced LINE_LIST) and the trace pass (compute, the shared
-// tracer code in shaders/tracer/), headless, read back into a float RGBA array. On machines
-// without a GPU it runs on Mesa's lavapipe.
+// tracer code in shaders/tracer/, in bounded dispatches), headless, read back into float arrays.
+// On machines without a GPU it runs on Mesa's lavapipe.
 #pragma once
 #include <cstdint>
 #include <memory>
@@ -34,6 +34,12 @@ struct VulkanOptions {
 /// Is the Vulkan loader present (cheap; does not create an instance)?
 bool vulkan_loader_available();
 
+namespace vk {
+struct RendererCore;
+}
+
+/// Safe to share between threads: every operation takes the renderer's lock (one render at a
+/// time per renderer; Vulkan queues are not thread-safe), and a RenderJob keeps what it uses alive.
 class VulkanRenderer {
 public:
     explicit VulkanRenderer(const VulkanOptions& options = {});
@@ -43,16 +49,21 @@ public:
 
     std::string device_name() const;
     std::string device_type() const;  ///< "discrete", "integrated", "virtual", "cpu" or "other"
+    /// The largest image side: the device's limit, at most kMaxImageDimension.
     std::uint32_t max_image_dimension() const;
 
-    /// Copies the scene to the device, replacing any earlier one; returns milliseconds. The
+    /// Copies the scene to the device for the renders started after it; returns milliseconds. The
     /// RenderScene may be destroyed afterwards.
     double upload(const RenderScene& scene);
 
-    /// Renders the uploaded scene: overlay pass (if settings.overlay), trace pass, read back.
-    /// rgba: settings.width × settings.height × 4 floats, row 0 at the top. Throws
+    /// A render in sample passes of the scene uploaded last (render.h). Throws
     /// std::invalid_argument for bad settings (validate(settings, max_image_dimension())).
-    RenderTimings render(const RenderSettings& settings, float* rgba);
+    std::unique_ptr<RenderJob> start(const RenderSettings& settings);
+
+    /// start, every sample, resolve: overlay pass (if settings.overlay), trace pass in bounded
+    /// dispatches, readback. Throws Cancelled when `cancel` says stop, RenderIncomplete when a pixel
+    /// cannot finish.
+    RenderTimings render(const RenderSettings& settings, const RenderImages& out, Cancellation* cancel = nullptr);
 
     /// Validation-layer messages (warnings and errors) since the last call; clears them.
     std::vector<std::string> take_validation_messages();
@@ -60,8 +71,7 @@ public:
     std::uint32_t validation_error_count() const;
 
 private:
-    struct Impl;
-    std::unique_ptr<Impl> impl_;
+    std::shared_ptr<vk::RendererCore> core_;
 };
 
 }  // namespace bvhlab

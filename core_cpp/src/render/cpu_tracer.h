@@ -1,9 +1,13 @@
 // cpu_tracer.h — the CPU reference tracer: the shared GLSL tracer code (shaders/tracer/*.glsl)
 // compiled as member functions of this class, over the same arrays the GPU reads. The accessors
-// below play the part of trace.comp's buffer references and storage image.
+// below play the part of trace.comp's buffer references and storage image; one CpuTracer is one
+// slot (a thread traces its pixels one after another through it).
 #pragma once
+#include <array>
+
 #include "bvhlab/render.h"
 #include "gpu_types.h"
+#include "pixel_sums.h"
 
 namespace bvhlab::gpu {
 
@@ -11,8 +15,9 @@ inline vec3 xyz(vec4 v) { return {v.x, v.y, v.z}; }
 
 class CpuTracer {
 public:
-    CpuTracer(const RenderScene& scene, const FrameParams& params, const vec4* overlay, uint traversal)
-        : frame(params), TRAVERSAL(traversal), scene_(scene), overlay_(overlay) {}
+    /// `overlay` (one vec4 per pixel) and `sums` may be null for the overlay rasterizer's use.
+    CpuTracer(const RenderScene& scene, const FrameParams& params, const vec4* overlay, PixelSums* sums, uint traversal)
+        : frame(params), TRAVERSAL(traversal), scene_(scene), overlay_(overlay), sums_(sums) {}
 
     FrameParams frame;
     uint TRAVERSAL;
@@ -22,18 +27,43 @@ public:
     GpuTriangle load_triangle(uint i) const { return scene_.triangles[i]; }
     GpuSphere load_sphere(uint i) const { return scene_.spheres[i]; }
     GpuMaterial load_material(uint i) const { return scene_.materials[i]; }
-    uint node_count() const { return frame.flags.z; }
-    vec4 overlay_at(uvec2 p) const { return overlay_ ? overlay_[std::size_t(p.y) * frame.size.x + p.x] : vec4(0.0f); }
+    uint node_count() const { return frame.node_count; }
+    vec4 overlay_at(uvec2 p) const { return overlay_ ? overlay_[pixel_index(p)] : vec4(0.0f); }
+
+    uint sync_steps(uint steps) const { return steps; }  // one lane: nothing to agree on
+
+    // The slot: a suspended trace and its two stacks (sized for the largest settings).
+    uvec4 state_load(uint k) const { return state_[k]; }
+    void state_store(uint k, uvec4 w) { state_[k] = w; }
+    uvec4 ray_word_load(uint k) const { return rays_[k]; }
+    void ray_word_store(uint k, uvec4 w) { rays_[k] = w; }
+    uvec2 node_stack_load(uint k) const { return nodes_[k]; }
+    void node_stack_store(uint k, uvec2 e) { nodes_[k] = e; }
+
+    // The pixel's sums (a pixel is traced by one thread at a time).
+    std::size_t pixel_index(uvec2 p) const { return std::size_t(p.y) * frame.width + p.x; }
+    uint samples_done(uvec2 p) const { return sums_->samples[pixel_index(p)]; }
+    void accumulate_sample(uvec2 p, vec3 color, float visits, float depth) {
+        const std::size_t i = pixel_index(p);
+        sums_->color[i] = sums_->color[i] + vec4(color, visits);
+        sums_->depth[i] = min(sums_->depth[i], depth);
+        sums_->samples[i] = sums_->samples[i] + 1u;
+    }
 
 #include "tracer/geometry.glsl"
 #include "tracer/traverse.glsl"
 #include "tracer/shade_colors.glsl"
 #include "tracer/shade.glsl"
+#include "tracer/state.glsl"
 #include "tracer/overlay.glsl"
 
 private:
     const RenderScene& scene_;
     const vec4* overlay_;
+    PixelSums* sums_;
+    std::array<uvec4, STATE_WORDS> state_{};
+    std::array<uvec4, 3 * RAY_STACK_SIZE> rays_{};
+    std::array<uvec2, MAX_TREE_HEIGHT> nodes_{};
 };
 
 }  // namespace bvhlab::gpu

@@ -1,6 +1,7 @@
 // The overlay pass on the CPU (report §3.3): the boxes of a depth range as 1-pixel lines with a
 // depth test, colour in rgb and camera distance in alpha — what overlay.vert/.frag make the GPU's
-// rasterizer do. The projection is the shared overlay_clip(); only the line stepping is local.
+// rasterizer do. The projection is the shared overlay_clip(); only clipping and stepping are local.
+#include <algorithm>
 #include <cmath>
 
 #include "cpu_tracer.h"
@@ -18,38 +19,67 @@ struct Target {
     std::uint32_t width, height;
 };
 
-/// Clips the segment a–b (clip space) to the near plane z >= 0; false if nothing is left.
-bool clip_near(vec4& a, vec4& b, vec3& pa, vec3& pb) {
-    if (a.z < 0 && b.z < 0) return false;
-    if (a.z >= 0 && b.z >= 0) return true;
-    float t = a.z / (a.z - b.z);
-    vec4 m = a + (b - a) * t;
-    vec3 pm = pa + (pb - pa) * t;
-    if (a.z < 0) a = m, pa = pm;
-    else b = m, pb = pm;
-    return true;
+/// A segment between two clip-space points, with the camera-relative positions they project.
+struct Segment {
+    vec4 a, b;
+    vec3 pa, pb;
+};
+
+/// Clips the segment to the view volume -w <= x, y <= w, 0 <= z <= w (Liang–Barsky in homogeneous
+/// clip space, where a segment stays a segment with the same parameter as in world space); false
+/// if nothing is left. Afterwards both ends project inside the image, so stepping is bounded by
+/// its size whatever the field of view (issue 8: a tiny fov sent the stepper to ±1e9 pixels).
+bool clip_to_view(Segment& s) {
+    const vec4 d = s.b - s.a;
+    float t0 = 0.0f, t1 = 1.0f;
+    // each plane as (value at a, change along the segment); inside where value >= 0
+    const float planes[6][2] = {{s.a.w + s.a.x, d.w + d.x}, {s.a.w - s.a.x, d.w - d.x}, {s.a.w + s.a.y, d.w + d.y},
+                                {s.a.w - s.a.y, d.w - d.y}, {s.a.z, d.z}, {s.a.w - s.a.z, d.w - d.z}};
+    for (const auto& [value, change] : planes) {
+        if (change == 0.0f) {
+            if (!(value >= 0.0f)) return false;
+            continue;
+        }
+        const float t = -value / change;
+        if (change > 0.0f) t0 = std::max(t0, t);
+        else t1 = std::min(t1, t);
+        if (!(t0 <= t1)) return false;
+    }
+    const vec4 a = s.a + d * t0, b = s.a + d * t1;
+    const vec3 pa = s.pa + (s.pb - s.pa) * t0, pb = s.pa + (s.pb - s.pa) * t1;
+    s = {a, b, pa, pb};
+    return a.w > 0.0f && b.w > 0.0f;
+}
+
+/// The pixel centres i + 0.5 within [from, to] on an axis of `extent` pixels, as [first, last].
+std::pair<int, int> pixel_span(float from, float to, std::uint32_t extent) {
+    const float first = std::max(std::ceil(from - 0.5f), 0.0f);
+    const float last = std::min(std::floor(to - 0.5f), float(extent) - 1.0f);
+    if (!(first <= last)) return {0, -1};  // also for NaN
+    return {int(first), int(last)};
 }
 
 /// Steps along the major axis through pixel centres (a DDA), interpolating the camera-relative
 /// position perspective-correctly for the distance, and depth linearly in screen space.
-void draw_line(Target& t, vec4 a, vec4 b, vec3 pa, vec3 pb, vec3 color) {
-    if (!clip_near(a, b, pa, pb) || a.w <= 0 || b.w <= 0) return;
+void draw_line(Target& t, Segment s, vec3 color) {
+    if (!clip_to_view(s)) return;
+    const vec4 a = s.a, b = s.b;
     float ax = (a.x / a.w + 1) * 0.5f * t.width, ay = (a.y / a.w + 1) * 0.5f * t.height;
     float bx = (b.x / b.w + 1) * 0.5f * t.width, by = (b.y / b.w + 1) * 0.5f * t.height;
     float dx = bx - ax, dy = by - ay;
     bool x_major = std::fabs(dx) >= std::fabs(dy);
-    float from = x_major ? std::min(ax, bx) : std::min(ay, by), to = x_major ? std::max(ax, bx) : std::max(ay, by);
-    int first = int(std::ceil(from - 0.5f)), last = int(std::floor(to - 0.5f));
+    auto [first, last] = x_major ? pixel_span(std::min(ax, bx), std::max(ax, bx), t.width)
+                                 : pixel_span(std::min(ay, by), std::max(ay, by), t.height);
     float length_major = x_major ? dx : dy;
     for (int i = first; i <= last; ++i) {
-        float s = length_major != 0 ? ((float(i) + 0.5f) - (x_major ? ax : ay)) / length_major : 0.0f;
-        s = std::clamp(s, 0.0f, 1.0f);
-        float minor = x_major ? ay + dy * s : ax + dx * s;
-        int px = x_major ? i : int(std::floor(minor)), py = x_major ? int(std::floor(minor)) : i;
-        if (px < 0 || py < 0 || px >= int(t.width) || py >= int(t.height)) continue;
-        float depth = (a.z / a.w) * (1 - s) + (b.z / b.w) * s;
-        float persp = (s / b.w) / ((1 - s) / a.w + s / b.w);  // screen → world parameter
-        vec3 p = pa + (pb - pa) * persp;
+        float s_major = length_major != 0 ? ((float(i) + 0.5f) - (x_major ? ax : ay)) / length_major : 0.0f;
+        s_major = std::clamp(s_major, 0.0f, 1.0f);
+        float minor = std::floor(x_major ? ay + dy * s_major : ax + dx * s_major);
+        if (!(minor >= 0.0f && minor < float(x_major ? t.height : t.width))) continue;
+        int px = x_major ? i : int(minor), py = x_major ? int(minor) : i;
+        float depth = (a.z / a.w) * (1 - s_major) + (b.z / b.w) * s_major;
+        float persp = (s_major / b.w) / ((1 - s_major) / a.w + s_major / b.w);  // screen → world parameter
+        vec3 p = s.pa + (s.pb - s.pa) * persp;
         std::size_t k = std::size_t(py) * t.width + std::size_t(px);
         if (depth < 0 || depth > 1 || depth >= t.depth[k]) continue;
         t.depth[k] = depth;
@@ -59,24 +89,23 @@ void draw_line(Target& t, vec4 a, vec4 b, vec3 pa, vec3 pb, vec3 color) {
 
 }  // namespace
 
-std::vector<gpu::vec4> rasterize_overlay(const RenderScene& scene, const RenderSettings& settings,
-                                         const gpu::FrameParams& frame) {
-    const std::size_t pixels = std::size_t(settings.width) * settings.height;
+std::vector<gpu::vec4> rasterize_overlay(const RenderScene& scene, const gpu::FrameParams& frame) {
+    const std::size_t pixels = std::size_t(frame.width) * frame.height;
     std::vector<vec4> color(pixels, vec4(0.0f));
-    if (!frame.flags.y || frame.overlay_range.y == 0) return color;
+    if (!frame.overlay_enabled) return color;
     std::vector<float> depth(pixels, 2.0f);
-    gpu::CpuTracer tracer(scene, frame, nullptr, gpu::TRAVERSAL_STACK);
-    Target target{color, depth, settings.width, settings.height};
+    gpu::CpuTracer tracer(scene, frame, nullptr, nullptr, gpu::TRAVERSAL_STACK);
+    Target target{color, depth, frame.width, frame.height};
     // distances are measured from the camera: work relative to it
-    const vec3 cam = gpu::xyz(frame.camera_position);
-    for (std::uint32_t b = frame.overlay_range.x; b < frame.overlay_range.x + frame.overlay_range.y; ++b) {
+    const vec3 cam = frame.camera_position;
+    for (std::uint32_t b = frame.overlay_first_box; b < frame.overlay_last_box; ++b) {
         const gpu::GpuBox& box = scene.boxes[b];
         vec3 lo = gpu::xyz(box.lo_depth), hi = gpu::xyz(box.hi);
-        vec3 line_color = frame.overlay_range.z ? tracer.depth_color(gpu::uint(box.lo_depth.w)) : vec3(1.0f, 0.85f, 0.2f);
+        vec3 line_color = frame.overlay_color_by_depth ? tracer.depth_color(gpu::uint(box.lo_depth.w)) : gpu::OVERLAY_LINE_COLOR;
         for (gpu::uint v = 0; v < 24; v += 2) {
             vec3 pa = tracer.corner_position(lo, hi, tracer.box_corner(v));
             vec3 pb = tracer.corner_position(lo, hi, tracer.box_corner(v + 1));
-            draw_line(target, tracer.overlay_clip(pa), tracer.overlay_clip(pb), pa - cam, pb - cam, line_color);
+            draw_line(target, {tracer.overlay_clip(pa), tracer.overlay_clip(pb), pa - cam, pb - cam}, line_color);
         }
     }
     return color;

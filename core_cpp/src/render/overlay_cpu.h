@@ -5,9 +5,8 @@
 
 namespace bvhlab {
 
-/// Lines of the boxes in frame.overlay_range, one vec4 per pixel (rgb, camera distance; 0 where no
-/// line), as the GPU's overlay pass leaves them in the image for the trace pass.
-std::vector<gpu::vec4> rasterize_overlay(const RenderScene& scene, const RenderSettings& settings,
-                                         const gpu::FrameParams& frame);
+/// Lines of the boxes [frame.overlay_first_box, overlay_last_box), one vec4 per pixel (rgb, camera
+/// distance; 0 where no line), as the GPU's overlay pass leaves them for the trace pass.
+std::vector<gpu::vec4> rasterize_overlay(const RenderScene& scene, const gpu::FrameParams& frame);
 
 }  // namespace bvhlab

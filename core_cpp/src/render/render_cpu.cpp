@@ -1,46 +1,168 @@
-// The CPU reference renderer: the overlay pass, then every pixel through the shared tracer code,
-// rows handed out to threads a few at a time.
+// The CPU reference renderer: the overlay pass, then every pixel through the shared tracer code in
+// budgets of steps with the state saved and loaded between them exactly as the GPU does between
+// dispatches, rows handed out to threads one at a time.
+#include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <exception>
+#include <mutex>
 #include <thread>
 
 #include "cpu_tracer.h"
 #include "overlay_cpu.h"
+#include "pixel_sums.h"
 
 namespace bvhlab {
+namespace {
 
-RenderTimings render_cpu(const RenderScene& scene, const RenderSettings& settings, float* rgba, std::uint32_t threads) {
-    validate(settings);
-    using Clock = std::chrono::steady_clock;
-    auto ms = [](Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); };
-    RenderTimings timings;
-    timings.device = "CPU reference (" + std::to_string(threads ? threads : std::thread::hardware_concurrency()) + " threads)";
-    auto start = Clock::now();
-    const gpu::FrameParams frame = make_frame_params(scene, settings);
-    std::vector<gpu::vec4> overlay = rasterize_overlay(scene, settings, frame);
-    auto overlay_done = Clock::now();
+using Clock = std::chrono::steady_clock;
 
+double ms_since(Clock::time_point start) { return std::chrono::duration<double, std::milli>(Clock::now() - start).count(); }
+
+enum class PixelResult { Done, Failed, Stopped };
+
+/// What the threads of one run share.
+struct RunShared {
     std::atomic<std::uint32_t> next_row{0};
-    auto worker = [&] {
-        gpu::CpuTracer tracer(scene, frame, overlay.data(), settings.traversal);
-        for (std::uint32_t y; (y = next_row.fetch_add(1)) < settings.height;) {
-            for (std::uint32_t x = 0; x < settings.width; ++x) {
-                gpu::vec4 c = tracer.trace_pixel(gpu::uvec2(x, y));
-                float* out = rgba + 4 * (std::size_t(y) * settings.width + x);
-                out[0] = c.x, out[1] = c.y, out[2] = c.z, out[3] = c.w;
+    std::atomic<std::uint64_t> pixels_done{0}, pixels_failed{0};
+    std::atomic<std::uint32_t> most_budgets{0};  ///< budgets of steps the slowest pixel needed
+    std::atomic<std::uint32_t> workers_left{0};
+    std::atomic<bool> abort{false};  ///< a pixel failed or threw: the run ends
+    std::exception_ptr error;
+    std::mutex error_mutex;
+};
+
+class CpuRenderJob final : public RenderJob {
+public:
+    CpuRenderJob(const RenderScene& scene, const RenderSettings& settings, std::uint32_t threads)
+        : RenderJob(settings), scene_(scene), frame_(make_frame_params(scene, settings)),
+          threads_(threads ? threads : std::max(1u, std::thread::hardware_concurrency())) {
+        const auto start = Clock::now();
+        overlay_ = rasterize_overlay(scene, frame_);
+        sums_ = PixelSums(std::size_t(settings.width) * settings.height);
+        timings_.overlay_ms = ms_since(start);
+        timings_.device = "CPU reference (" + std::to_string(threads_) + " threads)";
+        timings_.steps_per_dispatch = settings.steps_per_dispatch.value_or(gpu::MAX_STEPS_PER_DISPATCH);
+    }
+
+    void run(std::uint32_t samples, Cancellation* cancel, double* progress) override {
+        const std::uint32_t target = std::min(samples, samples_per_pixel());
+        if (target <= samples_done_) return;
+        const auto start = Clock::now();
+        gpu::FrameParams frame = frame_;
+        frame.sample_target = target;
+        frame.max_work_per_pixel = work_cap(scene_, settings_, target - samples_done_);
+        RunShared shared;
+        run_threads(frame, shared, cancel, progress);
+        timings_.trace_ms += ms_since(start);
+        timings_.total_ms = timings_.overlay_ms + timings_.trace_ms;
+        timings_.dispatches += shared.most_budgets.load();
+        if (shared.error) std::rethrow_exception(shared.error);
+        if (cancel && cancel->stop_requested()) throw Cancelled();
+        if (shared.pixels_failed) throw RenderIncomplete(incomplete_message(shared.pixels_failed, frame.max_work_per_pixel));
+        samples_done_ = target;
+    }
+
+    void resolve(const RenderImages& out) override {
+        const auto start = Clock::now();
+        bvhlab::resolve(sums_, frame_, out);
+        timings_.readback_ms = ms_since(start);
+    }
+
+private:
+    static void note_budgets(RunShared& shared, std::uint64_t budgets) {
+        auto n = std::uint32_t(std::min<std::uint64_t>(budgets, 0xffffffffu));
+        for (std::uint32_t seen = shared.most_budgets.load(); n > seen && !shared.most_budgets.compare_exchange_weak(seen, n);) {}
+    }
+
+    /// One pixel's samples up to frame.sample_target, in budgets of steps; between budgets the
+    /// trace is saved and loaded back (what a dispatch boundary does on the GPU).
+    PixelResult trace_pixel(gpu::CpuTracer& tracer, gpu::uvec2 p, RunShared& shared, const Cancellation* cancel) const {
+        gpu::CpuTracer::TraceState s = tracer.begin_pixel(p, tracer.samples_done(p), tracer.frame.sample_target);
+        for (std::uint32_t budgets = 1;; ++budgets) {
+            tracer.trace_steps(s, timings_.steps_per_dispatch);
+            if (s.phase >= gpu::CpuTracer::PHASE_DONE) {
+                note_budgets(shared, budgets);
+                return s.phase == gpu::CpuTracer::PHASE_DONE ? PixelResult::Done : PixelResult::Failed;
+            }
+            if (cancel && cancel->stop_requested()) return PixelResult::Stopped;
+            tracer.save_state(s, 1u);
+            s = tracer.load_state();
+        }
+    }
+
+    /// Rows are handed out one at a time; the calling thread also polls `cancel` (at most every
+    /// 20 ms, Cancellation::poll) between pixels.
+    void trace_rows(const gpu::FrameParams& frame, RunShared& shared, Cancellation* cancel, double* progress,
+                    bool caller) {
+        gpu::CpuTracer tracer(scene_, frame, overlay_.data(), &sums_, gpu_traversal(settings_.traversal));
+        const double pixels = double(frame.width) * frame.height;
+        for (std::uint32_t y; (y = shared.next_row.fetch_add(1)) < frame.height;) {
+            for (std::uint32_t x = 0; x < frame.width; ++x) {
+                if (caller && cancel) {
+                    if (progress) *progress = double(shared.pixels_done.load()) / pixels;
+                    cancel->poll();
+                }
+                if ((cancel && cancel->stop_requested()) || shared.abort.load()) return;
+                PixelResult r = trace_pixel(tracer, gpu::uvec2(x, y), shared, cancel);
+                if (r == PixelResult::Done) shared.pixels_done.fetch_add(1);
+                if (r == PixelResult::Failed) {
+                    shared.pixels_failed.fetch_add(1);
+                    shared.abort.store(true);
+                }
             }
         }
-    };
-    std::uint32_t n = threads ? threads : std::max(1u, std::thread::hardware_concurrency());
-    std::vector<std::thread> pool;
-    for (std::uint32_t t = 1; t < n; ++t) pool.emplace_back(worker);
-    worker();
-    for (auto& t : pool) t.join();
-    auto end = Clock::now();
-    timings.overlay_ms = ms(start, overlay_done);
-    timings.trace_ms = ms(overlay_done, end);
-    timings.total_ms = ms(start, end);
-    return timings;
+    }
+
+    /// The calling thread traces rows too; when they run out it keeps polling `cancel` until the
+    /// other threads are done, so Ctrl-C stops a render promptly whichever thread holds the work.
+    void run_threads(const gpu::FrameParams& frame, RunShared& shared, Cancellation* cancel, double* progress) {
+        auto work = [&](bool caller) {
+            try {
+                trace_rows(frame, shared, cancel, progress, caller);
+            } catch (...) {  // never let an exception escape a thread: rethrown by run()
+                std::lock_guard<std::mutex> lock(shared.error_mutex);
+                if (!shared.error) shared.error = std::current_exception();
+                shared.abort.store(true);
+            }
+            shared.workers_left.fetch_sub(1);
+        };
+        const std::uint32_t n = std::max(1u, std::min(threads_, frame.height));
+        shared.workers_left.store(n);
+        std::vector<std::thread> pool;
+        for (std::uint32_t t = 1; t < n; ++t) pool.emplace_back(work, false);
+        work(true);
+        while (cancel && shared.workers_left.load() > 0) {
+            if (progress) *progress = double(shared.pixels_done.load()) / (double(frame.width) * frame.height);
+            cancel->poll();
+            std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        }
+        for (auto& t : pool) t.join();
+    }
+
+    const RenderScene& scene_;
+    gpu::FrameParams frame_;
+    std::uint32_t threads_;
+    std::vector<gpu::vec4> overlay_;
+    PixelSums sums_;
+};
+
+}  // namespace
+
+std::unique_ptr<RenderJob> start_cpu(const RenderScene& scene, const RenderSettings& settings, std::uint32_t threads) {
+    validate(settings);
+    return std::make_unique<CpuRenderJob>(scene, settings, threads);
+}
+
+RenderTimings render_cpu(const RenderScene& scene, const RenderSettings& settings, const RenderImages& out,
+                         std::uint32_t threads, Cancellation* cancel) {
+    const auto start = Clock::now();
+    std::unique_ptr<RenderJob> job = start_cpu(scene, settings, threads);
+    job->run(job->samples_per_pixel(), cancel);
+    job->resolve(out);
+    RenderTimings t = job->timings();
+    t.total_ms = ms_since(start);
+    return t;
 }
 
 }  // namespace bvhlab

@@ -18,8 +18,8 @@ DepthOrder make_depth_order(const Bvh& bvh) {
 }
 
 std::pair<std::uint32_t, std::uint32_t> DepthOrder::range(std::uint32_t depth_min, std::uint32_t depth_max) const {
-    const auto levels = static_cast<std::uint32_t>(offset.size() - 1);
-    if (depth_min > depth_max || depth_min >= levels) return {0, 0};
+    const std::uint32_t levels = height();
+    if (depth_min > depth_max || depth_min >= levels) return {0, 0};  // also: no levels at all
     depth_max = std::min(depth_max, levels - 1);
     return {offset[depth_min], offset[depth_max + 1]};
 }

@@ -1,5 +1,7 @@
-// vk_frame.h — what a frame renders into and reads: the size-dependent targets (recreated only when
-// the size changes) and the FrameParams buffer with the one descriptor set both pipelines use.
+// vk_frame.h — what a frame renders into and reads: the overlay pass's size-dependent targets
+// (recreated only when the size changes), the FrameParams buffer with the one descriptor set both
+// pipelines use, the slots in which suspended traces wait between dispatches, and the pixel sums
+// of a render.
 #pragma once
 #include <cstdint>
 
@@ -8,13 +10,13 @@
 
 namespace bvhlab::vk {
 
+/// The overlay pass's colour (lines: rgb + camera distance, report §3.3) and depth images.
 struct FrameTargets {
     FrameTargets(const Device& device, std::uint32_t width, std::uint32_t height);
 
     std::uint32_t width, height;
-    Image color;      ///< rgba32f: the overlay's lines, then the traced colour (report §3.2)
-    Image depth;      ///< D32, the overlay's depth test
-    Buffer readback;  ///< host-visible copy of `color`, row 0 at the top
+    Image color;  ///< rgba32f: drawn by the overlay pass, read by the trace pass (storage image)
+    Image depth;  ///< D32, the overlay's depth test
 };
 
 class FrameBindings {
@@ -22,7 +24,7 @@ public:
     FrameBindings(const Device& device, VkDescriptorSetLayout layout);
 
     void write_params(const gpu::FrameParams& frame);  ///< only while no frame is in flight
-    void bind_image(VkImageView color);                ///< after the targets change
+    void bind_overlay(VkImageView color);              ///< after the targets change
     VkDescriptorSet set() const { return set_; }
 
 private:
@@ -32,6 +34,39 @@ private:
     Buffer params_;
     OwnedDescriptorPool pool_;
     VkDescriptorSet set_ = VK_NULL_HANDLE;  // freed with the pool
+};
+
+/// Where suspended traces wait between dispatches (trace.comp, state.glsl): per slot, the state
+/// words, the ray stack and the traversal stack; and the counters of slots with work left and of
+/// traces that failed.
+class TraceSlots {
+public:
+    explicit TraceSlots(const Device& device);
+
+    /// Room for `slots` slots of these stack sizes (grows, never shrinks); true when the memory
+    /// was made anew: the caller then fills state() with zeros (no stamp is 0, so no slot is
+    /// taken for a suspended trace).
+    bool reserve(std::uint32_t slots, std::uint32_t ray_entries, std::uint32_t node_entries);
+    /// Fills the addresses of FrameParams::addr that point here.
+    void address(gpu::FrameParams& frame) const;
+    void reset_counters();
+    std::uint32_t unfinished() const;
+    std::uint32_t failed() const;
+    const Buffer& state() const { return state_; }
+
+private:
+    const Device& device_;
+    Buffer state_, rays_, nodes_, counters_;
+    std::uint32_t slots_ = 0, ray_entries_ = 0, node_entries_ = 0;
+};
+
+/// A render's running sums per pixel (pixel_sums.h): colour + box tests, depth, sample count.
+struct SumBuffers {
+    SumBuffers(const Device& device, std::size_t pixels);
+    void address(gpu::FrameParams& frame) const;
+
+    std::size_t pixels;
+    Buffer color, depth, samples;
 };
 
 }  // namespace bvhlab::vk

@@ -90,7 +90,7 @@ namespace bvhlab::vk {
     X(vkCmdDispatch)                    \
     X(vkCmdClearColorImage)             \
     X(vkCmdCopyBuffer)                  \
-    X(vkCmdCopyImageToBuffer)
+    X(vkCmdFillBuffer)
 
 /// The function table: one per renderer, filled level by level as the instance and the device
 /// come to exist (vk_loader.cpp).

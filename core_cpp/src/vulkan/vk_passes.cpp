@@ -1,23 +1,22 @@
 // The commands of a frame and the image layouts/barriers between them (report §3.2, Figure 2).
 #include "vk_passes.h"
 
+#include <algorithm>
+
 #include "vk_commands.h"
 
 namespace bvhlab::vk {
 namespace {
 
-// The colour image's states through a frame. A frame starts by discarding the previous contents,
-// after the previous frame's copy read them.
-constexpr ImageState kColorDiscarded{VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_NONE, VK_IMAGE_LAYOUT_UNDEFINED};
+// The overlay image's states through a run. A run starts by discarding the previous contents,
+// after the previous run's trace pass read them.
+constexpr ImageState kColorDiscarded{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_NONE, VK_IMAGE_LAYOUT_UNDEFINED};
 constexpr ImageState kColorAttachment{VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
                                       VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
 constexpr ImageState kColorCleared{VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
                                    VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL};
-constexpr ImageState kColorTraced{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                                  VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+constexpr ImageState kColorTraced{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT,
                                   VK_IMAGE_LAYOUT_GENERAL};
-constexpr ImageState kColorCopied{VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
-                                  VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL};
 // Depth: discarded after the previous frame's depth tests, then tested and written.
 constexpr VkPipelineStageFlags2 kDepthStages =
     VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT;
@@ -72,7 +71,7 @@ void record_overlay(const PassContext& pass, VkCommandBuffer cmd, const gpu::Fra
     fn.vkCmdSetScissor(cmd, 0, 1, &scissor);
     fn.vkCmdSetLineWidth(cmd, line_width);
     // overlay.vert reads box gl_InstanceIndex, which starts at firstInstance
-    fn.vkCmdDraw(cmd, 24, frame.overlay_range.y, 0, frame.overlay_range.x);
+    fn.vkCmdDraw(cmd, 24, frame.overlay_last_box - frame.overlay_first_box, 0, frame.overlay_first_box);
     fn.vkCmdEndRendering(cmd);
     image_barrier(fn, cmd, t.color.handle(), VK_IMAGE_ASPECT_COLOR_BIT, kColorAttachment, kColorTraced);
 }
@@ -87,25 +86,41 @@ void record_clear(const PassContext& pass, VkCommandBuffer cmd) {
     image_barrier(fn, cmd, image, VK_IMAGE_ASPECT_COLOR_BIT, kColorCleared, kColorTraced);
 }
 
-void record_trace(const PassContext& pass, VkCommandBuffer cmd, std::uint32_t traversal) {
+void record_trace_round(const PassContext& pass, VkCommandBuffer cmd, std::uint32_t traversal, std::uint32_t width,
+                        std::uint32_t height) {
     const Functions& fn = pass.fn;
-    const FrameTargets& t = pass.targets;
+    // the previous round's (or the fills') writes to the slots and the sums come first
+    memory_barrier(fn, cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_CLEAR_BIT,
+                   VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                   VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
     fn.vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pass.pipelines.trace(traversal));
     VkDescriptorSet set = pass.set;
     fn.vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pass.pipelines.layout(), 0, 1, &set, 0, nullptr);
-    // rounded up; trace.comp returns early outside the image
-    fn.vkCmdDispatch(cmd, (t.width + gpu::TRACE_GROUP_X - 1) / gpu::TRACE_GROUP_X,
-                     (t.height + gpu::TRACE_GROUP_Y - 1) / gpu::TRACE_GROUP_Y, 1);
-    image_barrier(fn, cmd, t.color.handle(), VK_IMAGE_ASPECT_COLOR_BIT, kColorTraced, kColorCopied);
+    // rounded up; trace.comp returns early outside the tile
+    fn.vkCmdDispatch(cmd, (width + gpu::TRACE_GROUP_X - 1) / gpu::TRACE_GROUP_X,
+                     (height + gpu::TRACE_GROUP_Y - 1) / gpu::TRACE_GROUP_Y, 1);
+    memory_barrier(fn, cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                   VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
 }
 
-void record_readback(const PassContext& pass, VkCommandBuffer cmd) {
-    const FrameTargets& t = pass.targets;
-    VkBufferImageCopy region{};
-    region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-    region.imageExtent = {t.width, t.height, 1};
-    pass.fn.vkCmdCopyImageToBuffer(cmd, t.color.handle(), kColorCopied.layout, t.readback.handle(), 1, &region);
-    memory_barrier(pass.fn, cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT,
+void record_fill(const Functions& fn, VkCommandBuffer cmd, const Buffer& buffer, std::uint32_t pattern) {
+    // earlier shader reads and writes of the buffer are done before it is overwritten
+    memory_barrier(fn, cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                   VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_CLEAR_BIT,
+                   VK_ACCESS_2_TRANSFER_WRITE_BIT);
+    fn.vkCmdFillBuffer(cmd, buffer.handle(), 0, VK_WHOLE_SIZE, pattern);
+    memory_barrier(fn, cmd, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                   VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_HOST_BIT,
+                   VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_HOST_READ_BIT);
+}
+
+void record_copy_to_host(const Functions& fn, VkCommandBuffer cmd, const Buffer& from, const Buffer& to) {
+    memory_barrier(fn, cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_CLEAR_BIT,
+                   VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_COPY_BIT,
+                   VK_ACCESS_2_TRANSFER_READ_BIT);
+    VkBufferCopy region{0, 0, std::min(from.size(), to.size())};
+    fn.vkCmdCopyBuffer(cmd, from.handle(), to.handle(), 1, &region);
+    memory_barrier(fn, cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT,
                    VK_ACCESS_2_HOST_READ_BIT);
 }
 

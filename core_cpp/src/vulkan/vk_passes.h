@@ -1,6 +1,6 @@
-// vk_passes.h — the commands of a frame (report §3.2, Figure 2), one submission each so each is
-// timed whole: the overlay pass (or a clear when there is no overlay), the trace pass, the readback.
-// Each leaves the colour image ready for the next, with the barrier that orders them.
+// vk_passes.h — the commands of a render (report §3.2, Figure 2): the overlay pass (or a clear
+// when there is no overlay), rounds of the trace pass over a tile, and the fills and copies around
+// them. Each leaves its resources ready for the next, with the barrier that orders them.
 #pragma once
 #include <cstdint>
 
@@ -17,13 +17,19 @@ struct PassContext {
     const FrameTargets& targets;
 };
 
-/// Clears colour to 0 and depth to 1, draws frame.overlay_range's boxes as 24-vertex line lists
-/// (report §3.3.1: a depth range is one first instance and one count).
+/// Clears colour to 0 and depth to 1, draws the boxes [overlay_first_box, overlay_last_box) as
+/// 24-vertex line lists (report §3.3.1: a depth range is one first instance and one count); leaves
+/// the colour image for the trace pass to read.
 void record_overlay(const PassContext& pass, VkCommandBuffer cmd, const gpu::FrameParams& frame, float line_width);
 /// No overlay: the trace pass reads zero everywhere (no line anywhere).
 void record_clear(const PassContext& pass, VkCommandBuffer cmd);
-void record_trace(const PassContext& pass, VkCommandBuffer cmd, std::uint32_t traversal);
-/// Copies the image into targets.readback, made visible to the host.
-void record_readback(const PassContext& pass, VkCommandBuffer cmd);
+/// One dispatch of trace.comp over a tile of width × height pixels, ordered after every earlier
+/// transfer and compute write, and made visible to the host (the counter of unfinished slots).
+void record_trace_round(const PassContext& pass, VkCommandBuffer cmd, std::uint32_t traversal, std::uint32_t width,
+                        std::uint32_t height);
+/// Fills `bytes` of `buffer` with the 32-bit `pattern`, ordered before later compute shaders.
+void record_fill(const Functions& fn, VkCommandBuffer cmd, const Buffer& buffer, std::uint32_t pattern);
+/// Copies `from` into the host-visible `to`, made visible to the host.
+void record_copy_to_host(const Functions& fn, VkCommandBuffer cmd, const Buffer& from, const Buffer& to);
 
 }  // namespace bvhlab::vk

@@ -118,6 +118,10 @@ std::string check_device(const Functions& fn, PhysicalDevice& d) {
     VkPhysicalDeviceProperties2 properties{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, &v11};
     fn.vkGetPhysicalDeviceProperties2(d.handle, &properties);
     d.max_allocation = v11.maxMemoryAllocationSize;
+    // trace.comp keeps its step count in step across the SIMD vector with subgroupMax (shade.glsl)
+    if (missing.empty() && (!(v11.subgroupSupportedStages & VK_SHADER_STAGE_COMPUTE_BIT) ||
+                            !(v11.subgroupSupportedOperations & VK_SUBGROUP_FEATURE_ARITHMETIC_BIT)))
+        missing = "subgroup arithmetic in compute shaders";
     fn.vkGetPhysicalDeviceMemoryProperties(d.handle, &d.memory);
     return missing;
 }

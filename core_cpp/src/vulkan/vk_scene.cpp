@@ -9,10 +9,7 @@ Buffer upload_vector(const Device& device, CommandRunner& runner, const Array& a
     return upload_array(device, runner, array.data(), array.size() * sizeof(array[0]), force_staging);
 }
 
-/// The (lo, hi) words of two device addresses, as the shaders' uvec2 buffer references read them.
-gpu::uvec4 address_pair(VkDeviceAddress a, VkDeviceAddress b) {
-    return {std::uint32_t(a), std::uint32_t(a >> 32), std::uint32_t(b), std::uint32_t(b >> 32)};
-}
+gpu::uvec2 words(VkDeviceAddress a) { return {std::uint32_t(a), std::uint32_t(a >> 32)}; }
 
 }  // namespace
 
@@ -26,15 +23,19 @@ SceneBuffers::SceneBuffers(const Device& device, CommandRunner& runner, const Re
     materials_ = upload_vector(device, runner, scene.materials, force_staging);
     boxes_ = upload_vector(device, runner, scene.boxes, force_staging);
     summary_.bounds = scene.bounds;
-    summary_.depth_offset = scene.depth_offset;
+    summary_.order.offset = scene.order.offset;  // depth ranges and the height; not the node list
     summary_.node_count = scene.node_count;
+    summary_.ref_count = scene.ref_count;
 }
 
 gpu::FrameParams SceneBuffers::frame_params(const RenderSettings& settings) const {
     gpu::FrameParams frame = make_frame_params(summary_, settings);
-    frame.addr_nodes_refs = address_pair(nodes_.address(), refs_.address());
-    frame.addr_triangles_spheres = address_pair(triangles_.address(), spheres_.address());
-    frame.addr_materials_boxes = address_pair(materials_.address(), boxes_.address());
+    frame.addr.nodes = words(nodes_.address());
+    frame.addr.refs = words(refs_.address());
+    frame.addr.triangles = words(triangles_.address());
+    frame.addr.spheres = words(spheres_.address());
+    frame.addr.materials = words(materials_.address());
+    frame.addr.boxes = words(boxes_.address());
     return frame;
 }
 

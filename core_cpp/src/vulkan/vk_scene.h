@@ -15,14 +15,15 @@ public:
     /// Uploads the arrays; `scene` (and its tree) may be destroyed afterwards.
     SceneBuffers(const Device& device, CommandRunner& runner, const RenderScene& scene, bool force_staging);
 
-    /// make_frame_params for this scene, with the device addresses filled in.
+    /// make_frame_params for this scene, with the scene's device addresses filled in.
     gpu::FrameParams frame_params(const RenderSettings& settings) const;
+    /// What make_frame_params and the step bound read: bounds, depth offsets, node and reference
+    /// counts (no arrays, no tree).
+    const RenderScene& summary() const { return summary_; }
 
 private:
     Buffer nodes_, refs_, triangles_, spheres_, materials_, boxes_;
-    /// What make_frame_params reads: bounds, depth offsets, node count (no arrays, no tree).
     RenderScene summary_;
-    /// What it reads from the tree, taken at upload: node count and the default heatmap scale.
 };
 
 }  // namespace bvhlab::vk

@@ -4,7 +4,9 @@
 
 namespace bvhlab {
 
-struct VulkanRenderer::Impl {};
+namespace vk {
+struct RendererCore {};
+}  // namespace vk
 
 bool vulkan_loader_available() { return false; }
 
@@ -19,7 +21,8 @@ std::string VulkanRenderer::device_name() const { return {}; }
 std::string VulkanRenderer::device_type() const { return {}; }
 std::uint32_t VulkanRenderer::max_image_dimension() const { return 0; }
 double VulkanRenderer::upload(const RenderScene&) { return 0; }
-RenderTimings VulkanRenderer::render(const RenderSettings&, float*) { return {}; }
+std::unique_ptr<RenderJob> VulkanRenderer::start(const RenderSettings&) { return nullptr; }
+RenderTimings VulkanRenderer::render(const RenderSettings&, const RenderImages&, Cancellation*) { return {}; }
 std::vector<std::string> VulkanRenderer::take_validation_messages() { return {}; }
 std::uint32_t VulkanRenderer::validation_error_count() const { return 0; }
 

@@ -6,11 +6,12 @@ import re
 from pathlib import Path
 from typing import Callable
 
+from .. import _core
 from .._checks import OutputPathError, output_file
 from ..bvh import AXES, METHODS, method_from_label
 
 #: Largest image side the CLI accepts (OpenGL's and most Vulkan drivers' framebuffer limit).
-MAX_IMAGE_SIDE = 16384
+MAX_IMAGE_SIDE = _core.MAX_IMAGE_DIMENSION  # the renderers' limit, one definition
 
 
 def add_scene(p: argparse.ArgumentParser) -> None:
@@ -54,6 +55,19 @@ def image_side(text: str) -> int:
         raise argparse.ArgumentTypeError(f"expected a whole number of pixels, got '{text}'") from None
     if not 1 <= value <= MAX_IMAGE_SIDE:
         raise argparse.ArgumentTypeError(f"must be between 1 and {MAX_IMAGE_SIDE} pixels, got {value}")
+    return value
+
+
+def samples_per_axis(text: str) -> int:
+    """n of the n×n supersampling: an integer in 1..MAX_SAMPLES_PER_AXIS, checked before any work."""
+    from .._core import MAX_SAMPLES_PER_AXIS
+
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got '{text}'") from None
+    if not 1 <= value <= MAX_SAMPLES_PER_AXIS:
+        raise argparse.ArgumentTypeError(f"must be between 1 and {MAX_SAMPLES_PER_AXIS}, got {value}")
     return value
 
 

@@ -27,12 +27,13 @@ def build_settings(label: str, build_options: dict | None = None) -> dict:
 
 
 def render_frame(renderer: Renderer, scene: Scene, bvh, width: int, height: int, samples: int = 1, **options):
+    # samples: n of the n×n supersampling
     """The one place compare calls the tracer. Returns (image, wall ms, CPU ms, timings): a frame is
     the overlay pass, the trace pass and the read-back (our stand-in for the report's present); its
     CPU time is that of every thread of this process meanwhile (the CPU reference's, lavapipe's),
     less the scene upload."""
     cpu_start = time.process_time()
-    image, t = renderer.render(scene, bvh, width, height, spp=samples, **options)
+    image, t = renderer.render(scene, bvh, width, height, samples_per_axis=samples, **options)
     cpu_ms = (time.process_time() - cpu_start) * 1e3 - t.get("upload_ms", 0.0) - t.get("prepare_ms", 0.0)
     return image, t["overlay_ms"] + t["trace_ms"] + t["readback_ms"], max(cpu_ms, 0.0), t
 
@@ -56,7 +57,7 @@ def timed_build(scene: Scene, settings: dict):
 
 
 def measure_methods(scene: Scene, labels: list[str], *, frames: int = DEFAULT_FRAMES, builds: int = DEFAULT_BUILDS,
-                    width: int = 800, height: int = 600, renderer: Renderer | None = None, spp: int = 1,
+                    width: int = 800, height: int = 600, renderer: Renderer | None = None, samples_per_axis: int = 1,
                     max_depth: int = 5, build_options: dict | None = None, render_options: dict | None = None,
                     progress: Callable[[str], None] | None = None) -> list[dict]:
     """For each method: `builds` build times and `frames` frame times, each after a warm-up that is
@@ -72,14 +73,14 @@ def measure_methods(scene: Scene, labels: list[str], *, frames: int = DEFAULT_FR
     say = progress or (lambda text: None)
     settings = {label: build_settings(label, build_options) for label in labels}
     trees, build_times = _build_rounds(scene, settings, builds, say)
-    options = {"samples": spp, "max_depth": max_depth, **(render_options or {})}
+    options = {"samples": samples_per_axis, "max_depth": max_depth, **(render_options or {})}
     frame_times, timings = _render_rounds(scene, trees, frames, width, height, renderer, options, say)
     rows = []
     for label in labels:
         row = _row(label, settings[label], trees[label], timings[label])
         row.update(samples_columns("frame", *frame_times[label]), frame_clock=frame_clock(renderer))
         row.update(samples_columns("build", *build_times[label]))
-        row["primary_mrays_s"] = width * height * spp / (row["frame_ms"] * 1e3)
+        row["primary_mrays_s"] = width * height * samples_per_axis ** 2 / (row["frame_ms"] * 1e3)
         rows.append(row)
     return rows
 

@@ -1,0 +1,91 @@
+// render_settings.h — what a render is asked to do, with documented defaults, the names the Python
+// API and the CLI use for its choices, and its limits. Checked once, here (validate).
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "bvhlab/render_defaults.h"
+#include "bvhlab/traverse.h"
+#include "bvhlab/vec3.h"
+
+namespace bvhlab {
+
+/// A pinhole camera looking along `forward` (report §2.1), as Blender's camera or a viewport's
+/// region gives it: position, view direction, up, vertical field of view, aspect, lens shift.
+struct Camera {
+    Vec3 position = to_vec3(kFallbackCameraPosition);
+    Vec3 forward = to_vec3(kFallbackCameraTarget) - to_vec3(kFallbackCameraPosition);  ///< any length > 0
+    Vec3 up{0, 0, 1};              ///< any vector not parallel to forward
+    float fov_y_degrees = float(kDefaultFovY);  ///< vertical field of view
+    float aspect = 0;              ///< image-plane width / height; 0: the image's width / height
+    float shift_x = 0, shift_y = 0;  ///< image-plane centre offset, in fractions of its larger side
+                                   ///< (Blender's camera shift_x / shift_y)
+};
+
+/// v scaled to unit length without overflow or underflow (the zero vector for zero).
+Vec3 unit(Vec3 v);
+
+/// A camera at `position` looking at `target`.
+Camera look_at(Vec3 position, Vec3 target, Vec3 up = {0, 0, 1}, float fov_y_degrees = float(kDefaultFovY));
+
+struct PointLight {
+    Vec3 position{5, -5, 5};
+    Vec3 color{1, 1, 1};
+    float intensity = 1.0f;
+};
+
+enum class RenderMode {
+    Shade,    ///< the Whitted image (report §2.1)
+    Heatmap,  ///< the box tests of the primary rays as colours, blue (few) to red (heatmap_scale)
+};
+
+struct RenderSettings {
+    std::uint32_t width = 800, height = 600;
+    std::uint32_t samples_per_axis = 1;  ///< n: n×n samples per pixel on a regular grid
+    std::uint32_t max_ray_depth = 5;     ///< bounces of reflection and refraction (0: primary rays)
+    Camera camera;
+    PointLight light;
+    Vec3 sky = kDefaultSky;              ///< the atmosphere colour (report §2.1)
+    bool overlay = false;                ///< draw the boxes of depths [overlay_depth_min, overlay_depth_max]
+    std::uint32_t overlay_depth_min = 0, overlay_depth_max = 0;
+    bool overlay_color_by_depth = true;  ///< else gpu::OVERLAY_LINE_COLOR
+    float line_width = 1.0f;             ///< pixels (Vulkan devices without wide lines draw 1)
+    Traversal traversal = Traversal::Stack;  ///< Stack or Stackless (report §3.1); the tracer has no Wide
+    RenderMode mode = RenderMode::Shade;
+    std::optional<float> heatmap_scale;  ///< box tests shown as full red; unset: 8 × tree height
+    /// Tracer steps one pixel may run per dispatch (gpu::MIN_STEPS_PER_DISPATCH ..
+    /// MAX_STEPS_PER_DISPATCH); unset: chosen by the renderer. Only how the work is cut changes,
+    /// never the image.
+    std::optional<std::uint32_t> steps_per_dispatch;
+    /// A pixel needing more steps of work (a node, a primitive, a pop, a ray's bookkeeping) than this
+    /// in one RenderJob::run is an error (RenderIncomplete), the same on both backends; unset: the
+    /// most a correct trace of this scene can take (none above 2^32 - 2).
+    std::optional<std::uint64_t> max_steps_per_pixel;
+};
+
+// Limits, exported to Python so the API, the CLI and the add-on never retype them.
+inline constexpr std::uint32_t kMaxImageDimension = 16384;  ///< pixels per side (CPU; Vulkan: the device's)
+inline constexpr float kMaxHeatmapScale = 1e6f;              ///< box tests per ray at full red
+inline constexpr float kMaxLineWidth = 16.0f;
+
+/// Throws std::invalid_argument naming the bad setting (size zero or above max_dimension, NaN
+/// camera, camera looking along its up vector, too many samples or bounces, a bad heatmap scale).
+void validate(const RenderSettings& settings, std::uint32_t max_dimension = kMaxImageDimension);
+
+/// Names as the Python API and the CLI spell them; parse_* throw std::invalid_argument listing
+/// the valid names. Traversal names are traverse.h's (the CPU queries know "wide" too).
+Traversal parse_traversal(std::string_view name);
+RenderMode parse_render_mode(std::string_view name);
+std::string to_string(Traversal traversal);
+std::string to_string(RenderMode mode);
+std::vector<std::string> traversal_names();   ///< every traversal the CPU queries know
+std::vector<std::string> render_traversal_names();  ///< the tracer's: stack, stackless
+std::vector<std::string> render_mode_names();
+
+/// gpu::TRAVERSAL_STACK / TRAVERSAL_STACKLESS for the tracer.
+std::uint32_t gpu_traversal(Traversal traversal);
+
+}  // namespace bvhlab

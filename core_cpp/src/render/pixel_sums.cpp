@@ -1,0 +1,67 @@
+// Running sums per pixel and the resolve step both renderers share.
+#include "pixel_sums.h"
+
+#include <cmath>
+#include <limits>
+
+#include "bvhlab/palette.h"
+
+namespace bvhlab {
+namespace {
+
+std::uint64_t saturating_mul(std::uint64_t a, std::uint64_t b) {
+    if (a != 0 && b > std::numeric_limits<std::uint64_t>::max() / a) return std::numeric_limits<std::uint64_t>::max();
+    return a * b;
+}
+
+}  // namespace
+
+PixelSums::PixelSums(std::size_t pixels) {
+    color.assign(pixels, gpu::vec4(0.0f));
+    depth.assign(pixels, std::numeric_limits<float>::infinity());
+    samples.assign(pixels, 0u);
+}
+
+void resolve(const PixelSums& sums, const gpu::FrameParams& frame, const RenderImages& out) {
+    gpu::Palette palette;
+    const std::size_t pixels = std::size_t(frame.width) * frame.height;
+    for (std::size_t i = 0; i < pixels; ++i) {
+        const std::uint32_t n = sums.samples[i];
+        gpu::vec4 rgba(0.0f), heat(0.0f);
+        float cost = 0.0f;
+        if (n > 0) {
+            const float count = float(n);
+            const gpu::vec4& s = sums.color[i];
+            cost = s.w / count;
+            heat = gpu::vec4(palette.heat_color(cost / frame.heatmap_scale), 1.0f);
+            rgba = frame.mode == gpu::MODE_HEATMAP ? heat : gpu::vec4(gpu::vec3(s.x, s.y, s.z) / count, 1.0f);
+        }
+        auto store = [i](float* image, const gpu::vec4& v) {
+            float* c = image + 4 * i;
+            c[0] = v.x, c[1] = v.y, c[2] = v.z, c[3] = v.w;
+        };
+        if (out.color) store(out.color, rgba);
+        if (out.heat) store(out.heat, heat);
+        if (out.depth) out.depth[i] = std::isinf(sums.depth[i]) ? kNoDepth : sums.depth[i];
+        if (out.cost) out.cost[i] = cost;
+    }
+}
+
+std::uint64_t step_bound(const RenderScene& scene, const RenderSettings& settings, std::uint32_t samples) {
+    const std::uint64_t walk = 2ull * scene.node_count + scene.ref_count + 2;
+    const std::uint64_t rays = (1ull << (settings.max_ray_depth + 1)) - 1;
+    const std::uint64_t per_sample = saturating_mul(saturating_mul(rays, 2), walk) + 1;
+    return saturating_mul(per_sample, samples) + 1;
+}
+
+std::uint32_t work_cap(const RenderScene& scene, const RenderSettings& settings, std::uint32_t samples) {
+    const std::uint64_t cap = settings.max_steps_per_pixel ? *settings.max_steps_per_pixel : step_bound(scene, settings, samples);
+    return cap >= gpu::NO_WORK_CAP ? gpu::NO_WORK_CAP : std::uint32_t(cap);
+}
+
+std::string incomplete_message(std::uint64_t pixels, std::uint64_t cap) {
+    return std::to_string(pixels) + " pixel(s) did not finish within " + std::to_string(cap) +
+           " tracer steps (max_steps_per_pixel); no image is returned";
+}
+
+}  // namespace bvhlab

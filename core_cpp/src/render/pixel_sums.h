@@ -1,0 +1,39 @@
+// pixel_sums.h — a render's running sums per pixel (RenderJob, render.h), as the trace writes them
+// (accumulate_sample in shaders/trace.comp and cpu_tracer.h), and the one step that turns them
+// into images for both renderers.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "bvhlab/big_vector.h"
+#include "bvhlab/render.h"
+
+namespace bvhlab {
+
+struct PixelSums {
+    BigVector<gpu::vec4> color;          ///< rgb: sum of sample colours; a: sum of box tests
+    BigVector<float> depth;              ///< nearest view-axis depth of a primary hit (inf: none)
+    BigVector<std::uint32_t> samples;    ///< samples summed
+
+    /// Zero sums for `pixels` pixels (std::bad_alloc if they do not fit).
+    explicit PixelSums(std::size_t pixels = 0);
+};
+
+/// Colour (or heat colours), depth and cost of each pixel from its sums: the average of its
+/// samples; a pixel without samples is transparent black with depth kNoDepth and cost 0.
+void resolve(const PixelSums& sums, const gpu::FrameParams& frame, const RenderImages& out);
+
+/// The most tracer steps a correct trace of `samples` samples of one pixel can take: per sample,
+/// at most 2^(max_ray_depth + 1) - 1 rays, each a closest-hit and a shadow walk of at most
+/// 2·nodes + references + 2 steps (each node visited once, each primitive tested once, a pop per
+/// push), plus the step that starts the sample. Saturates at UINT64_MAX.
+std::uint64_t step_bound(const RenderScene& scene, const RenderSettings& settings, std::uint32_t samples);
+
+/// FrameParams::max_work_per_pixel of a run of `samples` samples: settings.max_steps_per_pixel,
+/// else step_bound; gpu::NO_WORK_CAP where that does not fit 32 bits.
+std::uint32_t work_cap(const RenderScene& scene, const RenderSettings& settings, std::uint32_t samples);
+
+/// The message of RenderIncomplete.
+std::string incomplete_message(std::uint64_t pixels, std::uint64_t cap);
+
+}  // namespace bvhlab

@@ -1,0 +1,134 @@
+// The render settings' checks (one place for every limit) and the names of their choices.
+#include "bvhlab/render_settings.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+
+#include "gpu_types.h"
+
+namespace bvhlab {
+namespace {
+
+constexpr std::array<std::pair<std::string_view, Traversal>, 3> kTraversals{{
+    {"stack", Traversal::Stack}, {"stackless", Traversal::Stackless}, {"wide", Traversal::Wide}}};
+constexpr std::array<std::pair<std::string_view, RenderMode>, 2> kModes{{
+    {"shade", RenderMode::Shade}, {"heatmap", RenderMode::Heatmap}}};
+
+template <class Table>
+auto lookup(const Table& table, std::string_view name, const char* what) {
+    std::string names;
+    for (const auto& [key, value] : table) {
+        if (key == name) return value;
+        names.append(" ").append(key);
+    }
+    std::string msg = "unknown ";
+    msg.append(what).append(" '").append(name).append("'; expected one of:").append(names);
+    throw std::invalid_argument(msg);
+}
+
+template <class Table, class Value>
+std::string name_in(const Table& table, Value value) {
+    for (const auto& [key, v] : table)
+        if (v == value) return std::string(key);
+    return "?";
+}
+
+[[noreturn]] void fail(const std::string& msg) { throw std::invalid_argument(msg); }
+
+void validate_camera(const Camera& c) {
+    if (!all_finite(c.position) || !all_finite(c.forward) || !all_finite(c.up) || !std::isfinite(c.fov_y_degrees) ||
+        !std::isfinite(c.aspect) || !std::isfinite(c.shift_x) || !std::isfinite(c.shift_y))
+        fail("the camera has a NaN or infinite value");
+    if (!(c.fov_y_degrees > 0 && c.fov_y_degrees < 180)) fail("camera fov_y must be in (0, 180) degrees");
+    if (c.aspect < 0) fail("camera aspect must be positive (or 0: the image's)");
+    if (c.forward.x == 0 && c.forward.y == 0 && c.forward.z == 0)
+        fail("the camera's view direction is zero (position and look_at coincide)");
+    if (length(cross(unit(c.forward), unit(c.up))) == 0) fail("camera up is parallel to the viewing direction");
+}
+
+void validate_light(const RenderSettings& s) {
+    if (!all_finite(s.light.position) || !all_finite(s.light.color) || !std::isfinite(s.light.intensity))
+        fail("the light has a NaN or infinite value");
+    if (!all_finite(s.sky)) fail("the sky colour has a NaN or infinite value");
+}
+
+void validate_work(const RenderSettings& s) {
+    if (s.samples_per_axis < 1 || s.samples_per_axis > gpu::MAX_SAMPLES_PER_AXIS)
+        fail("samples per pixel axis must be 1.." + std::to_string(gpu::MAX_SAMPLES_PER_AXIS));
+    if (s.max_ray_depth > gpu::MAX_RAY_DEPTH) fail("max_ray_depth must be at most " + std::to_string(gpu::MAX_RAY_DEPTH));
+    if (s.traversal == Traversal::Wide) fail("the tracer has no 'wide' traversal; expected one of: stack stackless");
+    if (s.steps_per_dispatch &&
+        (*s.steps_per_dispatch < gpu::MIN_STEPS_PER_DISPATCH || *s.steps_per_dispatch > gpu::MAX_STEPS_PER_DISPATCH))
+        fail("steps_per_dispatch must be " + std::to_string(gpu::MIN_STEPS_PER_DISPATCH) + ".." +
+             std::to_string(gpu::MAX_STEPS_PER_DISPATCH));
+    if (s.max_steps_per_pixel && *s.max_steps_per_pixel < 1) fail("max_steps_per_pixel must be at least 1");
+}
+
+void validate_look(const RenderSettings& s) {
+    if (s.heatmap_scale && !(std::isfinite(*s.heatmap_scale) && *s.heatmap_scale > 0 && *s.heatmap_scale <= kMaxHeatmapScale))
+        fail("heatmap_scale must be a positive number of box tests up to " + std::to_string(int(kMaxHeatmapScale)) +
+             ", got " + std::to_string(*s.heatmap_scale));
+    if (!(s.line_width >= 1.0f && s.line_width <= kMaxLineWidth)) fail("line_width must be in [1, 16]");
+    if (s.overlay && s.overlay_depth_min > s.overlay_depth_max)
+        fail("overlay depth_min " + std::to_string(s.overlay_depth_min) + " is greater than depth_max " +
+             std::to_string(s.overlay_depth_max));
+}
+
+}  // namespace
+
+Vec3 unit(Vec3 v) {
+    const float scale = std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)});
+    return scale > 0 ? normalize(v * (1.0f / scale)) : Vec3{};
+}
+
+Camera look_at(Vec3 position, Vec3 target, Vec3 up, float fov_y_degrees) {
+    Camera c;
+    c.position = position;
+    c.forward = target - position;
+    c.up = up;
+    c.fov_y_degrees = fov_y_degrees;
+    return c;
+}
+
+void validate(const RenderSettings& s, std::uint32_t max_dimension) {
+    if (s.width == 0 || s.height == 0)
+        fail("width and height must be at least 1, got " + std::to_string(s.width) + "x" + std::to_string(s.height));
+    if (s.width > max_dimension || s.height > max_dimension)
+        fail("image size " + std::to_string(s.width) + "x" + std::to_string(s.height) + " exceeds the device limit of " +
+             std::to_string(max_dimension) + " pixels per side");
+    validate_camera(s.camera);
+    validate_light(s);
+    validate_work(s);
+    validate_look(s);
+}
+
+Traversal parse_traversal(std::string_view name) { return lookup(kTraversals, name, "traversal"); }
+RenderMode parse_render_mode(std::string_view name) { return lookup(kModes, name, "mode"); }
+std::string to_string(Traversal traversal) { return name_in(kTraversals, traversal); }
+std::string to_string(RenderMode mode) { return name_in(kModes, mode); }
+
+std::vector<std::string> traversal_names() {
+    std::vector<std::string> out;
+    for (const auto& entry : kTraversals) out.emplace_back(entry.first);
+    return out;
+}
+std::vector<std::string> render_traversal_names() {
+    std::vector<std::string> out;
+    for (const auto& entry : kTraversals)
+        if (entry.second != Traversal::Wide) out.emplace_back(entry.first);
+    return out;
+}
+std::vector<std::string> render_mode_names() {
+    std::vector<std::string> out;
+    for (const auto& entry : kModes) out.emplace_back(entry.first);
+    return out;
+}
+
+std::uint32_t gpu_traversal(Traversal traversal) {
+    return traversal == Traversal::Stackless ? gpu::TRAVERSAL_STACKLESS : gpu::TRAVERSAL_STACK;
+}
+
+}  // namespace bvhlab

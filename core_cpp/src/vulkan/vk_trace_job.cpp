@@ -1,0 +1,181 @@
+// A render on the GPU in bounded dispatches (issue 8): the image is cut into tiles whose traces
+// fit the slot memory; each tile is dispatched round after round, every invocation running at most
+// a budget of tracer steps and saving where it stands, until no slot has work left. The budget
+// stays under lavapipe's loop limit (gpu::MAX_STEPS_PER_DISPATCH) and adapts so that a round takes
+// about kRoundTargetMs, which keeps GPU watchdogs quiet and Esc / Ctrl-C prompt (polled between
+// rounds). The sums per pixel stay on the device until resolve().
+#include <algorithm>
+#include <chrono>
+
+#include "../render/pixel_sums.h"
+#include "vk_passes.h"
+#include "vk_renderer_core.h"
+
+namespace bvhlab::vk {
+namespace {
+
+/// Memory for the slots of one tile: suspended states and their stacks.
+constexpr std::size_t kSlotBytes = std::size_t(64) << 20;
+constexpr double kRoundTargetMs = 100.0;
+/// The first round's steps per invocation: about 2^28 for the whole tile (most pixels of ordinary
+/// scenes finish in one round), at least kFirstRoundMinSteps; later rounds adapt to their time.
+constexpr std::uint64_t kFirstRoundSteps = std::uint64_t(1) << 28;
+constexpr std::uint32_t kFirstRoundMinSteps = 1024;
+constexpr std::uint32_t kMinSteps = 64;
+
+std::uint32_t round_up(std::uint32_t x, std::uint32_t m) { return (x + m - 1) / m * m; }
+
+/// A grid of tiles over the image: `width` × `height` pixels each (the last column and row cut to
+/// the image), multiples of the workgroup size.
+struct Tiling {
+    std::uint32_t width, height, columns, rows;
+
+    Tiling(std::uint32_t image_width, std::uint32_t image_height, std::size_t bytes_per_slot) {
+        const std::size_t slots = std::max<std::size_t>(kSlotBytes / bytes_per_slot, 64 * 64);
+        width = std::min(round_up(image_width, gpu::TRACE_GROUP_X), 2048u);
+        const std::size_t rows_fit = slots / width / gpu::TRACE_GROUP_Y * gpu::TRACE_GROUP_Y;
+        height = std::uint32_t(std::clamp<std::size_t>(rows_fit, gpu::TRACE_GROUP_Y, round_up(image_height, gpu::TRACE_GROUP_Y)));
+        columns = (image_width + width - 1) / width;
+        rows = (image_height + height - 1) / height;
+    }
+    std::uint32_t count() const { return columns * rows; }
+};
+
+class VulkanRenderJob final : public RenderJob {
+public:
+    VulkanRenderJob(std::shared_ptr<RendererCore> core, std::shared_ptr<const SceneBuffers> scene, const RenderSettings& settings)
+        : RenderJob(settings), core_(std::move(core)), scene_(std::move(scene)), frame_(scene_->frame_params(settings)),
+          tiles_(settings.width, settings.height, slot_bytes(frame_)) {
+        std::lock_guard<std::mutex> lock(core_->mutex);
+        sums_.emplace(core_->device, std::size_t(settings.width) * settings.height);
+        sums_->address(frame_);
+        core_->runner.run([&](VkCommandBuffer cmd) {
+            record_fill(core_->fn, cmd, sums_->color, 0u);
+            record_fill(core_->fn, cmd, sums_->depth, 0x7f800000u);  // +inf: nothing hit yet
+            record_fill(core_->fn, cmd, sums_->samples, 0u);
+        });
+        timings_.device = core_->device.physical().name();
+        budget_ = settings.steps_per_dispatch.value_or(std::uint32_t(
+            std::clamp<std::uint64_t>(kFirstRoundSteps / (std::uint64_t(tiles_.width) * tiles_.height),
+                                      kFirstRoundMinSteps, gpu::MAX_STEPS_PER_DISPATCH)));
+    }
+
+    void run(std::uint32_t samples, Cancellation* cancel, double* progress) override {
+        const std::uint32_t target = std::min(samples, samples_per_pixel());
+        if (target <= samples_done_) return;
+        std::lock_guard<std::mutex> lock(core_->mutex);
+        gpu::FrameParams frame = frame_;
+        frame.sample_target = target;
+        frame.max_work_per_pixel = work_cap(scene_->summary(), settings_, target - samples_done_);
+        prepare(frame);
+        for (std::uint32_t t = 0; t < tiles_.count(); ++t) run_tile(frame, t, cancel, progress);
+        timings_.total_ms = timings_.overlay_ms + timings_.trace_ms;
+        samples_done_ = target;
+    }
+
+    void resolve(const RenderImages& out) override {
+        const auto start = std::chrono::steady_clock::now();
+        PixelSums sums;
+        {
+            std::lock_guard<std::mutex> lock(core_->mutex);
+            sums.color.resize(sums_->pixels);
+            sums.depth.resize(sums_->pixels);
+            sums.samples.resize(sums_->pixels);
+            read(sums_->color, sums.color.data(), sums_->pixels * sizeof(gpu::vec4));
+            read(sums_->depth, sums.depth.data(), sums_->pixels * sizeof(float));
+            read(sums_->samples, sums.samples.data(), sums_->pixels * sizeof(std::uint32_t));
+        }
+        bvhlab::resolve(sums, frame_, out);
+        timings_.readback_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    }
+
+private:
+    static std::size_t slot_bytes(const gpu::FrameParams& f) {
+        return gpu::STATE_WORDS * sizeof(gpu::uvec4) + 3 * sizeof(gpu::uvec4) * f.ray_stack_entries +
+               sizeof(gpu::uvec2) * f.node_stack_entries;
+    }
+
+    /// Slots and overlay targets for this job (another job may have used them since), then the
+    /// overlay pass, or a clear: the trace pass reads the image either way.
+    void prepare(gpu::FrameParams& frame) {
+        RendererCore& c = *core_;
+        if (c.slots.reserve(tiles_.width * tiles_.height, frame.ray_stack_entries, frame.node_stack_entries))
+            c.runner.run([&](VkCommandBuffer cmd) { record_fill(c.fn, cmd, c.slots.state(), 0u); });
+        c.slots.address(frame);
+        c.ensure_targets(settings_.width, settings_.height);
+        c.bindings.write_params(frame);
+        const PassContext pass = c.pass();
+        timings_.overlay_ms += c.runner.run([&](VkCommandBuffer cmd) {
+            if (frame.overlay_enabled) record_overlay(pass, cmd, frame, c.line_width(settings_));
+            else record_clear(pass, cmd);
+        });
+    }
+
+    /// Rounds over tile `index` until each of its pixels has its samples, or `cancel` says stop
+    /// (Cancelled), or a pixel's trace failed: more work than frame.max_work_per_pixel (RenderIncomplete).
+    void run_tile(gpu::FrameParams frame, std::uint32_t index, Cancellation* cancel, double* progress) {
+        RendererCore& c = *core_;
+        frame.tile_x = index % tiles_.columns * tiles_.width;
+        frame.tile_y = index / tiles_.columns * tiles_.height;
+        frame.tile_width = std::min(tiles_.width, settings_.width - frame.tile_x);
+        frame.tile_height = std::min(tiles_.height, settings_.height - frame.tile_y);
+        frame.stamp = c.next_stamp();
+        const double tile_pixels = double(frame.tile_width) * frame.tile_height;
+        std::uint32_t unfinished = std::uint32_t(tile_pixels);
+        for (;;) {
+            if (progress) *progress = (index + 1.0 - unfinished / tile_pixels) / tiles_.count();
+            if (cancel && cancel->poll()) throw Cancelled();
+            frame.steps_per_dispatch = budget_;
+            c.bindings.write_params(frame);
+            c.slots.reset_counters();
+            const PassContext pass = c.pass();
+            const double ms = c.runner.run([&](VkCommandBuffer cmd) {
+                record_trace_round(pass, cmd, gpu_traversal(settings_.traversal), frame.tile_width, frame.tile_height);
+            });
+            timings_.trace_ms += ms;
+            timings_.dispatches += 1;
+            timings_.steps_per_dispatch = frame.steps_per_dispatch;
+            if (const std::uint32_t failed = c.slots.failed())
+                throw RenderIncomplete(incomplete_message(failed, frame.max_work_per_pixel));
+            unfinished = c.slots.unfinished();
+            if (unfinished == 0) return;
+            adapt_budget(ms);
+        }
+    }
+
+    /// Aims at rounds of about kRoundTargetMs (unless the settings fix the budget).
+    void adapt_budget(double ms) {
+        if (settings_.steps_per_dispatch) return;
+        if (ms > 2 * kRoundTargetMs) budget_ = std::max(kMinSteps, std::uint32_t(budget_ * (kRoundTargetMs / ms)));
+        else if (ms < kRoundTargetMs / 2) budget_ = std::min(gpu::MAX_STEPS_PER_DISPATCH, budget_ * 2);
+    }
+
+    /// Device → host: directly where the memory is host-visible, else through a readback buffer.
+    void read(const Buffer& from, void* out, std::size_t bytes) {
+        RendererCore& c = *core_;
+        if (from.host_visible()) {
+            from.read(out, bytes);
+            return;
+        }
+        Buffer host(c.device, from.size(), VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::Readback);
+        c.runner.run([&](VkCommandBuffer cmd) { record_copy_to_host(c.fn, cmd, from, host); });
+        host.read(out, bytes);
+    }
+
+    // Declared in creation order: the device buffers go before the device.
+    std::shared_ptr<RendererCore> core_;
+    std::shared_ptr<const SceneBuffers> scene_;
+    gpu::FrameParams frame_;
+    Tiling tiles_;
+    std::optional<SumBuffers> sums_;
+    std::uint32_t budget_ = gpu::MAX_STEPS_PER_DISPATCH;
+};
+
+}  // namespace
+
+std::unique_ptr<RenderJob> start_vulkan_job(std::shared_ptr<RendererCore> core, std::shared_ptr<const SceneBuffers> scene,
+                                            const RenderSettings& settings) {
+    return std::make_unique<VulkanRenderJob>(std::move(core), std::move(scene), settings);
+}
+
+}  // namespace bvhlab::vk
