@@ -5,6 +5,7 @@
 #include <tuple>
 
 #include "bvhlab/bvh.h"
+#include "bvhlab/isa.h"
 #include "bvhlab/stats.h"
 #include "test_scenes.h"
 #include "tree_checks.h"
@@ -51,6 +52,21 @@ TEST_P(EveryConfig, SameTreeOnEveryThreadCount) {
     check_tree(one, scene.view(), leaf);
 }
 
+TEST_P(EveryConfig, SameTreeOnEveryInstructionSet) {
+    // Each path the library can take on this CPU (isa.h) builds the same tree, bit for bit.
+    auto [method, axis, leaf] = GetParam();
+    auto scene = random_scene(6000, 500, 3);
+    const Isa before = active_isa();
+    set_isa(Isa::Portable);
+    Bvh portable = build_bvh(scene.view(), config(method, axis, leaf, 2));
+    for (Isa isa : {Isa::Avx2}) {
+        if (!isa_supported(isa)) continue;
+        set_isa(isa);
+        EXPECT_TRUE(same_tree(portable, build_bvh(scene.view(), config(method, axis, leaf, 2)))) << isa_name(isa);
+    }
+    set_isa(before);
+}
+
 INSTANTIATE_TEST_SUITE_P(AllMethods, EveryConfig,
                          ::testing::Combine(::testing::ValuesIn(kMethods), ::testing::ValuesIn(kAxes),
                                             ::testing::Values(1u, 4u)),
@@ -60,6 +76,25 @@ INSTANTIATE_TEST_SUITE_P(AllMethods, EveryConfig,
                          });
 
 class EveryMethod : public ::testing::TestWithParam<SplitMethod> {};
+
+TEST_P(EveryMethod, LargeSceneSameTreeOnEveryThreadCountAndInstructionSet) {
+    // Large enough that the top of the tree is split in chunks on several threads (split.h).
+    auto scene = random_scene(50000, 1000, 8);
+    const Isa before = active_isa();
+    set_isa(Isa::Portable);
+    BuildConfig c = config(GetParam(), AxisPolicy::Best, 4, 1);
+    Bvh one = build_bvh(scene.view(), c);
+    check_tree(one, scene.view(), 4);
+    for (Isa isa : {Isa::Portable, Isa::Avx2}) {
+        if (!isa_supported(isa)) continue;
+        set_isa(isa);
+        for (std::uint32_t threads : {1u, 2u, 3u}) {
+            c.threads = threads;
+            EXPECT_TRUE(same_tree(one, build_bvh(scene.view(), c))) << isa_name(isa) << ", " << threads << " threads";
+        }
+    }
+    set_isa(before);
+}
 
 TEST_P(EveryMethod, AllCentroidsEqualStillTerminates) {
     test::Scene s;

@@ -4,6 +4,7 @@
 #include <functional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace bvhlab {
 
@@ -43,8 +44,10 @@ struct BuildConfig {
 inline constexpr std::uint32_t kMinBins = 2;
 inline constexpr std::uint32_t kMaxBins = 256;
 
-/// Names as the Python API and the CLI spell them. parse_* throw std::invalid_argument
-/// listing the valid names.
+/// Names as the Python API and the CLI spell them (from the table of methods, split.h).
+/// parse_* throw std::invalid_argument listing the valid names.
+std::vector<std::string_view> split_method_names();
+std::vector<std::string_view> axis_policy_names();
 SplitMethod parse_split_method(std::string_view name);
 AxisPolicy parse_axis_policy(std::string_view name);
 std::string to_string(SplitMethod method);
@@ -54,6 +57,6 @@ std::string to_string(AxisPolicy axis);
 void validate(const BuildConfig& config);
 
 /// True for the methods that evaluate the SAH (and may stop early at a leaf, PBRT §4.3.2).
-inline bool uses_sah(SplitMethod m) { return m == SplitMethod::Sah || m == SplitMethod::SweepSah; }
+bool uses_sah(SplitMethod m);
 
 }  // namespace bvhlab

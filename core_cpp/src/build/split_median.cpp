@@ -17,8 +17,7 @@ struct Bucketer {
     float origin, scale, top;
     int axis;
     std::uint32_t operator()(const PrimRef& p) const {
-        float k = ((p.lo[axis] + p.hi[axis]) - origin) * scale;  // on 2·centroid
-        return static_cast<std::uint32_t>(std::clamp(k, 0.0f, top));
+        return truncate_clamped(((p.lo[axis] + p.hi[axis]) - origin) * scale, top);  // on 2·centroid
     }
 };
 
