@@ -116,6 +116,8 @@ struct SplitMethodInfo {
     bool uses_sah;               ///< weighs splits with SahCost, and so may stop early at a leaf
     bool needs_centroid_sum;     ///< reads NodeBounds::centroid_sum
     bool needs_morton_presort;   ///< the references are sorted by Morton code before the build
+    bool bottom_up_boxes;        ///< splits without looking at bounds: node boxes are made from the
+                                 ///< leaves up after the build (NodeBounds stay empty meanwhile)
 };
 std::span<const SplitMethodInfo> split_methods();
 const SplitMethodInfo& method_info(SplitMethod method);
@@ -139,6 +141,9 @@ Split split_even(SplitContext&, Range, int src, const NodeBounds&);
 NodeBounds bounds_of(const SplitContext&, Range r, int buf, bool with_centroid_sum);
 /// The split at `mid` of a range already divided in buffer `buf`: both sides' bounds and the cost.
 Split split_at(SplitContext&, Range, int buf, const NodeBounds& parent, std::uint32_t mid);
+/// The same with the sides' bounds already known.
+Split split_with(SplitContext&, Range, int buf, const NodeBounds& parent, std::uint32_t mid, const NodeBounds& left,
+                 const NodeBounds& right);
 
 /// Partition on `centroid(axis) < position` into the other buffer; nothing if a side is empty.
 std::optional<Split> split_at_position(SplitContext&, Range, int src, const NodeBounds& parent, int axis,

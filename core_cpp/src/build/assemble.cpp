@@ -4,11 +4,23 @@
 
 namespace bvhlab {
 
-void fill_skip_indices(BigVector<BvhNode>& nodes) {
+namespace {
+
+/// Skip index (and box) of internal node `n` from its children, which come after it.
+void finish_internal(BvhNode& n, const BvhNode& first, const BvhNode& second, bool boxes_from_children) {
+    n.info = gpu::NODE_INTERNAL_BIT | skip_index(second, n.index);
+    if (!boxes_from_children) return;
+    Aabb box = node_box(first);
+    box.grow(node_box(second));
+    set_box(n, box);
+}
+
+}  // namespace
+
+void fill_skip_indices(BigVector<BvhNode>& nodes, bool boxes_from_children) {
     for (std::size_t i = nodes.size(); i-- > 0;) {
         BvhNode& n = nodes[i];
-        if (is_leaf(n)) continue;
-        n.info = gpu::NODE_INTERNAL_BIT | skip_index(nodes[n.index], n.index);
+        if (!is_leaf(n)) finish_internal(n, nodes[i + 1], nodes[n.index], boxes_from_children);
     }
 }
 
@@ -26,7 +38,8 @@ void copy_part(const Subtree& p, std::uint32_t base, Bvh& out) {
 
 }  // namespace
 
-void assemble(const Subtree& top, const std::vector<Subtree>& parts, unsigned threads, Bvh& out) {
+void assemble(const Subtree& top, const std::vector<Subtree>& parts, unsigned threads, bool boxes_from_children,
+              Bvh& out) {
     // final index of each top node: shifted by the extra nodes of the placeholders before it
     std::vector<std::uint32_t> final_index(top.nodes.size());
     std::vector<int> part_of(top.nodes.size(), -1);
@@ -48,7 +61,7 @@ void assemble(const Subtree& top, const std::vector<Subtree>& parts, unsigned th
         const std::uint32_t at = final_index[i];
         if (!is_leaf(n)) {
             n.index = final_index[n.index];
-            n.info = gpu::NODE_INTERNAL_BIT | skip_index(out.nodes[n.index], n.index);
+            finish_internal(n, out.nodes[at + 1], out.nodes[n.index], boxes_from_children);
         }
         out.nodes[at] = n;
         out.depths[at] = top.depths[i];

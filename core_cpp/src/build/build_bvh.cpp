@@ -64,7 +64,7 @@ std::vector<Subtree> build_deferred(BuildShared& shared, const Subtree& top, uns
             WorkItem root = top.deferred[k].second;
             root.second_child = false;  // its parent lives in `top`, which already points at it
             build_subtree(shared, scratch[slot], root, parts[k], {0, slot == 0, nullptr});
-            fill_skip_indices(parts[k].nodes);
+            fill_skip_indices(parts[k].nodes, shared.method.bottom_up_boxes);
         } catch (...) {
             shared.cancel.request_stop();
             throw;
@@ -101,11 +101,11 @@ void build_tree(BigVector<PrimRef>& prim_refs, const BuildConfig& cfg, Bvh& out)
     if (!top.deferred.empty() && !stop.cancel().stop_requested()) parts = build_deferred(shared, top, threads, poll);
     if (stop.cancel().stop_requested()) stop.rethrow();
     if (parts.empty()) {
-        fill_skip_indices(top.nodes);
+        fill_skip_indices(top.nodes, method.bottom_up_boxes);
         out.nodes = std::move(top.nodes);
         out.depths = std::move(top.depths);
     } else {
-        assemble(top, parts, threads, out);
+        assemble(top, parts, threads, method.bottom_up_boxes, out);
     }
 }
 

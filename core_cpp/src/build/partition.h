@@ -1,18 +1,40 @@
 // partition.h — dividing a range of references in two: the branch-free scatter every split
-// method uses, sequential or cut into chunks on the pool with the same result.
+// method uses, which also gathers both sides' bounds in the same pass; sequential, or cut into
+// chunks on the pool with the same result.
 #pragma once
+#include <limits>
 #include <vector>
 
 #include "bvhlab/split.h"
 
 namespace bvhlab {
 
+/// Bounds of the references one side of a partition receives: box, twice-centroid box and
+/// (when asked) centroid sum, accumulated in input order.
+struct SideBounds {
+    F4 lo = F4::splat(std::numeric_limits<float>::infinity()), hi = F4::splat(-std::numeric_limits<float>::infinity());
+    F4 c_lo = lo, c_hi = hi;
+    double sum[3] = {0, 0, 0};
+
+    template <bool kSum>
+    void add(const PrimRef& p) {
+        const F4 a = p.lo4(), b = p.hi4(), c = a + b;
+        lo = min(lo, a), hi = max(hi, b), c_lo = min(c_lo, c), c_hi = max(c_hi, c);
+        if constexpr (kSum) for (int k = 0; k < 3; ++k) sum[k] += 0.5 * double(p.lo[k] + p.hi[k]);
+    }
+    void merge(const SideBounds& o) {
+        lo = min(lo, o.lo), hi = max(hi, o.hi), c_lo = min(c_lo, o.c_lo), c_hi = max(c_hi, o.c_hi);
+        for (int k = 0; k < 3; ++k) sum[k] += o.sum[k];
+    }
+    NodeBounds finish(bool with_sum) const;
+};
+
 /// Scatter of src[r] into dst: references for which goes_left(p) holds fill dst forward from
-/// `left`, the others backward from `right` (one past the last slot), both in input order from
-/// their end. Returns the left cursor after the last reference.
-template <class GoesLeft>
+/// `left`, the others backward from `right` (one past the last slot), each side gathering its
+/// bounds. Returns the left cursor after the last reference.
+template <bool kSum, class GoesLeft>
 std::uint32_t scatter(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
-                      const GoesLeft& goes_left) {
+                      const GoesLeft& goes_left, SideBounds sides[2]) {
     for (std::uint32_t i = r.begin; i < r.end; ++i) {
         const PrimRef& p = src[i];
         // Select the slot with a mask, not a branch: at the top of the tree the side is a coin toss.
@@ -21,6 +43,7 @@ std::uint32_t scatter(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t l
         dst[((right - 1) & ~mask) | (left & mask)] = p;
         left += l;
         right -= 1u - l;
+        sides[1 - l].template add<kSum>(p);
     }
     return left;
 }
@@ -42,22 +65,52 @@ struct ChunkCursors {
     }
 };
 
-/// Partitions src[r] into dst[r] by goes_left and returns the first right position; in chunks
-/// on the pool when ctx allows (a counting pass first), with the same result as one scatter.
+/// Chunks of this many references: the same cut whatever the thread count, so that centroid
+/// sums (added per chunk, then chunk by chunk) round the same way on any number of threads.
+inline constexpr std::uint32_t kPartitionChunk = 1u << 14;
+
+/// Partitions src[r] into dst[r] by goes_left and returns the first right position, with both
+/// sides' bounds (sides[0] left, sides[1] right); in chunks (on the pool when ctx allows; a
+/// counting pass first), with the same result as one scatter.
 template <class GoesLeft>
-std::uint32_t partition(const SplitContext& ctx, Range r, const PrimRef* src, PrimRef* dst, const GoesLeft& goes_left) {
-    const std::uint32_t chunks = chunk_count(ctx, r);
-    if (chunks == 1) return scatter(src, dst, r, r.begin, r.end, goes_left);
+std::uint32_t partition(const SplitContext& ctx, Range r, const PrimRef* src, PrimRef* dst, const GoesLeft& goes_left,
+                        bool with_sum, SideBounds sides[2]) {
+    const std::uint32_t chunks = (r.size() + kPartitionChunk - 1) / kPartitionChunk;
+    auto run = [&](Range c, std::uint32_t left, std::uint32_t right, SideBounds* out) {
+        return with_sum ? scatter<true>(src, dst, c, left, right, goes_left, out)
+                        : scatter<false>(src, dst, c, left, right, goes_left, out);
+    };
+    if (chunks <= 1) return run(r, r.begin, r.end, sides);
+    std::vector<SideBounds> chunk_sides(2 * std::size_t(chunks));
+    auto fixed = [&](std::uint32_t k) {
+        return Range{r.begin + k * kPartitionChunk, std::min(r.end, r.begin + (k + 1) * kPartitionChunk)};
+    };
+    auto merge_sides = [&] {
+        for (std::uint32_t k = 0; k < chunks; ++k) sides[0].merge(chunk_sides[2 * k]), sides[1].merge(chunk_sides[2 * k + 1]);
+    };
+    if (!ctx.parallel || ctx.parallel->threads < 2) {  // one pass, chunk after chunk
+        std::uint32_t left = r.begin, right = r.end;
+        for (std::uint32_t k = 0; k < chunks; ++k) {
+            const Range c = fixed(k);
+            const std::uint32_t end = run(c, left, right, &chunk_sides[2 * k]);
+            right -= c.size() - (end - left), left = end;
+            if (ctx.parallel && ctx.parallel->while_waiting) (*ctx.parallel->while_waiting)();
+        }
+        merge_sides();
+        return left;
+    }
     std::vector<std::uint32_t> left_counts(chunks), sizes(chunks);
-    for_each_chunk(ctx, r, chunks, [&](std::uint32_t k, Range c) {
+    for_each_chunk(ctx, {0, chunks}, chunks, [&](std::uint32_t k, Range) {
+        const Range c = fixed(k);
         std::uint32_t n = 0;
         for (std::uint32_t i = c.begin; i < c.end; ++i) n += goes_left(src[i]) ? 1u : 0u;
         left_counts[k] = n, sizes[k] = c.size();
     });
-    ChunkCursors cursors(r, left_counts, sizes);
-    for_each_chunk(ctx, r, chunks, [&](std::uint32_t k, Range c) {
-        scatter(src, dst, c, cursors.left[k], cursors.right[k], goes_left);
+    const ChunkCursors cursors(r, left_counts, sizes);
+    for_each_chunk(ctx, {0, chunks}, chunks, [&](std::uint32_t k, Range) {
+        run(fixed(k), cursors.left[k], cursors.right[k], &chunk_sides[2 * k]);
     });
+    merge_sides();
     return cursors.mid;
 }
 

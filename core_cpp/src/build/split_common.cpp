@@ -13,8 +13,12 @@ SplitScratch::SplitScratch() = default;
 SplitScratch::~SplitScratch() = default;
 
 std::uint32_t chunk_count(const SplitContext& ctx, Range r) {
-    if (!ctx.parallel || ctx.parallel->threads < 2 || r.size() < kMinParallelRange) return 1;
-    return std::min<std::uint32_t>(4 * ctx.parallel->threads, r.size() / (kMinParallelRange / 8));
+    if (!ctx.parallel || r.size() < kMinParallelRange) return 1;
+    // Several per thread for balance, and none larger than 2^16 references (a few milliseconds),
+    // so that the calling thread checks for cancellation often enough.
+    const std::uint32_t per_thread = ctx.parallel->threads < 2 ? 1 : 4 * ctx.parallel->threads;
+    return std::max<std::uint32_t>(std::min<std::uint32_t>(per_thread, r.size() / (kMinParallelRange / 8)),
+                                   (r.size() + 0xffffu) >> 16);
 }
 
 Range chunk_of(Range r, std::uint32_t k, std::uint32_t chunks) {
@@ -25,6 +29,13 @@ Range chunk_of(Range r, std::uint32_t k, std::uint32_t chunks) {
 void for_each_chunk(const SplitContext& ctx, Range r, std::uint32_t chunks,
                     const std::function<void(std::uint32_t, Range)>& pass) {
     if (chunks == 1) return pass(0, r);
+    if (!ctx.parallel || ctx.parallel->threads < 2) {  // in turn, polling the cancellation between chunks
+        for (std::uint32_t k = 0; k < chunks; ++k) {
+            pass(k, chunk_of(r, k, chunks));
+            if (ctx.parallel && ctx.parallel->while_waiting) (*ctx.parallel->while_waiting)();
+        }
+        return;
+    }
     const ParallelPasses& p = *ctx.parallel;
     ThreadPool::Task task = [&](std::size_t k, unsigned) { pass(std::uint32_t(k), chunk_of(r, std::uint32_t(k), chunks)); };
     p.pool->run(chunks, p.threads, task, p.while_waiting ? *p.while_waiting : std::function<void()>());
@@ -86,12 +97,25 @@ NodeBounds bounds_of(const SplitContext& ctx, Range r, int buf, bool with_sum) {
     return to_bounds(runs[0], with_sum);
 }
 
+NodeBounds SideBounds::finish(bool with_sum) const {
+    auto vec = [](F4 v) { return Vec3{v.lane(0), v.lane(1), v.lane(2)}; };
+    const F4 half = F4::splat(0.5f);
+    NodeBounds b{{vec(lo), vec(hi)}, {vec(c_lo * half), vec(c_hi * half)}};
+    if (with_sum) std::copy(sum, sum + 3, b.centroid_sum), b.has_sum = true;
+    return b;
+}
+
 Split split_at(SplitContext& ctx, Range r, int buf, const NodeBounds& parent, std::uint32_t mid) {
+    const bool sums = method_info(ctx.config.method).needs_centroid_sum;
+    return split_with(ctx, r, buf, parent, mid, bounds_of(ctx, {r.begin, mid}, buf, sums),
+                      bounds_of(ctx, {mid, r.end}, buf, sums));
+}
+
+Split split_with(SplitContext& ctx, Range r, int buf, const NodeBounds& parent, std::uint32_t mid, const NodeBounds& left,
+                 const NodeBounds& right) {
     Split s;
     s.mid = mid;
-    const bool sums = method_info(ctx.config.method).needs_centroid_sum;
-    s.left = bounds_of(ctx, {r.begin, mid}, buf, sums);
-    s.right = bounds_of(ctx, {mid, r.end}, buf, sums);
+    s.left = left, s.right = right;
     const SahCost sah(ctx.config);
     s.cost = sah.split(SahCost::inverse_area(parent.box.half_area()), s.left.box.half_area(), mid - r.begin,
                        s.right.box.half_area(), r.end - mid);
@@ -103,10 +127,12 @@ std::optional<Split> split_at_position(SplitContext& ctx, Range r, int src, cons
                                        float position) {
     // Compare 2·centroid with 2·position: the same order without a multiply per reference.
     const float twice = 2.0f * position;
+    const bool sums = method_info(ctx.config.method).needs_centroid_sum;
+    SideBounds sides[2];
     const std::uint32_t mid = partition(ctx, r, ctx.buffers[src], ctx.buffers[1 - src],
-                                        [=](const PrimRef& p) { return p.lo[axis] + p.hi[axis] < twice; });
+                                        [=](const PrimRef& p) { return p.lo[axis] + p.hi[axis] < twice; }, sums, sides);
     if (mid == r.begin || mid == r.end) return std::nullopt;
-    return split_at(ctx, r, 1 - src, parent, mid);
+    return split_with(ctx, r, 1 - src, parent, mid, sides[0].finish(sums), sides[1].finish(sums));
 }
 
 Split split_even(SplitContext& ctx, Range r, int src, const NodeBounds& parent) {

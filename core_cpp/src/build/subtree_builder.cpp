@@ -22,6 +22,7 @@ int choose_axis(const BuildConfig& cfg, const WorkItem& item) {
             int axes[3], n = 0;
             for (int a = 0; a < 3; ++a)
                 if (extent[a] > 0.0f) axes[n++] = a;
+            if (n == 0) return largest_axis(extent);
             std::uint64_t h = mix(cfg.seed ^ mix(item.range.begin ^ (std::uint64_t(item.range.end) << 32)) ^ item.depth);
             return axes[h % n];
         }
@@ -51,17 +52,28 @@ Split split_pair(SplitContext& ctx, const WorkItem& item) {
     return s;
 }
 
+/// The median split on the largest centroid extent (or an even split when all centroids coincide).
+Split median_of(SplitContext& ctx, Range r, int src, const NodeBounds& b) {
+    const Vec3 extent = b.centroids.extent();
+    if (!(extent.x > 0.0f || extent.y > 0.0f || extent.z > 0.0f)) return split_even(ctx, r, src, b);
+    return *split_median(ctx, r, src, b, largest_axis(extent));
+}
+
 Split find_split(SplitContext& ctx, const WorkItem& item) {
     const Range r = item.range;
     const int src = item.buffer;
     const NodeBounds& b = item.bounds;
-    Vec3 extent = b.centroids.extent();
-    if (!(extent.x > 0.0f || extent.y > 0.0f || extent.z > 0.0f)) return split_even(ctx, r, src, b);
-    if (r.size() == 2) return split_pair(ctx, item);
-    if (too_deep(item.depth, r.size())) return *split_median(ctx, r, src, b, largest_axis(extent));
-
     const SplitMethodInfo& method = method_info(ctx.config.method);
-    const int axis = choose_axis(ctx.config, item);
+    if (r.size() == 2) return split_pair(ctx, item);
+    if (method.bottom_up_boxes) {  // no bounds on the way down; the rare depth fallback makes its own
+        if (too_deep(item.depth, r.size())) return median_of(ctx, r, src, bounds_of(ctx, r, src, false));
+    } else {
+        const Vec3 extent = b.centroids.extent();
+        if (!(extent.x > 0.0f || extent.y > 0.0f || extent.z > 0.0f)) return split_even(ctx, r, src, b);
+        if (too_deep(item.depth, r.size())) return median_of(ctx, r, src, b);
+    }
+
+    const int axis = method.bottom_up_boxes ? kAllAxes : choose_axis(ctx.config, item);  // LBVH has no axis
     std::optional<Split> s = axis == kAllAxes && !method.all_axes ? split_best_of_axes(method.split, ctx, r, src, b)
                                                                   : method.split(ctx, r, src, b, axis);
     return s ? *s : split_even(ctx, r, src, b);
@@ -112,6 +124,10 @@ public:
         const PrimRef* refs = shared_.buffers[item.buffer];
         for (std::uint32_t i = item.range.begin; i < item.range.end; ++i) shared_.leaf_refs[i] = refs[i].ref;
         leaf_primitives_ += item.range.size();
+        if (!shared_.method.bottom_up_boxes) return;
+        F4 lo = refs[item.range.begin].lo4(), hi = refs[item.range.begin].hi4();
+        for (std::uint32_t i = item.range.begin + 1; i < item.range.end; ++i) lo = min(lo, refs[i].lo4()), hi = max(hi, refs[i].hi4());
+        set_box(node, {{lo.lane(0), lo.lane(1), lo.lane(2)}, {hi.lane(0), hi.lane(1), hi.lane(2)}});
     }
     void flush_leaf_count() {
         shared_.primitives_in_leaves.fetch_add(leaf_primitives_, std::memory_order_relaxed);
