@@ -2,7 +2,8 @@
 // interleaved (every repetition runs each system once, in turn), and prints JSON.
 //   bvh_bench build MESH.f32 --peer SPEC [--peer SPEC ...] [--repeat R] [--threads T]
 //   bvh_bench trace MESH.f32 RAYS.f32 [RAYS.f32 ...] --peer SPEC ... [--repeat R]
-//   bvh_bench once MESH.f32 --peer SPEC [--threads T]   (one build between callgrind's start/stop)
+//   bvh_bench once MESH.f32 [RAYS.f32] --peer SPEC [--threads T]   (one build, or one pass over the
+//   rays, between callgrind's start and stop)
 // SPEC: see bench_data.h. bench/build.py and bench/traverse.py drive it.
 #include <algorithm>
 #include <cmath>
@@ -129,6 +130,18 @@ int run_trace(const Args& a) {
 int run_once(const Args& a) {
     Mesh mesh = load_mesh(a.mesh);
     auto peer = make_peer(a.peers.at(0), a.threads);
+    if (!a.rays.empty()) {  // count the tracing of the first ray set instead of the build
+        peer->build(mesh);
+        peer->prepare_trace();
+        Rays rays = load_rays(a.rays[0]);
+        std::vector<float> t(rays.count());
+        std::vector<std::uint32_t> prim(rays.count());
+        CALLGRIND_START_INSTRUMENTATION;
+        peer->trace(rays, t.data(), prim.data());
+        CALLGRIND_STOP_INSTRUMENTATION;
+        std::printf("{\"spec\": \"%s\", \"rays\": %zu}\n", a.peers[0].c_str(), rays.count());
+        return 0;
+    }
     CALLGRIND_START_INSTRUMENTATION;
     peer->build(mesh);
     CALLGRIND_STOP_INSTRUMENTATION;

@@ -18,7 +18,7 @@ namespace {
 
 const SplitMethod kMethods[] = {SplitMethod::Median, SplitMethod::Mean,     SplitMethod::Midpoint,
                                 SplitMethod::Sah,    SplitMethod::SweepSah, SplitMethod::Lbvh};
-const AxisPolicy kAxes[] = {AxisPolicy::Largest, AxisPolicy::Random, AxisPolicy::Best};
+const AxisPolicy kAxes[] = {AxisPolicy::Largest, AxisPolicy::Random, AxisPolicy::Best, AxisPolicy::Auto};
 
 BuildConfig config(SplitMethod m, AxisPolicy a, std::uint32_t leaf, std::uint32_t threads = 1) {
     BuildConfig c;

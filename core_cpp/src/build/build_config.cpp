@@ -11,7 +11,8 @@
 namespace bvhlab {
 namespace {
 
-constexpr std::array<std::pair<std::string_view, AxisPolicy>, 3> kAxes{{
+constexpr std::array<std::pair<std::string_view, AxisPolicy>, 4> kAxes{{
+    {"auto", AxisPolicy::Auto},
     {"largest", AxisPolicy::Largest},
     {"random", AxisPolicy::Random},
     {"best", AxisPolicy::Best},

@@ -16,6 +16,7 @@ std::uint64_t mix(std::uint64_t x) {  // splitmix64 finaliser
 int choose_axis(const BuildConfig& cfg, const WorkItem& item) {
     Vec3 extent = item.bounds.centroids.extent();
     switch (cfg.axis) {
+        case AxisPolicy::Auto: return method_info(cfg.method).uses_sah ? kAllAxes : largest_axis(extent);
         case AxisPolicy::Largest: return largest_axis(extent);
         case AxisPolicy::Best: return kAllAxes;
         case AxisPolicy::Random: {

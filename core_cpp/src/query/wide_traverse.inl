@@ -80,9 +80,16 @@ int enter_children(const WideNode& node, const L8 origin[3], const L8 inv[3], co
     if (!mask) return 0;
     alignas(32) float entry[8];
     t0.store(entry);
-    int h = 0;
-    for (; mask; mask &= mask - 1) {
-        const int k = __builtin_ctz(unsigned(mask));
+    int k = __builtin_ctz(unsigned(mask));
+    out[0] = {node.child[k], node.count[k], entry[k]};
+    if (!(mask &= mask - 1)) return 1;  // the common case: one child entered
+    k = __builtin_ctz(unsigned(mask));
+    const Entry second{node.child[k], node.count[k], entry[k]};
+    if (second.t > out[0].t) out[1] = out[0], out[0] = second;  // farther first
+    else out[1] = second;
+    int h = 2;
+    for (mask &= mask - 1; mask; mask &= mask - 1) {
+        k = __builtin_ctz(unsigned(mask));
         const Entry e{node.child[k], node.count[k], entry[k]};
         int j = h++;
         for (; j > 0 && out[j - 1].t < e.t; --j) out[j] = out[j - 1];  // by decreasing entry distance

@@ -23,7 +23,7 @@ def render_figure(name: str, scene: Scene, labels: list[str], out: Path, rendere
     _, depths_of = FIGURES[name]
     paths = []
     for label in labels:
-        bvh = build(scene, **method_kwargs(label))
+        bvh = build(scene, axis="largest", max_leaf_size=1, **method_kwargs(label))  # the report's trees: one per leaf
         depths = depths_of(bvh.stats["height"])
         image, _ = renderer.render(scene, bvh, width, height, overlay_depth=depths, line_width=line_width)
         path = out / f"{name}_{label}.png"
