@@ -213,3 +213,44 @@ TEST(Refit, BoxesFollowMovedGeometry) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(Progress, ReportedOftenAndStopsTheBuild) {
+    auto scene = random_scene(120000, 1000, 21);
+    for (std::uint32_t threads : {1u, 2u}) {
+        BuildConfig c;
+        c.threads = threads;
+        std::vector<double> seen;
+        c.progress = [&](double f) { seen.push_back(f); return true; };
+        build_bvh(scene.view(), c);
+        ASSERT_GE(seen.size(), 2u);
+        EXPECT_EQ(seen.back(), 1.0);
+        for (std::size_t i = 1; i < seen.size(); ++i) EXPECT_LE(seen[i - 1], seen[i]);
+        // A callback that says stop cancels the build, whichever thread is busy where.
+        int calls = 0;
+        c.progress = [&](double) { return ++calls < 2; };
+        EXPECT_THROW(build_bvh(scene.view(), c), BuildCancelled) << threads << " threads";
+    }
+}
+
+TEST(Progress, AnExceptionFromTheCallbackComesOutAsItself) {
+    auto scene = random_scene(120000, 1000, 22);
+    for (std::uint32_t threads : {1u, 2u, 3u}) {
+        BuildConfig c;
+        c.threads = threads;
+        int calls = 0;
+        c.progress = [&](double) -> bool {
+            if (++calls == 2) throw std::runtime_error("callback failed");
+            return true;
+        };
+        try {
+            build_bvh(scene.view(), c);
+            ADD_FAILURE() << "no exception";
+        } catch (const std::runtime_error& e) {
+            EXPECT_STREQ(e.what(), "callback failed");
+        }
+    }
+}
+
+}  // namespace

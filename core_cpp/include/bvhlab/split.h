@@ -30,7 +30,9 @@ struct Range {
 };
 
 /// What the builder knows of a range: the box of its primitives, the box of their centroids,
-/// and (for the methods that ask for it, see SplitMethodInfo) the sum of their centroids.
+/// and (for the methods that ask for it, see SplitMethodInfo) the sum of their centroids. The
+/// binned SAH over all axes, which reads no centroid bounds, leaves the box in `centroids`
+/// (a box that contains the centroids); the fallbacks that read it stay correct with that.
 struct NodeBounds {
     Aabb box;
     Aabb centroids;

@@ -175,8 +175,10 @@ std::uint32_t partition_and_bin(const PrimRef* __restrict src, PrimRef* __restri
         dst[((right - 1) & ~mask) | (left & mask)] = p;
         left += l;
         right -= 1u - l;
-        CentroidBounds& c = acc[i & 1][1 - l];
-        c.lo = min(c.lo, c2), c.neg_hi = min(c.neg_hi, neg(c2));
+        if (sides) {
+            CentroidBounds& c = acc[i & 1][1 - l];
+            c.lo = min(c.lo, c2), c.neg_hi = min(c.neg_hi, neg(c2));
+        }
         const SideTarget& t = target[1 - l];
         if (!t.binned) continue;
         truncate_to_u32(min(max((c2 - t.origin2) * t.scale, zero), top), k);
@@ -187,7 +189,7 @@ std::uint32_t partition_and_bin(const PrimRef* __restrict src, PrimRef* __restri
             ++b.count[a][k[a]];
         }
     }
-    for (int s = 0; s < 2; ++s) sides[s].merge(acc[0][s]), sides[s].merge(acc[1][s]);
+    for (int s = 0; s < 2 && sides; ++s) sides[s].merge(acc[0][s]), sides[s].merge(acc[1][s]);
     return left;
 }
 

@@ -117,7 +117,7 @@ struct ChildBinning {
 /// The fused pass: scatters src[r] into dst by the parent's bucket on split.axis (buckets
 /// <= last_left forward from `left`, the others backward from `right`, as scatter() in
 /// partition.h), drops each reference into its child's buckets and gathers each side's centroid
-/// bounds (sides[0] left, sides[1] right). Returns the left cursor after.
+/// bounds (sides[0] left, sides[1] right; null: not gathered). Returns the left cursor after.
 std::uint32_t partition_and_bin(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
                                 const BinFrame& parent, const BinSplit& split, const ChildBinning child[2],
                                 CentroidBounds sides[2]);

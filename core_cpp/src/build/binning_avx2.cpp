@@ -69,9 +69,12 @@ void bin_refs(const PrimRef* refs, Range r, const BinFrame& f, const BinSet copi
     }
 }
 
-std::uint32_t partition_and_bin(const PrimRef* __restrict src, PrimRef* __restrict dst, Range r, std::uint32_t left,
-                                std::uint32_t right, const BinFrame& parent, const BinSplit& split,
-                                const ChildBinning child[2], CentroidBounds sides[2]) {
+namespace {
+
+template <bool kCentroids>
+std::uint32_t partition_and_bin_impl(const PrimRef* __restrict src, PrimRef* __restrict dst, Range r, std::uint32_t left,
+                                     std::uint32_t right, const BinFrame& parent, const BinSplit& split,
+                                     const ChildBinning child[2], CentroidBounds sides[2]) {
     const Kernel c;
     Buckets buckets[2][2];
     Side side[2];
@@ -101,20 +104,31 @@ std::uint32_t partition_and_bin(const PrimRef* __restrict src, PrimRef* __restri
         _mm256_storeu_ps(reinterpret_cast<float*>(dst + (((right - 1) & ~mask) | (left & mask))), raw);
         left += l;
         right -= 1u - l;
-        float* a = acc[i & 1][1 - l];
-        const __m256 cc = _mm256_insertf128_ps(_mm256_castps128_ps256(c2), _mm_xor_ps(c2, c.sign), 1);
-        _mm256_store_ps(a, _mm256_min_ps(_mm256_load_ps(a), cc));
+        if constexpr (kCentroids) {
+            float* a = acc[i & 1][1 - l];
+            const __m256 cc = _mm256_insertf128_ps(_mm256_castps128_ps256(c2), _mm_xor_ps(c2, c.sign), 1);
+            _mm256_store_ps(a, _mm256_min_ps(_mm256_load_ps(a), cc));
+        }
         const Side& t = side[1 - l];
         if (!t.copy) continue;
         const __m128i k = _mm_cvttps_epi32(bucket_coordinate(c2, t.origin2, t.scale, top, c.zero));
         t.copy[i & 1].add(k, _mm256_xor_ps(v, c.flip_hi));
     }
-    for (int s = 0; s < 2; ++s) {
+    for (int s = 0; s < 2 && kCentroids; ++s) {
         const __m256 both = _mm256_min_ps(_mm256_load_ps(acc[0][s]), _mm256_load_ps(acc[1][s]));
         sides[s].lo.v = _mm_min_ps(sides[s].lo.v, _mm256_castps256_ps128(both));
         sides[s].neg_hi.v = _mm_min_ps(sides[s].neg_hi.v, _mm256_extractf128_ps(both, 1));
     }
     return left;
+}
+
+}  // namespace
+
+std::uint32_t partition_and_bin(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
+                                const BinFrame& parent, const BinSplit& split, const ChildBinning child[2],
+                                CentroidBounds sides[2]) {
+    return sides ? partition_and_bin_impl<true>(src, dst, r, left, right, parent, split, child, sides)
+                 : partition_and_bin_impl<false>(src, dst, r, left, right, parent, split, child, sides);
 }
 
 }  // namespace bvhlab::avx2

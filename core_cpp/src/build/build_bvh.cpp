@@ -73,13 +73,12 @@ std::vector<Subtree> build_deferred(BuildShared& shared, const Subtree& top, uns
     return parts;
 }
 
-void build_tree(BigVector<PrimRef>& prim_refs, const BuildConfig& cfg, Bvh& out) {
+void build_tree(BigVector<PrimRef>& prim_refs, const BuildConfig& cfg, BuildStop& stop, Bvh& out) {
     out.refs.resize(prim_refs.size());
     if (prim_refs.empty()) return;
     const auto n = static_cast<std::uint32_t>(prim_refs.size());
     const unsigned threads = ThreadPool::resolve(cfg.threads);
     BigVector<PrimRef> other(n);  // not zeroed (BigAllocator): every slot is written before it is read
-    BuildStop stop(cfg, n);
     const std::function<void()> poll = [&] { stop.cancel().poll(); };
     const ParallelPasses parallel{&ThreadPool::shared(), threads, &poll};
     const SplitMethodInfo& method = method_info(cfg.method);
@@ -120,12 +119,25 @@ Bvh build_bvh(const GeometryView& geometry, const BuildConfig& config) {
     bvh.config = config;
     bvh.config.progress = nullptr;
 
-    BigVector<PrimRef> prim_refs = make_prim_refs(geometry);
-    build_tree(prim_refs, config, bvh);
-    bvh.prims = pack_prims(geometry, bvh.refs);
-    bvh.geometry_fingerprint = bvhlab::geometry_fingerprint(geometry);
+    // Cancellation is checked between the phases too: none of them takes long.
+    BuildStop stop(config, geometry.primitive_count());
+    auto check = [&] {
+        if (stop.cancel().poll()) stop.rethrow();
+    };
+    check();
+    // The references and the fingerprint read the same input: side by side on two threads, the
+    // calling thread (index 0) taking the fingerprint, then polling while the references finish.
+    BigVector<PrimRef> prim_refs;
+    ThreadPool::shared().run(2, config.threads, [&](std::size_t k, unsigned) {
+        if (k == 0) bvh.geometry_fingerprint = bvhlab::geometry_fingerprint(geometry);
+        else prim_refs = make_prim_refs(geometry);
+    }, [&] { stop.cancel().poll(); });
+    check();
+    build_tree(prim_refs, config, stop, bvh);
+    check();
+    bvh.prims = pack_prims(geometry, bvh.refs, config.threads);
     bvh.build_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-    if (config.progress) config.progress(1.0);
+    if (config.progress && !config.progress(1.0)) throw BuildCancelled();  // the last word may be "stop"
     return bvh;
 }
 

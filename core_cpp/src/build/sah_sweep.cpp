@@ -9,26 +9,40 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 
 }  // namespace
 
+namespace {
+
+/// Prefix and suffix unions with the element layout known at compile time (bins: stride 2 and
+/// counts; sorted primitives: stride 1, one each).
+template <std::uint32_t kStride, bool kCounted, std::uint32_t kCapacity>
+void fill_unions(const BoxSequence& s, Unions<kCapacity>& u) {
+    F4 lo = F4::splat(kInf), neg_hi = lo;
+    std::uint32_t n = 0;
+    for (std::uint32_t j = s.n - 1; j > 0; --j) {  // right of candidate j - 1
+        lo = min(lo, s.lo[j * kStride]), neg_hi = min(neg_hi, s.neg_hi[j * kStride]);
+        n += kCounted ? s.count[j] : 1u;
+        u.right_lo[j - 1] = lo, u.right_hi[j - 1] = neg(neg_hi), u.right_n[j - 1] = n;
+    }
+    lo = F4::splat(kInf), neg_hi = lo, n = 0;
+    for (std::uint32_t j = 0; j + 1 < s.n; ++j) {
+        lo = min(lo, s.lo[j * kStride]), neg_hi = min(neg_hi, s.neg_hi[j * kStride]);
+        n += kCounted ? s.count[j] : 1u;
+        u.left_lo[j] = lo, u.left_hi[j] = neg(neg_hi), u.left_n[j] = n;
+    }
+    // pad the candidates to a multiple of four with copies of the last (never chosen: not cheaper)
+    for (std::uint32_t c = s.n - 1; c % 4 != 0; ++c) {
+        u.left_lo[c] = u.left_lo[c - 1], u.left_hi[c] = u.left_hi[c - 1], u.left_n[c] = u.left_n[c - 1];
+        u.right_lo[c] = u.right_lo[c - 1], u.right_hi[c] = u.right_hi[c - 1], u.right_n[c] = u.right_n[c - 1];
+    }
+}
+
+}  // namespace
+
 template <std::uint32_t kCapacity>
 void Unions<kCapacity>::fill(const BoxSequence& s) {
-        F4 lo = F4::splat(kInf), neg_hi = lo;
-        std::uint32_t n = 0;
-        for (std::uint32_t j = s.n - 1; j > 0; --j) {  // right of candidate j - 1
-            lo = min(lo, s.lo[j * s.stride]), neg_hi = min(neg_hi, s.neg_hi[j * s.stride]);
-            n += s.count ? s.count[j] : 1u;
-            right_lo[j - 1] = lo, right_hi[j - 1] = neg(neg_hi), right_n[j - 1] = n;
-        }
-        lo = F4::splat(kInf), neg_hi = lo, n = 0;
-        for (std::uint32_t j = 0; j + 1 < s.n; ++j) {
-            lo = min(lo, s.lo[j * s.stride]), neg_hi = min(neg_hi, s.neg_hi[j * s.stride]);
-            n += s.count ? s.count[j] : 1u;
-            left_lo[j] = lo, left_hi[j] = neg(neg_hi), left_n[j] = n;
-        }
-        // pad the candidates to a multiple of four with copies of the last (never chosen: not cheaper)
-        for (std::uint32_t c = s.n - 1; c % 4 != 0; ++c) {
-            left_lo[c] = left_lo[c - 1], left_hi[c] = left_hi[c - 1], left_n[c] = left_n[c - 1];
-            right_lo[c] = right_lo[c - 1], right_hi[c] = right_hi[c - 1], right_n[c] = right_n[c - 1];
-        }
+    if (s.count && s.stride == 2) fill_unions<2, true>(s, *this);
+    else if (!s.count && s.stride == 1) fill_unions<1, false>(s, *this);
+    else if (s.count) fill_unions<1, true>(s, *this);  // (unused layouts: correct, not specialised)
+    else fill_unions<1, false>(s, *this);
 }
 
 namespace {

@@ -66,10 +66,10 @@ std::uint32_t partition_chunks(SplitContext& ctx, Range r, int src, const BinFra
         ChildBinning mine[2] = {child[0], child[1]};
         for (int s = 0; s < 2; ++s) mine[s].copies = slots[s] >= 0 ? &copies[4 * k + 2 * s] : nullptr;
         partition_and_bin(in, ctx.buffers[1 - src], c, cursors.left[k], cursors.right[k], f, best, mine,
-                          &chunk_sides[2 * k]);
+                          sides ? &chunk_sides[2 * k] : nullptr);
     });
     for (int s = 0; s < 2; ++s) {
-        for (std::uint32_t k = 0; k < chunks; ++k) sides[s].merge(chunk_sides[2 * k + s]);
+        for (std::uint32_t k = 0; k < chunks && sides; ++k) sides[s].merge(chunk_sides[2 * k + s]);
         if (slots[s] < 0) continue;
         const BinSet target = store.slot(std::uint32_t(slots[s]));
         target.reset();
@@ -101,11 +101,16 @@ std::optional<Split> split_binned_sah(SplitContext& ctx, Range r, int src, const
     ChildBinning child[2] = {{BinFrame(s.left.box, frame.bins)}, {BinFrame(s.right.box, frame.bins)}};
     const std::int32_t slots[2] = {n_left > kSmallExact ? std::int32_t(ctx.child_slot + 1) : -1,
                                    r.size() - n_left > kSmallExact ? std::int32_t(ctx.child_slot) : -1};
+    // The children's centroid bounds are gathered only for the axis policies that read them;
+    // otherwise their boxes stand in for them (they contain the centroids; see NodeBounds).
+    const bool centroids = ctx.config.axis == AxisPolicy::Largest || ctx.config.axis == AxisPolicy::Random;
     CentroidBounds sides[2];
+    CentroidBounds* gathered = centroids ? sides : nullptr;
     const std::uint32_t chunks = chunk_count(ctx, r);
-    s.mid = chunks == 1 ? partition_whole(ctx, r, src, frame, best, child, slots, sides)
-                        : partition_chunks(ctx, r, src, frame, best, child, slots, sides, chunks);
-    s.left.centroids = sides[0].halved(), s.right.centroids = sides[1].halved();
+    s.mid = chunks == 1 ? partition_whole(ctx, r, src, frame, best, child, slots, gathered)
+                        : partition_chunks(ctx, r, src, frame, best, child, slots, gathered, chunks);
+    s.left.centroids = centroids ? sides[0].halved() : s.left.box;
+    s.right.centroids = centroids ? sides[1].halved() : s.right.box;
     s.left.bins = slots[0], s.right.bins = slots[1];
     s.buffer = static_cast<std::uint8_t>(1 - src);
     return s;
