@@ -64,6 +64,7 @@ demo: build
 
 bench: build
 	$(PY) bench/build.py
+	$(PY) bench/traverse.py
 
 # The Blender extension zip (dist/), with the compiled core as a bundled wheel.
 addon: build

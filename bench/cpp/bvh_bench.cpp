@@ -146,8 +146,9 @@ int run_once(const Args& a) {
     peer->build(mesh);
     CALLGRIND_STOP_INSTRUMENTATION;
     TreeInfo info = peer->info();
-    std::printf("{\"spec\": \"%s\", \"triangles\": %zu, \"sah\": %f, \"nodes\": %llu}\n", a.peers[0].c_str(),
-                mesh.count(), info.sah, (unsigned long long)info.nodes);
+    std::printf("{\"spec\": \"%s\", \"triangles\": %zu, \"sah\": %f, \"nodes\": %llu, \"digest\": \"%016llx\"}\n",
+                a.peers[0].c_str(), mesh.count(), info.sah, (unsigned long long)info.nodes,
+                (unsigned long long)info.digest);
     return 0;
 }
 

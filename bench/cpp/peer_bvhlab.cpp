@@ -36,7 +36,7 @@ public:
     void build(const Mesh& mesh) override {
         bvh_ = bvhlab::build_bvh({mesh.xyz.data(), mesh.count()}, config_);
     }
-    TreeInfo info() const override { return {bvhlab::sah_cost(bvh_), bvh_.nodes.size()}; }
+    TreeInfo info() const override { return {bvhlab::sah_cost(bvh_), bvh_.nodes.size(), digest()}; }
     void prepare_trace() override { wide_ = bvhlab::make_wide(bvh_); }
     void trace(const Rays& rays, float* t, std::uint32_t* prim) override {
         for (std::size_t i = 0; i < rays.count(); ++i) {
@@ -48,6 +48,16 @@ public:
     }
 
 private:
+    std::uint64_t digest() const {
+        std::uint64_t h = 0xcbf29ce484222325ull;
+        auto add = [&](const void* data, std::size_t bytes) {
+            for (std::size_t i = 0; i < bytes; ++i) h = (h ^ static_cast<const unsigned char*>(data)[i]) * 0x100000001b3ull;
+        };
+        add(bvh_.nodes.data(), bvh_.nodes.size() * sizeof(bvhlab::BvhNode));
+        add(bvh_.refs.data(), bvh_.refs.size() * sizeof(std::uint32_t));
+        return h;
+    }
+
     std::string options_;
     bvhlab::BuildConfig config_;
     bvhlab::Bvh bvh_;

@@ -137,11 +137,12 @@ SideTarget side_target(const ChildBinning& c) {
     return t;
 }
 
-/// All lanes set in the lane of `axis` (to test one lane of a vector comparison).
+/// All bits set in the lane of `axis`, none elsewhere (to test one lane of a comparison). Made by
+/// a comparison, not loaded as floats: a NaN bit pattern need not survive a float copy.
 F4 lane_mask(int axis) {
-    alignas(16) std::uint32_t m[4] = {0, 0, 0, 0};
-    m[axis] = ~0u;
-    return F4::load(reinterpret_cast<const float*>(m));
+    float v[4] = {1.0f, 1.0f, 1.0f, 1.0f};
+    v[axis] = -1.0f;
+    return less(F4::load(v), F4::splat(0.0f));
 }
 
 }  // namespace

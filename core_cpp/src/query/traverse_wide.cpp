@@ -48,11 +48,11 @@ struct L4 {
     static L4 splat(float s) { return {{s, s, s, s}}; }
     void store(float* p) const { for (int i = 0; i < 4; ++i) p[i] = v[i]; }
 };
-#define BVHLAB_L4_OP(op) \\
+#define BVHLAB_L4_OP(op) \
     inline L4 operator op(L4 a, L4 b) { return {{a.v[0] op b.v[0], a.v[1] op b.v[1], a.v[2] op b.v[2], a.v[3] op b.v[3]}}; }
 BVHLAB_L4_OP(+) BVHLAB_L4_OP(-) BVHLAB_L4_OP(*) BVHLAB_L4_OP(/)
 #undef BVHLAB_L4_OP
-#define BVHLAB_M4_OP(op) \\
+#define BVHLAB_M4_OP(op) \
     inline M4 operator op(L4 a, L4 b) { return {{a.v[0] op b.v[0], a.v[1] op b.v[1], a.v[2] op b.v[2], a.v[3] op b.v[3]}}; }
 BVHLAB_M4_OP(!=) BVHLAB_M4_OP(>=) BVHLAB_M4_OP(<=) BVHLAB_M4_OP(>)
 #undef BVHLAB_M4_OP
