@@ -69,17 +69,14 @@ struct ChunkCursors {
 /// sums (added per chunk, then chunk by chunk) round the same way on any number of threads.
 inline constexpr std::uint32_t kPartitionChunk = 1u << 14;
 
-/// Partitions src[r] into dst[r] by goes_left and returns the first right position, with both
-/// sides' bounds (sides[0] left, sides[1] right); in chunks (on the pool when ctx allows; a
-/// counting pass first), with the same result as one scatter.
-template <class GoesLeft>
-std::uint32_t partition(const SplitContext& ctx, Range r, const PrimRef* src, PrimRef* dst, const GoesLeft& goes_left,
-                        bool with_sum, SideBounds sides[2]) {
+/// Partitions src[r] by goes_left and returns the first right position, with both sides' bounds
+/// (sides[0] left, sides[1] right); in chunks (on the pool when ctx allows; a counting pass
+/// first), with the same result as one scatter. `run(chunk, left, right, sides)` scatters one
+/// chunk as scatter() does and returns its left cursor after.
+template <class GoesLeft, class Run>
+std::uint32_t partition_with(const SplitContext& ctx, Range r, const PrimRef* src, const GoesLeft& goes_left,
+                             const Run& run, SideBounds sides[2]) {
     const std::uint32_t chunks = (r.size() + kPartitionChunk - 1) / kPartitionChunk;
-    auto run = [&](Range c, std::uint32_t left, std::uint32_t right, SideBounds* out) {
-        return with_sum ? scatter<true>(src, dst, c, left, right, goes_left, out)
-                        : scatter<false>(src, dst, c, left, right, goes_left, out);
-    };
     if (chunks <= 1) return run(r, r.begin, r.end, sides);
     std::vector<SideBounds> chunk_sides(2 * std::size_t(chunks));
     auto fixed = [&](std::uint32_t k) {
@@ -113,5 +110,10 @@ std::uint32_t partition(const SplitContext& ctx, Range r, const PrimRef* src, Pr
     merge_sides();
     return cursors.mid;
 }
+
+/// scatter() of the references whose twice-centroid on `axis` lies below `twice` (the mean and
+/// midpoint splits): the AVX2 kernel (partition_avx2.cpp) when that path is active.
+std::uint32_t scatter_below(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right, int axis,
+                            float twice, bool with_sum, SideBounds sides[2]);
 
 }  // namespace bvhlab

@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "binning.h"
+#include "bvhlab/isa.h"
 #include "bvhlab/thread_pool.h"
 #include "partition.h"
 
@@ -97,6 +98,23 @@ NodeBounds bounds_of(const SplitContext& ctx, Range r, int buf, bool with_sum) {
     return to_bounds(runs[0], with_sum);
 }
 
+#if defined(BVHLAB_AVX2_KERNELS)
+namespace avx2 {  // partition_avx2.cpp
+std::uint32_t scatter_below(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right, int axis,
+                            float twice, bool with_sum, SideBounds sides[2]);
+}
+#endif
+
+std::uint32_t scatter_below(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right, int axis,
+                            float twice, bool with_sum, SideBounds sides[2]) {
+#if defined(BVHLAB_AVX2_KERNELS)
+    if (active_isa() == Isa::Avx2) return avx2::scatter_below(src, dst, r, left, right, axis, twice, with_sum, sides);
+#endif
+    auto below = [=](const PrimRef& p) { return p.lo[axis] + p.hi[axis] < twice; };
+    return with_sum ? scatter<true>(src, dst, r, left, right, below, sides)
+                    : scatter<false>(src, dst, r, left, right, below, sides);
+}
+
 NodeBounds SideBounds::finish(bool with_sum) const {
     auto vec = [](F4 v) { return Vec3{v.lane(0), v.lane(1), v.lane(2)}; };
     const F4 half = F4::splat(0.5f);
@@ -129,8 +147,13 @@ std::optional<Split> split_at_position(SplitContext& ctx, Range r, int src, cons
     const float twice = 2.0f * position;
     const bool sums = method_info(ctx.config.method).needs_centroid_sum;
     SideBounds sides[2];
-    const std::uint32_t mid = partition(ctx, r, ctx.buffers[src], ctx.buffers[1 - src],
-                                        [=](const PrimRef& p) { return p.lo[axis] + p.hi[axis] < twice; }, sums, sides);
+    const PrimRef* in = ctx.buffers[src];
+    PrimRef* out = ctx.buffers[1 - src];
+    auto run = [&](Range c, std::uint32_t left, std::uint32_t right, SideBounds* s) {
+        return scatter_below(in, out, c, left, right, axis, twice, sums, s);
+    };
+    const std::uint32_t mid = partition_with(ctx, r, in, [=](const PrimRef& p) { return p.lo[axis] + p.hi[axis] < twice; },
+                                             run, sides);
     if (mid == r.begin || mid == r.end) return std::nullopt;
     return split_with(ctx, r, 1 - src, parent, mid, sides[0].finish(sums), sides[1].finish(sums));
 }
