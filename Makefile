@@ -119,6 +119,7 @@ demo: build
 
 bench: build
 	$(PY) bench/build.py
+	$(PY) bench/traverse.py
 
 # The Blender extension zip (dist/bvhlab.zip, a copy of dist/bvhlab-<version>.zip) with a wheel for
 # each Python Blender embeds: cp311 built here, cp313 in the Debian 13 root.

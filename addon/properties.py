@@ -16,6 +16,7 @@ METHOD_ITEMS = [
     ("lbvh", "LBVH", "Linear BVH from Morton codes"),
 ]
 AXIS_ITEMS = [
+    ("auto", "Auto", "All three axes for the SAH methods, the largest centroid extent for the others"),
     ("largest", "Largest", "Split along the axis of largest centroid extent"),
     ("random", "Random", "Split along a random axis (seeded)"),
     ("best", "Best", "Try all three axes, keep the lowest SAH cost"),

@@ -99,9 +99,11 @@ def write_json(name: str, data: dict) -> Path:
     return path
 
 
-def run_child(script: str, args: list[str]) -> dict:
-    """Run a benchmark part in a fresh process (so core pinning and Embree's pool start clean)."""
-    out = subprocess.run([sys.executable, script, *args], capture_output=True, text=True)
+def run_child(script: str, args: list[str], cores: int | None = None) -> dict:
+    """Run a benchmark part in a fresh process (so core pinning and Embree's pool start clean),
+    pinned to the first `cores` cores when given."""
+    pin = ["taskset", "-c", ",".join(str(c) for c in sorted(os.sched_getaffinity(0))[:cores])] if cores else []
+    out = subprocess.run([*pin, sys.executable, script, *args], capture_output=True, text=True)
     sys.stderr.write(out.stderr)
     out.check_returncode()
     return json.loads(out.stdout.strip().splitlines()[-1])

@@ -1,118 +1,121 @@
-"""Build and CPU-traversal benchmark against Embree, measured in the same run.
+"""Build benchmark: bvhlab's builders beside Embree 3 (C++, LOW/MEDIUM/HIGH), Embree 4 (embreex)
+and tinybvh (BuildAVX, when a local copy is given), measured in the same run.
 
-    python bench/build.py [--sizes 250000,1000000] [--threads 1,2] [--repeat 3]
+    python bench/build.py [--scenes sponza,room1m,uniform1m] [--threads 1,2] [--repeat 5]
+                          [--rounds 2] [--callgrind sponza] [--tinybvh DIR]
 
-For each scene (a detailed model in a large room, where median splits go wrong; and uniformly
-random small triangles) and each split method: build ms, Mprims/s, nodes, height, SAH cost, and
-closest-hit Mrays/s for coherent camera rays and random rays (binary tree with a stack,
-stackless, and the 4-wide copy); Embree's build (the
-commit, default quality) and rtcIntersect1 trace beside them, with ratios. Each thread count runs
-in its own process pinned to that many cores. Writes bench/results/build.json.
+All C++ builders run inside one bvh_bench process per (scene, thread count), pinned to that many
+cores, interleaved (each repetition builds with every system in turn); `--rounds` such processes
+alternate with embreex's. Prints, per scene, build ms and Mprims/s with ratios against Embree
+MEDIUM and tinybvh, two-thread scaling, SAH cost (bvhlab's convention) and callgrind instructions
+per primitive, and writes bench/results/build.json. tinybvh is never part of bvhlab: pass the
+folder of a local copy of github.com/jbikker/tinybvh (or set BVHLAB_TINYBVH_DIR).
 """
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
+import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _common  # noqa: E402
+import _peers  # noqa: E402
 
-CONFIGS = [  # (label, build kwargs)
-    ("median", dict(method="median")),
-    ("mean", dict(method="mean")),
-    ("midpoint", dict(method="midpoint")),
-    ("lbvh", dict(method="lbvh")),
-    ("sah12", dict(method="sah", bins=12)),
-    ("sah32", dict(method="sah", bins=32)),
-    ("sah12 leaf<=4", dict(method="sah", bins=12, max_leaf_size=4)),
-    ("sah12 best-axis", dict(method="sah", bins=12, axis="best")),
-    ("sweep_sah", dict(method="sweep_sah")),
+PEERS = [  # (label, bvh_bench spec)
+    ("bvhlab sah (defaults)", "bvhlab:"),
+    ("bvhlab sah12, largest, leaf 1 (report)", "bvhlab:method=sah,bins=12,axis=largest,leaf=1"),
+    ("bvhlab median", "bvhlab:method=median"),
+    ("bvhlab mean", "bvhlab:method=mean"),
+    ("bvhlab midpoint", "bvhlab:method=midpoint"),
+    ("bvhlab lbvh", "bvhlab:method=lbvh"),
+    ("Embree 3 LOW", "embree:low"),
+    ("Embree 3 MEDIUM", "embree:medium"),
+    ("Embree 3 HIGH", "embree:high"),
+    ("tinybvh BuildAVX", "tinybvh:"),
 ]
 
 
-def scenes(sizes):
-    from bvhlab.library import procedural
-
-    for n in sizes:
-        yield f"room {n // 1000}k", procedural.model_in_room(n)
-        yield f"uniform {n // 1000}k", procedural.random_triangles(n, size=1.0 / n ** (1 / 3), seed=1)
-
-
-def measure(threads: int, sizes: list[int], repeat: int) -> dict:
-    """One process, pinned to `threads` cores."""
-    _common.pin_to_cores(threads)
-    import bvhlab
-    from bvhlab.library import procedural
-
-    out = {"threads": threads, "scenes": []}
-    for name, tris in scenes(sizes):
-        n = len(tris)
-        cam = procedural.camera_rays(tris, 640, 480)
-        rnd = procedural.random_rays(tris, 200_000, seed=3)
-        emb = _common.Embree(tris)
-        emb_build = _common.statistics.median(emb.build() for _ in range(repeat))
-        emb_cam, _ = _common.median_time(lambda: emb.trace(*cam), repeat)
-        emb_rnd, _ = _common.median_time(lambda: emb.trace(*rnd), repeat)
-        scene = {"name": name, "triangles": n, "embree": {
-            "build_ms": emb_build * 1e3, "mprims_s": n / emb_build / 1e6,
-            "camera_mrays_s": len(cam[0]) / emb_cam / 1e6, "random_mrays_s": len(rnd[0]) / emb_rnd / 1e6}, "methods": []}
-        for label, kwargs in CONFIGS:
-            reps = 1 if kwargs["method"] == "sweep_sah" else repeat
-            t, bvh = _common.median_time(lambda: bvhlab.build(tris, threads=threads, **kwargs), reps)
-            s = bvh.stats
-            row = {"label": label, **kwargs, "build_ms": t * 1e3, "mprims_s": n / t / 1e6,
-                   "nodes": s["nodes"], "height": s["height"], "sah_cost": s["sah_cost"]}
-            for rays_name, rays in (("camera", cam), ("random", rnd)):
-                for trav in ("stack", "stackless", "wide"):
-                    bvh.intersect(rays[0][:1], rays[1][:1], traversal=trav)  # the wide copy is made on first use
-                    tt, _ = _common.median_time(lambda: bvh.intersect(*rays, traversal=trav, threads=threads), repeat)
-                    row[f"{rays_name}_{trav}_mrays_s"] = len(rays[0]) / tt / 1e6
-            scene["methods"].append(row)
-            print(f"  [{threads}t] {name} {label}: {row['build_ms']:.0f} ms", file=sys.stderr, flush=True)
-        out["scenes"].append(scene)
-    return out
+def measure_scene(exe: Path, path: Path, tris, threads: list[int], repeat: int, rounds: int, peers: list) -> dict:
+    """Every peer's build times per thread count (all rounds), SAH and nodes; embreex's commits."""
+    args = ["build", str(path)] + [a for _, spec in peers for a in ("--peer", spec)] + ["--repeat", str(repeat)]
+    rows = {spec: {"label": label, "spec": spec, "seconds": {}} for label, spec in peers}
+    embreex = {}
+    for t in threads:
+        for _ in range(rounds):
+            for p in _peers.run(exe, args, t)["peers"]:
+                row = rows[p["spec"]]
+                row["seconds"].setdefault(str(t), []).extend(p["seconds"])
+                row["sah"], row["nodes"] = p["sah"], p["nodes"]
+            child = _common.run_child(__file__, ["--embreex-child", str(path), "--repeat", str(repeat)], cores=t)
+            if child.get("seconds"):
+                embreex.setdefault(str(t), []).extend(child["seconds"])
+    return {"triangles": len(tris), "peers": list(rows.values()), "embreex": embreex}
 
 
-def report(result: dict) -> str:
-    texts = []
-    for sc in result["scenes"]:
-        e = sc["embree"]
-        rows = []
-        for m in sc["methods"]:
-            rows.append([m["label"], m["build_ms"], m["mprims_s"], m["mprims_s"] / e["mprims_s"], m["nodes"],
-                         m["height"], m["sah_cost"], m["camera_wide_mrays_s"],
-                         m["camera_wide_mrays_s"] / e["camera_mrays_s"], m["random_stack_mrays_s"],
-                         m["random_stackless_mrays_s"], m["random_wide_mrays_s"],
-                         m["random_wide_mrays_s"] / e["random_mrays_s"]])
-        rows.append(["Embree (default)", e["build_ms"], e["mprims_s"], 1.0, "", "", "", e["camera_mrays_s"], 1.0,
-                     "", "", e["random_mrays_s"], 1.0])
-        texts.append(_common.print_table(
-            ["method", "build ms", "Mprims/s", "x Embree", "nodes", "height", "SAH", "cam wide Mrays/s", "x Embree",
-             "rnd stack", "rnd stackless", "rnd wide", "x Embree"],
-            rows, title=f"\n{sc['name']} ({sc['triangles']} triangles), {result['threads']} thread(s)"))
-    return "\n".join(texts)
+def count_instructions(exe: Path, path: Path, result: dict) -> None:
+    for row in result["peers"]:
+        n = _peers.instructions(exe, [str(path), "--peer", row["spec"]])
+        row["instructions"] = n
+        print(f"  callgrind {row['label']}: {n}", file=sys.stderr, flush=True)
+
+
+def report(name: str, r: dict, threads: list[int]) -> str:
+    n = r["triangles"]
+    ms = lambda row, t: _peers.median(row["seconds"][str(t)]) * 1e3 if str(t) in row["seconds"] else float("nan")
+    by_spec = {row["spec"]: row for row in r["peers"]}
+    medium, tiny = by_spec.get("embree:medium"), by_spec.get("tinybvh:")
+    rows = []
+    for row in r["peers"]:
+        cells = [row["label"]]
+        for t in threads:
+            cells += [ms(row, t), n / ms(row, t) / 1e3]
+        cells += [ms(medium, 1) / ms(row, 1) if medium else "", ms(tiny, 1) / ms(row, 1) if tiny else ""]
+        cells += [ms(row, 1) / ms(row, threads[-1]) if len(threads) > 1 else ""]
+        ins = row.get("instructions")
+        cells += [row["sah"] if row["sah"] is not None else "", row["nodes"], round(ins / n) if ins else ""]
+        rows.append(cells)
+    for t in threads:
+        if str(t) in r["embreex"]:
+            e = _peers.median(r["embreex"][str(t)]) * 1e3
+            rows.append([f"embreex (Embree 4) commit, {t}T", e, n / e / 1e3] + [""] * (2 * len(threads) + 4))
+    headers = ["builder"] + [h for t in threads for h in (f"ms {t}T", f"Mprims/s {t}T")]
+    headers += ["x MEDIUM 1T", "x tinybvh 1T", f"{threads[-1]}T/1T", "SAH", "nodes", "instr/prim"]
+    return _common.print_table(headers, rows, title=f"\n{name}: {n} triangles")
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--sizes", default="250000,1000000")
+    ap.add_argument("--scenes", default="sponza,room1m,uniform1m")
     ap.add_argument("--threads", default="1,2")
-    ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--child", type=int, help=argparse.SUPPRESS)
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--rounds", type=int, default=2)
+    ap.add_argument("--callgrind", default="sponza", help="scenes whose builds callgrind counts ('' for none)")
+    ap.add_argument("--tinybvh", default=os.environ.get("BVHLAB_TINYBVH_DIR"))
+    ap.add_argument("--embreex-child", help=argparse.SUPPRESS)
     args = ap.parse_args()
-    sizes = [int(s) for s in args.sizes.split(",")]
-    if args.child:
-        print(json.dumps(measure(args.child, sizes, args.repeat)))
+    if args.embreex_child:
+        import numpy as np
+        tris = np.fromfile(args.embreex_child, np.float32).reshape(-1, 3, 3)
+        print(json.dumps({"seconds": _peers.embreex_commit_seconds(tris, args.repeat)}))
         return
-    results = {"machine": _common.machine(), "runs": []}
-    for threads in (int(t) for t in args.threads.split(",")):
-        r = _common.run_child(__file__, ["--child", str(threads), "--sizes", args.sizes, "--repeat", str(args.repeat)])
-        results["runs"].append(r)
-        report(r)
-    path = _common.write_json("build.json", results)
-    print(f"\nwrote {path}")
+    exe = _peers.build_bvh_bench(args.tinybvh)
+    threads = [int(t) for t in args.threads.split(",")]
+    peers = [(label, spec) for label, spec in PEERS if args.tinybvh or not spec.startswith("tinybvh")]
+    results = {"machine": _common.machine(), "threads": threads, "scenes": {}}
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, tris in _peers.scenes(args.scenes.split(",")).items():
+            path = Path(tmp) / f"{name}.f32"
+            tris.tofile(path)
+            print(f"{name}: timing", file=sys.stderr, flush=True)
+            r = measure_scene(exe, path, tris, threads, args.repeat, args.rounds, peers)
+            if name in args.callgrind.split(","):
+                count_instructions(exe, path, r)
+            results["scenes"][name] = r
+            report(name, r, threads)
+    print(f"\nwrote {_common.write_json('build.json', results)}")
 
 
 if __name__ == "__main__":

@@ -182,6 +182,20 @@ NB_MODULE(_core, m) {
           "Raises ValueError naming the first primitive that is not finite or lies outside MAX_COORDINATE.");
     m.def("build", &build, "triangles"_a.noconvert(), "spheres"_a.noconvert().none(), "method"_a, "axis"_a,
           "bins"_a, "max_leaf_size"_a, "seed"_a, "threads"_a, "progress"_a.none());
+    // The build's names and defaults, one definition (build_config.h, split_methods.cpp): Python's
+    // build() and the add-on's properties read these.
+    const BuildConfig defaults;
+    nb::list methods, axes;
+    for (std::string_view name : split_method_names()) methods.append(std::string(name));
+    for (std::string_view name : axis_policy_names()) axes.append(std::string(name));
+    m.attr("SPLIT_METHODS") = nb::tuple(methods);
+    m.attr("AXIS_POLICIES") = nb::tuple(axes);
+    m.attr("MIN_BINS") = kMinBins;
+    m.attr("MAX_BINS") = kMaxBins;
+    m.attr("DEFAULT_METHOD") = to_string(defaults.method);
+    m.attr("DEFAULT_AXIS") = to_string(defaults.axis);
+    m.attr("DEFAULT_BINS") = defaults.bins;
+    m.attr("DEFAULT_MAX_LEAF_SIZE") = defaults.max_leaf_size;
     m.attr("MAX_TREE_HEIGHT") = gpu::MAX_TREE_HEIGHT;
     m.attr("MAX_COORDINATE") = kMaxCoordinate;  // coordinate_range.h
     m.attr("MIN_DIRECTION") = kMinDirection;

@@ -8,8 +8,14 @@ import numpy as np
 
 from . import _checks, _core
 
-METHODS = ("median", "mean", "midpoint", "sah", "sweep_sah", "lbvh")
-AXES = ("largest", "random", "best")
+#: Split methods and axis policies as the C++ core names them (its table of methods), and the
+#: defaults of `build`: one definition, in core_cpp/include/bvhlab/build_config.h.
+METHODS = tuple(_core.SPLIT_METHODS)
+AXES = tuple(_core.AXIS_POLICIES)
+DEFAULT_METHOD = _core.DEFAULT_METHOD
+DEFAULT_AXIS = _core.DEFAULT_AXIS
+DEFAULT_BINS = _core.DEFAULT_BINS
+DEFAULT_MAX_LEAF_SIZE = _core.DEFAULT_MAX_LEAF_SIZE
 TRAVERSALS = ("stack", "stackless", "wide")
 MAX_TREE_HEIGHT = _core.MAX_TREE_HEIGHT
 #: Supported coordinates and ray directions (core_cpp/include/bvhlab/coordinate_range.h).
@@ -38,25 +44,29 @@ def method_from_label(label: str) -> dict:
 @dataclass(frozen=True)
 class BuildConfig:
     """What a tree was built with (the arguments of `build`)."""
-    method: str = "sah"
-    bins: int = 12
-    axis: str = "largest"
-    max_leaf_size: int = 1
+    method: str = DEFAULT_METHOD
+    bins: int = DEFAULT_BINS
+    axis: str = DEFAULT_AXIS
+    max_leaf_size: int = DEFAULT_MAX_LEAF_SIZE
     seed: int = 0
     threads: int = 0
 
 
-def build(scene_or_triangles, spheres: np.ndarray | None = None, *, method: str = "sah", bins: int = 12,
-          axis: str = "largest", max_leaf_size: int = 1, seed: int = 0, threads: int = 0,
+def build(scene_or_triangles, spheres: np.ndarray | None = None, *, method: str = DEFAULT_METHOD,
+          bins: int = DEFAULT_BINS, axis: str = DEFAULT_AXIS, max_leaf_size: int = DEFAULT_MAX_LEAF_SIZE,
+          seed: int = 0, threads: int = 0,
           progress: Callable[[float], bool | None] | None = None) -> "Bvh":
     """Build a BVH over triangles (float32 (T,3,3)) and spheres (float32 (S,4): centre, radius).
 
     `scene_or_triangles` is a `bvhlab.Scene` or a triangle array. `method` is one of METHODS,
-    `axis` one of AXES; `bins` (2..256) is used by "sah"; leaves hold at most `max_leaf_size`
-    primitives, and the SAH methods may stop earlier when a leaf is cheaper. `threads` = 0 uses
-    every core; the tree never depends on it. Bad input raises TypeError or ValueError; a vertex
-    or sphere outside ±MAX_COORDINATE (2^40 ≈ 1.1e12, where float32 ray tests would overflow) and a
-    sphere radius below MIN_RADIUS (2^-60, where its square underflows) are bad input.
+    `axis` one of AXES ("auto": all three axes for the SAH methods, the largest centroid extent
+    for the others); `bins` (2..256) is used by "sah"; leaves hold at most `max_leaf_size`
+    primitives, and the SAH methods may stop earlier when a leaf is cheaper. The defaults give a
+    fast tree for little build time; the report's Table 1 settings are method="sah", bins=12,
+    axis="largest", max_leaf_size=1. `threads` = 0 uses every core; the tree never depends on it.
+    Bad input raises TypeError or ValueError; a vertex or sphere outside ±MAX_COORDINATE (2^40 ≈
+    1.1e12, where float32 ray tests would overflow) and a sphere radius below MIN_RADIUS (2^-60,
+    where its square underflows) are bad input.
 
     `progress(fraction)` is called on this thread now and then, last with 1.0; its result is taken
     by its truth value (None means go on), and a false one cancels the build (BuildCancelled),
@@ -76,7 +86,7 @@ def build(scene_or_triangles, spheres: np.ndarray | None = None, *, method: str 
         spheres = _checks.float32_array("spheres", spheres, (4,))
     config = BuildConfig(
         method=_checks.choice("method", method, METHODS),
-        bins=_checks.integer("bins", bins, 2, 256),
+        bins=_checks.integer("bins", bins, _core.MIN_BINS, _core.MAX_BINS),
         axis=_checks.choice("axis", axis, AXES),
         max_leaf_size=_checks.integer("max_leaf_size", max_leaf_size, 1, 2**31 - 1),
         seed=_checks.integer("seed", seed, 0, 2**64 - 1),

@@ -176,7 +176,7 @@ def check_compare(tmp_dir) -> None:
     assert methods == {"median", "mean", "midpoint", "sah12", "sah32", "sweep_sah", "lbvh"}, methods
     exported = export_scene(bpy.context)
     for row in rows:
-        direct = bvhlab.build(exported, **method_kwargs(row["method"]))
+        direct = bvhlab.build(exported, axis="largest", max_leaf_size=1, **method_kwargs(row["method"]))  # as configured
         assert int(row["height"]) == direct.stats["height"] and float(row["frame_ms"]) > 0
     assert len(harness.addon().state.comparisons[harness.addon().state.key(bpy.context.scene)]) == len(rows)
 

@@ -5,6 +5,7 @@
 #include <tuple>
 
 #include "bvhlab/bvh.h"
+#include "bvhlab/isa.h"
 #include "bvhlab/stats.h"
 #include "test_scenes.h"
 #include "tree_checks.h"
@@ -17,7 +18,7 @@ namespace {
 
 const SplitMethod kMethods[] = {SplitMethod::Median, SplitMethod::Mean,     SplitMethod::Midpoint,
                                 SplitMethod::Sah,    SplitMethod::SweepSah, SplitMethod::Lbvh};
-const AxisPolicy kAxes[] = {AxisPolicy::Largest, AxisPolicy::Random, AxisPolicy::Best};
+const AxisPolicy kAxes[] = {AxisPolicy::Largest, AxisPolicy::Random, AxisPolicy::Best, AxisPolicy::Auto};
 
 BuildConfig config(SplitMethod m, AxisPolicy a, std::uint32_t leaf, std::uint32_t threads = 1) {
     BuildConfig c;
@@ -51,6 +52,21 @@ TEST_P(EveryConfig, SameTreeOnEveryThreadCount) {
     check_tree(one, scene.view(), leaf);
 }
 
+TEST_P(EveryConfig, SameTreeOnEveryInstructionSet) {
+    // Each path the library can take on this CPU (isa.h) builds the same tree, bit for bit.
+    auto [method, axis, leaf] = GetParam();
+    auto scene = random_scene(6000, 500, 3);
+    const Isa before = active_isa();
+    set_isa(Isa::Portable);
+    Bvh portable = build_bvh(scene.view(), config(method, axis, leaf, 2));
+    for (Isa isa : {Isa::Avx2}) {
+        if (!isa_supported(isa)) continue;
+        set_isa(isa);
+        EXPECT_TRUE(same_tree(portable, build_bvh(scene.view(), config(method, axis, leaf, 2)))) << isa_name(isa);
+    }
+    set_isa(before);
+}
+
 INSTANTIATE_TEST_SUITE_P(AllMethods, EveryConfig,
                          ::testing::Combine(::testing::ValuesIn(kMethods), ::testing::ValuesIn(kAxes),
                                             ::testing::Values(1u, 4u)),
@@ -60,6 +76,25 @@ INSTANTIATE_TEST_SUITE_P(AllMethods, EveryConfig,
                          });
 
 class EveryMethod : public ::testing::TestWithParam<SplitMethod> {};
+
+TEST_P(EveryMethod, LargeSceneSameTreeOnEveryThreadCountAndInstructionSet) {
+    // Large enough that the top of the tree is split in chunks on several threads (split.h).
+    auto scene = random_scene(50000, 1000, 8);
+    const Isa before = active_isa();
+    set_isa(Isa::Portable);
+    BuildConfig c = config(GetParam(), AxisPolicy::Best, 4, 1);
+    Bvh one = build_bvh(scene.view(), c);
+    check_tree(one, scene.view(), 4);
+    for (Isa isa : {Isa::Portable, Isa::Avx2}) {
+        if (!isa_supported(isa)) continue;
+        set_isa(isa);
+        for (std::uint32_t threads : {1u, 2u, 3u}) {
+            c.threads = threads;
+            EXPECT_TRUE(same_tree(one, build_bvh(scene.view(), c))) << isa_name(isa) << ", " << threads << " threads";
+        }
+    }
+    set_isa(before);
+}
 
 TEST_P(EveryMethod, AllCentroidsEqualStillTerminates) {
     test::Scene s;
@@ -176,6 +211,47 @@ TEST(Refit, BoxesFollowMovedGeometry) {
     check_tree(bvh, moved.view(), 2);
     test::Scene wrong = random_scene(10, 0, 1);
     EXPECT_THROW(refit(bvh, wrong.view()), std::invalid_argument);
+}
+
+}  // namespace
+
+namespace {
+
+TEST(Progress, ReportedOftenAndStopsTheBuild) {
+    auto scene = random_scene(120000, 1000, 21);
+    for (std::uint32_t threads : {1u, 2u}) {
+        BuildConfig c;
+        c.threads = threads;
+        std::vector<double> seen;
+        c.progress = [&](double f) { seen.push_back(f); return true; };
+        build_bvh(scene.view(), c);
+        ASSERT_GE(seen.size(), 2u);
+        EXPECT_EQ(seen.back(), 1.0);
+        for (std::size_t i = 1; i < seen.size(); ++i) EXPECT_LE(seen[i - 1], seen[i]);
+        // A callback that says stop cancels the build, whichever thread is busy where.
+        int calls = 0;
+        c.progress = [&](double) { return ++calls < 2; };
+        EXPECT_THROW(build_bvh(scene.view(), c), BuildCancelled) << threads << " threads";
+    }
+}
+
+TEST(Progress, AnExceptionFromTheCallbackComesOutAsItself) {
+    auto scene = random_scene(120000, 1000, 22);
+    for (std::uint32_t threads : {1u, 2u, 3u}) {
+        BuildConfig c;
+        c.threads = threads;
+        int calls = 0;
+        c.progress = [&](double) -> bool {
+            if (++calls == 2) throw std::runtime_error("callback failed");
+            return true;
+        };
+        try {
+            build_bvh(scene.view(), c);
+            ADD_FAILURE() << "no exception";
+        } catch (const std::runtime_error& e) {
+            EXPECT_STREQ(e.what(), "callback failed");
+        }
+    }
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <random>
 
 #include "bvhlab/bvh.h"
+#include "bvhlab/isa.h"
 #include "bvhlab/traverse.h"
 #include "bvhlab/wide_bvh.h"
 #include "test_scenes.h"
@@ -39,21 +40,41 @@ std::vector<Ray> random_rays(std::uint32_t n, std::uint32_t seed) {
     return rays;
 }
 
+/// The instruction set paths this CPU can run (isa.h).
+std::vector<Isa> supported_isas() {
+    std::vector<Isa> out;
+    for (Isa isa : {Isa::Portable, Isa::Avx2})
+        if (isa_supported(isa)) out.push_back(isa);
+    return out;
+}
+
+void expect_same_hit(const Hit& got, const Hit& want) {
+    ASSERT_EQ(got.t, want.t);      // the same float arithmetic on the same primitive
+    ASSERT_EQ(got.ref, want.ref);  // ties go to the smaller reference in every traversal
+    if (!(got.ref & gpu::REF_SPHERE_BIT)) {
+        EXPECT_EQ(got.u, want.u);
+        EXPECT_EQ(got.v, want.v);
+    }
+}
+
+/// Every traversal, the wide one on every instruction set path, equals brute force.
 void expect_same_hits(const Bvh& bvh, const std::vector<Ray>& rays) {
     const WideBvh wide = make_wide(bvh);
+    const Isa before = active_isa();
     int hits = 0;
     for (const Ray& ray : rays) {
         Hit want = brute_force(bvh, ray);
         hits += want.ref != kNoHit;
-        for (Traversal mode : {Traversal::Stack, Traversal::Stackless, Traversal::Wide}) {
-            Hit got = mode == Traversal::Wide ? intersect_wide(wide, bvh, ray) : intersect(bvh, ray, mode);
-            ASSERT_EQ(got.t, want.t);  // the same float arithmetic on the same primitive
-            ASSERT_EQ(got.ref, want.ref);  // ties go to the smaller reference in every traversal
-            if (!(got.ref & gpu::REF_SPHERE_BIT)) {
-                EXPECT_EQ(got.u, want.u);
-                EXPECT_EQ(got.v, want.v);
-            }
+        for (Traversal mode : {Traversal::Stack, Traversal::Stackless}) expect_same_hit(intersect(bvh, ray, mode), want);
+        std::uint32_t visited_first = 0;
+        for (Isa isa : supported_isas()) {
+            set_isa(isa);
+            std::uint32_t visited = 0;
+            expect_same_hit(intersect_wide(wide, bvh, ray, &visited), want);
+            if (isa == Isa::Portable) visited_first = visited;
+            EXPECT_EQ(visited, visited_first) << isa_name(isa);  // the same path through the tree
         }
+        set_isa(before);
     }
     EXPECT_GT(hits, int(rays.size()) / 10) << "too few hits to test anything";
 }
@@ -62,7 +83,7 @@ class EveryMethod : public ::testing::TestWithParam<SplitMethod> {};
 
 TEST_P(EveryMethod, ClosestHitEqualsBruteForce) {
     auto scene = test::random_scene(3000, 400, 17);
-    for (std::uint32_t leaf : {1u, 3u}) {
+    for (std::uint32_t leaf : {1u, 3u, 8u}) {
         BuildConfig cfg;
         cfg.method = GetParam();
         cfg.max_leaf_size = leaf;

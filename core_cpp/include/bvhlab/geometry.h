@@ -49,7 +49,9 @@ struct PackedPrim {
     std::uint32_t ref;
 };
 
-/// Geometry reordered into the order of `refs` (the tree's leaf order).
-BigVector<PackedPrim> pack_prims(const GeometryView& geometry, const BigVector<std::uint32_t>& refs);
+/// Geometry reordered into the order of `refs` (the tree's leaf order), on up to `threads`
+/// threads of the shared pool (0: all; the result does not depend on it).
+BigVector<PackedPrim> pack_prims(const GeometryView& geometry, const BigVector<std::uint32_t>& refs,
+                                 unsigned threads = 1);
 
 }  // namespace bvhlab

@@ -13,7 +13,9 @@ struct alignas(16) PrimRef {
     float lo[3];
     std::uint32_t ref;
     float hi[3];
-    std::uint32_t code;  ///< Morton code of the centroid (LBVH only)
+    std::uint32_t code;  ///< Morton code of the centroid, written by the LBVH presort and read by split_lbvh
+                         ///< only (the binned SAH recomputes a reference's bucket rather than storing
+                         ///< it here, so a split method never writes its source range: split.h)
 
     float centroid(int axis) const { return 0.5f * (lo[axis] + hi[axis]); }
     Vec3 centroid() const { return {centroid(0), centroid(1), centroid(2)}; }

@@ -8,12 +8,20 @@
 // several axes without copies (split_best_of_axes).
 #pragma once
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <optional>
+#include <span>
+#include <string_view>
 #include <vector>
+
 #include "bvhlab/build_config.h"
 #include "bvhlab/prim_ref.h"
+#include "bvhlab/sah.h"
 
 namespace bvhlab {
+
+class ThreadPool;
 
 /// A half-open range [begin, end) of reference positions (the same in both buffers).
 struct Range {
@@ -22,34 +30,68 @@ struct Range {
 };
 
 /// What the builder knows of a range: the box of its primitives, the box of their centroids,
-/// and (for the mean split) the sum of their centroids when has_sum is set.
+/// and (for the methods that ask for it, see SplitMethodInfo) the sum of their centroids. The
+/// binned SAH over all axes, which reads no centroid bounds, leaves the box in `centroids`
+/// (a box that contains the centroids); the fallbacks that read it stay correct with that.
 struct NodeBounds {
     Aabb box;
     Aabb centroids;
     double centroid_sum[3] = {0, 0, 0};
     bool has_sum = false;
+    std::int32_t bins = -1;  ///< binned SAH: the BinStore slot its parent's pass filled, or -1
 };
 
 /// A split: positions [begin, mid) go left, [mid, end) right, both non-empty.
 struct Split {
     std::uint32_t mid = 0;
     NodeBounds left, right;
-    float cost = 0;          ///< SAH cost of this split, C_trav + (A_L N_L + A_R N_R) / A_P · C_isect
+    float cost = 0;          ///< SahCost::split of this split
     std::uint8_t buffer = 0; ///< the buffer that now holds both children's references
+    bool leaf = false;       ///< SahCost says a leaf is cheaper (only when SplitContext::leaf_allowed);
+                             ///< nothing was moved then
 };
+
+class BinStore;  // binning.h
 
 /// Per-thread memory the split methods may use (sized on first use, reused across nodes).
 struct SplitScratch {
+    SplitScratch();
+    ~SplitScratch();
     std::vector<PrimRef> sorted;       ///< sweep SAH: the range sorted on one axis
     std::vector<float> areas;          ///< sweep SAH suffix areas
     std::vector<std::uint32_t> counts; ///< median: histogram
+    std::unique_ptr<BinStore> bins;    ///< binned SAH: buckets of the nodes on the work stack
+};
+
+/// The top of the tree is split with every thread working on the same node: a method cuts a large
+/// range into chunks and runs its passes over them on the pool. Unset (nullptr) inside subtrees.
+struct ParallelPasses {
+    ThreadPool* pool = nullptr;
+    unsigned threads = 1;
+    const std::function<void()>* while_waiting = nullptr;  ///< the calling thread's cancellation check
 };
 
 struct SplitContext {
     PrimRef* buffers[2];
     const BuildConfig& config;
     SplitScratch& scratch;
+    const ParallelPasses* parallel = nullptr;
+    /// Set by the builder for each node: the range may be a leaf (a method that weighs leaves
+    /// may answer Split::leaf), and the BinStore slots of the children's buckets are
+    /// child_slot (right) and child_slot + 1 (left): the stack positions they will take.
+    bool leaf_allowed = false;
+    std::uint32_t child_slot = 0;
 };
+
+/// Ranges smaller than this are never cut into chunks.
+inline constexpr std::uint32_t kMinParallelRange = 1u << 15;
+/// How many chunks a method cuts `r` into: several per thread at the top of the tree, else one.
+std::uint32_t chunk_count(const SplitContext& ctx, Range r);
+/// The k-th of `chunks` equal chunks of r.
+Range chunk_of(Range r, std::uint32_t k, std::uint32_t chunks);
+/// Runs pass(k, chunk_of(r, k, chunks)) for every chunk: on the pool when ctx.parallel is set.
+void for_each_chunk(const SplitContext& ctx, Range r, std::uint32_t chunks,
+                    const std::function<void(std::uint32_t, Range)>& pass);
 
 /// `axis` value asking a method to try every axis and keep the lowest SAH cost.
 inline constexpr int kAllAxes = -1;
@@ -66,8 +108,24 @@ std::optional<Split> split_binned_sah(SplitContext&, Range, int src, const NodeB
 std::optional<Split> split_sweep_sah(SplitContext&, Range, int src, const NodeBounds&, int axis);   // kAllAxes ok
 std::optional<Split> split_lbvh(SplitContext&, Range, int src, const NodeBounds&, int axis);        // no axis
 
+/// Everything the builder, the config parser, the stats and Python need to know about a split
+/// method: the one table they all read (split_methods.cpp).
+struct SplitMethodInfo {
+    SplitMethod method;
+    std::string_view name;       ///< as the Python API and the CLI spell it
+    SplitFunction split;
+    bool all_axes;               ///< takes kAllAxes itself (else split_best_of_axes tries each axis)
+    bool uses_sah;               ///< weighs splits with SahCost, and so may stop early at a leaf
+    bool needs_centroid_sum;     ///< reads NodeBounds::centroid_sum
+    bool needs_morton_presort;   ///< the references are sorted by Morton code before the build
+    bool bottom_up_boxes;        ///< splits without looking at bounds: node boxes are made from the
+                                 ///< leaves up after the build (NodeBounds stay empty meanwhile)
+};
+std::span<const SplitMethodInfo> split_methods();
+const SplitMethodInfo& method_info(SplitMethod method);
+
 /// Ranges of at most this many references get the exact SAH from both SAH methods.
-inline constexpr std::uint32_t kSmallExact = 16;
+inline constexpr std::uint32_t kSmallExact = 8;
 /// Exact SAH over every position of a small range (<= kSmallExact); kAllAxes ok.
 std::optional<Split> split_small_exact(SplitContext&, Range, int src, const NodeBounds&, int axis);
 
@@ -80,37 +138,14 @@ Split split_even(SplitContext&, Range, int src, const NodeBounds&);
 
 // ---- helpers shared by the split methods (split_common.cpp) ----
 
-/// Box and centroid box of n refs, and the centroid sum if asked for.
-NodeBounds bounds_of(const PrimRef* refs, std::uint32_t n, bool with_centroid_sum = true);
-/// SAH cost of splitting parent into (left, n_left) and (right, n_right).
-inline float split_cost(const BuildConfig& config, const NodeBounds& parent, const Aabb& left,
-                        std::uint32_t n_left, const Aabb& right, std::uint32_t n_right) {
-    float parent_area = parent.box.half_area();
-    float weighted = left.half_area() * float(n_left) + right.half_area() * float(n_right);
-    // A box with no area (all primitives on a line or a point) gives no probabilities; count
-    // every primitive as hit then, so splitting never looks cheaper than it is.
-    float ratio = parent_area > 0.0f ? weighted / parent_area : float(n_left + n_right);
-    return config.traversal_cost + ratio * config.intersection_cost;
-}
+/// Box and centroid box of the references of r in buffer buf, and their centroid sum if asked for.
+/// Sums are added in fixed blocks of the range, in order, so they do not depend on the threads.
+NodeBounds bounds_of(const SplitContext&, Range r, int buf, bool with_centroid_sum);
 /// The split at `mid` of a range already divided in buffer `buf`: both sides' bounds and the cost.
 Split split_at(SplitContext&, Range, int buf, const NodeBounds& parent, std::uint32_t mid);
-
-/// Branch-free partition of src[r] into dst[r]: references for which goes_left(p) holds fill
-/// dst from r.begin forward, the others from r.end backward. Returns the first right position.
-template <class GoesLeft>
-std::uint32_t scatter_partition(const PrimRef* src, PrimRef* dst, Range r, GoesLeft&& goes_left) {
-    std::uint32_t left = r.begin, right = r.end;
-    for (std::uint32_t i = r.begin; i < r.end; ++i) {
-        const PrimRef& p = src[i];
-        // Select the slot with a mask, not a branch: at the top of the tree the side is a coin toss.
-        const std::uint32_t l = goes_left(p) ? 1u : 0u;
-        const std::uint32_t mask = 0u - l;
-        dst[((right - 1) & ~mask) | (left & mask)] = p;
-        left += l;
-        right -= 1u - l;
-    }
-    return left;
-}
+/// The same with the sides' bounds already known.
+Split split_with(SplitContext&, Range, int buf, const NodeBounds& parent, std::uint32_t mid, const NodeBounds& left,
+                 const NodeBounds& right);
 
 /// Partition on `centroid(axis) < position` into the other buffer; nothing if a side is empty.
 std::optional<Split> split_at_position(SplitContext&, Range, int src, const NodeBounds& parent, int axis,

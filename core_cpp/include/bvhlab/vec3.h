@@ -2,6 +2,7 @@
 #pragma once
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 namespace bvhlab {
 
@@ -33,6 +34,13 @@ inline Vec3 abs3(Vec3 a) { return {std::fabs(a.x), std::fabs(a.y), std::fabs(a.z
 inline float length(Vec3 a) { return std::sqrt(dot(a, a)); }
 inline Vec3 normalize(Vec3 a) { return a * (1.0f / length(a)); }
 inline bool all_finite(Vec3 a) { return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z); }
+/// x truncated to an integer in [0, top]: NaN gives 0 and out-of-range values clamp first, so the
+/// float-to-integer conversion is always defined (a plain cast of NaN, inf or 1e30 is undefined).
+inline std::uint32_t truncate_clamped(float x, float top) {
+    x = x > 0.0f ? x : 0.0f;
+    x = x < top ? x : top;
+    return static_cast<std::uint32_t>(x);
+}
 /// Index of the largest component (ties go to the lower axis).
 inline int largest_axis(Vec3 a) { return a.x >= a.y ? (a.x >= a.z ? 0 : 2) : (a.y >= a.z ? 1 : 2); }
 

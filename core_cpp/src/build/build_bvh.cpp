@@ -1,13 +1,15 @@
-// build_bvh.cpp — build_bvh: input checks, primitive references, the top-down build (on several threads when
-// asked), and the finishing touches (skip indices, leaf-ordered geometry).
+// build_bvh.cpp — build_bvh: input checks, primitive references, the top-down build (the top of
+// the tree with every thread on each node, then the subtrees below on the pool), and the
+// finishing touches (skip indices, leaf-ordered geometry).
+#include <algorithm>
 #include <chrono>
-#include <memory>
-#include <mutex>
+#include <exception>
 #include <stdexcept>
-#include <thread>
 
+#include "assemble.h"
 #include "bvhlab/bvh.h"
 #include "bvhlab/cancel.h"
+#include "bvhlab/thread_pool.h"
 #include "morton.h"
 #include "subtree_builder.h"
 
@@ -16,121 +18,94 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-std::uint32_t thread_count(const BuildConfig& cfg) {
-    if (cfg.threads > 0) return cfg.threads;
-    return std::max(1u, std::thread::hardware_concurrency());
-}
-
-/// Calls the user's progress callback at most every 50 ms, from the calling thread only.
-class ProgressReporter {
+/// The stop check of one build: runs the caller's progress callback (on the calling thread,
+/// every 20 ms at most) with the fraction of primitives already in leaves. An exception from the
+/// callback stops the build and is rethrown once every thread has stopped.
+class BuildStop {
 public:
-    ProgressReporter(BuildShared& shared, std::size_t total) : shared_(shared), total_(total) {}
-    void operator()() {
-        if (!shared_.config.progress) return;
-        auto now = Clock::now();
-        if (now - last_ < std::chrono::milliseconds(50)) return;
-        last_ = now;
-        double done = total_ ? double(shared_.primitives_in_leaves.load()) / double(total_) : 1.0;
-        if (!shared_.config.progress(done)) shared_.cancelled = true;
+    BuildStop(const BuildConfig& cfg, std::size_t total)
+        : cancel_(cfg.progress ? Cancellation::Check([this, &cfg, total] { return !report(cfg, total); })
+                               : Cancellation::Check()) {}
+    Cancellation& cancel() { return cancel_; }
+    std::atomic<std::uint64_t>& in_leaves() { return in_leaves_; }
+    [[noreturn]] void rethrow() const {
+        if (callback_error_) std::rethrow_exception(callback_error_);
+        throw BuildCancelled();
     }
 
 private:
-    BuildShared& shared_;
-    std::size_t total_;
-    Clock::time_point last_{};  // the first check reports at once
+    bool report(const BuildConfig& cfg, std::size_t total) {
+        try {
+            return cfg.progress(total ? double(in_leaves_.load(std::memory_order_relaxed)) / double(total) : 1.0);
+        } catch (...) {
+            callback_error_ = std::current_exception();
+            return false;
+        }
+    }
+    std::atomic<std::uint64_t> in_leaves_{0};
+    std::exception_ptr callback_error_;
+    Cancellation cancel_;
 };
 
-/// Builds the deferred ranges of `top` on `threads` threads; results in the order of top.deferred.
-std::vector<Subtree> build_deferred(BuildShared& shared, const Subtree& top, std::uint32_t threads,
-                                    ProgressReporter& progress) {
+/// Builds the deferred ranges of `top`, largest first, on the pool (parts in the order of
+/// top.deferred, skip indices filled). A worker that throws stops the others; the pool rethrows.
+std::vector<Subtree> build_deferred(BuildShared& shared, const Subtree& top, unsigned threads,
+                                    const std::function<void()>& poll) {
+    std::vector<std::size_t> order(top.deferred.size());
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+        return top.deferred[a].second.range.size() > top.deferred[b].second.range.size();
+    });
     std::vector<Subtree> parts(top.deferred.size());
-    std::atomic<std::size_t> next{0};
-    auto worker = [&](bool reports) {
-        SplitScratch scratch;
-        for (std::size_t k; (k = next.fetch_add(1)) < parts.size() && !shared.cancelled;) {
+    std::vector<SplitScratch> scratch(threads);
+    ThreadPool::shared().run(order.size(), threads, [&](std::size_t i, unsigned slot) {
+        try {
+            const std::size_t k = order[i];
             WorkItem root = top.deferred[k].second;
             root.second_child = false;  // its parent lives in `top`, which already points at it
-            build_subtree(shared, scratch, root, parts[k], 0, [&] { if (reports) progress(); });
-            if (reports) progress();
+            build_subtree(shared, scratch[slot], root, parts[k], {0, slot == 0, nullptr});
+            fill_skip_indices(parts[k].nodes, shared.method.bottom_up_boxes);
+        } catch (...) {
+            shared.cancel.request_stop();
+            throw;
         }
-    };
-    std::vector<std::thread> pool;
-    for (std::uint32_t t = 1; t < threads; ++t) pool.emplace_back(worker, false);
-    worker(true);
-    for (auto& t : pool) t.join();
+    }, poll);
     return parts;
 }
 
-/// Splices the deferred subtrees into the placeholders of `top`, keeping depth-first order.
-void assemble(Subtree& top, std::vector<Subtree>& parts, Bvh& out) {
-    std::size_t total = top.nodes.size();
-    for (auto& p : parts) total += p.nodes.size() - 1;
-    // final index of each top node: shifted by the extra nodes of the placeholders before it
-    std::vector<std::uint32_t> final_index(top.nodes.size());
-    std::vector<int> part_of(top.nodes.size(), -1);
-    for (std::size_t k = 0; k < top.deferred.size(); ++k) part_of[top.deferred[k].first] = int(k);
-    std::uint32_t shift = 0;
-    for (std::size_t i = 0; i < top.nodes.size(); ++i) {
-        final_index[i] = std::uint32_t(i) + shift;
-        if (part_of[i] >= 0) shift += std::uint32_t(parts[part_of[i]].nodes.size() - 1);
-    }
-    out.nodes.resize(total);
-    out.depths.resize(total);
-    for (std::size_t i = 0; i < top.nodes.size(); ++i) {
-        std::uint32_t base = final_index[i];
-        if (part_of[i] < 0) {
-            BvhNode n = top.nodes[i];
-            if (!is_leaf(n)) n.index = final_index[n.index];
-            out.nodes[base] = n;
-            out.depths[base] = top.depths[i];
-            continue;
-        }
-        const Subtree& p = parts[part_of[i]];
-        for (std::size_t j = 0; j < p.nodes.size(); ++j) {
-            BvhNode n = p.nodes[j];
-            if (!is_leaf(n)) n.index += base;
-            out.nodes[base + j] = n;
-            out.depths[base + j] = p.depths[j];
-        }
-    }
-}
-
-/// Skip index of every internal node: the skip of its second child (leaves skip to i + 1).
-void fill_skip_indices(BigVector<BvhNode>& nodes) {
-    for (std::size_t i = nodes.size(); i-- > 0;) {
-        BvhNode& n = nodes[i];
-        if (is_leaf(n)) continue;
-        n.info = gpu::NODE_INTERNAL_BIT | skip_index(nodes[n.index], n.index);
-    }
-}
-
-void build_tree(BigVector<PrimRef>& prim_refs, const BuildConfig& cfg, Bvh& out) {
+void build_tree(BigVector<PrimRef>& prim_refs, const BuildConfig& cfg, BuildStop& stop, Bvh& out) {
     out.refs.resize(prim_refs.size());
     if (prim_refs.empty()) return;
     const auto n = static_cast<std::uint32_t>(prim_refs.size());
-    WorkItem root{{0, n}, bounds_of(prim_refs.data(), n), 0, 0, false, 0};
-    if (cfg.method == SplitMethod::Lbvh) sort_by_morton_code(prim_refs, root.bounds.centroids);
-
+    const unsigned threads = ThreadPool::resolve(cfg.threads);
     BigVector<PrimRef> other(n);  // not zeroed (BigAllocator): every slot is written before it is read
-    BuildShared shared{{prim_refs.data(), other.data()}, out.refs.data(), cfg};
-    ProgressReporter progress(shared, n);
-    const std::uint32_t threads = thread_count(cfg);
-    // With several threads, the top of the tree is built here and ranges of at most
-    // `defer_size` primitives are left to the pool; the tree is the same either way.
-    const std::uint32_t defer_size = threads > 1 ? std::max<std::uint32_t>(1024, n / (8 * threads)) : 0;
+    const std::function<void()> poll = [&] { stop.cancel().poll(); };
+    const ParallelPasses parallel{&ThreadPool::shared(), threads, &poll};
+    const SplitMethodInfo& method = method_info(cfg.method);
     SplitScratch scratch;
+    SplitContext ctx{{prim_refs.data(), other.data()}, cfg, scratch, &parallel};
+    if (method.needs_morton_presort) {
+        sort_by_morton_code(prim_refs, bounds_of(ctx, {0, n}, 0, false).centroids);
+        ctx.buffers[0] = prim_refs.data();  // the sort may have swapped the storage
+    }
+    WorkItem root{{0, n}, bounds_of(ctx, {0, n}, 0, method.needs_centroid_sum), 0, 0, false, 0};
+    BuildShared shared{{prim_refs.data(), other.data()}, out.refs.data(), cfg, method, stop.cancel(), stop.in_leaves()};
+
+    // With several threads, ranges of at most `defer_size` primitives are left to the pool; the
+    // nodes above them are split with every thread on each. The tree is the same either way.
+    const std::uint32_t defer_size = threads > 1 ? std::max<std::uint32_t>(1024, n / (8 * threads)) : 0;
     Subtree top;
-    build_subtree(shared, scratch, root, top, defer_size, [&] { progress(); });
+    build_subtree(shared, scratch, root, top, {defer_size, true, &parallel});
     std::vector<Subtree> parts;
-    if (!top.deferred.empty() && !shared.cancelled) parts = build_deferred(shared, top, threads, progress);
-    if (shared.cancelled) throw BuildCancelled();
+    if (!top.deferred.empty() && !stop.cancel().stop_requested()) parts = build_deferred(shared, top, threads, poll);
+    if (stop.cancel().stop_requested()) stop.rethrow();
     if (parts.empty()) {
+        fill_skip_indices(top.nodes, method.bottom_up_boxes);
         out.nodes = std::move(top.nodes);
         out.depths = std::move(top.depths);
     } else {
-        assemble(top, parts, out);
+        assemble(top, parts, threads, method.bottom_up_boxes, out);
     }
-    fill_skip_indices(out.nodes);
 }
 
 }  // namespace
@@ -144,10 +119,23 @@ Bvh build_bvh(const GeometryView& geometry, const BuildConfig& config) {
     bvh.config = config;
     bvh.config.progress = nullptr;
 
-    BigVector<PrimRef> prim_refs = make_prim_refs(geometry);
-    build_tree(prim_refs, config, bvh);
-    bvh.prims = pack_prims(geometry, bvh.refs);
-    bvh.geometry_fingerprint = bvhlab::geometry_fingerprint(geometry);
+    // Cancellation is checked between the phases too: none of them takes long.
+    BuildStop stop(config, geometry.primitive_count());
+    auto check = [&] {
+        if (stop.cancel().poll()) stop.rethrow();
+    };
+    check();
+    // The references and the fingerprint read the same input: side by side on two threads, the
+    // calling thread (index 0) taking the fingerprint, then polling while the references finish.
+    BigVector<PrimRef> prim_refs;
+    ThreadPool::shared().run(2, config.threads, [&](std::size_t k, unsigned) {
+        if (k == 0) bvh.geometry_fingerprint = bvhlab::geometry_fingerprint(geometry);
+        else prim_refs = make_prim_refs(geometry);
+    }, [&] { stop.cancel().poll(); });
+    check();
+    build_tree(prim_refs, config, stop, bvh);
+    check();
+    bvh.prims = pack_prims(geometry, bvh.refs, config.threads);
     bvh.build_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     if (config.progress && !config.progress(1.0)) throw BuildCancelled();  // the last word may be "stop"
     return bvh;

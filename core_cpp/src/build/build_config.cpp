@@ -4,52 +4,67 @@
 #include <cmath>
 #include <stdexcept>
 #include <utility>
+#include <vector>
+
+#include "bvhlab/split.h"
 
 namespace bvhlab {
 namespace {
 
-constexpr std::array<std::pair<std::string_view, SplitMethod>, 6> kMethods{{
-    {"median", SplitMethod::Median},
-    {"mean", SplitMethod::Mean},
-    {"midpoint", SplitMethod::Midpoint},
-    {"sah", SplitMethod::Sah},
-    {"sweep_sah", SplitMethod::SweepSah},
-    {"lbvh", SplitMethod::Lbvh},
-}};
-constexpr std::array<std::pair<std::string_view, AxisPolicy>, 3> kAxes{{
+constexpr std::array<std::pair<std::string_view, AxisPolicy>, 4> kAxes{{
+    {"auto", AxisPolicy::Auto},
     {"largest", AxisPolicy::Largest},
     {"random", AxisPolicy::Random},
     {"best", AxisPolicy::Best},
 }};
 
-template <class Table>
-auto parse(const Table& table, std::string_view name, const char* what) {
-    for (const auto& [key, value] : table)
-        if (key == name) return value;
+[[noreturn]] void throw_unknown(const char* what, std::string_view name, const std::vector<std::string_view>& names) {
     // (appends rather than operator+ chains: GCC 12 warns falsely on those, bug 105329)
     std::string msg = "unknown ";
     msg.append(what).append(" '").append(name).append("'; expected one of:");
-    for (const auto& entry : table) msg.append(" ").append(entry.first);
+    for (std::string_view n : names) msg.append(" ").append(n);
     throw std::invalid_argument(msg);
-}
-
-template <class Table, class Value>
-std::string name_of(const Table& table, Value value) {
-    for (const auto& [key, v] : table)
-        if (v == value) return std::string(key);
-    return "?";
 }
 
 }  // namespace
 
-SplitMethod parse_split_method(std::string_view name) { return parse(kMethods, name, "split method"); }
-AxisPolicy parse_axis_policy(std::string_view name) { return parse(kAxes, name, "axis policy"); }
-std::string to_string(SplitMethod method) { return name_of(kMethods, method); }
-std::string to_string(AxisPolicy axis) { return name_of(kAxes, axis); }
+std::vector<std::string_view> split_method_names() {
+    std::vector<std::string_view> names;
+    for (const SplitMethodInfo& m : split_methods()) names.push_back(m.name);
+    return names;
+}
+
+std::vector<std::string_view> axis_policy_names() {
+    std::vector<std::string_view> names;
+    for (const auto& entry : kAxes) names.push_back(entry.first);
+    return names;
+}
+
+SplitMethod parse_split_method(std::string_view name) {
+    for (const SplitMethodInfo& m : split_methods())
+        if (m.name == name) return m.method;
+    throw_unknown("split method", name, split_method_names());
+}
+
+AxisPolicy parse_axis_policy(std::string_view name) {
+    for (const auto& [key, value] : kAxes)
+        if (key == name) return value;
+    throw_unknown("axis policy", name, axis_policy_names());
+}
+
+std::string to_string(SplitMethod method) { return std::string(method_info(method).name); }
+
+std::string to_string(AxisPolicy axis) {
+    for (const auto& [key, value] : kAxes)
+        if (value == axis) return std::string(key);
+    return "?";
+}
+
+bool uses_sah(SplitMethod m) { return method_info(m).uses_sah; }
 
 void validate(const BuildConfig& config) {
     if (config.bins < kMinBins || config.bins > kMaxBins)
-        throw std::invalid_argument("bins must be between 2 and 256, got " + std::to_string(config.bins));
+        throw std::invalid_argument("bins must be between " + std::to_string(kMinBins) + " and " + std::to_string(kMaxBins) + ", got " + std::to_string(config.bins));
     if (config.max_leaf_size < 1)
         throw std::invalid_argument("max_leaf_size must be at least 1");
     if (!std::isfinite(config.traversal_cost) || !std::isfinite(config.intersection_cost) ||

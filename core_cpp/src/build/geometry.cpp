@@ -1,5 +1,8 @@
 #include "bvhlab/geometry.h"
 
+#include "bvhlab/thread_pool.h"
+
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -160,24 +163,30 @@ std::uint64_t geometry_fingerprint(const GeometryView& g) {
     return f.finish();
 }
 
-BigVector<PackedPrim> pack_prims(const GeometryView& g, const BigVector<std::uint32_t>& refs) {
-    BigVector<PackedPrim> out(refs.size());
-    for (std::size_t k = 0; k < refs.size(); ++k) {
-        std::uint32_t ref = refs[k];
-        std::size_t i = ref_index(ref);
-        PackedPrim& p = out[k];
-        p.ref = ref;
-        if (is_sphere_ref(ref)) {
-            Vec3 c = g.sphere_center(i);
-            p = {{c.x, c.y, c.z}, {g.sphere_radius(i), 0, 0}, {0, 0, 0}, ref};
-        } else {
-            Vec3 v0 = g.vertex(i, 0), e1 = g.vertex(i, 1) - v0, e2 = g.vertex(i, 2) - v0;
-            // A zero-area triangle keeps zero edges, so its determinant is exactly 0: never hit.
-            Vec3 n = cross(e1, e2);
-            if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) e1 = e2 = Vec3{};
-            p = {{v0.x, v0.y, v0.z}, {e1.x, e1.y, e1.z}, {e2.x, e2.y, e2.z}, ref};
-        }
+namespace {
+
+PackedPrim pack_prim(const GeometryView& g, std::uint32_t ref) {
+    const std::size_t i = ref_index(ref);
+    if (is_sphere_ref(ref)) {
+        const Vec3 c = g.sphere_center(i);
+        return {{c.x, c.y, c.z}, {g.sphere_radius(i), 0, 0}, {0, 0, 0}, ref};
     }
+    Vec3 v0 = g.vertex(i, 0), e1 = g.vertex(i, 1) - v0, e2 = g.vertex(i, 2) - v0;
+    // A zero-area triangle keeps zero edges, so its determinant is exactly 0: never hit.
+    const Vec3 n = cross(e1, e2);
+    if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) e1 = e2 = Vec3{};
+    return {{v0.x, v0.y, v0.z}, {e1.x, e1.y, e1.z}, {e2.x, e2.y, e2.z}, ref};
+}
+
+}  // namespace
+
+BigVector<PackedPrim> pack_prims(const GeometryView& g, const BigVector<std::uint32_t>& refs, unsigned threads) {
+    BigVector<PackedPrim> out(refs.size());
+    constexpr std::size_t kChunk = 1 << 15;
+    ThreadPool::shared().run((refs.size() + kChunk - 1) / kChunk, threads, [&](std::size_t c, unsigned) {
+        for (std::size_t k = c * kChunk, end = std::min(refs.size(), k + kChunk); k < end; ++k)
+            out[k] = pack_prim(g, refs[k]);
+    });
     return out;
 }
 

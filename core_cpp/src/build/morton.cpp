@@ -17,8 +17,7 @@ std::uint32_t spread_bits(std::uint32_t v) {
 }
 
 std::uint32_t quantize(float x, float lo, float scale) {
-    float q = (x - lo) * scale;
-    return static_cast<std::uint32_t>(std::clamp(q, 0.0f, 1023.0f));
+    return truncate_clamped((x - lo) * scale, 1023.0f);
 }
 
 }  // namespace

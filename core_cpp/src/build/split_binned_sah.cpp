@@ -1,171 +1,117 @@
-// Binned SAH (report §2.3.2, PBRT §4.3.2): drop centroids into B equal buckets along the axis,
-// then find the cheapest bucket boundary with one sweep from the right and one from the left —
-// O(n + B), the improvement over the O(n + B²) loop the report says its implementation had.
-#include <algorithm>
-#include <cmath>
-
-#include "bvhlab/split.h"
+// Binned SAH (report §2.3.2, PBRT §4.3.2): B equal buckets per axis, the cheapest bucket
+// boundary by an O(B) sweep (the improvement the report names over its O(n + B²) loop), then one
+// pass that scatters by bucket and fills the children's buckets (binning.h). At the top of the
+// tree the passes run in chunks on every thread.
+#include "binning.h"
+#include "partition.h"
 
 namespace bvhlab {
 namespace {
 
-/// One bucket: the box of its primitives and of their centroids (64 bytes, one cache line).
-struct alignas(64) Bin {
-    F4 lo, hi, clo, chi;
-};
-
-/// B buckets on one axis. Consecutive references alternate between two copies so that runs of
-/// references in the same bucket do not wait on each other's stores; the copies merge after.
-struct Bins {
-    Bin bin[2][kMaxBins];
-    std::uint32_t count[2][kMaxBins];
-
-    void reset(std::uint32_t n) {
-        const F4 inf = F4::splat(std::numeric_limits<float>::infinity()), ninf = F4::splat(-std::numeric_limits<float>::infinity());
-        for (auto& set : bin)
-            for (std::uint32_t k = 0; k < n; ++k) set[k] = {inf, ninf, inf, ninf};
-        for (auto& set : count) std::fill(set, set + n, 0u);
-    }
-    void add(int copy, std::uint32_t k, F4 lo, F4 hi, F4 c) {
-        Bin& b = bin[copy][k];
-        b.lo = min(b.lo, lo), b.hi = max(b.hi, hi), b.clo = min(b.clo, c), b.chi = max(b.chi, c);
-        ++count[copy][k];
-    }
-    void merge_copies(std::uint32_t n) {
-        for (std::uint32_t k = 0; k < n; ++k) {
-            Bin& a = bin[0][k];
-            const Bin& b = bin[1][k];
-            a.lo = min(a.lo, b.lo), a.hi = max(a.hi, b.hi), a.clo = min(a.clo, b.clo), a.chi = max(a.chi, b.chi);
-            count[0][k] += count[1][k];
-        }
-    }
-};
-
-/// Union of buckets [first, last) as NodeBounds.
-NodeBounds merge(const Bins& bins, std::uint32_t first, std::uint32_t last) {
-    const float inf = std::numeric_limits<float>::infinity();
-    F4 lo = F4::splat(inf), hi = F4::splat(-inf), clo = lo, chi = hi;
-    for (std::uint32_t k = first; k < last; ++k) {
-        const Bin& b = bins.bin[0][k];
-        lo = min(lo, b.lo), hi = max(hi, b.hi), clo = min(clo, b.clo), chi = max(chi, b.chi);
-    }
-    auto vec = [](F4 v) { return Vec3{v.lane(0), v.lane(1), v.lane(2)}; };
-    return {{vec(lo), vec(hi)}, {vec(clo), vec(chi)}};
+BinStore& store_of(SplitContext& ctx) {
+    if (!ctx.scratch.bins) ctx.scratch.bins = std::make_unique<BinStore>(ctx.config.bins);
+    return *ctx.scratch.bins;
 }
 
-struct Candidate {
-    float cost = std::numeric_limits<float>::infinity();
-    int axis = -1;
-    std::uint32_t last_left_bin = 0;  ///< buckets [0, last_left_bin] go left
-};
-
-/// The O(B) sweep: cheapest boundary of one axis's buckets.
-void sweep(const Bins& bins, std::uint32_t n_bins, int axis, const BuildConfig& config, float parent_area,
-           Candidate& best) {
-    const float inf = std::numeric_limits<float>::infinity();
-    float right_area[kMaxBins];
-    std::uint32_t right_count[kMaxBins];
-    F4 lo = F4::splat(inf), hi = F4::splat(-inf);
-    std::uint32_t n = 0;
-    for (std::uint32_t k = n_bins - 1; k > 0; --k) {
-        lo = min(lo, bins.bin[0][k].lo), hi = max(hi, bins.bin[0][k].hi), n += bins.count[0][k];
-        right_area[k] = half_area(lo, hi), right_count[k] = n;
-    }
-    lo = F4::splat(inf), hi = F4::splat(-inf), n = 0;
-    const float inv_parent = parent_area > 0 ? 1.0f / parent_area : 0.0f;
-    for (std::uint32_t k = 0; k + 1 < n_bins; ++k) {
-        lo = min(lo, bins.bin[0][k].lo), hi = max(hi, bins.bin[0][k].hi), n += bins.count[0][k];
-        if (n == 0 || right_count[k + 1] == 0) continue;
-        float weighted = half_area(lo, hi) * float(n) + right_area[k + 1] * float(right_count[k + 1]);
-        float ratio = parent_area > 0 ? weighted * inv_parent : float(n + right_count[k + 1]);
-        float cost = config.traversal_cost + ratio * config.intersection_cost;
-        if (cost < best.cost) best = {cost, axis, k};
-    }
+/// The buckets of a node its parent did not bin: one pass of its own (in chunks at the top).
+BinSet bin_node(SplitContext& ctx, Range r, const PrimRef* in, const BinFrame& f) {
+    BinStore& store = store_of(ctx);
+    const std::uint32_t chunks = chunk_count(ctx, r);
+    for (std::uint32_t k = 0; k < 2 * chunks; ++k) store.slot(kChunkSlots + k).reset();
+    for_each_chunk(ctx, r, chunks, [&](std::uint32_t k, Range c) {
+        const BinSet copies[2] = {store.slot(kChunkSlots + 2 * k), store.slot(kChunkSlots + 2 * k + 1)};
+        bin_refs(in, c, f, copies);
+    });
+    const BinSet own = store.slot(kOwnSlot);
+    own.reset();
+    for (std::uint32_t k = 0; k < 2 * chunks; ++k) own.merge(store.slot(kChunkSlots + k));
+    return own;
 }
 
-/// Bucket of a reference on one axis, from 2·centroid (one add, no multiply by ½). Binning and
-/// partitioning call this same function, so both see the same bucket.
-struct Bucketer {
-    float origin = 0, scale = 0, top = 0;
-    Bucketer() = default;
-    Bucketer(const Aabb& centroids, int axis, std::uint32_t n_bins) {
-        float extent = centroids.hi[axis] - centroids.lo[axis];
-        float s = float(n_bins) / (2.0f * extent);
-        origin = 2.0f * centroids.lo[axis];
-        scale = extent > 0 && std::isfinite(s) ? s : 0.0f;
-        top = float(n_bins - 1);
+/// The fused pass over r in one piece: the children's buckets end up in their slots.
+std::uint32_t partition_whole(SplitContext& ctx, Range r, int src, const BinFrame& f, const BinSplit& best,
+                              ChildBinning child[2], const std::int32_t slots[2], CentroidBounds sides[2]) {
+    BinStore& store = store_of(ctx);
+    BinSet copies[2][2];
+    for (int s = 0; s < 2; ++s) {
+        if (slots[s] < 0) continue;
+        copies[s][0] = store.slot(std::uint32_t(slots[s])), copies[s][1] = store.slot(kChunkSlots + s);
+        copies[s][0].reset(), copies[s][1].reset();
+        child[s].copies = copies[s];
     }
-    std::uint32_t operator()(const PrimRef& p, int axis) const {
-        float k = (p.lo[axis] + p.hi[axis] - origin) * scale;
-        return static_cast<std::uint32_t>(std::min(std::max(k, 0.0f), top));
-    }
-};
+    const std::uint32_t mid = partition_and_bin(ctx.buffers[src], ctx.buffers[1 - src], r, r.begin, r.end, f, best,
+                                                child, sides);
+    for (int s = 0; s < 2; ++s)
+        if (slots[s] >= 0) copies[s][0].merge(copies[s][1]);
+    return mid;
+}
 
-/// Bins every reference on the axes [first, last] (those with an extent) and stores its bucket
-/// on each axis in `code` (one byte per axis), so the partition reads rather than recomputes it.
-template <bool kOneAxis>
-void bin_range(PrimRef* refs, Range r, int first, int last, const Vec3& extent, Bins* bins, const Bucketer* bucket) {
-    const F4 half = F4::splat(0.5f);
-    for (std::uint32_t i = r.begin; i < r.end; ++i) {
-        PrimRef& p = refs[i];
-        F4 lo = p.lo4(), hi = p.hi4(), c = (lo + hi) * half;
-        if constexpr (kOneAxis) {
-            std::uint32_t k = bucket[first](p, first);
-            p.code = k << (8 * first);
-            bins[first].add(int(i & 1), k, lo, hi, c);
-        } else {
-            std::uint32_t code = 0;
-            for (int a = first; a <= last; ++a) {
-                if (!(extent[a] > 0.0f)) continue;
-                std::uint32_t k = bucket[a](p, a);
-                code |= k << (8 * a);
-                bins[a].add(int(i & 1), k, lo, hi, c);
-            }
-            p.code = code;
-        }
+/// The fused pass in chunks on the pool (the top of the tree): a counting pass first finds where
+/// each chunk writes; each chunk fills buckets of its own, merged into the slots after.
+std::uint32_t partition_chunks(SplitContext& ctx, Range r, int src, const BinFrame& f, const BinSplit& best,
+                               const ChildBinning child[2], const std::int32_t slots[2], CentroidBounds sides[2],
+                               std::uint32_t chunks) {
+    BinStore& store = store_of(ctx);
+    const PrimRef* in = ctx.buffers[src];
+    std::vector<BinSet> copies(4 * std::size_t(chunks));  // per chunk: left ×2, right ×2
+    for (std::uint32_t k = 0; k < 4 * chunks; ++k)
+        if (slots[(k / 2) % 2] >= 0) (copies[k] = store.slot(kChunkSlots + k)).reset();
+    std::vector<std::uint32_t> left_counts(chunks), sizes(chunks);
+    for_each_chunk(ctx, r, chunks, [&](std::uint32_t k, Range c) {
+        left_counts[k] = count_left(in, c, f, best), sizes[k] = c.size();
+    });
+    const ChunkCursors cursors(r, left_counts, sizes);
+    std::vector<CentroidBounds> chunk_sides(2 * std::size_t(chunks));
+    for_each_chunk(ctx, r, chunks, [&](std::uint32_t k, Range c) {
+        ChildBinning mine[2] = {child[0], child[1]};
+        for (int s = 0; s < 2; ++s) mine[s].copies = slots[s] >= 0 ? &copies[4 * k + 2 * s] : nullptr;
+        partition_and_bin(in, ctx.buffers[1 - src], c, cursors.left[k], cursors.right[k], f, best, mine,
+                          sides ? &chunk_sides[2 * k] : nullptr);
+    });
+    for (int s = 0; s < 2; ++s) {
+        for (std::uint32_t k = 0; k < chunks && sides; ++k) sides[s].merge(chunk_sides[2 * k + s]);
+        if (slots[s] < 0) continue;
+        const BinSet target = store.slot(std::uint32_t(slots[s]));
+        target.reset();
+        for (std::uint32_t k = 0; k < chunks; ++k) target.merge(copies[4 * k + 2 * s]), target.merge(copies[4 * k + 2 * s + 1]);
     }
+    return cursors.mid;
 }
 
 }  // namespace
 
 std::optional<Split> split_binned_sah(SplitContext& ctx, Range r, int src, const NodeBounds& b, int axis) {
     if (r.size() <= kSmallExact) return split_small_exact(ctx, r, src, b, axis);
-    const std::uint32_t n_bins = ctx.config.bins;
-    const int first_axis = axis == kAllAxes ? 0 : axis, last_axis = axis == kAllAxes ? 2 : axis;
-    const Vec3 extent = b.centroids.extent();
-    PrimRef* in = ctx.buffers[src];
-    Bins bins[3];
-    Bucketer bucket[3];
-
-    // Binning: one pass over the references, per axis asked for.
-    for (int a = first_axis; a <= last_axis; ++a) {
-        if (!(extent[a] > 0.0f)) continue;
-        bins[a].reset(n_bins);
-        bucket[a] = Bucketer(b.centroids, a, n_bins);
-    }
-    if (first_axis == last_axis) bin_range<true>(in, r, first_axis, last_axis, extent, bins, bucket);
-    else bin_range<false>(in, r, first_axis, last_axis, extent, bins, bucket);
-
-    // Sweep every binned axis; keep the cheapest boundary.
-    Candidate best;
-    const float parent_area = b.box.half_area();
-    for (int a = first_axis; a <= last_axis; ++a) {
-        if (!(extent[a] > 0.0f)) continue;
-        bins[a].merge_copies(n_bins);
-        sweep(bins[a], n_bins, a, ctx.config, parent_area, best);
-    }
+    const BinFrame frame(b.box, ctx.config.bins);
+    const BinSet bins = b.bins >= 0 ? store_of(ctx).slot(std::uint32_t(b.bins)) : bin_node(ctx, r, ctx.buffers[src], frame);
+    const SahCost sah(ctx.config);
+    const BinSplit best = best_bin_split(bins, frame, axis == kAllAxes ? 0 : axis, axis == kAllAxes ? 2 : axis, sah,
+                                         b.box.half_area());
     if (best.axis < 0) return std::nullopt;
-
-    // Scatter into the other buffer by bucket; the child bounds are the unions of their buckets.
-    const int a = best.axis;
-    const std::uint32_t last_left = best.last_left_bin;
-    const int shift = 8 * a;
     Split s;
-    s.mid = scatter_partition(in, ctx.buffers[1 - src], r,
-                              [=](const PrimRef& p) { return ((p.code >> shift) & 0xffu) <= last_left; });
-    s.left = merge(bins[a], 0, last_left + 1);
-    s.right = merge(bins[a], last_left + 1, n_bins);
     s.cost = best.cost;
+    if (ctx.leaf_allowed && sah.leaf(r.size()) <= best.cost) {
+        s.leaf = true;
+        return s;
+    }
+    // Before the pass: it may overwrite this node's buckets with its right child's.
+    s.left.box = bins.box_of(best.axis, 0, best.last_left + 1);
+    s.right.box = bins.box_of(best.axis, best.last_left + 1, frame.bins);
+    const std::uint32_t n_left = bins.count_of(best.axis, 0, best.last_left + 1);
+    ChildBinning child[2] = {{BinFrame(s.left.box, frame.bins)}, {BinFrame(s.right.box, frame.bins)}};
+    const std::int32_t slots[2] = {n_left > kSmallExact ? std::int32_t(ctx.child_slot + 1) : -1,
+                                   r.size() - n_left > kSmallExact ? std::int32_t(ctx.child_slot) : -1};
+    // The children's centroid bounds are gathered only for the axis policies that read them;
+    // otherwise their boxes stand in for them (they contain the centroids; see NodeBounds).
+    const bool centroids = ctx.config.axis == AxisPolicy::Largest || ctx.config.axis == AxisPolicy::Random;
+    CentroidBounds sides[2];
+    CentroidBounds* gathered = centroids ? sides : nullptr;
+    const std::uint32_t chunks = chunk_count(ctx, r);
+    s.mid = chunks == 1 ? partition_whole(ctx, r, src, frame, best, child, slots, gathered)
+                        : partition_chunks(ctx, r, src, frame, best, child, slots, gathered, chunks);
+    s.left.centroids = centroids ? sides[0].halved() : s.left.box;
+    s.right.centroids = centroids ? sides[1].halved() : s.right.box;
+    s.left.bins = slots[0], s.right.bins = slots[1];
     s.buffer = static_cast<std::uint8_t>(1 - src);
     return s;
 }

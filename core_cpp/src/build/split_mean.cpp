@@ -4,13 +4,8 @@
 namespace bvhlab {
 
 std::optional<Split> split_mean(SplitContext& ctx, Range r, int src, const NodeBounds& b, int axis) {
-    double sum = 0.0;
-    if (b.has_sum) {
-        sum = b.centroid_sum[axis];  // gathered by the parent's bounds pass
-    } else {
-        const PrimRef* refs = ctx.buffers[src];
-        for (std::uint32_t i = r.begin; i < r.end; ++i) sum += refs[i].centroid(axis);
-    }
+    // The sum is gathered by the parent's bounds pass (the table of methods asks for it).
+    const double sum = b.has_sum ? b.centroid_sum[axis] : bounds_of(ctx, r, src, true).centroid_sum[axis];
     return split_at_position(ctx, r, src, b, axis, static_cast<float>(sum / r.size()));
 }
 

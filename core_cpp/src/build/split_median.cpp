@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "bvhlab/split.h"
+#include "partition.h"
 
 namespace bvhlab {
 namespace {
@@ -17,8 +18,7 @@ struct Bucketer {
     float origin, scale, top;
     int axis;
     std::uint32_t operator()(const PrimRef& p) const {
-        float k = ((p.lo[axis] + p.hi[axis]) - origin) * scale;  // on 2·centroid
-        return static_cast<std::uint32_t>(std::clamp(k, 0.0f, top));
+        return truncate_clamped(((p.lo[axis] + p.hi[axis]) - origin) * scale, top);  // on 2·centroid
     }
 };
 
@@ -48,15 +48,21 @@ std::optional<Split> split_median(SplitContext& ctx, Range r, int src, const Nod
     std::uint32_t median_bucket = 0, below = 0;
     while (below + count[median_bucket] <= mid - r.begin) below += count[median_bucket++];
 
-    // 2. scatter: below | the median's bucket | above, each in input order
+    // 2. scatter: below | the median's bucket | above, each in input order; the bounds of what
+    //    lies below and above are gathered on the way
     std::uint32_t cursor[3] = {r.begin, r.begin + below, r.begin + below + count[median_bucket]};
+    const std::uint32_t bucket_begin = cursor[1], bucket_end = cursor[2];
+    SideBounds sides[3];
     for (std::uint32_t i = r.begin; i < r.end; ++i) {
-        std::uint32_t k = bucket(in[i]);
-        out[cursor[(k >= median_bucket) + (k > median_bucket)]++] = in[i];
+        const std::uint32_t k = bucket(in[i]);
+        const std::uint32_t group = (k >= median_bucket) + (k > median_bucket);
+        out[cursor[group]++] = in[i];
+        sides[group].add<false>(in[i]);
     }
-    // 3. select within the median's bucket
-    std::nth_element(out + cursor[0], out + mid, out + r.begin + below + count[median_bucket], less);
-    return split_at(ctx, r, 1 - src, b, mid);
+    // 3. select within the median's bucket, and add its two parts to the sides
+    std::nth_element(out + bucket_begin, out + mid, out + bucket_end, less);
+    for (std::uint32_t i = bucket_begin; i < bucket_end; ++i) sides[i < mid ? 0 : 2].add<false>(out[i]);
+    return split_with(ctx, r, 1 - src, b, mid, sides[0].finish(false), sides[2].finish(false));
 }
 
 }  // namespace bvhlab

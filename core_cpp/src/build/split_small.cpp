@@ -1,73 +1,90 @@
-// Exact SAH for small ranges: every split position of the centroids sorted on an axis. Below a
-// few dozen primitives this costs less than filling and sweeping B buckets, and never finds a
-// worse split than binning, so both SAH methods use it there.
-#include <algorithm>
+// Exact SAH for small ranges (<= kSmallExact): every split position of the centroids sorted on
+// each axis. Below a few buckets' worth of primitives this costs less than binning and never
+// finds a worse split, so both SAH methods use it there. The three axes are sorted at once:
+// vector lanes are axes, and each primitive's rank counts the primitives before it.
 #include <limits>
 
 #include "bvhlab/split.h"
+#include "sah_sweep.h"
 
 namespace bvhlab {
 namespace {
 
-NodeBounds bounds_in_order(const F4* lo, const F4* hi, const std::uint8_t* order, std::uint32_t first, std::uint32_t last) {
-    const float inf = std::numeric_limits<float>::infinity();
-    F4 blo = F4::splat(inf), bhi = F4::splat(-inf), clo = blo, chi = bhi;
-    for (std::uint32_t i = first; i < last; ++i) {
-        F4 a = lo[order[i]], b = hi[order[i]], c = (a + b) * F4::splat(0.5f);
-        blo = min(blo, a), bhi = max(bhi, b), clo = min(clo, c), chi = max(chi, c);
+static_assert(kSmallExact <= 255);
+
+/// The references of a small range: boxes as (lo, -hi), twice the centroids, and their order
+/// on each axis (a stable sort: ties keep input order).
+struct SmallSet {
+    std::uint32_t n;
+    F4 lo[kSmallExact], neg_hi[kSmallExact], c2[kSmallExact];
+    std::uint8_t order[3][kSmallExact];
+    bool flat[3];
+
+    SmallSet(const PrimRef* in, std::uint32_t count) : n(count) {
+        const float inf = std::numeric_limits<float>::infinity();
+        F4 cmin = F4::splat(inf), cmax = F4::splat(-inf);
+        for (std::uint32_t i = 0; i < n; ++i) {
+            lo[i] = in[i].lo4(), neg_hi[i] = neg(in[i].hi4()), c2[i] = in[i].lo4() + in[i].hi4();
+            cmin = min(cmin, c2[i]), cmax = max(cmax, c2[i]);
+        }
+        for (int a = 0; a < 3; ++a) flat[a] = !(cmin.lane(a) < cmax.lane(a));
+        rank_all();
     }
-    auto vec = [](F4 v) { return Vec3{v.lane(0), v.lane(1), v.lane(2)}; };
-    return {{vec(blo), vec(bhi)}, {vec(clo), vec(chi)}};
-}
+    /// rank of i = #{j : c2[j] < c2[i], or c2[j] == c2[i] and j < i}, per axis lane.
+    void rank_all() {
+        const F4 one = F4::splat(1.0f);
+        for (std::uint32_t i = 0; i < n; ++i) {
+            F4 rank = F4::splat(0.0f);
+            for (std::uint32_t j = 0; j < i; ++j) rank = rank + (less_equal(c2[j], c2[i]) & one);
+            for (std::uint32_t j = i + 1; j < n; ++j) rank = rank + (less(c2[j], c2[i]) & one);
+            std::uint32_t r[4];
+            truncate_to_u32(rank, r);
+            for (int a = 0; a < 3; ++a) order[a][r[a]] = std::uint8_t(i);
+        }
+    }
+    Cut cut(int a, const SahCost& sah, float inv_parent, Unions<kSmallExact + 3>& u) const {
+        F4 slo[kSmallExact], sneg_hi[kSmallExact];
+        for (std::uint32_t i = 0; i < n; ++i) slo[i] = lo[order[a][i]], sneg_hi[i] = neg_hi[order[a][i]];
+        return cheapest_cut({slo, sneg_hi, 1, nullptr, n}, sah, inv_parent, u);
+    }
+    Aabb centroid_box(int a, std::uint32_t first, std::uint32_t last) const {
+        const float inf = std::numeric_limits<float>::infinity();
+        F4 cmin = F4::splat(inf), cmax = F4::splat(-inf);
+        for (std::uint32_t i = first; i < last; ++i) cmin = min(cmin, c2[order[a][i]]), cmax = max(cmax, c2[order[a][i]]);
+        return box_of(cmin * F4::splat(0.5f), cmax * F4::splat(0.5f));
+    }
+    static Aabb box_of(F4 lo, F4 hi) { return {{lo.lane(0), lo.lane(1), lo.lane(2)}, {hi.lane(0), hi.lane(1), hi.lane(2)}}; }
+};
 
 }  // namespace
 
 std::optional<Split> split_small_exact(SplitContext& ctx, Range r, int src, const NodeBounds& b, int axis) {
-    const std::uint32_t n = r.size();
     const PrimRef* in = ctx.buffers[src] + r.begin;
-    const Vec3 extent = b.centroids.extent();
-    const float parent_area = b.box.half_area();
-    const float inv_parent = parent_area > 0 ? 1.0f / parent_area : 0.0f;
-    const BuildConfig& cfg = ctx.config;
-    const float inf = std::numeric_limits<float>::infinity();
-    F4 lo[kSmallExact], hi[kSmallExact];
-    for (std::uint32_t i = 0; i < n; ++i) lo[i] = in[i].lo4(), hi[i] = in[i].hi4();
-    std::uint8_t order[kSmallExact], best_order[kSmallExact];
-    float right_area[kSmallExact];
-    float best_cost = inf;
-    std::uint32_t best_mid = 0;
-
+    const SmallSet set(in, r.size());
+    const float inv_parent = SahCost::inverse_area(b.box.half_area());
+    const SahCost sah(ctx.config);
+    Unions<kSmallExact + 3> unions, best_unions;
+    Cut best;
+    int best_axis = -1;
     for (int a = 0; a < 3; ++a) {
-        if ((axis != kAllAxes && a != axis) || !(extent[a] > 0.0f)) continue;
-        float key[kSmallExact];  // insertion sort by 2·centroid; stable, ties keep input order
-        for (std::uint32_t i = 0; i < n; ++i) {
-            float k = in[i].lo[a] + in[i].hi[a];
-            std::uint32_t j = i;
-            for (; j > 0 && key[j - 1] > k; --j) key[j] = key[j - 1], order[j] = order[j - 1];
-            key[j] = k, order[j] = std::uint8_t(i);
-        }
-        F4 blo = F4::splat(inf), bhi = F4::splat(-inf);
-        for (std::uint32_t i = n; i-- > 1;) {
-            blo = min(blo, lo[order[i]]), bhi = max(bhi, hi[order[i]]);
-            right_area[i] = half_area(blo, bhi);
-        }
-        blo = F4::splat(inf), bhi = F4::splat(-inf);
-        for (std::uint32_t i = 1; i < n; ++i) {  // left = the first i in order
-            blo = min(blo, lo[order[i - 1]]), bhi = max(bhi, hi[order[i - 1]]);
-            float weighted = half_area(blo, bhi) * float(i) + right_area[i] * float(n - i);
-            float ratio = parent_area > 0 ? weighted * inv_parent : float(n);
-            float cost = cfg.traversal_cost + ratio * cfg.intersection_cost;
-            if (cost < best_cost) best_cost = cost, best_mid = i, std::copy(order, order + n, best_order);
-        }
+        if ((axis != kAllAxes && a != axis) || set.flat[a]) continue;
+        const Cut cut = set.cut(a, sah, inv_parent, unions);
+        if (cut.found && cut.cost < best.cost) best = cut, best_axis = a, best_unions = unions;
     }
-    if (best_mid == 0) return std::nullopt;
-    PrimRef* out = ctx.buffers[1 - src] + r.begin;
-    for (std::uint32_t i = 0; i < n; ++i) out[i] = in[best_order[i]];
+    if (best_axis < 0) return std::nullopt;
     Split s;
-    s.mid = r.begin + best_mid;
-    s.left = bounds_in_order(lo, hi, best_order, 0, best_mid);
-    s.right = bounds_in_order(lo, hi, best_order, best_mid, n);
-    s.cost = best_cost;
+    s.cost = best.cost;
+    if (ctx.leaf_allowed && sah.leaf(set.n) <= best.cost) {
+        s.leaf = true;
+        return s;
+    }
+    const std::uint8_t* order = set.order[best_axis];
+    PrimRef* out = ctx.buffers[1 - src] + r.begin;
+    for (std::uint32_t i = 0; i < set.n; ++i) out[i] = in[order[i]];
+    const std::uint32_t c = best.last_left, mid = c + 1;
+    s.mid = r.begin + mid;
+    s.left = {SmallSet::box_of(best_unions.left_lo[c], best_unions.left_hi[c]), set.centroid_box(best_axis, 0, mid)};
+    s.right = {SmallSet::box_of(best_unions.right_lo[c], best_unions.right_hi[c]), set.centroid_box(best_axis, mid, set.n)};
     s.buffer = static_cast<std::uint8_t>(1 - src);
     return s;
 }

@@ -34,13 +34,11 @@ void sweep(SplitContext& ctx, const std::vector<PrimRef>& p, const NodeBounds& b
         right_area[i] = box.half_area();
     }
     box = Aabb{};
-    const float parent_area = b.box.half_area();
-    const BuildConfig& cfg = ctx.config;
+    const float inv_parent = SahCost::inverse_area(b.box.half_area());
+    const SahCost sah(ctx.config);
     for (std::uint32_t i = 1; i < n; ++i) {  // left = [0, i), right = [i, n)
         box.grow(p[i - 1].box());
-        float weighted = box.half_area() * float(i) + right_area[i] * float(n - i);
-        float ratio = parent_area > 0 ? weighted / parent_area : float(n);
-        float cost = cfg.traversal_cost + ratio * cfg.intersection_cost;
+        const float cost = sah.split(inv_parent, box.half_area(), i, right_area[i], n - i);
         if (cost < best.cost) best = {cost, axis, i};
     }
 }

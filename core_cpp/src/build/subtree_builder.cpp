@@ -5,23 +5,6 @@
 namespace bvhlab {
 namespace {
 
-SplitFunction method_function(SplitMethod m) {
-    switch (m) {
-        case SplitMethod::Median: return split_median;
-        case SplitMethod::Mean: return split_mean;
-        case SplitMethod::Midpoint: return split_midpoint;
-        case SplitMethod::Sah: return split_binned_sah;
-        case SplitMethod::SweepSah: return split_sweep_sah;
-        case SplitMethod::Lbvh: return split_lbvh;
-    }
-    return split_median;
-}
-
-/// Methods that take kAllAxes themselves (and LBVH, which has no axis).
-bool handles_all_axes(SplitMethod m) {
-    return m == SplitMethod::Sah || m == SplitMethod::SweepSah || m == SplitMethod::Lbvh;
-}
-
 std::uint64_t mix(std::uint64_t x) {  // splitmix64 finaliser
     x ^= x >> 30, x *= 0xbf58476d1ce4e5b9ull;
     x ^= x >> 27, x *= 0x94d049bb133111ebull;
@@ -33,12 +16,14 @@ std::uint64_t mix(std::uint64_t x) {  // splitmix64 finaliser
 int choose_axis(const BuildConfig& cfg, const WorkItem& item) {
     Vec3 extent = item.bounds.centroids.extent();
     switch (cfg.axis) {
+        case AxisPolicy::Auto: return method_info(cfg.method).uses_sah ? kAllAxes : largest_axis(extent);
         case AxisPolicy::Largest: return largest_axis(extent);
         case AxisPolicy::Best: return kAllAxes;
         case AxisPolicy::Random: {
             int axes[3], n = 0;
             for (int a = 0; a < 3; ++a)
                 if (extent[a] > 0.0f) axes[n++] = a;
+            if (n == 0) return largest_axis(extent);
             std::uint64_t h = mix(cfg.seed ^ mix(item.range.begin ^ (std::uint64_t(item.range.end) << 32)) ^ item.depth);
             return axes[h % n];
         }
@@ -62,25 +47,36 @@ Split split_pair(SplitContext& ctx, const WorkItem& item) {
     s.mid = item.range.begin + 1;
     s.left = {p[0].box(), {p[0].centroid(), p[0].centroid()}};
     s.right = {p[1].box(), {p[1].centroid(), p[1].centroid()}};
-    s.cost = split_cost(ctx.config, item.bounds, s.left.box, 1, s.right.box, 1);
+    s.cost = SahCost(ctx.config).split(SahCost::inverse_area(item.bounds.box.half_area()), s.left.box.half_area(), 1,
+                                       s.right.box.half_area(), 1);
     s.buffer = item.buffer;
     return s;
+}
+
+/// The median split on the largest centroid extent (or an even split when all centroids coincide).
+Split median_of(SplitContext& ctx, Range r, int src, const NodeBounds& b) {
+    const Vec3 extent = b.centroids.extent();
+    if (!(extent.x > 0.0f || extent.y > 0.0f || extent.z > 0.0f)) return split_even(ctx, r, src, b);
+    return *split_median(ctx, r, src, b, largest_axis(extent));
 }
 
 Split find_split(SplitContext& ctx, const WorkItem& item) {
     const Range r = item.range;
     const int src = item.buffer;
     const NodeBounds& b = item.bounds;
-    Vec3 extent = b.centroids.extent();
-    if (!(extent.x > 0.0f || extent.y > 0.0f || extent.z > 0.0f)) return split_even(ctx, r, src, b);
+    const SplitMethodInfo& method = method_info(ctx.config.method);
     if (r.size() == 2) return split_pair(ctx, item);
-    if (too_deep(item.depth, r.size())) return *split_median(ctx, r, src, b, largest_axis(extent));
+    if (method.bottom_up_boxes) {  // no bounds on the way down; the rare depth fallback makes its own
+        if (too_deep(item.depth, r.size())) return median_of(ctx, r, src, bounds_of(ctx, r, src, false));
+    } else {
+        const Vec3 extent = b.centroids.extent();
+        if (!(extent.x > 0.0f || extent.y > 0.0f || extent.z > 0.0f)) return split_even(ctx, r, src, b);
+        if (too_deep(item.depth, r.size())) return median_of(ctx, r, src, b);
+    }
 
-    const SplitMethod method = ctx.config.method;
-    const int axis = choose_axis(ctx.config, item);
-    std::optional<Split> s = axis == kAllAxes && !handles_all_axes(method)
-                                 ? split_best_of_axes(method_function(method), ctx, r, src, b)
-                                 : method_function(method)(ctx, r, src, b, axis);
+    const int axis = method.bottom_up_boxes ? kAllAxes : choose_axis(ctx.config, item);  // LBVH has no axis
+    std::optional<Split> s = axis == kAllAxes && !method.all_axes ? split_best_of_axes(method.split, ctx, r, src, b)
+                                                                  : method.split(ctx, r, src, b, axis);
     return s ? *s : split_even(ctx, r, src, b);
 }
 
@@ -91,13 +87,17 @@ std::optional<Split> choose_split(SplitContext& ctx, const WorkItem& item) {
     const std::uint32_t n = item.range.size();
     if (n <= 1) return std::nullopt;
     const bool fits_leaf = n <= cfg.max_leaf_size;
-    if (fits_leaf && !uses_sah(cfg.method)) return std::nullopt;
-    Split s = find_split(ctx, item);
+    const bool weighs_leaves = method_info(cfg.method).uses_sah;
+    if (fits_leaf && !weighs_leaves) return std::nullopt;
     // SAH leaf termination (report §5.1, PBRT): a range that may be a leaf becomes one when
-    // intersecting all of it costs no more than the best split.
-    if (fits_leaf && float(n) * cfg.intersection_cost <= s.cost) return std::nullopt;
+    // intersecting all of it costs no more than the best split. The SAH methods answer that
+    // themselves before they move anything (Split::leaf); the check after covers the fallbacks.
+    ctx.leaf_allowed = fits_leaf;
+    Split s = find_split(ctx, item);
+    if (s.leaf || (fits_leaf && SahCost(cfg).leaf(n) <= s.cost)) return std::nullopt;
     return s;
 }
+
 
 namespace {
 
@@ -109,7 +109,7 @@ public:
 
     /// Appends the node of `item` (box and depth) and links it to its parent.
     std::uint32_t open(const WorkItem& item) {
-        auto index = static_cast<std::uint32_t>(out_.nodes.size());
+        const auto index = static_cast<std::uint32_t>(out_.nodes.size());
         BvhNode node{};
         set_box(node, item.bounds.box);
         out_.nodes.push_back(node);
@@ -125,6 +125,10 @@ public:
         const PrimRef* refs = shared_.buffers[item.buffer];
         for (std::uint32_t i = item.range.begin; i < item.range.end; ++i) shared_.leaf_refs[i] = refs[i].ref;
         leaf_primitives_ += item.range.size();
+        if (!shared_.method.bottom_up_boxes) return;
+        F4 lo = refs[item.range.begin].lo4(), hi = refs[item.range.begin].hi4();
+        for (std::uint32_t i = item.range.begin + 1; i < item.range.end; ++i) lo = min(lo, refs[i].lo4()), hi = max(hi, refs[i].hi4());
+        set_box(node, {{lo.lane(0), lo.lane(1), lo.lane(2)}, {hi.lane(0), hi.lane(1), hi.lane(2)}});
     }
     void flush_leaf_count() {
         shared_.primitives_in_leaves.fetch_add(leaf_primitives_, std::memory_order_relaxed);
@@ -139,35 +143,40 @@ private:
 
 /// A range that is a leaf without asking the split method: one primitive, or few enough for a
 /// leaf under a method that does not weigh leaves against splits.
-bool obviously_leaf(const BuildConfig& cfg, std::uint32_t n) {
-    return n == 1 || (n <= cfg.max_leaf_size && !uses_sah(cfg.method));
+bool obviously_leaf(const BuildShared& shared, std::uint32_t n) {
+    return n == 1 || (n <= shared.config.max_leaf_size && !shared.method.uses_sah);
+}
+
+/// True when the build should stop: polls the cancellation on the calling thread (which runs
+/// the caller's progress check at most every 20 ms), reads the flag on workers.
+bool should_stop(BuildShared& shared, const SubtreeRun& run) {
+    return run.calling_thread ? shared.cancel.poll() : shared.cancel.stop_requested();
 }
 
 }  // namespace
 
 void build_subtree(BuildShared& shared, SplitScratch& scratch, const WorkItem& root, Subtree& out,
-                   std::uint32_t defer_size, const std::function<void()>& on_progress) {
-    SplitContext ctx{{shared.buffers[0], shared.buffers[1]}, shared.config, scratch};
+                   const SubtreeRun& run) {
+    SplitContext ctx{{shared.buffers[0], shared.buffers[1]}, shared.config, scratch, run.parallel};
     SubtreeWriter writer(shared, out);
     out.nodes.reserve(2 * std::size_t(root.range.size()) - 1);  // a binary tree with n leaves at most
     out.depths.reserve(out.nodes.capacity());
     std::vector<WorkItem> stack{root};
-    std::uint32_t since_progress = 0;
-    while (!stack.empty()) {
+    for (std::uint32_t nodes = 0; !stack.empty(); ++nodes) {
+        if ((nodes & 63) == 0) {
+            writer.flush_leaf_count();
+            if (should_stop(shared, run)) return;
+        }
         WorkItem item = stack.back();
         stack.pop_back();
         const std::uint32_t index = writer.open(item);
-        if (index > 0 && item.range.size() <= defer_size) {
+        if (index > 0 && item.range.size() <= run.defer_size) {
+            item.bounds.bins = -1;  // its buckets live in this thread's store
             out.deferred.emplace_back(index, item);
             continue;
         }
-        if (++since_progress == 4096) {
-            since_progress = 0;
-            writer.flush_leaf_count();
-            on_progress();
-            if (shared.cancelled.load(std::memory_order_relaxed)) return;
-        }
-        std::optional<Split> split = obviously_leaf(shared.config, item.range.size()) ? std::nullopt : choose_split(ctx, item);
+        ctx.child_slot = static_cast<std::uint32_t>(stack.size());  // where the children will be pushed
+        std::optional<Split> split = obviously_leaf(shared, item.range.size()) ? std::nullopt : choose_split(ctx, item);
         if (!split) {
             writer.make_leaf(index, item);
             continue;
@@ -177,13 +186,13 @@ void build_subtree(BuildShared& shared, SplitScratch& scratch, const WorkItem& r
         WorkItem left{{item.range.begin, split->mid}, split->left, index, d, false, split->buffer};
         WorkItem right{{split->mid, item.range.end}, split->right, index, d, true, split->buffer};
         // Children that are plainly leaves (most leaves) are written at once, without a work item.
-        if (!obviously_leaf(shared.config, left.range.size())) {
+        if (!obviously_leaf(shared, left.range.size())) {
             stack.push_back(right);
             stack.push_back(left);
             continue;
         }
         writer.make_leaf(writer.open(left), left);
-        if (obviously_leaf(shared.config, right.range.size())) writer.make_leaf(writer.open(right), right);
+        if (obviously_leaf(shared, right.range.size())) writer.make_leaf(writer.open(right), right);
         else stack.push_back(right);
     }
 }

@@ -2,11 +2,11 @@
 // configured split method where to split, and writes nodes in depth-first order.
 #pragma once
 #include <atomic>
-#include <functional>
 #include <cstdint>
 #include <vector>
 
 #include "bvhlab/bvh.h"
+#include "bvhlab/cancel.h"
 #include "bvhlab/split.h"
 
 namespace bvhlab {
@@ -33,15 +33,23 @@ struct BuildShared {
     PrimRef* buffers[2];          ///< ping-pong reference buffers (split.h)
     std::uint32_t* leaf_refs;     ///< output: the references in leaf order
     const BuildConfig& config;
-    std::atomic<std::uint64_t> primitives_in_leaves{0};
-    std::atomic<bool> cancelled{false};
+    const SplitMethodInfo& method;
+    Cancellation& cancel;         ///< workers read stop_requested(); the calling thread polls it
+    std::atomic<std::uint64_t>& primitives_in_leaves;  ///< progress: primitives placed in leaves
 };
 
-/// Builds the subtree of `root` into `out`. Ranges of at most `defer_size` primitives (other than
-/// the root) are not built but left in out.deferred as placeholder nodes; 0 defers nothing.
-/// `on_progress` is called every few thousand nodes (from this thread).
+/// How one call of build_subtree runs: on the calling thread (which polls the cancellation and
+/// may cut large ranges into chunks for the pool) or on a worker.
+struct SubtreeRun {
+    std::uint32_t defer_size = 0;               ///< ranges of at most this many (but the root) are deferred; 0: none
+    bool calling_thread = false;
+    const ParallelPasses* parallel = nullptr;  ///< data-parallel passes for large ranges
+};
+
+/// Builds the subtree of `root` into `out`. Deferred ranges are left in out.deferred as
+/// placeholder nodes. Returns early (with an unfinished subtree) when the build is cancelled.
 void build_subtree(BuildShared& shared, SplitScratch& scratch, const WorkItem& root, Subtree& out,
-                   std::uint32_t defer_size, const std::function<void()>& on_progress);
+                   const SubtreeRun& run);
 
 /// Decides a node: the split to make, or nothing for a leaf. Exposed for the tests.
 std::optional<Split> choose_split(SplitContext& ctx, const WorkItem& item);

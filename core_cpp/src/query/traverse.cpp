@@ -6,10 +6,10 @@
 #include "bvhlab/coordinate_range.h"
 #include "bvhlab/wide_bvh.h"
 
-#include <atomic>
+#include <algorithm>
 #include <numbers>
-#include <thread>
-#include <vector>
+
+#include "bvhlab/thread_pool.h"
 
 namespace bvhlab {
 namespace {
@@ -106,37 +106,30 @@ void intersect_batch(const Bvh& bvh, const RayBatch& rays, const HitBatch& out, 
     if (mode == Traversal::Wide && !wide) throw std::invalid_argument("Traversal::Wide needs the wide tree");
     check_rays(rays);
     constexpr std::size_t kChunk = 1024;
-    std::atomic<std::size_t> next{0};
-    auto stopped = [&](bool calling_thread) {
-        return cancel && (calling_thread ? cancel->poll() : cancel->stop_requested());
-    };
-    auto worker = [&](bool calling_thread) {
-        for (std::size_t begin; !stopped(calling_thread) && (begin = next.fetch_add(kChunk)) < rays.count;) {
-            std::size_t end = std::min(rays.count, begin + kChunk);
-            for (std::size_t i = begin; i < end; ++i) {
-                const float* o = rays.origins + 3 * i;
-                const float* d = rays.directions + 3 * i;
-                Ray ray{{o[0], o[1], o[2]}, {d[0], d[1], d[2]}, rays.tmin, rays.tmax};
-                const float t_scale = scale_ray(ray);  // exact; keeps the arithmetic in range
-                std::uint32_t visited;
-                Hit h = mode == Traversal::Wide ? intersect_wide(*wide, bvh, ray, &visited)
-                                                : intersect(bvh, ray, mode, &visited);
-                bool miss = h.ref == kNoHit;
-                out.t[i] = h.t * t_scale;  // inf stays inf
-                out.prim[i] = miss ? -1 : std::int32_t(h.ref & gpu::REF_INDEX_MASK);
-                if (out.kind) out.kind[i] = miss ? 0 : std::uint8_t((h.ref & gpu::REF_SPHERE_BIT) ? 1 : 0);
-                if (out.u) out.u[i] = h.u;
-                if (out.v) out.v[i] = h.v;
-                if (out.nodes_visited) out.nodes_visited[i] = visited;
-            }
+    auto chunk = [&](std::size_t k, unsigned slot) {
+        // the calling thread (slot 0) runs the check; the others read the flag
+        if (cancel && (slot == 0 ? cancel->poll() : cancel->stop_requested())) return;
+        const std::size_t begin = k * kChunk, end = std::min(rays.count, begin + kChunk);
+        for (std::size_t i = begin; i < end; ++i) {
+            const float* o = rays.origins + 3 * i;
+            const float* d = rays.directions + 3 * i;
+            Ray ray{{o[0], o[1], o[2]}, {d[0], d[1], d[2]}, rays.tmin, rays.tmax};
+            const float t_scale = scale_ray(ray);  // exact; keeps the arithmetic in range
+            std::uint32_t visited;
+            Hit h = mode == Traversal::Wide ? intersect_wide(*wide, bvh, ray, &visited)
+                                            : intersect(bvh, ray, mode, &visited);
+            bool miss = h.ref == kNoHit;
+            out.t[i] = h.t * t_scale;  // inf stays inf
+            out.prim[i] = miss ? -1 : std::int32_t(h.ref & gpu::REF_INDEX_MASK);
+            if (out.kind) out.kind[i] = miss ? 0 : std::uint8_t((h.ref & gpu::REF_SPHERE_BIT) ? 1 : 0);
+            if (out.u) out.u[i] = h.u;
+            if (out.v) out.v[i] = h.v;
+            if (out.nodes_visited) out.nodes_visited[i] = visited;
         }
     };
-    std::uint32_t n = threads ? threads : std::max(1u, std::thread::hardware_concurrency());
-    n = std::uint32_t(std::min<std::size_t>(n, (rays.count + kChunk - 1) / kChunk));
-    std::vector<std::thread> pool;
-    for (std::uint32_t t = 1; t < n; ++t) pool.emplace_back(worker, false);
-    worker(true);
-    for (auto& t : pool) t.join();
+    ThreadPool::shared().run((rays.count + kChunk - 1) / kChunk, threads, chunk, [&] {
+        if (cancel) cancel->poll();
+    });
     if (cancel && cancel->stop_requested()) throw Cancelled();
 }
 

@@ -1,90 +1,94 @@
-// Closest-hit traversal of the 4-wide tree: four slab tests per SSE instruction sequence, the
-// near plane of each axis chosen once per ray from the sign of the direction (no min/max), with
-// the same closed faces as hit_box (ray.h).
-#include <emmintrin.h>
+// Closest-hit traversal of the 8-wide tree: the portable path (SSE on x86-64, plain C++
+// elsewhere), the dispatch to the AVX2 path (isa.h), and the helpers both call.
+#include <cmath>
 
+#include "bvhlab/isa.h"
+#include "bvhlab/simd.h"
 #include "bvhlab/traverse.h"
-#include "bvhlab/wide_bvh.h"
+#include "wide_kernel.h"
 
 namespace bvhlab {
-namespace {
 
-void test_leaf(const Bvh& bvh, std::uint32_t first, std::uint32_t count, const RayQuery& q, Hit& hit) {
-    for (std::uint32_t k = first, end = first + count; k < end; ++k)
-        if (hit_prim(bvh.prims[k], q, hit)) hit.slot = k;
+bool hit_packet_sphere(const PrimPacket& k, int lane, const float origin[3], const float dir[3], float tmin, Hit& hit) {
+    const PackedPrim p{{k.v0x[lane], k.v0y[lane], k.v0z[lane]}, {k.e1x[lane], 0, 0}, {0, 0, 0}, k.ref[lane]};
+    RayQuery q(Ray{{origin[0], origin[1], origin[2]}, {dir[0], dir[1], dir[2]}, tmin, hit.t});
+    return hit_sphere(p, q, hit);
 }
 
-struct Entry {
-    std::uint32_t node, count;  // count > 0: a leaf
-    float t;
-};
+namespace portable {
 
-}  // namespace
+#ifdef BVHLAB_SSE
+struct M4 { __m128 m; };
+inline M4 operator&(M4 a, M4 b) { return {_mm_and_ps(a.m, b.m)}; }
+inline int bits(M4 a) { return _mm_movemask_ps(a.m); }
+struct L4 {
+    __m128 v;
+    static L4 load(const float* p) { return {_mm_loadu_ps(p)}; }
+    static L4 splat(float s) { return {_mm_set1_ps(s)}; }
+    void store(float* p) const { _mm_storeu_ps(p, v); }
+};
+inline L4 operator+(L4 a, L4 b) { return {_mm_add_ps(a.v, b.v)}; }
+inline L4 operator-(L4 a, L4 b) { return {_mm_sub_ps(a.v, b.v)}; }
+inline L4 operator*(L4 a, L4 b) { return {_mm_mul_ps(a.v, b.v)}; }
+inline L4 operator/(L4 a, L4 b) { return {_mm_div_ps(a.v, b.v)}; }
+inline M4 operator!=(L4 a, L4 b) { return {_mm_cmpneq_ps(a.v, b.v)}; }
+inline M4 operator>=(L4 a, L4 b) { return {_mm_cmpge_ps(a.v, b.v)}; }
+inline M4 operator<=(L4 a, L4 b) { return {_mm_cmple_ps(a.v, b.v)}; }
+inline M4 operator>(L4 a, L4 b) { return {_mm_cmpgt_ps(a.v, b.v)}; }
+inline L4 raise(L4 acc, L4 t) { return {_mm_max_ps(t.v, acc.v)}; }  // t > acc ? t : acc
+inline L4 lower(L4 acc, L4 t) { return {_mm_min_ps(t.v, acc.v)}; }  // t < acc ? t : acc
+inline int le_bits(L4 a, L4 b) { return _mm_movemask_ps(_mm_cmple_ps(a.v, b.v)); }
+#else
+struct M4 { bool m[4]; };
+inline M4 operator&(M4 a, M4 b) { return {{a.m[0] && b.m[0], a.m[1] && b.m[1], a.m[2] && b.m[2], a.m[3] && b.m[3]}}; }
+inline int bits(M4 a) { return int(a.m[0]) | int(a.m[1]) << 1 | int(a.m[2]) << 2 | int(a.m[3]) << 3; }
+struct L4 {
+    float v[4];
+    static L4 load(const float* p) { return {{p[0], p[1], p[2], p[3]}}; }
+    static L4 splat(float s) { return {{s, s, s, s}}; }
+    void store(float* p) const { for (int i = 0; i < 4; ++i) p[i] = v[i]; }
+};
+#define BVHLAB_L4_OP(op) \
+    inline L4 operator op(L4 a, L4 b) { return {{a.v[0] op b.v[0], a.v[1] op b.v[1], a.v[2] op b.v[2], a.v[3] op b.v[3]}}; }
+BVHLAB_L4_OP(+) BVHLAB_L4_OP(-) BVHLAB_L4_OP(*) BVHLAB_L4_OP(/)
+#undef BVHLAB_L4_OP
+#define BVHLAB_M4_OP(op) \
+    inline M4 operator op(L4 a, L4 b) { return {{a.v[0] op b.v[0], a.v[1] op b.v[1], a.v[2] op b.v[2], a.v[3] op b.v[3]}}; }
+BVHLAB_M4_OP(!=) BVHLAB_M4_OP(>=) BVHLAB_M4_OP(<=) BVHLAB_M4_OP(>)
+#undef BVHLAB_M4_OP
+inline L4 raise(L4 acc, L4 t) { for (int i = 0; i < 4; ++i) acc.v[i] = t.v[i] > acc.v[i] ? t.v[i] : acc.v[i]; return acc; }
+inline L4 lower(L4 acc, L4 t) { for (int i = 0; i < 4; ++i) acc.v[i] = t.v[i] < acc.v[i] ? t.v[i] : acc.v[i]; return acc; }
+inline int le_bits(L4 a, L4 b) { return bits(a <= b); }
+#endif
+
+/// Eight floats as two halves.
+struct L8 {
+    L4 a, b;
+    static L8 load(const float* p) { return {L4::load(p), L4::load(p + 4)}; }
+    static L8 splat(float s) { return {L4::splat(s), L4::splat(s)}; }
+    void store(float* p) const { a.store(p), b.store(p + 4); }
+};
+inline L8 operator-(L8 x, L8 y) { return {x.a - y.a, x.b - y.b}; }
+inline L8 operator*(L8 x, L8 y) { return {x.a * y.a, x.b * y.b}; }
+inline L8 raise(L8 acc, L8 t) { return {raise(acc.a, t.a), raise(acc.b, t.b)}; }
+inline L8 lower(L8 acc, L8 t) { return {lower(acc.a, t.a), lower(acc.b, t.b)}; }
+inline int le_bits(L8 x, L8 y) { return le_bits(x.a, y.a) | le_bits(x.b, y.b) << 4; }
+
+#include "wide_traverse.inl"
+
+}  // namespace portable
 
 Hit intersect_wide(const WideBvh& wide, const Bvh& bvh, const Ray& ray, std::uint32_t* nodes_visited) {
-    Hit hit;
-    hit.t = ray.tmax;
-    std::uint32_t visited = 0;
-    RayQuery q(ray);
-    if (wide.root_leaf_count) {
-        test_leaf(bvh, 0, wide.root_leaf_count, q, hit);
-    } else if (!wide.nodes.empty()) {
-        // offsets of the near and far arrays of each axis inside a WideNode (in floats)
-        const int nx = q.inv_dir.x >= 0 ? 0 : 4, ny = q.inv_dir.y >= 0 ? 8 : 12, nz = q.inv_dir.z >= 0 ? 16 : 20;
-        const int fx = nx ^ 4, fy = ny ^ 4, fz = nz ^ 4;
-        const __m128 ox = _mm_set1_ps(q.origin.x), oy = _mm_set1_ps(q.origin.y), oz = _mm_set1_ps(q.origin.z);
-        const __m128 ix = _mm_set1_ps(q.inv_dir.x), iy = _mm_set1_ps(q.inv_dir.y), iz = _mm_set1_ps(q.inv_dir.z);
-        const __m128 tmin = _mm_set1_ps(q.tmin);
-        Entry stack[4 * gpu::MAX_TREE_HEIGHT];
-        std::uint32_t sp = 0;
-        Entry cur{0, 0, q.tmin};
-        for (;;) {
-            if (cur.count) {
-                test_leaf(bvh, cur.node, cur.count, q, hit);
-            } else {
-                const WideNode& n = wide.nodes[cur.node];
-                const float* f = n.lo_x;
-                ++visited;
-                __m128 tnx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(f + nx), ox), ix);
-                __m128 tny = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(f + ny), oy), iy);
-                __m128 tnz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(f + nz), oz), iz);
-                __m128 tfx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(f + fx), ox), ix);
-                __m128 tfy = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(f + fy), oy), iy);
-                __m128 tfz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(f + fz), oz), iz);
-                // maxps/minps return their second operand when either is NaN: with the plane
-                // distances first, the NaN of a ray lying in a face (0·inf) is ignored, as in hit_box.
-                __m128 tnear = _mm_max_ps(tnz, _mm_max_ps(tny, _mm_max_ps(tnx, tmin)));
-                __m128 tfar = _mm_min_ps(tfz, _mm_min_ps(tfy, _mm_min_ps(tfx, _mm_set1_ps(hit.t))));
-                int mask = _mm_movemask_ps(_mm_cmple_ps(tnear, tfar));
-                if (mask) {
-                    alignas(16) float t[4];
-                    _mm_store_ps(t, tnear);
-                    // nearest hit child next; the others onto the stack, farthest deepest
-                    Entry hits[4];
-                    int h = 0;
-                    for (int k = 0; k < 4; ++k)
-                        if (mask & (1 << k)) {
-                            Entry e{n.child[k], n.count[k], t[k]};
-                            int j = h++;
-                            for (; j > 0 && hits[j - 1].t < e.t; --j) hits[j] = hits[j - 1];
-                            hits[j] = e;  // sorted by decreasing t
-                        }
-                    for (int k = 0; k < h - 1; ++k) stack[sp++] = hits[k];
-                    cur = hits[h - 1];
-                    continue;
-                }
-            }
-            do {  // pop, skipping entries farther than the closest hit so far
-                if (sp == 0) goto done;
-                --sp;
-            } while (stack[sp].t > hit.t);
-            cur = stack[sp];
-        }
-    }
-done:
+    const WideView view{wide.nodes.empty() ? nullptr : wide.nodes.data(), wide.packets.data(), wide.slots.data(),
+                        wide.root_packets};
+#if defined(BVHLAB_AVX2_KERNELS)
+    Hit hit = active_isa() == Isa::Avx2 ? avx2::intersect_wide_kernel(view, ray, nodes_visited)
+                                        : portable::intersect_wide_kernel(view, ray, nodes_visited);
+#else
+    Hit hit = portable::intersect_wide_kernel(view, ray, nodes_visited);
+#endif
     if (hit.ref == kNoHit) hit.t = kInfinity;
     finish_hit(bvh, ray, hit);
-    if (nodes_visited) *nodes_visited = visited;
     return hit;
 }
 

@@ -1,31 +1,81 @@
 #include "bvhlab/wide_bvh.h"
 
-#include <algorithm>
 #include <limits>
 #include <vector>
 
 namespace bvhlab {
 namespace {
 
-/// The binary children of binary node i, opened up to four by largest surface area.
-int gather_children(const Bvh& bvh, std::uint32_t i, std::uint32_t out[4]) {
-    const BvhNode& n = bvh.nodes[i];
-    out[0] = i + 1, out[1] = n.index;
+/// A subtree of at most this many primitives becomes one wide leaf (one packet of triangles).
+constexpr std::uint32_t kMergedLeaf = 4;
+
+/// Per binary node: primitives in its subtree and the first of them (leaves are contiguous in
+/// leaf order, so a subtree's primitives are one range).
+struct SubtreeRanges {
+    std::vector<std::uint32_t> first, size;
+    explicit SubtreeRanges(const Bvh& bvh) : first(bvh.nodes.size()), size(bvh.nodes.size()) {
+        for (std::size_t i = bvh.nodes.size(); i-- > 0;) {
+            const BvhNode& n = bvh.nodes[i];
+            if (is_leaf(n)) first[i] = n.index, size[i] = leaf_count(n);
+            else first[i] = first[i + 1], size[i] = size[i + 1] + size[n.index];
+        }
+    }
+    bool leaf(const Bvh& bvh, std::uint32_t i) const { return is_leaf(bvh.nodes[i]) || size[i] <= kMergedLeaf; }
+};
+
+/// Appends the primitives [first, first + n) of bvh.prims as packets (triangles, then spheres,
+/// four a packet); returns the first packet's index and sets `count`.
+std::uint32_t pack_leaf(const Bvh& bvh, std::uint32_t first, std::uint32_t n, WideBvh& wide, std::uint32_t& count) {
+    const auto begin = static_cast<std::uint32_t>(wide.packets.size());
+    for (bool spheres : {false, true}) {
+        std::uint32_t lane = 4;
+        for (std::uint32_t k = first; k < first + n; ++k) {
+            const PackedPrim& p = bvh.prims[k];
+            if (is_sphere_ref(p.ref) != spheres) continue;
+            if (lane == 4) {
+                PrimPacket empty{};
+                for (auto& r : empty.ref) r = kNoHit;
+                wide.packets.push_back(empty);
+                wide.slots.insert(wide.slots.end(), 4, kNoHit);
+                lane = 0;
+            }
+            PrimPacket& q = wide.packets.back();
+            q.v0x[lane] = p.p[0], q.v0y[lane] = p.p[1], q.v0z[lane] = p.p[2];
+            q.e1x[lane] = p.e1[0], q.e1y[lane] = p.e1[1], q.e1z[lane] = p.e1[2];
+            q.e2x[lane] = p.e2[0], q.e2y[lane] = p.e2[1], q.e2z[lane] = p.e2[2];
+            q.ref[lane] = p.ref;
+            wide.slots[wide.slots.size() - 4 + lane] = k;
+            ++lane;
+        }
+    }
+    count = static_cast<std::uint32_t>(wide.packets.size()) - begin;
+    return begin;
+}
+
+/// The binary children of binary node i, opened up to eight by largest surface area.
+int gather_children(const Bvh& bvh, const SubtreeRanges& ranges, std::uint32_t i, std::uint32_t out[8]) {
+    out[0] = i + 1, out[1] = bvh.nodes[i].index;
     int count = 2;
-    while (count < 4) {
+    while (count < 8) {
         int pick = -1;
         float best = -1.0f;
         for (int k = 0; k < count; ++k) {
-            const BvhNode& c = bvh.nodes[out[k]];
-            float area = node_box(c).half_area();
-            if (!is_leaf(c) && area > best) best = area, pick = k;
+            const float area = node_box(bvh.nodes[out[k]]).half_area();
+            if (!ranges.leaf(bvh, out[k]) && area > best) best = area, pick = k;
         }
         if (pick < 0) break;
-        std::uint32_t opened = out[pick];
+        const std::uint32_t opened = out[pick];
         out[pick] = opened + 1;
         out[count++] = bvh.nodes[opened].index;
     }
     return count;
+}
+
+void set_slot(WideNode& w, int k, const BvhNode* c) {
+    const float inf = std::numeric_limits<float>::infinity();
+    w.lo_x[k] = c ? c->lo.x : inf, w.lo_y[k] = c ? c->lo.y : inf, w.lo_z[k] = c ? c->lo.z : inf;
+    w.hi_x[k] = c ? c->hi.x : -inf, w.hi_y[k] = c ? c->hi.y : -inf, w.hi_z[k] = c ? c->hi.z : -inf;
+    w.child[k] = 0, w.count[k] = 0;
 }
 
 }  // namespace
@@ -33,37 +83,33 @@ int gather_children(const Bvh& bvh, std::uint32_t i, std::uint32_t out[4]) {
 WideBvh make_wide(const Bvh& bvh) {
     WideBvh wide;
     if (bvh.empty()) return wide;
-    if (is_leaf(bvh.nodes[0])) {
-        wide.root_leaf_count = leaf_count(bvh.nodes[0]);
+    const SubtreeRanges ranges(bvh);
+    wide.packets.reserve(bvh.prims.size() / 2 + 1);
+    if (ranges.leaf(bvh, 0)) {
+        pack_leaf(bvh, ranges.first[0], ranges.size[0], wide, wide.root_packets);
         return wide;
     }
-    wide.nodes.reserve(bvh.nodes.size() / 2 + 1);
+    wide.nodes.reserve(bvh.nodes.size() / 4 + 1);
     struct Item { std::uint32_t binary, wide; };
     std::vector<Item> stack{{0, 0}};
     wide.nodes.emplace_back();
-    const float inf = std::numeric_limits<float>::infinity();
     while (!stack.empty()) {
-        Item item = stack.back();
+        const Item item = stack.back();
         stack.pop_back();
-        std::uint32_t children[4];
-        int count = gather_children(bvh, item.binary, children);
-        for (int k = 0; k < 4; ++k) {
-            WideNode& w = wide.nodes[item.wide];
-            if (k >= count) {  // an empty slot: a box no ray can enter
-                w.lo_x[k] = w.lo_y[k] = w.lo_z[k] = inf;
-                w.hi_x[k] = w.hi_y[k] = w.hi_z[k] = -inf;
-                w.child[k] = 0, w.count[k] = 0;
-                continue;
-            }
-            const BvhNode& c = bvh.nodes[children[k]];
-            w.lo_x[k] = c.lo.x, w.lo_y[k] = c.lo.y, w.lo_z[k] = c.lo.z;
-            w.hi_x[k] = c.hi.x, w.hi_y[k] = c.hi.y, w.hi_z[k] = c.hi.z;
-            if (is_leaf(c)) {
-                w.child[k] = c.index, w.count[k] = leaf_count(c);
+        std::uint32_t children[8];
+        const int count = gather_children(bvh, ranges, item.binary, children);
+        for (int k = 0; k < 8; ++k) {
+            const BvhNode* c = k < count ? &bvh.nodes[children[k]] : nullptr;
+            set_slot(wide.nodes[item.wide], k, c);
+            if (!c) continue;
+            if (ranges.leaf(bvh, children[k])) {
+                std::uint32_t packets = 0;
+                const std::uint32_t first = pack_leaf(bvh, ranges.first[children[k]], ranges.size[children[k]], wide, packets);
+                wide.nodes[item.wide].child[k] = first, wide.nodes[item.wide].count[k] = packets;
             } else {
-                auto index = static_cast<std::uint32_t>(wide.nodes.size());
-                wide.nodes.emplace_back();  // may move the array: `w` is not used after this
-                wide.nodes[item.wide].child[k] = index, wide.nodes[item.wide].count[k] = 0;
+                const auto index = static_cast<std::uint32_t>(wide.nodes.size());
+                wide.nodes.emplace_back();  // may move the array: take references after this only
+                wide.nodes[item.wide].child[k] = index;
                 stack.push_back({children[k], index});
             }
         }

@@ -8,7 +8,7 @@ from typing import Callable
 
 from .. import _core
 from .._checks import OutputPathError, output_file
-from ..bvh import AXES, METHODS, method_from_label
+from ..bvh import AXES, DEFAULT_AXIS, DEFAULT_BINS, DEFAULT_MAX_LEAF_SIZE, DEFAULT_METHOD, METHODS, method_from_label
 
 #: Largest image side the CLI accepts (OpenGL's and most Vulkan drivers' framebuffer limit).
 MAX_IMAGE_SIDE = _core.MAX_IMAGE_DIMENSION  # the renderers' limit, one definition
@@ -19,10 +19,11 @@ def add_scene(p: argparse.ArgumentParser) -> None:
 
 
 def add_build(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--method", default="sah", help=f"split method: {', '.join(METHODS)} (or sah<B>, e.g. sah32)")
-    p.add_argument("--bins", type=int, default=None, help="binned SAH buckets, 2..256 (default 12)")
-    p.add_argument("--axis", default="largest", choices=AXES, help="split axis policy")
-    p.add_argument("--max-leaf-size", type=int, default=1, help="primitives per leaf at most (default 1)")
+    p.add_argument("--method", default=DEFAULT_METHOD, help=f"split method: {', '.join(METHODS)} (or sah<B>, e.g. sah32)")
+    p.add_argument("--bins", type=int, default=None, help=f"binned SAH buckets, 2..256 (default {DEFAULT_BINS})")
+    p.add_argument("--axis", default=DEFAULT_AXIS, choices=AXES, help=f"split axis policy (default {DEFAULT_AXIS})")
+    p.add_argument("--max-leaf-size", type=int, default=DEFAULT_MAX_LEAF_SIZE,
+                   help=f"primitives per leaf at most (default {DEFAULT_MAX_LEAF_SIZE})")
 
 
 def build_kwargs(args) -> dict:

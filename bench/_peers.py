@@ -1,0 +1,144 @@
+"""bvh_bench (bench/cpp) from Python: building it, the scenes and rays it reads, pinned and
+repeated runs, callgrind instruction counts, and embreex timed beside it."""
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+BUILD = ROOT / "build" / "bench"
+
+
+def build_bvh_bench(tinybvh: str | None) -> Path:
+    """Configures and builds bench/cpp's bvh_bench in build/bench (Release, Embree 3 when
+    libembree-dev is installed, tinybvh when a local copy is given)."""
+    args = ["cmake", "-S", str(ROOT), "-B", str(BUILD), "-G", "Ninja", "-DCMAKE_BUILD_TYPE=Release",
+            "-DBVHLAB_TESTS=ON", "-DBVHLAB_VULKAN=OFF", f"-DBVHLAB_TINYBVH_DIR={tinybvh or ''}"]
+    subprocess.run(args, check=True, stdout=subprocess.DEVNULL)
+    subprocess.run(["cmake", "--build", str(BUILD), "--target", "bvh_bench"], check=True, stdout=subprocess.DEVNULL)
+    return BUILD / "bench" / "cpp" / "bvh_bench"
+
+
+def find_sponza() -> Path | None:
+    """Crytek Sponza (262,205 triangles): $BVHLAB_SPONZA, or shared/scenes beside or above the checkout."""
+    candidates = [os.environ.get("BVHLAB_SPONZA"), ROOT / "shared/scenes/sponza_tris.npy",
+                  ROOT.parent / "shared/scenes/sponza_tris.npy", ROOT.parent.parent / "shared/scenes/sponza_tris.npy"]
+    return next((Path(c) for c in candidates if c and Path(c).is_file()), None)
+
+
+def scenes(names: list[str]) -> dict[str, np.ndarray]:
+    """Triangle arrays (T,3,3) by name: sponza, room1m (a 1M-triangle model in a room, the
+    non-uniform case), uniform1m (1M small random triangles), and the 250k versions."""
+    from bvhlab.library import procedural
+
+    out = {}
+    for name in names:
+        if name == "sponza":
+            path = find_sponza()
+            if path is None:
+                print("bench: Sponza not found (set BVHLAB_SPONZA); skipped", file=sys.stderr)
+                continue
+            out[name] = np.ascontiguousarray(np.load(path), np.float32)
+        elif name.startswith("room"):
+            out[name] = procedural.model_in_room(_count(name))
+        elif name.startswith("uniform"):
+            n = _count(name)
+            out[name] = procedural.random_triangles(n, size=1.0 / n ** (1 / 3), seed=1)
+        else:
+            raise SystemExit(f"bench: unknown scene {name}")
+    return out
+
+
+def _count(name: str) -> int:
+    m = re.search(r"(\d+)([km])$", name)
+    if not m:
+        raise SystemExit(f"bench: scene {name} needs a size such as 250k or 1m")
+    return int(m.group(1)) * (1000 if m.group(2) == "k" else 1_000_000)
+
+
+def rays_for(name: str, tris: np.ndarray) -> dict[str, np.ndarray]:
+    """Random rays (origins in the bounds, uniform directions) and primary rays (640×480) as N×6."""
+    from bvhlab.library import procedural
+
+    o, d = procedural.random_rays(tris, 200_000, seed=3)
+    out = {"random": np.concatenate([o, d], 1)}
+    if name == "sponza":  # the atrium view of shared/scenes/README.md
+        out["primary"] = _pinhole((-110, 20, -4), (100, 45, 2), 60.0)
+    else:
+        o, d = procedural.camera_rays(tris, 640, 480)
+        out["primary"] = np.concatenate([o, d], 1)
+    return {k: np.ascontiguousarray(v, np.float32) for k, v in out.items()}
+
+
+def _pinhole(position, look_at, fov_y: float, width: int = 640, height: int = 480) -> np.ndarray:
+    pos, look = np.array(position, np.float64), np.array(look_at, np.float64)
+    fwd = (look - pos) / np.linalg.norm(look - pos)
+    right = np.cross(fwd, (0.0, 1.0, 0.0))
+    right /= np.linalg.norm(right)
+    up = np.cross(right, fwd)
+    tan = math.tan(math.radians(fov_y) / 2)
+    ys, xs = np.mgrid[0:height, 0:width]
+    px = ((xs + 0.5) / width * 2 - 1) * tan * width / height
+    py = (1 - (ys + 0.5) / height * 2) * tan
+    d = fwd + px[..., None] * right + py[..., None] * up
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    return np.concatenate([np.broadcast_to(pos, d.shape).reshape(-1, 3), d.reshape(-1, 3)], 1)
+
+
+def cores(threads: int) -> str:
+    """The first `threads` cores this process may use, for taskset."""
+    return ",".join(str(c) for c in sorted(os.sched_getaffinity(0))[:threads])
+
+
+def run(exe: Path, args: list[str], threads: int) -> dict:
+    """One bvh_bench run pinned to `threads` cores; its JSON."""
+    cmd = ["taskset", "-c", cores(threads), str(exe), *args, "--threads", str(threads)]
+    out = subprocess.run(cmd, capture_output=True, text=True)
+    if out.returncode:
+        raise SystemExit(f"bench: {' '.join(cmd)} failed:\n{out.stderr}")
+    return json.loads(out.stdout)
+
+
+def instructions(exe: Path, args: list[str]) -> int | None:
+    """Instructions of one build (or one pass over rays) on one thread, counted by callgrind
+    between bvh_bench's start and stop marks; None without valgrind."""
+    if not shutil.which("valgrind"):
+        return None
+    cmd = ["valgrind", "--tool=callgrind", "--instr-atstart=no", "--callgrind-out-file=/dev/null",
+           str(exe), "once", *args, "--threads", "1"]
+    out = subprocess.run(cmd, capture_output=True, text=True)
+    m = re.search(r"I\s+refs:\s+([\d,]+)", out.stderr)
+    return int(m.group(1).replace(",", "")) if m else None
+
+
+def embreex_commit_seconds(tris: np.ndarray, repeat: int) -> list[float] | None:
+    """Embree 4 through embreex: the lazy BVH commit at the first query, timed alone (the copy
+    into the TriangleMesh is excluded, ENVIRONMENT.md); None without embreex."""
+    try:
+        from embreex import rtcore_scene as rtcs
+        from embreex.mesh_construction import TriangleMesh
+    except ImportError:
+        return None
+    times = []
+    o, d = np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32)
+    for _ in range(repeat):
+        scene = rtcs.EmbreeScene()
+        TriangleMesh(scene, tris)
+        t = time.perf_counter()
+        scene.run(o, d)
+        times.append(time.perf_counter() - t)
+    return times
+
+
+def median(xs: list[float]) -> float:
+    return statistics.median(xs)

@@ -1,0 +1,32 @@
+#include "bench_data.h"
+
+#include <fstream>
+#include <stdexcept>
+
+namespace bench {
+namespace {
+
+std::vector<float> load_floats(const std::string& path) {
+    std::ifstream f(path, std::ios::binary | std::ios::ate);
+    if (!f) throw std::invalid_argument("cannot open " + path);
+    std::vector<float> v(std::size_t(f.tellg()) / sizeof(float));
+    f.seekg(0);
+    f.read(reinterpret_cast<char*>(v.data()), std::streamsize(v.size() * sizeof(float)));
+    return v;
+}
+
+}  // namespace
+
+Mesh load_mesh(const std::string& path) { return {load_floats(path)}; }
+Rays load_rays(const std::string& path) { return {load_floats(path)}; }
+
+std::unique_ptr<Peer> make_peer(const std::string& spec, unsigned threads) {
+    const auto colon = spec.find(':');
+    const std::string system = spec.substr(0, colon), options = colon == std::string::npos ? "" : spec.substr(colon + 1);
+    if (system == "bvhlab") return make_bvhlab_peer(options, threads);
+    if (system == "embree") return make_embree_peer(options, threads);
+    if (system == "tinybvh") return make_tinybvh_peer(options, threads);
+    throw std::invalid_argument("unknown system in '" + spec + "' (bvhlab, embree, tinybvh)");
+}
+
+}  // namespace bench

@@ -1,0 +1,59 @@
+// bench_data.h — what the C++ benchmark driver reads (raw float32 files written by bench/*.py) and
+// the peers it times side by side (bvhlab, Embree 3, tinybvh when present).
+#pragma once
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace bench {
+
+/// Triangles as T×3×3 float32 (numpy's `tris.tofile(path)`).
+struct Mesh {
+    std::vector<float> xyz;
+    std::size_t count() const { return xyz.size() / 9; }
+};
+
+/// Rays as N×6 float32: origin, direction.
+struct Rays {
+    std::vector<float> od;
+    std::size_t count() const { return od.size() / 6; }
+};
+
+Mesh load_mesh(const std::string& path);
+Rays load_rays(const std::string& path);
+
+/// What one peer reports about the tree it built (NaN / 0 where it cannot tell).
+struct TreeInfo {
+    double sah = 0.0 / 0.0;  ///< bvhlab's convention: Σ_internal A/A_root + Σ_leaf A/A_root·N
+    std::uint64_t nodes = 0;
+    std::uint64_t digest = 0;  ///< bvhlab: FNV-1a of the nodes and references, to compare builds bit for bit
+};
+
+/// One system under test. build() is what is timed; trace() answers closest hits one ray at a time
+/// (t = inf and prim = ~0u on a miss).
+class Peer {
+public:
+    virtual ~Peer() = default;
+    virtual std::string name() const = 0;
+    virtual void build(const Mesh& mesh) = 0;
+    virtual TreeInfo info() const = 0;
+    /// Work a system does once before tracing that is not part of its build (e.g. a wide copy).
+    virtual void prepare_trace() {}
+    virtual void trace(const Rays& rays, float* t, std::uint32_t* prim) = 0;
+};
+
+/// "bvhlab:key=value,..." (method, bins, axis, leaf, threads), "embree:low|medium|high",
+/// "tinybvh:avx" (BuildAVX, BVH8_CPU traversal). Throws std::invalid_argument for unknown names.
+std::unique_ptr<Peer> make_peer(const std::string& spec, unsigned threads);
+
+std::unique_ptr<Peer> make_bvhlab_peer(const std::string& options, unsigned threads);
+std::unique_ptr<Peer> make_embree_peer(const std::string& quality, unsigned threads);   // peer_embree.cpp
+std::unique_ptr<Peer> make_tinybvh_peer(const std::string& variant, unsigned threads);  // peer_tinybvh.cpp
+
+inline double seconds_since(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace bench

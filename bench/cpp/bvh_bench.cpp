@@ -1,0 +1,169 @@
+// bvh_bench — times builders and single-ray traversal of several systems in one process,
+// interleaved (every repetition runs each system once, in turn), and prints JSON.
+//   bvh_bench build MESH.f32 --peer SPEC [--peer SPEC ...] [--repeat R] [--threads T]
+//   bvh_bench trace MESH.f32 RAYS.f32 [RAYS.f32 ...] --peer SPEC ... [--repeat R]
+//   bvh_bench once MESH.f32 [RAYS.f32] --peer SPEC [--threads T]   (one build, or one pass over the
+//   rays, between callgrind's start and stop)
+// SPEC: see bench_data.h. bench/build.py and bench/traverse.py drive it.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#if __has_include(<valgrind/callgrind.h>)
+#include <valgrind/callgrind.h>
+#else
+#define CALLGRIND_START_INSTRUMENTATION
+#define CALLGRIND_STOP_INSTRUMENTATION
+#endif
+
+#include "bench_data.h"
+
+namespace bench {
+namespace {
+
+struct Args {
+    std::string mode, mesh;
+    std::vector<std::string> rays, peers;
+    int repeat = 5;
+    unsigned threads = 1;
+};
+
+Args parse(int argc, char** argv) {
+    Args a;
+    if (argc < 3) throw std::invalid_argument("usage: bvh_bench build|trace|once MESH.f32 [RAYS.f32...] --peer SPEC ...");
+    a.mode = argv[1], a.mesh = argv[2];
+    for (int i = 3; i < argc; ++i) {
+        std::string s = argv[i];
+        auto value = [&] {
+            if (i + 1 >= argc) throw std::invalid_argument(s + " needs a value");
+            return std::string(argv[++i]);
+        };
+        if (s == "--peer") a.peers.push_back(value());
+        else if (s == "--repeat") a.repeat = std::stoi(value());
+        else if (s == "--threads") a.threads = unsigned(std::stoul(value()));
+        else a.rays.push_back(s);
+    }
+    if (a.peers.empty()) throw std::invalid_argument("no --peer given");
+    return a;
+}
+
+void print_times(const std::vector<double>& times) {
+    std::printf("[");
+    for (std::size_t i = 0; i < times.size(); ++i) std::printf("%s%.6f", i ? ", " : "", times[i]);
+    std::printf("]");
+}
+
+int run_build(const Args& a) {
+    Mesh mesh = load_mesh(a.mesh);
+    std::vector<std::unique_ptr<Peer>> peers;
+    for (const auto& spec : a.peers) peers.push_back(make_peer(spec, a.threads));
+    std::vector<std::vector<double>> times(peers.size());
+    for (auto& p : peers) p->build(mesh);  // warm-up: first-touch of memory, thread start-up
+    for (int r = 0; r < a.repeat; ++r)
+        for (std::size_t k = 0; k < peers.size(); ++k) {
+            auto t0 = std::chrono::steady_clock::now();
+            peers[k]->build(mesh);
+            times[k].push_back(seconds_since(t0));
+        }
+    std::printf("{\"triangles\": %zu, \"threads\": %u, \"peers\": [", mesh.count(), a.threads);
+    for (std::size_t k = 0; k < peers.size(); ++k) {
+        TreeInfo info = peers[k]->info();
+        std::printf("%s\n {\"spec\": \"%s\", \"name\": \"%s\", \"sah\": %s, \"nodes\": %llu, \"seconds\": ", k ? "," : "",
+                    a.peers[k].c_str(), peers[k]->name().c_str(),
+                    std::isnan(info.sah) ? "null" : std::to_string(info.sah).c_str(), (unsigned long long)info.nodes);
+        print_times(times[k]);
+        std::printf("}");
+    }
+    std::printf("]}\n");
+    return 0;
+}
+
+/// Rays whose hit distance differs from the first peer's by more than a relative 1e-4 (or hit/miss).
+std::size_t disagreements(const std::vector<float>& a, const std::vector<float>& b) {
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        bool ma = std::isinf(a[i]), mb = std::isinf(b[i]);
+        if (ma != mb || (!ma && std::fabs(a[i] - b[i]) > 1e-4f * std::max(1.0f, std::fabs(a[i])))) ++n;
+    }
+    return n;
+}
+
+int run_trace(const Args& a) {
+    Mesh mesh = load_mesh(a.mesh);
+    std::vector<std::unique_ptr<Peer>> peers;
+    for (const auto& spec : a.peers) {
+        peers.push_back(make_peer(spec, a.threads));
+        peers.back()->build(mesh);
+        peers.back()->prepare_trace();
+    }
+    std::printf("{\"triangles\": %zu, \"ray_sets\": [", mesh.count());
+    for (std::size_t s = 0; s < a.rays.size(); ++s) {
+        Rays rays = load_rays(a.rays[s]);
+        std::vector<std::vector<float>> t(peers.size(), std::vector<float>(rays.count()));
+        std::vector<std::uint32_t> prim(rays.count());
+        std::vector<std::vector<double>> times(peers.size());
+        for (int r = 0; r < a.repeat; ++r)
+            for (std::size_t k = 0; k < peers.size(); ++k) {
+                auto t0 = std::chrono::steady_clock::now();
+                peers[k]->trace(rays, t[k].data(), prim.data());
+                times[k].push_back(seconds_since(t0));
+            }
+        std::printf("%s\n {\"rays\": \"%s\", \"count\": %zu, \"peers\": [", s ? "," : "", a.rays[s].c_str(), rays.count());
+        for (std::size_t k = 0; k < peers.size(); ++k) {
+            std::size_t hits = std::count_if(t[k].begin(), t[k].end(), [](float x) { return !std::isinf(x); });
+            std::printf("%s\n  {\"spec\": \"%s\", \"name\": \"%s\", \"hits\": %zu, \"disagree_with_first\": %zu, \"seconds\": ",
+                        k ? "," : "", a.peers[k].c_str(), peers[k]->name().c_str(), hits, disagreements(t[0], t[k]));
+            print_times(times[k]);
+            std::printf("}");
+        }
+        std::printf("]}");
+    }
+    std::printf("]}\n");
+    return 0;
+}
+
+int run_once(const Args& a) {
+    Mesh mesh = load_mesh(a.mesh);
+    auto peer = make_peer(a.peers.at(0), a.threads);
+    if (!a.rays.empty()) {  // count the tracing of the first ray set instead of the build
+        peer->build(mesh);
+        peer->prepare_trace();
+        Rays rays = load_rays(a.rays[0]);
+        std::vector<float> t(rays.count());
+        std::vector<std::uint32_t> prim(rays.count());
+        CALLGRIND_START_INSTRUMENTATION;
+        peer->trace(rays, t.data(), prim.data());
+        CALLGRIND_STOP_INSTRUMENTATION;
+        std::printf("{\"spec\": \"%s\", \"rays\": %zu}\n", a.peers[0].c_str(), rays.count());
+        return 0;
+    }
+    CALLGRIND_START_INSTRUMENTATION;
+    peer->build(mesh);
+    CALLGRIND_STOP_INSTRUMENTATION;
+    TreeInfo info = peer->info();
+    std::printf("{\"spec\": \"%s\", \"triangles\": %zu, \"sah\": %f, \"nodes\": %llu, \"digest\": \"%016llx\"}\n",
+                a.peers[0].c_str(), mesh.count(), info.sah, (unsigned long long)info.nodes,
+                (unsigned long long)info.digest);
+    return 0;
+}
+
+}  // namespace
+}  // namespace bench
+
+int main(int argc, char** argv) {
+    try {
+        bench::Args a = bench::parse(argc, argv);
+        if (a.mode == "build") return bench::run_build(a);
+        if (a.mode == "trace") return bench::run_trace(a);
+        if (a.mode == "once") return bench::run_once(a);
+        throw std::invalid_argument("unknown mode " + a.mode);
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "bvh_bench: %s\n", e.what());
+        return 2;
+    }
+}

@@ -1,0 +1,73 @@
+// bvhlab as a benchmark peer: build_bvh with the options of the spec, single rays through the
+// wide tree (the fastest CPU traversal).
+#include <sstream>
+#include <stdexcept>
+
+#include "bench_data.h"
+#include "bvhlab/bvh.h"
+#include "bvhlab/stats.h"
+#include "bvhlab/traverse.h"
+#include "bvhlab/wide_bvh.h"
+
+namespace bench {
+namespace {
+
+bvhlab::BuildConfig parse_options(const std::string& options, unsigned threads) {
+    bvhlab::BuildConfig cfg;
+    cfg.threads = threads;
+    std::stringstream ss(options);
+    for (std::string kv; std::getline(ss, kv, ',');) {
+        if (kv.empty()) continue;
+        const auto eq = kv.find('=');
+        const std::string key = kv.substr(0, eq), value = eq == std::string::npos ? "" : kv.substr(eq + 1);
+        if (key == "method") cfg.method = bvhlab::parse_split_method(value);
+        else if (key == "axis") cfg.axis = bvhlab::parse_axis_policy(value);
+        else if (key == "bins") cfg.bins = std::stoul(value);
+        else if (key == "leaf") cfg.max_leaf_size = std::stoul(value);
+        else throw std::invalid_argument("unknown bvhlab option '" + key + "'");
+    }
+    return cfg;
+}
+
+class BvhlabPeer : public Peer {
+public:
+    BvhlabPeer(const std::string& options, unsigned threads) : options_(options), config_(parse_options(options, threads)) {}
+    std::string name() const override { return "bvhlab " + (options_.empty() ? std::string("defaults") : options_); }
+    void build(const Mesh& mesh) override {
+        bvh_ = bvhlab::build_bvh({mesh.xyz.data(), mesh.count()}, config_);
+    }
+    TreeInfo info() const override { return {bvhlab::sah_cost(bvh_), bvh_.nodes.size(), digest()}; }
+    void prepare_trace() override { wide_ = bvhlab::make_wide(bvh_); }
+    void trace(const Rays& rays, float* t, std::uint32_t* prim) override {
+        for (std::size_t i = 0; i < rays.count(); ++i) {
+            const float* r = rays.od.data() + 6 * i;
+            bvhlab::Ray ray{{r[0], r[1], r[2]}, {r[3], r[4], r[5]}};
+            bvhlab::Hit h = bvhlab::intersect_wide(wide_, bvh_, ray);
+            t[i] = h.t, prim[i] = h.ref;
+        }
+    }
+
+private:
+    std::uint64_t digest() const {
+        std::uint64_t h = 0xcbf29ce484222325ull;
+        auto add = [&](const void* data, std::size_t bytes) {
+            for (std::size_t i = 0; i < bytes; ++i) h = (h ^ static_cast<const unsigned char*>(data)[i]) * 0x100000001b3ull;
+        };
+        add(bvh_.nodes.data(), bvh_.nodes.size() * sizeof(bvhlab::BvhNode));
+        add(bvh_.refs.data(), bvh_.refs.size() * sizeof(std::uint32_t));
+        return h;
+    }
+
+    std::string options_;
+    bvhlab::BuildConfig config_;
+    bvhlab::Bvh bvh_;
+    bvhlab::WideBvh wide_;
+};
+
+}  // namespace
+
+std::unique_ptr<Peer> make_bvhlab_peer(const std::string& options, unsigned threads) {
+    return std::make_unique<BvhlabPeer>(options, threads);
+}
+
+}  // namespace bench

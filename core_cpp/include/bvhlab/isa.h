@@ -1,0 +1,28 @@
+// isa.h — which instruction set the hot loops use, chosen once when the library loads.
+//
+// The library is built for a portable baseline (x86-64-v2 on x86, what the compiler targets
+// elsewhere); the binning/partition passes of the builder and the wide traversal also exist
+// compiled for AVX2, picked at run time when the CPU has it. Every path does the same IEEE
+// arithmetic in the same order (no fused multiply-adds), so trees and hits are bit-identical
+// whichever runs; the tests force each path and compare.
+#pragma once
+#include <string_view>
+
+namespace bvhlab {
+
+enum class Isa {
+    Portable,  ///< the baseline the library is compiled for (SSE4.2 on x86-64, scalar elsewhere)
+    Avx2,      ///< x86-64 with AVX2 (Haswell, Zen and later)
+};
+
+/// The path in use. At load: the best the CPU supports, lowered by the environment variable
+/// BVHLAB_ISA=portable|avx2 if set (an unsupported or unknown value is ignored).
+Isa active_isa();
+/// True when this build has the path and this CPU can run it.
+bool isa_supported(Isa isa);
+/// Switches path (for tests and benchmarks). Throws std::invalid_argument if unsupported.
+/// Not for use while other threads build or trace.
+void set_isa(Isa isa);
+std::string_view isa_name(Isa isa);
+
+}  // namespace bvhlab

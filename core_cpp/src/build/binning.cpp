@@ -1,0 +1,208 @@
+#include "binning.h"
+#include "sah_sweep.h"
+
+#include <algorithm>
+#include <cstdlib>
+
+#include "bvhlab/isa.h"
+
+namespace bvhlab {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+Aabb to_aabb(F4 lo, F4 hi) { return {{lo.lane(0), lo.lane(1), lo.lane(2)}, {hi.lane(0), hi.lane(1), hi.lane(2)}}; }
+
+}  // namespace
+
+BinFrame::BinFrame(const Aabb& box, std::uint32_t n_bins) : bins(n_bins) {
+    float o[4] = {0, 0, 0, 0}, s[4] = {0, 0, 0, 0};
+    for (int a = 0; a < 3; ++a) {
+        const float extent = box.hi[a] - box.lo[a];
+        const float sc = float(n_bins) / (2.0f * extent);
+        binned[a] = extent > 0.0f && sc > 0.0f && sc < kInf;  // an infinite extent cannot be binned
+        o[a] = origin2_of[a] = 2.0f * box.lo[a];
+        s[a] = scale_of[a] = binned[a] ? sc : 0.0f;
+    }
+    origin2 = F4::load(o), scale = F4::load(s);
+    top_of = float(n_bins - 1), top = F4::splat(top_of);
+}
+
+void BinSet::reset() const {
+    std::fill(box, box + 6 * std::size_t(bins), F4::splat(kInf));
+    std::fill(count, count + 3 * std::size_t(bins), 0u);
+}
+
+void BinSet::merge(const BinSet& other) const {
+    for (std::size_t i = 0; i < 6 * std::size_t(bins); ++i) box[i] = min(box[i], other.box[i]);
+    for (std::size_t i = 0; i < 3 * std::size_t(bins); ++i) count[i] += other.count[i];
+}
+
+Aabb BinSet::box_of(int axis, std::uint32_t first, std::uint32_t last) const {
+    F4 lo = F4::splat(kInf), neg_hi = lo;
+    for (std::uint32_t k = first; k < last; ++k) {
+        const F4* b = box + 2 * (std::size_t(axis) * bins + k);
+        lo = min(lo, b[0]), neg_hi = min(neg_hi, b[1]);
+    }
+    return to_aabb(lo, neg(neg_hi));
+}
+
+std::uint32_t BinSet::count_of(int axis, std::uint32_t first, std::uint32_t last) const {
+    std::uint32_t n = 0;
+    for (std::uint32_t k = first; k < last; ++k) n += count[std::size_t(axis) * bins + k];
+    return n;
+}
+
+BinSet BinStore::slot(std::uint32_t s) {
+    if (slots_.size() <= s) slots_.resize(s + 1);
+    // 6B boxes, then 3B counts in the room of ceil(3B / 4) more vectors
+    const std::size_t vectors = 6 * std::size_t(bins_) + (3 * std::size_t(bins_) + 3) / 4;
+    if (!slots_[s]) slots_[s].reset(static_cast<F4*>(std::aligned_alloc(64, (vectors * sizeof(F4) + 63) / 64 * 64)));
+    if (!slots_[s]) throw std::bad_alloc();
+    F4* base = slots_[s].get();
+    return {base, reinterpret_cast<std::uint32_t*>(base + 6 * std::size_t(bins_)), bins_};
+}
+
+#if defined(BVHLAB_AVX2_KERNELS)
+namespace avx2 {  // binning_avx2.cpp
+void bin_refs(const PrimRef* refs, Range r, const BinFrame& f, const BinSet copies[2]);
+std::uint32_t partition_and_bin(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
+                                const BinFrame& parent, const BinSplit& split, const ChildBinning child[2],
+                                CentroidBounds sides[2]);
+}  // namespace avx2
+#endif
+
+namespace portable {
+
+void bin_refs(const PrimRef* refs, Range r, const BinFrame& f, const BinSet copies[2]) {
+    alignas(16) std::uint32_t k[4];
+    for (std::uint32_t i = r.begin; i < r.end; ++i) {
+        const F4 lo = refs[i].lo4(), hi = refs[i].hi4(), neg_hi = neg(hi);
+        f.indices(lo + hi, k);
+        const BinSet& b = copies[i & 1];
+        b.add(0, k[0], lo, neg_hi), b.add(1, k[1], lo, neg_hi), b.add(2, k[2], lo, neg_hi);
+    }
+}
+
+}  // namespace portable
+
+void bin_refs(const PrimRef* refs, Range r, const BinFrame& f, const BinSet copies[2]) {
+#if defined(BVHLAB_AVX2_KERNELS)
+    if (active_isa() == Isa::Avx2) return avx2::bin_refs(refs, r, f, copies);
+#endif
+    portable::bin_refs(refs, r, f, copies);
+}
+
+BinSplit best_bin_split(const BinSet& bins, const BinFrame& f, int first_axis, int last_axis, const SahCost& sah,
+                        float parent_area) {
+    // The O(B) sweep per axis (the improvement over the report's O(n + B²), §2.3.2).
+    BinSplit best;
+    const float inv_parent = SahCost::inverse_area(parent_area);
+    Unions<kMaxBins + 3> unions;
+    for (int a = first_axis; a <= last_axis; ++a) {
+        if (!f.binned[a]) continue;
+        const F4* box = bins.box + 2 * std::size_t(a) * bins.bins;
+        const Cut cut = cheapest_cut({box, box + 1, 2, bins.count + std::size_t(a) * bins.bins, bins.bins}, sah, inv_parent,
+                                     unions);
+        if (cut.found && cut.cost < best.cost) best = {cut.cost, a, cut.last_left};
+    }
+    return best;
+}
+
+Aabb CentroidBounds::halved() const {
+    const F4 half = F4::splat(0.5f);
+    return to_aabb(lo * half, neg(neg_hi) * half);
+}
+
+namespace {
+
+/// One copy of one child's buckets, as base pointers per axis.
+struct BinTarget {
+    F4* box[3];
+    std::uint32_t* count[3];
+};
+/// What the fused pass needs of one side: the child's frame and its two bucket copies.
+struct SideTarget {
+    F4 origin2, scale;
+    BinTarget copy[2];
+    bool binned;
+};
+
+SideTarget side_target(const ChildBinning& c) {
+    SideTarget t{c.frame.origin2, c.frame.scale, {}, c.copies != nullptr};
+    for (int k = 0; k < 2 && t.binned; ++k)
+        for (int a = 0; a < 3; ++a)
+            t.copy[k].box[a] = c.copies[k].box + 2 * std::size_t(a) * c.copies[k].bins,
+            t.copy[k].count[a] = c.copies[k].count + std::size_t(a) * c.copies[k].bins;
+    return t;
+}
+
+/// All bits set in the lane of `axis`, none elsewhere (to test one lane of a comparison). Made by
+/// a comparison, not loaded as floats: a NaN bit pattern need not survive a float copy.
+F4 lane_mask(int axis) {
+    float v[4] = {1.0f, 1.0f, 1.0f, 1.0f};
+    v[axis] = -1.0f;
+    return less(F4::load(v), F4::splat(0.0f));
+}
+
+}  // namespace
+
+std::uint32_t count_left(const PrimRef* src, Range r, const BinFrame& parent, const BinSplit& split) {
+    std::uint32_t n = 0;
+    for (std::uint32_t i = r.begin; i < r.end; ++i) n += parent.index(src[i], split.axis) <= split.last_left ? 1u : 0u;
+    return n;
+}
+
+namespace portable {
+
+std::uint32_t partition_and_bin(const PrimRef* __restrict src, PrimRef* __restrict dst, Range r, std::uint32_t left,
+                                std::uint32_t right, const BinFrame& parent, const BinSplit& split,
+                                const ChildBinning child[2], CentroidBounds sides[2]) {
+    const SideTarget target[2] = {side_target(child[0]), side_target(child[1])};
+    const F4 axis_lane = lane_mask(split.axis), zero = F4::splat(0.0f), top = parent.top;
+    const F4 last_left = F4::splat(float(split.last_left));
+    // Two accumulators per side (even and odd references), so that a run of references going the
+    // same way does not chain through one min.
+    CentroidBounds acc[2][2];
+    alignas(16) std::uint32_t k[4];
+    for (std::uint32_t i = r.begin; i < r.end; ++i) {
+        const PrimRef& p = src[i];
+        const F4 lo = p.lo4(), hi = p.hi4(), c2 = lo + hi, neg_hi = neg(hi);
+        // The parent's bucket on the split axis, as indices() computes it (clamped, truncated):
+        // bucket <= last_left exactly when trunc(x) <= last_left, i.e. x < last_left + 1.
+        const F4 x = min(max((c2 - parent.origin2) * parent.scale, zero), top);
+        const std::uint32_t l = any_lane(less(x, last_left + F4::splat(1.0f)) & axis_lane) ? 1u : 0u;
+        const std::uint32_t mask = 0u - l;
+        dst[((right - 1) & ~mask) | (left & mask)] = p;
+        left += l;
+        right -= 1u - l;
+        if (sides) {
+            CentroidBounds& c = acc[i & 1][1 - l];
+            c.lo = min(c.lo, c2), c.neg_hi = min(c.neg_hi, neg(c2));
+        }
+        const SideTarget& t = target[1 - l];
+        if (!t.binned) continue;
+        truncate_to_u32(min(max((c2 - t.origin2) * t.scale, zero), top), k);
+        const BinTarget& b = t.copy[i & 1];
+        for (int a = 0; a < 3; ++a) {
+            F4* box = b.box[a] + 2 * k[a];
+            box[0] = min(box[0], lo), box[1] = min(box[1], neg_hi);
+            ++b.count[a][k[a]];
+        }
+    }
+    for (int s = 0; s < 2 && sides; ++s) sides[s].merge(acc[0][s]), sides[s].merge(acc[1][s]);
+    return left;
+}
+
+}  // namespace portable
+
+std::uint32_t partition_and_bin(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
+                                const BinFrame& parent, const BinSplit& split, const ChildBinning child[2],
+                                CentroidBounds sides[2]) {
+#if defined(BVHLAB_AVX2_KERNELS)
+    if (active_isa() == Isa::Avx2) return avx2::partition_and_bin(src, dst, r, left, right, parent, split, child, sides);
+#endif
+    return portable::partition_and_bin(src, dst, r, left, right, parent, split, child, sides);
+}
+
+}  // namespace bvhlab

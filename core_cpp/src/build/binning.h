@@ -1,0 +1,128 @@
+// binning.h — the passes of the binned SAH (report §2.3.2, PBRT §4.3.2; Wald 2007): every
+// reference falls into one of B equal buckets per axis of its node's box; an O(B) sweep per axis
+// finds the cheapest bucket boundary; one pass then scatters the references by bucket and, in
+// the same pass, drops each into its child's buckets (so every level of the tree costs one pass
+// over the references, not two). Buckets span the node's box rather than its centroids'
+// (tinybvh does the same): the children's boxes, known from the buckets before the pass, are
+// then their frames; on Crytek Sponza the trees are as good or better (SAH 70.4 vs 72.6 at 12
+// buckets, 8 per leaf, all axes).
+#pragma once
+#include <cstdint>
+#include <cstdlib>
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include "bvhlab/split.h"
+
+namespace bvhlab {
+
+/// Where the buckets of one node lie: bucket k of an axis holds the references whose twice-
+/// centroid c2 has k = trunc((c2 - origin2) · scale), clamped to [0, B - 1]. Binning and
+/// partitioning both use indices()/index(), so they agree on every reference.
+struct BinFrame {
+    F4 origin2;      ///< twice the box minimum (lane 3: 0)
+    F4 scale;        ///< B / (2 · box extent) per axis; 0 for a flat axis
+    F4 top;          ///< B - 1 in every lane
+    float origin2_of[3] = {0, 0, 0}, scale_of[3] = {0, 0, 0}, top_of = 0;  ///< the same, for index()
+    bool binned[3] = {false, false, false};  ///< the axes with an extent (the others are one bucket)
+    std::uint32_t bins = 0;
+
+    BinFrame() = default;
+    BinFrame(const Aabb& box, std::uint32_t bins);
+
+    /// Buckets of all three axes from twice the centroid (lanes 0-2). NaN goes to bucket 0, and
+    /// values clamp before they are converted, so the conversion is always defined.
+    void indices(F4 c2, std::uint32_t out[4]) const {
+        F4 x = (c2 - origin2) * scale;
+        truncate_to_u32(min(max(x, F4::splat(0.0f)), top), out);
+    }
+    /// The bucket of one reference on one axis: the scalar twin of indices().
+    std::uint32_t index(const PrimRef& p, int axis) const {
+        float x = (p.lo[axis] + p.hi[axis] - origin2_of[axis]) * scale_of[axis];
+        x = x > 0.0f ? x : 0.0f;  // max(x, 0) in indices(): NaN → 0
+        return static_cast<std::uint32_t>(x < top_of ? x : top_of);
+    }
+};
+
+/// The buckets of the three axes of one node (a view into a BinStore slot): per bucket the box
+/// of its references as (minimum, minimum of the negated maximum), so that one `min` grows both,
+/// and their count.
+struct BinSet {
+    F4* box = nullptr;               ///< [2 (a B + k)] = lo, [2 (a B + k) + 1] = -hi
+    std::uint32_t* count = nullptr;  ///< [a B + k]
+    std::uint32_t bins = 0;
+
+    void reset() const;
+    void merge(const BinSet& other) const;
+    void add(int axis, std::uint32_t k, F4 lo, F4 neg_hi) const {
+        F4* b = box + 2 * (std::size_t(axis) * bins + k);
+        b[0] = min(b[0], lo), b[1] = min(b[1], neg_hi);
+        ++count[std::size_t(axis) * bins + k];
+    }
+    /// The union of buckets [first, last) of `axis`, and how many references they hold.
+    Aabb box_of(int axis, std::uint32_t first, std::uint32_t last) const;
+    std::uint32_t count_of(int axis, std::uint32_t first, std::uint32_t last) const;
+};
+
+/// Bucket memory of one thread: slot s (allocated on first use) holds one BinSet.
+class BinStore {
+public:
+    explicit BinStore(std::uint32_t bins) : bins_(bins) {}
+    std::uint32_t bins() const { return bins_; }
+    BinSet slot(std::uint32_t s);
+
+private:
+    struct Free {
+        void operator()(F4* p) const { std::free(p); }
+    };
+    std::uint32_t bins_;
+    std::vector<std::unique_ptr<F4, Free>> slots_;  ///< 64-byte aligned
+};
+
+/// Slots of a BinStore: below kStackSlots, the buckets of the work item at that stack position;
+/// then two for a node binned on its own; then four per chunk of a parallel pass.
+inline constexpr std::uint32_t kStackSlots = 2 * gpu::MAX_TREE_HEIGHT + 2;
+inline constexpr std::uint32_t kOwnSlot = kStackSlots;
+inline constexpr std::uint32_t kChunkSlots = kStackSlots + 2;
+
+/// Adds the references of r to two copies of buckets (reset by the caller): consecutive
+/// references alternate between them, so that runs in one bucket do not wait on each other's
+/// stores. Merge the second into the first afterwards.
+void bin_refs(const PrimRef* refs, Range r, const BinFrame& f, const BinSet copies[2]);
+
+/// The cheapest boundary: buckets [0, last_left] go left on `axis`.
+struct BinSplit {
+    float cost = std::numeric_limits<float>::infinity();
+    int axis = -1;
+    std::uint32_t last_left = 0;
+};
+/// Sweeps the axes in [first_axis, last_axis] that have an extent.
+BinSplit best_bin_split(const BinSet& bins, const BinFrame& f, int first_axis, int last_axis, const SahCost& sah,
+                        float parent_area);
+
+/// Twice the centroid bounds of references, as (minimum, minimum of the negated maximum).
+struct CentroidBounds {
+    F4 lo = F4::splat(std::numeric_limits<float>::infinity()), neg_hi = lo;
+    void merge(const CentroidBounds& o) { lo = min(lo, o.lo), neg_hi = min(neg_hi, o.neg_hi); }
+    Aabb halved() const;
+};
+
+/// One child in the fused pass: its frame and two copies of its buckets (null: not binned).
+struct ChildBinning {
+    BinFrame frame;
+    const BinSet* copies = nullptr;
+};
+
+/// The fused pass: scatters src[r] into dst by the parent's bucket on split.axis (buckets
+/// <= last_left forward from `left`, the others backward from `right`, as scatter() in
+/// partition.h), drops each reference into its child's buckets and gathers each side's centroid
+/// bounds (sides[0] left, sides[1] right; null: not gathered). Returns the left cursor after.
+std::uint32_t partition_and_bin(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
+                                const BinFrame& parent, const BinSplit& split, const ChildBinning child[2],
+                                CentroidBounds sides[2]);
+
+/// How many references of r go left (the counting pass before a chunked partition_and_bin).
+std::uint32_t count_left(const PrimRef* src, Range r, const BinFrame& parent, const BinSplit& split);
+
+}  // namespace bvhlab

@@ -1,0 +1,79 @@
+// big_blocks.cpp — the large blocks behind BigVector, and the cache that lets one build reuse the
+// memory of the last instead of faulting in fresh pages (big_vector.h says why that matters).
+#include <cstdlib>
+#include <mutex>
+#include <new>
+#include <vector>
+
+#include "bvhlab/big_vector.h"
+
+namespace bvhlab {
+namespace {
+
+/// Freed blocks kept for reuse, at most kCacheBytes in all; a request takes the smallest cached
+/// block that is large enough and not more than 1.5 times too large.
+class BlockCache {
+public:
+    static constexpr std::size_t kCacheBytes = std::size_t(512) << 20;
+
+    void* take(std::size_t bytes) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        std::size_t best = blocks_.size();
+        for (std::size_t i = 0; i < blocks_.size(); ++i) {
+            const std::size_t size = blocks_[i].bytes;
+            if (size >= bytes && size <= bytes + bytes / 2 && (best == blocks_.size() || size < blocks_[best].bytes)) best = i;
+        }
+        if (best == blocks_.size()) return nullptr;
+        void* p = blocks_[best].p;
+        cached_ -= blocks_[best].bytes;
+        blocks_.erase(blocks_.begin() + std::ptrdiff_t(best));
+        return p;
+    }
+    /// Keeps the block; returns the blocks that no longer fit (the oldest first) for freeing.
+    std::vector<void*> keep(void* p, std::size_t bytes) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        std::vector<void*> evicted;
+        if (bytes > kCacheBytes) return {p};
+        blocks_.push_back({p, bytes});
+        cached_ += bytes;
+        while (cached_ > kCacheBytes) {
+            evicted.push_back(blocks_.front().p);
+            cached_ -= blocks_.front().bytes;
+            blocks_.erase(blocks_.begin());
+        }
+        return evicted;
+    }
+
+private:
+    struct Block {
+        void* p;
+        std::size_t bytes;
+    };
+    std::mutex mutex_;
+    std::vector<Block> blocks_;
+    std::size_t cached_ = 0;
+};
+
+BlockCache& cache() {
+    static BlockCache* c = new BlockCache();  // never destroyed: blocks may be freed during exit
+    return *c;
+}
+
+}  // namespace
+
+void* allocate_big_block(std::size_t bytes) {
+    if (void* p = cache().take(bytes)) return p;
+    void* p = std::aligned_alloc(std::size_t(2) << 20, bytes);
+    if (!p) throw std::bad_alloc();
+    return p;
+}
+
+void free_big_block(void* p, std::size_t bytes) noexcept {
+    try {
+        for (void* old : cache().keep(p, bytes)) std::free(old);
+    } catch (...) {  // no memory to remember the block: give it back
+        std::free(p);
+    }
+}
+
+}  // namespace bvhlab

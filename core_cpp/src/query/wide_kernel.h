@@ -1,0 +1,28 @@
+// wide_kernel.h — what the traversal kernels of the wide tree (wide_traverse.inl, one copy per
+// instruction set) see: plain pointers, and the helpers they call out of line.
+#pragma once
+#include <cstdint>
+
+#include "bvhlab/wide_bvh.h"
+
+namespace bvhlab {
+
+/// A WideBvh as plain pointers (nodes is null when the tree is one leaf or empty).
+struct WideView {
+    const WideNode* nodes;
+    const PrimPacket* packets;
+    const std::uint32_t* slots;
+    std::uint32_t root_packets;
+};
+
+/// hit_sphere (ray.h) on lane `lane` of a sphere packet; updates hit (t, ref) as it does.
+bool hit_packet_sphere(const PrimPacket& k, int lane, const float origin[3], const float dir[3], float tmin, Hit& hit);
+
+namespace portable {
+Hit intersect_wide_kernel(const WideView& wide, const Ray& ray, std::uint32_t* nodes_visited);
+}
+namespace avx2 {
+Hit intersect_wide_kernel(const WideView& wide, const Ray& ray, std::uint32_t* nodes_visited);
+}
+
+}  // namespace bvhlab
