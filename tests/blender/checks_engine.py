@@ -127,7 +127,8 @@ def check_heatmap_is_box_tests(tmp_dir) -> None:
     use_engine(scene, backend="cpu", render_supersampling=1, render_overlay=False, traversal="stack")
     got = render_passes(tmp_dir)
     exported = export_scene(bpy.context)
-    bvh = bvhlab.build(exported)
+    s = scene.bvhlab  # the tree the engine builds: the panel's settings
+    bvh = bvhlab.build(exported, method=s.method, bins=s.bins, axis=s.axis, max_leaf_size=s.max_leaf_size)
     directions = _primary_directions(exported.camera, 96, 72)
     origins = np.ascontiguousarray(np.broadcast_to(np.float32(exported.camera.position), directions.shape))
     visited = bvh.intersect(origins, directions, traversal="stack")["nodes_visited"].reshape(72, 96)

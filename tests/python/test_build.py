@@ -132,6 +132,7 @@ def test_method_quality_ordering_on_non_uniform_scene():
 
 def test_refit_follows_moved_geometry(knot_mesh):
     bvh = bvhlab.build(knot_mesh, method="sah")
+    topology = bvh.nodes[["index", "info"]].copy()
     moved = knot_mesh + np.float32(5.0)
     moved[::3] *= np.float32(1.5)  # not just a translation: boxes change shape
     bvh.refit(moved)
@@ -139,7 +140,7 @@ def test_refit_follows_moved_geometry(knot_mesh):
     fresh = bvhlab.build(moved, method="sah")
     o, d = procedural.random_rays(moved, 2000, seed=4)
     np.testing.assert_array_equal(bvh.intersect(o, d)["t"], fresh.intersect(o, d)["t"])
-    assert bvh.stats["nodes"] == fresh.stats["nodes"]
+    np.testing.assert_array_equal(bvh.nodes[["index", "info"]], topology)  # the same tree, moved boxes
 
 
 def test_progress_reports_and_cancels(knot_mesh):

@@ -121,10 +121,6 @@ def test_every_traversal_picks_the_same_primitive_on_ties():
             assert (prim[np.isin(prim, np.flatnonzero((tris == copies[0]).all(axis=(1, 2))))] == first_copy).all()
 
 
-@pytest.mark.xfail(strict=True, reason="found by the fuzzer (tests/fuzz/corpus/found_tie_at_box_entry), not fixed "
-                   "yet: Möller–Trumbore puts the shared vertex at t = 0.99999994, an ulp before the slab entry "
-                   "(1.0) of triangle 0's box, so the stack and wide traversals cull that box once triangle 1 is "
-                   "hit at the same t, and the tie rule's smaller index (0) loses")
 def test_a_tie_at_a_shared_vertex_goes_to_the_smaller_index_in_every_traversal():
     tris = np.array([[[-16, -16, -16], [-8.125, -16, -16], [-10, -13, -16]],
                      [[-10.5625, -9.375, -11.9375], [-10, -16, -16], [-16, -16, -16]]], np.float32)

@@ -106,6 +106,7 @@ void intersect_batch(const Bvh& bvh, const RayBatch& rays, const HitBatch& out, 
     if (mode == Traversal::Wide && !wide) throw std::invalid_argument("Traversal::Wide needs the wide tree");
     check_rays(rays);
     constexpr std::size_t kChunk = 1024;
+    if (cancel && cancel->poll()) throw Cancelled();  // asked to stop before anything started
     auto chunk = [&](std::size_t k, unsigned slot) {
         // the calling thread (slot 0) runs the check; the others read the flag
         if (cancel && (slot == 0 ? cancel->poll() : cancel->stop_requested())) return;
