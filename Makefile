@@ -102,7 +102,16 @@ fuzz: build/fuzz/build.ninja
 	UBSAN_OPTIONS=print_stacktrace=1 build/fuzz/tests/fuzz/fuzz_core -max_total_time=$(FUZZ_SECONDS) -timeout=20 \
 		-artifact_prefix=build/fuzz/crashes/ build/fuzz/corpus tests/fuzz/corpus
 
-test: cpp-test asan-test clang-sanitize-test pytest blender-test
+# Lint: ruff (pycodestyle, pyflakes, import order, bugbear, pyupgrade) and its formatter over every
+# Python file, mypy over the package (settings in pyproject.toml).
+PY_LINT_DIRS := python addon tests bench blender_scenes scripts
+.PHONY: lint
+lint: $(VENV)/.deps
+	$(VENV)/bin/ruff check $(PY_LINT_DIRS)
+	$(VENV)/bin/ruff format --check $(PY_LINT_DIRS)
+	$(VENV)/bin/mypy
+
+test: lint cpp-test asan-test clang-sanitize-test pytest blender-test
 
 # The report's Table 1 on its own scene, Crytek Sponza (frame times on the CPU reference, the
 # report's build settings), its claims checked with the measurement protocol, the §4.1 overlay claim

@@ -1,4 +1,5 @@
 """Settings on each Scene (`scene.bvhlab`) and the "Analytic sphere" flag on objects."""
+
 from __future__ import annotations
 
 import bpy
@@ -27,6 +28,7 @@ MAX_DEPTH = 63
 
 def _redraw(_self=None, _context=None) -> None:
     from .overlay import tag_redraw
+
     tag_redraw()
 
 
@@ -50,66 +52,133 @@ def _depth_max_changed(self, context) -> None:
 
 class BVHLAB_PG_settings(bpy.types.PropertyGroup):
     """Build, overlay, render and comparison settings of one scene."""
-    scope: EnumProperty(name="Scope", default="visible", description="Which objects the tree is built over",
-                        items=[("visible", "Visible", "Every object visible in the view layer"),
-                               ("selected", "Selected", "The selected objects only")])
+
+    scope: EnumProperty(
+        name="Scope",
+        default="visible",
+        description="Which objects the tree is built over",
+        items=[
+            ("visible", "Visible", "Every object visible in the view layer"),
+            ("selected", "Selected", "The selected objects only"),
+        ],
+    )
     method: EnumProperty(name="Split method", items=METHOD_ITEMS, default="sah")
     bins: IntProperty(name="Bins", min=2, max=256, default=12, description="SAH bins per axis (PBRT's default is 12)")
     axis: EnumProperty(name="Axis", items=AXIS_ITEMS, default="largest")
-    max_leaf_size: IntProperty(name="Max leaf size", min=1, max=255, soft_max=16, default=1,
-                               description="Most primitives in a leaf; SAH methods may stop earlier")
+    max_leaf_size: IntProperty(
+        name="Max leaf size",
+        min=1,
+        max=255,
+        soft_max=16,
+        default=1,
+        description="Most primitives in a leaf; SAH methods may stop earlier",
+    )
 
-    overlay_show: BoolProperty(name="Show boxes", default=False, update=_redraw,
-                               description="Draw the boxes of the nodes in the depth range in the viewport")
-    overlay_depth_min: IntProperty(name="Min depth", min=0, max=MAX_DEPTH, default=0, update=_depth_min_changed,
-                                   description="Shallowest depth drawn (root = 0); at most the tree height - 1")
-    overlay_depth_max: IntProperty(name="Max depth", min=0, max=MAX_DEPTH, default=3, update=_depth_max_changed,
-                                   description="Deepest depth drawn; at most the tree height - 1")
+    overlay_show: BoolProperty(
+        name="Show boxes",
+        default=False,
+        update=_redraw,
+        description="Draw the boxes of the nodes in the depth range in the viewport",
+    )
+    overlay_depth_min: IntProperty(
+        name="Min depth",
+        min=0,
+        max=MAX_DEPTH,
+        default=0,
+        update=_depth_min_changed,
+        description="Shallowest depth drawn (root = 0); at most the tree height - 1",
+    )
+    overlay_depth_max: IntProperty(
+        name="Max depth",
+        min=0,
+        max=MAX_DEPTH,
+        default=3,
+        update=_depth_max_changed,
+        description="Deepest depth drawn; at most the tree height - 1",
+    )
     overlay_color_by_depth: BoolProperty(name="Colour by depth", default=True, update=_redraw)
-    overlay_color: FloatVectorProperty(name="Colour", subtype="COLOR", size=4, min=0.0, max=1.0,
-                                       default=(1.0, 0.55, 0.1, 1.0), update=_redraw)
-    overlay_leaves_only: BoolProperty(name="Leaves only", default=False, update=_redraw,
-                                      description="Draw only the leaves in the depth range")
-    overlay_xray: BoolProperty(name="X-ray", default=True, update=_redraw,
-                               description="Draw boxes through geometry (off: hidden behind surfaces)")
+    overlay_color: FloatVectorProperty(
+        name="Colour", subtype="COLOR", size=4, min=0.0, max=1.0, default=(1.0, 0.55, 0.1, 1.0), update=_redraw
+    )
+    overlay_leaves_only: BoolProperty(
+        name="Leaves only", default=False, update=_redraw, description="Draw only the leaves in the depth range"
+    )
+    overlay_xray: BoolProperty(
+        name="X-ray",
+        default=True,
+        update=_redraw,
+        description="Draw boxes through geometry (off: hidden behind surfaces)",
+    )
     overlay_line_width: FloatProperty(name="Line width", min=1.0, max=5.0, default=1.0, update=_redraw)
 
-    render_bounces: IntProperty(name="Bounces", min=0, max=15, default=5,
-                                description="Reflection and refraction depth of the Whitted tracer")
-    render_supersampling: IntProperty(name="Samples", min=1, max=8, default=1,
-                                      description="n × n samples per pixel")
-    backend: EnumProperty(name="Backend", default="auto", items=[
-        ("auto", "Auto", "Vulkan when a driver is present, otherwise the CPU reference tracer"),
-        ("vulkan", "Vulkan", "Vulkan compute tracer"),
-        ("cpu", "CPU", "C++ reference tracer")])
-    traversal: EnumProperty(name="Traversal", default="stackless", items=[
-        ("stackless", "Stackless", "Skip indices (report §3.1)"), ("stack", "Stack", "A stack of node indices")])
-    render_mode: EnumProperty(name="Mode", default="shade", items=[
-        ("shade", "Shade", "Whitted shading"), ("heatmap", "Heatmap", "Box tests per pixel")])
-    render_overlay: BoolProperty(name="Boxes in image", default=False,
-                                 description="Draw the overlay's depth range into the rendered image")
-    viewport_budget_ms: FloatProperty(name="Preview ms", min=5.0, max=1000.0, default=40.0, precision=0, description=(
-        "Rendered viewport: while the view moves, trace at the resolution that takes about this many "
-        "milliseconds; full resolution (then n × n samples) once it stops"))
+    render_bounces: IntProperty(
+        name="Bounces", min=0, max=15, default=5, description="Reflection and refraction depth of the Whitted tracer"
+    )
+    render_supersampling: IntProperty(name="Samples", min=1, max=8, default=1, description="n × n samples per pixel")
+    backend: EnumProperty(
+        name="Backend",
+        default="auto",
+        items=[
+            ("auto", "Auto", "Vulkan when a driver is present, otherwise the CPU reference tracer"),
+            ("vulkan", "Vulkan", "Vulkan compute tracer"),
+            ("cpu", "CPU", "C++ reference tracer"),
+        ],
+    )
+    traversal: EnumProperty(
+        name="Traversal",
+        default="stackless",
+        items=[("stackless", "Stackless", "Skip indices (report §3.1)"), ("stack", "Stack", "A stack of node indices")],
+    )
+    render_mode: EnumProperty(
+        name="Mode",
+        default="shade",
+        items=[("shade", "Shade", "Whitted shading"), ("heatmap", "Heatmap", "Box tests per pixel")],
+    )
+    render_overlay: BoolProperty(
+        name="Boxes in image", default=False, description="Draw the overlay's depth range into the rendered image"
+    )
+    viewport_budget_ms: FloatProperty(
+        name="Preview ms",
+        min=5.0,
+        max=1000.0,
+        default=40.0,
+        precision=0,
+        description=(
+            "Rendered viewport: while the view moves, trace at the resolution that takes about this many "
+            "milliseconds; full resolution (then n × n samples) once it stops"
+        ),
+    )
 
-    compare_frames: IntProperty(name="Frames", min=1, max=50, default=3,
-                                description="Renders per method; the frame time is their mean")
-    compare_filepath: StringProperty(name="Table", subtype="FILE_PATH", default="//bvh_compare.csv",
-                                     description="CSV file the comparison is written to")
+    compare_frames: IntProperty(
+        name="Frames", min=1, max=50, default=3, description="Renders per method; the frame time is their mean"
+    )
+    compare_filepath: StringProperty(
+        name="Table",
+        subtype="FILE_PATH",
+        default="//bvh_compare.csv",
+        description="CSV file the comparison is written to",
+    )
 
     def build_settings(self) -> dict:
         """What a tree depends on besides the geometry."""
-        return {"scope": self.scope, "method": self.method, "bins": self.bins, "axis": self.axis,
-                "max_leaf_size": self.max_leaf_size}
+        return {
+            "scope": self.scope,
+            "method": self.method,
+            "bins": self.bins,
+            "axis": self.axis,
+            "max_leaf_size": self.max_leaf_size,
+        }
 
 
 def _get_sphere(obj) -> bool:
     from bvhlab.blender import is_analytic_sphere
+
     return is_analytic_sphere(obj)
 
 
 def _set_sphere(obj, value: bool) -> None:
     from bvhlab.blender import SPHERE_PROPERTY
+
     obj[SPHERE_PROPERTY] = bool(value)
 
 
@@ -121,12 +190,18 @@ def register_properties() -> None:
     bpy.types.Scene.bvhlab = bpy.props.PointerProperty(type=BVHLAB_PG_settings)
     # A pass switch lives on the view layer, like Blender's own (use_pass_z); the engine reads it.
     bpy.types.ViewLayer.bvhlab_use_pass_heatmap = BoolProperty(
-        name="BVH Heatmap", default=True, update=_passes_changed,
-        description="The bvhlab render engine's traversal-cost heatmap (box tests of the primary rays) as a pass")
+        name="BVH Heatmap",
+        default=True,
+        update=_passes_changed,
+        description="The bvhlab render engine's traversal-cost heatmap (box tests of the primary rays) as a pass",
+    )
     # Stored as the plain custom property bvhlab.blender reads, so files and the CLI need no add-on.
     bpy.types.Object.bvhlab_analytic_sphere = BoolProperty(
-        name="Analytic sphere", get=_get_sphere, set=_set_sphere,
-        description="Export this object as one exact sphere (centre and radius from its bounds)")
+        name="Analytic sphere",
+        get=_get_sphere,
+        set=_set_sphere,
+        description="Export this object as one exact sphere (centre and radius from its bounds)",
+    )
 
 
 def unregister_properties() -> None:

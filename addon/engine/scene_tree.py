@@ -1,5 +1,6 @@
 """The engine's tree over a scene kept between frames: built once, refit when only transforms moved,
 kept when nothing moved (the depsgraph said so, or the arrays are equal)."""
+
 from __future__ import annotations
 
 import time
@@ -15,13 +16,14 @@ REFIT_LIMIT = 1.5
 @dataclass(frozen=True)
 class BuildSettings:
     """What a tree depends on besides the geometry (scene.bvhlab's build settings)."""
+
     method: str = "sah"
     bins: int = 12
     axis: str = "largest"
     max_leaf_size: int = 1
 
     @classmethod
-    def of(cls, blender_scene) -> "BuildSettings":
+    def of(cls, blender_scene) -> BuildSettings:
         s = blender_scene.bvhlab
         return cls(s.method, s.bins, s.axis, s.max_leaf_size)
 
@@ -29,6 +31,7 @@ class BuildSettings:
 @dataclass(frozen=True)
 class TreeUpdate:
     """What `SceneTree.update` did: "built", "refit" or "kept", and how long it took."""
+
     action: str
     ms: float = 0.0
 
@@ -42,8 +45,9 @@ class SceneTree:
         self._source: tuple = (None, None)  # the triangle and sphere arrays the tree is over
         self._built_sah = 0.0
 
-    def update(self, scene, settings: BuildSettings, refittable: bool = False, progress=None,
-               threads: int = 0) -> TreeUpdate:
+    def update(
+        self, scene, settings: BuildSettings, refittable: bool = False, progress=None, threads: int = 0
+    ) -> TreeUpdate:
         """Make the tree fit `scene` (a bvhlab.Scene). `refittable`: the primitives are those of the
         last scene, in the same order, only moved (LiveScene's report). `progress(fraction)`
         returning False cancels a build (bvhlab.BuildCancelled). `threads`: for a build (0: all)."""
@@ -61,8 +65,11 @@ class SceneTree:
         triangles, spheres = self._source
         if triangles is scene.triangles and spheres is scene.spheres:
             return True
-        return (triangles is not None and np.array_equal(triangles, scene.triangles)
-                and np.array_equal(spheres, scene.spheres))
+        return (
+            triangles is not None
+            and np.array_equal(triangles, scene.triangles)
+            and np.array_equal(spheres, scene.spheres)
+        )
 
     def _refit(self, scene) -> bool:
         triangles, spheres = self._source
@@ -79,8 +86,15 @@ class SceneTree:
         import bvhlab
 
         self.bvh = None  # a cancelled build leaves no stale tree behind
-        bvh = bvhlab.build(scene, method=settings.method, bins=settings.bins, axis=settings.axis,
-                           max_leaf_size=settings.max_leaf_size, threads=threads, progress=progress)
+        bvh = bvhlab.build(
+            scene,
+            method=settings.method,
+            bins=settings.bins,
+            axis=settings.axis,
+            max_leaf_size=settings.max_leaf_size,
+            threads=threads,
+            progress=progress,
+        )
         self.bvh, self.settings = bvh, settings
         self._source = (scene.triangles, scene.spheres)
         self._built_sah = bvh.stats["sah_cost"]

@@ -1,8 +1,9 @@
 """`bvhlab.build` and the `Bvh` it returns: a thin, checked layer over the C++ core."""
+
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
@@ -44,6 +45,7 @@ def method_from_label(label: str) -> dict:
 @dataclass(frozen=True)
 class BuildConfig:
     """What a tree was built with (the arguments of `build`)."""
+
     method: str = DEFAULT_METHOD
     bins: int = DEFAULT_BINS
     axis: str = DEFAULT_AXIS
@@ -52,10 +54,18 @@ class BuildConfig:
     threads: int = 0
 
 
-def build(scene_or_triangles, spheres: np.ndarray | None = None, *, method: str = DEFAULT_METHOD,
-          bins: int = DEFAULT_BINS, axis: str = DEFAULT_AXIS, max_leaf_size: int = DEFAULT_MAX_LEAF_SIZE,
-          seed: int = 0, threads: int = 0,
-          progress: Callable[[float], bool | None] | None = None) -> "Bvh":
+def build(
+    scene_or_triangles,
+    spheres: np.ndarray | None = None,
+    *,
+    method: str = DEFAULT_METHOD,
+    bins: int = DEFAULT_BINS,
+    axis: str = DEFAULT_AXIS,
+    max_leaf_size: int = DEFAULT_MAX_LEAF_SIZE,
+    seed: int = 0,
+    threads: int = 0,
+    progress: Callable[[float], bool | None] | None = None,
+) -> Bvh:
     """Build a BVH over triangles (float32 (T,3,3)) and spheres (float32 (S,4): centre, radius).
 
     `scene_or_triangles` is a `bvhlab.Scene` or a triangle array. `method` is one of METHODS,
@@ -94,8 +104,17 @@ def build(scene_or_triangles, spheres: np.ndarray | None = None, *, method: str 
     )
     if progress is not None and not callable(progress):
         raise TypeError("progress must be callable (fraction -> bool) or None")
-    core = _core.build(triangles, spheres, config.method, config.axis, config.bins, config.max_leaf_size,
-                       config.seed, config.threads, progress)
+    core = _core.build(
+        triangles,
+        spheres,
+        config.method,
+        config.axis,
+        config.bins,
+        config.max_leaf_size,
+        config.seed,
+        config.threads,
+        progress,
+    )
     return Bvh(core, config)
 
 
@@ -105,15 +124,17 @@ class Bvh:
     A Bvh may be shared between threads: `intersect`, `boxes` and the arrays read one version of
     the tree; `refit` publishes a new version, so a reader sees the old tree or the new one."""
 
-    def __init__(self, core: "_core.Bvh", config: BuildConfig):
+    def __init__(self, core: _core.Bvh, config: BuildConfig):
         self._core = core
         self.config = config
         self._stats: dict | None = None
 
     def __repr__(self) -> str:
         s = self.stats
-        return (f"<bvhlab.Bvh {self.config.method} {s['primitives']} primitives, {s['nodes']} nodes, "
-                f"height {s['height']}, SAH {s['sah_cost']:.2f}>")
+        return (
+            f"<bvhlab.Bvh {self.config.method} {s['primitives']} primitives, {s['nodes']} nodes, "
+            f"height {s['height']}, SAH {s['sah_cost']:.2f}>"
+        )
 
     # -- numbers ---------------------------------------------------------------------------
     @property
@@ -169,8 +190,16 @@ class Bvh:
         return self._core.boxes(depth_min, depth_max, bool(leaves_only))
 
     # -- queries -----------------------------------------------------------------------------
-    def intersect(self, origins: np.ndarray, directions: np.ndarray, *, tmin: float = 0.0,
-                  tmax: float = np.inf, traversal: str = "wide", threads: int = 0) -> dict:
+    def intersect(
+        self,
+        origins: np.ndarray,
+        directions: np.ndarray,
+        *,
+        tmin: float = 0.0,
+        tmax: float = np.inf,
+        traversal: str = "wide",
+        threads: int = 0,
+    ) -> dict:
         """Closest hits of rays origin + t·direction, t in (tmin, tmax), on every core.
 
         Origins lie within ±MAX_COORDINATE (2^40) and the largest component of each direction in
@@ -192,12 +221,28 @@ class Bvh:
         _checks.choice("traversal", traversal, TRAVERSALS)
         tmin, tmax = _checks.real("tmin", tmin), _checks.real("tmax", tmax)
         n = len(origins)
-        out = {"t": np.empty(n, np.float32), "prim": np.empty(n, np.int32), "kind": np.empty(n, np.uint8),
-               "u": np.empty(n, np.float32), "v": np.empty(n, np.float32),
-               "nodes_visited": np.empty(n, np.uint32)}
-        self._core.intersect(origins, directions, tmin, tmax, traversal,
-                             _checks.integer("threads", threads, 0, 4096), out["t"], out["prim"], out["kind"],
-                             out["u"], out["v"], out["nodes_visited"])
+        out = {
+            "t": np.empty(n, np.float32),
+            "prim": np.empty(n, np.int32),
+            "kind": np.empty(n, np.uint8),
+            "u": np.empty(n, np.float32),
+            "v": np.empty(n, np.float32),
+            "nodes_visited": np.empty(n, np.uint32),
+        }
+        self._core.intersect(
+            origins,
+            directions,
+            tmin,
+            tmax,
+            traversal,
+            _checks.integer("threads", threads, 0, 4096),
+            out["t"],
+            out["prim"],
+            out["kind"],
+            out["u"],
+            out["v"],
+            out["nodes_visited"],
+        )
         return out
 
     def refit(self, triangles: np.ndarray, spheres: np.ndarray | None = None) -> None:

@@ -1,10 +1,10 @@
 """The add-on's operators under bpy, enabled in place from addon/ (the zip is tested in
 test_addon_install.py, drawing in test_addon_gpu.py)."""
-import pytest
 
 import blender_checks  # noqa: F401
-import harness
 import checks_addon  # noqa: E402
+import harness
+import pytest
 
 
 @pytest.fixture(scope="module", autouse=True)

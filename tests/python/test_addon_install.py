@@ -2,14 +2,15 @@
 listed in its manifest with the project's one version; it installs and enables headless under
 bpy 4.2, unregisters without leftovers, and enables again (in a child process with its own user
 folder). The same zip is installed under bpy 5.2 and a Blender binary by `make blender-test`."""
+
 import re
 import tomllib
 import zipfile
 from pathlib import Path
 
-import bvhlab
-
 import blender_checks
+
+import bvhlab
 
 ROOT = Path(__file__).resolve().parents[2]
 ZIP = ROOT / "dist" / "bvhlab.zip"
@@ -26,8 +27,9 @@ def test_zip_has_a_wheel_for_each_blender_python_and_one_version():
         names = set(archive.namelist())
     version = bvhlab.__version__
     assert manifest["version"] == version
-    assert sorted(manifest["wheels"]) == [f"./wheels/bvhlab-{version}-{tag}-{tag}-linux_x86_64.whl"
-                                          for tag in ("cp311", "cp313")]
+    assert sorted(manifest["wheels"]) == [
+        f"./wheels/bvhlab-{version}-{tag}-{tag}-linux_x86_64.whl" for tag in ("cp311", "cp313")
+    ]
     assert all(wheel[2:] in names for wheel in manifest["wheels"]), (manifest["wheels"], names)
 
 

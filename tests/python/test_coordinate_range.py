@@ -2,13 +2,14 @@
 direction of length 1e-28). Now geometry outside ±MAX_COORDINATE is refused naming the primitive,
 everything inside is hit as a float64 brute force says, and any direction whose largest component
 lies in [MIN_DIRECTION, MAX_DIRECTION] works (core_cpp/include/bvhlab/coordinate_range.h)."""
+
 import numpy as np
 import pytest
+from oracles import brute_force
 
 import bvhlab
 from bvhlab.bvh import MAX_COORDINATE, MAX_DIRECTION, MIN_DIRECTION, MIN_RADIUS
 from bvhlab.library import procedural
-from oracles import brute_force
 
 L = MAX_COORDINATE
 
@@ -65,7 +66,9 @@ def _giant_scene(rng, n_tris=300, n_spheres=40):
     """Triangles and spheres spread over the whole range, some as large as it (corners at ±L)."""
     tris = rng.uniform(-L, L, (n_tris, 3, 3)).astype(np.float32)
     tris[:20] = rng.choice([-L, L], (20, 3, 3)).astype(np.float32)  # corner to corner
-    tris[20:40] = (rng.uniform(-1, 1, (20, 3, 3)) * L / 2**20 + rng.uniform(-L / 2, L / 2, (20, 1, 3))).astype(np.float32)
+    tris[20:40] = (rng.uniform(-1, 1, (20, 3, 3)) * L / 2**20 + rng.uniform(-L / 2, L / 2, (20, 1, 3))).astype(
+        np.float32
+    )
     centres = rng.uniform(-L / 2, L / 2, (n_spheres, 3))
     radii = rng.uniform(L / 64, L / 2, n_spheres)
     spheres = np.column_stack([centres, radii]).astype(np.float32)

@@ -1,5 +1,6 @@
 """Argument types of `bvhlab compare`: each rejects bad input with argparse's own error
 ("bvhlab compare: error: argument --frames: ...", exit 2) before any work starts."""
+
 from __future__ import annotations
 
 import argparse
@@ -23,8 +24,10 @@ def sample_count(text: str) -> int:
     """Frames or builds per method: the protocol needs at least MIN_SAMPLES for a spread."""
     n = _integer(text)
     if n < MIN_SAMPLES:
-        raise argparse.ArgumentTypeError(f"must be at least {MIN_SAMPLES} (the protocol reports a median and its "
-                                         f"spread, which needs {MIN_SAMPLES} samples), got {n}")
+        raise argparse.ArgumentTypeError(
+            f"must be at least {MIN_SAMPLES} (the protocol reports a median and its "
+            f"spread, which needs {MIN_SAMPLES} samples), got {n}"
+        )
     return n
 
 
@@ -76,8 +79,9 @@ def output_dir(text: str) -> Path:
     may be a file. The path is used as given, never renamed."""
     path = Path(text)
     if path.exists() and not path.is_dir():
-        raise argparse.ArgumentTypeError(f"{path} exists and is not a directory (compare writes a directory of "
-                                         f"tables, charts and figures)")
+        raise argparse.ArgumentTypeError(
+            f"{path} exists and is not a directory (compare writes a directory of tables, charts and figures)"
+        )
     for parent in path.parents:
         if parent.exists() and not parent.is_dir():
             raise argparse.ArgumentTypeError(f"cannot create {path}: {parent} is a file")

@@ -1,10 +1,11 @@
 """Arguments several commands share, parsed once."""
+
 from __future__ import annotations
 
 import argparse
 import re
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 from .. import _core
 from .._checks import OutputPathError, output_file
@@ -19,11 +20,17 @@ def add_scene(p: argparse.ArgumentParser) -> None:
 
 
 def add_build(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--method", default=DEFAULT_METHOD, help=f"split method: {', '.join(METHODS)} (or sah<B>, e.g. sah32)")
+    p.add_argument(
+        "--method", default=DEFAULT_METHOD, help=f"split method: {', '.join(METHODS)} (or sah<B>, e.g. sah32)"
+    )
     p.add_argument("--bins", type=int, default=None, help=f"binned SAH buckets, 2..256 (default {DEFAULT_BINS})")
     p.add_argument("--axis", default=DEFAULT_AXIS, choices=AXES, help=f"split axis policy (default {DEFAULT_AXIS})")
-    p.add_argument("--max-leaf-size", type=int, default=DEFAULT_MAX_LEAF_SIZE,
-                   help=f"primitives per leaf at most (default {DEFAULT_MAX_LEAF_SIZE})")
+    p.add_argument(
+        "--max-leaf-size",
+        type=int,
+        default=DEFAULT_MAX_LEAF_SIZE,
+        help=f"primitives per leaf at most (default {DEFAULT_MAX_LEAF_SIZE})",
+    )
 
 
 def build_kwargs(args) -> dict:
@@ -75,11 +82,13 @@ def samples_per_axis(text: str) -> int:
 def output_file_type(suffix: str, what: str) -> Callable[[str], Path]:
     """An argparse type: a file path to be written, ending in `suffix`, checked before any work
     (not a folder, not under a file, never renamed)."""
+
     def parse(text: str) -> Path:
         try:
             return output_file(text, (suffix,), what)
         except OutputPathError as e:
             raise argparse.ArgumentTypeError(str(e)) from None
+
     return parse
 
 
