@@ -5,25 +5,51 @@ from __future__ import annotations
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, FloatVectorProperty, IntProperty, StringProperty
 
+from bvhlab import _core as bvhlab_core
+from bvhlab.bvh import AXES, DEFAULT_AXIS, DEFAULT_BINS, DEFAULT_MAX_LEAF_SIZE, DEFAULT_METHOD, MAX_TREE_HEIGHT, METHODS
+from bvhlab.render import BACKENDS, MAX_RAY_DEPTH, MAX_SAMPLES_PER_AXIS, MODES, TRAVERSALS
+
 from . import state
 
-# Same names as bvhlab.METHODS / AXES (a test checks): kept literal so registering imports no bvhlab.
-METHOD_ITEMS = [
-    ("median", "Median", "Split at the median centroid: equal counts (report §2.3.1)"),
-    ("mean", "Mean", "Split at the mean centroid (report §2.3.1)"),
-    ("midpoint", "Midpoint", "Split the centroid bounds in half (PBRT's Middle)"),
-    ("sah", "SAH (binned)", "Surface area heuristic over bins (report §2.3.2)"),
-    ("sweep_sah", "SAH (full sweep)", "Exact surface area heuristic over every split"),
-    ("lbvh", "LBVH", "Linear BVH from Morton codes"),
-]
-AXIS_ITEMS = [
-    ("auto", "Auto", "All three axes for the SAH methods, the largest centroid extent for the others"),
-    ("largest", "Largest", "Split along the axis of largest centroid extent"),
-    ("random", "Random", "Split along a random axis (seeded)"),
-    ("best", "Best", "Try all three axes, keep the lowest SAH cost"),
-]
-#: The maximum node depth any tree can have (bvhlab.bvh.MAX_TREE_HEIGHT - 1).
-MAX_DEPTH = 63
+# Names, defaults and limits come from the core (one definition, bvhlab._core); the add-on only
+# adds what a user reads in the UI: a label and a tooltip per name.
+_LABELS = {
+    "median": ("Median", "Split at the median centroid: equal counts (report §2.3.1)"),
+    "mean": ("Mean", "Split at the mean centroid (report §2.3.1)"),
+    "midpoint": ("Midpoint", "Split the centroid bounds in half (PBRT's Middle)"),
+    "sah": ("SAH (binned)", "Surface area heuristic over bins (report §2.3.2)"),
+    "sweep_sah": ("SAH (full sweep)", "Exact surface area heuristic over every split"),
+    "lbvh": ("LBVH", "Linear BVH from Morton codes"),
+    "auto": ("Auto", "All three axes for the SAH methods, the largest centroid extent for the others"),
+    "largest": ("Largest", "Split along the axis of largest centroid extent"),
+    "random": ("Random", "Split along a random axis (seeded)"),
+    "best": ("Best", "Try all three axes, keep the lowest SAH cost"),
+    "stackless": ("Stackless", "Skip indices (report §3.1)"),
+    "stack": ("Stack", "A stack of node indices"),
+    "shade": ("Shade", "Whitted shading"),
+    "heatmap": ("Heatmap", "Box tests per pixel"),
+    "vulkan": ("Vulkan", "Vulkan compute tracer"),
+    "cpu": ("CPU", "C++ reference tracer"),
+}
+_BACKEND_AUTO = (
+    "Auto",
+    "A Vulkan GPU when there is one, otherwise the CPU reference tracer (also instead of a CPU "
+    "Vulkan driver such as lavapipe, where it is faster)",
+)
+
+
+def _items(names) -> list[tuple[str, str, str]]:
+    """EnumProperty items for the core's names, labelled for the UI."""
+    return [(n, *_LABELS.get(n, (n.replace("_", " ").title(), ""))) for n in names]
+
+
+METHOD_ITEMS = _items(METHODS)
+# (module level: Blender evaluates the annotations below in a scope where a comprehension could
+# not see this module's names)
+BACKEND_ITEMS = [(b, *(_BACKEND_AUTO if b == "auto" else _LABELS[b])) for b in BACKENDS]
+AXIS_ITEMS = _items(AXES)
+#: The maximum node depth any tree can have.
+MAX_DEPTH = MAX_TREE_HEIGHT - 1
 
 
 def _redraw(_self=None, _context=None) -> None:
@@ -62,16 +88,22 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
             ("selected", "Selected", "The selected objects only"),
         ],
     )
-    method: EnumProperty(name="Split method", items=METHOD_ITEMS, default="sah")
-    bins: IntProperty(name="Bins", min=2, max=256, default=12, description="SAH bins per axis (PBRT's default is 12)")
-    axis: EnumProperty(name="Axis", items=AXIS_ITEMS, default="largest")
+    method: EnumProperty(name="Split method", items=METHOD_ITEMS, default=DEFAULT_METHOD)
+    bins: IntProperty(
+        name="Bins",
+        min=int(bvhlab_core.MIN_BINS),
+        max=int(bvhlab_core.MAX_BINS),
+        default=DEFAULT_BINS,
+        description="SAH bins per axis (PBRT's default and the report's is 12)",
+    )
+    axis: EnumProperty(name="Axis", items=AXIS_ITEMS, default=DEFAULT_AXIS)
     max_leaf_size: IntProperty(
         name="Max leaf size",
         min=1,
         max=255,
         soft_max=16,
-        default=1,
-        description="Most primitives in a leaf; SAH methods may stop earlier",
+        default=DEFAULT_MAX_LEAF_SIZE,
+        description="Most primitives in a leaf; SAH methods may stop earlier (the report's trees: 1)",
     )
 
     overlay_show: BoolProperty(
@@ -112,27 +144,29 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
     overlay_line_width: FloatProperty(name="Line width", min=1.0, max=5.0, default=1.0, update=_redraw)
 
     render_bounces: IntProperty(
-        name="Bounces", min=0, max=15, default=5, description="Reflection and refraction depth of the Whitted tracer"
+        name="Bounces",
+        min=0,
+        max=MAX_RAY_DEPTH,
+        default=5,
+        description="Reflection and refraction depth of the Whitted tracer",
     )
-    render_supersampling: IntProperty(name="Samples", min=1, max=8, default=1, description="n × n samples per pixel")
+    render_supersampling: IntProperty(
+        name="Samples", min=1, max=MAX_SAMPLES_PER_AXIS, soft_max=8, default=1, description="n × n samples per pixel"
+    )
     backend: EnumProperty(
         name="Backend",
         default="auto",
-        items=[
-            ("auto", "Auto", "Vulkan when a driver is present, otherwise the CPU reference tracer"),
-            ("vulkan", "Vulkan", "Vulkan compute tracer"),
-            ("cpu", "CPU", "C++ reference tracer"),
-        ],
+        items=BACKEND_ITEMS,
     )
     traversal: EnumProperty(
         name="Traversal",
         default="stackless",
-        items=[("stackless", "Stackless", "Skip indices (report §3.1)"), ("stack", "Stack", "A stack of node indices")],
+        items=_items(TRAVERSALS),
     )
     render_mode: EnumProperty(
         name="Mode",
         default="shade",
-        items=[("shade", "Shade", "Whitted shading"), ("heatmap", "Heatmap", "Box tests per pixel")],
+        items=_items(MODES),
     )
     render_overlay: BoolProperty(
         name="Boxes in image", default=False, description="Draw the overlay's depth range into the rendered image"

@@ -17,7 +17,7 @@ DEFAULT_METHOD = _core.DEFAULT_METHOD
 DEFAULT_AXIS = _core.DEFAULT_AXIS
 DEFAULT_BINS = _core.DEFAULT_BINS
 DEFAULT_MAX_LEAF_SIZE = _core.DEFAULT_MAX_LEAF_SIZE
-TRAVERSALS = ("stack", "stackless", "wide")
+TRAVERSALS = tuple(_core.TRAVERSALS)  # of Bvh.intersect (the renderers have their own: RENDER_TRAVERSALS)
 MAX_TREE_HEIGHT = _core.MAX_TREE_HEIGHT
 #: Supported coordinates and ray directions (core_cpp/include/bvhlab/coordinate_range.h).
 MAX_COORDINATE = float(_core.MAX_COORDINATE)
