@@ -137,7 +137,7 @@ build/wheels/.cp311: $(VENV)/.deps $(WHEEL_INPUTS)
 	$(PY) scripts/build_addon.py wheel
 	@touch $@
 build/wheels/.cp313: $(WHEEL_INPUTS) | trixie
-	$(TRIXIE) run python scripts/build_addon.py wheel
+	$(TRIXIE) run CXX=g++-12 python scripts/build_addon.py wheel
 	@touch $@
 dist/bvhlab.zip: build/wheels/.cp311 build/wheels/.cp313 $(ADDON_SOURCES) scripts/build_addon.py
 	cp "$$($(PY) scripts/build_addon.py package)" $@

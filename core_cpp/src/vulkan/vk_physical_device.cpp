@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <charconv>
 #include <cstdlib>
 #include <vector>
 
@@ -128,8 +129,11 @@ std::string check_device(const Functions& fn, PhysicalDevice& d) {
 
 /// Index of the device `spec` names (an index or a name substring).
 std::size_t find_named(const std::vector<PhysicalDevice>& devices, const std::string& spec) {
-    if (std::all_of(spec.begin(), spec.end(), [](unsigned char c) { return std::isdigit(c); })) {
-        std::size_t index = spec.size() < 10 ? std::stoul(spec) : devices.size();
+    if (!spec.empty() && std::all_of(spec.begin(), spec.end(), [](unsigned char c) { return std::isdigit(c); })) {
+        // from_chars, not stoul: no locale, and no libc call (glibc 2.38 renamed strtoul's symbol,
+        // which would raise the wheel's glibc requirement to 2.38)
+        std::size_t index = devices.size();
+        if (spec.size() < 10) std::from_chars(spec.data(), spec.data() + spec.size(), index);
         if (index >= devices.size())
             throw VulkanUnavailable("Vulkan device index " + spec + " is out of range; devices: " + list(devices));
         return index;
