@@ -12,9 +12,11 @@ from . import _checks, _core
 #: defaults of `build`: one definition, in core_cpp/include/bvhlab/build_config.h.
 METHODS = tuple(_core.SPLIT_METHODS)
 AXES = tuple(_core.AXIS_POLICIES)
+BIN_BOUNDS = tuple(_core.BIN_BOUNDS)
 DEFAULT_METHOD = _core.DEFAULT_METHOD
 DEFAULT_AXIS = _core.DEFAULT_AXIS
 DEFAULT_BINS = _core.DEFAULT_BINS
+DEFAULT_BIN_BOUNDS = _core.DEFAULT_BIN_BOUNDS
 DEFAULT_MAX_LEAF_SIZE = _core.DEFAULT_MAX_LEAF_SIZE
 TRAVERSALS = ("stack", "stackless", "wide")
 MAX_TREE_HEIGHT = _core.MAX_TREE_HEIGHT
@@ -46,6 +48,7 @@ class BuildConfig:
     """What a tree was built with (the arguments of `build`)."""
     method: str = DEFAULT_METHOD
     bins: int = DEFAULT_BINS
+    bin_bounds: str = DEFAULT_BIN_BOUNDS
     axis: str = DEFAULT_AXIS
     max_leaf_size: int = DEFAULT_MAX_LEAF_SIZE
     seed: int = 0
@@ -53,17 +56,18 @@ class BuildConfig:
 
 
 def build(scene_or_triangles, spheres: np.ndarray | None = None, *, method: str = DEFAULT_METHOD,
-          bins: int = DEFAULT_BINS, axis: str = DEFAULT_AXIS, max_leaf_size: int = DEFAULT_MAX_LEAF_SIZE,
-          seed: int = 0, threads: int = 0,
+          bins: int = DEFAULT_BINS, bin_bounds: str = DEFAULT_BIN_BOUNDS, axis: str = DEFAULT_AXIS,
+          max_leaf_size: int = DEFAULT_MAX_LEAF_SIZE, seed: int = 0, threads: int = 0,
           progress: Callable[[float], bool | None] | None = None) -> "Bvh":
     """Build a BVH over triangles (float32 (T,3,3)) and spheres (float32 (S,4): centre, radius).
 
     `scene_or_triangles` is a `bvhlab.Scene` or a triangle array. `method` is one of METHODS,
     `axis` one of AXES ("auto": all three axes for the SAH methods, the largest centroid extent
-    for the others); `bins` (2..256) is used by "sah"; leaves hold at most `max_leaf_size`
+    for the others); `bins` (2..256) is used by "sah", whose equal buckets divide the node's box
+    (`bin_bounds="box"`) or its centroid bounds ("centroids", the report's §2.3.2); leaves hold at most `max_leaf_size`
     primitives, and the SAH methods may stop earlier when a leaf is cheaper. The defaults give a
     fast tree for little build time; the report's Table 1 settings are method="sah", bins=12,
-    axis="largest", max_leaf_size=1. `threads` = 0 uses every core; the tree never depends on it.
+    bin_bounds="centroids", axis="largest", max_leaf_size=1. `threads` = 0 uses every core; the tree never depends on it.
     Bad input raises TypeError or ValueError; a vertex or sphere outside ±MAX_COORDINATE (2^40 ≈
     1.1e12, where float32 ray tests would overflow) and a sphere radius below MIN_RADIUS (2^-60,
     where its square underflows) are bad input.
@@ -87,6 +91,7 @@ def build(scene_or_triangles, spheres: np.ndarray | None = None, *, method: str 
     config = BuildConfig(
         method=_checks.choice("method", method, METHODS),
         bins=_checks.integer("bins", bins, _core.MIN_BINS, _core.MAX_BINS),
+        bin_bounds=_checks.choice("bin_bounds", bin_bounds, BIN_BOUNDS),
         axis=_checks.choice("axis", axis, AXES),
         max_leaf_size=_checks.integer("max_leaf_size", max_leaf_size, 1, 2**31 - 1),
         seed=_checks.integer("seed", seed, 0, 2**64 - 1),
@@ -94,8 +99,8 @@ def build(scene_or_triangles, spheres: np.ndarray | None = None, *, method: str 
     )
     if progress is not None and not callable(progress):
         raise TypeError("progress must be callable (fraction -> bool) or None")
-    core = _core.build(triangles, spheres, config.method, config.axis, config.bins, config.max_leaf_size,
-                       config.seed, config.threads, progress)
+    core = _core.build(triangles, spheres, config.method, config.axis, config.bins, config.bin_bounds,
+                       config.max_leaf_size, config.seed, config.threads, progress)
     return Bvh(core, config)
 
 

@@ -41,7 +41,7 @@ def test_build_json_and_csv_equal_the_api(tmp_path, capsys):
     api = bvhlab.build(scene, method="sah", bins=32, max_leaf_size=2).stats
     assert set(written) == {"about", "stats"} and written["about"]["scene"] == "whitted"
     assert written["about"]["settings"] == {"method": "sah", "bins": 32, "axis": bvhlab.bvh.DEFAULT_AXIS,
-                                            "max_leaf_size": 2}
+                                            "bin_bounds": bvhlab.bvh.DEFAULT_BIN_BOUNDS, "max_leaf_size": 2}
     for key in api:
         if key not in ("build_ms",):
             assert written["stats"][key] == api[key], key
