@@ -23,6 +23,7 @@ bvhlab::BuildConfig parse_options(const std::string& options, unsigned threads) 
         if (key == "method") cfg.method = bvhlab::parse_split_method(value);
         else if (key == "axis") cfg.axis = bvhlab::parse_axis_policy(value);
         else if (key == "bins") cfg.bins = std::stoul(value);
+        else if (key == "span") cfg.bin_bounds = bvhlab::parse_bin_bounds(value);
         else if (key == "leaf") cfg.max_leaf_size = std::stoul(value);
         else throw std::invalid_argument("unknown bvhlab option '" + key + "'");
     }

@@ -45,16 +45,18 @@ nb::dict stats_dict(const Bvh& bvh) {
     d["memory_bytes"] = s.memory_bytes;
     d["method"] = to_string(bvh.config.method), d["axis"] = to_string(bvh.config.axis);
     d["bins"] = bvh.config.bins, d["max_leaf_size_config"] = bvh.config.max_leaf_size;
+    d["bin_bounds"] = to_string(bvh.config.bin_bounds);
     return d;
 }
 
 PyBvh* build(const Triangles& tris, const std::optional<Spheres>& spheres, const std::string& method,
-             const std::string& axis, std::uint32_t bins, std::int64_t max_leaf_size, std::uint64_t seed,
-             std::uint32_t threads, std::optional<nb::callable> progress) {
+             const std::string& axis, std::uint32_t bins, const std::string& bin_bounds, std::int64_t max_leaf_size,
+             std::uint64_t seed, std::uint32_t threads, std::optional<nb::callable> progress) {
     BuildConfig cfg;
     cfg.method = parse_split_method(method);
     cfg.axis = parse_axis_policy(axis);
     cfg.bins = bins;
+    cfg.bin_bounds = parse_bin_bounds(bin_bounds);
     if (max_leaf_size < 1 || max_leaf_size > 0x7fffffff)
         throw std::invalid_argument("max_leaf_size must be at least 1, got " + std::to_string(max_leaf_size));
     cfg.max_leaf_size = static_cast<std::uint32_t>(max_leaf_size);
@@ -181,20 +183,23 @@ NB_MODULE(_core, m) {
           }, "triangles"_a.noconvert(), "spheres"_a.noconvert().none(),
           "Raises ValueError naming the first primitive that is not finite or lies outside MAX_COORDINATE.");
     m.def("build", &build, "triangles"_a.noconvert(), "spheres"_a.noconvert().none(), "method"_a, "axis"_a,
-          "bins"_a, "max_leaf_size"_a, "seed"_a, "threads"_a, "progress"_a.none());
+          "bins"_a, "bin_bounds"_a, "max_leaf_size"_a, "seed"_a, "threads"_a, "progress"_a.none());
     // The build's names and defaults, one definition (build_config.h, split_methods.cpp): Python's
     // build() and the add-on's properties read these.
     const BuildConfig defaults;
-    nb::list methods, axes;
+    nb::list methods, axes, bin_bounds;
     for (std::string_view name : split_method_names()) methods.append(std::string(name));
     for (std::string_view name : axis_policy_names()) axes.append(std::string(name));
+    for (std::string_view name : bin_bounds_names()) bin_bounds.append(std::string(name));
     m.attr("SPLIT_METHODS") = nb::tuple(methods);
     m.attr("AXIS_POLICIES") = nb::tuple(axes);
+    m.attr("BIN_BOUNDS") = nb::tuple(bin_bounds);
     m.attr("MIN_BINS") = kMinBins;
     m.attr("MAX_BINS") = kMaxBins;
     m.attr("DEFAULT_METHOD") = to_string(defaults.method);
     m.attr("DEFAULT_AXIS") = to_string(defaults.axis);
     m.attr("DEFAULT_BINS") = defaults.bins;
+    m.attr("DEFAULT_BIN_BOUNDS") = to_string(defaults.bin_bounds);
     m.attr("DEFAULT_MAX_LEAF_SIZE") = defaults.max_leaf_size;
     m.attr("MAX_TREE_HEIGHT") = gpu::MAX_TREE_HEIGHT;
     m.attr("MAX_COORDINATE") = kMaxCoordinate;  // coordinate_range.h

@@ -13,9 +13,11 @@ from . import _checks, _core
 #: defaults of `build`: one definition, in core_cpp/include/bvhlab/build_config.h.
 METHODS = tuple(_core.SPLIT_METHODS)
 AXES = tuple(_core.AXIS_POLICIES)
+BIN_BOUNDS = tuple(_core.BIN_BOUNDS)
 DEFAULT_METHOD = _core.DEFAULT_METHOD
 DEFAULT_AXIS = _core.DEFAULT_AXIS
 DEFAULT_BINS = _core.DEFAULT_BINS
+DEFAULT_BIN_BOUNDS = _core.DEFAULT_BIN_BOUNDS
 DEFAULT_MAX_LEAF_SIZE = _core.DEFAULT_MAX_LEAF_SIZE
 TRAVERSALS = tuple(_core.TRAVERSALS)  # of Bvh.intersect (the renderers have their own: RENDER_TRAVERSALS)
 MAX_TREE_HEIGHT = _core.MAX_TREE_HEIGHT
@@ -48,6 +50,7 @@ class BuildConfig:
 
     method: str = DEFAULT_METHOD
     bins: int = DEFAULT_BINS
+    bin_bounds: str = DEFAULT_BIN_BOUNDS
     axis: str = DEFAULT_AXIS
     max_leaf_size: int = DEFAULT_MAX_LEAF_SIZE
     seed: int = 0
@@ -60,6 +63,7 @@ def build(
     *,
     method: str = DEFAULT_METHOD,
     bins: int = DEFAULT_BINS,
+    bin_bounds: str = DEFAULT_BIN_BOUNDS,
     axis: str = DEFAULT_AXIS,
     max_leaf_size: int = DEFAULT_MAX_LEAF_SIZE,
     seed: int = 0,
@@ -70,10 +74,12 @@ def build(
 
     `scene_or_triangles` is a `bvhlab.Scene` or a triangle array. `method` is one of METHODS,
     `axis` one of AXES ("auto": all three axes for the SAH methods, the largest centroid extent
-    for the others); `bins` (2..256) is used by "sah"; leaves hold at most `max_leaf_size`
-    primitives, and the SAH methods may stop earlier when a leaf is cheaper. The defaults give a
-    fast tree for little build time; the report's Table 1 settings are method="sah", bins=12,
-    axis="largest", max_leaf_size=1. `threads` = 0 uses every core; the tree never depends on it.
+    for the others); `bins` (2..256) is used by "sah", whose equal buckets divide the node's box
+    (`bin_bounds="box"`) or its centroid bounds ("centroids", the report's §2.3.2); leaves hold at
+    most `max_leaf_size` primitives, and the SAH methods may stop earlier when a leaf is cheaper.
+    The defaults give a fast tree for little build time; the report's Table 1 settings are
+    method="sah", bins=12, bin_bounds="centroids", axis="largest", max_leaf_size=1. `threads` = 0
+    uses every core; the tree never depends on it.
     Bad input raises TypeError or ValueError; a vertex or sphere outside ±MAX_COORDINATE (2^40 ≈
     1.1e12, where float32 ray tests would overflow) and a sphere radius below MIN_RADIUS (2^-60,
     where its square underflows) are bad input.
@@ -97,6 +103,7 @@ def build(
     config = BuildConfig(
         method=_checks.choice("method", method, METHODS),
         bins=_checks.integer("bins", bins, _core.MIN_BINS, _core.MAX_BINS),
+        bin_bounds=_checks.choice("bin_bounds", bin_bounds, BIN_BOUNDS),
         axis=_checks.choice("axis", axis, AXES),
         max_leaf_size=_checks.integer("max_leaf_size", max_leaf_size, 1, 2**31 - 1),
         seed=_checks.integer("seed", seed, 0, 2**64 - 1),
@@ -110,6 +117,7 @@ def build(
         config.method,
         config.axis,
         config.bins,
+        config.bin_bounds,
         config.max_leaf_size,
         config.seed,
         config.threads,

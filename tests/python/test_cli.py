@@ -62,6 +62,7 @@ def test_build_json_and_csv_equal_the_api(tmp_path, capsys):
         "method": "sah",
         "bins": 32,
         "axis": bvhlab.bvh.DEFAULT_AXIS,
+        "bin_bounds": bvhlab.bvh.DEFAULT_BIN_BOUNDS,
         "max_leaf_size": 2,
     }
     for key in api:

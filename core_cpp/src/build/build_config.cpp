@@ -18,6 +18,11 @@ constexpr std::array<std::pair<std::string_view, AxisPolicy>, 4> kAxes{{
     {"best", AxisPolicy::Best},
 }};
 
+constexpr std::array<std::pair<std::string_view, BinBounds>, 2> kBinBounds{{
+    {"centroids", BinBounds::Centroids},
+    {"box", BinBounds::Box},
+}};
+
 [[noreturn]] void throw_unknown(const char* what, std::string_view name, const std::vector<std::string_view>& names) {
     // (appends rather than operator+ chains: GCC 12 warns falsely on those, bug 105329)
     std::string msg = "unknown ";
@@ -40,6 +45,12 @@ std::vector<std::string_view> axis_policy_names() {
     return names;
 }
 
+std::vector<std::string_view> bin_bounds_names() {
+    std::vector<std::string_view> names;
+    for (const auto& entry : kBinBounds) names.push_back(entry.first);
+    return names;
+}
+
 SplitMethod parse_split_method(std::string_view name) {
     for (const SplitMethodInfo& m : split_methods())
         if (m.name == name) return m.method;
@@ -52,11 +63,23 @@ AxisPolicy parse_axis_policy(std::string_view name) {
     throw_unknown("axis policy", name, axis_policy_names());
 }
 
+BinBounds parse_bin_bounds(std::string_view name) {
+    for (const auto& [key, value] : kBinBounds)
+        if (key == name) return value;
+    throw_unknown("bin bounds", name, bin_bounds_names());
+}
+
 std::string to_string(SplitMethod method) { return std::string(method_info(method).name); }
 
 std::string to_string(AxisPolicy axis) {
     for (const auto& [key, value] : kAxes)
         if (value == axis) return std::string(key);
+    return "?";
+}
+
+std::string to_string(BinBounds bounds) {
+    for (const auto& [key, value] : kBinBounds)
+        if (value == bounds) return std::string(key);
     return "?";
 }
 

@@ -82,7 +82,8 @@ std::uint32_t partition_chunks(SplitContext& ctx, Range r, int src, const BinFra
 
 std::optional<Split> split_binned_sah(SplitContext& ctx, Range r, int src, const NodeBounds& b, int axis) {
     if (r.size() <= kSmallExact) return split_small_exact(ctx, r, src, b, axis);
-    const BinFrame frame(b.box, ctx.config.bins);
+    const bool by_centroids = ctx.config.bin_bounds == BinBounds::Centroids;
+    const BinFrame frame(by_centroids ? b.centroids : b.box, ctx.config.bins);
     const BinSet bins = b.bins >= 0 ? store_of(ctx).slot(std::uint32_t(b.bins)) : bin_node(ctx, r, ctx.buffers[src], frame);
     const SahCost sah(ctx.config);
     const BinSplit best = best_bin_split(bins, frame, axis == kAllAxes ? 0 : axis, axis == kAllAxes ? 2 : axis, sah,
@@ -99,11 +100,12 @@ std::optional<Split> split_binned_sah(SplitContext& ctx, Range r, int src, const
     s.right.box = bins.box_of(best.axis, best.last_left + 1, frame.bins);
     const std::uint32_t n_left = bins.count_of(best.axis, 0, best.last_left + 1);
     ChildBinning child[2] = {{BinFrame(s.left.box, frame.bins)}, {BinFrame(s.right.box, frame.bins)}};
-    const std::int32_t slots[2] = {n_left > kSmallExact ? std::int32_t(ctx.child_slot + 1) : -1,
-                                   r.size() - n_left > kSmallExact ? std::int32_t(ctx.child_slot) : -1};
+    // Buckets over centroid bounds: a child's frame is known only after the pass, so it bins itself.
+    const std::int32_t slots[2] = {!by_centroids && n_left > kSmallExact ? std::int32_t(ctx.child_slot + 1) : -1,
+                                   !by_centroids && r.size() - n_left > kSmallExact ? std::int32_t(ctx.child_slot) : -1};
     // The children's centroid bounds are gathered only for the axis policies that read them;
     // otherwise their boxes stand in for them (they contain the centroids; see NodeBounds).
-    const bool centroids = ctx.config.axis == AxisPolicy::Largest || ctx.config.axis == AxisPolicy::Random;
+    const bool centroids = ctx.config.axis == AxisPolicy::Largest || ctx.config.axis == AxisPolicy::Random || by_centroids;
     CentroidBounds sides[2];
     CentroidBounds* gathered = centroids ? sides : nullptr;
     const std::uint32_t chunks = chunk_count(ctx, r);

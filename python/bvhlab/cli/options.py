@@ -9,7 +9,17 @@ from pathlib import Path
 
 from .. import _core
 from .._checks import OutputPathError, output_file
-from ..bvh import AXES, DEFAULT_AXIS, DEFAULT_BINS, DEFAULT_MAX_LEAF_SIZE, DEFAULT_METHOD, METHODS, method_from_label
+from ..bvh import (
+    AXES,
+    BIN_BOUNDS,
+    DEFAULT_AXIS,
+    DEFAULT_BIN_BOUNDS,
+    DEFAULT_BINS,
+    DEFAULT_MAX_LEAF_SIZE,
+    DEFAULT_METHOD,
+    METHODS,
+    method_from_label,
+)
 
 #: Largest image side the CLI accepts (OpenGL's and most Vulkan drivers' framebuffer limit).
 MAX_IMAGE_SIDE = _core.MAX_IMAGE_DIMENSION  # the renderers' limit, one definition
@@ -24,6 +34,12 @@ def add_build(p: argparse.ArgumentParser) -> None:
         "--method", default=DEFAULT_METHOD, help=f"split method: {', '.join(METHODS)} (or sah<B>, e.g. sah32)"
     )
     p.add_argument("--bins", type=int, default=None, help=f"binned SAH buckets, 2..256 (default {DEFAULT_BINS})")
+    p.add_argument(
+        "--bin-bounds",
+        default=DEFAULT_BIN_BOUNDS,
+        choices=BIN_BOUNDS,
+        help=f"what the SAH buckets divide: the node's box or its centroid bounds (default {DEFAULT_BIN_BOUNDS})",
+    )
     p.add_argument("--axis", default=DEFAULT_AXIS, choices=AXES, help=f"split axis policy (default {DEFAULT_AXIS})")
     p.add_argument(
         "--max-leaf-size",
@@ -37,7 +53,7 @@ def build_kwargs(args) -> dict:
     kw = method_kwargs(args.method)
     if args.bins is not None:
         kw["bins"] = args.bins
-    return {**kw, "axis": args.axis, "max_leaf_size": args.max_leaf_size}
+    return {**kw, "axis": args.axis, "bin_bounds": args.bin_bounds, "max_leaf_size": args.max_leaf_size}
 
 
 method_kwargs = method_from_label
