@@ -135,7 +135,9 @@ def check_overlay_colour_by_depth(width: int = 320, height: int = 240) -> None:
     the box edges projected in numpy: every lit pixel clearly on one depth's edges and off the
     shallower depths' has that depth's colour (from the core's palette), and every depth of the
     range owns lit pixels."""
-    scene, bvh = _built_boxes_scene(width, height, (0, 3), overlay_color_by_depth=True, overlay_xray=True)
+    scene, bvh = _built_boxes_scene(
+        width, height, (0, 3), overlay_color_by_depth=True, overlay_xray=True, overlay_line_width=1.0
+    )
     assert bvh.stats["height"] > 4, "the scene must be deeper than the range"
     drawn, image = _draw_offscreen(scene, width, height)
     assert drawn == sum(bvh.stats["nodes_per_depth"][0:4])
@@ -154,7 +156,9 @@ def check_overlay_colour_by_depth(width: int = 320, height: int = 240) -> None:
         ],
         1,
     )
-    on, off = to_depth < 0.75, to_depth > 2.0  # clearly on a line / clearly away from one
+    # A 1-pixel line lights the pixels whose centres lie within about half a pixel of it; between
+    # 0.4 and 1.5 pixels away a pixel may or may not be lit, so a depth there makes it ambiguous.
+    on, off = to_depth < 0.4, to_depth > 1.5  # clearly on a line / clearly away from one
     expected = np.where(on.any(1), on.argmax(1), -1)  # the shallowest depth whose line covers it
     clear = (expected >= 0) & np.array([off[i, : expected[i]].all() for i in range(len(expected))])
     agreement = (colour_depth[clear] == expected[clear]).mean()
@@ -163,7 +167,7 @@ def check_overlay_colour_by_depth(width: int = 320, height: int = 240) -> None:
         f"colour by depth 0-3: {counts.tolist()} pixels per depth; {agreement:.3f} of {clear.sum()} "
         f"unambiguous pixels have the shallowest covering depth's colour"
     )
-    assert clear.sum() > 200 and agreement > 0.97, f"only {agreement:.3f} of the pixels show the right depth"
+    assert clear.sum() > 200 and agreement > 0.99, f"only {agreement:.3f} of the pixels show the right depth"
     assert counts.min() >= 20, f"a depth is hardly visible: pixels per depth {counts.tolist()}"
 
 
