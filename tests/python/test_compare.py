@@ -190,7 +190,15 @@ def test_measure_methods_warms_up_interleaves_and_counts(small_scene):
 def test_build_settings_state_the_report_settings_explicitly():
     for label, method, bins in (("median", "median", 12), ("midpoint", "midpoint", 12), ("sah32", "sah", 32)):
         s = build_settings(label)
-        assert s == {"method": method, "bins": bins, "axis": "largest", "max_leaf_size": 1, "threads": 1, "seed": 0}
+        assert s == {
+            "method": method,
+            "bins": bins,
+            "bin_bounds": "centroids",
+            "axis": "largest",
+            "max_leaf_size": 1,
+            "threads": 1,
+            "seed": 0,
+        }
     assert build_settings("sah12", {"max_leaf_size": 4, "axis": "best"})["max_leaf_size"] == 4
     assert build_settings("sah12", {"bins": 99})["bins"] == 12  # the label decides the bins
 
