@@ -138,11 +138,9 @@ void py_refit(PyBvh& self, const Triangles& tris, const std::optional<Spheres>& 
 
 void bind_render(nb::module_& m);  // render_bindings.cpp
 
-NB_MODULE(_core, m) {
-    m.doc() = "bvhlab C++ core: BVH construction, stats, CPU traversal and the renderers";
-    bind_render(m);
-    nb::exception<BuildCancelled>(m, "BuildCancelled");
+namespace {
 
+void bind_bvh(nb::module_& m) {
     nb::class_<PyBvh>(m, "Bvh")
         .def("stats", [](const PyBvh& b) { return stats_dict(b.current()->bvh); })
         .def_prop_ro("node_count", [](const PyBvh& b) { return b.current()->bvh.nodes.size(); })
@@ -170,7 +168,9 @@ NB_MODULE(_core, m) {
              "traversal"_a, "threads"_a, "t"_a.noconvert(), "prim"_a.noconvert(), "kind"_a.noconvert(),
              "u"_a.noconvert(), "v"_a.noconvert(), "visited"_a.noconvert())
         .def("refit", &py_refit, "triangles"_a.noconvert(), "spheres"_a.noconvert().none());
+}
 
+void bind_functions(nb::module_& m) {  // geometry checks and the build
     m.def("geometry_fingerprint", [](const Triangles& tris, const std::optional<Spheres>& spheres) {
               GeometryView g = view_of(tris, spheres);
               nb::gil_scoped_release release;
@@ -184,6 +184,9 @@ NB_MODULE(_core, m) {
           "Raises ValueError naming the first primitive that is not finite or lies outside MAX_COORDINATE.");
     m.def("build", &build, "triangles"_a.noconvert(), "spheres"_a.noconvert().none(), "method"_a, "axis"_a,
           "bins"_a, "bin_bounds"_a, "max_leaf_size"_a, "seed"_a, "threads"_a, "progress"_a.none());
+}
+
+void bind_build_names(nb::module_& m) {
     // The build's names and defaults, one definition (build_config.h, split_methods.cpp): Python's
     // build() and the add-on's properties read these.
     const BuildConfig defaults;
@@ -208,4 +211,15 @@ NB_MODULE(_core, m) {
     m.attr("MIN_RADIUS") = kMinRadius;
     m.attr("NODE_INTERNAL_BIT") = gpu::NODE_INTERNAL_BIT;
     m.attr("REF_SPHERE_BIT") = gpu::REF_SPHERE_BIT;
+}
+
+}  // namespace
+
+NB_MODULE(_core, m) {
+    m.doc() = "bvhlab C++ core: BVH construction, stats, CPU traversal and the renderers";
+    nb::exception<BuildCancelled>(m, "BuildCancelled");
+    bind_render(m);
+    bind_bvh(m);
+    bind_functions(m);
+    bind_build_names(m);
 }
