@@ -26,7 +26,7 @@ import _common  # noqa: E402
 METHODS = ["median", "mean", "sah12", "sah32"]
 
 
-def main() -> None:
+def _arguments() -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--scene", default="atrium")
     ap.add_argument("--width", type=int, default=800)
@@ -34,10 +34,12 @@ def main() -> None:
     ap.add_argument("--frames", type=int, default=3)
     ap.add_argument("--samples-per-axis", type=int, default=1, help="for the bounded-dispatch table")
     ap.add_argument("--skip-table1", action="store_true", help="only the bounded-dispatch table")
-    args = ap.parse_args()
+    return ap.parse_args()
 
+
+def main() -> None:
+    args = _arguments()
     import bvhlab
-    from bvhlab.compare import REPORT_TABLE1, measure_methods
     from bvhlab.library import load_scene
 
     scene, name = load_scene(args.scene)
@@ -56,9 +58,23 @@ def main() -> None:
     if args.skip_table1:
         print(f"\nwrote {_common.write_json('render_budgets.json', results)}")
         return
+    results["rows"] = _measure_table1(scene, renderers, args)
+    _print_table1(
+        results["rows"],
+        title=f"\n{name}: frame ms at {args.width}x{args.height}; Vulkan on "
+        f"{renderers['vulkan'].device}, CPU reference on {threads} threads",
+    )
+    print(f"\nwrote {_common.write_json('render.json', results)}")
+
+
+def _measure_table1(scene, renderers: dict, args) -> list[dict]:
+    """The report's methods on each backend and traversal (bvhlab compare's protocol)."""
+    from bvhlab.compare import measure_methods
+
+    rows = []
     for backend, renderer in renderers.items():
         for traversal in ("stack", "stackless"):
-            rows = measure_methods(
+            measured = measure_methods(
                 scene,
                 METHODS,
                 frames=args.frames,
@@ -71,11 +87,16 @@ def main() -> None:
                 ),
                 render_options={"traversal": traversal},
             )
-            for r in rows:
-                results["rows"].append({**r, "backend": backend, "traversal": traversal})
+            rows += [{**r, "backend": backend, "traversal": traversal} for r in measured]
+    return rows
+
+
+def _print_table1(rows: list[dict], title: str) -> None:
+    from bvhlab.compare import REPORT_TABLE1
+
     table = []
     for m in METHODS:
-        cell = {(r["backend"], r["traversal"]): r for r in results["rows"] if r["method"] == m}
+        cell = {(r["backend"], r["traversal"]): r for r in rows if r["method"] == m}
         vk, cpu = cell[("vulkan", "stack")], cell[("cpu", "stack")]
         table.append(
             [
@@ -90,23 +111,9 @@ def main() -> None:
                 REPORT_TABLE1[m][0],
             ]
         )
-    _common.print_table(
-        [
-            "method",
-            "vulkan stack",
-            "vulkan stackless",
-            "cpu stack",
-            "cpu stackless",
-            "vulkan/cpu",
-            "vk prim Mrays/s",
-            "cpu prim Mrays/s",
-            "report ms",
-        ],
-        table,
-        title=f"\n{name}: frame ms at {args.width}x{args.height}; Vulkan on "
-        f"{renderers['vulkan'].device}, CPU reference on {threads} threads",
-    )
-    print(f"\nwrote {_common.write_json('render.json', results)}")
+    header = ["method", "vulkan stack", "vulkan stackless", "cpu stack", "cpu stackless", "vulkan/cpu"]
+    header += ["vk prim Mrays/s", "cpu prim Mrays/s", "report ms"]
+    _common.print_table(header, table, title=title)
 
 
 BUDGETS = [60000, 4096, 512, 64, None]
