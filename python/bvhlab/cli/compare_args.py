@@ -10,7 +10,6 @@ from ..bvh import method_from_label
 from ..compare.protocol import MIN_SAMPLES
 
 DEFAULT_METHODS = "median,mean,midpoint,sah12,sah32"
-MAX_IMAGE_SIZE = 16384
 
 
 def _integer(text: str) -> int:
@@ -35,13 +34,6 @@ def thread_count(text: str) -> int:
     n = _integer(text)
     if not 0 <= n <= 4096:
         raise argparse.ArgumentTypeError(f"must be between 0 (every core) and 4096, got {n}")
-    return n
-
-
-def image_size(text: str) -> int:
-    n = _integer(text)
-    if not 1 <= n <= MAX_IMAGE_SIZE:
-        raise argparse.ArgumentTypeError(f"must be between 1 and {MAX_IMAGE_SIZE} pixels, got {n}")
     return n
 
 

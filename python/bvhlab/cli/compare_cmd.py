@@ -42,8 +42,7 @@ def add_parser(sub) -> None:
         default=DEFAULT_BUILDS,
         help=f"builds per method after one warm-up, at least {MIN_SAMPLES} (default {DEFAULT_BUILDS})",
     )
-    p.add_argument("--width", type=cargs.image_size, default=800)
-    p.add_argument("--height", type=cargs.image_size, default=600)
+    options.add_image_size(p)
     p.add_argument("--backend", default="auto", choices=BACKENDS, help="renderer of Table 1's frame times")
     p.add_argument(
         "--threads",
@@ -80,17 +79,7 @@ def run(args) -> int:
     if renderer.fallback:
         say(renderer.fallback)
     started = time.perf_counter()
-    rows = measure_methods(
-        scene,
-        args.methods,
-        frames=args.frames,
-        builds=args.builds,
-        width=args.width,
-        height=args.height,
-        renderer=renderer,
-        render_options={"threads": args.threads},
-        progress=lambda s: say(f"[{name}] {s}"),
-    )
+    rows = _measure(scene, name, args, renderer)
     uniform = None if args.no_uniform else _uniform_rows(args, renderer)
     overlay_results, overlay_md = _overlay_check(args, out)
     meta = _meta(args, name, scene, renderer, uniform, overlay_results)
@@ -108,8 +97,13 @@ def run(args) -> int:
 def _uniform_rows(args, renderer) -> list[dict]:
     """Report §4.2: spheres uniformly at random in a cube, measured with the same protocol."""
     spheres, _ = load_scene("gen:random_spheres")
+    return _measure(spheres, "random spheres", args, renderer)
+
+
+def _measure(scene, label: str, args, renderer) -> list[dict]:
+    """The methods of the command line on one scene, with the command line's protocol settings."""
     return measure_methods(
-        spheres,
+        scene,
         args.methods,
         frames=args.frames,
         builds=args.builds,
@@ -117,7 +111,7 @@ def _uniform_rows(args, renderer) -> list[dict]:
         height=args.height,
         renderer=renderer,
         render_options={"threads": args.threads},
-        progress=lambda s: say(f"[random spheres] {s}"),
+        progress=lambda s: say(f"[{label}] {s}"),
     )
 
 

@@ -59,6 +59,21 @@ def build_kwargs(args) -> dict:
 method_kwargs = method_from_label
 
 
+def add_image_size(p: argparse.ArgumentParser) -> None:
+    """--width and --height of the image (800 × 600, the report's)."""
+    p.add_argument("--width", type=image_side, default=800)
+    p.add_argument("--height", type=image_side, default=600)
+
+
+def add_png_out(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--out",
+        type=output_file_type(".png", "PNG image"),
+        required=True,
+        help="PNG file to write (the name must end in .png)",
+    )
+
+
 def depth_range(text: str) -> tuple[int, int]:
     """'8:9' → (8, 9); '3' → (3, 3)."""
     try:

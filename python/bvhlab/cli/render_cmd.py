@@ -14,8 +14,7 @@ def add_parser(sub) -> None:
     p = sub.add_parser("render", help="render a scene to a PNG", description=__doc__)
     options.add_scene(p)
     options.add_build(p)
-    p.add_argument("--width", type=options.image_side, default=800)
-    p.add_argument("--height", type=options.image_side, default=600)
+    options.add_image_size(p)
     p.add_argument(
         "--backend", default="auto", choices=BACKENDS, help="auto (a Vulkan GPU, else the CPU reference), vulkan or cpu"
     )
@@ -30,12 +29,7 @@ def add_parser(sub) -> None:
     p.add_argument("--bvh-depth", type=options.depth_range, metavar="A:B", help="draw the boxes of depths A..B")
     p.add_argument("--heatmap", action="store_true", help="colour pixels by the box tests of their primary ray")
     p.add_argument("--traversal", default="stack", choices=TRAVERSALS)
-    p.add_argument(
-        "--out",
-        type=options.output_file_type(".png", "PNG image"),
-        required=True,
-        help="PNG file to write (the name must end in .png)",
-    )
+    options.add_png_out(p)
     p.set_defaults(run=run)
 
 
