@@ -61,9 +61,8 @@ def export_scene(context, require_camera: bool):
     )
 
 
-def build_tree(context, exported, *, method=None, bins=None):
-    """Build over `exported` with the panel's settings (method and bins overridable), showing
-    progress in the window manager."""
+def build_tree(context, exported):
+    """Build over `exported` with the panel's settings, showing progress in the window manager."""
     import bvhlab
 
     settings = context.scene.bvhlab
@@ -72,10 +71,7 @@ def build_tree(context, exported, *, method=None, bins=None):
     try:
         return bvhlab.build(
             exported,
-            method=method or settings.method,
-            bins=bins or settings.bins,
-            axis=settings.axis,
-            max_leaf_size=settings.max_leaf_size,
+            **settings.build_kwargs(),
             progress=lambda fraction: window_manager.progress_update(int(fraction * 100)) or True,
         )
     finally:

@@ -33,13 +33,7 @@ class BVHLAB_OT_build(ModalTaskMixin, bpy.types.Operator):
 
         self._exported = exported = export_scene(context, require_camera=False)  # bpy: on the UI thread
         s = context.scene.bvhlab
-        options = {
-            "method": s.method,
-            "bins": s.bins,
-            "axis": s.axis,
-            "max_leaf_size": s.max_leaf_size,
-            "threads": UI_WORK_THREADS,
-        }
+        options = {**s.build_kwargs(), "threads": UI_WORK_THREADS}
 
         def work(task):
             return bvhlab.build(exported, **options, progress=lambda fraction: task.progress(fraction))

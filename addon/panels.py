@@ -25,9 +25,10 @@ class BVHLAB_PT_main(_BvhPanel, bpy.types.Panel):
         col = layout.column()
         col.use_property_split = True
         col.prop(settings, "method")
-        row = col.row()
-        row.enabled = settings.method == "sah"
-        row.prop(settings, "bins")
+        binned = col.column()
+        binned.enabled = settings.method == "sah"
+        binned.prop(settings, "bins")
+        binned.prop(settings, "bin_bounds")
         col.prop(settings, "axis")
         col.prop(settings, "max_leaf_size")
         layout.operator("bvhlab.build", icon="MOD_LATTICE")

@@ -6,7 +6,17 @@ import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, FloatVectorProperty, IntProperty, StringProperty
 
 from bvhlab import _core as bvhlab_core
-from bvhlab.bvh import AXES, DEFAULT_AXIS, DEFAULT_BINS, DEFAULT_MAX_LEAF_SIZE, DEFAULT_METHOD, MAX_TREE_HEIGHT, METHODS
+from bvhlab.bvh import (
+    AXES,
+    BIN_BOUNDS,
+    DEFAULT_AXIS,
+    DEFAULT_BIN_BOUNDS,
+    DEFAULT_BINS,
+    DEFAULT_MAX_LEAF_SIZE,
+    DEFAULT_METHOD,
+    MAX_TREE_HEIGHT,
+    METHODS,
+)
 from bvhlab.render import BACKENDS, MAX_RAY_DEPTH, MAX_SAMPLES_PER_AXIS, MODES, TRAVERSALS
 
 from . import state
@@ -24,6 +34,8 @@ _LABELS = {
     "largest": ("Largest", "Split along the axis of largest centroid extent"),
     "random": ("Random", "Split along a random axis (seeded)"),
     "best": ("Best", "Try all three axes, keep the lowest SAH cost"),
+    "box": ("Node box", "Equal buckets over the node's box: one pass over the references per node"),
+    "centroids": ("Centroid bounds", "Equal buckets over the centroids' bounds (the report's, PBRT's)"),
     "stackless": ("Stackless", "Skip indices (report §3.1)"),
     "stack": ("Stack", "A stack of node indices"),
     "shade": ("Shade", "Whitted shading"),
@@ -48,6 +60,7 @@ METHOD_ITEMS = _items(METHODS)
 # not see this module's names)
 BACKEND_ITEMS = [(b, *(_BACKEND_AUTO if b == "auto" else _LABELS[b])) for b in BACKENDS]
 AXIS_ITEMS = _items(AXES)
+BIN_BOUNDS_ITEMS = _items(BIN_BOUNDS)
 #: The maximum node depth any tree can have.
 MAX_DEPTH = MAX_TREE_HEIGHT - 1
 
@@ -96,6 +109,7 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
         default=DEFAULT_BINS,
         description="SAH bins per axis (PBRT's default and the report's is 12)",
     )
+    bin_bounds: EnumProperty(name="Buckets over", items=BIN_BOUNDS_ITEMS, default=DEFAULT_BIN_BOUNDS)
     axis: EnumProperty(name="Axis", items=AXIS_ITEMS, default=DEFAULT_AXIS)
     max_leaf_size: IntProperty(
         name="Max leaf size",
@@ -193,15 +207,20 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
         description="CSV file the comparison is written to",
     )
 
-    def build_settings(self) -> dict:
-        """What a tree depends on besides the geometry."""
+    def build_kwargs(self) -> dict:
+        """The arguments of `bvhlab.build` that these settings choose: one definition for the
+        sidebar's Build, the render engine's trees and the tree a Render builds."""
         return {
-            "scope": self.scope,
             "method": self.method,
             "bins": self.bins,
+            "bin_bounds": self.bin_bounds,
             "axis": self.axis,
             "max_leaf_size": self.max_leaf_size,
         }
+
+    def build_settings(self) -> dict:
+        """What a tree depends on besides the geometry."""
+        return {"scope": self.scope, **self.build_kwargs()}
 
 
 def _get_sphere(obj) -> bool:

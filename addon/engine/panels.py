@@ -33,9 +33,10 @@ class BVHLAB_PT_engine_bvh(_EnginePanel, bpy.types.Panel):
         settings = context.scene.bvhlab
         col = self._column()
         col.prop(settings, "method")
-        row = col.row()
-        row.enabled = settings.method == "sah"
-        row.prop(settings, "bins")
+        binned = col.column()
+        binned.enabled = settings.method == "sah"
+        binned.prop(settings, "bins")
+        binned.prop(settings, "bin_bounds")
         col.prop(settings, "axis")
         col.prop(settings, "max_leaf_size")
 

@@ -4,9 +4,11 @@ kept when nothing moved (the depsgraph said so, or the arrays are equal)."""
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 import numpy as np
+
+from bvhlab.bvh import DEFAULT_AXIS, DEFAULT_BIN_BOUNDS, DEFAULT_BINS, DEFAULT_MAX_LEAF_SIZE, DEFAULT_METHOD
 
 #: A refit keeps the topology; once objects have moved far, its boxes overlap and tracing slows.
 #: Rebuild instead when the refit tree's SAH cost exceeds the built tree's by this factor.
@@ -15,17 +17,19 @@ REFIT_LIMIT = 1.5
 
 @dataclass(frozen=True)
 class BuildSettings:
-    """What a tree depends on besides the geometry (scene.bvhlab's build settings)."""
+    """What a tree depends on besides the geometry: the arguments of `bvhlab.build` that
+    scene.bvhlab chooses (its build_kwargs), frozen so that two can be compared. The default is
+    the core's defaults."""
 
-    method: str = "sah"
-    bins: int = 12
-    axis: str = "largest"
-    max_leaf_size: int = 1
+    method: str = DEFAULT_METHOD
+    bins: int = DEFAULT_BINS
+    bin_bounds: str = DEFAULT_BIN_BOUNDS
+    axis: str = DEFAULT_AXIS
+    max_leaf_size: int = DEFAULT_MAX_LEAF_SIZE
 
     @classmethod
     def of(cls, blender_scene) -> BuildSettings:
-        s = blender_scene.bvhlab
-        return cls(s.method, s.bins, s.axis, s.max_leaf_size)
+        return cls(**blender_scene.bvhlab.build_kwargs())
 
 
 @dataclass(frozen=True)
@@ -86,15 +90,7 @@ class SceneTree:
         import bvhlab
 
         self.bvh = None  # a cancelled build leaves no stale tree behind
-        bvh = bvhlab.build(
-            scene,
-            method=settings.method,
-            bins=settings.bins,
-            axis=settings.axis,
-            max_leaf_size=settings.max_leaf_size,
-            threads=threads,
-            progress=progress,
-        )
+        bvh = bvhlab.build(scene, **asdict(settings), threads=threads, progress=progress)
         self.bvh, self.settings = bvh, settings
         self._source = (scene.triangles, scene.spheres)
         self._built_sah = bvh.stats["sah_cost"]

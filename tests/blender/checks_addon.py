@@ -18,6 +18,7 @@ from bvhlab.bvh import method_from_label as method_kwargs
 
 BUILD_VARIANTS = (
     {"method": "sah", "bins": 12},
+    {"method": "sah", "bins": 32, "bin_bounds": "centroids"},
     {"method": "median"},
     {"method": "mean", "max_leaf_size": 4},
     {"method": "sweep_sah", "axis": "best"},
@@ -40,13 +41,13 @@ def check_build_matches_direct(name: str, variants=BUILD_VARIANTS) -> None:
     scene exported directly (only the build time may differ)."""
     harness.open_scene(name)
     for variant in variants:
-        _configure(scope="visible", method="sah", bins=12, axis="largest", max_leaf_size=1)
+        _configure(scope="visible", method="sah", bins=12, bin_bounds="box", axis="largest", max_leaf_size=1)
         _configure(**variant)
         assert bpy.ops.bvhlab.build() == {"FINISHED"}
         built = _built()
         direct = bvhlab.build(
             export_scene(bpy.context, require_camera=False),
-            **{"method": "sah", "bins": 12, "axis": "largest", "max_leaf_size": 1, **variant},
+            **{"method": "sah", "bins": 12, "bin_bounds": "box", "axis": "largest", "max_leaf_size": 1, **variant},
         )
         ours, theirs = built.bvh.stats, direct.stats
         for key in theirs:

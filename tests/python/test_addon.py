@@ -22,11 +22,14 @@ def test_settings_take_names_defaults_and_limits_from_the_core():
     properties = __import__(harness.addon().__name__ + ".properties", fromlist=["METHOD_ITEMS"])
     assert [item[0] for item in properties.METHOD_ITEMS] == list(bvhlab.METHODS)
     assert [item[0] for item in properties.AXIS_ITEMS] == list(bvhlab.AXES)
-    assert all(label and tooltip for _, label, tooltip in properties.METHOD_ITEMS + properties.AXIS_ITEMS)
+    assert [item[0] for item in properties.BIN_BOUNDS_ITEMS] == list(bvhlab.bvh.BIN_BOUNDS)
+    labelled = properties.METHOD_ITEMS + properties.AXIS_ITEMS + properties.BIN_BOUNDS_ITEMS
+    assert all(label and tooltip for _, label, tooltip in labelled)
     assert properties.MAX_DEPTH == bvhlab.bvh.MAX_TREE_HEIGHT - 1
     rna = bpy.types.Scene.bl_rna.properties["bvhlab"].fixed_type.properties
     assert rna["method"].default == bvhlab.bvh.DEFAULT_METHOD and rna["axis"].default == bvhlab.bvh.DEFAULT_AXIS
     assert rna["bins"].default == bvhlab.bvh.DEFAULT_BINS
+    assert rna["bin_bounds"].default == bvhlab.bvh.DEFAULT_BIN_BOUNDS
     assert (rna["bins"].hard_min, rna["bins"].hard_max) == (bvhlab._core.MIN_BINS, bvhlab._core.MAX_BINS)
     assert rna["max_leaf_size"].default == bvhlab.bvh.DEFAULT_MAX_LEAF_SIZE
     assert rna["render_bounces"].hard_max == bvhlab._core.MAX_RAY_DEPTH

@@ -168,7 +168,7 @@ def _write_oracle(session, scene, area, region, frame) -> None:
     exported = export_scene(bpy.context, require_camera=False)
     exported.camera = camera
     s = scene.bvhlab
-    bvh = bvhlab.build(exported, method=s.method, bins=s.bins, axis=s.axis, max_leaf_size=s.max_leaf_size)
+    bvh = bvhlab.build(exported, **s.build_kwargs())
     options = {"backend": "cpu", "samples_per_axis": 2, "max_depth": s.render_bounces, "traversal": s.traversal}
     image, _ = bvhlab.render(exported, bvh, region.width, region.height, overlay_depth=DEPTHS, **options)
     bare, _ = bvhlab.render(exported, bvh, region.width, region.height, **options)
