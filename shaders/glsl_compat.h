@@ -27,7 +27,10 @@ struct vec3 {
     constexpr vec3() = default;
     constexpr explicit vec3(float s) : x(s), y(s), z(s) {}
     constexpr vec3(float x_, float y_, float z_) : x(x_), y(y_), z(z_) {}
-    float operator[](int i) const { return i == 0 ? x : (i == 1 ? y : z); }
+    float operator[](uint i) const {  // an indexed load, not a chain of branches on a random axis
+        const float v[3] = {x, y, z};
+        return v[i];
+    }
 };
 
 struct vec4 {
@@ -109,9 +112,11 @@ inline float uintBitsToFloat(uint u) { return std::bit_cast<float>(u); }
 }  // namespace bvhlab::gpu
 
 // Parameter qualifiers of the shared code, and its constants (the shared code is compiled as
-// members of a class, see core_cpp/src/render/cpu_tracer.h).
+// members of a class, see core_cpp/src/render/cpu_tracer.h); INLINE marks the functions of shared
+// code that C++ compiles at namespace scope in a header (geometry.glsl, shared_geometry.h).
 #define INOUT(T) T&
 #define OUT(T) T&
 #define LOCAL_CONST static constexpr
+#define INLINE inline
 
 #endif  // BVHLAB_GLSL_COMPAT_H

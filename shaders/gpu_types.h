@@ -37,15 +37,34 @@ BVHLAB_CONST uint REF_SPHERE_BIT = 0x80000000u;
 BVHLAB_CONST uint REF_INDEX_MASK = 0x7fffffffu;
 /// Deepest tree a traversal stack must hold (report §3.1): height <= MAX_TREE_HEIGHT.
 BVHLAB_CONST uint MAX_TREE_HEIGHT = 64u;
+/// Every box test of every traversal (CPU and GPU) multiplies the far end of the ray's span in the
+/// box, min(exit distance, closest hit so far), by this before comparing it with the entry, and a
+/// stacked box is dropped only when its entry lies beyond the closest hit times this: the
+/// conservative traversal of Ize, "Robust BVH Ray Traversal" (JCGT 2013). Ize's 1 + 2γ3
+/// (γn = nε/(1 - nε), ε = 2^-24) covers the three roundings of a slab distance, (plane - origin) ·
+/// (1/dir); we take 1 + 2^-20 (16 ε), room for the last roundings of the triangle test's distance
+/// too (geometry.glsl: t = ((u·a + v·b) + w·c) / det · shear), so that a primitive hit at the
+/// closest distance so far, lying in a face of its box, is not culled by its box's rounding (the
+/// tie rule, closer_hit, needs to see it; the fuzz corpus's found_tie_at_box_entry). It does not
+/// cover t's cancellation where a large triangle is hit near the origin (geometry.glsl): there a
+/// traversal may still return another primitive than the brute force, within that error.
+BVHLAB_CONST float BOX_FAR_SCALE = 1.00000095367431640625f;  // 1 + 2^-20
 
 // ---- the scene as the tracer reads it (report §2.1, §5.1) -------------------------------------
 
-/// A triangle (48 bytes): first vertex, the two edges from it (Möller–Trumbore needs no more),
-/// and its material index as the bits of v0.w. A zero-area triangle has zero edges: never hit.
+/// A triangle as every ray test reads it, CPU and GPU (48 bytes): its three vertices — the
+/// watertight test (geometry.glsl hit_triangle) reads vertices, not edges, so a shared edge is
+/// computed from the same numbers in both triangles and no ray slips between them. A zero-area
+/// triangle is stored with all three vertices equal to its first: never hit (pack_triangle,
+/// core_cpp/include/bvhlab/geometry.h). The CPU traversal keeps spheres in the same layout in its
+/// leaf-ordered array: centre in v0, radius in v1.x.
 struct GpuTriangle {
-    vec4 v0;
-    vec4 e1;
-    vec4 e2;
+    vec3 v0;
+    uint material;  ///< index into the materials (the tracer's array; 0 in the CPU traversal's)
+    vec3 v1;
+    uint ref;       ///< the primitive reference (REF_SPHERE_BIT | index for a sphere)
+    vec3 v2;
+    uint unused;    ///< 0
 };
 
 /// A sphere (32 bytes): centre and radius, material index in material.x.

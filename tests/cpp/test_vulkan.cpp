@@ -49,8 +49,8 @@ struct BeyondBindingLimit {
     BeyondBindingLimit() {
         const std::uint32_t count = std::uint32_t((std::size_t(128) << 20) / sizeof(gpu::GpuTriangle) + 1024);
         scene.triangles.resize(count);
-        // in the plane y = 0, covering the view's centre, material 0 (the bits of v0.w)
-        scene.triangles[count - 1] = {{-2, 0, -2, 0}, {5, 0, 0, 0}, {0, 0, 5, 0}};
+        // in the plane y = 0, covering the view's centre, material 0
+        scene.triangles[count - 1] = {{-2, 0, -2}, 0, {3, 0, -2}, count - 1, {-2, 0, 3}, 0};
         scene.materials = {{{0.8f, 0.4f, 0.3f, 0}, {0, 1.5f, 0, 0}}};
         tree.triangle_count = count;
         tree.nodes.push_back({{-2, 0, -2}, 0, {3, 0, 3}, 1});  // a leaf of one reference

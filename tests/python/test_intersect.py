@@ -136,14 +136,6 @@ def test_a_tie_at_a_shared_vertex_goes_to_the_smaller_index_in_every_traversal()
     assert prims == {"stack": 0, "stackless": 0, "wide": 0}
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="found by the fuzzer (tests/fuzz/corpus/found_sphere_halo), not fixed yet: "
-    "the sphere test's discriminant b² - a·c cancels, so float32 resolves the ray's distance from "
-    "the centre only to about sqrt(eps)·|origin - centre| (2.4e-4 of it); the fix is Haines et al., "
-    "'Precision Improvements for Ray/Sphere Intersection', Ray Tracing Gems (2019) ch. 7: "
-    "r² - |f - (f·d)d|² (ray.h hit_sphere and shaders/tracer/geometry.glsl sphere_roots)",
-)
 def test_rays_beside_a_small_distant_sphere_miss_it():
     """A sphere of radius 1 mm 100 m away: rays passing 2 to 50 radii beside it were hits."""
     r, distance = 1e-3, 100.0
@@ -157,6 +149,10 @@ def test_rays_beside_a_small_distant_sphere_miss_it():
         max_leaf_size=2,
         method="median",
     )
+    through = np.array([[distance, 0, 0], [distance, 0.5 * r, 0]], np.float32)  # the centre, half a radius off
     for bvh in (one, two):  # a lone sphere (its box culls in stack and stackless) and two in a leaf
         for traversal in bvhlab.TRAVERSALS:
             assert np.all(bvh.intersect(o, d, traversal=traversal)["prim"] == -1), traversal
+            hits = bvh.intersect(np.zeros((2, 3), np.float32), through, traversal=traversal)
+            assert np.all(hits["prim"] == 0) and np.all(hits["kind"] == 1), traversal
+            np.testing.assert_allclose(hits["t"], [1 - r / distance, 1 - np.sqrt(0.75) * r / distance], rtol=1e-6)

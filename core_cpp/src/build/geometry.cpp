@@ -1,7 +1,5 @@
 #include "bvhlab/geometry.h"
 
-#include "bvhlab/thread_pool.h"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -161,33 +159,6 @@ std::uint64_t geometry_fingerprint(const GeometryView& g) {
     if (g.triangle_count) f.add(g.triangles, 9 * sizeof(float) * g.triangle_count);
     if (g.sphere_count) f.add(g.spheres, 4 * sizeof(float) * g.sphere_count);
     return f.finish();
-}
-
-namespace {
-
-PackedPrim pack_prim(const GeometryView& g, std::uint32_t ref) {
-    const std::size_t i = ref_index(ref);
-    if (is_sphere_ref(ref)) {
-        const Vec3 c = g.sphere_center(i);
-        return {{c.x, c.y, c.z}, {g.sphere_radius(i), 0, 0}, {0, 0, 0}, ref};
-    }
-    Vec3 v0 = g.vertex(i, 0), e1 = g.vertex(i, 1) - v0, e2 = g.vertex(i, 2) - v0;
-    // A zero-area triangle keeps zero edges, so its determinant is exactly 0: never hit.
-    const Vec3 n = cross(e1, e2);
-    if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) e1 = e2 = Vec3{};
-    return {{v0.x, v0.y, v0.z}, {e1.x, e1.y, e1.z}, {e2.x, e2.y, e2.z}, ref};
-}
-
-}  // namespace
-
-BigVector<PackedPrim> pack_prims(const GeometryView& g, const BigVector<std::uint32_t>& refs, unsigned threads) {
-    BigVector<PackedPrim> out(refs.size());
-    constexpr std::size_t kChunk = 1 << 15;
-    ThreadPool::shared().run((refs.size() + kChunk - 1) / kChunk, threads, [&](std::size_t c, unsigned) {
-        for (std::size_t k = c * kChunk, end = std::min(refs.size(), k + kChunk); k < end; ++k)
-            out[k] = pack_prim(g, refs[k]);
-    });
-    return out;
 }
 
 }  // namespace bvhlab

@@ -51,7 +51,7 @@ std::uint32_t traverse_stack(const Bvh& bvh, const RayQuery& q, Hit& hit) {
         do {  // pop, skipping entries farther than the closest hit so far
             if (sp == 0) return visited;
             --sp;
-        } while (stack[sp].t > hit.t);
+        } while (!may_hold_closer(stack[sp].t, hit.t));
         i = stack[sp].node;
     }
 }
@@ -81,7 +81,7 @@ std::uint32_t traverse_stackless(const Bvh& bvh, const RayQuery& q, Hit& hit) {
 void finish_hit(const Bvh& bvh, const Ray& ray, Hit& hit) {
     if (hit.ref == kNoHit || !(hit.ref & gpu::REF_SPHERE_BIT)) return;
     const PackedPrim& p = bvh.prims[hit.slot];
-    Vec3 n = normalize(ray.origin + ray.dir * hit.t - Vec3{p.p[0], p.p[1], p.p[2]});
+    Vec3 n = normalize(ray.origin + ray.dir * hit.t - Vec3{p.v0.x, p.v0.y, p.v0.z});
     hit.u = std::atan2(n.y, n.x) * float(0.5 / std::numbers::pi) + 0.5f;
     hit.v = std::acos(std::clamp(n.z, -1.0f, 1.0f)) * float(1.0 / std::numbers::pi);
 }

@@ -9,10 +9,10 @@
 
 namespace bvhlab {
 
-bool hit_packet_sphere(const PrimPacket& k, int lane, const float origin[3], const float dir[3], float tmin, Hit& hit) {
-    const PackedPrim p{{k.v0x[lane], k.v0y[lane], k.v0z[lane]}, {k.e1x[lane], 0, 0}, {0, 0, 0}, k.ref[lane]};
-    RayQuery q(Ray{{origin[0], origin[1], origin[2]}, {dir[0], dir[1], dir[2]}, tmin, hit.t});
-    return hit_sphere(p, q, hit);
+bool hit_packet_sphere(const PrimPacket& k, int lane, const Ray& ray, Hit& hit) {
+    const gpu::vec3 centre{k.v[0][0][lane], k.v[0][1][lane], k.v[0][2][lane]};
+    const PackedPrim p{centre, 0, {k.v[1][0][lane], 0, 0}, k.ref[lane], {}, 0};
+    return hit_sphere(p, RayQuery(ray), hit);
 }
 
 namespace portable {
@@ -20,6 +20,7 @@ namespace portable {
 #ifdef BVHLAB_SSE
 struct M4 { __m128 m; };
 inline M4 operator&(M4 a, M4 b) { return {_mm_and_ps(a.m, b.m)}; }
+inline M4 operator|(M4 a, M4 b) { return {_mm_or_ps(a.m, b.m)}; }
 inline int bits(M4 a) { return _mm_movemask_ps(a.m); }
 struct L4 {
     __m128 v;
@@ -41,6 +42,7 @@ inline int le_bits(L4 a, L4 b) { return _mm_movemask_ps(_mm_cmple_ps(a.v, b.v));
 #else
 struct M4 { bool m[4]; };
 inline M4 operator&(M4 a, M4 b) { return {{a.m[0] && b.m[0], a.m[1] && b.m[1], a.m[2] && b.m[2], a.m[3] && b.m[3]}}; }
+inline M4 operator|(M4 a, M4 b) { return {{a.m[0] || b.m[0], a.m[1] || b.m[1], a.m[2] || b.m[2], a.m[3] || b.m[3]}}; }
 inline int bits(M4 a) { return int(a.m[0]) | int(a.m[1]) << 1 | int(a.m[2]) << 2 | int(a.m[3]) << 3; }
 struct L4 {
     float v[4];
@@ -79,8 +81,7 @@ inline int le_bits(L8 x, L8 y) { return le_bits(x.a, y.a) | le_bits(x.b, y.b) <<
 }  // namespace portable
 
 Hit intersect_wide(const WideBvh& wide, const Bvh& bvh, const Ray& ray, std::uint32_t* nodes_visited) {
-    const WideView view{wide.nodes.empty() ? nullptr : wide.nodes.data(), wide.packets.data(), wide.slots.data(),
-                        wide.root_packets};
+    const WideView view{wide.nodes.empty() ? nullptr : wide.nodes.data(), wide.packets.data(), wide.slots.data()};
 #if defined(BVHLAB_AVX2_KERNELS)
     Hit hit = active_isa() == Isa::Avx2 ? avx2::intersect_wide_kernel(view, ray, nodes_visited)
                                         : portable::intersect_wide_kernel(view, ray, nodes_visited);

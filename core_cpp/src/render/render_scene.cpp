@@ -68,13 +68,8 @@ RenderScene make_render_scene(const Bvh& bvh, const GeometryView& g, const Mater
     s.materials = gpu_materials(mv);
     const std::size_t n_materials = mv.material_count ? mv.material_count : 1;
     s.triangles.resize(g.triangle_count);
-    for (std::size_t i = 0; i < g.triangle_count; ++i) {
-        Vec3 v0 = g.vertex(i, 0), e1 = g.vertex(i, 1) - v0, e2 = g.vertex(i, 2) - v0;
-        Vec3 n = cross(e1, e2);
-        if (n.x == 0 && n.y == 0 && n.z == 0) e1 = e2 = Vec3{};  // zero area: never hit
-        std::uint32_t m = material_index(mv.triangle_material, i, n_materials, "triangle");
-        s.triangles[i] = {v4(v0, gpu::uintBitsToFloat(m)), v4(e1, 0), v4(e2, 0)};
-    }
+    for (std::size_t i = 0; i < g.triangle_count; ++i)
+        s.triangles[i] = pack_triangle(g, i, material_index(mv.triangle_material, i, n_materials, "triangle"));
     s.spheres.resize(g.sphere_count);
     for (std::size_t i = 0; i < g.sphere_count; ++i) {
         std::uint32_t m = material_index(mv.sphere_material, i, n_materials, "sphere");
