@@ -53,20 +53,20 @@ struct uvec4 {
     constexpr uvec4(uint x_, uint y_, uint z_, uint w_) : x(x_), y(y_), z(z_), w(w_) {}
 };
 
-#define BVHLAB_VEC_OPS(V, APPLY)                                                              \
-    inline V operator+(V a, V b) { return APPLY(a, b, +); }                                  \
-    inline V operator-(V a, V b) { return APPLY(a, b, -); }                                  \
-    inline V operator*(V a, V b) { return APPLY(a, b, *); }                                  \
-    inline V operator/(V a, V b) { return APPLY(a, b, /); }                                  \
-    inline V operator*(V a, float s) { return a * V(s); }                                    \
-    inline V operator*(float s, V a) { return V(s) * a; }                                    \
-    inline V operator/(V a, float s) { return a / V(s); }                                    \
-    inline V operator+(V a, float s) { return a + V(s); }                                    \
-    inline V operator-(V a, float s) { return a - V(s); }                                    \
-    inline V& operator+=(V& a, V b) { return a = a + b; }                                    \
-    inline V& operator-=(V& a, V b) { return a = a - b; }                                    \
-    inline V& operator*=(V& a, V b) { return a = a * b; }                                    \
-    inline V& operator*=(V& a, float s) { return a = a * s; }                                \
+#define BVHLAB_VEC_OPS(V, APPLY)                              \
+    inline V operator+(V a, V b) { return APPLY(a, b, +); }   \
+    inline V operator-(V a, V b) { return APPLY(a, b, -); }   \
+    inline V operator*(V a, V b) { return APPLY(a, b, *); }   \
+    inline V operator/(V a, V b) { return APPLY(a, b, /); }   \
+    inline V operator*(V a, float s) { return a * V(s); }     \
+    inline V operator*(float s, V a) { return V(s) * a; }     \
+    inline V operator/(V a, float s) { return a / V(s); }     \
+    inline V operator+(V a, float s) { return a + V(s); }     \
+    inline V operator-(V a, float s) { return a - V(s); }     \
+    inline V& operator+=(V& a, V b) { return a = a + b; }     \
+    inline V& operator-=(V& a, V b) { return a = a - b; }     \
+    inline V& operator*=(V& a, V b) { return a = a * b; }     \
+    inline V& operator*=(V& a, float s) { return a = a * s; } \
     inline V operator-(V a) { return V(0.0f) - a; }
 #define BVHLAB_APPLY2(a, b, op) vec2(a.x op b.x, a.y op b.y)
 #define BVHLAB_APPLY3(a, b, op) vec3(a.x op b.x, a.y op b.y, a.z op b.z)

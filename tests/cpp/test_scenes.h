@@ -13,9 +13,7 @@ namespace bvhlab::test {
 struct Scene {
     std::vector<float> triangles;  // T×9
     std::vector<float> spheres;    // S×4
-    GeometryView view() const {
-        return {triangles.data(), triangles.size() / 9, spheres.data(), spheres.size() / 4};
-    }
+    GeometryView view() const { return {triangles.data(), triangles.size() / 9, spheres.data(), spheres.size() / 4}; }
     void add_triangle(Vec3 a, Vec3 b, Vec3 c) {
         for (Vec3 v : {a, b, c}) triangles.insert(triangles.end(), {v.x, v.y, v.z});
     }
@@ -43,7 +41,6 @@ inline Scene random_scene(std::uint32_t triangles, std::uint32_t spheres, std::u
     for (std::uint32_t i = 0; i < spheres; ++i) s.add_sphere(point(), 0.05f + 0.3f * u(rng));
     return s;
 }
-
 
 /// A closed mesh: the octahedron with vertices ±x, ±y, ±z (radius r around `c`), each face cut
 /// into level² triangles and its vertices pushed onto the sphere. A vertex is computed from the

@@ -33,9 +33,9 @@ std::vector<Ray> random_rays(std::uint32_t n, std::uint32_t seed) {
     std::vector<Ray> rays;
     for (std::uint32_t i = 0; i < n; ++i) {
         Vec3 d{g(rng), g(rng), g(rng)};
-        if (i % 7 == 0) d.y = 0;                 // axis-parallel components
+        if (i % 7 == 0) d.y = 0;  // axis-parallel components
         if (i % 11 == 0) d = {0, 0, i % 2 ? 1.0f : -1.0f};
-        if (i % 5 == 0) d = d * 3.7f;            // unnormalised
+        if (i % 5 == 0) d = d * 3.7f;  // unnormalised
         rays.push_back({{u(rng), u(rng), u(rng)}, d});
     }
     return rays;
@@ -66,7 +66,8 @@ void expect_same_hits(const Bvh& bvh, const std::vector<Ray>& rays) {
     for (const Ray& ray : rays) {
         Hit want = brute_force(bvh, ray);
         hits += want.ref != kNoHit;
-        for (Traversal mode : {Traversal::Stack, Traversal::Stackless}) expect_same_hit(intersect(bvh, ray, mode), want);
+        for (Traversal mode : {Traversal::Stack, Traversal::Stackless})
+            expect_same_hit(intersect(bvh, ray, mode), want);
         std::uint32_t visited_first = 0;
         for (Isa isa : supported_isas()) {
             set_isa(isa);
@@ -113,8 +114,8 @@ TEST(Traverse, TminTmaxBoundTheHits) {
 
 TEST(Traverse, DegenerateTrianglesAreNeverHit) {
     test::Scene s;
-    s.add_triangle({0, 0, 0}, {1, 1, 1}, {2, 2, 2});     // collinear
-    s.add_triangle({0, 0, 0}, {0, 0, 0}, {1, 0, 0});     // repeated vertex
+    s.add_triangle({0, 0, 0}, {1, 1, 1}, {2, 2, 2});                    // collinear
+    s.add_triangle({0, 0, 0}, {0, 0, 0}, {1, 0, 0});                    // repeated vertex
     s.add_triangle({0.5f, 0.5f, 0}, {0.5f, 0.5f, 0}, {0.5f, 0.5f, 0});  // a point
     Bvh bvh = build_bvh(s.view());
     for (const Ray& r : random_rays(2000, 3)) EXPECT_EQ(intersect(bvh, r, Traversal::Stack).ref, kNoHit);
@@ -177,9 +178,9 @@ TEST(Traverse, RaysThroughSharedEdgesAndVerticesOfAClosedMeshNeverMiss) {
         for (std::size_t t = 0; t < mesh.triangles.size() / 9; ++t) {
             const float* v = &mesh.triangles[9 * t];
             const Vec3 a{v[0], v[1], v[2]}, b{v[3], v[4], v[5]}, c{v[6], v[7], v[8]};
-            rays.push_back({o, a - o});                            // through a vertex
-            rays.push_back({o, (a + b) * 0.5f - o});               // an edge's midpoint
-            rays.push_back({o, a + (c - a) * f(rng) - o});         // a point of an edge
+            rays.push_back({o, a - o});                     // through a vertex
+            rays.push_back({o, (a + b) * 0.5f - o});        // an edge's midpoint
+            rays.push_back({o, a + (c - a) * f(rng) - o});  // a point of an edge
         }
     for (int i = -40; i <= 40; ++i)  // in the planes x = 0.25, y = -0.5, z = 3 that hold edges
         for (Vec3 d : {Vec3{0, float(i) / 40.0f, 1}, Vec3{float(i) / 40.0f, 0, -1}, Vec3{float(i) / 40.0f, 1, 0}})
@@ -278,13 +279,14 @@ TEST(Traverse, BatchAgreesWithSingleRaysOnAnyThreadCount) {
     Bvh bvh = build_bvh(scene.view());
     auto rays = random_rays(5000, 77);
     std::vector<float> o, d;
-    for (const Ray& r : rays) o.insert(o.end(), {r.origin.x, r.origin.y, r.origin.z}), d.insert(d.end(), {r.dir.x, r.dir.y, r.dir.z});
+    for (const Ray& r : rays)
+        o.insert(o.end(), {r.origin.x, r.origin.y, r.origin.z}), d.insert(d.end(), {r.dir.x, r.dir.y, r.dir.z});
     for (std::uint32_t threads : {1u, 2u, 5u}) {
         std::vector<float> t(rays.size()), u(rays.size()), v(rays.size());
         std::vector<std::int32_t> prim(rays.size());
         std::vector<std::uint8_t> kind(rays.size());
-        intersect_batch(bvh, {o.data(), d.data(), rays.size()}, {t.data(), prim.data(), kind.data(), u.data(), v.data()},
-                        Traversal::Stackless, threads);
+        intersect_batch(bvh, {o.data(), d.data(), rays.size()},
+                        {t.data(), prim.data(), kind.data(), u.data(), v.data()}, Traversal::Stackless, threads);
         for (std::size_t i = 0; i < rays.size(); ++i) {
             Hit h = intersect(bvh, rays[i], Traversal::Stack);
             ASSERT_EQ(t[i], h.t);

@@ -65,7 +65,6 @@ struct BeyondBindingLimit {
     }
 };
 
-
 }  // namespace
 
 TEST_F(Vulkan, ReportsTheDeviceUsed) {
@@ -256,7 +255,8 @@ protected:
             VulkanRenderer r(options);
             ADD_FAILURE() << "no exception; got device " << r.device_name();
         } catch (const VulkanUnavailable& e) {
-            for (const char* needle : needles) EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+            for (const char* needle : needles)
+                EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
         }
     }
 };
@@ -279,7 +279,8 @@ TEST_F(VulkanDevice, IndexOutOfRangeIsAClearError) {
 }
 
 TEST_F(VulkanDevice, UnknownNameIsAClearError) {
-    expect_unavailable(validated({.device = "no-such-gpu"}), {"no Vulkan device name contains 'no-such-gpu'", "llvmpipe"});
+    expect_unavailable(validated({.device = "no-such-gpu"}),
+                       {"no Vulkan device name contains 'no-such-gpu'", "llvmpipe"});
 }
 
 TEST_F(VulkanDevice, EnvironmentVariableChoosesWhenOptionsDoNot) {

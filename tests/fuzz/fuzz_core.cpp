@@ -50,7 +50,9 @@ void check_tree(const Bvh& bvh, const GeometryView& g) {
     require(bvh.refs.size() == n && bvh.prims.size() == n && bvh.depths.size() == bvh.nodes.size(), "array sizes");
     if (n == 0) return require(bvh.nodes.empty(), "an empty scene has nodes");
     std::vector<int> seen(n, 0);
-    struct Item { std::uint32_t node, depth, end; };  // `end`: where the subtree must end
+    struct Item {
+        std::uint32_t node, depth, end;
+    };  // `end`: where the subtree must end
     std::vector<Item> stack{{0, 0, bvh.node_count()}};
     while (!stack.empty()) {
         const Item it = stack.back();
@@ -106,12 +108,16 @@ struct Hits {
 };
 
 bool strict() {
-    static const bool value = [] { const char* v = std::getenv("BVHLAB_FUZZ_STRICT"); return v && *v == '1'; }();
+    static const bool value = [] {
+        const char* v = std::getenv("BVHLAB_FUZZ_STRICT");
+        return v && *v == '1';
+    }();
     return value;
 }
 
 bool within_ulps(float a, float b, float ulps) {
-    return a == b || std::fabs(a - b) <= ulps * std::numeric_limits<float>::epsilon() * std::fmax(std::fabs(a), std::fabs(b));
+    return a == b ||
+           std::fabs(a - b) <= ulps * std::numeric_limits<float>::epsilon() * std::fmax(std::fabs(a), std::fabs(b));
 }
 
 /// Double-precision 3-vectors for the grazing judgement below.
@@ -189,7 +195,8 @@ void check_hit(const Bvh& bvh, const FuzzCase& c, std::size_t i, const Hits& hit
     Hit alone;
     for (std::uint32_t k = 0; k < bvh.prims.size(); ++k)
         if (bvh.prims[k].ref == ref && hit_prim(bvh.prims[k], RayQuery(scaled), alone)) alone.t *= t_scale;
-    require(alone.ref == ref && within_ulps(alone.t, hits.t[i], 4), "the traversal's primitive is not hit there", long(i));
+    require(alone.ref == ref && within_ulps(alone.t, hits.t[i], 4), "the traversal's primitive is not hit there",
+            long(i));
 }
 
 /// The three traversals find the brute force's closest hit (check_hit); rays that check_rays
@@ -200,9 +207,7 @@ void check_rays(const Bvh& bvh, const FuzzCase& c) {
     bool valid = true;
     try {
         bvhlab::check_rays(rays);
-    } catch (const std::invalid_argument&) {
-        valid = false;
-    }
+    } catch (const std::invalid_argument&) { valid = false; }
     const WideBvh wide = make_wide(bvh);
     for (Traversal mode : {Traversal::Stack, Traversal::Stackless, Traversal::Wide}) {
         Hits hits(n);
@@ -255,9 +260,7 @@ void check_cancel(const FuzzCase& c, const Bvh& bvh) {
     bool cancelled = false;
     try {
         build_bvh(c.view(), cfg);
-    } catch (const BuildCancelled&) {
-        cancelled = true;
-    }
+    } catch (const BuildCancelled&) { cancelled = true; }
     require(cancelled, "a progress callback returning false did not cancel the build");
     Cancellation stop([] { return true; });
     Hits hits(c.origins.size() / 3);

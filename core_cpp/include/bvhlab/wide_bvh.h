@@ -32,9 +32,9 @@ struct alignas(32) PrimPacket {
 static_assert(sizeof(PrimPacket) == 160);
 
 struct WideBvh {
-    BigVector<WideNode> nodes;            ///< root at 0 (also when the whole tree is one leaf); none when empty
-    BigVector<PrimPacket> packets;        ///< leaves' primitives, leaf after leaf
-    BigVector<std::uint32_t> slots;       ///< per packet lane: its position in Bvh::prims (finish_hit)
+    BigVector<WideNode> nodes;       ///< root at 0 (also when the whole tree is one leaf); none when empty
+    BigVector<PrimPacket> packets;   ///< leaves' primitives, leaf after leaf
+    BigVector<std::uint32_t> slots;  ///< per packet lane: its position in Bvh::prims (finish_hit)
 };
 
 /// Collapses the binary tree: each wide node takes a binary node's children and keeps opening

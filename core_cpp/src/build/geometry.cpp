@@ -21,15 +21,16 @@ bool finite_floats(const float* p, int n) {
 PrimRef triangle_ref(const GeometryView& g, std::size_t i) {
     Aabb box;
     for (int c = 0; c < 3; ++c) box.grow(g.vertex(i, c));
-    return {{box.lo.x, box.lo.y, box.lo.z}, static_cast<std::uint32_t>(i),
-            {box.hi.x, box.hi.y, box.hi.z}, 0};
+    return {{box.lo.x, box.lo.y, box.lo.z}, static_cast<std::uint32_t>(i), {box.hi.x, box.hi.y, box.hi.z}, 0};
 }
 
 PrimRef sphere_ref(const GeometryView& g, std::size_t i) {
     Vec3 c = g.sphere_center(i);
     float r = g.sphere_radius(i);
-    return {{c.x - r, c.y - r, c.z - r}, gpu::REF_SPHERE_BIT | static_cast<std::uint32_t>(i),
-            {c.x + r, c.y + r, c.z + r}, 0};
+    return {{c.x - r, c.y - r, c.z - r},
+            gpu::REF_SPHERE_BIT | static_cast<std::uint32_t>(i),
+            {c.x + r, c.y + r, c.z + r},
+            0};
 }
 
 /// Throws naming the first non-finite triangle (the slow, exact search behind the fast check).
@@ -52,7 +53,8 @@ std::string range_text() {
         for (int c = 0; c < 3; ++c)
             if (!in_coordinate_range(g.vertex(i, c)))
                 throw std::invalid_argument("triangle " + std::to_string(i) + " has a vertex coordinate outside " +
-                                            range_text() + ", where float32 ray tests would overflow; move or scale "
+                                            range_text() +
+                                            ", where float32 ray tests would overflow; move or scale "
                                             "the scene nearer the origin");
     throw std::logic_error("throw_far_triangle: no such triangle");
 }
@@ -64,8 +66,10 @@ void validate_spheres(const GeometryView& g) {
         float r = g.sphere_radius(i);
         if (!(r >= kMinRadius) || !std::isfinite(r)) {
             char text[160];
-            std::snprintf(text, sizeof text, "sphere %zu has radius %g; a radius must be a finite number of at "
-                          "least 2^-60 (8.7e-19), below which its square underflows", i, double(r));
+            std::snprintf(text, sizeof text,
+                          "sphere %zu has radius %g; a radius must be a finite number of at "
+                          "least 2^-60 (8.7e-19), below which its square underflows",
+                          i, double(r));
             throw std::invalid_argument(text);
         }
         Aabb box = sphere_ref(g, i).box();
@@ -143,8 +147,16 @@ private:
         acc = (acc << 31) | (acc >> 33);
         return acc * kPrime1;
     }
-    static std::uint64_t word(const unsigned char* p) { std::uint64_t w; std::memcpy(&w, p, 8); return w; }
-    static std::uint32_t word4(const unsigned char* p) { std::uint32_t w; std::memcpy(&w, p, 4); return w; }
+    static std::uint64_t word(const unsigned char* p) {
+        std::uint64_t w;
+        std::memcpy(&w, p, 8);
+        return w;
+    }
+    static std::uint32_t word4(const unsigned char* p) {
+        std::uint32_t w;
+        std::memcpy(&w, p, 4);
+        return w;
+    }
 
     std::uint64_t lane_[4] = {kPrime1 + kPrime2, kPrime2, 0, 0 - kPrime1};
     std::uint64_t total_ = 0;

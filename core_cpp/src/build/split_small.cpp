@@ -50,10 +50,13 @@ struct SmallSet {
     Aabb centroid_box(int a, std::uint32_t first, std::uint32_t last) const {
         const float inf = std::numeric_limits<float>::infinity();
         F4 cmin = F4::splat(inf), cmax = F4::splat(-inf);
-        for (std::uint32_t i = first; i < last; ++i) cmin = min(cmin, c2[order[a][i]]), cmax = max(cmax, c2[order[a][i]]);
+        for (std::uint32_t i = first; i < last; ++i)
+            cmin = min(cmin, c2[order[a][i]]), cmax = max(cmax, c2[order[a][i]]);
         return box_of(cmin * F4::splat(0.5f), cmax * F4::splat(0.5f));
     }
-    static Aabb box_of(F4 lo, F4 hi) { return {{lo.lane(0), lo.lane(1), lo.lane(2)}, {hi.lane(0), hi.lane(1), hi.lane(2)}}; }
+    static Aabb box_of(F4 lo, F4 hi) {
+        return {{lo.lane(0), lo.lane(1), lo.lane(2)}, {hi.lane(0), hi.lane(1), hi.lane(2)}};
+    }
 };
 
 }  // namespace
@@ -84,7 +87,8 @@ std::optional<Split> split_small_exact(SplitContext& ctx, Range r, int src, cons
     const std::uint32_t c = best.last_left, mid = c + 1;
     s.mid = r.begin + mid;
     s.left = {SmallSet::box_of(best_unions.left_lo[c], best_unions.left_hi[c]), set.centroid_box(best_axis, 0, mid)};
-    s.right = {SmallSet::box_of(best_unions.right_lo[c], best_unions.right_hi[c]), set.centroid_box(best_axis, mid, set.n)};
+    s.right = {SmallSet::box_of(best_unions.right_lo[c], best_unions.right_hi[c]),
+               set.centroid_box(best_axis, mid, set.n)};
     s.buffer = static_cast<std::uint8_t>(1 - src);
     return s;
 }

@@ -16,15 +16,19 @@ std::uint64_t mix(std::uint64_t x) {  // splitmix64 finaliser
 int choose_axis(const BuildConfig& cfg, const WorkItem& item) {
     Vec3 extent = item.bounds.centroids.extent();
     switch (cfg.axis) {
-        case AxisPolicy::Auto: return method_info(cfg.method).uses_sah ? kAllAxes : largest_axis(extent);
-        case AxisPolicy::Largest: return largest_axis(extent);
-        case AxisPolicy::Best: return kAllAxes;
+        case AxisPolicy::Auto:
+            return method_info(cfg.method).uses_sah ? kAllAxes : largest_axis(extent);
+        case AxisPolicy::Largest:
+            return largest_axis(extent);
+        case AxisPolicy::Best:
+            return kAllAxes;
         case AxisPolicy::Random: {
             int axes[3], n = 0;
             for (int a = 0; a < 3; ++a)
                 if (extent[a] > 0.0f) axes[n++] = a;
             if (n == 0) return largest_axis(extent);
-            std::uint64_t h = mix(cfg.seed ^ mix(item.range.begin ^ (std::uint64_t(item.range.end) << 32)) ^ item.depth);
+            std::uint64_t h =
+                mix(cfg.seed ^ mix(item.range.begin ^ (std::uint64_t(item.range.end) << 32)) ^ item.depth);
             return axes[h % n];
         }
     }
@@ -47,8 +51,9 @@ Split split_pair(SplitContext& ctx, const WorkItem& item) {
     s.mid = item.range.begin + 1;
     s.left = {p[0].box(), {p[0].centroid(), p[0].centroid()}};
     s.right = {p[1].box(), {p[1].centroid(), p[1].centroid()}};
-    s.cost = SahCost(ctx.config).split(SahCost::inverse_area(item.bounds.box.half_area()), s.left.box.half_area(), 1,
-                                       s.right.box.half_area(), 1);
+    s.cost = SahCost(ctx.config)
+                 .split(SahCost::inverse_area(item.bounds.box.half_area()), s.left.box.half_area(), 1,
+                        s.right.box.half_area(), 1);
     s.buffer = item.buffer;
     return s;
 }
@@ -98,7 +103,6 @@ std::optional<Split> choose_split(SplitContext& ctx, const WorkItem& item) {
     return s;
 }
 
-
 namespace {
 
 /// Writes the nodes of one subtree in depth-first order.
@@ -127,7 +131,8 @@ public:
         leaf_primitives_ += item.range.size();
         if (!shared_.method.bottom_up_boxes) return;
         F4 lo = refs[item.range.begin].lo4(), hi = refs[item.range.begin].hi4();
-        for (std::uint32_t i = item.range.begin + 1; i < item.range.end; ++i) lo = min(lo, refs[i].lo4()), hi = max(hi, refs[i].hi4());
+        for (std::uint32_t i = item.range.begin + 1; i < item.range.end; ++i)
+            lo = min(lo, refs[i].lo4()), hi = max(hi, refs[i].hi4());
         set_box(node, {{lo.lane(0), lo.lane(1), lo.lane(2)}, {hi.lane(0), hi.lane(1), hi.lane(2)}});
     }
     void flush_leaf_count() {

@@ -22,7 +22,10 @@ void test_leaf(const Bvh& bvh, const BvhNode& n, const RayQuery& q, Hit& hit) {
 /// Ordered depth-first traversal: test both children's boxes, descend into the nearer, push the
 /// farther with its entry distance so it is dropped if a closer hit is found meanwhile.
 std::uint32_t traverse_stack(const Bvh& bvh, const RayQuery& q, Hit& hit) {
-    struct Entry { std::uint32_t node; float t; };
+    struct Entry {
+        std::uint32_t node;
+        float t;
+    };
     Entry stack[gpu::MAX_TREE_HEIGHT];
     std::uint32_t sp = 0, visited = 1, i = 0;
     const BvhNode* nodes = bvh.nodes.data();
@@ -101,8 +104,8 @@ Hit intersect(const Bvh& bvh, const Ray& ray, Traversal mode, std::uint32_t* nod
     return hit;
 }
 
-void intersect_batch(const Bvh& bvh, const RayBatch& rays, const HitBatch& out, Traversal mode,
-                     std::uint32_t threads, const WideBvh* wide, Cancellation* cancel) {
+void intersect_batch(const Bvh& bvh, const RayBatch& rays, const HitBatch& out, Traversal mode, std::uint32_t threads,
+                     const WideBvh* wide, Cancellation* cancel) {
     if (mode == Traversal::Wide && !wide) throw std::invalid_argument("Traversal::Wide needs the wide tree");
     check_rays(rays);
     constexpr std::size_t kChunk = 1024;

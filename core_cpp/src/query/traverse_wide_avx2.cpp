@@ -10,7 +10,9 @@
 
 namespace bvhlab::avx2 {
 
-struct M4 { __m128 m; };
+struct M4 {
+    __m128 m;
+};
 inline M4 operator&(M4 a, M4 b) { return {_mm_and_ps(a.m, b.m)}; }
 inline M4 operator|(M4 a, M4 b) { return {_mm_or_ps(a.m, b.m)}; }
 inline int bits(M4 a) { return _mm_movemask_ps(a.m); }

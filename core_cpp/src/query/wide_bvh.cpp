@@ -91,7 +91,9 @@ WideBvh make_wide(const Bvh& bvh) {
     const SubtreeRanges ranges(bvh);
     wide.packets.reserve(bvh.prims.size() / 2 + 1);
     wide.nodes.reserve(bvh.nodes.size() / 4 + 1);
-    struct Item { std::uint32_t binary, wide; };
+    struct Item {
+        std::uint32_t binary, wide;
+    };
     std::vector<Item> stack{{0, 0}};
     wide.nodes.emplace_back();
     while (!stack.empty()) {
@@ -105,7 +107,8 @@ WideBvh make_wide(const Bvh& bvh) {
             if (!c) continue;
             if (ranges.leaf(bvh, children[k])) {
                 std::uint32_t packets = 0;
-                const std::uint32_t first = pack_leaf(bvh, ranges.first[children[k]], ranges.size[children[k]], wide, packets);
+                const std::uint32_t first =
+                    pack_leaf(bvh, ranges.first[children[k]], ranges.size[children[k]], wide, packets);
                 wide.nodes[item.wide].child[k] = first, wide.nodes[item.wide].count[k] = packets;
             } else {
                 const auto index = static_cast<std::uint32_t>(wide.nodes.size());

@@ -18,10 +18,10 @@ namespace {
 /// test's axis order, the origin in that order and the shear for the triangles (make_query).
 struct Query {
     float o[3], inv[3], tmin;
-    int axis[3];       ///< kx, ky, kz
-    float o_axes[3];   ///< o[kx], o[ky], o[kz]
+    int axis[3];      ///< kx, ky, kz
+    float o_axes[3];  ///< o[kx], o[ky], o[kz]
     float shear[3];
-    const Ray* ray;    ///< for the spheres (hit_packet_sphere)
+    const Ray* ray;  ///< for the spheres (hit_packet_sphere)
 };
 
 /// Component k of (x, y, z), by selects: an array indexed by the axis made the compiler load the

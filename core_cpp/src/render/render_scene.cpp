@@ -16,8 +16,8 @@ gpu::vec3 v3(Vec3 v) { return {v.x, v.y, v.z}; }
 std::uint32_t material_index(const std::int32_t* table, std::size_t i, std::size_t count, const char* what) {
     std::int32_t m = table ? table[i] : 0;
     if (m < 0 || std::size_t(m) >= count)
-        throw std::invalid_argument(std::string(what) + " " + std::to_string(i) + " uses material " + std::to_string(m) +
-                                    " of " + std::to_string(count));
+        throw std::invalid_argument(std::string(what) + " " + std::to_string(i) + " uses material " +
+                                    std::to_string(m) + " of " + std::to_string(count));
     return std::uint32_t(m);
 }
 
@@ -45,8 +45,9 @@ void check_tree_matches(const Bvh& bvh, const GeometryView& g) {
     if (g.triangle_count != bvh.triangle_count || g.sphere_count != bvh.sphere_count)
         throw std::invalid_argument("the geometry does not match the tree (different primitive counts)");
     if (geometry_fingerprint(g) != bvh.geometry_fingerprint)
-        throw std::invalid_argument("the tree was built for other geometry (same counts, different coordinates): "
-                                    "build it again, or refit it, for these triangles and spheres");
+        throw std::invalid_argument(
+            "the tree was built for other geometry (same counts, different coordinates): "
+            "build it again, or refit it, for these triangles and spheres");
 }
 
 /// The boxes of the overlay pass, in the depth order (report §3.3.1).

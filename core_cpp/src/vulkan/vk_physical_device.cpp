@@ -15,22 +15,32 @@ namespace {
 
 std::string type_name(VkPhysicalDeviceType type) {
     switch (type) {
-        case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return "discrete";
-        case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return "integrated";
-        case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return "virtual";
-        case VK_PHYSICAL_DEVICE_TYPE_CPU: return "cpu";
-        default: return "other";
+        case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU:
+            return "discrete";
+        case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU:
+            return "integrated";
+        case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU:
+            return "virtual";
+        case VK_PHYSICAL_DEVICE_TYPE_CPU:
+            return "cpu";
+        default:
+            return "other";
     }
 }
 
 /// The documented preference: discrete, integrated, virtual, CPU, anything else.
 int type_rank(VkPhysicalDeviceType type) {
     switch (type) {
-        case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return 0;
-        case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return 1;
-        case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return 2;
-        case VK_PHYSICAL_DEVICE_TYPE_CPU: return 3;
-        default: return 4;
+        case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU:
+            return 0;
+        case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU:
+            return 1;
+        case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU:
+            return 2;
+        case VK_PHYSICAL_DEVICE_TYPE_CPU:
+            return 3;
+        default:
+            return 4;
     }
 }
 
@@ -96,11 +106,13 @@ std::string missing_format(const Functions& fn, VkPhysicalDevice device) {
     VkFormatProperties color{}, depth{};
     fn.vkGetPhysicalDeviceFormatProperties(device, VK_FORMAT_R32G32B32A32_SFLOAT, &color);
     fn.vkGetPhysicalDeviceFormatProperties(device, VK_FORMAT_D32_SFLOAT, &depth);
-    const VkFormatFeatureFlags color_needed = VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT | VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT |
+    const VkFormatFeatureFlags color_needed = VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT |
+                                              VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT |
                                               VK_FORMAT_FEATURE_TRANSFER_SRC_BIT | VK_FORMAT_FEATURE_TRANSFER_DST_BIT;
     if ((color.optimalTilingFeatures & color_needed) != color_needed)
         return "R32G32B32A32_SFLOAT as storage image, colour attachment and transfer source/destination";
-    if (!(depth.optimalTilingFeatures & VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT)) return "D32_SFLOAT depth attachment";
+    if (!(depth.optimalTilingFeatures & VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT))
+        return "D32_SFLOAT depth attachment";
     return {};
 }
 
@@ -146,7 +158,8 @@ std::size_t find_named(const std::vector<PhysicalDevice>& devices, const std::st
 PhysicalDevice select_named(const Functions& fn, std::vector<PhysicalDevice>& devices, const std::string& spec) {
     PhysicalDevice& d = devices[find_named(devices, spec)];
     std::string missing = check_device(fn, d);
-    if (!missing.empty()) throw VulkanUnavailable("Vulkan device " + d.name() + " cannot run bvhlab: it lacks " + missing);
+    if (!missing.empty())
+        throw VulkanUnavailable("Vulkan device " + d.name() + " cannot run bvhlab: it lacks " + missing);
     return d;
 }
 
