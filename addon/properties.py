@@ -109,7 +109,7 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
         default=DEFAULT_BINS,
         description="SAH bins per axis (PBRT's default and the report's is 12)",
     )
-    bin_bounds: EnumProperty(name="Buckets over", items=BIN_BOUNDS_ITEMS, default=DEFAULT_BIN_BOUNDS)
+    bin_bounds: EnumProperty(name="Buckets", items=BIN_BOUNDS_ITEMS, default=DEFAULT_BIN_BOUNDS)
     axis: EnumProperty(name="Axis", items=AXIS_ITEMS, default=DEFAULT_AXIS)
     max_leaf_size: IntProperty(
         name="Max leaf size",
