@@ -27,6 +27,7 @@ help:
 	@echo "make addon        the Blender extension zip in dist/ (wheels for Python 3.11 and 3.13)"
 	@echo "make screenshots  the sidebar panel and the Rendered viewport in a real Blender window → docs/panel.png, docs/viewport.png"
 	@echo "make fuzz         libFuzzer over the core for FUZZ_SECONDS (default 300) under ASan/UBSan"
+	@echo "make lint         ruff, mypy and clang-format checks (make format applies the formatters)"
 
 setup: system venv trixie
 
@@ -102,7 +103,23 @@ fuzz: build/fuzz/build.ninja
 	UBSAN_OPTIONS=print_stacktrace=1 build/fuzz/tests/fuzz/fuzz_core -max_total_time=$(FUZZ_SECONDS) -timeout=20 \
 		-artifact_prefix=build/fuzz/crashes/ build/fuzz/corpus tests/fuzz/corpus
 
-test: cpp-test asan-test clang-sanitize-test pytest blender-test
+# Lint: ruff (pycodestyle, pyflakes, import order, bugbear, pyupgrade) and its formatter over every
+# Python file, mypy over the package (settings in pyproject.toml), clang-format over every C++ file
+# (.clang-format). `make format` applies both formatters.
+PY_LINT_DIRS := python addon tests bench blender_scenes scripts
+CPP_FILES = $(shell git ls-files '*.cpp' '*.h' '*.inl' 2>/dev/null || find core_cpp tests bench shaders -name '*.cpp' -o -name '*.h' -o -name '*.inl')
+.PHONY: lint format
+lint: $(VENV)/.deps
+	$(VENV)/bin/ruff check $(PY_LINT_DIRS)
+	$(VENV)/bin/ruff format --check $(PY_LINT_DIRS)
+	$(VENV)/bin/mypy
+	$(VENV)/bin/clang-format --dry-run --Werror $(CPP_FILES)
+
+format: $(VENV)/.deps
+	$(VENV)/bin/ruff format $(PY_LINT_DIRS)
+	$(VENV)/bin/clang-format -i $(CPP_FILES)
+
+test: lint cpp-test asan-test clang-sanitize-test pytest blender-test
 
 # The report's Table 1 on its own scene, Crytek Sponza (frame times on the CPU reference, the
 # report's build settings), its claims checked with the measurement protocol, the §4.1 overlay claim
@@ -128,7 +145,7 @@ build/wheels/.cp311: $(VENV)/.deps $(WHEEL_INPUTS)
 	$(PY) scripts/build_addon.py wheel
 	@touch $@
 build/wheels/.cp313: $(WHEEL_INPUTS) | trixie
-	$(TRIXIE) run python scripts/build_addon.py wheel
+	$(TRIXIE) run CXX=g++-12 python scripts/build_addon.py wheel
 	@touch $@
 dist/bvhlab.zip: build/wheels/.cp311 build/wheels/.cp313 $(ADDON_SOURCES) scripts/build_addon.py
 	cp "$$($(PY) scripts/build_addon.py package)" $@

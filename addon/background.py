@@ -7,6 +7,7 @@ the progress (window manager cursor and the status bar), Esc asks the task to st
 thread is done the operator finishes on the UI thread. Scripts calling the operator get `execute`,
 which does the same work synchronously.
 """
+
 from __future__ import annotations
 
 import os

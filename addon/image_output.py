@@ -1,4 +1,5 @@
 """A rendered float image → the Blender Image "BVH Render", shown in any open Image Editor."""
+
 from __future__ import annotations
 
 import bpy

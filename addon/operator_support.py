@@ -1,5 +1,6 @@
 """What every bvhlab operator shares: turning exceptions and export warnings into reports, exporting
 the scene, building a tree with a progress bar, and resolving output paths."""
+
 from __future__ import annotations
 
 import traceback
@@ -52,22 +53,27 @@ def export_scene(context, require_camera: bool):
     """The scene as a bvhlab.Scene, over the panel's scope."""
     from bvhlab.blender import export_scene as export
 
-    return export(context, scope=context.scene.bvhlab.scope, depsgraph=context.evaluated_depsgraph_get(),
-                  require_camera=require_camera)
+    return export(
+        context,
+        scope=context.scene.bvhlab.scope,
+        depsgraph=context.evaluated_depsgraph_get(),
+        require_camera=require_camera,
+    )
 
 
-def build_tree(context, exported, *, method=None, bins=None):
-    """Build over `exported` with the panel's settings (method and bins overridable), showing
-    progress in the window manager."""
+def build_tree(context, exported):
+    """Build over `exported` with the panel's settings, showing progress in the window manager."""
     import bvhlab
 
     settings = context.scene.bvhlab
     window_manager = context.window_manager
     window_manager.progress_begin(0, 100)
     try:
-        return bvhlab.build(exported, method=method or settings.method, bins=bins or settings.bins,
-                            axis=settings.axis, max_leaf_size=settings.max_leaf_size,
-                            progress=lambda fraction: window_manager.progress_update(int(fraction * 100)) or True)
+        return bvhlab.build(
+            exported,
+            **settings.build_kwargs(),
+            progress=lambda fraction: window_manager.progress_update(int(fraction * 100)) or True,
+        )
     finally:
         window_manager.progress_end()
 
@@ -83,6 +89,7 @@ def remember_tree(context, bvh, exported) -> state.BuiltTree:
     if settings.overlay_depth_min > deepest:
         settings.overlay_depth_min = deepest
     from .overlay import tag_redraw
+
     tag_redraw()
     return built
 
@@ -93,9 +100,12 @@ def current_tree(context, exported) -> state.BuiltTree:
     import numpy as np
 
     built = state.tree_for(context.scene)
-    if (built is not None and built.settings == context.scene.bvhlab.build_settings()
-            and np.array_equal(built.scene.triangles, exported.triangles)
-            and np.array_equal(built.scene.spheres, exported.spheres)):
+    if (
+        built is not None
+        and built.settings == context.scene.bvhlab.build_settings()
+        and np.array_equal(built.scene.triangles, exported.triangles)
+        and np.array_equal(built.scene.spheres, exported.spheres)
+    ):
         return built
     return remember_tree(context, build_tree(context, exported), exported)
 

@@ -1,6 +1,7 @@
 """Build (`bvhlab.build`): export the scene in scope and build a tree with the panel's settings.
 From the UI the build runs on a thread (the UI stays live; Esc cancels it); from a script it runs
 at once (execute)."""
+
 from __future__ import annotations
 
 import bpy
@@ -12,6 +13,7 @@ from .operator_support import build_tree, export_scene, remember_tree, run_repor
 
 class BVHLAB_OT_build(ModalTaskMixin, bpy.types.Operator):
     """Build a BVH over the objects in scope with the chosen split method (Esc cancels)"""
+
     bl_idname = "bvhlab.build"
     bl_label = "Build BVH"
     bl_options = {"REGISTER"}
@@ -31,8 +33,7 @@ class BVHLAB_OT_build(ModalTaskMixin, bpy.types.Operator):
 
         self._exported = exported = export_scene(context, require_camera=False)  # bpy: on the UI thread
         s = context.scene.bvhlab
-        options = {"method": s.method, "bins": s.bins, "axis": s.axis, "max_leaf_size": s.max_leaf_size,
-                   "threads": UI_WORK_THREADS}
+        options = {**s.build_kwargs(), "threads": UI_WORK_THREADS}
 
         def work(task):
             return bvhlab.build(exported, **options, progress=lambda fraction: task.progress(fraction))
@@ -62,8 +63,10 @@ class BVHLAB_OT_build(ModalTaskMixin, bpy.types.Operator):
         remember_tree(context, bvh, exported)
         context.scene.bvhlab.overlay_show = True  # the user pressed Build to see the boxes
         s = bvh.stats
-        message = (f"Built {s['method']} BVH over {s['primitives']} primitives: {s['nodes']} nodes, "
-                   f"height {s['height']}, SAH cost {s['sah_cost']:.2f}, {s['build_ms']:.1f} ms")
+        message = (
+            f"Built {s['method']} BVH over {s['primitives']} primitives: {s['nodes']} nodes, "
+            f"height {s['height']}, SAH cost {s['sah_cost']:.2f}, {s['build_ms']:.1f} ms"
+        )
         self.report({"INFO"}, message)
         state.messages[state.key(context.scene)] = ("INFO", message)
         return {"FINISHED"}

@@ -2,6 +2,7 @@
 built and rendered with bvhlab.compare's protocol (the same as `bvhlab compare` on the command
 line), with frame time, build time, tree height and SAH cost. From the UI the measurement runs on a
 thread (Esc stops it between steps); from a script at once."""
+
 from __future__ import annotations
 
 import bpy
@@ -13,14 +14,20 @@ from .ops_render import render_size
 
 #: (label, method label of bvhlab.compare): every split method, SAH at the report's 12 and 32 bins.
 COMPARE_METHODS = (
-    ("Median", "median"), ("Mean", "mean"), ("Midpoint", "midpoint"), ("SAH 12 bins", "sah12"),
-    ("SAH 32 bins", "sah32"), ("SAH full sweep", "sweep_sah"), ("LBVH", "lbvh"),
+    ("Median", "median"),
+    ("Mean", "mean"),
+    ("Midpoint", "midpoint"),
+    ("SAH 12 bins", "sah12"),
+    ("SAH 32 bins", "sah32"),
+    ("SAH full sweep", "sweep_sah"),
+    ("LBVH", "lbvh"),
 )
 
 
 class BVHLAB_OT_compare(ModalTaskMixin, bpy.types.Operator):
     """Build and render the scene with every split method; show the table (frame time, build time,
     height, SAH cost) in the panel and write it as CSV (Esc stops)"""
+
     bl_idname = "bvhlab.compare"
     bl_label = "Compare Methods"
     bl_options = {"REGISTER"}
@@ -31,8 +38,14 @@ class BVHLAB_OT_compare(ModalTaskMixin, bpy.types.Operator):
             window_manager.progress_begin(0, len(COMPARE_METHODS))
             try:
                 measure = self._measurement(context)
-                return self._done(context, measure(lambda fraction, text: window_manager.progress_update(
-                    int(fraction * len(COMPARE_METHODS))) or True))
+                return self._done(
+                    context,
+                    measure(
+                        lambda fraction, text: (
+                            window_manager.progress_update(int(fraction * len(COMPARE_METHODS))) or True
+                        )
+                    ),
+                )
             finally:
                 window_manager.progress_end()
 
@@ -46,6 +59,7 @@ class BVHLAB_OT_compare(ModalTaskMixin, bpy.types.Operator):
                 def progress(fraction, text):
                     task.progress(fraction, text)
                     task.check()  # Esc: TaskCancelled at the next step
+
                 return measure(progress)
 
             return self.start_task(context, work, "Comparing methods")
@@ -73,9 +87,15 @@ class BVHLAB_OT_compare(ModalTaskMixin, bpy.types.Operator):
         settings = context.scene.bvhlab
         exported = export_scene(context, require_camera=True)
         width, height = render_size(context.scene)
-        options = {"frames": settings.compare_frames, "builds": 1, "width": width, "height": height,
-                   "samples_per_axis": settings.render_supersampling, "max_depth": settings.render_bounces,
-                   "build_options": {"axis": settings.axis, "max_leaf_size": settings.max_leaf_size}}
+        options = {
+            "frames": settings.compare_frames,
+            "builds": 1,
+            "width": width,
+            "height": height,
+            "samples_per_axis": settings.render_supersampling,
+            "max_depth": settings.render_bounces,
+            "build_options": {"axis": settings.axis, "max_leaf_size": settings.max_leaf_size},
+        }
         backend, labels = settings.backend, [method for _, method in COMPARE_METHODS]
         self._csv_path = output_path(settings.compare_filepath, "bvh_compare.csv")
 
@@ -100,8 +120,9 @@ class BVHLAB_OT_compare(ModalTaskMixin, bpy.types.Operator):
         state.comparisons[state.key(context.scene)] = rows
         path = write_csv(rows, self._csv_path)
         best = min(rows, key=lambda row: row["frame_ms"])
-        message = (f"Compared {len(rows)} methods; fastest frame: {best['label']} ({best['frame_ms']:.1f} ms); "
-                   f"wrote {path}")
+        message = (
+            f"Compared {len(rows)} methods; fastest frame: {best['label']} ({best['frame_ms']:.1f} ms); wrote {path}"
+        )
         self.report({"INFO"}, message)
         state.messages[state.key(context.scene)] = ("INFO", message)
         return {"FINISHED"}

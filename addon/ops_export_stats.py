@@ -1,4 +1,5 @@
 """Export stats (`bvhlab.export_stats`): the tree's statistics as JSON and CSV."""
+
 from __future__ import annotations
 
 import bpy
@@ -12,6 +13,7 @@ from .operator_support import build_tree, export_scene, output_path, remember_tr
 class BVHLAB_OT_export_stats(bpy.types.Operator, ExportHelper):
     """Write the BVH statistics (per-depth node counts, leaf-size histogram...) as JSON and CSV
     (the CSV beside the JSON, same name). Builds a tree first if the scene has none"""
+
     bl_idname = "bvhlab.export_stats"
     bl_label = "Export BVH Stats"
     bl_options = {"REGISTER"}

@@ -1,4 +1,5 @@
 """Render (`bvhlab.render`): trace the scene with the Whitted tracer into the Image "BVH Render"."""
+
 from __future__ import annotations
 
 import bpy
@@ -22,14 +23,25 @@ def render_with_settings(context, exported, bvh):
     settings = context.scene.bvhlab
     width, height = render_size(context.scene)
     overlay = (settings.overlay_depth_min, settings.overlay_depth_max) if settings.render_overlay else None
-    return bvhlab.render(exported, bvh, width, height, backend=settings.backend,
-                         samples_per_axis=settings.render_supersampling, max_depth=settings.render_bounces,
-                         overlay_depth=overlay, traversal=settings.traversal, mode=settings.render_mode,
-                         color_by_depth=settings.overlay_color_by_depth, line_width=settings.overlay_line_width)
+    return bvhlab.render(
+        exported,
+        bvh,
+        width,
+        height,
+        backend=settings.backend,
+        samples_per_axis=settings.render_supersampling,
+        max_depth=settings.render_bounces,
+        overlay_depth=overlay,
+        traversal=settings.traversal,
+        mode=settings.render_mode,
+        color_by_depth=settings.overlay_color_by_depth,
+        line_width=settings.overlay_line_width,
+    )
 
 
 class BVHLAB_OT_render(bpy.types.Operator):
     """Ray trace the scene with bvhlab's Whitted tracer into the Image "BVH Render\""""
+
     bl_idname = "bvhlab.render"
     bl_label = "Render"
     bl_options = {"REGISTER"}
@@ -44,9 +56,11 @@ class BVHLAB_OT_render(bpy.types.Operator):
         show_render(context, pixels)
         state.last_render[state.key(context.scene)] = dict(timings)
         fallback = f" (fell back: {timings['fallback']})" if timings.get("fallback") else ""
-        message = (f"{IMAGE_NAME}: {pixels.shape[1]}×{pixels.shape[0]} on {timings['device']} "
-                   f"[{timings['backend']}]{fallback}: trace {timings['trace_ms']:.1f} ms, "
-                   f"total {timings['total_ms']:.1f} ms")
+        message = (
+            f"{IMAGE_NAME}: {pixels.shape[1]}×{pixels.shape[0]} on {timings['device']} "
+            f"[{timings['backend']}]{fallback}: trace {timings['trace_ms']:.1f} ms, "
+            f"total {timings['total_ms']:.1f} ms"
+        )
         self.report({"INFO"}, message)
         state.messages[state.key(context.scene)] = ("INFO", message)
         return {"FINISHED"}

@@ -1,4 +1,5 @@
 """The sidebar tab View3D ▸ N ▸ BVH: build, stats, overlay, render, compare, export."""
+
 from __future__ import annotations
 
 import bpy
@@ -24,9 +25,10 @@ class BVHLAB_PT_main(_BvhPanel, bpy.types.Panel):
         col = layout.column()
         col.use_property_split = True
         col.prop(settings, "method")
-        row = col.row()
-        row.enabled = settings.method == "sah"
-        row.prop(settings, "bins")
+        binned = col.column()
+        binned.enabled = settings.method == "sah"
+        binned.prop(settings, "bins")
+        binned.prop(settings, "bin_bounds")
         col.prop(settings, "axis")
         col.prop(settings, "max_leaf_size")
         layout.operator("bvhlab.build", icon="MOD_LATTICE")
@@ -42,10 +44,16 @@ class BVHLAB_PT_main(_BvhPanel, bpy.types.Panel):
 def stats_rows(stats: dict) -> list[tuple[str, str]]:
     """(label, value) of each statistic the panel shows, in order."""
     s = stats
-    return [("Primitives", f"{s['primitives']:,}"), ("Nodes", f"{s['nodes']:,}"), ("Leaves", f"{s['leaves']:,}"),
-            ("Height", str(s["height"])), ("SAH cost", f"{s['sah_cost']:.2f}"),
-            ("Build", f"{s['build_ms']:.1f} ms"), ("Memory", f"{s['memory_bytes'] / 2**20:.1f} MiB"),
-            ("Method", s["method"])]
+    return [
+        ("Primitives", f"{s['primitives']:,}"),
+        ("Nodes", f"{s['nodes']:,}"),
+        ("Leaves", f"{s['leaves']:,}"),
+        ("Height", str(s["height"])),
+        ("SAH cost", f"{s['sah_cost']:.2f}"),
+        ("Build", f"{s['build_ms']:.1f} ms"),
+        ("Memory", f"{s['memory_bytes'] / 2**20:.1f} MiB"),
+        ("Method", s["method"]),
+    ]
 
 
 def _stats_box(layout, built, settings) -> None:
@@ -131,8 +139,9 @@ class BVHLAB_PT_compare(_BvhPanel, bpy.types.Panel):
         if rows:
             col = layout.box().column(align=True)
             for texts in [("Method", "Frame", "Build", "Height", "SAH")] + [
-                    (r["method"], f"{r['frame_ms']:.0f}", f"{r['build_ms']:.0f}", str(r["height"]),
-                     f"{r['sah_cost']:.1f}") for r in rows]:
+                (r["method"], f"{r['frame_ms']:.0f}", f"{r['build_ms']:.0f}", str(r["height"]), f"{r['sah_cost']:.1f}")
+                for r in rows
+            ]:
                 row = col.split(factor=0.32)  # one table row: method | four numbers
                 row.label(text=texts[0])
                 numbers = row.row(align=True)

@@ -1,32 +1,73 @@
 """Settings on each Scene (`scene.bvhlab`) and the "Analytic sphere" flag on objects."""
+
 from __future__ import annotations
 
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, FloatVectorProperty, IntProperty, StringProperty
 
+from bvhlab import _core as bvhlab_core
+from bvhlab.bvh import (
+    AXES,
+    BIN_BOUNDS,
+    DEFAULT_AXIS,
+    DEFAULT_BIN_BOUNDS,
+    DEFAULT_BINS,
+    DEFAULT_MAX_LEAF_SIZE,
+    DEFAULT_METHOD,
+    MAX_TREE_HEIGHT,
+    METHODS,
+)
+from bvhlab.render import BACKENDS, MAX_RAY_DEPTH, MAX_SAMPLES_PER_AXIS, MODES, TRAVERSALS
+
 from . import state
 
-# Same names as bvhlab.METHODS / AXES (a test checks): kept literal so registering imports no bvhlab.
-METHOD_ITEMS = [
-    ("median", "Median", "Split at the median centroid: equal counts (report §2.3.1)"),
-    ("mean", "Mean", "Split at the mean centroid (report §2.3.1)"),
-    ("midpoint", "Midpoint", "Split the centroid bounds in half (PBRT's Middle)"),
-    ("sah", "SAH (binned)", "Surface area heuristic over bins (report §2.3.2)"),
-    ("sweep_sah", "SAH (full sweep)", "Exact surface area heuristic over every split"),
-    ("lbvh", "LBVH", "Linear BVH from Morton codes"),
-]
-AXIS_ITEMS = [
-    ("auto", "Auto", "All three axes for the SAH methods, the largest centroid extent for the others"),
-    ("largest", "Largest", "Split along the axis of largest centroid extent"),
-    ("random", "Random", "Split along a random axis (seeded)"),
-    ("best", "Best", "Try all three axes, keep the lowest SAH cost"),
-]
-#: The maximum node depth any tree can have (bvhlab.bvh.MAX_TREE_HEIGHT - 1).
-MAX_DEPTH = 63
+# Names, defaults and limits come from the core (one definition, bvhlab._core); the add-on only
+# adds what a user reads in the UI: a label and a tooltip per name.
+_LABELS = {
+    "median": ("Median", "Split at the median centroid: equal counts (report §2.3.1)"),
+    "mean": ("Mean", "Split at the mean centroid (report §2.3.1)"),
+    "midpoint": ("Midpoint", "Split the centroid bounds in half (PBRT's Middle)"),
+    "sah": ("SAH (binned)", "Surface area heuristic over bins (report §2.3.2)"),
+    "sweep_sah": ("SAH (full sweep)", "Exact surface area heuristic over every split"),
+    "lbvh": ("LBVH", "Linear BVH from Morton codes"),
+    "auto": ("Auto", "All three axes for the SAH methods, the largest centroid extent for the others"),
+    "largest": ("Largest", "Split along the axis of largest centroid extent"),
+    "random": ("Random", "Split along a random axis (seeded)"),
+    "best": ("Best", "Try all three axes, keep the lowest SAH cost"),
+    "box": ("Node box", "Equal buckets over the node's box: one pass over the references per node"),
+    "centroids": ("Centroid bounds", "Equal buckets over the centroids' bounds (the report's, PBRT's)"),
+    "stackless": ("Stackless", "Skip indices (report §3.1)"),
+    "stack": ("Stack", "A stack of node indices"),
+    "shade": ("Shade", "Whitted shading"),
+    "heatmap": ("Heatmap", "Box tests per pixel"),
+    "vulkan": ("Vulkan", "Vulkan compute tracer"),
+    "cpu": ("CPU", "C++ reference tracer"),
+}
+_BACKEND_AUTO = (
+    "Auto",
+    "A Vulkan GPU when there is one, otherwise the CPU reference tracer (also instead of a CPU "
+    "Vulkan driver such as lavapipe, where it is faster)",
+)
+
+
+def _items(names) -> list[tuple[str, str, str]]:
+    """EnumProperty items for the core's names, labelled for the UI."""
+    return [(n, *_LABELS.get(n, (n.replace("_", " ").title(), ""))) for n in names]
+
+
+METHOD_ITEMS = _items(METHODS)
+# (module level: Blender evaluates the annotations below in a scope where a comprehension could
+# not see this module's names)
+BACKEND_ITEMS = [(b, *(_BACKEND_AUTO if b == "auto" else _LABELS[b])) for b in BACKENDS]
+AXIS_ITEMS = _items(AXES)
+BIN_BOUNDS_ITEMS = _items(BIN_BOUNDS)
+#: The maximum node depth any tree can have.
+MAX_DEPTH = MAX_TREE_HEIGHT - 1
 
 
 def _redraw(_self=None, _context=None) -> None:
     from .overlay import tag_redraw
+
     tag_redraw()
 
 
@@ -50,66 +91,147 @@ def _depth_max_changed(self, context) -> None:
 
 class BVHLAB_PG_settings(bpy.types.PropertyGroup):
     """Build, overlay, render and comparison settings of one scene."""
-    scope: EnumProperty(name="Scope", default="visible", description="Which objects the tree is built over",
-                        items=[("visible", "Visible", "Every object visible in the view layer"),
-                               ("selected", "Selected", "The selected objects only")])
-    method: EnumProperty(name="Split method", items=METHOD_ITEMS, default="sah")
-    bins: IntProperty(name="Bins", min=2, max=256, default=12, description="SAH bins per axis (PBRT's default is 12)")
-    axis: EnumProperty(name="Axis", items=AXIS_ITEMS, default="largest")
-    max_leaf_size: IntProperty(name="Max leaf size", min=1, max=255, soft_max=16, default=1,
-                               description="Most primitives in a leaf; SAH methods may stop earlier")
 
-    overlay_show: BoolProperty(name="Show boxes", default=False, update=_redraw,
-                               description="Draw the boxes of the nodes in the depth range in the viewport")
-    overlay_depth_min: IntProperty(name="Min depth", min=0, max=MAX_DEPTH, default=0, update=_depth_min_changed,
-                                   description="Shallowest depth drawn (root = 0); at most the tree height - 1")
-    overlay_depth_max: IntProperty(name="Max depth", min=0, max=MAX_DEPTH, default=3, update=_depth_max_changed,
-                                   description="Deepest depth drawn; at most the tree height - 1")
+    scope: EnumProperty(
+        name="Scope",
+        default="visible",
+        description="Which objects the tree is built over",
+        items=[
+            ("visible", "Visible", "Every object visible in the view layer"),
+            ("selected", "Selected", "The selected objects only"),
+        ],
+    )
+    method: EnumProperty(name="Split method", items=METHOD_ITEMS, default=DEFAULT_METHOD)
+    bins: IntProperty(
+        name="Bins",
+        min=int(bvhlab_core.MIN_BINS),
+        max=int(bvhlab_core.MAX_BINS),
+        default=DEFAULT_BINS,
+        description="SAH bins per axis (PBRT's default and the report's is 12)",
+    )
+    bin_bounds: EnumProperty(name="Buckets over", items=BIN_BOUNDS_ITEMS, default=DEFAULT_BIN_BOUNDS)
+    axis: EnumProperty(name="Axis", items=AXIS_ITEMS, default=DEFAULT_AXIS)
+    max_leaf_size: IntProperty(
+        name="Max leaf size",
+        min=1,
+        max=255,
+        soft_max=16,
+        default=DEFAULT_MAX_LEAF_SIZE,
+        description="Most primitives in a leaf; SAH methods may stop earlier (the report's trees: 1)",
+    )
+
+    overlay_show: BoolProperty(
+        name="Show boxes",
+        default=False,
+        update=_redraw,
+        description="Draw the boxes of the nodes in the depth range in the viewport",
+    )
+    overlay_depth_min: IntProperty(
+        name="Min depth",
+        min=0,
+        max=MAX_DEPTH,
+        default=0,
+        update=_depth_min_changed,
+        description="Shallowest depth drawn (root = 0); at most the tree height - 1",
+    )
+    overlay_depth_max: IntProperty(
+        name="Max depth",
+        min=0,
+        max=MAX_DEPTH,
+        default=3,
+        update=_depth_max_changed,
+        description="Deepest depth drawn; at most the tree height - 1",
+    )
     overlay_color_by_depth: BoolProperty(name="Colour by depth", default=True, update=_redraw)
-    overlay_color: FloatVectorProperty(name="Colour", subtype="COLOR", size=4, min=0.0, max=1.0,
-                                       default=(1.0, 0.55, 0.1, 1.0), update=_redraw)
-    overlay_leaves_only: BoolProperty(name="Leaves only", default=False, update=_redraw,
-                                      description="Draw only the leaves in the depth range")
-    overlay_xray: BoolProperty(name="X-ray", default=True, update=_redraw,
-                               description="Draw boxes through geometry (off: hidden behind surfaces)")
+    overlay_color: FloatVectorProperty(
+        name="Colour", subtype="COLOR", size=4, min=0.0, max=1.0, default=(1.0, 0.55, 0.1, 1.0), update=_redraw
+    )
+    overlay_leaves_only: BoolProperty(
+        name="Leaves only", default=False, update=_redraw, description="Draw only the leaves in the depth range"
+    )
+    overlay_xray: BoolProperty(
+        name="X-ray",
+        default=True,
+        update=_redraw,
+        description="Draw boxes through geometry (off: hidden behind surfaces)",
+    )
     overlay_line_width: FloatProperty(name="Line width", min=1.0, max=5.0, default=1.0, update=_redraw)
 
-    render_bounces: IntProperty(name="Bounces", min=0, max=15, default=5,
-                                description="Reflection and refraction depth of the Whitted tracer")
-    render_supersampling: IntProperty(name="Samples", min=1, max=8, default=1,
-                                      description="n × n samples per pixel")
-    backend: EnumProperty(name="Backend", default="auto", items=[
-        ("auto", "Auto", "Vulkan when a driver is present, otherwise the CPU reference tracer"),
-        ("vulkan", "Vulkan", "Vulkan compute tracer"),
-        ("cpu", "CPU", "C++ reference tracer")])
-    traversal: EnumProperty(name="Traversal", default="stackless", items=[
-        ("stackless", "Stackless", "Skip indices (report §3.1)"), ("stack", "Stack", "A stack of node indices")])
-    render_mode: EnumProperty(name="Mode", default="shade", items=[
-        ("shade", "Shade", "Whitted shading"), ("heatmap", "Heatmap", "Box tests per pixel")])
-    render_overlay: BoolProperty(name="Boxes in image", default=False,
-                                 description="Draw the overlay's depth range into the rendered image")
-    viewport_budget_ms: FloatProperty(name="Preview ms", min=5.0, max=1000.0, default=40.0, precision=0, description=(
-        "Rendered viewport: while the view moves, trace at the resolution that takes about this many "
-        "milliseconds; full resolution (then n × n samples) once it stops"))
+    render_bounces: IntProperty(
+        name="Bounces",
+        min=0,
+        max=MAX_RAY_DEPTH,
+        default=5,
+        description="Reflection and refraction depth of the Whitted tracer",
+    )
+    render_supersampling: IntProperty(
+        name="Samples", min=1, max=MAX_SAMPLES_PER_AXIS, soft_max=8, default=1, description="n × n samples per pixel"
+    )
+    backend: EnumProperty(
+        name="Backend",
+        default="auto",
+        items=BACKEND_ITEMS,
+    )
+    traversal: EnumProperty(
+        name="Traversal",
+        default="stackless",
+        items=_items(TRAVERSALS),
+    )
+    render_mode: EnumProperty(
+        name="Mode",
+        default="shade",
+        items=_items(MODES),
+    )
+    render_overlay: BoolProperty(
+        name="Boxes in image", default=False, description="Draw the overlay's depth range into the rendered image"
+    )
+    viewport_budget_ms: FloatProperty(
+        name="Preview ms",
+        min=5.0,
+        max=1000.0,
+        default=40.0,
+        precision=0,
+        description=(
+            "Rendered viewport: while the view moves, trace at the resolution that takes about this many "
+            "milliseconds; full resolution (then n × n samples) once it stops"
+        ),
+    )
 
-    compare_frames: IntProperty(name="Frames", min=1, max=50, default=3,
-                                description="Renders per method; the frame time is their mean")
-    compare_filepath: StringProperty(name="Table", subtype="FILE_PATH", default="//bvh_compare.csv",
-                                     description="CSV file the comparison is written to")
+    compare_frames: IntProperty(
+        name="Frames", min=1, max=50, default=3, description="Renders per method; the frame time is their mean"
+    )
+    compare_filepath: StringProperty(
+        name="Table",
+        subtype="FILE_PATH",
+        default="//bvh_compare.csv",
+        description="CSV file the comparison is written to",
+    )
+
+    def build_kwargs(self) -> dict:
+        """The arguments of `bvhlab.build` that these settings choose: one definition for the
+        sidebar's Build, the render engine's trees and the tree a Render builds."""
+        return {
+            "method": self.method,
+            "bins": self.bins,
+            "bin_bounds": self.bin_bounds,
+            "axis": self.axis,
+            "max_leaf_size": self.max_leaf_size,
+        }
 
     def build_settings(self) -> dict:
         """What a tree depends on besides the geometry."""
-        return {"scope": self.scope, "method": self.method, "bins": self.bins, "axis": self.axis,
-                "max_leaf_size": self.max_leaf_size}
+        return {"scope": self.scope, **self.build_kwargs()}
 
 
 def _get_sphere(obj) -> bool:
     from bvhlab.blender import is_analytic_sphere
+
     return is_analytic_sphere(obj)
 
 
 def _set_sphere(obj, value: bool) -> None:
     from bvhlab.blender import SPHERE_PROPERTY
+
     obj[SPHERE_PROPERTY] = bool(value)
 
 
@@ -121,12 +243,18 @@ def register_properties() -> None:
     bpy.types.Scene.bvhlab = bpy.props.PointerProperty(type=BVHLAB_PG_settings)
     # A pass switch lives on the view layer, like Blender's own (use_pass_z); the engine reads it.
     bpy.types.ViewLayer.bvhlab_use_pass_heatmap = BoolProperty(
-        name="BVH Heatmap", default=True, update=_passes_changed,
-        description="The bvhlab render engine's traversal-cost heatmap (box tests of the primary rays) as a pass")
+        name="BVH Heatmap",
+        default=True,
+        update=_passes_changed,
+        description="The bvhlab render engine's traversal-cost heatmap (box tests of the primary rays) as a pass",
+    )
     # Stored as the plain custom property bvhlab.blender reads, so files and the CLI need no add-on.
     bpy.types.Object.bvhlab_analytic_sphere = BoolProperty(
-        name="Analytic sphere", get=_get_sphere, set=_set_sphere,
-        description="Export this object as one exact sphere (centre and radius from its bounds)")
+        name="Analytic sphere",
+        get=_get_sphere,
+        set=_set_sphere,
+        description="Export this object as one exact sphere (centre and radius from its bounds)",
+    )
 
 
 def unregister_properties() -> None:

@@ -1,6 +1,7 @@
 """What the add-on remembers between operator calls, in module memory and never in bpy data:
 the built tree per scene, the last comparison table, the last message. Keyed by the scene's
 session_uid; cleared when a file is loaded and on unregister."""
+
 from __future__ import annotations
 
 import itertools
@@ -13,6 +14,7 @@ _serials = itertools.count(1)
 @dataclass
 class BuiltTree:
     """A tree and what it was built from."""
+
     bvh: object  # bvhlab.Bvh
     scene: object  # the exported bvhlab.Scene
     settings: dict  # BVHLAB_PG_settings.build_settings() at build time

@@ -1,4 +1,5 @@
 """Text that fits the sidebar: messages wrapped to the region's width instead of cut off."""
+
 from __future__ import annotations
 
 #: Pixels the sidebar takes from a label (at UI scale 1): category tabs, panel margins, an icon.

@@ -1,4 +1,5 @@
 """Shared helpers of the benchmarks: timing, Embree as the peer, tables, JSON."""
+
 from __future__ import annotations
 
 import json
@@ -67,8 +68,12 @@ def machine() -> dict:
                 break
     except OSError:
         pass
-    return {"cpu": cpu, "cores": os.cpu_count(), "python": platform.python_version(),
-            "date": time.strftime("%Y-%m-%d %H:%M:%S")}
+    return {
+        "cpu": cpu,
+        "cores": os.cpu_count(),
+        "python": platform.python_version(),
+        "date": time.strftime("%Y-%m-%d %H:%M:%S"),
+    }
 
 
 def print_table(headers: list[str], rows: list[list], title: str = "") -> str:

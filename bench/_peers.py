@@ -1,5 +1,6 @@
 """bvh_bench (bench/cpp) from Python: building it, the scenes and rays it reads, pinned and
 repeated runs, callgrind instruction counts, and embreex timed beside it."""
+
 from __future__ import annotations
 
 import json
@@ -22,8 +23,19 @@ BUILD = ROOT / "build" / "bench"
 def build_bvh_bench(tinybvh: str | None) -> Path:
     """Configures and builds bench/cpp's bvh_bench in build/bench (Release, Embree 3 when
     libembree-dev is installed, tinybvh when a local copy is given)."""
-    args = ["cmake", "-S", str(ROOT), "-B", str(BUILD), "-G", "Ninja", "-DCMAKE_BUILD_TYPE=Release",
-            "-DBVHLAB_TESTS=ON", "-DBVHLAB_VULKAN=OFF", f"-DBVHLAB_TINYBVH_DIR={tinybvh or ''}"]
+    args = [
+        "cmake",
+        "-S",
+        str(ROOT),
+        "-B",
+        str(BUILD),
+        "-G",
+        "Ninja",
+        "-DCMAKE_BUILD_TYPE=Release",
+        "-DBVHLAB_TESTS=ON",
+        "-DBVHLAB_VULKAN=OFF",
+        f"-DBVHLAB_TINYBVH_DIR={tinybvh or ''}",
+    ]
     subprocess.run(args, check=True, stdout=subprocess.DEVNULL)
     subprocess.run(["cmake", "--build", str(BUILD), "--target", "bvh_bench"], check=True, stdout=subprocess.DEVNULL)
     return BUILD / "bench" / "cpp" / "bvh_bench"
@@ -31,8 +43,12 @@ def build_bvh_bench(tinybvh: str | None) -> Path:
 
 def find_sponza() -> Path | None:
     """Crytek Sponza (262,205 triangles): $BVHLAB_SPONZA, or shared/scenes beside or above the checkout."""
-    candidates = [os.environ.get("BVHLAB_SPONZA"), ROOT / "shared/scenes/sponza_tris.npy",
-                  ROOT.parent / "shared/scenes/sponza_tris.npy", ROOT.parent.parent / "shared/scenes/sponza_tris.npy"]
+    candidates = [
+        os.environ.get("BVHLAB_SPONZA"),
+        ROOT / "shared/scenes/sponza_tris.npy",
+        ROOT.parent / "shared/scenes/sponza_tris.npy",
+        ROOT.parent.parent / "shared/scenes/sponza_tris.npy",
+    ]
     return next((Path(c) for c in candidates if c and Path(c).is_file()), None)
 
 
@@ -114,8 +130,17 @@ def instructions(exe: Path, args: list[str]) -> int | None:
     between bvh_bench's start and stop marks; None without valgrind."""
     if not shutil.which("valgrind"):
         return None
-    cmd = ["valgrind", "--tool=callgrind", "--instr-atstart=no", "--callgrind-out-file=/dev/null",
-           str(exe), "once", *args, "--threads", "1"]
+    cmd = [
+        "valgrind",
+        "--tool=callgrind",
+        "--instr-atstart=no",
+        "--callgrind-out-file=/dev/null",
+        str(exe),
+        "once",
+        *args,
+        "--threads",
+        "1",
+    ]
     out = subprocess.run(cmd, capture_output=True, text=True)
     m = re.search(r"I\s+refs:\s+([\d,]+)", out.stderr)
     return int(m.group(1).replace(",", "")) if m else None

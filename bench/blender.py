@@ -6,6 +6,7 @@ million boxes (box table, textures, line batch; target: at most 100 ms). bpy as 
 
 Best of --repeat runs after one warm-up (the machine is shared: the best run is the one the code,
 not the neighbours, decides), all runs printed."""
+
 from __future__ import annotations
 
 import argparse
@@ -17,8 +18,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "blender"))
-import harness  # noqa: E402  (before bpy: a private user folder)
 import bpy  # noqa: E402
+import harness  # noqa: E402  (before bpy: a private user folder)
 
 
 def timed(work, repeat: int) -> list[float]:
@@ -36,15 +37,19 @@ def export_million(repeat: int) -> dict:
 
     harness.open_scene("suzanne_1m")
     triangles = len(export_scene(bpy.context).triangles)
-    return {"what": f"export {triangles:,} evaluated triangles", "target_ms": 500,
-            "ms": timed(lambda: export_scene(bpy.context), repeat)}
+    return {
+        "what": f"export {triangles:,} evaluated triangles",
+        "target_ms": 500,
+        "ms": timed(lambda: export_scene(bpy.context), repeat),
+    }
 
 
 def overlay_batch_million(repeat: int) -> dict:
     from importlib import import_module
 
-    import bvhlab
     import checks_gpu
+
+    import bvhlab
     from bvhlab.library import procedural
 
     harness.enable_addon_from_source()
@@ -52,8 +57,11 @@ def overlay_batch_million(repeat: int) -> dict:
     checks_gpu.ensure_gpu_context()
     batch = import_module(harness.addon().__name__ + ".overlay.batch")
     bvh = bvhlab.build(procedural.random_triangles(500_000, seed=5), max_leaf_size=1)
-    return {"what": f"overlay batch of {bvh.stats['nodes']:,} boxes", "target_ms": 100,
-            "ms": timed(lambda: batch.BoxBatch.from_bvh(bvh), repeat)}
+    return {
+        "what": f"overlay batch of {bvh.stats['nodes']:,} boxes",
+        "target_ms": 100,
+        "ms": timed(lambda: batch.BoxBatch.from_bvh(bvh), repeat),
+    }
 
 
 def main() -> None:
@@ -66,7 +74,8 @@ def main() -> None:
     print("| what | best ms | target ms | all runs (ms) |\n|---|---|---|---|")
     for row in rows:
         row["best_ms"] = min(row["ms"])
-        print(f"| {row['what']} | {row['best_ms']:.1f} | {row['target_ms']} | {', '.join(f'{t:.0f}' for t in row['ms'])} |")
+        all_ms = ", ".join(f"{t:.0f}" for t in row["ms"])
+        print(f"| {row['what']} | {row['best_ms']:.1f} | {row['target_ms']} | {all_ms} |")
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps({"blender": bpy.app.version_string, "rows": rows}, indent=1) + "\n")
     sys.stdout.flush()

@@ -11,6 +11,7 @@ MEDIUM and tinybvh, two-thread scaling, SAH cost (bvhlab's convention) and callg
 per primitive, and writes bench/results/build.json. tinybvh is never part of bvhlab: pass the
 folder of a local copy of github.com/jbikker/tinybvh (or set BVHLAB_TINYBVH_DIR).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -64,7 +65,10 @@ def count_instructions(exe: Path, path: Path, result: dict) -> None:
 
 def report(name: str, r: dict, threads: list[int]) -> str:
     n = r["triangles"]
-    ms = lambda row, t: _peers.median(row["seconds"][str(t)]) * 1e3 if str(t) in row["seconds"] else float("nan")
+
+    def ms(row, t):
+        return _peers.median(row["seconds"][str(t)]) * 1e3 if str(t) in row["seconds"] else float("nan")
+
     by_spec = {row["spec"]: row for row in r["peers"]}
     medium, tiny = by_spec.get("embree:medium"), by_spec.get("tinybvh:")
     rows = []
@@ -98,6 +102,7 @@ def main() -> None:
     args = ap.parse_args()
     if args.embreex_child:
         import numpy as np
+
         tris = np.fromfile(args.embreex_child, np.float32).reshape(-1, 3, 3)
         print(json.dumps({"seconds": _peers.embreex_commit_seconds(tris, args.repeat)}))
         return

@@ -12,6 +12,7 @@ the renderer (adaptive), interleaved and repeated; frame ms, trace dispatches, a
 the 60000 budget. On the CPU reference the budget only decides how often a trace is saved and
 loaded. Writes bench/results/render.json.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -25,7 +26,7 @@ import _common  # noqa: E402
 METHODS = ["median", "mean", "sah12", "sah32"]
 
 
-def main() -> None:
+def _arguments() -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--scene", default="atrium")
     ap.add_argument("--width", type=int, default=800)
@@ -33,41 +34,86 @@ def main() -> None:
     ap.add_argument("--frames", type=int, default=3)
     ap.add_argument("--samples-per-axis", type=int, default=1, help="for the bounded-dispatch table")
     ap.add_argument("--skip-table1", action="store_true", help="only the bounded-dispatch table")
-    args = ap.parse_args()
+    return ap.parse_args()
 
+
+def main() -> None:
+    args = _arguments()
     import bvhlab
-    from bvhlab.compare import REPORT_TABLE1, measure_methods
     from bvhlab.library import load_scene
 
     scene, name = load_scene(args.scene)
     threads = os.cpu_count()
-    results = {"machine": _common.machine(), "scene": name, "triangles": len(scene.triangles),
-               "width": args.width, "height": args.height, "threads": threads, "rows": []}
+    results = {
+        "machine": _common.machine(),
+        "scene": name,
+        "triangles": len(scene.triangles),
+        "width": args.width,
+        "height": args.height,
+        "threads": threads,
+        "rows": [],
+    }
     renderers = {"vulkan": bvhlab.Renderer("vulkan"), "cpu": bvhlab.Renderer("cpu")}
     results["budgets"] = budget_rows(bvhlab, scene, name, renderers, args)
     if args.skip_table1:
         print(f"\nwrote {_common.write_json('render_budgets.json', results)}")
         return
+    results["rows"] = _measure_table1(scene, renderers, args)
+    _print_table1(
+        results["rows"],
+        title=f"\n{name}: frame ms at {args.width}x{args.height}; Vulkan on "
+        f"{renderers['vulkan'].device}, CPU reference on {threads} threads",
+    )
+    print(f"\nwrote {_common.write_json('render.json', results)}")
+
+
+def _measure_table1(scene, renderers: dict, args) -> list[dict]:
+    """The report's methods on each backend and traversal (bvhlab compare's protocol)."""
+    from bvhlab.compare import measure_methods
+
+    rows = []
     for backend, renderer in renderers.items():
         for traversal in ("stack", "stackless"):
-            rows = measure_methods(scene, METHODS, frames=args.frames, builds=1, width=args.width,
-                                   height=args.height, renderer=renderer,
-                                   progress=lambda s: print(f"  [{backend} {traversal}] {s}", file=sys.stderr),
-                                   render_options={"traversal": traversal})
-            for r in rows:
-                results["rows"].append({**r, "backend": backend, "traversal": traversal})
+            measured = measure_methods(
+                scene,
+                METHODS,
+                frames=args.frames,
+                builds=1,
+                width=args.width,
+                height=args.height,
+                renderer=renderer,
+                progress=lambda s, backend=backend, traversal=traversal: print(
+                    f"  [{backend} {traversal}] {s}", file=sys.stderr
+                ),
+                render_options={"traversal": traversal},
+            )
+            rows += [{**r, "backend": backend, "traversal": traversal} for r in measured]
+    return rows
+
+
+def _print_table1(rows: list[dict], title: str) -> None:
+    from bvhlab.compare import REPORT_TABLE1
+
     table = []
     for m in METHODS:
-        cell = {(r["backend"], r["traversal"]): r for r in results["rows"] if r["method"] == m}
+        cell = {(r["backend"], r["traversal"]): r for r in rows if r["method"] == m}
         vk, cpu = cell[("vulkan", "stack")], cell[("cpu", "stack")]
-        table.append([m, vk["frame_ms"], cell[("vulkan", "stackless")]["frame_ms"], cpu["frame_ms"],
-                      cell[("cpu", "stackless")]["frame_ms"], vk["frame_ms"] / cpu["frame_ms"],
-                      vk["primary_mrays_s"], cpu["primary_mrays_s"], REPORT_TABLE1[m][0]])
-    _common.print_table(["method", "vulkan stack", "vulkan stackless", "cpu stack", "cpu stackless",
-                         "vulkan/cpu", "vk prim Mrays/s", "cpu prim Mrays/s", "report ms"], table,
-                        title=f"\n{name}: frame ms at {args.width}x{args.height}; Vulkan on "
-                              f"{renderers['vulkan'].device}, CPU reference on {threads} threads")
-    print(f"\nwrote {_common.write_json('render.json', results)}")
+        table.append(
+            [
+                m,
+                vk["frame_ms"],
+                cell[("vulkan", "stackless")]["frame_ms"],
+                cpu["frame_ms"],
+                cell[("cpu", "stackless")]["frame_ms"],
+                vk["frame_ms"] / cpu["frame_ms"],
+                vk["primary_mrays_s"],
+                cpu["primary_mrays_s"],
+                REPORT_TABLE1[m][0],
+            ]
+        )
+    header = ["method", "vulkan stack", "vulkan stackless", "cpu stack", "cpu stackless", "vulkan/cpu"]
+    header += ["vk prim Mrays/s", "cpu prim Mrays/s", "report ms"]
+    _common.print_table(header, table, title=title)
 
 
 BUDGETS = [60000, 4096, 512, 64, None]
@@ -79,7 +125,7 @@ def budget_rows(bvhlab, scene, name, renderers, args) -> list[dict]:
     options = {"samples_per_axis": args.samples_per_axis}
     times = {(b, k): [] for b in renderers for k in range(len(BUDGETS))}
     dispatches = {}
-    for backend, renderer in renderers.items():  # warm-up: shaders compiled, scene uploaded
+    for renderer in renderers.values():  # warm-up: shaders compiled, scene uploaded
         renderer.render(scene, bvh, args.width, args.height, **options)
     for _ in range(max(1, args.frames)):
         for k, budget in enumerate(BUDGETS):
@@ -96,12 +142,23 @@ def budget_rows(bvhlab, scene, name, renderers, args) -> list[dict]:
             row[f"{backend}_ratio"] = row[f"{backend}_ms"] / min(times[(backend, 0)])
             row[f"{backend}_dispatches"] = dispatches[(backend, k)]
         rows.append(row)
-        table.append([row["steps_per_dispatch"], row["vulkan_ms"], row["vulkan_dispatches"], row["vulkan_ratio"],
-                      row["cpu_ms"], row["cpu_ratio"]])
-    _common.print_table(["steps/dispatch", "vulkan ms", "dispatches", "vs 60000", "cpu ms", "vs 60000"], table,
-                        title=f"\n{name}, SAH 12, {args.width}x{args.height}, {args.samples_per_axis}x"
-                              f"{args.samples_per_axis} samples: frame ms by steps per dispatch "
-                              f"(min of {max(1, args.frames)}, interleaved)")
+        table.append(
+            [
+                row["steps_per_dispatch"],
+                row["vulkan_ms"],
+                row["vulkan_dispatches"],
+                row["vulkan_ratio"],
+                row["cpu_ms"],
+                row["cpu_ratio"],
+            ]
+        )
+    _common.print_table(
+        ["steps/dispatch", "vulkan ms", "dispatches", "vs 60000", "cpu ms", "vs 60000"],
+        table,
+        title=f"\n{name}, SAH 12, {args.width}x{args.height}, {args.samples_per_axis}x"
+        f"{args.samples_per_axis} samples: frame ms by steps per dispatch "
+        f"(min of {max(1, args.frames)}, interleaved)",
+    )
     return rows
 
 

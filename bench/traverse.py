@@ -11,6 +11,7 @@ against Embree MEDIUM, the hits each system found and how many rays disagree wit
 distance, and callgrind instructions per ray (on the first `--callgrind` rays); writes
 bench/results/traverse.json. Each bvhlab row names its build settings.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -51,6 +52,7 @@ def measure(exe: Path, mesh: Path, rays: dict[str, Path], repeat: int, rounds: i
 def count_instructions(exe: Path, mesh: Path, rays: dict[str, Path], first: int, result: dict) -> None:
     for name, path in rays.items():
         import numpy as np
+
         few = path.with_suffix(".few.f32")
         np.fromfile(path, np.float32)[: 6 * first].tofile(few)
         for spec, row in result[name].items():
@@ -66,10 +68,21 @@ def report(scene: str, triangles: int, result: dict) -> None:
         for row in rows.values():
             t = _peers.median(row["seconds"])
             ipr = row.get("instructions_per_ray")
-            table.append([row["label"], row["count"] / t / 1e6, embree / t, row["hits"], row["disagree_with_embree"],
-                          round(ipr) if ipr else ""])
-        _common.print_table(["traversal", "Mrays/s", "x Embree", "hits", "disagree", "instr/ray"], table,
-                            title=f"\n{scene} ({triangles} triangles), {name} rays, 1 thread")
+            table.append(
+                [
+                    row["label"],
+                    row["count"] / t / 1e6,
+                    embree / t,
+                    row["hits"],
+                    row["disagree_with_embree"],
+                    round(ipr) if ipr else "",
+                ]
+            )
+        _common.print_table(
+            ["traversal", "Mrays/s", "x Embree", "hits", "disagree", "instr/ray"],
+            table,
+            title=f"\n{scene} ({triangles} triangles), {name} rays, 1 thread",
+        )
 
 
 def main() -> None:

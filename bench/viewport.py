@@ -12,6 +12,7 @@ The region size default is the 3D viewport of `make blender-ui-test` (1600 × 90
 viewport traces on all cores but one (VIEWPORT_THREADS); times are the tracer's own (overlay pass +
 trace pass: `total_ms`), medians with the spread printed. The machine is shared: run it pinned
 (`taskset -c 1`) and more than once."""
+
 from __future__ import annotations
 
 import argparse
@@ -23,8 +24,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "blender"))
-import harness  # noqa: E402  (before bpy: a private user folder)
 import bpy  # noqa: E402
+import harness  # noqa: E402  (before bpy: a private user folder)
 
 
 def _modules():
@@ -32,8 +33,9 @@ def _modules():
 
     harness.enable_addon_from_source()
     package = harness.addon().__name__ + ".engine."
-    return {name: import_module(package + name) for name in ("viewport", "view_camera", "tracer", "scene_tree",
-                                                             "settings")}
+    return {
+        name: import_module(package + name) for name in ("viewport", "view_camera", "tracer", "scene_tree", "settings")
+    }
 
 
 def _request(m, scene, width, height, turn: float, spp: int, overlay):
@@ -46,8 +48,9 @@ def _request(m, scene, width, height, turn: float, spp: int, overlay):
     view_matrix = world.inverted()
     window = camera.calc_matrix_camera(depsgraph, x=width, y=height)
     frustum = m["view_camera"].view_frustum(view_matrix, window, width, height)
-    settings = m["tracer"].TraceSettings(spp=spp, max_depth=5, overlay=overlay, traversal="stackless",
-                                         threads=m["settings"].VIEWPORT_THREADS)
+    settings = m["tracer"].TraceSettings(
+        spp=spp, max_depth=5, overlay=overlay, traversal="stackless", threads=m["settings"].VIEWPORT_THREADS
+    )
     return m["viewport"].ViewRequest(frustum, settings, "auto", m["scene_tree"].BuildSettings(), budget_ms=40.0)
 
 
@@ -73,8 +76,9 @@ def _levels(m, session, scene, width, height, views: int) -> dict:
             if frame is not None and frame.request == request and frame.level not in seen:
                 seen.add(frame.level)
                 t = frame.timings
-                out[frame.level].append({"width": t["width"], "height": t["height"], "ms": t["frame_ms"],
-                                         "latency_ms": t["latency_ms"]})
+                out[frame.level].append(
+                    {"width": t["width"], "height": t["height"], "ms": t["frame_ms"], "latency_ms": t["latency_ms"]}
+                )
             time.sleep(0.002)
     return out
 
@@ -119,21 +123,33 @@ def main() -> None:
     section = _section_41(m, session, scene, width, height, args.rounds)
     session.close()
     device = build_frame.timings["device"]
-    print(f"atrium {len(live.scene.triangles):,} triangles, viewport {width} × {height}, {device}, "
-          f"{m['settings'].VIEWPORT_THREADS} thread(s); tree built in {build_frame.timings['build_ms']:.0f} ms")
+    print(
+        f"atrium {len(live.scene.triangles):,} triangles, viewport {width} × {height}, {device}, "
+        f"{m['settings'].VIEWPORT_THREADS} thread(s); tree built in {build_frame.timings['build_ms']:.0f} ms"
+    )
     for level, runs in levels.items():
         sizes = {(r["width"], r["height"]) for r in runs}
-        print(f"  {level:8s} {sorted(sizes)}: frame {_spread([r['ms'] for r in runs])}; "
-              f"latency {_spread([r['latency_ms'] for r in runs])}")
+        print(
+            f"  {level:8s} {sorted(sizes)}: frame {_spread([r['ms'] for r in runs])}; "
+            f"latency {_spread([r['latency_ms'] for r in runs])}"
+        )
     print("  report §4.1, full level, 1 sample, same view:")
     for name, values in section.items():
         print(f"    {name:10s} {_spread(values)}")
     ratios = [b / n for b, n in zip(section["boxes 8-9"], section["no boxes"])]
-    print(f"    boxes / none per round: median {statistics.median(ratios):.3f} "
-          f"(min {min(ratios):.3f}, max {max(ratios):.3f})")
-    result = {"size": [width, height], "device": device, "threads": m["settings"].VIEWPORT_THREADS,
-              "build_ms": build_frame.timings["build_ms"], "levels": levels, "section_4_1_ms": section,
-              "section_4_1_ratio_median": statistics.median(ratios)}
+    print(
+        f"    boxes / none per round: median {statistics.median(ratios):.3f} "
+        f"(min {min(ratios):.3f}, max {max(ratios):.3f})"
+    )
+    result = {
+        "size": [width, height],
+        "device": device,
+        "threads": m["settings"].VIEWPORT_THREADS,
+        "build_ms": build_frame.timings["build_ms"],
+        "levels": levels,
+        "section_4_1_ms": section,
+        "section_4_1_ratio_median": statistics.median(ratios),
+    }
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps(result, indent=1) + "\n")
     print(f"wrote {args.json}")

@@ -8,6 +8,7 @@ in the data. scenes.json records, per scene, the counts Blender itself evaluates
 of visible meshes, flagged spheres), the materials as bvhlab should read them, and a few world
 positions the export must reproduce; the tests compare the export against it.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -27,8 +28,13 @@ def five_spheres():
     mean and SAH splits (3 | 2) at the root."""
     scene = kit.reset(sky=(0.6, 0.72, 0.85))
     colors = [(0.8, 0.2, 0.2), (0.9, 0.6, 0.1), (0.9, 0.85, 0.2), (0.2, 0.7, 0.3), (0.2, 0.4, 0.85)]
-    spheres = [(-4.0, 0.0, 1.0, 0.6), (-2.9, 0.4, 1.2, 0.5), (-1.9, -0.3, 0.9, 0.7),
-               (3.0, 0.2, 1.1, 0.55), (4.1, -0.2, 0.95, 0.65)]
+    spheres = [
+        (-4.0, 0.0, 1.0, 0.6),
+        (-2.9, 0.4, 1.2, 0.5),
+        (-1.9, -0.3, 0.9, 0.7),
+        (3.0, 0.2, 1.1, 0.55),
+        (4.1, -0.2, 0.95, 0.65),
+    ]
     for i, ((x, y, z, r), color) in enumerate(zip(spheres, colors)):
         kit.uv_sphere(f"Sphere {i + 1}", (x, y, z), r, kit.material(f"Sphere {i + 1}", color))
     kit.camera((0.0, -11.0, 3.5), (0.0, 0.0, 1.0), lens=40)
@@ -42,12 +48,17 @@ def random_spheres(count=1000, half=4.0, seed=42):
     rng = np.random.default_rng(seed)
     centres = rng.uniform(-half, half, (count, 3)).round(4)
     radii = rng.uniform(0.1, 0.22, count).round(4)
-    palette = [kit.material(f"Random {k}", c) for k, c in enumerate(
-        [(0.85, 0.3, 0.25), (0.3, 0.6, 0.85), (0.9, 0.8, 0.3), (0.4, 0.75, 0.4), (0.75, 0.5, 0.8)])]
+    palette = [
+        kit.material(f"Random {k}", c)
+        for k, c in enumerate(
+            [(0.85, 0.3, 0.25), (0.3, 0.6, 0.85), (0.9, 0.8, 0.3), (0.4, 0.75, 0.4), (0.75, 0.5, 0.8)]
+        )
+    ]
     mesh = None
     for i in range(count):
-        obj = kit.uv_sphere(f"Random sphere {i:04d}", centres[i], radii[i], palette[i % len(palette)],
-                            segments=16, rings=8, mesh=mesh)
+        obj = kit.uv_sphere(
+            f"Random sphere {i:04d}", centres[i], radii[i], palette[i % len(palette)], segments=16, rings=8, mesh=mesh
+        )
         mesh = obj.data
     kit.camera((10.0, -14.0, 9.0), (0.0, 0.0, 0.0), lens=40)
     kit.point_light((6.0, -8.0, 10.0), 4000)
@@ -105,14 +116,24 @@ def atrium():
     mirrored(kit.box("Gallery", (-12.0, 2.6, 7.7), (12.0, 5.0, 8.0), [stone]))
     mirrored(kit.box("Wall", (-12.0, 5.0, 0.0), (12.0, 5.3, 10.0), [stone]))
     kit.box("End wall", (12.0, -5.3, 0.0), (12.3, 5.3, 10.0), [stone])
-    banner = kit.mesh_object("Banner", [(-0.7, -2.0, 0), (0.7, -2.0, 0), (0.7, 2.0, 0), (-0.7, 2.0, 0)],
-                             [(0, 1, 2, 3)], [cloth], location=(-9.0, -2.4, 5.4))
+    banner = kit.mesh_object(
+        "Banner",
+        [(-0.7, -2.0, 0), (0.7, -2.0, 0), (0.7, 2.0, 0), (-0.7, 2.0, 0)],
+        [(0, 1, 2, 3)],
+        [cloth],
+        location=(-9.0, -2.4, 5.4),
+    )
     banner.rotation_euler = (np.pi / 2, 0.0, 0.0)
     kit.subdivide(banner, 6, simple=True)
     kit.modifier(banner, "WAVE", use_x=True, use_y=False, height=0.08, width=0.35, narrowness=1.0, speed=0.0)
     mirrored(banner, (7, (3.0, 0.0, 0.0)))
-    drape = kit.mesh_object("Curtain", [(-4.0, -3.0, 0), (4.0, -3.0, 0), (4.0, 3.0, 0), (-4.0, 3.0, 0)],
-                            [(0, 1, 2, 3)], [curtain], location=(11.6, 0.0, 4.2))
+    drape = kit.mesh_object(
+        "Curtain",
+        [(-4.0, -3.0, 0), (4.0, -3.0, 0), (4.0, 3.0, 0), (-4.0, 3.0, 0)],
+        [(0, 1, 2, 3)],
+        [curtain],
+        location=(11.6, 0.0, 4.2),
+    )
     drape.rotation_euler = (np.pi / 2, 0.0, np.pi / 2)
     kit.subdivide(drape, 8, simple=True)
     kit.modifier(drape, "WAVE", use_x=True, use_y=False, height=0.15, width=0.6, narrowness=1.5, speed=0.0)
@@ -135,10 +156,15 @@ def whitted():
     cell = 10.0 / round(len(floor.data.polygons) ** 0.5)
     cells = np.floor((centres.reshape(-1, 3)[:, :2] + 5.0) / cell).astype(int)
     floor.data.polygons.foreach_set("material_index", (cells.sum(1) % 2).astype(np.int32))
-    kit.uv_sphere("Glass sphere", (0.4, 0.0, 1.3), 1.0, kit.material("Glass", (1.0, 1.0, 1.0), transmission=1.0,
-                                                                        ior=1.5, roughness=0.0))
-    kit.uv_sphere("Mirror sphere", (-1.9, 2.2, 1.1), 1.1, kit.material("Mirror", (0.9, 0.9, 0.9), metallic=1.0,
-                                                                         roughness=0.0))
+    kit.uv_sphere(
+        "Glass sphere",
+        (0.4, 0.0, 1.3),
+        1.0,
+        kit.material("Glass", (1.0, 1.0, 1.0), transmission=1.0, ior=1.5, roughness=0.0),
+    )
+    kit.uv_sphere(
+        "Mirror sphere", (-1.9, 2.2, 1.1), 1.1, kit.material("Mirror", (0.9, 0.9, 0.9), metallic=1.0, roughness=0.0)
+    )
     bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=3, radius=0.8, location=(2.4, 2.0, 0.8))
     ball = bpy.context.object
     ball.name = "Matte ball"
@@ -168,16 +194,22 @@ def moving_ball():
 
 
 SCENES = {
-    "five_spheres": (five_spheres, "Five analytic spheres in a row: the report's Figures 3-4, where the "
-                     "median split differs from mean and SAH"),
+    "five_spheres": (
+        five_spheres,
+        "Five analytic spheres in a row: the report's Figures 3-4, where the median split differs from mean and SAH",
+    ),
     "random_spheres": (random_spheres, "1000 analytic spheres uniformly at random in a cube (report §4.2)"),
     "suzanne_250k": (lambda: suzanne(4), "Suzanne, Subdivision Surface level 4, on a floor"),
     "suzanne_1m": (lambda: suzanne(5), "Suzanne, Subdivision Surface level 5, on a floor"),
-    "atrium": (atrium, "An atrium with columns, arches, floor tiles and hanging cloth (the Sponza role "
-               "of the report's Table 1)"),
+    "atrium": (
+        atrium,
+        "An atrium with columns, arches, floor tiles and hanging cloth (the Sponza role of the report's Table 1)",
+    ),
     "whitted": (whitted, "Reflective and transparent spheres over a checkerboard (Whitted 1980)"),
-    "moving_ball": (moving_ball, "Frames 1-3: a mesh ball and an analytic sphere move over a floor "
-                    "(animation renders)"),
+    "moving_ball": (
+        moving_ball,
+        "Frames 1-3: a mesh ball and an analytic sphere move over a floor (animation renders)",
+    ),
 }
 
 
@@ -186,8 +218,14 @@ def make(name: str, out: Path) -> dict:
     scene, positions = builder()
     triangles, spheres = kit.counts(scene)
     path = out / f"{name}.blend"
-    entry = {"file": path.name, "description": description, "triangles": triangles, "spheres": spheres,
-             "materials": kit.material_rows(scene), "world_positions": positions}
+    entry = {
+        "file": path.name,
+        "description": description,
+        "triangles": triangles,
+        "spheres": spheres,
+        "materials": kit.material_rows(scene),
+        "world_positions": positions,
+    }
     kit.save(path)
     print(f"{path}: {triangles} triangles, {spheres} spheres, {path.stat().st_size / 1e6:.2f} MB")
     return entry

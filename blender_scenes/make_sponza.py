@@ -7,6 +7,7 @@ Reads the float32 (262205, 3, 3) triangle array, checks its sha256, welds exactl
 (checked here, and again at every load). Crytek Sponza: Frank Meinl (Crytek), Morgan McGuire's
 version, CC BY 3.0 — see README.md beside this script.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -32,8 +33,10 @@ def main() -> int:
     sponza.write_bundle(triangles, args.out)
     again = sponza.load_triangles(args.out)  # the same check every load makes
     assert np.array_equal(again.view(np.uint32), triangles.view(np.uint32))
-    print(f"wrote {args.out}: {args.out.stat().st_size:,} bytes for {len(triangles):,} triangles "
-          f"({triangles.nbytes:,} bytes raw), identical bit for bit")
+    print(
+        f"wrote {args.out}: {args.out.stat().st_size:,} bytes for {len(triangles):,} triangles "
+        f"({triangles.nbytes:,} bytes raw), identical bit for bit"
+    )
     return 0
 
 

@@ -1,4 +1,5 @@
 """Small helpers for make_scenes.py: materials, camera, light, modifiers, counting, saving (bpy)."""
+
 from __future__ import annotations
 
 import math
@@ -101,13 +102,15 @@ def modifier(obj, kind, **settings):
 
 
 def array(obj, count, offset):
-    return modifier(obj, "ARRAY", count=count, use_relative_offset=False, use_constant_offset=True,
-                    constant_offset_displace=offset)
+    return modifier(
+        obj, "ARRAY", count=count, use_relative_offset=False, use_constant_offset=True, constant_offset_displace=offset
+    )
 
 
 def subdivide(obj, levels, simple=False):
-    return modifier(obj, "SUBSURF", levels=levels, render_levels=levels,
-                    subdivision_type="SIMPLE" if simple else "CATMULL_CLARK")
+    return modifier(
+        obj, "SUBSURF", levels=levels, render_levels=levels, subdivision_type="SIMPLE" if simple else "CATMULL_CLARK"
+    )
 
 
 def camera(location, target, lens=35.0):
@@ -151,9 +154,12 @@ def material_rows(scene):
     for obj in scene.objects:
         for slot in obj.material_slots:
             inputs = slot.material.node_tree.nodes["Principled BSDF"].inputs
-            rows[slot.material.name] = [*[round(c, 6) for c in inputs["Base Color"].default_value[:3]],
-                                        inputs["Metallic"].default_value,
-                                        inputs["Transmission Weight"].default_value, inputs["IOR"].default_value]
+            rows[slot.material.name] = [
+                *[round(c, 6) for c in inputs["Base Color"].default_value[:3]],
+                inputs["Metallic"].default_value,
+                inputs["Transmission Weight"].default_value,
+                inputs["IOR"].default_value,
+            ]
     return rows
 
 
@@ -162,7 +168,9 @@ def save(path: Path):
     Run with the oldest supported Blender (the project's .venv has bpy 4.2): newer versions read
     its files, but 4.x cannot open a file saved by 5.x."""
     if bpy.app.version[:2] != (4, 2):
-        raise SystemExit(f"save the bundled scenes with bpy 4.2 (the oldest supported Blender), not {bpy.app.version_string}")
+        raise SystemExit(
+            f"save the bundled scenes with bpy 4.2 (the oldest supported Blender), not {bpy.app.version_string}"
+        )
     bpy.context.preferences.filepaths.save_version = 0
     bpy.data.orphans_purge(do_recursive=True)
     bpy.ops.wm.save_as_mainfile(filepath=str(path), compress=True, relative_remap=False)
@@ -172,8 +180,9 @@ def arch(name, inner, outer, depth, segments, materials=()):
     """A semicircular arch in the XZ plane (origin at the centre of its springing line), `depth`
     thick along Y: front, back, outer and inner faces, and the two ends."""
     theta = np.linspace(0.0, math.pi, segments + 1)
-    vertices = [(r * math.cos(t), y, r * math.sin(t))
-                for r in (inner, outer) for y in (-depth / 2, depth / 2) for t in theta]
+    vertices = [
+        (r * math.cos(t), y, r * math.sin(t)) for r in (inner, outer) for y in (-depth / 2, depth / 2) for t in theta
+    ]
     n = segments + 1
 
     def at(layer, side, i):  # layer 0 inner / 1 outer, side 0 front / 1 back

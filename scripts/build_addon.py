@@ -16,6 +16,7 @@ extension tool, which ships in the bpy wheel (no Blender binary needed). Prints 
 Install it with Edit ▸ Preferences ▸ Get Extensions ▸ Install from Disk, or headless with
 bpy.ops.extensions.package_install_files(filepath=ZIP, repo="user_default").
 """
+
 from __future__ import annotations
 
 import argparse
@@ -37,7 +38,7 @@ def project_version() -> str:
     """`__version__` of python/bvhlab/__init__.py, the one place the version is written."""
     found = re.search(r'^__version__ = "([^"]+)"$', VERSION_FILE.read_text(), re.M)
     if found is None:
-        raise SystemExit(f"no __version__ = \"...\" line in {VERSION_FILE}")
+        raise SystemExit(f'no __version__ = "..." line in {VERSION_FILE}')
     return found.group(1)
 
 
@@ -45,8 +46,23 @@ def build_wheel(into: Path) -> Path:
     """The bvhlab wheel for the running Python, copied into `into` (older ones of that tag removed)."""
     tag = f"cp{sys.version_info.major}{sys.version_info.minor}"
     with tempfile.TemporaryDirectory() as tmp:
-        subprocess.run([sys.executable, "-m", "pip", "wheel", str(ROOT), "--no-build-isolation", "--no-deps",
-                        "-q", "-w", tmp, f"--config-settings=build-dir=build/wheel-{tag}"], cwd=ROOT, check=True)
+        subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "pip",
+                "wheel",
+                str(ROOT),
+                "--no-build-isolation",
+                "--no-deps",
+                "-q",
+                "-w",
+                tmp,
+                f"--config-settings=build-dir=build/wheel-{tag}",
+            ],
+            cwd=ROOT,
+            check=True,
+        )
         built = list(Path(tmp).glob(f"bvhlab-*-{tag}-*.whl"))
         if len(built) != 1:
             raise SystemExit(f"expected one {tag} bvhlab wheel from pip, found {built}")
@@ -66,8 +82,10 @@ def wheels_for_version(wheels_dir: Path, version: str) -> list[Path]:
         else:
             found.append(matches[0])
     if missing:
-        raise SystemExit(f"{wheels_dir} needs exactly one bvhlab-{version} wheel for each of {', '.join(PYTHON_TAGS)}; "
-                         f"missing: {', '.join(missing)}. `make addon` builds both (cp313 in the Debian 13 root).")
+        raise SystemExit(
+            f"{wheels_dir} needs exactly one bvhlab-{version} wheel for each of {', '.join(PYTHON_TAGS)}; "
+            f"missing: {', '.join(missing)}. `make addon` builds both (cp313 in the Debian 13 root)."
+        )
     return found
 
 
@@ -77,7 +95,7 @@ def stage_manifest(source: str, version: str, wheel_names: list[str]) -> str:
         raise SystemExit("addon/blender_manifest.toml must not list wheels: scripts/build_addon.py writes them")
     text, count = re.subn(r'^version = "[^"]*"$', f'version = "{version}"', source, flags=re.M)
     if count != 1:
-        raise SystemExit("addon/blender_manifest.toml needs one top-level `version = \"...\"` line")
+        raise SystemExit('addon/blender_manifest.toml needs one top-level `version = "..."` line')
     wheels = "wheels = [\n" + "".join(f'  "./wheels/{name}",\n' for name in wheel_names) + "]\n"
     text, count = re.subn(r"^(platforms = .*\n)", lambda m: m.group(1) + wheels, text, flags=re.M)
     if count != 1:
@@ -119,8 +137,11 @@ def package(wheels_dir: Path, output_dir: Path) -> Path:
     output_dir.mkdir(parents=True, exist_ok=True)
     for stale in output_dir.glob("bvhlab-*.zip"):
         stale.unlink()
-    subprocess.run([*tool, "build", "--source-dir", str(staged), "--output-dir", str(output_dir)], check=True,
-                   stdout=subprocess.DEVNULL)
+    subprocess.run(
+        [*tool, "build", "--source-dir", str(staged), "--output-dir", str(output_dir)],
+        check=True,
+        stdout=subprocess.DEVNULL,
+    )
     zips = list(output_dir.glob(f"bvhlab-{version}*.zip"))
     if len(zips) != 1:
         raise SystemExit(f"expected one bvhlab-{version} zip in {output_dir}, found {zips}")

@@ -21,8 +21,10 @@ PACKAGES=(
   # the Blender binary, and what it needs headless: its extension add-on imports cattrs and
   # requests; GPU start-up aborts the process without EGL and Mesa
   blender python3-numpy python3-cattr python3-requests libegl1 libgl1 libegl-mesa0 libgl1-mesa-dri
-  # the cp313 wheel: compiler, CMake, shader compiler, Vulkan headers and loader, lavapipe
-  python3-dev python3-venv g++ cmake ninja-build glslc libvulkan-dev libvulkan1 mesa-vulkan-drivers
+  # the cp313 wheel: compiler, CMake, shader compiler, Vulkan headers and loader, lavapipe; GCC 12
+  # beside Debian 13's GCC 14, so the wheel asks for no newer libstdc++ than the cp311 one built on
+  # Debian 12 (Ubuntu 22.04's, for one: see MAX_GLIBCXX in tests/python/test_addon_install.py)
+  python3-dev python3-venv g++ g++-12 cmake ninja-build glslc libvulkan-dev libvulkan1 mesa-vulkan-drivers
   # the UI run: a virtual X server, a key press (close the splash) and a screen dump (xwd)
   xvfb xdotool x11-apps
   ca-certificates

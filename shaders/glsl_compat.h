@@ -27,7 +27,10 @@ struct vec3 {
     constexpr vec3() = default;
     constexpr explicit vec3(float s) : x(s), y(s), z(s) {}
     constexpr vec3(float x_, float y_, float z_) : x(x_), y(y_), z(z_) {}
-    float operator[](int i) const { return i == 0 ? x : (i == 1 ? y : z); }
+    float operator[](uint i) const {  // an indexed load, not a chain of branches on a random axis
+        const float v[3] = {x, y, z};
+        return v[i];
+    }
 };
 
 struct vec4 {
@@ -50,20 +53,20 @@ struct uvec4 {
     constexpr uvec4(uint x_, uint y_, uint z_, uint w_) : x(x_), y(y_), z(z_), w(w_) {}
 };
 
-#define BVHLAB_VEC_OPS(V, APPLY)                                                              \
-    inline V operator+(V a, V b) { return APPLY(a, b, +); }                                  \
-    inline V operator-(V a, V b) { return APPLY(a, b, -); }                                  \
-    inline V operator*(V a, V b) { return APPLY(a, b, *); }                                  \
-    inline V operator/(V a, V b) { return APPLY(a, b, /); }                                  \
-    inline V operator*(V a, float s) { return a * V(s); }                                    \
-    inline V operator*(float s, V a) { return V(s) * a; }                                    \
-    inline V operator/(V a, float s) { return a / V(s); }                                    \
-    inline V operator+(V a, float s) { return a + V(s); }                                    \
-    inline V operator-(V a, float s) { return a - V(s); }                                    \
-    inline V& operator+=(V& a, V b) { return a = a + b; }                                    \
-    inline V& operator-=(V& a, V b) { return a = a - b; }                                    \
-    inline V& operator*=(V& a, V b) { return a = a * b; }                                    \
-    inline V& operator*=(V& a, float s) { return a = a * s; }                                \
+#define BVHLAB_VEC_OPS(V, APPLY)                              \
+    inline V operator+(V a, V b) { return APPLY(a, b, +); }   \
+    inline V operator-(V a, V b) { return APPLY(a, b, -); }   \
+    inline V operator*(V a, V b) { return APPLY(a, b, *); }   \
+    inline V operator/(V a, V b) { return APPLY(a, b, /); }   \
+    inline V operator*(V a, float s) { return a * V(s); }     \
+    inline V operator*(float s, V a) { return V(s) * a; }     \
+    inline V operator/(V a, float s) { return a / V(s); }     \
+    inline V operator+(V a, float s) { return a + V(s); }     \
+    inline V operator-(V a, float s) { return a - V(s); }     \
+    inline V& operator+=(V& a, V b) { return a = a + b; }     \
+    inline V& operator-=(V& a, V b) { return a = a - b; }     \
+    inline V& operator*=(V& a, V b) { return a = a * b; }     \
+    inline V& operator*=(V& a, float s) { return a = a * s; } \
     inline V operator-(V a) { return V(0.0f) - a; }
 #define BVHLAB_APPLY2(a, b, op) vec2(a.x op b.x, a.y op b.y)
 #define BVHLAB_APPLY3(a, b, op) vec3(a.x op b.x, a.y op b.y, a.z op b.z)
@@ -109,9 +112,11 @@ inline float uintBitsToFloat(uint u) { return std::bit_cast<float>(u); }
 }  // namespace bvhlab::gpu
 
 // Parameter qualifiers of the shared code, and its constants (the shared code is compiled as
-// members of a class, see core_cpp/src/render/cpu_tracer.h).
+// members of a class, see core_cpp/src/render/cpu_tracer.h); INLINE marks the functions of shared
+// code that C++ compiles at namespace scope in a header (geometry.glsl, shared_geometry.h).
 #define INOUT(T) T&
 #define OUT(T) T&
 #define LOCAL_CONST static constexpr
+#define INLINE inline
 
 #endif  // BVHLAB_GLSL_COMPAT_H

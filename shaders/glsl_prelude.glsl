@@ -3,4 +3,5 @@
 #define INOUT(T) inout T
 #define OUT(T) out T
 #define LOCAL_CONST const
+#define INLINE
 vec3 xyz(vec4 v) { return v.xyz; }

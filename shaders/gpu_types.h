@@ -37,15 +37,34 @@ BVHLAB_CONST uint REF_SPHERE_BIT = 0x80000000u;
 BVHLAB_CONST uint REF_INDEX_MASK = 0x7fffffffu;
 /// Deepest tree a traversal stack must hold (report §3.1): height <= MAX_TREE_HEIGHT.
 BVHLAB_CONST uint MAX_TREE_HEIGHT = 64u;
+/// Every box test of every traversal (CPU and GPU) multiplies the far end of the ray's span in the
+/// box, min(exit distance, closest hit so far), by this before comparing it with the entry, and a
+/// stacked box is dropped only when its entry lies beyond the closest hit times this: the
+/// conservative traversal of Ize, "Robust BVH Ray Traversal" (JCGT 2013). Ize's 1 + 2γ3
+/// (γn = nε/(1 - nε), ε = 2^-24) covers the three roundings of a slab distance, (plane - origin) ·
+/// (1/dir); we take 1 + 2^-20 (16 ε), room for the last roundings of the triangle test's distance
+/// too (geometry.glsl: t = ((u·a + v·b) + w·c) / det · shear), so that a primitive hit at the
+/// closest distance so far, lying in a face of its box, is not culled by its box's rounding (the
+/// tie rule, closer_hit, needs to see it; the fuzz corpus's found_tie_at_box_entry). It does not
+/// cover t's cancellation where a large triangle is hit near the origin (geometry.glsl): there a
+/// traversal may still return another primitive than the brute force, within that error.
+BVHLAB_CONST float BOX_FAR_SCALE = 1.00000095367431640625f;  // 1 + 2^-20
 
 // ---- the scene as the tracer reads it (report §2.1, §5.1) -------------------------------------
 
-/// A triangle (48 bytes): first vertex, the two edges from it (Möller–Trumbore needs no more),
-/// and its material index as the bits of v0.w. A zero-area triangle has zero edges: never hit.
+/// A triangle as every ray test reads it, CPU and GPU (48 bytes): its three vertices — the
+/// watertight test (geometry.glsl hit_triangle) reads vertices, not edges, so a shared edge is
+/// computed from the same numbers in both triangles and no ray slips between them. A zero-area
+/// triangle is stored with all three vertices equal to its first: never hit (pack_triangle,
+/// core_cpp/include/bvhlab/geometry.h). The CPU traversal keeps spheres in the same layout in its
+/// leaf-ordered array: centre in v0, radius in v1.x.
 struct GpuTriangle {
-    vec4 v0;
-    vec4 e1;
-    vec4 e2;
+    vec3 v0;
+    uint material;  ///< index into the materials (the tracer's array; 0 in the CPU traversal's)
+    vec3 v1;
+    uint ref;  ///< the primitive reference (REF_SPHERE_BIT | index for a sphere)
+    vec3 v2;
+    uint unused;  ///< 0
 };
 
 /// A sphere (32 bytes): centre and radius, material index in material.x.
@@ -98,54 +117,54 @@ struct DeviceAddresses {
 /// 4-byte scalar, then come 4-byte scalars, then the addresses, 8-aligned).
 struct FrameParams {
     vec3 camera_position;
-    float tan_half_fov_y;       ///< tan(vertical field of view / 2)
-    vec3 camera_forward;        ///< unit; the view axis
-    float aspect;               ///< width / height of the image plane
-    vec3 camera_right;          ///< unit, orthogonal to forward
-    float shift_x;              ///< centre of the image plane at unit distance, right of the view axis
-    vec3 camera_up;             ///< unit, orthogonal to forward and right
-    float shift_y;              ///< ... above the view axis (Blender's lens shift, in tangent units)
+    float tan_half_fov_y;  ///< tan(vertical field of view / 2)
+    vec3 camera_forward;   ///< unit; the view axis
+    float aspect;          ///< width / height of the image plane
+    vec3 camera_right;     ///< unit, orthogonal to forward
+    float shift_x;         ///< centre of the image plane at unit distance, right of the view axis
+    vec3 camera_up;        ///< unit, orthogonal to forward and right
+    float shift_y;         ///< ... above the view axis (Blender's lens shift, in tangent units)
     vec3 light_position;
-    float ray_epsilon;          ///< offset of secondary and shadow ray origins from a surface
-    vec3 light_color;           ///< rgb, already multiplied by the intensity
-    float heatmap_scale;        ///< box tests per primary ray shown as full red (MODE_HEATMAP)
-    vec3 sky;                   ///< rgb: the atmosphere colour of rays that hit nothing (report §2.1)
-    float overlay_near;         ///< overlay pass: distance of the near clipping plane
-    uint width;                 ///< image size in pixels
+    float ray_epsilon;    ///< offset of secondary and shadow ray origins from a surface
+    vec3 light_color;     ///< rgb, already multiplied by the intensity
+    float heatmap_scale;  ///< box tests per primary ray shown as full red (MODE_HEATMAP)
+    vec3 sky;             ///< rgb: the atmosphere colour of rays that hit nothing (report §2.1)
+    float overlay_near;   ///< overlay pass: distance of the near clipping plane
+    uint width;           ///< image size in pixels
     uint height;
-    uint samples_per_axis;      ///< n: n×n samples per pixel on a regular grid
-    uint max_ray_depth;         ///< bounces of reflection and refraction (0 = primary rays only)
-    uint mode;                  ///< MODE_SHADE or MODE_HEATMAP
-    uint node_count;            ///< of the tree (the stackless traversal stops there)
-    uint overlay_enabled;       ///< 1: the trace pass reads the overlay pass's lines
+    uint samples_per_axis;        ///< n: n×n samples per pixel on a regular grid
+    uint max_ray_depth;           ///< bounces of reflection and refraction (0 = primary rays only)
+    uint mode;                    ///< MODE_SHADE or MODE_HEATMAP
+    uint node_count;              ///< of the tree (the stackless traversal stops there)
+    uint overlay_enabled;         ///< 1: the trace pass reads the overlay pass's lines
     uint overlay_color_by_depth;  ///< 1: line colour by tree depth (depth_color), else OVERLAY_LINE_COLOR
-    float overlay_far;          ///< overlay pass: distance of the far clipping plane
-    uint overlay_first_box;     ///< the boxes drawn: [overlay_first_box, overlay_last_box) (report §3.3.1)
+    float overlay_far;            ///< overlay pass: distance of the far clipping plane
+    uint overlay_first_box;       ///< the boxes drawn: [overlay_first_box, overlay_last_box) (report §3.3.1)
     uint overlay_last_box;
-    uint sample_target;         ///< this pass traces each pixel's samples up to (not including) this index
-    uint steps_per_dispatch;    ///< trace_steps() iterations one invocation may run in one dispatch
-    uint stamp;                 ///< tells a slot's state from an earlier tile's or pass's (never 0)
-    uint ray_stack_entries;     ///< per slot: max_ray_depth + 1
-    uint node_stack_entries;    ///< per slot: tree height - 1 (at least 1)
-    uint tile_x;                ///< the tile of this dispatch: first pixel, size; slot = local y · width + x
+    uint sample_target;       ///< this pass traces each pixel's samples up to (not including) this index
+    uint steps_per_dispatch;  ///< trace_steps() iterations one invocation may run in one dispatch
+    uint stamp;               ///< tells a slot's state from an earlier tile's or pass's (never 0)
+    uint ray_stack_entries;   ///< per slot: max_ray_depth + 1
+    uint node_stack_entries;  ///< per slot: tree height - 1 (at least 1)
+    uint tile_x;              ///< the tile of this dispatch: first pixel, size; slot = local y · width + x
     uint tile_y;
     uint tile_width;
     uint tile_height;
-    uint max_work_per_pixel;    ///< a trace with more steps of work in a pass fails (0xffffffff: no cap)
-    uint padding;               ///< keeps `addr` 8-byte aligned in std430, as in C++
+    uint max_work_per_pixel;  ///< a trace with more steps of work in a pass fails (0xffffffff: no cap)
+    uint padding;             ///< keeps `addr` 8-byte aligned in std430, as in C++
     DeviceAddresses addr;
 };
 
 // ---- bindings, workgroups, limits ------------------------------------------------------
 
-BVHLAB_CONST uint BINDING_FRAME = 0u;   ///< FrameParams, read-only storage buffer (trace and overlay)
-BVHLAB_CONST uint BINDING_OVERLAY = 1u; ///< rgba32f storage image: the overlay pass's lines (trace reads)
-BVHLAB_CONST uint TRACE_GROUP_X = 8u;   ///< trace.comp's workgroup: 8×8 pixels of a tile
+BVHLAB_CONST uint BINDING_FRAME = 0u;    ///< FrameParams, read-only storage buffer (trace and overlay)
+BVHLAB_CONST uint BINDING_OVERLAY = 1u;  ///< rgba32f storage image: the overlay pass's lines (trace reads)
+BVHLAB_CONST uint TRACE_GROUP_X = 8u;    ///< trace.comp's workgroup: 8×8 pixels of a tile
 BVHLAB_CONST uint TRACE_GROUP_Y = 8u;
 /// Entries of the Whitted ray stack: each bounce pops one ray and pushes at most two, so at most
 /// max_ray_depth + 1 wait at once.
 BVHLAB_CONST uint RAY_STACK_SIZE = 16u;
-BVHLAB_CONST uint MAX_RAY_DEPTH = 15u;   ///< bounces; keeps the ray stack within RAY_STACK_SIZE
+BVHLAB_CONST uint MAX_RAY_DEPTH = 15u;  ///< bounces; keeps the ray stack within RAY_STACK_SIZE
 BVHLAB_CONST uint MAX_SAMPLES_PER_AXIS = 16u;
 /// Loop iterations one shader invocation may run in one dispatch (trace_steps' budget). Mesa's
 /// llvmpipe (lavapipe) ends every loop of an invocation once they have run
@@ -165,7 +184,7 @@ BVHLAB_CONST uint NO_WORK_CAP = 0xffffffffu;
 BVHLAB_CONST uint STATE_WORDS = 11u;
 BVHLAB_CONST uint NO_HIT = 0xffffffffu;
 BVHLAB_CONST uint NODE_SKIP_MASK = 0x7fffffffu;
-BVHLAB_CONST float FAR_AWAY = 3.0e38f;       ///< tmax of a ray that may go anywhere
+BVHLAB_CONST float FAR_AWAY = 3.0e38f;  ///< tmax of a ray that may go anywhere
 
 // ---- shading constants (report §2.1) ---------------------------------------------------------
 BVHLAB_CONST float AMBIENT = 0.1f;     ///< light every opaque surface gets, lit or not

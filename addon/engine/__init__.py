@@ -4,6 +4,7 @@ Rendered shading traces the current view live with the BVH boxes (report §3.3).
 
 engine.py routes Blender's calls; final.py (final renders) and viewport.py (a worker thread per
 viewport) do the work through tracer.py, the one module that calls bvhlab's tracer."""
+
 from __future__ import annotations
 
 import bpy

@@ -1,6 +1,7 @@
 """Blender's own panels the engine shows (their COMPAT_ENGINES get the engine's id while the add-on
 is enabled). Pure bpy: registration imports no bvhlab. The names are the same from 4.2 to 5.2
 (checked under bpy 4.2, 5.2 and Blender 4.3)."""
+
 from __future__ import annotations
 
 import bpy

@@ -6,6 +6,7 @@ fragment centres a fraction of a pixel off the texel centres, so a full-resoluti
 come out blurred by ~1% of each neighbour. Previews, smaller than the region, show their pixels as
 blocks, as Cycles' viewport does at a coarse pixel size. Blender applies the scene's view transform
 to the whole viewport afterwards, so the texture holds linear values, like a Render Result."""
+
 from __future__ import annotations
 
 import time
@@ -95,5 +96,6 @@ class FrameDisplay:
         height, width = image.shape[:2]
         pixels = np.ascontiguousarray(image[::-1], np.float32).reshape(-1)  # GPU row 0 is the bottom
         self.texture = None  # free the old texture first
-        self.texture = gpu.types.GPUTexture((width, height), format="RGBA32F",
-                                            data=gpu.types.Buffer("FLOAT", pixels.size, pixels))
+        self.texture = gpu.types.GPUTexture(
+            (width, height), format="RGBA32F", data=gpu.types.Buffer("FLOAT", pixels.size, pixels)
+        )

@@ -2,6 +2,7 @@
 behind Blender's own render pipeline (F12, the command line, animation, passes, output formats)
 and the 3D viewport's Rendered shading. The class only routes Blender's calls: final renders to
 final.FinalRender, the viewport to viewport.ViewportSession (a worker thread) and display.FrameDisplay."""
+
 from __future__ import annotations
 
 import contextlib
@@ -102,8 +103,7 @@ def _status(status: str, frame, display) -> str:
         return status
     t = frame.timings
     tree = f"BVH {t['tree']}" + (f" {t['build_ms']:.0f} ms" if t["tree"] != "kept" else "")
-    return (f"{status} | {tree} | trace {t['trace_ms']:.0f} ms | draw {display.draw_ms:.1f} ms | "
-            f"{t['device']}")
+    return f"{status} | {tree} | trace {t['trace_ms']:.0f} ms | draw {display.draw_ms:.1f} ms | {t['device']}"
 
 
 def _record(blender_scene, frame, display) -> None:
@@ -130,7 +130,7 @@ def _watch_for_frames(session) -> None:
 
 def tag_rendered_viewports() -> None:
     window_manager = bpy.context.window_manager
-    for window in (window_manager.windows if window_manager else ()):
+    for window in window_manager.windows if window_manager else ():
         for area in window.screen.areas:
             if area.type == "VIEW_3D" and area.spaces.active.shading.type == "RENDERED":
                 area.tag_redraw()

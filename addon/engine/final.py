@@ -6,6 +6,7 @@ An engine instance lives for one render, or for as long as Blender keeps it: wit
 Performance ▸ Persistent Data on, the same instance (and depsgraph) serves every frame of an
 animation and every later F12, so only what the depsgraph reports as changed is read again.
 """
+
 from __future__ import annotations
 
 import time
@@ -61,6 +62,7 @@ class FinalRender:
                 return
             if not isinstance(error, (ValueError, RuntimeError, OSError)):
                 import traceback
+
                 traceback.print_exc()
             engine.report({"ERROR"}, f"bvhlab: {error}")
 
@@ -78,10 +80,17 @@ class FinalRender:
         result = engine.begin_result(0, 0, width, height, layer=depsgraph.view_layer.name)
         try:
             layer = result.layers[0]
-            images, timings = tracer.trace(scene, tree.bvh, scene.camera, width, height, settings,
-                                           cancelled=engine.test_break,
-                                           depth=layer.passes.get(passes.DEPTH) is not None,
-                                           heat=layer.passes.get(passes.HEATMAP) is not None)
+            images, timings = tracer.trace(
+                scene,
+                tree.bvh,
+                scene.camera,
+                width,
+                height,
+                settings,
+                cancelled=engine.test_break,
+                depth=layer.passes.get(passes.DEPTH) is not None,
+                heat=layer.passes.get(passes.HEATMAP) is not None,
+            )
             passes.write(layer, passes.COMBINED, images.color)
             engine.update_progress(PASSES_START)
             extra = self._extra_passes(layer, images)
@@ -89,10 +98,20 @@ class FinalRender:
         finally:
             engine.end_result(result)
         engine.update_progress(1.0)
-        record = {"device": tracer.device, "backend": tracer.backend, "note": tracer.note,
-                  "tree": update.action, "build_ms": update.ms, "trace_ms": timings["trace_ms"],
-                  "total_ms": timings["total_ms"], **extra, "sync": self.report, "totals": self.live.totals,
-                  "size": (width, height), "samples": settings.samples}
+        record = {
+            "device": tracer.device,
+            "backend": tracer.backend,
+            "note": tracer.note,
+            "tree": update.action,
+            "build_ms": update.ms,
+            "trace_ms": timings["trace_ms"],
+            "total_ms": timings["total_ms"],
+            **extra,
+            "sync": self.report,
+            "totals": self.live.totals,
+            "size": (width, height),
+            "samples": settings.samples,
+        }
         with records.lock:
             records.last_final[key] = record
         engine.update_stats("", _summary(record))
@@ -126,8 +145,10 @@ class FinalRender:
 
 
 def _summary(record: dict) -> str:
-    parts = [f"BVH {record['tree']}" + (f" {record['build_ms']:.0f} ms" if record["tree"] != "kept" else ""),
-             f"trace {record['trace_ms']:.0f} ms"]
+    parts = [
+        f"BVH {record['tree']}" + (f" {record['build_ms']:.0f} ms" if record["tree"] != "kept" else ""),
+        f"trace {record['trace_ms']:.0f} ms",
+    ]
     if "heatmap_ms" in record:
         parts.append(f"heatmap {record['heatmap_ms']:.0f} ms")
     return " | ".join(parts) + f" | {record['device']}"

@@ -1,4 +1,5 @@
 """Esc for the Rendered viewport: cancel the build a viewport's worker is running."""
+
 from __future__ import annotations
 
 import bpy
@@ -6,6 +7,7 @@ import bpy
 
 class BVHLAB_OT_viewport_cancel(bpy.types.Operator):
     """Stop the BVH build and tracing of the Rendered viewports (until the scene changes)"""
+
     bl_idname = "bvhlab.viewport_cancel"
     bl_label = "Cancel Viewport Render"
     bl_options = {"INTERNAL"}

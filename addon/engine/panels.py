@@ -1,5 +1,6 @@
 """Render Properties (and View Layer ▸ Passes) panels of the engine. Every setting is one of
 scene.bvhlab's (the sidebar panel shows the same ones) or Blender's own."""
+
 from __future__ import annotations
 
 import bpy
@@ -32,9 +33,10 @@ class BVHLAB_PT_engine_bvh(_EnginePanel, bpy.types.Panel):
         settings = context.scene.bvhlab
         col = self._column()
         col.prop(settings, "method")
-        row = col.row()
-        row.enabled = settings.method == "sah"
-        row.prop(settings, "bins")
+        binned = col.column()
+        binned.enabled = settings.method == "sah"
+        binned.prop(settings, "bins")
+        binned.prop(settings, "bin_bounds")
         col.prop(settings, "axis")
         col.prop(settings, "max_leaf_size")
 
@@ -101,7 +103,8 @@ class BVHLAB_PT_engine_status(_EnginePanel, bpy.types.Panel):
         if final is None and not viewport:
             col.label(text="Nothing rendered yet")
         if final is not None:
-            col.label(text=f"{final['size'][0]} × {final['size'][1]}, {final['samples']} samples per pixel on {final['device']}")
+            size = f"{final['size'][0]} × {final['size'][1]}"
+            col.label(text=f"{size}, {final['samples']} samples per pixel on {final['device']}")
             col.label(text=f"BVH {final['tree']} {final['build_ms']:.0f} ms, trace {final['trace_ms']:.0f} ms")
             if final.get("note"):
                 col.label(text=final["note"], icon="INFO")
@@ -120,5 +123,12 @@ class BVHLAB_PT_engine_passes(_EnginePanel, bpy.types.Panel):
         col.prop(context.view_layer, HEATMAP_PROPERTY)
 
 
-classes = (BVHLAB_PT_engine_bvh, BVHLAB_PT_engine_tracing, BVHLAB_PT_engine_boxes, BVHLAB_PT_engine_viewport,
-           BVHLAB_PT_engine_performance, BVHLAB_PT_engine_status, BVHLAB_PT_engine_passes)
+classes = (
+    BVHLAB_PT_engine_bvh,
+    BVHLAB_PT_engine_tracing,
+    BVHLAB_PT_engine_boxes,
+    BVHLAB_PT_engine_viewport,
+    BVHLAB_PT_engine_performance,
+    BVHLAB_PT_engine_status,
+    BVHLAB_PT_engine_passes,
+)

@@ -1,6 +1,7 @@
 """The engine's render passes: Combined, Depth (Blender's Z pass, when the view layer asks for it)
 and the traversal-cost heatmap as a pass of its own, so they can be saved (multilayer EXR) and
 composited (Render Layers node)."""
+
 from __future__ import annotations
 
 import numpy as np

@@ -1,11 +1,14 @@
 """The engine's tree over a scene kept between frames: built once, refit when only transforms moved,
 kept when nothing moved (the depsgraph said so, or the arrays are equal)."""
+
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 import numpy as np
+
+from bvhlab.bvh import DEFAULT_AXIS, DEFAULT_BIN_BOUNDS, DEFAULT_BINS, DEFAULT_MAX_LEAF_SIZE, DEFAULT_METHOD
 
 #: A refit keeps the topology; once objects have moved far, its boxes overlap and tracing slows.
 #: Rebuild instead when the refit tree's SAH cost exceeds the built tree's by this factor.
@@ -14,21 +17,25 @@ REFIT_LIMIT = 1.5
 
 @dataclass(frozen=True)
 class BuildSettings:
-    """What a tree depends on besides the geometry (scene.bvhlab's build settings)."""
-    method: str = "sah"
-    bins: int = 12
-    axis: str = "largest"
-    max_leaf_size: int = 1
+    """What a tree depends on besides the geometry: the arguments of `bvhlab.build` that
+    scene.bvhlab chooses (its build_kwargs), frozen so that two can be compared. The default is
+    the core's defaults."""
+
+    method: str = DEFAULT_METHOD
+    bins: int = DEFAULT_BINS
+    bin_bounds: str = DEFAULT_BIN_BOUNDS
+    axis: str = DEFAULT_AXIS
+    max_leaf_size: int = DEFAULT_MAX_LEAF_SIZE
 
     @classmethod
-    def of(cls, blender_scene) -> "BuildSettings":
-        s = blender_scene.bvhlab
-        return cls(s.method, s.bins, s.axis, s.max_leaf_size)
+    def of(cls, blender_scene) -> BuildSettings:
+        return cls(**blender_scene.bvhlab.build_kwargs())
 
 
 @dataclass(frozen=True)
 class TreeUpdate:
     """What `SceneTree.update` did: "built", "refit" or "kept", and how long it took."""
+
     action: str
     ms: float = 0.0
 
@@ -42,8 +49,9 @@ class SceneTree:
         self._source: tuple = (None, None)  # the triangle and sphere arrays the tree is over
         self._built_sah = 0.0
 
-    def update(self, scene, settings: BuildSettings, refittable: bool = False, progress=None,
-               threads: int = 0) -> TreeUpdate:
+    def update(
+        self, scene, settings: BuildSettings, refittable: bool = False, progress=None, threads: int = 0
+    ) -> TreeUpdate:
         """Make the tree fit `scene` (a bvhlab.Scene). `refittable`: the primitives are those of the
         last scene, in the same order, only moved (LiveScene's report). `progress(fraction)`
         returning False cancels a build (bvhlab.BuildCancelled). `threads`: for a build (0: all)."""
@@ -61,8 +69,11 @@ class SceneTree:
         triangles, spheres = self._source
         if triangles is scene.triangles and spheres is scene.spheres:
             return True
-        return (triangles is not None and np.array_equal(triangles, scene.triangles)
-                and np.array_equal(spheres, scene.spheres))
+        return (
+            triangles is not None
+            and np.array_equal(triangles, scene.triangles)
+            and np.array_equal(spheres, scene.spheres)
+        )
 
     def _refit(self, scene) -> bool:
         triangles, spheres = self._source
@@ -79,8 +90,7 @@ class SceneTree:
         import bvhlab
 
         self.bvh = None  # a cancelled build leaves no stale tree behind
-        bvh = bvhlab.build(scene, method=settings.method, bins=settings.bins, axis=settings.axis,
-                           max_leaf_size=settings.max_leaf_size, threads=threads, progress=progress)
+        bvh = bvhlab.build(scene, **asdict(settings), threads=threads, progress=progress)
         self.bvh, self.settings = bvh, settings
         self._source = (scene.triangles, scene.spheres)
         self._built_sah = bvh.stats["sah_cost"]

@@ -1,5 +1,6 @@
 """The engine's settings, read from the scene's one PropertyGroup (scene.bvhlab) that the sidebar
 panel also uses: one definition of each setting."""
+
 from __future__ import annotations
 
 import os

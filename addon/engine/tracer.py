@@ -8,10 +8,11 @@ come out of the same render. `cancelled()` is polled between dispatches, so Esc 
 stop a render within one dispatch (TraceCancelled). `backend="auto"` picks the CPU reference
 itself where the only Vulkan device is a CPU driver (lavapipe), and says why.
 """
+
 from __future__ import annotations
 
 import threading
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -23,6 +24,7 @@ class TraceCancelled(Exception):
 @dataclass(frozen=True)
 class TraceSettings:
     """One render's options, in the tracer's terms. `overlay`: (depth_min, depth_max) or None."""
+
     samples_per_axis: int = 1  # n of the n×n supersampling
     max_depth: int = 5
     overlay: tuple | None = None
@@ -35,18 +37,25 @@ class TraceSettings:
     @property
     def samples(self) -> int:
         """Samples per pixel."""
-        return self.samples_per_axis ** 2
+        return self.samples_per_axis**2
 
     def options(self) -> dict:
-        return {"samples_per_axis": self.samples_per_axis, "max_depth": self.max_depth,
-                "overlay_depth": self.overlay, "color_by_depth": self.color_by_depth,
-                "line_width": self.line_width, "traversal": self.traversal, "mode": self.mode}
+        return {
+            "samples_per_axis": self.samples_per_axis,
+            "max_depth": self.max_depth,
+            "overlay_depth": self.overlay,
+            "color_by_depth": self.color_by_depth,
+            "line_width": self.line_width,
+            "traversal": self.traversal,
+            "mode": self.mode,
+        }
 
 
 @dataclass(frozen=True)
 class TraceImages:
     """Row 0 at the top. color: float32 (H, W, 4); depth: float32 (H, W) or None; heat: float32
     (H, W, 4) heat colours of the box tests per primary ray, or None."""
+
     color: np.ndarray
     depth: np.ndarray | None
     heat: np.ndarray | None
@@ -71,14 +80,25 @@ class Tracer:
     def backend(self) -> str:
         return self.renderer.backend
 
-    def trace(self, scene, bvh, camera, width: int, height: int, settings: TraceSettings, cancelled=None,
-              depth: bool = False, heat: bool = False):
+    def trace(
+        self,
+        scene,
+        bvh,
+        camera,
+        width: int,
+        height: int,
+        settings: TraceSettings,
+        cancelled=None,
+        depth: bool = False,
+        heat: bool = False,
+    ):
         """(TraceImages, timings) of `scene` seen from `camera` (a bvhlab.Camera or View). With
         `cancelled`, raises TraceCancelled within one dispatch of it returning True."""
         import bvhlab
 
-        job = self.renderer.start(scene, bvh, width, height, camera=camera, threads=settings.threads,
-                                  **settings.options())
+        job = self.renderer.start(
+            scene, bvh, width, height, camera=camera, threads=settings.threads, **settings.options()
+        )
         try:
             job.run(progress=None if cancelled is None else (lambda fraction: not cancelled()))
         except bvhlab.RenderCancelled:

@@ -8,6 +8,7 @@ density, and drawn shifted so the region shows its part. Orthographic views are 
 ORTHO_DISTANCE view heights behind the view's focal plane (perspective distortion across a depth
 of one view height: 1/ORTHO_DISTANCE).
 """
+
 from __future__ import annotations
 
 import math
@@ -23,6 +24,7 @@ class ViewFrustum:
     """A bvhlab camera for the view (position, look_at, up, fov_y), the traced image size at full
     resolution, and the rectangle (x, y from the region's bottom left, width, height; pixels) the
     image covers in the region."""
+
     position: tuple
     look_at: tuple
     up: tuple
@@ -41,8 +43,14 @@ class ViewFrustum:
         return max(1, round(self.width * scale)), max(1, round(self.height * scale))
 
 
-def view_frustum(view_matrix, window_matrix, region_width: int, region_height: int,
-                 perspective: bool = True, view_distance: float = 10.0) -> ViewFrustum:
+def view_frustum(
+    view_matrix,
+    window_matrix,
+    region_width: int,
+    region_height: int,
+    perspective: bool = True,
+    view_distance: float = 10.0,
+) -> ViewFrustum:
     """The frustum of a viewport region (see the module docstring)."""
     view, projection = np.asarray(view_matrix, np.float64), np.asarray(window_matrix, np.float64)
     to_world = np.linalg.inv(view)
@@ -63,8 +71,15 @@ def view_frustum(view_matrix, window_matrix, region_width: int, region_height: i
     width, x0 = _symmetric_span(sx, cx, region_width)
     height, y0 = _symmetric_span(sy, cy, region_height)
     tan_half_y = height / (sy * region_height)
-    return ViewFrustum(tuple(position), tuple(position + forward), tuple(up),
-                       math.degrees(2 * math.atan(tan_half_y)), width, height, (x0, y0, width, height))
+    return ViewFrustum(
+        tuple(position),
+        tuple(position + forward),
+        tuple(up),
+        math.degrees(2 * math.atan(tan_half_y)),
+        width,
+        height,
+        (x0, y0, width, height),
+    )
 
 
 def _symmetric_span(scale: float, centre: float, pixels: int) -> tuple[int, float]:

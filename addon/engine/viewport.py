@@ -11,6 +11,7 @@ A new view or scene drops the levels not yet started and stops the level tracing
 dispatch (the tracer polls between its bounded dispatches: see tracer.py). A build in progress is
 cancelled at once when a newer scene arrives, when the session closes, or by Esc (`cancel`).
 """
+
 from __future__ import annotations
 
 import threading
@@ -28,12 +29,13 @@ SETTLE_S = 0.15
 #: The coarsest preview: 1/MAX_PREVIEW_DIVISOR of the resolution along each axis.
 MAX_PREVIEW_DIVISOR = 8
 
-_sessions: "weakref.WeakSet[ViewportSession]" = weakref.WeakSet()
+_sessions: weakref.WeakSet[ViewportSession] = weakref.WeakSet()
 
 
 @dataclass(frozen=True)
 class ViewRequest:
     """Everything a viewport frame depends on besides the scene."""
+
     frustum: ViewFrustum
     settings: TraceSettings  # as refined (n×n samples); lower levels use 1 sample
     backend: str
@@ -44,6 +46,7 @@ class ViewRequest:
 @dataclass(frozen=True)
 class ViewFrame:
     """A traced image (float32 (h, w, 4), row 0 at the top) and how it was made."""
+
     image: object
     request: ViewRequest
     level: str
@@ -158,13 +161,20 @@ class ViewportSession:
 
     def _stale(self) -> bool:
         frame = self._frame
-        return (frame.request != self._request or frame.serial != self._scene_serial
-                or frame.level != _levels(frame.request, self._ms_per_sample)[-1][0])
+        return (
+            frame.request != self._request
+            or frame.serial != self._scene_serial
+            or frame.level != _levels(frame.request, self._ms_per_sample)[-1][0]
+        )
 
     def _current(self, scene_serial: int, request_serial: int) -> bool:
         with self._cv:
-            return (not self._closed and not self._paused and scene_serial == self._scene_serial
-                    and request_serial == self._request_serial)
+            return (
+                not self._closed
+                and not self._paused
+                and scene_serial == self._scene_serial
+                and request_serial == self._request_serial
+            )
 
     def _run(self) -> None:
         while True:
@@ -198,18 +208,35 @@ class ViewportSession:
             self._set_status(f"Tracing {level} {width} × {height}" + (f", {spp} spp" if spp > 1 else ""))
             started = time.perf_counter()
             try:
-                images, timings = tracer.trace(scene, self.tree.bvh, request.frustum.camera(), width, height, settings,
-                                               cancelled=lambda: not self._current(scene_serial, request_serial))
+                images, timings = tracer.trace(
+                    scene,
+                    self.tree.bvh,
+                    request.frustum.camera(),
+                    width,
+                    height,
+                    settings,
+                    cancelled=lambda: not self._current(scene_serial, request_serial),
+                )
             except TraceCancelled:
                 return
             image = images.color
             wall_ms = (time.perf_counter() - started) * 1e3
             self._ms_per_sample = timings["trace_ms"] / (width * height * spp)
-            frame_timings = {"level": level, "width": width, "height": height, "spp": spp,
-                             "trace_ms": timings["trace_ms"], "overlay_ms": timings.get("overlay_ms", 0.0),
-                             "total_ms": timings["total_ms"], "frame_ms": wall_ms, "tree": update.action,
-                             "build_ms": update.ms, "device": tracer.device, "note": tracer.note,
-                             "latency_ms": (time.monotonic() - self._request_time) * 1e3}
+            frame_timings = {
+                "level": level,
+                "width": width,
+                "height": height,
+                "spp": spp,
+                "trace_ms": timings["trace_ms"],
+                "overlay_ms": timings.get("overlay_ms", 0.0),
+                "total_ms": timings["total_ms"],
+                "frame_ms": wall_ms,
+                "tree": update.action,
+                "build_ms": update.ms,
+                "device": tracer.device,
+                "note": tracer.note,
+                "latency_ms": (time.monotonic() - self._request_time) * 1e3,
+            }
             self._publish(ViewFrame(image, request, level, scale, frame_timings, scene_serial))
 
     def _update_tree(self, scene, scene_serial, request, request_serial, refittable):
@@ -242,8 +269,9 @@ class ViewportSession:
         with self._cv:
             self._frame, self._redraw = frame, True
             timings = frame.timings
-            self._status = (f"{timings['level'].capitalize()} {timings['width']} × {timings['height']}"
-                            + (f", {timings['spp']} spp" if timings["spp"] > 1 else ""))
+            self._status = f"{timings['level'].capitalize()} {timings['width']} × {timings['height']}" + (
+                f", {timings['spp']} spp" if timings["spp"] > 1 else ""
+            )
 
 
 def _levels(request: ViewRequest, ms_per_sample: float | None) -> list[tuple[str, float, int]]:

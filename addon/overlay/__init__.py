@@ -1,6 +1,7 @@
 """The viewport overlay: a POST_VIEW draw handler that draws the boxes of the scene's tree in the
 panel's depth range (report §3.3). The GPU batch is remade only when the tree or the leaves-only
 choice changes; the depth range only picks a slice of it."""
+
 from __future__ import annotations
 
 import bpy
@@ -31,9 +32,15 @@ def draw_scene_overlay(scene, view_projection) -> int:
     if not settings.overlay_show or built is None:
         return 0
     batch = batch_for(built, settings.overlay_leaves_only)
-    return batch.draw(view_projection, settings.overlay_depth_min, settings.overlay_depth_max,
-                      color=settings.overlay_color, color_by_depth=settings.overlay_color_by_depth,
-                      xray=settings.overlay_xray, line_width=settings.overlay_line_width)
+    return batch.draw(
+        view_projection,
+        settings.overlay_depth_min,
+        settings.overlay_depth_max,
+        color=settings.overlay_color,
+        color_by_depth=settings.overlay_color_by_depth,
+        xray=settings.overlay_xray,
+        line_width=settings.overlay_line_width,
+    )
 
 
 def _draw_callback() -> None:
@@ -47,6 +54,7 @@ def _draw_callback() -> None:
         draw_scene_overlay(context.scene, context.region_data.perspective_matrix)
     except Exception:  # a draw callback must not raise on every redraw; say it once
         import traceback
+
         traceback.print_exc()
         _failed.add(built.serial)
         state.messages[state.key(context.scene)] = ("ERROR", "the BVH overlay failed to draw; see the console")
@@ -67,6 +75,7 @@ def remove_handler() -> None:
     _cached.update(key=None, batch=None)
     _failed.clear()
     from .shader import forget_shader
+
     forget_shader()
 
 
@@ -77,7 +86,7 @@ def handler_installed() -> bool:
 def tag_redraw() -> None:
     """Ask every 3D viewport to redraw (after a settings or tree change)."""
     window_manager = bpy.context.window_manager
-    for window in (window_manager.windows if window_manager else ()):
+    for window in window_manager.windows if window_manager else ():
         for area in window.screen.areas:
             if area.type == "VIEW_3D":
                 area.tag_redraw()

@@ -1,6 +1,7 @@
 """The boxes of a tree on the GPU, ready to draw any depth range with one instanced call. The
 boxes, their depth order and the depth palette all come from the core (`Bvh.boxes`,
 `bvhlab._core.depth_colors`); this module only lays them out for Blender's `gpu` module."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -8,11 +9,35 @@ import numpy as np
 from .shader import box_shader
 
 #: The 12 edges of the unit cube as 24 corners in {0,1}³ (mixed between a box's min and max).
-CUBE_EDGES = np.array([
-    (0, 0, 0), (1, 0, 0), (0, 1, 0), (1, 1, 0), (0, 0, 1), (1, 0, 1), (0, 1, 1), (1, 1, 1),  # along x
-    (0, 0, 0), (0, 1, 0), (1, 0, 0), (1, 1, 0), (0, 0, 1), (0, 1, 1), (1, 0, 1), (1, 1, 1),  # along y
-    (0, 0, 0), (0, 0, 1), (1, 0, 0), (1, 0, 1), (0, 1, 0), (0, 1, 1), (1, 1, 0), (1, 1, 1),  # along z
-], np.float32)
+CUBE_EDGES = np.array(
+    [
+        (0, 0, 0),
+        (1, 0, 0),
+        (0, 1, 0),
+        (1, 1, 0),
+        (0, 0, 1),
+        (1, 0, 1),
+        (0, 1, 1),
+        (1, 1, 1),  # along x
+        (0, 0, 0),
+        (0, 1, 0),
+        (1, 0, 0),
+        (1, 1, 0),
+        (0, 0, 1),
+        (0, 1, 1),
+        (1, 0, 1),
+        (1, 1, 1),  # along y
+        (0, 0, 0),
+        (0, 0, 1),
+        (1, 0, 0),
+        (1, 0, 1),
+        (0, 1, 0),
+        (0, 1, 1),
+        (1, 1, 0),
+        (1, 1, 1),  # along z
+    ],
+    np.float32,
+)
 
 #: The widest texture rows GPUs must support (GL_MAX_TEXTURE_SIZE ≥ 16384 on GL 4.5 hardware).
 TEXTURE_WIDTH = 16384
@@ -61,8 +86,9 @@ def _texture(rows: np.ndarray, width: int):
     texels = rows.reshape(-1, 4)
     height = len(texels) // width
     assert width * height == len(texels), "rows must fill whole texture rows"
-    return gpu.types.GPUTexture((width, height), format="RGBA32F",
-                                data=gpu.types.Buffer("FLOAT", texels.size, texels.reshape(-1)))
+    return gpu.types.GPUTexture(
+        (width, height), format="RGBA32F", data=gpu.types.Buffer("FLOAT", texels.size, texels.reshape(-1))
+    )
 
 
 class BoxBatch:
@@ -83,11 +109,20 @@ class BoxBatch:
         self.batch = batch_for_shader(self.shader, "LINES", {"corner": CUBE_EDGES})
 
     @classmethod
-    def from_bvh(cls, bvh, leaves_only: bool = False) -> "BoxBatch":
+    def from_bvh(cls, bvh, leaves_only: bool = False) -> BoxBatch:
         return cls(BoxTable(bvh, leaves_only))
 
-    def draw(self, view_projection, depth_min: int, depth_max: int, *, color=(1.0, 0.55, 0.1, 1.0),
-             color_by_depth: bool = True, xray: bool = True, line_width: float = 1.0) -> int:
+    def draw(
+        self,
+        view_projection,
+        depth_min: int,
+        depth_max: int,
+        *,
+        color=(1.0, 0.55, 0.1, 1.0),
+        color_by_depth: bool = True,
+        xray: bool = True,
+        line_width: float = 1.0,
+    ) -> int:
         """Draw the boxes in the depth range with the current framebuffer; returns how many.
         Deepest boxes first: a child shares edges with its parent, and drawn last it would paint
         them all in its colour; this way every depth of the range keeps its own lines."""

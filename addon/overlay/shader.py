@@ -5,6 +5,7 @@ texture, two texels per box (min.xyz + depth, max.xyz), fetched by instance inde
 from the last box of the range (deepest first, see BoxBatch.draw). The colour of each depth comes
 from a palette texture filled from the core (`bvhlab._core.depth_colors`).
 """
+
 from __future__ import annotations
 
 _VERTEX = """

@@ -22,7 +22,8 @@ Rays load_rays(const std::string& path) { return {load_floats(path)}; }
 
 std::unique_ptr<Peer> make_peer(const std::string& spec, unsigned threads) {
     const auto colon = spec.find(':');
-    const std::string system = spec.substr(0, colon), options = colon == std::string::npos ? "" : spec.substr(colon + 1);
+    const std::string system = spec.substr(0, colon),
+                      options = colon == std::string::npos ? "" : spec.substr(colon + 1);
     if (system == "bvhlab") return make_bvhlab_peer(options, threads);
     if (system == "embree") return make_embree_peer(options, threads);
     if (system == "tinybvh") return make_tinybvh_peer(options, threads);

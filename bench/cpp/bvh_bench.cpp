@@ -35,7 +35,8 @@ struct Args {
 
 Args parse(int argc, char** argv) {
     Args a;
-    if (argc < 3) throw std::invalid_argument("usage: bvh_bench build|trace|once MESH.f32 [RAYS.f32...] --peer SPEC ...");
+    if (argc < 3)
+        throw std::invalid_argument("usage: bvh_bench build|trace|once MESH.f32 [RAYS.f32...] --peer SPEC ...");
     a.mode = argv[1], a.mesh = argv[2];
     for (int i = 3; i < argc; ++i) {
         std::string s = argv[i];
@@ -73,8 +74,8 @@ int run_build(const Args& a) {
     std::printf("{\"triangles\": %zu, \"threads\": %u, \"peers\": [", mesh.count(), a.threads);
     for (std::size_t k = 0; k < peers.size(); ++k) {
         TreeInfo info = peers[k]->info();
-        std::printf("%s\n {\"spec\": \"%s\", \"name\": \"%s\", \"sah\": %s, \"nodes\": %llu, \"seconds\": ", k ? "," : "",
-                    a.peers[k].c_str(), peers[k]->name().c_str(),
+        std::printf("%s\n {\"spec\": \"%s\", \"name\": \"%s\", \"sah\": %s, \"nodes\": %llu, \"seconds\": ",
+                    k ? "," : "", a.peers[k].c_str(), peers[k]->name().c_str(),
                     std::isnan(info.sah) ? "null" : std::to_string(info.sah).c_str(), (unsigned long long)info.nodes);
         print_times(times[k]);
         std::printf("}");
@@ -113,11 +114,13 @@ int run_trace(const Args& a) {
                 peers[k]->trace(rays, t[k].data(), prim.data());
                 times[k].push_back(seconds_since(t0));
             }
-        std::printf("%s\n {\"rays\": \"%s\", \"count\": %zu, \"peers\": [", s ? "," : "", a.rays[s].c_str(), rays.count());
+        std::printf("%s\n {\"rays\": \"%s\", \"count\": %zu, \"peers\": [", s ? "," : "", a.rays[s].c_str(),
+                    rays.count());
         for (std::size_t k = 0; k < peers.size(); ++k) {
             std::size_t hits = std::count_if(t[k].begin(), t[k].end(), [](float x) { return !std::isinf(x); });
-            std::printf("%s\n  {\"spec\": \"%s\", \"name\": \"%s\", \"hits\": %zu, \"disagree_with_first\": %zu, \"seconds\": ",
-                        k ? "," : "", a.peers[k].c_str(), peers[k]->name().c_str(), hits, disagreements(t[0], t[k]));
+            std::printf(
+                "%s\n  {\"spec\": \"%s\", \"name\": \"%s\", \"hits\": %zu, \"disagree_with_first\": %zu, \"seconds\": ",
+                k ? "," : "", a.peers[k].c_str(), peers[k]->name().c_str(), hits, disagreements(t[0], t[k]));
             print_times(times[k]);
             std::printf("}");
         }

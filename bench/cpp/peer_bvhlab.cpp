@@ -32,11 +32,10 @@ bvhlab::BuildConfig parse_options(const std::string& options, unsigned threads) 
 
 class BvhlabPeer : public Peer {
 public:
-    BvhlabPeer(const std::string& options, unsigned threads) : options_(options), config_(parse_options(options, threads)) {}
+    BvhlabPeer(const std::string& options, unsigned threads)
+        : options_(options), config_(parse_options(options, threads)) {}
     std::string name() const override { return "bvhlab " + (options_.empty() ? std::string("defaults") : options_); }
-    void build(const Mesh& mesh) override {
-        bvh_ = bvhlab::build_bvh({mesh.xyz.data(), mesh.count()}, config_);
-    }
+    void build(const Mesh& mesh) override { bvh_ = bvhlab::build_bvh({mesh.xyz.data(), mesh.count()}, config_); }
     TreeInfo info() const override { return {bvhlab::sah_cost(bvh_), bvh_.nodes.size(), digest()}; }
     void prepare_trace() override { wide_ = bvhlab::make_wide(bvh_); }
     void trace(const Rays& rays, float* t, std::uint32_t* prim) override {
@@ -52,7 +51,8 @@ private:
     std::uint64_t digest() const {
         std::uint64_t h = 0xcbf29ce484222325ull;
         auto add = [&](const void* data, std::size_t bytes) {
-            for (std::size_t i = 0; i < bytes; ++i) h = (h ^ static_cast<const unsigned char*>(data)[i]) * 0x100000001b3ull;
+            for (std::size_t i = 0; i < bytes; ++i)
+                h = (h ^ static_cast<const unsigned char*>(data)[i]) * 0x100000001b3ull;
         };
         add(bvh_.nodes.data(), bvh_.nodes.size() * sizeof(bvhlab::BvhNode));
         add(bvh_.refs.data(), bvh_.refs.size() * sizeof(std::uint32_t));

@@ -139,9 +139,12 @@ private:
         TreeInfo info;
         if (root && !root->count) {
             RTCBounds all = root->box[0];
-            all.lower_x = std::fmin(all.lower_x, root->box[1].lower_x), all.upper_x = std::fmax(all.upper_x, root->box[1].upper_x);
-            all.lower_y = std::fmin(all.lower_y, root->box[1].lower_y), all.upper_y = std::fmax(all.upper_y, root->box[1].upper_y);
-            all.lower_z = std::fmin(all.lower_z, root->box[1].lower_z), all.upper_z = std::fmax(all.upper_z, root->box[1].upper_z);
+            all.lower_x = std::fmin(all.lower_x, root->box[1].lower_x),
+            all.upper_x = std::fmax(all.upper_x, root->box[1].upper_x);
+            all.lower_y = std::fmin(all.lower_y, root->box[1].lower_y),
+            all.upper_y = std::fmax(all.upper_y, root->box[1].upper_y);
+            all.lower_z = std::fmin(all.lower_z, root->box[1].lower_z),
+            all.upper_z = std::fmax(all.upper_z, root->box[1].upper_z);
             info.sah = 1.0 + weighted_area(root) / area(all);
             info.nodes = 2 * leaves - 1;
         }

@@ -88,7 +88,7 @@ void py_intersect(const PyBvh& self, const Vectors& origins, const Vectors& dirs
     RayBatch rays{origins.data(), dirs.data(), n, tmin, tmax};
     HitBatch hits{t.data(), prim.data(), kind.data(), u.data(), v.data(), visited.data()};
     TreePtr tree = self.current();  // this version stays alive (and unchanged) until the rays are done
-    PyStopCheck stop;                // Ctrl-C stops a long batch
+    PyStopCheck stop;               // Ctrl-C stops a long batch
     Cancellation cancel([&stop] { return stop(0.0); });
     try {
         nb::gil_scoped_release release;
@@ -120,9 +120,7 @@ nb::tuple py_boxes(const PyBvh& self, std::uint32_t depth_min, std::uint32_t dep
         hi[3 * j] = n.hi.x, hi[3 * j + 1] = n.hi.y, hi[3 * j + 2] = n.hi.z;
         depth[j] = tree->bvh.depths[picked[j]];
     }
-    auto owned = [](auto* p) {
-        return nb::capsule(p, [](void* q) noexcept { delete[] static_cast<decltype(p)>(q); });
-    };
+    auto owned = [](auto* p) { return nb::capsule(p, [](void* q) noexcept { delete[] static_cast<decltype(p)>(q); }); };
     return nb::make_tuple(nb::ndarray<nb::numpy, float, nb::ndim<2>>(lo, {k, 3}, owned(lo)),
                           nb::ndarray<nb::numpy, float, nb::ndim<2>>(hi, {k, 3}, owned(hi)),
                           nb::ndarray<nb::numpy, std::uint8_t, nb::ndim<1>>(depth, {k}, owned(depth)));
@@ -138,52 +136,76 @@ void py_refit(PyBvh& self, const Triangles& tris, const std::optional<Spheres>& 
 
 void bind_render(nb::module_& m);  // render_bindings.cpp
 
-NB_MODULE(_core, m) {
-    m.doc() = "bvhlab C++ core: BVH construction, stats, CPU traversal and the renderers";
-    bind_render(m);
-    nb::exception<BuildCancelled>(m, "BuildCancelled");
+namespace {
 
+void bind_bvh(nb::module_& m) {
     nb::class_<PyBvh>(m, "Bvh")
         .def("stats", [](const PyBvh& b) { return stats_dict(b.current()->bvh); })
         .def_prop_ro("node_count", [](const PyBvh& b) { return b.current()->bvh.nodes.size(); })
         .def_prop_ro("build_ms", [](const PyBvh& b) { return b.current()->bvh.build_ms; })
         .def_prop_ro("revision", [](const PyBvh& b) { return b.current()->revision; })
         .def_prop_ro("geometry_fingerprint", [](const PyBvh& b) { return b.current()->bvh.geometry_fingerprint; })
-        .def("nodes_bytes", [](const PyBvh& b) {
+        .def("nodes_bytes",
+             [](const PyBvh& b) {
                  TreePtr t = b.current();
                  return array_owned_by(t, reinterpret_cast<const std::uint8_t*>(t->bvh.nodes.data()),
                                        {t->bvh.nodes.size(), sizeof(BvhNode)});
              })
-        .def("refs", [](const PyBvh& b) { TreePtr t = b.current(); return array_owned_by(t, t->bvh.refs.data(), {t->bvh.refs.size()}); })
-        .def("depths", [](const PyBvh& b) { TreePtr t = b.current(); return array_owned_by(t, t->bvh.depths.data(), {t->bvh.depths.size()}); })
-        .def("boxes", &py_boxes, "depth_min"_a, "depth_max"_a, "leaves_only"_a)
-        .def("depth_order", [](const PyBvh& b) {
+        .def("refs",
+             [](const PyBvh& b) {
                  TreePtr t = b.current();
-                 const DepthOrder& o = t->order();
-                 return nb::make_tuple(array_owned_by(t, o.nodes.data(), {o.nodes.size()}),
-                                       array_owned_by(t, o.offset.data(), {o.offset.size()}));
-             }, "(nodes, offset): node indices by depth; the nodes of depth d are nodes[offset[d]:offset[d + 1]]")
-        .def("depth_range", [](const PyBvh& b, std::uint32_t depth_min, std::uint32_t depth_max) {
-                 return b.current()->order().range(depth_min, depth_max);
-             }, "depth_min"_a, "depth_max"_a, "[first, last) in depth_order()'s nodes of the depths depth_min..depth_max")
+                 return array_owned_by(t, t->bvh.refs.data(), {t->bvh.refs.size()});
+             })
+        .def("depths",
+             [](const PyBvh& b) {
+                 TreePtr t = b.current();
+                 return array_owned_by(t, t->bvh.depths.data(), {t->bvh.depths.size()});
+             })
+        .def("boxes", &py_boxes, "depth_min"_a, "depth_max"_a, "leaves_only"_a)
+        .def(
+            "depth_order",
+            [](const PyBvh& b) {
+                TreePtr t = b.current();
+                const DepthOrder& o = t->order();
+                return nb::make_tuple(array_owned_by(t, o.nodes.data(), {o.nodes.size()}),
+                                      array_owned_by(t, o.offset.data(), {o.offset.size()}));
+            },
+            "(nodes, offset): node indices by depth; the nodes of depth d are nodes[offset[d]:offset[d + 1]]")
+        .def(
+            "depth_range",
+            [](const PyBvh& b, std::uint32_t depth_min, std::uint32_t depth_max) {
+                return b.current()->order().range(depth_min, depth_max);
+            },
+            "depth_min"_a, "depth_max"_a, "[first, last) in depth_order()'s nodes of the depths depth_min..depth_max")
         .def("intersect", &py_intersect, "origins"_a.noconvert(), "directions"_a.noconvert(), "tmin"_a, "tmax"_a,
              "traversal"_a, "threads"_a, "t"_a.noconvert(), "prim"_a.noconvert(), "kind"_a.noconvert(),
              "u"_a.noconvert(), "v"_a.noconvert(), "visited"_a.noconvert())
         .def("refit", &py_refit, "triangles"_a.noconvert(), "spheres"_a.noconvert().none());
+}
 
-    m.def("geometry_fingerprint", [](const Triangles& tris, const std::optional<Spheres>& spheres) {
-              GeometryView g = view_of(tris, spheres);
-              nb::gil_scoped_release release;
-              return geometry_fingerprint(g);
-          }, "triangles"_a.noconvert(), "spheres"_a.noconvert().none());
-    m.def("validate_geometry", [](const Triangles& tris, const std::optional<Spheres>& spheres) {
-              GeometryView g = view_of(tris, spheres);
-              nb::gil_scoped_release release;
-              validate(g);
-          }, "triangles"_a.noconvert(), "spheres"_a.noconvert().none(),
-          "Raises ValueError naming the first primitive that is not finite or lies outside MAX_COORDINATE.");
-    m.def("build", &build, "triangles"_a.noconvert(), "spheres"_a.noconvert().none(), "method"_a, "axis"_a,
-          "bins"_a, "bin_bounds"_a, "max_leaf_size"_a, "seed"_a, "threads"_a, "progress"_a.none());
+void bind_functions(nb::module_& m) {  // geometry checks and the build
+    m.def(
+        "geometry_fingerprint",
+        [](const Triangles& tris, const std::optional<Spheres>& spheres) {
+            GeometryView g = view_of(tris, spheres);
+            nb::gil_scoped_release release;
+            return geometry_fingerprint(g);
+        },
+        "triangles"_a.noconvert(), "spheres"_a.noconvert().none());
+    m.def(
+        "validate_geometry",
+        [](const Triangles& tris, const std::optional<Spheres>& spheres) {
+            GeometryView g = view_of(tris, spheres);
+            nb::gil_scoped_release release;
+            validate(g);
+        },
+        "triangles"_a.noconvert(), "spheres"_a.noconvert().none(),
+        "Raises ValueError naming the first primitive that is not finite or lies outside MAX_COORDINATE.");
+    m.def("build", &build, "triangles"_a.noconvert(), "spheres"_a.noconvert().none(), "method"_a, "axis"_a, "bins"_a,
+          "bin_bounds"_a, "max_leaf_size"_a, "seed"_a, "threads"_a, "progress"_a.none());
+}
+
+void bind_build_names(nb::module_& m) {
     // The build's names and defaults, one definition (build_config.h, split_methods.cpp): Python's
     // build() and the add-on's properties read these.
     const BuildConfig defaults;
@@ -208,4 +230,15 @@ NB_MODULE(_core, m) {
     m.attr("MIN_RADIUS") = kMinRadius;
     m.attr("NODE_INTERNAL_BIT") = gpu::NODE_INTERNAL_BIT;
     m.attr("REF_SPHERE_BIT") = gpu::REF_SPHERE_BIT;
+}
+
+}  // namespace
+
+NB_MODULE(_core, m) {
+    m.doc() = "bvhlab C++ core: BVH construction, stats, CPU traversal and the renderers";
+    nb::exception<BuildCancelled>(m, "BuildCancelled");
+    bind_render(m);
+    bind_bvh(m);
+    bind_functions(m);
+    bind_build_names(m);
 }

@@ -89,7 +89,8 @@ private:
 
 /// A read-only numpy array over `data` that keeps `owner` (a tree version) alive.
 template <class T>
-nb::ndarray<nb::numpy, const T> array_owned_by(const TreePtr& owner, const T* data, std::initializer_list<size_t> shape) {
+nb::ndarray<nb::numpy, const T> array_owned_by(const TreePtr& owner, const T* data,
+                                               std::initializer_list<size_t> shape) {
     auto* keep = new TreePtr(owner);
     nb::capsule capsule(keep, [](void* p) noexcept { delete static_cast<TreePtr*>(p); });
     return nb::ndarray<nb::numpy, const T>(data, shape, capsule);

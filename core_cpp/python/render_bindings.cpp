@@ -81,9 +81,7 @@ bool run_job(PyRenderJob& self, std::uint32_t samples, nb::object progress) {
         try {
             job.run(samples, &cancel, &fraction);
             return true;
-        } catch (const Cancelled&) {
-            return false;
-        }
+        } catch (const Cancelled&) { return false; }
     });
     check.rethrow();
     if (finished && check(1.0)) finished = false;  // the final call counts too: its "stop", its exception
@@ -114,7 +112,8 @@ void bind_job(nb::module_& m) {
         .def("resolve", &resolve_job, "color"_a.noconvert().none(), "depth"_a.noconvert().none(),
              "cost"_a.noconvert().none(), "heat"_a.noconvert().none() = nb::none(),
              "Writes the images of the samples so far into the given arrays.")
-        .def_prop_ro("samples_done", [](PyRenderJob& j) { return j.locked([](RenderJob& job) { return job.samples_done(); }); })
+        .def_prop_ro("samples_done",
+                     [](PyRenderJob& j) { return j.locked([](RenderJob& job) { return job.samples_done(); }); })
         .def_prop_ro("samples_per_pixel", [](PyRenderJob& j) { return j.job->samples_per_pixel(); })
         .def_prop_ro("timings", [](PyRenderJob& j) {
             RenderTimings t = j.locked([](RenderJob& job) { return job.timings(); });
@@ -125,26 +124,32 @@ void bind_job(nb::module_& m) {
 PyRenderJob* wrap(std::unique_ptr<RenderJob> job) { return new PyRenderJob{std::move(job), {}}; }
 
 void bind_palettes(nb::module_& m) {
-    m.def("depth_colors", [](const nb::ndarray<const std::uint32_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>& depths) {
-              auto* out = new float[depths.shape(0) * 3];
-              gpu::Palette palette;
-              for (std::size_t i = 0; i < depths.shape(0); ++i) {
-                  gpu::vec3 c = palette.depth_color(depths.data()[i]);
-                  out[3 * i] = c.x, out[3 * i + 1] = c.y, out[3 * i + 2] = c.z;
-              }
-              nb::capsule owner(out, [](void* p) noexcept { delete[] static_cast<float*>(p); });
-              return nb::ndarray<nb::numpy, float, nb::ndim<2>>(out, {depths.shape(0), 3}, owner);
-          }, "depths"_a.noconvert(), "Overlay line colour of each tree depth (the shaders' palette).");
-    m.def("heat_colors", [](const nb::ndarray<const float, nb::ndim<1>, nb::c_contig, nb::device::cpu>& x) {
-              auto* out = new float[x.shape(0) * 3];
-              gpu::Palette palette;
-              for (std::size_t i = 0; i < x.shape(0); ++i) {
-                  gpu::vec3 c = palette.heat_color(x.data()[i]);
-                  out[3 * i] = c.x, out[3 * i + 1] = c.y, out[3 * i + 2] = c.z;
-              }
-              nb::capsule owner(out, [](void* p) noexcept { delete[] static_cast<float*>(p); });
-              return nb::ndarray<nb::numpy, float, nb::ndim<2>>(out, {x.shape(0), 3}, owner);
-          }, "x"_a.noconvert(), "Heatmap colours of values in [0, 1] (blue → red; the heatmap mode's ramp).");
+    m.def(
+        "depth_colors",
+        [](const nb::ndarray<const std::uint32_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>& depths) {
+            auto* out = new float[depths.shape(0) * 3];
+            gpu::Palette palette;
+            for (std::size_t i = 0; i < depths.shape(0); ++i) {
+                gpu::vec3 c = palette.depth_color(depths.data()[i]);
+                out[3 * i] = c.x, out[3 * i + 1] = c.y, out[3 * i + 2] = c.z;
+            }
+            nb::capsule owner(out, [](void* p) noexcept { delete[] static_cast<float*>(p); });
+            return nb::ndarray<nb::numpy, float, nb::ndim<2>>(out, {depths.shape(0), 3}, owner);
+        },
+        "depths"_a.noconvert(), "Overlay line colour of each tree depth (the shaders' palette).");
+    m.def(
+        "heat_colors",
+        [](const nb::ndarray<const float, nb::ndim<1>, nb::c_contig, nb::device::cpu>& x) {
+            auto* out = new float[x.shape(0) * 3];
+            gpu::Palette palette;
+            for (std::size_t i = 0; i < x.shape(0); ++i) {
+                gpu::vec3 c = palette.heat_color(x.data()[i]);
+                out[3 * i] = c.x, out[3 * i + 1] = c.y, out[3 * i + 2] = c.z;
+            }
+            nb::capsule owner(out, [](void* p) noexcept { delete[] static_cast<float*>(p); });
+            return nb::ndarray<nb::numpy, float, nb::ndim<2>>(out, {x.shape(0), 3}, owner);
+        },
+        "x"_a.noconvert(), "Heatmap colours of values in [0, 1] (blue → red; the heatmap mode's ramp).");
 }
 
 #ifdef BVHLAB_VULKAN
@@ -153,23 +158,30 @@ void bind_vulkan(nb::module_& m) {
     m.def("vulkan_loader_available", &vulkan_loader_available);
     m.attr("HAS_VULKAN") = true;
     nb::class_<VulkanRenderer>(m, "VulkanRenderer")
-        .def("__init__", [](VulkanRenderer* self, const std::string& device, bool validation, bool force_staging) {
-                 VulkanOptions o;
-                 o.device = device, o.validation = validation, o.force_staging = force_staging;
-                 nb::gil_scoped_release release;
-                 new (self) VulkanRenderer(o);
-             }, "device"_a, "validation"_a, "force_staging"_a)
+        .def(
+            "__init__",
+            [](VulkanRenderer* self, const std::string& device, bool validation, bool force_staging) {
+                VulkanOptions o;
+                o.device = device, o.validation = validation, o.force_staging = force_staging;
+                nb::gil_scoped_release release;
+                new (self) VulkanRenderer(o);
+            },
+            "device"_a, "validation"_a, "force_staging"_a)
         .def_prop_ro("device_name", &VulkanRenderer::device_name)
         .def_prop_ro("device_type", &VulkanRenderer::device_type)
         .def_prop_ro("max_image_dimension", &VulkanRenderer::max_image_dimension)
-        .def("upload", [](VulkanRenderer& r, const PyRenderScene& scene) {
+        .def("upload",
+             [](VulkanRenderer& r, const PyRenderScene& scene) {
                  nb::gil_scoped_release release;
                  return r.upload(scene.scene);
              })
-        .def("start", [](VulkanRenderer& r, const RenderSettings& settings) {
-                 nb::gil_scoped_release release;
-                 return wrap(r.start(settings));
-             }, "settings"_a, "A RenderJob of the scene uploaded last.")
+        .def(
+            "start",
+            [](VulkanRenderer& r, const RenderSettings& settings) {
+                nb::gil_scoped_release release;
+                return wrap(r.start(settings));
+            },
+            "settings"_a, "A RenderJob of the scene uploaded last.")
         .def("take_validation_messages", &VulkanRenderer::take_validation_messages)
         .def_prop_ro("validation_error_count", &VulkanRenderer::validation_error_count);
 }
@@ -183,21 +195,28 @@ void bind_render(nb::module_& m) {
     bind_render_settings(m);
     nb::exception<RenderIncomplete>(m, "RenderIncomplete", PyExc_RuntimeError);
     nb::class_<PyRenderScene>(m, "RenderScene")
-        .def("__init__", [](PyRenderScene* self, const PyBvh& bvh, const Triangles& tris, const std::optional<Spheres>& spheres,
-                            const Materials& materials, const Indices& tri_material, const Indices& sphere_material) {
-                 TreePtr tree = bvh.current();
-                 new (self) PyRenderScene{tree, make_scene(*tree, tris, spheres, materials, tri_material, sphere_material)};
-             }, "bvh"_a, "triangles"_a.noconvert(), "spheres"_a.noconvert().none(), "materials"_a.noconvert(),
-             "tri_material"_a.noconvert(), "sphere_material"_a.noconvert())
+        .def(
+            "__init__",
+            [](PyRenderScene* self, const PyBvh& bvh, const Triangles& tris, const std::optional<Spheres>& spheres,
+               const Materials& materials, const Indices& tri_material, const Indices& sphere_material) {
+                TreePtr tree = bvh.current();
+                new (self)
+                    PyRenderScene{tree, make_scene(*tree, tris, spheres, materials, tri_material, sphere_material)};
+            },
+            "bvh"_a, "triangles"_a.noconvert(), "spheres"_a.noconvert().none(), "materials"_a.noconvert(),
+            "tri_material"_a.noconvert(), "sphere_material"_a.noconvert())
         .def_prop_ro("revision", [](const PyRenderScene& s) { return s.tree->revision; })
         .def_prop_ro("height", [](const PyRenderScene& s) { return s.scene.height(); });
     bind_job(m);
     bind_palettes(m);
-    m.def("start_cpu", [](const PyRenderScene& scene, const RenderSettings& settings, std::uint32_t threads) {
-              nb::gil_scoped_release release;
-              return wrap(start_cpu(scene.scene, settings, threads));
-          }, "scene"_a, "settings"_a, "threads"_a = 0, nb::keep_alive<0, 1>(),
-          "A RenderJob on the CPU reference (keeps `scene` alive).");
+    m.def(
+        "start_cpu",
+        [](const PyRenderScene& scene, const RenderSettings& settings, std::uint32_t threads) {
+            nb::gil_scoped_release release;
+            return wrap(start_cpu(scene.scene, settings, threads));
+        },
+        "scene"_a, "settings"_a, "threads"_a = 0, nb::keep_alive<0, 1>(),
+        "A RenderJob on the CPU reference (keeps `scene` alive).");
 #ifdef BVHLAB_VULKAN
     bind_vulkan(m);
 #else

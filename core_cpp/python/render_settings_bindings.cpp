@@ -25,7 +25,7 @@ using Double3 = std::array<double, 3>;
 Float3 to_array(Vec3 v) { return {v.x, v.y, v.z}; }
 
 /// A Vec3 member as a read-write property taking any three numbers.
-template <class Class, Vec3 Class::*Member>
+template <class Class, Vec3 Class::* Member>
 void vec3_property(nb::class_<Class>& c, const char* name, const char* doc) {
     c.def_prop_rw(
         name, [](const Class& self) { return to_array(self.*Member); },
@@ -74,8 +74,9 @@ void bind_settings(nb::module_& m) {
         .def_rw("heatmap_scale", &RenderSettings::heatmap_scale, "box tests at full red; None: 8 × tree height")
         .def_rw("steps_per_dispatch", &RenderSettings::steps_per_dispatch)
         .def_rw("max_steps_per_pixel", &RenderSettings::max_steps_per_pixel)
-        .def("validate", [](const RenderSettings& self) { validate(self); },
-             "Raises ValueError naming the first bad setting.");
+        .def(
+            "validate", [](const RenderSettings& self) { validate(self); },
+            "Raises ValueError naming the first bad setting.");
     vec3_property<RenderSettings, &RenderSettings::sky>(s, "sky", "the atmosphere colour (report §2.1)");
 
     m.def("parse_traversal", [](const std::string& name) { return parse_traversal(name); });
@@ -96,17 +97,23 @@ void bind_defaults(nb::module_& m) {
     m.attr("DEFAULT_SKY") = nb::tuple(nb::cast(kDefaultSkyRgb));
     m.attr("DEFAULT_MATERIAL") = nb::tuple(nb::cast(kDefaultMaterial));
     m.attr("DEFAULT_FOV_Y") = kDefaultFovY;
-    m.def("default_camera", [](const Double3& lo, const Double3& hi, bool empty) {
-              Aabb bounds;
-              if (!empty) bounds = {to_vec3(lo), to_vec3(hi)};
-              CameraPlacement c = default_camera(bounds);
-              return nb::make_tuple(c.position, c.target, c.up, c.fov_y_degrees);
-          }, "lo"_a, "hi"_a, "empty"_a = false,
-          "(position, target, up, fov_y) of the camera that frames the box lo..hi (or of the fallback "
-          "camera when `empty`).");
-    m.def("default_light_position", [](const Double3& position, const Double3& target, const Double3& up) {
-              return default_light_position({position, target, up, kDefaultFovY});
-          }, "position"_a, "target"_a, "up"_a, "The default point light's position for this camera.");
+    m.def(
+        "default_camera",
+        [](const Double3& lo, const Double3& hi, bool empty) {
+            Aabb bounds;
+            if (!empty) bounds = {to_vec3(lo), to_vec3(hi)};
+            CameraPlacement c = default_camera(bounds);
+            return nb::make_tuple(c.position, c.target, c.up, c.fov_y_degrees);
+        },
+        "lo"_a, "hi"_a, "empty"_a = false,
+        "(position, target, up, fov_y) of the camera that frames the box lo..hi (or of the fallback "
+        "camera when `empty`).");
+    m.def(
+        "default_light_position",
+        [](const Double3& position, const Double3& target, const Double3& up) {
+            return default_light_position({position, target, up, kDefaultFovY});
+        },
+        "position"_a, "target"_a, "up"_a, "The default point light's position for this camera.");
 }
 
 }  // namespace

@@ -1,12 +1,42 @@
 """bvhlab: bounding volume hierarchies over triangles and spheres, with the split methods of
 Sandén's report (median, mean, binned SAH) and more (midpoint, full-sweep SAH, LBVH, refit)."""
+
 from ._core import BuildCancelled
-from .bvh import AXES, METHODS, NODE_DTYPE, TRAVERSALS, Bvh, BuildConfig, build
-from .render import (RenderCancelled, Renderer, RenderIncomplete, RenderJob, RenderResult, View, VulkanUnavailable,
-                     render, save_png)
+from .bvh import AXES, METHODS, NODE_DTYPE, TRAVERSALS, BuildConfig, Bvh, build
+from .render import (
+    RenderCancelled,
+    Renderer,
+    RenderIncomplete,
+    RenderJob,
+    RenderResult,
+    View,
+    VulkanUnavailable,
+    render,
+    save_png,
+)
 from .scene import Camera, Light, Material, Scene
 
 __version__ = "0.1.0"
-__all__ = ["build", "Bvh", "BuildConfig", "BuildCancelled", "Scene", "Camera", "Light", "Material",
-           "METHODS", "AXES", "TRAVERSALS", "NODE_DTYPE", "render", "Renderer", "RenderJob", "RenderResult", "View",
-           "RenderCancelled", "RenderIncomplete", "VulkanUnavailable", "save_png"]
+__all__ = [
+    "build",
+    "Bvh",
+    "BuildConfig",
+    "BuildCancelled",
+    "Scene",
+    "Camera",
+    "Light",
+    "Material",
+    "METHODS",
+    "AXES",
+    "TRAVERSALS",
+    "NODE_DTYPE",
+    "render",
+    "Renderer",
+    "RenderJob",
+    "RenderResult",
+    "View",
+    "RenderCancelled",
+    "RenderIncomplete",
+    "VulkanUnavailable",
+    "save_png",
+]

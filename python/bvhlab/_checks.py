@@ -1,4 +1,5 @@
 """Argument checks with messages that say what was expected and what came instead."""
+
 from __future__ import annotations
 
 import math
@@ -18,8 +19,9 @@ def float32_array(name: str, value, trailing_shape: tuple[int, ...]) -> np.ndarr
     if not isinstance(value, np.ndarray):
         raise TypeError(f"{name} must be a numpy float32 array of shape {want}, got {type(value).__name__}")
     if value.dtype != np.float32:
-        raise TypeError(f"{name} must have dtype float32, got {value.dtype} "
-                        f"(convert explicitly with {name}.astype(np.float32))")
+        raise TypeError(
+            f"{name} must have dtype float32, got {value.dtype} (convert explicitly with {name}.astype(np.float32))"
+        )
     if value.ndim != 1 + len(trailing_shape) or value.shape[1:] != trailing_shape:
         raise ValueError(f"{name} must have shape {want}, got {value.shape}")
     if not value.flags.c_contiguous:
@@ -66,10 +68,14 @@ def output_file(path, suffixes: tuple[str, ...], what: str) -> Path:
     exactly where asked, never renamed). Raises OutputPathError saying what is wrong."""
     path = Path(path)
     if path.is_dir():
-        raise OutputPathError(f"{path} is a folder; give a file name for the {what}, e.g. {path / ('out' + suffixes[0])}")
+        raise OutputPathError(
+            f"{path} is a folder; give a file name for the {what}, e.g. {path / ('out' + suffixes[0])}"
+        )
     if path.suffix.lower() not in suffixes:
-        raise OutputPathError(f"{path}: a {what} is written as {' or '.join(suffixes)}; name the file so "
-                              f"(e.g. {path.with_name(path.stem + suffixes[0])}), it is not renamed for you")
+        raise OutputPathError(
+            f"{path}: a {what} is written as {' or '.join(suffixes)}; name the file so "
+            f"(e.g. {path.with_name(path.stem + suffixes[0])}), it is not renamed for you"
+        )
     for parent in path.parents:
         if parent.exists():
             if not parent.is_dir():

@@ -2,6 +2,7 @@
 shape, and the size the zip directory declares) before any array data is, so a small file cannot
 make the reader allocate gigabytes (a 3.85 MB file used to expand to 3.9 GB before the first check),
 and every failure is one SceneFileError naming the file and the problem."""
+
 from __future__ import annotations
 
 import zipfile
@@ -25,12 +26,18 @@ class SceneFileError(ValueError):
 class Member:
     """What an array must look like: dtype kinds ('f' float, 'iu' integer) and a shape in which
     None matches any length."""
+
     kinds: str
     shape: tuple
 
 
-def read_npz(path: Path, members: dict[str, Member], optional: tuple[str, ...] = (),
-             same_length: tuple[tuple[str, str], ...] = (), max_expansion: float = MAX_EXPANSION) -> dict[str, np.ndarray]:
+def read_npz(
+    path: Path,
+    members: dict[str, Member],
+    optional: tuple[str, ...] = (),
+    same_length: tuple[tuple[str, str], ...] = (),
+    max_expansion: float = MAX_EXPANSION,
+) -> dict[str, np.ndarray]:
     """The arrays named in `members` (those in `optional` may be absent), checked as described above;
     each pair in `same_length` must agree in their first dimension."""
     if path.is_dir():
@@ -82,15 +89,26 @@ def _check_members(path: Path, members: dict[str, Member], optional: tuple[str, 
     for name, header in headers.items():
         want = members[name]
         if header.dtype.hasobject or header.dtype.kind not in want.kinds or header.dtype.shape:
-            raise SceneFileError(f"{path}: '{name}' has dtype {header.dtype}; expected "
-                                 f"{'a float' if want.kinds == 'f' else 'an integer'} type")
-        if len(header.shape) != len(want.shape) or any(w is not None and w != h for w, h in zip(want.shape, header.shape)):
-            expected = "(" + ", ".join("N" if w is None else str(w) for w in want.shape) + ("," if len(want.shape) == 1 else "") + ")"
+            raise SceneFileError(
+                f"{path}: '{name}' has dtype {header.dtype}; expected "
+                f"{'a float' if want.kinds == 'f' else 'an integer'} type"
+            )
+        if len(header.shape) != len(want.shape) or any(
+            w is not None and w != h for w, h in zip(want.shape, header.shape)
+        ):
+            expected = (
+                "("
+                + ", ".join("N" if w is None else str(w) for w in want.shape)
+                + ("," if len(want.shape) == 1 else "")
+                + ")"
+            )
             raise SceneFileError(f"{path}: '{name}' has shape {header.shape}; expected {expected}")
         need = int(np.prod(header.shape, dtype=np.int64)) * header.dtype.itemsize
         if need != header.data_bytes:
-            raise SceneFileError(f"{path}: '{name}' declares shape {header.shape} ({need} bytes) but its data "
-                                 f"takes {header.data_bytes} bytes")
+            raise SceneFileError(
+                f"{path}: '{name}' declares shape {header.shape} ({need} bytes) but its data "
+                f"takes {header.data_bytes} bytes"
+            )
 
 
 def _check_lengths(path: Path, headers: dict, same_length: tuple[tuple[str, str], ...]) -> None:
@@ -103,9 +121,11 @@ def _check_total_size(path: Path, headers: dict, max_expansion: float) -> None:
     total = sum(h.data_bytes for h in headers.values())
     size = path.stat().st_size
     if total > MIN_CHECKED_BYTES and total > max_expansion * size:
-        raise SceneFileError(f"{path}: its arrays would take {total / 2**20:.0f} MiB, {total / size:.0f} times "
-                             f"the file's {size / 2**20:.1f} MiB (at most {max_expansion:g} times is read; "
-                             f"pass a larger max_expansion to Scene.load if you trust the file)")
+        raise SceneFileError(
+            f"{path}: its arrays would take {total / 2**20:.0f} MiB, {total / size:.0f} times "
+            f"the file's {size / 2**20:.1f} MiB (at most {max_expansion:g} times is read; "
+            f"pass a larger max_expansion to Scene.load if you trust the file)"
+        )
 
 
 def _read(path: Path, archive: zipfile.ZipFile, name: str, header: _Header) -> np.ndarray:

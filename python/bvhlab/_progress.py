@@ -1,4 +1,5 @@
 """A terminal progress bar for long work (builds, renders), with no dependencies."""
+
 from __future__ import annotations
 
 import sys

@@ -1,5 +1,6 @@
 """The scene in GPU layout (`_core.RenderScene`), made once per version of a tree, its geometry and
 its materials, and kept by a Renderer (one SceneCache each) while they stay the same."""
+
 from __future__ import annotations
 
 import threading
@@ -23,15 +24,22 @@ class SceneCache:
         self._key = None
         self._scene = None
 
-    def get(self, scene, bvh) -> "_core.RenderScene":
+    def get(self, scene, bvh) -> _core.RenderScene:
         tree = bvh._core
         fingerprint = _core.geometry_fingerprint(scene.triangles, scene.spheres)
-        key = (tree, tree.revision, fingerprint, tuple(scene.materials), _array_key(scene.tri_material),
-               _array_key(scene.sphere_material))
+        key = (
+            tree,
+            tree.revision,
+            fingerprint,
+            tuple(scene.materials),
+            _array_key(scene.tri_material),
+            _array_key(scene.sphere_material),
+        )
         with self._lock:
             if self._key == key:
                 return self._scene
-            render_scene = _core.RenderScene(tree, scene.triangles, scene.spheres, scene.material_table(),
-                                             scene.tri_material, scene.sphere_material)
+            render_scene = _core.RenderScene(
+                tree, scene.triangles, scene.spheres, scene.material_table(), scene.tri_material, scene.sphere_material
+            )
             self._key, self._scene = key, render_scene
             return render_scene

@@ -1,8 +1,9 @@
 """`bvhlab.build` and the `Bvh` it returns: a thin, checked layer over the C++ core."""
+
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
@@ -18,7 +19,7 @@ DEFAULT_AXIS = _core.DEFAULT_AXIS
 DEFAULT_BINS = _core.DEFAULT_BINS
 DEFAULT_BIN_BOUNDS = _core.DEFAULT_BIN_BOUNDS
 DEFAULT_MAX_LEAF_SIZE = _core.DEFAULT_MAX_LEAF_SIZE
-TRAVERSALS = ("stack", "stackless", "wide")
+TRAVERSALS = tuple(_core.TRAVERSALS)  # of Bvh.intersect (the renderers have their own: RENDER_TRAVERSALS)
 MAX_TREE_HEIGHT = _core.MAX_TREE_HEIGHT
 #: Supported coordinates and ray directions (core_cpp/include/bvhlab/coordinate_range.h).
 MAX_COORDINATE = float(_core.MAX_COORDINATE)
@@ -46,6 +47,7 @@ def method_from_label(label: str) -> dict:
 @dataclass(frozen=True)
 class BuildConfig:
     """What a tree was built with (the arguments of `build`)."""
+
     method: str = DEFAULT_METHOD
     bins: int = DEFAULT_BINS
     bin_bounds: str = DEFAULT_BIN_BOUNDS
@@ -55,19 +57,29 @@ class BuildConfig:
     threads: int = 0
 
 
-def build(scene_or_triangles, spheres: np.ndarray | None = None, *, method: str = DEFAULT_METHOD,
-          bins: int = DEFAULT_BINS, bin_bounds: str = DEFAULT_BIN_BOUNDS, axis: str = DEFAULT_AXIS,
-          max_leaf_size: int = DEFAULT_MAX_LEAF_SIZE, seed: int = 0, threads: int = 0,
-          progress: Callable[[float], bool | None] | None = None) -> "Bvh":
+def build(
+    scene_or_triangles,
+    spheres: np.ndarray | None = None,
+    *,
+    method: str = DEFAULT_METHOD,
+    bins: int = DEFAULT_BINS,
+    bin_bounds: str = DEFAULT_BIN_BOUNDS,
+    axis: str = DEFAULT_AXIS,
+    max_leaf_size: int = DEFAULT_MAX_LEAF_SIZE,
+    seed: int = 0,
+    threads: int = 0,
+    progress: Callable[[float], bool | None] | None = None,
+) -> Bvh:
     """Build a BVH over triangles (float32 (T,3,3)) and spheres (float32 (S,4): centre, radius).
 
     `scene_or_triangles` is a `bvhlab.Scene` or a triangle array. `method` is one of METHODS,
     `axis` one of AXES ("auto": all three axes for the SAH methods, the largest centroid extent
     for the others); `bins` (2..256) is used by "sah", whose equal buckets divide the node's box
-    (`bin_bounds="box"`) or its centroid bounds ("centroids", the report's §2.3.2); leaves hold at most `max_leaf_size`
-    primitives, and the SAH methods may stop earlier when a leaf is cheaper. The defaults give a
-    fast tree for little build time; the report's Table 1 settings are method="sah", bins=12,
-    bin_bounds="centroids", axis="largest", max_leaf_size=1. `threads` = 0 uses every core; the tree never depends on it.
+    (`bin_bounds="box"`) or its centroid bounds ("centroids", the report's §2.3.2); leaves hold at
+    most `max_leaf_size` primitives, and the SAH methods may stop earlier when a leaf is cheaper.
+    The defaults give a fast tree for little build time; the report's Table 1 settings are
+    method="sah", bins=12, bin_bounds="centroids", axis="largest", max_leaf_size=1. `threads` = 0
+    uses every core; the tree never depends on it.
     Bad input raises TypeError or ValueError; a vertex or sphere outside ±MAX_COORDINATE (2^40 ≈
     1.1e12, where float32 ray tests would overflow) and a sphere radius below MIN_RADIUS (2^-60,
     where its square underflows) are bad input.
@@ -99,8 +111,18 @@ def build(scene_or_triangles, spheres: np.ndarray | None = None, *, method: str 
     )
     if progress is not None and not callable(progress):
         raise TypeError("progress must be callable (fraction -> bool) or None")
-    core = _core.build(triangles, spheres, config.method, config.axis, config.bins, config.bin_bounds,
-                       config.max_leaf_size, config.seed, config.threads, progress)
+    core = _core.build(
+        triangles,
+        spheres,
+        config.method,
+        config.axis,
+        config.bins,
+        config.bin_bounds,
+        config.max_leaf_size,
+        config.seed,
+        config.threads,
+        progress,
+    )
     return Bvh(core, config)
 
 
@@ -110,15 +132,17 @@ class Bvh:
     A Bvh may be shared between threads: `intersect`, `boxes` and the arrays read one version of
     the tree; `refit` publishes a new version, so a reader sees the old tree or the new one."""
 
-    def __init__(self, core: "_core.Bvh", config: BuildConfig):
+    def __init__(self, core: _core.Bvh, config: BuildConfig):
         self._core = core
         self.config = config
         self._stats: dict | None = None
 
     def __repr__(self) -> str:
         s = self.stats
-        return (f"<bvhlab.Bvh {self.config.method} {s['primitives']} primitives, {s['nodes']} nodes, "
-                f"height {s['height']}, SAH {s['sah_cost']:.2f}>")
+        return (
+            f"<bvhlab.Bvh {self.config.method} {s['primitives']} primitives, {s['nodes']} nodes, "
+            f"height {s['height']}, SAH {s['sah_cost']:.2f}>"
+        )
 
     # -- numbers ---------------------------------------------------------------------------
     @property
@@ -174,8 +198,16 @@ class Bvh:
         return self._core.boxes(depth_min, depth_max, bool(leaves_only))
 
     # -- queries -----------------------------------------------------------------------------
-    def intersect(self, origins: np.ndarray, directions: np.ndarray, *, tmin: float = 0.0,
-                  tmax: float = np.inf, traversal: str = "wide", threads: int = 0) -> dict:
+    def intersect(
+        self,
+        origins: np.ndarray,
+        directions: np.ndarray,
+        *,
+        tmin: float = 0.0,
+        tmax: float = np.inf,
+        traversal: str = "wide",
+        threads: int = 0,
+    ) -> dict:
         """Closest hits of rays origin + t·direction, t in (tmin, tmax), on every core.
 
         Origins lie within ±MAX_COORDINATE (2^40) and the largest component of each direction in
@@ -197,12 +229,28 @@ class Bvh:
         _checks.choice("traversal", traversal, TRAVERSALS)
         tmin, tmax = _checks.real("tmin", tmin), _checks.real("tmax", tmax)
         n = len(origins)
-        out = {"t": np.empty(n, np.float32), "prim": np.empty(n, np.int32), "kind": np.empty(n, np.uint8),
-               "u": np.empty(n, np.float32), "v": np.empty(n, np.float32),
-               "nodes_visited": np.empty(n, np.uint32)}
-        self._core.intersect(origins, directions, tmin, tmax, traversal,
-                             _checks.integer("threads", threads, 0, 4096), out["t"], out["prim"], out["kind"],
-                             out["u"], out["v"], out["nodes_visited"])
+        out = {
+            "t": np.empty(n, np.float32),
+            "prim": np.empty(n, np.int32),
+            "kind": np.empty(n, np.uint8),
+            "u": np.empty(n, np.float32),
+            "v": np.empty(n, np.float32),
+            "nodes_visited": np.empty(n, np.uint32),
+        }
+        self._core.intersect(
+            origins,
+            directions,
+            tmin,
+            tmax,
+            traversal,
+            _checks.integer("threads", threads, 0, 4096),
+            out["t"],
+            out["prim"],
+            out["kind"],
+            out["u"],
+            out["v"],
+            out["nodes_visited"],
+        )
         return out
 
     def refit(self, triangles: np.ndarray, spheres: np.ndarray | None = None) -> None:

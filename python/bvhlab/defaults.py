@@ -1,5 +1,6 @@
 """What a render uses when the scene does not say: the one definition lives in C++
 (core_cpp/include/bvhlab/render_defaults.h); this module hands it to Python (`Scene`, `render`)."""
+
 from __future__ import annotations
 
 from . import _core
@@ -24,5 +25,6 @@ def camera_placement(bounds=None) -> tuple[tuple, tuple, tuple, float]:
 
 def light_position(position, target, up) -> tuple[float, float, float]:
     """The default point light for a camera: a little above and to the right of it."""
-    return tuple(_core.default_light_position(tuple(map(float, position)), tuple(map(float, target)),
-                                              tuple(map(float, up))))
+    return tuple(
+        _core.default_light_position(tuple(map(float, position)), tuple(map(float, target)), tuple(map(float, up)))
+    )

@@ -5,6 +5,7 @@ so the CPU reference is the oracle for the GPU image and the fallback where Vulk
 A render is a job in sample passes (`Renderer.start`): a viewport can show a coarse image first and
 refine it, a long render shows progress and stops on Ctrl-C or when its progress callable says so.
 """
+
 from __future__ import annotations
 
 import numbers
@@ -33,7 +34,7 @@ class VulkanUnavailable(RuntimeError):
 
 
 if HAS_VULKAN:
-    VulkanUnavailable = _core.VulkanUnavailable  # noqa: F811  (the C++ exception type itself)
+    VulkanUnavailable = _core.VulkanUnavailable  # type: ignore[misc]  # noqa: F811  (the C++ exception type itself)
 
 
 class RenderCancelled(Exception):
@@ -45,6 +46,7 @@ class View:
     """A camera given directly, as Blender's camera or a viewport region gives it: position, view
     direction, up, vertical field of view in degrees, image-plane aspect (None: the image's),
     and lens shift in fractions of the image plane's larger side (Blender's shift_x, shift_y)."""
+
     position: tuple[float, float, float]
     forward: tuple[float, float, float]
     up: tuple[float, float, float] = (0.0, 0.0, 1.0)
@@ -64,6 +66,7 @@ class RenderResult:
     cost: float32 (H, W), box tests per primary ray, averaged over the pixel's samples.
     heat: float32 (H, W, 4), `cost` in the heatmap's colours (what mode "heatmap" shows as colour).
     samples: samples every pixel has (after a cancelled run some pixels have one more)."""
+
     color: np.ndarray | None
     depth: np.ndarray | None
     cost: np.ndarray | None
@@ -72,11 +75,27 @@ class RenderResult:
     heat: np.ndarray | None = None
 
 
-def render(scene: Scene, bvh: Bvh, width: int = 800, height: int = 600, *, backend: str = "auto",
-           camera: Camera | View | None = None, samples_per_axis: int = 1, max_depth: int = 5,
-           overlay_depth: tuple[int, int] | None = None, traversal: str = "stack", mode: str = "shade",
-           color_by_depth: bool = True, line_width: float = 1.0, heatmap_scale: float | None = None,
-           threads: int = 0, device: str | None = None, validation: bool | None = None, progress=None):
+def render(
+    scene: Scene,
+    bvh: Bvh,
+    width: int = 800,
+    height: int = 600,
+    *,
+    backend: str = "auto",
+    camera: Camera | View | None = None,
+    samples_per_axis: int = 1,
+    max_depth: int = 5,
+    overlay_depth: tuple[int, int] | None = None,
+    traversal: str = "stack",
+    mode: str = "shade",
+    color_by_depth: bool = True,
+    line_width: float = 1.0,
+    heatmap_scale: float | None = None,
+    threads: int = 0,
+    device: str | None = None,
+    validation: bool | None = None,
+    progress=None,
+):
     """Render `scene` with its tree `bvh`; returns (image, timings).
 
     image: float32 (height, width, 4), row 0 at the top, linear RGB, alpha 1.
@@ -94,9 +113,22 @@ def render(scene: Scene, bvh: Bvh, width: int = 800, height: int = 600, *, backe
     device / validation: Vulkan device (index or name substring) and the Khronos validation layer.
     """
     return default_renderer(backend, device, validation).render(
-        scene, bvh, width, height, camera=camera, samples_per_axis=samples_per_axis, max_depth=max_depth,
-        overlay_depth=overlay_depth, traversal=traversal, mode=mode, color_by_depth=color_by_depth,
-        line_width=line_width, heatmap_scale=heatmap_scale, threads=threads, progress=progress)
+        scene,
+        bvh,
+        width,
+        height,
+        camera=camera,
+        samples_per_axis=samples_per_axis,
+        max_depth=max_depth,
+        overlay_depth=overlay_depth,
+        traversal=traversal,
+        mode=mode,
+        color_by_depth=color_by_depth,
+        line_width=line_width,
+        heatmap_scale=heatmap_scale,
+        threads=threads,
+        progress=progress,
+    )
 
 
 class RenderJob:
@@ -127,14 +159,19 @@ class RenderJob:
         completed so far, and run() may be called again."""
         target = self.samples_per_pixel if samples is None else _checks.integer("samples", samples, 0, 1 << 16)
         if not self._job.run(target, progress):
-            raise RenderCancelled(f"render stopped by its progress callable at {self.samples_done} of "
-                                  f"{self.samples_per_pixel} samples per pixel")
+            raise RenderCancelled(
+                f"render stopped by its progress callable at {self.samples_done} of "
+                f"{self.samples_per_pixel} samples per pixel"
+            )
 
     def result(self, color: bool = True, depth: bool = True, cost: bool = True, heat: bool = False) -> RenderResult:
         """The images of the samples so far (see RenderResult)."""
         h, w = self._settings.height, self._settings.width
-        images = (np.empty((h, w, 4), np.float32) if color else None, np.empty((h, w), np.float32) if depth else None,
-                  np.empty((h, w), np.float32) if cost else None)
+        images = (
+            np.empty((h, w, 4), np.float32) if color else None,
+            np.empty((h, w), np.float32) if depth else None,
+            np.empty((h, w), np.float32) if cost else None,
+        )
         heat_image = np.empty((h, w, 4), np.float32) if heat else None
         self._job.resolve(*images, heat_image)
         return RenderResult(*images, samples=self.samples_done, timings=self.timings, heat=heat_image)
@@ -149,8 +186,15 @@ class Renderer:
     and the scene is made (and uploaded) again only when the tree, its geometry or the materials
     change. Safe to share between threads (renders on one Vulkan device run one at a time)."""
 
-    def __init__(self, backend: str = "auto", *, device: str | None = None, validation: bool | None = None,
-                 force_staging: bool = False, threads: int = 0):
+    def __init__(
+        self,
+        backend: str = "auto",
+        *,
+        device: str | None = None,
+        validation: bool | None = None,
+        force_staging: bool = False,
+        threads: int = 0,
+    ):
         _checks.choice("backend", backend, BACKENDS)
         self.threads = _checks.integer("threads", threads, 0, 4096)
         self._vulkan, self.backend, self.reason = _choose_backend(backend, device, validation, force_staging)
@@ -175,8 +219,9 @@ class Renderer:
     def validation_errors(self) -> int:
         return self._vulkan.validation_error_count if self._vulkan else 0
 
-    def start(self, scene: Scene, bvh: Bvh, width: int = 800, height: int = 600, *, threads: int | None = None,
-              **options) -> RenderJob:
+    def start(
+        self, scene: Scene, bvh: Bvh, width: int = 800, height: int = 600, *, threads: int | None = None, **options
+    ) -> RenderJob:
         """A RenderJob (sample passes, nothing traced yet). Options as for `bvhlab.render`, and
         steps_per_dispatch (16..60000: how the work is cut, never the image; default: adaptive)
         and max_steps_per_pixel (a pixel needing more work in one run raises RenderIncomplete;
@@ -220,10 +265,20 @@ def _choose_backend(backend: str, device, validation, force_staging):
             raise
         return None, "cpu", f"auto: Vulkan unavailable ({e}); rendered on the CPU reference"
     if backend == "auto" and not device and vulkan.device_type == "cpu":
-        return None, "cpu", (f"auto: the only Vulkan device is {vulkan.device_name}, a CPU driver; the CPU "
-                             f"reference traces several times faster there")
+        return (
+            None,
+            "cpu",
+            (
+                f"auto: the only Vulkan device is {vulkan.device_name}, a CPU driver; the CPU "
+                f"reference traces several times faster there"
+            ),
+        )
     kind = vulkan.device_type
-    return vulkan, "vulkan", "requested" if backend == "vulkan" else f"auto: Vulkan device {vulkan.device_name} ({kind})"
+    return (
+        vulkan,
+        "vulkan",
+        "requested" if backend == "vulkan" else f"auto: Vulkan device {vulkan.device_name} ({kind})",
+    )
 
 
 _default_renderers: dict = {}
@@ -243,19 +298,37 @@ def _make_vulkan(device, validation, force_staging):
     import os
 
     if not HAS_VULKAN:
-        raise VulkanUnavailable("this build of bvhlab has no Vulkan backend (glslc or the Vulkan headers "
-                                "were missing when it was compiled)")
+        raise VulkanUnavailable(
+            "this build of bvhlab has no Vulkan backend (glslc or the Vulkan headers were missing when it was compiled)"
+        )
     if not _core.vulkan_loader_available():
-        raise VulkanUnavailable("no Vulkan loader (libvulkan.so.1): install libvulkan1 and a driver, "
-                                "e.g. apt-get install libvulkan1 mesa-vulkan-drivers")
+        raise VulkanUnavailable(
+            "no Vulkan loader (libvulkan.so.1): install libvulkan1 and a driver, "
+            "e.g. apt-get install libvulkan1 mesa-vulkan-drivers"
+        )
     if validation is None:
         validation = os.environ.get("BVHLAB_VULKAN_VALIDATION", "") not in ("", "0")
     return _core.VulkanRenderer(device or "", bool(validation), bool(force_staging))
 
 
-def render_settings(scene: Scene, bvh: Bvh, width, height, *, camera=None, samples_per_axis=1, max_depth=5,
-                    overlay_depth=None, traversal="stack", mode="shade", color_by_depth=True, line_width=1.0,
-                    heatmap_scale=None, steps_per_dispatch=None, max_steps_per_pixel=None) -> "_core.RenderSettings":
+def render_settings(
+    scene: Scene,
+    bvh: Bvh,
+    width,
+    height,
+    *,
+    camera=None,
+    samples_per_axis=1,
+    max_depth=5,
+    overlay_depth=None,
+    traversal="stack",
+    mode="shade",
+    color_by_depth=True,
+    line_width=1.0,
+    heatmap_scale=None,
+    steps_per_dispatch=None,
+    max_steps_per_pixel=None,
+) -> _core.RenderSettings:
     """The typed settings of a render. Types are checked here; values once, in C++ (ValueError)."""
     if not isinstance(scene, Scene):
         raise TypeError(f"scene must be a bvhlab.Scene, got {type(scene).__name__}")
@@ -304,7 +377,7 @@ def _real(name: str, value) -> float:
     return float(value)
 
 
-def _camera(scene: Scene, camera) -> "_core.Camera":
+def _camera(scene: Scene, camera) -> _core.Camera:
     c = _core.Camera()
     camera = scene.camera if camera is None else camera
     if camera is None:  # nothing to frame: bvhlab.defaults' fallback camera

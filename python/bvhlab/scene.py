@@ -1,4 +1,5 @@
 """`bvhlab.Scene`: geometry, materials, camera, light and sky as numpy arrays, saved as `.npz`."""
+
 from __future__ import annotations
 
 import math
@@ -29,10 +30,16 @@ def _vec3(name: str, value) -> tuple[float, float, float]:
     return v
 
 
+def _row3(row: np.ndarray, first: int) -> tuple[float, float, float]:
+    """Three numbers of a saved row, from `first`."""
+    return float(row[first]), float(row[first + 1]), float(row[first + 2])
+
+
 @dataclass(frozen=True)
 class Material:
     """Whitted material (report §2.1): a colour, a reflective and a transparent factor, an IOR."""
-    color: tuple[float, float, float] = defaults.MATERIAL[:3]
+
+    color: tuple[float, float, float] = defaults.MATERIAL[:3]  # type: ignore[assignment]  # three, by the core
     reflective: float = defaults.MATERIAL[3]
     transparent: float = defaults.MATERIAL[4]
     ior: float = defaults.MATERIAL[5]
@@ -54,6 +61,7 @@ class Material:
 @dataclass(frozen=True)
 class Camera:
     """Pinhole camera: position, the point it looks at, up vector, vertical field of view (degrees)."""
+
     position: tuple[float, float, float]
     look_at: tuple[float, float, float]
     up: tuple[float, float, float] = (0.0, 0.0, 1.0)
@@ -65,13 +73,18 @@ class Camera:
         if not (0.0 < float(self.fov_y) < 180.0):
             raise ValueError(f"camera fov_y must be in (0, 180) degrees, got {self.fov_y}")
         if max(abs(x) for x in self.position) > MAX_COORDINATE:
-            raise ValueError(f"camera position {self.position} lies outside the supported coordinate range "
-                             f"±{MAX_COORDINATE:.5g} (2^40)")
+            raise ValueError(
+                f"camera position {self.position} lies outside the supported coordinate range "
+                f"±{MAX_COORDINATE:.5g} (2^40)"
+            )
         # the tracer works in float32: the two points must differ there, not only in float64
-        forward = np.subtract(np.float32(self.look_at), np.float32(self.position)).astype(np.float64)
+        look_at, position = np.array(self.look_at, np.float32), np.array(self.position, np.float32)
+        forward = np.subtract(look_at, position).astype(np.float64)
         if np.linalg.norm(forward) == 0:
-            raise ValueError(f"camera position and look_at coincide (in float32, the tracer's precision): "
-                             f"{self.position}, {self.look_at}")
+            raise ValueError(
+                f"camera position and look_at coincide (in float32, the tracer's precision): "
+                f"{self.position}, {self.look_at}"
+            )
         if np.linalg.norm(np.cross(forward, self.up)) == 0:
             raise ValueError("camera up is parallel to the viewing direction")
 
@@ -82,6 +95,7 @@ class Camera:
 @dataclass(frozen=True)
 class Light:
     """Point light (report §2.1)."""
+
     position: tuple[float, float, float]
     color: tuple[float, float, float] = (1.0, 1.0, 1.0)
     intensity: float = 1.0
@@ -104,11 +118,13 @@ class Scene:
     """What bvhlab builds and renders. Missing parts get defaults that make a two-line script work:
     a camera framing the bounds (45° vertical, from the front-upper diagonal, Z up), a point light
     near it, matte white materials and a soft blue sky."""
+
     triangles: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 3), np.float32))
     spheres: np.ndarray = field(default_factory=lambda: np.zeros((0, 4), np.float32))
     materials: list[Material] = field(default_factory=lambda: [Material()])
-    tri_material: np.ndarray | None = None
-    sphere_material: np.ndarray | None = None
+    # None in the constructor means material 0 for all; the field always holds an int32 array.
+    tri_material: np.ndarray = None  # type: ignore[assignment]
+    sphere_material: np.ndarray = None  # type: ignore[assignment]
     camera: Camera | None = None
     light: Light | None = None
     sky: tuple[float, float, float] = DEFAULT_SKY
@@ -166,11 +182,13 @@ class Scene:
         which must end in .npz (never renamed); an existing file is replaced only once the new one
         is complete. Returns the path."""
         path = _checks.output_file(path, (".npz",), "scene file")
-        arrays = {
+        arrays: dict[str, np.ndarray] = {
             "format_version": np.array(FORMAT_VERSION),
-            "triangles": self.triangles, "spheres": self.spheres,
+            "triangles": self.triangles,
+            "spheres": self.spheres,
             "materials": np.array([m.as_row() for m in self.materials], np.float64).reshape(-1, 6),
-            "tri_material": self.tri_material, "sphere_material": self.sphere_material,
+            "tri_material": self.tri_material,
+            "sphere_material": self.sphere_material,
             "sky": np.array(self.sky, np.float64),
         }
         if self.camera is not None:
@@ -187,7 +205,7 @@ class Scene:
         return path
 
     @classmethod
-    def load(cls, path, *, max_expansion: float = MAX_EXPANSION) -> "Scene":
+    def load(cls, path, *, max_expansion: float = MAX_EXPANSION) -> Scene:
         """Read a scene written by `save`. Headers are checked before data is read: dtypes, shapes,
         counts that agree, and no more than `max_expansion` times the file's size once over 64 MiB
         (a small crafted file cannot claim gigabytes). Raises FileNotFoundError, or SceneFileError
@@ -195,20 +213,28 @@ class Scene:
         path = Path(path)
         if not path.exists():
             raise FileNotFoundError(f"no scene file at {path}")
-        f = read_npz(path, _FILE_MEMBERS, optional=("camera", "light"), max_expansion=max_expansion,
-                     same_length=(("triangles", "tri_material"), ("spheres", "sphere_material")))
+        f = read_npz(
+            path,
+            _FILE_MEMBERS,
+            optional=("camera", "light"),
+            max_expansion=max_expansion,
+            same_length=(("triangles", "tri_material"), ("spheres", "sphere_material")),
+        )
         if int(f["format_version"]) != FORMAT_VERSION:
-            raise SceneFileError(f"{path} is a bvhlab scene of format {int(f['format_version'])}; "
-                                 f"this version reads format {FORMAT_VERSION}")
+            raise SceneFileError(
+                f"{path} is a bvhlab scene of format {int(f['format_version'])}; "
+                f"this version reads format {FORMAT_VERSION}"
+            )
         try:
             cam, light = f.get("camera"), f.get("light")
             return cls(
                 triangles=np.ascontiguousarray(f["triangles"], np.float32),
                 spheres=np.ascontiguousarray(f["spheres"], np.float32),
                 materials=[Material(tuple(r[:3]), r[3], r[4], r[5]) for r in f["materials"]],
-                tri_material=f["tri_material"], sphere_material=f["sphere_material"],
-                camera=Camera(cam[0:3], cam[3:6], cam[6:9], cam[9]) if cam is not None else None,
-                light=Light(light[0:3], light[3:6], light[6]) if light is not None else None,
+                tri_material=f["tri_material"],
+                sphere_material=f["sphere_material"],
+                camera=Camera(_row3(cam, 0), _row3(cam, 3), _row3(cam, 6), float(cam[9])) if cam is not None else None,
+                light=Light(_row3(light, 0), _row3(light, 3), float(light[6])) if light is not None else None,
                 sky=tuple(f["sky"]),
             )
         except (ValueError, TypeError) as e:
@@ -218,10 +244,14 @@ class Scene:
 #: The arrays of a scene file: dtype kinds and shapes (None: any length).
 _FILE_MEMBERS = {
     "format_version": Member("iu", ()),
-    "triangles": Member("f", (None, 3, 3)), "spheres": Member("f", (None, 4)),
+    "triangles": Member("f", (None, 3, 3)),
+    "spheres": Member("f", (None, 4)),
     "materials": Member("f", (None, 6)),
-    "tri_material": Member("iu", (None,)), "sphere_material": Member("iu", (None,)),
-    "sky": Member("f", (3,)), "camera": Member("f", (10,)), "light": Member("f", (7,)),
+    "tri_material": Member("iu", (None,)),
+    "sphere_material": Member("iu", (None,)),
+    "sky": Member("f", (3,)),
+    "camera": Member("f", (10,)),
+    "light": Member("f", (7,)),
 }
 
 
@@ -248,9 +278,12 @@ def _materials(scene: Scene, value) -> list[Material]:
 def _instance_of(kind: type, name: str):
     def check(scene: Scene, value):
         if value is not None and not isinstance(value, kind):
-            raise TypeError(f"{name} must be a bvhlab.{kind.__name__} or None, got {type(value).__name__} "
-                            f"{value!r:.60} (make one with bvhlab.{kind.__name__}(...))")
+            raise TypeError(
+                f"{name} must be a bvhlab.{kind.__name__} or None, got {type(value).__name__} "
+                f"{value!r:.60} (make one with bvhlab.{kind.__name__}(...))"
+            )
         return value
+
     return check
 
 

@@ -1,5 +1,6 @@
 """BVH statistics as JSON and CSV files: the one writer of `bvhlab build --json/--csv` and the
 add-on's Export stats (no bpy). Method comparisons are written by bvhlab.compare."""
+
 from __future__ import annotations
 
 import csv

@@ -1,44 +1,77 @@
-// geometry.glsl — rays and the ray-box, ray-triangle and ray-sphere tests of the tracer.
+// geometry.glsl — rays and the ray-box, ray-triangle and ray-sphere tests: the one definition of
+// each, for the tracer (trace.comp, the CPU reference) and the CPU traversal (ray.h, through
+// core_cpp/include/bvhlab/shared_geometry.h; the wide traversal does the same arithmetic lane by
+// lane, core_cpp/src/query/wide_traverse.inl).
 // Shared code: GLSL that also compiles as C++ (glsl_compat.h), so the compute shader and the CPU
-// reference run the same arithmetic. Keep to that subset: no swizzles (use xyz()), no struct
-// constructors, float literals with an f suffix, INOUT/OUT for reference parameters.
+// run the same arithmetic. Keep to that subset: no swizzles (use xyz()), no struct constructors,
+// float literals with an f suffix, INOUT/OUT for reference parameters, INLINE before each function
+// (C++ includes this file in a header).
 
+/// A ray with what the tests need precomputed (make_ray).
 struct TraceRay {
     vec3 origin;
     vec3 dir;
-    vec3 inv_dir;
+    vec3 inv_dir;  ///< 1/dir, ±inf for a zero component (box tests)
     float tmin;
+    uint kx;       ///< the watertight test's axes: kz is the largest |dir| component, kx and ky
+    uint ky;       ///< the other two, swapped when dir[kz] < 0 so that the winding is kept
+    uint kz;
+    vec3 shear;    ///< dir[kx] / dir[kz], dir[ky] / dir[kz], 1 / dir[kz] (as products with 1 / dir[kz])
 };
 
 /// 1/d, with a signed infinity for d = ±0 (said explicitly rather than left to the division).
-float inverse_or_infinity(float d) {
+INLINE float inverse_or_infinity(float d) {
     float inf = uintBitsToFloat(0x7f800000u);
     if (d == 0.0f) return (floatBitsToUint(d) >> 31) != 0u ? -inf : inf;
     return 1.0f / d;
 }
 
-TraceRay make_ray(vec3 origin, vec3 dir, float tmin) {
+/// The axis of the largest |component| (ties go to the later axis, z before y before x).
+INLINE uint largest_axis_of(vec3 d) {
+    float x = abs(d.x);
+    float y = abs(d.y);
+    float z = abs(d.z);
+    if (x > y && x > z) return 0u;
+    return y > z ? 1u : 2u;
+}
+
+/// v's components in the ray's axis order (kx, ky, kz).
+INLINE vec3 in_ray_axes(vec3 v, TraceRay r) { return vec3(v[r.kx], v[r.ky], v[r.kz]); }
+
+/// The ray origin + t·dir, t in (tmin, ...), with the per-ray constants of the box test (inverse
+/// direction) and of the watertight triangle test (Woop, Benthin and Wald 2013, §3: the axis
+/// permutation and the shear that maps the ray onto the +z axis).
+INLINE TraceRay make_ray(vec3 origin, vec3 dir, float tmin) {
     TraceRay r;
     r.origin = origin;
     r.dir = dir;
     r.inv_dir = vec3(inverse_or_infinity(dir.x), inverse_or_infinity(dir.y), inverse_or_infinity(dir.z));
     r.tmin = tmin;
+    r.kz = largest_axis_of(dir);
+    uint next = r.kz == 2u ? 0u : r.kz + 1u;
+    uint last = next == 2u ? 0u : next + 1u;
+    bool flip = dir[r.kz] < 0.0f;  // selects, not a branch: its sign is random for random rays
+    r.kx = flip ? last : next;
+    r.ky = flip ? next : last;
+    float inv_z = r.inv_dir[r.kz];  // the box test's 1 / dir[kz]: no division here (the paper has three)
+    r.shear = vec3(dir[r.kx] * inv_z, dir[r.ky] * inv_z, inv_z);
     return r;
 }
 
 /// Distance along the ray to a slab plane `offset` = plane - origin away on an axis whose inverse
 /// direction is `inv`. A ray starting on the plane gets `on_plane` instead of 0·inv (NaN when the
 /// ray is parallel to the plane, and Vulkan need not even produce that NaN).
-float plane_distance(float offset, float inv, float on_plane) {
+INLINE float plane_distance(float offset, float inv, float on_plane) {
     return offset == 0.0f ? on_plane : offset * inv;
 }
 
-/// Slab test (Kay and Kajiya 1986), closed on every face: where the ray enters the box within
-/// (tmin, tmax], or -1 when it misses. A ray parallel to an axis (infinite inverse) is inside the
-/// slab's planes with no constraint, outside them with none of the slab, and on one of them
-/// counts as inside — so a ray along a box face is not lost while the closed triangle test on that
-/// face would hit (the CPU query side does the same: hit_box in core_cpp/include/bvhlab/ray.h).
-float box_entry(vec3 lo, vec3 hi, TraceRay r, float tmax) {
+/// Slab test (Kay and Kajiya 1986), closed on every face and conservative (Ize 2013: the far end
+/// times BOX_FAR_SCALE): where the ray enters the box within (tmin, tmax], or -1 when it misses. A
+/// ray parallel to an axis (infinite inverse) is inside the slab's planes with no constraint,
+/// outside them with none of the slab, and on one of them counts as inside — so a ray along a box
+/// face is not lost while the closed triangle test on that face would hit (the CPU query side does
+/// the same: hit_box in core_cpp/include/bvhlab/ray.h).
+INLINE float box_entry(vec3 lo, vec3 hi, TraceRay r, float tmax) {
     float inf = uintBitsToFloat(0x7f800000u);
     bool nx = r.inv_dir.x < 0.0f;
     bool ny = r.inv_dir.y < 0.0f;
@@ -50,47 +83,78 @@ float box_entry(vec3 lo, vec3 hi, TraceRay r, float tmax) {
     float far_y = plane_distance((ny ? lo.y : hi.y) - r.origin.y, r.inv_dir.y, inf);
     float far_z = plane_distance((nz ? lo.z : hi.z) - r.origin.z, r.inv_dir.z, inf);
     float tnear = max(max(near_x, near_y), max(near_z, r.tmin));
-    float tfar = min(min(far_x, far_y), min(far_z, tmax));
+    float tfar = min(min(far_x, far_y), min(far_z, tmax)) * BOX_FAR_SCALE;
     return tnear <= tfar ? tnear : -1.0f;
 }
 
-/// Möller–Trumbore. A hit in (tmin, t_best] returns true with tuv = (t, u, v); t_best is
-/// inclusive so that the caller can apply the tie rule (closer() in traverse.glsl).
-bool hit_triangle(GpuTriangle tri, TraceRay r, float t_best, OUT(vec3) tuv) {
-    vec3 e1 = xyz(tri.e1);
-    vec3 e2 = xyz(tri.e2);
-    vec3 p = cross(r.dir, e2);
-    float det = dot(e1, p);
-    if (det == 0.0f) return false;  // parallel, or a zero-area triangle (stored with zero edges)
-    float inv_det = 1.0f / det;
-    vec3 s = r.origin - xyz(tri.v0);
-    float u = dot(s, p) * inv_det;
-    if (!(u >= 0.0f && u <= 1.0f)) return false;
-    vec3 q = cross(s, e1);
-    float v = dot(r.dir, q) * inv_det;
-    if (!(v >= 0.0f && u + v <= 1.0f)) return false;
-    float t = dot(e2, q) * inv_det;
+/// Watertight ray–triangle intersection (Woop, Benthin and Wald, "Watertight Ray/Triangle
+/// Intersection", JCGT 2013). The vertices, relative to the origin, are sheared so that the ray
+/// runs along +z; u, v, w are the 2D edge functions of the opposite edges (the scaled barycentrics
+/// of p0, p1, p2), and the ray hits when they share a sign (both faces count), closed on the edges.
+/// A shared edge gives the same edge function (negated) in both triangles, from the same vertex
+/// numbers, so a ray never passes between two triangles of a mesh — with Möller–Trumbore each
+/// triangle rounds its own edge vectors, and rays slip through cracks (test_traverse.cpp: 7% of
+/// rays aimed at a closed mesh's vertices and edges). We chose it over Möller–Trumbore for that, in
+/// the same storage (three vertices instead of a vertex and two edges); measured on the wide CPU
+/// traversal (bvh_bench, 1 thread, against 1764b04): 1-7% more instructions per ray on Sponza and
+/// a 1M mesh with random rays, 25% more on cheap primary rays (the per-ray axis and shear), 5-37%
+/// more time. Its t is a sum of vertex distances and loses more than Möller–Trumbore's where a
+/// large triangle is hit near the origin (7 of 200k random rays in Sponza differ from Embree's t by
+/// over 1e-4, relative, all still hits; the float64 distance is Embree's). Unlike the paper we do
+/// not redo u, v, w in double precision when one is 0: a ray through a shared edge or vertex then
+/// hits both triangles, and the tie rule (closer_hit) picks one — still watertight.
+/// t = ((u·a + v·b) + w·c) / det · (1/dir[kz]) with a, b, c the vertices' unsheared kz distances:
+/// dividing before the scaling keeps it in range (coordinate_range.h). A hit in (tmin, t_best]
+/// returns true with tuv = (t, barycentric of p1, of p2); t_best is inclusive so that the caller
+/// can apply the tie rule.
+INLINE bool hit_triangle(vec3 p0, vec3 p1, vec3 p2, TraceRay r, float t_best, OUT(vec3) tuv) {
+    vec3 a = in_ray_axes(p0 - r.origin, r);
+    vec3 b = in_ray_axes(p1 - r.origin, r);
+    vec3 c = in_ray_axes(p2 - r.origin, r);
+    float ax = a.x - r.shear.x * a.z;
+    float ay = a.y - r.shear.y * a.z;
+    float bx = b.x - r.shear.x * b.z;
+    float by = b.y - r.shear.y * b.z;
+    float cx = c.x - r.shear.x * c.z;
+    float cy = c.y - r.shear.y * c.z;
+    float u = cx * by - cy * bx;
+    float v = ax * cy - ay * cx;
+    float w = bx * ay - by * ax;
+    if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f)) return false;
+    float det = u + v + w;
+    if (det == 0.0f) return false;  // seen edge-on, or a zero-area triangle (stored as one point)
+    float t = (u * a.z + v * b.z + w * c.z) / det * r.shear.z;
     if (!(t > r.tmin && t <= t_best)) return false;
-    tuv = vec3(t, u, v);
+    tuv = vec3(t, v / det, w / det);
     return true;
 }
 
-/// The two roots of |o + t·d - c|² = r², as (near, far); near > far when the ray misses.
-vec2 sphere_roots(GpuSphere s, TraceRay r) {
-    vec3 oc = r.origin - xyz(s.center_radius);
-    float radius = s.center_radius.w;
+/// The two roots of |o + t·d - c|² = radius², as (near, far); near > far when the ray misses.
+/// Haines, Günther, Akenine-Möller, "Precision Improvements for Ray/Sphere Intersection" (Ray
+/// Tracing Gems, 2019, ch. 7): the discriminant b² - a·c cancels catastrophically when the
+/// sphere is small and far (float32 then resolves the ray's distance from the centre only to
+/// about sqrt(ε)·|o - c|, and rays 20 radii beside a 1 mm sphere 100 m away hit it); it is
+/// computed instead as radius² - |l|², l = f - (f·d / d·d)·d the part of f = o - c
+/// perpendicular to the ray (their eq. 7.5, times d·d). The roots then come without cancellation
+/// either: q = -(b + sign(b)·sqrt(a·Δ)), t = c/q and q/a (their eq. 7.7).
+INLINE vec2 sphere_roots(vec3 centre, float radius, TraceRay r) {
+    vec3 f = r.origin - centre;
     float a = dot(r.dir, r.dir);
-    float b = dot(oc, r.dir);
-    float c = dot(oc, oc) - radius * radius;
-    float disc = b * b - a * c;
+    float b = dot(f, r.dir);
+    vec3 l = f - r.dir * (b / a);
+    float disc = radius * radius - dot(l, l);
     if (!(disc >= 0.0f)) return vec2(1.0f, -1.0f);
-    float sq = sqrt(disc);
-    return vec2((-b - sq) / a, (-b + sq) / a);
+    float root = sqrt(a * disc);
+    float q = b >= 0.0f ? -(b + root) : root - b;
+    float c = dot(f, f) - radius * radius;
+    float t0 = q != 0.0f ? c / q : 0.0f;  // q = 0: a tangent ray starting on the sphere (both 0)
+    float t1 = q / a;
+    return vec2(min(t0, t1), max(t0, t1));
 }
 
 /// Nearest root in (tmin, t_best] (inclusive, as hit_triangle).
-bool hit_sphere(GpuSphere s, TraceRay r, float t_best, OUT(float) t_hit) {
-    vec2 roots = sphere_roots(s, r);
+INLINE bool hit_sphere(vec3 centre, float radius, TraceRay r, float t_best, OUT(float) t_hit) {
+    vec2 roots = sphere_roots(centre, radius, r);
     if (roots.x > roots.y) return false;
     float t = roots.x > r.tmin ? roots.x : roots.y;
     if (!(t > r.tmin && t <= t_best)) return false;
@@ -99,8 +163,8 @@ bool hit_sphere(GpuSphere s, TraceRay r, float t_best, OUT(float) t_hit) {
 }
 
 /// How often the segment (tmin, tmax) crosses the sphere's surface: 0, 1 or 2.
-uint sphere_crossings(GpuSphere s, TraceRay r, float tmax) {
-    vec2 roots = sphere_roots(s, r);
+INLINE uint sphere_crossings(vec3 centre, float radius, TraceRay r, float tmax) {
+    vec2 roots = sphere_roots(centre, radius, r);
     if (roots.x > roots.y) return 0u;
     uint n = 0u;
     if (roots.x > r.tmin && roots.x < tmax) n += 1u;

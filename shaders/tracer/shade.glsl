@@ -82,8 +82,8 @@ Surface surface_at(RayTask task, Hit hit) {
         material = sphere.material.x;
     } else {
         GpuTriangle tri = load_triangle(hit.ref);
-        n = normalize(cross(xyz(tri.e1), xyz(tri.e2)));
-        material = floatBitsToUint(tri.v0.w);
+        n = normalize(cross(tri.v1 - tri.v0, tri.v2 - tri.v0));
+        material = tri.material;
     }
     s.entering = dot(n, task.dir) < 0.0f;
     s.facing = s.entering ? n : -n;

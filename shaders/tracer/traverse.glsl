@@ -34,7 +34,7 @@ bool closer(float t, uint ref, Hit hit) {
 
 uint material_of(uint ref) {
     if ((ref & REF_SPHERE_BIT) != 0u) return load_sphere(ref & REF_INDEX_MASK).material.x;
-    return floatBitsToUint(load_triangle(ref).v0.w);
+    return load_triangle(ref).material;
 }
 
 /// One primitive of a leaf. Closest-hit keeps the nearest; a shadow ray multiplies its
@@ -43,13 +43,14 @@ uint material_of(uint ref) {
 bool visit_primitive(uint ref, TraceRay r, bool shadow, INOUT(Hit) hit) {
     uint crossings = 0u;
     if ((ref & REF_SPHERE_BIT) != 0u) {
-        GpuSphere s = load_sphere(ref & REF_INDEX_MASK);
+        vec4 s = load_sphere(ref & REF_INDEX_MASK).center_radius;
         float t;
-        if (shadow) crossings = sphere_crossings(s, r, hit.t);
-        else if (hit_sphere(s, r, hit.t, t) && closer(t, ref, hit)) { hit.t = t; hit.ref = ref; }
+        if (shadow) crossings = sphere_crossings(xyz(s), s.w, r, hit.t);
+        else if (hit_sphere(xyz(s), s.w, r, hit.t, t) && closer(t, ref, hit)) { hit.t = t; hit.ref = ref; }
     } else {
+        GpuTriangle tri = load_triangle(ref);
         vec3 tuv;
-        if (hit_triangle(load_triangle(ref), r, hit.t, tuv)) {
+        if (hit_triangle(tri.v0, tri.v1, tri.v2, r, hit.t, tuv)) {
             if (shadow) crossings = tuv.x < hit.t ? 1u : 0u;
             else if (closer(tuv.x, ref, hit)) { hit.t = tuv.x; hit.u = tuv.y; hit.v = tuv.z; hit.ref = ref; }
         }
@@ -158,7 +159,7 @@ void step_pop(INOUT(Walk) w, Hit hit) {
     }
     w.stacked -= 1u;
     uvec2 entry = node_stack_load(w.stacked);
-    if (uintBitsToFloat(entry.y) <= hit.t) {
+    if (uintBitsToFloat(entry.y) <= hit.t * BOX_FAR_SCALE) {  // as conservative as box_entry (Ize 2013)
         w.node = entry.x;
         w.state = WALK_NODE;
     }

@@ -1,22 +1,28 @@
 """Operator checks (the add-on must be enabled: harness.enable_addon_from_source or an installed
 zip): Build against bvhlab.build on the same export, overlay box counts, exported stats files,
 Render against Blender's own ray casts, Compare, and bad input reported without a crash."""
+
 from __future__ import annotations
 
 import csv
 import json
 import math
 
+import bpy
+import harness
 import numpy as np
 
-import harness
-import bpy
 import bvhlab
-from bvhlab.bvh import method_from_label as method_kwargs
 from bvhlab.blender import export_scene
+from bvhlab.bvh import method_from_label as method_kwargs
 
-BUILD_VARIANTS = ({"method": "sah", "bins": 12}, {"method": "median"}, {"method": "mean", "max_leaf_size": 4},
-                  {"method": "sweep_sah", "axis": "best"})
+BUILD_VARIANTS = (
+    {"method": "sah", "bins": 12},
+    {"method": "sah", "bins": 32, "bin_bounds": "centroids"},
+    {"method": "median"},
+    {"method": "mean", "max_leaf_size": 4},
+    {"method": "sweep_sah", "axis": "best"},
+)
 #: Scenes the Build operator is checked on, with the variants (the large one gets the quick two).
 BUILD_SCENES = {"five_spheres": BUILD_VARIANTS, "whitted": BUILD_VARIANTS, "suzanne_250k": BUILD_VARIANTS[:2]}
 
@@ -35,12 +41,14 @@ def check_build_matches_direct(name: str, variants=BUILD_VARIANTS) -> None:
     scene exported directly (only the build time may differ)."""
     harness.open_scene(name)
     for variant in variants:
-        _configure(scope="visible", method="sah", bins=12, axis="largest", max_leaf_size=1)
+        _configure(scope="visible", method="sah", bins=12, bin_bounds="box", axis="largest", max_leaf_size=1)
         _configure(**variant)
         assert bpy.ops.bvhlab.build() == {"FINISHED"}
         built = _built()
-        direct = bvhlab.build(export_scene(bpy.context, require_camera=False), **{
-            "method": "sah", "bins": 12, "axis": "largest", "max_leaf_size": 1, **variant})
+        direct = bvhlab.build(
+            export_scene(bpy.context, require_camera=False),
+            **{"method": "sah", "bins": 12, "bin_bounds": "box", "axis": "largest", "max_leaf_size": 1, **variant},
+        )
         ours, theirs = built.bvh.stats, direct.stats
         for key in theirs:
             if key != "build_ms":
@@ -64,14 +72,14 @@ def check_overlay_ranges() -> None:
     leaf_set = {(tuple(node["lo"]), tuple(node["hi"])) for node in bvh.nodes[bvh.is_leaf]}
     for depth_min, depth_max in ((0, 0), (1, 2), (3, height - 1), (0, height - 1), (height - 1, height - 1)):
         first, count = table.depth_slice(depth_min, depth_max)
-        assert count == sum(stats["nodes_per_depth"][depth_min:depth_max + 1])
+        assert count == sum(stats["nodes_per_depth"][depth_min : depth_max + 1])
         lo, hi, depth = bvh.boxes(depth_min, depth_max)
-        rows = table.rows[first:first + count]
+        rows = table.rows[first : first + count]
         assert np.array_equal(rows[:, 0:3], lo) and np.array_equal(rows[:, 4:7], hi)
         assert np.array_equal(rows[:, 3], depth)
         first, leaf_count = leaves.depth_slice(depth_min, depth_max)
-        assert leaf_count == sum(stats["leaves_per_depth"][depth_min:depth_max + 1])
-        leaf_rows = leaves.rows[first:first + leaf_count]
+        assert leaf_count == sum(stats["leaves_per_depth"][depth_min : depth_max + 1])
+        leaf_rows = leaves.rows[first : first + leaf_count]
         assert np.all((leaf_rows[:, 3] >= depth_min) & (leaf_rows[:, 3] <= depth_max))
         assert all((tuple(r[0:3]), tuple(r[4:7])) in leaf_set for r in leaf_rows), "a non-leaf in the leaves"
     assert table.depth_slice(height, height + 3)[1] == 0
@@ -156,7 +164,7 @@ def check_render() -> None:
     drawn = np.abs(top_first[..., :3] - np.array(exported.sky)).max(-1) > 0.02
     hits = blender_hit_mask(scene, exported.camera, width, height)
     padded = np.pad(hits, 1, mode="edge")
-    neighbours = [padded[1 + dy:1 + dy + height, 1 + dx:1 + dx + width] for dy in (-1, 0, 1) for dx in (-1, 0, 1)]
+    neighbours = [padded[1 + dy : 1 + dy + height, 1 + dx : 1 + dx + width] for dy in (-1, 0, 1) for dx in (-1, 0, 1)]
     interior = np.all(neighbours == hits, axis=0)  # pixels away from a silhouette
     assert hits.any() and (~hits).any()
     agreement = (drawn == hits)[interior].mean()
@@ -176,7 +184,9 @@ def check_compare(tmp_dir) -> None:
     assert methods == {"median", "mean", "midpoint", "sah12", "sah32", "sweep_sah", "lbvh"}, methods
     exported = export_scene(bpy.context)
     for row in rows:
-        direct = bvhlab.build(exported, axis="largest", max_leaf_size=1, **method_kwargs(row["method"]))  # as configured
+        direct = bvhlab.build(
+            exported, axis="largest", max_leaf_size=1, **method_kwargs(row["method"])
+        )  # as configured
         assert int(row["height"]) == direct.stats["height"] and float(row["frame_ms"]) > 0
     assert len(harness.addon().state.comparisons[harness.addon().state.key(bpy.context.scene)]) == len(rows)
 

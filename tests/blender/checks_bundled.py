@@ -1,15 +1,16 @@
 """Export checks on the bundled scenes, against scenes.json (what make_scenes.py built and Blender
 evaluated) and against Blender's own numbers (mathutils transforms, view_frame, lights, world)."""
+
 from __future__ import annotations
 
 import math
 import warnings
 
+import bpy
+import harness  # noqa: F401  (before bpy)
 import numpy as np
 
-import harness  # noqa: F401  (before bpy)
-import bpy
-from bvhlab.blender import ExportWarning, SPHERE_PROPERTY, export_scene
+from bvhlab.blender import SPHERE_PROPERTY, ExportWarning, export_scene
 
 
 def export_bundled(name: str):
@@ -74,8 +75,9 @@ def check_camera(name: str, scene, exported) -> None:
     matrix = np.array(camera.matrix_world)
     np.testing.assert_allclose(exported.camera.position, matrix[:3, 3], atol=1e-5)
     forward = np.subtract(exported.camera.look_at, exported.camera.position)
-    np.testing.assert_allclose(forward / np.linalg.norm(forward), -matrix[:3, 2] / np.linalg.norm(matrix[:3, 2]),
-                               atol=1e-6)
+    np.testing.assert_allclose(
+        forward / np.linalg.norm(forward), -matrix[:3, 2] / np.linalg.norm(matrix[:3, 2]), atol=1e-6
+    )
     np.testing.assert_allclose(exported.camera.up, matrix[:3, 1] / np.linalg.norm(matrix[:3, 1]), atol=1e-6)
     frame = np.array([tuple(v) for v in camera.data.view_frame(scene=scene)])
     fov_y = math.degrees(2 * math.atan(np.abs(frame[:, 1]).max() / abs(frame[0, 2])))
@@ -91,7 +93,7 @@ def check_light_and_sky(name: str, scene, exported) -> None:
     np.testing.assert_allclose(exported.light.color, tuple(light.data.color), atol=1e-6)
     centres = np.concatenate([exported.triangles.mean(1), exported.spheres[:, :3]])
     median = np.median(np.linalg.norm(centres - np.array(exported.light.position), axis=1))
-    assert math.isclose(exported.light.intensity, light.data.energy / (4 * math.pi ** 2 * median ** 2), rel_tol=0.05)
+    assert math.isclose(exported.light.intensity, light.data.energy / (4 * math.pi**2 * median**2), rel_tol=0.05)
     background = scene.world.node_tree.nodes["Background"].inputs
     sky = np.array(background["Color"].default_value[:3]) * background["Strength"].default_value
     np.testing.assert_allclose(exported.sky, sky, atol=1e-6)

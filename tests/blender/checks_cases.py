@@ -1,14 +1,15 @@
 """Export checks on small scenes made on the spot: scope, instances, material slots, spheres,
 camera sensor fits, files, and bad input (clear errors, warnings for substitutes)."""
+
 from __future__ import annotations
 
 import math
 import warnings
 
+import bpy
+import harness
 import numpy as np
 
-import harness
-import bpy
 import bvhlab
 from bvhlab.blender import SPHERE_PROPERTY, ExportError, SubstituteWarning, export_scene, export_scene_file
 from bvhlab.blender.compat import ensure_shader_tree
@@ -36,8 +37,9 @@ def check_scope_selected_and_visible() -> None:
     selected = export_scene(bpy.context, scope="selected")
     assert len(selected.triangles) == 12
     corners = _world_cube_corners(objects["Box B"])
-    np.testing.assert_allclose(np.sort(np.unique(selected.triangles.reshape(-1, 3), axis=0), 0),
-                               np.sort(corners, 0), atol=1e-5)
+    np.testing.assert_allclose(
+        np.sort(np.unique(selected.triangles.reshape(-1, 3), axis=0), 0), np.sort(corners, 0), atol=1e-5
+    )
     assert len(export_scene(bpy.context, scope="visible").triangles) == 36
     objects["Box C"].hide_set(True)
     assert len(export_scene(bpy.context, scope="visible").triangles) == 24
@@ -150,6 +152,12 @@ def check_missing_camera_and_light_substituted() -> None:
     assert exported.camera is not None and exported.light is not None
 
 
-CASE_CHECKS = (check_scope_selected_and_visible, check_collection_instances, check_material_slots_per_triangle,
-               check_analytic_sphere_radius, check_camera_sensor_fits, check_bad_input_errors,
-               check_missing_camera_and_light_substituted)
+CASE_CHECKS = (
+    check_scope_selected_and_visible,
+    check_collection_instances,
+    check_material_slots_per_triangle,
+    check_analytic_sphere_radius,
+    check_camera_sensor_fits,
+    check_bad_input_errors,
+    check_missing_camera_and_light_substituted,
+)

@@ -3,15 +3,16 @@ F12 and `blender -b` run it): the passes read back from a multilayer EXR Blender
 tests/blender/exr.py, not by Blender), against the CPU reference tracer on the same export, a
 brute-force depth and Bvh.intersect's box-test counts; what a re-render reads again; animation
 frames. The add-on must be enabled (harness.enable_addon_from_source or an installed zip)."""
+
 from __future__ import annotations
 
 import math
 
-import numpy as np
-
+import bpy
 import exr
 import harness
-import bpy
+import numpy as np
+
 import bvhlab
 from bvhlab.blender import export_scene
 from bvhlab.blender.compat import use_multilayer_exr
@@ -61,13 +62,22 @@ def reference(scene, samples_per_axis: int, overlay=None, mode="shade", **build)
     """bvhlab.render on the CPU reference of a fresh export, tree built directly: the oracle."""
     exported = export_scene(bpy.context)
     settings = scene.bvhlab
-    bvh = bvhlab.build(exported, method=settings.method, bins=settings.bins, axis=settings.axis,
-                       max_leaf_size=settings.max_leaf_size, **build)
+    bvh = bvhlab.build(exported, **{**settings.build_kwargs(), **build})
     width, height = scene.render.resolution_x, scene.render.resolution_y
-    image, _ = bvhlab.render(exported, bvh, width, height, backend="cpu", samples_per_axis=samples_per_axis,
-                             max_depth=settings.render_bounces,
-                             overlay_depth=overlay, traversal=settings.traversal, mode=mode,
-                             color_by_depth=settings.overlay_color_by_depth, line_width=settings.overlay_line_width)
+    image, _ = bvhlab.render(
+        exported,
+        bvh,
+        width,
+        height,
+        backend="cpu",
+        samples_per_axis=samples_per_axis,
+        max_depth=settings.render_bounces,
+        overlay_depth=overlay,
+        traversal=settings.traversal,
+        mode=mode,
+        color_by_depth=settings.overlay_color_by_depth,
+        line_width=settings.overlay_line_width,
+    )
     return image, exported, bvh
 
 
@@ -88,8 +98,14 @@ def check_engine_selectable() -> None:
     scene = harness.boxes_scene()
     scene.render.engine = ENGINE
     assert scene.render.engine == ENGINE
-    for panel in ("RENDER_PT_format", "RENDER_PT_output", "RENDER_PT_frame_range", "DATA_PT_lens", "DATA_PT_light",
-                  "EEVEE_MATERIAL_PT_surface"):
+    for panel in (
+        "RENDER_PT_format",
+        "RENDER_PT_output",
+        "RENDER_PT_frame_range",
+        "DATA_PT_lens",
+        "DATA_PT_light",
+        "EEVEE_MATERIAL_PT_surface",
+    ):
         assert ENGINE in getattr(bpy.types, panel).COMPAT_ENGINES, panel
 
 
@@ -99,8 +115,16 @@ def check_combined_and_heatmap_match_the_tracer(tmp_dir) -> None:
     scene from the same camera (the CPU reference; exactly, when auto rendered on the CPU)."""
     scene = harness.open_scene("whitted")
     scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 160, 120, 100
-    use_engine(scene, backend="auto", render_supersampling=2, render_bounces=5, render_overlay=True,
-               overlay_depth_min=1, overlay_depth_max=3, traversal="stackless")
+    use_engine(
+        scene,
+        backend="auto",
+        render_supersampling=2,
+        render_bounces=5,
+        render_overlay=True,
+        overlay_depth_min=1,
+        overlay_depth_max=3,
+        traversal="stackless",
+    )
     got = render_passes(tmp_dir)
     record = _last_final(scene)
     combined, _, _ = reference(scene, samples_per_axis=2, overlay=(1, 3))
@@ -128,7 +152,7 @@ def check_heatmap_is_box_tests(tmp_dir) -> None:
     got = render_passes(tmp_dir)
     exported = export_scene(bpy.context)
     s = scene.bvhlab  # the tree the engine builds: the panel's settings
-    bvh = bvhlab.build(exported, method=s.method, bins=s.bins, axis=s.axis, max_leaf_size=s.max_leaf_size)
+    bvh = bvhlab.build(exported, **s.build_kwargs())
     directions = _primary_directions(exported.camera, 96, 72)
     origins = np.ascontiguousarray(np.broadcast_to(np.float32(exported.camera.position), directions.shape))
     visited = bvh.intersect(origins, directions, traversal="stack")["nodes_visited"].reshape(72, 96)
@@ -179,11 +203,11 @@ def brute_force_depth(exported, width: int, height: int, samples_per_axis: int =
         best = np.minimum(best, np.where(hit, t, np.inf).min(1))
     for cx, cy, cz, r in exported.spheres.astype(np.float64):
         oc = origin - (cx, cy, cz)
-        a2, b2, c2 = (directions ** 2).sum(1), 2 * directions @ oc, oc @ oc - r * r
+        a2, b2, c2 = (directions**2).sum(1), 2 * directions @ oc, oc @ oc - r * r
         disc = b2 * b2 - 4 * a2 * c2
         t = (-b2 - np.sqrt(np.maximum(disc, 0))) / (2 * a2)
         best = np.minimum(best, np.where((disc >= 0) & (t > 1e-6), t, np.inf))
-    best = best.reshape(height, width, samples_per_axis ** 2).min(-1)
+    best = best.reshape(height, width, samples_per_axis**2).min(-1)
     return np.where(np.isfinite(best), best, MISS_DEPTH)
 
 
@@ -220,9 +244,13 @@ def check_rerender_reads_only_what_changed(tmp_dir) -> None:
     box.data.materials.append(_principled("Paint", (0.8, 0.1, 0.1)))
     use_engine(scene, backend="cpu", render_supersampling=1, render_overlay=False)
     scene.render.use_persistent_data = True
-    steps = [("first", None), ("material", lambda: _set_color("Paint", (0.1, 0.8, 0.1))),
-             ("move", lambda: setattr(bpy.data.objects["Box B"], "location", (1.0, 0.3, 0.9))),
-             ("edit", lambda: _move_vertex("Box C")), ("nothing", None)]
+    steps = [
+        ("first", None),
+        ("material", lambda: _set_color("Paint", (0.1, 0.8, 0.1))),
+        ("move", lambda: setattr(bpy.data.objects["Box B"], "location", (1.0, 0.3, 0.9))),
+        ("edit", lambda: _move_vertex("Box C")),
+        ("nothing", None),
+    ]
     seen, images = [], []
     for step, change in steps:
         if change:
@@ -230,14 +258,20 @@ def check_rerender_reads_only_what_changed(tmp_dir) -> None:
         images.append(render_passes(tmp_dir, step)["Combined"])
         record = _last_final(scene)
         totals = record["totals"]
-        seen.append((step, totals.full_syncs, totals.objects_read, totals.objects_moved, totals.materials_read,
-                     record["tree"]))
+        seen.append(
+            (step, totals.full_syncs, totals.objects_read, totals.objects_moved, totals.materials_read, record["tree"])
+        )
         compare_images(images[-1], reference(scene, samples_per_axis=1)[0], "cpu")
     print(f"engine re-renders (step, full exports, objects read, moved, materials read, tree): {seen}")
     # materials: the empty slot's default and "Paint" at first; the edited mesh keeps its triangle
     # count and order, so the tree is refit for it too
-    assert [row[1:] for row in seen] == [(1, 3, 0, 2, "built"), (1, 3, 0, 3, "kept"), (1, 3, 1, 3, "refit"),
-                                         (1, 4, 1, 3, "refit"), (1, 4, 1, 3, "kept")], seen
+    assert [row[1:] for row in seen] == [
+        (1, 3, 0, 2, "built"),
+        (1, 3, 0, 3, "kept"),
+        (1, 3, 1, 3, "refit"),
+        (1, 4, 1, 3, "refit"),
+        (1, 4, 1, 3, "kept"),
+    ], seen
     assert np.abs(images[1] - images[0]).max() > 0.1, "the new colour did not reach the render"
     scene.render.use_persistent_data = False
     render_passes(tmp_dir, "fresh")
@@ -270,7 +304,12 @@ def _red_centroid_x(image: np.ndarray) -> float:
 def _exr_output(scene, path_prefix) -> None:
     scene.render.filepath = str(path_prefix)
     settings = scene.render.image_settings
-    settings.file_format, settings.exr_codec, settings.color_depth, settings.color_mode = "OPEN_EXR", "NONE", "32", "RGBA"
+    settings.file_format, settings.exr_codec, settings.color_depth, settings.color_mode = (
+        "OPEN_EXR",
+        "NONE",
+        "32",
+        "RGBA",
+    )
 
 
 def check_animation_frames(tmp_dir) -> None:
@@ -306,9 +345,25 @@ def check_command_line_frames(tmp_dir) -> None:
     import subprocess
 
     blend = harness.SCENES_DIR / harness.scenes_index()["moving_ball"]["file"]
-    command = [bpy.app.binary_path, "--background", "--factory-startup", str(blend), "--addons",
-               harness._addon_module, "--engine", ENGINE, "--render-output", str(tmp_dir / "cli_####"),
-               "--render-format", "OPEN_EXR", "--python-expr", _CLI_SETUP, "--render-frame", "1", "--render-anim"]
+    command = [
+        bpy.app.binary_path,
+        "--background",
+        "--factory-startup",
+        str(blend),
+        "--addons",
+        harness._addon_module,
+        "--engine",
+        ENGINE,
+        "--render-output",
+        str(tmp_dir / "cli_####"),
+        "--render-format",
+        "OPEN_EXR",
+        "--python-expr",
+        _CLI_SETUP,
+        "--render-frame",
+        "1",
+        "--render-anim",
+    ]
     done = subprocess.run(command, capture_output=True, text=True, timeout=600, env=dict(os.environ))
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
     files = sorted(p.name for p in tmp_dir.glob("cli_*.exr"))
@@ -317,12 +372,16 @@ def check_command_line_frames(tmp_dir) -> None:
     use_engine(scene, backend="auto", render_supersampling=1)
     for frame in (1, 2, 3):
         scene.frame_set(frame)
-        compare_images(_exr_rgba(tmp_dir / f"cli_{frame:04d}.exr"), reference(scene, samples_per_axis=1)[0], _auto_backend())
+        compare_images(
+            _exr_rgba(tmp_dir / f"cli_{frame:04d}.exr"), reference(scene, samples_per_axis=1)[0], _auto_backend()
+        )
 
 
 #: Run by the child Blender before it renders: lossless EXR output (the file's own settings are PNG).
-_CLI_SETUP = ("import bpy; s = bpy.context.scene.render.image_settings; "
-              "s.exr_codec, s.color_depth, s.color_mode = 'NONE', '32', 'RGBA'")
+_CLI_SETUP = (
+    "import bpy; s = bpy.context.scene.render.image_settings; "
+    "s.exr_codec, s.color_depth, s.color_mode = 'NONE', '32', 'RGBA'"
+)
 
 
 def _auto_backend() -> str:
@@ -363,8 +422,16 @@ def engine_checks(binary: bool) -> list:
     line one only under a Blender binary."""
     import checks_engine_viewport as viewport
 
-    checks = [check_engine_selectable, check_combined_and_heatmap_match_the_tracer, check_heatmap_is_box_tests,
-              check_depth_is_camera_z, check_rerender_reads_only_what_changed, check_animation_frames,
-              check_errors_are_reported, viewport.check_view_frustum, viewport.check_viewport_worker_levels,
-              viewport.check_viewport_build_cancels]
+    checks = [
+        check_engine_selectable,
+        check_combined_and_heatmap_match_the_tracer,
+        check_heatmap_is_box_tests,
+        check_depth_is_camera_z,
+        check_rerender_reads_only_what_changed,
+        check_animation_frames,
+        check_errors_are_reported,
+        viewport.check_view_frustum,
+        viewport.check_viewport_worker_levels,
+        viewport.check_viewport_build_cancels,
+    ]
     return checks + [check_command_line_frames] if binary else checks

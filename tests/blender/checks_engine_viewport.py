@@ -1,16 +1,17 @@
 """The render engine's Rendered viewport without a window: the camera it traces for a region
 (against Blender's own projection) and its worker thread (levels, the final image against
 bvhlab.render, Esc during a build). The add-on must be enabled."""
+
 from __future__ import annotations
 
 import math
 
-import numpy as np
-
-import harness
 import bpy
-import bvhlab
+import harness
+import numpy as np
 from checks_engine import compare_images
+
+import bvhlab
 
 
 def _engine_module(name: str):
@@ -56,8 +57,7 @@ def check_view_frustum() -> None:
         cam.type, (cam.shift_x, cam.shift_y), cam.ortho_scale = kind, shift, 6.0
         width, height = 320, 200
         view, window = _camera_matrices(scene, width, height)
-        frustum = view_camera.view_frustum(view, window, width, height, perspective=kind == "PERSP",
-                                           view_distance=8.0)
+        frustum = view_camera.view_frustum(view, window, width, height, perspective=kind == "PERSP", view_distance=8.0)
         clip = (window @ view @ np.c_[points, np.ones(len(points))].T).T
         blender_px = (clip[:, :2] / clip[:, 3:] + 1) / 2 * (width, height)
         x0, y0, w, h = frustum.draw_rect
@@ -93,7 +93,9 @@ def _session_for(scene, width: int, height: int, samples_per_axis: int, overlay=
     report = live.sync(bpy.context.evaluated_depsgraph_get(), scene, bpy.context.view_layer)
     view, window = _camera_matrices(scene, width, height)
     frustum = view_camera.view_frustum(view, window, width, height)
-    settings = tracer.TraceSettings(samples_per_axis=samples_per_axis, max_depth=5, overlay=overlay, traversal="stackless")
+    settings = tracer.TraceSettings(
+        samples_per_axis=samples_per_axis, max_depth=5, overlay=overlay, traversal="stackless"
+    )
     build = _engine_module("scene_tree").BuildSettings()
     request = viewport.ViewRequest(frustum, settings, "cpu", build, budget_ms=5.0)
     session = viewport.ViewportSession()
@@ -118,9 +120,17 @@ def check_viewport_worker_levels() -> None:
             return frame if frame is not None and frame.level == "refined" else None
 
         frame = _wait(refined)
-        expected, _ = bvhlab.render(live.scene.__class__(**_scene_fields(live.scene, request.frustum.camera())),
-                                    session.tree.bvh, 240, 160, backend="cpu", samples_per_axis=2, max_depth=5,
-                                    overlay_depth=(8, 9), traversal="stackless")
+        expected, _ = bvhlab.render(
+            live.scene.__class__(**_scene_fields(live.scene, request.frustum.camera())),
+            session.tree.bvh,
+            240,
+            160,
+            backend="cpu",
+            samples_per_axis=2,
+            max_depth=5,
+            overlay_depth=(8, 9),
+            traversal="stackless",
+        )
         compare_images(frame.image, expected, "cpu")
         names = [name for name, _, _ in levels]
         assert names[-2:] == ["full", "refined"] and set(names) <= {"preview", "full", "refined"}, levels
@@ -137,9 +147,16 @@ def _at_level(session, level: str):
 
 
 def _scene_fields(scene, camera) -> dict:
-    return {"triangles": scene.triangles, "spheres": scene.spheres, "materials": scene.materials,
-            "tri_material": scene.tri_material, "sphere_material": scene.sphere_material, "camera": camera,
-            "light": scene.light, "sky": scene.sky}
+    return {
+        "triangles": scene.triangles,
+        "spheres": scene.spheres,
+        "materials": scene.materials,
+        "tri_material": scene.tri_material,
+        "sphere_material": scene.sphere_material,
+        "camera": camera,
+        "light": scene.light,
+        "sky": scene.sky,
+    }
 
 
 def check_viewport_build_cancels() -> None:

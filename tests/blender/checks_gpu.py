@@ -1,23 +1,26 @@
 """Checks that draw with Blender's `gpu` module. Run them in their own process (Blender aborts the
 process when GPU start-up fails): tests/blender/run.py --only gpu."""
+
 from __future__ import annotations
 
 import math
 from importlib import import_module
 
+import bpy
+import harness
 import numpy as np
 
-import harness
-import bpy
 import bvhlab
-from bvhlab.library import procedural
 from bvhlab.blender import export_scene
 from bvhlab.blender.compat import buffer_to_array
+from bvhlab.library import procedural
 
 #: The 12 edges of a box as pairs of corner selectors (0 = min, 1 = max per axis).
-EDGES = [((a, b, 0), (a, b, 1)) for a in (0, 1) for b in (0, 1)] + \
-        [((a, 0, b), (a, 1, b)) for a in (0, 1) for b in (0, 1)] + \
-        [((0, a, b), (1, a, b)) for a in (0, 1) for b in (0, 1)]
+EDGES = (
+    [((a, b, 0), (a, b, 1)) for a in (0, 1) for b in (0, 1)]
+    + [((a, 0, b), (a, 1, b)) for a in (0, 1) for b in (0, 1)]
+    + [((0, a, b), (1, a, b)) for a in (0, 1) for b in (0, 1)]
+)
 
 
 def ensure_gpu_context() -> None:
@@ -108,7 +111,7 @@ def check_overlay_pixels(width: int = 256, height: int = 192) -> None:
     assert stray.max() < 1.5, f"{(stray >= 1.5).sum()} lit pixels are off every projected edge"
     samples = np.concatenate([a + (b - a) * t for t in np.linspace(0, 1, 200)[:, None, None]])
     inside = (samples[:, 0] > 2) & (samples[:, 0] < width - 2) & (samples[:, 1] > 2) & (samples[:, 1] < height - 2)
-    covered = [image[int(y) - 1:int(y) + 2, int(x) - 1:int(x) + 2, 3].max() > 0.5 for x, y in samples[inside]]
+    covered = [image[int(y) - 1 : int(y) + 2, int(x) - 1 : int(x) + 2, 3].max() > 0.5 for x, y in samples[inside]]
     assert np.mean(covered) > 0.98, f"only {np.mean(covered):.3f} of the projected edges are drawn"
 
 
@@ -119,8 +122,10 @@ def _projected_edges(lo, hi, camera_model, width, height):
     def projected(selector):  # one corner of every box: x, y, z each from min (0) or max (1)
         return _project(corners[:, list(selector), [0, 1, 2]], camera_model, width, height)
 
-    return (np.concatenate([projected(start) for start, _ in EDGES]),
-            np.concatenate([projected(end) for _, end in EDGES]))
+    return (
+        np.concatenate([projected(start) for start, _ in EDGES]),
+        np.concatenate([projected(end) for _, end in EDGES]),
+    )
 
 
 def check_overlay_colour_by_depth(width: int = 320, height: int = 240) -> None:
@@ -130,7 +135,9 @@ def check_overlay_colour_by_depth(width: int = 320, height: int = 240) -> None:
     the box edges projected in numpy: every lit pixel clearly on one depth's edges and off the
     shallower depths' has that depth's colour (from the core's palette), and every depth of the
     range owns lit pixels."""
-    scene, bvh = _built_boxes_scene(width, height, (0, 3), overlay_color_by_depth=True, overlay_xray=True)
+    scene, bvh = _built_boxes_scene(
+        width, height, (0, 3), overlay_color_by_depth=True, overlay_xray=True, overlay_line_width=1.0
+    )
     assert bvh.stats["height"] > 4, "the scene must be deeper than the range"
     drawn, image = _draw_offscreen(scene, width, height)
     assert drawn == sum(bvh.stats["nodes_per_depth"][0:4])
@@ -142,16 +149,25 @@ def check_overlay_colour_by_depth(width: int = 320, height: int = 240) -> None:
     colour_depth = distance_to_colour.argmin(1)
     camera_model = export_scene(bpy.context).camera
     centres = np.stack([xs + 0.5, ys + 0.5], -1)
-    to_depth = np.stack([_segment_distance(centres, *_projected_edges(*bvh.boxes(d, d)[:2], camera_model, width,
-                                                                      height)) for d in range(4)], 1)
-    on, off = to_depth < 0.75, to_depth > 2.0  # clearly on a line / clearly away from one
+    to_depth = np.stack(
+        [
+            _segment_distance(centres, *_projected_edges(*bvh.boxes(d, d)[:2], camera_model, width, height))
+            for d in range(4)
+        ],
+        1,
+    )
+    # A 1-pixel line lights the pixels whose centres lie within about half a pixel of it; between
+    # 0.4 and 1.5 pixels away a pixel may or may not be lit, so a depth there makes it ambiguous.
+    on, off = to_depth < 0.4, to_depth > 1.5  # clearly on a line / clearly away from one
     expected = np.where(on.any(1), on.argmax(1), -1)  # the shallowest depth whose line covers it
-    clear = (expected >= 0) & np.array([off[i, :expected[i]].all() for i in range(len(expected))])
+    clear = (expected >= 0) & np.array([off[i, : expected[i]].all() for i in range(len(expected))])
     agreement = (colour_depth[clear] == expected[clear]).mean()
     counts = np.bincount(colour_depth, minlength=4)
-    print(f"colour by depth 0-3: {counts.tolist()} pixels per depth; {agreement:.3f} of {clear.sum()} "
-          f"unambiguous pixels have the shallowest covering depth's colour")
-    assert clear.sum() > 200 and agreement > 0.97, f"only {agreement:.3f} of the pixels show the right depth"
+    print(
+        f"colour by depth 0-3: {counts.tolist()} pixels per depth; {agreement:.3f} of {clear.sum()} "
+        f"unambiguous pixels have the shallowest covering depth's colour"
+    )
+    assert clear.sum() > 200 and agreement > 0.99, f"only {agreement:.3f} of the pixels show the right depth"
     assert counts.min() >= 20, f"a depth is hardly visible: pixels per depth {counts.tolist()}"
 
 
@@ -169,4 +185,4 @@ def check_overlay_million_boxes(nodes: int = 1_000_000) -> None:
     for depth_min, depth_max in ((0, 0), (5, 9), (stats["height"] - 1, stats["height"] - 1)):
         first, count = batch.table.depth_slice(depth_min, depth_max)
         assert first == sum(stats["nodes_per_depth"][:depth_min])
-        assert count == sum(stats["nodes_per_depth"][depth_min:depth_max + 1])
+        assert count == sum(stats["nodes_per_depth"][depth_min : depth_max + 1])

@@ -1,6 +1,7 @@
 """A reader for the OpenEXR files Blender writes with codec NONE: scanline images, single-part or
 multi-part (Blender 5 writes multilayer files as several parts), HALF or FLOAT channels. Enough to
 read a render's passes back in tests without asking Blender."""
+
 from __future__ import annotations
 
 import struct
@@ -19,10 +20,10 @@ def _header(data: bytes, offset: int) -> tuple[dict, int]:
     while data[offset] != 0:
         name_end = data.index(b"\0", offset)
         type_end = data.index(b"\0", name_end + 1)
-        name, kind = data[offset:name_end].decode(), data[name_end + 1:type_end].decode()
+        name, kind = data[offset:name_end].decode(), data[name_end + 1 : type_end].decode()
         size = struct.unpack_from("<i", data, type_end + 1)[0]
         value_at = type_end + 5
-        attributes[name] = (kind, data[value_at:value_at + size])
+        attributes[name] = (kind, data[value_at : value_at + size])
         offset = value_at + size
     return attributes, offset + 1
 

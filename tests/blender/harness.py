@@ -4,6 +4,7 @@ the built zip, the bundled scenes, and small scenes made on the spot.
 
 Import this before bpy: Blender reads BLENDER_USER_RESOURCES once, when it starts.
 """
+
 from __future__ import annotations
 
 import json
@@ -44,8 +45,9 @@ def enable_addon_from_source() -> str:
     if _addon_module is None:
         repo_dir = Path(tempfile.mkdtemp(prefix="bvhlab_dev_repo_"))
         (repo_dir / EXTENSION_ID).symlink_to(ADDON_DIR, target_is_directory=True)
-        bpy.context.preferences.extensions.repos.new(name=DEV_REPO, module=DEV_REPO, custom_directory=str(repo_dir),
-                                                     source="USER")
+        bpy.context.preferences.extensions.repos.new(
+            name=DEV_REPO, module=DEV_REPO, custom_directory=str(repo_dir), source="USER"
+        )
         _addon_module = f"bl_ext.{DEV_REPO}.{EXTENSION_ID}"
     enable(_addon_module)
     return _addon_module

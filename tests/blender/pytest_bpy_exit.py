@@ -2,6 +2,7 @@
 pytest's exit status right after its summary instead of running the interpreter's teardown, where
 bpy 4.2 as a module segfaults (after the add-on has been enabled and used in the process; the same
 teardown crash tests/blender/run.py avoids). Every test has run and been reported by then."""
+
 import os
 import sys
 

@@ -13,6 +13,7 @@ unless the install group ran. The checks are the ones pytest runs (tests/python/
 test_addon*.py). Blender binaries re-run themselves with BLENDER_USER_RESOURCES set to a temporary
 folder, so nothing is written to the user's Blender configuration.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -30,9 +31,10 @@ GROUPS = ("install", "export", "addon", "engine", "no_vulkan", "gpu")
 
 
 def _arguments():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else ([] if IN_BLENDER else sys.argv[1:])
-    ap = argparse.ArgumentParser(prog="run.py", description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    argv = sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else ([] if IN_BLENDER else sys.argv[1:])
+    ap = argparse.ArgumentParser(
+        prog="run.py", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     ap.add_argument("--only", nargs="+", choices=GROUPS, default=None)
     ap.add_argument("--zip", type=Path, default=None, help="extension zip (default: the one in dist/)")
     return ap.parse_args(argv)
@@ -42,14 +44,24 @@ def _rerun_with_private_user_folder() -> int:
     import bpy
 
     env = dict(os.environ, BLENDER_USER_RESOURCES=tempfile.mkdtemp(prefix="bvhlab_blender_user_"))
-    command = [bpy.app.binary_path, "--background", "--factory-startup", "--python-exit-code", "1",
-               "--python", __file__, "--", *(sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else [])]
+    command = [
+        bpy.app.binary_path,
+        "--background",
+        "--factory-startup",
+        "--python-exit-code",
+        "1",
+        "--python",
+        __file__,
+        "--",
+        *(sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else []),
+    ]
     return subprocess.run(command, env=env).returncode
 
 
 def _default_zip() -> Path:
-    import harness
     import tomllib
+
+    import harness
 
     version = tomllib.loads((harness.ADDON_DIR / "blender_manifest.toml").read_text())["version"]
     return harness.ROOT / "dist" / f"bvhlab-{version}.zip"
@@ -62,10 +74,12 @@ def _checks(groups, zip_path: Path, tmp: Path):
 
     if "install" in groups:
         import checks_install
+
         yield "install", "install_enable_disable", lambda: checks_install.check_install_enable_disable(zip_path)
     if "export" in groups:
         import checks_bundled
         import checks_cases
+
         for name in harness.scenes_index():
             yield "export", f"bundled {name}", lambda name=name: checks_bundled.check_bundled_scene(name)
         for check in checks_cases.CASE_CHECKS:
@@ -76,26 +90,37 @@ def _checks(groups, zip_path: Path, tmp: Path):
         harness.enable_addon_from_source()
     if "addon" in groups:
         import checks_addon
+
         for name, variants in checks_addon.BUILD_SCENES.items():
-            yield "addon", f"build_matches_direct {name}", \
-                lambda n=name, v=variants: checks_addon.check_build_matches_direct(n, v)
-        for check in (checks_addon.check_overlay_ranges, checks_addon.check_build_shows_overlay,
-                      checks_addon.check_bad_input_reports,
-                      checks_addon.check_render, checks_addon.check_render_without_light):
+            yield (
+                "addon",
+                f"build_matches_direct {name}",
+                lambda n=name, v=variants: checks_addon.check_build_matches_direct(n, v),
+            )
+        for check in (
+            checks_addon.check_overlay_ranges,
+            checks_addon.check_build_shows_overlay,
+            checks_addon.check_bad_input_reports,
+            checks_addon.check_render,
+            checks_addon.check_render_without_light,
+        ):
             yield "addon", check.__name__, check
         yield "addon", "export_stats", lambda: checks_addon.check_export_stats(tmp)
         yield "addon", "compare", lambda: checks_addon.check_compare(tmp)
     if "engine" in groups:
         import checks_engine
+
         for check in checks_engine.engine_checks(binary=IN_BLENDER):
             yield "engine", check.__name__, lambda c=check: _in_own_folder(c, tmp / c.__name__)
     if "no_vulkan" in groups:
         import checks_addon
+
         # Read when the first Vulkan instance is made, which no earlier check does (they use the CPU).
         os.environ["VK_DRIVER_FILES"] = os.environ["VK_ICD_FILENAMES"] = "/nonexistent/bvhlab_icd.json"
         yield "no_vulkan", "no_vulkan_reported", checks_addon.check_no_vulkan_reported
     if "gpu" in groups:
         import checks_gpu
+
         yield "gpu", "overlay_pixels", checks_gpu.check_overlay_pixels
         yield "gpu", "overlay_colour_by_depth", checks_gpu.check_overlay_colour_by_depth
         yield "gpu", "overlay_million_boxes", checks_gpu.check_overlay_million_boxes

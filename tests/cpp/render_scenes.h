@@ -126,9 +126,9 @@ inline ScenePtr overlay_sphere() {
 
 /// Differences between two RGBA images, over the rgb channels.
 struct ImageDiff {
-    double mean_abs = 0;         ///< mean over all rgb values
+    double mean_abs = 0;  ///< mean over all rgb values
     float max_abs = 0;
-    double fraction_above = 0;   ///< of pixels with a channel differing by more than the threshold
+    double fraction_above = 0;  ///< of pixels with a channel differing by more than the threshold
 };
 
 inline ImageDiff compare_images(const std::vector<float>& a, const std::vector<float>& b, float threshold) {

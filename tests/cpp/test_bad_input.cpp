@@ -173,7 +173,10 @@ TEST(BadInput, ProgressCanCancel) {
         BuildConfig c;
         c.threads = threads;
         int calls = 0;
-        c.progress = [&](double) { ++calls; return false; };
+        c.progress = [&](double) {
+            ++calls;
+            return false;
+        };
         EXPECT_THROW(build_bvh(scene.view(), c), BuildCancelled);
         EXPECT_EQ(calls, 1);  // nothing is reported after a cancel
     }
@@ -183,7 +186,11 @@ TEST(BadInput, ProgressReachesOne) {
     auto scene = test::random_scene(1000, 0, 1);
     BuildConfig c;
     double last = -1;
-    c.progress = [&](double f) { EXPECT_GE(f, last); last = f; return true; };
+    c.progress = [&](double f) {
+        EXPECT_GE(f, last);
+        last = f;
+        return true;
+    };
     build_bvh(scene.view(), c);
     EXPECT_EQ(last, 1.0);
 }

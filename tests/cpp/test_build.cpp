@@ -165,9 +165,11 @@ TEST(Stats, SahCostMatchesTheFormula) {
 
 TEST(Stats, SahMethodsBeatMedianOnClusteredScenes) {
     auto scene = random_scene(20000, 0, 5);
-    double median = compute_stats(build_bvh(scene.view(), config(SplitMethod::Median, AxisPolicy::Largest, 1))).sah_cost;
+    double median =
+        compute_stats(build_bvh(scene.view(), config(SplitMethod::Median, AxisPolicy::Largest, 1))).sah_cost;
     double sah = compute_stats(build_bvh(scene.view(), config(SplitMethod::Sah, AxisPolicy::Largest, 1))).sah_cost;
-    double sweep = compute_stats(build_bvh(scene.view(), config(SplitMethod::SweepSah, AxisPolicy::Largest, 1))).sah_cost;
+    double sweep =
+        compute_stats(build_bvh(scene.view(), config(SplitMethod::SweepSah, AxisPolicy::Largest, 1))).sah_cost;
     EXPECT_LT(sah, median);
     EXPECT_LT(sweep, median);
 }
@@ -223,7 +225,10 @@ TEST(Progress, ReportedOftenAndStopsTheBuild) {
         BuildConfig c;
         c.threads = threads;
         std::vector<double> seen;
-        c.progress = [&](double f) { seen.push_back(f); return true; };
+        c.progress = [&](double f) {
+            seen.push_back(f);
+            return true;
+        };
         build_bvh(scene.view(), c);
         ASSERT_GE(seen.size(), 2u);
         EXPECT_EQ(seen.back(), 1.0);
@@ -248,9 +253,7 @@ TEST(Progress, AnExceptionFromTheCallbackComesOutAsItself) {
         try {
             build_bvh(scene.view(), c);
             ADD_FAILURE() << "no exception";
-        } catch (const std::runtime_error& e) {
-            EXPECT_STREQ(e.what(), "callback failed");
-        }
+        } catch (const std::runtime_error& e) { EXPECT_STREQ(e.what(), "callback failed"); }
     }
 }
 

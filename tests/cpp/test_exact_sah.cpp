@@ -32,8 +32,8 @@ double brute_force_cost(std::vector<Aabb> boxes, const Aabb& parent) {
         for (std::size_t k = 1; k < boxes.size(); ++k) {
             Aabb left, right;
             for (std::size_t i = 0; i < boxes.size(); ++i) (i < k ? left : right).grow(boxes[i]);
-            const double cost = 1.0 + (half_area(left) * double(k) + half_area(right) * double(boxes.size() - k)) /
-                                          half_area(parent);
+            const double cost =
+                1.0 + (half_area(left) * double(k) + half_area(right) * double(boxes.size() - k)) / half_area(parent);
             best = std::min(best, cost);
         }
     }
@@ -54,8 +54,9 @@ std::uint32_t check_exact(const Bvh& bvh, const GeometryView& g, std::uint32_t i
         for (std::uint32_t k = bvh.nodes[first].index; k < bvh.nodes[first].index + count; ++k)
             boxes.push_back(prim_box(g, bvh.refs[k]));
         const Aabb parent = node_box(n);
-        const double built = 1.0 + (half_area(node_box(bvh.nodes[i + 1])) * n_left +
-                                    half_area(node_box(bvh.nodes[n.index])) * n_right) / half_area(parent);
+        const double built =
+            1.0 + (half_area(node_box(bvh.nodes[i + 1])) * n_left + half_area(node_box(bvh.nodes[n.index])) * n_right) /
+                      half_area(parent);
         EXPECT_LE(built, brute_force_cost(boxes, parent) * (1.0 + 1e-5)) << "node " << i << " of " << count;
         ++checked;
     }

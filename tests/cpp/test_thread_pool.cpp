@@ -24,12 +24,14 @@ TEST(ThreadPool, EveryIndexOnceOnAnyThreadCount) {
 
 TEST(ThreadPool, FirstExceptionRethrownAfterEveryThreadLeft) {
     std::atomic<int> inside{0}, done{0};
-    EXPECT_THROW(ThreadPool::shared().run(200, 4, [&](std::size_t i, unsigned) {
-        ++inside;
-        if (i == 3) throw std::runtime_error("task failed");
-        std::this_thread::sleep_for(std::chrono::microseconds(200));
-        ++done, --inside;
-    }), std::runtime_error);
+    EXPECT_THROW(ThreadPool::shared().run(200, 4,
+                                          [&](std::size_t i, unsigned) {
+                                              ++inside;
+                                              if (i == 3) throw std::runtime_error("task failed");
+                                              std::this_thread::sleep_for(std::chrono::microseconds(200));
+                                              ++done, --inside;
+                                          }),
+                 std::runtime_error);
     EXPECT_EQ(inside.load(), 1);  // only the failed task did not leave normally: no thread still runs
     EXPECT_LT(done.load(), 200);  // indices stop being handed out after the failure
 }
@@ -53,14 +55,20 @@ TEST(ThreadPool, TheWaitingCallerPolls) {
     std::atomic<bool> release{false}, helper_ran{false};
     std::atomic<int> polls{0};
     for (int attempt = 0; attempt < 20 && !helper_ran; ++attempt) {
-        ThreadPool::shared().run(64, 2, [&](std::size_t, unsigned slot) {
-            if (slot == 0) {  // the caller is slow, so that a helper joins
-                std::this_thread::sleep_for(std::chrono::milliseconds(2));
-                return;
-            }
-            helper_ran = true;
-            while (!release) std::this_thread::yield();
-        }, [&] { if (++polls >= 3) release = true; }, std::chrono::milliseconds(1));
+        ThreadPool::shared().run(
+            64, 2,
+            [&](std::size_t, unsigned slot) {
+                if (slot == 0) {  // the caller is slow, so that a helper joins
+                    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+                    return;
+                }
+                helper_ran = true;
+                while (!release) std::this_thread::yield();
+            },
+            [&] {
+                if (++polls >= 3) release = true;
+            },
+            std::chrono::milliseconds(1));
     }
     if (!helper_ran) GTEST_SKIP() << "no helper thread joined (one hardware thread?)";
     EXPECT_GE(polls.load(), 3);

@@ -49,8 +49,8 @@ struct BeyondBindingLimit {
     BeyondBindingLimit() {
         const std::uint32_t count = std::uint32_t((std::size_t(128) << 20) / sizeof(gpu::GpuTriangle) + 1024);
         scene.triangles.resize(count);
-        // in the plane y = 0, covering the view's centre, material 0 (the bits of v0.w)
-        scene.triangles[count - 1] = {{-2, 0, -2, 0}, {5, 0, 0, 0}, {0, 0, 5, 0}};
+        // in the plane y = 0, covering the view's centre, material 0
+        scene.triangles[count - 1] = {{-2, 0, -2}, 0, {3, 0, -2}, count - 1, {-2, 0, 3}, 0};
         scene.materials = {{{0.8f, 0.4f, 0.3f, 0}, {0, 1.5f, 0, 0}}};
         tree.triangle_count = count;
         tree.nodes.push_back({{-2, 0, -2}, 0, {3, 0, 3}, 1});  // a leaf of one reference
@@ -64,7 +64,6 @@ struct BeyondBindingLimit {
         scene.ref_count = 1;
     }
 };
-
 
 }  // namespace
 
@@ -256,7 +255,8 @@ protected:
             VulkanRenderer r(options);
             ADD_FAILURE() << "no exception; got device " << r.device_name();
         } catch (const VulkanUnavailable& e) {
-            for (const char* needle : needles) EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+            for (const char* needle : needles)
+                EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
         }
     }
 };
@@ -279,7 +279,8 @@ TEST_F(VulkanDevice, IndexOutOfRangeIsAClearError) {
 }
 
 TEST_F(VulkanDevice, UnknownNameIsAClearError) {
-    expect_unavailable(validated({.device = "no-such-gpu"}), {"no Vulkan device name contains 'no-such-gpu'", "llvmpipe"});
+    expect_unavailable(validated({.device = "no-such-gpu"}),
+                       {"no Vulkan device name contains 'no-such-gpu'", "llvmpipe"});
 }
 
 TEST_F(VulkanDevice, EnvironmentVariableChoosesWhenOptionsDoNot) {

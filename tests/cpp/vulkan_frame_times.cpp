@@ -35,10 +35,11 @@ void time_scene(VulkanRenderer& vulkan, const char* name, const test::RenderTest
         s.traversal = traversal;
         RenderTimings v = best_of(3, [&] { return vulkan.render(s, {image.data()}); });
         RenderTimings c = best_of(3, [&] { return render_cpu(scene.render, s, {image.data()}, 0); });
-        std::printf("%-16s %-9s  Vulkan %7.1f ms (overlay %.1f, trace %.1f, readback %.1f; %.2f Mrays/s primary)"
-                    "  CPU %7.1f ms (%.2f Mrays/s)  ratio %.2f\n",
-                    name, to_string(traversal).c_str(), v.total_ms, v.overlay_ms, v.trace_ms,
-                    v.readback_ms, pixels / v.trace_ms / 1e3, c.total_ms, pixels / c.trace_ms / 1e3, v.total_ms / c.total_ms);
+        std::printf(
+            "%-16s %-9s  Vulkan %7.1f ms (overlay %.1f, trace %.1f, readback %.1f; %.2f Mrays/s primary)"
+            "  CPU %7.1f ms (%.2f Mrays/s)  ratio %.2f\n",
+            name, to_string(traversal).c_str(), v.total_ms, v.overlay_ms, v.trace_ms, v.readback_ms,
+            pixels / v.trace_ms / 1e3, c.total_ms, pixels / c.trace_ms / 1e3, v.total_ms / c.total_ms);
     }
 }
 

@@ -36,7 +36,8 @@ ScenePtr triangle_soup(std::uint32_t seed) {
     std::uniform_real_distribution<float> u(0.0f, 1.0f);
     const std::int32_t matte = s->material({0.7f, 0.7f, 0.7f}), mirror = s->material({0.9f, 0.9f, 0.9f}, 0.5f);
     for (int i = 0; i < 200; ++i)
-        s->triangle({u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, i % 3 ? matte : mirror);
+        s->triangle({u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)},
+                    i % 3 ? matte : mirror);
     s->build();
     s->settings.camera = look_at({0.5f, -1.6f, 1.4f}, {0.5f, 0.5f, 0.5f});
     s->settings.light.position = {1.5f, -1, 2};
@@ -128,7 +129,8 @@ TEST_F(Vulkan, DepthAndCostMatchTheReferenceAndTheRays) {
     RenderSettings s = scene->settings;
     s.camera.shift_x = 0.1f, s.camera.shift_y = -0.05f;
     const std::size_t pixels = std::size_t(s.width) * s.height;
-    std::vector<float> color(4 * pixels), depth(pixels), cost(pixels), cpu_color(4 * pixels), cpu_depth(pixels), cpu_cost(pixels);
+    std::vector<float> color(4 * pixels), depth(pixels), cost(pixels), cpu_color(4 * pixels), cpu_depth(pixels),
+        cpu_cost(pixels);
     renderer().render(s, {color.data(), depth.data(), cost.data()});
     render_cpu(scene->render, s, {cpu_color.data(), cpu_depth.data(), cpu_cost.data()});
     expect_close(color, cpu_color, "colour");
@@ -140,9 +142,11 @@ TEST_F(Vulkan, DepthAndCostMatchTheReferenceAndTheRays) {
     for (std::uint32_t y = 0; y < s.height; ++y)
         for (std::uint32_t x = 0; x < s.width; ++x) {  // the primary ray through the pixel centre, traced by traverse.h
             float px = (float(x) + 0.5f) / float(s.width) * 2 - 1, py = 1 - (float(y) + 0.5f) / float(s.height) * 2;
-            Vec3 fwd{f.camera_forward.x, f.camera_forward.y, f.camera_forward.z}, right{f.camera_right.x, f.camera_right.y, f.camera_right.z};
+            Vec3 fwd{f.camera_forward.x, f.camera_forward.y, f.camera_forward.z},
+                right{f.camera_right.x, f.camera_right.y, f.camera_right.z};
             Vec3 up{f.camera_up.x, f.camera_up.y, f.camera_up.z};
-            Vec3 dir = normalize(fwd + right * (px * f.tan_half_fov_y * f.aspect + f.shift_x) + up * (py * f.tan_half_fov_y + f.shift_y));
+            Vec3 dir = normalize(fwd + right * (px * f.tan_half_fov_y * f.aspect + f.shift_x) +
+                                 up * (py * f.tan_half_fov_y + f.shift_y));
             Hit h = intersect(scene->bvh, Ray{s.camera.position, dir}, Traversal::Stack);
             const std::size_t i = std::size_t(y) * s.width + x;
             const float expected = h.t < kInfinity ? h.t * dot(dir, fwd) : kNoDepth;
@@ -172,9 +176,7 @@ TEST_F(Vulkan, ThreadsSharingARendererGetTheirSerialImages) {
         threads.emplace_back([&, k] {
             try {
                 for (int round = 0; round < 3; ++round) parallel[k] = render_vulkan(renderer(), settings[k]);
-            } catch (...) {
-                failures.fetch_add(1);
-            }
+            } catch (...) { failures.fetch_add(1); }
         });
     for (auto& t : threads) t.join();
     EXPECT_EQ(failures.load(), 0);

@@ -25,7 +25,8 @@ constexpr bool kAddressSanitizer = false;
 /// Under ASan, keep them loaded (RTLD_NODELETE) so that their leaks carry their library's name.
 inline void pin_driver_libraries() {
     if (!kAddressSanitizer) return;
-    for (const char* library : {"libvulkan_lvp.so", "libVkLayer_khronos_validation.so", "libVkLayer_MESA_device_select.so"})
+    for (const char* library :
+         {"libvulkan_lvp.so", "libVkLayer_khronos_validation.so", "libVkLayer_MESA_device_select.so"})
         dlopen(library, RTLD_NOW | RTLD_NODELETE);  // absent: nothing to pin
 }
 

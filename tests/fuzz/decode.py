@@ -1,5 +1,6 @@
 """Prints a fuzz_core input (tests/fuzz/fuzz_input.h layout) as the arrays it stands for, to
 reproduce a finding through the Python API:  python tests/fuzz/decode.py FILE"""
+
 import struct
 import sys
 
@@ -30,10 +31,19 @@ def decode(data: bytes) -> dict:
     pairs = np.array([value() for _ in range(6 * n_rays)], np.float32).reshape(-1, 3, 2)
     offset = value()
     depth_min = byte() % 70
-    return {"method": METHODS[kinds % 6], "axis": AXES[kinds // 6 % 3], "bins": bins, "max_leaf_size": 1 + leaf % 8,
-            "threads": 1 + (leaf >> 7), "triangles": tris, "spheres": spheres, "origins": pairs[..., 0].copy(),
-            "directions": pairs[..., 1].copy(), "refit_offset": np.float32(offset),
-            "depth_range": (depth_min, depth_min + byte() % 8)}
+    return {
+        "method": METHODS[kinds % 6],
+        "axis": AXES[kinds // 6 % 3],
+        "bins": bins,
+        "max_leaf_size": 1 + leaf % 8,
+        "threads": 1 + (leaf >> 7),
+        "triangles": tris,
+        "spheres": spheres,
+        "origins": pairs[..., 0].copy(),
+        "directions": pairs[..., 1].copy(),
+        "refit_offset": np.float32(offset),
+        "depth_range": (depth_min, depth_min + byte() % 8),
+    }
 
 
 if __name__ == "__main__":

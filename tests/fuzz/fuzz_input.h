@@ -42,9 +42,7 @@ struct FuzzCase {
     std::uint32_t depth_min = 0, depth_max = 0;
     std::uint32_t threads = 1;
 
-    GeometryView view() const {
-        return {triangles.data(), triangles.size() / 9, spheres.data(), spheres.size() / 4};
-    }
+    GeometryView view() const { return {triangles.data(), triangles.size() / 9, spheres.data(), spheres.size() / 4}; }
 };
 
 inline FuzzCase read_case(const std::uint8_t* data, std::size_t size) {

@@ -1,5 +1,6 @@
 """Writes the seed corpus of fuzz_core (tests/fuzz/corpus): small cases of each kind, in the byte
 layout of fuzz_input.h. Run it again after changing that layout; the fuzzer grows the rest."""
+
 import struct
 from pathlib import Path
 
@@ -17,8 +18,17 @@ def raw(x: float) -> bytes:
 
 def case(method, axis, bins, leaf, threads, tris, spheres, rays, encoding, extra=b""):
     put = raw if encoding else grid
-    head = bytes([method + 6 * axis, bins - 2, (leaf - 1) | (0x80 if threads == 2 else 0), len(tris), len(spheres),
-                  len(rays), encoding])
+    head = bytes(
+        [
+            method + 6 * axis,
+            bins - 2,
+            (leaf - 1) | (0x80 if threads == 2 else 0),
+            len(tris),
+            len(spheres),
+            len(rays),
+            encoding,
+        ]
+    )
     body = b"".join(put(x) for t in tris for v in t for x in v)
     body += b"".join(put(x) for s in spheres for x in s)
     # fuzz_input.h reads each ray's origin and direction component by component, interleaved
@@ -38,11 +48,29 @@ SEEDS = {
     "spheres": case(4, 2, 12, 1, 1, [], SPHERES, RANDOM_RAYS, 0, grid(1.0) + bytes([1, 2])),
     "mixed_lbvh": case(5, 0, 12, 3, 2, SQUARE + STACK, SPHERES, RANDOM_RAYS, 0),
     "random_axis": case(1, 1, 7, 1, 1, STACK, SPHERES[:2], RANDOM_RAYS, 0),
-    "raw_huge": case(3, 0, 12, 1, 1, [[(0, 0, 0), (1e12, 0, 0), (0, 1e12, 0)], [(0, 0, 0), (1e13, 0, 0), (0, 1, 0)]],
-                     [], [((0, 0, 1), (0, 0, -1))], 1),
-    "raw_tiny_directions": case(3, 2, 30, 1, 1, SQUARE, SPHERES[:1],
-                                [((0.25, 0.25, 3), (0, 0, -1e-22)), ((0.25, 0.25, 3), (0, 0, -1e22)),
-                                 ((0, 0, 3), (0, 0, -1e-30))], 1, raw(5.0)),
+    "raw_huge": case(
+        3,
+        0,
+        12,
+        1,
+        1,
+        [[(0, 0, 0), (1e12, 0, 0), (0, 1e12, 0)], [(0, 0, 0), (1e13, 0, 0), (0, 1, 0)]],
+        [],
+        [((0, 0, 1), (0, 0, -1))],
+        1,
+    ),
+    "raw_tiny_directions": case(
+        3,
+        2,
+        30,
+        1,
+        1,
+        SQUARE,
+        SPHERES[:1],
+        [((0.25, 0.25, 3), (0, 0, -1e-22)), ((0.25, 0.25, 3), (0, 0, -1e22)), ((0, 0, 3), (0, 0, -1e-30))],
+        1,
+        raw(5.0),
+    ),
     "raw_nan": case(0, 0, 12, 1, 2, SQUARE, [(0, 0, 0, float("nan"))], DOWN[:2], 1),
     "empty": case(3, 0, 12, 1, 1, [], [], DOWN[:1], 0),
 }

@@ -1,5 +1,6 @@
 """Puts tests/blender (the checks shared with tests/blender/run.py) on the import path, and runs
 groups of them in a child process (Blender aborts the process on GPU failures)."""
+
 import os
 import subprocess
 import sys
@@ -15,6 +16,7 @@ def run_groups(*groups: str, zip_path=None, env=None, timeout: int = 300) -> sub
     if zip_path is not None:
         command += ["--zip", str(zip_path)]
     done = subprocess.run(command, capture_output=True, text=True, timeout=timeout, env={**os.environ, **(env or {})})
-    assert done.returncode == 0, (f"run.py --only {' '.join(groups)} failed:\n"
-                                  f"{done.stdout[-6000:]}\n{done.stderr[-3000:]}")
+    assert done.returncode == 0, (
+        f"run.py --only {' '.join(groups)} failed:\n{done.stdout[-6000:]}\n{done.stderr[-3000:]}"
+    )
     return done

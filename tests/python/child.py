@@ -1,5 +1,6 @@
 """Runs Python code in a child process, so that a crash (abort, segfault) fails one test instead
 of ending the test run."""
+
 import subprocess
 import sys
 import textwrap
@@ -7,8 +8,9 @@ import textwrap
 
 def run_python(code: str, timeout: float = 300, **popen) -> subprocess.CompletedProcess:
     """Runs `code` (dedented) with this interpreter; returns the finished process (text output)."""
-    return subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True,
-                          timeout=timeout, **popen)
+    return subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True, timeout=timeout, **popen
+    )
 
 
 def check_python(code: str, timeout: float = 300) -> str:

@@ -1,4 +1,5 @@
 """Independent answers the tests compare bvhlab with."""
+
 import numpy as np
 
 

@@ -1,10 +1,10 @@
 """The add-on's operators under bpy, enabled in place from addon/ (the zip is tested in
 test_addon_install.py, drawing in test_addon_gpu.py)."""
-import pytest
 
 import blender_checks  # noqa: F401
-import harness
 import checks_addon  # noqa: E402
+import harness
+import pytest
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -12,13 +12,30 @@ def addon_enabled():
     harness.enable_addon_from_source()
 
 
-def test_enum_items_match_bvhlab():
+def test_settings_take_names_defaults_and_limits_from_the_core():
+    """One definition: the panel's lists, defaults and limits are the core's, and each name has a
+    label and a tooltip."""
+    import bpy
+
     import bvhlab
 
     properties = __import__(harness.addon().__name__ + ".properties", fromlist=["METHOD_ITEMS"])
     assert [item[0] for item in properties.METHOD_ITEMS] == list(bvhlab.METHODS)
     assert [item[0] for item in properties.AXIS_ITEMS] == list(bvhlab.AXES)
+    assert [item[0] for item in properties.BIN_BOUNDS_ITEMS] == list(bvhlab.bvh.BIN_BOUNDS)
+    labelled = properties.METHOD_ITEMS + properties.AXIS_ITEMS + properties.BIN_BOUNDS_ITEMS
+    assert all(label and tooltip for _, label, tooltip in labelled)
     assert properties.MAX_DEPTH == bvhlab.bvh.MAX_TREE_HEIGHT - 1
+    rna = bpy.types.Scene.bl_rna.properties["bvhlab"].fixed_type.properties
+    assert rna["method"].default == bvhlab.bvh.DEFAULT_METHOD and rna["axis"].default == bvhlab.bvh.DEFAULT_AXIS
+    assert rna["bins"].default == bvhlab.bvh.DEFAULT_BINS
+    assert rna["bin_bounds"].default == bvhlab.bvh.DEFAULT_BIN_BOUNDS
+    assert (rna["bins"].hard_min, rna["bins"].hard_max) == (bvhlab._core.MIN_BINS, bvhlab._core.MAX_BINS)
+    assert rna["max_leaf_size"].default == bvhlab.bvh.DEFAULT_MAX_LEAF_SIZE
+    assert rna["render_bounces"].hard_max == bvhlab._core.MAX_RAY_DEPTH
+    assert rna["render_supersampling"].hard_max == bvhlab._core.MAX_SAMPLES_PER_AXIS
+    assert [i.identifier for i in rna["traversal"].enum_items] == list(bvhlab._core.RENDER_TRAVERSALS)
+    assert [i.identifier for i in rna["backend"].enum_items] == ["auto", "vulkan", "cpu"]
 
 
 @pytest.mark.parametrize("name", list(checks_addon.BUILD_SCENES))

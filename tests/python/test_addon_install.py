@@ -2,14 +2,15 @@
 listed in its manifest with the project's one version; it installs and enables headless under
 bpy 4.2, unregisters without leftovers, and enables again (in a child process with its own user
 folder). The same zip is installed under bpy 5.2 and a Blender binary by `make blender-test`."""
+
 import re
 import tomllib
 import zipfile
 from pathlib import Path
 
-import bvhlab
-
 import blender_checks
+
+import bvhlab
 
 ROOT = Path(__file__).resolve().parents[2]
 ZIP = ROOT / "dist" / "bvhlab.zip"
@@ -26,8 +27,9 @@ def test_zip_has_a_wheel_for_each_blender_python_and_one_version():
         names = set(archive.namelist())
     version = bvhlab.__version__
     assert manifest["version"] == version
-    assert sorted(manifest["wheels"]) == [f"./wheels/bvhlab-{version}-{tag}-{tag}-linux_x86_64.whl"
-                                          for tag in ("cp311", "cp313")]
+    assert sorted(manifest["wheels"]) == [
+        f"./wheels/bvhlab-{version}-{tag}-{tag}-linux_x86_64.whl" for tag in ("cp311", "cp313")
+    ]
     assert all(wheel[2:] in names for wheel in manifest["wheels"]), (manifest["wheels"], names)
 
 
@@ -42,3 +44,40 @@ def test_version_is_written_once():
 
 def test_built_zip_installs_enables_and_unregisters():
     blender_checks.run_groups("install", zip_path=_zip())
+
+
+#: The newest glibc and libstdc++ (GCC 12's) the wheels may ask for: Ubuntu 22.04, Debian 12,
+#: Fedora 36, RHEL 9 and later have them. Blender itself runs from glibc 2.28; on older systems the
+#: core cannot load (the README says so).
+MAX_GLIBC = (2, 34)
+MAX_GLIBCXX = (3, 4, 30)
+
+
+def test_wheels_load_on_glibc_2_34_and_gcc_12_libstdcxx():
+    """Each wheel's compiled core asks only for glibc symbols up to MAX_GLIBC and libstdc++ symbols
+    up to MAX_GLIBCXX, so it loads in Blender on the systems the README names. The cp313 wheel is
+    built in a Debian 13 root, whose GCC 14 and glibc 2.41 headers raise both if left alone (glibc
+    2.38 renamed strtoul's symbol: one std::stoul did that once); it is built with GCC 12 there."""
+    import subprocess
+    import tempfile
+
+    with zipfile.ZipFile(_zip()) as archive, tempfile.TemporaryDirectory() as tmp:
+        wheels = [n for n in archive.namelist() if n.endswith(".whl")]
+        assert len(wheels) == 2
+        for wheel in wheels:
+            archive.extract(wheel, tmp)
+            with zipfile.ZipFile(Path(tmp) / wheel) as inner:
+                core = next(n for n in inner.namelist() if re.search(r"_core\..*\.so$", n))
+                inner.extract(core, tmp)
+            symbols = subprocess.run(
+                ["objdump", "-T", str(Path(tmp) / core)], capture_output=True, text=True, check=True
+            ).stdout
+            needed = {tuple(int(x) for x in v.split(".")) for v in re.findall(r"GLIBC_(\d+\.\d+(?:\.\d+)?)", symbols)}
+            assert max(needed) <= MAX_GLIBC, f"{wheel} needs glibc {max(needed)}: " + ", ".join(
+                line.split()[-1]
+                for line in symbols.splitlines()
+                if "GLIBC_" in line
+                and tuple(int(x) for x in re.search(r"GLIBC_([\d.]+)", line).group(1).split(".")) > MAX_GLIBC
+            )
+            cxx = {tuple(int(x) for x in v.split(".")) for v in re.findall(r"GLIBCXX_(\d+\.\d+(?:\.\d+)?)", symbols)}
+            assert max(cxx) <= MAX_GLIBCXX, f"{wheel} needs libstdc++ GLIBCXX_{'.'.join(map(str, max(cxx)))}"

@@ -1,4 +1,5 @@
 """Bad input gets a clear TypeError or ValueError, never a crash or a silent copy."""
+
 import numpy as np
 import pytest
 
@@ -27,14 +28,17 @@ def test_bad_radius(tris, radius):
         bvhlab.build(tris, spheres)
 
 
-@pytest.mark.parametrize("bad, error, match", [
-    (np.zeros((4, 3, 3), np.float64), TypeError, "float32"),
-    (np.zeros((4, 9), np.float32), ValueError, r"shape \(N, 3, 3\)"),
-    (np.zeros((4, 3, 4), np.float32), ValueError, "shape"),
-    (np.zeros((3, 3, 4), np.float32)[:, :, :3], ValueError, "C-contiguous"),
-    ([[[0, 0, 0], [1, 0, 0], [0, 1, 0]]], TypeError, "numpy float32 array"),
-    (np.zeros((4, 3, 3), np.int32), TypeError, "float32"),
-])
+@pytest.mark.parametrize(
+    "bad, error, match",
+    [
+        (np.zeros((4, 3, 3), np.float64), TypeError, "float32"),
+        (np.zeros((4, 9), np.float32), ValueError, r"shape \(N, 3, 3\)"),
+        (np.zeros((4, 3, 4), np.float32), ValueError, "shape"),
+        (np.zeros((3, 3, 4), np.float32)[:, :, :3], ValueError, "C-contiguous"),
+        ([[[0, 0, 0], [1, 0, 0], [0, 1, 0]]], TypeError, "numpy float32 array"),
+        (np.zeros((4, 3, 3), np.int32), TypeError, "float32"),
+    ],
+)
 def test_wrong_arrays(bad, error, match):
     with pytest.raises(error, match=match):
         bvhlab.build(bad)
@@ -45,21 +49,24 @@ def test_wrong_sphere_array(tris):
         bvhlab.build(tris, np.zeros((3, 3), np.float32))
 
 
-@pytest.mark.parametrize("kwargs, error, match", [
-    (dict(bins=0), ValueError, "bins must be between 2 and 256"),
-    (dict(bins=1), ValueError, "bins"),
-    (dict(bins=257), ValueError, "bins"),
-    (dict(bins=10**12), ValueError, "bins"),
-    (dict(bins=12.0), TypeError, "bins must be an integer"),
-    (dict(bins=True), TypeError, "bins must be an integer"),
-    (dict(method="sha"), ValueError, "unknown method 'sha'; expected one of: median, mean"),
-    (dict(method=None), TypeError, "method must be a string"),
-    (dict(axis="longest"), ValueError, "unknown axis"),
-    (dict(max_leaf_size=0), ValueError, "max_leaf_size"),
-    (dict(max_leaf_size=-3), ValueError, "max_leaf_size"),
-    (dict(threads=-1), ValueError, "threads"),
-    (dict(progress=5), TypeError, "progress must be callable"),
-])
+@pytest.mark.parametrize(
+    "kwargs, error, match",
+    [
+        (dict(bins=0), ValueError, "bins must be between 2 and 256"),
+        (dict(bins=1), ValueError, "bins"),
+        (dict(bins=257), ValueError, "bins"),
+        (dict(bins=10**12), ValueError, "bins"),
+        (dict(bins=12.0), TypeError, "bins must be an integer"),
+        (dict(bins=True), TypeError, "bins must be an integer"),
+        (dict(method="sha"), ValueError, "unknown method 'sha'; expected one of: median, mean"),
+        (dict(method=None), TypeError, "method must be a string"),
+        (dict(axis="longest"), ValueError, "unknown axis"),
+        (dict(max_leaf_size=0), ValueError, "max_leaf_size"),
+        (dict(max_leaf_size=-3), ValueError, "max_leaf_size"),
+        (dict(threads=-1), ValueError, "threads"),
+        (dict(progress=5), TypeError, "progress must be callable"),
+    ],
+)
 def test_bad_config(tris, kwargs, error, match):
     with pytest.raises(error, match=match):
         bvhlab.build(tris, **kwargs)
@@ -115,11 +122,14 @@ def test_scene_with_a_nan_triangle_names_the_triangle_not_the_camera():
 
 
 def test_degenerate_triangles_build_and_are_never_hit():
-    tris = np.array([
-        [[0, 0, 0], [1, 1, 1], [2, 2, 2]],          # collinear
-        [[0, 0, 0], [0, 0, 0], [1, 0, 0]],          # repeated vertex
-        [[5, 5, 5], [5, 5, 5], [5, 5, 5]],          # a point
-    ], np.float32)
+    tris = np.array(
+        [
+            [[0, 0, 0], [1, 1, 1], [2, 2, 2]],  # collinear
+            [[0, 0, 0], [0, 0, 0], [1, 0, 0]],  # repeated vertex
+            [[5, 5, 5], [5, 5, 5], [5, 5, 5]],  # a point
+        ],
+        np.float32,
+    )
     bvh = bvhlab.build(tris)
     assert bvh.stats["primitives"] == 3
     o = np.array([[0.5, 0.5, -1], [1, 1, 5], [5, 5, 0], [0.5, 0, 1]], np.float32)

@@ -3,14 +3,14 @@ location and an infinite vertex name the object (Blender stores inf as 3.4e38, w
 as a coordinate), a camera scaled to 0 blocks neither Build nor Export stats (they need no camera),
 a scene at 1e12 exports without "camera position and look_at coincide", and Export stats writes
 exactly the path it is given or refuses it."""
+
 import json
 
+import blender_checks  # noqa: F401  (import path for tests/blender)
+import bpy  # noqa: E402
+import harness  # before bpy
 import numpy as np
 import pytest
-
-import blender_checks  # noqa: F401  (import path for tests/blender)
-import harness  # before bpy
-import bpy  # noqa: E402
 
 from bvhlab.blender import ExportError, export_scene  # noqa: E402
 

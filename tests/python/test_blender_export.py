@@ -1,11 +1,11 @@
 """bvhlab.blender: Blender scene → bvhlab.Scene, on the bundled scenes and on small scenes made
 here (bpy imported as a module; the checks live in tests/blender, shared with run.py)."""
-import pytest
 
 import blender_checks  # noqa: F401  (import path for the shared checks)
-import harness  # before bpy
 import checks_bundled  # noqa: E402
 import checks_cases  # noqa: E402
+import harness  # before bpy
+import pytest
 
 
 @pytest.mark.parametrize("name", list(harness.scenes_index()))

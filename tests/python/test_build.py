@@ -1,10 +1,11 @@
 """bvhlab.build through Python: structure, stats, views, determinism, every method and axis."""
+
 import numpy as np
 import pytest
+from child import check_python
 
 import bvhlab
 from bvhlab.library import procedural
-from child import check_python
 
 
 def check_structure(bvh, tris, spheres=None):

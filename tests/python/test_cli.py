@@ -1,5 +1,6 @@
 """The bvhlab command line end to end: each subcommand, exit codes, files written and parseable,
 and numbers equal to the Python API's for the same builds."""
+
 import csv
 import json
 import subprocess
@@ -7,18 +8,20 @@ import sys
 
 import numpy as np
 import pytest
+from png_reader import read_png
 
 import bvhlab
 from bvhlab.cli import main
-from bvhlab.png import linear_to_srgb, read_png
 from bvhlab.library import load_scene, procedural
+from bvhlab.png import linear_to_srgb
 from bvhlab.render import HAS_VULKAN
 
 
 def run_cli(*args, timeout=300):
     """The CLI in a child process (it may load .blend files through bpy, which changes global state)."""
-    done = subprocess.run([sys.executable, "-m", "bvhlab", *map(str, args)], capture_output=True, text=True,
-                          timeout=timeout)
+    done = subprocess.run(
+        [sys.executable, "-m", "bvhlab", *map(str, args)], capture_output=True, text=True, timeout=timeout
+    )
     return done.returncode, done.stdout, done.stderr
 
 
@@ -34,14 +37,34 @@ def test_build_json_and_csv_equal_the_api(tmp_path, capsys):
     """One stats writer (bvhlab.stats_files) for the CLI and the add-on's Export stats: the JSON is
     {"about": ..., "stats": Bvh.stats}, the CSV metric,index,value."""
     path, table = tmp_path / "stats.json", tmp_path / "stats.csv"
-    assert main(["build", "gen:whitted", "--method", "sah32", "--max-leaf-size", "2", "--json", str(path),
-                 "--csv", str(table)]) == 0
+    assert (
+        main(
+            [
+                "build",
+                "gen:whitted",
+                "--method",
+                "sah32",
+                "--max-leaf-size",
+                "2",
+                "--json",
+                str(path),
+                "--csv",
+                str(table),
+            ]
+        )
+        == 0
+    )
     written = json.loads(path.read_text())
     scene, _ = load_scene("gen:whitted")
     api = bvhlab.build(scene, method="sah", bins=32, max_leaf_size=2).stats
     assert set(written) == {"about", "stats"} and written["about"]["scene"] == "whitted"
-    assert written["about"]["settings"] == {"method": "sah", "bins": 32, "axis": bvhlab.bvh.DEFAULT_AXIS,
-                                            "bin_bounds": bvhlab.bvh.DEFAULT_BIN_BOUNDS, "max_leaf_size": 2}
+    assert written["about"]["settings"] == {
+        "method": "sah",
+        "bins": 32,
+        "axis": bvhlab.bvh.DEFAULT_AXIS,
+        "bin_bounds": bvhlab.bvh.DEFAULT_BIN_BOUNDS,
+        "max_leaf_size": 2,
+    }
     for key in api:
         if key not in ("build_ms",):
             assert written["stats"][key] == api[key], key
@@ -60,13 +83,48 @@ def line_pixels(png_path, depth: int) -> int:
 
 def test_render_with_overlay_and_heatmap(tmp_path):
     out = tmp_path / "render.png"
-    assert main(["render", "gen:five_spheres", "--width", "96", "--height", "64", "--backend", "cpu",
-                 "--method", "median", "--bvh-depth", "1:1", "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "render",
+                "gen:five_spheres",
+                "--width",
+                "96",
+                "--height",
+                "64",
+                "--backend",
+                "cpu",
+                "--method",
+                "median",
+                "--bvh-depth",
+                "1:1",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     assert read_png(out).shape == (64, 96, 4)
     assert line_pixels(out, 1) > 20 and line_pixels(out, 2) == 0
     heat = tmp_path / "heat.png"
-    assert main(["render", "gen:five_spheres", "--width", "32", "--height", "24", "--backend", "cpu",
-                 "--heatmap", "--out", str(heat)]) == 0
+    assert (
+        main(
+            [
+                "render",
+                "gen:five_spheres",
+                "--width",
+                "32",
+                "--height",
+                "24",
+                "--backend",
+                "cpu",
+                "--heatmap",
+                "--out",
+                str(heat),
+            ]
+        )
+        == 0
+    )
     assert read_png(heat).shape == (24, 32, 4)
 
 
@@ -87,9 +145,26 @@ def test_errors_have_exit_code_2(tmp_path, capsys):
 
 def test_compare_writes_table_charts_figures_and_sheets(tmp_path):
     out = tmp_path / "cmp"
-    code, stdout, stderr = run_cli("compare", "gen:five_spheres", "--methods", "median,mean,sah12", "--frames", "5",
-                                   "--builds", "5", "--width", "64", "--height", "48", "--backend", "cpu",
-                                   "--overlay-backends", "none", "--out", out)
+    code, stdout, stderr = run_cli(
+        "compare",
+        "gen:five_spheres",
+        "--methods",
+        "median,mean,sah12",
+        "--frames",
+        "5",
+        "--builds",
+        "5",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--backend",
+        "cpu",
+        "--overlay-backends",
+        "none",
+        "--out",
+        out,
+    )
     assert code == 0, stderr
     assert "Checks (report §4.2, §5.2)" in stdout and "Report §4.1" not in stdout
     rows = list(csv.DictReader((out / "table.csv").open()))
@@ -108,8 +183,14 @@ def test_compare_writes_table_charts_figures_and_sheets(tmp_path):
     assert len(table["meta"]["uniform_rows"][0]["frame_ms_all"]) == 5  # random spheres: the same protocol
     md = (out / "table.md").read_text()
     assert "| median |" in md and "41.8" in md and "mean (centroid mean" in md
-    for name in ("times.png", "nodes_per_depth.png", "sah_per_depth.png", "leaf_sizes.png", "figure6.png",
-                 "sheet_median.png"):
+    for name in (
+        "times.png",
+        "nodes_per_depth.png",
+        "sah_per_depth.png",
+        "leaf_sizes.png",
+        "figure6.png",
+        "sheet_median.png",
+    ):
         assert (out / name).stat().st_size > 1000, name
     # Figure 3 draws depth 1 only; Figure 4 depths 1 and deeper, never the root
     for method in ("median", "mean", "sah12"):
@@ -122,9 +203,28 @@ def test_compare_writes_table_charts_figures_and_sheets(tmp_path):
 def test_compare_measures_the_overlay_claim(tmp_path):
     """Report §4.1 on the >700,000-triangle model, on the CPU reference and on Vulkan."""
     out = tmp_path / "cmp"
-    code, stdout, stderr = run_cli("compare", "gen:whitted", "--methods", "sah12", "--frames", "5", "--builds", "5",
-                                   "--width", "48", "--height", "36", "--backend", "cpu", "--no-figures",
-                                   "--no-uniform", "--overlay-backends", "cpu,vulkan", "--out", out)
+    code, stdout, stderr = run_cli(
+        "compare",
+        "gen:whitted",
+        "--methods",
+        "sah12",
+        "--frames",
+        "5",
+        "--builds",
+        "5",
+        "--width",
+        "48",
+        "--height",
+        "36",
+        "--backend",
+        "cpu",
+        "--no-figures",
+        "--no-uniform",
+        "--overlay-backends",
+        "cpu,vulkan",
+        "--out",
+        out,
+    )
     assert code == 0, stderr
     assert "Report §4.1 and Figure 5" in stdout and "| CPU reference on 1 thread | no overlay |" in stdout
     overlay = json.loads((out / "table.json").read_text())["meta"]["overlay"]
@@ -136,20 +236,23 @@ def test_compare_measures_the_overlay_claim(tmp_path):
         assert line_pixels(png, 8) + line_pixels(png, 9) > 0
 
 
-@pytest.mark.parametrize("args, message", [
-    (["--frames", "0"], "argument --frames: must be at least 5"),
-    (["--frames", "-2"], "argument --frames: must be at least 5"),
-    (["--frames", "4"], "argument --frames: must be at least 5"),
-    (["--frames", "many"], "argument --frames: expected a whole number, got 'many'"),
-    (["--builds", "0"], "argument --builds: must be at least 5"),
-    (["--methods", ","], "argument --methods: no methods given"),
-    (["--methods", "median,,sah12"], "argument --methods: empty method name"),
-    (["--methods", "median,median"], "argument --methods: method given more than once: median"),
-    (["--methods", "quick"], "argument --methods: unknown method 'quick'"),
-    (["--width", "0"], "argument --width: must be between 1 and 16384 pixels, got 0"),
-    (["--height", "100000"], "argument --height: must be between 1 and 16384 pixels, got 100000"),
-    (["--overlay-backends", "gpu"], "argument --overlay-backends: expected cpu, vulkan"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--frames", "0"], "argument --frames: must be at least 5"),
+        (["--frames", "-2"], "argument --frames: must be at least 5"),
+        (["--frames", "4"], "argument --frames: must be at least 5"),
+        (["--frames", "many"], "argument --frames: expected a whole number, got 'many'"),
+        (["--builds", "0"], "argument --builds: must be at least 5"),
+        (["--methods", ","], "argument --methods: no methods given"),
+        (["--methods", "median,,sah12"], "argument --methods: empty method name"),
+        (["--methods", "median,median"], "argument --methods: method given more than once: median"),
+        (["--methods", "quick"], "argument --methods: unknown method 'quick'"),
+        (["--width", "0"], "argument --width: must be between 1 and 16384 pixels, got 0"),
+        (["--height", "100000"], "argument --height: must be between 1 and 16384 pixels, got 100000"),
+        (["--overlay-backends", "gpu"], "argument --overlay-backends: expected cpu, vulkan"),
+    ],
+)
 def test_compare_rejects_bad_arguments(tmp_path, args, message):
     out = tmp_path / "never"
     code, stdout, stderr = run_cli("compare", "gen:five_spheres", *args, "--out", out, timeout=60)
@@ -170,9 +273,27 @@ def test_compare_never_writes_over_a_file(tmp_path):
 def test_compare_at_width_one(tmp_path):
     """The random-spheres check used to halve the size and fail with "got 0"."""
     out = tmp_path / "tiny"
-    code, stdout, stderr = run_cli("compare", "gen:five_spheres", "--methods", "median,sah12", "--frames", "5",
-                                   "--builds", "5", "--width", "1", "--height", "1", "--backend", "cpu",
-                                   "--no-figures", "--overlay-backends", "none", "--out", out)
+    code, stdout, stderr = run_cli(
+        "compare",
+        "gen:five_spheres",
+        "--methods",
+        "median,sah12",
+        "--frames",
+        "5",
+        "--builds",
+        "5",
+        "--width",
+        "1",
+        "--height",
+        "1",
+        "--backend",
+        "cpu",
+        "--no-figures",
+        "--overlay-backends",
+        "none",
+        "--out",
+        out,
+    )
     assert code == 0, stderr
     assert "got 0" not in stderr and "1×1" in stdout and "random spheres" in stderr
 
@@ -192,21 +313,27 @@ def bad_scene_files(tmp_path_factory):
     return d
 
 
-@pytest.mark.parametrize("args, message", [
-    (["build", "{d}/truncated.npz"], "truncated.npz is not an .npz file"),
-    (["build", "{d}/no_triangles.npz"], "no_triangles.npz has no 'triangles'"),
-    (["build", "{d}/materials5.npz"], r"'materials' has shape \(1, 5\); expected \(N, 6\)"),
-    (["build", "{d}/good.npz", "--json", "{d}/a_file/stats.json"], "a_file is a file, not a folder"),
-    (["build", "{d}/good.npz", "--json", "{d}/a_folder"], "a_folder is a folder"),
-    (["build", "{d}/good.npz", "--csv", "{d}/stats.json"], "written as .csv"),
-    (["render", "{d}/good.npz", "--out", "{d}/r.jpg"], r"r.jpg: a PNG image is written as .png"),
-    (["render", "{d}/good.npz", "--out", "{d}/a_folder"], "a_folder is a folder"),
-    (["render", "{d}/good.npz", "--out", "{d}/a_file/r.png"], "a_file is a file, not a folder"),
-    (["render", "{d}/good.npz", "--bvh-depth", "-1:2", "--out", "{d}/r.png"], "depth range -1:2: need 0 <= A <= B"),
-    (["render", "{d}/good.npz", "--width", "100000", "--out", "{d}/r.png"], "between 1 and 16384 pixels, got 100000"),
-    (["snapshot", "{d}/good.npz", "--width", "0", "--out", "{d}/s.png"], "between 1 and 16384 pixels, got 0"),
-    (["snapshot", "{d}/good.npz", "--height", "100000", "--out", "{d}/s.png"], "between 1 and 16384 pixels"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["build", "{d}/truncated.npz"], "truncated.npz is not an .npz file"),
+        (["build", "{d}/no_triangles.npz"], "no_triangles.npz has no 'triangles'"),
+        (["build", "{d}/materials5.npz"], r"'materials' has shape \(1, 5\); expected \(N, 6\)"),
+        (["build", "{d}/good.npz", "--json", "{d}/a_file/stats.json"], "a_file is a file, not a folder"),
+        (["build", "{d}/good.npz", "--json", "{d}/a_folder"], "a_folder is a folder"),
+        (["build", "{d}/good.npz", "--csv", "{d}/stats.json"], "written as .csv"),
+        (["render", "{d}/good.npz", "--out", "{d}/r.jpg"], r"r.jpg: a PNG image is written as .png"),
+        (["render", "{d}/good.npz", "--out", "{d}/a_folder"], "a_folder is a folder"),
+        (["render", "{d}/good.npz", "--out", "{d}/a_file/r.png"], "a_file is a file, not a folder"),
+        (["render", "{d}/good.npz", "--bvh-depth", "-1:2", "--out", "{d}/r.png"], "depth range -1:2: need 0 <= A <= B"),
+        (
+            ["render", "{d}/good.npz", "--width", "100000", "--out", "{d}/r.png"],
+            "between 1 and 16384 pixels, got 100000",
+        ),
+        (["snapshot", "{d}/good.npz", "--width", "0", "--out", "{d}/s.png"], "between 1 and 16384 pixels, got 0"),
+        (["snapshot", "{d}/good.npz", "--height", "100000", "--out", "{d}/s.png"], "between 1 and 16384 pixels"),
+    ],
+)
 def test_bad_files_and_paths_are_one_error_line(bad_scene_files, args, message):
     """Issue 8: BadZipFile, KeyError and IndexError tracebacks, --json under a file or on a folder,
     PNG bytes written to r.jpg, argparse's "expected one argument", moderngl errors: now

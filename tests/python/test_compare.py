@@ -1,14 +1,14 @@
 """bvhlab.compare: the measurement protocol (intervals, verdicts, interleaved rounds), the report's
 claims on synthetic and measured rows, per-depth tree figures, charts, and the §4.1 overlay
 measurement."""
+
 import math
 
 import numpy as np
 import pytest
 
 import bvhlab
-from bvhlab.compare import build_settings, measure_methods, report_checks
-from bvhlab.compare import charts, overlay, protocol
+from bvhlab.compare import build_settings, charts, measure_methods, overlay, protocol, report_checks
 from bvhlab.compare.measure import samples_columns
 from bvhlab.compare.report import finding, markdown, ranking
 from bvhlab.compare.tree_stats import sah_cost_per_depth
@@ -80,9 +80,16 @@ def _rows(rng, medians: dict, n=9, builds: dict | None = None, heights: dict | N
     rows = []
     for m, ms in medians.items():
         frames, build = _noisy(rng, n, ms, stalls), _noisy(rng, n, (builds or {}).get(m, 10.0), stalls)
-        rows.append({"method": m, "height": (heights or {}).get(m, 20), "sah_cost": 1.0, "frame_clock": "cpu",
-                     **samples_columns("frame", [1000.0 / f for f in frames], frames),
-                     **samples_columns("build", [1000.0 / b for b in build], build)})
+        rows.append(
+            {
+                "method": m,
+                "height": (heights or {}).get(m, 20),
+                "sah_cost": 1.0,
+                "frame_clock": "cpu",
+                **samples_columns("frame", [1000.0 / f for f in frames], frames),
+                **samples_columns("build", [1000.0 / b for b in build], build),
+            }
+        )
     return rows
 
 
@@ -104,20 +111,26 @@ def test_verdicts_survive_stalls_and_never_reverse():
 
 def test_report_claims_on_rows_with_known_answers():
     rng = np.random.default_rng(1)
-    rows = _rows(rng, {"median": 100.0, "mean": 70.0, "midpoint": 70.0, "sah12": 60.0, "sah32": 60.0}, n=15,
-                 builds={"median": 10.0, "mean": 10.0, "midpoint": 10.0, "sah12": 30.0, "sah32": 31.0},
-                 heights={"median": 20, "mean": 25, "midpoint": 34, "sah12": 31, "sah32": 30})
+    rows = _rows(
+        rng,
+        {"median": 100.0, "mean": 70.0, "midpoint": 70.0, "sah12": 60.0, "sah32": 60.0},
+        n=15,
+        builds={"median": 10.0, "mean": 10.0, "midpoint": 10.0, "sah12": 30.0, "sah32": 31.0},
+        heights={"median": 20, "mean": 25, "midpoint": 34, "sah12": 31, "sah32": 30},
+    )
     checks = {c["claim"]: c for c in report_checks(rows)}
     assert all(c["verdict"] in VERDICTS and c["holds"] in (True, False, None) for c in checks.values())
-    want = {"SAH has the lowest frame time": protocol.HOLDS,
-            "mean is clearly faster than median (at least 10% less frame time)": protocol.HOLDS,
-            "mean comes close to SAH (its frame time nearer SAH's than median's)": protocol.HOLDS,
-            "median gives the lowest tree": protocol.HOLDS,
-            "mean gives the tallest tree (the most unbalanced)": protocol.FAILS,
-            "midpoint gives the tallest tree (the most unbalanced)": protocol.HOLDS,
-            "32 bins instead of 12 change the frame time little (within 10%)": protocol.HOLDS,
-            "32 bins instead of 12 increase the build time drastically (at least 1.5×)": protocol.FAILS,
-            "SAH (12 bins) takes longer to build than median and mean": protocol.HOLDS}
+    want = {
+        "SAH has the lowest frame time": protocol.HOLDS,
+        "mean is clearly faster than median (at least 10% less frame time)": protocol.HOLDS,
+        "mean comes close to SAH (its frame time nearer SAH's than median's)": protocol.HOLDS,
+        "median gives the lowest tree": protocol.HOLDS,
+        "mean gives the tallest tree (the most unbalanced)": protocol.FAILS,
+        "midpoint gives the tallest tree (the most unbalanced)": protocol.HOLDS,
+        "32 bins instead of 12 change the frame time little (within 10%)": protocol.HOLDS,
+        "32 bins instead of 12 increase the build time drastically (at least 1.5×)": protocol.FAILS,
+        "SAH (12 bins) takes longer to build than median and mean": protocol.HOLDS,
+    }
     for claim, verdict in want.items():
         assert checks[claim]["verdict"] == verdict, (claim, checks[claim])
     reversed_rows = _rows(rng, {"median": 60.0, "sah12": 100.0}, n=15, stalls=0.0)
@@ -126,8 +139,12 @@ def test_report_claims_on_rows_with_known_answers():
 
 def test_finding_and_ranking_are_read_from_the_numbers():
     rng = np.random.default_rng(2)
-    rows = _rows(rng, {"median": 100.0, "mean": 70.0, "midpoint": 71.0, "sah12": 50.0}, n=15,
-                 heights={"median": 20, "mean": 25, "midpoint": 34, "sah12": 30})
+    rows = _rows(
+        rng,
+        {"median": 100.0, "mean": 70.0, "midpoint": 71.0, "sah12": 50.0},
+        n=15,
+        heights={"median": 20, "mean": 25, "midpoint": 34, "sah12": 30},
+    )
     assert "mean split the midpoint" in finding(rows) and "centroid mean 25, midpoint 34" in finding(rows)
     rows[2]["height"] = 33
     assert "neither matches" in finding(rows)
@@ -155,7 +172,7 @@ def test_measure_methods_warms_up_interleaves_and_counts(small_scene):
     rows = measure_methods(scene, labels, frames=5, builds=6, width=24, height=16, renderer=renderer)
     assert [r["method"] for r in rows] == labels
     assert len(renderer.trees) == 3 * (5 + 1)  # one warm-up frame each, not counted
-    rounds = [renderer.trees[i:i + 3] for i in range(0, len(renderer.trees), 3)]
+    rounds = [renderer.trees[i : i + 3] for i in range(0, len(renderer.trees), 3)]
     assert all(len(set(r)) == 3 for r in rounds) and len({tuple(r) for r in rounds[1:]}) == 3  # rotated
     for row, label in zip(rows, labels):
         assert len(row["frame_ms_all"]) == 5 and len(row["build_ms_all"]) == 6
@@ -173,7 +190,15 @@ def test_measure_methods_warms_up_interleaves_and_counts(small_scene):
 def test_build_settings_state_the_report_settings_explicitly():
     for label, method, bins in (("median", "median", 12), ("midpoint", "midpoint", 12), ("sah32", "sah", 32)):
         s = build_settings(label)
-        assert s == {"method": method, "bins": bins, "axis": "largest", "max_leaf_size": 1, "threads": 1, "seed": 0}
+        assert s == {
+            "method": method,
+            "bins": bins,
+            "bin_bounds": "centroids",
+            "axis": "largest",
+            "max_leaf_size": 1,
+            "threads": 1,
+            "seed": 0,
+        }
     assert build_settings("sah12", {"max_leaf_size": 4, "axis": "best"})["max_leaf_size"] == 4
     assert build_settings("sah12", {"bins": 99})["bins"] == 12  # the label decides the bins
 
@@ -190,13 +215,31 @@ def test_sah_cost_per_depth_adds_up_to_the_tree_cost(knot_mesh, method, leaf):
 
 
 def test_chart_labels_keep_three_significant_digits(tmp_path):
-    assert [charts.value_label(v) for v in (0.0412, 0.9, 1.5, 12.34, 604.0, 1395.2)] == \
-        ["0.0412", "0.900", "1.50", "12.3", "604", "1395"]
-    rows = [{"method": m, "frame_ms": f, "frame_ms_lo": f * 0.9, "frame_ms_hi": f * 1.2, "build_ms": 0.04,
-             "build_ms_lo": math.nan, "build_ms_hi": math.nan, "nodes_per_depth": [1, 2, 4],
-             "frame_clock": "wall",
-             "sah_cost_per_depth": [1.0, 0.8, 2.0], "sah_cost": 3.8, "leaf_size_histogram": [0, 3, 1]}
-            for m, f in (("median", 0.5), ("sah12", 0.4))]
+    assert [charts.value_label(v) for v in (0.0412, 0.9, 1.5, 12.34, 604.0, 1395.2)] == [
+        "0.0412",
+        "0.900",
+        "1.50",
+        "12.3",
+        "604",
+        "1395",
+    ]
+    rows = [
+        {
+            "method": m,
+            "frame_ms": f,
+            "frame_ms_lo": f * 0.9,
+            "frame_ms_hi": f * 1.2,
+            "build_ms": 0.04,
+            "build_ms_lo": math.nan,
+            "build_ms_hi": math.nan,
+            "nodes_per_depth": [1, 2, 4],
+            "frame_clock": "wall",
+            "sah_cost_per_depth": [1.0, 0.8, 2.0],
+            "sah_cost": 3.8,
+            "leaf_size_histogram": [0, 3, 1],
+        }
+        for m, f in (("median", 0.5), ("sah12", 0.4))
+    ]
     for chart in (charts.times_chart, charts.nodes_per_depth_chart, charts.sah_per_depth_chart, charts.leaf_size_chart):
         path = chart(rows, tmp_path / f"{chart.__name__}.png", "t")
         assert path.stat().st_size > 2000
@@ -215,7 +258,20 @@ def test_overlay_measurement_times_three_settings_and_reports(knot_mesh):
     assert res["boxes"] == len(bvh.boxes(8, 9)[0]) > 0
     text = overlay.markdown([res], "knot", len(knot_mesh), "SAH 12", bvh.stats["height"])
     assert "Report §4.1" in text and "12 ms with the overlay against 17 ms" in text
-    rows = measure_methods(scene, ["median", "sah12"], frames=5, builds=5, width=16, height=12,
-                           renderer=bvhlab.Renderer("cpu"))
-    assert "| median |" in markdown(rows, {"scene": "knot", "triangles": 1, "spheres": 0, "width": 16,
-                                           "height": 12, "device": "cpu", "frames": 5, "builds": 5}, [])
+    rows = measure_methods(
+        scene, ["median", "sah12"], frames=5, builds=5, width=16, height=12, renderer=bvhlab.Renderer("cpu")
+    )
+    assert "| median |" in markdown(
+        rows,
+        {
+            "scene": "knot",
+            "triangles": 1,
+            "spheres": 0,
+            "width": 16,
+            "height": 12,
+            "device": "cpu",
+            "frames": 5,
+            "builds": 5,
+        },
+        [],
+    )

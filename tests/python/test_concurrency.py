@@ -2,6 +2,7 @@
 callables, some cancelling), intersect, refit and boxes on a shared tree, for a few seconds; no
 crash, and every result equal to the serial one. It runs in a child process, so a crash fails the
 test instead of the test run. Each workload is a function in WORKLOADS: add one to cover more."""
+
 from child import check_python
 
 CHILD = """
@@ -49,7 +50,8 @@ CHILD = """
                 except bvhlab.BuildCancelled:
                     pass
                 continue
-            t = bvhlab.build(geo, spheres, method=m, threads=int(rng.integers(0, 3)), progress=lambda f: f >= np.float64(0))
+            threads = int(rng.integers(0, 3))
+            t = bvhlab.build(geo, spheres, method=m, threads=threads, progress=lambda f: f >= np.float64(0))
             if (t.nodes.tobytes(), t.refs.tobytes()) != tree_bytes[(m, g)]:
                 fail(f"{m} tree of {g} differs from the serial one")
             counts["build"] = counts.get("build", 0) + 1
@@ -88,7 +90,8 @@ CHILD = """
     for t in threads:
         t.join()
     print("counts", counts, "failures", len(failures), sorted(set(failures))[:5])
-    ok = not failures and counts.get("build", 0) >= 2 and counts.get("refit", 0) >= 4 and counts.get("intersect", 0) >= 2
+    enough = counts.get("build", 0) >= 2 and counts.get("refit", 0) >= 4 and counts.get("intersect", 0) >= 2
+    ok = not failures and enough
     sys.exit(0 if ok else 1)
 """
 

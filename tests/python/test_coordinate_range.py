@@ -2,13 +2,14 @@
 direction of length 1e-28). Now geometry outside ±MAX_COORDINATE is refused naming the primitive,
 everything inside is hit as a float64 brute force says, and any direction whose largest component
 lies in [MIN_DIRECTION, MAX_DIRECTION] works (core_cpp/include/bvhlab/coordinate_range.h)."""
+
 import numpy as np
 import pytest
+from oracles import brute_force
 
 import bvhlab
 from bvhlab.bvh import MAX_COORDINATE, MAX_DIRECTION, MIN_DIRECTION, MIN_RADIUS
 from bvhlab.library import procedural
-from oracles import brute_force
 
 L = MAX_COORDINATE
 
@@ -65,7 +66,9 @@ def _giant_scene(rng, n_tris=300, n_spheres=40):
     """Triangles and spheres spread over the whole range, some as large as it (corners at ±L)."""
     tris = rng.uniform(-L, L, (n_tris, 3, 3)).astype(np.float32)
     tris[:20] = rng.choice([-L, L], (20, 3, 3)).astype(np.float32)  # corner to corner
-    tris[20:40] = (rng.uniform(-1, 1, (20, 3, 3)) * L / 2**20 + rng.uniform(-L / 2, L / 2, (20, 1, 3))).astype(np.float32)
+    tris[20:40] = (rng.uniform(-1, 1, (20, 3, 3)) * L / 2**20 + rng.uniform(-L / 2, L / 2, (20, 1, 3))).astype(
+        np.float32
+    )
     centres = rng.uniform(-L / 2, L / 2, (n_spheres, 3))
     radii = rng.uniform(L / 64, L / 2, n_spheres)
     spheres = np.column_stack([centres, radii]).astype(np.float32)
@@ -98,9 +101,16 @@ def test_geometry_as_large_as_the_range_is_hit_as_at_unit_scale():
         both = np.isfinite(got["t"]) & np.isfinite(want_t)
         close = np.abs(got["t"][both] - want_t[both]) <= 1e-4 * want_t[both]
         assert close.mean() >= 0.995
-        # another primitive only at the same distance (the cube-corner triangles share planes)
+        # another primitive only at the same distance (the cube-corner triangles share planes, some
+        # are one triangle with its vertices in another order): equal up to the rounding of the
+        # coordinates themselves, a few float32 spacings at L (2^-23 L), which is more than 1e-4 t
+        # for a hit near the origin (the watertight test's t, Woop et al. 2013, is a sum of
+        # vertex distances of size L, as Möller–Trumbore's is)
         other = (got["prim"][both] != want_id[both]) | (got["kind"][both] != want_kind[both])
-        assert np.all(close[other]), f"{traversal}: {np.count_nonzero(other & ~close)} rays hit another primitive"
+        same_place = np.abs(got["t"][both] - want_t[both]) <= 1e-4 * want_t[both] + 4 * 2.0**-23 * L
+        assert np.all(same_place[other]), (
+            f"{traversal}: {np.count_nonzero(other & ~same_place)} rays hit another primitive"
+        )
 
 
 #: Direction scales: exact powers of two (results must be bit-identical after rescaling t) and

@@ -1,12 +1,12 @@
 """The render engine "bvhlab Whitted" under bpy 4.2, the add-on enabled in place from addon/ (the
 same checks run under bpy 5.2 and a real Blender binary through tests/blender/run.py, which
 also renders `blender -b ... -a` on the command line)."""
-import pytest
 
 import blender_checks  # noqa: F401
-import harness
 import checks_engine  # noqa: E402
 import checks_engine_viewport  # noqa: E402
+import harness
+import pytest
 
 
 @pytest.fixture(scope="module", autouse=True)

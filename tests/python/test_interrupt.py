@@ -2,6 +2,7 @@
 says when it has begun, and gets SIGINT; it must end with KeyboardInterrupt long before the work
 could have finished (the full run is timed in the same child first), and the CLI must exit 130
 with one line and no traceback."""
+
 import signal
 import subprocess
 import sys

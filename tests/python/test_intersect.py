@@ -1,10 +1,11 @@
 """Bvh.intersect against two independent oracles: a float64 numpy brute force, and Embree."""
+
 import numpy as np
 import pytest
+from oracles import brute_force
 
 import bvhlab
 from bvhlab.library import procedural
-from oracles import brute_force
 
 
 @pytest.mark.parametrize("method", bvhlab.METHODS)
@@ -122,19 +123,19 @@ def test_every_traversal_picks_the_same_primitive_on_ties():
 
 
 def test_a_tie_at_a_shared_vertex_goes_to_the_smaller_index_in_every_traversal():
-    tris = np.array([[[-16, -16, -16], [-8.125, -16, -16], [-10, -13, -16]],
-                     [[-10.5625, -9.375, -11.9375], [-10, -16, -16], [-16, -16, -16]]], np.float32)
+    tris = np.array(
+        [
+            [[-16, -16, -16], [-8.125, -16, -16], [-10, -13, -16]],
+            [[-10.5625, -9.375, -11.9375], [-10, -16, -16], [-16, -16, -16]],
+        ],
+        np.float32,
+    )
     o = np.full((1, 3), -8, np.float32)  # straight at the shared vertex (-16, -16, -16)
     bvh = bvhlab.build(tris, method="median")
     prims = {t: int(bvh.intersect(o, o, traversal=t)["prim"][0]) for t in bvhlab.TRAVERSALS}
     assert prims == {"stack": 0, "stackless": 0, "wide": 0}
 
 
-@pytest.mark.xfail(strict=True, reason="found by the fuzzer (tests/fuzz/corpus/found_sphere_halo), not fixed yet: "
-                   "the sphere test's discriminant b² - a·c cancels, so float32 resolves the ray's distance from "
-                   "the centre only to about sqrt(eps)·|origin - centre| (2.4e-4 of it); the fix is Haines et al., "
-                   "'Precision Improvements for Ray/Sphere Intersection', Ray Tracing Gems (2019) ch. 7: "
-                   "r² - |f - (f·d)d|² (ray.h hit_sphere and shaders/tracer/geometry.glsl sphere_roots)")
 def test_rays_beside_a_small_distant_sphere_miss_it():
     """A sphere of radius 1 mm 100 m away: rays passing 2 to 50 radii beside it were hits."""
     r, distance = 1e-3, 100.0
@@ -142,8 +143,16 @@ def test_rays_beside_a_small_distant_sphere_miss_it():
     o = np.zeros((len(beside), 3), np.float32)
     d = np.column_stack([np.full(len(beside), distance), beside, np.zeros(len(beside))]).astype(np.float32)
     one = bvhlab.build(np.zeros((0, 3, 3), np.float32), np.array([[distance, 0, 0, r]], np.float32))
-    two = bvhlab.build(np.zeros((0, 3, 3), np.float32), np.array([[distance, 0, 0, r], [distance, 0.2, 0, r]],
-                                                                  np.float32), max_leaf_size=2, method="median")
+    two = bvhlab.build(
+        np.zeros((0, 3, 3), np.float32),
+        np.array([[distance, 0, 0, r], [distance, 0.2, 0, r]], np.float32),
+        max_leaf_size=2,
+        method="median",
+    )
+    through = np.array([[distance, 0, 0], [distance, 0.5 * r, 0]], np.float32)  # the centre, half a radius off
     for bvh in (one, two):  # a lone sphere (its box culls in stack and stackless) and two in a leaf
         for traversal in bvhlab.TRAVERSALS:
             assert np.all(bvh.intersect(o, d, traversal=traversal)["prim"] == -1), traversal
+            hits = bvh.intersect(np.zeros((2, 3), np.float32), through, traversal=traversal)
+            assert np.all(hits["prim"] == 0) and np.all(hits["kind"] == 1), traversal
+            np.testing.assert_allclose(hits["t"], [1 - r / distance, 1 - np.sqrt(0.75) * r / distance], rtol=1e-6)

@@ -1,6 +1,7 @@
 """The render API a render engine builds on (issue 12): sample passes with progress and cancel, a
 camera given directly, the Depth and cost outputs beside Combined; checked against the CPU
 reference and against rays traced independently (Bvh.intersect)."""
+
 import numpy as np
 import pytest
 
@@ -88,8 +89,15 @@ def test_view_camera_depth_and_cost(renderer):
     distance of what each pixel shows (Blender's Z), 1e10 where nothing is hit."""
     scene = bvhlab.Scene(triangles=procedural.torus_knot(20000))
     bvh = bvhlab.build(scene)
-    view = bvhlab.View(position=(0.4, -3.2, 1.1), forward=(-0.1, 1.0, -0.3), up=(0, 0, 1), fov_y=40, aspect=1.6,
-                       shift_x=0.05, shift_y=-0.08)
+    view = bvhlab.View(
+        position=(0.4, -3.2, 1.1),
+        forward=(-0.1, 1.0, -0.3),
+        up=(0, 0, 1),
+        fov_y=40,
+        aspect=1.6,
+        shift_x=0.05,
+        shift_y=-0.08,
+    )
     w, h = 64, 40
     result = renderer.start(scene, bvh, w, h, camera=view, max_depth=0)
     result.run()
@@ -126,14 +134,17 @@ def test_cost_is_what_the_heatmap_colours():
     np.testing.assert_allclose(out.color[..., :3].reshape(-1, 3), colours, atol=1e-6)
 
 
-@pytest.mark.parametrize("kwargs, error, match", [
-    (dict(overlay_depth=5), TypeError, "overlay_depth must be a pair"),
-    (dict(heatmap_scale="x"), TypeError, "heatmap_scale must be a number"),
-    (dict(camera=(0, 0, 0)), TypeError, "camera must be a bvhlab.Camera or bvhlab.View"),
-    (dict(camera=bvhlab.View((0, 0, 0), (0, 0, 0))), ValueError, "view direction is zero"),
-    (dict(camera=bvhlab.View((0, 0, 0), (0, 0, 1), up=(0, 0, 2))), ValueError, "parallel"),
-    (dict(traversal=3), TypeError, "traversal must be a string"),
-])
+@pytest.mark.parametrize(
+    "kwargs, error, match",
+    [
+        (dict(overlay_depth=5), TypeError, "overlay_depth must be a pair"),
+        (dict(heatmap_scale="x"), TypeError, "heatmap_scale must be a number"),
+        (dict(camera=(0, 0, 0)), TypeError, "camera must be a bvhlab.Camera or bvhlab.View"),
+        (dict(camera=bvhlab.View((0, 0, 0), (0, 0, 0))), ValueError, "view direction is zero"),
+        (dict(camera=bvhlab.View((0, 0, 0), (0, 0, 1), up=(0, 0, 2))), ValueError, "parallel"),
+        (dict(traversal=3), TypeError, "traversal must be a string"),
+    ],
+)
 def test_clear_errors(kwargs, error, match):
     scene = showcase.five_spheres()
     with pytest.raises(error, match=match):
@@ -182,8 +193,10 @@ def test_a_pixel_that_cannot_finish_is_an_error(renderer):
     """Ten thousand copies of one triangle: a primary ray alone takes some 20,000 steps of work; with
     max_steps_per_pixel below that the render raises instead of returning an unfinished image."""
     one = np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]]], np.float32)
-    scene = bvhlab.Scene(triangles=np.ascontiguousarray(np.repeat(one, 10000, 0)),
-                         camera=bvhlab.Camera((0.3, 0.3, 2), (0.3, 0.3, 0), up=(0, 1, 0), fov_y=30))
+    scene = bvhlab.Scene(
+        triangles=np.ascontiguousarray(np.repeat(one, 10000, 0)),
+        camera=bvhlab.Camera((0.3, 0.3, 2), (0.3, 0.3, 0), up=(0, 1, 0), fov_y=30),
+    )
     bvh = bvhlab.build(scene)
     with pytest.raises(bvhlab.RenderIncomplete, match="did not finish within 5000"):
         renderer.render(scene, bvh, 8, 8, max_steps_per_pixel=5000)

@@ -4,6 +4,7 @@ against the CPU reference: 200 random triangles at 8×8 samples (a segfault in 4
 of 768 pixels wrong), ten thousand copies of one triangle (56 of 64 pixels black), a 2,000-triangle
 mesh at 8×8 samples with the stack traversal (Blender crashed), the bundled scenes at 16×16
 samples (segfaults)."""
+
 import json
 import subprocess
 import sys

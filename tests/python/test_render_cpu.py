@@ -1,5 +1,6 @@
 """The tracer's algorithm, checked on the CPU reference against geometry and optics computed here
 independently: shadow transmission, Snell refraction, the overlay's occlusion, the sky."""
+
 import math
 
 import numpy as np
@@ -50,10 +51,14 @@ def shadow_scene(transparent: float | None):
     floor = showcase.quad((-10, -10, 0), (10, -10, 0), (10, 10, 0), (-10, 10, 0))
     spheres = np.zeros((0, 4), np.float32) if transparent is None else np.array([[0, 0, 1.5, 0.5]], np.float32)
     return bvhlab.Scene(
-        triangles=floor, spheres=spheres,
+        triangles=floor,
+        spheres=spheres,
         materials=[bvhlab.Material((0.8, 0.8, 0.8)), bvhlab.Material((0.3, 0.9, 0.3), transparent=transparent or 0.0)],
-        tri_material=[0, 0], sphere_material=[1] * len(spheres),
-        camera=bvhlab.Camera((0, -8, 6), (0, 0, 0.5)), light=bvhlab.Light((2, 0, 4.5)))
+        tri_material=[0, 0],
+        sphere_material=[1] * len(spheres),
+        camera=bvhlab.Camera((0, -8, 6), (0, 0, 0.5)),
+        light=bvhlab.Light((2, 0, 4.5)),
+    )
 
 
 @pytest.mark.parametrize("transparent", [0.5, 0.3])
@@ -70,7 +75,7 @@ def test_transparent_shadow_is_lighter_by_the_product_of_transparencies(transpar
     half = render(shadow_scene(transparent))[px[1], px[0], :3]
     assert np.all(dark < lit - 0.1), "the opaque sphere casts a shadow there"
     # The shadow ray crosses the sphere's surface twice: transmission = transparent².
-    np.testing.assert_allclose((half - dark) / (lit - dark), transparent ** 2, rtol=1e-3)
+    np.testing.assert_allclose((half - dark) / (lit - dark), transparent**2, rtol=1e-3)
 
 
 def slab_scene(ior: float, with_slab: bool = True):
@@ -85,10 +90,16 @@ def slab_scene(ior: float, with_slab: bool = True):
         tris.append((slab @ rot.T).astype(np.float32))
         mats += [2] * 12
     return bvhlab.Scene(
-        triangles=np.concatenate(tris), tri_material=np.array(mats),
-        materials=[bvhlab.Material((1, 0, 0)), bvhlab.Material((0, 1, 0)),
-                   bvhlab.Material((1, 1, 1), transparent=1.0, ior=ior)],
-        camera=bvhlab.Camera((0, -6, 0), (0, 0, 0), fov_y=20), light=bvhlab.Light((0, -5, 0)))
+        triangles=np.concatenate(tris),
+        tri_material=np.array(mats),
+        materials=[
+            bvhlab.Material((1, 0, 0)),
+            bvhlab.Material((0, 1, 0)),
+            bvhlab.Material((1, 1, 1), transparent=1.0, ior=ior),
+        ],
+        camera=bvhlab.Camera((0, -6, 0), (0, 0, 0), fov_y=20),
+        light=bvhlab.Light((0, -5, 0)),
+    )
 
 
 def boundary_column(image) -> float:
@@ -97,7 +108,7 @@ def boundary_column(image) -> float:
     row = image[image.shape[0] // 2, :, :3].astype(np.float64)
     green = row[:, 1] / np.maximum(row[:, 0] + row[:, 1], 1e-9)
     w = len(green)
-    k = w // 4 + int(np.argmax(green[w // 4: 3 * w // 4] > 0.5))  # first mostly-green pixel
+    k = w // 4 + int(np.argmax(green[w // 4 : 3 * w // 4] > 0.5))  # first mostly-green pixel
     g_red, g_green = green[k - 3], green[k + 3]
     covered = np.clip((green[k - 1] - g_red) / (g_green - g_red), 0, 1)  # green share of pixel k-1
     return k - covered
@@ -119,7 +130,7 @@ def snell_boundary_column(ior: float, width: int) -> float:
             t = (face - p @ n) / (d @ n)
             p = p + t * d
             nn = n if d @ n < 0 else -n  # the normal facing the incoming ray
-            k = 1 - eta ** 2 * (1 - (d @ nn) ** 2)
+            k = 1 - eta**2 * (1 - (d @ nn) ** 2)
             d = eta * d - (eta * (d @ nn) + math.sqrt(k)) * nn
         t = (6 - p[1]) / d[1]
         return (p + t * d)[0]
@@ -147,9 +158,14 @@ def overlay_scene():
     """A small sphere in front of a large one, seen from close by: the small sphere's box has its
     front edges in front of the big sphere (visible) and its back edges behind itself (hidden)."""
     spheres = np.array([[0, 0, 0, 0.5], [0, 6, 0, 3]], np.float32)
-    return bvhlab.Scene(spheres=spheres, materials=[bvhlab.Material((0.9, 0.3, 0.3)), bvhlab.Material((0.3, 0.3, 0.9))],
-                        sphere_material=[0, 1], camera=bvhlab.Camera((0, -3, 0), (0, 0, 0), fov_y=30),
-                        light=bvhlab.Light((0, -10, 5)), sky=SKY)
+    return bvhlab.Scene(
+        spheres=spheres,
+        materials=[bvhlab.Material((0.9, 0.3, 0.3)), bvhlab.Material((0.3, 0.3, 0.9))],
+        sphere_material=[0, 1],
+        camera=bvhlab.Camera((0, -3, 0), (0, 0, 0), fov_y=30),
+        light=bvhlab.Light((0, -10, 5)),
+        sky=SKY,
+    )
 
 
 def near_pixels(camera, w, h, point):
@@ -170,7 +186,7 @@ def test_overlay_lines_occlude_and_are_occluded():
     assert is_line.sum() > 50
     # the small sphere's box is [-0.5, 0.5]³; midpoints of its right vertical edges:
     front = (0.5, -0.5, 0.0)  # the ray there misses the small sphere and meets the big one farther
-    back = (0.5, 0.5, 0.0)    # the ray there passes through the small sphere first
+    back = (0.5, 0.5, 0.0)  # the ray there passes through the small sphere first
     assert any(is_line[p] for p in near_pixels(scene.camera, w, h, front))
     assert not any(is_line[p] for p in near_pixels(scene.camera, w, h, back))
 
@@ -200,16 +216,26 @@ def test_supersampling_averages_samples():
     assert np.any(np.abs(one - many) > 0.05)  # ...with smoother silhouettes
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    (dict(width=0), "width"), (dict(height=-3), "height"), (dict(samples_per_axis=0), "samples per pixel axis"),
-    (dict(samples_per_axis=17), "samples per pixel axis"),
-    (dict(max_depth=99), "max_ray_depth"), (dict(overlay_depth=(5, 2)), "greater"),
-    (dict(mode="xray"), "unknown mode"), (dict(traversal="bfs"), "unknown traversal"),
-    (dict(width=20000, height=10), "exceeds the device limit"), (dict(width=100000, height=100000), "exceeds"),
-    (dict(heatmap_scale=0.0), "heatmap_scale"), (dict(heatmap_scale=float("inf")), "heatmap_scale"),
-    (dict(heatmap_scale=-1.0), "heatmap_scale"), (dict(heatmap_scale=5e9), "heatmap_scale"),
-    (dict(traversal="wide"), "no 'wide' traversal"),
-])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(width=0), "width"),
+        (dict(height=-3), "height"),
+        (dict(samples_per_axis=0), "samples per pixel axis"),
+        (dict(samples_per_axis=17), "samples per pixel axis"),
+        (dict(max_depth=99), "max_ray_depth"),
+        (dict(overlay_depth=(5, 2)), "greater"),
+        (dict(mode="xray"), "unknown mode"),
+        (dict(traversal="bfs"), "unknown traversal"),
+        (dict(width=20000, height=10), "exceeds the device limit"),
+        (dict(width=100000, height=100000), "exceeds"),
+        (dict(heatmap_scale=0.0), "heatmap_scale"),
+        (dict(heatmap_scale=float("inf")), "heatmap_scale"),
+        (dict(heatmap_scale=-1.0), "heatmap_scale"),
+        (dict(heatmap_scale=5e9), "heatmap_scale"),
+        (dict(traversal="wide"), "no 'wide' traversal"),
+    ],
+)
 def test_bad_settings(kwargs, match):
     scene = showcase.five_spheres()
     args = dict(width=32, height=32) | kwargs
@@ -223,7 +249,7 @@ def test_nan_camera_is_rejected():
 
 
 def test_png_round_trip(tmp_path):
-    from bvhlab.png import read_png
+    from png_reader import read_png
 
     image = np.random.default_rng(0).random((5, 7, 4)).astype(np.float32)
     bvhlab.save_png(image, tmp_path / "x.png")

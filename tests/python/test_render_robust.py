@@ -1,6 +1,7 @@
 """Renders that must neither crash, hang nor ignore the user (issue 8, items 4, 11, 12): several
 threads rendering at once (Vulkan and the CPU reference), the overlay at a tiny field of view,
 Ctrl-C during a long render. Hang and crash cases run in a subprocess with a timeout."""
+
 import signal
 import subprocess
 import sys
@@ -11,7 +12,7 @@ import numpy as np
 import pytest
 
 import bvhlab
-from bvhlab.library import procedural, showcase
+from bvhlab.library import showcase
 
 
 def test_threads_rendering_at_once_get_their_serial_images():
@@ -28,8 +29,11 @@ def test_threads_rendering_at_once_get_their_serial_images():
     ]
 
     def run(target, options):
-        return target.render(scene, bvh, 40, 30, **options)[0] if isinstance(target, bvhlab.Renderer) \
+        return (
+            target.render(scene, bvh, 40, 30, **options)[0]
+            if isinstance(target, bvhlab.Renderer)
             else target(scene, bvh, 40, 30, **options)[0]
+        )
 
     serial = [run(target, options) for target, options in jobs]
     results, errors = [None] * len(jobs), []
@@ -65,7 +69,8 @@ def test_overlay_at_a_tiny_field_of_view_finishes(fov):
         "s = showcase.whitted(); b = bvhlab.build(s)\n"
         f"cam = bvhlab.Camera((0.3, -6, 2), (0.2, 0, 0.5), fov_y={fov})\n"
         "img, _ = bvhlab.render(s, b, 4, 4, backend='cpu', camera=cam, overlay_depth=(0, 20))\n"
-        "print('OK', img.shape)\n")
+        "print('OK', img.shape)\n"
+    )
     out = run_python(code, timeout=120)
     assert out.returncode == 0 and "OK (4, 4, 4)" in out.stdout, out.stderr
 
@@ -74,15 +79,15 @@ def test_overlay_of_boxes_at_huge_coordinates_and_through_the_camera():
     """A crafted scene: boxes as wide as the supported coordinate range (±2^40) around and behind
     the camera (lines cross the eye plane and project far outside the image before clipping)."""
     r = float(bvhlab.scene.MAX_COORDINATE)
-    tris = np.array([[[-r, -r, -r], [r, -r, r], [0, r, 0]],
-                     [[-1, -1, -1], [1, -1, 1], [0, 1, 0]]], np.float32)
+    tris = np.array([[[-r, -r, -r], [r, -r, r], [0, r, 0]], [[-1, -1, -1], [1, -1, 1], [0, 1, 0]]], np.float32)
     scene = bvhlab.Scene(triangles=tris, camera=bvhlab.Camera((0, -3, 0), (0, 0, 0)))
     code = (
         "import numpy as np, bvhlab\n"
         f"tris = np.array({tris.tolist()!r}, np.float32)\n"
         "s = bvhlab.Scene(triangles=tris, camera=bvhlab.Camera((0, -3, 0), (0, 0, 0)))\n"
         "img, _ = bvhlab.render(s, bvhlab.build(s, method='median'), 32, 24, backend='cpu', overlay_depth=(0, 5))\n"
-        "print('OK', bool(np.isfinite(img).all()))\n")
+        "print('OK', bool(np.isfinite(img).all()))\n"
+    )
     out = run_python(code, timeout=120)
     assert out.returncode == 0 and "OK True" in out.stdout, out.stderr
     assert scene.primitive_count == 2
@@ -106,8 +111,9 @@ except KeyboardInterrupt:
 def test_ctrl_c_stops_a_long_render(backend):
     """A render of several minutes is interrupted 2 s in: KeyboardInterrupt arrives (CPU: between
     budgets of steps, Vulkan: between dispatches) instead of the render running on."""
-    p = subprocess.Popen([sys.executable, "-c", LONG_RENDER, backend], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                         text=True)
+    p = subprocess.Popen(
+        [sys.executable, "-c", LONG_RENDER, backend], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
     assert p.stdout.readline().strip() == "READY"
     time.sleep(2.0)
     p.send_signal(signal.SIGINT)

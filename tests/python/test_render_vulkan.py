@@ -1,5 +1,6 @@
 """The Vulkan renderer through the Python API, on lavapipe with the Khronos validation layer on:
 images against the CPU reference (the same tracer code), the overlay, errors, the CPU fallback."""
+
 import os
 import subprocess
 import sys
@@ -9,6 +10,7 @@ import pytest
 
 import bvhlab
 from bvhlab.library import procedural, showcase
+
 
 @pytest.fixture(scope="module")
 def vulkan():
@@ -26,9 +28,11 @@ def compare(vk_image, cpu_image):
     assert diff.max() <= 1.5
 
 
-@pytest.mark.parametrize("make", [showcase.five_spheres, showcase.whitted,
-                                  lambda: bvhlab.Scene(triangles=procedural.torus_knot(60000))],
-                         ids=["five_spheres", "whitted", "mesh_60k"])
+@pytest.mark.parametrize(
+    "make",
+    [showcase.five_spheres, showcase.whitted, lambda: bvhlab.Scene(triangles=procedural.torus_knot(60000))],
+    ids=["five_spheres", "whitted", "mesh_60k"],
+)
 def test_vulkan_matches_the_cpu_reference(vulkan, make):
     scene = make()
     assert len(scene.triangles) + len(scene.spheres) > 0
@@ -83,7 +87,11 @@ def test_no_driver_gives_a_clear_error_and_auto_falls_back(tmp_path):
         "image, t = bvhlab.render(s, b, 8, 8, backend='auto')\n"
         "print('AUTO', t['backend'], t['reason'])\n"
     )
-    env = dict(os.environ, VK_DRIVER_FILES=str(tmp_path / "missing_icd.json"), VK_ICD_FILENAMES=str(tmp_path / "missing_icd.json"))
+    env = dict(
+        os.environ,
+        VK_DRIVER_FILES=str(tmp_path / "missing_icd.json"),
+        VK_ICD_FILENAMES=str(tmp_path / "missing_icd.json"),
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
     assert out.returncode == 0, out.stderr
     assert "ERROR" in out.stdout and "mesa-vulkan-drivers" in out.stdout

@@ -1,4 +1,5 @@
 """bvhlab.Scene: defaults that frame the geometry, and .npz round trips without pickle."""
+
 import numpy as np
 import pytest
 
@@ -28,12 +29,19 @@ def test_defaults_frame_the_geometry(knot_mesh):
 def test_save_load_round_trip(tmp_path, small_scene):
     tris, spheres = small_scene
     scene = bvhlab.Scene(
-        triangles=tris, spheres=spheres,
-        materials=[bvhlab.Material((1, 0, 0)), bvhlab.Material((0.9, 0.9, 0.9), reflective=0.8),
-                   bvhlab.Material(transparent=0.9, ior=1.33)],
-        tri_material=np.arange(len(tris)) % 3, sphere_material=np.full(len(spheres), 2),
+        triangles=tris,
+        spheres=spheres,
+        materials=[
+            bvhlab.Material((1, 0, 0)),
+            bvhlab.Material((0.9, 0.9, 0.9), reflective=0.8),
+            bvhlab.Material(transparent=0.9, ior=1.33),
+        ],
+        tri_material=np.arange(len(tris)) % 3,
+        sphere_material=np.full(len(spheres), 2),
         camera=bvhlab.Camera((0, -5, 2), (0.5, 0.5, 0.5), fov_y=60),
-        light=bvhlab.Light((3, -3, 6), (1, 0.9, 0.8), 2.0), sky=(0.1, 0.2, 0.3))
+        light=bvhlab.Light((3, -3, 6), (1, 0.9, 0.8), 2.0),
+        sky=(0.1, 0.2, 0.3),
+    )
     path = tmp_path / "scene.npz"
     scene.save(path)
     with np.load(path, allow_pickle=False) as f:  # plain arrays only
@@ -96,14 +104,21 @@ def _bad_files(tmp_path):
         "random.npz": "not an .npz file",
         "renamed_npy.npz": "not an .npz file",
         _scene_file(tmp_path, triangles=None).rename(tmp_path / "no_triangles.npz").name: "has no 'triangles'",
-        _scene_file(tmp_path, materials=np.zeros((1, 5))).rename(tmp_path / "m5.npz").name: r"'materials' has shape \(1, 5\); expected \(N, 6\)",
+        _scene_file(tmp_path, materials=np.zeros((1, 5)))
+        .rename(tmp_path / "m5.npz")
+        .name: r"'materials' has shape \(1, 5\); expected \(N, 6\)",
         _scene_file(tmp_path, camera=np.zeros(4)).rename(tmp_path / "cam.npz").name: r"'camera' has shape \(4,\)",
-        _scene_file(tmp_path, tri_material=np.zeros(3, np.int32)).rename(tmp_path / "tm.npz").name: "'triangles' has 40 rows but 'tri_material' has 3",
+        _scene_file(tmp_path, tri_material=np.zeros(3, np.int32))
+        .rename(tmp_path / "tm.npz")
+        .name: "'triangles' has 40 rows but 'tri_material' has 3",
         _scene_file(tmp_path, triangles=np.zeros((2, 3, 3), object)).rename(tmp_path / "obj.npz").name: "dtype object",
-        _scene_file(tmp_path, triangles=np.zeros((2, 3, 3), np.int32)).rename(tmp_path / "int.npz").name: "expected a float type",
+        _scene_file(tmp_path, triangles=np.zeros((2, 3, 3), np.int32))
+        .rename(tmp_path / "int.npz")
+        .name: "expected a float type",
         _scene_file(tmp_path, format_version=np.array(7)).rename(tmp_path / "v7.npz").name: "format 7",
-        _scene_file(tmp_path, triangles=np.full((2, 3, 3), 1e13, np.float32), tri_material=np.zeros(2, np.int32)
-                    ).rename(tmp_path / "far.npz").name: "triangle 0 has a vertex coordinate outside",
+        _scene_file(tmp_path, triangles=np.full((2, 3, 3), 1e13, np.float32), tri_material=np.zeros(2, np.int32))
+        .rename(tmp_path / "far.npz")
+        .name: "triangle 0 has a vertex coordinate outside",
     }
 
 
@@ -124,8 +139,14 @@ def _write_bomb(path, rows: int) -> None:
     import io
     import zipfile
 
-    arrays = {"format_version": np.array(1), "spheres": np.zeros((0, 4), np.float32), "materials": np.ones((1, 6)),
-              "sphere_material": np.zeros(0, np.int32), "sky": np.ones(3), "tri_material": np.zeros(rows, np.int8)}
+    arrays = {
+        "format_version": np.array(1),
+        "spheres": np.zeros((0, 4), np.float32),
+        "materials": np.ones((1, 6)),
+        "sphere_material": np.zeros(0, np.int32),
+        "sky": np.ones(3),
+        "tri_material": np.zeros(rows, np.int8),
+    }
     with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as archive:
         for key, value in arrays.items():
             buffer = io.BytesIO()
@@ -133,7 +154,9 @@ def _write_bomb(path, rows: int) -> None:
             archive.writestr(key + ".npy", buffer.getvalue())
         with archive.open("triangles.npy", "w", force_zip64=True) as f:
             header = io.BytesIO()
-            np.lib.format.write_array_header_1_0(header, {"descr": "<f4", "fortran_order": False, "shape": (rows, 3, 3)})
+            np.lib.format.write_array_header_1_0(
+                header, {"descr": "<f4", "fortran_order": False, "shape": (rows, 3, 3)}
+            )
             f.write(header.getvalue())
             block = bytes(36 << 16)
             for _ in range(rows >> 16):
@@ -165,8 +188,11 @@ def test_save_writes_exactly_the_path_given(tmp_path):
     scene = bvhlab.Scene(triangles=procedural.random_triangles(10))
     (tmp_path / "folder").mkdir()
     (tmp_path / "a_file").write_text("keep me")
-    for path, problem in ((tmp_path / "folder", "is a folder"), (tmp_path / "x.txt", "written as .npz"),
-                          (tmp_path / "a_file" / "x.npz", "is a file, not a folder")):
+    for path, problem in (
+        (tmp_path / "folder", "is a folder"),
+        (tmp_path / "x.txt", "written as .npz"),
+        (tmp_path / "a_file" / "x.npz", "is a file, not a folder"),
+    ):
         with pytest.raises(OutputPathError, match=problem):
             scene.save(path)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file", "folder"]  # nothing written

@@ -1,6 +1,7 @@
 """A Bvh shared between threads (issue 8.3): readers see the old tree or the new one, never freed
 memory; a tree used with other geometry is refused (issue 8.8). The races run in a child process,
 so a crash fails the test instead of the test run."""
+
 import subprocess
 import sys
 import textwrap
@@ -41,10 +42,12 @@ RACE = textwrap.dedent("""
                     failures.append("intersect returned hits of neither version")
             else:
                 lo, hi, depth = bvh.boxes(0, 6)
-                if not (np.array_equal(depth, depth0) and (np.array_equal(lo, lo0) or np.allclose(lo, lo0 + 0.25, atol=1e-3))):
+                same_boxes = np.array_equal(lo, lo0) or np.allclose(lo, lo0 + 0.25, atol=1e-3)
+                if not (np.array_equal(depth, depth0) and same_boxes):
                     failures.append("boxes returned boxes of neither version")
 
-    threads = [threading.Thread(target=refitter)] + [threading.Thread(target=reader, args=(k,)) for k in ("rays", "rays", "boxes")]
+    readers = [threading.Thread(target=reader, args=(k,)) for k in ("rays", "rays", "boxes")]
+    threads = [threading.Thread(target=refitter)] + readers
     for t in threads: t.start()
     for t in threads: t.join()
     print("revision", bvh.revision, "failures", len(failures), failures[:3])

@@ -1,6 +1,7 @@
 """Crytek Sponza, bundled: the welded bundle rebuilds the source array bit for bit, bad bundles are
 refused, the scene loads by name with the report's camera and a light that lights the nave, and
 the report's settings give Table 1's tree heights."""
+
 import hashlib
 import io
 import shutil
@@ -9,12 +10,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from png_reader import read_png
 
 import bvhlab
 from bvhlab.cli import main
 from bvhlab.compare import build_settings
 from bvhlab.library import bundled_dir, list_scenes, load_scene, sponza
-from bvhlab.png import read_png
 
 #: Published with the source (shared/scenes/README.md): sha256 of sponza_tris.npy.
 PUBLISHED_SHA256 = "e36e2e881611408c59887e68367d318b30365f069b7b193c5eafd37f66653537"
@@ -61,8 +62,9 @@ def test_weld_round_trips_hostile_values_bit_for_bit(tmp_path):
     assert empty.shape == (0, 3, 3)
     path = sponza.write_bundle(tris, tmp_path / "t.npz")
     with np.load(path) as f:  # an ordinary .npz to numpy (LZMA members)
-        assert np.array_equal(sponza.unweld(f["vertex_columns"], f["index_deltas"]).view(np.uint32),
-                              tris.view(np.uint32))
+        assert np.array_equal(
+            sponza.unweld(f["vertex_columns"], f["index_deltas"]).view(np.uint32), tris.view(np.uint32)
+        )
 
 
 def test_bad_bundles_are_refused(tmp_path, bundle):
@@ -110,8 +112,10 @@ def test_report_settings_give_table1_heights():
     """Report Table 1: median 20, mean 34, SAH 12 30, SAH 32 30. Here: the midpoint reading of
     "mean" gives 34, the centroid mean 25; SAH 12 within one level."""
     scene, _ = load_scene("sponza")
-    heights = {label: bvhlab.build(scene, **{**build_settings(label), "threads": 0}).stats["height"]
-               for label in ("median", "mean", "midpoint", "sah12", "sah32")}
+    heights = {
+        label: bvhlab.build(scene, **{**build_settings(label), "threads": 0}).stats["height"]
+        for label in ("median", "mean", "midpoint", "sah12", "sah32")
+    }
     assert heights["median"] == 20 and heights["midpoint"] == 34 and heights["sah32"] == 30
     assert abs(heights["sah12"] - 30) <= 1
     assert heights["mean"] == 25
@@ -119,8 +123,25 @@ def test_report_settings_give_table1_heights():
 
 def test_render_sponza_from_the_cli(tmp_path, capsys):
     out = tmp_path / "sponza.png"
-    assert main(["render", "sponza", "--method", "sah12", "--width", "80", "--height", "60", "--backend", "cpu",
-                 "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "render",
+                "sponza",
+                "--method",
+                "sah12",
+                "--width",
+                "80",
+                "--height",
+                "60",
+                "--backend",
+                "cpu",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     image = read_png(out)
     assert image.shape == (60, 80, 4)
     sky = image[0, 40, :3].astype(int)  # the open roof of the atrium, top middle

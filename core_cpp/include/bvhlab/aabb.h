@@ -11,8 +11,14 @@ struct Aabb {
     Vec3 lo{std::numeric_limits<float>::infinity()};
     Vec3 hi{-std::numeric_limits<float>::infinity()};
 
-    void grow(Vec3 p) { lo = min(lo, p); hi = max(hi, p); }
-    void grow(const Aabb& b) { lo = min(lo, b.lo); hi = max(hi, b.hi); }
+    void grow(Vec3 p) {
+        lo = min(lo, p);
+        hi = max(hi, p);
+    }
+    void grow(const Aabb& b) {
+        lo = min(lo, b.lo);
+        hi = max(hi, b.hi);
+    }
     bool empty() const { return lo.x > hi.x || lo.y > hi.y || lo.z > hi.z; }
     Vec3 extent() const { return hi - lo; }
     Vec3 center() const { return (lo + hi) * 0.5f; }
@@ -23,8 +29,7 @@ struct Aabb {
         return e.x * e.y + e.y * e.z + e.z * e.x;
     }
     bool contains(const Aabb& b) const {
-        return lo.x <= b.lo.x && lo.y <= b.lo.y && lo.z <= b.lo.z &&
-               hi.x >= b.hi.x && hi.y >= b.hi.y && hi.z >= b.hi.z;
+        return lo.x <= b.lo.x && lo.y <= b.lo.y && lo.z <= b.lo.z && hi.x >= b.hi.x && hi.y >= b.hi.y && hi.z >= b.hi.z;
     }
 };
 

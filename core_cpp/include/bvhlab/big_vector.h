@@ -46,7 +46,9 @@ struct BigAllocator {
         else free_big_block(p, (bytes + kHuge - 1) / kHuge * kHuge);
     }
     template <class U>
-    bool operator==(const BigAllocator<U>&) const { return true; }
+    bool operator==(const BigAllocator<U>&) const {
+        return true;
+    }
 };
 
 template <class T>

@@ -46,14 +46,14 @@ using ProgressCallback = std::function<bool(double)>;
 struct BuildConfig {
     SplitMethod method = SplitMethod::Sah;
     AxisPolicy axis = AxisPolicy::Auto;
-    std::uint32_t bins = 8;            ///< binned SAH buckets, kMinBins..kMaxBins
+    std::uint32_t bins = 8;                 ///< binned SAH buckets, kMinBins..kMaxBins
     BinBounds bin_bounds = BinBounds::Box;  ///< what the binned SAH's buckets divide
-    std::uint32_t max_leaf_size = 4;   ///< leaves hold at most this many primitives (>= 1)
-    std::uint64_t seed = 0;            ///< for AxisPolicy::Random
-    std::uint32_t threads = 0;         ///< 0 = every hardware thread; the tree never depends on it
-    float traversal_cost = 1.0f;       ///< C_trav of the SAH
-    float intersection_cost = 1.0f;    ///< C_isect of the SAH
-    ProgressCallback progress;         ///< optional; called from the calling thread only
+    std::uint32_t max_leaf_size = 4;        ///< leaves hold at most this many primitives (>= 1)
+    std::uint64_t seed = 0;                 ///< for AxisPolicy::Random
+    std::uint32_t threads = 0;              ///< 0 = every hardware thread; the tree never depends on it
+    float traversal_cost = 1.0f;            ///< C_trav of the SAH
+    float intersection_cost = 1.0f;         ///< C_isect of the SAH
+    ProgressCallback progress;              ///< optional; called from the calling thread only
 };
 
 inline constexpr std::uint32_t kMinBins = 2;

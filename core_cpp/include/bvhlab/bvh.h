@@ -16,13 +16,13 @@ using gpu::BvhNode;
 /// Depth of the root is 0; height is the largest leaf depth + 1 (an empty tree has height 0).
 struct Bvh {
     BigVector<BvhNode> nodes;
-    BigVector<std::uint32_t> refs;       ///< primitive references in leaf order
-    BigVector<std::uint8_t> depths;      ///< depth of each node
-    BigVector<PackedPrim> prims;         ///< geometry in leaf order, for the CPU traversal
+    BigVector<std::uint32_t> refs;   ///< primitive references in leaf order
+    BigVector<std::uint8_t> depths;  ///< depth of each node
+    BigVector<PackedPrim> prims;     ///< geometry in leaf order, for the CPU traversal
     std::uint32_t triangle_count = 0, sphere_count = 0;
     std::uint64_t geometry_fingerprint = 0;  ///< of the geometry built over (or last refitted to)
-    BuildConfig config;                  ///< what it was built with (progress callback dropped)
-    double build_ms = 0;                 ///< wall time of the tree build (refs in → nodes out)
+    BuildConfig config;                      ///< what it was built with (progress callback dropped)
+    double build_ms = 0;                     ///< wall time of the tree build (refs in → nodes out)
 
     bool empty() const { return nodes.empty(); }
     std::uint32_t node_count() const { return static_cast<std::uint32_t>(nodes.size()); }

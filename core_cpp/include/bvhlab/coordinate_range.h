@@ -66,7 +66,7 @@ inline bool direction_in_range(Vec3 d) {
 inline float scale_ray(Ray& ray) {
     int e;
     std::frexp(largest_component(ray.dir), &e);
-    if (e == 0) return 1.0f;  // already in [0.5, 1): nothing to do
+    if (e == 0) return 1.0f;                   // already in [0.5, 1): nothing to do
     ray.dir = ray.dir * std::ldexp(1.0f, -e);  // e in [-79, 81]: both factors are normal floats
     ray.tmin = std::ldexp(ray.tmin, e);
     ray.tmax = std::ldexp(ray.tmax, e);

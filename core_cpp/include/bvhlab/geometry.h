@@ -40,14 +40,18 @@ BigVector<PrimRef> make_prim_refs(const GeometryView& geometry);
 /// same primitive counts would be silently wrong). Reads the arrays once, ~10 GB/s.
 std::uint64_t geometry_fingerprint(const GeometryView& geometry);
 
-/// A primitive laid out for the CPU traversal, in leaf order (40 bytes).
-/// Triangle: v0 and the two edges (Möller–Trumbore needs no more). Sphere: centre in `p`, radius in e1[0].
-struct PackedPrim {
-    float p[3];
-    float e1[3];
-    float e2[3];
-    std::uint32_t ref;
-};
+/// A primitive in the one packed layout of the ray tests (gpu::GpuTriangle, 48 bytes): a
+/// triangle's three vertices, or a sphere's centre (v0) and radius (v1.x); `ref` says which.
+/// The CPU traversal keeps them in leaf order (Bvh::prims), the tracer its triangles by index.
+using PackedPrim = gpu::GpuTriangle;
+
+/// Triangle `i` packed with `material`. A triangle of zero area (its edges' cross product is 0 in
+/// float) is stored as three copies of its first vertex, which the watertight test never hits
+/// (its edge functions are exactly 0). The one packing of triangles, for the CPU and the GPU.
+PackedPrim pack_triangle(const GeometryView& geometry, std::size_t i, std::uint32_t material = 0);
+
+/// Primitive `ref` (a triangle or a sphere) packed for the CPU traversal (material 0).
+PackedPrim pack_prim(const GeometryView& geometry, std::uint32_t ref);
 
 /// Geometry reordered into the order of `refs` (the tree's leaf order), on up to `threads`
 /// threads of the shared pool (0: all; the result does not depend on it).

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <limits>
 #include "bvhlab/geometry.h"
+#include "bvhlab/shared_geometry.h"
 #include "gpu_types.h"
 
 namespace bvhlab {
@@ -26,15 +27,14 @@ struct Hit {
     std::uint32_t slot = kNoHit;  ///< position in the tree's leaf order (Bvh::refs, Bvh::prims)
 };
 
-/// A ray with what the box test needs precomputed.
+/// A ray with what the tests need precomputed: the inverse direction of the box test and the
+/// axes and shear of the watertight triangle test (geometry.glsl make_ray, the tracer's own).
 struct RayQuery {
-    Vec3 origin, dir, inv_dir;
-    float tmin, tmax;
+    gpu::TraceRay ray;
 
-    /// inv_dir is the exact IEEE inverse: ±inf for a zero component (see hit_box for why that is safe).
+    /// The inverse direction is the exact IEEE inverse: ±inf for a zero component (see hit_box).
     explicit RayQuery(const Ray& r)
-        : origin(r.origin), dir(r.dir), inv_dir{1.0f / r.dir.x, 1.0f / r.dir.y, 1.0f / r.dir.z},
-          tmin(r.tmin), tmax(r.tmax) {}
+        : ray(gpu::make_ray({r.origin.x, r.origin.y, r.origin.z}, {r.dir.x, r.dir.y, r.dir.z}, r.tmin)) {}
 };
 
 /// `acc` raised to `t`, ignoring a NaN `t` (then `acc` is kept): the order of the comparison matters.
@@ -48,19 +48,25 @@ inline float lower_to(float acc, float t) { return t < acc ? t : acc; }
 /// infinity (a miss), and exactly on a plane 0·inf = NaN, which raise_to/lower_to ignore, so a ray
 /// lying in a face counts as inside: the box test agrees with the closed triangle test
 /// (Williams et al. 2005; Barnes 2022, "Fast, branchless ray/bounding box intersections, part 3").
+/// Conservative (Ize 2013): the far end, min(exits, tmax), is widened by gpu::BOX_FAR_SCALE.
 inline bool hit_box(const gpu::BvhNode& n, const RayQuery& q, float tmax, float& t_enter) {
-    const bool nx = std::signbit(q.inv_dir.x), ny = std::signbit(q.inv_dir.y), nz = std::signbit(q.inv_dir.z);
-    const float near_x = ((nx ? n.hi.x : n.lo.x) - q.origin.x) * q.inv_dir.x;
-    const float near_y = ((ny ? n.hi.y : n.lo.y) - q.origin.y) * q.inv_dir.y;
-    const float near_z = ((nz ? n.hi.z : n.lo.z) - q.origin.z) * q.inv_dir.z;
-    const float far_x = ((nx ? n.lo.x : n.hi.x) - q.origin.x) * q.inv_dir.x;
-    const float far_y = ((ny ? n.lo.y : n.hi.y) - q.origin.y) * q.inv_dir.y;
-    const float far_z = ((nz ? n.lo.z : n.hi.z) - q.origin.z) * q.inv_dir.z;
-    const float t0 = raise_to(raise_to(raise_to(q.tmin, near_x), near_y), near_z);
-    const float t1 = lower_to(lower_to(lower_to(tmax, far_x), far_y), far_z);
+    const gpu::TraceRay& r = q.ray;
+    const bool nx = std::signbit(r.inv_dir.x), ny = std::signbit(r.inv_dir.y), nz = std::signbit(r.inv_dir.z);
+    const float near_x = ((nx ? n.hi.x : n.lo.x) - r.origin.x) * r.inv_dir.x;
+    const float near_y = ((ny ? n.hi.y : n.lo.y) - r.origin.y) * r.inv_dir.y;
+    const float near_z = ((nz ? n.hi.z : n.lo.z) - r.origin.z) * r.inv_dir.z;
+    const float far_x = ((nx ? n.lo.x : n.hi.x) - r.origin.x) * r.inv_dir.x;
+    const float far_y = ((ny ? n.lo.y : n.hi.y) - r.origin.y) * r.inv_dir.y;
+    const float far_z = ((nz ? n.lo.z : n.hi.z) - r.origin.z) * r.inv_dir.z;
+    const float t0 = raise_to(raise_to(raise_to(r.tmin, near_x), near_y), near_z);
+    const float t1 = lower_to(lower_to(lower_to(tmax, far_x), far_y), far_z) * gpu::BOX_FAR_SCALE;
     t_enter = t0;
     return t0 <= t1;
 }
+
+/// Whether a box entered at `t_enter` may still hold a hit as near as `hit_t`: the test of a
+/// stacked box at its pop, as conservative as hit_box (Ize 2013).
+inline bool may_hold_closer(float t_enter, float hit_t) { return t_enter <= hit_t * gpu::BOX_FAR_SCALE; }
 
 /// The closest-hit rule of every traversal, CPU and GPU (one rule, so that the three traversals
 /// and the tracer agree when distances tie): a candidate at distance t in (tmin, tmax) replaces
@@ -70,36 +76,19 @@ inline bool closer_hit(float t, std::uint32_t ref, const Hit& hit) {
     return t < hit.t || (t == hit.t && hit.ref != kNoHit && ref < hit.ref);
 }
 
-/// Möller–Trumbore on a packed triangle; updates `hit` when closer_hit() says so.
+/// The watertight triangle test (geometry.glsl hit_triangle) on a packed triangle; updates `hit`
+/// when closer_hit() says so.
 inline bool hit_triangle(const PackedPrim& p, const RayQuery& q, Hit& hit) {
-    Vec3 e1{p.e1[0], p.e1[1], p.e1[2]}, e2{p.e2[0], p.e2[1], p.e2[2]};
-    Vec3 pvec = cross(q.dir, e2);
-    float det = dot(e1, pvec);
-    if (det == 0.0f) return false;  // parallel, or a degenerate triangle (packed with zero edges)
-    float inv_det = 1.0f / det;
-    Vec3 tvec = q.origin - Vec3{p.p[0], p.p[1], p.p[2]};
-    float u = dot(tvec, pvec) * inv_det;
-    if (!(u >= 0.0f && u <= 1.0f)) return false;
-    Vec3 qvec = cross(tvec, e1);
-    float v = dot(q.dir, qvec) * inv_det;
-    if (!(v >= 0.0f && u + v <= 1.0f)) return false;
-    float t = dot(e2, qvec) * inv_det;
-    if (!(t > q.tmin && closer_hit(t, p.ref, hit))) return false;
-    hit.t = t, hit.ref = p.ref, hit.u = u, hit.v = v;
+    gpu::vec3 tuv;
+    if (!gpu::hit_triangle(p.v0, p.v1, p.v2, q.ray, hit.t, tuv) || !closer_hit(tuv.x, p.ref, hit)) return false;
+    hit.t = tuv.x, hit.ref = p.ref, hit.u = tuv.y, hit.v = tuv.z;
     return true;
 }
 
-/// Nearest root of |o + t·d - c|² = r² in (tmin, hit.t); u, v are filled in by finish_hit().
+/// The sphere test (geometry.glsl hit_sphere) on a packed sphere; u, v are filled in by finish_hit().
 inline bool hit_sphere(const PackedPrim& p, const RayQuery& q, Hit& hit) {
-    Vec3 oc = q.origin - Vec3{p.p[0], p.p[1], p.p[2]};
-    float r = p.e1[0];
-    float a = dot(q.dir, q.dir), b = dot(oc, q.dir), c = dot(oc, oc) - r * r;
-    float disc = b * b - a * c;
-    if (!(disc >= 0.0f)) return false;
-    float s = std::sqrt(disc);
-    float t = (-b - s) / a;
-    if (!(t > q.tmin)) t = (-b + s) / a;
-    if (!(t > q.tmin && closer_hit(t, p.ref, hit))) return false;
+    float t;
+    if (!gpu::hit_sphere(p.v0, p.v1.x, q.ray, hit.t, t) || !closer_hit(t, p.ref, hit)) return false;
     hit.t = t, hit.ref = p.ref;
     return true;
 }

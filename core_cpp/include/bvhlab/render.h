@@ -38,8 +38,8 @@ struct RenderScene {
     BigVector<gpu::GpuBox> boxes;  ///< in `order`: the boxes of depth d are order.range(d, d)
     DepthOrder order;              ///< of the tree's nodes (depth_order.h)
     Aabb bounds;
-    std::uint32_t node_count = 0;   ///< of the tree (kept here: make_frame_params never reads `bvh`)
-    std::uint32_t ref_count = 0;    ///< primitive references in the tree's leaves
+    std::uint32_t node_count = 0;  ///< of the tree (kept here: make_frame_params never reads `bvh`)
+    std::uint32_t ref_count = 0;   ///< primitive references in the tree's leaves
 
     std::uint32_t height() const { return order.height(); }
 };
@@ -66,8 +66,8 @@ inline constexpr float kNoDepth = 1e10f;
 
 struct RenderTimings {
     double upload_ms = 0, overlay_ms = 0, trace_ms = 0, readback_ms = 0, total_ms = 0;
-    std::string device;          ///< which device rendered
-    std::uint32_t dispatches = 0;      ///< trace dispatches (CPU: the most budgets of steps a pixel needed)
+    std::string device;                    ///< which device rendered
+    std::uint32_t dispatches = 0;          ///< trace dispatches (CPU: the most budgets of steps a pixel needed)
     std::uint32_t steps_per_dispatch = 0;  ///< the last budget of steps per pixel and dispatch
 };
 
@@ -107,7 +107,8 @@ protected:
 /// The CPU reference renderer: the same tracer code as the compute shader, on `threads` threads
 /// (0 = all). `scene` is borrowed and must outlive the job. Throws std::invalid_argument for bad
 /// settings (validate).
-std::unique_ptr<RenderJob> start_cpu(const RenderScene& scene, const RenderSettings& settings, std::uint32_t threads = 0);
+std::unique_ptr<RenderJob> start_cpu(const RenderScene& scene, const RenderSettings& settings,
+                                     std::uint32_t threads = 0);
 
 /// start_cpu, every sample, resolve: the whole render at once.
 RenderTimings render_cpu(const RenderScene& scene, const RenderSettings& settings, const RenderImages& out,

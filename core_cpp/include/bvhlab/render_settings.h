@@ -18,11 +18,11 @@ namespace bvhlab {
 struct Camera {
     Vec3 position = to_vec3(kFallbackCameraPosition);
     Vec3 forward = to_vec3(kFallbackCameraTarget) - to_vec3(kFallbackCameraPosition);  ///< any length > 0
-    Vec3 up{0, 0, 1};              ///< any vector not parallel to forward
+    Vec3 up{0, 0, 1};                           ///< any vector not parallel to forward
     float fov_y_degrees = float(kDefaultFovY);  ///< vertical field of view
-    float aspect = 0;              ///< image-plane width / height; 0: the image's width / height
-    float shift_x = 0, shift_y = 0;  ///< image-plane centre offset, in fractions of its larger side
-                                   ///< (Blender's camera shift_x / shift_y)
+    float aspect = 0;                           ///< image-plane width / height; 0: the image's width / height
+    float shift_x = 0, shift_y = 0;             ///< image-plane centre offset, in fractions of its larger side
+                                                ///< (Blender's camera shift_x / shift_y)
 };
 
 /// v scaled to unit length without overflow or underflow (the zero vector for zero).
@@ -48,11 +48,11 @@ struct RenderSettings {
     std::uint32_t max_ray_depth = 5;     ///< bounces of reflection and refraction (0: primary rays)
     Camera camera;
     PointLight light;
-    Vec3 sky = kDefaultSky;              ///< the atmosphere colour (report §2.1)
-    bool overlay = false;                ///< draw the boxes of depths [overlay_depth_min, overlay_depth_max]
+    Vec3 sky = kDefaultSky;  ///< the atmosphere colour (report §2.1)
+    bool overlay = false;    ///< draw the boxes of depths [overlay_depth_min, overlay_depth_max]
     std::uint32_t overlay_depth_min = 0, overlay_depth_max = 0;
-    bool overlay_color_by_depth = true;  ///< else gpu::OVERLAY_LINE_COLOR
-    float line_width = 1.0f;             ///< pixels (Vulkan devices without wide lines draw 1)
+    bool overlay_color_by_depth = true;      ///< else gpu::OVERLAY_LINE_COLOR
+    float line_width = 1.0f;                 ///< pixels (Vulkan devices without wide lines draw 1)
     Traversal traversal = Traversal::Stack;  ///< Stack or Stackless (report §3.1); the tracer has no Wide
     RenderMode mode = RenderMode::Shade;
     std::optional<float> heatmap_scale;  ///< box tests shown as full red; unset: 8 × tree height
@@ -68,7 +68,7 @@ struct RenderSettings {
 
 // Limits, exported to Python so the API, the CLI and the add-on never retype them.
 inline constexpr std::uint32_t kMaxImageDimension = 16384;  ///< pixels per side (CPU; Vulkan: the device's)
-inline constexpr float kMaxHeatmapScale = 1e6f;              ///< box tests per ray at full red
+inline constexpr float kMaxHeatmapScale = 1e6f;             ///< box tests per ray at full red
 inline constexpr float kMaxLineWidth = 16.0f;
 
 /// Throws std::invalid_argument naming the bad setting (size zero or above max_dimension, NaN
@@ -81,7 +81,7 @@ Traversal parse_traversal(std::string_view name);
 RenderMode parse_render_mode(std::string_view name);
 std::string to_string(Traversal traversal);
 std::string to_string(RenderMode mode);
-std::vector<std::string> traversal_names();   ///< every traversal the CPU queries know
+std::vector<std::string> traversal_names();         ///< every traversal the CPU queries know
 std::vector<std::string> render_traversal_names();  ///< the tracer's: stack, stackless
 std::vector<std::string> render_mode_names();
 

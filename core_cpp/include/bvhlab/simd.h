@@ -29,7 +29,11 @@ struct F4 {
         return {_mm_cvtepi32_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p)))};
     }
     void store(float* p) const { _mm_storeu_ps(p, v); }
-    float lane(int i) const { alignas(16) float t[4]; _mm_store_ps(t, v); return t[i]; }
+    float lane(int i) const {
+        alignas(16) float t[4];
+        _mm_store_ps(t, v);
+        return t[i];
+    }
 };
 inline F4 operator+(F4 a, F4 b) { return {_mm_add_ps(a.v, b.v)}; }
 inline F4 operator-(F4 a, F4 b) { return {_mm_sub_ps(a.v, b.v)}; }
@@ -70,20 +74,24 @@ struct F4 {
     static F4 load3(const float* p) { return {{p[0], p[1], p[2], 0.0f}}; }
     static F4 splat(float s) { return {{s, s, s, s}}; }
     static F4 from_counts(const std::uint32_t* p) {
-        return {{float(std::int32_t(p[0])), float(std::int32_t(p[1])), float(std::int32_t(p[2])), float(std::int32_t(p[3]))}};
+        return {{float(std::int32_t(p[0])), float(std::int32_t(p[1])), float(std::int32_t(p[2])),
+                 float(std::int32_t(p[3]))}};
     }
     void store(float* p) const { std::memcpy(p, v, sizeof(v)); }
     float lane(int i) const { return v[i]; }
 };
-#define BVHLAB_F4_OP(name, expr)                                          \
-    inline F4 name(F4 a, F4 b) {                                          \
-        F4 r;                                                             \
-        for (int i = 0; i < 4; ++i) { float x = a.v[i], y = b.v[i]; r.v[i] = (expr); } \
-        return r;                                                         \
+#define BVHLAB_F4_OP(name, expr)          \
+    inline F4 name(F4 a, F4 b) {          \
+        F4 r;                             \
+        for (int i = 0; i < 4; ++i) {     \
+            float x = a.v[i], y = b.v[i]; \
+            r.v[i] = (expr);              \
+        }                                 \
+        return r;                         \
     }
 BVHLAB_F4_OP(operator+, x + y)
 BVHLAB_F4_OP(operator-, x - y)
-BVHLAB_F4_OP(operator*, x * y)
+BVHLAB_F4_OP(operator*, x* y)
 BVHLAB_F4_OP(min, x < y ? x : y)
 BVHLAB_F4_OP(max, x > y ? x : y)
 #undef BVHLAB_F4_OP
@@ -120,7 +128,8 @@ inline void truncate_to_u32(F4 a, std::uint32_t out[4]) {
     for (int i = 0; i < 4; ++i) out[i] = static_cast<std::uint32_t>(a.v[i]);
 }
 inline void transpose3(F4 a, F4 b, F4 c, F4 d, F4& x, F4& y, F4& z) {
-    x = {{a.v[0], b.v[0], c.v[0], d.v[0]}}, y = {{a.v[1], b.v[1], c.v[1], d.v[1]}}, z = {{a.v[2], b.v[2], c.v[2], d.v[2]}};
+    x = {{a.v[0], b.v[0], c.v[0], d.v[0]}}, y = {{a.v[1], b.v[1], c.v[1], d.v[1]}},
+    z = {{a.v[2], b.v[2], c.v[2], d.v[2]}};
 }
 inline float half_area(F4 lo, F4 hi) {
     float e[3];

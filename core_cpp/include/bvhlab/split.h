@@ -45,10 +45,10 @@ struct NodeBounds {
 struct Split {
     std::uint32_t mid = 0;
     NodeBounds left, right;
-    float cost = 0;          ///< SahCost::split of this split
-    std::uint8_t buffer = 0; ///< the buffer that now holds both children's references
-    bool leaf = false;       ///< SahCost says a leaf is cheaper (only when SplitContext::leaf_allowed);
-                             ///< nothing was moved then
+    float cost = 0;           ///< SahCost::split of this split
+    std::uint8_t buffer = 0;  ///< the buffer that now holds both children's references
+    bool leaf = false;        ///< SahCost says a leaf is cheaper (only when SplitContext::leaf_allowed);
+                              ///< nothing was moved then
 };
 
 class BinStore;  // binning.h
@@ -57,10 +57,10 @@ class BinStore;  // binning.h
 struct SplitScratch {
     SplitScratch();
     ~SplitScratch();
-    std::vector<PrimRef> sorted;       ///< sweep SAH: the range sorted on one axis
-    std::vector<float> areas;          ///< sweep SAH suffix areas
-    std::vector<std::uint32_t> counts; ///< median: histogram
-    std::unique_ptr<BinStore> bins;    ///< binned SAH: buckets of the nodes on the work stack
+    std::vector<PrimRef> sorted;        ///< sweep SAH: the range sorted on one axis
+    std::vector<float> areas;           ///< sweep SAH suffix areas
+    std::vector<std::uint32_t> counts;  ///< median: histogram
+    std::unique_ptr<BinStore> bins;     ///< binned SAH: buckets of the nodes on the work stack
 };
 
 /// The top of the tree is split with every thread working on the same node: a method cuts a large
@@ -112,14 +112,14 @@ std::optional<Split> split_lbvh(SplitContext&, Range, int src, const NodeBounds&
 /// method: the one table they all read (split_methods.cpp).
 struct SplitMethodInfo {
     SplitMethod method;
-    std::string_view name;       ///< as the Python API and the CLI spell it
+    std::string_view name;  ///< as the Python API and the CLI spell it
     SplitFunction split;
-    bool all_axes;               ///< takes kAllAxes itself (else split_best_of_axes tries each axis)
-    bool uses_sah;               ///< weighs splits with SahCost, and so may stop early at a leaf
-    bool needs_centroid_sum;     ///< reads NodeBounds::centroid_sum
-    bool needs_morton_presort;   ///< the references are sorted by Morton code before the build
-    bool bottom_up_boxes;        ///< splits without looking at bounds: node boxes are made from the
-                                 ///< leaves up after the build (NodeBounds stay empty meanwhile)
+    bool all_axes;              ///< takes kAllAxes itself (else split_best_of_axes tries each axis)
+    bool uses_sah;              ///< weighs splits with SahCost, and so may stop early at a leaf
+    bool needs_centroid_sum;    ///< reads NodeBounds::centroid_sum
+    bool needs_morton_presort;  ///< the references are sorted by Morton code before the build
+    bool bottom_up_boxes;       ///< splits without looking at bounds: node boxes are made from the
+                                ///< leaves up after the build (NodeBounds stay empty meanwhile)
 };
 std::span<const SplitMethodInfo> split_methods();
 const SplitMethodInfo& method_info(SplitMethod method);

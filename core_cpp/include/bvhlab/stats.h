@@ -9,15 +9,15 @@ namespace bvhlab {
 struct BvhStats {
     std::uint64_t primitives = 0, triangles = 0, spheres = 0;
     std::uint64_t nodes = 0, leaves = 0;
-    std::uint32_t height = 0;      ///< largest leaf depth + 1 (root depth 0); 0 for an empty tree
-    double sah_cost = 0;           ///< see sah_cost()
+    std::uint32_t height = 0;  ///< largest leaf depth + 1 (root depth 0); 0 for an empty tree
+    double sah_cost = 0;       ///< see sah_cost()
     double build_ms = 0;
     double avg_leaf_size = 0;
     std::uint32_t max_leaf_size = 0;
     std::vector<std::uint64_t> nodes_per_depth;      ///< [d] = nodes at depth d
     std::vector<std::uint64_t> leaves_per_depth;     ///< [d] = leaves at depth d
     std::vector<std::uint64_t> leaf_size_histogram;  ///< [k] = leaves holding k primitives
-    std::uint64_t memory_bytes = 0;  ///< nodes, references, depths and leaf-ordered geometry
+    std::uint64_t memory_bytes = 0;                  ///< nodes, references, depths and leaf-ordered geometry
 };
 
 BvhStats compute_stats(const Bvh& bvh);

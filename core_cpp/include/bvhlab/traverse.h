@@ -26,9 +26,9 @@ struct RayBatch {
     float tmin = 0.0f, tmax = kInfinity;
 };
 struct HitBatch {
-    float* t = nullptr;                ///< inf on a miss
-    std::int32_t* prim = nullptr;      ///< index within its kind; -1 on a miss
-    std::uint8_t* kind = nullptr;      ///< 0 triangle, 1 sphere (0 on a miss)
+    float* t = nullptr;            ///< inf on a miss
+    std::int32_t* prim = nullptr;  ///< index within its kind; -1 on a miss
+    std::uint8_t* kind = nullptr;  ///< 0 triangle, 1 sphere (0 on a miss)
     float* u = nullptr;
     float* v = nullptr;
     std::uint32_t* nodes_visited = nullptr;

@@ -21,25 +21,26 @@ struct alignas(64) WideNode {
 };
 static_assert(sizeof(WideNode) == 256);
 
-/// Four primitives of one kind, structure of arrays (160 bytes). Triangles: first vertex and the
-/// two edges from it, as PackedPrim has them (Möller–Trumbore). Spheres: centre in v0, radius in
-/// e1x. An empty lane has ref = kNoHit and zero edges (a triangle with zero edges is never hit).
+/// Four primitives of one kind, structure of arrays (160 bytes): v[vertex][axis][lane]. Triangles:
+/// the three vertices, as PackedPrim has them (the watertight test reads vertices, so the kernel
+/// loads each axis by the ray's axis order). Spheres: centre in v[0], radius in v[1][0]. An empty
+/// lane has ref = kNoHit and all vertices 0 (a triangle that is one point is never hit).
 struct alignas(32) PrimPacket {
-    float v0x[4], v0y[4], v0z[4], e1x[4], e1y[4], e1z[4], e2x[4], e2y[4], e2z[4];
+    float v[3][3][4];
     std::uint32_t ref[4];
 };
 static_assert(sizeof(PrimPacket) == 160);
 
 struct WideBvh {
-    BigVector<WideNode> nodes;            ///< root at 0 (absent when the whole tree is one leaf)
-    BigVector<PrimPacket> packets;        ///< leaves' primitives, leaf after leaf
-    BigVector<std::uint32_t> slots;       ///< per packet lane: its position in Bvh::prims (finish_hit)
-    std::uint32_t root_packets = 0;       ///< a tree that is one leaf: its packet count, no nodes
+    BigVector<WideNode> nodes;       ///< root at 0 (also when the whole tree is one leaf); none when empty
+    BigVector<PrimPacket> packets;   ///< leaves' primitives, leaf after leaf
+    BigVector<std::uint32_t> slots;  ///< per packet lane: its position in Bvh::prims (finish_hit)
 };
 
 /// Collapses the binary tree: each wide node takes a binary node's children and keeps opening
 /// the inner child of largest surface area until it holds eight (Wald et al. 2008); a subtree of
-/// at most four primitives becomes one leaf.
+/// at most four primitives becomes one leaf. A tree that is one leaf gets a root node with that
+/// leaf as its only child, so its box is tested as every other traversal tests it.
 WideBvh make_wide(const Bvh& bvh);
 
 /// Closest hit through the wide tree (nearest child first): the same hit as intersect() on the

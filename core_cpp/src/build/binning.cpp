@@ -102,8 +102,8 @@ BinSplit best_bin_split(const BinSet& bins, const BinFrame& f, int first_axis, i
     for (int a = first_axis; a <= last_axis; ++a) {
         if (!f.binned[a]) continue;
         const F4* box = bins.box + 2 * std::size_t(a) * bins.bins;
-        const Cut cut = cheapest_cut({box, box + 1, 2, bins.count + std::size_t(a) * bins.bins, bins.bins}, sah, inv_parent,
-                                     unions);
+        const Cut cut = cheapest_cut({box, box + 1, 2, bins.count + std::size_t(a) * bins.bins, bins.bins}, sah,
+                                     inv_parent, unions);
         if (cut.found && cut.cost < best.cost) best = {cut.cost, a, cut.last_left};
     }
     return best;
@@ -200,7 +200,8 @@ std::uint32_t partition_and_bin(const PrimRef* src, PrimRef* dst, Range r, std::
                                 const BinFrame& parent, const BinSplit& split, const ChildBinning child[2],
                                 CentroidBounds sides[2]) {
 #if defined(BVHLAB_AVX2_KERNELS)
-    if (active_isa() == Isa::Avx2) return avx2::partition_and_bin(src, dst, r, left, right, parent, split, child, sides);
+    if (active_isa() == Isa::Avx2)
+        return avx2::partition_and_bin(src, dst, r, left, right, parent, split, child, sides);
 #endif
     return portable::partition_and_bin(src, dst, r, left, right, parent, split, child, sides);
 }

@@ -21,9 +21,9 @@ namespace bvhlab {
 /// centroid c2 has k = trunc((c2 - origin2) · scale), clamped to [0, B - 1]. Binning and
 /// partitioning both use indices()/index(), so they agree on every reference.
 struct BinFrame {
-    F4 origin2;      ///< twice the box minimum (lane 3: 0)
-    F4 scale;        ///< B / (2 · box extent) per axis; 0 for a flat axis
-    F4 top;          ///< B - 1 in every lane
+    F4 origin2;  ///< twice the box minimum (lane 3: 0)
+    F4 scale;    ///< B / (2 · box extent) per axis; 0 for a flat axis
+    F4 top;      ///< B - 1 in every lane
     float origin2_of[3] = {0, 0, 0}, scale_of[3] = {0, 0, 0}, top_of = 0;  ///< the same, for index()
     bool binned[3] = {false, false, false};  ///< the axes with an extent (the others are one bucket)
     std::uint32_t bins = 0;

@@ -32,8 +32,10 @@ struct Buckets {
 
     Buckets() = default;
     explicit Buckets(const BinSet& b)
-        : box(reinterpret_cast<char*>(b.box)), count(reinterpret_cast<char*>(b.count)),
-          box_stride(32 * std::size_t(b.bins)), count_stride(4 * std::size_t(b.bins)) {}
+        : box(reinterpret_cast<char*>(b.box)),
+          count(reinterpret_cast<char*>(b.count)),
+          box_stride(32 * std::size_t(b.bins)),
+          count_stride(4 * std::size_t(b.bins)) {}
     void add(__m128i k, __m256 box_of_ref) const {
         const std::size_t k0 = std::uint32_t(_mm_cvtsi128_si32(k)), k1 = std::uint32_t(_mm_extract_epi32(k, 1)),
                           k2 = std::uint32_t(_mm_extract_epi32(k, 2));
@@ -72,9 +74,9 @@ void bin_refs(const PrimRef* refs, Range r, const BinFrame& f, const BinSet copi
 namespace {
 
 template <bool kCentroids>
-std::uint32_t partition_and_bin_impl(const PrimRef* __restrict src, PrimRef* __restrict dst, Range r, std::uint32_t left,
-                                     std::uint32_t right, const BinFrame& parent, const BinSplit& split,
-                                     const ChildBinning child[2], CentroidBounds sides[2]) {
+std::uint32_t partition_and_bin_impl(const PrimRef* __restrict src, PrimRef* __restrict dst, Range r,
+                                     std::uint32_t left, std::uint32_t right, const BinFrame& parent,
+                                     const BinSplit& split, const ChildBinning child[2], CentroidBounds sides[2]) {
     const Kernel c;
     Buckets buckets[2][2];
     Side side[2];

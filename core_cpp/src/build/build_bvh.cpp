@@ -58,18 +58,21 @@ std::vector<Subtree> build_deferred(BuildShared& shared, const Subtree& top, uns
     });
     std::vector<Subtree> parts(top.deferred.size());
     std::vector<SplitScratch> scratch(threads);
-    ThreadPool::shared().run(order.size(), threads, [&](std::size_t i, unsigned slot) {
-        try {
-            const std::size_t k = order[i];
-            WorkItem root = top.deferred[k].second;
-            root.second_child = false;  // its parent lives in `top`, which already points at it
-            build_subtree(shared, scratch[slot], root, parts[k], {0, slot == 0, nullptr});
-            fill_skip_indices(parts[k].nodes, shared.method.bottom_up_boxes);
-        } catch (...) {
-            shared.cancel.request_stop();
-            throw;
-        }
-    }, poll);
+    ThreadPool::shared().run(
+        order.size(), threads,
+        [&](std::size_t i, unsigned slot) {
+            try {
+                const std::size_t k = order[i];
+                WorkItem root = top.deferred[k].second;
+                root.second_child = false;  // its parent lives in `top`, which already points at it
+                build_subtree(shared, scratch[slot], root, parts[k], {0, slot == 0, nullptr});
+                fill_skip_indices(parts[k].nodes, shared.method.bottom_up_boxes);
+            } catch (...) {
+                shared.cancel.request_stop();
+                throw;
+            }
+        },
+        poll);
     return parts;
 }
 
@@ -128,10 +131,13 @@ Bvh build_bvh(const GeometryView& geometry, const BuildConfig& config) {
     // The references and the fingerprint read the same input: side by side on two threads, the
     // calling thread (index 0) taking the fingerprint, then polling while the references finish.
     BigVector<PrimRef> prim_refs;
-    ThreadPool::shared().run(2, config.threads, [&](std::size_t k, unsigned) {
-        if (k == 0) bvh.geometry_fingerprint = bvhlab::geometry_fingerprint(geometry);
-        else prim_refs = make_prim_refs(geometry);
-    }, [&] { stop.cancel().poll(); });
+    ThreadPool::shared().run(
+        2, config.threads,
+        [&](std::size_t k, unsigned) {
+            if (k == 0) bvh.geometry_fingerprint = bvhlab::geometry_fingerprint(geometry);
+            else prim_refs = make_prim_refs(geometry);
+        },
+        [&] { stop.cancel().poll(); });
     check();
     build_tree(prim_refs, config, stop, bvh);
     check();

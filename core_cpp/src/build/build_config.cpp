@@ -87,9 +87,9 @@ bool uses_sah(SplitMethod m) { return method_info(m).uses_sah; }
 
 void validate(const BuildConfig& config) {
     if (config.bins < kMinBins || config.bins > kMaxBins)
-        throw std::invalid_argument("bins must be between " + std::to_string(kMinBins) + " and " + std::to_string(kMaxBins) + ", got " + std::to_string(config.bins));
-    if (config.max_leaf_size < 1)
-        throw std::invalid_argument("max_leaf_size must be at least 1");
+        throw std::invalid_argument("bins must be between " + std::to_string(kMinBins) + " and " +
+                                    std::to_string(kMaxBins) + ", got " + std::to_string(config.bins));
+    if (config.max_leaf_size < 1) throw std::invalid_argument("max_leaf_size must be at least 1");
     if (!std::isfinite(config.traversal_cost) || !std::isfinite(config.intersection_cost) ||
         config.traversal_cost < 0.0f || config.intersection_cost <= 0.0f)
         throw std::invalid_argument("SAH costs must be finite, traversal >= 0 and intersection > 0");

@@ -1,7 +1,5 @@
 #include "bvhlab/geometry.h"
 
-#include "bvhlab/thread_pool.h"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -23,15 +21,16 @@ bool finite_floats(const float* p, int n) {
 PrimRef triangle_ref(const GeometryView& g, std::size_t i) {
     Aabb box;
     for (int c = 0; c < 3; ++c) box.grow(g.vertex(i, c));
-    return {{box.lo.x, box.lo.y, box.lo.z}, static_cast<std::uint32_t>(i),
-            {box.hi.x, box.hi.y, box.hi.z}, 0};
+    return {{box.lo.x, box.lo.y, box.lo.z}, static_cast<std::uint32_t>(i), {box.hi.x, box.hi.y, box.hi.z}, 0};
 }
 
 PrimRef sphere_ref(const GeometryView& g, std::size_t i) {
     Vec3 c = g.sphere_center(i);
     float r = g.sphere_radius(i);
-    return {{c.x - r, c.y - r, c.z - r}, gpu::REF_SPHERE_BIT | static_cast<std::uint32_t>(i),
-            {c.x + r, c.y + r, c.z + r}, 0};
+    return {{c.x - r, c.y - r, c.z - r},
+            gpu::REF_SPHERE_BIT | static_cast<std::uint32_t>(i),
+            {c.x + r, c.y + r, c.z + r},
+            0};
 }
 
 /// Throws naming the first non-finite triangle (the slow, exact search behind the fast check).
@@ -54,7 +53,8 @@ std::string range_text() {
         for (int c = 0; c < 3; ++c)
             if (!in_coordinate_range(g.vertex(i, c)))
                 throw std::invalid_argument("triangle " + std::to_string(i) + " has a vertex coordinate outside " +
-                                            range_text() + ", where float32 ray tests would overflow; move or scale "
+                                            range_text() +
+                                            ", where float32 ray tests would overflow; move or scale "
                                             "the scene nearer the origin");
     throw std::logic_error("throw_far_triangle: no such triangle");
 }
@@ -66,8 +66,10 @@ void validate_spheres(const GeometryView& g) {
         float r = g.sphere_radius(i);
         if (!(r >= kMinRadius) || !std::isfinite(r)) {
             char text[160];
-            std::snprintf(text, sizeof text, "sphere %zu has radius %g; a radius must be a finite number of at "
-                          "least 2^-60 (8.7e-19), below which its square underflows", i, double(r));
+            std::snprintf(text, sizeof text,
+                          "sphere %zu has radius %g; a radius must be a finite number of at "
+                          "least 2^-60 (8.7e-19), below which its square underflows",
+                          i, double(r));
             throw std::invalid_argument(text);
         }
         Aabb box = sphere_ref(g, i).box();
@@ -145,8 +147,16 @@ private:
         acc = (acc << 31) | (acc >> 33);
         return acc * kPrime1;
     }
-    static std::uint64_t word(const unsigned char* p) { std::uint64_t w; std::memcpy(&w, p, 8); return w; }
-    static std::uint32_t word4(const unsigned char* p) { std::uint32_t w; std::memcpy(&w, p, 4); return w; }
+    static std::uint64_t word(const unsigned char* p) {
+        std::uint64_t w;
+        std::memcpy(&w, p, 8);
+        return w;
+    }
+    static std::uint32_t word4(const unsigned char* p) {
+        std::uint32_t w;
+        std::memcpy(&w, p, 4);
+        return w;
+    }
 
     std::uint64_t lane_[4] = {kPrime1 + kPrime2, kPrime2, 0, 0 - kPrime1};
     std::uint64_t total_ = 0;
@@ -161,33 +171,6 @@ std::uint64_t geometry_fingerprint(const GeometryView& g) {
     if (g.triangle_count) f.add(g.triangles, 9 * sizeof(float) * g.triangle_count);
     if (g.sphere_count) f.add(g.spheres, 4 * sizeof(float) * g.sphere_count);
     return f.finish();
-}
-
-namespace {
-
-PackedPrim pack_prim(const GeometryView& g, std::uint32_t ref) {
-    const std::size_t i = ref_index(ref);
-    if (is_sphere_ref(ref)) {
-        const Vec3 c = g.sphere_center(i);
-        return {{c.x, c.y, c.z}, {g.sphere_radius(i), 0, 0}, {0, 0, 0}, ref};
-    }
-    Vec3 v0 = g.vertex(i, 0), e1 = g.vertex(i, 1) - v0, e2 = g.vertex(i, 2) - v0;
-    // A zero-area triangle keeps zero edges, so its determinant is exactly 0: never hit.
-    const Vec3 n = cross(e1, e2);
-    if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) e1 = e2 = Vec3{};
-    return {{v0.x, v0.y, v0.z}, {e1.x, e1.y, e1.z}, {e2.x, e2.y, e2.z}, ref};
-}
-
-}  // namespace
-
-BigVector<PackedPrim> pack_prims(const GeometryView& g, const BigVector<std::uint32_t>& refs, unsigned threads) {
-    BigVector<PackedPrim> out(refs.size());
-    constexpr std::size_t kChunk = 1 << 15;
-    ThreadPool::shared().run((refs.size() + kChunk - 1) / kChunk, threads, [&](std::size_t c, unsigned) {
-        for (std::size_t k = c * kChunk, end = std::min(refs.size(), k + kChunk); k < end; ++k)
-            out[k] = pack_prim(g, refs[k]);
-    });
-    return out;
 }
 
 }  // namespace bvhlab

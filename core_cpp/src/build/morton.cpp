@@ -16,9 +16,7 @@ std::uint32_t spread_bits(std::uint32_t v) {
     return v;
 }
 
-std::uint32_t quantize(float x, float lo, float scale) {
-    return truncate_clamped((x - lo) * scale, 1023.0f);
-}
+std::uint32_t quantize(float x, float lo, float scale) { return truncate_clamped((x - lo) * scale, 1023.0f); }
 
 }  // namespace
 

@@ -20,7 +20,8 @@ struct SideBounds {
     void add(const PrimRef& p) {
         const F4 a = p.lo4(), b = p.hi4(), c = a + b;
         lo = min(lo, a), hi = max(hi, b), c_lo = min(c_lo, c), c_hi = max(c_hi, c);
-        if constexpr (kSum) for (int k = 0; k < 3; ++k) sum[k] += 0.5 * double(p.lo[k] + p.hi[k]);
+        if constexpr (kSum)
+            for (int k = 0; k < 3; ++k) sum[k] += 0.5 * double(p.lo[k] + p.hi[k]);
     }
     void merge(const SideBounds& o) {
         lo = min(lo, o.lo), hi = max(hi, o.hi), c_lo = min(c_lo, o.c_lo), c_hi = max(c_hi, o.c_hi);
@@ -83,7 +84,8 @@ std::uint32_t partition_with(const SplitContext& ctx, Range r, const PrimRef* sr
         return Range{r.begin + k * kPartitionChunk, std::min(r.end, r.begin + (k + 1) * kPartitionChunk)};
     };
     auto merge_sides = [&] {
-        for (std::uint32_t k = 0; k < chunks; ++k) sides[0].merge(chunk_sides[2 * k]), sides[1].merge(chunk_sides[2 * k + 1]);
+        for (std::uint32_t k = 0; k < chunks; ++k)
+            sides[0].merge(chunk_sides[2 * k]), sides[1].merge(chunk_sides[2 * k + 1]);
     };
     if (!ctx.parallel || ctx.parallel->threads < 2) {  // one pass, chunk after chunk
         std::uint32_t left = r.begin, right = r.end;
@@ -113,7 +115,7 @@ std::uint32_t partition_with(const SplitContext& ctx, Range r, const PrimRef* sr
 
 /// scatter() of the references whose twice-centroid on `axis` lies below `twice` (the mean and
 /// midpoint splits): the AVX2 kernel (partition_avx2.cpp) when that path is active.
-std::uint32_t scatter_below(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right, int axis,
-                            float twice, bool with_sum, SideBounds sides[2]);
+std::uint32_t scatter_below(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
+                            int axis, float twice, bool with_sum, SideBounds sides[2]);
 
 }  // namespace bvhlab

@@ -62,8 +62,8 @@ std::uint32_t scatter_below_impl(const PrimRef* __restrict src, PrimRef* __restr
 
 }  // namespace
 
-std::uint32_t scatter_below(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right, int axis,
-                            float twice, bool with_sum, SideBounds sides[2]) {
+std::uint32_t scatter_below(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
+                            int axis, float twice, bool with_sum, SideBounds sides[2]) {
     return with_sum ? scatter_below_impl<true>(src, dst, r, left, right, axis, twice, sides)
                     : scatter_below_impl<false>(src, dst, r, left, right, axis, twice, sides);
 }

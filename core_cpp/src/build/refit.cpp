@@ -16,7 +16,8 @@ void refit(Bvh& bvh, const GeometryView& geometry) {
         BvhNode& n = bvh.nodes[i];
         Aabb box;
         if (is_leaf(n)) {
-            for (std::uint32_t k = 0; k < leaf_count(n); ++k) box.grow(prim_refs[input_slot(bvh.refs[n.index + k])].box());
+            for (std::uint32_t k = 0; k < leaf_count(n); ++k)
+                box.grow(prim_refs[input_slot(bvh.refs[n.index + k])].box());
         } else {
             box = node_box(bvh.nodes[i + 1]);
             box.grow(node_box(bvh.nodes[n.index]));

@@ -64,7 +64,10 @@ struct SmallCut {
 class SmallBuilder {
 public:
     SmallBuilder(SubtreeWriter& writer, const BuildConfig& cfg, const WorkItem& item)
-        : writer_(writer), cfg_(cfg), sah_(cfg), begin_(item.range.begin),
+        : writer_(writer),
+          cfg_(cfg),
+          sah_(cfg),
+          begin_(item.range.begin),
           set_(writer.shared().buffers[item.buffer] + item.range.begin, item.range.size()) {}
 
     void build(const WorkItem& item, std::uint32_t index) {
@@ -76,8 +79,8 @@ public:
         stack[size++] = {0, set_.n, item.depth, item.parent, item.second_child, lo, neg_hi};
         for (bool root = true; size > 0; root = false) {
             const SmallNode node = stack[--size];
-            const std::uint32_t at = root ? index : writer_.open(to_aabb(node.lo, node.neg_hi), node.depth, node.parent,
-                                                                 node.second_child);
+            const std::uint32_t at =
+                root ? index : writer_.open(to_aabb(node.lo, node.neg_hi), node.depth, node.parent, node.second_child);
             const SmallCut cut = node.count > 1 ? choose(node) : SmallCut{};
             if (cut.axis < 0) {
                 make_leaf(at, node);
@@ -196,8 +199,8 @@ SmallCut SmallBuilder::cut_at(int axis, const SmallNode& node, std::uint32_t las
     for (std::uint32_t j = last_left + 1; j < node.count; ++j)
         rlo = min(rlo, set_.lo[order[j]]), rnh = min(rnh, set_.neg_hi[order[j]]);
     const float inv = SahCost::inverse_area(half_area(node.lo, neg(node.neg_hi)));
-    const float cost = sah_.split(inv, half_area(llo, neg(lnh)), last_left + 1, half_area(rlo, neg(rnh)),
-                                  node.count - last_left - 1);
+    const float cost =
+        sah_.split(inv, half_area(llo, neg(lnh)), last_left + 1, half_area(rlo, neg(rnh)), node.count - last_left - 1);
     return {axis, last_left, cost};
 }
 
@@ -234,9 +237,12 @@ void SmallBuilder::divide(const SmallNode& node, const SmallCut& cut, std::uint3
 
 std::uint32_t small_subtree_size(const BuildConfig& config) {
     switch (config.method) {
-        case SplitMethod::SweepSah: return kSmallSubtree;
-        case SplitMethod::Sah: return config.bin_bounds == BinBounds::Box ? kSmallSubtree : kSmallExactReport;
-        default: return 0;
+        case SplitMethod::SweepSah:
+            return kSmallSubtree;
+        case SplitMethod::Sah:
+            return config.bin_bounds == BinBounds::Box ? kSmallSubtree : kSmallExactReport;
+        default:
+            return 0;
     }
 }
 

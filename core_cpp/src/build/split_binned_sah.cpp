@@ -39,8 +39,8 @@ std::uint32_t partition_whole(SplitContext& ctx, Range r, int src, const BinFram
         copies[s][0].reset(), copies[s][1].reset();
         child[s].copies = copies[s];
     }
-    const std::uint32_t mid = partition_and_bin(ctx.buffers[src], ctx.buffers[1 - src], r, r.begin, r.end, f, best,
-                                                child, sides);
+    const std::uint32_t mid =
+        partition_and_bin(ctx.buffers[src], ctx.buffers[1 - src], r, r.begin, r.end, f, best, child, sides);
     for (int s = 0; s < 2; ++s)
         if (slots[s] >= 0) copies[s][0].merge(copies[s][1]);
     return mid;
@@ -57,9 +57,8 @@ std::uint32_t partition_chunks(SplitContext& ctx, Range r, int src, const BinFra
     for (std::uint32_t k = 0; k < 4 * chunks; ++k)
         if (slots[(k / 2) % 2] >= 0) (copies[k] = store.slot(kChunkSlots + k)).reset();
     std::vector<std::uint32_t> left_counts(chunks), sizes(chunks);
-    for_each_chunk(ctx, r, chunks, [&](std::uint32_t k, Range c) {
-        left_counts[k] = count_left(in, c, f, best), sizes[k] = c.size();
-    });
+    for_each_chunk(ctx, r, chunks,
+                   [&](std::uint32_t k, Range c) { left_counts[k] = count_left(in, c, f, best), sizes[k] = c.size(); });
     const ChunkCursors cursors(r, left_counts, sizes);
     std::vector<CentroidBounds> chunk_sides(2 * std::size_t(chunks));
     for_each_chunk(ctx, r, chunks, [&](std::uint32_t k, Range c) {
@@ -73,7 +72,8 @@ std::uint32_t partition_chunks(SplitContext& ctx, Range r, int src, const BinFra
         if (slots[s] < 0) continue;
         const BinSet target = store.slot(std::uint32_t(slots[s]));
         target.reset();
-        for (std::uint32_t k = 0; k < chunks; ++k) target.merge(copies[4 * k + 2 * s]), target.merge(copies[4 * k + 2 * s + 1]);
+        for (std::uint32_t k = 0; k < chunks; ++k)
+            target.merge(copies[4 * k + 2 * s]), target.merge(copies[4 * k + 2 * s + 1]);
     }
     return cursors.mid;
 }
@@ -83,10 +83,11 @@ std::uint32_t partition_chunks(SplitContext& ctx, Range r, int src, const BinFra
 std::optional<Split> split_binned_sah(SplitContext& ctx, Range r, int src, const NodeBounds& b, int axis) {
     const bool by_centroids = ctx.config.bin_bounds == BinBounds::Centroids;
     const BinFrame frame(by_centroids ? b.centroids : b.box, ctx.config.bins);
-    const BinSet bins = b.bins >= 0 ? store_of(ctx).slot(std::uint32_t(b.bins)) : bin_node(ctx, r, ctx.buffers[src], frame);
+    const BinSet bins =
+        b.bins >= 0 ? store_of(ctx).slot(std::uint32_t(b.bins)) : bin_node(ctx, r, ctx.buffers[src], frame);
     const SahCost sah(ctx.config);
-    const BinSplit best = best_bin_split(bins, frame, axis == kAllAxes ? 0 : axis, axis == kAllAxes ? 2 : axis, sah,
-                                         b.box.half_area());
+    const BinSplit best =
+        best_bin_split(bins, frame, axis == kAllAxes ? 0 : axis, axis == kAllAxes ? 2 : axis, sah, b.box.half_area());
     if (best.axis < 0) return std::nullopt;
     Split s;
     s.cost = best.cost;
@@ -106,7 +107,8 @@ std::optional<Split> split_binned_sah(SplitContext& ctx, Range r, int src, const
                                    !by_centroids && r.size() - n_left > small ? std::int32_t(ctx.child_slot) : -1};
     // The children's centroid bounds are gathered only for the axis policies that read them;
     // otherwise their boxes stand in for them (they contain the centroids; see NodeBounds).
-    const bool centroids = ctx.config.axis == AxisPolicy::Largest || ctx.config.axis == AxisPolicy::Random || by_centroids;
+    const bool centroids =
+        ctx.config.axis == AxisPolicy::Largest || ctx.config.axis == AxisPolicy::Random || by_centroids;
     CentroidBounds sides[2];
     CentroidBounds* gathered = centroids ? sides : nullptr;
     const std::uint32_t chunks = chunk_count(ctx, r);

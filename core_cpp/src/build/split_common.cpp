@@ -38,7 +38,9 @@ void for_each_chunk(const SplitContext& ctx, Range r, std::uint32_t chunks,
         return;
     }
     const ParallelPasses& p = *ctx.parallel;
-    ThreadPool::Task task = [&](std::size_t k, unsigned) { pass(std::uint32_t(k), chunk_of(r, std::uint32_t(k), chunks)); };
+    ThreadPool::Task task = [&](std::size_t k, unsigned) {
+        pass(std::uint32_t(k), chunk_of(r, std::uint32_t(k), chunks));
+    };
     p.pool->run(chunks, p.threads, task, p.while_waiting ? *p.while_waiting : std::function<void()>());
 }
 
@@ -59,7 +61,8 @@ struct BoundsRun {
         for (std::uint32_t i = r.begin; i < r.end; ++i) {
             const F4 a = refs[i].lo4(), b = refs[i].hi4(), c = a + b;  // twice the centroid
             lo = min(lo, a), hi = max(hi, b), clo = min(clo, c), chi = max(chi, c);
-            if constexpr (kSum) for (int k = 0; k < 3; ++k) sum[k] += 0.5 * double(refs[i].lo[k] + refs[i].hi[k]);
+            if constexpr (kSum)
+                for (int k = 0; k < 3; ++k) sum[k] += 0.5 * double(refs[i].lo[k] + refs[i].hi[k]);
         }
     }
     void merge(const BoundsRun& o) {
@@ -100,13 +103,13 @@ NodeBounds bounds_of(const SplitContext& ctx, Range r, int buf, bool with_sum) {
 
 #if defined(BVHLAB_AVX2_KERNELS)
 namespace avx2 {  // partition_avx2.cpp
-std::uint32_t scatter_below(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right, int axis,
-                            float twice, bool with_sum, SideBounds sides[2]);
+std::uint32_t scatter_below(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
+                            int axis, float twice, bool with_sum, SideBounds sides[2]);
 }
 #endif
 
-std::uint32_t scatter_below(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right, int axis,
-                            float twice, bool with_sum, SideBounds sides[2]) {
+std::uint32_t scatter_below(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
+                            int axis, float twice, bool with_sum, SideBounds sides[2]) {
 #if defined(BVHLAB_AVX2_KERNELS)
     if (active_isa() == Isa::Avx2) return avx2::scatter_below(src, dst, r, left, right, axis, twice, with_sum, sides);
 #endif
@@ -129,8 +132,8 @@ Split split_at(SplitContext& ctx, Range r, int buf, const NodeBounds& parent, st
                       bounds_of(ctx, {mid, r.end}, buf, sums));
 }
 
-Split split_with(SplitContext& ctx, Range r, int buf, const NodeBounds& parent, std::uint32_t mid, const NodeBounds& left,
-                 const NodeBounds& right) {
+Split split_with(SplitContext& ctx, Range r, int buf, const NodeBounds& parent, std::uint32_t mid,
+                 const NodeBounds& left, const NodeBounds& right) {
     Split s;
     s.mid = mid;
     s.left = left, s.right = right;
@@ -152,8 +155,8 @@ std::optional<Split> split_at_position(SplitContext& ctx, Range r, int src, cons
     auto run = [&](Range c, std::uint32_t left, std::uint32_t right, SideBounds* s) {
         return scatter_below(in, out, c, left, right, axis, twice, sums, s);
     };
-    const std::uint32_t mid = partition_with(ctx, r, in, [=](const PrimRef& p) { return p.lo[axis] + p.hi[axis] < twice; },
-                                             run, sides);
+    const std::uint32_t mid =
+        partition_with(ctx, r, in, [=](const PrimRef& p) { return p.lo[axis] + p.hi[axis] < twice; }, run, sides);
     if (mid == r.begin || mid == r.end) return std::nullopt;
     return split_with(ctx, r, 1 - src, parent, mid, sides[0].finish(sums), sides[1].finish(sums));
 }
@@ -162,8 +165,7 @@ Split split_even(SplitContext& ctx, Range r, int src, const NodeBounds& parent) 
     return split_at(ctx, r, src, parent, r.begin + r.size() / 2);
 }
 
-std::optional<Split> split_best_of_axes(SplitFunction split, SplitContext& ctx, Range r, int src,
-                                        const NodeBounds& b) {
+std::optional<Split> split_best_of_axes(SplitFunction split, SplitContext& ctx, Range r, int src, const NodeBounds& b) {
     std::optional<Split> best;
     int best_axis = -1, last_axis = -1;
     const Vec3 extent = b.centroids.extent();

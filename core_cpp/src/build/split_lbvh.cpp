@@ -13,8 +13,8 @@ std::optional<Split> split_lbvh(SplitContext& ctx, Range r, int src, const NodeB
     std::uint32_t first = refs[r.begin].code, last = refs[r.end - 1].code;
     if (first == last) return std::nullopt;  // equal codes: the builder splits them evenly
     std::uint32_t bit = 1u << (31 - std::countl_zero(first ^ last));
-    const PrimRef* mid = std::partition_point(refs + r.begin, refs + r.end,
-                                              [bit](const PrimRef& p) { return (p.code & bit) == 0; });
+    const PrimRef* mid =
+        std::partition_point(refs + r.begin, refs + r.end, [bit](const PrimRef& p) { return (p.code & bit) == 0; });
     Split s;  // the bounds stay empty: the builder makes LBVH boxes from the leaves up
     s.mid = static_cast<std::uint32_t>(mid - refs);
     s.buffer = static_cast<std::uint8_t>(src);

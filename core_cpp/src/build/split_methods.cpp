@@ -10,12 +10,12 @@ namespace {
 
 //     method                name         function          all axes  SAH    sum    Morton bottom-up
 constexpr std::array<SplitMethodInfo, 6> kMethods{{
-    {SplitMethod::Median,   "median",    split_median,     false,   false, false, false, false},
-    {SplitMethod::Mean,     "mean",      split_mean,       false,   false, true,  false, false},
-    {SplitMethod::Midpoint, "midpoint",  split_midpoint,   false,   false, false, false, false},
-    {SplitMethod::Sah,      "sah",       split_binned_sah, true,    true,  false, false, false},
-    {SplitMethod::SweepSah, "sweep_sah", split_sweep_sah,  true,    true,  false, false, false},
-    {SplitMethod::Lbvh,     "lbvh",      split_lbvh,       true,    false, false, true,  true},
+    {SplitMethod::Median, "median", split_median, false, false, false, false, false},
+    {SplitMethod::Mean, "mean", split_mean, false, false, true, false, false},
+    {SplitMethod::Midpoint, "midpoint", split_midpoint, false, false, false, false, false},
+    {SplitMethod::Sah, "sah", split_binned_sah, true, true, false, false, false},
+    {SplitMethod::SweepSah, "sweep_sah", split_sweep_sah, true, true, false, false, false},
+    {SplitMethod::Lbvh, "lbvh", split_lbvh, true, false, false, true, true},
 }};
 
 }  // namespace

@@ -18,9 +18,12 @@ std::uint64_t mix(std::uint64_t x) {  // splitmix64 finaliser
 
 int choose_axis(const BuildConfig& cfg, Vec3 extent, Range range, std::uint32_t depth) {
     switch (cfg.axis) {
-        case AxisPolicy::Auto: return method_info(cfg.method).uses_sah ? kAllAxes : largest_axis(extent);
-        case AxisPolicy::Largest: return largest_axis(extent);
-        case AxisPolicy::Best: return kAllAxes;
+        case AxisPolicy::Auto:
+            return method_info(cfg.method).uses_sah ? kAllAxes : largest_axis(extent);
+        case AxisPolicy::Largest:
+            return largest_axis(extent);
+        case AxisPolicy::Best:
+            return kAllAxes;
         case AxisPolicy::Random: {
             int axes[3], n = 0;
             for (int a = 0; a < 3; ++a)
@@ -49,8 +52,9 @@ Split split_pair(SplitContext& ctx, const WorkItem& item) {
     s.mid = item.range.begin + 1;
     s.left = {p[0].box(), {p[0].centroid(), p[0].centroid()}};
     s.right = {p[1].box(), {p[1].centroid(), p[1].centroid()}};
-    s.cost = SahCost(ctx.config).split(SahCost::inverse_area(item.bounds.box.half_area()), s.left.box.half_area(), 1,
-                                       s.right.box.half_area(), 1);
+    s.cost = SahCost(ctx.config)
+                 .split(SahCost::inverse_area(item.bounds.box.half_area()), s.left.box.half_area(), 1,
+                        s.right.box.half_area(), 1);
     s.buffer = item.buffer;
     return s;
 }
@@ -100,7 +104,6 @@ std::optional<Split> choose_split(SplitContext& ctx, const WorkItem& item) {
     if (s.leaf || (fits_leaf && SahCost(cfg).leaf(n) <= s.cost)) return std::nullopt;
     return s;
 }
-
 
 void SubtreeWriter::make_leaf(std::uint32_t index, const WorkItem& item) {
     const Range r = item.range;

@@ -15,10 +15,10 @@ namespace bvhlab {
 struct WorkItem {
     Range range;
     NodeBounds bounds;
-    std::uint32_t parent = 0;    ///< node whose second-child index this item's node fills in
+    std::uint32_t parent = 0;  ///< node whose second-child index this item's node fills in
     std::uint32_t depth = 0;
     bool second_child = false;
-    std::uint8_t buffer = 0;     ///< which of the two reference buffers holds the range
+    std::uint8_t buffer = 0;  ///< which of the two reference buffers holds the range
 };
 
 /// Nodes of one subtree in depth-first order, and the ranges it left for other threads.
@@ -30,18 +30,18 @@ struct Subtree {
 
 /// State shared by every thread of one build.
 struct BuildShared {
-    PrimRef* buffers[2];          ///< ping-pong reference buffers (split.h)
-    std::uint32_t* leaf_refs;     ///< output: the references in leaf order
+    PrimRef* buffers[2];       ///< ping-pong reference buffers (split.h)
+    std::uint32_t* leaf_refs;  ///< output: the references in leaf order
     const BuildConfig& config;
     const SplitMethodInfo& method;
-    Cancellation& cancel;         ///< workers read stop_requested(); the calling thread polls it
+    Cancellation& cancel;                              ///< workers read stop_requested(); the calling thread polls it
     std::atomic<std::uint64_t>& primitives_in_leaves;  ///< progress: primitives placed in leaves
 };
 
 /// How one call of build_subtree runs: on the calling thread (which polls the cancellation and
 /// may cut large ranges into chunks for the pool) or on a worker.
 struct SubtreeRun {
-    std::uint32_t defer_size = 0;               ///< ranges of at most this many (but the root) are deferred; 0: none
+    std::uint32_t defer_size = 0;  ///< ranges of at most this many (but the root) are deferred; 0: none
     bool calling_thread = false;
     const ParallelPasses* parallel = nullptr;  ///< data-parallel passes for large ranges
 };

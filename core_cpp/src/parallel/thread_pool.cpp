@@ -9,10 +9,10 @@ namespace bvhlab {
 struct ThreadPool::Job {
     const Task* task = nullptr;
     std::size_t count = 0;
-    unsigned helpers_wanted = 0;           ///< threads besides the caller
+    unsigned helpers_wanted = 0;  ///< threads besides the caller
     std::atomic<std::size_t> next{0};
     std::atomic<bool> failed{false};
-    std::mutex mutex;                      ///< guards the fields below
+    std::mutex mutex;  ///< guards the fields below
     std::condition_variable left;
     unsigned helpers_joined = 0, helpers_inside = 0;
     std::exception_ptr error;
@@ -82,8 +82,8 @@ void ThreadPool::run(std::size_t count, unsigned threads, const Task& task, cons
     auto job = std::make_shared<Job>();
     job->task = &task;
     job->count = count;
-    job->helpers_wanted = static_cast<unsigned>(
-        std::min<std::size_t>({std::size_t(resolve(threads) - 1), workers_.size(), count - 1}));
+    job->helpers_wanted =
+        static_cast<unsigned>(std::min<std::size_t>({std::size_t(resolve(threads) - 1), workers_.size(), count - 1}));
     if (job->helpers_wanted > 0) {
         {
             std::lock_guard<std::mutex> lock(mutex_);

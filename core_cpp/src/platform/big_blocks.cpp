@@ -21,7 +21,8 @@ public:
         std::size_t best = blocks_.size();
         for (std::size_t i = 0; i < blocks_.size(); ++i) {
             const std::size_t size = blocks_[i].bytes;
-            if (size >= bytes && size <= bytes + bytes / 2 && (best == blocks_.size() || size < blocks_[best].bytes)) best = i;
+            if (size >= bytes && size <= bytes + bytes / 2 && (best == blocks_.size() || size < blocks_[best].bytes))
+                best = i;
         }
         if (best == blocks_.size()) return nullptr;
         void* p = blocks_[best].p;

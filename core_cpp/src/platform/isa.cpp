@@ -39,7 +39,8 @@ Isa active_isa() { return current().load(std::memory_order_relaxed); }
 bool isa_supported(Isa isa) { return isa == Isa::Portable || (isa == Isa::Avx2 && cpu_has_avx2()); }
 
 void set_isa(Isa isa) {
-    if (!isa_supported(isa)) throw std::invalid_argument("instruction set " + std::string(isa_name(isa)) + " is not available here");
+    if (!isa_supported(isa))
+        throw std::invalid_argument("instruction set " + std::string(isa_name(isa)) + " is not available here");
     current().store(isa, std::memory_order_relaxed);
 }
 

@@ -18,12 +18,15 @@ void check_rays(const RayBatch& rays) {
         if (!all_finite(origin) || !all_finite(dir))
             throw std::invalid_argument(ray + ": origin and direction must be finite (no NaN or inf)");
         if (!in_coordinate_range(origin))
-            throw std::invalid_argument(ray + " starts outside the supported coordinate range [-2^40, 2^40] "
+            throw std::invalid_argument(ray +
+                                        " starts outside the supported coordinate range [-2^40, 2^40] "
                                         "(±1.0995e12), where float32 ray tests would overflow");
         char got[32];
         std::snprintf(got, sizeof got, "%g", double(largest_component(dir)));
-        throw std::invalid_argument(ray + ": the largest |component| of a direction must be in [2^-80, 2^80] "
-                                    "(8.3e-25 to 1.2e24), got " + got);
+        throw std::invalid_argument(ray +
+                                    ": the largest |component| of a direction must be in [2^-80, 2^80] "
+                                    "(8.3e-25 to 1.2e24), got " +
+                                    got);
     }
 }
 

@@ -22,7 +22,10 @@ void test_leaf(const Bvh& bvh, const BvhNode& n, const RayQuery& q, Hit& hit) {
 /// Ordered depth-first traversal: test both children's boxes, descend into the nearer, push the
 /// farther with its entry distance so it is dropped if a closer hit is found meanwhile.
 std::uint32_t traverse_stack(const Bvh& bvh, const RayQuery& q, Hit& hit) {
-    struct Entry { std::uint32_t node; float t; };
+    struct Entry {
+        std::uint32_t node;
+        float t;
+    };
     Entry stack[gpu::MAX_TREE_HEIGHT];
     std::uint32_t sp = 0, visited = 1, i = 0;
     const BvhNode* nodes = bvh.nodes.data();
@@ -51,7 +54,7 @@ std::uint32_t traverse_stack(const Bvh& bvh, const RayQuery& q, Hit& hit) {
         do {  // pop, skipping entries farther than the closest hit so far
             if (sp == 0) return visited;
             --sp;
-        } while (stack[sp].t > hit.t);
+        } while (!may_hold_closer(stack[sp].t, hit.t));
         i = stack[sp].node;
     }
 }
@@ -81,7 +84,7 @@ std::uint32_t traverse_stackless(const Bvh& bvh, const RayQuery& q, Hit& hit) {
 void finish_hit(const Bvh& bvh, const Ray& ray, Hit& hit) {
     if (hit.ref == kNoHit || !(hit.ref & gpu::REF_SPHERE_BIT)) return;
     const PackedPrim& p = bvh.prims[hit.slot];
-    Vec3 n = normalize(ray.origin + ray.dir * hit.t - Vec3{p.p[0], p.p[1], p.p[2]});
+    Vec3 n = normalize(ray.origin + ray.dir * hit.t - Vec3{p.v0.x, p.v0.y, p.v0.z});
     hit.u = std::atan2(n.y, n.x) * float(0.5 / std::numbers::pi) + 0.5f;
     hit.v = std::acos(std::clamp(n.z, -1.0f, 1.0f)) * float(1.0 / std::numbers::pi);
 }
@@ -101,8 +104,8 @@ Hit intersect(const Bvh& bvh, const Ray& ray, Traversal mode, std::uint32_t* nod
     return hit;
 }
 
-void intersect_batch(const Bvh& bvh, const RayBatch& rays, const HitBatch& out, Traversal mode,
-                     std::uint32_t threads, const WideBvh* wide, Cancellation* cancel) {
+void intersect_batch(const Bvh& bvh, const RayBatch& rays, const HitBatch& out, Traversal mode, std::uint32_t threads,
+                     const WideBvh* wide, Cancellation* cancel) {
     if (mode == Traversal::Wide && !wide) throw std::invalid_argument("Traversal::Wide needs the wide tree");
     check_rays(rays);
     constexpr std::size_t kChunk = 1024;

@@ -1,5 +1,6 @@
 // Closest-hit traversal of the 8-wide tree: the portable path (SSE on x86-64, plain C++
 // elsewhere), the dispatch to the AVX2 path (isa.h), and the helpers both call.
+#include <functional>
 #include <cmath>
 
 #include "bvhlab/isa.h"
@@ -9,17 +10,20 @@
 
 namespace bvhlab {
 
-bool hit_packet_sphere(const PrimPacket& k, int lane, const float origin[3], const float dir[3], float tmin, Hit& hit) {
-    const PackedPrim p{{k.v0x[lane], k.v0y[lane], k.v0z[lane]}, {k.e1x[lane], 0, 0}, {0, 0, 0}, k.ref[lane]};
-    RayQuery q(Ray{{origin[0], origin[1], origin[2]}, {dir[0], dir[1], dir[2]}, tmin, hit.t});
-    return hit_sphere(p, q, hit);
+bool hit_packet_sphere(const PrimPacket& k, int lane, const Ray& ray, Hit& hit) {
+    const gpu::vec3 centre{k.v[0][0][lane], k.v[0][1][lane], k.v[0][2][lane]};
+    const PackedPrim p{centre, 0, {k.v[1][0][lane], 0, 0}, k.ref[lane], {}, 0};
+    return hit_sphere(p, RayQuery(ray), hit);
 }
 
 namespace portable {
 
 #ifdef BVHLAB_SSE
-struct M4 { __m128 m; };
+struct M4 {
+    __m128 m;
+};
 inline M4 operator&(M4 a, M4 b) { return {_mm_and_ps(a.m, b.m)}; }
+inline M4 operator|(M4 a, M4 b) { return {_mm_or_ps(a.m, b.m)}; }
 inline int bits(M4 a) { return _mm_movemask_ps(a.m); }
 struct L4 {
     __m128 v;
@@ -39,25 +43,41 @@ inline L4 raise(L4 acc, L4 t) { return {_mm_max_ps(t.v, acc.v)}; }  // t > acc ?
 inline L4 lower(L4 acc, L4 t) { return {_mm_min_ps(t.v, acc.v)}; }  // t < acc ? t : acc
 inline int le_bits(L4 a, L4 b) { return _mm_movemask_ps(_mm_cmple_ps(a.v, b.v)); }
 #else
-struct M4 { bool m[4]; };
+struct M4 {
+    bool m[4];
+};
 inline M4 operator&(M4 a, M4 b) { return {{a.m[0] && b.m[0], a.m[1] && b.m[1], a.m[2] && b.m[2], a.m[3] && b.m[3]}}; }
+inline M4 operator|(M4 a, M4 b) { return {{a.m[0] || b.m[0], a.m[1] || b.m[1], a.m[2] || b.m[2], a.m[3] || b.m[3]}}; }
 inline int bits(M4 a) { return int(a.m[0]) | int(a.m[1]) << 1 | int(a.m[2]) << 2 | int(a.m[3]) << 3; }
 struct L4 {
     float v[4];
     static L4 load(const float* p) { return {{p[0], p[1], p[2], p[3]}}; }
     static L4 splat(float s) { return {{s, s, s, s}}; }
-    void store(float* p) const { for (int i = 0; i < 4; ++i) p[i] = v[i]; }
+    void store(float* p) const {
+        for (int i = 0; i < 4; ++i) p[i] = v[i];
+    }
 };
-#define BVHLAB_L4_OP(op) \
-    inline L4 operator op(L4 a, L4 b) { return {{a.v[0] op b.v[0], a.v[1] op b.v[1], a.v[2] op b.v[2], a.v[3] op b.v[3]}}; }
-BVHLAB_L4_OP(+) BVHLAB_L4_OP(-) BVHLAB_L4_OP(*) BVHLAB_L4_OP(/)
-#undef BVHLAB_L4_OP
-#define BVHLAB_M4_OP(op) \
-    inline M4 operator op(L4 a, L4 b) { return {{a.v[0] op b.v[0], a.v[1] op b.v[1], a.v[2] op b.v[2], a.v[3] op b.v[3]}}; }
-BVHLAB_M4_OP(!=) BVHLAB_M4_OP(>=) BVHLAB_M4_OP(<=) BVHLAB_M4_OP(>)
-#undef BVHLAB_M4_OP
-inline L4 raise(L4 acc, L4 t) { for (int i = 0; i < 4; ++i) acc.v[i] = t.v[i] > acc.v[i] ? t.v[i] : acc.v[i]; return acc; }
-inline L4 lower(L4 acc, L4 t) { for (int i = 0; i < 4; ++i) acc.v[i] = t.v[i] < acc.v[i] ? t.v[i] : acc.v[i]; return acc; }
+/// Lane by lane: op(a[i], b[i]) for the four lanes (floats for arithmetic, bools for comparisons).
+template <class R, class Op>
+inline R lanes(L4 a, L4 b, Op op) {
+    return {{op(a.v[0], b.v[0]), op(a.v[1], b.v[1]), op(a.v[2], b.v[2]), op(a.v[3], b.v[3])}};
+}
+inline L4 operator+(L4 a, L4 b) { return lanes<L4>(a, b, std::plus<>()); }
+inline L4 operator-(L4 a, L4 b) { return lanes<L4>(a, b, std::minus<>()); }
+inline L4 operator*(L4 a, L4 b) { return lanes<L4>(a, b, std::multiplies<>()); }
+inline L4 operator/(L4 a, L4 b) { return lanes<L4>(a, b, std::divides<>()); }
+inline M4 operator!=(L4 a, L4 b) { return lanes<M4>(a, b, std::not_equal_to<>()); }
+inline M4 operator>=(L4 a, L4 b) { return lanes<M4>(a, b, std::greater_equal<>()); }
+inline M4 operator<=(L4 a, L4 b) { return lanes<M4>(a, b, std::less_equal<>()); }
+inline M4 operator>(L4 a, L4 b) { return lanes<M4>(a, b, std::greater<>()); }
+inline L4 raise(L4 acc, L4 t) {
+    for (int i = 0; i < 4; ++i) acc.v[i] = t.v[i] > acc.v[i] ? t.v[i] : acc.v[i];
+    return acc;
+}
+inline L4 lower(L4 acc, L4 t) {
+    for (int i = 0; i < 4; ++i) acc.v[i] = t.v[i] < acc.v[i] ? t.v[i] : acc.v[i];
+    return acc;
+}
 inline int le_bits(L4 a, L4 b) { return bits(a <= b); }
 #endif
 
@@ -79,8 +99,7 @@ inline int le_bits(L8 x, L8 y) { return le_bits(x.a, y.a) | le_bits(x.b, y.b) <<
 }  // namespace portable
 
 Hit intersect_wide(const WideBvh& wide, const Bvh& bvh, const Ray& ray, std::uint32_t* nodes_visited) {
-    const WideView view{wide.nodes.empty() ? nullptr : wide.nodes.data(), wide.packets.data(), wide.slots.data(),
-                        wide.root_packets};
+    const WideView view{wide.nodes.empty() ? nullptr : wide.nodes.data(), wide.packets.data(), wide.slots.data()};
 #if defined(BVHLAB_AVX2_KERNELS)
     Hit hit = active_isa() == Isa::Avx2 ? avx2::intersect_wide_kernel(view, ray, nodes_visited)
                                         : portable::intersect_wide_kernel(view, ray, nodes_visited);

@@ -10,8 +10,11 @@
 
 namespace bvhlab::avx2 {
 
-struct M4 { __m128 m; };
+struct M4 {
+    __m128 m;
+};
 inline M4 operator&(M4 a, M4 b) { return {_mm_and_ps(a.m, b.m)}; }
+inline M4 operator|(M4 a, M4 b) { return {_mm_or_ps(a.m, b.m)}; }
 inline int bits(M4 a) { return _mm_movemask_ps(a.m); }
 struct L4 {
     __m128 v;
@@ -27,6 +30,8 @@ inline M4 operator!=(L4 a, L4 b) { return {_mm_cmp_ps(a.v, b.v, _CMP_NEQ_UQ)}; }
 inline M4 operator>=(L4 a, L4 b) { return {_mm_cmp_ps(a.v, b.v, _CMP_GE_OS)}; }
 inline M4 operator<=(L4 a, L4 b) { return {_mm_cmp_ps(a.v, b.v, _CMP_LE_OS)}; }
 inline M4 operator>(L4 a, L4 b) { return {_mm_cmp_ps(a.v, b.v, _CMP_GT_OS)}; }
+inline L4 raise(L4 acc, L4 t) { return {_mm_max_ps(t.v, acc.v)}; }  // t > acc ? t : acc
+inline L4 lower(L4 acc, L4 t) { return {_mm_min_ps(t.v, acc.v)}; }  // t < acc ? t : acc
 
 struct L8 {
     __m256 v;

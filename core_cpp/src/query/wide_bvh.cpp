@@ -40,9 +40,9 @@ std::uint32_t pack_leaf(const Bvh& bvh, std::uint32_t first, std::uint32_t n, Wi
                 lane = 0;
             }
             PrimPacket& q = wide.packets.back();
-            q.v0x[lane] = p.p[0], q.v0y[lane] = p.p[1], q.v0z[lane] = p.p[2];
-            q.e1x[lane] = p.e1[0], q.e1y[lane] = p.e1[1], q.e1z[lane] = p.e1[2];
-            q.e2x[lane] = p.e2[0], q.e2y[lane] = p.e2[1], q.e2z[lane] = p.e2[2];
+            const gpu::vec3 vertices[3] = {p.v0, p.v1, p.v2};
+            for (int v = 0; v < 3; ++v)
+                q.v[v][0][lane] = vertices[v].x, q.v[v][1][lane] = vertices[v].y, q.v[v][2][lane] = vertices[v].z;
             q.ref[lane] = p.ref;
             wide.slots[wide.slots.size() - 4 + lane] = k;
             ++lane;
@@ -52,8 +52,13 @@ std::uint32_t pack_leaf(const Bvh& bvh, std::uint32_t first, std::uint32_t n, Wi
     return begin;
 }
 
-/// The binary children of binary node i, opened up to eight by largest surface area.
+/// The binary children of binary node i, opened up to eight by largest surface area; a node that
+/// is itself a leaf (only the root can be) is its own only child.
 int gather_children(const Bvh& bvh, const SubtreeRanges& ranges, std::uint32_t i, std::uint32_t out[8]) {
+    if (ranges.leaf(bvh, i)) {
+        out[0] = i;
+        return 1;
+    }
     out[0] = i + 1, out[1] = bvh.nodes[i].index;
     int count = 2;
     while (count < 8) {
@@ -85,12 +90,10 @@ WideBvh make_wide(const Bvh& bvh) {
     if (bvh.empty()) return wide;
     const SubtreeRanges ranges(bvh);
     wide.packets.reserve(bvh.prims.size() / 2 + 1);
-    if (ranges.leaf(bvh, 0)) {
-        pack_leaf(bvh, ranges.first[0], ranges.size[0], wide, wide.root_packets);
-        return wide;
-    }
     wide.nodes.reserve(bvh.nodes.size() / 4 + 1);
-    struct Item { std::uint32_t binary, wide; };
+    struct Item {
+        std::uint32_t binary, wide;
+    };
     std::vector<Item> stack{{0, 0}};
     wide.nodes.emplace_back();
     while (!stack.empty()) {
@@ -104,7 +107,8 @@ WideBvh make_wide(const Bvh& bvh) {
             if (!c) continue;
             if (ranges.leaf(bvh, children[k])) {
                 std::uint32_t packets = 0;
-                const std::uint32_t first = pack_leaf(bvh, ranges.first[children[k]], ranges.size[children[k]], wide, packets);
+                const std::uint32_t first =
+                    pack_leaf(bvh, ranges.first[children[k]], ranges.size[children[k]], wide, packets);
                 wide.nodes[item.wide].child[k] = first, wide.nodes[item.wide].count[k] = packets;
             } else {
                 const auto index = static_cast<std::uint32_t>(wide.nodes.size());

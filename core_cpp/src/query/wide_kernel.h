@@ -7,16 +7,15 @@
 
 namespace bvhlab {
 
-/// A WideBvh as plain pointers (nodes is null when the tree is one leaf or empty).
+/// A WideBvh as plain pointers (nodes is null when the tree is empty).
 struct WideView {
     const WideNode* nodes;
     const PrimPacket* packets;
     const std::uint32_t* slots;
-    std::uint32_t root_packets;
 };
 
 /// hit_sphere (ray.h) on lane `lane` of a sphere packet; updates hit (t, ref) as it does.
-bool hit_packet_sphere(const PrimPacket& k, int lane, const float origin[3], const float dir[3], float tmin, Hit& hit);
+bool hit_packet_sphere(const PrimPacket& k, int lane, const Ray& ray, Hit& hit);
 
 namespace portable {
 Hit intersect_wide_kernel(const WideView& wide, const Ray& ray, std::uint32_t* nodes_visited);

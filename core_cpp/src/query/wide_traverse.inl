@@ -3,20 +3,54 @@
 //   L8: eight floats — load(const float*), splat(float), operator-, operator*, raise(acc, t)
 //       (= t > acc ? t : acc), lower(acc, t) (= t < acc ? t : acc), le_bits(a, b) (bit i set
 //       when a[i] <= b[i]), store(float*);
-//   L4: four floats — load, splat, + - * /, comparisons giving an M4 mask, M4 & M4, bits(M4),
-//       store.
+//   L4: four floats — load, splat, + - * /, raise, lower, comparisons giving an M4 mask,
+//       M4 & M4, M4 | M4, bits(M4), store.
 // traverse_wide.cpp includes it for the portable path (SSE or plain C++), traverse_wide_avx2.cpp
-// for AVX2. Both compute, lane by lane, exactly what hit_box and hit_triangle (ray.h) compute,
-// so every path returns the same hit. Only plain data and functions of the including file are
+// for AVX2. Both compute, lane by lane, exactly what hit_box (ray.h) and the watertight
+// hit_triangle (shaders/tracer/geometry.glsl) compute, so every path returns the same hit as the
+// binary traversals and the brute force. Only plain data and functions of the including file are
 // used here (an inline function of another header compiled for AVX2 could be picked by the
-// linker for code running without AVX2).
+// linker for code running without AVX2): make_query repeats make_ray's per-ray arithmetic.
 
 namespace {
 
-/// The ray as the tests need it: origin, direction, exact inverse direction, tmin.
+/// The ray as the kernel needs it: origin and inverse direction for the boxes; the watertight
+/// test's axis order, the origin in that order and the shear for the triangles (make_query).
 struct Query {
-    float o[3], d[3], inv[3], tmin;
+    float o[3], inv[3], tmin;
+    int axis[3];      ///< kx, ky, kz
+    float o_axes[3];  ///< o[kx], o[ky], o[kz]
+    float shear[3];
+    const Ray* ray;  ///< for the spheres (hit_packet_sphere)
 };
+
+/// Component k of (x, y, z), by selects: an array indexed by the axis made the compiler load the
+/// ray's fields in pairs, which stalls on the caller's single-float stores just before.
+float pick(int k, float x, float y, float z) { return k == 0 ? x : (k == 1 ? y : z); }
+
+/// The per-ray constants as geometry.glsl make_ray computes them, by the same float operations
+/// (so the same values; every test comparing the wide traversal with the brute force, which goes
+/// through make_ray, checks that bit for bit): 1/d is IEEE's, ±inf for ±0 as inverse_or_infinity;
+/// kz the axis of the largest |component| (ties to the later axis), kx and ky the next two,
+/// swapped when dir[kz] < 0; the shear as products with 1/dir[kz]. Computed here from the ray's
+/// fields rather than copied out of a TraceRay, which cost cheap rays a third of their time.
+Query make_query(const Ray& ray) {
+    const Vec3 o = ray.origin, d = ray.dir;
+    const float x = std::fabs(d.x), y = std::fabs(d.y), z = std::fabs(d.z);
+    const int kz = x > y && x > z ? 0 : (y > z ? 1 : 2);
+    const int next = kz == 2 ? 0 : kz + 1, last = next == 2 ? 0 : next + 1;
+    const bool flip = pick(kz, d.x, d.y, d.z) < 0.0f;
+    const int kx = flip ? last : next, ky = flip ? next : last;
+    const float inv[3] = {1.0f / d.x, 1.0f / d.y, 1.0f / d.z};
+    const float inv_z = pick(kz, inv[0], inv[1], inv[2]);
+    return {{o.x, o.y, o.z},
+            {inv[0], inv[1], inv[2]},
+            ray.tmin,
+            {kx, ky, kz},
+            {pick(kx, o.x, o.y, o.z), pick(ky, o.x, o.y, o.z), pick(kz, o.x, o.y, o.z)},
+            {pick(kx, d.x, d.y, d.z) * inv_z, pick(ky, d.x, d.y, d.z) * inv_z, inv_z},
+            &ray};
+}
 
 struct Entry {
     std::uint32_t index, count;  ///< count > 0: a leaf of `count` packets from `index`
@@ -28,30 +62,30 @@ bool closer(float t, std::uint32_t ref, const Hit& hit) {
     return t < hit.t || (t == hit.t && hit.ref != kNoHit && ref < hit.ref);
 }
 
-/// Möller–Trumbore on four triangles at once (hit_triangle's operations, lane by lane); the
-/// lanes that pass become hits in lane order under the closest-hit rule.
+/// The watertight test (geometry.glsl hit_triangle) on four triangles at once, its operations in
+/// its order lane by lane; the lanes that pass become hits in lane order under the closest-hit rule.
 void test_triangles(const PrimPacket& k, std::uint32_t packet, const Query& q, const WideView& wide, Hit& hit) {
-    const L4 dx = L4::splat(q.d[0]), dy = L4::splat(q.d[1]), dz = L4::splat(q.d[2]);
-    const L4 e1x = L4::load(k.e1x), e1y = L4::load(k.e1y), e1z = L4::load(k.e1z);
-    const L4 e2x = L4::load(k.e2x), e2y = L4::load(k.e2y), e2z = L4::load(k.e2z);
-    const L4 px = dy * e2z - dz * e2y, py = dz * e2x - dx * e2z, pz = dx * e2y - dy * e2x;
-    const L4 det = (e1x * px + e1y * py) + e1z * pz;
-    const L4 zero = L4::splat(0.0f), one = L4::splat(1.0f);
-    const L4 inv_det = one / det;
-    const L4 tx = L4::splat(q.o[0]) - L4::load(k.v0x), ty = L4::splat(q.o[1]) - L4::load(k.v0y),
-             tz = L4::splat(q.o[2]) - L4::load(k.v0z);
-    const L4 u = ((tx * px + ty * py) + tz * pz) * inv_det;
-    const L4 qx = ty * e1z - tz * e1y, qy = tz * e1x - tx * e1z, qz = tx * e1y - ty * e1x;
-    const L4 v = ((dx * qx + dy * qy) + dz * qz) * inv_det;
-    const L4 t = ((e2x * qx + e2y * qy) + e2z * qz) * inv_det;
-    int lanes = bits((det != zero) & (u >= zero) & (u <= one) & (v >= zero) & (u + v <= one) & (t > L4::splat(q.tmin)));
+    const int kx = q.axis[0], ky = q.axis[1], kz = q.axis[2];
+    const L4 ox = L4::splat(q.o_axes[0]), oy = L4::splat(q.o_axes[1]), oz = L4::splat(q.o_axes[2]);
+    const L4 sx = L4::splat(q.shear[0]), sy = L4::splat(q.shear[1]);
+    const L4 az = L4::load(k.v[0][kz]) - oz, bz = L4::load(k.v[1][kz]) - oz, cz = L4::load(k.v[2][kz]) - oz;
+    const L4 ax = (L4::load(k.v[0][kx]) - ox) - sx * az, ay = (L4::load(k.v[0][ky]) - oy) - sy * az;
+    const L4 bx = (L4::load(k.v[1][kx]) - ox) - sx * bz, by = (L4::load(k.v[1][ky]) - oy) - sy * bz;
+    const L4 cx = (L4::load(k.v[2][kx]) - ox) - sx * cz, cy = (L4::load(k.v[2][ky]) - oy) - sy * cz;
+    const L4 u = cx * by - cy * bx, v = ax * cy - ay * cx, w = bx * ay - by * ax;
+    const L4 zero = L4::splat(0.0f);
+    // "not (some negative and some positive)"; a NaN lane has a NaN t and fails below
+    const M4 one_sign = (lower(lower(u, v), w) >= zero) | (raise(raise(u, v), w) <= zero);
+    const L4 det = (u + v) + w;
+    const L4 t = (((u * az + v * bz) + w * cz) / det) * L4::splat(q.shear[2]);
+    int lanes = bits(one_sign & (det != zero) & (t > L4::splat(q.tmin)) & (t <= L4::splat(hit.t)));
     if (!lanes) return;
-    alignas(16) float ts[4], us[4], vs[4];
-    t.store(ts), u.store(us), v.store(vs);
+    alignas(16) float ts[4], vs[4], ws[4], dets[4];
+    t.store(ts), v.store(vs), w.store(ws), det.store(dets);
     for (; lanes; lanes &= lanes - 1) {
         const int l = __builtin_ctz(unsigned(lanes));
         if (!closer(ts[l], k.ref[l], hit)) continue;
-        hit.t = ts[l], hit.ref = k.ref[l], hit.u = us[l], hit.v = vs[l];
+        hit.t = ts[l], hit.ref = k.ref[l], hit.u = vs[l] / dets[l], hit.v = ws[l] / dets[l];
         hit.slot = wide.slots[4 * std::size_t(packet) + l];
     }
 }
@@ -64,18 +98,22 @@ void test_leaf(const WideView& wide, std::uint32_t first, std::uint32_t count, c
             continue;
         }
         for (int l = 0; l < 4 && k.ref[l] != kNoHit; ++l)
-            if (hit_packet_sphere(k, l, q.o, q.d, q.tmin, hit)) hit.slot = wide.slots[4 * std::size_t(p) + l];
+            if (hit_packet_sphere(k, l, *q.ray, hit)) hit.slot = wide.slots[4 * std::size_t(p) + l];
     }
 }
 
 /// The children of `node` the ray enters before hit.t, nearest last: returns how many.
-int enter_children(const WideNode& node, const L8 origin[3], const L8 inv[3], const int near[3], float tmin, const Hit& hit,
-                   Entry out[8]) {
+/// `inv_far` is the inverse direction times gpu::BOX_FAR_SCALE and `far_limit` the closest hit so
+/// far times it: the far end widened as hit_box widens it (Ize 2013), with the scale folded into
+/// per-ray constants rather than a multiply on every node's dependency chain. One rounding more
+/// than hit_box's product, which the scale covers with room to spare (16 ε against 7 ε).
+int enter_children(const WideNode& node, const L8 origin[3], const L8 inv[3], const L8 inv_far[3], const int near[3],
+                   float tmin, float far_limit, Entry out[8]) {
     const float* f = node.lo_x;
     // the same order of raises and lowers as hit_box: NaN from 0·inf on a face is ignored
-    L8 t0 = L8::splat(tmin), t1 = L8::splat(hit.t);
+    L8 t0 = L8::splat(tmin), t1 = L8::splat(far_limit);
     for (int a = 0; a < 3; ++a) t0 = raise(t0, (L8::load(f + near[a]) - origin[a]) * inv[a]);
-    for (int a = 0; a < 3; ++a) t1 = lower(t1, (L8::load(f + (near[a] ^ 8)) - origin[a]) * inv[a]);
+    for (int a = 0; a < 3; ++a) t1 = lower(t1, (L8::load(f + (near[a] ^ 8)) - origin[a]) * inv_far[a]);
     int mask = le_bits(t0, t1);
     if (!mask) return 0;
     alignas(32) float entry[8];
@@ -98,31 +136,37 @@ int enter_children(const WideNode& node, const L8 origin[3], const L8 inv[3], co
     return h;
 }
 
+/// Nearest child first, from the root. `far_limit`, the closest hit so far times the box scale,
+/// lives in a register and is renewed after a leaf, the one place the hit changes.
 std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit) {
     const L8 origin[3] = {L8::splat(q.o[0]), L8::splat(q.o[1]), L8::splat(q.o[2])};
     const L8 inv[3] = {L8::splat(q.inv[0]), L8::splat(q.inv[1]), L8::splat(q.inv[2])};
+    const float s = gpu::BOX_FAR_SCALE;
+    const L8 inv_far[3] = {L8::splat(q.inv[0] * s), L8::splat(q.inv[1] * s), L8::splat(q.inv[2] * s)};
     int near[3];  // float offset of the near plane array of each axis in a WideNode (lo_x = 0, hi_x = 8, ...)
     for (int a = 0; a < 3; ++a) near[a] = 16 * a + (std::signbit(q.inv[a]) ? 8 : 0);
     Entry stack[7 * gpu::MAX_TREE_HEIGHT + 8];
     std::uint32_t sp = 0, visited = 0;
     Entry cur{0, 0, q.tmin};
+    float far_limit = hit.t * s;
     for (;;) {
         if (cur.count) {
             test_leaf(wide, cur.index, cur.count, q, hit);
+            far_limit = hit.t * s;
         } else {
             ++visited;
             Entry hits[8];
-            const int h = enter_children(wide.nodes[cur.index], origin, inv, near, q.tmin, hit, hits);
+            const int h = enter_children(wide.nodes[cur.index], origin, inv, inv_far, near, q.tmin, far_limit, hits);
             if (h) {
                 for (int k = 0; k < h - 1; ++k) stack[sp++] = hits[k];
                 cur = hits[h - 1];
                 continue;
             }
         }
-        do {  // pop, skipping entries farther than the closest hit so far
+        do {  // pop, skipping entries farther than the closest hit so far (ray.h may_hold_closer)
             if (sp == 0) return visited;
             --sp;
-        } while (stack[sp].t > hit.t);
+        } while (!(stack[sp].t <= far_limit));
         cur = stack[sp];
     }
 }
@@ -131,11 +175,8 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit) {
 
 Hit intersect_wide_kernel(const WideView& wide, const Ray& ray, std::uint32_t* nodes_visited) {
     Hit hit{ray.tmax, kNoHit, 0.0f, 0.0f, kNoHit};
-    Query q{{ray.origin.x, ray.origin.y, ray.origin.z}, {ray.dir.x, ray.dir.y, ray.dir.z},
-            {1.0f / ray.dir.x, 1.0f / ray.dir.y, 1.0f / ray.dir.z}, ray.tmin};
-    std::uint32_t visited = 0;
-    if (wide.root_packets) test_leaf(wide, 0, wide.root_packets, q, hit);
-    else if (wide.nodes) visited = traverse_nodes(wide, q, hit);
+    const Query q = make_query(ray);
+    const std::uint32_t visited = wide.nodes ? traverse_nodes(wide, q, hit) : 0;
     if (nodes_visited) *nodes_visited = visited;
     return hit;
 }

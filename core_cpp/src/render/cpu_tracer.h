@@ -1,17 +1,17 @@
 // cpu_tracer.h — the CPU reference tracer: the shared GLSL tracer code (shaders/tracer/*.glsl)
-// compiled as member functions of this class, over the same arrays the GPU reads. The accessors
+// compiled as member functions of this class (geometry.glsl's ray tests, which the CPU traversal
+// shares, at namespace scope: shared_geometry.h), over the same arrays the GPU reads. The accessors
 // below play the part of trace.comp's buffer references and storage image; one CpuTracer is one
 // slot (a thread traces its pixels one after another through it).
 #pragma once
 #include <array>
 
 #include "bvhlab/render.h"
+#include "bvhlab/shared_geometry.h"
 #include "gpu_types.h"
 #include "pixel_sums.h"
 
 namespace bvhlab::gpu {
-
-inline vec3 xyz(vec4 v) { return {v.x, v.y, v.z}; }
 
 class CpuTracer {
 public:
@@ -50,7 +50,6 @@ public:
         sums_->samples[i] = sums_->samples[i] + 1u;
     }
 
-#include "tracer/geometry.glsl"
 #include "tracer/traverse.glsl"
 #include "tracer/shade_colors.glsl"
 #include "tracer/shade.glsl"

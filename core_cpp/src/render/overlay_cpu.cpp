@@ -33,8 +33,12 @@ bool clip_to_view(Segment& s) {
     const vec4 d = s.b - s.a;
     float t0 = 0.0f, t1 = 1.0f;
     // each plane as (value at a, change along the segment); inside where value >= 0
-    const float planes[6][2] = {{s.a.w + s.a.x, d.w + d.x}, {s.a.w - s.a.x, d.w - d.x}, {s.a.w + s.a.y, d.w + d.y},
-                                {s.a.w - s.a.y, d.w - d.y}, {s.a.z, d.z}, {s.a.w - s.a.z, d.w - d.z}};
+    const float planes[6][2] = {{s.a.w + s.a.x, d.w + d.x},
+                                {s.a.w - s.a.x, d.w - d.x},
+                                {s.a.w + s.a.y, d.w + d.y},
+                                {s.a.w - s.a.y, d.w - d.y},
+                                {s.a.z, d.z},
+                                {s.a.w - s.a.z, d.w - d.z}};
     for (const auto& [value, change] : planes) {
         if (change == 0.0f) {
             if (!(value >= 0.0f)) return false;
@@ -101,7 +105,8 @@ std::vector<gpu::vec4> rasterize_overlay(const RenderScene& scene, const gpu::Fr
     for (std::uint32_t b = frame.overlay_first_box; b < frame.overlay_last_box; ++b) {
         const gpu::GpuBox& box = scene.boxes[b];
         vec3 lo = gpu::xyz(box.lo_depth), hi = gpu::xyz(box.hi);
-        vec3 line_color = frame.overlay_color_by_depth ? tracer.depth_color(gpu::uint(box.lo_depth.w)) : gpu::OVERLAY_LINE_COLOR;
+        vec3 line_color =
+            frame.overlay_color_by_depth ? tracer.depth_color(gpu::uint(box.lo_depth.w)) : gpu::OVERLAY_LINE_COLOR;
         for (gpu::uint v = 0; v < 24; v += 2) {
             vec3 pa = tracer.corner_position(lo, hi, tracer.box_corner(v));
             vec3 pb = tracer.corner_position(lo, hi, tracer.box_corner(v + 1));

@@ -55,7 +55,8 @@ std::uint64_t step_bound(const RenderScene& scene, const RenderSettings& setting
 }
 
 std::uint32_t work_cap(const RenderScene& scene, const RenderSettings& settings, std::uint32_t samples) {
-    const std::uint64_t cap = settings.max_steps_per_pixel ? *settings.max_steps_per_pixel : step_bound(scene, settings, samples);
+    const std::uint64_t cap =
+        settings.max_steps_per_pixel ? *settings.max_steps_per_pixel : step_bound(scene, settings, samples);
     return cap >= gpu::NO_WORK_CAP ? gpu::NO_WORK_CAP : std::uint32_t(cap);
 }
 

@@ -11,9 +11,9 @@
 namespace bvhlab {
 
 struct PixelSums {
-    BigVector<gpu::vec4> color;          ///< rgb: sum of sample colours; a: sum of box tests
-    BigVector<float> depth;              ///< nearest view-axis depth of a primary hit (inf: none)
-    BigVector<std::uint32_t> samples;    ///< samples summed
+    BigVector<gpu::vec4> color;        ///< rgb: sum of sample colours; a: sum of box tests
+    BigVector<float> depth;            ///< nearest view-axis depth of a primary hit (inf: none)
+    BigVector<std::uint32_t> samples;  ///< samples summed
 
     /// Zero sums for `pixels` pixels (std::bad_alloc if they do not fit).
     explicit PixelSums(std::size_t pixels = 0);

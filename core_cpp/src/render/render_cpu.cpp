@@ -17,7 +17,9 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double ms_since(Clock::time_point start) { return std::chrono::duration<double, std::milli>(Clock::now() - start).count(); }
+double ms_since(Clock::time_point start) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
 
 enum class PixelResult { Done, Failed, Stopped };
 
@@ -35,7 +37,9 @@ struct RunShared {
 class CpuRenderJob final : public RenderJob {
 public:
     CpuRenderJob(const RenderScene& scene, const RenderSettings& settings, std::uint32_t threads)
-        : RenderJob(settings), scene_(scene), frame_(make_frame_params(scene, settings)),
+        : RenderJob(settings),
+          scene_(scene),
+          frame_(make_frame_params(scene, settings)),
           threads_(threads ? threads : std::max(1u, std::thread::hardware_concurrency())) {
         const auto start = Clock::now();
         overlay_ = rasterize_overlay(scene, frame_);
@@ -59,7 +63,8 @@ public:
         timings_.dispatches += shared.most_budgets.load();
         if (shared.error) std::rethrow_exception(shared.error);
         if (cancel && cancel->stop_requested()) throw Cancelled();
-        if (shared.pixels_failed) throw RenderIncomplete(incomplete_message(shared.pixels_failed, frame.max_work_per_pixel));
+        if (shared.pixels_failed)
+            throw RenderIncomplete(incomplete_message(shared.pixels_failed, frame.max_work_per_pixel));
         samples_done_ = target;
     }
 
@@ -72,7 +77,8 @@ public:
 private:
     static void note_budgets(RunShared& shared, std::uint64_t budgets) {
         auto n = std::uint32_t(std::min<std::uint64_t>(budgets, 0xffffffffu));
-        for (std::uint32_t seen = shared.most_budgets.load(); n > seen && !shared.most_budgets.compare_exchange_weak(seen, n);) {}
+        for (std::uint32_t seen = shared.most_budgets.load();
+             n > seen && !shared.most_budgets.compare_exchange_weak(seen, n);) {}
     }
 
     /// One pixel's samples up to frame.sample_target, in budgets of steps; between budgets the

@@ -16,8 +16,8 @@ gpu::vec3 v3(Vec3 v) { return {v.x, v.y, v.z}; }
 std::uint32_t material_index(const std::int32_t* table, std::size_t i, std::size_t count, const char* what) {
     std::int32_t m = table ? table[i] : 0;
     if (m < 0 || std::size_t(m) >= count)
-        throw std::invalid_argument(std::string(what) + " " + std::to_string(i) + " uses material " + std::to_string(m) +
-                                    " of " + std::to_string(count));
+        throw std::invalid_argument(std::string(what) + " " + std::to_string(i) + " uses material " +
+                                    std::to_string(m) + " of " + std::to_string(count));
     return std::uint32_t(m);
 }
 
@@ -45,8 +45,9 @@ void check_tree_matches(const Bvh& bvh, const GeometryView& g) {
     if (g.triangle_count != bvh.triangle_count || g.sphere_count != bvh.sphere_count)
         throw std::invalid_argument("the geometry does not match the tree (different primitive counts)");
     if (geometry_fingerprint(g) != bvh.geometry_fingerprint)
-        throw std::invalid_argument("the tree was built for other geometry (same counts, different coordinates): "
-                                    "build it again, or refit it, for these triangles and spheres");
+        throw std::invalid_argument(
+            "the tree was built for other geometry (same counts, different coordinates): "
+            "build it again, or refit it, for these triangles and spheres");
 }
 
 /// The boxes of the overlay pass, in the depth order (report §3.3.1).
@@ -68,13 +69,8 @@ RenderScene make_render_scene(const Bvh& bvh, const GeometryView& g, const Mater
     s.materials = gpu_materials(mv);
     const std::size_t n_materials = mv.material_count ? mv.material_count : 1;
     s.triangles.resize(g.triangle_count);
-    for (std::size_t i = 0; i < g.triangle_count; ++i) {
-        Vec3 v0 = g.vertex(i, 0), e1 = g.vertex(i, 1) - v0, e2 = g.vertex(i, 2) - v0;
-        Vec3 n = cross(e1, e2);
-        if (n.x == 0 && n.y == 0 && n.z == 0) e1 = e2 = Vec3{};  // zero area: never hit
-        std::uint32_t m = material_index(mv.triangle_material, i, n_materials, "triangle");
-        s.triangles[i] = {v4(v0, gpu::uintBitsToFloat(m)), v4(e1, 0), v4(e2, 0)};
-    }
+    for (std::size_t i = 0; i < g.triangle_count; ++i)
+        s.triangles[i] = pack_triangle(g, i, material_index(mv.triangle_material, i, n_materials, "triangle"));
     s.spheres.resize(g.sphere_count);
     for (std::size_t i = 0; i < g.sphere_count; ++i) {
         std::uint32_t m = material_index(mv.sphere_material, i, n_materials, "sphere");

@@ -12,10 +12,10 @@
 namespace bvhlab {
 namespace {
 
-constexpr std::array<std::pair<std::string_view, Traversal>, 3> kTraversals{{
-    {"stack", Traversal::Stack}, {"stackless", Traversal::Stackless}, {"wide", Traversal::Wide}}};
-constexpr std::array<std::pair<std::string_view, RenderMode>, 2> kModes{{
-    {"shade", RenderMode::Shade}, {"heatmap", RenderMode::Heatmap}}};
+constexpr std::array<std::pair<std::string_view, Traversal>, 3> kTraversals{
+    {{"stack", Traversal::Stack}, {"stackless", Traversal::Stackless}, {"wide", Traversal::Wide}}};
+constexpr std::array<std::pair<std::string_view, RenderMode>, 2> kModes{
+    {{"shade", RenderMode::Shade}, {"heatmap", RenderMode::Heatmap}}};
 
 template <class Table>
 auto lookup(const Table& table, std::string_view name, const char* what) {
@@ -58,7 +58,8 @@ void validate_light(const RenderSettings& s) {
 void validate_work(const RenderSettings& s) {
     if (s.samples_per_axis < 1 || s.samples_per_axis > gpu::MAX_SAMPLES_PER_AXIS)
         fail("samples per pixel axis must be 1.." + std::to_string(gpu::MAX_SAMPLES_PER_AXIS));
-    if (s.max_ray_depth > gpu::MAX_RAY_DEPTH) fail("max_ray_depth must be at most " + std::to_string(gpu::MAX_RAY_DEPTH));
+    if (s.max_ray_depth > gpu::MAX_RAY_DEPTH)
+        fail("max_ray_depth must be at most " + std::to_string(gpu::MAX_RAY_DEPTH));
     if (s.traversal == Traversal::Wide) fail("the tracer has no 'wide' traversal; expected one of: stack stackless");
     if (s.steps_per_dispatch &&
         (*s.steps_per_dispatch < gpu::MIN_STEPS_PER_DISPATCH || *s.steps_per_dispatch > gpu::MAX_STEPS_PER_DISPATCH))
@@ -68,7 +69,8 @@ void validate_work(const RenderSettings& s) {
 }
 
 void validate_look(const RenderSettings& s) {
-    if (s.heatmap_scale && !(std::isfinite(*s.heatmap_scale) && *s.heatmap_scale > 0 && *s.heatmap_scale <= kMaxHeatmapScale))
+    if (s.heatmap_scale &&
+        !(std::isfinite(*s.heatmap_scale) && *s.heatmap_scale > 0 && *s.heatmap_scale <= kMaxHeatmapScale))
         fail("heatmap_scale must be a positive number of box tests up to " + std::to_string(int(kMaxHeatmapScale)) +
              ", got " + std::to_string(*s.heatmap_scale));
     if (!(s.line_width >= 1.0f && s.line_width <= kMaxLineWidth)) fail("line_width must be in [1, 16]");
@@ -97,8 +99,8 @@ void validate(const RenderSettings& s, std::uint32_t max_dimension) {
     if (s.width == 0 || s.height == 0)
         fail("width and height must be at least 1, got " + std::to_string(s.width) + "x" + std::to_string(s.height));
     if (s.width > max_dimension || s.height > max_dimension)
-        fail("image size " + std::to_string(s.width) + "x" + std::to_string(s.height) + " exceeds the device limit of " +
-             std::to_string(max_dimension) + " pixels per side");
+        fail("image size " + std::to_string(s.width) + "x" + std::to_string(s.height) +
+             " exceeds the device limit of " + std::to_string(max_dimension) + " pixels per side");
     validate_camera(s.camera);
     validate_light(s);
     validate_work(s);

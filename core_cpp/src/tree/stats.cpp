@@ -45,8 +45,8 @@ BvhStats compute_stats(const Bvh& bvh) {
         ++s.leaf_size_histogram[count];
     }
     s.avg_leaf_size = s.leaves ? double(bvh.refs.size()) / double(s.leaves) : 0.0;
-    s.memory_bytes = bvh.nodes.size() * sizeof(BvhNode) + bvh.refs.size() * sizeof(std::uint32_t) +
-                     bvh.depths.size() + bvh.prims.size() * sizeof(PackedPrim);
+    s.memory_bytes = bvh.nodes.size() * sizeof(BvhNode) + bvh.refs.size() * sizeof(std::uint32_t) + bvh.depths.size() +
+                     bvh.prims.size() * sizeof(PackedPrim);
     return s;
 }
 

@@ -10,7 +10,8 @@ namespace bvhlab::vk {
 std::string result_name(VkResult result) {
     switch (result) {
 #define BVHLAB_VK_RESULT(name) \
-    case name: return #name;
+    case name:                 \
+        return #name;
         BVHLAB_VK_RESULT(VK_SUCCESS)
         BVHLAB_VK_RESULT(VK_NOT_READY)
         BVHLAB_VK_RESULT(VK_TIMEOUT)
@@ -35,14 +36,15 @@ std::string result_name(VkResult result) {
         BVHLAB_VK_RESULT(VK_PIPELINE_COMPILE_REQUIRED)
         BVHLAB_VK_RESULT(VK_ERROR_VALIDATION_FAILED_EXT)
 #undef BVHLAB_VK_RESULT
-        default: return "VkResult " + std::to_string(int(result));
+        default:
+            return "VkResult " + std::to_string(int(result));
     }
 }
 
 void throw_vk_error(VkResult result, const char* call, const char* file, int line) {
     const char* base = std::strrchr(file, '/');
-    throw std::runtime_error(std::string(call) + " failed with " + result_name(result) + " (" + (base ? base + 1 : file) +
-                             ":" + std::to_string(line) + ")");
+    throw std::runtime_error(std::string(call) + " failed with " + result_name(result) + " (" +
+                             (base ? base + 1 : file) + ":" + std::to_string(line) + ")");
 }
 
 }  // namespace bvhlab::vk

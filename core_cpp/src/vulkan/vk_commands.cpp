@@ -68,8 +68,8 @@ void image_barrier(const Functions& fn, VkCommandBuffer cmd, VkImage image, VkIm
     fn.vkCmdPipelineBarrier2(cmd, &dependency);
 }
 
-void memory_barrier(const Functions& fn, VkCommandBuffer cmd, VkPipelineStageFlags2 src_stage, VkAccessFlags2 src_access,
-                    VkPipelineStageFlags2 dst_stage, VkAccessFlags2 dst_access) {
+void memory_barrier(const Functions& fn, VkCommandBuffer cmd, VkPipelineStageFlags2 src_stage,
+                    VkAccessFlags2 src_access, VkPipelineStageFlags2 dst_stage, VkAccessFlags2 dst_access) {
     VkMemoryBarrier2 barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
     barrier.srcStageMask = src_stage;
     barrier.srcAccessMask = src_access;

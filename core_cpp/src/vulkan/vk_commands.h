@@ -44,7 +44,7 @@ void image_barrier(const Functions& fn, VkCommandBuffer cmd, VkImage image, VkIm
                    ImageState to);
 
 /// Global memory dependency (buffers), e.g. transfer writes → shader reads, copy → host read.
-void memory_barrier(const Functions& fn, VkCommandBuffer cmd, VkPipelineStageFlags2 src_stage, VkAccessFlags2 src_access,
-                    VkPipelineStageFlags2 dst_stage, VkAccessFlags2 dst_access);
+void memory_barrier(const Functions& fn, VkCommandBuffer cmd, VkPipelineStageFlags2 src_stage,
+                    VkAccessFlags2 src_access, VkPipelineStageFlags2 dst_stage, VkAccessFlags2 dst_access);
 
 }  // namespace bvhlab::vk

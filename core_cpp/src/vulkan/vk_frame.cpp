@@ -13,7 +13,8 @@ namespace {
 /// The (low, high) words of a device address, as the shaders' uvec2 buffer references read them.
 gpu::uvec2 words(VkDeviceAddress a) { return {std::uint32_t(a), std::uint32_t(a >> 32)}; }
 
-constexpr VkBufferUsageFlags kShaderArray = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT |
+constexpr VkBufferUsageFlags kShaderArray = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
+                                            VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT |
                                             VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT;
 
 Buffer shader_array(const Device& device, VkDeviceSize bytes) {
@@ -28,10 +29,12 @@ FrameTargets::FrameTargets(const Device& device, std::uint32_t width, std::uint3
       color(device, {width, height}, kColorFormat,
             VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
             VK_IMAGE_ASPECT_COLOR_BIT),
-      depth(device, {width, height}, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, VK_IMAGE_ASPECT_DEPTH_BIT) {}
+      depth(device, {width, height}, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
+            VK_IMAGE_ASPECT_DEPTH_BIT) {}
 
 FrameBindings::FrameBindings(const Device& device, VkDescriptorSetLayout layout)
-    : device_(device), params_(device, sizeof(gpu::FrameParams), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::PerFrame) {
+    : device_(device),
+      params_(device, sizeof(gpu::FrameParams), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::PerFrame) {
     const Functions& fn = device.fn();
     VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1}, {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1}};
     VkDescriptorPoolCreateInfo pool{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};

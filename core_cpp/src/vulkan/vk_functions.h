@@ -11,22 +11,22 @@
 namespace bvhlab::vk {
 
 /// Loaded with vkGetInstanceProcAddr(nullptr, ...): usable before an instance exists.
-#define BVHLAB_VK_GLOBAL_FUNCTIONS(X)        \
-    X(vkEnumerateInstanceVersion)            \
-    X(vkEnumerateInstanceLayerProperties)    \
+#define BVHLAB_VK_GLOBAL_FUNCTIONS(X)         \
+    X(vkEnumerateInstanceVersion)             \
+    X(vkEnumerateInstanceLayerProperties)     \
     X(vkEnumerateInstanceExtensionProperties) \
     X(vkCreateInstance)
 
-#define BVHLAB_VK_INSTANCE_FUNCTIONS(X)          \
-    X(vkDestroyInstance)                         \
-    X(vkEnumeratePhysicalDevices)                \
-    X(vkGetPhysicalDeviceProperties)             \
-    X(vkGetPhysicalDeviceProperties2)            \
-    X(vkGetPhysicalDeviceFeatures2)              \
-    X(vkGetPhysicalDeviceFormatProperties)       \
-    X(vkGetPhysicalDeviceMemoryProperties)       \
-    X(vkGetPhysicalDeviceQueueFamilyProperties)  \
-    X(vkCreateDevice)                            \
+#define BVHLAB_VK_INSTANCE_FUNCTIONS(X)         \
+    X(vkDestroyInstance)                        \
+    X(vkEnumeratePhysicalDevices)               \
+    X(vkGetPhysicalDeviceProperties)            \
+    X(vkGetPhysicalDeviceProperties2)           \
+    X(vkGetPhysicalDeviceFeatures2)             \
+    X(vkGetPhysicalDeviceFormatProperties)      \
+    X(vkGetPhysicalDeviceMemoryProperties)      \
+    X(vkGetPhysicalDeviceQueueFamilyProperties) \
+    X(vkCreateDevice)                           \
     X(vkGetDeviceProcAddr)
 
 /// VK_EXT_debug_utils: loaded only when validation is on (the extension is enabled then).
@@ -34,62 +34,62 @@ namespace bvhlab::vk {
     X(vkCreateDebugUtilsMessengerEXT)      \
     X(vkDestroyDebugUtilsMessengerEXT)
 
-#define BVHLAB_VK_DEVICE_FUNCTIONS(X)   \
-    X(vkDestroyDevice)                  \
-    X(vkGetDeviceQueue)                 \
-    X(vkDeviceWaitIdle)                 \
-    X(vkAllocateMemory)                 \
-    X(vkFreeMemory)                     \
-    X(vkMapMemory)                      \
-    X(vkFlushMappedMemoryRanges)        \
-    X(vkInvalidateMappedMemoryRanges)   \
-    X(vkCreateBuffer)                   \
-    X(vkDestroyBuffer)                  \
-    X(vkGetBufferMemoryRequirements)    \
-    X(vkBindBufferMemory)               \
-    X(vkGetBufferDeviceAddress)         \
-    X(vkCreateImage)                    \
-    X(vkDestroyImage)                   \
-    X(vkGetImageMemoryRequirements)     \
-    X(vkBindImageMemory)                \
-    X(vkCreateImageView)                \
-    X(vkDestroyImageView)               \
-    X(vkCreateShaderModule)             \
-    X(vkDestroyShaderModule)            \
-    X(vkCreateDescriptorSetLayout)      \
-    X(vkDestroyDescriptorSetLayout)     \
-    X(vkCreatePipelineLayout)           \
-    X(vkDestroyPipelineLayout)          \
-    X(vkCreateComputePipelines)         \
-    X(vkCreateGraphicsPipelines)        \
-    X(vkDestroyPipeline)                \
-    X(vkCreateDescriptorPool)           \
-    X(vkDestroyDescriptorPool)          \
-    X(vkAllocateDescriptorSets)         \
-    X(vkUpdateDescriptorSets)           \
-    X(vkCreateCommandPool)              \
-    X(vkDestroyCommandPool)             \
-    X(vkAllocateCommandBuffers)         \
-    X(vkResetCommandBuffer)             \
-    X(vkBeginCommandBuffer)             \
-    X(vkEndCommandBuffer)               \
-    X(vkCreateFence)                    \
-    X(vkDestroyFence)                   \
-    X(vkWaitForFences)                  \
-    X(vkResetFences)                    \
-    X(vkQueueSubmit2)                   \
-    X(vkCmdPipelineBarrier2)            \
-    X(vkCmdBeginRendering)              \
-    X(vkCmdEndRendering)                \
-    X(vkCmdBindPipeline)                \
-    X(vkCmdBindDescriptorSets)          \
-    X(vkCmdSetViewport)                 \
-    X(vkCmdSetScissor)                  \
-    X(vkCmdSetLineWidth)                \
-    X(vkCmdDraw)                        \
-    X(vkCmdDispatch)                    \
-    X(vkCmdClearColorImage)             \
-    X(vkCmdCopyBuffer)                  \
+#define BVHLAB_VK_DEVICE_FUNCTIONS(X) \
+    X(vkDestroyDevice)                \
+    X(vkGetDeviceQueue)               \
+    X(vkDeviceWaitIdle)               \
+    X(vkAllocateMemory)               \
+    X(vkFreeMemory)                   \
+    X(vkMapMemory)                    \
+    X(vkFlushMappedMemoryRanges)      \
+    X(vkInvalidateMappedMemoryRanges) \
+    X(vkCreateBuffer)                 \
+    X(vkDestroyBuffer)                \
+    X(vkGetBufferMemoryRequirements)  \
+    X(vkBindBufferMemory)             \
+    X(vkGetBufferDeviceAddress)       \
+    X(vkCreateImage)                  \
+    X(vkDestroyImage)                 \
+    X(vkGetImageMemoryRequirements)   \
+    X(vkBindImageMemory)              \
+    X(vkCreateImageView)              \
+    X(vkDestroyImageView)             \
+    X(vkCreateShaderModule)           \
+    X(vkDestroyShaderModule)          \
+    X(vkCreateDescriptorSetLayout)    \
+    X(vkDestroyDescriptorSetLayout)   \
+    X(vkCreatePipelineLayout)         \
+    X(vkDestroyPipelineLayout)        \
+    X(vkCreateComputePipelines)       \
+    X(vkCreateGraphicsPipelines)      \
+    X(vkDestroyPipeline)              \
+    X(vkCreateDescriptorPool)         \
+    X(vkDestroyDescriptorPool)        \
+    X(vkAllocateDescriptorSets)       \
+    X(vkUpdateDescriptorSets)         \
+    X(vkCreateCommandPool)            \
+    X(vkDestroyCommandPool)           \
+    X(vkAllocateCommandBuffers)       \
+    X(vkResetCommandBuffer)           \
+    X(vkBeginCommandBuffer)           \
+    X(vkEndCommandBuffer)             \
+    X(vkCreateFence)                  \
+    X(vkDestroyFence)                 \
+    X(vkWaitForFences)                \
+    X(vkResetFences)                  \
+    X(vkQueueSubmit2)                 \
+    X(vkCmdPipelineBarrier2)          \
+    X(vkCmdBeginRendering)            \
+    X(vkCmdEndRendering)              \
+    X(vkCmdBindPipeline)              \
+    X(vkCmdBindDescriptorSets)        \
+    X(vkCmdSetViewport)               \
+    X(vkCmdSetScissor)                \
+    X(vkCmdSetLineWidth)              \
+    X(vkCmdDraw)                      \
+    X(vkCmdDispatch)                  \
+    X(vkCmdClearColorImage)           \
+    X(vkCmdCopyBuffer)                \
     X(vkCmdFillBuffer)
 
 /// The function table: one per renderer, filled level by level as the instance and the device

@@ -21,17 +21,22 @@ MemoryFlags flags_for(MemoryUse use) {
         // The first device-local type: drivers list plain VRAM before the small host-visible BAR
         // window, so large scenes do not land there; where the first is host-visible anyway
         // (lavapipe, integrated GPUs) the upload writes it directly.
-        case MemoryUse::DeviceLocal: return {local, 0};
-        case MemoryUse::Staging: return {host, 0};
-        case MemoryUse::Readback: return {VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT, VK_MEMORY_PROPERTY_HOST_CACHED_BIT};
-        case MemoryUse::PerFrame: return {host, local};
+        case MemoryUse::DeviceLocal:
+            return {local, 0};
+        case MemoryUse::Staging:
+            return {host, 0};
+        case MemoryUse::Readback:
+            return {VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT, VK_MEMORY_PROPERTY_HOST_CACHED_BIT};
+        case MemoryUse::PerFrame:
+            return {host, local};
     }
     return {local, 0};
 }
 
 /// The first memory type allowed by `type_bits` with the required and preferred properties, else
 /// the first with the required ones.
-std::uint32_t find_memory_type(const VkPhysicalDeviceMemoryProperties& memory, std::uint32_t type_bits, MemoryFlags flags) {
+std::uint32_t find_memory_type(const VkPhysicalDeviceMemoryProperties& memory, std::uint32_t type_bits,
+                               MemoryFlags flags) {
     for (VkMemoryPropertyFlags wanted : {flags.required | flags.preferred, flags.required})
         for (std::uint32_t i = 0; i < memory.memoryTypeCount; ++i)
             if ((type_bits & (1u << i)) && (memory.memoryTypes[i].propertyFlags & wanted) == wanted) return i;
@@ -45,8 +50,8 @@ Memory::Memory(const Device& device, const VkMemoryRequirements& needs, MemoryUs
     const PhysicalDevice& physical = device.physical();
     if (physical.max_allocation && needs.size > physical.max_allocation)
         throw std::runtime_error("a Vulkan allocation of " + std::to_string(needs.size) +
-                                 " bytes exceeds the device's limit of " +
-                                 std::to_string(physical.max_allocation) + " (maxMemoryAllocationSize)");
+                                 " bytes exceeds the device's limit of " + std::to_string(physical.max_allocation) +
+                                 " (maxMemoryAllocationSize)");
     const std::uint32_t type = find_memory_type(physical.memory, needs.memoryTypeBits, flags_for(use));
     const VkMemoryPropertyFlags properties = physical.memory.memoryTypes[type].propertyFlags;
     VkMemoryAllocateFlagsInfo address_flags{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_FLAGS_INFO};
@@ -98,7 +103,8 @@ Buffer::Buffer(const Device& device, VkDeviceSize size, VkBufferUsageFlags usage
 }
 
 void Buffer::write(const void* data, std::size_t bytes, std::size_t offset) {
-    if (!host_visible() || offset + bytes > size_) throw std::logic_error("Buffer::write outside a host-visible buffer");
+    if (!host_visible() || offset + bytes > size_)
+        throw std::logic_error("Buffer::write outside a host-visible buffer");
     std::memcpy(memory_.mapped() + offset, data, bytes);
     memory_.flush();
 }
@@ -109,7 +115,8 @@ void Buffer::read(void* out, std::size_t bytes) const {
     std::memcpy(out, memory_.mapped(), bytes);
 }
 
-Image::Image(const Device& device, VkExtent2D extent, VkFormat format, VkImageUsageFlags usage, VkImageAspectFlags aspect)
+Image::Image(const Device& device, VkExtent2D extent, VkFormat format, VkImageUsageFlags usage,
+             VkImageAspectFlags aspect)
     : extent_(extent) {
     const Functions& fn = device.fn();
     VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};

@@ -23,8 +23,8 @@ public:
 
     VkDeviceMemory handle() const { return memory_.get(); }
     std::byte* mapped() const { return mapped_; }  ///< null unless host-visible
-    void flush() const;       ///< host writes → device, where the memory is not coherent
-    void invalidate() const;  ///< device writes → host, where the memory is not coherent
+    void flush() const;                            ///< host writes → device, where the memory is not coherent
+    void invalidate() const;                       ///< device writes → host, where the memory is not coherent
 
 private:
     const Device* device_ = nullptr;
@@ -48,7 +48,7 @@ public:
     void read(void* out, std::size_t bytes) const;
 
 private:
-    Memory memory_;      // declared first: freed after the buffer
+    Memory memory_;  // declared first: freed after the buffer
     OwnedBuffer buffer_;
     VkDeviceSize size_ = 0;
     VkDeviceAddress address_ = 0;

@@ -10,7 +10,8 @@ namespace {
 
 // The overlay image's states through a run. A run starts by discarding the previous contents,
 // after the previous run's trace pass read them.
-constexpr ImageState kColorDiscarded{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_NONE, VK_IMAGE_LAYOUT_UNDEFINED};
+constexpr ImageState kColorDiscarded{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_NONE,
+                                     VK_IMAGE_LAYOUT_UNDEFINED};
 constexpr ImageState kColorAttachment{VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
                                       VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
 constexpr ImageState kColorCleared{VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
@@ -20,7 +21,8 @@ constexpr ImageState kColorTraced{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACC
 // Depth: discarded after the previous frame's depth tests, then tested and written.
 constexpr VkPipelineStageFlags2 kDepthStages =
     VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT;
-constexpr ImageState kDepthDiscarded{kDepthStages, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, VK_IMAGE_LAYOUT_UNDEFINED};
+constexpr ImageState kDepthDiscarded{kDepthStages, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
+                                     VK_IMAGE_LAYOUT_UNDEFINED};
 constexpr ImageState kDepthAttachment{
     kDepthStages, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
     VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL};
@@ -91,7 +93,8 @@ void record_trace_round(const PassContext& pass, VkCommandBuffer cmd, std::uint3
     const Functions& fn = pass.fn;
     // the previous round's (or the fills') writes to the slots and the sums come first
     memory_barrier(fn, cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_CLEAR_BIT,
-                   VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                   VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                   VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                    VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
     fn.vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pass.pipelines.trace(traversal));
     VkDescriptorSet set = pass.set;
@@ -106,12 +109,13 @@ void record_trace_round(const PassContext& pass, VkCommandBuffer cmd, std::uint3
 void record_fill(const Functions& fn, VkCommandBuffer cmd, const Buffer& buffer, std::uint32_t pattern) {
     // earlier shader reads and writes of the buffer are done before it is overwritten
     memory_barrier(fn, cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                   VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_CLEAR_BIT,
-                   VK_ACCESS_2_TRANSFER_WRITE_BIT);
+                   VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                   VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
     fn.vkCmdFillBuffer(cmd, buffer.handle(), 0, VK_WHOLE_SIZE, pattern);
-    memory_barrier(fn, cmd, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                   VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_HOST_BIT,
-                   VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_HOST_READ_BIT);
+    memory_barrier(
+        fn, cmd, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+        VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_HOST_BIT,
+        VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_HOST_READ_BIT);
 }
 
 void record_copy_to_host(const Functions& fn, VkCommandBuffer cmd, const Buffer& from, const Buffer& to) {

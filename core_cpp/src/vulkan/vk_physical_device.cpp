@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <charconv>
 #include <cstdlib>
 #include <vector>
 
@@ -14,22 +15,32 @@ namespace {
 
 std::string type_name(VkPhysicalDeviceType type) {
     switch (type) {
-        case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return "discrete";
-        case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return "integrated";
-        case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return "virtual";
-        case VK_PHYSICAL_DEVICE_TYPE_CPU: return "cpu";
-        default: return "other";
+        case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU:
+            return "discrete";
+        case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU:
+            return "integrated";
+        case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU:
+            return "virtual";
+        case VK_PHYSICAL_DEVICE_TYPE_CPU:
+            return "cpu";
+        default:
+            return "other";
     }
 }
 
 /// The documented preference: discrete, integrated, virtual, CPU, anything else.
 int type_rank(VkPhysicalDeviceType type) {
     switch (type) {
-        case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return 0;
-        case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return 1;
-        case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return 2;
-        case VK_PHYSICAL_DEVICE_TYPE_CPU: return 3;
-        default: return 4;
+        case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU:
+            return 0;
+        case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU:
+            return 1;
+        case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU:
+            return 2;
+        case VK_PHYSICAL_DEVICE_TYPE_CPU:
+            return 3;
+        default:
+            return 4;
     }
 }
 
@@ -95,11 +106,13 @@ std::string missing_format(const Functions& fn, VkPhysicalDevice device) {
     VkFormatProperties color{}, depth{};
     fn.vkGetPhysicalDeviceFormatProperties(device, VK_FORMAT_R32G32B32A32_SFLOAT, &color);
     fn.vkGetPhysicalDeviceFormatProperties(device, VK_FORMAT_D32_SFLOAT, &depth);
-    const VkFormatFeatureFlags color_needed = VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT | VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT |
+    const VkFormatFeatureFlags color_needed = VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT |
+                                              VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT |
                                               VK_FORMAT_FEATURE_TRANSFER_SRC_BIT | VK_FORMAT_FEATURE_TRANSFER_DST_BIT;
     if ((color.optimalTilingFeatures & color_needed) != color_needed)
         return "R32G32B32A32_SFLOAT as storage image, colour attachment and transfer source/destination";
-    if (!(depth.optimalTilingFeatures & VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT)) return "D32_SFLOAT depth attachment";
+    if (!(depth.optimalTilingFeatures & VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT))
+        return "D32_SFLOAT depth attachment";
     return {};
 }
 
@@ -128,8 +141,11 @@ std::string check_device(const Functions& fn, PhysicalDevice& d) {
 
 /// Index of the device `spec` names (an index or a name substring).
 std::size_t find_named(const std::vector<PhysicalDevice>& devices, const std::string& spec) {
-    if (std::all_of(spec.begin(), spec.end(), [](unsigned char c) { return std::isdigit(c); })) {
-        std::size_t index = spec.size() < 10 ? std::stoul(spec) : devices.size();
+    if (!spec.empty() && std::all_of(spec.begin(), spec.end(), [](unsigned char c) { return std::isdigit(c); })) {
+        // from_chars, not stoul: no locale, and no libc call (glibc 2.38 renamed strtoul's symbol,
+        // which would raise the wheel's glibc requirement to 2.38)
+        std::size_t index = devices.size();
+        if (spec.size() < 10) std::from_chars(spec.data(), spec.data() + spec.size(), index);
         if (index >= devices.size())
             throw VulkanUnavailable("Vulkan device index " + spec + " is out of range; devices: " + list(devices));
         return index;
@@ -142,7 +158,8 @@ std::size_t find_named(const std::vector<PhysicalDevice>& devices, const std::st
 PhysicalDevice select_named(const Functions& fn, std::vector<PhysicalDevice>& devices, const std::string& spec) {
     PhysicalDevice& d = devices[find_named(devices, spec)];
     std::string missing = check_device(fn, d);
-    if (!missing.empty()) throw VulkanUnavailable("Vulkan device " + d.name() + " cannot run bvhlab: it lacks " + missing);
+    if (!missing.empty())
+        throw VulkanUnavailable("Vulkan device " + d.name() + " cannot run bvhlab: it lacks " + missing);
     return d;
 }
 

@@ -12,12 +12,12 @@ struct PhysicalDevice {
     VkPhysicalDevice handle = VK_NULL_HANDLE;
     VkPhysicalDeviceProperties properties{};
     VkPhysicalDeviceMemoryProperties memory{};
-    std::uint32_t queue_family = 0;     ///< graphics + compute (+ transfer, implied)
-    bool wide_lines = false;            ///< line widths other than 1 (the overlay's line_width)
-    VkDeviceSize max_allocation = 0;    ///< maxMemoryAllocationSize
+    std::uint32_t queue_family = 0;   ///< graphics + compute (+ transfer, implied)
+    bool wide_lines = false;          ///< line widths other than 1 (the overlay's line_width)
+    VkDeviceSize max_allocation = 0;  ///< maxMemoryAllocationSize
 
     std::string name() const { return properties.deviceName; }
-    std::string type_name() const;      ///< "discrete", "integrated", "virtual", "cpu" or "other"
+    std::string type_name() const;  ///< "discrete", "integrated", "virtual", "cpu" or "other"
 };
 
 /// `spec`: an index into the enumeration or a substring of the device name (case-insensitive);

@@ -49,7 +49,7 @@ struct RendererCore {
 };
 
 /// A render job on `scene` (vk_trace_job.cpp); takes `core->mutex` itself.
-std::unique_ptr<RenderJob> start_vulkan_job(std::shared_ptr<RendererCore> core, std::shared_ptr<const SceneBuffers> scene,
-                                            const RenderSettings& settings);
+std::unique_ptr<RenderJob> start_vulkan_job(std::shared_ptr<RendererCore> core,
+                                            std::shared_ptr<const SceneBuffers> scene, const RenderSettings& settings);
 
 }  // namespace bvhlab::vk

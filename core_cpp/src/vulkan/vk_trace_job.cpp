@@ -34,7 +34,8 @@ struct Tiling {
         const std::size_t slots = std::max<std::size_t>(kSlotBytes / bytes_per_slot, 64 * 64);
         width = std::min(round_up(image_width, gpu::TRACE_GROUP_X), 2048u);
         const std::size_t rows_fit = slots / width / gpu::TRACE_GROUP_Y * gpu::TRACE_GROUP_Y;
-        height = std::uint32_t(std::clamp<std::size_t>(rows_fit, gpu::TRACE_GROUP_Y, round_up(image_height, gpu::TRACE_GROUP_Y)));
+        height = std::uint32_t(
+            std::clamp<std::size_t>(rows_fit, gpu::TRACE_GROUP_Y, round_up(image_height, gpu::TRACE_GROUP_Y)));
         columns = (image_width + width - 1) / width;
         rows = (image_height + height - 1) / height;
     }
@@ -43,8 +44,12 @@ struct Tiling {
 
 class VulkanRenderJob final : public RenderJob {
 public:
-    VulkanRenderJob(std::shared_ptr<RendererCore> core, std::shared_ptr<const SceneBuffers> scene, const RenderSettings& settings)
-        : RenderJob(settings), core_(std::move(core)), scene_(std::move(scene)), frame_(scene_->frame_params(settings)),
+    VulkanRenderJob(std::shared_ptr<RendererCore> core, std::shared_ptr<const SceneBuffers> scene,
+                    const RenderSettings& settings)
+        : RenderJob(settings),
+          core_(std::move(core)),
+          scene_(std::move(scene)),
+          frame_(scene_->frame_params(settings)),
           tiles_(settings.width, settings.height, slot_bytes(frame_)) {
         std::lock_guard<std::mutex> lock(core_->mutex);
         sums_.emplace(core_->device, std::size_t(settings.width) * settings.height);
@@ -55,9 +60,9 @@ public:
             record_fill(core_->fn, cmd, sums_->samples, 0u);
         });
         timings_.device = core_->device.physical().name();
-        budget_ = settings.steps_per_dispatch.value_or(std::uint32_t(
-            std::clamp<std::uint64_t>(kFirstRoundSteps / (std::uint64_t(tiles_.width) * tiles_.height),
-                                      kFirstRoundMinSteps, gpu::MAX_STEPS_PER_DISPATCH)));
+        budget_ = settings.steps_per_dispatch.value_or(
+            std::uint32_t(std::clamp<std::uint64_t>(kFirstRoundSteps / (std::uint64_t(tiles_.width) * tiles_.height),
+                                                    kFirstRoundMinSteps, gpu::MAX_STEPS_PER_DISPATCH)));
     }
 
     void run(std::uint32_t samples, Cancellation* cancel, double* progress) override {
@@ -86,7 +91,8 @@ public:
             read(sums_->samples, sums.samples.data(), sums_->pixels * sizeof(std::uint32_t));
         }
         bvhlab::resolve(sums, frame_, out);
-        timings_.readback_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+        timings_.readback_ms =
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     }
 
 private:
@@ -173,8 +179,8 @@ private:
 
 }  // namespace
 
-std::unique_ptr<RenderJob> start_vulkan_job(std::shared_ptr<RendererCore> core, std::shared_ptr<const SceneBuffers> scene,
-                                            const RenderSettings& settings) {
+std::unique_ptr<RenderJob> start_vulkan_job(std::shared_ptr<RendererCore> core,
+                                            std::shared_ptr<const SceneBuffers> scene, const RenderSettings& settings) {
     return std::make_unique<VulkanRenderJob>(std::move(core), std::move(scene), settings);
 }
 

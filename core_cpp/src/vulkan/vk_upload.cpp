@@ -32,9 +32,10 @@ void upload_staged(const Device& device, CommandRunner& runner, const Buffer& ta
 
 }  // namespace
 
-Buffer upload_array(const Device& device, CommandRunner& runner, const void* data, std::size_t bytes, bool force_staging) {
-    const VkBufferUsageFlags usage =
-        VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+Buffer upload_array(const Device& device, CommandRunner& runner, const void* data, std::size_t bytes,
+                    bool force_staging) {
+    const VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT |
+                                     VK_BUFFER_USAGE_TRANSFER_DST_BIT;
     Buffer buffer(device, std::max(bytes, kMinBufferBytes), usage, MemoryUse::DeviceLocal);
     if (bytes == 0) return buffer;
     // Host writes before a submission are visible to it (Vulkan spec, "host write ordering").

@@ -11,6 +11,7 @@ namespace bvhlab::vk {
 
 /// A device-local buffer holding `bytes` bytes of `data`, with SHADER_DEVICE_ADDRESS usage. Never
 /// zero-sized (16 bytes at least), so an empty array still has a valid address.
-Buffer upload_array(const Device& device, CommandRunner& runner, const void* data, std::size_t bytes, bool force_staging);
+Buffer upload_array(const Device& device, CommandRunner& runner, const void* data, std::size_t bytes,
+                    bool force_staging);
 
 }  // namespace bvhlab::vk

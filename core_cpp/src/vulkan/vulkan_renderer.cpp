@@ -29,7 +29,8 @@ RendererCore::RendererCore(const VulkanOptions& options)
       pipelines(device),
       bindings(device, pipelines.set_layout()),
       slots(device),
-      scene(std::make_shared<const SceneBuffers>(device, runner, RenderScene{}, force_staging)) {}  // before upload(): sky
+      scene(std::make_shared<const SceneBuffers>(device, runner, RenderScene{}, force_staging)) {
+}  // before upload(): sky
 
 void RendererCore::ensure_targets(std::uint32_t width, std::uint32_t height) {
     if (targets && targets->width == width && targets->height == height) return;
@@ -41,7 +42,8 @@ void RendererCore::ensure_targets(std::uint32_t width, std::uint32_t height) {
 float RendererCore::line_width(const RenderSettings& settings) const {
     const PhysicalDevice& p = device.physical();
     if (!p.wide_lines) return 1.0f;
-    return std::clamp(settings.line_width, p.properties.limits.lineWidthRange[0], p.properties.limits.lineWidthRange[1]);
+    return std::clamp(settings.line_width, p.properties.limits.lineWidthRange[0],
+                      p.properties.limits.lineWidthRange[1]);
 }
 
 std::uint32_t RendererCore::next_stamp() {
@@ -71,7 +73,8 @@ double VulkanRenderer::upload(const RenderScene& scene) {
     try {
         c.scene = std::make_shared<const vk::SceneBuffers>(c.device, c.runner, scene, c.force_staging);
     } catch (...) {
-        c.scene = std::make_shared<const vk::SceneBuffers>(c.device, c.runner, RenderScene{}, c.force_staging);  // usable: sky
+        c.scene = std::make_shared<const vk::SceneBuffers>(c.device, c.runner, RenderScene{},
+                                                           c.force_staging);  // usable: sky
         throw;
     }
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

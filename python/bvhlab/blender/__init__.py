@@ -11,6 +11,7 @@ them together and keeps them between frames, `export` is one sync of a new LiveS
 holds what differs between the supported Blender versions (4.2 LTS to 5.3); nothing else checks
 `bpy.app.version`.
 """
+
 from .errors import ExportError, ExportWarning, SubstituteWarning
 from .export import export_scene, export_scene_file
 from .light import intensity_from_watts
@@ -18,5 +19,16 @@ from .live import LiveScene, SyncReport
 from .scope import SCOPES
 from .sphere import SPHERE_PROPERTY, is_analytic_sphere
 
-__all__ = ["export_scene", "export_scene_file", "LiveScene", "SyncReport", "ExportError", "ExportWarning",
-           "SubstituteWarning", "SCOPES", "SPHERE_PROPERTY", "is_analytic_sphere", "intensity_from_watts"]
+__all__ = [
+    "export_scene",
+    "export_scene_file",
+    "LiveScene",
+    "SyncReport",
+    "ExportError",
+    "ExportWarning",
+    "SubstituteWarning",
+    "SCOPES",
+    "SPHERE_PROPERTY",
+    "is_analytic_sphere",
+    "intensity_from_watts",
+]

@@ -1,4 +1,5 @@
 """The scene camera → `bvhlab.Camera` (pinhole: position, look-at, up, vertical field of view)."""
+
 from __future__ import annotations
 
 import math
@@ -23,16 +24,19 @@ def gather_camera(scene, depsgraph) -> Camera:
     evaluated = camera.evaluated_get(depsgraph)  # animation and drivers applied
     data = evaluated.data
     if data.type != "PERSP":
-        raise ExportError(f"camera '{camera.name}' is {data.type.lower()}; bvhlab renders perspective "
-                          "(pinhole) cameras only")
+        raise ExportError(
+            f"camera '{camera.name}' is {data.type.lower()}; bvhlab renders perspective (pinhole) cameras only"
+        )
     if data.shift_x or data.shift_y:
         warnings.warn(f"camera '{camera.name}': lens shift is ignored", ExportWarning, stacklevel=2)
     matrix = np.array(evaluated.matrix_world, np.float64)
     position = matrix[:3, 3]
     z_length, y_length = np.linalg.norm(matrix[:3, 2]), np.linalg.norm(matrix[:3, 1])
     if not (np.isfinite(matrix).all() and z_length > 0 and y_length > 0):
-        raise ExportError(f"camera '{camera.name}' has no usable orientation (a scale of 0, or a location, rotation "
-                          f"or scale that is not a number)")
+        raise ExportError(
+            f"camera '{camera.name}' has no usable orientation (a scale of 0, or a location, rotation "
+            f"or scale that is not a number)"
+        )
     forward, up = -matrix[:3, 2] / z_length, matrix[:3, 1] / y_length
     # look_at far enough ahead to differ from the position in float32 (the tracer's precision)
     ahead = max(1.0, float(np.abs(position).max()) * 2.0**-10)

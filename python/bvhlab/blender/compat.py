@@ -14,6 +14,7 @@
 Mesh attributes (`attributes["position"]`, `loop_triangle_polygons`, `material_index`) and the
 Principled BSDF socket names ("Transmission Weight") are the same from 4.2 on.
 """
+
 from __future__ import annotations
 
 import bpy
@@ -60,7 +61,6 @@ def builtin_shader(name: str):
     import gpu
 
     return gpu.shader.from_builtin(name)
-
 
 
 def use_multilayer_exr(image_settings) -> None:

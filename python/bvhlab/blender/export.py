@@ -1,4 +1,5 @@
 """Blender scene → `bvhlab.Scene`: the one export path the add-on and the CLI share."""
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -9,8 +10,9 @@ from ..scene import Scene
 from .live import LiveScene
 
 
-def export_scene(context_or_scene=None, scope: str = "visible", depsgraph=None, *,
-                 require_camera: bool = True) -> Scene:
+def export_scene(
+    context_or_scene=None, scope: str = "visible", depsgraph=None, *, require_camera: bool = True
+) -> Scene:
     """Export the evaluated scene (modifiers applied, world space) as a `bvhlab.Scene`.
 
     `context_or_scene`: a `bpy.types.Context`, a `bpy.types.Scene`, or None for `bpy.context`.
@@ -28,11 +30,13 @@ def export_scene(context_or_scene=None, scope: str = "visible", depsgraph=None, 
         depsgraph.update()  # evaluates what changed since the last update; cheap when nothing did
     live = LiveScene(scope, require_camera=require_camera)  # a first sync reads everything
     live.sync(depsgraph, scene, view_layer)
+    assert live.scene is not None  # a sync either makes the scene or raises ExportError
     return live.scene
 
 
-def export_scene_file(path, context_or_scene=None, scope: str = "visible", depsgraph=None, *,
-                      require_camera: bool = True) -> Scene:
+def export_scene_file(
+    path, context_or_scene=None, scope: str = "visible", depsgraph=None, *, require_camera: bool = True
+) -> Scene:
     """Export like `export_scene` and write the `.npz` that `bvhlab.Scene.load` and the CLI read.
     Returns the exported Scene."""
     scene = export_scene(context_or_scene, scope, depsgraph, require_camera=require_camera)

@@ -11,6 +11,7 @@ delivers an irradiance of about P / (4π d²) at distance d, and a Lambertian su
 median keeps one object next to the light from deciding it. Blender's default 1000 W light,
 7.4 m from the default cube, becomes ≈ 0.46.
 """
+
 from __future__ import annotations
 
 import math
@@ -26,15 +27,20 @@ def gather_light(depsgraph, view_layer, primitive_points: np.ndarray) -> Light |
     """The first visible point light by name (another kind of light stands in, at its position,
     with an ExportWarning); None when the scene has no visible light. `primitive_points` (N,3),
     a sample of primitive centres, calibrates the intensity."""
-    lights = sorted((obj for obj in depsgraph.objects
-                     if obj.type == "LIGHT" and obj.original.visible_get(view_layer=view_layer)),
-                    key=lambda obj: (obj.data.type != "POINT", obj.name))
+    lights = sorted(
+        (obj for obj in depsgraph.objects if obj.type == "LIGHT" and obj.original.visible_get(view_layer=view_layer)),
+        key=lambda obj: (obj.data.type != "POINT", obj.name),
+    )
     if not lights:
         return None
     light = lights[0]
     if light.data.type != "POINT":
-        warnings.warn(f"no point light; light '{light.name}' ({light.data.type.lower()}) is used as a "
-                      f"point light at its position", ExportWarning, stacklevel=2)
+        warnings.warn(
+            f"no point light; light '{light.name}' ({light.data.type.lower()}) is used as a "
+            f"point light at its position",
+            ExportWarning,
+            stacklevel=2,
+        )
     position = np.array(light.matrix_world.translation, np.float64)
     distance = float(np.median(np.linalg.norm(primitive_points - position, axis=1)))
     return Light(tuple(position), tuple(light.data.color), intensity_from_watts(light.data.energy, distance))
@@ -42,4 +48,4 @@ def gather_light(depsgraph, view_layer, primitive_points: np.ndarray) -> Light |
 
 def intensity_from_watts(watts: float, distance: float) -> float:
     """The mapping in this module's docstring."""
-    return max(float(watts), 0.0) / (4 * math.pi ** 2 * max(distance, 1e-3) ** 2)
+    return max(float(watts), 0.0) / (4 * math.pi**2 * max(distance, 1e-3) ** 2)

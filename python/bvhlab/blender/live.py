@@ -14,6 +14,7 @@ view_update and after `depsgraph.update()`):
 Each sync returns a `SyncReport` saying what changed, so a caller can keep its tree (nothing moved),
 refit it (same primitives in the same order, moved) or rebuild it (anything else).
 """
+
 from __future__ import annotations
 
 import copy
@@ -42,6 +43,7 @@ class SyncReport:
     """What one sync found. `geometry`: the triangles or spheres differ from the last sync;
     `refittable`: they differ only in position (same primitives, same order: a refit can follow);
     `materials`: the material table or the primitives' materials differ."""
+
     full: bool = False
     objects_read: int = 0
     objects_moved: int = 0
@@ -54,6 +56,7 @@ class SyncReport:
 @dataclass
 class SyncTotals:
     """Counts over a LiveScene's life (tests count exports with them)."""
+
     syncs: int = 0
     full_syncs: int = 0
     objects_read: int = 0
@@ -72,6 +75,7 @@ class SyncTotals:
 class _Part:
     """One object or instance as last read: its mesh (or a sphere's object-space bounds), the world
     matrix it was placed with, and the placed primitives (triangles (T,3,3) or a sphere (4,))."""
+
     mesh: MeshData | None
     bounds: np.ndarray | None
     matrix: np.ndarray
@@ -81,8 +85,9 @@ class _Part:
     def shape(self) -> tuple:
         return ("sphere",) if self.mesh is None else ("mesh", self.mesh.triangle_count)
 
-    def moved_to(self, matrix: np.ndarray, name: str) -> "_Part":
+    def moved_to(self, matrix: np.ndarray, name: str) -> _Part:
         if self.mesh is None:
+            assert self.bounds is not None  # a sphere keeps its object-space bounds
             return _Part(None, self.bounds, matrix, place_sphere(self.bounds, matrix, name))
         return _Part(self.mesh, None, matrix, self.mesh.world_triangles(matrix, name))
 
@@ -98,13 +103,14 @@ def _read_part(obj, matrix: np.ndarray, name: str) -> _Part:
 @dataclass
 class _Dirty:
     """Names (original, full) of what depsgraph.updates reports; `everything` on the first sync."""
+
     everything: bool = False
     objects: set = field(default_factory=set)
     meshes: set = field(default_factory=set)
     materials: set = field(default_factory=set)
 
     @classmethod
-    def from_updates(cls, depsgraph) -> "_Dirty":
+    def from_updates(cls, depsgraph) -> _Dirty:
         dirty = cls()
         for update in depsgraph.updates:
             data = update.id.original
@@ -151,8 +157,12 @@ class LiveScene:
         scene = self._make_scene(arrays, table, blender_scene, depsgraph, report)
         light = gather_light(depsgraph, view_layer, _primitive_sample(scene))
         if light is None:
-            warnings.warn(f"scene '{blender_scene.name}' has no visible light; using a default point light "
-                          f"near the camera", SubstituteWarning, stacklevel=2)
+            warnings.warn(
+                f"scene '{blender_scene.name}' has no visible light; using a default point light near the camera",
+                SubstituteWarning,
+                stacklevel=2,
+            )
+            assert scene.camera is not None  # _make_scene always gives the scene a camera
             light = default_light(scene.camera)
         scene.light = light
         self.scene, self._materials = scene, table.known
@@ -195,19 +205,27 @@ class LiveScene:
             raise ExportError(_nothing_in_scope(self.scope))
         same_order = list(self._parts) == list(parts)
         report.geometry = bool(self.scene is None or report.objects_read or report.objects_moved or not same_order)
-        report.refittable = report.geometry and same_order and [p.shape for p in self._parts.values()] == [
-            p.shape for p, _ in parts.values()]
+        report.refittable = (
+            report.geometry
+            and same_order
+            and [p.shape for p in self._parts.values()] == [p.shape for p, _ in parts.values()]
+        )
         previous = self.scene
-        arrays = {"tri_material": np.concatenate(tri_material) if tri_material else np.zeros(0, np.int32),
-                  "sphere_material": np.array(sphere_material, np.int32)}
+        arrays = {
+            "tri_material": np.concatenate(tri_material) if tri_material else np.zeros(0, np.int32),
+            "sphere_material": np.array(sphere_material, np.int32),
+        }
         if report.geometry:
             arrays["triangles"] = np.concatenate(triangles) if triangles else np.zeros((0, 3, 3), np.float32)
             arrays["spheres"] = np.array(spheres, np.float32).reshape(-1, 4)
         else:
+            assert previous is not None  # no geometry change means there was a scene before
             arrays["triangles"], arrays["spheres"] = previous.triangles, previous.spheres
         report.materials = previous is None or not (
-            previous.materials == table.materials and np.array_equal(previous.tri_material, arrays["tri_material"])
-            and np.array_equal(previous.sphere_material, arrays["sphere_material"]))
+            previous.materials == table.materials
+            and np.array_equal(previous.tri_material, arrays["tri_material"])
+            and np.array_equal(previous.sphere_material, arrays["sphere_material"])
+        )
         return arrays
 
     def _make_scene(self, arrays: dict, table: MaterialTable, blender_scene, depsgraph, report) -> Scene:
@@ -217,11 +235,18 @@ class LiveScene:
         if previous is not None and not report.geometry and not report.materials:
             scene = copy.copy(previous)  # the same arrays: renderers keep what they uploaded
             scene.camera = camera if camera is not None else default_camera(scene.bounds())
-            scene.sky = tuple(float(c) for c in sky)
+            r, g, b = (float(c) for c in sky)
+            scene.sky = (r, g, b)
             return scene
-        return Scene(triangles=arrays["triangles"], spheres=arrays["spheres"], materials=table.materials,
-                     tri_material=arrays["tri_material"], sphere_material=arrays["sphere_material"],
-                     camera=camera, sky=sky)
+        return Scene(
+            triangles=arrays["triangles"],
+            spheres=arrays["spheres"],
+            materials=table.materials,
+            tri_material=arrays["tri_material"],
+            sphere_material=arrays["sphere_material"],
+            camera=camera,
+            sky=sky,
+        )
 
     def _camera(self, blender_scene, depsgraph):
         try:
@@ -229,15 +254,14 @@ class LiveScene:
         except ExportError as error:
             if self.require_camera:
                 raise
-            warnings.warn(f"{error}; using a default camera that frames the geometry", SubstituteWarning,
-                          stacklevel=3)
+            warnings.warn(f"{error}; using a default camera that frames the geometry", SubstituteWarning, stacklevel=3)
             return None
 
 
 def _primitive_sample(scene: Scene, size: int = 4096) -> np.ndarray:
     """Centres of about `size` primitives, evenly strided (deterministic), as float64 (N,3)."""
-    triangles = scene.triangles[::max(1, len(scene.triangles) // size)].mean(axis=1)
-    spheres = scene.spheres[::max(1, len(scene.spheres) // size), :3]
+    triangles = scene.triangles[:: max(1, len(scene.triangles) // size)].mean(axis=1)
+    spheres = scene.spheres[:: max(1, len(scene.spheres) // size), :3]
     return np.concatenate([triangles, spheres]).astype(np.float64)
 
 

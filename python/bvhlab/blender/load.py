@@ -1,5 +1,6 @@
 """Reading a `.blend` file outside Blender: open it with bpy (Blender as a Python module) and export
 it with the same code the add-on uses."""
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -14,8 +15,10 @@ def load_blend(path: Path) -> Scene:
     try:
         import bpy
     except ImportError as e:
-        raise RuntimeError("reading .blend files needs Blender's Python module: pip install bpy (4.2 to "
-                           "5.0 for Python 3.11, 5.1 and later for Python 3.13)") from e
+        raise RuntimeError(
+            "reading .blend files needs Blender's Python module: pip install bpy (4.2 to "
+            "5.0 for Python 3.11, 5.1 and later for Python 3.13)"
+        ) from e
     from .export import export_scene
 
     bpy.ops.wm.open_mainfile(filepath=str(path.resolve()), load_ui=False)

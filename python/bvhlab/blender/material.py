@@ -1,4 +1,5 @@
 """Blender material → `bvhlab.Material` (report §2.1: colour, reflective, transparent, IOR)."""
+
 from __future__ import annotations
 
 import warnings
@@ -23,8 +24,11 @@ def gather_material(material) -> Material:
     reader = _READERS.get(shader.bl_idname) if shader is not None else None
     if reader is None:
         what = f"a '{shader.name}' node" if shader is not None else "no shader node"
-        warnings.warn(f"material '{material.name}' uses {what}; using its viewport display colour "
-                      f"and metallic", ExportWarning, stacklevel=2)
+        warnings.warn(
+            f"material '{material.name}' uses {what}; using its viewport display colour and metallic",
+            ExportWarning,
+            stacklevel=2,
+        )
         return _material(material.diffuse_color[:3], reflective=material.metallic)
     return reader(shader, material)
 
@@ -49,22 +53,32 @@ def _input(node, name: str, material, fallback):
     source = socket.links[0].from_node
     if source.bl_idname in ("ShaderNodeRGB", "ShaderNodeValue"):
         return source.outputs[0].default_value
-    warnings.warn(f"material '{material.name}': '{name}' comes from a '{source.name}' node; "
-                  f"using the viewport display value instead", ExportWarning, stacklevel=3)
+    warnings.warn(
+        f"material '{material.name}': '{name}' comes from a '{source.name}' node; "
+        f"using the viewport display value instead",
+        ExportWarning,
+        stacklevel=3,
+    )
     return fallback
 
 
 def _material(color, reflective=0.0, transparent=0.0, ior=1.5) -> Material:
     color = np.clip(np.asarray(color[:3], np.float64), 0.0, None)
-    return Material(tuple(color), float(np.clip(reflective, 0, 1)), float(np.clip(transparent, 0, 1)),
-                    float(ior) if ior > 0 else 1.5)
+    return Material(
+        tuple(color),
+        float(np.clip(reflective, 0, 1)),
+        float(np.clip(transparent, 0, 1)),
+        float(ior) if ior > 0 else 1.5,
+    )
 
 
 def _principled(node, material) -> Material:
-    return _material(_input(node, "Base Color", material, material.diffuse_color),
-                     reflective=_input(node, "Metallic", material, material.metallic),
-                     transparent=_input(node, "Transmission Weight", material, 0.0),
-                     ior=_input(node, "IOR", material, 1.5))
+    return _material(
+        _input(node, "Base Color", material, material.diffuse_color),
+        reflective=_input(node, "Metallic", material, material.metallic),
+        transparent=_input(node, "Transmission Weight", material, 0.0),
+        ior=_input(node, "IOR", material, 1.5),
+    )
 
 
 def _diffuse(node, material) -> Material:
@@ -76,8 +90,9 @@ def _glossy(node, material) -> Material:
 
 
 def _glass(node, material) -> Material:
-    return _material(_input(node, "Color", material, material.diffuse_color), transparent=1.0,
-                     ior=_input(node, "IOR", material, 1.5))
+    return _material(
+        _input(node, "Color", material, material.diffuse_color), transparent=1.0, ior=_input(node, "IOR", material, 1.5)
+    )
 
 
 _READERS = {

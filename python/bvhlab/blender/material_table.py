@@ -1,4 +1,5 @@
 """One `bvhlab.Material` per Blender material used, and the slot → table index of each object."""
+
 from __future__ import annotations
 
 import numpy as np

@@ -3,6 +3,7 @@
 Reading (`read_mesh`: object-space vertices, triangle corners, material slots) is kept apart from
 placing (`MeshData.world_triangles`), so a scene kept between frames (`live.LiveScene`) reads a
 mesh again only when its geometry changed and only re-places it when the object moved."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -19,6 +20,7 @@ CONVERTIBLE_TYPES = frozenset({"CURVE", "SURFACE", "FONT", "META"})
 class MeshData:
     """One evaluated mesh as read from Blender: float32 object-space vertices (V,3), int32 vertex
     index of each triangle corner (3T,), int32 material slot of each triangle (T,)."""
+
     positions: np.ndarray
     corners: np.ndarray
     slots: np.ndarray
@@ -74,8 +76,10 @@ def _read(mesh, name: str) -> MeshData:
     finite = np.isfinite(positions)
     if not finite.all():
         bad = int(np.flatnonzero(~finite.all(1))[0])
-        raise ExportError(f"object '{name}' has a vertex that is not a finite number (vertex {bad}: "
-                          f"{tuple(float(x) for x in positions[bad])}); fix or delete it before building")
+        raise ExportError(
+            f"object '{name}' has a vertex that is not a finite number (vertex {bad}: "
+            f"{tuple(float(x) for x in positions[bad])}); fix or delete it before building"
+        )
     corners, face_of_triangle = _loop_triangles(mesh)
     return MeshData(positions, corners, _triangle_material_slots(mesh, face_of_triangle))
 
@@ -92,10 +96,14 @@ def check_world_positions(world: np.ndarray, name: str) -> None:
     bad = int(np.flatnonzero(~inside.all(1))[0])
     where = f"vertex {bad} at {tuple(float(x) for x in world[bad])}"
     if np.isnan(world[bad]).any():
-        raise ExportError(f"object '{name}' has a vertex that is not a number in world space ({where}): check its "
-                          "location, rotation and scale, and its parents'")
-    raise ExportError(f"object '{name}' reaches outside the supported coordinate range ±{MAX_COORDINATE:.5g} (2^40) "
-                      f"({where}): move or scale it nearer the origin")
+        raise ExportError(
+            f"object '{name}' has a vertex that is not a number in world space ({where}): check its "
+            "location, rotation and scale, and its parents'"
+        )
+    raise ExportError(
+        f"object '{name}' reaches outside the supported coordinate range ±{MAX_COORDINATE:.5g} (2^40) "
+        f"({where}): move or scale it nearer the origin"
+    )
 
 
 def _loop_triangles(mesh):

@@ -1,8 +1,10 @@
 """Which evaluated objects an export covers: the selected ones or every visible one, instances
 (collection instances, instancing by vertices or geometry nodes) included."""
+
 from __future__ import annotations
 
-from typing import Iterator, NamedTuple
+from collections.abc import Iterator
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -14,7 +16,8 @@ SCOPES = ("selected", "visible")
 class InScope(NamedTuple):
     """One object or instance an export covers. `key` names it across depsgraph evaluations:
     (owner's name, object's name, persistent id of the instance or ())."""
-    obj: object
+
+    obj: Any  # a bpy.types.Object (bpy has no type stubs)
     matrix: np.ndarray
     name: str
     key: tuple
@@ -42,8 +45,10 @@ def instances_in_scope(depsgraph, view_layer, scope: str) -> Iterator[InScope]:
         if decided[owner_name]:
             obj = instance.object
             if instance.is_instance:
-                name, key = f"{obj.name} (instanced by {owner.name})", (owner_name, obj.original.name_full,
-                                                                          tuple(instance.persistent_id))
+                name, key = (
+                    f"{obj.name} (instanced by {owner.name})",
+                    (owner_name, obj.original.name_full, tuple(instance.persistent_id)),
+                )
             else:
                 name, key = obj.name, (owner_name, owner_name, ())
             yield InScope(obj, np.array(instance.matrix_world, np.float64), name, key)

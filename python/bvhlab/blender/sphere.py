@@ -1,4 +1,5 @@
 """Objects flagged "Analytic sphere" export as one exact sphere instead of their triangles."""
+
 from __future__ import annotations
 
 import numpy as np

@@ -1,4 +1,5 @@
 """The world colour → the atmosphere colour (`Scene.sky`) that misses see (report §2.1)."""
+
 from __future__ import annotations
 
 import warnings
@@ -20,8 +21,11 @@ def gather_sky(scene) -> tuple[float, float, float]:
         return tuple(world.color)
     color, strength = background.inputs["Color"], background.inputs["Strength"]
     if color.is_linked or strength.is_linked:
-        warnings.warn(f"world '{world.name}': the background is not a plain colour; using the world's "
-                      f"viewport colour", ExportWarning, stacklevel=2)
+        warnings.warn(
+            f"world '{world.name}': the background is not a plain colour; using the world's viewport colour",
+            ExportWarning,
+            stacklevel=2,
+        )
         return tuple(world.color)
     return tuple(max(c, 0.0) * strength.default_value for c in color.default_value[:3])
 

@@ -8,6 +8,7 @@ snapshot (raster level sheets) and scenes.
     bvhlab snapshot SCENE --out PNG [--bvh-depth A:B | --sheet]
     bvhlab scenes
 """
+
 from __future__ import annotations
 
 import argparse
@@ -20,7 +21,9 @@ COMMANDS = (build_cmd, render_cmd, compare_cmd, snapshot_cmd, scenes_cmd)
 
 
 def parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="bvhlab", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = argparse.ArgumentParser(
+        prog="bvhlab", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for command in COMMANDS:
         command.add_parser(sub)

@@ -1,4 +1,5 @@
 """`bvhlab build SCENE`: build one tree and print its stats (optionally as JSON)."""
+
 from __future__ import annotations
 
 from .. import build
@@ -12,10 +13,18 @@ def add_parser(sub) -> None:
     p = sub.add_parser("build", help="build a BVH and print its stats", description=__doc__)
     options.add_scene(p)
     options.add_build(p)
-    p.add_argument("--json", type=options.output_file_type(".json", "stats file"), metavar="PATH",
-                   help="also write the stats to this JSON file ({\"about\": ..., \"stats\": ...}, as the add-on's Export stats)")
-    p.add_argument("--csv", type=options.output_file_type(".csv", "stats file"), metavar="PATH",
-                   help="also write the stats to this CSV file (metric,index,value)")
+    p.add_argument(
+        "--json",
+        type=options.output_file_type(".json", "stats file"),
+        metavar="PATH",
+        help='also write the stats to this JSON file ({"about": ..., "stats": ...}, as the add-on\'s Export stats)',
+    )
+    p.add_argument(
+        "--csv",
+        type=options.output_file_type(".csv", "stats file"),
+        metavar="PATH",
+        help="also write the stats to this CSV file (metric,index,value)",
+    )
     p.set_defaults(run=run)
 
 
@@ -25,8 +34,19 @@ def run(args) -> int:
         bvh = build(scene, progress=bar, **options.build_kwargs(args))
     stats = bvh.stats
     print(f"{name}: {stats['triangles']} triangles, {stats['spheres']} spheres")
-    for key in ("method", "bins", "axis", "nodes", "leaves", "height", "sah_cost", "build_ms", "avg_leaf_size",
-                "max_leaf_size", "memory_bytes"):
+    for key in (
+        "method",
+        "bins",
+        "axis",
+        "nodes",
+        "leaves",
+        "height",
+        "sah_cost",
+        "build_ms",
+        "avg_leaf_size",
+        "max_leaf_size",
+        "memory_bytes",
+    ):
         value = stats[key]
         print(f"  {key:<14}{value:.3f}" if isinstance(value, float) else f"  {key:<14}{value}")
     print(f"  {'nodes/depth':<14}{' '.join(str(n) for n in stats['nodes_per_depth'])}")

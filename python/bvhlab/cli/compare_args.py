@@ -1,5 +1,6 @@
 """Argument types of `bvhlab compare`: each rejects bad input with argparse's own error
 ("bvhlab compare: error: argument --frames: ...", exit 2) before any work starts."""
+
 from __future__ import annotations
 
 import argparse
@@ -9,7 +10,6 @@ from ..bvh import method_from_label
 from ..compare.protocol import MIN_SAMPLES
 
 DEFAULT_METHODS = "median,mean,midpoint,sah12,sah32"
-MAX_IMAGE_SIZE = 16384
 
 
 def _integer(text: str) -> int:
@@ -23,8 +23,10 @@ def sample_count(text: str) -> int:
     """Frames or builds per method: the protocol needs at least MIN_SAMPLES for a spread."""
     n = _integer(text)
     if n < MIN_SAMPLES:
-        raise argparse.ArgumentTypeError(f"must be at least {MIN_SAMPLES} (the protocol reports a median and its "
-                                         f"spread, which needs {MIN_SAMPLES} samples), got {n}")
+        raise argparse.ArgumentTypeError(
+            f"must be at least {MIN_SAMPLES} (the protocol reports a median and its "
+            f"spread, which needs {MIN_SAMPLES} samples), got {n}"
+        )
     return n
 
 
@@ -32,13 +34,6 @@ def thread_count(text: str) -> int:
     n = _integer(text)
     if not 0 <= n <= 4096:
         raise argparse.ArgumentTypeError(f"must be between 0 (every core) and 4096, got {n}")
-    return n
-
-
-def image_size(text: str) -> int:
-    n = _integer(text)
-    if not 1 <= n <= MAX_IMAGE_SIZE:
-        raise argparse.ArgumentTypeError(f"must be between 1 and {MAX_IMAGE_SIZE} pixels, got {n}")
     return n
 
 
@@ -76,8 +71,9 @@ def output_dir(text: str) -> Path:
     may be a file. The path is used as given, never renamed."""
     path = Path(text)
     if path.exists() and not path.is_dir():
-        raise argparse.ArgumentTypeError(f"{path} exists and is not a directory (compare writes a directory of "
-                                         f"tables, charts and figures)")
+        raise argparse.ArgumentTypeError(
+            f"{path} exists and is not a directory (compare writes a directory of tables, charts and figures)"
+        )
     for parent in path.parents:
         if parent.exists() and not parent.is_dir():
             raise argparse.ArgumentTypeError(f"cannot create {path}: {parent} is a file")

@@ -3,6 +3,7 @@ tree height per split method, plus SAH cost, nodes, leaves, primary-ray throughp
 a protocol (warm-up, interleaved rounds, medians with their spread; a verdict only when a
 difference exceeds the spread), the report's claims checked on it, its §4.1 overlay claim and
 Figure 5 on a model of over 700,000 triangles, charts, Figures 3–6 and one level sheet per method."""
+
 from __future__ import annotations
 
 import sys
@@ -10,8 +11,7 @@ import time
 from pathlib import Path
 
 from .. import build
-from ..compare import charts, figures, overlay
-from ..compare import measure_methods, report_checks, write_tables
+from ..compare import charts, figures, measure_methods, overlay, report_checks, write_tables
 from ..compare.measure import REPORT_BUILD, build_settings, render_frame
 from ..compare.protocol import DEFAULT_BUILDS, DEFAULT_FRAMES, MIN_SAMPLES
 from ..library import load_scene
@@ -23,21 +23,40 @@ from . import options
 def add_parser(sub) -> None:
     p = sub.add_parser("compare", help="reproduce the report's Table 1 and figures", description=__doc__)
     options.add_scene(p)
-    p.add_argument("--methods", type=cargs.method_list, default=cargs.DEFAULT_METHODS,
-                   help="comma-separated: median, mean, midpoint, lbvh, sweep_sah, sah<B> "
-                        f"(default: {cargs.DEFAULT_METHODS}, the report's with both readings of 'mean')")
-    p.add_argument("--frames", type=cargs.sample_count, default=DEFAULT_FRAMES,
-                   help=f"frames per method after one warm-up, at least {MIN_SAMPLES} (default {DEFAULT_FRAMES})")
-    p.add_argument("--builds", type=cargs.sample_count, default=DEFAULT_BUILDS,
-                   help=f"builds per method after one warm-up, at least {MIN_SAMPLES} (default {DEFAULT_BUILDS})")
-    p.add_argument("--width", type=cargs.image_size, default=800)
-    p.add_argument("--height", type=cargs.image_size, default=600)
+    p.add_argument(
+        "--methods",
+        type=cargs.method_list,
+        default=cargs.DEFAULT_METHODS,
+        help="comma-separated: median, mean, midpoint, lbvh, sweep_sah, sah<B> "
+        f"(default: {cargs.DEFAULT_METHODS}, the report's with both readings of 'mean')",
+    )
+    p.add_argument(
+        "--frames",
+        type=cargs.sample_count,
+        default=DEFAULT_FRAMES,
+        help=f"frames per method after one warm-up, at least {MIN_SAMPLES} (default {DEFAULT_FRAMES})",
+    )
+    p.add_argument(
+        "--builds",
+        type=cargs.sample_count,
+        default=DEFAULT_BUILDS,
+        help=f"builds per method after one warm-up, at least {MIN_SAMPLES} (default {DEFAULT_BUILDS})",
+    )
+    options.add_image_size(p)
     p.add_argument("--backend", default="auto", choices=BACKENDS, help="renderer of Table 1's frame times")
-    p.add_argument("--threads", type=cargs.thread_count, default=1,
-                   help="CPU reference threads per frame (default 1, like the builds: on a shared machine one "
-                        "thread's CPU time measures the work, not the neighbours; 0 = every core)")
-    p.add_argument("--overlay-backends", type=cargs.backend_list, default="cpu,vulkan",
-                   help="backends for the §4.1 overlay measurement (Figure 5), or 'none' (default: cpu,vulkan)")
+    p.add_argument(
+        "--threads",
+        type=cargs.thread_count,
+        default=1,
+        help="CPU reference threads per frame (default 1, like the builds: on a shared machine one "
+        "thread's CPU time measures the work, not the neighbours; 0 = every core)",
+    )
+    p.add_argument(
+        "--overlay-backends",
+        type=cargs.backend_list,
+        default="cpu,vulkan",
+        help="backends for the §4.1 overlay measurement (Figure 5), or 'none' (default: cpu,vulkan)",
+    )
     p.add_argument("--no-figures", action="store_true", help="skip Figures 3-6 and the level sheets")
     p.add_argument("--no-uniform", action="store_true", help="skip the random-spheres check (report §4.2)")
     p.add_argument("--out", type=cargs.output_dir, required=True, help="directory for tables, charts and figures")
@@ -60,9 +79,7 @@ def run(args) -> int:
     if renderer.fallback:
         say(renderer.fallback)
     started = time.perf_counter()
-    rows = measure_methods(scene, args.methods, frames=args.frames, builds=args.builds, width=args.width,
-                           height=args.height, renderer=renderer, render_options={"threads": args.threads},
-                           progress=lambda s: say(f"[{name}] {s}"))
+    rows = _measure(scene, name, args, renderer)
     uniform = None if args.no_uniform else _uniform_rows(args, renderer)
     overlay_results, overlay_md = _overlay_check(args, out)
     meta = _meta(args, name, scene, renderer, uniform, overlay_results)
@@ -80,20 +97,42 @@ def run(args) -> int:
 def _uniform_rows(args, renderer) -> list[dict]:
     """Report §4.2: spheres uniformly at random in a cube, measured with the same protocol."""
     spheres, _ = load_scene("gen:random_spheres")
-    return measure_methods(spheres, args.methods, frames=args.frames, builds=args.builds, width=args.width,
-                           height=args.height, renderer=renderer, render_options={"threads": args.threads},
-                           progress=lambda s: say(f"[random spheres] {s}"))
+    return _measure(spheres, "random spheres", args, renderer)
+
+
+def _measure(scene, label: str, args, renderer) -> list[dict]:
+    """The methods of the command line on one scene, with the command line's protocol settings."""
+    return measure_methods(
+        scene,
+        args.methods,
+        frames=args.frames,
+        builds=args.builds,
+        width=args.width,
+        height=args.height,
+        renderer=renderer,
+        render_options={"threads": args.threads},
+        progress=lambda s: say(f"[{label}] {s}"),
+    )
 
 
 def _meta(args, name, scene, renderer, uniform, overlay_results) -> dict:
-    return {"scene": name, "triangles": len(scene.triangles), "spheres": len(scene.spheres), "width": args.width,
-            "height": args.height, "frames": args.frames, "builds": args.builds, "device": renderer.device,
-            "backend": renderer.backend, "build_threads": REPORT_BUILD["threads"],
-            "render_threads": args.threads if renderer.backend == "cpu" else None,
-            "build_settings": "one primitive per leaf, split axis of largest centroid extent, SAH with the "
-                              "bins of its label (12 or 32)",
-            "uniform_rows": uniform,
-            "overlay": [{k: v for k, v in res.items() if k != "images"} for res in overlay_results]}
+    return {
+        "scene": name,
+        "triangles": len(scene.triangles),
+        "spheres": len(scene.spheres),
+        "width": args.width,
+        "height": args.height,
+        "frames": args.frames,
+        "builds": args.builds,
+        "device": renderer.device,
+        "backend": renderer.backend,
+        "build_threads": REPORT_BUILD["threads"],
+        "render_threads": args.threads if renderer.backend == "cpu" else None,
+        "build_settings": "one primitive per leaf, split axis of largest centroid extent, SAH with the "
+        "bins of its label (12 or 32)",
+        "uniform_rows": uniform,
+        "overlay": [{k: v for k, v in res.items() if k != "images"} for res in overlay_results],
+    }
 
 
 def _overlay_check(args, out: Path) -> tuple[list[dict], str]:
@@ -109,9 +148,16 @@ def _overlay_check(args, out: Path) -> tuple[list[dict], str]:
         except VulkanUnavailable as e:
             say(f"[§4.1] {backend} skipped: {e}")
             continue
-        res = overlay.measure_overlay(scene, bvh, renderer, frames=args.frames, width=args.width,
-                                      height=args.height, threads=args.threads,
-                                      progress=lambda s: say(f"[§4.1 {model}] {s}"))
+        res = overlay.measure_overlay(
+            scene,
+            bvh,
+            renderer,
+            frames=args.frames,
+            width=args.width,
+            height=args.height,
+            threads=args.threads,
+            progress=lambda s: say(f"[§4.1 {model}] {s}"),
+        )
         widest = res["rows"][-1]["setting"]  # the report's screenshots: line width doubled
         save_png(res["images"][widest], out / f"figure5_overlay_{backend}.png")
         results.append(res)

@@ -1,15 +1,25 @@
 """Arguments several commands share, parsed once."""
+
 from __future__ import annotations
 
 import argparse
 import re
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 from .. import _core
 from .._checks import OutputPathError, output_file
-from ..bvh import (AXES, BIN_BOUNDS, DEFAULT_AXIS, DEFAULT_BIN_BOUNDS, DEFAULT_BINS, DEFAULT_MAX_LEAF_SIZE,
-                   DEFAULT_METHOD, METHODS, method_from_label)
+from ..bvh import (
+    AXES,
+    BIN_BOUNDS,
+    DEFAULT_AXIS,
+    DEFAULT_BIN_BOUNDS,
+    DEFAULT_BINS,
+    DEFAULT_MAX_LEAF_SIZE,
+    DEFAULT_METHOD,
+    METHODS,
+    method_from_label,
+)
 
 #: Largest image side the CLI accepts (OpenGL's and most Vulkan drivers' framebuffer limit).
 MAX_IMAGE_SIDE = _core.MAX_IMAGE_DIMENSION  # the renderers' limit, one definition
@@ -20,13 +30,23 @@ def add_scene(p: argparse.ArgumentParser) -> None:
 
 
 def add_build(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--method", default=DEFAULT_METHOD, help=f"split method: {', '.join(METHODS)} (or sah<B>, e.g. sah32)")
+    p.add_argument(
+        "--method", default=DEFAULT_METHOD, help=f"split method: {', '.join(METHODS)} (or sah<B>, e.g. sah32)"
+    )
     p.add_argument("--bins", type=int, default=None, help=f"binned SAH buckets, 2..256 (default {DEFAULT_BINS})")
-    p.add_argument("--bin-bounds", default=DEFAULT_BIN_BOUNDS, choices=BIN_BOUNDS,
-                   help=f"what the SAH buckets divide: the node's box or its centroid bounds (default {DEFAULT_BIN_BOUNDS})")
+    p.add_argument(
+        "--bin-bounds",
+        default=DEFAULT_BIN_BOUNDS,
+        choices=BIN_BOUNDS,
+        help=f"what the SAH buckets divide: the node's box or its centroid bounds (default {DEFAULT_BIN_BOUNDS})",
+    )
     p.add_argument("--axis", default=DEFAULT_AXIS, choices=AXES, help=f"split axis policy (default {DEFAULT_AXIS})")
-    p.add_argument("--max-leaf-size", type=int, default=DEFAULT_MAX_LEAF_SIZE,
-                   help=f"primitives per leaf at most (default {DEFAULT_MAX_LEAF_SIZE})")
+    p.add_argument(
+        "--max-leaf-size",
+        type=int,
+        default=DEFAULT_MAX_LEAF_SIZE,
+        help=f"primitives per leaf at most (default {DEFAULT_MAX_LEAF_SIZE})",
+    )
 
 
 def build_kwargs(args) -> dict:
@@ -37,6 +57,21 @@ def build_kwargs(args) -> dict:
 
 
 method_kwargs = method_from_label
+
+
+def add_image_size(p: argparse.ArgumentParser) -> None:
+    """--width and --height of the image (800 × 600, the report's)."""
+    p.add_argument("--width", type=image_side, default=800)
+    p.add_argument("--height", type=image_side, default=600)
+
+
+def add_png_out(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--out",
+        type=output_file_type(".png", "PNG image"),
+        required=True,
+        help="PNG file to write (the name must end in .png)",
+    )
 
 
 def depth_range(text: str) -> tuple[int, int]:
@@ -78,11 +113,13 @@ def samples_per_axis(text: str) -> int:
 def output_file_type(suffix: str, what: str) -> Callable[[str], Path]:
     """An argparse type: a file path to be written, ending in `suffix`, checked before any work
     (not a folder, not under a file, never renamed)."""
+
     def parse(text: str) -> Path:
         try:
             return output_file(text, (suffix,), what)
         except OutputPathError as e:
             raise argparse.ArgumentTypeError(str(e)) from None
+
     return parse
 
 

@@ -1,11 +1,12 @@
 """`bvhlab render SCENE --out PNG`: build a tree and render the scene with the Whitted tracer,
 optionally with the BVH overlay (--bvh-depth A:B) or as a heatmap of box tests (--heatmap)."""
+
 from __future__ import annotations
 
 from .. import build, render, save_png
 from .._progress import ProgressBar
-from ..render import BACKENDS, TRAVERSALS
 from ..library import load_scene
+from ..render import BACKENDS, TRAVERSALS
 from . import options
 
 
@@ -13,16 +14,22 @@ def add_parser(sub) -> None:
     p = sub.add_parser("render", help="render a scene to a PNG", description=__doc__)
     options.add_scene(p)
     options.add_build(p)
-    p.add_argument("--width", type=options.image_side, default=800)
-    p.add_argument("--height", type=options.image_side, default=600)
-    p.add_argument("--backend", default="auto", choices=BACKENDS, help="auto (a Vulkan GPU, else the CPU reference), vulkan or cpu")
-    p.add_argument("--samples-per-axis", type=options.samples_per_axis, default=1, metavar="N", help="N×N samples per pixel (default 1)")
+    options.add_image_size(p)
+    p.add_argument(
+        "--backend", default="auto", choices=BACKENDS, help="auto (a Vulkan GPU, else the CPU reference), vulkan or cpu"
+    )
+    p.add_argument(
+        "--samples-per-axis",
+        type=options.samples_per_axis,
+        default=1,
+        metavar="N",
+        help="N×N samples per pixel (default 1)",
+    )
     p.add_argument("--max-depth", type=int, default=5, help="bounces of reflection and refraction")
     p.add_argument("--bvh-depth", type=options.depth_range, metavar="A:B", help="draw the boxes of depths A..B")
     p.add_argument("--heatmap", action="store_true", help="colour pixels by the box tests of their primary ray")
     p.add_argument("--traversal", default="stack", choices=TRAVERSALS)
-    p.add_argument("--out", type=options.output_file_type(".png", "PNG image"), required=True,
-                   help="PNG file to write (the name must end in .png)")
+    options.add_png_out(p)
     p.set_defaults(run=run)
 
 
@@ -31,14 +38,25 @@ def run(args) -> int:
     with ProgressBar(f"building {args.method}") as bar:
         bvh = build(scene, progress=bar, **options.build_kwargs(args))
     with ProgressBar("rendering") as bar:
-        image, t = render(scene, bvh, args.width, args.height, backend=args.backend,
-                          samples_per_axis=args.samples_per_axis, max_depth=args.max_depth,
-                          overlay_depth=args.bvh_depth, traversal=args.traversal,
-                          mode="heatmap" if args.heatmap else "shade", progress=bar)
+        image, t = render(
+            scene,
+            bvh,
+            args.width,
+            args.height,
+            backend=args.backend,
+            samples_per_axis=args.samples_per_axis,
+            max_depth=args.max_depth,
+            overlay_depth=args.bvh_depth,
+            traversal=args.traversal,
+            mode="heatmap" if args.heatmap else "shade",
+            progress=bar,
+        )
     args.out.parent.mkdir(parents=True, exist_ok=True)
     save_png(image, args.out)
     print(f"{name}: {args.width}x{args.height} on {t['device']} ({t['backend']}: {t['reason']})")
-    print(f"trace {t['trace_ms']:.1f} ms, total {t['total_ms']:.1f} ms; build {bvh.stats['build_ms']:.1f} ms, "
-          f"height {bvh.stats['height']}")
+    print(
+        f"trace {t['trace_ms']:.1f} ms, total {t['total_ms']:.1f} ms; build {bvh.stats['build_ms']:.1f} ms, "
+        f"height {bvh.stats['height']}"
+    )
     print(f"wrote {args.out}")
     return 0

@@ -1,4 +1,5 @@
 """`bvhlab scenes`: the bundled and generated scenes a SCENE argument can name."""
+
 from __future__ import annotations
 
 from ..library import bundled_dir, list_scenes

@@ -2,6 +2,7 @@
 own process): the triangles flat-shaded, the spheres drawn, and the boxes of --bvh-depth A:B as
 lines coloured by depth. With --sheet: one panel per depth (0 … height) in a grid — how the tree
 cuts the model level by level, in a fraction of a traced frame."""
+
 from __future__ import annotations
 
 from . import options
@@ -13,10 +14,8 @@ def add_parser(sub) -> None:
     options.add_build(p)
     p.add_argument("--bvh-depth", type=options.depth_range, metavar="A:B", default=None)
     p.add_argument("--sheet", action="store_true", help="one panel per depth, 0 … height, in a grid")
-    p.add_argument("--width", type=options.image_side, default=800)
-    p.add_argument("--height", type=options.image_side, default=600)
-    p.add_argument("--out", type=options.output_file_type(".png", "PNG image"), required=True,
-                   help="PNG file to write (the name must end in .png)")
+    options.add_image_size(p)
+    options.add_png_out(p)
     p.set_defaults(run=run)
 
 

@@ -1,5 +1,6 @@
 """Charts of a comparison (matplotlib, PNG): frame and build time per method with their spreads,
 nodes per depth, SAH cost per depth, and the leaf-size histogram."""
+
 from __future__ import annotations
 
 import math
@@ -42,8 +43,10 @@ def times_chart(rows: list[dict], path: Path, title: str) -> Path:
         values = [r[key] for r in rows]
         lo = [r.get(f"{key}_lo", math.nan) for r in rows]
         hi = [r.get(f"{key}_hi", math.nan) for r in rows]
-        errors = [[0 if math.isnan(a) else v - a for v, a in zip(values, lo)],
-                  [0 if math.isnan(b) else b - v for v, b in zip(values, hi)]]
+        errors = [
+            [0 if math.isnan(a) else v - a for v, a in zip(values, lo)],
+            [0 if math.isnan(b) else b - v for v, b in zip(values, hi)],
+        ]
         bars = ax.bar(names, values, color="#4c78a8", yerr=errors, capsize=3, ecolor="#333333")
         ax.bar_label(bars, labels=[value_label(v) for v in values], fontsize=8, label_type="center", color="white")
         ax.set_ylabel(label)

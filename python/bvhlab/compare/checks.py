@@ -1,6 +1,7 @@
 """The report's claims (§4.2, §5.2), tested on our numbers with the protocol's verdicts: "holds" or
 "does NOT hold" only when the paired ratio's whole interval lies on one side of the claim's
 threshold, else "inconclusive". The data are never bent to fit."""
+
 from __future__ import annotations
 
 from .protocol import FAILS, HOLDS, Interval, all_of, at_least, at_most, paired, paired_ratio, within
@@ -26,8 +27,15 @@ def _report_ratio(a: str, b: str, column: int = 0) -> str:
 
 
 def _claim(out, section, text, verdict, detail):
-    out.append({"claim": text, "section": section, "verdict": verdict,
-                "holds": True if verdict == HOLDS else False if verdict == FAILS else None, "detail": detail})
+    out.append(
+        {
+            "claim": text,
+            "section": section,
+            "verdict": verdict,
+            "holds": True if verdict == HOLDS else False if verdict == FAILS else None,
+            "detail": detail,
+        }
+    )
 
 
 def report_checks(rows: list[dict], uniform_rows: list[dict] | None = None) -> list[dict]:
@@ -40,8 +48,13 @@ def report_checks(rows: list[dict], uniform_rows: list[dict] | None = None) -> l
         mean = _row(rows, reading)
         if mean and median:
             r = _ratio(mean, median)
-            _claim(out, "§5.2", f"{reading} is clearly faster than median (at least 10% less frame time)",
-                   at_most(r, 0.9), f"{reading}/median frame time {r.text(2)}{_report_ratio(reading, 'median')}")
+            _claim(
+                out,
+                "§5.2",
+                f"{reading} is clearly faster than median (at least 10% less frame time)",
+                at_most(r, 0.9),
+                f"{reading}/median frame time {r.text(2)}{_report_ratio(reading, 'median')}",
+            )
         if mean and median and best_sah:
             _check_close_to_sah(out, reading, mean, median, best_sah)
     _check_heights(out, rows)
@@ -51,9 +64,15 @@ def report_checks(rows: list[dict], uniform_rows: list[dict] | None = None) -> l
         fastest = min(uniform_rows, key=lambda r: median_ms(r, "frame"))
         slowest = max(uniform_rows, key=lambda r: median_ms(r, "frame"))
         r = _ratio(slowest, fastest)
-        _claim(out, "§4.2", "on uniformly random spheres the methods are within 15% of each other", at_most(r, 1.15),
-               f"slowest/fastest frame time ({slowest['method']}/{fastest['method']}) {r.text(2)}; medians "
-               + ", ".join(f"{u['method']} {median_ms(u, 'frame'):.1f}" for u in uniform_rows) + " ms")
+        _claim(
+            out,
+            "§4.2",
+            "on uniformly random spheres the methods are within 15% of each other",
+            at_most(r, 1.15),
+            f"slowest/fastest frame time ({slowest['method']}/{fastest['method']}) {r.text(2)}; medians "
+            + ", ".join(f"{u['method']} {median_ms(u, 'frame'):.1f}" for u in uniform_rows)
+            + " ms",
+        )
     return out
 
 
@@ -68,9 +87,14 @@ def _check_close_to_sah(out, reading, mean, median, sah):
     ratio of differences)."""
     share = paired(_to_midway, samples(mean, "frame"), samples(median, "frame"), samples(sah, "frame"))
     rep = [REPORT_TABLE1.get(report_row(m)) for m in (reading, "median", sah["method"])]
-    said = f" (report: {_to_midway(*(r[0] for r in rep)):.2f})" if all(rep) else ""
-    _claim(out, "§5.2", f"{reading} comes close to SAH (its frame time nearer SAH's than median's)",
-           at_most(share, 1.0), f"{reading} / midway(median, {sah['method']}) frame time {share.text(2)}{said}")
+    said = f" (report: {_to_midway(*(r[0] for r in rep if r is not None)):.2f})" if all(rep) else ""
+    _claim(
+        out,
+        "§5.2",
+        f"{reading} comes close to SAH (its frame time nearer SAH's than median's)",
+        at_most(share, 1.0),
+        f"{reading} / midway(median, {sah['method']}) frame time {share.text(2)}{said}",
+    )
 
 
 def _check_sah_fastest(out, rows):
@@ -80,8 +104,13 @@ def _check_sah_fastest(out, rows):
         return
     best = min(sah_rows, key=lambda r: median_ms(r, "frame"))
     ratios = {o["method"]: _ratio(best, o) for o in others}
-    _claim(out, "§4.2", "SAH has the lowest frame time", all_of([at_most(r, 1.0) for r in ratios.values()]),
-           f"{best['method']}/other frame time: " + ", ".join(f"{m} {r.text(2)}" for m, r in ratios.items()))
+    _claim(
+        out,
+        "§4.2",
+        "SAH has the lowest frame time",
+        all_of([at_most(r, 1.0) for r in ratios.values()]),
+        f"{best['method']}/other frame time: " + ", ".join(f"{m} {r.text(2)}" for m, r in ratios.items()),
+    )
 
 
 def _check_heights(out, rows):
@@ -89,16 +118,25 @@ def _check_heights(out, rows):
     median = _row(rows, "median")
     if median and len(rows) > 1:
         lowest = min(r["height"] for r in rows)
-        _claim(out, "§4.2", "median gives the lowest tree", HOLDS if median["height"] == lowest else FAILS,
-               f"heights: {heights} (report: median 20, mean 34, SAH 30)")
+        _claim(
+            out,
+            "§4.2",
+            "median gives the lowest tree",
+            HOLDS if median["height"] == lowest else FAILS,
+            f"heights: {heights} (report: median 20, mean 34, SAH 30)",
+        )
     for reading in MEAN_READINGS:
         mean = _row(rows, reading)
         rivals = [r for r in rows if r["method"] not in MEAN_READINGS]
         if mean and rivals:
             tallest = max(r["height"] for r in rivals)
-            _claim(out, "§4.2", f"{reading} gives the tallest tree (the most unbalanced)",
-                   HOLDS if mean["height"] > tallest else FAILS,
-                   f"{reading} {mean['height']} against " + ", ".join(f"{r['method']} {r['height']}" for r in rivals))
+            _claim(
+                out,
+                "§4.2",
+                f"{reading} gives the tallest tree (the most unbalanced)",
+                HOLDS if mean["height"] > tallest else FAILS,
+                f"{reading} {mean['height']} against " + ", ".join(f"{r['method']} {r['height']}" for r in rivals),
+            )
 
 
 def _check_bins(out, rows):
@@ -106,10 +144,20 @@ def _check_bins(out, rows):
     if not (sah12 and sah32):
         return
     frame, build = _ratio(sah32, sah12), _ratio(sah32, sah12, "build")
-    _claim(out, "§4.2", "32 bins instead of 12 change the frame time little (within 10%)", within(frame, 0.10),
-           f"sah32/sah12 frame time {frame.text(3)}{_report_ratio('sah32', 'sah12')}")
-    _claim(out, "§4.2", "32 bins instead of 12 increase the build time drastically (at least 1.5×)",
-           at_least(build, 1.5), f"sah32/sah12 build time {build.text(2)}{_report_ratio('sah32', 'sah12', 1)}")
+    _claim(
+        out,
+        "§4.2",
+        "32 bins instead of 12 change the frame time little (within 10%)",
+        within(frame, 0.10),
+        f"sah32/sah12 frame time {frame.text(3)}{_report_ratio('sah32', 'sah12')}",
+    )
+    _claim(
+        out,
+        "§4.2",
+        "32 bins instead of 12 increase the build time drastically (at least 1.5×)",
+        at_least(build, 1.5),
+        f"sah32/sah12 build time {build.text(2)}{_report_ratio('sah32', 'sah12', 1)}",
+    )
 
 
 def _check_sah_build(out, rows):
@@ -118,7 +166,11 @@ def _check_sah_build(out, rows):
     if not sah12 or not simple:
         return
     ratios = {r["method"]: _ratio(sah12, r, "build") for r in simple}
-    _claim(out, "§4.2", "SAH (12 bins) takes longer to build than median and mean",
-           all_of([at_least(r, 1.0) for r in ratios.values()]),
-           "sah12/other build time: " + ", ".join(f"{m} {r.text(2)}{_report_ratio('sah12', m, 1)}"
-                                                  for m, r in ratios.items()))
+    _claim(
+        out,
+        "§4.2",
+        "SAH (12 bins) takes longer to build than median and mean",
+        all_of([at_least(r, 1.0) for r in ratios.values()]),
+        "sah12/other build time: "
+        + ", ".join(f"{m} {r.text(2)}{_report_ratio('sah12', m, 1)}" for m, r in ratios.items()),
+    )

@@ -1,6 +1,7 @@
 """Figures like the report's, rendered with the overlay pass (one PNG per method):
 Figure 3, the five spheres after one split; Figure 4, all depths but the root; Figure 5, depths
 8–9 of a model of over 700,000 triangles."""
+
 from __future__ import annotations
 
 import importlib.util
@@ -33,8 +34,16 @@ def figure5_scene() -> tuple[Scene, str]:
     return load_scene("suzanne_1m" if _bundled_blend_readable() else "gen:knot_1m")
 
 
-def render_figure(name: str, scene: Scene, labels: list[str], out: Path, renderer: Renderer,
-                  width: int = 640, height: int = 480, line_width: float = 1.0) -> list[Path]:
+def render_figure(
+    name: str,
+    scene: Scene,
+    labels: list[str],
+    out: Path,
+    renderer: Renderer,
+    width: int = 640,
+    height: int = 480,
+    line_width: float = 1.0,
+) -> list[Path]:
     """One PNG per method: `<name>_<method>.png`, trees built with the report's settings."""
     _, depths_of = FIGURES[name]
     paths = []

@@ -12,6 +12,7 @@ claim gets a verdict.
   The verdict is "holds" or "does NOT hold" only when that whole interval lies on one side of the
   claim's threshold, the difference exceeding the spread; otherwise it is "inconclusive".
 """
+
 from __future__ import annotations
 
 import math
@@ -31,6 +32,7 @@ HOLDS, FAILS, INCONCLUSIVE = "holds", "does NOT hold", "inconclusive"
 class Interval:
     """A median and the interval that contains the true median with probability >= CONFIDENCE
     (lo = hi = nan when there are too few samples for one)."""
+
     median: float
     lo: float
     hi: float

@@ -1,4 +1,5 @@
 """Table 1 as CSV, Markdown (with the report's own numbers beside ours) and JSON."""
+
 from __future__ import annotations
 
 import csv
@@ -20,9 +21,25 @@ REPORT_TABLE1 = {
 MEAN_READINGS = ("mean", "midpoint")
 NAMES = {"mean": "mean (centroid mean, as §2.3.1 describes)", "midpoint": "midpoint (PBRT Middle)"}
 
-COLUMNS = ["method", "frame_ms", "frame_ms_lo", "frame_ms_hi", "frame_cpu_ms", "frame_cpu_ms_lo", "frame_cpu_ms_hi",
-           "build_ms", "build_cpu_ms", "build_cpu_ms_lo", "build_cpu_ms_hi", "height", "sah_cost", "nodes", "leaves",
-           "primary_mrays_s", "device"]
+COLUMNS = [
+    "method",
+    "frame_ms",
+    "frame_ms_lo",
+    "frame_ms_hi",
+    "frame_cpu_ms",
+    "frame_cpu_ms_lo",
+    "frame_cpu_ms_hi",
+    "build_ms",
+    "build_cpu_ms",
+    "build_cpu_ms_lo",
+    "build_cpu_ms_hi",
+    "height",
+    "sah_cost",
+    "nodes",
+    "leaves",
+    "primary_mrays_s",
+    "device",
+]
 
 
 def samples(row: dict, name: str) -> list[float]:
@@ -61,43 +78,59 @@ def write_tables(rows: list[dict], out: Path, meta: dict, checks: list[dict], ex
     paths = {"csv": out / "table.csv", "md": out / "table.md", "json": out / "table.json"}
     write_csv(rows, paths["csv"])
     paths["md"].write_text(markdown(rows, meta, checks) + extra_markdown)
-    paths["json"].write_text(json.dumps(_plain({"meta": meta, "rows": rows, "checks": checks,
-                                                "report_table1": REPORT_TABLE1}), indent=1))
+    paths["json"].write_text(
+        json.dumps(_plain({"meta": meta, "rows": rows, "checks": checks, "report_table1": REPORT_TABLE1}), indent=1)
+    )
     return paths
 
 
 def markdown(rows: list[dict], meta: dict, checks: list[dict]) -> str:
     clock = "CPU" if rows and rows[0].get("frame_clock") == "cpu" else "wall"
-    head = (f"| Split method | Frame ms ({clock}) | Frame ms (wall) | Build ms (CPU) | Tree height | SAH cost |"
-            " Frame ÷ SAH 12 | Report: frame ms | Report: build ms | Report: height | Report: frame ÷ SAH 12 |")
+    head = (
+        f"| Split method | Frame ms ({clock}) | Frame ms (wall) | Build ms (CPU) | Tree height | SAH cost |"
+        " Frame ÷ SAH 12 | Report: frame ms | Report: build ms | Report: height | Report: frame ÷ SAH 12 |"
+    )
     lines = [_preamble(meta, clock), "", head, "|" + "|".join(["---"] * (head.count("|") - 1)) + "|"]
     base = next((r for r in rows if r["method"] == "sah12"), None)
     for r in rows:
         rep = REPORT_TABLE1.get(report_row(r["method"]))
         ours = paired_ratio(samples(r, "frame"), samples(base, "frame")).text(2) if base else ""
-        rep_cells = ([str(rep[0]), str(rep[1]), str(rep[2]), f"{rep[0] / REPORT_TABLE1['sah12'][0]:.2f}"]
-                     if rep else [""] * 4)
+        rep_cells = (
+            [str(rep[0]), str(rep[1]), str(rep[2]), f"{rep[0] / REPORT_TABLE1['sah12'][0]:.2f}"] if rep else [""] * 4
+        )
         frame_key = "frame_cpu_ms" if clock == "CPU" else "frame_ms"
-        lines.append(f"| {NAMES.get(r['method'], r['method'])} | {_spread(r, frame_key)} | {_spread(r, 'frame_ms')} | "
-                     f"{_spread(r, 'build_cpu_ms')} | {r['height']} | {r['sah_cost']:.1f} | {ours} | "
-                     + " | ".join(rep_cells) + " |")
-    lines += ["", "Medians with [lo–hi], the interval that holds the true median with ≥ 90% confidence (order "
-              "statistics over rounds); ratios are medians of per-round ratios. The report's numbers are for "
-              "Sponza on its GPU (average frame time): compare the ranking and the ratios, not the milliseconds."]
+        lines.append(
+            f"| {NAMES.get(r['method'], r['method'])} | {_spread(r, frame_key)} | {_spread(r, 'frame_ms')} | "
+            f"{_spread(r, 'build_cpu_ms')} | {r['height']} | {r['sah_cost']:.1f} | {ours} | "
+            + " | ".join(rep_cells)
+            + " |"
+        )
+    lines += [
+        "",
+        "Medians with [lo–hi], the interval that holds the true median with ≥ 90% confidence (order "
+        "statistics over rounds); ratios are medians of per-round ratios. The report's numbers are for "
+        "Sponza on its GPU (average frame time): compare the ranking and the ratios, not the milliseconds.",
+    ]
     lines += ["", finding(rows), "", ranking(rows), "", "Checks (report §4.2, §5.2):", ""]
     lines += [f"- **{c['verdict']}**: {c['claim']} ({c['section']}) — {c['detail']}" for c in checks]
     return "\n".join(lines) + "\n"
 
 
 def _preamble(meta: dict, clock: str) -> str:
-    why = (" Verdicts and ratios use CPU time (all threads of the process), which measures a frame's work on"
-           " a shared machine; wall time also measures whoever else is using the cores." if clock == "CPU" else "")
-    return (f"Scene **{meta['scene']}** ({meta['triangles']} triangles, {meta['spheres']} spheres), "
-            f"{meta['width']}×{meta['height']}, device: {meta['device']}{_threads(meta)}. Frame: median of "
-            f"{meta['frames']} frames; build: median of {meta['builds']} builds on "
-            f"{meta.get('build_threads', 1)} thread(s); "
-            f"each after a warm-up that is not counted, methods interleaved round by round. Build settings: "
-            f"{meta.get('build_settings', 'one primitive per leaf, largest-extent axis')}.{why}")
+    why = (
+        " Verdicts and ratios use CPU time (all threads of the process), which measures a frame's work on"
+        " a shared machine; wall time also measures whoever else is using the cores."
+        if clock == "CPU"
+        else ""
+    )
+    return (
+        f"Scene **{meta['scene']}** ({meta['triangles']} triangles, {meta['spheres']} spheres), "
+        f"{meta['width']}×{meta['height']}, device: {meta['device']}{_threads(meta)}. Frame: median of "
+        f"{meta['frames']} frames; build: median of {meta['builds']} builds on "
+        f"{meta.get('build_threads', 1)} thread(s); "
+        f"each after a warm-up that is not counted, methods interleaved round by round. Build settings: "
+        f"{meta.get('build_settings', 'one primitive per leaf, largest-extent axis')}.{why}"
+    )
 
 
 def _threads(meta: dict) -> str:
@@ -114,11 +147,14 @@ def finding(rows: list[dict]) -> str:
     matching = [m for m, h in readings.items() if h == report_height]
     said = f"centroid mean {readings['mean']}, midpoint {readings['midpoint']}"
     if matching == ["midpoint"]:
-        return (f"**Finding:** the report's Mean row has height {report_height}; here the {said}. The report's "
-                f"mean split the midpoint of the centroid bounds (PBRT's Middle), not the centroid mean §2.3.1 "
-                f"describes.")
+        return (
+            f"**Finding:** the report's Mean row has height {report_height}; here the {said}. The report's "
+            f"mean split the midpoint of the centroid bounds (PBRT's Middle), not the centroid mean §2.3.1 "
+            f"describes."
+        )
     return f"**Finding:** the report's Mean row has height {report_height}; here the {said}: " + (
-        f"{' and '.join(matching)} match{'es' if len(matching) == 1 else ''}." if matching else "neither matches.")
+        f"{' and '.join(matching)} match{'es' if len(matching) == 1 else ''}." if matching else "neither matches."
+    )
 
 
 def ranking(rows: list[dict]) -> str:

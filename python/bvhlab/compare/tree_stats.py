@@ -1,4 +1,5 @@
 """Per-depth figures of a built tree that `Bvh.stats` does not carry, from its nodes."""
+
 from __future__ import annotations
 
 import numpy as np

@@ -1,12 +1,13 @@
 """Named scenes: the bundled `.blend` files (blender_scenes/), Crytek Sponza (`sponza`, bundled as
 an `.npz`, no Blender needed), generated scenes (`gen:...`, no Blender needed), and files (`.blend`
 read through bpy with the add-on's exporter, `.npz`)."""
+
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
 
 from ..scene import Scene
 from . import sponza
@@ -46,28 +47,40 @@ def _generated() -> dict[str, tuple[str, Callable[[], Scene]]]:
         "gen:whitted": ("reflective and transparent spheres over a checker floor", showcase.whitted),
         "gen:room": ("a detailed torus knot in a large room, 250k triangles", _room),
         "gen:knot": ("a bumpy torus knot, 250k triangles", triangles_scene(lambda: procedural.torus_knot(250_000))),
-        "gen:knot_1m": ("a bumpy torus knot, 1M triangles (report Figure 5: over 700,000)",
-                        triangles_scene(lambda: procedural.torus_knot(1_000_000))),
-        "gen:random_spheres": ("2000 spheres uniformly at random in a cube (report §4.2)",
-                               lambda: Scene(spheres=procedural.random_spheres(2000, radius=0.015, seed=1))),
+        "gen:knot_1m": (
+            "a bumpy torus knot, 1M triangles (report Figure 5: over 700,000)",
+            triangles_scene(lambda: procedural.torus_knot(1_000_000)),
+        ),
+        "gen:random_spheres": (
+            "2000 spheres uniformly at random in a cube (report §4.2)",
+            lambda: Scene(spheres=procedural.random_spheres(2000, radius=0.015, seed=1)),
+        ),
     }
 
 
 def _room() -> Scene:
     """procedural.model_in_room seen from inside the room, looking at the knot."""
-    from . import procedural
     from ..scene import Camera, Light
+    from . import procedural
 
-    return Scene(triangles=procedural.model_in_room(250_000), camera=Camera((-25, -40, -20), (20, 25, -50), fov_y=50),
-                 light=Light((-10, -30, 40)))
+    return Scene(
+        triangles=procedural.model_in_room(250_000),
+        camera=Camera((-25, -40, -20), (20, 25, -50), fov_y=50),
+        light=Light((-10, -30, 40)),
+    )
 
 
 def list_scenes() -> list[SceneInfo]:
-    out = [SceneInfo(k, v.get("description", ""), v.get("triangles", 0), v.get("spheres", 0), "bundled .blend")
-           for k, v in _bundled().items()]
+    out = [
+        SceneInfo(k, v.get("description", ""), v.get("triangles", 0), v.get("spheres", 0), "bundled .blend")
+        for k, v in _bundled().items()
+    ]
     if _sponza_path() is not None:
-        out.append(SceneInfo("sponza", f"the report's Table 1 scene: {sponza.ATTRIBUTION}", sponza.TRIANGLES, 0,
-                             "bundled .npz"))
+        out.append(
+            SceneInfo(
+                "sponza", f"the report's Table 1 scene: {sponza.ATTRIBUTION}", sponza.TRIANGLES, 0, "bundled .npz"
+            )
+        )
     for name, (description, _) in _generated().items():
         out.append(SceneInfo(name, description, -1, -1, "generated"))
     return out
@@ -83,8 +96,9 @@ def load_scene(spec: str) -> tuple[Scene, str]:
     generated = _generated()
     if spec in generated:
         return generated[spec][1](), spec.split(":", 1)[1]
-    if spec == "sponza" and _sponza_path() is not None:
-        return sponza.scene(_sponza_path()), spec
+    sponza_file = _sponza_path() if spec == "sponza" else None
+    if sponza_file is not None:
+        return sponza.scene(sponza_file), spec
     bundled = _bundled()
     if spec in bundled:
         return _load_blend(bundled_dir() / bundled[spec]["file"]), spec

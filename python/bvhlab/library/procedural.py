@@ -2,6 +2,7 @@
 
 Every generator is deterministic (seeded) and returns float32 (T,3,3) triangles or a Scene.
 """
+
 from __future__ import annotations
 
 import math
@@ -26,8 +27,9 @@ def grid_surface(u_count: int, v_count: int, point, u_closed: bool = True, v_clo
     return np.ascontiguousarray(tris.reshape(-1, 3, 3), np.float32)
 
 
-def torus_knot(triangles: int, p: int = 2, q: int = 3, tube: float = 0.35, bumps: float = 0.04,
-               scale: float = 1.0) -> np.ndarray:
+def torus_knot(
+    triangles: int, p: int = 2, q: int = 3, tube: float = 0.35, bumps: float = 0.04, scale: float = 1.0
+) -> np.ndarray:
     """A bumpy (p, q) torus-knot tube of about `triangles` triangles: a detailed, curved mesh with
     triangles of varying size, the stand-in for the report's high-poly models."""
     v_count = max(3, int(round(math.sqrt(triangles / 2 / 12))))

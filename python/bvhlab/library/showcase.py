@@ -1,5 +1,6 @@
 """Small complete scenes (geometry, materials, camera, light) for tests, examples and the demo:
 the report's five spheres (Figures 3–4) and a Whitted showcase. Deterministic, no files."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -38,21 +39,37 @@ def five_spheres() -> Scene:
     centers = [(-4.0, 0.0, 1.0), (-2.6, 0.4, 1.0), (-1.2, -0.3, 1.0), (1.5, 0.2, 1.0), (4.2, 0.0, 1.0)]
     spheres = np.array([(*c, 0.9 if k != 3 else 1.0) for k, c in enumerate(centers)], np.float32)
     materials = [Material((0.85, 0.25, 0.2)), Material((0.2, 0.5, 0.85)), Material((0.95, 0.8, 0.3))]
-    return Scene(spheres=spheres, materials=materials, sphere_material=np.array([0, 1, 2, 0, 1], np.int32),
-                 camera=Camera((0.0, -11.0, 5.0), (0.0, 0.0, 0.8), fov_y=40.0),
-                 light=Light((-3.0, -6.0, 9.0), intensity=1.0), sky=(0.55, 0.7, 0.9))
+    return Scene(
+        spheres=spheres,
+        materials=materials,
+        sphere_material=np.array([0, 1, 2, 0, 1], np.int32),
+        camera=Camera((0.0, -11.0, 5.0), (0.0, 0.0, 0.8), fov_y=40.0),
+        light=Light((-3.0, -6.0, 9.0), intensity=1.0),
+        sky=(0.55, 0.7, 0.9),
+    )
 
 
 def whitted() -> Scene:
     """Reflective and transparent spheres over a checker floor (Whitted 1980's classic setup)."""
     floor, floor_mat = checker_floor(10, 16.0)
-    spheres = np.array([[-1.7, 0.6, 1.1, 1.1], [0.9, -0.6, 0.9, 0.9], [2.6, 1.4, 0.7, 0.7], [-0.2, 2.6, 1.3, 1.3]],
-                       np.float32)
-    materials = [Material((0.9, 0.9, 0.85)), Material((0.8, 0.15, 0.1)),
-                 Material((0.95, 0.95, 0.95), reflective=0.85),           # mirror
-                 Material((1.0, 1.0, 1.0), reflective=0.1, transparent=0.85, ior=1.5),  # glass
-                 Material((0.2, 0.45, 0.9)), Material((0.9, 0.75, 0.2), reflective=0.3)]
-    return Scene(triangles=floor, spheres=spheres, materials=materials, tri_material=floor_mat,
-                 sphere_material=np.array([2, 3, 4, 5], np.int32),
-                 camera=Camera((0.5, -9.0, 3.6), (0.3, 0.5, 0.9), fov_y=42.0),
-                 light=Light((4.0, -5.0, 8.0), intensity=1.0), sky=(0.5, 0.68, 0.92))
+    spheres = np.array(
+        [[-1.7, 0.6, 1.1, 1.1], [0.9, -0.6, 0.9, 0.9], [2.6, 1.4, 0.7, 0.7], [-0.2, 2.6, 1.3, 1.3]], np.float32
+    )
+    materials = [
+        Material((0.9, 0.9, 0.85)),
+        Material((0.8, 0.15, 0.1)),
+        Material((0.95, 0.95, 0.95), reflective=0.85),  # mirror
+        Material((1.0, 1.0, 1.0), reflective=0.1, transparent=0.85, ior=1.5),  # glass
+        Material((0.2, 0.45, 0.9)),
+        Material((0.9, 0.75, 0.2), reflective=0.3),
+    ]
+    return Scene(
+        triangles=floor,
+        spheres=spheres,
+        materials=materials,
+        tri_material=floor_mat,
+        sphere_material=np.array([2, 3, 4, 5], np.int32),
+        camera=Camera((0.5, -9.0, 3.6), (0.3, 0.5, 0.9), fov_y=42.0),
+        light=Light((4.0, -5.0, 8.0), intensity=1.0),
+        sky=(0.5, 0.68, 0.92),
+    )

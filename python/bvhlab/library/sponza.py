@@ -12,6 +12,7 @@ as differences of vertex indices in order of first use. Both compress well with 
 members are LZMA-compressed; `numpy.load` reads them). `unweld` rebuilds the float32 (262205, 3, 3)
 array bit for bit, and `load_triangles` checks that against the sha256 of the source `.npy`.
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -27,8 +28,7 @@ FILE_NAME = "sponza.npz"
 TRIANGLES = 262_205
 #: sha256 of `sponza_tris.npy` (numpy's .npy format, version 1.0) as it was received.
 SOURCE_SHA256 = "e36e2e881611408c59887e68367d318b30365f069b7b193c5eafd37f66653537"
-ATTRIBUTION = ("Crytek Sponza by Frank Meinl (Crytek), Morgan McGuire's version, CC BY 3.0; "
-               "2 of 383 sub-objects missing")
+ATTRIBUTION = "Crytek Sponza by Frank Meinl (Crytek), Morgan McGuire's version, CC BY 3.0; 2 of 383 sub-objects missing"
 
 #: The report's Figure 6 (800×600): a view along the atrium that shows the whole nave.
 CAMERA = Camera(position=(-110.0, 20.0, -4.0), look_at=(100.0, 45.0, 2.0), up=(0.0, 1.0, 0.0), fov_y=60.0)

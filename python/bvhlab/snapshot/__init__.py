@@ -4,6 +4,7 @@ moderngl and Blender's `gpu` module fight over the current OpenGL context in one
 drawing runs in a child process (`python -m bvhlab.snapshot.worker`): the scene goes to it as an
 `.npz`, the picture comes back as a PNG.
 """
+
 from __future__ import annotations
 
 import json
@@ -13,11 +14,16 @@ import tempfile
 from pathlib import Path
 
 
-def run_snapshot(scene_spec: str, build_kwargs: dict, out: Path, depth_range: tuple[int, int],
-                 width: int = 800, height: int = 600) -> Path:
+def run_snapshot(
+    scene_spec: str, build_kwargs: dict, out: Path, depth_range: tuple[int, int], width: int = 800, height: int = 600
+) -> Path:
     """One picture with the boxes of depths depth_range[0] … depth_range[1]."""
-    return _run(scene_spec, build_kwargs, out, ["--depth", str(depth_range[0]), str(depth_range[1]),
-                                                 "--size", str(width), str(height)])
+    return _run(
+        scene_spec,
+        build_kwargs,
+        out,
+        ["--depth", str(depth_range[0]), str(depth_range[1]), "--size", str(width), str(height)],
+    )
 
 
 def run_sheet(scene_spec: str, build_kwargs: dict, out: Path, panel_width: int = 320, panel_height: int = 240) -> Path:
@@ -36,8 +42,19 @@ def _run(scene_spec: str, build_kwargs: dict, out: Path, extra: list[str]) -> Pa
     with tempfile.TemporaryDirectory() as tmp:
         npz = Path(tmp) / "scene.npz"
         scene.save(npz)
-        cmd = [sys.executable, "-m", "bvhlab.snapshot.worker", str(npz), "--name", name,
-               "--build", json.dumps(build_kwargs), "--out", str(out), *extra]
+        cmd = [
+            sys.executable,
+            "-m",
+            "bvhlab.snapshot.worker",
+            str(npz),
+            "--name",
+            name,
+            "--build",
+            json.dumps(build_kwargs),
+            "--out",
+            str(out),
+            *extra,
+        ]
         done = subprocess.run(cmd, capture_output=True, text=True)
     if done.returncode != 0:
         lines = (done.stderr or done.stdout).strip().splitlines()

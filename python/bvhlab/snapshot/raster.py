@@ -1,4 +1,5 @@
 """The moderngl drawing: flat-shaded triangles, instanced spheres, instanced box edges."""
+
 from __future__ import annotations
 
 import math
@@ -57,7 +58,10 @@ def box_corners() -> np.ndarray:
 def unit_sphere(subdivisions: int = 2) -> np.ndarray:
     """Triangles of a subdivided octahedron on the unit sphere, (N, 3) vertices."""
     v = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], np.float32)
-    tris = [v[[a, b, c]] for a, b, c in [(0, 2, 4), (2, 1, 4), (1, 3, 4), (3, 0, 4), (2, 0, 5), (1, 2, 5), (3, 1, 5), (0, 3, 5)]]
+    tris = [
+        v[[a, b, c]]
+        for a, b, c in [(0, 2, 4), (2, 1, 4), (1, 3, 4), (3, 0, 4), (2, 0, 5), (1, 2, 5), (3, 1, 5), (0, 3, 5)]
+    ]
     for _ in range(subdivisions):
         new = []
         for a, b, c in tris:
@@ -93,7 +97,7 @@ class Rasterizer:
         import moderngl
 
         try:
-            self.ctx = moderngl.create_standalone_context(backend="egl")
+            self.ctx = moderngl.create_standalone_context(backend="egl")  # type: ignore[arg-type]  # stubs lag the API
         except Exception as e:  # moderngl raises plain Exceptions when EGL or Mesa is missing
             raise RuntimeError(f"no headless OpenGL (EGL): {e}; install libegl1 libegl-mesa0 libgl1-mesa-dri") from e
         self.ctx.enable(self.ctx.DEPTH_TEST)
@@ -112,7 +116,7 @@ class Rasterizer:
 
     def _make_geometry(self):
         colors = self.scene.material_table()[:, :3]
-        vaos = []
+        vaos: list[tuple] = []  # (program, vertex array, instances or None)
         tris = self.scene.triangles
         if len(tris):
             n = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
@@ -121,30 +125,39 @@ class Rasterizer:
             data = np.concatenate([tris, np.repeat(n[:, None], 3, 1), np.repeat(c[:, None], 3, 1)], 2)
             prog = self.ctx.program(vertex_shader=MESH_VS, fragment_shader=SHADED_FS)
             vbo = self.ctx.buffer(np.ascontiguousarray(data, np.float32).tobytes())
-            vaos.append((prog, self.ctx.vertex_array(prog, [(vbo, "3f 3f 3f", "in_position", "in_normal", "in_color")]), None))
+            vaos.append(
+                (prog, self.ctx.vertex_array(prog, [(vbo, "3f 3f 3f", "in_position", "in_normal", "in_color")]), None)
+            )
         if len(self.scene.spheres):
             unit = unit_sphere()
             inst = np.concatenate([self.scene.spheres, colors[self.scene.sphere_material]], 1).astype(np.float32)
             prog = self.ctx.program(vertex_shader=SPHERE_VS, fragment_shader=SHADED_FS)
-            vao = self.ctx.vertex_array(prog, [(self.ctx.buffer(unit.tobytes()), "3f", "in_unit"),
-                                               (self.ctx.buffer(inst.tobytes()), "4f 3f/i", "in_sphere", "in_color")])
+            vao = self.ctx.vertex_array(
+                prog,
+                [
+                    (self.ctx.buffer(unit.tobytes()), "3f", "in_unit"),
+                    (self.ctx.buffer(inst.tobytes()), "4f 3f/i", "in_sphere", "in_color"),
+                ],
+            )
             vaos.append((prog, vao, len(inst)))
         return vaos
 
     def draw(self, lo: np.ndarray, hi: np.ndarray, colors: np.ndarray, background=(0.08, 0.08, 0.1)) -> np.ndarray:
         """The scene with the given boxes; returns uint8 (height, width, 4), row 0 at the top."""
         self.fbo.use()
-        self.fbo.clear(*background, 1.0, depth=1.0)
+        self.fbo.clear(*background, 1.0, depth=1.0)  # type: ignore[misc, call-arg]  # r, g, b, a, depth
         for prog, vao, instances in self._geometry:
             prog["mvp"].write(self.mvp.T.tobytes())
             prog["light_dir"].value = tuple(self.light_dir)
             vao.render(instances=instances) if instances else vao.render()
         if len(lo):
-            self._box_program["mvp"].write(self.mvp.T.tobytes())
+            self._box_program["mvp"].write(self.mvp.T.tobytes())  # type: ignore[union-attr]
             inst = np.ascontiguousarray(np.concatenate([lo, hi, colors], 1), np.float32)
             buf = self.ctx.buffer(inst.tobytes())
-            vao = self.ctx.vertex_array(self._box_program, [(self._corners, "3f", "in_corner"),
-                                                            (buf, "3f 3f 3f/i", "in_lo", "in_hi", "in_color")])
+            vao = self.ctx.vertex_array(
+                self._box_program,
+                [(self._corners, "3f", "in_corner"), (buf, "3f 3f 3f/i", "in_lo", "in_hi", "in_color")],
+            )
             vao.render(mode=self.ctx.LINES, instances=len(inst))
             vao.release()
             buf.release()

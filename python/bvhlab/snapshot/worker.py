@@ -1,10 +1,10 @@
 """The child process of bvhlab.snapshot: builds the tree and draws with moderngl."""
+
 from __future__ import annotations
 
 import argparse
 import json
 import math
-from pathlib import Path
 
 import numpy as np
 
@@ -21,6 +21,7 @@ def main(argv=None) -> None:
     args = ap.parse_args(argv)
 
     import bvhlab
+
     from .._core import depth_colors
     from .raster import Rasterizer
 

@@ -12,6 +12,7 @@ and runs the scenario's `check(shots, info)`. Exit code 1 when any scenario fail
 A new scenario is one more file scenario_NAME.py with SCENE, SCREENSHOTS, steps(session) and
 check(shots, info) (see scenario_panel.py); this driver finds it by its name.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -35,11 +36,22 @@ SIZE = (1600, 900)
 
 
 def start_x() -> subprocess.Popen:
-    server = subprocess.Popen(["Xvfb", DISPLAY, "-screen", "0", f"{SIZE[0]}x{SIZE[1]}x24", "-nolisten", "tcp"],
-                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    server = subprocess.Popen(
+        ["Xvfb", DISPLAY, "-screen", "0", f"{SIZE[0]}x{SIZE[1]}x24", "-nolisten", "tcp"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     for _ in range(100):
-        if subprocess.run(["xdpyinfo" if shutil.which("xdpyinfo") else "xwd", *(["-display", DISPLAY] if shutil.which(
-                "xdpyinfo") else ["-root", "-silent", "-display", DISPLAY])], capture_output=True).returncode == 0:
+        if (
+            subprocess.run(
+                [
+                    "xdpyinfo" if shutil.which("xdpyinfo") else "xwd",
+                    *(["-display", DISPLAY] if shutil.which("xdpyinfo") else ["-root", "-silent", "-display", DISPLAY]),
+                ],
+                capture_output=True,
+            ).returncode
+            == 0
+        ):
             return server
         time.sleep(0.1)
     server.kill()
@@ -53,12 +65,16 @@ def answer(request: dict, shots_dir: Path, shots: dict) -> None:
         shots[request["name"]] = image = xshot.capture(DISPLAY)
         xshot.write_png(shots_dir / f"{request['name']}.png", image)
     elif request["action"] == "key":
-        subprocess.run(["xdotool", "mousemove", str(request["x"]), str(request["y"]), "key", request["key"]],
-                       env=env, check=True)
+        subprocess.run(
+            ["xdotool", "mousemove", str(request["x"]), str(request["y"]), "key", request["key"]], env=env, check=True
+        )
     elif request["action"] == "scroll":
         keys = (["keydown", "ctrl"], ["keyup", "ctrl"]) if request.get("ctrl") else ([], [])
-        subprocess.run(["xdotool", "mousemove", str(request["x"]), str(request["y"]), *keys[0], "click", "5",
-                        *keys[1]], env=env, check=True)
+        subprocess.run(
+            ["xdotool", "mousemove", str(request["x"]), str(request["y"]), *keys[0], "click", "5", *keys[1]],
+            env=env,
+            check=True,
+        )
     else:
         raise ValueError(f"unknown request {request}")
     (shots_dir / f"done-{request['id']:03d}").touch()
@@ -72,9 +88,23 @@ def run_scenario(name: str, args) -> tuple[list[str], dict, dict]:
     shots_dir.mkdir(parents=True)
     user = tempfile.mkdtemp(prefix="bvhlab_ui_user_")
     scene = ROOT / "blender_scenes" / f"{scenario.SCENE}.blend"
-    command = [args.blender, "--factory-startup", "-p", "0", "0", str(SIZE[0]), str(SIZE[1]), str(scene),
-               "--python", str(HERE / f"scenario_{name}.py"), "--", "--zip", str(args.zip.resolve()),
-               "--shots", str(shots_dir)]
+    command = [
+        args.blender,
+        "--factory-startup",
+        "-p",
+        "0",
+        "0",
+        str(SIZE[0]),
+        str(SIZE[1]),
+        str(scene),
+        "--python",
+        str(HERE / f"scenario_{name}.py"),
+        "--",
+        "--zip",
+        str(args.zip.resolve()),
+        "--shots",
+        str(shots_dir),
+    ]
     env = dict(os.environ, DISPLAY=DISPLAY, BLENDER_USER_RESOURCES=user)
     shots: dict = {}
     with (shots_dir / "blender.log").open("w") as log:
@@ -110,7 +140,7 @@ def main(argv=None) -> int:
     ap.add_argument("--blender", default="blender")
     ap.add_argument("--timeout", type=float, default=240)
     args = ap.parse_args(argv)
-    names = args.only or sorted(p.stem[len("scenario_"):] for p in HERE.glob("scenario_*.py"))
+    names = args.only or sorted(p.stem[len("scenario_") :] for p in HERE.glob("scenario_*.py"))
     server = start_x()
     failed = 0
     try:
@@ -121,15 +151,21 @@ def main(argv=None) -> int:
             print(f"{name}: {json.dumps(summary, default=str)}")
             for failure in failures:
                 print(f"  {failure}")
-            print(f"{'FAIL' if failures else 'PASS'} ui: {name} ({time.time() - started:.0f} s; pictures in "
-                  f"{args.out / name})", flush=True)
+            print(
+                f"{'FAIL' if failures else 'PASS'} ui: {name} ({time.time() - started:.0f} s; pictures in "
+                f"{args.out / name})",
+                flush=True,
+            )
             failed += bool(failures)
             if args.screenshots is not None and not failures:
                 scenario = importlib.import_module(f"scenario_{name}")
                 for shot, file_name in scenario.SCREENSHOTS.items():
                     area = info.get("area")
-                    image = shots[shot] if area is None else shots[shot][area["y"]:area["y"] + area["height"],
-                                                                         area["x"]:area["x"] + area["width"]]
+                    image = (
+                        shots[shot]
+                        if area is None
+                        else shots[shot][area["y"] : area["y"] + area["height"], area["x"] : area["x"] + area["width"]]
+                    )
                     xshot.write_png(args.screenshots / file_name, image)
                     print(f"wrote {args.screenshots / file_name}")
     finally:

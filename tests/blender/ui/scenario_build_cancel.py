@@ -7,6 +7,7 @@ The big area shows a text editor: drawing a million triangles in a 3D viewport t
 itself about a second per redraw on a software OpenGL, which would hide what is measured here.
 
 Blender runs this file (--python) and the driver (run_ui.py) imports it for `check`."""
+
 from __future__ import annotations
 
 SCENE = "suzanne_1m"
@@ -27,12 +28,19 @@ def steps(session):
     area.type = "TEXT_EDITOR"
     yield 0.5
     centre = session.rect(session.region(area, "WINDOW"))
-    esc = {"action": "key", "key": "Escape", "x": centre["x"] + centre["width"] // 2,
-           "y": centre["y"] + centre["height"] // 2}
+    esc = {
+        "action": "key",
+        "key": "Escape",
+        "x": centre["x"] + centre["width"] // 2,
+        "y": centre["y"] + centre["height"] // 2,
+    }
     bpy.context.scene.bvhlab.compare_frames = 1
     bpy.context.scene.bvhlab.method = "sweep_sah"
-    for name, operator, press_esc in (("build_cancelled", "build", True), ("build", "build", False),
-                                      ("compare_cancelled", "compare", True)):
+    for name, operator, press_esc in (
+        ("build_cancelled", "build", True),
+        ("build", "build", False),
+        ("compare_cancelled", "compare", True),
+    ):
         state.messages.clear()
         with bpy.context.temp_override(window=session.window(), area=area):
             started = getattr(bpy.ops.bvhlab, operator)("INVOKE_DEFAULT")
@@ -47,9 +55,14 @@ def steps(session):
             if ticks * TICK_S > 180:
                 raise AssertionError(f"{name}: the operator did not finish within 180 s")
         level, text = state.messages[state.key(bpy.context.scene)]
-        session.info[name] = {"started": sorted(started), "ticks_while_running": ticks,
-                              "seconds": round(time.monotonic() - started_at, 2), "level": level,
-                              "message": text, "tree": state.tree_for(bpy.context.scene) is not None}
+        session.info[name] = {
+            "started": sorted(started),
+            "ticks_while_running": ticks,
+            "seconds": round(time.monotonic() - started_at, 2),
+            "level": level,
+            "message": text,
+            "tree": state.tree_for(bpy.context.scene) is not None,
+        }
         if name == "build_cancelled":
             state.trees.clear()
 
@@ -66,7 +79,11 @@ def check(shots: dict, info: dict) -> list[str]:
             failures.append(f"{name}: started {run['started']}, not modal")
         if run["ticks_while_running"] < 3:
             failures.append(f"{name}: the UI ticked only {run['ticks_while_running']} times while it ran")
-    cancelled, built, compared = info.get("build_cancelled", {}), info.get("build", {}), info.get("compare_cancelled", {})
+    cancelled, built, compared = (
+        info.get("build_cancelled", {}),
+        info.get("build", {}),
+        info.get("compare_cancelled", {}),
+    )
     if cancelled and (cancelled["level"] != "WARNING" or "cancelled" not in cancelled["message"] or cancelled["tree"]):
         failures.append(f"Esc did not cancel the build: {cancelled}")
     if built and (built["level"] != "INFO" or not built["tree"]):

@@ -6,6 +6,7 @@ and on the panel's own layout (UILayout.introspect): every stat is a label | val
 label is wider than the space it gets at the default sidebar width.
 
 Blender runs this file (--python) and the driver (run_ui.py) imports it for `check`."""
+
 from __future__ import annotations
 
 SCENE = "whitted"
@@ -56,12 +57,20 @@ def steps(session):
     yield 1.5
     yield {"action": "capture", "name": "no_overlay"}
     import numpy as np
+
     from bvhlab._core import depth_colors
 
     session.info["palette"] = depth_colors(np.arange(4, dtype=np.uint32)).tolist()
-    session.info["sidebar"], session.info["viewport"] = session.rect(sidebar), session.rect(session.region(area, "WINDOW"))
-    session.info["area"] = {"x": area.x, "y": session.window().height - area.y - area.height,
-                            "width": area.width, "height": area.height}
+    session.info["sidebar"], session.info["viewport"] = (
+        session.rect(sidebar),
+        session.rect(session.region(area, "WINDOW")),
+    )
+    session.info["area"] = {
+        "x": area.x,
+        "y": session.window().height - area.y - area.height,
+        "width": area.width,
+        "height": area.height,
+    }
     session.info["module"] = module
 
 
@@ -78,8 +87,12 @@ def _record_layouts(session) -> dict:
         blf.size(0, context.preferences.ui_styles[0].widget.points * system.ui_scale)
         tree = panel.layout.introspect()
         texts = sorted({item["draw_string"] for item in _walk(tree) if item.get("type") == LABEL_TYPE})
-        layouts[type(panel).__name__] = {"tree": tree, "scale": system.ui_scale, "region": context.region.width,
-                                         "widths": {t: blf.dimensions(0, t)[0] for t in texts}}
+        layouts[type(panel).__name__] = {
+            "tree": tree,
+            "scale": system.ui_scale,
+            "region": context.region.width,
+            "widths": {t: blf.dimensions(0, t)[0] for t in texts},
+        }
 
     for name in PANELS:
         getattr(bpy.types, name).append(hook)
@@ -122,7 +135,7 @@ def check(shots: dict, info: dict) -> list[str]:
 
 
 def _crop(image, rect):
-    return image[rect["y"]:rect["y"] + rect["height"], rect["x"]:rect["x"] + rect["width"]]
+    return image[rect["y"] : rect["y"] + rect["height"], rect["x"] : rect["x"] + rect["width"]]
 
 
 def _pixels_per_depth(pixels, palette_linear) -> list[int]:
@@ -144,7 +157,9 @@ def _stats_rows(layout) -> list[str]:
     splits = [item for item in _walk(layout["tree"]) if item.get("type") == "LAYOUT_SPLIT"]
     rows = [[i.get("draw_string") for i in s.get("items", ())] for s in splits]
     labelled = {row[0] for row in rows if len(row) == 2}
-    missing = [label for label in ("Primitives", "Nodes", "Leaves", "Height", "SAH cost", "Build") if label not in labelled]
+    missing = [
+        label for label in ("Primitives", "Nodes", "Leaves", "Height", "SAH cost", "Build") if label not in labelled
+    ]
     return [f"stats not shown as label | value rows: {missing} missing in {rows}"] if missing else []
 
 
@@ -163,8 +178,10 @@ def _cut_off_labels(name: str, layout) -> list[str]:
         for item in items:
             kind = item.get("type")
             if kind == LABEL_TYPE and layout["widths"].get(item["draw_string"], 0) > width:
-                failures.append(f"{name}: label '{item['draw_string']}' is {layout['widths'][item['draw_string']]:.0f} px, "
-                                f"its place {width:.0f} px")
+                failures.append(
+                    f"{name}: label '{item['draw_string']}' is {layout['widths'][item['draw_string']]:.0f} px, "
+                    f"its place {width:.0f} px"
+                )
             children = item.get("items", ())
             if kind == "LAYOUT_SPLIT" and len(children) > 1:
                 visit(children[:1], width * SPLIT_FIRST)

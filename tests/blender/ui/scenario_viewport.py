@@ -8,6 +8,7 @@ boxes of depths 8-9 against one without (full level, 1 sample). `make screenshot
 picture with the status line as docs/viewport.png.
 
 Blender runs this file (--python) and the driver (run_ui.py) imports it for `check`."""
+
 from __future__ import annotations
 
 SCENE = "atrium"
@@ -40,8 +41,13 @@ def steps(session):
     yield {"action": "capture", "name": "clean"}
     frame = _frame(viewport, "refined", region)
     _write_oracle(session, scene, area, region, frame)
-    session.info.update(region=session.rect(region), area=_area_rect(session, area), module=module,
-                        device=frame.timings["device"], note=frame.timings["note"])
+    session.info.update(
+        region=session.rect(region),
+        area=_area_rect(session, area),
+        module=module,
+        device=frame.timings["device"],
+        note=frame.timings["note"],
+    )
     _picture_overlays(area.spaces.active.overlay)
     area.tag_redraw()
     yield 1.0
@@ -83,8 +89,16 @@ def _picture_overlays(overlay) -> None:
     """Overlays on for the status line (the engine's info text); off for what would hide the picture
     (the camera the view looks out of, the light, the 3D cursor, the selection outline, the grid)."""
     overlay.show_overlays = True
-    for name in ("show_extras", "show_cursor", "show_outline_selected", "show_floor", "show_axis_x", "show_axis_y",
-                 "show_object_origins", "show_relationship_lines"):
+    for name in (
+        "show_extras",
+        "show_cursor",
+        "show_outline_selected",
+        "show_floor",
+        "show_axis_x",
+        "show_axis_y",
+        "show_object_origins",
+        "show_relationship_lines",
+    ):
         setattr(overlay, name, False)
 
 
@@ -103,7 +117,8 @@ def _frame(viewport, level: str, region, overlay="any"):
             continue
         x, y, width, height = frame.request.frustum.draw_rect
         if (width, height) == (region.width, region.height) and (
-                overlay == "any" or frame.request.settings.overlay == overlay):
+            overlay == "any" or frame.request.settings.overlay == overlay
+        ):
             return frame
     return None
 
@@ -119,8 +134,12 @@ def _until(condition, timeout: float, what: str):
 
 
 def _area_rect(session, area) -> dict:
-    return {"x": area.x, "y": session.window().height - area.y - area.height, "width": area.width,
-            "height": area.height}
+    return {
+        "x": area.x,
+        "y": session.window().height - area.y - area.height,
+        "width": area.width,
+        "height": area.height,
+    }
 
 
 def _write_oracle(session, scene, area, region, frame) -> None:
@@ -130,8 +149,9 @@ def _write_oracle(session, scene, area, region, frame) -> None:
     import math
 
     import bpy
-    import bvhlab
     import numpy as np
+
+    import bvhlab
     from bvhlab._core import depth_colors
     from bvhlab.blender import export_scene
 
@@ -139,21 +159,29 @@ def _write_oracle(session, scene, area, region, frame) -> None:
     window, to_world = np.array(view.window_matrix), np.array(view.view_matrix.inverted())
     assert abs(window[0, 2]) < 1e-9 and abs(window[1, 2]) < 1e-9, "the oracle assumes a centred projection"
     position = to_world[:3, 3]
-    camera = bvhlab.Camera(tuple(position), tuple(position - to_world[:3, 2]), tuple(to_world[:3, 1]),
-                           math.degrees(2 * math.atan(1 / window[1, 1])))
+    camera = bvhlab.Camera(
+        tuple(position),
+        tuple(position - to_world[:3, 2]),
+        tuple(to_world[:3, 1]),
+        math.degrees(2 * math.atan(1 / window[1, 1])),
+    )
     exported = export_scene(bpy.context, require_camera=False)
     exported.camera = camera
     s = scene.bvhlab
-    bvh = bvhlab.build(exported, method=s.method, bins=s.bins, axis=s.axis, max_leaf_size=s.max_leaf_size)
+    bvh = bvhlab.build(exported, **s.build_kwargs())
     options = {"backend": "cpu", "samples_per_axis": 2, "max_depth": s.render_bounces, "traversal": s.traversal}
     image, _ = bvhlab.render(exported, bvh, region.width, region.height, overlay_depth=DEPTHS, **options)
     bare, _ = bvhlab.render(exported, bvh, region.width, region.height, **options)
     np.save(session.shots / "oracle.npy", _display(image))
     np.save(session.shots / "lines.npy", np.abs(image - bare).max(-1) > 0)
-    session.info.update(oracle=str(session.shots / "oracle.npy"), lines=str(session.shots / "lines.npy"),
-                        line_colors=_display(depth_colors(np.array(DEPTHS, np.uint32))).tolist(),
-                        oracle_camera=camera.as_row(), engine_camera=frame.request.frustum.camera().as_row(),
-                        ui_top=_covered_top(session, area, region))
+    session.info.update(
+        oracle=str(session.shots / "oracle.npy"),
+        lines=str(session.shots / "lines.npy"),
+        line_colors=_display(depth_colors(np.array(DEPTHS, np.uint32))).tolist(),
+        oracle_camera=camera.as_row(),
+        engine_camera=frame.request.frustum.camera().as_row(),
+        ui_top=_covered_top(session, area, region),
+    )
 
 
 def _display(linear):
@@ -161,23 +189,28 @@ def _display(linear):
     import numpy as np
 
     linear = np.clip(np.asarray(linear)[..., :3], 0, 1)
-    return np.round(np.where(linear <= 0.0031308, linear * 12.92, 1.055 * linear ** (1 / 2.4) - 0.055) * 255
-                    ).astype(np.uint8)
+    return np.round(np.where(linear <= 0.0031308, linear * 12.92, 1.055 * linear ** (1 / 2.4) - 0.055) * 255).astype(
+        np.uint8
+    )
 
 
 def _covered_top(session, area, region) -> int:
     """Rows at the top of the region that the header and tool header are drawn over."""
     top = session.rect(region)["y"]
-    bottoms = [session.rect(r)["y"] + r.height for r in area.regions
-               if r.type in ("HEADER", "TOOL_HEADER") and r.height > 1]
+    bottoms = [
+        session.rect(r)["y"] + r.height for r in area.regions if r.type in ("HEADER", "TOOL_HEADER") and r.height > 1
+    ]
     return max([b - top for b in bottoms] + [0])
 
 
 def _light_moved(bpy, viewport, region, before):
     light = next(obj for obj in bpy.context.scene.objects if obj.type == "LIGHT")
     light.location.x += 6.0
-    yield from _until(lambda: (f := _frame(viewport, "refined", region)) is not None and f is not before, 120,
-                      "a refined frame after moving the light")
+    yield from _until(
+        lambda: (f := _frame(viewport, "refined", region)) is not None and f is not before,
+        120,
+        "a refined frame after moving the light",
+    )
     yield 1.0
 
 
@@ -190,7 +223,7 @@ def _orbit(session, viewport, area, region):
 
     view = area.spaces.active.region_3d
     seen, last = [], None
-    for step in range(ORBIT_STEPS):
+    for _ in range(ORBIT_STEPS):
         view.view_rotation = Quaternion((0.0, 0.0, 1.0), 0.01) @ view.view_rotation
         area.tag_redraw()
         yield 0.05
@@ -207,8 +240,12 @@ def _note(viewport, region, seen: list, last):
         frame = session.latest_frame()
         if frame is not None and frame is not last:
             t = frame.timings
-            seen.append({k: (round(t[k], 1) if isinstance(t[k], float) else t[k])
-                         for k in ("level", "width", "height", "spp", "trace_ms", "frame_ms", "latency_ms")})
+            seen.append(
+                {
+                    k: (round(t[k], 1) if isinstance(t[k], float) else t[k])
+                    for k in ("level", "width", "height", "spp", "trace_ms", "frame_ms", "latency_ms")
+                }
+            )
             return frame
     return last
 
@@ -224,8 +261,13 @@ def _section_41(session, viewport, scene, region):
             before = _frame(viewport, "full", region)
             settings.overlay_show = show
             wanted = DEPTHS if show else None
-            yield from _until(lambda: (f := _frame(viewport, "full", region, wanted)) is not None and f is not before,
-                              120, f"the full frame ({name})")
+            yield from _until(
+                lambda wanted=wanted, before=before: (
+                    (f := _frame(viewport, "full", region, wanted)) is not None and f is not before
+                ),
+                120,
+                f"the full frame ({name})",
+            )
             times[name].append(round(_frame(viewport, "full", region, wanted).timings["trace_ms"], 1))
     session.info["section_4_1_trace_ms"] = times
 
@@ -246,18 +288,24 @@ def check(shots: dict, info: dict) -> list[str]:
     if oracle.shape != clean.shape:
         return [f"the oracle is {oracle.shape}, the region {clean.shape}"]
     keep = np.zeros(lines.shape, bool)
-    keep[info["ui_top"] + EDGE:-EDGE, EDGE:-EDGE] = True
+    keep[info["ui_top"] + EDGE : -EDGE, EDGE:-EDGE] = True
     diff = np.abs(clean - oracle).max(-1)
     off, on = keep & ~lines, keep & lines
     colors = np.array(info["line_colors"])
     line_colored = np.abs(clean[..., None, :] - colors).max(-1).min(-1) <= PIXEL_TOLERANCE
-    stats = {"pixels": int(keep.sum()), "off_lines_mean": round(float(diff[off].mean()), 3),
-             "off_lines_within": round(float((diff[off] <= PIXEL_TOLERANCE).mean()), 5),
-             "on_lines_agree": round(float(((diff <= PIXEL_TOLERANCE) | line_colored)[on].mean()), 4)}
+    stats = {
+        "pixels": int(keep.sum()),
+        "off_lines_mean": round(float(diff[off].mean()), 3),
+        "off_lines_within": round(float((diff[off] <= PIXEL_TOLERANCE).mean()), 5),
+        "on_lines_agree": round(float(((diff <= PIXEL_TOLERANCE) | line_colored)[on].mean()), 4),
+    }
     info["screenshot_vs_oracle"] = stats
     failures = []
-    if (stats["off_lines_mean"] > MEAN_TOLERANCE or stats["off_lines_within"] < PIXEL_SHARE
-            or stats["on_lines_agree"] < LINE_SHARE):
+    if (
+        stats["off_lines_mean"] > MEAN_TOLERANCE
+        or stats["off_lines_within"] < PIXEL_SHARE
+        or stats["on_lines_agree"] < LINE_SHARE
+    ):
         failures.append(f"the viewport differs from bvhlab.render of its view: {stats}")
     moved = np.abs(_crop(shots["light_moved"], rect).astype(np.int32) - clean).max(-1) > 8
     info["light_moved_changed_share"] = round(float(moved.mean()), 4)
@@ -267,7 +315,7 @@ def check(shots: dict, info: dict) -> list[str]:
 
 
 def _crop(image, rect):
-    return image[rect["y"]:rect["y"] + rect["height"], rect["x"]:rect["x"] + rect["width"]]
+    return image[rect["y"] : rect["y"] + rect["height"], rect["x"] : rect["x"] + rect["width"]]
 
 
 if __name__ == "__main__":

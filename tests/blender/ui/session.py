@@ -4,6 +4,7 @@ seconds (the UI keeps drawing), a dict is a request to the driver (run_ui.py) â€
 "capture", "name": ...}, {"action": "key", "key": ...}, {"action": "scroll", "x", "y", "ctrl"} â€”
 answered before the next step. At the end the scenario's `info` goes to result.json and Blender
 quits; an exception is written there too and makes the exit code non-zero."""
+
 from __future__ import annotations
 
 import json
@@ -48,21 +49,26 @@ class Session:
 
     def install_zip(self) -> str:
         with bpy.context.temp_override(window=self.window()):
-            result = bpy.ops.extensions.package_install_files(filepath=str(self.zip_path), repo="user_default",
-                                                              enable_on_install=True)
+            result = bpy.ops.extensions.package_install_files(
+                filepath=str(self.zip_path), repo="user_default", enable_on_install=True
+            )
         assert result == {"FINISHED"}, result
         return "bl_ext.user_default.bvhlab"
 
     def rect(self, region) -> dict:
         """A region's rectangle in screen pixels, top-left origin (the window fills the screen)."""
         window = self.window()
-        return {"x": region.x, "y": window.height - region.y - region.height, "width": region.width,
-                "height": region.height}
+        return {
+            "x": region.x,
+            "y": window.height - region.y - region.height,
+            "width": region.width,
+            "height": region.height,
+        }
 
 
 def run(steps, argv=None) -> None:
     """Start the scenario `steps(session)` from a timer; write result.json when it ends."""
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    argv = sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else []
     shots, zip_path = Path(argv[argv.index("--shots") + 1]), Path(argv[argv.index("--zip") + 1])
     session = Session(shots, zip_path)
     generator = steps(session)

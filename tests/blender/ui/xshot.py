@@ -1,5 +1,6 @@
 """The X screen as a numpy image (xwd's dump format, read here) and PNG files (zlib): no
 ImageMagick needed. Blender's own screenshot operator writes black images under Xvfb/llvmpipe."""
+
 from __future__ import annotations
 
 import struct
@@ -27,7 +28,7 @@ def read_xwd(raw: bytes) -> np.ndarray:
     start = header_size + 12 * ncolors
     step = bits_per_pixel // 8
     rows = np.frombuffer(raw, np.uint8, bytes_per_line * height, start).reshape(height, bytes_per_line)
-    pixels = rows[:, :width * step].reshape(height, width, step).astype(np.uint32)
+    pixels = rows[:, : width * step].reshape(height, width, step).astype(np.uint32)
     order = range(step) if byte_order == 0 else range(step - 1, -1, -1)  # 0: least significant byte first
     value = sum(pixels[..., i] << (8 * k) for k, i in enumerate(order))
     channels = [(value & m) >> (int(m).bit_length() - 8) for m in masks]
@@ -43,5 +44,9 @@ def write_png(path: Path, rgb: np.ndarray) -> None:
         return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
 
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0))
-                     + chunk(b"IDAT", zlib.compress(scanlines, 9)) + chunk(b"IEND", b""))
+    path.write_bytes(
+        b"\x89PNG\r\n\x1a\n"
+        + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0))
+        + chunk(b"IDAT", zlib.compress(scanlines, 9))
+        + chunk(b"IEND", b"")
+    )

@@ -1,0 +1,86 @@
+"""The tracer's ray tests (shaders/tracer/geometry.glsl, the CPU reference and Vulkan run the same
+code) on the cases that float32 rounding decides: rays through the shared edges and vertices of a
+closed mesh never leak (watertight test, Woop, Benthin and Wald 2013), and rays beside a small
+distant sphere miss it (Haines et al., Ray Tracing Gems 2019 ch. 7). Checked against geometry
+worked out here in float64, on both backends and both traversals."""
+
+import math
+
+import numpy as np
+import pytest
+
+import bvhlab
+from bvhlab.library import procedural
+
+SKY_DEPTH = 1e10  # RenderResult.depth where nothing was hit
+
+
+@pytest.fixture(scope="module", params=["cpu", "vulkan"])
+def renderer(request):
+    r = bvhlab.Renderer(request.param, validation=True) if request.param == "vulkan" else bvhlab.Renderer("cpu")
+    yield r
+    assert r.validation_errors == 0, r.validation_messages()
+
+
+def depth_pass(renderer, scene, size, traversal, camera):
+    job = renderer.start(
+        scene, bvhlab.build(scene, method="median"), size, size, camera=camera, traversal=traversal, max_depth=0
+    )
+    job.run()
+    return job.result(color=False, cost=False).depth
+
+
+def cube_points(h):
+    """The corners of the cube [-h, h]³ and the midpoints of its edges (grid vertices of box_room
+    with an even number of divisions)."""
+    corners = [(x, y, z) for x in (-h, h) for y in (-h, h) for z in (-h, h)]
+    edges = [tuple(np.roll((a, b, 0.0), k)) for k in range(3) for a in (-h, h) for b in (-h, h)]
+    return corners + edges
+
+
+@pytest.mark.parametrize("traversal", ["stack", "stackless"])
+def test_rays_through_shared_edges_and_vertices_of_a_closed_mesh_never_miss(renderer, traversal):
+    """From the centre of a closed cube (six 8×8 grids of two triangles a cell), looking straight at
+    each corner and each edge's midpoint: the centre pixel's ray (an odd image) runs exactly
+    through that vertex, where three to six triangles meet, and the rays around it cross the
+    cube's edges and the grid's diagonals. Every pixel must hit, at the depth of the cube's wall."""
+    h, size = 1.0, 33
+    scene = bvhlab.Scene(triangles=procedural.box_room(2 * h, 8))
+    for point in cube_points(h):
+        up = (0.0, 0.0, 1.0) if point[2] == 0.0 or abs(point[0]) + abs(point[1]) > 0 else (0.0, 1.0, 0.0)
+        camera = bvhlab.Camera(position=(0.0, 0.0, 0.0), look_at=point, up=up, fov_y=60.0)
+        depth = depth_pass(renderer, scene, size, traversal, camera)
+        sky = np.count_nonzero(depth >= SKY_DEPTH)
+        assert sky == 0, f"{renderer.backend} {traversal}: {sky} rays leaked out of the cube towards {point}"
+        centre = depth[size // 2, size // 2]
+        assert centre == pytest.approx(math.hypot(*point), rel=1e-5), (point, centre)
+
+
+@pytest.mark.parametrize("traversal", ["stack", "stackless"])
+def test_rays_beside_a_small_distant_sphere_miss_it_in_the_tracer(renderer, traversal):
+    """A sphere of radius 1 mm 100 m away filling a 61-pixel image about 60 radii across: the
+    pixels whose ray passes within the radius (worked out in float64) hit it at its distance, all
+    others are sky. The old discriminant b² - a·c hit rays up to about 24 radii beside it."""
+    r, distance, size, radii_across = 1e-3, 100.0, 61, 60.0
+    scene = bvhlab.Scene(spheres=np.array([[distance, 0.0, 0.0, r]], np.float32))
+    tan_half = radii_across / 2 * r / distance
+    camera = bvhlab.Camera(
+        position=(0.0, 0.0, 0.0),
+        look_at=(1.0, 0.0, 0.0),
+        up=(0.0, 0.0, 1.0),
+        fov_y=math.degrees(2 * math.atan(tan_half)),
+    )
+    depth = depth_pass(renderer, scene, size, traversal, camera)
+    # each pixel's ray (1, x, y) in float64: its distance from the centre
+    s = ((np.arange(size) + 0.5) / size * 2 - 1) * tan_half
+    x, y = np.meshgrid(s, s)
+    beside = distance * np.hypot(x, y) / np.sqrt(1 + x * x + y * y)
+    inside, outside = beside < r * 0.99, beside > r * 1.01
+    assert inside.sum() >= 3 and outside.sum() > 3000
+    hit = depth < SKY_DEPTH
+    assert hit[inside].all(), f"{renderer.backend} {traversal}: rays through the sphere missed it"
+    assert not hit[outside].any(), (
+        f"{renderer.backend} {traversal}: {np.count_nonzero(hit & outside)} rays "
+        f"up to {beside[hit & outside].max() / r:.1f} radii beside the sphere hit it"
+    )
+    np.testing.assert_allclose(depth[inside], distance - r, rtol=2e-5)
