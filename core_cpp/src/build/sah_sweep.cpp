@@ -83,8 +83,6 @@ Cut cheapest_cut(const BoxSequence& seq, const SahCost& sah, float inv_parent_ar
 }
 
 template struct Unions<kMaxBins + 3>;
-template struct Unions<kSmallExact + 3>;
 template Cut cheapest_cut(const BoxSequence&, const SahCost&, float, Unions<kMaxBins + 3>&);
-template Cut cheapest_cut(const BoxSequence&, const SahCost&, float, Unions<kSmallExact + 3>&);
 
 }  // namespace bvhlab

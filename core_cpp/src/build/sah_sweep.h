@@ -1,6 +1,7 @@
-// sah_sweep.h — the cheapest cut of a sequence of boxes (report §2.3.2): buckets of the binned
-// SAH, or primitives sorted on an axis for the exact SAH of small ranges. One suffix and one
-// prefix pass of box unions, then the areas and costs of the candidates four at a time.
+// sah_sweep.h — the cheapest cut of a sequence of boxes (report §2.3.2): the buckets of the
+// binned SAH (small ranges sweep their sorted primitives in small_subtree.cpp instead). One
+// suffix and one prefix pass of box unions, then the areas and costs of the candidates four at
+// a time.
 #pragma once
 #include <cstdint>
 #include <limits>

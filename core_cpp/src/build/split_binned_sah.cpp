@@ -81,7 +81,6 @@ std::uint32_t partition_chunks(SplitContext& ctx, Range r, int src, const BinFra
 }  // namespace
 
 std::optional<Split> split_binned_sah(SplitContext& ctx, Range r, int src, const NodeBounds& b, int axis) {
-    if (r.size() <= kSmallExact) return split_small_exact(ctx, r, src, b, axis);
     const bool by_centroids = ctx.config.bin_bounds == BinBounds::Centroids;
     const BinFrame frame(by_centroids ? b.centroids : b.box, ctx.config.bins);
     const BinSet bins =
@@ -102,9 +101,10 @@ std::optional<Split> split_binned_sah(SplitContext& ctx, Range r, int src, const
     const std::uint32_t n_left = bins.count_of(best.axis, 0, best.last_left + 1);
     ChildBinning child[2] = {{BinFrame(s.left.box, frame.bins)}, {BinFrame(s.right.box, frame.bins)}};
     // Buckets over centroid bounds: a child's frame is known only after the pass, so it bins itself.
-    const std::int32_t slots[2] = {
-        !by_centroids && n_left > kSmallExact ? std::int32_t(ctx.child_slot + 1) : -1,
-        !by_centroids && r.size() - n_left > kSmallExact ? std::int32_t(ctx.child_slot) : -1};
+    // Small children are built whole by the small-subtree builder, which needs no buckets.
+    const std::uint32_t small = small_subtree_size(ctx.config);
+    const std::int32_t slots[2] = {!by_centroids && n_left > small ? std::int32_t(ctx.child_slot + 1) : -1,
+                                   !by_centroids && r.size() - n_left > small ? std::int32_t(ctx.child_slot) : -1};
     // The children's centroid bounds are gathered only for the axis policies that read them;
     // otherwise their boxes stand in for them (they contain the centroids; see NodeBounds).
     const bool centroids =

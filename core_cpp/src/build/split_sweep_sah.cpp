@@ -46,7 +46,6 @@ void sweep(SplitContext& ctx, const std::vector<PrimRef>& p, const NodeBounds& b
 }  // namespace
 
 std::optional<Split> split_sweep_sah(SplitContext& ctx, Range r, int src, const NodeBounds& b, int axis) {
-    if (r.size() <= kSmallExact) return split_small_exact(ctx, r, src, b, axis);
     const PrimRef* in = ctx.buffers[src];
     auto& sorted = ctx.scratch.sorted;
     Vec3 extent = b.centroids.extent();

@@ -2,6 +2,9 @@
 
 #include <bit>
 
+#include "small_subtree.h"
+#include "subtree_writer.h"
+
 namespace bvhlab {
 namespace {
 
@@ -11,10 +14,9 @@ std::uint64_t mix(std::uint64_t x) {  // splitmix64 finaliser
     return x ^ (x >> 31);
 }
 
-/// The axis policy (report §2.3). Random hashes the node's own range and depth, not a shared
-/// generator, so the tree is the same whichever thread builds which subtree.
-int choose_axis(const BuildConfig& cfg, const WorkItem& item) {
-    Vec3 extent = item.bounds.centroids.extent();
+}  // namespace
+
+int choose_axis(const BuildConfig& cfg, Vec3 extent, Range range, std::uint32_t depth) {
     switch (cfg.axis) {
         case AxisPolicy::Auto:
             return method_info(cfg.method).uses_sah ? kAllAxes : largest_axis(extent);
@@ -27,20 +29,19 @@ int choose_axis(const BuildConfig& cfg, const WorkItem& item) {
             for (int a = 0; a < 3; ++a)
                 if (extent[a] > 0.0f) axes[n++] = a;
             if (n == 0) return largest_axis(extent);
-            std::uint64_t h =
-                mix(cfg.seed ^ mix(item.range.begin ^ (std::uint64_t(item.range.end) << 32)) ^ item.depth);
+            std::uint64_t h = mix(cfg.seed ^ mix(range.begin ^ (std::uint64_t(range.end) << 32)) ^ depth);
             return axes[h % n];
         }
     }
     return 0;
 }
 
-/// Median splits keep every leaf within depth + ceil(log2 n) (report §3.1: the GPU stack is
-/// MAX_TREE_HEIGHT deep), so once a branch could outgrow that, it continues with them.
 bool too_deep(std::uint32_t depth, std::uint32_t n) {
     std::uint32_t median_height = std::bit_width(n - 1);  // ceil(log2 n) for n >= 1
     return depth + median_height >= gpu::MAX_TREE_HEIGHT - 1;
 }
+
+namespace {
 
 /// Two primitives: every method splits them 1 | 1; order them by centroid on the largest axis.
 Split split_pair(SplitContext& ctx, const WorkItem& item) {
@@ -79,7 +80,8 @@ Split find_split(SplitContext& ctx, const WorkItem& item) {
         if (too_deep(item.depth, r.size())) return median_of(ctx, r, src, b);
     }
 
-    const int axis = method.bottom_up_boxes ? kAllAxes : choose_axis(ctx.config, item);  // LBVH has no axis
+    const int axis = method.bottom_up_boxes ? kAllAxes  // LBVH has no axis
+                                            : choose_axis(ctx.config, b.centroids.extent(), r, item.depth);
     std::optional<Split> s = axis == kAllAxes && !method.all_axes ? split_best_of_axes(method.split, ctx, r, src, b)
                                                                   : method.split(ctx, r, src, b, axis);
     return s ? *s : split_even(ctx, r, src, b);
@@ -103,48 +105,18 @@ std::optional<Split> choose_split(SplitContext& ctx, const WorkItem& item) {
     return s;
 }
 
+void SubtreeWriter::make_leaf(std::uint32_t index, const WorkItem& item) {
+    const Range r = item.range;
+    std::uint32_t* out = make_leaf(index, r.begin, r.size());
+    const PrimRef* refs = shared_.buffers[item.buffer];
+    for (std::uint32_t i = r.begin; i < r.end; ++i) out[i - r.begin] = refs[i].ref;
+    if (!shared_.method.bottom_up_boxes) return;
+    F4 lo = refs[r.begin].lo4(), hi = refs[r.begin].hi4();
+    for (std::uint32_t i = r.begin + 1; i < r.end; ++i) lo = min(lo, refs[i].lo4()), hi = max(hi, refs[i].hi4());
+    set_box(out_.nodes[index], {{lo.lane(0), lo.lane(1), lo.lane(2)}, {hi.lane(0), hi.lane(1), hi.lane(2)}});
+}
+
 namespace {
-
-/// Writes the nodes of one subtree in depth-first order.
-class SubtreeWriter {
-public:
-    SubtreeWriter(BuildShared& shared, Subtree& out) : shared_(shared), out_(out) {}
-    ~SubtreeWriter() { flush_leaf_count(); }
-
-    /// Appends the node of `item` (box and depth) and links it to its parent.
-    std::uint32_t open(const WorkItem& item) {
-        const auto index = static_cast<std::uint32_t>(out_.nodes.size());
-        BvhNode node{};
-        set_box(node, item.bounds.box);
-        out_.nodes.push_back(node);
-        out_.depths.push_back(static_cast<std::uint8_t>(item.depth));
-        if (item.second_child) out_.nodes[item.parent].index = index;
-        return index;
-    }
-    void make_internal(std::uint32_t index) { out_.nodes[index].info = gpu::NODE_INTERNAL_BIT; }  // skip: at the end
-    void make_leaf(std::uint32_t index, const WorkItem& item) {
-        BvhNode& node = out_.nodes[index];
-        node.index = item.range.begin;
-        node.info = item.range.size();
-        const PrimRef* refs = shared_.buffers[item.buffer];
-        for (std::uint32_t i = item.range.begin; i < item.range.end; ++i) shared_.leaf_refs[i] = refs[i].ref;
-        leaf_primitives_ += item.range.size();
-        if (!shared_.method.bottom_up_boxes) return;
-        F4 lo = refs[item.range.begin].lo4(), hi = refs[item.range.begin].hi4();
-        for (std::uint32_t i = item.range.begin + 1; i < item.range.end; ++i)
-            lo = min(lo, refs[i].lo4()), hi = max(hi, refs[i].hi4());
-        set_box(node, {{lo.lane(0), lo.lane(1), lo.lane(2)}, {hi.lane(0), hi.lane(1), hi.lane(2)}});
-    }
-    void flush_leaf_count() {
-        shared_.primitives_in_leaves.fetch_add(leaf_primitives_, std::memory_order_relaxed);
-        leaf_primitives_ = 0;
-    }
-
-private:
-    BuildShared& shared_;
-    Subtree& out_;
-    std::uint64_t leaf_primitives_ = 0;
-};
 
 /// A range that is a leaf without asking the split method: one primitive, or few enough for a
 /// leaf under a method that does not weigh leaves against splits.
@@ -167,6 +139,7 @@ void build_subtree(BuildShared& shared, SplitScratch& scratch, const WorkItem& r
     out.nodes.reserve(2 * std::size_t(root.range.size()) - 1);  // a binary tree with n leaves at most
     out.depths.reserve(out.nodes.capacity());
     std::vector<WorkItem> stack{root};
+    const std::uint32_t small_size = small_subtree_size(shared.config);
     for (std::uint32_t nodes = 0; !stack.empty(); ++nodes) {
         if ((nodes & 63) == 0) {
             writer.flush_leaf_count();
@@ -178,6 +151,10 @@ void build_subtree(BuildShared& shared, SplitScratch& scratch, const WorkItem& r
         if (index > 0 && item.range.size() <= run.defer_size) {
             item.bounds.bins = -1;  // its buckets live in this thread's store
             out.deferred.emplace_back(index, item);
+            continue;
+        }
+        if (item.range.size() >= 2 && item.range.size() <= small_size) {  // the last levels at once
+            build_small_subtree(writer, shared.config, item, index);
             continue;
         }
         ctx.child_slot = static_cast<std::uint32_t>(stack.size());  // where the children will be pushed

@@ -54,4 +54,13 @@ void build_subtree(BuildShared& shared, SplitScratch& scratch, const WorkItem& r
 /// Decides a node: the split to make, or nothing for a leaf. Exposed for the tests.
 std::optional<Split> choose_split(SplitContext& ctx, const WorkItem& item);
 
+/// The axis policy (report §2.3) for a node with this centroid extent, range and depth, or
+/// kAllAxes. Random hashes the node's own range and depth, not a shared generator, so the tree
+/// is the same whichever thread builds which subtree.
+int choose_axis(const BuildConfig& cfg, Vec3 centroid_extent, Range range, std::uint32_t depth);
+
+/// Median splits keep every leaf within depth + ceil(log2 n) (report §3.1: the GPU stack is
+/// MAX_TREE_HEIGHT deep), so once a branch could outgrow that, it continues with them.
+bool too_deep(std::uint32_t depth, std::uint32_t n);
+
 }  // namespace bvhlab

@@ -1,0 +1,253 @@
+#include "small_subtree.h"
+
+#include <limits>
+
+#include "bvhlab/sah.h"
+
+namespace bvhlab {
+namespace {
+
+constexpr std::uint32_t K = kSmallSubtree;
+static_assert(K <= 255, "orders are bytes");
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+/// The references of the range: boxes as (lo, -hi), twice the centroids, and their order on
+/// each axis (stable: ties keep input order). A node of the subtree owns positions
+/// [first, first + count) of all three orders, and its leaves take the same positions.
+struct SmallSet {
+    std::uint32_t n = 0;
+    F4 lo[K], neg_hi[K], c2[K];
+    std::uint32_t ref[K];
+    std::uint8_t order[3][K];
+
+    SmallSet(const PrimRef* in, std::uint32_t count) : n(count) {
+        for (std::uint32_t i = 0; i < n; ++i) {
+            lo[i] = in[i].lo4(), neg_hi[i] = neg(in[i].hi4()), c2[i] = in[i].lo4() + in[i].hi4();
+            ref[i] = in[i].ref;
+        }
+        rank_all();
+    }
+    /// rank of i = #{j : c2[j] < c2[i], or c2[j] == c2[i] and j < i}, per axis lane.
+    void rank_all() {
+        const F4 one = F4::splat(1.0f);
+        for (std::uint32_t i = 0; i < n; ++i) {
+            F4 rank = F4::splat(0.0f);
+            for (std::uint32_t j = 0; j < i; ++j) rank = rank + (less_equal(c2[j], c2[i]) & one);
+            for (std::uint32_t j = i + 1; j < n; ++j) rank = rank + (less(c2[j], c2[i]) & one);
+            std::uint32_t r[4];
+            truncate_to_u32(rank, r);
+            for (int a = 0; a < 3; ++a) order[a][r[a]] = std::uint8_t(i);
+        }
+    }
+};
+
+/// One node of the subtree still to build: positions, depth, box, and where it hangs.
+struct SmallNode {
+    std::uint32_t first, count, depth, parent;
+    bool second_child;
+    F4 lo, neg_hi;
+};
+
+Aabb to_aabb(F4 lo, F4 neg_hi) {
+    const F4 hi = neg(neg_hi);
+    return {{lo.lane(0), lo.lane(1), lo.lane(2)}, {hi.lane(0), hi.lane(1), hi.lane(2)}};
+}
+
+/// How a node is split: positions [first, first + last_left] of order[axis] go left.
+struct SmallCut {
+    int axis = -1;
+    std::uint32_t last_left = 0;
+    float cost = kInf;
+};
+
+/// The builder of one small subtree.
+class SmallBuilder {
+public:
+    SmallBuilder(SubtreeWriter& writer, const BuildConfig& cfg, const WorkItem& item)
+        : writer_(writer),
+          cfg_(cfg),
+          sah_(cfg),
+          begin_(item.range.begin),
+          set_(writer.shared().buffers[item.buffer] + item.range.begin, item.range.size()) {}
+
+    void build(const WorkItem& item, std::uint32_t index) {
+        const Aabb& b = item.bounds.box;
+        const float lo3[4] = {b.lo.x, b.lo.y, b.lo.z, 0.0f}, hi3[4] = {b.hi.x, b.hi.y, b.hi.z, 0.0f};
+        const F4 lo = F4::load(lo3), neg_hi = neg(F4::load(hi3));
+        SmallNode stack[2 * K];
+        std::uint32_t size = 0;
+        stack[size++] = {0, set_.n, item.depth, item.parent, item.second_child, lo, neg_hi};
+        for (bool root = true; size > 0; root = false) {
+            const SmallNode node = stack[--size];
+            const std::uint32_t at =
+                root ? index : writer_.open(to_aabb(node.lo, node.neg_hi), node.depth, node.parent, node.second_child);
+            const SmallCut cut = node.count > 1 ? choose(node) : SmallCut{};
+            if (cut.axis < 0) {
+                make_leaf(at, node);
+                continue;
+            }
+            writer_.make_internal(at);
+            SmallNode children[2];
+            divide(node, cut, at, children);
+            stack[size++] = children[1], stack[size++] = children[0];
+        }
+    }
+
+private:
+    SmallCut choose(const SmallNode& node) const;
+    SmallCut cheapest(const SmallNode& node, const bool allowed[3]) const;
+    SmallCut cut_at(int axis, const SmallNode& node, std::uint32_t last_left) const;
+    void divide(const SmallNode& node, const SmallCut& cut, std::uint32_t at, SmallNode children[2]);
+    void make_leaf(std::uint32_t at, const SmallNode& node) {
+        std::uint32_t* out = writer_.make_leaf(at, begin_ + node.first, node.count);
+        for (std::uint32_t j = 0; j < node.count; ++j) out[j] = set_.ref[set_.order[0][node.first + j]];
+    }
+
+    SubtreeWriter& writer_;
+    const BuildConfig& cfg_;
+    const SahCost sah_;
+    const std::uint32_t begin_;
+    SmallSet set_;
+};
+
+/// The split (or nothing, for a leaf) of one node: the cheapest cut on the axes the policy
+/// allows, with the fallbacks of the top-down builder (subtree_builder.cpp's find_split).
+SmallCut SmallBuilder::choose(const SmallNode& node) const {
+    const std::uint32_t f = node.first, m = node.count;
+    // The centroid extent as NodeBounds::centroids gives it (halved twice-centroids).
+    const F4 half = F4::splat(0.5f);
+    Vec3 extent;
+    for (int a = 0; a < 3; ++a)
+        extent[a] = (set_.c2[set_.order[a][f + m - 1]] * half - set_.c2[set_.order[a][f]] * half).lane(a);
+    SmallCut best;
+    if (!(extent.x > 0.0f || extent.y > 0.0f || extent.z > 0.0f)) {
+        best = cut_at(0, node, m / 2 - 1);  // every centroid the same: an even split
+    } else if (too_deep(node.depth, m)) {
+        best = cut_at(largest_axis(extent), node, m / 2 - 1);
+    } else {
+        const Range r{begin_ + f, begin_ + f + m};
+        const int axis = choose_axis(cfg_, extent, r, node.depth);
+        bool allowed[3];
+        for (int a = 0; a < 3; ++a) allowed[a] = (axis == kAllAxes || a == axis) && extent[a] > 0.0f;
+        best = m == 2 ? cut_at(largest_axis(extent), node, 0) : cheapest(node, allowed);  // 2: one way to split
+        if (best.axis < 0) best = cut_at(0, node, m / 2 - 1);
+    }
+    // SAH leaf termination (report §5.1, PBRT): a leaf when intersecting all costs no more.
+    if (m <= cfg_.max_leaf_size && sah_.leaf(m) <= best.cost) return {};
+    return best;
+}
+
+/// Lanes 0-2 of boxes (lo, -hi) of the three axes' j-th references, transposed so that lane a
+/// of each result belongs to axis a's order: lo.x, lo.y, lo.z, -hi.x, -hi.y, -hi.z.
+struct AxisLanes {
+    F4 c[6];
+    AxisLanes() { c[0] = c[1] = c[2] = c[3] = c[4] = c[5] = F4::splat(kInf); }
+    void grow(const F4* lo, const F4* neg_hi, const std::uint8_t i[3]) {
+        F4 t[6];
+        transpose3(lo[i[0]], lo[i[1]], lo[i[2]], lo[i[2]], t[0], t[1], t[2]);
+        transpose3(neg_hi[i[0]], neg_hi[i[1]], neg_hi[i[2]], neg_hi[i[2]], t[3], t[4], t[5]);
+        for (int k = 0; k < 6; ++k) c[k] = min(c[k], t[k]);
+    }
+    /// half_area of each lane's box, bit for bit (the same operations in the same order).
+    F4 half_areas() const {
+        const F4 zero = F4::splat(0.0f);
+        const F4 x = max(neg(c[3]) - c[0], zero), y = max(neg(c[4]) - c[1], zero), z = max(neg(c[5]) - c[2], zero);
+        return (x * y + y * z) + z * x;
+    }
+};
+
+/// The exact SAH sweep (report §2.3.2) on the three sorted orders at once, one vector lane per
+/// axis: a suffix pass of right-side areas, then a prefix pass that prices every candidate with
+/// SahCost::split's operations (bit for bit). Ties: the first candidate of an axis, then the
+/// first axis.
+SmallCut SmallBuilder::cheapest(const SmallNode& node, const bool allowed[3]) const {
+    const std::uint32_t f = node.first, m = node.count;
+    const std::uint8_t* order[3] = {set_.order[0] + f, set_.order[1] + f, set_.order[2] + f};
+    auto grow = [&](AxisLanes& box, std::uint32_t j) {
+        const std::uint8_t i[3] = {order[0][j], order[1][j], order[2][j]};
+        box.grow(set_.lo, set_.neg_hi, i);
+    };
+    F4 right_area[K];  // candidate c: the right side is [c + 1, m)
+    AxisLanes box;
+    for (std::uint32_t j = m - 1; j > 0; --j) grow(box, j), right_area[j - 1] = box.half_areas();
+    const float inv = SahCost::inverse_area(half_area(node.lo, neg(node.neg_hi)));
+    const F4 trav = F4::splat(sah_.traversal), isect = F4::splat(sah_.intersection), inv4 = F4::splat(inv);
+    float lane_cost[3] = {kInf, kInf, kInf};
+    std::uint32_t lane_cut[3] = {0, 0, 0};
+    box = AxisLanes();
+    for (std::uint32_t c = 0; c + 1 < m; ++c) {
+        grow(box, c);
+        const F4 n_left = F4::splat(float(c + 1)), n_right = F4::splat(float(m - c - 1));
+        const F4 ratio = inv > 0.0f ? (box.half_areas() * n_left + right_area[c] * n_right) * inv4  // as SahCost::split
+                                    : F4::splat(float(m));
+        alignas(16) float cost[4];
+        (trav + ratio * isect).store(cost);
+        for (int a = 0; a < 3; ++a)
+            if (cost[a] < lane_cost[a]) lane_cost[a] = cost[a], lane_cut[a] = c;
+    }
+    SmallCut best;
+    for (int a = 0; a < 3; ++a)
+        if (allowed[a] && lane_cost[a] < best.cost) best = {a, lane_cut[a], lane_cost[a]};
+    return best;
+}
+
+SmallCut SmallBuilder::cut_at(int axis, const SmallNode& node, std::uint32_t last_left) const {
+    const std::uint8_t* order = set_.order[axis] + node.first;
+    F4 llo = F4::splat(kInf), lnh = llo, rlo = llo, rnh = llo;
+    for (std::uint32_t j = 0; j <= last_left; ++j)
+        llo = min(llo, set_.lo[order[j]]), lnh = min(lnh, set_.neg_hi[order[j]]);
+    for (std::uint32_t j = last_left + 1; j < node.count; ++j)
+        rlo = min(rlo, set_.lo[order[j]]), rnh = min(rnh, set_.neg_hi[order[j]]);
+    const float inv = SahCost::inverse_area(half_area(node.lo, neg(node.neg_hi)));
+    const float cost =
+        sah_.split(inv, half_area(llo, neg(lnh)), last_left + 1, half_area(rlo, neg(rnh)), node.count - last_left - 1);
+    return {axis, last_left, cost};
+}
+
+/// Divides the node's positions: the cut's order as it is, the other two orders stably by side.
+void SmallBuilder::divide(const SmallNode& node, const SmallCut& cut, std::uint32_t at, SmallNode children[2]) {
+    const std::uint32_t f = node.first, m = node.count, n_left = cut.last_left + 1;
+    bool left_of[K];
+    const std::uint8_t* by_cut = set_.order[cut.axis] + f;
+    F4 box[2][2] = {{F4::splat(kInf), F4::splat(kInf)}, {F4::splat(kInf), F4::splat(kInf)}};
+    for (std::uint32_t j = 0; j < m; ++j) {
+        const std::uint8_t i = by_cut[j];
+        const int side = j < n_left ? 0 : 1;
+        left_of[i] = side == 0;
+        box[side][0] = min(box[side][0], set_.lo[i]), box[side][1] = min(box[side][1], set_.neg_hi[i]);
+    }
+    for (int a = 0; a < 3; ++a) {
+        if (a == cut.axis) continue;
+        std::uint8_t* order = set_.order[a] + f;
+        std::uint8_t right[K];
+        std::uint32_t l = 0, r = 0;
+        for (std::uint32_t j = 0; j < m; ++j) {
+            const std::uint8_t i = order[j];
+            if (left_of[i]) order[l++] = i;
+            else right[r++] = i;
+        }
+        for (std::uint32_t j = 0; j < r; ++j) order[l + j] = right[j];
+    }
+    const std::uint32_t d = node.depth + 1;
+    children[0] = {f, n_left, d, at, false, box[0][0], box[0][1]};
+    children[1] = {f + n_left, m - n_left, d, at, true, box[1][0], box[1][1]};
+}
+
+}  // namespace
+
+std::uint32_t small_subtree_size(const BuildConfig& config) {
+    switch (config.method) {
+        case SplitMethod::SweepSah:
+            return kSmallSubtree;
+        case SplitMethod::Sah:
+            return config.bin_bounds == BinBounds::Box ? kSmallSubtree : kSmallExactReport;
+        default:
+            return 0;
+    }
+}
+
+void build_small_subtree(SubtreeWriter& writer, const BuildConfig& cfg, const WorkItem& item, std::uint32_t index) {
+    SmallBuilder(writer, cfg, item).build(item, index);
+}
+
+}  // namespace bvhlab

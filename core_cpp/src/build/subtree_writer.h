@@ -1,0 +1,55 @@
+// subtree_writer.h — appends the nodes of one subtree in depth-first order (DESIGN.md "Tree
+// layout"): the top-down builder and the small-subtree builder write through it.
+#pragma once
+#include "subtree_builder.h"
+
+namespace bvhlab {
+
+/// Writes the nodes of one subtree in depth-first order; leaves copy their references to
+/// BuildShared::leaf_refs. Skip indices are filled at the end (assemble.h).
+class SubtreeWriter {
+public:
+    SubtreeWriter(BuildShared& shared, Subtree& out) : shared_(shared), out_(out) {}
+    ~SubtreeWriter() { flush_leaf_count(); }
+    SubtreeWriter(const SubtreeWriter&) = delete;
+    SubtreeWriter& operator=(const SubtreeWriter&) = delete;
+
+    /// Appends a node with `box` at `depth`; a second child is linked to its parent.
+    std::uint32_t open(const Aabb& box, std::uint32_t depth, std::uint32_t parent, bool second_child) {
+        const auto index = static_cast<std::uint32_t>(out_.nodes.size());
+        BvhNode node{};
+        set_box(node, box);
+        out_.nodes.push_back(node);
+        out_.depths.push_back(static_cast<std::uint8_t>(depth));
+        if (second_child) out_.nodes[parent].index = index;
+        return index;
+    }
+    std::uint32_t open(const WorkItem& item) {
+        return open(item.bounds.box, item.depth, item.parent, item.second_child);
+    }
+    void make_internal(std::uint32_t index) { out_.nodes[index].info = gpu::NODE_INTERNAL_BIT; }  // skip: at the end
+    /// Makes node `index` a leaf of the `count` references from position `first` on, and
+    /// returns where their references go (the caller writes them).
+    std::uint32_t* make_leaf(std::uint32_t index, std::uint32_t first, std::uint32_t count) {
+        BvhNode& node = out_.nodes[index];
+        node.index = first;
+        node.info = count;
+        leaf_primitives_ += count;
+        return shared_.leaf_refs + first;
+    }
+    /// A leaf of the references of `item` as they lie in its buffer (boxes from them if the
+    /// method makes boxes bottom-up).
+    void make_leaf(std::uint32_t index, const WorkItem& item);
+    void flush_leaf_count() {
+        shared_.primitives_in_leaves.fetch_add(leaf_primitives_, std::memory_order_relaxed);
+        leaf_primitives_ = 0;
+    }
+    BuildShared& shared() const { return shared_; }
+
+private:
+    BuildShared& shared_;
+    Subtree& out_;
+    std::uint64_t leaf_primitives_ = 0;
+};
+
+}  // namespace bvhlab
