@@ -113,7 +113,8 @@ lint: $(VENV)/.deps
 	$(VENV)/bin/ruff check $(PY_LINT_DIRS)
 	$(VENV)/bin/ruff format --check $(PY_LINT_DIRS)
 	$(VENV)/bin/mypy
-	$(VENV)/bin/clang-format --dry-run --Werror $(CPP_FILES)
+	@echo "clang-format --dry-run --Werror (every C++ file)"
+	@$(VENV)/bin/clang-format --dry-run --Werror $(CPP_FILES)
 
 format: $(VENV)/.deps
 	$(VENV)/bin/ruff format $(PY_LINT_DIRS)

@@ -43,6 +43,19 @@ def test_interval_needs_five_samples():
         protocol.median_interval([])
 
 
+def test_a_round_without_a_ratio_is_left_out():
+    """A frame too short for the clock (0 ms) gives no ratio: that round is left out, the verdict
+    becomes inconclusive once fewer than five rounds remain, and nothing divides by zero."""
+    full = protocol.paired_ratio([2.0] * 5, [1.0] * 5)
+    assert (full.median, full.n) == (2.0, 5) and full.known
+    short = protocol.paired_ratio([2.0, 2.0, 2.0, 2.0, 2.0], [1.0, 0.0, 1.0, 1.0, 1.0])
+    assert (short.median, short.n) == (2.0, 4) and protocol.at_least(short, 1.5) == protocol.INCONCLUSIVE
+    none = protocol.paired_ratio([1.0, 1.0], [0.0, 0.0])
+    assert none.n == 0 and math.isnan(none.median) and protocol.at_most(none, 1.0) == protocol.INCONCLUSIVE
+    with pytest.raises(ValueError):
+        protocol.paired_ratio([1.0], [1.0, 2.0])
+
+
 def test_verdicts_need_the_whole_interval_on_one_side():
     def iv(lo, hi):
         return protocol.Interval((lo + hi) / 2, lo, hi, 9)

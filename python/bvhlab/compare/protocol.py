@@ -80,8 +80,15 @@ def paired(function, *series) -> Interval:
 
 
 def paired_ratio(a, b) -> Interval:
-    """Median of a_i / b_i over rounds i, with its interval."""
-    return paired(lambda x, y: x / y, a, b)
+    """Median of a_i / b_i over rounds i, with its interval. A round whose b_i is 0 (a frame too
+    short for the clock) has no ratio and is left out, so the interval widens or becomes unknown
+    rather than a division failing; with no round left the median is unknown too (nan)."""
+    if len(a) != len(b):
+        raise ValueError(f"paired samples differ in count ({len(a)}, {len(b)})")
+    ratios = [x / y for x, y in zip(a, b) if y > 0]
+    if not ratios:
+        return Interval(math.nan, math.nan, math.nan, 0)
+    return median_interval(ratios)
 
 
 def at_most(ratio: Interval, limit: float) -> str:
