@@ -8,6 +8,17 @@ from . import state
 from .text_layout import wrapped_label
 
 
+def draw_build_settings(col, settings) -> None:
+    """The tree's settings, as the sidebar and the engine's BVH panel show them."""
+    col.prop(settings, "method")
+    binned = col.column()
+    binned.enabled = settings.method == "sah"
+    binned.prop(settings, "bins")
+    binned.prop(settings, "bin_bounds")
+    col.prop(settings, "axis")
+    col.prop(settings, "max_leaf_size")
+
+
 class _BvhPanel:
     bl_space_type = "VIEW_3D"
     bl_region_type = "UI"
@@ -24,13 +35,7 @@ class BVHLAB_PT_main(_BvhPanel, bpy.types.Panel):
         col.prop(settings, "scope", expand=True)
         col = layout.column()
         col.use_property_split = True
-        col.prop(settings, "method")
-        binned = col.column()
-        binned.enabled = settings.method == "sah"
-        binned.prop(settings, "bins")
-        binned.prop(settings, "bin_bounds")
-        col.prop(settings, "axis")
-        col.prop(settings, "max_leaf_size")
+        draw_build_settings(col, settings)
         layout.operator("bvhlab.build", icon="MOD_LATTICE")
         built = state.tree_for(context.scene)
         if built is not None:

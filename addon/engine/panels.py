@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import bpy
 
+from ..panels import draw_build_settings
 from . import records
 from .engine import ENGINE_ID
 from .passes import HEATMAP_PROPERTY
@@ -31,14 +32,7 @@ class BVHLAB_PT_engine_bvh(_EnginePanel, bpy.types.Panel):
 
     def draw(self, context):
         settings = context.scene.bvhlab
-        col = self._column()
-        col.prop(settings, "method")
-        binned = col.column()
-        binned.enabled = settings.method == "sah"
-        binned.prop(settings, "bins")
-        binned.prop(settings, "bin_bounds")
-        col.prop(settings, "axis")
-        col.prop(settings, "max_leaf_size")
+        draw_build_settings(self._column(), settings)
 
 
 class BVHLAB_PT_engine_tracing(_EnginePanel, bpy.types.Panel):
