@@ -38,7 +38,7 @@ def _modules():
     }
 
 
-def _request(m, scene, width, height, turn: float, spp: int, overlay):
+def _request(m, scene, width, height, turn: float, samples_per_axis: int, overlay):
     """A ViewRequest for the scene camera's view turned by `turn` radians about the vertical."""
     from mathutils import Matrix
 
@@ -49,7 +49,11 @@ def _request(m, scene, width, height, turn: float, spp: int, overlay):
     window = camera.calc_matrix_camera(depsgraph, x=width, y=height)
     frustum = m["view_camera"].view_frustum(view_matrix, window, width, height)
     settings = m["tracer"].TraceSettings(
-        spp=spp, max_depth=5, overlay=overlay, traversal="stackless", threads=m["settings"].VIEWPORT_THREADS
+        samples_per_axis=samples_per_axis,
+        max_depth=5,
+        overlay=overlay,
+        traversal="stackless",
+        threads=m["settings"].VIEWPORT_THREADS,
     )
     return m["viewport"].ViewRequest(frustum, settings, "auto", m["scene_tree"].BuildSettings(), budget_ms=40.0)
 
@@ -68,7 +72,7 @@ def _levels(m, session, scene, width, height, views: int) -> dict:
     """Per level: tracer time and latency (view handed over → frame ready) of `views` new views."""
     out: dict = {"preview": [], "full": [], "refined": []}
     for k in range(views):
-        request = _request(m, scene, width, height, 0.02 * (k + 1), spp=4, overlay=None)
+        request = _request(m, scene, width, height, 0.02 * (k + 1), samples_per_axis=2, overlay=None)
         session.request(request)
         seen = set()
         while len(seen) < 3:
@@ -87,11 +91,13 @@ def _section_41(m, session, scene, width, height, rounds: int) -> dict:
     times: dict = {"no boxes": [], "boxes 8-9": []}
     for k in range(rounds):
         for name, overlay in (("no boxes", None), ("boxes 8-9", (8, 9))):
-            request = _request(m, scene, width, height, 0.0, spp=1, overlay=overlay)
+            request = _request(m, scene, width, height, 0.0, samples_per_axis=1, overlay=overlay)
             session.request(request)
             frame = _wait_for(session, request, "full")
             times[name].append(frame.timings["total_ms"])
-            session.request(_request(m, scene, width, height, 0.5 + 0.01 * k, spp=1, overlay=None))  # move away
+            session.request(
+                _request(m, scene, width, height, 0.5 + 0.01 * k, samples_per_axis=1, overlay=None)
+            )  # move away
             time.sleep(0.3)
     return times
 
@@ -116,7 +122,7 @@ def main() -> None:
     live.sync(bpy.context.evaluated_depsgraph_get(), scene, bpy.context.view_layer)
     session = m["viewport"].ViewportSession()
     session.set_scene(live.scene, None)
-    first = _request(m, scene, width, height, 0.0, spp=1, overlay=None)
+    first = _request(m, scene, width, height, 0.0, samples_per_axis=1, overlay=None)
     session.request(first)
     build_frame = _wait_for(session, first, "full")
     levels = _levels(m, session, scene, width, height, args.views)
