@@ -79,7 +79,7 @@ def main() -> None:
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps({"blender": bpy.app.version_string, "rows": rows}, indent=1) + "\n")
     sys.stdout.flush()
-    os._exit(0)  # bpy 4.2 crashes in its teardown after a gpu shader existed (see tests/blender/run.py)
+    os._exit(0)  # bpy 4.2 crashes in its own teardown once a Panel was registered (tests/blender/run.py)
 
 
 if __name__ == "__main__":
