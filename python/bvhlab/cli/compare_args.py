@@ -8,20 +8,14 @@ from pathlib import Path
 
 from ..bvh import method_from_label
 from ..compare.protocol import MIN_SAMPLES
+from .options import whole_number
 
 DEFAULT_METHODS = "median,mean,midpoint,sah12,sah32"
 
 
-def _integer(text: str) -> int:
-    try:
-        return int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got '{text}'") from None
-
-
 def sample_count(text: str) -> int:
     """Frames or builds per method: the protocol needs at least MIN_SAMPLES for a spread."""
-    n = _integer(text)
+    n = whole_number(text)
     if n < MIN_SAMPLES:
         raise argparse.ArgumentTypeError(
             f"must be at least {MIN_SAMPLES} (the protocol reports a median and its "
@@ -31,10 +25,7 @@ def sample_count(text: str) -> int:
 
 
 def thread_count(text: str) -> int:
-    n = _integer(text)
-    if not 0 <= n <= 4096:
-        raise argparse.ArgumentTypeError(f"must be between 0 (every core) and 4096, got {n}")
-    return n
+    return whole_number(text, 0, 4096, " threads")  # 0: every core
 
 
 def method_list(text: str) -> list[str]:

@@ -86,28 +86,26 @@ def depth_range(text: str) -> tuple[int, int]:
     return lo, hi
 
 
-def image_side(text: str) -> int:
-    """An image width or height: an integer in 1..MAX_IMAGE_SIDE, checked before any work."""
+def whole_number(text: str, lo: int | None = None, hi: int | None = None, unit: str = "") -> int:
+    """An argparse value: an integer, in lo..hi when they are given (unit, e.g. " pixels", only
+    for the message), checked before any work."""
     try:
         value = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number of pixels, got '{text}'") from None
-    if not 1 <= value <= MAX_IMAGE_SIDE:
-        raise argparse.ArgumentTypeError(f"must be between 1 and {MAX_IMAGE_SIDE} pixels, got {value}")
+        raise argparse.ArgumentTypeError(f"expected a whole number{unit and ' of' + unit}, got '{text}'") from None
+    if lo is not None and hi is not None and not lo <= value <= hi:
+        raise argparse.ArgumentTypeError(f"must be between {lo} and {hi}{unit}, got {value}")
     return value
+
+
+def image_side(text: str) -> int:
+    """An image width or height: 1..MAX_IMAGE_SIDE pixels."""
+    return whole_number(text, 1, MAX_IMAGE_SIDE, " pixels")
 
 
 def samples_per_axis(text: str) -> int:
-    """n of the n×n supersampling: an integer in 1..MAX_SAMPLES_PER_AXIS, checked before any work."""
-    from .._core import MAX_SAMPLES_PER_AXIS
-
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got '{text}'") from None
-    if not 1 <= value <= MAX_SAMPLES_PER_AXIS:
-        raise argparse.ArgumentTypeError(f"must be between 1 and {MAX_SAMPLES_PER_AXIS}, got {value}")
-    return value
+    """n of the n×n supersampling: 1..MAX_SAMPLES_PER_AXIS."""
+    return whole_number(text, 1, _core.MAX_SAMPLES_PER_AXIS)
 
 
 def output_file_type(suffix: str, what: str) -> Callable[[str], Path]:
