@@ -39,6 +39,22 @@ TEST(BadInput, NanOrInfiniteVertexNamesTheTriangle) {
     expect_invalid([&] { build_bvh(scene.view()); }, "triangle 5");
 }
 
+// make_prim_refs checks four lanes at a time and the last triangle on its own: every one of the
+// nine coordinates of the first, a middle and the last triangle is checked, for NaN, ±inf and
+// a value past the coordinate range.
+TEST(BadInput, EveryCoordinateSlotIsChecked) {
+    const float bad[] = {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
+                         -std::numeric_limits<float>::infinity(), 2 * kMaxCoordinate};
+    for (int tri : {0, 6, 12}) {
+        for (int k = 0; k < 9; ++k)
+            for (float value : bad) {
+                auto scene = test::random_scene(13, 0, 7);
+                scene.triangles[9 * tri + k] = value;
+                expect_invalid([&] { build_bvh(scene.view()); }, "triangle " + std::to_string(tri) + " has a");
+            }
+    }
+}
+
 TEST(BadInput, SphereRadiusMustBePositiveAndFinite) {
     for (float r : {0.0f, -1.0f, std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
                     6.9e-41f, 0x1p-61f}) {  // below kMinRadius (2^-60) r² underflows

@@ -28,9 +28,22 @@ PackedPrim pack_prim(const GeometryView& g, std::uint32_t ref) {
 BigVector<PackedPrim> pack_prims(const GeometryView& g, const BigVector<std::uint32_t>& refs, unsigned threads) {
     BigVector<PackedPrim> out(refs.size());
     constexpr std::size_t kChunk = 1 << 15;
+    // Leaf order visits the input at random: each read would wait on memory, so the input of the
+    // reference kAhead places later is fetched while this one is packed (Sponza: the packing
+    // took 22% of an LBVH build before).
+    constexpr std::size_t kAhead = 12;
+    auto prefetch = [&](std::uint32_t ref) {
+        const std::size_t i = ref_index(ref);
+        const float* p = is_sphere_ref(ref) ? g.spheres + 4 * i : g.triangles + 9 * i;
+        __builtin_prefetch(p), __builtin_prefetch(p + 8);  // 36 bytes may span two lines
+    };
     ThreadPool::shared().run((refs.size() + kChunk - 1) / kChunk, threads, [&](std::size_t c, unsigned) {
-        for (std::size_t k = c * kChunk, end = std::min(refs.size(), k + kChunk); k < end; ++k)
+        const std::size_t begin = c * kChunk, end = std::min(refs.size(), begin + kChunk);
+        for (std::size_t k = begin; k < std::min(end, begin + kAhead); ++k) prefetch(refs[k]);
+        for (std::size_t k = begin; k < end; ++k) {
+            if (k + kAhead < end) prefetch(refs[k + kAhead]);
             out[k] = pack_prim(g, refs[k]);
+        }
     });
     return out;
 }
