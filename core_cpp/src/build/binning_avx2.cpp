@@ -7,6 +7,8 @@
 // run on CPUs without AVX2. It reads their data and uses only the helpers below.
 #include <immintrin.h>
 
+#include <type_traits>
+
 #include "binning.h"
 
 namespace bvhlab::avx2 {
@@ -73,19 +75,43 @@ void bin_refs(const PrimRef* refs, Range r, const BinFrame& f, const BinSet copi
 
 namespace {
 
+/// One child in the fused pass: its frame, and where its two copies of buckets start (axis 0;
+/// axis a lies a · stride bytes further). Null boxes: the child is not binned.
+struct ChildSide {
+    __m128 origin2, scale;
+    char* box[2];
+    char* count[2];
+};
+
+template <int kCopy>
+using Copy = std::integral_constant<int, kCopy>;
+template <int kLane>
+using Lane = std::integral_constant<int, kLane>;
+
+/// Lane L of a vector of byte offsets, zero-extended (a 32-bit move; no sign extension).
+template <int kLane>
+std::size_t offset(__m128i v, Lane<kLane>) {
+    return std::uint32_t(_mm_extract_epi32(v, kLane));
+}
+
 template <bool kCentroids>
 std::uint32_t partition_and_bin_impl(const PrimRef* __restrict src, PrimRef* __restrict dst, Range r,
                                      std::uint32_t left, std::uint32_t right, const BinFrame& parent,
                                      const BinSplit& split, const ChildBinning child[2], CentroidBounds sides[2]) {
     const Kernel c;
-    Buckets buckets[2][2];
-    Side side[2];
+    ChildSide side[2];
     for (int s = 0; s < 2; ++s) {
-        side[s] = {child[s].frame.origin2.v, child[s].frame.scale.v, nullptr};
-        if (!child[s].copies) continue;
-        buckets[s][0] = Buckets(child[s].copies[0]), buckets[s][1] = Buckets(child[s].copies[1]);
-        side[s].copy = buckets[s];
+        side[s] = {child[s].frame.origin2.v, child[s].frame.scale.v, {nullptr, nullptr}, {nullptr, nullptr}};
+        for (int k = 0; k < 2 && child[s].copies; ++k) {
+            side[s].box[k] = reinterpret_cast<char*>(child[s].copies[k].box);
+            side[s].count[k] = reinterpret_cast<char*>(child[s].copies[k].count);
+        }
     }
+    // Byte offsets of a reference's three buckets from bucket indices k: boxes 32 k + a · 32 B,
+    // counts 4 k + a · 4 B for axis a (lane a), so one shift and one add give all three.
+    const int bins = int(parent.bins);
+    const __m128i box_axis = _mm_setr_epi32(0, 32 * bins, 64 * bins, 0);
+    const __m128i count_axis = _mm_setr_epi32(0, 4 * bins, 8 * bins, 0);
     alignas(16) std::uint32_t lane[4] = {0, 0, 0, 0};
     lane[split.axis] = ~0u;
     const __m128 axis_lane = _mm_load_ps(reinterpret_cast<const float*>(lane));
@@ -96,26 +122,49 @@ std::uint32_t partition_and_bin_impl(const PrimRef* __restrict src, PrimRef* __r
     alignas(32) float acc[2][2][8];
     for (auto& copy : acc)
         for (auto& a : copy) _mm256_store_ps(a, _mm256_set1_ps(__builtin_inff()));
-    for (std::uint32_t i = r.begin; i < r.end; ++i) {
+    // Reference i uses copy i & 1 of the buckets (consecutive references do not wait on each
+    // other's stores); the loop below runs in pairs so that the copy is a constant.
+    auto step = [&](std::uint32_t i, auto copy_tag) {
+        constexpr int kCopy = decltype(copy_tag)::value;
         const __m256 raw = _mm256_loadu_ps(reinterpret_cast<const float*>(src + i));
         const __m256 v = _mm256_and_ps(raw, c.xyz);
         const __m128 c2 = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
         const __m128 x = bucket_coordinate(c2, origin2, scale, top, c.zero);
-        const std::uint32_t l = _mm_movemask_ps(_mm_and_ps(_mm_cmplt_ps(x, limit), axis_lane)) != 0 ? 1u : 0u;
-        const std::uint32_t mask = 0u - l;
-        _mm256_storeu_ps(reinterpret_cast<float*>(dst + (((right - 1) & ~mask) | (left & mask))), raw);
-        left += l;
-        right -= 1u - l;
+        const bool goes_left = _mm_movemask_ps(_mm_and_ps(_mm_cmplt_ps(x, limit), axis_lane)) != 0;
+        // Left fills forward, right backward; the slot is selected, not branched on (at the top
+        // of the tree the side is a coin toss).
+        const std::uint32_t slot = goes_left ? left : right - 1;
+        _mm256_storeu_ps(reinterpret_cast<float*>(dst + slot), raw);
+        left += goes_left;
+        right -= !goes_left;
+        const int s = goes_left ? 0 : 1;
         if constexpr (kCentroids) {
-            float* a = acc[i & 1][1 - l];
+            float* a = acc[kCopy][s];
             const __m256 cc = _mm256_insertf128_ps(_mm256_castps128_ps256(c2), _mm_xor_ps(c2, c.sign), 1);
             _mm256_store_ps(a, _mm256_min_ps(_mm256_load_ps(a), cc));
         }
-        const Side& t = side[1 - l];
-        if (!t.copy) continue;
+        const ChildSide& t = side[s];
+        char* const box = t.box[kCopy];
+        if (!box) return;
         const __m128i k = _mm_cvttps_epi32(bucket_coordinate(c2, t.origin2, t.scale, top, c.zero));
-        t.copy[i & 1].add(k, _mm256_xor_ps(v, c.flip_hi));
-    }
+        const __m128i kb = _mm_add_epi32(_mm_slli_epi32(k, 5), box_axis);
+        const __m128i kc = _mm_add_epi32(_mm_slli_epi32(k, 2), count_axis);
+        const __m256 box_of_ref = _mm256_xor_ps(v, c.flip_hi);
+        float* b0 = reinterpret_cast<float*>(box + offset(kb, Lane<0>()));
+        float* b1 = reinterpret_cast<float*>(box + offset(kb, Lane<1>()));
+        float* b2 = reinterpret_cast<float*>(box + offset(kb, Lane<2>()));
+        _mm256_store_ps(b0, _mm256_min_ps(_mm256_load_ps(b0), box_of_ref));
+        _mm256_store_ps(b1, _mm256_min_ps(_mm256_load_ps(b1), box_of_ref));
+        _mm256_store_ps(b2, _mm256_min_ps(_mm256_load_ps(b2), box_of_ref));
+        char* const count = t.count[kCopy];
+        ++*reinterpret_cast<std::uint32_t*>(count + offset(kc, Lane<0>()));
+        ++*reinterpret_cast<std::uint32_t*>(count + offset(kc, Lane<1>()));
+        ++*reinterpret_cast<std::uint32_t*>(count + offset(kc, Lane<2>()));
+    };
+    std::uint32_t i = r.begin;
+    if (i < r.end && (i & 1)) step(i++, Copy<1>());
+    for (; i + 1 < r.end; i += 2) step(i, Copy<0>()), step(i + 1, Copy<1>());
+    if (i < r.end) step(i, Copy<0>());
     for (int s = 0; s < 2 && kCentroids; ++s) {
         const __m256 both = _mm256_min_ps(_mm256_load_ps(acc[0][s]), _mm256_load_ps(acc[1][s]));
         sides[s].lo.v = _mm_min_ps(sides[s].lo.v, _mm256_castps256_ps128(both));
