@@ -112,6 +112,34 @@ TEST(Traverse, TminTmaxBoundTheHits) {
     }
 }
 
+// The packing (SIMD where available) against the rule written out: vertices copied bit for bit,
+// the index and material in their words, and a triangle whose cross product is exactly zero
+// collapsed to its first vertex. Includes the last triangle of the array (no read past it).
+TEST(Packing, TrianglesAreCopiedAndZeroAreaOnesCollapsed) {
+    auto scene = test::random_scene(64, 0, 5);
+    for (int i = 0; i < 9; ++i) scene.triangles[9 * 10 + i] = float(i % 3);  // three equal vertices
+    for (int c = 0; c < 3; ++c)  // collinear: v2 = 2 v1 - v0 (exact in float for these values)
+        scene.triangles[9 * 63 + 3 + c] = 1.5f + c, scene.triangles[9 * 63 + c] = 1.0f + c,
+                                     scene.triangles[9 * 63 + 6 + c] = 2.0f + c;
+    const GeometryView g = scene.view();
+    for (std::size_t i = 0; i < g.triangle_count; ++i) {
+        const PackedPrim p = pack_triangle(g, i, 7);
+        const float* v = g.triangles + 9 * i;
+        const Vec3 v0{v[0], v[1], v[2]}, v1{v[3], v[4], v[5]}, v2{v[6], v[7], v[8]};
+        const Vec3 e1 = v1 - v0, e2 = v2 - v0;
+        const bool flat =
+            e1.y * e2.z - e1.z * e2.y == 0.0f && e1.z * e2.x - e1.x * e2.z == 0.0f && e1.x * e2.y - e1.y * e2.x == 0.0f;
+        EXPECT_EQ(flat, i == 10 || i == 63) << i;
+        const Vec3 want[3] = {v0, flat ? v0 : v1, flat ? v0 : v2};
+        const gpu::vec3 got[3] = {p.v0, p.v1, p.v2};
+        for (int k = 0; k < 3; ++k)
+            EXPECT_TRUE(got[k].x == want[k].x && got[k].y == want[k].y && got[k].z == want[k].z) << i << " " << k;
+        EXPECT_EQ(p.ref, i);
+        EXPECT_EQ(p.material, 7u);
+        EXPECT_EQ(p.unused, 0u);
+    }
+}
+
 TEST(Traverse, DegenerateTrianglesAreNeverHit) {
     test::Scene s;
     s.add_triangle({0, 0, 0}, {1, 1, 1}, {2, 2, 2});                    // collinear

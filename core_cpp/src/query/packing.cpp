@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "bvhlab/geometry.h"
+#include "bvhlab/simd.h"
 #include "bvhlab/thread_pool.h"
 
 namespace bvhlab {
@@ -10,19 +11,48 @@ namespace {
 
 gpu::vec3 v3(Vec3 v) { return {v.x, v.y, v.z}; }
 
+#ifdef BVHLAB_SSE
+/// pack_triangle with SSE: the same products and differences lane by lane, so the same zero test.
+/// The third vertex is loaded from v + 5 and shifted down, so no load reads past the triangle.
+inline PackedPrim pack_triangle_inline(const float* v, std::uint32_t index, std::uint32_t material) {
+    __m128 a = _mm_loadu_ps(v), b = _mm_loadu_ps(v + 3), c = _mm_loadu_ps(v + 5);
+    c = _mm_shuffle_ps(c, c, _MM_SHUFFLE(0, 3, 2, 1));
+    const __m128 e1 = _mm_sub_ps(b, a), e2 = _mm_sub_ps(c, a);
+    // n = e1 × e2 = (e1.y e2.z - e1.z e2.y, e1.z e2.x - e1.x e2.z, e1.x e2.y - e1.y e2.x)
+    const __m128 n = _mm_sub_ps(
+        _mm_mul_ps(_mm_shuffle_ps(e1, e1, _MM_SHUFFLE(3, 0, 2, 1)), _mm_shuffle_ps(e2, e2, _MM_SHUFFLE(3, 1, 0, 2))),
+        _mm_mul_ps(_mm_shuffle_ps(e1, e1, _MM_SHUFFLE(3, 1, 0, 2)), _mm_shuffle_ps(e2, e2, _MM_SHUFFLE(3, 0, 2, 1))));
+    if ((_mm_movemask_ps(_mm_cmpeq_ps(n, _mm_setzero_ps())) & 7) == 7) b = c = a;  // zero area: never hit
+    static_assert(sizeof(PackedPrim) == 48);
+    PackedPrim out;
+    float* rows = reinterpret_cast<float*>(&out);  // v0, material | v1, ref | v2, unused
+    _mm_storeu_ps(rows, a), _mm_storeu_ps(rows + 4, b), _mm_storeu_ps(rows + 8, c);
+    out.material = material, out.ref = index, out.unused = 0;  // lane 3 of each store, overwritten
+    return out;
+}
+#else
+inline PackedPrim pack_triangle_inline(const float* v, std::uint32_t index, std::uint32_t material) {
+    Vec3 v0{v[0], v[1], v[2]}, v1{v[3], v[4], v[5]}, v2{v[6], v[7], v[8]};
+    const Vec3 n = cross(v1 - v0, v2 - v0);
+    if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) v1 = v2 = v0;  // zero area: never hit
+    return {v3(v0), material, v3(v1), index, v3(v2), 0};
+}
+#endif
+
+PackedPrim pack_sphere(const GeometryView& g, std::uint32_t ref) {
+    const std::size_t i = ref_index(ref);
+    return {v3(g.sphere_center(i)), 0, {g.sphere_radius(i), 0, 0}, ref, {}, 0};
+}
+
 }  // namespace
 
 PackedPrim pack_triangle(const GeometryView& g, std::size_t i, std::uint32_t material) {
-    Vec3 v0 = g.vertex(i, 0), v1 = g.vertex(i, 1), v2 = g.vertex(i, 2);
-    const Vec3 n = cross(v1 - v0, v2 - v0);
-    if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) v1 = v2 = v0;  // zero area: never hit
-    return {v3(v0), material, v3(v1), static_cast<std::uint32_t>(i), v3(v2), 0};
+    return pack_triangle_inline(g.triangles + 9 * i, static_cast<std::uint32_t>(i), material);
 }
 
 PackedPrim pack_prim(const GeometryView& g, std::uint32_t ref) {
-    const std::size_t i = ref_index(ref);
-    if (!is_sphere_ref(ref)) return pack_triangle(g, i);
-    return {v3(g.sphere_center(i)), 0, {g.sphere_radius(i), 0, 0}, ref, {}, 0};
+    if (is_sphere_ref(ref)) return pack_sphere(g, ref);
+    return pack_triangle_inline(g.triangles + 9 * std::size_t(ref_index(ref)), ref_index(ref), 0);
 }
 
 BigVector<PackedPrim> pack_prims(const GeometryView& g, const BigVector<std::uint32_t>& refs, unsigned threads) {
@@ -42,7 +72,9 @@ BigVector<PackedPrim> pack_prims(const GeometryView& g, const BigVector<std::uin
         for (std::size_t k = begin; k < std::min(end, begin + kAhead); ++k) prefetch(refs[k]);
         for (std::size_t k = begin; k < end; ++k) {
             if (k + kAhead < end) prefetch(refs[k + kAhead]);
-            out[k] = pack_prim(g, refs[k]);
+            const std::uint32_t ref = refs[k];
+            out[k] = is_sphere_ref(ref) ? pack_sphere(g, ref)
+                                        : pack_triangle_inline(g.triangles + 9 * std::size_t(ref), ref, 0);
         }
     });
     return out;
