@@ -17,14 +17,24 @@ class CpuTracer {
 public:
     /// `overlay` (one vec4 per pixel) and `sums` may be null for the overlay rasterizer's use.
     CpuTracer(const RenderScene& scene, const FrameParams& params, const vec4* overlay, PixelSums* sums, uint traversal)
-        : frame(params), TRAVERSAL(traversal), scene_(scene), overlay_(overlay), sums_(sums) {}
+        : frame(params),
+          TRAVERSAL(traversal),
+          tree_nodes_(scene.bvh->nodes.data()),
+          tree_refs_(scene.bvh->refs.data()),
+          triangles_(scene.triangles.data()),
+          scene_(scene),
+          overlay_(overlay),
+          sums_(sums) {}
 
     FrameParams frame;
     uint TRAVERSAL;
 
-    BvhNode load_node(uint i) const { return scene_.bvh->nodes[i]; }
-    uint load_ref(uint i) const { return scene_.bvh->refs[i]; }
-    GpuTriangle load_triangle(uint i) const { return scene_.triangles[i]; }
+    // The arrays the walk reads at every step, through pointers held here: scene_.bvh->nodes[i]
+    // is three dependent loads (the scene, its tree, the vector's data) that the compiler must
+    // repeat after every store the walk makes (it cannot prove they do not alias).
+    BvhNode load_node(uint i) const { return tree_nodes_[i]; }
+    uint load_ref(uint i) const { return tree_refs_[i]; }
+    GpuTriangle load_triangle(uint i) const { return triangles_[i]; }
     GpuSphere load_sphere(uint i) const { return scene_.spheres[i]; }
     GpuMaterial load_material(uint i) const { return scene_.materials[i]; }
     uint node_count() const { return frame.node_count; }
@@ -57,6 +67,9 @@ public:
 #include "tracer/overlay.glsl"
 
 private:
+    const BvhNode* tree_nodes_;
+    const uint* tree_refs_;
+    const GpuTriangle* triangles_;
     const RenderScene& scene_;
     const vec4* overlay_;
     PixelSums* sums_;
