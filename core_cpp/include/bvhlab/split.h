@@ -60,6 +60,8 @@ struct SplitScratch {
     std::vector<PrimRef> sorted;        ///< sweep SAH: the range sorted on one axis
     std::vector<float> areas;           ///< sweep SAH suffix areas
     std::vector<std::uint32_t> counts;  ///< median: histogram
+    std::vector<std::uint16_t> bucket;  ///< median: each reference's histogram bucket
+    std::vector<std::uint64_t> ranks;   ///< median: (order key, position) of the candidates
     std::unique_ptr<BinStore> bins;     ///< binned SAH: buckets of the nodes on the work stack
 };
 

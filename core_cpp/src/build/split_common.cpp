@@ -47,83 +47,132 @@ void for_each_chunk(const SplitContext& ctx, Range r, std::uint32_t chunks,
 namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
-/// Centroid sums are added in blocks of this many references from the start of the range, and
-/// the block sums in order: the same rounding however many threads compute them.
+/// Bounds are gathered in blocks of this many references from the start of the range, and the
+/// blocks merged in order: the same centroid sums however many threads compute them.
 constexpr std::uint32_t kSumBlock = 4096;
 
-/// Running box, twice-centroid box and centroid sum of one run of references.
-struct BoundsRun {
+/// Running bounds of a run: box, twice-centroid box, twice-centroid sums (x, y | z, 0).
+struct BoundsAcc {
     F4 lo = F4::splat(kInf), hi = F4::splat(-kInf), clo = lo, chi = hi;
-    double sum[3] = {0, 0, 0};
+#ifdef BVHLAB_SSE
+    __m128d xy = _mm_setzero_pd(), z0 = _mm_setzero_pd();
+#else
+    double s[4] = {0, 0, 0, 0};
+#endif
 
     template <bool kSum>
-    void add(const PrimRef* refs, Range r) {
-        for (std::uint32_t i = r.begin; i < r.end; ++i) {
-            const F4 a = refs[i].lo4(), b = refs[i].hi4(), c = a + b;  // twice the centroid
-            lo = min(lo, a), hi = max(hi, b), clo = min(clo, c), chi = max(chi, c);
-            if constexpr (kSum)
-                for (int k = 0; k < 3; ++k) sum[k] += 0.5 * double(refs[i].lo[k] + refs[i].hi[k]);
+    void grow(const PrimRef& p) {
+        const F4 a = p.lo4(), b = p.hi4(), c = a + b;  // twice the centroid
+        lo = min(lo, a), hi = max(hi, b), clo = min(clo, c), chi = max(chi, c);
+        if constexpr (kSum) {
+#ifdef BVHLAB_SSE
+            xy = _mm_add_pd(xy, _mm_cvtps_pd(c.v)), z0 = _mm_add_pd(z0, _mm_cvtps_pd(_mm_movehl_ps(c.v, c.v)));
+#else
+            for (int k = 0; k < 4; ++k) s[k] += double(c.lane(k));
+#endif
         }
     }
-    void merge(const BoundsRun& o) {
-        lo = min(lo, o.lo), hi = max(hi, o.hi), clo = min(clo, o.clo), chi = max(chi, o.chi);
-        for (int k = 0; k < 3; ++k) sum[k] += o.sum[k];
+    void store(RunBounds& out) const {
+        lo.store(out.lo), hi.store(out.hi), clo.store(out.clo), chi.store(out.chi);
+#ifdef BVHLAB_SSE
+        _mm_store_pd(out.sum, xy), _mm_store_pd(out.sum + 2, z0);
+#else
+        std::copy(s, s + 4, out.sum);
+#endif
     }
 };
 
-NodeBounds to_bounds(const BoundsRun& run, bool with_sum) {
-    auto vec = [](F4 v) { return Vec3{v.lane(0), v.lane(1), v.lane(2)}; };
-    const F4 half = F4::splat(0.5f);
-    NodeBounds b{{vec(run.lo), vec(run.hi)}, {vec(run.clo * half), vec(run.chi * half)}};
-    if (with_sum) std::copy(run.sum, run.sum + 3, b.centroid_sum), b.has_sum = true;
+/// a grows by b: the minima, maxima and sums of both, in this order.
+void merge(RunBounds& a, const RunBounds& b) {
+    min(F4::load(a.lo), F4::load(b.lo)).store(a.lo), max(F4::load(a.hi), F4::load(b.hi)).store(a.hi);
+    min(F4::load(a.clo), F4::load(b.clo)).store(a.clo), max(F4::load(a.chi), F4::load(b.chi)).store(a.chi);
+    for (int k = 0; k < 4; ++k) a.sum[k] += b.sum[k];
+}
+
+template <bool kSum>
+void portable_run_bounds(const PrimRef* refs, Range r, RunBounds& out) {
+    BoundsAcc even, odd;  // locals: kept in registers
+    std::uint32_t i = r.begin;
+    for (; i + 1 < r.end; i += 2) even.grow<kSum>(refs[i]), odd.grow<kSum>(refs[i + 1]);
+    if (i < r.end) even.grow<kSum>(refs[i]);
+    RunBounds o;
+    even.store(out), odd.store(o);
+    merge(out, o);
+}
+
+NodeBounds to_bounds(const RunBounds& run, bool with_sum) {
+    const float half = 0.5f;
+    NodeBounds b{{{run.lo[0], run.lo[1], run.lo[2]}, {run.hi[0], run.hi[1], run.hi[2]}},
+                 {{run.clo[0] * half, run.clo[1] * half, run.clo[2] * half},
+                  {run.chi[0] * half, run.chi[1] * half, run.chi[2] * half}}};
+    if (with_sum) {
+        for (int k = 0; k < 3; ++k) b.centroid_sum[k] = 0.5 * run.sum[k];  // exact: sums of twice the centroids
+        b.has_sum = true;
+    }
     return b;
 }
 
 }  // namespace
 
+#if defined(BVHLAB_AVX2_KERNELS)
+namespace avx2 {  // partition_avx2.cpp
+void run_bounds(const PrimRef* refs, Range r, bool with_sum, RunBounds& out);
+}
+#endif
+
+void run_bounds(const PrimRef* refs, Range r, bool with_sum, RunBounds& out) {
+#if defined(BVHLAB_AVX2_KERNELS)
+    if (active_isa() == Isa::Avx2) return avx2::run_bounds(refs, r, with_sum, out);
+#endif
+    with_sum ? portable_run_bounds<true>(refs, r, out) : portable_run_bounds<false>(refs, r, out);
+}
+
 NodeBounds bounds_of(const SplitContext& ctx, Range r, int buf, bool with_sum) {
     const PrimRef* refs = ctx.buffers[buf];
     const std::uint32_t blocks = std::max<std::uint32_t>(1, (r.size() + kSumBlock - 1) / kSumBlock);
+    RunBounds first;
     if (blocks == 1) {
-        BoundsRun run;
-        with_sum ? run.add<true>(refs, r) : run.add<false>(refs, r);
-        return to_bounds(run, with_sum);
+        run_bounds(refs, r, with_sum, first);
+        return to_bounds(first, with_sum);
     }
-    std::vector<BoundsRun> runs(blocks);
+    std::vector<RunBounds> runs(blocks);
     const std::uint32_t chunks = std::min(chunk_count(ctx, r), blocks);
     for_each_chunk(ctx, {0, blocks}, chunks, [&](std::uint32_t, Range bl) {
-        for (std::uint32_t k = bl.begin; k < bl.end; ++k) {
-            Range block{r.begin + k * kSumBlock, std::min(r.end, r.begin + (k + 1) * kSumBlock)};
-            with_sum ? runs[k].add<true>(refs, block) : runs[k].add<false>(refs, block);
-        }
+        for (std::uint32_t k = bl.begin; k < bl.end; ++k)
+            run_bounds(refs, {r.begin + k * kSumBlock, std::min(r.end, r.begin + (k + 1) * kSumBlock)}, with_sum,
+                       runs[k]);
     });
-    for (std::uint32_t k = 1; k < blocks; ++k) runs[0].merge(runs[k]);
+    for (std::uint32_t k = 1; k < blocks; ++k) merge(runs[0], runs[k]);
     return to_bounds(runs[0], with_sum);
 }
 
 #if defined(BVHLAB_AVX2_KERNELS)
 namespace avx2 {  // partition_avx2.cpp
 std::uint32_t scatter_below(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
-                            int axis, float twice, bool with_sum, SideBounds sides[2]);
-}
+                            int axis, float twice, bool contained);
+std::uint32_t scatter_ranked(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
+                             const RankPivot& pivot, bool contained);
+}  // namespace avx2
 #endif
 
 std::uint32_t scatter_below(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
-                            int axis, float twice, bool with_sum, SideBounds sides[2]) {
+                            int axis, float twice, bool contained) {
 #if defined(BVHLAB_AVX2_KERNELS)
-    if (active_isa() == Isa::Avx2) return avx2::scatter_below(src, dst, r, left, right, axis, twice, with_sum, sides);
+    if (active_isa() == Isa::Avx2) return avx2::scatter_below(src, dst, r, left, right, axis, twice, contained);
 #endif
-    auto below = [=](const PrimRef& p) { return p.lo[axis] + p.hi[axis] < twice; };
-    return with_sum ? scatter<true>(src, dst, r, left, right, below, sides)
-                    : scatter<false>(src, dst, r, left, right, below, sides);
+    const BelowTwice below{axis, twice};
+    return contained ? scatter<true, MoveBytes>(src, dst, r, left, right, below)
+                     : scatter<false, MoveBytes>(src, dst, r, left, right, below);
 }
 
-NodeBounds SideBounds::finish(bool with_sum) const {
-    auto vec = [](F4 v) { return Vec3{v.lane(0), v.lane(1), v.lane(2)}; };
-    const F4 half = F4::splat(0.5f);
-    NodeBounds b{{vec(lo), vec(hi)}, {vec(c_lo * half), vec(c_hi * half)}};
-    if (with_sum) std::copy(sum, sum + 3, b.centroid_sum), b.has_sum = true;
-    return b;
+std::uint32_t scatter_ranked(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
+                             const RankPivot& pivot, bool contained) {
+#if defined(BVHLAB_AVX2_KERNELS)
+    if (active_isa() == Isa::Avx2) return avx2::scatter_ranked(src, dst, r, left, right, pivot, contained);
+#endif
+    const BeforePivot below{pivot};
+    return contained ? scatter<true, MoveBytes>(src, dst, r, left, right, below)
+                     : scatter<false, MoveBytes>(src, dst, r, left, right, below);
 }
 
 Split split_at(SplitContext& ctx, Range r, int buf, const NodeBounds& parent, std::uint32_t mid) {
@@ -148,17 +197,14 @@ std::optional<Split> split_at_position(SplitContext& ctx, Range r, int src, cons
                                        float position) {
     // Compare 2·centroid with 2·position: the same order without a multiply per reference.
     const float twice = 2.0f * position;
-    const bool sums = method_info(ctx.config.method).needs_centroid_sum;
-    SideBounds sides[2];
     const PrimRef* in = ctx.buffers[src];
     PrimRef* out = ctx.buffers[1 - src];
-    auto run = [&](Range c, std::uint32_t left, std::uint32_t right, SideBounds* s) {
-        return scatter_below(in, out, c, left, right, axis, twice, sums, s);
+    auto run = [&](Range c, std::uint32_t left, std::uint32_t right, bool contained) {
+        return scatter_below(in, out, c, left, right, axis, twice, contained);
     };
-    const std::uint32_t mid =
-        partition_with(ctx, r, in, [=](const PrimRef& p) { return p.lo[axis] + p.hi[axis] < twice; }, run, sides);
+    const std::uint32_t mid = partition_with(ctx, r, in, BelowTwice{axis, twice}, run);
     if (mid == r.begin || mid == r.end) return std::nullopt;
-    return split_with(ctx, r, 1 - src, parent, mid, sides[0].finish(sums), sides[1].finish(sums));
+    return split_at(ctx, r, 1 - src, parent, mid);
 }
 
 Split split_even(SplitContext& ctx, Range r, int src, const NodeBounds& parent) {
