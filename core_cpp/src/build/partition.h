@@ -103,15 +103,25 @@ struct RunBounds {
 /// sets of accumulators merged at the end: the AVX2 kernel (partition_avx2.cpp) computes the same.
 void run_bounds(const PrimRef* refs, Range r, bool with_sum, RunBounds& out);
 
-/// The median's order (split_median.cpp): a reference at position i goes left when its
-/// twice-centroid on `axis` is below `twice`, or equal to it with i - base below `position`.
-struct RankPivot {
+/// The median's histogram (split_median.cpp): the bucket of a reference is its twice-centroid on
+/// `axis`, less `origin`, times `scale`, clamped to [0, top] and truncated — monotone in the
+/// centroid. count_buckets writes each reference's bucket to tag[i - r.begin] and counts them in
+/// count[0..top] (zeroed by the caller): the AVX2 kernel (partition_avx2.cpp) when active.
+struct Bucketing {
+    float origin, scale, top;
     int axis;
-    float twice;
-    std::uint32_t base, position;
 };
-std::uint32_t scatter_ranked(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
-                             const RankPivot& pivot, bool contained);
+void count_buckets(const PrimRef* src, Range r, const Bucketing& b, std::uint16_t* tag, std::uint32_t* count);
+
+/// The median's sides (split_median.cpp): the reference at position i goes left when
+/// tag[i - base] <= last_left.
+struct SideTags {
+    const std::uint16_t* tag;
+    std::uint32_t base;
+    std::uint32_t last_left;
+};
+std::uint32_t scatter_tagged(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
+                             const SideTags& tags, bool contained);
 
 // The predicates of the two scatters, for the portable and the AVX2 file alike. In an unnamed
 // namespace, so that each file instantiates scatter() with its own copy (compiled for its ISA).
@@ -134,13 +144,10 @@ struct BelowTwice {
     bool operator()(const PrimRef& p, std::uint32_t) const { return p.lo[axis] + p.hi[axis] < twice; }
 };
 
-/// Before the pivot in the median's order.
-struct BeforePivot {
-    RankPivot q;
-    bool operator()(const PrimRef& p, std::uint32_t i) const {
-        const float c = p.lo[q.axis] + p.hi[q.axis];
-        return (c < q.twice) | ((c == q.twice) & (i - q.base < q.position));
-    }
+/// Tagged for the left side (the median).
+struct TaggedLeft {
+    SideTags t;
+    bool operator()(const PrimRef&, std::uint32_t i) const { return t.tag[i - t.base] <= t.last_left; }
 };
 
 }  // namespace

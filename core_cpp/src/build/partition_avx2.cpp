@@ -61,15 +61,44 @@ std::uint32_t scatter_below(const PrimRef* src, PrimRef* dst, Range r, std::uint
                      : scatter<false, MoveYmm>(src, dst, r, left, right, below);
 }
 
-std::uint32_t scatter_ranked(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
-                             const RankPivot& pivot, bool contained) {
-    const BeforePivot below{pivot};
+std::uint32_t scatter_tagged(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
+                             const SideTags& tags, bool contained) {
+    const TaggedLeft below{tags};
     return contained ? scatter<true, MoveYmm>(src, dst, r, left, right, below)
                      : scatter<false, MoveYmm>(src, dst, r, left, right, below);
 }
 
 void run_bounds(const PrimRef* refs, Range r, bool with_sum, RunBounds& out) {
     with_sum ? run_bounds_impl<true>(refs, r, out) : run_bounds_impl<false>(refs, r, out);
+}
+
+void count_buckets(const PrimRef* src, Range r, const Bucketing& b, std::uint16_t* tag, std::uint32_t* count) {
+    // Eight references at a time: their two floats on the axis gathered, the bucket computed with
+    // the portable path's operations in its order (sub, mul, max with 0, min with top, truncate).
+    const __m256i lo_at = _mm256_add_epi32(_mm256_setr_epi32(0, 8, 16, 24, 32, 40, 48, 56), _mm256_set1_epi32(b.axis));
+    const __m256i hi_at = _mm256_add_epi32(lo_at, _mm256_set1_epi32(4));
+    const __m256 origin = _mm256_set1_ps(b.origin), scale = _mm256_set1_ps(b.scale), top = _mm256_set1_ps(b.top);
+    const __m256 zero = _mm256_setzero_ps();
+    const std::uint32_t n = r.size();
+    std::uint32_t i = 0;
+    alignas(32) std::uint32_t k[8];
+    for (; i + 8 <= n; i += 8) {
+        const float* p = reinterpret_cast<const float*>(src + r.begin + i);
+        const __m256 c = _mm256_add_ps(_mm256_i32gather_ps(p, lo_at, 4), _mm256_i32gather_ps(p, hi_at, 4));
+        const __m256 x = _mm256_min_ps(_mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(c, origin), scale), zero), top);
+        const __m256i bucket = _mm256_cvttps_epi32(x);
+        _mm256_store_si256(reinterpret_cast<__m256i*>(k), bucket);
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(tag + i),
+                         _mm_packus_epi32(_mm256_castsi256_si128(bucket), _mm256_extracti128_si256(bucket, 1)));
+        for (std::uint32_t j = 0; j < 8; ++j) ++count[k[j]];
+    }
+    for (; i < n; ++i) {
+        const PrimRef& p = src[r.begin + i];
+        float x = ((p.lo[b.axis] + p.hi[b.axis]) - b.origin) * b.scale;
+        x = x > 0.0f ? x : 0.0f;
+        x = x < b.top ? x : b.top;
+        ++count[tag[i] = std::uint16_t(x)];
+    }
 }
 
 }  // namespace bvhlab::avx2

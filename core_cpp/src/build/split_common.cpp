@@ -150,8 +150,8 @@ NodeBounds bounds_of(const SplitContext& ctx, Range r, int buf, bool with_sum) {
 namespace avx2 {  // partition_avx2.cpp
 std::uint32_t scatter_below(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
                             int axis, float twice, bool contained);
-std::uint32_t scatter_ranked(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
-                             const RankPivot& pivot, bool contained);
+std::uint32_t scatter_tagged(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
+                             const SideTags& tags, bool contained);
 }  // namespace avx2
 #endif
 
@@ -165,12 +165,12 @@ std::uint32_t scatter_below(const PrimRef* src, PrimRef* dst, Range r, std::uint
                      : scatter<false, MoveBytes>(src, dst, r, left, right, below);
 }
 
-std::uint32_t scatter_ranked(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
-                             const RankPivot& pivot, bool contained) {
+std::uint32_t scatter_tagged(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
+                             const SideTags& tags, bool contained) {
 #if defined(BVHLAB_AVX2_KERNELS)
-    if (active_isa() == Isa::Avx2) return avx2::scatter_ranked(src, dst, r, left, right, pivot, contained);
+    if (active_isa() == Isa::Avx2) return avx2::scatter_tagged(src, dst, r, left, right, tags, contained);
 #endif
-    const BeforePivot below{pivot};
+    const TaggedLeft below{tags};
     return contained ? scatter<true, MoveBytes>(src, dst, r, left, right, below)
                      : scatter<false, MoveBytes>(src, dst, r, left, right, below);
 }

@@ -9,6 +9,7 @@
 #include <bit>
 #include <cmath>
 
+#include "bvhlab/isa.h"
 #include "bvhlab/split.h"
 #include "partition.h"
 
@@ -16,68 +17,86 @@ namespace bvhlab {
 namespace {
 
 /// Ranges smaller than this rank every reference; a histogram would cost more than it saves.
-constexpr std::uint32_t kDirectSelect = 128;
+constexpr std::uint32_t kDirectSelect = 16;
 
 /// An unsigned key in the order of the floats (-0 taken as +0, as `<` and `==` take it).
 std::uint64_t order_key(float x) {
     const auto bits = std::bit_cast<std::uint32_t>(x + 0.0f);
     return bits ^ (std::uint32_t(std::int32_t(bits) >> 31) | 0x80000000u);
 }
-float from_order_key(std::uint32_t key) { return std::bit_cast<float>(key & 0x80000000u ? key ^ 0x80000000u : ~key); }
 
 /// The rank key of the reference at offset i of the range: twice-centroid first, then i.
 std::uint64_t rank_key(const PrimRef& p, int axis, std::uint32_t i) {
     return order_key(p.lo[axis] + p.hi[axis]) << 32 | i;
 }
 
-struct Bucketer {
-    float origin, scale, top;
-    int axis;
-    std::uint32_t operator()(const PrimRef& p) const {
-        return truncate_clamped(((p.lo[axis] + p.hi[axis]) - origin) * scale, top);  // on 2·centroid
-    }
+/// The histogram bucket holding the median, and how many references lie in the buckets below.
+struct MedianBucket {
+    std::uint32_t bucket, below;
 };
 
-/// The rank keys that may hold the median, and how many references rank below all of them.
-std::uint32_t median_candidates(SplitContext& ctx, const PrimRef* in, Range r, const NodeBounds& b, int axis) {
-    auto& ranks = ctx.scratch.ranks;
-    ranks.clear();
+/// Tags each reference of the range with its bucket (monotone in the centroid: a lower bucket
+/// never holds a larger centroid) and finds the median's. Small ranges: one bucket.
+MedianBucket tag_buckets(SplitContext& ctx, const PrimRef* in, Range r, const NodeBounds& b, int axis) {
+    auto& tag = ctx.scratch.bucket;
+    tag.resize(r.size());
     if (r.size() < kDirectSelect) {
-        for (std::uint32_t i = r.begin; i < r.end; ++i) ranks.push_back(rank_key(in[i], axis, i - r.begin));
-        return 0;
+        std::fill(tag.begin(), tag.end(), std::uint16_t(0));
+        return {0, 0};
     }
-    const std::uint32_t buckets = std::min<std::uint32_t>(1024, r.size() / 16);
+    const std::uint32_t buckets = std::min<std::uint32_t>(1024, r.size() / 4);
     const float extent = b.centroids.extent()[axis];
     const float scale = extent > 0 ? float(buckets) / (2.0f * extent) : 0.0f;
-    const Bucketer bucket{2.0f * b.centroids.lo[axis], std::isfinite(scale) ? scale : 0.0f, float(buckets - 1), axis};
+    const Bucketing bucketing{2.0f * b.centroids.lo[axis], std::isfinite(scale) ? scale : 0.0f, float(buckets - 1),
+                              axis};
     auto& count = ctx.scratch.counts;
-    auto& of = ctx.scratch.bucket;
     count.assign(buckets, 0);
-    of.resize(r.size());
-    for (std::uint32_t i = r.begin; i < r.end; ++i) ++count[of[i - r.begin] = std::uint16_t(bucket(in[i]))];
-    // the bucket holding the median (the bucketing is monotone in the centroid)
-    const std::uint32_t half = r.size() / 2;
-    std::uint32_t median_bucket = 0, below = 0;
-    while (below + count[median_bucket] <= half) below += count[median_bucket++];
-    for (std::uint32_t i = 0; i < r.size(); ++i)
-        if (of[i] == median_bucket) ranks.push_back(rank_key(in[r.begin + i], axis, i));
-    return below;
+    count_buckets(in, r, bucketing, tag.data(), count.data());
+    MedianBucket m{0, 0};
+    while (m.below + count[m.bucket] <= r.size() / 2) m.below += count[m.bucket++];
+    return m;
 }
 
 }  // namespace
 
+#if defined(BVHLAB_AVX2_KERNELS)
+namespace avx2 {  // partition_avx2.cpp
+void count_buckets(const PrimRef* src, Range r, const Bucketing& b, std::uint16_t* tag, std::uint32_t* count);
+}
+#endif
+
+void count_buckets(const PrimRef* src, Range r, const Bucketing& b, std::uint16_t* tag, std::uint32_t* count) {
+#if defined(BVHLAB_AVX2_KERNELS)
+    if (active_isa() == Isa::Avx2) return avx2::count_buckets(src, r, b, tag, count);
+#endif
+    for (std::uint32_t i = r.begin; i < r.end; ++i) {
+        const PrimRef& p = src[i];
+        ++count[tag[i - r.begin] =
+                    std::uint16_t(truncate_clamped(((p.lo[b.axis] + p.hi[b.axis]) - b.origin) * b.scale, b.top))];
+    }
+}
+
 std::optional<Split> split_median(SplitContext& ctx, Range r, int src, const NodeBounds& b, int axis) {
     const PrimRef* in = ctx.buffers[src];
     PrimRef* out = ctx.buffers[1 - src];
-    const std::uint32_t below = median_candidates(ctx, in, r, b, axis);
+    const MedianBucket m = tag_buckets(ctx, in, r, b, axis);
+    // Rank the median's bucket exactly; its upper part is tagged as the next bucket (right).
+    auto& tag = ctx.scratch.bucket;
     auto& ranks = ctx.scratch.ranks;
-    const auto nth = ranks.begin() + (r.size() / 2 - below);
-    std::nth_element(ranks.begin(), nth, ranks.end());
-    const RankPivot pivot{axis, from_order_key(std::uint32_t(*nth >> 32)), r.begin, std::uint32_t(*nth)};
+    if (ranks.size() < r.size()) ranks.resize(r.size());  // never shrunk: no zeroing at every node
+    const auto first = ranks.begin();
+    auto last = first;
+    for (std::uint32_t i = 0; i < r.size(); ++i)
+        if (tag[i] == m.bucket) *last++ = rank_key(in[r.begin + i], axis, i);
+    const auto nth = first + (r.size() / 2 - m.below);
+    std::nth_element(first, nth, last);
+    for (auto k = nth; k != last; ++k) tag[std::uint32_t(*k)] = std::uint16_t(m.bucket + 1);
+
+    const SideTags tags{tag.data(), r.begin, m.bucket};
     auto run = [&](Range c, std::uint32_t left, std::uint32_t right, bool contained) {
-        return scatter_ranked(in, out, c, left, right, pivot, contained);
+        return scatter_tagged(in, out, c, left, right, tags, contained);
     };
-    const std::uint32_t mid = partition_with(ctx, r, in, BeforePivot{pivot}, run);
+    const std::uint32_t mid = partition_with(ctx, r, in, TaggedLeft{tags}, run);
     return split_at(ctx, r, 1 - src, b, mid);  // mid = r.begin + ⌊n/2⌋
 }
 
