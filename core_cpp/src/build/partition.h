@@ -26,20 +26,29 @@ namespace bvhlab {
 template <bool kContained, class Move, class GoesLeft>
 std::uint32_t scatter(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
                       const GoesLeft& goes_left) {
-    for (std::uint32_t i = r.begin; i < r.end; ++i) {
-        const auto p = Move::load(src + i);
-        const std::uint32_t l = goes_left(src[i], i) ? 1u : 0u;
-        if constexpr (kContained) {  // a mask, not a branch: at the top of the tree the side is a coin toss
-            const std::uint32_t mask = 0u - l;
-            Move::store(dst + (((right - 1) & ~mask) | (left & mask)), p);
+    // Cursors in bytes, and a reference's side as 0 or sizeof(PrimRef): two adds per reference.
+    constexpr std::uintptr_t kSize = sizeof(PrimRef);
+    std::uintptr_t next_left = reinterpret_cast<std::uintptr_t>(dst + left);
+    std::uintptr_t last_right = reinterpret_cast<std::uintptr_t>(dst + right) - kSize;
+    auto move = [&](const PrimRef* from, std::uintptr_t left_bytes) {  // left_bytes: kSize or 0
+        const auto p = Move::load(from);
+        if constexpr (kContained) {  // a select, not a branch: at the top of the tree the side is a coin toss
+            Move::store(reinterpret_cast<PrimRef*>(left_bytes ? next_left : last_right), p);
         } else {
-            Move::store(dst + left, p);
-            Move::store(dst + right - 1, p);
+            Move::store(reinterpret_cast<PrimRef*>(next_left), p);
+            Move::store(reinterpret_cast<PrimRef*>(last_right), p);
         }
-        left += l;
-        right -= 1u - l;
-    }
-    return left;
+        next_left += left_bytes;
+        last_right += left_bytes - kSize;
+    };
+    std::uint32_t i = r.begin;
+    if constexpr (requires { goes_left.eight(src, i); })  // the sides of eight at once: bit j for i + j
+        for (; i + 8 <= r.end; i += 8) {
+            std::uintptr_t bits = std::uintptr_t(goes_left.eight(src, i)) * kSize;
+            for (std::uint32_t j = 0; j < 8; ++j, bits >>= 1) move(src + i + j, bits & kSize);
+        }
+    for (; i < r.end; ++i) move(src + i, goes_left(src[i], i) ? kSize : 0);
+    return std::uint32_t((reinterpret_cast<PrimRef*>(next_left)) - dst);
 }
 
 /// Where chunk k of a chunked scatter writes: its left part starts at left[k], its right part

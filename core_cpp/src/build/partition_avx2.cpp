@@ -18,6 +18,19 @@ struct MoveYmm {
     static void store(PrimRef* p, __m256 v) { _mm256_storeu_ps(reinterpret_cast<float*>(p), v); }
 };
 
+/// TaggedLeft, eight tags at a time.
+struct TaggedLeft8 {
+    TaggedLeft one;
+    __m128i last_left = _mm_set1_epi16(short(one.t.last_left));
+
+    bool operator()(const PrimRef& p, std::uint32_t i) const { return one(p, i); }
+    unsigned eight(const PrimRef*, std::uint32_t i) const {
+        const __m128i tag = _mm_loadu_si128(reinterpret_cast<const __m128i*>(one.t.tag + (i - one.t.base)));
+        const __m128i at_most = _mm_cmpeq_epi16(_mm_min_epu16(tag, last_left), tag);  // unsigned tag <= last_left
+        return unsigned(_mm_movemask_epi8(_mm_packs_epi16(at_most, _mm_setzero_si128()))) & 0xffu;
+    }
+};
+
 /// Running bounds: box as (lo, -hi) in one register, twice-centroid minima and maxima, sums.
 struct Acc {
     __m256 box = _mm256_set1_ps(__builtin_inff());
@@ -63,7 +76,7 @@ std::uint32_t scatter_below(const PrimRef* src, PrimRef* dst, Range r, std::uint
 
 std::uint32_t scatter_tagged(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
                              const SideTags& tags, bool contained) {
-    const TaggedLeft below{tags};
+    const TaggedLeft8 below{{tags}};
     return contained ? scatter<true, MoveYmm>(src, dst, r, left, right, below)
                      : scatter<false, MoveYmm>(src, dst, r, left, right, below);
 }
