@@ -33,7 +33,7 @@ struct Range {
 /// and (for the methods that ask for it, see SplitMethodInfo) the sum of their centroids. The
 /// binned SAH over all axes, which reads no centroid bounds, leaves the box in `centroids`
 /// (a box that contains the centroids); the fallbacks that read it stay correct with that.
-struct NodeBounds {
+struct alignas(16) NodeBounds {  // 16-byte chunks: copies inside Split and WorkItem line up with the stores that wrote them
     Aabb box;
     Aabb centroids;
     double centroid_sum[3] = {0, 0, 0};

@@ -1,7 +1,11 @@
 // Helpers shared by every split method: chunks for the top of the tree, bounds, the SAH cost of
 // a split, partitioning at a position, the fallbacks.
 #include <algorithm>
+#include <cstddef>
 #include <limits>
+#if defined(__SSE4_1__)
+#include <smmintrin.h>
+#endif
 
 #include "binning.h"
 #include "bvhlab/isa.h"
@@ -100,16 +104,76 @@ void portable_run_bounds(const PrimRef* refs, Range r, RunBounds& out) {
     merge(out, o);
 }
 
-NodeBounds to_bounds(const RunBounds& run, bool with_sum) {
+/// Writes the bounds of `run` into b, in place.
+void write_bounds(const RunBounds& run, bool with_sum, NodeBounds& b) {
+#if defined(__SSE4_1__)
+    // The five 16-byte chunks of NodeBounds, each written by one store: the copies that follow
+    // (into Split, WorkItem, the work stack) read 16 bytes at a time, and a load that spans
+    // several narrower stores waits for them to retire (no store-to-load forwarding), which on
+    // Sponza cost more than the bounds pass itself.
+    static_assert(sizeof(NodeBounds) == 80 && alignof(NodeBounds) == 16 && offsetof(NodeBounds, centroids) == 24 &&
+                  offsetof(NodeBounds, centroid_sum) == 48 && offsetof(NodeBounds, has_sum) == 72 &&
+                  offsetof(NodeBounds, bins) == 76);
+    const __m128 half = _mm_set1_ps(0.5f);
+    const __m128 lo = _mm_load_ps(run.lo), hi = _mm_load_ps(run.hi);
+    const __m128 clo = _mm_mul_ps(_mm_load_ps(run.clo), half), chi = _mm_mul_ps(_mm_load_ps(run.chi), half);
+    const __m128 shifted_chi = _mm_castsi128_ps(_mm_slli_si128(_mm_castps_si128(chi), 4));  // 0, x, y, z
+    auto* chunk = reinterpret_cast<char*>(&b);
+    _mm_store_ps(reinterpret_cast<float*>(chunk), _mm_blend_ps(lo, _mm_shuffle_ps(hi, hi, 0), 0b1000));
+    _mm_store_ps(reinterpret_cast<float*>(chunk + 16), _mm_shuffle_ps(hi, clo, _MM_SHUFFLE(1, 0, 2, 1)));
+    _mm_store_ps(reinterpret_cast<float*>(chunk + 32),
+                 _mm_blend_ps(shifted_chi, _mm_shuffle_ps(clo, clo, _MM_SHUFFLE(2, 2, 2, 2)), 0b0001));
+    const __m128d half_sum = _mm_set1_pd(0.5);  // exact: sums of twice the centroids
+    const __m128d keep = _mm_castsi128_pd(_mm_set1_epi32(with_sum ? -1 : 0));
+    _mm_store_pd(reinterpret_cast<double*>(chunk + 48), _mm_and_pd(_mm_mul_pd(_mm_loadu_pd(run.sum), half_sum), keep));
+    __m128i tail = _mm_castpd_si128(_mm_and_pd(_mm_mul_sd(_mm_load_sd(run.sum + 2), half_sum), keep));
+    tail = _mm_insert_epi32(_mm_insert_epi32(tail, with_sum ? 1 : 0, 2), NodeBounds{}.bins, 3);  // has_sum, bins
+    _mm_store_si128(reinterpret_cast<__m128i*>(chunk + 64), tail);
+#else
     const float half = 0.5f;
-    NodeBounds b{{{run.lo[0], run.lo[1], run.lo[2]}, {run.hi[0], run.hi[1], run.hi[2]}},
-                 {{run.clo[0] * half, run.clo[1] * half, run.clo[2] * half},
-                  {run.chi[0] * half, run.chi[1] * half, run.chi[2] * half}}};
+    b = NodeBounds{};
+    b.box = {{run.lo[0], run.lo[1], run.lo[2]}, {run.hi[0], run.hi[1], run.hi[2]}};
+    b.centroids = {{run.clo[0] * half, run.clo[1] * half, run.clo[2] * half},
+                   {run.chi[0] * half, run.chi[1] * half, run.chi[2] * half}};
     if (with_sum) {
         for (int k = 0; k < 3; ++k) b.centroid_sum[k] = 0.5 * run.sum[k];  // exact: sums of twice the centroids
         b.has_sum = true;
     }
-    return b;
+#endif
+}
+
+/// bounds_of, written into b in place.
+void bounds_into(const SplitContext& ctx, Range r, int buf, bool with_sum, NodeBounds& b) {
+    const PrimRef* refs = ctx.buffers[buf];
+    const std::uint32_t blocks = std::max<std::uint32_t>(1, (r.size() + kSumBlock - 1) / kSumBlock);
+    RunBounds first;
+    if (blocks == 1) {
+        run_bounds(refs, r, with_sum, first);
+        return write_bounds(first, with_sum, b);
+    }
+    std::vector<RunBounds> runs(blocks);
+    const std::uint32_t chunks = std::min(chunk_count(ctx, r), blocks);
+    for_each_chunk(ctx, {0, blocks}, chunks, [&](std::uint32_t, Range bl) {
+        for (std::uint32_t k = bl.begin; k < bl.end; ++k)
+            run_bounds(refs, {r.begin + k * kSumBlock, std::min(r.end, r.begin + (k + 1) * kSumBlock)}, with_sum,
+                       runs[k]);
+    });
+    for (std::uint32_t k = 1; k < blocks; ++k) merge(runs[0], runs[k]);
+    write_bounds(runs[0], with_sum, b);
+}
+
+/// s becomes the split at `mid` of r in buffer buf: both sides' bounds written in place, the cost.
+/// (Split and NodeBounds are filled where they live, never assembled and copied: see write_bounds.)
+void fill_split(SplitContext& ctx, Range r, int buf, const NodeBounds& parent, std::uint32_t mid, Split& s) {
+    const bool sums = method_info(ctx.config.method).needs_centroid_sum;
+    bounds_into(ctx, {r.begin, mid}, buf, sums, s.left);
+    bounds_into(ctx, {mid, r.end}, buf, sums, s.right);
+    s.mid = mid;
+    s.cost = SahCost(ctx.config)
+                 .split(SahCost::inverse_area(parent.box.half_area()), s.left.box.half_area(), mid - r.begin,
+                        s.right.box.half_area(), r.end - mid);
+    s.buffer = static_cast<std::uint8_t>(buf);
+    s.leaf = false;
 }
 
 }  // namespace
@@ -128,22 +192,9 @@ void run_bounds(const PrimRef* refs, Range r, bool with_sum, RunBounds& out) {
 }
 
 NodeBounds bounds_of(const SplitContext& ctx, Range r, int buf, bool with_sum) {
-    const PrimRef* refs = ctx.buffers[buf];
-    const std::uint32_t blocks = std::max<std::uint32_t>(1, (r.size() + kSumBlock - 1) / kSumBlock);
-    RunBounds first;
-    if (blocks == 1) {
-        run_bounds(refs, r, with_sum, first);
-        return to_bounds(first, with_sum);
-    }
-    std::vector<RunBounds> runs(blocks);
-    const std::uint32_t chunks = std::min(chunk_count(ctx, r), blocks);
-    for_each_chunk(ctx, {0, blocks}, chunks, [&](std::uint32_t, Range bl) {
-        for (std::uint32_t k = bl.begin; k < bl.end; ++k)
-            run_bounds(refs, {r.begin + k * kSumBlock, std::min(r.end, r.begin + (k + 1) * kSumBlock)}, with_sum,
-                       runs[k]);
-    });
-    for (std::uint32_t k = 1; k < blocks; ++k) merge(runs[0], runs[k]);
-    return to_bounds(runs[0], with_sum);
+    NodeBounds b;
+    bounds_into(ctx, r, buf, with_sum, b);
+    return b;
 }
 
 #if defined(BVHLAB_AVX2_KERNELS)
@@ -176,9 +227,9 @@ std::uint32_t scatter_tagged(const PrimRef* src, PrimRef* dst, Range r, std::uin
 }
 
 Split split_at(SplitContext& ctx, Range r, int buf, const NodeBounds& parent, std::uint32_t mid) {
-    const bool sums = method_info(ctx.config.method).needs_centroid_sum;
-    return split_with(ctx, r, buf, parent, mid, bounds_of(ctx, {r.begin, mid}, buf, sums),
-                      bounds_of(ctx, {mid, r.end}, buf, sums));
+    Split s;
+    fill_split(ctx, r, buf, parent, mid, s);
+    return s;
 }
 
 Split split_with(SplitContext& ctx, Range r, int buf, const NodeBounds& parent, std::uint32_t mid,
@@ -203,8 +254,9 @@ std::optional<Split> split_at_position(SplitContext& ctx, Range r, int src, cons
         return scatter_below(in, out, c, left, right, axis, twice, contained);
     };
     const std::uint32_t mid = partition_with(ctx, r, in, BelowTwice{axis, twice}, run);
-    if (mid == r.begin || mid == r.end) return std::nullopt;
-    return split_at(ctx, r, 1 - src, parent, mid);
+    std::optional<Split> s;  // one object from here to the caller: filled in place, never copied
+    if (mid != r.begin && mid != r.end) fill_split(ctx, r, 1 - src, parent, mid, s.emplace());
+    return s;
 }
 
 Split split_even(SplitContext& ctx, Range r, int src, const NodeBounds& parent) {
