@@ -33,7 +33,9 @@ struct Range {
 /// and (for the methods that ask for it, see SplitMethodInfo) the sum of their centroids. The
 /// binned SAH over all axes, which reads no centroid bounds, leaves the box in `centroids`
 /// (a box that contains the centroids); the fallbacks that read it stay correct with that.
-struct alignas(16) NodeBounds {  // 16-byte chunks: copies inside Split and WorkItem line up with the stores that wrote them
+/// 16-byte aligned: copies inside Split and WorkItem then line up with the stores that wrote
+/// it (split_common.cpp, write_bounds).
+struct alignas(16) NodeBounds {
     Aabb box;
     Aabb centroids;
     double centroid_sum[3] = {0, 0, 0};

@@ -86,18 +86,20 @@ void run_bounds(const PrimRef* refs, Range r, bool with_sum, RunBounds& out) {
 }
 
 void count_buckets(const PrimRef* src, Range r, const Bucketing& b, std::uint16_t* tag, std::uint32_t* count) {
-    // Eight references at a time: their two floats on the axis gathered, the bucket computed with
-    // the portable path's operations in its order (sub, mul, max with 0, min with top, truncate).
-    const __m256i lo_at = _mm256_add_epi32(_mm256_setr_epi32(0, 8, 16, 24, 32, 40, 48, 56), _mm256_set1_epi32(b.axis));
-    const __m256i hi_at = _mm256_add_epi32(lo_at, _mm256_set1_epi32(4));
+    // Eight references at a time: the twice-centroids added one by one (vgatherdps is slower
+    // here), then the bucket of all eight with the portable path's operations in its order
+    // (sub, mul, max with 0, min with top, truncate).
     const __m256 origin = _mm256_set1_ps(b.origin), scale = _mm256_set1_ps(b.scale), top = _mm256_set1_ps(b.top);
     const __m256 zero = _mm256_setzero_ps();
     const std::uint32_t n = r.size();
+    const int a = b.axis;
     std::uint32_t i = 0;
     alignas(32) std::uint32_t k[8];
     for (; i + 8 <= n; i += 8) {
-        const float* p = reinterpret_cast<const float*>(src + r.begin + i);
-        const __m256 c = _mm256_add_ps(_mm256_i32gather_ps(p, lo_at, 4), _mm256_i32gather_ps(p, hi_at, 4));
+        const PrimRef* p = src + r.begin + i;
+        const __m256 c = _mm256_setr_ps(p[0].lo[a] + p[0].hi[a], p[1].lo[a] + p[1].hi[a], p[2].lo[a] + p[2].hi[a],
+                                        p[3].lo[a] + p[3].hi[a], p[4].lo[a] + p[4].hi[a], p[5].lo[a] + p[5].hi[a],
+                                        p[6].lo[a] + p[6].hi[a], p[7].lo[a] + p[7].hi[a]);
         const __m256 x = _mm256_min_ps(_mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(c, origin), scale), zero), top);
         const __m256i bucket = _mm256_cvttps_epi32(x);
         _mm256_store_si256(reinterpret_cast<__m256i*>(k), bucket);

@@ -86,8 +86,8 @@ std::optional<Split> split_median(SplitContext& ctx, Range r, int src, const Nod
     if (ranks.size() < r.size()) ranks.resize(r.size());  // never shrunk: no zeroing at every node
     const auto first = ranks.begin();
     auto last = first;
-    for (std::uint32_t i = 0; i < r.size(); ++i)
-        if (tag[i] == m.bucket) *last++ = rank_key(in[r.begin + i], axis, i);
+    for (std::uint32_t i = 0; i < r.size(); ++i) *last = i, last += tag[i] == m.bucket;  // no branch to mispredict
+    for (auto k = first; k != last; ++k) *k = rank_key(in[r.begin + std::uint32_t(*k)], axis, std::uint32_t(*k));
     const auto nth = first + (r.size() / 2 - m.below);
     std::nth_element(first, nth, last);
     for (auto k = nth; k != last; ++k) tag[std::uint32_t(*k)] = std::uint16_t(m.bucket + 1);
