@@ -39,9 +39,9 @@ struct MedianBucket {
 /// never holds a larger centroid) and finds the median's. Small ranges: one bucket.
 MedianBucket tag_buckets(SplitContext& ctx, const PrimRef* in, Range r, const NodeBounds& b, int axis) {
     auto& tag = ctx.scratch.bucket;
-    tag.resize(r.size());
+    if (tag.size() < r.size()) tag.resize(r.size());  // never shrunk: no zeroing at every node
     if (r.size() < kDirectSelect) {
-        std::fill(tag.begin(), tag.end(), std::uint16_t(0));
+        std::fill_n(tag.begin(), r.size(), std::uint16_t(0));
         return {0, 0};
     }
     const std::uint32_t buckets = std::min<std::uint32_t>(1024, r.size() / 4);
