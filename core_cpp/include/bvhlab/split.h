@@ -33,7 +33,9 @@ struct Range {
 /// and (for the methods that ask for it, see SplitMethodInfo) the sum of their centroids. The
 /// binned SAH over all axes, which reads no centroid bounds, leaves the box in `centroids`
 /// (a box that contains the centroids); the fallbacks that read it stay correct with that.
-struct NodeBounds {
+/// 16-byte aligned: copies inside Split and WorkItem then line up with the stores that wrote
+/// it (split_common.cpp, write_bounds).
+struct alignas(16) NodeBounds {
     Aabb box;
     Aabb centroids;
     double centroid_sum[3] = {0, 0, 0};
@@ -60,6 +62,8 @@ struct SplitScratch {
     std::vector<PrimRef> sorted;        ///< sweep SAH: the range sorted on one axis
     std::vector<float> areas;           ///< sweep SAH suffix areas
     std::vector<std::uint32_t> counts;  ///< median: histogram
+    std::vector<std::uint16_t> bucket;  ///< median: each reference's histogram bucket
+    std::vector<std::uint64_t> ranks;   ///< median: (order key, position) of the candidates
     std::unique_ptr<BinStore> bins;     ///< binned SAH: buckets of the nodes on the work stack
 };
 

@@ -1,52 +1,54 @@
 // partition.h — dividing a range of references in two: the branch-free scatter every split
-// method uses, which also gathers both sides' bounds in the same pass; sequential, or cut into
-// chunks on the pool with the same result.
+// method uses, sequential, or cut into chunks on the pool with the same result. The scatter only
+// moves references; the children's bounds are gathered afterwards, in one pass over each side's
+// contiguous positions (bounds_of), which costs fewer instructions than sorting every reference's
+// box into one of two accumulators as it moves.
 #pragma once
-#include <limits>
+#include <cstring>
 #include <vector>
 
 #include "bvhlab/split.h"
 
 namespace bvhlab {
 
-/// Bounds of the references one side of a partition receives: box, twice-centroid box and
-/// (when asked) centroid sum, accumulated in input order.
-struct SideBounds {
-    F4 lo = F4::splat(std::numeric_limits<float>::infinity()), hi = F4::splat(-std::numeric_limits<float>::infinity());
-    F4 c_lo = lo, c_hi = hi;
-    double sum[3] = {0, 0, 0};
-
-    template <bool kSum>
-    void add(const PrimRef& p) {
-        const F4 a = p.lo4(), b = p.hi4(), c = a + b;
-        lo = min(lo, a), hi = max(hi, b), c_lo = min(c_lo, c), c_hi = max(c_hi, c);
-        if constexpr (kSum)
-            for (int k = 0; k < 3; ++k) sum[k] += 0.5 * double(p.lo[k] + p.hi[k]);
-    }
-    void merge(const SideBounds& o) {
-        lo = min(lo, o.lo), hi = max(hi, o.hi), c_lo = min(c_lo, o.c_lo), c_hi = max(c_hi, o.c_hi);
-        for (int k = 0; k < 3; ++k) sum[k] += o.sum[k];
-    }
-    NodeBounds finish(bool with_sum) const;
-};
-
-/// Scatter of src[r] into dst: references for which goes_left(p) holds fill dst forward from
-/// `left`, the others backward from `right` (one past the last slot), each side gathering its
-/// bounds. Returns the left cursor after the last reference.
-template <bool kSum, class GoesLeft>
+/// Scatter of src[r] into dst: references for which goes_left(src[i], i) holds fill dst forward
+/// from `left`, the others backward from `right` (one past the last slot). Returns the left
+/// cursor after the last reference. `Move` loads a reference into registers and stores it.
+///
+/// kContained: every write lands in the slots this scatter fills (one store per reference, at
+/// a slot chosen by mask). Otherwise each reference is stored at both cursors, without a select;
+/// the store at the wrong cursor writes the slot next to the part filled so far (at most one past
+/// either part's end), which a later reference of the same scatter overwrites — so scatters of
+/// consecutive chunks of one range run in order, never at once.
+///
+/// A template only on types local to the file that instantiates it (below), and calling nothing
+/// but those: the AVX2 file instantiates it too (see binning_avx2.cpp on inline functions).
+template <bool kContained, class Move, class GoesLeft>
 std::uint32_t scatter(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
-                      const GoesLeft& goes_left, SideBounds sides[2]) {
-    for (std::uint32_t i = r.begin; i < r.end; ++i) {
-        const PrimRef& p = src[i];
-        // Select the slot with a mask, not a branch: at the top of the tree the side is a coin toss.
-        const std::uint32_t l = goes_left(p) ? 1u : 0u;
-        const std::uint32_t mask = 0u - l;
-        dst[((right - 1) & ~mask) | (left & mask)] = p;
-        left += l;
-        right -= 1u - l;
-        sides[1 - l].template add<kSum>(p);
-    }
-    return left;
+                      const GoesLeft& goes_left) {
+    // Cursors in bytes, and a reference's side as 0 or sizeof(PrimRef): two adds per reference.
+    constexpr std::uintptr_t kSize = sizeof(PrimRef);
+    std::uintptr_t next_left = reinterpret_cast<std::uintptr_t>(dst + left);
+    std::uintptr_t last_right = reinterpret_cast<std::uintptr_t>(dst + right) - kSize;
+    auto move = [&](const PrimRef* from, std::uintptr_t left_bytes) {  // left_bytes: kSize or 0
+        const auto p = Move::load(from);
+        if constexpr (kContained) {  // a select, not a branch: at the top of the tree the side is a coin toss
+            Move::store(reinterpret_cast<PrimRef*>(left_bytes ? next_left : last_right), p);
+        } else {
+            Move::store(reinterpret_cast<PrimRef*>(next_left), p);
+            Move::store(reinterpret_cast<PrimRef*>(last_right), p);
+        }
+        next_left += left_bytes;
+        last_right += left_bytes - kSize;
+    };
+    std::uint32_t i = r.begin;
+    if constexpr (requires { goes_left.eight(src, i); })  // the sides of eight at once: bit j for i + j
+        for (; i + 8 <= r.end; i += 8) {
+            std::uintptr_t bits = std::uintptr_t(goes_left.eight(src, i)) * kSize;
+            for (std::uint32_t j = 0; j < 8; ++j, bits >>= 1) move(src + i + j, bits & kSize);
+        }
+    for (; i < r.end; ++i) move(src + i, goes_left(src[i], i) ? kSize : 0);
+    return std::uint32_t((reinterpret_cast<PrimRef*>(next_left)) - dst);
 }
 
 /// Where chunk k of a chunked scatter writes: its left part starts at left[k], its right part
@@ -66,56 +68,97 @@ struct ChunkCursors {
     }
 };
 
-/// Chunks of this many references: the same cut whatever the thread count, so that centroid
-/// sums (added per chunk, then chunk by chunk) round the same way on any number of threads.
-inline constexpr std::uint32_t kPartitionChunk = 1u << 14;
-
-/// Partitions src[r] by goes_left and returns the first right position, with both sides' bounds
-/// (sides[0] left, sides[1] right); in chunks (on the pool when ctx allows; a counting pass
-/// first), with the same result as one scatter. `run(chunk, left, right, sides)` scatters one
-/// chunk as scatter() does and returns its left cursor after.
+/// Partitions src[r] by goes_left(ref, position) and returns the first right position. Large
+/// ranges on the pool: a counting pass, then chunks scattered at once (contained stores); else one
+/// scatter. `run(chunk, left, right, contained)` scatters one chunk as scatter() does and returns
+/// its left cursor after. The result never depends on the threads.
 template <class GoesLeft, class Run>
 std::uint32_t partition_with(const SplitContext& ctx, Range r, const PrimRef* src, const GoesLeft& goes_left,
-                             const Run& run, SideBounds sides[2]) {
-    const std::uint32_t chunks = (r.size() + kPartitionChunk - 1) / kPartitionChunk;
-    if (chunks <= 1) return run(r, r.begin, r.end, sides);
-    std::vector<SideBounds> chunk_sides(2 * std::size_t(chunks));
-    auto fixed = [&](std::uint32_t k) {
-        return Range{r.begin + k * kPartitionChunk, std::min(r.end, r.begin + (k + 1) * kPartitionChunk)};
-    };
-    auto merge_sides = [&] {
-        for (std::uint32_t k = 0; k < chunks; ++k)
-            sides[0].merge(chunk_sides[2 * k]), sides[1].merge(chunk_sides[2 * k + 1]);
-    };
-    if (!ctx.parallel || ctx.parallel->threads < 2) {  // one pass, chunk after chunk
+                             const Run& run) {
+    const std::uint32_t chunks = chunk_count(ctx, r);
+    if (chunks <= 1 || ctx.parallel->threads < 2) {  // in turn, polling the cancellation between chunks
         std::uint32_t left = r.begin, right = r.end;
         for (std::uint32_t k = 0; k < chunks; ++k) {
-            const Range c = fixed(k);
-            const std::uint32_t end = run(c, left, right, &chunk_sides[2 * k]);
+            const Range c = chunk_of(r, k, chunks);
+            const std::uint32_t end = run(c, left, right, false);
             right -= c.size() - (end - left), left = end;
             if (ctx.parallel && ctx.parallel->while_waiting) (*ctx.parallel->while_waiting)();
         }
-        merge_sides();
         return left;
     }
     std::vector<std::uint32_t> left_counts(chunks), sizes(chunks);
-    for_each_chunk(ctx, {0, chunks}, chunks, [&](std::uint32_t k, Range) {
-        const Range c = fixed(k);
+    for_each_chunk(ctx, r, chunks, [&](std::uint32_t k, Range c) {
         std::uint32_t n = 0;
-        for (std::uint32_t i = c.begin; i < c.end; ++i) n += goes_left(src[i]) ? 1u : 0u;
+        for (std::uint32_t i = c.begin; i < c.end; ++i) n += goes_left(src[i], i) ? 1u : 0u;
         left_counts[k] = n, sizes[k] = c.size();
     });
     const ChunkCursors cursors(r, left_counts, sizes);
-    for_each_chunk(ctx, {0, chunks}, chunks, [&](std::uint32_t k, Range) {
-        run(fixed(k), cursors.left[k], cursors.right[k], &chunk_sides[2 * k]);
-    });
-    merge_sides();
+    for_each_chunk(ctx, r, chunks, [&](std::uint32_t k, Range c) { run(c, cursors.left[k], cursors.right[k], true); });
     return cursors.mid;
 }
 
 /// scatter() of the references whose twice-centroid on `axis` lies below `twice` (the mean and
 /// midpoint splits): the AVX2 kernel (partition_avx2.cpp) when that path is active.
 std::uint32_t scatter_below(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
-                            int axis, float twice, bool with_sum, SideBounds sides[2]);
+                            int axis, float twice, bool contained);
+
+/// Bounds of one run of references as plain numbers: box, twice-centroid box, and the sum of the
+/// twice-centroids (lane 3 unused). bounds_of merges the runs of fixed blocks in order.
+struct RunBounds {
+    alignas(16) float lo[4], hi[4], clo[4], chi[4];
+    alignas(16) double sum[4];
+};
+/// The bounds of refs[r] (with the sums when asked), even and odd positions from r.begin in two
+/// sets of accumulators merged at the end: the AVX2 kernel (partition_avx2.cpp) computes the same.
+void run_bounds(const PrimRef* refs, Range r, bool with_sum, RunBounds& out);
+
+/// The median's histogram (split_median.cpp): the bucket of a reference is its twice-centroid on
+/// `axis`, less `origin`, times `scale`, clamped to [0, top] and truncated — monotone in the
+/// centroid. count_buckets writes each reference's bucket to tag[i - r.begin] and counts them in
+/// count[0..top] (zeroed by the caller): the AVX2 kernel (partition_avx2.cpp) when active.
+struct Bucketing {
+    float origin, scale, top;
+    int axis;
+};
+void count_buckets(const PrimRef* src, Range r, const Bucketing& b, std::uint16_t* tag, std::uint32_t* count);
+
+/// The median's sides (split_median.cpp): the reference at position i goes left when
+/// tag[i - base] <= last_left.
+struct SideTags {
+    const std::uint16_t* tag;
+    std::uint32_t base;
+    std::uint32_t last_left;
+};
+std::uint32_t scatter_tagged(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
+                             const SideTags& tags, bool contained);
+
+// The predicates of the two scatters, for the portable and the AVX2 file alike. In an unnamed
+// namespace, so that each file instantiates scatter() with its own copy (compiled for its ISA).
+namespace {
+
+/// Moves a reference as plain bytes (the portable path).
+struct MoveBytes {
+    static PrimRef load(const PrimRef* p) {
+        PrimRef v;
+        std::memcpy(&v, p, sizeof v);
+        return v;
+    }
+    static void store(PrimRef* p, const PrimRef& v) { std::memcpy(p, &v, sizeof v); }
+};
+
+/// Twice-centroid on `axis` below `twice` (mean and midpoint).
+struct BelowTwice {
+    int axis;
+    float twice;
+    bool operator()(const PrimRef& p, std::uint32_t) const { return p.lo[axis] + p.hi[axis] < twice; }
+};
+
+/// Tagged for the left side (the median).
+struct TaggedLeft {
+    SideTags t;
+    bool operator()(const PrimRef&, std::uint32_t i) const { return t.tag[i - t.base] <= t.last_left; }
+};
+
+}  // namespace
 
 }  // namespace bvhlab

@@ -1,68 +1,103 @@
-// Median split (report §2.3.1, PBRT "EqualCounts"): the first half gets the smaller centroids on
-// the axis, in O(n) — never a sort. A histogram of the centroids finds the bucket that holds the
-// median; one branch-free scatter puts everything below it left and above it right; then
-// std::nth_element (the report's select_nth_unstable) orders just that bucket around the median.
+// Median split (report §2.3.1, PBRT "EqualCounts"): the ⌊n/2⌋ references first in the order
+// (twice-centroid on the axis, position in the range) go left, in O(n) — never a sort. The
+// order is total, so ties between equal centroids are broken by position and the split is the
+// same on every path. A histogram of the centroids finds the bucket that holds the median; only
+// that bucket's references are ranked exactly (std::nth_element, the report's
+// select_nth_unstable, on 8-byte keys rather than 32-byte references); one branch-free scatter
+// then moves every reference once, each side in input order, and the sides' bounds follow.
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
+#include "bvhlab/isa.h"
 #include "bvhlab/split.h"
 #include "partition.h"
 
 namespace bvhlab {
 namespace {
 
-/// Ranges smaller than this are selected directly; a histogram would cost more than it saves.
-constexpr std::uint32_t kDirectSelect = 128;
+/// Ranges smaller than this rank every reference; a histogram would cost more than it saves.
+constexpr std::uint32_t kDirectSelect = 16;
 
-struct Bucketer {
-    float origin, scale, top;
-    int axis;
-    std::uint32_t operator()(const PrimRef& p) const {
-        return truncate_clamped(((p.lo[axis] + p.hi[axis]) - origin) * scale, top);  // on 2·centroid
-    }
+/// An unsigned key in the order of the floats (-0 taken as +0, as `<` and `==` take it).
+std::uint64_t order_key(float x) {
+    const auto bits = std::bit_cast<std::uint32_t>(x + 0.0f);
+    return bits ^ (std::uint32_t(std::int32_t(bits) >> 31) | 0x80000000u);
+}
+
+/// The rank key of the reference at offset i of the range: twice-centroid first, then i.
+std::uint64_t rank_key(const PrimRef& p, int axis, std::uint32_t i) {
+    return order_key(p.lo[axis] + p.hi[axis]) << 32 | i;
+}
+
+/// The histogram bucket holding the median, and how many references lie in the buckets below.
+struct MedianBucket {
+    std::uint32_t bucket, below;
 };
 
-bool less_on(int axis, const PrimRef& p, const PrimRef& q) { return p.lo[axis] + p.hi[axis] < q.lo[axis] + q.hi[axis]; }
+/// Tags each reference of the range with its bucket (monotone in the centroid: a lower bucket
+/// never holds a larger centroid) and finds the median's. Small ranges: one bucket.
+MedianBucket tag_buckets(SplitContext& ctx, const PrimRef* in, Range r, const NodeBounds& b, int axis) {
+    auto& tag = ctx.scratch.bucket;
+    if (tag.size() < r.size()) tag.resize(r.size());  // never shrunk: no zeroing at every node
+    if (r.size() < kDirectSelect) {
+        std::fill_n(tag.begin(), r.size(), std::uint16_t(0));
+        return {0, 0};
+    }
+    const std::uint32_t buckets = std::min<std::uint32_t>(1024, r.size() / 4);
+    const float extent = b.centroids.extent()[axis];
+    const float scale = extent > 0 ? float(buckets) / (2.0f * extent) : 0.0f;
+    const Bucketing bucketing{2.0f * b.centroids.lo[axis], std::isfinite(scale) ? scale : 0.0f, float(buckets - 1),
+                              axis};
+    auto& count = ctx.scratch.counts;
+    count.assign(buckets, 0);
+    count_buckets(in, r, bucketing, tag.data(), count.data());
+    MedianBucket m{0, 0};
+    while (m.below + count[m.bucket] <= r.size() / 2) m.below += count[m.bucket++];
+    return m;
+}
 
 }  // namespace
+
+#if defined(BVHLAB_AVX2_KERNELS)
+namespace avx2 {  // partition_avx2.cpp
+void count_buckets(const PrimRef* src, Range r, const Bucketing& b, std::uint16_t* tag, std::uint32_t* count);
+}
+#endif
+
+void count_buckets(const PrimRef* src, Range r, const Bucketing& b, std::uint16_t* tag, std::uint32_t* count) {
+#if defined(BVHLAB_AVX2_KERNELS)
+    if (active_isa() == Isa::Avx2) return avx2::count_buckets(src, r, b, tag, count);
+#endif
+    for (std::uint32_t i = r.begin; i < r.end; ++i) {
+        const PrimRef& p = src[i];
+        ++count[tag[i - r.begin] =
+                    std::uint16_t(truncate_clamped(((p.lo[b.axis] + p.hi[b.axis]) - b.origin) * b.scale, b.top))];
+    }
+}
 
 std::optional<Split> split_median(SplitContext& ctx, Range r, int src, const NodeBounds& b, int axis) {
     const PrimRef* in = ctx.buffers[src];
     PrimRef* out = ctx.buffers[1 - src];
-    const std::uint32_t mid = r.begin + r.size() / 2;
-    auto less = [axis](const PrimRef& p, const PrimRef& q) { return less_on(axis, p, q); };
-    if (r.size() < kDirectSelect) {
-        std::copy(in + r.begin, in + r.end, out + r.begin);
-        std::nth_element(out + r.begin, out + mid, out + r.end, less);
-        return split_at(ctx, r, 1 - src, b, mid);
-    }
-    const std::uint32_t buckets = std::min<std::uint32_t>(1024, r.size() / 16);
-    const float extent = b.centroids.extent()[axis];
-    const float scale = extent > 0 ? float(buckets) / (2.0f * extent) : 0.0f;
-    const Bucketer bucket{2.0f * b.centroids.lo[axis], std::isfinite(scale) ? scale : 0.0f, float(buckets - 1), axis};
+    const MedianBucket m = tag_buckets(ctx, in, r, b, axis);
+    // Rank the median's bucket exactly; its upper part is tagged as the next bucket (right).
+    auto& tag = ctx.scratch.bucket;
+    auto& ranks = ctx.scratch.ranks;
+    if (ranks.size() < r.size()) ranks.resize(r.size());  // never shrunk: no zeroing at every node
+    const auto first = ranks.begin();
+    auto last = first;
+    for (std::uint32_t i = 0; i < r.size(); ++i) *last = i, last += tag[i] == m.bucket;  // no branch to mispredict
+    for (auto k = first; k != last; ++k) *k = rank_key(in[r.begin + std::uint32_t(*k)], axis, std::uint32_t(*k));
+    const auto nth = first + (r.size() / 2 - m.below);
+    std::nth_element(first, nth, last);
+    for (auto k = nth; k != last; ++k) tag[std::uint32_t(*k)] = std::uint16_t(m.bucket + 1);
 
-    // 1. histogram, and the bucket holding the median
-    auto& count = ctx.scratch.counts;
-    count.assign(buckets, 0);
-    for (std::uint32_t i = r.begin; i < r.end; ++i) ++count[bucket(in[i])];
-    std::uint32_t median_bucket = 0, below = 0;
-    while (below + count[median_bucket] <= mid - r.begin) below += count[median_bucket++];
-
-    // 2. scatter: below | the median's bucket | above, each in input order; the bounds of what
-    //    lies below and above are gathered on the way
-    std::uint32_t cursor[3] = {r.begin, r.begin + below, r.begin + below + count[median_bucket]};
-    const std::uint32_t bucket_begin = cursor[1], bucket_end = cursor[2];
-    SideBounds sides[3];
-    for (std::uint32_t i = r.begin; i < r.end; ++i) {
-        const std::uint32_t k = bucket(in[i]);
-        const std::uint32_t group = (k >= median_bucket) + (k > median_bucket);
-        out[cursor[group]++] = in[i];
-        sides[group].add<false>(in[i]);
-    }
-    // 3. select within the median's bucket, and add its two parts to the sides
-    std::nth_element(out + bucket_begin, out + mid, out + bucket_end, less);
-    for (std::uint32_t i = bucket_begin; i < bucket_end; ++i) sides[i < mid ? 0 : 2].add<false>(out[i]);
-    return split_with(ctx, r, 1 - src, b, mid, sides[0].finish(false), sides[2].finish(false));
+    const SideTags tags{tag.data(), r.begin, m.bucket};
+    auto run = [&](Range c, std::uint32_t left, std::uint32_t right, bool contained) {
+        return scatter_tagged(in, out, c, left, right, tags, contained);
+    };
+    const std::uint32_t mid = partition_with(ctx, r, in, TaggedLeft{tags}, run);
+    return split_at(ctx, r, 1 - src, b, mid);  // mid = r.begin + ⌊n/2⌋
 }
 
 }  // namespace bvhlab

@@ -66,43 +66,46 @@ Split median_of(SplitContext& ctx, Range r, int src, const NodeBounds& b) {
     return *split_median(ctx, r, src, b, largest_axis(extent));
 }
 
-Split find_split(SplitContext& ctx, const WorkItem& item) {
+/// Writes the split of a range to `out` (in place: a Split is 192 bytes, see split_common.cpp's
+/// write_bounds on why it is never assembled and copied).
+void find_split(SplitContext& ctx, const WorkItem& item, Split& out) {
     const Range r = item.range;
     const int src = item.buffer;
     const NodeBounds& b = item.bounds;
     const SplitMethodInfo& method = method_info(ctx.config.method);
-    if (r.size() == 2) return split_pair(ctx, item);
+    if (r.size() == 2) return void(out = split_pair(ctx, item));
     if (method.bottom_up_boxes) {  // no bounds on the way down; the rare depth fallback makes its own
-        if (too_deep(item.depth, r.size())) return median_of(ctx, r, src, bounds_of(ctx, r, src, false));
+        if (too_deep(item.depth, r.size())) return void(out = median_of(ctx, r, src, bounds_of(ctx, r, src, false)));
     } else {
         const Vec3 extent = b.centroids.extent();
-        if (!(extent.x > 0.0f || extent.y > 0.0f || extent.z > 0.0f)) return split_even(ctx, r, src, b);
-        if (too_deep(item.depth, r.size())) return median_of(ctx, r, src, b);
+        if (!(extent.x > 0.0f || extent.y > 0.0f || extent.z > 0.0f)) return void(out = split_even(ctx, r, src, b));
+        if (too_deep(item.depth, r.size())) return void(out = median_of(ctx, r, src, b));
     }
 
     const int axis = method.bottom_up_boxes ? kAllAxes  // LBVH has no axis
                                             : choose_axis(ctx.config, b.centroids.extent(), r, item.depth);
-    std::optional<Split> s = axis == kAllAxes && !method.all_axes ? split_best_of_axes(method.split, ctx, r, src, b)
-                                                                  : method.split(ctx, r, src, b, axis);
-    return s ? *s : split_even(ctx, r, src, b);
+    const std::optional<Split> s = axis == kAllAxes && !method.all_axes
+                                       ? split_best_of_axes(method.split, ctx, r, src, b)
+                                       : method.split(ctx, r, src, b, axis);
+    if (s) out = *s;
+    else out = split_even(ctx, r, src, b);
 }
 
 }  // namespace
 
-std::optional<Split> choose_split(SplitContext& ctx, const WorkItem& item) {
+bool choose_split(SplitContext& ctx, const WorkItem& item, Split& out) {
     const BuildConfig& cfg = ctx.config;
     const std::uint32_t n = item.range.size();
-    if (n <= 1) return std::nullopt;
+    if (n <= 1) return false;
     const bool fits_leaf = n <= cfg.max_leaf_size;
     const bool weighs_leaves = method_info(cfg.method).uses_sah;
-    if (fits_leaf && !weighs_leaves) return std::nullopt;
+    if (fits_leaf && !weighs_leaves) return false;
     // SAH leaf termination (report §5.1, PBRT): a range that may be a leaf becomes one when
     // intersecting all of it costs no more than the best split. The SAH methods answer that
     // themselves before they move anything (Split::leaf); the check after covers the fallbacks.
     ctx.leaf_allowed = fits_leaf;
-    Split s = find_split(ctx, item);
-    if (s.leaf || (fits_leaf && SahCost(cfg).leaf(n) <= s.cost)) return std::nullopt;
-    return s;
+    find_split(ctx, item, out);
+    return !(out.leaf || (fits_leaf && SahCost(cfg).leaf(n) <= out.cost));
 }
 
 void SubtreeWriter::make_leaf(std::uint32_t index, const WorkItem& item) {
@@ -132,6 +135,29 @@ bool should_stop(BuildShared& shared, const SubtreeRun& run) {
 
 }  // namespace
 
+namespace {
+
+/// Replaces the item on top of the stack (the node `index`) with its children: the right one in
+/// its place, the left one above it, so that the left subtree is built first. Children that
+/// are plainly leaves (most leaves) are written at once, without a work item.
+void replace_by_children(SubtreeWriter& writer, std::vector<WorkItem>& stack, const Split& split, std::uint32_t index) {
+    const Range r = stack.back().range;
+    const std::uint32_t d = stack.back().depth + 1;
+    const WorkItem left{{r.begin, split.mid}, split.left, index, d, false, split.buffer};
+    const WorkItem right{{split.mid, r.end}, split.right, index, d, true, split.buffer};
+    if (!obviously_leaf(writer.shared(), left.range.size())) {
+        stack.back() = right;
+        stack.push_back(left);
+        return;
+    }
+    writer.make_leaf(writer.open(left), left);
+    if (!obviously_leaf(writer.shared(), right.range.size())) return void(stack.back() = right);
+    stack.pop_back();
+    writer.make_leaf(writer.open(right), right);
+}
+
+}  // namespace
+
 void build_subtree(BuildShared& shared, SplitScratch& scratch, const WorkItem& root, Subtree& out,
                    const SubtreeRun& run) {
     SplitContext ctx{{shared.buffers[0], shared.buffers[1]}, shared.config, scratch, run.parallel};
@@ -140,42 +166,30 @@ void build_subtree(BuildShared& shared, SplitScratch& scratch, const WorkItem& r
     out.depths.reserve(out.nodes.capacity());
     std::vector<WorkItem> stack{root};
     const std::uint32_t small_size = small_subtree_size(shared.config);
+    Split split;
     for (std::uint32_t nodes = 0; !stack.empty(); ++nodes) {
         if ((nodes & 63) == 0) {
             writer.flush_leaf_count();
             if (should_stop(shared, run)) return;
         }
-        WorkItem item = stack.back();
-        stack.pop_back();
+        // The item stays on the stack, read in place, until its children replace it.
+        WorkItem& item = stack.back();
         const std::uint32_t index = writer.open(item);
         if (index > 0 && item.range.size() <= run.defer_size) {
-            item.bounds.bins = -1;  // its buckets live in this thread's store
             out.deferred.emplace_back(index, item);
-            continue;
-        }
-        if (item.range.size() >= 2 && item.range.size() <= small_size) {  // the last levels at once
+            out.deferred.back().second.bounds.bins = -1;  // its buckets live in this thread's store
+        } else if (item.range.size() >= 2 && item.range.size() <= small_size) {  // the last levels at once
             build_small_subtree(writer, shared.config, item, index);
-            continue;
-        }
-        ctx.child_slot = static_cast<std::uint32_t>(stack.size());  // where the children will be pushed
-        std::optional<Split> split = obviously_leaf(shared, item.range.size()) ? std::nullopt : choose_split(ctx, item);
-        if (!split) {
+        } else {
+            ctx.child_slot = static_cast<std::uint32_t>(stack.size() - 1);  // where the children will be
+            if (!obviously_leaf(shared, item.range.size()) && choose_split(ctx, item, split)) {
+                writer.make_internal(index);
+                replace_by_children(writer, stack, split, index);
+                continue;
+            }
             writer.make_leaf(index, item);
-            continue;
         }
-        writer.make_internal(index);
-        const std::uint32_t d = item.depth + 1;
-        WorkItem left{{item.range.begin, split->mid}, split->left, index, d, false, split->buffer};
-        WorkItem right{{split->mid, item.range.end}, split->right, index, d, true, split->buffer};
-        // Children that are plainly leaves (most leaves) are written at once, without a work item.
-        if (!obviously_leaf(shared, left.range.size())) {
-            stack.push_back(right);
-            stack.push_back(left);
-            continue;
-        }
-        writer.make_leaf(writer.open(left), left);
-        if (obviously_leaf(shared, right.range.size())) writer.make_leaf(writer.open(right), right);
-        else stack.push_back(right);
+        stack.pop_back();
     }
 }
 

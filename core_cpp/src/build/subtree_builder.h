@@ -51,8 +51,8 @@ struct SubtreeRun {
 void build_subtree(BuildShared& shared, SplitScratch& scratch, const WorkItem& root, Subtree& out,
                    const SubtreeRun& run);
 
-/// Decides a node: the split to make, or nothing for a leaf. Exposed for the tests.
-std::optional<Split> choose_split(SplitContext& ctx, const WorkItem& item);
+/// Decides a node: true and the split to make written to `out`, or false for a leaf.
+bool choose_split(SplitContext& ctx, const WorkItem& item, Split& out);
 
 /// The axis policy (report §2.3) for a node with this centroid extent, range and depth, or
 /// kAllAxes. Random hashes the node's own range and depth, not a shared generator, so the tree

@@ -17,9 +17,9 @@ public:
     /// Appends a node with `box` at `depth`; a second child is linked to its parent.
     std::uint32_t open(const Aabb& box, std::uint32_t depth, std::uint32_t parent, bool second_child) {
         const auto index = static_cast<std::uint32_t>(out_.nodes.size());
-        BvhNode node{};
+        BvhNode& node = out_.nodes.emplace_back();  // written in place: no copy to wait for its stores
         set_box(node, box);
-        out_.nodes.push_back(node);
+        node.index = 0, node.info = 0;
         out_.depths.push_back(static_cast<std::uint8_t>(depth));
         if (second_child) out_.nodes[parent].index = index;
         return index;
