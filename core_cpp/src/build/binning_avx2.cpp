@@ -83,8 +83,6 @@ struct ChildSide {
     char* count[2];
 };
 
-template <int kCopy>
-using Copy = std::integral_constant<int, kCopy>;
 template <int kLane>
 using Lane = std::integral_constant<int, kLane>;
 
@@ -94,62 +92,76 @@ std::size_t offset(__m128i v, Lane<kLane>) {
     return std::uint32_t(_mm_extract_epi32(v, kLane));
 }
 
+/// The fused pass over one range: its constants, set up once, and the step for one reference.
 template <bool kCentroids>
-std::uint32_t partition_and_bin_impl(const PrimRef* __restrict src, PrimRef* __restrict dst, Range r,
-                                     std::uint32_t left, std::uint32_t right, const BinFrame& parent,
-                                     const BinSplit& split, const ChildBinning child[2], CentroidBounds sides[2]) {
-    const Kernel c;
-    ChildSide side[2];
-    for (int s = 0; s < 2; ++s) {
-        side[s] = {child[s].frame.origin2.v, child[s].frame.scale.v, {nullptr, nullptr}, {nullptr, nullptr}};
-        for (int k = 0; k < 2 && child[s].copies; ++k) {
-            side[s].box[k] = reinterpret_cast<char*>(child[s].copies[k].box);
-            side[s].count[k] = reinterpret_cast<char*>(child[s].copies[k].count);
+class FusedPass {
+public:
+    FusedPass(PrimRef* dst, std::uint32_t left, std::uint32_t right, const BinFrame& parent, const BinSplit& split,
+              const ChildBinning child[2])
+        : dst_(dst),
+          left_(left),
+          right_(right),
+          // Byte offsets of a reference's three buckets from bucket indices k: boxes 32 k + a · 32 B,
+          // counts 4 k + a · 4 B for axis a (lane a), so one shift and one add give all three.
+          box_axis_(_mm_setr_epi32(0, 32 * int(parent.bins), 64 * int(parent.bins), 0)),
+          count_axis_(_mm_setr_epi32(0, 4 * int(parent.bins), 8 * int(parent.bins), 0)),
+          origin2_(parent.origin2.v),
+          scale_(parent.scale.v),
+          top_(parent.top.v),
+          limit_(_mm_set1_ps(float(split.last_left) + 1.0f)) {  // bucket <= last_left ⟺ x < last_left + 1
+        for (int s = 0; s < 2; ++s) {
+            side_[s] = {child[s].frame.origin2.v, child[s].frame.scale.v, {nullptr, nullptr}, {nullptr, nullptr}};
+            for (int k = 0; k < 2 && child[s].copies; ++k) {
+                side_[s].box[k] = reinterpret_cast<char*>(child[s].copies[k].box);
+                side_[s].count[k] = reinterpret_cast<char*>(child[s].copies[k].count);
+            }
         }
+        alignas(16) std::uint32_t lane[4] = {0, 0, 0, 0};
+        lane[split.axis] = ~0u;
+        axis_lane_ = _mm_load_ps(reinterpret_cast<const float*>(lane));
+        for (auto& copy : acc_)
+            for (auto& a : copy) _mm256_store_ps(a, _mm256_set1_ps(__builtin_inff()));
     }
-    // Byte offsets of a reference's three buckets from bucket indices k: boxes 32 k + a · 32 B,
-    // counts 4 k + a · 4 B for axis a (lane a), so one shift and one add give all three.
-    const int bins = int(parent.bins);
-    const __m128i box_axis = _mm_setr_epi32(0, 32 * bins, 64 * bins, 0);
-    const __m128i count_axis = _mm_setr_epi32(0, 4 * bins, 8 * bins, 0);
-    alignas(16) std::uint32_t lane[4] = {0, 0, 0, 0};
-    lane[split.axis] = ~0u;
-    const __m128 axis_lane = _mm_load_ps(reinterpret_cast<const float*>(lane));
-    const __m128 origin2 = parent.origin2.v, scale = parent.scale.v, top = parent.top.v;
-    const __m128 limit = _mm_set1_ps(float(split.last_left) + 1.0f);  // bucket <= last_left ⟺ x < last_left + 1
-    // Twice-centroid (lo, -hi) per [copy][side]: even and odd references alternate, so that a run
-    // going one way does not chain through one min.
-    alignas(32) float acc[2][2][8];
-    for (auto& copy : acc)
-        for (auto& a : copy) _mm256_store_ps(a, _mm256_set1_ps(__builtin_inff()));
-    // Reference i uses copy i & 1 of the buckets (consecutive references do not wait on each
-    // other's stores); the loop below runs in pairs so that the copy is a constant.
-    auto step = [&](std::uint32_t i, auto copy_tag) {
-        constexpr int kCopy = decltype(copy_tag)::value;
-        const __m256 raw = _mm256_loadu_ps(reinterpret_cast<const float*>(src + i));
-        const __m256 v = _mm256_and_ps(raw, c.xyz);
+
+    /// Reference `raw`: to its side's next slot (left fills forward, right backward; the slot is
+    /// selected, not branched on: at the top of the tree the side is a coin toss), then into its
+    /// child's copy kCopy of the buckets.
+    template <int kCopy>
+    void step(__m256 raw) {
+        const __m256 v = _mm256_and_ps(raw, c_.xyz);
         const __m128 c2 = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
-        const __m128 x = bucket_coordinate(c2, origin2, scale, top, c.zero);
-        const bool goes_left = _mm_movemask_ps(_mm_and_ps(_mm_cmplt_ps(x, limit), axis_lane)) != 0;
-        // Left fills forward, right backward; the slot is selected, not branched on (at the top
-        // of the tree the side is a coin toss).
-        const std::uint32_t slot = goes_left ? left : right - 1;
-        _mm256_storeu_ps(reinterpret_cast<float*>(dst + slot), raw);
-        left += goes_left;
-        right -= !goes_left;
+        const __m128 x = bucket_coordinate(c2, origin2_, scale_, top_, c_.zero);
+        const bool goes_left = _mm_movemask_ps(_mm_and_ps(_mm_cmplt_ps(x, limit_), axis_lane_)) != 0;
+        const std::uint32_t slot = goes_left ? left_ : right_ - 1;
+        _mm256_storeu_ps(reinterpret_cast<float*>(dst_ + slot), raw);
+        left_ += goes_left;
+        right_ -= !goes_left;
         const int s = goes_left ? 0 : 1;
         if constexpr (kCentroids) {
-            float* a = acc[kCopy][s];
-            const __m256 cc = _mm256_insertf128_ps(_mm256_castps128_ps256(c2), _mm_xor_ps(c2, c.sign), 1);
+            float* a = acc_[kCopy][s];
+            const __m256 cc = _mm256_insertf128_ps(_mm256_castps128_ps256(c2), _mm_xor_ps(c2, c_.sign), 1);
             _mm256_store_ps(a, _mm256_min_ps(_mm256_load_ps(a), cc));
         }
-        const ChildSide& t = side[s];
+        if (side_[s].box[kCopy]) bin<kCopy>(side_[s], c2, _mm256_xor_ps(v, c_.flip_hi));
+    }
+
+    /// The left cursor after the pass; each side's twice-centroid bounds merged into sides.
+    std::uint32_t finish(CentroidBounds sides[2]) const {
+        for (int s = 0; s < 2 && kCentroids; ++s) {
+            const __m256 both = _mm256_min_ps(_mm256_load_ps(acc_[0][s]), _mm256_load_ps(acc_[1][s]));
+            sides[s].lo.v = _mm_min_ps(sides[s].lo.v, _mm256_castps256_ps128(both));
+            sides[s].neg_hi.v = _mm_min_ps(sides[s].neg_hi.v, _mm256_extractf128_ps(both, 1));
+        }
+        return left_;
+    }
+
+private:
+    template <int kCopy>
+    void bin(const ChildSide& t, __m128 c2, __m256 box_of_ref) const {
+        const __m128i k = _mm_cvttps_epi32(bucket_coordinate(c2, t.origin2, t.scale, top_, c_.zero));
+        const __m128i kb = _mm_add_epi32(_mm_slli_epi32(k, 5), box_axis_);
+        const __m128i kc = _mm_add_epi32(_mm_slli_epi32(k, 2), count_axis_);
         char* const box = t.box[kCopy];
-        if (!box) return;
-        const __m128i k = _mm_cvttps_epi32(bucket_coordinate(c2, t.origin2, t.scale, top, c.zero));
-        const __m128i kb = _mm_add_epi32(_mm_slli_epi32(k, 5), box_axis);
-        const __m128i kc = _mm_add_epi32(_mm_slli_epi32(k, 2), count_axis);
-        const __m256 box_of_ref = _mm256_xor_ps(v, c.flip_hi);
         float* b0 = reinterpret_cast<float*>(box + offset(kb, Lane<0>()));
         float* b1 = reinterpret_cast<float*>(box + offset(kb, Lane<1>()));
         float* b2 = reinterpret_cast<float*>(box + offset(kb, Lane<2>()));
@@ -160,17 +172,33 @@ std::uint32_t partition_and_bin_impl(const PrimRef* __restrict src, PrimRef* __r
         ++*reinterpret_cast<std::uint32_t*>(count + offset(kc, Lane<0>()));
         ++*reinterpret_cast<std::uint32_t*>(count + offset(kc, Lane<1>()));
         ++*reinterpret_cast<std::uint32_t*>(count + offset(kc, Lane<2>()));
-    };
-    std::uint32_t i = r.begin;
-    if (i < r.end && (i & 1)) step(i++, Copy<1>());
-    for (; i + 1 < r.end; i += 2) step(i, Copy<0>()), step(i + 1, Copy<1>());
-    if (i < r.end) step(i, Copy<0>());
-    for (int s = 0; s < 2 && kCentroids; ++s) {
-        const __m256 both = _mm256_min_ps(_mm256_load_ps(acc[0][s]), _mm256_load_ps(acc[1][s]));
-        sides[s].lo.v = _mm_min_ps(sides[s].lo.v, _mm256_castps256_ps128(both));
-        sides[s].neg_hi.v = _mm_min_ps(sides[s].neg_hi.v, _mm256_extractf128_ps(both, 1));
     }
-    return left;
+
+    const Kernel c_;
+    PrimRef* const dst_;
+    std::uint32_t left_, right_;
+    ChildSide side_[2];
+    const __m128i box_axis_, count_axis_;
+    const __m128 origin2_, scale_, top_, limit_;
+    __m128 axis_lane_;
+    // Twice-centroid (lo, -hi) per [copy][side]: even and odd references alternate, so that a run
+    // going one way does not chain through one min.
+    alignas(32) float acc_[2][2][8];
+};
+
+template <bool kCentroids>
+std::uint32_t partition_and_bin_impl(const PrimRef* __restrict src, PrimRef* __restrict dst, Range r,
+                                     std::uint32_t left, std::uint32_t right, const BinFrame& parent,
+                                     const BinSplit& split, const ChildBinning child[2], CentroidBounds sides[2]) {
+    FusedPass<kCentroids> pass(dst, left, right, parent, split, child);
+    auto load = [src](std::uint32_t i) { return _mm256_loadu_ps(reinterpret_cast<const float*>(src + i)); };
+    // Reference i uses copy i & 1 of the buckets (consecutive references do not wait on each
+    // other's stores); the loop runs in pairs so that the copy is a constant.
+    std::uint32_t i = r.begin;
+    if (i < r.end && (i & 1)) pass.template step<1>(load(i++));
+    for (; i + 1 < r.end; i += 2) pass.template step<0>(load(i)), pass.template step<1>(load(i + 1));
+    if (i < r.end) pass.template step<0>(load(i));
+    return pass.finish(sides);
 }
 
 }  // namespace
