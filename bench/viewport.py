@@ -106,6 +106,27 @@ def _spread(values) -> str:
     return f"median {statistics.median(values):7.1f} ms (min {min(values):.1f}, max {max(values):.1f}, n={len(values)})"
 
 
+def _report(header: str, levels: dict, section: dict) -> list[float]:
+    """Prints the frame times per level and the §4.1 comparison; returns the per-round ratios
+    of the frame with boxes to the frame without."""
+    print(header)
+    for level, runs in levels.items():
+        sizes = {(r["width"], r["height"]) for r in runs}
+        print(
+            f"  {level:8s} {sorted(sizes)}: frame {_spread([r['ms'] for r in runs])}; "
+            f"latency {_spread([r['latency_ms'] for r in runs])}"
+        )
+    print("  report §4.1, full level, 1 sample, same view:")
+    for name, values in section.items():
+        print(f"    {name:10s} {_spread(values)}")
+    ratios = [b / n for b, n in zip(section["boxes 8-9"], section["no boxes"])]
+    print(
+        f"    boxes / none per round: median {statistics.median(ratios):.3f} "
+        f"(min {min(ratios):.3f}, max {max(ratios):.3f})"
+    )
+    return ratios
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--size", default="1322x784")
@@ -129,24 +150,11 @@ def main() -> None:
     section = _section_41(m, session, scene, width, height, args.rounds)
     session.close()
     device = build_frame.timings["device"]
-    print(
+    header = (
         f"atrium {len(live.scene.triangles):,} triangles, viewport {width} × {height}, {device}, "
         f"{m['settings'].VIEWPORT_THREADS} thread(s); tree built in {build_frame.timings['build_ms']:.0f} ms"
     )
-    for level, runs in levels.items():
-        sizes = {(r["width"], r["height"]) for r in runs}
-        print(
-            f"  {level:8s} {sorted(sizes)}: frame {_spread([r['ms'] for r in runs])}; "
-            f"latency {_spread([r['latency_ms'] for r in runs])}"
-        )
-    print("  report §4.1, full level, 1 sample, same view:")
-    for name, values in section.items():
-        print(f"    {name:10s} {_spread(values)}")
-    ratios = [b / n for b, n in zip(section["boxes 8-9"], section["no boxes"])]
-    print(
-        f"    boxes / none per round: median {statistics.median(ratios):.3f} "
-        f"(min {min(ratios):.3f}, max {max(ratios):.3f})"
-    )
+    ratios = _report(header, levels, section)
     result = {
         "size": [width, height],
         "device": device,

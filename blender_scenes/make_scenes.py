@@ -80,25 +80,8 @@ def suzanne(levels):
     return scene, {"points": [[-6, -6, 0], [6, 6, -0.2]]}
 
 
-def atrium():
-    """The Sponza role of the report's Table 1: an atrium with columns, arches, floor tiles, walls
-    and hanging cloth, triangles from metres (walls) to millimetres (cloth) across."""
-    scene = kit.reset(sky=(0.7, 0.8, 0.95))
-    stone, marble = kit.material("Stone", (0.75, 0.7, 0.6)), kit.material("Marble", (0.9, 0.88, 0.85), roughness=0.2)
-    tile, cloth = kit.material("Tile", (0.55, 0.35, 0.25)), kit.material("Cloth", (0.7, 0.1, 0.12), roughness=0.8)
-    curtain = kit.material("Curtain", (0.15, 0.25, 0.6), roughness=0.8)
-    centre = kit.link(bpy.data.objects.new("Atrium centre", None))  # the mirror plane y = 0
-
-    def mirrored(obj, along_x=None):
-        if along_x:
-            kit.array(obj, *along_x)
-        kit.modifier(obj, "MIRROR", use_axis=(False, True, False), mirror_object=centre)
-        return obj
-
-    floor = kit.box("Floor tile", (-12.0, -5.0, -0.06), (-11.02, -4.02, 0.0), [tile])
-    kit.modifier(floor, "BEVEL", width=0.015, segments=2)
-    kit.array(floor, 24, (1.0, 0.0, 0.0))
-    kit.array(floor, 10, (0.0, 1.0, 0.0))
+def _atrium_colonnade(mirrored, marble, stone):
+    """The atrium's columns with their bases and capitals, and the arches between them."""
     bpy.ops.mesh.primitive_cylinder_add(vertices=32, radius=0.3, depth=5.6, location=(-10.5, -3.5, 3.1))
     column = bpy.context.object
     column.name = "Column"
@@ -113,9 +96,10 @@ def atrium():
     arch.location = (-9.0, -3.5, 6.2)
     kit.subdivide(arch, 1, simple=True)
     mirrored(arch, (7, (3.0, 0.0, 0.0)))
-    mirrored(kit.box("Gallery", (-12.0, 2.6, 7.7), (12.0, 5.0, 8.0), [stone]))
-    mirrored(kit.box("Wall", (-12.0, 5.0, 0.0), (12.0, 5.3, 10.0), [stone]))
-    kit.box("End wall", (12.0, -5.3, 0.0), (12.3, 5.3, 10.0), [stone])
+
+
+def _atrium_cloth(mirrored, cloth, curtain):
+    """The atrium's hanging cloth: a banner between each pair of columns, and a curtain."""
     banner = kit.mesh_object(
         "Banner",
         [(-0.7, -2.0, 0), (0.7, -2.0, 0), (0.7, 2.0, 0), (-0.7, 2.0, 0)],
@@ -137,6 +121,32 @@ def atrium():
     drape.rotation_euler = (np.pi / 2, 0.0, np.pi / 2)
     kit.subdivide(drape, 8, simple=True)
     kit.modifier(drape, "WAVE", use_x=True, use_y=False, height=0.15, width=0.6, narrowness=1.5, speed=0.0)
+
+
+def atrium():
+    """The Sponza role of the report's Table 1: an atrium with columns, arches, floor tiles, walls
+    and hanging cloth, triangles from metres (walls) to millimetres (cloth) across."""
+    scene = kit.reset(sky=(0.7, 0.8, 0.95))
+    stone, marble = kit.material("Stone", (0.75, 0.7, 0.6)), kit.material("Marble", (0.9, 0.88, 0.85), roughness=0.2)
+    tile, cloth = kit.material("Tile", (0.55, 0.35, 0.25)), kit.material("Cloth", (0.7, 0.1, 0.12), roughness=0.8)
+    curtain = kit.material("Curtain", (0.15, 0.25, 0.6), roughness=0.8)
+    centre = kit.link(bpy.data.objects.new("Atrium centre", None))  # the mirror plane y = 0
+
+    def mirrored(obj, along_x=None):
+        if along_x:
+            kit.array(obj, *along_x)
+        kit.modifier(obj, "MIRROR", use_axis=(False, True, False), mirror_object=centre)
+        return obj
+
+    floor = kit.box("Floor tile", (-12.0, -5.0, -0.06), (-11.02, -4.02, 0.0), [tile])
+    kit.modifier(floor, "BEVEL", width=0.015, segments=2)
+    kit.array(floor, 24, (1.0, 0.0, 0.0))
+    kit.array(floor, 10, (0.0, 1.0, 0.0))
+    _atrium_colonnade(mirrored, marble, stone)
+    mirrored(kit.box("Gallery", (-12.0, 2.6, 7.7), (12.0, 5.0, 8.0), [stone]))
+    mirrored(kit.box("Wall", (-12.0, 5.0, 0.0), (12.0, 5.3, 10.0), [stone]))
+    kit.box("End wall", (12.0, -5.3, 0.0), (12.3, 5.3, 10.0), [stone])
+    _atrium_cloth(mirrored, cloth, curtain)
     kit.camera((-11.0, -1.5, 2.2), (4.0, 0.8, 4.0), lens=22)
     kit.point_light((0.0, 0.0, 7.0), 6000, color=(1.0, 0.92, 0.8))
     return scene, {"points": [[12.3, 5.3, 10.0], [-12.0, -5.3, 0.0]]}
