@@ -123,31 +123,31 @@ void bind_job(nb::module_& m) {
 
 PyRenderJob* wrap(std::unique_ptr<RenderJob> job) { return new PyRenderJob{std::move(job), {}}; }
 
+/// An n × 3 float array of colour(i) for i < n, owned by the returned numpy array.
+template <class Color>
+nb::ndarray<nb::numpy, float, nb::ndim<2>> color_array(std::size_t n, const Color& color) {
+    auto* out = new float[n * 3];
+    for (std::size_t i = 0; i < n; ++i) {
+        const gpu::vec3 c = color(i);
+        out[3 * i] = c.x, out[3 * i + 1] = c.y, out[3 * i + 2] = c.z;
+    }
+    nb::capsule owner(out, [](void* p) noexcept { delete[] static_cast<float*>(p); });
+    return nb::ndarray<nb::numpy, float, nb::ndim<2>>(out, {n, 3}, owner);
+}
+
 void bind_palettes(nb::module_& m) {
     m.def(
         "depth_colors",
         [](const nb::ndarray<const std::uint32_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>& depths) {
-            auto* out = new float[depths.shape(0) * 3];
             gpu::Palette palette;
-            for (std::size_t i = 0; i < depths.shape(0); ++i) {
-                gpu::vec3 c = palette.depth_color(depths.data()[i]);
-                out[3 * i] = c.x, out[3 * i + 1] = c.y, out[3 * i + 2] = c.z;
-            }
-            nb::capsule owner(out, [](void* p) noexcept { delete[] static_cast<float*>(p); });
-            return nb::ndarray<nb::numpy, float, nb::ndim<2>>(out, {depths.shape(0), 3}, owner);
+            return color_array(depths.shape(0), [&](std::size_t i) { return palette.depth_color(depths.data()[i]); });
         },
         "depths"_a.noconvert(), "Overlay line colour of each tree depth (the shaders' palette).");
     m.def(
         "heat_colors",
         [](const nb::ndarray<const float, nb::ndim<1>, nb::c_contig, nb::device::cpu>& x) {
-            auto* out = new float[x.shape(0) * 3];
             gpu::Palette palette;
-            for (std::size_t i = 0; i < x.shape(0); ++i) {
-                gpu::vec3 c = palette.heat_color(x.data()[i]);
-                out[3 * i] = c.x, out[3 * i + 1] = c.y, out[3 * i + 2] = c.z;
-            }
-            nb::capsule owner(out, [](void* p) noexcept { delete[] static_cast<float*>(p); });
-            return nb::ndarray<nb::numpy, float, nb::ndim<2>>(out, {x.shape(0), 3}, owner);
+            return color_array(x.shape(0), [&](std::size_t i) { return palette.heat_color(x.data()[i]); });
         },
         "x"_a.noconvert(), "Heatmap colours of values in [0, 1] (blue → red; the heatmap mode's ramp).");
 }
