@@ -44,16 +44,18 @@ PackedPrim pack_sphere(const GeometryView& g, std::uint32_t ref) {
     return {v3(g.sphere_center(i)), 0, {g.sphere_radius(i), 0, 0}, ref, {}, 0};
 }
 
+inline PackedPrim pack_prim_inline(const GeometryView& g, std::uint32_t ref) {
+    if (is_sphere_ref(ref)) return pack_sphere(g, ref);
+    return pack_triangle_inline(g.triangles + 9 * std::size_t(ref_index(ref)), ref_index(ref), 0);
+}
+
 }  // namespace
 
 PackedPrim pack_triangle(const GeometryView& g, std::size_t i, std::uint32_t material) {
     return pack_triangle_inline(g.triangles + 9 * i, static_cast<std::uint32_t>(i), material);
 }
 
-PackedPrim pack_prim(const GeometryView& g, std::uint32_t ref) {
-    if (is_sphere_ref(ref)) return pack_sphere(g, ref);
-    return pack_triangle_inline(g.triangles + 9 * std::size_t(ref_index(ref)), ref_index(ref), 0);
-}
+PackedPrim pack_prim(const GeometryView& g, std::uint32_t ref) { return pack_prim_inline(g, ref); }
 
 BigVector<PackedPrim> pack_prims(const GeometryView& g, const BigVector<std::uint32_t>& refs, unsigned threads) {
     BigVector<PackedPrim> out(refs.size());
@@ -72,9 +74,7 @@ BigVector<PackedPrim> pack_prims(const GeometryView& g, const BigVector<std::uin
         for (std::size_t k = begin; k < std::min(end, begin + kAhead); ++k) prefetch(refs[k]);
         for (std::size_t k = begin; k < end; ++k) {
             if (k + kAhead < end) prefetch(refs[k + kAhead]);
-            const std::uint32_t ref = refs[k];
-            out[k] = is_sphere_ref(ref) ? pack_sphere(g, ref)
-                                        : pack_triangle_inline(g.triangles + 9 * std::size_t(ref), ref, 0);
+            out[k] = pack_prim_inline(g, refs[k]);
         }
     });
     return out;
