@@ -25,51 +25,52 @@ inline __m128 bucket_coordinate(__m128 c2, __m128 origin2, __m128 scale, __m128 
     return _mm_min_ps(_mm_max_ps(_mm_mul_ps(_mm_sub_ps(c2, origin2), scale), zero), top);
 }
 
-/// One copy of one node's buckets: the (lo, -hi) boxes of axis a start at box + a · box_stride
-/// bytes, its counts at count + a · count_stride bytes.
-struct Buckets {
-    char* box = nullptr;
-    char* count = nullptr;
-    std::size_t box_stride = 0, count_stride = 0;
+/// Lane L of a vector of byte offsets, zero-extended (a 32-bit move; no sign extension).
+template <int kLane>
+using Lane = std::integral_constant<int, kLane>;
+template <int kLane>
+std::size_t offset(__m128i v, Lane<kLane>) {
+    return std::uint32_t(_mm_extract_epi32(v, kLane));
+}
 
-    Buckets() = default;
-    explicit Buckets(const BinSet& b)
-        : box(reinterpret_cast<char*>(b.box)),
-          count(reinterpret_cast<char*>(b.count)),
-          box_stride(32 * std::size_t(b.bins)),
-          count_stride(4 * std::size_t(b.bins)) {}
-    void add(__m128i k, __m256 box_of_ref) const {
-        const std::size_t k0 = std::uint32_t(_mm_cvtsi128_si32(k)), k1 = std::uint32_t(_mm_extract_epi32(k, 1)),
-                          k2 = std::uint32_t(_mm_extract_epi32(k, 2));
-        float* b0 = reinterpret_cast<float*>(box + 32 * k0);
-        float* b1 = reinterpret_cast<float*>(box + box_stride + 32 * k1);
-        float* b2 = reinterpret_cast<float*>(box + 2 * box_stride + 32 * k2);
-        _mm256_store_ps(b0, _mm256_min_ps(_mm256_load_ps(b0), box_of_ref));
-        _mm256_store_ps(b1, _mm256_min_ps(_mm256_load_ps(b1), box_of_ref));
-        _mm256_store_ps(b2, _mm256_min_ps(_mm256_load_ps(b2), box_of_ref));
-        ++*reinterpret_cast<std::uint32_t*>(count + 4 * k0);
-        ++*reinterpret_cast<std::uint32_t*>(count + count_stride + 4 * k1);
-        ++*reinterpret_cast<std::uint32_t*>(count + 2 * count_stride + 4 * k2);
-    }
+/// Where axis a's buckets lie in a copy of B buckets per axis: boxes at a · 32 B bytes, counts
+/// at a · 4 B bytes (lane a), so that one shift and one add give a reference's three offsets.
+struct AxisOffsets {
+    __m128i box, count;
+    explicit AxisOffsets(std::uint32_t bins)
+        : box(_mm_setr_epi32(0, 32 * int(bins), 64 * int(bins), 0)),
+          count(_mm_setr_epi32(0, 4 * int(bins), 8 * int(bins), 0)) {}
 };
 
-/// What the fused pass needs of one child: its frame and two copies of its buckets (null: none).
-struct Side {
-    __m128 origin2, scale;
-    const Buckets* copy;
-};
+/// Adds a reference, (lo, -hi) box and bucket indices k on the three axes, to one copy of
+/// buckets whose boxes start at `box` and counts at `count`.
+inline void add_to_buckets(char* box, char* count, const AxisOffsets& axes, __m128i k, __m256 box_of_ref) {
+    const __m128i kb = _mm_add_epi32(_mm_slli_epi32(k, 5), axes.box);
+    const __m128i kc = _mm_add_epi32(_mm_slli_epi32(k, 2), axes.count);
+    float* b0 = reinterpret_cast<float*>(box + offset(kb, Lane<0>()));
+    float* b1 = reinterpret_cast<float*>(box + offset(kb, Lane<1>()));
+    float* b2 = reinterpret_cast<float*>(box + offset(kb, Lane<2>()));
+    _mm256_store_ps(b0, _mm256_min_ps(_mm256_load_ps(b0), box_of_ref));
+    _mm256_store_ps(b1, _mm256_min_ps(_mm256_load_ps(b1), box_of_ref));
+    _mm256_store_ps(b2, _mm256_min_ps(_mm256_load_ps(b2), box_of_ref));
+    ++*reinterpret_cast<std::uint32_t*>(count + offset(kc, Lane<0>()));
+    ++*reinterpret_cast<std::uint32_t*>(count + offset(kc, Lane<1>()));
+    ++*reinterpret_cast<std::uint32_t*>(count + offset(kc, Lane<2>()));
+}
 
 }  // namespace
 
 void bin_refs(const PrimRef* refs, Range r, const BinFrame& f, const BinSet copies[2]) {
     const Kernel c;
-    const Buckets b[2] = {Buckets(copies[0]), Buckets(copies[1])};
+    const AxisOffsets axes(f.bins);
+    char* const box[2] = {reinterpret_cast<char*>(copies[0].box), reinterpret_cast<char*>(copies[1].box)};
+    char* const count[2] = {reinterpret_cast<char*>(copies[0].count), reinterpret_cast<char*>(copies[1].count)};
     const __m128 origin2 = f.origin2.v, scale = f.scale.v, top = f.top.v;
     for (std::uint32_t i = r.begin; i < r.end; ++i) {
         const __m256 v = _mm256_and_ps(_mm256_loadu_ps(reinterpret_cast<const float*>(refs + i)), c.xyz);
         const __m128 c2 = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
         const __m128i k = _mm_cvttps_epi32(bucket_coordinate(c2, origin2, scale, top, c.zero));
-        b[i & 1].add(k, _mm256_xor_ps(v, c.flip_hi));
+        add_to_buckets(box[i & 1], count[i & 1], axes, k, _mm256_xor_ps(v, c.flip_hi));
     }
 }
 
@@ -83,15 +84,6 @@ struct ChildSide {
     char* count[2];
 };
 
-template <int kLane>
-using Lane = std::integral_constant<int, kLane>;
-
-/// Lane L of a vector of byte offsets, zero-extended (a 32-bit move; no sign extension).
-template <int kLane>
-std::size_t offset(__m128i v, Lane<kLane>) {
-    return std::uint32_t(_mm_extract_epi32(v, kLane));
-}
-
 /// The fused pass over one range: its constants, set up once, and the step for one reference.
 template <bool kCentroids>
 class FusedPass {
@@ -101,10 +93,7 @@ public:
         : dst_(dst),
           left_(left),
           right_(right),
-          // Byte offsets of a reference's three buckets from bucket indices k: boxes 32 k + a · 32 B,
-          // counts 4 k + a · 4 B for axis a (lane a), so one shift and one add give all three.
-          box_axis_(_mm_setr_epi32(0, 32 * int(parent.bins), 64 * int(parent.bins), 0)),
-          count_axis_(_mm_setr_epi32(0, 4 * int(parent.bins), 8 * int(parent.bins), 0)),
+          axes_(parent.bins),
           origin2_(parent.origin2.v),
           scale_(parent.scale.v),
           top_(parent.top.v),
@@ -159,26 +148,14 @@ private:
     template <int kCopy>
     void bin(const ChildSide& t, __m128 c2, __m256 box_of_ref) const {
         const __m128i k = _mm_cvttps_epi32(bucket_coordinate(c2, t.origin2, t.scale, top_, c_.zero));
-        const __m128i kb = _mm_add_epi32(_mm_slli_epi32(k, 5), box_axis_);
-        const __m128i kc = _mm_add_epi32(_mm_slli_epi32(k, 2), count_axis_);
-        char* const box = t.box[kCopy];
-        float* b0 = reinterpret_cast<float*>(box + offset(kb, Lane<0>()));
-        float* b1 = reinterpret_cast<float*>(box + offset(kb, Lane<1>()));
-        float* b2 = reinterpret_cast<float*>(box + offset(kb, Lane<2>()));
-        _mm256_store_ps(b0, _mm256_min_ps(_mm256_load_ps(b0), box_of_ref));
-        _mm256_store_ps(b1, _mm256_min_ps(_mm256_load_ps(b1), box_of_ref));
-        _mm256_store_ps(b2, _mm256_min_ps(_mm256_load_ps(b2), box_of_ref));
-        char* const count = t.count[kCopy];
-        ++*reinterpret_cast<std::uint32_t*>(count + offset(kc, Lane<0>()));
-        ++*reinterpret_cast<std::uint32_t*>(count + offset(kc, Lane<1>()));
-        ++*reinterpret_cast<std::uint32_t*>(count + offset(kc, Lane<2>()));
+        add_to_buckets(t.box[kCopy], t.count[kCopy], axes_, k, box_of_ref);
     }
 
     const Kernel c_;
     PrimRef* const dst_;
     std::uint32_t left_, right_;
     ChildSide side_[2];
-    const __m128i box_axis_, count_axis_;
+    const AxisOffsets axes_;
     const __m128 origin2_, scale_, top_, limit_;
     __m128 axis_lane_;
     // Twice-centroid (lo, -hi) per [copy][side]: even and odd references alternate, so that a run
