@@ -154,9 +154,6 @@ Split split_even(SplitContext&, Range, int src, const NodeBounds&);
 NodeBounds bounds_of(const SplitContext&, Range r, int buf, bool with_centroid_sum);
 /// The split at `mid` of a range already divided in buffer `buf`: both sides' bounds and the cost.
 Split split_at(SplitContext&, Range, int buf, const NodeBounds& parent, std::uint32_t mid);
-/// The same with the sides' bounds already known.
-Split split_with(SplitContext&, Range, int buf, const NodeBounds& parent, std::uint32_t mid, const NodeBounds& left,
-                 const NodeBounds& right);
 
 /// Partition on `centroid(axis) < position` into the other buffer; nothing if a side is empty.
 std::optional<Split> split_at_position(SplitContext&, Range, int src, const NodeBounds& parent, int axis,

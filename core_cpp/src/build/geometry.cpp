@@ -130,7 +130,7 @@ BigVector<PrimRef> make_prim_refs(const GeometryView& g) {
         for (int k = 0; k < 9; ++k) poison += v[k] * 0.0f, reach = std::max(reach, std::fabs(v[k]));
         refs[i] = triangle_ref(g, i);
     }
-    if (poison != 0.0f || reach != reach) throw_bad_triangle(g);
+    if (poison != 0.0f) throw_bad_triangle(g);  // NaN != 0 too
     if (reach > kMaxCoordinate) throw_far_triangle(g);
     validate_spheres(g);
     for (std::size_t i = 0; i < g.sphere_count; ++i) refs[g.triangle_count + i] = sphere_ref(g, i);

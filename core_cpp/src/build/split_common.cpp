@@ -232,18 +232,6 @@ Split split_at(SplitContext& ctx, Range r, int buf, const NodeBounds& parent, st
     return s;
 }
 
-Split split_with(SplitContext& ctx, Range r, int buf, const NodeBounds& parent, std::uint32_t mid,
-                 const NodeBounds& left, const NodeBounds& right) {
-    Split s;
-    s.mid = mid;
-    s.left = left, s.right = right;
-    const SahCost sah(ctx.config);
-    s.cost = sah.split(SahCost::inverse_area(parent.box.half_area()), s.left.box.half_area(), mid - r.begin,
-                       s.right.box.half_area(), r.end - mid);
-    s.buffer = static_cast<std::uint8_t>(buf);
-    return s;
-}
-
 std::optional<Split> split_at_position(SplitContext& ctx, Range r, int src, const NodeBounds& parent, int axis,
                                        float position) {
     // Compare 2·centroid with 2·position: the same order without a multiply per reference.
