@@ -50,8 +50,6 @@ public:
     void run(std::size_t count, unsigned threads, const Task& task, const std::function<void()>& while_waiting = {},
              std::chrono::milliseconds wait_interval = std::chrono::milliseconds(5));
 
-    unsigned worker_count() const { return static_cast<unsigned>(workers_.size()); }
-
 private:
     struct Job;
     void worker_loop();
