@@ -10,6 +10,7 @@
 #include <cmath>
 
 #include "bvhlab/isa.h"
+#include "bvhlab/simd.h"
 #include "bvhlab/split.h"
 #include "partition.h"
 
@@ -57,6 +58,42 @@ MedianBucket tag_buckets(SplitContext& ctx, const PrimRef* in, Range r, const No
     return m;
 }
 
+/// Appends to `out` the offsets i < n with tag[i] == bucket, in order; returns the new end. The
+/// median's bucket holds few references of a large range: eight tags are compared at once and
+/// only the matches are written (one store per tag before: a chain through the cursor that took
+/// a quarter of split_median's time).
+template <class It>
+It collect_bucket(const std::uint16_t* tag, std::uint32_t n, std::uint16_t bucket, It out) {
+    std::uint32_t i = 0;
+#ifdef BVHLAB_SSE
+    const __m128i want = _mm_set1_epi16(short(bucket));
+    for (; i + 8 <= n; i += 8) {
+        const __m128i eq = _mm_cmpeq_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(tag + i)), want);
+        for (auto bits = unsigned(_mm_movemask_epi8(_mm_packs_epi16(eq, _mm_setzero_si128()))); bits; bits &= bits - 1)
+            *out++ = i + std::uint32_t(__builtin_ctz(bits));
+    }
+#endif
+    for (; i < n; ++i) *out = i, out += tag[i] == bucket;  // no branch to mispredict
+    return out;
+}
+
+/// Tags as `upper` the keys of rank `keep` and above among keys[0, n) (distinct: each holds its
+/// offset in the low half), the offsets being those low halves. A few keys — the usual median
+/// bucket, and every range below kDirectSelect — are ranked by counting, without branches; the
+/// introselect's insertion sort mispredicted on most of its comparisons.
+void tag_upper(std::uint64_t* keys, std::uint32_t n, std::uint32_t keep, std::uint16_t upper, std::uint16_t* tag) {
+    if (n <= 32) {
+        for (std::uint32_t a = 0; a < n; ++a) {
+            std::uint32_t rank = 0;
+            for (std::uint32_t b = 0; b < n; ++b) rank += keys[b] < keys[a];
+            if (rank >= keep) tag[std::uint32_t(keys[a])] = upper;
+        }
+        return;
+    }
+    std::nth_element(keys, keys + keep, keys + n);
+    for (std::uint32_t k = keep; k < n; ++k) tag[std::uint32_t(keys[k])] = upper;
+}
+
 }  // namespace
 
 #if defined(BVHLAB_AVX2_KERNELS)
@@ -84,13 +121,9 @@ std::optional<Split> split_median(SplitContext& ctx, Range r, int src, const Nod
     auto& tag = ctx.scratch.bucket;
     auto& ranks = ctx.scratch.ranks;
     if (ranks.size() < r.size()) ranks.resize(r.size());  // never shrunk: no zeroing at every node
-    const auto first = ranks.begin();
-    auto last = first;
-    for (std::uint32_t i = 0; i < r.size(); ++i) *last = i, last += tag[i] == m.bucket;  // no branch to mispredict
+    const auto first = ranks.begin(), last = collect_bucket(tag.data(), r.size(), std::uint16_t(m.bucket), first);
     for (auto k = first; k != last; ++k) *k = rank_key(in[r.begin + std::uint32_t(*k)], axis, std::uint32_t(*k));
-    const auto nth = first + (r.size() / 2 - m.below);
-    std::nth_element(first, nth, last);
-    for (auto k = nth; k != last; ++k) tag[std::uint32_t(*k)] = std::uint16_t(m.bucket + 1);
+    tag_upper(&*first, std::uint32_t(last - first), r.size() / 2 - m.below, std::uint16_t(m.bucket + 1), tag.data());
 
     const SideTags tags{tag.data(), r.begin, m.bucket};
     auto run = [&](Range c, std::uint32_t left, std::uint32_t right, bool contained) {
