@@ -17,7 +17,7 @@
 namespace bvhlab {
 namespace {
 
-/// Ranges smaller than this rank every reference; a histogram would cost more than it saves.
+/// Ranges smaller than this rank every reference (split_small); a histogram would cost more.
 constexpr std::uint32_t kDirectSelect = 16;
 
 /// An unsigned key in the order of the floats (-0 taken as +0, as `<` and `==` take it).
@@ -37,14 +37,10 @@ struct MedianBucket {
 };
 
 /// Tags each reference of the range with its bucket (monotone in the centroid: a lower bucket
-/// never holds a larger centroid) and finds the median's. Small ranges: one bucket.
+/// never holds a larger centroid) and finds the median's.
 MedianBucket tag_buckets(SplitContext& ctx, const PrimRef* in, Range r, const NodeBounds& b, int axis) {
     auto& tag = ctx.scratch.bucket;
     if (tag.size() < r.size()) tag.resize(r.size());  // never shrunk: no zeroing at every node
-    if (r.size() < kDirectSelect) {
-        std::fill_n(tag.begin(), r.size(), std::uint16_t(0));
-        return {0, 0};
-    }
     const std::uint32_t buckets = std::min<std::uint32_t>(1024, r.size() / 4);
     const float extent = b.centroids.extent()[axis];
     const float scale = extent > 0 ? float(buckets) / (2.0f * extent) : 0.0f;
@@ -77,10 +73,33 @@ It collect_bucket(const std::uint16_t* tag, std::uint32_t n, std::uint16_t bucke
     return out;
 }
 
+/// A range below kDirectSelect (three in four nodes of a median tree): each reference's rank
+/// counted, and the scatter that partition.h's scatter() performs — the left side forward in
+/// input order, the right side backward from the end — written out here, without the tags, the
+/// selection and the dispatch a large range needs. Each reference is stored at both cursors and
+/// one cursor moves (no branch): the slot written in vain is filled by a later reference.
+std::optional<Split> split_small(SplitContext& ctx, Range r, int src, const NodeBounds& b, int axis) {
+    const PrimRef* in = ctx.buffers[src] + r.begin;
+    PrimRef* out = ctx.buffers[1 - src];
+    const std::uint32_t n = r.size(), half = n / 2;
+    std::uint32_t key[kDirectSelect];
+    for (std::uint32_t i = 0; i < n; ++i) key[i] = std::uint32_t(order_key(in[i].lo[axis] + in[i].hi[axis]));
+    std::uint32_t left = r.begin, right = r.end;
+    for (std::uint32_t i = 0; i < n; ++i) {
+        std::uint32_t rank = 0;  // the order of rank_key: centroid, then position
+        for (std::uint32_t j = 0; j < i; ++j) rank += key[j] <= key[i];
+        for (std::uint32_t j = i + 1; j < n; ++j) rank += key[j] < key[i];
+        out[left] = in[i], out[right - 1] = in[i];
+        const bool goes_left = rank < half;
+        left += goes_left, right -= !goes_left;
+    }
+    return split_at(ctx, r, 1 - src, b, left);
+}
+
 /// Tags as `upper` the keys of rank `keep` and above among keys[0, n) (distinct: each holds its
-/// offset in the low half), the offsets being those low halves. A few keys — the usual median
-/// bucket, and every range below kDirectSelect — are ranked by counting, without branches; the
-/// introselect's insertion sort mispredicted on most of its comparisons.
+/// offset in the low half), the offsets being those low halves. A few keys (the usual median
+/// bucket) are ranked by counting, without branches; the introselect's insertion sort
+/// mispredicted on most of its comparisons.
 void tag_upper(std::uint64_t* keys, std::uint32_t n, std::uint32_t keep, std::uint16_t upper, std::uint16_t* tag) {
     if (n <= 32) {
         for (std::uint32_t a = 0; a < n; ++a) {
@@ -114,6 +133,7 @@ void count_buckets(const PrimRef* src, Range r, const Bucketing& b, std::uint16_
 }
 
 std::optional<Split> split_median(SplitContext& ctx, Range r, int src, const NodeBounds& b, int axis) {
+    if (r.size() < kDirectSelect) return split_small(ctx, r, src, b, axis);
     const PrimRef* in = ctx.buffers[src];
     PrimRef* out = ctx.buffers[1 - src];
     const MedianBucket m = tag_buckets(ctx, in, r, b, axis);
