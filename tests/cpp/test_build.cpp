@@ -4,9 +4,11 @@
 #include <cstring>
 #include <tuple>
 
+#include "bvhlab/big_vector.h"
 #include "bvhlab/bvh.h"
 #include "bvhlab/isa.h"
 #include "bvhlab/stats.h"
+#include "bvhlab/wide_bvh.h"
 #include "test_scenes.h"
 #include "tree_checks.h"
 
@@ -258,3 +260,17 @@ TEST(Progress, AnExceptionFromTheCallbackComesOutAsItself) {
 }
 
 }  // namespace
+
+// big_vector.h: the block sizes, and the alignment a type asks for (WideNode's 64 bytes, which
+// operator new without an alignment did not give below 2 MiB).
+TEST(BigVector, BlockSizesAndAlignment) {
+    EXPECT_EQ(big_block_bytes(kBigBlockMin), kBigBlockMin);
+    EXPECT_EQ(big_block_bytes(kBigBlockMin + 1), 2 * kBigBlockMin);
+    EXPECT_EQ(big_block_bytes((std::size_t(1) << 20) + 1), std::size_t(2) << 20);
+    EXPECT_EQ(big_block_bytes((std::size_t(2) << 20) + 1), std::size_t(4) << 20);
+    EXPECT_EQ(big_block_bytes(std::size_t(5) << 20), std::size_t(6) << 20);
+    for (std::size_t n : {1, 100, 5000}) {  // below and above kBigBlockMin
+        BigVector<WideNode> nodes(n);
+        EXPECT_EQ(reinterpret_cast<std::uintptr_t>(nodes.data()) % alignof(WideNode), 0u) << n;
+    }
+}

@@ -1,11 +1,14 @@
 // big_vector.h — std::vector for the large arrays of a build (references, nodes, leaf geometry).
-// Blocks of 2 MiB and more come from a cache of freed blocks (big_blocks.cpp), so that a build
+// Blocks of 256 KiB and more come from a cache of freed blocks (big_blocks.cpp), so that a build
 // reuses the scratch memory of the last one: fresh memory costs a page fault per page and its
-// zeroing in the kernel. Elements are not zeroed on resize (every slot is written before it is
-// read). There are no huge-page hints (MADV_HUGEPAGE): they made the first build's page faults
-// cheaper, but when earlier trees stay alive every build needs fresh huge pages, and the kernel's
-// compaction to find them made each further build slower (Sponza: +8, +40, +51, +70 ms of system
-// time for builds 2-5), the "second build 1.4-1.7× slower" of issue 11.
+// zeroing in the kernel. (The node arrays of the subtrees a parallel build hands to its threads
+// are below 2 MiB: with fresh memory for them, a two-thread Sponza build took 2,100 page faults
+// and 7 ms of system time, against 32 faults on one thread.) Elements are not zeroed on resize
+// (every slot is written before it is read). There are no huge-page hints (MADV_HUGEPAGE): they
+// made the first build's page faults cheaper, but when earlier trees stay alive every build needs
+// fresh huge pages, and the kernel's compaction to find them made each further build slower
+// (Sponza: +8, +40, +51, +70 ms of system time for builds 2-5), the "second build 1.4-1.7×
+// slower" of issue 11.
 #pragma once
 #include <cstddef>
 #include <new>
@@ -14,15 +17,28 @@
 
 namespace bvhlab {
 
-/// A block of `bytes` (a multiple of 2 MiB), 2 MiB aligned: a cached one if any fits, else fresh.
+/// A block of `bytes` (a size big_block_bytes gives), 4 KiB aligned and 2 MiB aligned from 2 MiB
+/// up: a cached one if any fits, else fresh.
 void* allocate_big_block(std::size_t bytes);
 /// Returns a block from allocate_big_block, to the cache or, past its limit, to the system.
 void free_big_block(void* p, std::size_t bytes) noexcept;
 
+/// Below this, BigAllocator uses operator new.
+inline constexpr std::size_t kBigBlockMin = std::size_t(256) << 10;
+
+/// The block size for a request of `bytes` >= kBigBlockMin: the next power of two below 2 MiB (so
+/// that a block freed by one build fits the like request of the next), else a multiple of 2 MiB.
+constexpr std::size_t big_block_bytes(std::size_t bytes) {
+    constexpr std::size_t kHuge = std::size_t(2) << 20;
+    if (bytes >= kHuge) return (bytes + kHuge - 1) / kHuge * kHuge;
+    std::size_t size = kBigBlockMin;
+    while (size < bytes) size *= 2;
+    return size;
+}
+
 template <class T>
 struct BigAllocator {
     using value_type = T;
-    static constexpr std::size_t kHuge = std::size_t(2) << 20;
 
     BigAllocator() = default;
     template <class U>
@@ -36,14 +52,14 @@ struct BigAllocator {
     }
 
     T* allocate(std::size_t n) {
-        std::size_t bytes = n * sizeof(T);
-        if (bytes < kHuge) return static_cast<T*>(::operator new(bytes));
-        return static_cast<T*>(allocate_big_block((bytes + kHuge - 1) / kHuge * kHuge));
+        const std::size_t bytes = n * sizeof(T);
+        if (bytes < kBigBlockMin) return static_cast<T*>(::operator new(bytes, std::align_val_t(alignof(T))));
+        return static_cast<T*>(allocate_big_block(big_block_bytes(bytes)));
     }
     void deallocate(T* p, std::size_t n) {
         const std::size_t bytes = n * sizeof(T);
-        if (bytes < kHuge) ::operator delete(p);
-        else free_big_block(p, (bytes + kHuge - 1) / kHuge * kHuge);
+        if (bytes < kBigBlockMin) ::operator delete(p, std::align_val_t(alignof(T)));  // WideNode: 64
+        else free_big_block(p, big_block_bytes(bytes));
     }
     template <class U>
     bool operator==(const BigAllocator<U>&) const {

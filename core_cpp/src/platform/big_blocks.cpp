@@ -64,7 +64,8 @@ BlockCache& cache() {
 
 void* allocate_big_block(std::size_t bytes) {
     if (void* p = cache().take(bytes)) return p;
-    void* p = std::aligned_alloc(std::size_t(2) << 20, bytes);
+    const std::size_t huge = std::size_t(2) << 20;
+    void* p = std::aligned_alloc(bytes >= huge ? huge : std::size_t(4096), bytes);
     if (!p) throw std::bad_alloc();
     return p;
 }
