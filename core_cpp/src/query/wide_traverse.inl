@@ -77,8 +77,10 @@ void test_triangles(const PrimPacket& k, std::uint32_t packet, const Query& q, c
     // "not (some negative and some positive)"; a NaN lane has a NaN t and fails below
     const M4 one_sign = (lower(lower(u, v), w) >= zero) | (raise(raise(u, v), w) <= zero);
     const L4 det = (u + v) + w;
+    const M4 inside = one_sign & (det != zero);
+    if (!bits(inside)) return;  // most packets a ray reaches: no division to wait for
     const L4 t = (((u * az + v * bz) + w * cz) / det) * L4::splat(q.shear[2]);
-    int lanes = bits(one_sign & (det != zero) & (t > L4::splat(q.tmin)) & (t <= L4::splat(hit.t)));
+    int lanes = bits(inside & (t > L4::splat(q.tmin)) & (t <= L4::splat(hit.t)));
     if (!lanes) return;
     alignas(16) float ts[4], vs[4], ws[4], dets[4];
     t.store(ts), v.store(vs), w.store(ws), det.store(dets);
