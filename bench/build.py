@@ -7,9 +7,11 @@ and tinybvh (BuildAVX, when a local copy is given), measured in the same run.
 All C++ builders run inside one bvh_bench process per (scene, thread count), pinned to that many
 cores, interleaved (each repetition builds with every system in turn); `--rounds` such processes
 alternate with embreex's. Prints, per scene, build ms and Mprims/s with ratios against Embree
-MEDIUM and tinybvh, two-thread scaling, SAH cost (bvhlab's convention) and callgrind instructions
-per primitive, and writes bench/results/build.json. tinybvh is never part of bvhlab: pass the
-folder of a local copy of github.com/jbikker/tinybvh (or set BVHLAB_TINYBVH_DIR).
+MEDIUM and tinybvh, two-thread scaling, how many cores were busy on the most threads (CPU time
+of all threads over wall time) and the page faults of one build there, SAH cost (bvhlab's
+convention) and callgrind instructions per primitive, and writes bench/results/build.json.
+tinybvh is never part of bvhlab: pass the folder of a local copy of github.com/jbikker/tinybvh
+(or set BVHLAB_TINYBVH_DIR).
 """
 
 from __future__ import annotations
@@ -49,6 +51,8 @@ def measure_scene(exe: Path, path: Path, tris, threads: list[int], repeat: int, 
             for p in _peers.run(exe, args, t)["peers"]:
                 row = rows[p["spec"]]
                 row["seconds"].setdefault(str(t), []).extend(p["seconds"])
+                row.setdefault("cpu_seconds", {}).setdefault(str(t), []).extend(p["cpu_seconds"])
+                row.setdefault("page_faults", {}).setdefault(str(t), []).extend(p["page_faults"])
                 row["sah"], row["nodes"] = p["sah"], p["nodes"]
             child = _common.run_child(__file__, ["--embreex-child", str(path), "--repeat", str(repeat)], cores=t)
             if child.get("seconds"):
@@ -78,15 +82,19 @@ def report(name: str, r: dict, threads: list[int]) -> str:
             cells += [ms(row, t), n / ms(row, t) / 1e3]
         cells += [ms(medium, 1) / ms(row, 1) if medium else "", ms(tiny, 1) / ms(row, 1) if tiny else ""]
         cells += [ms(row, 1) / ms(row, threads[-1]) if len(threads) > 1 else ""]
+        last = str(threads[-1])
+        cpu, wall, faults = row["cpu_seconds"][last], row["seconds"][last], row["page_faults"][last]
+        cells += [sum(cpu) / sum(wall), round(_peers.median(faults))]
         ins = row.get("instructions")
         cells += [row["sah"] if row["sah"] is not None else "", row["nodes"], round(ins / n) if ins else ""]
         rows.append(cells)
     for t in threads:
         if str(t) in r["embreex"]:
             e = _peers.median(r["embreex"][str(t)]) * 1e3
-            rows.append([f"embreex (Embree 4) commit, {t}T", e, n / e / 1e3] + [""] * (2 * len(threads) + 4))
+            rows.append([f"embreex (Embree 4) commit, {t}T", e, n / e / 1e3] + [""] * (2 * len(threads) + 6))
     headers = ["builder"] + [h for t in threads for h in (f"ms {t}T", f"Mprims/s {t}T")]
-    headers += ["x MEDIUM 1T", "x tinybvh 1T", f"{threads[-1]}T/1T", "SAH", "nodes", "instr/prim"]
+    headers += ["x MEDIUM 1T", "x tinybvh 1T", f"{threads[-1]}T/1T", f"cores busy {threads[-1]}T"]
+    headers += [f"faults {threads[-1]}T", "SAH", "nodes", "instr/prim"]
     return _common.print_table(headers, rows, title=f"\n{name}: {n} triangles")
 
 

@@ -1,5 +1,6 @@
 // bvh_bench — times builders and single-ray traversal of several systems in one process,
-// interleaved (every repetition runs each system once, in turn), and prints JSON.
+// interleaved (every repetition runs each system once, in turn), and prints JSON (builds: wall
+// seconds, CPU seconds of all threads, minor page faults, per repetition).
 //   bvh_bench build MESH.f32 --peer SPEC [--peer SPEC ...] [--repeat R] [--threads T]
 //   bvh_bench trace MESH.f32 RAYS.f32 [RAYS.f32 ...] --peer SPEC ... [--repeat R]
 //   bvh_bench once MESH.f32 [RAYS.f32] --peer SPEC [--threads T]   (one build, or one pass over the
@@ -13,6 +14,8 @@
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include <sys/resource.h>
 
 #if __has_include(<valgrind/callgrind.h>)
 #include <valgrind/callgrind.h>
@@ -53,9 +56,22 @@ Args parse(int argc, char** argv) {
     return a;
 }
 
-void print_times(const std::vector<double>& times) {
+/// CPU time (user and system, every thread of the process) and minor page faults so far: with
+/// the wall time they show a parallel build's idle and extra work, and fresh memory it faults in.
+struct Usage {
+    double cpu_seconds;
+    long faults;
+};
+Usage usage() {
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    const auto sec = [](timeval t) { return double(t.tv_sec) + 1e-6 * double(t.tv_usec); };
+    return {sec(u.ru_utime) + sec(u.ru_stime), u.ru_minflt};
+}
+
+void print_times(const std::vector<double>& times, const char* format = "%s%.6f") {
     std::printf("[");
-    for (std::size_t i = 0; i < times.size(); ++i) std::printf("%s%.6f", i ? ", " : "", times[i]);
+    for (std::size_t i = 0; i < times.size(); ++i) std::printf(format, i ? ", " : "", times[i]);
     std::printf("]");
 }
 
@@ -63,13 +79,16 @@ int run_build(const Args& a) {
     Mesh mesh = load_mesh(a.mesh);
     std::vector<std::unique_ptr<Peer>> peers;
     for (const auto& spec : a.peers) peers.push_back(make_peer(spec, a.threads));
-    std::vector<std::vector<double>> times(peers.size());
+    std::vector<std::vector<double>> times(peers.size()), cpu(peers.size()), faults(peers.size());
     for (auto& p : peers) p->build(mesh);  // warm-up: first-touch of memory, thread start-up
     for (int r = 0; r < a.repeat; ++r)
         for (std::size_t k = 0; k < peers.size(); ++k) {
+            const Usage u0 = usage();
             auto t0 = std::chrono::steady_clock::now();
             peers[k]->build(mesh);
             times[k].push_back(seconds_since(t0));
+            const Usage u1 = usage();
+            cpu[k].push_back(u1.cpu_seconds - u0.cpu_seconds), faults[k].push_back(double(u1.faults - u0.faults));
         }
     std::printf("{\"triangles\": %zu, \"threads\": %u, \"peers\": [", mesh.count(), a.threads);
     for (std::size_t k = 0; k < peers.size(); ++k) {
@@ -78,6 +97,10 @@ int run_build(const Args& a) {
                     k ? "," : "", a.peers[k].c_str(), peers[k]->name().c_str(),
                     std::isnan(info.sah) ? "null" : std::to_string(info.sah).c_str(), (unsigned long long)info.nodes);
         print_times(times[k]);
+        std::printf(", \"cpu_seconds\": ");
+        print_times(cpu[k]);
+        std::printf(", \"page_faults\": ");
+        print_times(faults[k], "%s%.0f");
         std::printf("}");
     }
     std::printf("]}\n");
