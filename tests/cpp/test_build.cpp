@@ -80,8 +80,9 @@ INSTANTIATE_TEST_SUITE_P(AllMethods, EveryConfig,
 class EveryMethod : public ::testing::TestWithParam<SplitMethod> {};
 
 TEST_P(EveryMethod, LargeSceneSameTreeOnEveryThreadCountAndInstructionSet) {
-    // Large enough that the top of the tree is split in chunks on several threads (split.h).
-    auto scene = random_scene(50000, 1000, 8);
+    // Large enough that the top of the tree is split in chunks on several threads, and in more
+    // than one chunk (2^16 references each) on one thread (split.h).
+    auto scene = random_scene(70000, 1000, 8);
     const Isa before = active_isa();
     set_isa(Isa::Portable);
     BuildConfig c = config(GetParam(), AxisPolicy::Best, 4, 1);
