@@ -68,6 +68,26 @@ struct ChunkCursors {
     }
 };
 
+/// Whether the chunks of a pass run in turn on the calling thread (one chunk, or one thread).
+inline bool chunks_in_turn(const SplitContext& ctx, std::uint32_t chunks) {
+    return chunks <= 1 || !ctx.parallel || ctx.parallel->threads < 2;
+}
+
+/// The chunks of r, one after the other on the calling thread: `run(chunk, left, right)` scatters
+/// one chunk from the cursors the last one left (so no counting pass) and returns its left cursor
+/// after; the cancellation is polled between chunks. Returns the first right position.
+template <class Run>
+std::uint32_t scatter_in_turn(const SplitContext& ctx, Range r, std::uint32_t chunks, const Run& run) {
+    std::uint32_t left = r.begin, right = r.end;
+    for (std::uint32_t k = 0; k < chunks; ++k) {
+        const Range c = chunk_of(r, k, chunks);
+        const std::uint32_t end = run(c, left, right);
+        right -= c.size() - (end - left), left = end;
+        if (k + 1 < chunks && ctx.parallel && ctx.parallel->while_waiting) (*ctx.parallel->while_waiting)();
+    }
+    return left;
+}
+
 /// Partitions src[r] by goes_left(ref, position) and returns the first right position. Large
 /// ranges on the pool: a counting pass, then chunks scattered at once (contained stores); else one
 /// scatter. `run(chunk, left, right, contained)` scatters one chunk as scatter() does and returns
@@ -76,16 +96,10 @@ template <class GoesLeft, class Run>
 std::uint32_t partition_with(const SplitContext& ctx, Range r, const PrimRef* src, const GoesLeft& goes_left,
                              const Run& run) {
     const std::uint32_t chunks = chunk_count(ctx, r);
-    if (chunks <= 1 || ctx.parallel->threads < 2) {  // in turn, polling the cancellation between chunks
-        std::uint32_t left = r.begin, right = r.end;
-        for (std::uint32_t k = 0; k < chunks; ++k) {
-            const Range c = chunk_of(r, k, chunks);
-            const std::uint32_t end = run(c, left, right, false);
-            right -= c.size() - (end - left), left = end;
-            if (ctx.parallel && ctx.parallel->while_waiting) (*ctx.parallel->while_waiting)();
-        }
-        return left;
-    }
+    if (chunks_in_turn(ctx, chunks))
+        return scatter_in_turn(ctx, r, chunks, [&](Range c, std::uint32_t left, std::uint32_t right) {
+            return run(c, left, right, false);
+        });
     std::vector<std::uint32_t> left_counts(chunks), sizes(chunks);
     for_each_chunk(ctx, r, chunks, [&](std::uint32_t k, Range c) {
         std::uint32_t n = 0;

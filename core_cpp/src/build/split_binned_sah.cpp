@@ -28,9 +28,8 @@ BinSet bin_node(SplitContext& ctx, Range r, const PrimRef* in, const BinFrame& f
     return own;
 }
 
-/// The fused pass over r on the calling thread, `chunks` pieces in turn (cancellation polled
-/// between them; the cursors carry over, so no counting pass): the children's buckets end up in
-/// their slots.
+/// The fused pass over r on the calling thread, its `chunks` pieces in turn (scatter_in_turn):
+/// the children's buckets end up in their slots.
 std::uint32_t partition_whole(SplitContext& ctx, Range r, int src, const BinFrame& f, const BinSplit& best,
                               ChildBinning child[2], const std::int32_t slots[2], CentroidBounds sides[2],
                               std::uint32_t chunks) {
@@ -42,17 +41,12 @@ std::uint32_t partition_whole(SplitContext& ctx, Range r, int src, const BinFram
         copies[s][0].reset(), copies[s][1].reset();
         child[s].copies = copies[s];
     }
-    std::uint32_t left = r.begin, right = r.end;
-    for (std::uint32_t k = 0; k < chunks; ++k) {
-        const Range c = chunk_of(r, k, chunks);
-        const std::uint32_t end =
-            partition_and_bin(ctx.buffers[src], ctx.buffers[1 - src], c, left, right, f, best, child, sides);
-        right -= c.size() - (end - left), left = end;
-        if (k + 1 < chunks && ctx.parallel && ctx.parallel->while_waiting) (*ctx.parallel->while_waiting)();
-    }
+    const std::uint32_t mid = scatter_in_turn(ctx, r, chunks, [&](Range c, std::uint32_t left, std::uint32_t right) {
+        return partition_and_bin(ctx.buffers[src], ctx.buffers[1 - src], c, left, right, f, best, child, sides);
+    });
     for (int s = 0; s < 2; ++s)
         if (slots[s] >= 0) copies[s][0].merge(copies[s][1]);
-    return left;
+    return mid;
 }
 
 /// The fused pass in chunks on the pool (the top of the tree): a counting pass first finds where
@@ -121,9 +115,8 @@ std::optional<Split> split_binned_sah(SplitContext& ctx, Range r, int src, const
     CentroidBounds sides[2];
     CentroidBounds* gathered = centroids ? sides : nullptr;
     const std::uint32_t chunks = chunk_count(ctx, r);
-    const bool alone = chunks == 1 || !ctx.parallel || ctx.parallel->threads < 2;
-    s.mid = alone ? partition_whole(ctx, r, src, frame, best, child, slots, gathered, chunks)
-                  : partition_chunks(ctx, r, src, frame, best, child, slots, gathered, chunks);
+    s.mid = chunks_in_turn(ctx, chunks) ? partition_whole(ctx, r, src, frame, best, child, slots, gathered, chunks)
+                                        : partition_chunks(ctx, r, src, frame, best, child, slots, gathered, chunks);
     s.left.centroids = centroids ? sides[0].halved() : s.left.box;
     s.right.centroids = centroids ? sides[1].halved() : s.right.box;
     s.left.bins = slots[0], s.right.bins = slots[1];

@@ -36,20 +36,12 @@ inline void pack_triangle_into(PackedPrim* dst, const float* v, std::uint32_t in
     _mm_storeu_ps(rows, lane3(a, material)), _mm_storeu_ps(rows + 4, lane3(b, index));
     _mm_storeu_ps(rows + 8, _mm_and_ps(c, xyz));
 }
-inline PackedPrim pack_triangle_inline(const float* v, std::uint32_t index, std::uint32_t material) {
-    PackedPrim out;
-    pack_triangle_into(&out, v, index, material);
-    return out;
-}
 #else
-inline PackedPrim pack_triangle_inline(const float* v, std::uint32_t index, std::uint32_t material) {
+inline void pack_triangle_into(PackedPrim* dst, const float* v, std::uint32_t index, std::uint32_t material) {
     Vec3 v0{v[0], v[1], v[2]}, v1{v[3], v[4], v[5]}, v2{v[6], v[7], v[8]};
     const Vec3 n = cross(v1 - v0, v2 - v0);
     if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) v1 = v2 = v0;  // zero area: never hit
-    return {v3(v0), material, v3(v1), index, v3(v2), 0};
-}
-inline void pack_triangle_into(PackedPrim* dst, const float* v, std::uint32_t index, std::uint32_t material) {
-    *dst = pack_triangle_inline(v, index, material);
+    *dst = {v3(v0), material, v3(v1), index, v3(v2), 0};
 }
 #endif
 
@@ -66,7 +58,9 @@ inline void pack_prim_into(PackedPrim* dst, const GeometryView& g, std::uint32_t
 }  // namespace
 
 PackedPrim pack_triangle(const GeometryView& g, std::size_t i, std::uint32_t material) {
-    return pack_triangle_inline(g.triangles + 9 * i, static_cast<std::uint32_t>(i), material);
+    PackedPrim out;
+    pack_triangle_into(&out, g.triangles + 9 * i, static_cast<std::uint32_t>(i), material);
+    return out;
 }
 
 PackedPrim pack_prim(const GeometryView& g, std::uint32_t ref) {
