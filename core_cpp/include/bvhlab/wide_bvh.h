@@ -37,14 +37,15 @@ struct WideBvh {
     BigVector<std::uint32_t> slots;  ///< per packet lane: its position in Bvh::prims (finish_hit)
 };
 
-/// Collapses the binary tree: each wide node takes a binary node's children and keeps opening
-/// the inner child of largest surface area until it holds eight (Wald et al. 2008); a subtree of
-/// at most four primitives becomes one leaf. A tree that is one leaf gets a root node with that
+/// Collapses the binary tree: a subtree of at most four primitives becomes one leaf, and the
+/// binary inner nodes that become wide nodes are those of least total surface area (the
+/// cost-optimal collapse of Ylitie et al. 2017; each wide node holds up to eight children). A tree that is one leaf gets a root node with that
 /// leaf as its only child, so its box is tested as every other traversal tests it.
 WideBvh make_wide(const Bvh& bvh);
 
-/// Closest hit through the wide tree (nearest child first): the same hit as intersect() on the
-/// binary tree, bit for bit, on every instruction set path (isa.h).
+/// Closest hit through the wide tree (nearest child first, by the middle of the ray's span in
+/// each box): the same hit as intersect() on the binary tree, bit for bit, on every instruction
+/// set path (isa.h).
 Hit intersect_wide(const WideBvh& wide, const Bvh& bvh, const Ray& ray, std::uint32_t* nodes_visited = nullptr);
 
 }  // namespace bvhlab

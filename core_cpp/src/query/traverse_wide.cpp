@@ -87,7 +87,13 @@ struct L8 {
     static L8 load(const float* p) { return {L4::load(p), L4::load(p + 4)}; }
     static L8 splat(float s) { return {L4::splat(s), L4::splat(s)}; }
     void store(float* p) const { a.store(p), b.store(p + 4); }
+    float lane(int k) const {
+        alignas(32) float f[8];
+        store(f);
+        return f[k];
+    }
 };
+inline L8 operator+(L8 x, L8 y) { return {x.a + y.a, x.b + y.b}; }
 inline L8 operator-(L8 x, L8 y) { return {x.a - y.a, x.b - y.b}; }
 inline L8 operator*(L8 x, L8 y) { return {x.a * y.a, x.b * y.b}; }
 inline L8 raise(L8 acc, L8 t) { return {raise(acc.a, t.a), raise(acc.b, t.b)}; }

@@ -38,7 +38,10 @@ struct L8 {
     static L8 load(const float* p) { return {_mm256_loadu_ps(p)}; }
     static L8 splat(float s) { return {_mm256_set1_ps(s)}; }
     void store(float* p) const { _mm256_storeu_ps(p, v); }
+    /// Lane k by a permute, not a store and a reload (which waits on the store).
+    float lane(int k) const { return _mm256_cvtss_f32(_mm256_permutevar8x32_ps(v, _mm256_set1_epi32(k))); }
 };
+inline L8 operator+(L8 a, L8 b) { return {_mm256_add_ps(a.v, b.v)}; }
 inline L8 operator-(L8 a, L8 b) { return {_mm256_sub_ps(a.v, b.v)}; }
 inline L8 operator*(L8 a, L8 b) { return {_mm256_mul_ps(a.v, b.v)}; }
 inline L8 raise(L8 acc, L8 t) { return {_mm256_max_ps(t.v, acc.v)}; }  // t > acc ? t : acc

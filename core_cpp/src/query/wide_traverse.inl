@@ -1,6 +1,6 @@
 // wide_traverse.inl — the closest-hit traversal of the 8-wide tree (wide_bvh.h), written once
 // against two small vector types that the including file defines in its own namespace:
-//   L8: eight floats — load(const float*), splat(float), operator-, operator*, raise(acc, t)
+//   L8: eight floats — load(const float*), splat(float), lane(k), + - *, raise(acc, t)
 //       (= t > acc ? t : acc), lower(acc, t) (= t < acc ? t : acc), le_bits(a, b) (bit i set
 //       when a[i] <= b[i]), store(float*);
 //   L4: four floats — load, splat, + - * /, raise, lower, comparisons giving an M4 mask,
@@ -109,6 +109,11 @@ void test_leaf(const WideView& wide, std::uint32_t first, std::uint32_t count, c
 /// far times it: the far end widened as hit_box widens it (Ize 2013), with the scale folded into
 /// per-ray constants rather than a multiply on every node's dependency chain. One rounding more
 /// than hit_box's product, which the scale covers with room to spare (16 ε against 7 ε).
+/// "Nearest" is by the middle of the span the ray spends in each box (entry + exit), not by the
+/// entry alone: a ray starting inside several boxes enters them all at tmin, and the entry then
+/// says nothing of where their contents lie (the cost-optimal collapse puts large leaves beside
+/// deep subtrees, which entry order visited first). Only the order changes: the entry is still
+/// what the stack compares with the closest hit, so the hit is the same.
 int enter_children(const WideNode& node, const L8 origin[3], const L8 inv[3], const L8 inv_far[3], const int near[3],
                    float tmin, float far_limit, Entry out[8]) {
     const float* f = node.lo_x;
@@ -118,22 +123,24 @@ int enter_children(const WideNode& node, const L8 origin[3], const L8 inv[3], co
     for (int a = 0; a < 3; ++a) t1 = lower(t1, (L8::load(f + (near[a] ^ 8)) - origin[a]) * inv_far[a]);
     int mask = le_bits(t0, t1);
     if (!mask) return 0;
-    alignas(32) float entry[8];
-    t0.store(entry);
     int k = __builtin_ctz(unsigned(mask));
-    out[0] = {node.child[k], node.count[k], entry[k]};
-    if (!(mask &= mask - 1)) return 1;  // the common case: one child entered
+    out[0] = {node.child[k], node.count[k], t0.lane(k)};
+    if (!(mask &= mask - 1)) return 1;      // the common case: one child entered
+    alignas(32) float entry[8], middle[8];  // middle: twice the middle, the sort key
+    t0.store(entry);
+    (t0 + t1).store(middle);
+    float key[8] = {middle[k]};
     k = __builtin_ctz(unsigned(mask));
     const Entry second{node.child[k], node.count[k], entry[k]};
-    if (second.t > out[0].t) out[1] = out[0], out[0] = second;  // farther first
-    else out[1] = second;
+    if (middle[k] > key[0]) out[1] = out[0], key[1] = key[0], out[0] = second, key[0] = middle[k];  // farther first
+    else out[1] = second, key[1] = middle[k];
     int h = 2;
     for (mask &= mask - 1; mask; mask &= mask - 1) {
         k = __builtin_ctz(unsigned(mask));
         const Entry e{node.child[k], node.count[k], entry[k]};
         int j = h++;
-        for (; j > 0 && out[j - 1].t < e.t; --j) out[j] = out[j - 1];  // by decreasing entry distance
-        out[j] = e;
+        for (; j > 0 && key[j - 1] < middle[k]; --j) out[j] = out[j - 1], key[j] = key[j - 1];  // farther first
+        out[j] = e, key[j] = middle[k];
     }
     return h;
 }
