@@ -7,6 +7,9 @@
 #include "bvhlab/simd.h"
 #include "bvhlab/traverse.h"
 #include "wide_kernel.h"
+#ifdef __SSE4_1__
+#include <smmintrin.h>
+#endif
 
 namespace bvhlab {
 
@@ -29,8 +32,23 @@ struct L4 {
     __m128 v;
     static L4 load(const float* p) { return {_mm_loadu_ps(p)}; }
     static L4 splat(float s) { return {_mm_set1_ps(s)}; }
+    static L4 set(float a, float b, float c, float d) { return {_mm_setr_ps(a, b, c, d)}; }
     void store(float* p) const { _mm_storeu_ps(p, v); }
 };
+#ifdef __SSE4_1__
+/// By a byte shuffle: lane i takes bytes 4·index .. 4·index + 3.
+inline L4 permute(L4 x, int a, int b, int c) {
+    const __m128i lanes = _mm_setr_epi32(a, b, c, 3);
+    const __m128i bytes = _mm_add_epi32(_mm_mullo_epi32(lanes, _mm_set1_epi32(0x04040404)), _mm_set1_epi32(0x03020100));
+    return {_mm_castsi128_ps(_mm_shuffle_epi8(_mm_castps_si128(x.v), bytes))};
+}
+#else
+inline L4 permute(L4 x, int a, int b, int c) {
+    alignas(16) float f[4];
+    x.store(f);
+    return {_mm_setr_ps(f[a], f[b], f[c], f[3])};
+}
+#endif
 inline L4 operator+(L4 a, L4 b) { return {_mm_add_ps(a.v, b.v)}; }
 inline L4 operator-(L4 a, L4 b) { return {_mm_sub_ps(a.v, b.v)}; }
 inline L4 operator*(L4 a, L4 b) { return {_mm_mul_ps(a.v, b.v)}; }
@@ -53,10 +71,12 @@ struct L4 {
     float v[4];
     static L4 load(const float* p) { return {{p[0], p[1], p[2], p[3]}}; }
     static L4 splat(float s) { return {{s, s, s, s}}; }
+    static L4 set(float a, float b, float c, float d) { return {{a, b, c, d}}; }
     void store(float* p) const {
         for (int i = 0; i < 4; ++i) p[i] = v[i];
     }
 };
+inline L4 permute(L4 x, int a, int b, int c) { return {{x.v[a], x.v[b], x.v[c], x.v[3]}}; }
 /// Lane by lane: op(a[i], b[i]) for the four lanes (floats for arithmetic, bools for comparisons).
 template <class R, class Op>
 inline R lanes(L4 a, L4 b, Op op) {

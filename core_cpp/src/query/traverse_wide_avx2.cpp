@@ -20,8 +20,10 @@ struct L4 {
     __m128 v;
     static L4 load(const float* p) { return {_mm_loadu_ps(p)}; }
     static L4 splat(float s) { return {_mm_set1_ps(s)}; }
+    static L4 set(float a, float b, float c, float d) { return {_mm_setr_ps(a, b, c, d)}; }
     void store(float* p) const { _mm_storeu_ps(p, v); }
 };
+inline L4 permute(L4 x, int a, int b, int c) { return {_mm_permutevar_ps(x.v, _mm_setr_epi32(a, b, c, 3))}; }
 inline L4 operator+(L4 a, L4 b) { return {_mm_add_ps(a.v, b.v)}; }
 inline L4 operator-(L4 a, L4 b) { return {_mm_sub_ps(a.v, b.v)}; }
 inline L4 operator*(L4 a, L4 b) { return {_mm_mul_ps(a.v, b.v)}; }
