@@ -16,7 +16,7 @@ TRIXIE    := scripts/trixie.sh
 ADDON_SOURCES := $(shell find addon -type f -not -path '*/__pycache__/*' -not -path 'addon/wheels/*' 2>/dev/null)
 WHEEL_INPUTS  := $(CORE_SOURCES) $(PY_SOURCES) CMakeLists.txt pyproject.toml $(wildcard blender_scenes/*.blend blender_scenes/scenes.json)
 
-.PHONY: help setup system venv trixie build test cpp-test asan-test pytest blender-test bpy313-test \
+.PHONY: help setup system venv trixie build test cpp-test scalar-test asan-test pytest blender-test bpy313-test \
         blender-binary-test blender-ui-test demo bench addon screenshots scenes clean
 
 help:
@@ -64,6 +64,15 @@ cpp-test: build/cpp/build.ninja
 asan-test: build/asan/build.ninja
 	cmake --build build/asan -j $(JOBS)
 	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --test-dir build/asan --output-on-failure -j $(JOBS)
+
+# The plain C++ path of CPUs without SSE (core_cpp/CMakeLists.txt BVHLAB_SCALAR), built and tested
+# on this x86-64 machine: every C++ test but the Vulkan ones.
+build/scalar/build.ninja: CMakeLists.txt core_cpp/CMakeLists.txt tests/cpp/CMakeLists.txt | system
+	cmake -S . -B build/scalar $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=Release -DBVHLAB_TESTS=ON -DBVHLAB_SCALAR=ON -DBVHLAB_VULKAN=OFF -DBVHLAB_PYTHON=OFF > /dev/null
+
+scalar-test: build/scalar/build.ninja
+	cmake --build build/scalar -j $(JOBS)
+	ctest --test-dir build/scalar --output-on-failure -j $(JOBS)
 
 # bpy 4.2 LTS (Python 3.11, the oldest supported line) in .venv; the zip's install test needs dist/.
 pytest: build addon
@@ -120,7 +129,7 @@ format: $(VENV)/.deps
 	$(VENV)/bin/ruff format $(PY_LINT_DIRS)
 	$(VENV)/bin/clang-format -i $(CPP_FILES)
 
-test: lint cpp-test asan-test clang-sanitize-test pytest blender-test
+test: lint cpp-test scalar-test asan-test clang-sanitize-test pytest blender-test
 
 # The report's Table 1 on its own scene, Crytek Sponza (frame times on the CPU reference, the
 # report's build settings), its claims checked with the measurement protocol, the §4.1 overlay claim
