@@ -1,5 +1,6 @@
 #include "bvhlab/wide_bvh.h"
 
+#include <array>
 #include <limits>
 #include <vector>
 
@@ -70,27 +71,22 @@ class Collapse {
 public:
     static constexpr int kWidth = 8;
 
-    Collapse(const Bvh& bvh, const SubtreeRanges& ranges)
-        : bvh_(bvh), ranges_(ranges), cost_(bvh.nodes.size() * kWidth), share_(bvh.nodes.size() * kWidth) {
+    /// Bottom-up in reverse depth-first order, in which each node's two children are the last
+    /// two finished: their costs are popped off a stack as high as the tree (the memory for the
+    /// costs of every node would be 32 bytes a node), and the choices kept, 3 bits each.
+    Collapse(const Bvh& bvh, const SubtreeRanges& ranges) : bvh_(bvh), ranges_(ranges), share_(bvh.nodes.size()) {
+        std::vector<Costs> finished;  // of the subtrees whose parents are not done yet
         for (std::size_t n = bvh.nodes.size(); n-- > 0;) {
-            float* c = &cost_[n * kWidth];
-            std::uint8_t* s = &share_[n * kWidth];
-            if (ranges.leaf(bvh, std::uint32_t(n))) continue;  // zeros
-            const float* a = &cost_[(n + 1) * kWidth];
-            const float* b = &cost_[std::size_t(bvh.nodes[n].index) * kWidth];
-            float split[kWidth + 1];
-            std::uint8_t best[kWidth + 1];
-            for (int j = 2; j <= kWidth; ++j) {
-                split[j] = a[0] + b[j - 2], best[j] = 1;
-                for (int k = 2; k < j; ++k)
-                    if (a[k - 1] + b[j - k - 1] < split[j])
-                        split[j] = a[k - 1] + b[j - k - 1], best[j] = std::uint8_t(k);
+            Costs c{};  // a merged leaf: 0 for every i
+            if (!is_leaf(bvh.nodes[n])) {
+                const Costs a = finished.back();  // the first child, n + 1, finished last
+                finished.pop_back();
+                const Costs b = finished.back();
+                finished.pop_back();
+                if (!ranges.leaf(bvh, std::uint32_t(n)))
+                    share_[n] = choose(a, b, node_box(bvh.nodes[n]).half_area(), c);
             }
-            c[0] = node_box(bvh.nodes[n]).half_area() + split[kWidth], s[0] = best[kWidth];
-            for (int i = 2; i <= kWidth; ++i) {
-                const bool fewer = !(split[i] < c[i - 2]);  // ties keep the fewer children
-                c[i - 1] = fewer ? c[i - 2] : split[i], s[i - 1] = fewer ? 0 : best[i];
-            }
+            finished.push_back(c);
         }
     }
 
@@ -102,31 +98,54 @@ public:
             out[count++] = n;
             return count;
         }
-        const int k = share_[std::size_t(n) * kWidth];
+        const int k = share(n, 1);
         cover(n + 1, k, out, count);
         cover(bvh_.nodes[n].index, kWidth - k, out, count);
         return count;
     }
 
 private:
+    using Costs = std::array<float, kWidth>;  ///< cost(n, i) at i - 1
+
+    /// cost(n, ·) from the children's, into c; returns the choices, share(n, i) in bits 3(i - 1).
+    static std::uint32_t choose(const Costs& a, const Costs& b, float area, Costs& c) {
+        float split[kWidth + 1];
+        std::uint32_t best[kWidth + 1];
+        for (int j = 2; j <= kWidth; ++j) {
+            split[j] = a[0] + b[j - 2], best[j] = 1;
+            for (int k = 2; k < j; ++k)
+                if (a[k - 1] + b[j - k - 1] < split[j]) split[j] = a[k - 1] + b[j - k - 1], best[j] = std::uint32_t(k);
+        }
+        c[0] = area + split[kWidth];
+        std::uint32_t choices = best[kWidth];
+        for (int i = 2; i <= kWidth; ++i) {
+            const bool fewer = !(split[i] < c[i - 2]);  // ties keep the fewer children
+            c[i - 1] = fewer ? c[i - 2] : split[i];
+            choices |= (fewer ? 0u : best[i]) << 3 * (i - 1);
+        }
+        return choices;
+    }
+
+    /// i > 1: the slots split(n, i) gives the first child, or 0 where cost(n, i) is
+    /// cost(n, i - 1); i = 1: the slots split(n, 8) gives the first child.
+    int share(std::uint32_t n, int i) const { return int(share_[n] >> 3 * (i - 1) & 7u); }
+
     /// Appends the children that cover binary node n's subtree with at most i slots.
     void cover(std::uint32_t n, int i, std::uint32_t out[kWidth], int& count) const {
-        while (i > 1 && share_[std::size_t(n) * kWidth + i - 1] == 0) --i;
-        if (i == 1 || ranges_.leaf(bvh_, n)) {
+        if (ranges_.leaf(bvh_, n)) i = 1;
+        while (i > 1 && share(n, i) == 0) --i;
+        if (i == 1) {
             out[count++] = n;
             return;
         }
-        const int k = share_[std::size_t(n) * kWidth + i - 1];
+        const int k = share(n, i);
         cover(n + 1, k, out, count);
         cover(bvh_.nodes[n].index, i - k, out, count);
     }
 
     const Bvh& bvh_;
     const SubtreeRanges& ranges_;
-    std::vector<float> cost_;  ///< cost(n, i) at n * 8 + i - 1
-    /// At n * 8 + i - 1: for i > 1, the slots split(n, i) gives the first child, or 0 where
-    /// cost(n, i) is cost(n, i - 1); for i = 1, the slots split(n, 8) gives the first child.
-    std::vector<std::uint8_t> share_;
+    std::vector<std::uint32_t> share_;  ///< per binary node, the choices (choose)
 };
 
 void set_slot(WideNode& w, int k, const BvhNode* c) {
