@@ -97,15 +97,9 @@ BinSplit best_bin_split(const BinSet& bins, const BinFrame& f, int first_axis, i
                         float parent_area) {
     // The O(B) sweep per axis (the improvement over the report's O(n + B²), §2.3.2).
     BinSplit best;
-    const float inv_parent = SahCost::inverse_area(parent_area);
-    Unions<kMaxBins + 3> unions;
-    for (int a = first_axis; a <= last_axis; ++a) {
-        if (!f.binned[a]) continue;
-        const F4* box = bins.box + 2 * std::size_t(a) * bins.bins;
-        const Cut cut = cheapest_cut({box, box + 1, 2, bins.count + std::size_t(a) * bins.bins, bins.bins}, sah,
-                                     inv_parent, unions);
-        if (cut.found && cut.cost < best.cost) best = {cut.cost, a, cut.last_left};
-    }
+    const AxisCuts cuts = cheapest_bin_cuts(bins.box, bins.count, bins.bins, sah, SahCost::inverse_area(parent_area));
+    for (int a = first_axis; a <= last_axis; ++a)
+        if (f.binned[a] && cuts.found[a] && cuts.cost[a] < best.cost) best = {cuts.cost[a], a, cuts.last_left[a]};
     return best;
 }
 

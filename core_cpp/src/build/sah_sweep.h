@@ -1,7 +1,7 @@
-// sah_sweep.h — the cheapest cut of a sequence of boxes (report §2.3.2): the buckets of the
-// binned SAH (small ranges sweep their sorted primitives in small_subtree.cpp instead). One
-// suffix and one prefix pass of box unions, then the areas and costs of the candidates four at
-// a time.
+// sah_sweep.h — the cheapest bucket boundary of the binned SAH (report §2.3.2) on the three axes
+// at once: one vector lane per axis, one suffix and one prefix pass over the buckets (the O(B)
+// sweep the report names as the improvement over its O(n + B²) loop). Small ranges sweep their
+// sorted primitives the same way in small_subtree.cpp.
 #pragma once
 #include <cstdint>
 #include <limits>
@@ -11,37 +11,20 @@
 
 namespace bvhlab {
 
-/// The best cut: elements [0, last_left] on the left. `found` is false when no cut leaves both
-/// sides non-empty.
-struct Cut {
-    float cost = std::numeric_limits<float>::infinity();
-    std::uint32_t last_left = 0;
-    bool found = false;
+/// Per axis, the cheapest boundary: buckets [0, last_left[a]] on the left. found[a] is false
+/// when no boundary leaves both sides non-empty.
+struct AxisCuts {
+    float cost[3] = {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
+                     std::numeric_limits<float>::infinity()};
+    std::uint32_t last_left[3] = {0, 0, 0};
+    bool found[3] = {false, false, false};
 };
 
-/// A sequence of n boxes (n <= kMaxBins) as (lo, -hi): element j at lo[j * stride] and
-/// neg_hi[j * stride]; count[j] primitives each (1 each when count is null).
-struct BoxSequence {
-    const F4* lo;
-    const F4* neg_hi;
-    std::size_t stride;
-    const std::uint32_t* count;
-    std::uint32_t n;
-};
-
-/// Prefix and suffix unions of a sequence of at most kCapacity boxes: candidate c has
-/// left = [0, c], right = [c + 1, n); hi is stored as it is (not negated).
-template <std::uint32_t kCapacity>
-struct Unions {
-    F4 left_lo[kCapacity], left_hi[kCapacity], right_lo[kCapacity], right_hi[kCapacity];
-    std::uint32_t left_n[kCapacity], right_n[kCapacity];
-    void fill(const BoxSequence& s);
-};
-
-/// Every boundary is a candidate; a strictly cheaper one replaces the best so far, so ties go
-/// to the first. Costs are SahCost::split's, bit for bit. `u` (capacity >= seq.n + 3) is
-/// filled on the way: the unions of the chosen cut are u.left_*[last_left], u.right_*[last_left].
-template <std::uint32_t kCapacity>
-Cut cheapest_cut(const BoxSequence& seq, const SahCost& sah, float inv_parent_area, Unions<kCapacity>& u);
+/// The buckets of BinSet's layout: bucket k of axis a is box[2 (a B + k)] = lo and
+/// box[2 (a B + k) + 1] = -hi, with count[a B + k] references; B = bins (2..kMaxBins).
+/// Every boundary is a candidate; a strictly cheaper one replaces the best so far, so ties go to
+/// the first. Costs are SahCost::split's, bit for bit.
+AxisCuts cheapest_bin_cuts(const F4* box, const std::uint32_t* count, std::uint32_t bins, const SahCost& sah,
+                           float inv_parent_area);
 
 }  // namespace bvhlab
