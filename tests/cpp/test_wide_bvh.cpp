@@ -94,7 +94,7 @@ Bvh small_tree(std::uint32_t triangles, std::uint32_t seed, SplitMethod method, 
 
 }  // namespace
 
-TEST(WideBvh, EveryPrimitiveIsInExactlyOneLaneAndEveryNodeHasAtMostEightChildren) {
+TEST(WideBvh, EveryPrimitiveIsInExactlyOneLaneAndEveryNodeHasOneParent) {
     for (std::uint32_t leaf : {1u, 4u, 8u}) {
         const Bvh bvh = small_tree(5000, 3 + leaf, SplitMethod::Sah, leaf);
         const WideBvh wide = make_wide(bvh);

@@ -39,8 +39,9 @@ struct WideBvh {
 
 /// Collapses the binary tree: a subtree of at most four primitives becomes one leaf, and the
 /// binary inner nodes that become wide nodes are those of least total surface area (the
-/// cost-optimal collapse of Ylitie et al. 2017; each wide node holds up to eight children). A tree that is one leaf gets a root node with that
-/// leaf as its only child, so its box is tested as every other traversal tests it.
+/// cost-optimal collapse of Ylitie et al. 2017; each wide node holds up to eight children). A
+/// tree that is one leaf gets a root node with that leaf as its only child, so its box is tested
+/// as every other traversal tests it.
 WideBvh make_wide(const Bvh& bvh);
 
 /// Closest hit through the wide tree (nearest child first, by the middle of the ray's span in

@@ -7,8 +7,8 @@
 #include "bvhlab/simd.h"
 #include "bvhlab/traverse.h"
 #include "wide_kernel.h"
-#ifdef __SSE4_1__
-#include <smmintrin.h>
+#ifdef __SSSE3__
+#include <tmmintrin.h>
 #endif
 
 namespace bvhlab {
@@ -35,11 +35,13 @@ struct L4 {
     static L4 set(float a, float b, float c, float d) { return {_mm_setr_ps(a, b, c, d)}; }
     void store(float* p) const { _mm_storeu_ps(p, v); }
 };
-#ifdef __SSE4_1__
-/// By a byte shuffle: lane i takes bytes 4·index .. 4·index + 3.
+#ifdef __SSSE3__
+/// By a byte shuffle: lane i takes bytes 4·index .. 4·index + 3 (4·index spread over the lane's
+/// four bytes by a first shuffle, then 0, 1, 2, 3 added; no carries: 4·3 + 3 < 256).
 inline L4 permute(L4 x, int a, int b, int c) {
-    const __m128i lanes = _mm_setr_epi32(a, b, c, 3);
-    const __m128i bytes = _mm_add_epi32(_mm_mullo_epi32(lanes, _mm_set1_epi32(0x04040404)), _mm_set1_epi32(0x03020100));
+    const __m128i first = _mm_slli_epi32(_mm_setr_epi32(a, b, c, 3), 2);
+    const __m128i spread = _mm_shuffle_epi8(first, _mm_setr_epi8(0, 0, 0, 0, 4, 4, 4, 4, 8, 8, 8, 8, 12, 12, 12, 12));
+    const __m128i bytes = _mm_add_epi8(spread, _mm_set1_epi32(0x03020100));
     return {_mm_castsi128_ps(_mm_shuffle_epi8(_mm_castps_si128(x.v), bytes))};
 }
 #else

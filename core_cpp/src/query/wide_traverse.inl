@@ -50,6 +50,8 @@ Query make_query(const Ray& ray) {
     origin.store(q.o), inv.store(q.inv);
     permute(origin, kx, ky, kz).store(q.o_axes);
     // (dir[kx], dir[ky], 1, 1) times 1 / dir[kz]: the shear, and 1 / dir[kz] itself in lane 2
+    // (1 · x is x, except a denormal x under denormals-are-zero: 0, which is what the one use of
+    // shear[2], a product, reads x as in that mode anyway)
     (permute(dir, kx, ky, 3) * permute(inv, kz, kz, kz)).store(q.shear);
     q.axis[0] = kx, q.axis[1] = ky, q.axis[2] = kz;
     q.tmin = ray.tmin, q.ray = &ray;
