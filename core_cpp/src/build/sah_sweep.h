@@ -1,7 +1,7 @@
 // sah_sweep.h — the cheapest bucket boundary of the binned SAH (report §2.3.2) on the three axes
 // at once: one vector lane per axis, one suffix and one prefix pass over the buckets (the O(B)
 // sweep the report names as the improvement over its O(n + B²) loop). Small ranges sweep their
-// sorted primitives the same way in small_subtree.cpp.
+// sorted primitives the same way in small_subtree.cpp, with the same AxisBoxes and LaneSplitCost.
 #pragma once
 #include <cstdint>
 #include <limits>
@@ -10,6 +10,53 @@
 #include "bvhlab/sah.h"
 
 namespace bvhlab {
+
+inline constexpr float kSweepEmpty = std::numeric_limits<float>::infinity();
+
+/// The boxes of the three axes' sweeps at once, lane a holding axis a's (lanes x, y, z of each
+/// box transposed so that lanes are axes): (lo, -hi) per coordinate, grown by one box per axis.
+struct AxisBoxes {
+    F4 lo[3] = {F4::splat(kSweepEmpty), F4::splat(kSweepEmpty), F4::splat(kSweepEmpty)};
+    F4 neg_hi[3] = {F4::splat(kSweepEmpty), F4::splat(kSweepEmpty), F4::splat(kSweepEmpty)};
+
+    /// Lane a grows by the box (lo[i_a], neg_hi[i_a]) of axis a.
+    void grow(const F4* lo_of, const F4* neg_hi_of, std::size_t i_0, std::size_t i_1, std::size_t i_2) {
+        F4 t[3];
+        transpose3(lo_of[i_0], lo_of[i_1], lo_of[i_2], lo_of[i_2], t[0], t[1], t[2]);
+        for (int c = 0; c < 3; ++c) lo[c] = min(lo[c], t[c]);
+        transpose3(neg_hi_of[i_0], neg_hi_of[i_1], neg_hi_of[i_2], neg_hi_of[i_2], t[0], t[1], t[2]);
+        for (int c = 0; c < 3; ++c) neg_hi[c] = min(neg_hi[c], t[c]);
+    }
+    /// half_area of each lane's box, bit for bit (its operations in its order).
+    F4 half_areas() const {
+        const F4 zero = F4::splat(0.0f);
+        const F4 x = max(neg(neg_hi[0]) - lo[0], zero), y = max(neg(neg_hi[1]) - lo[1], zero),
+                 z = max(neg(neg_hi[2]) - lo[2], zero);
+        return (x * y + y * z) + z * x;
+    }
+};
+
+/// SahCost::split of each lane at once, bit for bit (its operations in its order), with one
+/// parent's constants splatted once.
+class LaneSplitCost {
+public:
+    LaneSplitCost(const SahCost& sah, float inv_parent_area)
+        : trav_(F4::splat(sah.traversal)),
+          isect_(F4::splat(sah.intersection)),
+          inv_(F4::splat(inv_parent_area)),
+          by_area_(inv_parent_area > 0.0f) {}
+    /// `total()`: n_left + n_right summed as integers, the ratio for a parent of zero area (only
+    /// then called).
+    template <class Total>
+    F4 operator()(F4 left_area, F4 n_left, F4 right_area, F4 n_right, const Total& total) const {
+        const F4 ratio = by_area_ ? (left_area * n_left + right_area * n_right) * inv_ : total();
+        return trav_ + ratio * isect_;
+    }
+
+private:
+    F4 trav_, isect_, inv_;
+    bool by_area_;
+};
 
 /// Per axis, the cheapest boundary: buckets [0, last_left[a]] on the left. found[a] is false
 /// when no boundary leaves both sides non-empty.

@@ -3,6 +3,7 @@
 #include <limits>
 
 #include "bvhlab/sah.h"
+#include "sah_sweep.h"
 
 namespace bvhlab {
 namespace {
@@ -137,25 +138,6 @@ SmallCut SmallBuilder::choose(const SmallNode& node) const {
     return best;
 }
 
-/// Lanes 0-2 of boxes (lo, -hi) of the three axes' j-th references, transposed so that lane a
-/// of each result belongs to axis a's order: lo.x, lo.y, lo.z, -hi.x, -hi.y, -hi.z.
-struct AxisLanes {
-    F4 c[6];
-    AxisLanes() { c[0] = c[1] = c[2] = c[3] = c[4] = c[5] = F4::splat(kInf); }
-    void grow(const F4* lo, const F4* neg_hi, const std::uint8_t i[3]) {
-        F4 t[6];
-        transpose3(lo[i[0]], lo[i[1]], lo[i[2]], lo[i[2]], t[0], t[1], t[2]);
-        transpose3(neg_hi[i[0]], neg_hi[i[1]], neg_hi[i[2]], neg_hi[i[2]], t[3], t[4], t[5]);
-        for (int k = 0; k < 6; ++k) c[k] = min(c[k], t[k]);
-    }
-    /// half_area of each lane's box, bit for bit (the same operations in the same order).
-    F4 half_areas() const {
-        const F4 zero = F4::splat(0.0f);
-        const F4 x = max(neg(c[3]) - c[0], zero), y = max(neg(c[4]) - c[1], zero), z = max(neg(c[5]) - c[2], zero);
-        return (x * y + y * z) + z * x;
-    }
-};
-
 /// The exact SAH sweep (report §2.3.2) on the three sorted orders at once, one vector lane per
 /// axis: a suffix pass of right-side areas, then a prefix pass that prices every candidate with
 /// SahCost::split's operations (bit for bit). Ties: the first candidate of an axis, then the
@@ -163,25 +145,23 @@ struct AxisLanes {
 SmallCut SmallBuilder::cheapest(const SmallNode& node, const bool allowed[3]) const {
     const std::uint32_t f = node.first, m = node.count;
     const std::uint8_t* order[3] = {set_.order[0] + f, set_.order[1] + f, set_.order[2] + f};
-    auto grow = [&](AxisLanes& box, std::uint32_t j) {
-        const std::uint8_t i[3] = {order[0][j], order[1][j], order[2][j]};
-        box.grow(set_.lo, set_.neg_hi, i);
+    auto grow = [&](AxisBoxes& box, std::uint32_t j) {
+        box.grow(set_.lo, set_.neg_hi, order[0][j], order[1][j], order[2][j]);
     };
     F4 right_area[K];  // candidate c: the right side is [c + 1, m)
-    AxisLanes box;
+    AxisBoxes box;
     for (std::uint32_t j = m - 1; j > 0; --j) grow(box, j), right_area[j - 1] = box.half_areas();
     const float inv = SahCost::inverse_area(half_area(node.lo, neg(node.neg_hi)));
-    const F4 trav = F4::splat(sah_.traversal), isect = F4::splat(sah_.intersection), inv4 = F4::splat(inv);
+    const LaneSplitCost price(sah_, inv);
     float lane_cost[3] = {kInf, kInf, kInf};
     std::uint32_t lane_cut[3] = {0, 0, 0};
-    box = AxisLanes();
+    box = AxisBoxes();
     for (std::uint32_t c = 0; c + 1 < m; ++c) {
         grow(box, c);
-        const F4 n_left = F4::splat(float(c + 1)), n_right = F4::splat(float(m - c - 1));
-        const F4 ratio = inv > 0.0f ? (box.half_areas() * n_left + right_area[c] * n_right) * inv4  // as SahCost::split
-                                    : F4::splat(float(m));
         alignas(16) float cost[4];
-        (trav + ratio * isect).store(cost);
+        price(box.half_areas(), F4::splat(float(c + 1)), right_area[c], F4::splat(float(m - c - 1)), [m] {
+            return F4::splat(float(m));
+        }).store(cost);
         for (int a = 0; a < 3; ++a)
             if (cost[a] < lane_cost[a]) lane_cost[a] = cost[a], lane_cut[a] = c;
     }
