@@ -135,7 +135,8 @@ int enter_children(const WideNode& node, const L8 origin[3], const L8 inv[3], co
     alignas(32) float entry[8], middle[8];  // middle: twice the middle, the sort key
     t0.store(entry);
     (t0 + t1).store(middle);
-    float key[8] = {middle[k]};
+    float key[8];  // of out[0 .. h), in step with it
+    key[0] = middle[k];
     k = __builtin_ctz(unsigned(mask));
     const Entry second{node.child[k], node.count[k], entry[k]};
     if (middle[k] > key[0]) out[1] = out[0], key[1] = key[0], out[0] = second, key[0] = middle[k];  // farther first
