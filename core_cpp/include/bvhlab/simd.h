@@ -48,6 +48,8 @@ inline F4 neg(F4 a) { return {_mm_xor_ps(a.v, _mm_set1_ps(-0.0f))}; }
 inline F4 less(F4 a, F4 b) { return {_mm_cmplt_ps(a.v, b.v)}; }
 inline F4 less_equal(F4 a, F4 b) { return {_mm_cmple_ps(a.v, b.v)}; }
 inline F4 operator&(F4 a, F4 b) { return {_mm_and_ps(a.v, b.v)}; }
+/// Per lane: a where the mask is set, else b (the mask's lanes all ones or all zeros).
+inline F4 select(F4 mask, F4 a, F4 b) { return {_mm_or_ps(_mm_and_ps(mask.v, a.v), _mm_andnot_ps(mask.v, b.v))}; }
 /// Bit i set when lane i of a mask is set.
 inline int lane_bits(F4 mask) { return _mm_movemask_ps(mask.v); }
 inline bool any_lane(F4 mask) { return lane_bits(mask) != 0; }
@@ -116,6 +118,13 @@ inline F4 operator&(F4 a, F4 b) {
     for (int i = 0; i < 4; ++i) x[i] &= y[i];
     F4 r;
     std::memcpy(r.v, x, sizeof(x));
+    return r;
+}
+inline F4 select(F4 mask, F4 a, F4 b) {
+    std::uint32_t m[4];
+    std::memcpy(m, mask.v, sizeof(m));
+    F4 r;
+    for (int i = 0; i < 4; ++i) r.v[i] = m[i] ? a.v[i] : b.v[i];
     return r;
 }
 inline int lane_bits(F4 mask) {

@@ -68,6 +68,7 @@ public:
         : writer_(writer),
           cfg_(cfg),
           sah_(cfg),
+          all_axes_(choose_axis(cfg, Vec3{1.0f, 1.0f, 1.0f}, Range{0, 0}, 0) == kAllAxes),
           begin_(item.range.begin),
           set_(writer.shared().buffers[item.buffer] + item.range.begin, item.range.size()) {}
 
@@ -98,6 +99,7 @@ private:
     SmallCut choose(const SmallNode& node) const;
     SmallCut cheapest(const SmallNode& node, const bool allowed[3]) const;
     SmallCut cut_at(int axis, const SmallNode& node, std::uint32_t last_left) const;
+    SmallCut cut_pair(int axis, const SmallNode& node) const;
     void divide(const SmallNode& node, const SmallCut& cut, std::uint32_t at, SmallNode children[2]);
     void make_leaf(std::uint32_t at, const SmallNode& node) {
         std::uint32_t* out = writer_.make_leaf(at, begin_ + node.first, node.count);
@@ -107,6 +109,7 @@ private:
     SubtreeWriter& writer_;
     const BuildConfig& cfg_;
     const SahCost sah_;
+    const bool all_axes_;  ///< the policy sweeps every axis at every node (choose_axis not needed per node)
     const std::uint32_t begin_;
     SmallSet set_;
 };
@@ -125,12 +128,14 @@ SmallCut SmallBuilder::choose(const SmallNode& node) const {
         best = cut_at(0, node, m / 2 - 1);  // every centroid the same: an even split
     } else if (too_deep(node.depth, m)) {
         best = cut_at(largest_axis(extent), node, m / 2 - 1);
+    } else if (m == 2) {
+        best = cut_pair(largest_axis(extent), node);  // one way to split, whatever the axis
     } else {
         const Range r{begin_ + f, begin_ + f + m};
-        const int axis = choose_axis(cfg_, extent, r, node.depth);
+        const int axis = all_axes_ ? kAllAxes : choose_axis(cfg_, extent, r, node.depth);
         bool allowed[3];
         for (int a = 0; a < 3; ++a) allowed[a] = (axis == kAllAxes || a == axis) && extent[a] > 0.0f;
-        best = m == 2 ? cut_at(largest_axis(extent), node, 0) : cheapest(node, allowed);  // 2: one way to split
+        best = cheapest(node, allowed);
         if (best.axis < 0) best = cut_at(0, node, m / 2 - 1);
     }
     // SAH leaf termination (report §5.1, PBRT): a leaf when intersecting all costs no more.
@@ -153,22 +158,34 @@ SmallCut SmallBuilder::cheapest(const SmallNode& node, const bool allowed[3]) co
     for (std::uint32_t j = m - 1; j > 0; --j) grow(box, j), right_area[j - 1] = box.half_areas();
     const float inv = SahCost::inverse_area(half_area(node.lo, neg(node.neg_hi)));
     const LaneSplitCost price(sah_, inv);
-    float lane_cost[3] = {kInf, kInf, kInf};
-    std::uint32_t lane_cut[3] = {0, 0, 0};
+    // Per lane, the cheapest so far and its left count (c + 1), kept without branches: which
+    // candidate wins is data, and a branch on it mispredicts.
+    F4 lane_cost = F4::splat(kInf), lane_left = F4::splat(1.0f);
     box = AxisBoxes();
     for (std::uint32_t c = 0; c + 1 < m; ++c) {
         grow(box, c);
-        alignas(16) float cost[4];
-        price(box.half_areas(), F4::splat(float(c + 1)), right_area[c], F4::splat(float(m - c - 1)), [m] {
-            return F4::splat(float(m));
-        }).store(cost);
-        for (int a = 0; a < 3; ++a)
-            if (cost[a] < lane_cost[a]) lane_cost[a] = cost[a], lane_cut[a] = c;
+        const F4 n_left = F4::splat(float(c + 1));
+        const F4 cost = price(box.half_areas(), n_left, right_area[c], F4::splat(float(m - c - 1)),
+                              [m] { return F4::splat(float(m)); });
+        const F4 cheaper = less(cost, lane_cost);
+        lane_cost = select(cheaper, cost, lane_cost), lane_left = select(cheaper, n_left, lane_left);
     }
+    std::uint32_t lefts[4];
+    truncate_to_u32(lane_left, lefts);
     SmallCut best;
     for (int a = 0; a < 3; ++a)
-        if (allowed[a] && lane_cost[a] < best.cost) best = {a, lane_cut[a], lane_cost[a]};
+        if (allowed[a] && lane_cost.lane(a) < best.cost) best = {a, lefts[a] - 1, lane_cost.lane(a)};
     return best;
+}
+
+/// cut_at(axis, node, 0) for a node of two references, bit for bit (min with an empty box gives
+/// the other box), without its loops: two-reference nodes are the most common kind.
+SmallCut SmallBuilder::cut_pair(int axis, const SmallNode& node) const {
+    const std::uint8_t a = set_.order[axis][node.first], b = set_.order[axis][node.first + 1];
+    const float inv = SahCost::inverse_area(half_area(node.lo, neg(node.neg_hi)));
+    const float cost =
+        sah_.split(inv, half_area(set_.lo[a], neg(set_.neg_hi[a])), 1, half_area(set_.lo[b], neg(set_.neg_hi[b])), 1);
+    return {axis, 0, cost};
 }
 
 SmallCut SmallBuilder::cut_at(int axis, const SmallNode& node, std::uint32_t last_left) const {
@@ -201,10 +218,11 @@ void SmallBuilder::divide(const SmallNode& node, const SmallCut& cut, std::uint3
         std::uint8_t* order = set_.order[a] + f;
         std::uint8_t right[K];
         std::uint32_t l = 0, r = 0;
-        for (std::uint32_t j = 0; j < m; ++j) {
+        for (std::uint32_t j = 0; j < m; ++j) {  // both stores, one cursor moves: no branch on the side
             const std::uint8_t i = order[j];
-            if (left_of[i]) order[l++] = i;
-            else right[r++] = i;
+            const std::uint32_t left = left_of[i];
+            order[l] = i, right[r] = i;
+            l += left, r += 1 - left;
         }
         for (std::uint32_t j = 0; j < r; ++j) order[l + j] = right[j];
     }
