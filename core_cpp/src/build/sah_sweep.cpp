@@ -32,7 +32,11 @@ AxisCuts cheapest_bin_cuts(const F4* box, const std::uint32_t* count, std::uint3
     }
     u = BucketUnion();
     const LaneSplitCost price(sah, inv_parent_area);
-    alignas(16) float cost[4];
+    // Per lane, the cheapest boundary with both sides non-empty, kept without branches (which
+    // boundary wins is data; a branch on it mispredicts). A boundary is only taken when cheaper
+    // than infinity, so a lane found one exactly when its cost is finite.
+    const F4 zero = F4::splat(0.0f);
+    F4 lane_cost = F4::splat(kSweepEmpty), lane_cut = zero;
     for (std::uint32_t c = 0; c + 1 < bins; ++c) {
         u.grow(box, count, bins, c);
         const auto total = [&] {
@@ -40,11 +44,16 @@ AxisCuts cheapest_bin_cuts(const F4* box, const std::uint32_t* count, std::uint3
             for (int a = 0; a < 4; ++a) n[a] = u.n[a] + right_n[c][a];
             return F4::from_counts(n);
         };
-        price(u.box.half_areas(), F4::from_counts(u.n), right_area[c], F4::from_counts(right_n[c]), total).store(cost);
-        for (int a = 0; a < 3; ++a) {
-            if (u.n[a] == 0 || right_n[c][a] == 0 || !(cost[a] < best.cost[a])) continue;
-            best.cost[a] = cost[a], best.last_left[a] = c, best.found[a] = true;
-        }
+        const F4 n_left = F4::from_counts(u.n), n_right = F4::from_counts(right_n[c]);
+        const F4 cost = price(u.box.half_areas(), n_left, right_area[c], n_right, total);
+        const F4 taken = less(cost, lane_cost) & less(zero, n_left) & less(zero, n_right);
+        lane_cost = select(taken, cost, lane_cost), lane_cut = select(taken, F4::splat(float(c)), lane_cut);
+    }
+    std::uint32_t cut[4];
+    truncate_to_u32(lane_cut, cut);
+    for (int a = 0; a < 3; ++a) {
+        best.cost[a] = lane_cost.lane(a), best.last_left[a] = cut[a];
+        best.found[a] = best.cost[a] < kSweepEmpty;
     }
     return best;
 }
