@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <cstring>
 
 #include "bvhlab/isa.h"
 
@@ -131,19 +132,63 @@ SideTarget side_target(const ChildBinning& c) {
     return t;
 }
 
-/// All bits set in the lane of `axis`, none elsewhere (to test one lane of a comparison). Made by
-/// a comparison, not loaded as floats: a NaN bit pattern need not survive a float copy.
-F4 lane_mask(int axis) {
-    float v[4] = {1.0f, 1.0f, 1.0f, 1.0f};
-    v[axis] = -1.0f;
-    return less(F4::load(v), F4::splat(0.0f));
+/// right_start() in the split axis's lane, -inf in the others: c2 < it in some lane exactly
+/// when the reference goes left (lane 3 of c2 is 0).
+F4 split_threshold(const BinFrame& f, const BinSplit& split) {
+    float v[4];
+    for (float& x : v) x = -std::numeric_limits<float>::infinity();
+    v[split.axis] = right_start(f, split);
+    return F4::load(v);
 }
 
 }  // namespace
 
+namespace {
+
+/// Floats in their order as unsigned integers (-inf ... -0, +0 ... +inf ascending), and back.
+std::uint32_t order_key(float x) {
+    std::uint32_t b;
+    std::memcpy(&b, &x, sizeof(b));
+    return b >> 31 ? ~b : b | 0x80000000u;
+}
+float from_order_key(std::uint32_t k) {
+    const std::uint32_t b = k >> 31 ? k & 0x7fffffffu : ~k;
+    float x;
+    std::memcpy(&x, &b, sizeof(x));
+    return x;
+}
+
+}  // namespace
+
+float right_start(const BinFrame& f, const BinSplit& split) {
+    const int a = split.axis;
+    // Bucket <= last_left exactly when x = (c2 - origin2) · scale < last_left + 1 (the clamp of
+    // index() changes no answer: last_left + 1 <= B - 1). x is monotone in c2 (each rounding
+    // is), so the left side is every c2 below a threshold: the first float where the test fails,
+    // found by bisection in float order. The guess origin2 + (last_left + 1) / scale is within a
+    // few ulps of it; the bracket widens until it holds the threshold.
+    const float limit = float(split.last_left) + 1.0f, origin2 = f.origin2_of[a], scale = f.scale_of[a];
+    const auto left = [&](std::uint32_t k) { return (from_order_key(k) - origin2) * scale < limit; };
+    const std::uint32_t guess = order_key(origin2 + limit / scale);
+    const std::uint32_t first = order_key(-std::numeric_limits<float>::infinity()),
+                        last = order_key(std::numeric_limits<float>::infinity());
+    std::uint32_t lo = guess, hi = guess;  // invariant after widening: left(lo), !left(hi)
+    for (std::uint32_t step = 16; !(lo == first || left(lo)); step *= 2) lo = lo - first > step ? lo - step : first;
+    for (std::uint32_t step = 16; !(hi == last || !left(hi)); step *= 2) hi = last - hi > step ? hi + step : last;
+    if (!left(lo)) return from_order_key(first);  // nothing goes left (cannot happen for a split)
+    if (left(hi)) return from_order_key(last);    // everything goes left (the same)
+    while (hi - lo > 1) {
+        const std::uint32_t mid = lo + (hi - lo) / 2;
+        (left(mid) ? lo : hi) = mid;
+    }
+    return from_order_key(hi);
+}
+
 std::uint32_t count_left(const PrimRef* src, Range r, const BinFrame& parent, const BinSplit& split) {
+    const float at = right_start(parent, split);
+    const int a = split.axis;
     std::uint32_t n = 0;
-    for (std::uint32_t i = r.begin; i < r.end; ++i) n += parent.index(src[i], split.axis) <= split.last_left ? 1u : 0u;
+    for (std::uint32_t i = r.begin; i < r.end; ++i) n += src[i].lo[a] + src[i].hi[a] < at ? 1u : 0u;
     return n;
 }
 
@@ -153,8 +198,7 @@ std::uint32_t partition_and_bin(const PrimRef* __restrict src, PrimRef* __restri
                                 std::uint32_t right, const BinFrame& parent, const BinSplit& split,
                                 const ChildBinning child[2], CentroidBounds sides[2]) {
     const SideTarget target[2] = {side_target(child[0]), side_target(child[1])};
-    const F4 axis_lane = lane_mask(split.axis), zero = F4::splat(0.0f), top = parent.top;
-    const F4 last_left = F4::splat(float(split.last_left));
+    const F4 split_at = split_threshold(parent, split), zero = F4::splat(0.0f), top = parent.top;
     // Two accumulators per side (even and odd references), so that a run of references going the
     // same way does not chain through one min.
     CentroidBounds acc[2][2];
@@ -162,10 +206,7 @@ std::uint32_t partition_and_bin(const PrimRef* __restrict src, PrimRef* __restri
     for (std::uint32_t i = r.begin; i < r.end; ++i) {
         const PrimRef& p = src[i];
         const F4 lo = p.lo4(), hi = p.hi4(), c2 = lo + hi, neg_hi = neg(hi);
-        // The parent's bucket on the split axis, as indices() computes it (clamped, truncated):
-        // bucket <= last_left exactly when trunc(x) <= last_left, i.e. x < last_left + 1.
-        const F4 x = min(max((c2 - parent.origin2) * parent.scale, zero), top);
-        const std::uint32_t l = any_lane(less(x, last_left + F4::splat(1.0f)) & axis_lane) ? 1u : 0u;
+        const std::uint32_t l = any_lane(less(c2, split_at)) ? 1u : 0u;  // the parent's bucket <= last_left
         const std::uint32_t mask = 0u - l;
         dst[((right - 1) & ~mask) | (left & mask)] = p;
         left += l;

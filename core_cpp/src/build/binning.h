@@ -101,6 +101,11 @@ struct BinSplit {
 BinSplit best_bin_split(const BinSet& bins, const BinFrame& f, int first_axis, int last_axis, const SahCost& sah,
                         float parent_area);
 
+/// Where the right side of `split` starts on its axis: the smallest twice-centroid c2 whose
+/// bucket is above split.last_left. A reference goes left exactly when its c2 on the axis is
+/// below it, so the passes compare once per reference instead of computing its bucket.
+float right_start(const BinFrame& f, const BinSplit& split);
+
 /// Twice the centroid bounds of references, as (minimum, minimum of the negated maximum).
 struct CentroidBounds {
     F4 lo = F4::splat(std::numeric_limits<float>::infinity()), neg_hi = lo;

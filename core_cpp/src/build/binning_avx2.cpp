@@ -94,10 +94,8 @@ public:
           left_(left),
           right_(right),
           axes_(parent.bins),
-          origin2_(parent.origin2.v),
-          scale_(parent.scale.v),
           top_(parent.top.v),
-          limit_(_mm_set1_ps(float(split.last_left) + 1.0f)) {  // bucket <= last_left ⟺ x < last_left + 1
+          split_at_(_mm_set1_ps(-__builtin_inff())) {
         for (int s = 0; s < 2; ++s) {
             side_[s] = {child[s].frame.origin2.v, child[s].frame.scale.v, {nullptr, nullptr}, {nullptr, nullptr}};
             for (int k = 0; k < 2 && child[s].copies; ++k) {
@@ -105,9 +103,10 @@ public:
                 side_[s].count[k] = reinterpret_cast<char*>(child[s].copies[k].count);
             }
         }
-        alignas(16) std::uint32_t lane[4] = {0, 0, 0, 0};
-        lane[split.axis] = ~0u;
-        axis_lane_ = _mm_load_ps(reinterpret_cast<const float*>(lane));
+        alignas(16) float at[4];
+        _mm_store_ps(at, split_at_);
+        at[split.axis] = right_start(parent, split);  // -inf in the other lanes: c2 < it never holds there
+        split_at_ = _mm_load_ps(at);
         for (auto& copy : acc_)
             for (auto& a : copy) _mm256_store_ps(a, _mm256_set1_ps(__builtin_inff()));
     }
@@ -119,8 +118,7 @@ public:
     void step(__m256 raw) {
         const __m256 v = _mm256_and_ps(raw, c_.xyz);
         const __m128 c2 = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
-        const __m128 x = bucket_coordinate(c2, origin2_, scale_, top_, c_.zero);
-        const bool goes_left = _mm_movemask_ps(_mm_and_ps(_mm_cmplt_ps(x, limit_), axis_lane_)) != 0;
+        const bool goes_left = _mm_movemask_ps(_mm_cmplt_ps(c2, split_at_)) != 0;  // see right_start()
         const std::uint32_t slot = goes_left ? left_ : right_ - 1;
         _mm256_storeu_ps(reinterpret_cast<float*>(dst_ + slot), raw);
         left_ += goes_left;
@@ -156,8 +154,8 @@ private:
     std::uint32_t left_, right_;
     ChildSide side_[2];
     const AxisOffsets axes_;
-    const __m128 origin2_, scale_, top_, limit_;
-    __m128 axis_lane_;
+    const __m128 top_;
+    __m128 split_at_;
     // Twice-centroid (lo, -hi) per [copy][side]: even and odd references alternate, so that a run
     // going one way does not chain through one min.
     alignas(32) float acc_[2][2][8];
