@@ -172,9 +172,10 @@ float right_start(const BinFrame& f, const BinSplit& split) {
     const std::uint32_t guess = order_key(origin2 + limit / scale);
     const std::uint32_t first = order_key(-std::numeric_limits<float>::infinity()),
                         last = order_key(std::numeric_limits<float>::infinity());
-    std::uint32_t lo = guess, hi = guess;  // invariant after widening: left(lo), !left(hi)
-    for (std::uint32_t step = 16; !(lo == first || left(lo)); step *= 2) lo = lo - first > step ? lo - step : first;
-    for (std::uint32_t step = 16; !(hi == last || !left(hi)); step *= 2) hi = last - hi > step ? hi + step : last;
+    // invariant after widening: left(lo), !left(hi)
+    std::uint32_t lo = guess - first > 2 ? guess - 2 : first, hi = last - guess > 2 ? guess + 2 : last;
+    for (std::uint32_t step = 4; !(lo == first || left(lo)); step *= 2) lo = lo - first > step ? lo - step : first;
+    for (std::uint32_t step = 4; !(hi == last || !left(hi)); step *= 2) hi = last - hi > step ? hi + step : last;
     if (!left(lo)) return from_order_key(first);  // nothing goes left (cannot happen for a split)
     if (left(hi)) return from_order_key(last);    // everything goes left (the same)
     while (hi - lo > 1) {
@@ -198,7 +199,7 @@ std::uint32_t partition_and_bin(const PrimRef* __restrict src, PrimRef* __restri
                                 std::uint32_t right, const BinFrame& parent, const BinSplit& split,
                                 const ChildBinning child[2], CentroidBounds sides[2]) {
     const SideTarget target[2] = {side_target(child[0]), side_target(child[1])};
-    const F4 split_at = split_threshold(parent, split), zero = F4::splat(0.0f), top = parent.top;
+    const F4 split_at = split_threshold(parent, split), top = parent.top;
     // Two accumulators per side (even and odd references), so that a run of references going the
     // same way does not chain through one min.
     CentroidBounds acc[2][2];
@@ -217,7 +218,8 @@ std::uint32_t partition_and_bin(const PrimRef* __restrict src, PrimRef* __restri
         }
         const SideTarget& t = target[1 - l];
         if (!t.binned) continue;
-        truncate_to_u32(min(max((c2 - t.origin2) * t.scale, zero), top), k);
+        // The child's box holds the reference's, so c2 - origin2 >= 0: only the top needs a clamp.
+        truncate_to_u32(min((c2 - t.origin2) * t.scale, top), k);
         const BinTarget& b = t.copy[i & 1];
         for (int a = 0; a < 3; ++a) {
             F4* box = b.box[a] + 2 * k[a];

@@ -76,15 +76,8 @@ void bin_refs(const PrimRef* refs, Range r, const BinFrame& f, const BinSet copi
 
 namespace {
 
-/// One child in the fused pass: its frame, and where its two copies of buckets start (axis 0;
-/// axis a lies a · stride bytes further). Null boxes: the child is not binned.
-struct ChildSide {
-    __m128 origin2, scale;
-    char* box[2];
-    char* count[2];
-};
-
 /// The fused pass over one range: its constants, set up once, and the step for one reference.
+/// The children's data are indexed by l, 1 for a reference going left and 0 for one going right.
 template <bool kCentroids>
 class FusedPass {
 public:
@@ -93,14 +86,16 @@ public:
         : dst_(dst),
           left_(left),
           right_(right),
+          axis_(std::uint32_t(split.axis)),
           axes_(parent.bins),
           top_(parent.top.v),
           split_at_(_mm_set1_ps(-__builtin_inff())) {
         for (int s = 0; s < 2; ++s) {
-            side_[s] = {child[s].frame.origin2.v, child[s].frame.scale.v, {nullptr, nullptr}, {nullptr, nullptr}};
-            for (int k = 0; k < 2 && child[s].copies; ++k) {
-                side_[s].box[k] = reinterpret_cast<char*>(child[s].copies[k].box);
-                side_[s].count[k] = reinterpret_cast<char*>(child[s].copies[k].count);
+            const int l = 1 - s;
+            frame_[l] = {child[s].frame.origin2.v, child[s].frame.scale.v};
+            for (int k = 0; k < 2; ++k) {
+                box_[k][l] = child[s].copies ? reinterpret_cast<char*>(child[s].copies[k].box) : nullptr;
+                count_[k][l] = child[s].copies ? reinterpret_cast<char*>(child[s].copies[k].count) : nullptr;
             }
         }
         alignas(16) float at[4];
@@ -118,24 +113,29 @@ public:
     void step(__m256 raw) {
         const __m256 v = _mm256_and_ps(raw, c_.xyz);
         const __m128 c2 = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
-        const bool goes_left = _mm_movemask_ps(_mm_cmplt_ps(c2, split_at_)) != 0;  // see right_start()
-        const std::uint32_t slot = goes_left ? left_ : right_ - 1;
+        // 1 when c2 is below the split's threshold on its axis (right_start()); the other lanes never are.
+        const std::uint32_t l = std::uint32_t(_mm_movemask_ps(_mm_cmplt_ps(c2, split_at_))) >> axis_;
+        const std::uint32_t slot = l ? left_ : right_ - 1;
         _mm256_storeu_ps(reinterpret_cast<float*>(dst_ + slot), raw);
-        left_ += goes_left;
-        right_ -= !goes_left;
-        const int s = goes_left ? 0 : 1;
+        left_ += l;
+        right_ += l - 1;
         if constexpr (kCentroids) {
-            float* a = acc_[kCopy][s];
+            float* a = acc_[kCopy][l];
             const __m256 cc = _mm256_insertf128_ps(_mm256_castps128_ps256(c2), _mm_xor_ps(c2, c_.sign), 1);
             _mm256_store_ps(a, _mm256_min_ps(_mm256_load_ps(a), cc));
         }
-        if (side_[s].box[kCopy]) bin<kCopy>(side_[s], c2, _mm256_xor_ps(v, c_.flip_hi));
+        if (char* box = box_[kCopy][l]) {
+            // The child's box holds the reference's, so c2 - origin2 >= 0: only the top needs a clamp.
+            const __m128 x = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(c2, frame_[l].origin2), frame_[l].scale), top_);
+            add_to_buckets(box, count_[kCopy][l], axes_, _mm_cvttps_epi32(x), _mm256_xor_ps(v, c_.flip_hi));
+        }
     }
 
     /// The left cursor after the pass; each side's twice-centroid bounds merged into sides.
     std::uint32_t finish(CentroidBounds sides[2]) const {
         for (int s = 0; s < 2 && kCentroids; ++s) {
-            const __m256 both = _mm256_min_ps(_mm256_load_ps(acc_[0][s]), _mm256_load_ps(acc_[1][s]));
+            const int l = 1 - s;
+            const __m256 both = _mm256_min_ps(_mm256_load_ps(acc_[0][l]), _mm256_load_ps(acc_[1][l]));
             sides[s].lo.v = _mm_min_ps(sides[s].lo.v, _mm256_castps256_ps128(both));
             sides[s].neg_hi.v = _mm_min_ps(sides[s].neg_hi.v, _mm256_extractf128_ps(both, 1));
         }
@@ -143,20 +143,19 @@ public:
     }
 
 private:
-    template <int kCopy>
-    void bin(const ChildSide& t, __m128 c2, __m256 box_of_ref) const {
-        const __m128i k = _mm_cvttps_epi32(bucket_coordinate(c2, t.origin2, t.scale, top_, c_.zero));
-        add_to_buckets(t.box[kCopy], t.count[kCopy], axes_, k, box_of_ref);
-    }
-
     const Kernel c_;
     PrimRef* const dst_;
     std::uint32_t left_, right_;
-    ChildSide side_[2];
+    const std::uint32_t axis_;
     const AxisOffsets axes_;
     const __m128 top_;
     __m128 split_at_;
-    // Twice-centroid (lo, -hi) per [copy][side]: even and odd references alternate, so that a run
+    struct Frame {
+        __m128 origin2, scale;
+    } frame_[2];       ///< [l]: each child's frame
+    char* box_[2][2];  ///< [copy][l]: where the child's buckets start (null: not binned)
+    char* count_[2][2];
+    // Twice-centroid (lo, -hi) per [copy][l]: even and odd references alternate, so that a run
     // going one way does not chain through one min.
     alignas(32) float acc_[2][2][8];
 };
