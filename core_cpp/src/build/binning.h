@@ -113,7 +113,9 @@ struct CentroidBounds {
     Aabb halved() const;
 };
 
-/// One child in the fused pass: its frame and two copies of its buckets (null: not binned).
+/// One child in the fused pass: its frame and two copies of its buckets (null: not binned). The
+/// frame spans a box that holds every reference of the child (its box from the parent's buckets):
+/// the pass clamps bucket coordinates only at the top.
 struct ChildBinning {
     BinFrame frame;
     const BinSet* copies = nullptr;
