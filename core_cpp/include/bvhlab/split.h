@@ -130,8 +130,10 @@ const SplitMethodInfo& method_info(SplitMethod method);
 
 /// The SAH methods build ranges of at most small_subtree_size(config) references whole, with
 /// the exact SAH (src/build/small_subtree.h), so their split functions only see larger ranges.
-/// 16 took the fewest instructions on Sponza and a 1M-triangle mesh (8: +5%, 24: +1%, 32: +2%).
-inline constexpr std::uint32_t kSmallSubtree = 16;
+/// 24 builds fastest on Sponza (55.6 ms against 57.0 at 16, 56.6 at 20, 56.5 at 28, one thread)
+/// and on the 1M-triangle meshes (room1m 241 against 252 ms, uniform1m 241 against 248 ms) since
+/// the small builder's branches were removed; at 16 before that.
+inline constexpr std::uint32_t kSmallSubtree = 24;
 /// The binned SAH over centroid bounds is the report's method (§2.3.2, Table 1): it bins every
 /// range of more than this many, as it did before the small-subtree builder, so the report's
 /// trees keep their meaning (only ties between equal costs may fall differently).
