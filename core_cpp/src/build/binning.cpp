@@ -30,38 +30,39 @@ BinFrame::BinFrame(const Aabb& box, std::uint32_t n_bins) : bins(n_bins) {
 }
 
 void BinSet::reset() const {
-    std::fill(box, box + 6 * std::size_t(bins), F4::splat(kInf));
-    std::fill(count, count + 3 * std::size_t(bins), 0u);
+    const Bucket empty{F4::splat(kInf), F4::splat(kInf), 0};
+    std::fill(bucket, bucket + 3 * std::size_t(bins), empty);
 }
 
 void BinSet::merge(const BinSet& other) const {
-    for (std::size_t i = 0; i < 6 * std::size_t(bins); ++i) box[i] = min(box[i], other.box[i]);
-    for (std::size_t i = 0; i < 3 * std::size_t(bins); ++i) count[i] += other.count[i];
+    for (std::size_t i = 0; i < 3 * std::size_t(bins); ++i) {
+        Bucket& b = bucket[i];
+        const Bucket& o = other.bucket[i];
+        b.lo = min(b.lo, o.lo), b.neg_hi = min(b.neg_hi, o.neg_hi), b.count += o.count;
+    }
 }
 
 Aabb BinSet::box_of(int axis, std::uint32_t first, std::uint32_t last) const {
     F4 lo = F4::splat(kInf), neg_hi = lo;
     for (std::uint32_t k = first; k < last; ++k) {
-        const F4* b = box + 2 * (std::size_t(axis) * bins + k);
-        lo = min(lo, b[0]), neg_hi = min(neg_hi, b[1]);
+        const Bucket& b = bucket[std::size_t(axis) * bins + k];
+        lo = min(lo, b.lo), neg_hi = min(neg_hi, b.neg_hi);
     }
     return to_aabb(lo, neg(neg_hi));
 }
 
 std::uint32_t BinSet::count_of(int axis, std::uint32_t first, std::uint32_t last) const {
     std::uint32_t n = 0;
-    for (std::uint32_t k = first; k < last; ++k) n += count[std::size_t(axis) * bins + k];
+    for (std::uint32_t k = first; k < last; ++k) n += bucket[std::size_t(axis) * bins + k].count;
     return n;
 }
 
 BinSet BinStore::slot(std::uint32_t s) {
     if (slots_.size() <= s) slots_.resize(s + 1);
-    // 6B boxes, then 3B counts in the room of ceil(3B / 4) more vectors
-    const std::size_t vectors = 6 * std::size_t(bins_) + (3 * std::size_t(bins_) + 3) / 4;
-    if (!slots_[s]) slots_[s].reset(static_cast<F4*>(std::aligned_alloc(64, (vectors * sizeof(F4) + 63) / 64 * 64)));
+    if (!slots_[s])
+        slots_[s].reset(static_cast<Bucket*>(std::aligned_alloc(alignof(Bucket), 3 * sizeof(Bucket) * bins_)));
     if (!slots_[s]) throw std::bad_alloc();
-    F4* base = slots_[s].get();
-    return {base, reinterpret_cast<std::uint32_t*>(base + 6 * std::size_t(bins_)), bins_};
+    return {slots_[s].get(), bins_};
 }
 
 #if defined(BVHLAB_AVX2_KERNELS)
@@ -98,7 +99,7 @@ BinSplit best_bin_split(const BinSet& bins, const BinFrame& f, int first_axis, i
                         float parent_area) {
     // The O(B) sweep per axis (the improvement over the report's O(n + B²), §2.3.2).
     BinSplit best;
-    const AxisCuts cuts = cheapest_bin_cuts(bins.box, bins.count, bins.bins, sah, SahCost::inverse_area(parent_area));
+    const AxisCuts cuts = cheapest_bin_cuts(bins.bucket, bins.bins, sah, SahCost::inverse_area(parent_area));
     for (int a = first_axis; a <= last_axis; ++a)
         if (f.binned[a] && cuts.found[a] && cuts.cost[a] < best.cost) best = {cuts.cost[a], a, cuts.last_left[a]};
     return best;
@@ -113,8 +114,7 @@ namespace {
 
 /// One copy of one child's buckets, as base pointers per axis.
 struct BinTarget {
-    F4* box[3];
-    std::uint32_t* count[3];
+    Bucket* axis[3];
 };
 /// What the fused pass needs of one side: the child's frame and its two bucket copies.
 struct SideTarget {
@@ -126,9 +126,7 @@ struct SideTarget {
 SideTarget side_target(const ChildBinning& c) {
     SideTarget t{c.frame.origin2, c.frame.scale, {}, c.copies != nullptr};
     for (int k = 0; k < 2 && t.binned; ++k)
-        for (int a = 0; a < 3; ++a)
-            t.copy[k].box[a] = c.copies[k].box + 2 * std::size_t(a) * c.copies[k].bins,
-            t.copy[k].count[a] = c.copies[k].count + std::size_t(a) * c.copies[k].bins;
+        for (int a = 0; a < 3; ++a) t.copy[k].axis[a] = c.copies[k].bucket + std::size_t(a) * c.copies[k].bins;
     return t;
 }
 
@@ -222,9 +220,8 @@ std::uint32_t partition_and_bin(const PrimRef* __restrict src, PrimRef* __restri
         truncate_to_u32(min((c2 - t.origin2) * t.scale, top), k);
         const BinTarget& b = t.copy[i & 1];
         for (int a = 0; a < 3; ++a) {
-            F4* box = b.box[a] + 2 * k[a];
-            box[0] = min(box[0], lo), box[1] = min(box[1], neg_hi);
-            ++b.count[a][k[a]];
+            Bucket& bucket = b.axis[a][k[a]];
+            bucket.lo = min(bucket.lo, lo), bucket.neg_hi = min(bucket.neg_hi, neg_hi), ++bucket.count;
         }
     }
     for (int s = 0; s < 2 && sides; ++s) sides[s].merge(acc[0][s]), sides[s].merge(acc[1][s]);

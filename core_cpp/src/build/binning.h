@@ -7,6 +7,7 @@
 // then their frames; on Crytek Sponza the trees are as good or better (SAH 70.4 vs 72.6 at 12
 // buckets, 8 per leaf, all axes).
 #pragma once
+#include <cstddef>
 #include <cstdint>
 #include <cstdlib>
 #include <limits>
@@ -45,20 +46,25 @@ struct BinFrame {
     }
 };
 
-/// The buckets of the three axes of one node (a view into a BinStore slot): per bucket the box
-/// of its references as (minimum, minimum of the negated maximum), so that one `min` grows both,
-/// and their count.
+/// One bucket of one axis: the box of its references as (lo, -hi), so that one `min` grows
+/// both, and their count, in one 64-byte line (the fused pass reaches both from one address).
+struct alignas(64) Bucket {
+    F4 lo, neg_hi;
+    std::uint32_t count;
+};
+static_assert(sizeof(Bucket) == 64 && offsetof(Bucket, neg_hi) == 16 && offsetof(Bucket, count) == 32,
+              "binning_avx2.cpp reads the box as 32 bytes at 0 and the count at 32");
+
+/// The buckets of the three axes of one node (a view into a BinStore slot).
 struct BinSet {
-    F4* box = nullptr;               ///< [2 (a B + k)] = lo, [2 (a B + k) + 1] = -hi
-    std::uint32_t* count = nullptr;  ///< [a B + k]
+    Bucket* bucket = nullptr;  ///< [a B + k]: bucket k of axis a
     std::uint32_t bins = 0;
 
     void reset() const;
     void merge(const BinSet& other) const;
     void add(int axis, std::uint32_t k, F4 lo, F4 neg_hi) const {
-        F4* b = box + 2 * (std::size_t(axis) * bins + k);
-        b[0] = min(b[0], lo), b[1] = min(b[1], neg_hi);
-        ++count[std::size_t(axis) * bins + k];
+        Bucket& b = bucket[std::size_t(axis) * bins + k];
+        b.lo = min(b.lo, lo), b.neg_hi = min(b.neg_hi, neg_hi), ++b.count;
     }
     /// The union of buckets [first, last) of `axis`, and how many references they hold.
     Aabb box_of(int axis, std::uint32_t first, std::uint32_t last) const;
@@ -74,10 +80,10 @@ public:
 
 private:
     struct Free {
-        void operator()(F4* p) const { std::free(p); }
+        void operator()(Bucket* p) const { std::free(p); }
     };
     std::uint32_t bins_;
-    std::vector<std::unique_ptr<F4, Free>> slots_;  ///< 64-byte aligned
+    std::vector<std::unique_ptr<Bucket, Free>> slots_;  ///< 3B buckets each
 };
 
 /// Slots of a BinStore: below kStackSlots, the buckets of the work item at that stack position;

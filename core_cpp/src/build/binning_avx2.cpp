@@ -33,29 +33,23 @@ std::size_t offset(__m128i v, Lane<kLane>) {
     return std::uint32_t(_mm_extract_epi32(v, kLane));
 }
 
-/// Where axis a's buckets lie in a copy of B buckets per axis: boxes at a · 32 B bytes, counts
-/// at a · 4 B bytes (lane a), so that one shift and one add give a reference's three offsets.
+/// Where axis a's buckets lie in a copy of B buckets per axis (lane a: a · 64 B bytes), so that
+/// one shift and one add give a reference's three bucket offsets (binning.h Bucket: 64 bytes).
 struct AxisOffsets {
-    __m128i box, count;
-    explicit AxisOffsets(std::uint32_t bins)
-        : box(_mm_setr_epi32(0, 32 * int(bins), 64 * int(bins), 0)),
-          count(_mm_setr_epi32(0, 4 * int(bins), 8 * int(bins), 0)) {}
+    __m128i bucket;
+    explicit AxisOffsets(std::uint32_t bins) : bucket(_mm_setr_epi32(0, 64 * int(bins), 128 * int(bins), 0)) {}
 };
 
 /// Adds a reference, (lo, -hi) box and bucket indices k on the three axes, to one copy of
-/// buckets whose boxes start at `box` and counts at `count`.
-inline void add_to_buckets(char* box, char* count, const AxisOffsets& axes, __m128i k, __m256 box_of_ref) {
-    const __m128i kb = _mm_add_epi32(_mm_slli_epi32(k, 5), axes.box);
-    const __m128i kc = _mm_add_epi32(_mm_slli_epi32(k, 2), axes.count);
-    float* b0 = reinterpret_cast<float*>(box + offset(kb, Lane<0>()));
-    float* b1 = reinterpret_cast<float*>(box + offset(kb, Lane<1>()));
-    float* b2 = reinterpret_cast<float*>(box + offset(kb, Lane<2>()));
-    _mm256_store_ps(b0, _mm256_min_ps(_mm256_load_ps(b0), box_of_ref));
-    _mm256_store_ps(b1, _mm256_min_ps(_mm256_load_ps(b1), box_of_ref));
-    _mm256_store_ps(b2, _mm256_min_ps(_mm256_load_ps(b2), box_of_ref));
-    ++*reinterpret_cast<std::uint32_t*>(count + offset(kc, Lane<0>()));
-    ++*reinterpret_cast<std::uint32_t*>(count + offset(kc, Lane<1>()));
-    ++*reinterpret_cast<std::uint32_t*>(count + offset(kc, Lane<2>()));
+/// buckets starting at `base`: the box is the bucket's first 32 bytes, its count the next 4.
+inline void add_to_buckets(char* base, const AxisOffsets& axes, __m128i k, __m256 box_of_ref) {
+    const __m128i at = _mm_add_epi32(_mm_slli_epi32(k, 6), axes.bucket);
+    char* b[3] = {base + offset(at, Lane<0>()), base + offset(at, Lane<1>()), base + offset(at, Lane<2>())};
+    for (char* p : b) {
+        float* box = reinterpret_cast<float*>(p);
+        _mm256_store_ps(box, _mm256_min_ps(_mm256_load_ps(box), box_of_ref));
+        ++*reinterpret_cast<std::uint32_t*>(p + 32);
+    }
 }
 
 }  // namespace
@@ -63,14 +57,13 @@ inline void add_to_buckets(char* box, char* count, const AxisOffsets& axes, __m1
 void bin_refs(const PrimRef* refs, Range r, const BinFrame& f, const BinSet copies[2]) {
     const Kernel c;
     const AxisOffsets axes(f.bins);
-    char* const box[2] = {reinterpret_cast<char*>(copies[0].box), reinterpret_cast<char*>(copies[1].box)};
-    char* const count[2] = {reinterpret_cast<char*>(copies[0].count), reinterpret_cast<char*>(copies[1].count)};
+    char* const base[2] = {reinterpret_cast<char*>(copies[0].bucket), reinterpret_cast<char*>(copies[1].bucket)};
     const __m128 origin2 = f.origin2.v, scale = f.scale.v, top = f.top.v;
     for (std::uint32_t i = r.begin; i < r.end; ++i) {
         const __m256 v = _mm256_and_ps(_mm256_loadu_ps(reinterpret_cast<const float*>(refs + i)), c.xyz);
         const __m128 c2 = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
         const __m128i k = _mm_cvttps_epi32(bucket_coordinate(c2, origin2, scale, top, c.zero));
-        add_to_buckets(box[i & 1], count[i & 1], axes, k, _mm256_xor_ps(v, c.flip_hi));
+        add_to_buckets(base[i & 1], axes, k, _mm256_xor_ps(v, c.flip_hi));
     }
 }
 
@@ -93,10 +86,8 @@ public:
         for (int s = 0; s < 2; ++s) {
             const int l = 1 - s;
             frame_[l] = {child[s].frame.origin2.v, child[s].frame.scale.v};
-            for (int k = 0; k < 2; ++k) {
-                box_[k][l] = child[s].copies ? reinterpret_cast<char*>(child[s].copies[k].box) : nullptr;
-                count_[k][l] = child[s].copies ? reinterpret_cast<char*>(child[s].copies[k].count) : nullptr;
-            }
+            for (int k = 0; k < 2; ++k)
+                bucket_[k][l] = child[s].copies ? reinterpret_cast<char*>(child[s].copies[k].bucket) : nullptr;
         }
         alignas(16) float at[4];
         _mm_store_ps(at, split_at_);
@@ -124,10 +115,10 @@ public:
             const __m256 cc = _mm256_insertf128_ps(_mm256_castps128_ps256(c2), _mm_xor_ps(c2, c_.sign), 1);
             _mm256_store_ps(a, _mm256_min_ps(_mm256_load_ps(a), cc));
         }
-        if (char* box = box_[kCopy][l]) {
+        if (char* base = bucket_[kCopy][l]) {
             // The child's box holds the reference's, so c2 - origin2 >= 0: only the top needs a clamp.
             const __m128 x = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(c2, frame_[l].origin2), frame_[l].scale), top_);
-            add_to_buckets(box, count_[kCopy][l], axes_, _mm_cvttps_epi32(x), _mm256_xor_ps(v, c_.flip_hi));
+            add_to_buckets(base, axes_, _mm_cvttps_epi32(x), _mm256_xor_ps(v, c_.flip_hi));
         }
     }
 
@@ -152,9 +143,8 @@ private:
     __m128 split_at_;
     struct Frame {
         __m128 origin2, scale;
-    } frame_[2];       ///< [l]: each child's frame
-    char* box_[2][2];  ///< [copy][l]: where the child's buckets start (null: not binned)
-    char* count_[2][2];
+    } frame_[2];          ///< [l]: each child's frame
+    char* bucket_[2][2];  ///< [copy][l]: where the child's buckets start (null: not binned)
     // Twice-centroid (lo, -hi) per [copy][l]: even and odd references alternate, so that a run
     // going one way does not chain through one min.
     alignas(32) float acc_[2][2][8];

@@ -1,5 +1,7 @@
 #include "sah_sweep.h"
 
+#include "binning.h"
+
 #include "bvhlab/build_config.h"
 
 namespace bvhlab {
@@ -10,23 +12,23 @@ struct BucketUnion {
     AxisBoxes box;
     std::uint32_t n[4] = {0, 0, 0, 0};
 
-    void grow(const F4* bucket, const std::uint32_t* count, std::uint32_t bins, std::uint32_t j) {
-        const std::size_t i = 2 * std::size_t(j), axis = 2 * std::size_t(bins);  // bucket j of axes 0, 1, 2
-        box.grow(bucket, bucket + 1, i, i + axis, i + 2 * axis);
-        for (int a = 0; a < 3; ++a) n[a] += count[std::size_t(a) * bins + j];
+    void grow(const Bucket* bucket, std::uint32_t bins, std::uint32_t j) {
+        const Bucket &x = bucket[j], &y = bucket[bins + j],
+                     &z = bucket[2 * std::size_t(bins) + j];  // bucket j of each axis
+        box.grow(x.lo, x.neg_hi, y.lo, y.neg_hi, z.lo, z.neg_hi);
+        n[0] += x.count, n[1] += y.count, n[2] += z.count;
     }
 };
 
 }  // namespace
 
-AxisCuts cheapest_bin_cuts(const F4* box, const std::uint32_t* count, std::uint32_t bins, const SahCost& sah,
-                           float inv_parent_area) {
+AxisCuts cheapest_bin_cuts(const Bucket* bucket, std::uint32_t bins, const SahCost& sah, float inv_parent_area) {
     AxisCuts best;
     F4 right_area[kMaxBins];  // candidate c: the right side is buckets [c + 1, bins)
     std::uint32_t right_n[kMaxBins][4];
     BucketUnion u;
     for (std::uint32_t j = bins - 1; j > 0; --j) {
-        u.grow(box, count, bins, j);
+        u.grow(bucket, bins, j);
         right_area[j - 1] = u.box.half_areas();
         for (int a = 0; a < 4; ++a) right_n[j - 1][a] = u.n[a];
     }
@@ -38,7 +40,7 @@ AxisCuts cheapest_bin_cuts(const F4* box, const std::uint32_t* count, std::uint3
     const F4 zero = F4::splat(0.0f);
     F4 lane_cost = F4::splat(kSweepEmpty), lane_cut = zero;
     for (std::uint32_t c = 0; c + 1 < bins; ++c) {
-        u.grow(box, count, bins, c);
+        u.grow(bucket, bins, c);
         const auto total = [&] {
             std::uint32_t n[4];
             for (int a = 0; a < 4; ++a) n[a] = u.n[a] + right_n[c][a];

@@ -19,12 +19,12 @@ struct AxisBoxes {
     F4 lo[3] = {F4::splat(kSweepEmpty), F4::splat(kSweepEmpty), F4::splat(kSweepEmpty)};
     F4 neg_hi[3] = {F4::splat(kSweepEmpty), F4::splat(kSweepEmpty), F4::splat(kSweepEmpty)};
 
-    /// Lane a grows by the box (lo[i_a], neg_hi[i_a]) of axis a.
-    void grow(const F4* lo_of, const F4* neg_hi_of, std::size_t i_0, std::size_t i_1, std::size_t i_2) {
+    /// Lane a grows by the box (lo_a, neg_hi_a) of axis a.
+    void grow(F4 lo_0, F4 neg_hi_0, F4 lo_1, F4 neg_hi_1, F4 lo_2, F4 neg_hi_2) {
         F4 t[3];
-        transpose3(lo_of[i_0], lo_of[i_1], lo_of[i_2], lo_of[i_2], t[0], t[1], t[2]);
+        transpose3(lo_0, lo_1, lo_2, lo_2, t[0], t[1], t[2]);
         for (int c = 0; c < 3; ++c) lo[c] = min(lo[c], t[c]);
-        transpose3(neg_hi_of[i_0], neg_hi_of[i_1], neg_hi_of[i_2], neg_hi_of[i_2], t[0], t[1], t[2]);
+        transpose3(neg_hi_0, neg_hi_1, neg_hi_2, neg_hi_2, t[0], t[1], t[2]);
         for (int c = 0; c < 3; ++c) neg_hi[c] = min(neg_hi[c], t[c]);
     }
     /// half_area of each lane's box, bit for bit (its operations in its order).
@@ -67,11 +67,11 @@ struct AxisCuts {
     bool found[3] = {false, false, false};
 };
 
-/// The buckets of BinSet's layout: bucket k of axis a is box[2 (a B + k)] = lo and
-/// box[2 (a B + k) + 1] = -hi, with count[a B + k] references; B = bins (2..kMaxBins).
-/// Every boundary is a candidate; a strictly cheaper one replaces the best so far, so ties go to
-/// the first. Costs are SahCost::split's, bit for bit.
-AxisCuts cheapest_bin_cuts(const F4* box, const std::uint32_t* count, std::uint32_t bins, const SahCost& sah,
-                           float inv_parent_area);
+struct Bucket;  // binning.h
+
+/// The B = bins buckets of each axis, bucket k of axis a at bucket[a B + k] (BinSet's layout),
+/// B in 2..kMaxBins. Every boundary is a candidate; a strictly cheaper one replaces the best so
+/// far, so ties go to the first. Costs are SahCost::split's, bit for bit.
+AxisCuts cheapest_bin_cuts(const Bucket* bucket, std::uint32_t bins, const SahCost& sah, float inv_parent_area);
 
 }  // namespace bvhlab

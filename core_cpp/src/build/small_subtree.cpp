@@ -151,7 +151,8 @@ SmallCut SmallBuilder::cheapest(const SmallNode& node, const bool allowed[3]) co
     const std::uint32_t f = node.first, m = node.count;
     const std::uint8_t* order[3] = {set_.order[0] + f, set_.order[1] + f, set_.order[2] + f};
     auto grow = [&](AxisBoxes& box, std::uint32_t j) {
-        box.grow(set_.lo, set_.neg_hi, order[0][j], order[1][j], order[2][j]);
+        const std::uint8_t x = order[0][j], y = order[1][j], z = order[2][j];
+        box.grow(set_.lo[x], set_.neg_hi[x], set_.lo[y], set_.neg_hi[y], set_.lo[z], set_.neg_hi[z]);
     };
     F4 right_area[K];  // candidate c: the right side is [c + 1, m)
     AxisBoxes box;
