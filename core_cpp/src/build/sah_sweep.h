@@ -13,25 +13,26 @@ namespace bvhlab {
 
 inline constexpr float kSweepEmpty = std::numeric_limits<float>::infinity();
 
-/// The boxes of the three axes' sweeps at once, lane a holding axis a's (lanes x, y, z of each
-/// box transposed so that lanes are axes): (lo, -hi) per coordinate, grown by one box per axis.
+/// The boxes of the three axes' sweeps at once: box a, (lo[a], neg_hi[a]) in lanes x, y, z, is
+/// axis a's. Growing is two `min`s per axis; half_areas() transposes only the three extents, so
+/// that lane a of the areas is axis a's.
 struct AxisBoxes {
     F4 lo[3] = {F4::splat(kSweepEmpty), F4::splat(kSweepEmpty), F4::splat(kSweepEmpty)};
     F4 neg_hi[3] = {F4::splat(kSweepEmpty), F4::splat(kSweepEmpty), F4::splat(kSweepEmpty)};
 
-    /// Lane a grows by the box (lo_a, neg_hi_a) of axis a.
+    /// Box a grows by (lo_a, neg_hi_a).
     void grow(F4 lo_0, F4 neg_hi_0, F4 lo_1, F4 neg_hi_1, F4 lo_2, F4 neg_hi_2) {
-        F4 t[3];
-        transpose3(lo_0, lo_1, lo_2, lo_2, t[0], t[1], t[2]);
-        for (int c = 0; c < 3; ++c) lo[c] = min(lo[c], t[c]);
-        transpose3(neg_hi_0, neg_hi_1, neg_hi_2, neg_hi_2, t[0], t[1], t[2]);
-        for (int c = 0; c < 3; ++c) neg_hi[c] = min(neg_hi[c], t[c]);
+        lo[0] = min(lo[0], lo_0), neg_hi[0] = min(neg_hi[0], neg_hi_0);
+        lo[1] = min(lo[1], lo_1), neg_hi[1] = min(neg_hi[1], neg_hi_1);
+        lo[2] = min(lo[2], lo_2), neg_hi[2] = min(neg_hi[2], neg_hi_2);
     }
-    /// half_area of each lane's box, bit for bit (its operations in its order).
+    /// half_area of each box, in lane a for box a, bit for bit (its operations in its order; the
+    /// transpose only moves the extents).
     F4 half_areas() const {
         const F4 zero = F4::splat(0.0f);
-        const F4 x = max(neg(neg_hi[0]) - lo[0], zero), y = max(neg(neg_hi[1]) - lo[1], zero),
-                 z = max(neg(neg_hi[2]) - lo[2], zero);
+        F4 x, y, z;
+        transpose3(max(neg(neg_hi[0]) - lo[0], zero), max(neg(neg_hi[1]) - lo[1], zero),
+                   max(neg(neg_hi[2]) - lo[2], zero), zero, x, y, z);
         return (x * y + y * z) + z * x;
     }
 };
