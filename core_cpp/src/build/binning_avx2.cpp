@@ -77,8 +77,8 @@ public:
     FusedPass(PrimRef* dst, std::uint32_t left, std::uint32_t right, const BinFrame& parent, const BinSplit& split,
               const ChildBinning child[2])
         : dst_(dst),
-          left_(left),
-          right_(right),
+          left_(dst + left),
+          right_(dst + right),
           axis_(std::uint32_t(split.axis)),
           axes_(parent.bins),
           top_(parent.top.v),
@@ -106,10 +106,10 @@ public:
         const __m128 c2 = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
         // 1 when c2 is below the split's threshold on its axis (right_start()); the other lanes never are.
         const std::uint32_t l = std::uint32_t(_mm_movemask_ps(_mm_cmplt_ps(c2, split_at_))) >> axis_;
-        const std::uint32_t slot = l ? left_ : right_ - 1;
-        _mm256_storeu_ps(reinterpret_cast<float*>(dst_ + slot), raw);
+        PrimRef* const slot = l ? left_ : right_ - 1;
+        _mm256_storeu_ps(reinterpret_cast<float*>(slot), raw);
         left_ += l;
-        right_ += l - 1;
+        right_ -= 1 - l;
         if constexpr (kCentroids) {
             float* a = acc_[kCopy][l];
             const __m256 cc = _mm256_insertf128_ps(_mm256_castps128_ps256(c2), _mm_xor_ps(c2, c_.sign), 1);
@@ -130,13 +130,13 @@ public:
             sides[s].lo.v = _mm_min_ps(sides[s].lo.v, _mm256_castps256_ps128(both));
             sides[s].neg_hi.v = _mm_min_ps(sides[s].neg_hi.v, _mm256_extractf128_ps(both, 1));
         }
-        return left_;
+        return std::uint32_t(left_ - dst_);
     }
 
 private:
     const Kernel c_;
     PrimRef* const dst_;
-    std::uint32_t left_, right_;
+    PrimRef *left_, *right_;  ///< the next left slot, one past the next right slot
     const std::uint32_t axis_;
     const AxisOffsets axes_;
     const __m128 top_;
@@ -155,13 +155,13 @@ std::uint32_t partition_and_bin_impl(const PrimRef* __restrict src, PrimRef* __r
                                      std::uint32_t left, std::uint32_t right, const BinFrame& parent,
                                      const BinSplit& split, const ChildBinning child[2], CentroidBounds sides[2]) {
     FusedPass<kCentroids> pass(dst, left, right, parent, split, child);
-    auto load = [src](std::uint32_t i) { return _mm256_loadu_ps(reinterpret_cast<const float*>(src + i)); };
+    auto load = [](const PrimRef* p) { return _mm256_loadu_ps(reinterpret_cast<const float*>(p)); };
     // Reference i uses copy i & 1 of the buckets (consecutive references do not wait on each
     // other's stores); the loop runs in pairs so that the copy is a constant.
-    std::uint32_t i = r.begin;
-    if (i < r.end && (i & 1)) pass.template step<1>(load(i++));
-    for (; i + 1 < r.end; i += 2) pass.template step<0>(load(i)), pass.template step<1>(load(i + 1));
-    if (i < r.end) pass.template step<0>(load(i));
+    const PrimRef *p = src + r.begin, *const end = src + r.end;
+    if (p < end && (r.begin & 1)) pass.template step<1>(load(p++));
+    for (; end - p >= 2; p += 2) pass.template step<0>(load(p)), pass.template step<1>(load(p + 1));
+    if (p < end) pass.template step<0>(load(p));
     return pass.finish(sides);
 }
 
