@@ -109,7 +109,9 @@ private:
     SubtreeWriter& writer_;
     const BuildConfig& cfg_;
     const SahCost sah_;
-    const bool all_axes_;  ///< the policy sweeps every axis at every node (choose_axis not needed per node)
+    /// The policy sweeps every axis at every node (Best, and Auto for the SAH methods: choose_axis
+    /// gives kAllAxes whatever the node), so choose_axis need not be asked per node.
+    const bool all_axes_;
     const std::uint32_t begin_;
     SmallSet set_;
 };
