@@ -15,11 +15,7 @@ using namespace bvhlab;
 namespace {
 
 /// Whether a reference with twice-centroid c2 on `axis` goes left, by its bucket.
-bool left_by_bucket(const BinFrame& f, const BinSplit& s, float c2) {
-    PrimRef p{};
-    p.lo[s.axis] = c2, p.hi[s.axis] = 0.0f;  // lo + hi = c2 exactly
-    return f.index(p, s.axis) <= s.last_left;
-}
+bool left_by_bucket(const BinFrame& f, const BinSplit& s, float c2) { return f.index(c2, s.axis) <= s.last_left; }
 
 void check_frame(const Aabb& box, std::uint32_t bins, int axis, std::mt19937& rng) {
     const BinFrame f(box, bins);

@@ -130,19 +130,6 @@ SideTarget side_target(const ChildBinning& c) {
     return t;
 }
 
-/// right_start() in the split axis's lane, -inf in the others: c2 < it in some lane exactly
-/// when the reference goes left (lane 3 of c2 is 0).
-F4 split_threshold(const BinFrame& f, const BinSplit& split) {
-    float v[4];
-    for (float& x : v) x = -std::numeric_limits<float>::infinity();
-    v[split.axis] = right_start(f, split);
-    return F4::load(v);
-}
-
-}  // namespace
-
-namespace {
-
 /// Floats in their order as unsigned integers (-inf ... -0, +0 ... +inf ascending), and back.
 std::uint32_t order_key(float x) {
     std::uint32_t b;
@@ -160,14 +147,12 @@ float from_order_key(std::uint32_t k) {
 
 float right_start(const BinFrame& f, const BinSplit& split) {
     const int a = split.axis;
-    // Bucket <= last_left exactly when x = (c2 - origin2) · scale < last_left + 1 (the clamp of
-    // index() changes no answer: last_left + 1 <= B - 1). x is monotone in c2 (each rounding
-    // is), so the left side is every c2 below a threshold: the first float where the test fails,
-    // found by bisection in float order. The guess origin2 + (last_left + 1) / scale is within a
-    // few ulps of it; the bracket widens until it holds the threshold.
-    const float limit = float(split.last_left) + 1.0f, origin2 = f.origin2_of[a], scale = f.scale_of[a];
-    const auto left = [&](std::uint32_t k) { return (from_order_key(k) - origin2) * scale < limit; };
-    const std::uint32_t guess = order_key(origin2 + limit / scale);
+    // index() is monotone in c2 (each rounding and the clamp are), so the left side is every c2
+    // below a threshold: the first float whose bucket is above last_left, found by bisection in
+    // float order. The guess, where the unrounded bucket coordinate reaches last_left + 1, is
+    // within a few floats of it; the bracket widens until it holds the threshold.
+    const auto left = [&](std::uint32_t k) { return f.index(from_order_key(k), a) <= split.last_left; };
+    const std::uint32_t guess = order_key(f.origin2_of[a] + (float(split.last_left) + 1.0f) / f.scale_of[a]);
     const std::uint32_t first = order_key(-std::numeric_limits<float>::infinity()),
                         last = order_key(std::numeric_limits<float>::infinity());
     // invariant after widening: left(lo), !left(hi)
@@ -183,11 +168,18 @@ float right_start(const BinFrame& f, const BinSplit& split) {
     return from_order_key(hi);
 }
 
+F4 split_threshold(const BinFrame& f, const BinSplit& split) {
+    float v[4];
+    for (float& x : v) x = -std::numeric_limits<float>::infinity();
+    v[split.axis] = right_start(f, split);
+    return F4::load(v);
+}
+
 std::uint32_t count_left(const PrimRef* src, Range r, const BinFrame& parent, const BinSplit& split) {
-    const float at = right_start(parent, split);
-    const int a = split.axis;
+    const F4 split_at = split_threshold(parent, split);
     std::uint32_t n = 0;
-    for (std::uint32_t i = r.begin; i < r.end; ++i) n += src[i].lo[a] + src[i].hi[a] < at ? 1u : 0u;
+    for (std::uint32_t i = r.begin; i < r.end; ++i)
+        n += any_lane(less(src[i].lo4() + src[i].hi4(), split_at)) ? 1u : 0u;
     return n;
 }
 

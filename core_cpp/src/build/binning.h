@@ -19,8 +19,9 @@
 namespace bvhlab {
 
 /// Where the buckets of one node lie: bucket k of an axis holds the references whose twice-
-/// centroid c2 has k = trunc((c2 - origin2) · scale), clamped to [0, B - 1]. Binning and
-/// partitioning both use indices()/index(), so they agree on every reference.
+/// centroid c2 has k = trunc((c2 - origin2) · scale), clamped to [0, B - 1]. Binning uses
+/// indices(); the passes that split a node send a reference left by split_threshold(), whose
+/// threshold is found with index(), so all agree on every reference.
 struct BinFrame {
     F4 origin2;  ///< twice the box minimum (lane 3: 0)
     F4 scale;    ///< B / (2 · box extent) per axis; 0 for a flat axis
@@ -38,9 +39,9 @@ struct BinFrame {
         F4 x = (c2 - origin2) * scale;
         truncate_to_u32(min(max(x, F4::splat(0.0f)), top), out);
     }
-    /// The bucket of one reference on one axis: the scalar twin of indices().
-    std::uint32_t index(const PrimRef& p, int axis) const {
-        float x = (p.lo[axis] + p.hi[axis] - origin2_of[axis]) * scale_of[axis];
+    /// The bucket of twice-centroid c2 on one axis: the scalar twin of indices().
+    std::uint32_t index(float c2, int axis) const {
+        float x = (c2 - origin2_of[axis]) * scale_of[axis];
         x = x > 0.0f ? x : 0.0f;  // max(x, 0) in indices(): NaN → 0
         return static_cast<std::uint32_t>(x < top_of ? x : top_of);
     }
@@ -111,6 +112,9 @@ BinSplit best_bin_split(const BinSet& bins, const BinFrame& f, int first_axis, i
 /// bucket is above split.last_left. A reference goes left exactly when its c2 on the axis is
 /// below it, so the passes compare once per reference instead of computing its bucket.
 float right_start(const BinFrame& f, const BinSplit& split);
+/// right_start() in the split axis's lane, -inf in the others: a reference goes left exactly
+/// when any lane of its twice-centroid (lane 3: 0) is below it.
+F4 split_threshold(const BinFrame& f, const BinSplit& split);
 
 /// Twice the centroid bounds of references, as (minimum, minimum of the negated maximum).
 struct CentroidBounds {

@@ -82,17 +82,13 @@ public:
           axis_(std::uint32_t(split.axis)),
           axes_(parent.bins),
           top_(parent.top.v),
-          split_at_(_mm_set1_ps(-__builtin_inff())) {
+          split_at_(split_threshold(parent, split).v) {
         for (int s = 0; s < 2; ++s) {
             const int l = 1 - s;
             frame_[l] = {child[s].frame.origin2.v, child[s].frame.scale.v};
             for (int k = 0; k < 2; ++k)
                 bucket_[k][l] = child[s].copies ? reinterpret_cast<char*>(child[s].copies[k].bucket) : nullptr;
         }
-        alignas(16) float at[4];
-        _mm_store_ps(at, split_at_);
-        at[split.axis] = right_start(parent, split);  // -inf in the other lanes: c2 < it never holds there
-        split_at_ = _mm_load_ps(at);
         for (auto& copy : acc_)
             for (auto& a : copy) _mm256_store_ps(a, _mm256_set1_ps(__builtin_inff()));
     }
@@ -104,7 +100,7 @@ public:
     void step(__m256 raw) {
         const __m256 v = _mm256_and_ps(raw, c_.xyz);
         const __m128 c2 = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
-        // 1 when c2 is below the split's threshold on its axis (right_start()); the other lanes never are.
+        // 1 when c2 is below the split's threshold on its axis (split_threshold(): the other lanes never are).
         const std::uint32_t l = std::uint32_t(_mm_movemask_ps(_mm_cmplt_ps(c2, split_at_))) >> axis_;
         PrimRef* const slot = l ? left_ : right_ - 1;
         _mm256_storeu_ps(reinterpret_cast<float*>(slot), raw);
@@ -140,7 +136,7 @@ private:
     const std::uint32_t axis_;
     const AxisOffsets axes_;
     const __m128 top_;
-    __m128 split_at_;
+    const __m128 split_at_;
     struct Frame {
         __m128 origin2, scale;
     } frame_[2];          ///< [l]: each child's frame
