@@ -101,7 +101,7 @@ BinSplit best_bin_split(const BinSet& bins, const BinFrame& f, int first_axis, i
     BinSplit best;
     const AxisCuts cuts = cheapest_bin_cuts(bins.bucket, bins.bins, sah, SahCost::inverse_area(parent_area));
     for (int a = first_axis; a <= last_axis; ++a)
-        if (f.binned[a] && cuts.found[a] && cuts.cost[a] < best.cost) best = {cuts.cost[a], a, cuts.last_left[a]};
+        if (f.binned[a] && cuts.cost[a] < best.cost) best = {cuts.cost[a], a, cuts.last_left[a]};  // finite: found
     return best;
 }
 

@@ -34,11 +34,8 @@ AxisCuts cheapest_bin_cuts(const Bucket* bucket, std::uint32_t bins, const SahCo
     }
     u = BucketUnion();
     const LaneSplitCost price(sah, inv_parent_area);
-    // Per lane, the cheapest boundary with both sides non-empty, kept without branches (which
-    // boundary wins is data; a branch on it mispredicts). A boundary is only taken when cheaper
-    // than infinity, so a lane found one exactly when its cost is finite.
     const F4 zero = F4::splat(0.0f);
-    F4 lane_cost = F4::splat(kSweepEmpty), lane_cut = zero;
+    LaneMin cheapest;  // per lane, among boundaries with both sides non-empty
     for (std::uint32_t c = 0; c + 1 < bins; ++c) {
         u.grow(bucket, bins, c);
         const auto total = [&] {
@@ -48,15 +45,11 @@ AxisCuts cheapest_bin_cuts(const Bucket* bucket, std::uint32_t bins, const SahCo
         };
         const F4 n_left = F4::from_counts(u.n), n_right = F4::from_counts(right_n[c]);
         const F4 cost = price(u.box.half_areas(), n_left, right_area[c], n_right, total);
-        const F4 taken = less(cost, lane_cost) & less(zero, n_left) & less(zero, n_right);
-        lane_cost = select(taken, cost, lane_cost), lane_cut = select(taken, F4::splat(float(c)), lane_cut);
+        cheapest.offer(cost, F4::splat(float(c)), less(zero, n_left) & less(zero, n_right));
     }
     std::uint32_t cut[4];
-    truncate_to_u32(lane_cut, cut);
-    for (int a = 0; a < 3; ++a) {
-        best.cost[a] = lane_cost.lane(a), best.last_left[a] = cut[a];
-        best.found[a] = best.cost[a] < kSweepEmpty;
-    }
+    truncate_to_u32(cheapest.key, cut);
+    for (int a = 0; a < 3; ++a) best.cost[a] = cheapest.cost.lane(a), best.last_left[a] = cut[a];
     return best;
 }
 

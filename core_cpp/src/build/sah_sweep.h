@@ -59,13 +59,27 @@ private:
     bool by_area_;
 };
 
-/// Per axis, the cheapest boundary: buckets [0, last_left[a]] on the left. found[a] is false
+/// The cheapest candidate of each lane and a key naming it, kept without branches (which
+/// candidate wins is data, and a branch on it mispredicts). A strictly cheaper candidate replaces
+/// the kept one, so ties keep the first; a lane that took none keeps kSweepEmpty.
+struct LaneMin {
+    F4 cost = F4::splat(kSweepEmpty), key = F4::splat(0.0f);
+
+    void offer(F4 candidate, F4 key_of) { keep(less(candidate, cost), candidate, key_of); }
+    /// Only in the lanes where `allowed` is set.
+    void offer(F4 candidate, F4 key_of, F4 allowed) { keep(less(candidate, cost) & allowed, candidate, key_of); }
+
+private:
+    void keep(F4 taken, F4 candidate, F4 key_of) {
+        cost = select(taken, candidate, cost), key = select(taken, key_of, key);
+    }
+};
+
+/// Per axis, the cheapest boundary: buckets [0, last_left[a]] on the left. cost[a] is infinite
 /// when no boundary leaves both sides non-empty.
 struct AxisCuts {
-    float cost[3] = {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
-                     std::numeric_limits<float>::infinity()};
+    float cost[3] = {kSweepEmpty, kSweepEmpty, kSweepEmpty};
     std::uint32_t last_left[3] = {0, 0, 0};
-    bool found[3] = {false, false, false};
 };
 
 struct Bucket;  // binning.h

@@ -161,23 +161,20 @@ SmallCut SmallBuilder::cheapest(const SmallNode& node, const bool allowed[3]) co
     for (std::uint32_t j = m - 1; j > 0; --j) grow(box, j), right_area[j - 1] = box.half_areas();
     const float inv = SahCost::inverse_area(half_area(node.lo, neg(node.neg_hi)));
     const LaneSplitCost price(sah_, inv);
-    // Per lane, the cheapest so far and its left count (c + 1), kept without branches: which
-    // candidate wins is data, and a branch on it mispredicts.
-    F4 lane_cost = F4::splat(kInf), lane_left = F4::splat(1.0f);
+    LaneMin cheapest;  // keyed by the left count, c + 1
     box = AxisBoxes();
     for (std::uint32_t c = 0; c + 1 < m; ++c) {
         grow(box, c);
         const F4 n_left = F4::splat(float(c + 1));
-        const F4 cost = price(box.half_areas(), n_left, right_area[c], F4::splat(float(m - c - 1)),
-                              [m] { return F4::splat(float(m)); });
-        const F4 cheaper = less(cost, lane_cost);
-        lane_cost = select(cheaper, cost, lane_cost), lane_left = select(cheaper, n_left, lane_left);
+        cheapest.offer(price(box.half_areas(), n_left, right_area[c], F4::splat(float(m - c - 1)),
+                             [m] { return F4::splat(float(m)); }),
+                       n_left);
     }
     std::uint32_t lefts[4];
-    truncate_to_u32(lane_left, lefts);
+    truncate_to_u32(cheapest.key, lefts);
     SmallCut best;
     for (int a = 0; a < 3; ++a)
-        if (allowed[a] && lane_cost.lane(a) < best.cost) best = {a, lefts[a] - 1, lane_cost.lane(a)};
+        if (allowed[a] && cheapest.cost.lane(a) < best.cost) best = {a, lefts[a] - 1, cheapest.cost.lane(a)};
     return best;
 }
 
