@@ -94,7 +94,11 @@ class BVHLAB_OT_compare(ModalTaskMixin, bpy.types.Operator):
             "height": height,
             "samples_per_axis": settings.render_supersampling,
             "max_depth": settings.render_bounces,
-            "build_options": {"axis": settings.axis, "max_leaf_size": settings.max_leaf_size},
+            "build_options": {
+                "axis": settings.axis,
+                "max_leaf_size": settings.max_leaf_size,
+                "sah_block": int(settings.sah_block),
+            },
         }
         backend, labels = settings.backend, [method for _, method in COMPARE_METHODS]
         self._csv_path = output_path(settings.compare_filepath, "bvh_compare.csv")

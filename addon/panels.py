@@ -17,6 +17,9 @@ def draw_build_settings(col, settings) -> None:
     binned.prop(settings, "bin_bounds")
     col.prop(settings, "axis")
     col.prop(settings, "max_leaf_size")
+    sah = col.column()
+    sah.enabled = settings.method in ("sah", "sweep_sah")
+    sah.prop(settings, "sah_block")
 
 
 class _BvhPanel:

@@ -14,6 +14,8 @@ from bvhlab.bvh import (
     DEFAULT_BINS,
     DEFAULT_MAX_LEAF_SIZE,
     DEFAULT_METHOD,
+    DEFAULT_SAH_BLOCK,
+    MAX_SAH_BLOCK,
     MAX_TREE_HEIGHT,
     METHODS,
 )
@@ -61,6 +63,12 @@ METHOD_ITEMS = _items(METHODS)
 BACKEND_ITEMS = [(b, *(_BACKEND_AUTO if b == "auto" else _LABELS[b])) for b in BACKENDS]
 AXIS_ITEMS = _items(AXES)
 BIN_BOUNDS_ITEMS = _items(BIN_BOUNDS)
+#: The SAH's block sizes, the powers of two up to the core's limit (a string per item, as an
+#: EnumProperty needs; build_kwargs passes the int).
+_SAH_BLOCK_ITEMS = [
+    (str(1 << k), str(1 << k), "Primitives one by one (the report's SAH)" if k == 0 else f"Blocks of {1 << k}")
+    for k in range(MAX_SAH_BLOCK.bit_length())
+]
 #: The maximum node depth any tree can have.
 MAX_DEPTH = MAX_TREE_HEIGHT - 1
 
@@ -118,6 +126,13 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
         soft_max=16,
         default=DEFAULT_MAX_LEAF_SIZE,
         description="Most primitives in a leaf; SAH methods may stop earlier (the report's trees: 1)",
+    )
+    sah_block: EnumProperty(
+        name="SAH block",
+        items=_SAH_BLOCK_ITEMS,
+        default=str(DEFAULT_SAH_BLOCK),
+        description="The SAH counts primitives in whole blocks of this many: 4, the triangles the CPU "
+        "traversal tests at once; 1, one by one (the report's SAH)",
     )
 
     overlay_show: BoolProperty(
@@ -216,6 +231,7 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
             "bin_bounds": self.bin_bounds,
             "axis": self.axis,
             "max_leaf_size": self.max_leaf_size,
+            "sah_block": int(self.sah_block),
         }
 
     def build_settings(self) -> dict:

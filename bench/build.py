@@ -29,7 +29,7 @@ import _peers  # noqa: E402
 
 PEERS = [  # (label, bvh_bench spec)
     ("bvhlab sah (defaults)", "bvhlab:"),
-    ("bvhlab sah12, largest, leaf 1 (report)", "bvhlab:method=sah,bins=12,axis=largest,leaf=1,span=centroids"),
+    ("bvhlab sah12, largest, leaf 1 (report)", "bvhlab:method=sah,bins=12,axis=largest,leaf=1,span=centroids,block=1"),
     ("bvhlab median", "bvhlab:method=median"),
     ("bvhlab mean", "bvhlab:method=mean"),
     ("bvhlab midpoint", "bvhlab:method=midpoint"),

@@ -27,9 +27,10 @@ import _peers  # noqa: E402
 PEERS = [  # (label, bvh_bench spec); Embree MEDIUM first: the others are compared with it
     ("Embree 3 MEDIUM rtcIntersect1", "embree:medium"),
     ("bvhlab wide (default tree)", "bvhlab:"),
+    ("bvhlab wide (default tree but primitives counted one by one: sah_block 1)", "bvhlab:block=1"),
     (
         "bvhlab wide (report's tree: sah12, largest, leaf 1)",
-        "bvhlab:method=sah,bins=12,axis=largest,leaf=1,span=centroids",
+        "bvhlab:method=sah,bins=12,axis=largest,leaf=1,span=centroids,block=1",
     ),
     ("tinybvh BVH8_CPU", "tinybvh:"),
 ]

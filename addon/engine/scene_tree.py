@@ -8,7 +8,14 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from bvhlab.bvh import DEFAULT_AXIS, DEFAULT_BIN_BOUNDS, DEFAULT_BINS, DEFAULT_MAX_LEAF_SIZE, DEFAULT_METHOD
+from bvhlab.bvh import (
+    DEFAULT_AXIS,
+    DEFAULT_BIN_BOUNDS,
+    DEFAULT_BINS,
+    DEFAULT_MAX_LEAF_SIZE,
+    DEFAULT_METHOD,
+    DEFAULT_SAH_BLOCK,
+)
 
 #: A refit keeps the topology; once objects have moved far, its boxes overlap and tracing slows.
 #: Rebuild instead when the refit tree's SAH cost exceeds the built tree's by this factor.
@@ -26,6 +33,7 @@ class BuildSettings:
     bin_bounds: str = DEFAULT_BIN_BOUNDS
     axis: str = DEFAULT_AXIS
     max_leaf_size: int = DEFAULT_MAX_LEAF_SIZE
+    sah_block: int = DEFAULT_SAH_BLOCK
 
     @classmethod
     def of(cls, blender_scene) -> BuildSettings:

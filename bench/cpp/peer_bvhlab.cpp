@@ -25,6 +25,7 @@ bvhlab::BuildConfig parse_options(const std::string& options, unsigned threads) 
         else if (key == "bins") cfg.bins = std::stoul(value);
         else if (key == "span") cfg.bin_bounds = bvhlab::parse_bin_bounds(value);
         else if (key == "leaf") cfg.max_leaf_size = std::stoul(value);
+        else if (key == "block") cfg.sah_block = std::stoul(value);
         else throw std::invalid_argument("unknown bvhlab option '" + key + "'");
     }
     return cfg;

@@ -45,13 +45,13 @@ nb::dict stats_dict(const Bvh& bvh) {
     d["memory_bytes"] = s.memory_bytes;
     d["method"] = to_string(bvh.config.method), d["axis"] = to_string(bvh.config.axis);
     d["bins"] = bvh.config.bins, d["max_leaf_size_config"] = bvh.config.max_leaf_size;
-    d["bin_bounds"] = to_string(bvh.config.bin_bounds);
+    d["bin_bounds"] = to_string(bvh.config.bin_bounds), d["sah_block"] = bvh.config.sah_block;
     return d;
 }
 
 PyBvh* build(const Triangles& tris, const std::optional<Spheres>& spheres, const std::string& method,
              const std::string& axis, std::uint32_t bins, const std::string& bin_bounds, std::int64_t max_leaf_size,
-             std::uint64_t seed, std::uint32_t threads, std::optional<nb::callable> progress) {
+             std::uint32_t sah_block, std::uint64_t seed, std::uint32_t threads, std::optional<nb::callable> progress) {
     BuildConfig cfg;
     cfg.method = parse_split_method(method);
     cfg.axis = parse_axis_policy(axis);
@@ -60,6 +60,7 @@ PyBvh* build(const Triangles& tris, const std::optional<Spheres>& spheres, const
     if (max_leaf_size < 1 || max_leaf_size > 0x7fffffff)
         throw std::invalid_argument("max_leaf_size must be at least 1, got " + std::to_string(max_leaf_size));
     cfg.max_leaf_size = static_cast<std::uint32_t>(max_leaf_size);
+    cfg.sah_block = sah_block;
     cfg.seed = seed;
     cfg.threads = threads;
     // Always a check, with or without a callable: Ctrl-C stops the build (KeyboardInterrupt).
@@ -202,7 +203,7 @@ void bind_functions(nb::module_& m) {  // geometry checks and the build
         "triangles"_a.noconvert(), "spheres"_a.noconvert().none(),
         "Raises ValueError naming the first primitive that is not finite or lies outside MAX_COORDINATE.");
     m.def("build", &build, "triangles"_a.noconvert(), "spheres"_a.noconvert().none(), "method"_a, "axis"_a, "bins"_a,
-          "bin_bounds"_a, "max_leaf_size"_a, "seed"_a, "threads"_a, "progress"_a.none());
+          "bin_bounds"_a, "max_leaf_size"_a, "sah_block"_a, "seed"_a, "threads"_a, "progress"_a.none());
 }
 
 void bind_build_names(nb::module_& m) {
@@ -223,6 +224,8 @@ void bind_build_names(nb::module_& m) {
     m.attr("DEFAULT_BINS") = defaults.bins;
     m.attr("DEFAULT_BIN_BOUNDS") = to_string(defaults.bin_bounds);
     m.attr("DEFAULT_MAX_LEAF_SIZE") = defaults.max_leaf_size;
+    m.attr("DEFAULT_SAH_BLOCK") = defaults.sah_block;
+    m.attr("MAX_SAH_BLOCK") = kMaxSahBlock;
     m.attr("MAX_TREE_HEIGHT") = gpu::MAX_TREE_HEIGHT;
     m.attr("MAX_COORDINATE") = kMaxCoordinate;  // coordinate_range.h
     m.attr("MIN_DIRECTION") = kMinDirection;

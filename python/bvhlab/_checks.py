@@ -39,6 +39,14 @@ def integer(name: str, value, lo: int, hi: int) -> int:
     return value
 
 
+def power_of_two(name: str, value, hi: int) -> int:
+    """An int that is a power of two from 1 to hi."""
+    value = integer(name, value, 1, hi)
+    if value & (value - 1):
+        raise ValueError(f"{name} must be a power of two from 1 to {hi}, got {value}")
+    return value
+
+
 def choice(name: str, value, options: tuple[str, ...]) -> str:
     if not isinstance(value, str):
         raise TypeError(f"{name} must be a string, one of {', '.join(options)}; got {type(value).__name__}")

@@ -171,6 +171,11 @@ TEST(BadInput, ConfigOutOfRange) {
     BuildConfig c;
     c.max_leaf_size = 0;
     expect_invalid([&] { build_bvh(scene.view(), c); }, "max_leaf_size");
+    for (std::uint32_t block : {0u, 3u, 6u, 128u, 0x80000000u}) {
+        c = {};
+        c.sah_block = block;
+        expect_invalid([&] { build_bvh(scene.view(), c); }, "sah_block must be a power of two");
+    }
     c = {};
     c.traversal_cost = std::numeric_limits<float>::quiet_NaN();
     expect_invalid([&] { build_bvh(scene.view(), c); }, "SAH costs");

@@ -36,6 +36,7 @@ def decode(data: bytes) -> dict:
         "axis": AXES[kinds // 6 % 3],
         "bins": bins,
         "max_leaf_size": 1 + leaf % 8,
+        "sah_block": 1 << (leaf >> 3 & 7) % 7,
         "threads": 1 + (leaf >> 7),
         "triangles": tris,
         "spheres": spheres,

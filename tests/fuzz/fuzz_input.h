@@ -1,6 +1,6 @@
 // fuzz_input.h — turns the fuzzer's raw bytes into a build configuration, geometry and rays.
 // Layout (every field reads 0 once the bytes run out, so any input is valid):
-//   byte 0: method (% 6) and axis (/ 6 % 3)   byte 1: bins - 2        byte 2: max leaf size, threads
+//   byte 0: method (% 6) and axis (/ 6 % 3)   byte 1: bins - 2        byte 2: max leaf size, SAH block, threads
 //   byte 3: triangles (% 48)   byte 4: spheres (% 16)   byte 5: rays (% 48)   byte 6: encoding
 //   then the floats: triangles (9 each), spheres (4), ray origins and directions (6), then the
 //   offset of a refit and a depth range for boxes.
@@ -54,6 +54,7 @@ inline FuzzCase read_case(const std::uint8_t* data, std::size_t size) {
     c.config.bins = 2 + in.byte() % 255;
     const std::uint8_t leaf = in.byte();
     c.config.max_leaf_size = 1 + leaf % 8;
+    c.config.sah_block = 1u << (leaf >> 3 & 7) % 7;  // 1 .. 64
     c.threads = c.config.threads = 1 + (leaf >> 7);
     const std::size_t triangles = in.byte() % 48, spheres = in.byte() % 16, rays = in.byte() % 48;
     const bool raw = in.byte() & 1;

@@ -64,6 +64,7 @@ def test_build_json_and_csv_equal_the_api(tmp_path, capsys):
         "axis": bvhlab.bvh.DEFAULT_AXIS,
         "bin_bounds": bvhlab.bvh.DEFAULT_BIN_BOUNDS,
         "max_leaf_size": 2,
+        "sah_block": bvhlab.bvh.DEFAULT_SAH_BLOCK,
     }
     for key in api:
         if key not in ("build_ms",):

@@ -209,6 +209,7 @@ def test_build_settings_state_the_report_settings_explicitly():
             "bin_bounds": "centroids",
             "axis": "largest",
             "max_leaf_size": 1,
+            "sah_block": 1,
             "threads": 1,
             "seed": 0,
         }

@@ -90,6 +90,10 @@ void validate(const BuildConfig& config) {
         throw std::invalid_argument("bins must be between " + std::to_string(kMinBins) + " and " +
                                     std::to_string(kMaxBins) + ", got " + std::to_string(config.bins));
     if (config.max_leaf_size < 1) throw std::invalid_argument("max_leaf_size must be at least 1");
+    const std::uint32_t block = config.sah_block;
+    if (block < 1 || block > kMaxSahBlock || (block & (block - 1)))
+        throw std::invalid_argument("sah_block must be a power of two from 1 to " + std::to_string(kMaxSahBlock) +
+                                    ", got " + std::to_string(block));
     if (!std::isfinite(config.traversal_cost) || !std::isfinite(config.intersection_cost) ||
         config.traversal_cost < 0.0f || config.intersection_cost <= 0.0f)
         throw std::invalid_argument("SAH costs must be finite, traversal >= 0 and intersection > 0");

@@ -32,18 +32,25 @@ AxisCuts cheapest_bin_cuts(const Bucket* bucket, std::uint32_t bins, const SahCo
         right_area[j - 1] = u.box.half_areas();
         for (int a = 0; a < 4; ++a) right_n[j - 1][a] = u.n[a];
     }
+    // the counts as the SAH counts them (SahCost::counted) under the parent, which holds every
+    // reference of each axis's buckets
+    const std::uint32_t mask = sah.round_mask(std::uint64_t(u.n[0]) + bucket[0].count);
+    for (std::uint32_t j = 0; j + 1 < bins; ++j)
+        for (int a = 0; a < 4; ++a) right_n[j][a] = SahCost::counted(right_n[j][a], mask);
     u = BucketUnion();
     const LaneSplitCost price(sah, inv_parent_area);
     const F4 zero = F4::splat(0.0f);
     LaneMin cheapest;  // per lane, among boundaries with both sides non-empty
     for (std::uint32_t c = 0; c + 1 < bins; ++c) {
         u.grow(bucket, bins, c);
+        std::uint32_t left_n[4];
+        for (int a = 0; a < 4; ++a) left_n[a] = SahCost::counted(u.n[a], mask);
         const auto total = [&] {
             std::uint32_t n[4];
-            for (int a = 0; a < 4; ++a) n[a] = u.n[a] + right_n[c][a];
+            for (int a = 0; a < 4; ++a) n[a] = left_n[a] + right_n[c][a];
             return F4::from_counts(n);
         };
-        const F4 n_left = F4::from_counts(u.n), n_right = F4::from_counts(right_n[c]);
+        const F4 n_left = F4::from_counts(left_n), n_right = F4::from_counts(right_n[c]);
         const F4 cost = price(u.box.half_areas(), n_left, right_area[c], n_right, total);
         cheapest.offer(cost, F4::splat(float(c)), less(zero, n_left) & less(zero, n_right));
     }

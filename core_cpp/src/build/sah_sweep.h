@@ -38,7 +38,7 @@ struct AxisBoxes {
 };
 
 /// SahCost::split of each lane at once, bit for bit (its operations in its order), with one
-/// parent's constants splatted once.
+/// parent's constants splatted once; the caller passes the counts as SahCost::counted has them.
 class LaneSplitCost {
 public:
     LaneSplitCost(const SahCost& sah, float inv_parent_area)
@@ -46,8 +46,8 @@ public:
           isect_(F4::splat(sah.intersection)),
           inv_(F4::splat(inv_parent_area)),
           by_area_(inv_parent_area > 0.0f) {}
-    /// `total()`: n_left + n_right summed as integers, the ratio for a parent of zero area (only
-    /// then called).
+    /// `total()`: n_left + n_right summed as integers (as counted), the ratio for a parent of zero
+    /// area (only then called).
     template <class Total>
     F4 operator()(F4 left_area, F4 n_left, F4 right_area, F4 n_right, const Total& total) const {
         const F4 ratio = by_area_ ? (left_area * n_left + right_area * n_right) * inv_ : total();

@@ -161,14 +161,15 @@ SmallCut SmallBuilder::cheapest(const SmallNode& node, const bool allowed[3]) co
     for (std::uint32_t j = m - 1; j > 0; --j) grow(box, j), right_area[j - 1] = box.half_areas();
     const float inv = SahCost::inverse_area(half_area(node.lo, neg(node.neg_hi)));
     const LaneSplitCost price(sah_, inv);
+    const std::uint32_t mask = sah_.round_mask(m);
     LaneMin cheapest;  // keyed by the left count, c + 1
     box = AxisBoxes();
     for (std::uint32_t c = 0; c + 1 < m; ++c) {
         grow(box, c);
-        const F4 n_left = F4::splat(float(c + 1));
-        cheapest.offer(price(box.half_areas(), n_left, right_area[c], F4::splat(float(m - c - 1)),
-                             [m] { return F4::splat(float(m)); }),
-                       n_left);
+        const std::uint32_t n_left = SahCost::counted(c + 1, mask), n_right = SahCost::counted(m - c - 1, mask);
+        cheapest.offer(price(box.half_areas(), F4::splat(float(n_left)), right_area[c], F4::splat(float(n_right)),
+                             [&] { return F4::splat(float(n_left + n_right)); }),
+                       F4::splat(float(c + 1)));
     }
     std::uint32_t lefts[4];
     truncate_to_u32(cheapest.key, lefts);

@@ -45,6 +45,7 @@ def run(args) -> int:
         "build_ms",
         "avg_leaf_size",
         "max_leaf_size",
+        "sah_block",
         "memory_bytes",
     ):
         value = stats[key]

@@ -17,6 +17,8 @@ from ..bvh import (
     DEFAULT_BINS,
     DEFAULT_MAX_LEAF_SIZE,
     DEFAULT_METHOD,
+    DEFAULT_SAH_BLOCK,
+    MAX_SAH_BLOCK,
     METHODS,
     method_from_label,
 )
@@ -47,13 +49,26 @@ def add_build(p: argparse.ArgumentParser) -> None:
         default=DEFAULT_MAX_LEAF_SIZE,
         help=f"primitives per leaf at most (default {DEFAULT_MAX_LEAF_SIZE})",
     )
+    p.add_argument(
+        "--sah-block",
+        type=int,
+        default=DEFAULT_SAH_BLOCK,
+        help=f"the SAH counts primitives in blocks of this many, a power of two up to {MAX_SAH_BLOCK} "
+        f"(default {DEFAULT_SAH_BLOCK}, the triangles the CPU traversal tests at once; 1: the report's SAH)",
+    )
 
 
 def build_kwargs(args) -> dict:
     kw = method_kwargs(args.method)
     if args.bins is not None:
         kw["bins"] = args.bins
-    return {**kw, "axis": args.axis, "bin_bounds": args.bin_bounds, "max_leaf_size": args.max_leaf_size}
+    return {
+        **kw,
+        "axis": args.axis,
+        "bin_bounds": args.bin_bounds,
+        "max_leaf_size": args.max_leaf_size,
+        "sah_block": args.sah_block,
+    }
 
 
 method_kwargs = method_from_label

@@ -15,9 +15,9 @@ from .tree_stats import sah_cost_per_depth
 
 #: The report's build settings (§2.3, §4.2), stated here rather than taken from the library's
 #: defaults: one primitive per leaf, the axis of largest centroid extent, SAH buckets over the
-#: centroid bounds (§2.3.2); the bins come from the method label (sah12, sah32). Builds run on
-#: one thread, like the report's builder.
-REPORT_BUILD = {"axis": "largest", "max_leaf_size": 1, "bin_bounds": "centroids", "threads": 1}
+#: centroid bounds and primitives counted one by one (§2.3.2, eq. 1); the bins come from the
+#: method label (sah12, sah32). Builds run on one thread, like the report's builder.
+REPORT_BUILD = {"axis": "largest", "max_leaf_size": 1, "bin_bounds": "centroids", "sah_block": 1, "threads": 1}
 DEFAULT_BINS = 12  # the report's (PBRT's) value, for a bare "sah"
 
 
