@@ -17,9 +17,7 @@ def draw_build_settings(col, settings) -> None:
     binned.prop(settings, "bin_bounds")
     col.prop(settings, "axis")
     col.prop(settings, "max_leaf_size")
-    sah = col.column()
-    sah.enabled = settings.method in ("sah", "sweep_sah")
-    sah.prop(settings, "sah_block")
+    col.prop(settings, "sah_block")  # the SAH methods' (Compare's SAH rows take it too)
 
 
 class _BvhPanel:

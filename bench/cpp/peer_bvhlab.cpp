@@ -1,5 +1,7 @@
 // bvhlab as a benchmark peer: build_bvh with the options of the spec, single rays through the
-// wide tree (the fastest CPU traversal).
+// wide tree (the fastest CPU traversal). Spec options, comma separated (BuildConfig's fields):
+// method=, axis=, bins=, span=box|centroids, leaf= (max leaf size), block= (sah_block),
+// trav= and isect= (the SAH's costs).
 #include <sstream>
 #include <stdexcept>
 
@@ -26,6 +28,8 @@ bvhlab::BuildConfig parse_options(const std::string& options, unsigned threads) 
         else if (key == "span") cfg.bin_bounds = bvhlab::parse_bin_bounds(value);
         else if (key == "leaf") cfg.max_leaf_size = std::stoul(value);
         else if (key == "block") cfg.sah_block = std::stoul(value);
+        else if (key == "trav") cfg.traversal_cost = std::stof(value);
+        else if (key == "isect") cfg.intersection_cost = std::stof(value);
         else throw std::invalid_argument("unknown bvhlab option '" + key + "'");
     }
     return cfg;

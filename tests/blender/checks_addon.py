@@ -22,6 +22,8 @@ BUILD_VARIANTS = (
     {"method": "median"},
     {"method": "mean", "max_leaf_size": 4},
     {"method": "sweep_sah", "axis": "best"},
+    {"method": "sah", "bins": 8, "max_leaf_size": 8, "sah_block": 1},
+    {"method": "sah", "bins": 8, "max_leaf_size": 8, "sah_block": 16},
 )
 #: Scenes the Build operator is checked on, with the variants (the large one gets the quick two).
 BUILD_SCENES = {"five_spheres": BUILD_VARIANTS, "whitted": BUILD_VARIANTS, "suzanne_250k": BUILD_VARIANTS[:2]}
@@ -29,7 +31,8 @@ BUILD_SCENES = {"five_spheres": BUILD_VARIANTS, "whitted": BUILD_VARIANTS, "suza
 
 def _configure(**settings):
     for name, value in settings.items():
-        setattr(bpy.context.scene.bvhlab, name, value)
+        # the SAH block is an enum of powers of two (its identifiers are strings)
+        setattr(bpy.context.scene.bvhlab, name, str(value) if name == "sah_block" else value)
 
 
 def _built():
@@ -41,13 +44,16 @@ def check_build_matches_direct(name: str, variants=BUILD_VARIANTS) -> None:
     scene exported directly (only the build time may differ)."""
     harness.open_scene(name)
     for variant in variants:
-        _configure(scope="visible", method="sah", bins=12, bin_bounds="box", axis="largest", max_leaf_size=1)
+        _configure(
+            scope="visible", method="sah", bins=12, bin_bounds="box", axis="largest", max_leaf_size=1, sah_block=4
+        )
         _configure(**variant)
         assert bpy.ops.bvhlab.build() == {"FINISHED"}
         built = _built()
         direct = bvhlab.build(
             export_scene(bpy.context, require_camera=False),
-            **{"method": "sah", "bins": 12, "bin_bounds": "box", "axis": "largest", "max_leaf_size": 1, **variant},
+            **{"method": "sah", "bins": 12, "bin_bounds": "box", "axis": "largest", "max_leaf_size": 1, "sah_block": 4}
+            | variant,
         )
         ours, theirs = built.bvh.stats, direct.stats
         for key in theirs:

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 #include <limits>
 #include <numeric>
 #include <vector>
@@ -74,6 +75,35 @@ std::uint32_t check_exact(const Bvh& bvh, const GeometryView& g, std::uint32_t i
     return count;
 }
 
+/// The boxes of the primitives of the subtree at i (its leaves are one range of refs).
+std::vector<Aabb> subtree_boxes(const Bvh& bvh, const GeometryView& g, std::uint32_t i, std::uint32_t count) {
+    std::uint32_t first = i;
+    while (!is_leaf(bvh.nodes[first])) ++first;
+    std::vector<Aabb> boxes;
+    for (std::uint32_t k = bvh.nodes[first].index; k < bvh.nodes[first].index + count; ++k)
+        boxes.push_back(prim_box(g, bvh.refs[k]));
+    return boxes;
+}
+
+/// SAH leaf termination (report §5.1) in the nodes of 2 .. max_leaf primitives that the exact
+/// sweep splits: a leaf where a leaf costs no more than the brute force's cheapest split, a split
+/// where it costs more, the leaf's count in blocks as the splits' are. Returns the subtree's count.
+std::uint32_t check_leaves(const Bvh& bvh, const GeometryView& g, std::uint32_t i, std::uint32_t max_leaf,
+                           std::uint32_t block, int& leaves, int& splits) {
+    const BvhNode& n = bvh.nodes[i];
+    const std::uint32_t count = is_leaf(n) ? leaf_count(n)
+                                           : check_leaves(bvh, g, i + 1, max_leaf, block, leaves, splits) +
+                                                 check_leaves(bvh, g, n.index, max_leaf, block, leaves, splits);
+    if (count >= 2 && count <= max_leaf) {
+        const double leaf_cost = counted(count, count, block);
+        const double split_cost = brute_force_cost(subtree_boxes(bvh, g, i, count), node_box(n), block);
+        if (is_leaf(n)) EXPECT_LE(leaf_cost, split_cost * (1.0 + 1e-5)) << "leaf " << i << " of " << count;
+        else EXPECT_GT(leaf_cost, split_cost * (1.0 - 1e-5)) << "node " << i << " of " << count;
+        ++(is_leaf(n) ? leaves : splits);
+    }
+    return count;
+}
+
 struct ExactCase {
     SplitMethod method;
     BinBounds bin_bounds;
@@ -100,6 +130,32 @@ TEST_P(ExactSah, SmallNodesSplitAtTheBruteForceOptimum) {
                 EXPECT_GT(checked, 300);
             }
         }
+    }
+}
+
+TEST_P(ExactSah, LeavesWhereALeafCostsNoMoreThanTheCheapestSplit) {
+    const ExactCase c = GetParam();
+    BuildConfig cfg;
+    cfg.method = c.method, cfg.bin_bounds = c.bin_bounds, cfg.axis = AxisPolicy::Best;
+    cfg.max_leaf_size = std::min(c.exact, 8u);
+    // large triangles at random in a cube (uniform1m in small): their boxes overlap, so leaves of
+    // up to eight are often cheaper than splits and both kinds of node are common
+    test::Scene scene;
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(0.0f, 10.0f);
+    auto point = [&] { return Vec3{u(rng), u(rng), u(rng)}; };
+    for (int i = 0; i < 3000; ++i) {
+        const Vec3 p = point();
+        scene.add_triangle(p, p + (point() - p) * 0.2f, p + (point() - p) * 0.2f);
+    }
+    for (std::uint32_t block : {1u, 4u}) {
+        cfg.sah_block = block;
+        Bvh bvh = build_bvh(scene.view(), cfg);
+        test::check_tree(bvh, scene.view(), cfg.max_leaf_size);
+        int leaves = 0, splits = 0;
+        check_leaves(bvh, scene.view(), 0, cfg.max_leaf_size, block, leaves, splits);
+        EXPECT_GT(leaves, 50) << "blocks of " << block;
+        EXPECT_GT(splits, 50) << "blocks of " << block;
     }
 }
 

@@ -32,6 +32,9 @@ def test_settings_take_names_defaults_and_limits_from_the_core():
     assert rna["bin_bounds"].default == bvhlab.bvh.DEFAULT_BIN_BOUNDS
     assert (rna["bins"].hard_min, rna["bins"].hard_max) == (bvhlab._core.MIN_BINS, bvhlab._core.MAX_BINS)
     assert rna["max_leaf_size"].default == bvhlab.bvh.DEFAULT_MAX_LEAF_SIZE
+    blocks = [int(i.identifier) for i in rna["sah_block"].enum_items]
+    assert blocks == [1 << k for k in range(bvhlab.bvh.MAX_SAH_BLOCK.bit_length())]
+    assert int(rna["sah_block"].default) == bvhlab.bvh.DEFAULT_SAH_BLOCK
     assert rna["render_bounces"].hard_max == bvhlab._core.MAX_RAY_DEPTH
     assert rna["render_supersampling"].hard_max == bvhlab._core.MAX_SAMPLES_PER_AXIS
     assert [i.identifier for i in rna["traversal"].enum_items] == list(bvhlab._core.RENDER_TRAVERSALS)

@@ -28,7 +28,8 @@ struct SahCost {
 
     /// What rounds the counts under a node of `n` primitives: block - 1 when n > block, else 0.
     std::uint32_t round_mask(std::uint64_t n) const { return n > block ? block - 1 : 0; }
-    /// `n` as the SAH counts it under the mask of round_mask.
+    /// `n` as the SAH counts it under the mask of round_mask (below 2^31, and so is the sum of a
+    /// node's two: a build takes at most 2^31 - 1 - 2 (kMaxSahBlock - 1) primitives, geometry.cpp).
     static std::uint32_t counted(std::uint32_t n, std::uint32_t mask) { return (n + mask) & ~mask; }
     /// 1 / A_P, or 0 for a parent of zero area: pass it to split().
     static float inverse_area(float parent_area) { return parent_area > 0.0f ? 1.0f / parent_area : 0.0f; }

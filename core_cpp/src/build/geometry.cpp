@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "bvhlab/build_config.h"
 #include "bvhlab/coordinate_range.h"
 #include "bvhlab/simd.h"
 
@@ -81,8 +82,11 @@ void validate_spheres(const GeometryView& g) {
 }
 
 void validate_counts(const GeometryView& g) {
-    if (g.primitive_count() > gpu::REF_INDEX_MASK)
-        throw std::invalid_argument("too many primitives: at most 2^31 - 1 fit a reference");
+    // a reference's index holds 2^31 - 1; the SAH's counts rounded up to whole blocks (sah.h)
+    // must stay below 2^31, which the sweeps convert to floats as signed integers
+    constexpr std::size_t kMaxPrimitives = gpu::REF_INDEX_MASK - 2 * (kMaxSahBlock - 1);
+    if (g.primitive_count() > kMaxPrimitives)
+        throw std::invalid_argument("too many primitives: at most " + std::to_string(kMaxPrimitives));
     if ((g.triangle_count && !g.triangles) || (g.sphere_count && !g.spheres))
         throw std::invalid_argument("primitive count given without data");
 }
