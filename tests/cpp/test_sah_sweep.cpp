@@ -47,7 +47,8 @@ std::pair<float, std::uint32_t> scalar_cut(const std::vector<Bucket>& bucket, st
             const int side = k <= c ? 0 : 1;
             n[side] += b.count;
             for (int x = 0; x < 3; ++x)
-                lo[side][x] = std::min(lo[side][x], b.lo.lane(x)), hi[side][x] = std::max(hi[side][x], -b.neg_hi.lane(x));
+                lo[side][x] = std::min(lo[side][x], b.lo.lane(x)),
+                hi[side][x] = std::max(hi[side][x], -b.neg_hi.lane(x));
         }
         if (!n[0] || !n[1]) continue;
         const float cost = sah.split(inv, half_area_of(lo[0], hi[0]), n[0], half_area_of(lo[1], hi[1]), n[1]);
@@ -77,7 +78,8 @@ TEST(CheapestBinCuts, IsSahCostSplitAtEveryBoundaryBitForBit) {
                 for (int a = 0; a < 3; ++a) lo[a] = hi[a] = 1.0f;  // every reference at one point
             if (kind == 2)
                 for (int a = 1; a < 3; ++a) lo[a] = hi[a] = 1.0f;  // on a line along x
-            for (int a = 0; a < 3; ++a) parent_lo[a] = std::min(parent_lo[a], lo[a]), parent_hi[a] = std::max(parent_hi[a], hi[a]);
+            for (int a = 0; a < 3; ++a)
+                parent_lo[a] = std::min(parent_lo[a], lo[a]), parent_hi[a] = std::max(parent_hi[a], hi[a]);
             for (int a = 0; a < 3; ++a) {  // every reference is in one bucket of each axis
                 const std::uint32_t k = kind == 3 ? (rng() % 2) * (bins - 1) : std::uint32_t(rng() % bins);
                 Bucket& b = bucket[a * bins + k];
