@@ -43,9 +43,9 @@ std::pair<float, std::uint32_t> scalar_cut(const std::vector<Bucket>& bucket, st
             for (int x = 0; x < 3; ++x) lo[s][x] = INFINITY, hi[s][x] = -INFINITY;
         for (std::uint32_t k = 0; k < bins; ++k) {
             const Bucket& b = bucket[axis * bins + k];
-            if (!b.count) continue;
+            if (!b.count()) continue;
             const int side = k <= c ? 0 : 1;
-            n[side] += b.count;
+            n[side] += b.count();
             for (int x = 0; x < 3; ++x)
                 lo[side][x] = std::min(lo[side][x], b.lo.lane(x)),
                 hi[side][x] = std::max(hi[side][x], -b.neg_hi.lane(x));
@@ -69,7 +69,7 @@ TEST(CheapestBinCuts, IsSahCostSplitAtEveryBoundaryBitForBit) {
         const std::uint32_t references = 2 + rng() % (rng() % 2 ? 12 : 300);
         const int kind = int(rng() % 4);  // 0 boxes anywhere, 1 one point, 2 a line, 3 the end buckets only
         std::vector<Bucket> bucket(3 * bins);
-        for (Bucket& b : bucket) b = Bucket{F4::splat(INFINITY), F4::splat(INFINITY), 0};
+        for (Bucket& b : bucket) b = Bucket::empty();
         float parent_lo[3] = {INFINITY, INFINITY, INFINITY}, parent_hi[3] = {-INFINITY, -INFINITY, -INFINITY};
         for (std::uint32_t i = 0; i < references; ++i) {
             float lo[4] = {place(rng), place(rng), place(rng), 0.0f}, hi[4] = {0.0f, 0.0f, 0.0f, 0.0f};
@@ -83,7 +83,8 @@ TEST(CheapestBinCuts, IsSahCostSplitAtEveryBoundaryBitForBit) {
             for (int a = 0; a < 3; ++a) {  // every reference is in one bucket of each axis
                 const std::uint32_t k = kind == 3 ? (rng() % 2) * (bins - 1) : std::uint32_t(rng() % bins);
                 Bucket& b = bucket[a * bins + k];
-                b.lo = min(b.lo, F4::load(lo)), b.neg_hi = min(b.neg_hi, neg(F4::load(hi))), ++b.count;
+                const std::uint32_t n = b.count() + 1;
+                b.lo = min(b.lo, F4::load(lo)), b.neg_hi = min(b.neg_hi, neg(F4::load(hi))), b.set_count(n);
             }
         }
         BuildConfig config;

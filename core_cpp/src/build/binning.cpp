@@ -29,16 +29,20 @@ BinFrame::BinFrame(const Aabb& box, std::uint32_t n_bins) : bins(n_bins) {
     top_of = float(n_bins - 1), top = F4::splat(top_of);
 }
 
-void BinSet::reset() const {
-    const Bucket empty{F4::splat(kInf), F4::splat(kInf), 0};
-    std::fill(bucket, bucket + 3 * std::size_t(bins), empty);
+Bucket Bucket::empty() {
+    Bucket b{F4::splat(kInf), F4::splat(kInf)};
+    b.set_count(0);
+    return b;
 }
+
+void BinSet::reset() const { std::fill(bucket, bucket + 3 * std::size_t(bins), Bucket::empty()); }
 
 void BinSet::merge(const BinSet& other) const {
     for (std::size_t i = 0; i < 3 * std::size_t(bins); ++i) {
         Bucket& b = bucket[i];
         const Bucket& o = other.bucket[i];
-        b.lo = min(b.lo, o.lo), b.neg_hi = min(b.neg_hi, o.neg_hi), b.count += o.count;
+        const std::uint32_t n = b.count() + o.count();  // lane 3 of the min may not hold it (2^30)
+        b.lo = min(b.lo, o.lo), b.neg_hi = min(b.neg_hi, o.neg_hi), b.set_count(n);
     }
 }
 
@@ -53,7 +57,7 @@ Aabb BinSet::box_of(int axis, std::uint32_t first, std::uint32_t last) const {
 
 std::uint32_t BinSet::count_of(int axis, std::uint32_t first, std::uint32_t last) const {
     std::uint32_t n = 0;
-    for (std::uint32_t k = first; k < last; ++k) n += bucket[std::size_t(axis) * bins + k].count;
+    for (std::uint32_t k = first; k < last; ++k) n += bucket[std::size_t(axis) * bins + k].count();
     return n;
 }
 
@@ -213,7 +217,8 @@ std::uint32_t partition_and_bin(const PrimRef* __restrict src, PrimRef* __restri
         const BinTarget& b = t.copy[i & 1];
         for (int a = 0; a < 3; ++a) {
             Bucket& bucket = b.axis[a][k[a]];
-            bucket.lo = min(bucket.lo, lo), bucket.neg_hi = min(bucket.neg_hi, neg_hi), ++bucket.count;
+            const std::uint32_t n = bucket.count() + 1;
+            bucket.lo = min(bucket.lo, lo), bucket.neg_hi = min(bucket.neg_hi, neg_hi), bucket.set_count(n);
         }
     }
     for (int s = 0; s < 2 && sides; ++s) sides[s].merge(acc[0][s]), sides[s].merge(acc[1][s]);

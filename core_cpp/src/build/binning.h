@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -47,14 +48,28 @@ struct BinFrame {
     }
 };
 
-/// One bucket of one axis: the box of its references as (lo, -hi), so that one `min` grows
-/// both, and their count, in one 64-byte line (the fused pass reaches both from one address).
-struct alignas(64) Bucket {
+/// One bucket of one axis in 32 bytes: the box of its references as (lo, -hi), so that one `min`
+/// grows both, and their count in lo's lane 3 as the bits of an integer plus kCountBias. Those bits
+/// are a positive normal float while a copy counts fewer than 2^30 references (a pass alternates
+/// two copies; a build has fewer than 2^31), so the `min` with a reference's box, whose lane 3 is
+/// +inf, keeps them (also with denormals flushed); an integer add of 1 in lane 3 counts.
+struct alignas(32) Bucket {
+    static constexpr std::uint32_t kCountBias = 0x00800000u;  ///< the bits of the least normal float
     F4 lo, neg_hi;
-    std::uint32_t count;
+
+    static Bucket empty();
+    std::uint32_t count() const {
+        std::uint32_t bits;
+        std::memcpy(&bits, reinterpret_cast<const char*>(&lo) + 12, sizeof(bits));
+        return bits - kCountBias;
+    }
+    void set_count(std::uint32_t n) {
+        const std::uint32_t bits = n + kCountBias;
+        std::memcpy(reinterpret_cast<char*>(&lo) + 12, &bits, sizeof(bits));
+    }
 };
-static_assert(sizeof(Bucket) == 64 && offsetof(Bucket, neg_hi) == 16 && offsetof(Bucket, count) == 32,
-              "binning_avx2.cpp reads the box as 32 bytes at 0 and the count at 32");
+static_assert(sizeof(Bucket) == 32 && offsetof(Bucket, neg_hi) == 16,
+              "binning_avx2.cpp reads the box as 32 bytes at 0 and the count in lane 3");
 
 /// The buckets of the three axes of one node (a view into a BinStore slot).
 struct BinSet {
@@ -65,7 +80,8 @@ struct BinSet {
     void merge(const BinSet& other) const;
     void add(int axis, std::uint32_t k, F4 lo, F4 neg_hi) const {
         Bucket& b = bucket[std::size_t(axis) * bins + k];
-        b.lo = min(b.lo, lo), b.neg_hi = min(b.neg_hi, neg_hi), ++b.count;
+        const std::uint32_t n = b.count() + 1;
+        b.lo = min(b.lo, lo), b.neg_hi = min(b.neg_hi, neg_hi), b.set_count(n);
     }
     /// The union of buckets [first, last) of `axis`, and how many references they hold.
     Aabb box_of(int axis, std::uint32_t first, std::uint32_t last) const;

@@ -16,7 +16,9 @@ namespace {
 
 struct Kernel {
     const __m256 xyz = _mm256_castsi256_ps(_mm256_setr_epi32(-1, -1, -1, 0, -1, -1, -1, 0));
-    const __m256 flip_hi = _mm256_setr_ps(0, 0, 0, 0, -0.0f, -0.0f, -0.0f, -0.0f);
+    // (lo, -hi) from (lo, hi) with lanes 3 and 7 zero; lane 3 becomes +inf, which keeps the count (Bucket)
+    const __m256 flip_hi = _mm256_setr_ps(0, 0, 0, __builtin_inff(), -0.0f, -0.0f, -0.0f, -0.0f);
+    const __m256i count_one = _mm256_setr_epi32(0, 0, 0, 1, 0, 0, 0, 0);
     const __m128 zero = _mm_setzero_ps(), sign = _mm_set1_ps(-0.0f);
 };
 
@@ -33,22 +35,23 @@ std::size_t offset(__m128i v, Lane<kLane>) {
     return std::uint32_t(_mm_extract_epi32(v, kLane));
 }
 
-/// Where axis a's buckets lie in a copy of B buckets per axis (lane a: a · 64 B bytes), so that
-/// one shift and one add give a reference's three bucket offsets (binning.h Bucket: 64 bytes).
+/// Where axis a's buckets lie in a copy of B buckets per axis (lane a: a · 32 B bytes), so that
+/// one shift and one add give a reference's three bucket offsets (binning.h Bucket: 32 bytes).
 struct AxisOffsets {
     __m128i bucket;
-    explicit AxisOffsets(std::uint32_t bins) : bucket(_mm_setr_epi32(0, 64 * int(bins), 128 * int(bins), 0)) {}
+    explicit AxisOffsets(std::uint32_t bins) : bucket(_mm_setr_epi32(0, 32 * int(bins), 64 * int(bins), 0)) {}
 };
 
-/// Adds a reference, (lo, -hi) box and bucket indices k on the three axes, to one copy of
-/// buckets starting at `base`: the box is the bucket's first 32 bytes, its count the next 4.
-inline void add_to_buckets(char* base, const AxisOffsets& axes, __m128i k, __m256 box_of_ref) {
-    const __m128i at = _mm_add_epi32(_mm_slli_epi32(k, 6), axes.bucket);
+/// Adds a reference, (lo, -hi) box with +inf in lane 3 and bucket indices k on the three axes,
+/// to one copy of buckets starting at `base`: one min grows the box and keeps the count in lane
+/// 3, one integer add counts the reference (Bucket).
+inline void add_to_buckets(char* base, const AxisOffsets& axes, __m128i k, __m256 box_of_ref, __m256i count_one) {
+    const __m128i at = _mm_add_epi32(_mm_slli_epi32(k, 5), axes.bucket);
     char* b[3] = {base + offset(at, Lane<0>()), base + offset(at, Lane<1>()), base + offset(at, Lane<2>())};
     for (char* p : b) {
         float* box = reinterpret_cast<float*>(p);
-        _mm256_store_ps(box, _mm256_min_ps(_mm256_load_ps(box), box_of_ref));
-        ++*reinterpret_cast<std::uint32_t*>(p + 32);
+        const __m256 grown = _mm256_min_ps(_mm256_load_ps(box), box_of_ref);
+        _mm256_store_ps(box, _mm256_castsi256_ps(_mm256_add_epi32(_mm256_castps_si256(grown), count_one)));
     }
 }
 
@@ -63,7 +66,7 @@ void bin_refs(const PrimRef* refs, Range r, const BinFrame& f, const BinSet copi
         const __m256 v = _mm256_and_ps(_mm256_loadu_ps(reinterpret_cast<const float*>(refs + i)), c.xyz);
         const __m128 c2 = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
         const __m128i k = _mm_cvttps_epi32(bucket_coordinate(c2, origin2, scale, top, c.zero));
-        add_to_buckets(base[i & 1], axes, k, _mm256_xor_ps(v, c.flip_hi));
+        add_to_buckets(base[i & 1], axes, k, _mm256_xor_ps(v, c.flip_hi), c.count_one);
     }
 }
 
@@ -114,7 +117,7 @@ public:
         if (char* base = bucket_[kCopy][l]) {
             // The child's box holds the reference's, so c2 - origin2 >= 0: only the top needs a clamp.
             const __m128 x = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(c2, frame_[l].origin2), frame_[l].scale), top_);
-            add_to_buckets(base, axes_, _mm_cvttps_epi32(x), _mm256_xor_ps(v, c_.flip_hi));
+            add_to_buckets(base, axes_, _mm_cvttps_epi32(x), _mm256_xor_ps(v, c_.flip_hi), c_.count_one);
         }
     }
 

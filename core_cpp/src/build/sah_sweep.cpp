@@ -16,7 +16,7 @@ struct BucketUnion {
         const Bucket &x = bucket[j], &y = bucket[bins + j],
                      &z = bucket[2 * std::size_t(bins) + j];  // bucket j of each axis
         box.grow(x.lo, x.neg_hi, y.lo, y.neg_hi, z.lo, z.neg_hi);
-        n[0] += x.count, n[1] += y.count, n[2] += z.count;
+        n[0] += x.count(), n[1] += y.count(), n[2] += z.count();
     }
 };
 
@@ -34,7 +34,7 @@ AxisCuts cheapest_bin_cuts(const Bucket* bucket, std::uint32_t bins, const SahCo
     }
     // the counts as the SAH counts them (SahCost::counted) under the parent, which holds every
     // reference of each axis's buckets
-    const std::uint32_t mask = sah.round_mask(std::uint64_t(u.n[0]) + bucket[0].count);
+    const std::uint32_t mask = sah.round_mask(std::uint64_t(u.n[0]) + bucket[0].count());
     for (std::uint32_t j = 0; j + 1 < bins; ++j)
         for (int a = 0; a < 4; ++a) right_n[j][a] = SahCost::counted(right_n[j][a], mask);
     u = BucketUnion();
