@@ -47,7 +47,8 @@ struct AxisOffsets {
 /// 3, one integer add counts the reference (Bucket).
 inline void add_to_buckets(char* base, const AxisOffsets& axes, __m128i k, __m256 box_of_ref, __m256i count_one) {
     const __m128i at = _mm_add_epi32(_mm_slli_epi32(k, 5), axes.bucket);
-    char* b[3] = {base + offset(at, Lane<0>()), base + offset(at, Lane<1>()), base + offset(at, Lane<2>())};
+    const std::uint64_t low = std::uint64_t(_mm_cvtsi128_si64(at));  // lanes 0 and 1 in one move
+    char* b[3] = {base + std::uint32_t(low), base + (low >> 32), base + offset(at, Lane<2>())};
     for (char* p : b) {
         float* box = reinterpret_cast<float*>(p);
         const __m256 grown = _mm256_min_ps(_mm256_load_ps(box), box_of_ref);
