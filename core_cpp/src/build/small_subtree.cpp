@@ -83,7 +83,7 @@ public:
             const SmallNode node = stack[--size];
             const std::uint32_t at =
                 root ? index : writer_.open(to_aabb(node.lo, node.neg_hi), node.depth, node.parent, node.second_child);
-            const SmallCut cut = node.count > 1 ? choose(node) : SmallCut{};
+            const SmallCut cut = node.count > 1 && !pair_is_leaf(node) ? choose(node) : SmallCut{};
             if (cut.axis < 0) {
                 make_leaf(at, node);
                 continue;
@@ -96,6 +96,15 @@ public:
     }
 
 private:
+    /// choose()'s answer "a leaf" for a node of two references, without its fallbacks: every cut
+    /// of two references costs the same (cut_pair; SahCost::split is symmetric).
+    bool pair_is_leaf(const SmallNode& node) const {
+        if (node.count != 2 || cfg_.max_leaf_size < 2) return false;
+        const std::uint8_t a = set_.order[0][node.first], b = set_.order[0][node.first + 1];
+        const float inv = SahCost::inverse_area(half_area(node.lo, neg(node.neg_hi)));
+        return sah_.leaf(2) <= sah_.split(inv, half_area(set_.lo[a], neg(set_.neg_hi[a])), 1,
+                                          half_area(set_.lo[b], neg(set_.neg_hi[b])), 1);
+    }
     SmallCut choose(const SmallNode& node) const;
     SmallCut cheapest(const SmallNode& node, const bool allowed[3]) const;
     SmallCut cut_at(int axis, const SmallNode& node, std::uint32_t last_left) const;
