@@ -41,7 +41,7 @@ void BinSet::merge(const BinSet& other) const {
     for (std::size_t i = 0; i < 3 * std::size_t(bins); ++i) {
         Bucket& b = bucket[i];
         const Bucket& o = other.bucket[i];
-        const std::uint32_t n = b.count() + o.count();  // lane 3 of the min may not hold it (2^30)
+        const std::uint32_t n = b.count() + o.count();  // the min below keeps one of the two counts, not their sum
         b.lo = min(b.lo, o.lo), b.neg_hi = min(b.neg_hi, o.neg_hi), b.set_count(n);
     }
 }
