@@ -64,7 +64,8 @@ std::uint32_t BinSet::count_of(int axis, std::uint32_t first, std::uint32_t last
 BinSet BinStore::slot(std::uint32_t s) {
     if (slots_.size() <= s) slots_.resize(s + 1);
     if (!slots_[s])
-        slots_[s].reset(static_cast<Bucket*>(std::aligned_alloc(alignof(Bucket), 3 * sizeof(Bucket) * bins_)));
+        // whole cache lines: the chunks of a parallel pass fill their slots on different threads
+        slots_[s].reset(static_cast<Bucket*>(std::aligned_alloc(64, (3 * sizeof(Bucket) * bins_ + 63) / 64 * 64)));
     if (!slots_[s]) throw std::bad_alloc();
     return {slots_[s].get(), bins_};
 }

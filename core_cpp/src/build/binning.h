@@ -52,7 +52,9 @@ struct BinFrame {
 /// grows both, and their count in lo's lane 3 as the bits of an integer plus kCountBias. Those bits
 /// are a positive normal float while a copy counts fewer than 2^30 references (a pass alternates
 /// two copies; a build has fewer than 2^31), so the `min` with a reference's box, whose lane 3 is
-/// +inf, keeps them (also with denormals flushed); an integer add of 1 in lane 3 counts.
+/// +inf, keeps them (also with denormals flushed); an integer add of 1 in lane 3 counts. A merged
+/// set (BinSet::merge) may count up to 2^31, past the normal floats: it is only read (count()),
+/// never binned into, as every pass resets its copies first.
 struct alignas(32) Bucket {
     static constexpr std::uint32_t kCountBias = 0x00800000u;  ///< the bits of the least normal float
     F4 lo, neg_hi;
