@@ -146,7 +146,9 @@ demo: build
 	cp out/demo/figure5_overlay_vulkan.png docs/figure5_overlay.png 2>/dev/null || cp out/demo/figure5_overlay_cpu.png docs/figure5_overlay.png
 	$(PY) -m bvhlab render atrium --method sah12 --bvh-depth 8:9 --width 800 --height 600 --out docs/atrium_overlay.png
 
+# Embree 3 in C++ (Debian's libembree-dev) is the benchmarks' peer; bench/cpp builds without it otherwise.
 bench: build
+	@scripts/install_system_packages.sh libembree-dev
 	$(PY) bench/build.py
 	$(PY) bench/traverse.py
 

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Installs the Debian packages bvhlab needs that are not installed yet (nothing when all are).
+# Installs the Debian packages bvhlab needs that are not installed yet (nothing when all are),
+# and any further packages named as arguments (make bench: Embree 3's libembree-dev).
 set -euo pipefail
 
 packages=(
@@ -14,6 +15,7 @@ packages=(
   mesa-vulkan-drivers libvulkan-dev glslc vulkan-validationlayers vulkan-tools libstb-dev
   # clang for the sanitizer build (GCC's UBSan lacks float-cast-overflow) and libFuzzer
   clang libclang-rt-14-dev
+  "$@"
 )
 
 missing=()
