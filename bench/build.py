@@ -45,10 +45,12 @@ def measure_scene(exe: Path, path: Path, tris, threads: list[int], repeat: int, 
     """Every peer's build times per thread count (all rounds), SAH and nodes; embreex's commits."""
     args = ["build", str(path)] + [a for _, spec in peers for a in ("--peer", spec)] + ["--repeat", str(repeat)]
     rows = {spec: {"label": label, "spec": spec, "seconds": {}} for label, spec in peers}
-    embreex = {}
+    embreex, warm_up = {}, {}
     for t in threads:
         for _ in range(rounds):
-            for p in _peers.run(exe, args, t)["peers"]:
+            run = _peers.run(exe, args, t)
+            warm_up.setdefault(str(t), []).append(run["warm_up_rounds"])
+            for p in run["peers"]:
                 row = rows[p["spec"]]
                 row["seconds"].setdefault(str(t), []).extend(p["seconds"])
                 row.setdefault("cpu_seconds", {}).setdefault(str(t), []).extend(p["cpu_seconds"])
@@ -57,7 +59,7 @@ def measure_scene(exe: Path, path: Path, tris, threads: list[int], repeat: int, 
             child = _common.run_child(__file__, ["--embreex-child", str(path), "--repeat", str(repeat)], cores=t)
             if child.get("seconds"):
                 embreex.setdefault(str(t), []).extend(child["seconds"])
-    return {"triangles": len(tris), "peers": list(rows.values()), "embreex": embreex}
+    return {"triangles": len(tris), "peers": list(rows.values()), "embreex": embreex, "warm_up_rounds": warm_up}
 
 
 def count_instructions(exe: Path, path: Path, result: dict) -> None:
