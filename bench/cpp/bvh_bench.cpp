@@ -110,8 +110,8 @@ int run_build(const Args& a) {
             const Usage u1 = usage();
             cpu[k].push_back(u1.cpu_seconds - u0.cpu_seconds), faults[k].push_back(double(u1.faults - u0.faults));
         }
-    std::printf("{\"triangles\": %zu, \"threads\": %u, \"warm_up_rounds\": %d, \"peers\": [", mesh.count(),
-                a.threads, warmups);
+    std::printf("{\"triangles\": %zu, \"threads\": %u, \"warm_up_rounds\": %d, \"peers\": [", mesh.count(), a.threads,
+                warmups);
     for (std::size_t k = 0; k < peers.size(); ++k) {
         TreeInfo info = peers[k]->info();
         std::printf("%s\n {\"spec\": \"%s\", \"name\": \"%s\", \"sah\": %s, \"nodes\": %llu, \"seconds\": ",
