@@ -79,8 +79,9 @@ void print_times(const std::vector<double>& times, const char* format = "%s%.6f"
 /// no build faults in more than kFreshPages pages (16 MiB), or kMaxRounds rounds. One round is not
 /// enough when several trees stay alive: their blocks are reserved for the largest tree a range
 /// can make (2n - 1 nodes) and written only as far as each tree goes, so as the blocks pass from
-/// one peer to the next, the first touches go on for rounds (room1m, six bvhlab trees: 4K-7K
-/// faults in each of the next three builds of a peer, then none). Returns the rounds run.
+/// one peer to the next, the first touches go on for rounds (room1m, six bvhlab trees: 21,943
+/// faults in the default's second build, then 4K-7K a build, for up to five more rounds, in the
+/// default's and the report configuration's). Returns the rounds run.
 int warm_up(const std::vector<std::unique_ptr<Peer>>& peers, const Mesh& mesh) {
     constexpr long kFreshPages = 4096;
     constexpr int kMaxRounds = 8;
