@@ -82,9 +82,7 @@ TEST(CheapestBinCuts, IsSahCostSplitAtEveryBoundaryBitForBit) {
                 parent_lo[a] = std::min(parent_lo[a], lo[a]), parent_hi[a] = std::max(parent_hi[a], hi[a]);
             for (int a = 0; a < 3; ++a) {  // every reference is in one bucket of each axis
                 const std::uint32_t k = kind == 3 ? (rng() % 2) * (bins - 1) : std::uint32_t(rng() % bins);
-                Bucket& b = bucket[a * bins + k];
-                const std::uint32_t n = b.count() + 1;
-                b.lo = min(b.lo, F4::load(lo)), b.neg_hi = min(b.neg_hi, neg(F4::load(hi))), b.set_count(n);
+                bucket[a * bins + k].add(F4::load(lo), neg(F4::load(hi)));
             }
         }
         BuildConfig config;

@@ -216,11 +216,7 @@ std::uint32_t partition_and_bin(const PrimRef* __restrict src, PrimRef* __restri
         // The child's box holds the reference's, so c2 - origin2 >= 0: only the top needs a clamp.
         truncate_to_u32(min((c2 - t.origin2) * t.scale, top), k);
         const BinTarget& b = t.copy[i & 1];
-        for (int a = 0; a < 3; ++a) {
-            Bucket& bucket = b.axis[a][k[a]];
-            const std::uint32_t n = bucket.count() + 1;
-            bucket.lo = min(bucket.lo, lo), bucket.neg_hi = min(bucket.neg_hi, neg_hi), bucket.set_count(n);
-        }
+        for (int a = 0; a < 3; ++a) b.axis[a][k[a]].add(lo, neg_hi);
     }
     for (int s = 0; s < 2 && sides; ++s) sides[s].merge(acc[0][s]), sides[s].merge(acc[1][s]);
     return left;

@@ -69,6 +69,12 @@ struct alignas(32) Bucket {
         const std::uint32_t bits = n + kCountBias;
         std::memcpy(reinterpret_cast<char*>(&lo) + 12, &bits, sizeof(bits));
     }
+    /// Grows the box by a reference's (lo, -hi) and counts it: the count is read before the `min`
+    /// and written after, so the reference's lane 3 need not be +inf on the portable paths.
+    void add(F4 ref_lo, F4 ref_neg_hi) {
+        const std::uint32_t n = count() + 1;
+        lo = min(lo, ref_lo), neg_hi = min(neg_hi, ref_neg_hi), set_count(n);
+    }
 };
 static_assert(sizeof(Bucket) == 32 && offsetof(Bucket, neg_hi) == 16,
               "binning_avx2.cpp reads the box as 32 bytes at 0 and the count in lane 3");
@@ -81,9 +87,7 @@ struct BinSet {
     void reset() const;
     void merge(const BinSet& other) const;
     void add(int axis, std::uint32_t k, F4 lo, F4 neg_hi) const {
-        Bucket& b = bucket[std::size_t(axis) * bins + k];
-        const std::uint32_t n = b.count() + 1;
-        b.lo = min(b.lo, lo), b.neg_hi = min(b.neg_hi, neg_hi), b.set_count(n);
+        bucket[std::size_t(axis) * bins + k].add(lo, neg_hi);
     }
     /// The union of buckets [first, last) of `axis`, and how many references they hold.
     Aabb box_of(int axis, std::uint32_t first, std::uint32_t last) const;

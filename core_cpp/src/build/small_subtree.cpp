@@ -97,18 +97,21 @@ public:
 
 private:
     /// choose()'s answer "a leaf" for a node of two references, without its fallbacks: every cut
-    /// of two references costs the same (cut_pair; SahCost::split is symmetric).
+    /// of two references costs the same (SahCost::split is symmetric), so any axis's order will do.
     bool pair_is_leaf(const SmallNode& node) const {
-        if (node.count != 2 || cfg_.max_leaf_size < 2) return false;
-        const std::uint8_t a = set_.order[0][node.first], b = set_.order[0][node.first + 1];
+        return node.count == 2 && cfg_.max_leaf_size >= 2 && sah_.leaf(2) <= pair_cost(0, node);
+    }
+    /// The cost of splitting a node of two references, its two in order[axis], one to a side:
+    /// cut_at(axis, node, 0) bit for bit (a min with an empty box gives the other box), without its loops.
+    float pair_cost(int axis, const SmallNode& node) const {
+        const std::uint8_t a = set_.order[axis][node.first], b = set_.order[axis][node.first + 1];
         const float inv = SahCost::inverse_area(half_area(node.lo, neg(node.neg_hi)));
-        return sah_.leaf(2) <= sah_.split(inv, half_area(set_.lo[a], neg(set_.neg_hi[a])), 1,
-                                          half_area(set_.lo[b], neg(set_.neg_hi[b])), 1);
+        return sah_.split(inv, half_area(set_.lo[a], neg(set_.neg_hi[a])), 1,
+                          half_area(set_.lo[b], neg(set_.neg_hi[b])), 1);
     }
     SmallCut choose(const SmallNode& node) const;
     SmallCut cheapest(const SmallNode& node, const bool allowed[3]) const;
     SmallCut cut_at(int axis, const SmallNode& node, std::uint32_t last_left) const;
-    SmallCut cut_pair(int axis, const SmallNode& node) const;
     void divide(const SmallNode& node, const SmallCut& cut, std::uint32_t at, SmallNode children[2]);
     void make_leaf(std::uint32_t at, const SmallNode& node) {
         std::uint32_t* out = writer_.make_leaf(at, begin_ + node.first, node.count);
@@ -140,7 +143,8 @@ SmallCut SmallBuilder::choose(const SmallNode& node) const {
     } else if (too_deep(node.depth, m)) {
         best = cut_at(largest_axis(extent), node, m / 2 - 1);
     } else if (m == 2) {
-        best = cut_pair(largest_axis(extent), node);  // one way to split, whatever the axis
+        const int axis = largest_axis(extent);
+        best = {axis, 0, pair_cost(axis, node)};  // one way to split, whatever the axis
     } else {
         const Range r{begin_ + f, begin_ + f + m};
         const int axis = all_axes_ ? kAllAxes : choose_axis(cfg_, extent, r, node.depth);
@@ -186,16 +190,6 @@ SmallCut SmallBuilder::cheapest(const SmallNode& node, const bool allowed[3]) co
     for (int a = 0; a < 3; ++a)
         if (allowed[a] && cheapest.cost.lane(a) < best.cost) best = {a, lefts[a] - 1, cheapest.cost.lane(a)};
     return best;
-}
-
-/// cut_at(axis, node, 0) for a node of two references, bit for bit (min with an empty box gives
-/// the other box), without its loops: two-reference nodes are the most common kind.
-SmallCut SmallBuilder::cut_pair(int axis, const SmallNode& node) const {
-    const std::uint8_t a = set_.order[axis][node.first], b = set_.order[axis][node.first + 1];
-    const float inv = SahCost::inverse_area(half_area(node.lo, neg(node.neg_hi)));
-    const float cost =
-        sah_.split(inv, half_area(set_.lo[a], neg(set_.neg_hi[a])), 1, half_area(set_.lo[b], neg(set_.neg_hi[b])), 1);
-    return {axis, 0, cost};
 }
 
 SmallCut SmallBuilder::cut_at(int axis, const SmallNode& node, std::uint32_t last_left) const {
