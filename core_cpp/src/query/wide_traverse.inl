@@ -101,7 +101,10 @@ void test_triangles(const PrimPacket& k, std::uint32_t packet, const Query& q, c
 void test_leaf(const WideView& wide, std::uint32_t first, std::uint32_t count, const Query& q, Hit& hit) {
     for (std::uint32_t p = first; p < first + count; ++p) {
         const PrimPacket& k = wide.packets[p];
-        if (!(k.ref[0] & gpu::REF_SPHERE_BIT)) {
+        // [[likely]]: the sphere calls out of line; laid out as the rare case, the leaf's entry
+        // spills fewer of the node loop's registers (uniform1m random rays: 3,549 → 3,486
+        // instructions a ray, Sponza 1,077 → 1,067)
+        if (!(k.ref[0] & gpu::REF_SPHERE_BIT)) [[likely]] {
             test_triangles(k, p, q, wide, hit);
             continue;
         }
