@@ -123,13 +123,13 @@ void test_leaf(const WideView& wide, std::uint32_t first, std::uint32_t count, c
 /// says nothing of where their contents lie (the cost-optimal collapse puts large leaves beside
 /// deep subtrees, which entry order visited first). Only the order changes: the entry is still
 /// what the stack compares with the closest hit, so the hit is the same.
-int enter_children(const WideNode& node, const L8 origin[3], const L8 inv[3], const L8 inv_far[3], const int near[3],
-                   float tmin, float far_limit, Entry out[8]) {
+int enter_children(const WideNode& node, const L8 origin[3], const L8 neg_inv[3], const L8 neg_inv_far[3],
+                   const int near[3], float tmin, float far_limit, Entry out[8]) {
     const float* f = node.lo_x;
     // the same order of raises and lowers as hit_box: NaN from 0·inf on a face is ignored
     L8 t0 = L8::splat(tmin), t1 = L8::splat(far_limit);
-    for (int a = 0; a < 3; ++a) t0 = raise(t0, (L8::load(f + near[a]) - origin[a]) * inv[a]);
-    for (int a = 0; a < 3; ++a) t1 = lower(t1, (L8::load(f + (near[a] ^ 8)) - origin[a]) * inv_far[a]);
+    for (int a = 0; a < 3; ++a) t0 = raise(t0, (origin[a] - L8::load(f + near[a])) * neg_inv[a]);
+    for (int a = 0; a < 3; ++a) t1 = lower(t1, (origin[a] - L8::load(f + (near[a] ^ 8))) * neg_inv_far[a]);
     int mask = le_bits(t0, t1);
     if (!mask) return 0;
     int k = __builtin_ctz(unsigned(mask));
@@ -170,9 +170,13 @@ void prefetch(const WideView& wide, const Entry& e) {
 /// lives in a register and is renewed after a leaf, the one place the hit changes.
 std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit) {
     const L8 origin[3] = {L8::splat(q.o[0]), L8::splat(q.o[1]), L8::splat(q.o[2])};
-    const L8 inv[3] = {L8::splat(q.inv[0]), L8::splat(q.inv[1]), L8::splat(q.inv[2])};
+    // The planes' distances as (origin - plane) · (-1/d), which are hit_box's (plane - origin) ·
+    // 1/d (negating is exact, and a zero's sign, the only difference, changes no comparison), so
+    // that the node's bounds can be the subtraction's memory operand: one load fewer per axis
+    // and side (uniform1m random rays: 6 instructions fewer a node).
+    const L8 neg_inv[3] = {L8::splat(-q.inv[0]), L8::splat(-q.inv[1]), L8::splat(-q.inv[2])};
     const float s = gpu::BOX_FAR_SCALE;
-    const L8 inv_far[3] = {L8::splat(q.inv[0] * s), L8::splat(q.inv[1] * s), L8::splat(q.inv[2] * s)};
+    const L8 neg_inv_far[3] = {L8::splat(-(q.inv[0] * s)), L8::splat(-(q.inv[1] * s)), L8::splat(-(q.inv[2] * s))};
     int near[3];  // float offset of the near plane array of each axis in a WideNode (lo_x = 0, hi_x = 8, ...)
     for (int a = 0; a < 3; ++a) near[a] = 16 * a + (std::signbit(q.inv[a]) ? 8 : 0);
     Entry stack[7 * gpu::MAX_TREE_HEIGHT + 8];
@@ -186,7 +190,8 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit) {
         } else {
             ++visited;
             Entry hits[8];
-            const int h = enter_children(wide.nodes[cur.index], origin, inv, inv_far, near, q.tmin, far_limit, hits);
+            const int h =
+                enter_children(wide.nodes[cur.index], origin, neg_inv, neg_inv_far, near, q.tmin, far_limit, hits);
             if (h) {
                 for (int k = 0; k < h - 1; ++k) prefetch(wide, hits[k]), stack[sp++] = hits[k];
                 cur = hits[h - 1];
