@@ -225,7 +225,7 @@ class Bvh:
         ValueError naming the ray. Ctrl-C stops a long batch (KeyboardInterrupt).
 
         `traversal`: "stack" (binary tree, nearer child first), "stackless" (skip indices,
-        report §3.1), or "wide" (a 4-wide copy of the tree made on first use; the fastest).
+        report §3.1), or "wide" (an 8-wide copy of the tree made on first use; the fastest).
         All three return the same hits.
 
         Returns a dict of arrays: t (inf on a miss), prim (index within its kind, -1 on a miss),

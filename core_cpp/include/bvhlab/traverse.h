@@ -9,7 +9,7 @@ namespace bvhlab {
 enum class Traversal {
     Stack,      ///< depth-first, nearer child first, a fixed stack of MAX_TREE_HEIGHT entries
     Stackless,  ///< depth-first in node order, following skip indices on a miss (report §3.1)
-    Wide,       ///< the 4-wide conversion (wide_bvh.h), nearer children first: the fastest on CPUs
+    Wide,       ///< the 8-wide conversion (wide_bvh.h), nearer children first: the fastest on CPUs
 };
 
 struct WideBvh;
