@@ -126,6 +126,11 @@ void test_leaf(const WideView& wide, std::uint32_t first, std::uint32_t count, c
 int enter_children(const WideNode& node, const L8 origin[3], const L8 neg_inv[3], const L8 neg_inv_far[3],
                    const int near[3], float tmin, float far_limit, Entry out[8]) {
     const float* f = node.lo_x;
+    // The children's indices are the node's fourth cache line, read only once the box tests say
+    // which: started now, its load overlaps the bounds' instead of following them (a second miss
+    // in a row where the node was not in the caches; uniform1m random rays +4-5% best of
+    // interleaved runs, Sponza and room1m unchanged).
+    __builtin_prefetch(node.child);
     // the same order of raises and lowers as hit_box: NaN from 0·inf on a face is ignored
     L8 t0 = L8::splat(tmin), t1 = L8::splat(far_limit);
     for (int a = 0; a < 3; ++a) t0 = raise(t0, (origin[a] - L8::load(f + near[a])) * neg_inv[a]);
