@@ -114,10 +114,11 @@ void test_leaf(const WideView& wide, std::uint32_t first, std::uint32_t count, c
 }
 
 /// The children of `node` the ray enters before hit.t, nearest last: returns how many.
-/// `inv_far` is the inverse direction times gpu::BOX_FAR_SCALE and `far_limit` the closest hit so
-/// far times it: the far end widened as hit_box widens it (Ize 2013), with the scale folded into
-/// per-ray constants rather than a multiply on every node's dependency chain. One rounding more
-/// than hit_box's product, which the scale covers with room to spare (16 ε against 7 ε).
+/// `neg_inv` is the negated inverse direction (traverse_nodes says why), `neg_inv_far` that times
+/// gpu::BOX_FAR_SCALE, and `far_limit` the closest hit so far times the scale: the far end widened
+/// as hit_box widens it (Ize 2013), with the scale folded into per-ray constants rather than a
+/// multiply on every node's dependency chain. One rounding more than hit_box's product, which the
+/// scale covers with room to spare (16 ε against 7 ε).
 /// "Nearest" is by the middle of the span the ray spends in each box (entry + exit), not by the
 /// entry alone: a ray starting inside several boxes enters them all at tmin, and the entry then
 /// says nothing of where their contents lie (the cost-optimal collapse puts large leaves beside
