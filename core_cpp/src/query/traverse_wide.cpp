@@ -1,7 +1,10 @@
 // Closest-hit traversal of the 8-wide tree: the portable path (SSE on x86-64, plain C++
 // elsewhere), the dispatch to the AVX2 path (isa.h), and the helpers both call.
-#include <functional>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <functional>
+#include <limits>
 
 #include "bvhlab/isa.h"
 #include "bvhlab/simd.h"
@@ -121,6 +124,57 @@ inline L8 operator*(L8 x, L8 y) { return {x.a * y.a, x.b * y.b}; }
 inline L8 raise(L8 acc, L8 t) { return {raise(acc.a, t.a), raise(acc.b, t.b)}; }
 inline L8 lower(L8 acc, L8 t) { return {lower(acc.a, t.a), lower(acc.b, t.b)}; }
 inline int le_bits(L8 x, L8 y) { return le_bits(x.a, y.a) | le_bits(x.b, y.b) << 4; }
+
+struct I8 {
+    std::uint32_t v[8];
+    static I8 load(const std::uint32_t* p) {
+        I8 x;
+        std::memcpy(x.v, p, sizeof x.v);
+        return x;
+    }
+    void store(std::uint32_t* p) const { std::memcpy(p, v, sizeof v); }
+};
+/// Lane i takes lane order[i] & 7.
+inline I8 permute(I8 x, I8 order) {
+    I8 r;
+    for (int i = 0; i < 8; ++i) r.v[i] = x.v[order.v[i] & 7];
+    return r;
+}
+inline L8 permute(L8 x, I8 order) {
+    alignas(32) float f[8], g[8];
+    x.store(f);
+    for (int i = 0; i < 8; ++i) g[i] = f[order.v[i] & 7];
+    return L8::load(g);
+}
+
+/// The key the wide traversal sorts child slot `lane` by (wide_traverse.inl enter_children): for
+/// a child the ray enters, an int ordered as `middle` (entry + exit) is, the float's bits with a
+/// negative value's magnitude bits flipped, its last three bits replaced by the slot, so that
+/// keys are distinct (ties, and middles within 8 ulps, go by slot); for a child not entered,
+/// INT_MIN + slot, below every entered child's key. The AVX2 path computes the same keys
+/// (traverse_wide_avx2.cpp order_children), so both visit the same nodes in the same order.
+inline std::int32_t child_key(float middle, int lane, bool entered) {
+    std::int32_t b;
+    std::memcpy(&b, &middle, sizeof b);
+    b ^= (b >> 31) & std::numeric_limits<std::int32_t>::max();
+    return entered ? (b & ~7) | lane : std::numeric_limits<std::int32_t>::min() + lane;
+}
+
+/// The eight slots' keys (child_key) largest first into `order`; returns the slot of the least
+/// entered key (the nearest child).
+inline int order_children(L8 t0, L8 t1, int mask, I8& order) {
+    alignas(32) float entry[8], exit[8];
+    t0.store(entry), t1.store(exit);
+    std::int32_t key[8];
+    for (int i = 0; i < 8; ++i) {
+        const std::int32_t k = child_key(entry[i] + exit[i], i, (mask >> i) & 1);
+        int j = i;
+        for (; j > 0 && key[j - 1] < k; --j) key[j] = key[j - 1];
+        key[j] = k;
+    }
+    for (int i = 0; i < 8; ++i) order.v[i] = std::uint32_t(key[i]);
+    return key[__builtin_popcount(unsigned(mask)) - 1] & 7;
+}
 
 #include "wide_traverse.inl"
 

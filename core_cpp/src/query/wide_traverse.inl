@@ -63,6 +63,15 @@ struct Entry {
     float t;                     ///< where the ray enters the box
 };
 
+/// Pushed entries, a field to an array so that a node's children are pushed as three vector
+/// stores (enter_children); eight slots of room past the deepest push.
+struct Stack {
+    static constexpr std::uint32_t kSize = 7 * gpu::MAX_TREE_HEIGHT + 8;
+    alignas(32) std::uint32_t index[kSize];
+    alignas(32) std::uint32_t count[kSize];
+    alignas(32) float t[kSize];
+};
+
 /// closer_hit (ray.h), repeated here for the reason given at the top of this file.
 bool closer(float t, std::uint32_t ref, const Hit& hit) {
     return t < hit.t || (t == hit.t && hit.ref != kNoHit && ref < hit.ref);
@@ -113,7 +122,20 @@ void test_leaf(const WideView& wide, std::uint32_t first, std::uint32_t count, c
     }
 }
 
-/// The children of `node` the ray enters before hit.t, nearest last: returns how many.
+/// Starts the loads of an entry pushed for later: its node's four cache lines, or its first
+/// packet's three. In a tree larger than the caches a popped entry is a miss, and its lines are
+/// on their way by then (random rays, against Embree measured alongside: uniform1m 0.60 → 0.71,
+/// Sponza 0.96 → 1.01; room1m unchanged).
+void prefetch(const WideView& wide, std::uint32_t index, std::uint32_t count) {
+    const char* p = nullptr;
+    if (count) p = reinterpret_cast<const char*>(wide.packets + index);
+    else p = reinterpret_cast<const char*>(wide.nodes + index), __builtin_prefetch(p + 192);
+    __builtin_prefetch(p), __builtin_prefetch(p + 64), __builtin_prefetch(p + 128);
+}
+
+/// One step of the traversal: tests the eight child boxes of `node` (as hit_box does) and pushes
+/// the children the ray enters before hit.t, nearest last, the nearest going to `cur` rather than
+/// the stack. Returns false when the ray enters none.
 /// `neg_inv` is the negated inverse direction (traverse_nodes says why), `neg_inv_far` that times
 /// gpu::BOX_FAR_SCALE, and `far_limit` the closest hit so far times the scale: the far end widened
 /// as hit_box widens it (Ize 2013), with the scale folded into per-ray constants rather than a
@@ -124,8 +146,12 @@ void test_leaf(const WideView& wide, std::uint32_t first, std::uint32_t count, c
 /// says nothing of where their contents lie (the cost-optimal collapse puts large leaves beside
 /// deep subtrees, which entry order visited first). Only the order changes: the entry is still
 /// what the stack compares with the closest hit, so the hit is the same.
-int enter_children(const WideNode& node, const L8 origin[3], const L8 neg_inv[3], const L8 neg_inv_far[3],
-                   const int near[3], float tmin, float far_limit, Entry out[8]) {
+/// The order comes from order_children, which sorts the eight slots by a key of their middle
+/// without branches where it can (AVX2: a sorting network): which children a ray enters, and in
+/// what order, is data that no branch predictor learns.
+bool enter_children(const WideView& wide, const WideNode& node, const L8 origin[3], const L8 neg_inv[3],
+                    const L8 neg_inv_far[3], const int near[3], float tmin, float far_limit, Stack& stack,
+                    std::uint32_t& sp, Entry& cur) {
     const float* f = node.lo_x;
     // The children's indices are the node's fourth cache line, read only once the box tests say
     // which: started now, its load overlaps the bounds' instead of following them (a second miss
@@ -136,40 +162,31 @@ int enter_children(const WideNode& node, const L8 origin[3], const L8 neg_inv[3]
     L8 t0 = L8::splat(tmin), t1 = L8::splat(far_limit);
     for (int a = 0; a < 3; ++a) t0 = raise(t0, (origin[a] - L8::load(f + near[a])) * neg_inv[a]);
     for (int a = 0; a < 3; ++a) t1 = lower(t1, (origin[a] - L8::load(f + (near[a] ^ 8))) * neg_inv_far[a]);
-    int mask = le_bits(t0, t1);
-    if (!mask) return 0;
-    int k = __builtin_ctz(unsigned(mask));
-    out[0] = {node.child[k], node.count[k], t0.lane(k)};
-    if (!(mask &= mask - 1)) return 1;      // the common case: one child entered
-    alignas(32) float entry[8], middle[8];  // middle: twice the middle, the sort key
-    t0.store(entry);
-    (t0 + t1).store(middle);
-    float key[8];  // of out[0 .. h), in step with it
-    key[0] = middle[k];
-    k = __builtin_ctz(unsigned(mask));
-    const Entry second{node.child[k], node.count[k], entry[k]};
-    if (middle[k] > key[0]) out[1] = out[0], key[1] = key[0], out[0] = second, key[0] = middle[k];  // farther first
-    else out[1] = second, key[1] = middle[k];
-    int h = 2;
-    for (mask &= mask - 1; mask; mask &= mask - 1) {
-        k = __builtin_ctz(unsigned(mask));
-        const Entry e{node.child[k], node.count[k], entry[k]};
-        int j = h++;
-        for (; j > 0 && key[j - 1] < middle[k]; --j) out[j] = out[j - 1], key[j] = key[j - 1];  // farther first
-        out[j] = e, key[j] = middle[k];
+    const int mask = le_bits(t0, t1);
+    if (!mask) return false;
+    if (!(mask & (mask - 1))) {
+        const int k = __builtin_ctz(unsigned(mask));
+        cur = {node.child[k], node.count[k], t0.lane(k)};
+        return true;
     }
-    return h;
-}
-
-/// Starts the loads of an entry pushed for later: its node's four cache lines, or its first
-/// packet's three. In a tree larger than the caches a popped entry is a miss, and its lines are
-/// on their way by then (random rays, against Embree measured alongside: uniform1m 0.60 → 0.71,
-/// Sponza 0.96 → 1.01; room1m unchanged).
-void prefetch(const WideView& wide, const Entry& e) {
-    const char* p = nullptr;
-    if (e.count) p = reinterpret_cast<const char*>(wide.packets + e.index);
-    else p = reinterpret_cast<const char*>(wide.nodes + e.index), __builtin_prefetch(p + 192);
-    __builtin_prefetch(p), __builtin_prefetch(p + 64), __builtin_prefetch(p + 128);
+    I8 order;  // the keys, farthest entered child first; permutes read their slot (the last 3 bits)
+    const int k = order_children(t0, t1, mask, order);
+    const auto h = std::uint32_t(__builtin_popcount(unsigned(mask)));
+    // all eight written, the entered ones first: those past the h - 1 pushed are overwritten later
+    permute(I8::load(node.child), order).store(stack.index + sp);
+    permute(I8::load(node.count), order).store(stack.count + sp);
+    permute(t0, order).store(stack.t + sp);
+    cur = {node.child[k], node.count[k], t0.lane(k)};
+    // the pushed entries (0 .. h - 2), nearest first, three without a loop (a position past
+    // them reads cur's, at h - 1, again): a loop's exit is as unpredictable as h
+    const std::uint32_t second = sp + h - 1 - 2 * std::uint32_t(h >= 3), third = sp + h - 1 - 3 * std::uint32_t(h >= 4);
+    prefetch(wide, stack.index[sp + h - 2], stack.count[sp + h - 2]);
+    prefetch(wide, stack.index[second], stack.count[second]);
+    prefetch(wide, stack.index[third], stack.count[third]);
+    if (h > 4) [[unlikely]]
+        for (std::uint32_t j = sp; j + 4 < sp + h; ++j) prefetch(wide, stack.index[j], stack.count[j]);
+    sp += h - 1;
+    return true;
 }
 
 /// Nearest child first, from the root. `far_limit`, the closest hit so far times the box scale,
@@ -185,7 +202,7 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit) {
     const L8 neg_inv_far[3] = {L8::splat(-(q.inv[0] * s)), L8::splat(-(q.inv[1] * s)), L8::splat(-(q.inv[2] * s))};
     int near[3];  // float offset of the near plane array of each axis in a WideNode (lo_x = 0, hi_x = 8, ...)
     for (int a = 0; a < 3; ++a) near[a] = 16 * a + (std::signbit(q.inv[a]) ? 8 : 0);
-    Entry stack[7 * gpu::MAX_TREE_HEIGHT + 8];
+    Stack stack;
     std::uint32_t sp = 0, visited = 0;
     Entry cur{0, 0, q.tmin};
     float far_limit = hit.t * s;
@@ -195,20 +212,15 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit) {
             far_limit = hit.t * s;
         } else {
             ++visited;
-            Entry hits[8];
-            const int h =
-                enter_children(wide.nodes[cur.index], origin, neg_inv, neg_inv_far, near, q.tmin, far_limit, hits);
-            if (h) {
-                for (int k = 0; k < h - 1; ++k) prefetch(wide, hits[k]), stack[sp++] = hits[k];
-                cur = hits[h - 1];
+            if (enter_children(wide, wide.nodes[cur.index], origin, neg_inv, neg_inv_far, near, q.tmin, far_limit,
+                               stack, sp, cur))
                 continue;
-            }
         }
         do {  // pop, skipping entries farther than the closest hit so far (ray.h may_hold_closer)
             if (sp == 0) return visited;
             --sp;
-        } while (!(stack[sp].t <= far_limit));
-        cur = stack[sp];
+        } while (!(stack.t[sp] <= far_limit));
+        cur = {stack.index[sp], stack.count[sp], stack.t[sp]};
     }
 }
 
