@@ -1,11 +1,16 @@
 // big_blocks.cpp — the large blocks behind BigVector, and the cache that lets one build reuse the
 // memory of the last instead of faulting in fresh pages (big_vector.h says why that matters).
+#include <cstdint>
 #include <cstdlib>
 #include <mutex>
 #include <new>
 #include <vector>
 
 #include "bvhlab/big_vector.h"
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 namespace bvhlab {
 namespace {
@@ -76,6 +81,18 @@ void free_big_block(void* p, std::size_t bytes) noexcept {
     } catch (...) {  // no memory to remember the block: give it back
         std::free(p);
     }
+}
+
+void advise_huge_pages(void* p, std::size_t bytes) noexcept {
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    constexpr std::uintptr_t kHuge = std::uintptr_t(2) << 20;
+    const auto begin = (reinterpret_cast<std::uintptr_t>(p) + kHuge - 1) & ~(kHuge - 1);
+    const auto end = (reinterpret_cast<std::uintptr_t>(p) + bytes) & ~(kHuge - 1);
+    if (begin < end)
+        madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);  // a hint: failure changes nothing
+#else
+    (void)p, (void)bytes;
+#endif
 }
 
 }  // namespace bvhlab

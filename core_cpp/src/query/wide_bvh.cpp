@@ -164,6 +164,8 @@ WideBvh make_wide(const Bvh& bvh) {
     const Collapse collapse(bvh, ranges);
     wide.packets.reserve(bvh.prims.size() / 2 + 1);
     wide.nodes.reserve(bvh.nodes.size() / 4 + 1);
+    advise_huge_pages(wide.packets.data(), wide.packets.capacity() * sizeof(PrimPacket));
+    advise_huge_pages(wide.nodes.data(), wide.nodes.capacity() * sizeof(WideNode));
     struct Item {
         std::uint32_t binary, wide;
     };
