@@ -22,6 +22,20 @@ Aabb slot_box(const WideNode& w, int k) {
     return {{w.lo_x[k], w.lo_y[k], w.lo_z[k]}, {w.hi_x[k], w.hi_y[k], w.hi_z[k]}};
 }
 
+/// Every node of the wide tree, from the root down.
+std::vector<const WideNode*> all_nodes(const WideBvh& wide) {
+    std::vector<const WideNode*> out;
+    std::vector<std::uint32_t> todo{0};
+    while (!todo.empty()) {
+        const WideNode& w = wide.node(todo.back());
+        todo.pop_back();
+        out.push_back(&w);
+        for (int k = 0; k < 8; ++k)
+            if (used(w, k) && w.count[k] == 0) todo.push_back(w.child[k]);
+    }
+    return out;
+}
+
 /// The box of a wide node: the union of its children's boxes (the box of the binary node it was
 /// made from, whose box is the union of its children's).
 Aabb node_bounds(const WideNode& w) {
@@ -94,33 +108,48 @@ Bvh small_tree(std::uint32_t triangles, std::uint32_t seed, SplitMethod method, 
 
 }  // namespace
 
-TEST(WideBvh, EveryPrimitiveIsInExactlyOneLaneAndEveryNodeHasOneParent) {
+TEST(WideBvh, PreorderLinesHoldEveryPrimitiveOnceAndEveryNodeOnce) {
     for (std::uint32_t leaf : {1u, 4u, 8u}) {
         const Bvh bvh = small_tree(5000, 3 + leaf, SplitMethod::Sah, leaf);
         const WideBvh wide = make_wide(bvh);
+        // Walking from the root in preorder lays the lines down again, one after another: each
+        // node, then its leaves' packets in slot order, then its inner children's subtrees.
         std::vector<int> seen(bvh.prims.size(), 0);
-        for (std::size_t p = 0; p < wide.packets.size(); ++p)
-            for (int l = 0; l < 4; ++l)
-                if (wide.packets[p].ref[l] != kNoHit) {
-                    const std::uint32_t slot = wide.slots[4 * p + l];
-                    ASSERT_LT(slot, bvh.prims.size());
-                    EXPECT_EQ(wide.packets[p].ref[l], bvh.prims[slot].ref);
-                    ++seen[slot];
-                }
-        EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), std::ptrdiff_t(seen.size())) << "leaf " << leaf;
-        std::vector<int> parents(wide.nodes.size(), 0);
-        for (const WideNode& w : wide.nodes) {
+        std::uint32_t next = 0, nodes = 0, packets = 0;
+        std::vector<std::uint32_t> todo{0};
+        while (!todo.empty()) {
+            const std::uint32_t line = todo.back();
+            todo.pop_back();
+            ASSERT_EQ(line, next) << "leaf " << leaf;
+            const WideNode& w = wide.node(line);
+            next += kNodeLines, ++nodes;
             int children = 0;
+            std::vector<std::uint32_t> inner;
             for (int k = 0; k < 8; ++k) {
                 if (!used(w, k)) continue;
                 ++children;
-                if (w.count[k] == 0) ++parents.at(w.child[k]);
-                else EXPECT_LE(w.child[k] + w.count[k], wide.packets.size());
+                if (w.count[k] == 0) {
+                    inner.push_back(w.child[k]);
+                    continue;
+                }
+                ASSERT_EQ(w.child[k], next);
+                for (std::uint32_t p = 0; p < w.count[k]; ++p, next += kPacketLines, ++packets) {
+                    const PrimPacket& q = wide.packet(w.child[k] + p * kPacketLines);
+                    for (int l = 0; l < 4; ++l) {
+                        if (q.ref[l] == kNoHit) continue;
+                        ASSERT_LT(q.slot[l], bvh.prims.size());
+                        EXPECT_EQ(q.ref[l], bvh.prims[q.slot[l]].ref);
+                        ++seen[q.slot[l]];
+                    }
+                }
             }
             EXPECT_GE(children, 1);
+            todo.insert(todo.end(), inner.rbegin(), inner.rend());
         }
-        EXPECT_EQ(parents[0], 0);  // the root
-        EXPECT_EQ(std::count(parents.begin() + 1, parents.end(), 1), std::ptrdiff_t(parents.size() - 1));
+        EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), std::ptrdiff_t(seen.size())) << "leaf " << leaf;
+        EXPECT_EQ(next, wide.lines.size());
+        EXPECT_EQ(nodes, wide.node_count);
+        EXPECT_EQ(packets, wide.packet_count);
     }
 }
 
@@ -134,7 +163,7 @@ TEST(WideBvh, CollapseHasTheLeastWideNodeAreaOfAllCollapses) {
             Enumeration all(bvh);
             if (all.merged(0)) continue;
             double area = 0;
-            for (const WideNode& w : wide.nodes) area += node_bounds(w).half_area();
+            for (const WideNode* w : all_nodes(wide)) area += node_bounds(*w).half_area();
             const float best = all.best_wide(0);
             EXPECT_NEAR(area, best, 1e-5 * best) << to_string(method) << " seed " << seed;
             ++checked;

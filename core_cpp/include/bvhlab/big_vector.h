@@ -25,10 +25,10 @@ void free_big_block(void* p, std::size_t bytes) noexcept;
 
 /// Asks the system to back the whole 2 MiB pages within [p, p + bytes) with huge pages where it
 /// can (Linux: MADV_HUGEPAGE; elsewhere nothing). For the long-lived arrays that rays read at
-/// random, the wide tree's (make_wide), not for a build's scratch (see above): uniform1m's 55 MB
-/// of nodes and packets then take 28 TLB entries instead of 14,000 (random rays +3.5%, best of
-/// interleaved runs; Embree's trees are on huge pages too), and making the wide tree takes a
-/// third of the page faults (uniform1m 5,600 against 19,000; Sponza 17-19 against 21-24 ms).
+/// random, the wide tree's (make_wide), not for a build's scratch (see above): uniform1m's 60 MB
+/// wide tree then takes 30 TLB entries instead of 15,000 (random rays +3.5%, best of interleaved
+/// runs; Embree's trees are on huge pages too), and making it takes a third of the page faults
+/// (uniform1m 5,600 against 19,000; Sponza 17-19 against 21-24 ms).
 void advise_huge_pages(void* p, std::size_t bytes) noexcept;
 
 /// Below this, BigAllocator uses operator new.

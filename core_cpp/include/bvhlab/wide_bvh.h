@@ -16,25 +16,44 @@ namespace bvhlab {
 /// has an inverted box (lo = +inf, hi = -inf), which no ray enters.
 struct alignas(64) WideNode {
     float lo_x[8], hi_x[8], lo_y[8], hi_y[8], lo_z[8], hi_z[8];
-    std::uint32_t child[8];  ///< inner child: WideNode index; leaf child: its first packet
+    std::uint32_t child[8];  ///< the line (WideBvh::lines) of an inner child, or of a leaf's first packet
     std::uint32_t count[8];  ///< 0 for an inner child, else the leaf's packet count
 };
 static_assert(sizeof(WideNode) == 256);
 
-/// Four primitives of one kind, structure of arrays (160 bytes): v[vertex][axis][lane]. Triangles:
-/// the three vertices, as PackedPrim has them (the watertight test reads vertices, so the kernel
-/// loads each axis by the ray's axis order). Spheres: centre in v[0], radius in v[1][0]. An empty
-/// lane has ref = kNoHit and all vertices 0 (a triangle that is one point is never hit).
-struct alignas(32) PrimPacket {
+/// Four primitives of one kind, structure of arrays (192 bytes, three cache lines):
+/// v[vertex][axis][lane]. Triangles: the three vertices, as PackedPrim has them (the watertight
+/// test reads vertices, so the kernel loads each axis by the ray's axis order). Spheres: centre in
+/// v[0], radius in v[1][0]. An empty lane has ref = kNoHit and all vertices 0 (a triangle that is
+/// one point is never hit). `slot` is each lane's position in Bvh::prims (finish_hit), in the
+/// packet because a packet takes three lines whether it holds it or not.
+struct alignas(64) PrimPacket {
     float v[3][3][4];
     std::uint32_t ref[4];
+    std::uint32_t slot[4];
+    std::uint32_t unused[4];
 };
-static_assert(sizeof(PrimPacket) == 160);
+static_assert(sizeof(PrimPacket) == 192);
 
+/// The unit of WideBvh::lines: one cache line.
+struct alignas(64) WideLine {
+    unsigned char bytes[64];
+};
+inline constexpr std::uint32_t kNodeLines = sizeof(WideNode) / sizeof(WideLine);
+inline constexpr std::uint32_t kPacketLines = sizeof(PrimPacket) / sizeof(WideLine);
+
+/// The wide tree in one block, in depth-first preorder: each node followed by the packets of its
+/// leaf children, in slot order, then by its inner children's subtrees, as Embree's allocator
+/// lays out its trees. A ray that enters a node and then one of its leaves reads neighbouring
+/// memory, and a node's four lines, read in a row, start the hardware's stream prefetch of the
+/// leaves after them. A WideNode's child is a line index (of a node, or of a leaf's first packet,
+/// the others following it).
 struct WideBvh {
-    BigVector<WideNode> nodes;       ///< root at 0 (also when the whole tree is one leaf); none when empty
-    BigVector<PrimPacket> packets;   ///< leaves' primitives, leaf after leaf
-    BigVector<std::uint32_t> slots;  ///< per packet lane: its position in Bvh::prims (finish_hit)
+    BigVector<WideLine> lines;  ///< root node at line 0; none when the tree is empty
+    std::uint32_t node_count = 0, packet_count = 0;
+
+    const WideNode& node(std::uint32_t line) const { return *reinterpret_cast<const WideNode*>(&lines[line]); }
+    const PrimPacket& packet(std::uint32_t line) const { return *reinterpret_cast<const PrimPacket*>(&lines[line]); }
 };
 
 /// Collapses the binary tree: a subtree of at most four primitives becomes one leaf, and the

@@ -181,7 +181,7 @@ inline int order_children(L8 t0, L8 t1, int mask, I8& order) {
 }  // namespace portable
 
 Hit intersect_wide(const WideBvh& wide, const Bvh& bvh, const Ray& ray, std::uint32_t* nodes_visited) {
-    const WideView view{wide.nodes.empty() ? nullptr : wide.nodes.data(), wide.packets.data(), wide.slots.data()};
+    const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
 #if defined(BVHLAB_AVX2_KERNELS)
     Hit hit = active_isa() == Isa::Avx2 ? avx2::intersect_wide_kernel(view, ray, nodes_visited)
                                         : portable::intersect_wide_kernel(view, ray, nodes_visited);

@@ -1,6 +1,8 @@
 #include "bvhlab/wide_bvh.h"
 
 #include <array>
+#include <cstring>
+#include <stdexcept>
 #include <limits>
 #include <vector>
 
@@ -24,32 +26,40 @@ struct SubtreeRanges {
     bool leaf(const Bvh& bvh, std::uint32_t i) const { return is_leaf(bvh.nodes[i]) || size[i] <= kMergedLeaf; }
 };
 
-/// Appends the primitives [first, first + n) of bvh.prims as packets (triangles, then spheres,
-/// four a packet); returns the first packet's index and sets `count`.
+/// Packets for the primitives [first, first + n) of bvh.prims: triangles, then spheres, four a packet.
+std::uint32_t packets_for(const Bvh& bvh, std::uint32_t first, std::uint32_t n) {
+    std::uint32_t spheres = 0;
+    for (std::uint32_t k = first; k < first + n; ++k) spheres += is_sphere_ref(bvh.prims[k].ref);
+    return (n - spheres + 3) / 4 + (spheres + 3) / 4;
+}
+
+/// Appends the primitives [first, first + n) of bvh.prims to wide.lines as packets (triangles,
+/// then spheres, four a packet); returns the first packet's line and sets `count`.
 std::uint32_t pack_leaf(const Bvh& bvh, std::uint32_t first, std::uint32_t n, WideBvh& wide, std::uint32_t& count) {
-    const auto begin = static_cast<std::uint32_t>(wide.packets.size());
+    const auto begin = static_cast<std::uint32_t>(wide.lines.size());
+    count = 0;
     for (bool spheres : {false, true}) {
-        std::uint32_t lane = 4;
+        PrimPacket q{};
+        int lane = 0;
+        auto flush = [&] {
+            for (int l = lane; l < 4; ++l) q.ref[l] = kNoHit, q.slot[l] = kNoHit;
+            const std::size_t at = wide.lines.size();
+            wide.lines.resize(at + kPacketLines);
+            std::memcpy(&wide.lines[at], &q, sizeof q);
+            ++count, q = PrimPacket{}, lane = 0;
+        };
         for (std::uint32_t k = first; k < first + n; ++k) {
             const PackedPrim& p = bvh.prims[k];
             if (is_sphere_ref(p.ref) != spheres) continue;
-            if (lane == 4) {
-                PrimPacket empty{};
-                for (auto& r : empty.ref) r = kNoHit;
-                wide.packets.push_back(empty);
-                wide.slots.insert(wide.slots.end(), 4, kNoHit);
-                lane = 0;
-            }
-            PrimPacket& q = wide.packets.back();
             const gpu::vec3 vertices[3] = {p.v0, p.v1, p.v2};
             for (int v = 0; v < 3; ++v)
                 q.v[v][0][lane] = vertices[v].x, q.v[v][1][lane] = vertices[v].y, q.v[v][2][lane] = vertices[v].z;
-            q.ref[lane] = p.ref;
-            wide.slots[wide.slots.size() - 4 + lane] = k;
-            ++lane;
+            q.ref[lane] = p.ref, q.slot[lane] = k;
+            if (++lane == 4) flush();
         }
+        if (lane) flush();
     }
-    count = static_cast<std::uint32_t>(wide.packets.size()) - begin;
+    wide.packet_count += count;
     return begin;
 }
 
@@ -162,36 +172,55 @@ WideBvh make_wide(const Bvh& bvh) {
     if (bvh.empty()) return wide;
     const SubtreeRanges ranges(bvh);
     const Collapse collapse(bvh, ranges);
-    wide.packets.reserve(bvh.prims.size() / 2 + 1);
-    wide.nodes.reserve(bvh.nodes.size() / 4 + 1);
-    advise_huge_pages(wide.packets.data(), wide.packets.capacity() * sizeof(PrimPacket));
-    advise_huge_pages(wide.nodes.data(), wide.nodes.capacity() * sizeof(WideNode));
-    struct Item {
-        std::uint32_t binary, wide;
-    };
-    std::vector<Item> stack{{0, 0}};
-    wide.nodes.emplace_back();
-    while (!stack.empty()) {
-        const Item item = stack.back();
-        stack.pop_back();
+    // The lines needed, counted first, so that the block is one allocation, advised onto huge
+    // pages before any of it is touched.
+    std::size_t lines = 0;
+    std::vector<std::uint32_t> todo{0};
+    while (!todo.empty()) {
+        const std::uint32_t n = todo.back();
+        todo.pop_back();
+        lines += kNodeLines;
         std::uint32_t children[8];
-        const int count = collapse.children(item.binary, children);
+        const int count = collapse.children(n, children);
+        for (int k = 0; k < count; ++k) {
+            if (!ranges.leaf(bvh, children[k])) todo.push_back(children[k]);
+            else
+                lines +=
+                    std::size_t(kPacketLines) * packets_for(bvh, ranges.first[children[k]], ranges.size[children[k]]);
+        }
+    }
+    if (lines > std::numeric_limits<std::uint32_t>::max())
+        throw std::length_error("the wide tree needs over 2^32 lines");
+    wide.lines.reserve(lines);
+    advise_huge_pages(wide.lines.data(), lines * sizeof(WideLine));
+    // Preorder: a node, its leaves' packets, then its inner children in slot order (the job of
+    // slot 0 pops first); each writes its line into its parent's slot when it is laid down.
+    struct Job {
+        std::uint32_t binary, parent_line;
+        int slot;
+    };
+    constexpr std::uint32_t kRoot = std::numeric_limits<std::uint32_t>::max();
+    std::vector<Job> jobs{{0, kRoot, 0}};
+    while (!jobs.empty()) {
+        const Job job = jobs.back();
+        jobs.pop_back();
+        const auto at = static_cast<std::uint32_t>(wide.lines.size());
+        wide.lines.resize(at + kNodeLines);
+        ++wide.node_count;
+        if (job.parent_line != kRoot) reinterpret_cast<WideNode*>(&wide.lines[job.parent_line])->child[job.slot] = at;
+        std::uint32_t children[8];
+        const int count = collapse.children(job.binary, children);
+        WideNode node;
         for (int k = 0; k < 8; ++k) {
             const BvhNode* c = k < count ? &bvh.nodes[children[k]] : nullptr;
-            set_slot(wide.nodes[item.wide], k, c);
-            if (!c) continue;
-            if (ranges.leaf(bvh, children[k])) {
-                std::uint32_t packets = 0;
-                const std::uint32_t first =
-                    pack_leaf(bvh, ranges.first[children[k]], ranges.size[children[k]], wide, packets);
-                wide.nodes[item.wide].child[k] = first, wide.nodes[item.wide].count[k] = packets;
-            } else {
-                const auto index = static_cast<std::uint32_t>(wide.nodes.size());
-                wide.nodes.emplace_back();  // may move the array: take references after this only
-                wide.nodes[item.wide].child[k] = index;
-                stack.push_back({children[k], index});
-            }
+            set_slot(node, k, c);
+            if (c && ranges.leaf(bvh, children[k]))
+                node.child[k] =
+                    pack_leaf(bvh, ranges.first[children[k]], ranges.size[children[k]], wide, node.count[k]);
         }
+        std::memcpy(&wide.lines[at], &node, sizeof node);
+        for (int k = count - 1; k >= 0; --k)
+            if (!ranges.leaf(bvh, children[k])) jobs.push_back({children[k], at, k});
     }
     return wide;
 }

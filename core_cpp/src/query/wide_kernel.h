@@ -7,11 +7,9 @@
 
 namespace bvhlab {
 
-/// A WideBvh as plain pointers (nodes is null when the tree is empty).
+/// A WideBvh as a plain pointer to its lines (null when the tree is empty).
 struct WideView {
-    const WideNode* nodes;
-    const PrimPacket* packets;
-    const std::uint32_t* slots;
+    const unsigned char* lines;
 };
 
 /// hit_sphere (ray.h) on lane `lane` of a sphere packet; updates hit (t, ref) as it does.

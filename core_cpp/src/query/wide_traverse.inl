@@ -59,7 +59,7 @@ Query make_query(const Ray& ray) {
 }
 
 struct Entry {
-    std::uint32_t index, count;  ///< count > 0: a leaf of `count` packets from `index`
+    std::uint32_t index, count;  ///< the line of a node (count 0), or of a leaf's first of `count` packets
     float t;                     ///< where the ray enters the box
 };
 
@@ -79,7 +79,7 @@ bool closer(float t, std::uint32_t ref, const Hit& hit) {
 
 /// The watertight test (geometry.glsl hit_triangle) on four triangles at once, its operations in
 /// its order lane by lane; the lanes that pass become hits in lane order under the closest-hit rule.
-void test_triangles(const PrimPacket& k, std::uint32_t packet, const Query& q, const WideView& wide, Hit& hit) {
+void test_triangles(const PrimPacket& k, const Query& q, Hit& hit) {
     const int kx = q.axis[0], ky = q.axis[1], kz = q.axis[2];
     const L4 ox = L4::splat(q.o_axes[0]), oy = L4::splat(q.o_axes[1]), oz = L4::splat(q.o_axes[2]);
     const L4 sx = L4::splat(q.shear[0]), sy = L4::splat(q.shear[1]);
@@ -103,34 +103,41 @@ void test_triangles(const PrimPacket& k, std::uint32_t packet, const Query& q, c
         const int l = __builtin_ctz(unsigned(lanes));
         if (!closer(ts[l], k.ref[l], hit)) continue;
         hit.t = ts[l], hit.ref = k.ref[l], hit.u = vs[l] / dets[l], hit.v = ws[l] / dets[l];
-        hit.slot = wide.slots[4 * std::size_t(packet) + l];
+        hit.slot = k.slot[l];
     }
 }
 
+/// The `count` packets of a leaf, from line `first` on.
 void test_leaf(const WideView& wide, std::uint32_t first, std::uint32_t count, const Query& q, Hit& hit) {
-    for (std::uint32_t p = first; p < first + count; ++p) {
-        const PrimPacket& k = wide.packets[p];
+    const unsigned char* at = wide.lines + std::size_t(first) * sizeof(WideLine);
+    for (const unsigned char* end = at + std::size_t(count) * sizeof(PrimPacket); at != end; at += sizeof(PrimPacket)) {
+        const PrimPacket& k = *reinterpret_cast<const PrimPacket*>(at);
         // [[likely]]: the sphere calls out of line; laid out as the rare case, the leaf's entry
         // spills fewer of the node loop's registers (uniform1m random rays: 3,549 → 3,486
         // instructions a ray, Sponza 1,077 → 1,067)
         if (!(k.ref[0] & gpu::REF_SPHERE_BIT)) [[likely]] {
-            test_triangles(k, p, q, wide, hit);
+            test_triangles(k, q, hit);
             continue;
         }
         for (int l = 0; l < 4 && k.ref[l] != kNoHit; ++l)
-            if (hit_packet_sphere(k, l, *q.ray, hit)) hit.slot = wide.slots[4 * std::size_t(p) + l];
+            if (hit_packet_sphere(k, l, *q.ray, hit)) hit.slot = k.slot[l];
     }
 }
 
-/// Starts the loads of an entry pushed for later: its node's four cache lines, or its first
-/// packet's three. In a tree larger than the caches a popped entry is a miss, and its lines are
-/// on their way by then (random rays, against Embree measured alongside: uniform1m 0.60 → 0.71,
-/// Sponza 0.96 → 1.01; room1m unchanged).
-void prefetch(const WideView& wide, std::uint32_t index, std::uint32_t count) {
-    const char* p = nullptr;
-    if (count) p = reinterpret_cast<const char*>(wide.packets + index);
-    else p = reinterpret_cast<const char*>(wide.nodes + index), __builtin_prefetch(p + 192);
-    __builtin_prefetch(p), __builtin_prefetch(p + 64), __builtin_prefetch(p + 128);
+/// Starts the loads of an entry pushed for later: the four lines from its line on, a node's, or
+/// a leaf's first packet and the line after it (the next packet's, or what follows the leaf in
+/// preorder). In a tree larger than the caches a popped entry is a miss, and its lines are on
+/// their way by then (random rays, against Embree measured alongside: uniform1m 0.60 → 0.71,
+/// Sponza 0.96 → 1.01; room1m unchanged). Nodes and packets being lines of one block, no
+/// branch on the kind.
+void prefetch(const WideView& wide, std::uint32_t line) {
+    const unsigned char* p = wide.lines + std::size_t(line) * sizeof(WideLine);
+    __builtin_prefetch(p), __builtin_prefetch(p + 64), __builtin_prefetch(p + 128), __builtin_prefetch(p + 192);
+}
+
+/// The node at `line`.
+const WideNode& node_at(const WideView& wide, std::uint32_t line) {
+    return *reinterpret_cast<const WideNode*>(wide.lines + std::size_t(line) * sizeof(WideLine));
 }
 
 /// One step of the traversal: tests the eight child boxes of `node` (as hit_box does) and pushes
@@ -180,11 +187,9 @@ bool enter_children(const WideView& wide, const WideNode& node, const L8 origin[
     // the pushed entries (0 .. h - 2), nearest first, three without a loop (a position past
     // them reads cur's, at h - 1, again): a loop's exit is as unpredictable as h
     const std::uint32_t second = sp + h - 1 - 2 * std::uint32_t(h >= 3), third = sp + h - 1 - 3 * std::uint32_t(h >= 4);
-    prefetch(wide, stack.index[sp + h - 2], stack.count[sp + h - 2]);
-    prefetch(wide, stack.index[second], stack.count[second]);
-    prefetch(wide, stack.index[third], stack.count[third]);
+    prefetch(wide, stack.index[sp + h - 2]), prefetch(wide, stack.index[second]), prefetch(wide, stack.index[third]);
     if (h > 4) [[unlikely]]
-        for (std::uint32_t j = sp; j + 4 < sp + h; ++j) prefetch(wide, stack.index[j], stack.count[j]);
+        for (std::uint32_t j = sp; j + 4 < sp + h; ++j) prefetch(wide, stack.index[j]);
     sp += h - 1;
     return true;
 }
@@ -212,7 +217,7 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit) {
             far_limit = hit.t * s;
         } else {
             ++visited;
-            if (enter_children(wide, wide.nodes[cur.index], origin, neg_inv, neg_inv_far, near, q.tmin, far_limit,
+            if (enter_children(wide, node_at(wide, cur.index), origin, neg_inv, neg_inv_far, near, q.tmin, far_limit,
                                stack, sp, cur))
                 continue;
         }
@@ -229,7 +234,7 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit) {
 Hit intersect_wide_kernel(const WideView& wide, const Ray& ray, std::uint32_t* nodes_visited) {
     Hit hit{ray.tmax, kNoHit, 0.0f, 0.0f, kNoHit};
     const Query q = make_query(ray);
-    const std::uint32_t visited = wide.nodes ? traverse_nodes(wide, q, hit) : 0;
+    const std::uint32_t visited = wide.lines ? traverse_nodes(wide, q, hit) : 0;
     if (nodes_visited) *nodes_visited = visited;
     return hit;
 }
