@@ -165,6 +165,11 @@ bool enter_children(const WideView& wide, const WideNode& node, const L8 origin[
     // in a row where the node was not in the caches; uniform1m random rays +4-5% best of
     // interleaved runs, Sponza and room1m unchanged).
     __builtin_prefetch(node.child);
+    // And the six lines after the node: in preorder its first leaves' packets, or its first inner
+    // child (uniform1m +4.2% random, +4.9% primary, Sponza +4% random, best of interleaved runs;
+    // room1m, whose tree the caches hold better, -2.5%).
+    const char* after = reinterpret_cast<const char*>(&node + 1);
+    for (int line = 0; line < 6; ++line) __builtin_prefetch(after + 64 * line);
     // the same order of raises and lowers as hit_box: NaN from 0·inf on a face is ignored
     L8 t0 = L8::splat(tmin), t1 = L8::splat(far_limit);
     for (int a = 0; a < 3; ++a) t0 = raise(t0, (origin[a] - L8::load(f + near[a])) * neg_inv[a]);
