@@ -148,6 +148,7 @@ TEST(WideBvh, PreorderLinesHoldEveryPrimitiveOnceAndEveryNodeOnce) {
         }
         EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), std::ptrdiff_t(seen.size())) << "leaf " << leaf;
         EXPECT_EQ(next, wide.lines.size());
+        EXPECT_EQ(wide.lines.capacity(), wide.lines.size());  // counted exactly: one block, advised before use
         EXPECT_EQ(nodes, wide.node_count);
         EXPECT_EQ(packets, wide.packet_count);
     }
