@@ -125,55 +125,50 @@ inline L8 raise(L8 acc, L8 t) { return {raise(acc.a, t.a), raise(acc.b, t.b)}; }
 inline L8 lower(L8 acc, L8 t) { return {lower(acc.a, t.a), lower(acc.b, t.b)}; }
 inline int le_bits(L8 x, L8 y) { return le_bits(x.a, y.a) | le_bits(x.b, y.b) << 4; }
 
-struct I8 {
-    std::uint32_t v[8];
-    static I8 load(const std::uint32_t* p) {
-        I8 x;
-        std::memcpy(x.v, p, sizeof x.v);
-        return x;
-    }
-    void store(std::uint32_t* p) const { std::memcpy(p, v, sizeof v); }
-};
-/// Lane i takes lane order[i] & 7.
-inline I8 permute(I8 x, I8 order) {
-    I8 r;
-    for (int i = 0; i < 8; ++i) r.v[i] = x.v[order.v[i] & 7];
-    return r;
-}
-inline L8 permute(L8 x, I8 order) {
-    alignas(32) float f[8], g[8];
-    x.store(f);
-    for (int i = 0; i < 8; ++i) g[i] = f[order.v[i] & 7];
-    return L8::load(g);
-}
-
-/// The key the wide traversal sorts child slot `lane` by (wide_traverse.inl enter_children): for
-/// a child the ray enters, an int ordered as `middle` (entry + exit) is, the float's bits with a
+/// The key the wide traversal sorts an entered child slot `lane` by (wide_traverse.inl
+/// enter_children): an int ordered as `middle` (entry + exit) is, the float's bits with a
 /// negative value's magnitude bits flipped, its last three bits replaced by the slot, so that
-/// keys are distinct (ties, and middles within 8 ulps, go by slot); for a child not entered,
-/// INT_MIN + slot, below every entered child's key. The AVX2 path computes the same keys
-/// (traverse_wide_avx2.cpp order_children), so both visit the same nodes in the same order.
-inline std::int32_t child_key(float middle, int lane, bool entered) {
+/// keys are distinct (ties, and middles within 8 ulps, go by slot). The AVX2 path computes the
+/// same keys (traverse_wide_avx2.cpp push_children), so both visit the same nodes in the same
+/// order.
+inline std::int32_t child_key(float middle, int lane) {
     std::int32_t b;
     std::memcpy(&b, &middle, sizeof b);
     b ^= (b >> 31) & std::numeric_limits<std::int32_t>::max();
-    return entered ? (b & ~7) | lane : std::numeric_limits<std::int32_t>::min() + lane;
+    return (b & ~7) | lane;
 }
 
-/// The eight slots' keys (child_key) largest first into `order`; returns the slot of the least
-/// entered key (the nearest child).
-inline int order_children(L8 t0, L8 t1, int mask, I8& order) {
+/// Writes the children of `node` in `mask` (the h slots the ray enters) but the nearest to
+/// index[0, h - 1), count[0, h - 1) and t[0, h - 1) (from t0, the entries), ordered by child_key
+/// largest first (the farthest first); returns the nearest's slot. An insertion sort of the entered slots only:
+/// two or three, mostly.
+inline int push_children(const WideNode& node, L8 t0, L8 t1, int mask, std::uint32_t* index, std::uint32_t* count,
+                         float* t) {
     alignas(32) float entry[8], exit[8];
     t0.store(entry), t1.store(exit);
     std::int32_t key[8];
-    for (int i = 0; i < 8; ++i) {
-        const std::int32_t k = child_key(entry[i] + exit[i], i, (mask >> i) & 1);
-        int j = i;
+    const int a = __builtin_ctz(unsigned(mask)), rest = mask & (mask - 1);
+    key[0] = child_key(entry[a] + exit[a], a);
+    int h = 1;
+    if (!(rest & (rest - 1))) {  // two, the most common case: one comparison, no loop
+        const int b = __builtin_ctz(unsigned(rest));
+        const std::int32_t kb = child_key(entry[b] + exit[b], b);
+        const bool b_first = kb > key[0];
+        key[1] = b_first ? key[0] : kb, key[0] = b_first ? kb : key[0];
+        h = 2;
+    }
+    for (int m = h == 2 ? 0 : rest; m; m &= m - 1) {
+        const int i = __builtin_ctz(unsigned(m));
+        const std::int32_t k = child_key(entry[i] + exit[i], i);
+        int j = h++;
         for (; j > 0 && key[j - 1] < k; --j) key[j] = key[j - 1];
         key[j] = k;
     }
-    for (int i = 0; i < 8; ++i) order.v[i] = std::uint32_t(key[i]);
-    return key[__builtin_popcount(unsigned(mask)) - 1] & 7;
+    for (int j = 0; j + 1 < h; ++j) {  // the nearest, at h - 1, goes to cur, not the stack
+        const int lane = key[j] & 7;
+        index[j] = node.child[lane], count[j] = node.count[lane], t[j] = entry[lane];
+    }
+    return key[h - 1] & 7;
 }
 
 #include "wide_traverse.inl"

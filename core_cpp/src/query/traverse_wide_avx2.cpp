@@ -52,15 +52,6 @@ inline L8 raise(L8 acc, L8 t) { return {_mm256_max_ps(t.v, acc.v)}; }  // t > ac
 inline L8 lower(L8 acc, L8 t) { return {_mm256_min_ps(t.v, acc.v)}; }  // t < acc ? t : acc
 inline int le_bits(L8 a, L8 b) { return _mm256_movemask_ps(_mm256_cmp_ps(a.v, b.v, _CMP_LE_OS)); }
 
-struct I8 {
-    __m256i v;
-    static I8 load(const std::uint32_t* p) { return {_mm256_loadu_si256(reinterpret_cast<const __m256i*>(p))}; }
-    void store(std::uint32_t* p) const { _mm256_storeu_si256(reinterpret_cast<__m256i*>(p), v); }
-};
-/// Lane i takes lane order[i] & 7 (vpermd reads the last three bits of each index).
-inline I8 permute(I8 x, I8 order) { return {_mm256_permutevar8x32_epi32(x.v, order.v)}; }
-inline L8 permute(L8 x, I8 order) { return {_mm256_permutevar8x32_ps(x.v, order.v)}; }
-
 /// One layer of the sorting network: each lane meets lane `partner` of the same layer; the lanes
 /// of kTakesMax keep the larger key.
 template <int kTakesMax>
@@ -68,11 +59,13 @@ inline __m256i exchange(__m256i v, __m256i partner) {
     return _mm256_blend_epi32(_mm256_min_epi32(v, partner), _mm256_max_epi32(v, partner), kTakesMax);
 }
 
-/// child_key (traverse_wide.cpp) for the eight slots at once, sorted largest first by the
-/// 19-comparator, depth-6 network for eight inputs (Knuth, TAOCP vol. 3, 5.3.4); returns the
-/// slot of the least entered key (the nearest child) from a minimum across lanes, which does
-/// not wait for the sort.
-inline int order_children(L8 t0, L8 t1, int, I8& order) {
+/// push_children (traverse_wide.cpp says what it writes) without branches: child_key for the
+/// eight slots at once, INT_MIN + slot for a slot not entered (below every entered one's key),
+/// sorted largest first by the 19-comparator, depth-6 network for eight inputs (Knuth, TAOCP
+/// vol. 3, 5.3.4), and the children permuted into that order by three vpermd; the nearest's slot
+/// from a minimum across lanes, which does not wait for the sort.
+inline int push_children(const WideNode& node, L8 t0, L8 t1, int, std::uint32_t* index, std::uint32_t* count,
+                         float* t) {
     const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
     __m256i b = _mm256_castps_si256(_mm256_add_ps(t0.v, t1.v));
     b = _mm256_xor_si256(b, _mm256_and_si256(_mm256_srai_epi32(b, 31), _mm256_set1_epi32(INT_MAX)));
@@ -91,7 +84,13 @@ inline int order_children(L8 t0, L8 t1, int, I8& order) {
                              _mm256_permutevar8x32_epi32(v, _mm256_setr_epi32(0, 4, 2, 6, 1, 5, 3, 7)));  // (1,4) (3,6)
     v = exchange<0b00101010>(
         v, _mm256_permutevar8x32_epi32(v, _mm256_setr_epi32(0, 2, 1, 4, 3, 6, 5, 7)));  // (1,2) (3,4) (5,6)
-    order.v = v;
+    // all eight written, the entered first: what follows them is overwritten by later pushes
+    // (vpermd reads the last three bits of each index: the slot)
+    const auto load = [](const std::uint32_t* p) { return _mm256_load_si256(reinterpret_cast<const __m256i*>(p)); };
+    const auto store = [](std::uint32_t* p, __m256i x) { _mm256_storeu_si256(reinterpret_cast<__m256i*>(p), x); };
+    store(index, _mm256_permutevar8x32_epi32(load(node.child), v));
+    store(count, _mm256_permutevar8x32_epi32(load(node.count), v));
+    _mm256_storeu_ps(t, _mm256_permutevar8x32_ps(t0.v, v));
     return _mm256_cvtsi256_si32(m) & 7;
 }
 

@@ -5,7 +5,10 @@
 //       when a[i] <= b[i]), store(float*);
 //   L4: four floats — load, splat, set(a, b, c, d), + - * /, raise, lower, comparisons giving
 //       an M4 mask, M4 & M4, M4 | M4, bits(M4), store, and permute(v, a, b, c) = (v[a], v[b],
-//       v[c], v[3]) for lane indices 0..3.
+//       v[c], v[3]) for lane indices 0..3;
+// and push_children(node, t0, t1, mask, index, count, t), which writes the children a ray enters
+// but the nearest to the stack's arrays, farthest first, and returns the nearest's slot
+// (traverse_wide.cpp).
 // traverse_wide.cpp includes it for the portable path (SSE or plain C++), traverse_wide_avx2.cpp
 // for AVX2. Both compute, lane by lane, exactly what hit_box (ray.h) and the watertight
 // hit_triangle (shaders/tracer/geometry.glsl) compute, so every path returns the same hit as the
@@ -153,9 +156,9 @@ const WideNode& node_at(const WideView& wide, std::uint32_t line) {
 /// says nothing of where their contents lie (the cost-optimal collapse puts large leaves beside
 /// deep subtrees, which entry order visited first). Only the order changes: the entry is still
 /// what the stack compares with the closest hit, so the hit is the same.
-/// The order comes from order_children, which sorts the eight slots by a key of their middle
-/// without branches where it can (AVX2: a sorting network): which children a ray enters, and in
-/// what order, is data that no branch predictor learns.
+/// The order comes from push_children, which sorts the entered slots by a key of their middle
+/// and pushes them, without branches where it can (AVX2: a sorting network and three permutes):
+/// which children a ray enters, and in what order, is data that no branch predictor learns.
 bool enter_children(const WideView& wide, const WideNode& node, const L8 origin[3], const L8 neg_inv[3],
                     const L8 neg_inv_far[3], const int near[3], float tmin, float far_limit, Stack& stack,
                     std::uint32_t& sp, Entry& cur) {
@@ -181,13 +184,8 @@ bool enter_children(const WideView& wide, const WideNode& node, const L8 origin[
         cur = {node.child[k], node.count[k], t0.lane(k)};
         return true;
     }
-    I8 order;  // the keys, farthest entered child first; permutes read their slot (the last 3 bits)
-    const int k = order_children(t0, t1, mask, order);
+    const int k = push_children(node, t0, t1, mask, stack.index + sp, stack.count + sp, stack.t + sp);
     const auto h = std::uint32_t(__builtin_popcount(unsigned(mask)));
-    // all eight written, the entered ones first: those past the h - 1 pushed are overwritten later
-    permute(I8::load(node.child), order).store(stack.index + sp);
-    permute(I8::load(node.count), order).store(stack.count + sp);
-    permute(t0, order).store(stack.t + sp);
     cur = {node.child[k], node.count[k], t0.lane(k)};
     // the pushed entries (0 .. h - 2), nearest first, three without a loop (a position past
     // them reads cur's, at h - 1, again): a loop's exit is as unpredictable as h
