@@ -66,8 +66,8 @@ struct Entry {
     float t;                     ///< where the ray enters the box
 };
 
-/// Pushed entries, a field to an array so that a node's children are pushed as three vector
-/// stores (enter_children); eight slots of room past the deepest push.
+/// Pushed entries, a field to an array, so that the AVX2 path pushes a node's children as three
+/// vector stores of eight (push_children); eight slots of room past the deepest push.
 struct Stack {
     static constexpr std::uint32_t kSize = 7 * gpu::MAX_TREE_HEIGHT + 8;
     alignas(32) std::uint32_t index[kSize];
@@ -187,9 +187,9 @@ bool enter_children(const WideView& wide, const WideNode& node, const L8 origin[
     const int k = push_children(node, t0, t1, mask, stack.index + sp, stack.count + sp, stack.t + sp);
     const auto h = std::uint32_t(__builtin_popcount(unsigned(mask)));
     cur = {node.child[k], node.count[k], t0.lane(k)};
-    // the pushed entries (0 .. h - 2), nearest first, three without a loop (a position past
-    // them reads cur's, at h - 1, again): a loop's exit is as unpredictable as h
-    const std::uint32_t second = sp + h - 1 - 2 * std::uint32_t(h >= 3), third = sp + h - 1 - 3 * std::uint32_t(h >= 4);
+    // the pushed entries (sp .. sp + h - 2), nearest first, three without a loop (where fewer
+    // were pushed, the nearest is prefetched again): a loop's exit is as unpredictable as h
+    const std::uint32_t second = sp + h - 2 - std::uint32_t(h >= 3), third = sp + h - 2 - 2 * std::uint32_t(h >= 4);
     prefetch(wide, stack.index[sp + h - 2]), prefetch(wide, stack.index[second]), prefetch(wide, stack.index[third]);
     if (h > 4) [[unlikely]]
         for (std::uint32_t j = sp; j + 4 < sp + h; ++j) prefetch(wide, stack.index[j]);
