@@ -140,29 +140,28 @@ inline std::int32_t child_key(float middle, int lane) {
 
 /// Writes the children of `node` in `mask` (the h slots the ray enters) but the nearest to
 /// index[0, h - 1), count[0, h - 1) and t[0, h - 1) (from t0, the entries), ordered by child_key
-/// largest first (the farthest first); returns the nearest's slot. An insertion sort of the entered slots only:
-/// two or three, mostly.
+/// largest first (the farthest first); returns the nearest's slot. An insertion sort of the
+/// entered slots only, two (the most common case) by one comparison without a loop.
 inline int push_children(const WideNode& node, L8 t0, L8 t1, int mask, std::uint32_t* index, std::uint32_t* count,
                          float* t) {
     alignas(32) float entry[8], exit[8];
     t0.store(entry), t1.store(exit);
+    auto key_of = [&](int slot) { return child_key(entry[slot] + exit[slot], slot); };
     std::int32_t key[8];
-    const int a = __builtin_ctz(unsigned(mask)), rest = mask & (mask - 1);
-    key[0] = child_key(entry[a] + exit[a], a);
+    const int rest = mask & (mask - 1);
+    key[0] = key_of(__builtin_ctz(unsigned(mask)));
     int h = 1;
-    if (!(rest & (rest - 1))) {  // two, the most common case: one comparison, no loop
-        const int b = __builtin_ctz(unsigned(rest));
-        const std::int32_t kb = child_key(entry[b] + exit[b], b);
-        const bool b_first = kb > key[0];
-        key[1] = b_first ? key[0] : kb, key[0] = b_first ? kb : key[0];
-        h = 2;
-    }
-    for (int m = h == 2 ? 0 : rest; m; m &= m - 1) {
-        const int i = __builtin_ctz(unsigned(m));
-        const std::int32_t k = child_key(entry[i] + exit[i], i);
-        int j = h++;
-        for (; j > 0 && key[j - 1] < k; --j) key[j] = key[j - 1];
-        key[j] = k;
+    if (!(rest & (rest - 1))) {
+        const std::int32_t k = key_of(__builtin_ctz(unsigned(rest)));
+        key[h++] = k > key[0] ? key[0] : k;
+        key[0] = k > key[0] ? k : key[0];
+    } else {
+        for (int m = rest; m; m &= m - 1) {
+            const std::int32_t k = key_of(__builtin_ctz(unsigned(m)));
+            int j = h++;
+            for (; j > 0 && key[j - 1] < k; --j) key[j] = key[j - 1];
+            key[j] = k;
+        }
     }
     for (int j = 0; j + 1 < h; ++j) {  // the nearest, at h - 1, goes to cur, not the stack
         const int lane = key[j] & 7;

@@ -2,8 +2,8 @@
 
 #include <array>
 #include <cstring>
-#include <stdexcept>
 #include <limits>
+#include <stdexcept>
 #include <vector>
 
 namespace bvhlab {

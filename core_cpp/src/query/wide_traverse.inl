@@ -110,9 +110,14 @@ void test_triangles(const PrimPacket& k, const Query& q, Hit& hit) {
     }
 }
 
+/// The start of line `i` of the wide tree.
+const unsigned char* line_at(const WideView& wide, std::uint32_t i) {
+    return wide.lines + std::size_t(i) * sizeof(WideLine);
+}
+
 /// The `count` packets of a leaf, from line `first` on.
 void test_leaf(const WideView& wide, std::uint32_t first, std::uint32_t count, const Query& q, Hit& hit) {
-    const unsigned char* at = wide.lines + std::size_t(first) * sizeof(WideLine);
+    const unsigned char* at = line_at(wide, first);
     for (const unsigned char* end = at + std::size_t(count) * sizeof(PrimPacket); at != end; at += sizeof(PrimPacket)) {
         const PrimPacket& k = *reinterpret_cast<const PrimPacket*>(at);
         // [[likely]]: the sphere calls out of line; laid out as the rare case, the leaf's entry
@@ -134,13 +139,13 @@ void test_leaf(const WideView& wide, std::uint32_t first, std::uint32_t count, c
 /// Sponza 0.96 → 1.01; room1m unchanged). Nodes and packets being lines of one block, no
 /// branch on the kind.
 void prefetch(const WideView& wide, std::uint32_t line) {
-    const unsigned char* p = wide.lines + std::size_t(line) * sizeof(WideLine);
+    const unsigned char* p = line_at(wide, line);
     __builtin_prefetch(p), __builtin_prefetch(p + 64), __builtin_prefetch(p + 128), __builtin_prefetch(p + 192);
 }
 
 /// The node at `line`.
 const WideNode& node_at(const WideView& wide, std::uint32_t line) {
-    return *reinterpret_cast<const WideNode*>(wide.lines + std::size_t(line) * sizeof(WideLine));
+    return *reinterpret_cast<const WideNode*>(line_at(wide, line));
 }
 
 /// One step of the traversal: tests the eight child boxes of `node` (as hit_box does) and pushes
