@@ -77,6 +77,63 @@ INSTANTIATE_TEST_SUITE_P(AllMethods, EveryConfig,
                                     "_leaf" + std::to_string(std::get<2>(info.param));
                          });
 
+/// Scenes where the SAH sweeps' arithmetic has its hard cases: exact ties of centroids (a
+/// lattice, as architectural models have; the sort's tie rule), a flat scene (boxes of zero
+/// extent on one axis), zero-area triangles on a line (parents of zero area: costs by counts),
+/// and duplicates beside random triangles.
+std::vector<test::Scene> hard_sah_scenes() {
+    std::vector<test::Scene> out(4);
+    for (int x = 0; x < 12; ++x)
+        for (int y = 0; y < 12; ++y)
+            for (int z = 0; z < 6; ++z) {
+                const Vec3 p{float(x), float(y), float(z)};
+                out[0].add_triangle(p, p + Vec3{1, 0, 0}, p + Vec3{0, float(1 + (x + y) % 3), 0});
+            }
+    const auto flat = random_scene(1500, 0, 5);
+    for (std::size_t t = 0; t + 9 <= flat.triangles.size(); t += 9) {
+        const float* v = flat.triangles.data() + t;
+        out[1].add_triangle({v[0], v[1], 0}, {v[3], v[4], 0}, {v[6], v[7], 0});
+    }
+    for (int i = 0; i < 700; ++i) {
+        const float x = float(i % 97) * 0.5f;
+        out[2].add_triangle({x, 0, 0}, {x + 1.0f, 0, 0}, {x + 0.25f, 0, 0});
+    }
+    out[3] = random_scene(800, 100, 9);
+    for (int i = 0; i < 300; ++i) out[3].add_triangle({1, 1, 1}, {2, 1, 1}, {1, 2, 1});
+    return out;
+}
+
+TEST(InstructionSets, SameSahTreesOnHardScenes) {
+    // The AVX2 sort, sweeps and bucket merges (sah_sweep_avx2.cpp, binning_avx2.cpp) against the
+    // portable ones, under every setting that changes their arithmetic.
+    const Isa before = active_isa();
+    int compared = 0;
+    for (const test::Scene& scene : hard_sah_scenes())
+        for (SplitMethod method : {SplitMethod::Sah, SplitMethod::SweepSah})
+            for (std::uint32_t block : {1u, 4u})
+                for (std::uint32_t bins : {2u, 8u, 12u, 256u})
+                    for (BinBounds bounds : {BinBounds::Box, BinBounds::Centroids})
+                        for (std::uint32_t leaf : {1u, 4u, 8u}) {
+                            if (method == SplitMethod::SweepSah && (bins != 8 || bounds != BinBounds::Box)) continue;
+                            BuildConfig c = config(method, AxisPolicy::Auto, leaf, 1);
+                            c.sah_block = block, c.bins = bins, c.bin_bounds = bounds;
+                            set_isa(Isa::Portable);
+                            const Bvh portable = build_bvh(scene.view(), c);
+                            check_tree(portable, scene.view(), leaf);
+                            for (Isa isa : {Isa::Avx2}) {
+                                if (!isa_supported(isa)) continue;
+                                set_isa(isa);
+                                EXPECT_TRUE(same_tree(portable, build_bvh(scene.view(), c)))
+                                    << isa_name(isa) << " " << to_string(method) << " block " << block << " bins "
+                                    << bins << " leaf " << leaf;
+                                ++compared;
+                            }
+                        }
+    set_isa(before);
+    if (!isa_supported(Isa::Avx2)) GTEST_SKIP() << "only the portable path on this CPU";
+    EXPECT_EQ(compared, 4 * (2 * 4 * 2 * 3 + 2 * 3));
+}
+
 class EveryMethod : public ::testing::TestWithParam<SplitMethod> {};
 
 TEST_P(EveryMethod, LargeSceneSameTreeOnEveryThreadCountAndInstructionSet) {

@@ -3,6 +3,8 @@
 #include "binning.h"
 
 #include "bvhlab/build_config.h"
+#include "bvhlab/isa.h"
+#include "sah_sweep_avx2.h"
 
 namespace bvhlab {
 namespace {
@@ -24,6 +26,17 @@ struct BucketUnion {
 
 AxisCuts cheapest_bin_cuts(const Bucket* bucket, std::uint32_t bins, const SahCost& sah, float inv_parent_area) {
     AxisCuts best;
+#if defined(BVHLAB_AVX2_KERNELS)
+    if (active_isa() == Isa::Avx2) {
+        std::uint32_t total = bucket[0].count();  // every reference of axis 0's buckets
+        for (std::uint32_t j = 1; j < bins; ++j) total += bucket[j].count();
+        alignas(16) float cost[4], last_left[4];
+        avx2::bucket_sweep(bucket, bins, {sah.traversal, sah.intersection, inv_parent_area, sah.round_mask(total)},
+                           cost, last_left);
+        for (int a = 0; a < 3; ++a) best.cost[a] = cost[a], best.last_left[a] = std::uint32_t(last_left[a]);
+        return best;
+    }
+#endif
     F4 right_area[kMaxBins];  // candidate c: the right side is buckets [c + 1, bins)
     std::uint32_t right_n[kMaxBins][4];
     BucketUnion u;

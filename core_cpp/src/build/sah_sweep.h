@@ -2,6 +2,7 @@
 // at once: one vector lane per axis, one suffix and one prefix pass over the buckets (the O(B)
 // sweep the report names as the improvement over its O(n + B²) loop). Small ranges sweep their
 // sorted primitives the same way in small_subtree.cpp, with the same AxisBoxes and LaneSplitCost.
+// With AVX2, both sweeps run sah_sweep_avx2.cpp's copies: the same operations, two boxes a step.
 #pragma once
 #include <cstdint>
 #include <limits>

@@ -2,8 +2,10 @@
 
 #include <limits>
 
+#include "bvhlab/isa.h"
 #include "bvhlab/sah.h"
 #include "sah_sweep.h"
+#include "sah_sweep_avx2.h"
 
 namespace bvhlab {
 namespace {
@@ -17,15 +19,22 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 /// [first, first + count) of all three orders, and its leaves take the same positions.
 struct SmallSet {
     std::uint32_t n = 0;
-    F4 lo[K], neg_hi[K], c2[K];
+    SmallBox box[K];
+    F4 c2[K];
     std::uint32_t ref[K];
     std::uint8_t order[3][K];
 
     SmallSet(const PrimRef* in, std::uint32_t count) : n(count) {
         for (std::uint32_t i = 0; i < n; ++i) {
-            lo[i] = in[i].lo4(), neg_hi[i] = neg(in[i].hi4()), c2[i] = in[i].lo4() + in[i].hi4();
+            box[i] = {in[i].lo4(), neg(in[i].hi4())}, c2[i] = in[i].lo4() + in[i].hi4();
             ref[i] = in[i].ref;
         }
+#if defined(BVHLAB_AVX2_KERNELS)
+        if (active_isa() == Isa::Avx2) {
+            avx2::small_ranks(reinterpret_cast<const float*>(c2), n, order);
+            return;
+        }
+#endif
         rank_all();
     }
     /// rank of i = #{j : c2[j] < c2[i], or c2[j] == c2[i] and j < i}, per axis lane.
@@ -106,11 +115,12 @@ private:
     float pair_cost(int axis, const SmallNode& node) const {
         const std::uint8_t a = set_.order[axis][node.first], b = set_.order[axis][node.first + 1];
         const float inv = SahCost::inverse_area(half_area(node.lo, neg(node.neg_hi)));
-        return sah_.split(inv, half_area(set_.lo[a], neg(set_.neg_hi[a])), 1,
-                          half_area(set_.lo[b], neg(set_.neg_hi[b])), 1);
+        return sah_.split(inv, half_area(set_.box[a].lo, neg(set_.box[a].neg_hi)), 1,
+                          half_area(set_.box[b].lo, neg(set_.box[b].neg_hi)), 1);
     }
     SmallCut choose(const SmallNode& node) const;
     SmallCut cheapest(const SmallNode& node, const bool allowed[3]) const;
+    static SmallCut cheapest_of(const LaneMin& cheapest, const bool allowed[3]);
     SmallCut cut_at(int axis, const SmallNode& node, std::uint32_t last_left) const;
     void divide(const SmallNode& node, const SmallCut& cut, std::uint32_t at, SmallNode children[2]);
     void make_leaf(std::uint32_t at, const SmallNode& node) {
@@ -165,17 +175,26 @@ SmallCut SmallBuilder::choose(const SmallNode& node) const {
 SmallCut SmallBuilder::cheapest(const SmallNode& node, const bool allowed[3]) const {
     const std::uint32_t f = node.first, m = node.count;
     const std::uint8_t* order[3] = {set_.order[0] + f, set_.order[1] + f, set_.order[2] + f};
+    const float inv = SahCost::inverse_area(half_area(node.lo, neg(node.neg_hi)));
+    const std::uint32_t mask = sah_.round_mask(m);
+    LaneMin cheapest;  // keyed by the left count, c + 1
+#if defined(BVHLAB_AVX2_KERNELS)
+    if (active_isa() == Isa::Avx2) {
+        alignas(16) float cost[4], key[4];
+        avx2::small_sweep(set_.box, order, m, {sah_.traversal, sah_.intersection, inv, mask}, cost, key);
+        cheapest.cost = F4::load(cost), cheapest.key = F4::load(key);
+        return cheapest_of(cheapest, allowed);
+    }
+#endif
     auto grow = [&](AxisBoxes& box, std::uint32_t j) {
         const std::uint8_t x = order[0][j], y = order[1][j], z = order[2][j];
-        box.grow(set_.lo[x], set_.neg_hi[x], set_.lo[y], set_.neg_hi[y], set_.lo[z], set_.neg_hi[z]);
+        const SmallBox &bx = set_.box[x], &by = set_.box[y], &bz = set_.box[z];
+        box.grow(bx.lo, bx.neg_hi, by.lo, by.neg_hi, bz.lo, bz.neg_hi);
     };
     F4 right_area[K];  // candidate c: the right side is [c + 1, m)
     AxisBoxes box;
     for (std::uint32_t j = m - 1; j > 0; --j) grow(box, j), right_area[j - 1] = box.half_areas();
-    const float inv = SahCost::inverse_area(half_area(node.lo, neg(node.neg_hi)));
     const LaneSplitCost price(sah_, inv);
-    const std::uint32_t mask = sah_.round_mask(m);
-    LaneMin cheapest;  // keyed by the left count, c + 1
     box = AxisBoxes();
     for (std::uint32_t c = 0; c + 1 < m; ++c) {
         grow(box, c);
@@ -184,6 +203,11 @@ SmallCut SmallBuilder::cheapest(const SmallNode& node, const bool allowed[3]) co
                              [&] { return F4::splat(float(n_left + n_right)); }),
                        F4::splat(float(c + 1)));
     }
+    return cheapest_of(cheapest, allowed);
+}
+
+/// The cheapest cut among the allowed axes' cheapest candidates (ties: the first axis).
+SmallCut SmallBuilder::cheapest_of(const LaneMin& cheapest, const bool allowed[3]) {
     std::uint32_t lefts[4];
     truncate_to_u32(cheapest.key, lefts);
     SmallCut best;
@@ -196,9 +220,9 @@ SmallCut SmallBuilder::cut_at(int axis, const SmallNode& node, std::uint32_t las
     const std::uint8_t* order = set_.order[axis] + node.first;
     F4 llo = F4::splat(kInf), lnh = llo, rlo = llo, rnh = llo;
     for (std::uint32_t j = 0; j <= last_left; ++j)
-        llo = min(llo, set_.lo[order[j]]), lnh = min(lnh, set_.neg_hi[order[j]]);
+        llo = min(llo, set_.box[order[j]].lo), lnh = min(lnh, set_.box[order[j]].neg_hi);
     for (std::uint32_t j = last_left + 1; j < node.count; ++j)
-        rlo = min(rlo, set_.lo[order[j]]), rnh = min(rnh, set_.neg_hi[order[j]]);
+        rlo = min(rlo, set_.box[order[j]].lo), rnh = min(rnh, set_.box[order[j]].neg_hi);
     const float inv = SahCost::inverse_area(half_area(node.lo, neg(node.neg_hi)));
     const float cost =
         sah_.split(inv, half_area(llo, neg(lnh)), last_left + 1, half_area(rlo, neg(rnh)), node.count - last_left - 1);
@@ -215,7 +239,7 @@ void SmallBuilder::divide(const SmallNode& node, const SmallCut& cut, std::uint3
         const std::uint8_t i = by_cut[j];
         const int side = j < n_left ? 0 : 1;
         left_of[i] = side == 0;
-        box[side][0] = min(box[side][0], set_.lo[i]), box[side][1] = min(box[side][1], set_.neg_hi[i]);
+        box[side][0] = min(box[side][0], set_.box[i].lo), box[side][1] = min(box[side][1], set_.box[i].neg_hi);
     }
     for (int a = 0; a < 3; ++a) {
         if (a == cut.axis) continue;
