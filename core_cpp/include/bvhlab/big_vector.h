@@ -12,6 +12,7 @@
 #pragma once
 #include <cstddef>
 #include <new>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -44,6 +45,14 @@ constexpr std::size_t big_block_bytes(std::size_t bytes) {
     return size;
 }
 
+/// True for types whose BigVector elements every user writes whole before reading them, so that
+/// BigVector(n) and resize(n) need not run their default member initialisers (as they run none
+/// for trivial types). Only for implicit-lifetime types (aggregates: C++20's P0593), which the
+/// allocation itself creates. Specialised next to the type, in the header that every user of
+/// such a BigVector includes.
+template <class T>
+struct WrittenBeforeRead : std::false_type {};
+
 template <class T>
 struct BigAllocator {
     using value_type = T;
@@ -55,7 +64,8 @@ struct BigAllocator {
     /// Elements are default-initialised (resize() does not zero what will be overwritten).
     template <class U, class... Args>
     void construct(U* p, Args&&... args) {
-        if constexpr (sizeof...(Args) == 0) ::new (static_cast<void*>(p)) U;
+        if constexpr (sizeof...(Args) == 0 && WrittenBeforeRead<U>::value) static_assert(std::is_aggregate_v<U>);
+        else if constexpr (sizeof...(Args) == 0) ::new (static_cast<void*>(p)) U;
         else ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
     }
 

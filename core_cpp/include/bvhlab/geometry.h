@@ -44,6 +44,10 @@ std::uint64_t geometry_fingerprint(const GeometryView& geometry);
 /// triangle's three vertices, or a sphere's centre (v0) and radius (v1.x); `ref` says which.
 /// The CPU traversal keeps them in leaf order (Bvh::prims), the tracer its triangles by index.
 using PackedPrim = gpu::GpuTriangle;
+/// Packing writes every element (pack_prims; the tracer's triangle array): zeroing 48 bytes a
+/// primitive first took 1.3% of a Sponza build.
+template <>
+struct WrittenBeforeRead<PackedPrim> : std::true_type {};
 
 /// Triangle `i` packed with `material`. A triangle of zero area (its edges' cross product is 0 in
 /// float) is stored as three copies of its first vertex, which the watertight test never hits
