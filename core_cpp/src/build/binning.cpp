@@ -35,9 +35,24 @@ Bucket Bucket::empty() {
     return b;
 }
 
-void BinSet::reset() const { std::fill(bucket, bucket + 3 * std::size_t(bins), Bucket::empty()); }
+#if defined(BVHLAB_AVX2_KERNELS)
+namespace avx2 {  // binning_avx2.cpp
+void reset_buckets(Bucket* bucket, std::size_t n);
+void merge_buckets(Bucket* into, const Bucket* other, std::size_t n);
+}  // namespace avx2
+#endif
+
+void BinSet::reset() const {
+#if defined(BVHLAB_AVX2_KERNELS)
+    if (active_isa() == Isa::Avx2) return avx2::reset_buckets(bucket, 3 * std::size_t(bins));
+#endif
+    std::fill(bucket, bucket + 3 * std::size_t(bins), Bucket::empty());
+}
 
 void BinSet::merge(const BinSet& other) const {
+#if defined(BVHLAB_AVX2_KERNELS)
+    if (active_isa() == Isa::Avx2) return avx2::merge_buckets(bucket, other.bucket, 3 * std::size_t(bins));
+#endif
     for (std::size_t i = 0; i < 3 * std::size_t(bins); ++i) {
         Bucket& b = bucket[i];
         const Bucket& o = other.bucket[i];

@@ -58,6 +58,25 @@ inline void add_to_buckets(char* base, const AxisOffsets& axes, __m128i k, __m25
 
 }  // namespace
 
+void reset_buckets(Bucket* bucket, std::size_t n) {
+    // Bucket::empty(): +inf everywhere but lo's lane 3, the count 0 as kCountBias
+    const __m256 empty = _mm256_castsi256_ps(_mm256_setr_epi32(
+        0x7f800000, 0x7f800000, 0x7f800000, int(Bucket::kCountBias), 0x7f800000, 0x7f800000, 0x7f800000, 0x7f800000));
+    for (std::size_t i = 0; i < n; ++i) _mm256_store_ps(reinterpret_cast<float*>(bucket + i), empty);
+}
+
+void merge_buckets(Bucket* into, const Bucket* other, std::size_t n) {
+    // BinSet::merge: the union of the boxes by one min, the counts' sum (the biased bits of both,
+    // less one bias) put into lane 3
+    const __m256i bias = _mm256_setr_epi32(0, 0, 0, int(Bucket::kCountBias), 0, 0, 0, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+        float* b = reinterpret_cast<float*>(into + i);
+        const __m256 x = _mm256_load_ps(b), y = _mm256_load_ps(reinterpret_cast<const float*>(other + i));
+        const __m256i sum = _mm256_sub_epi32(_mm256_add_epi32(_mm256_castps_si256(x), _mm256_castps_si256(y)), bias);
+        _mm256_store_ps(b, _mm256_blend_ps(_mm256_min_ps(x, y), _mm256_castsi256_ps(sum), 0x08));
+    }
+}
+
 void bin_refs(const PrimRef* refs, Range r, const BinFrame& f, const BinSet copies[2]) {
     const Kernel c;
     const AxisOffsets axes(f.bins);
