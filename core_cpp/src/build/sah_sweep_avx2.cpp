@@ -91,7 +91,8 @@ void bucket_sweep(const Bucket* bucket, std::uint32_t bins, const SweepPrice& pr
         const __m256 areas = sweep.step(record(0, c), record(1, c), record(2, c), right[c]);
         n = _mm_add_epi32(n, _mm_setr_epi32(int(count_of(bucket[c])), int(count_of(bucket[bins + c])),
                                             int(count_of(bucket[2 * std::size_t(bins) + c])), 0));
-        const __m128i left_n = counted(n), right_c = counted(_mm_load_si128(reinterpret_cast<const __m128i*>(right_n[c])));
+        const __m128i left_n = counted(n),
+                      right_c = counted(_mm_load_si128(reinterpret_cast<const __m128i*>(right_n[c])));
         const __m128 n_left = _mm_cvtepi32_ps(left_n), n_right = _mm_cvtepi32_ps(right_c);
         __m128 ratio;
         if (by_area) {
@@ -118,10 +119,12 @@ void small_ranks(const float* c2, std::uint32_t n, std::uint8_t (*order)[kSmallS
         // Counts of whole numbers: exact in any order, so pairs and halves may be summed as they come.
         __m256 before = _mm256_setzero_ps(), after = before;
         std::uint32_t j = 0;
-        for (; j + 2 <= i; j += 2) before = _mm256_add_ps(before, _mm256_and_ps(_mm256_cmp_ps(at(j), ci, _CMP_LE_OQ), one));
+        for (; j + 2 <= i; j += 2)
+            before = _mm256_add_ps(before, _mm256_and_ps(_mm256_cmp_ps(at(j), ci, _CMP_LE_OQ), one));
         __m128 rank = _mm_add_ps(_mm256_castps256_ps128(before), _mm256_extractf128_ps(before, 1));
         if (j < i) rank = _mm_add_ps(rank, _mm_and_ps(_mm_cmple_ps(_mm_loadu_ps(c2 + 4 * std::size_t(j)), ci4), one4));
-        for (j = i + 1; j + 2 <= n; j += 2) after = _mm256_add_ps(after, _mm256_and_ps(_mm256_cmp_ps(at(j), ci, _CMP_LT_OQ), one));
+        for (j = i + 1; j + 2 <= n; j += 2)
+            after = _mm256_add_ps(after, _mm256_and_ps(_mm256_cmp_ps(at(j), ci, _CMP_LT_OQ), one));
         rank = _mm_add_ps(rank, _mm_add_ps(_mm256_castps256_ps128(after), _mm256_extractf128_ps(after, 1)));
         if (j < n) rank = _mm_add_ps(rank, _mm_and_ps(_mm_cmplt_ps(_mm_loadu_ps(c2 + 4 * std::size_t(j)), ci4), one4));
         alignas(16) std::uint32_t r[4];
@@ -148,7 +151,8 @@ void small_sweep(const SmallBox* boxes, const std::uint8_t* const order[3], std:
     TwoSidedSweep sweep;
     for (std::uint32_t c = 0; c + 1 < m; ++c) {
         const __m256 areas = sweep.step(record(0, c), record(1, c), record(2, c), right[c]);
-        const std::uint32_t n_left = (c + 1 + price.mask) & ~price.mask, n_right = (m - c - 1 + price.mask) & ~price.mask;
+        const std::uint32_t n_left = (c + 1 + price.mask) & ~price.mask,
+                            n_right = (m - c - 1 + price.mask) & ~price.mask;
         __m128 ratio;
         if (by_area) {
             const __m256 weighted =
