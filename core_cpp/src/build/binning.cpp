@@ -37,14 +37,14 @@ Bucket Bucket::empty() {
 
 #if defined(BVHLAB_AVX2_KERNELS)
 namespace avx2 {  // binning_avx2.cpp
-void reset_buckets(Bucket* bucket, std::size_t n);
+void reset_buckets(Bucket* bucket, std::size_t n, const Bucket& empty);
 void merge_buckets(Bucket* into, const Bucket* other, std::size_t n);
 }  // namespace avx2
 #endif
 
 void BinSet::reset() const {
 #if defined(BVHLAB_AVX2_KERNELS)
-    if (active_isa() == Isa::Avx2) return avx2::reset_buckets(bucket, 3 * std::size_t(bins));
+    if (active_isa() == Isa::Avx2) return avx2::reset_buckets(bucket, 3 * std::size_t(bins), Bucket::empty());
 #endif
     std::fill(bucket, bucket + 3 * std::size_t(bins), Bucket::empty());
 }

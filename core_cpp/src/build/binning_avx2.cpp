@@ -58,11 +58,9 @@ inline void add_to_buckets(char* base, const AxisOffsets& axes, __m128i k, __m25
 
 }  // namespace
 
-void reset_buckets(Bucket* bucket, std::size_t n) {
-    // Bucket::empty(): +inf everywhere but lo's lane 3, the count 0 as kCountBias
-    const __m256 empty = _mm256_castsi256_ps(_mm256_setr_epi32(
-        0x7f800000, 0x7f800000, 0x7f800000, int(Bucket::kCountBias), 0x7f800000, 0x7f800000, 0x7f800000, 0x7f800000));
-    for (std::size_t i = 0; i < n; ++i) _mm256_store_ps(reinterpret_cast<float*>(bucket + i), empty);
+void reset_buckets(Bucket* bucket, std::size_t n, const Bucket& empty) {
+    const __m256 e = _mm256_load_ps(reinterpret_cast<const float*>(&empty));
+    for (std::size_t i = 0; i < n; ++i) _mm256_store_ps(reinterpret_cast<float*>(bucket + i), e);
 }
 
 void merge_buckets(Bucket* into, const Bucket* other, std::size_t n) {
