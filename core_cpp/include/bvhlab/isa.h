@@ -2,9 +2,9 @@
 //
 // The library is built for a portable baseline (x86-64-v2 on x86, what the compiler targets
 // elsewhere); the binning/partition passes of the builder, its SAH sweeps and small-subtree sort,
-// and the wide traversal also exist compiled for AVX2, picked at run time when the CPU has it. Every path does the same IEEE
-// arithmetic in the same order (no fused multiply-adds), so trees and hits are bit-identical
-// whichever runs; the tests force each path and compare.
+// and the wide traversal also exist compiled for AVX2, picked at run time when the CPU has it.
+// Every path does the same IEEE arithmetic in the same order (no fused multiply-adds), so trees
+// and hits are bit-identical whichever runs; the tests force each path and compare.
 #pragma once
 #include <string_view>
 
