@@ -87,20 +87,24 @@ public:
         const F4 lo = F4::load(lo3), neg_hi = neg(F4::load(hi3));
         SmallNode stack[2 * K];
         std::uint32_t size = 0;
-        stack[size++] = {0, set_.n, item.depth, item.parent, item.second_child, lo, neg_hi};
-        for (bool root = true; size > 0; root = false) {
-            const SmallNode node = stack[--size];
-            const std::uint32_t at =
-                root ? index : writer_.open(to_aabb(node.lo, node.neg_hi), node.depth, node.parent, node.second_child);
+        // The node at hand stays out of the stack: its left child is taken next straight from
+        // divide(), only the right one waits there (a node read back from the stack just after
+        // its fields were written one by one waits for those stores).
+        SmallNode node{0, set_.n, item.depth, item.parent, item.second_child, lo, neg_hi};
+        for (std::uint32_t at = index;;) {
             const SmallCut cut = node.count > 1 && !pair_is_leaf(node) ? choose(node) : SmallCut{};
-            if (cut.axis < 0) {
+            if (cut.axis >= 0) {
+                writer_.make_internal(at);
+                SmallNode children[2];
+                divide(node, cut, at, children);
+                stack[size++] = children[1];
+                node = children[0];
+            } else {
                 make_leaf(at, node);
-                continue;
+                if (size == 0) return;
+                node = stack[--size];
             }
-            writer_.make_internal(at);
-            SmallNode children[2];
-            divide(node, cut, at, children);
-            stack[size++] = children[1], stack[size++] = children[0];
+            at = writer_.open(to_aabb(node.lo, node.neg_hi), node.depth, node.parent, node.second_child);
         }
     }
 
@@ -234,12 +238,21 @@ void SmallBuilder::divide(const SmallNode& node, const SmallCut& cut, std::uint3
     const std::uint32_t f = node.first, m = node.count, n_left = cut.last_left + 1;
     bool left_of[K];
     const std::uint8_t* by_cut = set_.order[cut.axis] + f;
+    // Each side's box in registers: a record joins both, raised to +inf for the side it is not on
+    // (max with -inf keeps it as it is), so no side is picked by an index into memory, which made
+    // each record wait for the last one's store.
+    static const F4 kGate[2] = {F4::splat(-kInf), F4::splat(kInf)};
     F4 box[2][2] = {{F4::splat(kInf), F4::splat(kInf)}, {F4::splat(kInf), F4::splat(kInf)}};
     for (std::uint32_t j = 0; j < m; ++j) {
         const std::uint8_t i = by_cut[j];
-        const int side = j < n_left ? 0 : 1;
-        left_of[i] = side == 0;
-        box[side][0] = min(box[side][0], set_.box[i].lo), box[side][1] = min(box[side][1], set_.box[i].neg_hi);
+        const bool left = j < n_left;
+        left_of[i] = left;
+        const F4 to_left = kGate[!left], to_right = kGate[left];
+        const SmallBox& b = set_.box[i];
+        box[0][0] = min(box[0][0], max(b.lo, to_left));
+        box[0][1] = min(box[0][1], max(b.neg_hi, to_left));
+        box[1][0] = min(box[1][0], max(b.lo, to_right));
+        box[1][1] = min(box[1][1], max(b.neg_hi, to_right));
     }
     for (int a = 0; a < 3; ++a) {
         if (a == cut.axis) continue;
