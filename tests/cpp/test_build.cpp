@@ -204,33 +204,6 @@ TEST_P(EveryMethod, EmptyAndSingle) {
 INSTANTIATE_TEST_SUITE_P(AllMethods, EveryMethod, ::testing::ValuesIn(kMethods),
                          [](const auto& info) { return to_string(info.param); });
 
-// One thread makes the references and the fingerprint in one pass, in blocks of 512 triangles;
-// it must give the fingerprint of the separate pass (that of geometry_fingerprint, which renders
-// compare against) whatever the counts: blocks, their remainders and spheres after.
-TEST(Fingerprint, OnePassGivesTheSeparatePassesValue) {
-    for (std::uint32_t triangles : {0u, 1u, 2u, 511u, 512u, 513u, 1024u, 1500u}) {
-        for (std::uint32_t spheres : {0u, 3u}) {
-            if (triangles + spheres == 0) continue;
-            const test::Scene s = random_scene(triangles, spheres, triangles + spheres);
-            std::uint64_t together = 0;
-            make_prim_refs(s.view(), &together);
-            const std::uint64_t alone = geometry_fingerprint(s.view());
-            EXPECT_EQ(together, alone) << triangles << " triangles, " << spheres << " spheres";
-            for (std::uint32_t threads : {1u, 2u})
-                EXPECT_EQ(
-                    build_bvh(s.view(), config(SplitMethod::Sah, AxisPolicy::Auto, 4, threads)).geometry_fingerprint,
-                    alone)
-                    << triangles << " triangles, " << spheres << " spheres, " << threads << " threads";
-        }
-    }
-    // and it still tells geometry apart: one coordinate of the last block's remainder moved
-    test::Scene s = random_scene(1500, 3, 9);
-    const std::uint64_t before =
-        build_bvh(s.view(), config(SplitMethod::Sah, AxisPolicy::Auto, 4, 1)).geometry_fingerprint;
-    s.triangles[9 * 1499 + 4] += 0.25f;
-    EXPECT_NE(build_bvh(s.view(), config(SplitMethod::Sah, AxisPolicy::Auto, 4, 1)).geometry_fingerprint, before);
-}
-
 /// SAH of a tree computed from its definition, independently of stats.cpp.
 double reference_sah(const Bvh& bvh) {
     auto area = [](const BvhNode& n) {

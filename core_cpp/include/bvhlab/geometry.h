@@ -32,9 +32,8 @@ struct GeometryView {
 void validate(const GeometryView& geometry);
 
 /// One PrimRef per primitive: triangles first (refs 0..T-1), then spheres (REF_SPHERE_BIT | i).
-/// Checks the geometry as validate() does, throwing the same errors. With `fingerprint`, also
-/// writes geometry_fingerprint(geometry) there, from the same pass over the input.
-BigVector<PrimRef> make_prim_refs(const GeometryView& geometry, std::uint64_t* fingerprint = nullptr);
+/// Checks the geometry as validate() does, throwing the same errors.
+BigVector<PrimRef> make_prim_refs(const GeometryView& geometry);
 
 /// A 64-bit fingerprint of the geometry (counts and every coordinate's bits), so that a tree can
 /// tell whether it is used with the geometry it was built for (a render of another scene with the

@@ -139,20 +139,15 @@ Bvh build_bvh(const GeometryView& geometry, const BuildConfig& config) {
     };
     check();
     // The references and the fingerprint read the same input: side by side on two threads, the
-    // calling thread (index 0) taking the fingerprint, then polling while the references finish;
-    // in one pass on one thread.
+    // calling thread (index 0) taking the fingerprint, then polling while the references finish.
     BigVector<PrimRef> prim_refs;
-    if (ThreadPool::resolve(config.threads) == 1) {
-        prim_refs = make_prim_refs(geometry, &bvh.geometry_fingerprint);
-    } else {
-        ThreadPool::shared().run(
-            2, config.threads,
-            [&](std::size_t k, unsigned) {
-                if (k == 0) bvh.geometry_fingerprint = bvhlab::geometry_fingerprint(geometry);
-                else prim_refs = make_prim_refs(geometry);
-            },
-            [&] { stop.cancel().poll(); });
-    }
+    ThreadPool::shared().run(
+        2, config.threads,
+        [&](std::size_t k, unsigned) {
+            if (k == 0) bvh.geometry_fingerprint = bvhlab::geometry_fingerprint(geometry);
+            else prim_refs = make_prim_refs(geometry);
+        },
+        [&] { stop.cancel().poll(); });
     check();
     build_tree(prim_refs, config, stop, bvh);
     check();

@@ -103,6 +103,44 @@ void validate(const GeometryView& g) {
     validate_spheres(g);
 }
 
+BigVector<PrimRef> make_prim_refs(const GeometryView& g) {
+    validate_counts(g);
+    BigVector<PrimRef> refs(g.primitive_count());
+    // Checked on the way: x·0 is 0 for finite x and NaN otherwise, so one sum tells whether any
+    // coordinate was NaN or infinite, without a separate pass over the input.
+    // The largest |coordinate| is tracked the same way, for the range check.
+    // Four lanes at a time: a triangle's vertices are loaded as three overlapping 4-float rows
+    // (lane 3 of each is the next vertex's x, or the next triangle's first coordinate, which is
+    // checked anyway), so all but the last triangle read within the input; the last one is done
+    // by the scalar path.
+    const F4 zero = F4::splat(0.0f);
+    F4 poison4 = zero, reach4 = zero;
+    const std::size_t simd_count = g.triangle_count ? g.triangle_count - 1 : 0;
+    for (std::size_t i = 0; i < simd_count; ++i) {
+        const float* v = g.triangles + 9 * i;
+        const F4 a = F4::load(v), b = F4::load(v + 3), c = F4::load(v + 6);
+        poison4 = poison4 + (a * zero + b * zero) + c * zero;
+        reach4 = max(reach4, max(max(max(a, neg(a)), max(b, neg(b))), max(c, neg(c))));
+        PrimRef& r = refs[i];
+        float* row = reinterpret_cast<float*>(&r);  // lo, ref | hi, code: lane 3 lands on ref and code,
+        min(a, min(b, c)).store(row);               // which are written next
+        max(a, max(b, c)).store(row + 4);
+        r.ref = static_cast<std::uint32_t>(i), r.code = 0;
+    }
+    float poison = poison4.lane(0) + poison4.lane(1) + poison4.lane(2) + poison4.lane(3);
+    float reach = std::max(std::max(reach4.lane(0), reach4.lane(1)), std::max(reach4.lane(2), reach4.lane(3)));
+    for (std::size_t i = simd_count; i < g.triangle_count; ++i) {
+        const float* v = g.triangles + 9 * i;
+        for (int k = 0; k < 9; ++k) poison += v[k] * 0.0f, reach = std::max(reach, std::fabs(v[k]));
+        refs[i] = triangle_ref(g, i);
+    }
+    if (poison != 0.0f) throw_bad_triangle(g);  // NaN != 0 too
+    if (reach > kMaxCoordinate) throw_far_triangle(g);
+    validate_spheres(g);
+    for (std::size_t i = 0; i < g.sphere_count; ++i) refs[g.triangle_count + i] = sphere_ref(g, i);
+    return refs;
+}
+
 namespace {
 
 /// Eight independent multiply-rotate lanes over 8-byte words (the structure of xxHash64, Collet
@@ -151,64 +189,6 @@ private:
 };
 
 }  // namespace
-
-BigVector<PrimRef> make_prim_refs(const GeometryView& g, std::uint64_t* fingerprint) {
-    validate_counts(g);
-    // The fingerprint, when asked for, takes each block of triangles while it is still in the
-    // cache (blocks of whole 64-byte rounds: the same value as one pass over the array).
-    constexpr std::size_t kBlock = 512;
-    static_assert(kBlock * 9 * sizeof(float) % 64 == 0, "a block is whole fingerprint rounds");
-    Fingerprint f;
-    std::size_t fingerprinted = 0;  // triangles
-    if (fingerprint) {
-        const std::uint64_t counts[2] = {g.triangle_count, g.sphere_count};
-        f.add(counts, sizeof(counts));
-    }
-    BigVector<PrimRef> refs(g.primitive_count());
-    // Checked on the way: x·0 is 0 for finite x and NaN otherwise, so one sum tells whether any
-    // coordinate was NaN or infinite, without a separate pass over the input.
-    // The largest |coordinate| is tracked the same way, for the range check.
-    // Four lanes at a time: a triangle's vertices are loaded as three overlapping 4-float rows
-    // (lane 3 of each is the next vertex's x, or the next triangle's first coordinate, which is
-    // checked anyway), so all but the last triangle read within the input; the last one is done
-    // by the scalar path.
-    const F4 zero = F4::splat(0.0f);
-    F4 poison4 = zero, reach4 = zero;
-    const std::size_t simd_count = g.triangle_count ? g.triangle_count - 1 : 0;
-    for (std::size_t i = 0; i < simd_count; ++i) {
-        const float* v = g.triangles + 9 * i;
-        const F4 a = F4::load(v), b = F4::load(v + 3), c = F4::load(v + 6);
-        poison4 = poison4 + (a * zero + b * zero) + c * zero;
-        reach4 = max(reach4, max(max(max(a, neg(a)), max(b, neg(b))), max(c, neg(c))));
-        PrimRef& r = refs[i];
-        float* row = reinterpret_cast<float*>(&r);  // lo, ref | hi, code: lane 3 lands on ref and code,
-        min(a, min(b, c)).store(row);               // which are written next
-        max(a, max(b, c)).store(row + 4);
-        r.ref = static_cast<std::uint32_t>(i), r.code = 0;
-        if (fingerprint && i + 1 - fingerprinted == kBlock) {
-            f.add(g.triangles + 9 * fingerprinted, 9 * sizeof(float) * kBlock);
-            fingerprinted = i + 1;
-        }
-    }
-    float poison = poison4.lane(0) + poison4.lane(1) + poison4.lane(2) + poison4.lane(3);
-    float reach = std::max(std::max(reach4.lane(0), reach4.lane(1)), std::max(reach4.lane(2), reach4.lane(3)));
-    for (std::size_t i = simd_count; i < g.triangle_count; ++i) {
-        const float* v = g.triangles + 9 * i;
-        for (int k = 0; k < 9; ++k) poison += v[k] * 0.0f, reach = std::max(reach, std::fabs(v[k]));
-        refs[i] = triangle_ref(g, i);
-    }
-    if (poison != 0.0f) throw_bad_triangle(g);  // NaN != 0 too
-    if (reach > kMaxCoordinate) throw_far_triangle(g);
-    validate_spheres(g);
-    for (std::size_t i = 0; i < g.sphere_count; ++i) refs[g.triangle_count + i] = sphere_ref(g, i);
-    if (fingerprint) {
-        if (g.triangle_count > fingerprinted)
-            f.add(g.triangles + 9 * fingerprinted, 9 * sizeof(float) * (g.triangle_count - fingerprinted));
-        if (g.sphere_count) f.add(g.spheres, 4 * sizeof(float) * g.sphere_count);
-        *fingerprint = f.finish();
-    }
-    return refs;
-}
 
 std::uint64_t geometry_fingerprint(const GeometryView& g) {
     Fingerprint f;
