@@ -36,11 +36,6 @@ int choose_axis(const BuildConfig& cfg, Vec3 extent, Range range, std::uint32_t 
     return 0;
 }
 
-bool too_deep(std::uint32_t depth, std::uint32_t n) {
-    std::uint32_t median_height = std::bit_width(n - 1);  // ceil(log2 n) for n >= 1
-    return depth + median_height >= gpu::MAX_TREE_HEIGHT - 1;
-}
-
 namespace {
 
 /// Two primitives: every method splits them 1 | 1; order them by centroid on the largest axis.

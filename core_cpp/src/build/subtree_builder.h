@@ -2,6 +2,7 @@
 // configured split method where to split, and writes nodes in depth-first order.
 #pragma once
 #include <atomic>
+#include <bit>
 #include <cstdint>
 #include <vector>
 
@@ -61,6 +62,10 @@ int choose_axis(const BuildConfig& cfg, Vec3 centroid_extent, Range range, std::
 
 /// Median splits keep every leaf within depth + ceil(log2 n) (report §3.1: the GPU stack is
 /// MAX_TREE_HEIGHT deep), so once a branch could outgrow that, it continues with them.
-bool too_deep(std::uint32_t depth, std::uint32_t n);
+/// Inline: the small-subtree builder asks it at every node.
+inline bool too_deep(std::uint32_t depth, std::uint32_t n) {
+    const std::uint32_t median_height = std::bit_width(n - 1);  // ceil(log2 n) for n >= 1
+    return depth + median_height >= gpu::MAX_TREE_HEIGHT - 1;
+}
 
 }  // namespace bvhlab
