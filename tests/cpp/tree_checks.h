@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <functional>
+#include <cstring>
 #include <vector>
 
 #include "bvhlab/bvh.h"
@@ -37,7 +38,8 @@ inline std::uint32_t check_subtree(const Bvh& bvh, const GeometryView& g, std::u
             std::size_t slot = (ref & gpu::REF_INDEX_MASK) + ((ref & gpu::REF_SPHERE_BIT) ? g.triangle_count : 0);
             ++seen.at(slot);
             EXPECT_TRUE(box.contains(prim_box(g, ref))) << "leaf " << i << " misses primitive " << ref;
-            EXPECT_EQ(bvh.prims.at(k).ref, ref);
+            const PackedPrim expected = pack_prim(g, ref);  // the leaf-ordered geometry, byte for byte
+            EXPECT_EQ(std::memcmp(&bvh.prims.at(k), &expected, sizeof(PackedPrim)), 0) << "packed primitive " << k;
         }
         return i + 1;
     }

@@ -11,6 +11,7 @@
 #include "bvhlab/cancel.h"
 #include "bvhlab/thread_pool.h"
 #include "morton.h"
+#include "small_subtree.h"
 #include "subtree_builder.h"
 
 namespace bvhlab {
@@ -86,7 +87,9 @@ std::uint32_t defer_size_for(std::uint32_t n, unsigned threads) {
     return std::max({1024u, n / (8 * threads), std::min(chunked, balanced)});
 }
 
-void build_tree(BigVector<PrimRef>& prim_refs, const BuildConfig& cfg, BuildStop& stop, Bvh& out) {
+/// Builds the tree over prim_refs into `out`; packs out.prims too where `pack` (see BuildShared).
+void build_tree(BigVector<PrimRef>& prim_refs, const GeometryView& geometry, bool pack, const BuildConfig& cfg,
+                BuildStop& stop, Bvh& out) {
     out.refs.resize(prim_refs.size());
     if (prim_refs.empty()) return;
     const auto n = static_cast<std::uint32_t>(prim_refs.size());
@@ -103,6 +106,10 @@ void build_tree(BigVector<PrimRef>& prim_refs, const BuildConfig& cfg, BuildStop
     }
     WorkItem root{{0, n}, bounds_of(ctx, {0, n}, 0, method.needs_centroid_sum), 0, 0, false, 0};
     BuildShared shared{{prim_refs.data(), other.data()}, out.refs.data(), cfg, method, stop.cancel(), stop.in_leaves()};
+    if (pack) {
+        out.prims = BigVector<PackedPrim>(n);  // every element written by the leaves (WrittenBeforeRead)
+        shared.geometry = &geometry, shared.prims = out.prims.data();
+    }
 
     // With several threads, ranges of at most `defer_size` primitives are left to the pool; the
     // nodes above them are split with every thread on each. The tree is the same either way.
@@ -149,9 +156,12 @@ Bvh build_bvh(const GeometryView& geometry, const BuildConfig& config) {
         },
         [&] { stop.cancel().poll(); });
     check();
-    build_tree(prim_refs, config, stop, bvh);
+    // The leaves pack their geometry where the small-subtree builder makes them (it fetches the
+    // input ahead); the other methods' trees are packed after, in leaf order.
+    const bool pack_in_build = small_subtree_size(config) > 0;
+    build_tree(prim_refs, geometry, pack_in_build, config, stop, bvh);
     check();
-    bvh.prims = pack_prims(geometry, bvh.refs, config.threads);
+    if (!pack_in_build) bvh.prims = pack_prims(geometry, bvh.refs, config.threads);
     bvh.build_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     if (config.progress && !config.progress(1.0)) throw BuildCancelled();  // the last word may be "stop"
     return bvh;

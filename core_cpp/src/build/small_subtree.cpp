@@ -79,7 +79,12 @@ public:
           sah_(cfg),
           all_axes_(choose_axis(cfg, Vec3{1.0f, 1.0f, 1.0f}, Range{0, 0}, 0) == kAllAxes),
           begin_(item.range.begin),
-          set_(writer.shared().buffers[item.buffer] + item.range.begin, item.range.size()) {}
+          set_(writer.shared().buffers[item.buffer] + item.range.begin, item.range.size()) {
+        // The leaves pack their input when they are made: fetched now, it arrives while the
+        // subtree is built (packing it after the build waits on memory at every primitive).
+        if (const GeometryView* g = writer.shared().geometry; g && writer.shared().prims)
+            for (std::uint32_t i = 0; i < set_.n; ++i) prefetch_prim(*g, set_.ref[i]);
+    }
 
     void build(const WorkItem& item, std::uint32_t index) {
         const Aabb& b = item.bounds.box;
@@ -130,6 +135,8 @@ private:
     void make_leaf(std::uint32_t at, const SmallNode& node) {
         std::uint32_t* out = writer_.make_leaf(at, begin_ + node.first, node.count);
         for (std::uint32_t j = 0; j < node.count; ++j) out[j] = set_.ref[set_.order[0][node.first + j]];
+        const BuildShared& shared = writer_.shared();
+        if (shared.prims) pack_run(*shared.geometry, out, node.count, shared.prims + begin_ + node.first);
     }
 
     SubtreeWriter& writer_;

@@ -37,6 +37,11 @@ struct BuildShared {
     const SplitMethodInfo& method;
     Cancellation& cancel;                              ///< workers read stop_requested(); the calling thread polls it
     std::atomic<std::uint64_t>& primitives_in_leaves;  ///< progress: primitives placed in leaves
+    /// Where leaves pack their geometry as they are made (Bvh::prims, in leaf order), or null when
+    /// it is packed after the build (pack_prims): set where the small-subtree builder makes most
+    /// leaves, which fetches its references' input ahead.
+    const GeometryView* geometry = nullptr;
+    PackedPrim* prims = nullptr;
 };
 
 /// How one call of build_subtree runs: on the calling thread (which polls the cancellation and

@@ -69,6 +69,10 @@ PackedPrim pack_prim(const GeometryView& g, std::uint32_t ref) {
     return out;
 }
 
+void pack_run(const GeometryView& g, const std::uint32_t* refs, std::size_t count, PackedPrim* out) {
+    for (std::size_t k = 0; k < count; ++k) pack_prim_into(out + k, g, refs[k]);
+}
+
 BigVector<PackedPrim> pack_prims(const GeometryView& g, const BigVector<std::uint32_t>& refs, unsigned threads) {
     BigVector<PackedPrim> out(refs.size());
     constexpr std::size_t kChunk = 1 << 15;
@@ -76,11 +80,7 @@ BigVector<PackedPrim> pack_prims(const GeometryView& g, const BigVector<std::uin
     // reference kAhead places later is fetched while this one is packed (Sponza: the packing
     // took 22% of an LBVH build before).
     constexpr std::size_t kAhead = 12;
-    auto prefetch = [&](std::uint32_t ref) {
-        const std::size_t i = ref_index(ref);
-        const float* p = is_sphere_ref(ref) ? g.spheres + 4 * i : g.triangles + 9 * i;
-        __builtin_prefetch(p), __builtin_prefetch(p + 8);  // 36 bytes may span two lines
-    };
+    auto prefetch = [&](std::uint32_t ref) { prefetch_prim(g, ref); };
     ThreadPool::shared().run((refs.size() + kChunk - 1) / kChunk, threads, [&](std::size_t c, unsigned) {
         const std::size_t begin = c * kChunk, end = std::min(refs.size(), begin + kChunk);
         for (std::size_t k = begin; k < std::min(end, begin + kAhead); ++k) prefetch(refs[k]);
