@@ -30,7 +30,9 @@ BuildConfig config(SplitMethod m, AxisPolicy a, std::uint32_t leaf, std::uint32_
 
 bool same_tree(const Bvh& a, const Bvh& b) {
     return a.nodes.size() == b.nodes.size() && a.refs == b.refs && a.depths == b.depths &&
-           std::memcmp(a.nodes.data(), b.nodes.data(), a.nodes.size() * sizeof(BvhNode)) == 0;
+           std::memcmp(a.nodes.data(), b.nodes.data(), a.nodes.size() * sizeof(BvhNode)) == 0 &&
+           a.prims.size() == b.prims.size() &&
+           std::memcmp(a.prims.data(), b.prims.data(), a.prims.size() * sizeof(PackedPrim)) == 0;
 }
 
 using Param = std::tuple<SplitMethod, AxisPolicy, std::uint32_t>;

@@ -57,9 +57,11 @@ PackedPrim pack_triangle(const GeometryView& geometry, std::size_t i, std::uint3
 /// Primitive `ref` (a triangle or a sphere) packed for the CPU traversal (material 0).
 PackedPrim pack_prim(const GeometryView& geometry, std::uint32_t ref);
 
-/// pack_prim of refs[0 .. count) into out[0 .. count): the builder packs each small subtree's
-/// leaves as it makes them, its input fetched ahead (prefetch_prim).
-void pack_run(const GeometryView& geometry, const std::uint32_t* refs, std::size_t count, PackedPrim* out);
+/// pack_prim of refs[0 .. count) into out[0 .. count), each input fetched a few references ahead
+/// (pack_prims packs in such runs; so does the builder, see BuildShared::prims).
+/// `fetched`: the caller has fetched the input already (prefetch_prim), so none is fetched ahead.
+void pack_run(const GeometryView& geometry, const std::uint32_t* refs, std::size_t count, PackedPrim* out,
+              bool fetched = false);
 /// Asks for the input of primitive `ref` to be brought into the caches.
 inline void prefetch_prim(const GeometryView& g, std::uint32_t ref) {
     const std::size_t i = ref_index(ref);

@@ -68,6 +68,7 @@ std::vector<Subtree> build_deferred(BuildShared& shared, const Subtree& top, uns
                 root.second_child = false;  // its parent lives in `top`, which already points at it
                 build_subtree(shared, scratch[slot], root, parts[k], {0, slot == 0, nullptr});
                 fill_skip_indices(parts[k].nodes, shared.method.bottom_up_boxes);
+                pack_unpacked(shared, parts[k]);
             } catch (...) {
                 shared.cancel.request_stop();
                 throw;
@@ -119,6 +120,7 @@ void build_tree(BigVector<PrimRef>& prim_refs, const GeometryView& geometry, boo
     std::vector<Subtree> parts;
     if (!top.deferred.empty() && !stop.cancel().stop_requested()) parts = build_deferred(shared, top, threads, poll);
     if (stop.cancel().stop_requested()) stop.rethrow();
+    pack_unpacked(shared, top);
     if (parts.empty()) {
         fill_skip_indices(top.nodes, method.bottom_up_boxes);
         out.nodes = std::move(top.nodes);

@@ -108,7 +108,7 @@ void SubtreeWriter::make_leaf(std::uint32_t index, const WorkItem& item) {
     std::uint32_t* out = make_leaf(index, r.begin, r.size());
     const PrimRef* refs = shared_.buffers[item.buffer];
     for (std::uint32_t i = r.begin; i < r.end; ++i) out[i - r.begin] = refs[i].ref;
-    if (shared_.prims) pack_run(*shared_.geometry, out, r.size(), shared_.prims + r.begin);
+    if (shared_.prims) pack_later(r.begin, r.size());
     if (!shared_.method.bottom_up_boxes) return;
     F4 lo = refs[r.begin].lo4(), hi = refs[r.begin].hi4();
     for (std::uint32_t i = r.begin + 1; i < r.end; ++i) lo = min(lo, refs[i].lo4()), hi = max(hi, refs[i].hi4());
@@ -153,6 +153,12 @@ void replace_by_children(SubtreeWriter& writer, std::vector<WorkItem>& stack, co
 }
 
 }  // namespace
+
+void pack_unpacked(const BuildShared& shared, const Subtree& subtree) {
+    if (!shared.prims) return;
+    for (const Range r : subtree.unpacked)
+        pack_run(*shared.geometry, shared.leaf_refs + r.begin, r.size(), shared.prims + r.begin);
+}
 
 void build_subtree(BuildShared& shared, SplitScratch& scratch, const WorkItem& root, Subtree& out,
                    const SubtreeRun& run) {

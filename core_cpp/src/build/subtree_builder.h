@@ -27,6 +27,7 @@ struct Subtree {
     BigVector<BvhNode> nodes;
     BigVector<std::uint8_t> depths;
     std::vector<std::pair<std::uint32_t, WorkItem>> deferred;  ///< placeholder node, its range
+    std::vector<Range> unpacked;  ///< leaf positions whose geometry is packed after (BuildShared::prims)
 };
 
 /// State shared by every thread of one build.
@@ -37,12 +38,17 @@ struct BuildShared {
     const SplitMethodInfo& method;
     Cancellation& cancel;                              ///< workers read stop_requested(); the calling thread polls it
     std::atomic<std::uint64_t>& primitives_in_leaves;  ///< progress: primitives placed in leaves
-    /// Where leaves pack their geometry as they are made (Bvh::prims, in leaf order), or null when
-    /// it is packed after the build (pack_prims): set where the small-subtree builder makes most
-    /// leaves, which fetches its references' input ahead.
+    /// Where the build packs the leaves' geometry (Bvh::prims, in leaf order), or null when it is
+    /// packed after the build (pack_prims): set where the small-subtree builder makes most leaves.
+    /// A small subtree whose input lies close together fetches it when it starts and packs each
+    /// leaf as it is made; the other leaves are listed in Subtree::unpacked and packed in runs
+    /// afterwards (pack_unpacked), as input visited at random is packed faster in one stream.
     const GeometryView* geometry = nullptr;
     PackedPrim* prims = nullptr;
 };
+
+/// Packs the geometry of `subtree`'s unpacked ranges (BuildShared::prims).
+void pack_unpacked(const BuildShared& shared, const Subtree& subtree);
 
 /// How one call of build_subtree runs: on the calling thread (which polls the cancellation and
 /// may cut large ranges into chunks for the pool) or on a worker.

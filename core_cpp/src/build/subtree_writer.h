@@ -45,6 +45,11 @@ public:
         leaf_primitives_ = 0;
     }
     BuildShared& shared() const { return shared_; }
+    /// Leaves the geometry of leaf positions [begin, begin + count) to pack_unpacked.
+    void pack_later(std::uint32_t begin, std::uint32_t count) {
+        if (!out_.unpacked.empty() && out_.unpacked.back().end == begin) out_.unpacked.back().end += count;
+        else out_.unpacked.push_back({begin, begin + count});
+    }
 
 private:
     BuildShared& shared_;

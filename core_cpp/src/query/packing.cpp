@@ -69,25 +69,28 @@ PackedPrim pack_prim(const GeometryView& g, std::uint32_t ref) {
     return out;
 }
 
-void pack_run(const GeometryView& g, const std::uint32_t* refs, std::size_t count, PackedPrim* out) {
-    for (std::size_t k = 0; k < count; ++k) pack_prim_into(out + k, g, refs[k]);
+void pack_run(const GeometryView& g, const std::uint32_t* refs, std::size_t count, PackedPrim* out, bool fetched) {
+    if (fetched) {
+        for (std::size_t k = 0; k < count; ++k) pack_prim_into(out + k, g, refs[k]);
+        return;
+    }
+    // Leaf order visits the input at random: each read would wait on memory, so the input of the
+    // reference kAhead places later is fetched while this one is packed (Sponza: the packing
+    // took 22% of an LBVH build before).
+    constexpr std::size_t kAhead = 12;
+    for (std::size_t k = 0; k < std::min(count, kAhead); ++k) prefetch_prim(g, refs[k]);
+    for (std::size_t k = 0; k < count; ++k) {
+        if (k + kAhead < count) prefetch_prim(g, refs[k + kAhead]);
+        pack_prim_into(out + k, g, refs[k]);
+    }
 }
 
 BigVector<PackedPrim> pack_prims(const GeometryView& g, const BigVector<std::uint32_t>& refs, unsigned threads) {
     BigVector<PackedPrim> out(refs.size());
     constexpr std::size_t kChunk = 1 << 15;
-    // Leaf order visits the input at random: each read would wait on memory, so the input of the
-    // reference kAhead places later is fetched while this one is packed (Sponza: the packing
-    // took 22% of an LBVH build before).
-    constexpr std::size_t kAhead = 12;
-    auto prefetch = [&](std::uint32_t ref) { prefetch_prim(g, ref); };
     ThreadPool::shared().run((refs.size() + kChunk - 1) / kChunk, threads, [&](std::size_t c, unsigned) {
         const std::size_t begin = c * kChunk, end = std::min(refs.size(), begin + kChunk);
-        for (std::size_t k = begin; k < std::min(end, begin + kAhead); ++k) prefetch(refs[k]);
-        for (std::size_t k = begin; k < end; ++k) {
-            if (k + kAhead < end) prefetch(refs[k + kAhead]);
-            pack_prim_into(&out[k], g, refs[k]);
-        }
+        pack_run(g, refs.data() + begin, end - begin, out.data() + begin);
     });
     return out;
 }
