@@ -90,105 +90,123 @@ void bin_refs(const PrimRef* refs, Range r, const BinFrame& f, const BinSet copi
 
 namespace {
 
+/// Where the pass writes next, as addresses: the next left slot, one past the next right slot.
+struct Cursors {
+    std::uintptr_t left, right;
+};
+
 /// The fused pass over one range: its constants, set up once, and the step for one reference.
 /// The children's data are indexed by l, 1 for a reference going left and 0 for one going right.
 template <bool kCentroids>
 class FusedPass {
 public:
-    FusedPass(PrimRef* dst, std::uint32_t left, std::uint32_t right, const BinFrame& parent, const BinSplit& split,
-              const ChildBinning child[2])
-        : dst_(dst),
-          left_(dst + left),
-          right_(dst + right),
-          axis_(std::uint32_t(split.axis)),
+    FusedPass(const BinFrame& parent, const BinSplit& split, const ChildBinning child[2])
+        : to_side_(5u - std::uint32_t(split.axis)),
           axes_(parent.bins),
           top_(parent.top.v),
           split_at_(split_threshold(parent, split).v) {
         for (int s = 0; s < 2; ++s) {
             const int l = 1 - s;
-            frame_[l] = {child[s].frame.origin2.v, child[s].frame.scale.v};
+            side_[l].origin2 = child[s].frame.origin2.v, side_[l].scale = child[s].frame.scale.v;
             for (int k = 0; k < 2; ++k)
-                bucket_[k][l] = child[s].copies ? reinterpret_cast<char*>(child[s].copies[k].bucket) : nullptr;
+                bucket_[l][k] = child[s].copies ? reinterpret_cast<char*>(child[s].copies[k].bucket) : nullptr;
         }
         for (auto& copy : acc_)
             for (auto& a : copy) _mm256_store_ps(a, _mm256_set1_ps(__builtin_inff()));
     }
 
-    /// Reference `raw`: to its side's next slot (left fills forward, right backward; the slot is
-    /// selected, not branched on: at the top of the tree the side is a coin toss), then into its
-    /// child's copy kCopy of the buckets.
-    template <int kCopy>
-    void step(__m256 raw) {
+    /// Reference `raw`: to its side's next slot, `at` (left fills forward, right backward; no
+    /// branch on the side: at the top of the tree it is a coin toss), then into its child's copy
+    /// kCopy of the buckets. kContained: stored at its slot only, else at both cursors (the store
+    /// at the wrong one writes the free slot next to that part, which a later reference of the
+    /// range overwrites: scatter() in partition.h).
+    template <bool kContained, int kCopy>
+    void step(__m256 raw, Cursors& at) {
         const __m256 v = _mm256_and_ps(raw, c_.xyz);
         const __m128 c2 = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
-        // 1 when c2 is below the split's threshold on its axis (split_threshold(): the other lanes never are).
-        const std::uint32_t l = std::uint32_t(_mm_movemask_ps(_mm_cmplt_ps(c2, split_at_))) >> axis_;
-        PrimRef* const slot = l ? left_ : right_ - 1;
-        _mm256_storeu_ps(reinterpret_cast<float*>(slot), raw);
-        left_ += l;
-        right_ -= 1 - l;
+        // 32 (a slot, and one side's stride below) when c2 is below the split's threshold on its
+        // axis (split_threshold(): the other lanes never are), else 0.
+        const std::uintptr_t lb = std::uint32_t(_mm_movemask_ps(_mm_cmplt_ps(c2, split_at_))) << to_side_;
+        if constexpr (kContained) {
+            _mm256_storeu_ps(reinterpret_cast<float*>(lb ? at.left : at.right - 32), raw);
+        } else {
+            _mm256_storeu_ps(reinterpret_cast<float*>(at.left), raw);
+            _mm256_storeu_ps(reinterpret_cast<float*>(at.right - 32), raw);
+        }
+        at.left += lb;
+        at.right += lb - 32;
+        const std::uint32_t l = std::uint32_t(lb >> 5);
         if constexpr (kCentroids) {
             float* a = acc_[kCopy][l];
             const __m256 cc = _mm256_insertf128_ps(_mm256_castps128_ps256(c2), _mm_xor_ps(c2, c_.sign), 1);
             _mm256_store_ps(a, _mm256_min_ps(_mm256_load_ps(a), cc));
         }
-        if (char* base = bucket_[kCopy][l]) {
+        const char* side = reinterpret_cast<const char*>(side_) + lb;
+        if (char* base = *reinterpret_cast<char* const*>(reinterpret_cast<const char*>(bucket_) + lb + 8 * kCopy)) {
+            const __m128 origin2 = _mm_load_ps(reinterpret_cast<const float*>(side)),
+                         scale = _mm_load_ps(reinterpret_cast<const float*>(side + 16));
             // The child's box holds the reference's, so c2 - origin2 >= 0: only the top needs a clamp.
-            const __m128 x = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(c2, frame_[l].origin2), frame_[l].scale), top_);
+            const __m128 x = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(c2, origin2), scale), top_);
             add_to_buckets(base, axes_, _mm_cvttps_epi32(x), _mm256_xor_ps(v, c_.flip_hi), c_.count_one);
         }
     }
 
-    /// The left cursor after the pass; each side's twice-centroid bounds merged into sides.
-    std::uint32_t finish(CentroidBounds sides[2]) const {
+    /// Each side's twice-centroid bounds merged into sides.
+    void finish(CentroidBounds sides[2]) const {
         for (int s = 0; s < 2 && kCentroids; ++s) {
             const int l = 1 - s;
             const __m256 both = _mm256_min_ps(_mm256_load_ps(acc_[0][l]), _mm256_load_ps(acc_[1][l]));
             sides[s].lo.v = _mm_min_ps(sides[s].lo.v, _mm256_castps256_ps128(both));
             sides[s].neg_hi.v = _mm_min_ps(sides[s].neg_hi.v, _mm256_extractf128_ps(both, 1));
         }
-        return std::uint32_t(left_ - dst_);
     }
 
 private:
     const Kernel c_;
-    PrimRef* const dst_;
-    PrimRef *left_, *right_;  ///< the next left slot, one past the next right slot
-    const std::uint32_t axis_;
+    const std::uint32_t to_side_;  ///< shifts the split axis's bit of a compare mask to 32
     const AxisOffsets axes_;
     const __m128 top_;
     const __m128 split_at_;
-    struct Frame {
+    /// [l]: each child's frame, 32 bytes apart, so that a reference's 0 or 32 picks its side's.
+    struct alignas(32) Side {
         __m128 origin2, scale;
-    } frame_[2];          ///< [l]: each child's frame
-    char* bucket_[2][2];  ///< [copy][l]: where the child's buckets start (null: not binned)
+    } side_[2];
+    /// [l][copy]: where the child's buckets start (null: not binned), 32 bytes a side.
+    alignas(32) char* bucket_[2][4] = {};
     // Twice-centroid (lo, -hi) per [copy][l]: even and odd references alternate, so that a run
     // going one way does not chain through one min.
     alignas(32) float acc_[2][2][8];
 };
 
-template <bool kCentroids>
+template <bool kCentroids, bool kContained>
 std::uint32_t partition_and_bin_impl(const PrimRef* __restrict src, PrimRef* __restrict dst, Range r,
                                      std::uint32_t left, std::uint32_t right, const BinFrame& parent,
                                      const BinSplit& split, const ChildBinning child[2], CentroidBounds sides[2]) {
-    FusedPass<kCentroids> pass(dst, left, right, parent, split, child);
+    FusedPass<kCentroids> pass(parent, split, child);
+    // Locals, not members of the pass: its frames are read through pointers that could alias them.
+    Cursors at{reinterpret_cast<std::uintptr_t>(dst + left), reinterpret_cast<std::uintptr_t>(dst + right)};
     auto load = [](const PrimRef* p) { return _mm256_loadu_ps(reinterpret_cast<const float*>(p)); };
     // Reference i uses copy i & 1 of the buckets (consecutive references do not wait on each
     // other's stores); the loop runs in pairs so that the copy is a constant.
     const PrimRef *p = src + r.begin, *const end = src + r.end;
-    if (p < end && (r.begin & 1)) pass.template step<1>(load(p++));
-    for (; end - p >= 2; p += 2) pass.template step<0>(load(p)), pass.template step<1>(load(p + 1));
-    if (p < end) pass.template step<0>(load(p));
-    return pass.finish(sides);
+    if (p < end && (r.begin & 1)) pass.template step<kContained, 1>(load(p++), at);
+    for (; end - p >= 2; p += 2)
+        pass.template step<kContained, 0>(load(p), at), pass.template step<kContained, 1>(load(p + 1), at);
+    if (p < end) pass.template step<kContained, 0>(load(p), at);
+    pass.finish(sides);
+    return std::uint32_t(reinterpret_cast<const PrimRef*>(at.left) - dst);
 }
 
 }  // namespace
 
 std::uint32_t partition_and_bin(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
                                 const BinFrame& parent, const BinSplit& split, const ChildBinning child[2],
-                                CentroidBounds sides[2]) {
-    return sides ? partition_and_bin_impl<true>(src, dst, r, left, right, parent, split, child, sides)
-                 : partition_and_bin_impl<false>(src, dst, r, left, right, parent, split, child, sides);
+                                CentroidBounds sides[2], bool contained) {
+    if (contained)
+        return sides ? partition_and_bin_impl<true, true>(src, dst, r, left, right, parent, split, child, sides)
+                     : partition_and_bin_impl<false, true>(src, dst, r, left, right, parent, split, child, sides);
+    return sides ? partition_and_bin_impl<true, false>(src, dst, r, left, right, parent, split, child, sides)
+                 : partition_and_bin_impl<false, false>(src, dst, r, left, right, parent, split, child, sides);
 }
 
 }  // namespace bvhlab::avx2
