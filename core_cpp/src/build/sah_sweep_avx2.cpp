@@ -99,6 +99,21 @@ private:
     __m128 best_ = _mm_set1_ps(kInf), key_ = _mm_setzero_ps();
 };
 
+/// SahCost::counted(n) as a float, row[log2(block)][n] for the masks block - 1 of every block
+/// (1..kMaxSahBlock, powers of two) and the counts of a small subtree's nodes.
+struct CountedTable {
+    static constexpr int kBlocks = __builtin_ctz(kMaxSahBlock) + 1;
+    float row[kBlocks][kSmallSubtree + 1];
+    constexpr CountedTable() : row() {
+        for (int b = 0; b < kBlocks; ++b)
+            for (std::uint32_t n = 0; n <= kSmallSubtree; ++n) {
+                const std::uint32_t mask = (1u << b) - 1;
+                row[b][n] = float((n + mask) & ~mask);
+            }
+    }
+};
+constexpr CountedTable kCounted;
+
 /// A bucket's count (Bucket::count: the bits of lo's lane 3 less kCountBias).
 inline std::uint32_t count_of(const Bucket& b) {
     std::uint32_t bits;
@@ -205,8 +220,7 @@ void small_sweep(const SmallBox* boxes, const std::uint8_t* const order[3], std:
     __m256 right[kSmallSubtree][3];  // candidate c: the boxes of [c + 1, m)
     right_boxes(record, m, right);
     // SahCost::counted of every count the node can have, as floats: the candidates look them up
-    alignas(16) float counted[kSmallSubtree + 1];
-    for (std::uint32_t n = 0; n <= m; ++n) counted[n] = float((n + price.mask) & ~price.mask);
+    const float* const counted = kCounted.row[__builtin_popcount(price.mask)];
     const auto sweep = [&]<bool kByArea>() {
         PrefixSweep<kByArea> sweep(price);
         __m128 key = _mm_set1_ps(1.0f);  // the left count, c + 1
