@@ -336,3 +336,18 @@ TEST(BigVector, BlockSizesAndAlignment) {
         EXPECT_EQ(reinterpret_cast<std::uintptr_t>(nodes.data()) % alignof(WideNode), 0u) << n;
     }
 }
+
+// big_blocks.cpp: a cached block lent for a smaller request (within 1.5 times) comes back at its
+// own size, so that it serves a request of that size again (kept under the smaller request's size,
+// it never would, and every such request took fresh memory). Sizes no other test asks for.
+TEST(BigVector, BlockLentForLessComesBackWhole) {
+    const std::size_t whole = std::size_t(62) << 20, less = std::size_t(42) << 20;
+    void* p = allocate_big_block(whole);
+    free_big_block(p, whole);
+    void* q = allocate_big_block(less);
+    EXPECT_EQ(q, p);
+    free_big_block(q, less);
+    void* r = allocate_big_block(whole);
+    EXPECT_EQ(r, p);
+    free_big_block(r, whole);
+}

@@ -16,7 +16,9 @@ namespace bvhlab {
 namespace {
 
 /// Freed blocks kept for reuse, at most kCacheBytes in all; a request takes the smallest cached
-/// block that is large enough and not more than 1.5 times too large.
+/// block that is large enough and not more than 1.5 times too large. A block lent for a smaller
+/// request comes back at its own size, not the request's: kept under the smaller size, it would
+/// never again serve a request of its own size, which would then take fresh memory.
 class BlockCache {
 public:
     static constexpr std::size_t kCacheBytes = std::size_t(512) << 20;
@@ -30,14 +32,22 @@ public:
                 best = i;
         }
         if (best == blocks_.size()) return nullptr;
-        void* p = blocks_[best].p;
-        cached_ -= blocks_[best].bytes;
+        const Block b = blocks_[best];
+        if (b.bytes != bytes) lent_.push_back(b);  // first: if this throws, nothing has changed
+        cached_ -= b.bytes;
         blocks_.erase(blocks_.begin() + std::ptrdiff_t(best));
-        return p;
+        return b.p;
     }
-    /// Keeps the block; returns the blocks that no longer fit (the oldest first) for freeing.
+    /// Keeps the block (`bytes`: the size asked for it); returns the blocks that no longer fit
+    /// (the oldest first) for freeing.
     std::vector<void*> keep(void* p, std::size_t bytes) {
         std::lock_guard<std::mutex> lock(mutex_);
+        for (std::size_t i = 0; i < lent_.size(); ++i)
+            if (lent_[i].p == p) {  // lent larger than asked: back at its own size
+                bytes = lent_[i].bytes;
+                lent_.erase(lent_.begin() + std::ptrdiff_t(i));
+                break;
+            }
         std::vector<void*> evicted;
         if (bytes > kCacheBytes) return {p};
         blocks_.push_back({p, bytes});
@@ -57,6 +67,7 @@ private:
     };
     std::mutex mutex_;
     std::vector<Block> blocks_;
+    std::vector<Block> lent_;  ///< blocks out on loan that are larger than their request
     std::size_t cached_ = 0;
 };
 
