@@ -1,13 +1,8 @@
 // Tree invariants for every split method × axis policy × leaf size, determinism, hard inputs.
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <cstring>
 #include <tuple>
-#if defined(__linux__)
-#include <sys/mman.h>
-#include <unistd.h>
-#endif
 
 #include "bvhlab/big_vector.h"
 #include "bvhlab/bvh.h"
@@ -355,21 +350,4 @@ TEST(BigVector, BlockLentForLessComesBackWhole) {
     void* r = allocate_big_block(whole);
     EXPECT_EQ(r, p);
     free_big_block(r, whole);
-}
-
-// big_blocks.cpp: a fresh block comes with every page backed, so that no later build that is
-// handed it from the cache faults in the part earlier builds did not write.
-TEST(BigVector, FreshBlockIsBackedWhole) {
-#if defined(__linux__)
-    const std::size_t bytes = std::size_t(38) << 20;  // a size no other test asks for: a fresh block
-    const std::size_t page = std::size_t(sysconf(_SC_PAGESIZE));
-    void* p = allocate_big_block(bytes);
-    std::vector<unsigned char> resident((bytes + page - 1) / page);
-    ASSERT_EQ(mincore(p, bytes, resident.data()), 0);
-    EXPECT_EQ(std::size_t(std::count_if(resident.begin(), resident.end(), [](unsigned char c) { return c & 1; })),
-              resident.size());
-    free_big_block(p, bytes);
-#else
-    GTEST_SKIP() << "page residency is read with Linux's mincore";
-#endif
 }

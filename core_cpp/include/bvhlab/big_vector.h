@@ -19,7 +19,7 @@
 namespace bvhlab {
 
 /// A block of `bytes` (a size big_block_bytes gives), 4 KiB aligned and 2 MiB aligned from 2 MiB
-/// up: a cached one if any fits, else fresh, with every page backed (big_blocks.cpp says why).
+/// up: a cached one if any fits, else fresh.
 void* allocate_big_block(std::size_t bytes);
 /// Returns a block from allocate_big_block, to the cache or, past its limit, to the system.
 void free_big_block(void* p, std::size_t bytes) noexcept;

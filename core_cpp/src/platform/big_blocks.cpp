@@ -76,24 +76,6 @@ BlockCache& cache() {
     return *c;
 }
 
-/// Backs every page of a fresh block at once (Linux: MADV_POPULATE_WRITE; else, or where the
-/// kernel lacks it, a write to each page). Blocks pass from build to build through the cache, and
-/// each build writes its own extent of them: a tree's node array is reserved for 2n - 1 nodes and
-/// filled as far as its method's tree goes (Sponza: 267 K nodes by default, 524 K with leaves of
-/// one). A build handed a block that earlier builds had written less of faulted in the rest page
-/// by page: with bench/build.py's six configurations in one process, 730 faults and about 1 ms in
-/// every default Sponza build. Backed whole once, a block never faults again.
-void populate(void* p, std::size_t bytes) noexcept {
-#if defined(__linux__)
-#ifndef MADV_POPULATE_WRITE
-#define MADV_POPULATE_WRITE 23  // Linux 5.14; older kernels answer EINVAL
-#endif
-    if (madvise(p, bytes, MADV_POPULATE_WRITE) == 0) return;
-#endif
-    constexpr std::size_t kPage = 4096;  // at most the page size: every page gets a write
-    for (std::size_t i = 0; i < bytes; i += kPage) static_cast<volatile char*>(p)[i] = 0;
-}
-
 }  // namespace
 
 void* allocate_big_block(std::size_t bytes) {
@@ -101,7 +83,6 @@ void* allocate_big_block(std::size_t bytes) {
     const std::size_t huge = std::size_t(2) << 20;
     void* p = std::aligned_alloc(bytes >= huge ? huge : std::size_t(4096), bytes);
     if (!p) throw std::bad_alloc();
-    populate(p, bytes);
     return p;
 }
 
