@@ -130,10 +130,12 @@ const SplitMethodInfo& method_info(SplitMethod method);
 
 /// The SAH methods build ranges of at most small_subtree_size(config) references whole, with
 /// the exact SAH (src/build/small_subtree.h), so their split functions only see larger ranges.
-/// 24 builds fastest on Sponza (55.6 ms against 57.0 at 16, 56.6 at 20, 56.5 at 28, one thread)
-/// and on the 1M-triangle meshes (room1m 241 against 252 ms, uniform1m 241 against 248 ms) since
-/// the small builder's branches were removed; at 16 before that.
-inline constexpr std::uint32_t kSmallSubtree = 24;
+/// 32 since the small builder's sweep and sort lost a fifth of their instructions: against 24,
+/// Sponza 42.8-43.6 against 43.1-43.6 ms median, room1m 186.3-188.6 against 187.7-190.0 ms,
+/// uniform1m within noise (interleaved, one thread), each tree a little better (SAH 71.14 against
+/// 71.25 on Sponza). 24 was the fastest before (Sponza 55.6 ms against 57.0 at 16, 56.6 at 20,
+/// 56.5 at 28), 16 before the small builder's branches were removed.
+inline constexpr std::uint32_t kSmallSubtree = 32;
 /// The binned SAH over centroid bounds is the report's method (§2.3.2, Table 1): it bins every
 /// range of more than this many, as it did before the small-subtree builder, so the report's
 /// trees keep their meaning (only ties between equal costs may fall differently).
