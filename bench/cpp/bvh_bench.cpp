@@ -76,14 +76,17 @@ void print_times(const std::vector<double>& times, const char* format = "%s%.6f"
 }
 
 /// Builds with every peer, in turn, until the memory they use has been touched: a round in which
-/// no build faults in more than kFreshPages pages (16 MiB), or kMaxRounds rounds. One round is not
+/// no build faults in more than kFreshPages pages (1 MiB), or kMaxRounds rounds. One round is not
 /// enough when several trees stay alive: their blocks are reserved for the largest tree a range
 /// can make (2n - 1 nodes) and written only as far as each tree goes, so as the blocks pass from
 /// one peer to the next, the first touches go on for rounds (room1m, six bvhlab trees: 21,943
 /// faults in the default's second build, then 4K-7K a build, for up to five more rounds, in the
-/// default's and the report configuration's). Returns the rounds run.
+/// default's and the report configuration's; Sponza: 734 in every default build of the first
+/// five rounds, which a bound of 16 MiB let through into the timed builds). A peer that takes
+/// fresh memory in every build (Embree LOW: about 500 pages) keeps the warm-up to kMaxRounds.
+/// Returns the rounds run.
 int warm_up(const std::vector<std::unique_ptr<Peer>>& peers, const Mesh& mesh) {
-    constexpr long kFreshPages = 4096;
+    constexpr long kFreshPages = 256;
     constexpr int kMaxRounds = 8;
     for (int round = 1;; ++round) {
         long most = 0;
