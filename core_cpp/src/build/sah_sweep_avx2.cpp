@@ -99,6 +99,13 @@ private:
     __m128 best_ = _mm_set1_ps(kInf), key_ = _mm_setzero_ps();
 };
 
+/// Calls sweep.operator()<kByArea>() with PrefixSweep's kByArea for `price`: decided once per node.
+template <class Sweep>
+void sweep_by_area(const SweepPrice& price, const Sweep& sweep) {
+    if (price.inv_area > 0.0f) sweep.template operator()<true>();
+    else sweep.template operator()<false>();
+}
+
 /// SahCost::counted(n) as a float, row[log2(block)][n] for the masks block - 1 of every block
 /// (1..kMaxSahBlock, powers of two) and the counts of a small subtree's nodes.
 struct CountedTable {
@@ -156,8 +163,7 @@ void bucket_sweep(const Bucket* bucket, std::uint32_t bins, const SweepPrice& pr
         }
         sweep.store(cost_out, key_out);
     };
-    if (price.inv_area > 0.0f) sweep.template operator()<true>();
-    else sweep.template operator()<false>();
+    sweep_by_area(price, sweep);
 }
 
 void small_ranks(const float* c2, std::uint32_t n, std::uint8_t (*order)[kSmallSubtree]) {
@@ -232,8 +238,7 @@ void small_sweep(const SmallBox* boxes, const std::uint8_t* const order[3], std:
         }
         sweep.store(cost_out, left_count_out);
     };
-    if (price.inv_area > 0.0f) sweep.template operator()<true>();
-    else sweep.template operator()<false>();
+    sweep_by_area(price, sweep);
 }
 
 }  // namespace bvhlab::avx2
