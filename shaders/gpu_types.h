@@ -98,7 +98,7 @@ BVHLAB_CONST uint TRAVERSAL_STACKLESS = 1u;
 /// read or write, so no storage-buffer binding limit (128 MiB on lavapipe) caps a scene.
 struct DeviceAddresses {
     uvec2 nodes;          ///< BvhNode[node_count]
-    uvec2 refs;           ///< uint, primitive references in leaf order
+    uvec2 prims;          ///< GpuTriangle, the tree's primitives in leaf order (Bvh::prims)
     uvec2 triangles;      ///< GpuTriangle
     uvec2 spheres;        ///< GpuSphere
     uvec2 materials;      ///< GpuMaterial

@@ -37,26 +37,27 @@ uint material_of(uint ref) {
     return load_triangle(ref).material;
 }
 
-/// One primitive of a leaf. Closest-hit keeps the nearest; a shadow ray multiplies its
-/// transmission by the transparent factor of every surface it crosses (a sphere can be crossed
-/// twice). Returns true when the walk may stop (a shadow ray that is fully blocked).
-bool visit_primitive(uint ref, TraceRay r, bool shadow, INOUT(Hit) hit) {
+/// One primitive of a leaf, as the tree keeps it in leaf order (Bvh::prims: a triangle's vertices,
+/// or a sphere's centre in v0 and radius in v1.x, its reference in `ref`), so a leaf's primitives
+/// are read in one run with no reference to follow to the scene's arrays (the leaf layout of Aila
+/// and Laine 2009). Closest-hit keeps the nearest; a shadow ray multiplies its transmission by the
+/// transparent factor of every surface it crosses (a sphere can be crossed twice). Returns true
+/// when the walk may stop (a shadow ray that is fully blocked).
+bool visit_primitive(GpuTriangle p, TraceRay r, bool shadow, INOUT(Hit) hit) {
     uint crossings = 0u;
-    if ((ref & REF_SPHERE_BIT) != 0u) {
-        vec4 s = load_sphere(ref & REF_INDEX_MASK).center_radius;
+    if ((p.ref & REF_SPHERE_BIT) != 0u) {
         float t;
-        if (shadow) crossings = sphere_crossings(xyz(s), s.w, r, hit.t);
-        else if (hit_sphere(xyz(s), s.w, r, hit.t, t) && closer(t, ref, hit)) { hit.t = t; hit.ref = ref; }
+        if (shadow) crossings = sphere_crossings(p.v0, p.v1.x, r, hit.t);
+        else if (hit_sphere(p.v0, p.v1.x, r, hit.t, t) && closer(t, p.ref, hit)) { hit.t = t; hit.ref = p.ref; }
     } else {
-        GpuTriangle tri = load_triangle(ref);
         vec3 tuv;
-        if (hit_triangle(tri.v0, tri.v1, tri.v2, r, hit.t, tuv)) {
+        if (hit_triangle(p.v0, p.v1, p.v2, r, hit.t, tuv)) {
             if (shadow) crossings = tuv.x < hit.t ? 1u : 0u;
-            else if (closer(tuv.x, ref, hit)) { hit.t = tuv.x; hit.u = tuv.y; hit.v = tuv.z; hit.ref = ref; }
+            else if (closer(tuv.x, p.ref, hit)) { hit.t = tuv.x; hit.u = tuv.y; hit.v = tuv.z; hit.ref = p.ref; }
         }
     }
     if (crossings == 0u) return false;
-    float transparent = load_material(material_of(ref)).transparent_ior.x;
+    float transparent = load_material(material_of(p.ref)).transparent_ior.x;
     hit.transmission *= crossings == 2u ? transparent * transparent : transparent;
     return hit.transmission <= 0.0f;
 }
@@ -142,9 +143,9 @@ void step_stackless_node(INOUT(Walk) w, TraceRay r, INOUT(Hit) hit) {
 /// The next primitive of the leaf; after the last, the stack traversal pops and the stackless
 /// one goes on with the next node in depth-first order.
 void step_leaf(INOUT(Walk) w, TraceRay r, bool shadow, INOUT(Hit) hit) {
-    uint ref = load_ref(w.leaf_next);
+    GpuTriangle p = load_leaf_prim(w.leaf_next);
     w.leaf_next += 1u;
-    if (visit_primitive(ref, r, shadow, hit)) w.state = WALK_FINISHED;
+    if (visit_primitive(p, r, shadow, hit)) w.state = WALK_FINISHED;
     else if (w.leaf_next >= w.leaf_end) {
         w.state = TRAVERSAL == TRAVERSAL_STACKLESS ? WALK_NODE : WALK_POP;
         w.node += 1u;  // stackless: past the leaf; the stack traversal sets node at the pop

@@ -55,6 +55,7 @@ struct BeyondBindingLimit {
         tree.triangle_count = count;
         tree.nodes.push_back({{-2, 0, -2}, 0, {3, 0, 3}, 1});  // a leaf of one reference
         tree.refs.push_back(count - 1);
+        tree.prims.push_back(scene.triangles[count - 1]);  // the leaf's geometry, in leaf order
         tree.depths.push_back(0);
         scene.bvh = &tree;
         scene.boxes.push_back({{-2, 0, -2, 0}, {3, 0, 3, 0}});

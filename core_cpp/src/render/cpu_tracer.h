@@ -20,7 +20,7 @@ public:
         : frame(params),
           TRAVERSAL(traversal),
           tree_nodes_(scene.bvh->nodes.data()),
-          tree_refs_(scene.bvh->refs.data()),
+          leaf_prims_(scene.bvh->prims.data()),
           triangles_(scene.triangles.data()),
           scene_(scene),
           overlay_(overlay),
@@ -33,7 +33,7 @@ public:
     // is three dependent loads (the scene, its tree, the vector's data) that the compiler must
     // repeat after every store the walk makes (it cannot prove they do not alias).
     BvhNode load_node(uint i) const { return tree_nodes_[i]; }
-    uint load_ref(uint i) const { return tree_refs_[i]; }
+    GpuTriangle load_leaf_prim(uint i) const { return leaf_prims_[i]; }
     GpuTriangle load_triangle(uint i) const { return triangles_[i]; }
     GpuSphere load_sphere(uint i) const { return scene_.spheres[i]; }
     GpuMaterial load_material(uint i) const { return scene_.materials[i]; }
@@ -68,7 +68,7 @@ public:
 
 private:
     const BvhNode* tree_nodes_;
-    const uint* tree_refs_;
+    const GpuTriangle* leaf_prims_;
     const GpuTriangle* triangles_;
     const RenderScene& scene_;
     const vec4* overlay_;

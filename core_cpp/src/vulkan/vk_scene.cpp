@@ -17,7 +17,7 @@ SceneBuffers::SceneBuffers(const Device& device, CommandRunner& runner, const Re
     static const Bvh kNoTree;
     const Bvh& tree = scene.bvh ? *scene.bvh : kNoTree;
     nodes_ = upload_vector(device, runner, tree.nodes, force_staging);
-    refs_ = upload_vector(device, runner, tree.refs, force_staging);
+    prims_ = upload_vector(device, runner, tree.prims, force_staging);
     triangles_ = upload_vector(device, runner, scene.triangles, force_staging);
     spheres_ = upload_vector(device, runner, scene.spheres, force_staging);
     materials_ = upload_vector(device, runner, scene.materials, force_staging);
@@ -31,7 +31,7 @@ SceneBuffers::SceneBuffers(const Device& device, CommandRunner& runner, const Re
 gpu::FrameParams SceneBuffers::frame_params(const RenderSettings& settings) const {
     gpu::FrameParams frame = make_frame_params(summary_, settings);
     frame.addr.nodes = words(nodes_.address());
-    frame.addr.refs = words(refs_.address());
+    frame.addr.prims = words(prims_.address());
     frame.addr.triangles = words(triangles_.address());
     frame.addr.spheres = words(spheres_.address());
     frame.addr.materials = words(materials_.address());

@@ -22,7 +22,7 @@ public:
     const RenderScene& summary() const { return summary_; }
 
 private:
-    Buffer nodes_, refs_, triangles_, spheres_, materials_, boxes_;
+    Buffer nodes_, prims_, triangles_, spheres_, materials_, boxes_;
     RenderScene summary_;
 };
 
