@@ -48,7 +48,7 @@ void assemble(const Subtree& top, const std::vector<Subtree>& parts, unsigned th
     // final index of each top node: shifted by the extra nodes of the placeholders before it
     std::vector<std::uint32_t> final_index(top.nodes.size());
     std::vector<int> part_of(top.nodes.size(), -1);
-    for (std::size_t k = 0; k < top.deferred.size(); ++k) part_of[top.deferred[k].first] = int(k);
+    for (std::size_t k = 0; k < top.deferred.size(); ++k) part_of[top.deferred[k].node] = int(k);
     std::uint32_t shift = 0;
     for (std::size_t i = 0; i < top.nodes.size(); ++i) {
         final_index[i] = std::uint32_t(i) + shift;
@@ -57,7 +57,7 @@ void assemble(const Subtree& top, const std::vector<Subtree>& parts, unsigned th
     out.nodes.resize(top.nodes.size() + shift);
     out.depths.resize(out.nodes.size());
     ThreadPool::shared().run(parts.size(), threads, [&](std::size_t k, unsigned) {
-        copy_part(parts[k], final_index[top.deferred[k].first], out);
+        copy_part(parts[k], final_index[top.deferred[k].node], out);
     });
     // The top nodes, backwards: a node's skip is its second child's, which comes later.
     for (std::size_t i = top.nodes.size(); i-- > 0;) {

@@ -109,10 +109,19 @@ private:
     std::vector<std::unique_ptr<Bucket, Free>> slots_;  ///< 3B buckets each
 };
 
+/// The buckets of BinStore slot `slot` of this thread's scratch (NodeBounds::bins), copied out
+/// for a range deferred to another thread; empty when `slot` is -1 (nothing binned).
+std::vector<Bucket> carry_bins(SplitScratch& scratch, std::int32_t slot);
+/// Puts carried buckets into this thread's store, where the range's node will find them: the
+/// slot for NodeBounds::bins, or -1 when none were carried (the node then bins itself).
+std::int32_t adopt_bins(SplitScratch& scratch, const std::vector<Bucket>& carried);
+
 /// Slots of a BinStore: below kStackSlots, the buckets of the work item at that stack position;
-/// then two for a node binned on its own; then four per chunk of a parallel pass.
+/// then one for a node binned on its own, one for the buckets a deferred range carried here
+/// (adopt_bins); then four per chunk of a parallel pass.
 inline constexpr std::uint32_t kStackSlots = 2 * gpu::MAX_TREE_HEIGHT + 2;
 inline constexpr std::uint32_t kOwnSlot = kStackSlots;
+inline constexpr std::uint32_t kCarriedSlot = kStackSlots + 1;
 inline constexpr std::uint32_t kChunkSlots = kStackSlots + 2;
 
 /// Adds the references of r to two copies of buckets (reset by the caller): consecutive

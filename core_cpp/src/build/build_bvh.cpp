@@ -55,7 +55,7 @@ std::vector<Subtree> build_deferred(BuildShared& shared, const Subtree& top, uns
     std::vector<std::size_t> order(top.deferred.size());
     for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
     std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-        return top.deferred[a].second.range.size() > top.deferred[b].second.range.size();
+        return top.deferred[a].item.range.size() > top.deferred[b].item.range.size();
     });
     std::vector<Subtree> parts(top.deferred.size());
     std::vector<SplitScratch> scratch(threads);
@@ -64,8 +64,9 @@ std::vector<Subtree> build_deferred(BuildShared& shared, const Subtree& top, uns
         [&](std::size_t i, unsigned slot) {
             try {
                 const std::size_t k = order[i];
-                WorkItem root = top.deferred[k].second;
+                WorkItem root = top.deferred[k].item;
                 root.second_child = false;  // its parent lives in `top`, which already points at it
+                root.bounds.bins = adopt_bins(scratch[slot], top.deferred[k].bins);
                 build_subtree(shared, scratch[slot], root, parts[k], {0, slot == 0, nullptr});
                 fill_skip_indices(parts[k].nodes, shared.method.bottom_up_boxes);
                 pack_unpacked(shared, parts[k]);

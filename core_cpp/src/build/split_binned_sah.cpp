@@ -2,6 +2,8 @@
 // boundary by an O(B) sweep (the improvement the report names over its O(n + B²) loop), then one
 // pass that scatters by bucket and fills the children's buckets (binning.h). At the top of the
 // tree the passes run in chunks on every thread.
+#include <algorithm>
+
 #include "binning.h"
 #include "partition.h"
 
@@ -82,6 +84,20 @@ std::uint32_t partition_chunks(SplitContext& ctx, Range r, int src, const BinFra
 }
 
 }  // namespace
+
+std::vector<Bucket> carry_bins(SplitScratch& scratch, std::int32_t slot) {
+    if (slot < 0) return {};
+    const BinSet from = scratch.bins->slot(std::uint32_t(slot));
+    return {from.bucket, from.bucket + 3 * std::size_t(from.bins)};
+}
+
+std::int32_t adopt_bins(SplitScratch& scratch, const std::vector<Bucket>& carried) {
+    if (carried.empty()) return -1;
+    const auto bins = static_cast<std::uint32_t>(carried.size() / 3);
+    if (!scratch.bins) scratch.bins = std::make_unique<BinStore>(bins);
+    std::copy(carried.begin(), carried.end(), scratch.bins->slot(kCarriedSlot).bucket);
+    return std::int32_t(kCarriedSlot);
+}
 
 std::optional<Split> split_binned_sah(SplitContext& ctx, Range r, int src, const NodeBounds& b, int axis) {
     const bool by_centroids = ctx.config.bin_bounds == BinBounds::Centroids;

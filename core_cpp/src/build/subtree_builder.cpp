@@ -178,8 +178,9 @@ void build_subtree(BuildShared& shared, SplitScratch& scratch, const WorkItem& r
         WorkItem& item = stack.back();
         const std::uint32_t index = writer.open(item);
         if (index > 0 && item.range.size() <= run.defer_size) {
-            out.deferred.emplace_back(index, item);
-            out.deferred.back().second.bounds.bins = -1;  // its buckets live in this thread's store
+            // its buckets, in this thread's store, go with it
+            out.deferred.push_back({index, item, carry_bins(scratch, item.bounds.bins)});
+            out.deferred.back().item.bounds.bins = -1;
         } else if (item.range.size() >= 2 && item.range.size() <= small_size) {  // the last levels at once
             build_small_subtree(writer, shared.config, item, index);
         } else {

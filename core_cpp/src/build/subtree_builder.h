@@ -9,6 +9,7 @@
 #include "bvhlab/bvh.h"
 #include "bvhlab/cancel.h"
 #include "bvhlab/split.h"
+#include "binning.h"
 
 namespace bvhlab {
 
@@ -22,11 +23,20 @@ struct WorkItem {
     std::uint8_t buffer = 0;  ///< which of the two reference buffers holds the range
 };
 
+/// A range left to another thread: its placeholder node, its work item, and the buckets its
+/// parent's pass filled for it (binned SAH; else empty), which the thread that builds it adopts
+/// (adopt_bins) rather than binning the range again.
+struct DeferredRange {
+    std::uint32_t node = 0;
+    WorkItem item;
+    std::vector<Bucket> bins;
+};
+
 /// Nodes of one subtree in depth-first order, and the ranges it left for other threads.
 struct Subtree {
     BigVector<BvhNode> nodes;
     BigVector<std::uint8_t> depths;
-    std::vector<std::pair<std::uint32_t, WorkItem>> deferred;  ///< placeholder node, its range
+    std::vector<DeferredRange> deferred;
     std::vector<Range> unpacked;  ///< leaf positions whose geometry is packed after (BuildShared::prims)
 };
 
