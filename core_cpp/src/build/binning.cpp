@@ -196,11 +196,16 @@ F4 split_threshold(const BinFrame& f, const BinSplit& split) {
 }
 
 std::uint32_t count_left(const PrimRef* src, Range r, const BinFrame& parent, const BinSplit& split) {
-    const F4 split_at = split_threshold(parent, split);
-    std::uint32_t n = 0;
-    for (std::uint32_t i = r.begin; i < r.end; ++i)
-        n += any_lane(less(src[i].lo4() + src[i].hi4(), split_at)) ? 1u : 0u;
-    return n;
+    // The passes send a reference left when any lane of its twice-centroid is below
+    // split_threshold(), whose lanes but the split axis's are -inf: the same as this one sum and
+    // compare on the axis, which GCC vectorizes (half the instructions of the four-lane test).
+    const float t = right_start(parent, split);
+    const float* lo = src[r.begin].lo + split.axis;  // hi is 4 floats on, the next reference 8
+    const float* const end = lo + 8 * std::size_t(r.size());
+    std::uint32_t n[2] = {0, 0};
+    for (; lo + 8 < end; lo += 16) n[0] += lo[0] + lo[4] < t ? 1u : 0u, n[1] += lo[8] + lo[12] < t ? 1u : 0u;
+    if (lo < end) n[0] += lo[0] + lo[4] < t ? 1u : 0u;
+    return n[0] + n[1];
 }
 
 namespace portable {
