@@ -38,6 +38,7 @@ struct F4 {
 inline F4 operator+(F4 a, F4 b) { return {_mm_add_ps(a.v, b.v)}; }
 inline F4 operator-(F4 a, F4 b) { return {_mm_sub_ps(a.v, b.v)}; }
 inline F4 operator*(F4 a, F4 b) { return {_mm_mul_ps(a.v, b.v)}; }
+inline F4 operator/(F4 a, F4 b) { return {_mm_div_ps(a.v, b.v)}; }
 /// min(a, b) = a < b ? a : b and max(a, b) = a > b ? a : b per lane (SSE's rule: with a NaN,
 /// the second operand); the scalar version below follows the same rule.
 inline F4 min(F4 a, F4 b) { return {_mm_min_ps(a.v, b.v)}; }
@@ -94,6 +95,7 @@ struct F4 {
 BVHLAB_F4_OP(operator+, x + y)
 BVHLAB_F4_OP(operator-, x - y)
 BVHLAB_F4_OP(operator*, x* y)
+BVHLAB_F4_OP(operator/, x / y)
 BVHLAB_F4_OP(min, x < y ? x : y)
 BVHLAB_F4_OP(max, x > y ? x : y)
 #undef BVHLAB_F4_OP

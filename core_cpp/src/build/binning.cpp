@@ -17,15 +17,16 @@ Aabb to_aabb(F4 lo, F4 hi) { return {{lo.lane(0), lo.lane(1), lo.lane(2)}, {hi.l
 }  // namespace
 
 BinFrame::BinFrame(const Aabb& box, std::uint32_t n_bins) : bins(n_bins) {
-    float o[4] = {0, 0, 0, 0}, s[4] = {0, 0, 0, 0};
-    for (int a = 0; a < 3; ++a) {
-        const float extent = box.hi[a] - box.lo[a];
-        const float sc = float(n_bins) / (2.0f * extent);
-        binned[a] = extent > 0.0f && sc > 0.0f && sc < kInf;  // an infinite extent cannot be binned
-        o[a] = origin2_of[a] = 2.0f * box.lo[a];
-        s[a] = scale_of[a] = binned[a] ? sc : 0.0f;
-    }
-    origin2 = F4::load(o), scale = F4::load(s);
+    // The three axes at once (lane 3: an extent of 0, never binned).
+    const float lo3[4] = {box.lo.x, box.lo.y, box.lo.z, 0.0f}, hi3[4] = {box.hi.x, box.hi.y, box.hi.z, 0.0f};
+    const F4 lo = F4::load(lo3), extent = F4::load(hi3) - lo;
+    const F4 sc = F4::splat(float(n_bins)) / (extent + extent);
+    // an infinite extent cannot be binned (its scale is 0)
+    const F4 is_binned = less(F4::splat(0.0f), extent) & less(F4::splat(0.0f), sc) & less(sc, F4::splat(kInf));
+    origin2 = lo + lo, scale = sc & is_binned;
+    origin2.store(origin2_of), scale.store(scale_of);
+    const int bits = lane_bits(is_binned);
+    for (int a = 0; a < 3; ++a) binned[a] = (bits >> a) & 1;
     top_of = float(n_bins - 1), top = F4::splat(top_of);
 }
 
@@ -175,6 +176,14 @@ float right_start(const BinFrame& f, const BinSplit& split) {
     const std::uint32_t guess = order_key(f.origin2_of[a] + (float(split.last_left) + 1.0f) / f.scale_of[a]);
     const std::uint32_t first = order_key(-std::numeric_limits<float>::infinity()),
                         last = order_key(std::numeric_limits<float>::infinity());
+    // Most often the threshold is the guess or the float after it: two tests, no search.
+    if (guess > first && guess < last) {
+        if (left(guess)) {
+            if (!left(guess + 1)) return from_order_key(guess + 1);
+        } else if (left(guess - 1)) {
+            return from_order_key(guess);
+        }
+    }
     // invariant after widening: left(lo), !left(hi)
     std::uint32_t lo = guess - first > 2 ? guess - 2 : first, hi = last - guess > 2 ? guess + 2 : last;
     for (std::uint32_t step = 4; !(lo == first || left(lo)); step *= 2) lo = lo - first > step ? lo - step : first;

@@ -27,7 +27,7 @@ struct BinFrame {
     F4 origin2;  ///< twice the box minimum (lane 3: 0)
     F4 scale;    ///< B / (2 · box extent) per axis; 0 for a flat axis
     F4 top;      ///< B - 1 in every lane
-    float origin2_of[3] = {0, 0, 0}, scale_of[3] = {0, 0, 0}, top_of = 0;  ///< the same, for index()
+    float origin2_of[4] = {0, 0, 0, 0}, scale_of[4] = {0, 0, 0, 0}, top_of = 0;  ///< the same, for index()
     bool binned[3] = {false, false, false};  ///< the axes with an extent (the others are one bucket)
     std::uint32_t bins = 0;
 
