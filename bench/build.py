@@ -5,11 +5,13 @@ and tinybvh (BuildAVX, when a local copy is given), measured in the same run.
                           [--rounds 2] [--callgrind sponza] [--tinybvh DIR]
 
 All C++ builders run inside one bvh_bench process per (scene, thread count), pinned to that many
-cores, interleaved (each repetition builds with every system in turn); `--rounds` such processes
-alternate with embreex's. Prints, per scene, build ms and Mprims/s with ratios against Embree
-MEDIUM and tinybvh, two-thread scaling, how many cores were busy on the most threads (CPU time
-of all threads over wall time) and the page faults of one build there, SAH cost (bvhlab's
-convention) and callgrind instructions per primitive, and writes bench/results/build.json.
+cores, interleaved (each repetition builds with every system in turn); a round runs one such
+process per thread count, then embreex's, and `--rounds` rounds follow each other, so the thread
+counts alternate too. Prints, per scene, build ms and Mprims/s (medians of all builds) with ratios
+against Embree MEDIUM and tinybvh, scaling on the most threads (the median of the rounds' ratios,
+each round's 1T median over its own), how many cores were busy there (CPU time of all threads over
+wall time) and the page faults of one build there, SAH cost (bvhlab's convention) and callgrind
+instructions per primitive, and writes bench/results/build.json.
 tinybvh is never part of bvhlab: pass the folder of a local copy of github.com/jbikker/tinybvh
 (or set BVHLAB_TINYBVH_DIR).
 """
@@ -46,13 +48,14 @@ def measure_scene(exe: Path, path: Path, tris, threads: list[int], repeat: int, 
     args = ["build", str(path)] + [a for _, spec in peers for a in ("--peer", spec)] + ["--repeat", str(repeat)]
     rows = {spec: {"label": label, "spec": spec, "seconds": {}} for label, spec in peers}
     embreex, warm_up = {}, {}
-    for t in threads:
-        for _ in range(rounds):
+    for _ in range(rounds):  # thread counts alternate: a slow stretch of the machine hits all of them
+        for t in threads:
             run = _peers.run(exe, args, t)
             warm_up.setdefault(str(t), []).append(run["warm_up_rounds"])
             for p in run["peers"]:
                 row = rows[p["spec"]]
                 row["seconds"].setdefault(str(t), []).extend(p["seconds"])
+                row.setdefault("round_medians", {}).setdefault(str(t), []).append(_peers.median(p["seconds"]))
                 row.setdefault("cpu_seconds", {}).setdefault(str(t), []).extend(p["cpu_seconds"])
                 row.setdefault("page_faults", {}).setdefault(str(t), []).extend(p["page_faults"])
                 row["sah"], row["nodes"] = p["sah"], p["nodes"]
@@ -75,6 +78,12 @@ def report(name: str, r: dict, threads: list[int]) -> str:
     def ms(row, t):
         return _peers.median(row["seconds"][str(t)]) * 1e3 if str(t) in row["seconds"] else float("nan")
 
+    def scaling(row, t):  # per round, 1T against t threads measured next to it
+        if "1" not in row["round_medians"]:
+            return float("nan")
+        rounds = zip(row["round_medians"]["1"], row["round_medians"][str(t)])
+        return _peers.median([one / many for one, many in rounds])
+
     by_spec = {row["spec"]: row for row in r["peers"]}
     medium, tiny = by_spec.get("embree:medium"), by_spec.get("tinybvh:")
     rows = []
@@ -83,7 +92,7 @@ def report(name: str, r: dict, threads: list[int]) -> str:
         for t in threads:
             cells += [ms(row, t), n / ms(row, t) / 1e3]
         cells += [ms(medium, 1) / ms(row, 1) if medium else "", ms(tiny, 1) / ms(row, 1) if tiny else ""]
-        cells += [ms(row, 1) / ms(row, threads[-1]) if len(threads) > 1 else ""]
+        cells += [scaling(row, threads[-1]) if len(threads) > 1 else ""]
         last = str(threads[-1])
         cpu, wall, faults = row["cpu_seconds"][last], row["seconds"][last], row["page_faults"][last]
         cells += [sum(cpu) / sum(wall), round(_peers.median(faults))]
