@@ -31,14 +31,18 @@ struct GeometryView {
 /// Degenerate (zero-area) triangles are valid: they are built into the tree and never hit.
 void validate(const GeometryView& geometry);
 
-/// One PrimRef per primitive: triangles first (refs 0..T-1), then spheres (REF_SPHERE_BIT | i).
-/// Checks the geometry as validate() does, throwing the same errors.
-BigVector<PrimRef> make_prim_refs(const GeometryView& geometry);
+/// One PrimRef per primitive: triangles first (refs 0..T-1), then spheres (REF_SPHERE_BIT | i),
+/// on up to `threads` threads of the shared pool (0: all; the result does not depend on it).
+/// Checks the geometry as validate() does, throwing the same errors. `fingerprint`, if set,
+/// receives geometry_fingerprint(geometry), taken in the same pass over the input.
+BigVector<PrimRef> make_prim_refs(const GeometryView& geometry, unsigned threads = 1,
+                                  std::uint64_t* fingerprint = nullptr);
 
-/// A 64-bit fingerprint of the geometry (counts and every coordinate's bits), so that a tree can
-/// tell whether it is used with the geometry it was built for (a render of another scene with the
-/// same primitive counts would be silently wrong). Reads the arrays once, ~10 GB/s.
-std::uint64_t geometry_fingerprint(const GeometryView& geometry);
+/// A 64-bit fingerprint of the geometry (counts and every coordinate's bits, each primitive's at
+/// its place), so that a tree can tell whether it is used with the geometry it was built for (a
+/// render of another scene with the same primitive counts would be silently wrong). A change to
+/// one primitive always changes it. On up to `threads` threads (0: all); the same value for any.
+std::uint64_t geometry_fingerprint(const GeometryView& geometry, unsigned threads = 0);
 
 /// A primitive in the one packed layout of the ray tests (gpu::GpuTriangle, 48 bytes): a
 /// triangle's three vertices, or a sphere's centre (v0) and radius (v1.x); `ref` says which.

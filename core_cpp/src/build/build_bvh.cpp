@@ -148,16 +148,8 @@ Bvh build_bvh(const GeometryView& geometry, const BuildConfig& config) {
         if (stop.cancel().poll()) stop.rethrow();
     };
     check();
-    // The references and the fingerprint read the same input: side by side on two threads, the
-    // calling thread (index 0) taking the fingerprint, then polling while the references finish.
-    BigVector<PrimRef> prim_refs;
-    ThreadPool::shared().run(
-        2, config.threads,
-        [&](std::size_t k, unsigned) {
-            if (k == 0) bvh.geometry_fingerprint = bvhlab::geometry_fingerprint(geometry);
-            else prim_refs = make_prim_refs(geometry);
-        },
-        [&] { stop.cancel().poll(); });
+    // The references and the fingerprint in one pass over the input, in chunks on the pool.
+    BigVector<PrimRef> prim_refs = make_prim_refs(geometry, config.threads, &bvh.geometry_fingerprint);
     check();
     // The leaves pack their geometry where the small-subtree builder makes them (it fetches the
     // input ahead); the other methods' trees are packed after, in leaf order.

@@ -6,10 +6,12 @@
 #include <cstring>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "bvhlab/build_config.h"
 #include "bvhlab/coordinate_range.h"
 #include "bvhlab/simd.h"
+#include "bvhlab/thread_pool.h"
 
 namespace bvhlab {
 namespace {
@@ -103,20 +105,72 @@ void validate(const GeometryView& g) {
     validate_spheres(g);
 }
 
-BigVector<PrimRef> make_prim_refs(const GeometryView& g) {
-    validate_counts(g);
-    BigVector<PrimRef> refs(g.primitive_count());
-    // Checked on the way: x·0 is 0 for finite x and NaN otherwise, so one sum tells whether any
-    // coordinate was NaN or infinite, without a separate pass over the input.
-    // The largest |coordinate| is tracked the same way, for the range check.
-    // Four lanes at a time: a triangle's vertices are loaded as three overlapping 4-float rows
-    // (lane 3 of each is the next vertex's x, or the next triangle's first coordinate, which is
-    // checked anyway), so all but the last triangle read within the input; the last one is done
-    // by the scalar path.
+namespace {
+
+/// The fingerprint is a sum of one term per primitive (mod 2^64): the term folds the primitive's
+/// words into a value seeded by its index, one multiply a word (xor, rotate and multiply by an odd
+/// constant: for fixed other inputs each step maps a word, and the running value, one to one), then
+/// mixes it (the splitmix64 finaliser, Steele et al. 2014). So a change to one primitive always
+/// changes its term, a swap of two changes theirs (each word is seeded by its position), and the
+/// terms can be added in any order: chunk by chunk on several threads, and inside the pass that
+/// makes the references (the multiplies run beside its vector work).
+constexpr std::uint64_t kPrime1 = 0x9E3779B185EBCA87ull, kPrime2 = 0xC2B2AE3D27D4EB4Full;
+
+inline std::uint64_t fold(std::uint64_t h, std::uint64_t w) {
+    h ^= w;
+    return ((h << 29) | (h >> 35)) * kPrime2;
+}
+inline std::uint64_t mix(std::uint64_t x) {
+    x ^= x >> 30, x *= 0xbf58476d1ce4e5b9ull;
+    x ^= x >> 27, x *= 0x94d049bb133111ebull;
+    return x ^ (x >> 31);
+}
+/// Term of primitive `index` (triangles 0..T-1, then spheres) over its kFloats floats.
+template <int kFloats>
+inline std::uint64_t term(std::uint64_t index, const float* p) {
+    std::uint64_t h = (index + 1) * kPrime1;
+    for (int k = 0; k + 2 <= kFloats; k += 2) {
+        std::uint64_t w;
+        std::memcpy(&w, p + k, 8);
+        h = fold(h, w);
+    }
+    if constexpr (kFloats % 2) {
+        std::uint32_t w;
+        std::memcpy(&w, p + kFloats - 1, 4);
+        h = fold(h, w);
+    }
+    return mix(h);
+}
+constexpr int kTriangleFloats = 9, kSphereFloats = 4;
+
+/// The fingerprint from the sum of every primitive's term: with the counts mixed in.
+std::uint64_t finish_fingerprint(const GeometryView& g, std::uint64_t sum) {
+    return mix(sum ^ mix(g.triangle_count * kPrime1 + g.sphere_count * kPrime2));
+}
+
+/// Triangles per chunk of the passes over the input on several threads (~0.6 MB of input).
+constexpr std::size_t kChunkTriangles = 1u << 14;
+
+/// What a chunk of make_prim_refs found: its terms' sum and the validation's two reductions.
+struct ChunkChecks {
+    std::uint64_t sum = 0;
+    float poison = 0.0f, reach = 0.0f;
+};
+
+/// References, checks and fingerprint terms of triangles [first, last), 4 lanes at a time: a
+/// triangle's vertices are loaded as three overlapping 4-float rows (lane 3 of each is the next
+/// vertex's x, or the next triangle's first coordinate, which is checked anyway), so all but
+/// the last triangle of the input are read within it; that one goes by the scalar path.
+/// Checked on the way: x·0 is 0 for finite x and NaN otherwise, so one sum tells whether any
+/// coordinate was NaN or infinite, without a separate pass; the largest |coordinate| is tracked
+/// the same way, for the range check.
+ChunkChecks triangle_refs(const GeometryView& g, std::size_t first, std::size_t last, PrimRef* refs) {
     const F4 zero = F4::splat(0.0f);
     F4 poison4 = zero, reach4 = zero;
-    const std::size_t simd_count = g.triangle_count ? g.triangle_count - 1 : 0;
-    for (std::size_t i = 0; i < simd_count; ++i) {
+    std::uint64_t sum = 0;
+    const std::size_t simd_last = std::min(last, g.triangle_count - 1);
+    std::size_t i = first;
+    for (; i < simd_last; ++i) {
         const float* v = g.triangles + 9 * i;
         const F4 a = F4::load(v), b = F4::load(v + 3), c = F4::load(v + 6);
         poison4 = poison4 + (a * zero + b * zero) + c * zero;
@@ -126,77 +180,62 @@ BigVector<PrimRef> make_prim_refs(const GeometryView& g) {
         min(a, min(b, c)).store(row);               // which are written next
         max(a, max(b, c)).store(row + 4);
         r.ref = static_cast<std::uint32_t>(i), r.code = 0;
+        sum += term<kTriangleFloats>(i, v);
     }
-    float poison = poison4.lane(0) + poison4.lane(1) + poison4.lane(2) + poison4.lane(3);
-    float reach = std::max(std::max(reach4.lane(0), reach4.lane(1)), std::max(reach4.lane(2), reach4.lane(3)));
-    for (std::size_t i = simd_count; i < g.triangle_count; ++i) {
+    ChunkChecks out;
+    out.poison = poison4.lane(0) + poison4.lane(1) + poison4.lane(2) + poison4.lane(3);
+    out.reach = std::max(std::max(reach4.lane(0), reach4.lane(1)), std::max(reach4.lane(2), reach4.lane(3)));
+    for (; i < last; ++i) {
         const float* v = g.triangles + 9 * i;
-        for (int k = 0; k < 9; ++k) poison += v[k] * 0.0f, reach = std::max(reach, std::fabs(v[k]));
+        for (int k = 0; k < 9; ++k) out.poison += v[k] * 0.0f, out.reach = std::max(out.reach, std::fabs(v[k]));
         refs[i] = triangle_ref(g, i);
+        sum += term<kTriangleFloats>(i, v);
     }
-    if (poison != 0.0f) throw_bad_triangle(g);  // NaN != 0 too
-    if (reach > kMaxCoordinate) throw_far_triangle(g);
-    validate_spheres(g);
-    for (std::size_t i = 0; i < g.sphere_count; ++i) refs[g.triangle_count + i] = sphere_ref(g, i);
-    return refs;
+    out.sum = sum;
+    return out;
 }
 
-namespace {
+std::uint64_t sphere_terms(const GeometryView& g) {
+    std::uint64_t sum = 0;
+    for (std::size_t s = 0; s < g.sphere_count; ++s)
+        sum += term<kSphereFloats>(g.triangle_count + s, g.spheres + 4 * s);
+    return sum;
+}
 
-/// Eight independent multiply-rotate lanes over 8-byte words (the structure of xxHash64, Collet
-/// 2014, with twice its lanes: each lane's multiply chain waits 8 cycles a word, and four lanes
-/// kept the loop at 4 bytes a cycle), folded and avalanched at the end.
-class Fingerprint {
-public:
-    void add(const void* data, std::size_t n) {
-        const auto* bytes = static_cast<const unsigned char*>(data);
-        std::size_t i = 0;
-        for (; i + 64 <= n; i += 64)
-            for (int k = 0; k < 8; ++k) lane_[k] = round(lane_[k], word(bytes + i + 8 * k));
-        for (; i + 8 <= n; i += 8) lane_[0] = round(lane_[0], word(bytes + i));
-        if (i < n) lane_[1] = round(lane_[1], std::uint64_t(word4(bytes + i)));
-        total_ += n;
-    }
-    std::uint64_t finish() const {
-        std::uint64_t h = total_ * kPrime1;
-        for (std::uint64_t lane : lane_) h = (h ^ round(0, lane)) * kPrime1 + kPrime2;
-        h ^= h >> 33, h *= kPrime2, h ^= h >> 29, h *= kPrime3;
-        return h ^ (h >> 32);
-    }
-
-private:
-    static constexpr std::uint64_t kPrime1 = 0x9E3779B185EBCA87ull, kPrime2 = 0xC2B2AE3D27D4EB4Full,
-                                   kPrime3 = 0x165667B19E3779F9ull;
-    static std::uint64_t round(std::uint64_t acc, std::uint64_t w) {
-        acc += w * kPrime2;
-        acc = (acc << 31) | (acc >> 33);
-        return acc * kPrime1;
-    }
-    static std::uint64_t word(const unsigned char* p) {
-        std::uint64_t w;
-        std::memcpy(&w, p, 8);
-        return w;
-    }
-    static std::uint32_t word4(const unsigned char* p) {
-        std::uint32_t w;
-        std::memcpy(&w, p, 4);
-        return w;
-    }
-
-    std::uint64_t lane_[8] = {kPrime1 + kPrime2, kPrime2,           0,           0 - kPrime1,
-                              kPrime3,           kPrime3 + kPrime1, kPrime1 * 3, 0 - kPrime2};
-    std::uint64_t total_ = 0;
-};
+std::size_t chunks_of(std::size_t triangles) { return (triangles + kChunkTriangles - 1) / kChunkTriangles; }
 
 }  // namespace
 
-std::uint64_t geometry_fingerprint(const GeometryView& g) {
-    Fingerprint f;
-    const std::uint64_t counts[2] = {g.triangle_count, g.sphere_count};
-    f.add(counts, sizeof(counts));
-    if (g.triangle_count) f.add(g.triangles, 9 * sizeof(float) * g.triangle_count);
-    if (g.sphere_count) f.add(g.spheres, 4 * sizeof(float) * g.sphere_count);
-    return f.finish();
+BigVector<PrimRef> make_prim_refs(const GeometryView& g, unsigned threads, std::uint64_t* fingerprint) {
+    validate_counts(g);
+    BigVector<PrimRef> refs(g.primitive_count());
+    std::vector<ChunkChecks> chunks(chunks_of(g.triangle_count));
+    ThreadPool::shared().run(chunks.size(), threads, [&](std::size_t k, unsigned) {
+        const std::size_t first = k * kChunkTriangles;
+        chunks[k] = triangle_refs(g, first, std::min(first + kChunkTriangles, g.triangle_count), refs.data());
+    });
+    ChunkChecks all;
+    for (const ChunkChecks& c : chunks)
+        all.sum += c.sum, all.poison += c.poison, all.reach = std::max(all.reach, c.reach);
+    if (all.poison != 0.0f) throw_bad_triangle(g);  // NaN != 0 too
+    if (all.reach > kMaxCoordinate) throw_far_triangle(g);
+    validate_spheres(g);
+    for (std::size_t i = 0; i < g.sphere_count; ++i) refs[g.triangle_count + i] = sphere_ref(g, i);
+    if (fingerprint) *fingerprint = finish_fingerprint(g, all.sum + sphere_terms(g));
+    return refs;
+}
+
+std::uint64_t geometry_fingerprint(const GeometryView& g, unsigned threads) {
+    std::vector<std::uint64_t> sums(chunks_of(g.triangle_count));
+    ThreadPool::shared().run(sums.size(), threads, [&](std::size_t k, unsigned) {
+        const std::size_t first = k * kChunkTriangles, last = std::min(first + kChunkTriangles, g.triangle_count);
+        std::uint64_t sum = 0;
+        for (std::size_t i = first; i < last; ++i) sum += term<kTriangleFloats>(i, g.triangles + 9 * i);
+        sums[k] = sum;
+    });
+    std::uint64_t sum = sphere_terms(g);
+    for (std::uint64_t s : sums) sum += s;
+    return finish_fingerprint(g, sum);
 }
 
 }  // namespace bvhlab
