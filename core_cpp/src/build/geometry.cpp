@@ -111,9 +111,9 @@ namespace {
 /// words into a value seeded by its index, one multiply a word (xor, rotate and multiply by an odd
 /// constant: for fixed other inputs each step maps a word, and the running value, one to one), then
 /// mixes it (the splitmix64 finaliser, Steele et al. 2014). So a change to one primitive always
-/// changes its term, a swap of two changes theirs (each word is seeded by its position), and the
-/// terms can be added in any order: chunk by chunk on several threads, and inside the pass that
-/// makes the references (the multiplies run beside its vector work).
+/// changes its term, a swap of two changes both terms (each is seeded by its primitive's index),
+/// and the terms can be added in any order: chunk by chunk on several threads, and inside the
+/// pass that makes the references (the multiplies run beside its vector work).
 constexpr std::uint64_t kPrime1 = 0x9E3779B185EBCA87ull, kPrime2 = 0xC2B2AE3D27D4EB4Full;
 
 inline std::uint64_t fold(std::uint64_t h, std::uint64_t w) {
