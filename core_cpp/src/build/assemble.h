@@ -8,7 +8,9 @@ namespace bvhlab {
 
 /// Skip index of every internal node of `nodes` (a depth-first subtree whose root is at 0): the
 /// skip of its second child; leaves skip to i + 1, the last nodes to nodes.size(). With
-/// `boxes_from_children`, also each internal node's box: the union of its children's.
+/// `boxes_from_children`, also each internal node's box: the union of its children's. The
+/// builder writes skip indices as it goes (SubtreeWriter::close_spine); this pass is for the
+/// methods that make boxes from the leaves up (LBVH).
 void fill_skip_indices(BigVector<BvhNode>& nodes, bool boxes_from_children);
 
 /// Splices the deferred subtrees (`parts`, skip indices filled) into the placeholders of `top`,

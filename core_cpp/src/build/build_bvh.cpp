@@ -68,7 +68,7 @@ std::vector<Subtree> build_deferred(BuildShared& shared, const Subtree& top, uns
                 root.second_child = false;  // its parent lives in `top`, which already points at it
                 root.bounds.bins = adopt_bins(scratch[slot], top.deferred[k].bins);
                 build_subtree(shared, scratch[slot], root, parts[k], {0, slot == 0, nullptr});
-                fill_skip_indices(parts[k].nodes, shared.method.bottom_up_boxes);
+                if (shared.method.bottom_up_boxes) fill_skip_indices(parts[k].nodes, true);  // and boxes
                 pack_unpacked(shared, parts[k]);
             } catch (...) {
                 shared.cancel.request_stop();
@@ -123,7 +123,7 @@ void build_tree(BigVector<PrimRef>& prim_refs, const GeometryView& geometry, boo
     if (stop.cancel().stop_requested()) stop.rethrow();
     pack_unpacked(shared, top);
     if (parts.empty()) {
-        fill_skip_indices(top.nodes, method.bottom_up_boxes);
+        if (method.bottom_up_boxes) fill_skip_indices(top.nodes, true);  // boxes from the leaves up
         out.nodes = std::move(top.nodes);
         out.depths = std::move(top.depths);
     } else {

@@ -194,6 +194,7 @@ void build_subtree(BuildShared& shared, SplitScratch& scratch, const WorkItem& r
         }
         stack.pop_back();
     }
+    if (!out.nodes.empty()) writer.close_spine(0, static_cast<std::uint32_t>(out.nodes.size()));  // the root's
 }
 
 }  // namespace bvhlab

@@ -6,7 +6,8 @@
 namespace bvhlab {
 
 /// Writes the nodes of one subtree in depth-first order; leaves copy their references to
-/// BuildShared::leaf_refs. Skip indices are filled at the end (assemble.h).
+/// BuildShared::leaf_refs. A node's skip index, the node after its subtree, is written when
+/// that node is opened (close_spine), while the subtree's nodes are still in the caches.
 class SubtreeWriter {
 public:
     SubtreeWriter(BuildShared& shared, Subtree& out) : shared_(shared), out_(out) {}
@@ -21,13 +22,25 @@ public:
         set_box(node, box);
         node.index = 0, node.info = 0;
         out_.depths.push_back(static_cast<std::uint8_t>(depth));
-        if (second_child) out_.nodes[parent].index = index;
+        if (second_child) {
+            out_.nodes[parent].index = index;
+            close_spine(parent + 1, index);
+        }
         return index;
     }
     std::uint32_t open(const WorkItem& item) {
         return open(item.bounds.box, item.depth, item.parent, item.second_child);
     }
-    void make_internal(std::uint32_t index) { out_.nodes[index].info = gpu::NODE_INTERNAL_BIT; }  // skip: at the end
+    void make_internal(std::uint32_t index) { out_.nodes[index].info = gpu::NODE_INTERNAL_BIT; }  // skip: close_spine
+    /// Node `next` follows the subtree of node `first` (depth-first order): `first` and the second
+    /// children down from it, whose subtrees all end there, skip to it. Each inner node lies on
+    /// one such spine, so the tree's skips cost one visit a node (they were a pass over the tree
+    /// at the end, reading each node's second child far away). A placeholder (a deferred range,
+    /// info 0) ends the spine like a leaf: assemble() links the top's nodes.
+    void close_spine(std::uint32_t first, std::uint32_t next) {
+        for (std::uint32_t i = first; !is_leaf(out_.nodes[i]); i = out_.nodes[i].index)
+            out_.nodes[i].info = gpu::NODE_INTERNAL_BIT | next;
+    }
     /// Makes node `index` a leaf of the `count` references from position `first` on, and
     /// returns where their references go (the caller writes them).
     std::uint32_t* make_leaf(std::uint32_t index, std::uint32_t first, std::uint32_t count) {
