@@ -1,7 +1,8 @@
 // The geometry fingerprint (geometry.h): a tree's record of the geometry it was built for, which
 // renders and refits check. It must change with any one primitive, with primitives swapped, with
 // a triangle's corners swapped and with the counts; it must not depend on the thread count, and
-// the build's (taken while the references are made) must equal the standalone one.
+// the build's (taken while the references are made) must equal the standalone one. The bounds
+// make_prim_refs takes in the same pass (the root's, for the build) are its references', exactly.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -26,9 +27,9 @@ TEST(Fingerprint, SameForEveryThreadCountAndForTheBuild) {
     const std::uint64_t one = print(scene);
     for (unsigned threads : {2u, 3u, 0u}) EXPECT_EQ(print(scene, threads), one) << threads << " threads";
     for (unsigned threads : {1u, 2u}) {
-        std::uint64_t fused = 0;
-        const BigVector<PrimRef> refs = make_prim_refs(scene.view(), threads, &fused);
-        EXPECT_EQ(fused, one) << threads << " threads";
+        PrimRefsSummary summary;
+        const BigVector<PrimRef> refs = make_prim_refs(scene.view(), threads, &summary);
+        EXPECT_EQ(summary.fingerprint, one) << threads << " threads";
         EXPECT_EQ(refs.size(), scene.view().primitive_count());
         BuildConfig c;
         c.threads = threads;
@@ -71,4 +72,26 @@ TEST(Fingerprint, ChangesWhenPrimitivesOrCornersSwapOrCountsDiffer) {
     Scene one_sphere;
     one_sphere.add_sphere({0, 0, 0}, 1);
     EXPECT_TRUE(seen.insert(print(one_sphere)).second);
+}
+
+TEST(PrimRefsSummary, BoundsAreTheReferencesOwn) {
+    const Scene scene = test::random_scene(40'003, 29, 8);  // several chunks, spheres after
+    for (unsigned threads : {1u, 2u}) {
+        PrimRefsSummary summary;
+        const BigVector<PrimRef> refs = make_prim_refs(scene.view(), threads, &summary);
+        Aabb box, twice;  // brute force: every reference's box and twice-centroid
+        for (const PrimRef& r : refs) {
+            box.grow(r.box());
+            twice.grow(Vec3{r.lo[0] + r.hi[0], r.lo[1] + r.hi[1], r.lo[2] + r.hi[2]});
+        }
+        for (int a = 0; a < 3; ++a) {
+            EXPECT_EQ(summary.box.lo[a], box.lo[a]) << threads << " threads, axis " << a;
+            EXPECT_EQ(summary.box.hi[a], box.hi[a]) << threads << " threads, axis " << a;
+            EXPECT_EQ(summary.centroids.lo[a], 0.5f * twice.lo[a]) << threads << " threads, axis " << a;
+            EXPECT_EQ(summary.centroids.hi[a], 0.5f * twice.hi[a]) << threads << " threads, axis " << a;
+        }
+    }
+    PrimRefsSummary none;
+    make_prim_refs(Scene{}.view(), 1, &none);
+    EXPECT_TRUE(none.box.empty());
 }

@@ -31,12 +31,19 @@ struct GeometryView {
 /// Degenerate (zero-area) triangles are valid: they are built into the tree and never hit.
 void validate(const GeometryView& geometry);
 
+/// What make_prim_refs gathers in its pass over the input besides the references.
+struct PrimRefsSummary {
+    std::uint64_t fingerprint = 0;  ///< geometry_fingerprint(geometry)
+    Aabb box;                       ///< of the references' boxes (empty without primitives)
+    Aabb centroids;                 ///< of their centroids, halved twice-centroids (NodeBounds)
+};
+
 /// One PrimRef per primitive: triangles first (refs 0..T-1), then spheres (REF_SPHERE_BIT | i),
 /// on up to `threads` threads of the shared pool (0: all; the result does not depend on it).
-/// Checks the geometry as validate() does, throwing the same errors. `fingerprint`, if set,
-/// receives geometry_fingerprint(geometry), taken in the same pass over the input.
+/// Checks the geometry as validate() does, throwing the same errors. `summary`, if set, receives
+/// the fingerprint and the bounds, taken in the same pass.
 BigVector<PrimRef> make_prim_refs(const GeometryView& geometry, unsigned threads = 1,
-                                  std::uint64_t* fingerprint = nullptr);
+                                  PrimRefsSummary* summary = nullptr);
 
 /// A 64-bit fingerprint of the geometry (counts and every coordinate's bits, each primitive's at
 /// its place), so that a tree can tell whether it is used with the geometry it was built for (a

@@ -90,8 +90,9 @@ std::uint32_t defer_size_for(std::uint32_t n, unsigned threads) {
 }
 
 /// Builds the tree over prim_refs into `out`; packs out.prims too where `pack` (see BuildShared).
-void build_tree(BigVector<PrimRef>& prim_refs, const GeometryView& geometry, bool pack, const BuildConfig& cfg,
-                BuildStop& stop, Bvh& out) {
+/// `summary`: the bounds make_prim_refs took of them.
+void build_tree(BigVector<PrimRef>& prim_refs, const PrimRefsSummary& summary, const GeometryView& geometry, bool pack,
+                const BuildConfig& cfg, BuildStop& stop, Bvh& out) {
     out.refs.resize(prim_refs.size());
     if (prim_refs.empty()) return;
     const auto n = static_cast<std::uint32_t>(prim_refs.size());
@@ -106,7 +107,14 @@ void build_tree(BigVector<PrimRef>& prim_refs, const GeometryView& geometry, boo
         sort_by_morton_code(prim_refs, bounds_of(ctx, {0, n}, 0, false).centroids);
         ctx.buffers[0] = prim_refs.data();  // the sort may have swapped the storage
     }
-    WorkItem root{{0, n}, bounds_of(ctx, {0, n}, 0, method.needs_centroid_sum), 0, 0, false, 0};
+    // The root's bounds come from make_prim_refs' pass, but for a method that also sums the
+    // centroids (and LBVH, which sorted the references in between)
+    WorkItem root{{0, n}, {}, 0, 0, false, 0};
+    if (method.needs_centroid_sum || method.needs_morton_presort) {
+        root.bounds = bounds_of(ctx, {0, n}, 0, method.needs_centroid_sum);
+    } else {
+        root.bounds.box = summary.box, root.bounds.centroids = summary.centroids;
+    }
     BuildShared shared{{prim_refs.data(), other.data()}, out.refs.data(), cfg, method, stop.cancel(), stop.in_leaves()};
     if (pack) {
         out.prims = BigVector<PackedPrim>(n);  // every element written by the leaves (WrittenBeforeRead)
@@ -148,13 +156,16 @@ Bvh build_bvh(const GeometryView& geometry, const BuildConfig& config) {
         if (stop.cancel().poll()) stop.rethrow();
     };
     check();
-    // The references and the fingerprint in one pass over the input, in chunks on the pool.
-    BigVector<PrimRef> prim_refs = make_prim_refs(geometry, config.threads, &bvh.geometry_fingerprint);
+    // The references, the fingerprint and the root's bounds in one pass over the input, in
+    // chunks on the pool.
+    PrimRefsSummary summary;
+    BigVector<PrimRef> prim_refs = make_prim_refs(geometry, config.threads, &summary);
+    bvh.geometry_fingerprint = summary.fingerprint;
     check();
     // The leaves pack their geometry where the small-subtree builder makes them (it fetches the
     // input ahead); the other methods' trees are packed after, in leaf order.
     const bool pack_in_build = small_subtree_size(config) > 0;
-    build_tree(prim_refs, geometry, pack_in_build, config, stop, bvh);
+    build_tree(prim_refs, summary, geometry, pack_in_build, config, stop, bvh);
     check();
     if (!pack_in_build) bvh.prims = pack_prims(geometry, bvh.refs, config.threads);
     bvh.build_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -155,6 +156,17 @@ constexpr std::size_t kChunkTriangles = 1u << 14;
 struct ChunkChecks {
     std::uint64_t sum = 0;
     float poison = 0.0f, reach = 0.0f;
+    /// Bounds of the references' boxes and of their twice-centroids (lanes 0-2).
+    F4 lo = F4::splat(std::numeric_limits<float>::infinity()), hi = neg(lo), c2_lo = lo, c2_hi = hi;
+
+    void grow(F4 ref_lo, F4 ref_hi) {
+        const F4 c2 = ref_lo + ref_hi;
+        lo = min(lo, ref_lo), hi = max(hi, ref_hi), c2_lo = min(c2_lo, c2), c2_hi = max(c2_hi, c2);
+    }
+    void merge(const ChunkChecks& o) {
+        sum += o.sum, poison += o.poison, reach = std::max(reach, o.reach);
+        lo = min(lo, o.lo), hi = max(hi, o.hi), c2_lo = min(c2_lo, o.c2_lo), c2_hi = max(c2_hi, o.c2_hi);
+    }
 };
 
 /// References, checks and fingerprint terms of triangles [first, last), 4 lanes at a time: a
@@ -167,7 +179,7 @@ struct ChunkChecks {
 ChunkChecks triangle_refs(const GeometryView& g, std::size_t first, std::size_t last, PrimRef* refs) {
     const F4 zero = F4::splat(0.0f);
     F4 poison4 = zero, reach4 = zero;
-    std::uint64_t sum = 0;
+    ChunkChecks out;
     const std::size_t simd_last = std::min(last, g.triangle_count - 1);
     std::size_t i = first;
     for (; i < simd_last; ++i) {
@@ -177,21 +189,21 @@ ChunkChecks triangle_refs(const GeometryView& g, std::size_t first, std::size_t 
         reach4 = max(reach4, max(max(max(a, neg(a)), max(b, neg(b))), max(c, neg(c))));
         PrimRef& r = refs[i];
         float* row = reinterpret_cast<float*>(&r);  // lo, ref | hi, code: lane 3 lands on ref and code,
-        min(a, min(b, c)).store(row);               // which are written next
-        max(a, max(b, c)).store(row + 4);
+        const F4 lo = min(a, min(b, c)), hi = max(a, max(b, c));
+        lo.store(row), hi.store(row + 4);  // which are written next
         r.ref = static_cast<std::uint32_t>(i), r.code = 0;
-        sum += term<kTriangleFloats>(i, v);
+        out.grow(lo, hi);  // lane 3 is not a bound's: never read
+        out.sum += term<kTriangleFloats>(i, v);
     }
-    ChunkChecks out;
     out.poison = poison4.lane(0) + poison4.lane(1) + poison4.lane(2) + poison4.lane(3);
     out.reach = std::max(std::max(reach4.lane(0), reach4.lane(1)), std::max(reach4.lane(2), reach4.lane(3)));
     for (; i < last; ++i) {
         const float* v = g.triangles + 9 * i;
         for (int k = 0; k < 9; ++k) out.poison += v[k] * 0.0f, out.reach = std::max(out.reach, std::fabs(v[k]));
         refs[i] = triangle_ref(g, i);
-        sum += term<kTriangleFloats>(i, v);
+        out.grow(refs[i].lo4(), refs[i].hi4());
+        out.sum += term<kTriangleFloats>(i, v);
     }
-    out.sum = sum;
     return out;
 }
 
@@ -206,7 +218,7 @@ std::size_t chunks_of(std::size_t triangles) { return (triangles + kChunkTriangl
 
 }  // namespace
 
-BigVector<PrimRef> make_prim_refs(const GeometryView& g, unsigned threads, std::uint64_t* fingerprint) {
+BigVector<PrimRef> make_prim_refs(const GeometryView& g, unsigned threads, PrimRefsSummary* summary) {
     validate_counts(g);
     BigVector<PrimRef> refs(g.primitive_count());
     std::vector<ChunkChecks> chunks(chunks_of(g.triangle_count));
@@ -215,13 +227,25 @@ BigVector<PrimRef> make_prim_refs(const GeometryView& g, unsigned threads, std::
         chunks[k] = triangle_refs(g, first, std::min(first + kChunkTriangles, g.triangle_count), refs.data());
     });
     ChunkChecks all;
-    for (const ChunkChecks& c : chunks)
-        all.sum += c.sum, all.poison += c.poison, all.reach = std::max(all.reach, c.reach);
+    for (const ChunkChecks& c : chunks) all.merge(c);
     if (all.poison != 0.0f) throw_bad_triangle(g);  // NaN != 0 too
     if (all.reach > kMaxCoordinate) throw_far_triangle(g);
     validate_spheres(g);
-    for (std::size_t i = 0; i < g.sphere_count; ++i) refs[g.triangle_count + i] = sphere_ref(g, i);
-    if (fingerprint) *fingerprint = finish_fingerprint(g, all.sum + sphere_terms(g));
+    for (std::size_t i = 0; i < g.sphere_count; ++i) {
+        PrimRef& r = refs[g.triangle_count + i];
+        r = sphere_ref(g, i);
+        all.grow(r.lo4(), r.hi4());
+    }
+    if (summary) {
+        summary->fingerprint = finish_fingerprint(g, all.sum + sphere_terms(g));
+        if (!refs.empty()) {  // as bounds_of has them: the centroids are halved twice-centroids
+            const F4 half = F4::splat(0.5f), c_lo = all.c2_lo * half, c_hi = all.c2_hi * half;
+            summary->box = {{all.lo.lane(0), all.lo.lane(1), all.lo.lane(2)},
+                            {all.hi.lane(0), all.hi.lane(1), all.hi.lane(2)}};
+            summary->centroids = {{c_lo.lane(0), c_lo.lane(1), c_lo.lane(2)},
+                                  {c_hi.lane(0), c_hi.lane(1), c_hi.lane(2)}};
+        }
+    }
     return refs;
 }
 

@@ -8,8 +8,8 @@ namespace bvhlab {
 void refit(Bvh& bvh, const GeometryView& geometry) {
     if (geometry.triangle_count != bvh.triangle_count || geometry.sphere_count != bvh.sphere_count)
         throw std::invalid_argument("refit needs the same number of triangles and spheres the tree was built with");
-    std::uint64_t fingerprint = 0;
-    BigVector<PrimRef> prim_refs = make_prim_refs(geometry, 1, &fingerprint);
+    PrimRefsSummary summary;
+    BigVector<PrimRef> prim_refs = make_prim_refs(geometry, 1, &summary);
     // make_prim_refs puts triangles first, then spheres
     auto input_slot = [&](std::uint32_t ref) { return ref_index(ref) + (is_sphere_ref(ref) ? bvh.triangle_count : 0); };
     // Children come after their parent in depth-first order, so one backward pass suffices.
@@ -26,7 +26,7 @@ void refit(Bvh& bvh, const GeometryView& geometry) {
         set_box(n, box);
     }
     bvh.prims = pack_prims(geometry, bvh.refs);
-    bvh.geometry_fingerprint = fingerprint;
+    bvh.geometry_fingerprint = summary.fingerprint;
 }
 
 }  // namespace bvhlab
