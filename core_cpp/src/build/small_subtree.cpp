@@ -181,6 +181,8 @@ private:
     /// The policy sweeps every axis at every node (Best, and Auto for the SAH methods: choose_axis
     /// gives kAllAxes whatever the node), so choose_axis need not be asked per node.
     const bool all_axes_;
+    /// The AVX2 sweep, asked once a subtree (active_isa() is a call and an atomic load).
+    const bool avx2_ = active_isa() == Isa::Avx2;
     const std::uint32_t begin_;
     SmallSet set_;
     const bool pack_here_;
@@ -227,7 +229,7 @@ SmallCut SmallBuilder::cheapest(const SmallNode& node, const bool allowed[3]) co
     const std::uint32_t mask = sah_.round_mask(m);
     LaneMin cheapest;  // keyed by the left count, c + 1
 #if defined(BVHLAB_AVX2_KERNELS)
-    if (active_isa() == Isa::Avx2) {
+    if (avx2_) {
         alignas(16) float cost[4], key[4];
         avx2::small_sweep(set_.box, order, m, {sah_.traversal, sah_.intersection, inv, mask}, cost, key);
         cheapest.cost = F4::load(cost), cheapest.key = F4::load(key);
