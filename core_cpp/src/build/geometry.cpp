@@ -214,20 +214,29 @@ std::uint64_t sphere_terms(const GeometryView& g) {
     return sum;
 }
 
-std::size_t chunks_of(std::size_t triangles) { return (triangles + kChunkTriangles - 1) / kChunkTriangles; }
+/// Runs pass(first, last) over the chunks of kChunkTriangles triangles, on up to `threads`
+/// threads of the shared pool; returns what each chunk's pass returned, in chunk order.
+template <class Pass>
+auto for_each_triangle_chunk(const GeometryView& g, unsigned threads, const Pass& pass) {
+    std::vector<decltype(pass(std::size_t(0), std::size_t(0)))> out((g.triangle_count + kChunkTriangles - 1) /
+                                                                    kChunkTriangles);
+    ThreadPool::shared().run(out.size(), threads, [&](std::size_t k, unsigned) {
+        const std::size_t first = k * kChunkTriangles;
+        out[k] = pass(first, std::min(first + kChunkTriangles, g.triangle_count));
+    });
+    return out;
+}
 
 }  // namespace
 
 BigVector<PrimRef> make_prim_refs(const GeometryView& g, unsigned threads, PrimRefsSummary* summary) {
     validate_counts(g);
     BigVector<PrimRef> refs(g.primitive_count());
-    std::vector<ChunkChecks> chunks(chunks_of(g.triangle_count));
-    ThreadPool::shared().run(chunks.size(), threads, [&](std::size_t k, unsigned) {
-        const std::size_t first = k * kChunkTriangles;
-        chunks[k] = triangle_refs(g, first, std::min(first + kChunkTriangles, g.triangle_count), refs.data());
-    });
     ChunkChecks all;
-    for (const ChunkChecks& c : chunks) all.merge(c);
+    for (const ChunkChecks& c : for_each_triangle_chunk(g, threads, [&](std::size_t first, std::size_t last) {
+             return triangle_refs(g, first, last, refs.data());
+         }))
+        all.merge(c);
     if (all.poison != 0.0f) throw_bad_triangle(g);  // NaN != 0 too
     if (all.reach > kMaxCoordinate) throw_far_triangle(g);
     validate_spheres(g);
@@ -239,26 +248,24 @@ BigVector<PrimRef> make_prim_refs(const GeometryView& g, unsigned threads, PrimR
     if (summary) {
         summary->fingerprint = finish_fingerprint(g, all.sum + sphere_terms(g));
         if (!refs.empty()) {  // as bounds_of has them: the centroids are halved twice-centroids
-            const F4 half = F4::splat(0.5f), c_lo = all.c2_lo * half, c_hi = all.c2_hi * half;
-            summary->box = {{all.lo.lane(0), all.lo.lane(1), all.lo.lane(2)},
-                            {all.hi.lane(0), all.hi.lane(1), all.hi.lane(2)}};
-            summary->centroids = {{c_lo.lane(0), c_lo.lane(1), c_lo.lane(2)},
-                                  {c_hi.lane(0), c_hi.lane(1), c_hi.lane(2)}};
+            const auto aabb = [](F4 lo, F4 hi) {
+                return Aabb{{lo.lane(0), lo.lane(1), lo.lane(2)}, {hi.lane(0), hi.lane(1), hi.lane(2)}};
+            };
+            const F4 half = F4::splat(0.5f);
+            summary->box = aabb(all.lo, all.hi), summary->centroids = aabb(all.c2_lo * half, all.c2_hi * half);
         }
     }
     return refs;
 }
 
 std::uint64_t geometry_fingerprint(const GeometryView& g, unsigned threads) {
-    std::vector<std::uint64_t> sums(chunks_of(g.triangle_count));
-    ThreadPool::shared().run(sums.size(), threads, [&](std::size_t k, unsigned) {
-        const std::size_t first = k * kChunkTriangles, last = std::min(first + kChunkTriangles, g.triangle_count);
-        std::uint64_t sum = 0;
-        for (std::size_t i = first; i < last; ++i) sum += term<kTriangleFloats>(i, g.triangles + 9 * i);
-        sums[k] = sum;
-    });
     std::uint64_t sum = sphere_terms(g);
-    for (std::uint64_t s : sums) sum += s;
+    for (std::uint64_t s : for_each_triangle_chunk(g, threads, [&](std::size_t first, std::size_t last) {
+             std::uint64_t chunk = 0;
+             for (std::size_t i = first; i < last; ++i) chunk += term<kTriangleFloats>(i, g.triangles + 9 * i);
+             return chunk;
+         }))
+        sum += s;
     return finish_fingerprint(g, sum);
 }
 
