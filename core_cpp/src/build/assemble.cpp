@@ -19,10 +19,10 @@ void finish_internal(BvhNode& n, const BvhNode& first, const BvhNode& second, bo
 
 }  // namespace
 
-void fill_skip_indices(BigVector<BvhNode>& nodes, bool boxes_from_children) {
+void fill_boxes_from_children(BigVector<BvhNode>& nodes) {
     for (std::size_t i = nodes.size(); i-- > 0;) {
         BvhNode& n = nodes[i];
-        if (!is_leaf(n)) finish_internal(n, nodes[i + 1], nodes[n.index], boxes_from_children);
+        if (!is_leaf(n)) finish_internal(n, nodes[i + 1], nodes[n.index], true);
     }
 }
 

@@ -6,12 +6,11 @@
 
 namespace bvhlab {
 
-/// Skip index of every internal node of `nodes` (a depth-first subtree whose root is at 0): the
-/// skip of its second child; leaves skip to i + 1, the last nodes to nodes.size(). With
-/// `boxes_from_children`, also each internal node's box: the union of its children's. The
-/// builder writes skip indices as it goes (SubtreeWriter::close_spine); this pass is for the
-/// methods that make boxes from the leaves up (LBVH).
-void fill_skip_indices(BigVector<BvhNode>& nodes, bool boxes_from_children);
+/// Box of every internal node of `nodes` (a depth-first subtree whose root is at 0): the union of
+/// its children's, for the methods that make boxes from the leaves up (LBVH); the skip index is
+/// written again with it (the skip of the second child; the builder wrote them all already,
+/// SubtreeWriter::close_spine).
+void fill_boxes_from_children(BigVector<BvhNode>& nodes);
 
 /// Splices the deferred subtrees (`parts`, skip indices filled) into the placeholders of `top`,
 /// keeping depth-first order, and fills the skip indices of the top nodes. The parts are copied

@@ -68,7 +68,7 @@ std::vector<Subtree> build_deferred(BuildShared& shared, const Subtree& top, uns
                 root.second_child = false;  // its parent lives in `top`, which already points at it
                 root.bounds.bins = adopt_bins(scratch[slot], top.deferred[k].bins);
                 build_subtree(shared, scratch[slot], root, parts[k], {0, slot == 0, nullptr});
-                if (shared.method.bottom_up_boxes) fill_skip_indices(parts[k].nodes, true);  // and boxes
+                if (shared.method.bottom_up_boxes) fill_boxes_from_children(parts[k].nodes);
                 pack_unpacked(shared, parts[k]);
             } catch (...) {
                 shared.cancel.request_stop();
@@ -131,7 +131,7 @@ void build_tree(BigVector<PrimRef>& prim_refs, const PrimRefsSummary& summary, c
     if (stop.cancel().stop_requested()) stop.rethrow();
     pack_unpacked(shared, top);
     if (parts.empty()) {
-        if (method.bottom_up_boxes) fill_skip_indices(top.nodes, true);  // boxes from the leaves up
+        if (method.bottom_up_boxes) fill_boxes_from_children(top.nodes);
         out.nodes = std::move(top.nodes);
         out.depths = std::move(top.depths);
     } else {
