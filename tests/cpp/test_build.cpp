@@ -6,6 +6,8 @@
 
 #include "bvhlab/big_vector.h"
 #include "bvhlab/bvh.h"
+#include "bvhlab/cancel.h"
+#include "bvhlab/geometry.h"
 #include "bvhlab/isa.h"
 #include "bvhlab/stats.h"
 #include "bvhlab/wide_bvh.h"
@@ -301,6 +303,27 @@ TEST(Progress, ReportedOftenAndStopsTheBuild) {
         int calls = 0;
         c.progress = [&](double) { return ++calls < 2; };
         EXPECT_THROW(build_bvh(scene.view(), c), BuildCancelled) << threads << " threads";
+    }
+}
+
+// make_prim_refs polls the build's Cancellation on the calling thread before each chunk: a stop
+// asked at the first poll skips every chunk (a large mesh answered Esc only after the whole
+// pass), and no thread begins a chunk once a stop is asked.
+TEST(Progress, TheReferencesPassPollsAndStops) {
+    auto scene = random_scene(200000, 100, 23);  // several chunks
+    const BigVector<PrimRef> all = make_prim_refs(scene.view(), 1);
+    int checks = 0;
+    Cancellation first_poll([&] { return ++checks >= 1; });
+    EXPECT_TRUE(make_prim_refs(scene.view(), 1, nullptr, &first_poll).empty());
+    EXPECT_EQ(checks, 1);  // the calling thread runs every chunk; it stopped before the first
+    for (std::uint32_t threads : {1u, 2u, 3u}) {
+        Cancellation stopped;
+        stopped.request_stop();
+        EXPECT_TRUE(make_prim_refs(scene.view(), threads, nullptr, &stopped).empty()) << threads;
+        Cancellation go([&] { return false; });
+        const BigVector<PrimRef> refs = make_prim_refs(scene.view(), threads, nullptr, &go);
+        ASSERT_EQ(refs.size(), all.size()) << threads;
+        EXPECT_EQ(std::memcmp(refs.data(), all.data(), all.size() * sizeof(PrimRef)), 0) << threads;
     }
 }
 

@@ -8,6 +8,8 @@
 
 namespace bvhlab {
 
+class Cancellation;
+
 /// Borrowed views of the caller's arrays (zero-copy from numpy): triangles are T×3×3 floats
 /// (three world-space vertices each), spheres S×4 floats (centre x, y, z, radius).
 struct GeometryView {
@@ -41,9 +43,12 @@ struct PrimRefsSummary {
 /// One PrimRef per primitive: triangles first (refs 0..T-1), then spheres (REF_SPHERE_BIT | i),
 /// on up to `threads` threads of the shared pool (0: all; the result does not depend on it).
 /// Checks the geometry as validate() does, throwing the same errors. `summary`, if set, receives
-/// the fingerprint and the bounds, taken in the same pass.
+/// the fingerprint and the bounds, taken in the same pass. `cancel`, if set, is polled on the
+/// calling thread before each chunk and while it waits for the others; once it asks to stop, the
+/// chunks not yet begun are skipped and the call returns no references (the caller, which made
+/// the Cancellation, then stops).
 BigVector<PrimRef> make_prim_refs(const GeometryView& geometry, unsigned threads = 1,
-                                  PrimRefsSummary* summary = nullptr);
+                                  PrimRefsSummary* summary = nullptr, Cancellation* cancel = nullptr);
 
 /// A 64-bit fingerprint of the geometry (counts and every coordinate's bits, each primitive's at
 /// its place), so that a tree can tell whether it is used with the geometry it was built for (a

@@ -157,9 +157,9 @@ Bvh build_bvh(const GeometryView& geometry, const BuildConfig& config) {
     };
     check();
     // The references, the fingerprint and the root's bounds in one pass over the input, in
-    // chunks on the pool.
+    // chunks on the pool, polling for a stop between chunks (check() below rethrows it).
     PrimRefsSummary summary;
-    BigVector<PrimRef> prim_refs = make_prim_refs(geometry, config.threads, &summary);
+    BigVector<PrimRef> prim_refs = make_prim_refs(geometry, config.threads, &summary, &stop.cancel());
     bvh.geometry_fingerprint = summary.fingerprint;
     check();
     // The leaves pack their geometry where the small-subtree builder makes them (it fetches the

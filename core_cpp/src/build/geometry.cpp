@@ -4,12 +4,14 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "bvhlab/build_config.h"
+#include "bvhlab/cancel.h"
 #include "bvhlab/coordinate_range.h"
 #include "bvhlab/simd.h"
 #include "bvhlab/thread_pool.h"
@@ -216,27 +218,37 @@ std::uint64_t sphere_terms(const GeometryView& g) {
 
 /// Runs pass(first, last) over the chunks of kChunkTriangles triangles, on up to `threads`
 /// threads of the shared pool; returns what each chunk's pass returned, in chunk order.
+/// `cancel` (may be null) is polled on the calling thread (slot 0) before each chunk and while it
+/// waits; once it asks to stop, no further chunk begins (those left keep a default result).
 template <class Pass>
-auto for_each_triangle_chunk(const GeometryView& g, unsigned threads, const Pass& pass) {
+auto for_each_triangle_chunk(const GeometryView& g, unsigned threads, const Pass& pass,
+                             Cancellation* cancel = nullptr) {
     std::vector<decltype(pass(std::size_t(0), std::size_t(0)))> out((g.triangle_count + kChunkTriangles - 1) /
                                                                     kChunkTriangles);
-    ThreadPool::shared().run(out.size(), threads, [&](std::size_t k, unsigned) {
-        const std::size_t first = k * kChunkTriangles;
-        out[k] = pass(first, std::min(first + kChunkTriangles, g.triangle_count));
-    });
+    const std::function<void()> poll = [cancel] { cancel->poll(); };
+    ThreadPool::shared().run(
+        out.size(), threads,
+        [&](std::size_t k, unsigned slot) {
+            if (cancel && (slot == 0 ? cancel->poll() : cancel->stop_requested())) return;
+            const std::size_t first = k * kChunkTriangles;
+            out[k] = pass(first, std::min(first + kChunkTriangles, g.triangle_count));
+        },
+        cancel ? poll : std::function<void()>());
     return out;
 }
 
 }  // namespace
 
-BigVector<PrimRef> make_prim_refs(const GeometryView& g, unsigned threads, PrimRefsSummary* summary) {
+BigVector<PrimRef> make_prim_refs(const GeometryView& g, unsigned threads, PrimRefsSummary* summary,
+                                  Cancellation* cancel) {
     validate_counts(g);
     BigVector<PrimRef> refs(g.primitive_count());
     ChunkChecks all;
-    for (const ChunkChecks& c : for_each_triangle_chunk(g, threads, [&](std::size_t first, std::size_t last) {
-             return triangle_refs(g, first, last, refs.data());
-         }))
+    for (const ChunkChecks& c : for_each_triangle_chunk(
+             g, threads,
+             [&](std::size_t first, std::size_t last) { return triangle_refs(g, first, last, refs.data()); }, cancel))
         all.merge(c);
+    if (cancel && cancel->stop_requested()) return {};
     if (all.poison != 0.0f) throw_bad_triangle(g);  // NaN != 0 too
     if (all.reach > kMaxCoordinate) throw_far_triangle(g);
     validate_spheres(g);
