@@ -91,7 +91,7 @@ namespace avx2 {  // binning_avx2.cpp
 void bin_refs(const PrimRef* refs, Range r, const BinFrame& f, const BinSet copies[2]);
 std::uint32_t partition_and_bin(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
                                 const BinFrame& parent, const BinSplit& split, const ChildBinning child[2],
-                                CentroidBounds sides[2], bool contained);
+                                CentroidBounds sides[2]);
 }  // namespace avx2
 #endif
 
@@ -255,12 +255,11 @@ std::uint32_t partition_and_bin(const PrimRef* __restrict src, PrimRef* __restri
 
 std::uint32_t partition_and_bin(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
                                 const BinFrame& parent, const BinSplit& split, const ChildBinning child[2],
-                                CentroidBounds sides[2], bool contained) {
+                                CentroidBounds sides[2]) {
 #if defined(BVHLAB_AVX2_KERNELS)
     if (active_isa() == Isa::Avx2)
-        return avx2::partition_and_bin(src, dst, r, left, right, parent, split, child, sides, contained);
+        return avx2::partition_and_bin(src, dst, r, left, right, parent, split, child, sides);
 #endif
-    // The portable pass stores each reference once, at its slot: contained either way.
     return portable::partition_and_bin(src, dst, r, left, right, parent, split, child, sides);
 }
 

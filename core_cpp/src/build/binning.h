@@ -166,11 +166,11 @@ struct ChildBinning {
 /// <= last_left forward from `left`, the others backward from `right`, as scatter() in
 /// partition.h), drops each reference into its child's buckets and gathers each side's centroid
 /// bounds (sides[0] left, sides[1] right; null: not gathered). Returns the left cursor after.
-/// `contained` as scatter()'s kContained: false lets a pass write the free slot next to either
-/// part, so the chunks of one range must then run in order (scatter_in_turn), never at once.
+/// Each reference is stored once, at its slot (scatter()'s contained mode), so the chunks of one
+/// range may run at once.
 std::uint32_t partition_and_bin(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
                                 const BinFrame& parent, const BinSplit& split, const ChildBinning child[2],
-                                CentroidBounds sides[2], bool contained);
+                                CentroidBounds sides[2]);
 
 /// How many references of r go left (the counting pass before a chunked partition_and_bin).
 std::uint32_t count_left(const PrimRef* src, Range r, const BinFrame& parent, const BinSplit& split);

@@ -115,24 +115,19 @@ public:
             for (auto& a : copy) _mm256_store_ps(a, _mm256_set1_ps(__builtin_inff()));
     }
 
-    /// Reference `raw`: to its side's next slot, `at` (left fills forward, right backward; no
-    /// branch on the side: at the top of the tree it is a coin toss), then into its child's copy
-    /// kCopy of the buckets. kContained: stored at its slot only, else at both cursors (the store
-    /// at the wrong one writes the free slot next to that part, which a later reference of the
-    /// range overwrites: scatter() in partition.h).
-    template <bool kContained, int kCopy>
+    /// Reference `raw`: to its side's next slot, `at` (left fills forward, right backward; the
+    /// slot is selected, not branched to: at the top of the tree the side is a coin toss), then
+    /// into its child's copy kCopy of the buckets. One store of the reference, at its slot: the
+    /// pass stores three buckets a reference too, and storing it at both cursors as scatter()'s
+    /// uncontained mode does (partition.h) made the one-thread Sponza build 2% slower.
+    template <int kCopy>
     void step(__m256 raw, Cursors& at) {
         const __m256 v = _mm256_and_ps(raw, c_.xyz);
         const __m128 c2 = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
         // 32 (a slot, and one side's stride below) when c2 is below the split's threshold on its
         // axis (split_threshold(): the other lanes never are), else 0.
         const std::uintptr_t lb = std::uint32_t(_mm_movemask_ps(_mm_cmplt_ps(c2, split_at_))) << to_side_;
-        if constexpr (kContained) {
-            _mm256_storeu_ps(reinterpret_cast<float*>(lb ? at.left : at.right - 32), raw);
-        } else {
-            _mm256_storeu_ps(reinterpret_cast<float*>(at.left), raw);
-            _mm256_storeu_ps(reinterpret_cast<float*>(at.right - 32), raw);
-        }
+        _mm256_storeu_ps(reinterpret_cast<float*>(lb ? at.left : at.right - 32), raw);
         at.left += lb;
         at.right += lb - 32;
         const std::uint32_t l = std::uint32_t(lb >> 5);
@@ -178,7 +173,7 @@ private:
     alignas(32) float acc_[2][2][8];
 };
 
-template <bool kCentroids, bool kContained>
+template <bool kCentroids>
 std::uint32_t partition_and_bin_impl(const PrimRef* __restrict src, PrimRef* __restrict dst, Range r,
                                      std::uint32_t left, std::uint32_t right, const BinFrame& parent,
                                      const BinSplit& split, const ChildBinning child[2], CentroidBounds sides[2]) {
@@ -189,10 +184,9 @@ std::uint32_t partition_and_bin_impl(const PrimRef* __restrict src, PrimRef* __r
     // Reference i uses copy i & 1 of the buckets (consecutive references do not wait on each
     // other's stores); the loop runs in pairs so that the copy is a constant.
     const PrimRef *p = src + r.begin, *const end = src + r.end;
-    if (p < end && (r.begin & 1)) pass.template step<kContained, 1>(load(p++), at);
-    for (; end - p >= 2; p += 2)
-        pass.template step<kContained, 0>(load(p), at), pass.template step<kContained, 1>(load(p + 1), at);
-    if (p < end) pass.template step<kContained, 0>(load(p), at);
+    if (p < end && (r.begin & 1)) pass.template step<1>(load(p++), at);
+    for (; end - p >= 2; p += 2) pass.template step<0>(load(p), at), pass.template step<1>(load(p + 1), at);
+    if (p < end) pass.template step<0>(load(p), at);
     pass.finish(sides);
     return std::uint32_t(reinterpret_cast<const PrimRef*>(at.left) - dst);
 }
@@ -201,12 +195,9 @@ std::uint32_t partition_and_bin_impl(const PrimRef* __restrict src, PrimRef* __r
 
 std::uint32_t partition_and_bin(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
                                 const BinFrame& parent, const BinSplit& split, const ChildBinning child[2],
-                                CentroidBounds sides[2], bool contained) {
-    if (contained)
-        return sides ? partition_and_bin_impl<true, true>(src, dst, r, left, right, parent, split, child, sides)
-                     : partition_and_bin_impl<false, true>(src, dst, r, left, right, parent, split, child, sides);
-    return sides ? partition_and_bin_impl<true, false>(src, dst, r, left, right, parent, split, child, sides)
-                 : partition_and_bin_impl<false, false>(src, dst, r, left, right, parent, split, child, sides);
+                                CentroidBounds sides[2]) {
+    return sides ? partition_and_bin_impl<true>(src, dst, r, left, right, parent, split, child, sides)
+                 : partition_and_bin_impl<false>(src, dst, r, left, right, parent, split, child, sides);
 }
 
 }  // namespace bvhlab::avx2

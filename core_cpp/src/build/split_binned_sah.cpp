@@ -44,7 +44,7 @@ std::uint32_t partition_whole(SplitContext& ctx, Range r, int src, const BinFram
         child[s].copies = copies[s];
     }
     const std::uint32_t mid = scatter_in_turn(ctx, r, chunks, [&](Range c, std::uint32_t left, std::uint32_t right) {
-        return partition_and_bin(ctx.buffers[src], ctx.buffers[1 - src], c, left, right, f, best, child, sides, false);
+        return partition_and_bin(ctx.buffers[src], ctx.buffers[1 - src], c, left, right, f, best, child, sides);
     });
     for (int s = 0; s < 2; ++s)
         if (slots[s] >= 0) copies[s][0].merge(copies[s][1]);
@@ -70,7 +70,7 @@ std::uint32_t partition_chunks(SplitContext& ctx, Range r, int src, const BinFra
         ChildBinning mine[2] = {child[0], child[1]};
         for (int s = 0; s < 2; ++s) mine[s].copies = slots[s] >= 0 ? &copies[4 * k + 2 * s] : nullptr;
         partition_and_bin(in, ctx.buffers[1 - src], c, cursors.left[k], cursors.right[k], f, best, mine,
-                          sides ? &chunk_sides[2 * k] : nullptr, true);
+                          sides ? &chunk_sides[2 * k] : nullptr);
     });
     for (int s = 0; s < 2; ++s) {
         for (std::uint32_t k = 0; k < chunks && sides; ++k) sides[s].merge(chunk_sides[2 * k + s]);
