@@ -119,7 +119,7 @@ public:
     /// slot is selected, not branched to: at the top of the tree the side is a coin toss), then
     /// into its child's copy kCopy of the buckets. One store of the reference, at its slot: the
     /// pass stores three buckets a reference too, and storing it at both cursors as scatter()'s
-    /// uncontained mode does (partition.h) made the one-thread Sponza build 2% slower.
+    /// uncontained mode does (partition.h) made the one-thread Sponza build 1-2% slower.
     template <int kCopy>
     void step(__m256 raw, Cursors& at) {
         const __m256 v = _mm256_and_ps(raw, c_.xyz);
