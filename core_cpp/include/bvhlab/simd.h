@@ -24,6 +24,9 @@ struct F4 {
         return {_mm_and_ps(_mm_loadu_ps(p), mask)};
     }
     static F4 splat(float s) { return {_mm_set1_ps(s)}; }
+    /// (x, y, z, 0) built in registers: through a float[4] on the stack, GCC merged the lanes
+    /// with integer moves and read them back in one load that waited for those stores.
+    static F4 set3(float x, float y, float z) { return {_mm_setr_ps(x, y, z, 0.0f)}; }
     /// Four counts (each below 2^31) as floats, rounded as a scalar conversion rounds them.
     static F4 from_counts(const std::uint32_t* p) {
         return {_mm_cvtepi32_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p)))};
@@ -76,6 +79,7 @@ struct F4 {
     static F4 load(const float* p) { return {{p[0], p[1], p[2], p[3]}}; }
     static F4 load3(const float* p) { return {{p[0], p[1], p[2], 0.0f}}; }
     static F4 splat(float s) { return {{s, s, s, s}}; }
+    static F4 set3(float x, float y, float z) { return {{x, y, z, 0.0f}}; }
     static F4 from_counts(const std::uint32_t* p) {
         return {{float(std::int32_t(p[0])), float(std::int32_t(p[1])), float(std::int32_t(p[2])),
                  float(std::int32_t(p[3]))}};

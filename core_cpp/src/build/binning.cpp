@@ -18,8 +18,7 @@ Aabb to_aabb(F4 lo, F4 hi) { return {{lo.lane(0), lo.lane(1), lo.lane(2)}, {hi.l
 
 BinFrame::BinFrame(const Aabb& box, std::uint32_t n_bins) : bins(n_bins) {
     // The three axes at once (lane 3: an extent of 0, never binned).
-    const float lo3[4] = {box.lo.x, box.lo.y, box.lo.z, 0.0f}, hi3[4] = {box.hi.x, box.hi.y, box.hi.z, 0.0f};
-    const F4 lo = F4::load(lo3), extent = F4::load(hi3) - lo;
+    const F4 lo = F4::set3(box.lo.x, box.lo.y, box.lo.z), extent = F4::set3(box.hi.x, box.hi.y, box.hi.z) - lo;
     const F4 sc = F4::splat(float(n_bins)) / (extent + extent);
     // an infinite extent cannot be binned (its scale is 0)
     const F4 is_binned = less(F4::splat(0.0f), extent) & less(F4::splat(0.0f), sc) & less(sc, F4::splat(kInf));

@@ -108,8 +108,7 @@ public:
 
     void build(const WorkItem& item, std::uint32_t index) {
         const Aabb& b = item.bounds.box;
-        const float lo3[4] = {b.lo.x, b.lo.y, b.lo.z, 0.0f}, hi3[4] = {b.hi.x, b.hi.y, b.hi.z, 0.0f};
-        const F4 lo = F4::load(lo3), neg_hi = neg(F4::load(hi3));
+        const F4 lo = F4::set3(b.lo.x, b.lo.y, b.lo.z), neg_hi = neg(F4::set3(b.hi.x, b.hi.y, b.hi.z));
         SmallNode stack[2 * K];
         std::uint32_t size = 0;
         // The node at hand stays out of the stack: its left child is taken next straight from
