@@ -5,6 +5,8 @@
 #pragma once
 #include <cstdint>
 #include <cstring>
+
+#include "bvhlab/aabb.h"
 #if defined(__SSE2__) || defined(_M_X64)
 #include <emmintrin.h>
 #define BVHLAB_SSE 1
@@ -163,6 +165,11 @@ inline F4 half_areas(const F4 lo[4], const F4 hi[4]) {
     transpose3(max(hi[0] - lo[0], zero), max(hi[1] - lo[1], zero), max(hi[2] - lo[2], zero), max(hi[3] - lo[3], zero),
                x, y, z);
     return (x * y + y * z) + z * x;
+}
+
+/// The box [lo, hi] of lanes 0-2 (lane 3 ignored): the one conversion from the builders' vectors.
+inline Aabb to_aabb(F4 lo, F4 hi) {
+    return {{lo.lane(0), lo.lane(1), lo.lane(2)}, {hi.lane(0), hi.lane(1), hi.lane(2)}};
 }
 
 }  // namespace bvhlab

@@ -12,8 +12,6 @@ namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
-Aabb to_aabb(F4 lo, F4 hi) { return {{lo.lane(0), lo.lane(1), lo.lane(2)}, {hi.lane(0), hi.lane(1), hi.lane(2)}}; }
-
 }  // namespace
 
 BinFrame::BinFrame(const Aabb& box, std::uint32_t n_bins) : bins(n_bins) {

@@ -260,11 +260,8 @@ BigVector<PrimRef> make_prim_refs(const GeometryView& g, unsigned threads, PrimR
     if (summary) {
         summary->fingerprint = finish_fingerprint(g, all.sum + sphere_terms(g));
         if (!refs.empty()) {  // as bounds_of has them: the centroids are halved twice-centroids
-            const auto aabb = [](F4 lo, F4 hi) {
-                return Aabb{{lo.lane(0), lo.lane(1), lo.lane(2)}, {hi.lane(0), hi.lane(1), hi.lane(2)}};
-            };
             const F4 half = F4::splat(0.5f);
-            summary->box = aabb(all.lo, all.hi), summary->centroids = aabb(all.c2_lo * half, all.c2_hi * half);
+            summary->box = to_aabb(all.lo, all.hi), summary->centroids = to_aabb(all.c2_lo * half, all.c2_hi * half);
         }
     }
     return refs;

@@ -79,11 +79,6 @@ struct SmallNode {
     F4 lo, neg_hi;
 };
 
-Aabb to_aabb(F4 lo, F4 neg_hi) {
-    const F4 hi = neg(neg_hi);
-    return {{lo.lane(0), lo.lane(1), lo.lane(2)}, {hi.lane(0), hi.lane(1), hi.lane(2)}};
-}
-
 /// How a node is split: positions [first, first + last_left] of order[axis] go left.
 struct SmallCut {
     int axis = -1;
@@ -128,7 +123,7 @@ public:
                 if (size == 0) break;
                 node = stack[--size];
             }
-            at = writer_.open(to_aabb(node.lo, node.neg_hi), node.depth, node.parent, node.second_child);
+            at = writer_.open(to_aabb(node.lo, neg(node.neg_hi)), node.depth, node.parent, node.second_child);
         }
         if (!pack_here_ && writer_.shared().prims) writer_.pack_later(begin_, set_.n);
     }

@@ -112,7 +112,7 @@ void SubtreeWriter::make_leaf(std::uint32_t index, const WorkItem& item) {
     if (!shared_.method.bottom_up_boxes) return;
     F4 lo = refs[r.begin].lo4(), hi = refs[r.begin].hi4();
     for (std::uint32_t i = r.begin + 1; i < r.end; ++i) lo = min(lo, refs[i].lo4()), hi = max(hi, refs[i].hi4());
-    set_box(out_.nodes[index], {{lo.lane(0), lo.lane(1), lo.lane(2)}, {hi.lane(0), hi.lane(1), hi.lane(2)}});
+    set_box(out_.nodes[index], to_aabb(lo, hi));
 }
 
 namespace {
