@@ -160,6 +160,27 @@ TEST_P(EveryMethod, LargeSceneSameTreeOnEveryThreadCountAndInstructionSet) {
     set_isa(before);
 }
 
+TEST(Build, SortedInputSameTreeOnEveryThreadCount) {
+    // Triangles in rows along x, in order: the chunks of the top's passes then send all or none
+    // of their references to one side, so the children's pieces (PieceCounts, binning.h) are
+    // full or empty and the chunks cut at them are uneven. 150K triangles: several levels of
+    // nodes above 2^15 references, split in chunks on the pool.
+    test::Scene s;
+    for (int row = 0; row < 50; ++row)
+        for (int i = 0; i < 3000; ++i) {
+            const float x = float(i) * 0.01f + float(row % 7) * 0.003f, y = float(row) * 0.02f;
+            s.add_triangle({x, y, 0}, {x + 0.008f, y, 0.001f * float(i % 5)}, {x, y + 0.015f, 0.002f});
+        }
+    BuildConfig c;
+    c.threads = 1;
+    const Bvh one = build_bvh(s.view(), c);
+    check_tree(one, s.view(), c.max_leaf_size);
+    for (std::uint32_t threads : {2u, 3u, 4u}) {
+        c.threads = threads;
+        EXPECT_TRUE(same_tree(one, build_bvh(s.view(), c))) << threads << " threads";
+    }
+}
+
 TEST_P(EveryMethod, AllCentroidsEqualStillTerminates) {
     test::Scene s;
     for (int i = 0; i < 1000; ++i) s.add_triangle({0, 0, 0}, {1, 0, 0}, {0, 1, 0});  // duplicates

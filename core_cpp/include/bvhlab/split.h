@@ -96,6 +96,9 @@ Range chunk_of(Range r, std::uint32_t k, std::uint32_t chunks);
 /// Runs pass(k, chunk_of(r, k, chunks)) for every chunk: on the pool when ctx.parallel is set.
 void for_each_chunk(const SplitContext& ctx, Range r, std::uint32_t chunks,
                     const std::function<void(std::uint32_t, Range)>& pass);
+/// Runs pass(k, ranges[k]) for every k, as for_each_chunk does, the largest ranges first.
+void for_each_range(const SplitContext& ctx, std::span<const Range> ranges,
+                    const std::function<void(std::uint32_t, Range)>& pass);
 
 /// `axis` value asking a method to try every axis and keep the lowest SAH cost.
 inline constexpr int kAllAxes = -1;

@@ -83,6 +83,11 @@ BinSet BinStore::slot(std::uint32_t s) {
     return {slots_[s].get(), bins_};
 }
 
+PieceCounts& BinStore::pieces(std::uint32_t s) {
+    if (pieces_.size() <= s) pieces_.resize(s + 1);
+    return pieces_[s];
+}
+
 #if defined(BVHLAB_AVX2_KERNELS)
 namespace avx2 {  // binning_avx2.cpp
 void bin_refs(const PrimRef* refs, Range r, const BinFrame& f, const BinSet copies[2]);

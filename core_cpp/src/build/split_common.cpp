@@ -34,18 +34,30 @@ Range chunk_of(Range r, std::uint32_t k, std::uint32_t chunks) {
 void for_each_chunk(const SplitContext& ctx, Range r, std::uint32_t chunks,
                     const std::function<void(std::uint32_t, Range)>& pass) {
     if (chunks == 1) return pass(0, r);
-    if (!ctx.parallel || ctx.parallel->threads < 2) {  // in turn, polling the cancellation between chunks
-        for (std::uint32_t k = 0; k < chunks; ++k) {
-            pass(k, chunk_of(r, k, chunks));
+    std::vector<Range> ranges(chunks);
+    for (std::uint32_t k = 0; k < chunks; ++k) ranges[k] = chunk_of(r, k, chunks);
+    for_each_range(ctx, ranges, pass);
+}
+
+void for_each_range(const SplitContext& ctx, std::span<const Range> ranges,
+                    const std::function<void(std::uint32_t, Range)>& pass) {
+    const auto count = static_cast<std::uint32_t>(ranges.size());
+    if (!ctx.parallel || ctx.parallel->threads < 2 || count < 2) {  // in turn, polling the cancellation after each
+        for (std::uint32_t k = 0; k < count; ++k) {
+            pass(k, ranges[k]);
             if (ctx.parallel && ctx.parallel->while_waiting) (*ctx.parallel->while_waiting)();
         }
         return;
     }
+    // The pool hands out indices in order: the largest ranges first, so that none is left to
+    // start last (ranges cut at the pieces of a pass before differ in size; see PieceCounts).
+    std::vector<std::uint32_t> order(count);
+    for (std::uint32_t k = 0; k < count; ++k) order[k] = k;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::uint32_t a, std::uint32_t b) { return ranges[a].size() > ranges[b].size(); });
     const ParallelPasses& p = *ctx.parallel;
-    ThreadPool::Task task = [&](std::size_t k, unsigned) {
-        pass(std::uint32_t(k), chunk_of(r, std::uint32_t(k), chunks));
-    };
-    p.pool->run(chunks, p.threads, task, p.while_waiting ? *p.while_waiting : std::function<void()>());
+    ThreadPool::Task task = [&](std::size_t i, unsigned) { pass(order[i], ranges[order[i]]); };
+    p.pool->run(count, p.threads, task, p.while_waiting ? *p.while_waiting : std::function<void()>());
 }
 
 namespace {
