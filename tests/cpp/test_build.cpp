@@ -175,7 +175,7 @@ TEST(Build, SortedInputSameTreeOnEveryThreadCount) {
     c.threads = 1;
     const Bvh one = build_bvh(s.view(), c);
     check_tree(one, s.view(), c.max_leaf_size);
-    for (std::uint32_t threads : {2u, 3u, 4u}) {
+    for (std::uint32_t threads : {2u, 3u, 4u, 8u, 16u}) {  // the chunks follow the count asked for
         c.threads = threads;
         EXPECT_TRUE(same_tree(one, build_bvh(s.view(), c))) << threads << " threads";
     }
