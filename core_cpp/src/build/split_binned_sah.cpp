@@ -170,15 +170,15 @@ std::uint32_t partition_chunks(SplitContext& ctx, Range r, int src, std::int32_t
                                ? plan_from_pieces(ctx, *pieces, r, in, f, best, chunks)
                                : plan_by_counting(ctx, r, in, f, best, chunks);
     const auto n = static_cast<std::uint32_t>(plan.chunks.size());
-    // The chunks write where their counts say: counts that disagree with the node's buckets
-    // (which binning and the partition agree on, reference by reference) would leave slots
-    // unwritten, so they stop the build instead.
-    std::uint64_t left = 0;
+    // The chunks write where their counts say: chunks that miss references, or counts that
+    // disagree with the node's buckets (which binning and the partition agree on, reference by
+    // reference), would leave slots unwritten, so they stop the build instead.
+    std::uint64_t left = 0, total = 0;
     bool fits = true;
     for (std::uint32_t k = 0; k < n; ++k)
-        left += plan.left_counts[k], fits = fits && plan.left_counts[k] <= plan.sizes[k];
-    if (!fits || left != n_left)
-        throw std::logic_error("bvhlab: a chunked pass's left counts disagree with its buckets");
+        left += plan.left_counts[k], total += plan.sizes[k], fits = fits && plan.left_counts[k] <= plan.sizes[k];
+    if (!fits || left != n_left || total != r.size())
+        throw std::logic_error("bvhlab: a chunked pass's chunks or counts disagree with its node");
     std::vector<BinSet> copies(4 * std::size_t(n));  // per chunk: left ×2, right ×2
     for (std::uint32_t k = 0; k < 4 * n; ++k)
         if (slots[(k / 2) % 2] >= 0) (copies[k] = store.slot(kChunkSlots + k)).reset();
