@@ -104,8 +104,9 @@ void build_tree(BigVector<PrimRef>& prim_refs, const PrimRefsSummary& summary, c
     SplitScratch scratch;
     SplitContext ctx{{prim_refs.data(), other.data()}, cfg, scratch, &parallel};
     if (method.needs_morton_presort) {
-        sort_by_morton_code(prim_refs, bounds_of(ctx, {0, n}, 0, false).centroids);
-        ctx.buffers[0] = prim_refs.data();  // the sort may have swapped the storage
+        sort_by_morton_code(prim_refs, bounds_of(ctx, {0, n}, 0, false).centroids, threads, &stop.cancel());
+        if (stop.cancel().stop_requested()) stop.rethrow();  // the references may be unsorted
+        ctx.buffers[0] = prim_refs.data();                   // the sort may have swapped the storage
     }
     // The root's bounds come from make_prim_refs' pass, but for a method that also sums the
     // centroids (and LBVH, which sorted the references in between)
