@@ -22,6 +22,8 @@
 
 namespace bvhlab {
 
+class Cancellation;
+
 class ThreadPool {
 public:
     using Task = std::function<void(std::size_t index, unsigned slot)>;
@@ -49,6 +51,11 @@ public:
     /// other threads to finish (for cancellation checks and progress that must stay prompt).
     void run(std::size_t count, unsigned threads, const Task& task, const std::function<void()>& while_waiting = {},
              std::chrono::milliseconds wait_interval = std::chrono::milliseconds(5));
+
+    /// run() for work that a build may stop: `cancel` (may be null) is polled on the calling
+    /// thread (slot 0) before each of its tasks and while it waits; once a stop is asked, no
+    /// further task begins. Returns false when a stop was asked (some tasks did not run).
+    bool run_until_stopped(std::size_t count, unsigned threads, const Task& task, Cancellation* cancel);
 
 private:
     struct Job;

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <functional>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -225,15 +224,13 @@ auto for_each_triangle_chunk(const GeometryView& g, unsigned threads, const Pass
                              Cancellation* cancel = nullptr) {
     std::vector<decltype(pass(std::size_t(0), std::size_t(0)))> out((g.triangle_count + kChunkTriangles - 1) /
                                                                     kChunkTriangles);
-    const std::function<void()> poll = [cancel] { cancel->poll(); };
-    ThreadPool::shared().run(
+    ThreadPool::shared().run_until_stopped(
         out.size(), threads,
-        [&](std::size_t k, unsigned slot) {
-            if (cancel && (slot == 0 ? cancel->poll() : cancel->stop_requested())) return;
+        [&](std::size_t k, unsigned) {
             const std::size_t first = k * kChunkTriangles;
             out[k] = pass(first, std::min(first + kChunkTriangles, g.triangle_count));
         },
-        cancel ? poll : std::function<void()>());
+        cancel);
     return out;
 }
 

@@ -90,16 +90,9 @@ void sort_by_morton_code(BigVector<PrimRef>& refs, const Aabb& centroid_bounds, 
         scale[a] = extent[a] > 0 && std::isfinite(s) ? s : 0.0f;
     }
     const std::size_t n = refs.size(), chunks = (n + kChunk - 1) / kChunk;
-    const std::function<void()> poll = [cancel] { cancel->poll(); };
     const auto run = [&](std::size_t count, const std::function<void(std::size_t)>& task) {
-        ThreadPool::shared().run(
-            count, threads,
-            [&](std::size_t k, unsigned slot) {
-                if (cancel && (slot == 0 ? cancel->poll() : cancel->stop_requested())) return;
-                task(k);
-            },
-            cancel ? poll : std::function<void()>());
-        return !(cancel && cancel->stop_requested());
+        return ThreadPool::shared().run_until_stopped(
+            count, threads, [&](std::size_t k, unsigned) { task(k); }, cancel);
     };
     BigVector<Key> keys(n), by_top(n);
     std::vector<std::array<std::uint32_t, kDigits>> count(chunks);

@@ -43,13 +43,16 @@ BinSet bin_node(SplitContext& ctx, Range r, const PrimRef* in, const BinFrame& f
     });
     const BinSet own = store.slot(kOwnSlot);
     own.reset();
-    std::vector<BinSet> copies(2 * std::size_t(chunks));
-    for (std::uint32_t k = 0; k < 2 * chunks; ++k) own.merge(copies[k] = store.slot(kChunkSlots + k));
-    std::vector<std::uint32_t> sizes(chunks);
-    for (std::uint32_t k = 0; k < chunks; ++k) sizes[k] = chunk_of(r, k, chunks).size();
+    for (std::uint32_t k = 0; k < 2 * chunks; ++k) own.merge(store.slot(kChunkSlots + k));
     PieceCounts& pieces = store.pieces(kOwnSlot);
-    if (chunks_in_turn(ctx, chunks)) pieces.range = {};
-    else record_pieces(pieces, r, sizes, f.bins, [&](std::size_t p) { return &copies[2 * p]; });
+    pieces.range = {};
+    if (!chunks_in_turn(ctx, chunks)) {
+        std::vector<std::uint32_t> sizes(chunks);
+        for (std::uint32_t k = 0; k < chunks; ++k) sizes[k] = chunk_of(r, k, chunks).size();
+        std::vector<BinSet> copies(2 * std::size_t(chunks));
+        for (std::uint32_t k = 0; k < 2 * chunks; ++k) copies[k] = store.slot(kChunkSlots + k);
+        record_pieces(pieces, r, sizes, f.bins, [&](std::size_t p) { return &copies[2 * p]; });
+    }
     return own;
 }
 
@@ -160,14 +163,14 @@ std::uint32_t partition_whole(SplitContext& ctx, Range r, int src, const BinFram
 /// the counts of r's pieces when its buckets were filled in chunks (the pass before), else from a
 /// counting pass. Each chunk fills buckets of its own: merged into the children's slots after,
 /// and kept as the children's pieces.
-std::uint32_t partition_chunks(SplitContext& ctx, Range r, int src, std::int32_t own_slot, std::uint32_t n_left,
+std::uint32_t partition_chunks(SplitContext& ctx, Range r, int src, std::uint32_t own_slot, std::uint32_t n_left,
                                const BinFrame& f, const BinSplit& best, const ChildBinning child[2],
                                const std::int32_t slots[2], CentroidBounds sides[2], std::uint32_t chunks) {
     BinStore& store = store_of(ctx);
     const PrimRef* in = ctx.buffers[src];
-    const PieceCounts* pieces = own_slot >= 0 ? &store.pieces(std::uint32_t(own_slot)) : nullptr;
-    const ChunkPlan plan = pieces && pieces->range.begin == r.begin && pieces->range.end == r.end
-                               ? plan_from_pieces(ctx, *pieces, r, in, f, best, chunks)
+    const PieceCounts& pieces = store.pieces(own_slot);  // not used after the plan: recording may move it
+    const ChunkPlan plan = pieces.range.begin == r.begin && pieces.range.end == r.end
+                               ? plan_from_pieces(ctx, pieces, r, in, f, best, chunks)
                                : plan_by_counting(ctx, r, in, f, best, chunks);
     const auto n = static_cast<std::uint32_t>(plan.chunks.size());
     // The chunks write where their counts say: chunks that miss references, or counts that
@@ -260,7 +263,7 @@ std::optional<Split> split_binned_sah(SplitContext& ctx, Range r, int src, const
     CentroidBounds sides[2];
     CentroidBounds* gathered = centroids ? sides : nullptr;
     const std::uint32_t chunks = chunk_count(ctx, r);
-    const std::int32_t own_slot = b.bins >= 0 ? b.bins : std::int32_t(kOwnSlot);  // where `bins` came from
+    const std::uint32_t own_slot = b.bins >= 0 ? std::uint32_t(b.bins) : kOwnSlot;  // where `bins` came from
     s.mid = chunks_in_turn(ctx, chunks)
                 ? partition_whole(ctx, r, src, frame, best, child, slots, gathered, chunks)
                 : partition_chunks(ctx, r, src, own_slot, n_left, frame, best, child, slots, gathered, chunks);

@@ -1,5 +1,7 @@
 #include "bvhlab/thread_pool.h"
 
+#include "bvhlab/cancel.h"
+
 #include <algorithm>
 #include <exception>
 
@@ -132,6 +134,21 @@ void ThreadPool::run(std::size_t count, unsigned threads, const Task& task, cons
         }
     }
     if (job->error) std::rethrow_exception(job->error);
+}
+
+bool ThreadPool::run_until_stopped(std::size_t count, unsigned threads, const Task& task, Cancellation* cancel) {
+    if (!cancel) {
+        run(count, threads, task);
+        return true;
+    }
+    run(
+        count, threads,
+        [&](std::size_t i, unsigned slot) {
+            if (slot == 0 ? cancel->poll() : cancel->stop_requested()) return;
+            task(i, slot);
+        },
+        [cancel] { cancel->poll(); });
+    return !cancel->stop_requested();
 }
 
 }  // namespace bvhlab
