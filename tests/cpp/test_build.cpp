@@ -181,6 +181,21 @@ TEST(Build, SortedInputSameTreeOnEveryThreadCount) {
     }
 }
 
+TEST_P(EveryMethod, ManyThreadsOnASmallSceneSameTree) {
+    // On many threads a small scene's top has nodes too small to cut into chunks (under
+    // kMinParallelRange) but larger than the parts (defer_size_for): with 40K primitives on 8
+    // threads, the root is split in chunks and its children, about 20K each, by tasks on the pool
+    // down to parts of at most 2,500, whose subtrees are spliced into theirs (two levels).
+    auto scene = random_scene(38000, 2000, 31);
+    BuildConfig c = config(GetParam(), AxisPolicy::Auto, 4, 1);
+    const Bvh one = build_bvh(scene.view(), c);
+    check_tree(one, scene.view(), 4);
+    for (std::uint32_t threads : {2u, 8u, 16u, 32u}) {
+        c.threads = threads;
+        EXPECT_TRUE(same_tree(one, build_bvh(scene.view(), c))) << threads << " threads";
+    }
+}
+
 TEST_P(EveryMethod, AllCentroidsEqualStillTerminates) {
     test::Scene s;
     for (int i = 0; i < 1000; ++i) s.add_triangle({0, 0, 0}, {1, 0, 0}, {0, 1, 0});  // duplicates
@@ -308,7 +323,7 @@ namespace {
 
 TEST(Progress, ReportedOftenAndStopsTheBuild) {
     auto scene = random_scene(120000, 1000, 21);
-    for (std::uint32_t threads : {1u, 2u}) {
+    for (std::uint32_t threads : {1u, 2u, 8u}) {  // 8: nodes of the top split one per task (build_deferred)
         BuildConfig c;
         c.threads = threads;
         std::vector<double> seen;

@@ -1,6 +1,8 @@
 #include "assemble.h"
 
 #include <algorithm>
+#include <stdexcept>
+#include <utility>
 
 #include "bvhlab/thread_pool.h"
 
@@ -41,36 +43,79 @@ void copy_part(const Subtree& p, std::uint32_t base, Bvh& out) {
     std::copy(p.depths.begin(), p.depths.end(), out.depths.begin() + base);
 }
 
-}  // namespace
+/// The number of nodes of `s` with its parts spliced in.
+std::uint32_t spliced_size(const Subtree& s) {
+    auto size = static_cast<std::uint32_t>(s.nodes.size());
+    for (const Subtree& p : s.parts) size += spliced_size(p) - 1;  // a part's root takes its placeholder's place
+    return size;
+}
 
-void assemble(const Subtree& top, const std::vector<Subtree>& parts, unsigned threads, bool boxes_from_children,
-              Bvh& out) {
-    // final index of each top node: shifted by the extra nodes of the placeholders before it
-    std::vector<std::uint32_t> final_index(top.nodes.size());
-    std::vector<int> part_of(top.nodes.size(), -1);
-    for (std::size_t k = 0; k < top.deferred.size(); ++k) part_of[top.deferred[k].node] = int(k);
-    std::uint32_t shift = 0;
-    for (std::size_t i = 0; i < top.nodes.size(); ++i) {
-        final_index[i] = std::uint32_t(i) + shift;
-        if (part_of[i] >= 0) shift += std::uint32_t(parts[part_of[i]].nodes.size() - 1);
+/// A subtree with placeholders, where it goes: its nodes' final indices and its parts' placeholders.
+struct Linked {
+    const Subtree* tree;
+    std::vector<std::uint32_t> final_index;  ///< of each of its nodes in out.nodes
+    std::vector<int> part_of;                ///< the part that fills each node, or -1
+};
+
+/// Places `s` at out.nodes[base...]: its parts without placeholders into `copies`, those with
+/// them (and s itself) into `linked` at their depth of nesting (0: the top).
+void place(const Subtree& s, std::uint32_t base, std::size_t level,
+           std::vector<std::pair<const Subtree*, std::uint32_t>>& copies, std::vector<std::vector<Linked>>& linked) {
+    if (s.deferred.empty()) {
+        copies.emplace_back(&s, base);
+        return;
     }
-    out.nodes.resize(top.nodes.size() + shift);
-    out.depths.resize(out.nodes.size());
-    ThreadPool::shared().run(parts.size(), threads, [&](std::size_t k, unsigned) {
-        copy_part(parts[k], final_index[top.deferred[k].node], out);
-    });
-    // The top nodes, backwards: a node's skip is its second child's, which comes later.
-    for (std::size_t i = top.nodes.size(); i-- > 0;) {
-        if (part_of[i] >= 0) continue;
-        BvhNode n = top.nodes[i];
-        const std::uint32_t at = final_index[i];
+    if (s.parts.size() != s.deferred.size()) throw std::logic_error("bvhlab: a deferred range was not built");
+    Linked l{&s, std::vector<std::uint32_t>(s.nodes.size()), std::vector<int>(s.nodes.size(), -1)};
+    for (std::size_t k = 0; k < s.deferred.size(); ++k) l.part_of[s.deferred[k].node] = int(k);
+    std::uint32_t at = base;
+    for (std::size_t i = 0; i < s.nodes.size(); ++i) {
+        l.final_index[i] = at;
+        if (l.part_of[i] >= 0) {
+            const Subtree& p = s.parts[std::size_t(l.part_of[i])];
+            place(p, at, level + 1, copies, linked);
+            at += spliced_size(p);
+        } else {
+            ++at;
+        }
+    }
+    if (linked.size() <= level) linked.resize(level + 1);
+    linked[level].push_back(std::move(l));
+}
+
+/// Writes the nodes of l.tree but its placeholders at their final indices, last to first (a
+/// node's skip is its second child's, which comes later), their children's indices shifted and
+/// skip indices filled from the children already in `out` (the parts' roots included).
+void link(const Linked& l, bool boxes_from_children, Bvh& out) {
+    const Subtree& s = *l.tree;
+    for (std::size_t i = s.nodes.size(); i-- > 0;) {
+        if (l.part_of[i] >= 0) continue;
+        BvhNode n = s.nodes[i];
+        const std::uint32_t at = l.final_index[i];
         if (!is_leaf(n)) {
-            n.index = final_index[n.index];
+            n.index = l.final_index[n.index];
             finish_internal(n, out.nodes[at + 1], out.nodes[n.index], boxes_from_children);
         }
         out.nodes[at] = n;
-        out.depths[at] = top.depths[i];
+        out.depths[at] = s.depths[i];
     }
+}
+
+}  // namespace
+
+void assemble(const Subtree& top, unsigned threads, bool boxes_from_children, Bvh& out) {
+    std::vector<std::pair<const Subtree*, std::uint32_t>> copies;
+    std::vector<std::vector<Linked>> linked;
+    place(top, 0, 0, copies, linked);
+    out.nodes.resize(spliced_size(top));
+    out.depths.resize(out.nodes.size());
+    ThreadPool& pool = ThreadPool::shared();
+    pool.run(copies.size(), threads,
+             [&](std::size_t k, unsigned) { copy_part(*copies[k].first, copies[k].second, out); });
+    // The most nested first: a subtree's links read its parts' roots.
+    for (std::size_t level = linked.size(); level-- > 0;)
+        pool.run(linked[level].size(), threads,
+                 [&](std::size_t k, unsigned) { link(linked[level][k], boxes_from_children, out); });
 }
 
 }  // namespace bvhlab

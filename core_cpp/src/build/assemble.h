@@ -12,10 +12,10 @@ namespace bvhlab {
 /// SubtreeWriter::close_spine).
 void fill_boxes_from_children(BigVector<BvhNode>& nodes);
 
-/// Splices the deferred subtrees (`parts`, skip indices filled) into the placeholders of `top`,
-/// keeping depth-first order, and fills the skip indices of the top nodes. The parts are copied
-/// on up to `threads` threads.
-void assemble(const Subtree& top, const std::vector<Subtree>& parts, unsigned threads, bool boxes_from_children,
-              Bvh& out);
+/// Splices the subtrees of the deferred ranges (top.parts, skip indices filled where they have no
+/// placeholders of their own, their parts spliced into them likewise) into the placeholders of
+/// `top`, keeping depth-first order, and fills the skip indices of the nodes of every subtree
+/// with placeholders. Each subtree is copied once, on up to `threads` threads.
+void assemble(const Subtree& top, unsigned threads, bool boxes_from_children, Bvh& out);
 
 }  // namespace bvhlab

@@ -48,42 +48,69 @@ private:
     Cancellation cancel_;
 };
 
-/// Builds the deferred ranges of `top`, largest first, on the pool (parts in the order of
-/// top.deferred, skip indices filled). A worker that throws stops the others; the pool rethrows.
-std::vector<Subtree> build_deferred(BuildShared& shared, const Subtree& top, unsigned threads,
-                                    const std::function<void()>& poll) {
-    std::vector<std::size_t> order(top.deferred.size());
-    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-        return top.deferred[a].item.range.size() > top.deferred[b].item.range.size();
+/// A deferred range and the subtree to build for it.
+struct Job {
+    const DeferredRange* range;
+    Subtree* out;
+};
+
+/// Builds each job's subtree on the pool, largest range first, each range deferring what is at
+/// most `defer_size` (0: nothing) into its own subtree's `deferred`. A worker that throws stops
+/// the others; the pool rethrows.
+void build_jobs(BuildShared& shared, std::vector<Job>& jobs, std::uint32_t defer_size, unsigned threads,
+                const std::function<void()>& poll) {
+    std::stable_sort(jobs.begin(), jobs.end(), [](const Job& a, const Job& b) {
+        return a.range->item.range.size() > b.range->item.range.size();
     });
-    std::vector<Subtree> parts(top.deferred.size());
     std::vector<SplitScratch> scratch(threads);
     ThreadPool::shared().run(
-        order.size(), threads,
+        jobs.size(), threads,
         [&](std::size_t i, unsigned slot) {
             try {
-                const std::size_t k = order[i];
-                WorkItem root = top.deferred[k].item;
-                root.second_child = false;  // its parent lives in `top`, which already points at it
-                root.bounds.bins = adopt_bins(scratch[slot], top.deferred[k].bins);
-                build_subtree(shared, scratch[slot], root, parts[k], {0, slot == 0, nullptr});
-                if (shared.method.bottom_up_boxes) fill_boxes_from_children(parts[k].nodes);
-                pack_unpacked(shared, parts[k]);
+                WorkItem root = jobs[i].range->item;
+                root.second_child = false;  // its parent lives in another subtree, which already points at it
+                root.bounds.bins = adopt_bins(scratch[slot], jobs[i].range->bins);
+                Subtree& out = *jobs[i].out;
+                build_subtree(shared, scratch[slot], root, out, {defer_size, slot == 0, nullptr});
+                // a subtree with placeholders gets its boxes from its children when assembled
+                if (shared.method.bottom_up_boxes && out.deferred.empty()) fill_boxes_from_children(out.nodes);
+                pack_unpacked(shared, out);
             } catch (...) {
                 shared.cancel.request_stop();
                 throw;
             }
         },
         poll);
-    return parts;
+}
+
+/// Builds the deferred ranges of `top` on the pool into top.parts. Ranges larger than
+/// `defer_size` (those the top left to the pool rather than split them on the calling thread
+/// alone, SubtreeRun::serial_below) are split first, one per task, down to defer_size; then every
+/// range of at most defer_size, of the top and of those, is built whole, one per task.
+void build_deferred(BuildShared& shared, Subtree& top, std::uint32_t defer_size, unsigned threads,
+                    const std::function<void()>& poll) {
+    top.parts.resize(top.deferred.size());
+    std::vector<Job> large, whole;
+    for (std::size_t k = 0; k < top.deferred.size(); ++k)
+        (top.deferred[k].item.range.size() > defer_size ? large : whole).push_back({&top.deferred[k], &top.parts[k]});
+    if (!large.empty()) {
+        build_jobs(shared, large, defer_size, threads, poll);
+        if (shared.cancel.stop_requested()) return;
+        for (const Job& job : large) {
+            Subtree& mid = *job.out;
+            mid.parts.resize(mid.deferred.size());
+            for (std::size_t k = 0; k < mid.deferred.size(); ++k) whole.push_back({&mid.deferred[k], &mid.parts[k]});
+        }
+    }
+    build_jobs(shared, whole, 0, threads, poll);
 }
 
 /// The largest range left whole to one thread of the pool. Not so small that the parts are too
 /// many (n / 8T), and, where the parts stay at least 2T (balance), no node above it smaller than
-/// two chunked passes' minimum: a node of the top below kMinParallelRange is split by the calling
-/// thread alone while the others wait (Sponza, 2 threads: defer at n / 16 = 16K left the top at
-/// 9.3 ms, against 4.5 ms at 64K; the build 40.8 → 38.4 ms).
+/// two chunked passes' minimum: the top splits a node below kMinParallelRange by one task on the
+/// pool, down to this size, before the parts start (SubtreeRun::serial_below; before that the
+/// calling thread split them alone while the others waited: Sponza, 2 threads, defer at n / 16 =
+/// 16K left the top at 9.3 ms, against 4.5 ms at 64K; the build 40.8 → 38.4 ms).
 std::uint32_t defer_size_for(std::uint32_t n, unsigned threads) {
     const std::uint32_t balanced = n / (2 * threads), chunked = 2 * kMinParallelRange;
     return std::max({1024u, n / (8 * threads), std::min(chunked, balanced)});
@@ -123,20 +150,22 @@ void build_tree(BigVector<PrimRef>& prim_refs, const PrimRefsSummary& summary, c
     }
 
     // With several threads, ranges of at most `defer_size` primitives are left to the pool; the
-    // nodes above them are split with every thread on each. The tree is the same either way.
+    // nodes above them are split with every thread on each, but for those too small to cut into
+    // chunks, which the pool splits one per task. The tree is the same either way.
     const std::uint32_t defer_size = threads > 1 ? defer_size_for(n, threads) : 0;
+    const std::uint32_t serial_below = threads > 1 ? kMinParallelRange : 0;
     Subtree top;
-    build_subtree(shared, scratch, root, top, {defer_size, true, &parallel});
-    std::vector<Subtree> parts;
-    if (!top.deferred.empty() && !stop.cancel().stop_requested()) parts = build_deferred(shared, top, threads, poll);
+    build_subtree(shared, scratch, root, top, {defer_size, true, &parallel, serial_below});
+    if (!top.deferred.empty() && !stop.cancel().stop_requested())
+        build_deferred(shared, top, defer_size, threads, poll);
     if (stop.cancel().stop_requested()) stop.rethrow();
     pack_unpacked(shared, top);
-    if (parts.empty()) {
+    if (top.deferred.empty()) {
         if (method.bottom_up_boxes) fill_boxes_from_children(top.nodes);
         out.nodes = std::move(top.nodes);
         out.depths = std::move(top.depths);
     } else {
-        assemble(top, parts, threads, method.bottom_up_boxes, out);
+        assemble(top, threads, method.bottom_up_boxes, out);
     }
 }
 

@@ -177,7 +177,7 @@ void build_subtree(BuildShared& shared, SplitScratch& scratch, const WorkItem& r
         // The item stays on the stack, read in place, until its children replace it.
         WorkItem& item = stack.back();
         const std::uint32_t index = writer.open(item);
-        if (index > 0 && item.range.size() <= run.defer_size) {
+        if (index > 0 && (item.range.size() <= run.defer_size || item.range.size() < run.serial_below)) {
             // its buckets, in this thread's store, go with it
             out.deferred.push_back({index, item, carry_bins(scratch, item.bounds.bins)});
             out.deferred.back().item.bounds.bins = -1;

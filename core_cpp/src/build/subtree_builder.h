@@ -38,6 +38,7 @@ struct Subtree {
     BigVector<std::uint8_t> depths;
     std::vector<DeferredRange> deferred;
     std::vector<Range> unpacked;  ///< leaf positions whose geometry is packed after (BuildShared::prims)
+    std::vector<Subtree> parts;   ///< once built: the subtree of each deferred range, in its order (assemble)
 };
 
 /// State shared by every thread of one build.
@@ -66,6 +67,11 @@ struct SubtreeRun {
     std::uint32_t defer_size = 0;  ///< ranges of at most this many (but the root) are deferred; 0: none
     bool calling_thread = false;
     const ParallelPasses* parallel = nullptr;  ///< data-parallel passes for large ranges
+    /// Ranges (but the root) smaller than this are deferred too, whatever their size against
+    /// defer_size: at the top of a build on several threads, the ranges that no pass cuts into
+    /// chunks (kMinParallelRange), which the calling thread would otherwise split alone while
+    /// the other threads wait. 0: none.
+    std::uint32_t serial_below = 0;
 };
 
 /// Builds the subtree of `root` into `out`. Deferred ranges are left in out.deferred as
