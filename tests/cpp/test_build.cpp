@@ -365,7 +365,7 @@ TEST(Progress, TheReferencesPassPollsAndStops) {
 
 TEST(Progress, AnExceptionFromTheCallbackComesOutAsItself) {
     auto scene = random_scene(120000, 1000, 22);
-    for (std::uint32_t threads : {1u, 2u, 3u}) {
+    for (std::uint32_t threads : {1u, 2u, 3u, 8u}) {
         BuildConfig c;
         c.threads = threads;
         int calls = 0;

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "assemble.h"
+#include "deferred_parts.h"
 #include "bvhlab/bvh.h"
 #include "bvhlab/cancel.h"
 #include "bvhlab/thread_pool.h"
@@ -48,69 +49,12 @@ private:
     Cancellation cancel_;
 };
 
-/// A deferred range and the subtree to build for it.
-struct Job {
-    const DeferredRange* range;
-    Subtree* out;
-};
-
-/// Builds each job's subtree on the pool, largest range first, each range deferring what is at
-/// most `defer_size` (0: nothing) into its own subtree's `deferred`. A worker that throws stops
-/// the others; the pool rethrows.
-void build_jobs(BuildShared& shared, std::vector<Job>& jobs, std::uint32_t defer_size, unsigned threads,
-                const std::function<void()>& poll) {
-    std::stable_sort(jobs.begin(), jobs.end(), [](const Job& a, const Job& b) {
-        return a.range->item.range.size() > b.range->item.range.size();
-    });
-    std::vector<SplitScratch> scratch(threads);
-    ThreadPool::shared().run(
-        jobs.size(), threads,
-        [&](std::size_t i, unsigned slot) {
-            try {
-                WorkItem root = jobs[i].range->item;
-                root.second_child = false;  // its parent lives in another subtree, which already points at it
-                root.bounds.bins = adopt_bins(scratch[slot], jobs[i].range->bins);
-                Subtree& out = *jobs[i].out;
-                build_subtree(shared, scratch[slot], root, out, {defer_size, slot == 0, nullptr});
-                // a subtree with placeholders gets its boxes from its children when assembled
-                if (shared.method.bottom_up_boxes && out.deferred.empty()) fill_boxes_from_children(out.nodes);
-                pack_unpacked(shared, out);
-            } catch (...) {
-                shared.cancel.request_stop();
-                throw;
-            }
-        },
-        poll);
-}
-
-/// Builds the deferred ranges of `top` on the pool into top.parts. Ranges larger than
-/// `defer_size` (those the top left to the pool rather than split them on the calling thread
-/// alone, SubtreeRun::serial_below) are split first, one per task, down to defer_size; then every
-/// range of at most defer_size, of the top and of those, is built whole, one per task.
-void build_deferred(BuildShared& shared, Subtree& top, std::uint32_t defer_size, unsigned threads,
-                    const std::function<void()>& poll) {
-    top.parts.resize(top.deferred.size());
-    std::vector<Job> large, whole;
-    for (std::size_t k = 0; k < top.deferred.size(); ++k)
-        (top.deferred[k].item.range.size() > defer_size ? large : whole).push_back({&top.deferred[k], &top.parts[k]});
-    if (!large.empty()) {
-        build_jobs(shared, large, defer_size, threads, poll);
-        if (shared.cancel.stop_requested()) return;
-        for (const Job& job : large) {
-            Subtree& mid = *job.out;
-            mid.parts.resize(mid.deferred.size());
-            for (std::size_t k = 0; k < mid.deferred.size(); ++k) whole.push_back({&mid.deferred[k], &mid.parts[k]});
-        }
-    }
-    build_jobs(shared, whole, 0, threads, poll);
-}
-
 /// The largest range left whole to one thread of the pool. Not so small that the parts are too
 /// many (n / 8T), and, where the parts stay at least 2T (balance), no node above it smaller than
-/// two chunked passes' minimum: the top splits a node below kMinParallelRange by one task on the
-/// pool, down to this size, before the parts start (SubtreeRun::serial_below; before that the
-/// calling thread split them alone while the others waited: Sponza, 2 threads, defer at n / 16 =
-/// 16K left the top at 9.3 ms, against 4.5 ms at 64K; the build 40.8 → 38.4 ms).
+/// two chunked passes' minimum (Sponza, 2 threads: defer at n / 16 = 16K left the top at 9.3 ms,
+/// against 4.5 ms at 64K; the build 40.8 → 38.4 ms, when the calling thread split the nodes of
+/// the top below kMinParallelRange alone; now one task of the pool splits each down to this size,
+/// SubtreeRun::serial_below and build_deferred).
 std::uint32_t defer_size_for(std::uint32_t n, unsigned threads) {
     const std::uint32_t balanced = n / (2 * threads), chunked = 2 * kMinParallelRange;
     return std::max({1024u, n / (8 * threads), std::min(chunked, balanced)});
