@@ -410,3 +410,26 @@ TEST(BigVector, BlockLentForLessComesBackWhole) {
     EXPECT_EQ(r, p);
     free_big_block(r, whole);
 }
+
+// big_blocks.cpp: of two cached blocks that fit, a request takes the one with more memory behind
+// it (the one its last user touched further), whatever order they came back in: a block touched
+// a little, taken for an array written whole, faults in the rest.
+TEST(BigVector, TheBlockTouchedFurthestIsTakenFirst) {
+#if !defined(__linux__)
+    GTEST_SKIP() << "how much of a block is backed is asked of Linux (mincore)";
+#else
+    const std::size_t size = std::size_t(26) << 20;  // a size no other test asks for
+    auto* little = static_cast<unsigned char*>(allocate_big_block(size));
+    auto* whole = static_cast<unsigned char*>(allocate_big_block(size));
+    little[0] = 1;
+    std::memset(whole, 1, size);
+    free_big_block(little, size);  // first: in order, the first of equal blocks was taken
+    free_big_block(whole, size);
+    void* first = allocate_big_block(size);
+    void* second = allocate_big_block(size);
+    EXPECT_EQ(first, whole);
+    EXPECT_EQ(second, little);
+    free_big_block(first, size);
+    free_big_block(second, size);
+#endif
+}

@@ -1,9 +1,11 @@
 // big_vector.h — std::vector for the large arrays of a build (references, nodes, leaf geometry).
-// Blocks of 256 KiB and more come from a cache of freed blocks (big_blocks.cpp), so that a build
+// Blocks of 16 KiB and more come from a cache of freed blocks (big_blocks.cpp), so that a build
 // reuses the scratch memory of the last one: fresh memory costs a page fault per page and its
 // zeroing in the kernel. (The node arrays of the subtrees a parallel build hands to its threads
 // are below 2 MiB: with fresh memory for them, a two-thread Sponza build took 2,100 page faults
-// and 7 ms of system time, against 32 faults on one thread.) Elements are not zeroed on resize
+// and 7 ms of system time, against 32 faults on one thread. Their depth arrays, tens of KiB, from
+// malloc, which gives a worker's freed memory back to the system: 170 faults a two-thread room1m
+// build, most of uniform1m's 384, when the cache began at 256 KiB.) Elements are not zeroed on resize
 // (every slot is written before it is read). There are no huge-page hints (MADV_HUGEPAGE): they
 // made the first build's page faults cheaper, but when earlier trees stay alive every build needs
 // fresh huge pages, and the kernel's compaction to find them made each further build slower
@@ -33,7 +35,7 @@ void free_big_block(void* p, std::size_t bytes) noexcept;
 void advise_huge_pages(void* p, std::size_t bytes) noexcept;
 
 /// Below this, BigAllocator uses operator new.
-inline constexpr std::size_t kBigBlockMin = std::size_t(256) << 10;
+inline constexpr std::size_t kBigBlockMin = std::size_t(16) << 10;
 
 /// The block size for a request of `bytes` >= kBigBlockMin: the next power of two below 2 MiB (so
 /// that a block freed by one build fits the like request of the next), else a multiple of 2 MiB.
