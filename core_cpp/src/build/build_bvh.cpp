@@ -60,6 +60,12 @@ std::uint32_t defer_size_for(std::uint32_t n, unsigned threads) {
     return std::max({1024u, n / (8 * threads), std::min(chunked, balanced)});
 }
 
+/// The size of the parts the threads share below the top (build_deferred splits the top's deferred
+/// ranges down to it): a quarter of the top's, so that each thread has many and they end
+/// together. Two threads, idle at the end of the parts (both threads' summed, at defer_size and
+/// at this): Sponza 1.4 → 0.4 ms, room1m 3.3 → 0.4 ms, uniform1m 5.5 → 1.3 ms.
+std::uint32_t part_size_for(std::uint32_t defer_size) { return std::max(1024u, defer_size / 4); }
+
 /// Builds the tree over prim_refs into `out`; packs out.prims too where `pack` (see BuildShared).
 /// `summary`: the bounds make_prim_refs took of them.
 void build_tree(BigVector<PrimRef>& prim_refs, const PrimRefsSummary& summary, const GeometryView& geometry, bool pack,
@@ -101,7 +107,7 @@ void build_tree(BigVector<PrimRef>& prim_refs, const PrimRefsSummary& summary, c
     Subtree top;
     build_subtree(shared, scratch, root, top, {defer_size, true, &parallel, serial_below});
     if (!top.deferred.empty() && !stop.cancel().stop_requested())
-        build_deferred(shared, top, defer_size, threads, poll);
+        build_deferred(shared, top, part_size_for(defer_size), threads, poll);
     if (stop.cancel().stop_requested()) stop.rethrow();
     pack_unpacked(shared, top);
     if (top.deferred.empty()) {

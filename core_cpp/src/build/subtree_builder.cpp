@@ -164,7 +164,11 @@ void build_subtree(BuildShared& shared, SplitScratch& scratch, const WorkItem& r
                    const SubtreeRun& run) {
     SplitContext ctx{{shared.buffers[0], shared.buffers[1]}, shared.config, scratch, run.parallel};
     SubtreeWriter writer(shared, out);
-    out.nodes.reserve(2 * std::size_t(root.range.size()) - 1);  // a binary tree with n leaves at most
+    // A binary tree with n leaves has 2n - 1 nodes at most. A subtree that defers ranges of up to
+    // defer_size has about 2n / defer_size (more where splits are uneven: the arrays then grow);
+    // reserved for 2n - 1, its blocks, barely touched, would pass to arrays that fill them.
+    const std::size_t n = root.range.size(), most = 2 * n - 1;
+    out.nodes.reserve(run.defer_size ? std::min(most, 8 * n / run.defer_size + 64) : most);
     out.depths.reserve(out.nodes.capacity());
     std::vector<WorkItem> stack{root};
     const std::uint32_t small_size = small_subtree_size(shared.config);
