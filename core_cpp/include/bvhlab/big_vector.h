@@ -20,11 +20,25 @@
 
 namespace bvhlab {
 
+/// What a cached block was last used for: its element type (block_kind<T>). A block goes back
+/// only to arrays of its kind. Arrays of some kinds are written whole (references, geometry),
+/// of others a part (node arrays are reserved for the largest tree their range can make, 2n - 1,
+/// and filled about a third of the way): a block that held nodes, taken for an array written
+/// whole, faults in the rest (a two-thread build of room1m: 433 faults, about 1 ms in this VM,
+/// when the tree's references took the blocks of the parts' nodes).
+using BlockKind = const void*;
+template <class T>
+inline constexpr char kBlockKindTag = 0;
+template <class T>
+constexpr BlockKind block_kind() {
+    return &kBlockKindTag<T>;
+}
+
 /// A block of `bytes` (a size big_block_bytes gives), 4 KiB aligned and 2 MiB aligned from 2 MiB
-/// up: a cached one if any fits, else fresh.
-void* allocate_big_block(std::size_t bytes);
+/// up: a cached one of this kind if any fits, else fresh.
+void* allocate_big_block(std::size_t bytes, BlockKind kind);
 /// Returns a block from allocate_big_block, to the cache or, past its limit, to the system.
-void free_big_block(void* p, std::size_t bytes) noexcept;
+void free_big_block(void* p, std::size_t bytes, BlockKind kind) noexcept;
 
 /// Asks the system to back the whole 2 MiB pages within [p, p + bytes) with huge pages where it
 /// can (Linux: MADV_HUGEPAGE; elsewhere nothing). For the long-lived arrays that rays read at
@@ -74,12 +88,12 @@ struct BigAllocator {
     T* allocate(std::size_t n) {
         const std::size_t bytes = n * sizeof(T);
         if (bytes < kBigBlockMin) return static_cast<T*>(::operator new(bytes, std::align_val_t(alignof(T))));
-        return static_cast<T*>(allocate_big_block(big_block_bytes(bytes)));
+        return static_cast<T*>(allocate_big_block(big_block_bytes(bytes), block_kind<T>()));
     }
     void deallocate(T* p, std::size_t n) {
         const std::size_t bytes = n * sizeof(T);
         if (bytes < kBigBlockMin) ::operator delete(p, std::align_val_t(alignof(T)));  // WideNode: 64
-        else free_big_block(p, big_block_bytes(bytes));
+        else free_big_block(p, big_block_bytes(bytes), block_kind<T>());
     }
     template <class U>
     bool operator==(const BigAllocator<U>&) const {

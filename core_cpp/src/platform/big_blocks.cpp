@@ -10,51 +10,28 @@
 
 #if defined(__linux__)
 #include <sys/mman.h>
-#include <unistd.h>
 #endif
 
 namespace bvhlab {
 namespace {
 
-/// The bytes of [p, p + bytes) that are backed by memory (pages touched since the block was
-/// allocated: a first touch costs a page fault); where the system cannot say, all of them.
-std::size_t backed_bytes(void* p, std::size_t bytes) {
-#if defined(__linux__)
-    static const std::size_t page = std::size_t(sysconf(_SC_PAGESIZE));
-    std::vector<unsigned char> pages((bytes + page - 1) / page);
-    if (mincore(p, bytes, pages.data()) != 0) return bytes;
-    std::size_t backed = 0;
-    for (unsigned char b : pages) backed += b & 1u;
-    return backed * page;
-#else
-    (void)p;
-    return bytes;
-#endif
-}
-
-/// Freed blocks kept for reuse, at most kCacheBytes in all; a request takes, of the cached blocks
-/// large enough and not more than 1.5 times too large, the one with the most memory behind it
-/// (then the smallest). A block comes back as far as its last user touched it: node arrays are
-/// reserved for the largest tree their range can make and filled a third of the way, and such a
-/// block taken for an array written whole (a tree's references) faults in the rest. Chosen in
-/// order, a two-thread build of room1m took 430 such faults a build (433 of its 600; 4 ms is
-/// 2,000 faults here). A block lent for a smaller request comes back at its own size, not the
-/// request's: kept under the smaller size, it would never again serve a request of its own size,
-/// which would then take fresh memory.
+/// Freed blocks kept for reuse, at most kCacheBytes in all; a request takes the smallest cached
+/// block of its kind (BlockKind) that is large enough and not more than 1.5 times too large. A
+/// block lent for a smaller request comes back at its own size, not the request's: kept under
+/// the smaller size, it would never again serve a request of its own size, which would then take
+/// fresh memory.
 class BlockCache {
 public:
     static constexpr std::size_t kCacheBytes = std::size_t(512) << 20;
 
-    void* take(std::size_t bytes) {
+    void* take(std::size_t bytes, BlockKind kind) {
         std::lock_guard<std::mutex> lock(mutex_);
         std::size_t best = blocks_.size();
-        const auto better = [&](const Block& b) {
-            const Block& o = blocks_[best];
-            return b.backed != o.backed ? b.backed > o.backed : b.bytes < o.bytes;
-        };
         for (std::size_t i = 0; i < blocks_.size(); ++i) {
             const std::size_t size = blocks_[i].bytes;
-            if (size >= bytes && size <= bytes + bytes / 2 && (best == blocks_.size() || better(blocks_[i]))) best = i;
+            if (blocks_[i].kind == kind && size >= bytes && size <= bytes + bytes / 2 &&
+                (best == blocks_.size() || size < blocks_[best].bytes))
+                best = i;
         }
         if (best == blocks_.size()) return nullptr;
         const Block b = blocks_[best];
@@ -65,8 +42,7 @@ public:
     }
     /// Keeps the block (`bytes`: the size asked for it); returns the blocks that no longer fit
     /// (the oldest first) for freeing.
-    std::vector<void*> keep(void* p, std::size_t bytes) {
-        const std::size_t backed = backed_bytes(p, block_bytes(p, bytes));  // outside the lock: a system call
+    std::vector<void*> keep(void* p, std::size_t bytes, BlockKind kind) {
         std::lock_guard<std::mutex> lock(mutex_);
         for (std::size_t i = 0; i < lent_.size(); ++i)
             if (lent_[i].p == p) {  // lent larger than asked: back at its own size
@@ -76,7 +52,7 @@ public:
             }
         std::vector<void*> evicted;
         if (bytes > kCacheBytes) return {p};
-        blocks_.push_back({p, bytes, backed});
+        blocks_.push_back({p, bytes, kind});
         cached_ += bytes;
         while (cached_ > kCacheBytes) {
             evicted.push_back(blocks_.front().p);
@@ -90,15 +66,8 @@ private:
     struct Block {
         void* p;
         std::size_t bytes;
-        std::size_t backed = 0;  ///< of them, touched (backed_bytes) when it came back
+        BlockKind kind = nullptr;
     };
-    /// The size of block p (lent larger than `bytes` asked, or `bytes`).
-    std::size_t block_bytes(void* p, std::size_t bytes) {
-        std::lock_guard<std::mutex> lock(mutex_);
-        for (const Block& b : lent_)
-            if (b.p == p) return b.bytes;
-        return bytes;
-    }
     std::mutex mutex_;
     std::vector<Block> blocks_;
     std::vector<Block> lent_;  ///< blocks out on loan that are larger than their request
@@ -112,17 +81,17 @@ BlockCache& cache() {
 
 }  // namespace
 
-void* allocate_big_block(std::size_t bytes) {
-    if (void* p = cache().take(bytes)) return p;
+void* allocate_big_block(std::size_t bytes, BlockKind kind) {
+    if (void* p = cache().take(bytes, kind)) return p;
     const std::size_t huge = std::size_t(2) << 20;
     void* p = std::aligned_alloc(bytes >= huge ? huge : std::size_t(4096), bytes);
     if (!p) throw std::bad_alloc();
     return p;
 }
 
-void free_big_block(void* p, std::size_t bytes) noexcept {
+void free_big_block(void* p, std::size_t bytes, BlockKind kind) noexcept {
     try {
-        for (void* old : cache().keep(p, bytes)) std::free(old);
+        for (void* old : cache().keep(p, bytes, kind)) std::free(old);
     } catch (...) {  // no memory to remember the block: give it back
         std::free(p);
     }
