@@ -43,13 +43,6 @@ void copy_part(const Subtree& p, std::uint32_t base, Bvh& out) {
     std::copy(p.depths.begin(), p.depths.end(), out.depths.begin() + base);
 }
 
-/// The number of nodes of `s` with its parts spliced in.
-std::uint32_t spliced_size(const Subtree& s) {
-    auto size = static_cast<std::uint32_t>(s.nodes.size());
-    for (const Subtree& p : s.parts) size += spliced_size(p) - 1;  // a part's root takes its placeholder's place
-    return size;
-}
-
 /// A subtree with placeholders, where it goes: its nodes' final indices and its parts' placeholders.
 struct Linked {
     const Subtree* tree;
@@ -57,13 +50,15 @@ struct Linked {
     std::vector<int> part_of;                ///< the part that fills each node, or -1
 };
 
-/// Places `s` at out.nodes[base...]: its parts without placeholders into `copies`, those with
-/// them (and s itself) into `linked` at their depth of nesting (0: the top).
-void place(const Subtree& s, std::uint32_t base, std::size_t level,
-           std::vector<std::pair<const Subtree*, std::uint32_t>>& copies, std::vector<std::vector<Linked>>& linked) {
+/// Places `s` at out.nodes[base...]: subtrees without placeholders (s or its parts) into
+/// `copies`, those with them into `linked` at their depth of nesting (0: the top). Returns the
+/// number of nodes of s with its parts spliced in (a part's root takes its placeholder's place).
+std::uint32_t place(const Subtree& s, std::uint32_t base, std::size_t level,
+                    std::vector<std::pair<const Subtree*, std::uint32_t>>& copies,
+                    std::vector<std::vector<Linked>>& linked) {
     if (s.deferred.empty()) {
         copies.emplace_back(&s, base);
-        return;
+        return static_cast<std::uint32_t>(s.nodes.size());
     }
     if (s.parts.size() != s.deferred.size()) throw std::logic_error("bvhlab: a deferred range was not built");
     Linked l{&s, std::vector<std::uint32_t>(s.nodes.size()), std::vector<int>(s.nodes.size(), -1)};
@@ -71,16 +66,11 @@ void place(const Subtree& s, std::uint32_t base, std::size_t level,
     std::uint32_t at = base;
     for (std::size_t i = 0; i < s.nodes.size(); ++i) {
         l.final_index[i] = at;
-        if (l.part_of[i] >= 0) {
-            const Subtree& p = s.parts[std::size_t(l.part_of[i])];
-            place(p, at, level + 1, copies, linked);
-            at += spliced_size(p);
-        } else {
-            ++at;
-        }
+        at += l.part_of[i] >= 0 ? place(s.parts[std::size_t(l.part_of[i])], at, level + 1, copies, linked) : 1;
     }
     if (linked.size() <= level) linked.resize(level + 1);
     linked[level].push_back(std::move(l));
+    return at - base;
 }
 
 /// Writes the nodes of l.tree but its placeholders at their final indices, last to first (a
@@ -106,8 +96,7 @@ void link(const Linked& l, bool boxes_from_children, Bvh& out) {
 void assemble(const Subtree& top, unsigned threads, bool boxes_from_children, Bvh& out) {
     std::vector<std::pair<const Subtree*, std::uint32_t>> copies;
     std::vector<std::vector<Linked>> linked;
-    place(top, 0, 0, copies, linked);
-    out.nodes.resize(spliced_size(top));
+    out.nodes.resize(place(top, 0, 0, copies, linked));
     out.depths.resize(out.nodes.size());
     ThreadPool& pool = ThreadPool::shared();
     pool.run(copies.size(), threads,
