@@ -29,6 +29,29 @@ struct BvhNode {
     uint info;   ///< leaf: primitive count (>= 1); internal: NODE_INTERNAL_BIT | skip index
 };
 
+/// An internal node of the same tree with both children's boxes (Aila and Laine, "Understanding the
+/// Efficiency of Ray Traversal on GPUs", HPG 2009), 64 bytes: the stack walk tests both children of
+/// a node from one fetch of one place, where BvhNode needs two (the first child at i + 1, the
+/// second after the first's subtree; siblings share a 64-byte line for a quarter of Sponza's
+/// nodes). Pairs are numbered by their node's rank among the internal nodes in depth-first order,
+/// so the root is pair 0 and the order is the tree's (make_pair_nodes, render_scene.cpp).
+/// A child word: an internal child's pair index, or PAIR_LEAF_BIT | the leaf's first slot in the
+/// reference array (Bvh::prims); a count word: the leaf's primitive count, 0 for an internal child.
+struct BvhPair {
+    vec3 lo_a;  ///< first child's box (the node's i + 1)
+    uint child_a;
+    vec3 hi_a;
+    uint count_a;
+    vec3 lo_b;  ///< second child's box (BvhNode::index)
+    uint child_b;
+    vec3 hi_b;
+    uint count_b;
+};
+
+/// Marks a leaf in BvhPair's child words, and in the stack walk's entries a leaf child named by
+/// its parent and side: PAIR_LEAF_BIT | (2 · pair + side), side 0 for child a (traverse.glsl).
+BVHLAB_CONST uint PAIR_LEAF_BIT = 0x80000000u;
+
 /// Set in BvhNode::info for internal nodes; the low 31 bits are then the skip index.
 BVHLAB_CONST uint NODE_INTERNAL_BIT = 0x80000000u;
 /// A primitive reference carries its kind (report §5.1): this bit set means sphere, else triangle;
@@ -97,7 +120,8 @@ BVHLAB_CONST uint TRAVERSAL_STACKLESS = 1u;
 /// Device addresses (buffer_reference_uvec2: low word, high word) of every array the shaders
 /// read or write, so no storage-buffer binding limit (128 MiB on lavapipe) caps a scene.
 struct DeviceAddresses {
-    uvec2 nodes;          ///< BvhNode[node_count]
+    uvec2 nodes;          ///< BvhNode[node_count]: the stackless walk's, and the stack walk's root
+    uvec2 pairs;          ///< BvhPair, one per internal node: the stack walk's
     uvec2 prims;          ///< GpuTriangle, the tree's primitives in leaf order (Bvh::prims)
     uvec2 triangles;      ///< GpuTriangle
     uvec2 spheres;        ///< GpuSphere
@@ -110,7 +134,6 @@ struct DeviceAddresses {
     uvec2 slot_rays;      ///< uvec4[3 × ray_stack_entries] per slot: its Whitted ray stack
     uvec2 slot_nodes;     ///< uvec2[node_stack_entries] per slot: its traversal stack (node, entry t)
     uvec2 counters;       ///< uint[2], atomic: slots that ended a dispatch with work left, that failed
-    uvec2 unused;
 };
 
 /// Everything a frame reads, field by field (std430 and C++ agree: each vec3 is followed by a
@@ -195,6 +218,7 @@ BVHLAB_CONST vec3 OVERLAY_LINE_COLOR = vec3(1.0f, 0.85f, 0.2f);
 
 #ifdef __cplusplus
 static_assert(sizeof(BvhNode) == 32, "BvhNode must stay 32 bytes (std430 layout)");
+static_assert(sizeof(BvhPair) == 64, "BvhPair must stay 64 bytes (std430 layout)");
 static_assert(sizeof(GpuTriangle) == 48 && sizeof(GpuSphere) == 32 && sizeof(GpuMaterial) == 32);
 static_assert(sizeof(GpuBox) == 32 && sizeof(DeviceAddresses) == 14 * 8);
 static_assert(offsetof(FrameParams, width) == 112 && offsetof(FrameParams, addr) == 200);

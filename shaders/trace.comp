@@ -22,6 +22,7 @@ layout(set = 0, binding = BINDING_FRAME, std430) readonly buffer FrameBlock { Fr
 layout(set = 0, binding = BINDING_OVERLAY, rgba32f) readonly uniform image2D overlay;
 
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer NodeArray { BvhNode v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer PairArray { BvhPair v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer TriangleArray { GpuTriangle v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer SphereArray { GpuSphere v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer MaterialArray { GpuMaterial v[]; };
@@ -32,6 +33,7 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer Uvec4Array 
 layout(buffer_reference, std430, buffer_reference_align = 8) buffer Uvec2Array { uvec2 v[]; };
 
 BvhNode load_node(uint i) { return NodeArray(frame.addr.nodes).v[i]; }
+BvhPair load_pair(uint i) { return PairArray(frame.addr.pairs).v[i]; }
 GpuTriangle load_leaf_prim(uint i) { return TriangleArray(frame.addr.prims).v[i]; }
 GpuTriangle load_triangle(uint i) { return TriangleArray(frame.addr.triangles).v[i]; }
 GpuSphere load_sphere(uint i) { return SphereArray(frame.addr.spheres).v[i]; }

@@ -1,5 +1,6 @@
-// traverse.glsl — BVH traversal over the flattened depth-first nodes (report §2.2, §3.1), with a
-// stack or stackless via skip indices (TRAVERSAL, a specialization constant on the GPU), written
+// traverse.glsl — BVH traversal of the flattened depth-first tree (report §2.2, §3.1), with a
+// stack over its internal nodes as pairs of child boxes (BvhPair), or stackless over its nodes via
+// skip indices (TRAVERSAL, a specialization constant on the GPU), written
 // as a resumable walk: each step does one bounded unit of work (a node, a primitive or a pop) and
 // the walk's whole state lives in a Walk, so a trace can stop after any step and continue in the
 // next dispatch (issue 8: lavapipe stops long loops, GPUs have a watchdog). One walk serves
@@ -73,7 +74,7 @@ LOCAL_CONST uint WALK_FINISHED = 4u;  ///< the query is answered
 /// (node_stack_load/store), `stacked` entries of it.
 struct Walk {
     uint state;      ///< WALK_*
-    uint node;
+    uint node;       ///< stackless: a node (BvhNode); stack: a pair (BvhPair)
     uint stacked;    ///< entries on the traversal stack
     uint leaf_next;
     uint leaf_end;
@@ -89,27 +90,31 @@ Walk start_walk() {
     return w;
 }
 
-void enter_leaf(INOUT(Walk) w, BvhNode n) {
-    w.leaf_next = n.index;
-    w.leaf_end = n.index + n.info;
+void enter_leaf(INOUT(Walk) w, uint first, uint count) {
+    w.leaf_next = first;
+    w.leaf_end = first + count;
     w.state = WALK_LEAF;
 }
 
-/// Stack traversal at node `n` (= load_node(w.node)): at an inner node both children's boxes are
-/// tested, the nearer is entered and the farther pushed with its entry distance (dropped at the pop
-/// if a closer hit is found meanwhile); `n` becomes the entered child, fetched already. A leaf is
-/// entered (at the root or when popped; a leaf child is entered at once, saving a step).
-void step_stack_node(INOUT(Walk) w, TraceRay r, INOUT(Hit) hit, INOUT(BvhNode) n) {
-    if ((n.info & NODE_INTERNAL_BIT) == 0u) {
-        enter_leaf(w, n);
-        return;
+/// The stack walk goes on with a child of a pair: an internal one's pair is visited next, a leaf's
+/// primitives are tested.
+void enter_child(INOUT(Walk) w, uint child, uint count) {
+    if ((child & PAIR_LEAF_BIT) != 0u) {
+        enter_leaf(w, child & ~PAIR_LEAF_BIT, count);
+    } else {
+        w.node = child;
+        w.state = WALK_NODE;
     }
-    uint a = w.node + 1u;
-    uint b = n.index;
-    BvhNode na = load_node(a);
-    BvhNode nb = load_node(b);
-    float ta = box_entry(na.lo, na.hi, r, hit.t);
-    float tb = box_entry(nb.lo, nb.hi, r, hit.t);
+}
+
+/// Stack traversal at pair `w.node`: both children's boxes come in one fetch; the nearer child is
+/// entered and the farther pushed with its entry distance (dropped at the pop if a closer hit is
+/// found meanwhile). A pushed leaf is named by its parent and side (PAIR_LEAF_BIT | 2 · pair +
+/// side): a stack entry has no room for a leaf's range, and the pop reads it from the parent.
+void step_stack_node(INOUT(Walk) w, TraceRay r, INOUT(Hit) hit) {
+    BvhPair p = load_pair(w.node);
+    float ta = box_entry(p.lo_a, p.hi_a, r, hit.t);
+    float tb = box_entry(p.lo_b, p.hi_b, r, hit.t);
     hit.visited += 2u;
     if (ta < 0.0f && tb < 0.0f) {
         w.state = WALK_POP;
@@ -117,12 +122,13 @@ void step_stack_node(INOUT(Walk) w, TraceRay r, INOUT(Hit) hit, INOUT(BvhNode) n
     }
     bool b_next = ta < 0.0f || (tb >= 0.0f && tb < ta);
     if (ta >= 0.0f && tb >= 0.0f) {
-        node_stack_store(w.stacked, uvec2(b_next ? a : b, floatBitsToUint(b_next ? ta : tb)));
+        uint far_child = b_next ? p.child_a : p.child_b;
+        uint far_leaf = PAIR_LEAF_BIT | (2u * w.node + (b_next ? 0u : 1u));
+        uint far_entry = (far_child & PAIR_LEAF_BIT) != 0u ? far_leaf : far_child;
+        node_stack_store(w.stacked, uvec2(far_entry, floatBitsToUint(b_next ? ta : tb)));
         w.stacked += 1u;
     }
-    w.node = b_next ? b : a;
-    n = b_next ? nb : na;
-    if ((n.info & NODE_INTERNAL_BIT) == 0u) enter_leaf(w, n);
+    enter_child(w, b_next ? p.child_b : p.child_a, b_next ? p.count_b : p.count_a);
 }
 
 /// Stackless (report §3.1) at node `node` of the depth-first order: a missed box continues at
@@ -136,7 +142,7 @@ void step_stackless_node(INOUT(Walk) w, TraceRay r, INOUT(Hit) hit) {
     bool leaf = (n.info & NODE_INTERNAL_BIT) == 0u;
     hit.visited += 1u;
     if (box_entry(n.lo, n.hi, r, hit.t) < 0.0f) w.node = leaf ? w.node + 1u : (n.info & NODE_SKIP_MASK);
-    else if (leaf) enter_leaf(w, n);
+    else if (leaf) enter_leaf(w, n.index, n.info);
     else w.node += 1u;
 }
 
@@ -152,7 +158,8 @@ void step_leaf(INOUT(Walk) w, TraceRay r, bool shadow, INOUT(Hit) hit) {
     }
 }
 
-/// Takes one entry off the stack; an entry farther than the closest hit so far is dropped.
+/// Takes one entry off the stack; an entry farther than the closest hit so far is dropped. A
+/// leaf's entry names its parent pair and side, whose words hold the leaf's range.
 void step_pop(INOUT(Walk) w, Hit hit) {
     if (w.stacked == 0u) {
         w.state = WALK_FINISHED;
@@ -160,10 +167,14 @@ void step_pop(INOUT(Walk) w, Hit hit) {
     }
     w.stacked -= 1u;
     uvec2 entry = node_stack_load(w.stacked);
-    if (uintBitsToFloat(entry.y) <= hit.t * BOX_FAR_SCALE) {  // as conservative as box_entry (Ize 2013)
-        w.node = entry.x;
-        w.state = WALK_NODE;
+    if (uintBitsToFloat(entry.y) > hit.t * BOX_FAR_SCALE) return;  // as conservative as box_entry (Ize 2013)
+    if ((entry.x & PAIR_LEAF_BIT) == 0u) {
+        enter_child(w, entry.x, 0u);
+        return;
     }
+    uint side = entry.x & 1u;
+    BvhPair parent = load_pair((entry.x & ~PAIR_LEAF_BIT) >> 1u);
+    enter_child(w, side == 0u ? parent.child_a : parent.child_b, side == 0u ? parent.count_a : parent.count_b);
 }
 
 /// The walk, until the query is answered or `steps` reaches `budget`, as "while-while" loops
@@ -178,22 +189,22 @@ void walk(INOUT(Walk) walk_state, TraceRay r, bool shadow, INOUT(Hit) query, INO
           uint budget) {
     Walk w = walk_state;  // locals: the CPU build keeps them in registers (the state may alias the slot)
     Hit hit = query;
-    if (w.state == WALK_ROOT) {
+    if (w.state == WALK_ROOT) {  // the stack walk tests the root's box, then enters pair 0 or the root leaf
         BvhNode root = load_node(0u);
         hit.visited += 1u;
-        w.state = box_entry(root.lo, root.hi, r, hit.t) < 0.0f ? WALK_FINISHED : WALK_NODE;
+        if (box_entry(root.lo, root.hi, r, hit.t) < 0.0f) w.state = WALK_FINISHED;
+        else if ((root.info & NODE_INTERNAL_BIT) == 0u) enter_leaf(w, root.index, root.info);
+        else enter_child(w, 0u, 0u);
         steps += 1u;
         work += 1u;
     }
     while (w.state != WALK_FINISHED && steps < budget) {
         steps += 1u;
-        // the stack walk's node (the stackless walk fetches its own; its `node` may be one past the end)
-        BvhNode n = load_node(TRAVERSAL == TRAVERSAL_STACK && w.state == WALK_NODE ? w.node : 0u);
         while (w.state == WALK_NODE && steps < budget) {
             steps += 1u;
             work += 1u;
             if (TRAVERSAL == TRAVERSAL_STACKLESS) step_stackless_node(w, r, hit);
-            else step_stack_node(w, r, hit, n);
+            else step_stack_node(w, r, hit);
         }
         steps = sync_steps(steps) + 1u;
         while (w.state == WALK_LEAF && steps < budget) {

@@ -191,12 +191,27 @@ def test_overlay_lines_occlude_and_are_occluded():
     assert not any(is_line[p] for p in near_pixels(scene.camera, w, h, back))
 
 
-def test_stack_and_stackless_images_are_identical():
-    scene = showcase.whitted()
-    bvh = bvhlab.build(scene, method="mean")
-    a, _ = bvhlab.render(scene, bvh, 64, 48, backend="cpu", traversal="stack")
-    b, _ = bvhlab.render(scene, bvh, 64, 48, backend="cpu", traversal="stackless")
+@pytest.mark.parametrize(
+    "make, build",
+    [
+        (showcase.whitted, {"method": "mean"}),
+        (showcase.whitted, {"method": "sah", "max_leaf_size": 8}),  # leaves of several, pushed and popped
+        (showcase.five_spheres, {"method": "median", "max_leaf_size": 8}),  # the root is a leaf: no pairs
+        (showcase.five_spheres, {"method": "median", "max_leaf_size": 1}),
+    ],
+    ids=["whitted_mean", "whitted_sah_leaf8", "root_leaf", "five_spheres_leaf1"],
+)
+def test_stack_and_stackless_images_are_identical(make, build):
+    """The stack walk reads the internal nodes as pairs of child boxes, the stackless one the
+    depth-first nodes: two layouts of one tree, so the same closest hits and the same image."""
+    scene = make()
+    bvh = bvhlab.build(scene, **build)
+    kw = dict(backend="cpu", samples_per_axis=2, max_depth=4)
+    a, _ = bvhlab.render(scene, bvh, 64, 48, traversal="stack", **kw)
+    b, _ = bvhlab.render(scene, bvh, 64, 48, traversal="stackless", **kw)
     np.testing.assert_array_equal(a, b)
+    sky = np.all(np.abs(a[..., :3] - np.array(scene.sky, np.float32)) < 1e-6, -1)
+    assert 0.05 < sky.mean() < 0.95  # geometry and sky both in view
 
 
 def test_heatmap_shows_more_box_tests_where_the_geometry_is():

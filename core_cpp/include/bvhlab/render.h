@@ -13,6 +13,7 @@
 #include "bvhlab/bvh.h"
 #include "bvhlab/cancel.h"
 #include "bvhlab/depth_order.h"
+#include "bvhlab/pair_nodes.h"
 #include "bvhlab/render_defaults.h"
 #include "bvhlab/render_settings.h"
 #include "gpu_types.h"
@@ -31,7 +32,8 @@ struct MaterialView {
 /// The scene as both renderers read it: the tree, the geometry and materials in GPU layout,
 /// and every node's box sorted by depth for the overlay (report §3.3.1).
 struct RenderScene {
-    const Bvh* bvh = nullptr;  ///< borrowed: must outlive the RenderScene
+    const Bvh* bvh = nullptr;       ///< borrowed: must outlive the RenderScene
+    BigVector<gpu::BvhPair> pairs;  ///< the tree's internal nodes for the stack walk (pair_nodes.h)
     BigVector<gpu::GpuTriangle> triangles;
     std::vector<gpu::GpuSphere> spheres;
     std::vector<gpu::GpuMaterial> materials;

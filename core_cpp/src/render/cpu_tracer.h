@@ -20,6 +20,7 @@ public:
         : frame(params),
           TRAVERSAL(traversal),
           tree_nodes_(scene.bvh->nodes.data()),
+          pairs_(scene.pairs.data()),
           leaf_prims_(scene.bvh->prims.data()),
           triangles_(scene.triangles.data()),
           scene_(scene),
@@ -33,6 +34,7 @@ public:
     // is three dependent loads (the scene, its tree, the vector's data) that the compiler must
     // repeat after every store the walk makes (it cannot prove they do not alias).
     BvhNode load_node(uint i) const { return tree_nodes_[i]; }
+    BvhPair load_pair(uint i) const { return pairs_[i]; }
     GpuTriangle load_leaf_prim(uint i) const { return leaf_prims_[i]; }
     GpuTriangle load_triangle(uint i) const { return triangles_[i]; }
     GpuSphere load_sphere(uint i) const { return scene_.spheres[i]; }
@@ -68,6 +70,7 @@ public:
 
 private:
     const BvhNode* tree_nodes_;
+    const BvhPair* pairs_;
     const GpuTriangle* leaf_prims_;
     const GpuTriangle* triangles_;
     const RenderScene& scene_;

@@ -77,6 +77,7 @@ RenderScene make_render_scene(const Bvh& bvh, const GeometryView& g, const Mater
         s.spheres[i] = {v4(g.sphere_center(i), g.sphere_radius(i)), {m, 0, 0, 0}};
     }
     fill_boxes(s, bvh);
+    s.pairs = make_pair_nodes(bvh);
     if (!bvh.empty()) s.bounds = node_box(bvh.nodes[0]);
     s.node_count = bvh.node_count();
     s.ref_count = static_cast<std::uint32_t>(bvh.refs.size());

@@ -17,6 +17,7 @@ SceneBuffers::SceneBuffers(const Device& device, CommandRunner& runner, const Re
     static const Bvh kNoTree;
     const Bvh& tree = scene.bvh ? *scene.bvh : kNoTree;
     nodes_ = upload_vector(device, runner, tree.nodes, force_staging);
+    pairs_ = upload_vector(device, runner, scene.pairs, force_staging);
     prims_ = upload_vector(device, runner, tree.prims, force_staging);
     triangles_ = upload_vector(device, runner, scene.triangles, force_staging);
     spheres_ = upload_vector(device, runner, scene.spheres, force_staging);
@@ -31,6 +32,7 @@ SceneBuffers::SceneBuffers(const Device& device, CommandRunner& runner, const Re
 gpu::FrameParams SceneBuffers::frame_params(const RenderSettings& settings) const {
     gpu::FrameParams frame = make_frame_params(summary_, settings);
     frame.addr.nodes = words(nodes_.address());
+    frame.addr.pairs = words(pairs_.address());
     frame.addr.prims = words(prims_.address());
     frame.addr.triangles = words(triangles_.address());
     frame.addr.spheres = words(spheres_.address());

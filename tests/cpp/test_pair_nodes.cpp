@@ -1,0 +1,91 @@
+// The stack walk's node format (pair_nodes.h): each internal node with its children's boxes, checked
+// against the depth-first tree it came from by walking both together. The images the tracer makes
+// with it are checked against the stackless walk, which reads the depth-first nodes, in
+// test_vulkan.cpp and tests/python/test_render_cpu.py.
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "bvhlab/bvh.h"
+#include "bvhlab/pair_nodes.h"
+#include "test_scenes.h"
+
+using namespace bvhlab;
+
+namespace {
+
+bool same_box(const gpu::vec3& lo, const gpu::vec3& hi, const BvhNode& n) {
+    return lo.x == n.lo.x && lo.y == n.lo.y && lo.z == n.lo.z && hi.x == n.hi.x && hi.y == n.hi.y && hi.z == n.hi.z;
+}
+
+/// Walks pair `p` and node `i` together: the same boxes and leaf ranges, pairs met in the order
+/// 0, 1, 2, ... (depth-first), leaves met in the order of their ranges.
+struct PairWalk {
+    const Bvh& bvh;
+    const BigVector<gpu::BvhPair>& pairs;
+    std::uint32_t next_pair = 0, next_slot = 0;
+
+    void child(std::uint32_t word, std::uint32_t count, const gpu::vec3& lo, const gpu::vec3& hi, std::uint32_t node) {
+        const BvhNode& n = bvh.nodes[node];
+        ASSERT_TRUE(same_box(lo, hi, n)) << "node " << node;
+        if (is_leaf(n)) {
+            ASSERT_EQ(word, gpu::PAIR_LEAF_BIT | n.index) << "node " << node;
+            ASSERT_EQ(count, leaf_count(n));
+            ASSERT_EQ(n.index, next_slot);
+            next_slot += count;
+        } else {
+            ASSERT_EQ(count, 0u);
+            ASSERT_EQ(word & gpu::PAIR_LEAF_BIT, 0u);
+            visit(word, node);
+        }
+    }
+
+    void visit(std::uint32_t p, std::uint32_t i) {
+        ASSERT_EQ(p, next_pair++);
+        ASSERT_LT(p, pairs.size());
+        const gpu::BvhPair& pair = pairs[p];
+        child(pair.child_a, pair.count_a, pair.lo_a, pair.hi_a, i + 1);
+        child(pair.child_b, pair.count_b, pair.lo_b, pair.hi_b, bvh.nodes[i].index);
+    }
+};
+
+void expect_same_tree(const Bvh& bvh) {
+    BigVector<gpu::BvhPair> pairs = make_pair_nodes(bvh);
+    std::uint32_t internal = 0;
+    for (const BvhNode& n : bvh.nodes) internal += is_leaf(n) ? 0 : 1;
+    ASSERT_EQ(pairs.size(), internal);
+    if (internal == 0) return;
+    PairWalk walk{bvh, pairs};
+    walk.visit(0, 0);
+    EXPECT_EQ(walk.next_pair, internal) << "every pair reached once";
+    EXPECT_EQ(walk.next_slot, bvh.refs.size()) << "the leaves cover every reference";
+}
+
+}  // namespace
+
+TEST(PairNodes, EveryMethodAndLeafSizeGiveTheSameTree) {
+    test::Scene scene = test::random_scene(20000, 500, 7);
+    for (SplitMethod method : {SplitMethod::Median, SplitMethod::Sah, SplitMethod::Lbvh})
+        for (std::uint32_t leaf : {1u, 4u, 16u}) {
+            BuildConfig config;
+            config.method = method;
+            config.max_leaf_size = leaf;
+            SCOPED_TRACE(testing::Message() << "method " << int(method) << ", leaf " << leaf);
+            expect_same_tree(build_bvh(scene.view(), config));
+        }
+}
+
+TEST(PairNodes, EmptyTreeAndARootLeafHaveNoPairs) {
+    EXPECT_TRUE(make_pair_nodes(Bvh{}).empty());
+    test::Scene one;
+    one.add_sphere({0, 0, 0}, 1);
+    one.add_triangle({0, 0, 0}, {1, 0, 0}, {0, 1, 0});
+    BuildConfig config;
+    config.method = SplitMethod::Median;  // a leaf wherever the count fits
+    config.max_leaf_size = 8;
+    Bvh leaf = build_bvh(one.view(), config);
+    ASSERT_EQ(leaf.node_count(), 1u);
+    EXPECT_TRUE(make_pair_nodes(leaf).empty());
+    config.max_leaf_size = 1;
+    expect_same_tree(build_bvh(one.view(), config));  // a root of two leaves: one pair
+}
