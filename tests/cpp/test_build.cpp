@@ -185,14 +185,19 @@ TEST_P(EveryMethod, ManyThreadsOnASmallSceneSameTree) {
     // On many threads a small scene's top has nodes too small to cut into chunks (under
     // kMinParallelRange) but larger than the parts (defer_size_for): with 40K primitives on 8
     // threads, the root is split in chunks and its children, about 20K each, by tasks on the pool
-    // down to parts of at most 2,500, whose subtrees are spliced into theirs (two levels).
-    auto scene = random_scene(38000, 2000, 31);
-    BuildConfig c = config(GetParam(), AxisPolicy::Auto, 4, 1);
-    const Bvh one = build_bvh(scene.view(), c);
-    check_tree(one, scene.view(), 4);
-    for (std::uint32_t threads : {2u, 8u, 16u, 32u}) {
-        c.threads = threads;
-        EXPECT_TRUE(same_tree(one, build_bvh(scene.view(), c))) << threads << " threads";
+    // down to parts of at most 2,500, whose subtrees are spliced into theirs (two levels). With
+    // 12K primitives the root alone is cut into chunks (from kMinParallelRoot), and its children
+    // go to the pool at once.
+    for (std::uint32_t triangles : {38000u, 11000u}) {
+        auto scene = random_scene(triangles, 1000 + triangles / 38, 31);
+        BuildConfig c = config(GetParam(), AxisPolicy::Auto, 4, 1);
+        const Bvh one = build_bvh(scene.view(), c);
+        check_tree(one, scene.view(), 4);
+        for (std::uint32_t threads : {2u, 8u, 16u, 32u}) {
+            c.threads = threads;
+            EXPECT_TRUE(same_tree(one, build_bvh(scene.view(), c)))
+                << triangles << " triangles, " << threads << " threads";
+        }
     }
 }
 

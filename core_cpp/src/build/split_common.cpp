@@ -18,7 +18,9 @@ SplitScratch::SplitScratch() = default;
 SplitScratch::~SplitScratch() = default;
 
 std::uint32_t chunk_count(const SplitContext& ctx, Range r) {
-    if (!ctx.parallel || r.size() < kMinParallelRange) return 1;
+    if (!ctx.parallel) return 1;
+    const bool root = r.begin == 0 && r.size() == ctx.parallel->root_size;
+    if (r.size() < (root ? kMinParallelRoot : kMinParallelRange)) return 1;
     // Several per thread for balance, and none larger than 2^16 references (a few milliseconds),
     // so that the calling thread checks for cancellation often enough.
     const std::uint32_t per_thread = ctx.parallel->threads < 2 ? 1 : 4 * ctx.parallel->threads;
