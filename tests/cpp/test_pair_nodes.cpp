@@ -4,6 +4,7 @@
 // test_vulkan.cpp and tests/python/test_render_cpu.py.
 #include <gtest/gtest.h>
 
+#include <stdexcept>
 #include <vector>
 
 #include "bvhlab/bvh.h"
@@ -88,4 +89,18 @@ TEST(PairNodes, EmptyTreeAndARootLeafHaveNoPairs) {
     EXPECT_TRUE(make_pair_nodes(leaf).empty());
     config.max_leaf_size = 1;
     expect_same_tree(build_bvh(one.view(), config));  // a root of two leaves: one pair
+}
+
+TEST(PairNodes, NodesThatAreNotADepthFirstTreeAreAnError) {
+    test::Scene scene = test::random_scene(500, 0, 3);
+    BuildConfig config;
+    config.max_leaf_size = 1;
+    Bvh bvh = build_bvh(scene.view(), config);
+    ASSERT_GT(bvh.node_count(), 3u);
+    Bvh moved = bvh;
+    moved.nodes[0].index += 1;  // the root's second child is not where its first child's subtree ends
+    EXPECT_THROW(make_pair_nodes(moved), std::invalid_argument);
+    Bvh cut = bvh;
+    cut.nodes.pop_back();  // the last leaf missing
+    EXPECT_THROW(make_pair_nodes(cut), std::invalid_argument);
 }
