@@ -39,7 +39,7 @@ _LABELS = {
     "box": ("Node box", "Equal buckets over the node's box: one pass over the references per node"),
     "centroids": ("Centroid bounds", "Equal buckets over the centroids' bounds (the report's, PBRT's)"),
     "stackless": ("Stackless", "Skip indices (report §3.1)"),
-    "stack": ("Stack", "A stack of node indices"),
+    "stack": ("Stack", "A stack, nearer child first (report §3.1); nodes as pairs of child boxes"),
     "shade": ("Shade", "Whitted shading"),
     "heatmap": ("Heatmap", "Box tests per pixel"),
     "vulkan": ("Vulkan", "Vulkan compute tracer"),

@@ -21,7 +21,8 @@ namespace bvhlab::gpu {
 /// The first child of an internal node is the next node (i + 1); `index` holds the second.
 /// A leaf's skip (miss) index is always i + 1, so only internal nodes store theirs: the node
 /// visited next when the ray misses this node's box, i.e. the first node after its subtree.
-/// One fetch therefore serves both the stack traversal and the stackless one.
+/// One fetch serves a step of the stackless traversal; the stack traversal reads the internal
+/// nodes as BvhPair (below) and this format only for the root's box.
 struct BvhNode {
     vec3 lo;     ///< box minimum
     uint index;  ///< leaf: first slot in the reference array; internal: second child
@@ -132,7 +133,7 @@ struct DeviceAddresses {
     uvec2 accum_samples;  ///< uint per pixel: samples accumulated
     uvec2 slot_state;     ///< uvec4[STATE_WORDS] per slot: a pixel's suspended trace (see state.glsl)
     uvec2 slot_rays;      ///< uvec4[3 × ray_stack_entries] per slot: its Whitted ray stack
-    uvec2 slot_nodes;     ///< uvec2[node_stack_entries] per slot: its traversal stack (node, entry t)
+    uvec2 slot_nodes;     ///< uvec2[node_stack_entries] per slot: its traversal stack (child, entry t; traverse.glsl)
     uvec2 counters;       ///< uint[2], atomic: slots that ended a dispatch with work left, that failed
 };
 

@@ -65,7 +65,7 @@ bool visit_primitive(GpuTriangle p, TraceRay r, bool shadow, INOUT(Hit) hit) {
 
 // Where a walk stands (TraceState::walk).
 LOCAL_CONST uint WALK_ROOT = 0u;      ///< stack traversal: the root's box is still to be tested
-LOCAL_CONST uint WALK_NODE = 1u;      ///< at node `node`: test its box (stackless) or its children's (stack)
+LOCAL_CONST uint WALK_NODE = 1u;      ///< stackless: test node `node`'s box; stack: pair `node`'s two boxes
 LOCAL_CONST uint WALK_LEAF = 2u;      ///< testing primitives leaf_next .. leaf_end - 1 of a leaf
 LOCAL_CONST uint WALK_POP = 3u;       ///< stack traversal: take the next entry off the stack
 LOCAL_CONST uint WALK_FINISHED = 4u;  ///< the query is answered
@@ -154,7 +154,7 @@ void step_leaf(INOUT(Walk) w, TraceRay r, bool shadow, INOUT(Hit) hit) {
     if (visit_primitive(p, r, shadow, hit)) w.state = WALK_FINISHED;
     else if (w.leaf_next >= w.leaf_end) {
         w.state = TRAVERSAL == TRAVERSAL_STACKLESS ? WALK_NODE : WALK_POP;
-        w.node += 1u;  // stackless: past the leaf; the stack traversal sets node at the pop
+        w.node += 1u;  // stackless: past the leaf; the stack walk reads `node` only once a pop sets it
     }
 }
 

@@ -1,5 +1,6 @@
 // The stack walk's node format (pair_nodes.h): each internal node with its children's boxes, checked
-// against the depth-first tree it came from by walking both together. The images the tracer makes
+// against the depth-first tree it came from by walking both together; and the renderers' refusal of
+// a render scene whose pairs are not its tree's. The images the tracer makes
 // with it are checked against the stackless walk, which reads the depth-first nodes, in
 // test_vulkan.cpp and tests/python/test_render_cpu.py.
 #include <gtest/gtest.h>
@@ -9,6 +10,7 @@
 
 #include "bvhlab/bvh.h"
 #include "bvhlab/pair_nodes.h"
+#include "bvhlab/render.h"
 #include "test_scenes.h"
 
 using namespace bvhlab;
@@ -66,7 +68,8 @@ void expect_same_tree(const Bvh& bvh) {
 
 TEST(PairNodes, EveryMethodAndLeafSizeGiveTheSameTree) {
     test::Scene scene = test::random_scene(20000, 500, 7);
-    for (SplitMethod method : {SplitMethod::Median, SplitMethod::Sah, SplitMethod::Lbvh})
+    for (SplitMethod method : {SplitMethod::Median, SplitMethod::Mean, SplitMethod::Midpoint, SplitMethod::Sah,
+                               SplitMethod::SweepSah, SplitMethod::Lbvh})
         for (std::uint32_t leaf : {1u, 4u, 16u}) {
             BuildConfig config;
             config.method = method;
@@ -103,4 +106,29 @@ TEST(PairNodes, NodesThatAreNotADepthFirstTreeAreAnError) {
     Bvh cut = bvh;
     cut.nodes.pop_back();  // the last leaf missing
     EXPECT_THROW(make_pair_nodes(cut), std::invalid_argument);
+    Bvh open = bvh;
+    open.nodes.back() = open.nodes[0];  // the last node internal: more internal nodes than a full tree has
+    EXPECT_THROW(make_pair_nodes(open), std::invalid_argument);
+    Bvh far = bvh;
+    std::uint32_t leaf = 1;
+    while (!is_leaf(far.nodes[leaf])) ++leaf;
+    far.nodes[leaf].index |= gpu::PAIR_LEAF_BIT;  // a leaf whose first slot needs bit 31
+    EXPECT_THROW(make_pair_nodes(far), std::invalid_argument);
+}
+
+TEST(PairNodes, ARenderSceneLeftBehindByARefitOrWithoutPairsIsAnError) {
+    test::Scene scene = test::random_scene(2000, 50, 5);
+    Bvh bvh = build_bvh(scene.view());
+    RenderScene rs = make_render_scene(bvh, scene.view(), {});
+    RenderSettings settings;
+    settings.width = 8, settings.height = 8;
+    std::vector<float> image(8 * 8 * 4);
+    EXPECT_NO_THROW(render_cpu(rs, settings, {image.data()}, 1));
+    for (float& v : scene.triangles) v += 0.5f;  // the geometry moves; the tree is refitted in place
+    refit(bvh, scene.view());
+    EXPECT_THROW(render_cpu(rs, settings, {image.data()}, 1), std::invalid_argument);
+    RenderScene again = make_render_scene(bvh, scene.view(), {});
+    EXPECT_NO_THROW(render_cpu(again, settings, {image.data()}, 1));
+    again.pairs.clear();  // as a scene put together by hand, without make_render_scene
+    EXPECT_THROW(render_cpu(again, settings, {image.data()}, 1), std::invalid_argument);
 }

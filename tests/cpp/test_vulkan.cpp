@@ -119,6 +119,19 @@ TEST_F(Vulkan, StagingUploadGivesTheSameImage) {
     expect_no_validation_errors(staged);
 }
 
+TEST_F(Vulkan, AStaleOrHandMadeSceneIsRefusedAndTheSceneInPlaceKept) {
+    auto scene = test::whitted_showcase();
+    renderer().upload(scene->render);
+    const std::vector<float> before = render_vulkan(renderer(), scene->settings);
+    RenderScene no_pairs = make_render_scene(scene->bvh, scene->geometry.view(), {});
+    no_pairs.pairs.clear();  // as a scene put together by hand: the stack walk would read past the pairs
+    EXPECT_THROW(renderer().upload(no_pairs), std::invalid_argument);
+    for (float& v : scene->geometry.triangles) v += 0.25f;
+    refit(scene->bvh, scene->geometry.view());  // scene->render's pairs and boxes are the old tree's now
+    EXPECT_THROW(renderer().upload(scene->render), std::invalid_argument);
+    EXPECT_EQ(before, render_vulkan(renderer(), scene->settings));  // the uploaded scene is untouched
+}
+
 TEST_F(Vulkan, OverlayLinesInFrontShowBehindAreHiddenElsewhereUnchanged) {
     auto scene = test::overlay_sphere();
     renderer().upload(scene->render);

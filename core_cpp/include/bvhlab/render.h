@@ -42,13 +42,21 @@ struct RenderScene {
     Aabb bounds;
     std::uint32_t node_count = 0;  ///< of the tree (kept here: make_frame_params never reads `bvh`)
     std::uint32_t ref_count = 0;   ///< primitive references in the tree's leaves
+    /// The tree's geometry_fingerprint when this was made: a refit changes it, and the copies here
+    /// (pairs, boxes) would no longer be the tree's.
+    std::uint64_t tree_fingerprint = 0;
 
     std::uint32_t height() const { return order.height(); }
 };
 
-/// Throws std::invalid_argument for material indices out of range, bad material values, or a tree
-/// built for other geometry.
+/// Throws std::invalid_argument for material indices out of range, bad material values, a tree
+/// built for other geometry, or nodes that are not a depth-first binary tree (make_pair_nodes).
 RenderScene make_render_scene(const Bvh& bvh, const GeometryView& geometry, const MaterialView& materials);
+
+/// Throws std::invalid_argument when `scene` no longer describes its tree (refitted since it was
+/// made: make it again), or has no pairs for the tree's internal nodes (not made by
+/// make_render_scene). Both renderers call it before they read the scene.
+void check_render_scene(const RenderScene& scene);
 
 /// The per-frame parameters both renderers read (device addresses and the per-dispatch fields
 /// left zero; the Vulkan side fills them).

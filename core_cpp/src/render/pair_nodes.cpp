@@ -11,6 +11,8 @@ namespace {
 /// A child's words: its pair index (`rank`, internal) or PAIR_LEAF_BIT | first slot and count.
 void set_child(const BvhNode& child, std::uint32_t rank, gpu::vec3& lo, gpu::vec3& hi, std::uint32_t& word,
                std::uint32_t& count) {
+    if (is_leaf(child) && (child.index & gpu::PAIR_LEAF_BIT) != 0)
+        throw std::invalid_argument("make_pair_nodes: a leaf's first slot does not fit in 31 bits");
     lo = child.lo;
     hi = child.hi;
     word = is_leaf(child) ? gpu::PAIR_LEAF_BIT | child.index : rank;

@@ -157,6 +157,7 @@ private:
 
 std::unique_ptr<RenderJob> start_cpu(const RenderScene& scene, const RenderSettings& settings, std::uint32_t threads) {
     validate(settings);
+    check_render_scene(scene);
     return std::make_unique<CpuRenderJob>(scene, settings, threads);
 }
 

@@ -81,7 +81,17 @@ RenderScene make_render_scene(const Bvh& bvh, const GeometryView& g, const Mater
     if (!bvh.empty()) s.bounds = node_box(bvh.nodes[0]);
     s.node_count = bvh.node_count();
     s.ref_count = static_cast<std::uint32_t>(bvh.refs.size());
+    s.tree_fingerprint = bvh.geometry_fingerprint;
     return s;
+}
+
+void check_render_scene(const RenderScene& scene) {
+    if (scene.bvh &&
+        (scene.bvh->geometry_fingerprint != scene.tree_fingerprint || scene.bvh->node_count() != scene.node_count))
+        throw std::invalid_argument(
+            "the tree changed (refit) after its render scene was made: make the render scene again");
+    if (scene.node_count > 1 && scene.pairs.size() != scene.node_count / 2)
+        throw std::invalid_argument("the render scene has no pairs for its tree's internal nodes (make_render_scene)");
 }
 
 namespace {

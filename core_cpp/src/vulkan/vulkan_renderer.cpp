@@ -67,6 +67,7 @@ std::uint32_t VulkanRenderer::max_image_dimension() const {
 
 double VulkanRenderer::upload(const RenderScene& scene) {
     const auto start = std::chrono::steady_clock::now();
+    check_render_scene(scene);  // before the scene in place is freed: bad input loses nothing
     std::lock_guard<std::mutex> lock(core_->mutex);
     vk::RendererCore& c = *core_;
     c.scene.reset();  // free the old scene (unless a job still holds it) before allocating the new one
