@@ -19,7 +19,7 @@ from bvhlab.bvh import (
     MAX_TREE_HEIGHT,
     METHODS,
 )
-from bvhlab.render import BACKENDS, MAX_RAY_DEPTH, MAX_SAMPLES_PER_AXIS, MODES, TRAVERSALS
+from bvhlab.render import BACKENDS, DEFAULT_TRAVERSAL, MAX_RAY_DEPTH, MAX_SAMPLES_PER_AXIS, MODES, TRAVERSALS
 
 from . import state
 
@@ -189,7 +189,7 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
     )
     traversal: EnumProperty(
         name="Traversal",
-        default="stackless",
+        default=DEFAULT_TRAVERSAL,
         items=_items(TRAVERSALS),
     )
     render_mode: EnumProperty(

@@ -16,6 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bvhlab.render import DEFAULT_TRAVERSAL
+
 
 class TraceCancelled(Exception):
     """`cancelled()` became true while a render ran; its result is dropped."""
@@ -30,7 +32,7 @@ class TraceSettings:
     overlay: tuple | None = None
     color_by_depth: bool = True
     line_width: float = 1.0
-    traversal: str = "stackless"
+    traversal: str = DEFAULT_TRAVERSAL
     mode: str = "shade"
     threads: int = 0  # CPU reference threads; 0 = every core
 

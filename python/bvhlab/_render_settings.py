@@ -38,7 +38,7 @@ def render_settings(
     samples_per_axis=1,
     max_depth=5,
     overlay_depth=None,
-    traversal="stack",
+    traversal=_core.DEFAULT_TRAVERSAL,
     mode="shade",
     color_by_depth=True,
     line_width=1.0,

@@ -22,6 +22,9 @@ from .scene import Camera, Scene
 
 BACKENDS = ("auto", "vulkan", "cpu")
 TRAVERSALS: tuple[str, ...] = tuple(_core.RENDER_TRAVERSALS)
+#: The renderers' traversal where none is asked for (RenderSettings in C++): the stack walk, on pairs
+#: of child boxes, nearer child first.
+DEFAULT_TRAVERSAL: str = _core.DEFAULT_TRAVERSAL
 MODES: tuple[str, ...] = tuple(_core.RENDER_MODES)
 MAX_RAY_DEPTH: int = _core.MAX_RAY_DEPTH
 MAX_SAMPLES_PER_AXIS: int = _core.MAX_SAMPLES_PER_AXIS
@@ -71,7 +74,7 @@ def render(
     samples_per_axis: int = 1,
     max_depth: int = 5,
     overlay_depth: tuple[int, int] | None = None,
-    traversal: str = "stack",
+    traversal: str = DEFAULT_TRAVERSAL,
     mode: str = "shade",
     color_by_depth: bool = True,
     line_width: float = 1.0,

@@ -6,7 +6,7 @@ from __future__ import annotations
 from .. import build, render, save_png
 from .._progress import ProgressBar
 from ..library import load_scene
-from ..render import BACKENDS, TRAVERSALS
+from ..render import BACKENDS, DEFAULT_TRAVERSAL, TRAVERSALS
 from . import options
 
 
@@ -28,7 +28,7 @@ def add_parser(sub) -> None:
     p.add_argument("--max-depth", type=int, default=5, help="bounces of reflection and refraction")
     p.add_argument("--bvh-depth", type=options.depth_range, metavar="A:B", help="draw the boxes of depths A..B")
     p.add_argument("--heatmap", action="store_true", help="colour pixels by the box tests of their primary ray")
-    p.add_argument("--traversal", default="stack", choices=TRAVERSALS)
+    p.add_argument("--traversal", default=DEFAULT_TRAVERSAL, choices=TRAVERSALS)
     options.add_png_out(p)
     p.set_defaults(run=run)
 
