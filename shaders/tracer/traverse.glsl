@@ -107,6 +107,11 @@ void enter_child(INOUT(Walk) w, uint child, uint count) {
     }
 }
 
+/// enter_child of pair `p`'s first child, or its second where `second`.
+void enter_side(INOUT(Walk) w, BvhPair p, bool second) {
+    enter_child(w, second ? p.child_b : p.child_a, second ? p.count_b : p.count_a);
+}
+
 /// Stack traversal at pair `w.node`: both children's boxes come in one fetch; the nearer child is
 /// entered and the farther pushed with its entry distance (dropped at the pop if a closer hit is
 /// found meanwhile). A pushed leaf is named by its parent and side (PAIR_LEAF_BIT | 2 · pair +
@@ -128,7 +133,7 @@ void step_stack_node(INOUT(Walk) w, TraceRay r, INOUT(Hit) hit) {
         node_stack_store(w.stacked, uvec2(far_entry, floatBitsToUint(b_next ? ta : tb)));
         w.stacked += 1u;
     }
-    enter_child(w, b_next ? p.child_b : p.child_a, b_next ? p.count_b : p.count_a);
+    enter_side(w, p, b_next);
 }
 
 /// Stackless (report §3.1) at node `node` of the depth-first order: a missed box continues at
@@ -172,9 +177,7 @@ void step_pop(INOUT(Walk) w, Hit hit) {
         enter_child(w, entry.x, 0u);
         return;
     }
-    uint side = entry.x & 1u;
-    BvhPair parent = load_pair((entry.x & ~PAIR_LEAF_BIT) >> 1u);
-    enter_child(w, side == 0u ? parent.child_a : parent.child_b, side == 0u ? parent.count_a : parent.count_b);
+    enter_side(w, load_pair((entry.x & ~PAIR_LEAF_BIT) >> 1u), (entry.x & 1u) != 0u);
 }
 
 /// The walk, until the query is answered or `steps` reaches `budget`, as "while-while" loops

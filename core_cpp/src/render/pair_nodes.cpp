@@ -19,6 +19,10 @@ void set_child(const BvhNode& child, std::uint32_t rank, gpu::vec3& lo, gpu::vec
     count = is_leaf(child) ? leaf_count(child) : 0;
 }
 
+[[noreturn]] void not_a_tree() {
+    throw std::invalid_argument("make_pair_nodes: the nodes are not a depth-first binary tree");
+}
+
 /// An internal node whose second child is still to come in the depth-first order.
 struct Pending {
     std::uint32_t pair;          ///< its rank among the internal nodes
@@ -45,21 +49,18 @@ BigVector<gpu::BvhPair> make_pair_nodes(const Bvh& bvh) {
             gpu::BvhPair& p = pairs[next_pair - 1];
             set_child(node, rank, p.lo_a, p.hi_a, p.child_a, p.count_a);
         } else if (i > 0) {
-            if (pending.empty() || pending.back().second_child != i)
-                throw std::invalid_argument("make_pair_nodes: the nodes are not a depth-first binary tree");
+            if (pending.empty() || pending.back().second_child != i) not_a_tree();
             gpu::BvhPair& p = pairs[pending.back().pair];
             pending.pop_back();
             set_child(node, rank, p.lo_b, p.hi_b, p.child_b, p.count_b);
         }
         after_internal = !is_leaf(node);
         if (after_internal) {
-            if (next_pair == pairs.size())
-                throw std::invalid_argument("make_pair_nodes: the nodes are not a depth-first binary tree");
+            if (next_pair == pairs.size()) not_a_tree();
             pending.push_back({next_pair++, node.index});
         }
     }
-    if (!pending.empty() || next_pair != pairs.size())
-        throw std::invalid_argument("make_pair_nodes: the nodes are not a depth-first binary tree");
+    if (!pending.empty() || next_pair != pairs.size()) not_a_tree();
     return pairs;
 }
 
