@@ -1,11 +1,13 @@
 """Bundle Crytek Sponza (report Table 1, Figure 6) as blender_scenes/sponza.npz, losslessly:
 
-    .venv/bin/python blender_scenes/make_sponza.py [/work/shared/scenes/sponza_tris.npy]
+    .venv/bin/python blender_scenes/make_sponza.py SOURCE.npy [--out blender_scenes/sponza.npz]
 
-Reads the float32 (262205, 3, 3) triangle array, checks its sha256, welds exactly equal vertices
-(bvhlab.library.sponza.weld) and writes an LZMA-compressed .npz that rebuilds the array bit for bit
-(checked here, and again at every load). Crytek Sponza: Frank Meinl (Crytek), Morgan McGuire's
-version, CC BY 3.0 — see README.md beside this script.
+SOURCE.npy is the float32 (262205, 3, 3) triangle array the bundle was made from, as numpy's `.npy`
+file (sha256 bvhlab.library.sponza.SOURCE_SHA256); the bundle gives it back bit for bit
+(`np.save(path, sponza.load_triangles(bundle))`). Reads it, checks its sha256, welds exactly equal
+vertices (bvhlab.library.sponza.weld) and writes an LZMA-compressed .npz that rebuilds the array bit
+for bit (checked here, and again at every load); the same input gives the same bytes. Crytek
+Sponza: Frank Meinl (Crytek), Morgan McGuire's version, CC BY 3.0 — see README.md beside this script.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ HERE = Path(__file__).resolve().parent
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("source", nargs="?", type=Path, default=Path("/work/shared/scenes/sponza_tris.npy"))
+    ap.add_argument("source", type=Path, help="the source triangle array (.npy, float32 (262205, 3, 3))")
     ap.add_argument("--out", type=Path, default=HERE / sponza.FILE_NAME)
     args = ap.parse_args()
     triangles = np.load(args.source, allow_pickle=False)
