@@ -34,7 +34,7 @@ def pin_to_cores(n: int) -> None:
 
 class Embree:
     """Embree 4 through embreex: build time is the lazy commit at the first query, measured alone
-    (the Python-speed copy into the TriangleMesh is excluded, ENVIRONMENT.md)."""
+    (the Python-speed copy into the TriangleMesh, about 0.8 s for 1M triangles, is excluded)."""
 
     def __init__(self, tris: np.ndarray):
         from embreex import rtcore_scene as rtcs

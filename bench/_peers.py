@@ -10,7 +10,6 @@ import re
 import shutil
 import statistics
 import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -41,30 +40,15 @@ def build_bvh_bench(tinybvh: str | None) -> Path:
     return BUILD / "bench" / "cpp" / "bvh_bench"
 
 
-def find_sponza() -> Path | None:
-    """Crytek Sponza (262,205 triangles): $BVHLAB_SPONZA, or shared/scenes beside or above the checkout."""
-    candidates = [
-        os.environ.get("BVHLAB_SPONZA"),
-        ROOT / "shared/scenes/sponza_tris.npy",
-        ROOT.parent / "shared/scenes/sponza_tris.npy",
-        ROOT.parent.parent / "shared/scenes/sponza_tris.npy",
-    ]
-    return next((Path(c) for c in candidates if c and Path(c).is_file()), None)
-
-
 def scenes(names: list[str]) -> dict[str, np.ndarray]:
     """Triangle arrays (T,3,3) by name: sponza, room1m (a 1M-triangle model in a room, the
     non-uniform case), uniform1m (1M small random triangles), and the 250k versions."""
-    from bvhlab.library import procedural
+    from bvhlab.library import bundled_dir, procedural, sponza
 
     out = {}
     for name in names:
-        if name == "sponza":
-            path = find_sponza()
-            if path is None:
-                print("bench: Sponza not found (set BVHLAB_SPONZA); skipped", file=sys.stderr)
-                continue
-            out[name] = np.ascontiguousarray(np.load(path), np.float32)
+        if name == "sponza":  # bundled (blender_scenes/sponza.npz), the source's bits
+            out[name] = sponza.load_triangles(bundled_dir() / sponza.FILE_NAME)
         elif name.startswith("room"):
             out[name] = procedural.model_in_room(_count(name))
         elif name.startswith("uniform"):
@@ -88,7 +72,7 @@ def rays_for(name: str, tris: np.ndarray) -> dict[str, np.ndarray]:
 
     o, d = procedural.random_rays(tris, 200_000, seed=3)
     out = {"random": np.concatenate([o, d], 1)}
-    if name == "sponza":  # the atrium view of shared/scenes/README.md
+    if name == "sponza":  # the report's Figure 6 view (bvhlab.library.sponza.CAMERA)
         out["primary"] = _pinhole((-110, 20, -4), (100, 45, 2), 60.0)
     else:
         o, d = procedural.camera_rays(tris, 640, 480)
@@ -148,7 +132,7 @@ def instructions(exe: Path, args: list[str]) -> int | None:
 
 def embreex_commit_seconds(tris: np.ndarray, repeat: int) -> list[float] | None:
     """Embree 4 through embreex: the lazy BVH commit at the first query, timed alone (the copy
-    into the TriangleMesh is excluded, ENVIRONMENT.md); None without embreex."""
+    into the TriangleMesh, about 0.8 s for 1M triangles, is excluded); None without embreex."""
     try:
         from embreex import rtcore_scene as rtcs
         from embreex.mesh_construction import TriangleMesh

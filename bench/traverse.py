@@ -6,7 +6,7 @@ same rays in the same process, interleaved and repeated.
                              [--callgrind 20000] [--tinybvh DIR]
 
 For each scene: random rays (origins in the bounds, uniform directions, 200k) and primary rays
-(640×480; on Sponza the atrium view of shared/scenes/README.md). Prints Mrays/s with ratios
+(640×480; on Sponza the report's Figure 6 view). Prints Mrays/s with ratios
 against Embree MEDIUM, the hits each system found and how many rays disagree with Embree's hit
 distance, and callgrind instructions per ray (on `--callgrind` rays spread over the set); writes
 bench/results/traverse.json. Each bvhlab row names its build settings.
