@@ -1,4 +1,4 @@
-// An independent check of every structural invariant of a built tree (DESIGN.md "Tree layout").
+// An independent check of every structural invariant of a built tree (docs/design.md, "Tree layout").
 #pragma once
 #include <gtest/gtest.h>
 

@@ -16,8 +16,9 @@ template <>
 struct WrittenBeforeRead<BvhNode> : std::true_type {};
 
 /// A bounding volume hierarchy over triangles and spheres.
-/// Layout (DESIGN.md, report §3.1): nodes in depth-first order, root at 0, first child at i + 1,
-/// second child in `index`; leaves reference the contiguous slice refs[index, index + count).
+/// Layout (docs/design.md "Tree layout", report §3.1): nodes in depth-first order, root at 0,
+/// first child at i + 1, second child in `index`; leaves reference the contiguous slice
+/// refs[index, index + count).
 /// Depth of the root is 0; height is the largest leaf depth + 1 (an empty tree has height 0).
 struct Bvh {
     BigVector<BvhNode> nodes;

@@ -1,5 +1,5 @@
 // render_defaults.h — the one definition of what a render uses when the scene does not say
-// (DESIGN.md: "defaults make the two-line case work"): the sky, the matte material, the camera that
+// (docs/design.md, "Defaults": the two-line case works): the sky, the matte material, the camera that
 // frames a scene and the light beside it. Exported to Python (bvhlab.defaults), which reads them.
 #pragma once
 #include <array>

@@ -1,5 +1,5 @@
-// split.h — the contract between the top-down builder and the split methods (STYLE.md: the
-// builder owns the work stack; a split method only divides one range and says where).
+// split.h — the contract between the top-down builder and the split methods (madmann91/bvh's
+// shape: the builder owns the work stack; a split method only divides one range and says where).
 //
 // References live in two buffers of the same size. A split method reads a range from one
 // (`src`) and either writes both children to the same range of the other (`dst`, a branch-free

@@ -22,7 +22,7 @@ struct BvhStats {
 
 BvhStats compute_stats(const Bvh& bvh);
 
-/// The SAH cost of a whole tree with root box R (DESIGN.md, one formula everywhere):
+/// The SAH cost of a whole tree with root box R (docs/design.md "Conventions", one formula everywhere):
 ///   C = Σ_internal A(n)/A(R)·C_trav + Σ_leaf A(n)/A(R)·N(n)·C_isect,  C_trav = C_isect = 1.
 /// 0 for an empty tree; a root of zero area counts every node as hit.
 double sah_cost(const Bvh& bvh);

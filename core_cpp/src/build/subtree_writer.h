@@ -1,5 +1,5 @@
-// subtree_writer.h — appends the nodes of one subtree in depth-first order (DESIGN.md "Tree
-// layout"): the top-down builder and the small-subtree builder write through it.
+// subtree_writer.h — appends the nodes of one subtree in depth-first order (docs/design.md,
+// "Tree layout"): the top-down builder and the small-subtree builder write through it.
 #pragma once
 #include "subtree_builder.h"
 
