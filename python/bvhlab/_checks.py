@@ -79,6 +79,9 @@ def output_file(path, suffixes: tuple[str, ...], what: str) -> Path:
         raise OutputPathError(
             f"{path} is a folder; give a file name for the {what}, e.g. {path / ('out' + suffixes[0])}"
         )
+    if path.name.lower() in suffixes:  # ".png" alone is a hidden file with no suffix to Path
+        example = path.with_name("out" + path.name)
+        raise OutputPathError(f"{path}: the file name has no stem, only the suffix; name the file, e.g. {example}")
     if path.suffix.lower() not in suffixes:
         raise OutputPathError(
             f"{path}: a {what} is written as {' or '.join(suffixes)}; name the file so "

@@ -1,7 +1,8 @@
 """Reading an `.npz` that may be hostile: every member's `.npy` header is read and checked (dtype,
 shape, and the size the zip directory declares) before any array data is, so a small file cannot
 make the reader allocate gigabytes (a 3.85 MB file used to expand to 3.9 GB before the first check),
-and every failure is one SceneFileError naming the file and the problem."""
+and every failure is one SceneFileError naming the file and the problem. Writing one: whole or not
+at all (`write_npz`)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from ._atomic import replacing
 
 #: A file may expand to at most this many times its size once the arrays exceed MIN_CHECKED_BYTES.
 #: Real geometry deflates by 1.1-3x; only crafted (or absurdly regular) data compresses 100x.
@@ -42,6 +45,8 @@ def read_npz(
     each pair in `same_length` must agree in their first dimension."""
     if path.is_dir():
         raise SceneFileError(f"{path} is a folder, not a scene file")
+    if path.exists() and not path.is_file():  # a FIFO would block the reader until someone writes
+        raise SceneFileError(f"{path} is not a regular file (a FIFO, device or socket), not a scene file")
     try:
         with zipfile.ZipFile(path) as archive:
             headers = {name: _header(path, archive, name) for name in members if _has(archive, name)}
@@ -55,6 +60,14 @@ def read_npz(
         if isinstance(e, (FileNotFoundError, PermissionError)):
             raise
         raise SceneFileError(f"{path} cannot be read: {e}") from None
+
+
+def write_npz(path: Path, arrays: dict[str, np.ndarray]) -> Path:
+    """`arrays` as a compressed `.npz` at exactly `path` (no suffix added, no pickled objects); an
+    old file is replaced only by a complete new one (bvhlab._atomic). Returns the path."""
+    with replacing(path) as f:  # a file object: numpy adds no suffix
+        np.savez_compressed(f, **arrays)
+    return path
 
 
 def _has(archive: zipfile.ZipFile, name: str) -> bool:

@@ -7,6 +7,7 @@ import zlib
 
 import numpy as np
 
+from ._atomic import write_bytes
 from ._checks import output_file
 
 
@@ -27,7 +28,8 @@ def to_rgba8(image: np.ndarray) -> np.ndarray:
 
 def write_png(image: np.ndarray, path) -> None:
     """Write `image` (see to_rgba8) to `path`, which must end in .png (OutputPathError otherwise:
-    the bytes are PNG, so a .jpg name would be a lie)."""
+    the bytes are PNG, so a .jpg name would be a lie). An old file is replaced only by a complete
+    new one (WriteError naming the file otherwise)."""
     path = output_file(path, (".png",), "PNG image")
     rgba = to_rgba8(image)
     h, w, _ = rgba.shape
@@ -43,4 +45,4 @@ def write_png(image: np.ndarray, path) -> None:
         + chunk(b"IDAT", zlib.compress(raw.tobytes(), 6))
         + chunk(b"IEND", b"")
     )
-    path.write_bytes(png)
+    write_bytes(path, png)

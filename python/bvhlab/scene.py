@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from . import _checks, _core, defaults
-from ._npz import MAX_EXPANSION, Member, SceneFileError, read_npz
+from ._npz import MAX_EXPANSION, Member, SceneFileError, read_npz, write_npz
 
 FORMAT_VERSION = 1
 #: Points (vertices, sphere extents, ray origins, the camera) lie within ±MAX_COORDINATE, where
@@ -195,14 +194,7 @@ class Scene:
             arrays["camera"] = np.array(self.camera.as_row(), np.float64)
         if self.light is not None:
             arrays["light"] = np.array(self.light.as_row(), np.float64)
-        partial = path.with_name(path.name + ".partial")
-        try:
-            with partial.open("wb") as f:  # a file object: numpy adds no suffix
-                np.savez_compressed(f, **arrays)
-            os.replace(partial, path)
-        finally:
-            partial.unlink(missing_ok=True)
-        return path
+        return write_npz(path, arrays)
 
     @classmethod
     def load(cls, path, *, max_expansion: float = MAX_EXPANSION) -> Scene:

@@ -1,5 +1,6 @@
 """BVH statistics as JSON and CSV files: the one writer of `bvhlab build --json/--csv` and the
-add-on's Export stats (no bpy). Method comparisons are written by bvhlab.compare."""
+add-on's Export stats (no bpy). Method comparisons are written by bvhlab.compare. Both files are
+written whole or not at all (bvhlab._atomic)."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import csv
 import json
 from pathlib import Path
 
+from ._atomic import replacing, write_text
 from ._checks import output_file
 
 #: Per-depth and per-size lists in `Bvh.stats`; every other entry is one value.
@@ -27,14 +29,14 @@ def csv_path(path) -> Path:
 def write_stats_json(path: Path, stats: dict, about: dict) -> None:
     """{"about": {...scene, file, scope...}, "stats": <Bvh.stats, unchanged>}."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps({"about": about, "stats": stats}, indent=1) + "\n")
+    write_text(path, json.dumps({"about": about, "stats": stats}, indent=1) + "\n")
 
 
 def write_stats_csv(path: Path, stats: dict) -> None:
     """Long format, one value per row: `metric,index,value`. Single values leave `index` empty;
     nodes_per_depth and leaves_per_depth have the depth as index, leaf_size_histogram the leaf size."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w", newline="") as f:
+    with replacing(path, text=True) as f:
         out = csv.writer(f)
         out.writerow(["metric", "index", "value"])
         for name, value in stats.items():

@@ -76,7 +76,7 @@ def test_verdicts_need_the_whole_interval_on_one_side():
 
 def test_rounds_rotate_and_hold_every_label_once():
     labels = ["a", "b", "c"]
-    got = protocol.rounds(labels, 4)
+    got = list(protocol.rounds(labels, 4))
     assert got == [["a", "b", "c"], ["b", "c", "a"], ["c", "a", "b"], ["a", "b", "c"]]
     assert all(sorted(r) == labels for r in got)
 

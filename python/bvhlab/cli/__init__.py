@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from .._atomic import WriteError
 from .._core import BuildCancelled
 from . import build_cmd, compare_cmd, options, render_cmd, scenes_cmd, snapshot_cmd
 
@@ -49,7 +50,13 @@ def main(argv=None) -> int:
 
 def _error(command: str, error) -> int:
     text = str(error)
-    if isinstance(error, OSError) and error.strerror and error.filename and not text.startswith(str(error.filename)):
+    if (
+        isinstance(error, OSError)
+        and not isinstance(error, WriteError)  # already "cannot write PATH: REASON"
+        and error.strerror
+        and error.filename
+        and not text.startswith(str(error.filename))
+    ):
         text = f"{error.filename}: {error.strerror}"  # no "[Errno 21]"
     print(f"bvhlab {command}: error: {text}", file=sys.stderr)
     return 2

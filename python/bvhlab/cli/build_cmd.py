@@ -29,9 +29,10 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
+    settings = options.build_kwargs(args)  # checked before the scene is loaded
     scene, name = load_scene(args.scene)
     with ProgressBar(f"building {args.method}") as bar:
-        bvh = build(scene, progress=bar, **options.build_kwargs(args))
+        bvh = build(scene, progress=bar, **settings)
     stats = bvh.stats
     print(f"{name}: {stats['triangles']} triangles, {stats['spheres']} spheres")
     for key in (
@@ -51,7 +52,7 @@ def run(args) -> int:
         value = stats[key]
         print(f"  {key:<14}{value:.3f}" if isinstance(value, float) else f"  {key:<14}{value}")
     print(f"  {'nodes/depth':<14}{' '.join(str(n) for n in stats['nodes_per_depth'])}")
-    about = {"scene": name, "source": args.scene, "settings": options.build_kwargs(args)}
+    about = {"scene": name, "source": args.scene, "settings": settings}
     if args.json:
         write_stats_json(args.json, stats, about)
         print(f"wrote {args.json}")

@@ -7,19 +7,25 @@ import argparse
 from pathlib import Path
 
 from ..bvh import method_from_label
-from ..compare.protocol import MIN_SAMPLES
-from .options import whole_number
+from ..compare.measure import build_settings
+from ..compare.protocol import MAX_SAMPLES, MIN_SAMPLES
+from .options import checked_build_kwargs, whole_number
 
 DEFAULT_METHODS = "median,mean,midpoint,sah12,sah32"
 
 
 def sample_count(text: str) -> int:
-    """Frames or builds per method: the protocol needs at least MIN_SAMPLES for a spread."""
+    """Frames or builds per method: the protocol needs at least MIN_SAMPLES for a spread, and takes
+    at most MAX_SAMPLES (issue 39.3)."""
     n = whole_number(text)
     if n < MIN_SAMPLES:
         raise argparse.ArgumentTypeError(
             f"must be at least {MIN_SAMPLES} (the protocol reports a median and its "
             f"spread, which needs {MIN_SAMPLES} samples), got {n}"
+        )
+    if n > MAX_SAMPLES:
+        raise argparse.ArgumentTypeError(
+            f"must be at most {MAX_SAMPLES} (more rounds no longer narrow the spread), got {n}"
         )
     return n
 
@@ -40,6 +46,10 @@ def method_list(text: str) -> list[str]:
             method_from_label(label)
         except ValueError as e:
             raise argparse.ArgumentTypeError(str(e)) from None
+        try:  # every setting of the label's build, as the measurement will use it (sah1: one bin)
+            checked_build_kwargs(build_settings(label))
+        except (ValueError, TypeError) as e:
+            raise argparse.ArgumentTypeError(f"{label}: {e}") from None
     repeated = sorted({m for m in labels if labels.count(m) > 1})
     if repeated:
         raise argparse.ArgumentTypeError(f"method given more than once: {', '.join(repeated)}")

@@ -11,9 +11,10 @@ import time
 from pathlib import Path
 
 from .. import build
+from .._folder_lock import folder_lock
 from ..compare import charts, figures, measure_methods, overlay, report_checks, write_tables
 from ..compare.measure import REPORT_BUILD, build_settings, render_frame
-from ..compare.protocol import DEFAULT_BUILDS, DEFAULT_FRAMES, MIN_SAMPLES
+from ..compare.protocol import DEFAULT_BUILDS, DEFAULT_FRAMES, MAX_SAMPLES, MIN_SAMPLES
 from ..library import load_scene
 from ..render import BACKENDS, Renderer, VulkanUnavailable, save_png
 from . import compare_args as cargs
@@ -34,13 +35,13 @@ def add_parser(sub) -> None:
         "--frames",
         type=cargs.sample_count,
         default=DEFAULT_FRAMES,
-        help=f"frames per method after one warm-up, at least {MIN_SAMPLES} (default {DEFAULT_FRAMES})",
+        help=f"frames per method after one warm-up, {MIN_SAMPLES} to {MAX_SAMPLES} (default {DEFAULT_FRAMES})",
     )
     p.add_argument(
         "--builds",
         type=cargs.sample_count,
         default=DEFAULT_BUILDS,
-        help=f"builds per method after one warm-up, at least {MIN_SAMPLES} (default {DEFAULT_BUILDS})",
+        help=f"builds per method after one warm-up, {MIN_SAMPLES} to {MAX_SAMPLES} (default {DEFAULT_BUILDS})",
     )
     options.add_image_size(p)
     p.add_argument("--backend", default="auto", choices=BACKENDS, help="renderer of Table 1's frame times")
@@ -75,6 +76,11 @@ def run(args) -> int:
     if out.exists():
         say(f"writing into the existing directory {out}")
     out.mkdir(parents=True, exist_ok=True)
+    with folder_lock(out, "bvhlab compare"):  # a second run into `out` is refused, not mixed in
+        return _compare(scene, name, args, out)
+
+
+def _compare(scene, name: str, args, out: Path) -> int:
     renderer = Renderer(args.backend)
     if renderer.fallback:
         say(renderer.fallback)

@@ -7,6 +7,8 @@ import re
 from collections.abc import Callable
 from pathlib import Path
 
+import numpy as np
+
 from .. import _core
 from .._checks import OutputPathError, output_file
 from ..bvh import (
@@ -20,15 +22,34 @@ from ..bvh import (
     DEFAULT_SAH_BLOCK,
     MAX_SAH_BLOCK,
     METHODS,
+    build,
     method_from_label,
 )
 
 #: Largest image side the CLI accepts (OpenGL's and most Vulkan drivers' framebuffer limit).
 MAX_IMAGE_SIDE = _core.MAX_IMAGE_DIMENSION  # the renderers' limit, one definition
+#: What `library.load_scene` reads as a file rather than a scene name.
+SCENE_SUFFIXES = (".npz", ".blend")
 
 
 def add_scene(p: argparse.ArgumentParser) -> None:
-    p.add_argument("scene", metavar="SCENE", help="a .blend or .npz file, or a scene name from `bvhlab scenes`")
+    p.add_argument(
+        "scene", type=scene_spec, metavar="SCENE", help="a .blend or .npz file, or a scene name from `bvhlab scenes`"
+    )
+
+
+def scene_spec(text: str) -> str:
+    """A SCENE argument. A scene file (.npz, .blend) that exists but is not a regular file (a FIFO,
+    which would block the reader until someone writes to it, a device, a folder) is refused before
+    any work; names, and files that do not exist, are left to the loader, which lists the names."""
+    path = Path(text)
+    if not text.endswith(SCENE_SUFFIXES) or not path.exists() or path.is_file():
+        return text
+    if path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text} is a folder; give a .blend or .npz file")
+    raise argparse.ArgumentTypeError(
+        f"{text} is not a regular file (a FIFO, device or socket); give a .blend or .npz file"
+    )
 
 
 def add_build(p: argparse.ArgumentParser) -> None:
@@ -59,16 +80,27 @@ def add_build(p: argparse.ArgumentParser) -> None:
 
 
 def build_kwargs(args) -> dict:
+    """The build arguments of the command line, checked (ValueError) before any work is done."""
     kw = method_kwargs(args.method)
     if args.bins is not None:
         kw["bins"] = args.bins
-    return {
-        **kw,
-        "axis": args.axis,
-        "bin_bounds": args.bin_bounds,
-        "max_leaf_size": args.max_leaf_size,
-        "sah_block": args.sah_block,
-    }
+    return checked_build_kwargs(
+        {
+            **kw,
+            "axis": args.axis,
+            "bin_bounds": args.bin_bounds,
+            "max_leaf_size": args.max_leaf_size,
+            "sah_block": args.sah_block,
+        }
+    )
+
+
+def checked_build_kwargs(kwargs: dict) -> dict:
+    """`kwargs` checked by `bvhlab.build` itself, on no primitives (microseconds): a bad value (sah1's
+    one bin, a leaf size of 0) is refused with build's own message before a scene is loaded or a
+    measurement starts, and no second copy of its limits can drift from the first."""
+    build(np.zeros((0, 3, 3), np.float32), **kwargs)
+    return kwargs
 
 
 method_kwargs = method_from_label

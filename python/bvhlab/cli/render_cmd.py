@@ -34,9 +34,10 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
+    settings = options.build_kwargs(args)  # checked before the scene is loaded
     scene, name = load_scene(args.scene)
     with ProgressBar(f"building {args.method}") as bar:
-        bvh = build(scene, progress=bar, **options.build_kwargs(args))
+        bvh = build(scene, progress=bar, **settings)
     with ProgressBar("rendering") as bar:
         image, t = render(
             scene,

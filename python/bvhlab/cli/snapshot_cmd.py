@@ -12,8 +12,9 @@ def add_parser(sub) -> None:
     p = sub.add_parser("snapshot", help="raster preview with BVH boxes (moderngl)", description=__doc__)
     options.add_scene(p)
     options.add_build(p)
-    p.add_argument("--bvh-depth", type=options.depth_range, metavar="A:B", default=None)
-    p.add_argument("--sheet", action="store_true", help="one panel per depth, 0 … height, in a grid")
+    what = p.add_mutually_exclusive_group()  # a sheet draws every depth: a range would be ignored
+    what.add_argument("--bvh-depth", type=options.depth_range, metavar="A:B", default=None)
+    what.add_argument("--sheet", action="store_true", help="one panel per depth, 0 … height, in a grid")
     options.add_image_size(p)
     options.add_png_out(p)
     p.set_defaults(run=run)

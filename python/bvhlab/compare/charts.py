@@ -6,6 +6,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from .._atomic import replacing
+
 
 def _plt():
     import matplotlib
@@ -25,9 +27,12 @@ def value_label(v: float) -> str:
 
 
 def _save(fig, plt, path: Path) -> Path:
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    try:
+        fig.tight_layout()
+        with replacing(path) as f:  # whole or not at all
+            fig.savefig(f, format=Path(path).suffix[1:] or "png", dpi=110)
+    finally:
+        plt.close(fig)
     return path
 
 

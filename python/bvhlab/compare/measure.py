@@ -10,7 +10,7 @@ from ..bvh import build
 from ..bvh import method_from_label as method_kwargs  # 'sah32' → sah with 32 bins
 from ..render import Renderer
 from ..scene import Scene
-from .protocol import DEFAULT_BUILDS, DEFAULT_FRAMES, median_interval, rounds
+from .protocol import DEFAULT_BUILDS, DEFAULT_FRAMES, median_interval, rounds, sample_count
 from .tree_stats import sah_cost_per_depth
 
 #: The report's build settings (§2.3, §4.2), stated here rather than taken from the library's
@@ -82,9 +82,11 @@ def measure_methods(
     (frame_cpu_ms, ...; build_cpu_ms, ...), every sample kept in round order (paired across
     methods). `frame_clock` says which clock measures a frame's work (`frame_clock()`); builds
     are always measured by CPU time. Plus the tree's height, SAH cost, nodes, leaves, per depth.
-    `build_options` override the report's settings (REPORT_BUILD); `render_options`: traversal, ..."""
+    `build_options` override the report's settings (REPORT_BUILD); `render_options`: traversal, ...
+    `frames` and `builds` are 1 to MAX_SAMPLES (ValueError otherwise, before any work)."""
     if len(set(labels)) != len(labels) or not labels:
         raise ValueError(f"methods must be distinct and at least one, got {labels}")
+    frames, builds = sample_count("frames", frames), sample_count("builds", builds)
     renderer = renderer or Renderer("auto")
     say = progress or (lambda text: None)
     settings = {label: build_settings(label, build_options) for label in labels}
@@ -120,7 +122,7 @@ def _build_rounds(scene, settings: dict, builds: int, say) -> tuple[dict, dict]:
     for label in labels:
         say(f"{label}: building")
         trees[label] = build(scene, **settings[label])
-    for r, order in enumerate(rounds(labels, max(1, builds))):
+    for r, order in enumerate(rounds(labels, builds)):
         say(f"builds: round {r + 1}/{builds}")
         for label in order:
             bvh, cpu_ms = timed_build(scene, settings[label])
@@ -137,7 +139,7 @@ def _render_rounds(scene, trees: dict, frames: int, width, height, renderer, opt
     for label in labels:  # warm-up round (upload, shader compile, caches), not counted
         say(f"{label}: warm-up frame")
         render_frame(renderer, scene, trees[label], width, height, **options)
-    for r, order in enumerate(rounds(labels, max(1, frames))):
+    for r, order in enumerate(rounds(labels, frames)):
         say(f"frames: round {r + 1}/{frames}")
         for label in order:
             _, wall_ms, cpu_ms, last[label] = render_frame(renderer, scene, trees[label], width, height, **options)

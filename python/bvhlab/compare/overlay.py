@@ -16,7 +16,7 @@ import numpy as np
 from ..render import Renderer
 from ..scene import Scene
 from .measure import frame_clock, render_frame, samples_columns
-from .protocol import at_most, paired_ratio, rounds
+from .protocol import at_most, paired_ratio, rounds, sample_count
 
 DEPTHS = (8, 9)
 LINE_WIDTHS = (1.0, 2.0)
@@ -47,6 +47,7 @@ def measure_overlay(
     """Frame times without and with the overlay on one backend; the last image of each setting;
     the share of pixels the overlay changed; and the verdict on the report's claim per line width."""
     say = progress or (lambda text: None)
+    frames = sample_count("frames", frames)
     configs = {name: {**options, "threads": threads} for name, options in _configs(depths, line_widths).items()}
     for name, options in configs.items():  # warm-up, not counted
         say(f"{renderer.backend}: warm-up, {name}")

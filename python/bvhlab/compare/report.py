@@ -7,6 +7,7 @@ import json
 import math
 from pathlib import Path
 
+from .._atomic import replacing, write_text
 from .protocol import paired_ratio
 
 #: The report's Table 1 (Sponza, 800×600, its GPU): frame ms (average), build ms, tree height.
@@ -65,7 +66,7 @@ def report_row(method: str) -> str:
 def write_csv(rows: list[dict], path: Path) -> Path:
     """One row per method, the report's Table 1 columns first."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w", newline="") as f:
+    with replacing(path, text=True) as f:
         w = csv.writer(f)
         w.writerow(COLUMNS)
         for r in rows:
@@ -77,9 +78,10 @@ def write_tables(rows: list[dict], out: Path, meta: dict, checks: list[dict], ex
     out.mkdir(parents=True, exist_ok=True)
     paths = {"csv": out / "table.csv", "md": out / "table.md", "json": out / "table.json"}
     write_csv(rows, paths["csv"])
-    paths["md"].write_text(markdown(rows, meta, checks) + extra_markdown)
-    paths["json"].write_text(
-        json.dumps(_plain({"meta": meta, "rows": rows, "checks": checks, "report_table1": REPORT_TABLE1}), indent=1)
+    write_text(paths["md"], markdown(rows, meta, checks) + extra_markdown)
+    write_text(
+        paths["json"],
+        json.dumps(_plain({"meta": meta, "rows": rows, "checks": checks, "report_table1": REPORT_TABLE1}), indent=1),
     )
     return paths
 

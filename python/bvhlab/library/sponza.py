@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._atomic import replacing
 from ..scene import Camera, Light, Material, Scene
 
 FILE_NAME = "sponza.npz"
@@ -77,7 +78,7 @@ def write_bundle(triangles: np.ndarray, path: Path) -> Path:
     columns, deltas = weld(triangles)
     if not np.array_equal(unweld(columns, deltas).view(np.uint32), np.asarray(triangles, np.float32).view(np.uint32)):
         raise AssertionError("welding did not round-trip")  # cannot happen unless weld/unweld are broken
-    with zipfile.ZipFile(path, "w", compression=zipfile.ZIP_LZMA) as z:
+    with replacing(path) as f, zipfile.ZipFile(f, "w", compression=zipfile.ZIP_LZMA) as z:  # whole or not at all
         for name, array in (("vertex_columns", columns), ("index_deltas", deltas)):
             buffer = io.BytesIO()
             np.save(buffer, array)

@@ -8,6 +8,8 @@ import math
 
 import numpy as np
 
+from .._atomic import replacing
+
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser()
@@ -49,7 +51,8 @@ def _save_srgb(image: np.ndarray, path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    plt.imsave(path, image)
+    with replacing(path) as f:  # whole or not at all (issue 39.8)
+        plt.imsave(f, image, format="png")
 
 
 def _sheet(panels, path, title: str) -> None:
@@ -68,10 +71,16 @@ def _sheet(panels, path, title: str) -> None:
         ax.imshow(image)
         ax.set_title(f"depth {depth}: {count} boxes", fontsize=8)
     fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    try:
+        fig.tight_layout()
+        with replacing(path) as f:  # whole or not at all (issue 39.8)
+            fig.savefig(f, format="png", dpi=100)
+    finally:
+        plt.close(fig)
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except OSError as e:  # a file that cannot be read or written: one line, which the parent reports
+        raise SystemExit(str(e)) from None

@@ -1,0 +1,176 @@
+"""Issue 39.8: every file bvhlab writes is either the old one or the whole new one. The writer
+(bvhlab._atomic) writes a temporary beside the file, fsyncs it and renames it into place; an error,
+Ctrl-C or a file-size limit leaves the old bytes and no temporary, and the error names the file."""
+
+import os
+import re
+import stat
+from pathlib import Path
+
+import numpy as np
+import pytest
+from child import run_python
+
+import bvhlab
+from bvhlab._atomic import replacing, write_bytes, write_text
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def _listing(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.iterdir())
+
+
+def test_replaces_the_whole_file_and_leaves_no_temporary(tmp_path):
+    path = tmp_path / "a.json"
+    path.write_text("old")
+    write_text(path, '{"new": 1}\n')
+    assert path.read_text() == '{"new": 1}\n' and _listing(tmp_path) == ["a.json"]
+    write_bytes(tmp_path / "b.png", b"\x89PNG")
+    assert (tmp_path / "b.png").read_bytes() == b"\x89PNG" and _listing(tmp_path) == ["a.json", "b.png"]
+
+
+@pytest.mark.parametrize("error", [ValueError("bad row"), KeyboardInterrupt()])
+def test_an_error_while_writing_keeps_the_old_file(tmp_path, error):
+    """The writer fails half-way (an exception, Ctrl-C): the old bytes stay, the temporary goes."""
+    path = tmp_path / "table.csv"
+    path.write_bytes(b"method,frame_ms\nmedian,41.8\n")
+    with pytest.raises(type(error)):
+        with replacing(path, text=True) as f:
+            f.write("method,frame_ms\n" * 10000)
+            raise error
+    assert path.read_bytes() == b"method,frame_ms\nmedian,41.8\n"
+    assert _listing(tmp_path) == ["table.csv"]
+
+
+def test_a_real_sigint_mid_write_keeps_the_old_file(tmp_path):
+    """SIGINT delivered to the process while the bytes are being written (KeyboardInterrupt at the
+    next bytecode), as Ctrl-C in a terminal would."""
+    path = tmp_path / "good.png"
+    path.write_bytes(b"old png")
+    done = run_python(
+        f"""
+        import os, signal
+        from bvhlab._atomic import replacing
+        try:
+            with replacing({str(path)!r}) as f:
+                for i in range(1000):
+                    f.write(b"x" * 4096)
+                    if i == 500:
+                        os.kill(os.getpid(), signal.SIGINT)
+        except KeyboardInterrupt:
+            print("interrupted")
+        """,
+        timeout=60,
+    )
+    assert done.stdout.strip() == "interrupted", done.stderr
+    assert path.read_bytes() == b"old png" and _listing(tmp_path) == ["good.png"]
+
+
+def test_permissions_are_kept_or_follow_the_umask(tmp_path):
+    """A temporary file would be 0600: a replaced file keeps its mode, a new one gets open()'s."""
+    old = tmp_path / "old.json"
+    old.write_text("{}")
+    old.chmod(0o640)
+    write_text(old, "[]")
+    assert stat.S_IMODE(old.stat().st_mode) == 0o640
+    umask = os.umask(0o022)
+    try:
+        write_text(tmp_path / "new.json", "[]")
+    finally:
+        os.umask(umask)
+    assert stat.S_IMODE((tmp_path / "new.json").stat().st_mode) == 0o644
+
+
+def test_a_symbolic_link_is_written_through(tmp_path):
+    """As open() would: the link stays a link, the file it points to gets the new bytes."""
+    real = tmp_path / "real.png"
+    real.write_bytes(b"old")
+    link = tmp_path / "link.png"
+    link.symlink_to(real)
+    write_bytes(link, b"new")
+    assert link.is_symlink() and real.read_bytes() == b"new"
+
+
+def test_a_fifo_as_output_is_refused_without_blocking(tmp_path):
+    """open() of a FIFO for writing blocks until a reader comes; the writer refuses it instead."""
+    fifo = tmp_path / "out.png"
+    os.mkfifo(fifo)
+    done = run_python(
+        f"""
+        import numpy as np, bvhlab
+        try:
+            bvhlab.save_png(np.zeros((2, 2, 3), np.float32), {str(fifo)!r})
+        except OSError as e:
+            print(e)
+        """,
+        timeout=30,
+    )
+    assert f"cannot write {fifo}: it exists and is a FIFO (named pipe), not a regular file" in done.stdout, done
+    assert stat.S_ISFIFO(fifo.stat().st_mode)
+
+
+def test_a_file_size_limit_keeps_the_old_png_and_names_it(tmp_path):
+    """RLIMIT_FSIZE (a second way to run out of room, without mounting anything): writes past it fail
+    with EFBIG (Python ignores SIGXFSZ), as a full disk fails with ENOSPC."""
+    path = tmp_path / "good.png"
+    bvhlab.save_png(np.zeros((2, 2, 3), np.float32), path)
+    old = path.read_bytes()
+    done = run_python(
+        f"""
+        import resource, numpy as np, bvhlab
+        resource.setrlimit(resource.RLIMIT_FSIZE, (1024, resource.RLIM_INFINITY))
+        noise = np.random.default_rng(1).random((64, 64, 3)).astype(np.float32)  # ~16 KB of PNG
+        try:
+            bvhlab.save_png(noise, {str(path)!r})
+        except OSError as e:
+            print(type(e).__name__, e.errno, e)
+        """,
+        timeout=60,
+    )
+    assert done.stdout.strip() == f"WriteError 27 cannot write {path}: File too large", done
+    assert path.read_bytes() == old and _listing(tmp_path) == ["good.png"]
+
+
+def test_concurrent_writers_leave_one_whole_file(tmp_path):
+    """25 processes writing one PNG at once: the file is one of theirs, whole; no temporaries left."""
+    path = tmp_path / "shared.png"
+    done = run_python(
+        f"""
+        import multiprocessing as mp, numpy as np, bvhlab
+        def write(i):
+            bvhlab.save_png(np.full((40, 40, 3), i / 25, np.float32), {str(path)!r})
+        if __name__ == "__main__":
+            with mp.get_context("fork").Pool(25) as pool:
+                pool.map(write, range(25))
+        """,
+        timeout=120,
+    )
+    assert done.returncode == 0, done.stderr
+    from png_reader import read_png
+
+    image = read_png(path)
+    assert image.shape == (40, 40, 4) and len(np.unique(image[..., 0])) == 1
+    assert _listing(tmp_path) == ["shared.png"]
+
+
+# What writes a file without the atomic writer: open(.., "w"/"wb"/"a"), Path.write_text/bytes,
+# matplotlib's savefig/imsave to a name, numpy's save/savez to a name, a ZipFile opened on a name.
+_DIRECT_WRITE = re.compile(
+    r"""open\([^)]*["'][wax]b?\+?["']|\.write_(text|bytes)\(|\.(savefig|imsave)\((?!f\b)|"""
+    r"""np\.(save|savez|savez_compressed)\((?!f\b|buffer\b)|ZipFile\((?!f\b)[^)]*["']w["']|\.tofile\("""
+)
+
+
+def test_every_writer_of_the_package_and_the_addon_goes_through_the_atomic_writer():
+    """One writer everywhere (issue 39.8): no module of python/bvhlab or addon/ writes a file by
+    name (bvhlab._atomic itself aside)."""
+    offenders = []
+    for root in (REPO / "python" / "bvhlab", REPO / "addon"):
+        for source in root.rglob("*.py"):
+            if source.name == "_atomic.py" or "wheels" in source.parts:
+                continue
+            for number, line in enumerate(source.read_text().splitlines(), 1):
+                if _DIRECT_WRITE.search(line) and not line.lstrip().startswith("#"):
+                    offenders.append(f"{source.relative_to(REPO)}:{number}: {line.strip()}")
+    assert offenders == []
