@@ -33,7 +33,7 @@ def _invoke_build(session, area):
 def _wait_idle(background):
     """Ticks until no bvhlab task runs (or the limit)."""
     for _ in range(int(LIMIT_S / TICK_S)):
-        if not background._running and not _threads():
+        if not getattr(background, "_running", None) and not _threads():
             return
         yield TICK_S
     raise AssertionError(f"a build still ran after {LIMIT_S} s")
@@ -96,7 +96,7 @@ def steps(session):
     settings.method = "sweep_sah"
     _invoke_build(session, area)
     yield 0.3
-    running_before = len(background._running)
+    running_before = len(getattr(background, "_running", ())) or len(_threads())
     bpy.ops.preferences.addon_disable(module=module)
     yield 1.0
     session.info["disabled"] = {
