@@ -15,7 +15,7 @@ from __future__ import annotations
 import bpy
 from bpy.app.handlers import persistent
 
-from . import engine, overlay, state
+from . import background, engine, overlay, state
 from .ops_build import BVHLAB_OT_build
 from .ops_compare import BVHLAB_OT_compare
 from .ops_export_stats import BVHLAB_OT_export_stats
@@ -48,7 +48,9 @@ _register_classes, _unregister_classes = bpy.utils.register_classes_factory(clas
 
 @persistent
 def _forget_trees(*_args) -> None:
-    """Trees belong to the scenes of the open file: drop them when another file loads."""
+    """Trees belong to the scenes of the open file: drop them when another file loads, and stop
+    the builds and comparisons running for it (their results would land on the new file's scene)."""
+    background.stop_all()
     state.clear()
     engine.forget()
 
@@ -62,6 +64,7 @@ def register() -> None:
 
 
 def unregister() -> None:
+    background.stop_all()  # before the settings they read go away with unregister_properties
     overlay.remove_handler()
     if _forget_trees in bpy.app.handlers.load_pre:
         bpy.app.handlers.load_pre.remove(_forget_trees)

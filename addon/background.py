@@ -6,12 +6,18 @@ returns. So an operator started from the UI (`invoke`) prepares what needs bpy o
 the progress (window manager cursor and the status bar), Esc asks the task to stop, and when the
 thread is done the operator finishes on the UI thread. Scripts calling the operator get `execute`,
 which does the same work synchronously.
+
+Tasks outlive neither the add-on nor the file they were started in: `stop_all` (unregister, and
+load_pre when another file loads) cancels every running task, waits for its thread, and ends its
+operator without letting it touch the scene (whose settings may be gone, or belong to another
+file by the time the thread is done).
 """
 
 from __future__ import annotations
 
 import os
 import threading
+import time
 
 #: How often (s) a modal operator looks at its task.
 POLL_S = 0.1
@@ -64,8 +70,32 @@ class BackgroundTask:
     def done(self) -> bool:
         return not self._thread.is_alive()
 
-    def wait(self) -> None:
-        self._thread.join()
+    def wait(self, timeout: float | None = None) -> bool:
+        """Joins the thread; True when it has ended."""
+        self._thread.join(timeout)
+        return self.done
+
+
+#: Running tasks and the operator (a ModalTaskMixin) each belongs to, for stop_all.
+_running: dict[BackgroundTask, object] = {}
+
+
+def stop_all(wait_s: float = 10.0) -> int:
+    """Cancel every running task, end its operator now (while the window manager and workspace it
+    draws progress in still exist) and wait up to `wait_s` in all for the threads (the core's work
+    polls its cancellation often: milliseconds). Returns how many tasks were stopped."""
+    stopping = list(_running.items())
+    _running.clear()
+    for task, operator in stopping:
+        task.cancel()
+        try:
+            operator._abandon()
+        except ReferenceError:  # Blender freed the operator already (its window closed)
+            pass
+    deadline = time.monotonic() + wait_s
+    for task, _ in stopping:
+        task.wait(max(0.0, deadline - time.monotonic()))
+    return len(stopping)
 
 
 class ModalTaskMixin:
@@ -75,18 +105,25 @@ class ModalTaskMixin:
     _task: BackgroundTask | None = None
     _timer = None
     _label = ""
+    _window_manager = None
+    _workspace = None
+    _abandoned = False
 
     def start_task(self, context, work, label: str) -> set[str]:
         self._task, self._label = BackgroundTask(work), label
-        window_manager = context.window_manager
+        window_manager = self._window_manager = context.window_manager
+        self._workspace = context.workspace
         self._timer = window_manager.event_timer_add(POLL_S, window=context.window)
         window_manager.modal_handler_add(self)
         window_manager.progress_begin(0, 100)
+        _running[self._task] = self
         self._show(context)
         return {"RUNNING_MODAL"}
 
     def modal(self, context, event):
         task = self._task
+        if self._abandoned:  # stop_all ended it: nothing of the scene may be touched now
+            return {"CANCELLED"}
         if event.type == "ESC" and event.value == "PRESS":
             task.cancel()
             self._show(context)
@@ -96,7 +133,7 @@ class ModalTaskMixin:
         if not task.done:
             self._show(context)
             return {"RUNNING_MODAL"}
-        self._end(context)
+        self._end()
         return self.finish_task(context, task)
 
     def _show(self, context) -> None:
@@ -106,8 +143,16 @@ class ModalTaskMixin:
         text = f"{self._label}: {task.text} {state}" if task.text else f"{self._label} {state}"
         context.workspace.status_text_set(f"{text}   (Esc to cancel)")
 
-    def _end(self, context) -> None:
-        window_manager = context.window_manager
-        window_manager.event_timer_remove(self._timer)
-        window_manager.progress_end()
-        context.workspace.status_text_set(None)
+    def _end(self) -> None:
+        """Stop drawing progress (once: stop_all may have ended the operator before)."""
+        if self._timer is None:
+            return
+        _running.pop(self._task, None)
+        self._window_manager.event_timer_remove(self._timer)
+        self._timer = None
+        self._window_manager.progress_end()
+        self._workspace.status_text_set(None)
+
+    def _abandon(self) -> None:
+        self._abandoned = True
+        self._end()

@@ -78,10 +78,14 @@ def build_tree(context, exported):
         window_manager.progress_end()
 
 
-def remember_tree(context, bvh, exported) -> state.BuiltTree:
-    """Cache the tree for the scene and keep the overlay's depth range inside its height."""
+def remember_tree(context, bvh, exported, build_settings: dict | None = None) -> state.BuiltTree:
+    """Cache the tree for the scene and keep the overlay's depth range inside its height.
+    `build_settings`: what the tree was built with (BVHLAB_PG_settings.build_settings() taken when
+    the build started; default: the settings now, for a build that ran at once)."""
     settings = context.scene.bvhlab
-    built = state.BuiltTree(bvh, exported, settings.build_settings())
+    if build_settings is None:
+        build_settings = settings.build_settings()
+    built = state.BuiltTree(bvh, exported, build_settings)
     state.trees[state.key(context.scene)] = built
     deepest = built.height - 1
     if settings.overlay_depth_max > deepest:

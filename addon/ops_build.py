@@ -1,14 +1,29 @@
 """Build (`bvhlab.build`): export the scene in scope and build a tree with the panel's settings.
 From the UI the build runs on a thread (the UI stays live; Esc cancels it); from a script it runs
-at once (execute)."""
+at once (execute).
+
+The settings are taken when the build starts: a tree is labelled with what it was built with,
+whatever the panel shows by the time the thread is done. One build per scene at a time: starting
+another (a second press, or a script) cancels the one running, whose tree is then never kept, so
+the tree kept is always the one of the last build started (issue 39)."""
 
 from __future__ import annotations
 
 import bpy
 
 from . import state
-from .background import UI_WORK_THREADS, ModalTaskMixin, TaskCancelled
+from .background import UI_WORK_THREADS, BackgroundTask, ModalTaskMixin, TaskCancelled
 from .operator_support import build_tree, export_scene, remember_tree, run_reported
+
+
+def _take_over(scene_key: int, owner) -> bool:
+    """Make `owner` the scene's current build; cancel the one running before. True if there was one."""
+    running = state.builds.get(scene_key)
+    state.builds[scene_key] = owner
+    if isinstance(running, BackgroundTask) and not running.done:
+        running.cancel()
+        return True
+    return False
 
 
 class BVHLAB_OT_build(ModalTaskMixin, bpy.types.Operator):
@@ -33,12 +48,16 @@ class BVHLAB_OT_build(ModalTaskMixin, bpy.types.Operator):
 
         self._exported = exported = export_scene(context, require_camera=False)  # bpy: on the UI thread
         s = context.scene.bvhlab
+        self._settings = s.build_settings()
         options = {**s.build_kwargs(), "threads": UI_WORK_THREADS}
 
         def work(task):
             return bvhlab.build(exported, **options, progress=lambda fraction: task.progress(fraction))
 
-        return self.start_task(context, work, "Building BVH")
+        started = self.start_task(context, work, "Building BVH")
+        if _take_over(state.key(context.scene), self._task):
+            self.report({"INFO"}, "The build running before was cancelled: this one replaces it")
+        return started
 
     def finish_task(self, context, task):
         return run_reported(self, context, lambda: self._finish(context, task))
@@ -46,21 +65,33 @@ class BVHLAB_OT_build(ModalTaskMixin, bpy.types.Operator):
     def _finish(self, context, task):
         import bvhlab
 
+        key = state.key(context.scene)
+        if state.builds.get(key) is not task:  # replaced by a build started after it
+            self.report({"INFO"}, "Build replaced by the one started after it; its tree is not kept")
+            return {"CANCELLED"}
+        del state.builds[key]
         if isinstance(task.error, (bvhlab.BuildCancelled, TaskCancelled)):
             message = "Build cancelled (Esc); the previous tree is kept"
             self.report({"WARNING"}, message)
-            state.messages[state.key(context.scene)] = ("WARNING", message)
+            state.messages[key] = ("WARNING", message)
             return {"CANCELLED"}
         if task.error is not None:
             raise task.error
-        return self._done(context, task.result, self._exported)
+        return self._done(context, task.result, self._exported, self._settings)
 
     def _build(self, context):
-        exported = export_scene(context, require_camera=False)  # a tree needs no camera
-        return self._done(context, build_tree(context, exported), exported)
+        key = state.key(context.scene)
+        _take_over(key, self)  # a build started from the UI before this one is cancelled
+        try:
+            settings = context.scene.bvhlab.build_settings()
+            exported = export_scene(context, require_camera=False)  # a tree needs no camera
+            return self._done(context, build_tree(context, exported), exported, settings)
+        finally:
+            if state.builds.get(key) is self:
+                del state.builds[key]
 
-    def _done(self, context, bvh, exported):
-        remember_tree(context, bvh, exported)
+    def _done(self, context, bvh, exported, settings: dict):
+        remember_tree(context, bvh, exported, settings)
         context.scene.bvhlab.overlay_show = True  # the user pressed Build to see the boxes
         s = bvh.stats
         message = (

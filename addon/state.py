@@ -30,6 +30,9 @@ trees: dict[int, BuiltTree] = {}
 comparisons: dict[int, list[dict]] = {}
 last_render: dict[int, dict] = {}
 messages: dict[int, tuple[str, str]] = {}  # (level, text) of the last report
+#: The build running for a scene (a background.BackgroundTask, or the operator itself for a build
+#: run at once from a script): one at a time, the last one started is the one whose tree is kept.
+builds: dict[int, object] = {}
 
 
 def key(scene) -> int:
@@ -41,5 +44,5 @@ def tree_for(scene) -> BuiltTree | None:
 
 
 def clear() -> None:
-    for table in (trees, comparisons, last_render, messages):
+    for table in (trees, comparisons, last_render, messages, builds):
         table.clear()

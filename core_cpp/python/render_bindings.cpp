@@ -1,7 +1,9 @@
 // Bindings of the renderers: the scene in GPU layout, render jobs (sample passes with progress and
 // cancel), the CPU reference and the Vulkan renderer, the palettes. Settings arrive as a typed
 // RenderSettings (render_settings_bindings.cpp).
+#include <chrono>
 #include <mutex>
+#include <utility>
 
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
@@ -10,6 +12,7 @@
 #include <nanobind/stl/unique_ptr.h>
 #include <nanobind/stl/vector.h>
 
+#include "bvhlab/owned_mutex.h"
 #include "bvhlab/palette.h"
 #include "bvhlab/render.h"
 #include "py_bvh.h"
@@ -38,16 +41,34 @@ struct PyRenderScene {
 };
 
 /// A RenderJob used from Python: one call at a time (a job's sums are not for two threads). The
-/// mutex is only ever taken without the GIL (a running job takes the GIL to check for Ctrl-C).
+/// lock is only ever waited for without the GIL, and in slices, so that Ctrl-C still reaches a
+/// thread waiting for another thread's run. A call from inside the job's own run (its progress
+/// callable runs on the thread that holds the lock) raises RuntimeError (ReentrantCall), except
+/// the reads that are safe there: the samples and timings of the runs before (issue 39).
 struct PyRenderJob {
     std::unique_ptr<RenderJob> job;
-    std::mutex mutex;
+    OwnedMutex mutex{"this render job"};
 
     template <class F>
     auto locked(F&& f) {
+        std::unique_lock<OwnedMutex> lock(mutex, std::defer_lock);
+        {
+            nb::gil_scoped_release release;
+            while (!lock.try_lock_for(std::chrono::milliseconds(20))) {
+                nb::gil_scoped_acquire gil;
+                if (PyErr_CheckSignals() != 0) throw nb::python_error();
+            }
+        }
         nb::gil_scoped_release release;
-        std::lock_guard<std::mutex> lock(mutex);
         return f(*job);
+    }
+
+    /// A read that is safe on the thread running the job (in its progress callable: the job
+    /// writes these only on that thread, between polls), locked anywhere else.
+    template <class F>
+    auto read(F&& f) {
+        if (mutex.held_by_this_thread()) return f(std::as_const(*job));
+        return locked([&](RenderJob& j) { return f(std::as_const(j)); });
     }
 };
 
@@ -113,15 +134,15 @@ void bind_job(nb::module_& m) {
              "cost"_a.noconvert().none(), "heat"_a.noconvert().none() = nb::none(),
              "Writes the images of the samples so far into the given arrays.")
         .def_prop_ro("samples_done",
-                     [](PyRenderJob& j) { return j.locked([](RenderJob& job) { return job.samples_done(); }); })
+                     [](PyRenderJob& j) { return j.read([](const RenderJob& job) { return job.samples_done(); }); })
         .def_prop_ro("samples_per_pixel", [](PyRenderJob& j) { return j.job->samples_per_pixel(); })
         .def_prop_ro("timings", [](PyRenderJob& j) {
-            RenderTimings t = j.locked([](RenderJob& job) { return job.timings(); });
+            RenderTimings t = j.read([](const RenderJob& job) { return job.timings(); });
             return timings_dict(t);
         });
 }
 
-PyRenderJob* wrap(std::unique_ptr<RenderJob> job) { return new PyRenderJob{std::move(job), {}}; }
+PyRenderJob* wrap(std::unique_ptr<RenderJob> job) { return new PyRenderJob{std::move(job)}; }
 
 /// An n × 3 float array of colour(i) for i < n, owned by the returned numpy array.
 template <class Color>

@@ -4,7 +4,8 @@
     .venv/bin/python tests/blender/run.py [--only GROUP ...] [--zip dist/bvhlab-0.1.0.zip]
 
 Groups: install (the built zip installs, unregisters cleanly, enables again), export (bundled and
-small scenes), addon (operators), engine (the render engine: passes against the CPU reference,
+small scenes), addon (operators), instancing (Build and F12 on geometry-nodes and nested
+collection instances), engine (the render engine: passes against the CPU reference,
 re-renders, animation, `blender -b ... -a` under a binary, the viewport's camera and worker),
 no_vulkan (backend "vulkan" without a driver), gpu (overlay drawn into a GPUOffScreen; batch time
 for a million boxes). Under a Blender binary the add-on (and with
@@ -27,7 +28,7 @@ from pathlib import Path
 IN_BLENDER = "bpy" in sys.modules  # a Blender binary imports bpy before running scripts
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-GROUPS = ("install", "export", "addon", "engine", "no_vulkan", "gpu")
+GROUPS = ("install", "export", "addon", "instancing", "engine", "no_vulkan", "gpu")
 
 
 def _arguments():
@@ -86,7 +87,7 @@ def _checks(groups, zip_path: Path, tmp: Path):
             yield "export", check.__name__, check
         yield "export", "scene_file_round_trip", lambda: checks_cases.check_scene_file_round_trip(tmp)
         yield "export", "large_export", checks_bundled.check_large_export
-    if groups & {"addon", "engine", "no_vulkan", "gpu"} and harness._addon_module is None:
+    if groups & {"addon", "instancing", "engine", "no_vulkan", "gpu"} and harness._addon_module is None:
         harness.enable_addon_from_source()
     if "addon" in groups:
         import checks_addon
@@ -107,6 +108,11 @@ def _checks(groups, zip_path: Path, tmp: Path):
             yield "addon", check.__name__, check
         yield "addon", "export_stats", lambda: checks_addon.check_export_stats(tmp)
         yield "addon", "compare", lambda: checks_addon.check_compare(tmp)
+    if "instancing" in groups:
+        import checks_instancing
+
+        for check in checks_instancing.INSTANCING_CHECKS:
+            yield "instancing", check.__name__, lambda c=check: _in_own_folder(c, tmp / c.__name__)
     if "engine" in groups:
         import checks_engine
 

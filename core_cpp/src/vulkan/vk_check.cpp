@@ -43,8 +43,15 @@ std::string result_name(VkResult result) {
 
 void throw_vk_error(VkResult result, const char* call, const char* file, int line) {
     const char* base = std::strrchr(file, '/');
-    throw std::runtime_error(std::string(call) + " failed with " + result_name(result) + " (" +
-                             (base ? base + 1 : file) + ":" + std::to_string(line) + ")");
+    std::string message = std::string(call) + " failed with " + result_name(result) + " (" + (base ? base + 1 : file) +
+                          ":" + std::to_string(line) + ")";
+    // What a user can do about it (issue 39: a 16384² render at 256 samples said only the above).
+    if (result == VK_ERROR_OUT_OF_DEVICE_MEMORY || result == VK_ERROR_OUT_OF_HOST_MEMORY)
+        message =
+            "the Vulkan device ran out of memory: lower the resolution or the samples per pixel, or render "
+            "on the CPU (backend \"cpu\") [" +
+            message + "]";
+    throw std::runtime_error(message);
 }
 
 }  // namespace bvhlab::vk

@@ -5,9 +5,9 @@
 // threads rendered at once (issue 8).
 #pragma once
 #include <memory>
-#include <mutex>
 #include <optional>
 
+#include "bvhlab/owned_mutex.h"
 #include "bvhlab/vulkan_renderer.h"
 #include "vk_commands.h"
 #include "vk_device.h"
@@ -32,7 +32,9 @@ struct RendererCore {
     std::uint32_t next_stamp();
     PassContext pass() const { return {fn, pipelines, bindings.set(), *targets}; }
 
-    std::mutex mutex;  ///< held by every public operation of the renderer and its jobs
+    /// Held by every public operation of the renderer and its jobs; a job's progress callback
+    /// calling back into the renderer gets ReentrantCall instead of a deadlock.
+    OwnedMutex mutex{"the Vulkan renderer"};
     // Declared in creation order: destroyed in reverse.
     const bool force_staging;
     Functions fn;

@@ -51,7 +51,7 @@ public:
           scene_(std::move(scene)),
           frame_(scene_->frame_params(settings)),
           tiles_(settings.width, settings.height, slot_bytes(frame_)) {
-        std::lock_guard<std::mutex> lock(core_->mutex);
+        std::lock_guard lock(core_->mutex);
         sums_.emplace(core_->device, std::size_t(settings.width) * settings.height);
         sums_->address(frame_);
         core_->runner.run([&](VkCommandBuffer cmd) {
@@ -68,7 +68,7 @@ public:
     void run(std::uint32_t samples, Cancellation* cancel, double* progress) override {
         const std::uint32_t target = std::min(samples, samples_per_pixel());
         if (target <= samples_done_) return;
-        std::lock_guard<std::mutex> lock(core_->mutex);
+        std::lock_guard lock(core_->mutex);
         gpu::FrameParams frame = frame_;
         frame.sample_target = target;
         frame.max_work_per_pixel = work_cap(scene_->summary(), settings_, target - samples_done_);
@@ -82,7 +82,7 @@ public:
         const auto start = std::chrono::steady_clock::now();
         PixelSums sums;
         {
-            std::lock_guard<std::mutex> lock(core_->mutex);
+            std::lock_guard lock(core_->mutex);
             sums.color.resize(sums_->pixels);
             sums.depth.resize(sums_->pixels);
             sums.samples.resize(sums_->pixels);

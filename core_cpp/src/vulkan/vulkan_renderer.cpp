@@ -68,7 +68,7 @@ std::uint32_t VulkanRenderer::max_image_dimension() const {
 double VulkanRenderer::upload(const RenderScene& scene) {
     const auto start = std::chrono::steady_clock::now();
     check_render_scene(scene);  // before the scene in place is freed: bad input loses nothing
-    std::lock_guard<std::mutex> lock(core_->mutex);
+    std::lock_guard lock(core_->mutex);
     vk::RendererCore& c = *core_;
     c.scene.reset();  // free the old scene (unless a job still holds it) before allocating the new one
     try {
@@ -85,7 +85,7 @@ std::unique_ptr<RenderJob> VulkanRenderer::start(const RenderSettings& settings)
     validate(settings, max_image_dimension());
     std::shared_ptr<const vk::SceneBuffers> scene;
     {
-        std::lock_guard<std::mutex> lock(core_->mutex);
+        std::lock_guard lock(core_->mutex);
         scene = core_->scene;
     }
     return vk::start_vulkan_job(core_, std::move(scene), settings);

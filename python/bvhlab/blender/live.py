@@ -28,7 +28,7 @@ from ..scene import Scene, default_camera, default_light
 from .camera import gather_camera
 from .errors import ExportError, SubstituteWarning
 from .light import gather_light
-from .material_table import MaterialTable
+from .material_table import MaterialTable, map_slots
 from .mesh import CONVERTIBLE_TYPES, MeshData, read_mesh
 from .scope import instances_in_scope
 from .sphere import is_analytic_sphere, place_sphere, sphere_bounds
@@ -150,7 +150,7 @@ class LiveScene:
         dirty = _Dirty(everything=True) if full else _Dirty.from_updates(depsgraph)
         known = {k: v for k, v in self._materials.items() if k not in dirty.materials}
         table = MaterialTable(known)
-        parts, report = self._walk(depsgraph, view_layer, dirty)
+        parts, report = self._walk(depsgraph, view_layer, dirty, table)
         report.full = full
         arrays = self._arrays(parts, table, report)
         report.materials_read = table.reads
@@ -170,9 +170,12 @@ class LiveScene:
         self.totals.add(report)
         return report
 
-    def _walk(self, depsgraph, view_layer, dirty: _Dirty) -> tuple[dict, SyncReport]:
+    def _walk(self, depsgraph, view_layer, dirty: _Dirty, table: MaterialTable) -> tuple[dict, SyncReport]:
         """Every object in scope, read again when dirty or new, placed again when moved; in the
-        depsgraph's order (the order export_scene has always used)."""
+        depsgraph's order (the order export_scene has always used). Each part comes with the
+        material table index of each of its slots, read here: an instance's object is valid only
+        while it is the depsgraph iterator's current item (geometry-nodes and nested collection
+        instances crashed Blender when their slots were read after the loop had moved on)."""
         parts, report = {}, SyncReport()
         for item in instances_in_scope(depsgraph, view_layer, self.scope):
             if item.obj.type not in GEOMETRY_TYPES:  # cameras, lights, empties: no primitives
@@ -187,20 +190,21 @@ class LiveScene:
                 report.objects_moved += 1
             else:
                 part = old
-            parts[item.key] = (part, item.obj)
+            has_primitives = part.mesh is None or part.mesh.triangle_count > 0
+            parts[item.key] = (part, table.slot_indices(item.obj) if has_primitives else None)
         return parts, report
 
     def _arrays(self, parts: dict, table: MaterialTable, report: SyncReport) -> dict:
         """Triangles, spheres and their material indices, in walk order (the material table is
         rebuilt in that order every sync); the previous geometry arrays when nothing moved."""
         triangles, tri_material, spheres, sphere_material = [], [], [], []
-        for part, obj in parts.values():
+        for part, slot_table in parts.values():
             if part.mesh is None:
                 spheres.append(part.placed)
-                sphere_material.append(table.slot_indices(obj)[0])
+                sphere_material.append(slot_table[0])
             elif part.mesh.triangle_count:
                 triangles.append(part.placed)
-                tri_material.append(table.map_slots(obj, part.mesh.slots))
+                tri_material.append(map_slots(slot_table, part.mesh.slots))
         if not triangles and not spheres:
             raise ExportError(_nothing_in_scope(self.scope))
         same_order = list(self._parts) == list(parts)

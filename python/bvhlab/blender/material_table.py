@@ -35,8 +35,8 @@ class MaterialTable:
         slots = [slot.material for slot in obj.material_slots] or [None]
         return np.array([self.index_of(m) for m in slots], np.int32)
 
-    def map_slots(self, obj, slots: np.ndarray) -> np.ndarray:
-        """Per-triangle slot numbers → table indices; numbers past the last slot use the last one,
-        as Blender does."""
-        table = self.slot_indices(obj)
-        return table[np.clip(slots, 0, len(table) - 1)]
+
+def map_slots(slot_table: np.ndarray, slots: np.ndarray) -> np.ndarray:
+    """Per-triangle slot numbers → table indices (`slot_table`: MaterialTable.slot_indices of the
+    object); numbers past the last slot use the last one, as Blender does."""
+    return slot_table[np.clip(slots, 0, len(slot_table) - 1)]

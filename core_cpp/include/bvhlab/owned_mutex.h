@@ -1,0 +1,64 @@
+// owned_mutex.h — a mutex that knows which thread holds it. Long work (a render job's run) calls
+// back into Python while it holds its lock (the progress callable); a callback that calls into
+// the same job or renderer again asked for a lock its own thread held, and waited for itself
+// forever (issue 39). With OwnedMutex the second call fails at once with ReentrantCall.
+#pragma once
+#include <atomic>
+#include <chrono>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+namespace bvhlab {
+
+/// A call made, on the thread that holds a lock, into what that lock guards (e.g. from a progress
+/// callback into the job that is calling it). Python sees a RuntimeError.
+class ReentrantCall : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+/// std::timed_mutex plus the id of the thread holding it. Satisfies Lockable and TimedLockable, so
+/// std::lock_guard and std::unique_lock work on it.
+class OwnedMutex {
+public:
+    /// `what` names the guarded thing in the ReentrantCall message ("this render job").
+    explicit OwnedMutex(std::string what) : what_(std::move(what)) {}
+
+    void lock() {
+        refuse_reentry();
+        mutex_.lock();
+        owner_.store(std::this_thread::get_id(), std::memory_order_relaxed);
+    }
+    bool try_lock() { return try_lock_for(std::chrono::milliseconds(0)); }
+    template <class Rep, class Period>
+    bool try_lock_for(const std::chrono::duration<Rep, Period>& wait) {
+        refuse_reentry();
+        if (!mutex_.try_lock_for(wait)) return false;
+        owner_.store(std::this_thread::get_id(), std::memory_order_relaxed);
+        return true;
+    }
+    void unlock() {
+        owner_.store(std::thread::id(), std::memory_order_relaxed);
+        mutex_.unlock();
+    }
+
+    /// True on the thread that holds the lock. Only that thread can ever read its own id here, so
+    /// a relaxed load is exact for the question "do I hold it?".
+    bool held_by_this_thread() const { return owner_.load(std::memory_order_relaxed) == std::this_thread::get_id(); }
+
+private:
+    void refuse_reentry() const {
+        if (held_by_this_thread())
+            throw ReentrantCall(what_ +
+                                " is busy on this thread (a call from inside its own run, such as its "
+                                "progress callback); call it after run() returns");
+    }
+
+    std::timed_mutex mutex_;
+    std::atomic<std::thread::id> owner_{};
+    std::string what_;
+};
+
+}  // namespace bvhlab

@@ -1,0 +1,138 @@
+"""Export, Build and F12 on scenes made of instances that live only while Blender's instance
+iterator is on them (issue 39: geometry-nodes instances crashed or hung Blender on Build and F12,
+nested collection instances hung it): a geometry-nodes scatter (Grid 50×50 → Instance on Points of
+a 0.1 cube with a material) and 100 empties each instancing a collection of 100 cube instances.
+The exported triangles are checked against the instance positions computed here from the node
+settings and the empties (not by bvhlab), Build against a direct build, and the F12 Depth pass
+against a brute-force ray cast of the exported triangles. The add-on must be enabled."""
+
+from __future__ import annotations
+
+import bpy
+import checks_engine
+import harness
+import numpy as np
+
+import bvhlab
+from bvhlab.blender import export_scene
+from bvhlab.blender.compat import ensure_shader_tree
+
+GRID_VERTICES, GRID_SIZE, CUBE_SIZE = 50, 10.0, 0.1
+NESTED = 10  # 10 × 10 empties, each instancing 10 × 10 cubes
+CUBE_TRIANGLES = 12
+
+
+def _geometry_nodes_scatter(material):
+    """A mesh object whose Geometry Nodes modifier outputs only instances: Grid → Instance on
+    Points (Cube, Set Material) → Group Output."""
+    tree = bpy.data.node_groups.new("Scatter", "GeometryNodeTree")
+    tree.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
+    output = tree.nodes.new("NodeGroupOutput")
+    grid = tree.nodes.new("GeometryNodeMeshGrid")
+    grid.inputs["Size X"].default_value = grid.inputs["Size Y"].default_value = GRID_SIZE
+    grid.inputs["Vertices X"].default_value = grid.inputs["Vertices Y"].default_value = GRID_VERTICES
+    cube = tree.nodes.new("GeometryNodeMeshCube")
+    cube.inputs["Size"].default_value = (CUBE_SIZE,) * 3
+    paint = tree.nodes.new("GeometryNodeSetMaterial")
+    paint.inputs["Material"].default_value = material
+    instance = tree.nodes.new("GeometryNodeInstanceOnPoints")
+    tree.links.new(cube.outputs["Mesh"], paint.inputs["Geometry"])
+    tree.links.new(grid.outputs["Mesh"], instance.inputs["Points"])
+    tree.links.new(paint.outputs["Geometry"], instance.inputs["Instance"])
+    tree.links.new(instance.outputs["Instances"], output.inputs[0])
+    obj = bpy.data.objects.new("Scatter", bpy.data.meshes.new("Scatter"))
+    bpy.context.scene.collection.objects.link(obj)
+    obj.modifiers.new("Scatter", "NODES").node_group = tree
+    return obj
+
+
+def _red_material():
+    material = bpy.data.materials.new("Red")
+    ensure_shader_tree(material)
+    material.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (0.9, 0.05, 0.05, 1.0)
+    return material
+
+
+def geometry_nodes_scene():
+    scene = harness.empty_scene(resolution=(64, 48))
+    _geometry_nodes_scatter(_red_material())
+    harness.add_camera((0.0, -9.0, 7.0), (0.0, 0.0, 0.0), lens=30)
+    harness.add_point_light((2.0, -3.0, 5.0))
+    bpy.context.view_layer.update()
+    grid = np.linspace(-GRID_SIZE / 2, GRID_SIZE / 2, GRID_VERTICES)
+    centres = np.stack(np.meshgrid(grid, grid, [0.0], indexing="ij"), -1).reshape(-1, 3)
+    return scene, centres
+
+
+def nested_instances_scene():
+    """Cube → collection "Leaf" instanced by 100 empties in collection "Row" (spacing 0.3) →
+    instanced by 100 empties in the scene (spacing 4): 10,000 cubes, two levels of instancing."""
+    scene = harness.empty_scene(resolution=(48, 36))
+    leaf = bpy.data.collections.new("Leaf")
+    cube = harness.add_box("Cube", (0.0, 0.0, 0.0), size=0.2)
+    bpy.context.scene.collection.objects.unlink(cube)
+    leaf.objects.link(cube)
+    row = bpy.data.collections.new("Row")
+    inner, outer = [], []
+    for i in range(NESTED * NESTED):
+        offset = (0.3 * (i % NESTED), 0.3 * (i // NESTED), 0.0)
+        empty = bpy.data.objects.new(f"Leaf {i}", None)
+        empty.instance_type, empty.instance_collection, empty.location = "COLLECTION", leaf, offset
+        row.objects.link(empty)
+        inner.append(offset)
+    for i in range(NESTED * NESTED):
+        offset = (4.0 * (i % NESTED) - 18.0, 4.0 * (i // NESTED) - 18.0, 0.0)
+        empty = bpy.data.objects.new(f"Row {i}", None)
+        empty.instance_type, empty.instance_collection, empty.location = "COLLECTION", row, offset
+        bpy.context.scene.collection.objects.link(empty)
+        outer.append(offset)
+    harness.add_camera((0.0, -40.0, 30.0), (0.0, 0.0, 0.0), lens=30)
+    harness.add_point_light((2.0, -3.0, 25.0))
+    bpy.context.view_layer.update()
+    centres = (np.array(outer)[:, None] + np.array(inner)[None]).reshape(-1, 3)
+    return scene, centres
+
+
+def _check_cubes(exported, centres: np.ndarray, half: float) -> None:
+    """Every exported vertex is a corner of a cube at one of `centres`, and every cube is there."""
+    assert len(exported.triangles) == len(centres) * CUBE_TRIANGLES, (len(exported.triangles), len(centres))
+    vertices = exported.triangles.reshape(-1, 3).astype(np.float64)
+    corners = centres[:, None] + half * np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+    expected = np.unique(np.round(corners.reshape(-1, 3), 4), axis=0)
+    got = np.unique(np.round(vertices, 4), axis=0)
+    assert got.shape == expected.shape and np.array_equal(got, expected), (got.shape, expected.shape)
+
+
+def _check_build_and_f12(tmp_dir, scene, exported) -> None:
+    assert bpy.ops.bvhlab.build() == {"FINISHED"}
+    built = harness.addon().state.tree_for(scene)
+    direct = bvhlab.build(exported, **scene.bvhlab.build_kwargs())
+    assert built.bvh.stats["primitives"] == len(exported.triangles)
+    assert np.array_equal(built.bvh.nodes, direct.nodes)
+    checks_engine.use_engine(scene, backend="cpu", render_supersampling=1, render_overlay=False)
+    depth = checks_engine.render_passes(tmp_dir)["Depth"]
+    width, height = scene.render.resolution_x, scene.render.resolution_y
+    expected = checks_engine.brute_force_depth(exported, width, height)
+    hit = expected < checks_engine.MISS_DEPTH
+    assert 0.05 < hit.mean() < 0.98, hit.mean()
+    agree = np.where(hit, np.abs(depth - expected) <= 1e-4 * expected, depth == np.float32(checks_engine.MISS_DEPTH))
+    assert agree.mean() >= 0.99, f"only {agree.mean():.4f} of the pixels have the brute-force depth"
+
+
+def check_geometry_nodes_instances(tmp_dir) -> None:
+    scene, centres = geometry_nodes_scene()
+    exported = export_scene(bpy.context)
+    _check_cubes(exported, centres, CUBE_SIZE / 2)
+    red = [i for i, m in enumerate(exported.materials) if np.allclose(m.color, (0.9, 0.05, 0.05), atol=1e-3)]
+    assert red and np.isin(exported.tri_material, red).all(), "the instances' Set Material is lost"
+    _check_build_and_f12(tmp_dir, scene, exported)
+
+
+def check_nested_collection_instances(tmp_dir) -> None:
+    scene, centres = nested_instances_scene()
+    exported = export_scene(bpy.context)
+    _check_cubes(exported, centres, 0.1)
+    _check_build_and_f12(tmp_dir, scene, exported)
+
+
+INSTANCING_CHECKS = (check_geometry_nodes_instances, check_nested_collection_instances)
