@@ -73,6 +73,18 @@ _SAH_BLOCK_ITEMS = [
 MAX_DEPTH = MAX_TREE_HEIGHT - 1
 
 
+def output_path_options() -> set[str]:
+    """bpy.props options of a path the add-on writes to: an output path (the file browser asks for
+    no existing file), and "//" meaning the .blend's folder (operator_support.output_path resolves
+    it with bpy.path.abspath). Blender 4.5 added the option PATH_SUPPORTS_BLEND_RELATIVE; from then
+    a path property without it warns, and Blender 5.2 draws its field red, when it holds "//";
+    Blender 4.2 refuses the unknown option (registration fails), hence the test."""
+    options = {"OUTPUT_PATH"}
+    if "is_path_supports_blend_relative" in bpy.types.Property.bl_rna.properties:
+        options.add("PATH_SUPPORTS_BLEND_RELATIVE")
+    return options
+
+
 def _redraw(_self=None, _context=None) -> None:
     """The update of every setting the 3D viewport shows (the overlay, the Rendered shading). A
     property without an update function is not updated at all when a script sets it (Blender's
@@ -236,6 +248,7 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
     compare_filepath: StringProperty(
         name="Table",
         subtype="FILE_PATH",
+        options=output_path_options(),
         default="//bvh_compare.csv",
         description="CSV file the comparison is written to",
     )
