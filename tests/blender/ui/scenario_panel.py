@@ -2,8 +2,10 @@
 Install the zip, open the sidebar and its BVH tab, press Build (the overlay must come on by
 itself), and capture the screen with and without the boxes. Checked on the pictures: the panel
 region is not blank, box lines of each depth of the default range 0-3 are drawn over the viewport;
-and on the panel's own layout (UILayout.introspect): every stat is a label | value row and no
-label is wider than the space it gets at the default sidebar width.
+and on the panel's own layout (UILayout.introspect): every stat is a label | value row, the values
+those of bvhlab.build on the same scene and settings (the picture `make screenshots` keeps carries
+them: tests/python/test_docs_pictures.py), and no label is wider than the space it gets at the
+default sidebar width.
 
 Blender runs this file (--python) and the driver (run_ui.py) imports it for `check`."""
 
