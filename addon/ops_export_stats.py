@@ -8,6 +8,7 @@ from bpy_extras.io_utils import ExportHelper
 
 from . import state
 from .operator_support import build_tree, export_scene, output_path, remember_tree, run_reported
+from .properties import output_path_options
 
 
 class BVHLAB_OT_export_stats(bpy.types.Operator, ExportHelper):
@@ -20,6 +21,13 @@ class BVHLAB_OT_export_stats(bpy.types.Operator, ExportHelper):
 
     filename_ext = ".json"
     filter_glob: StringProperty(default="*.json", options={"HIDDEN"})
+    # ExportHelper's, with the options of a path the add-on writes ("//" included)
+    filepath: StringProperty(
+        name="File Path",
+        description="The JSON file; the CSV is written beside it",
+        subtype="FILE_PATH",
+        options=output_path_options(),
+    )
 
     def execute(self, context):
         from bvhlab.blender import SubstituteWarning  # statistics need no camera or light

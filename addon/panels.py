@@ -47,6 +47,14 @@ class BVHLAB_PT_main(_BvhPanel, bpy.types.Panel):
             wrapped_label(layout, context, message[1], icon=icon)
 
 
+def milliseconds(ms: float) -> str:
+    """A time for a table cell, in ms: whole from 10 ms on, two significant digits below (a
+    sub-millisecond build is 0.35, not 0)."""
+    if ms >= 10:
+        return f"{ms:.0f}"
+    return f"{ms:.2g}" if ms >= 0.01 else "<0.01"
+
+
 def stats_rows(stats: dict) -> list[tuple[str, str]]:
     """(label, value) of each statistic the panel shows, in order."""
     s = stats
@@ -56,7 +64,7 @@ def stats_rows(stats: dict) -> list[tuple[str, str]]:
         ("Leaves", f"{s['leaves']:,}"),
         ("Height", str(s["height"])),
         ("SAH cost", f"{s['sah_cost']:.2f}"),
-        ("Build", f"{s['build_ms']:.1f} ms"),
+        ("Build", f"{milliseconds(s['build_ms'])} ms"),
         ("Memory", f"{s['memory_bytes'] / 2**20:.1f} MiB"),
         ("Method", s["method"]),
     ]
@@ -122,7 +130,7 @@ class BVHLAB_PT_render(_BvhPanel, bpy.types.Panel):
         timings = state.last_render.get(state.key(context.scene))
         if timings:
             box = layout.box()
-            box.label(text=f"{timings['device']} ({timings['backend']})")
+            wrapped_label(box, context, f"{timings['device']} ({timings['backend']})", in_box=True)
             for name in ("upload_ms", "overlay_ms", "trace_ms", "readback_ms", "total_ms"):
                 if name in timings:
                     box.label(text=f"{name[:-3].capitalize()}: {timings[name]:.1f} ms")
@@ -143,17 +151,30 @@ class BVHLAB_PT_compare(_BvhPanel, bpy.types.Panel):
         layout.operator("bvhlab.compare", icon="SORTTIME")
         rows = state.comparisons.get(state.key(context.scene))
         if rows:
-            col = layout.box().column(align=True)
-            for texts in [("Method", "Frame", "Build", "Height", "SAH")] + [
-                (r["method"], f"{r['frame_ms']:.0f}", f"{r['build_ms']:.0f}", str(r["height"]), f"{r['sah_cost']:.1f}")
-                for r in rows
-            ]:
-                row = col.split(factor=0.32)  # one table row: method | four numbers
-                row.label(text=texts[0])
-                numbers = row.row(align=True)
-                for text in texts[1:]:
-                    numbers.label(text=text)
-            col.label(text="Frame and build in ms")
+            box = layout.box()
+            for columns in COMPARE_TABLES:
+                _compare_table(box.column(align=True), rows, columns)
+            box.label(text="Frame and build in ms")
+
+
+#: The Compare table, as two tables of method | two numbers: one row of method | four numbers
+#: does not fit the sidebar's default width (its header showed "Hei...").
+COMPARE_TABLES = (
+    (("Frame", lambda r: milliseconds(r["frame_ms"])), ("Build", lambda r: milliseconds(r["build_ms"]))),
+    (("Height", lambda r: str(r["height"])), ("SAH cost", lambda r: f"{r['sah_cost']:.1f}")),
+)
+
+
+def _compare_table(col, rows, columns) -> None:
+    """A header and one row per method: method | the columns' values."""
+    for texts in [("Method", *(name for name, _ in columns))] + [
+        (r["method"], *(value(r) for _, value in columns)) for r in rows
+    ]:
+        row = col.split(factor=0.4)
+        row.label(text=texts[0])
+        numbers = row.row(align=True)
+        for text in texts[1:]:
+            numbers.label(text=text)
 
 
 class BVHLAB_PT_export(_BvhPanel, bpy.types.Panel):

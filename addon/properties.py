@@ -73,7 +73,23 @@ _SAH_BLOCK_ITEMS = [
 MAX_DEPTH = MAX_TREE_HEIGHT - 1
 
 
+def output_path_options() -> set[str]:
+    """bpy.props options of a path the add-on writes to: an output path (the file browser asks for
+    no existing file), and "//" meaning the .blend's folder (operator_support.output_path resolves
+    it with bpy.path.abspath). Blender 4.5 added the option PATH_SUPPORTS_BLEND_RELATIVE; from then
+    a path property without it warns, and Blender 5.2 draws its field red, when it holds "//";
+    Blender 4.2 refuses the unknown option (registration fails), hence the test."""
+    options = {"OUTPUT_PATH"}
+    if "is_path_supports_blend_relative" in bpy.types.Property.bl_rna.properties:
+        options.add("PATH_SUPPORTS_BLEND_RELATIVE")
+    return options
+
+
 def _redraw(_self=None, _context=None) -> None:
+    """The update of every setting the 3D viewport shows (the overlay, the Rendered shading). A
+    property without an update function is not updated at all when a script sets it (Blender's
+    RNA_property_update_check): no depsgraph tag, so no view_update, and no redraw. With one,
+    Blender tags the scene and redraws the windows; this also tags the 3D viewports."""
     from .overlay import tag_redraw
 
     tag_redraw()
@@ -109,28 +125,31 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
             ("selected", "Selected", "The selected objects only"),
         ],
     )
-    method: EnumProperty(name="Split method", items=METHOD_ITEMS, default=DEFAULT_METHOD)
+    method: EnumProperty(name="Split method", items=METHOD_ITEMS, default=DEFAULT_METHOD, update=_redraw)
     bins: IntProperty(
         name="Bins",
         min=int(bvhlab_core.MIN_BINS),
         max=int(bvhlab_core.MAX_BINS),
         default=DEFAULT_BINS,
+        update=_redraw,
         description="SAH bins per axis (PBRT's default and the report's is 12)",
     )
-    bin_bounds: EnumProperty(name="Buckets", items=BIN_BOUNDS_ITEMS, default=DEFAULT_BIN_BOUNDS)
-    axis: EnumProperty(name="Axis", items=AXIS_ITEMS, default=DEFAULT_AXIS)
+    bin_bounds: EnumProperty(name="Buckets", items=BIN_BOUNDS_ITEMS, default=DEFAULT_BIN_BOUNDS, update=_redraw)
+    axis: EnumProperty(name="Axis", items=AXIS_ITEMS, default=DEFAULT_AXIS, update=_redraw)
     max_leaf_size: IntProperty(
         name="Max leaf size",
         min=1,
         max=255,
         soft_max=16,
         default=DEFAULT_MAX_LEAF_SIZE,
+        update=_redraw,
         description="Most primitives in a leaf; SAH methods may stop earlier (the report's trees: 1)",
     )
     sah_block: EnumProperty(
         name="SAH block",
         items=_SAH_BLOCK_ITEMS,
         default=str(DEFAULT_SAH_BLOCK),
+        update=_redraw,
         description="The SAH counts primitives in whole blocks of this many: 4, the triangles the CPU "
         "traversal tests at once; 1, one by one (the report's SAH)",
     )
@@ -177,25 +196,35 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
         min=0,
         max=MAX_RAY_DEPTH,
         default=5,
+        update=_redraw,
         description="Reflection and refraction depth of the Whitted tracer",
     )
     render_supersampling: IntProperty(
-        name="Samples", min=1, max=MAX_SAMPLES_PER_AXIS, soft_max=8, default=1, description="n × n samples per pixel"
+        name="Samples",
+        min=1,
+        max=MAX_SAMPLES_PER_AXIS,
+        soft_max=8,
+        default=1,
+        update=_redraw,
+        description="n × n samples per pixel",
     )
     backend: EnumProperty(
         name="Backend",
         default="auto",
         items=BACKEND_ITEMS,
+        update=_redraw,
     )
     traversal: EnumProperty(
         name="Traversal",
         default=DEFAULT_TRAVERSAL,
         items=_items(TRAVERSALS),
+        update=_redraw,
     )
     render_mode: EnumProperty(
         name="Mode",
         default="shade",
         items=_items(MODES),
+        update=_redraw,
     )
     render_overlay: BoolProperty(
         name="Boxes in image", default=False, description="Draw the overlay's depth range into the rendered image"
@@ -206,6 +235,7 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
         max=1000.0,
         default=40.0,
         precision=0,
+        update=_redraw,
         description=(
             "Rendered viewport: while the view moves, trace at the resolution that takes about this many "
             "milliseconds; full resolution (then n × n samples) once it stops"
@@ -218,6 +248,7 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
     compare_filepath: StringProperty(
         name="Table",
         subtype="FILE_PATH",
+        options=output_path_options(),
         default="//bvh_compare.csv",
         description="CSV file the comparison is written to",
     )

@@ -1,9 +1,15 @@
-"""Text that fits the sidebar: messages wrapped to the region's width instead of cut off."""
+"""Text that fits its panel: messages wrapped to the region's width instead of cut off, in the 3D
+viewport's sidebar and in the Properties editor."""
 
 from __future__ import annotations
 
-#: Pixels the sidebar takes from a label (at UI scale 1): category tabs, panel margins, an icon.
-PANEL_MARGIN_PX = 90
+#: Pixels (at UI scale 1) a panel takes from a label's width in the Properties editor: the panel's
+#: margins and an icon (Blender 4.3 at 1600 × 900: a 247 px region fits a 184 px label).
+PANEL_MARGIN_PX = 60
+#: What the sidebar's category tabs take on top (a 291 px sidebar fits a 200 px label).
+CATEGORY_TABS_PX = 30
+#: What a box's margins take.
+BOX_MARGIN_PX = 12
 
 
 def wrap_text(text: str, max_width: float, measure) -> list[str]:
@@ -38,15 +44,18 @@ def ui_text_measure(context):
     return lambda text: blf.dimensions(0, text)[0]
 
 
-def available_width(context) -> float:
-    """Text width a label gets in the current sidebar region."""
+def available_width(context, share: float = 1.0, in_box: bool = False) -> float:
+    """Text width a label gets in the current region (the sidebar's or the Properties editor's),
+    inside a box or not, in a column taking `share` of the panel's width."""
     scale = context.preferences.system.ui_scale
-    return context.region.width - PANEL_MARGIN_PX * scale
+    margin = PANEL_MARGIN_PX + (CATEGORY_TABS_PX if context.region.type == "UI" else 0)
+    margin += BOX_MARGIN_PX if in_box else 0
+    return (context.region.width - margin * scale) * share
 
 
-def wrapped_label(layout, context, text: str, icon: str = "NONE") -> None:
-    """A label that wraps to the region's width (the icon on the first line)."""
+def wrapped_label(layout, context, text: str, icon: str = "NONE", share: float = 1.0, in_box: bool = False) -> None:
+    """A label that wraps to the width `available_width` gives (the icon on the first line)."""
     col = layout.column(align=True)
     measure = ui_text_measure(context)
-    for i, line in enumerate(wrap_text(text, available_width(context), measure)):
+    for i, line in enumerate(wrap_text(text, available_width(context, share, in_box), measure)):
         col.label(text=line, icon=icon if i == 0 else "BLANK1")

@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import bpy
 
-from ..panels import draw_build_settings
+from ..panels import draw_build_settings, milliseconds
+from ..text_layout import wrapped_label
 from . import records
 from .engine import ENGINE_ID
 from .passes import HEATMAP_PROPERTY
@@ -42,7 +43,7 @@ class BVHLAB_PT_engine_tracing(_EnginePanel, bpy.types.Panel):
         settings = context.scene.bvhlab
         col = self._column()
         col.prop(settings, "render_bounces", text="Ray Depth")
-        col.prop(settings, "render_supersampling", text="Samples (n × n)")
+        col.prop(settings, "render_supersampling", text="Samples")  # n × n: its tooltip says so
         col.prop(settings, "traversal")
         col.prop(settings, "backend")
 
@@ -82,7 +83,7 @@ class BVHLAB_PT_engine_performance(_EnginePanel, bpy.types.Panel):
     def draw(self, context):
         col = self._column()
         col.prop(context.scene.render, "use_persistent_data", text="Persistent Data")
-        col.label(text="Keeps the scene and tree between frames")
+        wrapped_label(self.layout, context, "Keeps the scene and tree between frames")
 
 
 class BVHLAB_PT_engine_status(_EnginePanel, bpy.types.Panel):
@@ -90,20 +91,80 @@ class BVHLAB_PT_engine_status(_EnginePanel, bpy.types.Panel):
     bl_options = {"DEFAULT_CLOSED"}
 
     def draw(self, context):
+        _watch_records()
         key = records.key(context.scene)
         with records.lock:
             final, viewport = records.last_final.get(key), dict(records.last_viewport.get(key, {}))
-        col = self.layout.column(align=True)
+        layout = self.layout
         if final is None and not viewport:
-            col.label(text="Nothing rendered yet")
+            layout.label(text="Nothing rendered yet")
         if final is not None:
-            size = f"{final['size'][0]} × {final['size'][1]}"
-            col.label(text=f"{size}, {final['samples']} samples per pixel on {final['device']}")
-            col.label(text=f"BVH {final['tree']} {final['build_ms']:.0f} ms, trace {final['trace_ms']:.0f} ms")
+            _rows(layout, context, final_rows(final))
             if final.get("note"):
-                col.label(text=final["note"], icon="INFO")
-        for level, t in viewport.items():
-            col.label(text=f"Viewport {level}: {t['width']} × {t['height']}, trace {t['trace_ms']:.0f} ms")
+                wrapped_label(layout, context, final["note"], icon="INFO")
+        if viewport:
+            layout.label(text="Viewport")
+            _rows(layout, context, [(level.capitalize(), _viewport_value(t)) for level, t in viewport.items()])
+
+
+def final_rows(final: dict) -> list[tuple[str, str]]:
+    """(label, value) rows of the last final render, as Last Render shows them."""
+    tree = final["tree"] + ("" if final["tree"] == "kept" else f", {milliseconds(final['build_ms'])} ms")
+    return [
+        ("Size", f"{final['size'][0]} × {final['size'][1]}"),
+        ("Samples", f"{final['samples']} per pixel"),
+        ("Device", final["device"]),
+        ("BVH", tree),
+        ("Trace", f"{milliseconds(final['trace_ms'])} ms"),
+    ]
+
+
+def _viewport_value(t: dict) -> str:
+    return f"{t['width']} × {t['height']}, {milliseconds(t['trace_ms'])} ms"
+
+
+def _rows(layout, context, rows) -> None:
+    """label | value rows; a value too long for its column wraps."""
+    col = layout.column(align=True)
+    for label, value in rows:
+        row = col.split(factor=0.4)
+        row.label(text=label)
+        wrapped_label(row, context, value, share=0.6)
+
+
+#: How often (s) Last Render looks for a finished render or a new viewport frame.
+RECORDS_POLL_S = 0.25
+
+
+def _watch_records() -> None:
+    """The Properties editor redraws itself on a finished render only when the mouse moves over
+    it: a UI-thread timer (started by the first draw of Last Render, stopped when the add-on is
+    disabled) redraws it whenever what Last Render shows has changed."""
+    if not bpy.app.timers.is_registered(_redraw_on_new_records):
+        _shown[0] = _records_shown()
+        bpy.app.timers.register(_redraw_on_new_records, first_interval=RECORDS_POLL_S, persistent=True)
+
+
+_shown = [""]  # what Last Render showed when the timer last looked
+
+
+def _records_shown() -> str:
+    with records.lock:
+        return repr((records.last_final, records.last_viewport))
+
+
+def _redraw_on_new_records():
+    if not BVHLAB_PT_engine_status.is_registered:
+        return None
+    shown = _records_shown()
+    if shown != _shown[0]:
+        _shown[0] = shown
+        window_manager = bpy.context.window_manager
+        for window in window_manager.windows if window_manager else ():
+            for area in window.screen.areas:
+                if area.type == "PROPERTIES":
+                    area.tag_redraw()
+    return RECORDS_POLL_S
 
 
 class BVHLAB_PT_engine_passes(_EnginePanel, bpy.types.Panel):

@@ -7,6 +7,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import warnings
 
 import bpy
 import harness
@@ -249,3 +250,124 @@ def check_no_vulkan_reported() -> None:
     _configure(backend="vulkan")
     _expect_report(bpy.ops.bvhlab.render, "No Vulkan")
     _still_alive()
+
+
+PATH_SUBTYPES = ("FILE_PATH", "DIR_PATH")
+
+
+def _addon_structs() -> list:
+    """(name, bl_rna) of the add-on's PropertyGroups and operators, and of Blender's data types
+    (the add-on adds properties to some)."""
+    package = harness.addon().__name__
+    structs = [
+        (c.__name__, c.bl_rna) for c in bpy.types.PropertyGroup.__subclasses__() if c.__module__.startswith(package)
+    ]
+    structs += [(f"bpy.ops.bvhlab.{n}", getattr(bpy.ops.bvhlab, n).get_rna_type()) for n in dir(bpy.ops.bvhlab)]
+    return structs + [(t.__name__, t.bl_rna) for t in bpy.types.ID.__subclasses__()]
+
+
+def addon_path_properties() -> list:
+    """(owner, name, property) of every path property of the add-on."""
+    return [
+        (owner, prop.identifier, prop)
+        for owner, rna in _addon_structs()
+        for prop in rna.properties
+        if prop.type == "STRING"
+        and prop.subtype in PATH_SUBTYPES
+        and (owner.startswith(("BVHLAB", "bpy.ops.bvhlab")) or prop.identifier.startswith("bvhlab"))
+    ]
+
+
+def check_path_properties(tmp_dir) -> None:
+    """Every path property of the add-on is a path Blender knows as one the add-on writes (an
+    output) and, where Blender has the option (4.5 on), one that takes "//" as the .blend's folder:
+    Blender 5.2 warns (`does not support blend relative "//" prefix`) and draws the field red
+    otherwise. Set to "//..." from a script, Compare's table and Export Stats give no warning and
+    their files land beside the saved .blend."""
+    found = addon_path_properties()
+    names = {f"{owner}.{name}" for owner, name, _ in found}
+    assert {"BVHLAB_PG_settings.compare_filepath", "bpy.ops.bvhlab.export_stats.filepath"} <= names, names
+    blend_relative = "is_path_supports_blend_relative" in bpy.types.Property.bl_rna.properties
+    for owner, name, prop in found:
+        assert prop.is_path_output, f"{owner}.{name} is not an output path"
+        if blend_relative:
+            assert prop.is_path_supports_blend_relative, f"{owner}.{name} does not take a '//' path"
+    harness.boxes_scene()
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_dir / "paths.blend"))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        _configure(backend="cpu", compare_frames=1, compare_filepath="//paths_compare.csv")
+        assert bpy.ops.bvhlab.compare() == {"FINISHED"}
+        assert bpy.ops.bvhlab.export_stats(filepath="//paths_stats.json") == {"FINISHED"}
+    relative = [str(w.message) for w in caught if "relative" in str(w.message)]
+    assert not relative, relative
+    assert (tmp_dir / "paths_compare.csv").is_file() and (tmp_dir / "paths_stats.json").is_file()
+    print(f"path properties: {sorted(names)}")
+
+
+ENGINE = "BVHLAB_WHITTED"
+
+
+def _blender_panels() -> list:
+    panels, stack = [], list(bpy.types.Panel.__subclasses__())
+    while stack:
+        panels.append(stack.pop())
+        stack.extend(panels[-1].__subclasses__())
+    return [p for p in panels if isinstance(getattr(p, "COMPAT_ENGINES", None), set)]
+
+
+def _render_png(tmp_dir, name: str) -> dict:
+    """F12 of the current scene written as PNG: {view suffix: float (h, w, 4)} ("" for one view)."""
+    scene = bpy.context.scene
+    scene.render.filepath = str(tmp_dir / name)
+    assert bpy.ops.render.render(write_still=True) == {"FINISHED"}
+    images = {}
+    for path in tmp_dir.glob(f"{name}*.png"):
+        image = bpy.data.images.load(str(path))
+        pixels = np.empty(image.size[0] * image.size[1] * 4, np.float32)
+        image.pixels.foreach_get(pixels)
+        images[path.stem[len(name) :]] = pixels.reshape(image.size[1], image.size[0], 4)
+        bpy.data.images.remove(image)
+    return images
+
+
+def _add_grease_pencil_monkey(location) -> None:
+    try:
+        bpy.ops.object.gpencil_add(location=location, type="MONKEY")  # Blender 4.2
+    except (AttributeError, RuntimeError):
+        bpy.ops.object.grease_pencil_add(location=location, type="MONKEY")  # 4.3 on
+
+
+def check_engine_panels_follow_the_renders(tmp_dir) -> None:
+    """Blender's panels show for the engine where its renders follow them. Grease Pencil: Blender
+    draws a Grease Pencil object over the engine's image (a render with one in front of the
+    camera differs from one without), its panels show. Stereoscopy: the engine renders one view
+    (the right eye of a stereo render is empty), its panels do not. Freestyle is drawn too
+    (through EEVEE: minutes on llvmpipe, not rendered here), its panels show."""
+    shown = {p.__name__ for p in _blender_panels() if ENGINE in p.COMPAT_ENGINES}
+    listed = {p.__name__ for p in _blender_panels() if "BLENDER_RENDER" in p.COMPAT_ENGINES}
+    scene = harness.boxes_scene()  # 64 × 48
+    scene.render.engine = ENGINE
+    _configure(backend="cpu", render_bounces=1)
+    plain = _render_png(tmp_dir, "plain")[""]
+    scene.render.use_multiview, scene.render.views_format = True, "STEREO_3D"
+    scene.render.image_settings.views_format = "INDIVIDUAL"
+    stereo = _render_png(tmp_dir, "stereo_")
+    right_eye = stereo["_R"][..., :3]
+    stereo_rendered = right_eye.std() > 0.01 and np.abs(right_eye - stereo["_L"][..., :3]).max() > 0.05
+    scene.render.use_multiview = False
+    _add_grease_pencil_monkey(location=(0.0, -4.0, 1.0))
+    with_pencil = _render_png(tmp_dir, "pencil")[""]
+    pencil_drawn = (np.abs(with_pencil - plain)[..., :3].max(-1) > 0.05).mean() > 0.01
+    panels = {
+        "stereoscopy": ({n for n in listed if "stereo" in n.lower()} | {"RENDER_PT_output_views"}, stereo_rendered),
+        "grease pencil": ({n for n in listed if "gpencil" in n.lower() or "grease_pencil" in n.lower()}, pencil_drawn),
+        "freestyle": ({n for n in listed if "freestyle" in n.lower()}, True),
+    }
+    for feature, (names, rendered) in panels.items():
+        assert names, f"no {feature} panels found"
+        wrong = names - shown if rendered else names & shown
+        assert not wrong, (
+            f"{feature} is {'' if rendered else 'not '}rendered, yet these show otherwise: {sorted(wrong)}"
+        )
+    print(f"stereo right eye rendered: {stereo_rendered}; grease pencil drawn: {pencil_drawn}")

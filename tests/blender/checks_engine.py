@@ -433,5 +433,6 @@ def engine_checks(binary: bool) -> list:
         viewport.check_view_frustum,
         viewport.check_viewport_worker_levels,
         viewport.check_viewport_build_cancels,
+        viewport.check_viewport_settings_update,
     ]
     return checks + [check_command_line_frames] if binary else checks

@@ -175,3 +175,73 @@ def check_viewport_build_cancels() -> None:
         assert session.tree.bvh is not None and frame.image.shape[:2] == (48, 64)
     finally:
         session.close()
+
+
+class _NotingReads:
+    """scene.bvhlab as the engine's code sees it, noting the name of every setting it reads (its
+    methods, build_kwargs, run on this stand-in, so their reads are noted too)."""
+
+    def __init__(self, settings):
+        self._settings, self.names = settings, set()
+
+    def __getattr__(self, name):
+        method = getattr(type(self._settings), name, None)
+        if callable(method):
+            return method.__get__(self)
+        self.names.add(name)
+        return getattr(self._settings, name)
+
+
+def viewport_settings(scene) -> set[str]:
+    """The scene.bvhlab settings the Rendered viewport depends on: those the engine's own
+    view_request reads (what view_draw hands the worker) for a region looking through the camera."""
+    from types import SimpleNamespace
+
+    view, window = _camera_matrices(scene, 64, 48)
+    region_data = SimpleNamespace(view_matrix=view, window_matrix=window, is_perspective=True, view_distance=8.0)
+    context = SimpleNamespace(region=SimpleNamespace(width=64, height=48), region_data=region_data)
+    noting = _NotingReads(scene.bvhlab)
+    _engine_module("view_request").view_request(context, SimpleNamespace(bvhlab=noting))
+    return noting.names
+
+
+def _another_value(settings, name: str):
+    """A valid value of the setting `name` other than its current one."""
+    prop, value = settings.bl_rna.properties[name], getattr(settings, name)
+    if prop.type == "ENUM":
+        return next(item.identifier for item in prop.enum_items if item.identifier != value)
+    if prop.type == "BOOLEAN":
+        return not value
+    if prop.type in ("INT", "FLOAT"):
+        return value + 1 if value + 1 <= prop.hard_max else value - 1
+    raise AssertionError(f"{name}: a {prop.type} setting; add how to change it")
+
+
+def check_viewport_settings_update() -> None:
+    """Setting, from a script, any scene.bvhlab setting the Rendered viewport depends on tags the
+    scene in the depsgraph: what makes Blender call the engine's view_update and redraw Rendered
+    viewports (a property without an update function is not updated at all when a script sets it;
+    the user's clicks always are). The settings are the ones the engine's own code reads."""
+    scene = harness.boxes_scene()
+    scene.bvhlab.overlay_show = True  # so that the boxes' settings are read too
+    names = viewport_settings(scene)
+    assert {"render_mode", "render_supersampling", "method", "overlay_depth_max"} <= names, names
+    updated: list = []
+
+    def note(blender_scene, depsgraph):
+        updated.extend(u.id.original for u in depsgraph.updates if isinstance(u.id, bpy.types.Scene))
+
+    bpy.context.view_layer.update()
+    bpy.app.handlers.depsgraph_update_post.append(note)
+    try:
+        silent = []
+        for name in sorted(names):
+            updated.clear()
+            setattr(scene.bvhlab, name, _another_value(scene.bvhlab, name))
+            bpy.context.view_layer.update()
+            if scene not in updated:
+                silent.append(name)
+    finally:
+        bpy.app.handlers.depsgraph_update_post.remove(note)
+    assert not silent, f"setting these from a script leaves the Rendered viewport as it was: {silent}"
+    print(f"viewport settings, each tagging the scene when set: {sorted(names)}")

@@ -108,6 +108,8 @@ def _checks(groups, zip_path: Path, tmp: Path):
             yield "addon", check.__name__, check
         yield "addon", "export_stats", lambda: checks_addon.check_export_stats(tmp)
         yield "addon", "compare", lambda: checks_addon.check_compare(tmp)
+        yield "addon", "path_properties", lambda: checks_addon.check_path_properties(tmp)
+        yield "addon", "engine_panels", lambda: checks_addon.check_engine_panels_follow_the_renders(tmp)
     if "instancing" in groups:
         import checks_instancing
 

@@ -72,3 +72,11 @@ def test_bad_input_is_reported():
 
 def test_render_without_light_warns():
     checks_addon.check_render_without_light()
+
+
+def test_path_properties_take_blend_relative_output_paths(tmp_path):
+    checks_addon.check_path_properties(tmp_path)
+
+
+def test_blenders_panels_show_for_what_the_engine_renders(tmp_path):
+    checks_addon.check_engine_panels_follow_the_renders(tmp_path)

@@ -52,3 +52,7 @@ def test_viewport_worker_preview_full_refined():
 
 def test_viewport_build_cancels_with_esc():
     checks_engine_viewport.check_viewport_build_cancels()
+
+
+def test_viewport_settings_set_by_a_script_update_the_viewport():
+    checks_engine_viewport.check_viewport_settings_update()

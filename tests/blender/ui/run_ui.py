@@ -10,7 +10,8 @@ captures with xwd, key presses and Ctrl+wheel with xdotool), saves every capture
 and runs the scenario's `check(shots, info)`. Exit code 1 when any scenario fails.
 
 A new scenario is one more file scenario_NAME.py with SCENE, SCREENSHOTS, steps(session) and
-check(shots, info) (see scenario_panel.py); this driver finds it by its name.
+check(shots, info), and optionally screenshot_text(info) (text chunks for its pictures) (see
+scenario_panel.py); this driver finds it by its name.
 """
 
 from __future__ import annotations
@@ -31,31 +32,29 @@ ROOT = HERE.parents[2]
 sys.path.insert(0, str(HERE))
 import xshot  # noqa: E402
 
-DISPLAY = ":94"
+DISPLAY = ""  # the X display start_x got: ":N"
 SIZE = (1600, 900)
 
 
 def start_x() -> subprocess.Popen:
+    """Xvfb on a free display number (-displayfd: it picks one and says which): another UI run in
+    the same root (its /tmp/.X11-unix is shared) keeps its own screen."""
+    global DISPLAY
+    read_end, write_end = os.pipe()
     server = subprocess.Popen(
-        ["Xvfb", DISPLAY, "-screen", "0", f"{SIZE[0]}x{SIZE[1]}x24", "-nolisten", "tcp"],
+        ["Xvfb", "-displayfd", str(write_end), "-screen", "0", f"{SIZE[0]}x{SIZE[1]}x24", "-nolisten", "tcp"],
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
+        pass_fds=(write_end,),
     )
-    for _ in range(100):
-        if (
-            subprocess.run(
-                [
-                    "xdpyinfo" if shutil.which("xdpyinfo") else "xwd",
-                    *(["-display", DISPLAY] if shutil.which("xdpyinfo") else ["-root", "-silent", "-display", DISPLAY]),
-                ],
-                capture_output=True,
-            ).returncode
-            == 0
-        ):
-            return server
-        time.sleep(0.1)
-    server.kill()
-    raise SystemExit("Xvfb did not start")
+    os.close(write_end)
+    with os.fdopen(read_end) as said:
+        number = said.readline().strip()
+    if not number.isdigit():
+        server.kill()
+        raise SystemExit("Xvfb did not start")
+    DISPLAY = f":{number}"
+    return server
 
 
 def answer(request: dict, shots_dir: Path, shots: dict) -> None:
@@ -166,7 +165,8 @@ def main(argv=None) -> int:
                         if area is None
                         else shots[shot][area["y"] : area["y"] + area["height"], area["x"] : area["x"] + area["width"]]
                     )
-                    xshot.write_png(args.screenshots / file_name, image)
+                    text = scenario.screenshot_text(info) if hasattr(scenario, "screenshot_text") else None
+                    xshot.write_png(args.screenshots / file_name, image, text)
                     print(f"wrote {args.screenshots / file_name}")
     finally:
         server.terminate()

@@ -55,6 +55,22 @@ class Session:
         assert result == {"FINISHED"}, result
         return "bl_ext.user_default.bvhlab"
 
+    def show_sidebar_tab(self, area, tab: str):
+        """Steps that open the 3D viewport's sidebar on `tab`. Blender 4.x has the tab read-only:
+        Ctrl+wheel over the tabs cycles them, as a user would."""
+        from bvhlab.blender.compat import show_sidebar_tab
+
+        area.spaces.active.show_region_ui = True
+        sidebar = self.region(area, "UI")
+        yield 1.0
+        for _ in range(8):
+            if sidebar.active_panel_category == tab or show_sidebar_tab(sidebar, tab):
+                break
+            rect = self.rect(sidebar)
+            yield {"action": "scroll", "x": rect["x"] + rect["width"] - 8, "y": rect["y"] + 200, "ctrl": True}
+            yield 0.5
+        assert sidebar.active_panel_category == tab, sidebar.active_panel_category
+
     def rect(self, region) -> dict:
         """A region's rectangle in screen pixels, top-left origin (the window fills the screen)."""
         window = self.window()

@@ -35,8 +35,8 @@ def read_xwd(raw: bytes) -> np.ndarray:
     return np.stack(channels, -1).astype(np.uint8)
 
 
-def write_png(path: Path, rgb: np.ndarray) -> None:
-    """uint8 (height, width, 3) → an RGB PNG."""
+def write_png(path: Path, rgb: np.ndarray, text: dict[str, str] | None = None) -> None:
+    """uint8 (height, width, 3) → an RGB PNG, with `text` as tEXt chunks (keyword → Latin-1 text)."""
     height, width = rgb.shape[:2]
     scanlines = b"".join(b"\0" + np.ascontiguousarray(row).tobytes() for row in rgb)
 
@@ -47,6 +47,19 @@ def write_png(path: Path, rgb: np.ndarray) -> None:
     path.write_bytes(
         b"\x89PNG\r\n\x1a\n"
         + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0))
+        + b"".join(chunk(b"tEXt", k.encode("latin-1") + b"\0" + v.encode("latin-1")) for k, v in (text or {}).items())
         + chunk(b"IDAT", zlib.compress(scanlines, 9))
         + chunk(b"IEND", b"")
     )
+
+
+def read_png_text(path: Path) -> dict[str, str]:
+    """The tEXt chunks of a PNG file: keyword → text."""
+    data, texts, at = path.read_bytes(), {}, 8
+    while at < len(data):
+        (length,), kind = struct.unpack(">I", data[at : at + 4]), data[at + 4 : at + 8]
+        if kind == b"tEXt":
+            keyword, _, value = data[at + 8 : at + 8 + length].partition(b"\0")
+            texts[keyword.decode("latin-1")] = value.decode("latin-1")
+        at += 12 + length
+    return texts
