@@ -48,7 +48,9 @@ def _program(backend: str, call: str, expect: str) -> str:
             assert job.done and seen or {call!r}.startswith("renderer."), seen
             if seen and isinstance(seen[0], int):
                 # during the run: the samples of the runs before (0); the last call, after it: all
-                assert seen == sorted(seen) and seen[0] == 0 and seen[-1] == job.samples_per_pixel, seen
+                # (a run can finish before its first poll: then only the last call is seen)
+                assert seen == sorted(seen) and set(seen) <= {0, job.samples_per_pixel}, seen
+                assert seen[-1] == job.samples_per_pixel, seen
             assert (job.result().depth < 1e10).any()  # whitted: the floor and spheres are hit
         else:
             # the job is usable afterwards: finish it and check it rendered something
