@@ -10,14 +10,7 @@ from .viewport import ViewRequest
 
 def view_request(context, blender_scene) -> ViewRequest:
     region, view = context.region, context.region_data
-    frustum = view_frustum(
-        view.view_matrix,
-        view.window_matrix,
-        region.width,
-        region.height,
-        perspective=view.is_perspective,
-        view_distance=view.view_distance,
-    )
+    frustum = view_frustum(view.view_matrix, view.window_matrix, region.width, region.height)
     return ViewRequest(
         frustum,
         trace_settings(blender_scene, viewport=True),
