@@ -97,6 +97,46 @@ def check_unrendered_settings_are_said(tmp_dir) -> None:
     assert any("overlay" in note for note in _last_final(scene)["unrendered"]), _last_final(scene)
 
 
+def check_odd_borders_are_sized_as_blender_sizes_them(tmp_dir) -> None:
+    """Render borders whose edges fall between pixels, cropped, on a 37×29 frame at 70%: the
+    engine traces exactly the Render Result Blender makes for each (its EXR's size)."""
+    scene = camera_scene((37, 29))
+    r = scene.render
+    r.resolution_percentage, r.use_border, r.use_crop_to_border, r.engine = 70, True, True, ENGINE
+    scene.bvhlab.backend, bpy.context.view_layer.use_pass_z = "cpu", True
+    sizes = []
+    for x0, x1, y0, y1 in (
+        (0.1, 0.9, 0.3, 0.7),
+        (1 / 3, 2 / 3, 0.05, 0.95),
+        (0.0, 0.47, 0.51, 1.0),
+        (0.21, 0.43, 0.27, 0.83),
+    ):
+        r.border_min_x, r.border_max_x, r.border_min_y, r.border_max_y = x0, x1, y0, y1
+        depth = render_passes(tmp_dir, "odd_border")["Depth"]
+        assert _last_final(scene)["size"] == depth.shape[::-1], (_last_final(scene)["size"], depth.shape)
+        sizes.append(depth.shape[::-1])
+    print(f"odd borders of 25 × 20: {sizes}")
+
+
+def check_viewport_says_what_it_does_not_show() -> None:
+    """Looking through a panoramic camera, or one with depth of field, the Rendered viewport's
+    status says that F12 renders what it shows differently (its region's view and the space are
+    plain values here: no window in a background Blender)."""
+    from types import SimpleNamespace
+
+    from checks_engine_viewport import _engine_module
+
+    note = _engine_module("view_request").camera_view_note
+    scene = camera_scene()
+    space = SimpleNamespace(camera=None, use_local_camera=False)
+    camera_view, free_view = SimpleNamespace(view_perspective="CAMERA"), SimpleNamespace(view_perspective="PERSP")
+    assert note(camera_view, space, scene) == ""
+    scene.camera.data.dof.use_dof = True
+    assert "depth of field" in note(camera_view, space, scene) and note(free_view, space, scene) == ""
+    _panorama(scene.camera.data, "FISHEYE_EQUIDISTANT")
+    assert "panorama" in note(camera_view, space, scene)
+
+
 def _child_command(script: str) -> list[str]:
     """A fresh Blender running `script`: the binary with the installed add-on, or Python with bpy
     and the add-on from source."""
@@ -199,6 +239,11 @@ def check_esc_keeps_the_samples_done(tmp_dir) -> None:
 
 
 def final_checks(binary: bool) -> list:
-    checks = [check_depth_of_field_against_cycles, check_unrendered_settings_are_said]
+    checks = [
+        check_depth_of_field_against_cycles,
+        check_unrendered_settings_are_said,
+        check_odd_borders_are_sized_as_blender_sizes_them,
+        check_viewport_says_what_it_does_not_show,
+    ]
     checks.append(check_huge_f12_is_refused_before_allocating)
     return checks + [check_esc_keeps_the_samples_done] if binary else checks

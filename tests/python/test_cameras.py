@@ -34,5 +34,13 @@ def test_unrendered_settings_are_said(tmp_path):
     checks_final.check_unrendered_settings_are_said(tmp_path)
 
 
+def test_odd_borders_are_sized_as_blender_sizes_them(tmp_path):
+    checks_final.check_odd_borders_are_sized_as_blender_sizes_them(tmp_path)
+
+
+def test_viewport_says_what_it_does_not_show():
+    checks_final.check_viewport_says_what_it_does_not_show()
+
+
 def test_huge_f12_is_refused_before_blender_allocates_it():
     checks_final.check_huge_f12_is_refused_before_allocating()

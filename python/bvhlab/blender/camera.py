@@ -65,9 +65,12 @@ def render_size(render) -> tuple[int, int]:
 def lens_fields(scene, data, name: str, position=None, forward=None) -> dict:
     """bvhlab.Camera's keyword fields (bvhlab.scene.Lens) for Blender camera data `data` rendered
     at the scene's resolution."""
-    width, height = render_size(scene.render)
-    aspect = (max(width, 1) * scene.render.pixel_aspect_x) / (max(height, 1) * scene.render.pixel_aspect_y)
-    fields: dict = {"aspect": aspect, "clip_start": data.clip_start, "clip_end": data.clip_end}
+    render = scene.render
+    width, height = render_size(render)
+    aspect = (max(width, 1) * render.pixel_aspect_x) / (max(height, 1) * render.pixel_aspect_y)
+    fields: dict = {"clip_start": data.clip_start, "clip_end": data.clip_end}
+    if render.pixel_aspect_x != render.pixel_aspect_y:  # else the image's own, at any size it is rendered
+        fields["aspect"] = aspect
     if data.type == "PANO":
         fields.update(_panorama(data, name))
     elif data.type in ("PERSP", "ORTHO"):
