@@ -42,12 +42,15 @@ def _dof_scene(use_dof: bool):
 
 
 def _engine_coverage(tmp_dir, name: str) -> np.ndarray:
-    """The share of each pixel's 16×16 samples that see the square: 1 - colour / sky (it is black)."""
+    """The share of each pixel's 16×16 samples that see the square: 1 - colour / sky (it is black;
+    the sky is the world's colour as the export reads it)."""
     scene = bpy.context.scene
     scene.render.engine = ENGINE
     scene.bvhlab.backend, scene.bvhlab.render_supersampling, scene.bvhlab.render_overlay = "cpu", 16, False
     combined = render_passes(tmp_dir, name)["Combined"]
-    return 1.0 - combined[..., 2] / np.float32(scene.world.color[2])
+    sky = np.float32(export_scene(bpy.context).sky)
+    channel = int(np.argmax(sky))
+    return 1.0 - combined[..., channel] / sky[channel]
 
 
 def _cycles_coverage(tmp_dir, name: str) -> np.ndarray:
@@ -140,12 +143,15 @@ def check_viewport_says_what_it_does_not_show() -> None:
 def _child_command(script: str) -> list[str]:
     """A fresh Blender running `script`: the binary with the installed add-on, or Python with bpy
     and the add-on from source."""
+    module = harness._addon_module
     prelude = f"import sys; sys.path.insert(0, {str(BLENDER_TESTS)!r})\nimport harness, bpy\n"
+    # the add-on as this process has it: installed from the zip (in the user folder the child
+    # shares), or enabled in place from addon/ (a repository that lives only in this process)
+    in_place = module is None or module.startswith(f"bl_ext.{harness.DEV_REPO}.")
+    prelude += "harness.enable_addon_from_source()\n" if in_place else f"harness.enable({module!r})\n"
     if Path(bpy.app.binary_path or "python").name.startswith("blender"):
-        module = harness._addon_module
-        prelude += f"harness.enable({module!r})\n"
         return [bpy.app.binary_path, "--background", "--factory-startup", "--python-expr", prelude + script]
-    return [sys.executable, "-c", prelude + "harness.enable_addon_from_source()\n" + script]
+    return [sys.executable, "-c", prelude + script]
 
 
 _HUGE_F12 = textwrap.dedent(
