@@ -20,7 +20,7 @@ from .settings import backend, trace_settings
 from .tracer import TraceCancelled, open_tracer
 
 #: Progress (RenderEngine.update_progress) at the start of each stage.
-BUILD_START, TRACE_START, PASSES_START = 0.05, 0.35, 0.85
+BUILD_START, TRACE_START = 0.05, 0.35
 
 
 class FinalRender:
@@ -90,20 +90,10 @@ class FinalRender:
             "", f"Tracing {frame.width} × {frame.height}, {settings.samples} samples per pixel on {tracer.device}"
         )
         cancelled = self._trace(engine, job, depsgraph.view_layer.name)
-        timings = job.timings
         record = {
-            "device": tracer.device,
-            "backend": tracer.backend,
-            "note": tracer.note,
-            "tree": update.action,
-            "build_ms": update.ms,
-            "trace_ms": timings["trace_ms"],
-            "total_ms": timings["total_ms"],
+            **_trace_record(tracer, update, job, frame),
             "sync": self.report,
             "totals": self.live.totals,
-            "size": (frame.width, frame.height),
-            "frame": frame,
-            "samples": job.samples_done,
             "cancelled": cancelled,
             "unrendered": unrendered,
         }
@@ -168,6 +158,23 @@ class FinalRender:
         if update.action != "kept":
             engine.update_stats("", f"BVH {update.action} in {(time.perf_counter() - started) * 1e3:.0f} ms")
         return tree, update
+
+
+def _trace_record(tracer, update, job, frame) -> dict:
+    """What Render Properties ▸ Last Render shows of a final render, and the checks read."""
+    timings = job.timings
+    return {
+        "device": tracer.device,
+        "backend": tracer.backend,
+        "note": tracer.note,
+        "tree": update.action,
+        "build_ms": update.ms,
+        "trace_ms": timings["trace_ms"],
+        "total_ms": timings["total_ms"],
+        "size": (frame.width, frame.height),
+        "frame": frame,
+        "samples": job.samples_done,
+    }
 
 
 def sample_passes(total: int) -> list[int]:
