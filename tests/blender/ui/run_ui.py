@@ -31,16 +31,24 @@ ROOT = HERE.parents[2]
 sys.path.insert(0, str(HERE))
 import xshot  # noqa: E402
 
-DISPLAY = ":94"
+DISPLAY = ""  # start_x sets it
 SIZE = (1600, 900)
 
 
 def start_x() -> subprocess.Popen:
+    """Xvfb on the first free display (-displayfd): X's abstract sockets are shared by every root
+    and worktree on the machine, so a fixed number breaks when another UI run has the same."""
+    global DISPLAY
+    read_end, write_end = os.pipe()
     server = subprocess.Popen(
-        ["Xvfb", DISPLAY, "-screen", "0", f"{SIZE[0]}x{SIZE[1]}x24", "-nolisten", "tcp"],
+        ["Xvfb", "-displayfd", str(write_end), "-screen", "0", f"{SIZE[0]}x{SIZE[1]}x24", "-nolisten", "tcp"],
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
+        pass_fds=(write_end,),
     )
+    os.close(write_end)
+    with os.fdopen(read_end) as pipe:
+        DISPLAY = ":" + pipe.readline().strip()
     for _ in range(100):
         if (
             subprocess.run(
