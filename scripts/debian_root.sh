@@ -175,7 +175,7 @@ case "${1:-}" in
     ;;
   run | versions)
     [ -f "$STAMPS/packages" ] || { log "no root yet (or set-up unfinished): scripts/debian_root.sh $SUITE setup"; exit 1; }
-    if [ "$1" = versions ]; then cat "$STAMPS/versions"; exit 0; fi
+    if [ "$1" = versions ]; then cat "$STAMPS/versions" 2>/dev/null || apt_versions Installed; exit 0; fi
     shift
     in_root "$*"
     ;;
