@@ -76,9 +76,24 @@ def _checks(groups, zip_path: Path, tmp: Path):
     import harness
 
     if "install" in groups:
-        import checks_install
+        import platform
 
+        import checks_install
+        import checks_versions
+
+        if sys.version_info >= (3, 12):  # where a stable-ABI wheel could load
+            yield (
+                "install",
+                "abi3_beside_cp311_refused",
+                lambda: checks_versions.check_abi3_beside_cp311_refused(zip_path),
+            )
         yield "install", "install_enable_disable", lambda: checks_install.check_install_enable_disable(zip_path)
+        blender = f"Blender {harness.bpy.app.version_string}, Python {platform.python_version()}"
+        yield (
+            "install",
+            f"installed_core_is_this_pythons ({blender})",
+            checks_versions.check_installed_core_is_this_pythons,
+        )
     if "export" in groups:
         import checks_bundled
         import checks_cases
