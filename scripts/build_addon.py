@@ -1,13 +1,14 @@
 """Build the installable Blender extension zip (`make addon`), one bvhlab wheel per Python that
-Blender embeds (cp311 for Blender 4.2-5.0, cp313 for 5.1 and later):
+Blender embeds (cp311 for Blender 4.2-5.0, cp313 for blender.org's 5.1 and later, cp314 for
+distribution builds linked to their system Python, such as Debian's 5.2):
 
     PYTHON scripts/build_addon.py wheel [--into build/wheels]     # a wheel for the running Python
     .venv/bin/python scripts/build_addon.py package [--wheels build/wheels] [--output-dir dist]
 
 `wheel` builds the bvhlab wheel (the compiled core plus bvhlab.blender) for the interpreter that
 runs it, in a CMake build folder of its own (build/wheel-cpXY), so the editable install's build is
-never touched; `make addon` runs it with the project's Python 3.11 and with Python 3.13 inside
-the Debian 13 root (scripts/trixie.sh).
+never touched; `make addon` runs it with the project's Python 3.11, with Python 3.13 inside the
+Debian 13 root and with Python 3.14 inside the Debian sid root (scripts/debian_root.sh).
 
 `package` copies addon/ to build/addon-stage, adds the wheels (one for each of PYTHON_TAGS, all of
 the current version), writes the stage's manifest with the version from python/bvhlab/__init__.py
@@ -20,6 +21,7 @@ bpy.ops.extensions.package_install_files(filepath=ZIP, repo="user_default").
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import shutil
 import subprocess
@@ -30,8 +32,12 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 ADDON = ROOT / "addon"
 VERSION_FILE = ROOT / "python" / "bvhlab" / "__init__.py"
-#: The Pythons Blender embeds: 3.11 in 4.2 LTS to 5.0, 3.13 in 5.1, 5.2 LTS and 5.3.
-PYTHON_TAGS = ("cp311", "cp313")
+#: Included first in each C++ file of a wheel: keeps libm's symbol versions at glibc 2.34's.
+GLIBC_COMPAT = ROOT / "scripts" / "wheel_glibc_compat.h"
+#: The Pythons Blender embeds: 3.11 in 4.2 LTS to 5.0, 3.13 in blender.org's 5.1, 5.2 LTS and 5.3,
+#: 3.14 in distribution builds (Debian sid's 5.2.2). One wheel each, not one stable-ABI (abi3) wheel
+#: for 3.12+: Blender's installer refuses cp311 + abi3 on 3.13 and 3.14 (tests/blender/checks_versions.py).
+PYTHON_TAGS = ("cp311", "cp313", "cp314")
 
 
 def project_version() -> str:
@@ -43,8 +49,10 @@ def project_version() -> str:
 
 
 def build_wheel(into: Path) -> Path:
-    """The bvhlab wheel for the running Python, copied into `into` (older ones of that tag removed)."""
+    """The bvhlab wheel for the running Python, copied into `into` (older ones of that tag removed).
+    CMAKE_CXX_FLAGS is passed on every configure (a kept build folder picks up a change)."""
     tag = f"cp{sys.version_info.major}{sys.version_info.minor}"
+    cxx_flags = f"{os.environ.get('CXXFLAGS', '')} -include {GLIBC_COMPAT}".strip()
     with tempfile.TemporaryDirectory() as tmp:
         subprocess.run(
             [
@@ -59,6 +67,7 @@ def build_wheel(into: Path) -> Path:
                 "-w",
                 tmp,
                 f"--config-settings=build-dir=build/wheel-{tag}",
+                f"--config-settings=cmake.define.CMAKE_CXX_FLAGS={cxx_flags}",
             ],
             cwd=ROOT,
             check=True,
@@ -84,7 +93,8 @@ def wheels_for_version(wheels_dir: Path, version: str) -> list[Path]:
     if missing:
         raise SystemExit(
             f"{wheels_dir} needs exactly one bvhlab-{version} wheel for each of {', '.join(PYTHON_TAGS)}; "
-            f"missing: {', '.join(missing)}. `make addon` builds both (cp313 in the Debian 13 root)."
+            f"missing: {', '.join(missing)}. `make addon` builds them all (cp313 in the Debian 13 root, "
+            "cp314 in the sid one)."
         )
     return found
 

@@ -15,6 +15,9 @@ packages=(
   mesa-vulkan-drivers libvulkan-dev glslc vulkan-validationlayers vulkan-tools libstb-dev
   # clang for the sanitizer build (GCC's UBSan lacks float-cast-overflow) and libFuzzer
   clang libclang-rt-14-dev
+  # the Debian roots with real Blender binaries (scripts/debian_root.sh); here so that two roots
+  # made at once do not both run apt
+  debootstrap
   "$@"
 )
 

@@ -94,6 +94,8 @@ inline float pow(float x, float y) { return std::pow(x, y); }
 inline float floor(float x) { return std::floor(x); }
 inline float fract(float x) { return x - std::floor(x); }
 inline float tan(float x) { return std::tan(x); }
+inline float sin(float x) { return std::sin(x); }
+inline float cos(float x) { return std::cos(x); }
 inline float mix(float a, float b, float t) { return a * (1.0f - t) + b * t; }
 inline vec3 mix(vec3 a, vec3 b, float t) { return a * (1.0f - t) + b * t; }
 inline float dot(vec3 a, vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }

@@ -137,17 +137,32 @@ struct DeviceAddresses {
     uvec2 counters;       ///< uint[2], atomic: slots that ended a dispatch with work left, that failed
 };
 
+/// FrameParams::projection (camera.h Projection, in its order).
+BVHLAB_CONST uint PROJECTION_PERSPECTIVE = 0u;
+BVHLAB_CONST uint PROJECTION_ORTHOGRAPHIC = 1u;
+BVHLAB_CONST uint PROJECTION_EQUIRECTANGULAR = 2u;
+BVHLAB_CONST uint PROJECTION_FISHEYE_EQUIDISTANT = 3u;
+
 /// Everything a frame reads, field by field (std430 and C++ agree: each vec3 is followed by a
-/// 4-byte scalar, then come 4-byte scalars, then the addresses, 8-aligned).
+/// 4-byte scalar, then come vec4s, 4-byte scalars, then the addresses, 8-aligned).
+/// The camera (camera.h; make_camera_frame in core_cpp/src/render/camera.cpp): a pixel's sample
+/// at image position q (pixels from the top-left corner) has screen coordinates
+/// screen.xy + q · screen.zw, which the projection turns into a ray (camera_ray, shade.glsl):
+/// perspective: the direction forward + x·right + y·up; orthographic: the origin position +
+/// x·right + y·up; panoramic: Cycles' view-plane coordinates (u, v) in [0, 1]² (v up).
 struct FrameParams {
     vec3 camera_position;
-    float tan_half_fov_y;  ///< tan(vertical field of view / 2)
-    vec3 camera_forward;   ///< unit; the view axis
-    float aspect;          ///< width / height of the image plane
-    vec3 camera_right;     ///< unit, orthogonal to forward
-    float shift_x;         ///< centre of the image plane at unit distance, right of the view axis
-    vec3 camera_up;        ///< unit, orthogonal to forward and right
-    float shift_y;         ///< ... above the view axis (Blender's lens shift, in tangent units)
+    uint projection;        ///< PROJECTION_*
+    vec3 camera_forward;    ///< unit; the view axis
+    float clip_start;       ///< primary rays see what lies this far along the view axis (panoramic: from
+                            ///< the position) and no nearer
+    vec3 camera_right;      ///< unit, orthogonal to forward
+    float clip_end;         ///< ... and no farther (may be +inf)
+    vec3 camera_up;         ///< unit, orthogonal to forward and right
+    float aperture_radius;  ///< thin lens radius (world units); 0: a pinhole
+    vec4 screen;            ///< xy: screen coordinates of the image's top-left corner; zw: per pixel
+    vec4 panorama;          ///< equirectangular: Cycles' equirectangular_range (longitude span, -longitude
+                            ///< min, latitude span, π/2 - latitude min; radians); fisheye: x = field of view
     vec3 light_position;
     float ray_epsilon;    ///< offset of secondary and shadow ray origins from a surface
     vec3 light_color;     ///< rgb, already multiplied by the intensity
@@ -175,7 +190,7 @@ struct FrameParams {
     uint tile_width;
     uint tile_height;
     uint max_work_per_pixel;  ///< a trace with more steps of work in a pass fails (0xffffffff: no cap)
-    uint padding;             ///< keeps `addr` 8-byte aligned in std430, as in C++
+    float focus_distance;     ///< the thin lens's focus, along the view axis
     DeviceAddresses addr;
 };
 
@@ -222,8 +237,8 @@ static_assert(sizeof(BvhNode) == 32, "BvhNode must stay 32 bytes (std430 layout)
 static_assert(sizeof(BvhPair) == 64, "BvhPair must stay 64 bytes (std430 layout)");
 static_assert(sizeof(GpuTriangle) == 48 && sizeof(GpuSphere) == 32 && sizeof(GpuMaterial) == 32);
 static_assert(sizeof(GpuBox) == 32 && sizeof(DeviceAddresses) == 14 * 8);
-static_assert(offsetof(FrameParams, width) == 112 && offsetof(FrameParams, addr) == 200);
-static_assert(sizeof(FrameParams) == 200 + sizeof(DeviceAddresses));
+static_assert(offsetof(FrameParams, width) == 144 && offsetof(FrameParams, addr) == 232);
+static_assert(sizeof(FrameParams) == 232 + sizeof(DeviceAddresses));
 }  // namespace bvhlab::gpu
 #endif
 #endif  // BVHLAB_GPU_TYPES_H

@@ -1,15 +1,19 @@
 #version 460
-// overlay.frag — line colour in rgb, distance from the camera in alpha (report §3.3): the trace
-// pass keeps a primary hit only if it is nearer than that distance.
+// overlay.frag — line colour in rgb, distance along the primary ray in alpha (report §3.3): the
+// trace pass keeps a primary hit only if it is nearer than that distance.
 #include "gpu_types.h"
+#include "glsl_prelude.glsl"
 
 // A storage buffer, not a uniform one: Mesa 22.3 lavapipe recompiles (and leaks) a shader whose
 // branches read uniform-buffer values, at every command buffer execution.
 layout(set = 0, binding = BINDING_FRAME, std430) readonly buffer FrameBlock { FrameParams frame; };
+
+#include "tracer/overlay.glsl"
+
 layout(location = 0) in vec3 world_position;
 layout(location = 1) flat in vec3 line_color;
 layout(location = 0) out vec4 color_distance;
 
 void main() {
-    color_distance = vec4(line_color, length(world_position - frame.camera_position));
+    color_distance = vec4(line_color, overlay_distance(world_position - frame.camera_position));
 }

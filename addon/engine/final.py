@@ -11,14 +11,16 @@ from __future__ import annotations
 
 import time
 import warnings
+from dataclasses import replace
 
 from . import passes, records
+from .border import final_frame
 from .scene_tree import BuildSettings, SceneTree
 from .settings import backend, trace_settings
 from .tracer import TraceCancelled, open_tracer
 
 #: Progress (RenderEngine.update_progress) at the start of each stage.
-BUILD_START, TRACE_START, PASSES_START = 0.05, 0.35, 0.85
+BUILD_START, TRACE_START = 0.05, 0.35
 
 
 class FinalRender:
@@ -70,51 +72,74 @@ class FinalRender:
         key = records.key(blender_scene)
         scene = self.live.scene
         tracer = open_tracer(backend(blender_scene))
+        frame = final_frame(blender_scene.render, engine.resolution_x, engine.resolution_y)
+        # before the build and before Blender allocates the Render Result (issue 39: a huge F12 was
+        # refused only after gigabytes of passes)
+        tracer.check_size(frame.width, frame.height)
+        settings = trace_settings(blender_scene, viewport=False)
+        camera, settings, unrendered = self._camera(blender_scene, scene.camera, frame, settings)
+        for note in unrendered:
+            engine.report({"WARNING"}, f"bvhlab: {note}")
         tree, update = self._tree(engine, blender_scene, key)
         if engine.test_break():
+            engine.update_stats("", "Cancelled")
             return
-        width, height = engine.resolution_x, engine.resolution_y
-        settings = trace_settings(blender_scene, viewport=False)
+        job = tracer.start(scene, tree.bvh, camera, frame.width, frame.height, settings)
         engine.update_progress(TRACE_START)
-        engine.update_stats("", f"Tracing {width} × {height}, {settings.samples} samples per pixel on {tracer.device}")
-        result = engine.begin_result(0, 0, width, height, layer=depsgraph.view_layer.name)
-        try:
-            layer = result.layers[0]
-            images, timings = tracer.trace(
-                scene,
-                tree.bvh,
-                scene.camera,
-                width,
-                height,
-                settings,
-                cancelled=engine.test_break,
-                depth=layer.passes.get(passes.DEPTH) is not None,
-                heat=layer.passes.get(passes.HEATMAP) is not None,
-            )
-            passes.write(layer, passes.COMBINED, images.color)
-            engine.update_progress(PASSES_START)
-            extra = self._extra_passes(layer, images)
-            engine.update_result(result)
-        finally:
-            engine.end_result(result)
-        engine.update_progress(1.0)
+        engine.update_stats(
+            "", f"Tracing {frame.width} × {frame.height}, {settings.samples} samples per pixel on {tracer.device}"
+        )
+        cancelled = self._trace(engine, job, depsgraph.view_layer.name)
         record = {
-            "device": tracer.device,
-            "backend": tracer.backend,
-            "note": tracer.note,
-            "tree": update.action,
-            "build_ms": update.ms,
-            "trace_ms": timings["trace_ms"],
-            "total_ms": timings["total_ms"],
-            **extra,
+            **_trace_record(tracer, update, job, frame),
             "sync": self.report,
             "totals": self.live.totals,
-            "size": (width, height),
-            "samples": settings.samples,
+            "cancelled": cancelled,
+            "unrendered": unrendered,
         }
         with records.lock:
             records.last_final[key] = record
+        if cancelled:  # as Cycles says it; the samples finished so far are in the Render Result
+            engine.update_stats("", f"Cancelled | {job.samples_done} of {settings.samples} samples per pixel")
+            return
+        engine.update_progress(1.0)
         engine.update_stats("", _summary(record))
+
+    @staticmethod
+    def _camera(blender_scene, camera, frame, settings):
+        """The scene camera for this frame's part (the render border), the settings, and what of the
+        scene's settings bvhlab does not render, in words (said, never silently left out)."""
+        unrendered = unrendered_features(blender_scene.render)
+        if camera.projection in ("equirectangular", "fisheye") and settings.overlay is not None:
+            unrendered.append(f"the box overlay is not drawn through {camera.projection} cameras")
+            settings = replace(settings, overlay=None)
+        return (camera if frame.whole else replace(camera, region=frame.region)), settings, unrendered
+
+    def _trace(self, engine, job, layer_name: str) -> bool:
+        """Traces into Blender's Render Result in sample passes (1, 2, 4, ... samples per pixel),
+        writing the passes after each, so that Esc keeps the samples finished so far, as Cycles
+        does. Returns True when Esc stopped it."""
+        width, height = job.size
+        result = engine.begin_result(0, 0, width, height, layer=layer_name)
+        cancelled = False
+        try:
+            layer = result.layers[0]
+            depth, heat = (layer.passes.get(name) is not None for name in (passes.DEPTH, passes.HEATMAP))
+            total = job.samples_per_pixel
+            for target in sample_passes(total):
+                try:
+                    job.run(target, cancelled=engine.test_break)
+                except TraceCancelled:
+                    cancelled = True
+                passes.write_all(layer, job.images(depth=depth, heat=heat))
+                engine.update_result(result)
+                if cancelled:
+                    break
+                engine.update_progress(TRACE_START + (1.0 - TRACE_START) * target / total)
+                engine.update_stats("", f"Sample {target}/{total}")
+        finally:
+            engine.end_result(result)
+        return cancelled
 
     def _tree(self, engine, blender_scene, key):
         """The scene's tree for final renders (kept across engine instances), made to fit."""
@@ -134,14 +159,41 @@ class FinalRender:
             engine.update_stats("", f"BVH {update.action} in {(time.perf_counter() - started) * 1e3:.0f} ms")
         return tree, update
 
-    @staticmethod
-    def _extra_passes(layer, images) -> dict:
-        """Depth and heatmap, when the view layer asks for them (the same render made them)."""
-        if images.depth is not None:
-            passes.write(layer, passes.DEPTH, images.depth)
-        if images.heat is not None:
-            passes.write(layer, passes.HEATMAP, images.heat)
-        return {}
+
+def _trace_record(tracer, update, job, frame) -> dict:
+    """What Render Properties ▸ Last Render shows of a final render, and the checks read."""
+    timings = job.timings
+    return {
+        "device": tracer.device,
+        "backend": tracer.backend,
+        "note": tracer.note,
+        "tree": update.action,
+        "build_ms": update.ms,
+        "trace_ms": timings["trace_ms"],
+        "total_ms": timings["total_ms"],
+        "size": (frame.width, frame.height),
+        "frame": frame,
+        "samples": job.samples_done,
+    }
+
+
+def sample_passes(total: int) -> list[int]:
+    """Samples per pixel after each pass of a final render: doubling from 1 up to `total`."""
+    targets, n = [], 1
+    while n < total:
+        targets.append(n)
+        n *= 2
+    return [*targets, total]
+
+
+def unrendered_features(render) -> list[str]:
+    """What Blender's render settings ask for that bvhlab does not render, each in words."""
+    notes = []
+    if render.use_motion_blur:
+        notes.append("motion blur is not rendered (Render ▸ Motion Blur is on): the frame shows one moment")
+    if render.use_multiview:
+        notes.append("stereoscopy is not rendered (Output ▸ Stereoscopy is on): one view is rendered")
+    return notes
 
 
 def _summary(record: dict) -> str:
@@ -149,6 +201,4 @@ def _summary(record: dict) -> str:
         f"BVH {record['tree']}" + (f" {record['build_ms']:.0f} ms" if record["tree"] != "kept" else ""),
         f"trace {record['trace_ms']:.0f} ms",
     ]
-    if "heatmap_ms" in record:
-        parts.append(f"heatmap {record['heatmap_ms']:.0f} ms")
     return " | ".join(parts) + f" | {record['device']}"

@@ -36,3 +36,13 @@ def write(layer, name: str, pixels: np.ndarray) -> bool:
         return False
     render_pass.rect.foreach_set(np.ascontiguousarray(pixels[::-1], np.float32).reshape(-1))
     return True
+
+
+def write_all(layer, images) -> None:
+    """Combined, and Depth and the heatmap where the render made them (TraceImages), into a
+    RenderLayer of the Render Result."""
+    write(layer, COMBINED, images.color)
+    if images.depth is not None:
+        write(layer, DEPTH, images.depth)
+    if images.heat is not None:
+        write(layer, HEATMAP, images.heat)

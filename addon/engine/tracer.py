@@ -20,7 +20,7 @@ from bvhlab.render import DEFAULT_TRAVERSAL
 
 
 class TraceCancelled(Exception):
-    """`cancelled()` became true while a render ran; its result is dropped."""
+    """`cancelled()` became true while a render ran; the samples finished before are kept."""
 
 
 @dataclass(frozen=True)
@@ -63,6 +63,41 @@ class TraceImages:
     heat: np.ndarray | None
 
 
+class TraceJob:
+    """A render in sample passes (bvhlab.RenderJob): run to a number of samples per pixel, read the
+    images of the samples so far at any time (after Esc too: what is finished is kept)."""
+
+    def __init__(self, job, width: int, height: int):
+        self._job = job
+        self.size = (width, height)
+
+    @property
+    def samples_per_pixel(self) -> int:
+        return self._job.samples_per_pixel
+
+    @property
+    def samples_done(self) -> int:
+        return self._job.samples_done
+
+    def run(self, samples: int | None = None, cancelled=None) -> None:
+        """Traces until every pixel has `samples` samples (default: all). With `cancelled`, raises
+        TraceCancelled within one dispatch of it returning True."""
+        import bvhlab
+
+        try:
+            self._job.run(samples, progress=None if cancelled is None else (lambda fraction: not cancelled()))
+        except bvhlab.RenderCancelled:
+            raise TraceCancelled() from None
+
+    def images(self, depth: bool = False, heat: bool = False) -> TraceImages:
+        result = self._job.result(color=True, depth=depth, cost=False, heat=heat)
+        return TraceImages(result.color, result.depth, result.heat)
+
+    @property
+    def timings(self) -> dict:
+        return self._job.timings
+
+
 class Tracer:
     """One backend, shared by final renders and viewports (the Renderer is thread-safe)."""
 
@@ -82,31 +117,24 @@ class Tracer:
     def backend(self) -> str:
         return self.renderer.backend
 
-    def trace(
-        self,
-        scene,
-        bvh,
-        camera,
-        width: int,
-        height: int,
-        settings: TraceSettings,
-        cancelled=None,
-        depth: bool = False,
-        heat: bool = False,
-    ):
-        """(TraceImages, timings) of `scene` seen from `camera` (a bvhlab.Camera or View). With
-        `cancelled`, raises TraceCancelled within one dispatch of it returning True."""
-        import bvhlab
+    def check_size(self, width: int, height: int) -> None:
+        """ValueError for an image this backend does not render, before anything is allocated."""
+        self.renderer.check_size(width, height)
 
+    def start(self, scene, bvh, camera, width: int, height: int, settings: TraceSettings) -> TraceJob:
+        """A render of `scene` seen from `camera` (a bvhlab.Camera or View), nothing traced yet;
+        its settings checked (ValueError)."""
         job = self.renderer.start(
             scene, bvh, width, height, camera=camera, threads=settings.threads, **settings.options()
         )
-        try:
-            job.run(progress=None if cancelled is None else (lambda fraction: not cancelled()))
-        except bvhlab.RenderCancelled:
-            raise TraceCancelled() from None
-        result = job.result(color=True, depth=depth, cost=False, heat=heat)
-        return TraceImages(result.color, result.depth, result.heat), result.timings
+        return TraceJob(job, width, height)
+
+    def trace(self, scene, bvh, camera, width: int, height: int, settings: TraceSettings, cancelled=None):
+        """(TraceImages, timings) of the whole render (the Combined image only). With `cancelled`,
+        raises TraceCancelled within one dispatch of it returning True."""
+        job = self.start(scene, bvh, camera, width, height, settings)
+        job.run(cancelled=cancelled)
+        return job.images(), job.timings
 
 
 _tracers: dict[str, Tracer] = {}

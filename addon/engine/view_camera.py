@@ -1,12 +1,11 @@
-"""The 3D viewport's view as a camera the tracer takes (a symmetric pinhole), and where its image
-goes in the region. Pure numpy on the region's matrices (RegionView3D.view_matrix, window_matrix),
-so it is checked without a window.
+"""The 3D viewport's view as the camera the tracer takes, exactly: pure numpy on the region's
+matrices (RegionView3D.view_matrix, window_matrix), so it is checked without a window.
 
-The viewport's projection can be off-centre (camera view panned or zoomed, lens shift): the pinhole
-frustum is then the smallest symmetric one that covers the region, traced at the region's pixel
-density, and drawn shifted so the region shows its part. Orthographic views are traced by a pinhole
-ORTHO_DISTANCE view heights behind the view's focal plane (perspective distortion across a depth
-of one view height: 1/ORTHO_DISTANCE).
+Blender's projection for the region, off-centre or not (camera view panned or zoomed, lens
+shift), perspective or orthographic, becomes a bvhlab.View with the same frustum: its field of
+view, aspect, lens shift and clipping planes read from the window matrix. The traced image covers
+the region pixel for pixel. Panoramic cameras are drawn by Blender's viewport as perspective ones,
+and traced so (Cycles draws them panoramic in camera view; final renders here do too).
 """
 
 from __future__ import annotations
@@ -16,76 +15,50 @@ from dataclasses import dataclass
 
 import numpy as np
 
-ORTHO_DISTANCE = 500.0
-
 
 @dataclass(frozen=True)
 class ViewFrustum:
-    """A bvhlab camera for the view (position, look_at, up, fov_y), the traced image size at full
-    resolution, and the rectangle (x, y from the region's bottom left, width, height; pixels) the
-    image covers in the region."""
+    """A bvhlab.View for the region (`view`), the traced image size at full resolution, and the
+    rectangle (x, y from the region's bottom left, width, height; pixels) the image covers in the
+    region: all of it."""
 
-    position: tuple
-    look_at: tuple
-    up: tuple
-    fov_y: float
+    view: object
     width: int
     height: int
     draw_rect: tuple
 
     def camera(self):
-        from bvhlab import Camera
-
-        return Camera(self.position, self.look_at, self.up, self.fov_y)
+        return self.view
 
     def scaled(self, scale: float) -> tuple[int, int]:
         """Image size at a fraction of full resolution (at least one pixel each way)."""
         return max(1, round(self.width * scale)), max(1, round(self.height * scale))
 
 
-def view_frustum(
-    view_matrix,
-    window_matrix,
-    region_width: int,
-    region_height: int,
-    perspective: bool = True,
-    view_distance: float = 10.0,
-) -> ViewFrustum:
-    """The frustum of a viewport region (see the module docstring)."""
+def view_frustum(view_matrix, window_matrix, region_width: int, region_height: int) -> ViewFrustum:
+    """The frustum of a viewport region (see the module docstring). The window matrix is OpenGL's:
+    NDC x = P00·tan + offset for a perspective view (tan = x / -z), P00·x + P03 orthographic; the
+    clipping planes from its third row."""
+    from bvhlab import View
+
     view, projection = np.asarray(view_matrix, np.float64), np.asarray(window_matrix, np.float64)
     to_world = np.linalg.inv(view)
-    right, up, back = (to_world[:3, k] / np.linalg.norm(to_world[:3, k]) for k in range(3))
-    forward = -back
-    eye = to_world[:3, 3]
-    # Along each axis the region's NDC is s·t + c, t the tangent x/-z (perspective: c = -P[0][2]
-    # as clip w = -z) or, orthographic, the view-space x over the pinhole's distance (c = P[0][3]).
-    if perspective:
-        sx, cx, sy, cy = projection[0, 0], -projection[0, 2], projection[1, 1], -projection[1, 2]
-        position = eye
+    up, back = (to_world[:3, k] / np.linalg.norm(to_world[:3, k]) for k in (1, 2))
+    forward, eye = -back, to_world[:3, 3]
+    half_width, half_height = 1.0 / projection[0, 0], 1.0 / projection[1, 1]
+    larger = 2 * max(half_width, half_height)
+    lens: dict = {"aspect": half_width / half_height}
+    if projection[3, 3] == 0.0:  # perspective: clip w = -z
+        centre = projection[0, 2] * half_width, projection[1, 2] * half_height
+        near, far = projection[2, 3] / (projection[2, 2] - 1), projection[2, 3] / (projection[2, 2] + 1)
+        lens["fov_y"] = math.degrees(2 * math.atan(half_height))
     else:
-        half_height = 1.0 / projection[1, 1]
-        distance = ORTHO_DISTANCE * half_height
-        sx, cx = projection[0, 0] * distance, projection[0, 3]
-        sy, cy = projection[1, 1] * distance, projection[1, 3]
-        position = eye + forward * (view_distance - distance)
-    width, x0 = _symmetric_span(sx, cx, region_width)
-    height, y0 = _symmetric_span(sy, cy, region_height)
-    tan_half_y = height / (sy * region_height)
-    return ViewFrustum(
-        tuple(position),
-        tuple(position + forward),
-        tuple(up),
-        math.degrees(2 * math.atan(tan_half_y)),
-        width,
-        height,
-        (x0, y0, width, height),
-    )
-
-
-def _symmetric_span(scale: float, centre: float, pixels: int) -> tuple[int, float]:
-    """(traced pixels, region position of the traced image's first pixel) along one axis: the
-    narrowest span symmetric about the view axis that covers the region, at the region's density."""
-    half = max(abs((-1 - centre) / scale), abs((1 - centre) / scale))  # half extent in tangent units
-    traced = max(1, round(half * scale * pixels))
-    half = traced / (scale * pixels)  # exactly `traced` region pixels wide
-    return traced, (1 + centre - half * scale) * pixels / 2
+        centre = -projection[0, 3] * half_width, -projection[1, 3] * half_height
+        near, far = (projection[2, 3] + 1) / projection[2, 2], (projection[2, 3] - 1) / projection[2, 2]
+        lens.update(projection="orthographic", ortho_scale=larger)
+        # the tracer's orthographic rays start on the camera's plane: put it on the near plane when
+        # that lies behind the eye (a user orthographic view clips from -clip_end / 2)
+        eye, far, near = eye + forward * min(near, 0.0), far - min(near, 0.0), max(near, 0.0)
+    lens.update(shift_x=centre[0] / larger, shift_y=centre[1] / larger, clip_start=max(near, 0.0), clip_end=far)
+    camera = View(tuple(eye), tuple(forward), tuple(up), **lens)
+    return ViewFrustum(camera, region_width, region_height, (0, 0, region_width, region_height))

@@ -41,6 +41,7 @@ class ViewRequest:
     backend: str
     build: BuildSettings
     budget_ms: float
+    note: str = ""  # what of the camera the viewport does not show (view_request.camera_view_note)
 
 
 @dataclass(frozen=True)
@@ -272,6 +273,8 @@ class ViewportSession:
             self._status = f"{timings['level'].capitalize()} {timings['width']} × {timings['height']}" + (
                 f", {timings['spp']} spp" if timings["spp"] > 1 else ""
             )
+            if frame.request.note:
+                self._status += f" | {frame.request.note}"
 
 
 def _levels(request: ViewRequest, ms_per_sample: float | None) -> list[tuple[str, float, int]]:

@@ -33,15 +33,35 @@ void vec3_property(nb::class_<Class>& c, const char* name, const char* doc) {
 }
 
 void bind_camera(nb::module_& m) {
-    nb::class_<Camera> camera(m, "Camera", "A pinhole camera looking along `forward` (render_settings.h).");
+    nb::enum_<Projection>(m, "Projection")
+        .value("perspective", Projection::Perspective)
+        .value("orthographic", Projection::Orthographic)
+        .value("equirectangular", Projection::Equirectangular)
+        .value("fisheye", Projection::FisheyeEquidistant);
+    nb::class_<Camera> camera(m, "Camera", "A camera looking along `forward` (camera.h).");
     camera.def(nb::init<>());
     vec3_property<Camera, &Camera::position>(camera, "position", "where the camera is");
     vec3_property<Camera, &Camera::forward>(camera, "forward", "view direction (any length > 0)");
     vec3_property<Camera, &Camera::up>(camera, "up", "up vector (not parallel to forward)");
-    camera.def_rw("fov_y", &Camera::fov_y_degrees, "vertical field of view, degrees")
-        .def_rw("aspect", &Camera::aspect, "image-plane width / height; 0: the image's")
+    camera.def_rw("projection", &Camera::projection)
+        .def_rw("fov_y", &Camera::fov_y_degrees, "perspective: vertical field of view, degrees")
+        .def_rw("ortho_scale", &Camera::ortho_scale, "orthographic: the image plane's larger side")
+        .def_rw("aspect", &Camera::aspect, "image-plane width / height; 0: the frame's")
         .def_rw("shift_x", &Camera::shift_x, "lens shift in fractions of the image plane's larger side (Blender's)")
-        .def_rw("shift_y", &Camera::shift_y);
+        .def_rw("shift_y", &Camera::shift_y)
+        .def_rw("clip_start", &Camera::clip_start)
+        .def_rw("clip_end", &Camera::clip_end)
+        .def_rw("aperture_radius", &Camera::aperture_radius, "thin lens radius, world units (0: no depth of field)")
+        .def_rw("focus_distance", &Camera::focus_distance)
+        .def_rw("fisheye_fov", &Camera::fisheye_fov_degrees, "fisheye: field of view, degrees")
+        .def_rw("latitude_min", &Camera::latitude_min, "equirectangular: degrees")
+        .def_rw("latitude_max", &Camera::latitude_max)
+        .def_rw("longitude_min", &Camera::longitude_min)
+        .def_rw("longitude_max", &Camera::longitude_max)
+        .def_rw("region", &Camera::region, "x0, y0, x1, y1: the part of the frame the image shows (from the top left)")
+        .def("validate", [](const Camera& self) { validate(self); }, "Raises ValueError naming the first bad value.");
+    m.def("parse_projection", [](const std::string& name) { return parse_projection(name); });
+    m.attr("PROJECTIONS") = nb::tuple(nb::cast(projection_names()));
 
     nb::class_<PointLight> light(m, "PointLight");
     light.def(nb::init<>());
@@ -79,6 +99,13 @@ void bind_settings(nb::module_& m) {
             "Raises ValueError naming the first bad setting.");
     vec3_property<RenderSettings, &RenderSettings::sky>(s, "sky", "the atmosphere colour (report §2.1)");
 
+    m.def(
+        "validate_image_size",
+        [](std::uint32_t width, std::uint32_t height, std::uint32_t max_dimension) {
+            validate_image_size(width, height, max_dimension);
+        },
+        "width"_a, "height"_a, "max_dimension"_a = kMaxImageDimension,
+        "Raises ValueError for an empty size or one above max_dimension pixels per side.");
     m.def("parse_traversal", [](const std::string& name) { return parse_traversal(name); });
     m.def("parse_render_mode", [](const std::string& name) { return parse_render_mode(name); });
     m.attr("TRAVERSALS") = nb::tuple(nb::cast(traversal_names()));

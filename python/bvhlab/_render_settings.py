@@ -1,31 +1,15 @@
-"""The typed settings of a render (`_core.RenderSettings`) from `bvhlab.render`'s arguments, and
-`View`, a camera given directly. Types are checked here; values once, in C++."""
+"""The typed settings of a render (`_core.RenderSettings`) from `bvhlab.render`'s arguments.
+Types are checked here; values once, in C++."""
 
 from __future__ import annotations
 
 import numbers
-from dataclasses import dataclass
 
 import numpy as np
 
 from . import _checks, _core
 from .bvh import Bvh
-from .scene import Camera, Scene
-
-
-@dataclass(frozen=True)
-class View:
-    """A camera given directly, as Blender's camera or a viewport region gives it: position, view
-    direction, up, vertical field of view in degrees, image-plane aspect (None: the image's),
-    and lens shift in fractions of the image plane's larger side (Blender's shift_x, shift_y)."""
-
-    position: tuple[float, float, float]
-    forward: tuple[float, float, float]
-    up: tuple[float, float, float] = (0.0, 0.0, 1.0)
-    fov_y: float = 45.0
-    aspect: float | None = None
-    shift_x: float = 0.0
-    shift_y: float = 0.0
+from .scene import Camera, Scene, View
 
 
 def render_settings(
@@ -78,16 +62,6 @@ def _name(what: str, value) -> str:
     return value
 
 
-def _triple(name: str, value) -> tuple[float, float, float]:
-    try:
-        v = tuple(_real(name, x) for x in value)
-    except TypeError:
-        raise TypeError(f"{name} must be three numbers, got {value!r}") from None
-    if len(v) != 3:
-        raise ValueError(f"{name} must be three numbers, got {len(v)}")
-    return v
-
-
 def _real(name: str, value) -> float:
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise TypeError(f"{name} must be a number, got {type(value).__name__}")
@@ -95,25 +69,15 @@ def _real(name: str, value) -> float:
 
 
 def _camera(scene: Scene, camera) -> _core.Camera:
-    c = _core.Camera()
     camera = scene.camera if camera is None else camera
     if camera is None:  # nothing to frame: bvhlab.defaults' fallback camera
         from .defaults import camera_placement
 
         position, target, up, fov = camera_placement(scene.bounds() if scene.primitive_count else None)
         camera = Camera(position, target, up, fov)
-    if isinstance(camera, Camera):
-        c.position, c.up, c.fov_y = camera.position, camera.up, camera.fov_y
-        c.forward = tuple(np.subtract(camera.look_at, camera.position))
-    elif isinstance(camera, View):
-        c.position, c.forward = _triple("camera position", camera.position), _triple("camera forward", camera.forward)
-        c.up = _triple("camera up", camera.up)
-        c.fov_y = _real("camera fov_y", camera.fov_y)
-        c.aspect = 0.0 if camera.aspect is None else _real("camera aspect", camera.aspect)
-        c.shift_x, c.shift_y = _real("camera shift_x", camera.shift_x), _real("camera shift_y", camera.shift_y)
-    else:
+    if not isinstance(camera, (Camera, View)):
         raise TypeError(f"camera must be a bvhlab.Camera or bvhlab.View, got {type(camera).__name__}")
-    return c
+    return camera.core()
 
 
 def _set_light(s, scene: Scene, camera) -> None:

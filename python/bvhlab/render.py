@@ -199,6 +199,18 @@ class Renderer:
     def device(self) -> str:
         return self._vulkan.device_name if self._vulkan else "CPU reference"
 
+    @property
+    def max_image_dimension(self) -> int:
+        """Pixels per side this backend renders at most (Vulkan: the device's limit)."""
+        return int(self._vulkan.max_image_dimension) if self._vulkan else int(_core.MAX_IMAGE_DIMENSION)
+
+    def check_size(self, width: int, height: int) -> None:
+        """Raises ValueError for an image size this backend does not render (empty, or above
+        max_image_dimension per side), TypeError for a size that is not two integers: for callers
+        that must refuse a size before they allocate anything for it (as `start` does)."""
+        width, height = _checks.integer("width", width, 0, 2**31), _checks.integer("height", height, 0, 2**31)
+        _core.validate_image_size(width, height, self.max_image_dimension)
+
     def validation_messages(self) -> list[str]:
         """Validation-layer warnings and errors since the last call (Vulkan with validation on)."""
         return list(self._vulkan.take_validation_messages()) if self._vulkan else []

@@ -17,9 +17,10 @@ vec3 corner_position(vec3 lo, vec3 hi, uint corner) {
     return vec3((corner & 1u) != 0u ? hi.x : lo.x, (corner & 2u) != 0u ? hi.y : lo.y, (corner & 4u) != 0u ? hi.z : lo.z);
 }
 
-/// Clip-space position under the tracer's pinhole camera (camera_ray_dir in shade.glsl, with its
-/// shifted image plane), Vulkan conventions: y down, depth 0 at the near plane (overlay_near) and 1
-/// at the far plane (overlay_far).
+/// Clip-space position under the tracer's camera (camera_ray in shade.glsl: its screen
+/// coordinates, perspective or orthographic; panoramic cameras draw no overlay), Vulkan
+/// conventions: y down, depth 0 at the near plane (overlay_near) and 1 at the far plane
+/// (overlay_far). A screen point (x, y) lies at image pixel ((x, y) - screen.xy) / screen.zw.
 vec4 overlay_clip(vec3 p) {
     vec3 v = p - frame.camera_position;
     float x = dot(v, frame.camera_right);
@@ -27,6 +28,15 @@ vec4 overlay_clip(vec3 p) {
     float z = dot(v, frame.camera_forward);
     float near = frame.overlay_near;
     float far = frame.overlay_far;
-    return vec4((x - frame.shift_x * z) / (frame.tan_half_fov_y * frame.aspect),
-                (frame.shift_y * z - y) / frame.tan_half_fov_y, far / (far - near) * (z - near), z);
+    float sx = 2.0f / (frame.screen.z * float(frame.width));
+    float sy = 2.0f / (frame.screen.w * float(frame.height));
+    if (frame.projection == PROJECTION_ORTHOGRAPHIC)
+        return vec4((x - frame.screen.x) * sx - 1.0f, (y - frame.screen.y) * sy - 1.0f, (z - near) / (far - near), 1.0f);
+    return vec4((x - frame.screen.x * z) * sx - z, (y - frame.screen.y * z) * sy - z, far / (far - near) * (z - near), z);
+}
+
+/// The distance along the primary ray to a line point at `v` from the camera: from the camera
+/// (perspective), along the view axis from the ray's start on the camera's plane (orthographic).
+float overlay_distance(vec3 v) {
+    return frame.projection == PROJECTION_ORTHOGRAPHIC ? dot(v, frame.camera_forward) : length(v);
 }

@@ -16,6 +16,15 @@ struct RayTask {
     uint depth;   ///< bounces so far (0: the primary ray)
 };
 
+RayTask ray_task(vec3 origin, vec3 dir, vec3 weight, uint depth) {
+    RayTask t;
+    t.origin = origin;
+    t.dir = dir;
+    t.weight = weight;
+    t.depth = depth;
+    return t;
+}
+
 // What a trace does next (TraceState::phase).
 LOCAL_CONST uint PHASE_SAMPLE = 0u;    ///< start the pixel's next sample, or finish the pass
 LOCAL_CONST uint PHASE_START = 1u;     ///< start the closest-hit query of `task`
@@ -48,16 +57,113 @@ struct TraceState {
 
 float infinity() { return uintBitsToFloat(0x7f800000u); }
 
-/// Direction of the primary ray of a sample of pixel p: a pinhole camera with vertical field of
-/// view 2·atan(tan_half_fov_y), the image plane's centre shifted by (shift_x, shift_y) at unit
-/// distance, image row 0 at the top.
-vec3 camera_ray_dir(uvec2 p, uint sample_index) {
+/// Equirectangular or fisheye: rays from one point in every direction, clipped by distance.
+bool panoramic_camera() { return frame.projection >= PROJECTION_EQUIRECTANGULAR; }
+
+/// Screen coordinates (gpu_types.h FrameParams::screen) of sample `sample_index` of pixel p: the
+/// centres of an n×n grid over the pixel, image row 0 at the top.
+vec2 sample_screen(uvec2 p, uint sample_index) {
     uint n = frame.samples_per_axis;
-    float px = (float(p.x) + (float(sample_index % n) + 0.5f) / float(n)) / float(frame.width);
-    float py = (float(p.y) + (float(sample_index / n) + 0.5f) / float(n)) / float(frame.height);
-    float x = (2.0f * px - 1.0f) * frame.tan_half_fov_y * frame.aspect + frame.shift_x;
-    float y = (1.0f - 2.0f * py) * frame.tan_half_fov_y + frame.shift_y;
-    return normalize(frame.camera_forward + x * frame.camera_right + y * frame.camera_up);
+    float qx = float(p.x) + (float(sample_index % n) + 0.5f) / float(n);
+    float qy = float(p.y) + (float(sample_index / n) + 0.5f) / float(n);
+    return vec2(frame.screen.x + qx * frame.screen.z, frame.screen.y + qy * frame.screen.w);
+}
+
+/// Equirectangular (Cycles' equirectangular_range_to_direction, intern/cycles/kernel/camera/
+/// projection.h): longitude across, latitude up. Cycles' panorama camera space (x forward, y left,
+/// z up: blender_camera_matrix, intern/cycles/blender/camera.cpp) is turned into world space.
+vec3 equirectangular_dir(vec2 uv) {
+    float phi = frame.panorama.x * uv.x + frame.panorama.y;
+    float theta = frame.panorama.z * uv.y + frame.panorama.w;
+    float across = sin(theta);
+    return frame.camera_forward * (across * cos(phi)) - frame.camera_right * (across * sin(phi)) +
+           frame.camera_up * cos(theta);
+}
+
+/// Fisheye equidistant (Cycles' fisheye_to_direction, projection.h): the angle from the view axis
+/// grows with the distance from the frame's centre, reaching half the field of view at the edge
+/// of the ellipse that fills the frame; zero (no ray) outside it.
+vec3 fisheye_dir(vec2 uv) {
+    float u = (uv.x - 0.5f) * 2.0f;
+    float v = (uv.y - 0.5f) * 2.0f;
+    float r = sqrt(u * u + v * v);
+    if (r > 1.0f) return vec3(0.0f);
+    float theta = r * frame.panorama.x * 0.5f;
+    float across = r > 0.0f ? sin(theta) / r : 0.0f;
+    return frame.camera_forward * cos(theta) + frame.camera_right * (u * across) + frame.camera_up * (v * across);
+}
+
+/// lowbias32 (C. Wellons, "Hash Prospector", 2018): a well-mixed 32-bit integer hash.
+uint hash_uint(uint x) {
+    x = (x ^ (x >> 16u)) * 0x7feb352du;
+    x = (x ^ (x >> 15u)) * 0x846ca68bu;
+    return x ^ (x >> 16u);
+}
+
+/// A point of the unit disc for sample `sample_index` of pixel p: the additive recurrence R2
+/// (M. Roberts, "The Unreasonable Effectiveness of Quasirandom Sequences", 2018) over the samples
+/// from a start hashed from the pixel, so that a pixel's lens points spread evenly and neighbours
+/// differ; mapped onto the disc by Shirley and Chiu's concentric map (JGT 1997).
+vec2 lens_disc(uvec2 p, uint sample_index) {
+    uint h = hash_uint(p.x ^ hash_uint(p.y + 0x9e3779b9u));
+    float sx = fract(float(h >> 8u) * 5.9604645e-8f + float(sample_index) * 0.75487766f);
+    float sy = fract(float(hash_uint(h) >> 8u) * 5.9604645e-8f + float(sample_index) * 0.56984029f);
+    float a = 2.0f * sx - 1.0f;
+    float b = 2.0f * sy - 1.0f;
+    if (a == 0.0f && b == 0.0f) return vec2(0.0f);
+    bool wide = abs(a) > abs(b);
+    float r = wide ? a : b;
+    float phi = wide ? 0.78539816f * (b / a) : 1.57079633f - 0.78539816f * (a / b);
+    return vec2(r * cos(phi), r * sin(phi));
+}
+
+/// Depth of field through a thin lens (Cycles' camera_sample_perspective, _orthographic and
+/// _panorama with aperturesize > 0, kernel/camera/camera.h): the ray leaves a point of the lens
+/// disc (radius aperture_radius, across the view axis; panoramic: across the pinhole ray) towards
+/// the point the pinhole ray reaches at the focus distance (along the view axis; panoramic: along
+/// the ray). `dir` has a view-axis component of 1 (perspective, orthographic) or is unit.
+void thin_lens(INOUT(vec3) origin, INOUT(vec3) dir, uvec2 p, uint sample_index) {
+    vec2 lens = lens_disc(p, sample_index) * frame.aperture_radius;
+    vec3 across = frame.camera_right;
+    vec3 focus = origin + dir * frame.focus_distance;
+    if (panoramic_camera()) {
+        vec3 u = frame.camera_forward - dir * dot(dir, frame.camera_forward);
+        if (dot(u, u) > 1e-12f) across = normalize(u);  // along the view axis Cycles' U is undefined
+    }
+    vec3 other = panoramic_camera() ? cross(dir, across) : frame.camera_up;
+    origin = origin + across * lens.x + other * lens.y;
+    dir = focus - origin;
+}
+
+/// The primary ray of sample `sample_index` of pixel p (Cycles' camera_sample_perspective,
+/// _orthographic and _panorama, kernel/camera/camera.h), with a unit direction; a zero direction
+/// where the projection has no ray (outside the fisheye's ellipse).
+RayTask camera_ray(uvec2 p, uint sample_index) {
+    vec2 s = sample_screen(p, sample_index);
+    vec3 origin = frame.camera_position;
+    vec3 dir = frame.camera_forward;
+    uint projection = frame.projection;
+    if (projection == PROJECTION_PERSPECTIVE) dir = frame.camera_forward + frame.camera_right * s.x + frame.camera_up * s.y;
+    if (projection == PROJECTION_ORTHOGRAPHIC) origin = origin + frame.camera_right * s.x + frame.camera_up * s.y;
+    if (projection == PROJECTION_EQUIRECTANGULAR) dir = equirectangular_dir(s);
+    if (projection == PROJECTION_FISHEYE_EQUIDISTANT) dir = fisheye_dir(s);
+    bool ray = dot(dir, dir) > 0.0f;
+    if (ray && frame.aperture_radius > 0.0f) thin_lens(origin, dir, p, sample_index);
+    return ray_task(origin, ray ? normalize(dir) : dir, vec3(1.0f), 0u);
+}
+
+/// Blender's Depth of the point at `t` along a primary ray (Cycles' camera_z_depth,
+/// kernel/camera/camera.h): its distance along the view axis from the camera (perspective,
+/// orthographic), or from the camera (panoramic).
+float camera_depth(RayTask task, float t) {
+    vec3 v = (task.origin - frame.camera_position) + task.dir * t;
+    return panoramic_camera() ? length(v) : dot(v, frame.camera_forward);
+}
+
+/// How far a primary ray goes per unit of the depth it clips at: 1 / its view-axis component
+/// (perspective, orthographic), 1 (panoramic: clipped by distance, as Cycles clips).
+float clip_scale(vec3 dir) {
+    return panoramic_camera() ? 1.0f : 1.0f / dot(dir, frame.camera_forward);
 }
 
 /// A hit as shading sees it.
@@ -105,15 +211,6 @@ vec3 direct_light(vec3 p, vec3 n, vec3 view_dir, vec3 albedo, float transmission
     return color + frame.light_color * (transmission * (1.0f - AMBIENT)) * (albedo * lambert + vec3(highlight));
 }
 
-RayTask ray_task(vec3 origin, vec3 dir, vec3 weight, uint depth) {
-    RayTask t;
-    t.origin = origin;
-    t.dir = dir;
-    t.weight = weight;
-    t.depth = depth;
-    return t;
-}
-
 void push_ray(INOUT(TraceState) s, RayTask t) {
     uint k = 3u * s.rays;
     ray_word_store(k, uvec4(floatBitsToUint(t.origin.x), floatBitsToUint(t.origin.y), floatBitsToUint(t.origin.z), t.depth));
@@ -135,10 +232,13 @@ RayTask pop_ray(INOUT(TraceState) s) {
 
 /// Starts the closest-hit query of `task`. Where the overlay drew a line in front of the primary
 /// ray's surface, the line wins: the query only looks up to the line's distance (report §3.3).
+/// A primary ray looks only between the camera's clipping planes (Cycles' camera_sample_*).
 void start_closest(INOUT(TraceState) s) {
-    bool line = s.task.depth == 0u && s.overlay.w > 0.0f;
-    s.ray = make_ray(s.task.origin, s.task.dir, 0.0f);
-    s.hit = empty_hit(line ? s.overlay.w : FAR_AWAY);
+    bool primary = s.task.depth == 0u;
+    bool line = primary && s.overlay.w > 0.0f;
+    float k = primary ? clip_scale(s.task.dir) : 0.0f;  // camera rays see between the clipping planes
+    s.ray = make_ray(s.task.origin, s.task.dir, primary ? frame.clip_start * k : 0.0f);
+    s.hit = empty_hit(min(line ? s.overlay.w : FAR_AWAY, primary ? frame.clip_end * k : FAR_AWAY));
     s.walk = start_walk();
     s.phase = PHASE_CLOSEST;
 }
@@ -149,11 +249,12 @@ void start_sample(INOUT(TraceState) s) {
         s.phase = PHASE_DONE;
         return;
     }
-    s.task = ray_task(frame.camera_position, camera_ray_dir(s.pixel, s.sample_index), vec3(1.0f), 0u);
+    s.task = camera_ray(s.pixel, s.sample_index);
     s.color = vec3(0.0f);
     s.visits = 0.0f;
     s.depth = infinity();
-    s.phase = PHASE_START;
+    // no ray (outside the fisheye's ellipse): a black sample that hit nothing, as in Cycles
+    s.phase = dot(s.task.dir, s.task.dir) > 0.0f ? PHASE_START : PHASE_NEXT_RAY;
 }
 
 /// The next ray off the stack becomes the task, or the sample is complete: its colour, box tests
@@ -196,10 +297,9 @@ void finish_shading(INOUT(TraceState) s, Surface f) {
 /// (or the overlay's line, report §3.3) for a miss. Returns true for a hit.
 bool after_closest(INOUT(TraceState) s) {
     bool line = s.task.depth == 0u && s.overlay.w > 0.0f;
-    float cos_view = dot(s.task.dir, frame.camera_forward);
     if (s.task.depth == 0u) {
         s.visits = float(s.hit.visited);
-        s.depth = s.hit.ref != NO_HIT ? s.hit.t * cos_view : (line ? s.overlay.w * cos_view : infinity());
+        s.depth = s.hit.ref != NO_HIT ? camera_depth(s.task, s.hit.t) : (line ? camera_depth(s.task, s.overlay.w) : infinity());
     }
     if (s.hit.ref != NO_HIT) return true;
     s.color += s.task.weight * (line ? xyz(s.overlay) : frame.sky);

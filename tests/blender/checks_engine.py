@@ -145,7 +145,10 @@ def heat_color(x: np.ndarray) -> np.ndarray:
 
 def check_heatmap_is_box_tests(tmp_dir) -> None:
     """At one sample per pixel the heatmap pass is heat_color(box tests / (8 × tree height)) of the
-    primary rays, the box tests counted by Bvh.intersect (the core's traversal, not the tracer's)."""
+    primary rays, the box tests counted by Bvh.intersect (the core's traversal, not the tracer's).
+    The rays are worked out here in another order of float operations than the tracer's, so a ray
+    through a box's face may differ by an ulp and take one more or fewer box test: at most one
+    pixel in a thousand may differ, by at most two box tests."""
     scene = harness.open_scene("suzanne_250k")
     scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 96, 72, 100
     use_engine(scene, backend="cpu", render_supersampling=1, render_overlay=False, traversal="stack")
@@ -156,8 +159,13 @@ def check_heatmap_is_box_tests(tmp_dir) -> None:
     directions = _primary_directions(exported.camera, 96, 72)
     origins = np.ascontiguousarray(np.broadcast_to(np.float32(exported.camera.position), directions.shape))
     visited = bvh.intersect(origins, directions, traversal="stack")["nodes_visited"].reshape(72, 96)
-    expected = heat_color(visited / (8.0 * bvh.stats["height"]))
-    np.testing.assert_allclose(got["BVH Heatmap"][..., :3], expected, atol=1e-6)
+    scale = 8.0 * bvh.stats["height"]
+    expected = heat_color(visited / scale)
+    off = np.abs(got["BVH Heatmap"][..., :3] - expected).max(-1) > 1e-6
+    assert off.mean() <= 1e-3, f"{off.sum()} pixels differ"
+    for y, x in zip(*np.nonzero(off)):
+        candidates = heat_color((visited[y, x] + np.arange(-2, 3)) / scale)
+        assert np.abs(candidates - got["BVH Heatmap"][y, x, :3]).max(-1).min() <= 1e-6, (y, x, visited[y, x])
     assert len(np.unique(visited)) > 10, "the heatmap must vary over the picture"
 
 

@@ -7,12 +7,14 @@ Groups: install (the built zip installs, unregisters cleanly, enables again), ex
 small scenes), addon (operators), instancing (Build and F12 on geometry-nodes and nested
 collection instances), engine (the render engine: passes against the CPU reference,
 re-renders, animation, `blender -b ... -a` under a binary, the viewport's camera and worker),
-no_vulkan (backend "vulkan" without a driver), gpu (overlay drawn into a GPUOffScreen; batch time
-for a million boxes). Under a Blender binary the add-on (and with
-it the bvhlab wheel) comes from the zip, so `make addon` first; under Python, from addon/ in place
-unless the install group ran. The checks are the ones pytest runs (tests/python/test_blender_*.py,
-test_addon*.py). Blender binaries re-run themselves with BLENDER_USER_RESOURCES set to a temporary
-folder, so nothing is written to the user's Blender configuration.
+cameras (every camera kind and setting: the engine's Depth pass against Cycles', F12 on each
+backend and the viewport's camera; depth of field, a huge F12, Esc under a binary), no_vulkan
+(backend "vulkan" without a driver), gpu (overlay drawn into a GPUOffScreen; batch time for a
+million boxes). Under a Blender binary the add-on (and with it the bvhlab wheel) comes from the
+zip, so `make addon` first; under Python, from addon/ in place unless the install group ran. The
+checks are the ones pytest runs (tests/python/test_blender_*.py, test_addon*.py, test_engine.py,
+test_cameras.py). Blender binaries re-run themselves with BLENDER_USER_RESOURCES set to a
+temporary folder, so nothing is written to the user's Blender configuration.
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ from pathlib import Path
 IN_BLENDER = "bpy" in sys.modules  # a Blender binary imports bpy before running scripts
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-GROUPS = ("install", "export", "addon", "instancing", "engine", "no_vulkan", "gpu")
+GROUPS = ("install", "export", "addon", "instancing", "engine", "cameras", "no_vulkan", "gpu")
 
 
 def _arguments():
@@ -74,9 +76,24 @@ def _checks(groups, zip_path: Path, tmp: Path):
     import harness
 
     if "install" in groups:
-        import checks_install
+        import platform
 
+        import checks_install
+        import checks_versions
+
+        if sys.version_info >= (3, 12):  # where a stable-ABI wheel could load
+            yield (
+                "install",
+                "abi3_beside_cp311_refused",
+                lambda: checks_versions.check_abi3_beside_cp311_refused(zip_path),
+            )
         yield "install", "install_enable_disable", lambda: checks_install.check_install_enable_disable(zip_path)
+        blender = f"Blender {harness.bpy.app.version_string}, Python {platform.python_version()}"
+        yield (
+            "install",
+            f"installed_core_is_this_pythons ({blender})",
+            checks_versions.check_installed_core_is_this_pythons,
+        )
     if "export" in groups:
         import checks_bundled
         import checks_cases
@@ -87,7 +104,7 @@ def _checks(groups, zip_path: Path, tmp: Path):
             yield "export", check.__name__, check
         yield "export", "scene_file_round_trip", lambda: checks_cases.check_scene_file_round_trip(tmp)
         yield "export", "large_export", checks_bundled.check_large_export
-    if groups & {"addon", "instancing", "engine", "no_vulkan", "gpu"} and harness._addon_module is None:
+    if groups & {"addon", "instancing", "engine", "cameras", "no_vulkan", "gpu"} and harness._addon_module is None:
         harness.enable_addon_from_source()
     if "addon" in groups:
         import checks_addon
@@ -120,6 +137,19 @@ def _checks(groups, zip_path: Path, tmp: Path):
 
         for check in checks_engine.engine_checks(binary=IN_BLENDER):
             yield "engine", check.__name__, lambda c=check: _in_own_folder(c, tmp / c.__name__)
+    if "cameras" in groups:
+        import checks_cameras
+        import checks_final
+
+        backends = checks_cameras.vulkan_backends()
+        for name in checks_cameras.SETTINGS:
+            yield (
+                "cameras",
+                f"{name} against Cycles",
+                lambda n=name: checks_cameras.check_settings_against_cycles(tmp / "cameras", backends, names=[n]),
+            )
+        for check in checks_final.final_checks(binary=IN_BLENDER):
+            yield "cameras", check.__name__, lambda c=check: _in_own_folder(c, tmp / c.__name__)
     if "no_vulkan" in groups:
         import checks_addon
 

@@ -141,12 +141,11 @@ TEST_F(Vulkan, DepthAndCostMatchTheReferenceAndTheRays) {
     std::size_t hits = 0, off = 0;
     for (std::uint32_t y = 0; y < s.height; ++y)
         for (std::uint32_t x = 0; x < s.width; ++x) {  // the primary ray through the pixel centre, traced by traverse.h
-            float px = (float(x) + 0.5f) / float(s.width) * 2 - 1, py = 1 - (float(y) + 0.5f) / float(s.height) * 2;
+            float sx = f.screen.x + (float(x) + 0.5f) * f.screen.z, sy = f.screen.y + (float(y) + 0.5f) * f.screen.w;
             Vec3 fwd{f.camera_forward.x, f.camera_forward.y, f.camera_forward.z},
                 right{f.camera_right.x, f.camera_right.y, f.camera_right.z};
             Vec3 up{f.camera_up.x, f.camera_up.y, f.camera_up.z};
-            Vec3 dir = normalize(fwd + right * (px * f.tan_half_fov_y * f.aspect + f.shift_x) +
-                                 up * (py * f.tan_half_fov_y + f.shift_y));
+            Vec3 dir = normalize(fwd + right * sx + up * sy);
             Hit h = intersect(scene->bvh, Ray{s.camera.position, dir}, Traversal::Stack);
             const std::size_t i = std::size_t(y) * s.width + x;
             const float expected = h.t < kInfinity ? h.t * dot(dir, fwd) : kNoDepth;

@@ -1,7 +1,8 @@
 """The extension zip `make addon` builds (dist/bvhlab.zip): one wheel per Python Blender embeds,
 listed in its manifest with the project's one version; it installs and enables headless under
 bpy 4.2, unregisters without leftovers, and enables again (in a child process with its own user
-folder). The same zip is installed under bpy 5.2 and a Blender binary by `make blender-test`."""
+folder). The same zip is installed under bpy 5.2 and the Blender binaries 4.3 (Python 3.13) and
+5.2 (Python 3.14) by `make blender-test`."""
 
 import re
 import tomllib
@@ -14,6 +15,10 @@ import bvhlab
 
 ROOT = Path(__file__).resolve().parents[2]
 ZIP = ROOT / "dist" / "bvhlab.zip"
+#: The Pythons Blender embeds: 3.11 (4.2 LTS to 5.0), 3.13 (blender.org's 5.1 and later), 3.14
+#: (distribution builds linked to their system Python, as Debian's 5.2). One wheel each: Blender's
+#: installer refuses cp311 + one abi3 wheel under 3.13 and 3.14 (tests/blender/checks_versions.py).
+BLENDER_PYTHONS = ("cp311", "cp313", "cp314")
 
 
 def _zip() -> Path:
@@ -28,7 +33,7 @@ def test_zip_has_a_wheel_for_each_blender_python_and_one_version():
     version = bvhlab.__version__
     assert manifest["version"] == version
     assert sorted(manifest["wheels"]) == [
-        f"./wheels/bvhlab-{version}-{tag}-{tag}-linux_x86_64.whl" for tag in ("cp311", "cp313")
+        f"./wheels/bvhlab-{version}-{tag}-{tag}-linux_x86_64.whl" for tag in BLENDER_PYTHONS
     ]
     assert all(wheel[2:] in names for wheel in manifest["wheels"]), (manifest["wheels"], names)
 
@@ -55,15 +60,17 @@ MAX_GLIBCXX = (3, 4, 30)
 
 def test_wheels_load_on_glibc_2_34_and_gcc_12_libstdcxx():
     """Each wheel's compiled core asks only for glibc symbols up to MAX_GLIBC and libstdc++ symbols
-    up to MAX_GLIBCXX, so it loads in Blender on the systems the README names. The cp313 wheel is
-    built in a Debian 13 root, whose GCC 14 and glibc 2.41 headers raise both if left alone (glibc
-    2.38 renamed strtoul's symbol: one std::stoul did that once); it is built with GCC 12 there."""
+    up to MAX_GLIBCXX, so it loads in Blender on the systems the README names. The cp313 and cp314
+    wheels are built in Debian 13 and sid roots, whose GCC 14/16 and glibc 2.41/2.43 raise both if
+    left alone (glibc 2.38 renamed strtoul's symbol: one std::stoul did that once; 2.43 gave sqrtf,
+    atan2f and acosf new versions): they are built with GCC 12, and scripts/wheel_glibc_compat.h
+    binds libm's functions to their old versions."""
     import subprocess
     import tempfile
 
     with zipfile.ZipFile(_zip()) as archive, tempfile.TemporaryDirectory() as tmp:
         wheels = [n for n in archive.namelist() if n.endswith(".whl")]
-        assert len(wheels) == 2
+        assert len(wheels) == len(BLENDER_PYTHONS)
         for wheel in wheels:
             archive.extract(wheel, tmp)
             with zipfile.ZipFile(Path(tmp) / wheel) as inner:

@@ -107,7 +107,9 @@ def _bad_files(tmp_path):
         _scene_file(tmp_path, materials=np.zeros((1, 5)))
         .rename(tmp_path / "m5.npz")
         .name: r"'materials' has shape \(1, 5\); expected \(N, 6\)",
-        _scene_file(tmp_path, camera=np.zeros(4)).rename(tmp_path / "cam.npz").name: r"'camera' has shape \(4,\)",
+        _scene_file(tmp_path, camera=np.zeros(4))
+        .rename(tmp_path / "cam.npz")
+        .name: r"a camera row has 10 or 28 numbers, got 4",
         _scene_file(tmp_path, tri_material=np.zeros(3, np.int32))
         .rename(tmp_path / "tm.npz")
         .name: "'triangles' has 40 rows but 'tri_material' has 3",

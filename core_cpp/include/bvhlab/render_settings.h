@@ -7,29 +7,12 @@
 #include <string_view>
 #include <vector>
 
+#include "bvhlab/camera.h"
 #include "bvhlab/render_defaults.h"
 #include "bvhlab/traverse.h"
 #include "bvhlab/vec3.h"
 
 namespace bvhlab {
-
-/// A pinhole camera looking along `forward` (report §2.1), as Blender's camera or a viewport's
-/// region gives it: position, view direction, up, vertical field of view, aspect, lens shift.
-struct Camera {
-    Vec3 position = to_vec3(kFallbackCameraPosition);
-    Vec3 forward = to_vec3(kFallbackCameraTarget) - to_vec3(kFallbackCameraPosition);  ///< any length > 0
-    Vec3 up{0, 0, 1};                           ///< any vector not parallel to forward
-    float fov_y_degrees = float(kDefaultFovY);  ///< vertical field of view
-    float aspect = 0;                           ///< image-plane width / height; 0: the image's width / height
-    float shift_x = 0, shift_y = 0;             ///< image-plane centre offset, in fractions of its larger side
-                                                ///< (Blender's camera shift_x / shift_y)
-};
-
-/// v scaled to unit length without overflow or underflow (the zero vector for zero).
-Vec3 unit(Vec3 v);
-
-/// A camera at `position` looking at `target`.
-Camera look_at(Vec3 position, Vec3 target, Vec3 up = {0, 0, 1}, float fov_y_degrees = float(kDefaultFovY));
 
 struct PointLight {
     Vec3 position{5, -5, 5};
@@ -71,8 +54,13 @@ inline constexpr std::uint32_t kMaxImageDimension = 16384;  ///< pixels per side
 inline constexpr float kMaxHeatmapScale = 1e6f;             ///< box tests per ray at full red
 inline constexpr float kMaxLineWidth = 16.0f;
 
-/// Throws std::invalid_argument naming the bad setting (size zero or above max_dimension, NaN
-/// camera, camera looking along its up vector, too many samples or bounces, a bad heatmap scale).
+/// Throws std::invalid_argument when width × height is empty or above max_dimension per side: what
+/// validate checks first, for callers that must refuse a size before they allocate for it.
+void validate_image_size(std::uint32_t width, std::uint32_t height, std::uint32_t max_dimension = kMaxImageDimension);
+
+/// Throws std::invalid_argument naming the bad setting (size zero or above max_dimension, a bad
+/// camera (validate(Camera)), too many samples or bounces, a bad heatmap scale, the box overlay
+/// with a panoramic camera).
 void validate(const RenderSettings& settings, std::uint32_t max_dimension = kMaxImageDimension);
 
 /// Names as the Python API and the CLI spell them; parse_* throw std::invalid_argument listing

@@ -14,9 +14,12 @@ using gpu::vec3;
 using gpu::vec4;
 
 struct Target {
-    std::vector<vec4>& color;  // rgb + distance
+    std::vector<vec4>& color;  // rgb + distance along the primary ray
     std::vector<float>& depth;
     std::uint32_t width, height;
+    gpu::CpuTracer& tracer;  // the shared overlay code (overlay.glsl)
+
+    float distance(vec3 from_camera) { return tracer.overlay_distance(from_camera); }
 };
 
 /// A segment between two clip-space points, with the camera-relative positions they project.
@@ -87,7 +90,7 @@ void draw_line(Target& t, Segment s, vec3 color) {
         std::size_t k = std::size_t(py) * t.width + std::size_t(px);
         if (depth < 0 || depth > 1 || depth >= t.depth[k]) continue;
         t.depth[k] = depth;
-        t.color[k] = vec4(color, gpu::length(p));  // p is relative to the camera
+        t.color[k] = vec4(color, t.distance(p));  // p is relative to the camera
     }
 }
 
@@ -99,7 +102,7 @@ std::vector<gpu::vec4> rasterize_overlay(const RenderScene& scene, const gpu::Fr
     if (!frame.overlay_enabled) return color;
     std::vector<float> depth(pixels, 2.0f);
     gpu::CpuTracer tracer(scene, frame, nullptr, nullptr, gpu::TRAVERSAL_STACK);
-    Target target{color, depth, frame.width, frame.height};
+    Target target{color, depth, frame.width, frame.height, tracer};
     // distances are measured from the camera: work relative to it
     const vec3 cam = frame.camera_position;
     for (std::uint32_t b = frame.overlay_first_box; b < frame.overlay_last_box; ++b) {

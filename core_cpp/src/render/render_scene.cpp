@@ -6,6 +6,7 @@
 #include <string>
 
 #include "bvhlab/render.h"
+#include "camera_frame.h"
 
 namespace bvhlab {
 namespace {
@@ -94,37 +95,22 @@ void check_render_scene(const RenderScene& scene) {
         throw std::invalid_argument("the render scene has no pairs for its tree's internal nodes (make_render_scene)");
 }
 
-namespace {
-
-/// The camera's frame: unit forward, right and up, the image plane's extent and centre.
-void set_camera(gpu::FrameParams& f, const Camera& c, float image_aspect) {
-    Vec3 forward = unit(c.forward);
-    Vec3 right = unit(cross(forward, unit(c.up)));
-    f.camera_position = v3(c.position);
-    f.camera_forward = v3(forward);
-    f.camera_right = v3(right);
-    f.camera_up = v3(cross(right, forward));
-    f.tan_half_fov_y = std::tan(c.fov_y_degrees * 3.14159265358979f / 360.0f);
-    f.aspect = c.aspect > 0 ? c.aspect : image_aspect;
-    // Blender's shift is in fractions of the image plane's larger side (2 tan · max(aspect, 1)).
-    const float larger_side = 2.0f * f.tan_half_fov_y * std::max(f.aspect, 1.0f);
-    f.shift_x = c.shift_x * larger_side;
-    f.shift_y = c.shift_y * larger_side;
-}
-
-}  // namespace
-
 gpu::FrameParams make_frame_params(const RenderScene& scene, const RenderSettings& s) {
     gpu::FrameParams f{};
-    set_camera(f, s.camera, float(s.width) / float(s.height));
+    set_camera_frame(f, s.camera, s.width, s.height);
     // ray offsets and the overlay's depth range scale with the scene
     Aabb b = scene.bounds;
     if (b.empty()) b.grow(s.camera.position + unit(s.camera.forward));
     Vec3 far_corner = max(abs3(b.lo - s.camera.position), abs3(b.hi - s.camera.position));
     float diagonal = std::max(length(b.extent()), 1e-6f);
     f.ray_epsilon = 1e-4f * diagonal;
-    f.overlay_near = std::max(1e-3f * diagonal, 1e-6f);
-    f.overlay_far = 2.0f * length(far_corner) + diagonal;
+    // The overlay's depth range: the scene's, within the camera's clipping (a perspective projection
+    // needs a near plane in front of the camera; an orthographic one starts at clip_start).
+    const float scene_near = std::max(1e-3f * diagonal, 1e-6f);
+    f.overlay_near = s.camera.projection == Projection::Perspective ? std::max(scene_near, s.camera.clip_start)
+                                                                    : s.camera.clip_start;
+    f.overlay_far = std::min(2.0f * length(far_corner) + diagonal, s.camera.clip_end);
+    if (!(f.overlay_far > f.overlay_near)) f.overlay_far = 2.0f * f.overlay_near + 1.0f;  // nothing in range
     f.light_position = v3(s.light.position);
     f.light_color = v3(s.light.color * s.light.intensity);
     f.sky = v3(s.sky);

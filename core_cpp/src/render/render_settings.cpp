@@ -38,17 +38,6 @@ std::string name_in(const Table& table, Value value) {
 
 [[noreturn]] void fail(const std::string& msg) { throw std::invalid_argument(msg); }
 
-void validate_camera(const Camera& c) {
-    if (!all_finite(c.position) || !all_finite(c.forward) || !all_finite(c.up) || !std::isfinite(c.fov_y_degrees) ||
-        !std::isfinite(c.aspect) || !std::isfinite(c.shift_x) || !std::isfinite(c.shift_y))
-        fail("the camera has a NaN or infinite value");
-    if (!(c.fov_y_degrees > 0 && c.fov_y_degrees < 180)) fail("camera fov_y must be in (0, 180) degrees");
-    if (c.aspect < 0) fail("camera aspect must be positive (or 0: the image's)");
-    if (c.forward.x == 0 && c.forward.y == 0 && c.forward.z == 0)
-        fail("the camera's view direction is zero (position and look_at coincide)");
-    if (length(cross(unit(c.forward), unit(c.up))) == 0) fail("camera up is parallel to the viewing direction");
-}
-
 void validate_light(const RenderSettings& s) {
     if (!all_finite(s.light.position) || !all_finite(s.light.color) || !std::isfinite(s.light.intensity))
         fail("the light has a NaN or infinite value");
@@ -81,27 +70,20 @@ void validate_look(const RenderSettings& s) {
 
 }  // namespace
 
-Vec3 unit(Vec3 v) {
-    const float scale = std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)});
-    return scale > 0 ? normalize(v * (1.0f / scale)) : Vec3{};
-}
-
-Camera look_at(Vec3 position, Vec3 target, Vec3 up, float fov_y_degrees) {
-    Camera c;
-    c.position = position;
-    c.forward = target - position;
-    c.up = up;
-    c.fov_y_degrees = fov_y_degrees;
-    return c;
+void validate_image_size(std::uint32_t width, std::uint32_t height, std::uint32_t max_dimension) {
+    if (width == 0 || height == 0)
+        fail("width and height must be at least 1, got " + std::to_string(width) + "x" + std::to_string(height));
+    if (width > max_dimension || height > max_dimension)
+        fail("image size " + std::to_string(width) + "x" + std::to_string(height) + " exceeds the device limit of " +
+             std::to_string(max_dimension) + " pixels per side");
 }
 
 void validate(const RenderSettings& s, std::uint32_t max_dimension) {
-    if (s.width == 0 || s.height == 0)
-        fail("width and height must be at least 1, got " + std::to_string(s.width) + "x" + std::to_string(s.height));
-    if (s.width > max_dimension || s.height > max_dimension)
-        fail("image size " + std::to_string(s.width) + "x" + std::to_string(s.height) +
-             " exceeds the device limit of " + std::to_string(max_dimension) + " pixels per side");
-    validate_camera(s.camera);
+    validate_image_size(s.width, s.height, max_dimension);
+    validate(s.camera);
+    if (s.overlay && s.camera.panoramic())
+        fail("the box overlay draws straight lines: it needs a perspective or orthographic camera, not " +
+             to_string(s.camera.projection));
     validate_light(s);
     validate_work(s);
     validate_look(s);

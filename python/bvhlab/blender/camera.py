@@ -1,4 +1,11 @@
-"""The scene camera → `bvhlab.Camera` (pinhole: position, look-at, up, vertical field of view)."""
+"""The scene camera → `bvhlab.Camera`, framed as Cycles frames Blender's camera: perspective and
+orthographic with sensor fit and lens shift, the render's aspect with its pixel aspect, clipping,
+depth of field (thin lens), and the panoramic equirectangular and fisheye equidistant projections.
+
+Cycles' own conversion is the model (intern/cycles/blender/camera.cpp: blender_camera_from_object,
+blender_camera_viewplane, blender_camera_focal_distance); bvhlab.Camera's conventions are those of
+Blender's sensor fit Auto (core_cpp/include/bvhlab/camera.h), so other fits are converted here.
+"""
 
 from __future__ import annotations
 
@@ -10,53 +17,122 @@ import numpy as np
 from ..scene import Camera
 from .errors import ExportError, ExportWarning
 
+#: Blender's panorama types bvhlab renders, as bvhlab.Camera's projection.
+PANORAMAS = {"EQUIRECTANGULAR": "equirectangular", "FISHEYE_EQUIDISTANT": "fisheye"}
+
 
 def gather_camera(scene, depsgraph) -> Camera:
     """Position and orientation from the evaluated camera's world matrix (it looks along its -Z,
-    its +Y is up; look_at is one unit ahead). The vertical field of view follows Blender's sensor
-    fit for the render resolution's aspect ratio, so the picture frames what Blender's camera
-    frames. Raises ExportError when there is no usable camera."""
+    its +Y is up; scale ignored, as Cycles clears it; look_at is ahead along the view axis), and
+    its lens for the scene's render resolution. Raises ExportError when there is no usable camera
+    or it is of a kind bvhlab does not render."""
     camera = scene.camera
     if camera is None:
         raise ExportError(f"scene '{scene.name}' has no camera: add one and make it the active camera")
     if camera.type != "CAMERA":
         raise ExportError(f"the scene camera '{camera.name}' is a {camera.type.lower()}, not a camera")
     evaluated = camera.evaluated_get(depsgraph)  # animation and drivers applied
-    data = evaluated.data
-    if data.type != "PERSP":
-        raise ExportError(
-            f"camera '{camera.name}' is {data.type.lower()}; bvhlab renders perspective (pinhole) cameras only"
-        )
-    if data.shift_x or data.shift_y:
-        warnings.warn(f"camera '{camera.name}': lens shift is ignored", ExportWarning, stacklevel=2)
-    matrix = np.array(evaluated.matrix_world, np.float64)
-    position = matrix[:3, 3]
-    z_length, y_length = np.linalg.norm(matrix[:3, 2]), np.linalg.norm(matrix[:3, 1])
-    if not (np.isfinite(matrix).all() and z_length > 0 and y_length > 0):
-        raise ExportError(
-            f"camera '{camera.name}' has no usable orientation (a scale of 0, or a location, rotation "
-            f"or scale that is not a number)"
-        )
-    forward, up = -matrix[:3, 2] / z_length, matrix[:3, 1] / y_length
+    position, forward, up = _placement(camera.name, np.array(evaluated.matrix_world, np.float64))
     # look_at far enough ahead to differ from the position in float32 (the tracer's precision)
     ahead = max(1.0, float(np.abs(position).max()) * 2.0**-10)
+    lens = lens_fields(scene, evaluated.data, camera.name, position, forward)
     try:
-        return Camera(tuple(position), tuple(position + forward * ahead), tuple(up), vertical_fov_degrees(scene, data))
+        return Camera(tuple(position), tuple(position + forward * ahead), tuple(up), **lens)
     except ValueError as error:
         raise ExportError(f"camera '{camera.name}': {error}") from None
 
 
-def vertical_fov_degrees(scene, camera_data) -> float:
-    """Vertical field of view of a perspective camera for the scene's render aspect ratio."""
+def _placement(name: str, matrix: np.ndarray):
+    """(position, unit forward, unit up) of a camera's world matrix."""
+    z_length, y_length = np.linalg.norm(matrix[:3, 2]), np.linalg.norm(matrix[:3, 1])
+    if not (np.isfinite(matrix).all() and z_length > 0 and y_length > 0):
+        raise ExportError(
+            f"camera '{name}' has no usable orientation (a scale of 0, or a location, rotation "
+            f"or scale that is not a number)"
+        )
+    return matrix[:3, 3], -matrix[:3, 2] / z_length, matrix[:3, 1] / y_length
+
+
+def render_size(render) -> tuple[int, int]:
+    """The rendered frame's pixels: the resolution at its percentage, rounded down as Blender's
+    BKE_render_resolution does."""
+    return (
+        render.resolution_x * render.resolution_percentage // 100,
+        render.resolution_y * render.resolution_percentage // 100,
+    )
+
+
+def lens_fields(scene, data, name: str, position=None, forward=None) -> dict:
+    """bvhlab.Camera's keyword fields (bvhlab.scene.Lens) for Blender camera data `data` rendered
+    at the scene's resolution."""
     render = scene.render
-    aspect = (render.resolution_x * render.pixel_aspect_x) / (render.resolution_y * render.pixel_aspect_y)
-    fit = camera_data.sensor_fit
-    if fit == "AUTO":  # the sensor width spans the longer side of the picture
-        fit = "HORIZONTAL" if aspect >= 1 else "VERTICAL"
-        sensor = camera_data.sensor_width
+    width, height = render_size(render)
+    aspect = (max(width, 1) * render.pixel_aspect_x) / (max(height, 1) * render.pixel_aspect_y)
+    fields: dict = {"clip_start": data.clip_start, "clip_end": data.clip_end}
+    if render.pixel_aspect_x != render.pixel_aspect_y:  # else the image's own, at any size it is rendered
+        fields["aspect"] = aspect
+    if data.type == "PANO":
+        fields.update(_panorama(data, name))
+    elif data.type in ("PERSP", "ORTHO"):
+        fields.update(_view_plane(data, aspect))
     else:
-        sensor = camera_data.sensor_width if fit == "HORIZONTAL" else camera_data.sensor_height
-    half_tangent = sensor / (2 * camera_data.lens)
-    if fit == "HORIZONTAL":
-        half_tangent /= aspect
-    return math.degrees(2 * math.atan(half_tangent))
+        raise ExportError(f"camera '{name}' is of type {data.type}, which bvhlab does not render")
+    fields.update(_depth_of_field(data, name, position, forward))
+    return fields
+
+
+def _view_plane(data, aspect: float) -> dict:
+    """Perspective or orthographic: Cycles' blender_camera_viewplane. The sensor (or ortho_scale)
+    spans the fitted side, lens shift is in fractions of it; bvhlab takes the vertical field of
+    view, ortho_scale and shift along the larger side (sensor fit Auto)."""
+    fit = data.sensor_fit
+    horizontal = aspect > 1 if fit == "AUTO" else fit == "HORIZONTAL"  # Cycles: xratio > yratio
+    sensor = data.sensor_height if fit == "VERTICAL" else data.sensor_width
+    fitted = data.ortho_scale if data.type == "ORTHO" else sensor / data.lens  # the fitted side's extent
+    plane_width, plane_height = (fitted, fitted / aspect) if horizontal else (fitted * aspect, fitted)
+    larger = max(plane_width, plane_height)
+    fields = {"shift_x": data.shift_x * fitted / larger, "shift_y": data.shift_y * fitted / larger}
+    if data.type == "ORTHO":
+        return {**fields, "projection": "orthographic", "ortho_scale": larger}
+    return {**fields, "projection": "perspective", "fov_y": math.degrees(2 * math.atan(plane_height / 2))}
+
+
+def _panorama(data, name: str) -> dict:
+    """Equirectangular or fisheye equidistant; the panorama settings are the camera's own from
+    Blender 4.0 (data.panorama_type), Cycles' before (data.cycles.panorama_type)."""
+    settings = data if hasattr(data, "panorama_type") else getattr(data, "cycles", None)
+    kind = getattr(settings, "panorama_type", None)
+    if settings is None or kind not in PANORAMAS:
+        raise ExportError(
+            f"camera '{name}' is a {str(kind).replace('_', ' ').lower()} panorama; bvhlab renders the "
+            f"equirectangular and fisheye equidistant panoramas only"
+        )
+    fields = {"projection": PANORAMAS[kind], "shift_x": data.shift_x, "shift_y": data.shift_y}
+    if kind == "EQUIRECTANGULAR":
+        fields["latitude"] = (math.degrees(settings.latitude_min), math.degrees(settings.latitude_max))
+        fields["longitude"] = (math.degrees(settings.longitude_min), math.degrees(settings.longitude_max))
+    else:
+        fields["fisheye_fov"] = math.degrees(settings.fisheye_fov)
+    return fields
+
+
+def _depth_of_field(data, name: str, position, forward) -> dict:
+    """A thin lens as Cycles makes it (blender_camera_from_object): its radius from the focal
+    length and f-stop (orthographic: from the f-stop alone), in scene units; the focus distance,
+    or the focus object's distance along the view axis (blender_camera_focal_distance)."""
+    dof = data.dof
+    if not dof.use_dof:
+        return {}
+    fstop = max(dof.aperture_fstop, 1e-5)
+    radius = 1.0 / (2 * fstop) if data.type == "ORTHO" else data.lens * 1e-3 / (2 * fstop)
+    focus = dof.focus_distance
+    if dof.focus_object is not None and position is not None:
+        target = np.array(dof.focus_object.matrix_world, np.float64)[:3, 3]
+        focus = abs(float(np.dot(forward, target - position)))
+    if dof.aperture_blades >= 3 or dof.aperture_ratio != 1.0:
+        warnings.warn(
+            f"camera '{name}': the depth of field's bokeh is a disc (aperture blades and ratio are ignored)",
+            ExportWarning,
+            stacklevel=3,
+        )
+    return {"aperture_radius": radius, "focus_distance": max(focus, 1e-6)}

@@ -179,7 +179,7 @@ def _write_oracle(session, scene, area, region, frame) -> None:
         lines=str(session.shots / "lines.npy"),
         line_colors=_display(depth_colors(np.array(DEPTHS, np.uint32))).tolist(),
         oracle_camera=camera.as_row(),
-        engine_camera=frame.request.frustum.camera().as_row(),
+        engine_camera=repr(frame.request.frustum.camera()),
         ui_top=_covered_top(session, area, region),
     )
 

@@ -25,7 +25,10 @@ class Session:
     def request(self, **action) -> dict:
         self._serial += 1
         action["id"] = self._serial
-        (self.shots / f"request-{self._serial:03d}.json").write_text(json.dumps(action))
+        # written whole, then renamed: the driver polls for request-*.json and may read it at once
+        path = self.shots / f"request-{self._serial:03d}.json"
+        path.with_suffix(".tmp").write_text(json.dumps(action))
+        path.with_suffix(".tmp").replace(path)
         return action
 
     def answered(self, action) -> bool:
