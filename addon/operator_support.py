@@ -5,11 +5,13 @@ from __future__ import annotations
 
 import traceback
 import warnings
+from contextlib import contextmanager
 from pathlib import Path
 
 import bpy
 
 from . import state
+from .trees import TreeKey, cache, key_of
 
 
 def run_reported(operator, context, work, quiet: tuple = ()) -> set[str]:
@@ -61,32 +63,23 @@ def export_scene(context, require_camera: bool):
     )
 
 
-def build_tree(context, exported):
-    """Build over `exported` with the panel's settings, showing progress in the window manager."""
-    import bvhlab
-
-    settings = context.scene.bvhlab
+@contextmanager
+def window_progress(context):
+    """A build's progress callable, drawing in the window manager's progress cursor while inside."""
     window_manager = context.window_manager
     window_manager.progress_begin(0, 100)
     try:
-        return bvhlab.build(
-            exported,
-            **settings.build_kwargs(),
-            progress=lambda fraction: window_manager.progress_update(int(fraction * 100)) or True,
-        )
+        yield lambda fraction: window_manager.progress_update(int(fraction * 100)) or True
     finally:
         window_manager.progress_end()
 
 
-def remember_tree(context, bvh, exported, build_settings: dict | None = None) -> state.BuiltTree:
-    """Cache the tree for the scene and keep the overlay's depth range inside its height.
-    `build_settings`: what the tree was built with (BVHLAB_PG_settings.build_settings() taken when
-    the build started; default: the settings now, for a build that ran at once)."""
-    settings = context.scene.bvhlab
-    if build_settings is None:
-        build_settings = settings.build_settings()
-    built = state.BuiltTree(bvh, exported, build_settings)
+def remember_tree(context, key: TreeKey, exported) -> state.BuiltTree:
+    """Make the cache's tree of `key` the one the sidebar shows, and keep the overlay's depth range
+    inside its height."""
+    built = state.BuiltTree(key, cache.tree(key), exported)
     state.trees[state.key(context.scene)] = built
+    settings = context.scene.bvhlab
     deepest = built.height - 1
     if settings.overlay_depth_max > deepest:
         settings.overlay_depth_max = deepest  # its update callback pulls min along
@@ -98,20 +91,15 @@ def remember_tree(context, bvh, exported, build_settings: dict | None = None) ->
     return built
 
 
-def current_tree(context, exported) -> state.BuiltTree:
-    """The cached tree when it was built with the current settings over the same geometry,
-    otherwise a new one (cached)."""
-    import numpy as np
-
-    built = state.tree_for(context.scene)
-    if (
-        built is not None
-        and built.settings == context.scene.bvhlab.build_settings()
-        and np.array_equal(built.scene.triangles, exported.triangles)
-        and np.array_equal(built.scene.spheres, exported.spheres)
-    ):
-        return built
-    return remember_tree(context, build_tree(context, exported), exported)
+def current_tree(context, exported):
+    """The Bvh of the cache's tree for the scene's settings, made to fit `exported` (kept when it
+    fits already: built by Build, F12 or the viewport before), with a progress bar while it
+    builds; the sidebar shows it from now on."""
+    key = key_of(context.scene)
+    with window_progress(context) as progress:
+        update = cache.tree(key).update(exported, progress=progress)
+    remember_tree(context, key, exported)
+    return update.bvh
 
 
 def output_path(path: str, default_name: str) -> Path:

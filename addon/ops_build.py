@@ -3,7 +3,9 @@ From the UI the build runs on a thread (the UI stays live; Esc cancels it); from
 at once (execute).
 
 The settings are taken when the build starts: a tree is labelled with what it was built with,
-whatever the panel shows by the time the thread is done. One build per scene at a time: starting
+whatever the panel shows by the time the thread is done. Build always builds (that is what the
+button is for); the tree goes into the one cache of trees (trees.py), where F12, the viewport and
+the sidebar's Render find it. One build per scene at a time: starting
 another (a second press, or a script) cancels the one running, whose tree is then never kept, so
 the tree kept is always the one of the last build started (issue 39)."""
 
@@ -13,7 +15,8 @@ import bpy
 
 from . import state
 from .background import UI_WORK_THREADS, BackgroundTask, ModalTaskMixin, TaskCancelled
-from .operator_support import build_tree, export_scene, remember_tree, run_reported
+from .operator_support import export_scene, remember_tree, run_reported, window_progress
+from .trees import cache, key_of
 
 
 def _take_over(scene_key: int, owner) -> bool:
@@ -47,12 +50,11 @@ class BVHLAB_OT_build(ModalTaskMixin, bpy.types.Operator):
         import bvhlab
 
         self._exported = exported = export_scene(context, require_camera=False)  # bpy: on the UI thread
-        s = context.scene.bvhlab
-        self._settings = s.build_settings()
-        options = {**s.build_kwargs(), "threads": UI_WORK_THREADS}
+        self._key = key = key_of(context.scene)  # the settings as they are now, not when it ends
+        config = key.config.replace(threads=UI_WORK_THREADS)
 
         def work(task):
-            return bvhlab.build(exported, **options, progress=lambda fraction: task.progress(fraction))
+            return bvhlab.build(exported, config=config, progress=lambda fraction: task.progress(fraction))
 
         started = self.start_task(context, work, "Building BVH")
         if _take_over(state.key(context.scene), self._task):
@@ -77,23 +79,29 @@ class BVHLAB_OT_build(ModalTaskMixin, bpy.types.Operator):
             return {"CANCELLED"}
         if task.error is not None:
             raise task.error
-        return self._done(context, task.result, self._exported, self._settings)
+        cache.tree(self._key).store(task.result, self._exported)
+        return self._done(context, self._key, self._exported)
 
     def _build(self, context):
+        import bvhlab
+
         key = state.key(context.scene)
         _take_over(key, self)  # a build started from the UI before this one is cancelled
         try:
-            settings = context.scene.bvhlab.build_settings()
+            tree_key = key_of(context.scene)
             exported = export_scene(context, require_camera=False)  # a tree needs no camera
-            return self._done(context, build_tree(context, exported), exported, settings)
+            with window_progress(context) as progress:
+                bvh = bvhlab.build(exported, config=tree_key.config, progress=progress)
+            cache.tree(tree_key).store(bvh, exported)
+            return self._done(context, tree_key, exported)
         finally:
             if state.builds.get(key) is self:
                 del state.builds[key]
 
-    def _done(self, context, bvh, exported, settings: dict):
-        remember_tree(context, bvh, exported, settings)
+    def _done(self, context, tree_key, exported):
+        built = remember_tree(context, tree_key, exported)
         context.scene.bvhlab.overlay_show = True  # the user pressed Build to see the boxes
-        s = bvh.stats
+        s = built.bvh.stats
         message = (
             f"Built {s['method']} BVH over {s['primitives']} primitives: {s['nodes']} nodes, "
             f"height {s['height']}, SAH cost {s['sah_cost']:.2f}, {s['build_ms']:.1f} ms"

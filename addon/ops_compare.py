@@ -87,18 +87,15 @@ class BVHLAB_OT_compare(ModalTaskMixin, bpy.types.Operator):
         settings = context.scene.bvhlab
         exported = export_scene(context, require_camera=True)
         width, height = render_size(context.scene)
+        build = settings.build_config().tree_settings()
         options = {
             "frames": settings.compare_frames,
             "builds": 1,
             "width": width,
             "height": height,
-            "samples_per_axis": settings.render_supersampling,
-            "max_depth": settings.render_bounces,
-            "build_options": {
-                "axis": settings.axis,
-                "max_leaf_size": settings.max_leaf_size,
-                "sah_block": int(settings.sah_block),
-            },
+            "options": settings.render_options(),  # as F12 and the sidebar's Render trace
+            # every build setting of the panel but the method and its bins, which each row sets
+            "build_options": {name: build[name] for name in ("bin_bounds", "axis", "max_leaf_size", "sah_block")},
         }
         backend, labels = settings.backend, [method for _, method in COMPARE_METHODS]
         self._csv_path = output_path(settings.compare_filepath, "bvh_compare.csv")

@@ -7,7 +7,7 @@ from bpy.props import StringProperty
 from bpy_extras.io_utils import ExportHelper
 
 from . import state
-from .operator_support import build_tree, export_scene, output_path, remember_tree, run_reported
+from .operator_support import current_tree, export_scene, output_path, run_reported
 from .properties import output_path_options
 
 
@@ -40,8 +40,8 @@ class BVHLAB_OT_export_stats(bpy.types.Operator, ExportHelper):
         json_path = stats_json_path(self.filepath)  # refused before any work
         built = state.tree_for(context.scene)
         if built is None:
-            exported = export_scene(context, require_camera=False)
-            built = remember_tree(context, build_tree(context, exported), exported)
+            current_tree(context, export_scene(context, require_camera=False))
+            built = state.tree_for(context.scene)
         csv_path = json_path.with_suffix(".csv")
         stats = built.bvh.stats
         about = {"scene": context.scene.name, "blend_file": bpy.data.filepath, "settings": built.settings}

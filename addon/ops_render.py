@@ -10,33 +10,20 @@ from .operator_support import current_tree, export_scene, run_reported
 
 
 def render_size(scene) -> tuple[int, int]:
-    """The scene's output resolution (percentage applied)."""
+    """The scene's output resolution with the percentage applied as Blender applies it (integer
+    division, BKE_render_resolution): the size F12 renders."""
     render = scene.render
-    scale = render.resolution_percentage / 100
-    return max(1, round(render.resolution_x * scale)), max(1, round(render.resolution_y * scale))
+    percent = render.resolution_percentage
+    return max(1, render.resolution_x * percent // 100), max(1, render.resolution_y * percent // 100)
 
 
 def render_with_settings(context, exported, bvh):
-    """One frame with the panel's render settings; returns (image, timings)."""
+    """One frame with the scene's render options (the ones F12 uses); returns (image, timings)."""
     import bvhlab
 
-    settings = context.scene.bvhlab
     width, height = render_size(context.scene)
-    overlay = (settings.overlay_depth_min, settings.overlay_depth_max) if settings.render_overlay else None
-    return bvhlab.render(
-        exported,
-        bvh,
-        width,
-        height,
-        backend=settings.backend,
-        samples_per_axis=settings.render_supersampling,
-        max_depth=settings.render_bounces,
-        overlay_depth=overlay,
-        traversal=settings.traversal,
-        mode=settings.render_mode,
-        color_by_depth=settings.overlay_color_by_depth,
-        line_width=settings.overlay_line_width,
-    )
+    settings = context.scene.bvhlab
+    return bvhlab.render(exported, bvh, width, height, backend=settings.backend, options=settings.render_options())
 
 
 class BVHLAB_OT_render(bpy.types.Operator):
@@ -51,8 +38,7 @@ class BVHLAB_OT_render(bpy.types.Operator):
 
     def _render(self, context):
         exported = export_scene(context, require_camera=True)
-        built = current_tree(context, exported)
-        pixels, timings = render_with_settings(context, exported, built.bvh)
+        pixels, timings = render_with_settings(context, exported, current_tree(context, exported))
         where = show_in_image_editor(context, show_render(context, pixels))
         state.last_render[state.key(context.scene)] = dict(timings)
         fallback = f" (fell back: {timings['fallback']})" if timings.get("fallback") else ""

@@ -5,7 +5,6 @@ from __future__ import annotations
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, FloatVectorProperty, IntProperty, StringProperty
 
-from bvhlab import _core as bvhlab_core
 from bvhlab.bvh import (
     AXES,
     BIN_BOUNDS,
@@ -15,11 +14,15 @@ from bvhlab.bvh import (
     DEFAULT_MAX_LEAF_SIZE,
     DEFAULT_METHOD,
     DEFAULT_SAH_BLOCK,
+    MAX_BINS,
+    MAX_LEAF_SIZE,
     MAX_SAH_BLOCK,
     MAX_TREE_HEIGHT,
     METHODS,
+    MIN_BINS,
 )
-from bvhlab.render import BACKENDS, DEFAULT_TRAVERSAL, MAX_RAY_DEPTH, MAX_SAMPLES_PER_AXIS, MODES, TRAVERSALS
+from bvhlab.render import BACKENDS, MAX_RAY_DEPTH, MAX_SAMPLES_PER_AXIS, MODES, TRAVERSALS
+from bvhlab.render_options import MAX_LINE_WIDTH, RenderOptions
 
 from . import state
 
@@ -64,13 +67,16 @@ BACKEND_ITEMS = [(b, *(_BACKEND_AUTO if b == "auto" else _LABELS[b])) for b in B
 AXIS_ITEMS = _items(AXES)
 BIN_BOUNDS_ITEMS = _items(BIN_BOUNDS)
 #: The SAH's block sizes, the powers of two up to the core's limit (a string per item, as an
-#: EnumProperty needs; build_kwargs passes the int).
+#: EnumProperty needs; build_config passes the int).
 _SAH_BLOCK_ITEMS = [
     (str(1 << k), str(1 << k), "Primitives one by one (the report's SAH)" if k == 0 else f"Blocks of {1 << k}")
     for k in range(MAX_SAH_BLOCK.bit_length())
 ]
 #: The maximum node depth any tree can have.
 MAX_DEPTH = MAX_TREE_HEIGHT - 1
+#: A render's defaults (the core's RenderSettings, through bvhlab.RenderOptions): the settings below
+#: start from them.
+_RENDER = RenderOptions()
 
 
 def output_path_options() -> set[str]:
@@ -128,8 +134,8 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
     method: EnumProperty(name="Split method", items=METHOD_ITEMS, default=DEFAULT_METHOD, update=_redraw)
     bins: IntProperty(
         name="Bins",
-        min=int(bvhlab_core.MIN_BINS),
-        max=int(bvhlab_core.MAX_BINS),
+        min=MIN_BINS,
+        max=MAX_BINS,
         default=DEFAULT_BINS,
         update=_redraw,
         description="SAH bins per axis (PBRT's default and the report's is 12)",
@@ -139,7 +145,7 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
     max_leaf_size: IntProperty(
         name="Max leaf size",
         min=1,
-        max=255,
+        max=MAX_LEAF_SIZE,
         soft_max=16,
         default=DEFAULT_MAX_LEAF_SIZE,
         update=_redraw,
@@ -176,9 +182,16 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
         update=_depth_max_changed,
         description="Deepest depth drawn; at most the tree height - 1",
     )
-    overlay_color_by_depth: BoolProperty(name="Colour by depth", default=True, update=_redraw)
+    overlay_color_by_depth: BoolProperty(name="Colour by depth", default=_RENDER.color_by_depth, update=_redraw)
     overlay_color: FloatVectorProperty(
-        name="Colour", subtype="COLOR", size=4, min=0.0, max=1.0, default=(1.0, 0.55, 0.1, 1.0), update=_redraw
+        name="Colour",
+        subtype="COLOR",
+        size=4,
+        min=0.0,
+        max=1.0,
+        default=(*_RENDER.line_color, 1.0),
+        update=_redraw,
+        description="The boxes' colour when not coloured by depth (in the viewport and in traced images)",
     )
     overlay_leaves_only: BoolProperty(
         name="Leaves only", default=False, update=_redraw, description="Draw only the leaves in the depth range"
@@ -189,13 +202,15 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
         update=_redraw,
         description="Draw boxes through geometry (off: hidden behind surfaces)",
     )
-    overlay_line_width: FloatProperty(name="Line width", min=1.0, max=5.0, default=1.0, update=_redraw)
+    overlay_line_width: FloatProperty(
+        name="Line width", min=1.0, max=MAX_LINE_WIDTH, soft_max=5.0, default=_RENDER.line_width, update=_redraw
+    )
 
     render_bounces: IntProperty(
         name="Bounces",
         min=0,
         max=MAX_RAY_DEPTH,
-        default=5,
+        default=_RENDER.max_depth,
         update=_redraw,
         description="Reflection and refraction depth of the Whitted tracer",
     )
@@ -204,7 +219,7 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
         min=1,
         max=MAX_SAMPLES_PER_AXIS,
         soft_max=8,
-        default=1,
+        default=_RENDER.samples_per_axis,
         update=_redraw,
         description="n × n samples per pixel",
     )
@@ -216,13 +231,13 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
     )
     traversal: EnumProperty(
         name="Traversal",
-        default=DEFAULT_TRAVERSAL,
+        default=_RENDER.traversal,
         items=_items(TRAVERSALS),
         update=_redraw,
     )
     render_mode: EnumProperty(
         name="Mode",
-        default="shade",
+        default=_RENDER.mode,
         items=_items(MODES),
         update=_redraw,
     )
@@ -253,21 +268,41 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
         description="CSV file the comparison is written to",
     )
 
-    def build_kwargs(self) -> dict:
-        """The arguments of `bvhlab.build` that these settings choose: one definition for the
-        sidebar's Build, the render engine's trees and the tree a Render builds."""
-        return {
-            "method": self.method,
-            "bins": self.bins,
-            "bin_bounds": self.bin_bounds,
-            "axis": self.axis,
-            "max_leaf_size": self.max_leaf_size,
-            "sah_block": int(self.sah_block),
-        }
+    def build_config(self):
+        """The build these settings ask for, as the one typed object (bvhlab.BuildConfig) the
+        sidebar's Build, Render and Export, F12, the viewport and Compare all pass to the core."""
+        from bvhlab.bvh import BuildConfig
+
+        return BuildConfig(
+            method=self.method,
+            bins=self.bins,
+            bin_bounds=self.bin_bounds,
+            axis=self.axis,
+            max_leaf_size=self.max_leaf_size,
+            sah_block=int(self.sah_block),
+        )
 
     def build_settings(self) -> dict:
-        """What a tree depends on besides the geometry."""
-        return {"scope": self.scope, **self.build_kwargs()}
+        """What a tree depends on besides the geometry, by name (as state.BuiltTree.settings)."""
+        return {"scope": self.scope, **self.build_config().tree_settings()}
+
+    def render_options(self, *, viewport: bool = False) -> RenderOptions:
+        """How this scene is traced, as the one typed object (bvhlab.RenderOptions) that F12, the
+        sidebar's Render, Compare and the Rendered viewport all pass to the core: they cannot
+        disagree. They differ in one thing, which switch shows the boxes: "Boxes in image" for
+        the renders, "Show boxes" for the viewport (which traces n × n samples only once the view
+        is still)."""
+        show_boxes = self.overlay_show if viewport else self.render_overlay
+        return RenderOptions(
+            samples_per_axis=self.render_supersampling,
+            max_depth=self.render_bounces,
+            overlay_depth=(self.overlay_depth_min, self.overlay_depth_max) if show_boxes else None,
+            color_by_depth=self.overlay_color_by_depth,
+            line_color=tuple(self.overlay_color[:3]),
+            line_width=self.overlay_line_width,
+            traversal=self.traversal,
+            mode=self.render_mode,
+        )
 
 
 def _get_sphere(obj) -> bool:

@@ -1,29 +1,46 @@
-"""What the add-on remembers between operator calls, in module memory and never in bpy data:
-the built tree per scene, the last comparison table, the last message. Keyed by the scene's
-session_uid; cleared when a file is loaded and on unregister."""
+"""What the add-on remembers, in module memory and never in bpy data, keyed by the scene's
+session_uid: the tree the sidebar shows (from the one cache of trees, trees.py), the last
+comparison table, render and message, the builds running, and what the render engine's last final
+render and viewports did (the panels show it; the tests read it). Cleared when a file is loaded
+and on unregister. The one state module of the add-on: its operators, panels and render engine
+all read and write here."""
 
 from __future__ import annotations
 
-import itertools
+import threading
 import time
 from dataclasses import dataclass, field
 
-_serials = itertools.count(1)
+from .trees import SceneTree, TreeKey
 
 
 @dataclass
 class BuiltTree:
-    """A tree and what it was built from."""
+    """The tree the sidebar shows: the one Build (or Render, or Export) made last, in the cache.
+    Its Bvh is the cache's: a refit by the viewport or F12 shows here too."""
 
-    bvh: object  # bvhlab.Bvh
-    scene: object  # the exported bvhlab.Scene
-    settings: dict  # BVHLAB_PG_settings.build_settings() at build time
+    key: TreeKey
+    tree: SceneTree
+    scene: object  # the exported bvhlab.Scene it was made over
     built_at: float = field(default_factory=time.time)
-    serial: int = field(default_factory=lambda: next(_serials))  # changes whenever the tree does
+
+    @property
+    def bvh(self):
+        return self.tree.bvh
+
+    @property
+    def settings(self) -> dict:
+        """What the tree was built with: the scope and the build settings (BuildConfig's)."""
+        return {"scope": self.key.scope, **self.key.config.tree_settings()}
 
     @property
     def height(self) -> int:
         return self.bvh.stats["height"]
+
+    @property
+    def serial(self) -> tuple:
+        """Changes whenever the tree does (a build, a refit): what the overlay's batch depends on."""
+        return (id(self.tree), self.tree.generation)
 
 
 trees: dict[int, BuiltTree] = {}
@@ -33,6 +50,12 @@ messages: dict[int, tuple[str, str]] = {}  # (level, text) of the last report
 #: The build running for a scene (a background.BackgroundTask, or the operator itself for a build
 #: run at once from a script): one at a time, the last one started is the one whose tree is kept.
 builds: dict[int, object] = {}
+#: The render engine: the last final render (sync totals, tree action, timings, device, ...) and
+#: the latest frame of each viewport level; written from Blender's render thread and the
+#: viewport's worker, hence the lock.
+last_final: dict[int, dict] = {}
+last_viewport: dict[int, dict] = {}
+lock = threading.Lock()
 
 
 def key(scene) -> int:
@@ -40,9 +63,14 @@ def key(scene) -> int:
 
 
 def tree_for(scene) -> BuiltTree | None:
-    return trees.get(key(scene))
+    built = trees.get(key(scene))
+    return built if built is not None and built.bvh is not None else None
 
 
 def clear() -> None:
-    for table in (trees, comparisons, last_render, messages, builds):
-        table.clear()
+    from .trees import cache
+
+    with lock:
+        for table in (trees, comparisons, last_render, messages, builds, last_final, last_viewport):
+            table.clear()
+    cache.clear()

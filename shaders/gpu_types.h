@@ -163,6 +163,7 @@ struct FrameParams {
     vec4 screen;            ///< xy: screen coordinates of the image's top-left corner; zw: per pixel
     vec4 panorama;          ///< equirectangular: Cycles' equirectangular_range (longitude span, -longitude
                             ///< min, latitude span, π/2 - latitude min; radians); fisheye: x = field of view
+    vec4 overlay_color;     ///< rgb: the overlay's lines when not coloured by depth (w unused)
     vec3 light_position;
     float ray_epsilon;    ///< offset of secondary and shadow ray origins from a surface
     vec3 light_color;     ///< rgb, already multiplied by the intensity
@@ -176,7 +177,7 @@ struct FrameParams {
     uint mode;                    ///< MODE_SHADE or MODE_HEATMAP
     uint node_count;              ///< of the tree (the stackless traversal stops there)
     uint overlay_enabled;         ///< 1: the trace pass reads the overlay pass's lines
-    uint overlay_color_by_depth;  ///< 1: line colour by tree depth (depth_color), else OVERLAY_LINE_COLOR
+    uint overlay_color_by_depth;  ///< 1: line colour by tree depth (depth_color), else overlay_color
     float overlay_far;            ///< overlay pass: distance of the far clipping plane
     uint overlay_first_box;       ///< the boxes drawn: [overlay_first_box, overlay_last_box) (report §3.3.1)
     uint overlay_last_box;
@@ -230,15 +231,14 @@ BVHLAB_CONST float AMBIENT = 0.1f;     ///< light every opaque surface gets, lit
 BVHLAB_CONST float SPECULAR = 0.25f;   ///< Blinn-Phong highlight strength
 BVHLAB_CONST float SHININESS = 48.0f;  ///< Blinn-Phong exponent
 /// Overlay line colour when lines are not coloured by depth (report §3.3).
-BVHLAB_CONST vec3 OVERLAY_LINE_COLOR = vec3(1.0f, 0.85f, 0.2f);
 
 #ifdef __cplusplus
 static_assert(sizeof(BvhNode) == 32, "BvhNode must stay 32 bytes (std430 layout)");
 static_assert(sizeof(BvhPair) == 64, "BvhPair must stay 64 bytes (std430 layout)");
 static_assert(sizeof(GpuTriangle) == 48 && sizeof(GpuSphere) == 32 && sizeof(GpuMaterial) == 32);
 static_assert(sizeof(GpuBox) == 32 && sizeof(DeviceAddresses) == 14 * 8);
-static_assert(offsetof(FrameParams, width) == 144 && offsetof(FrameParams, addr) == 232);
-static_assert(sizeof(FrameParams) == 232 + sizeof(DeviceAddresses));
+static_assert(offsetof(FrameParams, width) == 160 && offsetof(FrameParams, addr) == 248);
+static_assert(sizeof(FrameParams) == 248 + sizeof(DeviceAddresses));
 }  // namespace bvhlab::gpu
 #endif
 #endif  // BVHLAB_GPU_TYPES_H

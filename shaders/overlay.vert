@@ -23,6 +23,6 @@ void main() {
     GpuBox box = BoxArray(frame.addr.boxes).v[gl_InstanceIndex];
     uint depth = uint(box.lo_depth.w);
     world_position = corner_position(box.lo_depth.xyz, box.hi.xyz, box_corner(uint(gl_VertexIndex)));
-    line_color = frame.overlay_color_by_depth != 0u ? depth_color(depth) : OVERLAY_LINE_COLOR;
+    line_color = frame.overlay_color_by_depth != 0u ? depth_color(depth) : frame.overlay_color.xyz;
     gl_Position = overlay_clip(world_position);
 }

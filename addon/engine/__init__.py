@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import bpy
 
-from . import panels, records
+from . import panels
 from .blender_panels import engine_panels
 from .engine import ENGINE_ID, BVHLAB_RE_whitted
 from .operators import BVHLAB_OT_viewport_cancel
@@ -38,16 +38,14 @@ def unregister() -> None:
         panel.COMPAT_ENGINES.discard(ENGINE_ID)
     for cls in reversed(classes):
         bpy.utils.unregister_class(cls)
-    records.clear()
-    forget_tracers()
+    forget_tracers()  # what the engine remembers is in the add-on's state (cleared by the add-on)
 
 
 def forget() -> None:
-    """Another file is loading: its scenes are not these."""
+    """Another file is loading: its scenes are not these (the add-on clears its state beside)."""
     from .viewport import close_all
 
     close_all()
-    records.clear()
 
 
 def _add_keymap() -> None:

@@ -11,7 +11,8 @@ import weakref
 
 import bpy
 
-from . import passes, records
+from .. import state
+from . import passes
 
 ENGINE_ID = "BVHLAB_WHITTED"
 #: How often (s) the UI thread looks for a new viewport frame to draw.
@@ -108,8 +109,8 @@ def _status(status: str, frame, display) -> str:
 
 def _record(blender_scene, frame, display) -> None:
     record = dict(frame.timings, draw_ms=display.draw_ms, upload_ms=display.upload_ms)
-    with records.lock:
-        records.last_viewport.setdefault(records.key(blender_scene), {})[frame.level] = record
+    with state.lock:
+        state.last_viewport.setdefault(state.key(blender_scene), {})[frame.level] = record
 
 
 def _watch_for_frames(session) -> None:

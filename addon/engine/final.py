@@ -13,10 +13,11 @@ import time
 import warnings
 from dataclasses import replace
 
-from . import passes, records
+from .. import state
+from ..trees import cache, key_of
+from . import passes
 from .border import final_frame
-from .scene_tree import BuildSettings, SceneTree
-from .settings import backend, trace_settings
+from .settings import backend
 from .tracer import TraceCancelled, open_tracer
 
 #: Progress (RenderEngine.update_progress) at the start of each stage.
@@ -69,22 +70,22 @@ class FinalRender:
             engine.report({"ERROR"}, f"bvhlab: {error}")
 
     def _render(self, engine, depsgraph, blender_scene) -> None:
-        key = records.key(blender_scene)
+        key = state.key(blender_scene)
         scene = self.live.scene
         tracer = open_tracer(backend(blender_scene))
         frame = final_frame(blender_scene.render, engine.resolution_x, engine.resolution_y)
         # before the build and before Blender allocates the Render Result (issue 39: a huge F12 was
         # refused only after gigabytes of passes)
         tracer.check_size(frame.width, frame.height)
-        settings = trace_settings(blender_scene, viewport=False)
+        settings = blender_scene.bvhlab.render_options()
         camera, settings, unrendered = self._camera(blender_scene, scene.camera, frame, settings)
         for note in unrendered:
             engine.report({"WARNING"}, f"bvhlab: {note}")
-        tree, update = self._tree(engine, blender_scene, key)
+        update = self._tree(engine, blender_scene)
         if engine.test_break():
             engine.update_stats("", "Cancelled")
             return
-        job = tracer.start(scene, tree.bvh, camera, frame.width, frame.height, settings)
+        job = tracer.start(scene, update.bvh, camera, frame.width, frame.height, settings)
         engine.update_progress(TRACE_START)
         engine.update_stats(
             "", f"Tracing {frame.width} × {frame.height}, {settings.samples} samples per pixel on {tracer.device}"
@@ -97,8 +98,8 @@ class FinalRender:
             "cancelled": cancelled,
             "unrendered": unrendered,
         }
-        with records.lock:
-            records.last_final[key] = record
+        with state.lock:
+            state.last_final[key] = record
         if cancelled:  # as Cycles says it; the samples finished so far are in the Render Result
             engine.update_stats("", f"Cancelled | {job.samples_done} of {settings.samples} samples per pixel")
             return
@@ -110,9 +111,9 @@ class FinalRender:
         """The scene camera for this frame's part (the render border), the settings, and what of the
         scene's settings bvhlab does not render, in words (said, never silently left out)."""
         unrendered = unrendered_features(blender_scene.render)
-        if camera.projection in ("equirectangular", "fisheye") and settings.overlay is not None:
+        if camera.projection in ("equirectangular", "fisheye") and settings.overlay_depth is not None:
             unrendered.append(f"the box overlay is not drawn through {camera.projection} cameras")
-            settings = replace(settings, overlay=None)
+            settings = settings.replace(overlay_depth=None)
         return (camera if frame.whole else replace(camera, region=frame.region)), settings, unrendered
 
     def _trace(self, engine, job, layer_name: str) -> bool:
@@ -141,23 +142,23 @@ class FinalRender:
             engine.end_result(result)
         return cancelled
 
-    def _tree(self, engine, blender_scene, key):
-        """The scene's tree for final renders (kept across engine instances), made to fit."""
-        with records.lock:
-            tree = records.final_trees.setdefault(key, SceneTree())
-        settings = BuildSettings.of(blender_scene)
+    def _tree(self, engine, blender_scene):
+        """The scene's tree from the add-on's one cache (trees.py), made to fit: one the sidebar's
+        Build or the viewport made over the same geometry is used as it is."""
+        key = key_of(blender_scene, scope="visible")  # a render shows every visible object
+        tree = cache.tree(key)
         engine.update_progress(BUILD_START)
-        engine.update_stats("", f"Building BVH ({settings.method})")
+        engine.update_stats("", f"Building BVH ({key.config.method})")
 
         def progress(fraction: float) -> bool:
             engine.update_progress(BUILD_START + (TRACE_START - BUILD_START) * fraction)
             return not engine.test_break()
 
         started = time.perf_counter()
-        update = tree.update(self.live.scene, settings, self.report is not None and self.report.refittable, progress)
+        update = tree.update(self.live.scene, self.report is not None and self.report.refittable, progress)
         if update.action != "kept":
             engine.update_stats("", f"BVH {update.action} in {(time.perf_counter() - started) * 1e3:.0f} ms")
-        return tree, update
+        return update
 
 
 def _trace_record(tracer, update, job, frame) -> dict:

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import bpy
 
+from .. import state
 from ..panels import draw_build_settings, milliseconds
 from ..text_layout import wrapped_label
-from . import records
 from .engine import ENGINE_ID
 from .passes import HEATMAP_PROPERTY
 
@@ -92,9 +92,9 @@ class BVHLAB_PT_engine_status(_EnginePanel, bpy.types.Panel):
 
     def draw(self, context):
         _watch_records()
-        key = records.key(context.scene)
-        with records.lock:
-            final, viewport = records.last_final.get(key), dict(records.last_viewport.get(key, {}))
+        key = state.key(context.scene)
+        with state.lock:
+            final, viewport = state.last_final.get(key), dict(state.last_viewport.get(key, {}))
         layout = self.layout
         if final is None and not viewport:
             layout.label(text="Nothing rendered yet")
@@ -149,8 +149,8 @@ _shown = [""]  # what Last Render showed when the timer last looked
 
 
 def _records_shown() -> str:
-    with records.lock:
-        return repr((records.last_final, records.last_viewport))
+    with state.lock:
+        return repr((state.last_final, state.last_viewport))
 
 
 def _redraw_on_new_records():

@@ -16,41 +16,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bvhlab.render import DEFAULT_TRAVERSAL
-
 
 class TraceCancelled(Exception):
     """`cancelled()` became true while a render ran; the samples finished before are kept."""
-
-
-@dataclass(frozen=True)
-class TraceSettings:
-    """One render's options, in the tracer's terms. `overlay`: (depth_min, depth_max) or None."""
-
-    samples_per_axis: int = 1  # n of the n×n supersampling
-    max_depth: int = 5
-    overlay: tuple | None = None
-    color_by_depth: bool = True
-    line_width: float = 1.0
-    traversal: str = DEFAULT_TRAVERSAL
-    mode: str = "shade"
-    threads: int = 0  # CPU reference threads; 0 = every core
-
-    @property
-    def samples(self) -> int:
-        """Samples per pixel."""
-        return self.samples_per_axis**2
-
-    def options(self) -> dict:
-        return {
-            "samples_per_axis": self.samples_per_axis,
-            "max_depth": self.max_depth,
-            "overlay_depth": self.overlay,
-            "color_by_depth": self.color_by_depth,
-            "line_width": self.line_width,
-            "traversal": self.traversal,
-            "mode": self.mode,
-        }
 
 
 @dataclass(frozen=True)
@@ -121,18 +89,16 @@ class Tracer:
         """ValueError for an image this backend does not render, before anything is allocated."""
         self.renderer.check_size(width, height)
 
-    def start(self, scene, bvh, camera, width: int, height: int, settings: TraceSettings) -> TraceJob:
-        """A render of `scene` seen from `camera` (a bvhlab.Camera or View), nothing traced yet;
-        its settings checked (ValueError)."""
-        job = self.renderer.start(
-            scene, bvh, width, height, camera=camera, threads=settings.threads, **settings.options()
-        )
+    def start(self, scene, bvh, camera, width: int, height: int, options, threads: int = 0) -> TraceJob:
+        """A render of `scene` seen from `camera` (a bvhlab.Camera or View) with `options` (a
+        bvhlab.RenderOptions), nothing traced yet; `threads`: the CPU reference's (0: every core)."""
+        job = self.renderer.start(scene, bvh, width, height, camera=camera, options=options, threads=threads)
         return TraceJob(job, width, height)
 
-    def trace(self, scene, bvh, camera, width: int, height: int, settings: TraceSettings, cancelled=None):
+    def trace(self, scene, bvh, camera, width: int, height: int, options, threads: int = 0, cancelled=None):
         """(TraceImages, timings) of the whole render (the Combined image only). With `cancelled`,
         raises TraceCancelled within one dispatch of it returning True."""
-        job = self.start(scene, bvh, camera, width, height, settings)
+        job = self.start(scene, bvh, camera, width, height, options, threads)
         job.run(cancelled=cancelled)
         return job.images(), job.timings
 

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from .scene_tree import BuildSettings
-from .settings import backend, trace_settings
+from ..trees import key_of
+from .settings import backend
 from .view_camera import view_frustum
 from .viewport import ViewRequest
 
@@ -13,9 +13,9 @@ def view_request(context, blender_scene) -> ViewRequest:
     frustum = view_frustum(view.view_matrix, view.window_matrix, region.width, region.height)
     return ViewRequest(
         frustum,
-        trace_settings(blender_scene, viewport=True),
+        blender_scene.bvhlab.render_options(viewport=True),
         backend(blender_scene),
-        BuildSettings.of(blender_scene),
+        key_of(blender_scene, scope="visible"),  # the viewport shows every visible object
         blender_scene.bvhlab.viewport_budget_ms,
         camera_view_note(view, context.space_data, blender_scene),
     )
@@ -24,8 +24,10 @@ def view_request(context, blender_scene) -> ViewRequest:
 def camera_view_note(view, space, blender_scene) -> str:
     """What the viewport does not show of the camera it looks through (F12 renders it), in words;
     empty elsewhere."""
+    if view.view_perspective != "CAMERA":
+        return ""
     camera = (space.camera if space is not None and space.use_local_camera else None) or blender_scene.camera
-    if view.view_perspective != "CAMERA" or camera is None or camera.type != "CAMERA":
+    if camera is None or camera.type != "CAMERA":
         return ""
     data = camera.data
     if data.type == "PANO":

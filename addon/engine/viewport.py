@@ -18,10 +18,11 @@ import threading
 import time
 import traceback
 import weakref
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
-from .scene_tree import BuildSettings, SceneTree
-from .tracer import TraceCancelled, TraceSettings, open_tracer
+from ..trees import TreeKey, cache
+from .settings import VIEWPORT_THREADS
+from .tracer import TraceCancelled, open_tracer
 from .view_camera import ViewFrustum
 
 #: Seconds the view must stay still before the full-resolution level starts.
@@ -37,9 +38,9 @@ class ViewRequest:
     """Everything a viewport frame depends on besides the scene."""
 
     frustum: ViewFrustum
-    settings: TraceSettings  # as refined (n×n samples); lower levels use 1 sample
+    settings: object  # bvhlab.RenderOptions as refined (n×n samples); lower levels use 1 sample
     backend: str
-    build: BuildSettings
+    tree: TreeKey  # the tree of the add-on's one cache (trees.py) the view is traced with
     budget_ms: float
     note: str = ""  # what of the camera the viewport does not show (view_request.camera_view_note)
 
@@ -75,7 +76,6 @@ class ViewportSession:
         self._closed = False
         self._busy = False
         self._ms_per_sample = None  # measured trace speed (ms per pixel-sample)
-        self.tree = SceneTree()
         _sessions.add(self)
         self._thread = threading.Thread(target=self._run, name="bvhlab viewport", daemon=True)
         self._thread.start()
@@ -204,18 +204,19 @@ class ViewportSession:
             if not self._current(scene_serial, request_serial):
                 return
             width, height = request.frustum.scaled(scale)
-            settings = replace(request.settings, samples_per_axis=samples_per_axis)
+            settings = request.settings.replace(samples_per_axis=samples_per_axis)
             spp = settings.samples
             self._set_status(f"Tracing {level} {width} × {height}" + (f", {spp} spp" if spp > 1 else ""))
             started = time.perf_counter()
             try:
                 images, timings = tracer.trace(
                     scene,
-                    self.tree.bvh,
+                    update.bvh,
                     request.frustum.camera(),
                     width,
                     height,
                     settings,
+                    threads=VIEWPORT_THREADS,
                     cancelled=lambda: not self._current(scene_serial, request_serial),
                 )
             except TraceCancelled:
@@ -248,11 +249,11 @@ class ViewportSession:
             with self._cv:
                 if self._closed or self._paused or scene_serial != self._scene_serial:
                     return False
-                self._status, self._redraw = f"Building BVH ({request.build.method}) {fraction:.0%}", True
+                self._status, self._redraw = f"Building BVH ({request.tree.config.method}) {fraction:.0%}", True
                 return True
 
         try:
-            return self.tree.update(scene, request.build, refittable, progress, threads=request.settings.threads)
+            return cache.tree(request.tree).update(scene, refittable, progress, threads=VIEWPORT_THREADS)
         except bvhlab.BuildCancelled:
             return None
 

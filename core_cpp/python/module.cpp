@@ -49,20 +49,9 @@ nb::dict stats_dict(const Bvh& bvh) {
     return d;
 }
 
-PyBvh* build(const Triangles& tris, const std::optional<Spheres>& spheres, const std::string& method,
-             const std::string& axis, std::uint32_t bins, const std::string& bin_bounds, std::int64_t max_leaf_size,
-             std::uint32_t sah_block, std::uint64_t seed, std::uint32_t threads, std::optional<nb::callable> progress) {
-    BuildConfig cfg;
-    cfg.method = parse_split_method(method);
-    cfg.axis = parse_axis_policy(axis);
-    cfg.bins = bins;
-    cfg.bin_bounds = parse_bin_bounds(bin_bounds);
-    if (max_leaf_size < 1 || max_leaf_size > 0x7fffffff)
-        throw std::invalid_argument("max_leaf_size must be at least 1, got " + std::to_string(max_leaf_size));
-    cfg.max_leaf_size = static_cast<std::uint32_t>(max_leaf_size);
-    cfg.sah_block = sah_block;
-    cfg.seed = seed;
-    cfg.threads = threads;
+PyBvh* build(const Triangles& tris, const std::optional<Spheres>& spheres, const BuildConfig& config,
+             std::optional<nb::callable> progress) {
+    BuildConfig cfg = config;  // the caller's stays as it was (no callback stored in it)
     // Always a check, with or without a callable: Ctrl-C stops the build (KeyboardInterrupt).
     PyStopCheck stop(progress ? nb::object(*progress) : nb::none());
     cfg.progress = [&stop](double done) { return !stop(done); };
@@ -135,7 +124,8 @@ void py_refit(PyBvh& self, const Triangles& tris, const std::optional<Spheres>& 
 
 }  // namespace
 
-void bind_render(nb::module_& m);  // render_bindings.cpp
+void bind_render(nb::module_& m);        // render_bindings.cpp
+void bind_build_config(nb::module_& m);  // build_config_bindings.cpp
 
 namespace {
 
@@ -202,8 +192,7 @@ void bind_functions(nb::module_& m) {  // geometry checks and the build
         },
         "triangles"_a.noconvert(), "spheres"_a.noconvert().none(),
         "Raises ValueError naming the first primitive that is not finite or lies outside MAX_COORDINATE.");
-    m.def("build", &build, "triangles"_a.noconvert(), "spheres"_a.noconvert().none(), "method"_a, "axis"_a, "bins"_a,
-          "bin_bounds"_a, "max_leaf_size"_a, "sah_block"_a, "seed"_a, "threads"_a, "progress"_a.none());
+    m.def("build", &build, "triangles"_a.noconvert(), "spheres"_a.noconvert().none(), "config"_a, "progress"_a.none());
 }
 
 void bind_build_names(nb::module_& m) {
@@ -217,15 +206,12 @@ void bind_build_names(nb::module_& m) {
     m.attr("SPLIT_METHODS") = nb::tuple(methods);
     m.attr("AXIS_POLICIES") = nb::tuple(axes);
     m.attr("BIN_BOUNDS") = nb::tuple(bin_bounds);
-    m.attr("MIN_BINS") = kMinBins;
-    m.attr("MAX_BINS") = kMaxBins;
     m.attr("DEFAULT_METHOD") = to_string(defaults.method);
     m.attr("DEFAULT_AXIS") = to_string(defaults.axis);
     m.attr("DEFAULT_BINS") = defaults.bins;
     m.attr("DEFAULT_BIN_BOUNDS") = to_string(defaults.bin_bounds);
     m.attr("DEFAULT_MAX_LEAF_SIZE") = defaults.max_leaf_size;
     m.attr("DEFAULT_SAH_BLOCK") = defaults.sah_block;
-    m.attr("MAX_SAH_BLOCK") = kMaxSahBlock;
     m.attr("MAX_TREE_HEIGHT") = gpu::MAX_TREE_HEIGHT;
     m.attr("MAX_COORDINATE") = kMaxCoordinate;  // coordinate_range.h
     m.attr("MIN_DIRECTION") = kMinDirection;
@@ -242,6 +228,7 @@ NB_MODULE(_core, m) {
     nb::exception<BuildCancelled>(m, "BuildCancelled");
     bind_render(m);
     bind_bvh(m);
+    bind_build_config(m);
     bind_functions(m);
     bind_build_names(m);
 }

@@ -98,6 +98,8 @@ void bind_settings(nb::module_& m) {
             "validate", [](const RenderSettings& self) { validate(self); },
             "Raises ValueError naming the first bad setting.");
     vec3_property<RenderSettings, &RenderSettings::sky>(s, "sky", "the atmosphere colour (report §2.1)");
+    vec3_property<RenderSettings, &RenderSettings::overlay_color>(s, "overlay_color",
+                                                                  "the overlay's line colour when not by depth");
 
     m.def(
         "validate_image_size",

@@ -14,6 +14,7 @@ from .render import (
     render,
     save_png,
 )
+from .render_options import RenderOptions
 from .scene import Camera, Light, Material, Scene
 
 __version__ = "0.1.0"
@@ -31,6 +32,7 @@ __all__ = [
     "TRAVERSALS",
     "NODE_DTYPE",
     "render",
+    "RenderOptions",
     "Renderer",
     "RenderJob",
     "RenderResult",

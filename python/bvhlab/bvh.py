@@ -2,25 +2,29 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
 from . import _checks, _core
 
 #: Split methods and axis policies as the C++ core names them (its table of methods), and the
-#: defaults of `build`: one definition, in core_cpp/include/bvhlab/build_config.h.
+#: defaults and limits of a build: one definition, in core_cpp/include/bvhlab/build_config.h.
 METHODS = tuple(_core.SPLIT_METHODS)
 AXES = tuple(_core.AXIS_POLICIES)
 BIN_BOUNDS = tuple(_core.BIN_BOUNDS)
-DEFAULT_METHOD = _core.DEFAULT_METHOD
-DEFAULT_AXIS = _core.DEFAULT_AXIS
-DEFAULT_BINS = _core.DEFAULT_BINS
-DEFAULT_BIN_BOUNDS = _core.DEFAULT_BIN_BOUNDS
-DEFAULT_MAX_LEAF_SIZE = _core.DEFAULT_MAX_LEAF_SIZE
-DEFAULT_SAH_BLOCK = _core.DEFAULT_SAH_BLOCK
-MAX_SAH_BLOCK = _core.MAX_SAH_BLOCK
+_CORE_DEFAULTS = _core.BuildConfig()
+DEFAULT_METHOD: str = _CORE_DEFAULTS.method
+DEFAULT_AXIS: str = _CORE_DEFAULTS.axis
+DEFAULT_BINS: int = _CORE_DEFAULTS.bins
+DEFAULT_BIN_BOUNDS: str = _CORE_DEFAULTS.bin_bounds
+DEFAULT_MAX_LEAF_SIZE: int = _CORE_DEFAULTS.max_leaf_size
+DEFAULT_SAH_BLOCK: int = _CORE_DEFAULTS.sah_block
+MIN_BINS, MAX_BINS = int(_core.MIN_BINS), int(_core.MAX_BINS)
+MAX_LEAF_SIZE = int(_core.MAX_LEAF_SIZE)
+MAX_SAH_BLOCK = int(_core.MAX_SAH_BLOCK)
 TRAVERSALS = tuple(_core.TRAVERSALS)  # of Bvh.intersect (the renderers have their own: RENDER_TRAVERSALS)
 MAX_TREE_HEIGHT = _core.MAX_TREE_HEIGHT
 #: Supported coordinates and ray directions (core_cpp/include/bvhlab/coordinate_range.h).
@@ -36,8 +40,64 @@ NODE_INTERNAL_BIT = _core.NODE_INTERNAL_BIT
 REF_SPHERE_BIT = _core.REF_SPHERE_BIT
 
 
+def _uint32(name: str, value, limits: tuple[int, int]) -> int:
+    """An int for a uint32 field of the core's config: its type is checked here; its range by the
+    core's validate (`limits` only word the message for a value no uint32 holds)."""
+    value = _checks.integer(name, value, -(2**63), 2**63)
+    if not 0 <= value < 2**32:
+        raise ValueError(f"{name} must be between {limits[0]} and {limits[1]}, got {value}")
+    return value
+
+
+@dataclass(frozen=True)
+class BuildConfig:
+    """What a tree is built with: the one typed object a build is asked for, from the API, the CLI
+    and the add-on alike. Defaults are the core's (build_config.h); values are checked once, by
+    the core (ValueError naming the setting), when the config is made. Two configs are equal when
+    they give the same tree (`threads` never changes it)."""
+
+    method: str = DEFAULT_METHOD
+    bins: int = DEFAULT_BINS
+    bin_bounds: str = DEFAULT_BIN_BOUNDS
+    axis: str = DEFAULT_AXIS
+    max_leaf_size: int = DEFAULT_MAX_LEAF_SIZE
+    sah_block: int = DEFAULT_SAH_BLOCK
+    seed: int = _CORE_DEFAULTS.seed
+    threads: int = field(default=_CORE_DEFAULTS.threads, compare=False)
+
+    def __post_init__(self):
+        self.core()
+
+    def core(self) -> _core.BuildConfig:
+        """The C++ BuildConfig (types checked here, values by the core's validate)."""
+        c = _core.BuildConfig()
+        c.method = _checks.choice("method", self.method, METHODS)
+        c.axis = _checks.choice("axis", self.axis, AXES)
+        c.bin_bounds = _checks.choice("bin_bounds", self.bin_bounds, BIN_BOUNDS)
+        c.bins = _uint32("bins", self.bins, (MIN_BINS, MAX_BINS))
+        c.max_leaf_size = _uint32("max_leaf_size", self.max_leaf_size, (1, MAX_LEAF_SIZE))
+        c.sah_block = _uint32("sah_block", self.sah_block, (1, MAX_SAH_BLOCK))
+        c.seed = _checks.integer("seed", self.seed, 0, 2**64 - 1)
+        c.threads = _checks.integer("threads", self.threads, 0, 4096)
+        c.validate()
+        return c
+
+    def replace(self, **changes) -> BuildConfig:
+        """A copy with some settings changed (unknown names: TypeError naming them)."""
+        unknown = sorted(set(changes) - {f.name for f in fields(self)})
+        if unknown:
+            raise TypeError(
+                f"unknown build setting(s) {', '.join(unknown)}; expected: {', '.join(f.name for f in fields(self))}"
+            )
+        return dataclasses.replace(self, **changes)
+
+    def tree_settings(self) -> dict:
+        """The settings the tree depends on, by name (what stats files and tables record)."""
+        return {f.name: getattr(self, f.name) for f in fields(self) if f.compare}
+
+
 def method_from_label(label: str) -> dict:
-    """Build arguments of a method label as tables and the CLI write them: 'sah32' → method sah
+    """Build settings of a method label as tables and the CLI write them: 'sah32' → method sah
     with 32 bins; every other label is a method name."""
     if label.startswith("sah") and label[3:].isdigit():
         return {"method": "sah", "bins": int(label[3:])}
@@ -46,47 +106,29 @@ def method_from_label(label: str) -> dict:
     return {"method": label}
 
 
-@dataclass(frozen=True)
-class BuildConfig:
-    """What a tree was built with (the arguments of `build`)."""
-
-    method: str = DEFAULT_METHOD
-    bins: int = DEFAULT_BINS
-    bin_bounds: str = DEFAULT_BIN_BOUNDS
-    axis: str = DEFAULT_AXIS
-    max_leaf_size: int = DEFAULT_MAX_LEAF_SIZE
-    sah_block: int = DEFAULT_SAH_BLOCK
-    seed: int = 0
-    threads: int = 0
-
-
 def build(
     scene_or_triangles,
     spheres: np.ndarray | None = None,
     *,
-    method: str = DEFAULT_METHOD,
-    bins: int = DEFAULT_BINS,
-    bin_bounds: str = DEFAULT_BIN_BOUNDS,
-    axis: str = DEFAULT_AXIS,
-    max_leaf_size: int = DEFAULT_MAX_LEAF_SIZE,
-    sah_block: int = DEFAULT_SAH_BLOCK,
-    seed: int = 0,
-    threads: int = 0,
+    config: BuildConfig | None = None,
     progress: Callable[[float], bool | None] | None = None,
+    **settings,
 ) -> Bvh:
     """Build a BVH over triangles (float32 (T,3,3)) and spheres (float32 (S,4): centre, radius).
 
-    `scene_or_triangles` is a `bvhlab.Scene` or a triangle array. `method` is one of METHODS,
-    `axis` one of AXES ("auto": all three axes for the SAH methods, the largest centroid extent
-    for the others); `bins` (2..256) is used by "sah", whose equal buckets divide the node's box
-    (`bin_bounds="box"`) or its centroid bounds ("centroids", the report's §2.3.2); leaves hold at
-    most `max_leaf_size` primitives, and the SAH methods may stop earlier when a leaf is cheaper.
-    `sah_block` (a power of two up to MAX_SAH_BLOCK) makes the SAH count primitives in whole
-    blocks of that many above a node of one block, as the wide CPU traversal tests four triangles
-    at once (Embree's sahBlockSize); 1 is the report's SAH. The defaults give a fast tree for
-    little build time; the report's Table 1 settings are method="sah", bins=12,
-    bin_bounds="centroids", axis="largest", max_leaf_size=1, sah_block=1. `threads` = 0 uses every
-    core; the tree never depends on it.
+    `scene_or_triangles` is a `bvhlab.Scene` or a triangle array. The settings are a BuildConfig
+    (`config`, default BuildConfig()), with any of its fields given by name on top
+    (`build(scene, method="median")`):
+    `method` is one of METHODS, `axis` one of AXES ("auto": all three axes for the SAH methods,
+    the largest centroid extent for the others); `bins` (MIN_BINS..MAX_BINS) is used by "sah",
+    whose equal buckets divide the node's box (`bin_bounds="box"`) or its centroid bounds
+    ("centroids", the report's §2.3.2); leaves hold at most `max_leaf_size` primitives, and the SAH
+    methods may stop earlier when a leaf is cheaper. `sah_block` (a power of two up to
+    MAX_SAH_BLOCK) makes the SAH count primitives in whole blocks of that many above a node of one
+    block, as the wide CPU traversal tests four triangles at once (Embree's sahBlockSize); 1 is the
+    report's SAH. The defaults give a fast tree for little build time; the report's Table 1
+    settings are method="sah", bins=12, bin_bounds="centroids", axis="largest", max_leaf_size=1,
+    sah_block=1. `threads` = 0 uses every core; the tree never depends on it.
     Bad input raises TypeError or ValueError; a vertex or sphere outside ±MAX_COORDINATE (2^40 ≈
     1.1e12, where float32 ray tests would overflow) and a sphere radius below MIN_RADIUS (2^-60,
     where its square underflows) are bad input.
@@ -107,32 +149,15 @@ def build(
     triangles = _checks.float32_array("triangles", triangles, (3, 3))
     if spheres is not None:
         spheres = _checks.float32_array("spheres", spheres, (4,))
-    config = BuildConfig(
-        method=_checks.choice("method", method, METHODS),
-        bins=_checks.integer("bins", bins, _core.MIN_BINS, _core.MAX_BINS),
-        bin_bounds=_checks.choice("bin_bounds", bin_bounds, BIN_BOUNDS),
-        axis=_checks.choice("axis", axis, AXES),
-        max_leaf_size=_checks.integer("max_leaf_size", max_leaf_size, 1, 2**31 - 1),
-        sah_block=_checks.power_of_two("sah_block", sah_block, MAX_SAH_BLOCK),
-        seed=_checks.integer("seed", seed, 0, 2**64 - 1),
-        threads=_checks.integer("threads", threads, 0, 4096),
-    )
+    if config is None:
+        config = BuildConfig()
+    elif not isinstance(config, BuildConfig):
+        raise TypeError(f"config must be a bvhlab.BuildConfig, got {type(config).__name__}")
+    if settings:
+        config = config.replace(**settings)
     if progress is not None and not callable(progress):
         raise TypeError("progress must be callable (fraction -> bool) or None")
-    core = _core.build(
-        triangles,
-        spheres,
-        config.method,
-        config.axis,
-        config.bins,
-        config.bin_bounds,
-        config.max_leaf_size,
-        config.sah_block,
-        config.seed,
-        config.threads,
-        progress,
-    )
-    return Bvh(core, config)
+    return Bvh(_core.build(triangles, spheres, config.core(), progress), config)
 
 
 class Bvh:

@@ -18,6 +18,7 @@ from . import _checks, _core
 from ._render_scene import SceneCache
 from ._render_settings import View, render_settings
 from .bvh import Bvh
+from .render_options import DEFAULT_HEIGHT, DEFAULT_WIDTH, RenderOptions, options_from
 from .scene import Camera, Scene
 
 BACKENDS = ("auto", "vulkan", "cpu")
@@ -66,23 +67,17 @@ class RenderResult:
 def render(
     scene: Scene,
     bvh: Bvh,
-    width: int = 800,
-    height: int = 600,
+    width: int = DEFAULT_WIDTH,
+    height: int = DEFAULT_HEIGHT,
     *,
     backend: str = "auto",
     camera: Camera | View | None = None,
-    samples_per_axis: int = 1,
-    max_depth: int = 5,
-    overlay_depth: tuple[int, int] | None = None,
-    traversal: str = DEFAULT_TRAVERSAL,
-    mode: str = "shade",
-    color_by_depth: bool = True,
-    line_width: float = 1.0,
-    heatmap_scale: float | None = None,
+    options: RenderOptions | None = None,
     threads: int = 0,
     device: str | None = None,
     validation: bool | None = None,
     progress=None,
+    **option_changes,
 ):
     """Render `scene` with its tree `bvh`; returns (image, timings).
 
@@ -92,13 +87,12 @@ def render(
 
     backend: "auto" (a Vulkan GPU if there is one, else the CPU reference: on a CPU Vulkan
     driver such as lavapipe the CPU reference is several times faster), "vulkan" or "cpu".
-    camera: a Camera or View; default: the scene's. samples_per_axis: n for n×n supersampling.
-    max_depth: bounces of reflection and refraction (0..MAX_RAY_DEPTH). overlay_depth=(a, b):
-    draw the boxes of tree depths a..b (report §3.3). traversal: "stack" or "stackless" (report
-    §3.1). mode: "shade" or "heatmap" (box tests of the primary rays, blue = few, red =
-    heatmap_scale or more; default 8 × tree height). progress: called with the fraction done;
-    a false result stops the render (RenderCancelled). Ctrl-C stops it too (KeyboardInterrupt).
-    device / validation: Vulkan device (index or name substring) and the Khronos validation layer.
+    camera: a Camera or View; default: the scene's. options: a RenderOptions (samples, bounces,
+    the box overlay, traversal, mode, ...; default RenderOptions()), with any of its fields given
+    by name on top (`render(scene, bvh, samples_per_axis=2)`). progress: called with the fraction
+    done; a false result stops the render (RenderCancelled). Ctrl-C stops it too
+    (KeyboardInterrupt). device / validation: Vulkan device (index or name substring) and the
+    Khronos validation layer.
     """
     return default_renderer(backend, device, validation).render(
         scene,
@@ -106,14 +100,7 @@ def render(
         width,
         height,
         camera=camera,
-        samples_per_axis=samples_per_axis,
-        max_depth=max_depth,
-        overlay_depth=overlay_depth,
-        traversal=traversal,
-        mode=mode,
-        color_by_depth=color_by_depth,
-        line_width=line_width,
-        heatmap_scale=heatmap_scale,
+        options=options_from(options, option_changes),
         threads=threads,
         progress=progress,
     )
@@ -220,15 +207,21 @@ class Renderer:
         return self._vulkan.validation_error_count if self._vulkan else 0
 
     def start(
-        self, scene: Scene, bvh: Bvh, width: int = 800, height: int = 600, *, threads: int | None = None, **options
+        self,
+        scene: Scene,
+        bvh: Bvh,
+        width: int = DEFAULT_WIDTH,
+        height: int = DEFAULT_HEIGHT,
+        *,
+        camera: Camera | View | None = None,
+        options: RenderOptions | None = None,
+        threads: int | None = None,
+        **option_changes,
     ) -> RenderJob:
-        """A RenderJob (sample passes, nothing traced yet). Options as for `bvhlab.render`, and
-        steps_per_dispatch (16..60000: how the work is cut, never the image; default: adaptive)
-        and max_steps_per_pixel (a pixel needing more work in one run raises RenderIncomplete;
-        default: the most a correct trace of the scene can take). `threads`: CPU reference
-        threads (default: the Renderer's, 0 = every core)."""
+        """A RenderJob (sample passes, nothing traced yet). `options` and its fields by name as for
+        `bvhlab.render`. `threads`: CPU reference threads (default: the Renderer's, 0 = every core)."""
         threads = self.threads if threads is None else _checks.integer("threads", threads, 0, 4096)
-        settings = render_settings(scene, bvh, width, height, **options)
+        settings = render_settings(scene, bvh, width, height, options_from(options, option_changes), camera)
         start = time.perf_counter()
         with self._lock:
             render_scene = self._cache.get(scene, bvh)
@@ -246,9 +239,18 @@ class Renderer:
             timings["fallback"] = self.fallback
         return RenderJob(job, settings, timings)
 
-    def render(self, scene: Scene, bvh: Bvh, width: int = 800, height: int = 600, *, progress=None, **options):
+    def render(
+        self,
+        scene: Scene,
+        bvh: Bvh,
+        width: int = DEFAULT_WIDTH,
+        height: int = DEFAULT_HEIGHT,
+        *,
+        progress=None,
+        **start_arguments,
+    ):
         """The whole render at once: (image, timings), as `bvhlab.render`."""
-        job = self.start(scene, bvh, width, height, **options)
+        job = self.start(scene, bvh, width, height, **start_arguments)
         job.run(progress=progress)
         result = job.result(depth=False, cost=False)
         return result.color, result.timings

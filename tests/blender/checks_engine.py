@@ -23,7 +23,7 @@ MISS_DEPTH = float(np.float32(bvhlab._core.NO_DEPTH))  # what the tracer (and Cy
 
 
 def _records():
-    return harness.addon().engine.records
+    return harness.addon().state
 
 
 def _last_final(scene=None) -> dict:
@@ -62,7 +62,7 @@ def reference(scene, samples_per_axis: int, overlay=None, mode="shade", **build)
     """bvhlab.render on the CPU reference of a fresh export, tree built directly: the oracle."""
     exported = export_scene(bpy.context)
     settings = scene.bvhlab
-    bvh = bvhlab.build(exported, **{**settings.build_kwargs(), **build})
+    bvh = bvhlab.build(exported, config=settings.build_config(), **build)
     width, height = scene.render.resolution_x, scene.render.resolution_y
     image, _ = bvhlab.render(
         exported,
@@ -155,7 +155,7 @@ def check_heatmap_is_box_tests(tmp_dir) -> None:
     got = render_passes(tmp_dir)
     exported = export_scene(bpy.context)
     s = scene.bvhlab  # the tree the engine builds: the panel's settings
-    bvh = bvhlab.build(exported, **s.build_kwargs())
+    bvh = bvhlab.build(exported, config=s.build_config())
     directions = _primary_directions(exported.camera, 96, 72)
     origins = np.ascontiguousarray(np.broadcast_to(np.float32(exported.camera.position), directions.shape))
     visited = bvh.intersect(origins, directions, traversal="stack")["nodes_visited"].reshape(72, 96)

@@ -5,6 +5,7 @@ bvhlab.render, Esc during a build). The add-on must be enabled."""
 from __future__ import annotations
 
 import math
+from importlib import import_module
 
 import bpy
 import harness
@@ -98,20 +99,29 @@ def _session_for(scene, width: int, height: int, samples_per_axis: int, overlay=
     camera; returns (session, request)."""
     from bvhlab.blender import LiveScene
 
-    viewport, view_camera, tracer = _engine_module("viewport"), _engine_module("view_camera"), _engine_module("tracer")
+    viewport, view_camera = _engine_module("viewport"), _engine_module("view_camera")
     live = LiveScene("visible", require_camera=False)
     report = live.sync(bpy.context.evaluated_depsgraph_get(), scene, bpy.context.view_layer)
     view, window = _camera_matrices(scene, width, height)
     frustum = view_camera.view_frustum(view, window, width, height)
-    settings = tracer.TraceSettings(
-        samples_per_axis=samples_per_axis, max_depth=5, overlay=overlay, traversal="stackless"
+    settings = bvhlab.RenderOptions(
+        samples_per_axis=samples_per_axis, max_depth=5, overlay_depth=overlay, traversal="stackless"
     )
-    build = _engine_module("scene_tree").BuildSettings()
-    request = viewport.ViewRequest(frustum, settings, "cpu", build, budget_ms=5.0)
+    tree = _trees().TreeKey(scene.session_uid, "visible", bvhlab.BuildConfig())
+    request = viewport.ViewRequest(frustum, settings, "cpu", tree, budget_ms=5.0)
     session = viewport.ViewportSession()
     session.set_scene(live.scene, report)
     session.request(request)
     return session, request, live
+
+
+def _trees():
+    return import_module(harness.addon().__name__ + ".trees")
+
+
+def _tree_of(request):
+    """The SceneTree of the add-on's one cache the viewport traces with."""
+    return _trees().cache.tree(request.tree)
 
 
 def check_viewport_worker_levels() -> None:
@@ -132,7 +142,7 @@ def check_viewport_worker_levels() -> None:
         frame = _wait(refined)
         expected, _ = bvhlab.render(
             live.scene,
-            session.tree.bvh,
+            _tree_of(request).bvh,
             240,
             160,
             backend="cpu",
@@ -166,18 +176,18 @@ def check_viewport_build_cancels() -> None:
         _wait(lambda: session.status().startswith("Building BVH"), what="the build")
         session.cancel()
         _wait(lambda: not session.busy, what="the cancelled build")
-        assert session.tree.bvh is None and session.latest_frame() is None
+        assert _tree_of(request).bvh is None and session.latest_frame() is None
         assert session.status().startswith("Cancelled"), session.status()
         session.set_scene(live.scene, None)  # what view_update does after an edit
         frame = _wait(lambda: _at_level(session, "full"), what="the build after the edit")
-        assert session.tree.bvh is not None and frame.image.shape[:2] == (48, 64)
+        assert _tree_of(request).bvh is not None and frame.image.shape[:2] == (48, 64)
     finally:
         session.close()
 
 
 class _NotingReads:
     """scene.bvhlab as the engine's code sees it, noting the name of every setting it reads (its
-    methods, build_kwargs, run on this stand-in, so their reads are noted too)."""
+    methods, build_config and render_options, run on this stand-in, so their reads are noted too)."""
 
     def __init__(self, settings):
         self._settings, self.names = settings, set()
@@ -196,16 +206,20 @@ def viewport_settings(scene) -> set[str]:
     from types import SimpleNamespace
 
     view, window = _camera_matrices(scene, 64, 48)
-    region_data = SimpleNamespace(view_matrix=view, window_matrix=window, is_perspective=True, view_distance=8.0)
-    context = SimpleNamespace(region=SimpleNamespace(width=64, height=48), region_data=region_data)
+    region_data = SimpleNamespace(
+        view_matrix=view, window_matrix=window, is_perspective=True, view_distance=8.0, view_perspective="PERSP"
+    )
+    context = SimpleNamespace(region=SimpleNamespace(width=64, height=48), region_data=region_data, space_data=None)
     noting = _NotingReads(scene.bvhlab)
-    _engine_module("view_request").view_request(context, SimpleNamespace(bvhlab=noting))
+    _engine_module("view_request").view_request(context, SimpleNamespace(bvhlab=noting, session_uid=scene.session_uid))
     return noting.names
 
 
 def _another_value(settings, name: str):
     """A valid value of the setting `name` other than its current one."""
     prop, value = settings.bl_rna.properties[name], getattr(settings, name)
+    if getattr(prop, "is_array", False):  # a colour: move each channel within its range
+        return tuple(x + 0.25 if x + 0.25 <= prop.hard_max else x - 0.25 for x in value)
     if prop.type == "ENUM":
         return next(item.identifier for item in prop.enum_items if item.identifier != value)
     if prop.type == "BOOLEAN":

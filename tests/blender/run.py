@@ -125,6 +125,10 @@ def _checks(groups, zip_path: Path, tmp: Path):
             yield "addon", check.__name__, check
         yield "addon", "export_stats", lambda: checks_addon.check_export_stats(tmp)
         yield "addon", "compare", lambda: checks_addon.check_compare(tmp)
+        import checks_settings_path
+
+        for check in checks_settings_path.SETTINGS_PATH_CHECKS:
+            yield "addon", check.__name__, lambda c=check: _in_own_folder(c, tmp / c.__name__)
         yield "addon", "path_properties", lambda: checks_addon.check_path_properties(tmp)
         yield "addon", "engine_panels", lambda: checks_addon.check_engine_panels_follow_the_renders(tmp)
     if "instancing" in groups:

@@ -136,10 +136,12 @@ TEST_F(Vulkan, OverlayLinesInFrontShowBehindAreHiddenElsewhereUnchanged) {
     auto scene = test::overlay_sphere();
     renderer().upload(scene->render);
     RenderSettings s = scene->settings;
+    ASSERT_FALSE(s.overlay_color_by_depth);
+    s.overlay_color = {0.2f, 0.9f, 0.4f};  // not the default: the setting reaches the overlay pass
     std::vector<float> lines = render_vulkan(renderer(), s);
     s.overlay = false;
     std::vector<float> plain = render_vulkan(renderer(), s);
-    const float line_color[3] = {gpu::OVERLAY_LINE_COLOR.x, gpu::OVERLAY_LINE_COLOR.y, gpu::OVERLAY_LINE_COLOR.z};
+    const float line_color[3] = {s.overlay_color.x, s.overlay_color.y, s.overlay_color.z};
     const float sky[3] = {s.sky.x, s.sky.y, s.sky.z};
     // Every pixel either shows the line colour exactly (a primary ray that stopped at the line)
     // or is bit-for-bit what it is without the overlay.

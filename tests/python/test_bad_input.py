@@ -63,7 +63,7 @@ def test_wrong_sphere_array(tris):
         (dict(axis="longest"), ValueError, "unknown axis"),
         (dict(max_leaf_size=0), ValueError, "max_leaf_size"),
         (dict(max_leaf_size=-3), ValueError, "max_leaf_size"),
-        (dict(sah_block=0), ValueError, "sah_block must be between 1 and 64"),
+        (dict(sah_block=0), ValueError, "sah_block must be a power of two from 1 to 64, got 0"),
         (dict(sah_block=3), ValueError, "sah_block must be a power of two"),
         (dict(sah_block=128), ValueError, "sah_block"),
         (dict(sah_block=4.0), TypeError, "sah_block must be an integer"),

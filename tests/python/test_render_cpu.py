@@ -178,8 +178,10 @@ def test_overlay_lines_occlude_and_are_occluded():
     bvh = bvhlab.build(scene)
     w, h = 160, 120
     plain, _ = bvhlab.render(scene, bvh, w, h, backend="cpu")
-    lines, _ = bvhlab.render(scene, bvh, w, h, backend="cpu", overlay_depth=(1, 1), color_by_depth=False)
-    line_color = np.float32([1.0, 0.85, 0.2])
+    line_color = np.float32([0.2, 0.9, 0.4])  # not the default: the setting reaches the overlay
+    lines, _ = bvhlab.render(
+        scene, bvh, w, h, backend="cpu", overlay_depth=(1, 1), color_by_depth=False, line_color=tuple(line_color)
+    )
     is_line = np.all(np.abs(lines[..., :3] - line_color) < 1e-6, -1)
     # every pixel is either unchanged or shows the line colour; some lines are drawn
     assert np.all(is_line | np.all(lines == plain, -1))

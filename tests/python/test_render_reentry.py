@@ -49,7 +49,7 @@ def _program(backend: str, call: str, expect: str) -> str:
             if seen and isinstance(seen[0], int):
                 # during the run: the samples of the runs before (0); the last call, after it: all
                 # (a run can finish before its first poll: then only the last call is seen)
-                assert seen == sorted(seen) and set(seen) <= {0, job.samples_per_pixel}, seen
+                assert seen == sorted(seen) and set(seen) <= {{0, job.samples_per_pixel}}, seen
                 assert seen[-1] == job.samples_per_pixel, seen
             assert (job.result().depth < 1e10).any()  # whitted: the floor and spheres are hit
         else:

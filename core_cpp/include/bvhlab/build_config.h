@@ -65,6 +65,7 @@ struct BuildConfig {
 inline constexpr std::uint32_t kMinBins = 2;
 inline constexpr std::uint32_t kMaxBins = 256;
 inline constexpr std::uint32_t kMaxSahBlock = 64;
+inline constexpr std::uint32_t kMaxLeafSize = 0x7fffffff;  ///< a leaf's count must fit the node's 31 bits
 
 /// Names as the Python API and the CLI spell them (from the table of methods, split.h).
 /// parse_* throw std::invalid_argument listing the valid names.

@@ -22,6 +22,9 @@ inline constexpr std::array<double, 3> kFallbackCameraTarget{0, 0, 0};
 
 inline constexpr Vec3 to_vec3(const std::array<double, 3>& a) { return {float(a[0]), float(a[1]), float(a[2])}; }
 inline constexpr Vec3 kDefaultSky = to_vec3(kDefaultSkyRgb);
+/// The overlay's line colour when it is not coloured by depth (a warm orange).
+inline constexpr std::array<double, 3> kDefaultOverlayRgb{1.0, 0.55, 0.1};
+inline constexpr Vec3 kDefaultOverlayColor = to_vec3(kDefaultOverlayRgb);
 
 /// A camera placement in double precision (Python's floats), before it becomes a render Camera.
 struct CameraPlacement {

@@ -34,7 +34,10 @@ struct RenderSettings {
     Vec3 sky = kDefaultSky;  ///< the atmosphere colour (report §2.1)
     bool overlay = false;    ///< draw the boxes of depths [overlay_depth_min, overlay_depth_max]
     std::uint32_t overlay_depth_min = 0, overlay_depth_max = 0;
-    bool overlay_color_by_depth = true;      ///< else gpu::OVERLAY_LINE_COLOR
+    bool overlay_color_by_depth = true;      ///< else overlay_color
+    /// The overlay's line colour when not by depth: one definition for the tracer's overlay pass
+    /// and the add-on's viewport drawing (its colour property's default).
+    Vec3 overlay_color = kDefaultOverlayColor;
     float line_width = 1.0f;                 ///< pixels (Vulkan devices without wide lines draw 1)
     Traversal traversal = Traversal::Stack;  ///< Stack or Stackless (report §3.1); the tracer has no Wide
     RenderMode mode = RenderMode::Shade;

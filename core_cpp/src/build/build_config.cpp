@@ -89,7 +89,9 @@ void validate(const BuildConfig& config) {
     if (config.bins < kMinBins || config.bins > kMaxBins)
         throw std::invalid_argument("bins must be between " + std::to_string(kMinBins) + " and " +
                                     std::to_string(kMaxBins) + ", got " + std::to_string(config.bins));
-    if (config.max_leaf_size < 1) throw std::invalid_argument("max_leaf_size must be at least 1");
+    if (config.max_leaf_size < 1 || config.max_leaf_size > kMaxLeafSize)
+        throw std::invalid_argument("max_leaf_size must be between 1 and " + std::to_string(kMaxLeafSize) + ", got " +
+                                    std::to_string(config.max_leaf_size));
     const std::uint32_t block = config.sah_block;
     if (block < 1 || block > kMaxSahBlock || (block & (block - 1)))
         throw std::invalid_argument("sah_block must be a power of two from 1 to " + std::to_string(kMaxSahBlock) +

@@ -124,6 +124,7 @@ gpu::FrameParams make_frame_params(const RenderScene& scene, const RenderSetting
     auto [first, last] = scene.order.range(s.overlay_depth_min, s.overlay_depth_max);
     f.overlay_enabled = s.overlay && last > first ? 1u : 0u;
     f.overlay_color_by_depth = s.overlay_color_by_depth ? 1u : 0u;
+    f.overlay_color = gpu::vec4(v3(s.overlay_color), 1.0f);
     f.overlay_first_box = first;
     f.overlay_last_box = s.overlay ? last : first;
     f.ray_stack_entries = s.max_ray_depth + 1;

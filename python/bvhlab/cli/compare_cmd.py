@@ -116,7 +116,7 @@ def _measure(scene, label: str, args, renderer) -> list[dict]:
         width=args.width,
         height=args.height,
         renderer=renderer,
-        render_options={"threads": args.threads},
+        threads=args.threads,
         progress=lambda s: say(f"[{label}] {s}"),
     )
 

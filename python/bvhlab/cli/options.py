@@ -20,11 +20,14 @@ from ..bvh import (
     DEFAULT_MAX_LEAF_SIZE,
     DEFAULT_METHOD,
     DEFAULT_SAH_BLOCK,
+    MAX_BINS,
     MAX_SAH_BLOCK,
     METHODS,
+    MIN_BINS,
     build,
     method_from_label,
 )
+from ..render_options import DEFAULT_HEIGHT, DEFAULT_WIDTH
 
 #: Largest image side the CLI accepts (OpenGL's and most Vulkan drivers' framebuffer limit).
 MAX_IMAGE_SIDE = _core.MAX_IMAGE_DIMENSION  # the renderers' limit, one definition
@@ -56,7 +59,9 @@ def add_build(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--method", default=DEFAULT_METHOD, help=f"split method: {', '.join(METHODS)} (or sah<B>, e.g. sah32)"
     )
-    p.add_argument("--bins", type=int, default=None, help=f"binned SAH buckets, 2..256 (default {DEFAULT_BINS})")
+    p.add_argument(
+        "--bins", type=int, default=None, help=f"binned SAH buckets, {MIN_BINS}..{MAX_BINS} (default {DEFAULT_BINS})"
+    )
     p.add_argument(
         "--bin-bounds",
         default=DEFAULT_BIN_BOUNDS,
@@ -107,9 +112,9 @@ method_kwargs = method_from_label
 
 
 def add_image_size(p: argparse.ArgumentParser) -> None:
-    """--width and --height of the image (800 × 600, the report's)."""
-    p.add_argument("--width", type=image_side, default=800)
-    p.add_argument("--height", type=image_side, default=600)
+    """--width and --height of the image (by default the core's, 800 × 600: the report's)."""
+    p.add_argument("--width", type=image_side, default=DEFAULT_WIDTH)
+    p.add_argument("--height", type=image_side, default=DEFAULT_HEIGHT)
 
 
 def add_png_out(p: argparse.ArgumentParser) -> None:

@@ -6,8 +6,11 @@ from __future__ import annotations
 from .. import build, render, save_png
 from .._progress import ProgressBar
 from ..library import load_scene
-from ..render import BACKENDS, DEFAULT_TRAVERSAL, TRAVERSALS
+from ..render import BACKENDS, TRAVERSALS
+from ..render_options import RenderOptions
 from . import options
+
+_DEFAULT = RenderOptions()  # the defaults are the core's (one definition)
 
 
 def add_parser(sub) -> None:
@@ -21,20 +24,32 @@ def add_parser(sub) -> None:
     p.add_argument(
         "--samples-per-axis",
         type=options.samples_per_axis,
-        default=1,
+        default=_DEFAULT.samples_per_axis,
         metavar="N",
-        help="N×N samples per pixel (default 1)",
+        help=f"N×N samples per pixel (default {_DEFAULT.samples_per_axis})",
     )
-    p.add_argument("--max-depth", type=int, default=5, help="bounces of reflection and refraction")
+    p.add_argument(
+        "--max-depth",
+        type=int,
+        default=_DEFAULT.max_depth,
+        help=f"bounces of reflection and refraction (default {_DEFAULT.max_depth})",
+    )
     p.add_argument("--bvh-depth", type=options.depth_range, metavar="A:B", help="draw the boxes of depths A..B")
     p.add_argument("--heatmap", action="store_true", help="colour pixels by the box tests of their primary ray")
-    p.add_argument("--traversal", default=DEFAULT_TRAVERSAL, choices=TRAVERSALS)
+    p.add_argument("--traversal", default=_DEFAULT.traversal, choices=TRAVERSALS)
     options.add_png_out(p)
     p.set_defaults(run=run)
 
 
 def run(args) -> int:
     settings = options.build_kwargs(args)  # checked before the scene is loaded
+    render_options = RenderOptions(  # likewise
+        samples_per_axis=args.samples_per_axis,
+        max_depth=args.max_depth,
+        overlay_depth=args.bvh_depth,
+        traversal=args.traversal,
+        mode="heatmap" if args.heatmap else "shade",
+    )
     scene, name = load_scene(args.scene)
     with ProgressBar(f"building {args.method}") as bar:
         bvh = build(scene, progress=bar, **settings)
@@ -45,11 +60,7 @@ def run(args) -> int:
             args.width,
             args.height,
             backend=args.backend,
-            samples_per_axis=args.samples_per_axis,
-            max_depth=args.max_depth,
-            overlay_depth=args.bvh_depth,
-            traversal=args.traversal,
-            mode="heatmap" if args.heatmap else "shade",
+            options=render_options,
             progress=bar,
         )
     args.out.parent.mkdir(parents=True, exist_ok=True)

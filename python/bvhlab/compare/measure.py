@@ -9,6 +9,7 @@ from collections.abc import Callable
 from ..bvh import build
 from ..bvh import method_from_label as method_kwargs  # 'sah32' → sah with 32 bins
 from ..render import Renderer
+from ..render_options import DEFAULT_HEIGHT, DEFAULT_WIDTH, RenderOptions
 from ..scene import Scene
 from .protocol import DEFAULT_BUILDS, DEFAULT_FRAMES, median_interval, rounds, sample_count
 from .tree_stats import sah_cost_per_depth
@@ -28,16 +29,25 @@ def build_settings(label: str, build_options: dict | None = None) -> dict:
     return kwargs
 
 
-def render_frame(renderer: Renderer, scene: Scene, bvh, width: int, height: int, samples: int = 1, **options):
-    # samples: n of the n×n supersampling
-    """The one place compare calls the tracer. Returns (image, wall ms, CPU ms, timings): a frame is
+def render_frame(
+    renderer: Renderer,
+    scene: Scene,
+    bvh,
+    width: int,
+    height: int,
+    options: RenderOptions | None = None,
+    threads: int = 0,
+    **option_changes,
+):
+    """The one place compare calls the tracer, with `options` (default RenderOptions()) and any of
+    its fields by name on top. Returns (image, wall ms, CPU ms, timings): a frame is
     the overlay pass, the trace pass and the read-back (our stand-in for the report's present); its
     CPU time is that of every thread of this process during the call (the CPU reference's,
     lavapipe's). Nothing is subtracted from it: the timings are wall clock, and under load a wall
     time exceeds the CPU time it spans. The scene is uploaded by the warm-up round, which is not
     counted, so a counted frame's CPU time is the frame's own."""
     cpu_start = time.process_time()
-    image, t = renderer.render(scene, bvh, width, height, samples_per_axis=samples, **options)
+    image, t = renderer.render(scene, bvh, width, height, options=options, threads=threads, **option_changes)
     cpu_ms = (time.process_time() - cpu_start) * 1e3
     return image, t["overlay_ms"] + t["trace_ms"] + t["readback_ms"], cpu_ms, t
 
@@ -67,13 +77,12 @@ def measure_methods(
     *,
     frames: int = DEFAULT_FRAMES,
     builds: int = DEFAULT_BUILDS,
-    width: int = 800,
-    height: int = 600,
+    width: int = DEFAULT_WIDTH,
+    height: int = DEFAULT_HEIGHT,
     renderer: Renderer | None = None,
-    samples_per_axis: int = 1,
-    max_depth: int = 5,
+    options: RenderOptions | None = None,
+    threads: int = 0,
     build_options: dict | None = None,
-    render_options: dict | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> list[dict]:
     """For each method: `builds` build times and `frames` frame times, each after a warm-up that is
@@ -82,7 +91,8 @@ def measure_methods(
     (frame_cpu_ms, ...; build_cpu_ms, ...), every sample kept in round order (paired across
     methods). `frame_clock` says which clock measures a frame's work (`frame_clock()`); builds
     are always measured by CPU time. Plus the tree's height, SAH cost, nodes, leaves, per depth.
-    `build_options` override the report's settings (REPORT_BUILD); `render_options`: traversal, ...
+    `build_options` override the report's settings (REPORT_BUILD); `options` (a RenderOptions) how
+    each frame is traced, `threads` the CPU reference's.
     `frames` and `builds` are 1 to MAX_SAMPLES (ValueError otherwise, before any work)."""
     if len(set(labels)) != len(labels) or not labels:
         raise ValueError(f"methods must be distinct and at least one, got {labels}")
@@ -91,14 +101,14 @@ def measure_methods(
     say = progress or (lambda text: None)
     settings = {label: build_settings(label, build_options) for label in labels}
     trees, build_times = _build_rounds(scene, settings, builds, say)
-    options = {"samples": samples_per_axis, "max_depth": max_depth, **(render_options or {})}
-    frame_times, timings = _render_rounds(scene, trees, frames, width, height, renderer, options, say)
+    options = options or RenderOptions()
+    frame_times, timings = _render_rounds(scene, trees, frames, width, height, renderer, (options, threads), say)
     rows = []
     for label in labels:
         row = _row(label, settings[label], trees[label], timings[label])
         row.update(samples_columns("frame", *frame_times[label]), frame_clock=frame_clock(renderer))
         row.update(samples_columns("build", *build_times[label]))
-        row["primary_mrays_s"] = width * height * samples_per_axis**2 / (row["frame_ms"] * 1e3)
+        row["primary_mrays_s"] = width * height * options.samples / (row["frame_ms"] * 1e3)
         rows.append(row)
     return rows
 
@@ -131,18 +141,19 @@ def _build_rounds(scene, settings: dict, builds: int, say) -> tuple[dict, dict]:
     return trees, times
 
 
-def _render_rounds(scene, trees: dict, frames: int, width, height, renderer, options, say):
-    """Per label ([wall ms], [CPU ms]) of the counted frames, and the timings of its last frame."""
+def _render_rounds(scene, trees: dict, frames: int, width, height, renderer, options: tuple, say):
+    """Per label ([wall ms], [CPU ms]) of the counted frames, and the timings of its last frame.
+    `options`: (RenderOptions, threads)."""
     labels = list(trees)
     times: dict[str, tuple[list[float], list[float]]] = {label: ([], []) for label in labels}
     last: dict = {}
     for label in labels:  # warm-up round (upload, shader compile, caches), not counted
         say(f"{label}: warm-up frame")
-        render_frame(renderer, scene, trees[label], width, height, **options)
+        render_frame(renderer, scene, trees[label], width, height, *options)
     for r, order in enumerate(rounds(labels, frames)):
         say(f"frames: round {r + 1}/{frames}")
         for label in order:
-            _, wall_ms, cpu_ms, last[label] = render_frame(renderer, scene, trees[label], width, height, **options)
+            _, wall_ms, cpu_ms, last[label] = render_frame(renderer, scene, trees[label], width, height, *options)
             times[label][0].append(wall_ms)
             times[label][1].append(cpu_ms)
     return times, last

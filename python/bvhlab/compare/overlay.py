@@ -14,6 +14,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..render import Renderer
+from ..render_options import DEFAULT_HEIGHT, DEFAULT_WIDTH
 from ..scene import Scene
 from .measure import frame_clock, render_frame, samples_columns
 from .protocol import at_most, paired_ratio, rounds, sample_count
@@ -37,8 +38,8 @@ def measure_overlay(
     renderer: Renderer,
     *,
     frames: int,
-    width: int = 800,
-    height: int = 600,
+    width: int = DEFAULT_WIDTH,
+    height: int = DEFAULT_HEIGHT,
     depths: tuple[int, int] = DEPTHS,
     line_widths=LINE_WIDTHS,
     threads: int = 0,

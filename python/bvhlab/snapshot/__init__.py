@@ -13,9 +13,16 @@ import sys
 import tempfile
 from pathlib import Path
 
+from ..render_options import DEFAULT_HEIGHT, DEFAULT_WIDTH
+
 
 def run_snapshot(
-    scene_spec: str, build_kwargs: dict, out: Path, depth_range: tuple[int, int], width: int = 800, height: int = 600
+    scene_spec: str,
+    build_kwargs: dict,
+    out: Path,
+    depth_range: tuple[int, int],
+    width: int = DEFAULT_WIDTH,
+    height: int = DEFAULT_HEIGHT,
 ) -> Path:
     """One picture with the boxes of depths depth_range[0] … depth_range[1]."""
     return _run(

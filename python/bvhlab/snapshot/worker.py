@@ -19,7 +19,7 @@ def main(argv=None) -> None:
     ap.add_argument("--out", required=True)
     ap.add_argument("--depth", nargs=2, type=int)
     ap.add_argument("--sheet", action="store_true")
-    ap.add_argument("--size", nargs=2, type=int, default=(800, 600))
+    ap.add_argument("--size", nargs=2, type=int, required=True)
     args = ap.parse_args(argv)
 
     import bvhlab

@@ -73,8 +73,9 @@ def _direct_build(settings) -> dict:
     import bvhlab
     from bvhlab.blender import export_scene
 
-    stats = bvhlab.build(export_scene(bpy.context, require_camera=False), **settings.build_kwargs()).stats
-    return {"scene": SCENE, "build": settings.build_kwargs(), "stats": {k: stats[k] for k in STATS.values()}}
+    config = settings.build_config()
+    stats = bvhlab.build(export_scene(bpy.context, require_camera=False), config=config).stats
+    return {"scene": SCENE, "build": config.tree_settings(), "stats": {k: stats[k] for k in STATS.values()}}
 
 
 # -- checks, run by the driver on the captured pictures (numpy only, no bpy) ---------------------

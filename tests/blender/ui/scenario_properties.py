@@ -105,7 +105,7 @@ def _final_render(session, module, scene, area, layouts):
 
     import bpy
 
-    records = importlib.import_module(f"{module}.engine.records")
+    records = importlib.import_module(f"{module}.state")
     with session.override(area):
         bpy.ops.render.render("INVOKE_DEFAULT")
     yield from _until(lambda: records.last_final.get(records.key(scene)), SECONDS["render"], "the F12 render")
@@ -125,7 +125,7 @@ def _rendered_viewport(session, module, scene, area, layouts):
     import importlib
     import time
 
-    records = importlib.import_module(f"{module}.engine.records")
+    records = importlib.import_module(f"{module}.state")
     viewport = importlib.import_module(f"{module}.engine.viewport")
     area.spaces.active.shading.type = "RENDERED"
     key = records.key(scene)

@@ -117,7 +117,7 @@ def _frame(viewport, level: str, region, overlay="any"):
             continue
         x, y, width, height = frame.request.frustum.draw_rect
         if (width, height) == (region.width, region.height) and (
-            overlay == "any" or frame.request.settings.overlay == overlay
+            overlay == "any" or frame.request.settings.overlay_depth == overlay
         ):
             return frame
     return None
@@ -168,7 +168,7 @@ def _write_oracle(session, scene, area, region, frame) -> None:
     exported = export_scene(bpy.context, require_camera=False)
     exported.camera = camera
     s = scene.bvhlab
-    bvh = bvhlab.build(exported, **s.build_kwargs())
+    bvh = bvhlab.build(exported, config=s.build_config())
     options = {"backend": "cpu", "samples_per_axis": 2, "max_depth": s.render_bounces, "traversal": s.traversal}
     image, _ = bvhlab.render(exported, bvh, region.width, region.height, overlay_depth=DEPTHS, **options)
     bare, _ = bvhlab.render(exported, bvh, region.width, region.height, **options)

@@ -1,0 +1,125 @@
+"""`RenderOptions`: how a render traces, besides the scene, its tree, the camera and the size. The
+one typed object every renderer of bvhlab is asked for — `bvhlab.render`, `Renderer.start`, the
+CLI, `compare`, and in Blender the sidebar's Render, F12 and the Rendered viewport, which all take
+it from the scene's settings in one place (the add-on's `BVHLAB_PG_settings.render_options`).
+Defaults are the C++ RenderSettings' (render_settings.h); values are checked once, by the core,
+when the options are made."""
+
+from __future__ import annotations
+
+import dataclasses
+import numbers
+from dataclasses import dataclass, fields
+
+from . import _checks, _core
+
+_CORE = _core.RenderSettings()
+#: The image size where none is given (RenderSettings in C++), and the limits the UI shows.
+DEFAULT_WIDTH: int = int(_CORE.width)
+DEFAULT_HEIGHT: int = int(_CORE.height)
+MAX_LINE_WIDTH: float = float(_core.MAX_LINE_WIDTH)
+
+
+def _rgb(value) -> tuple[float, float, float]:
+    return tuple(float(c) for c in value)  # type: ignore[return-value]
+
+
+@dataclass(frozen=True)
+class RenderOptions:
+    """`samples_per_axis`: n for n×n samples per pixel. `max_depth`: bounces of reflection and
+    refraction (0..MAX_RAY_DEPTH). `overlay_depth=(a, b)`: draw the boxes of tree depths a..b
+    (report §3.3), coloured by depth (`color_by_depth`) or in `line_color`, `line_width` pixels
+    wide. `traversal`: "stack" or "stackless" (report §3.1). `mode`: "shade" or "heatmap" (box
+    tests of the primary rays, blue = few, red = `heatmap_scale` or more; default 8 × tree height).
+    `steps_per_dispatch` (how the work is cut, never the image; default adaptive) and
+    `max_steps_per_pixel` (a pixel needing more work in one run raises RenderIncomplete; default:
+    the most a correct trace of the scene can take)."""
+
+    samples_per_axis: int = int(_CORE.samples_per_axis)
+    max_depth: int = int(_CORE.max_ray_depth)
+    overlay_depth: tuple[int, int] | None = None
+    color_by_depth: bool = bool(_CORE.overlay_color_by_depth)
+    line_color: tuple[float, float, float] = _rgb(_CORE.overlay_color)
+    line_width: float = float(_CORE.line_width)
+    traversal: str = _core.DEFAULT_TRAVERSAL
+    mode: str = _CORE.mode.name
+    heatmap_scale: float | None = None
+    steps_per_dispatch: int | None = None
+    max_steps_per_pixel: int | None = None
+
+    def __post_init__(self):
+        check = _core.RenderSettings()  # a whole render's settings, checked by the core now
+        self.apply(check)
+        check.validate()
+
+    @property
+    def samples(self) -> int:
+        """Samples per pixel."""
+        return self.samples_per_axis**2
+
+    def replace(self, **changes) -> RenderOptions:
+        """A copy with some options changed (unknown names: TypeError naming them)."""
+        names = [f.name for f in fields(self)]
+        unknown = sorted(set(changes) - set(names))
+        if unknown:
+            raise TypeError(f"unknown render option(s) {', '.join(unknown)}; expected: {', '.join(names)}")
+        return dataclasses.replace(self, **changes)
+
+    def apply(self, s: _core.RenderSettings) -> None:
+        """Write these options into the core's RenderSettings (types checked here; values by its
+        validate)."""
+        s.samples_per_axis = _checks.integer("samples_per_axis", self.samples_per_axis, 0, 2**31)
+        s.max_ray_depth = _checks.integer("max_depth", self.max_depth, 0, 2**31)
+        _set_overlay(s, self.overlay_depth)
+        s.overlay_color_by_depth = bool(self.color_by_depth)
+        s.overlay_color = _triple("line_color", self.line_color)
+        s.line_width = _real("line_width", self.line_width)
+        s.traversal = _core.parse_traversal(_name("traversal", self.traversal))
+        s.mode = _core.parse_render_mode(_name("mode", self.mode))
+        s.heatmap_scale = None if self.heatmap_scale is None else _real("heatmap_scale", self.heatmap_scale)
+        if self.steps_per_dispatch is not None:
+            s.steps_per_dispatch = _checks.integer("steps_per_dispatch", self.steps_per_dispatch, 0, 2**31)
+        if self.max_steps_per_pixel is not None:
+            s.max_steps_per_pixel = _checks.integer("max_steps_per_pixel", self.max_steps_per_pixel, 0, 2**63)
+
+
+def options_from(options: RenderOptions | None, changes: dict) -> RenderOptions:
+    """`options` (default: RenderOptions()) with `changes` by name on top: what the renderers' many
+    keyword arguments become."""
+    if options is None:
+        options = RenderOptions()
+    elif not isinstance(options, RenderOptions):
+        raise TypeError(f"options must be a bvhlab.RenderOptions, got {type(options).__name__}")
+    return options.replace(**changes) if changes else options
+
+
+def _name(what: str, value) -> str:
+    if not isinstance(value, str):
+        raise TypeError(f"{what} must be a string, got {type(value).__name__}")
+    return value
+
+
+def _real(name: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{name} must be a number, got {type(value).__name__}")
+    return float(value)
+
+
+def _triple(name: str, value) -> tuple[float, float, float]:
+    try:
+        v = tuple(_real(name, x) for x in value)
+    except TypeError:
+        raise TypeError(f"{name} must be three numbers, got {value!r}") from None
+    if len(v) != 3:
+        raise ValueError(f"{name} must be three numbers, got {len(v)}")
+    return v
+
+
+def _set_overlay(s, overlay_depth) -> None:
+    if overlay_depth is None:
+        return
+    if not isinstance(overlay_depth, (tuple, list)) or len(overlay_depth) != 2:
+        raise TypeError(f"overlay_depth must be a pair (depth_min, depth_max) of tree depths, got {overlay_depth!r}")
+    s.overlay = True
+    s.overlay_depth_min = _checks.integer("overlay depth_min", overlay_depth[0], 0, 255)
+    s.overlay_depth_max = _checks.integer("overlay depth_max", overlay_depth[1], 0, 255)
