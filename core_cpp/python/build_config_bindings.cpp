@@ -33,8 +33,9 @@ void bind_build_config(nb::module_& m) {
         .def_rw("sah_block", &BuildConfig::sah_block)
         .def_rw("seed", &BuildConfig::seed)
         .def_rw("threads", &BuildConfig::threads, "0: every hardware thread; the tree never depends on it")
-        .def("validate", [](const BuildConfig& self) { validate(self); },
-             "Raises ValueError naming the first setting out of range.");
+        .def(
+            "validate", [](const BuildConfig& self) { validate(self); },
+            "Raises ValueError naming the first setting out of range.");
     m.attr("MIN_BINS") = kMinBins;
     m.attr("MAX_BINS") = kMaxBins;
     m.attr("MAX_LEAF_SIZE") = kMaxLeafSize;

@@ -34,7 +34,7 @@ struct RenderSettings {
     Vec3 sky = kDefaultSky;  ///< the atmosphere colour (report §2.1)
     bool overlay = false;    ///< draw the boxes of depths [overlay_depth_min, overlay_depth_max]
     std::uint32_t overlay_depth_min = 0, overlay_depth_max = 0;
-    bool overlay_color_by_depth = true;      ///< else overlay_color
+    bool overlay_color_by_depth = true;  ///< else overlay_color
     /// The overlay's line colour when not by depth: one definition for the tracer's overlay pass
     /// and the add-on's viewport drawing (its colour property's default).
     Vec3 overlay_color = kDefaultOverlayColor;

@@ -108,8 +108,9 @@ std::vector<gpu::vec4> rasterize_overlay(const RenderScene& scene, const gpu::Fr
     for (std::uint32_t b = frame.overlay_first_box; b < frame.overlay_last_box; ++b) {
         const gpu::GpuBox& box = scene.boxes[b];
         vec3 lo = gpu::xyz(box.lo_depth), hi = gpu::xyz(box.hi);
-        vec3 line_color =
-            frame.overlay_color_by_depth ? tracer.depth_color(gpu::uint(box.lo_depth.w)) : gpu::vec3(frame.overlay_color.x, frame.overlay_color.y, frame.overlay_color.z);
+        vec3 line_color = frame.overlay_color_by_depth
+                              ? tracer.depth_color(gpu::uint(box.lo_depth.w))
+                              : gpu::vec3(frame.overlay_color.x, frame.overlay_color.y, frame.overlay_color.z);
         for (gpu::uint v = 0; v < 24; v += 2) {
             vec3 pa = tracer.corner_position(lo, hi, tracer.box_corner(v));
             vec3 pb = tracer.corner_position(lo, hi, tracer.box_corner(v + 1));
