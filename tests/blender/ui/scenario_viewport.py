@@ -18,9 +18,10 @@ ENGINE = "BVHLAB_WHITTED"
 DEPTHS = (8, 9)
 #: 8-bit display values, the region against the oracle after Blender's sRGB view transform: off the
 #: box lines, the mean difference and the share of pixels within PIXEL_TOLERANCE; on them, the share
-#: showing the oracle's colour or the other depth's line colour. EDGE: pixels at the region's sides
-#: that Blender's area edges and region toggles cover.
-MEAN_TOLERANCE, PIXEL_TOLERANCE, PIXEL_SHARE, LINE_SHARE, EDGE = 0.5, 3, 0.995, 0.97, 12
+#: showing the oracle's colour, a line colour, or the render of one of the two depths alone (4.3 and
+#: 5.2 give 0.9995 where the oracle alone is 0.93-0.98). EDGE: pixels at the region's sides that
+#: Blender's area edges and region toggles cover.
+MEAN_TOLERANCE, PIXEL_TOLERANCE, PIXEL_SHARE, LINE_SHARE, EDGE = 0.5, 3, 0.995, 0.995, 12
 ORBIT_STEPS, SECTION_41_ROUNDS = 30, 3
 
 
@@ -172,10 +173,18 @@ def _write_oracle(session, scene, area, region, frame) -> None:
     options = {"backend": "cpu", "samples_per_axis": 2, "max_depth": s.render_bounces, "traversal": s.traversal}
     image, _ = bvhlab.render(exported, bvh, region.width, region.height, overlay_depth=DEPTHS, **options)
     bare, _ = bvhlab.render(exported, bvh, region.width, region.height, **options)
+    # Where a depth-8 edge lies on a depth-9 one, either may win (the last bits of the camera
+    # decide): such a pixel may show the one depth's line, blended as drawn, instead of the other's.
+    each_depth = [
+        _display(bvhlab.render(exported, bvh, region.width, region.height, overlay_depth=(d, d), **options)[0])
+        for d in range(DEPTHS[0], DEPTHS[1] + 1)
+    ]
     np.save(session.shots / "oracle.npy", _display(image))
+    np.save(session.shots / "oracle_each_depth.npy", np.stack(each_depth))
     np.save(session.shots / "lines.npy", np.abs(image - bare).max(-1) > 0)
     session.info.update(
         oracle=str(session.shots / "oracle.npy"),
+        oracle_each_depth=str(session.shots / "oracle_each_depth.npy"),
         lines=str(session.shots / "lines.npy"),
         line_colors=_display(depth_colors(np.array(DEPTHS, np.uint32))).tolist(),
         oracle_camera=camera.as_row(),
@@ -293,11 +302,14 @@ def check(shots: dict, info: dict) -> list[str]:
     off, on = keep & ~lines, keep & lines
     colors = np.array(info["line_colors"])
     line_colored = np.abs(clean[..., None, :] - colors).max(-1).min(-1) <= PIXEL_TOLERANCE
+    each_depth = np.load(info["oracle_each_depth"]).astype(np.int32)
+    one_depth = (np.abs(clean[None] - each_depth).max(-1) <= PIXEL_TOLERANCE).any(0)
     stats = {
         "pixels": int(keep.sum()),
         "off_lines_mean": round(float(diff[off].mean()), 3),
         "off_lines_within": round(float((diff[off] <= PIXEL_TOLERANCE).mean()), 5),
-        "on_lines_agree": round(float(((diff <= PIXEL_TOLERANCE) | line_colored)[on].mean()), 4),
+        "on_lines_agree": round(float(((diff <= PIXEL_TOLERANCE) | line_colored | one_depth)[on].mean()), 4),
+        "on_lines_exact": round(float((diff <= PIXEL_TOLERANCE)[on].mean()), 4),
     }
     info["screenshot_vs_oracle"] = stats
     failures = []
