@@ -20,13 +20,14 @@ ADDON_SOURCES := $(shell find addon -type f -not -path '*/__pycache__/*' -not -p
 WHEEL_INPUTS  := $(CORE_SOURCES) $(PY_SOURCES) CMakeLists.txt pyproject.toml scripts/wheel_glibc_compat.h \
                  $(wildcard blender_scenes/*.blend blender_scenes/scenes.json)
 
-.PHONY: help setup system venv trixie sid build test cpp-test scalar-test asan-test pytest blender-test bpy313-test \
+.PHONY: help setup system venv trixie sid build check check-pytest test cpp-test scalar-test asan-test pytest blender-test bpy313-test \
         blender-binary-test blender-ui-test blender-sid-test blender-sid-ui-test demo bench addon screenshots scenes clean
 
 help:
 	@echo "make test         install what is missing, build, run all tests (C++, ASan/UBSan, pytest on bpy 4.2,"
 	@echo "                  bpy 5.2 on Python 3.13, real Blender binaries 4.3 (Python 3.13) and 5.2 (Python 3.14)"
 	@echo "                  headless and with their UI)"
+	@echo "make check        the quick loop: lint, C++ tests, pytest without the slow tests (no Debian roots)"
 	@echo "make demo         install what is missing, build, reproduce the report's Table 1 on Crytek Sponza (out/demo)"
 	@echo "make bench        build and traversal benchmark against Embree (bench/results/*.json)"
 	@echo "make addon        the Blender extension zip in dist/ (wheels for Python 3.11, 3.13 and 3.14)"
@@ -146,6 +147,17 @@ lint: $(VENV)/.deps
 format: $(VENV)/.deps
 	$(VENV)/bin/ruff format $(PY_LINT_DIRS)
 	$(VENV)/bin/clang-format -i $(CPP_FILES)
+
+# The inner loop (a few minutes from a built tree): lint, the release C++ tests, and pytest on Python
+# 3.11 (bpy 4.2, lavapipe) without the tests marked slow, the zip installed being one with the
+# cp311 wheel alone (no Debian root needed). `make test` runs everything; CI runs make test.
+# Markers to select by hand: vulkan, bpy, slow, full_zip (tests/python/conftest.py).
+CHECK_ZIP := build/check/bvhlab.zip
+check: build lint cpp-test check-pytest
+check-pytest: build $(CHECK_ZIP)
+	BVHLAB_ZIP=$(CHECK_ZIP) $(PY) -m pytest -q -m "not slow and not full_zip" --durations=5
+$(CHECK_ZIP): build/wheels/.cp311 $(ADDON_SOURCES) scripts/build_addon.py
+	cp "$$($(PY) scripts/build_addon.py package --tags cp311 --output-dir build/check)" $@
 
 # Every stage, timed (scripts/test_stages.sh: the Debian roots are set up in the background while
 # the C++ stages compile; the table of stage times is printed at the end, build/test-times.txt).

@@ -81,10 +81,10 @@ def build_wheel(into: Path) -> Path:
         return Path(shutil.copy2(built[0], into))
 
 
-def wheels_for_version(wheels_dir: Path, version: str) -> list[Path]:
-    """One wheel per tag of PYTHON_TAGS, of this version; a clear error naming what is missing."""
+def wheels_for_version(wheels_dir: Path, version: str, tags=PYTHON_TAGS) -> list[Path]:
+    """One wheel per tag of `tags`, of this version; a clear error naming what is missing."""
     found, missing = [], []
-    for tag in PYTHON_TAGS:
+    for tag in tags:
         matches = sorted(wheels_dir.glob(f"bvhlab-{version}-{tag}-{tag}-*.whl"))
         if len(matches) != 1:
             missing.append(f"{tag} ({len(matches)} found)")
@@ -92,7 +92,7 @@ def wheels_for_version(wheels_dir: Path, version: str) -> list[Path]:
             found.append(matches[0])
     if missing:
         raise SystemExit(
-            f"{wheels_dir} needs exactly one bvhlab-{version} wheel for each of {', '.join(PYTHON_TAGS)}; "
+            f"{wheels_dir} needs exactly one bvhlab-{version} wheel for each of {', '.join(tags)}; "
             f"missing: {', '.join(missing)}. `make addon` builds them all (cp313 in the Debian 13 root, "
             "cp314 in the sid one)."
         )
@@ -139,9 +139,9 @@ def extension_tool() -> Path:
     return tools[-1]
 
 
-def package(wheels_dir: Path, output_dir: Path) -> Path:
+def package(wheels_dir: Path, output_dir: Path, tags=PYTHON_TAGS) -> Path:
     version = project_version()
-    staged = stage(wheels_for_version(wheels_dir, version), version)
+    staged = stage(wheels_for_version(wheels_dir, version, tags), version)
     tool = [sys.executable, str(extension_tool())]
     subprocess.run([*tool, "validate", str(staged)], check=True, stdout=subprocess.DEVNULL)
     output_dir.mkdir(parents=True, exist_ok=True)
@@ -166,11 +166,18 @@ def main(argv=None) -> None:
     pack = sub.add_parser("package", help="stage addon/ with the wheels and build the zip")
     pack.add_argument("--wheels", type=Path, default=ROOT / "build" / "wheels")
     pack.add_argument("--output-dir", type=Path, default=ROOT / "dist")
+    pack.add_argument(
+        "--tags",
+        nargs="+",
+        choices=PYTHON_TAGS,
+        default=list(PYTHON_TAGS),
+        help="the Pythons whose wheels go in (default: all; make check packs cp311 alone)",
+    )
     args = ap.parse_args(argv)
     if args.command == "wheel":
         print(build_wheel(args.into.resolve()))
     else:
-        print(package(args.wheels.resolve(), args.output_dir.resolve()))
+        print(package(args.wheels.resolve(), args.output_dir.resolve(), tuple(args.tags)))
 
 
 if __name__ == "__main__":
