@@ -122,6 +122,11 @@ def test_view_equals_the_look_at_camera():
     a, _ = bvhlab.render(scene, bvh, 40, 30, backend="cpu", camera=camera)
     b, _ = bvhlab.render(scene, bvh, 40, 30, backend="cpu", camera=bvhlab.View((1, -8, 3), (-1, 8, -2), fov_y=50))
     np.testing.assert_array_equal(a, b)
+    # the picture shows the spheres and the sky: two images of nothing would be equal too
+    job = bvhlab.Renderer("cpu").start(scene, bvh, 40, 30, camera=camera, max_depth=0)
+    job.run()
+    hit = job.result().depth < _core.NO_DEPTH
+    assert 0.05 < hit.mean() < 0.95, hit.mean()
 
 
 def test_cost_is_what_the_heatmap_colours():
@@ -130,8 +135,12 @@ def test_cost_is_what_the_heatmap_colours():
     job = bvhlab.Renderer("cpu").start(scene, bvh, 32, 24, samples_per_axis=2, mode="heatmap", heatmap_scale=40.0)
     job.run()
     out = job.result()
-    colours = _core.heat_colors(np.ascontiguousarray((out.cost / np.float32(40.0)).reshape(-1)))
-    np.testing.assert_allclose(out.color[..., :3].reshape(-1, 3), colours, atol=1e-6)
+    x = np.clip(out.cost.reshape(-1).astype(np.float64) / 40.0, 0, 1)
+    # the ramp as documented (blue 0 -> cyan -> green -> yellow -> red 1), written out here
+    ramp = np.clip(1.5 - np.abs(4 * x[:, None] - np.array([3.0, 2.0, 1.0])), 0, 1)
+    np.testing.assert_allclose(out.color[..., :3].reshape(-1, 3), ramp, atol=1e-5)
+    np.testing.assert_allclose(_core.heat_colors(np.float32([0, 0.5, 1])), [[0, 0, 0.5], [0.5, 1, 0.5], [0.5, 0, 0]])
+    assert np.all(out.cost >= 1) and out.cost.max() > 2 * out.cost.min(), "costs that differ from pixel to pixel"
 
 
 @pytest.mark.parametrize(
