@@ -275,8 +275,13 @@ TEST(Stats, SahMethodsBeatMedianOnClusteredScenes) {
     double sah = compute_stats(build_bvh(scene.view(), config(SplitMethod::Sah, AxisPolicy::Largest, 1))).sah_cost;
     double sweep =
         compute_stats(build_bvh(scene.view(), config(SplitMethod::SweepSah, AxisPolicy::Largest, 1))).sah_cost;
-    EXPECT_LT(sah, median);
-    EXPECT_LT(sweep, median);
+    std::printf("SAH cost: median %.3f, binned SAH %.3f, sweep SAH %.3f\n", median, sah, sweep);
+    // Measured (2026-12-02): 107.3, 99.0, 97.5. The SAH methods are clearly better than the median
+    // split on clustered geometry, and binning loses little against the full sweep (Wald 2007).
+    EXPECT_LT(sah, 0.95 * median);
+    EXPECT_LT(sweep, 0.95 * median);
+    EXPECT_LE(sweep, sah * 1.005);
+    EXPECT_LE(sah, sweep * 1.03);
 }
 
 TEST(Stats, LeafTerminationFollowsTheCosts) {
