@@ -159,6 +159,13 @@ check-pytest: build $(CHECK_ZIP)
 $(CHECK_ZIP): build/wheels/.cp311 $(ADDON_SOURCES) scripts/build_addon.py
 	cp "$$($(PY) scripts/build_addon.py package --tags cp311 --output-dir build/check)" $@
 
+# The GPU check's bundle (build/gpu-check: the C++ Vulkan tests, the loader, the validation layer),
+# for a GPU machine without network: carry build/gpu-check and run scripts/gpu_check.sh there.
+.PHONY: gpu-bundle
+gpu-bundle: build/cpp/build.ninja
+	cmake --build build/cpp -j $(JOBS)
+	scripts/gpu_bundle.sh
+
 # Every stage, timed (scripts/test_stages.sh: the Debian roots are set up in the background while
 # the C++ stages compile; the table of stage times is printed at the end, build/test-times.txt).
 test:
