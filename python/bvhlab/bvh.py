@@ -9,6 +9,7 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from . import _checks, _core
+from .inspect.node_data import NodeData
 
 #: Split methods and axis policies as the C++ core names them (its table of methods), and the
 #: defaults and limits of a build: one definition, in core_cpp/include/bvhlab/build_config.h.
@@ -170,6 +171,7 @@ class Bvh:
         self._core = core
         self.config = config
         self._stats: dict | None = None
+        self._node_data: tuple[int, NodeData] | None = None  # (revision, data)
 
     def __repr__(self) -> str:
         s = self.stats
@@ -189,6 +191,16 @@ class Bvh:
             self._stats = self._core.stats()
             self._stats["threads"] = self.config.threads
         return dict(self._stats)
+
+    def node_data(self, *, threads: int = 0) -> NodeData:
+        """Every node's box, depth, parent, children, primitives under it, area, SAH term and its
+        subtree's share of the SAH cost, child overlap and end-point overlap (EPO), as arrays made
+        in C++ for all nodes at once (bvhlab.inspect.node_data.NodeData). Made once per revision."""
+        threads = _checks.integer("threads", threads, 0, 4096)
+        if self._node_data is None or self._node_data[0] != self._core.revision:
+            d = self._core.node_data(threads)  # of one version, whatever a refit does meanwhile
+            self._node_data = (d["revision"], NodeData.from_core(d))
+        return self._node_data[1]
 
     @property
     def revision(self) -> int:
