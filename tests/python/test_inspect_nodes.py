@@ -154,3 +154,10 @@ def test_empty_tree_and_spheres():
     spheres = procedural.random_spheres(50, seed=1)
     d = bvhlab.build(np.zeros((0, 3, 3), np.float32), spheres).node_data()
     assert d.prim_count[0] == 50 and d.epo_cost == 0  # EPO counts triangles only
+
+
+def test_node_data_does_not_depend_on_threads(knot_mesh):
+    one = bvhlab.build(knot_mesh).node_data(threads=1)
+    many = bvhlab.build(knot_mesh).node_data(threads=3)
+    np.testing.assert_array_equal(one.epo, many.epo)  # fixed-point sums: bit for bit
+    assert one.epo_cost == many.epo_cost > 0

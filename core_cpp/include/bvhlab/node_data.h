@@ -11,18 +11,18 @@ namespace bvhlab {
 /// Per-node arrays, one entry per node of Bvh::nodes (3 per node for lo and hi). Costs use the
 /// tree's one SAH formula (stats.h sah_cost: C_trav = C_isect = 1, areas relative to the root).
 struct NodeData {
-    std::vector<float> lo, hi;               ///< the box, N×3
-    std::vector<std::uint8_t> depth;         ///< root 0
-    std::vector<std::int32_t> parent;        ///< -1 for the root
-    std::vector<std::int32_t> left, right;   ///< children (left = i + 1); -1 for a leaf
-    std::vector<std::uint32_t> prim_count;   ///< primitives in the node's subtree
-    std::vector<double> area;                ///< surface area of the box (full, not half)
-    std::vector<double> sah_term;            ///< the node's own term of sah_cost()
-    std::vector<double> subtree_sah;         ///< Σ sah_term over the node's subtree (root: sah_cost())
-    std::vector<double> sah_share;           ///< subtree_sah / sah_cost() (root: 1)
-    std::vector<double> child_overlap;       ///< area(box(left) ∩ box(right)) / area(node); 0 for a leaf
-    std::vector<double> epo;                 ///< the node's end-point overlap term, see epo_terms()
-    double sah_cost = 0, epo_cost = 0;       ///< Σ sah_term, Σ epo
+    std::vector<float> lo, hi;              ///< the box, N×3
+    std::vector<std::uint8_t> depth;        ///< root 0
+    std::vector<std::int32_t> parent;       ///< -1 for the root
+    std::vector<std::int32_t> left, right;  ///< children (left = i + 1); -1 for a leaf
+    std::vector<std::uint32_t> prim_count;  ///< primitives in the node's subtree
+    std::vector<double> area;               ///< surface area of the box (full, not half)
+    std::vector<double> sah_term;           ///< the node's own term of sah_cost()
+    std::vector<double> subtree_sah;        ///< Σ sah_term over the node's subtree (root: sah_cost())
+    std::vector<double> sah_share;          ///< subtree_sah / sah_cost() (root: 1)
+    std::vector<double> child_overlap;      ///< area(box(left) ∩ box(right)) / area(node); 0 for a leaf
+    std::vector<double> epo;                ///< the node's end-point overlap term, see epo_terms()
+    double sah_cost = 0, epo_cost = 0;      ///< Σ sah_term, Σ epo
 };
 
 /// Every node's data; `threads` as in BuildConfig (0 = all). The EPO pass clips each triangle

@@ -71,8 +71,7 @@ std::vector<double> epo_terms(const Bvh& bvh, unsigned threads) {
     // The leaf of each slot, and the triangles' total area A(Q).
     std::vector<std::uint32_t> leaf_of_slot(bvh.prims.size());
     for (std::uint32_t i = 0; i < count; ++i)
-        if (is_leaf(bvh.nodes[i]))
-            std::fill_n(leaf_of_slot.begin() + bvh.nodes[i].index, leaf_count(bvh.nodes[i]), i);
+        if (is_leaf(bvh.nodes[i])) std::fill_n(leaf_of_slot.begin() + bvh.nodes[i].index, leaf_count(bvh.nodes[i]), i);
     auto vertices = [&](std::size_t k, double v[3][3]) {
         const PackedPrim& p = bvh.prims[k];
         const gpu::vec3* src[3] = {&p.v0, &p.v1, &p.v2};
