@@ -2,6 +2,8 @@
 // numpy arrays, made in C++ for all nodes at once; one ray's traversal as recorded by the
 // traversal code; a pixel's primary ray from the tracer's camera code.
 #include <array>
+#include <cstring>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -9,12 +11,14 @@
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/array.h>
+#include <nanobind/stl/optional.h>
 #include <nanobind/stl/string.h>
 
 #include "bvhlab/node_data.h"
 #include "bvhlab/pixel_ray.h"
 #include "bvhlab/ray_record.h"
 #include "bvhlab/render_settings.h"
+#include "bvhlab/restore.h"
 #include "py_bvh.h"
 #include "py_render_scene.h"
 
@@ -94,6 +98,26 @@ nb::tuple py_pixel_ray(const PyRenderScene& scene, const RenderSettings& setting
     return nb::make_tuple(Point{r.origin.x, r.origin.y, r.origin.z}, Point{r.dir.x, r.dir.y, r.dir.z}, r.tmin, r.tmax);
 }
 
+using NodeBytes = nb::ndarray<const std::uint8_t, nb::shape<-1, sizeof(BvhNode)>, nb::c_contig, nb::device::cpu>;
+using Refs = nb::ndarray<const std::uint32_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
+
+PyBvh* py_restore(const NodeBytes& nodes, const Refs& refs, const Triangles& tris,
+                  const std::optional<Spheres>& spheres, const BuildConfig& config, double build_ms,
+                  std::uint64_t fingerprint) {
+    SavedTree saved;
+    saved.nodes.resize(nodes.shape(0));
+    if (!saved.nodes.empty()) std::memcpy(saved.nodes.data(), nodes.data(), saved.nodes.size() * sizeof(BvhNode));
+    saved.refs.assign(refs.data(), refs.data() + refs.shape(0));
+    saved.geometry_fingerprint = fingerprint, saved.config = config, saved.build_ms = build_ms;
+    GeometryView g = view_of(tris, spheres);
+    Bvh bvh;
+    {
+        nb::gil_scoped_release release;
+        bvh = restore_bvh(std::move(saved), g, config.threads);
+    }
+    return new PyBvh(std::move(bvh));
+}
+
 }  // namespace
 
 void bind_inspect(nb::module_& m) {
@@ -102,6 +126,10 @@ void bind_inspect(nb::module_& m) {
             "Every node's data (node_data.h) as a dict of arrays, plus sah_cost and epo_cost.");
     bvh.def("trace_ray", &py_trace_ray, "origin"_a, "direction"_a, "tmin"_a, "tmax"_a, "traversal"_a,
             "One ray's traversal, recorded by the traversal itself (ray_record.h), as a dict.");
+    m.attr("NODE_BYTES") = sizeof(BvhNode);
+    m.def("restore_bvh", &py_restore, "nodes"_a.noconvert(), "refs"_a.noconvert(), "triangles"_a.noconvert(),
+          "spheres"_a.noconvert().none(), "config"_a, "build_ms"_a, "geometry_fingerprint"_a,
+          "A saved tree over its geometry, every invariant checked (restore.h).");
     m.def("pixel_ray", &py_pixel_ray, "scene"_a, "settings"_a, "x"_a, "y"_a, "sample"_a,
           "(origin, direction, tmin, tmax) of a pixel's primary ray, from the tracer's camera code (pixel_ray.h).");
 }

@@ -299,6 +299,14 @@ class Bvh:
         )
         return out
 
+    def save(self, path) -> None:
+        """Writes the tree to `path` (a .bvhtree file, as a whole or not at all): its nodes and
+        references, the geometry's fingerprint and the build settings (bvhlab.inspect.tree_file);
+        `bvhlab.load_bvh(path, scene)` reads it back over the same geometry."""
+        from .inspect.tree_file import save_bvh
+
+        save_bvh(self, path)
+
     def trace_ray(self, origin, direction, *, tmin: float = 0.0, tmax: float = np.inf, traversal: str = "stack"):
         """What `intersect` does for one ray, step by step (bvhlab.inspect.ray_record.RayRecord):
         the boxes it tested in order and whether each was hit, the primitives it tested, and the

@@ -13,10 +13,10 @@ namespace bvhlab {
 /// One ray's traversal as the traversal itself saw it (the same code as intersect(), which counts
 /// exactly these box tests: box_nodes.size() is its nodes_visited).
 struct TraversalRecord {
-    std::vector<std::uint32_t> box_nodes;  ///< nodes whose boxes were tested, in the order tested
-    std::vector<std::uint8_t> box_hit;     ///< 1 where the ray entered the box
-    std::vector<std::uint32_t> prim_slots;  ///< slots (Bvh::prims, leaf order) tested, in order
-    std::vector<std::uint32_t> prim_leaf;   ///< the leaf each was tested in
+    std::vector<std::uint32_t> box_nodes;      ///< nodes whose boxes were tested, in the order tested
+    std::vector<std::uint8_t> box_hit;         ///< 1 where the ray entered the box
+    std::vector<std::uint32_t> prim_slots;     ///< slots (Bvh::prims, leaf order) tested, in order
+    std::vector<std::uint32_t> prim_leaf;      ///< the leaf each was tested in
     std::vector<std::uint32_t> prim_box_test;  ///< how many box tests came before it
     std::vector<std::uint8_t> prim_closer;     ///< 1 where it became the closest hit so far
     Hit hit;                                   ///< as intersect() returns it (t in the ray's own units)
