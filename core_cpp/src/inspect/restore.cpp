@@ -42,7 +42,8 @@ void check_refs(const std::vector<std::uint32_t>& refs, const GeometryView& g) {
         const std::uint32_t ref = refs[k];
         const std::size_t i = ref_index(ref);
         const bool sphere = is_sphere_ref(ref);
-        if (i >= (sphere ? g.sphere_count : g.triangle_count)) refuse("reference " + std::to_string(k) + " out of range");
+        if (i >= (sphere ? g.sphere_count : g.triangle_count))
+            refuse("reference " + std::to_string(k) + " out of range");
         std::uint8_t& s = seen[sphere ? g.triangle_count + i : i];
         if (s++) refuse("primitive reference " + std::to_string(ref) + " used twice");
     }
