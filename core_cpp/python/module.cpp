@@ -126,6 +126,7 @@ void py_refit(PyBvh& self, const Triangles& tris, const std::optional<Spheres>& 
 
 void bind_render(nb::module_& m);        // render_bindings.cpp
 void bind_build_config(nb::module_& m);  // build_config_bindings.cpp
+void bind_inspect(nb::module_& m);       // inspect_bindings.cpp (after bind_bvh: it adds to Bvh)
 
 namespace {
 
@@ -228,6 +229,7 @@ NB_MODULE(_core, m) {
     nb::exception<BuildCancelled>(m, "BuildCancelled");
     bind_render(m);
     bind_bvh(m);
+    bind_inspect(m);
     bind_build_config(m);
     bind_functions(m);
     bind_build_names(m);

@@ -17,6 +17,7 @@
 #include "bvhlab/render.h"
 #include "py_bvh.h"
 #include "py_cancel.h"
+#include "py_render_scene.h"
 #ifdef BVHLAB_VULKAN
 #include "bvhlab/vulkan_renderer.h"
 #endif
@@ -32,13 +33,6 @@ using Materials = nb::ndarray<const float, nb::shape<-1, 6>, nb::c_contig, nb::d
 using Indices = nb::ndarray<const std::int32_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
 using Rgba = nb::ndarray<float, nb::shape<-1, -1, 4>, nb::c_contig, nb::device::cpu>;
 using Plane = nb::ndarray<float, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
-
-/// A RenderScene and the version of the tree it was made from (kept alive: RenderScene borrows it;
-/// a later refit of the Python Bvh makes a new version and leaves this one intact).
-struct PyRenderScene {
-    TreePtr tree;
-    RenderScene scene;
-};
 
 /// A RenderJob used from Python: one call at a time (a job's sums are not for two threads). The
 /// lock is only ever waited for without the GIL, and in slices, so that Ctrl-C still reaches a

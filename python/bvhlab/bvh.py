@@ -9,6 +9,7 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from . import _checks, _core
+from .inspect.node_data import NodeData
 
 #: Split methods and axis policies as the C++ core names them (its table of methods), and the
 #: defaults and limits of a build: one definition, in core_cpp/include/bvhlab/build_config.h.
@@ -170,6 +171,7 @@ class Bvh:
         self._core = core
         self.config = config
         self._stats: dict | None = None
+        self._node_data: tuple[int, NodeData] | None = None  # (revision, data)
 
     def __repr__(self) -> str:
         s = self.stats
@@ -189,6 +191,16 @@ class Bvh:
             self._stats = self._core.stats()
             self._stats["threads"] = self.config.threads
         return dict(self._stats)
+
+    def node_data(self, *, threads: int = 0) -> NodeData:
+        """Every node's box, depth, parent, children, primitives under it, area, SAH term and its
+        subtree's share of the SAH cost, child overlap and end-point overlap (EPO), as arrays made
+        in C++ for all nodes at once (bvhlab.inspect.node_data.NodeData). Made once per revision."""
+        threads = _checks.integer("threads", threads, 0, 4096)
+        if self._node_data is None or self._node_data[0] != self._core.revision:
+            d = self._core.node_data(threads)  # of one version, whatever a refit does meanwhile
+            self._node_data = (d["revision"], NodeData.from_core(d))
+        return self._node_data[1]
 
     @property
     def revision(self) -> int:
@@ -286,6 +298,24 @@ class Bvh:
             out["nodes_visited"],
         )
         return out
+
+    def save(self, path) -> None:
+        """Writes the tree to `path` (a .bvhtree file, as a whole or not at all): its nodes and
+        references, the geometry's fingerprint and the build settings (bvhlab.inspect.tree_file);
+        `bvhlab.load_bvh(path, scene)` reads it back over the same geometry."""
+        from .inspect.tree_file import save_bvh
+
+        save_bvh(self, path)
+
+    def trace_ray(self, origin, direction, *, tmin: float = 0.0, tmax: float = np.inf, traversal: str = "stack"):
+        """What `intersect` does for one ray, step by step (bvhlab.inspect.ray_record.RayRecord):
+        the boxes it tested in order and whether each was hit, the primitives it tested, and the
+        leaf and primitive of the closest hit. Recorded by the same traversal code ("stack" or
+        "stackless"; the wide tree has no binary nodes to name), so its box tests are the
+        nodes_visited `intersect` reports for the ray."""
+        from .inspect.ray_record import record
+
+        return record(self._core, origin, direction, tmin, tmax, traversal)
 
     def refit(self, triangles: np.ndarray, spheres: np.ndarray | None = None) -> None:
         """Move the geometry (same counts) and recompute every box, keeping the topology."""

@@ -27,4 +27,10 @@ BvhStats compute_stats(const Bvh& bvh);
 /// 0 for an empty tree; a root of zero area counts every node as hit.
 double sah_cost(const Bvh& bvh);
 
+/// Half the surface area of a node's box, in double (the stats must not depend on float rounding).
+double node_half_area(const BvhNode& n);
+/// A node's term of sah_cost(): A(n)/A(R) for an internal node, A(n)/A(R)·N(n) for a leaf, with
+/// R's half area `root_half_area` (a root of zero area counts every node as hit).
+double sah_term(const BvhNode& n, double root_half_area);
+
 }  // namespace bvhlab

@@ -4,21 +4,21 @@
 
 namespace bvhlab {
 
-namespace {
-double half_area(const BvhNode& n) {  // in double: the stats must not depend on float rounding
+double node_half_area(const BvhNode& n) {
     double x = double(n.hi.x) - n.lo.x, y = double(n.hi.y) - n.lo.y, z = double(n.hi.z) - n.lo.z;
     return x * y + y * z + z * x;
 }
-}  // namespace
+
+double sah_term(const BvhNode& n, double root_half_area) {
+    double p = root_half_area > 0 ? node_half_area(n) / root_half_area : 1.0;
+    return is_leaf(n) ? p * leaf_count(n) : p;
+}
 
 double sah_cost(const Bvh& bvh) {
     if (bvh.empty()) return 0.0;
-    double root_area = half_area(bvh.nodes[0]);
+    const double root_area = node_half_area(bvh.nodes[0]);
     double cost = 0.0;
-    for (const BvhNode& n : bvh.nodes) {
-        double p = root_area > 0 ? half_area(n) / root_area : 1.0;
-        cost += is_leaf(n) ? p * leaf_count(n) : p;
-    }
+    for (const BvhNode& n : bvh.nodes) cost += sah_term(n, root_area);
     return cost;
 }
 

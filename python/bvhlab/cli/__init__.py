@@ -7,6 +7,8 @@ snapshot (raster level sheets) and scenes.
                   [--bvh-depth A:B] [--heatmap]
     bvhlab compare SCENE --out DIR [--methods median,mean,sah12,sah32] [--frames N]
     bvhlab snapshot SCENE --out PNG [--bvh-depth A:B | --sheet]
+    bvhlab inspect SCENE [build options] --node N | --pixel X,Y | --worst K [--tree FILE] [--save-tree FILE]
+                   [--json PATH]
     bvhlab scenes
 """
 
@@ -17,9 +19,9 @@ import sys
 
 from .._atomic import WriteError
 from .._core import BuildCancelled
-from . import build_cmd, compare_cmd, options, render_cmd, scenes_cmd, snapshot_cmd
+from . import build_cmd, compare_cmd, inspect_cmd, options, render_cmd, scenes_cmd, snapshot_cmd
 
-COMMANDS = (build_cmd, render_cmd, compare_cmd, snapshot_cmd, scenes_cmd)
+COMMANDS = (build_cmd, render_cmd, compare_cmd, snapshot_cmd, inspect_cmd, scenes_cmd)
 
 
 def parser() -> argparse.ArgumentParser:

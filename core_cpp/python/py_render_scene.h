@@ -1,0 +1,15 @@
+// py_render_scene.h — what the Python module keeps per RenderScene, shared by the binding files.
+#pragma once
+#include "bvhlab/render.h"
+#include "py_bvh.h"
+
+namespace bvhlab::python {
+
+/// A RenderScene and the version of the tree it was made from (kept alive: RenderScene borrows it;
+/// a later refit of the Python Bvh makes a new version and leaves this one intact).
+struct PyRenderScene {
+    TreePtr tree;
+    RenderScene scene;
+};
+
+}  // namespace bvhlab::python

@@ -1,0 +1,133 @@
+// restore.cpp — a saved tree checked and made whole again (restore.h).
+#include "bvhlab/restore.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "bvhlab/prim_ref.h"
+
+namespace bvhlab {
+
+namespace {
+
+[[noreturn]] void refuse(const std::string& what) { throw std::invalid_argument("not a valid saved tree: " + what); }
+
+std::string node_name(std::uint32_t i) { return "node " + std::to_string(i); }
+
+bool finite_box(const BvhNode& n) {
+    return std::isfinite(n.lo.x) && std::isfinite(n.lo.y) && std::isfinite(n.lo.z) && std::isfinite(n.hi.x) &&
+           std::isfinite(n.hi.y) && std::isfinite(n.hi.z) && n.lo.x <= n.hi.x && n.lo.y <= n.hi.y && n.lo.z <= n.hi.z;
+}
+
+Aabb prim_box(const GeometryView& g, std::uint32_t ref) {
+    Aabb b;
+    const std::size_t i = ref_index(ref);
+    if (is_sphere_ref(ref)) {
+        const Vec3 c = g.sphere_center(i);
+        const float r = g.sphere_radius(i);
+        b.grow(c - Vec3(r)), b.grow(c + Vec3(r));
+    } else {
+        for (int k = 0; k < 3; ++k) b.grow(g.vertex(i, k));
+    }
+    return b;
+}
+
+/// Each reference names an existing primitive, and each primitive is named once.
+void check_refs(const std::vector<std::uint32_t>& refs, const GeometryView& g) {
+    if (refs.size() != g.primitive_count())
+        refuse(std::to_string(refs.size()) + " references for " + std::to_string(g.primitive_count()) + " primitives");
+    std::vector<std::uint8_t> seen(g.primitive_count(), 0);
+    for (std::size_t k = 0; k < refs.size(); ++k) {
+        const std::uint32_t ref = refs[k];
+        const std::size_t i = ref_index(ref);
+        const bool sphere = is_sphere_ref(ref);
+        if (i >= (sphere ? g.sphere_count : g.triangle_count))
+            refuse("reference " + std::to_string(k) + " out of range");
+        std::uint8_t& s = seen[sphere ? g.triangle_count + i : i];
+        if (s++) refuse("primitive reference " + std::to_string(ref) + " used twice");
+    }
+}
+
+/// Depth-first layout, skip indices, leaf slots and depths (bvh.h, docs/design.md "Tree layout").
+/// Children come after their parent, so subtree ends are found in one backward pass.
+void check_layout(const std::vector<BvhNode>& nodes, std::size_t ref_count, std::vector<std::uint8_t>& depths) {
+    const std::uint32_t n = std::uint32_t(nodes.size());
+    depths.assign(n, 0);
+    if (n == 0) return;
+    std::vector<std::uint32_t> end(n);
+    for (std::uint32_t i = n; i-- > 0;) {
+        const BvhNode& node = nodes[i];
+        if (is_leaf(node)) {
+            end[i] = i + 1;
+            continue;
+        }
+        const std::uint32_t second = node.index;
+        if (i + 1 >= n || second <= i + 1 || second >= n) refuse(node_name(i) + " has a child out of order or range");
+        if (end[i + 1] != second) refuse(node_name(i) + "'s second child does not follow its first child's subtree");
+        end[i] = end[second];
+        if (skip_index(node, i) != end[i]) refuse(node_name(i) + " has a wrong skip index");
+    }
+    if (end[0] != n) refuse("the root's subtree does not hold every node");
+    std::uint64_t next_slot = 0;
+    for (std::uint32_t i = 0; i < n; ++i) {
+        const BvhNode& node = nodes[i];
+        if (depths[i] >= gpu::MAX_TREE_HEIGHT) refuse(node_name(i) + " lies deeper than MAX_TREE_HEIGHT");
+        if (!is_leaf(node)) {
+            depths[i + 1] = depths[node.index] = std::uint8_t(depths[i] + 1);
+            continue;
+        }
+        if (leaf_count(node) == 0 || node.index != next_slot) refuse("leaf " + std::to_string(i) + " has wrong slots");
+        next_slot += leaf_count(node);
+    }
+    if (next_slot != ref_count) refuse("the leaves do not hold every reference");
+}
+
+/// Every box is finite and holds its children's boxes, or its primitives.
+void check_boxes(const std::vector<BvhNode>& nodes, const std::vector<std::uint32_t>& refs, const GeometryView& g) {
+    for (std::uint32_t i = 0; i < nodes.size(); ++i)
+        if (!finite_box(nodes[i])) refuse(node_name(i) + " has a box that is not finite");
+    for (std::uint32_t i = 0; i < nodes.size(); ++i) {
+        const BvhNode& node = nodes[i];
+        const Aabb box = node_box(node);
+        if (!is_leaf(node)) {
+            if (!box.contains(node_box(nodes[i + 1])) || !box.contains(node_box(nodes[node.index])))
+                refuse(node_name(i) + "'s box does not hold its children's");
+            continue;
+        }
+        for (std::uint32_t k = node.index; k < node.index + leaf_count(node); ++k)
+            if (!box.contains(prim_box(g, refs[k]))) refuse(node_name(i) + "'s box does not hold its primitives");
+    }
+}
+
+}  // namespace
+
+Bvh restore_bvh(SavedTree saved, const GeometryView& geometry, unsigned threads) {
+    validate(geometry);
+    validate(saved.config);
+    const std::uint64_t fingerprint = geometry_fingerprint(geometry, threads);
+    if (fingerprint != saved.geometry_fingerprint)
+        throw std::invalid_argument("the tree was saved for other geometry (its fingerprint " +
+                                    std::to_string(saved.geometry_fingerprint) + ", this scene's " +
+                                    std::to_string(fingerprint) + ")");
+    if (saved.nodes.empty() != (geometry.primitive_count() == 0)) refuse("nodes and primitives disagree");
+    check_refs(saved.refs, geometry);
+    std::vector<std::uint8_t> depths;
+    check_layout(saved.nodes, saved.refs.size(), depths);
+    check_boxes(saved.nodes, saved.refs, geometry);
+
+    Bvh bvh;
+    bvh.nodes.assign(saved.nodes.begin(), saved.nodes.end());
+    bvh.refs.assign(saved.refs.begin(), saved.refs.end());
+    bvh.depths.assign(depths.begin(), depths.end());
+    bvh.prims = pack_prims(geometry, bvh.refs, threads);
+    bvh.triangle_count = std::uint32_t(geometry.triangle_count);
+    bvh.sphere_count = std::uint32_t(geometry.sphere_count);
+    bvh.geometry_fingerprint = fingerprint;
+    saved.config.progress = nullptr;
+    bvh.config = saved.config;
+    bvh.build_ms = saved.build_ms;
+    return bvh;
+}
+
+}  // namespace bvhlab

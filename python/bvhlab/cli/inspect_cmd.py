@@ -1,0 +1,170 @@
+"""`bvhlab inspect SCENE --node N | --pixel X,Y | --worst K`: why a tree is good or bad (issue 35).
+Prints one node's figures (box, place in the tree, SAH term and share, child overlap, EPO), one
+pixel's primary-ray traversal as a table (through the renderer's camera and traversal code), or
+the K subtrees of largest SAH cost; --json writes the same. The tree is built with the build
+options, or read from a file saved with --save-tree (or Bvh.save)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from .. import build, load_bvh
+from .._atomic import write_text
+from .._progress import ProgressBar
+from ..inspect.ray_record import RECORD_TRAVERSALS, trace_pixel
+from ..inspect.tree_file import SUFFIX
+from ..library import load_scene
+from ..render_options import RenderOptions
+from . import options
+
+_DEFAULT = RenderOptions()
+_NODE_ROWS = (
+    "depth",
+    "parent",
+    "left",
+    "right",
+    "prim_count",
+    "lo",
+    "hi",
+    "area",
+    "sah_term",
+    "subtree_sah",
+    "sah_share",
+    "child_overlap",
+    "epo",
+)
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser(
+        "inspect", help="a node's figures, a pixel's traversal, the costliest subtrees", description=__doc__
+    )
+    options.add_scene(p)
+    options.add_build(p)
+    what = p.add_mutually_exclusive_group(required=True)
+    what.add_argument("--node", type=lambda t: options.whole_number(t, 0, 2**32 - 1), metavar="N", help="node index")
+    what.add_argument("--pixel", type=pixel_spec, metavar="X,Y", help="pixel (row 0 at the top) of a render")
+    what.add_argument("--worst", type=lambda t: options.whole_number(t, 1, 10**6), metavar="K")
+    p.add_argument("--tree", type=Path, metavar="FILE", help=f"read the tree from FILE ({SUFFIX}) instead of building")
+    p.add_argument(
+        "--save-tree", type=options.output_file_type(SUFFIX, "tree file"), metavar="FILE", help="also save the tree"
+    )
+    options.add_image_size(p)
+    p.add_argument(
+        "--samples-per-axis",
+        type=options.samples_per_axis,
+        default=_DEFAULT.samples_per_axis,
+        metavar="N",
+        help="N×N samples per pixel (--pixel)",
+    )
+    p.add_argument("--sample", type=lambda t: options.whole_number(t, 0, 2**32 - 1), default=0, help="(--pixel)")
+    p.add_argument("--traversal", default=_DEFAULT.traversal, choices=RECORD_TRAVERSALS, help="(--pixel)")
+    p.add_argument("--json", type=options.output_file_type(".json", "inspection file"), metavar="PATH")
+    p.set_defaults(run=run)
+
+
+def pixel_spec(text: str) -> tuple[int, int]:
+    """'12,7' → (12, 7)."""
+    try:
+        x, y = (int(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"a pixel must look like X,Y (e.g. 12,7), got '{text}'") from None
+    if x < 0 or y < 0:
+        raise argparse.ArgumentTypeError(f"pixel {text}: coordinates must be >= 0")
+    return x, y
+
+
+def run(args) -> int:
+    settings = options.build_kwargs(args)  # checked before the scene is loaded
+    scene, name = load_scene(args.scene)
+    if args.tree:
+        bvh = load_bvh(args.tree, scene)
+    else:
+        with ProgressBar(f"building {args.method}") as bar:
+            bvh = build(scene, progress=bar, **settings)
+    if args.save_tree:
+        bvh.save(args.save_tree)
+        print(f"wrote {args.save_tree}")
+    data = bvh.node_data()
+    stats = bvh.stats
+    tree = {
+        "method": stats["method"],
+        "nodes": stats["nodes"],
+        "height": stats["height"],
+        "sah_cost": data.sah_cost,
+        "epo_cost": data.epo_cost,
+    }
+    print(f"{name}: {stats['triangles']} triangles, {stats['spheres']} spheres; " + _pairs(tree))
+    report: dict = {
+        "about": {"scene": name, "source": args.scene, "settings": bvh.config.tree_settings()},
+        "tree": tree,
+    }
+    if args.node is not None:
+        report["node"] = _print_node(data, args.node)
+    elif args.pixel is not None:
+        report["pixel"] = _print_pixel(scene, bvh, args)
+    else:
+        report["worst"] = _print_worst(data, args.worst)
+    if args.json:
+        write_text(args.json, json.dumps(report, indent=1) + "\n")
+        print(f"wrote {args.json}")
+    return 0
+
+
+def _print_node(data, node: int) -> dict:
+    figures = data.node(node)
+    print(f"node {node} ({'leaf' if figures['leaf'] else 'internal'})")
+    for key in _NODE_ROWS:
+        print(f"  {key:<14}{_value(figures[key])}")
+    return figures
+
+
+def _print_pixel(scene, bvh, args) -> dict:
+    x, y = args.pixel
+    ray_options = RenderOptions(samples_per_axis=args.samples_per_axis, traversal=args.traversal)
+    record = trace_pixel(
+        scene, bvh, x, y, width=args.width, height=args.height, options=ray_options, sample=args.sample
+    )
+    summary = record.summary()
+    print(f"pixel {x},{y} sample {args.sample} of a {args.width}×{args.height} render, {args.traversal} traversal:")
+    print("  " + _pairs({k: summary[k] for k in ("box_tests", "box_hits", "prim_tests", "t", "prim", "kind")}))
+    print(f"  closest hit in leaf {summary['hit_leaf']}" if summary["hit_leaf"] >= 0 else "  no hit")
+    steps = record.steps()
+    print(f"  {'#':>5}  {'test':<5} {'node':>8} {'slot':>8} {'prim':>10}  result")
+    for i, s in enumerate(steps):
+        if s["step"] == "box":
+            print(f"  {i:>5}  {'box':<5} {s['node']:>8} {'':>8} {'':>10}  {'entered' if s['hit'] else 'missed'}")
+        else:
+            result = "closest so far" if s["closer"] else "-"
+            prim = f"{s['kind'][0]}{s['prim']}"
+            print(f"  {i:>5}  {'prim':<5} {s['leaf']:>8} {s['slot']:>8} {prim:>10}  {result}")
+    return {**summary, "steps": steps}
+
+
+def _print_worst(data, k: int) -> list[dict]:
+    rows = []
+    print(f"the {k} subtrees of largest SAH cost (share of the tree's {data.sah_cost:.4g}):")
+    head = ("node", 8), ("depth", 5), ("prims", 8), ("subtree SAH", 12), ("share", 7), ("own term", 10)
+    print("  " + " ".join(f"{name:>{width}}" for name, width in (*head, ("overlap", 8), ("EPO", 10))))
+    for node in data.worst(k):
+        f = data.node(int(node))
+        rows.append(f)
+        print(
+            f"  {f['node']:>8} {f['depth']:>5} {f['prim_count']:>8} {f['subtree_sah']:>12.4f} {f['sah_share']:>7.2%} "
+            f"{f['sah_term']:>10.4f} {f['child_overlap']:>8.3f} {f['epo']:>10.4g}"
+        )
+    return rows
+
+
+def _value(v) -> str:
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    if isinstance(v, list):
+        return "(" + ", ".join(_value(c) for c in v) + ")"
+    return str(v)
+
+
+def _pairs(d: dict) -> str:
+    return ", ".join(f"{k} {_value(v)}" for k, v in d.items())

@@ -1,0 +1,122 @@
+// The inspector's core (issue 35): node data, traversal records and restored trees, in C++ so that
+// the sanitizer builds run them (make asan-test): hostile saved trees are refused, never misread.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <random>
+#include <stdexcept>
+
+#include "bvhlab/node_data.h"
+#include "bvhlab/ray_record.h"
+#include "bvhlab/restore.h"
+#include "bvhlab/stats.h"
+#include "test_scenes.h"
+#include "tree_checks.h"
+
+namespace bvhlab {
+namespace {
+
+SavedTree saved_of(const Bvh& bvh) {
+    SavedTree s;
+    s.nodes.assign(bvh.nodes.begin(), bvh.nodes.end());
+    s.refs.assign(bvh.refs.begin(), bvh.refs.end());
+    s.geometry_fingerprint = bvh.geometry_fingerprint;
+    s.config = bvh.config;
+    s.build_ms = bvh.build_ms;
+    return s;
+}
+
+TEST(NodeData, SumsAndCounts) {
+    test::Scene scene = test::random_scene(500, 40, 3);
+    BuildConfig config;
+    config.max_leaf_size = 3;
+    Bvh bvh = build_bvh(scene.view(), config);
+    NodeData d = compute_node_data(bvh, 2);
+    ASSERT_EQ(d.depth.size(), bvh.nodes.size());
+    EXPECT_NEAR(d.sah_cost, sah_cost(bvh), 1e-9 * d.sah_cost);
+    EXPECT_NEAR(d.subtree_sah[0], d.sah_cost, 1e-9 * d.sah_cost);
+    EXPECT_EQ(d.prim_count[0], 540u);
+    EXPECT_GT(d.epo_cost, 0.0);
+    NodeData one = compute_node_data(bvh, 1);
+    EXPECT_EQ(one.epo, d.epo);  // fixed-point sums: the same for any number of threads
+}
+
+TEST(NodeData, ClippedArea) {
+    const double a[3] = {0, 0, 0}, b[3] = {2, 0, 0}, c[3] = {0, 2, 0};
+    const double lo[3] = {0, 0, -1}, hi[3] = {1, 1, 1};
+    EXPECT_NEAR(clipped_triangle_area(a, b, c, lo, hi), 1.0, 1e-15);  // the unit square lies inside
+    const double lo2[3] = {1, 1, -1}, hi2[3] = {3, 3, 1};
+    EXPECT_NEAR(clipped_triangle_area(a, b, c, lo2, hi2), 0.0, 1e-15);  // touches at one point
+    const double lo3[3] = {-5, -5, 0.5}, hi3[3] = {5, 5, 1};
+    EXPECT_EQ(clipped_triangle_area(a, b, c, lo3, hi3), 0.0);  // above the plane
+}
+
+TEST(RayRecord, CountsEqualIntersect) {
+    test::Scene scene = test::random_scene(800, 30, 9);
+    Bvh bvh = build_bvh(scene.view());
+    std::mt19937 rng(4);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    for (int i = 0; i < 500; ++i) {
+        Ray ray{{5 + 8 * u(rng), 5 + 8 * u(rng), 5 + 8 * u(rng)}, {u(rng), u(rng), u(rng) + 0.01f}};
+        for (Traversal mode : {Traversal::Stack, Traversal::Stackless}) {
+            std::uint32_t visited = 0;
+            const Hit hit = intersect(bvh, ray, mode, &visited);
+            const TraversalRecord r = record_traversal(bvh, ray, mode);
+            ASSERT_EQ(r.box_nodes.size(), visited);
+            ASSERT_EQ(r.hit.ref, hit.ref);
+            ASSERT_EQ(r.hit.t, hit.t);
+            if (hit.ref == kNoHit) continue;
+            const BvhNode& leaf = bvh.nodes[r.hit_leaf];
+            ASSERT_TRUE(is_leaf(leaf));
+            ASSERT_TRUE(leaf.index <= r.hit.slot && r.hit.slot < leaf.index + leaf_count(leaf));
+        }
+    }
+    EXPECT_THROW(record_traversal(bvh, Ray{{0, 0, 0}, {1, 0, 0}}, Traversal::Wide), std::invalid_argument);
+}
+
+TEST(Restore, RoundTrip) {
+    test::Scene scene = test::random_scene(300, 20, 5);
+    Bvh bvh = build_bvh(scene.view());
+    Bvh back = restore_bvh(saved_of(bvh), scene.view());
+    test::check_tree(back, scene.view(), bvh.config.max_leaf_size);
+    ASSERT_EQ(back.nodes.size(), bvh.nodes.size());
+    EXPECT_EQ(std::memcmp(back.nodes.data(), bvh.nodes.data(), bvh.nodes.size() * sizeof(BvhNode)), 0);
+    EXPECT_EQ(std::memcmp(back.prims.data(), bvh.prims.data(), bvh.prims.size() * sizeof(PackedPrim)), 0);
+    EXPECT_EQ(std::vector<std::uint8_t>(back.depths.begin(), back.depths.end()),
+              std::vector<std::uint8_t>(bvh.depths.begin(), bvh.depths.end()));
+}
+
+/// Random bytes changed in the nodes and references: each such tree is refused, or is a valid tree
+/// (a change that keeps every invariant, e.g. a box grown within its parent). Never a crash; the
+/// sanitizer builds check that no read goes astray.
+TEST(Restore, DamagedTreesAreRefusedOrValid) {
+    test::Scene scene = test::random_scene(200, 10, 8);
+    BuildConfig config;
+    config.max_leaf_size = 2;
+    const Bvh bvh = build_bvh(scene.view(), config);
+    std::mt19937 rng(1);
+    int refused = 0;
+    for (int trial = 0; trial < 3000; ++trial) {
+        SavedTree s = saved_of(bvh);
+        const int flips = 1 + int(rng() % 3);
+        for (int f = 0; f < flips; ++f) {
+            if (rng() % 4 == 0) {
+                s.refs[rng() % s.refs.size()] ^= 1u << (rng() % 32);
+            } else {
+                auto* bytes = reinterpret_cast<std::uint8_t*>(s.nodes.data());
+                bytes[rng() % (s.nodes.size() * sizeof(BvhNode))] ^= std::uint8_t(1u << (rng() % 8));
+            }
+        }
+        try {
+            Bvh back = restore_bvh(std::move(s), scene.view(), 1);
+            test::check_tree(back, scene.view(), 0x7fffffff);
+        } catch (const std::invalid_argument&) { ++refused; }
+    }
+    EXPECT_GT(refused, 2000);
+    SavedTree other = saved_of(bvh);
+    other.geometry_fingerprint ^= 1;
+    EXPECT_THROW(restore_bvh(other, scene.view()), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace bvhlab

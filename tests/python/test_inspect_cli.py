@@ -1,0 +1,99 @@
+"""`bvhlab inspect` end to end: what it prints and writes equals the Python API's figures for the
+same tree, a pixel's table equals the CPU tracer's cost there, saved trees are read back, and bad
+requests end with one clear line and exit code 2."""
+
+import json
+
+import numpy as np
+import pytest
+
+import bvhlab
+from bvhlab.cli import main
+from bvhlab.inspect.ray_record import trace_pixel
+from bvhlab.library import load_scene
+
+
+@pytest.fixture(scope="module")
+def whitted():
+    scene, _ = load_scene("gen:whitted")
+    return scene, bvhlab.build(scene, method="sah", bins=32, max_leaf_size=2)
+
+
+def _run(tmp_path, *args):
+    path = tmp_path / "out.json"
+    assert (
+        main(["inspect", "gen:whitted", "--method", "sah32", "--max-leaf-size", "2", *args, "--json", str(path)]) == 0
+    )
+    return json.loads(path.read_text())
+
+
+def test_node(tmp_path, whitted, capsys):
+    _, bvh = whitted
+    report = _run(tmp_path, "--node", "5")
+    data = bvh.node_data()
+    assert report["node"] == data.node(5)
+    assert report["tree"]["sah_cost"] == pytest.approx(bvh.stats["sah_cost"])
+    assert report["tree"]["epo_cost"] == pytest.approx(data.epo_cost) and data.epo_cost > 0
+    out = capsys.readouterr().out
+    assert "node 5 (" in out and "sah_share" in out and "epo_cost" in out
+
+
+def test_worst(tmp_path, whitted):
+    _, bvh = whitted
+    rows = _run(tmp_path, "--worst", "7")["worst"]
+    data = bvh.node_data()
+    assert [r["node"] for r in rows] == list(data.worst(7))
+    costs = [r["subtree_sah"] for r in rows]
+    assert costs == sorted(costs, reverse=True) and rows[0]["node"] == 0
+    # no node left out costs more than the last one shown
+    shown = {r["node"] for r in rows}
+    assert max(c for i, c in enumerate(data.subtree_sah) if i not in shown) <= costs[-1]
+
+
+@pytest.mark.parametrize("traversal", ["stack", "stackless"])
+def test_pixel_equals_the_tracers_cost(tmp_path, whitted, capsys, traversal):
+    scene, bvh = whitted
+    w, h, x, y = 64, 48, 30, 26
+    report = _run(tmp_path, "--pixel", f"{x},{y}", "--width", str(w), "--height", str(h), "--traversal", traversal)
+    pixel = report["pixel"]
+    job = bvhlab.Renderer("cpu").start(scene, bvh, w, h, options=bvhlab.RenderOptions(traversal=traversal))
+    job.run()
+    assert pixel["box_tests"] == job.result(color=False, depth=False).cost[y, x]
+    steps = pixel["steps"]
+    assert sum(s["step"] == "box" for s in steps) == pixel["box_tests"]
+    assert sum(s["step"] == "prim" for s in steps) == pixel["prim_tests"]
+    closer = [s for s in steps if s["step"] == "prim" and s["closer"]]
+    assert pixel["hit_leaf"] >= 0 and closer[-1]["leaf"] == pixel["hit_leaf"]
+    rec = trace_pixel(scene, bvh, x, y, width=w, height=h, options=bvhlab.RenderOptions(traversal=traversal))
+    assert (pixel["prim"], pixel["t"]) == (rec.prim, rec.t)
+    table = capsys.readouterr().out
+    assert f"box_tests {pixel['box_tests']}," in table and "closest so far" in table
+
+
+def test_saved_tree_is_read_back(tmp_path, whitted):
+    tree = tmp_path / "w.bvhtree"
+    first = _run(tmp_path, "--node", "3", "--save-tree", str(tree))
+    assert tree.exists()
+    again = main(["inspect", "gen:whitted", "--tree", str(tree), "--node", "3", "--json", str(tmp_path / "b.json")])
+    assert again == 0
+    second = json.loads((tmp_path / "b.json").read_text())
+    assert second["node"] == first["node"] and second["tree"] == first["tree"]
+
+
+def test_bad_requests(tmp_path, capsys):
+    tree = tmp_path / "w.bvhtree"
+    assert main(["inspect", "gen:whitted", "--node", "0", "--save-tree", str(tree)]) == 0
+    capsys.readouterr()
+    assert main(["inspect", "gen:five_spheres", "--tree", str(tree), "--node", "0"]) == 2
+    assert "saved for other geometry" in capsys.readouterr().err
+    assert main(["inspect", "gen:whitted", "--node", "100000"]) == 2
+    assert "does not exist" in capsys.readouterr().err
+    assert main(["inspect", "gen:whitted", "--pixel", "900,10"]) == 2
+    assert "outside the 800×600 image" in capsys.readouterr().err
+    for bad in (["--pixel", "3"], ["--node", "1", "--worst", "2"], []):
+        with pytest.raises(SystemExit) as e:
+            main(["inspect", "gen:whitted", *bad])
+        assert e.value.code == 2
+    err = capsys.readouterr().err
+    assert "X,Y" in err and "not allowed with" in err and "one of the arguments" in err
+    np.testing.assert_equal(sorted(p.name for p in tmp_path.iterdir()), ["w.bvhtree"])

@@ -1,0 +1,111 @@
+"""Bvh.trace_ray and trace_pixel (issue 35): a ray's recorded traversal against what the existing
+queries report for it (Bvh.intersect's hit and box-test count; the CPU tracer's cost image for a
+pixel), and against the tree's structure."""
+
+import numpy as np
+import pytest
+
+import bvhlab
+from bvhlab.inspect.ray_record import trace_pixel
+from bvhlab.library import procedural, showcase
+
+
+def _leaf_of_slot(bvh, slot):
+    nodes = bvh.nodes
+    leaf = np.nonzero(bvh.is_leaf & (nodes["index"] <= slot) & (slot < nodes["index"] + nodes["info"]))[0]
+    assert len(leaf) == 1
+    return int(leaf[0])
+
+
+def _check_record(bvh, rec, hit, visited):
+    assert rec.box_tests == visited
+    assert (rec.prim, rec.kind) == (hit["prim"], hit["kind"])
+    assert rec.t == pytest.approx(hit["t"], rel=0) or (np.isinf(rec.t) and np.isinf(hit["t"]))
+    entered = set(rec.box_nodes[rec.box_hit.astype(bool)].tolist())
+    for leaf, box_test in zip(rec.prim_leaf, rec.prim_box_test):
+        assert leaf in entered and bvh.is_leaf[leaf]
+        assert box_test > 0 and leaf in rec.box_nodes[:box_test]  # tested after its box was entered
+    if hit["prim"] < 0:
+        assert rec.hit_leaf == -1 and not rec.prim_closer.any()
+        return
+    ref = hit["prim"] | (bvhlab.bvh.REF_SPHERE_BIT if hit["kind"] else 0)
+    assert bvh.refs[rec.hit_slot] == ref
+    assert rec.hit_leaf == _leaf_of_slot(bvh, rec.hit_slot)  # the leaf holding intersect's primitive
+    last = np.nonzero(rec.prim_closer)[0][-1]  # the last primitive that became the closest
+    assert (rec.prim_slots[last], rec.prim_leaf[last]) == (rec.hit_slot, rec.hit_leaf)
+
+
+@pytest.mark.parametrize("traversal", ["stack", "stackless"])
+def test_records_match_intersect(traversal, small_scene, knot_mesh):
+    for tris, spheres in (small_scene, (knot_mesh, None)):
+        bvh = bvhlab.build(tris, spheres, max_leaf_size=4)
+        origins, dirs = procedural.random_rays(tris, 300, seed=7)
+        hits = bvh.intersect(origins, dirs, traversal=traversal)
+        assert (hits["prim"] >= 0).sum() > 50 and (hits["prim"] < 0).sum() > 0, "hits and misses to test"
+        for i in range(len(origins)):
+            rec = bvh.trace_ray(origins[i], dirs[i], traversal=traversal)
+            _check_record(bvh, rec, {k: v[i] for k, v in hits.items()}, hits["nodes_visited"][i])
+
+
+def test_stack_order_follows_the_tree(knot_mesh):
+    bvh = bvhlab.build(knot_mesh)
+    origins, dirs = procedural.random_rays(knot_mesh, 50, seed=3)
+    nodes, leaf = bvh.nodes, bvh.is_leaf
+    for o, d in zip(origins, dirs):
+        rec = bvh.trace_ray(o, d, traversal="stack")
+        assert rec.box_nodes[0] == 0
+        # after the root, boxes come in sibling pairs (first child, second child) of an entered node
+        pairs = rec.box_nodes[1:].reshape(-1, 2)
+        parents = pairs[:, 0] - 1
+        assert not leaf[parents].any()
+        np.testing.assert_array_equal(nodes["index"][parents], pairs[:, 1])
+        stackless = bvh.trace_ray(o, d, traversal="stackless")
+        assert (np.diff(stackless.box_nodes.astype(np.int64)) > 0).all()  # node order, skipping subtrees
+        assert (stackless.prim, stackless.hit_leaf) == (rec.prim, rec.hit_leaf)
+
+
+@pytest.mark.parametrize("traversal", ["stack", "stackless"])
+def test_pixel_records_match_the_tracers_cost(traversal):
+    scene = showcase.whitted()
+    bvh = bvhlab.build(scene, max_leaf_size=2)
+    w, h = 48, 32
+    options = bvhlab.RenderOptions(traversal=traversal, samples_per_axis=1)
+    job = bvhlab.Renderer("cpu").start(scene, bvh, w, h, options=options)
+    job.run()
+    cost = job.result(color=False, depth=False).cost
+    assert len(np.unique(cost)) > 5, "the cost must vary over the picture"
+    for y in range(0, h, 3):
+        for x in range(0, w, 5):
+            rec = trace_pixel(scene, bvh, x, y, width=w, height=h, options=options)
+            assert rec.box_tests == cost[y, x], (x, y)
+            o, d = np.float32([rec.origin]), np.float32([rec.direction])
+            hit = bvh.intersect(o, d, tmin=rec.tmin, tmax=rec.tmax, traversal=traversal)
+            _check_record(bvh, rec, {k: v[0] for k, v in hit.items()}, hit["nodes_visited"][0])
+
+
+def test_pixel_of_several_samples():
+    scene = showcase.five_spheres()
+    bvh = bvhlab.build(scene)
+    options = bvhlab.RenderOptions(samples_per_axis=2)
+    job = bvhlab.Renderer("cpu").start(scene, bvh, 24, 16, options=options)
+    job.run()
+    cost = job.result(color=False, depth=False).cost
+    for x, y in ((12, 8), (3, 2), (20, 12)):
+        recs = [trace_pixel(scene, bvh, x, y, width=24, height=16, options=options, sample=s) for s in range(4)]
+        assert np.mean([r.box_tests for r in recs]) == pytest.approx(cost[y, x], rel=1e-6)
+        assert len({r.direction for r in recs}) == 4  # four sample positions
+
+
+def test_bad_requests_are_refused():
+    scene = showcase.five_spheres()
+    bvh = bvhlab.build(scene)
+    with pytest.raises(ValueError, match="traversal"):
+        bvh.trace_ray((0, 0, 0), (1, 0, 0), traversal="wide")
+    with pytest.raises(ValueError, match="origin"):
+        bvh.trace_ray((0, 0), (1, 0, 0))
+    with pytest.raises(ValueError):
+        bvh.trace_ray((0, 0, 0), (0, 0, 0))  # no direction: the batch query refuses it too
+    with pytest.raises(ValueError, match="outside"):
+        trace_pixel(scene, bvh, 24, 0, width=24, height=16)
+    with pytest.raises(ValueError, match="sample"):
+        trace_pixel(scene, bvh, 0, 0, width=24, height=16, sample=1)

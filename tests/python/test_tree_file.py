@@ -1,0 +1,175 @@
+"""Bvh.save and bvhlab.load_bvh (issue 35): save → load gives the same nodes, stats and hits; a
+file cut short, damaged, of another version, for other geometry or other settings is refused
+with a clear error; nodes that are not a tree are refused by the core's checks, never a crash."""
+
+import hashlib
+import json
+import struct
+
+import numpy as np
+import pytest
+
+import bvhlab
+from bvhlab.inspect import tree_file
+from bvhlab.library import procedural, showcase
+
+
+@pytest.fixture()
+def saved(tmp_path, small_scene):
+    tris, spheres = small_scene
+    bvh = bvhlab.build(tris, spheres, method="sah", bins=16, max_leaf_size=3)
+    path = tmp_path / "tree.bvhtree"
+    bvh.save(path)
+    return bvh, path, tris, spheres
+
+
+def test_round_trip(saved):
+    bvh, path, tris, spheres = saved
+    loaded = bvhlab.load_bvh(path, tris, spheres)
+    np.testing.assert_array_equal(loaded.nodes, bvh.nodes)
+    np.testing.assert_array_equal(loaded.refs, bvh.refs)
+    np.testing.assert_array_equal(loaded.depths, bvh.depths)
+    assert loaded.config == bvh.config
+    assert loaded.stats == bvh.stats  # build_ms included: the saved build's
+    origins, dirs = procedural.random_rays(tris, 500, seed=2)
+    for traversal in bvhlab.TRAVERSALS:
+        a, b = bvh.intersect(origins, dirs, traversal=traversal), loaded.intersect(origins, dirs, traversal=traversal)
+        for key in a:
+            np.testing.assert_array_equal(a[key], b[key])
+    np.testing.assert_array_equal(loaded.node_data().epo, bvh.node_data().epo)
+
+
+def test_round_trip_of_a_scene_renders_the_same(tmp_path):
+    scene = showcase.whitted()
+    bvh = bvhlab.build(scene, method="median")
+    bvh.save(tmp_path / "w.bvhtree")
+    loaded = bvhlab.load_bvh(tmp_path / "w.bvhtree", scene, config=bvhlab.BuildConfig(method="median"))
+    a, _ = bvhlab.render(scene, bvh, 32, 24, backend="cpu")
+    b, _ = bvhlab.render(scene, loaded, 32, 24, backend="cpu")
+    np.testing.assert_array_equal(a, b)
+
+
+def test_empty_tree(tmp_path):
+    tris = np.zeros((0, 3, 3), np.float32)
+    bvhlab.build(tris).save(tmp_path / "e.bvhtree")
+    assert bvhlab.load_bvh(tmp_path / "e.bvhtree", tris).stats["nodes"] == 0
+
+
+def test_cut_short_or_damaged(saved):
+    _, path, tris, spheres = saved
+    data = path.read_bytes()
+    for cut in (5, 20, len(data) // 2, len(data) - 1):
+        path.write_bytes(data[:cut])
+        with pytest.raises(tree_file.TreeFileError, match="not a bvhlab tree file|cut short"):
+            bvhlab.load_bvh(path, tris, spheres)
+    damaged = bytearray(data)
+    damaged[len(data) // 2] ^= 0x40
+    path.write_bytes(bytes(damaged))
+    with pytest.raises(ValueError, match="damaged"):
+        bvhlab.load_bvh(path, tris, spheres)
+    path.write_bytes(b"PK\x03\x04 not a tree")
+    with pytest.raises(ValueError, match="not a bvhlab tree file"):
+        bvhlab.load_bvh(path, tris, spheres)
+
+
+def test_other_version(saved):
+    _, path, tris, spheres = saved
+    data = bytearray(path.read_bytes())
+    struct.pack_into("<I", data, len(tree_file.MAGIC), tree_file.FORMAT_VERSION + 1)
+    path.write_bytes(bytes(data))
+    with pytest.raises(ValueError, match=f"version {tree_file.FORMAT_VERSION + 1}; this bvhlab reads version 1"):
+        bvhlab.load_bvh(path, tris, spheres)
+
+
+def test_other_geometry(saved):
+    _, path, tris, spheres = saved
+    with pytest.raises(ValueError, match="other geometry: 400 triangles and 60 spheres"):
+        bvhlab.load_bvh(path, tris[:-1], spheres)
+    moved = tris.copy()
+    moved[7, 1, 2] += 1e-3  # same counts, one vertex moved: the fingerprint tells
+    with pytest.raises(ValueError, match="saved for other geometry .its fingerprint"):
+        bvhlab.load_bvh(path, moved, spheres)
+
+
+def test_other_settings(saved):
+    _, path, tris, spheres = saved
+    with pytest.raises(ValueError, match="built with method=sah, bins=16.*not with method=median"):
+        bvhlab.load_bvh(path, tris, spheres, config=bvhlab.BuildConfig(method="median"))
+    ok = bvhlab.BuildConfig(method="sah", bins=16, max_leaf_size=3, threads=1)  # threads never change a tree
+    assert bvhlab.load_bvh(path, tris, spheres, config=ok).config.bins == 16
+
+
+def _rewrite(path, change):
+    """The file with its nodes changed by `change(nodes)` and a checksum that fits again: what a
+    hostile or buggy writer could make."""
+    data = path.read_bytes()
+    start = len(tree_file.MAGIC) + 8
+    head_len = struct.unpack_from("<I", data, len(tree_file.MAGIC) + 4)[0]
+    header_end = start + head_len
+    n = json.loads(data[start:header_end])["nodes"]
+    nodes = np.frombuffer(data, bvhlab.NODE_DTYPE, n, header_end).copy()
+    change(nodes)
+    body = data[:header_end] + nodes.tobytes() + data[header_end + 32 * n : -32]
+    path.write_bytes(body + hashlib.sha256(body).digest())
+
+
+def _set(field, node, value):
+    def change(nodes):
+        nodes[field][node] = value(nodes) if callable(value) else value
+
+    return change
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (_set("index", 0, 10**6), "child out of order or range"),
+        (_set("info", 0, lambda n: n["info"][0] ^ 1), "skip index|second child"),
+        (_set("index", 0, 1), "child out of order or range"),  # the second child is the first
+        (_set("lo", 5, np.float32(np.nan)), "not finite"),
+        (_set("hi", 0, lambda n: n["hi"][0] - 0.5), "does not hold its children"),
+        (_set("lo", -1, lambda n: n["hi"][-1]), "does not hold its primitives"),
+    ],
+)
+def test_nodes_that_are_not_a_tree_are_refused(saved, change, message):
+    _, path, tris, spheres = saved
+    _rewrite(path, change)
+    with pytest.raises(ValueError, match=message):
+        bvhlab.load_bvh(path, tris, spheres)
+
+
+def test_leaf_slots_out_of_range_are_refused(saved):
+    _, path, tris, spheres = saved
+
+    def change(nodes):
+        leaf = np.nonzero((nodes["info"] & bvhlab.bvh.NODE_INTERNAL_BIT) == 0)[0][-1]
+        nodes["info"][leaf] = 2**31 - 1  # a huge leaf: slots far past the references
+
+    _rewrite(path, change)
+    with pytest.raises(ValueError, match="wrong slots|every reference"):
+        bvhlab.load_bvh(path, tris, spheres)
+
+
+def test_save_is_atomic(saved, monkeypatch):
+    """Ctrl-C half-way through a save: the old file stays whole and no temporary is left."""
+    bvh, path, tris, spheres = saved
+    before = path.read_bytes()
+    real = hashlib.sha256
+
+    class Interrupted:
+        def __init__(self):
+            self.parts, self.real = 0, real()
+
+        def update(self, part):
+            self.parts += 1
+            if self.parts == 4:  # after the magic, the version and the header were written
+                raise KeyboardInterrupt
+            self.real.update(part)
+
+    monkeypatch.setattr(tree_file.hashlib, "sha256", Interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        bvhlab.build(tris, spheres, method="median").save(path)
+    monkeypatch.undo()
+    assert path.read_bytes() == before
+    assert [p.name for p in path.parent.iterdir()] == [path.name]
+    assert bvhlab.load_bvh(path, tris, spheres).config == bvh.config
