@@ -7,6 +7,7 @@ snapshot (raster level sheets) and scenes.
                   [--bvh-depth A:B] [--heatmap]
     bvhlab compare SCENE --out DIR [--methods median,mean,sah12,sah32] [--frames N]
     bvhlab snapshot SCENE --out PNG [--bvh-depth A:B | --sheet]
+    bvhlab sweep SPEC.toml --out DIR [--scheduler tcp://HOST:PORT | --workers N] [--retry-failed]
     bvhlab scenes
 """
 
@@ -17,9 +18,9 @@ import sys
 
 from .._atomic import WriteError
 from .._core import BuildCancelled
-from . import build_cmd, compare_cmd, options, render_cmd, scenes_cmd, snapshot_cmd
+from . import build_cmd, compare_cmd, options, render_cmd, scenes_cmd, snapshot_cmd, sweep_cmd
 
-COMMANDS = (build_cmd, render_cmd, compare_cmd, snapshot_cmd, scenes_cmd)
+COMMANDS = (build_cmd, render_cmd, compare_cmd, snapshot_cmd, sweep_cmd, scenes_cmd)
 
 
 def parser() -> argparse.ArgumentParser:

@@ -114,6 +114,18 @@ def load_scene(spec: str) -> tuple[Scene, str]:
     raise FileNotFoundError(f"no scene '{spec}': give a scene file ({FILE_KINDS}), or one of: {names}")
 
 
+def scene_file(spec: str) -> Path | None:
+    """The file a scene spec reads (a path given, or a bundled name's file); None for `gen:` names
+    and for names that do not exist."""
+    if spec.endswith((".npz", ".blend")) or is_mesh_file(spec):
+        return Path(spec)
+    if spec == "sponza":
+        return _sponza_path()
+    bundled = _bundled()
+    folder = bundled_dir()
+    return folder / bundled[spec]["file"] if folder is not None and spec in bundled else None
+
+
 def _sponza_path() -> Path | None:
     d = bundled_dir()
     path = d / sponza.FILE_NAME if d else None
