@@ -52,11 +52,15 @@ def test_spec_grid_is_every_combination(tmp_path, models):
         ("colour = 'red'", "unknown key"),
         ("traversal = 'sideways'", "traversal"),
         ("bins = []", "empty list"),
+        ("[rays]\nrepeats = 0", "repeats"),
+        ("[rays]\ncount = true", "count"),
     ],
 )
 def test_bad_grid_is_refused_naming_the_setting(tmp_path, grid, message):
+    path = tmp_path / "spec.toml"
+    path.write_text(f"scenes = ['gen:five_spheres']\n[grid]\n{grid}\n")
     with pytest.raises(ValueError, match=message):
-        read_spec(_write_spec(tmp_path, ["gen:five_spheres"], grid))
+        read_spec(path)
 
 
 def test_glob_matching_nothing_is_refused(tmp_path):

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..library import load_scene, scene_file
-from .spec import Setting, SweepSpec
+from .spec import DEFAULT_REPEATS, Setting, SweepSpec
 
 #: Bumped when what a cell measures changes, so old results are not mistaken for new ones.
 SCHEMA = 1
@@ -26,6 +26,7 @@ class Cell:
     setting: Setting
     rays: int
     ray_seed: int
+    repeats: int = DEFAULT_REPEATS
 
     @property
     def key(self) -> str:
@@ -35,6 +36,7 @@ class Cell:
             "settings": self.setting.columns(),
             "rays": self.rays,
             "ray_seed": self.ray_seed,
+            "repeats": self.repeats,
         }
         return hashlib.sha256(json.dumps(what, sort_keys=True).encode()).hexdigest()[:20]
 
@@ -48,16 +50,20 @@ class Cell:
             **self.setting.columns(),
             "rays": self.rays,
             "ray_seed": self.ray_seed,
+            "repeats": self.repeats,
         }
 
 
 def plan_cells(spec: SweepSpec) -> list[Cell]:
-    """Every cell of the spec, scene by scene, in the grid's order."""
-    cells: list[Cell] = []
+    """Every cell of the spec, scene by scene, in the grid's order; a scene whose content equals an
+    earlier one's (a copied file) is the same cells, measured once."""
+    cells: dict[str, Cell] = {}
     for scene in spec.scenes:
         content = scene_hash(scene)
-        cells.extend(Cell(scene, content, setting, spec.rays, spec.ray_seed) for setting in spec.settings)
-    return cells
+        for setting in spec.settings:
+            cell = Cell(scene, content, setting, spec.rays, spec.ray_seed, spec.repeats)
+            cells.setdefault(cell.key, cell)
+    return list(cells.values())
 
 
 def scene_name(spec: str) -> str:

@@ -12,6 +12,7 @@
     [rays]
     count = 100000            # fixed random rays per cell
     seed = 1
+    repeats = 3               # timed passes over them; the table has the median
 
 Settings a grid leaves out keep BuildConfig's defaults. Globs and relative paths are relative to the
 spec's folder; a glob that matches nothing is an error (ValueError naming it)."""
@@ -30,6 +31,7 @@ from ..library import is_mesh_file
 #: The grid's keys: BuildConfig's tree settings (threads is the sweep's: one per worker) and traversal.
 GRID_KEYS = tuple(f.name for f in fields(BuildConfig) if f.compare) + ("traversal",)
 DEFAULT_RAYS, MAX_RAYS = 100_000, 100_000_000
+DEFAULT_REPEATS, MAX_REPEATS = 3, 100
 _SCENE_FILE_SUFFIXES = (".blend", ".npz")
 
 
@@ -50,6 +52,7 @@ class SweepSpec:
     settings: tuple[Setting, ...]
     rays: int = DEFAULT_RAYS
     ray_seed: int = 1
+    repeats: int = DEFAULT_REPEATS
 
 
 def read_spec(path) -> SweepSpec:
@@ -65,13 +68,19 @@ def read_spec(path) -> SweepSpec:
     scenes = _scenes(path, doc.get("scenes"))
     settings = _grid(path, doc.get("grid", {}))
     rays = doc.get("rays", {})
-    _only(path, "[rays]", rays, ("count", "seed"))
-    count, seed = rays.get("count", DEFAULT_RAYS), rays.get("seed", 1)
-    if not isinstance(count, int) or not 1 <= count <= MAX_RAYS:
+    _only(path, "[rays]", rays, ("count", "seed", "repeats"))
+    count, seed, repeats = rays.get("count", DEFAULT_RAYS), rays.get("seed", 1), rays.get("repeats", DEFAULT_REPEATS)
+    if not _whole(count) or not 1 <= count <= MAX_RAYS:
         raise ValueError(f"{path}: [rays] count must be a whole number from 1 to {MAX_RAYS}, got {count!r}")
-    if not isinstance(seed, int) or seed < 0:
+    if not _whole(seed) or seed < 0:
         raise ValueError(f"{path}: [rays] seed must be a whole number >= 0, got {seed!r}")
-    return SweepSpec(scenes, settings, count, seed)
+    if not _whole(repeats) or not 1 <= repeats <= MAX_REPEATS:
+        raise ValueError(f"{path}: [rays] repeats must be a whole number from 1 to {MAX_REPEATS}, got {repeats!r}")
+    return SweepSpec(scenes, settings, count, seed, repeats)
+
+
+def _whole(value) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
 
 
 def _only(path: Path, where: str, table, allowed: tuple[str, ...]) -> None:
