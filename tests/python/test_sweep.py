@@ -177,3 +177,18 @@ def test_pareto_front_against_brute_force():
     front = pareto_front(points)
     beaten = {p for p in points for q in points if q != p and q[0] <= p[0] and q[1] <= p[1] and q != p}
     assert set(front) == set(points) - beaten
+
+
+@pytest.mark.slow
+def test_cli_sends_the_cells_to_a_running_scheduler(tmp_path, models, capsys):
+    """--scheduler: the tasks go to a cluster the command did not start (here a LocalCluster's
+    scheduler, as `dask scheduler` would be), and its workers' addresses are in the table."""
+    spec = _write_spec(tmp_path, ["box.obj", "nan.obj"])
+    cluster, client = local_cluster(2)
+    with cluster, client:
+        out = tmp_path / "out"
+        assert cli.main(["sweep", str(spec), "--out", str(out), "--scheduler", cluster.scheduler_address]) == 0
+        workers = set(client.scheduler_info()["workers"])
+    assert "8 cells (8 run now, 0 stored before), 4 failed" in capsys.readouterr().out
+    rows = pq.read_table(out / PARQUET).to_pylist()
+    assert {r["worker"] for r in rows} <= workers
