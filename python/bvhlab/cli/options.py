@@ -27,17 +27,21 @@ from ..bvh import (
     build,
     method_from_label,
 )
+from ..library.files import MESH_SUFFIXES
 from ..render_options import DEFAULT_HEIGHT, DEFAULT_WIDTH
 
 #: Largest image side the CLI accepts (OpenGL's and most Vulkan drivers' framebuffer limit).
 MAX_IMAGE_SIDE = _core.MAX_IMAGE_DIMENSION  # the renderers' limit, one definition
 #: What `library.load_scene` reads as a file rather than a scene name.
-SCENE_SUFFIXES = (".npz", ".blend")
+SCENE_SUFFIXES = (".npz", ".blend", *MESH_SUFFIXES)
 
 
 def add_scene(p: argparse.ArgumentParser) -> None:
     p.add_argument(
-        "scene", type=scene_spec, metavar="SCENE", help="a .blend or .npz file, or a scene name from `bvhlab scenes`"
+        "scene",
+        type=scene_spec,
+        metavar="SCENE",
+        help="a scene file (.blend, .npz, .obj, .ply, .stl, .gltf, .glb), or a scene name from `bvhlab scenes`",
     )
 
 

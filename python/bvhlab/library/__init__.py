@@ -1,6 +1,7 @@
 """Named scenes: the bundled `.blend` files (blender_scenes/), Crytek Sponza (`sponza`, bundled as
 an `.npz`, no Blender needed), generated scenes (`gen:...`, no Blender needed), and files (`.blend`
-read through bpy with the add-on's exporter, `.npz`)."""
+read through bpy with the add-on's exporter, `.npz`, and OBJ, PLY, STL, glTF/GLB through trimesh:
+library.files)."""
 
 from __future__ import annotations
 
@@ -11,6 +12,10 @@ from pathlib import Path
 
 from ..scene import Scene
 from . import sponza
+from .files import is_mesh_file, load_mesh_file
+
+#: The scene files load_scene reads, as a message lists them.
+FILE_KINDS = ".blend, .npz, .obj, .ply, .stl, .gltf, .glb"
 
 
 @dataclass(frozen=True)
@@ -87,8 +92,11 @@ def list_scenes() -> list[SceneInfo]:
 
 
 def load_scene(spec: str) -> tuple[Scene, str]:
-    """A Scene from a bundled name, a `gen:` name, a `.blend` or an `.npz` path; and a short name."""
+    """A Scene from a bundled name, a `gen:` name, or a `.blend`, `.npz`, `.obj`, `.ply`, `.stl`,
+    `.gltf` or `.glb` path; and a short name."""
     path = Path(spec)
+    if is_mesh_file(spec):
+        return load_mesh_file(path), path.stem
     if spec.endswith(".npz"):
         return Scene.load(path), path.stem
     if spec.endswith(".blend"):
@@ -103,7 +111,19 @@ def load_scene(spec: str) -> tuple[Scene, str]:
     if spec in bundled:
         return _load_blend(bundled_dir() / bundled[spec]["file"]), spec
     names = ", ".join(sorted([*bundled, *generated, *(["sponza"] if _sponza_path() else [])]))
-    raise FileNotFoundError(f"no scene '{spec}': give a .blend or .npz file, or one of: {names}")
+    raise FileNotFoundError(f"no scene '{spec}': give a scene file ({FILE_KINDS}), or one of: {names}")
+
+
+def scene_file(spec: str) -> Path | None:
+    """The file a scene spec reads (a path given, or a bundled name's file); None for `gen:` names
+    and for names that do not exist."""
+    if spec.endswith((".npz", ".blend")) or is_mesh_file(spec):
+        return Path(spec)
+    if spec == "sponza":
+        return _sponza_path()
+    bundled = _bundled()
+    folder = bundled_dir()
+    return folder / bundled[spec]["file"] if folder is not None and spec in bundled else None
 
 
 def _sponza_path() -> Path | None:

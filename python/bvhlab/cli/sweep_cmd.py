@@ -1,0 +1,78 @@
+"""`bvhlab sweep SPEC.toml --out DIR`: build statistics (SAH cost, height, nodes, memory, build time)
+and CPU intersect throughput (Mrays/s on fixed random rays) for every scene and grid setting of the
+spec, one Dask task per cell: on a LocalCluster of single-threaded worker processes (one per core,
+or --workers N), on a running Dask cluster (--scheduler tcp://HOST:8786), or in this process
+(--workers 0). Writes DIR/results.parquet, DIR/results.csv and DIR/sah_vs_build.png; cells already
+in DIR are not run again, so an interrupted sweep continues where it stopped."""
+
+from __future__ import annotations
+
+import contextlib
+from pathlib import Path
+
+from .._folder_lock import folder_lock
+from .._progress import ProgressBar
+from . import compare_args as cargs
+from . import options
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser(
+        "sweep", help="build stats and ray throughput over scenes × settings, on Dask", description=__doc__
+    )
+    p.add_argument("spec", type=Path, metavar="SPEC.toml", help="the scenes and the grid of build settings")
+    p.add_argument("--out", type=cargs.output_dir, required=True, help="directory for the cells, table and plot")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="a running Dask scheduler's address")
+    where.add_argument(
+        "--workers",
+        type=lambda text: options.whole_number(text, 0, 4096),
+        help="LocalCluster worker processes (default: one per core; 0: run the cells in this process)",
+    )
+    p.add_argument("--retry-failed", action="store_true", help="run cells stored with an error again")
+    p.set_defaults(run=run)
+
+
+def run(args) -> int:
+    from ..sweep import local_cluster, read_spec, run_sweep
+
+    spec = read_spec(args.spec)  # checked before a cluster starts
+    _require_sweep_packages()
+    args.out.mkdir(parents=True, exist_ok=True)
+    with folder_lock(args.out, "bvhlab sweep"), contextlib.ExitStack() as stack:
+        client = None
+        if args.scheduler:
+            from distributed import Client
+
+            client = stack.enter_context(Client(args.scheduler, timeout="20s"))
+        elif args.workers != 0:
+            cluster, client = local_cluster(args.workers)
+            stack.enter_context(cluster)
+            stack.enter_context(client)
+        bar = stack.enter_context(ProgressBar("sweep"))
+        result = run_sweep(spec, args.out, client=client, retry_failed=args.retry_failed, progress=_drawer(bar))
+    print(
+        f"sweep: {len(result.rows)} cells ({result.ran} run now, {len(result.rows) - result.ran} stored before), "
+        f"{result.failed} failed"
+    )
+    for path in result.files:
+        print(f"wrote {path}")
+    return 0
+
+
+def _drawer(bar: ProgressBar):
+    def draw(done: int, failed: int, total: int) -> None:
+        bar.label = f"sweep {done}/{total} done, {failed} failed, {total - done} left"
+        bar(done / total if total else 1.0)
+
+    return draw
+
+
+def _require_sweep_packages() -> None:
+    try:
+        import distributed  # noqa: F401
+        import pyarrow  # noqa: F401
+    except ImportError as e:
+        raise RuntimeError(
+            f"bvhlab sweep needs dask[distributed] and pyarrow ({e}): pip install 'bvhlab[sweep]'"
+        ) from None

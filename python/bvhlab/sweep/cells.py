@@ -1,0 +1,99 @@
+"""The cells of a sweep: one scene with one setting, named by a key that hashes the scene's content
+and the settings, so that a cell already measured in the output folder is known without running it
+(a changed file or setting is a new cell)."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..library import load_scene, scene_file
+from .spec import DEFAULT_REPEATS, Setting, SweepSpec
+
+#: Bumped when what a cell measures changes, so old results are not mistaken for new ones.
+SCHEMA = 1
+_CHUNK = 1 << 20
+
+
+@dataclass(frozen=True)
+class Cell:
+    scene: str  # the spec as the loader takes it: a name or a path
+    scene_hash: str  # sha256 of the scene's content ("" when it cannot be read: the cell fails)
+    setting: Setting
+    rays: int
+    ray_seed: int
+    repeats: int = DEFAULT_REPEATS
+
+    @property
+    def key(self) -> str:
+        what = {
+            "schema": SCHEMA,
+            "scene": self.scene_hash or f"unreadable:{self.scene}",
+            "settings": self.setting.columns(),
+            "rays": self.rays,
+            "ray_seed": self.ray_seed,
+            "repeats": self.repeats,
+        }
+        return hashlib.sha256(json.dumps(what, sort_keys=True).encode()).hexdigest()[:20]
+
+    def columns(self) -> dict:
+        """What names the cell in the table: key, scene, settings as columns."""
+        return {
+            "key": self.key,
+            "scene": scene_name(self.scene),
+            "source": self.scene,
+            "scene_hash": self.scene_hash[:16],
+            **self.setting.columns(),
+            "rays": self.rays,
+            "ray_seed": self.ray_seed,
+            "repeats": self.repeats,
+        }
+
+
+def plan_cells(spec: SweepSpec) -> list[Cell]:
+    """Every cell of the spec, scene by scene, in the grid's order; a scene whose content equals an
+    earlier one's (a copied file) is the same cells, measured once."""
+    cells: dict[str, Cell] = {}
+    for scene in spec.scenes:
+        content = scene_hash(scene)
+        for setting in spec.settings:
+            cell = Cell(scene, content, setting, spec.rays, spec.ray_seed, spec.repeats)
+            cells.setdefault(cell.key, cell)
+    return list(cells.values())
+
+
+def scene_name(spec: str) -> str:
+    return spec.split(":", 1)[1] if spec.startswith("gen:") else Path(spec).stem
+
+
+def scene_hash(spec: str) -> str:
+    """sha256 of the file behind `spec` (files, bundled names), or of a generated scene's arrays;
+    "" when there is nothing to read (a missing file, an unknown name: the cell records the error)."""
+    path = scene_file(spec)
+    if path is not None:
+        return _file_hash(path) if path.is_file() else ""
+    if not spec.startswith("gen:"):
+        return ""
+    try:
+        scene, _ = load_scene(spec)  # generated here once: cheap next to the builds
+    except (OSError, ValueError):
+        return ""
+    digest = hashlib.sha256()
+    for array in (scene.triangles, scene.spheres):
+        digest.update(np.ascontiguousarray(array).tobytes())
+    return digest.hexdigest()
+
+
+def _file_hash(path: Path) -> str:
+    digest = hashlib.sha256()
+    try:
+        with open(path, "rb") as f:
+            while chunk := f.read(_CHUNK):
+                digest.update(chunk)
+    except OSError:
+        return ""
+    return digest.hexdigest()

@@ -1,0 +1,62 @@
+"""The sweep's plot: SAH cost against build time, one panel per scene, one colour per method, and the
+Pareto front (the settings no other setting beats on both) drawn through them."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from .._atomic import replacing
+
+PLOT = "sah_vs_build.png"
+
+
+def pareto_front(points: list[tuple[float, float]]) -> list[tuple[float, float]]:
+    """The points no other point beats on both coordinates (lower is better), by the first."""
+    front: list[tuple[float, float]] = []
+    for x, y in sorted(points):
+        if not front or y < front[-1][1]:
+            front.append((x, y))
+    return front
+
+
+def plot_sah_against_build_time(rows: list[dict], path: Path) -> Path | None:
+    """The plot of the rows with status "ok" at `path`; None when there are none."""
+    ok = [r for r in rows if r.get("status") == "ok"]
+    if not ok:
+        return None
+    import matplotlib
+
+    matplotlib.use("Agg")  # files only, no display
+    import matplotlib.pyplot as plt
+
+    scenes = sorted({r["scene"] for r in ok})
+    methods = sorted({r["method"] for r in ok})
+    colours = {m: plt.get_cmap("tab10")(i % 10) for i, m in enumerate(methods)}
+    cols = min(3, len(scenes))
+    fig, axes = plt.subplots(
+        math.ceil(len(scenes) / cols), cols, figsize=(4.5 * cols, 3.6 * math.ceil(len(scenes) / cols)), squeeze=False
+    )
+    for ax, scene in zip(axes.flat, scenes):
+        mine = [r for r in ok if r["scene"] == scene]
+        for method in methods:
+            xs = [r["build_ms"] for r in mine if r["method"] == method]
+            ys = [r["sah_cost"] for r in mine if r["method"] == method]
+            if xs:
+                ax.scatter(xs, ys, s=18, color=colours[method], label=method)
+        front = pareto_front([(r["build_ms"], r["sah_cost"]) for r in mine])
+        ax.plot(*zip(*front), color="0.4", lw=0.8, ls="--", drawstyle="steps-post", label="Pareto front")
+        ax.set(title=scene, xlabel="build time (ms, one thread)", ylabel="SAH cost")
+        times = [r["build_ms"] for r in mine if r["build_ms"] > 0]
+        if times and max(times) > 20 * min(times):  # full sweeps next to LBVH: orders of magnitude apart
+            ax.set_xscale("log")
+        ax.legend(fontsize=7)
+    for ax in list(axes.flat)[len(scenes) :]:
+        ax.set_visible(False)
+    try:
+        fig.tight_layout()
+        with replacing(path) as f:  # whole or not at all
+            fig.savefig(f, format="png", dpi=100)
+    finally:
+        plt.close(fig)
+    return path

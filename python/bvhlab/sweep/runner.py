@@ -1,0 +1,144 @@
+"""Running a sweep's cells: in this process, or as one Dask task each on a `distributed` cluster (a
+LocalCluster of single-threaded worker processes, or a running scheduler). Each finished cell is
+stored at once; cells already stored are not run again; a task that fails after Dask's retries (a
+worker killed) is recorded with its error; Ctrl-C cancels what is left and keeps what finished."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from collections import Counter
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from .cells import Cell, plan_cells
+from .plot import PLOT, plot_sah_against_build_time
+from .spec import SweepSpec
+from .table import store_row, stored_rows, write_table
+from .task import MEASURED, error_row, run_cell
+
+#: Dask's retries of a task that did not return (its worker died); Dask's own allowed-failures
+#: (3 by default) also ends a task that kills every worker it lands on.
+TASK_RETRIES = 1
+
+#: progress(done, failed, total): called once before the first cell and after each.
+Progress = Callable[[int, int, int], None]
+
+
+@dataclass
+class SweepResult:
+    rows: list[dict]  # one per cell of the spec, in its order
+    ran: int  # cells run this time (the others were stored already)
+    failed: int  # cells with status "error" in the table
+    files: list[Path]
+
+
+def run_sweep(
+    spec: SweepSpec,
+    out: Path,
+    *,
+    client=None,
+    retry_failed: bool = False,
+    progress: Progress | None = None,
+    plot: bool = True,
+) -> SweepResult:
+    """Runs the spec's cells not yet stored in `out` (in this process when `client` is None, else
+    as Dask tasks through `client`), then writes the table of all its cells, and their plot unless
+    `plot` is false."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    cells = plan_cells(spec)
+    stored = stored_rows(out, [c.key for c in cells])
+    if retry_failed:
+        stored = {k: r for k, r in stored.items() if r.get("status") == "ok"}
+    todo = [c for c in cells if c.key not in stored]
+    counts = _Counts(len(cells) - len(todo), sum(r.get("status") != "ok" for r in stored.values()), len(cells))
+    say = progress or (lambda done, failed, total: None)
+    say(counts.done, counts.failed, counts.total)
+
+    def finished(row: dict) -> None:
+        store_row(out, row)
+        counts.add(row)
+        say(counts.done, counts.failed, counts.total)
+
+    try:
+        if client is None:
+            for cell in todo:
+                finished({**run_cell(cell), "workers_on_host": 1})
+        else:
+            _run_on_dask(client, todo, finished)
+    finally:  # also after Ctrl-C: the table of what finished
+        result = _write_results(out, cells, len(todo), plot)
+    return result
+
+
+@dataclass
+class _Counts:
+    done: int
+    failed: int
+    total: int
+
+    def add(self, row: dict) -> None:
+        self.done += 1
+        self.failed += row["status"] != "ok"
+
+
+def _run_on_dask(client, todo: list[Cell], finished: Callable[[dict], None]) -> None:
+    from distributed import as_completed
+
+    per_host = Counter(w["host"] for w in client.scheduler_info()["workers"].values())
+    futures = {
+        client.submit(run_cell, cell, key=f"bvhlab-cell-{cell.key}", retries=TASK_RETRIES): cell for cell in todo
+    }
+    try:
+        for future in as_completed(futures):
+            cell = futures[future]
+            try:
+                row = future.result()
+            except Exception as e:  # KilledWorker and the like: the task never returned a row
+                row = error_row(cell, e)
+            host = str(row.get("worker") or "").removeprefix("tcp://").rpartition(":")[0]
+            finished({**row, "workers_on_host": per_host.get(host)})
+            future.release()
+    finally:  # Ctrl-C: nothing left running for this sweep (best effort: the table comes first)
+        with contextlib.suppress(Exception):
+            client.cancel(list(futures))
+
+
+def _write_results(out: Path, cells: list[Cell], ran: int, plot: bool) -> SweepResult:
+    rows_by_key = stored_rows(out, [c.key for c in cells])
+    rows = [rows_by_key[c.key] for c in cells if c.key in rows_by_key]
+    files: list[Path] = []
+    if rows:
+        columns = [*cells[0].columns(), *MEASURED, "workers_on_host"]
+        files.extend(write_table(out, rows, columns))
+        chart = plot_sah_against_build_time(rows, out / PLOT) if plot else None
+        if chart is not None:
+            files.append(chart)
+    return SweepResult(rows, ran, sum(r.get("status") != "ok" for r in rows), files)
+
+
+def local_cluster(workers: int | None = None):
+    """A Dask LocalCluster of `workers` processes (default: one per core), one thread each, so that
+    timings are not disturbed by a neighbour's threads; and a client on it."""
+    import logging
+    import signal
+    import threading
+
+    from distributed import Client, LocalCluster
+
+    n = workers or os.cpu_count() or 1
+    # The workers start with Ctrl-C ignored (a process inherits an ignored signal, and Python then
+    # installs no KeyboardInterrupt handler): Ctrl-C in a terminal reaches the whole process group,
+    # and only this process should act on it, cancelling the tasks and closing the cluster.
+    main = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
+    try:
+        cluster = LocalCluster(
+            n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.ERROR
+        )
+    finally:
+        if main and previous is not None:
+            signal.signal(signal.SIGINT, previous)
+    return cluster, Client(cluster)

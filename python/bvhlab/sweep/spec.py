@@ -1,0 +1,130 @@
+"""A sweep's SPEC.toml: the scenes and the grid of build settings, read and checked before any work.
+
+    scenes = ["gen:knot", "sponza", "models/*.ply", "extra/bunny.obj"]   # names, files, globs
+    [grid]                    # each a value or a list; every combination is one cell
+    method = ["median", "sah"]
+    bins = [12, 32]
+    bin_bounds = "box"
+    axis = "auto"
+    max_leaf_size = [1, 4]
+    sah_block = 1
+    traversal = "wide"        # of the timed intersect (bvhlab.TRAVERSALS)
+    [rays]
+    count = 100000            # fixed random rays per cell
+    seed = 1
+    repeats = 3               # timed passes over them; the table has the median
+
+Settings a grid leaves out keep BuildConfig's defaults. Globs and relative paths are relative to the
+spec's folder; a glob that matches nothing is an error (ValueError naming it)."""
+
+from __future__ import annotations
+
+import glob
+import itertools
+import tomllib
+from dataclasses import dataclass, fields
+from pathlib import Path
+
+from ..bvh import TRAVERSALS, BuildConfig
+from ..library import is_mesh_file
+
+#: The grid's keys: BuildConfig's tree settings (threads is the sweep's: one per worker) and traversal.
+GRID_KEYS = tuple(f.name for f in fields(BuildConfig) if f.compare) + ("traversal",)
+DEFAULT_RAYS, MAX_RAYS = 100_000, 100_000_000
+DEFAULT_REPEATS, MAX_REPEATS = 3, 100
+_SCENE_FILE_SUFFIXES = (".blend", ".npz")
+
+
+@dataclass(frozen=True)
+class Setting:
+    """One point of the grid: the tree's settings and the traversal its rays are timed with."""
+
+    config: BuildConfig
+    traversal: str
+
+    def columns(self) -> dict:
+        return {**self.config.tree_settings(), "traversal": self.traversal}
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    scenes: tuple[str, ...]  # names as given, files and glob matches as paths
+    settings: tuple[Setting, ...]
+    rays: int = DEFAULT_RAYS
+    ray_seed: int = 1
+    repeats: int = DEFAULT_REPEATS
+
+
+def read_spec(path) -> SweepSpec:
+    """The spec at `path`, checked (ValueError naming the file and the problem)."""
+    path = Path(path)
+    try:
+        doc = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as e:
+        raise ValueError(f"{path}: not valid TOML: {e}") from None
+    except UnicodeDecodeError:
+        raise ValueError(f"{path}: not a text file") from None
+    _only(path, "the spec", doc, ("scenes", "grid", "rays"))
+    scenes = _scenes(path, doc.get("scenes"))
+    settings = _grid(path, doc.get("grid", {}))
+    rays = doc.get("rays", {})
+    _only(path, "[rays]", rays, ("count", "seed", "repeats"))
+    count, seed, repeats = rays.get("count", DEFAULT_RAYS), rays.get("seed", 1), rays.get("repeats", DEFAULT_REPEATS)
+    if not _whole(count) or not 1 <= count <= MAX_RAYS:
+        raise ValueError(f"{path}: [rays] count must be a whole number from 1 to {MAX_RAYS}, got {count!r}")
+    if not _whole(seed) or seed < 0:
+        raise ValueError(f"{path}: [rays] seed must be a whole number >= 0, got {seed!r}")
+    if not _whole(repeats) or not 1 <= repeats <= MAX_REPEATS:
+        raise ValueError(f"{path}: [rays] repeats must be a whole number from 1 to {MAX_REPEATS}, got {repeats!r}")
+    return SweepSpec(scenes, settings, count, seed, repeats)
+
+
+def _whole(value) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def _only(path: Path, where: str, table, allowed: tuple[str, ...]) -> None:
+    if not isinstance(table, dict):
+        raise ValueError(f"{path}: {where} must be a table")
+    unknown = sorted(set(table) - set(allowed))
+    if unknown:
+        raise ValueError(f"{path}: unknown key(s) in {where}: {', '.join(unknown)}; expected: {', '.join(allowed)}")
+
+
+def _scenes(path: Path, entries) -> tuple[str, ...]:
+    if isinstance(entries, str):
+        entries = [entries]
+    if not entries or not isinstance(entries, list) or not all(isinstance(e, str) for e in entries):
+        raise ValueError(f"{path}: scenes must be a non-empty list of names, files or globs")
+    out: list[str] = []
+    for entry in entries:
+        if glob.has_magic(entry):
+            matches = sorted(glob.glob(str(path.parent.resolve() / entry), recursive=True))
+            if not matches:
+                raise ValueError(f"{path}: the scene glob '{entry}' matches no file")
+            out.extend(matches)
+        elif is_mesh_file(entry) or entry.endswith(_SCENE_FILE_SUFFIXES):
+            out.append(str(path.parent.resolve() / entry))  # a missing file becomes the cell's error row
+        else:
+            out.append(entry)
+    return tuple(dict.fromkeys(out))  # each scene once, in the order given
+
+
+def _grid(path: Path, grid) -> tuple[Setting, ...]:
+    _only(path, "[grid]", grid, GRID_KEYS)
+    axes = {key: value if isinstance(value, list) else [value] for key, value in grid.items()}
+    for key, values in axes.items():
+        if not values:
+            raise ValueError(f"{path}: [grid] {key} is an empty list")
+    traversals = axes.pop("traversal", ["wide"])
+    settings = []
+    for combination in itertools.product(*axes.values()):
+        try:
+            config = BuildConfig(**dict(zip(axes, combination)))
+        except (TypeError, ValueError) as e:
+            raise ValueError(f"{path}: [grid] {e}") from None
+        for traversal in traversals:
+            if traversal not in TRAVERSALS:
+                raise ValueError(f"{path}: [grid] unknown traversal {traversal!r}; expected: {', '.join(TRAVERSALS)}")
+            settings.append(Setting(config, traversal))
+    return tuple(dict.fromkeys(settings))

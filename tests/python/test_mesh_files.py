@@ -1,0 +1,149 @@
+"""Scenes from OBJ, PLY, STL, glTF and GLB files (bvhlab.library.files, through trimesh): each format
+round-trips a known mesh, and each hostile file gets a clear error naming it."""
+
+import json
+import struct
+
+import numpy as np
+import pytest
+import trimesh
+
+from bvhlab import cli
+from bvhlab._npz import SceneFileError
+from bvhlab.library import load_scene
+from bvhlab.library.files import load_mesh_file
+
+FORMATS = ("obj", "ply", "stl", "gltf", "glb")
+
+
+@pytest.fixture(scope="module")
+def source():
+    """A known mesh: an icosphere moved off the origin and stretched, so its bounds are not symmetric."""
+    mesh = trimesh.creation.icosphere(subdivisions=2)
+    mesh.apply_scale((2.0, 1.0, 0.5))
+    mesh.apply_translation((3.0, -1.0, 7.0))
+    return mesh
+
+
+@pytest.mark.parametrize("kind", FORMATS)
+def test_each_format_round_trips_a_known_mesh(tmp_path, source, kind):
+    path = tmp_path / f"sphere.{kind}"
+    source.export(path)  # trimesh's own writer: independent of the reader's path through bvhlab
+    scene, name = load_scene(str(path))
+    assert name == "sphere"
+    assert len(scene.triangles) == len(source.faces) == 320
+    lo, hi = scene.bounds()
+    np.testing.assert_allclose(lo, source.bounds[0], atol=1e-5)
+    np.testing.assert_allclose(hi, source.bounds[1], atol=1e-5)
+    assert scene.camera is not None  # the default camera frames the mesh
+
+
+def test_obj_written_by_hand_with_a_quad(tmp_path):
+    path = tmp_path / "quad.obj"
+    path.write_text("v 0 0 0\nv 2 0 0\nv 2 3 0\nv 0 3 0\nv 0 0 5\nf 1 2 3 4\nf 1 2 5\n")
+    scene = load_mesh_file(path)
+    assert len(scene.triangles) == 3  # the quad as two triangles, and one triangle
+    lo, hi = scene.bounds()
+    assert lo.tolist() == [0, 0, 0] and hi.tolist() == [2, 3, 5]
+
+
+def test_gltf_scene_graph_places_the_meshes(tmp_path, source):
+    """Two copies of the mesh under nodes with translations: both are placed in world space."""
+    scene = trimesh.Scene()
+    scene.add_geometry(source, node_name="a", transform=trimesh.transformations.translation_matrix((10, 0, 0)))
+    scene.add_geometry(source, node_name="b", transform=trimesh.transformations.translation_matrix((-10, 0, 0)))
+    path = tmp_path / "two.glb"
+    scene.export(path)
+    loaded = load_mesh_file(path)
+    assert len(loaded.triangles) == 2 * len(source.faces)
+    lo, hi = loaded.bounds()
+    np.testing.assert_allclose(lo[0], source.bounds[0][0] - 10, atol=1e-5)
+    np.testing.assert_allclose(hi[0], source.bounds[1][0] + 10, atol=1e-5)
+
+
+def _binary_stl(count: int, triangles: int) -> bytes:
+    return b"\0" * 80 + struct.pack("<I", count) + b"\0" * (50 * triangles)
+
+
+def _ply_header(vertices: int, faces: int, fmt: str = "binary_little_endian") -> bytes:
+    return (
+        f"ply\nformat {fmt} 1.0\nelement vertex {vertices}\nproperty float x\nproperty float y\n"
+        f"property float z\nelement face {faces}\nproperty list uchar int vertex_indices\nend_header\n"
+    ).encode()
+
+
+def _glb_claiming(count: int) -> bytes:
+    """A GLB whose one accessor claims `count` vertices in a 36-byte buffer."""
+    doc = {
+        "asset": {"version": "2.0"},
+        "buffers": [{"byteLength": 36}],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": count, "type": "VEC3"}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "nodes": [{"mesh": 0}],
+        "scenes": [{"nodes": [0]}],
+    }
+    text = json.dumps(doc).encode()
+    text += b" " * (-len(text) % 4)
+    data = np.zeros(9, np.float32).tobytes()
+    chunks = struct.pack("<I4s", len(text), b"JSON") + text + struct.pack("<I4s", len(data), b"BIN\0") + data
+    return struct.pack("<4sII", b"glTF", 2, 12 + len(chunks)) + chunks
+
+
+HOSTILE = {
+    "truncated.ply": _ply_header(3, 1) + b"\0" * 10,
+    "truncated.glb": _glb_claiming(3)[:40],
+    "truncated.stl": _binary_stl(2, 1),
+    "ply_named.stl": _ply_header(3, 1, "ascii") + b"0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+    "text_named.glb": b"this is not a glb file at all\n",
+    "nan.obj": b"v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n",
+    "inf.obj": b"v 0 0 0\nv inf 0 0\nv 0 1 0\nf 1 2 3\n",
+    "huge_coordinate.obj": b"v 0 0 0\nv 1e30 0 0\nv 0 1 0\nf 1 2 3\n",
+    "no_faces.obj": b"v 0 0 0\nv 1 0 0\nv 0 1 0\n",
+    "empty.stl": b"",
+    "points.ply": _ply_header(3, 0, "ascii") + b"0 0 0\n1 0 0\n0 1 0\n",
+    "billions.ply": _ply_header(4_000_000_000, 4_000_000_000) + b"\0" * 64,
+    "billions_ascii.ply": _ply_header(4_000_000_000, 1, "ascii") + b"0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+    "billions.stl": _binary_stl(4_000_000_000, 1),
+    "billions.glb": _glb_claiming(4_000_000_000),
+    "bad_index.obj": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
+}
+
+
+@pytest.mark.parametrize("name", sorted(HOSTILE))
+def test_hostile_file_gets_a_clear_error_naming_it(tmp_path, name):
+    path = tmp_path / name
+    path.write_bytes(HOSTILE[name])
+    with pytest.raises(SceneFileError) as e:
+        load_mesh_file(path)
+    assert str(path) in str(e.value)
+
+
+def test_huge_header_is_refused_before_reading(tmp_path):
+    path = tmp_path / "billions.ply"
+    path.write_bytes(HOSTILE["billions.ply"])
+    with pytest.raises(SceneFileError, match="declares 4000000000 vertex elements"):
+        load_mesh_file(path)
+
+
+def test_folder_with_a_mesh_suffix(tmp_path):
+    (tmp_path / "dir.obj").mkdir()
+    with pytest.raises(SceneFileError, match="is a folder"):
+        load_mesh_file(tmp_path / "dir.obj")
+
+
+def test_missing_file_is_file_not_found(tmp_path):
+    with pytest.raises(FileNotFoundError):
+        load_mesh_file(tmp_path / "missing.stl")
+
+
+def test_cli_builds_a_mesh_file_and_refuses_a_hostile_one(tmp_path, source, capsys):
+    good = tmp_path / "sphere.ply"
+    source.export(good)
+    assert cli.main(["build", str(good), "--method", "median"]) == 0
+    assert "sphere: 320 triangles" in capsys.readouterr().out
+    bad = tmp_path / "nan.obj"
+    bad.write_bytes(HOSTILE["nan.obj"])
+    assert cli.main(["build", str(bad)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("bvhlab build: error:") and str(bad) in err[0]

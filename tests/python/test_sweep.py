@@ -1,0 +1,194 @@
+"""`bvhlab sweep` (issue 37): the spec, the cells' keys, resuming, error rows, Ctrl-C, and the same
+table from a two-worker Dask LocalCluster as from the in-process run."""
+
+import itertools
+import json
+import os
+import signal
+import textwrap
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+import trimesh
+
+from bvhlab import build, cli
+from bvhlab.library import load_scene
+from bvhlab.sweep import local_cluster, plan_cells, read_spec, run_sweep
+from bvhlab.sweep.plot import pareto_front
+from bvhlab.sweep.table import CSV, PARQUET
+from bvhlab.sweep.task import VARYING, fixed_rays
+
+
+def _write_spec(folder, scenes, grid="method = ['median', 'sah']\nmax_leaf_size = [1, 4]", rays=2000):
+    path = folder / "spec.toml"
+    path.write_text(f"scenes = {json.dumps(scenes)}\n[grid]\n{grid}\n[rays]\ncount = {rays}\n")
+    return path
+
+
+@pytest.fixture
+def models(tmp_path):
+    """Two small mesh files and a hostile one (a NaN vertex), beside the spec."""
+    trimesh.creation.icosphere(subdivisions=2).export(tmp_path / "ball.ply")
+    trimesh.creation.box(extents=(1, 2, 3)).export(tmp_path / "box.obj")
+    (tmp_path / "nan.obj").write_text("v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n")
+    return tmp_path
+
+
+def test_spec_grid_is_every_combination(tmp_path, models):
+    spec = read_spec(_write_spec(tmp_path, ["*.ply", "box.obj", "gen:five_spheres"], "method = ['median', 'sah']\n"
+                                 "max_leaf_size = [1, 4]\ntraversal = ['wide', 'stack']"))  # fmt: skip
+    assert [s.rsplit("/", 1)[-1] for s in spec.scenes] == ["ball.ply", "box.obj", "gen:five_spheres"]
+    got = {(s.config.method, s.config.max_leaf_size, s.traversal) for s in spec.settings}
+    assert got == set(itertools.product(["median", "sah"], [1, 4], ["wide", "stack"]))
+    assert len(plan_cells(spec)) == 3 * 8
+
+
+@pytest.mark.parametrize(
+    "grid, message",
+    [
+        ("method = 'nope'", "method"),
+        ("max_leaf_size = 0", "max_leaf_size"),
+        ("colour = 'red'", "unknown key"),
+        ("traversal = 'sideways'", "traversal"),
+        ("bins = []", "empty list"),
+        ("[rays]\nrepeats = 0", "repeats"),
+        ("[rays]\ncount = true", "count"),
+    ],
+)
+def test_bad_grid_is_refused_naming_the_setting(tmp_path, grid, message):
+    path = tmp_path / "spec.toml"
+    path.write_text(f"scenes = ['gen:five_spheres']\n[grid]\n{grid}\n")
+    with pytest.raises(ValueError, match=message):
+        read_spec(path)
+
+
+def test_glob_matching_nothing_is_refused(tmp_path):
+    with pytest.raises(ValueError, match="matches no file"):
+        read_spec(_write_spec(tmp_path, ["*.stl"]))
+
+
+def test_key_changes_with_the_content_and_the_settings(tmp_path, models):
+    spec = read_spec(_write_spec(tmp_path, ["box.obj"]))
+    keys = [c.key for c in plan_cells(spec)]
+    assert len(set(keys)) == len(keys) == 4
+    assert keys == [c.key for c in plan_cells(spec)]  # stable
+    trimesh.creation.box(extents=(1, 2, 4)).export(models / "box.obj")
+    assert not set(keys) & {c.key for c in plan_cells(spec)}
+
+
+def test_in_process_sweep_rows_match_an_independent_build(tmp_path, models):
+    spec = read_spec(_write_spec(tmp_path, ["box.obj", "gen:five_spheres"]))
+    result = run_sweep(spec, tmp_path / "out", plot=False)
+    assert result.ran == len(result.rows) == 8 and result.failed == 0
+    for row in result.rows:
+        scene, _ = load_scene(row["source"])
+        bvh = build(scene, method=row["method"], max_leaf_size=row["max_leaf_size"])
+        assert (row["nodes"], row["height"]) == (bvh.stats["nodes"], bvh.stats["height"])
+        assert row["sah_cost"] == pytest.approx(bvh.stats["sah_cost"])
+        origins, directions = fixed_rays(scene, row["rays"], row["ray_seed"])
+        brute = bvh.intersect(origins, directions, traversal="stack")  # another traversal
+        assert row["hits"] == int(np.isfinite(brute["t"]).sum()) > 0
+        assert row["mrays_per_s"] > 0
+    table = pq.read_table(tmp_path / "out" / PARQUET).to_pylist()
+    assert [r["key"] for r in table] == [r["key"] for r in result.rows]
+    assert len((tmp_path / "out" / CSV).read_text().splitlines()) == 1 + 8
+
+
+def test_second_run_runs_nothing_and_a_bad_scene_is_an_error_row(tmp_path, models):
+    spec = read_spec(_write_spec(tmp_path, ["box.obj", "nan.obj", "missing.stl"]))
+    first = run_sweep(spec, tmp_path / "out", plot=False)
+    assert first.ran == 12 and first.failed == 8
+    errors = {r["scene"]: r["error"] for r in first.rows if r["status"] == "error"}
+    assert "nan.obj" in errors["nan"] and "NaN" in errors["nan"]
+    assert "FileNotFoundError" in errors["missing"]
+    cells = sorted((tmp_path / "out" / "cells").iterdir())
+    stamps = [p.stat().st_mtime_ns for p in cells]
+    second = run_sweep(spec, tmp_path / "out", plot=False)
+    assert second.ran == 0 and second.rows == first.rows
+    assert [p.stat().st_mtime_ns for p in cells] == stamps
+    assert run_sweep(spec, tmp_path / "out", retry_failed=True, plot=False).ran == 8
+
+
+def test_ctrl_c_keeps_the_finished_cells(tmp_path, models):
+    spec = read_spec(_write_spec(tmp_path, ["box.obj", "gen:five_spheres"]))
+
+    def interrupt_after_three(done, failed, total):
+        if done == 3:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(spec, tmp_path / "out", progress=interrupt_after_three, plot=False)
+    assert len(list((tmp_path / "out" / "cells").glob("*.json"))) == 3
+    assert len(pq.read_table(tmp_path / "out" / PARQUET)) == 3  # the table of what finished
+    assert run_sweep(spec, tmp_path / "out", plot=False).ran == 5
+
+
+def _without_varying(rows):
+    return sorted(({k: v for k, v in r.items() if k not in VARYING} for r in rows), key=lambda r: r["key"])
+
+
+@pytest.mark.slow
+def test_two_worker_cluster_gives_the_in_process_table(tmp_path, models):
+    spec = read_spec(_write_spec(tmp_path, ["ball.ply", "box.obj", "nan.obj", "gen:five_spheres"]))
+    alone = run_sweep(spec, tmp_path / "alone", plot=False)
+    cluster, client = local_cluster(2)
+    with cluster, client:
+        distributed = run_sweep(spec, tmp_path / "dask", client=client, plot=False)
+    assert distributed.ran == 16 and distributed.failed == alone.failed == 4
+    assert _without_varying(distributed.rows) == _without_varying(alone.rows)
+    workers = {r["worker"] for r in distributed.rows}
+    assert all(w.startswith("tcp://") for w in workers) and {r["workers_on_host"] for r in distributed.rows} == {2}
+
+
+@pytest.mark.slow
+def test_killing_a_worker_mid_sweep_still_completes(tmp_path, models):
+    spec = read_spec(_write_spec(tmp_path, ["ball.ply", "box.obj"], rays=100_000))
+    cluster, client = local_cluster(2)
+    with cluster, client:
+        pids = sorted(client.run(os.getpid).values())
+        killed = []
+
+        def kill_one_worker(done, failed, total):
+            if done == 1 and not killed:
+                os.kill(pids[0], signal.SIGKILL)
+                killed.append(pids[0])
+
+        result = run_sweep(spec, tmp_path / "out", client=client, progress=kill_one_worker, plot=False)
+    assert killed and result.ran == len(result.rows) == 8
+    assert result.failed == 0, [r["error"] for r in result.rows if r["status"] != "ok"]
+
+
+def test_cli_sweep_in_process_and_a_bad_spec(tmp_path, models, capsys):
+    spec = _write_spec(tmp_path, ["box.obj"])
+    assert cli.main(["sweep", str(spec), "--out", str(tmp_path / "out"), "--workers", "0"]) == 0
+    assert "4 cells (4 run now, 0 stored before), 0 failed" in capsys.readouterr().out
+    assert (tmp_path / "out" / "sah_vs_build.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    bad = tmp_path / "bad.toml"
+    bad.write_text(textwrap.dedent("scenes = ['box.obj']\n[grid]\nmethod = 'nope'\n"))
+    assert cli.main(["sweep", str(bad), "--out", str(tmp_path / "out2"), "--workers", "0"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("bvhlab sweep: error:") and "bad.toml" in err[0]
+
+
+def test_pareto_front_against_brute_force():
+    rng = np.random.default_rng(5)
+    points = [tuple(p) for p in rng.random((40, 2)).round(2)]
+    front = pareto_front(points)
+    beaten = {p for p in points for q in points if q != p and q[0] <= p[0] and q[1] <= p[1] and q != p}
+    assert set(front) == set(points) - beaten
+
+
+@pytest.mark.slow
+def test_cli_sends_the_cells_to_a_running_scheduler(tmp_path, models, capsys):
+    """--scheduler: the tasks go to a cluster the command did not start (here a LocalCluster's
+    scheduler, as `dask scheduler` would be), and its workers' addresses are in the table."""
+    spec = _write_spec(tmp_path, ["box.obj", "nan.obj"])
+    cluster, client = local_cluster(2)
+    with cluster, client:
+        out = tmp_path / "out"
+        assert cli.main(["sweep", str(spec), "--out", str(out), "--scheduler", cluster.scheduler_address]) == 0
+        workers = set(client.scheduler_info()["workers"])
+    assert "8 cells (8 run now, 0 stored before), 4 failed" in capsys.readouterr().out
+    rows = pq.read_table(out / PARQUET).to_pylist()
+    assert {r["worker"] for r in rows} <= workers
