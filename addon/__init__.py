@@ -5,7 +5,7 @@ tracer, export statistics and compare methods (View3D ▸ Sidebar ▸ BVH); and 
 Rendered shading (engine/).
 
 Everything the panel does is an operator (bvhlab.build, bvhlab.render, bvhlab.export_stats,
-bvhlab.compare), so scripts drive the same code as the buttons. The compiled core comes from the
+bvhlab.compare, bvhlab.pick_box), so scripts drive the same code as the buttons. The compiled core comes from the
 bundled bvhlab wheel; registering reads the core's names, defaults and limits from it (~25 ms),
 the rest is imported when an operator runs.
 """
@@ -15,7 +15,7 @@ from __future__ import annotations
 import bpy
 from bpy.app.handlers import persistent
 
-from . import background, engine, overlay, state
+from . import background, engine, ops_inspect, overlay, state
 from .ops_build import BVHLAB_OT_build
 from .ops_compare import BVHLAB_OT_compare
 from .ops_export_stats import BVHLAB_OT_export_stats
@@ -23,6 +23,7 @@ from .ops_render import BVHLAB_OT_render
 from .panels import (
     BVHLAB_PT_compare,
     BVHLAB_PT_export,
+    BVHLAB_PT_inspect,
     BVHLAB_PT_main,
     BVHLAB_PT_object,
     BVHLAB_PT_overlay,
@@ -36,8 +37,10 @@ classes = (
     BVHLAB_OT_render,
     BVHLAB_OT_export_stats,
     BVHLAB_OT_compare,
+    *ops_inspect.classes,
     BVHLAB_PT_main,
     BVHLAB_PT_overlay,
+    BVHLAB_PT_inspect,
     BVHLAB_PT_render,
     BVHLAB_PT_compare,
     BVHLAB_PT_export,

@@ -111,6 +111,17 @@ class BVHLAB_PT_overlay(_BvhPanel, bpy.types.Panel):
         layout.prop(settings, "overlay_line_width")
 
 
+class BVHLAB_PT_inspect(_BvhPanel, bpy.types.Panel):
+    bl_label = "Inspect"
+    bl_parent_id = "BVHLAB_PT_main"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        from .ops_inspect import draw_inspect_panel
+
+        draw_inspect_panel(self.layout, context.scene)
+
+
 class BVHLAB_PT_render(_BvhPanel, bpy.types.Panel):
     bl_label = "Render"
     bl_parent_id = "BVHLAB_PT_main"

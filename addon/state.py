@@ -56,6 +56,15 @@ builds: dict[int, object] = {}
 last_final: dict[int, dict] = {}
 last_viewport: dict[int, dict] = {}
 lock = threading.Lock()
+#: The box picked in the viewport (ops_inspect.py): (the tree's serial when picked, node, how). A
+#: pick of an older tree (rebuilt or refit since) is not shown.
+picked: dict[int, tuple] = {}
+
+
+def picked_node(scene) -> int | None:
+    """The node picked on the scene's current tree, or None."""
+    built, pick = tree_for(scene), picked.get(key(scene))
+    return pick[1] if built is not None and pick is not None and pick[0] == built.serial else None
 
 
 def key(scene) -> int:
@@ -71,6 +80,6 @@ def clear() -> None:
     from .trees import cache
 
     with lock:
-        for table in (trees, comparisons, last_render, messages, builds, last_final, last_viewport):
+        for table in (trees, comparisons, last_render, messages, builds, last_final, last_viewport, picked):
             table.clear()
     cache.clear()

@@ -48,9 +48,10 @@ def _draw_callback() -> None:
     built = state.tree_for(context.scene)
     if built is None or built.serial in _failed or context.region_data is None:
         return
-    if context.space_data.shading.type == "RENDERED" and context.engine == "BVHLAB_WHITTED":
-        return  # the engine traces the boxes into its image, depth-correct (report §3.3)
     try:
+        _draw_picked(context.scene)
+        if context.space_data.shading.type == "RENDERED" and context.engine == "BVHLAB_WHITTED":
+            return  # the engine traces the boxes into its image, depth-correct (report §3.3)
         draw_scene_overlay(context.scene, context.region_data.perspective_matrix)
     except Exception:  # a draw callback must not raise on every redraw; say it once
         import traceback
@@ -58,6 +59,33 @@ def _draw_callback() -> None:
         traceback.print_exc()
         _failed.add(built.serial)
         state.messages[state.key(context.scene)] = ("ERROR", "the BVH overlay failed to draw; see the console")
+
+
+#: The picked box's highlight: white, over everything (it is found by clicking through the others).
+PICKED_COLOR, PICKED_LINE_WIDTH = (1.0, 1.0, 1.0, 1.0), 3.0
+
+
+def _draw_picked(scene) -> None:
+    """The box picked with Pick Box (ops_inspect.py), its 12 edges drawn over the scene."""
+    from ..ops_inspect import picked_box
+
+    box = picked_box(scene)
+    if box is None:
+        return
+    import gpu
+    from gpu_extras.batch import batch_for_shader
+
+    from .batch import CUBE_EDGES
+
+    lo, hi = box
+    corners = lo + CUBE_EDGES * (hi - lo)
+    shader = gpu.shader.from_builtin("UNIFORM_COLOR")
+    batch = batch_for_shader(shader, "LINES", {"pos": corners.tolist()})
+    gpu.state.depth_test_set("NONE")
+    gpu.state.line_width_set(PICKED_LINE_WIDTH)
+    shader.uniform_float("color", PICKED_COLOR)
+    batch.draw(shader)
+    gpu.state.line_width_set(1.0)
 
 
 def add_handler() -> None:

@@ -39,6 +39,7 @@ VULKAN_MODULES = {
 BPY_MODULES = {
     "test_addon", "test_addon_gpu", "test_addon_install", "test_addon_writes", "test_blender_errors",
     "test_blender_export", "test_cameras", "test_docs_pictures", "test_engine", "test_instancing_blender",
+    "test_addon_pick",
 }  # fmt: skip
 #: Tests over about 2 s in a full run here (pytest --durations; 2026-12-02, 2 cores: 125 s in all,
 #: these 12 took 49 s). Matched as the start of the test's node id within its module.

@@ -1,5 +1,7 @@
 """Independent answers the tests compare bvhlab with."""
 
+import math
+
 import numpy as np
 
 
@@ -47,3 +49,34 @@ def brute_force(tris, spheres, origins, dirs):
         best_id = np.where(closer, sid, best_id)
         best_kind = np.where(closer, 1, best_kind)
     return best_t, best_id, best_kind
+
+
+def box_entry(lo, hi, o, d):
+    """One box's slab test for the ray o + t·d, t ≥ 0, written out per axis: the entry distance (0
+    inside), inf on a miss."""
+    t_in, t_out = 0.0, math.inf
+    for a in range(3):
+        if d[a] == 0:
+            if not lo[a] <= o[a] <= hi[a]:
+                return math.inf
+            continue
+        t0, t1 = (lo[a] - o[a]) / d[a], (hi[a] - o[a]) / d[a]
+        t_in, t_out = max(t_in, min(t0, t1)), min(t_out, max(t0, t1))
+    return t_in if t_in <= t_out else math.inf
+
+
+def pick_by_brute_force(data, o, d, t_hit, depths, leaves_only):
+    """The node Pick Box must pick, by a loop over every node (bvhlab.inspect.NodeData): of the
+    boxes in the depth range (leaves only if asked) entered no later than t_hit, the deepest, then
+    the first entered, then the lowest index; None when there is none."""
+    best = None
+    for n in range(len(data)):
+        if not depths[0] <= data.depth[n] <= depths[1] or (leaves_only and data.left[n] >= 0):
+            continue
+        t = box_entry(data.lo[n].astype(float), data.hi[n].astype(float), o, d)
+        if t > t_hit * (1 + 1e-4):  # the box around the hit triangle is entered at t_hit, give or take rounding
+            continue
+        key = (-int(data.depth[n]), t, n)
+        if best is None or key < best:
+            best = key
+    return None if best is None else best[2]

@@ -1,0 +1,199 @@
+"""Inspecting the tree in the viewport (issue 35): click to pick the box under the cursor (the rule
+of bvhlab.inspect.pick: the deepest shown box the mouse ray enters first, or the leaf it hits),
+step to its parent, children or sibling, and frame it. The sidebar's Inspect panel shows the
+picked node's figures (Bvh.node_data)."""
+
+from __future__ import annotations
+
+import bpy
+from bpy.props import EnumProperty, FloatVectorProperty
+
+from . import overlay, state
+from .operator_support import run_reported
+
+
+def _shown_range(scene, built) -> tuple[int, int]:
+    settings = scene.bvhlab
+    return settings.overlay_depth_min, min(settings.overlay_depth_max, built.height - 1)
+
+
+def pick_ray(operator, context, origin, direction) -> set[str]:
+    """Pick with one ray (world space) on the scene's tree and remember it for the panel."""
+    from bvhlab.inspect.pick import pick
+
+    scene = context.scene
+    built = state.tree_for(scene)
+    if built is None:
+        operator.report({"WARNING"}, "Build a tree first (BVH ▸ Build)")
+        return {"CANCELLED"}
+    got = pick(built.bvh, origin, direction, _shown_range(scene, built), leaves_only=scene.bvhlab.overlay_leaves_only)
+    if got.node is None:
+        state.picked.pop(state.key(scene), None)
+        operator.report({"INFO"}, "No box under the cursor")
+    else:
+        state.picked[state.key(scene)] = (built.serial, got.node, got.how)
+        data = built.bvh.node_data()
+        n, what = got.node, "leaf" if data.left[got.node] < 0 else "node"
+        operator.report(
+            {"INFO"},
+            f"Picked {what} {n} (depth {int(data.depth[n])}, {int(data.prim_count[n])} primitives, "
+            f"{100 * data.sah_share[n]:.2f}% of the SAH cost)",
+        )
+    overlay.tag_redraw()
+    return {"FINISHED"}
+
+
+class BVHLAB_OT_pick_box(bpy.types.Operator):
+    """Click in the 3D viewport to pick the box under the cursor; Esc or right-click to stop"""
+
+    bl_idname = "bvhlab.pick_box"
+    bl_label = "Pick Box"
+    bl_options = {"REGISTER"}
+
+    # For scripts: pick with this ray (world space) instead of waiting for a click.
+    origin: FloatVectorProperty(name="Origin", size=3, options={"SKIP_SAVE"})  # type: ignore[valid-type]
+    direction: FloatVectorProperty(name="Direction", size=3, options={"SKIP_SAVE"})  # type: ignore[valid-type]
+
+    def execute(self, context):
+        if not any(self.direction):
+            self.report({"ERROR"}, "give a direction, or click in the viewport (invoke)")
+            return {"CANCELLED"}
+        return run_reported(self, context, lambda: pick_ray(self, context, self.origin, self.direction))
+
+    def invoke(self, context, event):
+        if context.area is None or context.area.type != "VIEW_3D":
+            self.report({"WARNING"}, "Pick Box works in a 3D viewport")
+            return {"CANCELLED"}
+        if state.tree_for(context.scene) is None:
+            self.report({"WARNING"}, "Build a tree first (BVH ▸ Build)")
+            return {"CANCELLED"}
+        context.window_manager.modal_handler_add(self)
+        context.area.header_text_set("Pick Box: click a box · Esc or right-click to stop")
+        return {"RUNNING_MODAL"}
+
+    def modal(self, context, event):
+        if event.type in {"ESC", "RIGHTMOUSE"}:
+            if context.area is not None:
+                context.area.header_text_set(None)
+            return {"FINISHED"}
+        if event.type == "LEFTMOUSE" and event.value == "PRESS":
+            region, view = context.region, context.region_data
+            if region is None or view is None or region.type != "WINDOW":
+                return {"PASS_THROUGH"}
+            from bpy_extras import view3d_utils
+
+            xy = (event.mouse_region_x, event.mouse_region_y)
+            origin = view3d_utils.region_2d_to_origin_3d(region, view, xy)
+            direction = view3d_utils.region_2d_to_vector_3d(region, view, xy)
+            run_reported(self, context, lambda: pick_ray(self, context, origin, direction))
+            return {"RUNNING_MODAL"}
+        return {"PASS_THROUGH"}  # orbit, zoom and the sidebar keep working
+
+
+STEPS = [
+    ("PARENT", "Parent", "The picked node's parent"),
+    ("LEFT", "First Child", "The picked node's first child"),
+    ("RIGHT", "Second Child", "The picked node's second child"),
+    ("SIBLING", "Sibling", "The other child of the picked node's parent"),
+]
+
+
+class BVHLAB_OT_pick_step(bpy.types.Operator):
+    """Pick the picked node's parent, a child or its sibling"""
+
+    bl_idname = "bvhlab.pick_step"
+    bl_label = "Step"
+    bl_options = {"REGISTER"}
+
+    step: EnumProperty(name="Step", items=STEPS)  # type: ignore[valid-type]
+
+    def execute(self, context):
+        scene, built = context.scene, state.tree_for(context.scene)
+        node = state.picked_node(scene)
+        if built is None or node is None:
+            self.report({"WARNING"}, "Pick a box first")
+            return {"CANCELLED"}
+        data = built.bvh.node_data()
+        parent = int(data.parent[node])
+        sibling = -1 if parent < 0 else int(data.right[parent] if data.left[parent] == node else data.left[parent])
+        target = {
+            "PARENT": parent,
+            "LEFT": int(data.left[node]),
+            "RIGHT": int(data.right[node]),
+            "SIBLING": sibling,
+        }[self.step]
+        if target < 0:
+            self.report({"WARNING"}, f"Node {node} has no {self.step.lower()}")
+            return {"CANCELLED"}
+        state.picked[state.key(scene)] = (built.serial, target, "step")
+        overlay.tag_redraw()
+        return {"FINISHED"}
+
+
+class BVHLAB_OT_frame_picked(bpy.types.Operator):
+    """Frame the picked box in the 3D viewports"""
+
+    bl_idname = "bvhlab.frame_picked"
+    bl_label = "Frame This Box"
+    bl_options = {"REGISTER"}
+
+    def execute(self, context):
+        from mathutils import Vector
+
+        built, node = state.tree_for(context.scene), state.picked_node(context.scene)
+        if built is None or node is None:
+            self.report({"WARNING"}, "Pick a box first")
+            return {"CANCELLED"}
+        data = built.bvh.node_data()
+        lo, hi = Vector(data.lo[node].tolist()), Vector(data.hi[node].tolist())
+        framed = 0
+        screen = context.window.screen if context.window else None
+        for area in screen.areas if screen else ():
+            if area.type == "VIEW_3D":
+                view = area.spaces.active.region_3d
+                view.view_location = (lo + hi) / 2
+                view.view_distance = max((hi - lo).length, 1e-6) * 1.2
+                area.tag_redraw()
+                framed += 1
+        if not framed:
+            self.report({"WARNING"}, "No 3D viewport to frame the box in")
+            return {"CANCELLED"}
+        return {"FINISHED"}
+
+
+def picked_box(scene):
+    """(lo, hi) of the picked box, for the overlay's highlight, or None."""
+    built, node = state.tree_for(scene), state.picked_node(scene)
+    if built is None or node is None:
+        return None
+    data = built.bvh.node_data()
+    return data.lo[node], data.hi[node]
+
+
+def draw_inspect_panel(layout, scene) -> None:
+    """The sidebar's Inspect panel body: Pick Box, and the picked node's figures and steps."""
+    layout.operator(BVHLAB_OT_pick_box.bl_idname, icon="RESTRICT_SELECT_OFF")
+    built, node = state.tree_for(scene), state.picked_node(scene)
+    if built is None or node is None:
+        layout.label(text="Click Pick Box, then a box in the viewport", icon="INFO")
+        return
+    data = built.bvh.node_data()
+    leaf = data.left[node] < 0
+    col = layout.column(align=True)
+    col.label(text=f"{'Leaf' if leaf else 'Node'} {node} · depth {int(data.depth[node])}")
+    col.label(text=f"Primitives under it: {int(data.prim_count[node])}")
+    share = f"{100 * data.sah_share[node]:.2f}% of {data.sah_cost:.4g}"
+    col.label(text=f"Subtree SAH: {data.subtree_sah[node]:.4g} ({share})")
+    col.label(text=f"Own SAH term: {data.sah_term[node]:.4g}")
+    if not leaf:
+        col.label(text=f"Child overlap: {data.child_overlap[node]:.3f} of its area")
+    col.label(text=f"EPO term: {data.epo[node]:.4g} (tree {data.epo_cost:.4g})")
+    size = data.hi[node] - data.lo[node]
+    col.label(text="Size: " + " × ".join(f"{v:.3g}" for v in size))
+    row = layout.row(align=True)
+    for step, label, _ in STEPS:
+        row.operator(BVHLAB_OT_pick_step.bl_idname, text=label).step = step
+    layout.operator(BVHLAB_OT_frame_picked.bl_idname, icon="ZOOM_SELECTED")
+
+
+classes = (BVHLAB_OT_pick_box, BVHLAB_OT_pick_step, BVHLAB_OT_frame_picked)

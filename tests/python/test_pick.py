@@ -1,0 +1,67 @@
+"""Picking a box with a ray (bvhlab.inspect.pick) against brute force over the shown boxes: every
+box's entry distance by a plain slab test per node, the same rule written as a loop."""
+
+import numpy as np
+import pytest
+from oracles import box_entry, pick_by_brute_force
+
+import bvhlab
+from bvhlab.inspect.pick import entry_distances, pick
+from bvhlab.library import procedural
+
+
+@pytest.fixture(scope="module")
+def tree():
+    scene = bvhlab.Scene(triangles=procedural.torus_knot(3000))
+    return bvhlab.build(scene, method="sah", max_leaf_size=4)
+
+
+def _rays(count, seed):
+    rng = np.random.default_rng(seed)
+    origins = rng.normal(0, 4, (count, 3))
+    targets = rng.normal(0, 0.6, (count, 3))
+    return origins, targets - origins
+
+
+@pytest.mark.parametrize("depths, leaves_only", [((0, 255), False), ((3, 5), False), ((6, 6), False), ((0, 255), True)])
+def test_pick_is_the_deepest_shown_box_entered_first_before_the_hit(tree, depths, leaves_only):
+    data = tree.node_data()
+    picked_boxes = 0
+    for o, d in zip(*_rays(60, 7)):
+        got = pick(tree, o, d, depths, leaves_only=leaves_only)
+        expected = pick_by_brute_force(data, o, d, got.t_hit, depths, leaves_only)
+        if expected is not None:
+            assert (got.node, got.how) == (expected, "box"), (o, d)
+            picked_boxes += 1
+        else:
+            assert got.how in ("hit leaf", "nothing")
+    assert picked_boxes >= 20, "most rays aim at the knot"
+
+
+def test_a_ray_that_reaches_no_shown_box_picks_the_leaf_it_hits(tree):
+    data = tree.node_data()
+    deepest = int(data.depth.max())
+    for o, d in zip(*_rays(40, 3)):
+        got = pick(tree, o, d, (deepest + 1, deepest + 1))  # a range below every box
+        hit = tree.intersect(np.float32([o]), np.float32([d]), traversal="stack")
+        if np.isinf(hit["t"][0]):
+            assert got.node is None and got.how == "nothing"
+        else:
+            assert got.how == "hit leaf" and data.left[got.node] < 0
+            record = tree.trace_ray(np.float32(o), np.float32(d))
+            assert got.node == record.hit_leaf and record.prim == hit["prim"][0]
+
+
+def test_entry_distances_equal_the_slab_test_of_each_box(tree):
+    data = tree.node_data()
+    o, d = np.array([0.3, -5.0, 0.2]), np.array([0.0, 1.0, 0.05])  # x parallel to the slabs
+    t = entry_distances(data, o, d)
+    expected = [box_entry(data.lo[n].astype(float), data.hi[n].astype(float), o, d) for n in range(len(data))]
+    np.testing.assert_allclose(t, expected, rtol=1e-12)
+    assert np.isfinite(t[0]) and np.isinf(t).any()
+
+
+@pytest.mark.parametrize("o, d", [((0, 0, 0), (0, 0, 0)), ((np.nan, 0, 0), (1, 0, 0)), ((0, 0, 0), (np.inf, 0, 0))])
+def test_bad_rays_are_refused(tree, o, d):
+    with pytest.raises(ValueError, match="pick ray"):
+        pick(tree, o, d)
