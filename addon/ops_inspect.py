@@ -92,8 +92,8 @@ class BVHLAB_OT_pick_box(bpy.types.Operator):
 
 STEPS = [
     ("PARENT", "Parent", "The picked node's parent"),
-    ("LEFT", "First Child", "The picked node's first child"),
-    ("RIGHT", "Second Child", "The picked node's second child"),
+    ("LEFT", "Child 1", "The picked node's first child"),
+    ("RIGHT", "Child 2", "The picked node's second child"),
     ("SIBLING", "Sibling", "The other child of the picked node's parent"),
 ]
 
@@ -175,7 +175,7 @@ def draw_inspect_panel(layout, scene) -> None:
     layout.operator(BVHLAB_OT_pick_box.bl_idname, icon="RESTRICT_SELECT_OFF")
     built, node = state.tree_for(scene), state.picked_node(scene)
     if built is None or node is None:
-        layout.label(text="Click Pick Box, then a box in the viewport", icon="INFO")
+        layout.label(text="Pick Box, then click a box", icon="INFO")
         return
     data = built.bvh.node_data()
     leaf = data.left[node] < 0
@@ -186,7 +186,7 @@ def draw_inspect_panel(layout, scene) -> None:
     col.label(text=f"Subtree SAH: {data.subtree_sah[node]:.4g} ({share})")
     col.label(text=f"Own SAH term: {data.sah_term[node]:.4g}")
     if not leaf:
-        col.label(text=f"Child overlap: {data.child_overlap[node]:.3f} of its area")
+        col.label(text=f"Child overlap: {data.child_overlap[node]:.3f}")
     col.label(text=f"EPO term: {data.epo[node]:.4g} (tree {data.epo_cost:.4g})")
     size = data.hi[node] - data.lo[node]
     col.label(text="Size: " + " × ".join(f"{v:.3g}" for v in size))
