@@ -67,6 +67,12 @@ def answer(request: dict, shots_dir: Path, shots: dict) -> None:
         subprocess.run(
             ["xdotool", "mousemove", str(request["x"]), str(request["y"]), "key", request["key"]], env=env, check=True
         )
+    elif request["action"] == "click":
+        subprocess.run(
+            ["xdotool", "mousemove", str(request["x"]), str(request["y"]), "click", str(request.get("button", 1))],
+            env=env,
+            check=True,
+        )
     elif request["action"] == "scroll":
         keys = (["keydown", "ctrl"], ["keyup", "ctrl"]) if request.get("ctrl") else ([], [])
         subprocess.run(
