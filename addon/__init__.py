@@ -22,6 +22,7 @@ from .ops_export_stats import BVHLAB_OT_export_stats
 from .ops_render import BVHLAB_OT_render
 from .panels import (
     BVHLAB_PT_compare,
+    BVHLAB_PT_cost,
     BVHLAB_PT_export,
     BVHLAB_PT_inspect,
     BVHLAB_PT_main,
@@ -41,6 +42,7 @@ classes = (
     BVHLAB_PT_main,
     BVHLAB_PT_overlay,
     BVHLAB_PT_inspect,
+    BVHLAB_PT_cost,
     BVHLAB_PT_render,
     BVHLAB_PT_compare,
     BVHLAB_PT_export,

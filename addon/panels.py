@@ -122,6 +122,17 @@ class BVHLAB_PT_inspect(_BvhPanel, bpy.types.Panel):
         draw_inspect_panel(self.layout, context.scene)
 
 
+class BVHLAB_PT_cost(_BvhPanel, bpy.types.Panel):
+    bl_label = "Cost per Depth"
+    bl_parent_id = "BVHLAB_PT_inspect"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        from .ops_inspect import draw_cost_panel
+
+        draw_cost_panel(self.layout, context.scene)
+
+
 class BVHLAB_PT_render(_BvhPanel, bpy.types.Panel):
     bl_label = "Render"
     bl_parent_id = "BVHLAB_PT_main"

@@ -202,6 +202,12 @@ class Bvh:
             self._node_data = (d["revision"], NodeData.from_core(d))
         return self._node_data[1]
 
+    def cached_node_data(self) -> NodeData | None:
+        """The node data `node_data()` made for this revision of the tree, or None (never computes:
+        for a panel that must not block Blender while it draws)."""
+        cached = self._node_data
+        return cached[1] if cached is not None and cached[0] == self._core.revision else None
+
     @property
     def revision(self) -> int:
         """0 when built; each refit makes a new version of the tree and adds 1. Arrays taken from an

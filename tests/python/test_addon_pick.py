@@ -100,3 +100,30 @@ def test_a_rebuilt_tree_forgets_the_pick_and_no_tree_is_said(built):
     assert state.picked_node(scene) is None
     with pytest.raises(RuntimeError, match="give a direction"):
         bpy.ops.bvhlab.pick_box()
+
+
+def test_cost_per_depth_and_the_costliest_subtrees(built):
+    """The panel's breakdown adds up to the tree's SAH cost and equals node_data's terms summed per
+    depth; the costliest subtrees at a depth are those a sort of that depth's nodes gives; Pick
+    Node picks one, and a node that does not exist is an error."""
+    import bpy
+
+    scene, state = built
+    assert bpy.ops.bvhlab.build() == {"FINISHED"}
+    tree = state.tree_for(scene)
+    inspect = __import__(harness.addon().__name__ + ".ops_inspect", fromlist=["sah_per_depth"])
+    per_depth = inspect.sah_per_depth(tree)
+    assert tree.bvh.cached_node_data() is None, "the panel's breakdown needs no node data"
+    assert bpy.ops.bvhlab.analyse_tree() == {"FINISHED"}
+    data = tree.bvh.cached_node_data()
+    assert data is not None
+    assert np.isclose(sum(per_depth), tree.bvh.stats["sah_cost"], rtol=1e-9)
+    by_depth = np.bincount(data.depth, weights=data.sah_term)
+    np.testing.assert_allclose(per_depth, by_depth, rtol=1e-9)
+    at = [n for n in range(len(data)) if data.depth[n] == 3]
+    expected = sorted(at, key=lambda n: (-data.subtree_sah[n], n))[: inspect.COSTLIEST]
+    assert data.costliest_at_depth(3, inspect.COSTLIEST).tolist() == expected
+    assert bpy.ops.bvhlab.pick_node(node=expected[0]) == {"FINISHED"}
+    assert state.picked_node(scene) == expected[0]
+    with pytest.raises(RuntimeError, match="does not exist"):
+        bpy.ops.bvhlab.pick_node(node=len(data))

@@ -56,6 +56,13 @@ class NodeData:
                 out[f.name] = v[node].tolist()
         return out
 
+    def costliest_at_depth(self, depth: int, k: int) -> np.ndarray:
+        """The k nodes of one depth whose subtrees cost the most SAH, largest first (ties: the lower
+        index): where a tree at that depth is expensive."""
+        at = np.flatnonzero(self.depth == depth)
+        order = np.lexsort((at, -self.subtree_sah[at]))
+        return at[order[: max(0, int(k))]]
+
     def worst(self, k: int) -> np.ndarray:
         """The k nodes whose subtrees cost the most SAH, largest first (ties: the lower index). A
         subtree costs at least as much as any below it, so the root comes first and a node's
