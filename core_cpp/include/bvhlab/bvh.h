@@ -50,6 +50,11 @@ inline void set_box(BvhNode& n, const Aabb& b) {
 /// Throws std::invalid_argument on bad input, BuildCancelled when the progress callback says stop.
 Bvh build_bvh(const GeometryView& geometry, const BuildConfig& config = {});
 
+/// The same builder over boxes instead of primitives (the TLAS over instances' world boxes,
+/// tlas.h): the leaves' references are box indices 0..count-1, no geometry is packed (prims stays
+/// empty) and the counts of triangles and spheres are 0. Boxes must be non-empty and finite.
+Bvh build_bvh_over_boxes(const Aabb* boxes, std::size_t count, const BuildConfig& config = {});
+
 /// Recomputes every box bottom-up for moved geometry with the same primitive counts, keeping the
 /// topology (report §1: the refitting it names as future work; Bikker). O(nodes).
 void refit(Bvh& bvh, const GeometryView& geometry);
