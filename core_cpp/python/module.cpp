@@ -126,6 +126,7 @@ void py_refit(PyBvh& self, const Triangles& tris, const std::optional<Spheres>& 
 
 void bind_render(nb::module_& m);        // render_bindings.cpp
 void bind_build_config(nb::module_& m);  // build_config_bindings.cpp
+void bind_tlas(nb::module_& m);          // tlas_bindings.cpp
 
 namespace {
 
@@ -229,6 +230,7 @@ NB_MODULE(_core, m) {
     bind_render(m);
     bind_bvh(m);
     bind_build_config(m);
+    bind_tlas(m);
     bind_functions(m);
     bind_build_names(m);
 }

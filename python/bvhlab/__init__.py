@@ -3,6 +3,7 @@ Sandén's report (median, mean, binned SAH) and more (midpoint, full-sweep SAH, 
 
 from ._core import BuildCancelled
 from .bvh import AXES, METHODS, NODE_DTYPE, TRAVERSALS, BuildConfig, Bvh, build
+from .instanced import InstancedBvh
 from .render import (
     RenderCancelled,
     Renderer,
@@ -21,6 +22,7 @@ __version__ = "0.1.0"
 __all__ = [
     "build",
     "Bvh",
+    "InstancedBvh",
     "BuildConfig",
     "BuildCancelled",
     "Scene",

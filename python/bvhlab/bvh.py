@@ -5,10 +5,14 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass, field, fields
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from . import _checks, _core
+
+if TYPE_CHECKING:
+    from .instanced import InstancedBvh
 
 #: Split methods and axis policies as the C++ core names them (its table of methods), and the
 #: defaults and limits of a build: one definition, in core_cpp/include/bvhlab/build_config.h.
@@ -113,7 +117,7 @@ def build(
     config: BuildConfig | None = None,
     progress: Callable[[float], bool | None] | None = None,
     **settings,
-) -> Bvh:
+) -> Bvh | InstancedBvh:
     """Build a BVH over triangles (float32 (T,3,3)) and spheres (float32 (S,4): centre, radius).
 
     `scene_or_triangles` is a `bvhlab.Scene` or a triangle array. The settings are a BuildConfig
@@ -137,13 +141,18 @@ def build(
     by its truth value (None means go on), and a false one cancels the build (BuildCancelled),
     even at 1.0. What the callable raises is raised again, as itself, once the build has stopped.
     Ctrl-C stops a build promptly (KeyboardInterrupt), with or without `progress`.
+
+    A Scene with instances (`Scene.is_instanced`) gets a two-level tree, a `bvhlab.InstancedBvh`:
+    one tree per mesh with these settings, shared by its instances, and a TLAS over the instances.
     """
     from .scene import Scene  # local import: scene imports this module
 
+    instanced = False
     if isinstance(scene_or_triangles, Scene):
         if spheres is not None:
             raise ValueError("pass spheres inside the Scene, not beside it")
         triangles, spheres = scene_or_triangles.triangles, scene_or_triangles.spheres
+        instanced = scene_or_triangles.is_instanced
     else:
         triangles = scene_or_triangles
     triangles = _checks.float32_array("triangles", triangles, (3, 3))
@@ -157,6 +166,10 @@ def build(
         config = config.replace(**settings)
     if progress is not None and not callable(progress):
         raise TypeError("progress must be callable (fraction -> bool) or None")
+    if instanced:
+        from .instanced import build_instanced
+
+        return build_instanced(scene_or_triangles, config, progress)
     return Bvh(_core.build(triangles, spheres, config.core(), progress), config)
 
 

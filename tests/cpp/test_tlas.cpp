@@ -21,9 +21,10 @@ namespace {
 Transform make_transform(Vec3 axis, float angle, Vec3 scale, Vec3 move) {
     axis = normalize(axis);
     const float c = std::cos(angle), s = std::sin(angle), k = 1 - c;
-    const float r[9] = {c + axis.x * axis.x * k,          axis.x * axis.y * k - axis.z * s, axis.x * axis.z * k + axis.y * s,
-                        axis.y * axis.x * k + axis.z * s, c + axis.y * axis.y * k,          axis.y * axis.z * k - axis.x * s,
-                        axis.z * axis.x * k - axis.y * s, axis.z * axis.y * k + axis.x * s, c + axis.z * axis.z * k};
+    const float r[9] = {
+        c + axis.x * axis.x * k,          axis.x * axis.y * k - axis.z * s, axis.x * axis.z * k + axis.y * s,
+        axis.y * axis.x * k + axis.z * s, c + axis.y * axis.y * k,          axis.y * axis.z * k - axis.x * s,
+        axis.z * axis.x * k - axis.y * s, axis.z * axis.y * k + axis.x * s, c + axis.z * axis.z * k};
     Transform t;
     for (int row = 0; row < 3; ++row) {
         t.m[4 * row] = r[3 * row] * scale.x, t.m[4 * row + 1] = r[3 * row + 1] * scale.y;
@@ -74,13 +75,13 @@ Instanced mixed_instances() {
     const float pi = 3.14159265f;
     s.blas_of = {0, 1, 0, 1, 0, 0, 1};
     s.transforms = {
-        Transform{},                                                       // identity
-        make_transform({0, 0, 1}, pi / 5, {1, 1, 1}, {12, 0, 0}),          // rotation + move
-        make_transform({1, 2, 3}, 1.1f, {2.0f, 0.5f, 1.3f}, {-14, 3, 2}),  // non-uniform scale
-        make_transform({1, 0, 0}, 0.3f, {-1, 1, 1}, {0, 14, 0}),           // mirrored
+        Transform{},                                                         // identity
+        make_transform({0, 0, 1}, pi / 5, {1, 1, 1}, {12, 0, 0}),            // rotation + move
+        make_transform({1, 2, 3}, 1.1f, {2.0f, 0.5f, 1.3f}, {-14, 3, 2}),    // non-uniform scale
+        make_transform({1, 0, 0}, 0.3f, {-1, 1, 1}, {0, 14, 0}),             // mirrored
         make_transform({0, 1, 0}, 2.0f, {-0.7f, -1.5f, 2.5f}, {4, -12, 6}),  // mirrored, non-uniform
-        make_transform({1, 1, 0}, 0.7f, {3, 3, 3}, {30, 30, -5}),          // uniform scale
-        make_transform({0, 0, 1}, 0.0f, {1, 1, 1}, {3, 3, 3}),             // overlaps the first ones
+        make_transform({1, 1, 0}, 0.7f, {3, 3, 3}, {30, 30, -5}),            // uniform scale
+        make_transform({0, 0, 1}, 0.0f, {1, 1, 1}, {3, 3, 3}),               // overlaps the first ones
     };
     s.finish();
     return s;
@@ -109,8 +110,8 @@ void expect_same_as_flat(const Instanced& s, Traversal mode, std::uint32_t seed)
     std::uint32_t disagreements = 0, hits = 0;
     const auto rays = rays_at(s, 4000, seed);
     for (const Ray& ray : rays) {
-        const Hit flat = mode == Traversal::Wide ? intersect_wide(s.flat_wide, s.flat_tree, ray)
-                                                 : intersect(s.flat_tree, ray, mode);
+        const Hit flat =
+            mode == Traversal::Wide ? intersect_wide(s.flat_wide, s.flat_tree, ray) : intersect(s.flat_tree, ray, mode);
         const InstanceHit two = intersect_two_level(s.two_level, ray, mode);
         ASSERT_EQ(flat.ref == kNoHit, two.hit.ref == kNoHit && two.instance == kNoHit);
         if (flat.ref == kNoHit) continue;
@@ -153,13 +154,14 @@ TEST(Tlas, BatchReportsInstanceAndPrimitive) {
     const Instanced s = mixed_instances();
     const auto rays = rays_at(s, 3000, 4);
     std::vector<float> o, d, t(rays.size()), u(rays.size()), v(rays.size());
-    for (const Ray& r : rays) o.insert(o.end(), {r.origin.x, r.origin.y, r.origin.z}), d.insert(d.end(), {r.dir.x, r.dir.y, r.dir.z});
+    for (const Ray& r : rays)
+        o.insert(o.end(), {r.origin.x, r.origin.y, r.origin.z}), d.insert(d.end(), {r.dir.x, r.dir.y, r.dir.z});
     std::vector<std::int32_t> prim(rays.size()), instance(rays.size());
     std::vector<std::uint32_t> visited(rays.size());
     for (std::uint32_t threads : {1u, 3u}) {
         intersect_batch_two_level(s.two_level, {o.data(), d.data(), rays.size()},
-                                  {t.data(), prim.data(), nullptr, u.data(), v.data(), visited.data()},
-                                  instance.data(), Traversal::Wide, threads);
+                                  {t.data(), prim.data(), nullptr, u.data(), v.data(), visited.data()}, instance.data(),
+                                  Traversal::Wide, threads);
         for (std::size_t i = 0; i < rays.size(); ++i) {
             const InstanceHit h = intersect_two_level(s.two_level, rays[i], Traversal::Wide);
             ASSERT_EQ(instance[i], h.hit.ref == kNoHit ? -1 : std::int32_t(h.instance));
@@ -248,9 +250,9 @@ void expect_refused(const std::vector<std::uint32_t>& blas_of, const std::vector
 TEST(Tlas, BadInstancesAreRefusedByName) {
     Transform nan, zero_axis, flat_axes, far;
     nan.m[5] = std::nanf("");
-    zero_axis.m[10] = 0.0f;                          // scale z by 0
-    flat_axes.m[1] = 1.0f, flat_axes.m[5] = 1e-9f;   // columns 0 and 1 (nearly) parallel
-    far.m[3] = 0x1p41f;                              // moved beyond the coordinate range
+    zero_axis.m[10] = 0.0f;                         // scale z by 0
+    flat_axes.m[1] = 1.0f, flat_axes.m[5] = 1e-9f;  // columns 0 and 1 (nearly) parallel
+    far.m[3] = 0x1p41f;                             // moved beyond the coordinate range
     expect_refused({0, 3}, {Transform{}, Transform{}}, "instance 1 refers to mesh 3, but the scene has 1 mesh");
     expect_refused({0, 0}, {Transform{}, nan}, "instance 1: the transform has a NaN");
     expect_refused({0}, {zero_axis}, "instance 0: the transform cannot be inverted");

@@ -19,7 +19,7 @@ struct WideBvh;
 struct Instance {
     std::uint32_t blas = 0;
     Transform object_to_world, world_to_object;
-    Aabb world_box;   ///< empty for an instance of an empty BLAS (never in the TLAS)
+    Aabb world_box;        ///< empty for an instance of an empty BLAS (never in the TLAS)
     bool identity = true;  ///< object space is world space: rays are not moved (the one-mesh scene)
 };
 

@@ -40,10 +40,10 @@ Transform inverse(const Transform& t) {
     auto d = [&](int i) { return double(m[i]); };
     const double inv_det = 1.0 / det3(t);
     // The adjugate of the linear part over the determinant, then -A^-1 · translation.
-    double a[9] = {(d(5) * d(10) - d(6) * d(9)) * inv_det,  (d(2) * d(9) - d(1) * d(10)) * inv_det,
-                   (d(1) * d(6) - d(2) * d(5)) * inv_det,   (d(6) * d(8) - d(4) * d(10)) * inv_det,
-                   (d(0) * d(10) - d(2) * d(8)) * inv_det,  (d(2) * d(4) - d(0) * d(6)) * inv_det,
-                   (d(4) * d(9) - d(5) * d(8)) * inv_det,   (d(1) * d(8) - d(0) * d(9)) * inv_det,
+    double a[9] = {(d(5) * d(10) - d(6) * d(9)) * inv_det, (d(2) * d(9) - d(1) * d(10)) * inv_det,
+                   (d(1) * d(6) - d(2) * d(5)) * inv_det,  (d(6) * d(8) - d(4) * d(10)) * inv_det,
+                   (d(0) * d(10) - d(2) * d(8)) * inv_det, (d(2) * d(4) - d(0) * d(6)) * inv_det,
+                   (d(4) * d(9) - d(5) * d(8)) * inv_det,  (d(1) * d(8) - d(0) * d(9)) * inv_det,
                    (d(0) * d(5) - d(1) * d(4)) * inv_det};
     Transform out;
     for (int r = 0; r < 3; ++r) {
