@@ -40,7 +40,8 @@ public:
     /// The query's view of both levels (the wide copies made on first use, once per version).
     TwoLevel view(Traversal mode) const {
         TwoLevel scene{&tlas_, {}};
-        for (const TreePtr& m : meshes_) scene.blases.push_back({&m->bvh, mode == Traversal::Wide ? &m->wide() : nullptr});
+        for (const TreePtr& m : meshes_)
+            scene.blases.push_back({&m->bvh, mode == Traversal::Wide ? &m->wide() : nullptr});
         return scene;
     }
 
@@ -76,8 +77,8 @@ void py_intersect(const PyTwoLevel& self, const Vectors& origins, const Vectors&
                   Out1D<std::int32_t> instance) {
     const std::size_t n = origins.shape(0);
     if (dirs.shape(0) != n) throw std::invalid_argument("origins and directions differ in length");
-    for (std::size_t len : {t.shape(0), prim.shape(0), kind.shape(0), u.shape(0), v.shape(0), visited.shape(0),
-                            instance.shape(0)})
+    for (std::size_t len :
+         {t.shape(0), prim.shape(0), kind.shape(0), u.shape(0), v.shape(0), visited.shape(0), instance.shape(0)})
         if (len != n) throw std::invalid_argument("output arrays must have one entry per ray");
     const Traversal mode = parse_traversal(traversal);
     RayBatch rays{origins.data(), dirs.data(), n, tmin, tmax};
@@ -120,8 +121,11 @@ void bind_tlas(nb::module_& m) {
                 auto* lo = new float[3 * inst.size()];
                 auto* hi = new float[3 * inst.size()];
                 for (std::size_t i = 0; i < inst.size(); ++i)
-                    for (int k = 0; k < 3; ++k) lo[3 * i + k] = inst[i].world_box.lo[k], hi[3 * i + k] = inst[i].world_box.hi[k];
-                auto owned = [](float* p) { return nb::capsule(p, [](void* q) noexcept { delete[] static_cast<float*>(q); }); };
+                    for (int k = 0; k < 3; ++k)
+                        lo[3 * i + k] = inst[i].world_box.lo[k], hi[3 * i + k] = inst[i].world_box.hi[k];
+                auto owned = [](float* p) {
+                    return nb::capsule(p, [](void* q) noexcept { delete[] static_cast<float*>(q); });
+                };
                 return nb::make_tuple(nb::ndarray<nb::numpy, float, nb::ndim<2>>(lo, {inst.size(), 3}, owned(lo)),
                                       nb::ndarray<nb::numpy, float, nb::ndim<2>>(hi, {inst.size(), 3}, owned(hi)));
             },
@@ -130,6 +134,7 @@ void bind_tlas(nb::module_& m) {
              "traversal"_a, "threads"_a, "t"_a.noconvert(), "prim"_a.noconvert(), "kind"_a.noconvert(),
              "u"_a.noconvert(), "v"_a.noconvert(), "visited"_a.noconvert(), "instance"_a.noconvert());
     m.def("build_two_level", &build_two_level, "meshes"_a, "mesh_of"_a.noconvert(), "transforms"_a.noconvert(),
-          "config"_a, "A TLAS over instances (mesh_of[i] placed by transforms[i], 3×4 object-to-world) of the meshes' trees.");
+          "config"_a,
+          "A TLAS over instances (mesh_of[i] placed by transforms[i], 3×4 object-to-world) of the meshes' trees.");
     m.def("default_tlas_config", &default_tlas_config);
 }

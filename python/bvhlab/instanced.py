@@ -22,7 +22,7 @@ class InstancedBvh:
     def __init__(self, meshes: list[Bvh], mesh_of: np.ndarray, transforms: np.ndarray, config: BuildConfig):
         self.meshes = meshes
         self.config = config
-        self._core = _make_tlas(meshes, mesh_of, transforms)
+        self._core = _make_tlas(meshes, mesh_of, transforms, config.threads)
 
     def __repr__(self) -> str:
         s = self.stats
@@ -39,7 +39,7 @@ class InstancedBvh:
 
     def place(self, mesh_of: np.ndarray, transforms: np.ndarray) -> None:
         """Move the instances (or change them): a new TLAS over the same meshes' trees."""
-        self._core = _make_tlas(self.meshes, mesh_of, transforms)
+        self._core = _make_tlas(self.meshes, mesh_of, transforms, self.config.threads)
 
     def world_boxes(self) -> tuple[np.ndarray, np.ndarray]:
         """(lo (N,3), hi (N,3)): each instance's world box, which the TLAS is built over."""
@@ -85,7 +85,8 @@ class InstancedBvh:
         return out
 
 
-def _make_tlas(meshes: list[Bvh], mesh_of, transforms) -> _core.TwoLevel:
+def _make_tlas(meshes: list[Bvh], mesh_of, transforms, threads: int) -> _core.TwoLevel:
+    """The TLAS with the core's TLAS settings (default_tlas_config) on `threads` threads (0: all)."""
     mesh_of = np.asarray(mesh_of)
     if mesh_of.ndim != 1 or not (np.issubdtype(mesh_of.dtype, np.integer) or mesh_of.size == 0):
         raise ValueError(f"mesh indices must be (N,) integers, got shape {mesh_of.shape} dtype {mesh_of.dtype}")
