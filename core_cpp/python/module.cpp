@@ -119,7 +119,7 @@ nb::tuple py_boxes(const PyBvh& self, std::uint32_t depth_min, std::uint32_t dep
 void py_refit(PyBvh& self, const Triangles& tris, const std::optional<Spheres>& spheres) {
     GeometryView g = view_of(tris, spheres);
     nb::gil_scoped_release release;
-    self.update([&](Bvh& tree) { refit(tree, g); });
+    self.replace([&](const Bvh& tree) { return refitted(tree, g, tree.config.threads); });
 }
 
 }  // namespace

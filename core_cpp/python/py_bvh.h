@@ -2,7 +2,8 @@
 //
 // A Python Bvh may be used from several threads at once (intersect on one, refit on another,
 // boxes on a third). Each operation takes the current TreeVersion, a shared_ptr to an immutable
-// tree, and works on that: a refit builds a new version and publishes it, so a reader sees the
+// tree, and works on that: a refit makes a new version from it (the old one untouched, not
+// copied: refitted in bvh.h) and publishes it, so a reader sees the
 // old tree or the new one, never freed or half-written memory. Arrays handed to Python keep
 // their version alive.
 #pragma once
@@ -67,16 +68,14 @@ public:
         std::lock_guard<std::mutex> lock(mutex_);
         return current_;
     }
-    /// Makes a new version with `change` applied to a copy of the current tree and publishes it.
-    /// Changes are serialised (the last call wins, as it would without threads); readers are never
-    /// blocked by them. Call without the GIL.
-    template <class Change>
-    void update(Change&& change) {
+    /// Publishes `make(current tree)`, a new tree made from the current one without copying it
+    /// first (refitted): changes are serialised (the last call wins, as it would without threads);
+    /// readers are never blocked by them. Call without the GIL.
+    template <class Make>
+    void replace(Make&& make) {
         std::lock_guard<std::mutex> writer(writer_mutex_);
         TreePtr old = current();
-        Bvh next = old->bvh;  // copy on write: readers of the old version are not disturbed
-        change(next);
-        auto version = std::make_shared<const TreeVersion>(std::move(next), old->revision + 1);
+        auto version = std::make_shared<const TreeVersion>(make(old->bvh), old->revision + 1);
         std::lock_guard<std::mutex> lock(mutex_);
         current_ = std::move(version);
     }
