@@ -17,6 +17,7 @@ from .render import (
 )
 from .render_options import RenderOptions
 from .scene import Camera, Light, Material, Scene
+from .update import UPDATE_POLICIES, UpdateConfig, UpdateStats
 
 __version__ = "0.1.0"
 __all__ = [
@@ -26,6 +27,9 @@ __all__ = [
     "BuildConfig",
     "BuildCancelled",
     "Scene",
+    "UpdateConfig",
+    "UpdateStats",
+    "UPDATE_POLICIES",
     "Camera",
     "Light",
     "Material",

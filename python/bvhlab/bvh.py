@@ -13,6 +13,7 @@ from . import _checks, _core
 
 if TYPE_CHECKING:
     from .instanced import InstancedBvh
+    from .update import UpdateConfig, UpdateStats
 
 #: Split methods and axis policies as the C++ core names them (its table of methods), and the
 #: defaults and limits of a build: one definition, in core_cpp/include/bvhlab/build_config.h.
@@ -299,6 +300,29 @@ class Bvh:
             out["nodes_visited"],
         )
         return out
+
+    def update(
+        self, triangles: np.ndarray, spheres: np.ndarray | None = None, config: UpdateConfig | None = None, **changes
+    ) -> UpdateStats:
+        """Update the tree for moved geometry (same counts) as `config` says (an UpdateConfig,
+        default adaptive, with any of its fields given by name on top: `update(tris, policy="partial")`).
+        Publishes a new version of the tree, as refit does, and returns what ran (UpdateStats).
+        Costs are compared with the nodes' costs when they were built (this tree as built, or as
+        the last rebuild of each subtree left it)."""
+        from .update import UpdateConfig, UpdateStats
+
+        triangles = _checks.float32_array("triangles", triangles, (3, 3))
+        if spheres is not None:
+            spheres = _checks.float32_array("spheres", spheres, (4,))
+        if config is None:
+            config = UpdateConfig()
+        elif not isinstance(config, UpdateConfig):
+            raise TypeError(f"config must be a bvhlab.UpdateConfig, got {type(config).__name__}")
+        if changes:
+            config = config.replace(**changes)
+        stats = _core.update_bvh(self._core, triangles, spheres, config.core())
+        self._stats = None
+        return UpdateStats(**stats)
 
     def refit(self, triangles: np.ndarray, spheres: np.ndarray | None = None) -> None:
         """Move the geometry (same counts) and recompute every box, keeping the topology."""
