@@ -65,9 +65,10 @@ int main() {
     const double refit_ms = least_ms([&] { Bvh t = refitted(built, frame, 1); });
     const double build_ms = least_ms([&] { Bvh t = build_bvh(frame, config); });
     const double refit_sah = sah_cost(refitted(built, frame, 1)), build_sah = sah_cost(build_bvh(frame, config));
-    std::printf("{\"triangles\": %zu,\n \"bvhlab\": {\"refit_ms\": %.2f, \"build_ms\": %.2f, \"ratio\": %.2f, "
-                "\"refit_sah\": %.2f, \"build_sah\": %.2f}",
-                n, refit_ms, build_ms, build_ms / refit_ms, refit_sah, build_sah);
+    std::printf(
+        "{\"triangles\": %zu,\n \"bvhlab\": {\"refit_ms\": %.2f, \"build_ms\": %.2f, \"ratio\": %.2f, "
+        "\"refit_sah\": %.2f, \"build_sah\": %.2f}",
+        n, refit_ms, build_ms, build_ms / refit_ms, refit_sah, build_sah);
 #ifdef BVHLAB_TINYBVH
     std::vector<tinybvh::bvhvec4> v_rest(3 * n), v_moved(3 * n);
     for (std::size_t i = 0; i < 3 * n; ++i) {

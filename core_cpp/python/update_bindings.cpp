@@ -15,8 +15,7 @@ using namespace bvhlab::python;
 
 namespace {
 
-nb::dict update(PyBvh& self, const Triangles& tris, const std::optional<Spheres>& spheres,
-                const UpdateConfig& config) {
+nb::dict update(PyBvh& self, const Triangles& tris, const std::optional<Spheres>& spheres, const UpdateConfig& config) {
     validate(config);
     const GeometryView g = view_of(tris, spheres);
     UpdateStats stats;
@@ -37,7 +36,8 @@ nb::dict update(PyBvh& self, const Triangles& tris, const std::optional<Spheres>
 }  // namespace
 
 void bind_update(nb::module_& m) {
-    nb::class_<UpdateConfig> c(m, "UpdateConfig", "How a tree is updated for moved geometry (update.h), defaults included.");
+    nb::class_<UpdateConfig> c(m, "UpdateConfig",
+                               "How a tree is updated for moved geometry (update.h), defaults included.");
     c.def(nb::init<>())
         .def_prop_rw(
             "policy", [](const UpdateConfig& self) { return to_string(self.policy); },

@@ -17,7 +17,8 @@ enum class UpdatePolicy {
     Rebuild,   ///< a fresh build with the tree's own settings
     Refit,     ///< boxes only (refitted): the topology stays, its cost may grow
     Partial,   ///< refit, then rebuild each topmost subtree whose cost grew past subtree_growth
-    Adaptive,  ///< refit; a rebuild once the tree's cost passes tree_growth, else partial where needed
+    Adaptive,  ///< refit; a rebuild once the tree's cost passes tree_growth or the subtrees past
+               ///< subtree_growth hold more than half the primitives, else partial where needed
 };
 
 /// The thresholds of an update. Costs are SAH costs of a subtree relative to its own root's area

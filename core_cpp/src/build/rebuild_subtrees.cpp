@@ -78,6 +78,13 @@ std::vector<std::uint32_t> subtrees_past(const Bvh& bvh, const std::vector<float
     return roots;
 }
 
+std::uint64_t primitives_under(const Bvh& bvh, const std::vector<std::uint32_t>& roots) {
+    const std::vector<std::uint32_t> count = primitive_counts(bvh);
+    std::uint64_t sum = 0;
+    for (std::uint32_t root : roots) sum += count[root];
+    return sum;
+}
+
 std::uint64_t rebuild_subtrees(Bvh& tree, std::vector<float>& built, const std::vector<std::uint32_t>& roots,
                                const GeometryView& g) {
     const std::vector<std::uint32_t> count = primitive_counts(tree);

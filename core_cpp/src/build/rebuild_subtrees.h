@@ -13,6 +13,9 @@ namespace bvhlab {
 std::vector<std::uint32_t> subtrees_past(const Bvh& bvh, const std::vector<float>& costs,
                                          const std::vector<float>& built, float growth, std::uint32_t min_primitives);
 
+/// The primitives under the nodes `roots` (none inside another).
+std::uint64_t primitives_under(const Bvh& bvh, const std::vector<std::uint32_t>& roots);
+
 /// `tree` with the subtrees rooted at `roots` (node order, none inside another) each rebuilt over
 /// its own primitives with the tree's settings, spliced in place of the old ones; `built` (one per
 /// node, costs when built) is spliced alike, the rebuilt nodes getting their own. Returns the

@@ -15,14 +15,20 @@ using Clock = std::chrono::steady_clock;
 
 constexpr std::string_view kNames[] = {"rebuild", "refit", "partial", "adaptive"};
 
-/// Refit, then rebuild the subtrees past the threshold (Yoon et al. 2007's selective
-/// restructuring, with the SAH cost ratio as the measure of a subtree gone bad).
-void restructure(Bvh& tree, std::vector<float>& built, const std::vector<float>& costs, const GeometryView& g,
+/// The partial step after a refit: rebuild the subtrees past the threshold (Yoon et al. 2007's
+/// selective restructuring, with the SAH cost ratio as the measure of a subtree gone bad).
+/// Adaptive asks for a full rebuild instead (returns false) when they hold more than half the
+/// primitives: the parts' gathering and splicing then cost more than a rebuild saves (bench/updates.py:
+/// a partial update of most of a 250K-triangle wave took 87-94 ms against 39-65 ms for a rebuild).
+bool restructure(Bvh& tree, std::vector<float>& built, const std::vector<float>& costs, const GeometryView& g,
                  const UpdateConfig& config, UpdateStats& stats) {
     const std::vector<std::uint32_t> roots =
         subtrees_past(tree, costs, built, config.subtree_growth, config.min_subtree_primitives);
+    if (config.policy == UpdatePolicy::Adaptive && 2 * primitives_under(tree, roots) > g.primitive_count())
+        return false;
     stats.primitives_rebuilt = rebuild_subtrees(tree, built, roots, g);
     stats.subtrees_rebuilt = static_cast<std::uint32_t>(roots.size());
+    return true;
 }
 
 }  // namespace
@@ -57,7 +63,8 @@ Bvh update_bvh(const Bvh& old, const std::vector<float>& built, const GeometryVi
     auto rebuild = [&] {
         tree = build_bvh(g, old.config);
         built_out = subtree_costs(tree);
-        stats.policy = UpdatePolicy::Rebuild, stats.subtrees_rebuilt = 1, stats.primitives_rebuilt = g.primitive_count();
+        stats.policy = UpdatePolicy::Rebuild, stats.subtrees_rebuilt = 1,
+        stats.primitives_rebuilt = g.primitive_count();
     };
     if (config.policy == UpdatePolicy::Rebuild) {
         rebuild();
@@ -66,12 +73,12 @@ Bvh update_bvh(const Bvh& old, const std::vector<float>& built, const GeometryVi
         built_out = built;
         if (config.policy != UpdatePolicy::Refit) {
             const std::vector<float> costs = subtree_costs(tree);
-            if (config.policy == UpdatePolicy::Adaptive && !tree.empty() && costs[0] > config.tree_growth * built[0]) {
+            const bool adaptive = config.policy == UpdatePolicy::Adaptive;
+            if ((adaptive && !tree.empty() && costs[0] > config.tree_growth * built[0]) ||
+                !restructure(tree, built_out, costs, g, config, stats)) {
                 rebuild();
-            } else {
-                restructure(tree, built_out, costs, g, config, stats);
-                if (config.policy == UpdatePolicy::Adaptive)
-                    stats.policy = stats.subtrees_rebuilt ? UpdatePolicy::Partial : UpdatePolicy::Refit;
+            } else if (adaptive) {
+                stats.policy = stats.subtrees_rebuilt ? UpdatePolicy::Partial : UpdatePolicy::Refit;
             }
         }
     }
