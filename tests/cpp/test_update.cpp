@@ -53,12 +53,14 @@ std::uint32_t prims_under(const Bvh& bvh, std::uint32_t i) {
 void count_past(const Bvh& refit, const std::vector<float>& built, const UpdateConfig& c, std::uint32_t i,
                 std::uint32_t& roots, std::uint64_t& prims) {
     double ac;
-    if (prims_under(refit, i) >= c.min_subtree_primitives && cost_of(refit, i, ac) > c.subtree_growth * built[i] * (1 + 1e-6)) {
+    if (prims_under(refit, i) >= c.min_subtree_primitives &&
+        cost_of(refit, i, ac) > c.subtree_growth * built[i] * (1 + 1e-6)) {
         ++roots, prims += prims_under(refit, i);
         return;
     }
     const BvhNode& n = refit.nodes[i];
-    if (!is_leaf(n)) count_past(refit, built, c, i + 1, roots, prims), count_past(refit, built, c, n.index, roots, prims);
+    if (!is_leaf(n))
+        count_past(refit, built, c, i + 1, roots, prims), count_past(refit, built, c, n.index, roots, prims);
 }
 
 struct Fixture {
@@ -73,7 +75,8 @@ TEST(Update, SubtreeCostOfTheRootIsTheTreesSahCost) {
     const Fixture f;
     EXPECT_NEAR(f.built[0], sah_cost(f.tree), 1e-4 * sah_cost(f.tree));
     double ac;
-    for (std::uint32_t i : {0u, 1u, 5u, f.tree.nodes[0].index}) EXPECT_NEAR(f.built[i], cost_of(f.tree, i, ac), 1e-4 * f.built[i]);
+    for (std::uint32_t i : {0u, 1u, 5u, f.tree.nodes[0].index})
+        EXPECT_NEAR(f.built[i], cost_of(f.tree, i, ac), 1e-4 * f.built[i]);
 }
 
 TEST(Update, EveryPolicyLeavesAValidTree) {
@@ -112,7 +115,7 @@ TEST(Update, PartialRebuildsExactlyTheSubtreesPastTheThreshold) {
     EXPECT_EQ(stats.subtrees_rebuilt, roots);
     EXPECT_EQ(stats.primitives_rebuilt, prims);
     EXPECT_LT(prims, moved.view().primitive_count());  // not the whole tree
-    EXPECT_LT(stats.sah_cost, sah_cost(refit));          // restructuring helped
+    EXPECT_LT(stats.sah_cost, sah_cost(refit));        // restructuring helped
     check_tree(t, moved.view(), f.tree.config.max_leaf_size);
     // a second update of the same geometry finds nothing past the threshold any more
     std::vector<float> again;

@@ -61,7 +61,7 @@ def test_partial_rebuilds_part_and_lowers_the_cost(knot):
     moved = _moved(knot, 0.5, region=float(np.quantile(knot[:, 0, 0], 0.2)))
     refit, partial = bvhlab.build(knot), bvhlab.build(knot)
     refit.update(moved, policy="refit")
-    stats = partial.update(moved, policy="partial", min_subtree_primitives=64)
+    stats = partial.update(moved, policy="partial", subtree_growth=1.3, min_subtree_primitives=64)
     assert stats.subtrees_rebuilt > 0 and 0 < stats.primitives_rebuilt < len(knot)
     assert stats.sah_cost < refit.stats["sah_cost"]
 
