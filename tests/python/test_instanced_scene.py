@@ -2,6 +2,7 @@
 equal those of one flat tree over the same triangles moved into the world (Scene.flattened), the
 scene file keeps them, and bad instances are refused with clear errors."""
 
+import json
 import math
 
 import numpy as np
@@ -175,3 +176,31 @@ def test_bad_instances_are_refused_by_name(small_scene):
     with pytest.raises(ValueError, match="renderers take flat scenes"):
         scene = bvhlab.Scene(triangles=tris, instance_mesh=[0], instance_transforms=eye)
         bvhlab.render(scene, bvhlab.build(scene.flattened()), 8, 8, backend="cpu")
+
+
+def test_the_cli_builds_and_renders_an_instanced_scene_file(instanced_scene, tmp_path, capsys):
+    from bvhlab.cli import main
+
+    path = instanced_scene.save(tmp_path / "inst.npz")
+    assert main(["build", str(path), "--json", str(tmp_path / "stats.json")]) == 0
+    assert "5 instances of 2 meshes" in capsys.readouterr().out
+    assert json.loads((tmp_path / "stats.json").read_text())["stats"]["instances"] == 5
+    # the renderers walk one level: the CLI renders the flattened scene
+    assert (
+        main(
+            [
+                "render",
+                str(path),
+                "--width",
+                "16",
+                "--height",
+                "12",
+                "--backend",
+                "cpu",
+                "--out",
+                str(tmp_path / "a.png"),
+            ]
+        )
+        == 0
+    )
+    assert (tmp_path / "a.png").stat().st_size > 0
