@@ -15,7 +15,8 @@ namespace bvhlab {
 struct WideBvh;
 
 /// One placement of a mesh: which BLAS, where (object-to-world and its inverse), and the world
-/// box the TLAS is built over (the BLAS root box moved into the world, transform_box).
+/// box the TLAS is built over (the union of the BLAS's top eight boxes moved into the world,
+/// transform_box: tighter than its moved root box where the instance is rotated).
 struct Instance {
     std::uint32_t blas = 0;
     Transform object_to_world, world_to_object;

@@ -2,6 +2,7 @@
 // and what the two-level tree does with it: points, directions and boxes moved between spaces.
 #pragma once
 #include <array>
+#include <cstddef>
 
 #include "bvhlab/aabb.h"
 #include "bvhlab/vec3.h"
@@ -30,12 +31,16 @@ struct Transform {
 /// would be noise: |det| below 1e-6 of the product of its columns' lengths, Hadamard's bound).
 void validate_transform(const Transform& t, const char* what);
 
+/// What validate_transform accepts, without a message.
+bool transform_invertible(const Transform& t);
+
 /// The inverse of a transform that validate_transform accepts (computed in double, rounded once).
 Transform inverse(const Transform& t);
 
-/// A box holding `t` applied to every point of `box` (its eight corners, in double, rounded
-/// outwards by a relative 2^-20 so that float rounding of a transformed vertex stays inside).
-/// An empty box stays empty.
-Aabb transform_box(const Transform& t, const Aabb& box);
+/// A box holding `t` applied to every point of the `count` boxes (Arvo's moved centre and
+/// |M|-weighted half extent, in double, rounded outwards by a relative 2^-20 once, so that float
+/// rounding of a moved vertex stays inside). Empty boxes add nothing; none at all: an empty box.
+Aabb transform_boxes(const Transform& t, const Aabb* boxes, std::size_t count);
+Aabb transform_box(const Transform& t, const Aabb& box);  ///< transform_boxes of one box
 
 }  // namespace bvhlab

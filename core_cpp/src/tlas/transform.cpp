@@ -1,6 +1,7 @@
 // transform.cpp — checks, inverse and boxes of instance transforms (transform.h).
 #include "bvhlab/transform.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -22,17 +23,23 @@ double column_length(const Transform& t, int c) {
 
 }  // namespace
 
+bool transform_invertible(const Transform& t) {
+    for (float x : t.m)
+        if (!std::isfinite(x)) return false;
+    const double det = det3(t);
+    const double bound = column_length(t, 0) * column_length(t, 1) * column_length(t, 2);  // Hadamard: |det| <= bound
+    return std::fabs(det) > 1e-6 * bound && std::isfinite(det);
+}
+
 void validate_transform(const Transform& t, const char* what) {
+    if (transform_invertible(t)) return;
     for (float x : t.m)
         if (!std::isfinite(x))
             throw std::invalid_argument(std::string(what) + ": the transform has a NaN or infinite entry");
-    const double det = det3(t);
-    const double bound = column_length(t, 0) * column_length(t, 1) * column_length(t, 2);  // Hadamard: |det| <= bound
-    if (!(std::fabs(det) > 1e-6 * bound) || !std::isfinite(det))
-        throw std::invalid_argument(std::string(what) +
-                                    ": the transform cannot be inverted (a zero-scale axis, or axes "
-                                    "(nearly) parallel: determinant " +
-                                    std::to_string(det) + ")");
+    throw std::invalid_argument(std::string(what) +
+                                ": the transform cannot be inverted (a zero-scale axis, or axes "
+                                "(nearly) parallel: determinant " +
+                                std::to_string(det3(t)) + ")");
 }
 
 Transform inverse(const Transform& t) {
@@ -54,18 +61,25 @@ Transform inverse(const Transform& t) {
     return out;
 }
 
-Aabb transform_box(const Transform& t, const Aabb& box) {
-    if (box.empty()) return box;
+Aabb transform_boxes(const Transform& t, const Aabb* boxes, std::size_t count) {
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int corner = 0; corner < 8; ++corner) {
-        const double p[3] = {corner & 1 ? box.hi.x : box.lo.x, corner & 2 ? box.hi.y : box.lo.y,
-                             corner & 4 ? box.hi.z : box.lo.z};
+    for (std::size_t k = 0; k < count; ++k) {
+        const Aabb& box = boxes[k];
+        if (box.empty()) continue;
+        // Arvo (Graphics Gems, 1990): the moved centre, and the half extent through |M|
+        const double c[3] = {0.5 * (double(box.lo.x) + box.hi.x), 0.5 * (double(box.lo.y) + box.hi.y),
+                             0.5 * (double(box.lo.z) + box.hi.z)};
+        const double h[3] = {0.5 * (double(box.hi.x) - box.lo.x), 0.5 * (double(box.hi.y) - box.lo.y),
+                             0.5 * (double(box.hi.z) - box.lo.z)};
         for (int r = 0; r < 3; ++r) {
-            const double w = t.m[4 * r] * p[0] + t.m[4 * r + 1] * p[1] + t.m[4 * r + 2] * p[2] + t.m[4 * r + 3];
-            lo[r] = std::min(lo[r], w), hi[r] = std::max(hi[r], w);
+            const double m0 = t.m[4 * r], m1 = t.m[4 * r + 1], m2 = t.m[4 * r + 2];
+            const double centre = m0 * c[0] + m1 * c[1] + m2 * c[2] + t.m[4 * r + 3];
+            const double half = std::fabs(m0) * h[0] + std::fabs(m1) * h[1] + std::fabs(m2) * h[2];
+            lo[r] = std::min(lo[r], centre - half), hi[r] = std::max(hi[r], centre + half);
         }
     }
     Aabb out;
+    if (lo[0] > hi[0]) return out;  // nothing but empty boxes
     for (int r = 0; r < 3; ++r) {
         // Rounded outwards: a vertex moved into the world in float, or a ray moved into the object,
         // lands within a few ulps of its exact place.
@@ -75,5 +89,7 @@ Aabb transform_box(const Transform& t, const Aabb& box) {
     }
     return out;
 }
+
+Aabb transform_box(const Transform& t, const Aabb& box) { return transform_boxes(t, &box, 1); }
 
 }  // namespace bvhlab
