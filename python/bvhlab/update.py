@@ -31,6 +31,8 @@ class UpdateConfig:
     subtree_growth: float = _CORE_DEFAULTS.subtree_growth
     tree_growth: float = _CORE_DEFAULTS.tree_growth
     min_subtree_primitives: int = _CORE_DEFAULTS.min_subtree_primitives
+    #: also build a fresh tree, only to report its SAH cost (UpdateStats.fresh_sah_cost): a build's time
+    measure_fresh: bool = _CORE_DEFAULTS.measure_fresh
 
     def __post_init__(self):
         self.core()
@@ -41,6 +43,9 @@ class UpdateConfig:
         c.subtree_growth = _checks.real("subtree_growth", self.subtree_growth)
         c.tree_growth = _checks.real("tree_growth", self.tree_growth)
         c.min_subtree_primitives = _checks.integer("min_subtree_primitives", self.min_subtree_primitives, 0, 2**32 - 1)
+        if not isinstance(self.measure_fresh, bool):
+            raise TypeError(f"measure_fresh must be True or False, got {type(self.measure_fresh).__name__}")
+        c.measure_fresh = self.measure_fresh
         c.validate()
         return c
 
@@ -51,10 +56,12 @@ class UpdateConfig:
 @dataclass(frozen=True)
 class UpdateStats:
     """What one update did: the policy that ran (adaptive's choice), its wall time, the SAH cost
-    of the updated tree, and the subtrees and primitives rebuilt."""
+    of the updated tree, the subtrees and primitives rebuilt, and (with measure_fresh, else None)
+    the SAH cost of a fresh build over the same geometry."""
 
     policy: str
     ms: float
     sah_cost: float
     subtrees_rebuilt: int
     primitives_rebuilt: int
+    fresh_sah_cost: float | None = None

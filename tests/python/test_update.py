@@ -87,3 +87,12 @@ def test_bad_updates_are_refused(knot):
     with pytest.raises(ValueError, match="triangle 5"):
         tree.update(bad, policy="partial")
     assert tree.revision == 0  # nothing published
+
+
+def test_fresh_sah_is_measured_on_demand(knot):
+    tree = bvhlab.build(knot)
+    moved = _moved(knot, 0.3)
+    assert tree.update(moved, policy="refit").fresh_sah_cost is None
+    stats = tree.update(moved, policy="refit", measure_fresh=True)
+    assert stats.fresh_sah_cost == pytest.approx(bvhlab.build(moved).stats["sah_cost"], rel=1e-6)
+    assert stats.sah_cost >= stats.fresh_sah_cost

@@ -37,6 +37,9 @@ struct UpdateConfig {
     /// partial, adaptive: subtrees of fewer primitives are never rebuilt alone (their rebuilds
     /// gain little and their costs are noisy); their ancestors are.
     std::uint32_t min_subtree_primitives = 256;
+    /// Also build a fresh tree over the geometry, only to report its SAH cost (UpdateStats::
+    /// fresh_sah_cost): on demand, as it costs a build.
+    bool measure_fresh = false;
 };
 
 /// What an update did.
@@ -46,6 +49,7 @@ struct UpdateStats {
     double sah_cost = 0;                        ///< of the updated tree (sah_cost, stats.h)
     std::uint32_t subtrees_rebuilt = 0;         ///< partial: how many; rebuild: 1
     std::uint64_t primitives_rebuilt = 0;       ///< in the rebuilt subtrees
+    double fresh_sah_cost = -1;                 ///< a fresh build's, with UpdateConfig::measure_fresh; else -1
 };
 
 /// Each node's SAH cost relative to its own box: S(n)/A(n) with S(leaf) = A·N and S(inner) =

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "bvhlab/stats.h"
 #include "rebuild_subtrees.h"
 
 namespace bvhlab {
@@ -84,6 +85,10 @@ Bvh update_bvh(const Bvh& old, const std::vector<float>& built, const GeometryVi
     }
     stats.sah_cost = tree.empty() ? 0.0 : subtree_costs(tree)[0];
     stats.ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    if (config.measure_fresh) {  // not part of the update's time
+        const Bvh fresh = stats.policy == UpdatePolicy::Rebuild ? Bvh{} : build_bvh(g, old.config);
+        stats.fresh_sah_cost = stats.policy == UpdatePolicy::Rebuild ? stats.sah_cost : sah_cost(fresh);
+    }
     if (stats_out) *stats_out = stats;
     return tree;
 }
