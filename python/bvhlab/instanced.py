@@ -10,6 +10,7 @@ import numpy as np
 
 from . import _checks, _core
 from .bvh import TRAVERSALS, BuildConfig, Bvh
+from .update import UpdateStats
 
 
 class InstancedBvh:
@@ -17,12 +18,14 @@ class InstancedBvh:
 
     `intersect` walks both levels: rays are moved into each instance's space, t stays in world
     units, and every hit names its instance and its primitive within the instance's mesh.
-    `place` rebuilds only the TLAS, for instances that moved (the meshes' trees are kept)."""
+    `place` rebuilds only the TLAS, for instances that moved (the meshes' trees are kept);
+    `update_mesh` updates one mesh's tree and then the TLAS."""
 
     def __init__(self, meshes: list[Bvh], mesh_of: np.ndarray, transforms: np.ndarray, config: BuildConfig):
         self.meshes = meshes
         self.config = config
         self._core = _make_tlas(meshes, mesh_of, transforms, config.threads)
+        self._placed = (mesh_of, transforms)
 
     def __repr__(self) -> str:
         s = self.stats
@@ -40,6 +43,30 @@ class InstancedBvh:
     def place(self, mesh_of: np.ndarray, transforms: np.ndarray) -> None:
         """Move the instances (or change them): a new TLAS over the same meshes' trees."""
         self._core = _make_tlas(self.meshes, mesh_of, transforms, self.config.threads)
+        self._placed = (mesh_of, transforms)
+
+    def update_mesh(
+        self, k: int, triangles: np.ndarray, spheres: np.ndarray | None = None, config=None, **changes
+    ) -> UpdateStats:
+        """Mesh k moved or changed: with the same counts its tree is updated as `Bvh.update` does
+        (`config`/`changes`: an UpdateConfig), with other counts it is rebuilt; the other meshes'
+        trees are not touched. Then the TLAS is made again over the same instances (their world
+        boxes follow the mesh). Returns what ran on mesh k."""
+        k = _checks.integer("mesh", k, 0, len(self.meshes) - 1)
+        triangles = _checks.float32_array("triangles", triangles, (3, 3))
+        if spheres is not None:
+            spheres = _checks.float32_array("spheres", spheres, (4,))
+        old = self.meshes[k].stats
+        n_spheres = 0 if spheres is None else len(spheres)
+        if len(triangles) == old["triangles"] and n_spheres == old["spheres"]:
+            stats = self.meshes[k].update(triangles, spheres, config, **changes)
+        else:  # another count: a new tree for this mesh alone
+            tree = Bvh(_core.build(triangles, spheres, self.config.core(), None), self.config)
+            s = tree.stats
+            stats = UpdateStats("rebuild", s["build_ms"], s["sah_cost"], 1, s["primitives"])
+            self.meshes[k] = tree
+        self.place(*self._placed)
+        return stats
 
     def world_boxes(self) -> tuple[np.ndarray, np.ndarray]:
         """(lo (N,3), hi (N,3)): each instance's world box, which the TLAS is built over."""

@@ -204,3 +204,27 @@ def test_the_cli_builds_and_renders_an_instanced_scene_file(instanced_scene, tmp
         == 0
     )
     assert (tmp_path / "a.png").stat().st_size > 0
+
+
+def test_update_mesh_touches_only_that_mesh(instanced_scene):
+    tree = bvhlab.build(instanced_scene)
+    cloud_tree = tree.meshes[0]
+    mesh_of, transforms = instanced_scene.instances()
+    knot = instanced_scene.meshes[0]
+    for moved_knot in (knot * np.float32(1.1), np.ascontiguousarray(knot[:500])):
+        stats = tree.update_mesh(1, moved_knot)  # adaptive with the same count; another count: rebuilt
+        assert stats.policy in bvhlab.UPDATE_POLICIES
+        if len(moved_knot) != len(knot):
+            assert stats.policy == "rebuild" and stats.primitives_rebuilt == 500
+        assert tree.meshes[0] is cloud_tree and cloud_tree.revision == 0  # the other mesh untouched
+        ref = bvhlab.Scene(
+            triangles=instanced_scene.triangles,
+            meshes=[moved_knot],
+            instance_mesh=mesh_of,
+            instance_transforms=transforms,
+        )
+        origins, dirs = _rays(ref, 2000, 9)
+        a, b = tree.intersect(origins, dirs), bvhlab.build(ref).intersect(origins, dirs)
+        np.testing.assert_array_equal(a["instance"], b["instance"])
+        np.testing.assert_array_equal(a["prim"], b["prim"])
+        np.testing.assert_array_equal(a["t"], b["t"])
