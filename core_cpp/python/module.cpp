@@ -119,7 +119,10 @@ nb::tuple py_boxes(const PyBvh& self, std::uint32_t depth_min, std::uint32_t dep
 void py_refit(PyBvh& self, const Triangles& tris, const std::optional<Spheres>& spheres) {
     GeometryView g = view_of(tris, spheres);
     nb::gil_scoped_release release;
-    self.update([&](Bvh& tree) { refit(tree, g); });
+    // the topology stays, and with it the costs its nodes had when built (update.h)
+    self.replace([&](const TreeVersion& old) {
+        return std::pair{refitted(old.bvh, g, old.bvh.config.threads), old.built_costs()};
+    });
 }
 
 }  // namespace
@@ -127,6 +130,8 @@ void py_refit(PyBvh& self, const Triangles& tris, const std::optional<Spheres>& 
 void bind_render(nb::module_& m);        // render_bindings.cpp
 void bind_build_config(nb::module_& m);  // build_config_bindings.cpp
 void bind_inspect(nb::module_& m);       // inspect_bindings.cpp (after bind_bvh: it adds to Bvh)
+void bind_tlas(nb::module_& m);          // tlas_bindings.cpp
+void bind_update(nb::module_& m);        // update_bindings.cpp
 
 namespace {
 
@@ -231,6 +236,8 @@ NB_MODULE(_core, m) {
     bind_bvh(m);
     bind_inspect(m);
     bind_build_config(m);
+    bind_tlas(m);
+    bind_update(m);
     bind_functions(m);
     bind_build_names(m);
 }

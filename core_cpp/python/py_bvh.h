@@ -2,7 +2,8 @@
 //
 // A Python Bvh may be used from several threads at once (intersect on one, refit on another,
 // boxes on a third). Each operation takes the current TreeVersion, a shared_ptr to an immutable
-// tree, and works on that: a refit builds a new version and publishes it, so a reader sees the
+// tree, and works on that: a refit makes a new version from it (the old one untouched, not
+// copied: refitted in bvh.h) and publishes it, so a reader sees the
 // old tree or the new one, never freed or half-written memory. Arrays handed to Python keep
 // their version alive.
 #pragma once
@@ -11,12 +12,15 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <utility>
+#include <vector>
 
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 
 #include "bvhlab/bvh.h"
 #include "bvhlab/depth_order.h"
+#include "bvhlab/update.h"
 #include "bvhlab/wide_bvh.h"
 
 namespace bvhlab::python {
@@ -33,13 +37,25 @@ inline GeometryView view_of(const Triangles& tris, const std::optional<Spheres>&
     return g;
 }
 
+using CostsPtr = std::shared_ptr<const std::vector<float>>;
+
 /// One immutable version of a tree, with the views made of it on first use (thread-safe).
 class TreeVersion {
 public:
-    TreeVersion(Bvh tree, std::uint64_t revision) : bvh(std::move(tree)), revision(revision) {}
+    /// `built`: the costs of the tree's nodes when they were built (update.h), carried from the
+    /// version this one was made from; null for a tree as built (taken from it when first asked).
+    TreeVersion(Bvh tree, std::uint64_t revision, CostsPtr built = nullptr)
+        : bvh(std::move(tree)), revision(revision), built_(std::move(built)) {}
 
     const Bvh bvh;
-    const std::uint64_t revision;  ///< 0 when built, +1 per refit
+    const std::uint64_t revision;  ///< 0 when built, +1 per refit or update
+
+    const CostsPtr& built_costs() const {
+        std::call_once(built_once_, [this] {
+            if (!built_) built_ = std::make_shared<const std::vector<float>>(subtree_costs(bvh));
+        });
+        return built_;
+    }
 
     const DepthOrder& order() const {
         std::call_once(order_once_, [this] { order_.emplace(make_depth_order(bvh)); });
@@ -51,7 +67,8 @@ public:
     }
 
 private:
-    mutable std::once_flag order_once_, wide_once_;
+    mutable std::once_flag order_once_, wide_once_, built_once_;
+    mutable CostsPtr built_;
     mutable std::optional<DepthOrder> order_;
     mutable std::optional<WideBvh> wide_;
 };
@@ -67,16 +84,16 @@ public:
         std::lock_guard<std::mutex> lock(mutex_);
         return current_;
     }
-    /// Makes a new version with `change` applied to a copy of the current tree and publishes it.
-    /// Changes are serialised (the last call wins, as it would without threads); readers are never
-    /// blocked by them. Call without the GIL.
-    template <class Change>
-    void update(Change&& change) {
+    /// Publishes the tree and built costs that `make(current version)` returns (a std::pair), made
+    /// from the current one without copying it first (refitted, update_bvh): changes are serialised
+    /// (the last call wins, as it would without threads); readers are never blocked by them. Call
+    /// without the GIL.
+    template <class Make>
+    void replace(Make&& make) {
         std::lock_guard<std::mutex> writer(writer_mutex_);
         TreePtr old = current();
-        Bvh next = old->bvh;  // copy on write: readers of the old version are not disturbed
-        change(next);
-        auto version = std::make_shared<const TreeVersion>(std::move(next), old->revision + 1);
+        auto [tree, built] = make(*old);
+        auto version = std::make_shared<const TreeVersion>(std::move(tree), old->revision + 1, std::move(built));
         std::lock_guard<std::mutex> lock(mutex_);
         current_ = std::move(version);
     }

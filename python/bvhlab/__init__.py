@@ -4,6 +4,7 @@ Sandén's report (median, mean, binned SAH) and more (midpoint, full-sweep SAH, 
 from ._core import BuildCancelled
 from .bvh import AXES, METHODS, NODE_DTYPE, TRAVERSALS, BuildConfig, Bvh, build
 from .inspect.tree_file import load_bvh
+from .instanced import InstancedBvh
 from .render import (
     RenderCancelled,
     Renderer,
@@ -17,15 +18,20 @@ from .render import (
 )
 from .render_options import RenderOptions
 from .scene import Camera, Light, Material, Scene
+from .update import UPDATE_POLICIES, UpdateConfig, UpdateStats
 
 __version__ = "0.1.0"
 __all__ = [
     "build",
     "Bvh",
     "load_bvh",
+    "InstancedBvh",
     "BuildConfig",
     "BuildCancelled",
     "Scene",
+    "UpdateConfig",
+    "UpdateStats",
+    "UPDATE_POLICIES",
     "Camera",
     "Light",
     "Material",

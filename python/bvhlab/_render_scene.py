@@ -25,6 +25,8 @@ class SceneCache:
         self._scene = None
 
     def get(self, scene, bvh) -> _core.RenderScene:
+        if scene.is_instanced:  # the tracer walks one level (issue 34 leaves the two-level tracer to come)
+            raise ValueError("the renderers take flat scenes: render scene.flattened() with a tree built over it")
         tree = bvh._core
         fingerprint = _core.geometry_fingerprint(scene.triangles, scene.spheres)
         key = (

@@ -5,11 +5,16 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass, field, fields
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from . import _checks, _core
 from .inspect.node_data import NodeData
+
+if TYPE_CHECKING:
+    from .instanced import InstancedBvh
+    from .update import UpdateConfig, UpdateStats
 
 #: Split methods and axis policies as the C++ core names them (its table of methods), and the
 #: defaults and limits of a build: one definition, in core_cpp/include/bvhlab/build_config.h.
@@ -114,7 +119,7 @@ def build(
     config: BuildConfig | None = None,
     progress: Callable[[float], bool | None] | None = None,
     **settings,
-) -> Bvh:
+) -> Bvh | InstancedBvh:
     """Build a BVH over triangles (float32 (T,3,3)) and spheres (float32 (S,4): centre, radius).
 
     `scene_or_triangles` is a `bvhlab.Scene` or a triangle array. The settings are a BuildConfig
@@ -138,13 +143,18 @@ def build(
     by its truth value (None means go on), and a false one cancels the build (BuildCancelled),
     even at 1.0. What the callable raises is raised again, as itself, once the build has stopped.
     Ctrl-C stops a build promptly (KeyboardInterrupt), with or without `progress`.
+
+    A Scene with instances (`Scene.is_instanced`) gets a two-level tree, a `bvhlab.InstancedBvh`:
+    one tree per mesh with these settings, shared by its instances, and a TLAS over the instances.
     """
     from .scene import Scene  # local import: scene imports this module
 
+    instanced = False
     if isinstance(scene_or_triangles, Scene):
         if spheres is not None:
             raise ValueError("pass spheres inside the Scene, not beside it")
         triangles, spheres = scene_or_triangles.triangles, scene_or_triangles.spheres
+        instanced = scene_or_triangles.is_instanced
     else:
         triangles = scene_or_triangles
     triangles = _checks.float32_array("triangles", triangles, (3, 3))
@@ -158,6 +168,10 @@ def build(
         config = config.replace(**settings)
     if progress is not None and not callable(progress):
         raise TypeError("progress must be callable (fraction -> bool) or None")
+    if instanced:
+        from .instanced import build_instanced
+
+        return build_instanced(scene_or_triangles, config, progress)
     return Bvh(_core.build(triangles, spheres, config.core(), progress), config)
 
 
@@ -322,6 +336,29 @@ class Bvh:
         from .inspect.ray_record import record
 
         return record(self._core, origin, direction, tmin, tmax, traversal)
+
+    def update(
+        self, triangles: np.ndarray, spheres: np.ndarray | None = None, config: UpdateConfig | None = None, **changes
+    ) -> UpdateStats:
+        """Update the tree for moved geometry (same counts) as `config` says (an UpdateConfig,
+        default adaptive, with any of its fields given by name on top: `update(tris, policy="partial")`).
+        Publishes a new version of the tree, as refit does, and returns what ran (UpdateStats).
+        Costs are compared with the nodes' costs when they were built (this tree as built, or as
+        the last rebuild of each subtree left it)."""
+        from .update import UpdateConfig, UpdateStats
+
+        triangles = _checks.float32_array("triangles", triangles, (3, 3))
+        if spheres is not None:
+            spheres = _checks.float32_array("spheres", spheres, (4,))
+        if config is None:
+            config = UpdateConfig()
+        elif not isinstance(config, UpdateConfig):
+            raise TypeError(f"config must be a bvhlab.UpdateConfig, got {type(config).__name__}")
+        if changes:
+            config = config.replace(**changes)
+        stats = _core.update_bvh(self._core, triangles, spheres, config.core())
+        self._stats = None
+        return UpdateStats(**stats)
 
     def refit(self, triangles: np.ndarray, spheres: np.ndarray | None = None) -> None:
         """Move the geometry (same counts) and recompute every box, keeping the topology."""

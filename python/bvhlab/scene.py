@@ -12,7 +12,10 @@ import numpy as np
 from . import _checks, _core, defaults
 from ._npz import MAX_EXPANSION, Member, SceneFileError, read_npz, write_npz
 
-FORMAT_VERSION = 1
+#: Written by Scene.save; 2 added meshes and instances (issue 34). Files of every version listed in
+#: READ_FORMAT_VERSIONS load.
+FORMAT_VERSION = 2
+READ_FORMAT_VERSIONS = (1, 2)
 #: Points (vertices, sphere extents, ray origins, the camera) lie within ±MAX_COORDINATE, where
 #: bvhlab's float32 ray tests cannot overflow (core_cpp/include/bvhlab/coordinate_range.h says why).
 MAX_COORDINATE = float(_core.MAX_COORDINATE)
@@ -295,6 +298,14 @@ class Scene:
     camera: Camera | None = None
     light: Light | None = None
     sky: tuple[float, float, float] = DEFAULT_SKY
+    # Instancing (issue 34; bvhlab.instanced). The scene's own triangles and spheres are mesh 0;
+    # `meshes` adds meshes 1, 2, ... (float32 (T,3,3) triangle arrays, material 0). Instance i places
+    # mesh instance_mesh[i] by instance_transforms[i] (float32 (3,4), object to world, row-major).
+    # Without instances every mesh is placed once where it was modelled: Scene(triangles=...) is
+    # one mesh and one identity instance, the flat scene of before.
+    meshes: list[np.ndarray] = field(default_factory=list)
+    instance_mesh: np.ndarray | None = None
+    instance_transforms: np.ndarray | None = None
 
     def __setattr__(self, name, value):
         # Every field is checked when it is set, in the constructor and after it, so a scene never
@@ -303,7 +314,7 @@ class Scene:
         object.__setattr__(self, name, check(self, value) if check else value)
 
     def __post_init__(self):
-        if self.camera is None and self.primitive_count:
+        if self.camera is None and (self.primitive_count or any(len(m) for m in self.meshes)):
             self.camera = default_camera(self.bounds())
         if self.light is None and self.camera is not None:
             self.light = default_light(self.camera)
@@ -322,22 +333,110 @@ class Scene:
 
     @property
     def primitive_count(self) -> int:
+        """Primitives of the scene's own geometry (mesh 0)."""
         return len(self.triangles) + len(self.spheres)
 
-    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """(lo, hi) of all primitives; raises ValueError for an empty scene."""
-        if not self.primitive_count:
-            raise ValueError("the scene has no geometry")
+    # -- instancing ----------------------------------------------------------------------------
+    @property
+    def is_instanced(self) -> bool:
+        """True when the scene has meshes besides its own or instances given: bvhlab.build then
+        makes a two-level tree (bvhlab.InstancedBvh)."""
+        return bool(self.meshes) or self.instance_mesh is not None or self.instance_transforms is not None
+
+    @property
+    def mesh_count(self) -> int:
+        return 1 + len(self.meshes)
+
+    def mesh_triangles(self, k: int) -> np.ndarray:
+        """The triangles of mesh k (0: the scene's own)."""
+        return self.triangles if k == 0 else self.meshes[k - 1]
+
+    def instances(self) -> tuple[np.ndarray, np.ndarray]:
+        """(mesh index int32 (N,), object-to-world float32 (N,3,4)): the instances given, checked
+        against each other and the meshes (ValueError naming the instance), or every mesh once
+        where it was modelled."""
+        if self.instance_mesh is None and self.instance_transforms is None:
+            n = self.mesh_count
+            return np.arange(n, dtype=np.int32), np.ascontiguousarray(np.tile(_IDENTITY, (n, 1, 1)))
+        if self.instance_mesh is None or self.instance_transforms is None:
+            raise ValueError("instance_mesh and instance_transforms are given together (one each per instance)")
+        mesh, transforms = self.instance_mesh, self.instance_transforms
+        if len(mesh) != len(transforms):
+            raise ValueError(f"{len(mesh)} instance meshes but {len(transforms)} instance transforms")
+        bad = np.flatnonzero((mesh < 0) | (mesh >= self.mesh_count))
+        if len(bad):
+            raise ValueError(
+                f"instance {bad[0]} refers to mesh {mesh[bad[0]]}, but the scene has {self.mesh_count} "
+                f"mesh{'es' if self.mesh_count != 1 else ''}"
+            )
+        return mesh, transforms
+
+    def flattened(self) -> Scene:
+        """The same geometry as one flat mesh: every instance's triangles moved into the world (the
+        flat scene that a two-level tree must agree with). Spheres of mesh 0 move with its
+        instances, which must then keep them spheres (rotation, uniform scale, translation)."""
+        if not self.is_instanced:
+            return self
+        mesh_of, transforms = self.instances()
+        tris, tri_mat, spheres, sphere_mat = [], [], [], []
+        for k, t in zip(mesh_of, transforms.astype(np.float64)):
+            src = self.mesh_triangles(int(k)).astype(np.float64)
+            tris.append((src @ t[:, :3].T + t[:, 3]).astype(np.float32))
+            tri_mat.append(self.tri_material if k == 0 else np.zeros(len(src), np.int32))
+            if k == 0 and len(self.spheres):
+                spheres.append(_moved_spheres(self.spheres, t))
+                sphere_mat.append(self.sphere_material)
+        return Scene(
+            triangles=np.ascontiguousarray(np.concatenate(tris or [np.zeros((0, 3, 3), np.float32)])),
+            spheres=np.ascontiguousarray(np.concatenate(spheres or [np.zeros((0, 4), np.float32)])),
+            materials=list(self.materials),
+            tri_material=np.concatenate(tri_mat or [np.zeros(0, np.int32)]),
+            sphere_material=np.concatenate(sphere_mat or [np.zeros(0, np.int32)]),
+            camera=self.camera,
+            light=self.light,
+            sky=self.sky,
+        )
+
+    def _mesh_bounds(self, k: int) -> tuple[np.ndarray, np.ndarray] | None:
         parts_lo, parts_hi = [], []
-        if len(self.triangles):
-            points = self.triangles.reshape(-1, 3)
+        tris = self.mesh_triangles(k)
+        if len(tris):
+            points = tris.reshape(-1, 3)
             # one column at a time: numpy reduces contiguous columns several times faster
-            parts_lo.append(np.array([points[:, k].min() for k in range(3)]))
-            parts_hi.append(np.array([points[:, k].max() for k in range(3)]))
-        if len(self.spheres):
+            parts_lo.append(np.array([points[:, c].min() for c in range(3)]))
+            parts_hi.append(np.array([points[:, c].max() for c in range(3)]))
+        if k == 0 and len(self.spheres):
             parts_lo.append((self.spheres[:, :3] - self.spheres[:, 3:]).min(0))
             parts_hi.append((self.spheres[:, :3] + self.spheres[:, 3:]).max(0))
+        if not parts_lo:
+            return None
         return np.min(parts_lo, 0), np.max(parts_hi, 0)
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """(lo, hi) of all primitives (of every instance, in the world); raises ValueError for an
+        empty scene."""
+        if self.is_instanced:
+            return self._instanced_bounds()
+        box = self._mesh_bounds(0)
+        if box is None:
+            raise ValueError("the scene has no geometry")
+        return box
+
+    def _instanced_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        mesh_of, transforms = self.instances()
+        boxes = [self._mesh_bounds(k) for k in range(self.mesh_count)]
+        corners_lo, corners_hi = [], []
+        for k, t in zip(mesh_of, transforms.astype(np.float64)):
+            box = boxes[int(k)]
+            if box is None:
+                continue
+            corners = np.array([[box[(c >> a) & 1][a] for a in range(3)] for c in range(8)])
+            world = corners @ t[:, :3].T + t[:, 3]
+            corners_lo.append(world.min(0))
+            corners_hi.append(world.max(0))
+        if not corners_lo:
+            raise ValueError("the scene has no geometry")
+        return np.min(corners_lo, 0), np.max(corners_hi, 0)
 
     def material_table(self) -> np.ndarray:
         """float32 (M, 6): r, g, b, reflective, transparent, ior."""
@@ -358,6 +457,11 @@ class Scene:
             "sphere_material": self.sphere_material,
             "sky": np.array(self.sky, np.float64),
         }
+        if self.meshes:
+            arrays["mesh_triangles"] = np.concatenate(self.meshes)
+            arrays["mesh_triangle_counts"] = np.array([len(m) for m in self.meshes], np.int64)
+        if self.instance_mesh is not None or self.instance_transforms is not None:
+            arrays["instance_mesh"], arrays["instance_transforms"] = self.instances()
         if self.camera is not None:
             arrays["camera"] = np.array(self.camera.as_row(), np.float64)
         if self.light is not None:
@@ -376,14 +480,14 @@ class Scene:
         f = read_npz(
             path,
             _FILE_MEMBERS,
-            optional=("camera", "light"),
+            optional=("camera", "light", *_INSTANCING_MEMBERS),
             max_expansion=max_expansion,
             same_length=(("triangles", "tri_material"), ("spheres", "sphere_material")),
         )
-        if int(f["format_version"]) != FORMAT_VERSION:
+        if int(f["format_version"]) not in READ_FORMAT_VERSIONS:
             raise SceneFileError(
                 f"{path} is a bvhlab scene of format {int(f['format_version'])}; "
-                f"this version reads format {FORMAT_VERSION}"
+                f"this version reads formats {', '.join(map(str, READ_FORMAT_VERSIONS))}"
             )
         try:
             cam, light = f.get("camera"), f.get("light")
@@ -396,6 +500,7 @@ class Scene:
                 camera=Camera.from_row(cam) if cam is not None else None,
                 light=Light(_row3(light, 0), _row3(light, 3), float(light[6])) if light is not None else None,
                 sky=tuple(f["sky"]),
+                **_instancing_fields(f),
             )
         except (ValueError, TypeError) as e:
             raise SceneFileError(f"{path}: {e}") from None
@@ -412,7 +517,47 @@ _FILE_MEMBERS = {
     "sky": Member("f", (3,)),
     "camera": Member("f", (None,)),  # 10 numbers, or 10 + LENS_ROW (Camera.from_row)
     "light": Member("f", (7,)),
+    # format 2: meshes 1.. concatenated with their counts, and the instances (Scene.instances)
+    "mesh_triangles": Member("f", (None, 3, 3)),
+    "mesh_triangle_counts": Member("iu", (None,)),
+    "instance_mesh": Member("iu", (None,)),
+    "instance_transforms": Member("f", (None, 3, 4)),
 }
+_INSTANCING_MEMBERS = ("mesh_triangles", "mesh_triangle_counts", "instance_mesh", "instance_transforms")
+_IDENTITY = np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]], np.float32)
+
+
+def _instancing_fields(f: dict) -> dict:
+    """Scene keyword fields of a file's instancing members (none in a format 1 file)."""
+    out: dict = {}
+    if ("mesh_triangles" in f) != ("mesh_triangle_counts" in f):
+        raise ValueError("mesh_triangles and mesh_triangle_counts are stored together")
+    if "mesh_triangles" in f:
+        counts = np.asarray(f["mesh_triangle_counts"], np.int64)
+        if np.any(counts < 0) or counts.sum() != len(f["mesh_triangles"]):
+            raise ValueError(
+                f"mesh_triangle_counts {counts.tolist()} do not add up to the {len(f['mesh_triangles'])} mesh triangles"
+            )
+        tris = np.asarray(f["mesh_triangles"], np.float32)
+        out["meshes"] = [np.ascontiguousarray(m) for m in np.split(tris, np.cumsum(counts)[:-1])]
+    if ("instance_mesh" in f) != ("instance_transforms" in f):
+        raise ValueError("instance_mesh and instance_transforms are stored together")
+    if "instance_mesh" in f:
+        out["instance_mesh"] = f["instance_mesh"]
+        out["instance_transforms"] = np.ascontiguousarray(f["instance_transforms"], np.float32)
+    return out
+
+
+def _moved_spheres(spheres: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Spheres under a transform that keeps them spheres (its linear part a scaled rotation)."""
+    a = t[:, :3]
+    gram = a.T @ a
+    scale2 = gram[0, 0]
+    if not np.allclose(gram, scale2 * np.eye(3), rtol=1e-5, atol=1e-6 * max(scale2, 1e-30)):
+        raise ValueError("an instance of mesh 0 with spheres must keep them spheres (rotation, uniform scale)")
+    centres = spheres[:, :3].astype(np.float64) @ a.T + t[:, 3]
+    radii = spheres[:, 3:].astype(np.float64) * np.sqrt(scale2)
+    return np.concatenate([centres, radii], 1).astype(np.float32)
 
 
 def _triangles(scene: Scene, value) -> np.ndarray:
@@ -424,6 +569,39 @@ def _triangles(scene: Scene, value) -> np.ndarray:
 def _spheres(scene: Scene, value) -> np.ndarray:
     value = _checks.float32_array("spheres", value, (4,))
     _core.validate_geometry(np.zeros((0, 3, 3), np.float32), value)
+    return value
+
+
+def _meshes(value) -> list[np.ndarray]:
+    if isinstance(value, np.ndarray) or not isinstance(value, (list, tuple)):
+        raise TypeError(f"meshes must be a list of float32 (T,3,3) triangle arrays, got {type(value).__name__}")
+    out = []
+    for k, m in enumerate(value, start=1):
+        m = _checks.float32_array(f"mesh {k}", m, (3, 3))
+        try:
+            _core.validate_geometry(m, None)
+        except ValueError as e:
+            raise ValueError(f"mesh {k}: {e}") from None
+        out.append(m)
+    return out
+
+
+def _instance_mesh(value) -> np.ndarray | None:
+    if value is None:
+        return None
+    value = np.asarray(value)
+    if value.ndim != 1 or not (np.issubdtype(value.dtype, np.integer) or value.size == 0):
+        raise ValueError(f"instance_mesh must be (N,) integers, got shape {value.shape} dtype {value.dtype}")
+    return np.ascontiguousarray(value, np.int32)
+
+
+def _instance_transforms(value) -> np.ndarray | None:
+    if value is None:
+        return None
+    value = _checks.float32_array("instance_transforms", value, (3, 4))
+    bad = np.flatnonzero(~np.isfinite(value).reshape(len(value), -1).all(1))
+    if len(bad):
+        raise ValueError(f"instance {bad[0]}: the transform has a NaN or infinite entry")
     return value
 
 
@@ -456,6 +634,9 @@ _FIELD_CHECKS = {
     "camera": _instance_of(Camera, "camera"),
     "light": _instance_of(Light, "light"),
     "sky": lambda scene, v: _vec3("sky", v),
+    "meshes": lambda scene, v: _meshes(v),
+    "instance_mesh": lambda scene, v: _instance_mesh(v),
+    "instance_transforms": lambda scene, v: _instance_transforms(v),
 }
 
 

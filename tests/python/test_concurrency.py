@@ -1,5 +1,5 @@
 """Several Python threads at once on the core (issue 8, "keep it so"): builds (with progress
-callables, some cancelling), intersect, refit and boxes on a shared tree, for a few seconds; no
+callables, some cancelling), intersect, refit, update and boxes on shared trees, for a few seconds; no
 crash, and every result equal to the serial one. It runs in a child process, so a crash fails the
 test instead of the test run. Each workload is a function in WORKLOADS: add one to cover more."""
 
@@ -29,6 +29,7 @@ CHILD = """
     refitted.refit(moved, spheres)
     boxes["b"] = refitted.boxes(0, 7)
     shared = bvhlab.build(tris, spheres, method="sah")
+    updated = bvhlab.build(tris, spheres, method="sah")  # updated by every policy meanwhile
     failures, counts = [], {}
     stop_at = time.monotonic() + DURATION
 
@@ -77,13 +78,27 @@ CHILD = """
             k += 1
         counts["refit"] = k
 
+    def updates(k):  # issue 34: each policy publishes a whole new version; readers keep theirs
+        while time.monotonic() < stop_at:
+            updated.update(moved if k % 2 == 0 else tris, spheres, policy=bvhlab.UPDATE_POLICIES[k % 4])
+            k += 1
+        counts["update"] = k
+
+    def updated_intersect(k):  # any valid tree over the same geometry gives the same hits
+        while time.monotonic() < stop_at:
+            h = updated.intersect(o, d, traversal=("wide", "stack", "stackless")[k % 3])
+            if not (same_hits(h, "a") or same_hits(h, "b")):
+                fail("intersect on the updated tree gave hits of neither geometry")
+            k += 1
+
     def shared_boxes(k):
         while time.monotonic() < stop_at:
             got = shared.boxes(0, 7)
             if not any(all(np.array_equal(x, y) for x, y in zip(got, boxes[g])) for g in ("a", "b")):
                 fail("boxes of the shared tree are of neither version")
 
-    WORKLOADS = [builds, builds, private_intersect, shared_intersect, shared_intersect, refits, shared_boxes]
+    WORKLOADS = [builds, builds, private_intersect, shared_intersect, shared_intersect, refits, shared_boxes,
+                 updates, updated_intersect]
     threads = [threading.Thread(target=w, args=(k,)) for k, w in enumerate(WORKLOADS)]
     for t in threads:
         t.start()
@@ -91,6 +106,7 @@ CHILD = """
         t.join()
     print("counts", counts, "failures", len(failures), sorted(set(failures))[:5])
     enough = counts.get("build", 0) >= 2 and counts.get("refit", 0) >= 4 and counts.get("intersect", 0) >= 2
+    enough = enough and counts.get("update", 0) >= 4
     ok = not failures and enough
     sys.exit(0 if ok else 1)
 """

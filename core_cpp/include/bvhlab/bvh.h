@@ -50,9 +50,20 @@ inline void set_box(BvhNode& n, const Aabb& b) {
 /// Throws std::invalid_argument on bad input, BuildCancelled when the progress callback says stop.
 Bvh build_bvh(const GeometryView& geometry, const BuildConfig& config = {});
 
+/// The same builder over boxes instead of primitives (the TLAS over instances' world boxes,
+/// tlas.h): the leaves' references are box indices 0..count-1, no geometry is packed (prims stays
+/// empty) and the counts of triangles and spheres are 0. Boxes must be non-empty and finite.
+Bvh build_bvh_over_boxes(const Aabb* boxes, std::size_t count, const BuildConfig& config = {});
+
 /// Recomputes every box bottom-up for moved geometry with the same primitive counts, keeping the
-/// topology (report §1: the refitting it names as future work; Bikker). O(nodes).
+/// topology (report §1: the refitting it names as future work; Bikker). O(nodes). Throws
+/// std::invalid_argument as build_bvh does for bad geometry, and leaves `bvh` as it was.
 void refit(Bvh& bvh, const GeometryView& geometry);
+
+/// The refit of `old` as a new tree, `old` untouched (readers on other threads may keep using
+/// it): only its topology is copied; boxes, leaf geometry and fingerprint are made from
+/// `geometry` (the fingerprint on up to `threads` threads of the pool, 0: all).
+Bvh refitted(const Bvh& old, const GeometryView& geometry, unsigned threads = 1);
 
 /// Thrown when a build is cancelled through its progress callback.
 struct BuildCancelled : std::exception {

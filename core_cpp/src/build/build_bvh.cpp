@@ -153,4 +153,27 @@ Bvh build_bvh(const GeometryView& geometry, const BuildConfig& config) {
     return bvh;
 }
 
+Bvh build_bvh_over_boxes(const Aabb* boxes, std::size_t count, const BuildConfig& config) {
+    validate(config);
+    if (count > gpu::REF_INDEX_MASK) throw std::invalid_argument("too many boxes for one tree");
+    auto start = Clock::now();
+    Bvh bvh;
+    bvh.config = config;
+    bvh.config.progress = nullptr;
+    BuildStop stop(config, count);
+    // The references and their bounds, as make_prim_refs gathers them for primitives.
+    PrimRefsSummary summary;
+    BigVector<PrimRef> prim_refs(count);
+    for (std::size_t i = 0; i < count; ++i) {
+        const Aabb& b = boxes[i];
+        prim_refs[i] = PrimRef{{b.lo.x, b.lo.y, b.lo.z}, static_cast<std::uint32_t>(i), {b.hi.x, b.hi.y, b.hi.z}, 0};
+        summary.box.grow(b);
+        summary.centroids.grow(prim_refs[i].centroid());
+    }
+    build_tree(prim_refs, summary, GeometryView{}, false, config, stop, bvh);
+    if (stop.cancel().poll()) stop.rethrow();
+    bvh.build_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    return bvh;
+}
+
 }  // namespace bvhlab

@@ -1,16 +1,13 @@
 #include "bvhlab/traverse.h"
 
-#include <stdexcept>
-
-#include "bvhlab/cancel.h"
-#include "bvhlab/ray_record.h"
-#include "bvhlab/coordinate_range.h"
-#include "bvhlab/wide_bvh.h"
-
 #include <algorithm>
 #include <numbers>
+#include <stdexcept>
 
-#include "bvhlab/thread_pool.h"
+#include "bvhlab/ray_record.h"
+#include "bvhlab/wide_bvh.h"
+#include "ray_batch.h"
+#include "walk.h"
 
 namespace bvhlab {
 namespace {
@@ -32,8 +29,8 @@ struct Recorder {
 };
 
 template <class Record>
-void test_leaf(const Bvh& bvh, std::uint32_t i, const RayQuery& q, Hit& hit, Record& record) {
-    const BvhNode& n = bvh.nodes[i];
+void test_leaf(const Bvh& bvh, const BvhNode& n, const RayQuery& q, Hit& hit, Record& record) {
+    const auto i = std::uint32_t(&n - bvh.nodes.data());
     for (std::uint32_t k = n.index, end = n.index + leaf_count(n); k < end; ++k) {
         const bool closer = hit_prim(bvh.prims[k], q, hit);
         if (closer) hit.slot = k;
@@ -41,71 +38,18 @@ void test_leaf(const Bvh& bvh, std::uint32_t i, const RayQuery& q, Hit& hit, Rec
     }
 }
 
-/// Ordered depth-first traversal: test both children's boxes, descend into the nearer, push the
-/// farther with its entry distance so it is dropped if a closer hit is found meanwhile.
 template <class Record>
 std::uint32_t traverse_stack(const Bvh& bvh, const RayQuery& q, Hit& hit, Record& record) {
-    struct Entry {
-        std::uint32_t node;
-        float t;
-    };
-    Entry stack[gpu::MAX_TREE_HEIGHT];
-    std::uint32_t sp = 0, visited = 1, i = 0;
-    const BvhNode* nodes = bvh.nodes.data();
-    float t_root;
-    const bool hit_root = hit_box(nodes[0], q, hit.t, t_root);
-    record.box(0, hit_root);
-    if (!hit_root) return visited;
-    for (;;) {
-        const BvhNode& n = nodes[i];
-        if (is_leaf(n)) {
-            test_leaf(bvh, i, q, hit, record);
-        } else {
-            std::uint32_t a = i + 1, b = n.index;
-            float ta, tb;
-            bool hit_a = hit_box(nodes[a], q, hit.t, ta), hit_b = hit_box(nodes[b], q, hit.t, tb);
-            visited += 2;
-            record.box(a, hit_a), record.box(b, hit_b);
-            if (hit_a && hit_b) {
-                if (tb < ta) std::swap(a, b), std::swap(ta, tb);
-                stack[sp++] = {b, tb};
-                i = a;
-                continue;
-            }
-            if (hit_a || hit_b) {
-                i = hit_a ? a : b;
-                continue;
-            }
-        }
-        do {  // pop, skipping entries farther than the closest hit so far
-            if (sp == 0) return visited;
-            --sp;
-        } while (!may_hold_closer(stack[sp].t, hit.t));
-        i = stack[sp].node;
-    }
+    return walk::stack(
+        bvh.nodes.data(), q, hit.t, [&](const BvhNode& n) { test_leaf(bvh, n, q, hit, record); },
+        [&](std::uint32_t node, bool entered) { record.box(node, entered); });
 }
 
-/// Stackless traversal (report §3.1): nodes in depth-first order; a missed box jumps to its skip
-/// index, the first node after its subtree.
 template <class Record>
 std::uint32_t traverse_stackless(const Bvh& bvh, const RayQuery& q, Hit& hit, Record& record) {
-    const BvhNode* nodes = bvh.nodes.data();
-    const std::uint32_t count = bvh.node_count();
-    std::uint32_t visited = 0;
-    for (std::uint32_t i = 0; i < count;) {
-        const BvhNode& n = nodes[i];
-        float t;
-        ++visited;
-        const bool entered = hit_box(n, q, hit.t, t);
-        record.box(i, entered);
-        if (!entered) {
-            i = skip_index(n, i);
-            continue;
-        }
-        if (is_leaf(n)) test_leaf(bvh, i, q, hit, record);
-        ++i;
-    }
-    return visited;
+    return walk::stackless(
+        bvh.nodes.data(), bvh.node_count(), q, hit.t, [&](const BvhNode& n) { test_leaf(bvh, n, q, hit, record); },
+        [&](std::uint32_t node, bool entered) { record.box(node, entered); });
 }
 
 }  // namespace
@@ -150,34 +94,10 @@ Hit detail::intersect_recorded(const Bvh& bvh, const Ray& ray, Traversal mode, T
 void intersect_batch(const Bvh& bvh, const RayBatch& rays, const HitBatch& out, Traversal mode, std::uint32_t threads,
                      const WideBvh* wide, Cancellation* cancel) {
     if (mode == Traversal::Wide && !wide) throw std::invalid_argument("Traversal::Wide needs the wide tree");
-    check_rays(rays);
-    constexpr std::size_t kChunk = 1024;
-    if (cancel && cancel->poll()) throw Cancelled();  // asked to stop before anything started
-    auto chunk = [&](std::size_t k, unsigned slot) {
-        // the calling thread (slot 0) runs the check; the others read the flag
-        if (cancel && (slot == 0 ? cancel->poll() : cancel->stop_requested())) return;
-        const std::size_t begin = k * kChunk, end = std::min(rays.count, begin + kChunk);
-        for (std::size_t i = begin; i < end; ++i) {
-            const float* o = rays.origins + 3 * i;
-            const float* d = rays.directions + 3 * i;
-            Ray ray{{o[0], o[1], o[2]}, {d[0], d[1], d[2]}, rays.tmin, rays.tmax};
-            const float t_scale = scale_ray(ray);  // exact; keeps the arithmetic in range
-            std::uint32_t visited;
-            Hit h = mode == Traversal::Wide ? intersect_wide(*wide, bvh, ray, &visited)
-                                            : intersect(bvh, ray, mode, &visited);
-            bool miss = h.ref == kNoHit;
-            out.t[i] = h.t * t_scale;  // inf stays inf
-            out.prim[i] = miss ? -1 : std::int32_t(h.ref & gpu::REF_INDEX_MASK);
-            if (out.kind) out.kind[i] = miss ? 0 : std::uint8_t((h.ref & gpu::REF_SPHERE_BIT) ? 1 : 0);
-            if (out.u) out.u[i] = h.u;
-            if (out.v) out.v[i] = h.v;
-            if (out.nodes_visited) out.nodes_visited[i] = visited;
-        }
-    };
-    ThreadPool::shared().run((rays.count + kChunk - 1) / kChunk, threads, chunk, [&] {
-        if (cancel) cancel->poll();
+    run_ray_batch(rays, out, threads, cancel, [&](std::size_t, const Ray& ray, std::uint32_t& visited) {
+        return mode == Traversal::Wide ? intersect_wide(*wide, bvh, ray, &visited)
+                                       : intersect(bvh, ray, mode, &visited);
     });
-    if (cancel && cancel->stop_requested()) throw Cancelled();
 }
 
 }  // namespace bvhlab

@@ -1,8 +1,9 @@
-"""`bvhlab build SCENE`: build one tree and print its stats (optionally as JSON)."""
+"""`bvhlab build SCENE`: build one tree (a two-level tree for a scene with instances) and print its
+stats (optionally as JSON)."""
 
 from __future__ import annotations
 
-from .. import build
+from .. import InstancedBvh, build
 from .._progress import ProgressBar
 from ..library import load_scene
 from ..stats_files import write_stats_csv, write_stats_json
@@ -34,6 +35,21 @@ def run(args) -> int:
     with ProgressBar(f"building {args.method}") as bar:
         bvh = build(scene, progress=bar, **settings)
     stats = bvh.stats
+    if isinstance(bvh, InstancedBvh):
+        _print_instanced(name, bvh)
+    else:
+        _print_flat(name, stats)
+    about = {"scene": name, "source": args.scene, "settings": settings}
+    if args.json:
+        write_stats_json(args.json, stats, about)
+        print(f"wrote {args.json}")
+    if args.csv:
+        write_stats_csv(args.csv, stats)
+        print(f"wrote {args.csv}")
+    return 0
+
+
+def _print_flat(name: str, stats: dict) -> None:
     print(f"{name}: {stats['triangles']} triangles, {stats['spheres']} spheres")
     for key in (
         "method",
@@ -52,11 +68,14 @@ def run(args) -> int:
         value = stats[key]
         print(f"  {key:<14}{value:.3f}" if isinstance(value, float) else f"  {key:<14}{value}")
     print(f"  {'nodes/depth':<14}{' '.join(str(n) for n in stats['nodes_per_depth'])}")
-    about = {"scene": name, "source": args.scene, "settings": settings}
-    if args.json:
-        write_stats_json(args.json, stats, about)
-        print(f"wrote {args.json}")
-    if args.csv:
-        write_stats_csv(args.csv, stats)
-        print(f"wrote {args.csv}")
-    return 0
+
+
+def _print_instanced(name: str, bvh: InstancedBvh) -> None:
+    """A two-level tree (issue 34): the TLAS, then one line per mesh's tree."""
+    stats = bvh.stats
+    print(f"{name}: {stats['instances']} instances of {stats['meshes']} meshes")
+    for key, value in stats.items():
+        print(f"  {key:<20}{value:.3f}" if isinstance(value, float) else f"  {key:<20}{value}")
+    for k, mesh in enumerate(bvh.meshes):
+        m = mesh.stats
+        print(f"  mesh {k}: {m['primitives']} primitives, {m['nodes']} nodes, SAH {m['sah_cost']:.3f}")

@@ -3,7 +3,7 @@ optionally with the BVH overlay (--bvh-depth A:B) or as a heatmap of box tests (
 
 from __future__ import annotations
 
-from .. import build, render, save_png
+from .. import Bvh, build, render, save_png
 from .._progress import ProgressBar
 from ..library import load_scene
 from ..render import BACKENDS, TRAVERSALS
@@ -51,8 +51,10 @@ def run(args) -> int:
         mode="heatmap" if args.heatmap else "shade",
     )
     scene, name = load_scene(args.scene)
+    scene = scene.flattened()  # the renderers walk one level: instances become world triangles
     with ProgressBar(f"building {args.method}") as bar:
         bvh = build(scene, progress=bar, **settings)
+    assert isinstance(bvh, Bvh)  # a flat scene gets a flat tree
     with ProgressBar("rendering") as bar:
         image, t = render(
             scene,

@@ -27,8 +27,9 @@ def main(argv=None) -> None:
     from .._core import depth_colors
     from .raster import Rasterizer
 
-    scene = bvhlab.Scene.load(args.npz)
+    scene = bvhlab.Scene.load(args.npz).flattened()  # the raster draws one level of boxes
     bvh = bvhlab.build(scene, **json.loads(args.build))
+    assert isinstance(bvh, bvhlab.Bvh)  # a flat scene gets a flat tree
     raster = Rasterizer(scene, *args.size)
 
     def boxes(a, b):

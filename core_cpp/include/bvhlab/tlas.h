@@ -1,0 +1,84 @@
+// tlas.h — two-level trees (issue 34): a bottom-level tree (BLAS, the ordinary Bvh) per mesh,
+// shared by every instance of it, and a top-level tree (TLAS) over the instances, as Embree,
+// OptiX and tinybvh (BVH::BuildTLAS) arrange instanced scenes. A mesh instanced N times costs one
+// BLAS and O(N) bytes.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "bvhlab/bvh.h"
+#include "bvhlab/transform.h"
+#include "bvhlab/traverse.h"
+
+namespace bvhlab {
+
+struct WideBvh;
+
+/// One placement of a mesh: which BLAS, where (object-to-world and its inverse), and the world
+/// box the TLAS is built over (the union of the BLAS's top eight boxes moved into the world,
+/// transform_box: tighter than its moved root box where the instance is rotated).
+struct Instance {
+    std::uint32_t blas = 0;
+    Transform object_to_world, world_to_object;
+    Aabb world_box;        ///< empty for an instance of an empty BLAS (never in the TLAS)
+    bool identity = true;  ///< object space is world space: rays are not moved (the one-mesh scene)
+};
+
+/// A BLAS as the two-level queries see it: the tree and, for Traversal::Wide, its 8-wide copy.
+/// Borrowed: the caller keeps both alive while the TwoLevel that refers to them is used.
+struct BlasView {
+    const Bvh* bvh = nullptr;
+    const WideBvh* wide = nullptr;
+};
+
+/// The TLAS: a Bvh whose leaves' references are instance indices (no geometry packed), built with
+/// the builder of every tree over the instances' world boxes (build_bvh_over_boxes).
+struct Tlas {
+    Bvh tree;
+    std::vector<Instance> instances;
+};
+
+/// The settings a TLAS is built with unless told otherwise: binned SAH as for a BLAS, but one
+/// instance per leaf and the report's per-primitive SAH (sah_block 1): visiting an instance means a
+/// whole BLAS traversal, so leaves are never filled to save nodes.
+BuildConfig default_tlas_config();
+
+/// Checks every instance (a BLAS index within `blases`, a transform validate_transform accepts, a
+/// world box within the coordinate range) and builds the TLAS. Throws std::invalid_argument naming
+/// the first bad instance. `transforms[i]` places an instance of `blas_of[i]`.
+Tlas build_tlas(const std::vector<const Bvh*>& blases, const std::vector<std::uint32_t>& blas_of,
+                const std::vector<Transform>& transforms, const BuildConfig& config = default_tlas_config());
+
+/// The closest hit of a two-level query: the primitive (Hit, ref and slot in the instance's BLAS)
+/// and the instance. t is in world units (the ray is moved into the instance's space with its
+/// direction unnormalised, so the ray parameter is the same in both). Among hits at the same t in
+/// different instances, the instance visited first wins.
+struct InstanceHit {
+    Hit hit;
+    std::uint32_t instance = kNoHit;
+};
+
+/// A TLAS with the BLASes its instances refer to (blases[i] for BLAS index i).
+struct TwoLevel {
+    const Tlas* tlas = nullptr;
+    std::vector<BlasView> blases;
+};
+
+/// Throws std::invalid_argument unless every instance's BLAS is among scene.blases, each with a
+/// tree (and, for Traversal::Wide, its wide copy).
+void check_two_level(const TwoLevel& scene, Traversal mode);
+
+/// Closest hit through both levels, on a scene that check_two_level accepts. `mode` picks the BLAS
+/// traversal (the TLAS is walked with a stack, or stacklessly for Traversal::Stackless). The ray is
+/// one intersect_batch would accept. A scene of one identity instance goes straight to its BLAS:
+/// exactly the flat query.
+InstanceHit intersect_two_level(const TwoLevel& scene, const Ray& ray, Traversal mode,
+                                std::uint32_t* nodes_visited = nullptr);
+
+/// intersect_batch over both levels; `instance` (N, may be null) receives each hit's instance
+/// (-1 on a miss). Same checks, threads and cancellation as intersect_batch.
+void intersect_batch_two_level(const TwoLevel& scene, const RayBatch& rays, const HitBatch& hits,
+                               std::int32_t* instance, Traversal mode, std::uint32_t threads = 0,
+                               Cancellation* cancel = nullptr);
+
+}  // namespace bvhlab

@@ -1,0 +1,46 @@
+// transform.h — the affine object-to-world transform of an instance (a 3×4 matrix), its inverse,
+// and what the two-level tree does with it: points, directions and boxes moved between spaces.
+#pragma once
+#include <array>
+#include <cstddef>
+
+#include "bvhlab/aabb.h"
+#include "bvhlab/vec3.h"
+
+namespace bvhlab {
+
+/// A 3×4 row-major affine matrix: world = M · (object, 1). m[4 r + c] is row r, column c; column 3
+/// is the translation (the layout of Embree's RTC_FORMAT_FLOAT3X4_ROW_MAJOR and of Blender's
+/// matrix_world without its last row).
+struct Transform {
+    std::array<float, 12> m{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+
+    Vec3 point(Vec3 p) const {
+        return {m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3], m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
+                m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]};
+    }
+    Vec3 vector(Vec3 d) const {
+        return {m[0] * d.x + m[1] * d.y + m[2] * d.z, m[4] * d.x + m[5] * d.y + m[6] * d.z,
+                m[8] * d.x + m[9] * d.y + m[10] * d.z};
+    }
+    bool is_identity() const { return m == Transform{}.m; }
+};
+
+/// Throws std::invalid_argument, naming `what`, for a transform with a NaN or infinite entry or
+/// one that cannot be inverted (a zero-scale axis, or axes so nearly parallel that the inverse
+/// would be noise: |det| below 1e-6 of the product of its columns' lengths, Hadamard's bound).
+void validate_transform(const Transform& t, const char* what);
+
+/// What validate_transform accepts, without a message.
+bool transform_invertible(const Transform& t);
+
+/// The inverse of a transform that validate_transform accepts (computed in double, rounded once).
+Transform inverse(const Transform& t);
+
+/// A box holding `t` applied to every point of the `count` boxes (Arvo's moved centre and
+/// |M|-weighted half extent, in double, rounded outwards by a relative 2^-20 once, so that float
+/// rounding of a moved vertex stays inside). Empty boxes add nothing; none at all: an empty box.
+Aabb transform_boxes(const Transform& t, const Aabb* boxes, std::size_t count);
+Aabb transform_box(const Transform& t, const Aabb& box);  ///< transform_boxes of one box
+
+}  // namespace bvhlab

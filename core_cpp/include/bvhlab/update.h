@@ -1,0 +1,73 @@
+// update.h — updates of a tree over a deforming mesh (issue 34), one policy per update: rebuild,
+// refit, partial (refit, then rebuild the subtrees whose SAH cost grew too much; selective
+// restructuring, Yoon, Curtis and Manocha 2007), or adaptive (refit, then whichever of the three
+// the measured costs call for). Every policy leaves a whole, valid tree (docs/design.md "Tree
+// layout"); the same inputs give the same tree on any thread count.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "bvhlab/bvh.h"
+
+namespace bvhlab {
+
+enum class UpdatePolicy {
+    Rebuild,   ///< a fresh build with the tree's own settings
+    Refit,     ///< boxes only (refitted): the topology stays, its cost may grow
+    Partial,   ///< refit, then rebuild each topmost subtree whose cost grew past subtree_growth
+    Adaptive,  ///< refit; a rebuild once the tree's cost passes tree_growth or the subtrees past
+               ///< subtree_growth hold more than half the primitives, else partial where needed
+};
+
+/// The thresholds of an update. Costs are SAH costs of a subtree relative to its own root's area
+/// (subtree_costs), compared with the same subtree's cost when it was built.
+struct UpdateConfig {
+    UpdatePolicy policy = UpdatePolicy::Adaptive;
+    /// partial, adaptive: a subtree is rebuilt once its cost exceeds this times its cost when
+    /// built (Yoon et al. 2007 restructure where culling efficiency has dropped; the ratio is
+    /// that measure under the SAH). bench/updates.py, adaptive over 11 frames: 1.3 kept the SAH
+    /// within 1.22x of a fresh build's for 0.56x the time of rebuilding every frame; 1.2 within
+    /// 1.08x for 0.49x; 1.15 within 1.03x for 0.84x; 1.1 rebuilt every frame.
+    float subtree_growth = 1.2f;
+    /// adaptive: the whole tree is rebuilt once its cost exceeds this times its cost when built
+    /// (the add-on rebuilt at 1.5, addon/engine/scene_tree.py).
+    float tree_growth = 1.5f;
+    /// partial, adaptive: subtrees of fewer primitives are never rebuilt alone (their rebuilds
+    /// gain little and their costs are noisy); their ancestors are.
+    std::uint32_t min_subtree_primitives = 256;
+    /// Also build a fresh tree over the geometry, only to report its SAH cost (UpdateStats::
+    /// fresh_sah_cost): on demand, as it costs a build.
+    bool measure_fresh = false;
+};
+
+/// What an update did.
+struct UpdateStats {
+    UpdatePolicy policy = UpdatePolicy::Refit;  ///< the policy that ran (adaptive's choice)
+    double ms = 0;                              ///< wall time of the whole update
+    double sah_cost = 0;                        ///< of the updated tree (sah_cost, stats.h)
+    std::uint32_t subtrees_rebuilt = 0;         ///< partial: how many; rebuild: 1
+    std::uint64_t primitives_rebuilt = 0;       ///< in the rebuilt subtrees
+    double fresh_sah_cost = -1;                 ///< a fresh build's, with UpdateConfig::measure_fresh; else -1
+};
+
+/// Each node's SAH cost relative to its own box: S(n)/A(n) with S(leaf) = A·N and S(inner) =
+/// A·C_trav + S(children) (C_trav = C_isect = 1, sah_cost's formula), so entry 0 is sah_cost(bvh).
+/// A node of zero area gets the count its subtree would cost if every node were hit.
+std::vector<float> subtree_costs(const Bvh& bvh);
+
+/// The tree over `geometry` (same counts) by `config.policy`, from `old` (untouched) and the
+/// costs its nodes had when built (`built`, subtree_costs of the tree as built, one per node of
+/// `old`). `built_out` receives those costs for the new tree (rebuilt nodes' own, the others'
+/// carried over). Throws std::invalid_argument as refit and build_bvh do.
+Bvh update_bvh(const Bvh& old, const std::vector<float>& built, const GeometryView& geometry,
+               const UpdateConfig& config, std::vector<float>& built_out, UpdateStats* stats = nullptr);
+
+std::vector<std::string_view> update_policy_names();
+UpdatePolicy parse_update_policy(std::string_view name);  ///< throws std::invalid_argument listing the names
+std::string to_string(UpdatePolicy policy);
+/// Throws std::invalid_argument for thresholds below 1 or not finite.
+void validate(const UpdateConfig& config);
+
+}  // namespace bvhlab

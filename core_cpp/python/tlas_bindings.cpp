@@ -1,0 +1,140 @@
+// tlas_bindings.cpp — two-level trees in Python (tlas.h): `_core.TwoLevel`, a TLAS over instances
+// of meshes whose trees are `_core.Bvh`s. It keeps the version of each mesh's tree it was built
+// over (py_bvh.h), so a refit of a mesh after the TLAS was built changes neither.
+#include <memory>
+#include <vector>
+
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+#include <nanobind/stl/string.h>
+#include <nanobind/stl/vector.h>
+
+#include "bvhlab/cancel.h"
+#include "bvhlab/render_settings.h"
+#include "bvhlab/stats.h"
+#include "bvhlab/tlas.h"
+#include "bvhlab/wide_bvh.h"
+#include "py_bvh.h"
+#include "py_cancel.h"
+
+namespace nb = nanobind;
+using namespace nb::literals;
+
+namespace bvhlab::python {
+namespace {
+
+using Vectors = nb::ndarray<const float, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
+using Transforms = nb::ndarray<const float, nb::shape<-1, 3, 4>, nb::c_contig, nb::device::cpu>;
+using MeshIndices = nb::ndarray<const std::uint32_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
+template <class T>
+using Out1D = nb::ndarray<T, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
+
+/// A TLAS and the mesh tree versions it was built over. Immutable once made.
+class PyTwoLevel {
+public:
+    PyTwoLevel(std::vector<TreePtr> meshes, Tlas tlas) : meshes_(std::move(meshes)), tlas_(std::move(tlas)) {}
+
+    const Tlas& tlas() const { return tlas_; }
+    const std::vector<TreePtr>& meshes() const { return meshes_; }
+
+    /// The query's view of both levels (the wide copies made on first use, once per version).
+    TwoLevel view(Traversal mode) const {
+        TwoLevel scene{&tlas_, {}};
+        for (const TreePtr& m : meshes_)
+            scene.blases.push_back({&m->bvh, mode == Traversal::Wide ? &m->wide() : nullptr});
+        return scene;
+    }
+
+private:
+    std::vector<TreePtr> meshes_;
+    Tlas tlas_;
+};
+
+PyTwoLevel* build_two_level(const std::vector<const PyBvh*>& meshes, const MeshIndices& mesh_of,
+                            const Transforms& transforms, const BuildConfig& config) {
+    const std::size_t n = mesh_of.shape(0);
+    if (transforms.shape(0) != n)
+        throw std::invalid_argument("one transform per instance: got " + std::to_string(n) + " instances and " +
+                                    std::to_string(transforms.shape(0)) + " transforms");
+    std::vector<TreePtr> versions;
+    std::vector<const Bvh*> blases;
+    for (const PyBvh* m : meshes) {
+        if (!m) throw std::invalid_argument("a mesh of the scene has no tree (None)");
+        versions.push_back(m->current());
+        blases.push_back(&versions.back()->bvh);
+    }
+    std::vector<std::uint32_t> blas_of(mesh_of.data(), mesh_of.data() + n);
+    std::vector<Transform> placed(n);
+    for (std::size_t i = 0; i < n; ++i) std::copy_n(transforms.data() + 12 * i, 12, placed[i].m.begin());
+    nb::gil_scoped_release release;
+    Tlas tlas = build_tlas(blases, blas_of, placed, config);
+    return new PyTwoLevel(std::move(versions), std::move(tlas));
+}
+
+void py_intersect(const PyTwoLevel& self, const Vectors& origins, const Vectors& dirs, float tmin, float tmax,
+                  const std::string& traversal, std::uint32_t threads, Out1D<float> t, Out1D<std::int32_t> prim,
+                  Out1D<std::uint8_t> kind, Out1D<float> u, Out1D<float> v, Out1D<std::uint32_t> visited,
+                  Out1D<std::int32_t> instance) {
+    const std::size_t n = origins.shape(0);
+    if (dirs.shape(0) != n) throw std::invalid_argument("origins and directions differ in length");
+    for (std::size_t len :
+         {t.shape(0), prim.shape(0), kind.shape(0), u.shape(0), v.shape(0), visited.shape(0), instance.shape(0)})
+        if (len != n) throw std::invalid_argument("output arrays must have one entry per ray");
+    const Traversal mode = parse_traversal(traversal);
+    RayBatch rays{origins.data(), dirs.data(), n, tmin, tmax};
+    HitBatch hits{t.data(), prim.data(), kind.data(), u.data(), v.data(), visited.data()};
+    PyStopCheck stop;  // Ctrl-C stops a long batch
+    Cancellation cancel([&stop] { return stop(0.0); });
+    try {
+        nb::gil_scoped_release release;
+        intersect_batch_two_level(self.view(mode), rays, hits, instance.data(), mode, threads, &cancel);
+    } catch (const Cancelled&) {
+        stop.rethrow();
+        throw;
+    }
+}
+
+nb::dict tlas_stats(const PyTwoLevel& self) {
+    const Tlas& tlas = self.tlas();
+    const BvhStats s = compute_stats(tlas.tree);
+    nb::dict d;
+    d["instances"] = tlas.instances.size(), d["meshes"] = self.meshes().size();
+    d["tlas_nodes"] = s.nodes, d["tlas_height"] = s.height, d["tlas_sah_cost"] = s.sah_cost;
+    d["tlas_build_ms"] = tlas.tree.build_ms;
+    d["tlas_memory_bytes"] = s.memory_bytes + tlas.instances.size() * sizeof(Instance);
+    return d;
+}
+
+}  // namespace
+}  // namespace bvhlab::python
+
+void bind_tlas(nb::module_& m) {
+    using namespace bvhlab;
+    using namespace bvhlab::python;
+    nb::class_<PyTwoLevel>(m, "TwoLevel")
+        .def("stats", &tlas_stats)
+        .def_prop_ro("instance_count", [](const PyTwoLevel& s) { return s.tlas().instances.size(); })
+        .def(
+            "world_boxes",
+            [](const PyTwoLevel& s) {
+                const auto& inst = s.tlas().instances;
+                auto* lo = new float[3 * inst.size()];
+                auto* hi = new float[3 * inst.size()];
+                for (std::size_t i = 0; i < inst.size(); ++i)
+                    for (int k = 0; k < 3; ++k)
+                        lo[3 * i + k] = inst[i].world_box.lo[k], hi[3 * i + k] = inst[i].world_box.hi[k];
+                auto owned = [](float* p) {
+                    return nb::capsule(p, [](void* q) noexcept { delete[] static_cast<float*>(q); });
+                };
+                return nb::make_tuple(nb::ndarray<nb::numpy, float, nb::ndim<2>>(lo, {inst.size(), 3}, owned(lo)),
+                                      nb::ndarray<nb::numpy, float, nb::ndim<2>>(hi, {inst.size(), 3}, owned(hi)));
+            },
+            "(lo (N,3), hi (N,3)): each instance's world box (empty, lo > hi, for an empty mesh)")
+        .def("intersect", &py_intersect, "origins"_a.noconvert(), "directions"_a.noconvert(), "tmin"_a, "tmax"_a,
+             "traversal"_a, "threads"_a, "t"_a.noconvert(), "prim"_a.noconvert(), "kind"_a.noconvert(),
+             "u"_a.noconvert(), "v"_a.noconvert(), "visited"_a.noconvert(), "instance"_a.noconvert());
+    m.def("build_two_level", &build_two_level, "meshes"_a, "mesh_of"_a.noconvert(), "transforms"_a.noconvert(),
+          "config"_a,
+          "A TLAS over instances (mesh_of[i] placed by transforms[i], 3×4 object-to-world) of the meshes' trees.");
+    m.def("default_tlas_config", &default_tlas_config);
+}

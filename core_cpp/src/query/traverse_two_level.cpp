@@ -1,0 +1,93 @@
+// traverse_two_level.cpp — closest hits through a TLAS and its BLASes (tlas.h): the TLAS is walked
+// with the walks of every tree (walk.h); at an instance the ray is moved into its object space
+// (origin and direction by the inverse transform, the direction left unnormalised so that t is
+// the same in both spaces) and the BLAS is traversed up to the closest hit so far.
+#include <stdexcept>
+#include <string>
+
+#include "bvhlab/coordinate_range.h"
+#include "bvhlab/tlas.h"
+#include "bvhlab/wide_bvh.h"
+#include "ray_batch.h"
+#include "walk.h"
+
+namespace bvhlab {
+namespace {
+
+Hit intersect_blas(const BlasView& blas, const Ray& ray, Traversal mode, std::uint32_t* visited) {
+    return mode == Traversal::Wide ? intersect_wide(*blas.wide, *blas.bvh, ray, visited)
+                                   : intersect(*blas.bvh, ray, mode, visited);
+}
+
+/// Tests instance `index` with a world ray whose closest hit so far is `best`.
+void test_instance(const TwoLevel& scene, std::uint32_t index, const Ray& world, Traversal mode, InstanceHit& best,
+                   std::uint32_t& visited) {
+    const Instance& inst = scene.tlas->instances[index];
+    Ray ray = world;
+    ray.tmax = best.hit.t;
+    if (!inst.identity) {
+        ray.origin = inst.world_to_object.point(world.origin);
+        ray.dir = inst.world_to_object.vector(world.dir);
+    }
+    // The moved direction is rescaled exactly as the batch scales world rays (coordinate_range.h);
+    // one that cannot be (too long or short for float) cannot hit what lies within the range.
+    if (!direction_in_range(ray.dir)) return;
+    const float t_scale = scale_ray(ray);
+    std::uint32_t count = 0;
+    Hit h = intersect_blas(scene.blases[inst.blas], ray, mode, &count);
+    visited += count;
+    if (h.ref == kNoHit) return;
+    h.t *= t_scale;
+    if (h.t < best.hit.t) best.hit = h, best.instance = index;
+}
+
+}  // namespace
+
+void check_two_level(const TwoLevel& scene, Traversal mode) {
+    if (!scene.tlas) throw std::invalid_argument("a two-level query needs a TLAS");
+    for (const BlasView& b : scene.blases) {
+        if (!b.bvh) throw std::invalid_argument("a mesh of the two-level query has no tree");
+        if (mode == Traversal::Wide && !b.wide)
+            throw std::invalid_argument("Traversal::Wide needs every mesh's wide tree");
+    }
+    for (const Instance& inst : scene.tlas->instances)
+        if (inst.blas >= scene.blases.size())
+            throw std::invalid_argument("the TLAS refers to mesh " + std::to_string(inst.blas) +
+                                        ", but the query has " + std::to_string(scene.blases.size()));
+}
+
+InstanceHit intersect_two_level(const TwoLevel& scene, const Ray& ray, Traversal mode, std::uint32_t* nodes_visited) {
+    const Tlas& tlas = *scene.tlas;
+    InstanceHit best;
+    best.hit.t = ray.tmax;
+    std::uint32_t visited = 0;
+    if (tlas.instances.size() == 1 && tlas.instances[0].identity) {
+        // One mesh where it was modelled: the flat query, no TLAS box in the way.
+        best.hit = intersect_blas(scene.blases[tlas.instances[0].blas], ray, mode, &visited);
+        if (best.hit.ref != kNoHit) best.instance = 0;
+    } else if (!tlas.tree.empty()) {
+        const RayQuery q(ray);
+        auto leaf = [&](const BvhNode& n) {
+            for (std::uint32_t k = n.index, end = n.index + leaf_count(n); k < end; ++k)
+                test_instance(scene, tlas.tree.refs[k], ray, mode, best, visited);
+        };
+        visited += mode == Traversal::Stackless
+                       ? walk::stackless(tlas.tree.nodes.data(), tlas.tree.node_count(), q, best.hit.t, leaf)
+                       : walk::stack(tlas.tree.nodes.data(), q, best.hit.t, leaf);
+    }
+    if (best.hit.ref == kNoHit) best.hit.t = kInfinity;
+    if (nodes_visited) *nodes_visited = visited;
+    return best;
+}
+
+void intersect_batch_two_level(const TwoLevel& scene, const RayBatch& rays, const HitBatch& hits,
+                               std::int32_t* instance, Traversal mode, std::uint32_t threads, Cancellation* cancel) {
+    check_two_level(scene, mode);
+    run_ray_batch(rays, hits, threads, cancel, [&](std::size_t i, const Ray& ray, std::uint32_t& visited) {
+        const InstanceHit h = intersect_two_level(scene, ray, mode, &visited);
+        if (instance) instance[i] = h.hit.ref == kNoHit ? -1 : std::int32_t(h.instance);
+        return h.hit;
+    });
+}
+
+}  // namespace bvhlab

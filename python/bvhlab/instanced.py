@@ -1,0 +1,140 @@
+"""Two-level trees (issue 34): `InstancedBvh`, a bottom-level tree (a `Bvh`) per mesh of a
+`Scene`, shared by every instance of it, and a top-level tree over the instances (C++
+core_cpp/include/bvhlab/tlas.h). `bvhlab.build` makes one for a scene with instances."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from . import _checks, _core
+from .bvh import TRAVERSALS, BuildConfig, Bvh
+from .update import UpdateStats
+
+
+class InstancedBvh:
+    """A TLAS over a scene's instances and the trees of its meshes (`meshes[k]` for mesh k).
+
+    `intersect` walks both levels: rays are moved into each instance's space, t stays in world
+    units, and every hit names its instance and its primitive within the instance's mesh.
+    `place` rebuilds only the TLAS, for instances that moved (the meshes' trees are kept);
+    `update_mesh` updates one mesh's tree and then the TLAS."""
+
+    def __init__(self, meshes: list[Bvh], mesh_of: np.ndarray, transforms: np.ndarray, config: BuildConfig):
+        self.meshes = meshes
+        self.config = config
+        self._core = _make_tlas(meshes, mesh_of, transforms, config.threads)
+        self._placed = (mesh_of, transforms)
+
+    def __repr__(self) -> str:
+        s = self.stats
+        return f"<bvhlab.InstancedBvh {s['instances']} instances of {s['meshes']} meshes, TLAS {s['tlas_nodes']} nodes>"
+
+    @property
+    def stats(self) -> dict:
+        """instances, meshes, tlas_nodes, tlas_height, tlas_sah_cost, tlas_build_ms, tlas_memory_bytes
+        (the TLAS and the instance records: what instancing adds over the meshes' trees), and
+        meshes_memory_bytes (the meshes' trees, each counted once)."""
+        d = self._core.stats()
+        d["meshes_memory_bytes"] = sum(m.stats["memory_bytes"] for m in self.meshes)
+        return d
+
+    def place(self, mesh_of: np.ndarray, transforms: np.ndarray) -> None:
+        """Move the instances (or change them): a new TLAS over the same meshes' trees."""
+        self._core = _make_tlas(self.meshes, mesh_of, transforms, self.config.threads)
+        self._placed = (mesh_of, transforms)
+
+    def update_mesh(
+        self, k: int, triangles: np.ndarray, spheres: np.ndarray | None = None, config=None, **changes
+    ) -> UpdateStats:
+        """Mesh k moved or changed: with the same counts its tree is updated as `Bvh.update` does
+        (`config`/`changes`: an UpdateConfig), with other counts it is rebuilt; the other meshes'
+        trees are not touched. Then the TLAS is made again over the same instances (their world
+        boxes follow the mesh). Returns what ran on mesh k."""
+        k = _checks.integer("mesh", k, 0, len(self.meshes) - 1)
+        triangles = _checks.float32_array("triangles", triangles, (3, 3))
+        if spheres is not None:
+            spheres = _checks.float32_array("spheres", spheres, (4,))
+        old = self.meshes[k].stats
+        n_spheres = 0 if spheres is None else len(spheres)
+        if len(triangles) == old["triangles"] and n_spheres == old["spheres"]:
+            stats = self.meshes[k].update(triangles, spheres, config, **changes)
+        else:  # another count: a new tree for this mesh alone
+            tree = Bvh(_core.build(triangles, spheres, self.config.core(), None), self.config)
+            s = tree.stats
+            stats = UpdateStats("rebuild", s["build_ms"], s["sah_cost"], 1, s["primitives"])
+            self.meshes[k] = tree
+        self.place(*self._placed)
+        return stats
+
+    def world_boxes(self) -> tuple[np.ndarray, np.ndarray]:
+        """(lo (N,3), hi (N,3)): each instance's world box, which the TLAS is built over."""
+        return self._core.world_boxes()
+
+    def intersect(
+        self,
+        origins: np.ndarray,
+        directions: np.ndarray,
+        *,
+        tmin: float = 0.0,
+        tmax: float = np.inf,
+        traversal: str = "wide",
+        threads: int = 0,
+    ) -> dict:
+        """As `Bvh.intersect`, through both levels; the dict also holds `instance` (int32, -1 on a
+        miss), and `prim` indexes the triangles (or spheres) of that instance's mesh."""
+        origins = _checks.float32_array("origins", origins, (3,))
+        directions = _checks.float32_array("directions", directions, (3,))
+        if len(origins) != len(directions):
+            raise ValueError(f"origins ({len(origins)}) and directions ({len(directions)}) differ in length")
+        _checks.choice("traversal", traversal, TRAVERSALS)
+        tmin, tmax = _checks.real("tmin", tmin), _checks.real("tmax", tmax)
+        n = len(origins)
+        out = {
+            "t": np.empty(n, np.float32),
+            "prim": np.empty(n, np.int32),
+            "kind": np.empty(n, np.uint8),
+            "u": np.empty(n, np.float32),
+            "v": np.empty(n, np.float32),
+            "nodes_visited": np.empty(n, np.uint32),
+            "instance": np.empty(n, np.int32),
+        }
+        self._core.intersect(
+            origins,
+            directions,
+            tmin,
+            tmax,
+            traversal,
+            _checks.integer("threads", threads, 0, 4096),
+            *(out[k] for k in ("t", "prim", "kind", "u", "v", "nodes_visited", "instance")),
+        )
+        return out
+
+
+def _make_tlas(meshes: list[Bvh], mesh_of, transforms, threads: int) -> _core.TwoLevel:
+    """The TLAS with the core's TLAS settings (default_tlas_config) on `threads` threads (0: all)."""
+    mesh_of = np.asarray(mesh_of)
+    if mesh_of.ndim != 1 or not (np.issubdtype(mesh_of.dtype, np.integer) or mesh_of.size == 0):
+        raise ValueError(f"mesh indices must be (N,) integers, got shape {mesh_of.shape} dtype {mesh_of.dtype}")
+    negative = np.flatnonzero(mesh_of < 0)
+    if len(negative):
+        raise ValueError(f"instance {negative[0]} refers to mesh {mesh_of[negative[0]]}, which does not exist")
+    transforms = _checks.float32_array("transforms", transforms, (3, 4))
+    core = [m._core for m in meshes]
+    return _core.build_two_level(
+        core, np.ascontiguousarray(mesh_of, np.uint32), transforms, _core.default_tlas_config()
+    )
+
+
+def build_instanced(scene, config: BuildConfig, progress: Callable[[float], bool | None] | None) -> InstancedBvh:
+    """The two-level tree of an instanced scene: one build per mesh (with `config`), then the TLAS."""
+    mesh_of, transforms = scene.instances()
+    n = scene.mesh_count
+    trees = []
+    for k in range(n):
+        part = None if progress is None else (lambda f, k=k: progress((k + f) / n))
+        spheres = scene.spheres if k == 0 else None
+        core = _core.build(scene.mesh_triangles(k), spheres, config.core(), part)
+        trees.append(Bvh(core, config))
+    return InstancedBvh(trees, mesh_of, transforms, config)

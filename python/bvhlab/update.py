@@ -1,0 +1,67 @@
+"""Updates of a tree over deforming geometry (issue 34; C++ core_cpp/include/bvhlab/update.h):
+`UpdateConfig` says how (rebuild, refit, partial, adaptive), `UpdateStats` what ran."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+from . import _checks, _core
+
+#: Policy names as the core spells them, and its defaults: one definition, in update.h.
+UPDATE_POLICIES = tuple(_core.UPDATE_POLICIES)
+_CORE_DEFAULTS = _core.UpdateConfig()
+
+
+@dataclass(frozen=True)
+class UpdateConfig:
+    """How `Bvh.update` updates a tree for moved geometry (same primitive counts):
+
+    - "rebuild": a fresh build with the tree's settings;
+    - "refit": boxes only; the topology stays and its SAH cost may grow;
+    - "partial": refit, then rebuild each topmost subtree (of at least `min_subtree_primitives`)
+      whose SAH cost grew past `subtree_growth` × its cost when built (selective restructuring,
+      Yoon et al. 2007);
+    - "adaptive": refit, then a full rebuild once the tree's cost passes `tree_growth` × its cost
+      when built, else partial where needed.
+
+    Defaults are the core's; values are checked by it (ValueError) when the config is made."""
+
+    policy: str = _CORE_DEFAULTS.policy
+    subtree_growth: float = _CORE_DEFAULTS.subtree_growth
+    tree_growth: float = _CORE_DEFAULTS.tree_growth
+    min_subtree_primitives: int = _CORE_DEFAULTS.min_subtree_primitives
+    #: also build a fresh tree, only to report its SAH cost (UpdateStats.fresh_sah_cost): a build's time
+    measure_fresh: bool = _CORE_DEFAULTS.measure_fresh
+
+    def __post_init__(self):
+        self.core()
+
+    def core(self) -> _core.UpdateConfig:
+        c = _core.UpdateConfig()
+        c.policy = _checks.choice("policy", self.policy, UPDATE_POLICIES)
+        c.subtree_growth = _checks.real("subtree_growth", self.subtree_growth)
+        c.tree_growth = _checks.real("tree_growth", self.tree_growth)
+        c.min_subtree_primitives = _checks.integer("min_subtree_primitives", self.min_subtree_primitives, 0, 2**32 - 1)
+        if not isinstance(self.measure_fresh, bool):
+            raise TypeError(f"measure_fresh must be True or False, got {type(self.measure_fresh).__name__}")
+        c.measure_fresh = self.measure_fresh
+        c.validate()
+        return c
+
+    def replace(self, **changes) -> UpdateConfig:
+        return dataclasses.replace(self, **changes)
+
+
+@dataclass(frozen=True)
+class UpdateStats:
+    """What one update did: the policy that ran (adaptive's choice), its wall time, the SAH cost
+    of the updated tree, the subtrees and primitives rebuilt, and (with measure_fresh, else None)
+    the SAH cost of a fresh build over the same geometry."""
+
+    policy: str
+    ms: float
+    sah_cost: float
+    subtrees_rebuilt: int
+    primitives_rebuilt: int
+    fresh_sah_cost: float | None = None

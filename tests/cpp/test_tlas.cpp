@@ -1,0 +1,273 @@
+// Two-level trees (tlas.h): the hits through a TLAS and its shared BLASes equal those of one flat
+// tree over the same triangles moved into the world; bad instances are refused with clear errors.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <stdexcept>
+#include <string>
+
+#include "bvhlab/coordinate_range.h"
+#include "bvhlab/tlas.h"
+#include "bvhlab/wide_bvh.h"
+#include "test_scenes.h"
+
+using namespace bvhlab;
+using namespace bvhlab::test;
+
+namespace {
+
+/// rotation about a unit axis by `angle`, then scale (applied first), then translation
+Transform make_transform(Vec3 axis, float angle, Vec3 scale, Vec3 move) {
+    axis = normalize(axis);
+    const float c = std::cos(angle), s = std::sin(angle), k = 1 - c;
+    const float r[9] = {
+        c + axis.x * axis.x * k,          axis.x * axis.y * k - axis.z * s, axis.x * axis.z * k + axis.y * s,
+        axis.y * axis.x * k + axis.z * s, c + axis.y * axis.y * k,          axis.y * axis.z * k - axis.x * s,
+        axis.z * axis.x * k - axis.y * s, axis.z * axis.y * k + axis.x * s, c + axis.z * axis.z * k};
+    Transform t;
+    for (int row = 0; row < 3; ++row) {
+        t.m[4 * row] = r[3 * row] * scale.x, t.m[4 * row + 1] = r[3 * row + 1] * scale.y;
+        t.m[4 * row + 2] = r[3 * row + 2] * scale.z, t.m[4 * row + 3] = move[row];
+    }
+    return t;
+}
+
+/// Meshes, their trees, instances, and the same triangles moved into the world as one flat scene.
+struct Instanced {
+    std::vector<Scene> meshes;
+    std::vector<Bvh> trees;
+    std::vector<WideBvh> wides;
+    std::vector<std::uint32_t> blas_of;
+    std::vector<Transform> transforms;
+    Tlas tlas;
+    TwoLevel two_level;
+    Scene flat;
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> flat_origin;  ///< flat triangle → (instance, prim)
+    Bvh flat_tree;
+    WideBvh flat_wide;
+
+    void finish() {
+        for (const Scene& m : meshes) trees.push_back(build_bvh(m.view()));
+        for (const Bvh& t : trees) wides.push_back(make_wide(t));
+        std::vector<const Bvh*> blases;
+        for (const Bvh& t : trees) blases.push_back(&t);
+        tlas = build_tlas(blases, blas_of, transforms);
+        two_level.tlas = &tlas;
+        for (std::size_t b = 0; b < trees.size(); ++b) two_level.blases.push_back({&trees[b], &wides[b]});
+        for (std::uint32_t i = 0; i < blas_of.size(); ++i) {
+            const GeometryView g = meshes[blas_of[i]].view();
+            for (std::uint32_t p = 0; p < g.triangle_count; ++p) {
+                const Transform& t = transforms[i];
+                flat.add_triangle(t.point(g.vertex(p, 0)), t.point(g.vertex(p, 1)), t.point(g.vertex(p, 2)));
+                flat_origin.push_back({i, p});
+            }
+        }
+        flat_tree = build_bvh(flat.view());
+        flat_wide = make_wide(flat_tree);
+    }
+};
+
+Instanced mixed_instances() {
+    Instanced s;
+    s.meshes.push_back(random_scene(400, 0, 1));
+    s.meshes.push_back(octasphere(6, {5, 5, 5}, 3.0f));
+    const float pi = 3.14159265f;
+    s.blas_of = {0, 1, 0, 1, 0, 0, 1};
+    s.transforms = {
+        Transform{},                                                         // identity
+        make_transform({0, 0, 1}, pi / 5, {1, 1, 1}, {12, 0, 0}),            // rotation + move
+        make_transform({1, 2, 3}, 1.1f, {2.0f, 0.5f, 1.3f}, {-14, 3, 2}),    // non-uniform scale
+        make_transform({1, 0, 0}, 0.3f, {-1, 1, 1}, {0, 14, 0}),             // mirrored
+        make_transform({0, 1, 0}, 2.0f, {-0.7f, -1.5f, 2.5f}, {4, -12, 6}),  // mirrored, non-uniform
+        make_transform({1, 1, 0}, 0.7f, {3, 3, 3}, {30, 30, -5}),            // uniform scale
+        make_transform({0, 0, 1}, 0.0f, {1, 1, 1}, {3, 3, 3}),               // overlaps the first ones
+    };
+    s.finish();
+    return s;
+}
+
+/// Rays from a box around everything towards random points of random world triangles and of space.
+std::vector<Ray> rays_at(const Instanced& s, std::uint32_t n, std::uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    std::vector<Ray> rays;
+    const GeometryView g = s.flat.view();
+    for (std::uint32_t i = 0; i < n; ++i) {
+        const Vec3 origin{-40 + 90 * u(rng), -40 + 90 * u(rng), -40 + 90 * u(rng)};
+        Vec3 target{-20 + 60 * u(rng), -20 + 60 * u(rng), -20 + 60 * u(rng)};
+        if (i % 4 != 0) {  // most at a triangle's interior
+            const std::size_t t = rng() % g.triangle_count;
+            float a = 0.1f + 0.8f * u(rng), b = (1 - a) * (0.1f + 0.8f * u(rng));
+            target = g.vertex(t, 0) * (1 - a - b) + g.vertex(t, 1) * a + g.vertex(t, 2) * b;
+        }
+        rays.push_back({origin, target - origin});
+    }
+    return rays;
+}
+
+void expect_same_as_flat(const Instanced& s, Traversal mode, std::uint32_t seed) {
+    std::uint32_t disagreements = 0, hits = 0;
+    const auto rays = rays_at(s, 4000, seed);
+    for (const Ray& ray : rays) {
+        const Hit flat =
+            mode == Traversal::Wide ? intersect_wide(s.flat_wide, s.flat_tree, ray) : intersect(s.flat_tree, ray, mode);
+        const InstanceHit two = intersect_two_level(s.two_level, ray, mode);
+        ASSERT_EQ(flat.ref == kNoHit, two.hit.ref == kNoHit && two.instance == kNoHit);
+        if (flat.ref == kNoHit) continue;
+        ++hits;
+        const auto [instance, prim] = s.flat_origin[flat.ref];
+        const bool same = instance == two.instance && prim == two.hit.ref;
+        // t is in world units in both: the same within float rounding of the moved vertices
+        const bool near = std::fabs(flat.t - two.hit.t) <= 1e-4f * flat.t;
+        if (!same || !near) ++disagreements;
+        if (same) EXPECT_NEAR(two.hit.t, flat.t, 1e-4f * flat.t);
+    }
+    // Rays that graze an edge may go either way under different rounding; anything more is a bug.
+    EXPECT_GT(hits, rays.size() / 2);
+    EXPECT_LE(disagreements, rays.size() / 500) << disagreements << " of " << rays.size();
+}
+
+/// Rays scattered through the test scenes' cube, some axis-parallel, some unnormalised.
+std::vector<Ray> scattered_rays(std::uint32_t n, std::uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(-2.0f, 12.0f);
+    std::normal_distribution<float> g(0.0f, 1.0f);
+    std::vector<Ray> rays;
+    for (std::uint32_t i = 0; i < n; ++i) {
+        Vec3 d{g(rng), g(rng), g(rng)};
+        if (i % 7 == 0) d.y = 0;
+        if (i % 5 == 0) d = d * 3.7f;
+        rays.push_back({{u(rng), u(rng), u(rng)}, d});
+    }
+    return rays;
+}
+
+}  // namespace
+
+TEST(Tlas, HitsEqualOneFlatTreeOverTheMovedTriangles) {
+    const Instanced s = mixed_instances();
+    for (Traversal mode : {Traversal::Stack, Traversal::Stackless, Traversal::Wide}) expect_same_as_flat(s, mode, 11);
+}
+
+TEST(Tlas, BatchReportsInstanceAndPrimitive) {
+    const Instanced s = mixed_instances();
+    const auto rays = rays_at(s, 3000, 4);
+    std::vector<float> o, d, t(rays.size()), u(rays.size()), v(rays.size());
+    for (const Ray& r : rays)
+        o.insert(o.end(), {r.origin.x, r.origin.y, r.origin.z}), d.insert(d.end(), {r.dir.x, r.dir.y, r.dir.z});
+    std::vector<std::int32_t> prim(rays.size()), instance(rays.size());
+    std::vector<std::uint32_t> visited(rays.size());
+    for (std::uint32_t threads : {1u, 3u}) {
+        intersect_batch_two_level(s.two_level, {o.data(), d.data(), rays.size()},
+                                  {t.data(), prim.data(), nullptr, u.data(), v.data(), visited.data()}, instance.data(),
+                                  Traversal::Wide, threads);
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+            const InstanceHit h = intersect_two_level(s.two_level, rays[i], Traversal::Wide);
+            ASSERT_EQ(instance[i], h.hit.ref == kNoHit ? -1 : std::int32_t(h.instance));
+            ASSERT_EQ(prim[i], h.hit.ref == kNoHit ? -1 : std::int32_t(h.hit.ref));
+            if (h.hit.ref != kNoHit) ASSERT_EQ(t[i], h.hit.t);
+        }
+    }
+}
+
+TEST(Tlas, OneIdentityInstanceIsTheFlatTree) {
+    const Scene mesh = random_scene(2000, 30, 9);
+    const Bvh tree = build_bvh(mesh.view());
+    const WideBvh wide = make_wide(tree);
+    const Tlas tlas = build_tlas({&tree}, {0}, {Transform{}});
+    const TwoLevel scene{&tlas, {{&tree, &wide}}};
+    for (const Ray& ray : scattered_rays(3000, 2)) {
+        for (Traversal mode : {Traversal::Stack, Traversal::Stackless, Traversal::Wide}) {
+            std::uint32_t flat_visits = 0, two_visits = 0;
+            const Hit flat = mode == Traversal::Wide ? intersect_wide(wide, tree, ray, &flat_visits)
+                                                     : intersect(tree, ray, mode, &flat_visits);
+            const InstanceHit two = intersect_two_level(scene, ray, mode, &two_visits);
+            ASSERT_EQ(flat.ref, two.hit.ref);
+            ASSERT_EQ(flat.t, two.hit.t);  // bit for bit: no TLAS, no transform
+            ASSERT_EQ(flat.u, two.hit.u);
+            ASSERT_EQ(flat_visits, two_visits);
+            ASSERT_EQ(two.instance, flat.ref == kNoHit ? kNoHit : 0u);
+        }
+    }
+}
+
+TEST(Tlas, TreeHoldsEveryPlacedInstanceOnceInsideItsBoxes) {
+    const Instanced s = mixed_instances();
+    std::vector<int> seen(s.tlas.instances.size(), 0);
+    const Bvh& tree = s.tlas.tree;
+    for (std::uint32_t i = 0; i < tree.node_count(); ++i) {
+        const BvhNode& n = tree.nodes[i];
+        if (!is_leaf(n)) {
+            EXPECT_TRUE(node_box(n).contains(node_box(tree.nodes[i + 1])));
+            EXPECT_TRUE(node_box(n).contains(node_box(tree.nodes[n.index])));
+            continue;
+        }
+        EXPECT_EQ(leaf_count(n), 1u);  // default_tlas_config: one instance per leaf
+        for (std::uint32_t k = n.index; k < n.index + leaf_count(n); ++k) {
+            const std::uint32_t inst = tree.refs[k];
+            ++seen.at(inst);
+            EXPECT_TRUE(node_box(n).contains(s.tlas.instances[inst].world_box));
+        }
+    }
+    for (int c : seen) EXPECT_EQ(c, 1);
+    // every moved vertex lies in its instance's world box
+    for (std::size_t f = 0; f < s.flat_origin.size(); ++f) {
+        Aabb tri;
+        for (int k = 0; k < 3; ++k) tri.grow(s.flat.view().vertex(f, k));
+        EXPECT_TRUE(s.tlas.instances[s.flat_origin[f].first].world_box.contains(tri));
+    }
+}
+
+TEST(Tlas, InstancesOfAnEmptyMeshAreLeftOut) {
+    const Scene mesh = random_scene(50, 0, 3);
+    const Bvh tree = build_bvh(mesh.view()), empty = build_bvh(GeometryView{});
+    const Tlas tlas = build_tlas({&tree, &empty}, {1, 0, 1}, {Transform{}, Transform{}, Transform{}});
+    ASSERT_EQ(tlas.tree.refs.size(), 1u);
+    EXPECT_EQ(tlas.tree.refs[0], 1u);
+    const TwoLevel none{&tlas, {{&tree, nullptr}, {&empty, nullptr}}};
+    const Tlas no_instances = build_tlas({&tree}, {}, {});
+    const TwoLevel scene{&no_instances, {{&tree, nullptr}}};
+    EXPECT_EQ(intersect_two_level(scene, {{0, 0, -5}, {0, 0, 1}}, Traversal::Stack).hit.ref, kNoHit);
+    check_two_level(none, Traversal::Stack);
+    EXPECT_THROW(check_two_level(none, Traversal::Wide), std::invalid_argument);
+}
+
+namespace {
+void expect_refused(const std::vector<std::uint32_t>& blas_of, const std::vector<Transform>& transforms,
+                    const std::string& words) {
+    const Scene mesh = random_scene(50, 0, 3);
+    const Bvh tree = build_bvh(mesh.view());
+    try {
+        build_tlas({&tree}, blas_of, transforms);
+        ADD_FAILURE() << "accepted: " << words;
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+    }
+}
+}  // namespace
+
+TEST(Tlas, BadInstancesAreRefusedByName) {
+    Transform nan, zero_axis, flat_axes, far;
+    nan.m[5] = std::nanf("");
+    zero_axis.m[10] = 0.0f;                         // scale z by 0
+    flat_axes.m[1] = 1.0f, flat_axes.m[5] = 1e-9f;  // columns 0 and 1 (nearly) parallel
+    far.m[3] = 0x1p41f;                             // moved beyond the coordinate range
+    expect_refused({0, 3}, {Transform{}, Transform{}}, "instance 1 refers to mesh 3, but the scene has 1 mesh");
+    expect_refused({0, 0}, {Transform{}, nan}, "instance 1: the transform has a NaN");
+    expect_refused({0}, {zero_axis}, "instance 0: the transform cannot be inverted");
+    expect_refused({0}, {flat_axes}, "instance 0: the transform cannot be inverted");
+    expect_refused({0}, {far}, "instance 0: the transform moves the mesh outside");
+    expect_refused({0, 0}, {Transform{}}, "one transform per instance");
+}
+
+TEST(Tlas, InverseUndoesTheTransform) {
+    const Transform t = make_transform({1, 2, 3}, 1.1f, {2.0f, -0.5f, 1.3f}, {-14, 3, 2});
+    const Transform inv = inverse(t);
+    for (Vec3 p : {Vec3{1, 2, 3}, Vec3{-5, 0.25f, 9}}) {
+        const Vec3 back = inv.point(t.point(p));
+        EXPECT_NEAR(back.x, p.x, 1e-5f);
+        EXPECT_NEAR(back.y, p.y, 1e-5f);
+        EXPECT_NEAR(back.z, p.z, 1e-5f);
+    }
+}

@@ -1,0 +1,174 @@
+// Updates of a deforming mesh (update.h): every policy leaves a valid tree over the moved
+// geometry, partial rebuilds exactly the topmost subtrees past the threshold, adaptive picks by
+// cost, and the results do not depend on the thread count.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <functional>
+#include <stdexcept>
+
+#include "bvhlab/stats.h"
+#include "bvhlab/update.h"
+#include "test_scenes.h"
+#include "tree_checks.h"
+
+using namespace bvhlab;
+using namespace bvhlab::test;
+
+namespace {
+
+/// `scene` with the triangles whose first vertex lies in x < cut moved, each by its own offset
+/// along y of up to `amount` (the triangles keep their shape; that region's subtrees spread out).
+Scene deformed(const Scene& scene, float cut, float amount) {
+    Scene out = scene;
+    for (std::size_t t = 0; t < out.triangles.size() / 9; ++t) {
+        if (out.triangles[9 * t] >= cut) continue;
+        const float offset = amount * std::sin(float(7 * t));
+        for (int k = 0; k < 3; ++k) out.triangles[9 * t + 3 * k + 1] += offset;
+    }
+    return out;
+}
+
+/// The subtree cost of node i by recursion (independent of subtree_costs): S/A with the same rule.
+double cost_of(const Bvh& bvh, std::uint32_t i, double& area_cost) {
+    const BvhNode& n = bvh.nodes[i];
+    const double a = node_box(n).half_area();
+    if (is_leaf(n)) {
+        area_cost = a * leaf_count(n);
+    } else {
+        double l, r;
+        cost_of(bvh, i + 1, l), cost_of(bvh, n.index, r);
+        area_cost = a + l + r;
+    }
+    return area_cost / a;
+}
+
+std::uint32_t prims_under(const Bvh& bvh, std::uint32_t i) {
+    const BvhNode& n = bvh.nodes[i];
+    return is_leaf(n) ? leaf_count(n) : prims_under(bvh, i + 1) + prims_under(bvh, n.index);
+}
+
+/// Topmost nodes past the threshold, by recursion from the root.
+void count_past(const Bvh& refit, const std::vector<float>& built, const UpdateConfig& c, std::uint32_t i,
+                std::uint32_t& roots, std::uint64_t& prims) {
+    double ac;
+    if (prims_under(refit, i) >= c.min_subtree_primitives &&
+        cost_of(refit, i, ac) > c.subtree_growth * built[i] * (1 + 1e-6)) {
+        ++roots, prims += prims_under(refit, i);
+        return;
+    }
+    const BvhNode& n = refit.nodes[i];
+    if (!is_leaf(n))
+        count_past(refit, built, c, i + 1, roots, prims), count_past(refit, built, c, n.index, roots, prims);
+}
+
+struct Fixture {
+    Scene scene = random_scene(20000, 40, 7);
+    Bvh tree = build_bvh(scene.view());
+    std::vector<float> built = subtree_costs(tree);
+};
+
+}  // namespace
+
+TEST(Update, SubtreeCostOfTheRootIsTheTreesSahCost) {
+    const Fixture f;
+    EXPECT_NEAR(f.built[0], sah_cost(f.tree), 1e-4 * sah_cost(f.tree));
+    double ac;
+    for (std::uint32_t i : {0u, 1u, 5u, f.tree.nodes[0].index})
+        EXPECT_NEAR(f.built[i], cost_of(f.tree, i, ac), 1e-4 * f.built[i]);
+}
+
+TEST(Update, EveryPolicyLeavesAValidTree) {
+    const Fixture f;
+    const Scene moved = deformed(f.scene, 4.0f, 1.5f);
+    for (UpdatePolicy p : {UpdatePolicy::Rebuild, UpdatePolicy::Refit, UpdatePolicy::Partial, UpdatePolicy::Adaptive}) {
+        UpdateConfig c;
+        c.policy = p;
+        std::vector<float> built_out;
+        UpdateStats stats;
+        const Bvh t = update_bvh(f.tree, f.built, moved.view(), c, built_out, &stats);
+        SCOPED_TRACE(to_string(p));
+        check_tree(t, moved.view(), f.tree.config.max_leaf_size);
+        EXPECT_EQ(t.geometry_fingerprint, geometry_fingerprint(moved.view()));
+        ASSERT_EQ(built_out.size(), t.nodes.size());
+        EXPECT_NEAR(stats.sah_cost, sah_cost(t), 1e-4 * stats.sah_cost);
+        EXPECT_GT(stats.ms, 0.0);
+        if (p != UpdatePolicy::Adaptive) EXPECT_EQ(stats.policy, p);
+    }
+}
+
+TEST(Update, PartialRebuildsExactlyTheSubtreesPastTheThreshold) {
+    const Fixture f;
+    const Scene moved = deformed(f.scene, 1.0f, 3.0f);
+    UpdateConfig c;
+    c.policy = UpdatePolicy::Partial;
+    c.min_subtree_primitives = 64;
+    const Bvh refit = refitted(f.tree, moved.view());
+    std::uint32_t roots = 0;
+    std::uint64_t prims = 0;
+    count_past(refit, f.built, c, 0, roots, prims);
+    ASSERT_GT(roots, 0u);  // the deformation must have pushed some subtree past it
+    std::vector<float> built_out;
+    UpdateStats stats;
+    const Bvh t = update_bvh(f.tree, f.built, moved.view(), c, built_out, &stats);
+    EXPECT_EQ(stats.subtrees_rebuilt, roots);
+    EXPECT_EQ(stats.primitives_rebuilt, prims);
+    EXPECT_LT(prims, moved.view().primitive_count());  // not the whole tree
+    EXPECT_LT(stats.sah_cost, sah_cost(refit));        // restructuring helped
+    check_tree(t, moved.view(), f.tree.config.max_leaf_size);
+    // a second update of the same geometry finds nothing past the threshold any more
+    std::vector<float> again;
+    UpdateStats second;
+    update_bvh(t, built_out, moved.view(), c, again, &second);
+    EXPECT_EQ(second.subtrees_rebuilt, 0u);
+}
+
+TEST(Update, AdaptivePicksByCost) {
+    const Fixture f;
+    UpdateConfig c;  // adaptive
+    std::vector<float> out;
+    UpdateStats stats;
+    update_bvh(f.tree, f.built, deformed(f.scene, 100.0f, 1e-3f).view(), c, out, &stats);  // barely moved
+    EXPECT_EQ(stats.policy, UpdatePolicy::Refit);
+    update_bvh(f.tree, f.built, deformed(f.scene, 1.0f, 3.0f).view(), c, out, &stats);  // one region
+    EXPECT_EQ(stats.policy, UpdatePolicy::Partial);
+    update_bvh(f.tree, f.built, deformed(f.scene, 100.0f, 6.0f).view(), c, out, &stats);  // everything
+    EXPECT_EQ(stats.policy, UpdatePolicy::Rebuild);
+}
+
+TEST(Update, SameTreesOnEveryThreadCount) {
+    Fixture f;
+    const Scene moved = deformed(f.scene, 1.0f, 3.0f);
+    std::vector<Bvh> trees;
+    for (std::uint32_t threads : {1u, 4u}) {
+        Bvh tree = f.tree;
+        tree.config.threads = threads;
+        UpdateConfig c;
+        c.policy = UpdatePolicy::Partial;
+        std::vector<float> out;
+        trees.push_back(update_bvh(tree, f.built, moved.view(), c, out));
+    }
+    ASSERT_EQ(trees[0].nodes.size(), trees[1].nodes.size());
+    EXPECT_EQ(std::memcmp(trees[0].nodes.data(), trees[1].nodes.data(), trees[0].nodes.size() * sizeof(BvhNode)), 0);
+    EXPECT_EQ(std::memcmp(trees[0].refs.data(), trees[1].refs.data(), trees[0].refs.size() * 4), 0);
+}
+
+TEST(Update, BadInputIsRefused) {
+    const Fixture f;
+    std::vector<float> out;
+    UpdateConfig c;
+    const Scene fewer = random_scene(100, 40, 7);
+    EXPECT_THROW(update_bvh(f.tree, f.built, fewer.view(), c, out), std::invalid_argument);
+    Scene nan = f.scene;
+    nan.triangles[40] = std::nanf("");
+    for (UpdatePolicy p : {UpdatePolicy::Rebuild, UpdatePolicy::Refit, UpdatePolicy::Partial}) {
+        c.policy = p;
+        EXPECT_THROW(update_bvh(f.tree, f.built, nan.view(), c, out), std::invalid_argument);
+    }
+    c.subtree_growth = 0.5f;
+    EXPECT_THROW(update_bvh(f.tree, f.built, f.scene.view(), c, out), std::invalid_argument);
+    EXPECT_THROW(update_bvh(f.tree, {}, f.scene.view(), UpdateConfig{}, out), std::invalid_argument);
+    EXPECT_THROW(parse_update_policy("sometimes"), std::invalid_argument);
+    EXPECT_EQ(parse_update_policy("partial"), UpdatePolicy::Partial);
+}

@@ -1,0 +1,230 @@
+"""Scenes with meshes and instances (issue 34): bvhlab.build makes a two-level tree whose hits
+equal those of one flat tree over the same triangles moved into the world (Scene.flattened), the
+scene file keeps them, and bad instances are refused with clear errors."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+import bvhlab
+from bvhlab.library import procedural
+
+
+def _transform(angle: float, axis, scale, move) -> np.ndarray:
+    """Rotation about `axis` by `angle`, after scaling by `scale`, then moved by `move` (3×4)."""
+    a = np.asarray(axis, np.float64) / np.linalg.norm(axis)
+    k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+    r = np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * (k @ k)
+    return np.concatenate([r @ np.diag(scale), np.reshape(move, (3, 1))], 1).astype(np.float32)
+
+
+@pytest.fixture(scope="module")
+def instanced_scene():
+    cloud = procedural.random_triangles(300, size=0.15, seed=4)
+    knot = procedural.torus_knot(2000)
+    transforms = np.stack(
+        [
+            _transform(0.0, (0, 0, 1), (1, 1, 1), (0, 0, 0)),
+            _transform(0.6, (1, 2, 3), (2.0, 0.5, 1.3), (3, 0, 0)),  # non-uniform scale
+            _transform(1.1, (0, 1, 0), (-1, 1, 1), (0, 3, 0)),  # mirrored
+            _transform(2.0, (1, 1, 0), (-0.7, -1.5, 2.5), (3, 3, 1)),  # mirrored, non-uniform
+            _transform(0.3, (0, 0, 1), (1, 1, 1), (0.2, 0.1, 0)),  # overlaps the first
+        ]
+    )
+    return bvhlab.Scene(
+        triangles=cloud, meshes=[knot], instance_mesh=np.array([0, 1, 0, 1, 1]), instance_transforms=transforms
+    )
+
+
+def _rays(scene: bvhlab.Scene, n: int, seed: int):
+    """Rays from around the scene at random points of its (world) triangles, and some at nothing."""
+    rng = np.random.default_rng(seed)
+    flat = scene.flattened().triangles
+    lo, hi = scene.bounds()
+    origins = rng.uniform(lo - 2, hi + 2, (n, 3)).astype(np.float32)
+    w = rng.uniform(0.1, 0.8, (n, 2))
+    w[:, 1] *= 1 - w[:, 0]
+    tri = flat[rng.integers(0, len(flat), n)]
+    targets = tri[:, 0] * (1 - w.sum(1))[:, None] + tri[:, 1] * w[:, :1] + tri[:, 2] * w[:, 1:]
+    targets[::4] = rng.uniform(lo, hi, (len(targets[::4]), 3))
+    return origins, np.ascontiguousarray(targets - origins, np.float32)
+
+
+@pytest.mark.parametrize("traversal", bvhlab.TRAVERSALS)
+def test_two_level_hits_equal_the_flattened_tree(instanced_scene, traversal):
+    tree = bvhlab.build(instanced_scene)
+    assert isinstance(tree, bvhlab.InstancedBvh)
+    flat_scene = instanced_scene.flattened()
+    flat = bvhlab.build(flat_scene)
+    assert isinstance(flat, bvhlab.Bvh)
+    # which instance and primitive each flat triangle came from
+    mesh_of, _ = instanced_scene.instances()
+    sizes = [len(instanced_scene.mesh_triangles(int(k))) for k in mesh_of]
+    flat_instance = np.repeat(np.arange(len(sizes)), sizes)
+    flat_prim = np.concatenate([np.arange(s) for s in sizes])
+
+    origins, dirs = _rays(instanced_scene, 6000, 1)
+    two = tree.intersect(origins, dirs, traversal=traversal)
+    one = flat.intersect(origins, dirs, traversal=traversal)
+    hit = one["prim"] >= 0
+    assert hit.sum() > len(hit) // 2
+    np.testing.assert_array_equal(two["prim"] >= 0, hit)
+    np.testing.assert_array_equal(two["instance"] >= 0, hit)
+    same = (two["instance"][hit] == flat_instance[one["prim"][hit]]) & (two["prim"][hit] == flat_prim[one["prim"][hit]])
+    # the hit points agree within float rounding of world coordinates (the scene's extent)
+    lo, hi = instanced_scene.bounds()
+    length = np.linalg.norm(dirs[hit], axis=1)
+    slack = 1e-4 * one["t"][hit] + 1e-5 * float(np.max(hi - lo)) / length
+    near = np.abs(two["t"][hit] - one["t"][hit]) <= slack
+    # rays grazing an edge may go either way under different rounding; anything more is a bug
+    assert np.count_nonzero(~(same & near)) <= len(hit) // 500, np.count_nonzero(~(same & near))
+    assert np.all(near[same])
+
+
+def test_a_flat_scene_is_one_mesh_and_one_identity_instance(small_scene):
+    tris, spheres = small_scene
+    scene = bvhlab.Scene(triangles=tris, spheres=spheres)
+    assert not scene.is_instanced and scene.mesh_count == 1
+    mesh_of, transforms = scene.instances()
+    np.testing.assert_array_equal(mesh_of, [0])
+    np.testing.assert_array_equal(transforms[0], np.eye(3, 4))
+    assert isinstance(bvhlab.build(scene), bvhlab.Bvh)
+    assert scene.flattened() is scene
+    # the same scene with its one instance spelled out: a two-level tree with the same hits, bit for bit
+    spelled = bvhlab.Scene(triangles=tris, spheres=spheres, instance_mesh=mesh_of, instance_transforms=transforms)
+    two, flat = bvhlab.build(spelled), bvhlab.build(scene)
+    rng = np.random.default_rng(5)
+    origins = rng.uniform(-0.5, 1.5, (3000, 3)).astype(np.float32)
+    dirs = rng.normal(size=(3000, 3)).astype(np.float32)
+    a, b = two.intersect(origins, dirs), flat.intersect(origins, dirs)
+    for key in ("t", "prim", "kind", "u", "v", "nodes_visited"):
+        np.testing.assert_array_equal(a[key], b[key])
+    np.testing.assert_array_equal(a["instance"], np.where(b["prim"] >= 0, 0, -1))
+
+
+def test_place_moves_instances_without_rebuilding_meshes(instanced_scene):
+    tree = bvhlab.build(instanced_scene)
+    meshes = list(tree.meshes)
+    lo_before, _ = tree.world_boxes()
+    mesh_of, transforms = instanced_scene.instances()
+    moved = transforms.copy()
+    moved[:, :, 3] += np.float32(10)
+    tree.place(mesh_of, moved)
+    assert tree.meshes == meshes
+    lo, hi = tree.world_boxes()
+    ref = bvhlab.Scene(
+        triangles=instanced_scene.triangles,
+        meshes=instanced_scene.meshes,
+        instance_mesh=mesh_of,
+        instance_transforms=moved,
+    )
+    origins, dirs = _rays(ref, 2000, 3)
+    a = tree.intersect(origins, dirs)
+    b = bvhlab.build(ref).intersect(origins, dirs)
+    np.testing.assert_array_equal(a["instance"], b["instance"])
+    np.testing.assert_array_equal(a["t"], b["t"])
+    np.testing.assert_allclose(lo, lo_before + 10, rtol=1e-5)  # the boxes moved with the instances
+    assert tree.stats["instances"] == 5 and tree.stats["meshes"] == 2
+
+
+def test_scene_file_keeps_meshes_and_instances(instanced_scene, tmp_path):
+    path = instanced_scene.save(tmp_path / "inst.npz")
+    back = bvhlab.Scene.load(path)
+    assert back.is_instanced and back.mesh_count == 2
+    np.testing.assert_array_equal(back.meshes[0], instanced_scene.meshes[0])
+    for a, b in zip(back.instances(), instanced_scene.instances()):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_format_1_files_still_load(small_scene, tmp_path):
+    tris, spheres = small_scene
+    path = tmp_path / "old.npz"
+    np.savez(
+        path,
+        format_version=np.array(1),
+        triangles=tris,
+        spheres=spheres,
+        materials=np.array([[0.8, 0.8, 0.8, 0, 0, 1.5]]),
+        tri_material=np.zeros(len(tris), np.int32),
+        sphere_material=np.zeros(len(spheres), np.int32),
+        sky=np.array([0.5, 0.6, 0.7]),
+    )
+    scene = bvhlab.Scene.load(path)
+    assert not scene.is_instanced
+    np.testing.assert_array_equal(scene.triangles, tris)
+
+
+def test_bad_instances_are_refused_by_name(small_scene):
+    tris, _ = small_scene
+    eye = np.eye(3, 4, dtype=np.float32)[None]
+    with pytest.raises(ValueError, match="instance 1 refers to mesh 2, but the scene has 1 mesh"):
+        bvhlab.build(bvhlab.Scene(triangles=tris, instance_mesh=[0, 2], instance_transforms=np.repeat(eye, 2, 0)))
+    bad = np.repeat(eye, 2, 0)
+    bad[1, 2, 2] = 0.0  # a zero-scale axis
+    with pytest.raises(ValueError, match="instance 1: the transform cannot be inverted"):
+        bvhlab.build(bvhlab.Scene(triangles=tris, instance_mesh=[0, 0], instance_transforms=bad))
+    nan = eye.copy()
+    nan[0, 1, 1] = np.nan
+    with pytest.raises(ValueError, match="instance 0: the transform has a NaN"):
+        bvhlab.Scene(triangles=tris, instance_mesh=[0], instance_transforms=nan)
+    with pytest.raises(ValueError, match="2 instance meshes but 1 instance transforms"):
+        bvhlab.build(bvhlab.Scene(triangles=tris, instance_mesh=[0, 0], instance_transforms=eye))
+    with pytest.raises(TypeError, match="instance_transforms must have dtype float32"):
+        bvhlab.Scene(triangles=tris, instance_mesh=[0], instance_transforms=eye.astype(np.float64))
+    with pytest.raises(ValueError, match="renderers take flat scenes"):
+        scene = bvhlab.Scene(triangles=tris, instance_mesh=[0], instance_transforms=eye)
+        bvhlab.render(scene, bvhlab.build(scene.flattened()), 8, 8, backend="cpu")
+
+
+def test_the_cli_builds_and_renders_an_instanced_scene_file(instanced_scene, tmp_path, capsys):
+    from bvhlab.cli import main
+
+    path = instanced_scene.save(tmp_path / "inst.npz")
+    assert main(["build", str(path), "--json", str(tmp_path / "stats.json")]) == 0
+    assert "5 instances of 2 meshes" in capsys.readouterr().out
+    assert json.loads((tmp_path / "stats.json").read_text())["stats"]["instances"] == 5
+    # the renderers walk one level: the CLI renders the flattened scene
+    assert (
+        main(
+            [
+                "render",
+                str(path),
+                "--width",
+                "16",
+                "--height",
+                "12",
+                "--backend",
+                "cpu",
+                "--out",
+                str(tmp_path / "a.png"),
+            ]
+        )
+        == 0
+    )
+    assert (tmp_path / "a.png").stat().st_size > 0
+
+
+def test_update_mesh_touches_only_that_mesh(instanced_scene):
+    tree = bvhlab.build(instanced_scene)
+    cloud_tree = tree.meshes[0]
+    mesh_of, transforms = instanced_scene.instances()
+    knot = instanced_scene.meshes[0]
+    for moved_knot in (knot * np.float32(1.1), np.ascontiguousarray(knot[:500])):
+        stats = tree.update_mesh(1, moved_knot)  # adaptive with the same count; another count: rebuilt
+        assert stats.policy in bvhlab.UPDATE_POLICIES
+        if len(moved_knot) != len(knot):
+            assert stats.policy == "rebuild" and stats.primitives_rebuilt == 500
+        assert tree.meshes[0] is cloud_tree and cloud_tree.revision == 0  # the other mesh untouched
+        ref = bvhlab.Scene(
+            triangles=instanced_scene.triangles,
+            meshes=[moved_knot],
+            instance_mesh=mesh_of,
+            instance_transforms=transforms,
+        )
+        origins, dirs = _rays(ref, 2000, 9)
+        a, b = tree.intersect(origins, dirs), bvhlab.build(ref).intersect(origins, dirs)
+        np.testing.assert_array_equal(a["instance"], b["instance"])
+        np.testing.assert_array_equal(a["prim"], b["prim"])
+        np.testing.assert_array_equal(a["t"], b["t"])

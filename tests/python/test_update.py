@@ -1,0 +1,98 @@
+"""Bvh.update (issue 34): every policy leaves a valid tree over the moved geometry (its boxes hold
+their primitives and their children, skip indices are right) whose hits equal a fresh build's,
+and reports what ran."""
+
+import numpy as np
+import pytest
+
+import bvhlab
+from bvhlab.library import procedural
+
+
+def _moved(tris: np.ndarray, amount: float, region: float = np.inf) -> np.ndarray:
+    """Triangles left of x = region moved along y, each by its own offset of up to `amount`."""
+    out = tris.copy()
+    left = tris[:, 0, 0] < region
+    out[left, :, 1] += (amount * np.sin(np.arange(len(tris))[left] * 7.0)).astype(np.float32)[:, None]
+    return np.ascontiguousarray(out)
+
+
+def _check_valid(bvh: bvhlab.Bvh, tris: np.ndarray) -> None:
+    nodes, refs, skip, leaf = bvh.nodes, bvh.refs, bvh.skip, bvh.is_leaf
+    lo, hi = nodes["lo"], nodes["hi"]
+    # leaves hold their triangles' boxes
+    counts = np.where(leaf, nodes["info"], 0)
+    owner = np.repeat(np.flatnonzero(leaf), counts[leaf])
+    slots = np.concatenate([np.arange(s, s + c) for s, c in zip(nodes["index"][leaf], counts[leaf])])
+    assert np.all(lo[owner] <= tris[refs[slots]].min(1)) and np.all(hi[owner] >= tris[refs[slots]].max(1))
+    assert sorted(refs.tolist()) == list(range(len(tris)))
+    # inner nodes hold both children; the second child follows the first's subtree; skips are right
+    inner = np.flatnonzero(~leaf)
+    first, second = inner + 1, nodes["index"][inner]
+    for child in (first, second):
+        assert np.all(lo[inner] <= lo[child]) and np.all(hi[inner] >= hi[child])
+    np.testing.assert_array_equal(skip[first], second)
+    np.testing.assert_array_equal(skip[inner], skip[second])
+
+
+@pytest.fixture(scope="module")
+def knot():
+    return procedural.torus_knot(30000)
+
+
+@pytest.mark.parametrize("policy", bvhlab.UPDATE_POLICIES)
+def test_every_policy_leaves_a_valid_tree_with_a_fresh_builds_hits(knot, policy):
+    tree = bvhlab.build(knot)
+    moved = _moved(knot, 0.3, region=float(np.median(knot[:, 0, 0])))
+    stats = tree.update(moved, policy=policy)
+    assert isinstance(stats, bvhlab.UpdateStats) and tree.revision == 1
+    assert stats.policy in bvhlab.UPDATE_POLICIES and stats.ms > 0
+    if policy != "adaptive":
+        assert stats.policy == policy
+    assert stats.sah_cost == pytest.approx(tree.stats["sah_cost"], rel=1e-4)
+    _check_valid(tree, moved)
+    origins, dirs = procedural.random_rays(moved, 4000, seed=3)
+    a, b = tree.intersect(origins, dirs), bvhlab.build(moved).intersect(origins, dirs)
+    np.testing.assert_array_equal(a["t"], b["t"])
+    np.testing.assert_array_equal(a["prim"], b["prim"])
+
+
+def test_partial_rebuilds_part_and_lowers_the_cost(knot):
+    moved = _moved(knot, 0.5, region=float(np.quantile(knot[:, 0, 0], 0.2)))
+    refit, partial = bvhlab.build(knot), bvhlab.build(knot)
+    refit.update(moved, policy="refit")
+    stats = partial.update(moved, policy="partial", subtree_growth=1.3, min_subtree_primitives=64)
+    assert stats.subtrees_rebuilt > 0 and 0 < stats.primitives_rebuilt < len(knot)
+    assert stats.sah_cost < refit.stats["sah_cost"]
+
+
+def test_adaptive_refits_a_small_motion_and_rebuilds_a_scramble(knot):
+    tree = bvhlab.build(knot)
+    assert tree.update(_moved(knot, 1e-4)).policy == "refit"
+    scrambled = np.ascontiguousarray(knot[np.random.default_rng(1).permutation(len(knot))])
+    assert tree.update(scrambled).policy == "rebuild"
+    _check_valid(tree, scrambled)
+
+
+def test_bad_updates_are_refused(knot):
+    tree = bvhlab.build(knot)
+    with pytest.raises(ValueError, match="same number of triangles"):
+        tree.update(knot[:10].copy())
+    with pytest.raises(ValueError, match="policy"):
+        bvhlab.UpdateConfig(policy="sometimes")
+    with pytest.raises(ValueError, match="subtree_growth"):
+        bvhlab.UpdateConfig(subtree_growth=0.5)
+    bad = knot.copy()
+    bad[5, 1, 2] = np.nan
+    with pytest.raises(ValueError, match="triangle 5"):
+        tree.update(bad, policy="partial")
+    assert tree.revision == 0  # nothing published
+
+
+def test_fresh_sah_is_measured_on_demand(knot):
+    tree = bvhlab.build(knot)
+    moved = _moved(knot, 0.3)
+    assert tree.update(moved, policy="refit").fresh_sah_cost is None
+    stats = tree.update(moved, policy="refit", measure_fresh=True)
+    assert stats.fresh_sah_cost == pytest.approx(bvhlab.build(moved).stats["sah_cost"], rel=1e-6)
+    assert stats.sah_cost >= stats.fresh_sah_cost
