@@ -91,7 +91,7 @@ def main() -> int:
         groups.add("install")  # the only way a Blender binary gets bvhlab
     zip_path = args.zip or _default_zip()
     print(f"Blender {harness.bpy.app.version_string}, Python {platform.python_version()}", flush=True)
-    failures = []
+    failures, listed = [], set()
     with tempfile.TemporaryDirectory() as tmp:
         for group in (g for g in registry.GROUPS if g in groups):
             if group in registry.ADDON_GROUPS and harness._addon_module is None:
@@ -99,18 +99,20 @@ def main() -> int:
             for check in registry.checks([group]):
                 if only and group not in only and check.id not in only:
                     continue
+                listed.add(check.id)
                 reason = check.skip_reason(binary=IN_BLENDER)
                 if reason:
                     print(f"SKIP {check.id} ({reason})", flush=True)
                     continue
                 start = time.perf_counter()
                 try:
-                    check.run(Path(tmp) / check.id.replace(" ", "_"), zip_path)
+                    check.run(Path(tmp) / check.id, zip_path)
                     print(f"PASS {check.id} ({time.perf_counter() - start:.1f} s)", flush=True)
                 except Exception:
                     traceback.print_exc(file=sys.stdout)  # after the check's own output, before its FAIL
                     failures.append(check.id)
                     print(f"FAIL {check.id}", flush=True)
+    failures += [f"{name} (no such check)" for name in sorted(only - groups - listed)]
     print(f"{len(failures)} failed" + (": " + "; ".join(failures) if failures else ""), flush=True)
     return 1 if failures else 0
 

@@ -16,7 +16,7 @@ _child_outcomes: dict[str, tuple[str, str]] = {}
 
 def _selected(session, group: str) -> list[str]:
     """The ids of this session's tests of `group` that can run here."""
-    checks = (item.callspec.params["check"] for item in session.items if item.originalname == "test_check")
+    checks = (item.callspec.params["check"] for item in session.items if getattr(item, "obj", None) is test_check)
     return [c.id for c in checks if c.group == group and not c.skip_reason(binary=False)]
 
 
