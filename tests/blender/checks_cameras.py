@@ -11,6 +11,7 @@ said, a huge F12 refused before Blender allocates it, and the size of a border's
 
 from __future__ import annotations
 
+import functools
 import math
 
 import bpy
@@ -274,22 +275,22 @@ def _fresh(setting):
     return scene
 
 
-def check_settings_against_cycles(tmp_dir, backends=("cpu", "vulkan"), names=None) -> None:
-    """Every setting of SETTINGS: F12 on each backend, and the viewport's camera where it has the
-    setting, against Cycles' Depth pass."""
-    tmp_dir.mkdir(parents=True, exist_ok=True)
-    lines = []
-    for name in names or SETTINGS:
-        setting, in_viewport = SETTINGS[name]
-        scene = _fresh(setting)
-        reference = cycles_depth(tmp_dir, name)
-        for backend in backends:
-            lines.append(compare_depth(engine_depth(tmp_dir, name, backend), reference, f"{name} F12 {backend}"))
-        if in_viewport:
-            lines.append(compare_depth(viewport_depth(scene), reference, f"{name} viewport"))
+def check_setting_against_cycles(tmp_dir, name: str) -> None:
+    """One setting of SETTINGS: F12 on each backend there is, and the viewport's camera where it has
+    the setting, against Cycles' Depth pass."""
+    setting, in_viewport = SETTINGS[name]
+    scene = _fresh(setting)
+    reference = cycles_depth(tmp_dir, name)
+    lines = [
+        compare_depth(engine_depth(tmp_dir, name, backend), reference, f"{name} F12 {backend}")
+        for backend in vulkan_backends()
+    ]
+    if in_viewport:
+        lines.append(compare_depth(viewport_depth(scene), reference, f"{name} viewport"))
     print("cameras against Cycles:\n  " + "\n  ".join(lines))
 
 
+@functools.cache
 def vulkan_backends() -> tuple[str, ...]:
     """("cpu", "vulkan") where a Vulkan device is there, else ("cpu",)."""
     try:

@@ -150,14 +150,3 @@ def check_missing_camera_and_light_substituted() -> None:
     messages = [str(w.message) for w in caught if issubclass(w.category, SubstituteWarning)]
     assert any("no camera" in m for m in messages) and any("no visible light" in m for m in messages), messages
     assert exported.camera is not None and exported.light is not None
-
-
-CASE_CHECKS = (
-    check_scope_selected_and_visible,
-    check_collection_instances,
-    check_material_slots_per_triangle,
-    check_analytic_sphere_radius,
-    check_camera_sensor_fits,
-    check_bad_input_errors,
-    check_missing_camera_and_light_substituted,
-)

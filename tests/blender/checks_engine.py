@@ -423,24 +423,3 @@ def _expect_render_error(fragment: str) -> None:
         assert fragment in str(error), f"'{fragment}' not in '{error}'"
         return
     raise AssertionError(f"the render did not fail with '{fragment}'")
-
-
-def engine_checks(binary: bool) -> list:
-    """The checks in run order (each taking a fresh folder when it has a parameter); the command
-    line one only under a Blender binary."""
-    import checks_engine_viewport as viewport
-
-    checks = [
-        check_engine_selectable,
-        check_combined_and_heatmap_match_the_tracer,
-        check_heatmap_is_box_tests,
-        check_depth_is_camera_z,
-        check_rerender_reads_only_what_changed,
-        check_animation_frames,
-        check_errors_are_reported,
-        viewport.check_view_frustum,
-        viewport.check_viewport_worker_levels,
-        viewport.check_viewport_build_cancels,
-        viewport.check_viewport_settings_update,
-    ]
-    return checks + [check_command_line_frames] if binary else checks

@@ -245,14 +245,3 @@ def check_esc_keeps_the_samples_done(tmp_dir) -> None:
     difference = np.abs(image - reference).mean()
     print(f"Esc: {status.split('|')[-1].strip()}; mean difference from 1 sample per pixel {difference:.4f}")
     assert difference < 0.05, difference
-
-
-def final_checks(binary: bool) -> list:
-    checks = [
-        check_depth_of_field_against_cycles,
-        check_unrendered_settings_are_said,
-        check_odd_borders_are_sized_as_blender_sizes_them,
-        check_viewport_says_what_it_does_not_show,
-    ]
-    checks.append(check_huge_f12_is_refused_before_allocating)
-    return checks + [check_esc_keeps_the_samples_done] if binary else checks

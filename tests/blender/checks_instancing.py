@@ -153,6 +153,3 @@ def check_nested_collection_instances(tmp_dir) -> None:
     exported = export_scene(bpy.context)
     _check_cubes(exported, centres, 0.1)
     _check_build_and_f12(tmp_dir, scene, exported, centres, 0.1)
-
-
-INSTANCING_CHECKS = (check_geometry_nodes_instances, check_nested_collection_instances)

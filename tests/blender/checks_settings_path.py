@@ -169,10 +169,3 @@ def check_one_tree_for_build_f12_render_export(tmp_dir) -> None:
     assert bpy.ops.render.render() == {"FINISHED"}
     assert bpy.ops.render.render() == {"FINISHED"}
     assert trees.SceneTree.builds == builds + 2
-
-
-SETTINGS_PATH_CHECKS = (
-    check_defaults_are_the_cores,
-    check_render_paths_agree,
-    check_one_tree_for_build_f12_render_export,
-)

@@ -32,26 +32,26 @@ def knot_mesh():
 # -- selection (pyproject's markers): `make check` runs -m "not slow and not full_zip" -----------
 #: Modules that use a Vulkan device, and modules that import bpy or run Blender in a child.
 VULKAN_MODULES = {
-    "test_addon", "test_addon_gpu", "test_cameras", "test_cli", "test_render_api", "test_render_bounded",
-    "test_render_cameras", "test_render_cpu", "test_render_precision", "test_render_reentry",
-    "test_render_robust", "test_render_vulkan",
+    "test_cli", "test_render_api", "test_render_bounded", "test_render_cameras", "test_render_cpu",
+    "test_render_precision", "test_render_reentry", "test_render_robust", "test_render_vulkan",
 }  # fmt: skip
 BPY_MODULES = {
-    "test_addon", "test_addon_gpu", "test_addon_install", "test_addon_writes", "test_blender_errors",
-    "test_blender_export", "test_cameras", "test_docs_pictures", "test_engine", "test_instancing_blender",
-    "test_addon_pick",
+    "test_addon", "test_addon_install", "test_addon_writes", "test_blender_checks", "test_blender_errors",
+    "test_docs_pictures", "test_addon_pick",
 }  # fmt: skip
+#: test_blender_checks.py's tests (tests/blender/registry.py) of these groups use a Vulkan device.
+VULKAN_GROUPS = {"addon", "engine", "cameras", "no_vulkan", "gpu"}
 #: Tests over about 2 s in a full run here (pytest --durations; 2026-12-02, 2 cores: 125 s in all,
 #: these 12 took 49 s). Matched as the start of the test's node id within its module.
 SLOW = (
     "test_cli.py::test_compare_writes_table_charts_figures_and_sheets",
     "test_cli.py::test_compare_measures_the_overlay_claim",
-    "test_instancing_blender.py::test_instances_build_and_render",
+    "test_blender_checks.py::test_check[instancing/",  # one child runs the group: its first test takes the time
     "test_render_robust.py::test_ctrl_c_stops_a_long_render",
     "test_scene.py::test_load_checks_sizes_before_reading_data",
     "test_concurrency.py::test_threads_share_the_core_and_get_serial_results",
     "test_shared_tree.py::test_refit_while_other_threads_read",
-    "test_addon_gpu.py::test_overlay_draws_box_edges_each_depth_in_its_colour_and_a_million_boxes",
+    "test_blender_checks.py::test_check[gpu/",
     "test_interrupt.py::test_ctrl_c_stops_the_work_promptly[build]",
     "test_render_bounded.py::test_ten_thousand_copies_of_one_triangle",
     "test_render_bounded.py::test_bundled_scene_at_16x16_samples",
@@ -64,7 +64,8 @@ def pytest_collection_modifyitems(config, items):
     ids = [f"{item.path.name}::{item.name}" for item in items]
     for item, node in zip(items, ids):
         module = item.path.stem
-        if module in VULKAN_MODULES:
+        check = item.callspec.params.get("check") if module == "test_blender_checks" else None
+        if module in VULKAN_MODULES or (check is not None and check.group in VULKAN_GROUPS):
             item.add_marker(pytest.mark.vulkan)
         if module in BPY_MODULES:
             item.add_marker(pytest.mark.bpy)

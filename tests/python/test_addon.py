@@ -1,8 +1,7 @@
-"""The add-on's operators under bpy, enabled in place from addon/ (the zip is tested in
-test_addon_install.py, drawing in test_addon_gpu.py)."""
+"""The add-on's settings under bpy, enabled in place from addon/ (its operators are checked by the
+addon group of tests/blender/registry.py, in test_blender_checks.py; the zip in test_addon_install.py)."""
 
 import blender_checks  # noqa: F401
-import checks_addon  # noqa: E402
 import harness
 import pytest
 
@@ -39,44 +38,3 @@ def test_settings_take_names_defaults_and_limits_from_the_core():
     assert rna["render_supersampling"].hard_max == bvhlab._core.MAX_SAMPLES_PER_AXIS
     assert [i.identifier for i in rna["traversal"].enum_items] == list(bvhlab._core.RENDER_TRAVERSALS)
     assert [i.identifier for i in rna["backend"].enum_items] == ["auto", "vulkan", "cpu"]
-
-
-@pytest.mark.parametrize("name", list(checks_addon.BUILD_SCENES))
-def test_build_operator_equals_direct_build(name):
-    checks_addon.check_build_matches_direct(name, checks_addon.BUILD_SCENES[name])
-
-
-def test_overlay_depth_ranges():
-    checks_addon.check_overlay_ranges()
-
-
-def test_build_shows_the_overlay():
-    checks_addon.check_build_shows_overlay()
-
-
-def test_export_stats_files(tmp_path):
-    checks_addon.check_export_stats(tmp_path)
-
-
-def test_render_operator():
-    checks_addon.check_render()
-
-
-def test_compare_operator(tmp_path):
-    checks_addon.check_compare(tmp_path)
-
-
-def test_bad_input_is_reported():
-    checks_addon.check_bad_input_reports()
-
-
-def test_render_without_light_warns():
-    checks_addon.check_render_without_light()
-
-
-def test_path_properties_take_blend_relative_output_paths(tmp_path):
-    checks_addon.check_path_properties(tmp_path)
-
-
-def test_blenders_panels_show_for_what_the_engine_renders(tmp_path):
-    checks_addon.check_engine_panels_follow_the_renders(tmp_path)

@@ -1,10 +1,9 @@
 """The extension zip `make addon` builds (dist/bvhlab.zip): one wheel per Python Blender embeds,
-listed in its manifest with the project's one version; it installs and enables headless under
-bpy 4.2, unregisters without leftovers, and enables again (in a child process with its own user
-folder). The same zip is installed under bpy 5.2 and the Blender binaries 4.3 (Python 3.13) and
-5.2 (Python 3.14) by `make blender-test`."""
+listed in its manifest with the project's one version. That it installs and enables headless,
+unregisters without leftovers and enables again is the install group of tests/blender/registry.py
+(under bpy 4.2 in test_blender_checks.py; under bpy 5.2 and the Blender binaries 4.3, Python 3.13,
+and 5.2, Python 3.14, by `make blender-test`)."""
 
-import os
 import re
 import tomllib
 import zipfile
@@ -15,10 +14,8 @@ import pytest
 
 import bvhlab
 
-ROOT = Path(__file__).resolve().parents[2]
-#: `make check` sets BVHLAB_ZIP to a zip with the cp311 wheel alone (no Debian roots needed) and
-#: deselects the tests marked full_zip, which need every Python's wheel.
-ZIP = Path(os.environ.get("BVHLAB_ZIP") or ROOT / "dist" / "bvhlab.zip")
+ROOT = blender_checks.ROOT
+ZIP = blender_checks.ZIP
 #: The Pythons Blender embeds: 3.11 (4.2 LTS to 5.0), 3.13 (blender.org's 5.1 and later), 3.14
 #: (distribution builds linked to their system Python, as Debian's 5.2). One wheel each: Blender's
 #: installer refuses cp311 + one abi3 wheel under 3.13 and 3.14 (tests/blender/checks_versions.py).
@@ -50,10 +47,6 @@ def test_version_is_written_once():
     assert source["version"] == bvhlab.__version__ and "wheels" not in source
     assert "version" in tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["dynamic"]
     assert not re.search(r"project\(bvhlab VERSION \d", (ROOT / "CMakeLists.txt").read_text())
-
-
-def test_built_zip_installs_enables_and_unregisters():
-    blender_checks.run_groups("install", zip_path=_zip())
 
 
 #: The newest glibc and libstdc++ (GCC 12's) the wheels may ask for: Ubuntu 22.04, Debian 12,

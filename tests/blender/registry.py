@@ -1,0 +1,221 @@
+"""Every Blender check of bvhlab, listed once: tests/blender/run.py runs them in order (under a
+Blender binary or Python with bpy as a module), and pytest makes one test of each
+(tests/python/test_blender_checks.py, ids "group/name").
+
+A group's check modules are imported only when the group is listed (`checks`): under a Blender
+binary bvhlab is importable only once the install group has installed the zip.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+SCENES_JSON = Path(__file__).resolve().parents[2] / "blender_scenes" / "scenes.json"
+
+#: In run order.
+GROUPS = ("install", "export", "addon", "instancing", "engine", "cameras", "no_vulkan", "gpu")
+#: Groups pytest runs in a child process (tests/blender/run.py --only ...), never in its own:
+#: install (enables the zip's add-on in place of the one from addon/), instancing (before issue
+#: 39's fix these segfaulted or hung Blender in most runs), no_vulkan (VK_DRIVER_FILES must be set
+#: before the process's first Vulkan instance), gpu (Blender aborts the process when its GPU
+#: start-up fails).
+CHILD_GROUPS = frozenset({"install", "instancing", "no_vulkan", "gpu"})
+#: Groups that need the add-on enabled (from addon/ unless the install group installed the zip).
+ADDON_GROUPS = frozenset(GROUPS) - {"install", "export"}
+
+
+@dataclass(frozen=True)
+class Check:
+    group: str
+    name: str
+    function: Callable
+    args: tuple = ()
+    folder: bool = False  # takes an empty folder of its own as its first argument
+    zip: bool = False  # takes the extension zip as its first argument
+    binary: bool = False  # only under a Blender binary (it runs `blender` on the command line, presses Esc)
+    python: tuple[int, int] = (3, 0)  # the oldest Python it means anything under
+
+    @property
+    def id(self) -> str:
+        return f"{self.group}/{self.name}"
+
+    @property
+    def child(self) -> bool:
+        return self.group in CHILD_GROUPS
+
+    def skip_reason(self, binary: bool) -> str | None:
+        if self.binary and not binary:
+            return "needs a Blender binary (tests/blender/run.py under blender)"
+        if sys.version_info < self.python:
+            return f"needs Python {'.'.join(map(str, self.python))} or later"
+        return None
+
+    def run(self, folder: Path | None = None, zip_path: Path | None = None) -> None:
+        first = (zip_path,) if self.zip else (folder,) if self.folder else ()
+        if self.folder:
+            folder.mkdir(parents=True, exist_ok=True)
+        self.function(*first, *self.args)
+
+
+def _install() -> Iterator[Check]:
+    import checks_install
+    import checks_versions
+
+    # Where a stable-ABI wheel could load.
+    yield Check(
+        "install",
+        "abi3_beside_cp311_refused",
+        checks_versions.check_abi3_beside_cp311_refused,
+        zip=True,
+        python=(3, 12),
+    )
+    yield Check("install", "install_enable_disable", checks_install.check_install_enable_disable, zip=True)
+    yield Check("install", "installed_core_is_this_pythons", checks_versions.check_installed_core_is_this_pythons)
+
+
+def _export() -> Iterator[Check]:
+    import checks_bundled
+    import checks_cases as cases
+
+    for name in json.loads(SCENES_JSON.read_text()):
+        yield Check("export", f"bundled_{name}", checks_bundled.check_bundled_scene, args=(name,))
+    for check in (
+        cases.check_scope_selected_and_visible,
+        cases.check_collection_instances,
+        cases.check_material_slots_per_triangle,
+        cases.check_analytic_sphere_radius,
+        cases.check_camera_sensor_fits,
+        cases.check_bad_input_errors,
+        cases.check_missing_camera_and_light_substituted,
+    ):
+        yield Check("export", check.__name__.removeprefix("check_"), check)
+    yield Check("export", "scene_file_round_trip", cases.check_scene_file_round_trip, folder=True)
+    yield Check("export", "large_export", checks_bundled.check_large_export)
+
+
+def _addon() -> Iterator[Check]:
+    import checks_addon as addon
+    import checks_settings_path as settings_path
+
+    for name, variants in addon.BUILD_SCENES.items():
+        yield Check("addon", f"build_matches_direct_{name}", addon.check_build_matches_direct, args=(name, variants))
+    for check in (
+        addon.check_overlay_ranges,
+        addon.check_build_shows_overlay,
+        addon.check_bad_input_reports,
+        addon.check_render,
+        addon.check_render_without_light,
+    ):
+        yield Check("addon", check.__name__.removeprefix("check_"), check)
+    yield Check("addon", "export_stats", addon.check_export_stats, folder=True)
+    yield Check("addon", "compare", addon.check_compare, folder=True)
+    yield Check("addon", "defaults_are_the_cores", settings_path.check_defaults_are_the_cores)
+    yield Check("addon", "render_paths_agree", settings_path.check_render_paths_agree, folder=True)
+    yield Check(
+        "addon",
+        "one_tree_for_build_f12_render_export",
+        settings_path.check_one_tree_for_build_f12_render_export,
+        folder=True,
+    )
+    yield Check("addon", "path_properties", addon.check_path_properties, folder=True)
+    yield Check("addon", "engine_panels", addon.check_engine_panels_follow_the_renders, folder=True)
+
+
+def _instancing() -> Iterator[Check]:
+    import checks_instancing as instancing
+
+    yield Check("instancing", "geometry_nodes_instances", instancing.check_geometry_nodes_instances, folder=True)
+    yield Check("instancing", "nested_collection_instances", instancing.check_nested_collection_instances, folder=True)
+
+
+def _engine() -> Iterator[Check]:
+    import checks_engine as engine
+    import checks_engine_viewport as viewport
+
+    yield Check("engine", "engine_selectable", engine.check_engine_selectable)
+    for check in (
+        engine.check_combined_and_heatmap_match_the_tracer,
+        engine.check_heatmap_is_box_tests,
+        engine.check_depth_is_camera_z,
+        engine.check_rerender_reads_only_what_changed,
+        engine.check_animation_frames,
+    ):
+        yield Check("engine", check.__name__.removeprefix("check_"), check, folder=True)
+    yield Check("engine", "errors_are_reported", engine.check_errors_are_reported)
+    for check in (
+        viewport.check_view_frustum,
+        viewport.check_viewport_worker_levels,
+        viewport.check_viewport_build_cancels,
+        viewport.check_viewport_settings_update,
+    ):
+        yield Check("engine", check.__name__.removeprefix("check_"), check)
+    yield Check("engine", "command_line_frames", engine.check_command_line_frames, folder=True, binary=True)
+
+
+def _cameras() -> Iterator[Check]:
+    import checks_cameras as cameras
+    import checks_final as final
+
+    for name in cameras.SETTINGS:
+        yield Check(
+            "cameras", f"{name}_against_cycles", cameras.check_setting_against_cycles, args=(name,), folder=True
+        )
+    for check in (
+        final.check_depth_of_field_against_cycles,
+        final.check_unrendered_settings_are_said,
+        final.check_odd_borders_are_sized_as_blender_sizes_them,
+    ):
+        yield Check("cameras", check.__name__.removeprefix("check_"), check, folder=True)
+    yield Check("cameras", "viewport_says_what_it_does_not_show", final.check_viewport_says_what_it_does_not_show)
+    yield Check("cameras", "huge_f12_is_refused_before_allocating", final.check_huge_f12_is_refused_before_allocating)
+    yield Check(
+        "cameras", "esc_keeps_the_samples_done", final.check_esc_keeps_the_samples_done, folder=True, binary=True
+    )
+
+
+def _without_vulkan_driver(check: Callable) -> Callable:
+    def run() -> None:
+        # Read when the process makes its first Vulkan instance, which no earlier check does (they
+        # use the CPU); Blender's own GPU back-end (OpenGL) does not read it.
+        os.environ["VK_DRIVER_FILES"] = os.environ["VK_ICD_FILENAMES"] = "/nonexistent/bvhlab_icd.json"
+        check()
+
+    return run
+
+
+def _no_vulkan() -> Iterator[Check]:
+    import checks_addon
+
+    yield Check("no_vulkan", "no_vulkan_reported", _without_vulkan_driver(checks_addon.check_no_vulkan_reported))
+
+
+def _gpu() -> Iterator[Check]:
+    import checks_gpu as gpu
+
+    for check in (gpu.check_overlay_pixels, gpu.check_overlay_colour_by_depth, gpu.check_overlay_million_boxes):
+        yield Check("gpu", check.__name__.removeprefix("check_"), check)
+
+
+_LISTS = {
+    "install": _install,
+    "export": _export,
+    "addon": _addon,
+    "instancing": _instancing,
+    "engine": _engine,
+    "cameras": _cameras,
+    "no_vulkan": _no_vulkan,
+    "gpu": _gpu,
+}
+assert tuple(_LISTS) == GROUPS
+
+
+def checks(groups=GROUPS) -> Iterator[Check]:
+    """The checks of `groups` in run order, each group's modules imported when it is reached."""
+    for group in GROUPS:
+        if group in groups:
+            yield from _LISTS[group]()
