@@ -1,5 +1,6 @@
 // tinybvh (github.com/jbikker/tinybvh, a local copy: never committed) as a benchmark peer:
-// BVH::BuildAVX (8 bins, SAH leaves), and BVH8_CPU (its 8-wide AVX2 traversal) for single rays.
+// BVH::Build (in 1.9 its AVX2 8-bin builder where AVX2 is compiled in), and BVH8_CPU (its
+// 8-wide AVX2 traversal) for single rays.
 // Built only when CMake is given -DBVHLAB_TINYBVH_DIR=<folder holding tiny_bvh.h>.
 #define TINYBVH_IMPLEMENTATION
 #include "tiny_bvh.h"
@@ -21,7 +22,7 @@ double area(const tinybvh::bvhvec3& lo, const tinybvh::bvhvec3& hi) {
 class TinyBvhPeer : public Peer {
 public:
     explicit TinyBvhPeer(unsigned threads) : threads_(threads) {}
-    std::string name() const override { return "tinybvh BuildAVX / BVH8_CPU"; }
+    std::string name() const override { return "tinybvh Build / BVH8_CPU"; }
 
     void build(const Mesh& mesh) override {
         if (verts_.empty()) {
@@ -30,7 +31,7 @@ public:
                 verts_[i] = tinybvh::bvhvec4(mesh.xyz[3 * i], mesh.xyz[3 * i + 1], mesh.xyz[3 * i + 2], 0.0f);
         }
         bvh_.threadedBuild = threads_ != 1;
-        bvh_.BuildAVX(verts_.data(), std::uint32_t(mesh.count()));
+        bvh_.Build(verts_.data(), std::uint32_t(mesh.count()));  // 1.9: picks its AVX2 binned builder
     }
 
     TreeInfo info() const override {
