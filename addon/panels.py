@@ -107,6 +107,14 @@ class BVHLAB_PT_overlay(_BvhPanel, bpy.types.Panel):
         row = layout.row()
         row.enabled = not settings.overlay_color_by_depth
         row.prop(settings, "overlay_color")
+        layout.prop(settings, "overlay_measure")
+        if settings.overlay_measure != "depth" and built is not None:
+            from .overlay import batch_for, shown_measure
+
+            if shown_measure(built, settings.overlay_measure) == "depth":
+                layout.operator("bvhlab.analyse_tree", icon="VIEWZOOM")
+            elif legend := batch_for(built, settings.overlay_leaves_only, settings.overlay_measure).table.legend:
+                layout.label(text=legend.text())
         layout.prop(settings, "overlay_xray")
         layout.prop(settings, "overlay_line_width")
 

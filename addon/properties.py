@@ -55,11 +55,20 @@ _BACKEND_AUTO = (
 )
 
 
+def _measure_items() -> list[tuple[str, str, str]]:
+    from bvhlab.inspect.measures import MEASURES
+
+    return [("depth", "Depth", "The depth colours, or the line colour (above)")] + [
+        (name, label, tooltip) for name, (label, tooltip) in MEASURES.items()
+    ]
+
+
 def _items(names) -> list[tuple[str, str, str]]:
     """EnumProperty items for the core's names, labelled for the UI."""
     return [(n, *_LABELS.get(n, (n.replace("_", " ").title(), ""))) for n in names]
 
 
+MEASURE_ITEMS = _measure_items()
 METHOD_ITEMS = _items(METHODS)
 # (module level: Blender evaluates the annotations below in a scope where a comprehension could
 # not see this module's names)
@@ -183,6 +192,14 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
         description="Deepest depth drawn; at most the tree height - 1",
     )
     overlay_color_by_depth: BoolProperty(name="Colour by depth", default=_RENDER.color_by_depth, update=_redraw)
+    overlay_measure: EnumProperty(
+        name="Colour by",
+        items=MEASURE_ITEMS,
+        default="depth",
+        update=_redraw,
+        description="Colour the viewport's boxes by a measure of each node (blue low → red high; Inspect ▸ "
+        "Analyse Tree computes them). Boxes traced into renders keep the depth or line colour",
+    )
     overlay_color: FloatVectorProperty(
         name="Colour",
         subtype="COLOR",

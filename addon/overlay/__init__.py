@@ -13,14 +13,22 @@ _cached: dict = {"key": None, "batch": None}
 _failed: set = set()  # trees whose overlay failed: report once, not on every redraw
 
 
-def batch_for(built, leaves_only: bool):
-    """The BoxBatch of a built tree, made on first use and whenever the tree or leaves-only changes."""
+def shown_measure(built, measure: str) -> str:
+    """The measure the boxes are coloured by: the chosen one once the tree is analysed (drawing
+    never computes node data), else "depth"."""
+    return measure if measure != "depth" and built.bvh.cached_node_data() is not None else "depth"
+
+
+def batch_for(built, leaves_only: bool, measure: str = "depth"):
+    """The BoxBatch of a built tree, made on first use and whenever the tree, leaves-only or the
+    measure shown changes."""
     from .batch import BoxBatch
 
-    key = (built.serial, leaves_only)
+    measure = shown_measure(built, measure)
+    key = (built.serial, leaves_only, measure)
     if _cached["key"] != key:
         _cached["batch"] = None  # free the old texture before making the new one
-        _cached["batch"] = BoxBatch.from_bvh(built.bvh, leaves_only)
+        _cached["batch"] = BoxBatch.from_bvh(built.bvh, leaves_only, measure)
         _cached["key"] = key
     return _cached["batch"]
 
@@ -31,7 +39,7 @@ def draw_scene_overlay(scene, view_projection) -> int:
     built = state.tree_for(scene)
     if not settings.overlay_show or built is None:
         return 0
-    batch = batch_for(built, settings.overlay_leaves_only)
+    batch = batch_for(built, settings.overlay_leaves_only, settings.overlay_measure)
     return batch.draw(
         view_projection,
         settings.overlay_depth_min,

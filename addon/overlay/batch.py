@@ -46,15 +46,22 @@ PALETTE_SIZE = 64
 
 
 class BoxTable:
-    """float32 rows (min.xyz, depth, max.xyz, 0) of a tree's boxes in the core's depth order
+    """float32 rows (min.xyz, depth, max.xyz, value) of a tree's boxes in the core's depth order
     (`Bvh.boxes`: by depth, depth-first within a depth), only the leaves when `leaves_only`, and
     where each depth starts, so a depth range is one offset and one count (report §3.3.1)."""
 
-    def __init__(self, bvh, leaves_only: bool = False):
+    def __init__(self, bvh, leaves_only: bool = False, measure: str = "depth"):
         lo, hi, depth = bvh.boxes(leaves_only=leaves_only)
         per_depth = bvh.stats["leaves_per_depth" if leaves_only else "nodes_per_depth"]
         self.rows = np.zeros((len(lo), 8), np.float32)
         self.rows[:, 0:3], self.rows[:, 3], self.rows[:, 4:7] = lo, depth, hi
+        self.legend = None
+        if measure != "depth":  # each box's value on the heat ramp in the spare column
+            from bvhlab.inspect.measures import box_order, measure_values
+
+            data = bvh.cached_node_data()
+            assert data is not None, "a measure colouring needs the tree analysed (Bvh.node_data)"
+            self.rows[:, 7], self.legend = measure_values(data, measure, box_order(data, leaves_only))
         self.depth_starts = np.concatenate([[0], np.cumsum(per_depth)]).astype(np.int64)
         assert self.depth_starts[-1] == len(self.rows), "stats and boxes disagree"
 
@@ -78,6 +85,22 @@ def depth_palette() -> np.ndarray:
 
     rgb = depth_colors(np.arange(PALETTE_SIZE, dtype=np.uint32))
     return np.concatenate([rgb, np.ones((PALETTE_SIZE, 1), np.float32)], 1).astype(np.float32)
+
+
+#: Entries of the heat ramp's texture (the core's heat_colors sampled evenly over [0, 1]).
+HEAT_SIZE = 256
+
+
+def heat_palette() -> np.ndarray:
+    """RGBA float32 (HEAT_SIZE, 4): the core's heat ramp (the heatmap mode's), for measures."""
+    from bvhlab._core import heat_colors
+
+    rgb = heat_colors(np.linspace(0, 1, HEAT_SIZE, dtype=np.float32))
+    return np.concatenate([rgb, np.ones((HEAT_SIZE, 1), np.float32)], 1).astype(np.float32)
+
+
+#: The shader's colour modes.
+UNIFORM, BY_DEPTH, BY_VALUE = 0, 1, 2
 
 
 def _texture(rows: np.ndarray, width: int):
@@ -105,12 +128,13 @@ class BoxBatch:
             rows = np.zeros((1, 8), np.float32)
         self.texture = _texture(rows, min(TEXTURE_WIDTH, 2 * len(rows)))
         self.palette = _texture(depth_palette(), PALETTE_SIZE)
+        self.heat = _texture(heat_palette(), HEAT_SIZE)
         self.shader = box_shader()
         self.batch = batch_for_shader(self.shader, "LINES", {"corner": CUBE_EDGES})
 
     @classmethod
-    def from_bvh(cls, bvh, leaves_only: bool = False) -> BoxBatch:
-        return cls(BoxTable(bvh, leaves_only))
+    def from_bvh(cls, bvh, leaves_only: bool = False, measure: str = "depth") -> BoxBatch:
+        return cls(BoxTable(bvh, leaves_only, measure))
 
     def draw(
         self,
@@ -123,7 +147,8 @@ class BoxBatch:
         xray: bool = True,
         line_width: float = 1.0,
     ) -> int:
-        """Draw the boxes in the depth range with the current framebuffer; returns how many.
+        """Draw the boxes in the depth range with the current framebuffer; returns how many. A table
+        made with a measure colours each box by its value (heat ramp), whatever `color_by_depth`.
         Deepest boxes first: a child shares edges with its parent, and drawn last it would paint
         them all in its colour; this way every depth of the range keeps its own lines."""
         import gpu
@@ -135,10 +160,12 @@ class BoxBatch:
         shader.bind()
         shader.uniform_sampler("boxes", self.texture)
         shader.uniform_sampler("palette", self.palette)
+        shader.uniform_sampler("heat", self.heat)
         shader.uniform_float("view_projection", view_projection)
         shader.uniform_float("uniform_color", tuple(color))
         shader.uniform_int("last_box", first + count - 1)
-        shader.uniform_int("color_by_depth", int(color_by_depth))
+        mode = BY_VALUE if self.table.legend is not None else BY_DEPTH if color_by_depth else UNIFORM
+        shader.uniform_int("color_mode", mode)
         gpu.state.blend_set("ALPHA")
         gpu.state.depth_test_set("NONE" if xray else "LESS_EQUAL")
         gpu.state.line_width_set(line_width)

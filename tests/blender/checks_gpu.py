@@ -171,6 +171,40 @@ def check_overlay_colour_by_depth(width: int = 320, height: int = 240) -> None:
     assert counts.min() >= 20, f"a depth is hardly visible: pixels per depth {counts.tolist()}"
 
 
+def check_overlay_colour_by_measure(width: int = 320, height: int = 240) -> None:
+    """Colour by a measure (leaves only, coloured by the primitives under each): before the tree is
+    analysed the boxes keep the depth colours (drawing never computes node data); after Analyse
+    Tree every lit pixel has the heat-ramp colour of one drawn leaf's value, several leaf sizes show,
+    and the panel's legend is the table's."""
+    from bvhlab.inspect.measures import box_order, measure_values
+
+    scene, bvh = _built_boxes_scene(
+        width, height, (0, 40), overlay_leaves_only=True, overlay_xray=True, overlay_line_width=1.0
+    )
+    scene.bvhlab.max_leaf_size = 4
+    assert bpy.ops.bvhlab.build() == {"FINISHED"}
+    bvh = harness.addon().state.tree_for(scene).bvh
+    scene.bvhlab.overlay_measure = "leaf_size"
+    _, before = _draw_offscreen(scene, width, height)
+    palette = bvhlab._core.depth_colors(np.arange(64, dtype=np.uint32))
+    lit = before[before[..., 3] > 0.5][:, :3]
+    assert len(lit) > 200 and np.linalg.norm(lit[:, None] - palette[None], axis=-1).min(1).max() < 0.02
+    assert bpy.ops.bvhlab.analyse_tree() == {"FINISHED"}
+    drawn, image = _draw_offscreen(scene, width, height)
+    data = bvh.cached_node_data()
+    order = box_order(data, leaves_only=True)
+    values, legend = measure_values(data, "leaf_size", order)
+    assert drawn == len(order)
+    colours = bvhlab._core.heat_colors(np.unique(values))
+    lit = image[image[..., 3] > 0.5][:, :3]
+    distance = np.linalg.norm(lit[:, None] - colours[None], axis=-1)
+    nearest = distance.argmin(1)
+    print(f"colour by leaf size: {len(lit)} lit pixels, {len(colours)} values, legend {legend.text()}")
+    assert distance.min(1).max() < 0.02, "a lit pixel has no drawn leaf's ramp colour"
+    assert len(np.unique(nearest)) >= 2, "only one leaf size is visible"
+    assert legend.high == data.prim_count[order].max()
+
+
 def check_overlay_million_boxes(nodes: int = 1_000_000) -> None:
     """The overlay batch of a million-node tree: every box uploaded (several texture rows), and
     each depth range is the slice the tree's per-depth counts say. (Its time is measured in

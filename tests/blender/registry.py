@@ -197,7 +197,12 @@ def _no_vulkan() -> Iterator[Check]:
 def _gpu() -> Iterator[Check]:
     import checks_gpu as gpu
 
-    for check in (gpu.check_overlay_pixels, gpu.check_overlay_colour_by_depth, gpu.check_overlay_million_boxes):
+    for check in (
+        gpu.check_overlay_pixels,
+        gpu.check_overlay_colour_by_depth,
+        gpu.check_overlay_colour_by_measure,
+        gpu.check_overlay_million_boxes,
+    ):
         yield Check("gpu", check.__name__.removeprefix("check_"), check)
 
 
