@@ -9,6 +9,7 @@ snapshot (raster level sheets) and scenes.
     bvhlab snapshot SCENE --out PNG [--bvh-depth A:B | --sheet]
     bvhlab inspect SCENE [build options] --node N | --pixel X,Y | --worst K [--tree FILE] [--save-tree FILE]
                    [--json PATH]
+    bvhlab animate ANIMATION --frames A-B [--policy P,Q] [--backend cpu] --out DIR
     bvhlab sweep SPEC.toml --out DIR [--scheduler tcp://HOST:PORT | --workers N] [--retry-failed]
     bvhlab scenes
 """
@@ -20,9 +21,19 @@ import sys
 
 from .._atomic import WriteError
 from .._core import BuildCancelled
-from . import build_cmd, compare_cmd, inspect_cmd, options, render_cmd, scenes_cmd, snapshot_cmd, sweep_cmd
+from . import (
+    animate_cmd,
+    build_cmd,
+    compare_cmd,
+    inspect_cmd,
+    options,
+    render_cmd,
+    scenes_cmd,
+    snapshot_cmd,
+    sweep_cmd,
+)
 
-COMMANDS = (build_cmd, render_cmd, compare_cmd, snapshot_cmd, inspect_cmd, sweep_cmd, scenes_cmd)
+COMMANDS = (build_cmd, render_cmd, compare_cmd, snapshot_cmd, inspect_cmd, sweep_cmd, animate_cmd, scenes_cmd)
 
 
 def parser() -> argparse.ArgumentParser:

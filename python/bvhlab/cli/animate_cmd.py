@@ -1,0 +1,145 @@
+"""`bvhlab animate ANIMATION --frames A-B --policy rebuild,refit,partial,adaptive --out DIR`: the
+per-frame dynamic-BVH experiment the report could not run (issue 34; bvhlab.animate). Per frame
+and policy: update ms, the policy adaptive chose, SAH cost against a fresh build's, subtrees
+rebuilt, and with --backend the frame's trace time. Writes animate.csv, animate.json and
+animate.png (the SAH ratio and the update time over the frames)."""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import json
+from pathlib import Path
+
+from .._atomic import write_text
+from .._progress import ProgressBar
+from ..animate import FrameRow, run_experiment, summary
+from ..library.animations import ANIMATIONS
+from ..render import BACKENDS
+from ..scene import Scene
+from ..update import UPDATE_POLICIES
+from . import options
+
+#: The most frames one run takes (the CLI's other per-frame limits are the same).
+MAX_FRAMES = 10_000
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("animate", help="update policies frame by frame over an animation", description=__doc__)
+    p.add_argument("animation", choices=list(ANIMATIONS), help="; ".join(f"{k}: {v[1]}" for k, v in ANIMATIONS.items()))
+    p.add_argument("--frames", type=frame_range, default=range(0, 24), metavar="A-B", help="frames A..B (default 0-23)")
+    p.add_argument("--policy", type=policy_list, default=UPDATE_POLICIES, metavar="P,Q", help="policies (default all)")
+    p.add_argument(
+        "--size",
+        type=lambda t: options.whole_number(t, 2, 4096),
+        default=None,
+        help="the animation's size (wave: quads per side; crowd: knots), smaller for a quick run",
+    )
+    p.add_argument("--backend", default="none", choices=("none", *BACKENDS), help="trace each frame (default: none)")
+    options.add_image_size(p)
+    p.add_argument("--out", type=Path, required=True, metavar="DIR")
+    p.set_defaults(run=run)
+
+
+def frame_range(text: str) -> range:
+    """'0-23' → range(0, 24)."""
+    try:
+        a, b = (int(v) for v in text.split("-"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"frames must look like A-B (e.g. 0-23), got '{text}'") from None
+    if not 0 <= a < b:
+        raise argparse.ArgumentTypeError(f"frames {text}: need 0 <= A < B")
+    if b - a + 1 > MAX_FRAMES:
+        raise argparse.ArgumentTypeError(f"frames {text}: at most {MAX_FRAMES} frames")
+    return range(a, b + 1)
+
+
+def policy_list(text: str) -> tuple[str, ...]:
+    names = tuple(dict.fromkeys(n.strip() for n in text.split(",") if n.strip()))
+    bad = [n for n in names if n not in UPDATE_POLICIES]
+    if bad or not names:
+        raise argparse.ArgumentTypeError(f"policies are among {', '.join(UPDATE_POLICIES)}; got '{text}'")
+    return names
+
+
+def run(args) -> int:
+    make = ANIMATIONS[args.animation][0]
+    frame_of = make(args.size) if args.size else make()
+    first, last = args.frames[0], args.frames[-1]
+
+    def triangles(k: int):
+        return frame_of((k - first) / max(last - first, 1))
+
+    trace = None
+    if args.backend != "none":
+        from ..render import Camera, render
+
+        lo, hi = Scene(triangles=triangles(first)).bounds()
+        centre = (float(lo[0] + hi[0]) / 2, float(lo[1] + hi[1]) / 2, float(lo[2] + hi[2]) / 2)
+        extent = float(max(hi - lo))
+        eye = (centre[0] - 0.2 * extent, centre[1] - 1.1 * extent, centre[2] + 0.8 * extent)
+        camera = Camera(eye, centre, fov_y=45)
+
+        def trace(tris, bvh) -> float:
+            _, t = render(Scene(triangles=tris, camera=camera), bvh, args.width, args.height, backend=args.backend)
+            return float(t["trace_ms"])
+
+    with ProgressBar(f"{args.animation}, {len(args.frames)} frames × {len(args.policy)} policies") as bar:
+        rows = run_experiment(triangles, args.frames, args.policy, trace=trace, progress=bar)
+    totals = summary(rows)
+    _print(rows, totals)
+    args.out.mkdir(parents=True, exist_ok=True)
+    about = {"animation": args.animation, "size": args.size, "frames": [first, last], "backend": args.backend}
+    write_text(args.out / "animate.csv", _csv(rows))
+    write_text(
+        args.out / "animate.json",
+        json.dumps({"about": about, "summary": totals, "rows": [r.as_dict() for r in rows]}, indent=1) + "\n",
+    )
+    _plot(rows, args.out / "animate.png", f"{args.animation}: update policies over frames {first}-{last}")
+    print(f"wrote {args.out / 'animate.csv'}, animate.json, animate.png")
+    return 0
+
+
+def _csv(rows: list[FrameRow]) -> str:
+    out = io.StringIO()
+    fields = list(rows[0].as_dict())
+    writer = csv.DictWriter(out, fieldnames=fields, lineterminator="\n")
+    writer.writeheader()
+    for r in rows:
+        writer.writerow(r.as_dict())
+    return out.getvalue()
+
+
+def _print(rows: list[FrameRow], totals: dict) -> None:
+    policies = list(dict.fromkeys(r.policy for r in rows))
+    print(f"{'frame':>5}  " + "  ".join(f"{p + ' ms / SAH÷fresh':>28}" for p in policies))
+    for k in dict.fromkeys(r.frame for r in rows):
+        cells = []
+        for p in policies:
+            r = next(r for r in rows if r.frame == k and r.policy == p)
+            cells.append(f"{r.update_ms:9.2f} {r.sah_ratio:6.3f} {r.ran[:8]:>10}")
+        print(f"{k:>5}  " + "  ".join(f"{c:>28}" for c in cells))
+    for p, t in totals.items():
+        share = f", {t['share_of_rebuild']:.2f} of rebuilding every frame" if "share_of_rebuild" in t else ""
+        print(f"{p}: {t['total_ms']:.1f} ms in all{share}; SAH ÷ fresh worst {t['worst_sah_ratio']:.3f}")
+
+
+def _plot(rows: list[FrameRow], path: Path, title: str) -> Path:
+    from ..compare.charts import _plt, _save
+
+    plt = _plt()
+    fig, (left, right) = plt.subplots(1, 2, figsize=(10, 3.8))
+    for p in dict.fromkeys(r.policy for r in rows):
+        mine = [r for r in rows if r.policy == p and r.ran != "build"]
+        frames = [r.frame for r in mine]
+        left.plot(frames, [r.sah_ratio for r in mine], marker=".", label=p)
+        right.plot(frames, [r.update_ms for r in mine], marker=".", label=p)
+    left.set_ylabel("SAH cost ÷ a fresh build's")
+    right.set_ylabel("update (ms)")
+    right.set_yscale("log" if any(r.update_ms > 0 for r in rows) else "linear")
+    for ax in (left, right):
+        ax.set_xlabel("frame")
+        ax.legend(fontsize=8)
+    fig.suptitle(title)
+    return _save(fig, plt, path)
