@@ -18,6 +18,7 @@ from . import _checks, _core
 from ._render_scene import SceneCache
 from ._render_settings import View, render_settings
 from .bvh import Bvh
+from .instanced import InstancedBvh
 from .render_options import DEFAULT_HEIGHT, DEFAULT_WIDTH, RenderOptions, options_from
 from .scene import Camera, Scene
 
@@ -66,7 +67,7 @@ class RenderResult:
 
 def render(
     scene: Scene,
-    bvh: Bvh,
+    bvh: Bvh | InstancedBvh,
     width: int = DEFAULT_WIDTH,
     height: int = DEFAULT_HEIGHT,
     *,
@@ -209,7 +210,7 @@ class Renderer:
     def start(
         self,
         scene: Scene,
-        bvh: Bvh,
+        bvh: Bvh | InstancedBvh,
         width: int = DEFAULT_WIDTH,
         height: int = DEFAULT_HEIGHT,
         *,
@@ -242,7 +243,7 @@ class Renderer:
     def render(
         self,
         scene: Scene,
-        bvh: Bvh,
+        bvh: Bvh | InstancedBvh,
         width: int = DEFAULT_WIDTH,
         height: int = DEFAULT_HEIGHT,
         *,
