@@ -39,10 +39,10 @@ std::uint32_t moved_child(std::uint32_t word, const TreePlace& at) {
 /// Appends a tree to the forest at its end; returns where it went. Leaf primitives' references
 /// move by the mesh's first triangle and sphere in the scene's arrays.
 TreePlace append_tree(RenderScene& s, const Bvh& bvh, std::uint32_t first_triangle, std::uint32_t first_sphere) {
-    const TreePlace at{checked_offset(s.forest_nodes.size() + bvh.nodes.size(), "nodes") - bvh.node_count(),
-                       checked_offset(s.pairs.size(), "nodes"),
-                       checked_offset(s.forest_prims.size() + bvh.prims.size(), "primitives") -
-                           std::uint32_t(bvh.prims.size())};
+    const TreePlace at{
+        checked_offset(s.forest_nodes.size() + bvh.nodes.size(), "nodes") - bvh.node_count(),
+        checked_offset(s.pairs.size(), "nodes"),
+        checked_offset(s.forest_prims.size() + bvh.prims.size(), "primitives") - std::uint32_t(bvh.prims.size())};
     for (const BvhNode& n : bvh.nodes) s.forest_nodes.push_back(moved_node(n, at));
     for (gpu::BvhPair p : make_pair_nodes(bvh)) {
         p.child_a = moved_child(p.child_a, at);
@@ -84,8 +84,8 @@ gpu::GpuInstance gpu_instance(const Instance& inst, const TreePlace& at, const B
 void check_meshes(const Tlas& tlas, const std::vector<RenderMesh>& meshes) {
     for (const Instance& inst : tlas.instances)
         if (inst.blas >= meshes.size())
-            throw std::invalid_argument("the TLAS refers to mesh " + std::to_string(inst.blas) + ", but the scene has " +
-                                        std::to_string(meshes.size()));
+            throw std::invalid_argument("the TLAS refers to mesh " + std::to_string(inst.blas) +
+                                        ", but the scene has " + std::to_string(meshes.size()));
     for (const RenderMesh& m : meshes) {
         if (!m.bvh) throw std::invalid_argument("a mesh of the two-level scene has no tree");
         check_tree_matches(*m.bvh, m.geometry);
@@ -101,7 +101,8 @@ RenderScene make_render_scene(const Tlas& tlas, const std::vector<RenderMesh>& m
     check_meshes(tlas, meshes);
     if (tlas.instances.size() == 1 && tlas.instances[0].identity) {  // one mesh where it was modelled: flat
         const RenderMesh& m = meshes[tlas.instances[0].blas];
-        return make_render_scene(*m.bvh, m.geometry, {mv.materials, mv.material_count, m.triangle_material, m.sphere_material});
+        return make_render_scene(*m.bvh, m.geometry,
+                                 {mv.materials, mv.material_count, m.triangle_material, m.sphere_material});
     }
     static const Bvh kNoTree;
     if (tlas.tree.empty()) return make_render_scene(kNoTree, GeometryView{}, mv);  // nothing to hit
