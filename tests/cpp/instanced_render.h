@@ -78,9 +78,9 @@ inline InstancedPtr mixed_instances() {
     s.transforms = {
         Transform{},
         make_transform({0, 0, 1}, pi / 5, {3, 3, 3}, {8, 0, 0}),
-        make_transform({1, 2, 3}, 1.1f, {2.0f, 0.5f, 1.3f}, {0, 10, 2}),     // non-uniform scale
-        make_transform({1, 0, 0}, 0.3f, {-1, 1, 1}, {8, 10, 0}),             // mirrored
-        make_transform({0, 1, 0}, 2.0f, {-0.7f, -1.5f, 2.5f}, {16, 6, 1}),   // mirrored, non-uniform
+        make_transform({1, 2, 3}, 1.1f, {2.0f, 0.5f, 1.3f}, {0, 10, 2}),    // non-uniform scale
+        make_transform({1, 0, 0}, 0.3f, {-1, 1, 1}, {8, 10, 0}),            // mirrored
+        make_transform({0, 1, 0}, 2.0f, {-0.7f, -1.5f, 2.5f}, {16, 6, 1}),  // mirrored, non-uniform
         make_transform({1, 1, 0}, 0.7f, {1.5f, 0.6f, 1.0f}, {16, 14, -1}),  // non-uniform
     };
     s.finish();
@@ -95,7 +95,8 @@ inline InstancedPtr many_instances() {
     std::uniform_real_distribution<float> u(0.0f, 1.0f);
     for (int x = 0; x < 10; ++x)
         for (int y = 0; y < 10; ++y) {
-            const Vec3 scale{0.4f + 0.6f * u(rng), 0.4f + 0.6f * u(rng), (u(rng) < 0.3f ? -1.0f : 1.0f) * (0.4f + u(rng))};
+            const Vec3 scale{0.4f + 0.6f * u(rng), 0.4f + 0.6f * u(rng),
+                             (u(rng) < 0.3f ? -1.0f : 1.0f) * (0.4f + u(rng))};
             s.blas_of.push_back(0);
             s.transforms.push_back(make_transform({u(rng), u(rng), 1}, 6 * u(rng), scale, {2.0f * x, 2.0f * y, 0}));
         }
