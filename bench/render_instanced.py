@@ -68,17 +68,32 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--flat-only", action="store_true")
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--scene", help="the flat scene (a library name, e.g. atrium); default: a 100K torus knot")
     args = ap.parse_args()
     knot = procedural.torus_knot(100_000)
     flat = bvhlab.Scene(triangles=knot)
     flat.camera = camera_for(flat)
+    if args.scene:
+        from bvhlab.library import load_scene
+
+        flat, _ = load_scene(args.scene)
     flat_tree = bvhlab.build(flat)
     rows: dict = {}
     for traversal in ("stack", "stackless"):
         rows[f"flat_{traversal}_ms"] = frame_ms(flat, flat_tree, args.repeat, traversal)
     if not args.flat_only:
         mesh_of, transforms = flat.instances()
-        one = bvhlab.Scene(triangles=knot, instance_mesh=mesh_of, instance_transforms=transforms, camera=flat.camera)
+        one = bvhlab.Scene(
+            triangles=flat.triangles,
+            spheres=flat.spheres,
+            materials=list(flat.materials),
+            tri_material=flat.tri_material,
+            sphere_material=flat.sphere_material,
+            instance_mesh=mesh_of,
+            instance_transforms=transforms,
+            camera=flat.camera,
+            light=flat.light,
+        )
         one_tree = bvhlab.build(one)
         rows["one_instance_stack_ms"] = frame_ms(one, one_tree, args.repeat, "stack")
         mesh = procedural.torus_knot(20_000)

@@ -80,7 +80,9 @@ def render(
     progress=None,
     **option_changes,
 ):
-    """Render `scene` with its tree `bvh`; returns (image, timings).
+    """Render `scene` with its tree `bvh`; returns (image, timings). An instanced scene renders with
+    its `InstancedBvh` (`bvhlab.build(scene)`): the tracers walk the TLAS and each mesh's tree, and
+    the box overlay draws the TLAS's boxes.
 
     image: float32 (height, width, 4), row 0 at the top, linear RGB, alpha 1.
     timings: upload_ms, overlay_ms, trace_ms, readback_ms, total_ms, dispatches, device (which
