@@ -114,54 +114,49 @@ void enter_leaf(INOUT(Walk) w, uint first, uint count) {
     w.state = two_level() && w.instance == NO_INSTANCE ? WALK_INSTANCE : WALK_LEAF;
 }
 
-/// Where the walk's current tree lies: the ray in its space, its root node and pair, and the end of
-/// its nodes (the stackless walk stops there).
+/// Where the walk's current tree lies: its root node and pair, and the end of its nodes (the
+/// stackless walk stops there). The ray in its space is walk()'s `r`.
 struct Level {
-    TraceRay ray;
     uint root;
     uint root_pair;
     uint end;
 };
 
-Level top_level(TraceRay world) {
+Level top_level() {
     Level l;
-    l.ray = world;
     l.root = 0u;
     l.root_pair = 0u;
     l.end = node_count();
     return l;
 }
 
-/// An instance's BLAS, with the world ray moved into its object space: origin and direction by the
-/// world-to-object transform, the direction left unnormalised so that t is the same number in both
-/// spaces (as the CPU queries do: core_cpp/src/query/traverse_two_level.cpp).
-Level instance_level(uint slot, TraceRay world) {
+/// An instance's BLAS; `ray` goes from world space into the instance's object space: origin and
+/// direction by the world-to-object transform, the direction left unnormalised so that t is the
+/// same number in both spaces (as the CPU queries do: core_cpp/src/query/traverse_two_level.cpp).
+Level instance_level(uint slot, INOUT(TraceRay) ray) {
     GpuInstance inst = load_instance(slot);
-    vec3 o = world.origin;
-    vec3 d = world.dir;
+    vec3 o = ray.origin;
+    vec3 d = ray.dir;
     vec3 origin = vec3(dot(xyz(inst.row0), o) + inst.row0.w, dot(xyz(inst.row1), o) + inst.row1.w,
                        dot(xyz(inst.row2), o) + inst.row2.w);
     vec3 dir = vec3(dot(xyz(inst.row0), d), dot(xyz(inst.row1), d), dot(xyz(inst.row2), d));
+    ray = make_ray(origin, dir, ray.tmin);
     Level l;
-    l.ray = make_ray(origin, dir, world.tmin);
     l.root = inst.tree.x;
     l.end = inst.tree.y;
     l.root_pair = inst.tree.z;
     return l;
 }
 
-Level level_of(Walk w, TraceRay world) {
-    return w.instance == NO_INSTANCE ? top_level(world) : instance_level(w.instance, world);
-}
-
 /// Two-level: enters the instance of the TLAS leaf reached (WALK_INSTANCE) at its BLAS's root, or,
-/// when that BLAS is done (WALK_RETURN), goes on with the TLAS where it left it.
-void change_level(INOUT(Walk) w, TraceRay world, INOUT(Level) level) {
+/// when that BLAS is done (WALK_RETURN), goes on with the TLAS where it left it, the world ray made
+/// again from its origin and direction (make_ray gives the same ray for the same numbers).
+void change_level(INOUT(Walk) w, INOUT(TraceRay) ray, vec3 world_origin, vec3 world_dir, INOUT(Level) level) {
     bool stackless = TRAVERSAL == TRAVERSAL_STACKLESS;
     if (w.state == WALK_INSTANCE) {
         w.instance = w.leaf_next;
         w.outer = stackless ? w.node + 1u : w.stacked;
-        level = instance_level(w.instance, world);
+        level = instance_level(w.instance, ray);
         w.node = level.root;
         w.state = stackless ? WALK_NODE : WALK_ROOT;
     } else {
@@ -169,7 +164,8 @@ void change_level(INOUT(Walk) w, TraceRay world, INOUT(Level) level) {
         w.state = stackless ? WALK_NODE : WALK_POP;
         w.instance = NO_INSTANCE;
         w.outer = 0u;
-        level = top_level(world);
+        ray = make_ray(world_origin, world_dir, ray.tmin);
+        level = top_level();
     }
 }
 
@@ -274,18 +270,21 @@ void walk(INOUT(Walk) walk_state, TraceRay r, bool shadow, INOUT(Hit) query, INO
           uint budget) {
     Walk w = walk_state;  // locals: the CPU build keeps them in registers (the state may alias the slot)
     Hit hit = query;
-    Level level = level_of(w, r);
+    vec3 world_origin = r.origin;  // `r` is the current tree's ray: the world's, or an instance's
+    vec3 world_dir = r.dir;
+    Level level = top_level();
+    if (w.instance != NO_INSTANCE) level = instance_level(w.instance, r);
     while (w.state != WALK_FINISHED && steps < budget) {
         steps += 1u;
         if (w.state >= WALK_INSTANCE) {  // two-level only
-            change_level(w, r, level);
+            change_level(w, r, world_origin, world_dir, level);
             steps += 1u;
             work += 1u;
         }
         if (w.state == WALK_ROOT) {  // the stack walk tests the root's box, then enters its pair or the root leaf
             BvhNode root = load_node(level.root);
             hit.visited += 1u;
-            if (box_entry(root.lo, root.hi, level.ray, hit.t) < 0.0f) w.state = walk_done(w);
+            if (box_entry(root.lo, root.hi, r, hit.t) < 0.0f) w.state = walk_done(w);
             else if ((root.info & NODE_INTERNAL_BIT) == 0u) enter_leaf(w, root.index, root.info);
             else enter_child(w, level.root_pair, 0u);
             steps += 1u;
@@ -294,14 +293,14 @@ void walk(INOUT(Walk) walk_state, TraceRay r, bool shadow, INOUT(Hit) query, INO
         while (w.state == WALK_NODE && steps < budget) {
             steps += 1u;
             work += 1u;
-            if (TRAVERSAL == TRAVERSAL_STACKLESS) step_stackless_node(w, level.ray, level.end, hit);
-            else step_stack_node(w, level.ray, hit);
+            if (TRAVERSAL == TRAVERSAL_STACKLESS) step_stackless_node(w, r, level.end, hit);
+            else step_stack_node(w, r, hit);
         }
         steps = sync_steps(steps) + 1u;
         while (w.state == WALK_LEAF && steps < budget) {
             steps += 1u;
             work += 1u;
-            step_leaf(w, level.ray, shadow, hit);
+            step_leaf(w, r, shadow, hit);
         }
         steps = sync_steps(steps) + 1u;
         while (w.state == WALK_POP && steps < budget) {
