@@ -103,6 +103,22 @@ struct GpuMaterial {
     vec4 transparent_ior;   ///< x = transparent factor, y = index of refraction
 };
 
+/// An instance of a two-level scene as the tracer reads it (issue 34), 64 bytes, stored in the TLAS's
+/// leaf order (a TLAS leaf's slot is its instance's place here). The rows of the 3×4 world-to-object
+/// transform (w: the translation) move a world ray into object space; their transpose's 3×3 part is
+/// the inverse transpose of the object-to-world transform, which carries normals back into the world
+/// (traverse.glsl instance_ray, shade.glsl surface_at). `tree` places the instance's BLAS in the
+/// scene's forest of trees (make_render_scene, render_scene.cpp).
+struct GpuInstance {
+    vec4 row0;
+    vec4 row1;
+    vec4 row2;
+    uvec4 tree;  ///< x: the BLAS's root node, y: one past its last node, z: its root pair, w: the instance's index
+};
+
+/// Hit::instance and Walk::instance of a flat scene, or of the top level of a two-level one.
+BVHLAB_CONST uint NO_INSTANCE = 0xffffffffu;
+
 /// One box of the overlay pass (report §3.3), 32 bytes; boxes are stored sorted by depth.
 struct GpuBox {
     vec4 lo_depth;  ///< xyz = minimum, w = depth in the tree
@@ -122,8 +138,10 @@ BVHLAB_CONST uint TRAVERSAL_STACKLESS = 1u;
 /// read or write, so no storage-buffer binding limit (128 MiB on lavapipe) caps a scene.
 struct DeviceAddresses {
     uvec2 nodes;          ///< BvhNode[node_count]: the stackless walk's, and the stack walk's root
+                          ///< (two-level: the TLAS's nodes, then every BLAS's: RenderScene::forest_nodes)
     uvec2 pairs;          ///< BvhPair, one per internal node: the stack walk's
-    uvec2 prims;          ///< GpuTriangle, the tree's primitives in leaf order (Bvh::prims)
+    uvec2 prims;          ///< GpuTriangle, the tree's primitives in leaf order (Bvh::prims; two-level: every BLAS's)
+    uvec2 instances;      ///< GpuInstance, two-level scenes only (frame.instance_count of them)
     uvec2 triangles;      ///< GpuTriangle
     uvec2 spheres;        ///< GpuSphere
     uvec2 materials;      ///< GpuMaterial
@@ -175,7 +193,7 @@ struct FrameParams {
     uint samples_per_axis;        ///< n: n×n samples per pixel on a regular grid
     uint max_ray_depth;           ///< bounces of reflection and refraction (0 = primary rays only)
     uint mode;                    ///< MODE_SHADE or MODE_HEATMAP
-    uint node_count;              ///< of the tree (the stackless traversal stops there)
+    uint node_count;              ///< of the tree (the stackless traversal stops there); two-level: of the TLAS
     uint overlay_enabled;         ///< 1: the trace pass reads the overlay pass's lines
     uint overlay_color_by_depth;  ///< 1: line colour by tree depth (depth_color), else overlay_color
     float overlay_far;            ///< overlay pass: distance of the far clipping plane
@@ -192,6 +210,8 @@ struct FrameParams {
     uint tile_height;
     uint max_work_per_pixel;  ///< a trace with more steps of work in a pass fails (0xffffffff: no cap)
     float focus_distance;     ///< the thin lens's focus, along the view axis
+    uint instance_count;      ///< two-level scenes: instances in the TLAS (0: a flat scene, one level)
+    uint unused;              ///< 0 (keeps addr 8-aligned)
     DeviceAddresses addr;
 };
 
@@ -221,7 +241,7 @@ BVHLAB_CONST uint MIN_STEPS_PER_DISPATCH = 16u;
 /// FrameParams::max_work_per_pixel meaning "no cap".
 BVHLAB_CONST uint NO_WORK_CAP = 0xffffffffu;
 /// Words (uvec4) of a slot's saved trace state (state.glsl).
-BVHLAB_CONST uint STATE_WORDS = 11u;
+BVHLAB_CONST uint STATE_WORDS = 12u;
 BVHLAB_CONST uint NO_HIT = 0xffffffffu;
 BVHLAB_CONST uint NODE_SKIP_MASK = 0x7fffffffu;
 BVHLAB_CONST float FAR_AWAY = 3.0e38f;  ///< tmax of a ray that may go anywhere
@@ -236,9 +256,9 @@ BVHLAB_CONST float SHININESS = 48.0f;  ///< Blinn-Phong exponent
 static_assert(sizeof(BvhNode) == 32, "BvhNode must stay 32 bytes (std430 layout)");
 static_assert(sizeof(BvhPair) == 64, "BvhPair must stay 64 bytes (std430 layout)");
 static_assert(sizeof(GpuTriangle) == 48 && sizeof(GpuSphere) == 32 && sizeof(GpuMaterial) == 32);
-static_assert(sizeof(GpuBox) == 32 && sizeof(DeviceAddresses) == 14 * 8);
-static_assert(offsetof(FrameParams, width) == 160 && offsetof(FrameParams, addr) == 248);
-static_assert(sizeof(FrameParams) == 248 + sizeof(DeviceAddresses));
+static_assert(sizeof(GpuBox) == 32 && sizeof(GpuInstance) == 64 && sizeof(DeviceAddresses) == 15 * 8);
+static_assert(offsetof(FrameParams, width) == 160 && offsetof(FrameParams, addr) == 256);
+static_assert(sizeof(FrameParams) == 256 + sizeof(DeviceAddresses));
 }  // namespace bvhlab::gpu
 #endif
 #endif  // BVHLAB_GPU_TYPES_H

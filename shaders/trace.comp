@@ -26,6 +26,7 @@ layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Pa
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer TriangleArray { GpuTriangle v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer SphereArray { GpuSphere v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer MaterialArray { GpuMaterial v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer InstanceArray { GpuInstance v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer Vec4Array { vec4 v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer FloatArray { float v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer UintArray { uint v[]; };
@@ -38,7 +39,9 @@ GpuTriangle load_leaf_prim(uint i) { return TriangleArray(frame.addr.prims).v[i]
 GpuTriangle load_triangle(uint i) { return TriangleArray(frame.addr.triangles).v[i]; }
 GpuSphere load_sphere(uint i) { return SphereArray(frame.addr.spheres).v[i]; }
 GpuMaterial load_material(uint i) { return MaterialArray(frame.addr.materials).v[i]; }
+GpuInstance load_instance(uint i) { return InstanceArray(frame.addr.instances).v[i]; }
 uint node_count() { return frame.node_count; }
+bool two_level() { return frame.instance_count != 0u; }
 vec4 overlay_at(uvec2 p) { return frame.overlay_enabled != 0u ? imageLoad(overlay, ivec2(p)) : vec4(0.0f); }
 
 // The step count of the lanes of a SIMD vector (a subgroup on lavapipe) after a loop: the largest.

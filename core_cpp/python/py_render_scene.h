@@ -1,5 +1,7 @@
 // py_render_scene.h — what the Python module keeps per RenderScene, shared by the binding files.
 #pragma once
+#include <vector>
+
 #include "bvhlab/render.h"
 #include "py_bvh.h"
 
@@ -8,7 +10,8 @@ namespace bvhlab::python {
 /// A RenderScene and the version of the tree it was made from (kept alive: RenderScene borrows it;
 /// a later refit of the Python Bvh makes a new version and leaves this one intact).
 struct PyRenderScene {
-    TreePtr tree;
+    TreePtr tree;                 ///< flat scenes
+    std::vector<TreePtr> meshes;  ///< two-level scenes: every mesh's (a one-instance scene borrows one)
     RenderScene scene;
 };
 

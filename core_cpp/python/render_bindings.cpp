@@ -18,6 +18,7 @@
 #include "py_bvh.h"
 #include "py_cancel.h"
 #include "py_render_scene.h"
+#include "py_two_level.h"
 #ifdef BVHLAB_VULKAN
 #include "bvhlab/vulkan_renderer.h"
 #endif
@@ -74,6 +75,31 @@ RenderScene make_scene(const TreeVersion& tree, const Triangles& tris, const std
     MaterialView mv{materials.data(), materials.shape(0), tri_material.data(), sphere_material.data()};
     nb::gil_scoped_release release;
     return make_render_scene(tree.bvh, g, mv);
+}
+
+/// The render scene of a two-level tree: mesh k's triangles, spheres (None: none) and material
+/// indices in the k-th entry of each list.
+PyRenderScene make_two_level_scene(const PyTwoLevel& two, const std::vector<Triangles>& tris,
+                                   const std::vector<std::optional<Spheres>>& spheres, const Materials& materials,
+                                   const std::vector<Indices>& tri_material,
+                                   const std::vector<Indices>& sphere_material) {
+    const std::size_t n = two.meshes().size();
+    if (tris.size() != n || spheres.size() != n || tri_material.size() != n || sphere_material.size() != n)
+        throw std::invalid_argument("one entry per mesh of the two-level tree is needed (" + std::to_string(n) + ")");
+    std::vector<RenderMesh> meshes(n);
+    for (std::size_t k = 0; k < n; ++k) {
+        meshes[k].bvh = &two.meshes()[k]->bvh;
+        meshes[k].geometry = view_of(tris[k], spheres[k]);
+        if (tri_material[k].shape(0) != meshes[k].geometry.triangle_count ||
+            sphere_material[k].shape(0) != meshes[k].geometry.sphere_count)
+            throw std::invalid_argument("one material index per triangle and per sphere is needed (mesh " +
+                                        std::to_string(k) + ")");
+        meshes[k].triangle_material = tri_material[k].data();
+        meshes[k].sphere_material = sphere_material[k].data();
+    }
+    MaterialView mv{materials.data(), materials.shape(0), nullptr, nullptr};
+    nb::gil_scoped_release release;
+    return PyRenderScene{nullptr, two.meshes(), make_render_scene(two.tlas(), meshes, mv)};
 }
 
 nb::dict timings_dict(const RenderTimings& t) {
@@ -216,11 +242,22 @@ void bind_render(nb::module_& m) {
                const Materials& materials, const Indices& tri_material, const Indices& sphere_material) {
                 TreePtr tree = bvh.current();
                 new (self)
-                    PyRenderScene{tree, make_scene(*tree, tris, spheres, materials, tri_material, sphere_material)};
+                    PyRenderScene{tree, {}, make_scene(*tree, tris, spheres, materials, tri_material, sphere_material)};
             },
             "bvh"_a, "triangles"_a.noconvert(), "spheres"_a.noconvert().none(), "materials"_a.noconvert(),
             "tri_material"_a.noconvert(), "sphere_material"_a.noconvert())
-        .def_prop_ro("revision", [](const PyRenderScene& s) { return s.tree->revision; })
+        .def(
+            "__init__",
+            [](PyRenderScene* self, const PyTwoLevel& two, const std::vector<Triangles>& tris,
+               const std::vector<std::optional<Spheres>>& spheres, const Materials& materials,
+               const std::vector<Indices>& tri_material, const std::vector<Indices>& sphere_material) {
+                new (self)
+                    PyRenderScene(make_two_level_scene(two, tris, spheres, materials, tri_material, sphere_material));
+            },
+            "two_level"_a, "triangles"_a, "spheres"_a, "materials"_a.noconvert(), "tri_material"_a, "sphere_material"_a,
+            "A two-level scene: the TLAS of `two_level` and, per mesh, its triangles, spheres and material indices.")
+        .def_prop_ro("revision", [](const PyRenderScene& s) { return s.tree ? s.tree->revision : 0; })
+        .def_prop_ro("two_level", [](const PyRenderScene& s) { return s.scene.two_level(); })
         .def_prop_ro("height", [](const PyRenderScene& s) { return s.scene.height(); });
     bind_job(m);
     bind_palettes(m);

@@ -16,6 +16,7 @@
 #include "bvhlab/wide_bvh.h"
 #include "py_bvh.h"
 #include "py_cancel.h"
+#include "py_two_level.h"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -28,27 +29,6 @@ using Transforms = nb::ndarray<const float, nb::shape<-1, 3, 4>, nb::c_contig, n
 using MeshIndices = nb::ndarray<const std::uint32_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
 template <class T>
 using Out1D = nb::ndarray<T, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
-
-/// A TLAS and the mesh tree versions it was built over. Immutable once made.
-class PyTwoLevel {
-public:
-    PyTwoLevel(std::vector<TreePtr> meshes, Tlas tlas) : meshes_(std::move(meshes)), tlas_(std::move(tlas)) {}
-
-    const Tlas& tlas() const { return tlas_; }
-    const std::vector<TreePtr>& meshes() const { return meshes_; }
-
-    /// The query's view of both levels (the wide copies made on first use, once per version).
-    TwoLevel view(Traversal mode) const {
-        TwoLevel scene{&tlas_, {}};
-        for (const TreePtr& m : meshes_)
-            scene.blases.push_back({&m->bvh, mode == Traversal::Wide ? &m->wide() : nullptr});
-        return scene;
-    }
-
-private:
-    std::vector<TreePtr> meshes_;
-    Tlas tlas_;
-};
 
 PyTwoLevel* build_two_level(const std::vector<const PyBvh*>& meshes, const MeshIndices& mesh_of,
                             const Transforms& transforms, const BuildConfig& config) {

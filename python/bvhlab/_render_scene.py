@@ -8,6 +8,7 @@ import threading
 import numpy as np
 
 from . import _core
+from .instanced import InstancedBvh
 
 
 def _array_key(a: np.ndarray) -> tuple:
@@ -16,8 +17,9 @@ def _array_key(a: np.ndarray) -> tuple:
 
 class SceneCache:
     """Remembers the RenderScene last made and the key it was made for: the tree (object and
-    revision, which refit bumps), the geometry's fingerprint (so in-place edits of the arrays are
-    seen) and the materials (by value)."""
+    revision, which refit bumps; for a two-level tree its TLAS object, which holds the meshes' tree
+    versions), the geometry's fingerprint (so in-place edits of the arrays are seen) and the
+    materials (by value)."""
 
     def __init__(self):
         self._lock = threading.Lock()
@@ -25,23 +27,48 @@ class SceneCache:
         self._scene = None
 
     def get(self, scene, bvh) -> _core.RenderScene:
-        if scene.is_instanced:  # the tracer walks one level (issue 34 leaves the two-level tracer to come)
-            raise ValueError("the renderers take flat scenes: render scene.flattened() with a tree built over it")
+        two_level = isinstance(bvh, InstancedBvh)
+        if scene.is_instanced and not two_level:
+            raise ValueError("an instanced scene renders with its two-level tree: bvhlab.build(scene)")
+        if two_level and len(bvh.meshes) != scene.mesh_count:
+            raise ValueError(f"the tree has {len(bvh.meshes)} meshes, the scene {scene.mesh_count}")
+        key = self._key_of(scene, bvh, two_level)
+        with self._lock:
+            if self._key == key:
+                return self._scene
+            render_scene = _make(scene, bvh, two_level)
+            self._key, self._scene = key, render_scene
+            return render_scene
+
+    @staticmethod
+    def _key_of(scene, bvh, two_level: bool) -> tuple:
+        meshes = range(scene.mesh_count) if two_level else range(1)
+        spheres = [scene.spheres if k == 0 else None for k in meshes]
         tree = bvh._core
-        fingerprint = _core.geometry_fingerprint(scene.triangles, scene.spheres)
-        key = (
+        return (
             tree,
-            tree.revision,
-            fingerprint,
+            0 if two_level else tree.revision,
+            tuple(_core.geometry_fingerprint(scene.mesh_triangles(k), s) for k, s in zip(meshes, spheres)),
             tuple(scene.materials),
             _array_key(scene.tri_material),
             _array_key(scene.sphere_material),
         )
-        with self._lock:
-            if self._key == key:
-                return self._scene
-            render_scene = _core.RenderScene(
-                tree, scene.triangles, scene.spheres, scene.material_table(), scene.tri_material, scene.sphere_material
-            )
-            self._key, self._scene = key, render_scene
-            return render_scene
+
+
+def _make(scene, bvh, two_level: bool) -> _core.RenderScene:
+    if not two_level:
+        return _core.RenderScene(
+            bvh._core, scene.triangles, scene.spheres, scene.material_table(), scene.tri_material, scene.sphere_material
+        )
+    # The two-level tracer (issue 34): the meshes' own triangles, placed by the TLAS's instances;
+    # the scene's spheres belong to mesh 0.
+    n = scene.mesh_count
+    no_spheres = np.zeros(0, np.int32)
+    return _core.RenderScene(
+        bvh._core,
+        [scene.mesh_triangles(k) for k in range(n)],
+        [scene.spheres if k == 0 else None for k in range(n)],
+        scene.material_table(),
+        [scene.mesh_triangle_material(k) for k in range(n)],
+        [scene.sphere_material if k == 0 else no_spheres for k in range(n)],
+    )

@@ -7,17 +7,20 @@ import numpy as np
 
 from . import _checks, _core
 from .bvh import Bvh
+from .instanced import InstancedBvh
 from .render_options import RenderOptions
 from .scene import Camera, Scene, View
 
 
-def render_settings(scene: Scene, bvh: Bvh, width, height, options: RenderOptions, camera=None) -> _core.RenderSettings:
+def render_settings(
+    scene: Scene, bvh: Bvh | InstancedBvh, width, height, options: RenderOptions, camera=None
+) -> _core.RenderSettings:
     """The typed settings of a render: the scene's sky and light, the camera (default: the
     scene's), the size and the options. Types are checked here; values once, in C++ (ValueError)."""
     if not isinstance(scene, Scene):
         raise TypeError(f"scene must be a bvhlab.Scene, got {type(scene).__name__}")
-    if not isinstance(bvh, Bvh):
-        raise TypeError(f"bvh must be a bvhlab.Bvh, got {type(bvh).__name__}")
+    if not isinstance(bvh, (Bvh, InstancedBvh)):
+        raise TypeError(f"bvh must be a bvhlab.Bvh or bvhlab.InstancedBvh, got {type(bvh).__name__}")
     s = _core.RenderSettings()
     s.width, s.height = _checks.integer("width", width, 0, 2**31), _checks.integer("height", height, 0, 2**31)
     s.camera = _camera(scene, camera)
@@ -33,7 +36,8 @@ def _camera(scene: Scene, camera) -> _core.Camera:
     if camera is None:  # nothing to frame: bvhlab.defaults' fallback camera
         from .defaults import camera_placement
 
-        position, target, up, fov = camera_placement(scene.bounds() if scene.primitive_count else None)
+        framed = scene.primitive_count or scene.is_instanced
+        position, target, up, fov = camera_placement(scene.bounds() if framed else None)
         camera = Camera(position, target, up, fov)
     if not isinstance(camera, (Camera, View)):
         raise TypeError(f"camera must be a bvhlab.Camera or bvhlab.View, got {type(camera).__name__}")

@@ -18,6 +18,7 @@ from . import _checks, _core
 from ._render_scene import SceneCache
 from ._render_settings import View, render_settings
 from .bvh import Bvh
+from .instanced import InstancedBvh
 from .render_options import DEFAULT_HEIGHT, DEFAULT_WIDTH, RenderOptions, options_from
 from .scene import Camera, Scene
 
@@ -66,7 +67,7 @@ class RenderResult:
 
 def render(
     scene: Scene,
-    bvh: Bvh,
+    bvh: Bvh | InstancedBvh,
     width: int = DEFAULT_WIDTH,
     height: int = DEFAULT_HEIGHT,
     *,
@@ -79,7 +80,9 @@ def render(
     progress=None,
     **option_changes,
 ):
-    """Render `scene` with its tree `bvh`; returns (image, timings).
+    """Render `scene` with its tree `bvh`; returns (image, timings). An instanced scene renders with
+    its `InstancedBvh` (`bvhlab.build(scene)`): the tracers walk the TLAS and each mesh's tree, and
+    the box overlay draws the TLAS's boxes.
 
     image: float32 (height, width, 4), row 0 at the top, linear RGB, alpha 1.
     timings: upload_ms, overlay_ms, trace_ms, readback_ms, total_ms, dispatches, device (which
@@ -209,7 +212,7 @@ class Renderer:
     def start(
         self,
         scene: Scene,
-        bvh: Bvh,
+        bvh: Bvh | InstancedBvh,
         width: int = DEFAULT_WIDTH,
         height: int = DEFAULT_HEIGHT,
         *,
@@ -242,7 +245,7 @@ class Renderer:
     def render(
         self,
         scene: Scene,
-        bvh: Bvh,
+        bvh: Bvh | InstancedBvh,
         width: int = DEFAULT_WIDTH,
         height: int = DEFAULT_HEIGHT,
         *,

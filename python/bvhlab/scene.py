@@ -351,6 +351,11 @@ class Scene:
         """The triangles of mesh k (0: the scene's own)."""
         return self.triangles if k == 0 else self.meshes[k - 1]
 
+    def mesh_triangle_material(self, k: int) -> np.ndarray:
+        """The material index of each triangle of mesh k: the scene's own (mesh 0) keep
+        tri_material, the other meshes use material 0."""
+        return self.tri_material if k == 0 else np.zeros(len(self.meshes[k - 1]), np.int32)
+
     def instances(self) -> tuple[np.ndarray, np.ndarray]:
         """(mesh index int32 (N,), object-to-world float32 (N,3,4)): the instances given, checked
         against each other and the meshes (ValueError naming the instance), or every mesh once
@@ -382,7 +387,7 @@ class Scene:
         for k, t in zip(mesh_of, transforms.astype(np.float64)):
             src = self.mesh_triangles(int(k)).astype(np.float64)
             tris.append((src @ t[:, :3].T + t[:, 3]).astype(np.float32))
-            tri_mat.append(self.tri_material if k == 0 else np.zeros(len(src), np.int32))
+            tri_mat.append(self.mesh_triangle_material(int(k)))
             if k == 0 and len(self.spheres):
                 spheres.append(_moved_spheres(self.spheres, t))
                 sphere_mat.append(self.sphere_material)

@@ -175,22 +175,41 @@ struct Surface {
     float opaque;    ///< what is neither reflected nor transmitted
 };
 
-/// The hit point, its geometric normal (unit, outwards; triangles: by winding) and material, the
-/// primitive fetched once.
+/// A point moved by an instance's world-to-object transform.
+vec3 object_point(GpuInstance inst, vec3 p) {
+    return vec3(dot(xyz(inst.row0), p) + inst.row0.w, dot(xyz(inst.row1), p) + inst.row1.w,
+                dot(xyz(inst.row2), p) + inst.row2.w);
+}
+
+/// An object-space normal in the world: times the inverse transpose of the object-to-world
+/// transform, i.e. the transpose of the world-to-object one (PBRT §3.10.3, "Normals"). No sign
+/// flip for a mirroring transform: the outside stays the outside, as Blender and Cycles keep a
+/// mirrored object's normals (only the vertices' winding is reversed in the world).
+vec3 normal_to_world(GpuInstance inst, vec3 n) {
+    return xyz(inst.row0) * n.x + xyz(inst.row1) * n.y + xyz(inst.row2) * n.z;
+}
+
+/// The hit point, its geometric normal (unit, outwards; triangles: by winding in the mesh's own
+/// space) and material, the primitive fetched once; a two-level hit's normal comes from its
+/// instance's object space.
 Surface surface_at(RayTask task, Hit hit) {
     Surface s;
     s.p = task.origin + task.dir * hit.t;
+    bool moved = hit.instance != NO_INSTANCE;
+    GpuInstance inst;
+    if (moved) inst = load_instance(hit.instance);
     vec3 n;
     uint material;
     if ((hit.ref & REF_SPHERE_BIT) != 0u) {
         GpuSphere sphere = load_sphere(hit.ref & REF_INDEX_MASK);
-        n = normalize(s.p - xyz(sphere.center_radius));
+        n = (moved ? object_point(inst, s.p) : s.p) - xyz(sphere.center_radius);
         material = sphere.material.x;
     } else {
         GpuTriangle tri = load_triangle(hit.ref);
-        n = normalize(cross(tri.v1 - tri.v0, tri.v2 - tri.v0));
+        n = cross(tri.v1 - tri.v0, tri.v2 - tri.v0);
         material = tri.material;
     }
+    n = normalize(moved ? normal_to_world(inst, n) : n);
     s.entering = dot(n, task.dir) < 0.0f;
     s.facing = s.entering ? n : -n;
     s.m = load_material(material);

@@ -20,6 +20,7 @@ void save_state(TraceState s, uint stamp) {
     state_store(8u, word3(s.task.dir, floatBitsToUint(s.visits)));
     state_store(9u, word3(s.task.weight, floatBitsToUint(s.depth)));
     state_store(10u, word3(s.color, s.work));
+    state_store(11u, uvec4(s.walk.instance, s.walk.outer, s.hit.instance, s.closest.instance));
 }
 
 uint slot_stamp() { return state_load(2u).w; }
@@ -71,5 +72,10 @@ TraceState load_state() {
     uvec4 w10 = state_load(10u);
     s.color = vec3_of(w10);
     s.work = w10.w;
+    uvec4 w11 = state_load(11u);
+    s.walk.instance = w11.x;
+    s.walk.outer = w11.y;
+    s.hit.instance = w11.z;
+    s.closest.instance = w11.w;
     return s;
 }

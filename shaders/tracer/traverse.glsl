@@ -5,10 +5,18 @@
 // the walk's whole state lives in a Walk, so a trace can stop after any step and continue in the
 // next dispatch (issue 8: lavapipe stops long loops, GPUs have a watchdog). One walk serves
 // closest-hit queries and shadow rays. Shared code: see geometry.glsl.
+//
+// Two-level scenes (issue 34; docs/design.md "Two-level trees") walk the TLAS the same way; a TLAS
+// leaf holds one instance (default_tlas_config), whose BLAS is walked in the same Walk with the ray
+// moved into the instance's object space (WALK_INSTANCE), then the TLAS walk goes on (WALK_RETURN):
+// the stack walk pushes the BLAS's entries above the TLAS's, the stackless one resumes at the node
+// after the instance's leaf. Every tree lives in one forest (the scene's node, pair and primitive
+// arrays), its indices moved to its place there, so the steps are those of a flat tree.
 
 struct Hit {
     float t;        ///< closest-hit: distance so far; shadow: the end of the segment
     uint ref;       ///< primitive reference, NO_HIT when nothing was hit
+    uint instance;  ///< two-level: the instance slot (GpuInstance) of the hit; NO_INSTANCE otherwise
     float u;        ///< triangle barycentrics
     float v;
     float transmission;  ///< shadow rays: product of the transparencies crossed (report §2.1)
@@ -19,6 +27,7 @@ Hit empty_hit(float tmax) {
     Hit h;
     h.t = tmax;
     h.ref = NO_HIT;
+    h.instance = NO_INSTANCE;
     h.u = 0.0f;
     h.v = 0.0f;
     h.transmission = 1.0f;
@@ -44,17 +53,18 @@ uint material_of(uint ref) {
 /// and Laine 2009). Closest-hit keeps the nearest; a shadow ray multiplies its transmission by the
 /// transparent factor of every surface it crosses (a sphere can be crossed twice). Returns true
 /// when the walk may stop (a shadow ray that is fully blocked).
-bool visit_primitive(GpuTriangle p, TraceRay r, bool shadow, INOUT(Hit) hit) {
+/// `instance`: the instance slot whose BLAS holds the primitive (NO_INSTANCE in a flat scene).
+bool visit_primitive(GpuTriangle p, TraceRay r, bool shadow, uint instance, INOUT(Hit) hit) {
     uint crossings = 0u;
     if ((p.ref & REF_SPHERE_BIT) != 0u) {
         float t;
         if (shadow) crossings = sphere_crossings(p.v0, p.v1.x, r, hit.t);
-        else if (hit_sphere(p.v0, p.v1.x, r, hit.t, t) && closer(t, p.ref, hit)) { hit.t = t; hit.ref = p.ref; }
+        else if (hit_sphere(p.v0, p.v1.x, r, hit.t, t) && closer(t, p.ref, hit)) { hit.t = t; hit.ref = p.ref; hit.instance = instance; }
     } else {
         vec3 tuv;
         if (hit_triangle(p.v0, p.v1, p.v2, r, hit.t, tuv)) {
             if (shadow) crossings = tuv.x < hit.t ? 1u : 0u;
-            else if (closer(tuv.x, p.ref, hit)) { hit.t = tuv.x; hit.u = tuv.y; hit.v = tuv.z; hit.ref = p.ref; }
+            else if (closer(tuv.x, p.ref, hit)) { hit.t = tuv.x; hit.u = tuv.y; hit.v = tuv.z; hit.ref = p.ref; hit.instance = instance; }
         }
     }
     if (crossings == 0u) return false;
@@ -69,6 +79,8 @@ LOCAL_CONST uint WALK_NODE = 1u;      ///< stackless: test node `node`'s box; st
 LOCAL_CONST uint WALK_LEAF = 2u;      ///< testing primitives leaf_next .. leaf_end - 1 of a leaf
 LOCAL_CONST uint WALK_POP = 3u;       ///< stack traversal: take the next entry off the stack
 LOCAL_CONST uint WALK_FINISHED = 4u;  ///< the query is answered
+LOCAL_CONST uint WALK_INSTANCE = 5u;  ///< two-level: enter the instance in slot leaf_next (a TLAS leaf's)
+LOCAL_CONST uint WALK_RETURN = 6u;    ///< two-level: the instance's BLAS is done: back to the TLAS
 
 /// The state of a query in progress; the traversal stack itself lives in the slot's storage
 /// (node_stack_load/store), `stacked` entries of it.
@@ -78,6 +90,9 @@ struct Walk {
     uint stacked;    ///< entries on the traversal stack
     uint leaf_next;
     uint leaf_end;
+    uint instance;   ///< two-level: the instance slot whose BLAS is walked; NO_INSTANCE: the top level
+    uint outer;      ///< in an instance: stack walk, the TLAS's entries below the BLAS's (0 at the top
+                     ///< level: the stack's floor); stackless, the TLAS node after the instance's leaf
 };
 
 Walk start_walk() {
@@ -87,14 +102,75 @@ Walk start_walk() {
     w.stacked = 0u;
     w.leaf_next = 0u;
     w.leaf_end = 0u;
+    w.instance = NO_INSTANCE;
+    w.outer = 0u;
     return w;
 }
 
+/// A leaf of a two-level scene's TLAS names an instance to enter; any other leaf has primitives.
 void enter_leaf(INOUT(Walk) w, uint first, uint count) {
     w.leaf_next = first;
     w.leaf_end = first + count;
-    w.state = WALK_LEAF;
+    w.state = two_level() && w.instance == NO_INSTANCE ? WALK_INSTANCE : WALK_LEAF;
 }
+
+/// Where the walk's current tree lies: its root node and pair, and the end of its nodes (the
+/// stackless walk stops there). The ray in its space is walk()'s `r`.
+struct Level {
+    uint root;
+    uint root_pair;
+    uint end;
+};
+
+Level top_level() {
+    Level l;
+    l.root = 0u;
+    l.root_pair = 0u;
+    l.end = node_count();
+    return l;
+}
+
+/// An instance's BLAS; `ray` goes from world space into the instance's object space: origin and
+/// direction by the world-to-object transform, the direction left unnormalised so that t is the
+/// same number in both spaces (as the CPU queries do: core_cpp/src/query/traverse_two_level.cpp).
+Level instance_level(uint slot, INOUT(TraceRay) ray) {
+    GpuInstance inst = load_instance(slot);
+    vec3 o = ray.origin;
+    vec3 d = ray.dir;
+    vec3 origin = vec3(dot(xyz(inst.row0), o) + inst.row0.w, dot(xyz(inst.row1), o) + inst.row1.w,
+                       dot(xyz(inst.row2), o) + inst.row2.w);
+    vec3 dir = vec3(dot(xyz(inst.row0), d), dot(xyz(inst.row1), d), dot(xyz(inst.row2), d));
+    ray = make_ray(origin, dir, ray.tmin);
+    Level l;
+    l.root = inst.tree.x;
+    l.end = inst.tree.y;
+    l.root_pair = inst.tree.z;
+    return l;
+}
+
+/// Two-level: enters the instance of the TLAS leaf reached (WALK_INSTANCE) at its BLAS's root, or,
+/// when that BLAS is done (WALK_RETURN), goes on with the TLAS where it left it, the world ray made
+/// again from its origin and direction (make_ray gives the same ray for the same numbers).
+void change_level(INOUT(Walk) w, INOUT(TraceRay) ray, vec3 world_origin, vec3 world_dir, INOUT(Level) level) {
+    bool stackless = TRAVERSAL == TRAVERSAL_STACKLESS;
+    if (w.state == WALK_INSTANCE) {
+        w.instance = w.leaf_next;
+        w.outer = stackless ? w.node + 1u : w.stacked;
+        level = instance_level(w.instance, ray);
+        w.node = level.root;
+        w.state = stackless ? WALK_NODE : WALK_ROOT;
+    } else {
+        w.node = w.outer;
+        w.state = stackless ? WALK_NODE : WALK_POP;
+        w.instance = NO_INSTANCE;
+        w.outer = 0u;
+        ray = make_ray(world_origin, world_dir, ray.tmin);
+        level = top_level();
+    }
+}
+
+/// The walk of the current tree is over: the query's, or (two-level) only the instance's.
+uint walk_done(Walk w) { return w.instance == NO_INSTANCE ? WALK_FINISHED : WALK_RETURN; }
 
 /// The stack walk goes on with a child of a pair: an internal one's pair is visited next, a leaf's
 /// primitives are tested.
@@ -138,9 +214,9 @@ void step_stack_node(INOUT(Walk) w, TraceRay r, INOUT(Hit) hit) {
 
 /// Stackless (report §3.1) at node `node` of the depth-first order: a missed box continues at
 /// its skip index, the first node after its subtree; a leaf's skip index is the next node.
-void step_stackless_node(INOUT(Walk) w, TraceRay r, INOUT(Hit) hit) {
-    if (w.node >= node_count()) {
-        w.state = WALK_FINISHED;
+void step_stackless_node(INOUT(Walk) w, TraceRay r, uint end, INOUT(Hit) hit) {
+    if (w.node >= end) {
+        w.state = walk_done(w);
         return;
     }
     BvhNode n = load_node(w.node);
@@ -156,7 +232,7 @@ void step_stackless_node(INOUT(Walk) w, TraceRay r, INOUT(Hit) hit) {
 void step_leaf(INOUT(Walk) w, TraceRay r, bool shadow, INOUT(Hit) hit) {
     GpuTriangle p = load_leaf_prim(w.leaf_next);
     w.leaf_next += 1u;
-    if (visit_primitive(p, r, shadow, hit)) w.state = WALK_FINISHED;
+    if (visit_primitive(p, r, shadow, w.instance, hit)) w.state = WALK_FINISHED;
     else if (w.leaf_next >= w.leaf_end) {
         w.state = TRAVERSAL == TRAVERSAL_STACKLESS ? WALK_NODE : WALK_POP;
         w.node += 1u;  // stackless: past the leaf; the stack walk reads `node` only once a pop sets it
@@ -164,10 +240,11 @@ void step_leaf(INOUT(Walk) w, TraceRay r, bool shadow, INOUT(Hit) hit) {
 }
 
 /// Takes one entry off the stack; an entry farther than the closest hit so far is dropped. A
-/// leaf's entry names its parent pair and side, whose words hold the leaf's range.
+/// leaf's entry names its parent pair and side, whose words hold the leaf's range. The current
+/// tree's entries end at `outer` (two-level: the TLAS's lie below an instance's).
 void step_pop(INOUT(Walk) w, Hit hit) {
-    if (w.stacked == 0u) {
-        w.state = WALK_FINISHED;
+    if (w.stacked == w.outer) {
+        w.state = walk_done(w);
         return;
     }
     w.stacked -= 1u;
@@ -187,26 +264,36 @@ void step_pop(INOUT(Walk) w, Hit hit) {
 /// largest count among them (sync_steps), plus one for the loop's exit. So `steps` never falls
 /// below the iterations the SIMD vector ran, which is what lavapipe's loop limit counts (see
 /// MAX_STEPS_PER_DISPATCH), and a walk cut short by the budget continues from `w` later. `work`
-/// counts this lane's own steps (a node, a primitive, a pop).
+/// counts this lane's own steps (a node, a primitive, a pop; two-level: entering or leaving an
+/// instance). `r` is the world ray.
 void walk(INOUT(Walk) walk_state, TraceRay r, bool shadow, INOUT(Hit) query, INOUT(uint) work, INOUT(uint) steps,
           uint budget) {
     Walk w = walk_state;  // locals: the CPU build keeps them in registers (the state may alias the slot)
     Hit hit = query;
-    if (w.state == WALK_ROOT) {  // the stack walk tests the root's box, then enters pair 0 or the root leaf
-        BvhNode root = load_node(0u);
-        hit.visited += 1u;
-        if (box_entry(root.lo, root.hi, r, hit.t) < 0.0f) w.state = WALK_FINISHED;
-        else if ((root.info & NODE_INTERNAL_BIT) == 0u) enter_leaf(w, root.index, root.info);
-        else enter_child(w, 0u, 0u);
-        steps += 1u;
-        work += 1u;
-    }
+    vec3 world_origin = r.origin;  // `r` is the current tree's ray: the world's, or an instance's
+    vec3 world_dir = r.dir;
+    Level level = top_level();
+    if (w.instance != NO_INSTANCE) level = instance_level(w.instance, r);
     while (w.state != WALK_FINISHED && steps < budget) {
         steps += 1u;
+        if (w.state >= WALK_INSTANCE) {  // two-level only
+            change_level(w, r, world_origin, world_dir, level);
+            steps += 1u;
+            work += 1u;
+        }
+        if (w.state == WALK_ROOT) {  // the stack walk tests the root's box, then enters its pair or the root leaf
+            BvhNode root = load_node(level.root);
+            hit.visited += 1u;
+            if (box_entry(root.lo, root.hi, r, hit.t) < 0.0f) w.state = walk_done(w);
+            else if ((root.info & NODE_INTERNAL_BIT) == 0u) enter_leaf(w, root.index, root.info);
+            else enter_child(w, level.root_pair, 0u);
+            steps += 1u;
+            work += 1u;
+        }
         while (w.state == WALK_NODE && steps < budget) {
             steps += 1u;
             work += 1u;
-            if (TRAVERSAL == TRAVERSAL_STACKLESS) step_stackless_node(w, r, hit);
+            if (TRAVERSAL == TRAVERSAL_STACKLESS) step_stackless_node(w, r, level.end, hit);
             else step_stack_node(w, r, hit);
         }
         steps = sync_steps(steps) + 1u;

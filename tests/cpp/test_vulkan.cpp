@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "instanced_render.h"
 #include "vulkan_fixture.h"
 
 using namespace bvhlab;
@@ -147,6 +148,25 @@ TEST_F(Vulkan, BumpyMeshMatchesCpuReference) {
     auto scene = test::bumpy_mesh();
     ASSERT_GE(scene->bvh.triangle_count, 50000u);
     expect_matches_reference(*scene, scene->settings);
+}
+
+// Two-level scenes (issue 34): the shader walks the TLAS and the BLASes as the CPU reference does,
+// also when a small budget of steps stops walks inside instances.
+TEST_F(Vulkan, InstancedScenesMatchCpuReference) {
+    for (auto make : {mixed_instances, many_instances}) {
+        const InstancedPtr p = make();
+        const InstancedRender& s = *p;
+        ASSERT_TRUE(s.two_level.two_level());
+        renderer().upload(s.two_level);
+        RenderSettings settings = s.settings;
+        for (Traversal traversal : {Traversal::Stack, Traversal::Stackless})
+            for (std::uint32_t steps : {0u, 97u}) {
+                settings.traversal = traversal;
+                settings.steps_per_dispatch = steps ? std::optional<std::uint32_t>(steps) : std::nullopt;
+                expect_close(render_vulkan(renderer(), settings), render_reference(s.two_level, settings),
+                             to_string(traversal).c_str());
+            }
+    }
 }
 
 TEST_F(Vulkan, HeatmapMatchesCpuReference) {

@@ -144,6 +144,28 @@ def test_errors_have_exit_code_2(tmp_path, capsys):
         main(["render", "gen:whitted", "--bvh-depth", "9:2", "--out", str(tmp_path / "x.png")])
 
 
+def test_render_an_instanced_scene_without_flattening(tmp_path, capsys):
+    """The CLI renders an instanced scene with its two-level tree (issue 34): the image equals the
+    flattened scene's (no mirrored instance here, so flattening keeps every outside out)."""
+    knot = procedural.torus_knot(2000)
+    transforms = np.tile(np.eye(3, 4, dtype=np.float32), (3, 1, 1))
+    transforms[:, 0, 3] = [0.0, 3.0, 6.0]
+    transforms[1, :, :3] *= 0.5
+    scene = bvhlab.Scene(triangles=knot, instance_mesh=[0, 0, 0], instance_transforms=transforms)
+    scene.camera = bvhlab.Camera((3.0, -12.0, 4.0), (3.0, 0.0, 0.0), (0.0, 0.0, 1.0), 50.0)
+    path = scene.save(tmp_path / "three.npz")
+    out, flat_out = tmp_path / "three.png", tmp_path / "flat.png"
+    assert main(["render", str(path), "--width", "64", "--height", "48", "--backend", "cpu", "--out", str(out)]) == 0
+    assert "3 instances of 1 meshes" in capsys.readouterr().out
+    flat = scene.flattened().save(tmp_path / "flat.npz")
+    assert (
+        main(["render", str(flat), "--width", "64", "--height", "48", "--backend", "cpu", "--out", str(flat_out)]) == 0
+    )
+    a, b = read_png(out).astype(int), read_png(flat_out).astype(int)
+    assert (np.abs(a - b).max(-1) > 2).mean() <= 0.01
+    assert (a != a[0, 0]).any(-1).mean() > 0.1  # the knots are in view
+
+
 def test_compare_writes_table_charts_figures_and_sheets(tmp_path):
     out = tmp_path / "cmp"
     code, stdout, stderr = run_cli(

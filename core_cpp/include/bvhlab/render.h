@@ -16,6 +16,7 @@
 #include "bvhlab/pair_nodes.h"
 #include "bvhlab/render_defaults.h"
 #include "bvhlab/render_settings.h"
+#include "bvhlab/tlas.h"
 #include "gpu_types.h"
 
 namespace bvhlab {
@@ -31,27 +32,58 @@ struct MaterialView {
 
 /// The scene as both renderers read it: the tree, the geometry and materials in GPU layout,
 /// and every node's box sorted by depth for the overlay (report §3.3.1).
+/// A two-level scene (issue 34) has no `bvh`: its TLAS and every mesh's BLAS are copied into one
+/// forest (forest_nodes, pairs, forest_prims: the TLAS first, each tree's indices moved to its place
+/// there), its triangles and spheres are every mesh's, one after another, and `instances` places
+/// the BLASes (in the TLAS's leaf order). Its overlay boxes are the TLAS's only.
 struct RenderScene {
-    const Bvh* bvh = nullptr;       ///< borrowed: must outlive the RenderScene
-    BigVector<gpu::BvhPair> pairs;  ///< the tree's internal nodes for the stack walk (pair_nodes.h)
+    const Bvh* bvh = nullptr;         ///< borrowed: must outlive the RenderScene (flat scenes)
+    BigVector<gpu::BvhPair> pairs;    ///< the tree's internal nodes for the stack walk (pair_nodes.h)
+    BigVector<BvhNode> forest_nodes;  ///< two-level: every tree's nodes (flat: bvh->nodes is read)
+    BigVector<gpu::GpuTriangle>
+        forest_prims;  ///< two-level: every BLAS's leaf primitives, refs into `triangles`/`spheres`
+    std::vector<gpu::GpuInstance> instances;  ///< two-level: in the TLAS's leaf order; empty: a flat scene
     BigVector<gpu::GpuTriangle> triangles;
     std::vector<gpu::GpuSphere> spheres;
     std::vector<gpu::GpuMaterial> materials;
     BigVector<gpu::GpuBox> boxes;  ///< in `order`: the boxes of depth d are order.range(d, d)
     DepthOrder order;              ///< of the tree's nodes (depth_order.h)
     Aabb bounds;
-    std::uint32_t node_count = 0;  ///< of the tree (kept here: make_frame_params never reads `bvh`)
-    std::uint32_t ref_count = 0;   ///< primitive references in the tree's leaves
+    std::uint32_t node_count =
+        0;  ///< of the tree (kept here: make_frame_params never reads `bvh`); two-level: the TLAS's
+    std::uint32_t ref_count = 0;      ///< primitive references in the tree's leaves
+    std::uint32_t stack_entries = 1;  ///< traversal stack entries a walk may need (two-level: TLAS's and a BLAS's)
+    std::uint64_t walk_steps = 2;     ///< the most steps of work one walk can take (pixel_sums.cpp step_bound)
     /// The tree's geometry_fingerprint when this was made: a refit changes it, and the copies here
     /// (pairs, boxes) would no longer be the tree's.
     std::uint64_t tree_fingerprint = 0;
 
     std::uint32_t height() const { return order.height(); }
+    bool two_level() const { return !instances.empty(); }
+    const BvhNode* node_data() const { return two_level() ? forest_nodes.data() : bvh->nodes.data(); }
+    const gpu::GpuTriangle* prim_data() const { return two_level() ? forest_prims.data() : bvh->prims.data(); }
 };
 
 /// Throws std::invalid_argument for material indices out of range, bad material values, a tree
 /// built for other geometry, or nodes that are not a depth-first binary tree (make_pair_nodes).
 RenderScene make_render_scene(const Bvh& bvh, const GeometryView& geometry, const MaterialView& materials);
+
+/// A mesh of a two-level scene as the renderers take it: its tree (borrowed), its geometry and a
+/// material index per triangle and per sphere (null: material 0) into the scene's one table.
+struct RenderMesh {
+    const Bvh* bvh = nullptr;
+    GeometryView geometry;
+    const std::int32_t* triangle_material = nullptr;
+    const std::int32_t* sphere_material = nullptr;
+};
+
+/// The render scene of a two-level tree (tlas.h): `meshes[k]` is BLAS k of `tlas`, `materials` the
+/// table (its index arrays unused). A TLAS of one identity instance gives exactly the flat render
+/// scene of its mesh (the flat tracer, bit for bit). The arrays are copied: `tlas` may go, the
+/// meshes' trees too. Throws std::invalid_argument as the flat make_render_scene does, for a mesh
+/// count that is not the TLAS's, or a TLAS leaf with more than one instance (default_tlas_config
+/// makes one per leaf; the tracer enters one instance per leaf).
+RenderScene make_render_scene(const Tlas& tlas, const std::vector<RenderMesh>& meshes, const MaterialView& materials);
 
 /// Throws std::invalid_argument when `scene` no longer describes its tree (refitted since it was
 /// made: make it again), or has no pairs for the tree's internal nodes (not made by

@@ -19,9 +19,9 @@ public:
     CpuTracer(const RenderScene& scene, const FrameParams& params, const vec4* overlay, PixelSums* sums, uint traversal)
         : frame(params),
           TRAVERSAL(traversal),
-          tree_nodes_(scene.bvh->nodes.data()),
+          tree_nodes_(scene.node_data()),
           pairs_(scene.pairs.data()),
-          leaf_prims_(scene.bvh->prims.data()),
+          leaf_prims_(scene.prim_data()),
           triangles_(scene.triangles.data()),
           scene_(scene),
           overlay_(overlay),
@@ -39,7 +39,9 @@ public:
     GpuTriangle load_triangle(uint i) const { return triangles_[i]; }
     GpuSphere load_sphere(uint i) const { return scene_.spheres[i]; }
     GpuMaterial load_material(uint i) const { return scene_.materials[i]; }
+    GpuInstance load_instance(uint i) const { return scene_.instances[i]; }
     uint node_count() const { return frame.node_count; }
+    bool two_level() const { return frame.instance_count != 0u; }
     vec4 overlay_at(uvec2 p) const { return overlay_ ? overlay_[pixel_index(p)] : vec4(0.0f); }
 
     uint sync_steps(uint steps) const { return steps; }  // one lane: nothing to agree on
@@ -78,7 +80,7 @@ private:
     PixelSums* sums_;
     std::array<uvec4, STATE_WORDS> state_{};
     std::array<uvec4, 3 * RAY_STACK_SIZE> rays_{};
-    std::array<uvec2, MAX_TREE_HEIGHT> nodes_{};
+    std::array<uvec2, 2 * MAX_TREE_HEIGHT> nodes_{};  ///< two-level: a TLAS's entries and a BLAS's
 };
 
 }  // namespace bvhlab::gpu

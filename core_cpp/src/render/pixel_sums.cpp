@@ -48,7 +48,7 @@ void resolve(const PixelSums& sums, const gpu::FrameParams& frame, const RenderI
 }
 
 std::uint64_t step_bound(const RenderScene& scene, const RenderSettings& settings, std::uint32_t samples) {
-    const std::uint64_t walk = 2ull * scene.node_count + scene.ref_count + 2;
+    const std::uint64_t walk = scene.walk_steps;
     const std::uint64_t rays = (1ull << (settings.max_ray_depth + 1)) - 1;
     const std::uint64_t per_sample = saturating_mul(saturating_mul(rays, 2), walk) + 1;
     return saturating_mul(per_sample, samples) + 1;

@@ -7,12 +7,18 @@
 
 #include "bvhlab/render.h"
 #include "camera_frame.h"
+#include "render_scene_parts.h"
 
 namespace bvhlab {
 namespace {
 
-gpu::vec4 v4(Vec3 v, float w) { return {v.x, v.y, v.z, w}; }
 gpu::vec3 v3(Vec3 v) { return {v.x, v.y, v.z}; }
+
+}  // namespace
+
+namespace render_parts {
+
+gpu::vec4 v4(Vec3 v, float w) { return {v.x, v.y, v.z, w}; }
 
 std::uint32_t material_index(const std::int32_t* table, std::size_t i, std::size_t count, const char* what) {
     std::int32_t m = table ? table[i] : 0;
@@ -22,10 +28,13 @@ std::uint32_t material_index(const std::int32_t* table, std::size_t i, std::size
     return std::uint32_t(m);
 }
 
+namespace {
 template <class T>
 gpu::GpuMaterial gpu_material(const T* m) {
     return {{float(m[0]), float(m[1]), float(m[2]), float(m[3])}, {float(m[4]), float(m[5]), 0, 0}};
 }
+
+}  // namespace
 
 std::vector<gpu::GpuMaterial> gpu_materials(const MaterialView& mv) {
     std::vector<gpu::GpuMaterial> out;
@@ -61,7 +70,9 @@ void fill_boxes(RenderScene& s, const Bvh& bvh) {
     }
 }
 
-}  // namespace
+}  // namespace render_parts
+
+using namespace render_parts;
 
 RenderScene make_render_scene(const Bvh& bvh, const GeometryView& g, const MaterialView& mv) {
     check_tree_matches(bvh, g);
@@ -83,6 +94,8 @@ RenderScene make_render_scene(const Bvh& bvh, const GeometryView& g, const Mater
     s.node_count = bvh.node_count();
     s.ref_count = static_cast<std::uint32_t>(bvh.refs.size());
     s.tree_fingerprint = bvh.geometry_fingerprint;
+    s.stack_entries = std::max(s.height(), 2u) - 1;
+    s.walk_steps = 2ull * s.node_count + s.ref_count + 2;
     return s;
 }
 
@@ -91,7 +104,7 @@ void check_render_scene(const RenderScene& scene) {
         (scene.bvh->geometry_fingerprint != scene.tree_fingerprint || scene.bvh->node_count() != scene.node_count))
         throw std::invalid_argument(
             "the tree changed (refit) after its render scene was made: make the render scene again");
-    if (scene.node_count > 1 && scene.pairs.size() != scene.node_count / 2)
+    if (!scene.two_level() && scene.node_count > 1 && scene.pairs.size() != scene.node_count / 2)
         throw std::invalid_argument("the render scene has no pairs for its tree's internal nodes (make_render_scene)");
 }
 
@@ -129,7 +142,8 @@ gpu::FrameParams make_frame_params(const RenderScene& scene, const RenderSetting
     f.overlay_last_box = s.overlay ? last : first;
     f.ray_stack_entries = s.max_ray_depth + 1;
     f.max_work_per_pixel = gpu::NO_WORK_CAP;  // set per run (pixel_sums.h work_cap)
-    f.node_stack_entries = std::max(scene.height(), 2u) - 1;
+    f.node_stack_entries = std::max(scene.stack_entries, 1u);
+    f.instance_count = std::uint32_t(scene.instances.size());
     return f;
 }
 

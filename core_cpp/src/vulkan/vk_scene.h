@@ -1,5 +1,5 @@
 // vk_scene.h — the scene on the device (report §3.2, §5.1): one buffer per array — nodes, pairs,
-// references, triangles, spheres, materials, overlay boxes — read by the shaders through buffer
+// references, instances (two-level scenes), triangles, spheres, materials, overlay boxes — read by the shaders through buffer
 // device addresses in FrameParams, so no storage-buffer binding limit (128 MiB on lavapipe) caps
 // the scene size.
 #pragma once
@@ -22,7 +22,7 @@ public:
     const RenderScene& summary() const { return summary_; }
 
 private:
-    Buffer nodes_, pairs_, prims_, triangles_, spheres_, materials_, boxes_;
+    Buffer nodes_, pairs_, prims_, instances_, triangles_, spheres_, materials_, boxes_;
     RenderScene summary_;
 };
 

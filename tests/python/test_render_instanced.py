@@ -1,0 +1,145 @@
+"""The tracers walk two-level trees (issue 34): an instanced scene renders as the same geometry
+flattened into one mesh (rotation, non-uniform scale, mirroring, many instances of one mesh), and a
+scene of one identity instance renders exactly as the flat scene, bit for bit."""
+
+import math
+
+import numpy as np
+import pytest
+
+import bvhlab
+from bvhlab.library import procedural
+
+MATERIALS = [
+    bvhlab.Material(
+        (0.8, 0.8, 0.8), reflective=0.2, transparent=0.3, ior=1.3
+    ),  # meshes 1..: refraction sees the normals
+    bvhlab.Material((0.9, 0.2, 0.1), reflective=0.0, transparent=0.0),
+    bvhlab.Material((0.2, 0.3, 0.9), reflective=0.6, transparent=0.0),
+]
+
+
+def _transform(angle: float, axis, scale, move) -> np.ndarray:
+    """Rotation about `axis` by `angle`, after scaling by `scale`, then moved by `move` (3×4)."""
+    a = np.asarray(axis, np.float64) / np.linalg.norm(axis)
+    k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+    r = np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * (k @ k)
+    return np.concatenate([r @ np.diag(scale), np.reshape(move, (3, 1))], 1).astype(np.float32)
+
+
+def _scene(transforms, mesh_of) -> bvhlab.Scene:
+    """Mesh 0: small triangles and two spheres (materials 1 and 2); mesh 1: a torus knot (material 0)."""
+    cloud = procedural.random_triangles(200, size=0.25, seed=3)
+    spheres = np.array([[0.3, 0.4, 0.5, 0.2], [0.7, 0.6, 0.2, 0.15]], np.float32)
+    knot = procedural.torus_knot(3000)
+    camera = bvhlab.Camera((6.0, -9.0, 7.0), (2.0, 1.5, 0.5), (0.0, 0.0, 1.0), 50.0)
+    light = bvhlab.Light((8.0, -4.0, 12.0), (1.0, 1.0, 1.0), 1.0)
+    return bvhlab.Scene(
+        triangles=cloud,
+        spheres=spheres,
+        meshes=[knot],
+        materials=MATERIALS,
+        tri_material=np.arange(len(cloud)) % 3,
+        sphere_material=np.array([1, 2]),
+        instance_mesh=np.asarray(mesh_of),
+        instance_transforms=np.stack(transforms),
+        camera=camera,
+        light=light,
+    )
+
+
+def _flattened_outside_out(scene: bvhlab.Scene) -> bvhlab.Scene:
+    """scene.flattened() with the winding of mirrored instances' triangles reversed: a mirrored mesh
+    keeps its outside out (as the tracer's inverse-transpose normals, and Blender, keep it)."""
+    flat = scene.flattened()
+    tris = flat.triangles.copy()
+    first = 0
+    for k, t in zip(*scene.instances()):
+        n = len(scene.mesh_triangles(int(k)))
+        if np.linalg.det(t[:, :3].astype(np.float64)) < 0:
+            tris[first : first + n] = tris[first : first + n][:, [0, 2, 1]]
+        first += n
+    flat.triangles = np.ascontiguousarray(tris)
+    return flat
+
+
+def _render(scene, tree, traversal="stack", **kw):
+    job = bvhlab.Renderer("cpu").start(scene, tree, 96, 72, samples_per_axis=1, max_depth=4, traversal=traversal, **kw)
+    job.run()
+    return job.result(depth=True, cost=False)
+
+
+def _assert_same_image(a, b, share=0.01):
+    """Depth and colour agree but for a small share of pixels (grazing edges, where float rounding of
+    the moved rays may pick a neighbour)."""
+    depth_off = ~np.isclose(a.depth, b.depth, rtol=1e-4, atol=1e-5)
+    color_off = np.abs(a.color - b.color).max(-1) > 2e-3
+    assert depth_off.mean() <= share, f"{depth_off.sum()} pixels differ in depth"
+    assert color_off.mean() <= share, f"{color_off.sum()} pixels differ in colour"
+
+
+MANY = [
+    _transform(0.0, (0, 0, 1), (1, 1, 1), (0, 0, 0)),
+    _transform(0.7, (0, 0, 1), (1.5, 1.5, 1.5), (2.5, 0, 0)),  # mesh 0 again: rotated, uniform scale
+    _transform(0.6, (1, 2, 3), (2.0, 0.5, 1.3), (3, 3, 0)),  # non-uniform scale
+    _transform(1.1, (0, 1, 0), (-1, 1, 1), (0, 3, 0)),  # mirrored
+    _transform(2.0, (1, 1, 0), (-0.7, -1.5, 1.5), (4, 1, 1)),  # mirrored, non-uniform
+]
+
+
+@pytest.mark.parametrize("traversal", ["stack", "stackless"])
+def test_instanced_scene_renders_as_its_flattened_scene(traversal):
+    scene = _scene(MANY, [0, 0, 1, 1, 1])
+    flat = _flattened_outside_out(scene)
+    two = bvhlab.build(scene)
+    assert isinstance(two, bvhlab.InstancedBvh)
+    a, b = _render(scene, two, traversal), _render(flat, bvhlab.build(flat), traversal)
+    assert np.isfinite(a.depth).all() and (a.depth < 1e9).mean() > 0.2  # the scene fills the frame
+    _assert_same_image(a, b)
+
+
+def test_many_instances_of_one_mesh():
+    rng = np.random.default_rng(7)
+    transforms = [
+        _transform(rng.uniform(0, 6), rng.normal(size=3), rng.uniform(0.2, 0.5, 3) * rng.choice([-1, 1], 3), (x, y, 0))
+        for x in np.linspace(-1, 5, 8)
+        for y in np.linspace(-1, 4, 8)
+    ]
+    scene = _scene(transforms, np.ones(len(transforms), int))
+    flat = _flattened_outside_out(scene)
+    a, b = _render(scene, bvhlab.build(scene)), _render(flat, bvhlab.build(flat))
+    _assert_same_image(a, b)
+
+
+def test_one_identity_instance_renders_as_the_flat_scene_bit_for_bit(small_scene):
+    tris, spheres = small_scene
+    flat = bvhlab.Scene(triangles=tris, spheres=spheres)
+    mesh_of, transforms = flat.instances()
+    spelled = bvhlab.Scene(triangles=tris, spheres=spheres, instance_mesh=mesh_of, instance_transforms=transforms)
+    two = bvhlab.build(spelled)
+    assert isinstance(two, bvhlab.InstancedBvh)
+    for mode in ("shade", "heatmap"):
+        a, b = _render(spelled, two, mode=mode), _render(flat, bvhlab.build(flat), mode=mode)
+        np.testing.assert_array_equal(a.color, b.color)
+        np.testing.assert_array_equal(a.depth, b.depth)
+
+
+def test_an_instanced_scene_needs_its_two_level_tree():
+    scene = _scene(MANY[:2], [0, 1])
+    with pytest.raises(ValueError, match="two-level tree"):
+        _render(scene, bvhlab.build(scene.flattened()))
+
+
+def test_instances_move_between_renders():
+    scene = _scene(MANY[:3], [0, 0, 1])
+    tree = bvhlab.build(scene)
+    renderer = bvhlab.Renderer("cpu")
+    before, _ = renderer.render(scene, tree, 48, 36)
+    moved = [MANY[0], MANY[1], _transform(0.6, (1, 2, 3), (2.0, 0.5, 1.3), (3, 1, 0))]
+    scene.instance_transforms = np.stack(moved)
+    tree.place(*scene.instances())
+    after, _ = renderer.render(scene, tree, 48, 36)
+    flat = _flattened_outside_out(scene)
+    oracle, _ = renderer.render(flat, bvhlab.build(flat), 48, 36)
+    assert np.abs(before - after).max() > 0.1
+    assert (np.abs(after - oracle).max(-1) > 2e-3).mean() <= 0.01
