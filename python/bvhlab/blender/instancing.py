@@ -71,15 +71,25 @@ class Layout:
 
 def plan(items: dict, share: bool) -> Layout:
     """The layout of `items` (key → Item, in walk order): which of them become instances."""
-    layout = Layout()
+    layout = Layout(mesh_of=dict.fromkeys(items, 0))
+    candidates = [
+        key
+        for key, item in items.items()
+        if share
+        and item.mesh is not None
+        and item.data is not None
+        and item.slot_table is not None
+        and item.mesh.triangle_count > 0
+    ]
+    if not candidates:
+        return layout
+    linear = np.array([items[key].matrix[:3, :3] for key in candidates])
     members: dict[tuple, list] = {}
-    for key, item in items.items():
-        layout.mesh_of[key] = 0
-        if not share or item.mesh is None or item.data is None or item.slot_table is None:
-            continue
-        if item.mesh.triangle_count == 0 or not invertible(item.matrix):
-            continue
-        members.setdefault((item.data, tuple(item.slot_table.tolist())), []).append(key)
+    for key, ok in zip(candidates, invertible(linear)):
+        if ok:
+            item = items[key]
+            assert item.slot_table is not None  # a candidate
+            members.setdefault((item.data, item.slot_table.tobytes()), []).append(key)
     for group, keys in members.items():
         if len(keys) >= MIN_INSTANCES:
             layout.groups.append(group)
@@ -88,11 +98,12 @@ def plan(items: dict, share: bool) -> Layout:
     return layout
 
 
-def invertible(matrix: np.ndarray) -> bool:
-    linear = matrix[:3, :3]
-    bound = float(np.prod(np.linalg.norm(linear, axis=0)))
-    det = float(np.linalg.det(linear))
-    return np.isfinite(det) and abs(det) > SINGULAR_FRACTION * bound
+def invertible(linear: np.ndarray) -> np.ndarray:
+    """bool (N,): which of the (N,3,3) linear parts can be inverted (see SINGULAR_FRACTION)."""
+    bound = np.prod(np.linalg.norm(linear, axis=1), axis=1)  # the columns' lengths
+    with np.errstate(invalid="ignore", over="ignore"):
+        det = np.linalg.det(linear)
+    return np.isfinite(det) & (np.abs(det) > SINGULAR_FRACTION * bound)
 
 
 @dataclass

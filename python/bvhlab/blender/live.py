@@ -161,7 +161,7 @@ class LiveScene:
         arrays = self._arrays(items, layout, shared, table, report)
         report.materials_read = table.reads
         scene = self._make_scene(arrays, table, blender_scene, depsgraph, report)
-        light = gather_light(depsgraph, view_layer, _primitive_sample(scene))
+        light = gather_light(depsgraph, view_layer, _primitive_sample(items, scene.spheres))
         if light is None:
             warnings.warn(
                 f"scene '{blender_scene.name}' has no visible light; using a default point light near the camera",
@@ -368,22 +368,31 @@ class LiveScene:
             return None
 
 
-def _primitive_sample(scene: Scene, size: int = 4096) -> np.ndarray:
-    """Centres of about `size` primitives, evenly strided (deterministic), as float64 (N,3): of mesh
-    0, and of each shared mesh placed by an evenly strided choice of its instances."""
-    triangles = scene.triangles[:: max(1, len(scene.triangles) // size)].mean(axis=1)
-    spheres = scene.spheres[:: max(1, len(scene.spheres) // size), :3]
-    parts = [triangles.astype(np.float64), spheres.astype(np.float64)]
-    if scene.meshes:
-        mesh_of, transforms = scene.instances()
-        for k in range(1, scene.mesh_count):
-            chosen = transforms[mesh_of == k].astype(np.float64)
-            if not len(chosen):
-                continue
-            chosen = chosen[:: max(1, len(chosen) // 64)]
-            source = scene.meshes[k - 1]
-            centres = source[:: max(1, len(source) // max(1, size // len(chosen)))].mean(axis=1).astype(np.float64)
-            parts.append((np.einsum("nij,cj->nci", chosen[:, :, :3], centres) + chosen[:, None, :, 3]).reshape(-1, 3))
+def _primitive_sample(items: dict, spheres: np.ndarray, size: int = 4096) -> np.ndarray:
+    """Centres of about `size` primitives, as float64 (N,3): every k-th triangle of the world
+    triangles in walk order (the flat export's order; instances placed where they are, so an
+    instanced export samples the same triangles as the flat one) and every k-th sphere."""
+    blocks = [i for i in items.values() if i.mesh is not None and i.slot_table is not None and i.mesh.triangle_count]
+    parts = [spheres[:: max(1, len(spheres) // size), :3].astype(np.float64)]
+    if blocks:
+        counts = np.array([item.mesh.triangle_count for item in blocks], np.int64)
+        stride = max(1, int(counts.sum()) // size)
+        offsets = np.cumsum(counts) - counts
+        first = (-offsets) % stride
+        picks = np.maximum(0, (counts - first + stride - 1) // stride)
+        which = np.repeat(np.arange(len(blocks)), picks)
+        local = first[which] + (np.arange(len(which)) - np.repeat(np.cumsum(picks) - picks, picks)) * stride
+        matrices = np.array([item.matrix for item in blocks], np.float64)[which]
+        meshes: dict[int, int] = {}
+        mesh_of = np.array([meshes.setdefault(id(item.mesh), len(meshes)) for item in blocks])[which]
+        centres = np.empty((len(which), 3))
+        for m, mesh in enumerate({id(item.mesh): item.mesh for item in blocks}.values()):
+            chosen = np.flatnonzero(mesh_of == m)
+            assert mesh is not None  # blocks hold meshes
+            corners = mesh.corners.reshape(-1, 3)[local[chosen]]
+            centres[chosen] = mesh.positions[corners].astype(np.float64).mean(1)
+        world = np.einsum("nij,nj->ni", matrices[:, :3, :3], centres) + matrices[:, :3, 3]
+        parts.insert(0, world)
     return np.concatenate(parts)
 
 
