@@ -384,6 +384,38 @@ def _compare(got, reference) -> None:
     assert (diff > 1e-3).mean() <= 0.01, f"{(diff > 1e-3).mean():.4f} of the pixels differ in colour"
 
 
+def test_spheres_stay_spheres_and_zero_scale_instances_stay_in_the_world():
+    """A collection of an analytic sphere and Suzanne, instanced three times, one of them at zero
+    scale: the spheres are spheres of mesh 0 (three), Suzanne is one mesh with two instances, and
+    the zero-scale one (its transform cannot be inverted) is placed in mesh 0 as flat triangles;
+    the scene builds and renders two-level."""
+    from bvhlab.blender import SPHERE_PROPERTY
+
+    _base_scene()
+    source = bpy.data.collections.new("Source")
+    monkey = _monkey()
+    source.objects.link(monkey)
+    ball = harness.add_box("Ball", (0.0, 0.0, 1.5), size=0.6)
+    bpy.context.scene.collection.objects.unlink(ball)
+    source.objects.link(ball)
+    ball[SPHERE_PROPERTY] = True
+    for i, scale in enumerate([(1.0, 1.0, 1.0), (0.5, 0.5, 0.5), (0.0, 1.0, 1.0)]):
+        empty = bpy.data.objects.new(f"Instance {i}", None)
+        empty.instance_type, empty.instance_collection = "COLLECTION", source
+        bpy.context.scene.collection.objects.link(empty)
+        empty.location, empty.scale = (3.0 * i - 3.0, 0.0, 0.0), scale
+    bpy.context.view_layer.update()
+    exported = export_scene(bpy.context)
+    assert len(exported.spheres) == 3 and len(exported.meshes) == 1
+    assert np.count_nonzero(exported.instance_mesh == 1) == 2
+    assert len(exported.triangles) == 968  # the zero-scale Suzanne, flat
+    assert np.allclose(sorted(exported.spheres[:, 3]), [0.15, 0.3, 0.3], atol=1e-6)  # largest half extent
+    bvh = bvhlab.build(exported)
+    assert isinstance(bvh, bvhlab.InstancedBvh)
+    image, _ = bvhlab.render(exported, bvh, 32, 24, backend="cpu")
+    assert np.isfinite(image).all()
+
+
 def test_a_thousand_instances_store_the_mesh_once():
     """1,000 collection instances of a 15,744-triangle Suzanne: one mesh, 1,000 transforms. The
     export time and bytes are printed (bench/export_instances.py measures them against the flat
