@@ -52,7 +52,9 @@ def _describe(error: Exception) -> str:
 
 
 def export_scene(context, require_camera: bool):
-    """The scene as a bvhlab.Scene, over the panel's scope."""
+    """The scene as a flat bvhlab.Scene, over the panel's scope. The sidebar's Build (stats and
+    overlay), Render, Export stats and Compare take flat trees only, so Blender's instancing, which
+    the exporter keeps as instances (issue 34), is flattened here for now (Scene.flattened())."""
     from bvhlab.blender import export_scene as export
 
     return export(
@@ -60,7 +62,7 @@ def export_scene(context, require_camera: bool):
         scope=context.scene.bvhlab.scope,
         depsgraph=context.evaluated_depsgraph_get(),
         require_camera=require_camera,
-    )
+    ).flattened()
 
 
 @contextmanager

@@ -3,7 +3,10 @@ the Rendered viewport all take the tree of a (scene, scope, build settings) from
 built by one is used by the others (Build, then F12: one build). Each `SceneTree` fits its tree to
 the geometry it is given one way: kept when the arrays are the same (or equal), refit when only
 positions moved (LiveScene's report says so, and the refit tree's SAH stays within REFIT_LIMIT of
-the built one), built otherwise.
+the built one), built otherwise. An instanced scene (issue 34: F12 renders Blender's instancing
+as instances) gets a two-level tree (bvhlab.InstancedBvh) under a key of its own
+(`TreeKey.instanced`): the meshes' trees whose arrays are unchanged are kept, the others built,
+and the TLAS made again over the instances ("placed" when only instances moved).
 
 Trees are shared between threads (Blender's UI thread, its render thread, the viewport's worker):
 a SceneTree is updated under its own lock, and a Bvh refit in place leaves the versions that
@@ -31,17 +34,21 @@ MAX_TREES_PER_SCENE = 3
 @dataclass(frozen=True)
 class TreeKey:
     """What a tree depends on besides the geometry: the scene (session_uid), the objects in it
-    (scope) and the build settings (BuildConfig compares without `threads`)."""
+    (scope), the build settings (BuildConfig compares without `threads`) and whether it is the
+    two-level tree of the instanced scene (F12) or a flat one (the sidebar, the viewport: they
+    take flat trees only and are given `Scene.flattened()` for now)."""
 
     scene: int
     scope: str
     config: BuildConfig
+    instanced: bool = False
 
 
 @dataclass(frozen=True)
 class TreeUpdate:
-    """What `SceneTree.update` did: "built", "refit" or "kept", how long it took, and the Bvh that
-    fits the scene it was given (use this one: another thread may update the SceneTree next)."""
+    """What `SceneTree.update` did: "built", "refit", "placed" (a new TLAS over the same meshes'
+    trees) or "kept", how long it took, and the Bvh (or InstancedBvh) that fits the scene it was
+    given (use this one: another thread may update the SceneTree next)."""
 
     action: str
     bvh: object
@@ -70,7 +77,10 @@ class SceneTree:
         for a build (0: all)."""
         with self.lock:
             start = time.perf_counter()
-            if self.bvh is not None:
+            if scene.is_instanced:
+                action = self._update_instanced(scene, progress, threads)
+                return TreeUpdate(action, self.bvh, 0.0 if action == "kept" else (time.perf_counter() - start) * 1e3)
+            if self.bvh is not None and not isinstance(self.bvh, _instanced_type()):
                 if self._same_geometry(scene):
                     self._source = (scene.triangles, scene.spheres)
                     return TreeUpdate("kept", self.bvh)
@@ -78,6 +88,39 @@ class SceneTree:
                     return TreeUpdate("refit", self.bvh, (time.perf_counter() - start) * 1e3)
             self._build(scene, progress, threads)
             return TreeUpdate("built", self.bvh, (time.perf_counter() - start) * 1e3)
+
+    def _update_instanced(self, scene, progress, threads: int) -> str:
+        """Fit a two-level tree to an instanced scene: mesh k's tree is kept when its triangles (and
+        mesh 0's spheres) are the arrays (or equal to those) it was built over, built otherwise;
+        then the TLAS over the scene's instances, unless they are the same too."""
+        import bvhlab
+
+        sources = [(scene.mesh_triangles(k), scene.spheres if k == 0 else None) for k in range(scene.mesh_count)]
+        mesh_of, transforms = scene.instances()
+        old = self.bvh if isinstance(self.bvh, bvhlab.InstancedBvh) else None
+        old_sources, old_instances = self._source if old is not None else ([], (None, None))
+        trees, built = [], 0
+        for k, (triangles, spheres) in enumerate(sources):
+            if k < len(old_sources) and _same_arrays(old_sources[k], (triangles, spheres)):
+                trees.append(old.meshes[k])
+                continue
+            part = None if progress is None else (lambda f, k=k: progress((k + f) / len(sources)))
+            config = self.config.replace(threads=threads)
+            mesh = bvhlab.Scene(triangles=triangles) if spheres is None else bvhlab.Scene(triangles, spheres)
+            trees.append(bvhlab.build(mesh, config=config, progress=part))
+            built += 1
+        if old is not None and not built and len(trees) == len(old.meshes):
+            if _same_arrays(old_instances, (mesh_of, transforms)):
+                self._source = (sources, (mesh_of, transforms))
+                return "kept"
+        bvh = bvhlab.InstancedBvh(trees, mesh_of, transforms, self.config.replace(threads=threads))
+        self.generation += 1
+        self.bvh, self._source = bvh, (sources, (mesh_of, transforms))
+        self._built_sah = bvh.stats["tlas_sah_cost"]
+        if built:
+            _count_build()
+            return "built"
+        return "placed"
 
     def store(self, bvh, scene) -> None:
         """A tree built elsewhere with this config over `scene` (the sidebar's Build, on its thread)."""
@@ -122,6 +165,16 @@ class SceneTree:
         self._built_sah = bvh.stats["sah_cost"]
 
 
+def _same_arrays(a: tuple, b: tuple) -> bool:
+    return all(x is y or (x is not None and y is not None and np.array_equal(x, y)) for x, y in zip(a, b))
+
+
+def _instanced_type() -> type:
+    import bvhlab
+
+    return bvhlab.InstancedBvh
+
+
 def _count_build() -> None:
     with SceneTree._count_lock:
         SceneTree.builds += 1
@@ -154,8 +207,9 @@ class TreeCache:
 cache = TreeCache()
 
 
-def key_of(blender_scene, scope: str | None = None) -> TreeKey:
+def key_of(blender_scene, scope: str | None = None, instanced: bool = False) -> TreeKey:
     """The key of the tree the scene's settings (scene.bvhlab) ask for; `scope`: the objects in it
-    when not the settings' (the render engine always renders the visible ones)."""
+    when not the settings' (the render engine always renders the visible ones); `instanced`: the
+    two-level tree of an instanced scene (F12)."""
     settings = blender_scene.bvhlab
-    return TreeKey(blender_scene.session_uid, scope or settings.scope, settings.build_config())
+    return TreeKey(blender_scene.session_uid, scope or settings.scope, settings.build_config(), instanced)

@@ -68,7 +68,9 @@ class BVHLAB_RE_whitted(bpy.types.RenderEngine):
         except ExportError as error:
             self._viewport.set_error(f"bvhlab: {error}")
             return
-        self._viewport.set_scene(self._live.scene, report)
+        # The Rendered viewport still traces flat trees (the tree cache's flat key, shared with the
+        # sidebar): an instanced scene is flattened here for now (issue 34; F12 renders it two-level).
+        self._viewport.set_scene(self._live.flat_scene(), report)
 
     def view_draw(self, context, depsgraph):
         from .display import FrameDisplay

@@ -94,6 +94,7 @@ class FinalRender:
         record = {
             **_trace_record(tracer, update, job, frame),
             "sync": self.report,
+            "scene": scene,  # the exported bvhlab.Scene rendered (the checks read it)
             "totals": self.live.totals,
             "cancelled": cancelled,
             "unrendered": unrendered,
@@ -144,8 +145,12 @@ class FinalRender:
 
     def _tree(self, engine, blender_scene):
         """The scene's tree from the add-on's one cache (trees.py), made to fit: one the sidebar's
-        Build or the viewport made over the same geometry is used as it is."""
-        key = key_of(blender_scene, scope="visible")  # a render shows every visible object
+        Build or the viewport made over the same geometry is used as it is. An instanced scene
+        (Blender's instancing, issue 34) renders through its two-level tree, never flattened; when
+        only instances moved, only its TLAS is made again."""
+        scene = self.live.scene
+        # a render shows every visible object
+        key = key_of(blender_scene, scope="visible", instanced=scene is not None and scene.is_instanced)
         tree = cache.tree(key)
         engine.update_progress(BUILD_START)
         engine.update_stats("", f"Building BVH ({key.config.method})")

@@ -299,11 +299,14 @@ class Scene:
     light: Light | None = None
     sky: tuple[float, float, float] = DEFAULT_SKY
     # Instancing (issue 34; bvhlab.instanced). The scene's own triangles and spheres are mesh 0;
-    # `meshes` adds meshes 1, 2, ... (float32 (T,3,3) triangle arrays, material 0). Instance i places
+    # `meshes` adds meshes 1, 2, ... (float32 (T,3,3) triangle arrays); `mesh_tri_material`, when
+    # given, holds the material index of each of their triangles (one int32 array per mesh; empty:
+    # material 0 for all, as before; the Blender exporter fills it). Instance i places
     # mesh instance_mesh[i] by instance_transforms[i] (float32 (3,4), object to world, row-major).
     # Without instances every mesh is placed once where it was modelled: Scene(triangles=...) is
     # one mesh and one identity instance, the flat scene of before.
     meshes: list[np.ndarray] = field(default_factory=list)
+    mesh_tri_material: list[np.ndarray] = field(default_factory=list)
     instance_mesh: np.ndarray | None = None
     instance_transforms: np.ndarray | None = None
 
@@ -353,8 +356,18 @@ class Scene:
 
     def mesh_triangle_material(self, k: int) -> np.ndarray:
         """The material index of each triangle of mesh k: the scene's own (mesh 0) keep
-        tri_material, the other meshes use material 0."""
-        return self.tri_material if k == 0 else np.zeros(len(self.meshes[k - 1]), np.int32)
+        tri_material, the other meshes theirs in mesh_tri_material (material 0 when it is empty).
+        Raises ValueError when mesh_tri_material does not match the meshes or the materials."""
+        if k == 0:
+            return self.tri_material
+        triangles = self.meshes[k - 1]
+        if not self.mesh_tri_material:
+            return np.zeros(len(triangles), np.int32)
+        if len(self.mesh_tri_material) != len(self.meshes):
+            raise ValueError(
+                f"mesh_tri_material has {len(self.mesh_tri_material)} arrays for {len(self.meshes)} meshes"
+            )
+        return self._material_index(f"mesh_tri_material of mesh {k}", self.mesh_tri_material[k - 1], len(triangles))
 
     def instances(self) -> tuple[np.ndarray, np.ndarray]:
         """(mesh index int32 (N,), object-to-world float32 (N,3,4)): the instances given, checked
@@ -465,6 +478,9 @@ class Scene:
         if self.meshes:
             arrays["mesh_triangles"] = np.concatenate(self.meshes)
             arrays["mesh_triangle_counts"] = np.array([len(m) for m in self.meshes], np.int64)
+            if self.mesh_tri_material:
+                materials = [self.mesh_triangle_material(k) for k in range(1, self.mesh_count)]
+                arrays["mesh_tri_material"] = np.concatenate(materials)
         if self.instance_mesh is not None or self.instance_transforms is not None:
             arrays["instance_mesh"], arrays["instance_transforms"] = self.instances()
         if self.camera is not None:
@@ -525,10 +541,17 @@ _FILE_MEMBERS = {
     # format 2: meshes 1.. concatenated with their counts, and the instances (Scene.instances)
     "mesh_triangles": Member("f", (None, 3, 3)),
     "mesh_triangle_counts": Member("iu", (None,)),
+    "mesh_tri_material": Member("iu", (None,)),  # optional within format 2: material 0 without it
     "instance_mesh": Member("iu", (None,)),
     "instance_transforms": Member("f", (None, 3, 4)),
 }
-_INSTANCING_MEMBERS = ("mesh_triangles", "mesh_triangle_counts", "instance_mesh", "instance_transforms")
+_INSTANCING_MEMBERS = (
+    "mesh_triangles",
+    "mesh_triangle_counts",
+    "mesh_tri_material",
+    "instance_mesh",
+    "instance_transforms",
+)
 _IDENTITY = np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]], np.float32)
 
 
@@ -545,6 +568,13 @@ def _instancing_fields(f: dict) -> dict:
             )
         tris = np.asarray(f["mesh_triangles"], np.float32)
         out["meshes"] = [np.ascontiguousarray(m) for m in np.split(tris, np.cumsum(counts)[:-1])]
+        if "mesh_tri_material" in f:
+            materials = np.asarray(f["mesh_tri_material"])
+            if len(materials) != len(tris):
+                raise ValueError(f"mesh_tri_material has {len(materials)} entries for {len(tris)} mesh triangles")
+            out["mesh_tri_material"] = np.split(materials, np.cumsum(counts)[:-1])
+    elif "mesh_tri_material" in f:
+        raise ValueError("mesh_tri_material is stored with mesh_triangles")
     if ("instance_mesh" in f) != ("instance_transforms" in f):
         raise ValueError("instance_mesh and instance_transforms are stored together")
     if "instance_mesh" in f:
@@ -588,6 +618,22 @@ def _meshes(value) -> list[np.ndarray]:
         except ValueError as e:
             raise ValueError(f"mesh {k}: {e}") from None
         out.append(m)
+    return out
+
+
+def _mesh_tri_material(value) -> list[np.ndarray]:
+    """One (T,) integer array per mesh 1..; checked against the meshes and materials when read
+    (Scene.mesh_triangle_material), since either may be set after it."""
+    if isinstance(value, np.ndarray) or not isinstance(value, (list, tuple)):
+        raise TypeError(f"mesh_tri_material must be a list of (T,) integer arrays, got {type(value).__name__}")
+    out = []
+    for k, m in enumerate(value, start=1):
+        m = np.asarray(m)
+        if m.ndim != 1 or not (np.issubdtype(m.dtype, np.integer) or m.size == 0):
+            raise ValueError(
+                f"mesh_tri_material of mesh {k} must be (T,) integers, got shape {m.shape} dtype {m.dtype}"
+            )
+        out.append(np.ascontiguousarray(m, np.int32))
     return out
 
 
@@ -640,6 +686,7 @@ _FIELD_CHECKS = {
     "light": _instance_of(Light, "light"),
     "sky": lambda scene, v: _vec3("sky", v),
     "meshes": lambda scene, v: _meshes(v),
+    "mesh_tri_material": lambda scene, v: _mesh_tri_material(v),
     "instance_mesh": lambda scene, v: _instance_mesh(v),
     "instance_transforms": lambda scene, v: _instance_transforms(v),
 }

@@ -46,7 +46,8 @@ def check_scope_selected_and_visible() -> None:
 
 
 def check_collection_instances() -> None:
-    """A collection instanced twice by empties exports twice, at each instance's transform."""
+    """A collection instanced twice by empties exports twice, at each instance's transform: as two
+    instances of Box A's mesh, which the prototype shares with Box A (a third instance)."""
     harness.boxes_scene()
     source = bpy.data.collections.new("Source")
     mesh = bpy.data.objects["Box A"].data
@@ -58,7 +59,10 @@ def check_collection_instances() -> None:
         empty.instance_type, empty.instance_collection = "COLLECTION", source
         empty.location = location
         bpy.context.scene.collection.objects.link(empty)
-    exported = export_scene(bpy.context)
+    instanced = export_scene(bpy.context)
+    assert len(instanced.triangles) == 24 and len(instanced.meshes) == 1 and len(instanced.meshes[0]) == 12
+    assert len(instanced.instance_mesh) == 1 + 3  # mesh 0 (Boxes B and C) once, Box A's mesh three times
+    exported = instanced.flattened()
     assert len(exported.triangles) == 36 + 24
     points = exported.triangles.reshape(-1, 3)
     for location in [(10.0, 0.0, 0.0), (0.0, 10.0, 2.0)]:

@@ -11,14 +11,22 @@ from .live import LiveScene
 
 
 def export_scene(
-    context_or_scene=None, scope: str = "visible", depsgraph=None, *, require_camera: bool = True
+    context_or_scene=None,
+    scope: str = "visible",
+    depsgraph=None,
+    *,
+    require_camera: bool = True,
+    instancing: bool = True,
 ) -> Scene:
     """Export the evaluated scene (modifiers applied, world space) as a `bvhlab.Scene`.
 
     `context_or_scene`: a `bpy.types.Context`, a `bpy.types.Scene`, or None for `bpy.context`.
     `scope`: "visible" (every object visible in the view layer) or "selected".
     `depsgraph`: an evaluated depsgraph to read from (default: the view layer's).
-    Objects flagged "Analytic sphere" become spheres, everything else triangles.
+    Objects flagged "Analytic sphere" become spheres, everything else triangles. Blender's
+    instancing (collection, vertex, face and geometry-nodes instances, linked duplicates) becomes
+    meshes stored once and instances of them (`instancing.py`; `Scene.flattened()` gives the world
+    triangles); `instancing=False` places every instance's triangles into the world instead.
     Raises ExportError (a ValueError) for nothing in scope, a NaN vertex (naming the object), or no
     camera when `require_camera`. Otherwise a missing camera becomes one that frames the bounds
     and a missing light bvhlab's default light (SubstituteWarning), a missing world the default
@@ -28,18 +36,24 @@ def export_scene(
     if depsgraph is None:
         depsgraph = view_layer.depsgraph
         depsgraph.update()  # evaluates what changed since the last update; cheap when nothing did
-    live = LiveScene(scope, require_camera=require_camera)  # a first sync reads everything
+    live = LiveScene(scope, require_camera=require_camera, instancing=instancing)  # a first sync reads everything
     live.sync(depsgraph, scene, view_layer)
     assert live.scene is not None  # a sync either makes the scene or raises ExportError
     return live.scene
 
 
 def export_scene_file(
-    path, context_or_scene=None, scope: str = "visible", depsgraph=None, *, require_camera: bool = True
+    path,
+    context_or_scene=None,
+    scope: str = "visible",
+    depsgraph=None,
+    *,
+    require_camera: bool = True,
+    instancing: bool = True,
 ) -> Scene:
     """Export like `export_scene` and write the `.npz` that `bvhlab.Scene.load` and the CLI read.
     Returns the exported Scene."""
-    scene = export_scene(context_or_scene, scope, depsgraph, require_camera=require_camera)
+    scene = export_scene(context_or_scene, scope, depsgraph, require_camera=require_camera, instancing=instancing)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     scene.save(path)

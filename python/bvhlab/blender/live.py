@@ -6,13 +6,19 @@ changed since the last evaluation (`depsgraph.updates`, valid inside RenderEngin
 view_update and after `depsgraph.update()`):
 
 - an object whose geometry changed (`is_updated_geometry`, or its mesh data-block updated) is read
-  again (vertices, triangles, material slots);
-- an object that only moved is placed again from the vertices read before (no mesh read);
+  again (vertices, triangles, material slots); a mesh shared by instances is read once;
+- an object that only moved is placed again from the vertices read before (no mesh read); an
+  instance of a shared mesh only changes its transform;
 - a material reported as updated is read again; the others come from the last sync;
 - camera, light and sky are gathered every sync (a few attribute reads).
 
+Instancing (collection instances, linked duplicates, instancing by vertices or faces, geometry-nodes
+instances) becomes meshes and instances of the Scene (`instancing.py`); objects used once stay in
+mesh 0, in world space, as before.
+
 Each sync returns a `SyncReport` saying what changed, so a caller can keep its tree (nothing moved),
-refit it (same primitives in the same order, moved) or rebuild it (anything else).
+place its instances again (only instance transforms changed: a new TLAS), refit it (same
+primitives in the same order, moved) or rebuild it (anything else).
 """
 
 from __future__ import annotations
@@ -20,6 +26,7 @@ from __future__ import annotations
 import copy
 import warnings
 from dataclasses import dataclass, field
+from typing import Any
 
 import bpy
 import numpy as np
@@ -27,6 +34,7 @@ import numpy as np
 from ..scene import Scene, default_camera, default_light
 from .camera import gather_camera
 from .errors import ExportError, SubstituteWarning
+from .instancing import Item, Layout, SharedMesh, instance_transforms, plan, shared_meshes
 from .light import gather_light
 from .material_table import MaterialTable, map_slots
 from .mesh import CONVERTIBLE_TYPES, MeshData, read_mesh
@@ -40,16 +48,22 @@ GEOMETRY_TYPES = CONVERTIBLE_TYPES | {"MESH"}
 
 @dataclass
 class SyncReport:
-    """What one sync found. `geometry`: the triangles or spheres differ from the last sync;
-    `refittable`: they differ only in position (same primitives, same order: a refit can follow);
-    `materials`: the material table or the primitives' materials differ."""
+    """What one sync found. `geometry`: the triangles, spheres or instances differ from the last
+    sync; `refittable`: they differ only in position (same primitives, same order, same instances
+    of the same meshes: a refit of the flattened scene can follow); `placeable`: only instance
+    transforms differ (every mesh's arrays are the last sync's: only the TLAS is built again);
+    `materials`: the material table or the primitives' materials differ. `objects_read` counts
+    meshes read (a mesh shared by instances once), `objects_moved` items placed again without a
+    read, `instances_moved` those of them that are instances of a shared mesh (a new transform)."""
 
     full: bool = False
     objects_read: int = 0
     objects_moved: int = 0
+    instances_moved: int = 0
     materials_read: int = 0
     geometry: bool = False
     refittable: bool = False
+    placeable: bool = False
     materials: bool = False
 
 
@@ -61,6 +75,7 @@ class SyncTotals:
     full_syncs: int = 0
     objects_read: int = 0
     objects_moved: int = 0
+    instances_moved: int = 0
     materials_read: int = 0
 
     def add(self, report: SyncReport) -> None:
@@ -68,36 +83,8 @@ class SyncTotals:
         self.full_syncs += report.full
         self.objects_read += report.objects_read
         self.objects_moved += report.objects_moved
+        self.instances_moved += report.instances_moved
         self.materials_read += report.materials_read
-
-
-@dataclass
-class _Part:
-    """One object or instance as last read: its mesh (or a sphere's object-space bounds), the world
-    matrix it was placed with, and the placed primitives (triangles (T,3,3) or a sphere (4,))."""
-
-    mesh: MeshData | None
-    bounds: np.ndarray | None
-    matrix: np.ndarray
-    placed: np.ndarray
-
-    @property
-    def shape(self) -> tuple:
-        return ("sphere",) if self.mesh is None else ("mesh", self.mesh.triangle_count)
-
-    def moved_to(self, matrix: np.ndarray, name: str) -> _Part:
-        if self.mesh is None:
-            assert self.bounds is not None  # a sphere keeps its object-space bounds
-            return _Part(None, self.bounds, matrix, place_sphere(self.bounds, matrix, name))
-        return _Part(self.mesh, None, matrix, self.mesh.world_triangles(matrix, name))
-
-
-def _read_part(obj, matrix: np.ndarray, name: str) -> _Part:
-    if obj.type == "MESH" and is_analytic_sphere(obj):
-        bounds = sphere_bounds(obj)
-        return _Part(None, bounds, matrix, place_sphere(bounds, matrix, name))
-    mesh = read_mesh(obj, name)
-    return _Part(mesh, None, matrix, mesh.world_triangles(matrix, name))
 
 
 @dataclass
@@ -129,17 +116,34 @@ class _Dirty:
         return data is not None and data.name_full in self.meshes
 
 
+def _data_of(obj) -> int | None:
+    """The address of an evaluated mesh object's mesh data during this evaluation: the same for
+    every object and instance that shows that mesh (linked duplicates without modifiers of their
+    own, collection, vertex, face and geometry-nodes instances). None for objects converted to a
+    mesh (curves, text...), which get a mesh of their own."""
+    return obj.data.as_pointer() if obj.type == "MESH" and obj.data is not None else None
+
+
+def _vertex_count(obj) -> int:
+    return len(obj.data.vertices) if obj.type == "MESH" and obj.data is not None else -1
+
+
 class LiveScene:
     """The scene of one depsgraph, kept between syncs. `scene` is the last exported bvhlab.Scene
     (a new object after every sync that changed anything; arrays that did not change are shared
-    with the previous one). `totals` counts reads over the LiveScene's life."""
+    with the previous one). `totals` counts reads over the LiveScene's life. `instancing`: False
+    places every instance's triangles into the world (the flat export of before)."""
 
-    def __init__(self, scope: str = "visible", *, require_camera: bool = True):
-        self.scope, self.require_camera = scope, require_camera
+    def __init__(self, scope: str = "visible", *, require_camera: bool = True, instancing: bool = True):
+        self.scope, self.require_camera, self.instancing = scope, require_camera, instancing
         self.scene: Scene | None = None
         self.totals = SyncTotals()
-        self._parts: dict[tuple, _Part] = {}
+        self._items: dict[tuple, Item] = {}
+        self._by_data: dict[int, MeshData] = {}  # mesh data address → mesh, as last read
+        self._layout: Layout | None = None
+        self._shared: list[SharedMesh] = []
         self._materials: dict = {}  # material name → bvhlab.Material, as last read
+        self._flat: tuple[Any, Scene] | None = None
 
     def sync(self, depsgraph, blender_scene=None, view_layer=None) -> SyncReport:
         """Bring `scene` up to date with the evaluated depsgraph. Raises ExportError (see
@@ -150,12 +154,14 @@ class LiveScene:
         dirty = _Dirty(everything=True) if full else _Dirty.from_updates(depsgraph)
         known = {k: v for k, v in self._materials.items() if k not in dirty.materials}
         table = MaterialTable(known)
-        parts, report = self._walk(depsgraph, view_layer, dirty, table)
+        items, by_data, report = self._walk(depsgraph, view_layer, dirty, table)
         report.full = full
-        arrays = self._arrays(parts, table, report)
+        layout = plan(items, self.instancing)
+        shared = shared_meshes(items, layout, self._shared)
+        arrays = self._arrays(items, layout, shared, table, report)
         report.materials_read = table.reads
         scene = self._make_scene(arrays, table, blender_scene, depsgraph, report)
-        light = gather_light(depsgraph, view_layer, _primitive_sample(scene))
+        light = gather_light(depsgraph, view_layer, _primitive_sample(items, scene.spheres))
         if light is None:
             warnings.warn(
                 f"scene '{blender_scene.name}' has no visible light; using a default point light near the camera",
@@ -166,71 +172,167 @@ class LiveScene:
             light = default_light(scene.camera)
         scene.light = light
         self.scene, self._materials = scene, table.known
-        self._parts = {key: part for key, (part, _) in parts.items()}
+        self._items, self._by_data, self._layout, self._shared = items, by_data, layout, shared
         self.totals.add(report)
         return report
 
-    def _walk(self, depsgraph, view_layer, dirty: _Dirty, table: MaterialTable) -> tuple[dict, SyncReport]:
-        """Every object in scope, read again when dirty or new, placed again when moved; in the
-        depsgraph's order (the order export_scene has always used). Each part comes with the
-        material table index of each of its slots, read here: an instance's object is valid only
-        while it is the depsgraph iterator's current item (geometry-nodes and nested collection
-        instances crashed Blender when their slots were read after the loop had moved on)."""
-        parts, report = {}, SyncReport()
-        for item in instances_in_scope(depsgraph, view_layer, self.scope):
-            if item.obj.type not in GEOMETRY_TYPES:  # cameras, lights, empties: no primitives
-                continue
-            old = self._parts.get(item.key)
-            sphere = item.obj.type == "MESH" and is_analytic_sphere(item.obj)
-            if old is None or (old.mesh is None) != sphere or dirty.geometry_of(item.obj, item.key):
-                part = _read_part(item.obj, item.matrix, item.name)
-                report.objects_read += 1
-            elif not np.array_equal(old.matrix, item.matrix):
-                part = old.moved_to(item.matrix, item.name)
-                report.objects_moved += 1
-            else:
-                part = old
-            has_primitives = part.mesh is None or part.mesh.triangle_count > 0
-            parts[item.key] = (part, table.slot_indices(item.obj) if has_primitives else None)
-        return parts, report
+    def flat_scene(self) -> Scene:
+        """`scene` as one flat mesh (Scene.flattened(), made once per geometry), for the consumers
+        that still take flat trees only (the Rendered viewport; issue 34)."""
+        scene = self.scene
+        assert scene is not None, "sync first"
+        if not scene.is_instanced:
+            return scene
+        source = (scene.triangles, scene.spheres, scene.instance_transforms, scene.tri_material, *scene.meshes)
+        if (
+            self._flat is None
+            or len(self._flat[0]) != len(source)
+            or any(a is not b for a, b in zip(self._flat[0], source))
+        ):
+            self._flat = (source, scene.flattened())
+        flat = copy.copy(self._flat[1])
+        flat.materials, flat.camera, flat.light, flat.sky = scene.materials, scene.camera, scene.light, scene.sky
+        return flat
 
-    def _arrays(self, parts: dict, table: MaterialTable, report: SyncReport) -> dict:
-        """Triangles, spheres and their material indices, in walk order (the material table is
-        rebuilt in that order every sync); the previous geometry arrays when nothing moved."""
+    def _walk(self, depsgraph, view_layer, dirty: _Dirty, table: MaterialTable) -> tuple[dict, dict, SyncReport]:
+        """Every object in scope, read again when dirty or new (a mesh shared by several items
+        once), kept when not; in the depsgraph's order (the order export_scene has always used).
+        Each item's material table index of each slot is read here: an instance's object is valid
+        only while it is the depsgraph iterator's current item (geometry-nodes and nested
+        collection instances crashed Blender when their slots were read after the loop had moved
+        on)."""
+        items: dict[tuple, Item] = {}
+        fresh: dict[int, MeshData] = {}  # meshes read in this sync, by data address
+        by_data: dict[int, MeshData] = {}
+        report = SyncReport()
+        for entry in instances_in_scope(depsgraph, view_layer, self.scope):
+            obj = entry.obj
+            if obj.type not in GEOMETRY_TYPES:  # cameras, lights, empties: no primitives
+                continue
+            old = self._items.get(entry.key)
+            changed = dirty.geometry_of(obj, entry.key)
+            if obj.type == "MESH" and is_analytic_sphere(obj):
+                if old is None or old.mesh is not None or changed:
+                    bounds = sphere_bounds(obj)
+                    report.objects_read += 1
+                else:
+                    assert old.bounds is not None  # a sphere keeps its object-space bounds
+                    bounds = old.bounds
+                item = Item(None, bounds, entry.matrix, None, table.slot_indices(obj), entry.name)
+            else:
+                data = _data_of(obj)
+                mesh = fresh.get(data) if data is not None else None
+                if mesh is None:
+                    mesh = None if changed else self._known_mesh(old, data, obj)
+                    if mesh is None:
+                        mesh = read_mesh(obj, entry.name)
+                        report.objects_read += 1
+                        if data is not None:
+                            fresh[data] = mesh
+                if data is not None:
+                    by_data[data] = mesh
+                slots = table.slot_indices(obj) if mesh.triangle_count else None
+                item = Item(mesh, None, entry.matrix, data, slots, entry.name)
+            if old is not None and old.mesh is item.mesh and old.bounds is item.bounds:
+                if np.array_equal(old.matrix, item.matrix):
+                    item.placed = old.placed
+                else:
+                    item.moved = True
+                    report.objects_moved += 1
+            items[entry.key] = item
+        for item in items.values():  # a clean item seen before a changed one of the same mesh
+            if item.data is not None and item.data in fresh and item.mesh is not fresh[item.data]:
+                item.mesh, item.placed, item.moved = fresh[item.data], None, False
+        return items, by_data, report
+
+    def _known_mesh(self, old: Item | None, data: int | None, obj) -> MeshData | None:
+        """The mesh read before for an item whose geometry did not change, or None to read it."""
+        if old is not None and old.mesh is not None and old.data == data:
+            return old.mesh
+        mesh = self._by_data.get(data) if data is not None else None
+        if mesh is not None and len(mesh.positions) == _vertex_count(obj):
+            return mesh
+        return None
+
+    def _arrays(self, items: dict, layout: Layout, shared: list[SharedMesh], table: MaterialTable, report) -> dict:
+        """Mesh 0 (the items placed in the world: triangles, spheres and their material indices, in
+        walk order; the material table is rebuilt in that order every sync), the shared meshes and
+        the instances; the previous arrays where nothing changed."""
         triangles, tri_material, spheres, sphere_material = [], [], [], []
-        for part, slot_table in parts.values():
-            if part.mesh is None:
-                spheres.append(part.placed)
-                sphere_material.append(slot_table[0])
-            elif part.mesh.triangle_count:
-                triangles.append(part.placed)
-                tri_material.append(map_slots(slot_table, part.mesh.slots))
-        if not triangles and not spheres:
+        for key, item in items.items():
+            if layout.mesh_of[key] or item.slot_table is None:
+                continue
+            if item.mesh is None:
+                assert item.bounds is not None  # a sphere keeps its object-space bounds
+                if item.placed is None:
+                    item.placed = place_sphere(item.bounds, item.matrix, item.name)
+                spheres.append(item.placed)
+                sphere_material.append(item.slot_table[0])
+            else:
+                if item.placed is None:
+                    item.placed = item.mesh.world_triangles(item.matrix, item.name)
+                triangles.append(item.placed)
+                tri_material.append(map_slots(item.slot_table, item.mesh.slots))
+        if not triangles and not spheres and not shared:
             raise ExportError(_nothing_in_scope(self.scope))
-        same_order = list(self._parts) == list(parts)
-        report.geometry = bool(self.scene is None or report.objects_read or report.objects_moved or not same_order)
+        previous = self.scene
+        same_order = list(self._items) == list(items)
+        same_layout = layout.same_as(self._layout)
+        moved = [key for key, item in items.items() if item.moved]
+        report.instances_moved = sum(1 for key in moved if layout.mesh_of[key])
+        report.geometry = bool(previous is None or report.objects_read or moved or not same_order or not same_layout)
         report.refittable = (
             report.geometry
             and same_order
-            and [p.shape for p in self._parts.values()] == [p.shape for p, _ in parts.values()]
+            and same_layout
+            and [p.shape for p in self._items.values()] == [p.shape for p in items.values()]
         )
-        previous = self.scene
-        arrays = {
+        report.placeable = (
+            report.geometry
+            and previous is not None
+            and same_order
+            and same_layout
+            and report.objects_read == 0
+            and report.instances_moved == len(moved)
+            and all(a is b for a, b in zip(shared, self._shared))
+        )
+        arrays: dict = {
             "tri_material": np.concatenate(tri_material) if tri_material else np.zeros(0, np.int32),
             "sphere_material": np.array(sphere_material, np.int32),
+            "meshes": [m.triangles for m in shared],
+            "mesh_tri_material": [m.tri_material for m in shared],
         }
-        if report.geometry:
+        if previous is not None and (not report.geometry or report.placeable):
+            arrays["triangles"], arrays["spheres"] = previous.triangles, previous.spheres
+        else:
             arrays["triangles"] = np.concatenate(triangles) if triangles else np.zeros((0, 3, 3), np.float32)
             arrays["spheres"] = np.array(spheres, np.float32).reshape(-1, 4)
-        else:
-            assert previous is not None  # no geometry change means there was a scene before
-            arrays["triangles"], arrays["spheres"] = previous.triangles, previous.spheres
+        arrays["instance_mesh"], arrays["instance_transforms"] = self._instances(items, layout, shared, arrays, report)
         report.materials = previous is None or not (
             previous.materials == table.materials
             and np.array_equal(previous.tri_material, arrays["tri_material"])
             and np.array_equal(previous.sphere_material, arrays["sphere_material"])
+            and len(previous.mesh_tri_material) == len(shared)
+            and all(np.array_equal(a, b) for a, b in zip(previous.mesh_tri_material, arrays["mesh_tri_material"]))
         )
         return arrays
+
+    def _instances(self, items: dict, layout: Layout, shared: list[SharedMesh], arrays: dict, report):
+        """(instance_mesh, instance_transforms): mesh 0 once where it was modelled (when it has
+        primitives), then the shared meshes' instances; (None, None) without shared meshes."""
+        if not shared:
+            return None, None
+        previous = self.scene
+        if previous is not None and not report.geometry and previous.instance_transforms is not None:
+            return previous.instance_mesh, previous.instance_transforms
+        mesh_of, transforms = instance_transforms(items, layout, shared)
+        if len(arrays["triangles"]) or len(arrays["spheres"]):
+            identity = np.eye(4, dtype=np.float32)[None, :3]
+            mesh_of, transforms = (
+                np.concatenate([[0], mesh_of]).astype(np.int32),
+                np.concatenate([identity, transforms]),
+            )
+        return mesh_of, np.ascontiguousarray(transforms)
 
     def _make_scene(self, arrays: dict, table: MaterialTable, blender_scene, depsgraph, report) -> Scene:
         camera = self._camera(blender_scene, depsgraph)
@@ -250,6 +352,10 @@ class LiveScene:
             sphere_material=arrays["sphere_material"],
             camera=camera,
             sky=sky,
+            meshes=arrays["meshes"],
+            mesh_tri_material=arrays["mesh_tri_material"],
+            instance_mesh=arrays["instance_mesh"],
+            instance_transforms=arrays["instance_transforms"],
         )
 
     def _camera(self, blender_scene, depsgraph):
@@ -262,11 +368,32 @@ class LiveScene:
             return None
 
 
-def _primitive_sample(scene: Scene, size: int = 4096) -> np.ndarray:
-    """Centres of about `size` primitives, evenly strided (deterministic), as float64 (N,3)."""
-    triangles = scene.triangles[:: max(1, len(scene.triangles) // size)].mean(axis=1)
-    spheres = scene.spheres[:: max(1, len(scene.spheres) // size), :3]
-    return np.concatenate([triangles, spheres]).astype(np.float64)
+def _primitive_sample(items: dict, spheres: np.ndarray, size: int = 4096) -> np.ndarray:
+    """Centres of about `size` primitives, as float64 (N,3): every k-th triangle of the world
+    triangles in walk order (the flat export's order; instances placed where they are, so an
+    instanced export samples the same triangles as the flat one) and every k-th sphere."""
+    blocks = [i for i in items.values() if i.mesh is not None and i.slot_table is not None and i.mesh.triangle_count]
+    parts = [spheres[:: max(1, len(spheres) // size), :3].astype(np.float64)]
+    if blocks:
+        counts = np.array([item.mesh.triangle_count for item in blocks], np.int64)
+        stride = max(1, int(counts.sum()) // size)
+        offsets = np.cumsum(counts) - counts
+        first = (-offsets) % stride
+        picks = np.maximum(0, (counts - first + stride - 1) // stride)
+        which = np.repeat(np.arange(len(blocks)), picks)
+        local = first[which] + (np.arange(len(which)) - np.repeat(np.cumsum(picks) - picks, picks)) * stride
+        matrices = np.array([item.matrix for item in blocks], np.float64)[which]
+        meshes: dict[int, int] = {}
+        mesh_of = np.array([meshes.setdefault(id(item.mesh), len(meshes)) for item in blocks])[which]
+        centres = np.empty((len(which), 3))
+        for m, mesh in enumerate({id(item.mesh): item.mesh for item in blocks}.values()):
+            chosen = np.flatnonzero(mesh_of == m)
+            assert mesh is not None  # blocks hold meshes
+            corners = mesh.corners.reshape(-1, 3)[local[chosen]]
+            centres[chosen] = mesh.positions[corners].astype(np.float64).mean(1)
+        world = np.einsum("nij,nj->ni", matrices[:, :3, :3], centres) + matrices[:, :3, 3]
+        parts.insert(0, world)
+    return np.concatenate(parts)
 
 
 def _nothing_in_scope(scope: str) -> str:

@@ -7,6 +7,7 @@ mesh again only when its geometry changed and only re-places it when the object 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -29,17 +30,35 @@ class MeshData:
     def triangle_count(self) -> int:
         return len(self.slots)
 
+    @cached_property
+    def triangles(self) -> np.ndarray:
+        """float32 (T,3,3) object-space triangles (a shared mesh's, placed by its instances); made
+        once per MeshData."""
+        return np.ascontiguousarray(self.positions[self.corners].reshape(-1, 3, 3))
+
+    @cached_property
+    def bounds(self) -> np.ndarray:
+        """float64 (2,3) object-space box of the vertices the triangles use."""
+        used = self.positions[self.corners].astype(np.float64)
+        return np.stack([used.min(0), used.max(0)])
+
     def world_triangles(self, matrix_world: np.ndarray, name: str) -> np.ndarray:
         """float32 (T,3,3) world-space triangles. The vertices (fewer than 3 per triangle) are
-        transformed before they are gathered into triangles. Raises ExportError naming the object
-        when a transformed vertex is NaN or outside the supported range (check_world_positions)."""
+        transformed before they are gathered into triangles. A mirroring matrix (negative
+        determinant) gets each triangle's winding reversed, so that the geometric normal still points
+        out, as Blender shows a mirrored object (and as the tracers shade a mirrored instance: issue
+        34). Raises ExportError naming the object when a transformed vertex is NaN or outside the
+        supported range (check_world_positions)."""
         if not len(self.slots):
             return np.zeros((0, 3, 3), np.float32)
         linear, offset = matrix_world[:3, :3].astype(np.float32), matrix_world[:3, 3].astype(np.float32)
         with np.errstate(over="ignore", invalid="ignore"):
             world = self.positions @ linear.T + offset
         check_world_positions(world, name)
-        return world[self.corners].reshape(-1, 3, 3)
+        corners = self.corners
+        if np.linalg.det(matrix_world[:3, :3]) < 0:
+            corners = corners.reshape(-1, 3)[:, ::-1].reshape(-1)
+        return world[corners].reshape(-1, 3, 3)
 
 
 EMPTY_MESH = MeshData(np.zeros((0, 3), np.float32), np.zeros(0, np.int32), np.zeros(0, np.int32))

@@ -1,0 +1,155 @@
+"""Blender's instancing → a `bvhlab.Scene`'s meshes and instances (issue 34).
+
+Objects and instances that show the same evaluated mesh data with the same materials share one
+mesh: collection instances (nested ones too), linked duplicates (objects sharing a mesh
+data-block, without modifiers of their own), instancing by vertices or faces and geometry-nodes
+instances all reach the exporter as depsgraph items whose evaluated `data` is one mesh. The key is
+that mesh (its address during the evaluation) and the material table index of each slot, so an
+object whose object-level materials differ gets a mesh of its own. A key used by two or more
+items becomes a mesh of the scene (stored once, in object space) with one instance per item (its
+world matrix); everything else (objects used once, spheres, instances whose matrix cannot be
+inverted, such as a zero scale) is placed into the world in mesh 0 as before, which one identity
+instance places. Without any shared mesh the scene is the flat scene of before.
+
+Mirroring instances keep their matrix: the tracers move a hit's normal back by the inverse
+transpose, so the outside stays out, as Blender shows it (`MeshData.world_triangles` reverses the
+winding of a mirrored object placed in mesh 0 to match)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..scene import MAX_COORDINATE
+from .errors import ExportError
+from .material_table import map_slots
+from .mesh import MeshData, check_world_positions
+
+#: A mesh key used this many times or more becomes a shared mesh with instances.
+MIN_INSTANCES = 2
+#: |det| of an instance's linear part at most this fraction of Hadamard's bound (the product of its
+#: columns' lengths) cannot be inverted (core_cpp/src/tlas/transform.cpp, validate_transform,
+#: refuses 1e-6; a margin of 10 keeps float32 rounding of the matrix from crossing it): such an
+#: instance (a zero scale) goes into mesh 0 as world triangles.
+SINGULAR_FRACTION = 1e-5
+
+
+@dataclass
+class Item:
+    """One object or instance as last read: its mesh (None for a sphere), a sphere's object-space
+    bounds, the world matrix (4×4 float64), the address of its evaluated mesh data during this
+    evaluation (None: a mesh of its own, as converted curves and text are), the material table
+    index of each slot (None: no primitives), a name for messages, its world-space primitives once
+    placed (kept while neither mesh nor matrix changes), and whether only its matrix changed."""
+
+    mesh: MeshData | None
+    bounds: np.ndarray | None
+    matrix: np.ndarray
+    data: int | None
+    slot_table: np.ndarray | None
+    name: str
+    placed: np.ndarray | None = None
+    moved: bool = False  # the same mesh as last sync, a different matrix
+
+    @property
+    def shape(self) -> tuple:
+        return ("sphere",) if self.mesh is None else ("mesh", self.mesh.triangle_count)
+
+
+@dataclass
+class Layout:
+    """Which items share a mesh: `mesh_of[key]` is the scene mesh (1..) of each instanced item, 0
+    for the items placed in mesh 0; `groups` lists each shared mesh's key (data, slot table)."""
+
+    mesh_of: dict = field(default_factory=dict)
+    groups: list = field(default_factory=list)
+
+    def same_as(self, other: Layout | None) -> bool:
+        return other is not None and self.mesh_of == other.mesh_of
+
+
+def plan(items: dict, share: bool) -> Layout:
+    """The layout of `items` (key → Item, in walk order): which of them become instances."""
+    layout = Layout(mesh_of=dict.fromkeys(items, 0))
+    candidates = [
+        key
+        for key, item in items.items()
+        if share
+        and item.mesh is not None
+        and item.data is not None
+        and item.slot_table is not None
+        and item.mesh.triangle_count > 0
+    ]
+    if not candidates:
+        return layout
+    linear = np.array([items[key].matrix[:3, :3] for key in candidates])
+    members: dict[tuple, list] = {}
+    for key, ok in zip(candidates, invertible(linear)):
+        if ok:
+            item = items[key]
+            assert item.slot_table is not None  # a candidate
+            members.setdefault((item.data, item.slot_table.tobytes()), []).append(key)
+    for group, keys in members.items():
+        if len(keys) >= MIN_INSTANCES:
+            layout.groups.append(group)
+            for key in keys:
+                layout.mesh_of[key] = len(layout.groups)
+    return layout
+
+
+def invertible(linear: np.ndarray) -> np.ndarray:
+    """bool (N,): which of the (N,3,3) linear parts can be inverted (see SINGULAR_FRACTION)."""
+    bound = np.prod(np.linalg.norm(linear, axis=1), axis=1)  # the columns' lengths
+    with np.errstate(invalid="ignore", over="ignore"):
+        det = np.linalg.det(linear)
+    return np.isfinite(det) & (np.abs(det) > SINGULAR_FRACTION * bound)
+
+
+@dataclass
+class SharedMesh:
+    """A mesh of the scene (1..): its object-space triangles and their material indices."""
+
+    mesh: MeshData
+    triangles: np.ndarray
+    tri_material: np.ndarray
+
+
+def shared_meshes(items: dict, layout: Layout, previous: list[SharedMesh]) -> list[SharedMesh]:
+    """One SharedMesh per group, reusing the arrays of `previous` (the last sync's) where the mesh
+    read and the materials are the same, so unchanged meshes keep their arrays (and trees)."""
+    first = {}
+    for key, k in layout.mesh_of.items():
+        if k and k not in first:
+            first[k] = items[key]
+    out = []
+    for k in range(1, len(layout.groups) + 1):
+        item = first[k]
+        assert item.mesh is not None and item.slot_table is not None  # plan() shares meshes only
+        materials = map_slots(item.slot_table, item.mesh.slots)
+        reused = next((p for p in previous if p.mesh is item.mesh and np.array_equal(p.tri_material, materials)), None)
+        out.append(reused or SharedMesh(item.mesh, item.mesh.triangles, materials))
+    return out
+
+
+def instance_transforms(items: dict, layout: Layout, meshes: list[SharedMesh]) -> tuple[np.ndarray, np.ndarray]:
+    """(mesh index int32 (N,), object-to-world float32 (N,3,4)) of the instanced items, in walk
+    order. Raises ExportError naming an instance that reaches outside the coordinate range."""
+    keys = [key for key, k in layout.mesh_of.items() if k]
+    mesh_of = np.array([layout.mesh_of[key] for key in keys], np.int32)
+    matrices = np.array([items[key].matrix[:3, :4] for key in keys], np.float64).reshape(-1, 3, 4)
+    for k, shared in enumerate(meshes, start=1):
+        chosen = np.flatnonzero(mesh_of == k)
+        _check_reach(shared.mesh.bounds, matrices[chosen], [items[keys[i]].name for i in chosen])
+    return mesh_of, matrices.astype(np.float32)
+
+
+def _check_reach(bounds: np.ndarray, matrices: np.ndarray, names: list[str]) -> None:
+    """The world corners of each instance's box must be inside the coordinate range."""
+    corners = np.array([[bounds[(c >> a) & 1][a] for a in range(3)] for c in range(8)])
+    world = np.einsum("nij,cj->nci", matrices[:, :, :3], corners) + matrices[:, None, :, 3]
+    outside = ~(np.abs(world) <= MAX_COORDINATE).reshape(len(matrices), -1).all(1)
+    if outside.any():
+        i = int(np.flatnonzero(outside)[0])
+        check_world_positions(world[i], names[i])  # raises, naming the instance
+        raise ExportError(f"object '{names[i]}' reaches outside the supported coordinate range")
