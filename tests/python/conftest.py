@@ -32,12 +32,12 @@ def knot_mesh():
 # -- selection (pyproject's markers): `make check` runs -m "not slow and not full_zip" -----------
 #: Modules that use a Vulkan device, and modules that import bpy or run Blender in a child.
 VULKAN_MODULES = {
-    "test_cli", "test_render_api", "test_render_bounded", "test_render_cameras", "test_render_cpu",
-    "test_render_precision", "test_render_reentry", "test_render_robust", "test_render_vulkan",
+    "test_cli", "test_export_instances", "test_render_api", "test_render_bounded", "test_render_cameras",
+    "test_render_cpu", "test_render_precision", "test_render_reentry", "test_render_robust", "test_render_vulkan",
 }  # fmt: skip
 BPY_MODULES = {
     "test_addon", "test_addon_install", "test_addon_writes", "test_blender_checks", "test_blender_errors",
-    "test_docs_pictures", "test_addon_pick",
+    "test_docs_pictures", "test_addon_pick", "test_export_instances",
 }  # fmt: skip
 #: test_blender_checks.py's tests (tests/blender/registry.py) of these groups use a Vulkan device.
 VULKAN_GROUPS = {"addon", "engine", "cameras", "no_vulkan", "gpu"}
