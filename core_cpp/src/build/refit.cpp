@@ -56,7 +56,9 @@ inline void grow_packed(const PackedPrim& p, const GeometryView& g, F4& lo, F4& 
     if (p.v0.x == p.v1.x && p.v0.y == p.v1.y && p.v0.z == p.v1.z && p.v0.x == p.v2.x && p.v0.y == p.v2.y &&
         p.v0.z == p.v2.z) {
         const float* t = g.triangles + 9 * std::size_t(ref_index(p.ref));
-        v0 = F4::load3(t), v1 = F4::load3(t + 3), v2 = F4::load3(t + 6);
+        // set3, not load3: load3 reads four floats, and past the last vertex of the input that is
+        // past the end of its array (the fuzz corpus's ASan run caught it)
+        v0 = F4::set3(t[0], t[1], t[2]), v1 = F4::set3(t[3], t[4], t[5]), v2 = F4::set3(t[6], t[7], t[8]);
     }
     checks.row(v0), checks.row(v1), checks.row(v2);
     lo = min(lo, min(v0, min(v1, v2))), hi = max(hi, max(v0, max(v1, v2)));
