@@ -11,6 +11,9 @@ from bpy.props import EnumProperty, FloatVectorProperty, IntProperty
 from . import overlay, state
 from .operator_support import run_reported
 
+#: What a tree-less inspect operator says.
+NO_TREE = "Build a tree first (BVH ▸ Build)"
+
 
 def _shown_range(scene, built) -> tuple[int, int]:
     settings = scene.bvhlab
@@ -24,14 +27,14 @@ def pick_ray(operator, context, origin, direction) -> set[str]:
     scene = context.scene
     built = state.tree_for(scene)
     if built is None:
-        operator.report({"WARNING"}, "Build a tree first (BVH ▸ Build)")
+        operator.report({"WARNING"}, NO_TREE)
         return {"CANCELLED"}
     got = pick(built.bvh, origin, direction, _shown_range(scene, built), leaves_only=scene.bvhlab.overlay_leaves_only)
     if got.node is None:
         state.picked.pop(state.key(scene), None)
         operator.report({"INFO"}, "No box under the cursor")
     else:
-        state.picked[state.key(scene)] = (built.serial, got.node, got.how)
+        state.remember_pick(scene, built, got.node, got.how)
         data = built.bvh.node_data()
         n, what = got.node, "leaf" if data.left[got.node] < 0 else "node"
         operator.report(
@@ -65,7 +68,7 @@ class BVHLAB_OT_pick_box(bpy.types.Operator):
             self.report({"WARNING"}, "Pick Box works in a 3D viewport")
             return {"CANCELLED"}
         if state.tree_for(context.scene) is None:
-            self.report({"WARNING"}, "Build a tree first (BVH ▸ Build)")
+            self.report({"WARNING"}, NO_TREE)
             return {"CANCELLED"}
         context.window_manager.modal_handler_add(self)
         context.area.header_text_set("Pick Box: click a box · Esc or right-click to stop")
@@ -125,7 +128,7 @@ class BVHLAB_OT_pick_step(bpy.types.Operator):
         if target < 0:
             self.report({"WARNING"}, f"Node {node} has no {self.step.lower()}")
             return {"CANCELLED"}
-        state.picked[state.key(scene)] = (built.serial, target, "step")
+        state.remember_pick(scene, built, target, "step")
         overlay.tag_redraw()
         return {"FINISHED"}
 
@@ -173,12 +176,12 @@ class BVHLAB_OT_pick_node(bpy.types.Operator):
     def execute(self, context):
         built = state.tree_for(context.scene)
         if built is None:
-            self.report({"WARNING"}, "Build a tree first (BVH ▸ Build)")
+            self.report({"WARNING"}, NO_TREE)
             return {"CANCELLED"}
         if self.node >= built.bvh.stats["nodes"]:
             self.report({"ERROR"}, f"node {self.node} does not exist; the tree has {built.bvh.stats['nodes']} nodes")
             return {"CANCELLED"}
-        state.picked[state.key(context.scene)] = (built.serial, self.node, "node")
+        state.remember_pick(context.scene, built, self.node, "node")
         overlay.tag_redraw()
         return {"FINISHED"}
 
@@ -196,7 +199,7 @@ class BVHLAB_OT_analyse_tree(bpy.types.Operator):
 
         built = state.tree_for(context.scene)
         if built is None:
-            self.report({"WARNING"}, "Build a tree first (BVH ▸ Build)")
+            self.report({"WARNING"}, NO_TREE)
             return {"CANCELLED"}
         start = time.perf_counter()
         data = built.bvh.node_data()

@@ -61,6 +61,11 @@ lock = threading.Lock()
 picked: dict[int, tuple] = {}
 
 
+def remember_pick(scene, built: BuiltTree, node: int, how: str) -> None:
+    """Pick `node` of the scene's current tree (ops_inspect.py: a click, a step, a button)."""
+    picked[key(scene)] = (built.serial, node, how)
+
+
 def picked_node(scene) -> int | None:
     """The node picked on the scene's current tree, or None."""
     built, pick = tree_for(scene), picked.get(key(scene))

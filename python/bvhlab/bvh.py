@@ -288,36 +288,7 @@ class Bvh:
         Returns a dict of arrays: t (inf on a miss), prim (index within its kind, -1 on a miss),
         kind (0 triangle, 1 sphere), u, v (triangle barycentrics; sphere longitude/2π, colatitude/π),
         nodes_visited (box tests, for heatmaps)."""
-        origins = _checks.float32_array("origins", origins, (3,))
-        directions = _checks.float32_array("directions", directions, (3,))
-        if len(origins) != len(directions):
-            raise ValueError(f"origins ({len(origins)}) and directions ({len(directions)}) differ in length")
-        _checks.choice("traversal", traversal, TRAVERSALS)
-        tmin, tmax = _checks.real("tmin", tmin), _checks.real("tmax", tmax)
-        n = len(origins)
-        out = {
-            "t": np.empty(n, np.float32),
-            "prim": np.empty(n, np.int32),
-            "kind": np.empty(n, np.uint8),
-            "u": np.empty(n, np.float32),
-            "v": np.empty(n, np.float32),
-            "nodes_visited": np.empty(n, np.uint32),
-        }
-        self._core.intersect(
-            origins,
-            directions,
-            tmin,
-            tmax,
-            traversal,
-            _checks.integer("threads", threads, 0, 4096),
-            out["t"],
-            out["prim"],
-            out["kind"],
-            out["u"],
-            out["v"],
-            out["nodes_visited"],
-        )
-        return out
+        return run_ray_query(self._core, origins, directions, tmin, tmax, traversal, threads)
 
     def save(self, path) -> None:
         """Writes the tree to `path` (a .bvhtree file, as a whole or not at all): its nodes and
@@ -367,6 +338,27 @@ class Bvh:
             spheres = _checks.float32_array("spheres", spheres, (4,))
         self._core.refit(triangles, spheres)
         self._stats = None
+
+
+#: The arrays a ray query fills, in the order the core's intersect takes them.
+HIT_FIELDS = {"t": np.float32, "prim": np.int32, "kind": np.uint8, "u": np.float32, "v": np.float32,
+              "nodes_visited": np.uint32}  # fmt: skip
+
+
+def run_ray_query(core, origins, directions, tmin, tmax, traversal: str, threads: int, extra: dict | None = None):
+    """The checked arguments and output arrays of one `intersect` over a flat or two-level tree
+    (`extra`: more output fields, e.g. the instance), filled by `core.intersect`."""
+    origins = _checks.float32_array("origins", origins, (3,))
+    directions = _checks.float32_array("directions", directions, (3,))
+    if len(origins) != len(directions):
+        raise ValueError(f"origins ({len(origins)}) and directions ({len(directions)}) differ in length")
+    _checks.choice("traversal", traversal, TRAVERSALS)
+    tmin, tmax = _checks.real("tmin", tmin), _checks.real("tmax", tmax)
+    out = {name: np.empty(len(origins), dtype) for name, dtype in {**HIT_FIELDS, **(extra or {})}.items()}
+    core.intersect(
+        origins, directions, tmin, tmax, traversal, _checks.integer("threads", threads, 0, 4096), *out.values()
+    )
+    return out
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:

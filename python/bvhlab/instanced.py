@@ -9,7 +9,7 @@ from collections.abc import Callable
 import numpy as np
 
 from . import _checks, _core
-from .bvh import TRAVERSALS, BuildConfig, Bvh
+from .bvh import BuildConfig, Bvh, run_ray_query
 from .update import UpdateStats
 
 
@@ -84,32 +84,7 @@ class InstancedBvh:
     ) -> dict:
         """As `Bvh.intersect`, through both levels; the dict also holds `instance` (int32, -1 on a
         miss), and `prim` indexes the triangles (or spheres) of that instance's mesh."""
-        origins = _checks.float32_array("origins", origins, (3,))
-        directions = _checks.float32_array("directions", directions, (3,))
-        if len(origins) != len(directions):
-            raise ValueError(f"origins ({len(origins)}) and directions ({len(directions)}) differ in length")
-        _checks.choice("traversal", traversal, TRAVERSALS)
-        tmin, tmax = _checks.real("tmin", tmin), _checks.real("tmax", tmax)
-        n = len(origins)
-        out = {
-            "t": np.empty(n, np.float32),
-            "prim": np.empty(n, np.int32),
-            "kind": np.empty(n, np.uint8),
-            "u": np.empty(n, np.float32),
-            "v": np.empty(n, np.float32),
-            "nodes_visited": np.empty(n, np.uint32),
-            "instance": np.empty(n, np.int32),
-        }
-        self._core.intersect(
-            origins,
-            directions,
-            tmin,
-            tmax,
-            traversal,
-            _checks.integer("threads", threads, 0, 4096),
-            *(out[k] for k in ("t", "prim", "kind", "u", "v", "nodes_visited", "instance")),
-        )
-        return out
+        return run_ray_query(self._core, origins, directions, tmin, tmax, traversal, threads, {"instance": np.int32})
 
 
 def _make_tlas(meshes: list[Bvh], mesh_of, transforms, threads: int) -> _core.TwoLevel:
