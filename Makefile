@@ -134,7 +134,7 @@ fuzz: build/fuzz/build.ninja
 # Lint: ruff (pycodestyle, pyflakes, import order, bugbear, pyupgrade) and its formatter over every
 # Python file, mypy over the package (settings in pyproject.toml), clang-format over every C++ file
 # (.clang-format). `make format` applies both formatters.
-PY_LINT_DIRS := python addon tests bench blender_scenes scripts
+PY_LINT_DIRS := python addon tests bench blender_scenes scripts examples
 CPP_FILES = $(shell git ls-files '*.cpp' '*.h' '*.inl' 2>/dev/null || find core_cpp tests bench shaders -name '*.cpp' -o -name '*.h' -o -name '*.inl')
 .PHONY: lint format
 lint: $(VENV)/.deps
@@ -183,6 +183,13 @@ demo: build
 	cp out/demo/leaf_sizes.png docs/sponza_leaf_sizes.png
 	cp out/demo/figure5_overlay_vulkan.png docs/figure5_overlay.png 2>/dev/null || cp out/demo/figure5_overlay_cpu.png docs/figure5_overlay.png
 	$(PY) -m bvhlab render atrium --method sah12 --bvh-depth 8:9 --width 800 --height 600 --out docs/atrium_overlay.png
+
+# The README's example sweep: the bundled scenes and a mesh file in each format trimesh reads
+# (examples/study/make_files.py writes them), on a Dask LocalCluster; out/study/summary.md.
+.PHONY: study
+study: build
+	$(PY) examples/study/make_files.py
+	$(PY) -m bvhlab sweep examples/study/study.toml --out out/study
 
 # Embree 3 in C++ (Debian's libembree-dev) is the benchmarks' peer; bench/cpp builds without it otherwise.
 bench: build

@@ -16,6 +16,7 @@ from bvhlab import build, cli
 from bvhlab.library import load_scene
 from bvhlab.sweep import local_cluster, plan_cells, read_spec, run_sweep
 from bvhlab.sweep.plot import pareto_front
+from bvhlab.sweep.summary import RATIO_PLOT, SUMMARY
 from bvhlab.sweep.table import CSV, PARQUET
 from bvhlab.sweep.task import VARYING, fixed_rays
 
@@ -54,6 +55,8 @@ def test_spec_grid_is_every_combination(tmp_path, models):
         ("bins = []", "empty list"),
         ("[rays]\nrepeats = 0", "repeats"),
         ("[rays]\ncount = true", "count"),
+        ("method = 'sah'\n[report]\nbaseline = 'median'", "baseline 'median' is not a method of the grid"),
+        ("[report]\ncolour = 'red'", "unknown key"),
     ],
 )
 def test_bad_grid_is_refused_naming_the_setting(tmp_path, grid, message):
@@ -169,6 +172,28 @@ def test_cli_sweep_in_process_and_a_bad_spec(tmp_path, models, capsys):
     assert cli.main(["sweep", str(bad), "--out", str(tmp_path / "out2"), "--workers", "0"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("bvhlab sweep: error:") and "bad.toml" in err[0]
+
+
+def test_summary_divides_each_cell_by_its_baseline_cell(tmp_path, models):
+    """summary.md: each row's SAH and Mrays/s over the median cell of the same scene and the same
+    other settings, checked against the table's own rows; and its plot."""
+    spec = read_spec(_write_spec(tmp_path, ["box.obj", "ball.ply"], "method = ['median', 'sah']\nbins = [4, 16]\n"
+                                 "max_leaf_size = [1, 4]\n[report]\nbaseline = 'median'"))  # fmt: skip
+    result = run_sweep(spec, tmp_path / "out")
+    lines = (tmp_path / "out" / SUMMARY).read_text().splitlines()
+    assert lines[0].startswith("| scene | setting | SAH cost | SAH ÷ median |") and len(lines) == 2 + len(result.rows)
+    by_label = {tuple(line.split(" | ")[:2]): line.split(" | ") for line in lines[2:]}
+    for row in result.rows:
+        base = next(
+            r for r in result.rows
+            if r["scene"] == row["scene"] and r["method"] == "median" and r["max_leaf_size"] == row["max_leaf_size"]
+            and r["bins"] == row["bins"]
+        )  # fmt: skip
+        label = f"{row['method']} b{row['bins']} leaf{row['max_leaf_size']}"
+        cells = by_label[(f"| {row['scene']}", label)]
+        assert float(cells[3]) == pytest.approx(row["sah_cost"] / base["sah_cost"], abs=0.006)
+        assert float(cells[6].rstrip(" |")) == pytest.approx(row["mrays_per_s"] / base["mrays_per_s"], abs=0.006)
+    assert (tmp_path / "out" / RATIO_PLOT).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 def test_pareto_front_against_brute_force():

@@ -15,6 +15,7 @@ from pathlib import Path
 from .cells import Cell, plan_cells
 from .plot import PLOT, plot_sah_against_build_time
 from .spec import SweepSpec
+from .summary import write_summary
 from .table import store_row, stored_rows, write_table
 from .task import MEASURED, error_row, run_cell
 
@@ -44,8 +45,8 @@ def run_sweep(
     plot: bool = True,
 ) -> SweepResult:
     """Runs the spec's cells not yet stored in `out` (in this process when `client` is None, else
-    as Dask tasks through `client`), then writes the table of all its cells, and their plot unless
-    `plot` is false."""
+    as Dask tasks through `client`), then writes the table of all its cells and its summary
+    (summary.py), and their plots unless `plot` is false."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     cells = plan_cells(spec)
@@ -69,7 +70,7 @@ def run_sweep(
         else:
             _run_on_dask(client, todo, finished)
     finally:  # also after Ctrl-C: the table of what finished
-        result = _write_results(out, cells, len(todo), plot)
+        result = _write_results(out, cells, len(todo), plot, spec.baseline)
     return result
 
 
@@ -106,7 +107,7 @@ def _run_on_dask(client, todo: list[Cell], finished: Callable[[dict], None]) -> 
             client.cancel(list(futures))
 
 
-def _write_results(out: Path, cells: list[Cell], ran: int, plot: bool) -> SweepResult:
+def _write_results(out: Path, cells: list[Cell], ran: int, plot: bool, baseline: str) -> SweepResult:
     rows_by_key = stored_rows(out, [c.key for c in cells])
     rows = [rows_by_key[c.key] for c in cells if c.key in rows_by_key]
     files: list[Path] = []
@@ -116,6 +117,7 @@ def _write_results(out: Path, cells: list[Cell], ran: int, plot: bool) -> SweepR
         chart = plot_sah_against_build_time(rows, out / PLOT) if plot else None
         if chart is not None:
             files.append(chart)
+        files.extend(write_summary(rows, baseline, out, plot=plot))
     return SweepResult(rows, ran, sum(r.get("status") != "ok" for r in rows), files)
 
 

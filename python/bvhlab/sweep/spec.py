@@ -13,6 +13,8 @@
     count = 100000            # fixed random rays per cell
     seed = 1
     repeats = 3               # timed passes over them; the table has the median
+    [report]
+    baseline = "median"       # the method the summary's ratios divide by (default: the grid's first)
 
 Settings a grid leaves out keep BuildConfig's defaults. Globs and relative paths are relative to the
 spec's folder; a glob that matches nothing is an error (ValueError naming it)."""
@@ -53,6 +55,7 @@ class SweepSpec:
     rays: int = DEFAULT_RAYS
     ray_seed: int = 1
     repeats: int = DEFAULT_REPEATS
+    baseline: str = "median"  # a method of the grid: summary.md and its plot divide by its cells
 
 
 def read_spec(path) -> SweepSpec:
@@ -64,7 +67,7 @@ def read_spec(path) -> SweepSpec:
         raise ValueError(f"{path}: not valid TOML: {e}") from None
     except UnicodeDecodeError:
         raise ValueError(f"{path}: not a text file") from None
-    _only(path, "the spec", doc, ("scenes", "grid", "rays"))
+    _only(path, "the spec", doc, ("scenes", "grid", "rays", "report"))
     scenes = _scenes(path, doc.get("scenes"))
     settings = _grid(path, doc.get("grid", {}))
     rays = doc.get("rays", {})
@@ -76,7 +79,16 @@ def read_spec(path) -> SweepSpec:
         raise ValueError(f"{path}: [rays] seed must be a whole number >= 0, got {seed!r}")
     if not _whole(repeats) or not 1 <= repeats <= MAX_REPEATS:
         raise ValueError(f"{path}: [rays] repeats must be a whole number from 1 to {MAX_REPEATS}, got {repeats!r}")
-    return SweepSpec(scenes, settings, count, seed, repeats)
+    return SweepSpec(scenes, settings, count, seed, repeats, _baseline(path, doc.get("report", {}), settings))
+
+
+def _baseline(path: Path, report, settings: tuple[Setting, ...]) -> str:
+    _only(path, "[report]", report, ("baseline",))
+    methods = list(dict.fromkeys(s.config.method for s in settings))
+    baseline = report.get("baseline", methods[0])
+    if baseline not in methods:
+        raise ValueError(f"{path}: [report] baseline {baseline!r} is not a method of the grid: {', '.join(methods)}")
+    return baseline
 
 
 def _whole(value) -> bool:

@@ -1,0 +1,101 @@
+"""The sweep's summary: each cell beside the cell of the baseline method with the same scene and
+otherwise the same settings (SAH cost and Mrays/s as ratios to it), as a Markdown table
+(DIR/summary.md) and a plot of the Mrays/s ratios, one panel per scene (DIR/mrays_vs_baseline.png)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from .._atomic import replacing, write_text
+
+SUMMARY, RATIO_PLOT = "summary.md", "mrays_vs_baseline.png"
+#: Setting columns a label names when they vary over the grid (method always).
+_LABELLED = ("bins", "bin_bounds", "axis", "max_leaf_size", "sah_block", "traversal")
+_SHORT = {"bins": "b", "max_leaf_size": "leaf", "sah_block": "block", "bin_bounds": "", "axis": "", "traversal": ""}
+
+
+def setting_labels(rows: list[dict]) -> dict[str, str]:
+    """A short label for each row's setting ('sah b32 leaf4'): its method and the settings that
+    vary over the rows, keyed by the row's key."""
+    varying = [c for c in _LABELLED if len({r.get(c) for r in rows}) > 1]
+    return {r["key"]: " ".join([r["method"], *(f"{_SHORT[c]}{r.get(c)}" for c in varying)]) for r in rows}
+
+
+def baseline_pairs(rows: list[dict], baseline: str) -> list[tuple[dict, dict | None]]:
+    """Each ok row with the ok row of method `baseline` for the same scene and the same other
+    settings (None where the grid has none, e.g. a setting only another method takes)."""
+    ok = [r for r in rows if r.get("status") == "ok"]
+
+    def others(row: dict) -> tuple:
+        return (row["scene_hash"], *(row.get(c) for c in _LABELLED))
+
+    bases = {others(r): r for r in ok if r["method"] == baseline}
+    return [(r, bases.get(others(r))) for r in ok]
+
+
+def _ratio(value, base) -> float | None:
+    return value / base if base and value is not None else None
+
+
+def summary_table(rows: list[dict], baseline: str) -> str:
+    """The Markdown table: scene, setting, SAH cost, ÷ baseline, build ms, Mrays/s, ÷ baseline."""
+    labels = setting_labels(rows)
+    lines = [
+        f"| scene | setting | SAH cost | SAH ÷ {baseline} | build ms | Mrays/s | Mrays/s ÷ {baseline} |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for row, base in baseline_pairs(rows, baseline):
+        sah = _ratio(row["sah_cost"], base and base["sah_cost"])
+        speed = _ratio(row["mrays_per_s"], base and base["mrays_per_s"])
+        lines.append(
+            f"| {row['scene']} | {labels[row['key']]} | {row['sah_cost']:.1f} | {_fmt(sah)} | "
+            f"{row['build_ms']:.1f} | {row['mrays_per_s']:.2f} | {_fmt(speed)} |"
+        )
+    failed = [r for r in rows if r.get("status") != "ok"]
+    if failed:
+        lines.append("")
+        lines.extend(f"- {r['scene']} {labels[r['key']]}: {r.get('error')}" for r in failed)
+    return "\n".join(lines) + "\n"
+
+
+def _fmt(ratio: float | None) -> str:
+    return "–" if ratio is None else f"{ratio:.2f}"
+
+
+def write_summary(rows: list[dict], baseline: str, out: Path, plot: bool = True) -> list[Path]:
+    """summary.md, and (with `plot`) the ratio plot when any cell has a baseline to divide by."""
+    files = [write_text(out / SUMMARY, summary_table(rows, baseline))]
+    pairs = [(r, b) for r, b in baseline_pairs(rows, baseline) if b is not None]
+    if plot and pairs:
+        files.append(_plot_ratios(pairs, setting_labels(rows), baseline, out / RATIO_PLOT))
+    return files
+
+
+def _plot_ratios(pairs: list[tuple[dict, dict]], labels: dict[str, str], baseline: str, path: Path) -> Path:
+    import matplotlib
+
+    matplotlib.use("Agg")  # files only, no display
+    import matplotlib.pyplot as plt
+
+    scenes = list(dict.fromkeys(r["scene"] for r, _ in pairs))
+    cols = min(3, len(scenes))
+    nrows = math.ceil(len(scenes) / cols)
+    fig, axes = plt.subplots(nrows, cols, figsize=(4.5 * cols, 3.4 * nrows), squeeze=False)
+    for ax, scene in zip(axes.flat, scenes):
+        mine = [(r, b) for r, b in pairs if r["scene"] == scene]
+        ratios = [r["mrays_per_s"] / b["mrays_per_s"] for r, b in mine]
+        ax.barh(range(len(mine)), ratios, color=["0.55" if r["method"] == baseline else "tab:blue" for r, _ in mine])
+        ax.set_yticks(range(len(mine)), [labels[r["key"]] for r, _ in mine], fontsize=7)
+        ax.axvline(1.0, color="0.3", lw=0.8)
+        ax.invert_yaxis()
+        ax.set(title=scene, xlabel=f"Mrays/s ÷ {baseline} (higher is faster)")
+    for ax in list(axes.flat)[len(scenes) :]:
+        ax.set_visible(False)
+    try:
+        fig.tight_layout()
+        with replacing(path) as f:  # whole or not at all
+            fig.savefig(f, format="png", dpi=100)
+    finally:
+        plt.close(fig)
+    return path
