@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from png_reader import read_png
 
 import bvhlab
 from bvhlab.library import procedural
@@ -185,25 +186,15 @@ def test_the_cli_builds_and_renders_an_instanced_scene_file(instanced_scene, tmp
     assert main(["build", str(path), "--json", str(tmp_path / "stats.json")]) == 0
     assert "5 instances of 2 meshes" in capsys.readouterr().out
     assert json.loads((tmp_path / "stats.json").read_text())["stats"]["instances"] == 5
-    # the renderers walk one level: the CLI renders the flattened scene
-    assert (
-        main(
-            [
-                "render",
-                str(path),
-                "--width",
-                "16",
-                "--height",
-                "12",
-                "--backend",
-                "cpu",
-                "--out",
-                str(tmp_path / "a.png"),
-            ]
-        )
-        == 0
-    )
-    assert (tmp_path / "a.png").stat().st_size > 0
+    # the CLI renders the two-level tree: its image equals the flattened scene's (a flat tree)
+    flat = instanced_scene.flattened().save(tmp_path / "flat.npz")
+    for scene_file, png in ((path, "a.png"), (flat, "flat.png")):
+        args = ["render", str(scene_file), "--width", "48", "--height", "36", "--backend", "cpu"]
+        assert main([*args, "--out", str(tmp_path / png)]) == 0
+    two_level, flattened = read_png(tmp_path / "a.png"), read_png(tmp_path / "flat.png")
+    assert len(np.unique(flattened.reshape(-1, flattened.shape[-1]), axis=0)) > 2  # geometry, not one colour
+    differ = np.any(two_level != flattened, axis=-1).mean()
+    assert differ < 0.01, f"{differ:.3%} of the pixels differ from the flattened scene's render"
 
 
 def test_update_mesh_touches_only_that_mesh(instanced_scene):
