@@ -99,9 +99,9 @@ def _fmt(c) -> str:
 
 def write_json(name: str, data: dict) -> Path:
     RESULTS.mkdir(parents=True, exist_ok=True)
-    path = RESULTS / name
-    path.write_text(json.dumps(data, indent=1))
-    return path
+    from bvhlab._atomic import write_text  # whole or not at all: a stopped run leaves the old file
+
+    return write_text(RESULTS / name, json.dumps(data, indent=1) + "\n")
 
 
 def run_child(script: str, args: list[str], cores: int | None = None) -> dict:

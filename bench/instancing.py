@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import RESULTS, median_time  # noqa: E402
+from _common import median_time, write_json  # noqa: E402
 
 import bvhlab  # noqa: E402
 from bvhlab.library import procedural  # noqa: E402
@@ -129,7 +129,7 @@ def main() -> None:
     }
     print(json.dumps(results, indent=1))
     if args.json:
-        (RESULTS / "instancing.json").write_text(json.dumps(results, indent=1) + "\n")
+        write_json("instancing.json", results)
 
 
 if __name__ == "__main__":
