@@ -1,0 +1,291 @@
+"""The parts of a `bvhlab.Scene` besides its geometry: Whitted materials, the camera and its lens, a
+view (a camera without a light's defaults), the point light, the sky, and the defaults that frame
+a scene's bounds."""
+
+from __future__ import annotations
+
+import math
+import numbers
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import _core, defaults
+
+#: Points (vertices, sphere extents, ray origins, the camera) lie within ±MAX_COORDINATE, where
+#: bvhlab's float32 ray tests cannot overflow (core_cpp/include/bvhlab/coordinate_range.h says why).
+MAX_COORDINATE = float(_core.MAX_COORDINATE)
+
+
+def _vec3(name: str, value) -> tuple[float, float, float]:
+    try:
+        v = tuple(float(x) for x in value)
+    except TypeError:
+        raise TypeError(f"{name} must be three numbers, got {value!r}") from None
+    if len(v) != 3:
+        raise ValueError(f"{name} must be three numbers, got {len(v)}")
+    if not all(math.isfinite(x) for x in v):
+        raise ValueError(f"{name} must be finite, got {v}")
+    return v
+
+
+def _row3(row: np.ndarray, first: int) -> tuple[float, float, float]:
+    """Three numbers of a saved row, from `first`."""
+    return float(row[first]), float(row[first + 1]), float(row[first + 2])
+
+
+@dataclass(frozen=True)
+class Material:
+    """Whitted material (report §2.1): a colour, a reflective and a transparent factor, an IOR."""
+
+    color: tuple[float, float, float] = defaults.MATERIAL[:3]  # type: ignore[assignment]  # three, by the core
+    reflective: float = defaults.MATERIAL[3]
+    transparent: float = defaults.MATERIAL[4]
+    ior: float = defaults.MATERIAL[5]
+
+    def __post_init__(self):
+        object.__setattr__(self, "color", _vec3("material color", self.color))
+        for name in ("reflective", "transparent"):
+            x = float(getattr(self, name))
+            if not 0.0 <= x <= 1.0:
+                raise ValueError(f"material {name} must be in [0, 1], got {x}")
+            object.__setattr__(self, name, x)
+        if not (math.isfinite(self.ior) and self.ior > 0):
+            raise ValueError(f"material ior must be a positive number, got {self.ior}")
+
+    def as_row(self) -> list[float]:
+        return [*self.color, self.reflective, self.transparent, float(self.ior)]
+
+
+#: Camera projections (core_cpp/include/bvhlab/camera.h): "perspective", "orthographic",
+#: "equirectangular", "fisheye" (equidistant), as Blender's camera data and Cycles define them.
+PROJECTIONS: tuple[str, ...] = tuple(_core.PROJECTIONS)
+
+
+def _real(name: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{name} must be a number, got {type(value).__name__}")
+    return float(value)
+
+
+def _reals(name: str, value, n: int) -> tuple[float, ...]:
+    try:
+        v = tuple(_real(name, x) for x in value)
+    except TypeError:
+        raise TypeError(f"{name} must be {n} numbers, got {value!r}") from None
+    if len(v) != n:
+        raise ValueError(f"{name} must be {n} numbers, got {len(v)}")
+    return v
+
+
+@dataclass(frozen=True, kw_only=True)
+class Lens:
+    """How a camera's image maps onto rays, as Blender's camera data (and Cycles) define it; the
+    keyword fields of Camera and View. Values are checked in C++ (camera.h), once, when made.
+
+    projection: one of PROJECTIONS. ortho_scale: the orthographic view's larger side (world units).
+    aspect: image-plane width / height (None: the frame's; Blender's pixel aspect sets it).
+    shift_x, shift_y: lens shift in fractions of the image plane's larger side (Blender's shift with
+    sensor fit Auto; panoramic: fractions of the frame's width and height).
+    clip_start, clip_end: primary rays see only what lies between them, along the view axis
+    (panoramic: from the camera). aperture_radius (world units; 0: none) and focus_distance: depth
+    of field through a thin lens. fisheye_fov: degrees across the frame. latitude, longitude:
+    (min, max) degrees of the equirectangular frame (bottom, top; left, right).
+    region: (x0, y0, x1, y1), the part of the frame the image shows, in fractions of the frame
+    from its top-left corner (Blender's render border)."""
+
+    projection: str = "perspective"
+    ortho_scale: float | None = None
+    aspect: float | None = None
+    shift_x: float = 0.0
+    shift_y: float = 0.0
+    clip_start: float = 0.0
+    clip_end: float = math.inf
+    aperture_radius: float = 0.0
+    focus_distance: float = 10.0
+    fisheye_fov: float = 180.0
+    latitude: tuple[float, float] = (-90.0, 90.0)
+    longitude: tuple[float, float] = (-180.0, 180.0)
+    region: tuple[float, float, float, float] = (0.0, 0.0, 1.0, 1.0)
+
+    def _check_lens(self) -> None:
+        """Types here (TypeError), values by the C++ camera's own checks (ValueError)."""
+        if not isinstance(self.projection, str):
+            raise TypeError(f"camera projection must be a string, got {type(self.projection).__name__}")
+        for name in ("shift_x", "shift_y", "clip_start", "clip_end", "aperture_radius", "focus_distance"):
+            object.__setattr__(self, name, _real(f"camera {name}", getattr(self, name)))
+        object.__setattr__(self, "fisheye_fov", _real("camera fisheye_fov", self.fisheye_fov))
+        for name in ("ortho_scale", "aspect"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, _real(f"camera {name}", getattr(self, name)))
+        object.__setattr__(self, "latitude", _reals("camera latitude", self.latitude, 2))
+        object.__setattr__(self, "longitude", _reals("camera longitude", self.longitude, 2))
+        object.__setattr__(self, "region", _reals("camera region", self.region, 4))
+
+    def _set_lens(self, c) -> None:
+        """Copies the lens into a _core.Camera."""
+        c.projection = _core.parse_projection(self.projection)
+        c.ortho_scale = self.ortho_scale or 0.0
+        c.aspect = self.aspect or 0.0
+        c.shift_x, c.shift_y = self.shift_x, self.shift_y
+        c.clip_start, c.clip_end = self.clip_start, self.clip_end
+        c.aperture_radius, c.focus_distance = self.aperture_radius, self.focus_distance
+        c.fisheye_fov = self.fisheye_fov
+        c.latitude_min, c.latitude_max = self.latitude
+        c.longitude_min, c.longitude_max = self.longitude
+        c.region = self.region
+
+    def lens_row(self) -> list[float]:
+        """The lens as numbers, in LENS_ROW's order (the scene file's camera row after its first 10)."""
+        return [
+            float(PROJECTIONS.index(self.projection)),
+            self.ortho_scale or 0.0,
+            self.aspect or 0.0,
+            self.shift_x,
+            self.shift_y,
+            self.clip_start,
+            self.clip_end,
+            self.aperture_radius,
+            self.focus_distance,
+            self.fisheye_fov,
+            *self.latitude,
+            *self.longitude,
+            *self.region,
+        ]
+
+    @staticmethod
+    def lens_fields(row) -> dict:
+        """The keyword fields of a lens_row."""
+        r = [float(x) for x in row]
+        index = int(r[0])
+        if not (r[0] == index and 0 <= index < len(PROJECTIONS)):
+            raise ValueError(f"camera projection code {r[0]} is not one of 0..{len(PROJECTIONS) - 1}")
+        return {
+            "projection": PROJECTIONS[index],
+            "ortho_scale": r[1] or None,
+            "aspect": r[2] or None,
+            "shift_x": r[3],
+            "shift_y": r[4],
+            "clip_start": r[5],
+            "clip_end": r[6],
+            "aperture_radius": r[7],
+            "focus_distance": r[8],
+            "fisheye_fov": r[9],
+            "latitude": (r[10], r[11]),
+            "longitude": (r[12], r[13]),
+            "region": (r[14], r[15], r[16], r[17]),
+        }
+
+
+#: Numbers of a Lens in a scene file's camera row (after position, look_at, up and fov_y).
+LENS_ROW = 18
+
+
+@dataclass(frozen=True)
+class Camera(Lens):
+    """A camera at `position` looking at `look_at`, `up` above the view axis; perspective with a
+    vertical field of view of fov_y degrees unless its lens (the keyword fields, see Lens) says
+    otherwise."""
+
+    position: tuple[float, float, float]
+    look_at: tuple[float, float, float]
+    up: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    fov_y: float = 45.0
+
+    def __post_init__(self):
+        for name in ("position", "look_at", "up"):
+            object.__setattr__(self, name, _vec3(f"camera {name}", getattr(self, name)))
+        object.__setattr__(self, "fov_y", _real("camera fov_y", self.fov_y))
+        self._check_lens()
+        if max(abs(x) for x in self.position) > MAX_COORDINATE:
+            raise ValueError(
+                f"camera position {self.position} lies outside the supported coordinate range "
+                f"±{MAX_COORDINATE:.5g} (2^40)"
+            )
+        # the tracer works in float32: the two points must differ there, not only in float64
+        look_at, position = np.array(self.look_at, np.float32), np.array(self.position, np.float32)
+        if not np.any(look_at != position):
+            raise ValueError(
+                f"camera position and look_at coincide (in float32, the tracer's precision): "
+                f"{self.position}, {self.look_at}"
+            )
+        self.core().validate()
+
+    def core(self):
+        """The _core.Camera the renderers take."""
+        c = _core.Camera()
+        c.position, c.up, c.fov_y = self.position, self.up, self.fov_y
+        c.forward = tuple(np.subtract(self.look_at, self.position))
+        self._set_lens(c)
+        return c
+
+    def as_row(self) -> list[float]:
+        return [*self.position, *self.look_at, *self.up, float(self.fov_y), *self.lens_row()]
+
+    @classmethod
+    def from_row(cls, row) -> Camera:
+        """The camera of a scene file's row: 10 numbers (a pinhole) or 10 + LENS_ROW."""
+        row = [float(x) for x in row]
+        if len(row) not in (10, 10 + LENS_ROW):
+            raise ValueError(f"a camera row has 10 or {10 + LENS_ROW} numbers, got {len(row)}")
+        lens = Lens.lens_fields(row[10:]) if len(row) > 10 else {}
+        return cls(_row3(row, 0), _row3(row, 3), _row3(row, 6), row[9], **lens)
+
+
+@dataclass(frozen=True)
+class View(Lens):
+    """A camera given directly, as Blender's camera or a viewport region gives it: position, view
+    direction, up, vertical field of view in degrees (perspective), and its lens (the keyword
+    fields, see Lens). Checked when made, as Camera is."""
+
+    position: tuple[float, float, float]
+    forward: tuple[float, float, float]
+    up: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    fov_y: float = 45.0
+
+    def __post_init__(self):
+        for name in ("position", "forward", "up"):
+            object.__setattr__(self, name, _reals(f"camera {name}", getattr(self, name), 3))
+        object.__setattr__(self, "fov_y", _real("camera fov_y", self.fov_y))
+        self._check_lens()
+        self.core().validate()
+
+    def core(self):
+        """The _core.Camera the renderers take."""
+        c = _core.Camera()
+        c.position, c.forward, c.up, c.fov_y = self.position, self.forward, self.up, self.fov_y
+        self._set_lens(c)
+        return c
+
+
+@dataclass(frozen=True)
+class Light:
+    """Point light (report §2.1)."""
+
+    position: tuple[float, float, float]
+    color: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    intensity: float = 1.0
+
+    def __post_init__(self):
+        object.__setattr__(self, "position", _vec3("light position", self.position))
+        object.__setattr__(self, "color", _vec3("light color", self.color))
+        if not (math.isfinite(self.intensity) and self.intensity >= 0):
+            raise ValueError(f"light intensity must be a non-negative number, got {self.intensity}")
+
+    def as_row(self) -> list[float]:
+        return [*self.position, *self.color, float(self.intensity)]
+
+
+DEFAULT_SKY = defaults.SKY
+
+
+def default_camera(bounds) -> Camera:
+    """The camera that frames `bounds` (bvhlab.defaults.camera_placement: 45° vertical field of
+    view, looking at the centre from the front-upper diagonal)."""
+    position, target, up, fov = defaults.camera_placement(bounds)
+    return Camera(position, target, up, fov)
+
+
+def default_light(camera: Camera) -> Light:
+    """A point light a little above and to the right of the camera."""
+    return Light(defaults.light_position(camera.position, camera.look_at, camera.up))
