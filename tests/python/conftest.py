@@ -48,6 +48,7 @@ SLOW = (
     "test_cli.py::test_compare_measures_the_overlay_claim",
     "test_blender_checks.py::test_check[instancing/",  # one child runs the group: its first test takes the time
     "test_render_robust.py::test_ctrl_c_stops_a_long_render",
+    "test_docs_code.py::test_the_documented_code_runs[docs/api.md]",  # an 800×600 CPU render and node data
     "test_scene.py::test_load_checks_sizes_before_reading_data",
     "test_concurrency.py::test_threads_share_the_core_and_get_serial_results",
     "test_shared_tree.py::test_refit_while_other_threads_read",
