@@ -99,9 +99,12 @@ void validate(const OptimizeConfig& config) {
 
 std::string to_string(OptimizeStop stop) {
     switch (stop) {
-    case OptimizeStop::Converged: return "converged";
-    case OptimizeStop::Iterations: return "iterations";
-    case OptimizeStop::TimeBudget: return "time_budget";
+        case OptimizeStop::Converged:
+            return "converged";
+        case OptimizeStop::Iterations:
+            return "iterations";
+        case OptimizeStop::TimeBudget:
+            return "time_budget";
     }
     return "?";
 }
