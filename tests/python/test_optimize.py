@@ -116,9 +116,20 @@ def test_wrong_types_and_stops(small_scene, knot):
     check_tree_layout(big, knot)
 
 
-def test_cli_build_optimize(capsys):
+def test_cli_build_and_inspect_optimize(tmp_path, capsys):
     assert main(["build", "gen:whitted", "--optimize", "5"]) == 0
-    out = capsys.readouterr().out
-    assert "optimized     SAH" in out
+    assert "optimized     SAH" in capsys.readouterr().out
     assert main(["build", "gen:whitted", "--optimize", "5", "--optimize-ms", "-3"]) == 2
     assert "time_budget_ms" in capsys.readouterr().err
+    saved = tmp_path / "t.bvhtree"
+    args = ["inspect", "gen:whitted", "--method", "median", "--worst", "2", "--save-tree", str(saved)]
+    assert main(args) == 0
+    median_sah = float(capsys.readouterr().out.split("sah_cost ")[1].split(",")[0])
+    assert main([*args, "--optimize", "5"]) == 0
+    assert float(capsys.readouterr().out.split("sah_cost ")[1].split(",")[0]) < median_sah
+    knot = procedural.torus_knot(500)
+    transforms = np.tile(np.eye(3, 4, dtype=np.float32), (2, 1, 1))
+    transforms[1, 0, 3] = 3.0
+    path = bvhlab.Scene(triangles=knot, instance_mesh=[0, 0], instance_transforms=transforms).save(tmp_path / "i.npz")
+    assert main(["build", str(path), "--optimize", "5"]) == 2
+    assert "flat scene" in capsys.readouterr().err

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from .. import Bvh, InstancedBvh, build
+from .. import InstancedBvh, build
 from .._progress import ProgressBar
 from ..library import load_scene
 from ..stats_files import write_stats_csv, write_stats_json
@@ -36,14 +36,11 @@ def run(args) -> int:
     settings = options.build_kwargs(args)  # checked before the scene is loaded
     optimize = options.optimize_config(args)
     scene, name = load_scene(args.scene)
-    if optimize and scene.is_instanced:
-        raise ValueError("--optimize takes a flat scene's tree; this scene has instances (a two-level tree)")
+    if optimize is not None and scene.is_instanced:  # refused before the build
+        raise ValueError(options.OPTIMIZE_FLAT_ONLY)
     with ProgressBar(f"building {args.method}") as bar:
         bvh = build(scene, progress=bar, **settings)
-    optimized = None
-    if optimize is not None and isinstance(bvh, Bvh):
-        with ProgressBar("optimizing") as bar:
-            optimized = bvh.optimize(optimize, progress=bar)
+    optimized = options.optimize_tree(bvh, optimize)
     stats = bvh.stats
     if isinstance(bvh, InstancedBvh):
         _print_instanced(name, bvh)
