@@ -27,6 +27,7 @@ import _peers  # noqa: E402
 PEERS = [  # (label, bvh_bench spec); Embree MEDIUM first: the others are compared with it
     ("Embree 3 MEDIUM rtcIntersect1", "embree:medium"),
     ("bvhlab wide (default tree)", "bvhlab:"),
+    ("bvhlab wide (default tree, optimised: 25 batches of reinsertion, Bvh.optimize)", "bvhlab:opt=25"),
     ("bvhlab wide (default tree but primitives counted one by one: sah_block 1)", "bvhlab:block=1"),
     (
         "bvhlab wide (report's tree: sah12, largest, leaf 1)",

@@ -1,12 +1,14 @@
 // bvhlab as a benchmark peer: build_bvh with the options of the spec, single rays through the
 // wide tree (the fastest CPU traversal). Spec options, comma separated (BuildConfig's fields):
 // method=, axis=, bins=, span=box|centroids, leaf= (max leaf size), block= (sah_block),
-// trav= and isect= (the SAH's costs).
+// trav= and isect= (the SAH's costs); opt=N optimises the built tree by reinsertion for at most N
+// batches (optimize.h), part of the build's time.
 #include <sstream>
 #include <stdexcept>
 
 #include "bench_data.h"
 #include "bvhlab/bvh.h"
+#include "bvhlab/optimize.h"
 #include "bvhlab/stats.h"
 #include "bvhlab/traverse.h"
 #include "bvhlab/wide_bvh.h"
@@ -14,8 +16,14 @@
 namespace bench {
 namespace {
 
-bvhlab::BuildConfig parse_options(const std::string& options, unsigned threads) {
-    bvhlab::BuildConfig cfg;
+struct Options {
+    bvhlab::BuildConfig build;
+    std::uint32_t optimize = 0;  ///< batches of Bvh optimisation after the build (0: none)
+};
+
+Options parse_options(const std::string& options, unsigned threads) {
+    Options out;
+    bvhlab::BuildConfig& cfg = out.build;
     cfg.threads = threads;
     std::stringstream ss(options);
     for (std::string kv; std::getline(ss, kv, ',');) {
@@ -30,9 +38,10 @@ bvhlab::BuildConfig parse_options(const std::string& options, unsigned threads) 
         else if (key == "block") cfg.sah_block = std::stoul(value);
         else if (key == "trav") cfg.traversal_cost = std::stof(value);
         else if (key == "isect") cfg.intersection_cost = std::stof(value);
+        else if (key == "opt") out.optimize = std::stoul(value);
         else throw std::invalid_argument("unknown bvhlab option '" + key + "'");
     }
-    return cfg;
+    return out;
 }
 
 class BvhlabPeer : public Peer {
@@ -40,7 +49,14 @@ public:
     BvhlabPeer(const std::string& options, unsigned threads)
         : options_(options), config_(parse_options(options, threads)) {}
     std::string name() const override { return "bvhlab " + (options_.empty() ? std::string("defaults") : options_); }
-    void build(const Mesh& mesh) override { bvh_ = bvhlab::build_bvh({mesh.xyz.data(), mesh.count()}, config_); }
+    void build(const Mesh& mesh) override {
+        bvh_ = bvhlab::build_bvh({mesh.xyz.data(), mesh.count()}, config_.build);
+        if (config_.optimize) {
+            bvhlab::OptimizeConfig opt;
+            opt.iterations = config_.optimize;
+            bvh_ = bvhlab::optimized(bvh_, opt);
+        }
+    }
     TreeInfo info() const override { return {bvhlab::sah_cost(bvh_), bvh_.nodes.size(), digest()}; }
     void prepare_trace() override { wide_ = bvhlab::make_wide(bvh_); }
     void trace(const Rays& rays, float* t, std::uint32_t* prim) override {
@@ -65,7 +81,7 @@ private:
     }
 
     std::string options_;
-    bvhlab::BuildConfig config_;
+    Options config_;
     bvhlab::Bvh bvh_;
     bvhlab::WideBvh wide_;
 };

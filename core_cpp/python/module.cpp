@@ -132,6 +132,7 @@ void bind_build_config(nb::module_& m);  // build_config_bindings.cpp
 void bind_inspect(nb::module_& m);       // inspect_bindings.cpp (after bind_bvh: it adds to Bvh)
 void bind_tlas(nb::module_& m);          // tlas_bindings.cpp
 void bind_update(nb::module_& m);        // update_bindings.cpp
+void bind_optimize(nb::module_& m);      // optimize_bindings.cpp
 
 namespace {
 
@@ -238,6 +239,7 @@ NB_MODULE(_core, m) {
     bind_build_config(m);
     bind_tlas(m);
     bind_update(m);
+    bind_optimize(m);
     bind_functions(m);
     bind_build_names(m);
 }

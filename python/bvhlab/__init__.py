@@ -5,6 +5,7 @@ from ._core import BuildCancelled
 from .bvh import AXES, METHODS, NODE_DTYPE, TRAVERSALS, BuildConfig, Bvh, build
 from .inspect.tree_file import load_bvh
 from .instanced import InstancedBvh
+from .optimize import OptimizeConfig, OptimizeStats
 from .render import (
     RenderCancelled,
     Renderer,
@@ -32,6 +33,8 @@ __all__ = [
     "UpdateConfig",
     "UpdateStats",
     "UPDATE_POLICIES",
+    "OptimizeConfig",
+    "OptimizeStats",
     "Camera",
     "Light",
     "Material",

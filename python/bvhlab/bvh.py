@@ -14,6 +14,7 @@ from .inspect.node_data import NodeData
 
 if TYPE_CHECKING:
     from .instanced import InstancedBvh
+    from .optimize import OptimizeConfig, OptimizeStats
     from .update import UpdateConfig, UpdateStats
 
 #: Split methods and axis policies as the C++ core names them (its table of methods), and the
@@ -330,6 +331,34 @@ class Bvh:
         stats = _core.update_bvh(self._core, triangles, spheres, config.core())
         self._stats = None
         return UpdateStats(**stats)
+
+    def optimize(
+        self,
+        config: OptimizeConfig | None = None,
+        *,
+        progress: Callable[[float], bool | None] | None = None,
+        **changes,
+    ) -> OptimizeStats:
+        """Restructure the tree to lower its SAH cost by reinsertion (Bittner, Hapala and Havran
+        2013), as `config` says (an OptimizeConfig, with any of its fields given by name on top:
+        `optimize(iterations=20, time_budget_ms=50)`). Leaves move whole (sizes kept) and no
+        geometry is needed. Publishes a new version of the tree, as refit does, never of a higher
+        SAH cost, the same whatever the number of threads; returns what it did (OptimizeStats).
+        `progress(fraction of the iteration bound)` and Ctrl-C stop it as they stop a build
+        (BuildCancelled, or what the callable raised), the tree left as it was."""
+        from .optimize import OptimizeConfig, OptimizeStats
+
+        if config is None:
+            config = OptimizeConfig()
+        elif not isinstance(config, OptimizeConfig):
+            raise TypeError(f"config must be a bvhlab.OptimizeConfig, got {type(config).__name__}")
+        if changes:
+            config = config.replace(**changes)
+        if progress is not None and not callable(progress):
+            raise TypeError("progress must be callable (fraction -> bool) or None")
+        stats = _core.optimize_bvh(self._core, config.core(), progress)
+        self._stats = None
+        return OptimizeStats(**stats)
 
     def refit(self, triangles: np.ndarray, spheres: np.ndarray | None = None) -> None:
         """Move the geometry (same counts) and recompute every box, keeping the topology."""

@@ -80,3 +80,24 @@ def pick_by_brute_force(data, o, d, t_hit, depths, leaves_only):
         if best is None or key < best:
             best = key
     return None if best is None else best[2]
+
+
+def check_tree_layout(bvh, tris: np.ndarray) -> None:
+    """A tree over triangles `tris` is whole: leaves hold their triangles' boxes, every triangle
+    once, inner nodes hold their children, the second child follows the first's subtree, skips
+    are right (docs/design.md "Tree layout")."""
+    nodes, refs, skip, leaf = bvh.nodes, bvh.refs, bvh.skip, bvh.is_leaf
+    lo, hi = nodes["lo"], nodes["hi"]
+    # leaves hold their triangles' boxes
+    counts = np.where(leaf, nodes["info"], 0)
+    owner = np.repeat(np.flatnonzero(leaf), counts[leaf])
+    slots = np.concatenate([np.arange(s, s + c) for s, c in zip(nodes["index"][leaf], counts[leaf])])
+    assert np.all(lo[owner] <= tris[refs[slots]].min(1)) and np.all(hi[owner] >= tris[refs[slots]].max(1))
+    assert sorted(refs.tolist()) == list(range(len(tris)))
+    # inner nodes hold both children; the second child follows the first's subtree; skips are right
+    inner = np.flatnonzero(~leaf)
+    first, second = inner + 1, nodes["index"][inner]
+    for child in (first, second):
+        assert np.all(lo[inner] <= lo[child]) and np.all(hi[inner] >= hi[child])
+    np.testing.assert_array_equal(skip[first], second)
+    np.testing.assert_array_equal(skip[inner], skip[second])

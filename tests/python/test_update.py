@@ -4,6 +4,7 @@ and reports what ran."""
 
 import numpy as np
 import pytest
+from oracles import check_tree_layout
 
 import bvhlab
 from bvhlab.library import procedural
@@ -15,24 +16,6 @@ def _moved(tris: np.ndarray, amount: float, region: float = np.inf) -> np.ndarra
     left = tris[:, 0, 0] < region
     out[left, :, 1] += (amount * np.sin(np.arange(len(tris))[left] * 7.0)).astype(np.float32)[:, None]
     return np.ascontiguousarray(out)
-
-
-def _check_valid(bvh: bvhlab.Bvh, tris: np.ndarray) -> None:
-    nodes, refs, skip, leaf = bvh.nodes, bvh.refs, bvh.skip, bvh.is_leaf
-    lo, hi = nodes["lo"], nodes["hi"]
-    # leaves hold their triangles' boxes
-    counts = np.where(leaf, nodes["info"], 0)
-    owner = np.repeat(np.flatnonzero(leaf), counts[leaf])
-    slots = np.concatenate([np.arange(s, s + c) for s, c in zip(nodes["index"][leaf], counts[leaf])])
-    assert np.all(lo[owner] <= tris[refs[slots]].min(1)) and np.all(hi[owner] >= tris[refs[slots]].max(1))
-    assert sorted(refs.tolist()) == list(range(len(tris)))
-    # inner nodes hold both children; the second child follows the first's subtree; skips are right
-    inner = np.flatnonzero(~leaf)
-    first, second = inner + 1, nodes["index"][inner]
-    for child in (first, second):
-        assert np.all(lo[inner] <= lo[child]) and np.all(hi[inner] >= hi[child])
-    np.testing.assert_array_equal(skip[first], second)
-    np.testing.assert_array_equal(skip[inner], skip[second])
 
 
 @pytest.fixture(scope="module")
@@ -50,7 +33,7 @@ def test_every_policy_leaves_a_valid_tree_with_a_fresh_builds_hits(knot, policy)
     if policy != "adaptive":
         assert stats.policy == policy
     assert stats.sah_cost == pytest.approx(tree.stats["sah_cost"], rel=1e-4)
-    _check_valid(tree, moved)
+    check_tree_layout(tree, moved)
     origins, dirs = procedural.random_rays(moved, 4000, seed=3)
     a, b = tree.intersect(origins, dirs), bvhlab.build(moved).intersect(origins, dirs)
     np.testing.assert_array_equal(a["t"], b["t"])
@@ -71,7 +54,7 @@ def test_adaptive_refits_a_small_motion_and_rebuilds_a_scramble(knot):
     assert tree.update(_moved(knot, 1e-4)).policy == "refit"
     scrambled = np.ascontiguousarray(knot[np.random.default_rng(1).permutation(len(knot))])
     assert tree.update(scrambled).policy == "rebuild"
-    _check_valid(tree, scrambled)
+    check_tree_layout(tree, scrambled)
 
 
 def test_bad_updates_are_refused(knot):

@@ -2,7 +2,7 @@
 snapshot (raster level sheets) and scenes.
 
     bvhlab build SCENE [--method M] [--bins B] [--bin-bounds box|centroids] [--axis A] [--max-leaf-size N]
-                 [--sah-block N] [--json PATH] [--csv PATH]
+                 [--sah-block N] [--optimize N [--optimize-ms MS]] [--json PATH] [--csv PATH]
     bvhlab render SCENE --out PNG [--method M] [--width W --height H] [--backend B] [--samples-per-axis N]
                   [--bvh-depth A:B] [--heatmap]
     bvhlab compare SCENE --out DIR [--methods median,mean,sah12,sah32] [--frames N]

@@ -1,7 +1,9 @@
-"""`bvhlab build SCENE`: build one tree (a two-level tree for a scene with instances) and print its
-stats (optionally as JSON)."""
+"""`bvhlab build SCENE`: build one tree (a two-level tree for a scene with instances), optimise it
+if asked (--optimize N: a flat scene's tree), and print its stats (optionally as JSON)."""
 
 from __future__ import annotations
+
+import dataclasses
 
 from .. import InstancedBvh, build
 from .._progress import ProgressBar
@@ -14,6 +16,7 @@ def add_parser(sub) -> None:
     p = sub.add_parser("build", help="build a BVH and print its stats", description=__doc__)
     options.add_scene(p)
     options.add_build(p)
+    options.add_optimize(p)
     p.add_argument(
         "--json",
         type=options.output_file_type(".json", "stats file"),
@@ -31,15 +34,25 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     settings = options.build_kwargs(args)  # checked before the scene is loaded
+    optimize = options.optimize_config(args)
     scene, name = load_scene(args.scene)
+    if optimize is not None and scene.is_instanced:  # refused before the build
+        raise ValueError(options.OPTIMIZE_FLAT_ONLY)
     with ProgressBar(f"building {args.method}") as bar:
         bvh = build(scene, progress=bar, **settings)
+    optimized = options.optimize_tree(bvh, optimize)
     stats = bvh.stats
     if isinstance(bvh, InstancedBvh):
         _print_instanced(name, bvh)
     else:
         _print_flat(name, stats)
     about = {"scene": name, "source": args.scene, "settings": settings}
+    if optimize is not None and optimized is not None:
+        print(
+            f"  optimized     SAH {optimized.sah_before:.3f} -> {optimized.sah_after:.3f} in {optimized.ms:.0f} ms, "
+            f"{optimized.iterations} batches, {optimized.reinsertions} reinsertions ({optimized.stop})"
+        )
+        about["optimize"] = {**dataclasses.asdict(optimize), "stats": dataclasses.asdict(optimized)}
     if args.json:
         write_stats_json(args.json, stats, about)
         print(f"wrote {args.json}")

@@ -2,7 +2,7 @@
 Prints one node's figures (box, place in the tree, SAH term and share, child overlap, EPO), one
 pixel's primary-ray traversal as a table (through the renderer's camera and traversal code), or
 the K subtrees of largest SAH cost; --json writes the same. The tree is built with the build
-options, or read from a file saved with --save-tree (or Bvh.save)."""
+options or read from a file saved with --save-tree (or Bvh.save), and optimised with --optimize N."""
 
 from __future__ import annotations
 
@@ -43,6 +43,7 @@ def add_parser(sub) -> None:
     )
     options.add_scene(p)
     options.add_build(p)
+    options.add_optimize(p)
     what = p.add_mutually_exclusive_group(required=True)
     what.add_argument("--node", type=lambda t: options.whole_number(t, 0, 2**32 - 1), metavar="N", help="node index")
     what.add_argument("--pixel", type=pixel_spec, metavar="X,Y", help="pixel (row 0 at the top) of a render")
@@ -78,12 +79,14 @@ def pixel_spec(text: str) -> tuple[int, int]:
 
 def run(args) -> int:
     settings = options.build_kwargs(args)  # checked before the scene is loaded
+    optimize = options.optimize_config(args)
     scene, name = load_scene(args.scene)
     if args.tree:
         bvh = load_bvh(args.tree, scene)
     else:
         with ProgressBar(f"building {args.method}") as bar:
             bvh = build(scene, progress=bar, **settings)
+    options.optimize_tree(bvh, optimize)
     if args.save_tree:
         bvh.save(args.save_tree)
         print(f"wrote {args.save_tree}")

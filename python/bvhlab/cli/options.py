@@ -11,6 +11,7 @@ import numpy as np
 
 from .. import _core
 from .._checks import OutputPathError, output_file
+from .._progress import ProgressBar
 from ..bvh import (
     AXES,
     BIN_BOUNDS,
@@ -24,10 +25,12 @@ from ..bvh import (
     MAX_SAH_BLOCK,
     METHODS,
     MIN_BINS,
+    Bvh,
     build,
     method_from_label,
 )
 from ..library.files import MESH_SUFFIXES
+from ..optimize import OptimizeConfig, OptimizeStats
 from ..render_options import DEFAULT_HEIGHT, DEFAULT_WIDTH
 
 #: Largest image side the CLI accepts (OpenGL's and most Vulkan drivers' framebuffer limit).
@@ -86,6 +89,46 @@ def add_build(p: argparse.ArgumentParser) -> None:
         help=f"the SAH counts primitives in blocks of this many, a power of two up to {MAX_SAH_BLOCK} "
         f"(default {DEFAULT_SAH_BLOCK}, the triangles the CPU traversal tests at once; 1: the report's SAH)",
     )
+
+
+def add_optimize(p: argparse.ArgumentParser) -> None:
+    """--optimize N and --optimize-ms MS: Bvh.optimize after the build (OptimizeConfig)."""
+    p.add_argument(
+        "--optimize",
+        type=lambda text: whole_number(text, 0, 2**32 - 1),
+        default=0,
+        metavar="N",
+        help="after the build, optimise the tree by reinsertion (Bittner et al. 2013) for at most N batches "
+        "(default 0: not at all)",
+    )
+    p.add_argument(
+        "--optimize-ms",
+        type=float,
+        default=0.0,
+        metavar="MS",
+        help="with --optimize: stop after this many ms, keeping what it did (default 0: no budget)",
+    )
+
+
+def optimize_config(args) -> OptimizeConfig | None:
+    """The OptimizeConfig of --optimize/--optimize-ms (checked, ValueError), or None without --optimize."""
+    config = OptimizeConfig(iterations=args.optimize, time_budget_ms=args.optimize_ms)
+    return config if args.optimize else None
+
+
+#: Why --optimize refuses a scene with instances: its TLAS holds the meshes' trees as built.
+OPTIMIZE_FLAT_ONLY = "--optimize takes a flat scene's tree; this scene has instances (a two-level tree)"
+
+
+def optimize_tree(bvh, config: OptimizeConfig | None) -> OptimizeStats | None:
+    """`bvh` optimised as --optimize asks (with a progress bar), and what that did; None when not
+    asked. A two-level tree is refused (ValueError, OPTIMIZE_FLAT_ONLY)."""
+    if config is None:
+        return None
+    if not isinstance(bvh, Bvh):
+        raise ValueError(OPTIMIZE_FLAT_ONLY)
+    with ProgressBar("optimizing") as bar:
+        return bvh.optimize(config, progress=bar)
 
 
 def build_kwargs(args) -> dict:

@@ -1,0 +1,135 @@
+"""Bvh.optimize (issue 36; Bittner, Hapala and Havran 2013): the optimised tree is valid (its boxes
+hold their primitives and children, skip indices are right, every primitive once), gives the hits
+of brute force and of the tree before, never costs more, is the same for every thread count,
+saves, loads and refits; hostile configs and stops are refused cleanly."""
+
+import numpy as np
+import pytest
+from oracles import brute_force, check_tree_layout
+
+import bvhlab
+from bvhlab.cli import main
+from bvhlab.library import procedural
+
+
+@pytest.fixture(scope="module")
+def knot():
+    return procedural.torus_knot(30000)
+
+
+def test_valid_cheaper_tree_with_the_same_hits(knot):
+    tree = bvhlab.build(knot, method="median", max_leaf_size=3)
+    before = tree.intersect(*procedural.random_rays(knot, 3000, seed=5))
+    stats = tree.optimize(iterations=30, batch_fraction=0.05)
+    assert isinstance(stats, bvhlab.OptimizeStats) and tree.revision == 1
+    assert stats.sah_after < 0.9 * stats.sah_before  # a median tree leaves much to gain
+    assert stats.sah_after == pytest.approx(tree.stats["sah_cost"], rel=1e-12)
+    assert stats.reinsertions > 0 and stats.ms > 0 and stats.stop in ("converged", "iterations")
+    assert tree.stats["max_leaf_size"] <= 3
+    check_tree_layout(tree, knot)
+    origins, dirs = procedural.random_rays(knot, 3000, seed=5)
+    for traversal in bvhlab.TRAVERSALS:
+        after = tree.intersect(origins, dirs, traversal=traversal)
+        np.testing.assert_array_equal(after["t"], before["t"])
+        np.testing.assert_array_equal(after["prim"], before["prim"])
+
+
+def test_hits_equal_brute_force_with_spheres(small_scene):
+    tris, spheres = small_scene
+    tree = bvhlab.build(tris, spheres, method="midpoint", max_leaf_size=2)
+    stats = tree.optimize()
+    assert stats.sah_after <= stats.sah_before
+    origins, dirs = procedural.random_rays(tris, 500, seed=9)
+    t, prim, kind = brute_force(tris, spheres, origins, dirs)
+    hits = tree.intersect(origins, dirs)
+    np.testing.assert_allclose(hits["t"], t, rtol=1e-4)
+    hit = np.isfinite(t)
+    np.testing.assert_array_equal(hits["prim"][hit], prim[hit])
+    np.testing.assert_array_equal(hits["kind"][hit], kind[hit])
+
+
+def test_sah_never_increases_on_a_good_tree(knot):
+    tree = bvhlab.build(knot)  # the default SAH tree
+    stats = tree.optimize(iterations=10)
+    assert stats.sah_after <= stats.sah_before
+    assert tree.stats["sah_cost"] == pytest.approx(stats.sah_after, rel=1e-12)
+
+
+def test_same_tree_for_every_thread_count(knot):
+    trees = []
+    for threads in (1, 2, 0):
+        tree = bvhlab.build(knot, threads=threads)
+        tree.optimize(iterations=15)
+        trees.append(tree)
+    for other in trees[1:]:
+        np.testing.assert_array_equal(other.nodes, trees[0].nodes)
+        np.testing.assert_array_equal(other.refs, trees[0].refs)
+
+
+def test_saves_loads_and_refits(tmp_path, knot):
+    tree = bvhlab.build(knot, method="lbvh")
+    tree.optimize(iterations=10)
+    path = tmp_path / "optimised.bvhtree"
+    tree.save(path)
+    loaded = bvhlab.load_bvh(path, knot)
+    np.testing.assert_array_equal(loaded.nodes, tree.nodes)
+    np.testing.assert_array_equal(loaded.refs, tree.refs)
+    moved = np.ascontiguousarray(knot + np.float32(0.01) * np.sin(knot))
+    tree.refit(moved)
+    check_tree_layout(tree, moved)
+
+
+@pytest.mark.parametrize(
+    "changes",
+    [{"time_budget_ms": -1.0}, {"time_budget_ms": float("nan")}, {"batch_fraction": 0.0},
+     {"batch_fraction": 2.0}, {"iterations": -1}],
+)  # fmt: skip
+def test_hostile_configs_are_value_errors(small_scene, changes):
+    tree = bvhlab.build(*small_scene)
+    with pytest.raises(ValueError):
+        tree.optimize(**changes)
+    assert tree.revision == 0
+
+
+def test_wrong_types_and_stops(small_scene, knot):
+    tree = bvhlab.build(*small_scene)
+    with pytest.raises(TypeError):
+        tree.optimize(config={"iterations": 3})
+    with pytest.raises(TypeError):
+        tree.optimize(steps=3)
+    with pytest.raises(TypeError):
+        bvhlab.OptimizeConfig(merge_leaves=1)
+    big = bvhlab.build(knot, method="median")
+    nodes = big.nodes.copy()
+    with pytest.raises(bvhlab.BuildCancelled):
+        big.optimize(progress=lambda fraction: False)
+
+    def fails(fraction):
+        raise RuntimeError("from the callable")
+
+    with pytest.raises(RuntimeError, match="from the callable"):
+        big.optimize(progress=fails)
+    assert big.revision == 0
+    np.testing.assert_array_equal(big.nodes, nodes)
+    stats = big.optimize(time_budget_ms=1e-6)
+    assert stats.stop == "time_budget"
+    check_tree_layout(big, knot)
+
+
+def test_cli_build_and_inspect_optimize(tmp_path, capsys):
+    assert main(["build", "gen:whitted", "--optimize", "5"]) == 0
+    assert "optimized     SAH" in capsys.readouterr().out
+    assert main(["build", "gen:whitted", "--optimize", "5", "--optimize-ms", "-3"]) == 2
+    assert "time_budget_ms" in capsys.readouterr().err
+    saved = tmp_path / "t.bvhtree"
+    args = ["inspect", "gen:whitted", "--method", "median", "--worst", "2", "--save-tree", str(saved)]
+    assert main(args) == 0
+    median_sah = float(capsys.readouterr().out.split("sah_cost ")[1].split(",")[0])
+    assert main([*args, "--optimize", "5"]) == 0
+    assert float(capsys.readouterr().out.split("sah_cost ")[1].split(",")[0]) < median_sah
+    knot = procedural.torus_knot(500)
+    transforms = np.tile(np.eye(3, 4, dtype=np.float32), (2, 1, 1))
+    transforms[1, 0, 3] = 3.0
+    path = bvhlab.Scene(triangles=knot, instance_mesh=[0, 0], instance_transforms=transforms).save(tmp_path / "i.npz")
+    assert main(["build", str(path), "--optimize", "5"]) == 2
+    assert "flat scene" in capsys.readouterr().err
