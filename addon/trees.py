@@ -116,6 +116,7 @@ class SceneTree:
             sources, instances = _sources(scene)
             old_sources, old_instances = self._source
             trees, built, updated, ran = [], 0, [], []
+            stats = None  # the last in-place update's UpdateStats
             old_meshes = self._meshes()
             for k, source in enumerate(sources):
                 old = old_meshes[k] if k < len(old_meshes) and k < len(old_sources) else None
@@ -144,12 +145,14 @@ class SceneTree:
             self._hold(trees, instances, two_level, threads)
             self._source = (sources, instances)
             action = "built" if built else "refit" if updated else "placed"
+            # a flat tree updated in place: the update's own SAH cost (no second pass over the nodes)
+            sah = stats.sah_cost if not two_level and stats is not None else self.bvh.stats["sah_cost"]
             update = TreeUpdate(
                 action,
                 self.bvh,
                 (time.perf_counter() - start) * 1e3,
                 "+".join(dict.fromkeys(ran)),
-                self.bvh.stats["sah_cost"],
+                sah,
                 built,
                 len(updated),
                 two_level,
@@ -244,7 +247,24 @@ def _update_in_place(tree, old_source: tuple, source: tuple, policy):
 
 
 def _same_arrays(a: tuple, b: tuple) -> bool:
-    return all(x is y or (x is not None and y is not None and np.array_equal(x, y)) for x, y in zip(a, b))
+    return all(_equal(x, y) for x, y in zip(a, b))
+
+
+#: Values of an array compared before the whole of it (a moved object usually shows among them).
+_SAMPLE = 4096
+
+
+def _equal(x, y) -> bool:
+    """The same array, or equal ones; a sample of the values is compared first, so that geometry
+    that moved is told apart without a pass over all of it (the viewport's frames)."""
+    if x is y:
+        return True
+    if x is None or y is None or x.shape != y.shape:
+        return False
+    step = max(1, x.size // _SAMPLE)
+    if not np.array_equal(x.reshape(-1)[::step], y.reshape(-1)[::step]):
+        return False
+    return bool(np.array_equal(x, y))
 
 
 def _is_instanced(bvh) -> bool:
