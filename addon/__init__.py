@@ -15,10 +15,11 @@ from __future__ import annotations
 import bpy
 from bpy.app.handlers import persistent
 
-from . import background, engine, ops_inspect, overlay, state
+from . import background, engine, follow, ops_inspect, overlay, state
 from .ops_build import BVHLAB_OT_build
 from .ops_compare import BVHLAB_OT_compare
 from .ops_export_stats import BVHLAB_OT_export_stats
+from .ops_fresh_sah import BVHLAB_OT_fresh_sah
 from .ops_render import BVHLAB_OT_render
 from .panels import (
     BVHLAB_PT_compare,
@@ -37,6 +38,7 @@ classes = (
     BVHLAB_OT_build,
     BVHLAB_OT_render,
     BVHLAB_OT_export_stats,
+    BVHLAB_OT_fresh_sah,
     BVHLAB_OT_compare,
     *ops_inspect.classes,
     BVHLAB_PT_main,
@@ -58,6 +60,7 @@ def _forget_trees(*_args) -> None:
     background.stop_all()
     state.clear()
     engine.forget()
+    follow.forget()
 
 
 def register() -> None:
@@ -66,11 +69,13 @@ def register() -> None:
     engine.register()
     bpy.app.handlers.load_pre.append(_forget_trees)
     overlay.add_handler()
+    follow.register()
 
 
 def unregister() -> None:
     background.stop_all()  # before the settings they read go away with unregister_properties
     overlay.remove_handler()
+    follow.unregister()
     if _forget_trees in bpy.app.handlers.load_pre:
         bpy.app.handlers.load_pre.remove(_forget_trees)
     engine.unregister()

@@ -52,9 +52,9 @@ def _describe(error: Exception) -> str:
 
 
 def export_scene(context, require_camera: bool):
-    """The scene as a flat bvhlab.Scene, over the panel's scope. The sidebar's Build (stats and
-    overlay), Render, Export stats and Compare take flat trees only, so Blender's instancing, which
-    the exporter keeps as instances (issue 34), is flattened here for now (Scene.flattened())."""
+    """The scene as a bvhlab.Scene, over the panel's scope: Blender's instancing as meshes and
+    instances (issue 34), which the sidebar's Build, Render, Export stats and Compare build as a
+    two-level tree, as F12 and the viewport do (the one cache of trees, trees.py)."""
     from bvhlab.blender import export_scene as export
 
     return export(
@@ -62,7 +62,7 @@ def export_scene(context, require_camera: bool):
         scope=context.scene.bvhlab.scope,
         depsgraph=context.evaluated_depsgraph_get(),
         require_camera=require_camera,
-    ).flattened()
+    )
 
 
 @contextmanager

@@ -106,6 +106,9 @@ class BVHLAB_OT_build(ModalTaskMixin, bpy.types.Operator):
             f"Built {s['method']} BVH over {s['primitives']} primitives: {s['nodes']} nodes, "
             f"height {s['height']}, SAH cost {s['sah_cost']:.2f}, {s['build_ms']:.1f} ms"
         )
+        if "instances" in s:  # a two-level tree (issue 34): each mesh stored once
+            flattened = s["triangles_flattened"]
+            message += f" ({s['instances']:,} instances of {s['meshes']} meshes: {flattened:,} triangles flattened)"
         self.report({"INFO"}, message)
         state.messages[state.key(context.scene)] = ("INFO", message)
         return {"FINISHED"}

@@ -13,6 +13,21 @@ from .operator_support import run_reported
 
 #: What a tree-less inspect operator says.
 NO_TREE = "Build a tree first (BVH ▸ Build)"
+#: What it says of a two-level tree (an instanced scene, issue 34).
+TWO_LEVEL = "Inspect walks a flat tree's nodes; this scene's tree is two-level (instances): see its boxes"
+
+
+def inspected_tree(scene):
+    """The scene's tree as Inspect sees it (state.BuiltTree), or None: no tree, or a two-level one
+    (an instanced scene; Viewport Boxes draws its TLAS and BLAS boxes)."""
+    import bvhlab
+
+    built = state.tree_for(scene)
+    return built if built is not None and isinstance(built.bvh, bvhlab.Bvh) else None
+
+
+def no_tree_message(scene) -> str:
+    return TWO_LEVEL if state.tree_for(scene) is not None else NO_TREE
 
 
 def _shown_range(scene, built) -> tuple[int, int]:
@@ -25,9 +40,9 @@ def pick_ray(operator, context, origin, direction) -> set[str]:
     from bvhlab.inspect.pick import pick
 
     scene = context.scene
-    built = state.tree_for(scene)
+    built = inspected_tree(scene)
     if built is None:
-        operator.report({"WARNING"}, NO_TREE)
+        operator.report({"WARNING"}, no_tree_message(scene))
         return {"CANCELLED"}
     got = pick(built.bvh, origin, direction, _shown_range(scene, built), leaves_only=scene.bvhlab.overlay_leaves_only)
     if got.node is None:
@@ -67,8 +82,8 @@ class BVHLAB_OT_pick_box(bpy.types.Operator):
         if context.area is None or context.area.type != "VIEW_3D":
             self.report({"WARNING"}, "Pick Box works in a 3D viewport")
             return {"CANCELLED"}
-        if state.tree_for(context.scene) is None:
-            self.report({"WARNING"}, NO_TREE)
+        if inspected_tree(context.scene) is None:
+            self.report({"WARNING"}, no_tree_message(context.scene))
             return {"CANCELLED"}
         context.window_manager.modal_handler_add(self)
         context.area.header_text_set("Pick Box: click a box · Esc or right-click to stop")
@@ -111,7 +126,7 @@ class BVHLAB_OT_pick_step(bpy.types.Operator):
     step: EnumProperty(name="Step", items=STEPS)  # type: ignore[valid-type]
 
     def execute(self, context):
-        scene, built = context.scene, state.tree_for(context.scene)
+        scene, built = context.scene, inspected_tree(context.scene)
         node = state.picked_node(scene)
         if built is None or node is None:
             self.report({"WARNING"}, "Pick a box first")
@@ -143,7 +158,7 @@ class BVHLAB_OT_frame_picked(bpy.types.Operator):
     def execute(self, context):
         from mathutils import Vector
 
-        built, node = state.tree_for(context.scene), state.picked_node(context.scene)
+        built, node = inspected_tree(context.scene), state.picked_node(context.scene)
         if built is None or node is None:
             self.report({"WARNING"}, "Pick a box first")
             return {"CANCELLED"}
@@ -174,9 +189,9 @@ class BVHLAB_OT_pick_node(bpy.types.Operator):
     node: IntProperty(name="Node", min=0)  # type: ignore[valid-type]
 
     def execute(self, context):
-        built = state.tree_for(context.scene)
+        built = inspected_tree(context.scene)
         if built is None:
-            self.report({"WARNING"}, NO_TREE)
+            self.report({"WARNING"}, no_tree_message(context.scene))
             return {"CANCELLED"}
         if self.node >= built.bvh.stats["nodes"]:
             self.report({"ERROR"}, f"node {self.node} does not exist; the tree has {built.bvh.stats['nodes']} nodes")
@@ -197,9 +212,9 @@ class BVHLAB_OT_analyse_tree(bpy.types.Operator):
     def execute(self, context):
         import time
 
-        built = state.tree_for(context.scene)
+        built = inspected_tree(context.scene)
         if built is None:
-            self.report({"WARNING"}, NO_TREE)
+            self.report({"WARNING"}, no_tree_message(context.scene))
             return {"CANCELLED"}
         start = time.perf_counter()
         data = built.bvh.node_data()
@@ -229,9 +244,9 @@ def sah_per_depth(built) -> list[float]:
 def draw_cost_panel(layout, scene) -> None:
     """The cost breakdown per depth (a bar per depth, its share of the SAH cost) and the costliest
     subtrees at the top depth of the shown range, each a button that picks it."""
-    built = state.tree_for(scene)
+    built = inspected_tree(scene)
     if built is None:
-        layout.label(text="Build a tree first", icon="INFO")
+        layout.label(text=no_tree_message(scene), icon="INFO")
         return
     per_depth = sah_per_depth(built)
     total = sum(per_depth) or 1.0
@@ -253,7 +268,7 @@ def draw_cost_panel(layout, scene) -> None:
 
 def picked_box(scene):
     """(lo, hi) of the picked box, for the overlay's highlight, or None."""
-    built, node = state.tree_for(scene), state.picked_node(scene)
+    built, node = inspected_tree(scene), state.picked_node(scene)
     if built is None or node is None:
         return None
     data = built.bvh.node_data()
@@ -263,7 +278,7 @@ def picked_box(scene):
 def draw_inspect_panel(layout, scene) -> None:
     """The sidebar's Inspect panel body: Pick Box, and the picked node's figures and steps."""
     layout.operator(BVHLAB_OT_pick_box.bl_idname, icon="RESTRICT_SELECT_OFF")
-    built, node = state.tree_for(scene), state.picked_node(scene)
+    built, node = inspected_tree(scene), state.picked_node(scene)
     if built is None or node is None:
         layout.label(text="Pick Box, then click a box", icon="INFO")
         return

@@ -5,6 +5,7 @@ from __future__ import annotations
 import bpy
 
 from . import state
+from .overlay import is_two_level, scene_batch
 from .text_layout import wrapped_label
 
 
@@ -18,6 +19,7 @@ def draw_build_settings(col, settings) -> None:
     col.prop(settings, "axis")
     col.prop(settings, "max_leaf_size")
     col.prop(settings, "sah_block")  # the SAH methods' (Compare's SAH rows take it too)
+    col.prop(settings, "update_policy")  # moved or edited meshes (the viewport, F12)
 
 
 class _BvhPanel:
@@ -56,8 +58,11 @@ def milliseconds(ms: float) -> str:
 
 
 def stats_rows(stats: dict) -> list[tuple[str, str]]:
-    """(label, value) of each statistic the panel shows, in order."""
+    """(label, value) of each statistic the panel shows, in order (a two-level tree's: stored
+    against flattened, its TLAS and BLASes)."""
     s = stats
+    if "tlas_nodes" in s:
+        return two_level_rows(s)
     return [
         ("Primitives", f"{s['primitives']:,}"),
         ("Nodes", f"{s['nodes']:,}"),
@@ -70,14 +75,54 @@ def stats_rows(stats: dict) -> list[tuple[str, str]]:
     ]
 
 
+def two_level_rows(s: dict) -> list[tuple[str, str]]:
+    """The rows of an instanced scene's two-level tree (InstancedBvh.stats)."""
+    mib = 2**20
+    return [
+        ("Meshes", f"{s['meshes']:,}"),
+        ("Instances", f"{s['instances']:,}"),
+        ("Triangles stored", f"{s['triangles']:,}"),
+        ("Triangles flattened", f"{s['triangles_flattened']:,}"),
+        ("TLAS nodes", f"{s['tlas_nodes']:,}"),
+        ("BLAS nodes", f"{s['nodes'] - s['tlas_nodes']:,}"),
+        ("Height", f"{s['tlas_height']} + {max(s['mesh_height'], default=0)}"),
+        ("SAH cost", f"{s['sah_cost']:.2f}"),
+        ("TLAS SAH cost", f"{s['tlas_sah_cost']:.2f}"),
+        ("Build", f"{milliseconds(s['build_ms'])} ms"),
+        ("Memory", f"{s['memory_bytes'] / mib:.1f} MiB"),
+        ("TLAS memory", f"{s['tlas_memory_bytes'] / mib:.2f} MiB"),
+        ("Method", s["method"]),
+    ]
+
+
+def update_rows(tree) -> list[tuple[str, str]]:
+    """The last update of the tree (trees.SceneTree.last): what ran, its policy, ms and SAH cost,
+    and a fresh build's SAH cost once measured."""
+    last = tree.last
+    if last is None:
+        return []
+    what = last.action + (f" ({last.policy})" if last.policy else "")
+    rows = [
+        ("Last update", what),
+        ("Update time", f"{milliseconds(last.ms)} ms"),
+        ("SAH after", f"{last.sah_cost:.2f}"),
+    ]
+    fresh = tree.known_fresh_sah_cost()
+    if fresh is not None:
+        rows.append(("Fresh build SAH", f"{fresh:.2f}"))
+    return rows
+
+
 def _stats_box(layout, built, settings) -> None:
     """One row per statistic, label | value (a grid_flow would fill columns first)."""
     box = layout.box()
     col = box.column(align=True)
-    for label, value in stats_rows(built.bvh.stats):
+    for label, value in stats_rows(built.bvh.stats) + update_rows(built.tree):
         row = col.split(factor=0.5)
         row.label(text=label)
         row.label(text=value)
+    if built.tree.known_fresh_sah_cost() is None:
+        box.operator("bvhlab.fresh_sah", icon="TIME")
     if built.settings != settings.build_settings():
         box.label(text="Settings changed; build again", icon="INFO")
 
@@ -102,13 +147,20 @@ class BVHLAB_PT_overlay(_BvhPanel, bpy.types.Panel):
             layout.label(text="Build a tree to see its boxes", icon="INFO")
         else:
             layout.label(text=f"Depths 0 – {built.height - 1}")
+        two_level = built is not None and is_two_level(built)
+        if two_level:  # an instanced scene: which level's boxes, and what the cap leaves out
+            layout.prop(settings, "overlay_level", expand=True)
+            note = scene_batch(context.scene, built).table.note if settings.overlay_show else ""
+            if note:
+                wrapped_label(layout, context, note, icon="INFO")
         layout.prop(settings, "overlay_leaves_only")
         layout.prop(settings, "overlay_color_by_depth")
         row = layout.row()
         row.enabled = not settings.overlay_color_by_depth
         row.prop(settings, "overlay_color")
-        layout.prop(settings, "overlay_measure")
-        if settings.overlay_measure != "depth" and built is not None:
+        if not two_level:  # measures are of one tree's nodes (Inspect ▸ Analyse Tree)
+            layout.prop(settings, "overlay_measure")
+        if settings.overlay_measure != "depth" and built is not None and not two_level:
             from .overlay import batch_for, shown_measure
 
             if shown_measure(built, settings.overlay_measure) == "depth":

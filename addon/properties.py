@@ -23,6 +23,7 @@ from bvhlab.bvh import (
 )
 from bvhlab.render import BACKENDS, MAX_RAY_DEPTH, MAX_SAMPLES_PER_AXIS, MODES, TRAVERSALS
 from bvhlab.render_options import MAX_LINE_WIDTH, RenderOptions
+from bvhlab.update import UPDATE_POLICIES, UpdateConfig
 
 from . import state
 
@@ -81,6 +82,19 @@ _SAH_BLOCK_ITEMS = [
     (str(1 << k), str(1 << k), "Primitives one by one (the report's SAH)" if k == 0 else f"Blocks of {1 << k}")
     for k in range(MAX_SAH_BLOCK.bit_length())
 ]
+OVERLAY_LEVEL_ITEMS = [
+    ("tlas", "TLAS", "The top-level tree's boxes (its leaves: the instances' world boxes)"),
+    ("blas", "BLAS", "Each mesh's tree's boxes, moved into the world by each of its instances"),
+    ("both", "Both", "The TLAS's and the BLASes' boxes"),
+]
+_POLICY_LABELS = {
+    "rebuild": ("Rebuild", "A fresh build of the mesh's tree"),
+    "refit": ("Refit", "Boxes only: the topology stays, its SAH cost may grow"),
+    "partial": ("Partial", "Refit, then rebuild the subtrees whose SAH cost grew (Yoon et al. 2007)"),
+    "adaptive": ("Adaptive", "Refit, then rebuild where or when the measured SAH cost calls for it"),
+}
+UPDATE_POLICY_ITEMS = [(p, *_POLICY_LABELS.get(p, (p.title(), ""))) for p in UPDATE_POLICIES]
+DEFAULT_UPDATE_POLICY = UpdateConfig().policy
 #: The maximum node depth any tree can have.
 MAX_DEPTH = MAX_TREE_HEIGHT - 1
 #: A render's defaults (the core's RenderSettings, through bvhlab.RenderOptions): the settings below
@@ -221,6 +235,25 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
     )
     overlay_line_width: FloatProperty(
         name="Line width", min=1.0, max=MAX_LINE_WIDTH, soft_max=5.0, default=_RENDER.line_width, update=_redraw
+    )
+    # Two-level trees (instanced scenes, issue 34): which level's boxes the viewport draws, and how
+    # the tree of a mesh that moved or was edited is updated.
+    overlay_level: EnumProperty(
+        name="Level",
+        items=OVERLAY_LEVEL_ITEMS,
+        default="both",
+        update=_redraw,
+        description="Of a two-level tree (instanced scene): the boxes of the TLAS (over the instances), of the "
+        "BLASes (each mesh's tree, moved into the world by each instance; the depth range applies within a "
+        "BLAS), or both",
+    )
+    update_policy: EnumProperty(
+        name="Update",
+        items=UPDATE_POLICY_ITEMS,
+        default=DEFAULT_UPDATE_POLICY,
+        update=_redraw,
+        description="How the viewport and F12 update the tree of a mesh that moved or was edited (same "
+        "triangle count); moving an instance only rebuilds the TLAS",
     )
 
     render_bounces: IntProperty(

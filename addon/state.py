@@ -35,7 +35,12 @@ class BuiltTree:
 
     @property
     def height(self) -> int:
-        return self.bvh.stats["height"]
+        """The depths the overlay's range spans: the tree's height, or for a two-level tree the
+        larger of its TLAS's and its deepest BLAS's (the range applies within each level)."""
+        stats = self.bvh.stats
+        if "tlas_height" in stats:
+            return max(stats["tlas_height"], max(stats["mesh_height"], default=0))
+        return stats["height"]
 
     @property
     def serial(self) -> tuple:

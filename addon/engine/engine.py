@@ -68,9 +68,8 @@ class BVHLAB_RE_whitted(bpy.types.RenderEngine):
         except ExportError as error:
             self._viewport.set_error(f"bvhlab: {error}")
             return
-        # The Rendered viewport still traces flat trees (the tree cache's flat key, shared with the
-        # sidebar): an instanced scene is flattened here for now (issue 34; F12 renders it two-level).
-        self._viewport.set_scene(self._live.flat_scene(), report)
+        # an instanced scene is traced two-level, with the tree the sidebar and F12 use (issue 34)
+        self._viewport.set_scene(self._live.scene, report)
 
     def view_draw(self, context, depsgraph):
         from .display import FrameDisplay

@@ -14,7 +14,7 @@ import warnings
 from dataclasses import replace
 
 from .. import state
-from ..trees import cache, key_of
+from ..trees import cache, key_of, update_config
 from . import passes
 from .border import final_frame
 from .settings import backend
@@ -147,10 +147,10 @@ class FinalRender:
         """The scene's tree from the add-on's one cache (trees.py), made to fit: one the sidebar's
         Build or the viewport made over the same geometry is used as it is. An instanced scene
         (Blender's instancing, issue 34) renders through its two-level tree, never flattened; when
-        only instances moved, only its TLAS is made again."""
+        only instances moved, only its TLAS is made again; a mesh that moved or was edited has its
+        tree updated with the scene's update policy."""
         scene = self.live.scene
-        # a render shows every visible object
-        key = key_of(blender_scene, scope="visible", instanced=scene is not None and scene.is_instanced)
+        key = key_of(blender_scene, scope="visible")  # a render shows every visible object
         tree = cache.tree(key)
         engine.update_progress(BUILD_START)
         engine.update_stats("", f"Building BVH ({key.config.method})")
@@ -160,7 +160,8 @@ class FinalRender:
             return not engine.test_break()
 
         started = time.perf_counter()
-        update = tree.update(self.live.scene, self.report is not None and self.report.refittable, progress)
+        refittable = self.report is not None and self.report.refittable
+        update = tree.update(scene, refittable, progress, policy=update_config(blender_scene))
         if update.action != "kept":
             engine.update_stats("", f"BVH {update.action} in {(time.perf_counter() - started) * 1e3:.0f} ms")
         return update

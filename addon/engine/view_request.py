@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..trees import key_of
+from ..trees import key_of, update_config
 from .settings import backend
 from .view_camera import view_frustum
 from .viewport import ViewRequest
@@ -18,6 +18,7 @@ def view_request(context, blender_scene) -> ViewRequest:
         key_of(blender_scene, scope="visible"),  # the viewport shows every visible object
         blender_scene.bvhlab.viewport_budget_ms,
         camera_view_note(view, context.space_data, blender_scene),
+        update_config(blender_scene),
     )
 
 

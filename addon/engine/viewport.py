@@ -43,6 +43,7 @@ class ViewRequest:
     tree: TreeKey  # the tree of the add-on's one cache (trees.py) the view is traced with
     budget_ms: float
     note: str = ""  # what of the camera the viewport does not show (view_request.camera_view_note)
+    update: object = None  # the bvhlab.UpdateConfig a moved or edited mesh's tree is updated with
 
 
 @dataclass(frozen=True)
@@ -253,7 +254,8 @@ class ViewportSession:
                 return True
 
         try:
-            return cache.tree(request.tree).update(scene, refittable, progress, threads=VIEWPORT_THREADS)
+            tree = cache.tree(request.tree)
+            return tree.update(scene, refittable, progress, threads=VIEWPORT_THREADS, policy=request.update)
         except bvhlab.BuildCancelled:
             return None
 

@@ -15,22 +15,47 @@ _failed: set = set()  # trees whose overlay failed: report once, not on every re
 
 def shown_measure(built, measure: str) -> str:
     """The measure the boxes are coloured by: the chosen one once the tree is analysed (drawing
-    never computes node data), else "depth"."""
-    return measure if measure != "depth" and built.bvh.cached_node_data() is not None else "depth"
+    never computes node data), else "depth" (always for a two-level tree: Inspect analyses flat
+    trees)."""
+    if measure == "depth" or is_two_level(built):
+        return "depth"
+    return measure if built.bvh.cached_node_data() is not None else "depth"
 
 
-def batch_for(built, leaves_only: bool, measure: str = "depth"):
+def is_two_level(built) -> bool:
+    """The tree is an instanced scene's (bvhlab.InstancedBvh: TLAS and BLAS boxes)."""
+    import bvhlab
+
+    return isinstance(built.bvh, bvhlab.InstancedBvh)
+
+
+def batch_for(built, leaves_only: bool, measure: str = "depth", level: str = "both", depth_range=(0, 255)):
     """The BoxBatch of a built tree, made on first use and whenever the tree, leaves-only or the
-    measure shown changes."""
-    from .batch import BoxBatch
+    measure shown changes; for a two-level tree also the level shown and the depth range (its
+    table holds only the boxes of the range: overlay/levels.py)."""
+    from .batch import BoxBatch, BoxTable
 
     measure = shown_measure(built, measure)
-    key = (built.serial, leaves_only, measure)
+    two_level = is_two_level(built)
+    key = (built.serial, leaves_only, measure) + ((level, tuple(depth_range)) if two_level else ())
     if _cached["key"] != key:
         _cached["batch"] = None  # free the old texture before making the new one
-        _cached["batch"] = BoxBatch.from_bvh(built.bvh, leaves_only, measure)
+        if two_level:
+            from .levels import two_level_boxes
+
+            boxes = two_level_boxes(built.bvh, level, *depth_range, leaves_only=leaves_only)
+            _cached["batch"] = BoxBatch(BoxTable.from_boxes(boxes.lo, boxes.hi, boxes.depth, boxes.note))
+        else:
+            _cached["batch"] = BoxBatch.from_bvh(built.bvh, leaves_only, measure)
         _cached["key"] = key
     return _cached["batch"]
+
+
+def scene_batch(scene, built):
+    """The BoxBatch of the scene's tree as its settings ask for it."""
+    settings = scene.bvhlab
+    depth_range = (settings.overlay_depth_min, settings.overlay_depth_max)
+    return batch_for(built, settings.overlay_leaves_only, settings.overlay_measure, settings.overlay_level, depth_range)
 
 
 def draw_scene_overlay(scene, view_projection) -> int:
@@ -39,7 +64,7 @@ def draw_scene_overlay(scene, view_projection) -> int:
     built = state.tree_for(scene)
     if not settings.overlay_show or built is None:
         return 0
-    batch = batch_for(built, settings.overlay_leaves_only, settings.overlay_measure)
+    batch = scene_batch(scene, built)
     return batch.draw(
         view_projection,
         settings.overlay_depth_min,

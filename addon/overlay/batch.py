@@ -52,16 +52,27 @@ class BoxTable:
 
     def __init__(self, bvh, leaves_only: bool = False, measure: str = "depth"):
         lo, hi, depth = bvh.boxes(leaves_only=leaves_only)
-        per_depth = bvh.stats["leaves_per_depth" if leaves_only else "nodes_per_depth"]
-        self.rows = np.zeros((len(lo), 8), np.float32)
-        self.rows[:, 0:3], self.rows[:, 3], self.rows[:, 4:7] = lo, depth, hi
-        self.legend = None
+        self._fill(lo, hi, depth, bvh.stats["leaves_per_depth" if leaves_only else "nodes_per_depth"])
         if measure != "depth":  # each box's value on the heat ramp in the spare column
             from bvhlab.inspect.measures import box_order, measure_values
 
             data = bvh.cached_node_data()
             assert data is not None, "a measure colouring needs the tree analysed (Bvh.node_data)"
             self.rows[:, 7], self.legend = measure_values(data, measure, box_order(data, leaves_only))
+
+    @classmethod
+    def from_boxes(cls, lo: np.ndarray, hi: np.ndarray, depth: np.ndarray, note: str = "") -> BoxTable:
+        """A table of boxes already sorted by depth (a two-level tree's: overlay/levels.py)."""
+        table = cls.__new__(cls)
+        table._fill(lo, hi, depth, np.bincount(depth, minlength=1))
+        table.note = note
+        return table
+
+    def _fill(self, lo, hi, depth, per_depth) -> None:
+        self.rows = np.zeros((len(lo), 8), np.float32)
+        self.rows[:, 0:3], self.rows[:, 3], self.rows[:, 4:7] = lo, depth, hi
+        self.legend = None
+        self.note = ""  # what the table leaves out, for the panel
         self.depth_starts = np.concatenate([[0], np.cumsum(per_depth)]).astype(np.int64)
         assert self.depth_starts[-1] == len(self.rows), "stats and boxes disagree"
 

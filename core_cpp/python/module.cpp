@@ -19,6 +19,7 @@
 #include "bvhlab/stats.h"
 #include "bvhlab/traverse.h"
 #include "bvhlab/wide_bvh.h"
+#include "py_boxes.h"
 #include "py_bvh.h"
 #include "py_cancel.h"
 
@@ -90,30 +91,11 @@ void py_intersect(const PyBvh& self, const Vectors& origins, const Vectors& dirs
     }
 }
 
-/// Boxes of the nodes (only the leaves if asked) whose depth is in [depth_min, depth_max], by
-/// depth (report §3.3.1), read from one version of the tree: (lo (K,3), hi (K,3), depth (K,)).
+/// Boxes of the nodes whose depth is in [depth_min, depth_max] (py_boxes.h), read from one
+/// version of the tree.
 nb::tuple py_boxes(const PyBvh& self, std::uint32_t depth_min, std::uint32_t depth_max, bool leaves_only) {
     TreePtr tree = self.current();
-    const DepthOrder& order = tree->order();
-    auto [first, last] = order.range(depth_min, depth_max);
-    std::vector<std::uint32_t> picked;
-    picked.reserve(last - first);
-    for (std::uint32_t j = first; j < last; ++j)
-        if (!leaves_only || is_leaf(tree->bvh.nodes[order.nodes[j]])) picked.push_back(order.nodes[j]);
-    const std::size_t k = picked.size();
-    auto* lo = new float[3 * k];
-    auto* hi = new float[3 * k];
-    auto* depth = new std::uint8_t[k];
-    for (std::size_t j = 0; j < k; ++j) {
-        const BvhNode& n = tree->bvh.nodes[picked[j]];
-        lo[3 * j] = n.lo.x, lo[3 * j + 1] = n.lo.y, lo[3 * j + 2] = n.lo.z;
-        hi[3 * j] = n.hi.x, hi[3 * j + 1] = n.hi.y, hi[3 * j + 2] = n.hi.z;
-        depth[j] = tree->bvh.depths[picked[j]];
-    }
-    auto owned = [](auto* p) { return nb::capsule(p, [](void* q) noexcept { delete[] static_cast<decltype(p)>(q); }); };
-    return nb::make_tuple(nb::ndarray<nb::numpy, float, nb::ndim<2>>(lo, {k, 3}, owned(lo)),
-                          nb::ndarray<nb::numpy, float, nb::ndim<2>>(hi, {k, 3}, owned(hi)),
-                          nb::ndarray<nb::numpy, std::uint8_t, nb::ndim<1>>(depth, {k}, owned(depth)));
+    return boxes_by_depth(tree->bvh, tree->order(), depth_min, depth_max, leaves_only);
 }
 
 void py_refit(PyBvh& self, const Triangles& tris, const std::optional<Spheres>& spheres) {

@@ -10,10 +10,12 @@
 #include <nanobind/stl/vector.h>
 
 #include "bvhlab/cancel.h"
+#include "bvhlab/depth_order.h"
 #include "bvhlab/render_settings.h"
 #include "bvhlab/stats.h"
 #include "bvhlab/tlas.h"
 #include "bvhlab/wide_bvh.h"
+#include "py_boxes.h"
 #include "py_bvh.h"
 #include "py_cancel.h"
 #include "py_two_level.h"
@@ -110,6 +112,14 @@ void bind_tlas(nb::module_& m) {
                                       nb::ndarray<nb::numpy, float, nb::ndim<2>>(hi, {inst.size(), 3}, owned(hi)));
             },
             "(lo (N,3), hi (N,3)): each instance's world box (empty, lo > hi, for an empty mesh)")
+        .def(
+            "tlas_boxes",
+            [](const PyTwoLevel& s, std::uint32_t depth_min, std::uint32_t depth_max, bool leaves_only) {
+                const Bvh& tree = s.tlas().tree;
+                return boxes_by_depth(tree, make_depth_order(tree), depth_min, depth_max, leaves_only);
+            },
+            "depth_min"_a, "depth_max"_a, "leaves_only"_a,
+            "The TLAS's node boxes by depth, as Bvh.boxes gives a tree's: (lo (K,3), hi (K,3), depth (K,))")
         .def("intersect", &py_intersect, "origins"_a.noconvert(), "directions"_a.noconvert(), "tmin"_a, "tmax"_a,
              "traversal"_a, "threads"_a, "t"_a.noconvert(), "prim"_a.noconvert(), "kind"_a.noconvert(),
              "u"_a.noconvert(), "v"_a.noconvert(), "visited"_a.noconvert(), "instance"_a.noconvert());

@@ -10,6 +10,7 @@ import numpy as np
 
 from . import _checks, _core
 from .bvh import BuildConfig, Bvh, run_ray_query
+from .two_level_stats import instanced_stats
 from .update import UpdateStats
 
 
@@ -26,6 +27,7 @@ class InstancedBvh:
         self.config = config
         self._core = _make_tlas(meshes, mesh_of, transforms, config.threads)
         self._placed = (mesh_of, transforms)
+        self._stats: tuple | None = None  # (what they were made of, stats)
 
     def __repr__(self) -> str:
         s = self.stats
@@ -35,10 +37,28 @@ class InstancedBvh:
     def stats(self) -> dict:
         """instances, meshes, tlas_nodes, tlas_height, tlas_sah_cost, tlas_build_ms, tlas_memory_bytes
         (the TLAS and the instance records: what instancing adds over the meshes' trees), and
-        meshes_memory_bytes (the meshes' trees, each counted once)."""
-        d = self._core.stats()
-        d["meshes_memory_bytes"] = sum(m.stats["memory_bytes"] for m in self.meshes)
-        return d
+        meshes_memory_bytes (the meshes' trees, each counted once); and the whole tree's
+        (two_level_stats.instanced_stats): primitives and triangles stored (each mesh once) and
+        flattened (once per instance), nodes, height, memory_bytes, sah_cost (two-level), per-mesh
+        lists (mesh_primitives, mesh_instances, mesh_sah_cost, ...) and the meshes' build method."""
+        key = (id(self._core), tuple(m.revision for m in self.meshes), tuple(id(m) for m in self.meshes))
+        if self._stats is None or self._stats[0] != key:
+            lo, hi = self.world_boxes()
+            self._stats = (key, instanced_stats(self._core.stats(), self.meshes, self._placed[0], lo, hi))
+        return dict(self._stats[1])
+
+    @property
+    def instances(self) -> tuple[np.ndarray, np.ndarray]:
+        """(mesh index (N,), object-to-world float32 (N,3,4)) of the instances the TLAS is over."""
+        return self._placed
+
+    def tlas_boxes(self, depth_min: int = 0, depth_max: int | None = None, *, leaves_only: bool = False):
+        """The TLAS's node boxes (world space) in the depth range, as `Bvh.boxes` gives a tree's:
+        (lo (K,3) float32, hi (K,3) float32, depth (K,) uint8), by depth; its leaves are the
+        instances' world boxes."""
+        depth_min = _checks.integer("depth_min", depth_min, 0, 255)
+        depth_max = 255 if depth_max is None else _checks.integer("depth_max", depth_max, 0, 255)
+        return self._core.tlas_boxes(depth_min, depth_max, bool(leaves_only))
 
     def place(self, mesh_of: np.ndarray, transforms: np.ndarray) -> None:
         """Move the instances (or change them): a new TLAS over the same meshes' trees."""

@@ -10,9 +10,11 @@ from pathlib import Path
 
 from ._atomic import replacing, write_text
 from ._checks import output_file
+from .two_level_stats import MESH_METRICS
 
-#: Per-depth and per-size lists in `Bvh.stats`; every other entry is one value.
-LIST_METRICS = ("nodes_per_depth", "leaves_per_depth", "leaf_size_histogram")
+#: Per-depth and per-size lists in `Bvh.stats`, per-mesh lists in `InstancedBvh.stats`; every
+#: other entry is one value.
+LIST_METRICS = ("nodes_per_depth", "leaves_per_depth", "leaf_size_histogram", *MESH_METRICS)
 
 
 def json_path(path) -> Path:
@@ -34,7 +36,8 @@ def write_stats_json(path: Path, stats: dict, about: dict) -> None:
 
 def write_stats_csv(path: Path, stats: dict) -> None:
     """Long format, one value per row: `metric,index,value`. Single values leave `index` empty;
-    nodes_per_depth and leaves_per_depth have the depth as index, leaf_size_histogram the leaf size."""
+    nodes_per_depth and leaves_per_depth have the depth as index, leaf_size_histogram the leaf size,
+    the mesh_* lists of a two-level tree the mesh."""
     path.parent.mkdir(parents=True, exist_ok=True)
     with replacing(path, text=True) as f:
         out = csv.writer(f)

@@ -220,3 +220,67 @@ def check_overlay_million_boxes(nodes: int = 1_000_000) -> None:
         first, count = batch.table.depth_slice(depth_min, depth_max)
         assert first == sum(stats["nodes_per_depth"][:depth_min])
         assert count == sum(stats["nodes_per_depth"][depth_min : depth_max + 1])
+
+
+def _scatter_scene(width: int, height: int, side: int, cube: float):
+    """side × side geometry-nodes instances (Grid 4 × 2 → Instance on Points) of a cube of edge
+    `cube` with 10 × 10 vertices a face (a BLAS of some hundred nodes), seen by a camera."""
+    scene = harness.empty_scene((width, height))
+    tree = bpy.data.node_groups.new("Scatter", "GeometryNodeTree")
+    tree.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
+    output, grid = tree.nodes.new("NodeGroupOutput"), tree.nodes.new("GeometryNodeMeshGrid")
+    grid.inputs["Size X"].default_value, grid.inputs["Size Y"].default_value = 4.0, 2.0
+    grid.inputs["Vertices X"].default_value = grid.inputs["Vertices Y"].default_value = side
+    mesh = tree.nodes.new("GeometryNodeMeshCube")
+    mesh.inputs["Size"].default_value = (cube,) * 3
+    for axis in "XYZ":
+        mesh.inputs[f"Vertices {axis}"].default_value = 10
+    instance = tree.nodes.new("GeometryNodeInstanceOnPoints")
+    tree.links.new(grid.outputs["Mesh"], instance.inputs["Points"])
+    tree.links.new(mesh.outputs["Mesh"], instance.inputs["Instance"])
+    tree.links.new(instance.outputs["Instances"], output.inputs[0])
+    obj = bpy.data.objects.new("Scatter", bpy.data.meshes.new("Scatter"))
+    scene.collection.objects.link(obj)
+    obj.modifiers.new("Scatter", "NODES").node_group = tree
+    harness.add_camera((0.0, -6.0, 4.0), (0.0, 0.0, 0.0), lens=35)
+    harness.add_point_light((2.0, -3.0, 5.0))
+    bpy.context.view_layer.update()
+    xs, ys = np.linspace(-2, 2, side), np.linspace(-1, 1, side)
+    centres = np.stack(np.meshgrid(xs, ys, [0.0], indexing="ij"), -1).reshape(-1, 3)
+    return scene, centres
+
+
+def check_overlay_two_level_boxes(width: int = 256, height: int = 192, side: int = 100) -> None:
+    """The overlay of a two-level tree (issue 34): 10,000 geometry-nodes instances, built by
+    Build. BLAS boxes are capped at MAX_OVERLAY_BOXES (the panel's note says how many instances),
+    TLAS boxes are drawn in full, and the TLAS root drawn alone lights the projected edges of the
+    union of the cubes placed at the grid points computed here (not by bvhlab)."""
+    cube = 0.02
+    scene, centres = _scatter_scene(width, height, side, cube)
+    ensure_gpu_context()
+    addon = harness.addon()
+    levels = import_module(addon.__name__ + ".overlay.levels")
+    assert bpy.ops.bvhlab.build() == {"FINISHED"}
+    bvh = addon.state.tree_for(scene).bvh
+    assert isinstance(bvh, bvhlab.InstancedBvh) and bvh.stats["instances"] == side * side
+    settings = scene.bvhlab
+    settings.overlay_level, settings.overlay_depth_min, settings.overlay_depth_max = "blas", 0, 20
+    drawn, _ = _draw_offscreen(scene, width, height)
+    mesh_of, _ = bvh.instances
+    per_instance = len(bvh.meshes[int(mesh_of[0])].boxes(0, 20)[0])
+    assert np.all(mesh_of == mesh_of[0]) and per_instance * side * side > levels.MAX_OVERLAY_BOXES
+    assert drawn == levels.MAX_OVERLAY_BOXES // per_instance * per_instance, (drawn, per_instance)
+    note = _overlay_package().scene_batch(scene, addon.state.tree_for(scene)).table.note
+    assert f"of {side * side:,} instances" in note, note
+    settings.overlay_level = "tlas"
+    drawn, _ = _draw_offscreen(scene, width, height)
+    assert drawn == bvh.stats["tlas_nodes"] > side * side
+    settings.overlay_depth_max = 0
+    drawn, image = _draw_offscreen(scene, width, height)
+    assert drawn == 1
+    lo, hi = centres.min(0) - cube / 2, centres.max(0) + cube / 2
+    a, b = _projected_edges(lo[None], hi[None], export_scene(bpy.context).camera, width, height)
+    ys, xs = np.nonzero(image[..., 3] > 0.5)
+    assert len(xs) > 50, f"only {len(xs)} pixels drawn"
+    stray = _segment_distance(np.stack([xs + 0.5, ys + 0.5], -1), a, b)
+    assert stray.max() < 1.5, f"{(stray >= 1.5).sum()} lit pixels are off the root box's projected edges"

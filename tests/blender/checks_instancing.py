@@ -4,11 +4,13 @@ nested collection instances hung it): a geometry-nodes scatter (Grid 50×50 → 
 a 0.1 cube with a material) and 100 empties each instancing a collection of 100 cube instances.
 The exported triangles (the instanced scene flattened: issue 34 keeps Blender's instancing as
 instances of one mesh) are checked against the instance positions computed here from the node
-settings and the empties (not by bvhlab), Build (which flattens) against a direct build of the
-flattened scene, and the F12 Depth pass (two-level) against slab tests of the cubes at those
-positions. The add-on must be enabled."""
+settings and the empties (not by bvhlab), Build (two-level, as F12) against a direct build of the
+instanced scene, and the F12 Depth pass (over Build's tree: no second build) against slab tests of
+the cubes at those positions. The add-on must be enabled."""
 
 from __future__ import annotations
+
+from importlib import import_module
 
 import bpy
 import checks_engine
@@ -127,14 +129,23 @@ def box_depth(camera, centres: np.ndarray, half: float, width: int, height: int)
 
 def _check_build_and_f12(tmp_dir, scene, exported, centres: np.ndarray, half: float) -> None:
     assert exported.is_instanced and len(exported.meshes) == 1, "the cube is not stored once"
-    exported = exported.flattened()
+    trees = import_module(harness.addon().__name__ + ".trees")
+    builds = trees.counts.snapshot()[0]
     assert bpy.ops.bvhlab.build() == {"FINISHED"}
     built = harness.addon().state.tree_for(scene)
     direct = bvhlab.build(exported, config=scene.bvhlab.build_config())
-    assert built.bvh.stats["primitives"] == len(exported.triangles)
-    assert np.array_equal(built.bvh.nodes, direct.nodes)
+    assert isinstance(built.bvh, bvhlab.InstancedBvh), "Build flattened the instances"
+    assert built.bvh.stats["triangles_flattened"] == len(exported.flattened().triangles)
+    assert built.bvh.stats["triangles"] == len(exported.triangles) + CUBE_TRIANGLES
+    assert all(np.array_equal(a.nodes, b.nodes) for a, b in zip(built.bvh.meshes, direct.meshes))
+    assert all(np.array_equal(a, b) for a, b in zip(built.bvh.tlas_boxes(), direct.tlas_boxes()))
+    exported = exported.flattened()
     checks_engine.use_engine(scene, backend="cpu", render_supersampling=1, render_overlay=False)
     depth = checks_engine.render_passes(tmp_dir)["Depth"]
+    # F12 renders the tree Build made: no second build (its instances may come in another order
+    # from the render depsgraph: then only a new TLAS)
+    assert trees.counts.snapshot()[0] == builds + 1
+    assert checks_engine._last_final(scene)["tree"] in ("kept", "placed")
     width, height = scene.render.resolution_x, scene.render.resolution_y
     expected = box_depth(exported.camera, centres, half, width, height)
     hit = expected < checks_engine.MISS_DEPTH

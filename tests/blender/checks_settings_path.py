@@ -152,15 +152,15 @@ def check_one_tree_for_build_f12_render_export(tmp_dir) -> None:
     trees = import_module(harness.addon().__name__ + ".trees")
     scene = harness.boxes_scene()
     checks_engine.use_engine(scene, backend="cpu", render_overlay=False)
-    builds = trees.SceneTree.builds
+    builds = trees.counts.snapshot()[0]
     assert bpy.ops.bvhlab.build() == {"FINISHED"}
-    assert trees.SceneTree.builds == builds + 1
+    assert trees.counts.snapshot()[0] == builds + 1
     built = harness.addon().state.tree_for(scene).bvh
     with _Recorder() as rendered:
         assert bpy.ops.render.render() == {"FINISHED"}
         assert bpy.ops.bvhlab.render() == {"FINISHED"}
     assert bpy.ops.bvhlab.export_stats(filepath=str(tmp_dir / "stats.json")) == {"FINISHED"}
-    assert trees.SceneTree.builds == builds + 1, "F12, Render or Export stats built the tree again"
+    assert trees.counts.snapshot()[0] == builds + 1, "F12, Render or Export stats built the tree again"
     assert checks_engine._last_final(scene)["tree"] == "kept"
     assert harness.addon().state.tree_for(scene).bvh is built
     assert len(rendered.calls) == 2
@@ -168,4 +168,4 @@ def check_one_tree_for_build_f12_render_export(tmp_dir) -> None:
     scene.bvhlab.method = "median"
     assert bpy.ops.render.render() == {"FINISHED"}
     assert bpy.ops.render.render() == {"FINISHED"}
-    assert trees.SceneTree.builds == builds + 2
+    assert trees.counts.snapshot()[0] == builds + 2

@@ -202,6 +202,7 @@ def _gpu() -> Iterator[Check]:
         gpu.check_overlay_colour_by_depth,
         gpu.check_overlay_colour_by_measure,
         gpu.check_overlay_million_boxes,
+        gpu.check_overlay_two_level_boxes,
     ):
         yield Check("gpu", check.__name__.removeprefix("check_"), check)
 

@@ -296,7 +296,7 @@ def test_f12_of_instances_equals_the_flattened_render(tmp_path, name):
     scene = SCENES[name][0]()
     got, record = _f12(tmp_path, scene)
     assert record["tree"] == "built"
-    tree = harness.addon().trees.cache.tree(harness.addon().trees.key_of(scene, "visible", instanced=True))
+    tree = harness.addon().trees.cache.tree(harness.addon().trees.key_of(scene, "visible"))
     assert isinstance(tree.bvh, bvhlab.InstancedBvh), "F12 did not render the instanced scene two-level"
     assert record["scene"].is_instanced
     # F12's scene comes from the render depsgraph (which hides the children of vertex and face
@@ -334,8 +334,8 @@ def test_f12_of_instances_on_vulkan_equals_the_flattened_cpu_render(tmp_path, na
 def test_rerender_moves_instances_and_reads_a_changed_mesh_once(tmp_path):
     """F12 with Persistent Data (the engine keeps its LiveScene and depsgraph): moving an instancer
     changes only its instances' transforms (no mesh read, the meshes' arrays kept, a new TLAS:
-    "placed"); editing the shared mesh reads it once, not once per instance; every image equals
-    the flat reference's."""
+    "placed"); editing the shared mesh reads it once, not once per instance, and updates its tree
+    in place; every image equals the flat reference's."""
     scene = collection_instances_scene()
     _, record = _f12(tmp_path, scene)  # selects the engine (changing its settings ends Persistent Data's engine)
     assert record["tree"] == "built"
@@ -361,7 +361,7 @@ def test_rerender_moves_instances_and_reads_a_changed_mesh_once(tmp_path):
     got, record = _render(tmp_path, scene)
     edited = _copy(record["totals"])
     assert edited["objects_read"] - moved["objects_read"] == 1, (moved, edited)
-    assert record["tree"] == "built"
+    assert record["tree"] == "refit"  # the shared mesh's tree updated in place (the scene's policy), the other kept
     third = _live_scene()
     monkey = next(k for k, m in enumerate(first.meshes) if len(m) == 968)
     assert not np.array_equal(third.meshes[monkey], first.meshes[monkey])

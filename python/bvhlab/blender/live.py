@@ -26,7 +26,6 @@ from __future__ import annotations
 import copy
 import warnings
 from dataclasses import dataclass, field
-from typing import Any
 
 import bpy
 import numpy as np
@@ -143,7 +142,6 @@ class LiveScene:
         self._layout: Layout | None = None
         self._shared: list[SharedMesh] = []
         self._materials: dict = {}  # material name → bvhlab.Material, as last read
-        self._flat: tuple[Any, Scene] | None = None
 
     def sync(self, depsgraph, blender_scene=None, view_layer=None) -> SyncReport:
         """Bring `scene` up to date with the evaluated depsgraph. Raises ExportError (see
@@ -175,24 +173,6 @@ class LiveScene:
         self._items, self._by_data, self._layout, self._shared = items, by_data, layout, shared
         self.totals.add(report)
         return report
-
-    def flat_scene(self) -> Scene:
-        """`scene` as one flat mesh (Scene.flattened(), made once per geometry), for the consumers
-        that still take flat trees only (the Rendered viewport; issue 34)."""
-        scene = self.scene
-        assert scene is not None, "sync first"
-        if not scene.is_instanced:
-            return scene
-        source = (scene.triangles, scene.spheres, scene.instance_transforms, scene.tri_material, *scene.meshes)
-        if (
-            self._flat is None
-            or len(self._flat[0]) != len(source)
-            or any(a is not b for a, b in zip(self._flat[0], source))
-        ):
-            self._flat = (source, scene.flattened())
-        flat = copy.copy(self._flat[1])
-        flat.materials, flat.camera, flat.light, flat.sky = scene.materials, scene.camera, scene.light, scene.sky
-        return flat
 
     def _walk(self, depsgraph, view_layer, dirty: _Dirty, table: MaterialTable) -> tuple[dict, dict, SyncReport]:
         """Every object in scope, read again when dirty or new (a mesh shared by several items

@@ -8,10 +8,12 @@ from collections.abc import Callable
 
 from ..bvh import build
 from ..bvh import method_from_label as method_kwargs  # 'sah32' → sah with 32 bins
+from ..instanced import InstancedBvh
 from ..render import Renderer
 from ..render_options import DEFAULT_HEIGHT, DEFAULT_WIDTH, RenderOptions
 from ..scene import Scene
 from .protocol import DEFAULT_BUILDS, DEFAULT_FRAMES, median_interval, rounds, sample_count
+from .report import TWO_LEVEL_COLUMNS
 from .tree_stats import sah_cost_per_depth
 
 #: The report's build settings (§2.3, §4.2), stated here rather than taken from the library's
@@ -161,7 +163,7 @@ def _render_rounds(scene, trees: dict, frames: int, width, height, renderer, opt
 
 def _row(label, settings, bvh, timings) -> dict:
     stats = bvh.stats
-    return {
+    row = {
         "method": label,
         "split_method": settings["method"],
         "bins": settings["bins"] if settings["method"] == "sah" else None,
@@ -170,9 +172,25 @@ def _row(label, settings, bvh, timings) -> dict:
         "sah_cost": stats["sah_cost"],
         "nodes": stats["nodes"],
         "leaves": stats["leaves"],
-        "nodes_per_depth": stats["nodes_per_depth"],
-        "leaf_size_histogram": stats["leaf_size_histogram"],
-        "sah_cost_per_depth": sah_cost_per_depth(bvh),
         "device": timings["device"],
         "backend": timings["backend"],
     }
+    if isinstance(bvh, InstancedBvh):  # the TLAS's numbers, and the meshes' trees' (each once)
+        row.update({name: stats[name] for name in TWO_LEVEL_COLUMNS})
+        row["nodes_per_depth"] = _summed([m.stats["nodes_per_depth"] for m in bvh.meshes])
+        row["leaf_size_histogram"] = _summed([m.stats["leaf_size_histogram"] for m in bvh.meshes])
+        row["sah_cost_per_depth"] = []  # per depth of one tree: a two-level tree has two kinds of depth
+    else:
+        row["nodes_per_depth"] = stats["nodes_per_depth"]
+        row["leaf_size_histogram"] = stats["leaf_size_histogram"]
+        row["sah_cost_per_depth"] = sah_cost_per_depth(bvh)
+    return row
+
+
+def _summed(lists: list[list]) -> list:
+    """Elementwise sums of lists of different lengths."""
+    out = [0] * max((len(x) for x in lists), default=0)
+    for x in lists:
+        for i, v in enumerate(x):
+            out[i] += v
+    return out

@@ -41,6 +41,18 @@ COLUMNS = [
     "primary_mrays_s",
     "device",
 ]
+#: A two-level tree's (an instanced scene, issue 34) columns after those: its TLAS and what the
+#: instances make of the meshes' trees (InstancedBvh.stats); written only when a row has them.
+TWO_LEVEL_COLUMNS = [
+    "instances",
+    "meshes",
+    "tlas_height",
+    "tlas_sah_cost",
+    "tlas_nodes",
+    "primitives",
+    "primitives_flattened",
+    "memory_bytes",
+]
 
 
 def samples(row: dict, name: str) -> list[float]:
@@ -68,9 +80,10 @@ def write_csv(rows: list[dict], path: Path) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     with replacing(path, text=True) as f:
         w = csv.writer(f)
-        w.writerow(COLUMNS)
+        columns = COLUMNS + [c for c in TWO_LEVEL_COLUMNS if any(c in r for r in rows)]
+        w.writerow(columns)
         for r in rows:
-            w.writerow([_cell(r.get(c)) for c in COLUMNS])
+            w.writerow([_cell(r.get(c)) for c in columns])
     return path
 
 
