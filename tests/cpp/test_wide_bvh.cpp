@@ -31,7 +31,7 @@ std::vector<const WideNode*> all_nodes(const WideBvh& wide) {
         todo.pop_back();
         out.push_back(&w);
         for (int k = 0; k < 8; ++k)
-            if (used(w, k) && w.count[k] == 0) todo.push_back(w.child[k]);
+            if (used(w, k) && !w.leaf(k)) todo.push_back(w.child[k]);
     }
     return out;
 }
@@ -128,13 +128,14 @@ TEST(WideBvh, PreorderLinesHoldEveryPrimitiveOnceAndEveryNodeOnce) {
             for (int k = 0; k < 8; ++k) {
                 if (!used(w, k)) continue;
                 ++children;
-                if (w.count[k] == 0) {
+                if (!w.leaf(k)) {
                     inner.push_back(w.child[k]);
                     continue;
                 }
-                ASSERT_EQ(w.child[k], next);
-                for (std::uint32_t p = 0; p < w.count[k]; ++p, next += kPacketLines, ++packets) {
-                    const PrimPacket& q = wide.packet(w.child[k] + p * kPacketLines);
+                ASSERT_EQ(w.line(k), next);
+                for (bool more = true; more; next += kPacketLines, ++packets) {
+                    const PrimPacket& q = wide.packet(next);
+                    more = q.more != 0;
                     for (int l = 0; l < 4; ++l) {
                         if (q.ref[l] == kNoHit) continue;
                         ASSERT_LT(q.slot[l], bvh.prims.size());

@@ -1,6 +1,7 @@
 // Closest-hit traversal of the 8-wide tree: the portable path (SSE on x86-64, plain C++
 // elsewhere), the dispatch to the AVX2 path (isa.h), and the helpers both call.
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <functional>
@@ -139,11 +140,10 @@ inline std::int32_t child_key(float middle, int lane) {
 }
 
 /// Writes the children of `node` in `mask` (the h slots the ray enters) but the nearest to
-/// index[0, h - 1), count[0, h - 1) and t[0, h - 1) (from t0, the entries), ordered by child_key
+/// index[0, h - 1) and t[0, h - 1) (from t0, the entries), ordered by child_key
 /// largest first (the farthest first); returns the nearest's slot. An insertion sort of the
 /// entered slots only, two (the most common case) by one comparison without a loop.
-inline int push_children(const WideNode& node, L8 t0, L8 t1, int mask, std::uint32_t* index, std::uint32_t* count,
-                         float* t) {
+inline int push_children(const WideNode& node, L8 t0, L8 t1, int mask, std::uint32_t* index, float* t) {
     alignas(32) float entry[8], exit[8];
     t0.store(entry), t1.store(exit);
     auto key_of = [&](int slot) { return child_key(entry[slot] + exit[slot], slot); };
@@ -165,7 +165,7 @@ inline int push_children(const WideNode& node, L8 t0, L8 t1, int mask, std::uint
     }
     for (int j = 0; j + 1 < h; ++j) {  // the nearest, at h - 1, goes to cur, not the stack
         const int lane = key[j] & 7;
-        index[j] = node.child[lane], count[j] = node.count[lane], t[j] = entry[lane];
+        index[j] = node.child[lane], t[j] = entry[lane];
     }
     return key[h - 1] & 7;
 }

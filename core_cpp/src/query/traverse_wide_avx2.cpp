@@ -6,6 +6,7 @@
 
 #include <climits>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 
 #include "wide_kernel.h"
@@ -59,17 +60,36 @@ inline __m256i exchange(__m256i v, __m256i partner) {
     return _mm256_blend_epi32(_mm256_min_epi32(v, partner), _mm256_max_epi32(v, partner), kTakesMax);
 }
 
+/// push_children for two entered slots (the commonest case after one, which never gets here):
+/// the two keys (b, child_key of every slot) compared as scalars, and the farther one's child
+/// written by the same permutes as the sorting network writes it, so that the stack holds what
+/// the network would have written (tinybvh 1.9 BVH8_CPU's BVH8_2VALIDNODES case).
+inline int push_two(const WideNode& node, L8 t0, __m256i b, int mask, std::uint32_t* index, float* t) {
+    const int low = __builtin_ctz(unsigned(mask)), high = 31 - __builtin_clz(unsigned(mask));
+    const int key_low = _mm256_cvtsi256_si32(_mm256_permutevar8x32_epi32(b, _mm256_set1_epi32(low)));
+    const int key_high = _mm256_cvtsi256_si32(_mm256_permutevar8x32_epi32(b, _mm256_set1_epi32(high)));
+    const bool low_far = key_low > key_high;
+    const int far = low_far ? low : high;
+    const __m256i v = _mm256_set1_epi32(far);
+    const auto load = [](const std::uint32_t* p) { return _mm256_load_si256(reinterpret_cast<const __m256i*>(p)); };
+    const auto store = [](std::uint32_t* p, __m256i x) { _mm256_storeu_si256(reinterpret_cast<__m256i*>(p), x); };
+    store(index, _mm256_permutevar8x32_epi32(load(node.child), v));
+    _mm256_storeu_ps(t, _mm256_permutevar8x32_ps(t0.v, v));
+    return low_far ? high : low;
+}
+
 /// push_children (traverse_wide.cpp says what it writes) without branches: child_key for the
 /// eight slots at once, INT_MIN + slot for a slot not entered (below every entered one's key),
 /// sorted largest first by the 19-comparator, depth-6 network for eight inputs (Knuth, TAOCP
-/// vol. 3, 5.3.4), and the children permuted into that order by three vpermd; the nearest's slot
+/// vol. 3, 5.3.4), and the children permuted into that order by two vpermd; the nearest's slot
 /// from a minimum across lanes, which does not wait for the sort.
-inline int push_children(const WideNode& node, L8 t0, L8 t1, int, std::uint32_t* index, std::uint32_t* count,
-                         float* t) {
+inline int push_children(const WideNode& node, L8 t0, L8 t1, int mask, std::uint32_t* index, float* t) {
     const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
     __m256i b = _mm256_castps_si256(_mm256_add_ps(t0.v, t1.v));
     b = _mm256_xor_si256(b, _mm256_and_si256(_mm256_srai_epi32(b, 31), _mm256_set1_epi32(INT_MAX)));
     b = _mm256_or_si256(_mm256_and_si256(b, _mm256_set1_epi32(~7)), lane);
+    const int rest = mask & (mask - 1);
+    if (!(rest & (rest - 1))) return push_two(node, t0, b, mask, index, t);
     const __m256i entered = _mm256_castps_si256(_mm256_cmp_ps(t0.v, t1.v, _CMP_LE_OS));
     __m256i m = _mm256_blendv_epi8(_mm256_set1_epi32(INT_MAX), b, entered);
     m = _mm256_min_epi32(m, _mm256_shuffle_epi32(m, _MM_SHUFFLE(2, 3, 0, 1)));
@@ -89,7 +109,6 @@ inline int push_children(const WideNode& node, L8 t0, L8 t1, int, std::uint32_t*
     const auto load = [](const std::uint32_t* p) { return _mm256_load_si256(reinterpret_cast<const __m256i*>(p)); };
     const auto store = [](std::uint32_t* p, __m256i x) { _mm256_storeu_si256(reinterpret_cast<__m256i*>(p), x); };
     store(index, _mm256_permutevar8x32_epi32(load(node.child), v));
-    store(count, _mm256_permutevar8x32_epi32(load(node.count), v));
     _mm256_storeu_ps(t, _mm256_permutevar8x32_ps(t0.v, v));
     return _mm256_cvtsi256_si32(m) & 7;
 }

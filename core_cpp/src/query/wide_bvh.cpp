@@ -34,15 +34,17 @@ std::uint32_t packets_for(const Bvh& bvh, std::uint32_t first, std::uint32_t n) 
 }
 
 /// Appends the primitives [first, first + n) of bvh.prims to wide.lines as packets (triangles,
-/// then spheres, four a packet); returns the first packet's line and sets `count`.
-std::uint32_t pack_leaf(const Bvh& bvh, std::uint32_t first, std::uint32_t n, WideBvh& wide, std::uint32_t& count) {
+/// then spheres, four a packet, each but the last with `more` set); returns the child word of the
+/// leaf (kLeafChild | its first packet's line).
+std::uint32_t pack_leaf(const Bvh& bvh, std::uint32_t first, std::uint32_t n, WideBvh& wide) {
     const auto begin = static_cast<std::uint32_t>(wide.lines.size());
-    count = 0;
+    std::uint32_t count = 0;
     for (bool spheres : {false, true}) {
         PrimPacket q{};
         int lane = 0;
         auto flush = [&] {
             for (int l = lane; l < 4; ++l) q.ref[l] = kNoHit, q.slot[l] = kNoHit;
+            q.more = 1;
             const std::size_t at = wide.lines.size();
             wide.lines.resize(at + kPacketLines);
             std::memcpy(&wide.lines[at], &q, sizeof q);
@@ -59,8 +61,9 @@ std::uint32_t pack_leaf(const Bvh& bvh, std::uint32_t first, std::uint32_t n, Wi
         }
         if (lane) flush();
     }
+    reinterpret_cast<PrimPacket*>(&wide.lines[wide.lines.size() - kPacketLines])->more = 0;
     wide.packet_count += count;
-    return begin;
+    return kLeafChild | begin;
 }
 
 /// Which binary inner nodes become wide nodes: the cost-optimal collapse of Ylitie, Karras and
@@ -162,7 +165,7 @@ void set_slot(WideNode& w, int k, const BvhNode* c) {
     const float inf = std::numeric_limits<float>::infinity();
     w.lo_x[k] = c ? c->lo.x : inf, w.lo_y[k] = c ? c->lo.y : inf, w.lo_z[k] = c ? c->lo.z : inf;
     w.hi_x[k] = c ? c->hi.x : -inf, w.hi_y[k] = c ? c->hi.y : -inf, w.hi_z[k] = c ? c->hi.z : -inf;
-    w.child[k] = 0, w.count[k] = 0;
+    w.child[k] = 0, w.unused[k] = 0;
 }
 
 }  // namespace
@@ -189,8 +192,7 @@ WideBvh make_wide(const Bvh& bvh) {
                     std::size_t(kPacketLines) * packets_for(bvh, ranges.first[children[k]], ranges.size[children[k]]);
         }
     }
-    if (lines > std::numeric_limits<std::uint32_t>::max())
-        throw std::length_error("the wide tree needs over 2^32 lines");
+    if (lines > kLeafChild) throw std::length_error("the wide tree needs over 2^31 lines");
     wide.lines.reserve(lines);
     advise_huge_pages(wide.lines.data(), lines * sizeof(WideLine));
     // Preorder: a node, its leaves' packets, then its inner children in slot order (the job of
@@ -215,8 +217,7 @@ WideBvh make_wide(const Bvh& bvh) {
             const BvhNode* c = k < count ? &bvh.nodes[children[k]] : nullptr;
             set_slot(node, k, c);
             if (c && ranges.leaf(bvh, children[k]))
-                node.child[k] =
-                    pack_leaf(bvh, ranges.first[children[k]], ranges.size[children[k]], wide, node.count[k]);
+                node.child[k] = pack_leaf(bvh, ranges.first[children[k]], ranges.size[children[k]], wide);
         }
         std::memcpy(&wide.lines[at], &node, sizeof node);
         for (int k = count - 1; k >= 0; --k)

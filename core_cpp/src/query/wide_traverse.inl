@@ -6,7 +6,7 @@
 //   L4: four floats — load, splat, set(a, b, c, d), + - * /, raise, lower, comparisons giving
 //       an M4 mask, M4 & M4, M4 | M4, bits(M4), store, and permute(v, a, b, c) = (v[a], v[b],
 //       v[c], v[3]) for lane indices 0..3;
-// and push_children(node, t0, t1, mask, index, count, t), which writes the children a ray enters
+// and push_children(node, t0, t1, mask, index, t), which writes the children a ray enters
 // but the nearest to the stack's arrays, farthest first, and returns the nearest's slot
 // (traverse_wide.cpp).
 // traverse_wide.cpp includes it for the portable path (SSE or plain C++), traverse_wide_avx2.cpp
@@ -62,16 +62,15 @@ Query make_query(const Ray& ray) {
 }
 
 struct Entry {
-    std::uint32_t index, count;  ///< the line of a node (count 0), or of a leaf's first of `count` packets
-    float t;                     ///< where the ray enters the box
+    std::uint32_t index;  ///< a WideNode child word: a node's line, or kLeafChild | a leaf's first packet's
+    float t;              ///< where the ray enters the box
 };
 
-/// Pushed entries, a field to an array, so that the AVX2 path pushes a node's children as three
+/// Pushed entries, a field to an array, so that the AVX2 path pushes a node's children as two
 /// vector stores of eight (push_children); eight slots of room past the deepest push.
 struct Stack {
     static constexpr std::uint32_t kSize = 7 * gpu::MAX_TREE_HEIGHT + 8;
     alignas(32) std::uint32_t index[kSize];
-    alignas(32) std::uint32_t count[kSize];
     alignas(32) float t[kSize];
 };
 
@@ -115,20 +114,20 @@ const unsigned char* line_at(const WideView& wide, std::uint32_t i) {
     return wide.lines + std::size_t(i) * sizeof(WideLine);
 }
 
-/// The `count` packets of a leaf, from line `first` on.
-void test_leaf(const WideView& wide, std::uint32_t first, std::uint32_t count, const Query& q, Hit& hit) {
-    const unsigned char* at = line_at(wide, first);
-    for (const unsigned char* end = at + std::size_t(count) * sizeof(PrimPacket); at != end; at += sizeof(PrimPacket)) {
+/// The packets of a leaf, from line `first` on, up to the one without `more`.
+void test_leaf(const WideView& wide, std::uint32_t first, const Query& q, Hit& hit) {
+    for (const unsigned char* at = line_at(wide, first);; at += sizeof(PrimPacket)) {
         const PrimPacket& k = *reinterpret_cast<const PrimPacket*>(at);
         // [[likely]]: the sphere calls out of line; laid out as the rare case, the leaf's entry
         // spills fewer of the node loop's registers (uniform1m random rays: 3,549 → 3,486
         // instructions a ray, Sponza 1,077 → 1,067)
         if (!(k.ref[0] & gpu::REF_SPHERE_BIT)) [[likely]] {
             test_triangles(k, q, hit);
-            continue;
+        } else {
+            for (int l = 0; l < 4 && k.ref[l] != kNoHit; ++l)
+                if (hit_packet_sphere(k, l, *q.ray, hit)) hit.slot = k.slot[l];
         }
-        for (int l = 0; l < 4 && k.ref[l] != kNoHit; ++l)
-            if (hit_packet_sphere(k, l, *q.ray, hit)) hit.slot = k.slot[l];
+        if (!k.more) return;
     }
 }
 
@@ -138,8 +137,8 @@ void test_leaf(const WideView& wide, std::uint32_t first, std::uint32_t count, c
 /// their way by then (random rays, against Embree measured alongside: uniform1m 0.60 → 0.71,
 /// Sponza 0.96 → 1.01; room1m unchanged). Nodes and packets being lines of one block, no
 /// branch on the kind.
-void prefetch(const WideView& wide, std::uint32_t line) {
-    const unsigned char* p = line_at(wide, line);
+void prefetch(const WideView& wide, std::uint32_t child) {
+    const unsigned char* p = line_at(wide, child & ~kLeafChild);
     __builtin_prefetch(p), __builtin_prefetch(p + 64), __builtin_prefetch(p + 128), __builtin_prefetch(p + 192);
 }
 
@@ -162,10 +161,10 @@ const WideNode& node_at(const WideView& wide, std::uint32_t line) {
 /// deep subtrees, which entry order visited first). Only the order changes: the entry is still
 /// what the stack compares with the closest hit, so the hit is the same.
 /// The order comes from push_children, which sorts the entered slots by a key of their middle
-/// and pushes them, without branches where it can (AVX2: a sorting network and three permutes):
+/// and pushes them, without branches where it can (AVX2: one comparison for two, else a sorting network, and two permutes):
 /// which children a ray enters, and in what order, is data that no branch predictor learns.
 bool enter_children(const WideView& wide, const WideNode& node, const L8 origin[3], const L8 neg_inv[3],
-                    const L8 neg_inv_far[3], const int near[3], float tmin, float far_limit, Stack& stack,
+                    const L8 neg_inv_far[3], const std::ptrdiff_t plane[6], float tmin, float far_limit, Stack& stack,
                     std::uint32_t& sp, Entry& cur) {
     const float* f = node.lo_x;
     // The children's indices are the node's fourth cache line, read only once the box tests say
@@ -180,27 +179,53 @@ bool enter_children(const WideView& wide, const WideNode& node, const L8 origin[
     for (int line = 0; line < 6; ++line) __builtin_prefetch(after + 64 * line);
     // the same order of raises and lowers as hit_box: NaN from 0·inf on a face is ignored
     L8 t0 = L8::splat(tmin), t1 = L8::splat(far_limit);
-    for (int a = 0; a < 3; ++a) t0 = raise(t0, (origin[a] - L8::load(f + near[a])) * neg_inv[a]);
-    for (int a = 0; a < 3; ++a) t1 = lower(t1, (origin[a] - L8::load(f + (near[a] ^ 8))) * neg_inv_far[a]);
+    for (int a = 0; a < 3; ++a) t0 = raise(t0, (origin[a] - L8::load(f + plane[a])) * neg_inv[a]);
+    for (int a = 0; a < 3; ++a) t1 = lower(t1, (origin[a] - L8::load(f + plane[3 + a])) * neg_inv_far[a]);
     const int mask = le_bits(t0, t1);
     if (!mask) return false;
     if (!(mask & (mask - 1))) {
         const int k = __builtin_ctz(unsigned(mask));
-        cur = {node.child[k], node.count[k], t0.lane(k)};
+        cur = {node.child[k], t0.lane(k)};
         return true;
     }
-    const int k = push_children(node, t0, t1, mask, stack.index + sp, stack.count + sp, stack.t + sp);
+    const int k = push_children(node, t0, t1, mask, stack.index + sp, stack.t + sp);
     const auto h = std::uint32_t(__builtin_popcount(unsigned(mask)));
-    cur = {node.child[k], node.count[k], t0.lane(k)};
-    // the pushed entries (sp .. sp + h - 2), nearest first, three without a loop (where fewer
-    // were pushed, the nearest is prefetched again): a loop's exit is as unpredictable as h
-    const std::uint32_t second = sp + h - 2 - std::uint32_t(h >= 3), third = sp + h - 2 - 2 * std::uint32_t(h >= 4);
-    prefetch(wide, stack.index[sp + h - 2]), prefetch(wide, stack.index[second]), prefetch(wide, stack.index[third]);
-    if (h > 4) [[unlikely]]
-        for (std::uint32_t j = sp; j + 4 < sp + h; ++j) prefetch(wide, stack.index[j]);
+    cur = {node.child[k], t0.lane(k)};
+    // the pushed entries (sp .. sp + h - 2), nearest first: one where two were entered (over
+    // half the pushes of random rays; push_children's AVX2 path has branched on it already, so
+    // this branch follows that one), else three without a loop (where fewer were pushed, the
+    // nearest is prefetched again): a loop's exit is as unpredictable as h. (Two entered had
+    // the one entry prefetched three times: Sponza instructions a ray, random 952 → 918,
+    // primary 1,824 → 1,741.)
+    if (h == 2) {
+        prefetch(wide, stack.index[sp]);
+    } else {
+        const std::uint32_t third = sp + h - 3 - std::uint32_t(h >= 4);
+        prefetch(wide, stack.index[sp + h - 2]), prefetch(wide, stack.index[sp + h - 3]);
+        prefetch(wide, stack.index[third]);
+        if (h > 4) [[unlikely]]
+            for (std::uint32_t j = sp; j + 4 < sp + h; ++j) prefetch(wide, stack.index[j]);
+    }
     sp += h - 1;
     return true;
 }
+
+/// Float offsets in a WideNode of the near plane arrays of x, y, z (lo_x = 0, hi_x = 8, ...), then
+/// of the far ones, by the ray's octant (bit a set where 1/dir[a] is negative). Pointer-sized and
+/// both sides kept, so that a node's six loads take them as they are (as ints, near ^ 8 and a
+/// sign extension were redone at every node; Sponza instructions a ray: random 959 → 952, primary
+/// 1,860 → 1,824), and looked up rather than worked out for every ray (random 918 → 906, primary
+/// 1,741 → 1,729).
+struct PlaneTable {
+    std::ptrdiff_t at[8][6];
+    constexpr PlaneTable() : at{} {
+        for (int octant = 0; octant < 8; ++octant)
+            for (int a = 0; a < 3; ++a)
+                at[octant][a] = 16 * a + 8 * (octant >> a & 1), at[octant][3 + a] = at[octant][a] ^ 8;
+    }
+    constexpr const std::ptrdiff_t* operator[](int octant) const { return at[octant]; }
+};
+constexpr PlaneTable kPlanes;
 
 /// Nearest child first, from the root. `far_limit`, the closest hit so far times the box scale,
 /// lives in a register and is renewed after a leaf, the one place the hit changes.
@@ -213,19 +238,20 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit) {
     const L8 neg_inv[3] = {L8::splat(-q.inv[0]), L8::splat(-q.inv[1]), L8::splat(-q.inv[2])};
     const float s = gpu::BOX_FAR_SCALE;
     const L8 neg_inv_far[3] = {L8::splat(-(q.inv[0] * s)), L8::splat(-(q.inv[1] * s)), L8::splat(-(q.inv[2] * s))};
-    int near[3];  // float offset of the near plane array of each axis in a WideNode (lo_x = 0, hi_x = 8, ...)
-    for (int a = 0; a < 3; ++a) near[a] = 16 * a + (std::signbit(q.inv[a]) ? 8 : 0);
+    const int octant =
+        int(std::signbit(q.inv[0])) | int(std::signbit(q.inv[1])) << 1 | int(std::signbit(q.inv[2])) << 2;
+    const std::ptrdiff_t* plane = kPlanes[octant];
     Stack stack;
     std::uint32_t sp = 0, visited = 0;
-    Entry cur{0, 0, q.tmin};
+    Entry cur{0, q.tmin};
     float far_limit = hit.t * s;
     for (;;) {
-        if (cur.count) {
-            test_leaf(wide, cur.index, cur.count, q, hit);
+        if (cur.index & kLeafChild) {
+            test_leaf(wide, cur.index & ~kLeafChild, q, hit);
             far_limit = hit.t * s;
         } else {
             ++visited;
-            if (enter_children(wide, node_at(wide, cur.index), origin, neg_inv, neg_inv_far, near, q.tmin, far_limit,
+            if (enter_children(wide, node_at(wide, cur.index), origin, neg_inv, neg_inv_far, plane, q.tmin, far_limit,
                                stack, sp, cur))
                 continue;
         }
@@ -233,7 +259,7 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit) {
             if (sp == 0) return visited;
             --sp;
         } while (!(stack.t[sp] <= far_limit));
-        cur = {stack.index[sp], stack.count[sp], stack.t[sp]};
+        cur = {stack.index[sp], stack.t[sp]};
     }
 }
 
