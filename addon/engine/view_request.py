@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from ..trees import key_of
+from .counter_view import counter_view
 from .settings import backend
 from .view_camera import view_frustum
 from .viewport import ViewRequest
@@ -18,6 +19,7 @@ def view_request(context, blender_scene) -> ViewRequest:
         key_of(blender_scene, scope="visible"),  # the viewport shows every visible object
         blender_scene.bvhlab.viewport_budget_ms,
         camera_view_note(view, context.space_data, blender_scene),
+        counter_view(blender_scene.bvhlab),
     )
 
 

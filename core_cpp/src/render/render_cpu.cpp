@@ -43,7 +43,7 @@ public:
           threads_(threads ? threads : std::max(1u, std::thread::hardware_concurrency())) {
         const auto start = Clock::now();
         overlay_ = rasterize_overlay(scene, frame_);
-        sums_ = PixelSums(std::size_t(settings.width) * settings.height);
+        sums_ = PixelSums(std::size_t(settings.width) * settings.height, settings.traversal_counters);
         timings_.overlay_ms = ms_since(start);
         timings_.device = "CPU reference (" + std::to_string(threads_) + " threads)";
         timings_.steps_per_dispatch = settings.steps_per_dispatch.value_or(gpu::MAX_STEPS_PER_DISPATCH);
