@@ -14,6 +14,8 @@
 
 /// TRAVERSAL_STACK or TRAVERSAL_STACKLESS (report §3.1).
 layout(constant_id = 0) const uint TRAVERSAL = TRAVERSAL_STACK;
+/// Every traversal counter is counted (traverse.glsl); a few ALU operations a step on a GPU.
+const bool COUNT_TRAVERSAL = true;
 layout(local_size_x = TRACE_GROUP_X, local_size_y = TRACE_GROUP_Y) in;
 
 // A storage buffer, not a uniform one: Mesa 22.3 lavapipe recompiles (and leaks) a shader whose

@@ -19,7 +19,7 @@ def _counters(scene, bvh, renderer="cpu", width=W, height=H, **options):
     r = renderer if isinstance(renderer, bvhlab.Renderer) else bvhlab.Renderer(renderer)
     job = r.start(scene, bvh, width, height, traversal_counters=True, **options)
     job.run()
-    return job.result(color=False, depth=False, counters=True)
+    return job.result(depth=False, counters=True)
 
 
 def _recorded(rec) -> list:
@@ -36,6 +36,11 @@ def test_pixel_counters_are_the_recorded_traversal(traversal):
     c = result.counters
     assert c.shape == (H, W, len(counters.COUNTERS)) and counters.COUNTERS[0] == "box_tests"
     np.testing.assert_array_equal(c[..., 0], result.cost)  # the heatmap's cost is the box_tests counter
+    job = bvhlab.Renderer("cpu").start(scene, bvh, W, H, options=options)  # no counters kept: the same picture
+    job.run()
+    plain = job.result(depth=False)
+    np.testing.assert_array_equal(plain.cost, result.cost)
+    np.testing.assert_array_equal(plain.color, _counters(scene, bvh, options=options).color)
     assert len(np.unique(c[..., 3])) > 1 and (c[..., 2] > c[..., 3]).any(), "the counters must vary"
     for y in range(0, H, 3):
         for x in range(0, W, 4):
