@@ -15,7 +15,7 @@ from __future__ import annotations
 import bpy
 from bpy.app.handlers import persistent
 
-from . import background, engine, follow, ops_inspect, overlay, state
+from . import background, engine, follow, legend_icons, ops_inspect, overlay, state
 from .ops_build import BVHLAB_OT_build
 from .ops_compare import BVHLAB_OT_compare
 from .ops_export_stats import BVHLAB_OT_export_stats
@@ -81,4 +81,5 @@ def unregister() -> None:
     engine.unregister()
     unregister_properties()
     _unregister_classes()
+    legend_icons.unregister()
     state.clear()

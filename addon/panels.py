@@ -155,6 +155,10 @@ class BVHLAB_PT_overlay(_BvhPanel, bpy.types.Panel):
                 wrapped_label(layout, context, note, icon="INFO")
         layout.prop(settings, "overlay_leaves_only")
         layout.prop(settings, "overlay_color_by_depth")
+        if settings.overlay_color_by_depth and settings.overlay_measure == "depth":
+            from .legend_icons import depth_legend
+
+            depth_legend(layout, settings.overlay_depth_min, settings.overlay_depth_max)
         row = layout.row()
         row.enabled = not settings.overlay_color_by_depth
         row.prop(settings, "overlay_color")

@@ -69,6 +69,17 @@ def _items(names) -> list[tuple[str, str, str]]:
     return [(n, *_LABELS.get(n, (n.replace("_", " ").title(), ""))) for n in names]
 
 
+def _counter_items() -> list[tuple[str, str, str]]:
+    from bvhlab.counters import COUNTERS, LABELS
+
+    from .engine.counter_view import NO_COUNTER
+
+    shaded = (NO_COUNTER, "Shading", "The render mode's image")
+    per_ray = "per primary ray (its closest-hit walk; averaged over the samples)"
+    return [shaded, *((c, LABELS[c], f"{LABELS[c]} {per_ray}, blue few, red many") for c in COUNTERS)]
+
+
+COUNTER_ITEMS = _counter_items()
 MEASURE_ITEMS = _measure_items()
 METHOD_ITEMS = _items(METHODS)
 # (module level: Blender evaluates the annotations below in a scope where a comprehension could
@@ -294,6 +305,25 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
     render_overlay: BoolProperty(
         name="Boxes in image", default=False, description="Draw the overlay's depth range into the rendered image"
     )
+    viewport_counter: EnumProperty(
+        name="Counter",
+        items=COUNTER_ITEMS,
+        default="none",
+        update=_redraw,
+        description="Rendered viewport: show a traversal counter per pixel on the heat ramp instead of the image",
+    )
+    counter_range_auto: BoolProperty(
+        name="Auto Range",
+        default=True,
+        update=_redraw,
+        description="The counter's colours span 0 to the 99th percentile of the frame",
+    )
+    counter_range_min: FloatProperty(
+        name="Min", default=0.0, min=0.0, max=1e6, update=_redraw, description="Counter shown blue"
+    )
+    counter_range_max: FloatProperty(
+        name="Max", default=64.0, min=0.0, max=1e6, update=_redraw, description="Counter shown red (and above)"
+    )
     viewport_budget_ms: FloatProperty(
         name="Preview ms",
         min=5.0,
@@ -352,6 +382,7 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
             line_width=self.overlay_line_width,
             traversal=self.traversal,
             mode=self.render_mode,
+            traversal_counters=viewport and self.viewport_counter != "none",
         )
 
 
@@ -380,6 +411,13 @@ def register_properties() -> None:
         update=_passes_changed,
         description="The bvhlab render engine's traversal-cost heatmap (box tests of the primary rays) as a pass",
     )
+    bpy.types.ViewLayer.bvhlab_use_pass_counters = BoolProperty(
+        name="BVH Counters",
+        default=False,
+        update=_passes_changed,
+        description="The traversal counters of the primary rays (box tests, box hits, primitive tests, primitive "
+        "hits, instance hits) as one float pass each, in raw counts per ray",
+    )
     # Stored as the plain custom property bvhlab.blender reads, so files and the CLI need no add-on.
     bpy.types.Object.bvhlab_analytic_sphere = BoolProperty(
         name="Analytic sphere",
@@ -391,5 +429,6 @@ def register_properties() -> None:
 
 def unregister_properties() -> None:
     del bpy.types.ViewLayer.bvhlab_use_pass_heatmap
+    del bpy.types.ViewLayer.bvhlab_use_pass_counters
     del bpy.types.Object.bvhlab_analytic_sphere
     del bpy.types.Scene.bvhlab

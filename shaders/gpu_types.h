@@ -130,6 +130,24 @@ struct GpuBox {
 /// RenderSettings::mode: the Whitted image, or the box tests of the primary rays as colours.
 BVHLAB_CONST uint MODE_SHADE = 0u;
 BVHLAB_CONST uint MODE_HEATMAP = 1u;
+/// Traversal counters of a ray (issue 35; AMD's Radeon Raytracing Analyzer's traversal counters),
+/// in this order in the per-pixel sums (DeviceAddresses::accum_counts) and the images
+/// (RenderImages::counters); TraversalCounter (render_settings.h) names them. Counted in
+/// traverse.glsl for every walk; a pixel keeps those of its primary rays' closest-hit walks.
+BVHLAB_CONST uint COUNTER_BOX_TESTS = 0u;      ///< boxes tested (the heatmap's cost)
+BVHLAB_CONST uint COUNTER_BOX_HITS = 1u;       ///< ... that the ray entered
+BVHLAB_CONST uint COUNTER_PRIM_TESTS = 2u;     ///< primitives tested
+BVHLAB_CONST uint COUNTER_PRIM_HITS = 3u;      ///< ... that became the closest hit so far
+BVHLAB_CONST uint COUNTER_INSTANCE_HITS = 4u;  ///< two-level: instances entered (TLAS leaves reached)
+BVHLAB_CONST uint COUNTER_COUNT = 5u;
+/// One walk's traversal counters, or a pixel's sums of them (COUNTER_* order, one field each).
+struct TraversalCounts {
+    uint box_tests;
+    uint box_hits;
+    uint prim_tests;
+    uint prim_hits;
+    uint instance_hits;
+};
 /// The traversal variant (report §3.1), a specialization constant of trace.comp.
 BVHLAB_CONST uint TRAVERSAL_STACK = 0u;
 BVHLAB_CONST uint TRAVERSAL_STACKLESS = 1u;
@@ -153,6 +171,7 @@ struct DeviceAddresses {
     uvec2 slot_rays;      ///< uvec4[3 × ray_stack_entries] per slot: its Whitted ray stack
     uvec2 slot_nodes;     ///< uvec2[node_stack_entries] per slot: its traversal stack (child, entry t; traverse.glsl)
     uvec2 counters;       ///< uint[2], atomic: slots that ended a dispatch with work left, that failed
+    uvec2 accum_counts;   ///< uint[COUNTER_COUNT] per pixel: sums of the traversal counters (frame.count_traversal)
 };
 
 /// FrameParams::projection (camera.h Projection, in its order).
@@ -211,7 +230,7 @@ struct FrameParams {
     uint max_work_per_pixel;  ///< a trace with more steps of work in a pass fails (0xffffffff: no cap)
     float focus_distance;     ///< the thin lens's focus, along the view axis
     uint instance_count;      ///< two-level scenes: instances in the TLAS (0: a flat scene, one level)
-    uint unused;              ///< 0 (keeps addr 8-aligned)
+    uint count_traversal;     ///< 1: the trace pass sums the traversal counters into addr.accum_counts
     DeviceAddresses addr;
 };
 
@@ -241,7 +260,7 @@ BVHLAB_CONST uint MIN_STEPS_PER_DISPATCH = 16u;
 /// FrameParams::max_work_per_pixel meaning "no cap".
 BVHLAB_CONST uint NO_WORK_CAP = 0xffffffffu;
 /// Words (uvec4) of a slot's saved trace state (state.glsl).
-BVHLAB_CONST uint STATE_WORDS = 12u;
+BVHLAB_CONST uint STATE_WORDS = 14u;
 BVHLAB_CONST uint NO_HIT = 0xffffffffu;
 BVHLAB_CONST uint NODE_SKIP_MASK = 0x7fffffffu;
 BVHLAB_CONST float FAR_AWAY = 3.0e38f;  ///< tmax of a ray that may go anywhere
@@ -256,7 +275,8 @@ BVHLAB_CONST float SHININESS = 48.0f;  ///< Blinn-Phong exponent
 static_assert(sizeof(BvhNode) == 32, "BvhNode must stay 32 bytes (std430 layout)");
 static_assert(sizeof(BvhPair) == 64, "BvhPair must stay 64 bytes (std430 layout)");
 static_assert(sizeof(GpuTriangle) == 48 && sizeof(GpuSphere) == 32 && sizeof(GpuMaterial) == 32);
-static_assert(sizeof(GpuBox) == 32 && sizeof(GpuInstance) == 64 && sizeof(DeviceAddresses) == 15 * 8);
+static_assert(sizeof(TraversalCounts) == COUNTER_COUNT * 4);
+static_assert(sizeof(GpuBox) == 32 && sizeof(GpuInstance) == 64 && sizeof(DeviceAddresses) == 16 * 8);
 static_assert(offsetof(FrameParams, width) == 160 && offsetof(FrameParams, addr) == 256);
 static_assert(sizeof(FrameParams) == 256 + sizeof(DeviceAddresses));
 }  // namespace bvhlab::gpu

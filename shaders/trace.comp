@@ -14,6 +14,8 @@
 
 /// TRAVERSAL_STACK or TRAVERSAL_STACKLESS (report §3.1).
 layout(constant_id = 0) const uint TRAVERSAL = TRAVERSAL_STACK;
+/// Every traversal counter is counted (traverse.glsl); a few ALU operations a step on a GPU.
+const bool COUNT_TRAVERSAL = true;
 layout(local_size_x = TRACE_GROUP_X, local_size_y = TRACE_GROUP_Y) in;
 
 // A storage buffer, not a uniform one: Mesa 22.3 lavapipe recompiles (and leaks) a shader whose
@@ -52,6 +54,7 @@ uint sync_steps(uint steps) { return subgroupMax(steps); }
 vec4 g_sum;        // colour (rgb) and box tests (a) of the samples so far
 float g_depth;     // nearest primary hit
 uint g_samples;
+TraversalCounts g_counts;  // traversal counters of the samples so far (frame.count_traversal)
 uint g_slot;
 uvec4 state_load(uint k) { return Uvec4Array(frame.addr.slot_state).v[g_slot * STATE_WORDS + k]; }
 void state_store(uint k, uvec4 w) { Uvec4Array(frame.addr.slot_state).v[g_slot * STATE_WORDS + k] = w; }
@@ -60,19 +63,30 @@ void ray_word_store(uint k, uvec4 w) { Uvec4Array(frame.addr.slot_rays).v[g_slot
 uvec2 node_stack_load(uint k) { return Uvec2Array(frame.addr.slot_nodes).v[g_slot * frame.node_stack_entries + k]; }
 void node_stack_store(uint k, uvec2 e) { Uvec2Array(frame.addr.slot_nodes).v[g_slot * frame.node_stack_entries + k] = e; }
 uint samples_done(uvec2 p) { return g_samples; }
-void accumulate_sample(uvec2 p, vec3 color, float visits, float depth) {
-    g_sum = g_sum + vec4(color, visits);  // in sample order, as the CPU reference adds them
+void accumulate_sample(uvec2 p, vec3 color, TraversalCounts counts, float depth) {
+    g_sum = g_sum + vec4(color, float(counts.box_tests));  // in sample order, as the CPU reference adds them
     g_depth = min(g_depth, depth);
     g_samples = g_samples + 1u;
+    g_counts.box_tests += counts.box_tests;
+    g_counts.box_hits += counts.box_hits;
+    g_counts.prim_tests += counts.prim_tests;
+    g_counts.prim_hits += counts.prim_hits;
+    g_counts.instance_hits += counts.instance_hits;
 }
 
 uint pixel_index(uvec2 p) { return p.y * frame.width + p.x; }
 
 void load_sums(uvec2 p) {
     uint i = pixel_index(p);
+    g_counts = TraversalCounts(0u, 0u, 0u, 0u, 0u);
     g_sum = Vec4Array(frame.addr.accum_color).v[i];
     g_depth = FloatArray(frame.addr.accum_depth).v[i];
     g_samples = UintArray(frame.addr.accum_samples).v[i];
+    if (frame.count_traversal == 0u) return;
+    UintArray c = UintArray(frame.addr.accum_counts);
+    uint k = i * COUNTER_COUNT;
+    g_counts = TraversalCounts(c.v[k + COUNTER_BOX_TESTS], c.v[k + COUNTER_BOX_HITS], c.v[k + COUNTER_PRIM_TESTS],
+                               c.v[k + COUNTER_PRIM_HITS], c.v[k + COUNTER_INSTANCE_HITS]);
 }
 
 void store_sums(uvec2 p) {
@@ -80,6 +94,14 @@ void store_sums(uvec2 p) {
     Vec4Array(frame.addr.accum_color).v[i] = g_sum;
     FloatArray(frame.addr.accum_depth).v[i] = g_depth;
     UintArray(frame.addr.accum_samples).v[i] = g_samples;
+    if (frame.count_traversal == 0u) return;
+    UintArray c = UintArray(frame.addr.accum_counts);
+    uint k = i * COUNTER_COUNT;
+    c.v[k + COUNTER_BOX_TESTS] = g_counts.box_tests;
+    c.v[k + COUNTER_BOX_HITS] = g_counts.box_hits;
+    c.v[k + COUNTER_PRIM_TESTS] = g_counts.prim_tests;
+    c.v[k + COUNTER_PRIM_HITS] = g_counts.prim_hits;
+    c.v[k + COUNTER_INSTANCE_HITS] = g_counts.instance_hits;
 }
 
 #include "tracer/geometry.glsl"

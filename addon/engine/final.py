@@ -78,6 +78,8 @@ class FinalRender:
         # refused only after gigabytes of passes)
         tracer.check_size(frame.width, frame.height)
         settings = blender_scene.bvhlab.render_options()
+        if passes.counters_wanted(depsgraph.view_layer):  # the counter passes (issue 35)
+            settings = settings.replace(traversal_counters=True)
         camera, settings, unrendered = self._camera(blender_scene, scene.camera, frame, settings)
         for note in unrendered:
             engine.report({"WARNING"}, f"bvhlab: {note}")
@@ -127,13 +129,16 @@ class FinalRender:
         try:
             layer = result.layers[0]
             depth, heat = (layer.passes.get(name) is not None for name in (passes.DEPTH, passes.HEATMAP))
+            counters = job.keeps_counters and any(
+                layer.passes.get(n) is not None for n in passes.counter_passes().values()
+            )
             total = job.samples_per_pixel
             for target in sample_passes(total):
                 try:
                     job.run(target, cancelled=engine.test_break)
                 except TraceCancelled:
                     cancelled = True
-                passes.write_all(layer, job.images(depth=depth, heat=heat))
+                passes.write_all(layer, job.images(depth=depth, heat=heat, counters=counters))
                 engine.update_result(result)
                 if cancelled:
                     break

@@ -6,10 +6,12 @@ from __future__ import annotations
 import bpy
 
 from .. import state
+from ..legend_icons import heat_legend
 from ..panels import draw_build_settings, milliseconds
 from ..text_layout import wrapped_label
+from .counter_view import NO_COUNTER
 from .engine import ENGINE_ID
-from .passes import HEATMAP_PROPERTY
+from .passes import COUNTERS_PROPERTY, HEATMAP_PROPERTY
 
 
 class _EnginePanel:
@@ -73,7 +75,30 @@ class BVHLAB_PT_engine_viewport(_EnginePanel, bpy.types.Panel):
         settings = context.scene.bvhlab
         col = self._column()
         col.prop(settings, "render_mode", text="Display")
+        col.prop(settings, "viewport_counter")
+        if settings.viewport_counter != NO_COUNTER:
+            col.prop(settings, "counter_range_auto")
+            sub = col.column(align=True)
+            sub.active = not settings.counter_range_auto
+            sub.prop(settings, "counter_range_min")
+            sub.prop(settings, "counter_range_max")
+            _counter_legend(self.layout, context, settings)
         col.prop(settings, "viewport_budget_ms")
+
+
+def _counter_legend(layout, context, settings) -> None:
+    """The heat ramp's colours with the numbers of the range the last viewport frame used."""
+    from bvhlab.counters import AUTO_PERCENTILE, LABELS
+
+    with state.lock:
+        frames = dict(state.last_viewport.get(state.key(context.scene), {}))
+    shown = [t for t in frames.values() if t.get("counter") == settings.viewport_counter and t.get("counter_range")]
+    if not shown:
+        layout.label(text="The legend follows the next viewport frame", icon="INFO")
+        return
+    lo, hi = shown[-1]["counter_range"]
+    how = f"auto: 0 to the {AUTO_PERCENTILE:g}th percentile" if settings.counter_range_auto else "manual"
+    heat_legend(layout, lo, hi, f"{LABELS[settings.viewport_counter]} per primary ray ({how})")
 
 
 class BVHLAB_PT_engine_performance(_EnginePanel, bpy.types.Panel):
@@ -176,6 +201,7 @@ class BVHLAB_PT_engine_passes(_EnginePanel, bpy.types.Panel):
         col.label(text="Combined is always rendered")
         col.prop(context.view_layer, "use_pass_z", text="Depth")
         col.prop(context.view_layer, HEATMAP_PROPERTY)
+        col.prop(context.view_layer, COUNTERS_PROPERTY)
 
 
 classes = (

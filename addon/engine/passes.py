@@ -1,5 +1,6 @@
-"""The engine's render passes: Combined, Depth (Blender's Z pass, when the view layer asks for it)
-and the traversal-cost heatmap as a pass of its own, so they can be saved (multilayer EXR) and
+"""The engine's render passes: Combined, Depth (Blender's Z pass, when the view layer asks for it),
+the traversal-cost heatmap as a pass of its own, and the traversal counters (issue 35: one float
+pass per counter, raw counts per primary ray), so they can be saved (multilayer EXR) and
 composited (Render Layers node)."""
 
 from __future__ import annotations
@@ -9,6 +10,19 @@ import numpy as np
 COMBINED, DEPTH, HEATMAP = "Combined", "Depth", "BVH Heatmap"
 #: The view layer's switch for the heatmap pass (a property the add-on adds to ViewLayer).
 HEATMAP_PROPERTY = "bvhlab_use_pass_heatmap"
+#: The view layer's switch for the counter passes.
+COUNTERS_PROPERTY = "bvhlab_use_pass_counters"
+
+
+def counter_passes() -> dict[str, str]:
+    """Counter name → its pass's name ("BVH Box Tests", ...), in the core's order."""
+    from bvhlab.counters import COUNTERS, LABELS
+
+    return {c: f"BVH {LABELS[c].title()}" for c in COUNTERS}
+
+
+def counters_wanted(view_layer) -> bool:
+    return bool(getattr(view_layer, COUNTERS_PROPERTY, False))
 
 
 def wanted(view_layer) -> list[tuple[str, int, str, str]]:
@@ -18,6 +32,8 @@ def wanted(view_layer) -> list[tuple[str, int, str, str]]:
         passes.append((DEPTH, 1, "Z", "VALUE"))
     if getattr(view_layer, HEATMAP_PROPERTY, False):
         passes.append((HEATMAP, 4, "RGBA", "COLOR"))
+    if counters_wanted(view_layer):
+        passes.extend((name, 1, "X", "VALUE") for name in counter_passes().values())
     return passes
 
 
@@ -39,10 +55,13 @@ def write(layer, name: str, pixels: np.ndarray) -> bool:
 
 
 def write_all(layer, images) -> None:
-    """Combined, and Depth and the heatmap where the render made them (TraceImages), into a
-    RenderLayer of the Render Result."""
+    """Combined, and Depth, the heatmap and the counters where the render made them (TraceImages),
+    into a RenderLayer of the Render Result."""
     write(layer, COMBINED, images.color)
     if images.depth is not None:
         write(layer, DEPTH, images.depth)
     if images.heat is not None:
         write(layer, HEATMAP, images.heat)
+    if images.counters is not None:
+        for k, name in enumerate(counter_passes().values()):
+            write(layer, name, images.counters[..., k])

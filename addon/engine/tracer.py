@@ -24,20 +24,23 @@ class TraceCancelled(Exception):
 @dataclass(frozen=True)
 class TraceImages:
     """Row 0 at the top. color: float32 (H, W, 4); depth: float32 (H, W) or None; heat: float32
-    (H, W, 4) heat colours of the box tests per primary ray, or None."""
+    (H, W, 4) heat colours of the box tests per primary ray, or None; counters: float32 (H, W, 5)
+    traversal counters per primary ray (bvhlab.counters.COUNTERS order), or None."""
 
     color: np.ndarray
     depth: np.ndarray | None
     heat: np.ndarray | None
+    counters: np.ndarray | None = None
 
 
 class TraceJob:
     """A render in sample passes (bvhlab.RenderJob): run to a number of samples per pixel, read the
     images of the samples so far at any time (after Esc too: what is finished is kept)."""
 
-    def __init__(self, job, width: int, height: int):
+    def __init__(self, job, width: int, height: int, keeps_counters: bool = False):
         self._job = job
         self.size = (width, height)
+        self.keeps_counters = keeps_counters  # started with traversal_counters
 
     @property
     def samples_per_pixel(self) -> int:
@@ -57,9 +60,9 @@ class TraceJob:
         except bvhlab.RenderCancelled:
             raise TraceCancelled() from None
 
-    def images(self, depth: bool = False, heat: bool = False) -> TraceImages:
-        result = self._job.result(color=True, depth=depth, cost=False, heat=heat)
-        return TraceImages(result.color, result.depth, result.heat)
+    def images(self, depth: bool = False, heat: bool = False, counters: bool = False) -> TraceImages:
+        result = self._job.result(color=True, depth=depth, cost=False, heat=heat, counters=counters)
+        return TraceImages(result.color, result.depth, result.heat, result.counters)
 
     @property
     def timings(self) -> dict:
@@ -93,14 +96,15 @@ class Tracer:
         """A render of `scene` seen from `camera` (a bvhlab.Camera or View) with `options` (a
         bvhlab.RenderOptions), nothing traced yet; `threads`: the CPU reference's (0: every core)."""
         job = self.renderer.start(scene, bvh, width, height, camera=camera, options=options, threads=threads)
-        return TraceJob(job, width, height)
+        return TraceJob(job, width, height, options.traversal_counters)
 
     def trace(self, scene, bvh, camera, width: int, height: int, options, threads: int = 0, cancelled=None):
-        """(TraceImages, timings) of the whole render (the Combined image only). With `cancelled`,
-        raises TraceCancelled within one dispatch of it returning True."""
+        """(TraceImages, timings) of the whole render (the Combined image, and the counters where
+        `options` keeps them). With `cancelled`, raises TraceCancelled within one dispatch of it
+        returning True."""
         job = self.start(scene, bvh, camera, width, height, options, threads)
         job.run(cancelled=cancelled)
-        return job.images(), job.timings
+        return job.images(counters=options.traversal_counters), job.timings
 
 
 _tracers: dict[str, Tracer] = {}

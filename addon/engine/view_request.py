@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from ..trees import key_of, update_config
+from .counter_view import counter_view
 from .settings import backend
 from .view_camera import view_frustum
 from .viewport import ViewRequest
@@ -19,6 +20,7 @@ def view_request(context, blender_scene) -> ViewRequest:
         blender_scene.bvhlab.viewport_budget_ms,
         camera_view_note(view, context.space_data, blender_scene),
         update_config(blender_scene),
+        counter_view(blender_scene.bvhlab),
     )
 
 

@@ -21,6 +21,7 @@ import weakref
 from dataclasses import dataclass
 
 from ..trees import TreeKey, cache
+from .counter_view import counter_colors
 from .settings import VIEWPORT_THREADS
 from .tracer import TraceCancelled, open_tracer
 from .view_camera import ViewFrustum
@@ -44,6 +45,7 @@ class ViewRequest:
     budget_ms: float
     note: str = ""  # what of the camera the viewport does not show (view_request.camera_view_note)
     update: object = None  # the bvhlab.UpdateConfig a moved or edited mesh's tree is updated with
+    counter: object = None  # counter_view.CounterView: a traversal counter instead of the image; None: the image
 
 
 @dataclass(frozen=True)
@@ -222,7 +224,9 @@ class ViewportSession:
                 )
             except TraceCancelled:
                 return
-            image = images.color
+            image, counter_range = images.color, None
+            if request.counter is not None and images.counters is not None:
+                image, counter_range = counter_colors(images.counters, request.counter)
             wall_ms = (time.perf_counter() - started) * 1e3
             self._ms_per_sample = timings["trace_ms"] / (width * height * spp)
             frame_timings = {
@@ -239,6 +243,8 @@ class ViewportSession:
                 "device": tracer.device,
                 "note": tracer.note,
                 "latency_ms": (time.monotonic() - self._request_time) * 1e3,
+                "counter": request.counter.counter if counter_range else None,
+                "counter_range": counter_range,  # what the panel's legend shows
             }
             self._publish(ViewFrame(image, request, level, scale, frame_timings, scene_serial))
 

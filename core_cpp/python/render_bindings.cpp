@@ -34,6 +34,7 @@ using Materials = nb::ndarray<const float, nb::shape<-1, 6>, nb::c_contig, nb::d
 using Indices = nb::ndarray<const std::int32_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
 using Rgba = nb::ndarray<float, nb::shape<-1, -1, 4>, nb::c_contig, nb::device::cpu>;
 using Plane = nb::ndarray<float, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
+using Counters = nb::ndarray<float, nb::shape<-1, -1, gpu::COUNTER_COUNT>, nb::c_contig, nb::device::cpu>;
 
 /// A RenderJob used from Python: one call at a time (a job's sums are not for two threads). The
 /// lock is only ever waited for without the GIL, and in slices, so that Ctrl-C still reaches a
@@ -139,10 +140,11 @@ float* pixels_of(const std::optional<Array>& a, const RenderSettings& s, const c
 }
 
 void resolve_job(PyRenderJob& self, const std::optional<Rgba>& color, const std::optional<Plane>& depth,
-                 const std::optional<Plane>& cost, const std::optional<Rgba>& heat) {
+                 const std::optional<Plane>& cost, const std::optional<Rgba>& heat,
+                 const std::optional<Counters>& counters) {
     const RenderSettings& s = self.job->settings();
     RenderImages out{pixels_of(color, s, "color"), pixels_of(depth, s, "depth"), pixels_of(cost, s, "cost"),
-                     pixels_of(heat, s, "heat")};
+                     pixels_of(heat, s, "heat"), pixels_of(counters, s, "counters")};
     self.locked([&](RenderJob& job) { job.resolve(out); });
 }
 
@@ -152,6 +154,7 @@ void bind_job(nb::module_& m) {
              "Traces until every pixel has `samples` samples; False when `progress` said stop.")
         .def("resolve", &resolve_job, "color"_a.noconvert().none(), "depth"_a.noconvert().none(),
              "cost"_a.noconvert().none(), "heat"_a.noconvert().none() = nb::none(),
+             "counters"_a.noconvert().none() = nb::none(),
              "Writes the images of the samples so far into the given arrays.")
         .def_prop_ro("samples_done",
                      [](PyRenderJob& j) { return j.read([](const RenderJob& job) { return job.samples_done(); }); })
@@ -191,6 +194,13 @@ void bind_palettes(nb::module_& m) {
             return color_array(x.shape(0), [&](std::size_t i) { return palette.heat_color(x.data()[i]); });
         },
         "x"_a.noconvert(), "Heatmap colours of values in [0, 1] (blue → red; the heatmap mode's ramp).");
+    m.def(
+        "diverging_colors",
+        [](const nb::ndarray<const float, nb::ndim<1>, nb::c_contig, nb::device::cpu>& x) {
+            gpu::Palette palette;
+            return color_array(x.shape(0), [&](std::size_t i) { return palette.diverging_color(x.data()[i]); });
+        },
+        "x"_a.noconvert(), "Colours of signed values in [-1, 1] (blue → white → red; counter differences).");
 }
 
 #ifdef BVHLAB_VULKAN

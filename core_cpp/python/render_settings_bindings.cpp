@@ -76,6 +76,12 @@ void bind_settings(nb::module_& m) {
         .value("stackless", Traversal::Stackless)
         .value("wide", Traversal::Wide);
     nb::enum_<RenderMode>(m, "RenderMode").value("shade", RenderMode::Shade).value("heatmap", RenderMode::Heatmap);
+    nb::enum_<TraversalCounter>(m, "TraversalCounter", "A traversal counter of a pixel (render_settings.h).")
+        .value("box_tests", TraversalCounter::BoxTests)
+        .value("box_hits", TraversalCounter::BoxHits)
+        .value("prim_tests", TraversalCounter::PrimTests)
+        .value("prim_hits", TraversalCounter::PrimHits)
+        .value("instance_hits", TraversalCounter::InstanceHits);
     nb::class_<RenderSettings> s(m, "RenderSettings", "What a render is asked to do (render_settings.h).");
     s.def(nb::init<>())
         .def_rw("width", &RenderSettings::width)
@@ -92,6 +98,8 @@ void bind_settings(nb::module_& m) {
         .def_rw("traversal", &RenderSettings::traversal)
         .def_rw("mode", &RenderSettings::mode)
         .def_rw("heatmap_scale", &RenderSettings::heatmap_scale, "box tests at full red; None: 8 × tree height")
+        .def_rw("traversal_counters", &RenderSettings::traversal_counters,
+                "keep every traversal counter per pixel (RenderJob.resolve's counters)")
         .def_rw("steps_per_dispatch", &RenderSettings::steps_per_dispatch)
         .def_rw("max_steps_per_pixel", &RenderSettings::max_steps_per_pixel)
         .def(
@@ -114,6 +122,8 @@ void bind_settings(nb::module_& m) {
     m.attr("RENDER_TRAVERSALS") = nb::tuple(nb::cast(render_traversal_names()));
     m.attr("DEFAULT_TRAVERSAL") = to_string(RenderSettings{}.traversal);  // the one definition: render_settings.h
     m.attr("RENDER_MODES") = nb::tuple(nb::cast(render_mode_names()));
+    m.def("parse_traversal_counter", [](const std::string& name) { return parse_traversal_counter(name); });
+    m.attr("TRAVERSAL_COUNTERS") = nb::tuple(nb::cast(traversal_counter_names()));
     m.attr("MAX_RAY_DEPTH") = gpu::MAX_RAY_DEPTH;
     m.attr("MAX_SAMPLES_PER_AXIS") = gpu::MAX_SAMPLES_PER_AXIS;
     m.attr("MAX_IMAGE_DIMENSION") = kMaxImageDimension;

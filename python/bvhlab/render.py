@@ -55,6 +55,8 @@ class RenderResult:
     1e10 where nothing was hit, as Cycles writes.
     cost: float32 (H, W), box tests per primary ray, averaged over the pixel's samples.
     heat: float32 (H, W, 4), `cost` in the heatmap's colours (what mode "heatmap" shows as colour).
+    counters: float32 (H, W, 5), the traversal counters per primary ray in bvhlab.counters.COUNTERS
+    order, averaged over the pixel's samples (renders with RenderOptions(traversal_counters=True)).
     samples: samples every pixel has (after a cancelled run some pixels have one more)."""
 
     color: np.ndarray | None
@@ -63,6 +65,7 @@ class RenderResult:
     samples: int
     timings: dict
     heat: np.ndarray | None = None
+    counters: np.ndarray | None = None
 
 
 def render(
@@ -142,8 +145,11 @@ class RenderJob:
                 f"{self.samples_per_pixel} samples per pixel"
             )
 
-    def result(self, color: bool = True, depth: bool = True, cost: bool = True, heat: bool = False) -> RenderResult:
-        """The images of the samples so far (see RenderResult)."""
+    def result(
+        self, color: bool = True, depth: bool = True, cost: bool = True, heat: bool = False, counters: bool = False
+    ) -> RenderResult:
+        """The images of the samples so far (see RenderResult). `counters` needs a job started with
+        traversal_counters=True (ValueError otherwise)."""
         h, w = self._settings.height, self._settings.width
         images = (
             np.empty((h, w, 4), np.float32) if color else None,
@@ -151,8 +157,11 @@ class RenderJob:
             np.empty((h, w), np.float32) if cost else None,
         )
         heat_image = np.empty((h, w, 4), np.float32) if heat else None
-        self._job.resolve(*images, heat_image)
-        return RenderResult(*images, samples=self.samples_done, timings=self.timings, heat=heat_image)
+        counter_image = np.empty((h, w, len(_core.TRAVERSAL_COUNTERS)), np.float32) if counters else None
+        self._job.resolve(*images, heat_image, counter_image)
+        return RenderResult(
+            *images, samples=self.samples_done, timings=self.timings, heat=heat_image, counters=counter_image
+        )
 
     @property
     def timings(self) -> dict:

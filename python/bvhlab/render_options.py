@@ -31,7 +31,9 @@ class RenderOptions:
     (report §3.3), coloured by depth (`color_by_depth`) or in `line_color`, `line_width` pixels
     wide. `traversal`: "stack" or "stackless" (report §3.1). `mode`: "shade" or "heatmap" (box
     tests of the primary rays, blue = few, red = `heatmap_scale` or more; default 8 × tree height).
-    `steps_per_dispatch` (how the work is cut, never the image; default adaptive) and
+    `traversal_counters`: keep every traversal counter per pixel (RenderResult.counters;
+    bvhlab.counters; 20 more bytes a pixel). `steps_per_dispatch` (how the work is cut, never the
+    image; default adaptive) and
     `max_steps_per_pixel` (a pixel needing more work in one run raises RenderIncomplete; default:
     the most a correct trace of the scene can take)."""
 
@@ -44,6 +46,7 @@ class RenderOptions:
     traversal: str = _core.DEFAULT_TRAVERSAL
     mode: str = _CORE.mode.name
     heatmap_scale: float | None = None
+    traversal_counters: bool = bool(_CORE.traversal_counters)
     steps_per_dispatch: int | None = None
     max_steps_per_pixel: int | None = None
 
@@ -77,6 +80,7 @@ class RenderOptions:
         s.traversal = _core.parse_traversal(_name("traversal", self.traversal))
         s.mode = _core.parse_render_mode(_name("mode", self.mode))
         s.heatmap_scale = None if self.heatmap_scale is None else _real("heatmap_scale", self.heatmap_scale)
+        s.traversal_counters = bool(self.traversal_counters)
         if self.steps_per_dispatch is not None:
             s.steps_per_dispatch = _checks.integer("steps_per_dispatch", self.steps_per_dispatch, 0, 2**31)
         if self.max_steps_per_pixel is not None:

@@ -51,7 +51,9 @@ struct TraceState {
     RayTask task;     ///< the ray being traced
     vec4 overlay;     ///< the overlay pass's line at this pixel: rgb, distance (w = 0: none)
     vec3 color;       ///< of this sample so far
-    float visits;     ///< box tests of this sample's primary ray (heatmap)
+    TraversalCounts counts;  ///< of this sample's primary ray's closest-hit walk (issue 35: secondary and
+                             ///< shadow rays are not counted, so a pixel's counters describe the tree
+                             ///< seen from the camera, as Bvh.trace_pixel records it)
     float depth;      ///< view-axis depth of what this sample's primary ray shows (inf: sky)
 };
 
@@ -270,18 +272,18 @@ void start_sample(INOUT(TraceState) s) {
     }
     s.task = camera_ray(s.pixel, s.sample_index);
     s.color = vec3(0.0f);
-    s.visits = 0.0f;
+    s.counts = no_counts();
     s.depth = infinity();
     // no ray (outside the fisheye's ellipse): a black sample that hit nothing, as in Cycles
     s.phase = dot(s.task.dir, s.task.dir) > 0.0f ? PHASE_START : PHASE_NEXT_RAY;
 }
 
-/// The next ray off the stack becomes the task, or the sample is complete: its colour, box tests
+/// The next ray off the stack becomes the task, or the sample is complete: its colour, counters
 /// and depth go into the pixel's sums (whole samples only, so a stopped render leaves consistent
 /// sums).
 void next_ray(INOUT(TraceState) s) {
     if (s.rays == 0u) {
-        accumulate_sample(s.pixel, s.color, s.visits, s.depth);
+        accumulate_sample(s.pixel, s.color, s.counts, s.depth);
         s.sample_index += 1u;
         s.phase = PHASE_SAMPLE;
         return;
@@ -312,12 +314,12 @@ void finish_shading(INOUT(TraceState) s, Surface f) {
         push_ray(s, ray_task(f.p + f.facing * eps, reflect(s.task.dir, f.facing), s.task.weight * reflect_weight, s.task.depth + 1u));
 }
 
-/// The closest-hit query of `task` is answered: the primary ray's box tests and depth; the sky
+/// The closest-hit query of `task` is answered: the primary ray's traversal counters and depth; the sky
 /// (or the overlay's line, report §3.3) for a miss. Returns true for a hit.
 bool after_closest(INOUT(TraceState) s) {
     bool line = s.task.depth == 0u && s.overlay.w > 0.0f;
     if (s.task.depth == 0u) {
-        s.visits = float(s.hit.visited);
+        s.counts = s.hit.counts;
         s.depth = s.hit.ref != NO_HIT ? camera_depth(s.task, s.hit.t) : (line ? camera_depth(s.task, s.overlay.w) : infinity());
     }
     if (s.hit.ref != NO_HIT) return true;
@@ -399,7 +401,7 @@ TraceState begin_pixel(uvec2 p, uint first, uint target) {
     s.task = ray_task(vec3(0.0f), vec3(0.0f), vec3(0.0f), 0u);
     s.overlay = overlay_at(p);
     s.color = vec3(0.0f);
-    s.visits = 0.0f;
+    s.counts = no_counts();
     s.depth = infinity();
     return s;
 }

@@ -15,12 +15,14 @@ void save_state(TraceState s, uint stamp) {
     state_store(3u, word3(s.ray.origin, floatBitsToUint(s.ray.tmin)));
     state_store(4u, word3(s.ray.dir, floatBitsToUint(s.hit.t)));
     state_store(5u, uvec4(s.hit.ref, floatBitsToUint(s.hit.u), floatBitsToUint(s.hit.v), floatBitsToUint(s.hit.transmission)));
-    state_store(6u, uvec4(s.hit.visited, floatBitsToUint(s.closest.t), s.closest.ref, s.closest.visited));
+    state_store(6u, uvec4(s.hit.counts.box_tests, floatBitsToUint(s.closest.t), s.closest.ref, s.hit.counts.box_hits));
     state_store(7u, word3(s.task.origin, s.task.depth));
-    state_store(8u, word3(s.task.dir, floatBitsToUint(s.visits)));
+    state_store(8u, word3(s.task.dir, s.counts.box_tests));
     state_store(9u, word3(s.task.weight, floatBitsToUint(s.depth)));
     state_store(10u, word3(s.color, s.work));
     state_store(11u, uvec4(s.walk.instance, s.walk.outer, s.hit.instance, s.closest.instance));
+    state_store(12u, uvec4(s.hit.counts.prim_tests, s.hit.counts.prim_hits, s.hit.counts.instance_hits, 0u));
+    state_store(13u, uvec4(s.counts.box_hits, s.counts.prim_tests, s.counts.prim_hits, s.counts.instance_hits));
 }
 
 uint slot_stamp() { return state_load(2u).w; }
@@ -35,8 +37,8 @@ void save_done(TraceState s, uint stamp) {
 /// Whether the slot holds a trace of this tile and pass (`stamp`) that is over (done or failed).
 bool slot_done(uint stamp) { return slot_stamp() == stamp && state_load(0u).z >= PHASE_DONE; }
 
-/// The state save_state stored. (The closest hit's barycentrics and transmission are not kept:
-/// shading never reads them.)
+/// The state save_state stored. (The closest hit's barycentrics, transmission and counters are
+/// not kept: shading never reads them.)
 TraceState load_state() {
     uvec4 w0 = state_load(0u);
     uvec4 w1 = state_load(1u);
@@ -62,12 +64,12 @@ TraceState load_state() {
     s.hit.u = uintBitsToFloat(w5.y);
     s.hit.v = uintBitsToFloat(w5.z);
     s.hit.transmission = uintBitsToFloat(w5.w);
-    s.hit.visited = w6.x;
+    s.hit.counts.box_tests = w6.x;
+    s.hit.counts.box_hits = w6.w;
     s.closest = empty_hit(uintBitsToFloat(w6.y));
     s.closest.ref = w6.z;
-    s.closest.visited = w6.w;
     s.task = ray_task(vec3_of(w7), vec3_of(w8), vec3_of(w9), w7.w);
-    s.visits = uintBitsToFloat(w8.w);
+    s.counts.box_tests = w8.w;
     s.depth = uintBitsToFloat(w9.w);
     uvec4 w10 = state_load(10u);
     s.color = vec3_of(w10);
@@ -77,5 +79,14 @@ TraceState load_state() {
     s.walk.outer = w11.y;
     s.hit.instance = w11.z;
     s.closest.instance = w11.w;
+    uvec4 w12 = state_load(12u);
+    s.hit.counts.prim_tests = w12.x;
+    s.hit.counts.prim_hits = w12.y;
+    s.hit.counts.instance_hits = w12.z;
+    uvec4 w13 = state_load(13u);
+    s.counts.box_hits = w13.x;
+    s.counts.prim_tests = w13.y;
+    s.counts.prim_hits = w13.z;
+    s.counts.instance_hits = w13.w;
     return s;
 }

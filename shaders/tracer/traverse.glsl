@@ -12,6 +12,10 @@
 // the stack walk pushes the BLAS's entries above the TLAS's, the stackless one resumes at the node
 // after the instance's leaf. Every tree lives in one forest (the scene's node, pair and primitive
 // arrays), its indices moved to its place there, so the steps are those of a flat tree.
+//
+// Traversal counters (issue 35, Hit::counts): box tests always (the heatmap's cost); box hits,
+// primitive tests and hits and instance hits where COUNT_TRAVERSAL (trace.comp: always; the CPU
+// reference: only in renders that keep them, so the others run the walk of before).
 
 struct Hit {
     float t;        ///< closest-hit: distance so far; shadow: the end of the segment
@@ -20,8 +24,18 @@ struct Hit {
     float u;        ///< triangle barycentrics
     float v;
     float transmission;  ///< shadow rays: product of the transparencies crossed (report §2.1)
-    uint visited;   ///< box tests, for the heatmap
+    TraversalCounts counts;  ///< what this walk tested (issue 35; a pixel keeps its primary ray's)
 };
+
+TraversalCounts no_counts() {
+    TraversalCounts c;
+    c.box_tests = 0u;
+    c.box_hits = 0u;
+    c.prim_tests = 0u;
+    c.prim_hits = 0u;
+    c.instance_hits = 0u;
+    return c;
+}
 
 Hit empty_hit(float tmax) {
     Hit h;
@@ -31,7 +45,7 @@ Hit empty_hit(float tmax) {
     h.u = 0.0f;
     h.v = 0.0f;
     h.transmission = 1.0f;
-    h.visited = 0u;
+    h.counts = no_counts();
     return h;
 }
 
@@ -59,12 +73,12 @@ bool visit_primitive(GpuTriangle p, TraceRay r, bool shadow, uint instance, INOU
     if ((p.ref & REF_SPHERE_BIT) != 0u) {
         float t;
         if (shadow) crossings = sphere_crossings(p.v0, p.v1.x, r, hit.t);
-        else if (hit_sphere(p.v0, p.v1.x, r, hit.t, t) && closer(t, p.ref, hit)) { hit.t = t; hit.ref = p.ref; hit.instance = instance; }
+        else if (hit_sphere(p.v0, p.v1.x, r, hit.t, t) && closer(t, p.ref, hit)) { hit.t = t; hit.ref = p.ref; hit.instance = instance; if (COUNT_TRAVERSAL) hit.counts.prim_hits += 1u; }
     } else {
         vec3 tuv;
         if (hit_triangle(p.v0, p.v1, p.v2, r, hit.t, tuv)) {
             if (shadow) crossings = tuv.x < hit.t ? 1u : 0u;
-            else if (closer(tuv.x, p.ref, hit)) { hit.t = tuv.x; hit.u = tuv.y; hit.v = tuv.z; hit.ref = p.ref; hit.instance = instance; }
+            else if (closer(tuv.x, p.ref, hit)) { hit.t = tuv.x; hit.u = tuv.y; hit.v = tuv.z; hit.ref = p.ref; hit.instance = instance; if (COUNT_TRAVERSAL) hit.counts.prim_hits += 1u; }
         }
     }
     if (crossings == 0u) return false;
@@ -196,7 +210,8 @@ void step_stack_node(INOUT(Walk) w, TraceRay r, INOUT(Hit) hit) {
     BvhPair p = load_pair(w.node);
     float ta = box_entry(p.lo_a, p.hi_a, r, hit.t);
     float tb = box_entry(p.lo_b, p.hi_b, r, hit.t);
-    hit.visited += 2u;
+    hit.counts.box_tests += 2u;
+    if (COUNT_TRAVERSAL) hit.counts.box_hits += uint(ta >= 0.0f) + uint(tb >= 0.0f);
     if (ta < 0.0f && tb < 0.0f) {
         w.state = WALK_POP;
         return;
@@ -221,8 +236,10 @@ void step_stackless_node(INOUT(Walk) w, TraceRay r, uint end, INOUT(Hit) hit) {
     }
     BvhNode n = load_node(w.node);
     bool leaf = (n.info & NODE_INTERNAL_BIT) == 0u;
-    hit.visited += 1u;
-    if (box_entry(n.lo, n.hi, r, hit.t) < 0.0f) w.node = leaf ? w.node + 1u : (n.info & NODE_SKIP_MASK);
+    bool entered = box_entry(n.lo, n.hi, r, hit.t) >= 0.0f;
+    hit.counts.box_tests += 1u;
+    if (COUNT_TRAVERSAL) hit.counts.box_hits += uint(entered);
+    if (!entered) w.node = leaf ? w.node + 1u : (n.info & NODE_SKIP_MASK);
     else if (leaf) enter_leaf(w, n.index, n.info);
     else w.node += 1u;
 }
@@ -232,6 +249,7 @@ void step_stackless_node(INOUT(Walk) w, TraceRay r, uint end, INOUT(Hit) hit) {
 void step_leaf(INOUT(Walk) w, TraceRay r, bool shadow, INOUT(Hit) hit) {
     GpuTriangle p = load_leaf_prim(w.leaf_next);
     w.leaf_next += 1u;
+    if (COUNT_TRAVERSAL) hit.counts.prim_tests += 1u;
     if (visit_primitive(p, r, shadow, w.instance, hit)) w.state = WALK_FINISHED;
     else if (w.leaf_next >= w.leaf_end) {
         w.state = TRAVERSAL == TRAVERSAL_STACKLESS ? WALK_NODE : WALK_POP;
@@ -277,14 +295,17 @@ void walk(INOUT(Walk) walk_state, TraceRay r, bool shadow, INOUT(Hit) query, INO
     while (w.state != WALK_FINISHED && steps < budget) {
         steps += 1u;
         if (w.state >= WALK_INSTANCE) {  // two-level only
+            if (COUNT_TRAVERSAL) hit.counts.instance_hits += uint(w.state == WALK_INSTANCE);
             change_level(w, r, world_origin, world_dir, level);
             steps += 1u;
             work += 1u;
         }
         if (w.state == WALK_ROOT) {  // the stack walk tests the root's box, then enters its pair or the root leaf
             BvhNode root = load_node(level.root);
-            hit.visited += 1u;
-            if (box_entry(root.lo, root.hi, r, hit.t) < 0.0f) w.state = walk_done(w);
+            bool entered = box_entry(root.lo, root.hi, r, hit.t) >= 0.0f;
+            hit.counts.box_tests += 1u;
+            if (COUNT_TRAVERSAL) hit.counts.box_hits += uint(entered);
+            if (!entered) w.state = walk_done(w);
             else if ((root.info & NODE_INTERNAL_BIT) == 0u) enter_leaf(w, root.index, root.info);
             else enter_child(w, level.root_pair, 0u);
             steps += 1u;

@@ -14,6 +14,7 @@ import harness
 import numpy as np
 
 import bvhlab
+import bvhlab.counters
 from bvhlab.blender import export_scene
 from bvhlab.blender.compat import use_multilayer_exr
 
@@ -51,7 +52,8 @@ def render_passes(tmp_dir, name: str = "render") -> dict:
     channels = exr.read_exr(path)
     layer = bpy.context.view_layer.name
     out = {}
-    for pass_name, ids in (("Combined", "RGBA"), ("Depth", "Z"), ("BVH Heatmap", "RGBA")):
+    counter_passes = [(f"BVH {bvhlab.counters.LABELS[c].title()}", "X") for c in bvhlab.counters.COUNTERS]
+    for pass_name, ids in (("Combined", "RGBA"), ("Depth", "Z"), ("BVH Heatmap", "RGBA"), *counter_passes):
         names = [f"{layer}.{pass_name}.{c}" for c in ids]
         if all(n in channels for n in names):
             out[pass_name] = np.stack([channels[n] for n in names], -1) if len(ids) > 1 else channels[names[0]]
@@ -167,6 +169,32 @@ def check_heatmap_is_box_tests(tmp_dir) -> None:
         candidates = heat_color((visited[y, x] + np.arange(-2, 3)) / scale)
         assert np.abs(candidates - got["BVH Heatmap"][y, x, :3]).max(-1).min() <= 1e-6, (y, x, visited[y, x])
     assert len(np.unique(visited)) > 10, "the heatmap must vary over the picture"
+
+
+def check_counter_passes_are_the_cpu_counters(tmp_dir) -> None:
+    """With the view layer's BVH Counters on, F12 writes one float pass per traversal counter: the
+    counts per primary ray of the CPU reference on the same export and tree (2×2 samples, mirror
+    and glass: the secondary rays are not counted), exactly."""
+    scene = harness.open_scene("whitted")
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 64, 48, 100
+    use_engine(scene, backend="cpu", render_supersampling=2, render_bounces=5, render_overlay=False)
+    bpy.context.view_layer.bvhlab_use_pass_counters = True
+    try:
+        got = render_passes(tmp_dir)
+    finally:
+        bpy.context.view_layer.bvhlab_use_pass_counters = False
+    exported = export_scene(bpy.context)
+    bvh = bvhlab.build(exported, config=scene.bvhlab.build_config())
+    options = scene.bvhlab.render_options().replace(traversal_counters=True)
+    job = bvhlab.Renderer("cpu").start(exported, bvh, 64, 48, options=options)
+    job.run()
+    expected = job.result(color=False, depth=False, cost=False, counters=True).counters
+    for k, counter in enumerate(bvhlab.counters.COUNTERS):
+        name = f"BVH {bvhlab.counters.LABELS[counter].title()}"
+        assert name in got, f"no {name} pass in {sorted(got)}"
+        np.testing.assert_array_equal(got[name], expected[..., k], err_msg=name)
+    assert got["BVH Box Tests"].max() > got["BVH Box Hits"].max() > 0 and got["BVH Primitive Tests"].max() > 0
+    print(f"counter passes: box tests up to {got['BVH Box Tests'].max():g} per primary ray")
 
 
 def _primary_directions(camera, width: int, height: int, samples_per_axis: int = 1) -> np.ndarray:

@@ -94,7 +94,7 @@ def _wait(condition, timeout: float = 120.0, what: str = "the viewport worker"):
     raise AssertionError(f"{what} did not get there within {timeout} s")
 
 
-def _session_for(scene, width: int, height: int, samples_per_axis: int, overlay=None):
+def _session_for(scene, width: int, height: int, samples_per_axis: int, overlay=None, counter=None):
     """A viewport worker fed the way view_update / view_draw feed it, looking through the scene
     camera; returns (session, request)."""
     from bvhlab.blender import LiveScene
@@ -105,10 +105,14 @@ def _session_for(scene, width: int, height: int, samples_per_axis: int, overlay=
     view, window = _camera_matrices(scene, width, height)
     frustum = view_camera.view_frustum(view, window, width, height)
     settings = bvhlab.RenderOptions(
-        samples_per_axis=samples_per_axis, max_depth=5, overlay_depth=overlay, traversal="stackless"
+        samples_per_axis=samples_per_axis,
+        max_depth=5,
+        overlay_depth=overlay,
+        traversal="stackless",
+        traversal_counters=counter is not None,
     )
     tree = _trees().TreeKey(scene.session_uid, "visible", bvhlab.BuildConfig())
-    request = viewport.ViewRequest(frustum, settings, "cpu", tree, budget_ms=5.0)
+    request = viewport.ViewRequest(frustum, settings, "cpu", tree, budget_ms=5.0, counter=counter)
     session = viewport.ViewportSession()
     session.set_scene(live.scene, report)
     session.request(request)
@@ -160,6 +164,31 @@ def check_viewport_worker_levels() -> None:
         print(f"viewport worker levels on the atrium at 240×160 (level, size, trace ms): {levels}")
     finally:
         session.close()
+
+
+def check_viewport_counter_display() -> None:
+    """The viewport showing a counter (primitive tests, auto range; then box hits over 0..4): the
+    full-resolution frame is the heat ramp of the CPU reference's counter over the range the
+    frame reports, and the auto range is 0 to the 99th percentile."""
+    from bvhlab import counters, palette
+
+    counter_view = _engine_module("counter_view")
+    scene = harness.open_scene("whitted")
+    for view in (counter_view.CounterView("prim_tests", None), counter_view.CounterView("box_hits", (0.0, 4.0))):
+        session, request, live = _session_for(scene, 64, 48, samples_per_axis=1, counter=view)
+        try:
+            frame = _wait(lambda s=session: _at_level(s, "full"))
+            job = bvhlab.Renderer("cpu").start(
+                live.scene, _tree_of(request).bvh, 64, 48, camera=request.frustum.camera(), options=request.settings
+            )
+            job.run()
+            plane = counters.counter_plane(job.result(color=False, depth=False, counters=True).counters, view.counter)
+            lo, hi = frame.timings["counter_range"]
+            assert (lo, hi) == (counters.auto_range(plane) if view.value_range is None else view.value_range)
+            np.testing.assert_array_equal(frame.image, palette.heat_image(plane, lo, hi))
+            assert frame.timings["counter"] == view.counter and len(np.unique(plane)) > 2
+        finally:
+            session.close()
 
 
 def _at_level(session, level: str):

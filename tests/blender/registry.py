@@ -144,6 +144,7 @@ def _engine() -> Iterator[Check]:
         engine.check_depth_is_camera_z,
         engine.check_rerender_reads_only_what_changed,
         engine.check_animation_frames,
+        engine.check_counter_passes_are_the_cpu_counters,
     ):
         yield Check("engine", check.__name__.removeprefix("check_"), check, folder=True)
     yield Check("engine", "errors_are_reported", engine.check_errors_are_reported)
@@ -152,6 +153,7 @@ def _engine() -> Iterator[Check]:
         viewport.check_viewport_worker_levels,
         viewport.check_viewport_build_cancels,
         viewport.check_viewport_settings_update,
+        viewport.check_viewport_counter_display,
     ):
         yield Check("engine", check.__name__.removeprefix("check_"), check)
     yield Check("engine", "command_line_frames", engine.check_command_line_frames, folder=True, binary=True)

@@ -11,6 +11,7 @@ import pytest
 from png_reader import read_png
 
 import bvhlab
+from bvhlab import legend
 from bvhlab.cli import main
 from bvhlab.library import load_scene, procedural
 from bvhlab.png import linear_to_srgb
@@ -105,7 +106,8 @@ def test_render_with_overlay_and_heatmap(tmp_path):
         )
         == 0
     )
-    assert read_png(out).shape == (64, 96, 4)
+    strip = legend.depth_legend(96, [1]).shape[0]  # the depth colours' legend under the image
+    assert read_png(out).shape == (64 + strip, 96, 4)
     assert line_pixels(out, 1) > 20 and line_pixels(out, 2) == 0
     heat = tmp_path / "heat.png"
     assert (
@@ -126,7 +128,8 @@ def test_render_with_overlay_and_heatmap(tmp_path):
         )
         == 0
     )
-    assert read_png(heat).shape == (24, 32, 4)
+    assert read_png(heat).shape == (24 + legend.heat_bar(32, 0, 1).shape[0], 32, 4)  # --counter box_tests
+    assert np.load(heat.with_suffix(".npy")).shape == (24, 32)
 
 
 def test_errors_have_exit_code_2(tmp_path, capsys):

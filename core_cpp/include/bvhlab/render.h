@@ -101,6 +101,10 @@ struct RenderImages {
                              ///< (Blender's Z pass); kNoDepth where no sample hit anything
     float* cost = nullptr;   ///< box tests per primary ray, averaged over the pixel's samples
     float* heat = nullptr;   ///< RGBA: `cost` as heat colours (what MODE_HEATMAP shows), in either mode
+    /// gpu::COUNTER_COUNT floats per pixel (TraversalCounter order): each counter per primary ray,
+    /// averaged over the pixel's samples; needs RenderSettings::traversal_counters
+    /// (std::invalid_argument otherwise)
+    float* counters = nullptr;
 };
 
 /// The depth of a pixel where nothing was hit: what Cycles writes into its Depth pass there.

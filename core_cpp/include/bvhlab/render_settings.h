@@ -25,6 +25,17 @@ enum class RenderMode {
     Heatmap,  ///< the box tests of the primary rays as colours, blue (few) to red (heatmap_scale)
 };
 
+/// A traversal counter of a pixel (issue 35; the traversal counters of AMD's Radeon Raytracing
+/// Analyzer), in gpu_types.h's COUNTER_* order. Counted for each primary ray's closest-hit walk
+/// only (reflection, refraction and shadow rays are not), averaged over the pixel's samples.
+enum class TraversalCounter {
+    BoxTests,      ///< boxes tested (what the heatmap mode colours)
+    BoxHits,       ///< boxes the ray entered
+    PrimTests,     ///< primitives tested
+    PrimHits,      ///< primitive tests that found a hit nearer than the closest so far
+    InstanceHits,  ///< two-level scenes: instances entered (TLAS leaves reached); 0 in a flat scene
+};
+
 struct RenderSettings {
     std::uint32_t width = 800, height = 600;
     std::uint32_t samples_per_axis = 1;  ///< n: n×n samples per pixel on a regular grid
@@ -42,6 +53,8 @@ struct RenderSettings {
     Traversal traversal = Traversal::Stack;  ///< Stack or Stackless (report §3.1); the tracer has no Wide
     RenderMode mode = RenderMode::Shade;
     std::optional<float> heatmap_scale;  ///< box tests shown as full red; unset: 8 × tree height
+    /// Keep every TraversalCounter per pixel (RenderImages::counters; 20 more bytes a pixel).
+    bool traversal_counters = false;
     /// Tracer steps one pixel may run per dispatch (gpu::MIN_STEPS_PER_DISPATCH ..
     /// MAX_STEPS_PER_DISPATCH); unset: chosen by the renderer. Only how the work is cut changes,
     /// never the image.
@@ -70,6 +83,9 @@ void validate(const RenderSettings& settings, std::uint32_t max_dimension = kMax
 /// the valid names. Traversal names are traverse.h's (the CPU queries know "wide" too).
 Traversal parse_traversal(std::string_view name);
 RenderMode parse_render_mode(std::string_view name);
+TraversalCounter parse_traversal_counter(std::string_view name);
+std::string to_string(TraversalCounter counter);
+std::vector<std::string> traversal_counter_names();  ///< box_tests, box_hits, prim_tests, prim_hits, instance_hits
 std::string to_string(Traversal traversal);
 std::string to_string(RenderMode mode);
 std::vector<std::string> traversal_names();         ///< every traversal the CPU queries know

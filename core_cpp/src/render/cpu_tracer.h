@@ -13,10 +13,17 @@
 
 namespace bvhlab::gpu {
 
-class CpuTracer {
+/// `Count`: traverse.glsl's COUNT_TRAVERSAL. A render that keeps the traversal counters runs
+/// CpuTracerOf<true>; one that does not, CpuTracerOf<false>, which counts box tests only (the
+/// heatmap's cost) and so runs the walk as it was before the counters.
+template <bool Count>
+class CpuTracerOf {
 public:
+    static constexpr bool COUNT_TRAVERSAL = Count;
+
     /// `overlay` (one vec4 per pixel) and `sums` may be null for the overlay rasterizer's use.
-    CpuTracer(const RenderScene& scene, const FrameParams& params, const vec4* overlay, PixelSums* sums, uint traversal)
+    CpuTracerOf(const RenderScene& scene, const FrameParams& params, const vec4* overlay, PixelSums* sums,
+                uint traversal)
         : frame(params),
           TRAVERSAL(traversal),
           tree_nodes_(scene.node_data()),
@@ -57,11 +64,12 @@ public:
     // The pixel's sums (a pixel is traced by one thread at a time).
     std::size_t pixel_index(uvec2 p) const { return std::size_t(p.y) * frame.width + p.x; }
     uint samples_done(uvec2 p) const { return sums_->samples[pixel_index(p)]; }
-    void accumulate_sample(uvec2 p, vec3 color, float visits, float depth) {
+    void accumulate_sample(uvec2 p, vec3 color, TraversalCounts counts, float depth) {
         const std::size_t i = pixel_index(p);
-        sums_->color[i] = sums_->color[i] + vec4(color, visits);
+        sums_->color[i] = sums_->color[i] + vec4(color, float(counts.box_tests));
         sums_->depth[i] = min(sums_->depth[i], depth);
         sums_->samples[i] = sums_->samples[i] + 1u;
+        if (Count && frame.count_traversal) add_counts(sums_->counts[i], counts);
     }
 
 #include "tracer/traverse.glsl"
@@ -82,5 +90,9 @@ private:
     std::array<uvec4, 3 * RAY_STACK_SIZE> rays_{};
     std::array<uvec2, 2 * MAX_TREE_HEIGHT> nodes_{};  ///< two-level: a TLAS's entries and a BLAS's
 };
+
+/// The tracer with every counter (the inspector's pixel rays and the overlay rasterizer, which
+/// count nothing, take it too).
+using CpuTracer = CpuTracerOf<true>;
 
 }  // namespace bvhlab::gpu

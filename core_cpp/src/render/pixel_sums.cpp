@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include "bvhlab/palette.h"
 
@@ -16,13 +17,30 @@ std::uint64_t saturating_mul(std::uint64_t a, std::uint64_t b) {
 
 }  // namespace
 
-PixelSums::PixelSums(std::size_t pixels) {
+PixelSums::PixelSums(std::size_t pixels, bool counters) {
     color.assign(pixels, gpu::vec4(0.0f));
     depth.assign(pixels, std::numeric_limits<float>::infinity());
     samples.assign(pixels, 0u);
+    if (counters) counts.assign(pixels, gpu::TraversalCounts{});
 }
 
+namespace {
+
+/// Each counter of pixel `i` per primary ray (the average over its samples; 0 without samples).
+void resolve_counts(const PixelSums& sums, std::size_t i, float* out) {
+    const std::uint32_t n = sums.samples[i];
+    const gpu::TraversalCounts& c = sums.counts[i];
+    const std::uint32_t values[gpu::COUNTER_COUNT] = {c.box_tests, c.box_hits, c.prim_tests, c.prim_hits,
+                                                      c.instance_hits};
+    for (std::uint32_t k = 0; k < gpu::COUNTER_COUNT; ++k) out[k] = n > 0 ? float(double(values[k]) / n) : 0.0f;
+}
+
+}  // namespace
+
 void resolve(const PixelSums& sums, const gpu::FrameParams& frame, const RenderImages& out) {
+    if (out.counters && sums.counts.empty())
+        throw std::invalid_argument(
+            "this render kept no traversal counters: ask for them when it starts (traversal_counters)");
     gpu::Palette palette;
     const std::size_t pixels = std::size_t(frame.width) * frame.height;
     for (std::size_t i = 0; i < pixels; ++i) {
@@ -44,6 +62,7 @@ void resolve(const PixelSums& sums, const gpu::FrameParams& frame, const RenderI
         if (out.heat) store(out.heat, heat);
         if (out.depth) out.depth[i] = std::isinf(sums.depth[i]) ? kNoDepth : sums.depth[i];
         if (out.cost) out.cost[i] = cost;
+        if (out.counters) resolve_counts(sums, i, out.counters + gpu::COUNTER_COUNT * i);
     }
 }
 

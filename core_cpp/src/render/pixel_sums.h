@@ -14,10 +14,19 @@ struct PixelSums {
     BigVector<gpu::vec4> color;        ///< rgb: sum of sample colours; a: sum of box tests
     BigVector<float> depth;            ///< nearest view-axis depth of a primary hit (inf: none)
     BigVector<std::uint32_t> samples;  ///< samples summed
+    /// Traversal counters summed over the samples (issue 35); empty unless the render keeps them
+    /// (RenderSettings::traversal_counters: 20 bytes a pixel).
+    BigVector<gpu::TraversalCounts> counts;
 
-    /// Zero sums for `pixels` pixels (std::bad_alloc if they do not fit).
-    explicit PixelSums(std::size_t pixels = 0);
+    /// Zero sums for `pixels` pixels, with counters where `counters` (std::bad_alloc if they do not fit).
+    explicit PixelSums(std::size_t pixels = 0, bool counters = false);
 };
+
+/// `sum` += `c`, counter by counter.
+inline void add_counts(gpu::TraversalCounts& sum, const gpu::TraversalCounts& c) {
+    sum.box_tests += c.box_tests, sum.box_hits += c.box_hits, sum.prim_tests += c.prim_tests;
+    sum.prim_hits += c.prim_hits, sum.instance_hits += c.instance_hits;
+}
 
 /// Colour (or heat colours), depth and cost of each pixel from its sums: the average of its
 /// samples; a pixel without samples is transparent black with depth kNoDepth and cost 0.

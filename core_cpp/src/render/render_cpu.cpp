@@ -43,7 +43,7 @@ public:
           threads_(threads ? threads : std::max(1u, std::thread::hardware_concurrency())) {
         const auto start = Clock::now();
         overlay_ = rasterize_overlay(scene, frame_);
-        sums_ = PixelSums(std::size_t(settings.width) * settings.height);
+        sums_ = PixelSums(std::size_t(settings.width) * settings.height, settings.traversal_counters);
         timings_.overlay_ms = ms_since(start);
         timings_.device = "CPU reference (" + std::to_string(threads_) + " threads)";
         timings_.steps_per_dispatch = settings.steps_per_dispatch.value_or(gpu::MAX_STEPS_PER_DISPATCH);
@@ -83,13 +83,14 @@ private:
 
     /// One pixel's samples up to frame.sample_target, in budgets of steps; between budgets the
     /// trace is saved and loaded back (what a dispatch boundary does on the GPU).
-    PixelResult trace_pixel(gpu::CpuTracer& tracer, gpu::uvec2 p, RunShared& shared, const Cancellation* cancel) const {
-        gpu::CpuTracer::TraceState s = tracer.begin_pixel(p, tracer.samples_done(p), tracer.frame.sample_target);
+    template <class Tracer>
+    PixelResult trace_pixel(Tracer& tracer, gpu::uvec2 p, RunShared& shared, const Cancellation* cancel) const {
+        typename Tracer::TraceState s = tracer.begin_pixel(p, tracer.samples_done(p), tracer.frame.sample_target);
         for (std::uint32_t budgets = 1;; ++budgets) {
             tracer.trace_steps(s, timings_.steps_per_dispatch);
-            if (s.phase >= gpu::CpuTracer::PHASE_DONE) {
+            if (s.phase >= Tracer::PHASE_DONE) {
                 note_budgets(shared, budgets);
-                return s.phase == gpu::CpuTracer::PHASE_DONE ? PixelResult::Done : PixelResult::Failed;
+                return s.phase == Tracer::PHASE_DONE ? PixelResult::Done : PixelResult::Failed;
             }
             if (cancel && cancel->stop_requested()) return PixelResult::Stopped;
             tracer.save_state(s, 1u);
@@ -101,7 +102,14 @@ private:
     /// 20 ms, Cancellation::poll) between pixels.
     void trace_rows(const gpu::FrameParams& frame, RunShared& shared, Cancellation* cancel, double* progress,
                     bool caller) {
-        gpu::CpuTracer tracer(scene_, frame, overlay_.data(), &sums_, gpu_traversal(settings_.traversal));
+        if (frame.count_traversal) trace_rows_with<gpu::CpuTracerOf<true>>(frame, shared, cancel, progress, caller);
+        else trace_rows_with<gpu::CpuTracerOf<false>>(frame, shared, cancel, progress, caller);
+    }
+
+    template <class Tracer>
+    void trace_rows_with(const gpu::FrameParams& frame, RunShared& shared, Cancellation* cancel, double* progress,
+                         bool caller) {
+        Tracer tracer(scene_, frame, overlay_.data(), &sums_, gpu_traversal(settings_.traversal));
         const double pixels = double(frame.width) * frame.height;
         for (std::uint32_t y; (y = shared.next_row.fetch_add(1)) < frame.height;) {
             for (std::uint32_t x = 0; x < frame.width; ++x) {

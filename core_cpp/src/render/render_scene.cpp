@@ -144,6 +144,7 @@ gpu::FrameParams make_frame_params(const RenderScene& scene, const RenderSetting
     f.max_work_per_pixel = gpu::NO_WORK_CAP;  // set per run (pixel_sums.h work_cap)
     f.node_stack_entries = std::max(scene.stack_entries, 1u);
     f.instance_count = std::uint32_t(scene.instances.size());
+    f.count_traversal = s.traversal_counters ? 1u : 0u;
     return f;
 }
 

@@ -16,6 +16,17 @@ constexpr std::array<std::pair<std::string_view, Traversal>, 3> kTraversals{
     {{"stack", Traversal::Stack}, {"stackless", Traversal::Stackless}, {"wide", Traversal::Wide}}};
 constexpr std::array<std::pair<std::string_view, RenderMode>, 2> kModes{
     {{"shade", RenderMode::Shade}, {"heatmap", RenderMode::Heatmap}}};
+constexpr std::array<std::pair<std::string_view, TraversalCounter>, gpu::COUNTER_COUNT> kCounters{
+    {{"box_tests", TraversalCounter::BoxTests},
+     {"box_hits", TraversalCounter::BoxHits},
+     {"prim_tests", TraversalCounter::PrimTests},
+     {"prim_hits", TraversalCounter::PrimHits},
+     {"instance_hits", TraversalCounter::InstanceHits}}};
+static_assert(std::uint32_t(TraversalCounter::BoxTests) == gpu::COUNTER_BOX_TESTS &&
+              std::uint32_t(TraversalCounter::BoxHits) == gpu::COUNTER_BOX_HITS &&
+              std::uint32_t(TraversalCounter::PrimTests) == gpu::COUNTER_PRIM_TESTS &&
+              std::uint32_t(TraversalCounter::PrimHits) == gpu::COUNTER_PRIM_HITS &&
+              std::uint32_t(TraversalCounter::InstanceHits) == gpu::COUNTER_INSTANCE_HITS);
 
 template <class Table>
 auto lookup(const Table& table, std::string_view name, const char* what) {
@@ -93,6 +104,13 @@ Traversal parse_traversal(std::string_view name) { return lookup(kTraversals, na
 RenderMode parse_render_mode(std::string_view name) { return lookup(kModes, name, "mode"); }
 std::string to_string(Traversal traversal) { return name_in(kTraversals, traversal); }
 std::string to_string(RenderMode mode) { return name_in(kModes, mode); }
+TraversalCounter parse_traversal_counter(std::string_view name) { return lookup(kCounters, name, "counter"); }
+std::string to_string(TraversalCounter counter) { return name_in(kCounters, counter); }
+std::vector<std::string> traversal_counter_names() {
+    std::vector<std::string> out;
+    for (const auto& entry : kCounters) out.emplace_back(entry.first);
+    return out;
+}
 
 std::vector<std::string> traversal_names() {
     std::vector<std::string> out;

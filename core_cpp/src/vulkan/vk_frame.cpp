@@ -120,16 +120,19 @@ std::uint32_t TraceSlots::failed() const {
     return n[1];
 }
 
-SumBuffers::SumBuffers(const Device& device, std::size_t pixels)
+SumBuffers::SumBuffers(const Device& device, std::size_t pixels, bool counters)
     : pixels(pixels),
       color(shader_array(device, pixels * sizeof(gpu::vec4))),
       depth(shader_array(device, pixels * sizeof(float))),
-      samples(shader_array(device, pixels * sizeof(std::uint32_t))) {}
+      samples(shader_array(device, pixels * sizeof(std::uint32_t))) {
+    if (counters) counts = shader_array(device, pixels * sizeof(gpu::TraversalCounts));
+}
 
 void SumBuffers::address(gpu::FrameParams& frame) const {
     frame.addr.accum_color = words(color.address());
     frame.addr.accum_depth = words(depth.address());
     frame.addr.accum_samples = words(samples.address());
+    if (counts.size()) frame.addr.accum_counts = words(counts.address());
 }
 
 }  // namespace bvhlab::vk

@@ -60,13 +60,14 @@ private:
     std::uint32_t slots_ = 0, ray_entries_ = 0, node_entries_ = 0;
 };
 
-/// A render's running sums per pixel (pixel_sums.h): colour + box tests, depth, sample count.
+/// A render's running sums per pixel (pixel_sums.h): colour + box tests, depth, sample count, and
+/// the traversal counters where `counters` (no buffer otherwise).
 struct SumBuffers {
-    SumBuffers(const Device& device, std::size_t pixels);
+    SumBuffers(const Device& device, std::size_t pixels, bool counters);
     void address(gpu::FrameParams& frame) const;
 
     std::size_t pixels;
-    Buffer color, depth, samples;
+    Buffer color, depth, samples, counts;
 };
 
 }  // namespace bvhlab::vk

@@ -52,12 +52,13 @@ public:
           frame_(scene_->frame_params(settings)),
           tiles_(settings.width, settings.height, slot_bytes(frame_)) {
         std::lock_guard lock(core_->mutex);
-        sums_.emplace(core_->device, std::size_t(settings.width) * settings.height);
+        sums_.emplace(core_->device, std::size_t(settings.width) * settings.height, settings.traversal_counters);
         sums_->address(frame_);
         core_->runner.run([&](VkCommandBuffer cmd) {
             record_fill(core_->fn, cmd, sums_->color, 0u);
             record_fill(core_->fn, cmd, sums_->depth, 0x7f800000u);  // +inf: nothing hit yet
             record_fill(core_->fn, cmd, sums_->samples, 0u);
+            if (sums_->counts.size()) record_fill(core_->fn, cmd, sums_->counts, 0u);
         });
         timings_.device = core_->device.physical().name();
         budget_ = settings.steps_per_dispatch.value_or(
@@ -89,6 +90,10 @@ public:
             read(sums_->color, sums.color.data(), sums_->pixels * sizeof(gpu::vec4));
             read(sums_->depth, sums.depth.data(), sums_->pixels * sizeof(float));
             read(sums_->samples, sums.samples.data(), sums_->pixels * sizeof(std::uint32_t));
+            if (sums_->counts.size()) {
+                sums.counts.resize(sums_->pixels);
+                read(sums_->counts, sums.counts.data(), sums_->pixels * sizeof(gpu::TraversalCounts));
+            }
         }
         bvhlab::resolve(sums, frame_, out);
         timings_.readback_ms =

@@ -56,6 +56,14 @@ def method_list(text: str) -> list[str]:
     return labels
 
 
+def method_pair(text: str) -> list[str]:
+    """'median,sah12' → two method labels (method_list's checks), exactly two."""
+    labels = method_list(text)
+    if len(labels) != 2:
+        raise argparse.ArgumentTypeError(f"give two methods A,B, got {len(labels)}")
+    return labels
+
+
 def backend_list(text: str) -> list[str]:
     """'cpu,vulkan' → ['cpu', 'vulkan']; 'none' → []."""
     if text.strip() == "none":

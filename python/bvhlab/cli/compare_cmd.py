@@ -2,7 +2,10 @@
 tree height per split method, plus SAH cost, nodes, leaves, primary-ray throughput) measured with
 a protocol (warm-up, interleaved rounds, medians with their spread; a verdict only when a
 difference exceeds the spread), the report's claims checked on it, its §4.1 overlay claim and
-Figure 5 on a model of over 700,000 triangles, charts, Figures 3–6 and one level sheet per method."""
+Figure 5 on a model of over 700,000 triangles, charts, Figures 3–6 and one level sheet per method.
+With --counter-diff A,B it writes only two trees side by side instead: a traversal counter per
+pixel (--counter) of the same view with the trees of methods A and B, their difference A − B as a
+diverging image with its legend, the counts, and each one's mean and percentiles."""
 
 from __future__ import annotations
 
@@ -10,9 +13,9 @@ import sys
 import time
 from pathlib import Path
 
-from .. import build
+from .. import build, counters
 from .._folder_lock import folder_lock
-from ..compare import charts, figures, measure_methods, overlay, report_checks, write_tables
+from ..compare import charts, counter_diff, figures, measure_methods, overlay, report_checks, write_tables
 from ..compare.measure import REPORT_BUILD, build_settings, render_frame
 from ..compare.protocol import DEFAULT_BUILDS, DEFAULT_FRAMES, MAX_SAMPLES, MIN_SAMPLES
 from ..library import load_scene
@@ -60,6 +63,18 @@ def add_parser(sub) -> None:
     )
     p.add_argument("--no-figures", action="store_true", help="skip Figures 3-6 and the level sheets")
     p.add_argument("--no-uniform", action="store_true", help="skip the random-spheres check (report §4.2)")
+    p.add_argument(
+        "--counter-diff",
+        type=cargs.method_pair,
+        metavar="A,B",
+        help="only the per-pixel difference A − B of a traversal counter between the trees of two methods",
+    )
+    p.add_argument(
+        "--counter",
+        choices=counters.COUNTERS,
+        default="box_tests",
+        help="the counter of --counter-diff (default box_tests)",
+    )
     p.add_argument("--out", type=cargs.output_dir, required=True, help="directory for tables, charts and figures")
     p.set_defaults(run=run)
 
@@ -78,7 +93,28 @@ def run(args) -> int:
         say(f"writing into the existing directory {out}")
     out.mkdir(parents=True, exist_ok=True)
     with folder_lock(out, "bvhlab compare"):  # a second run into `out` is refused, not mixed in
+        if args.counter_diff:
+            return _counter_diff(scene, name, args, out)
         return _compare(scene, name, args, out)
+
+
+def _counter_diff(scene, name: str, args, out: Path) -> int:
+    """Two trees side by side: args.counter per pixel, the first method's minus the second's."""
+    first, second = args.counter_diff
+    renderer = Renderer(args.backend)
+    tree_a, tree_b = (build(scene, **{**build_settings(label), "threads": 0}) for label in (first, second))
+    result = counter_diff.counter_difference(
+        scene, tree_a, tree_b, args.counter, args.width, args.height, renderer=renderer, labels=(first, second)
+    )
+    paths = counter_diff.write_difference(result, out, f"counter_diff_{args.counter}_{first}_{second}")
+    s = result["summary"]
+    for label in (first, second, "first_minus_second"):
+        v = s[label]
+        shown = f"{first} - {second}" if label == "first_minus_second" else label
+        print(f"{name} {args.counter} {shown}: mean {v['mean']:.2f}, median {v['median']:g}, p99 {v['p99']:g}")
+    print(f"colour span ±{result['span']:g} (auto: the {s['auto_percentile']:g}th percentile of |difference|)")
+    say(f"wrote {paths['png']}, {paths['npy'].name}, {paths['json'].name}")
+    return 0
 
 
 def _compare(scene, name: str, args, out: Path) -> int:

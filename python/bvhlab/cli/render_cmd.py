@@ -1,12 +1,19 @@
 """`bvhlab render SCENE --out PNG`: build a tree and render the scene with the Whitted tracer,
-optionally with the BVH overlay (--bvh-depth A:B) or as a heatmap of box tests (--heatmap)."""
+optionally with the BVH overlay (--bvh-depth A:B; a legend of its depth colours under the image),
+or a traversal counter per pixel (--counter NAME: the false-colour image with its scale bar, the
+raw counts per primary ray beside it as OUT.npy; --heatmap is --counter box_tests)."""
 
 from __future__ import annotations
 
-from .. import Bvh, InstancedBvh, build, render, save_png
+import argparse
+
+import numpy as np
+
+from .. import Bvh, InstancedBvh, build, counters, legend, save_png
+from .._atomic import replacing
 from .._progress import ProgressBar
 from ..library import load_scene
-from ..render import BACKENDS, TRAVERSALS
+from ..render import BACKENDS, TRAVERSALS, default_renderer
 from ..render_options import RenderOptions
 from . import options
 
@@ -35,40 +42,88 @@ def add_parser(sub) -> None:
         help=f"bounces of reflection and refraction (default {_DEFAULT.max_depth})",
     )
     p.add_argument("--bvh-depth", type=options.depth_range, metavar="A:B", help="draw the boxes of depths A..B")
-    p.add_argument("--heatmap", action="store_true", help="colour pixels by the box tests of their primary ray")
+    p.add_argument(
+        "--counter",
+        choices=counters.COUNTERS,
+        help="colour pixels by a traversal counter of their primary rays (averaged over the samples); "
+        "writes the counts as OUT.npy too",
+    )
+    p.add_argument(
+        "--range",
+        type=_range,
+        default=None,
+        metavar="LO,HI|auto",
+        help=f"the counter's colour range (default auto: 0 to the {counters.AUTO_PERCENTILE:g}th percentile)",
+    )
+    p.add_argument("--heatmap", action="store_true", help="the same as --counter box_tests (kept for old scripts)")
     p.add_argument("--traversal", default=_DEFAULT.traversal, choices=TRAVERSALS)
     options.add_png_out(p)
     p.set_defaults(run=run)
 
 
+def _range(text: str):
+    try:
+        return counters.parse_range(text)
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+
+
 def run(args) -> int:
     settings = options.build_kwargs(args)  # checked before the scene is loaded
+    counter = _counter(args)
     render_options = RenderOptions(  # likewise
         samples_per_axis=args.samples_per_axis,
         max_depth=args.max_depth,
         overlay_depth=args.bvh_depth,
         traversal=args.traversal,
-        mode="heatmap" if args.heatmap else "shade",
+        traversal_counters=counter is not None,
     )
     scene, name = load_scene(args.scene)
     with ProgressBar(f"building {args.method}") as bar:
         bvh = build(scene, progress=bar, **settings)  # an instanced scene: a two-level tree, rendered as it is
+    renderer = default_renderer(args.backend)
     with ProgressBar("rendering") as bar:
-        image, t = render(
-            scene,
-            bvh,
-            args.width,
-            args.height,
-            backend=args.backend,
-            options=render_options,
-            progress=bar,
-        )
+        job = renderer.start(scene, bvh, args.width, args.height, options=render_options)
+        job.run(progress=bar)
+    result = job.result(depth=False, cost=False, counters=counter is not None)
+    t = result.timings
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    save_png(image, args.out)
+    if result.counters is not None:
+        _write_counter(result.counters, counter, args.range, args.out)
+    elif result.color is not None:
+        image = result.color
+        if args.bvh_depth is not None:  # which colour is which depth
+            image = legend.below(
+                image, legend.depth_legend(args.width, range(args.bvh_depth[0], args.bvh_depth[1] + 1))
+            )
+        save_png(image, args.out)
     print(f"{name}: {args.width}x{args.height} on {t['device']} ({t['backend']}: {t['reason']})")
     print(f"trace {t['trace_ms']:.1f} ms, total {t['total_ms']:.1f} ms; {_tree_summary(bvh)}")
     print(f"wrote {args.out}")
     return 0
+
+
+def _counter(args) -> str | None:
+    if args.heatmap and args.counter not in (None, "box_tests"):
+        raise ValueError("--heatmap is --counter box_tests: give one of them")
+    if args.range is not None and not (args.counter or args.heatmap):
+        raise ValueError("--range needs --counter")
+    return "box_tests" if args.heatmap else args.counter
+
+
+def _write_counter(all_counters, counter: str | None, value_range, out) -> None:
+    """The counter's image with its scale bar (OUT) and its values per primary ray (OUT.npy)."""
+    assert counter is not None  # the render kept counters because one was asked for
+    values = counters.counter_plane(all_counters, counter)
+    image, (lo, hi) = counters.counter_image(values, value_range)
+    save_png(image, out)
+    raw = out.with_suffix(".npy")
+    with replacing(raw) as f:
+        np.save(f, values)
+    how = "auto: 0 to the 99th percentile" if value_range is None else "given"
+    s = counters.summary(values)
+    print(f"{counter} per primary ray: mean {s['mean']:.2f}, median {s['median']:g}, max {s['max']:g}")
+    print(f"colour range {lo:g}..{hi:g} ({how}); counts in {raw}")
 
 
 def _tree_summary(bvh: Bvh | InstancedBvh) -> str:

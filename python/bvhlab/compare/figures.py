@@ -7,6 +7,7 @@ from __future__ import annotations
 import importlib.util
 from pathlib import Path
 
+from .. import legend
 from ..bvh import build
 from ..library import bundled_dir, load_scene
 from ..render import Renderer, save_png
@@ -44,13 +45,15 @@ def render_figure(
     height: int = 480,
     line_width: float = 1.0,
 ) -> list[Path]:
-    """One PNG per method: `<name>_<method>.png`, trees built with the report's settings."""
+    """One PNG per method: `<name>_<method>.png`, trees built with the report's settings, with the
+    legend of the boxes' depth colours under the picture."""
     _, depths_of = FIGURES[name]
     paths = []
     for label in labels:
         bvh = build(scene, **{**build_settings(label), "threads": 0})  # the tree does not depend on threads
         depths = depths_of(bvh.stats["height"])
         image, *_ = render_frame(renderer, scene, bvh, width, height, overlay_depth=depths, line_width=line_width)
+        image = legend.below(image, legend.depth_legend(width, range(depths[0], depths[1] + 1)))
         path = out / f"{name}_{label}.png"
         save_png(image, path)
         paths.append(path)

@@ -1,0 +1,43 @@
+"""The Rendered viewport's counter display (issue 35): a traversal counter per pixel on the core's
+heat ramp instead of the shaded image, over a manual range or the auto range
+(bvhlab.counters.auto_range: 0 to the 99th percentile of the frame). No bpy: the settings are read
+into a CounterView on the UI thread, the image is made on the viewport's worker."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+#: The display that shows the shaded image (the render mode's), not a counter.
+NO_COUNTER = "none"
+
+
+@dataclass(frozen=True)
+class CounterView:
+    """Which counter the viewport shows, and over which range (None: auto)."""
+
+    counter: str
+    value_range: tuple[float, float] | None
+
+
+def counter_view(settings) -> CounterView | None:
+    """The CounterView of the scene's settings (scene.bvhlab), None for the shaded display."""
+    if settings.viewport_counter == NO_COUNTER:
+        return None
+    manual = None if settings.counter_range_auto else (settings.counter_range_min, settings.counter_range_max)
+    return CounterView(settings.viewport_counter, manual)
+
+
+def counter_colors(all_counters: np.ndarray, view: CounterView) -> tuple[np.ndarray, tuple[float, float]]:
+    """(H, W, 4) heat colours of the view's counter (no scale bar: the panel shows the legend) and
+    the range used. A manual range with min ≥ max is widened to min + 1."""
+    from bvhlab import counters, palette
+
+    values = counters.counter_plane(all_counters, view.counter)
+    if view.value_range is None:
+        lo, hi = counters.auto_range(values)
+    else:
+        lo, hi = view.value_range
+        hi = max(hi, lo + 1.0)
+    return palette.heat_image(values, lo, hi), (float(lo), float(hi))
