@@ -25,7 +25,8 @@ class UpdateConfig:
     - "adaptive": refit; once the tree's cost passes `target_growth` × its cost when built,
       rebuild the subtrees that hold most of the grown cost per primitive (Yoon et al. 2007
       restructure only where culling efficiency dropped), at most `restructure_share` of the
-      primitives an update, or the whole tree past `tree_growth` ×.
+      primitives an update; the whole tree when those would leave its cost past `tree_growth` ×
+      its cost when built.
 
     Defaults are the core's; values are checked by it (ValueError) when the config is made."""
 

@@ -135,13 +135,18 @@ std::uint64_t rebuild_subtrees(Bvh& tree, NodeCostArray& built, const std::vecto
     }
     if (parts.empty()) return 0;
     // map(i): where old node i (outside the replaced ranges, or the end of one) lands
+    // ends[k]: the end of part k's old range; shift[k]: how far the parts before it move a node
+    // (a binary search a node: copying a node once walked every part, 10% of an adaptive update)
+    std::vector<std::uint32_t> ends;
+    std::vector<std::int64_t> shift{0};
+    for (const Replacement& r : parts) {
+        ends.push_back(r.end);
+        shift.push_back(shift.back() + std::int64_t(r.part.node_count()) - std::int64_t(r.end - r.root));
+    }
     auto map = [&](std::uint32_t i) {
-        std::int64_t shift = 0;
-        for (const Replacement& r : parts) {
-            if (r.end > i) break;
-            shift += std::int64_t(r.part.node_count()) - std::int64_t(r.end - r.root);
-        }
-        return std::uint32_t(std::int64_t(i) + shift);
+        const std::size_t before =
+            std::upper_bound(ends.begin(), ends.end(), i) - ends.begin();  // parts ending at or before i
+        return std::uint32_t(std::int64_t(i) + shift[before]);
     };
     Bvh out;
     NodeCostArray out_built;

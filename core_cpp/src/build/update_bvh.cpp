@@ -29,20 +29,22 @@ double restructure(Bvh& tree, NodeCostArray& built, const NodeCosts& now, const 
 }
 
 /// What adaptive runs after a refit, by the tree's measured costs (`now`) against its costs when
-/// built: nothing more while the tree's cost is within target_growth of its cost when built; a
-/// full rebuild past tree_growth; otherwise the subtrees that take most of the excess off per
-/// primitive (subtrees_by_excess: Yoon, Curtis and Manocha 2007 restructure only where culling
-/// efficiency dropped; the SAH cost is that measure), at most restructure_share of the
-/// primitives an update: what is left waits for the next frame, or for the full rebuild at
-/// tree_growth. bench/updates.py has the figures.
+/// built: nothing more while the tree's cost is within target_growth of its cost when built;
+/// else the subtrees that take most of the excess off per primitive (subtrees_by_excess: Yoon,
+/// Curtis and Manocha 2007 restructure only where culling efficiency dropped; the SAH cost is
+/// that measure), at most restructure_share of the primitives; a full rebuild instead when the
+/// tree would keep more than tree_growth of its cost when built after them. bench/updates.py
+/// has the figures.
 UpdatePolicy adaptive_choice(const Bvh& tree, const NodeCosts& now, const NodeCostArray& built,
                              const UpdateConfig& config, std::vector<std::uint32_t>& roots) {
     if (tree.empty() || now.cost[0] <= config.target_growth * built[0]) return UpdatePolicy::Refit;
-    if (now.cost[0] > config.tree_growth * built[0]) return UpdatePolicy::Rebuild;
+    if (now.area[0] <= 0) return UpdatePolicy::Rebuild;  // no areas to weigh the subtrees by
     const double excess = double(now.area[0]) * (double(now.cost[0]) - built[0]);
     double covered = 0;
     roots = subtrees_by_excess(tree, now, built, excess, config.min_subtree_primitives,
                                std::uint64_t(config.restructure_share * now.count[0]), covered);
+    // the cost the restructured tree should have: past tree_growth, a rebuild instead
+    if (now.cost[0] - covered / now.area[0] > config.tree_growth * built[0]) return UpdatePolicy::Rebuild;
     return UpdatePolicy::Partial;
 }
 
