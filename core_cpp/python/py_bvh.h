@@ -37,7 +37,7 @@ inline GeometryView view_of(const Triangles& tris, const std::optional<Spheres>&
     return g;
 }
 
-using CostsPtr = std::shared_ptr<const std::vector<float>>;
+using CostsPtr = std::shared_ptr<const NodeCostArray>;
 
 /// One immutable version of a tree, with the views made of it on first use (thread-safe).
 class TreeVersion {
@@ -52,7 +52,7 @@ public:
 
     const CostsPtr& built_costs() const {
         std::call_once(built_once_, [this] {
-            if (!built_) built_ = std::make_shared<const std::vector<float>>(subtree_costs(bvh));
+            if (!built_) built_ = std::make_shared<const NodeCostArray>(subtree_costs(bvh));
         });
         return built_;
     }

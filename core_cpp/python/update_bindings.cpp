@@ -22,7 +22,7 @@ nb::dict update(PyBvh& self, const Triangles& tris, const std::optional<Spheres>
     {
         nb::gil_scoped_release release;
         self.replace([&](const TreeVersion& old) {
-            auto built = std::make_shared<std::vector<float>>();
+            auto built = std::make_shared<NodeCostArray>();
             Bvh tree = update_bvh(old.bvh, *old.built_costs(), g, config, *built, &stats);
             return std::pair{std::move(tree), CostsPtr(std::move(built))};
         });
@@ -46,6 +46,8 @@ void bind_update(nb::module_& m) {
             "rebuild, refit, partial or adaptive")
         .def_rw("subtree_growth", &UpdateConfig::subtree_growth)
         .def_rw("tree_growth", &UpdateConfig::tree_growth)
+        .def_rw("target_growth", &UpdateConfig::target_growth)
+        .def_rw("restructure_share", &UpdateConfig::restructure_share)
         .def_rw("min_subtree_primitives", &UpdateConfig::min_subtree_primitives)
         .def_rw("measure_fresh", &UpdateConfig::measure_fresh)
         .def(

@@ -22,13 +22,18 @@ class UpdateConfig:
     - "partial": refit, then rebuild each topmost subtree (of at least `min_subtree_primitives`)
       whose SAH cost grew past `subtree_growth` × its cost when built (selective restructuring,
       Yoon et al. 2007);
-    - "adaptive": refit, then a full rebuild once the tree's cost passes `tree_growth` × its cost
-      when built, else partial where needed.
+    - "adaptive": refit; once the tree's cost passes `target_growth` × its cost when built,
+      rebuild the subtrees that hold most of the grown cost per primitive (Yoon et al. 2007
+      restructure only where culling efficiency dropped), at most `restructure_share` of the
+      primitives an update; the whole tree when those would leave its cost past `tree_growth` ×
+      its cost when built.
 
     Defaults are the core's; values are checked by it (ValueError) when the config is made."""
 
     policy: str = _CORE_DEFAULTS.policy
     subtree_growth: float = _CORE_DEFAULTS.subtree_growth
+    target_growth: float = _CORE_DEFAULTS.target_growth
+    restructure_share: float = _CORE_DEFAULTS.restructure_share
     tree_growth: float = _CORE_DEFAULTS.tree_growth
     min_subtree_primitives: int = _CORE_DEFAULTS.min_subtree_primitives
     #: also build a fresh tree, only to report its SAH cost (UpdateStats.fresh_sah_cost): a build's time
@@ -42,6 +47,8 @@ class UpdateConfig:
         c.policy = _checks.choice("policy", self.policy, UPDATE_POLICIES)
         c.subtree_growth = _checks.real("subtree_growth", self.subtree_growth)
         c.tree_growth = _checks.real("tree_growth", self.tree_growth)
+        c.target_growth = _checks.real("target_growth", self.target_growth)
+        c.restructure_share = _checks.real("restructure_share", self.restructure_share)
         c.min_subtree_primitives = _checks.integer("min_subtree_primitives", self.min_subtree_primitives, 0, 2**32 - 1)
         if not isinstance(self.measure_fresh, bool):
             raise TypeError(f"measure_fresh must be True or False, got {type(self.measure_fresh).__name__}")

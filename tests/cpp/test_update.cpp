@@ -50,7 +50,7 @@ std::uint32_t prims_under(const Bvh& bvh, std::uint32_t i) {
 }
 
 /// Topmost nodes past the threshold, by recursion from the root.
-void count_past(const Bvh& refit, const std::vector<float>& built, const UpdateConfig& c, std::uint32_t i,
+void count_past(const Bvh& refit, const NodeCostArray& built, const UpdateConfig& c, std::uint32_t i,
                 std::uint32_t& roots, std::uint64_t& prims) {
     double ac;
     if (prims_under(refit, i) >= c.min_subtree_primitives &&
@@ -66,7 +66,7 @@ void count_past(const Bvh& refit, const std::vector<float>& built, const UpdateC
 struct Fixture {
     Scene scene = random_scene(20000, 40, 7);
     Bvh tree = build_bvh(scene.view());
-    std::vector<float> built = subtree_costs(tree);
+    NodeCostArray built = subtree_costs(tree);
 };
 
 }  // namespace
@@ -85,7 +85,7 @@ TEST(Update, EveryPolicyLeavesAValidTree) {
     for (UpdatePolicy p : {UpdatePolicy::Rebuild, UpdatePolicy::Refit, UpdatePolicy::Partial, UpdatePolicy::Adaptive}) {
         UpdateConfig c;
         c.policy = p;
-        std::vector<float> built_out;
+        NodeCostArray built_out;
         UpdateStats stats;
         const Bvh t = update_bvh(f.tree, f.built, moved.view(), c, built_out, &stats);
         SCOPED_TRACE(to_string(p));
@@ -109,7 +109,7 @@ TEST(Update, PartialRebuildsExactlyTheSubtreesPastTheThreshold) {
     std::uint64_t prims = 0;
     count_past(refit, f.built, c, 0, roots, prims);
     ASSERT_GT(roots, 0u);  // the deformation must have pushed some subtree past it
-    std::vector<float> built_out;
+    NodeCostArray built_out;
     UpdateStats stats;
     const Bvh t = update_bvh(f.tree, f.built, moved.view(), c, built_out, &stats);
     EXPECT_EQ(stats.subtrees_rebuilt, roots);
@@ -118,7 +118,7 @@ TEST(Update, PartialRebuildsExactlyTheSubtreesPastTheThreshold) {
     EXPECT_LT(stats.sah_cost, sah_cost(refit));        // restructuring helped
     check_tree(t, moved.view(), f.tree.config.max_leaf_size);
     // a second update of the same geometry finds nothing past the threshold any more
-    std::vector<float> again;
+    NodeCostArray again;
     UpdateStats second;
     update_bvh(t, built_out, moved.view(), c, again, &second);
     EXPECT_EQ(second.subtrees_rebuilt, 0u);
@@ -127,7 +127,7 @@ TEST(Update, PartialRebuildsExactlyTheSubtreesPastTheThreshold) {
 TEST(Update, AdaptivePicksByCost) {
     const Fixture f;
     UpdateConfig c;  // adaptive
-    std::vector<float> out;
+    NodeCostArray out;
     UpdateStats stats;
     update_bvh(f.tree, f.built, deformed(f.scene, 100.0f, 1e-3f).view(), c, out, &stats);  // barely moved
     EXPECT_EQ(stats.policy, UpdatePolicy::Refit);
@@ -146,7 +146,7 @@ TEST(Update, SameTreesOnEveryThreadCount) {
         tree.config.threads = threads;
         UpdateConfig c;
         c.policy = UpdatePolicy::Partial;
-        std::vector<float> out;
+        NodeCostArray out;
         trees.push_back(update_bvh(tree, f.built, moved.view(), c, out));
     }
     ASSERT_EQ(trees[0].nodes.size(), trees[1].nodes.size());
@@ -156,7 +156,7 @@ TEST(Update, SameTreesOnEveryThreadCount) {
 
 TEST(Update, BadInputIsRefused) {
     const Fixture f;
-    std::vector<float> out;
+    NodeCostArray out;
     UpdateConfig c;
     const Scene fewer = random_scene(100, 40, 7);
     EXPECT_THROW(update_bvh(f.tree, f.built, fewer.view(), c, out), std::invalid_argument);

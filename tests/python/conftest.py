@@ -37,7 +37,7 @@ VULKAN_MODULES = {
 }  # fmt: skip
 BPY_MODULES = {
     "test_addon", "test_addon_install", "test_addon_writes", "test_blender_checks", "test_blender_errors",
-    "test_docs_pictures", "test_addon_pick", "test_export_instances",
+    "test_docs_pictures", "test_addon_pick", "test_export_instances", "test_animate_blend",
 }  # fmt: skip
 #: test_blender_checks.py's tests (tests/blender/registry.py) of these groups use a Vulkan device.
 VULKAN_GROUPS = {"addon", "engine", "cameras", "no_vulkan", "gpu"}
@@ -57,6 +57,7 @@ SLOW = (
     "test_render_bounded.py::test_ten_thousand_copies_of_one_triangle",
     "test_render_bounded.py::test_bundled_scene_at_16x16_samples",
     "test_render_vulkan.py::test_scene_larger_than_one_storage_buffer_binding",
+    "test_animate_blend.py::",  # bpy plays the two animated .blend files in children: 90 s for the module
 )
 
 

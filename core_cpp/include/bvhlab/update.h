@@ -17,23 +17,33 @@ enum class UpdatePolicy {
     Rebuild,   ///< a fresh build with the tree's own settings
     Refit,     ///< boxes only (refitted): the topology stays, its cost may grow
     Partial,   ///< refit, then rebuild each topmost subtree whose cost grew past subtree_growth
-    Adaptive,  ///< refit; a rebuild once the tree's cost passes tree_growth or the subtrees past
-               ///< subtree_growth hold more than half the primitives, else partial where needed
+    Adaptive,  ///< refit; past target_growth, rebuild the subtrees holding most of the cost grown
+               ///< per primitive (a full rebuild when they would leave it past tree_growth)
 };
 
 /// The thresholds of an update. Costs are SAH costs of a subtree relative to its own root's area
 /// (subtree_costs), compared with the same subtree's cost when it was built.
 struct UpdateConfig {
     UpdatePolicy policy = UpdatePolicy::Adaptive;
-    /// partial, adaptive: a subtree is rebuilt once its cost exceeds this times its cost when
-    /// built (Yoon et al. 2007 restructure where culling efficiency has dropped; the ratio is
-    /// that measure under the SAH). bench/updates.py, adaptive over 11 frames: 1.3 kept the SAH
-    /// within 1.22x of a fresh build's for 0.56x the time of rebuilding every frame; 1.2 within
-    /// 1.08x for 0.49x; 1.15 within 1.03x for 0.84x; 1.1 rebuilt every frame.
+    /// partial: a subtree is rebuilt once its cost exceeds this times its cost when built (Yoon
+    /// et al. 2007 restructure where culling efficiency has dropped; the ratio is that measure
+    /// under the SAH). bench/updates.py, over 11 frames: 1.3 kept the SAH within 1.22x of a fresh
+    /// build's for 0.56x the time of rebuilding every frame; 1.2 within 1.08x for 0.49x; 1.15
+    /// within 1.03x for 0.84x; 1.1 rebuilt every frame.
     float subtree_growth = 1.2f;
-    /// adaptive: the whole tree is rebuilt once its cost exceeds this times its cost when built
-    /// (the add-on rebuilt at 1.5, addon/engine/scene_tree.py).
-    float tree_growth = 1.5f;
+    /// adaptive: while the refitted tree's cost is within this times its cost when built, the
+    /// refit is all; past it, subtrees are rebuilt to take the excess off (subtrees_by_excess).
+    float target_growth = 1.03f;
+    /// adaptive: the most primitives one update rebuilds in subtrees, as a share of all (a
+    /// sixth of a full rebuild's work; the subtrees that would not fit wait for the next update).
+    float restructure_share = 0.15f;
+    /// adaptive: the whole tree is rebuilt instead when the restructured tree's cost (the refitted
+    /// tree's less the excess the chosen subtrees hold) would still exceed this times its cost
+    /// when built (issue 34: within 1.10 of a fresh build's). bench/updates.py, the 24-frame
+    /// wave: 1.09 kept the SAH within 1.065 of a fresh build's for 0.45-0.53 of the time of
+    /// rebuilding every frame; 1.15 within 1.12-1.14 for 0.39-0.42; 1.05 within 1.03-1.04 for
+    /// 0.60-0.65. (The add-on rebuilt at 1.5 of the refitted cost, addon/engine/scene_tree.py.)
+    float tree_growth = 1.09f;
     /// partial, adaptive: subtrees of fewer primitives are never rebuilt alone (their rebuilds
     /// gain little and their costs are noisy); their ancestors are.
     std::uint32_t min_subtree_primitives = 256;
@@ -52,17 +62,22 @@ struct UpdateStats {
     double fresh_sah_cost = -1;                 ///< a fresh build's, with UpdateConfig::measure_fresh; else -1
 };
 
+/// One cost per node of a tree (subtree_costs), in the builds' cached blocks (big_vector.h): an
+/// update makes several, and a fresh std::vector of a 250K-triangle tree's size cost a page fault
+/// per page (a quarter of a partial update's time).
+using NodeCostArray = BigVector<float>;
+
 /// Each node's SAH cost relative to its own box: S(n)/A(n) with S(leaf) = A·N and S(inner) =
 /// A·C_trav + S(children) (C_trav = C_isect = 1, sah_cost's formula), so entry 0 is sah_cost(bvh).
 /// A node of zero area gets the count its subtree would cost if every node were hit.
-std::vector<float> subtree_costs(const Bvh& bvh);
+NodeCostArray subtree_costs(const Bvh& bvh);
 
 /// The tree over `geometry` (same counts) by `config.policy`, from `old` (untouched) and the
 /// costs its nodes had when built (`built`, subtree_costs of the tree as built, one per node of
 /// `old`). `built_out` receives those costs for the new tree (rebuilt nodes' own, the others'
 /// carried over). Throws std::invalid_argument as refit and build_bvh do.
-Bvh update_bvh(const Bvh& old, const std::vector<float>& built, const GeometryView& geometry,
-               const UpdateConfig& config, std::vector<float>& built_out, UpdateStats* stats = nullptr);
+Bvh update_bvh(const Bvh& old, const NodeCostArray& built, const GeometryView& geometry, const UpdateConfig& config,
+               NodeCostArray& built_out, UpdateStats* stats = nullptr);
 
 std::vector<std::string_view> update_policy_names();
 UpdatePolicy parse_update_policy(std::string_view name);  ///< throws std::invalid_argument listing the names

@@ -12,16 +12,6 @@
 namespace bvhlab {
 namespace {
 
-/// Primitives under each node (a leaf's count; an inner node's children's sum).
-std::vector<std::uint32_t> primitive_counts(const Bvh& bvh) {
-    std::vector<std::uint32_t> count(bvh.nodes.size());
-    for (std::size_t i = bvh.nodes.size(); i-- > 0;) {
-        const BvhNode& n = bvh.nodes[i];
-        count[i] = is_leaf(n) ? leaf_count(n) : count[i + 1] + count[n.index];
-    }
-    return count;
-}
-
 /// The first leaf slot of the subtree at `root`: its leftmost leaf's.
 std::uint32_t first_slot(const Bvh& bvh, std::uint32_t root) {
     while (!is_leaf(bvh.nodes[root])) ++root;
@@ -31,7 +21,7 @@ std::uint32_t first_slot(const Bvh& bvh, std::uint32_t root) {
 /// A tree over the primitives in slots [first, first + count) of `tree`, built with its settings;
 /// its references and packed primitives name the original primitives.
 Bvh build_part(const Bvh& tree, const GeometryView& g, std::uint32_t first, std::uint32_t count) {
-    std::vector<float> tris, spheres;
+    NodeCostArray tris, spheres;
     std::vector<std::uint32_t> tri_ref, sphere_ref;
     for (std::uint32_t k = first; k < first + count; ++k) {
         const std::uint32_t ref = tree.refs[k], i = ref_index(ref);
@@ -57,18 +47,17 @@ Bvh build_part(const Bvh& tree, const GeometryView& g, std::uint32_t first, std:
 struct Replacement {
     std::uint32_t root, end;  ///< old node range [root, end)
     Bvh part;
-    std::vector<float> costs;
+    NodeCostArray costs;
     std::uint32_t slot;  ///< first leaf slot
 };
 
 }  // namespace
 
-std::vector<std::uint32_t> subtrees_past(const Bvh& bvh, const std::vector<float>& costs,
-                                         const std::vector<float>& built, float growth, std::uint32_t min_primitives) {
-    const std::vector<std::uint32_t> count = primitive_counts(bvh);
+std::vector<std::uint32_t> subtrees_past(const Bvh& bvh, const NodeCosts& now, const NodeCostArray& built, float growth,
+                                         std::uint32_t min_primitives) {
     std::vector<std::uint32_t> roots;
     for (std::uint32_t i = 0; i < bvh.node_count();) {
-        if (count[i] >= min_primitives && costs[i] > growth * built[i]) {
+        if (now.count[i] >= min_primitives && now.cost[i] > growth * built[i]) {
             roots.push_back(i);
             i = skip_index(bvh.nodes[i], i);
         } else {
@@ -78,39 +67,89 @@ std::vector<std::uint32_t> subtrees_past(const Bvh& bvh, const std::vector<float
     return roots;
 }
 
-std::uint64_t primitives_under(const Bvh& bvh, const std::vector<std::uint32_t>& roots) {
-    const std::vector<std::uint32_t> count = primitive_counts(bvh);
+std::vector<std::uint32_t> subtrees_by_excess(const Bvh& bvh, const NodeCosts& now, const NodeCostArray& built,
+                                              double to_remove, std::uint32_t min_primitives,
+                                              std::uint64_t max_primitives, double& covered) {
+    // a node whose children hold this share of its excess is passed over for them: part of a
+    // node's excess is its children's boxes grown, which only the geometry's own shape may cause
+    constexpr double kChildrenShare = 0.35;
+    auto excess = [&](std::uint32_t i) { return double(now.area[i]) * (double(now.cost[i]) - built[i]); };
+    // candidates: walk down from the root, passing over a node for its children while it is too
+    // big to fit, holds no excess of its own (its costs when built may date from before a
+    // rebuild below it) or its children hold most of its excess
+    std::vector<std::uint32_t> candidates, stack;
+    if (bvh.node_count() > 0) stack.push_back(0);
+    while (!stack.empty()) {
+        const std::uint32_t i = stack.back();
+        stack.pop_back();
+        const double e = excess(i);
+        const BvhNode& n = bvh.nodes[i];
+        const bool splits = !is_leaf(n) && now.count[i + 1] >= min_primitives && now.count[n.index] >= min_primitives;
+        if (splits && (now.count[i] > max_primitives || !(e > 0) ||
+                       std::max(excess(i + 1), 0.0) + std::max(excess(n.index), 0.0) >= kChildrenShare * e)) {
+            stack.push_back(n.index), stack.push_back(i + 1);
+        } else if (e > 0 && now.count[i] >= min_primitives && now.count[i] <= max_primitives) {
+            candidates.push_back(i);
+        }
+    }
+    // the most excess per primitive first (ties by node: the same choice on every run)
+    std::sort(candidates.begin(), candidates.end(), [&](std::uint32_t a, std::uint32_t b) {
+        const double da = excess(a) / now.count[a], db = excess(b) / now.count[b];
+        return da != db ? da > db : a < b;
+    });
+    covered = 0;
+    std::uint64_t primitives = 0;
+    std::vector<std::uint32_t> taken;
+    for (std::uint32_t c : candidates) {
+        if (covered >= to_remove) break;
+        if (primitives + now.count[c] > max_primitives) continue;  // a smaller one may still fit
+        covered += excess(c), primitives += now.count[c];
+        taken.push_back(c);
+    }
+    candidates = std::move(taken);
+    std::sort(candidates.begin(), candidates.end());
+    return candidates;
+}
+
+std::uint64_t primitives_under(const NodeCosts& now, const std::vector<std::uint32_t>& roots) {
     std::uint64_t sum = 0;
-    for (std::uint32_t root : roots) sum += count[root];
+    for (std::uint32_t root : roots) sum += now.count[root];
     return sum;
 }
 
-std::uint64_t rebuild_subtrees(Bvh& tree, std::vector<float>& built, const std::vector<std::uint32_t>& roots,
-                               const GeometryView& g) {
-    const std::vector<std::uint32_t> count = primitive_counts(tree);
+std::uint64_t rebuild_subtrees(Bvh& tree, NodeCostArray& built, const std::vector<std::uint32_t>& roots,
+                               const GeometryView& g, const NodeCosts& now, double& area_cost_saved) {
     std::vector<Replacement> parts;
     std::uint64_t rebuilt = 0;
+    area_cost_saved = 0;
     for (std::uint32_t root : roots) {
         const std::uint32_t slot = first_slot(tree, root);
-        Bvh part = build_part(tree, g, slot, count[root]);
-        const BvhStats s = compute_stats(part);
-        if (tree.depths[root] + s.height > gpu::MAX_TREE_HEIGHT) continue;  // kept as it was
-        std::vector<float> costs = subtree_costs(part);
-        rebuilt += count[root];
+        Bvh part = build_part(tree, g, slot, now.count[root]);
+        const std::uint32_t height = *std::max_element(part.depths.begin(), part.depths.end()) + 1u;
+        if (tree.depths[root] + height > gpu::MAX_TREE_HEIGHT) continue;  // kept as it was
+        NodeCostArray costs = subtree_costs(part);
+        // the part's root box is the old root's (both the union of the same primitives' boxes)
+        area_cost_saved += now.area_cost(root) - double(now.area[root]) * costs[0];
+        rebuilt += now.count[root];
         parts.push_back({root, skip_index(tree.nodes[root], root), std::move(part), std::move(costs), slot});
     }
     if (parts.empty()) return 0;
     // map(i): where old node i (outside the replaced ranges, or the end of one) lands
+    // ends[k]: the end of part k's old range; shift[k]: how far the parts before it move a node
+    // (a binary search a node: copying a node once walked every part, 10% of an adaptive update)
+    std::vector<std::uint32_t> ends;
+    std::vector<std::int64_t> shift{0};
+    for (const Replacement& r : parts) {
+        ends.push_back(r.end);
+        shift.push_back(shift.back() + std::int64_t(r.part.node_count()) - std::int64_t(r.end - r.root));
+    }
     auto map = [&](std::uint32_t i) {
-        std::int64_t shift = 0;
-        for (const Replacement& r : parts) {
-            if (r.end > i) break;
-            shift += std::int64_t(r.part.node_count()) - std::int64_t(r.end - r.root);
-        }
-        return std::uint32_t(std::int64_t(i) + shift);
+        const std::size_t before =
+            std::upper_bound(ends.begin(), ends.end(), i) - ends.begin();  // parts ending at or before i
+        return std::uint32_t(std::int64_t(i) + shift[before]);
     };
     Bvh out;
-    std::vector<float> out_built;
+    NodeCostArray out_built;
     const std::size_t size = map(tree.node_count());
     out.nodes = BigVector<BvhNode>(size);
     out.depths = BigVector<std::uint8_t>(size);

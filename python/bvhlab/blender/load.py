@@ -8,10 +8,8 @@ from pathlib import Path
 from ..scene import Scene
 
 
-def load_blend(path: Path) -> Scene:
-    """Open a .blend with bpy (Blender as a Python module) and export it with the add-on's code."""
-    if not path.exists():
-        raise FileNotFoundError(f"no such file: {path}")
+def bpy_module():
+    """Blender's Python module, or RuntimeError saying how to install it."""
     try:
         import bpy
     except ImportError as e:
@@ -19,6 +17,14 @@ def load_blend(path: Path) -> Scene:
             "reading .blend files needs Blender's Python module: pip install bpy (4.2 to "
             "5.0 for Python 3.11, 5.1 and later for Python 3.13)"
         ) from e
+    return bpy
+
+
+def load_blend(path: Path) -> Scene:
+    """Open a .blend with bpy (Blender as a Python module) and export it with the add-on's code."""
+    if not path.exists():
+        raise FileNotFoundError(f"no such file: {path}")
+    bpy = bpy_module()
     from .export import export_scene
 
     bpy.ops.wm.open_mainfile(filepath=str(path.resolve()), load_ui=False)

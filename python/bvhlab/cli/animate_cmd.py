@@ -1,8 +1,11 @@
 """`bvhlab animate ANIMATION --frames A-B --policy rebuild,refit,partial,adaptive --out DIR`: the
-per-frame dynamic-BVH experiment the report could not run (issue 34; bvhlab.animate). Per frame
+per-frame dynamic-BVH experiment the report could not run (issue 34; bvhlab.animate). ANIMATION is
+a generated one (wave, crowd) or an animated `.blend` file (each frame set and exported through
+bpy as the add-on does, its instancing kept: blender_scenes/make_animated.py makes two). Per frame
 and policy: update ms, the policy adaptive chose, SAH cost against a fresh build's, subtrees
-rebuilt, and with --backend the frame's trace time. Writes animate.csv, animate.json and
-animate.png (the SAH ratio and the update time over the frames)."""
+rebuilt, and with --backend the frame's trace time; an instanced scene adds its two-level tree's
+update time. Writes animate.csv, animate.json and animate.png (the SAH ratio and the update time
+over the frames)."""
 
 from __future__ import annotations
 
@@ -10,11 +13,15 @@ import argparse
 import csv
 import io
 import json
+import math
+from collections.abc import Callable
 from pathlib import Path
+
+import numpy as np
 
 from .._atomic import write_text
 from .._progress import ProgressBar
-from ..animate import FrameRow, run_experiment, summary
+from ..animate import FrameRow, as_scene, run_experiment, summary
 from ..library.animations import ANIMATIONS
 from ..render import BACKENDS
 from ..scene import Scene
@@ -27,8 +34,18 @@ MAX_FRAMES = 10_000
 
 def add_parser(sub) -> None:
     p = sub.add_parser("animate", help="update policies frame by frame over an animation", description=__doc__)
-    p.add_argument("animation", choices=list(ANIMATIONS), help="; ".join(f"{k}: {v[1]}" for k, v in ANIMATIONS.items()))
-    p.add_argument("--frames", type=frame_range, default=range(0, 24), metavar="A-B", help="frames A..B (default 0-23)")
+    p.add_argument(
+        "animation",
+        type=animation_spec,
+        help="; ".join(f"{k}: {v[1]}" for k, v in ANIMATIONS.items()) + "; or an animated .blend file",
+    )
+    p.add_argument(
+        "--frames",
+        type=frame_range,
+        default=None,
+        metavar="A-B",
+        help="frames A..B (default 0-23; a .blend: its range)",
+    )
     p.add_argument("--policy", type=policy_list, default=UPDATE_POLICIES, metavar="P,Q", help="policies (default all)")
     p.add_argument(
         "--size",
@@ -55,6 +72,12 @@ def frame_range(text: str) -> range:
     return range(a, b + 1)
 
 
+def animation_spec(text: str) -> str:
+    if text in ANIMATIONS or (text.endswith(".blend") and Path(text).is_file()):
+        return text
+    raise argparse.ArgumentTypeError(f"'{text}' is neither one of {', '.join(ANIMATIONS)} nor an existing .blend file")
+
+
 def policy_list(text: str) -> tuple[str, ...]:
     names = tuple(dict.fromkeys(n.strip() for n in text.split(",") if n.strip()))
     bad = [n for n in names if n not in UPDATE_POLICIES]
@@ -63,19 +86,27 @@ def policy_list(text: str) -> tuple[str, ...]:
     return names
 
 
-def run(args) -> int:
+def _frames_of(args) -> tuple[Callable[[int], np.ndarray | Scene], range]:
+    """Frame k's geometry, and the frames to run."""
+    if args.animation.endswith(".blend"):
+        from ..blender.animation import open_animation
+
+        scene_at, frames = open_animation(Path(args.animation))
+        return scene_at, args.frames or frames
     make = ANIMATIONS[args.animation][0]
     frame_of = make(args.size) if args.size else make()
-    first, last = args.frames[0], args.frames[-1]
+    frames = args.frames or range(0, 24)
+    return (lambda k: frame_of((k - frames[0]) / max(frames[-1] - frames[0], 1))), frames
 
-    def triangles(k: int):
-        return frame_of((k - first) / max(last - first, 1))
 
+def run(args) -> int:
+    geometry, frames = _frames_of(args)
+    first, last = frames[0], frames[-1]
     trace = None
     if args.backend != "none":
         from ..render import Camera, render
 
-        lo, hi = Scene(triangles=triangles(first)).bounds()
+        lo, hi = as_scene(geometry(first)).bounds()
         centre = (float(lo[0] + hi[0]) / 2, float(lo[1] + hi[1]) / 2, float(lo[2] + hi[2]) / 2)
         extent = float(max(hi - lo))
         eye = (centre[0] - 0.2 * extent, centre[1] - 1.1 * extent, centre[2] + 0.8 * extent)
@@ -85,8 +116,8 @@ def run(args) -> int:
             _, t = render(Scene(triangles=tris, camera=camera), bvh, args.width, args.height, backend=args.backend)
             return float(t["trace_ms"])
 
-    with ProgressBar(f"{args.animation}, {len(args.frames)} frames × {len(args.policy)} policies") as bar:
-        rows = run_experiment(triangles, args.frames, args.policy, trace=trace, progress=bar)
+    with ProgressBar(f"{args.animation}, {len(frames)} frames × {len(args.policy)} policies") as bar:
+        rows = run_experiment(geometry, frames, args.policy, trace=trace, progress=bar)
     totals = summary(rows)
     _print(rows, totals)
     args.out.mkdir(parents=True, exist_ok=True)
@@ -96,7 +127,7 @@ def run(args) -> int:
         args.out / "animate.json",
         json.dumps({"about": about, "summary": totals, "rows": [r.as_dict() for r in rows]}, indent=1) + "\n",
     )
-    _plot(rows, args.out / "animate.png", f"{args.animation}: update policies over frames {first}-{last}")
+    _plot(rows, args.out / "animate.png", f"{Path(args.animation).stem}: update policies over frames {first}-{last}")
     print(f"wrote {args.out / 'animate.csv'}, animate.json, animate.png")
     return 0
 
@@ -133,7 +164,8 @@ def _plot(rows: list[FrameRow], path: Path, title: str) -> Path:
     for p in dict.fromkeys(r.policy for r in rows):
         mine = [r for r in rows if r.policy == p and r.ran != "build"]
         frames = [r.frame for r in mine]
-        left.plot(frames, [r.sah_ratio for r in mine], marker=".", label=p)
+        if not all(math.isnan(r.sah_ratio) for r in mine):  # the two-level row has no flat SAH
+            left.plot(frames, [r.sah_ratio for r in mine], marker=".", label=p)
         right.plot(frames, [r.update_ms for r in mine], marker=".", label=p)
     left.set_ylabel("SAH cost ÷ a fresh build's")
     right.set_ylabel("update (ms)")
