@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_update import _check_valid
+from oracles import check_tree_layout
 
 import bvhlab
 from bvhlab.library import procedural
@@ -100,7 +100,7 @@ def test_every_policy_leaves_a_valid_tree_each_frame(frames, name):
         tree = bvhlab.build(flat[0], threads=1)
         for tris in flat[1:]:
             tree.update(tris, policy=policy)
-            _check_valid(tree, tris)
+            check_tree_layout(tree, tris)
         origins, directions = procedural.random_rays(flat[-1], 1000, seed=2)
         got, want = tree.intersect(origins, directions), bvhlab.build(flat[-1]).intersect(origins, directions)
         np.testing.assert_array_equal(got["t"], want["t"])
