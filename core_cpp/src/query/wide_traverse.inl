@@ -1,4 +1,5 @@
-// wide_traverse.inl — the closest-hit traversal of the 8-wide tree (wide_bvh.h), written once
+// wide_traverse.inl — the closest-hit and any-hit traversals of the 8-wide tree (wide_bvh.h), one
+// walk with an any-hit mode (kAnyHit: ends at the first leaf that holds a hit), written once
 // against two small vector types that the including file defines in its own namespace:
 //   L8: eight floats — load(const float*), splat(float), lane(k), + - *, raise(acc, t)
 //       (= t > acc ? t : acc), lower(acc, t) (= t < acc ? t : acc), le_bits(a, b) (bit i set
@@ -82,6 +83,8 @@ bool closer(float t, std::uint32_t ref, const Hit& hit) {
 
 /// The watertight test (geometry.glsl hit_triangle) on four triangles at once, its operations in
 /// its order lane by lane; the lanes that pass become hits in lane order under the closest-hit rule.
+/// kAnyHit: the first lane that passes is the hit (its t and ref only; the query wants no more).
+template <bool kAnyHit>
 void test_triangles(const PrimPacket& k, const Query& q, Hit& hit) {
     const int kx = q.axis[0], ky = q.axis[1], kz = q.axis[2];
     const L4 ox = L4::splat(q.o_axes[0]), oy = L4::splat(q.o_axes[1]), oz = L4::splat(q.o_axes[2]);
@@ -100,6 +103,18 @@ void test_triangles(const PrimPacket& k, const Query& q, Hit& hit) {
     const L4 t = (((u * az + v * bz) + w * cz) / det) * L4::splat(q.shear[2]);
     int lanes = bits(inside & (t > L4::splat(q.tmin)) & (t <= L4::splat(hit.t)));
     if (!lanes) return;
+    if constexpr (kAnyHit) {
+        alignas(16) float ts[4];
+        t.store(ts);
+        for (; lanes; lanes &= lanes - 1) {
+            const int l = __builtin_ctz(unsigned(lanes));
+            if (closer(ts[l], k.ref[l], hit)) {
+                hit.t = ts[l], hit.ref = k.ref[l];
+                return;
+            }
+        }
+        return;
+    }
     alignas(16) float ts[4], vs[4], ws[4], dets[4];
     t.store(ts), v.store(vs), w.store(ws), det.store(dets);
     for (; lanes; lanes &= lanes - 1) {
@@ -115,7 +130,8 @@ const unsigned char* line_at(const WideView& wide, std::uint32_t i) {
     return wide.lines + std::size_t(i) * sizeof(WideLine);
 }
 
-/// The `count` packets of a leaf, from line `first` on.
+/// The `count` packets of a leaf, from line `first` on; kAnyHit: up to the first packet with a hit.
+template <bool kAnyHit>
 void test_leaf(const WideView& wide, std::uint32_t first, std::uint32_t count, const Query& q, Hit& hit) {
     const unsigned char* at = line_at(wide, first);
     for (const unsigned char* end = at + std::size_t(count) * sizeof(PrimPacket); at != end; at += sizeof(PrimPacket)) {
@@ -124,11 +140,13 @@ void test_leaf(const WideView& wide, std::uint32_t first, std::uint32_t count, c
         // spills fewer of the node loop's registers (uniform1m random rays: 3,549 → 3,486
         // instructions a ray, Sponza 1,077 → 1,067)
         if (!(k.ref[0] & gpu::REF_SPHERE_BIT)) [[likely]] {
-            test_triangles(k, q, hit);
+            test_triangles<kAnyHit>(k, q, hit);
+            if (kAnyHit && hit.ref != kNoHit) return;
             continue;
         }
         for (int l = 0; l < 4 && k.ref[l] != kNoHit; ++l)
             if (hit_packet_sphere(k, l, *q.ray, hit)) hit.slot = k.slot[l];
+        if (kAnyHit && hit.ref != kNoHit) return;
     }
 }
 
@@ -164,9 +182,12 @@ const WideNode& node_at(const WideView& wide, std::uint32_t line) {
 /// The order comes from push_children, which sorts the entered slots by a key of their middle
 /// and pushes them, without branches where it can (AVX2: a sorting network and three permutes):
 /// which children a ray enters, and in what order, is data that no branch predictor learns.
-bool enter_children(const WideView& wide, const WideNode& node, const L8 origin[3], const L8 neg_inv[3],
-                    const L8 neg_inv_far[3], const int near[3], float tmin, float far_limit, Stack& stack,
-                    std::uint32_t& sp, Entry& cur) {
+/// Inlined into each walk (closest and any hit), as it was into the one walk before the any-hit
+/// mode came (shared by two, the compiler called it per node).
+[[gnu::always_inline]] inline bool enter_children(const WideView& wide, const WideNode& node, const L8 origin[3],
+                                                  const L8 neg_inv[3], const L8 neg_inv_far[3], const int near[3],
+                                                  float tmin, float far_limit, Stack& stack, std::uint32_t& sp,
+                                                  Entry& cur) {
     const float* f = node.lo_x;
     // The children's indices are the node's fourth cache line, read only once the box tests say
     // which: started now, its load overlaps the bounds' instead of following them (a second miss
@@ -203,7 +224,9 @@ bool enter_children(const WideView& wide, const WideNode& node, const L8 origin[
 }
 
 /// Nearest child first, from the root. `far_limit`, the closest hit so far times the box scale,
-/// lives in a register and is renewed after a leaf, the one place the hit changes.
+/// lives in a register and is renewed after a leaf, the one place the hit changes. kAnyHit: the
+/// walk ends at the first leaf with a hit (the boxes' far limit stays the ray's tmax).
+template <bool kAnyHit>
 std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit) {
     const L8 origin[3] = {L8::splat(q.o[0]), L8::splat(q.o[1]), L8::splat(q.o[2])};
     // The planes' distances as (origin - plane) · (-1/d), which are hit_box's (plane - origin) ·
@@ -221,7 +244,8 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit) {
     float far_limit = hit.t * s;
     for (;;) {
         if (cur.count) {
-            test_leaf(wide, cur.index, cur.count, q, hit);
+            test_leaf<kAnyHit>(wide, cur.index, cur.count, q, hit);
+            if (kAnyHit && hit.ref != kNoHit) return visited;
             far_limit = hit.t * s;
         } else {
             ++visited;
@@ -242,7 +266,13 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit) {
 Hit intersect_wide_kernel(const WideView& wide, const Ray& ray, std::uint32_t* nodes_visited) {
     Hit hit{ray.tmax, kNoHit, 0.0f, 0.0f, kNoHit};
     const Query q = make_query(ray);
-    const std::uint32_t visited = wide.lines ? traverse_nodes(wide, q, hit) : 0;
+    const std::uint32_t visited = wide.lines ? traverse_nodes<false>(wide, q, hit) : 0;
     if (nodes_visited) *nodes_visited = visited;
     return hit;
+}
+
+bool occluded_wide_kernel(const WideView& wide, const Ray& ray) {
+    Hit hit{ray.tmax, kNoHit, 0.0f, 0.0f, kNoHit};
+    if (wide.lines) traverse_nodes<true>(wide, make_query(ray), hit);
+    return hit.ref != kNoHit;
 }
