@@ -8,7 +8,7 @@ rays in the same process, interleaved and repeated.
 
 For each scene: random rays (origins in the bounds, uniform directions, 200k) and primary rays
 (640×480; on Sponza the report's Figure 6 view), closest hit; and shadow rays (any hit: bvhlab's
-occluded) from the primary rays' hits to a point light (_peers.shadow_rays). Prints Mrays/s with
+occluded) from the random rays' hits to a point light (_peers.shadow_rays). Prints Mrays/s with
 ratios against Embree MEDIUM and against the fastest peer (not bvhlab), the hits each system found
 (shadow rays: those occluded) and how many rays disagree with Embree's hit distance (or
 occlusion), and callgrind instructions per ray (on `--callgrind` rays spread over the set); writes
@@ -29,7 +29,7 @@ import _common  # noqa: E402
 import _peers  # noqa: E402
 
 PEERS = [  # (label, bvh_bench spec); Embree MEDIUM first: the others are compared with it
-    ("Embree 3 MEDIUM rtcIntersect1", "embree:medium"),
+    ("Embree 3 MEDIUM rtcIntersect1 / rtcOccluded1", "embree:medium"),
     ("bvhlab wide (default tree)", "bvhlab:"),
     ("bvhlab stack (default tree)", "bvhlab:query=stack"),
     ("bvhlab stackless (default tree)", "bvhlab:query=stackless"),
