@@ -1,5 +1,6 @@
 """Build benchmark: bvhlab's builders beside Embree 3 (C++, LOW/MEDIUM/HIGH), Embree 4 (embreex)
-and tinybvh (Build: its AVX2 builder, when a local copy is given), measured in the same run.
+and tinybvh (Build: its AVX2 builder; BuildHQ: its SBVH; Build + Optimize: its reinsertion; when a
+local copy is given), measured in the same run.
 
     python bench/build.py [--scenes sponza,room1m,uniform1m] [--threads 1,2] [--repeat 5]
                           [--rounds 2] [--callgrind sponza] [--tinybvh DIR]
@@ -40,6 +41,8 @@ PEERS = [  # (label, bvh_bench spec)
     ("Embree 3 MEDIUM", "embree:medium"),
     ("Embree 3 HIGH", "embree:high"),
     ("tinybvh Build", "tinybvh:"),
+    ("tinybvh BuildHQ (SBVH)", "tinybvh:hq"),
+    ("tinybvh Build + Optimize (25 iterations)", "tinybvh:opt"),
 ]
 
 

@@ -1,15 +1,19 @@
-"""Traversal benchmark: single-ray closest hit on one core, bvhlab's 8-wide traversal beside
-Embree 3 (C++ rtcIntersect1, MEDIUM) and tinybvh's BVH8_CPU (when a local copy is given), on the
-same rays in the same process, interleaved and repeated.
+"""Traversal benchmark: single rays on one core, bvhlab's traversals (8-wide, stack, stackless)
+beside Embree 3 (C++ rtcIntersect1 / rtcOccluded1, MEDIUM) and tinybvh's BVH8_CPU and BVH4_CPU
+(Intersect / IsOccluded; Build, BuildHQ and Optimize; when a local copy is given), on the same
+rays in the same process, interleaved and repeated.
 
     python bench/traverse.py [--scenes sponza,room1m,uniform1m] [--repeat 5] [--rounds 2]
-                             [--callgrind 20000] [--tinybvh DIR]
+                             [--callgrind 20000] [--tinybvh DIR] [--peers SPEC,...]
 
 For each scene: random rays (origins in the bounds, uniform directions, 200k) and primary rays
-(640×480; on Sponza the report's Figure 6 view). Prints Mrays/s with ratios
-against Embree MEDIUM, the hits each system found and how many rays disagree with Embree's hit
-distance, and callgrind instructions per ray (on `--callgrind` rays spread over the set); writes
-bench/results/traverse.json. Each bvhlab row names its build settings.
+(640×480; on Sponza the report's Figure 6 view), closest hit; and shadow rays (any hit: bvhlab's
+occluded) from the random rays' hits to a point light (_peers.shadow_rays). Prints Mrays/s with
+ratios against Embree MEDIUM and against the fastest peer (not bvhlab), the hits each system found
+(shadow rays: those occluded) and how many rays disagree with Embree's hit distance (or
+occlusion), and callgrind instructions per ray (on `--callgrind` rays spread over the set); writes
+bench/results/traverse.json. Each bvhlab row names its build settings and traversal. `--peers`
+keeps only the given specs (Embree MEDIUM is always kept: the others are compared with it).
 """
 
 from __future__ import annotations
@@ -25,20 +29,31 @@ import _common  # noqa: E402
 import _peers  # noqa: E402
 
 PEERS = [  # (label, bvh_bench spec); Embree MEDIUM first: the others are compared with it
-    ("Embree 3 MEDIUM rtcIntersect1", "embree:medium"),
+    ("Embree 3 MEDIUM rtcIntersect1 / rtcOccluded1", "embree:medium"),
     ("bvhlab wide (default tree)", "bvhlab:"),
     ("bvhlab wide (default tree, optimised: 25 batches of reinsertion, Bvh.optimize)", "bvhlab:opt=25"),
+    ("bvhlab stack (default tree)", "bvhlab:query=stack"),
+    ("bvhlab stackless (default tree)", "bvhlab:query=stackless"),
     ("bvhlab wide (default tree but primitives counted one by one: sah_block 1)", "bvhlab:block=1"),
     (
         "bvhlab wide (report's tree: sah12, largest, leaf 1)",
         "bvhlab:method=sah,bins=12,axis=largest,leaf=1,span=centroids,block=1",
     ),
     ("tinybvh BVH8_CPU", "tinybvh:"),
+    ("tinybvh BVH4_CPU", "tinybvh:bvh4"),
+    ("tinybvh BuildHQ / BVH8_CPU", "tinybvh:hq"),
+    ("tinybvh Build + Optimize / BVH8_CPU", "tinybvh:opt"),
 ]
 
 
+def ray_args(name: str, path: Path) -> list[str]:
+    """bvh_bench's arguments for a ray set: shadow rays (N×7) after --shadow."""
+    return ["--shadow", str(path)] if name == "shadow" else [str(path)]
+
+
 def measure(exe: Path, mesh: Path, rays: dict[str, Path], repeat: int, rounds: int, peers: list) -> dict:
-    args = ["trace", str(mesh), *map(str, rays.values())] + [a for _, s in peers for a in ("--peer", s)]
+    args = ["trace", str(mesh), *(a for name, path in rays.items() for a in ray_args(name, path))]
+    args += [a for _, s in peers for a in ("--peer", s)]
     args += ["--repeat", str(repeat)]
     out = {name: {} for name in rays}
     for _ in range(rounds):
@@ -61,11 +76,11 @@ def count_instructions(exe: Path, mesh: Path, rays: dict[str, Path], sample: int
 
     for name, path in rays.items():
         few = path.with_suffix(".few.f32")
-        all_rays = np.fromfile(path, np.float32).reshape(-1, 6)
+        all_rays = np.fromfile(path, np.float32).reshape(-1, 7 if name == "shadow" else 6)
         subset = all_rays[:: max(1, len(all_rays) // sample)][:sample]
         np.ascontiguousarray(subset).tofile(few)
         for spec, row in result[name].items():
-            n = _peers.instructions(exe, [str(mesh), str(few), "--peer", spec])
+            n = _peers.instructions(exe, [str(mesh), *ray_args(name, few), "--peer", spec])
             row["instructions_per_ray"] = n / len(subset) if n else None
             print(f"  callgrind {name} {row['label']}: {n}", file=sys.stderr, flush=True)
 
@@ -73,24 +88,29 @@ def count_instructions(exe: Path, mesh: Path, rays: dict[str, Path], sample: int
 def report(scene: str, triangles: int, result: dict) -> None:
     for name, rows in result.items():
         embree = _peers.median(rows["embree:medium"]["seconds"])
+        best_peer = min(_peers.median(r["seconds"]) for spec, r in rows.items() if not spec.startswith("bvhlab"))
         table = []
         for row in rows.values():
             t = _peers.median(row["seconds"])
+            row["mrays_per_s"] = row["count"] / t / 1e6
+            row["x_best_peer"] = best_peer / t
             ipr = row.get("instructions_per_ray")
             table.append(
                 [
                     row["label"],
-                    row["count"] / t / 1e6,
+                    row["mrays_per_s"],
                     embree / t,
+                    best_peer / t,
                     row["hits"],
                     row["disagree_with_embree"],
                     round(ipr) if ipr else "",
                 ]
             )
+        what = "shadow rays (any hit)" if name == "shadow" else f"{name} rays"
         _common.print_table(
-            ["traversal", "Mrays/s", "x Embree", "hits", "disagree", "instr/ray"],
+            ["traversal", "Mrays/s", "x Embree", "x best peer", "hits", "disagree", "instr/ray"],
             table,
-            title=f"\n{scene} ({triangles} triangles), {name} rays, 1 thread",
+            title=f"\n{scene} ({triangles} triangles), {what}, 1 thread",
         )
 
 
@@ -103,9 +123,13 @@ def main() -> None:
         "--callgrind", type=int, default=20000, help="rays callgrind counts, spread over each set (0: none)"
     )
     ap.add_argument("--tinybvh", default=os.environ.get("BVHLAB_TINYBVH_DIR"))
+    ap.add_argument("--peers", help="comma-separated bvh_bench specs to keep (default: all)")
     args = ap.parse_args()
     exe = _peers.build_bvh_bench(args.tinybvh)
     peers = [(label, spec) for label, spec in PEERS if args.tinybvh or not spec.startswith("tinybvh")]
+    if args.peers:
+        keep = set(args.peers.split(",")) | {"embree:medium"}
+        peers = [(label, spec) for label, spec in peers if spec in keep]
     results = {"machine": _common.machine(), "scenes": {}}
     with tempfile.TemporaryDirectory() as tmp:
         for scene, tris in _peers.scenes(args.scenes.split(",")).items():

@@ -18,7 +18,17 @@ std::vector<float> load_floats(const std::string& path) {
 }  // namespace
 
 Mesh load_mesh(const std::string& path) { return {load_floats(path)}; }
-Rays load_rays(const std::string& path) { return {load_floats(path)}; }
+Rays load_rays(const std::string& path) { return {load_floats(path), {}}; }
+
+Rays load_shadow_rays(const std::string& path) {
+    const std::vector<float> all = load_floats(path);
+    Rays rays;
+    for (std::size_t i = 0; i + 7 <= all.size(); i += 7) {
+        rays.od.insert(rays.od.end(), all.begin() + std::ptrdiff_t(i), all.begin() + std::ptrdiff_t(i + 6));
+        rays.tmax.push_back(all[i + 6]);
+    }
+    return rays;
+}
 
 std::unique_ptr<Peer> make_peer(const std::string& spec, unsigned threads) {
     const auto colon = spec.find(':');

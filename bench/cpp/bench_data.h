@@ -15,14 +15,17 @@ struct Mesh {
     std::size_t count() const { return xyz.size() / 9; }
 };
 
-/// Rays as N×6 float32: origin, direction.
+/// Rays as N×6 float32: origin, direction; shadow rays also have each ray's tmax (the segment's end,
+/// in units of the direction), read from N×7 files (origin, direction, tmax).
 struct Rays {
     std::vector<float> od;
+    std::vector<float> tmax;  ///< shadow rays only
     std::size_t count() const { return od.size() / 6; }
 };
 
 Mesh load_mesh(const std::string& path);
 Rays load_rays(const std::string& path);
+Rays load_shadow_rays(const std::string& path);
 
 /// What one peer reports about the tree it built (NaN / 0 where it cannot tell).
 struct TreeInfo {
@@ -42,10 +45,14 @@ public:
     /// Work a system does once before tracing that is not part of its build (e.g. a wide copy).
     virtual void prepare_trace() {}
     virtual void trace(const Rays& rays, float* t, std::uint32_t* prim) = 0;
+    /// Any-hit queries (shadow rays) one ray at a time: occluded[i] = 1 when ray i hits anything at
+    /// t in (0, rays.tmax[i]).
+    virtual void occluded(const Rays& rays, std::uint8_t* occluded) = 0;
 };
 
-/// "bvhlab:key=value,..." (method, bins, axis, leaf, threads), "embree:low|medium|high",
-/// "tinybvh:avx" (BuildAVX, BVH8_CPU traversal). Throws std::invalid_argument for unknown names.
+/// "bvhlab:key=value,..." (method, bins, axis, leaf, threads; query=stack|stackless|wide),
+/// "embree:low|medium|high", "tinybvh:option,..." (hq: BuildHQ, opt or opt=N: Optimize, bvh4:
+/// BVH4_CPU rather than BVH8_CPU traversal). Throws std::invalid_argument for unknown names.
 std::unique_ptr<Peer> make_peer(const std::string& spec, unsigned threads);
 
 std::unique_ptr<Peer> make_bvhlab_peer(const std::string& options, unsigned threads);

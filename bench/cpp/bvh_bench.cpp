@@ -2,9 +2,10 @@
 // interleaved (every repetition runs each system once, in turn), and prints JSON (builds: wall
 // seconds, CPU seconds of all threads, minor page faults, per repetition).
 //   bvh_bench build MESH.f32 --peer SPEC [--peer SPEC ...] [--repeat R] [--threads T]
-//   bvh_bench trace MESH.f32 RAYS.f32 [RAYS.f32 ...] --peer SPEC ... [--repeat R]
-//   bvh_bench once MESH.f32 [RAYS.f32] --peer SPEC [--threads T]   (one build, or one pass over the
-//   rays, between callgrind's start and stop)
+//   bvh_bench trace MESH.f32 RAYS.f32 [RAYS.f32 | --shadow SHADOW.f32 ...] --peer SPEC ... [--repeat R]
+//   bvh_bench once MESH.f32 [RAYS.f32 | --shadow SHADOW.f32] --peer SPEC [--threads T]   (one build,
+//   or one pass over the rays, between callgrind's start and stop)
+// RAYS: N×6 (origin, direction), closest hits; SHADOW: N×7 (origin, direction, tmax), any hits.
 // SPEC: see bench_data.h. bench/build.py and bench/traverse.py drive it.
 #include <algorithm>
 #include <cmath>
@@ -32,6 +33,7 @@ namespace {
 struct Args {
     std::string mode, mesh;
     std::vector<std::string> rays, peers;
+    std::vector<bool> shadow;  ///< per ray set: shadow rays (any hit) rather than closest hits
     int repeat = 5;
     unsigned threads = 1;
 };
@@ -50,7 +52,8 @@ Args parse(int argc, char** argv) {
         if (s == "--peer") a.peers.push_back(value());
         else if (s == "--repeat") a.repeat = std::stoi(value());
         else if (s == "--threads") a.threads = unsigned(std::stoul(value()));
-        else a.rays.push_back(s);
+        else if (s == "--shadow") a.rays.push_back(value()), a.shadow.push_back(true);
+        else a.rays.push_back(s), a.shadow.push_back(false);
     }
     if (a.peers.empty()) throw std::invalid_argument("no --peer given");
     return a;
@@ -142,6 +145,46 @@ std::size_t disagreements(const std::vector<float>& a, const std::vector<float>&
     return n;
 }
 
+/// Rays that a peer says are occluded and the first peer not, or the other way round.
+std::size_t disagreements(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b) {
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) n += (a[i] != 0) != (b[i] != 0);
+    return n;
+}
+
+/// One ray set through every peer, interleaved: closest hits (t) or, for shadow rays, any hits.
+/// Prints its JSON object.
+void trace_set(const Args& a, std::size_t s, const std::vector<std::unique_ptr<Peer>>& peers) {
+    const bool shadow = a.shadow[s];
+    const Rays rays = shadow ? load_shadow_rays(a.rays[s]) : load_rays(a.rays[s]);
+    std::vector<std::vector<float>> t(peers.size(), std::vector<float>(rays.count()));
+    std::vector<std::vector<std::uint8_t>> blocked(peers.size(), std::vector<std::uint8_t>(rays.count()));
+    std::vector<std::uint32_t> prim(rays.count());
+    std::vector<std::vector<double>> times(peers.size());
+    for (int r = 0; r < a.repeat; ++r)
+        for (std::size_t k = 0; k < peers.size(); ++k) {
+            auto t0 = std::chrono::steady_clock::now();
+            if (shadow) peers[k]->occluded(rays, blocked[k].data());
+            else peers[k]->trace(rays, t[k].data(), prim.data());
+            times[k].push_back(seconds_since(t0));
+        }
+    std::printf("%s\n {\"rays\": \"%s\", \"shadow\": %s, \"count\": %zu, \"peers\": [", s ? "," : "", a.rays[s].c_str(),
+                shadow ? "true" : "false", rays.count());
+    for (std::size_t k = 0; k < peers.size(); ++k) {
+        const std::size_t hits =
+            shadow ? std::size_t(std::count(blocked[k].begin(), blocked[k].end(), 1))
+                   : std::size_t(std::count_if(t[k].begin(), t[k].end(), [](float x) { return !std::isinf(x); }));
+        const std::size_t differ = shadow ? disagreements(blocked[0], blocked[k]) : disagreements(t[0], t[k]);
+        std::printf(
+            "%s\n  {\"spec\": \"%s\", \"name\": \"%s\", \"hits\": %zu, \"disagree_with_first\": %zu, "
+            "\"seconds\": ",
+            k ? "," : "", a.peers[k].c_str(), peers[k]->name().c_str(), hits, differ);
+        print_times(times[k]);
+        std::printf("}");
+    }
+    std::printf("]}");
+}
+
 int run_trace(const Args& a) {
     Mesh mesh = load_mesh(a.mesh);
     std::vector<std::unique_ptr<Peer>> peers;
@@ -151,29 +194,7 @@ int run_trace(const Args& a) {
         peers.back()->prepare_trace();
     }
     std::printf("{\"triangles\": %zu, \"ray_sets\": [", mesh.count());
-    for (std::size_t s = 0; s < a.rays.size(); ++s) {
-        Rays rays = load_rays(a.rays[s]);
-        std::vector<std::vector<float>> t(peers.size(), std::vector<float>(rays.count()));
-        std::vector<std::uint32_t> prim(rays.count());
-        std::vector<std::vector<double>> times(peers.size());
-        for (int r = 0; r < a.repeat; ++r)
-            for (std::size_t k = 0; k < peers.size(); ++k) {
-                auto t0 = std::chrono::steady_clock::now();
-                peers[k]->trace(rays, t[k].data(), prim.data());
-                times[k].push_back(seconds_since(t0));
-            }
-        std::printf("%s\n {\"rays\": \"%s\", \"count\": %zu, \"peers\": [", s ? "," : "", a.rays[s].c_str(),
-                    rays.count());
-        for (std::size_t k = 0; k < peers.size(); ++k) {
-            std::size_t hits = std::count_if(t[k].begin(), t[k].end(), [](float x) { return !std::isinf(x); });
-            std::printf(
-                "%s\n  {\"spec\": \"%s\", \"name\": \"%s\", \"hits\": %zu, \"disagree_with_first\": %zu, \"seconds\": ",
-                k ? "," : "", a.peers[k].c_str(), peers[k]->name().c_str(), hits, disagreements(t[0], t[k]));
-            print_times(times[k]);
-            std::printf("}");
-        }
-        std::printf("]}");
-    }
+    for (std::size_t s = 0; s < a.rays.size(); ++s) trace_set(a, s, peers);
     std::printf("]}\n");
     return 0;
 }
@@ -184,11 +205,14 @@ int run_once(const Args& a) {
     if (!a.rays.empty()) {  // count the tracing of the first ray set instead of the build
         peer->build(mesh);
         peer->prepare_trace();
-        Rays rays = load_rays(a.rays[0]);
+        const bool shadow = a.shadow[0];
+        Rays rays = shadow ? load_shadow_rays(a.rays[0]) : load_rays(a.rays[0]);
         std::vector<float> t(rays.count());
         std::vector<std::uint32_t> prim(rays.count());
+        std::vector<std::uint8_t> blocked(rays.count());
         CALLGRIND_START_INSTRUMENTATION;
-        peer->trace(rays, t.data(), prim.data());
+        if (shadow) peer->occluded(rays, blocked.data());
+        else peer->trace(rays, t.data(), prim.data());
         CALLGRIND_STOP_INSTRUMENTATION;
         std::printf("{\"spec\": \"%s\", \"rays\": %zu}\n", a.peers[0].c_str(), rays.count());
         return 0;

@@ -1,20 +1,35 @@
-// bvhlab as a benchmark peer: build_bvh with the options of the spec, single rays through the
-// wide tree (the fastest CPU traversal). Spec options, comma separated (BuildConfig's fields):
-// method=, axis=, bins=, span=box|centroids, leaf= (max leaf size), block= (sah_block),
-// trav= and isect= (the SAH's costs); opt=N optimises the built tree by reinsertion for at most N
-// batches (optimize.h), part of the build's time.
+// bvhlab as a benchmark peer: build_bvh with the options of the spec, single rays (closest hit,
+// or any hit for shadow rays: occluded) through the wide tree (the fastest CPU traversal) or the
+// traversal named by query=. Spec options, comma separated (BuildConfig's fields): method=, axis=,
+// bins=, span=box|centroids, leaf= (max leaf size), block= (sah_block), trav= and isect= (the
+// SAH's costs); query=stack|stackless|wide; opt=N optimises the built tree by reinsertion for at
+// most N batches (optimize.h), part of the build's time.
 #include <sstream>
 #include <stdexcept>
 
 #include "bench_data.h"
 #include "bvhlab/bvh.h"
 #include "bvhlab/optimize.h"
+#include "bvhlab/render_settings.h"
 #include "bvhlab/stats.h"
 #include "bvhlab/traverse.h"
 #include "bvhlab/wide_bvh.h"
 
 namespace bench {
 namespace {
+
+/// The traversal of query= in `options` (wide without one), taken out of `options`.
+bvhlab::Traversal take_query(std::string& options) {
+    std::stringstream ss(options);
+    std::string rest;
+    bvhlab::Traversal query = bvhlab::Traversal::Wide;
+    for (std::string kv; std::getline(ss, kv, ',');) {
+        if (kv.rfind("query=", 0) == 0) query = bvhlab::parse_traversal(kv.substr(6));
+        else rest += (rest.empty() ? "" : ",") + kv;
+    }
+    options = rest;
+    return query;
+}
 
 struct Options {
     bvhlab::BuildConfig build;
@@ -46,8 +61,11 @@ Options parse_options(const std::string& options, unsigned threads) {
 
 class BvhlabPeer : public Peer {
 public:
-    BvhlabPeer(const std::string& options, unsigned threads)
-        : options_(options), config_(parse_options(options, threads)) {}
+    BvhlabPeer(const std::string& options, unsigned threads) : options_(options) {
+        std::string build_options = options;
+        query_ = take_query(build_options);
+        config_ = parse_options(build_options, threads);
+    }
     std::string name() const override { return "bvhlab " + (options_.empty() ? std::string("defaults") : options_); }
     void build(const Mesh& mesh) override {
         bvh_ = bvhlab::build_bvh({mesh.xyz.data(), mesh.count()}, config_.build);
@@ -63,8 +81,17 @@ public:
         for (std::size_t i = 0; i < rays.count(); ++i) {
             const float* r = rays.od.data() + 6 * i;
             bvhlab::Ray ray{{r[0], r[1], r[2]}, {r[3], r[4], r[5]}};
-            bvhlab::Hit h = bvhlab::intersect_wide(wide_, bvh_, ray);
+            bvhlab::Hit h = query_ == bvhlab::Traversal::Wide ? bvhlab::intersect_wide(wide_, bvh_, ray)
+                                                              : bvhlab::intersect(bvh_, ray, query_);
             t[i] = h.t, prim[i] = h.ref;
+        }
+    }
+    void occluded(const Rays& rays, std::uint8_t* out) override {
+        for (std::size_t i = 0; i < rays.count(); ++i) {
+            const float* r = rays.od.data() + 6 * i;
+            bvhlab::Ray ray{{r[0], r[1], r[2]}, {r[3], r[4], r[5]}, 0.0f, rays.tmax[i]};
+            out[i] = query_ == bvhlab::Traversal::Wide ? bvhlab::occluded_wide(wide_, ray)
+                                                       : bvhlab::occluded(bvh_, ray, query_);
         }
     }
 
@@ -81,6 +108,7 @@ private:
     }
 
     std::string options_;
+    bvhlab::Traversal query_;
     Options config_;
     bvhlab::Bvh bvh_;
     bvhlab::WideBvh wide_;

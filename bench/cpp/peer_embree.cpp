@@ -1,7 +1,7 @@
 // Embree 3 (Debian's libembree-dev) as a benchmark peer: a triangle scene committed at LOW
 // (Morton), MEDIUM (binned SAH, the default) or HIGH (spatial splits) quality, rtcIntersect1 per
 // ray. Its tree's SAH is measured on a binary tree built by rtcBuildBVH at the same quality
-// (leaves of at most 8, C_trav = C_isect = 1), in bvhlab's convention.
+// (leaves of at most 8, C_trav = C_isect = 1), in bvhlab's convention. Shadow rays: rtcOccluded1.
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -89,6 +89,21 @@ public:
             const bool miss = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID;
             t[i] = miss ? std::numeric_limits<float>::infinity() : rh.ray.tfar;
             prim[i] = miss ? ~0u : rh.hit.primID;
+        }
+    }
+
+    void occluded(const Rays& rays, std::uint8_t* out) override {
+        RTCIntersectContext context;
+        rtcInitIntersectContext(&context);
+        for (std::size_t i = 0; i < rays.count(); ++i) {
+            const float* r = rays.od.data() + 6 * i;
+            RTCRay ray{};
+            ray.org_x = r[0], ray.org_y = r[1], ray.org_z = r[2];
+            ray.dir_x = r[3], ray.dir_y = r[4], ray.dir_z = r[5];
+            ray.tnear = 0.0f, ray.tfar = rays.tmax[i];
+            ray.mask = ~0u;
+            rtcOccluded1(scene_, &context, &ray);
+            out[i] = ray.tfar == -std::numeric_limits<float>::infinity();  // Embree's mark of a hit
         }
     }
 

@@ -22,6 +22,7 @@
 #include "py_boxes.h"
 #include "py_bvh.h"
 #include "py_cancel.h"
+#include "py_occluded.h"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -89,6 +90,18 @@ void py_intersect(const PyBvh& self, const Vectors& origins, const Vectors& dirs
         stop.rethrow();
         throw;
     }
+}
+
+void py_occluded(const PyBvh& self, const Vectors& origins, const Vectors& dirs, float tmin, float tmax,
+                 const std::optional<RayFloats>& tmax_of, const std::string& traversal, std::uint32_t threads,
+                 Occluded out) {
+    const RayBatch rays = occluded_rays(origins, dirs, tmin, tmax, tmax_of, out);
+    const Traversal mode = parse_traversal(traversal);
+    TreePtr tree = self.current();  // this version stays alive (and unchanged) until the rays are done
+    run_released([&](Cancellation* cancel) {
+        const WideBvh* wide = mode == Traversal::Wide ? &tree->wide() : nullptr;
+        occluded_batch(tree->bvh, rays, out.data(), mode, threads, wide, cancel);
+    });
 }
 
 /// Boxes of the nodes whose depth is in [depth_min, depth_max] (py_boxes.h), read from one
@@ -160,6 +173,8 @@ void bind_bvh(nb::module_& m) {
         .def("intersect", &py_intersect, "origins"_a.noconvert(), "directions"_a.noconvert(), "tmin"_a, "tmax"_a,
              "traversal"_a, "threads"_a, "t"_a.noconvert(), "prim"_a.noconvert(), "kind"_a.noconvert(),
              "u"_a.noconvert(), "v"_a.noconvert(), "visited"_a.noconvert())
+        .def("occluded", &py_occluded, "origins"_a.noconvert(), "directions"_a.noconvert(), "tmin"_a, "tmax"_a,
+             "tmax_of"_a.noconvert().none(), "traversal"_a, "threads"_a, "out"_a.noconvert())
         .def("refit", &py_refit, "triangles"_a.noconvert(), "spheres"_a.noconvert().none());
 }
 

@@ -18,6 +18,7 @@
 #include "py_boxes.h"
 #include "py_bvh.h"
 #include "py_cancel.h"
+#include "py_occluded.h"
 #include "py_two_level.h"
 
 namespace nb = nanobind;
@@ -76,6 +77,16 @@ void py_intersect(const PyTwoLevel& self, const Vectors& origins, const Vectors&
     }
 }
 
+void py_occluded(const PyTwoLevel& self, const Vectors& origins, const Vectors& dirs, float tmin, float tmax,
+                 const std::optional<RayFloats>& tmax_of, const std::string& traversal, std::uint32_t threads,
+                 Occluded out) {
+    const RayBatch rays = occluded_rays(origins, dirs, tmin, tmax, tmax_of, out);
+    const Traversal mode = parse_traversal(traversal);
+    run_released([&](Cancellation* cancel) {
+        occluded_batch_two_level(self.view(mode), rays, out.data(), mode, threads, cancel);
+    });
+}
+
 nb::dict tlas_stats(const PyTwoLevel& self) {
     const Tlas& tlas = self.tlas();
     const BvhStats s = compute_stats(tlas.tree);
@@ -122,7 +133,9 @@ void bind_tlas(nb::module_& m) {
             "The TLAS's node boxes by depth, as Bvh.boxes gives a tree's: (lo (K,3), hi (K,3), depth (K,))")
         .def("intersect", &py_intersect, "origins"_a.noconvert(), "directions"_a.noconvert(), "tmin"_a, "tmax"_a,
              "traversal"_a, "threads"_a, "t"_a.noconvert(), "prim"_a.noconvert(), "kind"_a.noconvert(),
-             "u"_a.noconvert(), "v"_a.noconvert(), "visited"_a.noconvert(), "instance"_a.noconvert());
+             "u"_a.noconvert(), "v"_a.noconvert(), "visited"_a.noconvert(), "instance"_a.noconvert())
+        .def("occluded", &py_occluded, "origins"_a.noconvert(), "directions"_a.noconvert(), "tmin"_a, "tmax"_a,
+             "tmax_of"_a.noconvert().none(), "traversal"_a, "threads"_a, "out"_a.noconvert());
     m.def("build_two_level", &build_two_level, "meshes"_a, "mesh_of"_a.noconvert(), "transforms"_a.noconvert(),
           "config"_a,
           "A TLAS over instances (mesh_of[i] placed by transforms[i], 3×4 object-to-world) of the meshes' trees.");

@@ -291,6 +291,26 @@ class Bvh:
         nodes_visited (box tests, for heatmaps)."""
         return run_ray_query(self._core, origins, directions, tmin, tmax, traversal, threads)
 
+    def occluded(
+        self,
+        origins: np.ndarray,
+        directions: np.ndarray,
+        tmax: float | np.ndarray = np.inf,
+        *,
+        tmin: float = 0.0,
+        traversal: str = "wide",
+        threads: int = 0,
+    ) -> np.ndarray:
+        """Any-hit query (shadow rays): for each ray, whether anything lies on it at t in
+        (tmin, tmax). The walk of `intersect` that ends at the first hit it finds (Embree's
+        rtcOccluded1, tinybvh's IsOccluded), so it answers exactly `intersect(...)["t"] < tmax`
+        on every traversal; a hit at exactly tmax does not count, as in `intersect`.
+
+        `tmax`: a number >= 0 (inf: the whole ray), or a float32 array with one per ray. Rays,
+        tmin, traversal and threads as for `intersect`; a NaN or negative tmax raises ValueError.
+        Returns a bool array, one per ray."""
+        return run_occluded_query(self._core, origins, directions, tmin, tmax, traversal, threads)
+
     def save(self, path) -> None:
         """Writes the tree to `path` (a .bvhtree file, as a whole or not at all): its nodes and
         references, the geometry's fingerprint and the build settings (bvhlab.inspect.tree_file);
@@ -374,19 +394,41 @@ HIT_FIELDS = {"t": np.float32, "prim": np.int32, "kind": np.uint8, "u": np.float
               "nodes_visited": np.uint32}  # fmt: skip
 
 
-def run_ray_query(core, origins, directions, tmin, tmax, traversal: str, threads: int, extra: dict | None = None):
-    """The checked arguments and output arrays of one `intersect` over a flat or two-level tree
-    (`extra`: more output fields, e.g. the instance), filled by `core.intersect`."""
+def _checked_rays(origins, directions, tmin, traversal: str, threads: int):
+    """The arguments every ray query checks alike: (origins, directions, tmin, traversal, threads)."""
     origins = _checks.float32_array("origins", origins, (3,))
     directions = _checks.float32_array("directions", directions, (3,))
     if len(origins) != len(directions):
         raise ValueError(f"origins ({len(origins)}) and directions ({len(directions)}) differ in length")
     _checks.choice("traversal", traversal, TRAVERSALS)
-    tmin, tmax = _checks.real("tmin", tmin), _checks.real("tmax", tmax)
+    return origins, directions, _checks.real("tmin", tmin), traversal, _checks.integer("threads", threads, 0, 4096)
+
+
+def run_ray_query(core, origins, directions, tmin, tmax, traversal: str, threads: int, extra: dict | None = None):
+    """The checked arguments and output arrays of one `intersect` over a flat or two-level tree
+    (`extra`: more output fields, e.g. the instance), filled by `core.intersect`."""
+    origins, directions, tmin, traversal, threads = _checked_rays(origins, directions, tmin, traversal, threads)
+    tmax = _checks.real("tmax", tmax)
     out = {name: np.empty(len(origins), dtype) for name, dtype in {**HIT_FIELDS, **(extra or {})}.items()}
-    core.intersect(
-        origins, directions, tmin, tmax, traversal, _checks.integer("threads", threads, 0, 4096), *out.values()
-    )
+    core.intersect(origins, directions, tmin, tmax, traversal, threads, *out.values())
+    return out
+
+
+def run_occluded_query(core, origins, directions, tmin, tmax, traversal: str, threads: int) -> np.ndarray:
+    """The checked arguments of one `occluded` over a flat or two-level tree, and its answer (bool,
+    one per ray) from `core.occluded`. `tmax`: a number >= 0, or a float32 array of one per ray
+    (which the core checks: a NaN or negative one raises ValueError naming the ray)."""
+    origins, directions, tmin, traversal, threads = _checked_rays(origins, directions, tmin, traversal, threads)
+    if isinstance(tmax, np.ndarray):
+        tmax_of = _checks.float32_array("tmax", tmax, ())
+        if len(tmax_of) != len(origins):
+            raise ValueError(f"tmax has {len(tmax_of)} entries for {len(origins)} rays (give one per ray, or a number)")
+        tmax = np.inf
+    else:
+        tmax_of = None
+        tmax = _checks.real("tmax", tmax, 0.0)
+    out = np.empty(len(origins), np.bool_)
+    core.occluded(origins, directions, tmin, tmax, tmax_of, traversal, threads, out)
     return out
 
 

@@ -9,7 +9,7 @@ from collections.abc import Callable
 import numpy as np
 
 from . import _checks, _core
-from .bvh import BuildConfig, Bvh, run_ray_query
+from .bvh import BuildConfig, Bvh, run_occluded_query, run_ray_query
 from .two_level_stats import instanced_stats
 from .update import UpdateStats
 
@@ -105,6 +105,20 @@ class InstancedBvh:
         """As `Bvh.intersect`, through both levels; the dict also holds `instance` (int32, -1 on a
         miss), and `prim` indexes the triangles (or spheres) of that instance's mesh."""
         return run_ray_query(self._core, origins, directions, tmin, tmax, traversal, threads, {"instance": np.int32})
+
+    def occluded(
+        self,
+        origins: np.ndarray,
+        directions: np.ndarray,
+        tmax: float | np.ndarray = np.inf,
+        *,
+        tmin: float = 0.0,
+        traversal: str = "wide",
+        threads: int = 0,
+    ) -> np.ndarray:
+        """As `Bvh.occluded`, through both levels: the walk ends at the first instance with a hit
+        before tmax (exactly `intersect(...)["t"] < tmax`)."""
+        return run_occluded_query(self._core, origins, directions, tmin, tmax, traversal, threads)
 
 
 def _make_tlas(meshes: list[Bvh], mesh_of, transforms, threads: int) -> _core.TwoLevel:

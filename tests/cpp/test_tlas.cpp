@@ -3,11 +3,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <random>
 #include <stdexcept>
 #include <string>
 
 #include "bvhlab/coordinate_range.h"
+#include "bvhlab/render_settings.h"
 #include "bvhlab/tlas.h"
 #include "bvhlab/wide_bvh.h"
 #include "test_scenes.h"
@@ -152,6 +154,41 @@ TEST(Tlas, BatchReportsInstanceAndPrimitive) {
             ASSERT_EQ(instance[i], h.hit.ref == kNoHit ? -1 : std::int32_t(h.instance));
             ASSERT_EQ(prim[i], h.hit.ref == kNoHit ? -1 : std::int32_t(h.hit.ref));
             if (h.hit.ref != kNoHit) ASSERT_EQ(t[i], h.hit.t);
+        }
+    }
+}
+
+// The any-hit query through both levels: occluded == the closest hit's t < tmax, for tmax at, just
+// after and just before each ray's closest hit (rotated, scaled and mirrored instances), on every
+// traversal; the batch on several threads with per-ray tmax gives the same answers.
+TEST(Tlas, OccludedEqualsClosestHitBeforeTmax) {
+    const Instanced s = mixed_instances();
+    auto rays = rays_at(s, 2500, 21);
+    for (const Ray& r : scattered_rays(500, 3)) rays.push_back(r);
+    for (Traversal mode : {Traversal::Stack, Traversal::Stackless, Traversal::Wide}) {
+        std::uint32_t occluded_count = 0;
+        std::vector<float> o, d, tmax;
+        std::vector<bool> want;
+        for (Ray ray : rays) {
+            const float t = intersect_two_level(s.two_level, ray, mode).hit.t;
+            for (float limit : {kInfinity, t, std::nextafter(t, kInfinity), std::nextafter(t, 0.0f), 0.5f * t, 8.0f}) {
+                if (t == kInfinity && limit != kInfinity && limit != 8.0f) continue;
+                ray.tmax = limit;
+                const bool expected = t < limit;
+                ASSERT_EQ(occluded_two_level(s.two_level, ray, mode), expected) << to_string(mode) << " t " << t;
+                occluded_count += expected;
+                o.insert(o.end(), {ray.origin.x, ray.origin.y, ray.origin.z});
+                d.insert(d.end(), {ray.dir.x, ray.dir.y, ray.dir.z});
+                tmax.push_back(limit), want.push_back(expected);
+            }
+        }
+        EXPECT_GT(occluded_count, rays.size());
+        RayBatch batch{o.data(), d.data(), tmax.size()};
+        batch.tmax_of = tmax.data();
+        for (std::uint32_t threads : {1u, 3u}) {
+            std::unique_ptr<bool[]> got(new bool[tmax.size()]);
+            occluded_batch_two_level(s.two_level, batch, got.get(), mode, threads);
+            for (std::size_t i = 0; i < tmax.size(); ++i) ASSERT_EQ(got[i], want[i]) << i;
         }
     }
 }

@@ -75,6 +75,14 @@ void check_two_level(const TwoLevel& scene, Traversal mode);
 InstanceHit intersect_two_level(const TwoLevel& scene, const Ray& ray, Traversal mode,
                                 std::uint32_t* nodes_visited = nullptr);
 
+/// Any hit through both levels (occluded, traverse.h): the walk of intersect_two_level, ended at
+/// the first instance that holds a hit before ray.tmax; exactly when intersect_two_level's t < tmax.
+bool occluded_two_level(const TwoLevel& scene, const Ray& ray, Traversal mode);
+
+/// occluded_batch over both levels (its checks, threads and cancellation).
+void occluded_batch_two_level(const TwoLevel& scene, const RayBatch& rays, bool* occluded, Traversal mode,
+                              std::uint32_t threads = 0, Cancellation* cancel = nullptr);
+
 /// intersect_batch over both levels; `instance` (N, may be null) receives each hit's instance
 /// (-1 on a miss). Same checks, threads and cancellation as intersect_batch.
 void intersect_batch_two_level(const TwoLevel& scene, const RayBatch& rays, const HitBatch& hits,

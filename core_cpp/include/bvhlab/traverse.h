@@ -1,4 +1,5 @@
-// traverse.h — closest-hit queries on the CPU, with a stack and stackless (report §2.2, §3.1).
+// traverse.h — closest-hit and any-hit (occluded) queries on the CPU, with a stack and stackless
+// (report §2.2, §3.1).
 #pragma once
 #include <cstdint>
 #include "bvhlab/bvh.h"
@@ -18,12 +19,18 @@ class Cancellation;
 /// Closest hit of one ray; `nodes_visited` (if given) counts the box tests.
 Hit intersect(const Bvh& bvh, const Ray& ray, Traversal mode, std::uint32_t* nodes_visited = nullptr);
 
+/// Whether anything lies on the ray at t in (tmin, tmax): the any-hit query, which ends at the
+/// first hit it finds. Exactly when intersect() would return a hit (its t < tmax), on every
+/// traversal: the same walks, box tests and primitive tests (closer_hit against a hit at tmax).
+bool occluded(const Bvh& bvh, const Ray& ray, Traversal mode);
+
 /// Rays and results as flat arrays (numpy layout). Output pointers other than t and ref may be null.
 struct RayBatch {
     const float* origins = nullptr;     ///< N×3
     const float* directions = nullptr;  ///< N×3
     std::size_t count = 0;
     float tmin = 0.0f, tmax = kInfinity;
+    const float* tmax_of = nullptr;  ///< N: each ray's own tmax, in place of `tmax` when given
 };
 struct HitBatch {
     float* t = nullptr;            ///< inf on a miss
@@ -44,8 +51,18 @@ struct HitBatch {
 void intersect_batch(const Bvh& bvh, const RayBatch& rays, const HitBatch& hits, Traversal mode,
                      std::uint32_t threads = 0, const WideBvh* wide = nullptr, Cancellation* cancel = nullptr);
 
-/// Throws std::invalid_argument naming the first ray of `rays` that intersect_batch refuses.
+/// Any-hit queries of a batch: occluded[i] = occluded(ray i), as intersect_batch's t[i] < tmax
+/// (of ray i). Same rays, checks, threads and cancellation as intersect_batch; a NaN or negative
+/// tmax (scalar or per ray) is refused too.
+void occluded_batch(const Bvh& bvh, const RayBatch& rays, bool* occluded, Traversal mode, std::uint32_t threads = 0,
+                    const WideBvh* wide = nullptr, Cancellation* cancel = nullptr);
+
+/// Throws std::invalid_argument naming the first ray of `rays` that intersect_batch refuses (and
+/// the first NaN or negative per-ray tmax, where the batch has them).
 void check_rays(const RayBatch& rays);
+/// Throws std::invalid_argument unless the batch's scalar tmax is a number ≥ 0 (with per-ray ones,
+/// check_rays checks those).
+void check_tmax(const RayBatch& rays);
 
 /// Sphere u, v from the hit point (done once per ray, not per candidate).
 void finish_hit(const Bvh& bvh, const Ray& ray, Hit& hit);

@@ -79,4 +79,8 @@ WideBvh make_wide(const Bvh& bvh);
 /// set path (isa.h).
 Hit intersect_wide(const WideBvh& wide, const Bvh& bvh, const Ray& ray, std::uint32_t* nodes_visited = nullptr);
 
+/// Any hit through the wide tree (occluded, traverse.h): the walk of intersect_wide, ended at the
+/// first leaf with a hit nearer than ray.tmax; exactly when intersect_wide's t < ray.tmax.
+bool occluded_wide(const WideBvh& wide, const Ray& ray);
+
 }  // namespace bvhlab

@@ -8,7 +8,24 @@
 
 namespace bvhlab {
 
+namespace {
+bool valid_tmax(float tmax) { return tmax >= 0.0f; }  // false for NaN too
+
+std::string tmax_message(const std::string& what, float tmax) {
+    char got[32];
+    std::snprintf(got, sizeof got, "%g", double(tmax));
+    return what + ": tmax must be a number >= 0 (inf for no limit), got " + got;
+}
+}  // namespace
+
+void check_tmax(const RayBatch& rays) {  // each ray's own tmax: check_rays
+    if (!rays.tmax_of && !valid_tmax(rays.tmax)) throw std::invalid_argument(tmax_message("the rays", rays.tmax));
+}
+
 void check_rays(const RayBatch& rays) {
+    for (std::size_t i = 0; rays.tmax_of && i < rays.count; ++i)
+        if (!valid_tmax(rays.tmax_of[i]))
+            throw std::invalid_argument(tmax_message("ray " + std::to_string(i), rays.tmax_of[i]));
     for (std::size_t i = 0; i < rays.count; ++i) {
         const float* o = rays.origins + 3 * i;
         const float* d = rays.directions + 3 * i;

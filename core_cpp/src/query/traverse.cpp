@@ -52,6 +52,18 @@ std::uint32_t traverse_stackless(const Bvh& bvh, const RayQuery& q, Hit& hit, Re
         [&](std::uint32_t node, bool entered) { record.box(node, entered); });
 }
 
+/// The any-hit leaf (walk.h ends_walk): true at the first primitive hit at t in (tmin, tmax), by
+/// the closest-hit test against a hit at tmax (closer_hit: nearer than tmax, as intersect's first
+/// hit must be).
+bool leaf_occludes(const Bvh& bvh, const BvhNode& n, const RayQuery& q, float tmax) {
+    for (std::uint32_t k = n.index, end = n.index + leaf_count(n); k < end; ++k) {
+        Hit at_tmax;
+        at_tmax.t = tmax;
+        if (hit_prim(bvh.prims[k], q, at_tmax)) return true;
+    }
+    return false;
+}
+
 }  // namespace
 
 void finish_hit(const Bvh& bvh, const Ray& ray, Hit& hit) {
@@ -89,6 +101,27 @@ Hit intersect(const Bvh& bvh, const Ray& ray, Traversal mode, std::uint32_t* nod
 Hit detail::intersect_recorded(const Bvh& bvh, const Ray& ray, Traversal mode, TraversalRecord& record) {
     Recorder recorder{record};
     return intersect_with(bvh, ray, mode, nullptr, recorder);
+}
+
+bool occluded(const Bvh& bvh, const Ray& ray, Traversal mode) {
+    if (mode == Traversal::Wide) throw std::invalid_argument("use occluded_wide for Traversal::Wide");
+    if (bvh.empty()) return false;
+    const RayQuery q(ray);
+    const float tmax = ray.tmax;  // the boxes are tested up to tmax throughout: no hit lowers it
+    bool found = false;
+    auto leaf = [&](const BvhNode& n) { return found = leaf_occludes(bvh, n, q, tmax); };
+    if (mode == Traversal::Stack) walk::stack(bvh.nodes.data(), q, tmax, leaf);
+    else walk::stackless(bvh.nodes.data(), bvh.node_count(), q, tmax, leaf);
+    return found;
+}
+
+void occluded_batch(const Bvh& bvh, const RayBatch& rays, bool* occluded_out, Traversal mode, std::uint32_t threads,
+                    const WideBvh* wide, Cancellation* cancel) {
+    if (mode == Traversal::Wide && !wide) throw std::invalid_argument("Traversal::Wide needs the wide tree");
+    check_tmax(rays);
+    for_each_ray(rays, threads, cancel, [&](std::size_t i, const Ray& ray, float) {
+        occluded_out[i] = mode == Traversal::Wide ? occluded_wide(*wide, ray) : occluded(bvh, ray, mode);
+    });
 }
 
 void intersect_batch(const Bvh& bvh, const RayBatch& rays, const HitBatch& out, Traversal mode, std::uint32_t threads,

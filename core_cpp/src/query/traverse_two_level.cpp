@@ -1,7 +1,8 @@
 // traverse_two_level.cpp — closest hits through a TLAS and its BLASes (tlas.h): the TLAS is walked
 // with the walks of every tree (walk.h); at an instance the ray is moved into its object space
 // (origin and direction by the inverse transform, the direction left unnormalised so that t is
-// the same in both spaces) and the BLAS is traversed up to the closest hit so far.
+// the same in both spaces) and the BLAS is traversed up to the closest hit so far. The any-hit
+// query (occluded) is the same walk of both levels, ended at the first instance with a hit.
 #include <stdexcept>
 #include <string>
 
@@ -19,26 +20,55 @@ Hit intersect_blas(const BlasView& blas, const Ray& ray, Traversal mode, std::ui
                                    : intersect(*blas.bvh, ray, mode, visited);
 }
 
-/// Tests instance `index` with a world ray whose closest hit so far is `best`.
-void test_instance(const TwoLevel& scene, std::uint32_t index, const Ray& world, Traversal mode, InstanceHit& best,
-                   std::uint32_t& visited) {
-    const Instance& inst = scene.tlas->instances[index];
-    Ray ray = world;
-    ray.tmax = best.hit.t;
+bool occluded_blas(const BlasView& blas, const Ray& ray, Traversal mode) {
+    return mode == Traversal::Wide ? occluded_wide(*blas.wide, ray) : occluded(*blas.bvh, ray, mode);
+}
+
+/// The world ray up to `tmax` moved into the object space of `inst` and rescaled exactly as the
+/// batch scales world rays (coordinate_range.h), its scale in `t_scale`. False where it cannot be
+/// (a direction too long or short for float), which cannot hit what lies within the range.
+bool object_ray(const Instance& inst, const Ray& world, float tmax, Ray& ray, float& t_scale) {
+    ray = world;
+    ray.tmax = tmax;
     if (!inst.identity) {
         ray.origin = inst.world_to_object.point(world.origin);
         ray.dir = inst.world_to_object.vector(world.dir);
     }
-    // The moved direction is rescaled exactly as the batch scales world rays (coordinate_range.h);
-    // one that cannot be (too long or short for float) cannot hit what lies within the range.
-    if (!direction_in_range(ray.dir)) return;
-    const float t_scale = scale_ray(ray);
+    if (!direction_in_range(ray.dir)) return false;
+    t_scale = scale_ray(ray);
+    return true;
+}
+
+/// Tests instance `index` with a world ray whose closest hit so far is `best`.
+void test_instance(const TwoLevel& scene, std::uint32_t index, const Ray& world, Traversal mode, InstanceHit& best,
+                   std::uint32_t& visited) {
+    const Instance& inst = scene.tlas->instances[index];
+    Ray ray;
+    float t_scale;
+    if (!object_ray(inst, world, best.hit.t, ray, t_scale)) return;
     std::uint32_t count = 0;
     Hit h = intersect_blas(scene.blases[inst.blas], ray, mode, &count);
     visited += count;
     if (h.ref == kNoHit) return;
     h.t *= t_scale;
     if (h.t < best.hit.t) best.hit = h, best.instance = index;
+}
+
+/// Whether instance `index` holds a hit of the world ray before its tmax.
+bool instance_occludes(const TwoLevel& scene, std::uint32_t index, const Ray& world, Traversal mode) {
+    const Instance& inst = scene.tlas->instances[index];
+    Ray ray;
+    float t_scale;
+    return object_ray(inst, world, world.tmax, ray, t_scale) && occluded_blas(scene.blases[inst.blas], ray, mode);
+}
+
+/// The TLAS walk of `mode` (stackless for Traversal::Stackless, else with a stack) up to `hit_t`,
+/// `leaf` testing a leaf's instances (walk.h: returning true ends the walk).
+template <class Leaf>
+std::uint32_t walk_tlas(const Tlas& tlas, const RayQuery& q, const float& hit_t, Traversal mode, Leaf&& leaf) {
+    return mode == Traversal::Stackless
+               ? walk::stackless(tlas.tree.nodes.data(), tlas.tree.node_count(), q, hit_t, leaf)
+               : walk::stack(tlas.tree.nodes.data(), q, hit_t, leaf);
 }
 
 }  // namespace
@@ -71,9 +101,7 @@ InstanceHit intersect_two_level(const TwoLevel& scene, const Ray& ray, Traversal
             for (std::uint32_t k = n.index, end = n.index + leaf_count(n); k < end; ++k)
                 test_instance(scene, tlas.tree.refs[k], ray, mode, best, visited);
         };
-        visited += mode == Traversal::Stackless
-                       ? walk::stackless(tlas.tree.nodes.data(), tlas.tree.node_count(), q, best.hit.t, leaf)
-                       : walk::stack(tlas.tree.nodes.data(), q, best.hit.t, leaf);
+        visited += walk_tlas(tlas, q, best.hit.t, mode, leaf);
     }
     if (best.hit.ref == kNoHit) best.hit.t = kInfinity;
     if (nodes_visited) *nodes_visited = visited;
@@ -88,6 +116,34 @@ void intersect_batch_two_level(const TwoLevel& scene, const RayBatch& rays, cons
         if (instance) instance[i] = h.hit.ref == kNoHit ? -1 : std::int32_t(h.instance);
         return h.hit;
     });
+}
+
+}  // namespace bvhlab
+
+namespace bvhlab {
+
+bool occluded_two_level(const TwoLevel& scene, const Ray& ray, Traversal mode) {
+    const Tlas& tlas = *scene.tlas;
+    if (tlas.instances.size() == 1 && tlas.instances[0].identity)  // as intersect_two_level
+        return occluded_blas(scene.blases[tlas.instances[0].blas], ray, mode);
+    if (tlas.tree.empty()) return false;
+    const RayQuery q(ray);
+    bool found = false;
+    auto leaf = [&](const BvhNode& n) {
+        for (std::uint32_t k = n.index, end = n.index + leaf_count(n); k < end && !found; ++k)
+            found = instance_occludes(scene, tlas.tree.refs[k], ray, mode);
+        return found;
+    };
+    walk_tlas(tlas, q, ray.tmax, mode, leaf);
+    return found;
+}
+
+void occluded_batch_two_level(const TwoLevel& scene, const RayBatch& rays, bool* occluded, Traversal mode,
+                              std::uint32_t threads, Cancellation* cancel) {
+    check_two_level(scene, mode);
+    check_tmax(rays);
+    for_each_ray(rays, threads, cancel,
+                 [&](std::size_t i, const Ray& ray, float) { occluded[i] = occluded_two_level(scene, ray, mode); });
 }
 
 }  // namespace bvhlab

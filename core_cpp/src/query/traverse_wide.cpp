@@ -187,4 +187,12 @@ Hit intersect_wide(const WideBvh& wide, const Bvh& bvh, const Ray& ray, std::uin
     return hit;
 }
 
+bool occluded_wide(const WideBvh& wide, const Ray& ray) {
+    const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
+#if defined(BVHLAB_AVX2_KERNELS)
+    if (active_isa() == Isa::Avx2) return avx2::occluded_wide_kernel(view, ray);
+#endif
+    return portable::occluded_wide_kernel(view, ray);
+}
+
 }  // namespace bvhlab

@@ -1,8 +1,11 @@
 // walk.h — the two binary-tree walks (report §2.2, §3.1), written once over a leaf callback: the
 // flat traversals test a leaf's primitives, the two-level one a leaf's instances (tlas.h); an
-// optional box callback lets the inspector record every box test (ray_record.h).
+// optional box callback lets the inspector record every box test (ray_record.h). The same walks
+// answer closest-hit and any-hit queries (occluded): an any-hit leaf callback returns bool, true
+// ending the walk at the first hit (ends_walk).
 #pragma once
 #include <cstdint>
+#include <type_traits>
 #include <utility>
 
 #include "bvhlab/bvh.h"
@@ -15,6 +18,19 @@ namespace bvhlab::walk {
 struct NoBoxes {
     void operator()(std::uint32_t, bool) const {}
 };
+
+/// Tests leaf `n`; true when the walk is to end there. A closest-hit leaf callback returns nothing
+/// and never ends the walk (this compiles to the call alone); an any-hit one returns true once it
+/// has found a hit, which answers the query (Embree's rtcOccluded1, tinybvh's IsOccluded).
+template <class TestLeaf>
+bool ends_walk(TestLeaf& test_leaf, const BvhNode& n) {
+    if constexpr (std::is_void_v<decltype(test_leaf(n))>) {
+        test_leaf(n);
+        return false;
+    } else {
+        return test_leaf(n);
+    }
+}
 
 /// Ordered depth-first walk: test both children's boxes, descend into the nearer, push the farther
 /// with its entry distance so it is dropped if a closer hit is found meanwhile. `hit_t` is the
@@ -35,7 +51,7 @@ std::uint32_t stack(const BvhNode* nodes, const RayQuery& q, const float& hit_t,
     for (;;) {
         const BvhNode& n = nodes[i];
         if (is_leaf(n)) {
-            test_leaf(n);
+            if (ends_walk(test_leaf, n)) return visited;
         } else {
             std::uint32_t a = i + 1, b = n.index;
             float ta, tb;
@@ -77,7 +93,7 @@ std::uint32_t stackless(const BvhNode* nodes, std::uint32_t count, const RayQuer
             i = skip_index(n, i);
             continue;
         }
-        if (is_leaf(n)) test_leaf(n);
+        if (is_leaf(n) && ends_walk(test_leaf, n)) return visited;
         ++i;
     }
     return visited;

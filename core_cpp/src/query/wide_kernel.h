@@ -17,9 +17,11 @@ bool hit_packet_sphere(const PrimPacket& k, int lane, const Ray& ray, Hit& hit);
 
 namespace portable {
 Hit intersect_wide_kernel(const WideView& wide, const Ray& ray, std::uint32_t* nodes_visited);
-}
+bool occluded_wide_kernel(const WideView& wide, const Ray& ray);
+}  // namespace portable
 namespace avx2 {
 Hit intersect_wide_kernel(const WideView& wide, const Ray& ray, std::uint32_t* nodes_visited);
-}
+bool occluded_wide_kernel(const WideView& wide, const Ray& ray);
+}  // namespace avx2
 
 }  // namespace bvhlab
