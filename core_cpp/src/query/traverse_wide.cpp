@@ -66,7 +66,6 @@ inline M4 operator>(L4 a, L4 b) { return {_mm_cmpgt_ps(a.v, b.v)}; }
 inline L4 raise(L4 acc, L4 t) { return {_mm_max_ps(t.v, acc.v)}; }  // t > acc ? t : acc
 inline L4 lower(L4 acc, L4 t) { return {_mm_min_ps(t.v, acc.v)}; }  // t < acc ? t : acc
 inline int le_bits(L4 a, L4 b) { return _mm_movemask_ps(_mm_cmple_ps(a.v, b.v)); }
-inline int sign_bits(L4 a) { return _mm_movemask_ps(a.v); }
 #else
 struct M4 {
     bool m[4];
@@ -106,10 +105,6 @@ inline L4 lower(L4 acc, L4 t) {
     return acc;
 }
 inline int le_bits(L4 a, L4 b) { return bits(a <= b); }
-inline int sign_bits(L4 a) {
-    return int(std::signbit(a.v[0])) | int(std::signbit(a.v[1])) << 1 | int(std::signbit(a.v[2])) << 2 |
-           int(std::signbit(a.v[3])) << 3;
-}
 #endif
 
 /// Eight floats as two halves.

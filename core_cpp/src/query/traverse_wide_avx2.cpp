@@ -37,7 +37,6 @@ inline M4 operator<=(L4 a, L4 b) { return {_mm_cmp_ps(a.v, b.v, _CMP_LE_OS)}; }
 inline M4 operator>(L4 a, L4 b) { return {_mm_cmp_ps(a.v, b.v, _CMP_GT_OS)}; }
 inline L4 raise(L4 acc, L4 t) { return {_mm_max_ps(t.v, acc.v)}; }  // t > acc ? t : acc
 inline L4 lower(L4 acc, L4 t) { return {_mm_min_ps(t.v, acc.v)}; }  // t < acc ? t : acc
-inline int sign_bits(L4 a) { return _mm_movemask_ps(a.v); }
 
 struct L8 {
     __m256 v;

@@ -5,8 +5,8 @@
 //       (= t > acc ? t : acc), lower(acc, t) (= t < acc ? t : acc), le_bits(a, b) (bit i set
 //       when a[i] <= b[i]), store(float*);
 //   L4: four floats — load, splat, set(a, b, c, d), + - * /, raise, lower, comparisons giving
-//       an M4 mask, M4 & M4, M4 | M4, bits(M4), sign_bits(L4) (bit i the sign bit of lane i),
-//       store, and permute(v, a, b, c) = (v[a], v[b], v[c], v[3]) for lane indices 0..3;
+//       an M4 mask, M4 & M4, M4 | M4, bits(M4), store, and permute(v, a, b, c) = (v[a], v[b],
+//       v[c], v[3]) for lane indices 0..3;
 // and push_children(node, t0, t1, mask, index, t), which writes the children a ray enters
 // but the nearest to the stack's arrays, farthest first, and returns the nearest's slot
 // (traverse_wide.cpp).
@@ -24,69 +24,40 @@ namespace {
 /// Four floats where three are used, so that each is one vector store.
 struct Query {
     float o[4], inv[4];
-    /// -1/d and -(1/d) · gpu::BOX_FAR_SCALE, the factors of the near and far planes' distances
-    /// (traverse_nodes), one vector product each here rather than three scalar ones at the walk's
-    /// entry
-    float neg_inv[4], neg_inv_far[4];
     float o_axes[4];  ///< o[kx], o[ky], o[kz]
     float shear[4];
     int axis[3];  ///< kx, ky, kz
-    int octant;   ///< bit a set where 1/dir[a] is negative (PlaneTable)
     float tmin;
     const Ray* ray;  ///< for the spheres (hit_packet_sphere)
 };
 
-/// The watertight test's axis order (kx, ky, kz) for each of the 64 cases of six bits: bit 0
-/// |d.x| > |d.y|, bit 1 |d.x| > |d.z|, bit 2 |d.y| > |d.z|, bits 3-5 d.x, d.y, d.z < 0. kz is the
-/// axis of the largest |component| (ties to the later axis), kx and ky the next two, swapped when
-/// dir[kz] < 0 (geometry.glsl make_ray). Looked up, the six bits from two vector comparisons,
-/// rather than worked out by integer arithmetic for every ray (with the octant from the inverse's
-/// sign bits, the planes' factors as two vector products, and finish_hit called for spheres only:
-/// Sponza instructions a ray, random 903 → 855, primary 1,719 → 1,671).
-struct AxisTable {
-    std::int8_t at[64][3];
-    constexpr AxisTable() : at{} {
-        for (int key = 0; key < 64; ++key) {
-            const int xy = key & 1, xz = key >> 1 & 1, yz = key >> 2 & 1;
-            const int x_largest = xy & xz, y_largest = (1 - x_largest) & yz;
-            const int kz = 2 - 2 * x_largest - y_largest;
-            const int flip = key >> (3 + kz) & 1;
-            const int next = kz == 2 ? 0 : kz + 1, last = 3 - kz - next;
-            const int kx = flip ? last : next, ky = next ^ last ^ kx;
-            at[key][0] = std::int8_t(kx), at[key][1] = std::int8_t(ky), at[key][2] = std::int8_t(kz);
-        }
-    }
-};
-constexpr AxisTable kAxes;
-
 /// The per-ray constants as geometry.glsl make_ray computes them, by the same float operations
 /// (so the same values; every test comparing the wide traversal with the brute force, which goes
 /// through make_ray, checks that bit for bit): 1/d is IEEE's, ±inf for ±0 as inverse_or_infinity;
-/// the axis order from kAxes; the shear as products with 1/dir[kz]. Computed here from the ray's
+/// kz the axis of the largest |component| (ties to the later axis), kx and ky the next two,
+/// swapped when dir[kz] < 0; the shear as products with 1/dir[kz]. Computed here from the ray's
 /// fields rather than copied out of a TraceRay, which cost cheap rays a third of their time.
-/// Without branches: selects by the axis compiled to branches, which random directions
-/// mispredicted (1.4 a ray, a tenth of a random ray's time in room1m).
+/// Without branches: the axes come from comparison flags and the components in axis order from
+/// a permute. Selects by the axis compiled to branches, which random directions mispredicted
+/// (1.4 a ray, a tenth of a random ray's time in room1m).
 Query make_query(const Ray& ray) {
     const Vec3 o = ray.origin, d = ray.dir;
-    const L4 dir = L4::set(d.x, d.y, d.z, 1.0f), origin = L4::set(o.x, o.y, o.z, 0.0f), zero = L4::splat(0.0f);
-    // |d| but for a zero's sign (and which NaN), which no comparison sees; lane 3 compares 1 with 1
-    const L4 size = raise(dir, zero - dir);
-    const int larger = bits(permute(size, 0, 0, 1) > permute(size, 1, 2, 2));  // x > y, x > z, y > z
-    const int negative = bits(zero > dir);                                     // lane 3 (1.0) never
-    const std::int8_t* axes = kAxes.at[larger | negative << 3];
-    const int kx = axes[0], ky = axes[1], kz = axes[2];
+    const float x = std::fabs(d.x), y = std::fabs(d.y), z = std::fabs(d.z);
+    const int x_largest = int(x > y) & int(x > z), y_largest = (1 - x_largest) & int(y > z);
+    const int kz = 2 - 2 * x_largest - y_largest;
+    const L4 dir = L4::set(d.x, d.y, d.z, 1.0f), origin = L4::set(o.x, o.y, o.z, 0.0f);
+    const int flip = (bits(L4::splat(0.0f) > dir) >> kz) & 1;  // dir[kz] < 0
+    const int next = kz == 2 ? 0 : kz + 1, last = 3 - kz - next;
+    const int kx = next ^ ((next ^ last) & -flip), ky = next ^ last ^ kx;
     const L4 inv = L4::splat(1.0f) / dir;
     Query q;
     origin.store(q.o), inv.store(q.inv);
-    // -x as x · -1 and -(x · s) as x · -s: exact, lane by lane the values negating gives
-    (inv * L4::splat(-1.0f)).store(q.neg_inv), (inv * L4::splat(-gpu::BOX_FAR_SCALE)).store(q.neg_inv_far);
     permute(origin, kx, ky, kz).store(q.o_axes);
     // (dir[kx], dir[ky], 1, 1) times 1 / dir[kz]: the shear, and 1 / dir[kz] itself in lane 2
     // (1 · x is x, except a denormal x under denormals-are-zero: 0, which is what the one use of
     // shear[2], a product, reads x as in that mode anyway)
     (permute(dir, kx, ky, 3) * permute(inv, kz, kz, kz)).store(q.shear);
     q.axis[0] = kx, q.axis[1] = ky, q.axis[2] = kz;
-    q.octant = sign_bits(inv) & 7;  // lane 3, 1 / 1, is positive anyway
     q.tmin = ray.tmin, q.ray = &ray;
     return q;
 }
@@ -303,10 +274,12 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit) {
     // 1/d (negating is exact, and a zero's sign, the only difference, changes no comparison), so
     // that the node's bounds can be the subtraction's memory operand: one load fewer per axis
     // and side (uniform1m random rays: 6 instructions fewer a node).
-    const L8 neg_inv[3] = {L8::splat(q.neg_inv[0]), L8::splat(q.neg_inv[1]), L8::splat(q.neg_inv[2])};
-    const L8 neg_inv_far[3] = {L8::splat(q.neg_inv_far[0]), L8::splat(q.neg_inv_far[1]), L8::splat(q.neg_inv_far[2])};
+    const L8 neg_inv[3] = {L8::splat(-q.inv[0]), L8::splat(-q.inv[1]), L8::splat(-q.inv[2])};
     const float s = gpu::BOX_FAR_SCALE;
-    const std::ptrdiff_t* plane = kPlanes[q.octant];
+    const L8 neg_inv_far[3] = {L8::splat(-(q.inv[0] * s)), L8::splat(-(q.inv[1] * s)), L8::splat(-(q.inv[2] * s))};
+    const int octant =
+        int(std::signbit(q.inv[0])) | int(std::signbit(q.inv[1])) << 1 | int(std::signbit(q.inv[2])) << 2;
+    const std::ptrdiff_t* plane = kPlanes[octant];
     Stack stack;
     std::uint32_t sp = 0, visited = 0;
     Entry cur{0, q.tmin};
