@@ -183,7 +183,8 @@ Hit intersect_wide(const WideBvh& wide, const Bvh& bvh, const Ray& ray, std::uin
     Hit hit = portable::intersect_wide_kernel(view, ray, nodes_visited);
 #endif
     if (hit.ref == kNoHit) hit.t = kInfinity;
-    finish_hit(bvh, ray, hit);
+    // finish_hit's work is a sphere's u, v: a triangle's hit (or a miss) skips the call
+    else if (hit.ref & gpu::REF_SPHERE_BIT) [[unlikely]] finish_hit(bvh, ray, hit);
     return hit;
 }
 
