@@ -1,9 +1,18 @@
 """Runs Python code in a child process, so that a crash (abort, segfault) fails one test instead
 of ending the test run."""
 
+import signal
 import subprocess
 import sys
 import textwrap
+
+
+def default_sigint() -> None:
+    """preexec_fn for a child that a test sends SIGINT: the signal's default disposition, as a
+    terminal's Ctrl-C finds it. A test run started in the background of a shell without job control
+    inherits SIGINT ignored, and a Python started with it ignored installs no KeyboardInterrupt
+    handler, so the Ctrl-C tests would fail there for a reason that is not the code's."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
 def run_python(code: str, timeout: float = 300, **popen) -> subprocess.CompletedProcess:

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from child import run_python
+from child import default_sigint, run_python
 
 import bvhlab
 from bvhlab._atomic import replacing, write_bytes, write_text
@@ -62,6 +62,7 @@ def test_a_real_sigint_mid_write_keeps_the_old_file(tmp_path):
             print("interrupted")
         """,
         timeout=60,
+        preexec_fn=default_sigint,
     )
     assert done.stdout.strip() == "interrupted", done.stderr
     assert path.read_bytes() == b"old png" and _listing(tmp_path) == ["good.png"]

@@ -11,6 +11,7 @@ import time
 from collections.abc import Callable
 
 import pytest
+from child import default_sigint
 
 #: The child times a full run, then starts another, prints "started" and waits to be interrupted.
 CHILD = """
@@ -45,7 +46,7 @@ def interrupt(
     """Starts a child, waits for the line `ready` (and `delay` seconds, or delay(lines before
     `ready`)), sends SIGINT; returns the finished process, the seconds from SIGINT to its end, and
     the lines it printed before `ready`."""
-    child = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    child = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=default_sigint)
     lines = []
     for line in child.stdout:
         if line.strip() == ready:

@@ -10,6 +10,7 @@ import time
 
 import numpy as np
 import pytest
+from child import default_sigint
 
 import bvhlab
 from bvhlab.library import showcase
@@ -112,7 +113,11 @@ def test_ctrl_c_stops_a_long_render(backend):
     """A render of several minutes is interrupted 2 s in: KeyboardInterrupt arrives (CPU: between
     budgets of steps, Vulkan: between dispatches) instead of the render running on."""
     p = subprocess.Popen(
-        [sys.executable, "-c", LONG_RENDER, backend], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+        [sys.executable, "-c", LONG_RENDER, backend],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=default_sigint,
     )
     assert p.stdout.readline().strip() == "READY"
     time.sleep(2.0)
