@@ -16,17 +16,10 @@ import checks_engine_viewport as viewport_checks  # noqa: E402
 import harness  # before bpy
 import numpy as np
 import pytest
+from test_export_instances import PLACES  # noqa: E402  (rotation, non-uniform scale, a mirror)
 
 import bvhlab  # noqa: E402
 import bvhlab.blender  # noqa: E402
-
-#: Where the four instancers stand: rotation, non-uniform scale and a mirror among them.
-PLACES = [
-    ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (1.0, 1.0, 1.0)),
-    ((3.0, 0.5, 0.0), (0.3, 0.0, 0.7), (1.0, 0.5, 1.5)),
-    ((-3.0, 0.0, 0.5), (0.0, 0.4, -0.2), (-1.0, 1.0, 1.0)),
-    ((0.0, 3.0, -0.5), (1.1, 0.2, 0.0), (0.7, -1.2, 0.9)),
-]
 
 
 @pytest.fixture(scope="module", autouse=True)

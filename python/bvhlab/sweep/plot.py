@@ -33,10 +33,7 @@ def plot_sah_against_build_time(rows: list[dict], path: Path) -> Path | None:
     scenes = sorted({r["scene"] for r in ok})
     methods = sorted({r["method"] for r in ok})
     colours = {m: plt.get_cmap("tab10")(i % 10) for i, m in enumerate(methods)}
-    cols = min(3, len(scenes))
-    fig, axes = plt.subplots(
-        math.ceil(len(scenes) / cols), cols, figsize=(4.5 * cols, 3.6 * math.ceil(len(scenes) / cols)), squeeze=False
-    )
+    fig, axes = panel_grid(len(scenes), 3.6)
     for ax, scene in zip(axes.flat, scenes):
         mine = [r for r in ok if r["scene"] == scene]
         for method in methods:
@@ -51,11 +48,31 @@ def plot_sah_against_build_time(rows: list[dict], path: Path) -> Path | None:
         if times and max(times) > 20 * min(times):  # full sweeps next to LBVH: orders of magnitude apart
             ax.set_xscale("log")
         ax.legend(fontsize=7)
-    for ax in list(axes.flat)[len(scenes) :]:
+    return save_panels(fig, axes, len(scenes), path)
+
+
+def panel_grid(panels: int, height: float):
+    """A figure of `panels` panels, three to a row (matplotlib, drawing to files only)."""
+    import matplotlib
+
+    matplotlib.use("Agg")  # files only, no display
+    import matplotlib.pyplot as plt
+
+    cols = min(3, panels)
+    rows = math.ceil(panels / cols)
+    return plt.subplots(rows, cols, figsize=(4.5 * cols, height * rows), squeeze=False)
+
+
+def save_panels(fig, axes, used: int, path: Path) -> Path:
+    """Hides the grid's panels past the first `used`, writes the figure to `path` as PNG (whole or
+    not at all) and closes it."""
+    import matplotlib.pyplot as plt
+
+    for ax in list(axes.flat)[used:]:
         ax.set_visible(False)
     try:
         fig.tight_layout()
-        with replacing(path) as f:  # whole or not at all
+        with replacing(path) as f:
             fig.savefig(f, format="png", dpi=100)
     finally:
         plt.close(fig)

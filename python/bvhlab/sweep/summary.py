@@ -4,10 +4,10 @@ otherwise the same settings (SAH cost and Mrays/s as ratios to it), as a Markdow
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
-from .._atomic import replacing, write_text
+from .._atomic import write_text
+from .plot import panel_grid, save_panels
 
 SUMMARY, RATIO_PLOT = "summary.md", "mrays_vs_baseline.png"
 #: Setting columns a label names when they vary over the grid (method always).
@@ -73,15 +73,8 @@ def write_summary(rows: list[dict], baseline: str, out: Path, plot: bool = True)
 
 
 def _plot_ratios(pairs: list[tuple[dict, dict]], labels: dict[str, str], baseline: str, path: Path) -> Path:
-    import matplotlib
-
-    matplotlib.use("Agg")  # files only, no display
-    import matplotlib.pyplot as plt
-
     scenes = list(dict.fromkeys(r["scene"] for r, _ in pairs))
-    cols = min(3, len(scenes))
-    nrows = math.ceil(len(scenes) / cols)
-    fig, axes = plt.subplots(nrows, cols, figsize=(4.5 * cols, 3.4 * nrows), squeeze=False)
+    fig, axes = panel_grid(len(scenes), 3.4)
     for ax, scene in zip(axes.flat, scenes):
         mine = [(r, b) for r, b in pairs if r["scene"] == scene]
         ratios = [r["mrays_per_s"] / b["mrays_per_s"] for r, b in mine]
@@ -90,12 +83,4 @@ def _plot_ratios(pairs: list[tuple[dict, dict]], labels: dict[str, str], baselin
         ax.axvline(1.0, color="0.3", lw=0.8)
         ax.invert_yaxis()
         ax.set(title=scene, xlabel=f"Mrays/s ÷ {baseline} (higher is faster)")
-    for ax in list(axes.flat)[len(scenes) :]:
-        ax.set_visible(False)
-    try:
-        fig.tight_layout()
-        with replacing(path) as f:  # whole or not at all
-            fig.savefig(f, format="png", dpi=100)
-    finally:
-        plt.close(fig)
-    return path
+    return save_panels(fig, axes, len(scenes), path)
