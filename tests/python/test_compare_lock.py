@@ -9,32 +9,14 @@ import sys
 import time
 
 import pytest
+from cli_args import QUICK_COMPARE
 
 from bvhlab._folder_lock import LOCK_NAME, FolderBusy, folder_lock
-
-QUICK = [
-    "--methods",
-    "median",
-    "--frames",
-    "5",
-    "--builds",
-    "5",
-    "--width",
-    "8",
-    "--height",
-    "8",
-    "--backend",
-    "cpu",
-    "--no-figures",
-    "--no-uniform",
-    "--overlay-backends",
-    "none",
-]
 
 
 def compare(out, *extra, timeout=300):
     return subprocess.run(
-        [sys.executable, "-m", "bvhlab", "compare", "gen:five_spheres", *QUICK, *extra, "--out", str(out)],
+        [sys.executable, "-m", "bvhlab", "compare", "gen:five_spheres", *QUICK_COMPARE, *extra, "--out", str(out)],
         capture_output=True,
         text=True,
         timeout=timeout,
@@ -47,7 +29,7 @@ def test_a_second_run_into_a_held_folder_is_refused(tmp_path):
     (SIGCONT) finishes alone."""
     out = tmp_path / "out"
     first = subprocess.Popen(
-        [sys.executable, "-m", "bvhlab", "compare", "gen:five_spheres", *QUICK, "--out", str(out)],
+        [sys.executable, "-m", "bvhlab", "compare", "gen:five_spheres", *QUICK_COMPARE, "--out", str(out)],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,

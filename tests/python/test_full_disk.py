@@ -7,6 +7,7 @@ import sys
 
 import numpy as np
 import pytest
+from cli_args import QUICK_COMPARE
 from full_disk import full_disk_unavailable, run_on_full_disk
 
 import bvhlab
@@ -93,22 +94,7 @@ def test_compare_keeps_the_old_table(tmp_path, files):
     command = _cli(
         "compare",
         "{disk}/s.npz",
-        "--methods",
-        "median",
-        "--frames",
-        "5",
-        "--builds",
-        "5",
-        "--width",
-        "8",
-        "--height",
-        "8",
-        "--backend",
-        "cpu",
-        "--no-figures",
-        "--no-uniform",
-        "--overlay-backends",
-        "none",
+        *QUICK_COMPARE,
         "--out",
         "{disk}/out",
     )
