@@ -41,8 +41,10 @@ def build_bvh_bench(tinybvh: str | None) -> Path:
 
 
 def scenes(names: list[str]) -> dict[str, np.ndarray]:
-    """Triangle arrays (T,3,3) by name: sponza, room1m (a 1M-triangle model in a room, the
-    non-uniform case), uniform1m (1M small random triangles), and the 250k versions."""
+    """Triangle arrays (T,3,3) by name, each with a size (250k, 1m): sponza (bundled); room1m (a
+    model in a room, the non-uniform case); uniform1m (small random triangles); and scenes unlike
+    them: repeat1m (a knot repeated 20 times in a row), rods1m (2,000 long thin rods at random
+    angles), vast1m (a knot in an empty room 10,000 units wide)."""
     from bvhlab.library import bundled_dir, procedural, sponza
 
     out = {}
@@ -54,6 +56,12 @@ def scenes(names: list[str]) -> dict[str, np.ndarray]:
         elif name.startswith("uniform"):
             n = _count(name)
             out[name] = procedural.random_triangles(n, size=1.0 / n ** (1 / 3), seed=1)
+        elif name.startswith("repeat"):
+            out[name] = procedural.repeated_row(_count(name))
+        elif name.startswith("rods"):
+            out[name] = procedural.rods(_count(name))
+        elif name.startswith("vast"):
+            out[name] = procedural.model_in_vast_room(_count(name))
         else:
             raise SystemExit(f"bench: unknown scene {name}")
     return out

@@ -86,6 +86,49 @@ def model_in_room(triangles: int, seed: int = 0) -> np.ndarray:
     return np.ascontiguousarray(np.concatenate([room, *furniture, knot]), np.float32)
 
 
+def repeated_row(triangles: int, copies: int = 20) -> np.ndarray:
+    """A torus knot of about triangles/copies triangles repeated `copies` times in a row along x:
+    repeated geometry (what instancing would store once) laid out flat, long in one axis."""
+    knot = torus_knot(max(1, triangles // copies))
+    step = np.float32(7.0)  # the knot spans about 6.7 units
+    return np.ascontiguousarray(np.concatenate([knot + np.array([k * step, 0, 0], np.float32) for k in range(copies)]))
+
+
+def rods(triangles: int, count: int = 2000, sections: int = 8, seed: int = 0) -> np.ndarray:
+    """`count` long thin open cylinders (radius 0.02, length 2 to 8) at random angles and places in a
+    box of side 10, each cut along its length into segments so that there are about `triangles`
+    triangles in all: long thin triangles whose boxes are mostly empty and overlap along the rods'
+    diagonals (the case spatial splits are for)."""
+    rng = np.random.default_rng(seed)
+    segments = max(1, triangles // (count * 2 * sections))
+
+    def unit(u, v):  # a cylinder of radius 1 along z from 0 to 1
+        angle = 2 * np.pi * u
+        return np.stack([np.cos(angle), np.sin(angle), v], -1)
+
+    template = grid_surface(sections, segments, unit, v_closed=False).astype(np.float64)
+    axis = rng.normal(size=(count, 3))
+    axis /= np.linalg.norm(axis, axis=1, keepdims=True)
+    side = np.cross(axis, np.where(np.abs(axis[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]]))
+    side /= np.linalg.norm(side, axis=1, keepdims=True)
+    other = np.cross(axis, side)
+    length = rng.uniform(2.0, 8.0, count)
+    radius = 0.02
+    # object → world: columns side·r, other·r, axis·length; each rod centred at a random point
+    linear = np.stack([side * radius, other * radius, axis * length[:, None]], 2)  # (count, 3, 3)
+    centre = rng.uniform(-5.0, 5.0, (count, 3)) - axis * length[:, None] / 2
+    world = np.einsum("nij,tvj->ntvi", linear, template) + centre[:, None, None, :]
+    return np.ascontiguousarray(world.reshape(-1, 3, 3), np.float32)
+
+
+def model_in_vast_room(triangles: int) -> np.ndarray:
+    """A torus knot of about `triangles` triangles (6.7 units across) off-centre in an empty room
+    10,000 units wide: almost all of the scene's box is empty space around one small dense mesh."""
+    room = box_room(10_000.0, 8)
+    knot = torus_knot(max(1, triangles - len(room))) + np.array([300.0, -200.0, -4_990.0], np.float32)
+    return np.ascontiguousarray(np.concatenate([room, knot]), np.float32)
+
+
 def random_triangles(n: int, size: float = 0.01, seed: int = 0) -> np.ndarray:
     """n small triangles uniformly at random in the unit cube: the uniform case."""
     rng = np.random.default_rng(seed)
