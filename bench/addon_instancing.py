@@ -104,6 +104,8 @@ def main() -> None:
     args.json.parent.mkdir(parents=True, exist_ok=True)
     note = "best of --repeat; one run on the shared 2-core machine, other helpers loading it"
     args.json.write_text(json.dumps({"note": note, "rows": rows}, indent=1) + "\n")
+    harness.exit_without_teardown(0)
+    harness.exit_without_teardown(0)
 
 
 if __name__ == "__main__":

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 import time
 from pathlib import Path
@@ -78,8 +77,7 @@ def main() -> None:
         print(f"| {row['what']} | {row['best_ms']:.1f} | {row['target_ms']} | {all_ms} |")
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps({"blender": bpy.app.version_string, "rows": rows}, indent=1) + "\n")
-    sys.stdout.flush()
-    os._exit(0)  # bpy 4.2 crashes in its own teardown once a Panel was registered (tests/blender/run.py)
+    harness.exit_without_teardown(0)
 
 
 if __name__ == "__main__":

@@ -170,9 +170,7 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    # bpy 4.2 as a module segfaults in its own teardown once a Panel class has been registered
-    # (tests/blender/run.py): report the outcome and skip the teardown, on success and on failure.
-    import os
+    # report the outcome and skip bpy's teardown (harness.exit_without_teardown), on success and on failure
     import traceback
 
     exit_code = 0
@@ -181,6 +179,4 @@ if __name__ == "__main__":
     except Exception:
         traceback.print_exc()
         exit_code = 1
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os._exit(exit_code)
+    harness.exit_without_teardown(exit_code)

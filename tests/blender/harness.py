@@ -27,6 +27,17 @@ DEV_REPO = "bvhlab_dev"
 _addon_module: str | None = None
 
 
+def exit_without_teardown(code: int) -> None:
+    """End a bpy-as-a-module process with `code`, skipping the interpreter's teardown: bpy 4.2 as a
+    module segfaults while the interpreter shuts down once any Panel class has been registered
+    (SpaceType's destructor frees the class after the interpreter is gone: a five-line script
+    registering one Panel does it) or a shader made with gpu.shader.create_from_info has existed.
+    Blender's teardown, not bvhlab's code; everything has run and reported by then."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)
+
+
 def scenes_index() -> dict:
     """blender_scenes/scenes.json: name → file, description, counts, materials, world positions."""
     return json.loads((SCENES_DIR / "scenes.json").read_text())
