@@ -246,7 +246,13 @@ class Renderer:
                     upload_ms = self._vulkan.upload(render_scene)
                     self._uploaded = render_scene
                 job = self._vulkan.start(settings)
-        timings = {"prepare_ms": prepare_ms, "upload_ms": upload_ms, "backend": self.backend, "reason": self.reason}
+        timings = {
+            "prepare_ms": prepare_ms,
+            "upload_ms": upload_ms,
+            "backend": self.backend,
+            "reason": self.reason,
+            "heatmap_scale": render_scene.heatmap_scale(settings),  # the heatmap's legend (bvhlab.legend)
+        }
         if self.fallback:
             timings["fallback"] = self.fallback
         return RenderJob(job, settings, timings)

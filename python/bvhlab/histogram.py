@@ -1,0 +1,180 @@
+"""The histogram of a traversal counter over a render's pixels (issue 35; the histogram of AMD's
+Radeon Raytracing Analyzer's traversal-counter view): how many pixels needed how many box tests,
+box hits, primitive tests, primitive hits or instance hits per primary ray.
+
+The bins span the counter's colour range (a manual range, or the auto range of bvhlab.counters:
+0 to the 99th percentile), so the histogram is of what the image shows: a pixel outside the range
+is counted in the end bin its colour saturates to (`below` and `above` say how many), and the
+counts always add up to the pixel count. Whole-number counts (one sample per pixel) get bins of
+whole numbers, each holding the same number of integers, and averages over n × n samples bins of
+the same number of multiples of 1/n²; other values get even bins.
+Each bar is drawn in the heat colour of its bin's middle (bvhlab.palette), so the strip is the
+image's legend too. The percentiles and the maximum are of the values themselves."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import _core, counters, legend, palette
+
+#: Bins of a histogram at most (the CLI's); the sidebar shows fewer (SIDEBAR_BINS in the add-on).
+DEFAULT_BINS = 32
+#: The percentiles reported beside the maximum.
+PERCENTILES = (50, 90, 99)
+#: Height of the bars' area of the strip (pixels), and the narrowest bar.
+PLOT_HEIGHT = 64
+MIN_BAR_WIDTH = 3
+
+
+@dataclass(frozen=True)
+class CounterHistogram:
+    """Pixel counts of a counter plane per bin: bin k holds values in [edges[k], edges[k + 1]) (the
+    last also its right end), the end bins also every value below / above `value_range`."""
+
+    counter: str
+    edges: np.ndarray  # (bins + 1,) float64, increasing
+    counts: np.ndarray  # (bins,) int64
+    value_range: tuple[float, float]  # the colour range the bins span
+    auto: bool  # value_range is the auto range
+    below: int  # pixels below value_range[0] (in bin 0)
+    above: int  # pixels above value_range[1] (in the last bin)
+    mean: float
+    percentiles: dict  # "p50", "p90", "p99", "max" of the values
+
+    @property
+    def pixels(self) -> int:
+        return int(self.counts.sum())
+
+    @property
+    def middles(self) -> np.ndarray:
+        return (self.edges[:-1] + self.edges[1:]) / 2
+
+    def colors(self) -> np.ndarray:
+        """(bins, 3) heat colour of each bin's middle over the colour range (the image's colours)."""
+        lo, hi = self.value_range
+        return palette.heat(palette.scaled(np.clip(self.middles, lo, hi), lo, hi))
+
+    def to_json(self) -> dict:
+        return {
+            "counter": self.counter,
+            "range": list(self.value_range),
+            "auto_range": self.auto,
+            "auto_percentile": counters.AUTO_PERCENTILE,
+            "bins": [[float(a), float(b)] for a, b in zip(self.edges[:-1], self.edges[1:])],
+            "counts": [int(c) for c in self.counts],
+            "pixels": self.pixels,
+            "below_range": self.below,
+            "above_range": self.above,
+            "mean": self.mean,
+            "percentiles": self.percentiles,
+        }
+
+
+#: The sample counts a pixel's average can be over (n × n samples, n up to the core's most).
+_SAMPLE_COUNTS = tuple(n * n for n in range(1, int(_core.MAX_SAMPLES_PER_AXIS) + 1))
+
+
+def value_grid(values: np.ndarray) -> int | None:
+    """The smallest sample count q for which every value is a whole number of 1/q (counts averaged
+    over q samples; 1 for whole numbers), None when there is none."""
+    v = np.asarray(values, np.float64)
+    for q in _SAMPLE_COUNTS:
+        scaled = v * q
+        if np.all(np.abs(scaled - np.round(scaled)) < 1e-3):  # float32 averages: k / q within rounding
+            return q
+    return None
+
+
+def bin_edges(values: np.ndarray, lo: float, hi: float, most: int = DEFAULT_BINS) -> np.ndarray:
+    """Edges of at most `most` bins over lo..hi. Values on a grid of 1/q (value_grid: averages of
+    whole counts over q samples) get bins of the same number of grid points each, edges half-way
+    between them (no bin holds one point more than its neighbour); other values `most` even bins."""
+    if most < 1:
+        raise ValueError(f"a histogram needs at least one bin, got {most}")
+    q = value_grid(values) if np.size(values) else None
+    if q is not None and math.floor(hi * q) >= math.ceil(lo * q):
+        first, last = math.ceil(lo * q), math.floor(hi * q)
+        points = last - first + 1
+        width = -(-points // most)
+        bins = -(-points // width)
+        return (first - 0.5 + width * np.arange(bins + 1, dtype=np.float64)) / q
+    return np.linspace(lo, hi, most + 1, dtype=np.float64)
+
+
+def counter_histogram(
+    values: np.ndarray, counter: str, value_range: tuple[float, float] | None = None, bins: int = DEFAULT_BINS
+) -> CounterHistogram:
+    """The histogram of an (H, W) plane of `counter` over `value_range` (None: the auto range, as
+    counters.counter_image colours it)."""
+    counters.counter_index(counter)  # an unknown name: ValueError
+    v = np.asarray(values, np.float64).ravel()
+    if not np.isfinite(v).all():
+        raise ValueError("counter values must be finite")
+    lo, hi = counters.auto_range(v) if value_range is None else (float(value_range[0]), float(value_range[1]))
+    counters.check_range(lo, hi)
+    edges = bin_edges(v, lo, hi, bins)
+    # bin k: edges[k] <= v < edges[k + 1]; outside the edges: the end bins (the image saturates)
+    index = np.clip(np.searchsorted(edges, v, side="right") - 1, 0, len(edges) - 2)
+    counts = np.bincount(index, minlength=len(edges) - 1).astype(np.int64)
+    if v.size:
+        p = np.percentile(v, PERCENTILES)
+        percentiles = {f"p{q}": float(x) for q, x in zip(PERCENTILES, p)} | {"max": float(v.max())}
+        mean = float(v.mean())
+    else:
+        percentiles, mean = {f"p{q}": 0.0 for q in PERCENTILES} | {"max": 0.0}, 0.0
+    return CounterHistogram(
+        counter=counter,
+        edges=edges,
+        counts=counts,
+        value_range=(lo, hi),
+        auto=value_range is None,
+        below=int((v < lo).sum()),
+        above=int((v > hi).sum()),
+        mean=mean,
+        percentiles=percentiles,
+    )
+
+
+def strip_width(histogram: CounterHistogram, width: int) -> int:
+    """The strip's width: `width` (the image's), widened until every bar is MIN_BAR_WIDTH wide."""
+    return max(int(width), 2 * legend.MARGIN + MIN_BAR_WIDTH * len(histogram.counts))
+
+
+def bar_columns(histogram: CounterHistogram, width: int) -> np.ndarray:
+    """(bins + 1,) the first column of each bar in a strip `width` wide (and the end of the last)."""
+    inner = width - 2 * legend.MARGIN
+    n = len(histogram.counts)
+    return legend.MARGIN + (np.arange(n + 1) * inner) // n
+
+
+def bar_heights(histogram: CounterHistogram) -> np.ndarray:
+    """(bins,) each bar's height in pixels: the tallest PLOT_HEIGHT, any non-empty bin at least 1."""
+    tallest = max(int(histogram.counts.max(initial=0)), 1)
+    h = np.round(histogram.counts / tallest * PLOT_HEIGHT).astype(int)
+    return np.where(histogram.counts > 0, np.maximum(h, 1), 0)
+
+
+#: Rows of the strip: the tallest count's number, the bars, the range's numbers.
+PLOT_TOP = legend.MARGIN + legend.TEXT_HEIGHT + legend.MARGIN
+
+
+def histogram_strip(histogram: CounterHistogram, width: int) -> np.ndarray:
+    """(h, strip_width(width), 4) linear RGBA: the bars (bottom-aligned, each in its bin's heat
+    colour), the tallest bar's pixel count above them at the left, and the numbers of the colour
+    range's ends below them."""
+    width = strip_width(histogram, width)
+    bottom = PLOT_TOP + PLOT_HEIGHT
+    strip = legend.blank_strip(bottom + legend.MARGIN + legend.TEXT_HEIGHT + legend.MARGIN, width)
+    columns, heights = bar_columns(histogram, width), bar_heights(histogram)
+    for k, rgb in enumerate(histogram.colors()):
+        strip[bottom - heights[k] : bottom, columns[k] : columns[k + 1], :3] = rgb
+    legend.draw_text(strip, legend.number_text(int(histogram.counts.max(initial=0))), legend.MARGIN, legend.MARGIN)
+    y = bottom + legend.MARGIN
+    lo, hi = histogram.value_range
+    legend.draw_text(strip, legend.number_text(lo), legend.MARGIN, y)
+    hi_text = legend.number_text(hi)
+    legend.draw_text(strip, hi_text, width - legend.MARGIN - legend.text_mask(hi_text).shape[1], y)
+    return strip
