@@ -39,6 +39,7 @@ class CounterHistogram:
     counts: np.ndarray  # (bins,) int64
     value_range: tuple[float, float]  # the colour range the bins span
     auto: bool  # value_range is the auto range
+    grid: int | None  # the values are whole multiples of 1/grid (value_grid), or None
     below: int  # pixels below value_range[0] (in bin 0)
     above: int  # pixels above value_range[1] (in the last bin)
     mean: float
@@ -51,6 +52,25 @@ class CounterHistogram:
     @property
     def middles(self) -> np.ndarray:
         return (self.edges[:-1] + self.edges[1:]) / 2
+
+    def bin_labels(self) -> list[str]:
+        """A short label per bin: the grid values it holds ('3', '4-7', '1.25-1.5'), or its edges
+        ('0.5-1.2'); '+' after the last where pixels above the range are in it, '-' before the
+        first likewise."""
+        labels = []
+        for a, b in zip(self.edges[:-1], self.edges[1:]):
+            if self.grid is None:
+                first, last = float(a), float(b)
+            else:
+                q = self.grid
+                first, last = math.ceil(a * q) / q, math.floor(b * q) / q
+            text = legend.number_text(first) if first == last else f"{_short(first)}-{_short(last)}"
+            labels.append(text)
+        if self.above:
+            labels[-1] += "+"
+        if self.below:
+            labels[0] = "-" + labels[0]
+        return labels
 
     def colors(self) -> np.ndarray:
         """(bins, 3) heat colour of each bin's middle over the colour range (the image's colours)."""
@@ -88,6 +108,10 @@ def value_grid(values: np.ndarray) -> int | None:
     return None
 
 
+def _short(value: float) -> str:
+    return legend.number_text(round(value, 3))
+
+
 def bin_edges(values: np.ndarray, lo: float, hi: float, most: int = DEFAULT_BINS) -> np.ndarray:
     """Edges of at most `most` bins over lo..hi. Values on a grid of 1/q (value_grid: averages of
     whole counts over q samples) get bins of the same number of grid points each, edges half-way
@@ -95,13 +119,19 @@ def bin_edges(values: np.ndarray, lo: float, hi: float, most: int = DEFAULT_BINS
     if most < 1:
         raise ValueError(f"a histogram needs at least one bin, got {most}")
     q = value_grid(values) if np.size(values) else None
-    if q is not None and math.floor(hi * q) >= math.ceil(lo * q):
+    if _on_grid(q, lo, hi):
+        assert q is not None
         first, last = math.ceil(lo * q), math.floor(hi * q)
         points = last - first + 1
         width = -(-points // most)
         bins = -(-points // width)
         return (first - 0.5 + width * np.arange(bins + 1, dtype=np.float64)) / q
     return np.linspace(lo, hi, most + 1, dtype=np.float64)
+
+
+def _on_grid(q: int | None, lo: float, hi: float) -> bool:
+    """Whether lo..hi holds a point of the grid 1/q (grid bins need one)."""
+    return q is not None and math.floor(hi * q) >= math.ceil(lo * q)
 
 
 def counter_histogram(
@@ -116,6 +146,7 @@ def counter_histogram(
     lo, hi = counters.auto_range(v) if value_range is None else (float(value_range[0]), float(value_range[1]))
     counters.check_range(lo, hi)
     edges = bin_edges(v, lo, hi, bins)
+    grid = value_grid(v) if v.size else None
     # bin k: edges[k] <= v < edges[k + 1]; outside the edges: the end bins (the image saturates)
     index = np.clip(np.searchsorted(edges, v, side="right") - 1, 0, len(edges) - 2)
     counts = np.bincount(index, minlength=len(edges) - 1).astype(np.int64)
@@ -131,6 +162,7 @@ def counter_histogram(
         counts=counts,
         value_range=(lo, hi),
         auto=value_range is None,
+        grid=grid if _on_grid(grid, lo, hi) else None,
         below=int((v < lo).sum()),
         above=int((v > hi).sum()),
         mean=mean,

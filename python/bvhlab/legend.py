@@ -141,3 +141,9 @@ def render_legends(
         hi = hi if tree_height is None else min(hi, tree_height - 1)
         image = below(image, depth_legend(width, range(lo, hi + 1)))
     return image
+
+
+def overlay_height(bvh) -> int:
+    """The height of the tree whose boxes the overlay draws (a two-level tree's: its TLAS's)."""
+    stats = bvh.stats
+    return int(stats["tlas_height"] if "tlas_height" in stats else stats["height"])

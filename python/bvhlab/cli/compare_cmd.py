@@ -102,7 +102,7 @@ def _counter_diff(scene, name: str, args, out: Path) -> int:
     """Two trees side by side: args.counter per pixel, the first method's minus the second's."""
     first, second = args.counter_diff
     renderer = Renderer(args.backend)
-    tree_a, tree_b = (build(scene, **{**build_settings(label), "threads": 0}) for label in (first, second))
+    tree_a, tree_b = counter_diff.build_trees(scene, (first, second))
     result = counter_diff.counter_difference(
         scene, tree_a, tree_b, args.counter, args.width, args.height, renderer=renderer, labels=(first, second)
     )

@@ -94,7 +94,8 @@ def run(args) -> int:
     if result.counters is not None:
         _write_counter(result.counters, counter, args.range, args.out)
     elif result.color is not None:
-        save_png(legend.render_legends(result.color, render_options, t["heatmap_scale"]), args.out)
+        image = legend.render_legends(result.color, render_options, t["heatmap_scale"], legend.overlay_height(bvh))
+        save_png(image, args.out)
     print(f"{name}: {args.width}x{args.height} on {t['device']} ({t['backend']}: {t['reason']})")
     print(f"trace {t['trace_ms']:.1f} ms, total {t['total_ms']:.1f} ms; {_tree_summary(bvh)}")
     print(f"wrote {args.out}")

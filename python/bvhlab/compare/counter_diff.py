@@ -16,6 +16,15 @@ from ..render import Renderer, save_png
 from ..render_options import options_from
 
 
+def build_trees(scene, labels, build_options: dict | None = None) -> list:
+    """The tree of each method label over `scene`, built as `bvhlab compare` builds its rows (the
+    report's settings, measure.build_settings, with `build_options` over them; every core)."""
+    from .. import build
+    from .measure import build_settings
+
+    return [build(scene, **{**build_settings(label, build_options), "threads": 0}) for label in labels]
+
+
 def counter_planes(
     scene, bvhs, counter: str, width: int, height: int, *, renderer: Renderer, options=None, camera=None
 ):
