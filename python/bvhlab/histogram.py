@@ -97,15 +97,42 @@ class CounterHistogram:
 _SAMPLE_COUNTS = tuple(n * n for n in range(1, int(_core.MAX_SAMPLES_PER_AXIS) + 1))
 
 
+def _distinct(values) -> tuple[np.ndarray, np.ndarray]:
+    """The sorted distinct values (in their own dtype) and how many pixels hold each. A counter plane
+    has few distinct values: after this one sort the grid, the bins and the percentiles cost next to
+    nothing (a 1920 × 1080 plane's histogram is about one np.unique)."""
+    distinct, counts = np.unique(np.asarray(values).ravel(), return_counts=True)
+    return distinct, counts.astype(np.int64)
+
+
+def _grid_of(distinct: np.ndarray) -> int | None:
+    def on(d: np.ndarray, q: int) -> bool:
+        scaled = d * q
+        return bool(np.all(np.abs(scaled - np.round(scaled)) < 1e-3))  # float32 averages: k / q within rounding
+
+    d = np.asarray(distinct, np.float64)
+    few = d[:: max(len(d) // 64, 1)]  # a sample first: values off every grid fail fast
+    return next((q for q in _SAMPLE_COUNTS if on(few, q) and on(d, q)), None)
+
+
 def value_grid(values: np.ndarray) -> int | None:
     """The smallest sample count q for which every value is a whole number of 1/q (counts averaged
     over q samples; 1 for whole numbers), None when there is none."""
-    v = np.asarray(values, np.float64)
-    for q in _SAMPLE_COUNTS:
-        scaled = v * q
-        if np.all(np.abs(scaled - np.round(scaled)) < 1e-3):  # float32 averages: k / q within rounding
-            return q
-    return None
+    return _grid_of(_distinct(values)[0])
+
+
+def percentile(distinct: np.ndarray, counts: np.ndarray, q: float) -> float:
+    """np.percentile(values, q) (numpy's default, linear method; the same float) of the values
+    given as their sorted distinct values and counts."""
+    n = int(counts.sum())
+    index = q / 100 * (n - 1)
+    below = math.floor(index)
+    ends = np.cumsum(counts)
+    a = distinct[np.searchsorted(ends, below, side="right")]
+    b = distinct[np.searchsorted(ends, min(below + 1, n - 1), side="right")]
+    t = np.float64(index - below)
+    step = b - a
+    return float(a + step * t) if t < 0.5 else float(b - step * (1 - t))  # numpy's _lerp
 
 
 def _short(value: float) -> str:
@@ -116,11 +143,13 @@ def bin_edges(values: np.ndarray, lo: float, hi: float, most: int = DEFAULT_BINS
     """Edges of at most `most` bins over lo..hi. Values on a grid of 1/q (value_grid: averages of
     whole counts over q samples) get bins of the same number of grid points each, edges half-way
     between them (no bin holds one point more than its neighbour); other values `most` even bins."""
+    return _edges(value_grid(values) if np.size(values) else None, lo, hi, most)
+
+
+def _edges(q: int | None, lo: float, hi: float, most: int) -> np.ndarray:
     if most < 1:
         raise ValueError(f"a histogram needs at least one bin, got {most}")
-    q = value_grid(values) if np.size(values) else None
-    if _on_grid(q, lo, hi):
-        assert q is not None
+    if q is not None and _on_grid(q, lo, hi):
         first, last = math.ceil(lo * q), math.floor(hi * q)
         points = last - first + 1
         width = -(-points // most)
@@ -140,31 +169,35 @@ def counter_histogram(
     """The histogram of an (H, W) plane of `counter` over `value_range` (None: the auto range, as
     counters.counter_image colours it)."""
     counters.counter_index(counter)  # an unknown name: ValueError
-    v = np.asarray(values, np.float64).ravel()
-    if not np.isfinite(v).all():
+    distinct, counts = _distinct(values)
+    if not np.isfinite(distinct).all():
         raise ValueError("counter values must be finite")
-    lo, hi = counters.auto_range(v) if value_range is None else (float(value_range[0]), float(value_range[1]))
+    if value_range is None:  # counters.auto_range, from the distinct values
+        top = percentile(distinct, counts, counters.AUTO_PERCENTILE) if distinct.size else 0.0
+        lo, hi = counters.range_to(top)
+    else:
+        lo, hi = float(value_range[0]), float(value_range[1])
     counters.check_range(lo, hi)
-    edges = bin_edges(v, lo, hi, bins)
-    grid = value_grid(v) if v.size else None
+    grid = _grid_of(distinct) if distinct.size else None
+    edges = _edges(grid, lo, hi, bins)
     # bin k: edges[k] <= v < edges[k + 1]; outside the edges: the end bins (the image saturates)
-    index = np.clip(np.searchsorted(edges, v, side="right") - 1, 0, len(edges) - 2)
-    counts = np.bincount(index, minlength=len(edges) - 1).astype(np.int64)
-    if v.size:
-        p = np.percentile(v, PERCENTILES)
-        percentiles = {f"p{q}": float(x) for q, x in zip(PERCENTILES, p)} | {"max": float(v.max())}
-        mean = float(v.mean())
+    index = np.clip(np.searchsorted(edges, distinct, side="right") - 1, 0, len(edges) - 2)
+    binned = np.bincount(index, weights=counts, minlength=len(edges) - 1)
+    if distinct.size:
+        percentiles = {f"p{q}": percentile(distinct, counts, q) for q in PERCENTILES}
+        percentiles["max"] = float(distinct[-1])
+        mean = float(np.dot(distinct.astype(np.float64), counts) / counts.sum())
     else:
         percentiles, mean = {f"p{q}": 0.0 for q in PERCENTILES} | {"max": 0.0}, 0.0
     return CounterHistogram(
         counter=counter,
         edges=edges,
-        counts=counts,
+        counts=np.round(binned).astype(np.int64),
         value_range=(lo, hi),
         auto=value_range is None,
         grid=grid if _on_grid(grid, lo, hi) else None,
-        below=int((v < lo).sum()),
-        above=int((v > hi).sum()),
+        below=int(counts[distinct < lo].sum()),
+        above=int(counts[distinct > hi].sum()),
         mean=mean,
         percentiles=percentiles,
     )

@@ -89,7 +89,8 @@ def render(
 
     image: float32 (height, width, 4), row 0 at the top, linear RGB, alpha 1.
     timings: upload_ms, overlay_ms, trace_ms, readback_ms, total_ms, dispatches, device (which
-    device rendered), backend ("vulkan" or "cpu") and reason (why that backend).
+    device rendered), backend ("vulkan" or "cpu"), reason (why that backend) and heatmap_scale (the
+    box tests the heatmap shows red: its legend's top).
 
     backend: "auto" (a Vulkan GPU if there is one, else the CPU reference: on a CPU Vulkan
     driver such as lavapipe the CPU reference is several times faster), "vulkan" or "cpu".

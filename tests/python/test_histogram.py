@@ -76,6 +76,21 @@ def test_whole_counts_get_bins_of_whole_numbers_and_averages_bins_of_their_grid(
         histogram.counter_histogram(np.float32([1, np.nan]), "box_tests")
 
 
+def test_percentiles_from_distinct_values_are_numpys():
+    rng = np.random.default_rng(3)
+    for trial in range(300):
+        n = int(rng.integers(1, 400))
+        grid = (1, 4, 9)[trial % 3]
+        values = (rng.integers(0, 60, n) / grid).astype(np.float32)
+        if trial % 5 == 0:
+            values = (rng.random(n) * 30).astype(np.float32)  # on no grid
+        distinct, counts = np.unique(values, return_counts=True)
+        for q in (0, 37.5, 50, 90, 99, 100):
+            assert histogram.percentile(distinct, counts, q) == float(np.percentile(values, q)), (trial, q)
+    big = np.repeat(np.float32([1, 2, 5]), [10**6, 3, 10**4])
+    assert histogram.counter_histogram(big, "box_tests").value_range == counters.auto_range(big)
+
+
 def _entered(scene, lo, hi, width, height):
     """Which pixels' primary rays enter the box lo..hi (a slab test on the tracer's own rays)."""
     from bvhlab import _core
