@@ -3,23 +3,24 @@ viewport shows: counter, auto or manual range), Render Counter (`bvhlab.render_c
 counter of every pixel on the heat ramp with its scale bar, in the Image "BVH Render") with the
 histogram of what was shown (that render, and the Rendered viewport's latest frame) as rows,
 and Compare Two Trees (`bvhlab.counter_diff`): the counter of the same view with the trees of two
-Compare methods and their per-pixel difference with its legend, by the code of
-`bvhlab compare --counter-diff` (bvhlab.compare.counter_diff), in the Image "BVH Counter
-Difference"."""
+Compare methods side by side over the counter view's range (the Image "BVH Two Trees") and their
+per-pixel difference with its legend (the Image "BVH Counter Difference"), by the code of
+`bvhlab compare --counter-diff` (bvhlab.compare.counter_diff)."""
 
 from __future__ import annotations
 
 import bpy
 
 from . import state
-from .engine.counter_view import NO_COUNTER, counter_histogram, counter_view, shown_range
+from .engine.counter_view import NO_COUNTER, counter_histogram, counter_view, manual_range, shown_range
 from .image_output import show_render
 from .operator_support import current_tree, export_scene, run_reported
 from .ops_render import render_size
 from .panels import _BvhPanel
 
-#: The Image the difference of two trees is written to.
+#: The Images Compare Two Trees writes: the difference, and both trees' counters side by side.
 DIFFERENCE_IMAGE = "BVH Counter Difference"
+SIDE_BY_SIDE_IMAGE = "BVH Two Trees"
 
 
 def _counter_chosen(context) -> bool:
@@ -106,25 +107,29 @@ class BVHLAB_OT_counter_diff(bpy.types.Operator):
         exported = export_scene(context, require_camera=True).flattened()
         trees = counter_diff.build_trees(exported, (first, second), compare_build_options(settings))
         width, height = render_size(context.scene)
+        view = counter_view(settings)
+        assert view is not None  # poll
         result = counter_diff.counter_difference(
             exported,
             *trees,
-            settings.viewport_counter,
+            view.counter,
             width,
             height,
             renderer=default_renderer(settings.backend),
             labels=(first, second),
             options=settings.render_options(),
+            value_range=manual_range(view),  # the side-by-side's colours: the counter view's range
         )
+        show_render(context, result["side_by_side"], SIDE_BY_SIDE_IMAGE)
         show_render(context, result["image"], DIFFERENCE_IMAGE)
         state.counter_results.setdefault(state.key(context.scene), {})["difference"] = result["summary"]
         s = result["summary"]
         return _report(
             self,
             context,
-            f"Image '{DIFFERENCE_IMAGE}': {first} − {second}, mean {s['first_minus_second']['mean']:+.2f} "
-            f"per primary ray; {first} costs more on {s['pixels_first_more']:,} pixels, less on "
-            f"{s['pixels_first_less']:,}",
+            f"Images '{SIDE_BY_SIDE_IMAGE}', '{DIFFERENCE_IMAGE}': {first} − {second}, "
+            f"mean {s['first_minus_second']['mean']:+.2f} per primary ray; {first} costs more on "
+            f"{s['pixels_first_more']:,} pixels, less on {s['pixels_first_less']:,}",
         )
 
 

@@ -33,16 +33,19 @@ def counter_view(settings) -> CounterView | None:
 SIDEBAR_BINS = 12
 
 
+def manual_range(view: CounterView) -> tuple[float, float] | None:
+    """The view's manual range (min ≥ max widened to min + 1), None for the auto range."""
+    if view.value_range is None:
+        return None
+    lo, hi = view.value_range
+    return float(lo), float(max(hi, lo + 1.0))
+
+
 def shown_range(values: np.ndarray, view: CounterView) -> tuple[float, float]:
-    """The range the view colours `values` over: the auto range, or the manual one (min ≥ max
-    widened to min + 1)."""
+    """The range the view colours `values` over: the auto range, or the manual one."""
     from bvhlab import counters
 
-    if view.value_range is None:
-        lo, hi = counters.auto_range(values)
-    else:
-        lo, hi = view.value_range
-        hi = max(hi, lo + 1.0)
+    lo, hi = manual_range(view) or counters.auto_range(values)
     return float(lo), float(hi)
 
 
@@ -62,5 +65,4 @@ def counter_histogram(all_counters: np.ndarray, view: CounterView):
     from bvhlab import counters, histogram
 
     values = counters.counter_plane(all_counters, view.counter)
-    value_range = None if view.value_range is None else shown_range(values, view)
-    return histogram.counter_histogram(values, view.counter, value_range, bins=SIDEBAR_BINS)
+    return histogram.counter_histogram(values, view.counter, manual_range(view), bins=SIDEBAR_BINS)

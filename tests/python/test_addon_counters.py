@@ -88,9 +88,11 @@ def test_two_trees_difference_is_the_clis(scene, tmp_path, capsys):
 
     from bvhlab import counters
     from bvhlab.cli import main
+    from bvhlab.compare import counter_diff
     from bvhlab.png import linear_to_srgb
 
     settings = scene.bvhlab
+    settings.counter_range_auto = True
     for name, value in REPORT_PANEL.items():
         setattr(settings, name, value)
     settings.viewport_counter = "box_tests"
@@ -110,8 +112,11 @@ def test_two_trees_difference_is_the_clis(scene, tmp_path, capsys):
     assert summary == cli
     image, span = counters.difference_image(difference, cli["span"])
     np.testing.assert_array_equal(ours, image)  # the CLI's image, legend included
-    png = read_png(stem.with_suffix(".png"))[..., :3].astype(int)
-    assert np.abs(png - (linear_to_srgb(ours[..., :3]) * 255 + 0.5).astype(int)).max() <= 1
+    side = _image("BVH Two Trees")
+    np.testing.assert_array_equal(side, counter_diff.side_by_side(a, b)[0])  # the auto range of both
+    for path, pixels in ((stem.with_suffix(".png"), ours), (out / f"{stem.name}_side_by_side.png", side)):
+        png = read_png(path)[..., :3].astype(int)
+        assert np.abs(png - (linear_to_srgb(pixels[..., :3]) * 255 + 0.5).astype(int)).max() <= 1
     settings.counter_diff_second = "median"
     with pytest.raises(RuntimeError, match="two different methods"):  # one tree against itself: said
         bpy.ops.bvhlab.counter_diff()
