@@ -55,8 +55,8 @@ class CounterHistogram:
 
     def bin_labels(self) -> list[str]:
         """A short label per bin: the grid values it holds ('3', '4-7', '1.25-1.5'), or its edges
-        ('0.5-1.2'); '+' after the last where pixels above the range are in it, '-' before the
-        first likewise."""
+        ('0.5-1.2'); '+' after the last where pixels above the range are in it, '≤ ' before the
+        first where pixels below it are in that."""
         labels = []
         for a, b in zip(self.edges[:-1], self.edges[1:]):
             if self.grid is None:
@@ -69,7 +69,7 @@ class CounterHistogram:
         if self.above:
             labels[-1] += "+"
         if self.below:
-            labels[0] = "-" + labels[0]
+            labels[0] = "≤ " + labels[0]
         return labels
 
     def colors(self) -> np.ndarray:

@@ -62,9 +62,14 @@ def test_whole_counts_get_bins_of_whole_numbers_and_averages_bins_of_their_grid(
     wide = histogram.counter_histogram(np.arange(100, dtype=np.float32), "box_tests", (0.0, 99.0), bins=32)
     assert (np.diff(wide.edges) == 4).all() and len(wide.counts) == 25  # 4 whole numbers a bin
     assert (wide.counts == 4).all()
+    assert h.bin_labels() == ["0", "1", "2", "3", "4", "5", "6", "7+"]
+    assert wide.bin_labels()[:2] == ["0-3", "4-7"] and wide.bin_labels()[-1] == "96-99"
+    above_two = histogram.counter_histogram(values, "prim_tests", (2.0, 7.0))
+    assert above_two.below == 3 and above_two.bin_labels()[0] == "≤ 2" and above_two.counts[0] == 4
     quarters = np.arange(0, 10, 0.25, dtype=np.float32)  # averages over 2 × 2 samples
     q = histogram.counter_histogram(quarters, "box_tests", (0.0, 9.75), bins=40)
     assert (q.counts == 1).all() and histogram.value_grid(quarters) == 4
+    assert q.bin_labels()[:3] == ["0", "0.25", "0.5"]
     uneven = np.float32([0.1234, 0.4567, 2.71])
     assert histogram.value_grid(uneven) is None
     assert np.allclose(histogram.counter_histogram(uneven, "box_tests", (0, 3), bins=3).edges, [0, 1, 2, 3])
