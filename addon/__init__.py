@@ -15,7 +15,7 @@ from __future__ import annotations
 import bpy
 from bpy.app.handlers import persistent
 
-from . import background, engine, follow, legend_icons, ops_inspect, overlay, state
+from . import background, engine, follow, legend_icons, ops_counters, ops_inspect, overlay, state
 from .ops_build import BVHLAB_OT_build
 from .ops_compare import BVHLAB_OT_compare
 from .ops_export_stats import BVHLAB_OT_export_stats
@@ -46,6 +46,7 @@ classes = (
     BVHLAB_PT_inspect,
     BVHLAB_PT_cost,
     BVHLAB_PT_render,
+    *ops_counters.classes,
     BVHLAB_PT_compare,
     BVHLAB_PT_export,
     BVHLAB_PT_object,

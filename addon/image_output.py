@@ -8,13 +8,13 @@ import numpy as np
 IMAGE_NAME = "BVH Render"
 
 
-def show_render(context, pixels: np.ndarray):
-    """Write `pixels` (float (height, width, 4), row 0 = top, linear RGB) into the Image
-    "BVH Render" (created or resized as needed) and show it in every open Image Editor."""
+def show_render(context, pixels: np.ndarray, name: str = IMAGE_NAME):
+    """Write `pixels` (float (height, width, 4), row 0 = top, linear RGB) into the Image `name`
+    (default "BVH Render"; created or resized as needed) and show it in every open Image Editor."""
     height, width = pixels.shape[:2]
-    image = bpy.data.images.get(IMAGE_NAME)
+    image = bpy.data.images.get(name)
     if image is None:
-        image = bpy.data.images.new(IMAGE_NAME, width, height, alpha=True, float_buffer=True)
+        image = bpy.data.images.new(name, width, height, alpha=True, float_buffer=True)
     elif tuple(image.size) != (width, height):
         image.scale(width, height)
     # Blender's row 0 is the bottom of the picture.

@@ -1,6 +1,7 @@
-"""Colour swatches for legends in panels (issue 35): the depth colours of the box overlay and the
-ends of a counter's heat ramp, each a small icon filled with the core's palette colour
-(bvhlab.palette), so the panel shows the very colours the overlay and the images use."""
+"""Colour swatches for legends in panels (issue 35): the depth colours of the box overlay, the
+stops of a counter's heat ramp and of a difference's diverging ramp, each a small icon filled with
+the core's palette colour (bvhlab.palette), so the panel shows the very colours the overlay and the
+images use."""
 
 from __future__ import annotations
 
@@ -49,6 +50,19 @@ def heat_legend(layout, lo: float, hi: float, what: str, stops: int = 5) -> None
     values = np.linspace(lo, hi, stops)
     for v, rgb in zip(values, palette.heat(np.linspace(0.0, 1.0, stops))):
         prefix = "≥ " if v == hi else ""
+        col.label(text=prefix + legend.number_text(round(float(v), 2)), icon_value=swatch_icon(rgb))
+
+
+def diverging_legend(layout, span: float, what: str, stops: int = 5) -> None:
+    """Rows of the diverging ramp (a difference's) at `stops` values from -span (blue) through 0
+    (white) to span (red), each with its number."""
+    from bvhlab import legend, palette
+
+    col = layout.column(align=True)
+    col.label(text=what)
+    values = np.linspace(-span, span, stops)
+    for v, rgb in zip(values, palette.diverging(np.linspace(-1.0, 1.0, stops))):
+        prefix = "≥ " if v == span else "≤ " if v == -span else ""
         col.label(text=prefix + legend.number_text(round(float(v), 2)), icon_value=swatch_icon(rgb))
 
 

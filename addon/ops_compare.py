@@ -24,6 +24,13 @@ COMPARE_METHODS = (
 )
 
 
+def compare_build_options(settings) -> dict:
+    """Every build setting of the panel but the method and its bins, which each Compare row (and
+    each of Compare Two Trees' trees) sets."""
+    build = settings.build_config().tree_settings()
+    return {name: build[name] for name in ("bin_bounds", "axis", "max_leaf_size", "sah_block")}
+
+
 class BVHLAB_OT_compare(ModalTaskMixin, bpy.types.Operator):
     """Build and render the scene with every split method; show the table (frame time, build time,
     height, SAH cost) in the panel and write it as CSV (Esc stops)"""
@@ -87,15 +94,13 @@ class BVHLAB_OT_compare(ModalTaskMixin, bpy.types.Operator):
         settings = context.scene.bvhlab
         exported = export_scene(context, require_camera=True)
         width, height = render_size(context.scene)
-        build = settings.build_config().tree_settings()
         options = {
             "frames": settings.compare_frames,
             "builds": 1,
             "width": width,
             "height": height,
             "options": settings.render_options(),  # as F12 and the sidebar's Render trace
-            # every build setting of the panel but the method and its bins, which each row sets
-            "build_options": {name: build[name] for name in ("bin_bounds", "axis", "max_leaf_size", "sah_block")},
+            "build_options": compare_build_options(settings),
         }
         backend, labels = settings.backend, [method for _, method in COMPARE_METHODS]
         self._csv_path = output_path(settings.compare_filepath, "bvh_compare.csv")

@@ -37,8 +37,14 @@ class BVHLAB_OT_render(bpy.types.Operator):
         return run_reported(self, context, lambda: self._render(context))
 
     def _render(self, context):
+        from bvhlab import legend
+
         exported = export_scene(context, require_camera=True)
-        pixels, timings = render_with_settings(context, exported, current_tree(context, exported))
+        bvh = current_tree(context, exported)
+        pixels, timings = render_with_settings(context, exported, bvh)
+        # the legends of its colourings under it: the heatmap's scale, the boxes' depth colours
+        options = context.scene.bvhlab.render_options()
+        pixels = legend.render_legends(pixels, options, timings["heatmap_scale"], legend.overlay_height(bvh))
         where = show_in_image_editor(context, show_render(context, pixels))
         state.last_render[state.key(context.scene)] = dict(timings)
         fallback = f" (fell back: {timings['fallback']})" if timings.get("fallback") else ""

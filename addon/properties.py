@@ -79,7 +79,16 @@ def _counter_items() -> list[tuple[str, str, str]]:
     return [shaded, *((c, LABELS[c], f"{LABELS[c]} {per_ray}, blue few, red many") for c in COUNTERS)]
 
 
+def _two_tree_items() -> list[tuple[str, str, str]]:
+    from .ops_compare import COMPARE_METHODS
+
+    return [
+        (method, label, f"The tree of {label}, built as Compare Methods builds it") for label, method in COMPARE_METHODS
+    ]
+
+
 COUNTER_ITEMS = _counter_items()
+TWO_TREE_ITEMS = _two_tree_items()
 MEASURE_ITEMS = _measure_items()
 METHOD_ITEMS = _items(METHODS)
 # (module level: Blender evaluates the annotations below in a scope where a comprehension could
@@ -323,6 +332,12 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
     )
     counter_range_max: FloatProperty(
         name="Max", default=64.0, min=0.0, max=1e6, update=_redraw, description="Counter shown red (and above)"
+    )
+    counter_diff_first: EnumProperty(
+        name="First", items=TWO_TREE_ITEMS, default="median", description="Compare Two Trees: the tree subtracted from"
+    )
+    counter_diff_second: EnumProperty(
+        name="Second", items=TWO_TREE_ITEMS, default="sah12", description="Compare Two Trees: the tree subtracted"
     )
     viewport_budget_ms: FloatProperty(
         name="Preview ms",

@@ -64,6 +64,9 @@ lock = threading.Lock()
 #: The box picked in the viewport (ops_inspect.py): (the tree's serial when picked, node, how). A
 #: pick of an older tree (rebuilt or refit since) is not shown.
 picked: dict[int, tuple] = {}
+#: The sidebar's Traversal Counters (ops_counters.py): "histogram" (Render Counter's
+#: bvhlab.histogram.CounterHistogram) and "difference" (Compare Two Trees' summary).
+counter_results: dict[int, dict] = {}
 
 
 def remember_pick(scene, built: BuiltTree, node: int, how: str) -> None:
@@ -90,6 +93,7 @@ def clear() -> None:
     from .trees import cache
 
     with lock:
-        for table in (trees, comparisons, last_render, messages, builds, last_final, last_viewport, picked):
+        tables = (trees, comparisons, last_render, messages, builds, last_final, last_viewport, picked)
+        for table in (*tables, counter_results):
             table.clear()
     cache.clear()

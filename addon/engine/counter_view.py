@@ -29,15 +29,40 @@ def counter_view(settings) -> CounterView | None:
     return CounterView(settings.viewport_counter, manual)
 
 
+#: Bins of the histogram the sidebar shows (one row each).
+SIDEBAR_BINS = 12
+
+
+def manual_range(view: CounterView) -> tuple[float, float] | None:
+    """The view's manual range (min ≥ max widened to min + 1), None for the auto range."""
+    if view.value_range is None:
+        return None
+    lo, hi = view.value_range
+    return float(lo), float(max(hi, lo + 1.0))
+
+
+def shown_range(values: np.ndarray, view: CounterView) -> tuple[float, float]:
+    """The range the view colours `values` over: the auto range, or the manual one."""
+    from bvhlab import counters
+
+    lo, hi = manual_range(view) or counters.auto_range(values)
+    return float(lo), float(hi)
+
+
 def counter_colors(all_counters: np.ndarray, view: CounterView) -> tuple[np.ndarray, tuple[float, float]]:
     """(H, W, 4) heat colours of the view's counter (no scale bar: the panel shows the legend) and
-    the range used. A manual range with min ≥ max is widened to min + 1."""
+    the range used (shown_range)."""
     from bvhlab import counters, palette
 
     values = counters.counter_plane(all_counters, view.counter)
-    if view.value_range is None:
-        lo, hi = counters.auto_range(values)
-    else:
-        lo, hi = view.value_range
-        hi = max(hi, lo + 1.0)
-    return palette.heat_image(values, lo, hi), (float(lo), float(hi))
+    lo, hi = shown_range(values, view)
+    return palette.heat_image(values, lo, hi), (lo, hi)
+
+
+def counter_histogram(all_counters: np.ndarray, view: CounterView):
+    """The histogram (bvhlab.histogram, SIDEBAR_BINS bins) of the view's counter over the range
+    counter_colors colours it with: what the sidebar shows under the counter."""
+    from bvhlab import counters, histogram
+
+    values = counters.counter_plane(all_counters, view.counter)
+    return histogram.counter_histogram(values, view.counter, manual_range(view), bins=SIDEBAR_BINS)

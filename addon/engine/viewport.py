@@ -21,7 +21,7 @@ import weakref
 from dataclasses import dataclass
 
 from ..trees import TreeKey, cache
-from .counter_view import counter_colors
+from .counter_view import counter_colors, counter_histogram
 from .settings import VIEWPORT_THREADS
 from .tracer import TraceCancelled, open_tracer
 from .view_camera import ViewFrustum
@@ -245,6 +245,7 @@ class ViewportSession:
                 "latency_ms": (time.monotonic() - self._request_time) * 1e3,
                 "counter": request.counter.counter if counter_range else None,
                 "counter_range": counter_range,  # what the panel's legend shows
+                "counter_histogram": counter_histogram(images.counters, request.counter) if counter_range else None,
             }
             self._publish(ViewFrame(image, request, level, scale, frame_timings, scene_serial))
 

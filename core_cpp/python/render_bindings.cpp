@@ -268,7 +268,11 @@ void bind_render(nb::module_& m) {
             "A two-level scene: the TLAS of `two_level` and, per mesh, its triangles, spheres and material indices.")
         .def_prop_ro("revision", [](const PyRenderScene& s) { return s.tree ? s.tree->revision : 0; })
         .def_prop_ro("two_level", [](const PyRenderScene& s) { return s.scene.two_level(); })
-        .def_prop_ro("height", [](const PyRenderScene& s) { return s.scene.height(); });
+        .def_prop_ro("height", [](const PyRenderScene& s) { return s.scene.height(); })
+        .def(
+            "heatmap_scale",
+            [](const PyRenderScene& s, const RenderSettings& settings) { return heatmap_scale(s.scene, settings); },
+            "settings"_a, "Box tests per primary ray the heatmap shows red with these settings.");
     bind_job(m);
     bind_palettes(m);
     m.def(

@@ -42,7 +42,11 @@ def counter_plane(counters: np.ndarray, name: str) -> np.ndarray:
 
 def auto_range(values: np.ndarray) -> tuple[float, float]:
     """(0, the AUTO_PERCENTILE-th percentile of `values`), the top at least 1."""
-    top = float(np.percentile(values, AUTO_PERCENTILE)) if values.size else 0.0
+    return range_to(float(np.percentile(values, AUTO_PERCENTILE)) if values.size else 0.0)
+
+
+def range_to(top: float) -> tuple[float, float]:
+    """The auto range whose percentile is `top`: 0 to top, at least 1."""
     return 0.0, max(top, 1.0)
 
 

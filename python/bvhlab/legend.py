@@ -59,13 +59,15 @@ def text_mask(text: str) -> np.ndarray:
     return np.kron(mask, np.ones((SCALE, SCALE), bool)).astype(bool)
 
 
-def _strip(height: int, width: int) -> np.ndarray:
+def blank_strip(height: int, width: int) -> np.ndarray:
+    """(height, width, 4) of the legend background."""
     out = np.ones((height, width, 4), np.float32)
     out[..., :3] = BACKGROUND
     return out
 
 
-def _draw_text(image: np.ndarray, text: str, x: int, y: int) -> None:
+def draw_text(image: np.ndarray, text: str, x: int, y: int) -> None:
+    """Light the pixels of `text` in TEXT_COLOR, its top left at (x, y) (moved left to fit)."""
     mask = text_mask(text)
     h, w = mask.shape
     x = int(np.clip(x, 0, max(image.shape[1] - w, 0)))
@@ -81,13 +83,13 @@ def bar_colors(width: int, colors: Callable[[np.ndarray], np.ndarray], lo: float
 def scale_bar(width: int, lo: float, hi: float, colors: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
     """(h, width, 4) strip: a bar of `colors` (a palette of values lo..hi) from column MARGIN to
     width - MARGIN, the numbers lo (left) and hi (right) below it."""
-    strip = _strip(MARGIN + BAR_HEIGHT + MARGIN + TEXT_HEIGHT + MARGIN, width)
+    strip = blank_strip(MARGIN + BAR_HEIGHT + MARGIN + TEXT_HEIGHT + MARGIN, width)
     inner = max(width - 2 * MARGIN, 1)
     strip[MARGIN : MARGIN + BAR_HEIGHT, MARGIN : MARGIN + inner, :3] = bar_colors(inner, colors, lo, hi)[None]
     y = MARGIN + BAR_HEIGHT + MARGIN
-    _draw_text(strip, number_text(lo), MARGIN, y)
+    draw_text(strip, number_text(lo), MARGIN, y)
     hi_text = number_text(hi)
-    _draw_text(strip, hi_text, width - MARGIN - text_mask(hi_text).shape[1], y)
+    draw_text(strip, hi_text, width - MARGIN - text_mask(hi_text).shape[1], y)
     return strip
 
 
@@ -108,15 +110,40 @@ def depth_legend(width: int, depths) -> np.ndarray:
     swatch = max(TEXT_HEIGHT * 2, text_mask(number_text(max(depths, default=0))).shape[1] + 2)
     fit = max((width - MARGIN) // (swatch + MARGIN), 1)
     shown = depths[:fit]
-    strip = _strip(MARGIN + BAR_HEIGHT + MARGIN + TEXT_HEIGHT + MARGIN, width)
+    strip = blank_strip(MARGIN + BAR_HEIGHT + MARGIN + TEXT_HEIGHT + MARGIN, width)
     colors = palette.depth(np.array(shown, np.uint32)) if shown else np.zeros((0, 3), np.float32)
     for k, (d, c) in enumerate(zip(shown, colors)):
         x = MARGIN + k * (swatch + MARGIN)
         strip[MARGIN : MARGIN + BAR_HEIGHT, x : x + swatch, :3] = c
-        _draw_text(strip, number_text(d), x, MARGIN + BAR_HEIGHT + MARGIN)
+        draw_text(strip, number_text(d), x, MARGIN + BAR_HEIGHT + MARGIN)
     return strip
 
 
 def below(image: np.ndarray, strip: np.ndarray) -> np.ndarray:
     """`image` with `strip` under it (same width)."""
     return np.concatenate([image, strip], axis=0)
+
+
+def render_legends(
+    image: np.ndarray, options, heatmap_scale: float | None = None, tree_height: int | None = None
+) -> np.ndarray:
+    """A rendered image with the legends of its colourings under it: the heat bar of the heatmap
+    mode (0 to `heatmap_scale` box tests, the render's timings["heatmap_scale"]), and the depth
+    swatches of boxes coloured by depth (the depths the tree has, where `tree_height` is given).
+    `options`: the render's bvhlab.RenderOptions."""
+    width = image.shape[1]
+    if options.mode == "heatmap":
+        if heatmap_scale is None:
+            raise ValueError("a heatmap's legend needs its scale (the render's timings['heatmap_scale'])")
+        image = below(image, heat_bar(width, 0.0, float(heatmap_scale)))
+    if options.overlay_depth is not None and options.color_by_depth:
+        lo, hi = options.overlay_depth
+        hi = hi if tree_height is None else min(hi, tree_height - 1)
+        image = below(image, depth_legend(width, range(lo, hi + 1)))
+    return image
+
+
+def overlay_height(bvh) -> int:
+    """The height of the tree whose boxes the overlay draws (a two-level tree's: its TLAS's)."""
+    stats = bvh.stats
+    return int(stats["tlas_height"] if "tlas_height" in stats else stats["height"])

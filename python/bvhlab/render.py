@@ -89,7 +89,8 @@ def render(
 
     image: float32 (height, width, 4), row 0 at the top, linear RGB, alpha 1.
     timings: upload_ms, overlay_ms, trace_ms, readback_ms, total_ms, dispatches, device (which
-    device rendered), backend ("vulkan" or "cpu") and reason (why that backend).
+    device rendered), backend ("vulkan" or "cpu"), reason (why that backend) and heatmap_scale (the
+    box tests the heatmap shows red: its legend's top).
 
     backend: "auto" (a Vulkan GPU if there is one, else the CPU reference: on a CPU Vulkan
     driver such as lavapipe the CPU reference is several times faster), "vulkan" or "cpu".
@@ -246,7 +247,13 @@ class Renderer:
                     upload_ms = self._vulkan.upload(render_scene)
                     self._uploaded = render_scene
                 job = self._vulkan.start(settings)
-        timings = {"prepare_ms": prepare_ms, "upload_ms": upload_ms, "backend": self.backend, "reason": self.reason}
+        timings = {
+            "prepare_ms": prepare_ms,
+            "upload_ms": upload_ms,
+            "backend": self.backend,
+            "reason": self.reason,
+            "heatmap_scale": render_scene.heatmap_scale(settings),  # the heatmap's legend (bvhlab.legend)
+        }
         if self.fallback:
             timings["fallback"] = self.fallback
         return RenderJob(job, settings, timings)

@@ -169,8 +169,9 @@ def check_viewport_worker_levels() -> None:
 def check_viewport_counter_display() -> None:
     """The viewport showing a counter (primitive tests, auto range; then box hits over 0..4): the
     full-resolution frame is the heat ramp of the CPU reference's counter over the range the
-    frame reports, and the auto range is 0 to the 99th percentile."""
-    from bvhlab import counters, palette
+    frame reports, and the auto range is 0 to the 99th percentile; the frame's histogram is
+    bvhlab.histogram's of the same counts."""
+    from bvhlab import counters, histogram, palette
 
     counter_view = _engine_module("counter_view")
     scene = harness.open_scene("whitted")
@@ -187,6 +188,9 @@ def check_viewport_counter_display() -> None:
             assert (lo, hi) == (counters.auto_range(plane) if view.value_range is None else view.value_range)
             np.testing.assert_array_equal(frame.image, palette.heat_image(plane, lo, hi))
             assert frame.timings["counter"] == view.counter and len(np.unique(plane)) > 2
+            hist = frame.timings["counter_histogram"]  # the sidebar's histogram of the frame's counts
+            expected = histogram.counter_histogram(plane, view.counter, view.value_range, counter_view.SIDEBAR_BINS)
+            assert hist.pixels == 64 * 48 and hist.counts.tolist() == expected.counts.tolist()
         finally:
             session.close()
 

@@ -8,6 +8,7 @@ import pytest
 
 import bvhlab
 from bvhlab import counters, legend, palette
+from bvhlab.compare import counter_diff
 from bvhlab.compare.counter_diff import counter_difference, counter_planes
 from bvhlab.inspect.ray_record import trace_pixel
 from bvhlab.library import procedural, showcase
@@ -210,6 +211,12 @@ def test_difference_of_a_tree_with_itself_is_zero_and_median_against_sah_has_the
         assert (img[red][:, 0] > img[red][:, 2]).all() and (img[blue][:, 2] > img[blue][:, 0]).all()
         assert (img[d["difference"] == 0] == 1.0).all()
         np.testing.assert_array_equal(d["image"][:H], palette.diverging_image(d["difference"], d["span"]))
+        lo, hi = s_range = d["summary"]["side_by_side_range"]
+        assert s_range == list(counters.auto_range(np.concatenate([a.ravel(), b.ravel()])))
+        pair = d["side_by_side"]  # first | gap | second, one range, one bar
+        np.testing.assert_array_equal(pair[:H, :W], palette.heat_image(a, lo, hi))
+        np.testing.assert_array_equal(pair[:H, -W:], palette.heat_image(b, lo, hi))
+        assert pair.shape[1] == 2 * W + counter_diff.GAP and (pair[:H, W:-W, :3] == np.float32(legend.BACKGROUND)).all()
         s = d["summary"]
         assert s["median"]["mean"] == pytest.approx(a.mean()) and s["sah"]["mean"] == pytest.approx(b.mean())
         assert s["first_minus_second"]["mean"] == pytest.approx((a - b).mean(), abs=1e-5)
@@ -270,3 +277,4 @@ def test_cli_compare_counter_diff(tmp_path, capsys):
     summary = json.loads(stem.with_suffix(".json").read_text())
     assert summary["median"]["mean"] == pytest.approx(float(a.mean()))
     assert stem.with_suffix(".png").exists() and "median - sah12" in capsys.readouterr().out
+    assert (out / f"{stem.name}_side_by_side.png").exists()

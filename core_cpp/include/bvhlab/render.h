@@ -90,6 +90,11 @@ RenderScene make_render_scene(const Tlas& tlas, const std::vector<RenderMesh>& m
 /// make_render_scene). Both renderers call it before they read the scene.
 void check_render_scene(const RenderScene& scene);
 
+/// The box tests per primary ray the heatmap shows red (and above): settings.heatmap_scale, else
+/// 8 × the height of the tree whose boxes the overlay draws (a two-level scene's: the TLAS's), at
+/// least 8. The heatmap's legend (bvhlab.legend) reads it from here: one definition.
+float heatmap_scale(const RenderScene& scene, const RenderSettings& settings);
+
 /// The per-frame parameters both renderers read (device addresses and the per-dispatch fields
 /// left zero; the Vulkan side fills them).
 gpu::FrameParams make_frame_params(const RenderScene& scene, const RenderSettings& settings);

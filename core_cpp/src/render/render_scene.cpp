@@ -108,6 +108,10 @@ void check_render_scene(const RenderScene& scene) {
         throw std::invalid_argument("the render scene has no pairs for its tree's internal nodes (make_render_scene)");
 }
 
+float heatmap_scale(const RenderScene& scene, const RenderSettings& s) {
+    return s.heatmap_scale ? *s.heatmap_scale : float(std::max<std::uint32_t>(8 * scene.height(), 8));
+}
+
 gpu::FrameParams make_frame_params(const RenderScene& scene, const RenderSettings& s) {
     gpu::FrameParams f{};
     set_camera_frame(f, s.camera, s.width, s.height);
@@ -127,7 +131,7 @@ gpu::FrameParams make_frame_params(const RenderScene& scene, const RenderSetting
     f.light_position = v3(s.light.position);
     f.light_color = v3(s.light.color * s.light.intensity);
     f.sky = v3(s.sky);
-    f.heatmap_scale = s.heatmap_scale ? *s.heatmap_scale : float(std::max<std::uint32_t>(8 * scene.height(), 8));
+    f.heatmap_scale = heatmap_scale(scene, s);
     f.width = s.width;
     f.height = s.height;
     f.samples_per_axis = s.samples_per_axis;

@@ -4,8 +4,9 @@ a protocol (warm-up, interleaved rounds, medians with their spread; a verdict on
 difference exceeds the spread), the report's claims checked on it, its §4.1 overlay claim and
 Figure 5 on a model of over 700,000 triangles, charts, Figures 3–6 and one level sheet per method.
 With --counter-diff A,B it writes only two trees side by side instead: a traversal counter per
-pixel (--counter) of the same view with the trees of methods A and B, their difference A − B as a
-diverging image with its legend, the counts, and each one's mean and percentiles."""
+pixel (--counter) of the same view with the trees of methods A and B (side by side on one heat
+range), their difference A − B as a diverging image with its legend, the counts, and each one's
+mean and percentiles."""
 
 from __future__ import annotations
 
@@ -102,7 +103,7 @@ def _counter_diff(scene, name: str, args, out: Path) -> int:
     """Two trees side by side: args.counter per pixel, the first method's minus the second's."""
     first, second = args.counter_diff
     renderer = Renderer(args.backend)
-    tree_a, tree_b = (build(scene, **{**build_settings(label), "threads": 0}) for label in (first, second))
+    tree_a, tree_b = counter_diff.build_trees(scene, (first, second))
     result = counter_diff.counter_difference(
         scene, tree_a, tree_b, args.counter, args.width, args.height, renderer=renderer, labels=(first, second)
     )
@@ -113,7 +114,7 @@ def _counter_diff(scene, name: str, args, out: Path) -> int:
         shown = f"{first} - {second}" if label == "first_minus_second" else label
         print(f"{name} {args.counter} {shown}: mean {v['mean']:.2f}, median {v['median']:g}, p99 {v['p99']:g}")
     print(f"colour span ±{result['span']:g} (auto: the {s['auto_percentile']:g}th percentile of |difference|)")
-    say(f"wrote {paths['png']}, {paths['npy'].name}, {paths['json'].name}")
+    say(f"wrote {paths['png']}, {paths['side_by_side'].name}, {paths['npy'].name}, {paths['json'].name}")
     return 0
 
 

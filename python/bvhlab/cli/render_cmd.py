@@ -1,15 +1,18 @@
 """`bvhlab render SCENE --out PNG`: build a tree and render the scene with the Whitted tracer,
 optionally with the BVH overlay (--bvh-depth A:B; a legend of its depth colours under the image),
 or a traversal counter per pixel (--counter NAME: the false-colour image with its scale bar, the
-raw counts per primary ray beside it as OUT.npy; --heatmap is --counter box_tests)."""
+raw counts per primary ray beside it as OUT.npy, their histogram as OUT.histogram.png and
+OUT.histogram.json; --heatmap is --counter box_tests)."""
 
 from __future__ import annotations
 
 import argparse
+import json
+from pathlib import Path
 
 import numpy as np
 
-from .. import Bvh, InstancedBvh, build, counters, legend, save_png
+from .. import Bvh, InstancedBvh, build, counters, histogram, legend, save_png
 from .._atomic import replacing
 from .._progress import ProgressBar
 from ..library import load_scene
@@ -91,11 +94,7 @@ def run(args) -> int:
     if result.counters is not None:
         _write_counter(result.counters, counter, args.range, args.out)
     elif result.color is not None:
-        image = result.color
-        if args.bvh_depth is not None:  # which colour is which depth
-            image = legend.below(
-                image, legend.depth_legend(args.width, range(args.bvh_depth[0], args.bvh_depth[1] + 1))
-            )
+        image = legend.render_legends(result.color, render_options, t["heatmap_scale"], legend.overlay_height(bvh))
         save_png(image, args.out)
     print(f"{name}: {args.width}x{args.height} on {t['device']} ({t['backend']}: {t['reason']})")
     print(f"trace {t['trace_ms']:.1f} ms, total {t['total_ms']:.1f} ms; {_tree_summary(bvh)}")
@@ -111,8 +110,14 @@ def _counter(args) -> str | None:
     return "box_tests" if args.heatmap else args.counter
 
 
-def _write_counter(all_counters, counter: str | None, value_range, out) -> None:
-    """The counter's image with its scale bar (OUT) and its values per primary ray (OUT.npy)."""
+def histogram_paths(out: Path) -> tuple[Path, Path]:
+    """Where `render --counter` writes the histogram beside OUT: OUT.histogram.png and .json."""
+    return out.with_suffix(".histogram.png"), out.with_suffix(".histogram.json")
+
+
+def _write_counter(all_counters, counter: str | None, value_range, out: Path) -> None:
+    """The counter's image with its scale bar (OUT), its values per primary ray (OUT.npy) and
+    their histogram over the colour range (histogram_paths: a strip and its numbers)."""
     assert counter is not None  # the render kept counters because one was asked for
     values = counters.counter_plane(all_counters, counter)
     image, (lo, hi) = counters.counter_image(values, value_range)
@@ -120,10 +125,18 @@ def _write_counter(all_counters, counter: str | None, value_range, out) -> None:
     raw = out.with_suffix(".npy")
     with replacing(raw) as f:
         np.save(f, values)
+    hist = histogram.counter_histogram(values, counter, value_range)
+    strip_png, numbers = histogram_paths(out)
+    save_png(histogram.histogram_strip(hist, values.shape[1]), strip_png)
+    with replacing(numbers, text=True) as f:
+        f.write(json.dumps(hist.to_json(), indent=2))
     how = "auto: 0 to the 99th percentile" if value_range is None else "given"
-    s = counters.summary(values)
-    print(f"{counter} per primary ray: mean {s['mean']:.2f}, median {s['median']:g}, max {s['max']:g}")
-    print(f"colour range {lo:g}..{hi:g} ({how}); counts in {raw}")
+    p = hist.percentiles
+    print(
+        f"{counter} per primary ray: mean {hist.mean:.2f}, p50 {p['p50']:g}, p90 {p['p90']:g}, "
+        f"p99 {p['p99']:g}, max {p['max']:g}"
+    )
+    print(f"colour range {lo:g}..{hi:g} ({how}); counts in {raw}; histogram in {strip_png.name}, {numbers.name}")
 
 
 def _tree_summary(bvh: Bvh | InstancedBvh) -> str:

@@ -36,13 +36,31 @@ def main(argv=None) -> None:
         lo, hi, depth = bvh.boxes(a, b)
         return lo, hi, depth_colors(depth.astype(np.uint32))
 
+    height = bvh.stats["height"]
     if not args.sheet:
         image = raster.draw(*boxes(*args.depth))
-        _save_srgb(image, args.out)
+        shown = range(args.depth[0], min(args.depth[1], height - 1) + 1)
+        _save_srgb(with_depth_legend(image, shown), args.out)
         return
-    height = bvh.stats["height"]
-    panels = [(d, raster.draw(*boxes(d, d)), bvh.stats["nodes_per_depth"][d]) for d in range(height)]
+    panels = [
+        (d, with_depth_legend(raster.draw(*boxes(d, d)), [d]), bvh.stats["nodes_per_depth"][d]) for d in range(height)
+    ]
     _sheet(panels, args.out, f"{args.name}: {bvh.config.method} — boxes per depth (height {height})")
+
+
+def with_depth_legend(image: np.ndarray, depths) -> np.ndarray:
+    """The raster image (uint8) with the swatches of `depths` under it (bvhlab.legend.depth_legend),
+    in the raster's own encoding: OpenGL writes the palette's floats into the RGBA8 target as they
+    are (round(v × 255), no sRGB curve), so a swatch is the very byte value of its boxes' lines."""
+    from .. import legend
+
+    strip = legend.depth_legend(image.shape[1], depths)
+    return np.concatenate([image, raster_bytes(strip)], axis=0)
+
+
+def raster_bytes(image: np.ndarray) -> np.ndarray:
+    """Linear float RGBA → the uint8 the raster's framebuffer holds for it."""
+    return np.round(np.clip(image, 0.0, 1.0) * 255).astype(np.uint8)
 
 
 def _save_srgb(image: np.ndarray, path) -> None:
@@ -69,7 +87,7 @@ def _sheet(panels, path, title: str) -> None:
     for ax in axes.flat:
         ax.axis("off")
     for ax, (depth, image, count) in zip(axes.flat, panels):
-        ax.imshow(image)
+        ax.imshow(image, interpolation="nearest")  # the legend swatch keeps its exact colour
         ax.set_title(f"depth {depth}: {count} boxes", fontsize=8)
     fig.suptitle(title, fontsize=10)
     try:
