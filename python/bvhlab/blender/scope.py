@@ -15,12 +15,14 @@ SCOPES = ("selected", "visible")
 
 class InScope(NamedTuple):
     """One object or instance an export covers. `key` names it across depsgraph evaluations:
-    (owner's name, object's name, persistent id of the instance or ())."""
+    (owner's name, object's name, persistent id of the instance or ()). `owner`: the original
+    object itself, or the original object that instances it."""
 
     obj: Any  # a bpy.types.Object (bpy has no type stubs)
     matrix: np.ndarray
     name: str
     key: tuple
+    owner: Any = None
 
 
 def objects_in_scope(depsgraph, view_layer, scope: str) -> Iterator[tuple[object, np.ndarray, str]]:
@@ -51,7 +53,7 @@ def instances_in_scope(depsgraph, view_layer, scope: str) -> Iterator[InScope]:
                 )
             else:
                 name, key = obj.name, (owner_name, owner_name, ())
-            yield InScope(obj, _matrix(instance.matrix_world), name, key)
+            yield InScope(obj, _matrix(instance.matrix_world), name, key, owner)
 
 
 def _matrix(m) -> np.ndarray:
