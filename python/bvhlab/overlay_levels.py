@@ -1,8 +1,10 @@
-"""The boxes of a two-level tree (issue 34) as the overlay draws them: the TLAS's node boxes (world
+"""The boxes of a two-level tree (issue 34) as the overlays draw them: the TLAS's node boxes (world
 space), the BLASes' node boxes moved into the world by each instance, or both, in a depth range
 that applies within each level. Bounded: a scene of 10,000 instances would make millions of BLAS
 boxes, so at most MAX_OVERLAY_BOXES are kept, the BLAS boxes of the first instances that fit (the
-panel says how many). No bpy: the tests compare it with their own computation."""
+panel says how many). One definition for the add-on's viewport overlay (addon/overlay) and the
+tracers' overlay pass (`RenderOptions.overlay_level`, _render_scene.py). The tests compare it with
+their own computation."""
 
 from __future__ import annotations
 
