@@ -158,7 +158,8 @@ class LiveScene:
         table = MaterialTable(known)
         items, by_data, report, seen_moving = self._walk(depsgraph, view_layer, dirty, table)
         report.full = full
-        layout = plan(items, self.instancing)
+        animated = AnimatedMemo()
+        layout = plan(items, self.instancing, lambda key: key in seen_moving or animated(items[key].origin))
         shared = shared_meshes(items, layout, self._shared)
         arrays = self._arrays(items, layout, shared, table, report)
         report.materials_read = table.reads
@@ -190,7 +191,6 @@ class LiveScene:
         fresh: dict[int, MeshData] = {}  # meshes read in this sync, by data address
         by_data: dict[int, MeshData] = {}
         report = SyncReport()
-        animated = AnimatedMemo()
         seen_moving = set(self._seen_moving)
         for entry in instances_in_scope(depsgraph, view_layer, self.scope):
             obj = entry.obj
@@ -229,7 +229,7 @@ class LiveScene:
                 else:
                     item.moved = True
                     report.objects_moved += 1
-            item.mover = self.instancing and (entry.key in seen_moving or animated(entry))
+            item.origin = (entry.key[0], entry.owner, entry.key[1], entry.source)
             items[entry.key] = item
         seen_moving &= items.keys()
         for item in items.values():  # a clean item seen before a changed one of the same mesh

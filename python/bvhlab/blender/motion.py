@@ -55,19 +55,18 @@ def _animates_transform(animation) -> bool:
 
 class AnimatedMemo:
     """`transform_animated` asked once per object and sync (an instancer owns thousands of
-    instances), by the names in an item's key (InScope.key: owner, object)."""
+    instances), by name."""
 
     def __init__(self):
         self._known: dict[str, bool] = {}
 
-    def __call__(self, entry) -> bool:
-        """Whether the item `entry` (an InScope) moves with the frame: its owner (the object, or
-        the instancer) or the object it shows is animated."""
-        owner_name, name = entry.key[0], entry.key[1]
-        if owner_name not in self._known:
-            self._known[owner_name] = entry.owner is not None and transform_animated(entry.owner)
-        if self._known[owner_name] or name == owner_name:
-            return self._known[owner_name]
-        if name not in self._known:
-            self._known[name] = transform_animated(entry.obj.original)
-        return self._known[name]
+    def __call__(self, origin: tuple) -> bool:
+        """Whether an item moves with the frame: `origin` is (owner's name, owner, shown object's
+        name, shown object), originals (InScope); its owner (the object, or the instancer) or the
+        object it shows is animated."""
+        for name, obj in (origin[:2], origin[2:]):
+            if name not in self._known:
+                self._known[name] = obj is not None and transform_animated(obj)
+            if self._known[name]:
+                return True
+        return False
