@@ -395,6 +395,7 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
             color_by_depth=self.overlay_color_by_depth,
             line_color=tuple(self.overlay_color[:3]),
             line_width=self.overlay_line_width,
+            overlay_level=self.overlay_level,
             traversal=self.traversal,
             mode=self.render_mode,
             traversal_counters=viewport and self.viewport_counter != "none",

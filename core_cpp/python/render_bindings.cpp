@@ -35,6 +35,8 @@ using Indices = nb::ndarray<const std::int32_t, nb::ndim<1>, nb::c_contig, nb::d
 using Rgba = nb::ndarray<float, nb::shape<-1, -1, 4>, nb::c_contig, nb::device::cpu>;
 using Plane = nb::ndarray<float, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
 using Counters = nb::ndarray<float, nb::shape<-1, -1, gpu::COUNTER_COUNT>, nb::c_contig, nb::device::cpu>;
+using Corners = nb::ndarray<const float, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
+using Depths = nb::ndarray<const std::uint8_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
 
 /// A RenderJob used from Python: one call at a time (a job's sums are not for two threads). The
 /// lock is only ever waited for without the GIL, and in slices, so that Ctrl-C still reaches a
@@ -266,6 +268,24 @@ void bind_render(nb::module_& m) {
             },
             "two_level"_a, "triangles"_a, "spheres"_a, "materials"_a.noconvert(), "tri_material"_a, "sphere_material"_a,
             "A two-level scene: the TLAS of `two_level` and, per mesh, its triangles, spheres and material indices.")
+        .def(
+            "with_overlay_boxes",
+            [](const PyRenderScene& s, const Corners& lo, const Corners& hi, const Depths& depth) {
+                if (hi.shape(0) != lo.shape(0) || depth.shape(0) != lo.shape(0))
+                    throw std::invalid_argument("one lo, one hi and one depth per overlay box are needed");
+                auto* out = new PyRenderScene{s.tree, s.meshes, {}};
+                std::unique_ptr<PyRenderScene> owned(out);
+                {
+                    nb::gil_scoped_release release;
+                    out->scene = s.scene;  // a copy: renders in flight keep reading `s`
+                    set_overlay_boxes(out->scene, lo.data(), hi.data(), depth.data(), lo.shape(0));
+                }
+                return owned.release();
+            },
+            "lo"_a.noconvert(), "hi"_a.noconvert(), "depth"_a.noconvert(), nb::rv_policy::take_ownership,
+            "A copy whose overlay pass draws these world boxes (sorted by depth; the depth range of the "
+            "settings picks among them) instead of the tree's node boxes.")
+        .def_prop_ro("overlay_box_count", [](const PyRenderScene& s) { return s.scene.boxes.size(); })
         .def_prop_ro("revision", [](const PyRenderScene& s) { return s.tree ? s.tree->revision : 0; })
         .def_prop_ro("two_level", [](const PyRenderScene& s) { return s.scene.two_level(); })
         .def_prop_ro("height", [](const PyRenderScene& s) { return s.scene.height(); })

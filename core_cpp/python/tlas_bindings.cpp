@@ -108,6 +108,9 @@ void bind_tlas(nb::module_& m) {
         .def("stats", &tlas_stats)
         .def_prop_ro("instance_count", [](const PyTwoLevel& s) { return s.tlas().instances.size(); })
         .def(
+            "tlas_tree", [](const PyTwoLevel& s) { return new PyBvh(s.tlas().tree); }, nb::rv_policy::take_ownership,
+            "A copy of the TLAS as a tree (its references are instance indices, it has no geometry).")
+        .def(
             "world_boxes",
             [](const PyTwoLevel& s) {
                 const auto& inst = s.tlas().instances;

@@ -9,6 +9,7 @@ import numpy as np
 
 from . import _core
 from .instanced import InstancedBvh
+from .overlay_levels import two_level_boxes
 
 
 def _array_key(a: np.ndarray) -> tuple:
@@ -19,26 +20,38 @@ class SceneCache:
     """Remembers the RenderScene last made and the key it was made for: the tree (object and
     revision, which refit bumps; for a two-level tree its TLAS object, which holds the meshes' tree
     versions), the geometry's fingerprint (so in-place edits of the arrays are seen) and the
-    materials (by value)."""
+    materials (by value). And the copy last made of it whose overlay pass draws a two-level tree's
+    BLAS boxes (RenderOptions.overlay_level), by (level, depth range)."""
 
     def __init__(self):
         self._lock = threading.Lock()
         self._key = None
         self._scene = None
+        self._overlay_key = None
+        self._overlay_scene = None
 
-    def get(self, scene, bvh) -> _core.RenderScene:
+    def get(self, scene, bvh, options=None) -> _core.RenderScene:
+        """The RenderScene of `scene` and `bvh`; `options` (RenderOptions) picks its overlay boxes."""
         two_level = isinstance(bvh, InstancedBvh)
         if scene.is_instanced and not two_level:
             raise ValueError("an instanced scene renders with its two-level tree: bvhlab.build(scene)")
         if two_level and len(bvh.meshes) != scene.mesh_count:
             raise ValueError(f"the tree has {len(bvh.meshes)} meshes, the scene {scene.mesh_count}")
         key = self._key_of(scene, bvh, two_level)
+        level = _overlay_level(bvh, options)
         with self._lock:
-            if self._key == key:
-                return self._scene
-            render_scene = _make(scene, bvh, two_level)
-            self._key, self._scene = key, render_scene
-            return render_scene
+            if self._key != key:
+                self._scene = self._overlay_scene = self._key = self._overlay_key = None  # the old go first
+                self._scene, self._key = _make(scene, bvh, two_level), key
+            render_scene = self._scene
+            assert render_scene is not None  # made above for this key
+            if level is None:
+                return render_scene
+            if self._overlay_key != (key, level):
+                boxes = two_level_boxes(bvh, *level)
+                self._overlay_scene = render_scene.with_overlay_boxes(boxes.lo, boxes.hi, boxes.depth)
+                self._overlay_key = (key, level)
+            return self._overlay_scene
 
     @staticmethod
     def _key_of(scene, bvh, two_level: bool) -> tuple:
@@ -53,6 +66,17 @@ class SceneCache:
             _array_key(scene.tri_material),
             _array_key(scene.sphere_material),
         )
+
+
+def _overlay_level(bvh, options) -> tuple | None:
+    """(level, depth_min, depth_max) when the overlay pass draws other boxes than the tree's node
+    boxes (a two-level tree's BLAS boxes, moved into the world: overlay_levels.py); None otherwise
+    (a flat tree, the TLAS's boxes, or no overlay)."""
+    if options is None or options.overlay_depth is None or options.overlay_level == "tlas":
+        return None
+    if not isinstance(bvh, InstancedBvh):
+        return None
+    return (options.overlay_level, *(int(d) for d in options.overlay_depth))
 
 
 def _make(scene, bvh, two_level: bool) -> _core.RenderScene:

@@ -28,6 +28,7 @@ class InstancedBvh:
         self._core = _make_tlas(meshes, mesh_of, transforms, config.threads)
         self._placed = (mesh_of, transforms)
         self._stats: tuple | None = None  # (what they were made of, stats)
+        self._tlas: tuple | None = None  # (the core TLAS, it as a Bvh)
 
     def __repr__(self) -> str:
         s = self.stats
@@ -46,6 +47,15 @@ class InstancedBvh:
             lo, hi = self.world_boxes()
             self._stats = (key, instanced_stats(self._core.stats(), self.meshes, self._placed[0], lo, hi))
         return dict(self._stats[1])
+
+    @property
+    def tlas(self) -> Bvh:
+        """The TLAS as a Bvh (a copy, made once per TLAS): its node boxes are in world space, its
+        references are instance indices (one per leaf), it holds no geometry; its `config` is the
+        meshes' (the TLAS is built with the core's default_tlas_config)."""
+        if self._tlas is None or self._tlas[0] is not self._core:
+            self._tlas = (self._core, Bvh(self._core.tlas_tree(), self.config))
+        return self._tlas[1]
 
     @property
     def instances(self) -> tuple[np.ndarray, np.ndarray]:

@@ -234,10 +234,11 @@ class Renderer:
         """A RenderJob (sample passes, nothing traced yet). `options` and its fields by name as for
         `bvhlab.render`. `threads`: CPU reference threads (default: the Renderer's, 0 = every core)."""
         threads = self.threads if threads is None else _checks.integer("threads", threads, 0, 4096)
-        settings = render_settings(scene, bvh, width, height, options_from(options, option_changes), camera)
+        options = options_from(options, option_changes)
+        settings = render_settings(scene, bvh, width, height, options, camera)
         start = time.perf_counter()
         with self._lock:
-            render_scene = self._cache.get(scene, bvh)
+            render_scene = self._cache.get(scene, bvh, options)
             prepare_ms = (time.perf_counter() - start) * 1e3
             upload_ms = 0.0
             if self._vulkan is None:

@@ -12,6 +12,7 @@ import numbers
 from dataclasses import dataclass, fields
 
 from . import _checks, _core
+from .overlay_levels import LEVELS
 
 _CORE = _core.RenderSettings()
 #: The image size where none is given (RenderSettings in C++), and the limits the UI shows.
@@ -29,8 +30,11 @@ class RenderOptions:
     """`samples_per_axis`: n for n×n samples per pixel. `max_depth`: bounces of reflection and
     refraction (0..MAX_RAY_DEPTH). `overlay_depth=(a, b)`: draw the boxes of tree depths a..b
     (report §3.3), coloured by depth (`color_by_depth`) or in `line_color`, `line_width` pixels
-    wide. `traversal`: "stack" or "stackless" (report §3.1). `mode`: "shade" or "heatmap" (box
-    tests of the primary rays, blue = few, red = `heatmap_scale` or more; default 8 × tree height).
+    wide; of a two-level tree (an InstancedBvh), `overlay_level` says whose: "tlas" (over the
+    instances), "blas" (each mesh's tree moved into the world by each instance; the depth range
+    applies within a BLAS; at most overlay_levels.MAX_OVERLAY_BOXES) or "both". `traversal`:
+    "stack" or "stackless" (report §3.1). `mode`: "shade" or "heatmap" (box tests of the primary
+    rays, blue = few, red = `heatmap_scale` or more; default 8 × tree height).
     `traversal_counters`: keep every traversal counter per pixel (RenderResult.counters;
     bvhlab.counters; 20 more bytes a pixel). `steps_per_dispatch` (how the work is cut, never the
     image; default adaptive) and
@@ -43,6 +47,7 @@ class RenderOptions:
     color_by_depth: bool = bool(_CORE.overlay_color_by_depth)
     line_color: tuple[float, float, float] = _rgb(_CORE.overlay_color)
     line_width: float = float(_CORE.line_width)
+    overlay_level: str = "tlas"
     traversal: str = _core.DEFAULT_TRAVERSAL
     mode: str = _CORE.mode.name
     heatmap_scale: float | None = None
@@ -51,6 +56,7 @@ class RenderOptions:
     max_steps_per_pixel: int | None = None
 
     def __post_init__(self):
+        _checks.choice("overlay_level", self.overlay_level, LEVELS)
         check = _core.RenderSettings()  # a whole render's settings, checked by the core now
         self.apply(check)
         check.validate()

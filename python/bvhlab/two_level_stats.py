@@ -43,6 +43,43 @@ def two_level_sah_cost(tlas_sah: float, lo: np.ndarray, hi: np.ndarray, mesh_of,
     return float(tlas_sah + np.sum(areas / root * (blas - 1.0)))
 
 
+def two_level_sah_cost_per_depth(tlas, mesh_of, mesh_per_depth: list[list[float]], mesh_sah) -> list[float]:
+    """A two-level tree's SAH cost split by depth in the one tree the TLAS and the BLASes make
+    together, each instance's TLAS leaf replaced by its BLAS's root: entry d sums A(n)/A(R) over
+    the TLAS's internal nodes at depth d, and A(box_i)/A(R) · (BLAS cost at depth e) over every
+    instance i whose leaf is at depth d_i and BLAS depth e with d_i + e = d (R: the TLAS's root;
+    a BLAS's per-depth costs are relative to its own root box, as `two_level_sah_cost` takes
+    them). The entries add up to `two_level_sah_cost` (within rounding), so a two-level row of
+    Compare is read like a flat tree's: the cost a ray meets at each level of its walk.
+    `tlas`: the TLAS as a Bvh (InstancedBvh.tlas; its references are instance indices); `mesh_of`:
+    each instance's mesh; `mesh_per_depth[k]`: compare.tree_stats.sah_cost_per_depth of mesh k's
+    tree (empty for a box without area: its whole `mesh_sah[k]` at BLAS depth 0)."""
+    nodes = tlas.nodes
+    if len(nodes) == 0:
+        return []
+    area = box_areas(nodes["lo"], nodes["hi"])
+    if not area[0] > 0:
+        return []
+    weight = area / area[0]
+    depths = tlas.depths.astype(np.int64)
+    leaf = tlas.is_leaf
+    per_mesh = [
+        np.asarray(d if len(d) else [s], np.float64) for d, s in zip(mesh_per_depth, mesh_sah)
+    ]  # one instance per TLAS leaf (default_tlas_config)
+    instance = tlas.refs[nodes["index"][leaf]].astype(np.int64)
+    mesh = np.asarray(mesh_of, np.int64)[instance]
+    height = int(depths.max()) + 1 + max((len(d) for d in per_mesh), default=1)
+    out = np.bincount(depths[~leaf], weights=weight[~leaf], minlength=height).astype(np.float64)
+    # the leaves' weights summed by (mesh, leaf depth): a BLAS's per-depth costs added once per pair
+    pairs = mesh * height + depths[leaf]
+    summed = np.bincount(pairs, weights=weight[leaf])
+    for pair in np.flatnonzero(summed):
+        k, d = divmod(int(pair), height)
+        out[d : d + len(per_mesh[k])] += summed[pair] * per_mesh[k]
+    last = np.flatnonzero(out)
+    return out[: int(last[-1]) + 1].tolist() if len(last) else []
+
+
 def instanced_stats(core_stats: dict, meshes: list, mesh_of: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> dict:
     """The core's TLAS stats plus the whole tree's: meshes' trees (each counted once) and what the
     instances make of them. `meshes`: the BLASes (bvhlab.Bvh); `mesh_of`: each instance's mesh;

@@ -85,6 +85,35 @@ def test_build_then_f12_render_and_export_share_one_two_level_tree(tmp_path):
     assert ["mesh_primitives", "1", "968"] in rows
 
 
+def test_f12_traces_the_boxes_of_the_overlay_level(tmp_path):
+    """F12 with the boxes in the image follows the panel's Level: "blas" traces the BLAS boxes moved
+    into the world, the image bvhlab.render gives with overlay_level "blas" (CPU reference: equal)
+    and not the TLAS's (tests/python/test_render_instanced.py checks the pixels of a BLAS edge)."""
+    scene = instanced_scene()
+    checks_engine.use_engine(
+        scene, backend="cpu", render_supersampling=1, render_overlay=True, overlay_depth_min=1, overlay_depth_max=2
+    )
+    images = {}
+    for level in ("blas", "tlas"):
+        scene.bvhlab.overlay_level = level
+        got = checks_engine.render_passes(tmp_path, level)["Combined"]
+        record = checks_engine._last_final(scene)
+        options = scene.bvhlab.render_options()
+        assert options.overlay_level == level and options.overlay_depth == (1, 2)
+        width, height = scene.render.resolution_x, scene.render.resolution_y
+        want, _ = bvhlab.render(
+            record["scene"],
+            bvhlab.build(record["scene"], config=scene.bvhlab.build_config()),
+            width,
+            height,
+            backend="cpu",
+            options=options,
+        )
+        checks_engine.compare_images(got, want, "cpu")
+        images[level] = got
+    assert np.abs(images["blas"] - images["tlas"]).max(-1).astype(bool).mean() > 0.01
+
+
 def _corner_boxes(lo: np.ndarray, hi: np.ndarray, transform: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """World boxes of object-space boxes: the eight corners of each moved, then their min and max."""
     corners = np.stack([np.where([(c >> a) & 1 for a in range(3)], hi, lo) for c in range(8)], 1)  # (B,8,3)
@@ -274,7 +303,8 @@ def test_fresh_sah_is_measured_on_demand_against_the_updated_tree():
 
 def test_compare_reports_the_tlas_and_the_meshes_trees(tmp_path):
     """Compare on the instanced scene builds and renders every method two-level: its rows and CSV
-    hold the TLAS's figures and the stored and flattened counts (not a flattened tree's)."""
+    hold the TLAS's figures, the stored and flattened counts (not a flattened tree's) and the SAH
+    cost per depth."""
     scene = instanced_scene((24, 18))
     scene.bvhlab.compare_frames = 1
     scene.bvhlab.compare_filepath = str(tmp_path / "compare.csv")
@@ -283,6 +313,8 @@ def test_compare_reports_the_tlas_and_the_meshes_trees(tmp_path):
     rows = harness.addon().state.comparisons[scene.session_uid]
     flat = 12 + 4 * 968
     assert all(r["instances"] == 5 and r["primitives"] == 980 and r["primitives_flattened"] == flat for r in rows)
+    for r in rows:  # per depth of the tree TLAS and BLASes make together: adds up to the two-level cost
+        assert len(r["sah_cost_per_depth"]) > 1 and np.isclose(sum(r["sah_cost_per_depth"]), r["sah_cost"], rtol=1e-5)
     header = next(csv.reader((tmp_path / "compare.csv").open()))
     assert {"instances", "tlas_sah_cost", "primitives_flattened"} <= set(header)
 

@@ -143,3 +143,107 @@ def test_instances_move_between_renders():
     oracle, _ = renderer.render(flat, bvhlab.build(flat), 48, 36)
     assert np.abs(before - after).max() > 0.1
     assert (np.abs(after - oracle).max(-1) > 2e-3).mean() <= 0.01
+
+
+def _two_cloud_scene() -> bvhlab.Scene:
+    """Two instances (side by side, apart) of a mesh of two small triangle clouds, [0,1]³ and
+    [3,4]×[0,1]², seen from the front and above: each BLAS splits the clouds apart at depth 1."""
+    a = procedural.random_triangles(60, size=0.1, seed=11) * 0.8 + 0.1
+    b = a + np.float32([3.0, 0.0, 0.0])
+    mesh = np.ascontiguousarray(np.concatenate([a, b]), np.float32)
+    transforms = np.stack([_transform(0.0, (0, 0, 1), (1, 1, 1), move) for move in ((0, 0, 0), (6, 0, 0))])
+    return bvhlab.Scene(
+        meshes=[mesh],
+        instance_mesh=np.array([1, 1]),
+        instance_transforms=transforms,
+        camera=bvhlab.Camera((5.0, -9.0, 4.0), (5.0, 0.5, 0.5), (0.0, 0.0, 1.0), 55.0),
+        light=bvhlab.Light((5.0, -6.0, 8.0), (1.0, 1.0, 1.0), 1.0),
+        sky=(0.0, 0.0, 0.0),
+    )
+
+
+@pytest.mark.parametrize("backend", ["cpu", "vulkan"])
+def test_the_overlay_pass_draws_the_level_asked_for(backend):
+    """overlay_level "blas" traces the BLAS boxes moved into the world (here: depth 1, each cloud's
+    box): a pixel on the vertical edge of a cloud's box where the two clouds split shows the line
+    colour with "blas" and "both", and not with "tlas" (the TLAS's depth-1 boxes are the
+    instances' boxes, with no edge there). The Vulkan tracer draws the same box list."""
+    from test_render_cpu import near_pixels
+
+    from bvhlab.overlay_levels import two_level_boxes
+
+    if backend == "vulkan":
+        try:
+            bvhlab.Renderer("vulkan")
+        except bvhlab.VulkanUnavailable as error:
+            pytest.skip(f"no Vulkan: {error}")
+    scene = _two_cloud_scene()
+    tree = bvhlab.build(scene)
+    line = (1.0, 0.0, 1.0)
+    w, h = 160, 100
+
+    def image(level):
+        renderer = bvhlab.Renderer(backend)
+        options = dict(overlay_depth=(1, 1), color_by_depth=False, line_color=line, line_width=2.0)
+        job = renderer.start(scene, tree, w, h, samples_per_axis=1, overlay_level=level, **options)
+        job.run()
+        colour = job.result(depth=False, cost=False).color
+        return np.all(np.abs(colour[..., :3] - np.float32(line)) < 1e-3, -1)
+
+    boxes = two_level_boxes(tree, "blas", 1, 1)
+    assert len(boxes.lo) == 4 and boxes.instances_shown == 2
+    left = np.argmin(boxes.lo[:, 0])  # the first instance's first cloud
+    # a point 70% up its front right edge (the TLAS box's front and back edges project elsewhere)
+    edge = (boxes.hi[left, 0], boxes.lo[left, 1], boxes.lo[left, 2] + 0.7 * (boxes.hi[left, 2] - boxes.lo[left, 2]))
+    pixels = near_pixels(scene.camera, w, h, edge)
+    blas, both, tlas = image("blas"), image("both"), image("tlas")
+    assert any(blas[p] and both[p] and not tlas[p] for p in pixels), [(blas[p], both[p], tlas[p]) for p in pixels]
+    assert blas.sum() > 100 and tlas.sum() > 100 and (both & ~blas & ~tlas).sum() < 0.05 * both.sum()
+
+
+def test_blas_boxes_in_the_overlay_pass_are_capped():
+    """3,000 instances of a 2,000-triangle mesh have some 3M BLAS boxes: the render scene's overlay
+    holds the TLAS's boxes and the BLAS boxes of the first instances that fit the cap, as the
+    add-on's viewport overlay draws them (overlay_levels.two_level_boxes)."""
+    from bvhlab._render_scene import SceneCache
+    from bvhlab.overlay_levels import MAX_OVERLAY_BOXES, two_level_boxes
+
+    knot = procedural.torus_knot(1000)
+    n = 3000
+    transforms = np.tile(np.eye(4, dtype=np.float32)[:3], (n, 1, 1))
+    transforms[:, :, 3] = np.stack([np.arange(n) % 60 * 3.0, np.arange(n) // 60 * 3.0, np.zeros(n)], 1)
+    scene = bvhlab.Scene(
+        meshes=[knot],
+        instance_mesh=np.ones(n, np.int64),
+        instance_transforms=transforms,
+        camera=bvhlab.Camera((90.0, -60.0, 80.0), (90.0, 75.0, 0.0)),
+    )
+    tree = bvhlab.build(scene)
+    options = bvhlab.RenderOptions(overlay_depth=(0, 40), overlay_level="both")
+    render_scene = SceneCache().get(scene, tree, options)
+    want = two_level_boxes(tree, "both", 0, 40)
+    assert 0 < want.instances_shown < n and render_scene.overlay_box_count == len(want.lo) <= MAX_OVERLAY_BOXES
+    assert SceneCache().get(scene, tree, options.replace(overlay_level="tlas")).overlay_box_count == 2 * n - 1
+
+
+def test_overlay_boxes_out_of_order_or_not_boxes_are_refused():
+    """RenderScene.with_overlay_boxes (what the cache calls for overlay_level) refuses boxes not
+    sorted by depth, a NaN corner, lo > hi and mismatched lengths with a ValueError."""
+    from bvhlab._render_scene import SceneCache
+
+    scene = _two_cloud_scene()
+    render_scene = SceneCache().get(scene, bvhlab.build(scene))
+    lo = np.zeros((2, 3), np.float32)
+    hi = np.ones((2, 3), np.float32)
+    ok = render_scene.with_overlay_boxes(lo, hi, np.array([0, 3], np.uint8))
+    assert ok.overlay_box_count == 2 and render_scene.overlay_box_count == 3  # the TLAS's, untouched
+    assert ok.height == render_scene.height  # the tree's, not the boxes' (the heatmap scale reads it)
+    bad = [
+        (lo, hi, np.array([3, 0], np.uint8), "sorted by depth"),
+        (np.float32([[0, 0, np.nan], [0, 0, 0]]), hi, np.zeros(2, np.uint8), "not a box"),
+        (hi + 1, hi, np.zeros(2, np.uint8), "not a box"),
+        (lo, hi[:1], np.zeros(2, np.uint8), "one lo, one hi"),
+    ]
+    for a, b, depth, message in bad:
+        with pytest.raises(ValueError, match=message):
+            render_scene.with_overlay_boxes(a, b, depth)

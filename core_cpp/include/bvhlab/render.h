@@ -35,7 +35,8 @@ struct MaterialView {
 /// A two-level scene (issue 34) has no `bvh`: its TLAS and every mesh's BLAS are copied into one
 /// forest (forest_nodes, pairs, forest_prims: the TLAS first, each tree's indices moved to its place
 /// there), its triangles and spheres are every mesh's, one after another, and `instances` places
-/// the BLASes (in the TLAS's leaf order). Its overlay boxes are the TLAS's only.
+/// the BLASes (in the TLAS's leaf order). Its overlay boxes are the TLAS's, or any list of world
+/// boxes by depth given with `set_overlay_boxes` (the add-on's BLAS boxes moved into the world).
 struct RenderScene {
     const Bvh* bvh = nullptr;         ///< borrowed: must outlive the RenderScene (flat scenes)
     BigVector<gpu::BvhPair> pairs;    ///< the tree's internal nodes for the stack walk (pair_nodes.h)
@@ -46,8 +47,9 @@ struct RenderScene {
     BigVector<gpu::GpuTriangle> triangles;
     std::vector<gpu::GpuSphere> spheres;
     std::vector<gpu::GpuMaterial> materials;
-    BigVector<gpu::GpuBox> boxes;  ///< in `order`: the boxes of depth d are order.range(d, d)
-    DepthOrder order;              ///< of the tree's nodes (depth_order.h)
+    BigVector<gpu::GpuBox> boxes;   ///< in `order`: the boxes of depth d are order.range(d, d)
+    DepthOrder order;               ///< of the tree's nodes (depth_order.h), or of the boxes given
+    std::uint32_t tree_height = 0;  ///< of the tree (two-level: the TLAS's), whatever boxes the overlay draws
     Aabb bounds;
     std::uint32_t node_count =
         0;  ///< of the tree (kept here: make_frame_params never reads `bvh`); two-level: the TLAS's
@@ -58,7 +60,7 @@ struct RenderScene {
     /// (pairs, boxes) would no longer be the tree's.
     std::uint64_t tree_fingerprint = 0;
 
-    std::uint32_t height() const { return order.height(); }
+    std::uint32_t height() const { return tree_height; }
     bool two_level() const { return !instances.empty(); }
     const BvhNode* node_data() const { return two_level() ? forest_nodes.data() : bvh->nodes.data(); }
     const gpu::GpuTriangle* prim_data() const { return two_level() ? forest_prims.data() : bvh->prims.data(); }
@@ -84,6 +86,13 @@ struct RenderMesh {
 /// count that is not the TLAS's, or a TLAS leaf with more than one instance (default_tlas_config
 /// makes one per leaf; the tracer enters one instance per leaf).
 RenderScene make_render_scene(const Tlas& tlas, const std::vector<RenderMesh>& meshes, const MaterialView& materials);
+
+/// Makes the overlay pass draw `count` boxes (lo, hi: 3 floats each; depth: the depth each is
+/// coloured by and picked by, non-decreasing) instead of the tree's node boxes: a two-level scene's
+/// BLAS boxes moved into the world (issue 34). The caller bounds their number. Throws
+/// std::invalid_argument for depths out of order, a non-finite coordinate or lo > hi.
+void set_overlay_boxes(RenderScene& scene, const float* lo, const float* hi, const std::uint8_t* depth,
+                       std::size_t count);
 
 /// Throws std::invalid_argument when `scene` no longer describes its tree (refitted since it was
 /// made: make it again), or has no pairs for the tree's internal nodes (not made by

@@ -63,6 +63,7 @@ void check_tree_matches(const Bvh& bvh, const GeometryView& g) {
 /// The boxes of the overlay pass, in the depth order (report §3.3.1).
 void fill_boxes(RenderScene& s, const Bvh& bvh) {
     s.order = make_depth_order(bvh);
+    s.tree_height = s.order.height();
     s.boxes.resize(s.order.nodes.size());
     for (std::size_t k = 0; k < s.order.nodes.size(); ++k) {
         const BvhNode& n = bvh.nodes[s.order.nodes[k]];
@@ -97,6 +98,29 @@ RenderScene make_render_scene(const Bvh& bvh, const GeometryView& g, const Mater
     s.stack_entries = std::max(s.height(), 2u) - 1;
     s.walk_steps = 2ull * s.node_count + s.ref_count + 2;
     return s;
+}
+
+void set_overlay_boxes(RenderScene& scene, const float* lo, const float* hi, const std::uint8_t* depth,
+                       std::size_t count) {
+    for (std::size_t k = 1; k < count; ++k)
+        if (depth[k] < depth[k - 1])
+            throw std::invalid_argument("overlay boxes must be sorted by depth (box " + std::to_string(k) + ")");
+    BigVector<gpu::GpuBox> boxes(count);
+    std::vector<std::uint32_t> offset(count ? std::size_t(depth[count - 1]) + 2 : 1, 0);  // by depth, as DepthOrder
+    for (std::size_t k = 0; k < count; ++k) {
+        const float* a = lo + 3 * k;
+        const float* b = hi + 3 * k;
+        for (int c = 0; c < 3; ++c)
+            if (!std::isfinite(a[c]) || !std::isfinite(b[c]) || a[c] > b[c])
+                throw std::invalid_argument("overlay box " + std::to_string(k) +
+                                            " is not a box (a coordinate is not finite, or lo > hi)");
+        ++offset[std::size_t(depth[k]) + 1];
+        boxes[k] = {{a[0], a[1], a[2], float(depth[k])}, {b[0], b[1], b[2], 0}};
+    }
+    for (std::size_t d = 1; d < offset.size(); ++d) offset[d] += offset[d - 1];
+    scene.boxes = std::move(boxes);
+    scene.order.nodes.clear();  // not node indices: the boxes are given
+    scene.order.offset = std::move(offset);
 }
 
 void check_render_scene(const RenderScene& scene) {

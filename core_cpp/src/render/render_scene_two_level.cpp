@@ -129,8 +129,8 @@ RenderScene make_render_scene(const Tlas& tlas, const std::vector<RenderMesh>& m
         s.instances.push_back(gpu_instance(inst, places[inst.blas], blas, index));
         walk_steps += 2 + 2ull * blas.node_count() + blas.refs.size() + 2;  // enter, the BLAS's walk, return
     }
-    // The overlay pass of an instanced scene draws the TLAS's boxes only (its depths are TLAS depths);
-    // BLAS boxes moved into the world are later work.
+    // The overlay pass of an instanced scene draws the TLAS's boxes (its depths are TLAS depths);
+    // set_overlay_boxes gives it BLAS boxes moved into the world instead (the Python side makes them).
     fill_boxes(s, tlas.tree);
     s.bounds = node_box(tlas.tree.nodes[0]);
     s.node_count = tlas.tree.node_count();

@@ -28,7 +28,8 @@ SceneBuffers::SceneBuffers(const Device& device, CommandRunner& runner, const Re
     materials_ = upload_vector(device, runner, scene.materials, force_staging);
     boxes_ = upload_vector(device, runner, scene.boxes, force_staging);
     summary_.bounds = scene.bounds;
-    summary_.order.offset = scene.order.offset;  // depth ranges and the height; not the node list
+    summary_.order.offset = scene.order.offset;  // the overlay's depth ranges; not the node list
+    summary_.tree_height = scene.tree_height;
     summary_.node_count = scene.node_count;
     summary_.ref_count = scene.ref_count;
     summary_.stack_entries = scene.stack_entries;

@@ -70,3 +70,20 @@ def use_multilayer_exr(image_settings) -> None:
     if "media_type" in image_settings.bl_rna.properties:
         image_settings.media_type = "MULTI_LAYER_IMAGE"
     image_settings.file_format = "OPEN_EXR_MULTILAYER"
+
+
+def action_data_paths(action) -> set[str]:
+    """The data paths an Action's F-curves animate. 4.4 brought layered ("slotted") actions, whose
+    F-curves live in channel bags of layers' strips, and 5.0 removed `Action.fcurves` (the legacy
+    list 4.2 has); every slot's curves are taken (more, never fewer, than the object's own)."""
+    if action is None:
+        return set()
+    paths: set[str] = set()
+    for layer in getattr(action, "layers", ()):
+        for strip in layer.strips:
+            for bag in getattr(strip, "channelbags", ()):
+                paths.update(curve.data_path for curve in bag.fcurves)
+    legacy = getattr(action, "fcurves", None)
+    if legacy is not None:
+        paths.update(curve.data_path for curve in legacy)
+    return paths

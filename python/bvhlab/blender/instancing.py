@@ -11,6 +11,11 @@ world matrix); everything else (objects used once, spheres, instances whose matr
 inverted, such as a zero scale) is placed into the world in mesh 0 as before, which one identity
 instance places. Without any shared mesh the scene is the flat scene of before.
 
+Except movers: an item whose transform is animated (motion.py) or that was seen moving is a mesh
+and an instance of its own even when used once, so that moving it makes only a new TLAS (mesh 0,
+and its tree, stay as they are). Static objects used once stay merged in mesh 0: a static scene
+traces one tree as before.
+
 Mirroring instances keep their matrix: the tracers move a hit's normal back by the inverse
 transpose, so the outside stays out, as Blender shows it (`MeshData.world_triangles` reverses the
 winding of a mirrored object placed in mesh 0 to match)."""
@@ -41,7 +46,8 @@ class Item:
     bounds, the world matrix (4×4 float64), the address of its evaluated mesh data during this
     evaluation (None: a mesh of its own, as converted curves and text are), the material table
     index of each slot (None: no primitives), a name for messages, its world-space primitives once
-    placed (kept while neither mesh nor matrix changes), and whether only its matrix changed."""
+    placed (kept while neither mesh nor matrix changes), whether only its matrix changed, and the
+    original objects it comes from (whose animation makes it a mover)."""
 
     mesh: MeshData | None
     bounds: np.ndarray | None
@@ -51,6 +57,7 @@ class Item:
     name: str
     placed: np.ndarray | None = None
     moved: bool = False  # the same mesh as last sync, a different matrix
+    origin: tuple = ()  # (owner's name, owner, shown object's name, shown object): originals (motion.py)
 
     @property
     def shape(self) -> tuple:
@@ -69,17 +76,21 @@ class Layout:
         return other is not None and self.mesh_of == other.mesh_of
 
 
-def plan(items: dict, share: bool) -> Layout:
-    """The layout of `items` (key → Item, in walk order): which of them become instances."""
+def plan(items: dict, share: bool, is_mover=None) -> Layout:
+    """The layout of `items` (key → Item, in walk order): which of them become instances.
+    `is_mover(key)`: whether an item used once gets a mesh and an instance of its own anyway (it
+    moves); asked only of the items that would otherwise be placed in mesh 0."""
     layout = Layout(mesh_of=dict.fromkeys(items, 0))
+    if is_mover is None:
+        is_mover = _never
     candidates = [
         key
         for key, item in items.items()
         if share
         and item.mesh is not None
-        and item.data is not None
         and item.slot_table is not None
         and item.mesh.triangle_count > 0
+        and (item.data is not None or is_mover(key))
     ]
     if not candidates:
         return layout
@@ -89,13 +100,18 @@ def plan(items: dict, share: bool) -> Layout:
         if ok:
             item = items[key]
             assert item.slot_table is not None  # a candidate
-            members.setdefault((item.data, item.slot_table.tobytes()), []).append(key)
+            data = item.data if item.data is not None else ("item", key)  # a converted curve: its own
+            members.setdefault((data, item.slot_table.tobytes()), []).append(key)
     for group, keys in members.items():
-        if len(keys) >= MIN_INSTANCES:
+        if len(keys) >= MIN_INSTANCES or any(is_mover(key) for key in keys):
             layout.groups.append(group)
             for key in keys:
                 layout.mesh_of[key] = len(layout.groups)
     return layout
+
+
+def _never(key) -> bool:
+    return False
 
 
 def invertible(linear: np.ndarray) -> np.ndarray:

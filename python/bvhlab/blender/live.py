@@ -13,8 +13,10 @@ view_update and after `depsgraph.update()`):
 - camera, light and sky are gathered every sync (a few attribute reads).
 
 Instancing (collection instances, linked duplicates, instancing by vertices or faces, geometry-nodes
-instances) becomes meshes and instances of the Scene (`instancing.py`); objects used once stay in
-mesh 0, in world space, as before.
+instances) becomes meshes and instances of the Scene (`instancing.py`); static objects used once
+stay in mesh 0, in world space, as before. Movers (an animated transform, `motion.py`, or an item
+seen moving between two syncs, remembered by its key from then on) get a mesh and an instance of
+their own, so that moving them only changes a transform.
 
 Each sync returns a `SyncReport` saying what changed, so a caller can keep its tree (nothing moved),
 place its instances again (only instance transforms changed: a new TLAS), refit it (same
@@ -37,6 +39,7 @@ from .instancing import Item, Layout, SharedMesh, instance_transforms, plan, sha
 from .light import gather_light
 from .material_table import MaterialTable, map_slots
 from .mesh import CONVERTIBLE_TYPES, MeshData, read_mesh
+from .motion import AnimatedMemo
 from .scope import instances_in_scope
 from .sphere import is_analytic_sphere, place_sphere, sphere_bounds
 from .world import gather_sky
@@ -142,6 +145,7 @@ class LiveScene:
         self._layout: Layout | None = None
         self._shared: list[SharedMesh] = []
         self._materials: dict = {}  # material name → bvhlab.Material, as last read
+        self._seen_moving: set[tuple] = set()  # keys of the items seen moving (movers from then on)
 
     def sync(self, depsgraph, blender_scene=None, view_layer=None) -> SyncReport:
         """Bring `scene` up to date with the evaluated depsgraph. Raises ExportError (see
@@ -152,9 +156,10 @@ class LiveScene:
         dirty = _Dirty(everything=True) if full else _Dirty.from_updates(depsgraph)
         known = {k: v for k, v in self._materials.items() if k not in dirty.materials}
         table = MaterialTable(known)
-        items, by_data, report = self._walk(depsgraph, view_layer, dirty, table)
+        items, by_data, report, seen_moving = self._walk(depsgraph, view_layer, dirty, table)
         report.full = full
-        layout = plan(items, self.instancing)
+        animated = AnimatedMemo()
+        layout = plan(items, self.instancing, lambda key: key in seen_moving or animated(items[key].origin))
         shared = shared_meshes(items, layout, self._shared)
         arrays = self._arrays(items, layout, shared, table, report)
         report.materials_read = table.reads
@@ -171,20 +176,22 @@ class LiveScene:
         scene.light = light
         self.scene, self._materials = scene, table.known
         self._items, self._by_data, self._layout, self._shared = items, by_data, layout, shared
+        self._seen_moving = seen_moving
         self.totals.add(report)
         return report
 
-    def _walk(self, depsgraph, view_layer, dirty: _Dirty, table: MaterialTable) -> tuple[dict, dict, SyncReport]:
+    def _walk(self, depsgraph, view_layer, dirty: _Dirty, table: MaterialTable) -> tuple[dict, dict, SyncReport, set]:
         """Every object in scope, read again when dirty or new (a mesh shared by several items
         once), kept when not; in the depsgraph's order (the order export_scene has always used).
         Each item's material table index of each slot is read here: an instance's object is valid
         only while it is the depsgraph iterator's current item (geometry-nodes and nested
         collection instances crashed Blender when their slots were read after the loop had moved
-        on)."""
+        on). Also the keys of the items seen moving so far (movers: `instancing.plan`)."""
         items: dict[tuple, Item] = {}
         fresh: dict[int, MeshData] = {}  # meshes read in this sync, by data address
         by_data: dict[int, MeshData] = {}
         report = SyncReport()
+        seen_moving = set(self._seen_moving)
         for entry in instances_in_scope(depsgraph, view_layer, self.scope):
             obj = entry.obj
             if obj.type not in GEOMETRY_TYPES:  # cameras, lights, empties: no primitives
@@ -213,17 +220,22 @@ class LiveScene:
                     by_data[data] = mesh
                 slots = table.slot_indices(obj) if mesh.triangle_count else None
                 item = Item(mesh, None, entry.matrix, data, slots, entry.name)
+            same_matrix = old is None or np.array_equal(old.matrix, item.matrix)
+            if not same_matrix and self.instancing:
+                seen_moving.add(entry.key)
             if old is not None and old.mesh is item.mesh and old.bounds is item.bounds:
-                if np.array_equal(old.matrix, item.matrix):
+                if same_matrix:
                     item.placed = old.placed
                 else:
                     item.moved = True
                     report.objects_moved += 1
+            item.origin = (entry.key[0], entry.owner, entry.key[1], entry.source)
             items[entry.key] = item
+        seen_moving &= items.keys()
         for item in items.values():  # a clean item seen before a changed one of the same mesh
             if item.data is not None and item.data in fresh and item.mesh is not fresh[item.data]:
                 item.mesh, item.placed, item.moved = fresh[item.data], None, False
-        return items, by_data, report
+        return items, by_data, report, seen_moving
 
     def _known_mesh(self, old: Item | None, data: int | None, obj) -> MeshData | None:
         """The mesh read before for an item whose geometry did not change, or None to read it."""

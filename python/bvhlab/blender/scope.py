@@ -15,12 +15,16 @@ SCOPES = ("selected", "visible")
 
 class InScope(NamedTuple):
     """One object or instance an export covers. `key` names it across depsgraph evaluations:
-    (owner's name, object's name, persistent id of the instance or ())."""
+    (owner's name, object's name, persistent id of the instance or ()). `owner`: the original
+    object itself, or the original object that instances it; `source`: the original object shown
+    (the owner itself for an object). Originals stay valid after the iterator moves on."""
 
     obj: Any  # a bpy.types.Object (bpy has no type stubs)
     matrix: np.ndarray
     name: str
     key: tuple
+    owner: Any = None
+    source: Any = None
 
 
 def objects_in_scope(depsgraph, view_layer, scope: str) -> Iterator[tuple[object, np.ndarray, str]]:
@@ -45,13 +49,14 @@ def instances_in_scope(depsgraph, view_layer, scope: str) -> Iterator[InScope]:
         if decided[owner_name]:
             obj = instance.object
             if instance.is_instance:
+                source = obj.original
                 name, key = (
                     f"{obj.name} (instanced by {owner.name})",
-                    (owner_name, obj.original.name_full, tuple(instance.persistent_id)),
+                    (owner_name, source.name_full, tuple(instance.persistent_id)),
                 )
             else:
-                name, key = obj.name, (owner_name, owner_name, ())
-            yield InScope(obj, _matrix(instance.matrix_world), name, key)
+                source, name, key = owner, obj.name, (owner_name, owner_name, ())
+            yield InScope(obj, _matrix(instance.matrix_world), name, key, owner, source)
 
 
 def _matrix(m) -> np.ndarray:

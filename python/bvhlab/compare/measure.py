@@ -12,6 +12,7 @@ from ..instanced import InstancedBvh
 from ..render import Renderer
 from ..render_options import DEFAULT_HEIGHT, DEFAULT_WIDTH, RenderOptions
 from ..scene import Scene
+from ..two_level_stats import two_level_sah_cost_per_depth
 from .protocol import DEFAULT_BUILDS, DEFAULT_FRAMES, median_interval, rounds, sample_count
 from .report import TWO_LEVEL_COLUMNS
 from .tree_stats import sah_cost_per_depth
@@ -179,7 +180,9 @@ def _row(label, settings, bvh, timings) -> dict:
         row.update({name: stats[name] for name in TWO_LEVEL_COLUMNS})
         row["nodes_per_depth"] = _summed([m.stats["nodes_per_depth"] for m in bvh.meshes])
         row["leaf_size_histogram"] = _summed([m.stats["leaf_size_histogram"] for m in bvh.meshes])
-        row["sah_cost_per_depth"] = []  # per depth of one tree: a two-level tree has two kinds of depth
+        row["sah_cost_per_depth"] = two_level_sah_cost_per_depth(
+            bvh.tlas, bvh.instances[0], [sah_cost_per_depth(m) for m in bvh.meshes], stats["mesh_sah_cost"]
+        )  # by depth in the tree TLAS and BLASes make together (two_level_stats.py)
     else:
         row["nodes_per_depth"] = stats["nodes_per_depth"]
         row["leaf_size_histogram"] = stats["leaf_size_histogram"]
