@@ -218,7 +218,7 @@ class LiveScene:
                             fresh[data] = mesh
                 if data is not None:
                     by_data[data] = mesh
-                slots = table.slot_indices(obj) if mesh.triangle_count else None
+                slots = table.slot_indices(obj, data) if mesh.triangle_count else None
                 item = Item(mesh, None, entry.matrix, data, slots, entry.name)
             same_matrix = old is None or np.array_equal(old.matrix, item.matrix)
             if not same_matrix and self.instancing:

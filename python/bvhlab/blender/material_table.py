@@ -18,6 +18,7 @@ class MaterialTable:
         self.known = {} if known is None else known
         self.reads = 0
         self._index: dict[str, int] = {}  # original material's full name ('' for an empty slot)
+        self._slots: dict[tuple, np.ndarray] = {}  # (original object, mesh data) → slot_indices
 
     def index_of(self, material) -> int:
         """Table index of a Blender material (evaluated or original; None = empty slot)."""
@@ -30,10 +31,20 @@ class MaterialTable:
             self.materials.append(self.known[key])
         return self._index[key]
 
-    def slot_indices(self, obj) -> np.ndarray:
-        """int32 table index of each material slot of an evaluated object (one entry if it has none)."""
-        slots = [slot.material for slot in obj.material_slots] or [None]
-        return np.array([self.index_of(m) for m in slots], np.int32)
+    def slot_indices(self, obj, data: int | None = None) -> np.ndarray:
+        """int32 table index of each material slot of an evaluated object (one entry if it has none).
+        `data`, the address of its evaluated mesh data (live._data_of), lets the many instances of
+        one object showing one mesh read the slots once: an object's slots are its original's
+        (object-linked materials) and its data's, so (original, data) decides them; reading 10,000
+        instances' slots took about 0.1 s of a 10,000-instance export."""
+        key = None if data is None else (obj.original.as_pointer(), data)
+        known = self._slots.get(key) if key is not None else None
+        if known is None:
+            slots = [slot.material for slot in obj.material_slots] or [None]
+            known = np.array([self.index_of(m) for m in slots], np.int32)
+            if key is not None:
+                self._slots[key] = known
+        return known
 
 
 def map_slots(slot_table: np.ndarray, slots: np.ndarray) -> np.ndarray:

@@ -61,7 +61,10 @@ def instances_in_scope(depsgraph, view_layer, scope: str) -> Iterator[InScope]:
 
 def _matrix(m) -> np.ndarray:
     """A mathutils 4×4 Matrix as float64 (4,4), rows unpacked (several times faster than np.array(m),
-    which goes through the sequence protocol element by element: it counts for 10,000 instances)."""
+    which goes through the sequence protocol element by element: it counts for 10,000 instances).
+    A copy first: the depsgraph's matrix wraps Blender's memory and reads it again for every row
+    and element asked (a third faster for 10,000 instances)."""
+    m = m.copy()
     return np.array([*m[0], *m[1], *m[2], *m[3]], np.float64).reshape(4, 4)
 
 
