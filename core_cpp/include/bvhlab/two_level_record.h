@@ -21,7 +21,7 @@ struct TwoLevelRecord {
     /// Per instance entered (as tlas.prim_slots), its BLAS walk: the object-space ray's steps,
     /// with nodes and slots of the instance's mesh tree; hit t in the world ray's units
     std::vector<TraversalRecord> blas;
-    InstanceHit hit;                   ///< as intersect_two_level returns it
+    InstanceHit hit;                       ///< as intersect_two_level returns it
     std::uint32_t hit_leaf = kNoHit;       ///< the leaf of the hit instance's BLAS holding the hit
     std::uint32_t hit_tlas_leaf = kNoHit;  ///< the TLAS leaf of the hit instance
     std::uint32_t nodes_visited = 0;
@@ -38,13 +38,14 @@ class TwoLevelRecorder {
 public:
     /// A TLAS box test.
     virtual void box(std::uint32_t node, bool entered) = 0;
-    /// Instance `index` of TLAS leaf `leaf` is entered with the object-space ray `ray` (scaled,
-    /// `t_scale` its t to the world ray's): walks and records its BLAS as the query's walk would,
-    /// returning the hit and, in `visited`, the walk's nodes_visited.
-    virtual Hit instance(std::uint32_t leaf, std::uint32_t index, const BlasView& blas, const Ray& ray, float t_scale,
-                         Traversal mode, std::uint32_t* visited) = 0;
-    /// The instance just entered held a hit nearer than the closest so far (or not).
-    virtual void instance_done(bool closer) = 0;
+    /// Instance `index` of TLAS leaf `leaf` is entered with the object-space ray `ray` (scaled):
+    /// walks and records its BLAS as the query's walk would, returning the hit (t in the object
+    /// ray's units) and, in `visited`, the walk's nodes_visited.
+    virtual Hit instance(std::uint32_t leaf, std::uint32_t index, const BlasView& blas, const Ray& ray, Traversal mode,
+                         std::uint32_t* visited) = 0;
+    /// The instance just entered held a hit nearer than the closest so far (or not); `t_scale`
+    /// takes its object ray's t to the world ray's.
+    virtual void instance_done(bool closer, float t_scale) = 0;
 
 protected:
     ~TwoLevelRecorder() = default;

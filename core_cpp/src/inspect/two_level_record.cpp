@@ -20,8 +20,8 @@ public:
         r_.tlas.box_nodes.push_back(node), r_.tlas.box_hit.push_back(entered);
     }
 
-    Hit instance(std::uint32_t leaf, std::uint32_t index, const BlasView& blas, const Ray& ray, float t_scale,
-                 Traversal mode, std::uint32_t* visited) override {
+    Hit instance(std::uint32_t leaf, std::uint32_t index, const BlasView& blas, const Ray& ray, Traversal mode,
+                 std::uint32_t* visited) override {
         TraversalRecord& t = r_.tlas;
         t.prim_slots.push_back(index), t.prim_leaf.push_back(leaf), t.prim_closer.push_back(0);
         t.prim_box_test.push_back(std::uint32_t(t.box_nodes.size()));
@@ -35,13 +35,13 @@ public:
         }
         *visited = b.nodes_visited;
         b.hit = h;
-        b.hit.t = h.t * t_scale;  // the world ray's units (inf stays inf)
         if (h.ref == kNoHit) b.hit_leaf = kNoHit;
         r_.blas.push_back(std::move(b));
         return h;
     }
 
-    void instance_done(bool closer) override {
+    void instance_done(bool closer, float t_scale) override {
+        r_.blas.back().hit.t *= t_scale;  // the world ray's units (inf stays inf)
         r_.tlas.prim_closer.back() = closer;
         if (closer) r_.hit_tlas_leaf = r_.tlas.prim_leaf.back(), r_.hit_leaf = r_.blas.back().hit_leaf;
     }

@@ -44,20 +44,20 @@ bool object_ray(const Instance& inst, const Ray& world, float tmax, Ray& ray, fl
 /// code they were), or each step to the inspector's recorder (two_level_record.h).
 struct NoSteps {
     void box(std::uint32_t, bool) {}
-    Hit enter(std::uint32_t, std::uint32_t, const BlasView& blas, const Ray& ray, float, Traversal mode,
+    Hit enter(std::uint32_t, std::uint32_t, const BlasView& blas, const Ray& ray, Traversal mode,
               std::uint32_t* visited) {
         return intersect_blas(blas, ray, mode, visited);
     }
-    void entered(bool) {}
+    void entered(bool, float) {}
 };
 struct RecordedSteps {
     TwoLevelRecorder& r;
     void box(std::uint32_t node, bool hit) { r.box(node, hit); }
-    Hit enter(std::uint32_t leaf, std::uint32_t index, const BlasView& blas, const Ray& ray, float t_scale,
-              Traversal mode, std::uint32_t* visited) {
-        return r.instance(leaf, index, blas, ray, t_scale, mode, visited);
+    Hit enter(std::uint32_t leaf, std::uint32_t index, const BlasView& blas, const Ray& ray, Traversal mode,
+              std::uint32_t* visited) {
+        return r.instance(leaf, index, blas, ray, mode, visited);
     }
-    void entered(bool closer) { r.instance_done(closer); }
+    void entered(bool closer, float t_scale) { r.instance_done(closer, t_scale); }
 };
 
 /// Tests instance `index` (of TLAS leaf `leaf`) with a world ray whose closest hit so far is `best`.
@@ -69,13 +69,13 @@ void test_instance(const TwoLevel& scene, std::uint32_t leaf, std::uint32_t inde
     float t_scale;
     if (!object_ray(inst, world, best.hit.t, ray, t_scale)) return;
     std::uint32_t count = 0;
-    Hit h = steps.enter(leaf, index, scene.blases[inst.blas], ray, t_scale, mode, &count);
+    Hit h = steps.enter(leaf, index, scene.blases[inst.blas], ray, mode, &count);
     visited += count;
-    const bool closer = h.ref != kNoHit && h.t * t_scale < best.hit.t;
-    steps.entered(closer);
-    if (h.ref == kNoHit) return;
+    if (h.ref == kNoHit) return steps.entered(false, t_scale);
     h.t *= t_scale;
-    if (h.t < best.hit.t) best.hit = h, best.instance = index;
+    const bool closer = h.t < best.hit.t;
+    steps.entered(closer, t_scale);
+    if (closer) best.hit = h, best.instance = index;
 }
 
 /// Whether instance `index` holds a hit of the world ray before its tmax.
@@ -106,8 +106,8 @@ InstanceHit intersect_two_level_with(const TwoLevel& scene, const Ray& ray, Trav
     std::uint32_t visited = 0;
     if (tlas.instances.size() == 1 && tlas.instances[0].identity) {
         // One mesh where it was modelled: the flat query, no TLAS box in the way.
-        best.hit = steps.enter(kNoHit, 0, scene.blases[tlas.instances[0].blas], ray, 1.0f, mode, &visited);
-        steps.entered(best.hit.ref != kNoHit);
+        best.hit = steps.enter(kNoHit, 0, scene.blases[tlas.instances[0].blas], ray, mode, &visited);
+        steps.entered(best.hit.ref != kNoHit, 1.0f);
         if (best.hit.ref != kNoHit) best.instance = 0;
     } else if (!tlas.tree.empty()) {
         const RayQuery q(ray);
