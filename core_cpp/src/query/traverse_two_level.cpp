@@ -97,6 +97,23 @@ std::uint32_t walk_tlas(const Tlas& tlas, const RayQuery& q, const float& hit_t,
                : walk::stack(tlas.tree.nodes.data(), q, hit_t, leaf, on_box);
 }
 
+}  // namespace
+
+void check_two_level(const TwoLevel& scene, Traversal mode) {
+    if (!scene.tlas) throw std::invalid_argument("a two-level query needs a TLAS");
+    for (const BlasView& b : scene.blases) {
+        if (!b.bvh) throw std::invalid_argument("a mesh of the two-level query has no tree");
+        if (mode == Traversal::Wide && !b.wide)
+            throw std::invalid_argument("Traversal::Wide needs every mesh's wide tree");
+    }
+    for (const Instance& inst : scene.tlas->instances)
+        if (inst.blas >= scene.blases.size())
+            throw std::invalid_argument("the TLAS refers to mesh " + std::to_string(inst.blas) +
+                                        ", but the query has " + std::to_string(scene.blases.size()));
+}
+
+namespace {
+
 template <class Steps>
 InstanceHit intersect_two_level_with(const TwoLevel& scene, const Ray& ray, Traversal mode,
                                      std::uint32_t* nodes_visited, Steps& steps) {
@@ -125,19 +142,6 @@ InstanceHit intersect_two_level_with(const TwoLevel& scene, const Ray& ray, Trav
 }
 
 }  // namespace
-
-void check_two_level(const TwoLevel& scene, Traversal mode) {
-    if (!scene.tlas) throw std::invalid_argument("a two-level query needs a TLAS");
-    for (const BlasView& b : scene.blases) {
-        if (!b.bvh) throw std::invalid_argument("a mesh of the two-level query has no tree");
-        if (mode == Traversal::Wide && !b.wide)
-            throw std::invalid_argument("Traversal::Wide needs every mesh's wide tree");
-    }
-    for (const Instance& inst : scene.tlas->instances)
-        if (inst.blas >= scene.blases.size())
-            throw std::invalid_argument("the TLAS refers to mesh " + std::to_string(inst.blas) +
-                                        ", but the query has " + std::to_string(scene.blases.size()));
-}
 
 InstanceHit intersect_two_level(const TwoLevel& scene, const Ray& ray, Traversal mode, std::uint32_t* nodes_visited) {
     NoSteps none;
