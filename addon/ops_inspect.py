@@ -17,7 +17,7 @@ from .operator_support import run_reported
 #: What a tree-less inspect operator says.
 NO_TREE = "Build a tree first (BVH ▸ Build)"
 #: What the cost breakdown and Pick Node say of a two-level tree (an instanced scene, issue 34).
-TWO_LEVEL = "The cost breakdown is of flat trees; pick a box to see a two-level tree's figures"
+TWO_LEVEL = "Cost breakdown: flat trees only"
 
 
 def inspected_tree(scene):
@@ -61,9 +61,10 @@ def node_view(built, picked):
 
 def _report_pick(operator, built, picked) -> None:
     data, n, _, _, name = node_view(built, picked)
+    under = "instances" if getattr(picked, "level", None) == "tlas" else "primitives"
     operator.report(
         {"INFO"},
-        f"Picked {name} (depth {int(data.depth[n])}, {int(data.prim_count[n])} primitives, "
+        f"Picked {name} (depth {int(data.depth[n])}, {int(data.prim_count[n])} {under}, "
         f"{100 * data.sah_share[n]:.2f}% of the SAH cost)",
     )
 
@@ -353,12 +354,17 @@ def draw_inspect_panel(layout, scene) -> None:
     if built is None or node is None:
         layout.label(text="Pick Box, then click a box", icon="INFO")
         return
-    data, node_name, lo, hi, name = node_view(built, node)
-    node = node_name
+    picked = node
+    data, node, lo, hi, name = node_view(built, picked)
     leaf = data.left[node] < 0
     col = layout.column(align=True)
-    col.label(text=f"{name} · depth {int(data.depth[node])}")
-    col.label(text=f"Primitives under it: {int(data.prim_count[node])}")
+    if overlay.is_two_level(built):  # two short lines: the sidebar is narrow
+        col.label(text=name)
+        col.label(text=f"Depth {int(data.depth[node])} in {'the TLAS' if picked.level == 'tlas' else 'its mesh tree'}")
+    else:
+        col.label(text=f"{name} · depth {int(data.depth[node])}")
+    under = "Instances" if overlay.is_two_level(built) and picked.level == "tlas" else "Primitives"
+    col.label(text=f"{under} under it: {int(data.prim_count[node])}")
     share = f"{100 * data.sah_share[node]:.2f}% of {data.sah_cost:.4g}"
     col.label(text=f"Subtree SAH: {data.subtree_sah[node]:.4g} ({share})")
     col.label(text=f"Own SAH term: {data.sah_term[node]:.4g}")
