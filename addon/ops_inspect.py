@@ -1,7 +1,10 @@
 """Inspecting the tree in the viewport (issue 35): click to pick the box under the cursor (the rule
 of bvhlab.inspect.pick: the deepest shown box the mouse ray enters first, or the leaf it hits),
 step to its parent, children or sibling, and frame it. The sidebar's Inspect panel shows the
-picked node's figures (Bvh.node_data)."""
+picked node's figures (Bvh.node_data). A two-level tree (an instanced scene) is picked among the
+boxes the overlay shows of it (TLAS, BLAS moved into the world, or both: Viewport Boxes ▸ Level);
+a pick is then a bvhlab.inspect.levels.TreeNode, and the steps cross between the levels (a BLAS
+root's parent is its instance's TLAS leaf, a TLAS leaf's children its instances' BLAS roots)."""
 
 from __future__ import annotations
 
@@ -13,17 +16,19 @@ from .operator_support import run_reported
 
 #: What a tree-less inspect operator says.
 NO_TREE = "Build a tree first (BVH ▸ Build)"
-#: What it says of a two-level tree (an instanced scene, issue 34).
-TWO_LEVEL = "Inspect walks a flat tree's nodes; this scene's tree is two-level (instances): see its boxes"
+#: What the cost breakdown and Pick Node say of a two-level tree (an instanced scene, issue 34).
+TWO_LEVEL = "Cost breakdown: flat trees only"
 
 
 def inspected_tree(scene):
-    """The scene's tree as Inspect sees it (state.BuiltTree), or None: no tree, or a two-level one
-    (an instanced scene; Viewport Boxes draws its TLAS and BLAS boxes)."""
-    import bvhlab
+    """The scene's tree as Inspect sees it (state.BuiltTree, flat or two-level), or None."""
+    return state.tree_for(scene)
 
+
+def flat_tree(scene):
+    """The scene's tree if it is flat (a bvhlab.Bvh), else None."""
     built = state.tree_for(scene)
-    return built if built is not None and isinstance(built.bvh, bvhlab.Bvh) else None
+    return built if built is not None and not overlay.is_two_level(built) else None
 
 
 def no_tree_message(scene) -> str:
@@ -35,28 +40,60 @@ def _shown_range(scene, built) -> tuple[int, int]:
     return settings.overlay_depth_min, min(settings.overlay_depth_max, built.height - 1)
 
 
+def node_view(built, picked):
+    """What the panel, the steps and the highlight need of a picked node: (NodeData of its tree,
+    its index there, world lo, world hi, its name in words)."""
+    if not overlay.is_two_level(built):
+        data = built.bvh.node_data()
+        return data, picked, data.lo[picked], data.hi[picked], f"{'Leaf' if data.left[picked] < 0 else 'Node'} {picked}"
+    from bvhlab.inspect.pick import node_world_box
+
+    bvh = built.bvh
+    lo, hi = node_world_box(bvh, picked)
+    if picked.level == "tlas":
+        data = bvh.tlas_node_data()
+        what = "leaf" if data.left[picked.node] < 0 else "node"
+        return data, picked.node, lo, hi, f"TLAS {what} {picked.node}"
+    data = bvh.meshes[int(bvh.instances[0][picked.instance])].node_data()
+    what = "leaf" if data.left[picked.node] < 0 else "node"
+    return data, picked.node, lo, hi, f"Instance {picked.instance} · BLAS {what} {picked.node}"
+
+
+def _report_pick(operator, built, picked) -> None:
+    data, n, _, _, name = node_view(built, picked)
+    under = "instances" if getattr(picked, "level", None) == "tlas" else "primitives"
+    operator.report(
+        {"INFO"},
+        f"Picked {name} (depth {int(data.depth[n])}, {int(data.prim_count[n])} {under}, "
+        f"{100 * data.sah_share[n]:.2f}% of the SAH cost)",
+    )
+
+
 def pick_ray(operator, context, origin, direction) -> set[str]:
     """Pick with one ray (world space) on the scene's tree and remember it for the panel."""
-    from bvhlab.inspect.pick import pick
+    from bvhlab.inspect.pick import pick, pick_two_level
 
     scene = context.scene
     built = inspected_tree(scene)
     if built is None:
         operator.report({"WARNING"}, no_tree_message(scene))
         return {"CANCELLED"}
-    got = pick(built.bvh, origin, direction, _shown_range(scene, built), leaves_only=scene.bvhlab.overlay_leaves_only)
-    if got.node is None:
+    settings = scene.bvhlab
+    shown = _shown_range(scene, built)
+    if overlay.is_two_level(built):
+        got = pick_two_level(
+            built.bvh, origin, direction, settings.overlay_level, shown, leaves_only=settings.overlay_leaves_only
+        )
+        picked, how = got.box, got.how
+    else:
+        got = pick(built.bvh, origin, direction, shown, leaves_only=settings.overlay_leaves_only)
+        picked, how = got.node, got.how
+    if picked is None:
         state.picked.pop(state.key(scene), None)
         operator.report({"INFO"}, "No box under the cursor")
     else:
-        state.remember_pick(scene, built, got.node, got.how)
-        data = built.bvh.node_data()
-        n, what = got.node, "leaf" if data.left[got.node] < 0 else "node"
-        operator.report(
-            {"INFO"},
-            f"Picked {what} {n} (depth {int(data.depth[n])}, {int(data.prim_count[n])} primitives, "
-            f"{100 * data.sah_share[n]:.2f}% of the SAH cost)",
-        )
+        state.remember_pick(scene, built, picked, how)
+        _report_pick(operator, built, picked)
     overlay.tag_redraw()
     return {"FINISHED"}
 
@@ -131,21 +168,46 @@ class BVHLAB_OT_pick_step(bpy.types.Operator):
         if built is None or node is None:
             self.report({"WARNING"}, "Pick a box first")
             return {"CANCELLED"}
-        data = built.bvh.node_data()
-        parent = int(data.parent[node])
-        sibling = -1 if parent < 0 else int(data.right[parent] if data.left[parent] == node else data.left[parent])
-        target = {
-            "PARENT": parent,
-            "LEFT": int(data.left[node]),
-            "RIGHT": int(data.right[node]),
-            "SIBLING": sibling,
-        }[self.step]
-        if target < 0:
-            self.report({"WARNING"}, f"Node {node} has no {self.step.lower()}")
+        if overlay.is_two_level(built):
+            target = two_level_step(built.bvh, node, self.step)
+        else:
+            target = flat_step(built.bvh.node_data(), node, self.step)
+        if target is None:
+            self.report({"WARNING"}, f"{node_view(built, node)[4]} has no {self.step.lower()}")
             return {"CANCELLED"}
         state.remember_pick(scene, built, target, "step")
         overlay.tag_redraw()
         return {"FINISHED"}
+
+
+def flat_step(data, node: int, step: str) -> int | None:
+    """The node a step leads to in one tree (bvhlab.inspect.NodeData), or None."""
+    parent = int(data.parent[node])
+    sibling = -1 if parent < 0 else int(data.right[parent] if data.left[parent] == node else data.left[parent])
+    target = {"PARENT": parent, "LEFT": int(data.left[node]), "RIGHT": int(data.right[node]), "SIBLING": sibling}[step]
+    return None if target < 0 else target
+
+
+def two_level_step(bvh, picked, step: str):
+    """The TreeNode a step leads to in a two-level tree, or None: within a level as flat_step;
+    from a BLAS root up to the TLAS leaf holding its instance, and from a TLAS leaf down to its
+    instances' BLAS roots (Child 1: its first instance's, Child 2: its second's)."""
+    from bvhlab.inspect.levels import TreeNode
+
+    if picked.level == "tlas":
+        data = bvh.tlas_node_data()
+        if data.left[picked.node] < 0 and step in ("LEFT", "RIGHT"):
+            instances = bvh.tlas_leaf_instances(picked.node)
+            k = 0 if step == "LEFT" else 1
+            return TreeNode("blas", 0, int(instances[k])) if k < len(instances) else None
+        target = flat_step(data, picked.node, step)
+        return None if target is None else TreeNode("tlas", target)
+    mesh = bvh.meshes[int(bvh.instances[0][picked.instance])]
+    if picked.node == 0 and step == "PARENT":
+        leaf = bvh.tlas_leaf_of(picked.instance)
+        return TreeNode("tlas", leaf) if leaf >= 0 else None
+    target = flat_step(mesh.node_data(), picked.node, step)
+    return None if target is None else TreeNode("blas", target, picked.instance)
 
 
 class BVHLAB_OT_frame_picked(bpy.types.Operator):
@@ -162,8 +224,8 @@ class BVHLAB_OT_frame_picked(bpy.types.Operator):
         if built is None or node is None:
             self.report({"WARNING"}, "Pick a box first")
             return {"CANCELLED"}
-        data = built.bvh.node_data()
-        lo, hi = Vector(data.lo[node].tolist()), Vector(data.hi[node].tolist())
+        _, _, lo, hi, _ = node_view(built, node)
+        lo, hi = Vector(lo.tolist()), Vector(hi.tolist())
         framed = 0
         screen = context.window.screen if context.window else None
         for area in screen.areas if screen else ():
@@ -189,7 +251,7 @@ class BVHLAB_OT_pick_node(bpy.types.Operator):
     node: IntProperty(name="Node", min=0)  # type: ignore[valid-type]
 
     def execute(self, context):
-        built = inspected_tree(context.scene)
+        built = flat_tree(context.scene)
         if built is None:
             self.report({"WARNING"}, no_tree_message(context.scene))
             return {"CANCELLED"}
@@ -217,6 +279,17 @@ class BVHLAB_OT_analyse_tree(bpy.types.Operator):
             self.report({"WARNING"}, no_tree_message(context.scene))
             return {"CANCELLED"}
         start = time.perf_counter()
+        if overlay.is_two_level(built):  # the TLAS and each mesh's tree
+            tlas = built.bvh.tlas_node_data()
+            meshes = [m.node_data() for m in built.bvh.meshes]
+            ms = (time.perf_counter() - start) * 1e3
+            nodes = len(tlas) + sum(len(d) for d in meshes)
+            self.report(
+                {"INFO"},
+                f"Analysed {nodes} nodes (TLAS and {len(meshes)} mesh trees) in {ms:.0f} ms: "
+                f"TLAS SAH {tlas.sah_cost:.4g}",
+            )
+            return {"FINISHED"}
         data = built.bvh.node_data()
         ms = (time.perf_counter() - start) * 1e3
         self.report(
@@ -243,8 +316,8 @@ def sah_per_depth(built) -> list[float]:
 
 def draw_cost_panel(layout, scene) -> None:
     """The cost breakdown per depth (a bar per depth, its share of the SAH cost) and the costliest
-    subtrees at the top depth of the shown range, each a button that picks it."""
-    built = inspected_tree(scene)
+    subtrees at the top depth of the shown range, each a button that picks it (flat trees)."""
+    built = flat_tree(scene)
     if built is None:
         layout.label(text=no_tree_message(scene), icon="INFO")
         return
@@ -271,8 +344,7 @@ def picked_box(scene):
     built, node = inspected_tree(scene), state.picked_node(scene)
     if built is None or node is None:
         return None
-    data = built.bvh.node_data()
-    return data.lo[node], data.hi[node]
+    return node_view(built, node)[2:4]
 
 
 def draw_inspect_panel(layout, scene) -> None:
@@ -282,18 +354,24 @@ def draw_inspect_panel(layout, scene) -> None:
     if built is None or node is None:
         layout.label(text="Pick Box, then click a box", icon="INFO")
         return
-    data = built.bvh.node_data()
+    picked = node
+    data, node, lo, hi, name = node_view(built, picked)
     leaf = data.left[node] < 0
     col = layout.column(align=True)
-    col.label(text=f"{'Leaf' if leaf else 'Node'} {node} · depth {int(data.depth[node])}")
-    col.label(text=f"Primitives under it: {int(data.prim_count[node])}")
+    if overlay.is_two_level(built):  # two short lines: the sidebar is narrow
+        col.label(text=name)
+        col.label(text=f"Depth {int(data.depth[node])} in {'the TLAS' if picked.level == 'tlas' else 'its mesh tree'}")
+    else:
+        col.label(text=f"{name} · depth {int(data.depth[node])}")
+    under = "Instances" if overlay.is_two_level(built) and picked.level == "tlas" else "Primitives"
+    col.label(text=f"{under} under it: {int(data.prim_count[node])}")
     share = f"{100 * data.sah_share[node]:.2f}% of {data.sah_cost:.4g}"
     col.label(text=f"Subtree SAH: {data.subtree_sah[node]:.4g} ({share})")
     col.label(text=f"Own SAH term: {data.sah_term[node]:.4g}")
     if not leaf:
         col.label(text=f"Child overlap: {data.child_overlap[node]:.3f}")
     col.label(text=f"EPO term: {data.epo[node]:.4g} (tree {data.epo_cost:.4g})")
-    size = data.hi[node] - data.lo[node]
+    size = hi - lo  # in the world (a BLAS box moved by its instance)
     col.label(text="Size: " + " × ".join(f"{v:.3g}" for v in size))
     row = layout.row(align=True)
     for step, label, _ in STEPS:

@@ -20,6 +20,7 @@
 #include "bvhlab/render_settings.h"
 #include "bvhlab/restore.h"
 #include "py_bvh.h"
+#include "py_record.h"
 #include "py_render_scene.h"
 
 namespace nb = nanobind;
@@ -29,15 +30,6 @@ using namespace bvhlab::python;
 
 namespace {
 
-/// A numpy array that owns `v` (moved, not copied), shaped (len) or (len / width, width).
-template <class T>
-nb::ndarray<nb::numpy, T> owned_array(std::vector<T>&& v, std::size_t width = 0) {
-    auto* held = new std::vector<T>(std::move(v));
-    nb::capsule owner(held, [](void* p) noexcept { delete static_cast<std::vector<T>*>(p); });
-    if (width == 0) return nb::ndarray<nb::numpy, T>(held->data(), {held->size()}, owner);
-    return nb::ndarray<nb::numpy, T>(held->data(), {held->size() / width, width}, owner);
-}
-
 nb::dict py_node_data(const PyBvh& self, unsigned threads) {
     TreePtr tree = self.current();
     NodeData d;
@@ -45,29 +37,12 @@ nb::dict py_node_data(const PyBvh& self, unsigned threads) {
         nb::gil_scoped_release release;
         d = compute_node_data(tree->bvh, threads);
     }
-    nb::dict out;
-    out["lo"] = owned_array(std::move(d.lo), 3), out["hi"] = owned_array(std::move(d.hi), 3);
-    out["depth"] = owned_array(std::move(d.depth)), out["parent"] = owned_array(std::move(d.parent));
-    out["left"] = owned_array(std::move(d.left)), out["right"] = owned_array(std::move(d.right));
-    out["prim_count"] = owned_array(std::move(d.prim_count)), out["area"] = owned_array(std::move(d.area));
-    out["sah_term"] = owned_array(std::move(d.sah_term)), out["subtree_sah"] = owned_array(std::move(d.subtree_sah));
-    out["sah_share"] = owned_array(std::move(d.sah_share));
-    out["child_overlap"] = owned_array(std::move(d.child_overlap)), out["epo"] = owned_array(std::move(d.epo));
-    out["sah_cost"] = d.sah_cost, out["epo_cost"] = d.epo_cost, out["revision"] = tree->revision;
+    nb::dict out = node_data_dict(std::move(d));
+    out["revision"] = tree->revision;
     return out;
 }
 
 using Point = std::array<float, 3>;
-
-/// A missed hit's fields as Bvh.intersect writes them (prim -1, kind 0).
-void put_hit(nb::dict& out, const TraversalRecord& r) {
-    const bool miss = r.hit.ref == kNoHit;
-    out["t"] = r.hit.t, out["u"] = r.hit.u, out["v"] = r.hit.v;
-    out["prim"] = miss ? -1 : std::int32_t(r.hit.ref & gpu::REF_INDEX_MASK);
-    out["kind"] = miss ? 0 : ((r.hit.ref & gpu::REF_SPHERE_BIT) ? 1 : 0);
-    out["hit_slot"] = miss ? -1 : std::int64_t(r.hit.slot);
-    out["hit_leaf"] = miss ? -1 : std::int64_t(r.hit_leaf);
-}
 
 nb::dict py_trace_ray(const PyBvh& self, Point origin, Point direction, float tmin, float tmax,
                       const std::string& traversal) {
@@ -77,17 +52,10 @@ nb::dict py_trace_ray(const PyBvh& self, Point origin, Point direction, float tm
     TraversalRecord r;
     {
         nb::gil_scoped_release release;
-        r = record_traversal(tree->bvh, ray, mode);
+        r = mode == Traversal::Wide ? record_wide_traversal(tree->bvh, tree->wide(), tree->wide_names(), ray)
+                                    : record_traversal(tree->bvh, ray, mode);
     }
-    std::vector<std::uint32_t> refs(r.prim_slots.size());
-    for (std::size_t j = 0; j < refs.size(); ++j) refs[j] = tree->bvh.refs[r.prim_slots[j]];
-    nb::dict out;
-    put_hit(out, r);
-    out["box_nodes"] = owned_array(std::move(r.box_nodes)), out["box_hit"] = owned_array(std::move(r.box_hit));
-    out["prim_slots"] = owned_array(std::move(r.prim_slots)), out["prim_refs"] = owned_array(std::move(refs));
-    out["prim_leaf"] = owned_array(std::move(r.prim_leaf));
-    out["prim_box_test"] = owned_array(std::move(r.prim_box_test));
-    out["prim_closer"] = owned_array(std::move(r.prim_closer));
+    nb::dict out = record_dict(std::move(r), tree->bvh.refs.data());
     out["revision"] = tree->revision;
     return out;
 }

@@ -20,6 +20,7 @@
 
 #include "bvhlab/bvh.h"
 #include "bvhlab/depth_order.h"
+#include "bvhlab/ray_record.h"
 #include "bvhlab/update.h"
 #include "bvhlab/wide_bvh.h"
 
@@ -66,8 +67,15 @@ public:
         return *wide_;
     }
 
+    /// The binary node each line of the wide tree stands for (ray_record.h), for wide records.
+    const WideNames& wide_names() const {
+        std::call_once(names_once_, [this] { names_.emplace(name_wide_nodes(bvh, wide())); });
+        return *names_;
+    }
+
 private:
-    mutable std::once_flag order_once_, wide_once_, built_once_;
+    mutable std::once_flag order_once_, wide_once_, built_once_, names_once_;
+    mutable std::optional<WideNames> names_;
     mutable CostsPtr built_;
     mutable std::optional<DepthOrder> order_;
     mutable std::optional<WideBvh> wide_;

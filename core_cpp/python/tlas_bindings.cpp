@@ -1,23 +1,28 @@
 // tlas_bindings.cpp — two-level trees in Python (tlas.h): `_core.TwoLevel`, a TLAS over instances
 // of meshes whose trees are `_core.Bvh`s. It keeps the version of each mesh's tree it was built
 // over (py_bvh.h), so a refit of a mesh after the TLAS was built changes neither.
+#include <array>
 #include <memory>
 #include <vector>
 
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
+#include <nanobind/stl/array.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/vector.h>
 
 #include "bvhlab/cancel.h"
 #include "bvhlab/depth_order.h"
+#include "bvhlab/node_data.h"
 #include "bvhlab/render_settings.h"
 #include "bvhlab/stats.h"
 #include "bvhlab/tlas.h"
+#include "bvhlab/two_level_record.h"
 #include "bvhlab/wide_bvh.h"
 #include "py_boxes.h"
 #include "py_bvh.h"
 #include "py_cancel.h"
+#include "py_record.h"
 #include "py_occluded.h"
 #include "py_two_level.h"
 
@@ -87,6 +92,53 @@ void py_occluded(const PyTwoLevel& self, const Vectors& origins, const Vectors& 
     });
 }
 
+using Point = std::array<float, 3>;
+
+/// One ray's two-level walk (two_level_record.h) as a dict: "tlas" (its record, whose primitives
+/// are the instances entered), "blas" (a record per instance entered), the hit and its instance.
+nb::dict py_trace_ray(const PyTwoLevel& self, Point origin, Point direction, float tmin, float tmax,
+                      const std::string& traversal) {
+    const Traversal mode = parse_traversal(traversal);
+    Ray ray{{origin[0], origin[1], origin[2]}, {direction[0], direction[1], direction[2]}, tmin, tmax};
+    TwoLevelRecord r;
+    {
+        nb::gil_scoped_release release;
+        std::vector<const WideNames*> names;
+        if (mode == Traversal::Wide)
+            for (const TreePtr& m : self.meshes()) names.push_back(&m->wide_names());
+        r = record_two_level(self.view(mode), ray, mode, names);
+    }
+    nb::dict out;
+    const bool miss = r.hit.hit.ref == kNoHit;
+    out["instance"] = miss ? -1 : std::int64_t(r.hit.instance);
+    out["hit_tlas_leaf"] = miss || r.hit_tlas_leaf == kNoHit ? -1 : std::int64_t(r.hit_tlas_leaf);
+    out["nodes_visited"] = r.nodes_visited;
+    nb::list blas;
+    for (std::size_t j = 0; j < r.blas.size(); ++j) {
+        const std::uint32_t instance = r.tlas.prim_slots[j];
+        const Bvh& mesh = self.meshes()[self.tlas().instances[instance].blas]->bvh;
+        blas.append(record_dict(std::move(r.blas[j]), mesh.refs.data()));
+    }
+    out["blas"] = blas;
+    out["tlas"] = record_dict(std::move(r.tlas), nullptr);
+    return out;
+}
+
+/// The TLAS's node data (node_data.h; EPO 0: it holds instances, not geometry) as Bvh.node_data's
+/// dict, with `leaf_first` (per node: a leaf's first slot in `refs`, else -1) and `refs` (the
+/// instances in leaf order).
+nb::dict py_tlas_node_data(const PyTwoLevel& self) {
+    const Bvh& tree = self.tlas().tree;
+    NodeData d = compute_node_data(tree, 1);
+    nb::dict out = node_data_dict(std::move(d));
+    std::vector<std::int32_t> leaf_first(tree.node_count(), -1);
+    for (std::uint32_t i = 0; i < tree.node_count(); ++i)
+        if (is_leaf(tree.nodes[i])) leaf_first[i] = std::int32_t(tree.nodes[i].index);
+    out["leaf_first"] = owned_array(std::move(leaf_first));
+    out["refs"] = owned_array(std::vector<std::uint32_t>(tree.refs.begin(), tree.refs.end()));
+    return out;
+}
+
 nb::dict tlas_stats(const PyTwoLevel& self) {
     const Tlas& tlas = self.tlas();
     const BvhStats s = compute_stats(tlas.tree);
@@ -137,6 +189,9 @@ void bind_tlas(nb::module_& m) {
         .def("intersect", &py_intersect, "origins"_a.noconvert(), "directions"_a.noconvert(), "tmin"_a, "tmax"_a,
              "traversal"_a, "threads"_a, "t"_a.noconvert(), "prim"_a.noconvert(), "kind"_a.noconvert(),
              "u"_a.noconvert(), "v"_a.noconvert(), "visited"_a.noconvert(), "instance"_a.noconvert())
+        .def("tlas_node_data", &py_tlas_node_data, "The TLAS's node data as a dict (Bvh.node_data's, EPO 0).")
+        .def("trace_ray", &py_trace_ray, "origin"_a, "direction"_a, "tmin"_a, "tmax"_a, "traversal"_a,
+             "One ray's walk through both levels, recorded by the walk itself (two_level_record.h), as a dict.")
         .def("occluded", &py_occluded, "origins"_a.noconvert(), "directions"_a.noconvert(), "tmin"_a, "tmax"_a,
              "tmax_of"_a.noconvert().none(), "traversal"_a, "threads"_a, "out"_a.noconvert());
     m.def("build_two_level", &build_two_level, "meshes"_a, "mesh_of"_a.noconvert(), "transforms"_a.noconvert(),

@@ -322,9 +322,9 @@ class Bvh:
     def trace_ray(self, origin, direction, *, tmin: float = 0.0, tmax: float = np.inf, traversal: str = "stack"):
         """What `intersect` does for one ray, step by step (bvhlab.inspect.ray_record.RayRecord):
         the boxes it tested in order and whether each was hit, the primitives it tested, and the
-        leaf and primitive of the closest hit. Recorded by the same traversal code ("stack" or
-        "stackless"; the wide tree has no binary nodes to name), so its box tests are the
-        nodes_visited `intersect` reports for the ray."""
+        leaf and primitive of the closest hit. Recorded by the same traversal code ("stack",
+        "stackless" or "wide", whose wide nodes and leaves are named by the binary nodes they
+        stand for), so its `nodes_visited` is what `intersect` reports for the ray."""
         from .inspect.ray_record import record
 
         return record(self._core, origin, direction, tmin, tmax, traversal)

@@ -10,6 +10,7 @@ import numpy as np
 
 from . import _checks, _core
 from .bvh import BuildConfig, Bvh, run_occluded_query, run_ray_query
+from .inspect.node_data import NodeData
 from .two_level_stats import instanced_stats
 from .update import UpdateStats
 
@@ -29,6 +30,7 @@ class InstancedBvh:
         self._placed = (mesh_of, transforms)
         self._stats: tuple | None = None  # (what they were made of, stats)
         self._tlas: tuple | None = None  # (the core TLAS, it as a Bvh)
+        self._tlas_data: tuple | None = None  # (the TLAS it was made of, NodeData, leaf_first, refs)
 
     def __repr__(self) -> str:
         s = self.stats
@@ -69,6 +71,33 @@ class InstancedBvh:
         depth_min = _checks.integer("depth_min", depth_min, 0, 255)
         depth_max = 255 if depth_max is None else _checks.integer("depth_max", depth_max, 0, 255)
         return self._core.tlas_boxes(depth_min, depth_max, bool(leaves_only))
+
+    def tlas_node_data(self) -> NodeData:
+        """The TLAS's node data (`Bvh.node_data`'s figures over its nodes, whose primitives are
+        instances; EPO 0: it holds no geometry), made once per TLAS."""
+        return self._tlas()[1]
+
+    def tlas_leaf_instances(self, node: int) -> np.ndarray:
+        """The instances TLAS leaf `node` holds (none for an inner node)."""
+        _, data, leaf_first, refs = self._tlas()
+        first = int(leaf_first[node])
+        return refs[first : first + int(data.prim_count[node])] if first >= 0 else refs[:0]
+
+    def tlas_leaf_of(self, instance: int) -> int:
+        """The TLAS leaf holding `instance` (-1 for an instance of an empty mesh, which no leaf holds)."""
+        _, data, leaf_first, refs = self._tlas()
+        slot = np.flatnonzero(refs == instance)
+        if not len(slot):
+            return -1
+        leaves = np.flatnonzero((leaf_first >= 0) & (leaf_first <= slot[0]))
+        ends = leaf_first[leaves] + data.prim_count[leaves].astype(np.int64)
+        return int(leaves[np.flatnonzero(slot[0] < ends)[0]])
+
+    def _tlas(self) -> tuple:
+        if self._tlas_data is None or self._tlas_data[0] is not self._core:
+            d = self._core.tlas_node_data()
+            self._tlas_data = (self._core, NodeData.from_core(d), d["leaf_first"], d["refs"])
+        return self._tlas_data
 
     def place(self, mesh_of: np.ndarray, transforms: np.ndarray) -> None:
         """Move the instances (or change them): a new TLAS over the same meshes' trees."""
@@ -115,6 +144,16 @@ class InstancedBvh:
         """As `Bvh.intersect`, through both levels; the dict also holds `instance` (int32, -1 on a
         miss), and `prim` indexes the triangles (or spheres) of that instance's mesh."""
         return run_ray_query(self._core, origins, directions, tmin, tmax, traversal, threads, {"instance": np.int32})
+
+    def trace_ray(self, origin, direction, *, tmin: float = 0.0, tmax: float = np.inf, traversal: str = "stack"):
+        """What `intersect` does for one ray through both levels, step by step
+        (bvhlab.inspect.ray_record.InstancedRayRecord): the TLAS's box tests, and for each instance
+        entered its walk through its mesh's tree (as `Bvh.trace_ray` records it), the closest hit
+        with its instance. Recorded by the query's own walk ("stack", "stackless" or "wide" for
+        the meshes' trees), so its `nodes_visited` is what `intersect` reports for the ray."""
+        from .inspect.ray_record import record_instanced
+
+        return record_instanced(self._core, origin, direction, tmin, tmax, traversal)
 
     def occluded(
         self,

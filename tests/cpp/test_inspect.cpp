@@ -6,6 +6,7 @@
 #include <random>
 #include <stdexcept>
 
+#include "bvhlab/coordinate_range.h"
 #include "bvhlab/node_data.h"
 #include "bvhlab/ray_record.h"
 #include "bvhlab/restore.h"
@@ -72,6 +73,85 @@ TEST(RayRecord, CountsEqualIntersect) {
         }
     }
     EXPECT_THROW(record_traversal(bvh, Ray{{0, 0, 0}, {1, 0, 0}}, Traversal::Wide), std::invalid_argument);
+}
+
+/// Each node's subtree as a range of leaf-order slots: [first, first + count).
+struct SlotRanges {
+    std::vector<std::uint32_t> first, count;
+    explicit SlotRanges(const Bvh& bvh) : first(bvh.nodes.size()), count(bvh.nodes.size()) {
+        for (std::size_t i = bvh.nodes.size(); i-- > 0;) {
+            const BvhNode& n = bvh.nodes[i];
+            if (is_leaf(n)) first[i] = n.index, count[i] = leaf_count(n);
+            else first[i] = first[i + 1], count[i] = count[i + 1] + count[n.index];
+        }
+    }
+    bool holds(std::uint32_t node, std::uint32_t slot) const {
+        return first[node] <= slot && slot < first[node] + count[node];
+    }
+};
+
+/// The closest hit over every primitive (no tree), t in the ray's own units.
+Hit brute_force(const Bvh& bvh, Ray ray) {
+    const float t_scale = scale_ray(ray);
+    const RayQuery q(ray);
+    Hit hit;
+    hit.t = ray.tmax;
+    for (std::uint32_t k = 0; k < bvh.prims.size(); ++k)
+        if (hit_prim(bvh.prims[k], q, hit)) hit.slot = k;
+    hit.t = hit.ref == kNoHit ? kInfinity : hit.t * t_scale;
+    return hit;
+}
+
+TEST(RayRecord, WideWalkEqualsIntersectWide) {
+    test::Scene scene = test::random_scene(900, 40, 12);
+    Bvh bvh = build_bvh(scene.view());
+    const WideBvh wide = make_wide(bvh);
+    const WideNames names = name_wide_nodes(bvh, wide);
+    const SlotRanges ranges(bvh);
+    EXPECT_EQ(names.at(0), 0u);
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    int hits = 0;
+    for (int i = 0; i < 500; ++i) {
+        Ray ray{{5 + 8 * u(rng), 5 + 8 * u(rng), 5 + 8 * u(rng)}, {u(rng), u(rng), u(rng) + 0.01f}};
+        if (i % 2) {  // half of them at a primitive's first vertex or centre
+            const PackedPrim& p = bvh.prims[rng() % bvh.prims.size()];
+            const Vec3 at{p.v0.x, p.v0.y, p.v0.z};
+            ray.dir = at - ray.origin;
+        }
+        std::uint32_t visited = 0;
+        const Hit hit = intersect_wide(wide, bvh, ray, &visited);
+        const TraversalRecord r = record_wide_traversal(bvh, wide, names, ray);
+        ASSERT_EQ(r.nodes_visited, visited);
+        ASSERT_EQ(r.wide_nodes.size(), visited);
+        ASSERT_EQ(r.box_wide_step.size(), r.box_nodes.size());
+        ASSERT_EQ(r.hit.ref, hit.ref);
+        ASSERT_EQ(r.hit.t, hit.t);
+        const Hit brute = brute_force(bvh, ray);
+        ASSERT_EQ(r.hit.ref, brute.ref);
+        ASSERT_EQ(r.hit.t, brute.t);
+        // every wide node after the root was entered as a child box of a node visited before it
+        for (std::size_t w = 1; w < r.wide_nodes.size(); ++w) {
+            bool entered_before = false;
+            for (std::size_t b = 0; b < r.box_nodes.size() && r.box_wide_step[b] < w; ++b)
+                entered_before |= r.box_nodes[b] == r.wide_nodes[w] && r.box_hit[b];
+            ASSERT_TRUE(entered_before) << "wide node " << w;
+        }
+        if (hit.ref == kNoHit) {
+            ASSERT_EQ(r.hit_leaf, kNoHit);
+            continue;
+        }
+        ++hits;
+        ASSERT_TRUE(ranges.holds(r.hit_leaf, r.hit.slot));
+        ASSERT_LE(ranges.count[r.hit_leaf], 4u);  // a wide leaf: a subtree of at most four
+        // the last test that came closer is the hit, in the hit's leaf
+        std::size_t last = r.prim_closer.size();
+        while (last-- > 0 && !r.prim_closer[last]) {}
+        ASSERT_LT(last, r.prim_closer.size());
+        ASSERT_EQ(r.prim_slots[last], r.hit.slot);
+        ASSERT_EQ(r.prim_leaf[last], r.hit_leaf);
+    }
+    EXPECT_GT(hits, 100);
 }
 
 TEST(Restore, RoundTrip) {

@@ -11,6 +11,7 @@
 #include "bvhlab/coordinate_range.h"
 #include "bvhlab/render_settings.h"
 #include "bvhlab/tlas.h"
+#include "bvhlab/two_level_record.h"
 #include "bvhlab/wide_bvh.h"
 #include "test_scenes.h"
 #include "transforms.h"
@@ -135,6 +136,54 @@ std::vector<Ray> scattered_rays(std::uint32_t n, std::uint32_t seed) {
 TEST(Tlas, HitsEqualOneFlatTreeOverTheMovedTriangles) {
     const Instanced s = mixed_instances();
     for (Traversal mode : {Traversal::Stack, Traversal::Stackless, Traversal::Wide}) expect_same_as_flat(s, mode, 11);
+}
+
+/// The recorded two-level walk is the query's: the same hit and nodes_visited, made of the TLAS's
+/// box tests and the BLAS walks of the instances entered; the hit lies in the recorded leaves.
+TEST(Tlas, RecordedWalkIsTheQuerysWalk) {
+    const Instanced s = mixed_instances();
+    std::vector<WideNames> names;
+    for (std::size_t b = 0; b < s.trees.size(); ++b) names.push_back(name_wide_nodes(s.trees[b], s.wides[b]));
+    std::vector<const WideNames*> name_ptrs;
+    for (const WideNames& n : names) name_ptrs.push_back(&n);
+    for (Traversal mode : {Traversal::Stack, Traversal::Stackless, Traversal::Wide}) {
+        int hits = 0;
+        for (const Ray& ray : rays_at(s, 400, 21)) {
+            std::uint32_t visited = 0;
+            const InstanceHit h = intersect_two_level(s.two_level, ray, mode, &visited);
+            const TwoLevelRecord r = record_two_level(s.two_level, ray, mode, name_ptrs);
+            ASSERT_EQ(r.nodes_visited, visited);
+            std::uint32_t sum = std::uint32_t(r.tlas.box_nodes.size());
+            for (const TraversalRecord& b : r.blas) sum += b.nodes_visited;
+            ASSERT_EQ(sum, visited);
+            ASSERT_EQ(r.blas.size(), r.tlas.prim_slots.size());
+            ASSERT_EQ(r.hit.instance, h.instance);
+            ASSERT_EQ(r.hit.hit.ref, h.hit.ref);
+            ASSERT_EQ(r.hit.hit.t, h.hit.t);
+            if (h.hit.ref == kNoHit) continue;
+            ++hits;
+            // the last instance that came closer is the hit's, in the TLAS leaf that holds it
+            std::size_t last = r.tlas.prim_closer.size();
+            while (last-- > 0 && !r.tlas.prim_closer[last]) {}
+            ASSERT_LT(last, r.blas.size());
+            ASSERT_EQ(r.tlas.prim_slots[last], h.instance);
+            ASSERT_EQ(r.hit_tlas_leaf, r.tlas.prim_leaf[last]);
+            const BvhNode& tlas_leaf = s.tlas.tree.nodes[r.hit_tlas_leaf];
+            bool holds = false;
+            for (std::uint32_t k = tlas_leaf.index; k < tlas_leaf.index + leaf_count(tlas_leaf); ++k)
+                holds |= s.tlas.tree.refs[k] == h.instance;
+            ASSERT_TRUE(holds);
+            ASSERT_EQ(r.blas[last].hit.slot, h.hit.slot);
+            ASSERT_EQ(r.blas[last].hit_leaf, r.hit_leaf);
+            const Bvh& mesh = s.trees[s.tlas.instances[h.instance].blas];
+            const BvhNode& leaf = mesh.nodes[r.hit_leaf];
+            if (mode != Traversal::Wide) {
+                ASSERT_TRUE(is_leaf(leaf));
+                ASSERT_TRUE(leaf.index <= h.hit.slot && h.hit.slot < leaf.index + leaf_count(leaf));
+            }
+        }
+        EXPECT_GT(hits, 200);
+    }
 }
 
 TEST(Tlas, BatchReportsInstanceAndPrimitive) {

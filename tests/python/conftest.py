@@ -38,6 +38,7 @@ VULKAN_MODULES = {
 BPY_MODULES = {
     "test_addon", "test_addon_install", "test_addon_writes", "test_blender_checks", "test_blender_errors",
     "test_docs_pictures", "test_addon_pick", "test_export_instances", "test_animate_blend", "test_addon_counters",
+    "test_addon_pick_two_level",
 }  # fmt: skip
 #: test_blender_checks.py's tests (tests/blender/registry.py) of these groups use a Vulkan device.
 VULKAN_GROUPS = {"addon", "engine", "cameras", "no_vulkan", "gpu"}

@@ -74,8 +74,8 @@ def pick_by_brute_force(data, o, d, t_hit, depths, leaves_only):
         if not depths[0] <= data.depth[n] <= depths[1] or (leaves_only and data.left[n] >= 0):
             continue
         t = box_entry(data.lo[n].astype(float), data.hi[n].astype(float), o, d)
-        if t > t_hit * (1 + 1e-4):  # the box around the hit triangle is entered at t_hit, give or take rounding
-            continue
+        if math.isinf(t) or t > t_hit * (1 + 1e-4):  # not entered, or after the hit: the box around the
+            continue  # hit triangle is entered at t_hit, give or take rounding
         key = (-int(data.depth[n]), t, n)
         if best is None or key < best:
             best = key

@@ -18,7 +18,7 @@ def _leaf_of_slot(bvh, slot):
 
 
 def _check_record(bvh, rec, hit, visited):
-    assert rec.box_tests == visited
+    assert rec.box_tests == visited == rec.nodes_visited
     assert (rec.prim, rec.kind) == (hit["prim"], hit["kind"])
     assert rec.t == pytest.approx(hit["t"], rel=0) or (np.isinf(rec.t) and np.isinf(hit["t"]))
     entered = set(rec.box_nodes[rec.box_hit.astype(bool)].tolist())
@@ -45,6 +45,65 @@ def test_records_match_intersect(traversal, small_scene, knot_mesh):
         for i in range(len(origins)):
             rec = bvh.trace_ray(origins[i], dirs[i], traversal=traversal)
             _check_record(bvh, rec, {k: v[i] for k, v in hits.items()}, hits["nodes_visited"][i])
+
+
+def _subtree_slots(bvh):
+    """(first, count) of each node's subtree in leaf order, from the nodes alone."""
+    nodes, leaf = bvh.nodes, bvh.is_leaf
+    first = np.where(leaf, nodes["index"], 0).astype(np.int64)
+    count = np.where(leaf, nodes["info"], 0).astype(np.int64)
+    for i in range(len(nodes) - 1, -1, -1):
+        if not leaf[i]:
+            first[i], count[i] = first[i + 1], count[i + 1] + count[nodes["index"][i]]
+    return first, count
+
+
+def _brute_force(bvh, tris, spheres, origin, direction):
+    """The closest hit over every primitive, each alone in a tree of its own (no shared tree)."""
+    best = (np.inf, -1, 0)
+    for kind, prims in ((0, tris), (1, spheres)):
+        for p in range(0 if prims is None else len(prims)):
+            one = (
+                bvhlab.build(prims[p : p + 1])
+                if kind == 0
+                else bvhlab.build(np.zeros((0, 3, 3), np.float32), prims[p : p + 1])
+            )
+            t = one.intersect(np.float32([origin]), np.float32([direction]))["t"][0]
+            if t < best[0]:
+                best = (t, p, kind)
+    return best
+
+
+def test_wide_records_match_intersect_and_brute_force(small_scene, knot_mesh):
+    """The wide walk's record: nodes_visited is intersect's (wide nodes visited), every wide node
+    after the root was entered as a child box of one visited before it, the hit is intersect's
+    and the brute force's, and it ends in the wide leaf (a subtree of at most four) holding it."""
+    for tris, spheres in (small_scene, (knot_mesh, None)):
+        bvh = bvhlab.build(tris, spheres)
+        first, count = _subtree_slots(bvh)
+        origins, dirs = procedural.random_rays(tris, 300, seed=7)
+        hits = bvh.intersect(origins, dirs, traversal="wide")
+        for i in range(len(origins)):
+            rec = bvh.trace_ray(origins[i], dirs[i], traversal="wide")
+            assert rec.nodes_visited == len(rec.wide_nodes) == hits["nodes_visited"][i]
+            assert (rec.prim, rec.kind, rec.t) == (hits["prim"][i], hits["kind"][i], hits["t"][i])
+            assert rec.wide_nodes[0] == 0 and len(rec.box_wide_step) == rec.box_tests
+            for w in range(1, len(rec.wide_nodes)):
+                before = rec.box_wide_step < w
+                assert rec.wide_nodes[w] in set(rec.box_nodes[before & rec.box_hit.astype(bool)].tolist())
+            if rec.prim < 0:
+                assert rec.hit_leaf == -1 and not rec.prim_closer.any()
+                continue
+            leaf = rec.hit_leaf
+            assert first[leaf] <= rec.hit_slot < first[leaf] + count[leaf] and count[leaf] <= 4
+            last = np.nonzero(rec.prim_closer)[0][-1]
+            assert (rec.prim_slots[last], rec.prim_leaf[last]) == (rec.hit_slot, leaf)
+            steps = rec.steps()
+            assert sum(s["step"] == "wide node" for s in steps) == rec.nodes_visited
+        if spheres is not None:  # brute force on a few rays (a tree per primitive is slow)
+            for i in range(0, 300, 30):
+                t, p, kind = _brute_force(bvh, tris, spheres, origins[i], dirs[i])
+                assert (hits["t"][i], hits["prim"][i]) == (t, p) and (p < 0 or hits["kind"][i] == kind)
 
 
 def test_stack_order_follows_the_tree(knot_mesh):
@@ -100,7 +159,7 @@ def test_bad_requests_are_refused():
     scene = showcase.five_spheres()
     bvh = bvhlab.build(scene)
     with pytest.raises(ValueError, match="traversal"):
-        bvh.trace_ray((0, 0, 0), (1, 0, 0), traversal="wide")
+        bvh.trace_ray((0, 0, 0), (1, 0, 0), traversal="bvh2")
     with pytest.raises(ValueError, match="origin"):
         bvh.trace_ray((0, 0), (1, 0, 0))
     with pytest.raises(ValueError):

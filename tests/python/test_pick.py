@@ -65,3 +65,14 @@ def test_entry_distances_equal_the_slab_test_of_each_box(tree):
 def test_bad_rays_are_refused(tree, o, d):
     with pytest.raises(ValueError, match="pick ray"):
         pick(tree, o, d)
+
+
+def test_a_ray_that_misses_everything_picks_nothing(tree):
+    """A ray past the whole tree hits nothing and enters no box: nothing is picked (a miss's
+    infinite hit distance is no licence to pick boxes the ray never enters)."""
+    lo, hi = tree.node_data().lo[0], tree.node_data().hi[0]
+    origin = hi + 5.0
+    for direction in ((1.0, 0.0, 0.0), (0.3, 1.0, 0.2), (1.0, 1.0, 1.0)):
+        got = pick(tree, origin, direction)
+        assert (got.node, got.how) == (None, "nothing") and np.isinf(got.t_hit)
+    assert np.all(lo < origin)

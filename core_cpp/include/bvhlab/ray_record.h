@@ -2,11 +2,13 @@
 // order and whether each was hit, the primitives it tested, and where its closest hit lies.
 #pragma once
 #include <cstdint>
+#include <unordered_map>
 #include <vector>
 
 #include "bvhlab/bvh.h"
 #include "bvhlab/ray.h"
 #include "bvhlab/traverse.h"
+#include "bvhlab/wide_bvh.h"
 
 namespace bvhlab {
 
@@ -21,15 +23,46 @@ struct TraversalRecord {
     std::vector<std::uint8_t> prim_closer;     ///< 1 where it became the closest hit so far
     Hit hit;                                   ///< as intersect() returns it (t in the ray's own units)
     std::uint32_t hit_leaf = kNoHit;           ///< the leaf holding the closest hit; kNoHit on a miss
+    /// What intersect() reports as nodes_visited: the box tests (Stack, Stackless), or the wide
+    /// nodes visited (Wide: each tests its up to eight children's boxes at once)
+    std::uint32_t nodes_visited = 0;
+    /// Wide only: the binary node each visited wide node stands for (the top of the binary nodes
+    /// collapsed into it), in the order visited; nodes_visited is its size
+    std::vector<std::uint32_t> wide_nodes;
+    /// Wide only: for each box test (a child slot of a visited wide node), that node's position in
+    /// wide_nodes
+    std::vector<std::uint32_t> box_wide_step;
 };
 
-/// Records the traversal of `ray` (Stack or Stackless: the wide tree has no binary nodes to name).
+/// Records the traversal of `ray` (Stack or Stackless; the wide walk is record_wide_traversal).
 /// The ray is checked and scaled as intersect_batch does (std::invalid_argument for a ray it refuses).
 TraversalRecord record_traversal(const Bvh& bvh, Ray ray, Traversal mode);
+
+/// Which binary node each node and leaf of a wide tree (wide_bvh.h) stands for, by line: a wide
+/// node's line, or a leaf's first packet's. A wide node stands for the binary node it was made
+/// from, a leaf for the binary subtree it holds (at most four primitives), each found by its
+/// primitives' range in leaf order, which no two binary nodes share (make_wide's layout is not
+/// assumed).
+struct WideNames {
+    std::unordered_map<std::uint32_t, std::uint32_t> binary_of_line;
+    std::uint32_t at(std::uint32_t line) const { return binary_of_line.at(line); }
+};
+WideNames name_wide_nodes(const Bvh& bvh, const WideBvh& wide);
+
+/// Records the walk of the wide tree that intersect_wide runs (the same kernel of the same
+/// instruction set path, in its recorded instantiation, wide_traverse.inl), its steps named by
+/// binary nodes (`names`, of this wide tree): each wide node visited (wide_nodes), each child box
+/// it tested (box_nodes, box_hit, box_wide_step), each primitive of each leaf entered. The ray is
+/// checked and scaled as record_traversal's.
+TraversalRecord record_wide_traversal(const Bvh& bvh, const WideBvh& wide, const WideNames& names, Ray ray);
 
 namespace detail {
 /// intersect() with every box and primitive test reported to `record` (traverse.cpp).
 Hit intersect_recorded(const Bvh& bvh, const Ray& ray, Traversal mode, TraversalRecord& record);
+/// intersect_wide() recorded into `record` (wide_record.cpp); the ray already scaled, t as the walk
+/// returns it.
+Hit intersect_wide_recorded(const Bvh& bvh, const WideBvh& wide, const WideNames& names, const Ray& ray,
+                            TraversalRecord& record);
 }  // namespace detail
 
 }  // namespace bvhlab

@@ -60,7 +60,8 @@ NodeData compute_node_data(const Bvh& bvh, unsigned threads) {
         }
     }
     for (std::uint32_t i = 0; i < n; ++i) d.sah_share[i] = d.sah_cost > 0 ? d.subtree_sah[i] / d.sah_cost : 0.0;
-    d.epo = epo_terms(bvh, threads);
+    // A TLAS (tlas.h) packs no geometry: its boxes hold instances, whose EPO it cannot clip.
+    d.epo = bvh.prims.empty() ? std::vector<double>(n, 0.0) : epo_terms(bvh, threads);
     for (double e : d.epo) d.epo_cost += e;
     return d;
 }

@@ -8,6 +8,7 @@
 
 #include "bvhlab/coordinate_range.h"
 #include "bvhlab/tlas.h"
+#include "bvhlab/two_level_record.h"
 #include "bvhlab/wide_bvh.h"
 #include "ray_batch.h"
 #include "walk.h"
@@ -39,19 +40,42 @@ bool object_ray(const Instance& inst, const Ray& world, float tmax, Ray& ray, fl
     return true;
 }
 
-/// Tests instance `index` with a world ray whose closest hit so far is `best`.
-void test_instance(const TwoLevel& scene, std::uint32_t index, const Ray& world, Traversal mode, InstanceHit& best,
-                   std::uint32_t& visited) {
+/// What the closest-hit walk reports of its steps: nothing (every query; the calls compile to the
+/// code they were), or each step to the inspector's recorder (two_level_record.h).
+struct NoSteps {
+    void box(std::uint32_t, bool) {}
+    Hit enter(std::uint32_t, std::uint32_t, const BlasView& blas, const Ray& ray, Traversal mode,
+              std::uint32_t* visited) {
+        return intersect_blas(blas, ray, mode, visited);
+    }
+    void entered(bool, float) {}
+};
+struct RecordedSteps {
+    TwoLevelRecorder& r;
+    void box(std::uint32_t node, bool hit) { r.box(node, hit); }
+    Hit enter(std::uint32_t leaf, std::uint32_t index, const BlasView& blas, const Ray& ray, Traversal mode,
+              std::uint32_t* visited) {
+        return r.instance(leaf, index, blas, ray, mode, visited);
+    }
+    void entered(bool closer, float t_scale) { r.instance_done(closer, t_scale); }
+};
+
+/// Tests instance `index` (of TLAS leaf `leaf`) with a world ray whose closest hit so far is `best`.
+template <class Steps>
+void test_instance(const TwoLevel& scene, std::uint32_t leaf, std::uint32_t index, const Ray& world, Traversal mode,
+                   InstanceHit& best, std::uint32_t& visited, Steps& steps) {
     const Instance& inst = scene.tlas->instances[index];
     Ray ray;
     float t_scale;
     if (!object_ray(inst, world, best.hit.t, ray, t_scale)) return;
     std::uint32_t count = 0;
-    Hit h = intersect_blas(scene.blases[inst.blas], ray, mode, &count);
+    Hit h = steps.enter(leaf, index, scene.blases[inst.blas], ray, mode, &count);
     visited += count;
-    if (h.ref == kNoHit) return;
+    if (h.ref == kNoHit) return steps.entered(false, t_scale);
     h.t *= t_scale;
-    if (h.t < best.hit.t) best.hit = h, best.instance = index;
+    const bool closer = h.t < best.hit.t;
+    steps.entered(closer, t_scale);
+    if (closer) best.hit = h, best.instance = index;
 }
 
 /// Whether instance `index` holds a hit of the world ray before its tmax.
@@ -63,12 +87,14 @@ bool instance_occludes(const TwoLevel& scene, std::uint32_t index, const Ray& wo
 }
 
 /// The TLAS walk of `mode` (stackless for Traversal::Stackless, else with a stack) up to `hit_t`,
-/// `leaf` testing a leaf's instances (walk.h: returning true ends the walk).
-template <class Leaf>
-std::uint32_t walk_tlas(const Tlas& tlas, const RayQuery& q, const float& hit_t, Traversal mode, Leaf&& leaf) {
+/// `leaf` testing a leaf's instances (walk.h: returning true ends the walk), `on_box` told of each
+/// box test (walk.h).
+template <class Leaf, class OnBox = walk::NoBoxes>
+std::uint32_t walk_tlas(const Tlas& tlas, const RayQuery& q, const float& hit_t, Traversal mode, Leaf&& leaf,
+                        OnBox&& on_box = OnBox{}) {
     return mode == Traversal::Stackless
-               ? walk::stackless(tlas.tree.nodes.data(), tlas.tree.node_count(), q, hit_t, leaf)
-               : walk::stack(tlas.tree.nodes.data(), q, hit_t, leaf);
+               ? walk::stackless(tlas.tree.nodes.data(), tlas.tree.node_count(), q, hit_t, leaf, on_box)
+               : walk::stack(tlas.tree.nodes.data(), q, hit_t, leaf, on_box);
 }
 
 }  // namespace
@@ -86,26 +112,46 @@ void check_two_level(const TwoLevel& scene, Traversal mode) {
                                         ", but the query has " + std::to_string(scene.blases.size()));
 }
 
-InstanceHit intersect_two_level(const TwoLevel& scene, const Ray& ray, Traversal mode, std::uint32_t* nodes_visited) {
+namespace {
+
+template <class Steps>
+InstanceHit intersect_two_level_with(const TwoLevel& scene, const Ray& ray, Traversal mode,
+                                     std::uint32_t* nodes_visited, Steps& steps) {
     const Tlas& tlas = *scene.tlas;
     InstanceHit best;
     best.hit.t = ray.tmax;
     std::uint32_t visited = 0;
     if (tlas.instances.size() == 1 && tlas.instances[0].identity) {
         // One mesh where it was modelled: the flat query, no TLAS box in the way.
-        best.hit = intersect_blas(scene.blases[tlas.instances[0].blas], ray, mode, &visited);
+        best.hit = steps.enter(kNoHit, 0, scene.blases[tlas.instances[0].blas], ray, mode, &visited);
+        steps.entered(best.hit.ref != kNoHit, 1.0f);
         if (best.hit.ref != kNoHit) best.instance = 0;
     } else if (!tlas.tree.empty()) {
         const RayQuery q(ray);
         auto leaf = [&](const BvhNode& n) {
+            const auto node = std::uint32_t(&n - tlas.tree.nodes.data());
             for (std::uint32_t k = n.index, end = n.index + leaf_count(n); k < end; ++k)
-                test_instance(scene, tlas.tree.refs[k], ray, mode, best, visited);
+                test_instance(scene, node, tlas.tree.refs[k], ray, mode, best, visited, steps);
         };
-        visited += walk_tlas(tlas, q, best.hit.t, mode, leaf);
+        visited += walk_tlas(tlas, q, best.hit.t, mode, leaf,
+                             [&](std::uint32_t node, bool entered) { steps.box(node, entered); });
     }
     if (best.hit.ref == kNoHit) best.hit.t = kInfinity;
     if (nodes_visited) *nodes_visited = visited;
     return best;
+}
+
+}  // namespace
+
+InstanceHit intersect_two_level(const TwoLevel& scene, const Ray& ray, Traversal mode, std::uint32_t* nodes_visited) {
+    NoSteps none;
+    return intersect_two_level_with(scene, ray, mode, nodes_visited, none);
+}
+
+InstanceHit detail::intersect_two_level_recorded(const TwoLevel& scene, const Ray& ray, Traversal mode,
+                                                 TwoLevelRecorder& recorder, std::uint32_t* nodes_visited) {
+    RecordedSteps steps{recorder};
+    return intersect_two_level_with(scene, ray, mode, nodes_visited, steps);
 }
 
 void intersect_batch_two_level(const TwoLevel& scene, const RayBatch& rays, const HitBatch& hits,

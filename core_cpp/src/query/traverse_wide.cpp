@@ -17,11 +17,13 @@
 
 namespace bvhlab {
 
+#ifndef BVHLAB_RECORDED_WIDE_WALK  // (traverse_wide_record.cpp: this file again, the recorded walk alone)
 bool hit_packet_sphere(const PrimPacket& k, int lane, const Ray& ray, Hit& hit) {
     const gpu::vec3 centre{k.v[0][0][lane], k.v[0][1][lane], k.v[0][2][lane]};
     const PackedPrim p{centre, 0, {k.v[1][0][lane], 0, 0}, k.ref[lane], {}, 0};
     return hit_sphere(p, RayQuery(ray), hit);
 }
+#endif
 
 namespace portable {
 
@@ -174,6 +176,7 @@ inline int push_children(const WideNode& node, L8 t0, L8 t1, int mask, std::uint
 
 }  // namespace portable
 
+#ifndef BVHLAB_RECORDED_WIDE_WALK
 Hit intersect_wide(const WideBvh& wide, const Bvh& bvh, const Ray& ray, std::uint32_t* nodes_visited) {
     const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
 #if defined(BVHLAB_AVX2_KERNELS)
@@ -195,5 +198,7 @@ bool occluded_wide(const WideBvh& wide, const Ray& ray) {
 #endif
     return portable::occluded_wide_kernel(view, ray);
 }
+
+#endif
 
 }  // namespace bvhlab

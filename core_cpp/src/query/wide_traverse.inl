@@ -267,8 +267,11 @@ constexpr PlaneTable kPlanes;
 /// Nearest child first, from the root. `far_limit`, the closest hit so far times the box scale,
 /// lives in a register and is renewed after a leaf, the one place the hit changes. kAnyHit: the
 /// walk ends at the first leaf with a hit (the boxes' far limit stays the ray's tmax).
-template <bool kAnyHit>
-std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit) {
+/// kRecord: each node's entered children and each leaf's effect on the hit go to `record` (the
+/// inspector's record, wide_kernel.h WideRecorder); without it the calls compile away and the walk
+/// is the plain one.
+template <bool kAnyHit, bool kRecord = false>
+std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit, WideRecorder* record = nullptr) {
     const L8 origin[3] = {L8::splat(q.o[0]), L8::splat(q.o[1]), L8::splat(q.o[2])};
     // The planes' distances as (origin - plane) · (-1/d), which are hit_box's (plane - origin) ·
     // 1/d (negating is exact, and a zero's sign, the only difference, changes no comparison), so
@@ -286,14 +289,22 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit) {
     float far_limit = hit.t * s;
     for (;;) {
         if (cur.index & kLeafChild) {
-            test_leaf<kAnyHit>(wide, cur.index & ~kLeafChild, q, hit);
+            if constexpr (kRecord) {
+                const Hit before = hit;
+                test_leaf<kAnyHit>(wide, cur.index & ~kLeafChild, q, hit);
+                record->leaf(cur.index & ~kLeafChild, before, hit);
+            } else {
+                test_leaf<kAnyHit>(wide, cur.index & ~kLeafChild, q, hit);
+            }
             if (kAnyHit && hit.ref != kNoHit) return visited;
             far_limit = hit.t * s;
         } else {
             ++visited;
-            if (enter_children<kAnyHit>(wide, node_at(wide, cur.index), origin, neg_inv, neg_inv_far, plane, q.tmin,
-                                        far_limit, stack, sp, cur))
-                continue;
+            [[maybe_unused]] const std::uint32_t line = cur.index, pushed = sp;
+            const bool entered = enter_children<kAnyHit>(wide, node_at(wide, cur.index), origin, neg_inv, neg_inv_far,
+                                                         plane, q.tmin, far_limit, stack, sp, cur);
+            if constexpr (kRecord) record->node(line, entered ? cur.index : kNoHit, stack.index + pushed, sp - pushed);
+            if (entered) continue;
         }
         do {  // pop, skipping entries farther than the closest hit so far (ray.h may_hold_closer)
             if (sp == 0) return visited;
@@ -305,6 +316,7 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit) {
 
 }  // namespace
 
+#ifndef BVHLAB_RECORDED_WIDE_WALK
 Hit intersect_wide_kernel(const WideView& wide, const Ray& ray, std::uint32_t* nodes_visited) {
     Hit hit{ray.tmax, kNoHit, 0.0f, 0.0f, kNoHit};
     const Query q = make_query(ray);
@@ -318,3 +330,15 @@ bool occluded_wide_kernel(const WideView& wide, const Ray& ray) {
     if (wide.lines) traverse_nodes<true>(wide, make_query(ray), hit);
     return hit.ref != kNoHit;
 }
+#else
+// The recorded walk, in translation units of its own (traverse_wide_record*.cpp): compiled beside
+// the plain walks, its calls of the same leaf and triangle functions changed how the compiler
+// inlined those into them (their machine code differed from the walk's without a recorded mode).
+Hit record_wide_kernel(const WideView& wide, const Ray& ray, WideRecorder& record, std::uint32_t* nodes_visited) {
+    Hit hit{ray.tmax, kNoHit, 0.0f, 0.0f, kNoHit};
+    const Query q = make_query(ray);
+    const std::uint32_t visited = wide.lines ? traverse_nodes<false, true>(wide, q, hit, &record) : 0;
+    if (nodes_visited) *nodes_visited = visited;
+    return hit;
+}
+#endif

@@ -1,6 +1,7 @@
 """`bvhlab inspect SCENE --node N | --pixel X,Y | --worst K`: why a tree is good or bad (issue 35).
 Prints one node's figures (box, place in the tree, SAH term and share, child overlap, EPO), one
-pixel's primary-ray traversal as a table (through the renderer's camera and traversal code), or
+pixel's primary-ray traversal as a table (through the renderer's camera and traversal code; for
+a scene with instances, the TLAS's boxes and each instance's walk), or
 the K subtrees of largest SAH cost; --json writes the same. The tree is built with the build
 options or read from a file saved with --save-tree (or Bvh.save), and optimised with --optimize N."""
 
@@ -10,16 +11,21 @@ import argparse
 import json
 from pathlib import Path
 
-from .. import build, load_bvh
+from .. import InstancedBvh, build, load_bvh
 from .._atomic import write_text
 from .._progress import ProgressBar
-from ..inspect.ray_record import RECORD_TRAVERSALS, trace_pixel
+from ..inspect.ray_record import PIXEL_TRAVERSALS, trace_pixel
 from ..inspect.tree_file import SUFFIX
 from ..library import load_scene
 from ..render_options import RenderOptions
 from . import options
 
 _DEFAULT = RenderOptions()
+#: What --node, --worst and --save-tree say of a scene with instances.
+TWO_LEVEL_PIXEL_ONLY = (
+    "--node, --worst and --save-tree take a flat scene's tree; this scene has instances (a two-level tree): "
+    "use --pixel X,Y"
+)
 _NODE_ROWS = (
     "depth",
     "parent",
@@ -61,7 +67,7 @@ def add_parser(sub) -> None:
         help="N×N samples per pixel (--pixel)",
     )
     p.add_argument("--sample", type=lambda t: options.whole_number(t, 0, 2**32 - 1), default=0, help="(--pixel)")
-    p.add_argument("--traversal", default=_DEFAULT.traversal, choices=RECORD_TRAVERSALS, help="(--pixel)")
+    p.add_argument("--traversal", default=_DEFAULT.traversal, choices=PIXEL_TRAVERSALS, help="(--pixel)")
     p.add_argument("--json", type=options.output_file_type(".json", "inspection file"), metavar="PATH")
     p.set_defaults(run=run)
 
@@ -87,19 +93,27 @@ def run(args) -> int:
         with ProgressBar(f"building {args.method}") as bar:
             bvh = build(scene, progress=bar, **settings)
     options.optimize_tree(bvh, optimize)
+    two_level = isinstance(bvh, InstancedBvh)
+    if two_level and (args.node is not None or args.worst is not None or args.save_tree):
+        raise ValueError(TWO_LEVEL_PIXEL_ONLY)
     if args.save_tree:
         bvh.save(args.save_tree)
         print(f"wrote {args.save_tree}")
-    data = bvh.node_data()
     stats = bvh.stats
-    tree = {
-        "method": stats["method"],
-        "nodes": stats["nodes"],
-        "height": stats["height"],
-        "sah_cost": data.sah_cost,
-        "epo_cost": data.epo_cost,
-    }
-    print(f"{name}: {stats['triangles']} triangles, {stats['spheres']} spheres; " + _pairs(tree))
+    if two_level:
+        keys = ("instances", "meshes", "tlas_nodes", "tlas_height", "tlas_sah_cost", "nodes", "sah_cost")
+        tree = {"method": stats["method"], **{k: stats[k] for k in keys}}
+        print(f"{name}: {stats['triangles_flattened']} triangles flattened, stored once per mesh; " + _pairs(tree))
+    else:
+        data = bvh.node_data()
+        tree = {
+            "method": stats["method"],
+            "nodes": stats["nodes"],
+            "height": stats["height"],
+            "sah_cost": data.sah_cost,
+            "epo_cost": data.epo_cost,
+        }
+        print(f"{name}: {stats['triangles']} triangles, {stats['spheres']} spheres; " + _pairs(tree))
     report: dict = {
         "about": {"scene": name, "source": args.scene, "settings": bvh.config.tree_settings()},
         "tree": tree,
@@ -131,18 +145,34 @@ def _print_pixel(scene, bvh, args) -> dict:
         scene, bvh, x, y, width=args.width, height=args.height, options=ray_options, sample=args.sample
     )
     summary = record.summary()
+    two_level = "instance" in summary
     print(f"pixel {x},{y} sample {args.sample} of a {args.width}×{args.height} render, {args.traversal} traversal:")
-    print("  " + _pairs({k: summary[k] for k in ("box_tests", "box_hits", "prim_tests", "t", "prim", "kind")}))
-    print(f"  closest hit in leaf {summary['hit_leaf']}" if summary["hit_leaf"] >= 0 else "  no hit")
+    keys: tuple[str, ...] = ("nodes_visited", "box_tests", "box_hits", "prim_tests", "t", "prim", "kind")
+    if two_level:
+        keys = ("nodes_visited", "tlas_box_tests", "instances_entered", *keys[1:], "instance")
+    print("  " + _pairs({k: summary[k] for k in keys}))
+    if summary["hit_leaf"] < 0:
+        print("  no hit")
+    elif two_level:
+        print(f"  closest hit in instance {summary['instance']}, leaf {summary['hit_leaf']} of its mesh's tree")
+    else:
+        print(f"  closest hit in leaf {summary['hit_leaf']}")
     steps = record.steps()
-    print(f"  {'#':>5}  {'test':<5} {'node':>8} {'slot':>8} {'prim':>10}  result")
+    print(f"  {'#':>5}  {'inst':>5} {'test':<9} {'node':>8} {'slot':>8} {'prim':>10}  result")
     for i, s in enumerate(steps):
-        if s["step"] == "box":
-            print(f"  {i:>5}  {'box':<5} {s['node']:>8} {'':>8} {'':>10}  {'entered' if s['hit'] else 'missed'}")
+        inst = s.get("instance", "")
+        if s["step"] in ("box", "tlas box"):
+            result = "entered" if s["hit"] else "missed"
+            print(f"  {i:>5}  {inst:>5} {s['step']:<9} {s['node']:>8} {'':>8} {'':>10}  {result}")
+        elif s["step"] == "wide node":
+            print(f"  {i:>5}  {inst:>5} {'wide node':<9} {s['node']:>8} {'':>8} {'':>10}  its children's boxes:")
+        elif s["step"] == "instance":
+            result = "came closer" if s["closer"] else "-"
+            print(f"  {i:>5}  {inst:>5} {'instance':<9} {s['leaf']:>8} {'':>8} {'':>10}  {result}")
         else:
             result = "closest so far" if s["closer"] else "-"
             prim = f"{s['kind'][0]}{s['prim']}"
-            print(f"  {i:>5}  {'prim':<5} {s['leaf']:>8} {s['slot']:>8} {prim:>10}  {result}")
+            print(f"  {i:>5}  {inst:>5} {'prim':<9} {s['leaf']:>8} {s['slot']:>8} {prim:>10}  {result}")
     return {**summary, "steps": steps}
 
 

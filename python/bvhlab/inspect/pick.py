@@ -1,7 +1,8 @@
 """Picking a box with a ray (issue 35: click in the viewport to pick the box under the cursor),
 the way the overlay shows them: of the boxes in the shown depth range (only the leaves when the
 overlay shows only leaves) that the ray enters before it reaches the geometry it hits, the deepest,
-and of those the one it enters first; where it enters none, the leaf holding the primitive it hits."""
+and of those the one it enters first; where it enters none, the leaf holding the primitive it hits.
+The same for a two-level tree (`pick_two_level`), among the TLAS and BLAS boxes it shows."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .levels import MAX_OVERLAY_BOXES, TreeNode, shown_boxes, world_boxes
 from .node_data import NodeData
 
 #: A box that holds the hit point is entered at or before the hit; the box wrapping the hit triangle
@@ -31,16 +33,21 @@ class Pick:
 def entry_distances(data: NodeData, origin, direction) -> np.ndarray:
     """Each node's slab test (Kay and Kajiya 1986) for the ray origin + t·direction, t ≥ 0: the
     distance at which the ray enters the box (0 inside it), +inf where it misses."""
+    return box_entry_distances(data.lo, data.hi, origin, direction)
+
+
+def box_entry_distances(lo: np.ndarray, hi: np.ndarray, origin, direction) -> np.ndarray:
+    """entry_distances for boxes (K,3) lo and hi."""
     o = np.asarray(origin, np.float64)
     d = np.asarray(direction, np.float64)
     with np.errstate(divide="ignore", invalid="ignore"):
         inv = 1.0 / d
-        t0 = (data.lo.astype(np.float64) - o) * inv
-        t1 = (data.hi.astype(np.float64) - o) * inv
+        t0 = (lo.astype(np.float64) - o) * inv
+        t1 = (hi.astype(np.float64) - o) * inv
     near, far = np.minimum(t0, t1), np.maximum(t0, t1)
     # an axis the ray runs parallel to: inside the slab for every t, or never
     parallel = d == 0
-    inside = (data.lo <= o) & (o <= data.hi)
+    inside = (lo <= o) & (o <= hi)
     near = np.where(parallel, np.where(inside, -np.inf, np.inf), near)
     far = np.where(parallel, np.where(inside, np.inf, -np.inf), far)
     t_in, t_out = np.maximum(near.max(1), 0.0), far.min(1)
@@ -57,10 +64,7 @@ def pick(
 ) -> Pick:
     """The box a ray picks among those the overlay shows (module docstring). `bvh` is a
     bvhlab.Bvh; `depth_range` the overlay's (min, max) depth, both included."""
-    origin = np.asarray(origin, np.float64).reshape(3)
-    direction = np.asarray(direction, np.float64).reshape(3)
-    if not (np.all(np.isfinite(origin)) and np.all(np.isfinite(direction)) and np.any(direction != 0)):
-        raise ValueError(f"a pick ray needs a finite origin and a finite non-zero direction, got {origin}, {direction}")
+    origin, direction = _pick_ray(origin, direction)
     data = bvh.node_data()
     record = bvh.trace_ray(origin.astype(np.float32), direction.astype(np.float32))
     t_hit = float(record.t)
@@ -68,7 +72,8 @@ def pick(
     shown = (data.depth >= depth_range[0]) & (data.depth <= depth_range[1])
     if leaves_only:
         shown &= data.left < 0
-    candidates = np.flatnonzero(shown & (t_enter <= t_hit * (1 + HIT_SLACK)))
+    # entered (a finite entry: a ray that hits nothing still enters only the boxes it enters)
+    candidates = np.flatnonzero(shown & np.isfinite(t_enter) & (t_enter <= t_hit * (1 + HIT_SLACK)))
     if len(candidates):
         deepest = candidates[data.depth[candidates] == data.depth[candidates].max()]
         node = int(deepest[np.lexsort((deepest, t_enter[deepest]))[0]])  # first entered; ties: lower index
@@ -76,3 +81,74 @@ def pick(
     if record.hit_leaf >= 0:
         return Pick(int(record.hit_leaf), "hit leaf", float(t_enter[record.hit_leaf]), t_hit)
     return Pick(None, "nothing", float("inf"), t_hit)
+
+
+def _pick_ray(origin, direction) -> tuple[np.ndarray, np.ndarray]:
+    origin = np.asarray(origin, np.float64).reshape(3)
+    direction = np.asarray(direction, np.float64).reshape(3)
+    if not (np.all(np.isfinite(origin)) and np.all(np.isfinite(direction)) and np.any(direction != 0)):
+        raise ValueError(f"a pick ray needs a finite origin and a finite non-zero direction, got {origin}, {direction}")
+    return origin, direction
+
+
+@dataclass(frozen=True)
+class TwoLevelPick:
+    """What a ray picked in a two-level tree: `box` (a TreeNode, None when nothing), how, and the
+    distances as Pick's."""
+
+    box: TreeNode | None
+    how: str
+    t_enter: float
+    t_hit: float
+
+
+def pick_two_level(
+    bvh,
+    origin,
+    direction,
+    level: str = "both",
+    depth_range: tuple[int, int] = (0, 255),
+    *,
+    leaves_only: bool = False,
+    cap: int = MAX_OVERLAY_BOXES,
+) -> TwoLevelPick:
+    """The box a ray picks among those the overlay shows of a two-level tree (`bvh` a
+    bvhlab.InstancedBvh; `level`, the depth range, leaves-only and the cap as
+    bvhlab.inspect.levels.shown_boxes takes them): the rule of `pick` with BLAS boxes deeper than
+    TLAS boxes (a BLAS box lies inside its instance's TLAS leaf); where the ray enters none, the
+    BLAS leaf of the hit primitive in its instance (the TLAS leaf of the hit instance when only
+    the TLAS is shown)."""
+    origin, direction = _pick_ray(origin, direction)
+    shown = shown_boxes(bvh, level, depth_range[0], depth_range[1], leaves_only, cap)
+    record = bvh.trace_ray(origin.astype(np.float32), direction.astype(np.float32))
+    t_hit = float(record.t)
+    t_enter = box_entry_distances(shown.lo, shown.hi, origin, direction)
+    candidates = np.flatnonzero(np.isfinite(t_enter) & (t_enter <= t_hit * (1 + HIT_SLACK)))
+    if len(candidates):
+        # deepest: BLAS over TLAS, then depth; then first entered; ties: earlier in the shown order
+        deeper = -shown.depth[candidates].astype(np.int64)  # (as ints: the arrays are unsigned)
+        lower_level = -shown.level[candidates].astype(np.int64)
+        k = candidates[np.lexsort((candidates, t_enter[candidates], deeper, lower_level))[0]]
+        return TwoLevelPick(shown.tree_node(int(k)), "box", float(t_enter[k]), t_hit)
+    if record.instance < 0:
+        return TwoLevelPick(None, "nothing", float("inf"), t_hit)
+    if level == "tlas":
+        node = bvh.tlas_leaf_of(record.instance)
+        box = TreeNode("tlas", node) if node >= 0 else None
+    else:
+        box = TreeNode("blas", record.hit_leaf, record.instance)
+    if box is None:
+        return TwoLevelPick(None, "nothing", float("inf"), t_hit)
+    lo, hi = node_world_box(bvh, box)
+    return TwoLevelPick(box, "hit leaf", float(box_entry_distances(lo[None], hi[None], origin, direction)[0]), t_hit)
+
+
+def node_world_box(bvh, box: TreeNode) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi) float32 (3,) of a two-level tree's node in the world, as the overlay draws it."""
+    if box.level == "tlas":
+        data = bvh.tlas_node_data()
+        return data.lo[box.node], data.hi[box.node]
+    mesh_of, transforms = bvh.instances
+    nodes = bvh.meshes[int(mesh_of[box.instance])].nodes
+    lo, hi = world_boxes(nodes["lo"][box.node][None], nodes["hi"][box.node][None], transforms[box.instance][None])
+    return lo[0, 0].astype(np.float32), hi[0, 0].astype(np.float32)

@@ -10,8 +10,11 @@ import numpy as np
 
 from .. import _checks, _core
 
-#: Traversals that can be recorded: those over the binary nodes (the wide tree has none to name).
-RECORD_TRAVERSALS = ("stack", "stackless")
+#: Traversals that can be recorded: the binary walks and the wide one (`Bvh.intersect`'s default),
+#: whose wide nodes and leaves are named by the binary nodes they stand for.
+RECORD_TRAVERSALS = ("stack", "stackless", "wide")
+#: Traversals of the tracer (RenderOptions.traversal), which trace_pixel records.
+PIXEL_TRAVERSALS = ("stack", "stackless")
 
 
 @dataclass(frozen=True)
@@ -21,7 +24,11 @@ class RayRecord:
     REF_SPHERE_BIT for spheres, `prim_leaf` the leaf, `prim_box_test` how many box tests came
     before, `prim_closer` whether it became the closest hit), and the closest hit as
     `Bvh.intersect` returns it (t, prim, kind, u, v) with its slot and leaf (-1 on a miss).
-    `len(box_nodes)` is the box-test count `Bvh.intersect` reports as nodes_visited."""
+    `nodes_visited` is what `Bvh.intersect` reports for the ray: the box tests (`len(box_nodes)`)
+    of the binary walks; for the wide walk the wide nodes visited (`wide_nodes`: the binary node
+    each stands for), each testing its children's boxes at once (`box_wide_step`: the position in
+    `wide_nodes` of the node each box test belongs to). A wide leaf is a subtree of at most four
+    primitives, named by its top binary node (`prim_leaf`, `hit_leaf`)."""
 
     origin: tuple
     direction: tuple
@@ -42,6 +49,9 @@ class RayRecord:
     v: float
     hit_slot: int
     hit_leaf: int
+    nodes_visited: int = 0
+    wide_nodes: np.ndarray = field(default_factory=lambda: np.zeros(0, np.uint32))
+    box_wide_step: np.ndarray = field(default_factory=lambda: np.zeros(0, np.uint32))
     pixel: tuple | None = field(default=None)  #: (x, y, sample) for trace_pixel's records
 
     @property
@@ -76,6 +86,8 @@ class RayRecord:
                 )
                 prim += 1
             if step < self.box_tests:
+                if len(self.box_wide_step) and (step == 0 or self.box_wide_step[step] != self.box_wide_step[step - 1]):
+                    out.append({"step": "wide node", "node": int(self.wide_nodes[self.box_wide_step[step]])})
                 out.append({"step": "box", "node": int(self.box_nodes[step]), "hit": bool(self.box_hit[step])})
         return out
 
@@ -88,6 +100,7 @@ class RayRecord:
             "tmin": self.tmin,
             "tmax": self.tmax,
             "traversal": self.traversal,
+            "nodes_visited": self.nodes_visited,
             "box_tests": self.box_tests,
             "box_hits": self.box_hits,
             "prim_tests": self.prim_tests,
@@ -106,18 +119,153 @@ def record(core_bvh, origin, direction, tmin: float, tmax: float, traversal: str
     _checks.choice("traversal", traversal, RECORD_TRAVERSALS)
     tmin, tmax = _checks.real("tmin", tmin), _checks.real("tmax", tmax)
     d = core_bvh.trace_ray(origin, direction, tmin, tmax, traversal)
+    d.pop("revision")
+    return _from_core(d, origin, direction, tmin, tmax, traversal, pixel)
+
+
+def _from_core(d: dict, origin, direction, tmin, tmax, traversal, pixel=None) -> RayRecord:
     for value in d.values():
         if isinstance(value, np.ndarray):
             value.flags.writeable = False
-    d.pop("revision")
     return RayRecord(origin, direction, tmin, tmax, traversal, pixel=pixel, **d)
+
+
+@dataclass(frozen=True)
+class InstancedRayRecord:
+    """One ray's walk through a two-level tree (`InstancedBvh.trace_ray`): `tlas`, the TLAS walk's
+    record (its nodes are the TLAS's; its "primitives" are the instances entered, in order:
+    `tlas.prim_refs` the instance, `tlas.prim_leaf` the TLAS leaf, -1 where a scene of one
+    identity instance has no TLAS walk, `tlas.prim_closer` whether it held a nearer hit), and
+    `blas[j]`, the walk of the j-th instance entered through its mesh's tree (nodes and slots of
+    `InstancedBvh.meshes[mesh of that instance]`, t in world units). The closest hit as
+    `InstancedBvh.intersect` returns it, with its instance, the mesh tree's leaf (`hit_leaf`) and
+    the TLAS leaf (`hit_tlas_leaf`). `nodes_visited` is intersect's figure for the ray: the TLAS's
+    box tests plus each instance walk's nodes_visited."""
+
+    origin: tuple
+    direction: tuple
+    tmin: float
+    tmax: float
+    traversal: str
+    tlas: RayRecord
+    blas: tuple
+    nodes_visited: int
+    instance: int
+    hit_tlas_leaf: int
+    pixel: tuple | None = field(default=None)
+
+    @property
+    def instances(self) -> np.ndarray:
+        """The instances entered, in order (one per `blas` record)."""
+        return self.tlas.prim_refs
+
+    @property
+    def hit(self) -> RayRecord | None:
+        """The record of the instance walk that found the closest hit (None on a miss)."""
+        if self.instance < 0:
+            return None
+        closer = np.flatnonzero(self.tlas.prim_closer)
+        return self.blas[int(closer[-1])]
+
+    @property
+    def t(self) -> float:
+        return self.tlas.t
+
+    @property
+    def prim(self) -> int:
+        return self.tlas.prim
+
+    @property
+    def kind(self) -> int:
+        return self.tlas.kind
+
+    @property
+    def hit_leaf(self) -> int:
+        hit = self.hit
+        return -1 if hit is None else hit.hit_leaf
+
+    @property
+    def hit_slot(self) -> int:
+        hit = self.hit
+        return -1 if hit is None else hit.hit_slot
+
+    def summary(self) -> dict:
+        """Counts and the closest hit as plain values (what the CLI prints and writes)."""
+        hit = self.hit
+        return {
+            "pixel": list(self.pixel) if self.pixel else None,
+            "origin": list(self.origin),
+            "direction": list(self.direction),
+            "tmin": self.tmin,
+            "tmax": self.tmax,
+            "traversal": self.traversal,
+            "nodes_visited": self.nodes_visited,
+            "tlas_box_tests": self.tlas.box_tests,
+            "instances_entered": len(self.blas),
+            "box_tests": self.tlas.box_tests + sum(b.box_tests for b in self.blas),
+            "box_hits": self.tlas.box_hits + sum(b.box_hits for b in self.blas),
+            "prim_tests": sum(b.prim_tests for b in self.blas),
+            "t": self.t,
+            "prim": self.prim,
+            "kind": "sphere" if self.kind else "triangle",
+            "instance": self.instance,
+            "hit_tlas_leaf": self.hit_tlas_leaf,
+            "hit_leaf": -1 if hit is None else hit.hit_leaf,
+            "hit_slot": -1 if hit is None else hit.hit_slot,
+        }
+
+    def steps(self) -> list[dict]:
+        """The walk as one list of steps: the TLAS's box tests, and at each instance entered an
+        "instance" step followed by its walk's steps (each with its instance)."""
+        out: list[dict] = []
+        tlas = self.tlas
+        j = 0
+        for step in range(tlas.box_tests + 1):
+            while j < len(self.blas) and tlas.prim_box_test[j] == step:
+                out.append(
+                    {
+                        "step": "instance",
+                        "instance": int(tlas.prim_refs[j]),
+                        "leaf": int(tlas.prim_leaf[j]) if tlas.prim_leaf[j] != _NO_NODE else -1,
+                        "closer": bool(tlas.prim_closer[j]),
+                    }
+                )
+                out.extend({**s, "instance": int(tlas.prim_refs[j])} for s in self.blas[j].steps())
+                j += 1
+            if step < tlas.box_tests:
+                out.append({"step": "tlas box", "node": int(tlas.box_nodes[step]), "hit": bool(tlas.box_hit[step])})
+        return out
+
+
+_NO_NODE = 0xFFFFFFFF
+
+
+def record_instanced(core_two_level, origin, direction, tmin: float, tmax: float, traversal: str, pixel=None):
+    """The record of one ray through `core_two_level` (a `_core.TwoLevel`)."""
+    origin = _point("origin", origin)
+    direction = _point("direction", direction)
+    _checks.choice("traversal", traversal, RECORD_TRAVERSALS)
+    tmin, tmax = _checks.real("tmin", tmin), _checks.real("tmax", tmax)
+    d = core_two_level.trace_ray(origin, direction, tmin, tmax, traversal)
+    ray = (origin, direction, tmin, tmax, traversal)
+    blas = tuple(_from_core(b, *ray) for b in d["blas"])
+    return InstancedRayRecord(
+        *ray,
+        tlas=_from_core(d["tlas"], *ray),
+        blas=blas,
+        nodes_visited=int(d["nodes_visited"]),
+        instance=int(d["instance"]),
+        hit_tlas_leaf=int(d["hit_tlas_leaf"]),
+        pixel=pixel,
+    )
 
 
 def trace_pixel(scene, bvh, x: int, y: int, *, width: int, height: int, options=None, camera=None, sample: int = 0):
     """The record of the primary ray of sample `sample` of pixel (x, y) (row 0 at the top) of a
-    `width`×`height` render of `scene` with `bvh`: the ray the tracer traces there (its camera
-    code and clipping; the overlay's lines are not drawn), walked by the traversal of
-    `options.traversal` (stack or stackless), whose box tests are the pixel's cost at one sample."""
+    `width`×`height` render of `scene` with `bvh` (a Bvh, or an InstancedBvh: then an
+    InstancedRayRecord): the ray the tracer traces there (its camera code and clipping; the
+    overlay's lines are not drawn), walked by the traversal of `options.traversal` (stack or
+    stackless), whose box tests are the pixel's cost at one sample."""
     from .._render_scene import SceneCache
     from .._render_settings import render_settings
     from ..render_options import options_from
@@ -129,6 +277,8 @@ def trace_pixel(scene, bvh, x: int, y: int, *, width: int, height: int, options=
     y = _checks.integer("y", y, 0, 2**32 - 1)
     sample = _checks.integer("sample", sample, 0, 2**32 - 1)
     origin, direction, tmin, tmax = _core.pixel_ray(render_scene, settings, x, y, sample)
+    if isinstance(bvh._core, _core.TwoLevel):
+        return record_instanced(bvh._core, origin, direction, tmin, tmax, options.traversal, pixel=(x, y, sample))
     return record(bvh._core, origin, direction, tmin, tmax, options.traversal, pixel=(x, y, sample))
 
 

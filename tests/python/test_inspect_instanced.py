@@ -1,0 +1,210 @@
+"""InstancedBvh.trace_ray and Pick Box's rule on two-level trees (issues 34, 35): a ray's recorded
+walk through the TLAS and the instances it entered against InstancedBvh.intersect (hit, instance,
+nodes_visited) and against one flat tree over the same triangles moved into the world
+(Scene.flattened); the pick against a loop over the boxes the overlay shows; the TLAS's node data
+against its boxes and instances."""
+
+import numpy as np
+import pytest
+from oracles import box_entry
+from test_instanced_scene import _rays, instanced_scene  # noqa: F401  (the fixture)
+
+import bvhlab
+from bvhlab.inspect.levels import TreeNode, shown_boxes, world_boxes
+from bvhlab.inspect.pick import HIT_SLACK, node_world_box, pick_two_level
+
+
+@pytest.fixture(scope="module")
+def trees(instanced_scene):  # noqa: F811
+    tree = bvhlab.build(instanced_scene)
+    flat = bvhlab.build(instanced_scene.flattened())
+    mesh_of, _ = instanced_scene.instances()
+    sizes = [len(instanced_scene.mesh_triangles(int(k))) for k in mesh_of]
+    origin_of_flat = (np.repeat(np.arange(len(sizes)), sizes), np.concatenate([np.arange(s) for s in sizes]))
+    return tree, flat, origin_of_flat
+
+
+def _slots_of(bvh):
+    nodes, leaf = bvh.nodes, bvh.is_leaf
+    first = np.where(leaf, nodes["index"], 0).astype(np.int64)
+    count = np.where(leaf, nodes["info"], 0).astype(np.int64)
+    for i in range(len(nodes) - 1, -1, -1):
+        if not leaf[i]:
+            first[i], count[i] = first[i + 1], count[i + 1] + count[nodes["index"][i]]
+    return first, count
+
+
+@pytest.mark.parametrize("traversal", bvhlab.TRAVERSALS)
+def test_records_are_intersects_walk_and_the_flattened_trees_hits(instanced_scene, trees, traversal):  # noqa: F811
+    tree, flat, (flat_instance, flat_prim) = trees
+    mesh_of, _ = tree.instances
+    slots = [_slots_of(m) for m in tree.meshes]
+    origins, dirs = _rays(instanced_scene, 300, 5)
+    two = tree.intersect(origins, dirs, traversal=traversal)
+    one = flat.intersect(origins, dirs, traversal=traversal)
+    disagree = hits = 0
+    for i in range(len(origins)):
+        rec = tree.trace_ray(origins[i], dirs[i], traversal=traversal)
+        assert rec.nodes_visited == two["nodes_visited"][i]
+        assert rec.nodes_visited == rec.tlas.box_tests + sum(b.nodes_visited for b in rec.blas)
+        assert (rec.instance, rec.prim, rec.t) == (two["instance"][i], two["prim"][i], two["t"][i])
+        assert len(rec.blas) == len(rec.instances)
+        entered_tlas = set(rec.tlas.box_nodes[rec.tlas.box_hit.astype(bool)].tolist())
+        assert set(rec.tlas.prim_leaf.tolist()) <= entered_tlas  # instances of entered TLAS leaves
+        if rec.prim < 0:
+            assert one["prim"][i] < 0 and rec.hit is None and rec.hit_leaf == -1
+            continue
+        hits += 1
+        assert rec.instance in tree.tlas_leaf_instances(rec.hit_tlas_leaf)
+        first, count = slots[int(mesh_of[rec.instance])]
+        leaf = rec.hit_leaf
+        assert first[leaf] <= rec.hit_slot < first[leaf] + count[leaf]  # ends in the leaf holding it
+        if traversal != "wide":
+            assert tree.meshes[int(mesh_of[rec.instance])].is_leaf[leaf]
+        last = rec.hit
+        closer = np.nonzero(last.prim_closer)[0][-1]
+        assert (last.prim_slots[closer], last.prim_leaf[closer]) == (rec.hit_slot, leaf)
+        # the flattened tree's hit: the same instance and primitive, but for rays grazing an edge
+        j = one["prim"][i]
+        same = j >= 0 and (flat_instance[j], flat_prim[j]) == (rec.instance, rec.prim)
+        disagree += not (same and abs(one["t"][i] - rec.t) <= 1e-4 * one["t"][i])
+    assert hits > 150 and disagree <= 2, (hits, disagree)
+
+
+def test_a_scene_of_one_identity_instance_records_no_tlas(small_scene):
+    tris, spheres = small_scene
+    scene = bvhlab.Scene(
+        triangles=tris, spheres=spheres, instance_mesh=[0], instance_transforms=np.eye(3, 4, dtype=np.float32)[None]
+    )
+    tree = bvhlab.build(scene)
+    flat = bvhlab.build(tris, spheres)
+    origins, dirs = bvhlab.library.procedural.random_rays(tris, 50, seed=2)
+    for o, d in zip(origins, dirs):
+        rec = tree.trace_ray(o, d, traversal="wide")
+        alone = flat.trace_ray(o, d, traversal="wide")
+        assert rec.tlas.box_tests == 0 and len(rec.blas) == 1 and rec.tlas.prim_leaf[0] == 0xFFFFFFFF
+        assert rec.nodes_visited == alone.nodes_visited and (rec.prim, rec.t) == (alone.prim, alone.t)
+        np.testing.assert_array_equal(rec.blas[0].box_nodes, alone.box_nodes)
+        assert rec.hit_tlas_leaf == -1
+
+
+def test_tlas_node_data_is_its_boxes_and_instances(trees):
+    tree, _, _ = trees
+    data = tree.tlas_node_data()
+    world_lo, world_hi = tree.world_boxes()
+    leaves = np.flatnonzero(data.left < 0)
+    held = np.concatenate([tree.tlas_leaf_instances(int(n)) for n in leaves])
+    assert sorted(held.tolist()) == list(range(len(world_lo)))
+    for n in leaves:
+        for i in tree.tlas_leaf_instances(int(n)):
+            assert tree.tlas_leaf_of(int(i)) == n
+            assert np.all(data.lo[n] <= world_lo[i]) and np.all(world_hi[i] <= data.hi[n])
+    assert data.prim_count[0] == len(world_lo) and np.isclose(data.sah_cost, tree.stats["tlas_sah_cost"])
+    assert data.epo_cost == 0
+    lo, hi, depth = tree.tlas_boxes()
+    np.testing.assert_array_equal(np.sort(depth), np.sort(data.depth))
+
+
+def _pick_by_brute_force(shown, o, d, t_hit):
+    """Of the shown boxes entered no later than t_hit: BLAS before TLAS, the deepest, the first
+    entered, the earliest shown; by a loop."""
+    best = None
+    for k in range(len(shown.lo)):
+        t = box_entry(shown.lo[k].astype(float), shown.hi[k].astype(float), o, d)
+        if not np.isfinite(t) or t > t_hit * (1 + HIT_SLACK):
+            continue
+        key = (-int(shown.level[k]), -int(shown.depth[k]), t, k)
+        best = key if best is None or key < best else best
+    return None if best is None else shown.tree_node(best[3])
+
+
+@pytest.mark.parametrize("level, depths, leaves_only", [("both", (0, 40), False), ("tlas", (1, 3), False),
+                                                        ("blas", (2, 5), False), ("both", (0, 40), True)])  # fmt: skip
+def test_pick_is_the_brute_force_pick_over_the_shown_boxes(instanced_scene, trees, level, depths, leaves_only):  # noqa: F811
+    tree, _, _ = trees
+    shown = shown_boxes(tree, level, *depths, leaves_only=leaves_only)
+    origins, dirs = _rays(instanced_scene, 60, 9)
+    boxes = 0
+    for o, d in zip(origins.astype(np.float64), dirs.astype(np.float64)):
+        got = pick_two_level(tree, o, d, level, depths, leaves_only=leaves_only)
+        t_hit = tree.intersect(np.float32([o]), np.float32([d]), traversal="stack")["t"][0]
+        expected = _pick_by_brute_force(shown, o, d, float(t_hit))
+        if expected is not None:
+            assert got.box == expected and got.how == "box"
+            boxes += 1
+        elif np.isfinite(t_hit):
+            assert got.how == "hit leaf" and got.box is not None
+        else:
+            assert got.box is None
+    assert boxes >= 10
+
+
+def test_blas_world_boxes_hold_the_instances_moved_triangles(instanced_scene, trees):  # noqa: F811
+    tree, _, _ = trees
+    mesh_of, transforms = tree.instances
+    for i in range(len(mesh_of)):
+        mesh = tree.meshes[int(mesh_of[i])]
+        tris = instanced_scene.mesh_triangles(int(mesh_of[i]))
+        moved = tris @ transforms[i][:, :3].T + transforms[i][:, 3]
+        leaves = np.flatnonzero(mesh.is_leaf)[:20]
+        for n in leaves:
+            lo, hi = node_world_box(tree, TreeNode("blas", int(n), i))
+            start, k = int(mesh.nodes["index"][n]), int(mesh.nodes["info"][n])
+            pts = moved[mesh.refs[start : start + k]].reshape(-1, 3)
+            assert np.all(lo <= pts.min(0) + 1e-4) and np.all(pts.max(0) <= hi + 1e-4)
+        w_lo, w_hi = world_boxes(mesh.nodes["lo"][:1], mesh.nodes["hi"][:1], transforms[i : i + 1])
+        np.testing.assert_allclose(node_world_box(tree, TreeNode("blas", 0, i))[0], w_lo[0, 0], rtol=1e-6)
+
+
+@pytest.mark.parametrize("traversal", ["stack", "stackless"])
+def test_pixel_records_of_a_two_level_scene_are_the_tracers_counters(instanced_scene, trees, traversal):  # noqa: F811
+    """trace_pixel on an instanced scene records the tracer's primary ray through both levels: its
+    box tests, box hits, primitive tests, primitive hits and instances entered are the counters
+    the CPU tracer keeps for that pixel."""
+    from bvhlab.inspect.ray_record import trace_pixel
+
+    tree, _, _ = trees
+    w, h = 32, 24
+    options = bvhlab.RenderOptions(traversal=traversal, samples_per_axis=1, traversal_counters=True)
+    job = bvhlab.Renderer("cpu").start(instanced_scene, tree, w, h, options=options)
+    job.run()
+    counters = job.result(counters=True).counters
+    assert counters[..., 4].max() >= 2, "pixels that enter several instances"
+    for y in range(0, h, 2):
+        for x in range(0, w, 2):
+            rec = trace_pixel(instanced_scene, tree, x, y, width=w, height=h, options=options)
+            s = rec.summary()
+            closer = sum(int(b.prim_closer.sum()) for b in rec.blas)
+            got = (s["box_tests"], s["box_hits"], s["prim_tests"], closer, s["instances_entered"])
+            assert got == tuple(counters[y, x].tolist()), (x, y, got, counters[y, x])
+            assert rec.nodes_visited == s["box_tests"]
+
+
+def test_cli_inspects_a_pixel_of_an_instanced_scene(instanced_scene, trees, tmp_path, capsys):  # noqa: F811
+    """`bvhlab inspect SCENE --pixel X,Y` on a scene file with instances: the pixel's walk through
+    both levels, its box tests the CPU tracer's cost there; --node and --worst say they take flat
+    trees (exit 2)."""
+    import json
+
+    from bvhlab.cli import main
+
+    path = instanced_scene.save(tmp_path / "inst.npz")
+    w, h = 40, 30
+    tree = bvhlab.build(bvhlab.Scene.load(path))
+    job = bvhlab.Renderer("cpu").start(instanced_scene, tree, w, h, options=bvhlab.RenderOptions())
+    job.run()
+    cost = job.result(color=False, depth=False).cost
+    y, x = np.unravel_index(np.argmax(cost), cost.shape)
+    out = tmp_path / "px.json"
+    args = ["inspect", str(path), "--pixel", f"{x},{y}", "--width", str(w), "--height", str(h), "--json", str(out)]
+    assert main(args) == 0
+    pixel = json.loads(out.read_text())["pixel"]
+    assert pixel["box_tests"] == cost[y, x] and pixel["instances_entered"] >= 1
+    steps = pixel["steps"]
+    assert sum(s["step"] in ("box", "tlas box") for s in steps) == pixel["box_tests"]
+    assert sum(s["step"] == "instance" for s in steps) == pixel["instances_entered"]
+    table = capsys.readouterr().out
+    assert "tlas box" in table and "instances" in table
+    for bad in (["--node", "0"], ["--worst", "3"]):
+        assert main(["inspect", str(path), *bad]) == 2
+        assert "two-level" in capsys.readouterr().err
