@@ -75,17 +75,17 @@ class InstancedBvh:
     def tlas_node_data(self) -> NodeData:
         """The TLAS's node data (`Bvh.node_data`'s figures over its nodes, whose primitives are
         instances; EPO 0: it holds no geometry), made once per TLAS."""
-        return self._tlas()[1]
+        return self._tlas_nodes()[1]
 
     def tlas_leaf_instances(self, node: int) -> np.ndarray:
         """The instances TLAS leaf `node` holds (none for an inner node)."""
-        _, data, leaf_first, refs = self._tlas()
+        _, data, leaf_first, refs = self._tlas_nodes()
         first = int(leaf_first[node])
         return refs[first : first + int(data.prim_count[node])] if first >= 0 else refs[:0]
 
     def tlas_leaf_of(self, instance: int) -> int:
         """The TLAS leaf holding `instance` (-1 for an instance of an empty mesh, which no leaf holds)."""
-        _, data, leaf_first, refs = self._tlas()
+        _, data, leaf_first, refs = self._tlas_nodes()
         slot = np.flatnonzero(refs == instance)
         if not len(slot):
             return -1
@@ -93,7 +93,7 @@ class InstancedBvh:
         ends = leaf_first[leaves] + data.prim_count[leaves].astype(np.int64)
         return int(leaves[np.flatnonzero(slot[0] < ends)[0]])
 
-    def _tlas(self) -> tuple:
+    def _tlas_nodes(self) -> tuple:
         if self._tlas_data is None or self._tlas_data[0] is not self._core:
             d = self._core.tlas_node_data()
             self._tlas_data = (self._core, NodeData.from_core(d), d["leaf_first"], d["refs"])
