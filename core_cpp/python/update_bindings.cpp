@@ -30,6 +30,7 @@ nb::dict update(PyBvh& self, const Triangles& tris, const std::optional<Spheres>
     nb::dict d;
     d["policy"] = to_string(stats.policy), d["ms"] = stats.ms, d["sah_cost"] = stats.sah_cost;
     d["subtrees_rebuilt"] = stats.subtrees_rebuilt, d["primitives_rebuilt"] = stats.primitives_rebuilt;
+    d["top_boxes"] = stats.top_boxes;
     d["fresh_sah_cost"] = stats.fresh_sah_cost < 0 ? nb::none() : nb::cast(stats.fresh_sah_cost);
     return d;
 }
@@ -49,6 +50,8 @@ void bind_update(nb::module_& m) {
         .def_rw("target_growth", &UpdateConfig::target_growth)
         .def_rw("restructure_share", &UpdateConfig::restructure_share)
         .def_rw("min_subtree_primitives", &UpdateConfig::min_subtree_primitives)
+        .def_rw("top_cut_primitives", &UpdateConfig::top_cut_primitives)
+        .def_rw("top_growth", &UpdateConfig::top_growth)
         .def_rw("measure_fresh", &UpdateConfig::measure_fresh)
         .def(
             "validate", [](const UpdateConfig& self) { validate(self); },

@@ -25,8 +25,9 @@ class UpdateConfig:
     - "adaptive": refit; once the tree's cost passes `target_growth` × its cost when built,
       rebuild the subtrees that hold most of the grown cost per primitive (Yoon et al. 2007
       restructure only where culling efficiency dropped), at most `restructure_share` of the
-      primitives an update; the whole tree when those would leave its cost past `tree_growth` ×
-      its cost when built.
+      primitives an update, then (past `top_growth`) the levels above the subtrees of at most
+      `top_cut_primitives` over their boxes; the whole tree when its cost is still past `tree_growth` × its cost when
+      built.
 
     Defaults are the core's; values are checked by it (ValueError) when the config is made."""
 
@@ -36,6 +37,12 @@ class UpdateConfig:
     restructure_share: float = _CORE_DEFAULTS.restructure_share
     tree_growth: float = _CORE_DEFAULTS.tree_growth
     min_subtree_primitives: int = _CORE_DEFAULTS.min_subtree_primitives
+    #: adaptive: after the subtrees, the levels above subtrees of at most this many primitives are
+    #: rebuilt over their boxes (0: never)
+    top_cut_primitives: int = _CORE_DEFAULTS.top_cut_primitives
+    #: adaptive: that step runs only while the tree, after its subtrees, costs more than this ×
+    #: its cost when built
+    top_growth: float = _CORE_DEFAULTS.top_growth
     #: also build a fresh tree, only to report its SAH cost (UpdateStats.fresh_sah_cost): a build's time
     measure_fresh: bool = _CORE_DEFAULTS.measure_fresh
 
@@ -50,6 +57,8 @@ class UpdateConfig:
         c.target_growth = _checks.real("target_growth", self.target_growth)
         c.restructure_share = _checks.real("restructure_share", self.restructure_share)
         c.min_subtree_primitives = _checks.integer("min_subtree_primitives", self.min_subtree_primitives, 0, 2**32 - 1)
+        c.top_cut_primitives = _checks.integer("top_cut_primitives", self.top_cut_primitives, 0, 2**32 - 1)
+        c.top_growth = _checks.real("top_growth", self.top_growth)
         if not isinstance(self.measure_fresh, bool):
             raise TypeError(f"measure_fresh must be True or False, got {type(self.measure_fresh).__name__}")
         c.measure_fresh = self.measure_fresh
@@ -72,3 +81,5 @@ class UpdateStats:
     subtrees_rebuilt: int
     primitives_rebuilt: int
     fresh_sah_cost: float | None = None
+    #: adaptive: the subtrees whose boxes the levels above them were rebuilt over (0: not)
+    top_boxes: int = 0

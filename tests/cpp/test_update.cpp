@@ -3,13 +3,16 @@
 // cost, and the results do not depend on the thread count.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <map>
 #include <stdexcept>
 
 #include "bvhlab/stats.h"
 #include "bvhlab/update.h"
+#include "rebuild_top.h"
 #include "test_scenes.h"
 #include "tree_checks.h"
 
@@ -26,6 +29,45 @@ Scene deformed(const Scene& scene, float cut, float amount) {
         if (out.triangles[9 * t] >= cut) continue;
         const float offset = amount * std::sin(float(7 * t));
         for (int k = 0; k < 3; ++k) out.triangles[9 * t + 3 * k + 1] += offset;
+    }
+    return out;
+}
+
+/// `scene` with its triangles in `slabs` slabs along x (by their first vertex) each moved whole
+/// along y by its own offset of up to `amount`: rigid parts moving apart, their subtrees intact.
+Scene slabs_apart(const Scene& scene, int slabs, float amount) {
+    Scene out = scene;
+    float lo = 1e30f, hi = -1e30f;
+    for (std::size_t t = 0; t < out.triangles.size() / 9; ++t)
+        lo = std::min(lo, out.triangles[9 * t]), hi = std::max(hi, out.triangles[9 * t]);
+    for (std::size_t t = 0; t < out.triangles.size() / 9; ++t) {
+        const int slab = std::min(slabs - 1, int((out.triangles[9 * t] - lo) / (hi - lo) * slabs));
+        const float offset = amount * std::sin(float(3 * slab + 1));
+        for (int k = 0; k < 3; ++k) out.triangles[9 * t + 3 * k + 1] += offset;
+    }
+    return out;
+}
+
+/// `count` spheres (octasphere) in a row along x, rigid parts; `shuffled`: sphere k moved whole to
+/// where sphere 5k mod count sat, raised by k mod 3 (the same triangles, in the same order).
+Scene spheres_row(int count, bool shuffled) {
+    Scene s;
+    for (int k = 0; k < count; ++k) {
+        const int place = shuffled ? (5 * k) % count : k;
+        const Scene part = octasphere(4, Vec3{3.0f * float(place), shuffled ? float(k % 3) : 0.0f, 0.0f});
+        s.triangles.insert(s.triangles.end(), part.triangles.begin(), part.triangles.end());
+    }
+    return s;
+}
+
+/// Each leaf's references, sorted, by its first: the leaves of a tree as sets of primitives.
+std::map<std::uint32_t, std::vector<std::uint32_t>> leaf_sets(const Bvh& bvh) {
+    std::map<std::uint32_t, std::vector<std::uint32_t>> out;
+    for (const BvhNode& n : bvh.nodes) {
+        if (!is_leaf(n)) continue;
+        std::vector<std::uint32_t> refs(bvh.refs.begin() + n.index, bvh.refs.begin() + n.index + leaf_count(n));
+        std::sort(refs.begin(), refs.end());
+        out[refs.front()] = refs;
     }
     return out;
 }
@@ -144,14 +186,19 @@ TEST(Update, SameTreesOnEveryThreadCount) {
     for (std::uint32_t threads : {1u, 4u}) {
         Bvh tree = f.tree;
         tree.config.threads = threads;
-        UpdateConfig c;
-        c.policy = UpdatePolicy::Partial;
-        NodeCostArray out;
-        trees.push_back(update_bvh(tree, f.built, moved.view(), c, out));
+        for (UpdatePolicy p : {UpdatePolicy::Partial, UpdatePolicy::Adaptive}) {
+            UpdateConfig c;
+            c.policy = p;
+            NodeCostArray out;
+            trees.push_back(update_bvh(tree, f.built, moved.view(), c, out));
+        }
     }
-    ASSERT_EQ(trees[0].nodes.size(), trees[1].nodes.size());
-    EXPECT_EQ(std::memcmp(trees[0].nodes.data(), trees[1].nodes.data(), trees[0].nodes.size() * sizeof(BvhNode)), 0);
-    EXPECT_EQ(std::memcmp(trees[0].refs.data(), trees[1].refs.data(), trees[0].refs.size() * 4), 0);
+    for (std::size_t k = 0; k < 2; ++k) {  // partial, then adaptive: 1 thread against 4
+        const Bvh &one = trees[k], &four = trees[k + 2];
+        ASSERT_EQ(one.nodes.size(), four.nodes.size());
+        EXPECT_EQ(std::memcmp(one.nodes.data(), four.nodes.data(), one.nodes.size() * sizeof(BvhNode)), 0);
+        EXPECT_EQ(std::memcmp(one.refs.data(), four.refs.data(), one.refs.size() * 4), 0);
+    }
 }
 
 TEST(Update, BadInputIsRefused) {
@@ -168,7 +215,60 @@ TEST(Update, BadInputIsRefused) {
     }
     c.subtree_growth = 0.5f;
     EXPECT_THROW(update_bvh(f.tree, f.built, f.scene.view(), c, out), std::invalid_argument);
+    c.subtree_growth = 1.2f, c.top_growth = 0.5f;
+    EXPECT_THROW(update_bvh(f.tree, f.built, f.scene.view(), c, out), std::invalid_argument);
     EXPECT_THROW(update_bvh(f.tree, {}, f.scene.view(), UpdateConfig{}, out), std::invalid_argument);
     EXPECT_THROW(parse_update_policy("sometimes"), std::invalid_argument);
     EXPECT_EQ(parse_update_policy("partial"), UpdatePolicy::Partial);
+}
+
+TEST(Update, TopCutHoldsEveryPrimitiveOnce) {
+    const Fixture f;
+    const Bvh refit = refitted(f.tree, slabs_apart(f.scene, 6, 8.0f).view());
+    const std::vector<std::uint32_t> cut = top_cut(refit, 64);
+    ASSERT_GT(cut.size(), 1u);
+    std::uint64_t prims = 0;
+    for (std::size_t c = 0; c < cut.size(); ++c) {
+        const std::uint32_t i = cut[c];
+        const BvhNode& n = refit.nodes[i];
+        EXPECT_TRUE(is_leaf(n) || prims_under(refit, i) <= 64) << "cut node " << i;
+        if (c + 1 < cut.size()) EXPECT_LE(skip_index(n, i), cut[c + 1]);  // none inside another
+        prims += prims_under(refit, i);
+    }
+    EXPECT_EQ(prims, f.scene.view().primitive_count());
+}
+
+TEST(Update, RebuildTopKeepsTheLeavesAndLowersTheCost) {
+    const Scene rest = spheres_row(48, false), moved = spheres_row(48, true);
+    const Bvh built_tree = build_bvh(rest.view());
+    Bvh tree = refitted(built_tree, moved.view());
+    const Bvh refit = tree;
+    NodeCostArray built = subtree_costs(built_tree);
+    double sah = 0;
+    ASSERT_TRUE(rebuild_top(tree, built, top_cut(tree, 64), sah));
+    check_tree(tree, moved.view(), built_tree.config.max_leaf_size);
+    EXPECT_EQ(tree.nodes.size(), refit.nodes.size());
+    EXPECT_EQ(built.size(), tree.nodes.size());
+    EXPECT_EQ(leaf_sets(tree), leaf_sets(refit));  // subtrees below the cut moved whole
+    EXPECT_NEAR(sah, sah_cost(tree), 1e-4 * sah);
+    // the spheres regrouped: far below the refit's cost, near a fresh build's
+    EXPECT_LT(sah, 0.6 * sah_cost(refit));
+    EXPECT_LT(sah, 1.1 * sah_cost(build_bvh(moved.view())));
+}
+
+TEST(Update, AdaptiveRebuildsTheTopOverPartsThatMovedApart) {
+    const Scene rest = spheres_row(48, false), moved = spheres_row(48, true);
+    const Bvh tree = build_bvh(rest.view());
+    UpdateConfig c;  // adaptive
+    NodeCostArray out;
+    UpdateStats with, without;
+    const Bvh t = update_bvh(tree, subtree_costs(tree), moved.view(), c, out, &with);
+    check_tree(t, moved.view(), tree.config.max_leaf_size);
+    EXPECT_EQ(with.policy, UpdatePolicy::Partial);
+    EXPECT_GT(with.top_boxes, 1u);
+    EXPECT_NEAR(with.sah_cost, sah_cost(t), 1e-4 * with.sah_cost);
+    c.top_cut_primitives = 0;
+    update_bvh(tree, subtree_costs(tree), moved.view(), c, out, &without);
+    EXPECT_EQ(without.top_boxes, 0u);
+    EXPECT_EQ(without.policy, UpdatePolicy::Rebuild);  // the subtrees alone could not mend it
 }

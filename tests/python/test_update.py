@@ -65,6 +65,8 @@ def test_bad_updates_are_refused(knot):
         bvhlab.UpdateConfig(policy="sometimes")
     with pytest.raises(ValueError, match="subtree_growth"):
         bvhlab.UpdateConfig(subtree_growth=0.5)
+    with pytest.raises(ValueError, match="top_growth"):
+        bvhlab.UpdateConfig(top_growth=0.5)
     bad = knot.copy()
     bad[5, 1, 2] = np.nan
     with pytest.raises(ValueError, match="triangle 5"):
@@ -79,3 +81,23 @@ def test_fresh_sah_is_measured_on_demand(knot):
     stats = tree.update(moved, policy="refit", measure_fresh=True)
     assert stats.fresh_sah_cost == pytest.approx(bvhlab.build(moved).stats["sah_cost"], rel=1e-6)
     assert stats.sah_cost >= stats.fresh_sah_cost
+
+
+def test_adaptive_rebuilds_the_top_over_parts_that_moved(knot):
+    """Rigid slabs of the knot moved apart: adaptive rebuilds the levels above its small subtrees
+    over their boxes (top_boxes), and the tree stays valid with a fresh build's hits; with
+    top_cut_primitives 0 it does not."""
+    slab = np.minimum(5, ((knot[:, 0, 0] - knot[:, 0, 0].min()) / np.ptp(knot[:, 0, 0]) * 6).astype(int))
+    moved = knot.copy()
+    moved[:, :, 1] += (0.3 * np.sin(3.0 * slab + 1.0)).astype(np.float32)[:, None]
+    moved = np.ascontiguousarray(moved)
+    tree = bvhlab.build(knot)
+    stats = tree.update(moved, top_growth=1.0)  # whatever the subtrees left
+    assert stats.policy == "partial" and stats.top_boxes > 1
+    assert stats.sah_cost == pytest.approx(tree.stats["sah_cost"], rel=1e-4)
+    check_tree_layout(tree, moved)
+    origins, dirs = procedural.random_rays(moved, 4000, seed=5)
+    a, b = tree.intersect(origins, dirs), bvhlab.build(moved).intersect(origins, dirs)
+    np.testing.assert_array_equal(a["t"], b["t"])
+    np.testing.assert_array_equal(a["prim"], b["prim"])
+    assert bvhlab.build(knot).update(moved, top_cut_primitives=0).top_boxes == 0

@@ -1,8 +1,9 @@
 // update.h — updates of a tree over a deforming mesh (issue 34), one policy per update: rebuild,
 // refit, partial (refit, then rebuild the subtrees whose SAH cost grew too much; selective
-// restructuring, Yoon, Curtis and Manocha 2007), or adaptive (refit, then whichever of the three
-// the measured costs call for). Every policy leaves a whole, valid tree (docs/design.md "Tree
-// layout"); the same inputs give the same tree on any thread count.
+// restructuring, Yoon, Curtis and Manocha 2007), or adaptive (refit, then by the measured costs:
+// nothing more, subtrees and the upper levels rebuilt, or a full rebuild). Every policy leaves a
+// whole, valid tree (docs/design.md "Tree layout"); the same inputs give the same tree on any
+// thread count.
 #pragma once
 #include <cstdint>
 #include <string>
@@ -18,7 +19,8 @@ enum class UpdatePolicy {
     Refit,     ///< boxes only (refitted): the topology stays, its cost may grow
     Partial,   ///< refit, then rebuild each topmost subtree whose cost grew past subtree_growth
     Adaptive,  ///< refit; past target_growth, rebuild the subtrees holding most of the cost grown
-               ///< per primitive (a full rebuild when they would leave it past tree_growth)
+               ///< per primitive, then the levels above a cut of small subtrees over their boxes
+               ///< (a full rebuild when the tree still costs more than tree_growth)
 };
 
 /// The thresholds of an update. Costs are SAH costs of a subtree relative to its own root's area
@@ -34,19 +36,34 @@ struct UpdateConfig {
     /// adaptive: while the refitted tree's cost is within this times its cost when built, the
     /// refit is all; past it, subtrees are rebuilt to take the excess off (subtrees_by_excess).
     float target_growth = 1.03f;
-    /// adaptive: the most primitives one update rebuilds in subtrees, as a share of all (a
-    /// sixth of a full rebuild's work; the subtrees that would not fit wait for the next update).
-    float restructure_share = 0.15f;
-    /// adaptive: the whole tree is rebuilt instead when the restructured tree's cost (the refitted
-    /// tree's less the excess the chosen subtrees hold) would still exceed this times its cost
-    /// when built (issue 34: within 1.10 of a fresh build's). bench/updates.py, the 24-frame
-    /// wave: 1.09 kept the SAH within 1.065 of a fresh build's for 0.45-0.53 of the time of
-    /// rebuilding every frame; 1.15 within 1.12-1.14 for 0.39-0.42; 1.05 within 1.03-1.04 for
-    /// 0.60-0.65. (The add-on rebuilt at 1.5 of the refitted cost, addon/engine/scene_tree.py.)
+    /// adaptive: the most primitives one update rebuilds in subtrees, as a share of all (the
+    /// subtrees that would not fit wait for the next update). 0.15 before rebuild_top; with it,
+    /// 0.1 kept the bundled animations within 1.04-1.09 of a fresh build's SAH with no full
+    /// rebuild (bench/updates.py; 0.05 let the generated crowd rebuild 10 frames of 23).
+    float restructure_share = 0.1f;
+    /// adaptive: the whole tree is rebuilt instead when the restructured tree's cost still exceeds
+    /// this times its cost when built (issue 34: within 1.10 of a fresh build's). Before
+    /// rebuild_top, on the 24-frame wave: 1.09 kept the SAH within 1.065 of a fresh build's for
+    /// 0.45-0.53 of the time of rebuilding every frame, rebuilding 4 frames; 1.15 within 1.12-1.14
+    /// for 0.39-0.42; 1.05 within 1.03-1.04 for 0.60-0.65. (The add-on rebuilt at 1.5 of the
+    /// refitted cost, addon/engine/scene_tree.py.)
     float tree_growth = 1.09f;
     /// partial, adaptive: subtrees of fewer primitives are never rebuilt alone (their rebuilds
     /// gain little and their costs are noisy); their ancestors are.
     std::uint32_t min_subtree_primitives = 256;
+    /// adaptive: after the subtrees, the levels above the topmost subtrees of at most this many
+    /// primitives are rebuilt over those subtrees' boxes (rebuild_top.h); 0: never. bench/
+    /// updates.py, restructure_share 0.1: 16 kept the generated crowd within 1.085 of a fresh
+    /// build's SAH with no full rebuild, 32 within 1.110, 64 rebuilt 12 frames of 23; the wave
+    /// within 1.037 (16), 1.058 (32), 1.065 (0: no top rebuild).
+    std::uint32_t top_cut_primitives = 16;
+    /// adaptive: the levels above the cut are rebuilt only while the tree, after its subtrees,
+    /// still costs more than this times its cost when built (the step copies the whole tree, which
+    /// in wall time costs about a fifth of a rebuild on this machine). bench/updates.py: 1.07 ran
+    /// it on 11 of the wave's 23 updates (SAH within 1.050 of a fresh build's) and 15 of the
+    /// .blend crowd's (1.060), on every one of the generated crowd's; 1.05 on 17 of the wave's
+    /// (1.039); 1 (always) 1.037.
+    float top_growth = 1.07f;
     /// Also build a fresh tree over the geometry, only to report its SAH cost (UpdateStats::
     /// fresh_sah_cost): on demand, as it costs a build.
     bool measure_fresh = false;
@@ -59,6 +76,7 @@ struct UpdateStats {
     double sah_cost = 0;                        ///< of the updated tree (sah_cost, stats.h)
     std::uint32_t subtrees_rebuilt = 0;         ///< partial: how many; rebuild: 1
     std::uint64_t primitives_rebuilt = 0;       ///< in the rebuilt subtrees
+    std::uint32_t top_boxes = 0;                ///< adaptive: the cut's subtrees (rebuild_top); 0: none
     double fresh_sah_cost = -1;                 ///< a fresh build's, with UpdateConfig::measure_fresh; else -1
 };
 

@@ -148,6 +148,11 @@ std::uint64_t rebuild_subtrees(Bvh& tree, NodeCostArray& built, const std::vecto
             std::upper_bound(ends.begin(), ends.end(), i) - ends.begin();  // parts ending at or before i
         return std::uint32_t(std::int64_t(i) + shift[before]);
     };
+    // map(i) for i at or after the node being copied, the parts before that node being `done`: a
+    // child or skip index short of the next part's root moves as the node does (no search)
+    auto map_from = [&](std::size_t done, std::uint32_t i) {
+        return done == parts.size() || i <= parts[done].root ? std::uint32_t(std::int64_t(i) + shift[done]) : map(i);
+    };
     Bvh out;
     NodeCostArray out_built;
     const std::size_t size = map(tree.node_count());
@@ -156,10 +161,13 @@ std::uint64_t rebuild_subtrees(Bvh& tree, NodeCostArray& built, const std::vecto
     out_built.resize(size);
     std::uint32_t next = 0;  // old node to copy next
     std::size_t at = 0;      // where it goes
+    std::size_t done = 0;    // the parts before it
     auto copy_old = [&](std::uint32_t until) {
         for (; next < until; ++next, ++at) {
             BvhNode n = tree.nodes[next];
-            if (!is_leaf(n)) n.index = map(n.index), n.info = gpu::NODE_INTERNAL_BIT | map(skip_index(n, next));
+            if (!is_leaf(n))
+                n.index = map_from(done, n.index),
+                n.info = gpu::NODE_INTERNAL_BIT | map_from(done, skip_index(n, next));
             out.nodes[at] = n, out.depths[at] = tree.depths[next], out_built[at] = built[next];
         }
     };
@@ -175,7 +183,7 @@ std::uint64_t rebuild_subtrees(Bvh& tree, NodeCostArray& built, const std::vecto
         }
         std::copy(r.part.refs.begin(), r.part.refs.end(), tree.refs.begin() + r.slot);
         std::copy(r.part.prims.begin(), r.part.prims.end(), tree.prims.begin() + r.slot);
-        next = r.end;
+        next = r.end, ++done;
     }
     copy_old(tree.node_count());
     tree.nodes = std::move(out.nodes);

@@ -9,6 +9,7 @@
 
 #include "bvhlab/stats.h"
 #include "rebuild_subtrees.h"
+#include "rebuild_top.h"
 
 namespace bvhlab {
 namespace {
@@ -28,24 +29,33 @@ double restructure(Bvh& tree, NodeCostArray& built, const NodeCosts& now, const 
     return subtree_costs(tree)[0];  // a root of zero area: its cost counts nodes
 }
 
-/// What adaptive runs after a refit, by the tree's measured costs (`now`) against its costs when
-/// built: nothing more while the tree's cost is within target_growth of its cost when built;
-/// else the subtrees that take most of the excess off per primitive (subtrees_by_excess: Yoon,
-/// Curtis and Manocha 2007 restructure only where culling efficiency dropped; the SAH cost is
-/// that measure), at most restructure_share of the primitives; a full rebuild instead when the
-/// tree would keep more than tree_growth of its cost when built after them. bench/updates.py
-/// has the figures.
-UpdatePolicy adaptive_choice(const Bvh& tree, const NodeCosts& now, const NodeCostArray& built,
-                             const UpdateConfig& config, std::vector<std::uint32_t>& roots) {
-    if (tree.empty() || now.cost[0] <= config.target_growth * built[0]) return UpdatePolicy::Refit;
+/// Adaptive past target_growth (its caller's check), after a refit whose measured costs are
+/// `now`: first the subtrees that take most of the excess off per primitive are rebuilt from their
+/// primitives (subtrees_by_excess: Yoon, Curtis and Manocha 2007 restructure only where culling
+/// efficiency dropped; the SAH cost is that measure), at most restructure_share of the primitives;
+/// then, while the tree still costs more than top_growth × its cost when built, the levels above
+/// the topmost subtrees of at most top_cut_primitives are rebuilt over those subtrees' boxes
+/// (rebuild_top: the excess of the large nodes, which no subtree of a share of the primitives
+/// holds, is how the parts are grouped). A full rebuild instead when the tree still costs more
+/// than tree_growth × its cost when built. Returns what ran; `sah`
+/// receives the tree's cost after it. bench/updates.py has the figures.
+UpdatePolicy adaptive(Bvh& tree, NodeCostArray& built, const NodeCosts& now, const GeometryView& g,
+                      const UpdateConfig& config, UpdateStats& stats, double& sah) {
     if (now.area[0] <= 0) return UpdatePolicy::Rebuild;  // no areas to weigh the subtrees by
-    const double excess = double(now.area[0]) * (double(now.cost[0]) - built[0]);
+    const double goal = built[0];
+    const double excess = double(now.area[0]) * (double(now.cost[0]) - goal);
     double covered = 0;
-    roots = subtrees_by_excess(tree, now, built, excess, config.min_subtree_primitives,
-                               std::uint64_t(config.restructure_share * now.count[0]), covered);
-    // the cost the restructured tree should have: past tree_growth, a rebuild instead
-    if (now.cost[0] - covered / now.area[0] > config.tree_growth * built[0]) return UpdatePolicy::Rebuild;
-    return UpdatePolicy::Partial;
+    const std::vector<std::uint32_t> roots =
+        subtrees_by_excess(tree, now, built, excess, config.min_subtree_primitives,
+                           std::uint64_t(config.restructure_share * now.count[0]), covered);
+    if (!roots.empty()) sah = restructure(tree, built, now, roots, g, stats);
+    if (config.top_cut_primitives > 0 && sah > config.top_growth * goal) {
+        const std::vector<std::uint32_t> cut = top_cut(tree, config.top_cut_primitives);
+        if (cut.size() > 1 && rebuild_top(tree, built, cut, sah))
+            stats.top_boxes = static_cast<std::uint32_t>(cut.size());
+    }
+    if (roots.empty() && stats.top_boxes == 0 && sah <= config.tree_growth * goal) return UpdatePolicy::Refit;
+    return sah > config.tree_growth * goal ? UpdatePolicy::Rebuild : UpdatePolicy::Partial;
 }
 
 }  // namespace
@@ -96,25 +106,27 @@ Bvh update_bvh(const Bvh& old, const NodeCostArray& built, const GeometryView& g
         tree = refitted(old, g, old.config.threads);
         const NodeCosts now = node_costs(tree);
         stats.sah_cost = tree.empty() ? 0.0 : now.cost[0];
-        std::vector<std::uint32_t> roots;
+        built_out = built;
+        double sah = stats.sah_cost;
         UpdatePolicy ran = UpdatePolicy::Refit;
         if (config.policy == UpdatePolicy::Partial) {
-            roots = subtrees_past(tree, now, built, config.subtree_growth, config.min_subtree_primitives);
+            const std::vector<std::uint32_t> roots =
+                subtrees_past(tree, now, built, config.subtree_growth, config.min_subtree_primitives);
+            if (!roots.empty()) sah = restructure(tree, built_out, now, roots, g, stats);
             ran = UpdatePolicy::Partial;
-        } else if (config.policy == UpdatePolicy::Adaptive) {
-            ran = adaptive_choice(tree, now, built, config, roots);
+        } else if (config.policy == UpdatePolicy::Adaptive && !tree.empty() &&
+                   now.cost[0] > config.target_growth * built[0]) {
+            ran = adaptive(tree, built_out, now, g, config, stats, sah);
         }
         if (ran == UpdatePolicy::Rebuild) {
+            stats.subtrees_rebuilt = 0, stats.top_boxes = 0;
             rebuild();
         } else {
-            built_out = built;
-            if (!roots.empty()) {
-                stats.sah_cost = restructure(tree, built_out, now, roots, g, stats);
-                // the root's cost as built follows the best its restructured tree reached: the
-                // geometry's own shape may have made a good tree cheaper than the first build
-                built_out[0] = std::min(built_out[0], float(stats.sah_cost));
-            }
-            stats.policy = config.policy == UpdatePolicy::Adaptive && roots.empty() ? UpdatePolicy::Refit : ran;
+            // the root's cost as built follows the best its restructured tree reached: the
+            // geometry's own shape may have made a good tree cheaper than the first build
+            if (config.policy == UpdatePolicy::Adaptive && ran == UpdatePolicy::Partial)
+                built_out[0] = std::min(built_out[0], float(sah));
+            stats.sah_cost = sah, stats.policy = ran;
         }
     }
     stats.ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
@@ -144,6 +156,8 @@ void validate(const UpdateConfig& config) {
         throw std::invalid_argument("tree_growth must be a finite number of at least 1");
     if (!(config.target_growth >= 1.0f) || !std::isfinite(config.target_growth))
         throw std::invalid_argument("target_growth must be a finite number of at least 1");
+    if (!(config.top_growth >= 1.0f) || !std::isfinite(config.top_growth))
+        throw std::invalid_argument("top_growth must be a finite number of at least 1");
     if (!(config.restructure_share > 0.0f && config.restructure_share <= 1.0f))
         throw std::invalid_argument("restructure_share must be a number in (0, 1]");
     if (static_cast<unsigned>(config.policy) >= std::size(kNames)) throw std::invalid_argument("unknown update policy");
