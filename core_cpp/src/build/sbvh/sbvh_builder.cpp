@@ -1,0 +1,263 @@
+// sbvh_builder.cpp — the SBVH's top-down build (Stich, Friedrich and Dietrich 2009, §4): one work
+// array used as a stack of nodes' reference ranges, the node on top always last, so a spatial
+// split that duplicates references grows the array in place.
+#include "sbvh_builder.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "bvhlab/build_config.h"
+#include "chop.h"
+#include "sbvh_splits.h"
+
+namespace bvhlab {
+namespace {
+
+using sbvh::ObjectSplit;
+using sbvh::SpatialSplit;
+
+/// The box and centroid box of some references.
+struct Bounds {
+    Aabb box, centroids;
+    void grow(const PrimRef& r) { box.grow(r.box()), centroids.grow(r.centroid()); }
+};
+
+Bounds bounds_of(const PrimRef* refs, std::size_t n) {
+    Bounds b;
+    for (std::size_t i = 0; i < n; ++i) b.grow(refs[i]);
+    return b;
+}
+
+/// A node to build: its references are work[begin, end), the last of the work array.
+struct Task {
+    std::uint32_t begin = 0, end = 0;
+    Bounds bounds;
+    std::uint32_t depth = 0;
+    std::int64_t parent = -1;  ///< the node whose second child this is (its index is written then), or -1
+    std::uint32_t size() const { return end - begin; }
+};
+
+std::uint32_t ceil_log2(std::uint32_t n) {
+    std::uint32_t k = 0;
+    while ((std::uint64_t(1) << k) < n) ++k;
+    return k;
+}
+
+class SbvhBuilder {
+public:
+    SbvhBuilder(const GeometryView& g, const BuildConfig& cfg, std::uint64_t limit, float root_area)
+        : g_(g), cfg_(cfg), setup_{cfg.bins, SahCost(cfg)}, limit_(limit), min_overlap_(cfg.sbvh_alpha * root_area) {}
+
+    /// Builds over `refs`; false when cancelled.
+    bool run(const BigVector<PrimRef>& refs, const Bounds& root, Cancellation& cancel,
+             std::atomic<std::uint64_t>& in_leaves);
+
+    std::vector<BvhNode> nodes;
+    std::vector<std::uint32_t> leaf_refs;
+    std::vector<std::uint8_t> depths;
+
+private:
+    bool split(const Task& t, Task& left, Task& right);
+    bool spatial_partition(const Task& t, const SpatialSplit& s, Task& left, Task& right);
+    void object_partition(const Task& t, const ObjectSplit& s, Task& left, Task& right);
+    void median_partition(const Task& t, Task& left, Task& right);
+    /// Children of t from work[t.begin, t.begin + right_count) (right) and the rest (left).
+    void children(const Task& t, std::uint32_t right_count, Task& left, Task& right) const;
+    void emit_leaf(const Task& t);
+    /// What the object split's bins divide (BuildConfig::bin_bounds).
+    const Aabb& object_span(const Task& t) const {
+        return cfg_.bin_bounds == BinBounds::Box ? t.bounds.box : t.bounds.centroids;
+    }
+
+    const GeometryView& g_;
+    const BuildConfig& cfg_;
+    sbvh::BinSetup setup_;
+    std::uint64_t limit_;   ///< the reference budget
+    float min_overlap_;     ///< α · A(root): children overlapping less need no spatial split
+    std::uint64_t total_ = 0;  ///< references alive (in leaves and in the work array)
+    std::vector<PrimRef> work_, lefts_, rights_;
+};
+
+bool SbvhBuilder::run(const BigVector<PrimRef>& refs, const Bounds& root, Cancellation& cancel,
+                      std::atomic<std::uint64_t>& in_leaves) {
+    const auto n = static_cast<std::uint32_t>(refs.size());
+    work_.reserve(limit_);
+    work_.assign(refs.begin(), refs.end());
+    total_ = n;
+    std::vector<Task> stack{Task{0, n, root, 0, -1}};
+    while (!stack.empty()) {
+        const Task t = stack.back();
+        stack.pop_back();
+        if (t.parent >= 0) nodes[t.parent].index = static_cast<std::uint32_t>(nodes.size());
+        if ((nodes.size() & 255) == 0) {
+            if (cancel.poll()) return false;
+            in_leaves.store(std::min<std::uint64_t>(leaf_refs.size(), n), std::memory_order_relaxed);
+        }
+        Task left, right;
+        if (!split(t, left, right)) {
+            emit_leaf(t);
+            continue;
+        }
+        BvhNode node{};
+        set_box(node, t.bounds.box);
+        node.info = gpu::NODE_INTERNAL_BIT;  // its skip index is written at the end
+        right.parent = static_cast<std::int64_t>(nodes.size());
+        nodes.push_back(node), depths.push_back(std::uint8_t(t.depth));
+        stack.push_back(right), stack.push_back(left);  // left on top: the next node, i + 1
+    }
+    // skip index of an internal node: the end of its second child's subtree (children come later)
+    std::vector<std::uint32_t> end(nodes.size());
+    for (std::size_t i = nodes.size(); i-- > 0;) {
+        BvhNode& node = nodes[i];
+        end[i] = is_leaf(node) ? std::uint32_t(i + 1) : end[node.index];
+        if (!is_leaf(node)) node.info = gpu::NODE_INTERNAL_BIT | end[i];
+    }
+    return true;
+}
+
+void SbvhBuilder::emit_leaf(const Task& t) {
+    BvhNode node{};
+    set_box(node, t.bounds.box);
+    node.index = static_cast<std::uint32_t>(leaf_refs.size());
+    node.info = t.size();
+    nodes.push_back(node), depths.push_back(std::uint8_t(t.depth));
+    for (std::uint32_t i = t.begin; i < t.end; ++i) leaf_refs.push_back(work_[i].ref);
+    work_.resize(t.begin);
+}
+
+/// Where a node of more than one reference is split (Stich et al. 2009 §4): the object split; the
+/// spatial split where the object split's children overlap by more than α·A(root) (§4.5) and it is
+/// cheaper; a leaf where one is allowed and cheaper than both; the median once the tree could grow
+/// past MAX_TREE_HEIGHT.
+bool SbvhBuilder::split(const Task& t, Task& left, Task& right) {
+    const std::uint32_t n = t.size();
+    if (n <= 1) return false;
+    if (t.depth + ceil_log2(n) + 1 >= gpu::MAX_TREE_HEIGHT) {
+        median_partition(t, left, right);
+        return true;
+    }
+    const PrimRef* refs = work_.data() + t.begin;
+    const ObjectSplit object = sbvh::find_object_split(refs, n, object_span(t), t.bounds.box.half_area(), setup_);
+    SpatialSplit spatial;
+    const bool overlapping =
+        object.axis < 0 || sbvh::intersect(object.left, object.right).half_area() > min_overlap_;
+    if (overlapping && total_ < limit_) spatial = sbvh::find_spatial_split(g_, refs, n, t.bounds.box, setup_);
+    // without an object split the median's cost bounds the split (its children's boxes at most the node's)
+    const float area = t.bounds.box.half_area();
+    const float object_cost = object.axis >= 0 ? object.cost
+                                               : setup_.sah.split(SahCost::inverse_area(area), area, n / 2, area, n - n / 2);
+    if (n <= cfg_.max_leaf_size && setup_.sah.leaf(n) <= std::min(object_cost, spatial.cost)) return false;
+    if (spatial.cost < object_cost && spatial_partition(t, spatial, left, right)) return true;
+    if (object.axis >= 0) {
+        object_partition(t, object, left, right);
+    } else {
+        median_partition(t, left, right);
+    }
+    return true;
+}
+
+void SbvhBuilder::children(const Task& t, std::uint32_t right_count, Task& left, Task& right) const {
+    const PrimRef* refs = work_.data() + t.begin;
+    right = Task{t.begin, t.begin + right_count, bounds_of(refs, right_count), t.depth + 1, -1};
+    const auto end = static_cast<std::uint32_t>(work_.size());
+    left = Task{right.end, end, bounds_of(refs + right_count, end - right.end), t.depth + 1, -1};
+}
+
+void SbvhBuilder::object_partition(const Task& t, const ObjectSplit& s, Task& left, Task& right) {
+    const Aabb& span = object_span(t);
+    const std::uint32_t bins = setup_.bins;
+    auto first = work_.begin() + t.begin;
+    auto mid = std::partition(first, work_.end(), [&](const PrimRef& r) {  // right side first
+        return !sbvh::object_goes_left(r, s, span, bins);
+    });
+    children(t, static_cast<std::uint32_t>(mid - first), left, right);
+}
+
+/// The even split by count on the largest centroid axis (ties by reference): always two non-empty
+/// halves, and every leaf within depth + ⌈log2 n⌉.
+void SbvhBuilder::median_partition(const Task& t, Task& left, Task& right) {
+    const int axis = largest_axis(t.bounds.centroids.extent());
+    const std::uint32_t n = t.size(), right_count = n - n / 2;
+    auto first = work_.begin() + t.begin;
+    std::nth_element(first, first + right_count, work_.end(), [axis](const PrimRef& a, const PrimRef& b) {
+        const float ca = a.centroid(axis), cb = b.centroid(axis);
+        return ca > cb || (ca == cb && a.ref > b.ref);
+    });
+    children(t, right_count, left, right);
+}
+
+/// The spatial split's references (§4.3): those on one side of the plane go there; a straddling one
+/// is chopped into both, or goes whole to the side where that is cheaper (unsplitting, §4.4:
+/// A(L ∪ r)·N_L + A(R)·(N_R − 1) or A(L)·(N_L − 1) + A(R ∪ r)·N_R against A(L)·N_L + A(R)·N_R).
+/// False, nothing moved, when a side would be empty or the budget would be overdrawn.
+bool SbvhBuilder::spatial_partition(const Task& t, const SpatialSplit& s, Task& left, Task& right) {
+    const int axis = s.axis;
+    const float pos = s.position;
+    Aabb lbox = s.left, rbox = s.right;
+    float nl = float(s.left_count), nr = float(s.right_count);
+    lefts_.clear(), rights_.clear();
+    for (std::uint32_t i = t.begin; i < t.end; ++i) {
+        const PrimRef& r = work_[i];
+        if (r.hi[axis] <= pos) {
+            lefts_.push_back(r);
+            continue;
+        }
+        if (r.lo[axis] >= pos) {
+            rights_.push_back(r);
+            continue;
+        }
+        Aabb below, above;
+        sbvh::chop_reference(g_, r, axis, pos, below, above);
+        if (below.empty() || above.empty()) {
+            (below.empty() ? rights_ : lefts_).push_back(sbvh::with_box(r, below.empty() ? above : below));
+            continue;
+        }
+        if (cfg_.sbvh_unsplit) {
+            Aabb lgrown = lbox, rgrown = rbox;
+            lgrown.grow(r.box()), rgrown.grow(r.box());
+            const float both = lbox.half_area() * nl + rbox.half_area() * nr;
+            const float to_left = lgrown.half_area() * nl + rbox.half_area() * (nr - 1);
+            const float to_right = lbox.half_area() * (nl - 1) + rgrown.half_area() * nr;
+            if (to_left < both && to_left <= to_right) {
+                lefts_.push_back(r), lbox = lgrown, nr -= 1;
+                continue;
+            }
+            if (to_right < both) {
+                rights_.push_back(r), rbox = rgrown, nl -= 1;
+                continue;
+            }
+        }
+        lefts_.push_back(sbvh::with_box(r, below)), rights_.push_back(sbvh::with_box(r, above));
+    }
+    const std::uint64_t added = lefts_.size() + rights_.size() - t.size();
+    if (lefts_.empty() || rights_.empty() || total_ + added > limit_) return false;
+    total_ += added;
+    work_.resize(t.begin);
+    work_.insert(work_.end(), rights_.begin(), rights_.end());
+    work_.insert(work_.end(), lefts_.begin(), lefts_.end());
+    children(t, static_cast<std::uint32_t>(rights_.size()), left, right);
+    return true;
+}
+
+}  // namespace
+
+std::uint64_t sbvh_reference_limit(std::uint64_t primitives, const BuildConfig& config) {
+    const auto budget = static_cast<std::uint64_t>(std::floor(double(config.sbvh_budget) * double(primitives)));
+    constexpr std::uint64_t kMaxReferences = gpu::REF_INDEX_MASK - 2 * (kMaxSahBlock - 1);
+    return std::max(primitives, std::min(budget, kMaxReferences));
+}
+
+void build_sbvh(const BigVector<PrimRef>& refs, const GeometryView& geometry, const BuildConfig& config,
+                Cancellation& cancel, std::atomic<std::uint64_t>& in_leaves, Bvh& out) {
+    if (refs.empty()) return;
+    const Bounds root = bounds_of(refs.data(), refs.size());
+    SbvhBuilder builder(geometry, config, sbvh_reference_limit(refs.size(), config), root.box.half_area());
+    if (!builder.run(refs, root, cancel, in_leaves)) return;
+    out.nodes.assign(builder.nodes.begin(), builder.nodes.end());
+    out.refs.assign(builder.leaf_refs.begin(), builder.leaf_refs.end());
+    out.depths.assign(builder.depths.begin(), builder.depths.end());
+    out.prims = pack_prims(geometry, out.refs, config.threads);
+}
+
+}  // namespace bvhlab
