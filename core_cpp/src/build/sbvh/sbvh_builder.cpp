@@ -5,9 +5,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <vector>
 
 #include "bvhlab/build_config.h"
+#include "bvhlab/thread_pool.h"
 #include "chop.h"
 #include "sbvh_splits.h"
 
@@ -38,6 +40,17 @@ struct Task {
     std::uint32_t size() const { return end - begin; }
 };
 
+/// A subtree left to a task of the pool: its place in the top's nodes, its root and references.
+struct Deferred {
+    std::uint32_t node = 0;
+    Task task;
+    std::vector<PrimRef> refs;
+};
+
+/// Subtrees of at most this many references are built as parts, on the pool (a constant: the tree
+/// must not depend on the thread count). Sponza's 262K triangles make about 100.
+constexpr std::uint32_t kPartSize = 4096;
+
 std::uint32_t ceil_log2(std::uint32_t n) {
     std::uint32_t k = 0;
     while ((std::uint64_t(1) << k) < n) ++k;
@@ -46,16 +59,22 @@ std::uint32_t ceil_log2(std::uint32_t n) {
 
 class SbvhBuilder {
 public:
-    SbvhBuilder(const GeometryView& g, const BuildConfig& cfg, std::uint64_t limit, float root_area)
-        : g_(g), cfg_(cfg), setup_{cfg.bins, SahCost(cfg)}, limit_(limit), min_overlap_(cfg.sbvh_alpha * root_area) {}
+    SbvhBuilder(const GeometryView& g, const BuildConfig& cfg, float root_area)
+        : g_(g), cfg_(cfg), setup_{cfg.bins, SahCost(cfg)}, min_overlap_(cfg.sbvh_alpha * root_area) {}
 
-    /// Builds over `refs`; false when cancelled.
-    bool run(const BigVector<PrimRef>& refs, const Bounds& root, Cancellation& cancel,
-             std::atomic<std::uint64_t>& in_leaves);
+    /// Builds the subtree of `root` over `refs` (root.begin = 0, root.end = their count), adding at
+    /// most `spare` references by spatial splits, spent as they come (the paper's budget, depth
+    /// first). Tasks of at most `defer_size` references (but the root; 0: none) are left in
+    /// `deferred`, each as a leaf of no references in `nodes`. `cancel` is polled where `poll` (the
+    /// calling thread), else read. False when cancelled.
+    bool run(std::vector<PrimRef> refs, const Task& root, std::uint64_t spare, std::uint32_t defer_size,
+             Cancellation& cancel, bool poll, std::atomic<std::uint64_t>& in_leaves);
+    std::uint64_t spare() const { return spare_; }
 
     std::vector<BvhNode> nodes;
     std::vector<std::uint32_t> leaf_refs;
     std::vector<std::uint8_t> depths;
+    std::vector<Deferred> deferred;
 
 private:
     bool split(const Task& t, Task& left, Task& right);
@@ -65,6 +84,7 @@ private:
     /// Children of t from work[t.begin, t.begin + right_count) (right) and the rest (left).
     void children(const Task& t, std::uint32_t right_count, Task& left, Task& right) const;
     void emit_leaf(const Task& t);
+    void defer(const Task& t);
     /// What the object split's bins divide (BuildConfig::bin_bounds).
     const Aabb& object_span(const Task& t) const {
         return cfg_.bin_bounds == BinBounds::Box ? t.bounds.box : t.bounds.centroids;
@@ -73,26 +93,29 @@ private:
     const GeometryView& g_;
     const BuildConfig& cfg_;
     sbvh::BinSetup setup_;
-    std::uint64_t limit_;   ///< the reference budget
-    float min_overlap_;     ///< α · A(root): children overlapping less need no spatial split
-    std::uint64_t total_ = 0;  ///< references alive (in leaves and in the work array)
+    float min_overlap_;        ///< α · A(root): children overlapping less need no spatial split
+    std::uint64_t spare_ = 0;  ///< references spatial splits may still add
     std::vector<PrimRef> work_, lefts_, rights_;
 };
 
-bool SbvhBuilder::run(const BigVector<PrimRef>& refs, const Bounds& root, Cancellation& cancel,
-                      std::atomic<std::uint64_t>& in_leaves) {
-    const auto n = static_cast<std::uint32_t>(refs.size());
-    work_.reserve(limit_);
-    work_.assign(refs.begin(), refs.end());
-    total_ = n;
-    std::vector<Task> stack{Task{0, n, root, 0, -1}};
+bool SbvhBuilder::run(std::vector<PrimRef> refs, const Task& root, std::uint64_t spare, std::uint32_t defer_size,
+                      Cancellation& cancel, bool poll, std::atomic<std::uint64_t>& in_leaves) {
+    work_ = std::move(refs);
+    spare_ = spare;
+    work_.reserve(root.size() + spare);
+    std::vector<Task> stack{root};
     while (!stack.empty()) {
         const Task t = stack.back();
         stack.pop_back();
         if (t.parent >= 0) nodes[t.parent].index = static_cast<std::uint32_t>(nodes.size());
         if ((nodes.size() & 255) == 0) {
-            if (cancel.poll()) return false;
-            in_leaves.store(std::min<std::uint64_t>(leaf_refs.size(), n), std::memory_order_relaxed);
+            if (poll ? cancel.poll() : cancel.stop_requested()) return false;
+            if (poll)
+                in_leaves.store(std::min<std::uint64_t>(leaf_refs.size(), root.size()), std::memory_order_relaxed);
+        }
+        if (t.size() <= defer_size && t.parent != -2) {
+            defer(t);
+            continue;
         }
         Task left, right;
         if (!split(t, left, right)) {
@@ -101,19 +124,22 @@ bool SbvhBuilder::run(const BigVector<PrimRef>& refs, const Bounds& root, Cancel
         }
         BvhNode node{};
         set_box(node, t.bounds.box);
-        node.info = gpu::NODE_INTERNAL_BIT;  // its skip index is written at the end
+        node.info = gpu::NODE_INTERNAL_BIT;  // its skip index is written when the tree is whole
         right.parent = static_cast<std::int64_t>(nodes.size());
         nodes.push_back(node), depths.push_back(std::uint8_t(t.depth));
         stack.push_back(right), stack.push_back(left);  // left on top: the next node, i + 1
     }
-    // skip index of an internal node: the end of its second child's subtree (children come later)
-    std::vector<std::uint32_t> end(nodes.size());
-    for (std::size_t i = nodes.size(); i-- > 0;) {
-        BvhNode& node = nodes[i];
-        end[i] = is_leaf(node) ? std::uint32_t(i + 1) : end[node.index];
-        if (!is_leaf(node)) node.info = gpu::NODE_INTERNAL_BIT | end[i];
-    }
     return true;
+}
+
+void SbvhBuilder::defer(const Task& t) {
+    Deferred d{static_cast<std::uint32_t>(nodes.size()), t, {work_.begin() + t.begin, work_.begin() + t.end}};
+    d.task.begin = 0, d.task.end = t.size(), d.task.parent = -2;  // -2: a root, never deferred again
+    deferred.push_back(std::move(d));
+    BvhNode node{};
+    set_box(node, t.bounds.box);
+    nodes.push_back(node), depths.push_back(std::uint8_t(t.depth));
+    work_.resize(t.begin);
 }
 
 void SbvhBuilder::emit_leaf(const Task& t) {
@@ -140,13 +166,12 @@ bool SbvhBuilder::split(const Task& t, Task& left, Task& right) {
     const PrimRef* refs = work_.data() + t.begin;
     const ObjectSplit object = sbvh::find_object_split(refs, n, object_span(t), t.bounds.box.half_area(), setup_);
     SpatialSplit spatial;
-    const bool overlapping =
-        object.axis < 0 || sbvh::intersect(object.left, object.right).half_area() > min_overlap_;
-    if (overlapping && total_ < limit_) spatial = sbvh::find_spatial_split(g_, refs, n, t.bounds.box, setup_);
+    const bool overlapping = object.axis < 0 || sbvh::intersect(object.left, object.right).half_area() > min_overlap_;
+    if (overlapping && spare_ > 0) spatial = sbvh::find_spatial_split(g_, refs, n, t.bounds.box, setup_);
     // without an object split the median's cost bounds the split (its children's boxes at most the node's)
     const float area = t.bounds.box.half_area();
-    const float object_cost = object.axis >= 0 ? object.cost
-                                               : setup_.sah.split(SahCost::inverse_area(area), area, n / 2, area, n - n / 2);
+    const float object_cost =
+        object.axis >= 0 ? object.cost : setup_.sah.split(SahCost::inverse_area(area), area, n / 2, area, n - n / 2);
     if (n <= cfg_.max_leaf_size && setup_.sah.leaf(n) <= std::min(object_cost, spatial.cost)) return false;
     if (spatial.cost < object_cost && spatial_partition(t, spatial, left, right)) return true;
     if (object.axis >= 0) {
@@ -231,8 +256,8 @@ bool SbvhBuilder::spatial_partition(const Task& t, const SpatialSplit& s, Task& 
         lefts_.push_back(sbvh::with_box(r, below)), rights_.push_back(sbvh::with_box(r, above));
     }
     const std::uint64_t added = lefts_.size() + rights_.size() - t.size();
-    if (lefts_.empty() || rights_.empty() || total_ + added > limit_) return false;
-    total_ += added;
+    if (lefts_.empty() || rights_.empty() || added > spare_) return false;
+    spare_ -= added;
     work_.resize(t.begin);
     work_.insert(work_.end(), rights_.begin(), rights_.end());
     work_.insert(work_.end(), lefts_.begin(), lefts_.end());
@@ -248,15 +273,113 @@ std::uint64_t sbvh_reference_limit(std::uint64_t primitives, const BuildConfig& 
     return std::max(primitives, std::min(budget, kMaxReferences));
 }
 
+namespace {
+
+/// Each part's share of the `spare` references the top left: in proportion to the area of its
+/// references' boxes over its own box's (how often a ray through the part meets a reference: the
+/// parts where references overlap most are where spatial splits pay), in order, rounded down.
+std::vector<std::uint64_t> shares(const std::vector<Deferred>& parts, std::uint64_t spare) {
+    std::vector<double> weight;
+    double total = 0;
+    for (const Deferred& d : parts) {
+        double area = 0;
+        for (const PrimRef& r : d.refs) area += r.box().half_area();
+        const double box = d.task.bounds.box.half_area();
+        weight.push_back(box > 0 ? area / box : double(d.refs.size()));
+        total += weight.back();
+    }
+    std::vector<std::uint64_t> out;
+    std::uint64_t handed = 0;  // never more than spare, whatever the rounding
+    for (double w : weight) {
+        const auto s = std::min(spare - handed, total > 0 ? std::uint64_t(double(spare) * (w / total)) : 0);
+        out.push_back(s), handed += s;
+    }
+    return out;
+}
+
+/// The tree of `top` with its deferred subtrees `parts` spliced in, each in its placeholder's place
+/// (depth-first order holds: a subtree is a contiguous range of nodes and of leaf slots): second
+/// children, leaf slots and skip indices are written here.
+void assemble(const SbvhBuilder& top, const std::vector<std::unique_ptr<SbvhBuilder>>& parts, Bvh& out) {
+    const std::size_t m = top.nodes.size();
+    std::vector<std::int64_t> part_of(m, -1);
+    for (std::size_t k = 0; k < parts.size(); ++k) part_of[top.deferred[k].node] = std::int64_t(k);
+    std::vector<std::uint32_t> pos(m);
+    std::size_t total = 0, slots = top.leaf_refs.size();
+    for (std::size_t i = 0; i < m; ++i) {
+        pos[i] = static_cast<std::uint32_t>(total);
+        total += part_of[i] >= 0 ? parts[part_of[i]]->nodes.size() : 1;
+    }
+    for (const auto& p : parts) slots += p->leaf_refs.size();
+    out.nodes = BigVector<BvhNode>(total);
+    out.depths = BigVector<std::uint8_t>(total);
+    out.refs = BigVector<std::uint32_t>(slots);
+    std::uint32_t slot = 0;
+    for (std::size_t i = 0; i < m; ++i) {
+        if (part_of[i] >= 0) {
+            const SbvhBuilder& p = *parts[part_of[i]];
+            for (std::size_t j = 0; j < p.nodes.size(); ++j) {
+                BvhNode c = p.nodes[j];
+                c.index += is_leaf(c) ? slot : pos[i];
+                out.nodes[pos[i] + j] = c, out.depths[pos[i] + j] = p.depths[j];
+            }
+            std::copy(p.leaf_refs.begin(), p.leaf_refs.end(), out.refs.begin() + slot);
+            slot += static_cast<std::uint32_t>(p.leaf_refs.size());
+            continue;
+        }
+        BvhNode n = top.nodes[i];
+        if (is_leaf(n)) {
+            std::copy_n(top.leaf_refs.begin() + n.index, leaf_count(n), out.refs.begin() + slot);
+            n.index = slot, slot += leaf_count(n);
+        } else {
+            n.index = pos[n.index];
+        }
+        out.nodes[pos[i]] = n, out.depths[pos[i]] = top.depths[i];
+    }
+    // skip index of an internal node: the end of its second child's subtree (children come later)
+    std::vector<std::uint32_t> end(total);
+    for (std::size_t i = total; i-- > 0;) {
+        BvhNode& node = out.nodes[i];
+        end[i] = is_leaf(node) ? std::uint32_t(i + 1) : end[node.index];
+        if (!is_leaf(node)) node.info = gpu::NODE_INTERNAL_BIT | end[i];
+    }
+}
+
+}  // namespace
+
 void build_sbvh(const BigVector<PrimRef>& refs, const GeometryView& geometry, const BuildConfig& config,
                 Cancellation& cancel, std::atomic<std::uint64_t>& in_leaves, Bvh& out) {
     if (refs.empty()) return;
-    const Bounds root = bounds_of(refs.data(), refs.size());
-    SbvhBuilder builder(geometry, config, sbvh_reference_limit(refs.size(), config), root.box.half_area());
-    if (!builder.run(refs, root, cancel, in_leaves)) return;
-    out.nodes.assign(builder.nodes.begin(), builder.nodes.end());
-    out.refs.assign(builder.leaf_refs.begin(), builder.leaf_refs.end());
-    out.depths.assign(builder.depths.begin(), builder.depths.end());
+    const auto n = static_cast<std::uint32_t>(refs.size());
+    const Bounds bounds = bounds_of(refs.data(), n);
+    const float root_area = bounds.box.half_area();
+    const Task root{0, n, bounds, 0, -2};
+    // The top of the tree leaves its subtrees of at most kPartSize references to the pool; the top
+    // spends the budget first, then each part gets a share of what is left in proportion to its
+    // references: the same tree on every thread count.
+    SbvhBuilder top(geometry, config, root_area);
+    if (!top.run({refs.begin(), refs.end()}, root, sbvh_reference_limit(n, config) - n, kPartSize, cancel, true,
+                 in_leaves))
+        return;
+    std::vector<std::unique_ptr<SbvhBuilder>> parts;
+    std::vector<std::size_t> order;  // largest first
+    const std::vector<std::uint64_t> share = shares(top.deferred, top.spare());
+    for (std::size_t k = 0; k < top.deferred.size(); ++k) {
+        parts.push_back(std::make_unique<SbvhBuilder>(geometry, config, root_area));
+        order.push_back(k);
+    }
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+        return top.deferred[a].task.size() > top.deferred[b].task.size();
+    });
+    const bool whole = ThreadPool::shared().run_until_stopped(
+        order.size(), ThreadPool::resolve(config.threads),
+        [&](std::size_t i, unsigned) {
+            Deferred& d = top.deferred[order[i]];
+            parts[order[i]]->run(std::move(d.refs), d.task, share[order[i]], 0, cancel, false, in_leaves);
+        },
+        &cancel);
+    if (!whole || cancel.stop_requested()) return;
+    assemble(top, parts, out);
     out.prims = pack_prims(geometry, out.refs, config.threads);
 }
 

@@ -15,7 +15,7 @@ namespace bvhlab {
 /// the budget) the spatial split with chopped references; the cheaper wins, or a leaf. One thread,
 /// so the tree never depends on the thread count. Returns early, the tree unfinished, when
 /// `cancel` says stop (the caller checks it). `in_leaves` counts primitives placed, for progress.
-void build_sbvh(const BigVector<PrimRef>& refs, const GeometryView& geometry, const BuildConfig& config, Cancellation& cancel,
-                std::atomic<std::uint64_t>& in_leaves, Bvh& out);
+void build_sbvh(const BigVector<PrimRef>& refs, const GeometryView& geometry, const BuildConfig& config,
+                Cancellation& cancel, std::atomic<std::uint64_t>& in_leaves, Bvh& out);
 
 }  // namespace bvhlab

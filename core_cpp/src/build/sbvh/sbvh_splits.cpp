@@ -18,9 +18,9 @@ struct Bin {
 /// The SAH sweep over one axis' bins: the cheapest boundary k (1..bins-1) between bins k-1 and k,
 /// with the counts `left(b)` of bins entering the left side and `right(b)` the right.
 template <class LeftCount, class RightCount>
-void sweep(const Bin* bins, std::uint32_t count, float inv_area, const SahCost& sah, LeftCount left,
-           RightCount right, float& best_cost, std::uint32_t& best_k, Aabb& best_left, Aabb& best_right,
-           std::uint32_t& best_nl, std::uint32_t& best_nr) {
+void sweep(const Bin* bins, std::uint32_t count, float inv_area, const SahCost& sah, LeftCount left, RightCount right,
+           float& best_cost, std::uint32_t& best_k, Aabb& best_left, Aabb& best_right, std::uint32_t& best_nl,
+           std::uint32_t& best_nr) {
     thread_local std::vector<Aabb> right_box;
     thread_local std::vector<std::uint32_t> right_n;
     right_box.resize(count), right_n.resize(count);
@@ -68,8 +68,7 @@ ObjectSplit find_object_split(const PrimRef* refs, std::uint32_t n, const Aabb& 
         std::uint32_t k = 0, nl = 0, nr = 0;
         const float before = best.cost;
         auto counted = [](const Bin& b) { return b.count; };
-        sweep(bins[a], count, inv_area, setup.sah, counted, counted, best.cost, k, best.left, best.right, nl,
-              nr);
+        sweep(bins[a], count, inv_area, setup.sah, counted, counted, best.cost, k, best.left, best.right, nl, nr);
         if (best.cost < before) best.axis = a, best.bin = k;
     }
     return best;
@@ -92,7 +91,8 @@ SpatialSplit find_spatial_split(const GeometryView& g, const PrimRef* refs, std:
         std::uint32_t first[3], last[3];
         bool spans = false;
         for (int a = 0; a < 3; ++a) {
-            first[a] = bin_of(r.lo[a], box.lo[a], scale[a], count), last[a] = bin_of(r.hi[a], box.lo[a], scale[a], count);
+            first[a] = bin_of(r.lo[a], box.lo[a], scale[a], count),
+            last[a] = bin_of(r.hi[a], box.lo[a], scale[a], count);
             ++bins[a][first[a]].count, ++bins[a][last[a]].exits;
             if (first[a] == last[a]) bins[a][first[a]].box.grow(r.box());
             spans |= first[a] != last[a];
