@@ -5,13 +5,10 @@
 #include <cmath>
 
 namespace bvhlab::sbvh {
-namespace {
-
-/// Where edge a→b crosses x[axis] = pos (a and b strictly on either side), as a box that holds the
-/// exact point: p = a + (b - a)·t in float is off by a few ulps of |a| + |b| on the other two axes
+/// p = a + (b - a)·t in float is off by a few ulps of |a| + |b| on the other two axes
 /// (one rounding in b - a, one in t, one in the product and one in the sum), so it is widened by
 /// 2^-20 (|a| + |b|), eight ulps of it.
-Aabb crossing(Vec3 a, Vec3 b, int axis, float pos) {
+Aabb edge_crossing(Vec3 a, Vec3 b, int axis, float pos) {
     const float t = (pos - a[axis]) / (b[axis] - a[axis]);
     Aabb box;
     for (int k = 0; k < 3; ++k) {
@@ -26,8 +23,6 @@ Aabb crossing(Vec3 a, Vec3 b, int axis, float pos) {
     return box;
 }
 
-}  // namespace
-
 void chop_triangle(const Vec3 v[3], const Aabb& box, int axis, float pos, Aabb& below, Aabb& above) {
     Aabb lo_part, hi_part;
     for (int k = 0; k < 3; ++k) {
@@ -35,7 +30,7 @@ void chop_triangle(const Vec3 v[3], const Aabb& box, int axis, float pos, Aabb& 
         if (a[axis] <= pos) lo_part.grow(a);
         if (a[axis] >= pos) hi_part.grow(a);
         if ((a[axis] < pos && pos < b[axis]) || (b[axis] < pos && pos < a[axis])) {
-            const Aabb p = crossing(a, b, axis, pos);
+            const Aabb p = edge_crossing(a, b, axis, pos);
             lo_part.grow(p), hi_part.grow(p);
         }
     }

@@ -19,6 +19,9 @@ void chop_reference(const GeometryView& g, const PrimRef& r, int axis, float pos
 
 /// chop_reference for a triangle whose vertices `v` are loaded already, its reference's box `box`.
 void chop_triangle(const Vec3 v[3], const Aabb& box, int axis, float pos, Aabb& below, Aabb& above);
+/// Where edge a→b crosses x[axis] = pos (a and b strictly on either side), as a box that holds the
+/// exact point (the float point widened by its rounding error).
+Aabb edge_crossing(Vec3 a, Vec3 b, int axis, float pos);
 /// chop_reference for a box (a sphere's reference).
 void chop_box(const Aabb& box, int axis, float pos, Aabb& below, Aabb& above);
 
