@@ -5,10 +5,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <vector>
 
 #include "bvhlab/build_config.h"
+#include "bvhlab/simd.h"
 #include "bvhlab/thread_pool.h"
 #include "chop.h"
 #include "sbvh_splits.h"
@@ -26,9 +28,17 @@ struct Bounds {
 };
 
 Bounds bounds_of(const PrimRef* refs, std::size_t n) {
-    Bounds b;
-    for (std::size_t i = 0; i < n; ++i) b.grow(refs[i]);
-    return b;
+    const float inf = std::numeric_limits<float>::infinity();
+    F4 lo = F4::splat(inf), hi = F4::splat(-inf), clo = lo, chi = hi;
+    const F4 half = F4::splat(0.5f);
+    for (std::size_t i = 0; i < n; ++i) {
+        const F4 l = refs[i].lo4(), h = refs[i].hi4(), c = (l + h) * half;  // PrimRef::centroid's
+        lo = min(lo, l), hi = max(hi, h), clo = min(clo, c), chi = max(chi, c);
+    }
+    alignas(16) float v[4][4];
+    lo.store(v[0]), hi.store(v[1]), clo.store(v[2]), chi.store(v[3]);
+    return {{{v[0][0], v[0][1], v[0][2]}, {v[1][0], v[1][1], v[1][2]}},
+            {{v[2][0], v[2][1], v[2][2]}, {v[3][0], v[3][1], v[3][2]}}};
 }
 
 /// A node to build: its references are work[begin, end), the last of the work array.

@@ -67,23 +67,23 @@ void sweep(const Bin* bins, std::uint32_t count, float inv_area, const SahCost& 
     }
 }
 
-/// The boxes of the parts of triangle `v` (its reference's box `box_lo`, `box_hi`) in bins
+/// The boxes of the parts of triangle `v` (its nine coordinates; its reference's box `box_lo`, `box_hi`) in bins
 /// first..last on `axis` (`lane`: that lane's mask; bin b between planes lo + width·b and
 /// lo + width·(b+1), the first and last open outwards), grown into their bins: each part is the box
 /// of the triangle's vertices in the slab and the edges' crossings of its two planes (the convex
 /// polygon triangle ∩ slab), intersected with the reference's box. Each plane's crossings are
 /// computed once, for the bins on both sides; the crossings are chop.h's edge_crossing in vectors.
-void bin_triangle_parts(const Vec3 v[3], F4 box_lo, F4 box_hi, int axis, F4 lane, std::uint32_t first,
+void bin_triangle_parts(const float* v, F4 box_lo, F4 box_hi, int axis, F4 lane, std::uint32_t first,
                         std::uint32_t last, float lo, float width, Bin* bins) {
+    float c[3] = {v[axis], v[3 + axis], v[6 + axis]};
     int order[3] = {0, 1, 2};  // the vertices in order along the axis
-    if (v[order[1]][axis] < v[order[0]][axis]) std::swap(order[0], order[1]);
-    if (v[order[2]][axis] < v[order[1]][axis]) std::swap(order[1], order[2]);
-    if (v[order[1]][axis] < v[order[0]][axis]) std::swap(order[0], order[1]);
+    if (c[1] < c[0]) std::swap(c[0], c[1]), std::swap(order[0], order[1]);
+    if (c[2] < c[1]) std::swap(c[1], c[2]), std::swap(order[1], order[2]);
+    if (c[1] < c[0]) std::swap(c[0], c[1]), std::swap(order[0], order[1]);
     F4 p[3];
-    float c[3];
     for (int k = 0; k < 3; ++k) {
-        const Vec3& q = v[order[k]];
-        p[k] = F4::set3(q.x, q.y, q.z), c[k] = q[axis];
+        const float* q = v + 3 * order[k];
+        p[k] = F4::set3(q[0], q[1], q[2]);
     }
     const F4 widen = F4::splat(0x1p-20f);
     auto cross = [&](int i, int j, float pos, Box4& out) {  // edge_crossing(p[i], p[j], axis, pos)
@@ -180,11 +180,7 @@ SpatialSplit find_spatial_split(const GeometryView& g, const PrimRef* refs, std:
         if (!spans) continue;
         // the reference is chopped at each bin boundary it spans, its parts binned one by one
         const bool sphere = is_sphere_ref(r.ref);
-        Vec3 v[3];
-        if (!sphere) {
-            const std::size_t t = ref_index(r.ref);
-            v[0] = g.vertex(t, 0), v[1] = g.vertex(t, 1), v[2] = g.vertex(t, 2);
-        }
+        const float* v = sphere ? nullptr : g.triangles + 9 * std::size_t(ref_index(r.ref));
         for (int a = 0; a < 3; ++a) {
             if (first[a] == last[a]) continue;
             if (!sphere) {
