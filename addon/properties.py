@@ -36,6 +36,7 @@ _LABELS = {
     "sah": ("SAH (binned)", "Surface area heuristic over bins (report §2.3.2)"),
     "sweep_sah": ("SAH (full sweep)", "Exact surface area heuristic over every split"),
     "lbvh": ("LBVH", "Linear BVH from Morton codes"),
+    "sbvh": ("SBVH", "Spatial splits (Stich et al. 2009): binned SAH, triangles clipped into repeated references"),
     "auto": ("Auto", "All three axes for the SAH methods, the largest centroid extent for the others"),
     "largest": ("Largest", "Split along the axis of largest centroid extent"),
     "random": ("Random", "Split along a random axis (seeded)"),

@@ -37,6 +37,7 @@ PEERS = [  # (label, bvh_bench spec)
     ("bvhlab mean", "bvhlab:method=mean"),
     ("bvhlab midpoint", "bvhlab:method=midpoint"),
     ("bvhlab lbvh", "bvhlab:method=lbvh"),
+    ("bvhlab sbvh (spatial splits)", "bvhlab:method=sbvh"),
     ("Embree 3 LOW", "embree:low"),
     ("Embree 3 MEDIUM", "embree:medium"),
     ("Embree 3 HIGH", "embree:high"),
@@ -120,6 +121,8 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=2)
     ap.add_argument("--callgrind", default="sponza", help="scenes whose builds callgrind counts ('' for none)")
     ap.add_argument("--tinybvh", default=os.environ.get("BVHLAB_TINYBVH_DIR"))
+    ap.add_argument("--peers", help="comma-separated bvh_bench specs to keep (default: all)")
+    ap.add_argument("--json", default="build.json", help="results file name in bench/results")
     ap.add_argument("--embreex-child", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.embreex_child:
@@ -131,6 +134,9 @@ def main() -> None:
     exe = _peers.build_bvh_bench(args.tinybvh)
     threads = [int(t) for t in args.threads.split(",")]
     peers = [(label, spec) for label, spec in PEERS if args.tinybvh or not spec.startswith("tinybvh")]
+    if args.peers:
+        keep = set(args.peers.split(","))
+        peers = [(label, spec) for label, spec in peers if spec in keep]
     results = {"machine": _common.machine(), "threads": threads, "scenes": {}}
     with tempfile.TemporaryDirectory() as tmp:
         for name, tris in _peers.scenes(args.scenes.split(",")).items():
@@ -142,7 +148,7 @@ def main() -> None:
                 count_instructions(exe, path, r)
             results["scenes"][name] = r
             report(name, r, threads)
-    print(f"\nwrote {_common.write_json('build.json', results)}")
+    print(f"\nwrote {_common.write_json(args.json, results)}")
 
 
 if __name__ == "__main__":

@@ -39,6 +39,7 @@ PEERS = [  # (label, bvh_bench spec); Embree MEDIUM first: the others are compar
         "bvhlab wide (report's tree: sah12, largest, leaf 1)",
         "bvhlab:method=sah,bins=12,axis=largest,leaf=1,span=centroids,block=1",
     ),
+    ("bvhlab wide (SBVH tree: method sbvh)", "bvhlab:method=sbvh"),
     ("tinybvh BVH8_CPU", "tinybvh:"),
     ("tinybvh BVH4_CPU", "tinybvh:bvh4"),
     ("tinybvh BuildHQ / BVH8_CPU", "tinybvh:hq"),
@@ -124,6 +125,7 @@ def main() -> None:
     )
     ap.add_argument("--tinybvh", default=os.environ.get("BVHLAB_TINYBVH_DIR"))
     ap.add_argument("--peers", help="comma-separated bvh_bench specs to keep (default: all)")
+    ap.add_argument("--json", default="traverse.json", help="results file name in bench/results")
     args = ap.parse_args()
     exe = _peers.build_bvh_bench(args.tinybvh)
     peers = [(label, spec) for label, spec in PEERS if args.tinybvh or not spec.startswith("tinybvh")]
@@ -145,7 +147,7 @@ def main() -> None:
                 count_instructions(exe, mesh, rays, args.callgrind, result)
             results["scenes"][scene] = {"triangles": len(tris), "rays": result}
             report(scene, len(tris), result)
-    print(f"\nwrote {_common.write_json('traverse.json', results)}")
+    print(f"\nwrote {_common.write_json(args.json, results)}")
 
 
 if __name__ == "__main__":

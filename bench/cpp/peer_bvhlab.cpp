@@ -2,7 +2,8 @@
 // or any hit for shadow rays: occluded) through the wide tree (the fastest CPU traversal) or the
 // traversal named by query=. Spec options, comma separated (BuildConfig's fields): method=, axis=,
 // bins=, span=box|centroids, leaf= (max leaf size), block= (sah_block), trav= and isect= (the
-// SAH's costs); query=stack|stackless|wide; opt=N optimises the built tree by reinsertion for at
+// SAH's costs), alpha=, budget=, unsplit=0|1 (method sbvh); query=stack|stackless|wide; opt=N
+// optimises the built tree by reinsertion for at
 // most N batches (optimize.h), part of the build's time.
 #include <sstream>
 #include <stdexcept>
@@ -53,6 +54,9 @@ Options parse_options(const std::string& options, unsigned threads) {
         else if (key == "block") cfg.sah_block = std::stoul(value);
         else if (key == "trav") cfg.traversal_cost = std::stof(value);
         else if (key == "isect") cfg.intersection_cost = std::stof(value);
+        else if (key == "alpha") cfg.sbvh_alpha = std::stof(value);
+        else if (key == "budget") cfg.sbvh_budget = std::stof(value);
+        else if (key == "unsplit") cfg.sbvh_unsplit = value != "0";
         else if (key == "opt") out.optimize = std::stoul(value);
         else throw std::invalid_argument("unknown bvhlab option '" + key + "'");
     }

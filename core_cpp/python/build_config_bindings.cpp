@@ -32,6 +32,10 @@ void bind_build_config(nb::module_& m) {
         .def_rw("max_leaf_size", &BuildConfig::max_leaf_size)
         .def_rw("sah_block", &BuildConfig::sah_block)
         .def_rw("seed", &BuildConfig::seed)
+        .def_rw("sbvh_alpha", &BuildConfig::sbvh_alpha,
+                "sbvh: overlap (fraction of the root's area) above which spatial splits are tried")
+        .def_rw("sbvh_budget", &BuildConfig::sbvh_budget, "sbvh: at most this many references per primitive")
+        .def_rw("sbvh_unsplit", &BuildConfig::sbvh_unsplit, "sbvh: reference unsplitting")
         .def_rw("threads", &BuildConfig::threads, "0: every hardware thread; the tree never depends on it")
         .def(
             "validate", [](const BuildConfig& self) { validate(self); },
@@ -40,4 +44,6 @@ void bind_build_config(nb::module_& m) {
     m.attr("MAX_BINS") = kMaxBins;
     m.attr("MAX_LEAF_SIZE") = kMaxLeafSize;
     m.attr("MAX_SAH_BLOCK") = kMaxSahBlock;
+    m.def("sbvh_reference_limit", &sbvh_reference_limit, nb::arg("primitives"), nb::arg("config"),
+          "The most references an SBVH over that many primitives may hold.");
 }

@@ -39,6 +39,7 @@ nb::dict stats_dict(const Bvh& bvh) {
     BvhStats s = compute_stats(bvh);
     nb::dict d;
     d["primitives"] = s.primitives, d["triangles"] = s.triangles, d["spheres"] = s.spheres;
+    d["references"] = s.references;
     d["nodes"] = s.nodes, d["leaves"] = s.leaves, d["height"] = s.height;
     d["sah_cost"] = s.sah_cost, d["build_ms"] = s.build_ms;
     d["avg_leaf_size"] = s.avg_leaf_size, d["max_leaf_size"] = s.max_leaf_size;

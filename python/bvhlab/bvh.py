@@ -70,6 +70,9 @@ class BuildConfig:
     max_leaf_size: int = DEFAULT_MAX_LEAF_SIZE
     sah_block: int = DEFAULT_SAH_BLOCK
     seed: int = _CORE_DEFAULTS.seed
+    sbvh_alpha: float = _CORE_DEFAULTS.sbvh_alpha
+    sbvh_budget: float = _CORE_DEFAULTS.sbvh_budget
+    sbvh_unsplit: bool = _CORE_DEFAULTS.sbvh_unsplit
     threads: int = field(default=_CORE_DEFAULTS.threads, compare=False)
 
     def __post_init__(self):
@@ -85,6 +88,11 @@ class BuildConfig:
         c.max_leaf_size = _uint32("max_leaf_size", self.max_leaf_size, (1, MAX_LEAF_SIZE))
         c.sah_block = _uint32("sah_block", self.sah_block, (1, MAX_SAH_BLOCK))
         c.seed = _checks.integer("seed", self.seed, 0, 2**64 - 1)
+        c.sbvh_alpha = _checks.real("sbvh_alpha", self.sbvh_alpha)
+        c.sbvh_budget = _checks.real("sbvh_budget", self.sbvh_budget)
+        if not isinstance(self.sbvh_unsplit, (bool, np.bool_)):
+            raise TypeError(f"sbvh_unsplit must be a bool, got {type(self.sbvh_unsplit).__name__}")
+        c.sbvh_unsplit = bool(self.sbvh_unsplit)
         c.threads = _checks.integer("threads", self.threads, 0, 4096)
         c.validate()
         return c
@@ -198,7 +206,8 @@ class Bvh:
     # -- numbers ---------------------------------------------------------------------------
     @property
     def stats(self) -> dict:
-        """primitives, triangles, spheres, nodes, leaves, height (largest leaf depth + 1, root depth 0),
+        """primitives, triangles, spheres, references (leaf slots: more than the primitives in an
+        SBVH, whose references repeat), nodes, leaves, height (largest leaf depth + 1, root depth 0),
         sah_cost (Σ_internal A/A_root + Σ_leaf A/A_root·N), build_ms, avg_leaf_size, max_leaf_size,
         nodes_per_depth, leaves_per_depth, leaf_size_histogram ([k] = leaves with k primitives),
         memory_bytes, and the build settings."""
@@ -381,7 +390,9 @@ class Bvh:
         return OptimizeStats(**stats)
 
     def refit(self, triangles: np.ndarray, spheres: np.ndarray | None = None) -> None:
-        """Move the geometry (same counts) and recompute every box, keeping the topology."""
+        """Move the geometry (same counts) and recompute every box, keeping the topology. An SBVH
+        (method "sbvh") is rebuilt with its settings instead: its leaf boxes hold clipped parts of
+        triangles, which a refit cannot clip again."""
         triangles = _checks.float32_array("triangles", triangles, (3, 3))
         if spheres is not None:
             spheres = _checks.float32_array("spheres", spheres, (4,))

@@ -69,7 +69,7 @@ void expect_same_tree(const Bvh& bvh) {
 TEST(PairNodes, EveryMethodAndLeafSizeGiveTheSameTree) {
     test::Scene scene = test::random_scene(20000, 500, 7);
     for (SplitMethod method : {SplitMethod::Median, SplitMethod::Mean, SplitMethod::Midpoint, SplitMethod::Sah,
-                               SplitMethod::SweepSah, SplitMethod::Lbvh})
+                               SplitMethod::SweepSah, SplitMethod::Lbvh, SplitMethod::Sbvh})
         for (std::uint32_t leaf : {1u, 4u, 16u}) {
             BuildConfig config;
             config.method = method;

@@ -101,7 +101,8 @@ TEST_P(EveryMethod, ClosestHitEqualsBruteForce) {
 
 INSTANTIATE_TEST_SUITE_P(AllMethods, EveryMethod,
                          ::testing::Values(SplitMethod::Median, SplitMethod::Mean, SplitMethod::Midpoint,
-                                           SplitMethod::Sah, SplitMethod::SweepSah, SplitMethod::Lbvh),
+                                           SplitMethod::Sah, SplitMethod::SweepSah, SplitMethod::Lbvh,
+                                           SplitMethod::Sbvh),
                          [](const auto& info) { return to_string(info.param); });
 
 TEST(Traverse, TminTmaxBoundTheHits) {

@@ -145,6 +145,9 @@ def test_every_centroid_equal():
     tris = np.tile(np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]]], np.float32), (1000, 1, 1))
     for method in bvhlab.METHODS:
         s = bvhlab.build(tris, method=method, max_leaf_size=1).stats  # one per leaf: the even split all the way
+        if method == "sbvh":  # spatial splits cut the triangles (their parts are smaller), within the budget
+            assert s["leaves"] == s["references"] <= 1500 and s["height"] <= 64
+            continue
         assert s["height"] == 11 and s["leaves"] == 1000
 
 

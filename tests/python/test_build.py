@@ -62,7 +62,12 @@ def check_leaf_boxes(bvh, tris, spheres):
 def test_every_method_and_axis(small_scene, method, axis):
     tris, spheres = small_scene
     bvh = bvhlab.build(tris, spheres, method=method, axis=axis, max_leaf_size=2, threads=2)
-    check_structure(bvh, tris, spheres)
+    if method == "sbvh":  # its references repeat and its leaves hold clipped parts
+        from test_sbvh import check_sbvh_tree
+
+        check_sbvh_tree(bvh, tris, spheres)
+    else:
+        check_structure(bvh, tris, spheres)
     s = bvh.stats
     assert s["method"] == method and s["axis"] == axis
     assert s["triangles"] == len(tris) and s["spheres"] == len(spheres)

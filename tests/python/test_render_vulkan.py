@@ -167,3 +167,21 @@ def test_vulkan_walks_two_level_trees_as_the_cpu_reference(vulkan):
                 compare(vk_image, cpu_image)
                 assert steps is None or t["dispatches"] > 1
     assert vulkan.validation_errors == 0, vulkan.validation_messages()
+
+
+def test_vulkan_walks_an_sbvh_as_the_cpu_reference(vulkan):
+    """An SBVH's repeated references (more leaf primitives in the buffers than the scene has): the
+    GPU image equals the CPU reference's, and that equals the binned tree's image exactly."""
+    scene = bvhlab.Scene(triangles=procedural.model_in_room(3000, seed=2))
+    bvh = bvhlab.build(scene, method="sbvh")
+    assert bvh.stats["references"] > bvh.stats["primitives"]
+    cpu = bvhlab.Renderer("cpu")
+    binned, _ = cpu.render(scene, bvhlab.build(scene), 96, 64)
+    for traversal in ("stack", "stackless"):
+        vk_image, t = vulkan.render(scene, bvh, 96, 64, traversal=traversal)
+        cpu_image, _ = cpu.render(scene, bvh, 96, 64, traversal=traversal)
+        compare(vk_image, cpu_image)
+        np.testing.assert_array_equal(cpu_image, binned)
+        assert t["backend"] == "vulkan"
+    lines, _ = vulkan.render(scene, bvh, 96, 64, overlay_depth=(2, 4))
+    assert np.any(lines != vk_image, -1).sum() > 100, "the overlay draws the SBVH's boxes"

@@ -16,6 +16,8 @@ enum class SplitMethod {
     Sah,       ///< binned surface area heuristic, O(n + B) sweep (report §2.3.2, PBRT)
     SweepSah,  ///< exact SAH over centroids sorted on the axis (every split position)
     Lbvh,      ///< linear BVH: Morton-sorted centroids split at the highest differing bit (report §5.2)
+    Sbvh,      ///< spatial splits (Stich, Friedrich and Dietrich 2009): binned SAH object splits, and
+               ///< spatial splits that clip triangles into bins; references may repeat (src/build/sbvh/)
 };
 
 /// Which axis a node is split on (report §2.3).
@@ -59,6 +61,15 @@ struct BuildConfig {
     /// report's SAH. Splits then fill whole blocks (Sponza: 3.8 triangles per packet of four
     /// against 3.3 with 1).
     std::uint32_t sah_block = 4;
+    /// method sbvh: spatial splits are tried where the object split's children overlap by more than
+    /// this fraction of the root's surface area (Stich et al. 2009 §4.5, α; 1e-5 as the paper).
+    float sbvh_alpha = 1e-5f;
+    /// method sbvh: the tree holds at most this many references per primitive (>= 1); once they
+    /// are spent, only object splits. 1.5, as Embree's SBVH builder allows.
+    float sbvh_budget = 1.5f;
+    /// method sbvh: reference unsplitting (Stich et al. 2009 §4.4): a reference that straddles a
+    /// spatial split goes to one side whole where that is cheaper than two halves.
+    bool sbvh_unsplit = true;
     ProgressCallback progress;  ///< optional; called from the calling thread only
 };
 
@@ -81,6 +92,10 @@ std::string to_string(BinBounds bounds);
 
 /// Throws std::invalid_argument when a field is out of range.
 void validate(const BuildConfig& config);
+
+/// The most references an SBVH over `primitives` primitives may hold: sbvh_budget per primitive,
+/// rounded down, never fewer than the primitives nor more than a reference slot can index.
+std::uint64_t sbvh_reference_limit(std::uint64_t primitives, const BuildConfig& config);
 
 /// True for the methods that evaluate the SAH (and may stop early at a leaf, PBRT §4.3.2).
 bool uses_sah(SplitMethod m);

@@ -8,6 +8,7 @@ namespace bvhlab {
 
 struct BvhStats {
     std::uint64_t primitives = 0, triangles = 0, spheres = 0;
+    std::uint64_t references = 0;  ///< slots in the leaves: the primitives, more in an SBVH (references repeat)
     std::uint64_t nodes = 0, leaves = 0;
     std::uint32_t height = 0;  ///< largest leaf depth + 1 (root depth 0); 0 for an empty tree
     double sah_cost = 0;       ///< see sah_cost()

@@ -12,6 +12,7 @@
 #include "bvhlab/cancel.h"
 #include "bvhlab/thread_pool.h"
 #include "morton.h"
+#include "sbvh/sbvh_builder.h"
 #include "small_subtree.h"
 #include "subtree_builder.h"
 
@@ -142,6 +143,13 @@ Bvh build_bvh(const GeometryView& geometry, const BuildConfig& config) {
     BigVector<PrimRef> prim_refs = make_prim_refs(geometry, config.threads, &summary, &stop.cancel());
     bvh.geometry_fingerprint = summary.fingerprint;
     check();
+    if (config.method == SplitMethod::Sbvh) {  // its own builder: references may repeat
+        build_sbvh(prim_refs, geometry, config, stop.cancel(), stop.in_leaves(), bvh);
+        check();
+        bvh.build_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+        if (config.progress && !config.progress(1.0)) throw BuildCancelled();
+        return bvh;
+    }
     // The leaves pack their geometry where the small-subtree builder makes them (it fetches the
     // input ahead); the other methods' trees are packed after, in leaf order.
     const bool pack_in_build = small_subtree_size(config) > 0;
@@ -160,6 +168,8 @@ Bvh build_bvh_over_boxes(const Aabb* boxes, std::size_t count, const BuildConfig
     Bvh bvh;
     bvh.config = config;
     bvh.config.progress = nullptr;
+    // boxes have no shape to clip: an SBVH over boxes is the binned SAH tree
+    if (bvh.config.method == SplitMethod::Sbvh) bvh.config.method = SplitMethod::Sah;
     BuildStop stop(config, count);
     // The references and their bounds, as make_prim_refs gathers them for primitives.
     PrimRefsSummary summary;
@@ -170,7 +180,7 @@ Bvh build_bvh_over_boxes(const Aabb* boxes, std::size_t count, const BuildConfig
         summary.box.grow(b);
         summary.centroids.grow(prim_refs[i].centroid());
     }
-    build_tree(prim_refs, summary, GeometryView{}, false, config, stop, bvh);
+    build_tree(prim_refs, summary, GeometryView{}, false, bvh.config, stop, bvh);
     if (stop.cancel().poll()) stop.rethrow();
     bvh.build_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     return bvh;

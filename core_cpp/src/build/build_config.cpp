@@ -99,6 +99,12 @@ void validate(const BuildConfig& config) {
     if (!std::isfinite(config.traversal_cost) || !std::isfinite(config.intersection_cost) ||
         config.traversal_cost < 0.0f || config.intersection_cost <= 0.0f)
         throw std::invalid_argument("SAH costs must be finite, traversal >= 0 and intersection > 0");
+    if (!(config.sbvh_alpha >= 0.0f) || !std::isfinite(config.sbvh_alpha))
+        throw std::invalid_argument("sbvh_alpha must be a finite number >= 0, got " +
+                                    std::to_string(config.sbvh_alpha));
+    if (!(config.sbvh_budget >= 1.0f) || !(config.sbvh_budget <= 64.0f))
+        throw std::invalid_argument("sbvh_budget must be a number from 1 to 64 (references per primitive), got " +
+                                    std::to_string(config.sbvh_budget));
 }
 
 }  // namespace bvhlab

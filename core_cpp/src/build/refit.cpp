@@ -106,6 +106,9 @@ Bvh refitted(const Bvh& old, const GeometryView& geometry, unsigned threads) {
         throw std::invalid_argument("refit needs the same number of triangles and spheres the tree was built with");
     if ((geometry.triangle_count && !geometry.triangles) || (geometry.sphere_count && !geometry.spheres))
         throw std::invalid_argument("primitive count given without data");
+    // An SBVH's leaf boxes hold clipped parts of its primitives (sbvh/chop.h): a refit would have
+    // to clip again at planes the tree does not keep, so it is rebuilt with its settings instead.
+    if (old.config.method == SplitMethod::Sbvh) return build_bvh(geometry, old.config);
     Bvh out;
     out.prims = BigVector<PackedPrim>(old.refs.size());  // both written whole by the pass (WrittenBeforeRead)
     out.nodes = BigVector<BvhNode>(old.nodes.size());

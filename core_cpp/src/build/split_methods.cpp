@@ -9,13 +9,15 @@ namespace bvhlab {
 namespace {
 
 //     method                name         function          all axes  SAH    sum    Morton bottom-up
-constexpr std::array<SplitMethodInfo, 6> kMethods{{
+constexpr std::array<SplitMethodInfo, 7> kMethods{{
     {SplitMethod::Median, "median", split_median, false, false, false, false, false},
     {SplitMethod::Mean, "mean", split_mean, false, false, true, false, false},
     {SplitMethod::Midpoint, "midpoint", split_midpoint, false, false, false, false, false},
     {SplitMethod::Sah, "sah", split_binned_sah, true, true, false, false, false},
     {SplitMethod::SweepSah, "sweep_sah", split_sweep_sah, true, true, false, false, false},
     {SplitMethod::Lbvh, "lbvh", split_lbvh, true, false, false, true, true},
+    // its own builder (sbvh/sbvh_builder.h), which build_bvh calls instead of the split function's
+    {SplitMethod::Sbvh, "sbvh", split_binned_sah, true, true, false, false, false},
 }};
 
 }  // namespace

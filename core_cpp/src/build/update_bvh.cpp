@@ -100,7 +100,8 @@ Bvh update_bvh(const Bvh& old, const NodeCostArray& built, const GeometryView& g
         stats.policy = UpdatePolicy::Rebuild, stats.subtrees_rebuilt = 1,
         stats.primitives_rebuilt = g.primitive_count();
     };
-    if (config.policy == UpdatePolicy::Rebuild) {
+    // an SBVH refits by a rebuild (refitted), and its subtrees' references are not whole primitives
+    if (config.policy == UpdatePolicy::Rebuild || old.config.method == SplitMethod::Sbvh) {
         rebuild();
     } else {
         tree = refitted(old, g, old.config.threads);

@@ -33,9 +33,12 @@ Aabb prim_box(const GeometryView& g, std::uint32_t ref) {
     return b;
 }
 
-/// Each reference names an existing primitive, and each primitive is named once.
-void check_refs(const std::vector<std::uint32_t>& refs, const GeometryView& g) {
-    if (refs.size() != g.primitive_count())
+/// Each reference names an existing primitive, and each primitive is named once; in an SBVH
+/// (`repeats`) at least once, and the references are within its budget (sbvh_reference_limit).
+void check_refs(const std::vector<std::uint32_t>& refs, const GeometryView& g, const BuildConfig& config) {
+    const bool repeats = config.method == SplitMethod::Sbvh;
+    const std::uint64_t most = repeats ? sbvh_reference_limit(g.primitive_count(), config) : g.primitive_count();
+    if (refs.size() < g.primitive_count() || refs.size() > most)
         refuse(std::to_string(refs.size()) + " references for " + std::to_string(g.primitive_count()) + " primitives");
     std::vector<std::uint8_t> seen(g.primitive_count(), 0);
     for (std::size_t k = 0; k < refs.size(); ++k) {
@@ -45,8 +48,11 @@ void check_refs(const std::vector<std::uint32_t>& refs, const GeometryView& g) {
         if (i >= (sphere ? g.sphere_count : g.triangle_count))
             refuse("reference " + std::to_string(k) + " out of range");
         std::uint8_t& s = seen[sphere ? g.triangle_count + i : i];
-        if (s++) refuse("primitive reference " + std::to_string(ref) + " used twice");
+        if (s && !repeats) refuse("primitive reference " + std::to_string(ref) + " used twice");
+        s = 1;
     }
+    for (std::size_t i = 0; i < seen.size(); ++i)
+        if (!seen[i]) refuse("primitive " + std::to_string(i) + " has no reference");
 }
 
 /// Depth-first layout, skip indices, leaf slots and depths (bvh.h, docs/design.md "Tree layout").
@@ -83,8 +89,10 @@ void check_layout(const std::vector<BvhNode>& nodes, std::size_t ref_count, std:
     if (next_slot != ref_count) refuse("the leaves do not hold every reference");
 }
 
-/// Every box is finite and holds its children's boxes, or its primitives.
-void check_boxes(const std::vector<BvhNode>& nodes, const std::vector<std::uint32_t>& refs, const GeometryView& g) {
+/// Every box is finite and holds its children's boxes, or its primitives; an SBVH leaf (`clipped`)
+/// holds a part of each of its primitives, so its box need only meet theirs.
+void check_boxes(const std::vector<BvhNode>& nodes, const std::vector<std::uint32_t>& refs, const GeometryView& g,
+                 bool clipped) {
     for (std::uint32_t i = 0; i < nodes.size(); ++i)
         if (!finite_box(nodes[i])) refuse(node_name(i) + " has a box that is not finite");
     for (std::uint32_t i = 0; i < nodes.size(); ++i) {
@@ -95,8 +103,11 @@ void check_boxes(const std::vector<BvhNode>& nodes, const std::vector<std::uint3
                 refuse(node_name(i) + "'s box does not hold its children's");
             continue;
         }
-        for (std::uint32_t k = node.index; k < node.index + leaf_count(node); ++k)
-            if (!box.contains(prim_box(g, refs[k]))) refuse(node_name(i) + "'s box does not hold its primitives");
+        for (std::uint32_t k = node.index; k < node.index + leaf_count(node); ++k) {
+            const Aabb prim = prim_box(g, refs[k]);
+            const bool ok = clipped ? !Aabb{max(box.lo, prim.lo), min(box.hi, prim.hi)}.empty() : box.contains(prim);
+            if (!ok) refuse(node_name(i) + "'s box does not hold its primitives");
+        }
     }
 }
 
@@ -111,10 +122,10 @@ Bvh restore_bvh(SavedTree saved, const GeometryView& geometry, unsigned threads)
                                     std::to_string(saved.geometry_fingerprint) + ", this scene's " +
                                     std::to_string(fingerprint) + ")");
     if (saved.nodes.empty() != (geometry.primitive_count() == 0)) refuse("nodes and primitives disagree");
-    check_refs(saved.refs, geometry);
+    check_refs(saved.refs, geometry, saved.config);
     std::vector<std::uint8_t> depths;
     check_layout(saved.nodes, saved.refs.size(), depths);
-    check_boxes(saved.nodes, saved.refs, geometry);
+    check_boxes(saved.nodes, saved.refs, geometry, saved.config.method == SplitMethod::Sbvh);
 
     Bvh bvh;
     bvh.nodes.assign(saved.nodes.begin(), saved.nodes.end());

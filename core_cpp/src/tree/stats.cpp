@@ -27,6 +27,7 @@ BvhStats compute_stats(const Bvh& bvh) {
     s.triangles = bvh.triangle_count;
     s.spheres = bvh.sphere_count;
     s.primitives = s.triangles + s.spheres;
+    s.references = bvh.refs.size();
     s.nodes = bvh.nodes.size();
     s.build_ms = bvh.build_ms;
     s.sah_cost = sah_cost(bvh);
