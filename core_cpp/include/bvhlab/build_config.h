@@ -39,17 +39,28 @@ enum class BinBounds {
 using ProgressCallback = std::function<bool(double)>;
 
 /// Build arguments. The defaults give the tree that traces fastest for the least build time:
-/// binned SAH over all three axes with 8 buckets (tinybvh's; the report and PBRT use 12, which
-/// costs more and on Crytek Sponza gives no better a tree) dividing the node's box (on Sponza
-/// SAH 70.7 against 77.6 over the centroid bounds; on 1M-triangle meshes within 0.3%), leaves
-/// of up to four primitives where the SAH finds them cheaper (report §5.1; the CPU traversal
-/// tests four triangles at once), and SAH counts in blocks of four (sah_block). The report's own
-/// settings (Table 1) are method sah with 12 or 32 bins over the centroid bounds, axis largest,
-/// one primitive per leaf, sah_block 1: pass them explicitly.
+/// binned SAH over all three axes with 12 buckets dividing the node's box (with 8 on Sponza, SAH
+/// 70.6 against 77.6 over the centroid bounds; on 1M-triangle meshes within 0.3%), leaves of up to four
+/// primitives where the SAH finds them cheaper (report §5.1; the CPU traversal tests four
+/// triangles at once), primitives counted one by one (sah_block 1). The report's own settings
+/// (Table 1) are method sah with 12 or 32 bins over the centroid bounds, axis largest, one
+/// primitive per leaf, sah_block 1: pass them explicitly.
+///
+/// Why 12 buckets and sah_block 1 (issue 36; SAH in sah_cost's convention, bench/build.py's
+/// scenes and a 1.04M-triangle mesh repeated 20 times in a row, against tinybvh 1.9 BuildSIMD):
+/// with 8 buckets and blocks of four, uniform1m 394.1 against tinybvh's 385.5, the row of meshes
+/// 67.1 against 66.1, room1m 31.75 against 31.59; blocks of four cost 2.5% on uniform1m even with
+/// the exact SAH (sweep_sah 392.8 against 378.8), and blocks of one alone leave room1m at 31.70.
+/// 12 buckets and blocks of one: 382.5, 65.6, 31.13, Sponza 70.9 (tinybvh 71.6): every scene
+/// below tinybvh's. room1m's SAH moves either way with the bucket count (4: 31.54, 8: 31.70,
+/// 16: 31.88, 32: 33.76: which top split carves the walls from the model). The wide traversal
+/// runs about as many instructions a ray on either tree (callgrind, random rays: Sponza +3.7%,
+/// room1m -0.4%, uniform1m -4.2%, the row -1.4%) and the build about as many (Sponza +2.5%,
+/// room1m -1.6%, uniform1m +1.4%).
 struct BuildConfig {
     SplitMethod method = SplitMethod::Sah;
     AxisPolicy axis = AxisPolicy::Auto;
-    std::uint32_t bins = 8;                 ///< binned SAH buckets, kMinBins..kMaxBins
+    std::uint32_t bins = 12;                ///< binned SAH buckets, kMinBins..kMaxBins
     BinBounds bin_bounds = BinBounds::Box;  ///< what the binned SAH's buckets divide
     std::uint32_t max_leaf_size = 4;        ///< leaves hold at most this many primitives (>= 1)
     std::uint64_t seed = 0;                 ///< for AxisPolicy::Random
@@ -57,10 +68,10 @@ struct BuildConfig {
     float traversal_cost = 1.0f;            ///< C_trav of the SAH
     float intersection_cost = 1.0f;         ///< C_isect of the SAH
     /// The SAH counts primitives in blocks of this many (a power of two, 1..kMaxSahBlock) above a
-    /// node of one block (sah.h): 4, the triangles the wide CPU traversal tests at once; 1 is the
-    /// report's SAH. Splits then fill whole blocks (Sponza: 3.8 triangles per packet of four
-    /// against 3.3 with 1).
-    std::uint32_t sah_block = 4;
+    /// node of one block (sah.h): 4 fills the wide CPU traversal's packets of four triangles
+    /// (Sponza: 3.8 triangles per packet of four against 3.3 with 1) but gives a worse tree by
+    /// sah_cost (see above); 1, the default, is the report's SAH.
+    std::uint32_t sah_block = 1;
     /// method sbvh: spatial splits are tried where the object split's children overlap by more than
     /// this fraction of the root's surface area (Stich et al. 2009 §4.5, α; 1e-5 as the paper).
     float sbvh_alpha = 1e-5f;

@@ -87,7 +87,7 @@ def add_build(p: argparse.ArgumentParser) -> None:
         type=int,
         default=DEFAULT_SAH_BLOCK,
         help=f"the SAH counts primitives in blocks of this many, a power of two up to {MAX_SAH_BLOCK} "
-        f"(default {DEFAULT_SAH_BLOCK}, the triangles the CPU traversal tests at once; 1: the report's SAH)",
+        f"(default {DEFAULT_SAH_BLOCK}, the report's SAH; 4: the triangles the CPU traversal tests at once)",
     )
 
 
