@@ -25,6 +25,9 @@ namespace {
 /// Four floats where three are used, so that each is one vector store.
 struct Query {
     float o[4], inv[4];
+    /// −1/d and −(1/d)·BOX_FAR_SCALE, the box test's factors (traverse_nodes), made here by two
+    /// vector products rather than as six scalar products and negations at the start of the walk
+    float neg_inv[4], neg_inv_far[4];
     float o_axes[4];  ///< o[kx], o[ky], o[kz]
     float shear[4];
     /// 4·kx, 4·ky, 4·kz: where axis k's four lanes start in a PrimPacket vertex (v[i][k]), in
@@ -56,6 +59,7 @@ Query make_query(const Ray& ray) {
     const L4 inv = L4::splat(1.0f) / dir;
     Query q;
     origin.store(q.o), inv.store(q.inv);
+    (inv * L4::splat(-1.0f)).store(q.neg_inv), (inv * L4::splat(-gpu::BOX_FAR_SCALE)).store(q.neg_inv_far);
     permute(origin, kx, ky, kz).store(q.o_axes);
     // (dir[kx], dir[ky], 1, 1) times 1 / dir[kz]: the shear, and 1 / dir[kz] itself in lane 2
     // (1 · x is x, except a denormal x under denormals-are-zero: 0, which is what the one use of
@@ -270,9 +274,10 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit) {
     // 1/d (negating is exact, and a zero's sign, the only difference, changes no comparison), so
     // that the node's bounds can be the subtraction's memory operand: one load fewer per axis
     // and side (uniform1m random rays: 6 instructions fewer a node).
-    const L8 neg_inv[3] = {L8::splat(-q.inv[0]), L8::splat(-q.inv[1]), L8::splat(-q.inv[2])};
+    // −(1/d · s) is (1/d)·(−s) bit for bit: a rounding is symmetric about zero
+    const L8 neg_inv[3] = {L8::splat(q.neg_inv[0]), L8::splat(q.neg_inv[1]), L8::splat(q.neg_inv[2])};
+    const L8 neg_inv_far[3] = {L8::splat(q.neg_inv_far[0]), L8::splat(q.neg_inv_far[1]), L8::splat(q.neg_inv_far[2])};
     const float s = gpu::BOX_FAR_SCALE;
-    const L8 neg_inv_far[3] = {L8::splat(-(q.inv[0] * s)), L8::splat(-(q.inv[1] * s)), L8::splat(-(q.inv[2] * s))};
     Stack stack;
     std::uint32_t sp = 0, visited = 0;
     Entry cur{0, q.tmin};
