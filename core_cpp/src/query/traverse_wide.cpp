@@ -41,6 +41,7 @@ struct L4 {
     static L4 set(float a, float b, float c, float d) { return {_mm_setr_ps(a, b, c, d)}; }
     void store(float* p) const { _mm_storeu_ps(p, v); }
 };
+inline int sign_bits(L4 x) { return _mm_movemask_ps(x.v); }
 #ifdef __SSSE3__
 /// By a byte shuffle: lane i takes bytes 4·index .. 4·index + 3 (4·index spread over the lane's
 /// four bytes by a first shuffle, then 0, 1, 2, 3 added; no carries: 4·3 + 3 < 256).
@@ -85,6 +86,10 @@ struct L4 {
     }
 };
 inline L4 permute(L4 x, int a, int b, int c) { return {{x.v[a], x.v[b], x.v[c], x.v[3]}}; }
+inline int sign_bits(L4 x) {
+    return int(std::signbit(x.v[0])) | int(std::signbit(x.v[1])) << 1 | int(std::signbit(x.v[2])) << 2 |
+           int(std::signbit(x.v[3])) << 3;
+}
 /// Lane by lane: op(a[i], b[i]) for the four lanes (floats for arithmetic, bools for comparisons).
 template <class R, class Op>
 inline R lanes(L4 a, L4 b, Op op) {
@@ -170,6 +175,11 @@ inline int push_children(const WideNode& node, L8 t0, L8 t1, int mask, std::uint
         index[j] = node.child[lane], t[j] = entry[lane];
     }
     return key[h - 1] & 7;
+}
+
+/// The children of `node` in `mask` to index[0, popcount(mask)), in slot order.
+inline void push_entered(const WideNode& node, int mask, std::uint32_t* index) {
+    for (; mask; mask &= mask - 1) *index++ = node.child[__builtin_ctz(unsigned(mask))];
 }
 
 #include "wide_traverse.inl"

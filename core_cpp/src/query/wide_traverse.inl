@@ -5,11 +5,12 @@
 //       (= t > acc ? t : acc), lower(acc, t) (= t < acc ? t : acc), le_bits(a, b) (bit i set
 //       when a[i] <= b[i]), store(float*);
 //   L4: four floats — load, splat, set(a, b, c, d), + - * /, raise, lower, comparisons giving
-//       an M4 mask, M4 & M4, M4 | M4, bits(M4), store, and permute(v, a, b, c) = (v[a], v[b],
-//       v[c], v[3]) for lane indices 0..3;
+//       an M4 mask, M4 & M4, M4 | M4, bits(M4), sign_bits(L4) (bit i: lane i's sign bit),
+//       store, and permute(v, a, b, c) = (v[a], v[b], v[c], v[3]) for lane indices 0..3;
 // and push_children(node, t0, t1, mask, index, t), which writes the children a ray enters
 // but the nearest to the stack's arrays, farthest first, and returns the nearest's slot
-// (traverse_wide.cpp).
+// (traverse_wide.cpp), and push_entered(node, mask, index), which writes the children in `mask`
+// to index[0 .. popcount(mask)) in slot order (and may write up to eight).
 // traverse_wide.cpp includes it for the portable path (SSE or plain C++), traverse_wide_avx2.cpp
 // for AVX2. Both compute, lane by lane, exactly what hit_box (ray.h) and the watertight
 // hit_triangle (shaders/tracer/geometry.glsl) compute, so every path returns the same hit as the
@@ -24,9 +25,15 @@ namespace {
 /// Four floats where three are used, so that each is one vector store.
 struct Query {
     float o[4], inv[4];
+    /// −1/d and −(1/d)·BOX_FAR_SCALE, the box test's factors (traverse_nodes), made here by two
+    /// vector products rather than as six scalar products and negations at the start of the walk
+    float neg_inv[4], neg_inv_far[4];
     float o_axes[4];  ///< o[kx], o[ky], o[kz]
     float shear[4];
-    int axis[3];  ///< kx, ky, kz
+    /// 4·kx, 4·ky, 4·kz: where axis k's four lanes start in a PrimPacket vertex (v[i][k]), in
+    /// floats, so that a packet's loads scale it by the addressing mode rather than a shift each
+    std::ptrdiff_t axis_at[3];
+    int octant;  ///< bit a set where 1/dir[a] is negative: kPlanes' row, any_hit_walk's copy
     float tmin;
     const Ray* ray;  ///< for the spheres (hit_packet_sphere)
 };
@@ -52,12 +59,14 @@ Query make_query(const Ray& ray) {
     const L4 inv = L4::splat(1.0f) / dir;
     Query q;
     origin.store(q.o), inv.store(q.inv);
+    (inv * L4::splat(-1.0f)).store(q.neg_inv), (inv * L4::splat(-gpu::BOX_FAR_SCALE)).store(q.neg_inv_far);
     permute(origin, kx, ky, kz).store(q.o_axes);
     // (dir[kx], dir[ky], 1, 1) times 1 / dir[kz]: the shear, and 1 / dir[kz] itself in lane 2
     // (1 · x is x, except a denormal x under denormals-are-zero: 0, which is what the one use of
     // shear[2], a product, reads x as in that mode anyway)
     (permute(dir, kx, ky, 3) * permute(inv, kz, kz, kz)).store(q.shear);
-    q.axis[0] = kx, q.axis[1] = ky, q.axis[2] = kz;
+    q.axis_at[0] = 4 * kx, q.axis_at[1] = 4 * ky, q.axis_at[2] = 4 * kz;
+    q.octant = sign_bits(inv) & 7;
     q.tmin = ray.tmin, q.ray = &ray;
     return q;
 }
@@ -85,13 +94,14 @@ bool closer(float t, std::uint32_t ref, const Hit& hit) {
 /// kAnyHit: the first lane that passes is the hit (its t and ref only; the query wants no more).
 template <bool kAnyHit>
 void test_triangles(const PrimPacket& k, const Query& q, Hit& hit) {
-    const int kx = q.axis[0], ky = q.axis[1], kz = q.axis[2];
+    const std::ptrdiff_t kx = q.axis_at[0], ky = q.axis_at[1], kz = q.axis_at[2];
     const L4 ox = L4::splat(q.o_axes[0]), oy = L4::splat(q.o_axes[1]), oz = L4::splat(q.o_axes[2]);
     const L4 sx = L4::splat(q.shear[0]), sy = L4::splat(q.shear[1]);
-    const L4 az = L4::load(k.v[0][kz]) - oz, bz = L4::load(k.v[1][kz]) - oz, cz = L4::load(k.v[2][kz]) - oz;
-    const L4 ax = (L4::load(k.v[0][kx]) - ox) - sx * az, ay = (L4::load(k.v[0][ky]) - oy) - sy * az;
-    const L4 bx = (L4::load(k.v[1][kx]) - ox) - sx * bz, by = (L4::load(k.v[1][ky]) - oy) - sy * bz;
-    const L4 cx = (L4::load(k.v[2][kx]) - ox) - sx * cz, cy = (L4::load(k.v[2][ky]) - oy) - sy * cz;
+    const float *a = k.v[0][0], *b = k.v[1][0], *c = k.v[2][0];  // v[i][axis] is v[i][0] + 4·axis
+    const L4 az = L4::load(a + kz) - oz, bz = L4::load(b + kz) - oz, cz = L4::load(c + kz) - oz;
+    const L4 ax = (L4::load(a + kx) - ox) - sx * az, ay = (L4::load(a + ky) - oy) - sy * az;
+    const L4 bx = (L4::load(b + kx) - ox) - sx * bz, by = (L4::load(b + ky) - oy) - sy * bz;
+    const L4 cx = (L4::load(c + kx) - ox) - sx * cz, cy = (L4::load(c + ky) - oy) - sy * cz;
     const L4 u = cx * by - cy * bx, v = ax * cy - ay * cx, w = bx * ay - by * ax;
     const L4 zero = L4::splat(0.0f);
     // "not (some negative and some positive)"; a NaN lane has a NaN t and fails below
@@ -165,6 +175,35 @@ const WideNode& node_at(const WideView& wide, std::uint32_t line) {
     return *reinterpret_cast<const WideNode*>(line_at(wide, line));
 }
 
+/// Float offsets in a WideNode of the near plane arrays of x, y, z (lo_x = 0, hi_x = 8, ...), then
+/// of the far ones, by the ray's octant (bit a set where 1/dir[a] is negative). Pointer-sized and
+/// both sides kept, so that a node's six loads take them as they are (as ints, near ^ 8 and a
+/// sign extension were redone at every node; Sponza instructions a ray: random 959 → 952, primary
+/// 1,860 → 1,824), and looked up rather than worked out for every ray (random 918 → 906, primary
+/// 1,741 → 1,729).
+struct PlaneTable {
+    std::ptrdiff_t at[8][6];
+    constexpr PlaneTable() : at{} {
+        for (int octant = 0; octant < 8; ++octant)
+            for (int a = 0; a < 3; ++a)
+                at[octant][a] = 16 * a + 8 * (octant >> a & 1), at[octant][3 + a] = at[octant][a] ^ 8;
+    }
+    constexpr const std::ptrdiff_t* operator[](int octant) const { return at[octant]; }
+};
+constexpr PlaneTable kPlanes;
+
+/// kAnyOctant as a walk's octant: the plane offsets are read from kPlanes by the ray's octant.
+constexpr int kAnyOctant = -1;
+
+/// The offset of plane `i` (0-2 near x, y, z; 3-5 far) for a walk of `kOctant`: a constant in a
+/// walk compiled for one octant (tinybvh 1.9 BVH8_CPU's IntersectOctant), so that each of a
+/// node's six loads takes it as an immediate, else from `plane` (kPlanes[octant]).
+template <int kOctant>
+[[gnu::always_inline]] inline std::ptrdiff_t plane_at(const std::ptrdiff_t* plane, int i) {
+    if constexpr (kOctant == kAnyOctant) return plane[i];
+    else return kPlanes.at[kOctant][i];
+}
+
 /// One step of the traversal: tests the eight child boxes of `node` (as hit_box does) and pushes
 /// the children the ray enters before hit.t, nearest last, the nearest going to `cur` rather than
 /// the stack. Returns false when the ray enters none.
@@ -186,11 +225,13 @@ const WideNode& node_at(const WideView& wide, std::uint32_t line) {
 /// kAnyHit: no order to keep, as any hit ends the walk (tinybvh's IsOccluded pushes unordered
 /// too): the highest entered slot goes to `cur`, the others are pushed in slot order, without the
 /// sort (shadow rays against the sorted push, two interleaved runs: uniform1m +19% and +42%,
-/// Sponza +9% and +15%). Their entry is tmin: any entered box passes the pop's test, tmax being fixed.
-template <bool kAnyHit>
+/// Sponza +9% and +15%), by push_entered (AVX2: one permute by a table of the mask, as tinybvh's
+/// IsOccluded does). No entry distance is pushed: any entered box passes the pop's test, tmax
+/// being fixed, so the any-hit walk pops without one.
+template <bool kAnyHit, int kOctant>
 [[gnu::always_inline]] inline bool enter_children(const WideView& wide, const WideNode& node, const L8 origin[3],
                                                   const L8 neg_inv[3], const L8 neg_inv_far[3],
-                                                  const std::ptrdiff_t plane[6], float tmin, float far_limit,
+                                                  const std::ptrdiff_t* plane, float tmin, float far_limit,
                                                   Stack& stack, std::uint32_t& sp, Entry& cur) {
     const float* f = node.lo_x;
     // The children's indices are the node's fourth cache line, read only once the box tests say
@@ -205,8 +246,9 @@ template <bool kAnyHit>
     for (int line = 0; line < 6; ++line) __builtin_prefetch(after + 64 * line);
     // the same order of raises and lowers as hit_box: NaN from 0·inf on a face is ignored
     L8 t0 = L8::splat(tmin), t1 = L8::splat(far_limit);
-    for (int a = 0; a < 3; ++a) t0 = raise(t0, (origin[a] - L8::load(f + plane[a])) * neg_inv[a]);
-    for (int a = 0; a < 3; ++a) t1 = lower(t1, (origin[a] - L8::load(f + plane[3 + a])) * neg_inv_far[a]);
+    for (int a = 0; a < 3; ++a) t0 = raise(t0, (origin[a] - L8::load(f + plane_at<kOctant>(plane, a))) * neg_inv[a]);
+    for (int a = 0; a < 3; ++a)
+        t1 = lower(t1, (origin[a] - L8::load(f + plane_at<kOctant>(plane, 3 + a))) * neg_inv_far[a]);
     const int mask = le_bits(t0, t1);
     if (!mask) return false;
     if (!(mask & (mask - 1))) {
@@ -215,13 +257,10 @@ template <bool kAnyHit>
         return true;
     }
     if constexpr (kAnyHit) {
-        const int k = 31 - __builtin_clz(unsigned(mask));
-        cur = {node.child[k], tmin};
-        for (int m = mask & ~(1 << k); m; m &= m - 1) {
-            const int lane = __builtin_ctz(unsigned(m));
-            stack.index[sp] = node.child[lane], stack.t[sp] = tmin;
-            ++sp;
-        }
+        const auto h = std::uint32_t(__builtin_popcount(unsigned(mask)));
+        push_entered(node, mask, stack.index + sp);
+        sp += h - 1;
+        cur = {stack.index[sp], tmin};
         prefetch(wide, stack.index[sp - 1]);
         return true;
     }
@@ -247,42 +286,24 @@ template <bool kAnyHit>
     return true;
 }
 
-/// Float offsets in a WideNode of the near plane arrays of x, y, z (lo_x = 0, hi_x = 8, ...), then
-/// of the far ones, by the ray's octant (bit a set where 1/dir[a] is negative). Pointer-sized and
-/// both sides kept, so that a node's six loads take them as they are (as ints, near ^ 8 and a
-/// sign extension were redone at every node; Sponza instructions a ray: random 959 → 952, primary
-/// 1,860 → 1,824), and looked up rather than worked out for every ray (random 918 → 906, primary
-/// 1,741 → 1,729).
-struct PlaneTable {
-    std::ptrdiff_t at[8][6];
-    constexpr PlaneTable() : at{} {
-        for (int octant = 0; octant < 8; ++octant)
-            for (int a = 0; a < 3; ++a)
-                at[octant][a] = 16 * a + 8 * (octant >> a & 1), at[octant][3 + a] = at[octant][a] ^ 8;
-    }
-    constexpr const std::ptrdiff_t* operator[](int octant) const { return at[octant]; }
-};
-constexpr PlaneTable kPlanes;
-
 /// Nearest child first, from the root. `far_limit`, the closest hit so far times the box scale,
 /// lives in a register and is renewed after a leaf, the one place the hit changes. kAnyHit: the
 /// walk ends at the first leaf with a hit (the boxes' far limit stays the ray's tmax).
 /// kRecord: each node's entered children and each leaf's effect on the hit go to `record` (the
 /// inspector's record, wide_kernel.h WideRecorder); without it the calls compile away and the walk
 /// is the plain one.
-template <bool kAnyHit, bool kRecord = false>
+template <bool kAnyHit, int kOctant, bool kRecord = false>
 std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit, WideRecorder* record = nullptr) {
     const L8 origin[3] = {L8::splat(q.o[0]), L8::splat(q.o[1]), L8::splat(q.o[2])};
     // The planes' distances as (origin - plane) · (-1/d), which are hit_box's (plane - origin) ·
     // 1/d (negating is exact, and a zero's sign, the only difference, changes no comparison), so
     // that the node's bounds can be the subtraction's memory operand: one load fewer per axis
     // and side (uniform1m random rays: 6 instructions fewer a node).
-    const L8 neg_inv[3] = {L8::splat(-q.inv[0]), L8::splat(-q.inv[1]), L8::splat(-q.inv[2])};
+    // −(1/d · s) is (1/d)·(−s) bit for bit: a rounding is symmetric about zero
+    const L8 neg_inv[3] = {L8::splat(q.neg_inv[0]), L8::splat(q.neg_inv[1]), L8::splat(q.neg_inv[2])};
+    const L8 neg_inv_far[3] = {L8::splat(q.neg_inv_far[0]), L8::splat(q.neg_inv_far[1]), L8::splat(q.neg_inv_far[2])};
     const float s = gpu::BOX_FAR_SCALE;
-    const L8 neg_inv_far[3] = {L8::splat(-(q.inv[0] * s)), L8::splat(-(q.inv[1] * s)), L8::splat(-(q.inv[2] * s))};
-    const int octant =
-        int(std::signbit(q.inv[0])) | int(std::signbit(q.inv[1])) << 1 | int(std::signbit(q.inv[2])) << 2;
-    const std::ptrdiff_t* plane = kPlanes[octant];
+    const std::ptrdiff_t* plane = kPlanes[q.octant];
     Stack stack;
     std::uint32_t sp = 0, visited = 0;
     Entry cur{0, q.tmin};
@@ -301,10 +322,16 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit, Wid
         } else {
             ++visited;
             [[maybe_unused]] const std::uint32_t line = cur.index, pushed = sp;
-            const bool entered = enter_children<kAnyHit>(wide, node_at(wide, cur.index), origin, neg_inv, neg_inv_far,
-                                                         plane, q.tmin, far_limit, stack, sp, cur);
+            const bool entered = enter_children<kAnyHit, kOctant>(wide, node_at(wide, cur.index), origin, neg_inv,
+                                                                  neg_inv_far, plane, q.tmin, far_limit, stack, sp, cur);
             if constexpr (kRecord) record->node(line, entered ? cur.index : kNoHit, stack.index + pushed, sp - pushed);
             if (entered) continue;
+        }
+        if constexpr (kAnyHit) {  // every entry passes may_hold_closer: hit.t is still tmax
+            if (sp == 0) return visited;
+            --sp;
+            cur = {stack.index[sp], q.tmin};
+            continue;
         }
         do {  // pop, skipping entries farther than the closest hit so far (ray.h may_hold_closer)
             if (sp == 0) return visited;
@@ -314,20 +341,34 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit, Wid
     }
 }
 
+/// The any-hit walk for the ray's octant: one copy per octant, each with its plane offsets as
+/// constants (tinybvh 1.9's IsOccludedOctant). The closest-hit walk is one copy for every octant:
+/// eight of it (2.5 KiB each) made random rays slower, though fewer instructions (callgrind
+/// instructions a ray and Mrays/s ÷ the best peer, CPU time of one pinned core, two interleaved
+/// runs: Sponza random 884 → 866, 1.11-1.13 → 1.06-1.07; primary 1,699 → 1,628, 0.93 → 0.94-0.96;
+/// room1m random 1.03-1.07 → 0.98-1.00).
+[[maybe_unused]] std::uint32_t any_hit_walk(const WideView& wide, const Query& q, Hit& hit) {
+    using Walk = std::uint32_t (*)(const WideView&, const Query&, Hit&);
+    static constexpr Walk kWalks[8] = {traverse_nodes<true, 0>, traverse_nodes<true, 1>, traverse_nodes<true, 2>,
+                                       traverse_nodes<true, 3>, traverse_nodes<true, 4>, traverse_nodes<true, 5>,
+                                       traverse_nodes<true, 6>, traverse_nodes<true, 7>};
+    return kWalks[q.octant](wide, q, hit);
+}
+
 }  // namespace
 
 #ifndef BVHLAB_RECORDED_WIDE_WALK
 Hit intersect_wide_kernel(const WideView& wide, const Ray& ray, std::uint32_t* nodes_visited) {
     Hit hit{ray.tmax, kNoHit, 0.0f, 0.0f, kNoHit};
     const Query q = make_query(ray);
-    const std::uint32_t visited = wide.lines ? traverse_nodes<false>(wide, q, hit) : 0;
+    const std::uint32_t visited = wide.lines ? traverse_nodes<false, kAnyOctant>(wide, q, hit) : 0;
     if (nodes_visited) *nodes_visited = visited;
     return hit;
 }
 
 bool occluded_wide_kernel(const WideView& wide, const Ray& ray) {
     Hit hit{ray.tmax, kNoHit, 0.0f, 0.0f, kNoHit};
-    if (wide.lines) traverse_nodes<true>(wide, make_query(ray), hit);
+    if (wide.lines) any_hit_walk(wide, make_query(ray), hit);
     return hit.ref != kNoHit;
 }
 #else
@@ -337,7 +378,7 @@ bool occluded_wide_kernel(const WideView& wide, const Ray& ray) {
 Hit record_wide_kernel(const WideView& wide, const Ray& ray, WideRecorder& record, std::uint32_t* nodes_visited) {
     Hit hit{ray.tmax, kNoHit, 0.0f, 0.0f, kNoHit};
     const Query q = make_query(ray);
-    const std::uint32_t visited = wide.lines ? traverse_nodes<false, true>(wide, q, hit, &record) : 0;
+    const std::uint32_t visited = wide.lines ? traverse_nodes<false, kAnyOctant, true>(wide, q, hit, &record) : 0;
     if (nodes_visited) *nodes_visited = visited;
     return hit;
 }
