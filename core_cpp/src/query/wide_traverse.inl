@@ -322,8 +322,8 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit, Wid
         } else {
             ++visited;
             [[maybe_unused]] const std::uint32_t line = cur.index, pushed = sp;
-            const bool entered = enter_children<kAnyHit, kOctant>(wide, node_at(wide, cur.index), origin, neg_inv,
-                                                                  neg_inv_far, plane, q.tmin, far_limit, stack, sp, cur);
+            const bool entered = enter_children<kAnyHit, kOctant>(
+                wide, node_at(wide, cur.index), origin, neg_inv, neg_inv_far, plane, q.tmin, far_limit, stack, sp, cur);
             if constexpr (kRecord) record->node(line, entered ? cur.index : kNoHit, stack.index + pushed, sp - pushed);
             if (entered) continue;
         }
@@ -348,11 +348,11 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit, Wid
 /// runs: Sponza random 884 → 866, 1.11-1.13 → 1.06-1.07; primary 1,699 → 1,628, 0.93 → 0.94-0.96;
 /// room1m random 1.03-1.07 → 0.98-1.00).
 [[maybe_unused]] std::uint32_t any_hit_walk(const WideView& wide, const Query& q, Hit& hit) {
-    using Walk = std::uint32_t (*)(const WideView&, const Query&, Hit&);
+    using Walk = std::uint32_t (*)(const WideView&, const Query&, Hit&, WideRecorder*);
     static constexpr Walk kWalks[8] = {traverse_nodes<true, 0>, traverse_nodes<true, 1>, traverse_nodes<true, 2>,
                                        traverse_nodes<true, 3>, traverse_nodes<true, 4>, traverse_nodes<true, 5>,
                                        traverse_nodes<true, 6>, traverse_nodes<true, 7>};
-    return kWalks[q.octant](wide, q, hit);
+    return kWalks[q.octant](wide, q, hit, nullptr);
 }
 
 }  // namespace
