@@ -67,6 +67,18 @@ def scenes(names: list[str]) -> dict[str, np.ndarray]:
     return out
 
 
+def write_inputs(folder: Path, scene: str, tris: np.ndarray) -> tuple[Path, dict[str, Path]]:
+    """bvh_bench's inputs for a scene, written into `folder`: its triangles (.f32) and each of its
+    ray sets (rays_for) as a file, by set name."""
+    mesh = folder / f"{scene}.f32"
+    tris.tofile(mesh)
+    rays = {}
+    for name, r in rays_for(scene, tris).items():
+        rays[name] = folder / f"{scene}_{name}.f32"
+        r.tofile(rays[name])
+    return mesh, rays
+
+
 def _count(name: str) -> int:
     m = re.search(r"(\d+)([km])$", name)
     if not m:

@@ -70,12 +70,7 @@ def main() -> None:
         for scene, tris in _peers.scenes(args.scenes.split(",")).items():
             print(f"{scene}: optimising", file=sys.stderr, flush=True)
             sah = sah_rows(tris, [int(b) for b in args.batches.split(",")])
-            mesh = Path(tmp) / f"{scene}.f32"
-            tris.tofile(mesh)
-            rays = {}
-            for name, r in _peers.rays_for(scene, tris).items():
-                rays[name] = Path(tmp) / f"{scene}_{name}.f32"
-                r.tofile(rays[name])
+            mesh, rays = _peers.write_inputs(Path(tmp), scene, tris)
             print(f"{scene}: tracing", file=sys.stderr, flush=True)
             traced = measure(exe, mesh, rays, args.repeat, args.rounds, peers)
             if args.callgrind:  # instructions per ray: what the machine's load does not change

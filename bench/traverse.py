@@ -135,12 +135,7 @@ def main() -> None:
     results = {"machine": _common.machine(), "scenes": {}}
     with tempfile.TemporaryDirectory() as tmp:
         for scene, tris in _peers.scenes(args.scenes.split(",")).items():
-            mesh = Path(tmp) / f"{scene}.f32"
-            tris.tofile(mesh)
-            rays = {}
-            for name, r in _peers.rays_for(scene, tris).items():
-                rays[name] = Path(tmp) / f"{scene}_{name}.f32"
-                r.tofile(rays[name])
+            mesh, rays = _peers.write_inputs(Path(tmp), scene, tris)
             print(f"{scene}: tracing", file=sys.stderr, flush=True)
             result = measure(exe, mesh, rays, args.repeat, args.rounds, peers)
             if args.callgrind:
