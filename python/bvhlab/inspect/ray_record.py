@@ -94,13 +94,7 @@ class RayRecord:
     def summary(self) -> dict:
         """Counts and the closest hit as plain values (what the CLI prints and writes)."""
         return {
-            "pixel": list(self.pixel) if self.pixel else None,
-            "origin": list(self.origin),
-            "direction": list(self.direction),
-            "tmin": self.tmin,
-            "tmax": self.tmax,
-            "traversal": self.traversal,
-            "nodes_visited": self.nodes_visited,
+            **_ray_fields(self),
             "box_tests": self.box_tests,
             "box_hits": self.box_hits,
             "prim_tests": self.prim_tests,
@@ -193,13 +187,7 @@ class InstancedRayRecord:
         """Counts and the closest hit as plain values (what the CLI prints and writes)."""
         hit = self.hit
         return {
-            "pixel": list(self.pixel) if self.pixel else None,
-            "origin": list(self.origin),
-            "direction": list(self.direction),
-            "tmin": self.tmin,
-            "tmax": self.tmax,
-            "traversal": self.traversal,
-            "nodes_visited": self.nodes_visited,
+            **_ray_fields(self),
             "tlas_box_tests": self.tlas.box_tests,
             "instances_entered": len(self.blas),
             "box_tests": self.tlas.box_tests + sum(b.box_tests for b in self.blas),
@@ -287,3 +275,16 @@ def _point(name: str, value) -> tuple:
     if a.shape != (3,) or a.dtype.kind not in "iuf":
         raise ValueError(f"{name} must be 3 numbers, got {value!r}")
     return tuple(float(c) for c in a.astype(np.float32))  # the traversal's precision, as Bvh.intersect
+
+
+def _ray_fields(record) -> dict:
+    """The ray and walk of a flat or two-level record as plain values (both summaries begin so)."""
+    return {
+        "pixel": list(record.pixel) if record.pixel else None,
+        "origin": list(record.origin),
+        "direction": list(record.direction),
+        "tmin": record.tmin,
+        "tmax": record.tmax,
+        "traversal": record.traversal,
+        "nodes_visited": record.nodes_visited,
+    }
