@@ -101,3 +101,14 @@ def check_tree_layout(bvh, tris: np.ndarray) -> None:
         assert np.all(lo[inner] <= lo[child]) and np.all(hi[inner] >= hi[child])
     np.testing.assert_array_equal(skip[first], second)
     np.testing.assert_array_equal(skip[inner], skip[second])
+
+
+def subtree_slots(bvh):
+    """(first, count) of each node's subtree in leaf order, from the nodes alone."""
+    nodes, leaf = bvh.nodes, bvh.is_leaf
+    first = np.where(leaf, nodes["index"], 0).astype(np.int64)
+    count = np.where(leaf, nodes["info"], 0).astype(np.int64)
+    for i in range(len(nodes) - 1, -1, -1):
+        if not leaf[i]:
+            first[i], count[i] = first[i + 1], count[i + 1] + count[nodes["index"][i]]
+    return first, count

@@ -6,7 +6,7 @@ against its boxes and instances."""
 
 import numpy as np
 import pytest
-from oracles import box_entry
+from oracles import box_entry, subtree_slots
 from test_instanced_scene import _rays, instanced_scene  # noqa: F401  (the fixture)
 
 import bvhlab
@@ -24,21 +24,11 @@ def trees(instanced_scene):  # noqa: F811
     return tree, flat, origin_of_flat
 
 
-def _slots_of(bvh):
-    nodes, leaf = bvh.nodes, bvh.is_leaf
-    first = np.where(leaf, nodes["index"], 0).astype(np.int64)
-    count = np.where(leaf, nodes["info"], 0).astype(np.int64)
-    for i in range(len(nodes) - 1, -1, -1):
-        if not leaf[i]:
-            first[i], count[i] = first[i + 1], count[i + 1] + count[nodes["index"][i]]
-    return first, count
-
-
 @pytest.mark.parametrize("traversal", bvhlab.TRAVERSALS)
 def test_records_are_intersects_walk_and_the_flattened_trees_hits(instanced_scene, trees, traversal):  # noqa: F811
     tree, flat, (flat_instance, flat_prim) = trees
     mesh_of, _ = tree.instances
-    slots = [_slots_of(m) for m in tree.meshes]
+    slots = [subtree_slots(m) for m in tree.meshes]
     origins, dirs = _rays(instanced_scene, 300, 5)
     two = tree.intersect(origins, dirs, traversal=traversal)
     one = flat.intersect(origins, dirs, traversal=traversal)

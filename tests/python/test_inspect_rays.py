@@ -4,6 +4,7 @@ pixel), and against the tree's structure."""
 
 import numpy as np
 import pytest
+from oracles import subtree_slots
 
 import bvhlab
 from bvhlab.inspect.ray_record import trace_pixel
@@ -47,17 +48,6 @@ def test_records_match_intersect(traversal, small_scene, knot_mesh):
             _check_record(bvh, rec, {k: v[i] for k, v in hits.items()}, hits["nodes_visited"][i])
 
 
-def _subtree_slots(bvh):
-    """(first, count) of each node's subtree in leaf order, from the nodes alone."""
-    nodes, leaf = bvh.nodes, bvh.is_leaf
-    first = np.where(leaf, nodes["index"], 0).astype(np.int64)
-    count = np.where(leaf, nodes["info"], 0).astype(np.int64)
-    for i in range(len(nodes) - 1, -1, -1):
-        if not leaf[i]:
-            first[i], count[i] = first[i + 1], count[i + 1] + count[nodes["index"][i]]
-    return first, count
-
-
 def _brute_force(bvh, tris, spheres, origin, direction):
     """The closest hit over every primitive, each alone in a tree of its own (no shared tree)."""
     best = (np.inf, -1, 0)
@@ -80,7 +70,7 @@ def test_wide_records_match_intersect_and_brute_force(small_scene, knot_mesh):
     and the brute force's, and it ends in the wide leaf (a subtree of at most four) holding it."""
     for tris, spheres in (small_scene, (knot_mesh, None)):
         bvh = bvhlab.build(tris, spheres)
-        first, count = _subtree_slots(bvh)
+        first, count = subtree_slots(bvh)
         origins, dirs = procedural.random_rays(tris, 300, seed=7)
         hits = bvh.intersect(origins, dirs, traversal="wide")
         for i in range(len(origins)):
