@@ -24,6 +24,15 @@ def knot():
 
 
 @pytest.mark.parametrize("policy", bvhlab.UPDATE_POLICIES)
+def _expect_valid_with_fresh_hits(tree, moved, seed):
+    """The updated tree is laid out right and gives a fresh build's hits on random rays."""
+    check_tree_layout(tree, moved)
+    origins, dirs = procedural.random_rays(moved, 4000, seed=seed)
+    a, b = tree.intersect(origins, dirs), bvhlab.build(moved).intersect(origins, dirs)
+    np.testing.assert_array_equal(a["t"], b["t"])
+    np.testing.assert_array_equal(a["prim"], b["prim"])
+
+
 def test_every_policy_leaves_a_valid_tree_with_a_fresh_builds_hits(knot, policy):
     tree = bvhlab.build(knot)
     moved = _moved(knot, 0.3, region=float(np.median(knot[:, 0, 0])))
@@ -33,11 +42,7 @@ def test_every_policy_leaves_a_valid_tree_with_a_fresh_builds_hits(knot, policy)
     if policy != "adaptive":
         assert stats.policy == policy
     assert stats.sah_cost == pytest.approx(tree.stats["sah_cost"], rel=1e-4)
-    check_tree_layout(tree, moved)
-    origins, dirs = procedural.random_rays(moved, 4000, seed=3)
-    a, b = tree.intersect(origins, dirs), bvhlab.build(moved).intersect(origins, dirs)
-    np.testing.assert_array_equal(a["t"], b["t"])
-    np.testing.assert_array_equal(a["prim"], b["prim"])
+    _expect_valid_with_fresh_hits(tree, moved, seed=3)
 
 
 def test_partial_rebuilds_part_and_lowers_the_cost(knot):
@@ -97,9 +102,5 @@ def test_adaptive_rebuilds_the_top_over_parts_that_moved(knot):
     stats = tree.update(moved, top_growth=1.0)  # whatever the subtrees left
     assert stats.policy == "partial" and stats.top_boxes > 1
     assert stats.sah_cost == pytest.approx(tree.stats["sah_cost"], rel=1e-4)
-    check_tree_layout(tree, moved)
-    origins, dirs = procedural.random_rays(moved, 4000, seed=5)
-    a, b = tree.intersect(origins, dirs), bvhlab.build(moved).intersect(origins, dirs)
-    np.testing.assert_array_equal(a["t"], b["t"])
-    np.testing.assert_array_equal(a["prim"], b["prim"])
+    _expect_valid_with_fresh_hits(tree, moved, seed=5)
     assert bvhlab.build(knot).update(moved, top_cut_primitives=0).top_boxes == 0
