@@ -45,6 +45,16 @@ class ShownBoxes:
     instances_shown: int
     instances: int
 
+    @property
+    def note(self) -> str:
+        """What the cap left out, in words ("" when nothing)."""
+        if self.instances_shown == self.instances:
+            return ""
+        return (
+            f"BLAS boxes of {self.instances_shown:,} of {self.instances:,} instances "
+            f"(at most {MAX_OVERLAY_BOXES:,} boxes)"
+        )
+
     def tree_node(self, k: int) -> TreeNode:
         """What box k is."""
         if self.level[k] == TLAS:
