@@ -184,7 +184,7 @@ BVHLAB_CONST uint PROJECTION_FISHEYE_EQUIDISTANT = 3u;
 /// 4-byte scalar, then come vec4s, 4-byte scalars, then the addresses, 8-aligned).
 /// The camera (camera.h; make_camera_frame in core_cpp/src/render/camera.cpp): a pixel's sample
 /// at image position q (pixels from the top-left corner) has screen coordinates
-/// screen.xy + q · screen.zw, which the projection turns into a ray (camera_ray, shade.glsl):
+/// screen.xy + q · screen.zw, which the projection turns into a ray (camera_ray, camera.glsl):
 /// perspective: the direction forward + x·right + y·up; orthographic: the origin position +
 /// x·right + y·up; panoramic: Cycles' view-plane coordinates (u, v) in [0, 1]² (v up).
 struct FrameParams {

@@ -33,7 +33,7 @@ std::size_t resident_bytes() {
 }
 
 /// The pixel (column, row) through which the camera of `s` sees p: the tracer's pinhole camera
-/// (camera_ray in shaders/tracer/shade.glsl), row 0 at the top.
+/// (camera_ray in shaders/tracer/camera.glsl), row 0 at the top.
 std::pair<int, int> project(const RenderSettings& s, Vec3 p) {
     const Camera& c = s.camera;
     Vec3 forward = normalize(c.forward), right = normalize(cross(forward, c.up));

@@ -1,5 +1,5 @@
 // pixel_ray.h — the primary ray the tracer traces for one sample of one pixel (issue 35), made by
-// the tracer's own camera code (shaders/tracer/shade.glsl camera_ray, compiled as C++).
+// the tracer's own camera code (shaders/tracer/camera.glsl camera_ray, compiled as C++).
 #pragma once
 #include <cstdint>
 

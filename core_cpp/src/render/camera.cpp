@@ -1,5 +1,5 @@
 // The cameras (camera.h): their checks and names, and the frame parameters the tracer's camera_ray
-// (shaders/tracer/shade.glsl) reads. The view plane follows Cycles' blender_camera_viewplane
+// (shaders/tracer/camera.glsl) reads. The view plane follows Cycles' blender_camera_viewplane
 // (intern/cycles/blender/camera.cpp), the panoramic ranges Cycles' Camera::update
 // (intern/cycles/scene/camera.cpp: equirectangular_range).
 #include "camera_frame.h"
