@@ -35,7 +35,7 @@ inline nb::dict node_data_dict(NodeData&& d) {
     out["sah_term"] = owned_array(std::move(d.sah_term)), out["subtree_sah"] = owned_array(std::move(d.subtree_sah));
     out["sah_share"] = owned_array(std::move(d.sah_share));
     out["child_overlap"] = owned_array(std::move(d.child_overlap)), out["epo"] = owned_array(std::move(d.epo));
-    out["sah_cost"] = d.sah_cost, out["epo_cost"] = d.epo_cost;
+    out["sah_cost"] = d.sah_cost, out["epo_cost"] = d.epo_cost, out["surface_area"] = d.surface_area;
     return out;
 }
 

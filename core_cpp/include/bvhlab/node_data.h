@@ -23,6 +23,7 @@ struct NodeData {
     std::vector<double> child_overlap;      ///< area(box(left) ∩ box(right)) / area(node); 0 for a leaf
     std::vector<double> epo;                ///< the node's end-point overlap term, see epo_terms()
     double sah_cost = 0, epo_cost = 0;      ///< Σ sah_term, Σ epo
+    double surface_area = 0;                ///< A(Q): the triangles' area, EPO's normaliser
 };
 
 /// Every node's data; `threads` as in BuildConfig (0 = all). The EPO pass clips each triangle
@@ -36,6 +37,9 @@ NodeData compute_node_data(const Bvh& bvh, unsigned threads = 0);
 /// sah_cost()). Only triangles count: spheres are neither clipped nor in A(Q).
 /// Returns the term of each node (their sum is the tree's EPO).
 std::vector<double> epo_terms(const Bvh& bvh, unsigned threads = 0);
+
+/// A(Q) of epo_terms(): the area of the tree's triangles (each reference once; spheres not counted).
+double surface_area(const Bvh& bvh);
 
 /// The area of the part of triangle (a, b, c) inside box [lo, hi] (Sutherland–Hodgman clipping
 /// by the six planes of the box), in double.

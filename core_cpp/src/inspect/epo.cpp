@@ -64,6 +64,19 @@ double clipped_triangle_area(const double a[3], const double b[3], const double 
     return x.n >= 3 ? polygon_area(x) : 0.0;
 }
 
+double surface_area(const Bvh& bvh) {
+    double total = 0;
+    for (const PackedPrim& p : bvh.prims) {
+        if (p.ref & gpu::REF_SPHERE_BIT) continue;
+        const double v[3][3] = {{p.v0.x, p.v0.y, p.v0.z}, {p.v1.x, p.v1.y, p.v1.z}, {p.v2.x, p.v2.y, p.v2.z}};
+        double lo[3], hi[3];
+        for (int a = 0; a < 3; ++a)
+            lo[a] = std::min({v[0][a], v[1][a], v[2][a]}), hi[a] = std::max({v[0][a], v[1][a], v[2][a]});
+        total += clipped_triangle_area(v[0], v[1], v[2], lo, hi);  // the same arithmetic as the clips
+    }
+    return total;
+}
+
 std::vector<double> epo_terms(const Bvh& bvh, unsigned threads) {
     const std::uint32_t count = bvh.node_count();
     std::vector<double> terms(count, 0.0);
@@ -78,16 +91,7 @@ std::vector<double> epo_terms(const Bvh& bvh, unsigned threads) {
         for (int j = 0; j < 3; ++j) v[j][0] = src[j]->x, v[j][1] = src[j]->y, v[j][2] = src[j]->z;
     };
     auto is_triangle = [&](std::size_t k) { return !(bvh.prims[k].ref & gpu::REF_SPHERE_BIT); };
-    double total_area = 0;
-    for (std::size_t k = 0; k < bvh.prims.size(); ++k) {
-        if (!is_triangle(k)) continue;
-        double v[3][3];
-        vertices(k, v);
-        double lo[3], hi[3];
-        for (int a = 0; a < 3; ++a)
-            lo[a] = std::min({v[0][a], v[1][a], v[2][a]}), hi[a] = std::max({v[0][a], v[1][a], v[2][a]});
-        total_area += clipped_triangle_area(v[0], v[1], v[2], lo, hi);  // the same arithmetic as the clips
-    }
+    const double total_area = surface_area(bvh);
     if (!(total_area > 0)) return terms;
 
     const unsigned slots = ThreadPool::resolve(threads);

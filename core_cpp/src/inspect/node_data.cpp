@@ -63,6 +63,7 @@ NodeData compute_node_data(const Bvh& bvh, unsigned threads) {
     // A TLAS (tlas.h) packs no geometry: its boxes hold instances, whose EPO it cannot clip.
     d.epo = bvh.prims.empty() ? std::vector<double>(n, 0.0) : epo_terms(bvh, threads);
     for (double e : d.epo) d.epo_cost += e;
+    d.surface_area = surface_area(bvh);
     return d;
 }
 

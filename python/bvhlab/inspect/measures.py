@@ -52,8 +52,14 @@ def measure_values(data: NodeData, measure: str, nodes: np.ndarray | None = None
     """Each node's (or each of `nodes`') value in [0, 1] on the ramp, and its legend. Log scales
     span LOG_DECADES below the largest value among the nodes coloured; zero maps to 0."""
     raw = _raw(data, measure)
-    if nodes is not None:
-        raw = raw[nodes]
+    return ramp(raw if nodes is None else raw[nodes], measure)
+
+
+def ramp(raw: np.ndarray, measure: str) -> tuple[np.ndarray, Legend]:
+    """Raw values of `measure` (as `_raw` gives them: shares, counts, overlaps) on the ramp, and
+    the legend: the one mapping of a flat tree's nodes and a two-level tree's boxes."""
+    if measure not in MEASURES:
+        raise ValueError(f"measure must be one of {', '.join(MEASURES)}, got {measure!r}")
     if measure == "child_overlap":
         return np.clip(raw, 0.0, 1.0).astype(np.float32), Legend(measure, 0.0, 1.0, False)
     high = float(raw.max()) if len(raw) else 0.0

@@ -28,6 +28,7 @@ class NodeData:
     epo: np.ndarray  #: float64 end-point overlap term (Aila, Karras and Laine 2013; triangles only)
     sah_cost: float  #: Σ sah_term
     epo_cost: float  #: Σ epo
+    surface_area: float  #: A(Q), the triangles' area: what EPO terms are shares of (0 for a TLAS)
 
     @classmethod
     def from_core(cls, d: dict) -> NodeData:
