@@ -11,6 +11,7 @@ import numpy as np
 from . import _checks, _core
 from .bvh import BuildConfig, Bvh, run_occluded_query, run_ray_query
 from .inspect.node_data import NodeData
+from .inspect.two_level_data import TwoLevelNodeData
 from .two_level_stats import instanced_stats
 from .update import UpdateStats
 
@@ -31,6 +32,7 @@ class InstancedBvh:
         self._stats: tuple | None = None  # (what they were made of, stats)
         self._tlas: tuple | None = None  # (the core TLAS, it as a Bvh)
         self._tlas_data: tuple | None = None  # (the TLAS it was made of, NodeData, leaf_first, refs)
+        self._analysed: tuple | None = None  # (_analysis_key(), TwoLevelNodeData)
 
     def __repr__(self) -> str:
         s = self.stats
@@ -85,13 +87,38 @@ class InstancedBvh:
 
     def tlas_leaf_of(self, instance: int) -> int:
         """The TLAS leaf holding `instance` (-1 for an instance of an empty mesh, which no leaf holds)."""
+        return int(self.tlas_leaves_of_instances()[instance])
+
+    def tlas_leaves_of_instances(self) -> np.ndarray:
+        """(N,) int64: the TLAS leaf holding each instance (-1 for an empty mesh's instance)."""
         _, data, leaf_first, refs = self._tlas_nodes()
-        slot = np.flatnonzero(refs == instance)
-        if not len(slot):
-            return -1
-        leaves = np.flatnonzero((leaf_first >= 0) & (leaf_first <= slot[0]))
-        ends = leaf_first[leaves] + data.prim_count[leaves].astype(np.int64)
-        return int(leaves[np.flatnonzero(slot[0] < ends)[0]])
+        out = np.full(len(self._placed[0]), -1, np.int64)
+        leaves = np.flatnonzero(np.asarray(leaf_first) >= 0)
+        counts = data.prim_count[leaves].astype(np.int64)
+        slots = np.repeat(leaf_first[leaves].astype(np.int64), counts) + (
+            np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+        )
+        out[refs[slots]] = np.repeat(leaves, counts)
+        return out
+
+    def node_data(self) -> TwoLevelNodeData:
+        """The figures of the tree the TLAS and the meshes' trees make together
+        (bvhlab.inspect.two_level_data): each mesh tree analysed once (`Bvh.node_data`)."""
+        key = self._analysis_key()
+        if self._analysed is None or self._analysed[0] != key:
+            self._analysed = (key, TwoLevelNodeData.of(self))
+        return self._analysed[1]
+
+    def cached_node_data(self) -> TwoLevelNodeData | None:
+        """What `node_data()` made for the current TLAS and meshes, or None (never computes)."""
+        if self._analysed is not None and self._analysed[0] == self._analysis_key():
+            return self._analysed[1]
+        if all(m.cached_node_data() is not None for m in self.meshes):
+            return self.node_data()  # only the joining arrays are left to make (milliseconds)
+        return None
+
+    def _analysis_key(self) -> tuple:
+        return (id(self._core), tuple(m.revision for m in self.meshes), tuple(id(m) for m in self.meshes))
 
     def _tlas_nodes(self) -> tuple:
         if self._tlas_data is None or self._tlas_data[0] is not self._core:
