@@ -15,7 +15,7 @@ from __future__ import annotations
 import bpy
 from bpy.app.handlers import persistent
 
-from . import background, engine, follow, legend_icons, ops_counters, ops_inspect, overlay, state
+from . import background, engine, follow, legend_icons, ops_costs, ops_counters, ops_inspect, overlay, state
 from .ops_build import BVHLAB_OT_build
 from .ops_compare import BVHLAB_OT_compare
 from .ops_export_stats import BVHLAB_OT_export_stats
@@ -41,6 +41,7 @@ classes = (
     BVHLAB_OT_fresh_sah,
     BVHLAB_OT_compare,
     *ops_inspect.classes,
+    *ops_costs.classes,
     BVHLAB_PT_main,
     BVHLAB_PT_overlay,
     BVHLAB_PT_inspect,

@@ -9,30 +9,18 @@ root's parent is its instance's TLAS leaf, a TLAS leaf's children its instances'
 from __future__ import annotations
 
 import bpy
-from bpy.props import EnumProperty, FloatVectorProperty, IntProperty
+from bpy.props import EnumProperty, FloatVectorProperty
 
 from . import overlay, state
 from .operator_support import run_reported
 
 #: What a tree-less inspect operator says.
 NO_TREE = "Build a tree first (BVH ▸ Build)"
-#: What the cost breakdown and Pick Node say of a two-level tree (an instanced scene, issue 34).
-TWO_LEVEL = "Cost breakdown: flat trees only"
 
 
 def inspected_tree(scene):
     """The scene's tree as Inspect sees it (state.BuiltTree, flat or two-level), or None."""
     return state.tree_for(scene)
-
-
-def flat_tree(scene):
-    """The scene's tree if it is flat (a bvhlab.Bvh), else None."""
-    built = state.tree_for(scene)
-    return built if built is not None and not overlay.is_two_level(built) else None
-
-
-def no_tree_message(scene) -> str:
-    return TWO_LEVEL if state.tree_for(scene) is not None else NO_TREE
 
 
 def _shown_range(scene, built) -> tuple[int, int]:
@@ -76,7 +64,7 @@ def pick_ray(operator, context, origin, direction) -> set[str]:
     scene = context.scene
     built = inspected_tree(scene)
     if built is None:
-        operator.report({"WARNING"}, no_tree_message(scene))
+        operator.report({"WARNING"}, NO_TREE)
         return {"CANCELLED"}
     settings = scene.bvhlab
     shown = _shown_range(scene, built)
@@ -120,7 +108,7 @@ class BVHLAB_OT_pick_box(bpy.types.Operator):
             self.report({"WARNING"}, "Pick Box works in a 3D viewport")
             return {"CANCELLED"}
         if inspected_tree(context.scene) is None:
-            self.report({"WARNING"}, no_tree_message(context.scene))
+            self.report({"WARNING"}, NO_TREE)
             return {"CANCELLED"}
         context.window_manager.modal_handler_add(self)
         context.area.header_text_set("Pick Box: click a box · Esc or right-click to stop")
@@ -241,104 +229,6 @@ class BVHLAB_OT_frame_picked(bpy.types.Operator):
         return {"FINISHED"}
 
 
-class BVHLAB_OT_pick_node(bpy.types.Operator):
-    """Pick this node (highlighted in the viewport, its figures in the Inspect panel)"""
-
-    bl_idname = "bvhlab.pick_node"
-    bl_label = "Pick Node"
-    bl_options = {"REGISTER"}
-
-    node: IntProperty(name="Node", min=0)  # type: ignore[valid-type]
-
-    def execute(self, context):
-        built = flat_tree(context.scene)
-        if built is None:
-            self.report({"WARNING"}, no_tree_message(context.scene))
-            return {"CANCELLED"}
-        if self.node >= built.bvh.stats["nodes"]:
-            self.report({"ERROR"}, f"node {self.node} does not exist; the tree has {built.bvh.stats['nodes']} nodes")
-            return {"CANCELLED"}
-        state.remember_pick(context.scene, built, self.node, "node")
-        overlay.tag_redraw()
-        return {"FINISHED"}
-
-
-class BVHLAB_OT_analyse_tree(bpy.types.Operator):
-    """Compute every node's figures (SAH share, child overlap, EPO) for the Inspect panel: a second
-    or two for a million nodes"""
-
-    bl_idname = "bvhlab.analyse_tree"
-    bl_label = "Analyse Tree"
-    bl_options = {"REGISTER"}
-
-    def execute(self, context):
-        import time
-
-        built = inspected_tree(context.scene)
-        if built is None:
-            self.report({"WARNING"}, no_tree_message(context.scene))
-            return {"CANCELLED"}
-        start = time.perf_counter()
-        if overlay.is_two_level(built):  # the TLAS and each mesh's tree
-            tlas = built.bvh.tlas_node_data()
-            meshes = [m.node_data() for m in built.bvh.meshes]
-            ms = (time.perf_counter() - start) * 1e3
-            nodes = len(tlas) + sum(len(d) for d in meshes)
-            self.report(
-                {"INFO"},
-                f"Analysed {nodes} nodes (TLAS and {len(meshes)} mesh trees) in {ms:.0f} ms: "
-                f"TLAS SAH {tlas.sah_cost:.4g}",
-            )
-            return {"FINISHED"}
-        data = built.bvh.node_data()
-        ms = (time.perf_counter() - start) * 1e3
-        self.report(
-            {"INFO"}, f"Analysed {len(data)} nodes in {ms:.0f} ms: SAH {data.sah_cost:.4g}, EPO {data.epo_cost:.4g}"
-        )
-        return {"FINISHED"}
-
-
-#: Rows of the Inspect panel's cost list: the costliest subtrees at the shown range's top depth.
-COSTLIEST = 5
-_per_depth: dict = {}  # the tree's serial → its SAH cost per depth (one entry: the tree shown)
-
-
-def sah_per_depth(built) -> list[float]:
-    """The shown tree's SAH cost split by depth (bvhlab.compare.tree_stats: from the nodes alone,
-    milliseconds), kept for the tree's serial so that drawing the panel recomputes nothing."""
-    if built.serial not in _per_depth:
-        from bvhlab.compare.tree_stats import sah_cost_per_depth
-
-        _per_depth.clear()
-        _per_depth[built.serial] = sah_cost_per_depth(built.bvh)
-    return _per_depth[built.serial]
-
-
-def draw_cost_panel(layout, scene) -> None:
-    """The cost breakdown per depth (a bar per depth, its share of the SAH cost) and the costliest
-    subtrees at the top depth of the shown range, each a button that picks it (flat trees)."""
-    built = flat_tree(scene)
-    if built is None:
-        layout.label(text=no_tree_message(scene), icon="INFO")
-        return
-    per_depth = sah_per_depth(built)
-    total = sum(per_depth) or 1.0
-    widest = max(per_depth, default=0.0) or 1.0
-    col = layout.column(align=True)
-    for depth, cost in enumerate(per_depth):
-        col.progress(factor=cost / widest, type="BAR", text=f"{depth}: {100 * cost / total:.1f}%")
-    data = built.bvh.cached_node_data()
-    depth = scene.bvhlab.overlay_depth_min
-    if data is None:
-        layout.operator(BVHLAB_OT_analyse_tree.bl_idname, icon="VIEWZOOM")
-        return
-    layout.label(text=f"Costliest at depth {depth}:")
-    col = layout.column(align=True)
-    for node in data.costliest_at_depth(depth, COSTLIEST):
-        text = f"Node {int(node)}: {100 * data.sah_share[node]:.2f}%"
-        col.operator(BVHLAB_OT_pick_node.bl_idname, text=text).node = int(node)
-
-
 def picked_box(scene):
     """(lo, hi) of the picked box, for the overlay's highlight, or None."""
     built, node = inspected_tree(scene), state.picked_node(scene)
@@ -379,4 +269,4 @@ def draw_inspect_panel(layout, scene) -> None:
     layout.operator(BVHLAB_OT_frame_picked.bl_idname, icon="ZOOM_SELECTED")
 
 
-classes = (BVHLAB_OT_pick_box, BVHLAB_OT_pick_step, BVHLAB_OT_frame_picked, BVHLAB_OT_pick_node, BVHLAB_OT_analyse_tree)
+classes = (BVHLAB_OT_pick_box, BVHLAB_OT_pick_step, BVHLAB_OT_frame_picked)

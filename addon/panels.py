@@ -162,14 +162,13 @@ class BVHLAB_PT_overlay(_BvhPanel, bpy.types.Panel):
         row = layout.row()
         row.enabled = not settings.overlay_color_by_depth
         row.prop(settings, "overlay_color")
-        if not two_level:  # measures are of one tree's nodes (Inspect ▸ Analyse Tree)
-            layout.prop(settings, "overlay_measure")
-        if settings.overlay_measure != "depth" and built is not None and not two_level:
-            from .overlay import batch_for, shown_measure
+        layout.prop(settings, "overlay_measure")  # of the analysed tree's nodes (Inspect ▸ Analyse Tree)
+        if settings.overlay_measure != "depth" and built is not None:
+            from .overlay import shown_measure
 
             if shown_measure(built, settings.overlay_measure) == "depth":
                 layout.operator("bvhlab.analyse_tree", icon="VIEWZOOM")
-            elif legend := batch_for(built, settings.overlay_leaves_only, settings.overlay_measure).table.legend:
+            elif legend := scene_batch(context.scene, built).table.legend:
                 layout.label(text=legend.text())
         layout.prop(settings, "overlay_xray")
         layout.prop(settings, "overlay_line_width")
@@ -192,7 +191,7 @@ class BVHLAB_PT_cost(_BvhPanel, bpy.types.Panel):
     bl_options = {"DEFAULT_CLOSED"}
 
     def draw(self, context):
-        from .ops_inspect import draw_cost_panel
+        from .ops_costs import draw_cost_panel
 
         draw_cost_panel(self.layout, context.scene)
 

@@ -83,6 +83,7 @@ class BVHLAB_PT_engine_viewport(_EnginePanel, bpy.types.Panel):
             sub.prop(settings, "counter_range_min")
             sub.prop(settings, "counter_range_max")
             _counter_legend(self.layout, context, settings)
+            _counter_histogram(self.layout, context)
         col.prop(settings, "viewport_budget_ms")
 
 
@@ -99,6 +100,16 @@ def _counter_legend(layout, context, settings) -> None:
     lo, hi = shown[-1]["counter_range"]
     how = f"auto: 0 to the {AUTO_PERCENTILE:g}th percentile" if settings.counter_range_auto else "manual"
     heat_legend(layout, lo, hi, f"{LABELS[settings.viewport_counter]} per primary ray ({how})")
+
+
+def _counter_histogram(layout, context) -> None:
+    """The histogram of the Rendered viewport's latest counter frame, as the sidebar's Traversal
+    Counters panel draws it (one definition: ops_counters.draw_histogram)."""
+    from ..ops_counters import draw_histogram, shown_histograms
+
+    for source, hist in shown_histograms(context.scene):
+        if source == "Viewport":
+            draw_histogram(layout.box(), source, hist)
 
 
 class BVHLAB_PT_engine_performance(_EnginePanel, bpy.types.Panel):

@@ -15,9 +15,9 @@ _failed: set = set()  # trees whose overlay failed: report once, not on every re
 
 def shown_measure(built, measure: str) -> str:
     """The measure the boxes are coloured by: the chosen one once the tree is analysed (drawing
-    never computes node data), else "depth" (always for a two-level tree: Inspect analyses flat
-    trees)."""
-    if measure == "depth" or is_two_level(built):
+    never computes node data; a two-level tree's figures are its whole tree's:
+    bvhlab.inspect.two_level_data), else "depth"."""
+    if measure == "depth":
         return "depth"
     return measure if built.bvh.cached_node_data() is not None else "depth"
 
@@ -33,7 +33,7 @@ def batch_for(built, leaves_only: bool, measure: str = "depth", level: str = "bo
     """The BoxBatch of a built tree, made on first use and whenever the tree, leaves-only or the
     measure shown changes; for a two-level tree also the level shown and the depth range (its
     table holds only the boxes of the range: overlay/levels.py)."""
-    from .batch import BoxBatch, BoxTable
+    from .batch import BoxBatch
 
     measure = shown_measure(built, measure)
     two_level = is_two_level(built)
@@ -41,14 +41,24 @@ def batch_for(built, leaves_only: bool, measure: str = "depth", level: str = "bo
     if _cached["key"] != key:
         _cached["batch"] = None  # free the old texture before making the new one
         if two_level:
-            from .levels import two_level_boxes
-
-            boxes = two_level_boxes(built.bvh, level, *depth_range, leaves_only=leaves_only)
-            _cached["batch"] = BoxBatch(BoxTable.from_boxes(boxes.lo, boxes.hi, boxes.depth, boxes.note))
+            _cached["batch"] = BoxBatch(two_level_table(built.bvh, leaves_only, measure, level, depth_range))
         else:
             _cached["batch"] = BoxBatch.from_bvh(built.bvh, leaves_only, measure)
         _cached["key"] = key
     return _cached["batch"]
+
+
+def two_level_table(bvh, leaves_only: bool, measure: str, level: str, depth_range):
+    """The BoxTable of a two-level tree's shown boxes (overlay/levels.py), coloured by `measure`
+    of its analysed whole tree (bvhlab.inspect.two_level_data) unless "depth"."""
+    from .batch import BoxTable
+    from .levels import two_level_boxes
+
+    boxes = two_level_boxes(bvh, level, *depth_range, leaves_only=leaves_only)
+    table = BoxTable.from_boxes(boxes.lo, boxes.hi, boxes.depth, boxes.note)
+    if measure != "depth":  # each box's value on the heat ramp in the spare column
+        table.rows[:, 7], table.legend = bvh.node_data().values(boxes, measure)
+    return table
 
 
 def scene_batch(scene, built):

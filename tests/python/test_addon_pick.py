@@ -111,7 +111,7 @@ def test_cost_per_depth_and_the_costliest_subtrees(built):
     scene, state = built
     assert bpy.ops.bvhlab.build() == {"FINISHED"}
     tree = state.tree_for(scene)
-    inspect = __import__(harness.addon().__name__ + ".ops_inspect", fromlist=["sah_per_depth"])
+    inspect = __import__(harness.addon().__name__ + ".ops_costs", fromlist=["sah_per_depth"])
     per_depth = inspect.sah_per_depth(tree)
     assert tree.bvh.cached_node_data() is None, "the panel's breakdown needs no node data"
     assert bpy.ops.bvhlab.analyse_tree() == {"FINISHED"}

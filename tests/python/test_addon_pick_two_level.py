@@ -136,6 +136,42 @@ def test_steps_cross_the_levels_and_frame_uses_the_world_box(built):
     assert figures is tlas and n == sibling.node and name.startswith("TLAS")
     np.testing.assert_array_equal(inspect.picked_box(scene)[0], tlas.lo[sibling.node])
     assert bpy.ops.bvhlab.frame_picked() in ({"CANCELLED"}, {"FINISHED"})  # headless: no viewport
+
+
+def test_cost_panel_and_measures_of_the_whole_tree(built):
+    """A two-level tree's Cost panel: the breakdown per depth adds up to its SAH cost; after Analyse
+    Tree the costliest rows at a depth are TwoLevelNodeData.costliest's (checked against brute
+    force in test_two_level_data) and Pick Node picks one of an instance's mesh tree; the overlay's
+    table colours each shown box by its share of the whole tree's SAH (the TLAS root: all of it)."""
+    import bpy
+
+    from bvhlab.inspect.levels import TLAS, TreeNode, shown_boxes
+    from bvhlab.inspect.two_level_data import TwoLevelNodeData
+
+    scene, state, _ = built
+    addon = harness.addon().__name__
+    costs = __import__(addon + ".ops_costs", fromlist=["costliest"])
+    overlay = __import__(addon + ".overlay", fromlist=["two_level_table"])
+    tree = state.tree_for(scene)
+    per_depth = costs.sah_per_depth(tree)
+    assert np.isclose(sum(per_depth), tree.bvh.stats["sah_cost"], rtol=1e-9)
     assert bpy.ops.bvhlab.analyse_tree() == {"FINISHED"}
-    assert bpy.ops.bvhlab.pick_node(node=0) == {"CANCELLED"}  # the costliest list is of flat trees (a warning)
-    assert state.picked_node(scene) == sibling
+    data = tree.bvh.cached_node_data()
+    assert isinstance(data, TwoLevelNodeData)
+    depth = int(data.tlas.depth.max()) + 1  # below the TLAS: mesh tree nodes of several instances
+    rows = costs.costliest(tree, depth)
+    expected = data.costliest(costs.COSTLIEST, depth)
+    assert len(rows) == len(expected) == costs.COSTLIEST
+    assert [(n, i) for _, n, i in rows] == [(t.node, t.instance) for t, _ in expected]
+    _, node, instance = next(r for r in rows if r[2] >= 0)
+    assert bpy.ops.bvhlab.pick_node(node=node, instance=instance) == {"FINISHED"}
+    assert state.picked_node(scene) == TreeNode("blas", node, instance)
+    with pytest.raises(RuntimeError, match="does not exist"):
+        bpy.ops.bvhlab.pick_node(node=10**6, instance=instance)
+    with pytest.raises(RuntimeError, match="instance 99 does not exist"):
+        bpy.ops.bvhlab.pick_node(node=0, instance=99)
+    table = overlay.two_level_table(tree.bvh, False, "sah_share", "both", (0, 255))
+    shown = shown_boxes(tree.bvh, "both", 0, 255)
+    np.testing.assert_array_equal(table.rows[:, 7], data.values(shown, "sah_share")[0])
+    root = np.flatnonzero((shown.level == TLAS) & (shown.node == 0))
+    assert table.rows[root, 7] == pytest.approx(1.0) and table.legend.high == pytest.approx(1.0)

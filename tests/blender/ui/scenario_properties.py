@@ -46,6 +46,7 @@ def steps(session):
     yield from _sidebar_render(session, addon, scene, area)
     yield from _final_render(session, module, scene, area, layouts)
     yield from _rendered_viewport(session, module, scene, area, layouts)
+    yield from _counters(session, module, scene, area, layouts)
     properties.spaces.active.context = "VIEW_LAYER"  # the Passes panel
     yield 1.5
     properties.spaces.active.context = "RENDER"
@@ -144,6 +145,38 @@ def _rendered_viewport(session, module, scene, area, layouts):
     yield {"action": "capture", "name": "heatmap"}
 
 
+def _counters(session, module, scene, area, layouts):
+    """A traversal counter chosen: the sidebar's Render Counter, and the Rendered viewport's frames
+    counting it; then the Traversal Counters panel and Render Properties ▸ Viewport must draw
+    their histograms (rows of bins and the percentiles)."""
+    import importlib
+    import time
+
+    import bpy
+
+    records = importlib.import_module(f"{module}.state")
+    scene.bvhlab.render_mode = "shade"
+    scene.bvhlab.viewport_counter = "box_tests"
+    with session.override(area, "UI"):
+        assert bpy.ops.bvhlab.render_counter() == {"FINISHED"}
+    key = records.key(scene)
+
+    def counted():
+        with records.lock:
+            return any(t.get("counter_histogram") is not None for t in records.last_viewport.get(key, {}).values())
+
+    yield from _until(counted, SECONDS["viewport"], "a viewport frame counting box tests")
+    done = time.monotonic()
+    yield 2.0
+    for name in ("BVHLAB_PT_counters", "BVHLAB_PT_engine_viewport"):
+        drawn = layouts.get(name, {})
+        session.info.setdefault("histogram_texts", {})[name] = {
+            "redrawn": drawn.get("time", 0) > done,
+            "texts": [i.get("draw_string", "") for i in _labels(drawn)],
+        }
+    yield {"action": "capture", "name": "counters"}
+
+
 def _frame_in_mode(viewport, mode: str) -> bool:
     frames = [s.latest_frame() for s in list(viewport._sessions) if not s.closed]
     return any(f is not None and f.request.settings.mode == mode for f in frames)
@@ -186,6 +219,25 @@ def check(shots: dict, info: dict) -> list[str]:
         failures.append("Last Render was not redrawn after the viewport's full frame")
     if not info["heatmap_frame"]:
         failures.append("render_mode = 'heatmap' set by a script brought no heatmap frame into the viewport")
+    failures += _histograms(info["histogram_texts"])
+    return failures
+
+
+def _histograms(drawn: dict) -> list[str]:
+    """Each counter panel drew a histogram after the counters came: its title (the counter and where
+    from) and its percentiles line (the sidebar: the render's and the viewport's)."""
+    expected = {"BVHLAB_PT_counters": ("Render", "Viewport"), "BVHLAB_PT_engine_viewport": ("Viewport",)}
+    failures = []
+    for name, sources in expected.items():
+        texts = drawn[name]["texts"]
+        titles = [t for t in texts if t.startswith("Box tests (")]
+        for source in sources:
+            if not any(f"({source}," in t for t in titles):
+                failures.append(f"{name}: no histogram of the {source} drawn (labels {texts})")
+        if sum(t.startswith("p50 ") for t in texts) != len(sources):
+            failures.append(f"{name}: {len(sources)} percentile lines expected (labels {texts})")
+        if not drawn[name]["redrawn"]:
+            failures.append(f"{name} was not redrawn after the counters came")
     return failures
 
 
