@@ -1,9 +1,11 @@
 #include "assemble.h"
 
 #include <algorithm>
+#include <cstddef>
 #include <stdexcept>
 #include <utility>
 
+#include "bvhlab/simd.h"
 #include "bvhlab/thread_pool.h"
 
 namespace bvhlab {
@@ -34,12 +36,30 @@ namespace {
 void copy_part(const Subtree& p, std::uint32_t base, Bvh& out) {
     // Whether a node is a leaf is data: the shift is selected, not branched on (a branch here
     // mispredicted about every other node).
+#ifdef BVHLAB_SSE
+    // A node is two 16-byte rows, (lo, index) and (hi, info): info's top bit (NODE_INTERNAL_BIT),
+    // spread by an arithmetic shift, selects `base` for lane 3 of both (the shift's other lanes
+    // are 0, whatever the boxes' sign bits). 11 instructions a node where the scalar loop, which
+    // the compiler did not vectorise, took 19 (callgrind, uniform1m's splice on two threads:
+    // 37.3 M; bench/build_threads.py).
+    static_assert(sizeof(BvhNode) == 32 && offsetof(BvhNode, index) == 12 && offsetof(BvhNode, info) == 28);
+    const __m128i shift = _mm_set_epi32(int(base), 0, 0, 0);
+    const auto* from = reinterpret_cast<const __m128i*>(p.nodes.data());
+    auto* to = reinterpret_cast<__m128i*>(out.nodes.data() + base);
+    const std::size_t rows = 2 * p.nodes.size();  // read once: the stores might alias the vector
+    for (std::size_t j = 0; j < rows; j += 2) {
+        const __m128i lo = _mm_loadu_si128(from + j), hi = _mm_loadu_si128(from + j + 1);
+        const __m128i add = _mm_and_si128(_mm_srai_epi32(hi, 31), shift);
+        _mm_storeu_si128(to + j, _mm_add_epi32(lo, add)), _mm_storeu_si128(to + j + 1, _mm_add_epi32(hi, add));
+    }
+#else
     for (std::size_t j = 0; j < p.nodes.size(); ++j) {
         BvhNode n = p.nodes[j];
         const std::uint32_t shift = is_leaf(n) ? 0u : base;
         n.index += shift, n.info += shift;  // the skip keeps NODE_INTERNAL_BIT
         out.nodes[base + j] = n;
     }
+#endif
     std::copy(p.depths.begin(), p.depths.end(), out.depths.begin() + base);
 }
 

@@ -11,6 +11,7 @@
 #include "bvhlab/bvh.h"
 #include "bvhlab/cancel.h"
 #include "bvhlab/thread_pool.h"
+#include "bvhlab/work_trace.h"
 #include "morton.h"
 #include "sbvh/sbvh_builder.h"
 #include "small_subtree.h"
@@ -106,11 +107,15 @@ void build_tree(BigVector<PrimRef>& prim_refs, const PrimRefsSummary& summary, c
     const std::uint32_t defer_size = threads > 1 ? defer_size_for(n, threads) : 0;
     const std::uint32_t serial_below = threads > 1 ? kMinParallelRange : 0;
     Subtree top;
+    BVHLAB_WORK_MARK("phase top");  // each phase mark ends the serial part of the one before
     build_subtree(shared, scratch, root, top, {defer_size, true, &parallel, serial_below});
+    BVHLAB_WORK_MARK("phase deferred");
     if (!top.deferred.empty() && !stop.cancel().stop_requested())
         build_deferred(shared, top, part_size_for(defer_size), threads, poll);
     if (stop.cancel().stop_requested()) stop.rethrow();
+    BVHLAB_WORK_MARK("phase pack");
     pack_unpacked(shared, top);
+    BVHLAB_WORK_MARK("phase assemble");
     if (top.deferred.empty()) {
         if (method.bottom_up_boxes) fill_boxes_from_children(top.nodes);
         out.nodes = std::move(top.nodes);
@@ -137,12 +142,14 @@ Bvh build_bvh(const GeometryView& geometry, const BuildConfig& config) {
         if (stop.cancel().poll()) stop.rethrow();
     };
     check();
+    BVHLAB_WORK_MARK("phase refs");
     // The references, the fingerprint and the root's bounds in one pass over the input, in
     // chunks on the pool, polling for a stop between chunks (check() below rethrows it).
     PrimRefsSummary summary;
     BigVector<PrimRef> prim_refs = make_prim_refs(geometry, config.threads, &summary, &stop.cancel());
     bvh.geometry_fingerprint = summary.fingerprint;
     check();
+    BVHLAB_WORK_MARK("phase tree");
     if (config.method == SplitMethod::Sbvh) {  // its own builder: references may repeat
         build_sbvh(prim_refs, geometry, config, stop.cancel(), stop.in_leaves(), bvh);
         check();
@@ -155,8 +162,10 @@ Bvh build_bvh(const GeometryView& geometry, const BuildConfig& config) {
     const bool pack_in_build = small_subtree_size(config) > 0;
     build_tree(prim_refs, summary, geometry, pack_in_build, config, stop, bvh);
     check();
+    BVHLAB_WORK_MARK("phase finish");
     if (!pack_in_build) bvh.prims = pack_prims(geometry, bvh.refs, config.threads);
     bvh.build_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    BVHLAB_WORK_MARK("phase end");
     if (config.progress && !config.progress(1.0)) throw BuildCancelled();  // the last word may be "stop"
     return bvh;
 }

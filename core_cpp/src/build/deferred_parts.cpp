@@ -10,6 +10,7 @@
 
 #include "assemble.h"
 #include "bvhlab/thread_pool.h"
+#include "bvhlab/work_trace.h"
 
 namespace bvhlab {
 namespace {
@@ -44,6 +45,7 @@ public:
     /// still add), or a stop is asked.
     void work(unsigned slot, SplitScratch& scratch) {
         for (Job job; next(slot, job);) {
+            BVHLAB_WORK_MARK("queue");  // taking the job (or waiting for one)
             try {
                 build(job, slot, scratch);
             } catch (...) {
@@ -52,6 +54,7 @@ public:
                 throw;
             }
             done();
+            BVHLAB_WORK_MARK("job %u %u", job.range->item.range.begin, job.range->item.range.end);
         }
     }
 

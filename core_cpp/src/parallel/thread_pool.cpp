@@ -1,6 +1,7 @@
 #include "bvhlab/thread_pool.h"
 
 #include "bvhlab/cancel.h"
+#include "bvhlab/work_trace.h"
 
 #include <algorithm>
 #include <exception>
@@ -10,6 +11,10 @@ namespace {
 
 /// How long a thread waiting for the others spins before it sleeps.
 constexpr std::chrono::microseconds kSpin(200);
+
+#ifdef BVHLAB_WORK_TRACE
+std::atomic<unsigned> trace_runs{0};  ///< numbers the calls of run() for the marks
+#endif
 
 }  // namespace
 
@@ -25,6 +30,7 @@ struct ThreadPool::Job {
     unsigned helpers_joined = 0;
     std::atomic<unsigned> helpers_inside{0};  ///< changed under `mutex`; the caller also reads it spinning
     std::exception_ptr error;
+    unsigned trace_id = 0;  ///< BVHLAB_WORK_TRACE: this call's number in the marks
 };
 
 ThreadPool::ThreadPool(unsigned workers) {
@@ -51,6 +57,7 @@ void ThreadPool::work_on(Job& job, unsigned slot) {
     for (std::size_t i; !job.failed.load(std::memory_order_relaxed) && (i = job.next.fetch_add(1)) < job.count;) {
         try {
             (*job.task)(i, slot);
+            BVHLAB_WORK_MARK("task %u %zu", job.trace_id, i);
         } catch (...) {
             std::lock_guard<std::mutex> lock(job.mutex);
             if (!job.error) job.error = std::current_exception();
@@ -79,9 +86,11 @@ void ThreadPool::worker_loop() {
             ++job->helpers_inside;
             if (job->helpers_joined == job->helpers_wanted) jobs_.pop_front();
         }
+        BVHLAB_WORK_MARK("idle");  // the wait for this job
         work_on(*job, slot);
         std::lock_guard<std::mutex> job_lock(job->mutex);
         if (--job->helpers_inside == 0) job->left.notify_all();
+        BVHLAB_WORK_MARK("idle");  // leaving it
     }
 }
 
@@ -93,6 +102,10 @@ void ThreadPool::run(std::size_t count, unsigned threads, const Task& task, cons
     job->count = count;
     job->helpers_wanted =
         static_cast<unsigned>(std::min<std::size_t>({std::size_t(resolve(threads) - 1), workers_.size(), count - 1}));
+#ifdef BVHLAB_WORK_TRACE
+    job->trace_id = ++trace_runs;
+    BVHLAB_WORK_MARK("run %u %u %zu", job->trace_id, job->helpers_wanted + 1, count);  // the serial part before it
+#endif
     if (job->helpers_wanted > 0) {
         {
             std::lock_guard<std::mutex> lock(mutex_);
@@ -133,6 +146,7 @@ void ThreadPool::run(std::size_t count, unsigned threads, const Task& task, cons
             lock.lock();
         }
     }
+    BVHLAB_WORK_MARK("wait %u", job->trace_id);  // for the helpers to leave
     if (job->error) std::rethrow_exception(job->error);
 }
 
