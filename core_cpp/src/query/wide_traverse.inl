@@ -236,10 +236,11 @@ template <int kOctant>
 /// the children the ray enters before hit.t, nearest last, the nearest going to `cur` rather than
 /// the stack. Returns false when the ray enters none.
 /// `neg_inv` is the negated inverse direction (traverse_nodes says why), `neg_inv_far` that times
-/// gpu::BOX_FAR_SCALE, `tmin8` the ray's tmin and `far8` the closest hit so far times the scale
-/// (the far limit), each in eight lanes in memory, read by the box test's first raise and first
-/// lower as they are (a broadcast a node fewer, Sponza random 917 → 892 instructions a ray with
-/// the sort keys made by shifts, push_children): the far end widened
+/// gpu::BOX_FAR_SCALE, `tmin8` the ray's tmin in eight lanes in memory, which the box test's first
+/// raise reads as it is (a broadcast a node fewer), and `far_limit` the closest hit so far times
+/// the scale, broadcast from a register at every node (read from memory as tmin is, the far limit
+/// was written there after every leaf and read back at the next node: primary rays slower in time
+/// though fewer instructions, design.md's fourth pass): the far end widened
 /// as hit_box widens it (Ize 2013), with the scale folded into per-ray constants rather than a
 /// multiply on every node's dependency chain. One rounding more than hit_box's product, which the
 /// scale covers with room to spare (16 ε against 7 ε).
@@ -262,7 +263,7 @@ template <int kOctant>
 template <bool kAnyHit, int kOctant>
 [[gnu::always_inline]] inline bool enter_children(const WideView& wide, const WideNode& node, const L8 origin[3],
                                                   const L8 neg_inv[3], const L8 neg_inv_far[3],
-                                                  const std::ptrdiff_t* plane, const float* tmin8, const float* far8,
+                                                  const std::ptrdiff_t* plane, const float* tmin8, float far_limit,
                                                   Stack& stack, std::uint32_t& sp, Entry& cur) {
     const float* f = node.lo_x;
     // The children's indices are the node's fourth cache line, read only once the box tests say
@@ -276,7 +277,7 @@ template <bool kAnyHit, int kOctant>
     const char* after = reinterpret_cast<const char*>(&node + 1);
     for (int line = 0; line < 6; ++line) __builtin_prefetch(after + 64 * line);
     // the same order of raises and lowers as hit_box: NaN from 0·inf on a face is ignored
-    L8 t0 = L8::load(tmin8), t1 = L8::load(far8);
+    L8 t0 = L8::load(tmin8), t1 = L8::splat(far_limit);
     for (int a = 0; a < 3; ++a) t0 = raise(t0, (origin[a] - L8::load(f + plane_at<kOctant>(plane, a))) * neg_inv[a]);
     for (int a = 0; a < 3; ++a)
         t1 = lower(t1, (origin[a] - L8::load(f + plane_at<kOctant>(plane, 3 + a))) * neg_inv_far[a]);
@@ -338,11 +339,7 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit, Wid
     Stack stack;
     std::uint32_t sp = 0, visited = 0;
     Entry cur{0, q.tmin};
-    // the far limit, and the same in eight lanes, which every node's box test reads as it is
-    // (a memory operand rather than a broadcast a node; written again after a leaf only)
     float far_limit = hit.t * s;
-    alignas(32) float far8[8];
-    L8::splat(far_limit).store(far8);
     for (;;) {
         if (cur.index & kLeafChild) {
             if constexpr (kRecord) {
@@ -356,13 +353,13 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit, Wid
                 if (hit.ref != kNoHit) return visited;
             } else {
                 far_limit = hit.t * s;
-                L8::splat(far_limit).store(far8);
             }
         } else {
             ++visited;
             [[maybe_unused]] const std::uint32_t line = cur.index, pushed = sp;
-            const bool entered = enter_children<kAnyHit, kOctant>(wide, node_at(wide, cur.index), origin, neg_inv,
-                                                                  neg_inv_far, plane, q.tmin8, far8, stack, sp, cur);
+            const bool entered =
+                enter_children<kAnyHit, kOctant>(wide, node_at(wide, cur.index), origin, neg_inv, neg_inv_far, plane,
+                                                 q.tmin8, far_limit, stack, sp, cur);
             if constexpr (kRecord) record->node(line, entered ? cur.index : kNoHit, stack.index + pushed, sp - pushed);
             if (entered) continue;
         }
