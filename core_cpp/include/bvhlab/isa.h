@@ -6,6 +6,7 @@
 // Every path does the same IEEE arithmetic in the same order (no fused multiply-adds), so trees
 // and hits are bit-identical whichever runs; the tests force each path and compare.
 #pragma once
+#include <atomic>
 #include <string_view>
 
 namespace bvhlab {
@@ -15,9 +16,16 @@ enum class Isa {
     Avx2,      ///< x86-64 with AVX2 (Haswell, Zen and later)
 };
 
+namespace detail {
+/// What active_isa() returns (isa.cpp sets it when the library loads; set_isa changes it).
+extern std::atomic<Isa> active_isa_now;
+}  // namespace detail
+
 /// The path in use. At load: the best the CPU supports, lowered by the environment variable
-/// BVHLAB_ISA=portable|avx2 if set (an unsupported or unknown value is ignored).
-Isa active_isa();
+/// BVHLAB_ISA=portable|avx2 if set (an unsupported or unknown value is ignored). Inline, one
+/// load: the per-ray queries ask it for every ray (an out-of-line call with a guarded static
+/// cost the wide walk ~6 instructions a ray).
+inline Isa active_isa() { return detail::active_isa_now.load(std::memory_order_relaxed); }
 /// True when this build has the path and this CPU can run it.
 bool isa_supported(Isa isa);
 /// Switches path (for tests and benchmarks). Throws std::invalid_argument if unsupported.

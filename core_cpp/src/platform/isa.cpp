@@ -27,21 +27,18 @@ Isa initial_isa() {
     return best;
 }
 
-std::atomic<Isa>& current() {
-    static std::atomic<Isa> isa{initial_isa()};
-    return isa;
-}
-
 }  // namespace
 
-Isa active_isa() { return current().load(std::memory_order_relaxed); }
+// Set when the library loads (dynamic initialisation). Anything that ran before it would read
+// zero, Isa::Portable, which every CPU runs.
+std::atomic<Isa> detail::active_isa_now{initial_isa()};
 
 bool isa_supported(Isa isa) { return isa == Isa::Portable || (isa == Isa::Avx2 && cpu_has_avx2()); }
 
 void set_isa(Isa isa) {
     if (!isa_supported(isa))
         throw std::invalid_argument("instruction set " + std::string(isa_name(isa)) + " is not available here");
-    current().store(isa, std::memory_order_relaxed);
+    detail::active_isa_now.store(isa, std::memory_order_relaxed);
 }
 
 std::string_view isa_name(Isa isa) { return isa == Isa::Avx2 ? "avx2" : "portable"; }

@@ -45,17 +45,17 @@ inline int sign_bits(L4 x) { return _mm_movemask_ps(x.v); }
 #ifdef __SSSE3__
 /// By a byte shuffle: lane i takes bytes 4·index .. 4·index + 3 (4·index spread over the lane's
 /// four bytes by a first shuffle, then 0, 1, 2, 3 added; no carries: 4·3 + 3 < 256).
-inline L4 permute(L4 x, int a, int b, int c) {
-    const __m128i first = _mm_slli_epi32(_mm_setr_epi32(a, b, c, 3), 2);
+inline L4 permute(L4 x, const std::int32_t* lanes) {
+    const __m128i first = _mm_slli_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(lanes)), 2);
     const __m128i spread = _mm_shuffle_epi8(first, _mm_setr_epi8(0, 0, 0, 0, 4, 4, 4, 4, 8, 8, 8, 8, 12, 12, 12, 12));
     const __m128i bytes = _mm_add_epi8(spread, _mm_set1_epi32(0x03020100));
     return {_mm_castsi128_ps(_mm_shuffle_epi8(_mm_castps_si128(x.v), bytes))};
 }
 #else
-inline L4 permute(L4 x, int a, int b, int c) {
+inline L4 permute(L4 x, const std::int32_t* lanes) {
     alignas(16) float f[4];
     x.store(f);
-    return {_mm_setr_ps(f[a], f[b], f[c], f[3])};
+    return {_mm_setr_ps(f[lanes[0]], f[lanes[1]], f[lanes[2]], f[3])};
 }
 #endif
 inline L4 operator+(L4 a, L4 b) { return {_mm_add_ps(a.v, b.v)}; }
@@ -85,7 +85,7 @@ struct L4 {
         for (int i = 0; i < 4; ++i) p[i] = v[i];
     }
 };
-inline L4 permute(L4 x, int a, int b, int c) { return {{x.v[a], x.v[b], x.v[c], x.v[3]}}; }
+inline L4 permute(L4 x, const std::int32_t* lanes) { return {{x.v[lanes[0]], x.v[lanes[1]], x.v[lanes[2]], x.v[3]}}; }
 inline int sign_bits(L4 x) {
     return int(std::signbit(x.v[0])) | int(std::signbit(x.v[1])) << 1 | int(std::signbit(x.v[2])) << 2 |
            int(std::signbit(x.v[3])) << 3;

@@ -27,7 +27,10 @@ struct L4 {
     void store(float* p) const { _mm_storeu_ps(p, v); }
 };
 inline int sign_bits(L4 x) { return _mm_movemask_ps(x.v); }
-inline L4 permute(L4 x, int a, int b, int c) { return {_mm_permutevar_ps(x.v, _mm_setr_epi32(a, b, c, 3))}; }
+/// lanes[3] is 3 wherever it is called (wide_traverse.inl AxisOrder)
+inline L4 permute(L4 x, const std::int32_t* lanes) {
+    return {_mm_permutevar_ps(x.v, _mm_load_si128(reinterpret_cast<const __m128i*>(lanes)))};
+}
 inline L4 operator+(L4 a, L4 b) { return {_mm_add_ps(a.v, b.v)}; }
 inline L4 operator-(L4 a, L4 b) { return {_mm_sub_ps(a.v, b.v)}; }
 inline L4 operator*(L4 a, L4 b) { return {_mm_mul_ps(a.v, b.v)}; }
@@ -86,9 +89,12 @@ inline int push_two(const WideNode& node, L8 t0, __m256i b, int mask, std::uint3
 /// from a minimum across lanes, which does not wait for the sort.
 inline int push_children(const WideNode& node, L8 t0, L8 t1, int mask, std::uint32_t* index, float* t) {
     const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    // by shifts rather than masks: the walk's registers full, the compiler made each mask anew
+    // at every node (three instructions each); (b >> 31) & INT_MAX is 0 or -1 shifted right by
+    // one, b & ~7 the bits shifted right and back by three (Sponza instructions a ray: design.md)
     __m256i b = _mm256_castps_si256(_mm256_add_ps(t0.v, t1.v));
-    b = _mm256_xor_si256(b, _mm256_and_si256(_mm256_srai_epi32(b, 31), _mm256_set1_epi32(INT_MAX)));
-    b = _mm256_or_si256(_mm256_and_si256(b, _mm256_set1_epi32(~7)), lane);
+    b = _mm256_xor_si256(b, _mm256_srli_epi32(_mm256_srai_epi32(b, 31), 1));
+    b = _mm256_or_si256(_mm256_slli_epi32(_mm256_srli_epi32(b, 3), 3), lane);
     const int rest = mask & (mask - 1);
     if (!(rest & (rest - 1))) return push_two(node, t0, b, mask, index, t);
     const __m256i entered = _mm256_castps_si256(_mm256_cmp_ps(t0.v, t1.v, _CMP_LE_OS));

@@ -6,7 +6,8 @@
 //       when a[i] <= b[i]), store(float*);
 //   L4: four floats — load, splat, set(a, b, c, d), + - * /, raise, lower, comparisons giving
 //       an M4 mask, M4 & M4, M4 | M4, bits(M4), sign_bits(L4) (bit i: lane i's sign bit),
-//       store, and permute(v, a, b, c) = (v[a], v[b], v[c], v[3]) for lane indices 0..3;
+//       store, and permute(v, lanes) = (v[lanes[0]], v[lanes[1]], v[lanes[2]], v[3]) for four
+//       lane indices 0..3, the last 3;
 // and push_children(node, t0, t1, mask, index, t), which writes the children a ray enters
 // but the nearest to the stack's arrays, farthest first, and returns the nearest's slot
 // (traverse_wide.cpp), and push_entered(node, mask, index), which writes the children in `mask`
@@ -30,13 +31,39 @@ struct Query {
     float neg_inv[4], neg_inv_far[4];
     float o_axes[4];  ///< o[kx], o[ky], o[kz]
     float shear[4];
-    /// 4·kx, 4·ky, 4·kz: where axis k's four lanes start in a PrimPacket vertex (v[i][k]), in
-    /// floats, so that a packet's loads scale it by the addressing mode rather than a shift each
-    std::ptrdiff_t axis_at[3];
+    /// tmin in eight lanes: the first raise of every node's box test reads it as it is (a
+    /// memory operand; a broadcast a node before)
+    alignas(32) float tmin8[8];
+    /// 16·kx, 16·ky, 16·kz (AxisOrder::at): where axis k's four lanes start in a PrimPacket
+    /// vertex (v[i][k]), in bytes, so that each of a packet's nine loads is one addressing mode
+    /// (base + offset + vertex), without a shift or an address computed first
+    const std::ptrdiff_t* axis_at;
     int octant;  ///< bit a set where 1/dir[a] is negative: kPlanes' row, any_hit_walk's copy
     float tmin;
     const Ray* ray;  ///< for the spheres (hit_packet_sphere)
 };
+
+/// The watertight test's axis order (geometry.glsl make_ray) for one kz and sign of dir[kz]: kx
+/// and ky the two axes after kz, swapped when dir[kz] < 0. As lane indices of the permutes that
+/// put the origin and direction in that order, and as byte offsets in a PrimPacket vertex.
+struct AxisOrder {
+    alignas(16) std::int32_t origin[4];  ///< kx, ky, kz, 3
+    alignas(16) std::int32_t dir[4];     ///< kx, ky, 3, 3
+    alignas(16) std::int32_t inv[4];     ///< kz, kz, kz, 3
+    std::ptrdiff_t at[3];                ///< 16·kx, 16·ky, 16·kz: axis k's lanes in a PrimPacket vertex
+};
+
+constexpr AxisOrder axis_order(int kz, bool flip) {
+    const int next = kz == 2 ? 0 : kz + 1, last = 3 - kz - next;
+    const int kx = flip ? last : next, ky = flip ? next : last;
+    constexpr std::ptrdiff_t bytes = sizeof(PrimPacket::v[0][0]);
+    return {{kx, ky, kz, 3}, {kx, ky, 3, 3}, {kz, kz, kz, 3}, {bytes * kx, bytes * ky, bytes * kz}};
+}
+
+/// AxisOrder by 2·kz + (dir[kz] < 0): looked up rather than worked out by integer arithmetic and
+/// lane inserts for every ray (Sponza instructions a ray: design.md, traversal's fourth pass).
+constexpr AxisOrder kAxisOrders[6] = {axis_order(0, false), axis_order(0, true),  axis_order(1, false),
+                                      axis_order(1, true),  axis_order(2, false), axis_order(2, true)};
 
 /// The per-ray constants as geometry.glsl make_ray computes them, by the same float operations
 /// (so the same values; every test comparing the wide traversal with the brute force, which goes
@@ -54,18 +81,18 @@ Query make_query(const Ray& ray) {
     const int kz = 2 - 2 * x_largest - y_largest;
     const L4 dir = L4::set(d.x, d.y, d.z, 1.0f), origin = L4::set(o.x, o.y, o.z, 0.0f);
     const int flip = (bits(L4::splat(0.0f) > dir) >> kz) & 1;  // dir[kz] < 0
-    const int next = kz == 2 ? 0 : kz + 1, last = 3 - kz - next;
-    const int kx = next ^ ((next ^ last) & -flip), ky = next ^ last ^ kx;
+    const AxisOrder& axes = kAxisOrders[2 * kz + flip];
     const L4 inv = L4::splat(1.0f) / dir;
     Query q;
     origin.store(q.o), inv.store(q.inv);
     (inv * L4::splat(-1.0f)).store(q.neg_inv), (inv * L4::splat(-gpu::BOX_FAR_SCALE)).store(q.neg_inv_far);
-    permute(origin, kx, ky, kz).store(q.o_axes);
     // (dir[kx], dir[ky], 1, 1) times 1 / dir[kz]: the shear, and 1 / dir[kz] itself in lane 2
     // (1 · x is x, except a denormal x under denormals-are-zero: 0, which is what the one use of
     // shear[2], a product, reads x as in that mode anyway)
-    (permute(dir, kx, ky, 3) * permute(inv, kz, kz, kz)).store(q.shear);
-    q.axis_at[0] = 4 * kx, q.axis_at[1] = 4 * ky, q.axis_at[2] = 4 * kz;
+    permute(origin, axes.origin).store(q.o_axes);
+    (permute(dir, axes.dir) * permute(inv, axes.inv)).store(q.shear);
+    L8::splat(ray.tmin).store(q.tmin8);
+    q.axis_at = axes.at;
     q.octant = sign_bits(inv) & 7;
     q.tmin = ray.tmin, q.ray = &ray;
     return q;
@@ -97,11 +124,14 @@ void test_triangles(const PrimPacket& k, const Query& q, Hit& hit) {
     const std::ptrdiff_t kx = q.axis_at[0], ky = q.axis_at[1], kz = q.axis_at[2];
     const L4 ox = L4::splat(q.o_axes[0]), oy = L4::splat(q.o_axes[1]), oz = L4::splat(q.o_axes[2]);
     const L4 sx = L4::splat(q.shear[0]), sy = L4::splat(q.shear[1]);
-    const float *a = k.v[0][0], *b = k.v[1][0], *c = k.v[2][0];  // v[i][axis] is v[i][0] + 4·axis
-    const L4 az = L4::load(a + kz) - oz, bz = L4::load(b + kz) - oz, cz = L4::load(c + kz) - oz;
-    const L4 ax = (L4::load(a + kx) - ox) - sx * az, ay = (L4::load(a + ky) - oy) - sy * az;
-    const L4 bx = (L4::load(b + kx) - ox) - sx * bz, by = (L4::load(b + ky) - oy) - sy * bz;
-    const L4 cx = (L4::load(c + kx) - ox) - sx * cz, cy = (L4::load(c + ky) - oy) - sy * cz;
+    // v[i][axis] is v[i][0] + 16·axis bytes
+    const auto vertex = [&k](int i) { return reinterpret_cast<const char*>(k.v[i][0]); };
+    const auto at = [](const char* p, std::ptrdiff_t offset) { return reinterpret_cast<const float*>(p + offset); };
+    const char *a = vertex(0), *b = vertex(1), *c = vertex(2);
+    const L4 az = L4::load(at(a, kz)) - oz, bz = L4::load(at(b, kz)) - oz, cz = L4::load(at(c, kz)) - oz;
+    const L4 ax = (L4::load(at(a, kx)) - ox) - sx * az, ay = (L4::load(at(a, ky)) - oy) - sy * az;
+    const L4 bx = (L4::load(at(b, kx)) - ox) - sx * bz, by = (L4::load(at(b, ky)) - oy) - sy * bz;
+    const L4 cx = (L4::load(at(c, kx)) - ox) - sx * cz, cy = (L4::load(at(c, ky)) - oy) - sy * cz;
     const L4 u = cx * by - cy * bx, v = ax * cy - ay * cx, w = bx * ay - by * ax;
     const L4 zero = L4::splat(0.0f);
     // "not (some negative and some positive)"; a NaN lane has a NaN t and fails below
@@ -110,20 +140,18 @@ void test_triangles(const PrimPacket& k, const Query& q, Hit& hit) {
     const M4 inside = one_sign & (det != zero);
     if (!bits(inside)) return;  // most packets a ray reaches: no division to wait for
     const L4 t = (((u * az + v * bz) + w * cz) / det) * L4::splat(q.shear[2]);
-    int lanes = bits(inside & (t > L4::splat(q.tmin)) & (t <= L4::splat(hit.t)));
-    if (!lanes) return;
     if constexpr (kAnyHit) {
+        // no hit yet (the walk ends at the first): closer() is t < hit.t, the ray's tmax
+        const int lanes = bits(inside & (t > L4::load(q.tmin8)) & (L4::splat(hit.t) > t));
+        if (!lanes) return;
         alignas(16) float ts[4];
         t.store(ts);
-        for (; lanes; lanes &= lanes - 1) {
-            const int l = __builtin_ctz(unsigned(lanes));
-            if (closer(ts[l], k.ref[l], hit)) {
-                hit.t = ts[l], hit.ref = k.ref[l];
-                return;
-            }
-        }
+        const int l = __builtin_ctz(unsigned(lanes));
+        hit.t = ts[l], hit.ref = k.ref[l];
         return;
     }
+    int lanes = bits(inside & (t > L4::load(q.tmin8)) & (t <= L4::splat(hit.t)));
+    if (!lanes) return;
     alignas(16) float ts[4], vs[4], ws[4], dets[4];
     t.store(ts), v.store(vs), w.store(ws), det.store(dets);
     for (; lanes; lanes &= lanes - 1) {
@@ -208,7 +236,11 @@ template <int kOctant>
 /// the children the ray enters before hit.t, nearest last, the nearest going to `cur` rather than
 /// the stack. Returns false when the ray enters none.
 /// `neg_inv` is the negated inverse direction (traverse_nodes says why), `neg_inv_far` that times
-/// gpu::BOX_FAR_SCALE, and `far_limit` the closest hit so far times the scale: the far end widened
+/// gpu::BOX_FAR_SCALE, `tmin8` the ray's tmin in eight lanes in memory, which the box test's first
+/// raise reads as it is (a broadcast a node fewer), and `far_limit` the closest hit so far times
+/// the scale, broadcast from a register at every node (read from memory as tmin is, the far limit
+/// was written there after every leaf and read back at the next node: primary rays slower in time
+/// though fewer instructions, design.md's fourth pass): the far end widened
 /// as hit_box widens it (Ize 2013), with the scale folded into per-ray constants rather than a
 /// multiply on every node's dependency chain. One rounding more than hit_box's product, which the
 /// scale covers with room to spare (16 ε against 7 ε).
@@ -231,7 +263,7 @@ template <int kOctant>
 template <bool kAnyHit, int kOctant>
 [[gnu::always_inline]] inline bool enter_children(const WideView& wide, const WideNode& node, const L8 origin[3],
                                                   const L8 neg_inv[3], const L8 neg_inv_far[3],
-                                                  const std::ptrdiff_t* plane, float tmin, float far_limit,
+                                                  const std::ptrdiff_t* plane, const float* tmin8, float far_limit,
                                                   Stack& stack, std::uint32_t& sp, Entry& cur) {
     const float* f = node.lo_x;
     // The children's indices are the node's fourth cache line, read only once the box tests say
@@ -245,7 +277,7 @@ template <bool kAnyHit, int kOctant>
     const char* after = reinterpret_cast<const char*>(&node + 1);
     for (int line = 0; line < 6; ++line) __builtin_prefetch(after + 64 * line);
     // the same order of raises and lowers as hit_box: NaN from 0·inf on a face is ignored
-    L8 t0 = L8::splat(tmin), t1 = L8::splat(far_limit);
+    L8 t0 = L8::load(tmin8), t1 = L8::splat(far_limit);
     for (int a = 0; a < 3; ++a) t0 = raise(t0, (origin[a] - L8::load(f + plane_at<kOctant>(plane, a))) * neg_inv[a]);
     for (int a = 0; a < 3; ++a)
         t1 = lower(t1, (origin[a] - L8::load(f + plane_at<kOctant>(plane, 3 + a))) * neg_inv_far[a]);
@@ -260,7 +292,7 @@ template <bool kAnyHit, int kOctant>
         const auto h = std::uint32_t(__builtin_popcount(unsigned(mask)));
         push_entered(node, mask, stack.index + sp);
         sp += h - 1;
-        cur = {stack.index[sp], tmin};
+        cur = {stack.index[sp], tmin8[0]};
         prefetch(wide, stack.index[sp - 1]);
         return true;
     }
@@ -317,13 +349,17 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit, Wid
             } else {
                 test_leaf<kAnyHit>(wide, cur.index & ~kLeafChild, q, hit);
             }
-            if (kAnyHit && hit.ref != kNoHit) return visited;
-            far_limit = hit.t * s;
+            if constexpr (kAnyHit) {  // no hit: tmax, and so the far limit, stays what it was
+                if (hit.ref != kNoHit) return visited;
+            } else {
+                far_limit = hit.t * s;
+            }
         } else {
             ++visited;
             [[maybe_unused]] const std::uint32_t line = cur.index, pushed = sp;
-            const bool entered = enter_children<kAnyHit, kOctant>(
-                wide, node_at(wide, cur.index), origin, neg_inv, neg_inv_far, plane, q.tmin, far_limit, stack, sp, cur);
+            const bool entered =
+                enter_children<kAnyHit, kOctant>(wide, node_at(wide, cur.index), origin, neg_inv, neg_inv_far, plane,
+                                                 q.tmin8, far_limit, stack, sp, cur);
             if constexpr (kRecord) record->node(line, entered ? cur.index : kNoHit, stack.index + pushed, sp - pushed);
             if (entered) continue;
         }
