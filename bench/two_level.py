@@ -131,7 +131,9 @@ def report(name: str, result: dict) -> None:
             t = _peers.median(row["seconds"])
             row["ms"], row["x_flat_wide"] = t * 1e3, t / first
             ipr = row.get("instructions_per_ray")
-            table.append([row["label"], row["ms"], row["x_flat_wide"], row["hits"], row["disagree"], round(ipr or 0)])
+            table.append(
+                [row["label"], row["ms"], row["x_flat_wide"], row["hits"], row["disagree"], round(ipr) if ipr else ""]
+            )
         _common.print_table(
             ["query", "ms", "time ÷ flat wide", "hits", "disagree", "instr/ray"],
             table,
