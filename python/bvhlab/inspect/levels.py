@@ -1,9 +1,10 @@
 """The boxes of a two-level tree (issue 34) as the viewport shows them, each with what it is: a
 TLAS node (world space), or a node of an instance's mesh tree moved into the world by the
-instance's transform (Arvo's box; a root's is the TLAS's box of its instance, blas_world_boxes), in a depth range that applies within each level. Bounded: a
-scene of 10,000 instances would have millions of BLAS boxes, so at most `cap` are kept, the BLAS
-boxes of the first instances that fit. The overlay draws these boxes (addon/overlay/levels.py) and
-Pick Box picks among them (bvhlab.inspect.pick.pick_two_level), so both see the same boxes."""
+instance's transform (Arvo's box; a root's is the TLAS's box of its instance, blas_world_boxes),
+in a depth range that applies within each level. Bounded: a scene of 10,000 instances would have
+millions of BLAS boxes, so at most `cap` are kept, the BLAS boxes of the first instances that fit.
+The overlay draws these boxes (addon/overlay/levels.py) and Pick Box picks among them
+(bvhlab.inspect.pick.pick_two_level), so both see the same boxes."""
 
 from __future__ import annotations
 
