@@ -19,9 +19,9 @@ ROOT = Path(__file__).resolve().parent.parent
 BUILD = ROOT / "build" / "bench"
 
 
-def build_bvh_bench(tinybvh: str | None) -> Path:
-    """Configures and builds bench/cpp's bvh_bench in build/bench (Release, Embree 3 when
-    libembree-dev is installed, tinybvh when a local copy is given)."""
+def build_bvh_bench(tinybvh: str | None, target: str = "bvh_bench") -> Path:
+    """Configures and builds bench/cpp's bvh_bench (or `target`, e.g. tlas_bench) in build/bench
+    (Release, Embree 3 when libembree-dev is installed, tinybvh when a local copy is given)."""
     args = [
         "cmake",
         "-S",
@@ -36,8 +36,8 @@ def build_bvh_bench(tinybvh: str | None) -> Path:
         f"-DBVHLAB_TINYBVH_DIR={tinybvh or ''}",
     ]
     subprocess.run(args, check=True, stdout=subprocess.DEVNULL)
-    subprocess.run(["cmake", "--build", str(BUILD), "--target", "bvh_bench"], check=True, stdout=subprocess.DEVNULL)
-    return BUILD / "bench" / "cpp" / "bvh_bench"
+    subprocess.run(["cmake", "--build", str(BUILD), "--target", target], check=True, stdout=subprocess.DEVNULL)
+    return BUILD / "bench" / "cpp" / target
 
 
 def scenes(names: list[str]) -> dict[str, np.ndarray]:

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <random>
 #include <stdexcept>
@@ -341,4 +342,67 @@ TEST(Tlas, InverseUndoesTheTransform) {
         EXPECT_NEAR(back.y, p.y, 1e-5f);
         EXPECT_NEAR(back.z, p.z, 1e-5f);
     }
+}
+
+/// scale_ray takes its power of two from the largest component's exponent bits (no frexp, ldexp):
+/// the same ray, bit for bit, as frexp and ldexp give, over the whole range of directions, and
+/// tmin, tmax of every kind (0, inf, subnormal results).
+TEST(Tlas, ScaleRayIsFrexpAndLdexpBitForBit) {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> mantissa(-1.0f, 1.0f);
+    std::uniform_int_distribution<int> exponent(-80, 79);
+    const float tmaxes[] = {kInfinity, 0.0f, 1.0f, 3.5e38f, 1e-38f, 7.0f};
+    auto bits = [](float f) {
+        std::uint32_t b;
+        std::memcpy(&b, &f, sizeof b);
+        return b;
+    };
+    for (int i = 0; i < 20000; ++i) {
+        const int e = exponent(rng);
+        Ray ray{{0, 0, 0}, {std::ldexp(mantissa(rng), e), std::ldexp(mantissa(rng), e), std::ldexp(mantissa(rng), e)}};
+        if (!direction_in_range(ray.dir)) continue;
+        ray.tmin = i % 3 ? 0.0f : std::ldexp(mantissa(rng) + 1.0f, exponent(rng));
+        ray.tmax = tmaxes[i % 6];
+        Ray expected = ray;
+        int k;
+        std::frexp(largest_component(ray.dir), &k);
+        const float expected_scale = k ? std::ldexp(1.0f, -k) : 1.0f;
+        if (k) {
+            expected.dir = ray.dir * std::ldexp(1.0f, -k);
+            expected.tmin = std::ldexp(ray.tmin, k), expected.tmax = std::ldexp(ray.tmax, k);
+        }
+        const float scale = scale_ray(ray);
+        ASSERT_EQ(bits(scale), bits(expected_scale));
+        ASSERT_EQ(bits(ray.dir.x), bits(expected.dir.x));
+        ASSERT_EQ(bits(ray.dir.y), bits(expected.dir.y));
+        ASSERT_EQ(bits(ray.dir.z), bits(expected.dir.z));
+        ASSERT_EQ(bits(ray.tmin), bits(expected.tmin));
+        ASSERT_EQ(bits(ray.tmax), bits(expected.tmax));
+    }
+}
+
+/// The two-level walk scales the world ray once (WorldRay): a ray as given and its copy scaled as
+/// the batch scales it hit the same primitive of the same instance at the same t (bit for bit once
+/// the scaled t is scaled back), on every traversal, closest and any hit.
+TEST(Tlas, AnUnscaledRayHitsAsItsScaledCopy) {
+    const Instanced s = mixed_instances();
+    std::uint32_t scaled = 0;
+    for (Traversal mode : {Traversal::Stack, Traversal::Stackless, Traversal::Wide}) {
+        for (Ray ray : rays_at(s, 1500, 23)) {
+            ray.dir = ray.dir * 37.0f;  // largest components from ~4 to ~5,000: every ray rescaled
+            Ray copy = ray;
+            const float t_scale = scale_ray(copy);
+            scaled += t_scale != 1.0f;
+            const InstanceHit a = intersect_two_level(s.two_level, ray, mode);
+            const InstanceHit b = intersect_two_level(s.two_level, copy, mode);
+            ASSERT_EQ(a.instance, b.instance);
+            ASSERT_EQ(a.hit.ref, b.hit.ref);
+            ASSERT_EQ(a.hit.t, b.hit.t * t_scale);
+            ASSERT_EQ(a.hit.u, b.hit.u);
+            ray.tmax = copy.tmax = std::isinf(a.hit.t) ? 10.0f : a.hit.t * 0.75f;
+            copy.tmax = ray.tmax / t_scale;
+            ASSERT_EQ(occluded_two_level(s.two_level, ray, mode), occluded_two_level(s.two_level, copy, mode));
+        }
+    }
+    EXPECT_GT(scaled, 4000u);
 }

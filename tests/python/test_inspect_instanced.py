@@ -142,8 +142,34 @@ def test_blas_world_boxes_hold_the_instances_moved_triangles(instanced_scene, tr
             start, k = int(mesh.nodes["index"][n]), int(mesh.nodes["info"][n])
             pts = moved[mesh.refs[start : start + k]].reshape(-1, 3)
             assert np.all(lo <= pts.min(0) + 1e-4) and np.all(pts.max(0) <= hi + 1e-4)
-        w_lo, w_hi = world_boxes(mesh.nodes["lo"][:1], mesh.nodes["hi"][:1], transforms[i : i + 1])
-        np.testing.assert_allclose(node_world_box(tree, TreeNode("blas", 0, i))[0], w_lo[0, 0], rtol=1e-6)
+
+
+def test_a_blas_roots_world_box_is_its_tlas_leafs_box(instanced_scene, trees):  # noqa: F811
+    """Stepping from a TLAS leaf to its instance's BLAS root shows the same box (the TLAS's, which
+    is tighter than the root box moved by Arvo's method where the instance is rotated), in the
+    pick's box and among the overlay's shown boxes; and it holds the instance's moved triangles."""
+    tree, _, _ = trees
+    mesh_of, transforms = tree.instances
+    data = tree.tlas_node_data()
+    shown = shown_boxes(tree, "both", 0, 0)
+    tighter = 0
+    for i in range(len(mesh_of)):
+        mesh = tree.meshes[int(mesh_of[i])]
+        leaf = tree.tlas_leaf_of(i)
+        lo, hi = node_world_box(tree, TreeNode("blas", 0, i))
+        np.testing.assert_array_equal(lo, data.lo[leaf])
+        np.testing.assert_array_equal(hi, data.hi[leaf])
+        k = np.flatnonzero((shown.level == 1) & (shown.instance == i) & (shown.node == 0))
+        assert len(k) == 1
+        np.testing.assert_array_equal(shown.lo[k[0]], data.lo[leaf])
+        np.testing.assert_array_equal(shown.hi[k[0]], data.hi[leaf])
+        tris = instanced_scene.mesh_triangles(int(mesh_of[i]))
+        pts = (tris @ transforms[i][:, :3].T + transforms[i][:, 3]).reshape(-1, 3)
+        assert np.all(lo <= pts.min(0) + 1e-4) and np.all(pts.max(0) <= hi + 1e-4)
+        arvo_lo, arvo_hi = world_boxes(mesh.nodes["lo"][:1], mesh.nodes["hi"][:1], transforms[i : i + 1])
+        assert np.all(arvo_lo[0, 0] <= lo + 1e-5) and np.all(hi <= arvo_hi[0, 0] + 1e-5)
+        tighter += bool(np.any(arvo_lo[0, 0] < lo - 1e-4) or np.any(hi > arvo_hi[0, 0] + 1e-4))
+    assert tighter, "the scene has a rotated instance whose moved root box sticks out of its TLAS leaf"
 
 
 @pytest.mark.parametrize("traversal", ["stack", "stackless"])

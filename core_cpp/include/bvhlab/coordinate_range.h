@@ -31,6 +31,8 @@
 // the ray keeps a normal (not subnormal) t even for the longest directions.
 #pragma once
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 
 #include "bvhlab/ray.h"
 #include "bvhlab/vec3.h"
@@ -56,21 +58,37 @@ inline bool direction_in_range(Vec3 d) {
     return m >= kMinDirection && m <= kMaxDirection && all_finite(d);
 }
 
+/// 2^e for e in [-126, 127], made from its bits (exact, no library call).
+inline float power_of_two(int e) {
+    const auto bits = std::uint32_t(127 + e) << 23;
+    float f;
+    std::memcpy(&f, &bits, sizeof f);
+    return f;
+}
+
 /// Scales a ray's direction by 2^-e so that its largest component lies in [0.5, 1), and its
 /// (tmin, tmax) by 2^e, so it describes the same points; returns 2^-e, by which the t of a hit
 /// must be multiplied to be in the caller's units. Powers of two scale exactly, and every test is
 /// homogeneous in d (Möller–Trumbore's u, v and the sphere's roots are ratios), so the hit,
 /// u, v and t are bit for bit what the unscaled arithmetic gives whenever that does not over- or
 /// underflow; and where it would, the scaled arithmetic stays in range (see the top of this file).
-/// Needs direction_in_range(dir).
+/// Needs direction_in_range(dir) (a direction outside it is left as it is). e comes from the
+/// largest component's exponent bits and 2^±e from bits (power_of_two), which is what frexp and
+/// ldexp give for a normal float (a product with a power of two is rounded once, as ldexp's
+/// result is) without their library calls: every ray of a batch and every instance a two-level
+/// ray enters is scaled (two-level random rays: 17 instructions a ray in frexpf alone).
 inline float scale_ray(Ray& ray) {
-    int e;
-    std::frexp(largest_component(ray.dir), &e);
-    if (e == 0) return 1.0f;                   // already in [0.5, 1): nothing to do
-    ray.dir = ray.dir * std::ldexp(1.0f, -e);  // e in [-79, 81]: both factors are normal floats
-    ray.tmin = std::ldexp(ray.tmin, e);
-    ray.tmax = std::ldexp(ray.tmax, e);
-    return std::ldexp(1.0f, -e);
+    const float m = largest_component(ray.dir);
+    if (!(m >= kMinDirection && m <= kMaxDirection)) return 1.0f;
+    std::uint32_t bits;
+    std::memcpy(&bits, &m, sizeof bits);
+    const int e = int(bits >> 23) - 126;                        // m = f·2^e with f in [0.5, 1): m is normal here
+    if (e == 0) return 1.0f;                                    // already in [0.5, 1): nothing to do
+    const float down = power_of_two(-e), up = power_of_two(e);  // e in [-79, 81]: both normal
+    ray.dir = ray.dir * down;
+    ray.tmin *= up;
+    ray.tmax *= up;
+    return down;
 }
 
 }  // namespace bvhlab

@@ -3,10 +3,13 @@
 // (origin and direction by the inverse transform, the direction left unnormalised so that t is
 // the same in both spaces) and the BLAS is traversed up to the closest hit so far. The any-hit
 // query (occluded) is the same walk of both levels, ended at the first instance with a hit.
+#include <cmath>
+#include <cstddef>
 #include <stdexcept>
 #include <string>
 
 #include "bvhlab/coordinate_range.h"
+#include "bvhlab/ray.h"
 #include "bvhlab/tlas.h"
 #include "bvhlab/two_level_record.h"
 #include "bvhlab/wide_bvh.h"
@@ -25,16 +28,68 @@ bool occluded_blas(const BlasView& blas, const Ray& ray, Traversal mode) {
     return mode == Traversal::Wide ? occluded_wide(*blas.wide, ray) : occluded(*blas.bvh, ray, mode);
 }
 
-/// The world ray up to `tmax` moved into the object space of `inst` and rescaled exactly as the
-/// batch scales world rays (coordinate_range.h), its scale in `t_scale`. False where it cannot be
-/// (a direction too long or short for float), which cannot hit what lies within the range.
+/// The TLAS's box test: hit_box's (ray.h) arithmetic, the same products and the same order of
+/// raises and lowers, so the same t's bit for bit, but each axis's near and far plane picked by the
+/// ray's signs once per ray (offsets among the node's floats, as the wide walk's kPlanes), not by
+/// three branches per box, which random directions mispredict. A TLAS has no triangles, so none
+/// of make_ray's axes and shear: the origin and the IEEE inverse direction alone of the
+/// world ray.
+struct TlasQuery {
+    float origin[3], inv_dir[3], tmin;
+    int near[3], far[3];  ///< floats from a BvhNode's start: lo.x, lo.y, lo.z at 0-2, hi at 4-6
+    TlasQuery(const float* o, const float* inv, float t_min) : tmin(t_min) {
+        for (int a = 0; a < 3; ++a) {
+            origin[a] = o[a], inv_dir[a] = inv[a];
+            near[a] = a + (std::signbit(inv[a]) ? 4 : 0), far[a] = near[a] ^ 4;
+        }
+    }
+};
+static_assert(offsetof(BvhNode, hi) == 4 * sizeof(float));
+
+[[gnu::always_inline]] inline bool hit_box(const BvhNode& n, const TlasQuery& q, float tmax, float& t_enter) {
+    const float* f = reinterpret_cast<const float*>(&n);
+    const float near_x = (f[q.near[0]] - q.origin[0]) * q.inv_dir[0];
+    const float near_y = (f[q.near[1]] - q.origin[1]) * q.inv_dir[1];
+    const float near_z = (f[q.near[2]] - q.origin[2]) * q.inv_dir[2];
+    const float far_x = (f[q.far[0]] - q.origin[0]) * q.inv_dir[0];
+    const float far_y = (f[q.far[1]] - q.origin[1]) * q.inv_dir[1];
+    const float far_z = (f[q.far[2]] - q.origin[2]) * q.inv_dir[2];
+    const float t0 = raise_to(raise_to(raise_to(q.tmin, near_x), near_y), near_z);
+    const float t1 = lower_to(lower_to(lower_to(tmax, far_x), far_y), far_z) * gpu::BOX_FAR_SCALE;
+    t_enter = t0;
+    return t0 <= t1;
+}
+
+/// The world ray as every instance starts from it: scaled once (scale_ray, exact; a batch's rays
+/// are scaled already, so this is nothing for them), with the TLAS's box test. Its t times
+/// `t_scale` is the caller's.
+struct WorldRay {
+    Ray ray;
+    float t_scale;
+    TlasQuery boxes;
+    explicit WorldRay(const Ray& r) : ray(r), t_scale(scale_ray(ray)), boxes(tlas_query()) {}
+
+private:
+    TlasQuery tlas_query() const {
+        const float o[3] = {ray.origin.x, ray.origin.y, ray.origin.z};
+        const float inv[3] = {1.0f / ray.dir.x, 1.0f / ray.dir.y, 1.0f / ray.dir.z};  // IEEE, as make_ray
+        return TlasQuery(o, inv, ray.tmin);
+    }
+};
+
+/// The world ray (scaled, WorldRay) up to `tmax` in the object space of `inst`, rescaled as the
+/// batch scales world rays (coordinate_range.h), its scale in `t_scale`: an identity instance walks
+/// the world ray as it is (no transform, nothing to rescale: the one-mesh-and-movers layout of
+/// blender/motion.py, whose mesh 0 is such an instance). The transform is the instance's stored
+/// world_to_object (inverted once when placed, not per ray). False where the moved direction
+/// cannot be scaled (too long or short for float), which cannot hit what lies within the range.
 bool object_ray(const Instance& inst, const Ray& world, float tmax, Ray& ray, float& t_scale) {
     ray = world;
     ray.tmax = tmax;
-    if (!inst.identity) {
-        ray.origin = inst.world_to_object.point(world.origin);
-        ray.dir = inst.world_to_object.vector(world.dir);
-    }
+    t_scale = 1.0f;
+    if (inst.identity) return true;
+    ray.origin = inst.world_to_object.point(world.origin);
+    ray.dir = inst.world_to_object.vector(world.dir);
     if (!direction_in_range(ray.dir)) return false;
     t_scale = scale_ray(ray);
     return true;
@@ -60,37 +115,39 @@ struct RecordedSteps {
     void entered(bool closer, float t_scale) { r.instance_done(closer, t_scale); }
 };
 
-/// Tests instance `index` (of TLAS leaf `leaf`) with a world ray whose closest hit so far is `best`.
+/// Tests instance `index` (of TLAS leaf `leaf`) with the world ray, whose closest hit so far is
+/// `best` (t in the world ray's scaled units).
 template <class Steps>
-void test_instance(const TwoLevel& scene, std::uint32_t leaf, std::uint32_t index, const Ray& world, Traversal mode,
-                   InstanceHit& best, std::uint32_t& visited, Steps& steps) {
+void test_instance(const TwoLevel& scene, std::uint32_t leaf, std::uint32_t index, const WorldRay& world,
+                   Traversal mode, InstanceHit& best, std::uint32_t& visited, Steps& steps) {
     const Instance& inst = scene.tlas->instances[index];
     Ray ray;
     float t_scale;
-    if (!object_ray(inst, world, best.hit.t, ray, t_scale)) return;
+    if (!object_ray(inst, world.ray, best.hit.t, ray, t_scale)) return;
     std::uint32_t count = 0;
     Hit h = steps.enter(leaf, index, scene.blases[inst.blas], ray, mode, &count);
     visited += count;
-    if (h.ref == kNoHit) return steps.entered(false, t_scale);
+    if (h.ref == kNoHit) return steps.entered(false, t_scale * world.t_scale);
     h.t *= t_scale;
     const bool closer = h.t < best.hit.t;
-    steps.entered(closer, t_scale);
+    steps.entered(closer, t_scale * world.t_scale);
     if (closer) best.hit = h, best.instance = index;
 }
 
 /// Whether instance `index` holds a hit of the world ray before its tmax.
-bool instance_occludes(const TwoLevel& scene, std::uint32_t index, const Ray& world, Traversal mode) {
+bool instance_occludes(const TwoLevel& scene, std::uint32_t index, const WorldRay& world, Traversal mode) {
     const Instance& inst = scene.tlas->instances[index];
+    const BlasView& blas = scene.blases[inst.blas];
     Ray ray;
     float t_scale;
-    return object_ray(inst, world, world.tmax, ray, t_scale) && occluded_blas(scene.blases[inst.blas], ray, mode);
+    return object_ray(inst, world.ray, world.ray.tmax, ray, t_scale) && occluded_blas(blas, ray, mode);
 }
 
 /// The TLAS walk of `mode` (stackless for Traversal::Stackless, else with a stack) up to `hit_t`,
 /// `leaf` testing a leaf's instances (walk.h: returning true ends the walk), `on_box` told of each
 /// box test (walk.h).
 template <class Leaf, class OnBox = walk::NoBoxes>
-std::uint32_t walk_tlas(const Tlas& tlas, const RayQuery& q, const float& hit_t, Traversal mode, Leaf&& leaf,
+std::uint32_t walk_tlas(const Tlas& tlas, const TlasQuery& q, const float& hit_t, Traversal mode, Leaf&& leaf,
                         OnBox&& on_box = OnBox{}) {
     return mode == Traversal::Stackless
                ? walk::stackless(tlas.tree.nodes.data(), tlas.tree.node_count(), q, hit_t, leaf, on_box)
@@ -127,14 +184,16 @@ InstanceHit intersect_two_level_with(const TwoLevel& scene, const Ray& ray, Trav
         steps.entered(best.hit.ref != kNoHit, 1.0f);
         if (best.hit.ref != kNoHit) best.instance = 0;
     } else if (!tlas.tree.empty()) {
-        const RayQuery q(ray);
+        const WorldRay world(ray);
+        best.hit.t = world.ray.tmax;
         auto leaf = [&](const BvhNode& n) {
             const auto node = std::uint32_t(&n - tlas.tree.nodes.data());
             for (std::uint32_t k = n.index, end = n.index + leaf_count(n); k < end; ++k)
-                test_instance(scene, node, tlas.tree.refs[k], ray, mode, best, visited, steps);
+                test_instance(scene, node, tlas.tree.refs[k], world, mode, best, visited, steps);
         };
-        visited += walk_tlas(tlas, q, best.hit.t, mode, leaf,
+        visited += walk_tlas(tlas, world.boxes, best.hit.t, mode, leaf,
                              [&](std::uint32_t node, bool entered) { steps.box(node, entered); });
+        best.hit.t *= world.t_scale;  // the caller's units (a miss's tmax is replaced below)
     }
     if (best.hit.ref == kNoHit) best.hit.t = kInfinity;
     if (nodes_visited) *nodes_visited = visited;
@@ -173,14 +232,14 @@ bool occluded_two_level(const TwoLevel& scene, const Ray& ray, Traversal mode) {
     if (tlas.instances.size() == 1 && tlas.instances[0].identity)  // as intersect_two_level
         return occluded_blas(scene.blases[tlas.instances[0].blas], ray, mode);
     if (tlas.tree.empty()) return false;
-    const RayQuery q(ray);
+    const WorldRay world(ray);
     bool found = false;
     auto leaf = [&](const BvhNode& n) {
         for (std::uint32_t k = n.index, end = n.index + leaf_count(n); k < end && !found; ++k)
-            found = instance_occludes(scene, tlas.tree.refs[k], ray, mode);
+            found = instance_occludes(scene, tlas.tree.refs[k], world, mode);
         return found;
     };
-    walk_tlas(tlas, q, ray.tmax, mode, leaf);
+    walk_tlas(tlas, world.boxes, world.ray.tmax, mode, leaf);
     return found;
 }
 

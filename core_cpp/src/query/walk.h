@@ -34,9 +34,11 @@ bool ends_walk(TestLeaf& test_leaf, const BvhNode& n) {
 
 /// Ordered depth-first walk: test both children's boxes, descend into the nearer, push the farther
 /// with its entry distance so it is dropped if a closer hit is found meanwhile. `hit_t` is the
-/// closest hit so far, lowered by `test_leaf(node)`. Returns the box tests.
-template <class TestLeaf, class OnBox = NoBoxes>
-std::uint32_t stack(const BvhNode* nodes, const RayQuery& q, const float& hit_t, TestLeaf&& test_leaf,
+/// closest hit so far, lowered by `test_leaf(node)`. Returns the box tests. `q` is a RayQuery, or
+/// a query with its own hit_box(node, q, tmax, t_enter) computing what ray.h's does (the TLAS's,
+/// traverse_two_level.cpp).
+template <class Query, class TestLeaf, class OnBox = NoBoxes>
+std::uint32_t stack(const BvhNode* nodes, const Query& q, const float& hit_t, TestLeaf&& test_leaf,
                     OnBox&& on_box = OnBox{}) {
     struct Entry {
         std::uint32_t node;
@@ -78,9 +80,9 @@ std::uint32_t stack(const BvhNode* nodes, const RayQuery& q, const float& hit_t,
 }
 
 /// Stackless walk (report §3.1): nodes in depth-first order; a missed box jumps to its skip index,
-/// the first node after its subtree.
-template <class TestLeaf, class OnBox = NoBoxes>
-std::uint32_t stackless(const BvhNode* nodes, std::uint32_t count, const RayQuery& q, const float& hit_t,
+/// the first node after its subtree. `q` as for stack().
+template <class Query, class TestLeaf, class OnBox = NoBoxes>
+std::uint32_t stackless(const BvhNode* nodes, std::uint32_t count, const Query& q, const float& hit_t,
                         TestLeaf&& test_leaf, OnBox&& on_box = OnBox{}) {
     std::uint32_t visited = 0;
     for (std::uint32_t i = 0; i < count;) {

@@ -1,9 +1,10 @@
 """The boxes of a two-level tree (issue 34) as the viewport shows them, each with what it is: a
 TLAS node (world space), or a node of an instance's mesh tree moved into the world by the
-instance's transform (Arvo's box), in a depth range that applies within each level. Bounded: a
-scene of 10,000 instances would have millions of BLAS boxes, so at most `cap` are kept, the BLAS
-boxes of the first instances that fit. The overlay draws these boxes (addon/overlay/levels.py) and
-Pick Box picks among them (bvhlab.inspect.pick.pick_two_level), so both see the same boxes."""
+instance's transform (Arvo's box; a root's is the TLAS's box of its instance, blas_world_boxes),
+in a depth range that applies within each level. Bounded: a scene of 10,000 instances would have
+millions of BLAS boxes, so at most `cap` are kept, the BLAS boxes of the first instances that fit.
+The overlay draws these boxes (addon/overlay/levels.py) and Pick Box picks among them
+(bvhlab.inspect.pick.pick_two_level), so both see the same boxes."""
 
 from __future__ import annotations
 
@@ -75,6 +76,24 @@ def world_boxes(lo: np.ndarray, hi: np.ndarray, transforms: np.ndarray) -> tuple
     return moved - extent, moved + extent
 
 
+def blas_world_boxes(bvh, lo: np.ndarray, hi: np.ndarray, node: np.ndarray, instances: np.ndarray):
+    """Nodes `node` (B,) of one mesh's tree, boxes `lo`, `hi` (B,3), in the world for each of
+    `instances` (N,) of that mesh: (N,B,3) lo and hi, world_boxes of each, but a BLAS root's box is
+    its instance's world box, the box the TLAS holds (InstancedBvh.world_boxes: its mesh's top
+    eight boxes moved, tighter than the moved root box where the instance is rotated), so that a
+    BLAS root never sticks out of its TLAS leaf when stepping between the levels. Boxes below the
+    root are each moved by Arvo's method: they hold their geometry, but under a rotation one can
+    stick out of the root's tighter box (a box moved whole is larger than its moved children)."""
+    _, transforms = bvh.instances
+    world_lo, world_hi = world_boxes(lo, hi, transforms[instances])
+    root = np.asarray(node) == 0
+    if root.any() and len(instances):
+        instance_lo, instance_hi = bvh.world_boxes()
+        world_lo[:, root] = instance_lo[instances][:, None]
+        world_hi[:, root] = instance_hi[instances][:, None]
+    return world_lo, world_hi
+
+
 def nodes_in_range(depth: np.ndarray, leaf: np.ndarray, depth_min: int, depth_max: int, leaves_only: bool):
     """The nodes of one tree in the depth range (only leaves with `leaves_only`), by depth and in
     depth-first order within a depth: the order of Bvh.boxes."""
@@ -109,7 +128,7 @@ def shown_boxes(
         for k, (lo, hi, depth, ids) in enumerate(per_mesh):
             chosen = np.flatnonzero(mesh_of[:shown] == k)
             if len(chosen) and len(ids):
-                world_lo, world_hi = world_boxes(lo, hi, transforms[chosen])
+                world_lo, world_hi = blas_world_boxes(bvh, lo, hi, ids, chosen)
                 parts.append(
                     (
                         world_lo.reshape(-1, 3),

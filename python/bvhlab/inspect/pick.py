@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .levels import MAX_OVERLAY_BOXES, TreeNode, shown_boxes, world_boxes
+from .levels import MAX_OVERLAY_BOXES, TreeNode, blas_world_boxes, shown_boxes
 from .node_data import NodeData
 
 #: A box that holds the hit point is entered at or before the hit; the box wrapping the hit triangle
@@ -148,7 +148,9 @@ def node_world_box(bvh, box: TreeNode) -> tuple[np.ndarray, np.ndarray]:
     if box.level == "tlas":
         data = bvh.tlas_node_data()
         return data.lo[box.node], data.hi[box.node]
-    mesh_of, transforms = bvh.instances
+    mesh_of, _ = bvh.instances
     nodes = bvh.meshes[int(mesh_of[box.instance])].nodes
-    lo, hi = world_boxes(nodes["lo"][box.node][None], nodes["hi"][box.node][None], transforms[box.instance][None])
+    lo, hi = blas_world_boxes(
+        bvh, nodes["lo"][box.node][None], nodes["hi"][box.node][None], np.array([box.node]), np.array([box.instance])
+    )
     return lo[0, 0].astype(np.float32), hi[0, 0].astype(np.float32)
