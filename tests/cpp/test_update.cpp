@@ -105,6 +105,17 @@ void count_past(const Bvh& refit, const NodeCostArray& built, const UpdateConfig
         count_past(refit, built, c, i + 1, roots, prims), count_past(refit, built, c, n.index, roots, prims);
 }
 
+/// Whether the leaves' slots run in depth-first order (as a build and a refit lay them).
+bool slots_in_order(const Bvh& bvh) {
+    std::uint32_t next = 0;
+    for (const BvhNode& n : bvh.nodes) {
+        if (!is_leaf(n)) continue;
+        if (n.index != next) return false;
+        next += leaf_count(n);
+    }
+    return true;
+}
+
 struct Fixture {
     Scene scene = random_scene(20000, 40, 7);
     Bvh tree = build_bvh(scene.view());
@@ -225,14 +236,17 @@ TEST(Update, BadInputIsRefused) {
 TEST(Update, TopCutHoldsEveryPrimitiveOnce) {
     const Fixture f;
     const Bvh refit = refitted(f.tree, slabs_apart(f.scene, 6, 8.0f).view());
-    const std::vector<std::uint32_t> cut = top_cut(refit, 64);
+    const NodeCosts now = node_costs(refit);
+    const std::vector<RebuiltPart> none;
+    const std::vector<PartNode> cut = top_cut(PartedTree(refit, now, none), 64);
     ASSERT_GT(cut.size(), 1u);
     std::uint64_t prims = 0;
     for (std::size_t c = 0; c < cut.size(); ++c) {
-        const std::uint32_t i = cut[c];
+        ASSERT_EQ(cut[c].part, -1);
+        const std::uint32_t i = cut[c].node;
         const BvhNode& n = refit.nodes[i];
         EXPECT_TRUE(is_leaf(n) || prims_under(refit, i) <= 64) << "cut node " << i;
-        if (c + 1 < cut.size()) EXPECT_LE(skip_index(n, i), cut[c + 1]);  // none inside another
+        if (c + 1 < cut.size()) EXPECT_LE(skip_index(n, i), cut[c + 1].node);  // none inside another
         prims += prims_under(refit, i);
     }
     EXPECT_EQ(prims, f.scene.view().primitive_count());
@@ -244,8 +258,11 @@ TEST(Update, RebuildTopKeepsTheLeavesAndLowersTheCost) {
     Bvh tree = refitted(built_tree, moved.view());
     const Bvh refit = tree;
     NodeCostArray built = subtree_costs(built_tree);
+    const NodeCosts now = node_costs(tree);
+    const std::vector<RebuiltPart> none;
+    const PartedTree parted(refit, now, none);
     double sah = 0;
-    ASSERT_TRUE(rebuild_top(tree, built, top_cut(tree, 64), sah));
+    ASSERT_TRUE(rebuild_top(tree, built, parted, top_cut(parted, 64), sah));
     check_tree(tree, moved.view(), built_tree.config.max_leaf_size);
     EXPECT_EQ(tree.nodes.size(), refit.nodes.size());
     EXPECT_EQ(built.size(), tree.nodes.size());
@@ -271,4 +288,38 @@ TEST(Update, AdaptiveRebuildsTheTopOverPartsThatMovedApart) {
     update_bvh(tree, subtree_costs(tree), moved.view(), c, out, &without);
     EXPECT_EQ(without.top_boxes, 0u);
     EXPECT_EQ(without.policy, UpdatePolicy::Rebuild);  // the subtrees alone could not mend it
+}
+
+TEST(Update, AdaptiveSplicesItsPartsUnderTheNewTopTheSameOnEveryThreadCount) {
+    // one region deformed (subtrees rebuilt) and rigid slabs moved apart (the top rebuilt): both
+    // in one update, the parts spliced under the new top by its one copy of the nodes
+    const Fixture f;
+    const Scene moved = slabs_apart(deformed(f.scene, 1.0f, 3.0f), 6, 8.0f);
+    std::vector<Bvh> trees;
+    std::vector<UpdateStats> stats(2);
+    for (std::uint32_t threads : {1u, 4u}) {
+        Bvh tree = f.tree;
+        tree.config.threads = threads;
+        UpdateConfig c;  // adaptive, with the top always rebuilt and never the whole tree
+        c.top_growth = 1.0f, c.tree_growth = 100.0f;
+        NodeCostArray out;
+        trees.push_back(update_bvh(tree, f.built, moved.view(), c, out, &stats[trees.size()]));
+        SCOPED_TRACE(threads);
+        check_tree(trees.back(), moved.view(), f.tree.config.max_leaf_size);
+        EXPECT_EQ(out.size(), trees.back().nodes.size());
+        EXPECT_NEAR(stats[trees.size() - 1].sah_cost, sah_cost(trees.back()), 1e-4 * sah_cost(trees.back()));
+    }
+    ASSERT_EQ(stats[0].policy, UpdatePolicy::Partial);
+    EXPECT_GT(stats[0].subtrees_rebuilt, 1u);
+    EXPECT_GT(stats[0].top_boxes, 1u);
+    ASSERT_EQ(trees[0].nodes.size(), trees[1].nodes.size());
+    EXPECT_EQ(std::memcmp(trees[0].nodes.data(), trees[1].nodes.data(), trees[0].nodes.size() * sizeof(BvhNode)), 0);
+    EXPECT_EQ(std::memcmp(trees[0].refs.data(), trees[1].refs.data(), trees[0].refs.size() * 4), 0);
+    // the cut subtrees kept their slots, so the leaves' runs are out of depth-first order; the
+    // next refit lays them in order again, leaf for leaf the same primitives
+    EXPECT_FALSE(slots_in_order(trees[0]));
+    const Bvh again = refitted(trees[0], moved.view());
+    EXPECT_TRUE(slots_in_order(again));
+    check_tree(again, moved.view(), f.tree.config.max_leaf_size);
+    EXPECT_EQ(leaf_sets(again), leaf_sets(trees[0]));
 }

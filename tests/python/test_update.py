@@ -104,3 +104,26 @@ def test_adaptive_rebuilds_the_top_over_parts_that_moved(knot):
     assert stats.sah_cost == pytest.approx(tree.stats["sah_cost"], rel=1e-4)
     _expect_valid_with_fresh_hits(tree, moved, seed=5)
     assert bvhlab.build(knot).update(moved, top_cut_primitives=0).top_boxes == 0
+
+
+def test_a_tree_whose_top_was_rebuilt_saves_loads_and_records_its_walks(knot, tmp_path):
+    """After a top rebuild the cut subtrees keep their leaf slots (out of depth-first order): the
+    saved tree loads back with the same hits, and the wide walk's records name its nodes and give
+    intersect's hits (wide leaves merge only subtrees whose slots are one run)."""
+    slab = np.minimum(5, ((knot[:, 0, 0] - knot[:, 0, 0].min()) / np.ptp(knot[:, 0, 0]) * 6).astype(int))
+    moved = knot.copy()
+    moved[:, :, 1] += (0.3 * np.sin(3.0 * slab + 1.0)).astype(np.float32)[:, None]
+    moved = np.ascontiguousarray(moved)
+    tree = bvhlab.build(knot)
+    assert tree.update(moved, top_growth=1.0).top_boxes > 1
+    leaves = np.flatnonzero(tree.is_leaf)
+    assert np.any(np.diff(tree.nodes["index"][leaves].astype(np.int64)) < 0)  # slots out of order
+    tree.save(tmp_path / "updated.bvhtree")
+    loaded = bvhlab.load_bvh(tmp_path / "updated.bvhtree", moved)
+    origins, dirs = procedural.random_rays(moved, 2000, seed=9)
+    a, b = tree.intersect(origins, dirs), loaded.intersect(origins, dirs)
+    np.testing.assert_array_equal(a["t"], b["t"])
+    np.testing.assert_array_equal(a["prim"], b["prim"])
+    for k in range(0, 2000, 97):
+        record = tree.trace_ray(origins[k], dirs[k], traversal="wide")
+        assert record.prim == a["prim"][k] and (record.t == a["t"][k] or a["prim"][k] < 0)

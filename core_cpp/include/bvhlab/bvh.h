@@ -18,7 +18,8 @@ struct WrittenBeforeRead<BvhNode> : std::true_type {};
 /// A bounding volume hierarchy over triangles and spheres.
 /// Layout (docs/design.md "Tree layout", report §3.1): nodes in depth-first order, root at 0,
 /// first child at i + 1, second child in `index`; leaves reference the contiguous slice
-/// refs[index, index + count).
+/// refs[index, index + count), the leaves' slices tiling refs (in depth-first order after a build
+/// or a refit; an update that rebuilt the upper levels leaves its cut subtrees' slices in place).
 /// Depth of the root is 0; height is the largest leaf depth + 1 (an empty tree has height 0).
 struct Bvh {
     BigVector<BvhNode> nodes;

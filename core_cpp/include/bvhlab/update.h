@@ -58,8 +58,8 @@ struct UpdateConfig {
     /// within 1.037 (16), 1.058 (32), 1.065 (0: no top rebuild).
     std::uint32_t top_cut_primitives = 16;
     /// adaptive: the levels above the cut are rebuilt only while the tree, after its subtrees,
-    /// still costs more than this times its cost when built (the step copies the whole tree, which
-    /// in wall time costs about a fifth of a rebuild on this machine). bench/updates.py: 1.07 ran
+    /// still costs more than this times its cost when built (the step copies every node and builds
+    /// over the cut's boxes: about a fifth of a rebuild in thread CPU time). bench/updates.py: 1.07 ran
     /// it on 11 of the wave's 23 updates (SAH within 1.050 of a fresh build's) and 15 of the
     /// .blend crowd's (1.060), on every one of the generated crowd's; 1.05 on 17 of the wave's
     /// (1.039); 1 (always) 1.037.

@@ -7,6 +7,7 @@
 #include <algorithm>
 
 #include "bvhlab/stats.h"
+#include "bvhlab/thread_pool.h"
 #include "bvhlab/update.h"
 
 namespace bvhlab {
@@ -23,6 +24,7 @@ std::uint32_t first_slot(const Bvh& bvh, std::uint32_t root) {
 Bvh build_part(const Bvh& tree, const GeometryView& g, std::uint32_t first, std::uint32_t count) {
     NodeCostArray tris, spheres;
     std::vector<std::uint32_t> tri_ref, sphere_ref;
+    tris.reserve(9 * std::size_t(count)), tri_ref.reserve(count);
     for (std::uint32_t k = first; k < first + count; ++k) {
         const std::uint32_t ref = tree.refs[k], i = ref_index(ref);
         if (is_sphere_ref(ref)) {
@@ -43,13 +45,6 @@ Bvh build_part(const Bvh& tree, const GeometryView& g, std::uint32_t first, std:
     for (PackedPrim& p : part.prims) p.ref = original(p.ref);
     return part;
 }
-
-struct Replacement {
-    std::uint32_t root, end;  ///< old node range [root, end)
-    Bvh part;
-    NodeCostArray costs;
-    std::uint32_t slot;  ///< first leaf slot
-};
 
 }  // namespace
 
@@ -111,35 +106,49 @@ std::vector<std::uint32_t> subtrees_by_excess(const Bvh& bvh, const NodeCosts& n
     return candidates;
 }
 
-std::uint64_t primitives_under(const NodeCosts& now, const std::vector<std::uint32_t>& roots) {
-    std::uint64_t sum = 0;
-    for (std::uint32_t root : roots) sum += now.count[root];
-    return sum;
+std::vector<RebuiltPart> build_parts(const Bvh& tree, const std::vector<std::uint32_t>& roots, const GeometryView& g,
+                                     const NodeCosts& now, double& area_cost_saved) {
+    std::vector<RebuiltPart> parts(roots.size());
+    // each part on one thread of the pool (the largest first), each built with threads = 1: the
+    // same parts on every thread count
+    std::vector<std::size_t> order(roots.size());
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return now.count[roots[a]] > now.count[roots[b]]; });
+    ThreadPool::shared().run(roots.size(), ThreadPool::resolve(tree.config.threads), [&](std::size_t i, unsigned) {
+        const std::uint32_t root = roots[order[i]];
+        RebuiltPart& r = parts[order[i]];
+        r.root = root, r.end = skip_index(tree.nodes[root], root), r.slot = first_slot(tree, root);
+        r.part = build_part(tree, g, r.slot, now.count[root]);
+        r.costs = node_costs(r.part);
+    });
+    area_cost_saved = 0;
+    std::vector<RebuiltPart> kept;
+    for (RebuiltPart& r : parts) {
+        const std::uint32_t height = *std::max_element(r.part.depths.begin(), r.part.depths.end()) + 1u;
+        if (tree.depths[r.root] + height > gpu::MAX_TREE_HEIGHT) continue;  // kept as it was
+        // the part's root box is the old root's (both the union of the same primitives' boxes)
+        area_cost_saved += now.area_cost(r.root) - r.costs.area_cost(0);
+        kept.push_back(std::move(r));
+    }
+    return kept;
 }
 
-std::uint64_t rebuild_subtrees(Bvh& tree, NodeCostArray& built, const std::vector<std::uint32_t>& roots,
-                               const GeometryView& g, const NodeCosts& now, double& area_cost_saved) {
-    std::vector<Replacement> parts;
-    std::uint64_t rebuilt = 0;
-    area_cost_saved = 0;
-    for (std::uint32_t root : roots) {
-        const std::uint32_t slot = first_slot(tree, root);
-        Bvh part = build_part(tree, g, slot, now.count[root]);
-        const std::uint32_t height = *std::max_element(part.depths.begin(), part.depths.end()) + 1u;
-        if (tree.depths[root] + height > gpu::MAX_TREE_HEIGHT) continue;  // kept as it was
-        NodeCostArray costs = subtree_costs(part);
-        // the part's root box is the old root's (both the union of the same primitives' boxes)
-        area_cost_saved += now.area_cost(root) - double(now.area[root]) * costs[0];
-        rebuilt += now.count[root];
-        parts.push_back({root, skip_index(tree.nodes[root], root), std::move(part), std::move(costs), slot});
+void place_part_slots(Bvh& tree, const std::vector<RebuiltPart>& parts) {
+    for (const RebuiltPart& r : parts) {
+        std::copy(r.part.refs.begin(), r.part.refs.end(), tree.refs.begin() + r.slot);
+        std::copy(r.part.prims.begin(), r.part.prims.end(), tree.prims.begin() + r.slot);
     }
-    if (parts.empty()) return 0;
+}
+
+void splice_parts(Bvh& tree, NodeCostArray& built, const std::vector<RebuiltPart>& parts) {
+    if (parts.empty()) return;
     // map(i): where old node i (outside the replaced ranges, or the end of one) lands
     // ends[k]: the end of part k's old range; shift[k]: how far the parts before it move a node
     // (a binary search a node: copying a node once walked every part, 10% of an adaptive update)
     std::vector<std::uint32_t> ends;
     std::vector<std::int64_t> shift{0};
-    for (const Replacement& r : parts) {
+    for (const RebuiltPart& r : parts) {
         ends.push_back(r.end);
         shift.push_back(shift.back() + std::int64_t(r.part.node_count()) - std::int64_t(r.end - r.root));
     }
@@ -171,7 +180,7 @@ std::uint64_t rebuild_subtrees(Bvh& tree, NodeCostArray& built, const std::vecto
             out.nodes[at] = n, out.depths[at] = tree.depths[next], out_built[at] = built[next];
         }
     };
-    for (const Replacement& r : parts) {
+    for (const RebuiltPart& r : parts) {
         copy_old(r.root);
         const std::uint32_t base = static_cast<std::uint32_t>(at);
         for (std::uint32_t j = 0; j < r.part.node_count(); ++j, ++at) {
@@ -179,17 +188,28 @@ std::uint64_t rebuild_subtrees(Bvh& tree, NodeCostArray& built, const std::vecto
             if (is_leaf(n)) n.index += r.slot;
             else n.index += base, n.info = gpu::NODE_INTERNAL_BIT | (skip_index(n, j) + base);
             out.nodes[at] = n, out.depths[at] = std::uint8_t(tree.depths[r.root] + r.part.depths[j]);
-            out_built[at] = r.costs[j];
+            out_built[at] = r.costs.cost[j];
         }
-        std::copy(r.part.refs.begin(), r.part.refs.end(), tree.refs.begin() + r.slot);
-        std::copy(r.part.prims.begin(), r.part.prims.end(), tree.prims.begin() + r.slot);
         next = r.end, ++done;
     }
     copy_old(tree.node_count());
     tree.nodes = std::move(out.nodes);
     tree.depths = std::move(out.depths);
     built = std::move(out_built);
-    return rebuilt;
+}
+
+std::uint64_t rebuild_subtrees(Bvh& tree, NodeCostArray& built, const std::vector<std::uint32_t>& roots,
+                               const GeometryView& g, const NodeCosts& now, double& area_cost_saved) {
+    const std::vector<RebuiltPart> parts = build_parts(tree, roots, g, now, area_cost_saved);
+    place_part_slots(tree, parts);
+    splice_parts(tree, built, parts);
+    return primitives_in(parts);
+}
+
+std::uint64_t primitives_in(const std::vector<RebuiltPart>& parts) {
+    std::uint64_t sum = 0;
+    for (const RebuiltPart& r : parts) sum += r.part.refs.size();
+    return sum;
 }
 
 }  // namespace bvhlab

@@ -35,15 +35,39 @@ std::vector<std::uint32_t> subtrees_by_excess(const Bvh& bvh, const NodeCosts& n
                                               double to_remove, std::uint32_t min_primitives,
                                               std::uint64_t max_primitives, double& covered);
 
-/// The primitives under the nodes `roots` (none inside another).
-std::uint64_t primitives_under(const NodeCosts& now, const std::vector<std::uint32_t>& roots);
+/// A subtree of a refitted tree rebuilt over its own primitives with the tree's settings, not yet
+/// in the tree: its references and packed primitives name the original primitives, in the order
+/// its leaves take the old subtree's slots [slot, slot + part.refs.size()).
+struct RebuiltPart {
+    std::uint32_t root = 0, end = 0;  ///< the old subtree's node range [root, end)
+    std::uint32_t slot = 0;           ///< its first leaf slot
+    Bvh part;
+    NodeCosts costs;  ///< node_costs(part): its nodes' costs when built, areas and counts
+};
 
-/// `tree` with the subtrees rooted at `roots` (node order, none inside another) each rebuilt over
-/// its own primitives with the tree's settings, spliced in place of the old ones; `built` (one per
-/// node, costs when built) is spliced alike, the rebuilt nodes getting their own. `now` is
-/// node_costs(tree) before. Returns the primitives rebuilt; `area_cost_saved` receives what the
-/// new subtrees took off the root's A·cost (so the new tree's SAH cost needs no pass over it). A
-/// subtree whose rebuild would pass MAX_TREE_HEIGHT is kept as it was.
+/// The subtrees rooted at `roots` (node order, none inside another; `tree`'s slots in
+/// depth-first order, as a refit leaves them) rebuilt, on up to tree.config.threads threads of
+/// the pool (each part on one: the same parts on every thread count); `now` is node_costs(tree).
+/// A part that would pass MAX_TREE_HEIGHT where it stands is dropped (its subtree kept).
+/// `area_cost_saved` receives what the parts take off the root's A·cost (so the new tree's SAH
+/// cost needs no pass over it).
+std::vector<RebuiltPart> build_parts(const Bvh& tree, const std::vector<std::uint32_t>& roots,
+                                     const GeometryView& geometry, const NodeCosts& now, double& area_cost_saved);
+
+/// Writes the parts' references and packed primitives into their slots of `tree` (the same
+/// primitives there, in the parts' leaf order). The nodes still hold the old subtrees.
+void place_part_slots(Bvh& tree, const std::vector<RebuiltPart>& parts);
+
+/// Replaces each part's old node range by the part's nodes in the depth-first array (one copy of
+/// the nodes): every node index after a replaced range moves by the difference. `built` (one
+/// per node, costs when built) is spliced alike, the parts' nodes getting their own.
+void splice_parts(Bvh& tree, NodeCostArray& built, const std::vector<RebuiltPart>& parts);
+
+/// The primitives the parts hold.
+std::uint64_t primitives_in(const std::vector<RebuiltPart>& parts);
+
+/// build_parts, place_part_slots and splice_parts: `tree` with the subtrees at `roots` rebuilt.
+/// Returns the primitives rebuilt.
 std::uint64_t rebuild_subtrees(Bvh& tree, NodeCostArray& built, const std::vector<std::uint32_t>& roots,
                                const GeometryView& geometry, const NodeCosts& now, double& area_cost_saved);
 

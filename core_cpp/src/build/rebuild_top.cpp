@@ -3,10 +3,10 @@
 // boxes span parts that were near each other when built. No subtree of a share of the primitives
 // holds that excess, and rebuilding from primitives the nodes that do is a full rebuild. The levels
 // above a cut of subtrees, each taken as one box, are rebuilt instead: a build over a few thousand
-// boxes and one copy of the nodes and leaf slots. (HLBVH builds its upper levels by the SAH over
-// clusters' boxes the same way, Pantaleoni and Luebke 2010; Garanzha, Pantaleoni and McAllister
-// 2011. bench/updates.py: on the 24-frame wave, after the subtrees of adaptive, no more full
-// rebuilds.)
+// boxes and one copy of the nodes, the leaf slots left where they are. (HLBVH builds its upper
+// levels by the SAH over clusters' boxes the same way, Pantaleoni and Luebke 2010; Garanzha,
+// Pantaleoni and McAllister 2011. bench/updates.py: on the 24-frame wave, after the subtrees of
+// adaptive, no more full rebuilds.)
 #include "rebuild_top.h"
 
 #include <algorithm>
@@ -18,50 +18,81 @@ namespace {
 /// Children whose half areas sum to less than this share of their parent's have come apart.
 constexpr float kApart = 0.5f;
 
-/// The first leaf slot of the subtree at `j` (its leftmost leaf's; the slot count for j = node
-/// count): a subtree's primitives are the slots up to the next one's.
-std::uint32_t slot_at(const Bvh& tree, std::uint32_t j) {
-    if (j == tree.node_count()) return static_cast<std::uint32_t>(tree.refs.size());
-    while (!is_leaf(tree.nodes[j])) ++j;
-    return tree.nodes[j].index;
+/// The end of the subtree at `n` in its own node array.
+std::uint32_t end_of(const PartedTree& t, PartNode n) { return skip_index(t.node(n), n.node); }
+
+/// The nodes and depths of the subtree at `n`, for a copy.
+const BvhNode* nodes_of(const PartedTree& t, PartNode n) {
+    return n.part < 0 ? t.tree().nodes.data() : t.parts()[std::size_t(n.part)].part.nodes.data();
+}
+const std::uint8_t* depths_of(const PartedTree& t, PartNode n) {
+    return n.part < 0 ? t.tree().depths.data() : t.parts()[std::size_t(n.part)].part.depths.data();
 }
 
-/// The primitives under node i.
-std::uint32_t primitives_at(const Bvh& tree, std::uint32_t i) {
-    return slot_at(tree, skip_index(tree.nodes[i], i)) - slot_at(tree, i);
+/// Levels below `n` in its subtree, the node itself counted (its height).
+std::uint32_t height_of(const PartedTree& t, PartNode n) {
+    const std::uint8_t* depths = depths_of(t, n);
+    std::uint32_t deepest = depths[n.node];
+    for (std::uint32_t i = n.node; i < end_of(t, n); ++i) deepest = std::max<std::uint32_t>(deepest, depths[i]);
+    return deepest - depths[n.node] + 1;
 }
-
-float half_area(const BvhNode& n) { return node_box(n).half_area(); }
 
 }  // namespace
 
-std::vector<std::uint32_t> top_cut(const Bvh& tree, std::uint32_t max_primitives) {
-    std::vector<std::uint32_t> cut;
-    for (std::uint32_t i = 0; i < tree.node_count();) {
-        const BvhNode& n = tree.nodes[i];
-        const bool apart =
-            !is_leaf(n) && half_area(tree.nodes[i + 1]) + half_area(tree.nodes[n.index]) < kApart * half_area(n);
-        if (is_leaf(n) || (!apart && primitives_at(tree, i) <= max_primitives)) {
-            cut.push_back(i);
+PartedTree::PartedTree(const Bvh& tree, const NodeCosts& now, const std::vector<RebuiltPart>& parts)
+    : tree_(tree), now_(now), parts_(parts) {}
+
+namespace {
+
+/// Appends the cut (top_cut) of the subtree whose nodes are [first, end) of one array: `part` -1
+/// the tree's, with the parts standing in for their roots' subtrees, else parts[part]'s. One
+/// scan forwards in depth-first order, jumping over each cut node's subtree: the nodes, their
+/// counts and areas are read in order (walking down by the children read them at random, and
+/// a cut node's children, whose areas tell whether they came apart, are near it: it is small).
+void cut_scan(const PartedTree& t, std::int32_t part, std::uint32_t first, std::uint32_t end,
+              std::uint32_t max_primitives, std::vector<PartNode>& cut) {
+    const std::vector<RebuiltPart>& parts = t.parts();
+    const Bvh& bvh = part < 0 ? t.tree() : parts[std::size_t(part)].part;
+    const NodeCosts& costs = part < 0 ? t.tree_costs() : parts[std::size_t(part)].costs;
+    std::size_t next = 0;  // the next part (in node order) not yet passed
+    for (std::uint32_t i = first; i < end;) {
+        if (part < 0 && next < parts.size() && parts[next].root == i) {
+            cut_scan(t, std::int32_t(next), 0, parts[next].part.node_count(), max_primitives, cut);
+            i = parts[next++].end;
+            continue;
+        }
+        const BvhNode& n = bvh.nodes[i];
+        const bool whole = is_leaf(n) || (costs.count[i] <= max_primitives &&
+                                          !(costs.area[i + 1] + costs.area[n.index] < kApart * costs.area[i]) &&
+                                          !(part < 0 && next < parts.size() && parts[next].root < skip_index(n, i)));
+        if (whole) {
+            cut.push_back({part, i});
             i = skip_index(n, i);
         } else {
             ++i;  // its children (at i + 1 and after its first child's subtree) come next
         }
     }
+}
+
+}  // namespace
+
+std::vector<PartNode> top_cut(const PartedTree& tree, std::uint32_t max_primitives) {
+    std::vector<PartNode> cut;
+    cut_scan(tree, -1, 0, tree.tree().node_count(), max_primitives, cut);
     return cut;
 }
 
-bool rebuild_top(Bvh& tree, NodeCostArray& built, const std::vector<std::uint32_t>& cut, double& sah_cost) {
-    if (tree.empty() || !(half_area(tree.nodes[0]) > 0)) return false;
+bool rebuild_top(Bvh& tree, NodeCostArray& built, const PartedTree& parted, const std::vector<PartNode>& cut,
+                 double& sah_cost) {
+    if (tree.empty() || !(node_box(tree.nodes[0]).half_area() > 0)) return false;
     std::vector<Aabb> boxes(cut.size());
-    for (std::size_t c = 0; c < cut.size(); ++c) boxes[c] = node_box(tree.nodes[cut[c]]);
+    for (std::size_t c = 0; c < cut.size(); ++c) boxes[c] = node_box(parted.node(cut[c]));
     BuildConfig config = tree.config;
     config.max_leaf_size = 1, config.sah_block = 1, config.threads = 1, config.progress = nullptr;
     const Bvh top = build_bvh_over_boxes(boxes.data(), boxes.size(), config);
     // where each top node lands: after the top nodes before it and the cut subtrees they hold
     const std::uint32_t top_nodes = top.node_count();
     std::vector<std::uint32_t> at(top_nodes + 1);
-    std::uint32_t height = 0;
     for (std::uint32_t j = 0, pos = 0; j <= top_nodes; ++j) {
         at[j] = pos;
         if (j == top_nodes) break;
@@ -71,57 +102,53 @@ bool rebuild_top(Bvh& tree, NodeCostArray& built, const std::vector<std::uint32_
             continue;
         }
         if (leaf_count(n) != 1) return false;  // one box a leaf (max_leaf_size 1)
-        const std::uint32_t c = cut[top.refs[n.index]];
-        const std::uint32_t end = skip_index(tree.nodes[c], c);
-        std::uint32_t deepest = 0;
-        for (std::uint32_t i = c; i < end; ++i) deepest = std::max<std::uint32_t>(deepest, tree.depths[i]);
-        height = std::max(height, top.depths[j] + deepest - tree.depths[c] + 1);
-        pos += end - c;
+        const PartNode c = cut[top.refs[n.index]];
+        // a cut subtree holds at most max(count, 1) leaves, so it is no taller: the exact height
+        // only where that bound could pass the limit
+        const std::uint32_t below = std::max<std::uint32_t>(parted.count(c), 1);
+        if (top.depths[j] + below > gpu::MAX_TREE_HEIGHT && top.depths[j] + height_of(parted, c) > gpu::MAX_TREE_HEIGHT)
+            return false;
+        pos += end_of(parted, c) - c.node;
     }
-    if (height > gpu::MAX_TREE_HEIGHT) return false;
     // the new arrays: top inner nodes with their children's places, cut subtrees shifted whole
-    Bvh out;
-    out.nodes = BigVector<BvhNode>(tree.nodes.size());
-    out.depths = BigVector<std::uint8_t>(tree.nodes.size());
-    out.refs = BigVector<std::uint32_t>(tree.refs.size());
-    out.prims = BigVector<PackedPrim>(tree.prims.size());
-    NodeCostArray out_built(tree.nodes.size());
+    const std::uint32_t size = at[top_nodes];
+    BigVector<BvhNode> nodes(size);
+    BigVector<std::uint8_t> depths(size);
+    NodeCostArray out_built(size);
     // S(n) = A(n)·cost(n) of each top node, for its cost (built) and the tree's SAH cost
     std::vector<double> area_cost(top_nodes);
-    std::uint32_t slot = 0;
     for (std::uint32_t j = 0; j < top_nodes; ++j) {
         const BvhNode& n = top.nodes[j];
         if (!is_leaf(n)) {
-            BvhNode& o = out.nodes[at[j]];
+            BvhNode& o = nodes[at[j]];
             o = n;
             o.index = at[n.index], o.info = gpu::NODE_INTERNAL_BIT | at[skip_index(n, j)];
-            out.depths[at[j]] = top.depths[j];
+            depths[at[j]] = top.depths[j];
             continue;
         }
-        const std::uint32_t c = cut[top.refs[n.index]];
-        const std::uint32_t end = skip_index(tree.nodes[c], c);
-        const std::uint32_t first_slot = slot_at(tree, c), count = slot_at(tree, end) - first_slot;
-        const std::int64_t shift = std::int64_t(at[j]) - c, slot_shift = std::int64_t(slot) - first_slot;
-        const int depth_shift = int(top.depths[j]) - int(tree.depths[c]);
-        double area_cost_below = 0;  // S(c): each node's half area, times its count for a leaf
-        for (std::uint32_t i = c; i < end; ++i) {
-            BvhNode m = tree.nodes[i];
-            if (is_leaf(m)) {
-                area_cost_below += double(half_area(m)) * leaf_count(m);
-                m.index = std::uint32_t(m.index + slot_shift);
-            } else {
-                area_cost_below += half_area(m);
-                m.index = std::uint32_t(m.index + shift);
-                m.info = gpu::NODE_INTERNAL_BIT | std::uint32_t(skip_index(m, i) + shift);
-            }
-            out.nodes[i + shift] = m;
-            out.depths[i + shift] = std::uint8_t(tree.depths[i] + depth_shift);
+        const PartNode c = cut[top.refs[n.index]];
+        const std::uint32_t end = end_of(parted, c);
+        const BvhNode* from = nodes_of(parted, c);
+        const std::uint8_t* from_depths = depths_of(parted, c);
+        // a part's leaves take its slots (placed by place_part_slots); the tree's keep theirs
+        const std::uint32_t slot_shift = c.part < 0 ? 0 : parted.parts()[std::size_t(c.part)].slot;
+        const std::uint32_t shift = at[j] - c.node;  // unsigned: wraps where the subtree moves up
+        const std::uint8_t depth_shift = std::uint8_t(top.depths[j] - from_depths[c.node]);
+        for (std::uint32_t i = c.node, o = at[j]; i < end; ++i, ++o) {
+            BvhNode m = from[i];
+            // an inner node's child and skip move by `shift` (the skip in info's low bits: no carry,
+            // sizes < 2^31), a leaf's first slot by `slot_shift`: by a mask, as leaves and inner
+            // nodes alternate at random (a branch mispredicted half the time)
+            const std::uint32_t inner = 0u - (m.info >> 31);
+            m.index += (shift & inner) | (slot_shift & ~inner), m.info += shift & inner;
+            nodes[o] = m;
+            depths[o] = std::uint8_t(from_depths[i] + depth_shift);
         }
-        std::memcpy(out_built.data() + at[j], built.data() + c, (end - c) * sizeof(float));
-        std::memcpy(out.refs.data() + slot, tree.refs.data() + first_slot, count * sizeof(std::uint32_t));
-        std::memcpy(out.prims.data() + slot, tree.prims.data() + first_slot, count * sizeof(PackedPrim));
-        slot += count;
-        area_cost[j] = area_cost_below;
+        if (c.part < 0) std::memcpy(out_built.data() + at[j], built.data() + c.node, (end - c.node) * sizeof(float));
+        else
+            std::memcpy(out_built.data() + at[j], parted.parts()[std::size_t(c.part)].costs.cost.data() + c.node,
+                        (end - c.node) * sizeof(float));
+        area_cost[j] = parted.area_cost(c);
     }
     // the top's costs, children before parents (both after their parent in depth-first order)
     for (std::uint32_t j = top_nodes; j-- > 0;) {
@@ -134,8 +161,7 @@ bool rebuild_top(Bvh& tree, NodeCostArray& built, const std::vector<std::uint32_
     }
     out_built[0] = built[0];  // the root's cost when built stays the update's reference
     sah_cost = area_cost[0] / node_box(top.nodes[0]).half_area();  // the old root's box: not 0
-    tree.nodes = std::move(out.nodes), tree.depths = std::move(out.depths);
-    tree.refs = std::move(out.refs), tree.prims = std::move(out.prims);
+    tree.nodes = std::move(nodes), tree.depths = std::move(depths);
     built = std::move(out_built);
     return true;
 }

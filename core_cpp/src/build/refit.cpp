@@ -63,19 +63,34 @@ inline void store_node(BvhNode* dst, const BvhNode& n, F4 lo, F4 hi) {
 /// One pass over the nodes in reverse depth-first order, so that both children of a node (at
 /// i + 1 and at its index, both after it) are done before it: an inner node's box is the union
 /// of theirs (two loads and a min and a max a side), a leaf packs its primitives (the tree's
-/// geometry copy, Bvh::prims, walked backwards; the input fetched kAhead references ahead, as
+/// geometry copy, Bvh::prims, written backwards; the input fetched kAhead references ahead, as
 /// leaf order visits it at random) and takes their box from the vertices it read. Every node
 /// and primitive is written once, with no stack (tinybvh's Refit walks its nodes backwards too).
+/// The leaves' slots are laid down again in depth-first order (`refs` written leaf by leaf, each
+/// leaf's index moved to its run): a tree whose upper levels an update rebuilt keeps its cut
+/// subtrees' runs where they were (rebuild_top.h), and this puts them back in order at no cost
+/// beyond writing the references (the old tree's are read either way).
 /// A zero-area triangle is packed as one point (pack_triangle) but boxed from the input, so that
 /// leaves still contain every primitive's box (its PrimRef's).
-void refit_pass(const Bvh& old, const GeometryView& g, BvhNode* nodes, PackedPrim* prims, Checks& checks) {
+void refit_pass(const Bvh& old, const GeometryView& g, BvhNode* nodes, std::uint32_t* out_refs, PackedPrim* prims,
+                Checks& checks) {
     constexpr std::uint32_t kAhead = 16;
-    const std::uint32_t slots = static_cast<std::uint32_t>(old.refs.size());
     const std::uint32_t* refs = old.refs.data();
-    for (std::uint32_t k = slots; k-- > slots - std::min(slots, kAhead);) prefetch_prim(g, refs[k]);
     const F4 empty = F4::splat(std::numeric_limits<float>::infinity());
+    std::uint32_t end = static_cast<std::uint32_t>(old.refs.size());  // the leaves after node i take [end, slots)
+    // the next leaves' references, kAhead slots ahead in the order the pass reads them
+    std::uint32_t ahead_node = old.node_count(), ahead_slot = 0, ahead_left = 0;
+    auto prefetch_next = [&] {
+        while (ahead_left == 0 && ahead_node > 0) {
+            const BvhNode& m = old.nodes[--ahead_node];
+            if (is_leaf(m)) ahead_slot = m.index + leaf_count(m), ahead_left = leaf_count(m);
+        }
+        if (ahead_left == 0) return;
+        prefetch_prim(g, refs[--ahead_slot]), --ahead_left;
+    };
+    for (std::uint32_t k = 0; k < kAhead; ++k) prefetch_next();
     for (std::uint32_t i = old.node_count(); i-- > 0;) {
-        const BvhNode n = old.nodes[i];
+        BvhNode n = old.nodes[i];
         if (!is_leaf(n)) {
             const BvhNode &a = nodes[i + 1], &b = nodes[n.index];
             store_node(nodes + i, n, min(F4::load(&a.lo.x), F4::load(&b.lo.x)),
@@ -83,18 +98,21 @@ void refit_pass(const Bvh& old, const GeometryView& g, BvhNode* nodes, PackedPri
             continue;
         }
         F4 lo = empty, hi = neg(empty);
-        for (std::uint32_t k = n.index + leaf_count(n); k-- > n.index;) {
-            if (k >= kAhead) prefetch_prim(g, refs[k - kAhead]);
-            const std::uint32_t ref = refs[k];
+        end -= leaf_count(n);
+        for (std::uint32_t k = leaf_count(n); k-- > 0;) {
+            prefetch_next();
+            const std::uint32_t ref = refs[n.index + k], slot = end + k;
+            out_refs[slot] = ref;
             if (is_sphere_ref(ref)) {
-                refit_sphere(g, ref, prims + k, lo, hi, checks);
+                refit_sphere(g, ref, prims + slot, lo, hi, checks);
                 continue;
             }
             F4 a, b, c;
-            pack_triangle_rows(prims + k, g.triangles + 9 * std::size_t(ref), ref, 0, a, b, c);
+            pack_triangle_rows(prims + slot, g.triangles + 9 * std::size_t(ref), ref, 0, a, b, c);
             checks.triangle(a, b, c);
             lo = min(lo, min(a, min(b, c))), hi = max(hi, max(a, max(b, c)));
         }
+        n.index = end;
         store_node(nodes + i, n, lo, hi);
     }
 }
@@ -110,15 +128,15 @@ Bvh refitted(const Bvh& old, const GeometryView& geometry, unsigned threads) {
     // to clip again at planes the tree does not keep, so it is rebuilt with its settings instead.
     if (old.config.method == SplitMethod::Sbvh) return build_bvh(geometry, old.config);
     Bvh out;
-    out.prims = BigVector<PackedPrim>(old.refs.size());  // both written whole by the pass (WrittenBeforeRead)
+    out.prims = BigVector<PackedPrim>(old.refs.size());  // all three written whole by the pass
     out.nodes = BigVector<BvhNode>(old.nodes.size());
+    out.refs = BigVector<std::uint32_t>(old.refs.size());
     Checks checks;
-    refit_pass(old, geometry, out.nodes.data(), out.prims.data(), checks);
+    refit_pass(old, geometry, out.nodes.data(), out.refs.data(), out.prims.data(), checks);
     if (checks.bad(out.nodes.empty() ? Aabb{Vec3{0.0f}, Vec3{0.0f}} : node_box(out.nodes[0]))) {
         validate(geometry);  // names the first bad primitive
         throw std::invalid_argument("refit: the geometry has a coordinate out of range");
     }
-    out.refs = old.refs;
     out.depths = old.depths;
     out.triangle_count = old.triangle_count, out.sphere_count = old.sphere_count;
     out.config = old.config;

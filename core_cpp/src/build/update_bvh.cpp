@@ -36,7 +36,8 @@ double restructure(Bvh& tree, NodeCostArray& built, const NodeCosts& now, const 
 /// then, while the tree still costs more than top_growth × its cost when built, the levels above
 /// the topmost subtrees of at most top_cut_primitives are rebuilt over those subtrees' boxes
 /// (rebuild_top: the excess of the large nodes, which no subtree of a share of the primitives
-/// holds, is how the parts are grouped). A full rebuild instead when the tree still costs more
+/// holds, is how the parts are grouped; its one copy of the nodes splices the rebuilt subtrees
+/// too, else splice_parts does). A full rebuild instead when the tree still costs more
 /// than tree_growth × its cost when built. Returns what ran; `sah`
 /// receives the tree's cost after it. bench/updates.py has the figures.
 UpdatePolicy adaptive(Bvh& tree, NodeCostArray& built, const NodeCosts& now, const GeometryView& g,
@@ -48,13 +49,19 @@ UpdatePolicy adaptive(Bvh& tree, NodeCostArray& built, const NodeCosts& now, con
     const std::vector<std::uint32_t> roots =
         subtrees_by_excess(tree, now, built, excess, config.min_subtree_primitives,
                            std::uint64_t(config.restructure_share * now.count[0]), covered);
-    if (!roots.empty()) sah = restructure(tree, built, now, roots, g, stats);
+    double saved = 0;
+    const std::vector<RebuiltPart> parts = build_parts(tree, roots, g, now, saved);
+    place_part_slots(tree, parts);
+    if (!parts.empty()) sah = (now.area_cost(0) - saved) / now.area[0];
+    stats.subtrees_rebuilt = static_cast<std::uint32_t>(parts.size()), stats.primitives_rebuilt = primitives_in(parts);
     if (config.top_cut_primitives > 0 && sah > config.top_growth * goal) {
-        const std::vector<std::uint32_t> cut = top_cut(tree, config.top_cut_primitives);
-        if (cut.size() > 1 && rebuild_top(tree, built, cut, sah))
+        const PartedTree parted(tree, now, parts);
+        const std::vector<PartNode> cut = top_cut(parted, config.top_cut_primitives);
+        if (cut.size() > 1 && rebuild_top(tree, built, parted, cut, sah))
             stats.top_boxes = static_cast<std::uint32_t>(cut.size());
     }
-    if (roots.empty() && stats.top_boxes == 0 && sah <= config.tree_growth * goal) return UpdatePolicy::Refit;
+    if (stats.top_boxes == 0) splice_parts(tree, built, parts);  // the top rebuild splices them itself
+    if (parts.empty() && stats.top_boxes == 0 && sah <= config.tree_growth * goal) return UpdatePolicy::Refit;
     return sah > config.tree_growth * goal ? UpdatePolicy::Rebuild : UpdatePolicy::Partial;
 }
 

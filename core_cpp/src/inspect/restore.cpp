@@ -1,9 +1,12 @@
 // restore.cpp — a saved tree checked and made whole again (restore.h).
 #include "bvhlab/restore.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "bvhlab/prim_ref.h"
 
@@ -75,7 +78,7 @@ void check_layout(const std::vector<BvhNode>& nodes, std::size_t ref_count, std:
         if (skip_index(node, i) != end[i]) refuse(node_name(i) + " has a wrong skip index");
     }
     if (end[0] != n) refuse("the root's subtree does not hold every node");
-    std::uint64_t next_slot = 0;
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> runs;  // each leaf's first slot, and the leaf
     for (std::uint32_t i = 0; i < n; ++i) {
         const BvhNode& node = nodes[i];
         if (depths[i] >= gpu::MAX_TREE_HEIGHT) refuse(node_name(i) + " lies deeper than MAX_TREE_HEIGHT");
@@ -83,8 +86,17 @@ void check_layout(const std::vector<BvhNode>& nodes, std::size_t ref_count, std:
             depths[i + 1] = depths[node.index] = std::uint8_t(depths[i] + 1);
             continue;
         }
-        if (leaf_count(node) == 0 || node.index != next_slot) refuse("leaf " + std::to_string(i) + " has wrong slots");
-        next_slot += leaf_count(node);
+        if (leaf_count(node) == 0 || std::uint64_t(node.index) + leaf_count(node) > ref_count)
+            refuse("leaf " + std::to_string(i) + " has wrong slots");
+        runs.emplace_back(node.index, i);
+    }
+    // the leaves' runs of slots tile the references: in depth-first order after a build, in any
+    // order after an update rebuilt the upper levels (rebuild_top.h)
+    std::sort(runs.begin(), runs.end());
+    std::uint64_t next_slot = 0;
+    for (const auto& [first, leaf] : runs) {
+        if (first != next_slot) refuse("leaf " + std::to_string(leaf) + " has wrong slots");
+        next_slot += leaf_count(nodes[leaf]);
     }
     if (next_slot != ref_count) refuse("the leaves do not hold every reference");
 }

@@ -16,15 +16,17 @@ namespace {
 /// A range of leaf-order slots (Bvh::prims) as one key: first in the high word, count in the low.
 std::uint64_t range_key(std::uint32_t first, std::uint32_t count) { return std::uint64_t(first) << 32 | count; }
 
-/// Every binary node by its subtree's slot range. Ranges are distinct: an inner node's range is
-/// its children's together, each child holding at least one primitive.
+/// Every binary node by its subtree's first slot and slot count. Keys are distinct: an inner
+/// node's slots are its children's together, each child holding at least one, and subtrees that
+/// are not nested hold no slot in common. (A subtree's slots are one range in a built tree, runs
+/// from apart after an update rebuilt the upper levels: rebuild_top.h.)
 std::unordered_map<std::uint64_t, std::uint32_t> nodes_by_range(const Bvh& bvh) {
     const std::size_t n = bvh.nodes.size();
     std::vector<std::uint32_t> first(n), count(n);
     for (std::size_t i = n; i-- > 0;) {  // children (i + 1 and index) come after their parent
         const BvhNode& node = bvh.nodes[i];
         if (is_leaf(node)) first[i] = node.index, count[i] = leaf_count(node);
-        else first[i] = first[i + 1], count[i] = count[i + 1] + count[node.index];
+        else first[i] = std::min(first[i + 1], first[node.index]), count[i] = count[i + 1] + count[node.index];
     }
     std::unordered_map<std::uint64_t, std::uint32_t> by_range;
     by_range.reserve(n);

@@ -12,18 +12,27 @@ namespace {
 /// A subtree of at most this many primitives becomes one wide leaf (one packet of triangles).
 constexpr std::uint32_t kMergedLeaf = 4;
 
-/// Per binary node: primitives in its subtree and the first of them (leaves are contiguous in
-/// leaf order, so a subtree's primitives are one range).
+/// Per binary node: primitives in its subtree and the first of them, where they are one range of
+/// slots (kNoRange where not: after an update rebuilt the upper levels, rebuild_top.h, a subtree
+/// above its cut may hold runs from apart; built and refitted trees lay the slots in depth-first
+/// order, every subtree one range). Only a subtree of one range merges into one wide leaf.
 struct SubtreeRanges {
+    static constexpr std::uint32_t kNoRange = std::numeric_limits<std::uint32_t>::max();
     std::vector<std::uint32_t> first, size;
     explicit SubtreeRanges(const Bvh& bvh) : first(bvh.nodes.size()), size(bvh.nodes.size()) {
         for (std::size_t i = bvh.nodes.size(); i-- > 0;) {
             const BvhNode& n = bvh.nodes[i];
-            if (is_leaf(n)) first[i] = n.index, size[i] = leaf_count(n);
-            else first[i] = first[i + 1], size[i] = size[i + 1] + size[n.index];
+            if (is_leaf(n)) {
+                first[i] = n.index, size[i] = leaf_count(n);
+                continue;
+            }
+            const bool one = first[i + 1] != kNoRange && first[n.index] == first[i + 1] + size[i + 1];
+            first[i] = one ? first[i + 1] : kNoRange, size[i] = size[i + 1] + size[n.index];
         }
     }
-    bool leaf(const Bvh& bvh, std::uint32_t i) const { return is_leaf(bvh.nodes[i]) || size[i] <= kMergedLeaf; }
+    bool leaf(const Bvh& bvh, std::uint32_t i) const {
+        return is_leaf(bvh.nodes[i]) || (size[i] <= kMergedLeaf && first[i] != kNoRange);
+    }
 };
 
 /// Packets for the primitives [first, first + n) of bvh.prims: triangles, then spheres, four a packet.
