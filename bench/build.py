@@ -11,8 +11,9 @@ process per thread count, then embreex's, and `--rounds` rounds follow each othe
 counts alternate too. Prints, per scene, build ms and Mprims/s (medians of all builds) with ratios
 against Embree MEDIUM and tinybvh, scaling on the most threads (the median of the rounds' ratios,
 each round's 1T median over its own), how many cores were busy there (CPU time of all threads over
-wall time) and the page faults of one build there, SAH cost (bvhlab's convention) and callgrind
-instructions per primitive, and writes bench/results/build.json.
+wall time) and the page faults of one build there, SAH cost (bvhlab's convention), references per
+primitive (leaf slots: above 1 with spatial splits) and callgrind instructions per primitive, and
+writes bench/results/build.json.
 tinybvh is never part of bvhlab: pass the folder of a local copy of github.com/jbikker/tinybvh
 (or set BVHLAB_TINYBVH_DIR).
 """
@@ -62,7 +63,7 @@ def measure_scene(exe: Path, path: Path, tris, threads: list[int], repeat: int, 
                 row.setdefault("round_medians", {}).setdefault(str(t), []).append(_peers.median(p["seconds"]))
                 row.setdefault("cpu_seconds", {}).setdefault(str(t), []).extend(p["cpu_seconds"])
                 row.setdefault("page_faults", {}).setdefault(str(t), []).extend(p["page_faults"])
-                row["sah"], row["nodes"] = p["sah"], p["nodes"]
+                row["sah"], row["nodes"], row["references"] = p["sah"], p["nodes"], p.get("references")
             child = _common.run_child(__file__, ["--embreex-child", str(path), "--repeat", str(repeat)], cores=t)
             if child.get("seconds"):
                 embreex.setdefault(str(t), []).extend(child["seconds"])
@@ -101,15 +102,17 @@ def report(name: str, r: dict, threads: list[int]) -> str:
         cpu, wall, faults = row["cpu_seconds"][last], row["seconds"][last], row["page_faults"][last]
         cells += [sum(cpu) / sum(wall), round(_peers.median(faults))]
         ins = row.get("instructions")
-        cells += [row["sah"] if row["sah"] is not None else "", row["nodes"], round(ins / n) if ins else ""]
+        refs = row.get("references")
+        cells += [row["sah"] if row["sah"] is not None else "", row["nodes"], refs / n if refs else ""]
+        cells += [round(ins / n) if ins else ""]
         rows.append(cells)
     for t in threads:
         if str(t) in r["embreex"]:
             e = _peers.median(r["embreex"][str(t)]) * 1e3
-            rows.append([f"embreex (Embree 4) commit, {t}T", e, n / e / 1e3] + [""] * (2 * len(threads) + 6))
+            rows.append([f"embreex (Embree 4) commit, {t}T", e, n / e / 1e3] + [""] * (2 * len(threads) + 7))
     headers = ["builder"] + [h for t in threads for h in (f"ms {t}T", f"Mprims/s {t}T")]
     headers += ["x MEDIUM 1T", "x tinybvh 1T", f"{threads[-1]}T/1T", f"cores busy {threads[-1]}T"]
-    headers += [f"faults {threads[-1]}T", "SAH", "nodes", "instr/prim"]
+    headers += [f"faults {threads[-1]}T", "SAH", "nodes", "refs/prim", "instr/prim"]
     return _common.print_table(headers, rows, title=f"\n{name}: {n} triangles")
 
 

@@ -31,7 +31,8 @@ Rays load_shadow_rays(const std::string& path);
 struct TreeInfo {
     double sah = 0.0 / 0.0;  ///< bvhlab's convention: Σ_internal A/A_root + Σ_leaf A/A_root·N
     std::uint64_t nodes = 0;
-    std::uint64_t digest = 0;  ///< bvhlab: FNV-1a of the nodes and references, to compare builds bit for bit
+    std::uint64_t references = 0;  ///< primitive slots in the leaves (more than the triangles with spatial splits)
+    std::uint64_t digest = 0;      ///< bvhlab: FNV-1a of the nodes and references, to compare builds bit for bit
 };
 
 /// One system under test. build() is what is timed; trace() answers closest hits one ray at a time

@@ -121,9 +121,12 @@ int run_build(const Args& a) {
                 warmups);
     for (std::size_t k = 0; k < peers.size(); ++k) {
         TreeInfo info = peers[k]->info();
-        std::printf("%s\n {\"spec\": \"%s\", \"name\": \"%s\", \"sah\": %s, \"nodes\": %llu, \"seconds\": ",
-                    k ? "," : "", a.peers[k].c_str(), peers[k]->name().c_str(),
-                    std::isnan(info.sah) ? "null" : std::to_string(info.sah).c_str(), (unsigned long long)info.nodes);
+        std::printf(
+            "%s\n {\"spec\": \"%s\", \"name\": \"%s\", \"sah\": %s, \"nodes\": %llu, \"references\": %llu, "
+            "\"seconds\": ",
+            k ? "," : "", a.peers[k].c_str(), peers[k]->name().c_str(),
+            std::isnan(info.sah) ? "null" : std::to_string(info.sah).c_str(), (unsigned long long)info.nodes,
+            (unsigned long long)info.references);
         print_times(times[k]);
         std::printf(", \"cpu_seconds\": ");
         print_times(cpu[k]);
@@ -221,9 +224,11 @@ int run_once(const Args& a) {
     peer->build(mesh);
     CALLGRIND_STOP_INSTRUMENTATION;
     TreeInfo info = peer->info();
-    std::printf("{\"spec\": \"%s\", \"triangles\": %zu, \"sah\": %f, \"nodes\": %llu, \"digest\": \"%016llx\"}\n",
-                a.peers[0].c_str(), mesh.count(), info.sah, (unsigned long long)info.nodes,
-                (unsigned long long)info.digest);
+    std::printf(
+        "{\"spec\": \"%s\", \"triangles\": %zu, \"sah\": %f, \"nodes\": %llu, \"references\": %llu, "
+        "\"digest\": \"%016llx\"}\n",
+        a.peers[0].c_str(), mesh.count(), info.sah, (unsigned long long)info.nodes, (unsigned long long)info.references,
+        (unsigned long long)info.digest);
     return 0;
 }
 

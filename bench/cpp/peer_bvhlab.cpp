@@ -79,7 +79,7 @@ public:
             bvh_ = bvhlab::optimized(bvh_, opt);
         }
     }
-    TreeInfo info() const override { return {bvhlab::sah_cost(bvh_), bvh_.nodes.size(), digest()}; }
+    TreeInfo info() const override { return {bvhlab::sah_cost(bvh_), bvh_.nodes.size(), bvh_.refs.size(), digest()}; }
     void prepare_trace() override { wide_ = bvhlab::make_wide(bvh_); }
     void trace(const Rays& rays, float* t, std::uint32_t* prim) override {
         for (std::size_t i = 0; i < rays.count(); ++i) {

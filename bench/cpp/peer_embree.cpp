@@ -162,6 +162,7 @@ private:
             all.upper_z = std::fmax(all.upper_z, root->box[1].upper_z);
             info.sah = 1.0 + weighted_area(root) / area(all);
             info.nodes = 2 * leaves - 1;
+            info.references = count_;  // no spatial splits in this copy (no room in the primitive array)
         }
         rtcReleaseBVH(bvh);
         return info;

@@ -74,16 +74,16 @@ public:
     TreeInfo info() const override {
         const auto* nodes = bvh_.bvhNode;
         double sum = 0;
-        std::uint64_t count = 0;
+        std::uint64_t count = 0, references = 0;
         std::vector<std::uint32_t> stack{0};
         while (!stack.empty()) {
             const auto& n = nodes[stack.back()];
             stack.pop_back();
-            ++count;
+            ++count, references += n.isLeaf() ? n.triCount : 0;
             sum += area(n.aabbMin, n.aabbMax) * (n.isLeaf() ? double(n.triCount) : 1.0);
             if (!n.isLeaf()) stack.push_back(n.leftFirst), stack.push_back(n.leftFirst + 1);
         }
-        return {sum / area(nodes[0].aabbMin, nodes[0].aabbMax), count};
+        return {sum / area(nodes[0].aabbMin, nodes[0].aabbMax), count, references};
     }
 
     void prepare_trace() override {

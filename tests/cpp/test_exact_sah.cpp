@@ -17,7 +17,7 @@
 #include "tree_checks.h"
 
 using namespace bvhlab;
-using bvhlab::test::prim_box;
+using bvhlab::prim_box;
 
 namespace {
 

@@ -11,18 +11,7 @@
 
 namespace bvhlab::test {
 
-inline Aabb prim_box(const GeometryView& g, std::uint32_t ref) {
-    Aabb b;
-    std::uint32_t i = ref & gpu::REF_INDEX_MASK;
-    if (ref & gpu::REF_SPHERE_BIT) {
-        Vec3 c = g.sphere_center(i);
-        float r = g.sphere_radius(i);
-        b.grow(c - Vec3(r)), b.grow(c + Vec3(r));
-    } else {
-        for (int k = 0; k < 3; ++k) b.grow(g.vertex(i, k));
-    }
-    return b;
-}
+using bvhlab::prim_box;  // the core's (geometry.h)
 
 /// Walks the tree recursively (the builder never recurses, so this is an independent view) and
 /// checks layout, boxes, skip indices, depths and counts. Returns the subtree's end index.

@@ -6,8 +6,10 @@ import sys
 
 import numpy as np
 
-METHODS = ("median", "mean", "midpoint", "sah", "sweep_sah", "lbvh")
+METHODS = ("median", "mean", "midpoint", "sah", "sweep_sah", "lbvh")  # byte 0 % 6; sbvh: byte 6 bit 1
 AXES = ("largest", "random", "best")
+SBVH_BUDGETS = (1.5, 1.0, 1.1, 1.25, 2.0, 3.0, 8.0, 64.0)  # fuzz_input.h kBudgets
+SBVH_ALPHAS = (3e-4, 0.0, 1e-2, 1.0)  # kAlphas
 
 
 def decode(data: bytes) -> dict:
@@ -19,7 +21,8 @@ def decode(data: bytes) -> dict:
         return data[pos - 1] if pos - 1 < len(data) else 0
 
     kinds, bins, leaf = byte(), 2 + byte() % 255, byte()
-    n_tris, n_spheres, n_rays, raw = byte() % 48, byte() % 16, byte() % 48, byte() & 1
+    n_tris, n_spheres, n_rays, encoding = byte() % 48, byte() % 16, byte() % 48, byte()
+    raw = encoding & 1
 
     def value():
         if raw:
@@ -31,8 +34,16 @@ def decode(data: bytes) -> dict:
     pairs = np.array([value() for _ in range(6 * n_rays)], np.float32).reshape(-1, 3, 2)
     offset = value()
     depth_min = byte() % 70
+    sbvh = {}
+    if encoding & 2:
+        sbvh = {
+            "sbvh_budget": SBVH_BUDGETS[encoding >> 2 & 7],
+            "sbvh_alpha": SBVH_ALPHAS[encoding >> 5 & 3],
+            "sbvh_unsplit": not encoding & 0x80,
+        }
     return {
-        "method": METHODS[kinds % 6],
+        "method": "sbvh" if sbvh else METHODS[kinds % 6],
+        **sbvh,
         "axis": AXES[kinds // 6 % 3],
         "bins": bins,
         "max_leaf_size": 1 + leaf % 8,

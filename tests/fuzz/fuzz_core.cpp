@@ -1,9 +1,10 @@
-// fuzz_core.cpp — libFuzzer target over the core: build (every method, axis, leaf size, 1 or 2
-// threads), intersect (three traversals against a brute force over the same primitive tests),
-// refit and boxes by depth, from raw bytes (fuzz_input.h). Bad input must give
-// std::invalid_argument; anything else that goes wrong — an invariant, a disagreement, another
-// exception, a sanitizer report — is a crash the fuzzer keeps. `make fuzz` runs it; `make test`
-// replays the corpus in tests/fuzz/corpus under ASan, UBSan and float-cast-overflow.
+// fuzz_core.cpp — libFuzzer target over the core: build (every method, the SBVH with its settings
+// among them, axis, leaf size, 1 or 2 threads), intersect (three traversals against a brute force
+// over the same primitive tests), refit and boxes by depth, from raw bytes (fuzz_input.h). Bad
+// input must give std::invalid_argument; anything else that goes wrong — an invariant, a
+// disagreement, another exception, a sanitizer report — is a crash the fuzzer keeps. `make fuzz`
+// runs it; `make test` replays the corpus in tests/fuzz/corpus under ASan, UBSan and
+// float-cast-overflow.
 #include <cstdio>
 #include <algorithm>
 #include <cmath>
@@ -30,26 +31,82 @@ void require(bool ok, const char* what, long detail = -1) {
     std::abort();
 }
 
-Aabb prim_box(const GeometryView& g, std::uint32_t ref) {
-    Aabb b;
-    const std::uint32_t i = ref_index(ref);
-    if (is_sphere_ref(ref)) {
-        const Vec3 c = g.sphere_center(i);
-        const float r = g.sphere_radius(i);
-        b.grow(c - Vec3(r)), b.grow(c + Vec3(r));
-    } else {
-        for (int k = 0; k < 3; ++k) b.grow(g.vertex(i, k));
-    }
-    return b;
+/// Double-precision 3-vectors: triangle points (check_clipped_leaves) and the grazing judgement (grazes).
+struct D3 {
+    double x, y, z;
+    D3 operator-(const D3& b) const { return {x - b.x, y - b.y, z - b.z}; }
+    D3 operator+(const D3& b) const { return {x + b.x, y + b.y, z + b.z}; }
+    D3 operator*(double s) const { return {x * s, y * s, z * s}; }
+    double dot(const D3& b) const { return x * b.x + y * b.y + z * b.z; }
+    D3 cross(const D3& b) const { return {y * b.z - z * b.y, z * b.x - x * b.z, x * b.y - y * b.x}; }
+    double norm() const { return std::sqrt(dot(*this)); }
+    double largest() const { return std::max({std::fabs(x), std::fabs(y), std::fabs(z)}); }
+};
+
+/// Points of triangle `i` (its vertices, edges and inside, barycentrics in quarters) in double,
+/// each kept inside the triangle's box (a flat triangle's points stay on its plane).
+std::vector<D3> triangle_points(const GeometryView& g, std::size_t i) {
+    const Vec3 v[3] = {g.vertex(i, 0), g.vertex(i, 1), g.vertex(i, 2)};
+    const Aabb box = prim_box(g, std::uint32_t(i));
+    std::vector<D3> out;
+    for (int a = 0; a <= 4; ++a)
+        for (int b = 0; a + b <= 4; ++b) {
+            const double u = a / 4.0, w = b / 4.0;
+            double p[3];
+            for (int k = 0; k < 3; ++k)
+                p[k] = std::clamp(double(v[0][k]) * (1 - u - w) + double(v[1][k]) * u + double(v[2][k]) * w,
+                                  double(box.lo[k]), double(box.hi[k]));
+            out.push_back({p[0], p[1], p[2]});
+        }
+    return out;
 }
 
-/// Every primitive in exactly one leaf, boxes nested and around their primitives, depths and skip
-/// indices consistent, children where the layout says (walked with its own stack).
-void check_tree(const Bvh& bvh, const GeometryView& g) {
+/// An SBVH leaf holds parts of its primitives (Stich et al. 2009): its box meets each one's box and
+/// lies within their boxes' union, and every point of a triangle lies in the box of some leaf that
+/// holds it (the parts cover the triangle; a relative 1e-12 allows the points' rounding in double).
+void check_clipped_leaves(const Bvh& bvh, const GeometryView& g,
+                          const std::vector<std::vector<std::uint32_t>>& leaves_of) {
+    for (std::uint32_t i = 0; i < bvh.node_count(); ++i) {
+        const BvhNode& node = bvh.nodes[i];
+        if (!is_leaf(node)) continue;
+        const Aabb box = node_box(node);
+        Aabb around;
+        for (std::uint32_t k = node.index; k < node.index + leaf_count(node); ++k) {
+            const Aabb prim = prim_box(g, bvh.refs[k]);
+            require(!Aabb{max(box.lo, prim.lo), min(box.hi, prim.hi)}.empty(), "a leaf box misses its primitive", i);
+            around.grow(prim);
+        }
+        require(around.contains(box), "a leaf box reaches past its primitives' boxes", i);
+    }
+    for (std::size_t t = 0; t < g.triangle_count; ++t) {
+        const Aabb box = prim_box(g, std::uint32_t(t));
+        const double slack = 1e-12 * std::max({std::fabs(box.lo.x), std::fabs(box.lo.y), std::fabs(box.lo.z),
+                                               std::fabs(box.hi.x), std::fabs(box.hi.y), std::fabs(box.hi.z)});
+        for (const D3& p : triangle_points(g, t)) {
+            bool covered = false;
+            for (std::uint32_t leaf : leaves_of[t]) {
+                const BvhNode& n = bvh.nodes[leaf];
+                covered |= p.x >= n.lo.x - slack && p.x <= n.hi.x + slack && p.y >= n.lo.y - slack &&
+                           p.y <= n.hi.y + slack && p.z >= n.lo.z - slack && p.z <= n.hi.z + slack;
+            }
+            require(covered, "a point of a triangle outside every leaf that holds it", long(t));
+        }
+    }
+}
+
+/// Every primitive in exactly one leaf (an SBVH: in at least one, never twice in one leaf, within
+/// its reference budget), boxes nested and around their primitives, depths and skip indices
+/// consistent, children where the layout says (walked with its own stack).
+void check_tree(const Bvh& bvh, const GeometryView& g, const BuildConfig& config) {
     const std::size_t n = g.primitive_count();
-    require(bvh.refs.size() == n && bvh.prims.size() == n && bvh.depths.size() == bvh.nodes.size(), "array sizes");
+    const bool repeats = config.method == SplitMethod::Sbvh;
+    const std::size_t slots = bvh.refs.size();
+    require(repeats ? slots >= n && slots <= sbvh_reference_limit(n, config) : slots == n, "reference count",
+            long(slots));
+    require(bvh.prims.size() == slots && bvh.depths.size() == bvh.nodes.size(), "array sizes");
     if (n == 0) return require(bvh.nodes.empty(), "an empty scene has nodes");
     std::vector<int> seen(n, 0);
+    std::vector<std::vector<std::uint32_t>> leaves_of(n);  // the leaves holding each primitive
     struct Item {
         std::uint32_t node, depth, end;
     };  // `end`: where the subtree must end
@@ -65,11 +122,14 @@ void check_tree(const Bvh& bvh, const GeometryView& g) {
         if (is_leaf(node)) {
             require(leaf_count(node) >= 1 && it.node + 1 == it.end, "leaf", it.node);
             for (std::uint32_t k = node.index; k < node.index + leaf_count(node); ++k) {
-                require(k < n && bvh.prims[k].ref == bvh.refs[k], "leaf slot", k);
+                require(k < slots && bvh.prims[k].ref == bvh.refs[k], "leaf slot", k);
                 const std::uint32_t ref = bvh.refs[k];
                 const std::size_t slot = ref_index(ref) + (is_sphere_ref(ref) ? g.triangle_count : 0);
-                require(slot < n && ++seen[slot] == 1, "a primitive in two leaves", long(slot));
-                require(box.contains(prim_box(g, ref)), "a leaf box misses its primitive", it.node);
+                require(slot < n && (++seen[slot] == 1 || repeats), "a primitive in two leaves", long(slot));
+                require(leaves_of[slot].empty() || leaves_of[slot].back() != it.node, "a primitive twice in a leaf",
+                        long(slot));
+                leaves_of[slot].push_back(it.node);
+                require(repeats || box.contains(prim_box(g, ref)), "a leaf box misses its primitive", it.node);
             }
             continue;
         }
@@ -80,9 +140,10 @@ void check_tree(const Bvh& bvh, const GeometryView& g) {
         stack.push_back({second, it.depth + 1, it.end});
         stack.push_back({first, it.depth + 1, second});
     }
-    for (std::size_t k = 0; k < n; ++k) require(seen[k] == 1, "a primitive in no leaf", long(k));
+    for (std::size_t k = 0; k < n; ++k) require(seen[k] >= 1, "a primitive in no leaf", long(k));
+    if (repeats) check_clipped_leaves(bvh, g, leaves_of);
     const BvhStats s = compute_stats(bvh);
-    require(s.nodes == 2 * s.leaves - 1 && s.primitives == n, "stats");
+    require(s.nodes == 2 * s.leaves - 1 && s.primitives == n && s.references == slots, "stats");
 }
 
 /// The closest hit over every primitive with the same tests and tie rule as the traversals.
@@ -119,18 +180,6 @@ bool within_ulps(float a, float b, float ulps) {
     return a == b ||
            std::fabs(a - b) <= ulps * std::numeric_limits<float>::epsilon() * std::fmax(std::fabs(a), std::fabs(b));
 }
-
-/// Double-precision 3-vectors for the grazing judgement below.
-struct D3 {
-    double x, y, z;
-    D3 operator-(const D3& b) const { return {x - b.x, y - b.y, z - b.z}; }
-    D3 operator+(const D3& b) const { return {x + b.x, y + b.y, z + b.z}; }
-    D3 operator*(double s) const { return {x * s, y * s, z * s}; }
-    double dot(const D3& b) const { return x * b.x + y * b.y + z * b.z; }
-    D3 cross(const D3& b) const { return {y * b.z - z * b.y, z * b.x - x * b.z, x * b.y - y * b.x}; }
-    double norm() const { return std::sqrt(dot(*this)); }
-    double largest() const { return std::max({std::fabs(x), std::fabs(y), std::fabs(z)}); }
-};
 
 double segment_distance(const D3& p, const D3& a, const D3& b) {
     const D3 e = b - a;
@@ -250,7 +299,7 @@ void check_refit(Bvh& bvh, FuzzCase& c) {
         require(!bvh.nodes.size() || bvh.nodes[0].lo.x == before, "a refused refit changed the tree");
         return;
     }
-    check_tree(bvh, c.view());
+    check_tree(bvh, c.view(), c.config);
     check_rays(bvh, c);
 }
 
@@ -285,7 +334,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     } catch (const std::invalid_argument&) {
         return 0;  // bad geometry: refused, as it should be
     }
-    fuzz::check_tree(bvh, c.view());
+    fuzz::check_tree(bvh, c.view(), c.config);
     fuzz::check_rays(bvh, c);
     fuzz::check_depth_order(bvh, c);
     fuzz::check_cancel(c, bvh);

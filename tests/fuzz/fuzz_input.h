@@ -1,11 +1,14 @@
 // fuzz_input.h — turns the fuzzer's raw bytes into a build configuration, geometry and rays.
 // Layout (every field reads 0 once the bytes run out, so any input is valid):
 //   byte 0: method (% 6) and axis (/ 6 % 3)   byte 1: bins - 2        byte 2: max leaf size, SAH block, threads
-//   byte 3: triangles (% 48)   byte 4: spheres (% 16)   byte 5: rays (% 48)   byte 6: encoding
+//   byte 3: triangles (% 48)   byte 4: spheres (% 16)   byte 5: rays (% 48)   byte 6: encoding, SBVH
 //   then the floats: triangles (9 each), spheres (4), ray origins and directions (6), then the
 //   offset of a refit and a depth range for boxes.
-// Encoding bit 0 chooses how a float is read: raw IEEE bits (4 bytes: NaN, inf, subnormals, 1e38)
-// or a small grid value (1 byte: coincident, axis-aligned, degenerate shapes are common).
+// Byte 6 bit 0 chooses how a float is read: raw IEEE bits (4 bytes: NaN, inf, subnormals, 1e38)
+// or a small grid value (1 byte: coincident, axis-aligned, degenerate shapes are common). Bit 1
+// makes the method sbvh (byte 0's method is then not used), bits 2-4 its budget (kBudgets),
+// bits 5-6 its alpha (kAlphas), bit 7 turns its unsplitting off; inputs older than the SBVH bits
+// had them 0 (the corpus reads as it did).
 #pragma once
 #include <cstdint>
 #include <cstring>
@@ -35,6 +38,11 @@ private:
     std::size_t size_, pos_ = 0;
 };
 
+/// The SBVH settings byte 6 draws from (the defaults 1.5 and 3e-4 first; a budget of 1 leaves
+/// no room for spatial splits, 64 is the most allowed; an alpha of 0 tries a spatial split at every node).
+constexpr float kBudgets[8] = {1.5f, 1.0f, 1.1f, 1.25f, 2.0f, 3.0f, 8.0f, 64.0f};
+constexpr float kAlphas[4] = {3e-4f, 0.0f, 1e-2f, 1.0f};
+
 struct FuzzCase {
     BuildConfig config;
     std::vector<float> triangles, spheres, origins, directions;
@@ -57,7 +65,14 @@ inline FuzzCase read_case(const std::uint8_t* data, std::size_t size) {
     c.config.sah_block = 1u << (leaf >> 3 & 7) % 7;  // 1 .. 64
     c.threads = c.config.threads = 1 + (leaf >> 7);
     const std::size_t triangles = in.byte() % 48, spheres = in.byte() % 16, rays = in.byte() % 48;
-    const bool raw = in.byte() & 1;
+    const std::uint8_t encoding = in.byte();
+    const bool raw = encoding & 1;
+    if (encoding & 2) {
+        c.config.method = SplitMethod::Sbvh;
+        c.config.sbvh_budget = kBudgets[encoding >> 2 & 7];
+        c.config.sbvh_alpha = kAlphas[encoding >> 5 & 3];
+        c.config.sbvh_unsplit = !(encoding & 0x80);
+    }
     auto next = [&] { return raw ? in.raw_float() : in.grid_float(); };
     c.triangles.resize(9 * triangles);
     for (float& f : c.triangles) f = next();

@@ -36,10 +36,17 @@ def case(method, axis, bins, leaf, threads, tris, spheres, rays, encoding, extra
     return head + body + extra
 
 
+def sbvh(encoding, budget=0, alpha=0, unsplit=True):
+    """Byte 6 for method sbvh (fuzz_input.h): the float encoding, kBudgets[budget], kAlphas[alpha]."""
+    return encoding | 2 | budget << 2 | alpha << 5 | (0 if unsplit else 0x80)
+
+
 SQUARE = [[(0, 0, 0), (1, 0, 0), (1, 1, 0)], [(0, 0, 0), (1, 1, 0), (0, 1, 0)]]
 DOWN = [((x, y, 1), (0, 0, -1)) for x in (0, 0.5, 1) for y in (0, 0.5, 1)]
 STACK = [[(-1, -1, z), (3, -1, z), (-1, 3, z)] for z in range(-3, 4)]
 SPHERES = [(0, 0, 0, 1), (2, 0, 0, 0.5), (0, 2, 0, 0.25), (0, 0, 2, 2)]
+# long thin triangles across each other: spatial splits pay (the SBVH seeds)
+RODS = [[(-8, y, z), (7.5, -y, 1 - z), (7.5, 0.25 - y, 1 - z)] for y in (-3, 0, 3) for z in (-2, 0.5, 2)]
 RANDOM_RAYS = [((-4 + i, 0.3 * i - 2, 5), (0.1 * i - 1, 0.2, -1)) for i in range(8)]
 
 SEEDS = {
@@ -73,6 +80,19 @@ SEEDS = {
     ),
     "raw_nan": case(0, 0, 12, 1, 2, SQUARE, [(0, 0, 0, float("nan"))], DOWN[:2], 1),
     "empty": case(3, 0, 12, 1, 1, [], [], DOWN[:1], 0),
+    "sbvh_rods": case(3, 2, 12, 1, 1, RODS + SQUARE, [], RANDOM_RAYS + DOWN, sbvh(0, budget=7, alpha=1)),
+    "sbvh_mixed": case(3, 0, 8, 3, 2, RODS + STACK, SPHERES, RANDOM_RAYS, sbvh(0), grid(0.5) + bytes([0, 4])),
+    "sbvh_raw_no_unsplit": case(
+        3,
+        0,
+        16,
+        2,
+        1,
+        [[(-1e6, 0, 0), (1e6, 1, 0), (1e6, 0, 1e-30)], [(0, -1e6, 3), (1, 1e6, -3), (0, 1e6, 0)]] + SQUARE,
+        [(0, 0, 0, 1e-10)],
+        [((0.25, 0.25, 3), (0, 0, -1)), ((5e5, 0.5, 3), (0, 0, -1))],
+        sbvh(1, budget=4, alpha=1, unsplit=False),
+    ),
 }
 
 if __name__ == "__main__":

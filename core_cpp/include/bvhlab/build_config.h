@@ -73,8 +73,9 @@ struct BuildConfig {
     /// sah_cost (see above); 1, the default, is the report's SAH.
     std::uint32_t sah_block = 1;
     /// method sbvh: spatial splits are tried where the object split's children overlap by more than
-    /// this fraction of the root's surface area (Stich et al. 2009 §4.5, α; 1e-5 as the paper).
-    float sbvh_alpha = 1e-5f;
+    /// this fraction of the root's surface area (Stich et al. 2009 §4.5, α; the paper's 1e-5 binned
+    /// 1.7× the references for a slightly worse Sponza tree: docs/design.md, "Spatial splits").
+    float sbvh_alpha = 3e-4f;
     /// method sbvh: the tree holds at most this many references per primitive (>= 1); once they
     /// are spent, only object splits. 1.5, as Embree's SBVH builder allows.
     float sbvh_budget = 1.5f;

@@ -33,6 +33,10 @@ struct GeometryView {
 /// Degenerate (zero-area) triangles are valid: they are built into the tree and never hit.
 void validate(const GeometryView& geometry);
 
+/// The box of primitive `ref` (a triangle's three vertices, a sphere's centre ± radius): the box
+/// make_prim_refs gives its reference. The one definition (the saved-tree checks and the tests use it).
+Aabb prim_box(const GeometryView& geometry, std::uint32_t ref);
+
 /// What make_prim_refs gathers in its pass over the input besides the references.
 struct PrimRefsSummary {
     std::uint64_t fingerprint = 0;  ///< geometry_fingerprint(geometry)

@@ -107,6 +107,11 @@ void validate(const GeometryView& g) {
     validate_spheres(g);
 }
 
+Aabb prim_box(const GeometryView& g, std::uint32_t ref) {
+    const std::size_t i = ref_index(ref);
+    return (is_sphere_ref(ref) ? sphere_ref(g, i) : triangle_ref(g, i)).box();
+}
+
 namespace {
 
 /// The fingerprint is a sum of one term per primitive (mod 2^64): the term folds the primitive's

@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "bvhlab/geometry.h"
 #include "bvhlab/prim_ref.h"
 
 namespace bvhlab {
@@ -21,19 +22,6 @@ std::string node_name(std::uint32_t i) { return "node " + std::to_string(i); }
 bool finite_box(const BvhNode& n) {
     return std::isfinite(n.lo.x) && std::isfinite(n.lo.y) && std::isfinite(n.lo.z) && std::isfinite(n.hi.x) &&
            std::isfinite(n.hi.y) && std::isfinite(n.hi.z) && n.lo.x <= n.hi.x && n.lo.y <= n.hi.y && n.lo.z <= n.hi.z;
-}
-
-Aabb prim_box(const GeometryView& g, std::uint32_t ref) {
-    Aabb b;
-    const std::size_t i = ref_index(ref);
-    if (is_sphere_ref(ref)) {
-        const Vec3 c = g.sphere_center(i);
-        const float r = g.sphere_radius(i);
-        b.grow(c - Vec3(r)), b.grow(c + Vec3(r));
-    } else {
-        for (int k = 0; k < 3; ++k) b.grow(g.vertex(i, k));
-    }
-    return b;
 }
 
 /// Each reference names an existing primitive, and each primitive is named once; in an SBVH

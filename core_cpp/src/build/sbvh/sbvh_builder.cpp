@@ -70,7 +70,10 @@ std::uint32_t ceil_log2(std::uint32_t n) {
 class SbvhBuilder {
 public:
     SbvhBuilder(const GeometryView& g, const BuildConfig& cfg, float root_area)
-        : g_(g), cfg_(cfg), setup_{cfg.bins, SahCost(cfg)}, min_overlap_(cfg.sbvh_alpha * root_area) {}
+        : g_(g),
+          cfg_(cfg),
+          setup_{cfg.bins, std::min(cfg.bins, sbvh::kMaxSpatialBins), SahCost(cfg)},
+          min_overlap_(cfg.sbvh_alpha * root_area) {}
 
     /// Builds the subtree of `root` over `refs` (root.begin = 0, root.end = their count), adding at
     /// most `spare` references by spatial splits, spent as they come (the paper's budget, depth

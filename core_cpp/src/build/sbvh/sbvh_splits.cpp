@@ -40,31 +40,40 @@ void bins_of(F4 x, F4 lo, F4 scale, F4 top, std::uint32_t out[4]) {
 }
 
 /// The SAH sweep over one axis' bins: the cheapest boundary k (1..bins-1) between bins k-1 and k,
-/// with the counts `left(b)` of bins entering the left side and `right(b)` the right.
-template <class LeftCount, class RightCount>
+/// with the counts `left(b)` of bins entering the left side and `right(b)` the right. Only the right
+/// sides' areas and counts are kept on the way back; the winner's right box is grown again at the
+/// end (the same bins in the same order: the same box). `Sparse`: a bin whose count is 0 holds
+/// nothing (the object split's), so the boundary after it costs what the one before it did and is
+/// never cheaper: skipped, the same split found. Every node runs six sweeps, most of them over a
+/// few references in mostly empty bins.
+template <bool Sparse, class LeftCount, class RightCount>
 void sweep(const Bin* bins, std::uint32_t count, float inv_area, const SahCost& sah, LeftCount left, RightCount right,
            float& best_cost, std::uint32_t& best_k, Aabb& best_left, Aabb& best_right, std::uint32_t& best_nl,
            std::uint32_t& best_nr) {
-    thread_local std::vector<float> right_area;
-    thread_local std::vector<Box4> right_box;
-    thread_local std::vector<std::uint32_t> right_n;
-    right_area.resize(count), right_box.resize(count), right_n.resize(count);
+    float right_area[kMaxBins];
+    std::uint32_t right_n[kMaxBins];
     Box4 box;
     std::uint32_t n = 0;
+    float area = 0;
     for (std::uint32_t b = count; b-- > 1;) {
-        box.grow(bins[b].box), n += right(bins[b]);
-        right_box[b] = box, right_area[b] = box.half_area(), right_n[b] = n;
+        if (!Sparse || bins[b].count) box.grow(bins[b].box), n += right(bins[b]), area = box.half_area();
+        right_area[b] = area, right_n[b] = n;
     }
     box = Box4{}, n = 0;
+    std::uint32_t found = 0, found_nl = 0;
+    Box4 found_left;
     for (std::uint32_t k = 1; k < count; ++k) {
+        if (Sparse && !bins[k - 1].count) continue;
         box.grow(bins[k - 1].box), n += left(bins[k - 1]);
         if (n == 0 || right_n[k] == 0) continue;
         const float cost = sah.split(inv_area, box.half_area(), n, right_area[k], right_n[k]);
-        if (cost < best_cost) {
-            best_cost = cost, best_k = k, best_left = box.aabb(), best_right = right_box[k].aabb();
-            best_nl = n, best_nr = right_n[k];
-        }
+        if (cost < best_cost) best_cost = cost, found = k, found_left = box, found_nl = n;
     }
+    if (found == 0) return;
+    Box4 right_box;
+    for (std::uint32_t b = count; b-- > found;) right_box.grow(bins[b].box);
+    best_k = found, best_left = found_left.aabb(), best_right = right_box.aabb();
+    best_nl = found_nl, best_nr = right_n[found];
 }
 
 /// The boxes of the parts of triangle `v` (its nine coordinates; its reference's box `box_lo`, `box_hi`) in bins
@@ -143,7 +152,7 @@ ObjectSplit find_object_split(const PrimRef* refs, std::uint32_t n, const Aabb& 
         std::uint32_t k = 0, nl = 0, nr = 0;
         const float before = best.cost;
         auto counted = [](const Bin& b) { return b.count; };
-        sweep(bins[a], count, inv_area, setup.sah, counted, counted, best.cost, k, best.left, best.right, nl, nr);
+        sweep<true>(bins[a], count, inv_area, setup.sah, counted, counted, best.cost, k, best.left, best.right, nl, nr);
         if (best.cost < before) best.axis = a, best.bin = k;
     }
     return best;
@@ -151,7 +160,7 @@ ObjectSplit find_object_split(const PrimRef* refs, std::uint32_t n, const Aabb& 
 
 SpatialSplit find_spatial_split(const GeometryView& g, const PrimRef* refs, std::uint32_t n, const Aabb& box,
                                 const BinSetup& setup) {
-    const std::uint32_t count = setup.bins;
+    const std::uint32_t count = setup.spatial_bins;
     thread_local std::vector<Bin> storage;
     storage.assign(3 * std::size_t(count), Bin{});
     Bin* bins[3] = {storage.data(), storage.data() + count, storage.data() + 2 * count};
@@ -203,7 +212,7 @@ SpatialSplit find_spatial_split(const GeometryView& g, const PrimRef* refs, std:
         if (scale[a] == 0.0f) continue;
         std::uint32_t k = 0, nl = 0, nr = 0;
         const float before = best.cost;
-        sweep(
+        sweep<false>(
             bins[a], count, inv_area, setup.sah, [](const Bin& b) { return b.count; },
             [](const Bin& b) { return b.exits; }, best.cost, k, best.left, best.right, nl, nr);
         if (best.cost < before) {

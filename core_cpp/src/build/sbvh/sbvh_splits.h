@@ -29,9 +29,15 @@ struct SpatialSplit {
     std::uint32_t left_count = 0, right_count = 0;
 };
 
-/// How a node's references are binned: `bins` buckets per axis (BuildConfig::bins) and the SAH.
+/// The most bins of a spatial split (tinybvh's BuildHQ uses 8 too): each reference is clipped into
+/// every bin it spans, so the bins' count is the spatial split's cost. On Sponza 8 gave a lower SAH
+/// than 12 (61.9 against 63.9) at 16% fewer instructions; 6 and 4 fewer still, SAH 64.3 and 63.8.
+constexpr std::uint32_t kMaxSpatialBins = 8;
+
+/// How a node's references are binned: `bins` buckets per axis for the object split
+/// (BuildConfig::bins), `spatial_bins` (at most kMaxSpatialBins of them) for the spatial split, and the SAH.
 struct BinSetup {
-    std::uint32_t bins;
+    std::uint32_t bins, spatial_bins;
     SahCost sah;
 };
 
