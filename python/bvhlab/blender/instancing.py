@@ -44,16 +44,16 @@ SINGULAR_FRACTION = 1e-5
 @dataclass(slots=True)
 class Item:
     """One object or instance as last read: its mesh (None for a sphere), a sphere's object-space
-    bounds, the world matrix (4×4 float64: a row of the sync's matrices, see `plan`), the address
-    of its evaluated mesh data during this evaluation (None: a mesh of its own, as converted curves
-    and text are), the material table index of each slot (None: no primitives), its key
-    (scope.InScope.key, which names it), its world-space primitives once placed (kept while neither
-    mesh nor matrix changes), whether only its matrix changed, and the original objects it comes
-    from (whose animation makes it a mover)."""
+    bounds, the world matrix (4×4 float64, a row of the sync's matrices, see `plan`; during the
+    walk the mathutils.Matrix read), the address of its evaluated mesh data during this evaluation
+    (None: a mesh of its own, as converted curves and text are), the material table index of each
+    slot (None: no primitives), its key (scope.InScope.key, which names it), its world-space
+    primitives once placed (kept while neither mesh nor matrix changes), whether only its matrix
+    changed, and the original objects it comes from (whose animation makes it a mover)."""
 
     mesh: MeshData | None
     bounds: np.ndarray | None
-    matrix: np.ndarray | None
+    matrix: np.ndarray
     data: int | None
     slot_table: np.ndarray | None
     key: tuple

@@ -198,7 +198,6 @@ class LiveScene:
         10,000 instances of one object make one part (shown object, mesh data): whether it is a
         sphere and its slots are asked once per part; per item only what differs (key, matrix)."""
         items: dict[tuple, Item] = {}
-        matrices: list = []  # mathutils.Matrix copies, converted at once after the walk
         fresh: dict[int, MeshData] = {}  # meshes read in this sync, by data address
         by_data: dict[int, MeshData] = {}
         parts: dict[tuple, tuple] = {}  # (shown object's name, data address) → (sphere, slot table)
@@ -219,7 +218,7 @@ class LiveScene:
                 else:
                     assert old.bounds is not None  # a sphere keeps its object-space bounds
                     bounds = old.bounds
-                item = Item(None, bounds, None, None, table.slot_indices(obj), key)
+                item = Item(None, bounds, entry.matrix, None, table.slot_indices(obj), key)
             else:
                 mesh = fresh.get(data) if data is not None else None
                 if mesh is None:
@@ -236,11 +235,11 @@ class LiveScene:
                     slots = table.slot_indices(obj, data)
                     if data is not None:
                         parts[(key[1], data)] = (False, slots)
-                item = Item(mesh, None, None, data, slots, key)
+                item = Item(mesh, None, entry.matrix, data, slots, key)
             item.origin = (key[0], entry.owner, key[1], entry.source)
             items[key] = item
-            matrices.append(entry.matrix)
-        world = matrices_array(matrices)
+        # each item's Matrix copy (a key seen twice keeps its last, as the dict does), all at once
+        world = matrices_array([item.matrix for item in items.values()])
         seen_moving = self._compare_matrices(items, world, report)
         for item in items.values():  # a clean item seen before a changed one of the same mesh
             if item.data is not None and item.data in fresh and item.mesh is not fresh[item.data]:
