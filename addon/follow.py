@@ -4,9 +4,25 @@ mode. Blender's depsgraph_update_post and frame_change_post handlers sync a Live
 tree's scope (only what the depsgraph reports as changed is read again) and update the tree as the
 render engine does (trees.SceneTree.update): moving an instance makes a new TLAS only, a moved or
 edited mesh has its tree updated with the scene's update policy. Only while the boxes are shown
-and no build is running; on the UI thread (a topology change rebuilds that mesh's tree there)."""
+and no build is running.
+
+Where the work runs: the sync reads bpy data, so it runs on the UI thread, in the handler. A new
+TLAS alone (only instances moved: `SyncReport.placeable`) is made there too: it is bounded by the
+instance count (binned SAH over instance boxes: 0.4 ms for 100 instances, about 15 ms for 10,000
+on the loaded 2-core machine, bench/addon_instancing.py `move_instance_ms`), and the tests and
+scripts see the boxes moved at once. Anything that builds or updates a mesh's tree (a deforming or
+edited mesh: a rebuild of a big mesh takes seconds) runs on a worker thread that is given only the
+exported bvhlab.Scene (no bpy data), the way Build runs its build (background.BackgroundTask): the
+overlay keeps drawing the last complete tree until the update is done (SceneTree.update swaps its
+tree at the end; a tree updated in place keeps the versions readers hold), later changes made
+meanwhile are taken in one update after it (the newest scene; refittable only if every sync in
+between was), an error is said in the panel and never raised, and a UI timer redraws the
+viewports when it is done."""
 
 from __future__ import annotations
+
+import threading
+from dataclasses import dataclass
 
 import bpy
 from bpy.app.handlers import persistent
@@ -15,14 +31,97 @@ from . import state
 
 _live: dict[tuple, object] = {}  # (scene key, scope) → the LiveScene kept between updates
 _busy = [False]  # a handler does not run inside itself (the sync may evaluate the depsgraph)
+#: How often (s) the UI timer looks for a finished worker update to redraw.
+REDRAW_POLL_S = 0.05
+
+
+@dataclass
+class _Job:
+    """A tree update for the worker: what it needs, none of it bpy data."""
+
+    key: int  # the scene's state.key
+    built: object  # the state.BuiltTree whose tree is updated
+    scene: object  # the exported bvhlab.Scene
+    refittable: bool
+    policy: object  # bvhlab.UpdateConfig
+
+
+class _Worker:
+    """One thread at a time updates trees for the handlers; a job given while it runs waits as the
+    one pending job of its scene (a newer one replaces it, refittable only if both were)."""
+
+    def __init__(self):
+        self._lock = threading.Lock()
+        self._pending: dict[int, _Job] = {}
+        self._thread: threading.Thread | None = None
+        self._current: int | None = None  # the scene key being updated
+        self.running = False  # an update is in progress or pending
+
+    def give(self, job: _Job) -> None:
+        with self._lock:
+            waiting = self._pending.get(job.key)
+            if waiting is not None and waiting.built is job.built:
+                job.refittable = job.refittable and waiting.refittable
+            self._pending[job.key] = job
+            self.running = True
+            if self._thread is None or not self._thread.is_alive():
+                self._thread = threading.Thread(target=self._run, name="bvhlab follow", daemon=True)
+                self._thread.start()
+
+    def busy_with(self, key: int) -> bool:
+        with self._lock:
+            return self.running and (key in self._pending or self._current == key)
+
+    def _run(self) -> None:
+        while True:
+            with self._lock:
+                if not self._pending:
+                    self.running, self._current = False, None
+                    return
+                key, job = self._pending.popitem()
+                self._current = key
+            _update(job)
+
+    def forget(self, wait_s: float = 10.0) -> None:
+        """Drop the pending jobs and wait (up to `wait_s`) for the one running."""
+        with self._lock:
+            self._pending.clear()
+            thread = self._thread
+        if thread is not None:
+            thread.join(wait_s)
+
+    def wait(self, timeout: float = 60.0) -> bool:
+        """Until every job given is done (tests, scripts); True when they are."""
+        thread = self._thread
+        if thread is not None:
+            thread.join(timeout)
+        return not self.running
+
+
+_worker = _Worker()
+
+
+def _update(job: _Job):
+    """Update the job's tree (any thread; no bpy). Never raises: an error is said in the panel."""
+    from .background import UI_WORK_THREADS
+
+    if state.trees.get(job.key) is not job.built or job.key in state.builds:
+        return None  # a Build replaced the tree (or is running): this scene is not its any more
+    try:
+        update = job.built.tree.update(job.scene, job.refittable, threads=UI_WORK_THREADS, policy=job.policy)
+    except Exception as error:  # said in the panel, never raised into Blender
+        state.messages[job.key] = ("WARNING", f"The boxes no longer follow the scene: {error}")
+        return None
+    job.built.scene = job.scene
+    return update
 
 
 def follow(scene, depsgraph):
     """Bring the scene's shown tree up to date with the evaluated depsgraph; returns the
-    trees.TreeUpdate (None when there is nothing to follow or nothing changed)."""
+    trees.TreeUpdate of a new TLAS made here, or None (nothing to follow, nothing changed, or the
+    update was given to the worker: `wait()` waits for it)."""
     from bvhlab.blender import ExportError, LiveScene
 
-    from .background import UI_WORK_THREADS
     from .trees import update_config
 
     key = state.key(scene)
@@ -38,20 +137,52 @@ def follow(scene, depsgraph):
     _busy[0] = True
     try:
         report = live.sync(depsgraph, scene, depsgraph.view_layer)
-        if not report.geometry and not report.full:
-            return None
-        update = built.tree.update(live.scene, report.refittable, threads=UI_WORK_THREADS, policy=update_config(scene))
     except (ExportError, ValueError) as error:  # said in the panel, never raised into Blender
         state.messages[key] = ("WARNING", f"The boxes no longer follow the scene: {error}")
         return None
     finally:
         _busy[0] = False
-    built.scene = live.scene
-    if update.action != "kept":
-        from .overlay import tag_redraw
+    if not report.geometry and not report.full:
+        return None
+    job = _Job(key, built, live.scene, report.refittable, update_config(scene))
+    if report.placeable and not _worker.busy_with(key):  # a TLAS only: bounded (module docstring)
+        update = _update(job)
+        if update is not None and update.action != "kept":
+            _tag_redraw()
+        return update
+    _worker.give(job)
+    _watch_worker()
+    return None
 
-        tag_redraw()
-    return update
+
+def wait(timeout: float = 60.0) -> bool:
+    """Wait for the updates given to the worker (tests and scripts); True when all are done."""
+    return _worker.wait(timeout)
+
+
+def _tag_redraw() -> None:
+    from .overlay import tag_redraw
+
+    tag_redraw()
+
+
+_timer: list = [None]  # the redraw timer's function while it is registered
+
+
+def _watch_worker() -> None:
+    """A UI timer (one at a time) that redraws the viewports once the worker's updates are done."""
+    if _timer[0] is not None and bpy.app.timers.is_registered(_timer[0]):
+        return
+
+    def tick():
+        if _worker.running:
+            return REDRAW_POLL_S
+        _timer[0] = None
+        _tag_redraw()
+        return None
+
+    _timer[0] = tick
+    bpy.app.timers.register(tick, first_interval=REDRAW_POLL_S)
 
 
 def _moved_or_edited(depsgraph) -> bool:
@@ -84,4 +215,10 @@ def unregister() -> None:
 
 
 def forget() -> None:
+    """Drop the scenes kept and the updates not started; wait for the one running (its tree is one
+    the cache may forget: nothing of bpy is touched)."""
+    _worker.forget()
     _live.clear()
+    if _timer[0] is not None and bpy.app.timers.is_registered(_timer[0]):
+        bpy.app.timers.unregister(_timer[0])
+    _timer[0] = None

@@ -13,6 +13,8 @@ import time
 import warnings
 from dataclasses import replace
 
+from bvhlab.overlay_levels import traced_cap_note
+
 from .. import state
 from ..trees import cache, key_of, update_config
 from . import passes
@@ -84,6 +86,9 @@ class FinalRender:
         for note in unrendered:
             engine.report({"WARNING"}, f"bvhlab: {note}")
         update = self._tree(engine, blender_scene)
+        capped = traced_cap_note(update.bvh, settings)
+        if capped:  # said as the sidebar says it under its boxes
+            engine.report({"WARNING"}, f"bvhlab: the box overlay shows {capped}")
         if engine.test_break():
             engine.update_stats("", "Cancelled")
             return
@@ -100,6 +105,7 @@ class FinalRender:
             "totals": self.live.totals,
             "cancelled": cancelled,
             "unrendered": unrendered,
+            "overlay_note": capped,
         }
         with state.lock:
             state.last_final[key] = record
@@ -213,4 +219,6 @@ def _summary(record: dict) -> str:
         f"BVH {record['tree']}" + (f" {record['build_ms']:.0f} ms" if record["tree"] != "kept" else ""),
         f"trace {record['trace_ms']:.0f} ms",
     ]
+    if record["overlay_note"]:
+        parts.append(f"overlay: {record['overlay_note']}")
     return " | ".join(parts) + f" | {record['device']}"

@@ -138,6 +138,8 @@ class BVHLAB_PT_engine_status(_EnginePanel, bpy.types.Panel):
             _rows(layout, context, final_rows(final))
             if final.get("note"):
                 wrapped_label(layout, context, final["note"], icon="INFO")
+            if final.get("overlay_note"):  # the BLAS boxes hit the cap (issue 34), as the sidebar says
+                wrapped_label(layout, context, f"Overlay: {final['overlay_note']}", icon="INFO")
         if viewport:
             layout.label(text="Viewport")
             _rows(layout, context, [(level.capitalize(), _viewport_value(t)) for level, t in viewport.items()])

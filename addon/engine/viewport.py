@@ -20,6 +20,8 @@ import traceback
 import weakref
 from dataclasses import dataclass
 
+from bvhlab.overlay_levels import traced_cap_note
+
 from ..trees import TreeKey, cache
 from .counter_view import counter_colors, counter_histogram
 from .settings import VIEWPORT_THREADS
@@ -201,6 +203,7 @@ class ViewportSession:
         update = self._update_tree(scene, scene_serial, request, request_serial, refittable)
         if update is None:
             return
+        capped = traced_cap_note(update.bvh, request.settings)
         for level, scale, samples_per_axis in _levels(request, self._ms_per_sample):
             if level != "preview" and not self._settled(scene_serial, request_serial):
                 return
@@ -242,6 +245,7 @@ class ViewportSession:
                 "build_ms": update.ms,
                 "device": tracer.device,
                 "note": tracer.note,
+                "overlay_note": capped,
                 "latency_ms": (time.monotonic() - self._request_time) * 1e3,
                 "counter": request.counter.counter if counter_range else None,
                 "counter_range": counter_range,  # what the panel's legend shows
@@ -285,6 +289,8 @@ class ViewportSession:
             )
             if frame.request.note:
                 self._status += f" | {frame.request.note}"
+            if timings["overlay_note"]:
+                self._status += f" | overlay: {timings['overlay_note']}"
 
 
 def _levels(request: ViewRequest, ms_per_sample: float | None) -> list[tuple[str, float, int]]:

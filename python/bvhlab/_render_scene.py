@@ -9,7 +9,7 @@ import numpy as np
 
 from . import _core
 from .instanced import InstancedBvh
-from .overlay_levels import two_level_boxes
+from .overlay_levels import traced_level, two_level_boxes
 
 
 def _array_key(a: np.ndarray) -> tuple:
@@ -38,7 +38,7 @@ class SceneCache:
         if two_level and len(bvh.meshes) != scene.mesh_count:
             raise ValueError(f"the tree has {len(bvh.meshes)} meshes, the scene {scene.mesh_count}")
         key = self._key_of(scene, bvh, two_level)
-        level = _overlay_level(bvh, options)
+        level = traced_level(bvh, options)
         with self._lock:
             if self._key != key:
                 self._scene = self._overlay_scene = self._key = self._overlay_key = None  # the old go first
@@ -66,17 +66,6 @@ class SceneCache:
             _array_key(scene.tri_material),
             _array_key(scene.sphere_material),
         )
-
-
-def _overlay_level(bvh, options) -> tuple | None:
-    """(level, depth_min, depth_max) when the overlay pass draws other boxes than the tree's node
-    boxes (a two-level tree's BLAS boxes, moved into the world: overlay_levels.py); None otherwise
-    (a flat tree, the TLAS's boxes, or no overlay)."""
-    if options is None or options.overlay_depth is None or options.overlay_level == "tlas":
-        return None
-    if not isinstance(bvh, InstancedBvh):
-        return None
-    return (options.overlay_level, *(int(d) for d in options.overlay_depth))
 
 
 def _make(scene, bvh, two_level: bool) -> _core.RenderScene:

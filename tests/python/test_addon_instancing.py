@@ -343,6 +343,7 @@ def test_the_sidebars_boxes_follow_a_moved_instance_and_the_animation():
     shown = leaves()
     bpy.data.objects["Instance 2"].location.z += 2.0
     bpy.context.view_layer.update()
+    assert _addon("follow").wait()  # the first sync after Build reads everything: on the worker
     assert built.tree.last.action == "placed", built.tree.last
     after = counts.snapshot()
     assert after[:3] == before[:3] and after[3] == before[3] + 1, (before, after)
@@ -354,8 +355,10 @@ def test_the_sidebars_boxes_follow_a_moved_instance_and_the_animation():
     empty.location.x += 3.0
     empty.keyframe_insert("location", frame=10)
     scene.frame_set(1)
+    assert _addon("follow").wait()
     at_start = leaves()
     scene.frame_set(5)
+    assert _addon("follow").wait()
     assert not np.array_equal(leaves(), at_start), "scrubbing did not move the boxes"
     np.testing.assert_allclose(leaves(), _instance_boxes_now(), atol=1e-5)
     assert counts.snapshot()[:2] == before[:2], "scrubbing built a tree"

@@ -120,6 +120,7 @@ def test_a_frame_change_rebuilds_only_the_tlas_and_hits_equal_a_fresh_flat_build
     for frame in (4, 9):
         before = _counts().snapshot()
         scene.frame_set(frame)
+        assert import_module(f"{harness.addon().__name__}.follow").wait()  # the first sync after Build: on the worker
         last = built.tree.last
         assert (last.action, last.meshes_built, last.meshes_updated, last.policy) == ("placed", 0, 0, ""), last
         builds, mesh_builds, mesh_updates, tlas_builds = _counts().snapshot()

@@ -30,6 +30,7 @@ from ..scene import MAX_COORDINATE
 from .errors import ExportError
 from .material_table import map_slots
 from .mesh import MeshData, check_world_positions
+from .scope import item_name
 
 #: A mesh key used this many times or more becomes a shared mesh with instances.
 MIN_INSTANCES = 2
@@ -40,24 +41,30 @@ MIN_INSTANCES = 2
 SINGULAR_FRACTION = 1e-5
 
 
-@dataclass
+@dataclass(slots=True)
 class Item:
     """One object or instance as last read: its mesh (None for a sphere), a sphere's object-space
-    bounds, the world matrix (4×4 float64), the address of its evaluated mesh data during this
-    evaluation (None: a mesh of its own, as converted curves and text are), the material table
-    index of each slot (None: no primitives), a name for messages, its world-space primitives once
-    placed (kept while neither mesh nor matrix changes), whether only its matrix changed, and the
-    original objects it comes from (whose animation makes it a mover)."""
+    bounds, the world matrix (4×4 float64, a row of the sync's matrices, see `plan`; during the
+    walk the mathutils.Matrix read), the address of its evaluated mesh data during this evaluation
+    (None: a mesh of its own, as converted curves and text are), the material table index of each
+    slot (None: no primitives), its key (scope.InScope.key, which names it), its world-space
+    primitives once placed (kept while neither mesh nor matrix changes), whether only its matrix
+    changed, and the original objects it comes from (whose animation makes it a mover)."""
 
     mesh: MeshData | None
     bounds: np.ndarray | None
     matrix: np.ndarray
     data: int | None
     slot_table: np.ndarray | None
-    name: str
+    key: tuple
     placed: np.ndarray | None = None
     moved: bool = False  # the same mesh as last sync, a different matrix
     origin: tuple = ()  # (owner's name, owner, shown object's name, shown object): originals (motion.py)
+
+    @property
+    def name(self) -> str:
+        """For messages."""
+        return item_name(self.key)
 
     @property
     def shape(self) -> tuple:
@@ -76,32 +83,37 @@ class Layout:
         return other is not None and self.mesh_of == other.mesh_of
 
 
-def plan(items: dict, share: bool, is_mover=None) -> Layout:
-    """The layout of `items` (key → Item, in walk order): which of them become instances.
-    `is_mover(key)`: whether an item used once gets a mesh and an instance of its own anyway (it
-    moves); asked only of the items that would otherwise be placed in mesh 0."""
+def plan(items: dict, matrices: np.ndarray, share: bool, is_mover=None) -> Layout:
+    """The layout of `items` (key → Item, in walk order; `matrices` (N,4,4): their world matrices,
+    row i the i-th item's): which of them become instances. `is_mover(key)`: whether an item used
+    once gets a mesh and an instance of its own anyway (it moves); asked only of the items that
+    would otherwise be placed in mesh 0."""
     layout = Layout(mesh_of=dict.fromkeys(items, 0))
     if is_mover is None:
         is_mover = _never
-    candidates = [
-        key
-        for key, item in items.items()
+    rows = [
+        row
+        for row, (key, item) in enumerate(items.items())
         if share
         and item.mesh is not None
         and item.slot_table is not None
         and item.mesh.triangle_count > 0
         and (item.data is not None or is_mover(key))
     ]
-    if not candidates:
+    if not rows:
         return layout
-    linear = np.array([items[key].matrix[:3, :3] for key in candidates])
+    keys, values = list(items), list(items.values())
     members: dict[tuple, list] = {}
-    for key, ok in zip(candidates, invertible(linear)):
-        if ok:
-            item = items[key]
-            assert item.slot_table is not None  # a candidate
-            data = item.data if item.data is not None else ("item", key)  # a converted curve: its own
-            members.setdefault((data, item.slot_table.tobytes()), []).append(key)
+    tables: dict[int, bytes] = {}  # id of a slot table (shared by the items of one part) → its bytes
+    for row in np.flatnonzero(invertible(matrices[rows, :3, :3])):
+        key, item = keys[rows[row]], values[rows[row]]
+        table = item.slot_table
+        assert table is not None  # a candidate
+        slots = tables.get(id(table))
+        if slots is None:
+            slots = tables[id(table)] = table.tobytes()
+        data = item.data if item.data is not None else ("item", key)  # a converted curve: its own
+        members.setdefault((data, slots), []).append(key)
     for group, keys in members.items():
         if len(keys) >= MIN_INSTANCES or any(is_mover(key) for key in keys):
             layout.groups.append(group)
@@ -148,24 +160,31 @@ def shared_meshes(items: dict, layout: Layout, previous: list[SharedMesh]) -> li
     return out
 
 
-def instance_transforms(items: dict, layout: Layout, meshes: list[SharedMesh]) -> tuple[np.ndarray, np.ndarray]:
+def instance_transforms(
+    layout: Layout, matrices: np.ndarray, meshes: list[SharedMesh]
+) -> tuple[np.ndarray, np.ndarray]:
     """(mesh index int32 (N,), object-to-world float32 (N,3,4)) of the instanced items, in walk
-    order. Raises ExportError naming an instance that reaches outside the coordinate range."""
-    keys = [key for key, k in layout.mesh_of.items() if k]
-    mesh_of = np.array([layout.mesh_of[key] for key in keys], np.int32)
-    matrices = np.array([items[key].matrix[:3, :4] for key in keys], np.float64).reshape(-1, 3, 4)
+    order (`matrices`: every item's, as given to `plan`). Raises ExportError naming an instance
+    that reaches outside the coordinate range."""
+    every = np.fromiter(layout.mesh_of.values(), np.int32, len(layout.mesh_of))
+    rows = np.flatnonzero(every)
+    mesh_of, chosen_matrices = every[rows], matrices[rows, :3, :4]
+    keys = list(layout.mesh_of)
     for k, shared in enumerate(meshes, start=1):
         chosen = np.flatnonzero(mesh_of == k)
-        _check_reach(shared.mesh.bounds, matrices[chosen], [items[keys[i]].name for i in chosen])
-    return mesh_of, matrices.astype(np.float32)
+        _check_reach(
+            shared.mesh.bounds, chosen_matrices[chosen], lambda i, chosen=chosen: item_name(keys[rows[chosen[i]]])
+        )
+    return mesh_of, chosen_matrices.astype(np.float32)
 
 
-def _check_reach(bounds: np.ndarray, matrices: np.ndarray, names: list[str]) -> None:
-    """The world corners of each instance's box must be inside the coordinate range."""
+def _check_reach(bounds: np.ndarray, matrices: np.ndarray, name_of) -> None:
+    """The world corners of each instance's box must be inside the coordinate range; `name_of(i)`:
+    instance i's name, for the message."""
     corners = np.array([[bounds[(c >> a) & 1][a] for a in range(3)] for c in range(8)])
-    world = np.einsum("nij,cj->nci", matrices[:, :, :3], corners) + matrices[:, None, :, 3]
+    world = corners @ matrices[:, :, :3].transpose(0, 2, 1) + matrices[:, None, :, 3]  # (N,8,3)
     outside = ~(np.abs(world) <= MAX_COORDINATE).reshape(len(matrices), -1).all(1)
     if outside.any():
         i = int(np.flatnonzero(outside)[0])
-        check_world_positions(world[i], names[i])  # raises, naming the instance
-        raise ExportError(f"object '{names[i]}' reaches outside the supported coordinate range")
+        check_world_positions(world[i], name_of(i))  # raises, naming the instance
+        raise ExportError(f"object '{name_of(i)}' reaches outside the supported coordinate range")

@@ -40,7 +40,7 @@ from .light import gather_light
 from .material_table import MaterialTable, map_slots
 from .mesh import CONVERTIBLE_TYPES, MeshData, read_mesh
 from .motion import AnimatedMemo
-from .scope import instances_in_scope
+from .scope import instances_in_scope, matrices_array
 from .sphere import is_analytic_sphere, place_sphere, sphere_bounds
 from .world import gather_sky
 
@@ -118,12 +118,16 @@ class _Dirty:
         return data is not None and data.name_full in self.meshes
 
 
-def _data_of(obj) -> int | None:
+def _address(data, addresses: dict) -> int:
     """The address of an evaluated mesh object's mesh data during this evaluation: the same for
     every object and instance that shows that mesh (linked duplicates without modifiers of their
-    own, collection, vertex, face and geometry-nodes instances). None for objects converted to a
-    mesh (curves, text...), which get a mesh of their own."""
-    return obj.data.as_pointer() if obj.type == "MESH" and obj.data is not None else None
+    own, collection, vertex, face and geometry-nodes instances). Objects converted to a mesh
+    (curves, text...) have none: they get a mesh of their own. `addresses` remembers it per mesh
+    for the walk (bpy structs hash by their address; as_pointer is a slower method call)."""
+    address = addresses.get(data)
+    if address is None:
+        address = addresses[data] = data.as_pointer()
+    return address
 
 
 def _vertex_count(obj) -> int:
@@ -146,6 +150,7 @@ class LiveScene:
         self._shared: list[SharedMesh] = []
         self._materials: dict = {}  # material name → bvhlab.Material, as last read
         self._seen_moving: set[tuple] = set()  # keys of the items seen moving (movers from then on)
+        self._world = np.zeros((0, 4, 4))  # the items' world matrices, row i the i-th item's
 
     def sync(self, depsgraph, blender_scene=None, view_layer=None) -> SyncReport:
         """Bring `scene` up to date with the evaluated depsgraph. Raises ExportError (see
@@ -156,15 +161,15 @@ class LiveScene:
         dirty = _Dirty(everything=True) if full else _Dirty.from_updates(depsgraph)
         known = {k: v for k, v in self._materials.items() if k not in dirty.materials}
         table = MaterialTable(known)
-        items, by_data, report, seen_moving = self._walk(depsgraph, view_layer, dirty, table)
+        items, world, by_data, report, seen_moving = self._walk(depsgraph, view_layer, dirty, table)
         report.full = full
         animated = AnimatedMemo()
-        layout = plan(items, self.instancing, lambda key: key in seen_moving or animated(items[key].origin))
+        layout = plan(items, world, self.instancing, lambda key: key in seen_moving or animated(items[key].origin))
         shared = shared_meshes(items, layout, self._shared)
-        arrays = self._arrays(items, layout, shared, table, report)
+        arrays = self._arrays(items, world, layout, shared, table, report)
         report.materials_read = table.reads
         scene = self._make_scene(arrays, table, blender_scene, depsgraph, report)
-        light = gather_light(depsgraph, view_layer, _primitive_sample(items, scene.spheres))
+        light = gather_light(depsgraph, view_layer, _primitive_sample(items, world, scene.spheres))
         if light is None:
             warnings.warn(
                 f"scene '{blender_scene.name}' has no visible light; using a default point light near the camera",
@@ -176,38 +181,45 @@ class LiveScene:
         scene.light = light
         self.scene, self._materials = scene, table.known
         self._items, self._by_data, self._layout, self._shared = items, by_data, layout, shared
+        self._world = world
         self._seen_moving = seen_moving
         self.totals.add(report)
         return report
 
-    def _walk(self, depsgraph, view_layer, dirty: _Dirty, table: MaterialTable) -> tuple[dict, dict, SyncReport, set]:
+    def _walk(self, depsgraph, view_layer, dirty: _Dirty, table: MaterialTable):
         """Every object in scope, read again when dirty or new (a mesh shared by several items
         once), kept when not; in the depsgraph's order (the order export_scene has always used).
         Each item's material table index of each slot is read here: an instance's object is valid
         only while it is the depsgraph iterator's current item (geometry-nodes and nested
         collection instances crashed Blender when their slots were read after the loop had moved
-        on). Also the keys of the items seen moving so far (movers: `instancing.plan`)."""
+        on). Returns (items, their world matrices (N,4,4) in walk order, meshes by data address,
+        the report, the keys of the items seen moving so far: movers, `instancing.plan`).
+
+        10,000 instances of one object make one part (shown object, mesh data): whether it is a
+        sphere and its slots are asked once per part; per item only what differs (key, matrix)."""
         items: dict[tuple, Item] = {}
         fresh: dict[int, MeshData] = {}  # meshes read in this sync, by data address
         by_data: dict[int, MeshData] = {}
+        parts: dict[tuple, tuple] = {}  # (shown object's name, data address) → (sphere, slot table)
+        addresses: dict = {}  # evaluated mesh (hashed by its address) → its address: as_pointer once
         report = SyncReport()
-        seen_moving = set(self._seen_moving)
-        for entry in instances_in_scope(depsgraph, view_layer, self.scope):
-            obj = entry.obj
-            if obj.type not in GEOMETRY_TYPES:  # cameras, lights, empties: no primitives
-                continue
-            old = self._items.get(entry.key)
-            changed = dirty.geometry_of(obj, entry.key)
-            if obj.type == "MESH" and is_analytic_sphere(obj):
+        for entry in instances_in_scope(depsgraph, view_layer, self.scope, GEOMETRY_TYPES):
+            obj, key = entry.obj, entry.key
+            old = self._items.get(key)
+            changed = dirty.everything or dirty.geometry_of(obj, key)
+            data = _address(obj.data, addresses) if entry.type == "MESH" else None  # None: a mesh of its own
+            part = parts.get((key[1], data)) if data is not None else None
+            if part is None:
+                part = (entry.type == "MESH" and is_analytic_sphere(obj), None)
+            if part[0]:
                 if old is None or old.mesh is not None or changed:
                     bounds = sphere_bounds(obj)
                     report.objects_read += 1
                 else:
                     assert old.bounds is not None  # a sphere keeps its object-space bounds
                     bounds = old.bounds
-                item = Item(None, bounds, entry.matrix, None, table.slot_indices(obj), entry.name)
+                item = Item(None, bounds, entry.matrix, None, table.slot_indices(obj), key)
             else:
-                data = _data_of(obj)
                 mesh = fresh.get(data) if data is not None else None
                 if mesh is None:
                     mesh = None if changed else self._known_mesh(old, data, obj)
@@ -218,24 +230,47 @@ class LiveScene:
                             fresh[data] = mesh
                 if data is not None:
                     by_data[data] = mesh
-                slots = table.slot_indices(obj, data) if mesh.triangle_count else None
-                item = Item(mesh, None, entry.matrix, data, slots, entry.name)
-            same_matrix = old is None or np.array_equal(old.matrix, item.matrix)
-            if not same_matrix and self.instancing:
-                seen_moving.add(entry.key)
-            if old is not None and old.mesh is item.mesh and old.bounds is item.bounds:
-                if same_matrix:
+                slots = part[1]
+                if slots is None and mesh.triangle_count:
+                    slots = table.slot_indices(obj, data)
+                    if data is not None:
+                        parts[(key[1], data)] = (False, slots)
+                item = Item(mesh, None, entry.matrix, data, slots, key)
+            item.origin = (key[0], entry.owner, key[1], entry.source)
+            items[key] = item
+        # each item's Matrix copy (a key seen twice keeps its last, as the dict does), all at once
+        world = matrices_array([item.matrix for item in items.values()])
+        seen_moving = self._compare_matrices(items, world, report)
+        for item in items.values():  # a clean item seen before a changed one of the same mesh
+            if item.data is not None and item.data in fresh and item.mesh is not fresh[item.data]:
+                item.mesh, item.placed, item.moved = fresh[item.data], None, False
+        return items, world, by_data, report, seen_moving
+
+    def _compare_matrices(self, items: dict, world: np.ndarray, report: SyncReport) -> set:
+        """Give each item its row of `world`; an item seen last sync with the same mesh keeps its
+        placed primitives if its matrix is the same, else is `moved`. Returns the keys of the items
+        seen moving so far (this sync's and before, of the items still there)."""
+        seen_moving = self._seen_moving & items.keys()
+        previous = {key: row for row, key in enumerate(self._items)}
+        rows = np.fromiter((previous.get(key, -1) for key in items), np.int64, len(items))
+        same = np.ones(len(items), bool)  # new items count as unmoved
+        known = np.flatnonzero(rows >= 0)
+        same[known] = (self._world[rows[known]] == world[known]).all(axis=(1, 2))  # NaN: moved
+        olds = self._items
+        for (key, item), matrix, row, unmoved in zip(items.items(), world, rows, same):
+            item.matrix = matrix
+            if row < 0:
+                continue
+            if not unmoved and self.instancing:
+                seen_moving.add(key)
+            old = olds[key]
+            if old.mesh is item.mesh and old.bounds is item.bounds:
+                if unmoved:
                     item.placed = old.placed
                 else:
                     item.moved = True
                     report.objects_moved += 1
-            item.origin = (entry.key[0], entry.owner, entry.key[1], entry.source)
-            items[entry.key] = item
-        seen_moving &= items.keys()
-        for item in items.values():  # a clean item seen before a changed one of the same mesh
-            if item.data is not None and item.data in fresh and item.mesh is not fresh[item.data]:
-                item.mesh, item.placed, item.moved = fresh[item.data], None, False
-        return items, by_data, report, seen_moving
+        return seen_moving
 
     def _known_mesh(self, old: Item | None, data: int | None, obj) -> MeshData | None:
         """The mesh read before for an item whose geometry did not change, or None to read it."""
@@ -246,7 +281,9 @@ class LiveScene:
             return mesh
         return None
 
-    def _arrays(self, items: dict, layout: Layout, shared: list[SharedMesh], table: MaterialTable, report) -> dict:
+    def _arrays(
+        self, items: dict, world: np.ndarray, layout: Layout, shared: list[SharedMesh], table: MaterialTable, report
+    ) -> dict:
         """Mesh 0 (the items placed in the world: triangles, spheres and their material indices, in
         walk order; the material table is rebuilt in that order every sync), the shared meshes and
         the instances; the previous arrays where nothing changed."""
@@ -299,7 +336,7 @@ class LiveScene:
         else:
             arrays["triangles"] = np.concatenate(triangles) if triangles else np.zeros((0, 3, 3), np.float32)
             arrays["spheres"] = np.array(spheres, np.float32).reshape(-1, 4)
-        arrays["instance_mesh"], arrays["instance_transforms"] = self._instances(items, layout, shared, arrays, report)
+        arrays["instance_mesh"], arrays["instance_transforms"] = self._instances(world, layout, shared, arrays, report)
         report.materials = previous is None or not (
             previous.materials == table.materials
             and np.array_equal(previous.tri_material, arrays["tri_material"])
@@ -309,7 +346,7 @@ class LiveScene:
         )
         return arrays
 
-    def _instances(self, items: dict, layout: Layout, shared: list[SharedMesh], arrays: dict, report):
+    def _instances(self, world: np.ndarray, layout: Layout, shared: list[SharedMesh], arrays: dict, report):
         """(instance_mesh, instance_transforms): mesh 0 once where it was modelled (when it has
         primitives), then the shared meshes' instances; (None, None) without shared meshes."""
         if not shared:
@@ -317,7 +354,7 @@ class LiveScene:
         previous = self.scene
         if previous is not None and not report.geometry and previous.instance_transforms is not None:
             return previous.instance_mesh, previous.instance_transforms
-        mesh_of, transforms = instance_transforms(items, layout, shared)
+        mesh_of, transforms = instance_transforms(layout, world, shared)
         if len(arrays["triangles"]) or len(arrays["spheres"]):
             identity = np.eye(4, dtype=np.float32)[None, :3]
             mesh_of, transforms = (
@@ -360,31 +397,44 @@ class LiveScene:
             return None
 
 
-def _primitive_sample(items: dict, spheres: np.ndarray, size: int = 4096) -> np.ndarray:
+def _primitive_sample(items: dict, world: np.ndarray, spheres: np.ndarray, size: int = 4096) -> np.ndarray:
     """Centres of about `size` primitives, as float64 (N,3): every k-th triangle of the world
     triangles in walk order (the flat export's order; instances placed where they are, so an
-    instanced export samples the same triangles as the flat one) and every k-th sphere."""
-    blocks = [i for i in items.values() if i.mesh is not None and i.slot_table is not None and i.mesh.triangle_count]
+    instanced export samples the same triangles as the flat one) and every k-th sphere. `world`:
+    the items' matrices (row i the i-th item's)."""
     parts = [spheres[:: max(1, len(spheres) // size), :3].astype(np.float64)]
-    if blocks:
-        counts = np.array([item.mesh.triangle_count for item in blocks], np.int64)
+    meshes: list[MeshData] = []
+    index: dict[int, int] = {}  # id of a mesh → its place in `meshes`
+    rows, mesh_of = [], []  # the items with triangles: their row and mesh
+    for row, item in enumerate(items.values()):
+        mesh = item.mesh
+        if mesh is not None and item.slot_table is not None:
+            k = index.get(id(mesh))
+            if k is None:
+                k = index[id(mesh)] = len(meshes)
+                meshes.append(mesh)
+            rows.append(row)
+            mesh_of.append(k)
+    sizes = np.array([mesh.triangle_count for mesh in meshes], np.int64)
+    blocks = np.array(mesh_of, np.int64)
+    keep = sizes[blocks] > 0 if len(blocks) else np.zeros(0, bool)
+    blocks, rows = blocks[keep], np.array(rows, np.int64)[keep]
+    if len(blocks):
+        counts = sizes[blocks]
         stride = max(1, int(counts.sum()) // size)
         offsets = np.cumsum(counts) - counts
         first = (-offsets) % stride
         picks = np.maximum(0, (counts - first + stride - 1) // stride)
         which = np.repeat(np.arange(len(blocks)), picks)
         local = first[which] + (np.arange(len(which)) - np.repeat(np.cumsum(picks) - picks, picks)) * stride
-        matrices = np.array([item.matrix for item in blocks], np.float64)[which]
-        meshes: dict[int, int] = {}
-        mesh_of = np.array([meshes.setdefault(id(item.mesh), len(meshes)) for item in blocks])[which]
+        matrices = world[rows[which]]
         centres = np.empty((len(which), 3))
-        for m, mesh in enumerate({id(item.mesh): item.mesh for item in blocks}.values()):
-            chosen = np.flatnonzero(mesh_of == m)
-            assert mesh is not None  # blocks hold meshes
+        for m, mesh in enumerate(meshes):
+            chosen = np.flatnonzero(blocks[which] == m)
             corners = mesh.corners.reshape(-1, 3)[local[chosen]]
             centres[chosen] = mesh.positions[corners].astype(np.float64).mean(1)
-        world = np.einsum("nij,nj->ni", matrices[:, :3, :3], centres) + matrices[:, :3, 3]
-        parts.insert(0, world)
+        placed = np.einsum("nij,nj->ni", matrices[:, :3, :3], centres) + matrices[:, :3, 3]
+        parts.insert(0, placed)
     return np.concatenate(parts)
 
 

@@ -49,18 +49,42 @@ class ShownBoxes:
     @property
     def note(self) -> str:
         """What the cap left out, in words ("" when nothing)."""
-        if self.instances_shown == self.instances:
-            return ""
-        return (
-            f"BLAS boxes of {self.instances_shown:,} of {self.instances:,} instances "
-            f"(at most {MAX_OVERLAY_BOXES:,} boxes)"
-        )
+        return _cap_note(self.instances_shown, self.instances)
 
     def tree_node(self, k: int) -> TreeNode:
         """What box k is."""
         if self.level[k] == TLAS:
             return TreeNode("tlas", int(self.node[k]))
         return TreeNode("blas", int(self.node[k]), int(self.instance[k]))
+
+
+def _cap_note(shown: int, instances: int) -> str:
+    if shown == instances:
+        return ""
+    return f"BLAS boxes of {shown:,} of {instances:,} instances (at most {MAX_OVERLAY_BOXES:,} boxes)"
+
+
+def _instances_within(counts: np.ndarray, budget: int) -> int:
+    """How many instances, first to last, have all their boxes (`counts`, one per instance) in
+    `budget` boxes."""
+    return int(np.searchsorted(np.cumsum(counts), max(budget, 0), side="right"))
+
+
+def cap_note(bvh, level: str, depth_min: int, depth_max: int, leaves_only: bool = False, cap: int = MAX_OVERLAY_BOXES):
+    """`shown_boxes(...).note` for the same arguments, from the counts only (no box is made): what
+    F12 and the Rendered viewport say their overlay pass leaves out."""
+    if level not in LEVELS:
+        raise ValueError(f"level must be one of {LEVELS}, got {level!r}")
+    if level == "tlas":
+        return ""
+    mesh_of = np.asarray(bvh.instances[0], np.int64)
+    tlas = 0
+    if level == "both":
+        data = bvh.tlas_node_data()
+        tlas = len(nodes_in_range(data.depth, data.left < 0, depth_min, depth_max, leaves_only))
+    per_mesh = [len(nodes_in_range(m.depths, m.is_leaf, depth_min, depth_max, leaves_only)) for m in bvh.meshes]
+    counts = np.array(per_mesh, np.int64)[mesh_of]
+    return _cap_note(_instances_within(counts, cap - tlas), len(mesh_of))
 
 
 def world_boxes(lo: np.ndarray, hi: np.ndarray, transforms: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -123,8 +147,7 @@ def shown_boxes(
             ids = nodes_in_range(m.depths, m.is_leaf, depth_min, depth_max, leaves_only)
             per_mesh.append((nodes["lo"][ids], nodes["hi"][ids], m.depths[ids], ids))
         counts = np.array([len(b[3]) for b in per_mesh], np.int64)[mesh_of]
-        budget = max(cap - sum(len(p[0]) for p in parts), 0)
-        shown = int(np.searchsorted(np.cumsum(counts), budget, side="right"))
+        shown = _instances_within(counts, cap - sum(len(p[0]) for p in parts))
         for k, (lo, hi, depth, ids) in enumerate(per_mesh):
             chosen = np.flatnonzero(mesh_of[:shown] == k)
             if len(chosen) and len(ids):

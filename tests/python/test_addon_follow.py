@@ -1,0 +1,101 @@
+"""The sidebar's tree follows an edited mesh off the UI thread (issue 34), under bpy 4.2: the
+depsgraph handler syncs the scene and gives the tree update (a refit or a rebuild of the mesh's
+tree) to a worker thread; the overlay keeps the last complete tree meanwhile, edits made while it
+runs are taken in one later update, an error on the worker is said in the panel and never raised,
+and the tree then hits what a fresh build over a fresh export hits."""
+
+import threading
+from importlib import import_module
+
+import blender_checks  # noqa: F401  (import path for the shared checks)
+import bpy  # noqa: E402  (after harness)
+import harness  # before bpy
+import numpy as np
+import pytest
+from test_export_instances import _monkey  # noqa: E402
+from test_moving_objects import _same_hits  # noqa: E402
+
+from bvhlab.blender import export_scene  # noqa: E402
+
+
+@pytest.fixture(scope="module", autouse=True)
+def addon_enabled():
+    harness.enable_addon_from_source()
+
+
+def _addon(name: str):
+    return import_module(f"{harness.addon().__name__}.{name}")
+
+
+def built_monkey():
+    """A 15,744-triangle Suzanne and a floor, built with the boxes shown."""
+    harness.empty_scene()
+    harness.add_camera((0.5, -12.0, 5.0), (0.0, 0.5, 0.0), lens=30)
+    harness.add_point_light((3.0, -5.0, 6.0))
+    harness.add_box("Floor", (0.0, 0.0, -1.5), size=1.0, scale=(6.0, 6.0, 0.2))
+    monkey = _monkey("Edited", subdivisions=2)
+    bpy.context.scene.collection.objects.link(monkey)
+    bpy.context.view_layer.update()
+    assert bpy.ops.bvhlab.build() == {"FINISHED"} and bpy.context.scene.bvhlab.overlay_show
+    return harness.addon().state.tree_for(bpy.context.scene), monkey
+
+
+def _edit(monkey, dz: float) -> None:
+    mesh = monkey.data
+    for k in range(0, len(mesh.vertices), 9):
+        mesh.vertices[k].co.z += dz
+    mesh.update()
+    bpy.context.view_layer.update()  # depsgraph_update_post: the handler
+
+
+class HeldUpdate:
+    """Stands in for the SceneTree's update: records the thread and call, waits for `release`."""
+
+    def __init__(self, tree, fail: bool = False):
+        self.tree, self.update, self.fail = tree, tree.update, fail
+        self.release, self.threads = threading.Event(), []
+
+    def __call__(self, *args, **kwargs):
+        self.threads.append(threading.current_thread())
+        assert self.release.wait(60), "never released"
+        if self.fail:
+            raise RuntimeError("the update failed on purpose")
+        return self.update(*args, **kwargs)
+
+
+def test_an_edited_mesh_is_followed_on_a_worker_keeping_the_last_tree_drawn():
+    built, monkey = built_monkey()
+    state, follow = harness.addon().state, _addon("follow")
+    tree, before = built.tree, built.bvh
+    generation = tree.generation
+    held = tree.update = HeldUpdate(tree)
+    try:
+        _edit(monkey, 0.3)  # returns although the update is held: it is not on this thread
+        _edit(monkey, 0.2)  # and again while it runs: pending
+        _edit(monkey, -0.1)  # replaces the pending one
+        assert len(held.threads) == 1 and held.threads[0] is not threading.main_thread()
+        assert state.tree_for(bpy.context.scene).bvh is before and tree.generation == generation
+        held.release.set()
+        assert follow.wait()
+    finally:
+        del tree.update
+    assert len(held.threads) == 2, "the edits made meanwhile were not taken in one update"
+    assert tree.generation > generation and tree.last.action in ("refit", "built"), tree.last
+    _same_hits(state.tree_for(bpy.context.scene).bvh, export_scene(bpy.context, require_camera=False))
+
+
+def test_an_error_on_the_worker_is_said_and_the_tree_kept():
+    built, monkey = built_monkey()
+    state, follow = harness.addon().state, _addon("follow")
+    tree, before = built.tree, built.bvh
+    held = tree.update = HeldUpdate(tree, fail=True)
+    held.release.set()
+    try:
+        _edit(monkey, 0.3)
+        assert follow.wait()
+    finally:
+        del tree.update
+    level, message = state.messages[state.key(bpy.context.scene)]
+    assert level == "WARNING" and "failed on purpose" in message
+    assert state.tree_for(bpy.context.scene).bvh is before
+    assert np.isfinite(before.stats["sah_cost"])
