@@ -42,7 +42,7 @@ def _bundled() -> dict:
 
 
 def _generated() -> dict[str, tuple[str, Callable[[], Scene]]]:
-    from . import procedural, showcase
+    from . import procedural, scatter, showcase
 
     def triangles_scene(make):
         return lambda: Scene(triangles=make())
@@ -55,6 +55,10 @@ def _generated() -> dict[str, tuple[str, Callable[[], Scene]]]:
         "gen:knot_1m": (
             "a bumpy torus knot, 1M triangles (report Figure 5: over 700,000)",
             triangles_scene(lambda: procedural.torus_knot(1_000_000)),
+        ),
+        "gen:knot_field": (
+            "2000 instances of a 20k-triangle knot and a box over a floor: 20M triangles, a two-level tree",
+            scatter.knot_field,
         ),
         "gen:random_spheres": (
             "2000 spheres uniformly at random in a cube (report §4.2)",
