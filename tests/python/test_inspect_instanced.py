@@ -198,8 +198,7 @@ def test_pixel_records_of_a_two_level_scene_are_the_tracers_counters(instanced_s
 
 def test_cli_inspects_a_pixel_of_an_instanced_scene(instanced_scene, trees, tmp_path, capsys):  # noqa: F811
     """`bvhlab inspect SCENE --pixel X,Y` on a scene file with instances: the pixel's walk through
-    both levels, its box tests the CPU tracer's cost there; --node and --worst say they take flat
-    trees (exit 2)."""
+    both levels, its box tests the CPU tracer's cost there."""
     import json
 
     from bvhlab.cli import main
@@ -221,6 +220,52 @@ def test_cli_inspects_a_pixel_of_an_instanced_scene(instanced_scene, trees, tmp_
     assert sum(s["step"] == "instance" for s in steps) == pixel["instances_entered"]
     table = capsys.readouterr().out
     assert "tlas box" in table and "instances" in table
-    for bad in (["--node", "0"], ["--worst", "3"]):
-        assert main(["inspect", str(path), *bad]) == 2
-        assert "two-level" in capsys.readouterr().err
+
+
+def test_cli_inspects_nodes_of_both_levels(instanced_scene, trees, tmp_path, capsys):  # noqa: F811
+    """--worst K lists TLAS and mesh-tree nodes by the whole tree's SAH under them (the TLAS root
+    first, its share 1; each row's cost its own tree's subtree SAH scaled by the instance's area
+    weight); --node N [--instance I] prints one of either level; a flat scene refuses --instance,
+    a two-level one --save-tree, and a missing instance is a clear error (exit 2)."""
+    import json
+
+    from bvhlab.cli import main
+
+    path = instanced_scene.save(tmp_path / "inst.npz")
+    tree = bvhlab.build(bvhlab.Scene.load(path))
+    data = tree.node_data()
+    out = tmp_path / "w.json"
+    assert main(["inspect", str(path), "--worst", "12", "--json", str(out)]) == 0
+    rows = json.loads(out.read_text())["worst"]
+    assert len(rows) == 12 and rows[0]["level"] == "tlas" and rows[0]["node"] == 0
+    assert rows[0]["sah_share"] == pytest.approx(1.0) and rows[0]["subtree_sah"] == pytest.approx(tree.stats["sah_cost"])
+    costs = [r["subtree_sah"] for r in rows]
+    assert costs == sorted(costs, reverse=True)
+    blas = [r for r in rows if r["level"] == "blas"]
+    assert blas, "the mesh trees' roots cost more than the TLAS's smallest subtrees here"
+    for r in blas:
+        own = data.meshes[r["mesh"]].subtree_sah[r["node"]]
+        assert r["subtree_sah"] == pytest.approx(data.weight[r["instance"]] * own)
+    capsys.readouterr()
+    i = blas[0]["instance"]
+    out = tmp_path / "n.json"
+    assert main(["inspect", str(path), "--node", "1", "--instance", str(i), "--json", str(out)]) == 0
+    node = json.loads(out.read_text())["node"]
+    mesh = data.meshes[int(tree.instances[0][i])]
+    assert (node["mesh"], node["prim_count"]) == (int(tree.instances[0][i]), int(mesh.prim_count[1]))
+    assert node["depth"] == data.tlas.depth[data.leaf_of[i]] + mesh.depth[1] == node["depth_in_mesh_tree"] + int(
+        data.tlas.depth[node["tlas_leaf"]]
+    )
+    assert "mesh tree" in capsys.readouterr().out
+    assert main(["inspect", str(path), "--node", "2"]) == 0
+    assert "of the TLAS" in capsys.readouterr().out
+    bad = {
+        ("--node", "0", "--instance", "100000"): "instance 100000 does not exist",
+        ("--worst", "2", "--save-tree", str(tmp_path / "t.bvhtree")): "two-level",
+        ("--node", "100000"): "node 100000 does not exist",
+    }
+    for args, said in bad.items():
+        assert main(["inspect", str(path), *args]) == 2
+        assert said in capsys.readouterr().err
+    assert main(["inspect", "gen:whitted", "--node", "0", "--instance", "0"]) == 2
+    assert "this scene is flat" in capsys.readouterr().err

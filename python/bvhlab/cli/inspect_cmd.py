@@ -2,7 +2,9 @@
 Prints one node's figures (box, place in the tree, SAH term and share, child overlap, EPO), one
 pixel's primary-ray traversal as a table (through the renderer's camera and traversal code; for
 a scene with instances, the TLAS's boxes and each instance's walk), or
-the K subtrees of largest SAH cost; --json writes the same. The tree is built with the build
+the K subtrees of largest SAH cost; --json writes the same. For a scene with instances the tree
+is the TLAS with each instance's mesh tree in its leaf: --node N is TLAS node N, or node N of
+instance I's mesh tree with --instance I, and --worst lists nodes of both levels. The tree is built with the build
 options or read from a file saved with --save-tree (or Bvh.save), and optimised with --optimize N."""
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ from pathlib import Path
 from .. import InstancedBvh, build, load_bvh
 from .._atomic import write_text
 from .._progress import ProgressBar
+from ..inspect.levels import TreeNode
 from ..inspect.ray_record import PIXEL_TRAVERSALS, trace_pixel
 from ..inspect.tree_file import SUFFIX
 from ..library import load_scene
@@ -21,11 +24,13 @@ from ..render_options import RenderOptions
 from . import options
 
 _DEFAULT = RenderOptions()
-#: What --node, --worst and --save-tree say of a scene with instances.
-TWO_LEVEL_PIXEL_ONLY = (
-    "--node, --worst and --save-tree take a flat scene's tree; this scene has instances (a two-level tree): "
-    "use --pixel X,Y"
+#: What --save-tree says of a scene with instances.
+TWO_LEVEL_NOT_SAVED = (
+    "--save-tree takes a flat scene's tree; this scene has instances (a two-level tree), whose trees "
+    "are not saved to a file"
 )
+#: What --instance says of a flat scene.
+FLAT_HAS_NO_INSTANCES = "--instance I names an instance of a scene with instances; this scene is flat"
 _NODE_ROWS = (
     "depth",
     "parent",
@@ -54,6 +59,12 @@ def add_parser(sub) -> None:
     what.add_argument("--node", type=lambda t: options.whole_number(t, 0, 2**32 - 1), metavar="N", help="node index")
     what.add_argument("--pixel", type=pixel_spec, metavar="X,Y", help="pixel (row 0 at the top) of a render")
     what.add_argument("--worst", type=lambda t: options.whole_number(t, 1, 10**6), metavar="K")
+    p.add_argument(
+        "--instance",
+        type=lambda t: options.whole_number(t, 0, 2**32 - 1),
+        metavar="I",
+        help="(--node, a scene with instances) node N of instance I's mesh tree instead of the TLAS's",
+    )
     p.add_argument("--tree", type=Path, metavar="FILE", help=f"read the tree from FILE ({SUFFIX}) instead of building")
     p.add_argument(
         "--save-tree", type=options.output_file_type(SUFFIX, "tree file"), metavar="FILE", help="also save the tree"
@@ -94,8 +105,10 @@ def run(args) -> int:
             bvh = build(scene, progress=bar, **settings)
     options.optimize_tree(bvh, optimize)
     two_level = isinstance(bvh, InstancedBvh)
-    if two_level and (args.node is not None or args.worst is not None or args.save_tree):
-        raise ValueError(TWO_LEVEL_PIXEL_ONLY)
+    if two_level and args.save_tree:
+        raise ValueError(TWO_LEVEL_NOT_SAVED)
+    if not two_level and args.instance is not None:
+        raise ValueError(FLAT_HAS_NO_INSTANCES)
     if args.save_tree:
         bvh.save(args.save_tree)
         print(f"wrote {args.save_tree}")
@@ -103,6 +116,7 @@ def run(args) -> int:
     if two_level:
         keys = ("instances", "meshes", "tlas_nodes", "tlas_height", "tlas_sah_cost", "nodes", "sah_cost")
         tree = {"method": stats["method"], **{k: stats[k] for k in keys}}
+        data = bvh.node_data() if args.pixel is None else None
         print(f"{name}: {stats['triangles_flattened']} triangles flattened, stored once per mesh; " + _pairs(tree))
     else:
         data = bvh.node_data()
@@ -118,10 +132,15 @@ def run(args) -> int:
         "about": {"scene": name, "source": args.scene, "settings": bvh.config.tree_settings()},
         "tree": tree,
     }
-    if args.node is not None:
+    if args.node is not None and two_level:
+        level = TreeNode("tlas", args.node) if args.instance is None else TreeNode("blas", args.node, args.instance)
+        report["node"] = _print_two_level_node(data, level)
+    elif args.node is not None:
         report["node"] = _print_node(data, args.node)
     elif args.pixel is not None:
         report["pixel"] = _print_pixel(scene, bvh, args)
+    elif two_level:
+        report["worst"] = _print_two_level_worst(data, args.worst)
     else:
         report["worst"] = _print_worst(data, args.worst)
     if args.json:
@@ -136,6 +155,34 @@ def _print_node(data, node: int) -> dict:
     for key in _NODE_ROWS:
         print(f"  {key:<14}{_value(figures[key])}")
     return figures
+
+
+def _print_two_level_node(data, node: TreeNode) -> dict:
+    figures = data.figures(node)
+    where = "the TLAS" if node.level == "tlas" else f"instance {node.instance}'s mesh tree (mesh {figures['mesh']})"
+    print(f"node {node.node} of {where} ({'leaf' if figures['leaf'] else 'internal'})")
+    rows = _NODE_ROWS if node.level == "tlas" else ("tlas_leaf", "depth_in_mesh_tree", *_NODE_ROWS)
+    for key in rows:
+        print(f"  {key:<19}{_value(figures[key])}")
+    if node.level == "blas":
+        print("  (lo, hi: in the mesh's space; depth, subtree_sah and sah_share: of the whole tree)")
+    return figures
+
+
+def _print_two_level_worst(data, k: int) -> list[dict]:
+    rows = []
+    print(f"the {k} subtrees of largest SAH cost (share of the whole tree's {data.sah_cost:.4g}):")
+    head = ("level", 5), ("instance", 8), ("node", 8), ("depth", 5), ("prims", 9), ("subtree SAH", 12), ("share", 7)
+    print("  " + " ".join(f"{name:>{width}}" for name, width in head))
+    for node, _ in data.costliest(k):
+        f = data.figures(node)
+        rows.append(f)
+        inst = f.get("instance", "")
+        print(
+            f"  {f['level']:>5} {inst:>8} {f['node']:>8} {f['depth']:>5} {f['prim_count']:>9} "
+            f"{f['subtree_sah']:>12.4f} {f['sah_share']:>7.2%}"
+        )
+    return rows
 
 
 def _print_pixel(scene, bvh, args) -> dict:

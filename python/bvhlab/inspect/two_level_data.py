@@ -91,6 +91,27 @@ class TwoLevelNodeData:
             return int(self.tlas.depth[node.node])
         return int(self.tlas.depth[self.leaf_of[node.instance]]) + int(self.mesh_data(node.instance).depth[node.node])
 
+    def figures(self, node: TreeNode) -> dict:
+        """One node's figures as plain Python values (what `bvhlab inspect --node` prints): its own
+        tree's NodeData.node (a mesh tree's box in the mesh's space) with the whole tree's depth,
+        SAH cost under it and share of the whole tree's SAH."""
+        if node.level == "tlas":
+            out = {"level": "tlas", **self.tlas.node(node.node)}
+            out["prim_count"] = int(self.tlas_prims[node.node])
+        else:
+            if not 0 <= node.instance < len(self.mesh_of):
+                raise ValueError(f"instance {node.instance} does not exist; the scene has 0..{len(self.mesh_of) - 1}")
+            if self.leaf_of[node.instance] < 0:
+                raise ValueError(f"instance {node.instance}'s mesh is empty: it has no tree")
+            mesh = int(self.mesh_of[node.instance])
+            out = {"level": "blas", "instance": node.instance, "mesh": mesh, **self.meshes[mesh].node(node.node)}
+            out["tlas_leaf"] = int(self.leaf_of[node.instance])
+            out["depth_in_mesh_tree"] = out["depth"]
+        out["depth"] = self.depth(node)
+        out["subtree_sah"] = self.subtree_sah(node)
+        out["sah_share"] = out["subtree_sah"] / self.sah_cost if self.sah_cost > 0 else 0.0
+        return out
+
     def raw(self, shown: ShownBoxes, measure: str) -> np.ndarray:
         """Each shown box's value of `measure` before the ramp, as measures._raw gives a flat
         tree's: its subtree's share of the whole tree's SAH, its primitives, its children's
