@@ -56,7 +56,7 @@ struct UpdateConfig {
     /// updates.py, restructure_share 0.1: 16 kept the generated crowd within 1.085 of a fresh
     /// build's SAH with no full rebuild, 32 within 1.110, 64 rebuilt 12 frames of 23; the wave
     /// within 1.037 (16), 1.058 (32), 1.065 (0: no top rebuild).
-    std::uint32_t top_cut_primitives = 16;
+    std::uint32_t top_cut_primitives = 8;
     /// adaptive: the levels above the cut are rebuilt only while the tree, after its subtrees,
     /// still costs more than this times its cost when built (the step copies every node and builds
     /// over the cut's boxes: about a fifth of a rebuild in thread CPU time). bench/updates.py: 1.07 ran
@@ -92,8 +92,10 @@ NodeCostArray subtree_costs(const Bvh& bvh);
 
 /// The tree over `geometry` (same counts) by `config.policy`, from `old` (untouched) and the
 /// costs its nodes had when built (`built`, subtree_costs of the tree as built, one per node of
-/// `old`). `built_out` receives those costs for the new tree (rebuilt nodes' own, the others'
-/// carried over). Throws std::invalid_argument as refit and build_bvh do.
+/// `old`, and after them, as update_bvh leaves them, the root's half area when entry 0, adaptive's
+/// reference, was taken: without it, `old`'s root's). `built_out` receives those for the new tree
+/// (rebuilt nodes' own, the others' carried over, then the reference's area). Throws
+/// std::invalid_argument as refit and build_bvh do.
 Bvh update_bvh(const Bvh& old, const NodeCostArray& built, const GeometryView& geometry, const UpdateConfig& config,
                NodeCostArray& built_out, UpdateStats* stats = nullptr);
 
