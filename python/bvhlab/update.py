@@ -26,8 +26,9 @@ class UpdateConfig:
       rebuild the subtrees that hold most of the grown cost per primitive (Yoon et al. 2007
       restructure only where culling efficiency dropped), at most `restructure_share` of the
       primitives an update, then (past `top_growth`) the levels above the subtrees of at most
-      `top_cut_primitives` over their boxes; the whole tree when its cost is still past `tree_growth` × its cost when
-      built.
+      `top_cut_primitives` over their boxes; the whole tree when its cost is still past `tree_growth` × its reference
+      (its cost when built, taken as keeping its area-weighted cost where the root's box has grown since: a fresh
+      build's cost falls where the geometry spreads).
 
     Defaults are the core's; values are checked by it (ValueError) when the config is made."""
 

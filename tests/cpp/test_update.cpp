@@ -144,7 +144,7 @@ TEST(Update, EveryPolicyLeavesAValidTree) {
         SCOPED_TRACE(to_string(p));
         check_tree(t, moved.view(), f.tree.config.max_leaf_size);
         EXPECT_EQ(t.geometry_fingerprint, geometry_fingerprint(moved.view()));
-        ASSERT_EQ(built_out.size(), t.nodes.size());
+        ASSERT_EQ(built_out.size(), t.nodes.size() + 1);  // and the reference's area
         EXPECT_NEAR(stats.sah_cost, sah_cost(t), 1e-4 * stats.sah_cost);
         EXPECT_GT(stats.ms, 0.0);
         if (p != UpdatePolicy::Adaptive) EXPECT_EQ(stats.policy, p);
@@ -184,8 +184,17 @@ TEST(Update, AdaptivePicksByCost) {
     UpdateStats stats;
     update_bvh(f.tree, f.built, deformed(f.scene, 100.0f, 1e-3f).view(), c, out, &stats);  // barely moved
     EXPECT_EQ(stats.policy, UpdatePolicy::Refit);
-    update_bvh(f.tree, f.built, deformed(f.scene, 1.0f, 3.0f).view(), c, out, &stats);  // one region
+    c.measure_fresh = true;
+    update_bvh(f.tree, f.built, deformed(f.scene, 1.0f, 1.0f).view(), c, out, &stats);  // one region
     EXPECT_EQ(stats.policy, UpdatePolicy::Partial);
+    EXPECT_LT(stats.sah_cost, 1.1 * stats.fresh_sah_cost);
+    // one region spread by 3 grows the root's box: a fresh build's cost falls (83.2 against 95.3
+    // when built), and restructuring left 97.5 (1.17 of it), within tree_growth of the cost when
+    // built: the reference keeps its A·cost where the root grew, so adaptive rebuilds
+    update_bvh(f.tree, f.built, deformed(f.scene, 1.0f, 3.0f).view(), c, out, &stats);
+    EXPECT_EQ(stats.policy, UpdatePolicy::Rebuild);
+    EXPECT_LT(stats.sah_cost, 1.1 * stats.fresh_sah_cost);
+    c.measure_fresh = false;
     update_bvh(f.tree, f.built, deformed(f.scene, 100.0f, 6.0f).view(), c, out, &stats);  // everything
     EXPECT_EQ(stats.policy, UpdatePolicy::Rebuild);
 }
@@ -279,11 +288,17 @@ TEST(Update, AdaptiveRebuildsTheTopOverPartsThatMovedApart) {
     UpdateConfig c;  // adaptive
     NodeCostArray out;
     UpdateStats with, without;
+    // the raised spheres grow the row's thin box: the reference, which keeps its A·cost where the
+    // root grew, errs low there (a fresh build's A·cost grows with it) and adaptive rebuilds with
+    // the default tree_growth; the top rebuild is checked with one that lets it stand
+    c.tree_growth = 2.0f, c.measure_fresh = true;
     const Bvh t = update_bvh(tree, subtree_costs(tree), moved.view(), c, out, &with);
     check_tree(t, moved.view(), tree.config.max_leaf_size);
     EXPECT_EQ(with.policy, UpdatePolicy::Partial);
     EXPECT_GT(with.top_boxes, 1u);
     EXPECT_NEAR(with.sah_cost, sah_cost(t), 1e-4 * with.sah_cost);
+    EXPECT_LT(with.sah_cost, 1.01 * with.fresh_sah_cost);
+    c = UpdateConfig{};
     c.top_cut_primitives = 0;
     update_bvh(tree, subtree_costs(tree), moved.view(), c, out, &without);
     EXPECT_EQ(without.top_boxes, 0u);
@@ -306,7 +321,7 @@ TEST(Update, AdaptiveSplicesItsPartsUnderTheNewTopTheSameOnEveryThreadCount) {
         trees.push_back(update_bvh(tree, f.built, moved.view(), c, out, &stats[trees.size()]));
         SCOPED_TRACE(threads);
         check_tree(trees.back(), moved.view(), f.tree.config.max_leaf_size);
-        EXPECT_EQ(out.size(), trees.back().nodes.size());
+        EXPECT_EQ(out.size(), trees.back().nodes.size() + 1);
         EXPECT_NEAR(stats[trees.size() - 1].sah_cost, sah_cost(trees.back()), 1e-4 * sah_cost(trees.back()));
     }
     ASSERT_EQ(stats[0].policy, UpdatePolicy::Partial);

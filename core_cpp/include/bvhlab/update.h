@@ -42,7 +42,8 @@ struct UpdateConfig {
     /// rebuild (bench/updates.py; 0.05 let the generated crowd rebuild 10 frames of 23).
     float restructure_share = 0.1f;
     /// adaptive: the whole tree is rebuilt instead when the restructured tree's cost still exceeds
-    /// this times its cost when built (issue 34: within 1.10 of a fresh build's). Before
+    /// this times its reference: its cost when built, taken as keeping its A·cost where the root
+    /// has grown since (update_bvh.cpp reference_cost; issue 34: within 1.10 of a fresh build's). Before
     /// rebuild_top, on the 24-frame wave: 1.09 kept the SAH within 1.065 of a fresh build's for
     /// 0.45-0.53 of the time of rebuilding every frame, rebuilding 4 frames; 1.15 within 1.12-1.14
     /// for 0.39-0.42; 1.05 within 1.03-1.04 for 0.60-0.65. (The add-on rebuilt at 1.5 of the
@@ -55,8 +56,11 @@ struct UpdateConfig {
     /// primitives are rebuilt over those subtrees' boxes (rebuild_top.h); 0: never. bench/
     /// updates.py, restructure_share 0.1: 16 kept the generated crowd within 1.085 of a fresh
     /// build's SAH with no full rebuild, 32 within 1.110, 64 rebuilt 12 frames of 23; the wave
-    /// within 1.037 (16), 1.058 (32), 1.065 (0: no top rebuild).
-    std::uint32_t top_cut_primitives = 16;
+    /// within 1.037 (16), 1.058 (32), 1.065 (0: no top rebuild). With tree_growth against a
+    /// reference that follows a fresh build's cost (update_bvh.cpp reference_cost), 16 rebuilt 6
+    /// of the generated crowd's 23 frames (0.78 of rebuilding every frame), 8 none (0.57-0.59,
+    /// within 1.067; the wave 0.47-0.52, within 1.050; docs/design.md).
+    std::uint32_t top_cut_primitives = 8;
     /// adaptive: the levels above the cut are rebuilt only while the tree, after its subtrees,
     /// still costs more than this times its cost when built (the step copies every node and builds
     /// over the cut's boxes: about a fifth of a rebuild in thread CPU time). bench/updates.py: 1.07 ran
@@ -92,8 +96,10 @@ NodeCostArray subtree_costs(const Bvh& bvh);
 
 /// The tree over `geometry` (same counts) by `config.policy`, from `old` (untouched) and the
 /// costs its nodes had when built (`built`, subtree_costs of the tree as built, one per node of
-/// `old`). `built_out` receives those costs for the new tree (rebuilt nodes' own, the others'
-/// carried over). Throws std::invalid_argument as refit and build_bvh do.
+/// `old`, and after them, as update_bvh leaves them, the root's half area when entry 0, adaptive's
+/// reference, was taken: without it, `old`'s root's). `built_out` receives those for the new tree
+/// (rebuilt nodes' own, the others' carried over, then the reference's area). Throws
+/// std::invalid_argument as refit and build_bvh do.
 Bvh update_bvh(const Bvh& old, const NodeCostArray& built, const GeometryView& geometry, const UpdateConfig& config,
                NodeCostArray& built_out, UpdateStats* stats = nullptr);
 

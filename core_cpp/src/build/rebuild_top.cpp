@@ -85,14 +85,25 @@ std::vector<PartNode> top_cut(const PartedTree& tree, std::uint32_t max_primitiv
 bool rebuild_top(Bvh& tree, NodeCostArray& built, const PartedTree& parted, const std::vector<PartNode>& cut,
                  double& sah_cost) {
     if (tree.empty() || !(node_box(tree.nodes[0]).half_area() > 0)) return false;
-    std::vector<Aabb> boxes(cut.size());
-    for (std::size_t c = 0; c < cut.size(); ++c) boxes[c] = node_box(parted.node(cut[c]));
+    // what the top needs of each cut node, read in cut (depth-first) order: the nodes, counts and
+    // costs in order, where reading them in the new top's order missed the cache at every one
+    const std::size_t cuts = cut.size();
+    BigVector<Aabb> boxes(cuts);
+    BigVector<std::uint32_t> size(cuts), count(cuts);
+    BigVector<double> cut_area_cost(cuts);
+    for (std::size_t c = 0; c < cuts; ++c) {
+        boxes[c] = node_box(parted.node(cut[c]));
+        size[c] = end_of(parted, cut[c]) - cut[c].node, count[c] = parted.count(cut[c]);
+        cut_area_cost[c] = parted.area_cost(cut[c]);
+    }
     BuildConfig config = tree.config;
     config.max_leaf_size = 1, config.sah_block = 1, config.threads = 1, config.progress = nullptr;
     const Bvh top = build_bvh_over_boxes(boxes.data(), boxes.size(), config);
-    // where each top node lands: after the top nodes before it and the cut subtrees they hold
+    // where each top node lands: after the top nodes before it and the cut subtrees they hold;
+    // dest[c]: where cut node c's subtree goes
     const std::uint32_t top_nodes = top.node_count();
-    std::vector<std::uint32_t> at(top_nodes + 1);
+    BigVector<std::uint32_t> at(top_nodes + 1), dest(cuts);
+    BigVector<std::uint8_t> dest_depth(cuts);
     for (std::uint32_t j = 0, pos = 0; j <= top_nodes; ++j) {
         at[j] = pos;
         if (j == top_nodes) break;
@@ -102,39 +113,30 @@ bool rebuild_top(Bvh& tree, NodeCostArray& built, const PartedTree& parted, cons
             continue;
         }
         if (leaf_count(n) != 1) return false;  // one box a leaf (max_leaf_size 1)
-        const PartNode c = cut[top.refs[n.index]];
+        const std::uint32_t c = top.refs[n.index];
         // a cut subtree holds at most max(count, 1) leaves, so it is no taller: the exact height
         // only where that bound could pass the limit
-        const std::uint32_t below = std::max<std::uint32_t>(parted.count(c), 1);
-        if (top.depths[j] + below > gpu::MAX_TREE_HEIGHT && top.depths[j] + height_of(parted, c) > gpu::MAX_TREE_HEIGHT)
+        if (top.depths[j] + std::max<std::uint32_t>(count[c], 1) > gpu::MAX_TREE_HEIGHT &&
+            top.depths[j] + height_of(parted, cut[c]) > gpu::MAX_TREE_HEIGHT)
             return false;
-        pos += end_of(parted, c) - c.node;
+        dest[c] = pos, dest_depth[c] = top.depths[j];
+        pos += size[c];
     }
     // the new arrays: top inner nodes with their children's places, cut subtrees shifted whole
-    const std::uint32_t size = at[top_nodes];
-    BigVector<BvhNode> nodes(size);
-    BigVector<std::uint8_t> depths(size);
-    NodeCostArray out_built(size);
-    // S(n) = A(n)·cost(n) of each top node, for its cost (built) and the tree's SAH cost
-    std::vector<double> area_cost(top_nodes);
-    for (std::uint32_t j = 0; j < top_nodes; ++j) {
-        const BvhNode& n = top.nodes[j];
-        if (!is_leaf(n)) {
-            BvhNode& o = nodes[at[j]];
-            o = n;
-            o.index = at[n.index], o.info = gpu::NODE_INTERNAL_BIT | at[skip_index(n, j)];
-            depths[at[j]] = top.depths[j];
-            continue;
-        }
-        const PartNode c = cut[top.refs[n.index]];
-        const std::uint32_t end = end_of(parted, c);
+    BigVector<BvhNode> nodes(at[top_nodes]);
+    BigVector<std::uint8_t> depths(at[top_nodes]);
+    NodeCostArray out_built(at[top_nodes]);
+    // each cut subtree moved whole to its place
+    auto move_subtree = [&](std::size_t k) {
+        const PartNode c = cut[k];
         const BvhNode* from = nodes_of(parted, c);
         const std::uint8_t* from_depths = depths_of(parted, c);
+        const float* from_built = c.part < 0 ? built.data() : parted.parts()[std::size_t(c.part)].costs.cost.data();
         // a part's leaves take its slots (placed by place_part_slots); the tree's keep theirs
         const std::uint32_t slot_shift = c.part < 0 ? 0 : parted.parts()[std::size_t(c.part)].slot;
-        const std::uint32_t shift = at[j] - c.node;  // unsigned: wraps where the subtree moves up
-        const std::uint8_t depth_shift = std::uint8_t(top.depths[j] - from_depths[c.node]);
-        for (std::uint32_t i = c.node, o = at[j]; i < end; ++i, ++o) {
+        const std::uint32_t shift = dest[k] - c.node;  // unsigned: wraps where the subtree moves up
+        const std::uint8_t depth_shift = std::uint8_t(dest_depth[k] - from_depths[c.node]);
+        for (std::uint32_t i = c.node, o = dest[k]; i < c.node + size[k]; ++i, ++o) {
             BvhNode m = from[i];
             // an inner node's child and skip move by `shift` (the skip in info's low bits: no carry,
             // sizes < 2^31), a leaf's first slot by `slot_shift`: by a mask, as leaves and inner
@@ -143,17 +145,22 @@ bool rebuild_top(Bvh& tree, NodeCostArray& built, const PartedTree& parted, cons
             m.index += (shift & inner) | (slot_shift & ~inner), m.info += shift & inner;
             nodes[o] = m;
             depths[o] = std::uint8_t(from_depths[i] + depth_shift);
+            out_built[o] = from_built[i];
         }
-        if (c.part < 0) std::memcpy(out_built.data() + at[j], built.data() + c.node, (end - c.node) * sizeof(float));
-        else
-            std::memcpy(out_built.data() + at[j], parted.parts()[std::size_t(c.part)].costs.cost.data() + c.node,
-                        (end - c.node) * sizeof(float));
-        area_cost[j] = parted.area_cost(c);
-    }
-    // the top's costs, children before parents (both after their parent in depth-first order)
+    };
+    for (std::size_t k = 0; k < cuts; ++k) move_subtree(k);  // read in order, each written to its place
+    // the top nodes, and S(n) = A(n)·cost(n) of each, for its cost (built) and the tree's SAH cost
+    BigVector<double> area_cost(top_nodes);
     for (std::uint32_t j = top_nodes; j-- > 0;) {
         const BvhNode& n = top.nodes[j];
-        if (is_leaf(n)) continue;
+        if (is_leaf(n)) {
+            area_cost[j] = cut_area_cost[top.refs[n.index]];
+            continue;
+        }
+        BvhNode& o = nodes[at[j]];
+        o = n;
+        o.index = at[n.index], o.info = gpu::NODE_INTERNAL_BIT | at[skip_index(n, j)];
+        depths[at[j]] = top.depths[j];
         const double area = node_box(n).half_area();
         area_cost[j] = area + area_cost[j + 1] + area_cost[n.index];
         // a node of zero area weighs nothing in any excess (A·(cost - built)): any cost will do
