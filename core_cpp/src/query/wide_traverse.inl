@@ -411,13 +411,14 @@ bool occluded_wide_kernel(const WideView& wide, const Ray& ray) {
     return hit.ref != kNoHit;
 }
 
+/// make_query's box factors alone (the same operations, so the same bits): a TLAS has no triangles.
 void start_tlas_walk(const Ray& ray, TlasWalk& walk) {
-    const Query q = make_query(ray);
-    for (int a = 0; a < 4; ++a)
-        walk.o[a] = q.o[a], walk.neg_inv[a] = q.neg_inv[a], walk.neg_inv_far[a] = q.neg_inv_far[a];
-    for (int l = 0; l < 8; ++l) walk.tmin8[l] = q.tmin8[l];
-    walk.octant = q.octant;
-    walk.sp = 0, walk.cur = 0, walk.cur_t = q.tmin, walk.visited = 0, walk.resumed = false;
+    const L4 inv = L4::splat(1.0f) / L4::set(ray.dir.x, ray.dir.y, ray.dir.z, 1.0f);
+    L4::set(ray.origin.x, ray.origin.y, ray.origin.z, 0.0f).store(walk.o);
+    (inv * L4::splat(-1.0f)).store(walk.neg_inv), (inv * L4::splat(-gpu::BOX_FAR_SCALE)).store(walk.neg_inv_far);
+    L8::splat(ray.tmin).store(walk.tmin8);
+    walk.octant = sign_bits(inv) & 7;
+    walk.sp = 0, walk.cur = 0, walk.cur_t = ray.tmin, walk.visited = 0, walk.resumed = false;
 }
 
 /// The TLAS's wide walk (wide_kernel.h next_tlas_leaf): traverse_nodes' steps on a tree whose
