@@ -9,10 +9,9 @@
 #include "bvhlab/bvh.h"
 #include "bvhlab/transform.h"
 #include "bvhlab/traverse.h"
+#include "bvhlab/wide_bvh.h"
 
 namespace bvhlab {
-
-struct WideBvh;
 
 /// One placement of a mesh: which BLAS, where (object-to-world and its inverse), and the world
 /// box the TLAS is built over (the union of the BLAS's top eight boxes moved into the world,
@@ -32,9 +31,12 @@ struct BlasView {
 };
 
 /// The TLAS: a Bvh whose leaves' references are instance indices (no geometry packed), built with
-/// the builder of every tree over the instances' world boxes (build_bvh_over_boxes).
+/// the builder of every tree over the instances' world boxes (build_bvh_over_boxes), and its
+/// 8-wide copy (make_wide_tlas), which Traversal::Wide walks: a ray visits a wide node where the
+/// binary walk tested two boxes at each of several levels (design.md, "The two-level walk's cost").
 struct Tlas {
     Bvh tree;
+    WideBvh wide;
     std::vector<Instance> instances;
 };
 
@@ -69,7 +71,8 @@ struct TwoLevel {
 void check_two_level(const TwoLevel& scene, Traversal mode);
 
 /// Closest hit through both levels, on a scene that check_two_level accepts. `mode` picks the BLAS
-/// traversal (the TLAS is walked with a stack, or stacklessly for Traversal::Stackless). The ray is
+/// traversal (the TLAS is walked with a stack, stacklessly for Traversal::Stackless, and by its wide copy for
+/// Traversal::Wide, whose nodes_visited counts the child boxes of each wide node visited). The ray is
 /// one intersect_batch would accept. A scene of one identity instance goes straight to its BLAS:
 /// exactly the flat query.
 InstanceHit intersect_two_level(const TwoLevel& scene, const Ray& ray, Traversal mode,

@@ -13,7 +13,8 @@ namespace bvhlab {
 /// A two-level walk as it happened. nodes_visited is what intersect_two_level reports for the ray:
 /// the TLAS's box tests plus each BLAS walk's nodes_visited.
 struct TwoLevelRecord {
-    /// The TLAS walk: its box tests (TLAS nodes); its primitive tests are the instances entered,
+    /// The TLAS walk: its box tests (TLAS nodes; Traversal::Wide tests the children of each wide
+    /// TLAS node visited, each named by its binary node); its primitive tests are the instances entered,
     /// in order: prim_slots holds the instance, prim_leaf the TLAS leaf (kNoHit in a scene of one
     /// identity instance, which has no TLAS walk: intersect_two_level), prim_closer whether the
     /// instance held a hit nearer than the closest so far

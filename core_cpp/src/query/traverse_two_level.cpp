@@ -3,6 +3,7 @@
 // (origin and direction by the inverse transform, the direction left unnormalised so that t is
 // the same in both spaces) and the BLAS is traversed up to the closest hit so far. The any-hit
 // query (occluded) is the same walk of both levels, ended at the first instance with a hit.
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <stdexcept>
@@ -15,6 +16,7 @@
 #include "bvhlab/wide_bvh.h"
 #include "ray_batch.h"
 #include "walk.h"
+#include "wide_kernel.h"
 
 namespace bvhlab {
 namespace {
@@ -61,16 +63,13 @@ static_assert(offsetof(BvhNode, hi) == 4 * sizeof(float));
 }
 
 /// The world ray as every instance starts from it: scaled once (scale_ray, exact; a batch's rays
-/// are scaled already, so this is nothing for them), with the TLAS's box test. Its t times
-/// `t_scale` is the caller's.
+/// are scaled already, so this is nothing for them). Its t times `t_scale` is the caller's.
 struct WorldRay {
     Ray ray;
     float t_scale;
-    TlasQuery boxes;
-    explicit WorldRay(const Ray& r) : ray(r), t_scale(scale_ray(ray)), boxes(tlas_query()) {}
-
-private:
-    TlasQuery tlas_query() const {
+    explicit WorldRay(const Ray& r) : ray(r), t_scale(scale_ray(ray)) {}
+    /// The binary TLAS's box test for this ray (the wide TLAS's is the wide walk's, start_tlas_walk).
+    TlasQuery boxes() const {
         const float o[3] = {ray.origin.x, ray.origin.y, ray.origin.z};
         const float inv[3] = {1.0f / ray.dir.x, 1.0f / ray.dir.y, 1.0f / ray.dir.z};  // IEEE, as make_ray
         return TlasQuery(o, inv, ray.tmin);
@@ -98,6 +97,7 @@ bool object_ray(const Instance& inst, const Ray& world, float tmax, Ray& ray, fl
 /// What the closest-hit walk reports of its steps: nothing (every query; the calls compile to the
 /// code they were), or each step to the inspector's recorder (two_level_record.h).
 struct NoSteps {
+    static constexpr bool kRecorded = false;
     void box(std::uint32_t, bool) {}
     Hit enter(std::uint32_t, std::uint32_t, const BlasView& blas, const Ray& ray, Traversal mode,
               std::uint32_t* visited) {
@@ -106,6 +106,7 @@ struct NoSteps {
     void entered(bool, float) {}
 };
 struct RecordedSteps {
+    static constexpr bool kRecorded = true;
     TwoLevelRecorder& r;
     void box(std::uint32_t node, bool hit) { r.box(node, hit); }
     Hit enter(std::uint32_t leaf, std::uint32_t index, const BlasView& blas, const Ray& ray, Traversal mode,
@@ -113,6 +114,27 @@ struct RecordedSteps {
         return r.instance(leaf, index, blas, ray, mode, visited);
     }
     void entered(bool closer, float t_scale) { r.instance_done(closer, t_scale); }
+};
+
+/// The recorder's view of the wide TLAS walk (wide_kernel.h next_tlas_leaf): each wide node visited
+/// is the box tests of its children, named by the binary nodes they stand for (an inner child's
+/// WideNode::unused[1], a leaf child's word), entered where the walk went on to the child or pushed it.
+class WideTlasBoxes final : public WideRecorder {
+public:
+    WideTlasBoxes(const WideBvh& wide, TwoLevelRecorder& r) : wide_(wide), r_(r) {}
+    void node(std::uint32_t line, std::uint32_t nearest, const std::uint32_t* pushed, std::uint32_t count) override {
+        const WideNode& n = wide_.node(line);
+        for (std::uint32_t k = 0; k < n.unused[0]; ++k) {
+            const std::uint32_t c = n.child[k];
+            const std::uint32_t name = (c & kLeafChild) ? c & ~kLeafChild : wide_.node(c).unused[1];
+            r_.box(name, c == nearest || std::find(pushed, pushed + count, c) != pushed + count);
+        }
+    }
+    void leaf(std::uint32_t, const Hit&, const Hit&) override {}
+
+private:
+    const WideBvh& wide_;
+    TwoLevelRecorder& r_;
 };
 
 /// Tests instance `index` (of TLAS leaf `leaf`) with the world ray, whose closest hit so far is
@@ -191,8 +213,24 @@ InstanceHit intersect_two_level_with(const TwoLevel& scene, const Ray& ray, Trav
             for (std::uint32_t k = n.index, end = n.index + leaf_count(n); k < end; ++k)
                 test_instance(scene, node, tlas.tree.refs[k], world, mode, best, visited, steps);
         };
-        visited += walk_tlas(tlas, world.boxes, best.hit.t, mode, leaf,
-                             [&](std::uint32_t node, bool entered) { steps.box(node, entered); });
+        if (mode == Traversal::Wide) {
+            TlasWalk walk;
+            start_tlas_walk(world.ray, walk);
+            auto walk_to_end = [&](WideRecorder* record) {
+                for (std::uint32_t n; (n = next_tlas_leaf(tlas.wide, walk, best.hit.t, record)) != kNoHit;)
+                    leaf(tlas.tree.nodes[n]);
+            };
+            if constexpr (Steps::kRecorded) {
+                WideTlasBoxes boxes(tlas.wide, steps.r);
+                walk_to_end(&boxes);
+            } else {
+                walk_to_end(nullptr);
+            }
+            visited += walk.visited;
+        } else {
+            visited += walk_tlas(tlas, world.boxes(), best.hit.t, mode, leaf,
+                                 [&](std::uint32_t node, bool entered) { steps.box(node, entered); });
+        }
         best.hit.t *= world.t_scale;  // the caller's units (a miss's tmax is replaced below)
     }
     if (best.hit.ref == kNoHit) best.hit.t = kInfinity;
@@ -239,7 +277,14 @@ bool occluded_two_level(const TwoLevel& scene, const Ray& ray, Traversal mode) {
             found = instance_occludes(scene, tlas.tree.refs[k], world, mode);
         return found;
     };
-    walk_tlas(tlas, world.boxes, world.ray.tmax, mode, leaf);
+    if (mode == Traversal::Wide) {  // the closest-hit walk of the wide TLAS, its far limit tmax throughout
+        TlasWalk walk;
+        start_tlas_walk(world.ray, walk);
+        for (std::uint32_t n; (n = next_tlas_leaf(tlas.wide, walk, world.ray.tmax)) != kNoHit;)
+            if (leaf(tlas.tree.nodes[n])) break;
+    } else {
+        walk_tlas(tlas, world.boxes(), world.ray.tmax, mode, leaf);
+    }
     return found;
 }
 

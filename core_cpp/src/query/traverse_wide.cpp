@@ -209,6 +209,21 @@ bool occluded_wide(const WideBvh& wide, const Ray& ray) {
     return portable::occluded_wide_kernel(view, ray);
 }
 
+void start_tlas_walk(const Ray& ray, TlasWalk& walk) {
+#if defined(BVHLAB_AVX2_KERNELS)
+    if (active_isa() == Isa::Avx2) return avx2::start_tlas_walk(ray, walk);
+#endif
+    portable::start_tlas_walk(ray, walk);
+}
+
+std::uint32_t next_tlas_leaf(const WideBvh& wide, TlasWalk& walk, float hit_t, WideRecorder* record) {
+    const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
+#if defined(BVHLAB_AVX2_KERNELS)
+    if (active_isa() == Isa::Avx2) return avx2::next_tlas_leaf(view, walk, hit_t, record);
+#endif
+    return portable::next_tlas_leaf(view, walk, hit_t, record);
+}
+
 #endif
 
 }  // namespace bvhlab

@@ -16,10 +16,14 @@ constexpr std::uint32_t kMergedLeaf = 4;
 /// slots (kNoRange where not: after an update rebuilt the upper levels, rebuild_top.h, a subtree
 /// above its cut may hold runs from apart; built and refitted trees lay the slots in depth-first
 /// order, every subtree one range). Only a subtree of one range merges into one wide leaf.
+/// `merged`: the largest subtree merged into one leaf (kMergedLeaf; 0 for a TLAS, whose leaves
+/// stay the binary tree's).
 struct SubtreeRanges {
     static constexpr std::uint32_t kNoRange = std::numeric_limits<std::uint32_t>::max();
     std::vector<std::uint32_t> first, size;
-    explicit SubtreeRanges(const Bvh& bvh) : first(bvh.nodes.size()), size(bvh.nodes.size()) {
+    std::uint32_t merged;
+    explicit SubtreeRanges(const Bvh& bvh, std::uint32_t merged_leaf = kMergedLeaf)
+        : first(bvh.nodes.size()), size(bvh.nodes.size()), merged(merged_leaf) {
         for (std::size_t i = bvh.nodes.size(); i-- > 0;) {
             const BvhNode& n = bvh.nodes[i];
             if (is_leaf(n)) {
@@ -31,7 +35,7 @@ struct SubtreeRanges {
         }
     }
     bool leaf(const Bvh& bvh, std::uint32_t i) const {
-        return is_leaf(bvh.nodes[i]) || (size[i] <= kMergedLeaf && first[i] != kNoRange);
+        return is_leaf(bvh.nodes[i]) || (size[i] <= merged && first[i] != kNoRange);
     }
 };
 
@@ -231,6 +235,42 @@ WideBvh make_wide(const Bvh& bvh) {
         std::memcpy(&wide.lines[at], &node, sizeof node);
         for (int k = count - 1; k >= 0; --k)
             if (!ranges.leaf(bvh, children[k])) jobs.push_back({children[k], at, k});
+    }
+    return wide;
+}
+
+WideBvh make_wide_tlas(const Bvh& tlas) {
+    WideBvh wide;
+    if (tlas.empty()) return wide;
+    const SubtreeRanges ranges(tlas, 0);
+    const Collapse collapse(tlas, ranges);
+    wide.lines.reserve(std::size_t(kNodeLines) * (tlas.nodes.size() / 2 + 1));  // a node per binary inner node at most
+    struct Job {
+        std::uint32_t binary, parent_line;
+        int slot;
+    };
+    constexpr std::uint32_t kRoot = std::numeric_limits<std::uint32_t>::max();
+    std::vector<Job> jobs{{0, kRoot, 0}};
+    while (!jobs.empty()) {  // preorder, as make_wide (nodes only)
+        const Job job = jobs.back();
+        jobs.pop_back();
+        const auto at = static_cast<std::uint32_t>(wide.lines.size());
+        if (at > kLeafChild - kNodeLines) throw std::length_error("the wide TLAS needs over 2^31 lines");
+        wide.lines.resize(at + kNodeLines);
+        ++wide.node_count;
+        if (job.parent_line != kRoot) reinterpret_cast<WideNode*>(&wide.lines[job.parent_line])->child[job.slot] = at;
+        std::uint32_t children[8];
+        const int count = collapse.children(job.binary, children);
+        WideNode node;
+        for (int k = 0; k < 8; ++k) {
+            const BvhNode* c = k < count ? &tlas.nodes[children[k]] : nullptr;
+            set_slot(node, k, c);
+            if (c && is_leaf(*c)) node.child[k] = kLeafChild | children[k];
+        }
+        node.unused[0] = std::uint32_t(count), node.unused[1] = job.binary;
+        std::memcpy(&wide.lines[at], &node, sizeof node);
+        for (int k = count - 1; k >= 0; --k)
+            if (!is_leaf(tlas.nodes[children[k]])) jobs.push_back({children[k], at, k});
     }
     return wide;
 }

@@ -29,15 +29,50 @@ protected:
     ~WideRecorder() = default;
 };
 
+/// The wide walk's stack: pushed entries, a field to an array, so that the AVX2 path pushes a
+/// node's children as two vector stores of eight (push_children); eight slots of room past the
+/// deepest push.
+struct WideStack {
+    static constexpr std::uint32_t kSize = 7 * gpu::MAX_TREE_HEIGHT + 8;
+    alignas(32) std::uint32_t index[kSize];
+    alignas(32) float t[kSize];
+};
+
+/// The wide TLAS walk (tlas.h Tlas::wide), suspended at a leaf so that its caller can enter the
+/// leaf's instances (traverse_two_level.cpp) and resume it with the closest hit found since: the
+/// stack, the entry to go on from, and the world ray as the box test needs it (wide_traverse.inl
+/// make_query's fields). Plain data, filled by start_tlas_walk.
+struct TlasWalk {
+    WideStack stack;
+    alignas(32) float tmin8[8];
+    float o[4], neg_inv[4], neg_inv_far[4];
+    std::uint32_t sp, cur, visited;  ///< visited: child boxes tested (the binary walk's box tests)
+    float cur_t;
+    int octant;
+    bool resumed;  ///< false until the first leaf is handed out: the next call pops
+};
+
 namespace portable {
 Hit intersect_wide_kernel(const WideView& wide, const Ray& ray, std::uint32_t* nodes_visited);
 Hit record_wide_kernel(const WideView& wide, const Ray& ray, WideRecorder& record, std::uint32_t* nodes_visited);
 bool occluded_wide_kernel(const WideView& wide, const Ray& ray);
+void start_tlas_walk(const Ray& ray, TlasWalk& walk);
+std::uint32_t next_tlas_leaf(const WideView& wide, TlasWalk& walk, float hit_t, WideRecorder* record);
 }  // namespace portable
 namespace avx2 {
 Hit intersect_wide_kernel(const WideView& wide, const Ray& ray, std::uint32_t* nodes_visited);
 Hit record_wide_kernel(const WideView& wide, const Ray& ray, WideRecorder& record, std::uint32_t* nodes_visited);
 bool occluded_wide_kernel(const WideView& wide, const Ray& ray);
+void start_tlas_walk(const Ray& ray, TlasWalk& walk);
+std::uint32_t next_tlas_leaf(const WideView& wide, TlasWalk& walk, float hit_t, WideRecorder* record);
 }  // namespace avx2
+
+/// The wide TLAS walk on the active instruction set (isa.h): start_tlas_walk sets `walk` up for
+/// the (scaled) world ray; each next_tlas_leaf goes on to the next TLAS leaf the ray enters before
+/// `hit_t` (nearest first, as the BLAS's wide walk) and returns its binary node index (its
+/// instances are tlas.tree's), or kNoHit when the walk is done. `record`, if given, is told of
+/// every wide node visited (WideRecorder::node; ::leaf is never called).
+void start_tlas_walk(const Ray& ray, TlasWalk& walk);
+std::uint32_t next_tlas_leaf(const WideBvh& wide, TlasWalk& walk, float hit_t, WideRecorder* record = nullptr);
 
 }  // namespace bvhlab

@@ -103,13 +103,8 @@ struct Entry {
     float t;              ///< where the ray enters the box
 };
 
-/// Pushed entries, a field to an array, so that the AVX2 path pushes a node's children as two
-/// vector stores of eight (push_children); eight slots of room past the deepest push.
-struct Stack {
-    static constexpr std::uint32_t kSize = 7 * gpu::MAX_TREE_HEIGHT + 8;
-    alignas(32) std::uint32_t index[kSize];
-    alignas(32) float t[kSize];
-};
+/// Pushed entries (wide_kernel.h, plain data: the TLAS walk keeps one between calls).
+using Stack = WideStack;
 
 /// closer_hit (ray.h), repeated here for the reason given at the top of this file.
 bool closer(float t, std::uint32_t ref, const Hit& hit) {
@@ -260,7 +255,9 @@ template <int kOctant>
 /// Sponza +9% and +15%), by push_entered (AVX2: one permute by a table of the mask, as tinybvh's
 /// IsOccluded does). No entry distance is pushed: any entered box passes the pop's test, tmax
 /// being fixed, so the any-hit walk pops without one.
-template <bool kAnyHit, int kOctant>
+/// kPrefetch false (the TLAS's walk, next_tlas_leaf): no prefetches, as a TLAS is small enough to
+/// stay in the caches and its leaf words are no lines.
+template <bool kAnyHit, int kOctant, bool kPrefetch = true>
 [[gnu::always_inline]] inline bool enter_children(const WideView& wide, const WideNode& node, const L8 origin[3],
                                                   const L8 neg_inv[3], const L8 neg_inv_far[3],
                                                   const std::ptrdiff_t* plane, const float* tmin8, float far_limit,
@@ -270,12 +267,14 @@ template <bool kAnyHit, int kOctant>
     // which: started now, its load overlaps the bounds' instead of following them (a second miss
     // in a row where the node was not in the caches; uniform1m random rays +4-5% best of
     // interleaved runs, Sponza and room1m unchanged).
-    __builtin_prefetch(node.child);
-    // And the six lines after the node: in preorder its first leaves' packets, or its first inner
-    // child (uniform1m +4.2% random, +4.9% primary, Sponza +4% random, best of interleaved runs;
-    // room1m, whose tree the caches hold better, -2.5%).
-    const char* after = reinterpret_cast<const char*>(&node + 1);
-    for (int line = 0; line < 6; ++line) __builtin_prefetch(after + 64 * line);
+    if constexpr (kPrefetch) {
+        __builtin_prefetch(node.child);
+        // And the six lines after the node: in preorder its first leaves' packets, or its first
+        // inner child (uniform1m +4.2% random, +4.9% primary, Sponza +4% random, best of
+        // interleaved runs; room1m, whose tree the caches hold better, -2.5%).
+        const char* after = reinterpret_cast<const char*>(&node + 1);
+        for (int line = 0; line < 6; ++line) __builtin_prefetch(after + 64 * line);
+    }
     // the same order of raises and lowers as hit_box: NaN from 0·inf on a face is ignored
     L8 t0 = L8::load(tmin8), t1 = L8::splat(far_limit);
     for (int a = 0; a < 3; ++a) t0 = raise(t0, (origin[a] - L8::load(f + plane_at<kOctant>(plane, a))) * neg_inv[a]);
@@ -299,6 +298,10 @@ template <bool kAnyHit, int kOctant>
     const int k = push_children(node, t0, t1, mask, stack.index + sp, stack.t + sp);
     const auto h = std::uint32_t(__builtin_popcount(unsigned(mask)));
     cur = {node.child[k], t0.lane(k)};
+    if constexpr (!kPrefetch) {
+        sp += h - 1;
+        return true;
+    }
     // the pushed entries (sp .. sp + h - 2), nearest first: one where two were entered (over
     // half the pushes of random rays; push_children's AVX2 path has branched on it already, so
     // this branch follows that one), else three without a loop (where fewer were pushed, the
@@ -406,6 +409,56 @@ bool occluded_wide_kernel(const WideView& wide, const Ray& ray) {
     Hit hit{ray.tmax, kNoHit, 0.0f, 0.0f, kNoHit};
     if (wide.lines) any_hit_walk(wide, make_query(ray), hit);
     return hit.ref != kNoHit;
+}
+
+/// make_query's box factors alone (the same operations, so the same bits): a TLAS has no triangles.
+void start_tlas_walk(const Ray& ray, TlasWalk& walk) {
+    const L4 inv = L4::splat(1.0f) / L4::set(ray.dir.x, ray.dir.y, ray.dir.z, 1.0f);
+    L4::set(ray.origin.x, ray.origin.y, ray.origin.z, 0.0f).store(walk.o);
+    (inv * L4::splat(-1.0f)).store(walk.neg_inv), (inv * L4::splat(-gpu::BOX_FAR_SCALE)).store(walk.neg_inv_far);
+    L8::splat(ray.tmin).store(walk.tmin8);
+    walk.octant = sign_bits(inv) & 7;
+    walk.sp = 0, walk.cur = 0, walk.cur_t = ray.tmin, walk.visited = 0, walk.resumed = false;
+}
+
+/// The TLAS's wide walk (wide_kernel.h next_tlas_leaf): traverse_nodes' steps on a tree whose
+/// nodes are WideNodes with the count of their children in unused[0] (make_wide_tlas), up to a
+/// leaf, which is handed to the caller (its child word is kLeafChild | the binary leaf's index);
+/// resumed by popping, with the closest hit the caller has found since.
+std::uint32_t next_tlas_leaf(const WideView& wide, TlasWalk& w, float hit_t, WideRecorder* record) {
+    const L8 origin[3] = {L8::splat(w.o[0]), L8::splat(w.o[1]), L8::splat(w.o[2])};
+    const L8 neg_inv[3] = {L8::splat(w.neg_inv[0]), L8::splat(w.neg_inv[1]), L8::splat(w.neg_inv[2])};
+    const L8 neg_inv_far[3] = {L8::splat(w.neg_inv_far[0]), L8::splat(w.neg_inv_far[1]), L8::splat(w.neg_inv_far[2])};
+    const std::ptrdiff_t* plane = kPlanes[w.octant];
+    const float far_limit = hit_t * gpu::BOX_FAR_SCALE;
+    Entry cur{w.cur, w.cur_t};
+    std::uint32_t sp = w.sp;
+    bool pop = w.resumed;
+    w.resumed = true;
+    for (;;) {
+        if (!pop) {
+            if (cur.index & kLeafChild) {
+                w.sp = sp;
+                return cur.index & ~kLeafChild;
+            }
+            const WideNode& node = node_at(wide, cur.index);
+            w.visited += node.unused[0];
+            const std::uint32_t line = cur.index, pushed = sp;
+            const bool entered = enter_children<false, kAnyOctant, false>(wide, node, origin, neg_inv, neg_inv_far,
+                                                                          plane, w.tmin8, far_limit, w.stack, sp, cur);
+            if (record) record->node(line, entered ? cur.index : kNoHit, w.stack.index + pushed, sp - pushed);
+            if (entered) continue;
+        }
+        pop = false;
+        do {  // pop, skipping entries farther than the closest hit so far (ray.h may_hold_closer)
+            if (sp == 0) {
+                w.sp = 0;
+                return kNoHit;
+            }
+            --sp;
+        } while (!(w.stack.t[sp] <= far_limit));
+        cur = {w.stack.index[sp], w.stack.t[sp]};
+    }
 }
 #else
 // The recorded walk, in translation units of its own (traverse_wide_record*.cpp): compiled beside

@@ -88,6 +88,7 @@ Tlas build_tlas(const std::vector<const Bvh*>& blases, const std::vector<std::ui
     }
     tlas.tree = build_bvh_over_boxes(boxes.data(), boxes.size(), config);
     for (std::uint32_t& ref : tlas.tree.refs) ref = placed[ref];
+    tlas.wide = make_wide_tlas(tlas.tree);
     return tlas;
 }
 
