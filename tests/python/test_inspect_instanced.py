@@ -238,7 +238,8 @@ def test_cli_inspects_nodes_of_both_levels(instanced_scene, trees, tmp_path, cap
     assert main(["inspect", str(path), "--worst", "12", "--json", str(out)]) == 0
     rows = json.loads(out.read_text())["worst"]
     assert len(rows) == 12 and rows[0]["level"] == "tlas" and rows[0]["node"] == 0
-    assert rows[0]["sah_share"] == pytest.approx(1.0) and rows[0]["subtree_sah"] == pytest.approx(tree.stats["sah_cost"])
+    assert rows[0]["sah_share"] == pytest.approx(1.0)
+    assert rows[0]["subtree_sah"] == pytest.approx(tree.stats["sah_cost"])
     costs = [r["subtree_sah"] for r in rows]
     assert costs == sorted(costs, reverse=True)
     blas = [r for r in rows if r["level"] == "blas"]
@@ -253,8 +254,10 @@ def test_cli_inspects_nodes_of_both_levels(instanced_scene, trees, tmp_path, cap
     node = json.loads(out.read_text())["node"]
     mesh = data.meshes[int(tree.instances[0][i])]
     assert (node["mesh"], node["prim_count"]) == (int(tree.instances[0][i]), int(mesh.prim_count[1]))
-    assert node["depth"] == data.tlas.depth[data.leaf_of[i]] + mesh.depth[1] == node["depth_in_mesh_tree"] + int(
-        data.tlas.depth[node["tlas_leaf"]]
+    assert (
+        node["depth"]
+        == data.tlas.depth[data.leaf_of[i]] + mesh.depth[1]
+        == node["depth_in_mesh_tree"] + int(data.tlas.depth[node["tlas_leaf"]])
     )
     assert "mesh tree" in capsys.readouterr().out
     assert main(["inspect", str(path), "--node", "2"]) == 0
