@@ -4,7 +4,7 @@ beside Embree 3 (C++ rtcIntersect1 / rtcOccluded1, MEDIUM) and tinybvh's BVH8_CP
 rays in the same process, interleaved and repeated.
 
     python bench/traverse.py [--scenes sponza,room1m,uniform1m] [--repeat 5] [--rounds 2]
-                             [--callgrind 20000] [--tinybvh DIR] [--peers SPEC,...]
+                             [--callgrind 20000] [--tinybvh DIR] [--peers SPEC,...] [--cpu-time]
 
 For each scene: random rays (origins in the bounds, uniform directions, 200k) and primary rays
 (640×480; on Sponza the report's Figure 6 view), closest hit; and shadow rays (any hit: bvhlab's
@@ -52,7 +52,11 @@ def ray_args(name: str, path: Path) -> list[str]:
     return ["--shadow", str(path)] if name == "shadow" else [str(path)]
 
 
-def measure(exe: Path, mesh: Path, rays: dict[str, Path], repeat: int, rounds: int, peers: list) -> dict:
+def measure(
+    exe: Path, mesh: Path, rays: dict[str, Path], repeat: int, rounds: int, peers: list, clock: str = "seconds"
+) -> dict:
+    """Times of each peer on each ray set; `clock` "seconds" (wall) or "cpu_seconds" (the tracing
+    thread's CPU time, which a loaded machine disturbs far less)."""
     args = ["trace", str(mesh), *(a for name, path in rays.items() for a in ray_args(name, path))]
     args += [a for _, s in peers for a in ("--peer", s)]
     args += ["--repeat", str(repeat)]
@@ -62,7 +66,7 @@ def measure(exe: Path, mesh: Path, rays: dict[str, Path], repeat: int, rounds: i
         for name, ray_set in zip(rays, result["ray_sets"]):
             for p in ray_set["peers"]:
                 row = out[name].setdefault(p["spec"], {"spec": p["spec"], "seconds": [], "count": ray_set["count"]})
-                row["seconds"].extend(p["seconds"])
+                row["seconds"].extend(p[clock])
                 row.update(hits=p["hits"], disagree_with_embree=p["disagree_with_first"])
     for name in out:
         for label, spec in peers:
@@ -126,6 +130,11 @@ def main() -> None:
     ap.add_argument("--tinybvh", default=os.environ.get("BVHLAB_TINYBVH_DIR"))
     ap.add_argument("--peers", help="comma-separated bvh_bench specs to keep (default: all)")
     ap.add_argument("--json", default="traverse.json", help="results file name in bench/results")
+    ap.add_argument(
+        "--cpu-time",
+        action="store_true",
+        help="time by the tracing thread's CPU time rather than wall time (for a loaded machine)",
+    )
     args = ap.parse_args()
     exe = _peers.build_bvh_bench(args.tinybvh)
     peers = [(label, spec) for label, spec in PEERS if args.tinybvh or not spec.startswith("tinybvh")]
@@ -137,7 +146,8 @@ def main() -> None:
         for scene, tris in _peers.scenes(args.scenes.split(",")).items():
             mesh, rays = _peers.write_inputs(Path(tmp), scene, tris)
             print(f"{scene}: tracing", file=sys.stderr, flush=True)
-            result = measure(exe, mesh, rays, args.repeat, args.rounds, peers)
+            clock = "cpu_seconds" if args.cpu_time else "seconds"
+            result = measure(exe, mesh, rays, args.repeat, args.rounds, peers, clock)
             if args.callgrind:
                 count_instructions(exe, mesh, rays, args.callgrind, result)
             results["scenes"][scene] = {"triangles": len(tris), "rays": result}

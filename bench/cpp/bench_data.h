@@ -1,6 +1,8 @@
 // bench_data.h — what the C++ benchmark driver reads (raw float32 files written by bench/*.py) and
 // the peers it times side by side (bvhlab, Embree 3, tinybvh when present).
 #pragma once
+#include <time.h>
+
 #include <chrono>
 #include <cstdint>
 #include <memory>
@@ -62,6 +64,14 @@ std::unique_ptr<Peer> make_tinybvh_peer(const std::string& variant, unsigned thr
 
 inline double seconds_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// CPU time of the calling thread (rays are traced on one thread): on a loaded machine, where the
+/// wall time of a pass includes the time other processes held its core.
+inline double thread_cpu_seconds() {
+    timespec ts{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
 }
 
 }  // namespace bench

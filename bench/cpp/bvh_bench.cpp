@@ -163,13 +163,15 @@ void trace_set(const Args& a, std::size_t s, const std::vector<std::unique_ptr<P
     std::vector<std::vector<float>> t(peers.size(), std::vector<float>(rays.count()));
     std::vector<std::vector<std::uint8_t>> blocked(peers.size(), std::vector<std::uint8_t>(rays.count()));
     std::vector<std::uint32_t> prim(rays.count());
-    std::vector<std::vector<double>> times(peers.size());
+    std::vector<std::vector<double>> times(peers.size()), cpu(peers.size());
     for (int r = 0; r < a.repeat; ++r)
         for (std::size_t k = 0; k < peers.size(); ++k) {
+            const double c0 = thread_cpu_seconds();
             auto t0 = std::chrono::steady_clock::now();
             if (shadow) peers[k]->occluded(rays, blocked[k].data());
             else peers[k]->trace(rays, t[k].data(), prim.data());
             times[k].push_back(seconds_since(t0));
+            cpu[k].push_back(thread_cpu_seconds() - c0);
         }
     std::printf("%s\n {\"rays\": \"%s\", \"shadow\": %s, \"count\": %zu, \"peers\": [", s ? "," : "", a.rays[s].c_str(),
                 shadow ? "true" : "false", rays.count());
@@ -183,6 +185,8 @@ void trace_set(const Args& a, std::size_t s, const std::vector<std::unique_ptr<P
             "\"seconds\": ",
             k ? "," : "", a.peers[k].c_str(), peers[k]->name().c_str(), hits, differ);
         print_times(times[k]);
+        std::printf(", \"cpu_seconds\": ");
+        print_times(cpu[k]);
         std::printf("}");
     }
     std::printf("]}");
