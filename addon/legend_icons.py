@@ -41,25 +41,33 @@ def depth_legend(layout, depth_min: int, depth_max: int, most: int = 12) -> None
         col.label(text=f"… to depth {depth_max}")
 
 
-def heat_legend(layout, lo: float, hi: float, what: str, stops: int = 5) -> None:
+def _title(col, what: str, how: str) -> None:
+    """The legend's title and, on a line of its own, how its range was chosen: two short lines fit
+    the Properties editor's narrow column where one long one is cut."""
+    col.label(text=what)
+    if how:
+        col.label(text=how)
+
+
+def heat_legend(layout, lo: float, hi: float, what: str, how: str = "", stops: int = 5) -> None:
     """Rows of the heat ramp at `stops` values from lo (blue) to hi (red), each with its number."""
     from bvhlab import legend, palette
 
     col = layout.column(align=True)
-    col.label(text=what)
+    _title(col, what, how)
     values = np.linspace(lo, hi, stops)
     for v, rgb in zip(values, palette.heat(np.linspace(0.0, 1.0, stops))):
         prefix = "≥ " if v == hi else ""
         col.label(text=prefix + legend.number_text(round(float(v), 2)), icon_value=swatch_icon(rgb))
 
 
-def diverging_legend(layout, span: float, what: str, stops: int = 5) -> None:
+def diverging_legend(layout, span: float, what: str, how: str = "", stops: int = 5) -> None:
     """Rows of the diverging ramp (a difference's) at `stops` values from -span (blue) through 0
     (white) to span (red), each with its number."""
     from bvhlab import legend, palette
 
     col = layout.column(align=True)
-    col.label(text=what)
+    _title(col, what, how)
     values = np.linspace(-span, span, stops)
     for v, rgb in zip(values, palette.diverging(np.linspace(-1.0, 1.0, stops))):
         prefix = "≥ " if v == span else "≤ " if v == -span else ""

@@ -151,15 +151,16 @@ def draw_histogram(layout, source: str, hist) -> None:
     from .legend_icons import swatch_icon
 
     col = layout.column(align=True)
-    how = "auto range" if hist.auto else "manual range"
-    col.label(text=f"{LABELS[hist.counter]} ({source}, {how})")
+    col.label(text=LABELS[hist.counter])
+    col.label(text=f"{source}, {'auto' if hist.auto else 'manual'} range")
     tallest = max(int(hist.counts.max(initial=0)), 1)
     for text, count, rgb in zip(hist.bin_labels(), hist.counts, hist.colors()):
         row = col.split(factor=0.35, align=True)
         row.label(text=text, icon_value=swatch_icon(rgb))
         row.progress(factor=int(count) / tallest, type="BAR", text=f"{int(count):,}")
     p = hist.percentiles
-    col.label(text=f"p50 {p['p50']:g} · p90 {p['p90']:g} · p99 {p['p99']:g} · max {p['max']:g}")
+    col.label(text=f"p50 {p['p50']:g} · p90 {p['p90']:g}")
+    col.label(text=f"p99 {p['p99']:g} · max {p['max']:g}")
 
 
 def _draw_difference(layout, summary: dict) -> None:
@@ -172,7 +173,7 @@ def _draw_difference(layout, summary: dict) -> None:
         row.label(text=label)
         row.label(text=f"mean {summary[key]['mean']:.2f}")
     col.label(text=f"{first} more: {summary['pixels_first_more']:,} px, less: {summary['pixels_first_less']:,} px")
-    diverging_legend(layout, summary["span"], f"{first} − {second} (auto: ± {summary['auto_percentile']:g}th pct)")
+    diverging_legend(layout, summary["span"], f"{first} − {second}", f"Auto: ± {summary['auto_percentile']:g}th pct")
 
 
 class BVHLAB_PT_counters(_BvhPanel, bpy.types.Panel):

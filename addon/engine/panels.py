@@ -98,8 +98,8 @@ def _counter_legend(layout, context, settings) -> None:
         layout.label(text="The legend follows the next viewport frame", icon="INFO")
         return
     lo, hi = shown[-1]["counter_range"]
-    how = f"auto: 0 to the {AUTO_PERCENTILE:g}th percentile" if settings.counter_range_auto else "manual"
-    heat_legend(layout, lo, hi, f"{LABELS[settings.viewport_counter]} per primary ray ({how})")
+    how = f"Auto: 0 to the {AUTO_PERCENTILE:g}th pct" if settings.counter_range_auto else "Manual range"
+    heat_legend(layout, lo, hi, f"{LABELS[settings.viewport_counter]} per ray", how)
 
 
 def _counter_histogram(layout, context) -> None:

@@ -78,7 +78,14 @@ inline float half_area(F4 lo, F4 hi) {
 #else
 struct F4 {
     float v[4];
-    static F4 load(const float* p) { return {{p[0], p[1], p[2], p[3]}}; }
+    /// A copy of the bytes (as _mm_loadu_ps, which may alias): rows read this way hold integer
+    /// words too (a node's index and info, a record's material), and reading them as floats broke
+    /// strict aliasing: GCC kept a node's old index over one stored since (refit_pass).
+    static F4 load(const float* p) {
+        F4 r;
+        std::memcpy(r.v, p, sizeof(r.v));
+        return r;
+    }
     static F4 load3(const float* p) { return {{p[0], p[1], p[2], 0.0f}}; }
     static F4 splat(float s) { return {{s, s, s, s}}; }
     static F4 set3(float x, float y, float z) { return {{x, y, z, 0.0f}}; }
