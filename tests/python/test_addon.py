@@ -18,13 +18,13 @@ def test_settings_take_names_defaults_and_limits_from_the_core():
 
     import bvhlab
 
-    properties = __import__(harness.addon().__name__ + ".properties", fromlist=["METHOD_ITEMS"])
-    assert [item[0] for item in properties.METHOD_ITEMS] == list(bvhlab.METHODS)
-    assert [item[0] for item in properties.AXIS_ITEMS] == list(bvhlab.AXES)
-    assert [item[0] for item in properties.BIN_BOUNDS_ITEMS] == list(bvhlab.bvh.BIN_BOUNDS)
-    labelled = properties.METHOD_ITEMS + properties.AXIS_ITEMS + properties.BIN_BOUNDS_ITEMS
+    property_items = __import__(harness.addon().__name__ + ".property_items", fromlist=["METHOD_ITEMS"])
+    assert [item[0] for item in property_items.METHOD_ITEMS] == list(bvhlab.METHODS)
+    assert [item[0] for item in property_items.AXIS_ITEMS] == list(bvhlab.AXES)
+    assert [item[0] for item in property_items.BIN_BOUNDS_ITEMS] == list(bvhlab.bvh.BIN_BOUNDS)
+    labelled = property_items.METHOD_ITEMS + property_items.AXIS_ITEMS + property_items.BIN_BOUNDS_ITEMS
     assert all(label and tooltip for _, label, tooltip in labelled)
-    assert properties.MAX_DEPTH == bvhlab.bvh.MAX_TREE_HEIGHT - 1
+    assert property_items.MAX_DEPTH == bvhlab.bvh.MAX_TREE_HEIGHT - 1
     rna = bpy.types.Scene.bl_rna.properties["bvhlab"].fixed_type.properties
     assert rna["method"].default == bvhlab.bvh.DEFAULT_METHOD and rna["axis"].default == bvhlab.bvh.DEFAULT_AXIS
     assert rna["bins"].default == bvhlab.bvh.DEFAULT_BINS
