@@ -2,10 +2,11 @@
 Sandén's report (median, mean, binned SAH) and more (midpoint, full-sweep SAH, LBVH, refit)."""
 
 from ._core import BuildCancelled
-from .bvh import AXES, METHODS, NODE_DTYPE, TRAVERSALS, BuildConfig, Bvh, build
+from .bvh import AXES, METHODS, NODE_DTYPE, BuildConfig, Bvh, build
 from .inspect.tree_file import load_bvh
 from .instanced import InstancedBvh
 from .optimize import OptimizeConfig, OptimizeStats
+from .ray_query import TRAVERSALS
 from .render import (
     RenderCancelled,
     Renderer,

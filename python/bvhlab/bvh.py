@@ -11,6 +11,7 @@ import numpy as np
 
 from . import _checks, _core
 from .inspect.node_data import NodeData
+from .ray_query import run_occluded_query, run_ray_query
 
 if TYPE_CHECKING:
     from .instanced import InstancedBvh
@@ -32,7 +33,6 @@ DEFAULT_SAH_BLOCK: int = _CORE_DEFAULTS.sah_block
 MIN_BINS, MAX_BINS = int(_core.MIN_BINS), int(_core.MAX_BINS)
 MAX_LEAF_SIZE = int(_core.MAX_LEAF_SIZE)
 MAX_SAH_BLOCK = int(_core.MAX_SAH_BLOCK)
-TRAVERSALS = tuple(_core.TRAVERSALS)  # of Bvh.intersect (the renderers have their own: RENDER_TRAVERSALS)
 MAX_TREE_HEIGHT = _core.MAX_TREE_HEIGHT
 #: Supported coordinates and ray directions (core_cpp/include/bvhlab/coordinate_range.h).
 MAX_COORDINATE = float(_core.MAX_COORDINATE)
@@ -398,49 +398,6 @@ class Bvh:
             spheres = _checks.float32_array("spheres", spheres, (4,))
         self._core.refit(triangles, spheres)
         self._stats = None
-
-
-#: The arrays a ray query fills, in the order the core's intersect takes them.
-HIT_FIELDS = {"t": np.float32, "prim": np.int32, "kind": np.uint8, "u": np.float32, "v": np.float32,
-              "nodes_visited": np.uint32}  # fmt: skip
-
-
-def _checked_rays(origins, directions, tmin, traversal: str, threads: int):
-    """The arguments every ray query checks alike: (origins, directions, tmin, traversal, threads)."""
-    origins = _checks.float32_array("origins", origins, (3,))
-    directions = _checks.float32_array("directions", directions, (3,))
-    if len(origins) != len(directions):
-        raise ValueError(f"origins ({len(origins)}) and directions ({len(directions)}) differ in length")
-    _checks.choice("traversal", traversal, TRAVERSALS)
-    return origins, directions, _checks.real("tmin", tmin), traversal, _checks.integer("threads", threads, 0, 4096)
-
-
-def run_ray_query(core, origins, directions, tmin, tmax, traversal: str, threads: int, extra: dict | None = None):
-    """The checked arguments and output arrays of one `intersect` over a flat or two-level tree
-    (`extra`: more output fields, e.g. the instance), filled by `core.intersect`."""
-    origins, directions, tmin, traversal, threads = _checked_rays(origins, directions, tmin, traversal, threads)
-    tmax = _checks.real("tmax", tmax)
-    out = {name: np.empty(len(origins), dtype) for name, dtype in {**HIT_FIELDS, **(extra or {})}.items()}
-    core.intersect(origins, directions, tmin, tmax, traversal, threads, *out.values())
-    return out
-
-
-def run_occluded_query(core, origins, directions, tmin, tmax, traversal: str, threads: int) -> np.ndarray:
-    """The checked arguments of one `occluded` over a flat or two-level tree, and its answer (bool,
-    one per ray) from `core.occluded`. `tmax`: a number >= 0, or a float32 array of one per ray
-    (which the core checks: a NaN or negative one raises ValueError naming the ray)."""
-    origins, directions, tmin, traversal, threads = _checked_rays(origins, directions, tmin, traversal, threads)
-    if isinstance(tmax, np.ndarray):
-        tmax_of = _checks.float32_array("tmax", tmax, ())
-        if len(tmax_of) != len(origins):
-            raise ValueError(f"tmax has {len(tmax_of)} entries for {len(origins)} rays (give one per ray, or a number)")
-        tmax = np.inf
-    else:
-        tmax_of = None
-        tmax = _checks.real("tmax", tmax, 0.0)
-    out = np.empty(len(origins), np.bool_)
-    core.occluded(origins, directions, tmin, tmax, tmax_of, traversal, threads, out)
-    return out
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:

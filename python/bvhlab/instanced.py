@@ -9,9 +9,10 @@ from collections.abc import Callable
 import numpy as np
 
 from . import _checks, _core
-from .bvh import BuildConfig, Bvh, run_occluded_query, run_ray_query
+from .bvh import BuildConfig, Bvh
 from .inspect.node_data import NodeData
 from .inspect.two_level_data import TwoLevelNodeData
+from .ray_query import run_occluded_query, run_ray_query
 from .two_level_stats import instanced_stats
 from .update import UpdateStats
 

@@ -27,8 +27,9 @@ import tomllib
 from dataclasses import dataclass, fields
 from pathlib import Path
 
-from ..bvh import TRAVERSALS, BuildConfig
+from ..bvh import BuildConfig
 from ..library import is_mesh_file
+from ..ray_query import TRAVERSALS
 
 #: The grid's keys: BuildConfig's tree settings (threads is the sweep's: one per worker) and traversal.
 GRID_KEYS = tuple(f.name for f in fields(BuildConfig) if f.compare) + ("traversal",)

@@ -230,12 +230,14 @@ def _histograms(drawn: dict) -> list[str]:
     failures = []
     for name, sources in expected.items():
         texts = drawn[name]["texts"]
-        titles = [t for t in texts if t.startswith("Box tests (")]
+        # the title is two lines: the counter, then where from and how its range was chosen
+        titles = [where for what, where in zip(texts, texts[1:]) if what == "Box tests"]
         for source in sources:
-            if not any(f"({source}," in t for t in titles):
+            if not any(t.startswith(f"{source}, ") and t.endswith(" range") for t in titles):
                 failures.append(f"{name}: no histogram of the {source} drawn (labels {texts})")
-        if sum(t.startswith("p50 ") for t in texts) != len(sources):
-            failures.append(f"{name}: {len(sources)} percentile lines expected (labels {texts})")
+        for line in ("p50 ", "p99 "):  # the percentiles, on two lines
+            if sum(t.startswith(line) for t in texts) != len(sources):
+                failures.append(f"{name}: {len(sources)} lines of {line.strip()} expected (labels {texts})")
         if not drawn[name]["redrawn"]:
             failures.append(f"{name} was not redrawn after the counters came")
     return failures
