@@ -10,6 +10,7 @@
 #include <embree3/rtcore.h>
 
 #include "bench_data.h"
+#include "embree_rays.h"
 
 namespace bench {
 namespace {
@@ -74,38 +75,8 @@ public:
         return binary_tree_info();
     }
 
-    void trace(const Rays& rays, float* t, std::uint32_t* prim) override {
-        RTCIntersectContext context;
-        rtcInitIntersectContext(&context);
-        for (std::size_t i = 0; i < rays.count(); ++i) {
-            const float* r = rays.od.data() + 6 * i;
-            RTCRayHit rh{};
-            rh.ray.org_x = r[0], rh.ray.org_y = r[1], rh.ray.org_z = r[2];
-            rh.ray.dir_x = r[3], rh.ray.dir_y = r[4], rh.ray.dir_z = r[5];
-            rh.ray.tnear = 0.0f, rh.ray.tfar = std::numeric_limits<float>::infinity();
-            rh.ray.mask = ~0u;
-            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-            rtcIntersect1(scene_, &context, &rh);
-            const bool miss = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID;
-            t[i] = miss ? std::numeric_limits<float>::infinity() : rh.ray.tfar;
-            prim[i] = miss ? ~0u : rh.hit.primID;
-        }
-    }
-
-    void occluded(const Rays& rays, std::uint8_t* out) override {
-        RTCIntersectContext context;
-        rtcInitIntersectContext(&context);
-        for (std::size_t i = 0; i < rays.count(); ++i) {
-            const float* r = rays.od.data() + 6 * i;
-            RTCRay ray{};
-            ray.org_x = r[0], ray.org_y = r[1], ray.org_z = r[2];
-            ray.dir_x = r[3], ray.dir_y = r[4], ray.dir_z = r[5];
-            ray.tnear = 0.0f, ray.tfar = rays.tmax[i];
-            ray.mask = ~0u;
-            rtcOccluded1(scene_, &context, &ray);
-            out[i] = ray.tfar == -std::numeric_limits<float>::infinity();  // Embree's mark of a hit
-        }
-    }
+    void trace(const Rays& rays, float* t, std::uint32_t* prim) override { embree_trace(scene_, rays, t, prim); }
+    void occluded(const Rays& rays, std::uint8_t* out) override { embree_occluded(scene_, rays, out); }
 
 private:
     void copy_mesh(const Mesh& mesh) {
