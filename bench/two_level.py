@@ -8,8 +8,9 @@ process (bench/cpp/tlas_bench), and callgrind instructions per ray.
 
 Scenes: `mover` (a static 240K knot and a floor in mesh 0, one identity instance, and a 968-
 triangle knot as a second instance moved away: the layout of a scene with one moving object,
-python/bvhlab/blender/motion.py), `many` (10,000 instances of a 480-triangle knot, rotated and
-scaled), `hundred` (100 instances of a 15K knot, bench/instancing.py's). Rays: random (200K,
+python/bvhlab/blender/motion.py), `one` (the mover's mesh 0 alone, one identity instance: the
+flat query's own path), `many` (10,000 instances of a 480-triangle knot, rotated and scaled),
+`hundred` (100 instances of a 15K knot, bench/instancing.py's). Rays: random (200K,
 origins in the bounds, uniform directions; closest hit) and shadow (any hit, to a point light
 from the random rays' hits, _peers.shadow_rays). Prints ms per set, each row ÷ the flat bvhlab wide
 walk, and instructions per ray; writes bench/results/two_level.json.
@@ -45,7 +46,7 @@ def scene(name: str) -> tuple[list[np.ndarray], np.ndarray]:
     """Meshes (T,3,3) and instances (N,13: mesh index, 3×4 object-to-world) of a bench scene."""
     from bvhlab.library import procedural
 
-    if name == "mover":
+    if name in ("mover", "one"):
         big = procedural.torus_knot(240_000)
         floor = np.array([[[-8, -8, -1.5], [8, -8, -1.5], [8, 8, -1.5]], [[-8, -8, -1.5], [8, 8, -1.5], [-8, 8, -1.5]]])
         small = procedural.torus_knot(968, scale=0.4)
@@ -54,6 +55,8 @@ def scene(name: str) -> tuple[list[np.ndarray], np.ndarray]:
         placed[:, :, :3] = np.eye(3)
         placed[1, :, 3] = (2.5, -2.0, 0.5)
         mesh_of = np.array([0, 1])
+        if name == "one":  # the mover's static mesh alone, one identity instance: the flat query's own path
+            meshes, placed, mesh_of = meshes[:1], placed[:1], mesh_of[:1]
     elif name == "many":
         meshes, placed = [procedural.torus_knot(480)], _placements(10_000, 7)
         mesh_of = np.zeros(10_000)

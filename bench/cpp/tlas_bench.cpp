@@ -4,6 +4,9 @@
 //   tlas_bench trace --mesh M.f32 [--mesh M.f32 ...] --instances I.f32 RAYS.f32 [--shadow S.f32 ...]
 //              --peer SPEC [--peer SPEC ...] [--repeat R]
 //   tlas_bench once  (the same, one peer, one ray set: one pass between callgrind's marks)
+//   tlas_bench build [--mesh M.f32] [--counts 1000,10000,100000] [--repeat R]
+//              (build_tlas over N placements of one mesh, bench/instancing.py's layout: the whole
+//              build, its binary tree and its wide copy, interleaved over the counts, one thread)
 // M: a mesh's triangles, T×3×3 float32; I: N×13 float32 (the mesh index, then the 3×4 row-major
 // object-to-world transform); RAYS and SHADOW as bvh_bench reads them.
 // SPEC: "flat/" + a bvh_bench spec (bvhlab:..., embree:...), built over the flattened triangles;
@@ -13,6 +16,9 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <random>
+#include <sys/resource.h>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -209,11 +215,138 @@ void run_set(const Args& a, std::size_t s, const std::vector<std::unique_ptr<Ins
     std::printf("]}");
 }
 
+/// N placements as bench/instancing.py's _placements lays them out (rotated about z, scaled
+/// 0.5-2, spread over a square of side 4·sqrt(N), flat in z), from std::mt19937.
+std::vector<bvhlab::Transform> placements(std::size_t n, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    const float side = std::sqrt(float(n)) * 4.0f;
+    std::vector<bvhlab::Transform> out(n);
+    for (bvhlab::Transform& t : out) {
+        const float angle = unit(rng) * 6.2831853f, scale = 0.5f + 1.5f * unit(rng);
+        t.m = {std::cos(angle) * scale,
+               -std::sin(angle) * scale,
+               0,
+               unit(rng) * side,
+               std::sin(angle) * scale,
+               std::cos(angle) * scale,
+               0,
+               unit(rng) * side,
+               0,
+               0,
+               scale,
+               unit(rng) * side * 0.1f};
+    }
+    return out;
+}
+
+/// 480 random triangles in the unit cube (no mesh file): the TLAS build reads only the BLAS's top boxes.
+Mesh default_mesh() {
+    std::mt19937 rng(1);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    Mesh m;
+    for (int k = 0; k < 480; ++k) {
+        const float c[3] = {unit(rng), unit(rng), unit(rng)};
+        for (int v = 0; v < 3; ++v)
+            for (int a = 0; a < 3; ++a) m.xyz.push_back(c[a] + 0.1f * unit(rng));
+    }
+    return m;
+}
+
+/// build_tlas timed: the whole call, its binary tree (Bvh::build_ms) and a second make_wide_tlas of
+/// the same tree; each count in turn, R rounds, the least and the median of each.
+int build_mode(int argc, char** argv) {
+    std::vector<std::size_t> counts{1000, 10000, 100000};
+    std::string mesh_path;
+    int repeat = 7;
+    for (int i = 2; i < argc; ++i) {
+        const std::string s = argv[i];
+        if (i + 1 >= argc) throw std::invalid_argument(s + " needs a value");
+        const std::string v = argv[++i];
+        if (s == "--mesh") mesh_path = v;
+        else if (s == "--repeat") repeat = std::stoi(v);
+        else if (s == "--counts") {
+            counts.clear();
+            std::stringstream in(v);
+            for (std::string c; std::getline(in, c, ',');) counts.push_back(std::stoul(c));
+        } else throw std::invalid_argument("unknown option " + s);
+    }
+    const Mesh mesh = mesh_path.empty() ? default_mesh() : load_mesh(mesh_path);
+    bvhlab::BuildConfig config;
+    config.threads = 1;
+    const bvhlab::Bvh blas = bvhlab::build_bvh({mesh.xyz.data(), mesh.count()}, config);
+    const std::vector<const bvhlab::Bvh*> blases{&blas};
+    std::vector<std::vector<bvhlab::Transform>> placed;
+    for (std::size_t n : counts) placed.push_back(placements(n, unsigned(n)));
+    bvhlab::BuildConfig tlas_config = bvhlab::default_tlas_config();
+    tlas_config.threads = 1;
+    struct Times {
+        std::vector<double> total, tree, wide, faults;
+        std::size_t nodes = 0, wide_nodes = 0;
+        double sah = 0;
+        std::uint64_t digest = 0;
+    };
+    auto minor_faults = [] {
+        rusage u{};
+        getrusage(RUSAGE_SELF, &u);
+        return double(u.ru_minflt);
+    };
+    std::vector<Times> times(counts.size());
+    bvhlab::Tlas previous;  // alive while the next is built, as InstancedBvh.place keeps its last
+    for (int r = 0; r < repeat; ++r)
+        for (std::size_t c = 0; c < counts.size(); ++c) {
+            const std::vector<std::uint32_t> blas_of(counts[c], 0);
+            const double faults = minor_faults();
+            auto t0 = std::chrono::steady_clock::now();
+            bvhlab::Tlas tlas = bvhlab::build_tlas(blases, blas_of, placed[c], tlas_config);
+            times[c].total.push_back(seconds_since(t0) * 1e3);
+            times[c].faults.push_back(minor_faults() - faults);
+            times[c].tree.push_back(tlas.tree.build_ms);
+            t0 = std::chrono::steady_clock::now();
+            const bvhlab::WideBvh wide = bvhlab::make_wide_tlas(tlas.tree);
+            times[c].wide.push_back(seconds_since(t0) * 1e3);
+            times[c].nodes = tlas.tree.nodes.size(), times[c].wide_nodes = wide.node_count;
+            std::uint64_t h = 0xcbf29ce484222325ull;  // FNV-1a of the tree, the wide copy and the world boxes
+            auto add = [&h](const void* data, std::size_t bytes) {
+                for (std::size_t i = 0; i < bytes; ++i)
+                    h = (h ^ static_cast<const unsigned char*>(data)[i]) * 0x100000001b3ull;
+            };
+            add(tlas.tree.nodes.data(), tlas.tree.nodes.size() * sizeof(bvhlab::BvhNode));
+            add(tlas.tree.refs.data(), tlas.tree.refs.size() * 4);
+            add(tlas.wide.lines.data(), tlas.wide.lines.size() * sizeof(bvhlab::WideLine));
+            for (const bvhlab::Instance& inst : tlas.instances) add(&inst.world_box, sizeof inst.world_box);
+            times[c].digest = h;
+            double sah = 0;  // the tree's summed inner-node area over the root's (a quality check)
+            for (const auto& n : tlas.tree.nodes)
+                if (!bvhlab::is_leaf(n)) sah += bvhlab::node_box(n).half_area();
+            times[c].sah = sah / bvhlab::node_box(tlas.tree.nodes[0]).half_area();
+            previous = std::move(tlas);
+        }
+    auto least = [](std::vector<double> v) { return *std::min_element(v.begin(), v.end()); };
+    auto median = [](std::vector<double> v) {
+        std::sort(v.begin(), v.end());
+        return v[v.size() / 2];
+    };
+    std::printf("{\"builds\": [");
+    for (std::size_t c = 0; c < counts.size(); ++c) {
+        const Times& t = times[c];
+        std::printf(
+            "%s\n {\"instances\": %zu, \"nodes\": %zu, \"wide_nodes\": %zu, \"inner_area_over_root\": %.2f, "
+            "\"build_tlas_ms\": [%.3f, %.3f], \"tree_ms\": [%.3f, %.3f], \"wide_ms\": [%.3f, %.3f], "
+            "\"page_faults\": %.0f, \"digest\": \"%016llx\"}",
+            c ? "," : "", counts[c], t.nodes, t.wide_nodes, t.sah, least(t.total), median(t.total), least(t.tree),
+            median(t.tree), least(t.wide), median(t.wide), median(t.faults), (unsigned long long)t.digest);
+    }
+    std::printf("]}\n  (each: [least, median] of %d rounds; build_tlas_ms includes the wide copy)\n", repeat);
+    return 0;
+}
+
 }  // namespace
 }  // namespace bench
 
 int main(int argc, char** argv) {
     try {
+        if (argc > 1 && std::string(argv[1]) == "build") return bench::build_mode(argc, argv);
         const bench::Args a = bench::parse(argc, argv);
         if (a.mode != "trace" && a.mode != "once") throw std::invalid_argument("unknown mode " + a.mode);
         const bool once = a.mode == "once";

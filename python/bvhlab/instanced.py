@@ -208,9 +208,9 @@ def _make_tlas(meshes: list[Bvh], mesh_of, transforms, threads: int) -> _core.Tw
         raise ValueError(f"instance {negative[0]} refers to mesh {mesh_of[negative[0]]}, which does not exist")
     transforms = _checks.float32_array("transforms", transforms, (3, 4))
     core = [m._core for m in meshes]
-    return _core.build_two_level(
-        core, np.ascontiguousarray(mesh_of, np.uint32), transforms, _core.default_tlas_config()
-    )
+    config = _core.default_tlas_config()
+    config.threads = threads  # the docstring's promise (it was dropped: a TLAS was built on every thread)
+    return _core.build_two_level(core, np.ascontiguousarray(mesh_of, np.uint32), transforms, config)
 
 
 def build_instanced(scene, config: BuildConfig, progress: Callable[[float], bool | None] | None) -> InstancedBvh:

@@ -262,6 +262,37 @@ TEST(Tlas, OneIdentityInstanceIsTheFlatTree) {
             ASSERT_EQ(two.instance, flat.ref == kNoHit ? kNoHit : 0u);
         }
     }
+    // The batches are the flat batches themselves, each hit in instance 0
+    const auto rays = scattered_rays(2000, 3);
+    const std::size_t n = rays.size();
+    std::vector<float> o, d, t[2], u[2], v[2];
+    for (const Ray& r : rays)
+        o.insert(o.end(), {r.origin.x, r.origin.y, r.origin.z}), d.insert(d.end(), {r.dir.x, r.dir.y, r.dir.z});
+    std::vector<std::int32_t> prim[2], instance(n);
+    std::vector<std::uint32_t> visited[2];
+    for (int k = 0; k < 2; ++k) t[k].resize(n), u[k].resize(n), v[k].resize(n), prim[k].resize(n), visited[k].resize(n);
+    auto out = [&](int k) {
+        return HitBatch{t[k].data(), prim[k].data(), nullptr, u[k].data(), v[k].data(), visited[k].data()};
+    };
+    std::unique_ptr<bool[]> flat_blocked(new bool[n]), two_blocked(new bool[n]);
+    std::vector<float> tmax(n);
+    for (Traversal mode : {Traversal::Stack, Traversal::Stackless, Traversal::Wide}) {
+        intersect_batch(tree, {o.data(), d.data(), n}, out(0), mode, 1, &wide);
+        intersect_batch_two_level(scene, {o.data(), d.data(), n}, out(1), instance.data(), mode, 1);
+        for (std::size_t i = 0; i < n; ++i) {
+            ASSERT_EQ(prim[0][i], prim[1][i]);
+            ASSERT_EQ(t[0][i], t[1][i]);
+            ASSERT_EQ(u[0][i], u[1][i]);
+            ASSERT_EQ(visited[0][i], visited[1][i]);
+            ASSERT_EQ(instance[i], prim[0][i] < 0 ? -1 : 0);
+            tmax[i] = std::isinf(t[0][i]) ? 50.0f : t[0][i] * (i % 2 ? 0.99f : 1.01f);
+        }
+        RayBatch shadow{o.data(), d.data(), n};
+        shadow.tmax_of = tmax.data();
+        occluded_batch(tree, shadow, flat_blocked.get(), mode, 1, &wide);
+        occluded_batch_two_level(scene, shadow, two_blocked.get(), mode, 1);
+        for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(flat_blocked[i], two_blocked[i]);
+    }
 }
 
 TEST(Tlas, TreeHoldsEveryPlacedInstanceOnceInsideItsBoxes) {
@@ -342,6 +373,61 @@ TEST(Tlas, InverseUndoesTheTransform) {
         EXPECT_NEAR(back.y, p.y, 1e-5f);
         EXPECT_NEAR(back.z, p.z, 1e-5f);
     }
+}
+
+/// transform_boxes over boxes made ready once (BoxesToMove: two boxes at a time, the matrix in
+/// double once) and rounded out by bits rather than nextafterf: the same box, bit for bit, as the
+/// box-by-box computation, over transforms and boxes with zeros of both signs, empty boxes, odd
+/// counts and magnitudes from 2^-30 to 2^30.
+TEST(Tlas, MovedBoxesAreTheBoxByBoxUnionBitForBit) {
+    auto box_by_box = [](const Transform& t, const Aabb* boxes, std::size_t count) {
+        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        for (std::size_t k = 0; k < count; ++k) {
+            const Aabb& b = boxes[k];
+            if (b.empty()) continue;
+            const double c[3] = {0.5 * (double(b.lo.x) + b.hi.x), 0.5 * (double(b.lo.y) + b.hi.y),
+                                 0.5 * (double(b.lo.z) + b.hi.z)};
+            const double h[3] = {0.5 * (double(b.hi.x) - b.lo.x), 0.5 * (double(b.hi.y) - b.lo.y),
+                                 0.5 * (double(b.hi.z) - b.lo.z)};
+            for (int r = 0; r < 3; ++r) {
+                const double m0 = t.m[4 * r], m1 = t.m[4 * r + 1], m2 = t.m[4 * r + 2];
+                const double centre = m0 * c[0] + m1 * c[1] + m2 * c[2] + t.m[4 * r + 3];
+                const double half = std::fabs(m0) * h[0] + std::fabs(m1) * h[1] + std::fabs(m2) * h[2];
+                lo[r] = std::min(lo[r], centre - half), hi[r] = std::max(hi[r], centre + half);
+            }
+        }
+        Aabb out;
+        if (lo[0] > hi[0]) return out;
+        for (int r = 0; r < 3; ++r) {
+            const double pad = 0x1p-20 * std::max({std::fabs(lo[r]), std::fabs(hi[r]), hi[r] - lo[r]});
+            out.lo[r] = std::nextafter(float(lo[r] - pad), -INFINITY);
+            out.hi[r] = std::nextafter(float(hi[r] + pad), INFINITY);
+        }
+        return out;
+    };
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> mantissa(-2.0f, 2.0f);
+    std::uniform_int_distribution<int> exponent(-30, 30), kind(0, 5);
+    auto value = [&](int e) { return kind(rng) == 0 ? 0.0f : kind(rng) == 0 ? -0.0f : std::ldexp(mantissa(rng), e); };
+    for (int i = 0; i < 50000; ++i) {
+        Transform t;
+        for (float& x : t.m) x = value(exponent(rng) / 3);
+        Aabb boxes[9];
+        const std::size_t count = std::size_t(i % 10);
+        for (std::size_t k = 0; k < count; ++k) {
+            const int e = exponent(rng);
+            const Vec3 a{value(e), value(e), value(e)}, b{value(e), value(e), value(e)};
+            boxes[k].lo = min(a, b), boxes[k].hi = max(a, b);
+            if (i % 7 == 0 && k == 0) boxes[k] = Aabb{};
+        }
+        const Aabb expected = box_by_box(t, boxes, count);
+        const Aabb got = transform_boxes(t, BoxesToMove(boxes, count));
+        ASSERT_EQ(std::memcmp(&got, &expected, sizeof got), 0) << "case " << i;
+    }
+    const Transform zero{{0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}};  // a point at the origin: ±denorm_min
+    const Aabb origin{{0, 0, 0}, {0, 0, 0}};
+    const Aabb got = transform_boxes(zero, &origin, 1), expected = box_by_box(zero, &origin, 1);
+    EXPECT_EQ(std::memcmp(&got, &expected, sizeof got), 0);
 }
 
 /// scale_ray takes its power of two from the largest component's exponent bits (no frexp, ldexp):

@@ -3,6 +3,7 @@
 #pragma once
 #include <array>
 #include <cstddef>
+#include <vector>
 
 #include "bvhlab/aabb.h"
 #include "bvhlab/vec3.h"
@@ -42,5 +43,15 @@ Transform inverse(const Transform& t);
 /// rounding of a moved vertex stays inside). Empty boxes add nothing; none at all: an empty box.
 Aabb transform_boxes(const Transform& t, const Aabb* boxes, std::size_t count);
 Aabb transform_box(const Transform& t, const Aabb& box);  ///< transform_boxes of one box
+
+/// Boxes made ready to be moved by many transforms (a BLAS's top boxes, by each of its instances:
+/// build_tlas): the centre and half extent of each non-empty box in double, by axis, in a count
+/// rounded up to even (the last box repeated, which changes no union).
+struct BoxesToMove {
+    std::vector<double> centre[3], half[3];
+    BoxesToMove(const Aabb* boxes, std::size_t count);
+};
+/// transform_boxes(t, boxes, count) of the boxes that `boxes` was made from: the same box, bit for bit.
+Aabb transform_boxes(const Transform& t, const BoxesToMove& boxes);
 
 }  // namespace bvhlab

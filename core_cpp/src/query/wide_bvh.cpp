@@ -22,8 +22,9 @@ struct SubtreeRanges {
     static constexpr std::uint32_t kNoRange = std::numeric_limits<std::uint32_t>::max();
     std::vector<std::uint32_t> first, size;
     std::uint32_t merged;
-    explicit SubtreeRanges(const Bvh& bvh, std::uint32_t merged_leaf = kMergedLeaf)
-        : first(bvh.nodes.size()), size(bvh.nodes.size()), merged(merged_leaf) {
+    explicit SubtreeRanges(const Bvh& bvh, std::uint32_t merged_leaf = kMergedLeaf) : merged(merged_leaf) {
+        if (merged == 0) return;  // a TLAS: the leaves are the binary tree's (leaf()), no ranges needed
+        first.resize(bvh.nodes.size()), size.resize(bvh.nodes.size());
         for (std::size_t i = bvh.nodes.size(); i-- > 0;) {
             const BvhNode& n = bvh.nodes[i];
             if (is_leaf(n)) {
@@ -35,7 +36,7 @@ struct SubtreeRanges {
         }
     }
     bool leaf(const Bvh& bvh, std::uint32_t i) const {
-        return is_leaf(bvh.nodes[i]) || (size[i] <= merged && first[i] != kNoRange);
+        return is_leaf(bvh.nodes[i]) || (merged != 0 && size[i] <= merged && first[i] != kNoRange);
     }
 };
 
@@ -109,8 +110,15 @@ public:
                 finished.pop_back();
                 const Costs b = finished.back();
                 finished.pop_back();
-                if (!ranges.leaf(bvh, std::uint32_t(n)))
-                    share_[n] = choose(a, b, node_box(bvh.nodes[n]).half_area(), c);
+                if (!ranges.leaf(bvh, std::uint32_t(n))) {
+                    const float area = node_box(bvh.nodes[n]).half_area();
+                    // Two leaves (two in five of a TLAS's inner nodes): what choose() finds for costs
+                    // of 0, without its 28 sums: cost(n, 1) = area, 0 for more slots (each leaf a
+                    // slot of its own), share 1 for i = 1 and 2. Where area is 0, choose() (ties).
+                    if (area > 0.0f && ranges.leaf(bvh, std::uint32_t(n) + 1) && ranges.leaf(bvh, bvh.nodes[n].index))
+                        c[0] = area, share_[n] = 1u | 1u << 3;
+                    else share_[n] = choose(a, b, area, c);
+                }
             }
             finished.push_back(c);
         }

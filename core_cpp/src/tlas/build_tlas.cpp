@@ -42,7 +42,7 @@ std::vector<Aabb> top_boxes(const Bvh& tree) {
     return boxes;
 }
 
-Instance make_instance(const std::vector<std::vector<Aabb>>& tops, std::uint32_t blas, const Transform& t,
+Instance make_instance(const std::vector<BoxesToMove>& tops, std::uint32_t blas, const Transform& t,
                        std::size_t index) {
     auto what = [&] { return "instance " + std::to_string(index); };
     if (blas >= tops.size())
@@ -54,7 +54,7 @@ Instance make_instance(const std::vector<std::vector<Aabb>>& tops, std::uint32_t
     inst.object_to_world = t;
     inst.world_to_object = inverse(t);
     inst.identity = t.is_identity();
-    inst.world_box = transform_boxes(t, tops[blas].data(), tops[blas].size());
+    inst.world_box = transform_boxes(t, tops[blas]);
     if (!inst.world_box.empty() && !(in_coordinate_range(inst.world_box.lo) && in_coordinate_range(inst.world_box.hi)))
         throw std::invalid_argument(what() +
                                     ": the transform moves the mesh outside the supported coordinate range "
@@ -71,15 +71,18 @@ Tlas build_tlas(const std::vector<const Bvh*>& blases, const std::vector<std::ui
                                     " instances and " + std::to_string(transforms.size()) + " transforms");
     for (const Bvh* b : blases)
         if (!b) throw std::invalid_argument("a mesh of the scene has no tree");
-    std::vector<std::vector<Aabb>> tops;
-    for (const Bvh* b : blases) tops.push_back(top_boxes(*b));
+    std::vector<BoxesToMove> tops;  // each BLAS's, made ready once for all its instances
+    for (const Bvh* b : blases) {
+        const std::vector<Aabb> boxes = top_boxes(*b);
+        tops.emplace_back(boxes.data(), boxes.size());
+    }
     Tlas tlas;
     tlas.instances.reserve(blas_of.size());
     for (std::size_t i = 0; i < blas_of.size(); ++i)
         tlas.instances.push_back(make_instance(tops, blas_of[i], transforms[i], i));
     // Instances of empty meshes are not in the tree: box i of the build is instance placed[i].
-    std::vector<Aabb> boxes;
-    std::vector<std::uint32_t> placed;
+    BigVector<Aabb> boxes;
+    BigVector<std::uint32_t> placed;
     boxes.reserve(tlas.instances.size()), placed.reserve(tlas.instances.size());
     for (std::size_t i = 0; i < tlas.instances.size(); ++i) {
         if (tlas.instances[i].world_box.empty()) continue;

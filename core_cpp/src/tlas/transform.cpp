@@ -1,8 +1,12 @@
 // transform.cpp — checks, inverse and boxes of instance transforms (transform.h).
 #include "bvhlab/transform.h"
 
+#include "bvhlab/simd.h"
+
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
@@ -61,33 +65,96 @@ Transform inverse(const Transform& t) {
     return out;
 }
 
-Aabb transform_boxes(const Transform& t, const Aabb* boxes, std::size_t count) {
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+namespace {
+
+/// std::nextafter(x, -inf) and (x, +inf) from the bits, as libm computes them (a call of ~30
+/// instructions each, six an instance: 18% of a 100,000-instance build_tlas before).
+float next_down(float x) {
+    if (!(x > -INFINITY)) return x;  // -inf, NaN
+    if (x == 0.0f) return -0x1p-149f;
+    std::uint32_t bits;
+    std::memcpy(&bits, &x, 4);
+    bits = x > 0.0f ? bits - 1 : bits + 1;
+    std::memcpy(&x, &bits, 4);
+    return x;
+}
+float next_up(float x) { return -next_down(-x); }
+
+/// The union of the moved boxes before rounding: per row r of the transform, the least and
+/// the greatest of centre - half and centre + half over the boxes, where (Arvo, Graphics Gems 1990)
+///   centre = ((m[r][0] c.x + m[r][1] c.y) + m[r][2] c.z) + m[r][3],
+///   half   = (|m[r][0]| h.x + |m[r][1]| h.y) + |m[r][2]| h.z,
+/// in this order in double on every path. The boxes two at a time (SSE2) where there is SSE: 300
+/// instructions for eight boxes against 870 box by box with the rows paired, 1,270 before either.
+/// Min and max do not depend on the order of the boxes but for the sign of a zero, which the
+/// rounding outwards (transform_boxes) makes the same.
+void union_of_moved(const Transform& t, const BoxesToMove& boxes, double lo[3], double hi[3]) {
+    const std::size_t n = boxes.centre[0].size();
+    for (int r = 0; r < 3; ++r) {
+        const double m0 = t.m[4 * r], m1 = t.m[4 * r + 1], m2 = t.m[4 * r + 2], m3 = t.m[4 * r + 3];
+        const double a0 = std::fabs(m0), a1 = std::fabs(m1), a2 = std::fabs(m2);
+        const double *cx = boxes.centre[0].data(), *cy = boxes.centre[1].data(), *cz = boxes.centre[2].data();
+        const double *hx = boxes.half[0].data(), *hy = boxes.half[1].data(), *hz = boxes.half[2].data();
+#ifdef BVHLAB_SSE
+        const __m128d vm0 = _mm_set1_pd(m0), vm1 = _mm_set1_pd(m1), vm2 = _mm_set1_pd(m2), vm3 = _mm_set1_pd(m3);
+        const __m128d va0 = _mm_set1_pd(a0), va1 = _mm_set1_pd(a1), va2 = _mm_set1_pd(a2);
+        __m128d vlo = _mm_set1_pd(INFINITY), vhi = _mm_set1_pd(-INFINITY);
+        for (std::size_t k = 0; k < n; k += 2) {
+            const __m128d centre = _mm_add_pd(
+                _mm_add_pd(_mm_add_pd(_mm_mul_pd(vm0, _mm_loadu_pd(cx + k)), _mm_mul_pd(vm1, _mm_loadu_pd(cy + k))),
+                           _mm_mul_pd(vm2, _mm_loadu_pd(cz + k))),
+                vm3);
+            const __m128d half =
+                _mm_add_pd(_mm_add_pd(_mm_mul_pd(va0, _mm_loadu_pd(hx + k)), _mm_mul_pd(va1, _mm_loadu_pd(hy + k))),
+                           _mm_mul_pd(va2, _mm_loadu_pd(hz + k)));
+            vlo = _mm_min_pd(_mm_sub_pd(centre, half), vlo), vhi = _mm_max_pd(_mm_add_pd(centre, half), vhi);
+        }
+        vlo = _mm_min_pd(vlo, _mm_unpackhi_pd(vlo, vlo)), vhi = _mm_max_pd(vhi, _mm_unpackhi_pd(vhi, vhi));
+        lo[r] = _mm_cvtsd_f64(vlo), hi[r] = _mm_cvtsd_f64(vhi);
+#else
+        lo[r] = INFINITY, hi[r] = -INFINITY;
+        for (std::size_t k = 0; k < n; ++k) {
+            const double centre = m0 * cx[k] + m1 * cy[k] + m2 * cz[k] + m3;
+            const double half = a0 * hx[k] + a1 * hy[k] + a2 * hz[k];
+            lo[r] = std::min(lo[r], centre - half), hi[r] = std::max(hi[r], centre + half);
+        }
+#endif
+    }
+}
+
+}  // namespace
+
+BoxesToMove::BoxesToMove(const Aabb* boxes, std::size_t count) {
     for (std::size_t k = 0; k < count; ++k) {
         const Aabb& box = boxes[k];
         if (box.empty()) continue;
-        // Arvo (Graphics Gems, 1990): the moved centre, and the half extent through |M|
-        const double c[3] = {0.5 * (double(box.lo.x) + box.hi.x), 0.5 * (double(box.lo.y) + box.hi.y),
-                             0.5 * (double(box.lo.z) + box.hi.z)};
-        const double h[3] = {0.5 * (double(box.hi.x) - box.lo.x), 0.5 * (double(box.hi.y) - box.lo.y),
-                             0.5 * (double(box.hi.z) - box.lo.z)};
-        for (int r = 0; r < 3; ++r) {
-            const double m0 = t.m[4 * r], m1 = t.m[4 * r + 1], m2 = t.m[4 * r + 2];
-            const double centre = m0 * c[0] + m1 * c[1] + m2 * c[2] + t.m[4 * r + 3];
-            const double half = std::fabs(m0) * h[0] + std::fabs(m1) * h[1] + std::fabs(m2) * h[2];
-            lo[r] = std::min(lo[r], centre - half), hi[r] = std::max(hi[r], centre + half);
+        for (int a = 0; a < 3; ++a) {
+            centre[a].push_back(0.5 * (double(box.lo[a]) + box.hi[a]));
+            half[a].push_back(0.5 * (double(box.hi[a]) - box.lo[a]));
         }
     }
+    if (centre[0].size() % 2)
+        for (int a = 0; a < 3; ++a) centre[a].push_back(centre[a].back()), half[a].push_back(half[a].back());
+}
+
+Aabb transform_boxes(const Transform& t, const BoxesToMove& boxes) {
+    double lo[3], hi[3];
+    union_of_moved(t, boxes, lo, hi);
     Aabb out;
-    if (lo[0] > hi[0]) return out;  // nothing but empty boxes
+    if (lo[0] > hi[0]) return out;  // nothing but empty boxes (or a NaN in the transform, which min and max pass over)
     for (int r = 0; r < 3; ++r) {
         // Rounded outwards: a vertex moved into the world in float, or a ray moved into the object,
-        // lands within a few ulps of its exact place.
+        // lands within a few ulps of its exact place. (A zero's sign changes nothing here: with
+        // pad 0, lo and hi are both zero, and next_down and next_up give the same for ±0.)
         const double pad = 0x1p-20 * std::max({std::fabs(lo[r]), std::fabs(hi[r]), hi[r] - lo[r]});
-        out.lo[r] = std::nextafter(float(lo[r] - pad), -INFINITY);
-        out.hi[r] = std::nextafter(float(hi[r] + pad), INFINITY);
+        out.lo[r] = next_down(float(lo[r] - pad));
+        out.hi[r] = next_up(float(hi[r] + pad));
     }
     return out;
+}
+
+Aabb transform_boxes(const Transform& t, const Aabb* boxes, std::size_t count) {
+    return transform_boxes(t, BoxesToMove(boxes, count));
 }
 
 Aabb transform_box(const Transform& t, const Aabb& box) { return transform_boxes(t, &box, 1); }
