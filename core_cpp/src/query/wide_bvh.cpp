@@ -189,6 +189,36 @@ void set_slot(WideNode& w, int k, const BvhNode* c) {
     w.child[k] = 0, w.unused[k] = 0;
 }
 
+/// Lays the wide nodes down in preorder: a node, what `fill` appends after it (a tree's leaf
+/// packets), then its inner children in slot order (the job of slot 0 pops first); each node
+/// writes its line into its parent's slot when it is laid down. `leaf(n)`: whether binary node n
+/// ends in a leaf slot; `fill(node, n, children, count)` sets the slots of the node collapsed from n.
+template <class Leaf, class Fill>
+void lay_down(const Collapse& collapse, WideBvh& wide, Leaf leaf, Fill fill) {
+    struct Job {
+        std::uint32_t binary, parent_line;
+        int slot;
+    };
+    constexpr std::uint32_t kRoot = std::numeric_limits<std::uint32_t>::max();
+    std::vector<Job> jobs{{0, kRoot, 0}};
+    while (!jobs.empty()) {
+        const Job job = jobs.back();
+        jobs.pop_back();
+        const auto at = static_cast<std::uint32_t>(wide.lines.size());
+        if (at > kLeafChild - kNodeLines) throw std::length_error("the wide tree needs over 2^31 lines");
+        wide.lines.resize(at + kNodeLines);
+        ++wide.node_count;
+        if (job.parent_line != kRoot) reinterpret_cast<WideNode*>(&wide.lines[job.parent_line])->child[job.slot] = at;
+        std::uint32_t children[8];
+        const int count = collapse.children(job.binary, children);
+        WideNode node;
+        fill(node, job.binary, children, count);
+        std::memcpy(&wide.lines[at], &node, sizeof node);
+        for (int k = count - 1; k >= 0; --k)
+            if (!leaf(children[k])) jobs.push_back({children[k], at, k});
+    }
+}
+
 }  // namespace
 
 WideBvh make_wide(const Bvh& bvh) {
@@ -216,34 +246,16 @@ WideBvh make_wide(const Bvh& bvh) {
     if (lines > kLeafChild) throw std::length_error("the wide tree needs over 2^31 lines");
     wide.lines.reserve(lines);
     advise_huge_pages(wide.lines.data(), lines * sizeof(WideLine));
-    // Preorder: a node, its leaves' packets, then its inner children in slot order (the job of
-    // slot 0 pops first); each writes its line into its parent's slot when it is laid down.
-    struct Job {
-        std::uint32_t binary, parent_line;
-        int slot;
-    };
-    constexpr std::uint32_t kRoot = std::numeric_limits<std::uint32_t>::max();
-    std::vector<Job> jobs{{0, kRoot, 0}};
-    while (!jobs.empty()) {
-        const Job job = jobs.back();
-        jobs.pop_back();
-        const auto at = static_cast<std::uint32_t>(wide.lines.size());
-        wide.lines.resize(at + kNodeLines);
-        ++wide.node_count;
-        if (job.parent_line != kRoot) reinterpret_cast<WideNode*>(&wide.lines[job.parent_line])->child[job.slot] = at;
-        std::uint32_t children[8];
-        const int count = collapse.children(job.binary, children);
-        WideNode node;
-        for (int k = 0; k < 8; ++k) {
-            const BvhNode* c = k < count ? &bvh.nodes[children[k]] : nullptr;
-            set_slot(node, k, c);
-            if (c && ranges.leaf(bvh, children[k]))
-                node.child[k] = pack_leaf(bvh, ranges.first[children[k]], ranges.size[children[k]], wide);
-        }
-        std::memcpy(&wide.lines[at], &node, sizeof node);
-        for (int k = count - 1; k >= 0; --k)
-            if (!ranges.leaf(bvh, children[k])) jobs.push_back({children[k], at, k});
-    }
+    lay_down(
+        collapse, wide, [&](std::uint32_t n) { return ranges.leaf(bvh, n); },
+        [&](WideNode& node, std::uint32_t, const std::uint32_t* children, int count) {
+            for (int k = 0; k < 8; ++k) {
+                const BvhNode* c = k < count ? &bvh.nodes[children[k]] : nullptr;
+                set_slot(node, k, c);
+                if (c && ranges.leaf(bvh, children[k]))
+                    node.child[k] = pack_leaf(bvh, ranges.first[children[k]], ranges.size[children[k]], wide);
+            }
+        });
     return wide;
 }
 
@@ -253,33 +265,16 @@ WideBvh make_wide_tlas(const Bvh& tlas) {
     const SubtreeRanges ranges(tlas, 0);
     const Collapse collapse(tlas, ranges);
     wide.lines.reserve(std::size_t(kNodeLines) * (tlas.nodes.size() / 2 + 1));  // a node per binary inner node at most
-    struct Job {
-        std::uint32_t binary, parent_line;
-        int slot;
-    };
-    constexpr std::uint32_t kRoot = std::numeric_limits<std::uint32_t>::max();
-    std::vector<Job> jobs{{0, kRoot, 0}};
-    while (!jobs.empty()) {  // preorder, as make_wide (nodes only)
-        const Job job = jobs.back();
-        jobs.pop_back();
-        const auto at = static_cast<std::uint32_t>(wide.lines.size());
-        if (at > kLeafChild - kNodeLines) throw std::length_error("the wide TLAS needs over 2^31 lines");
-        wide.lines.resize(at + kNodeLines);
-        ++wide.node_count;
-        if (job.parent_line != kRoot) reinterpret_cast<WideNode*>(&wide.lines[job.parent_line])->child[job.slot] = at;
-        std::uint32_t children[8];
-        const int count = collapse.children(job.binary, children);
-        WideNode node;
-        for (int k = 0; k < 8; ++k) {
-            const BvhNode* c = k < count ? &tlas.nodes[children[k]] : nullptr;
-            set_slot(node, k, c);
-            if (c && is_leaf(*c)) node.child[k] = kLeafChild | children[k];
-        }
-        node.unused[0] = std::uint32_t(count), node.unused[1] = job.binary;
-        std::memcpy(&wide.lines[at], &node, sizeof node);
-        for (int k = count - 1; k >= 0; --k)
-            if (!is_leaf(tlas.nodes[children[k]])) jobs.push_back({children[k], at, k});
-    }
+    lay_down(
+        collapse, wide, [&](std::uint32_t n) { return is_leaf(tlas.nodes[n]); },  // nodes only: no packets
+        [&](WideNode& node, std::uint32_t binary, const std::uint32_t* children, int count) {
+            for (int k = 0; k < 8; ++k) {
+                const BvhNode* c = k < count ? &tlas.nodes[children[k]] : nullptr;
+                set_slot(node, k, c);
+                if (c && is_leaf(*c)) node.child[k] = kLeafChild | children[k];
+            }
+            node.unused[0] = std::uint32_t(count), node.unused[1] = binary;
+        });
     return wide;
 }
 
