@@ -74,17 +74,44 @@ struct TwoLevel {
 /// tree (and, for Traversal::Wide, its wide copy).
 void check_two_level(const TwoLevel& scene, Traversal mode);
 
+/// Whether `tlas` is one identity instance, the scene the two-level queries answer with the flat
+/// query of its one BLAS (the one-mesh scene of blender/motion.py's layout, without a mover).
+inline bool one_identity_instance(const Tlas& tlas) { return tlas.instances.size() == 1 && tlas.instances[0].identity; }
+
+namespace detail {
+/// intersect_two_level past its one-identity-instance case: the walk through the TLAS (a scene
+/// one_identity_instance rejects), out of line.
+InstanceHit intersect_through_tlas(const TwoLevel& scene, const Ray& ray, Traversal mode, std::uint32_t* nodes_visited);
+/// occluded_two_level past its one-identity-instance case, as intersect_through_tlas.
+bool occluded_through_tlas(const TwoLevel& scene, const Ray& ray, Traversal mode);
+}  // namespace detail
+
 /// Closest hit through both levels, on a scene that check_two_level accepts. `mode` picks the BLAS
 /// traversal (the TLAS is walked with a stack, stacklessly for Traversal::Stackless, and by its wide copy for
 /// Traversal::Wide, whose nodes_visited counts the child boxes of each wide node visited). The ray is
 /// one intersect_batch would accept. A scene of one identity instance goes straight to its BLAS:
-/// exactly the flat query.
-InstanceHit intersect_two_level(const TwoLevel& scene, const Ray& ray, Traversal mode,
-                                std::uint32_t* nodes_visited = nullptr);
+/// exactly the flat query, tested inline so that it costs the caller little more than the flat
+/// query does (design.md, "The two-level walk's cost").
+inline InstanceHit intersect_two_level(const TwoLevel& scene, const Ray& ray, Traversal mode,
+                                       std::uint32_t* nodes_visited = nullptr) {
+    const Tlas& tlas = *scene.tlas;
+    if (!one_identity_instance(tlas)) return detail::intersect_through_tlas(scene, ray, mode, nodes_visited);
+    const BlasView& blas = scene.blases[tlas.instances[0].blas];
+    InstanceHit best;  // both flat queries give a miss t = inf
+    best.hit = mode == Traversal::Wide ? intersect_wide(*blas.wide, *blas.bvh, ray, nodes_visited)
+                                       : intersect(*blas.bvh, ray, mode, nodes_visited);
+    if (best.hit.ref != kNoHit) best.instance = 0;
+    return best;
+}
 
 /// Any hit through both levels (occluded, traverse.h): the walk of intersect_two_level, ended at
 /// the first instance that holds a hit before ray.tmax; exactly when intersect_two_level's t < tmax.
-bool occluded_two_level(const TwoLevel& scene, const Ray& ray, Traversal mode);
+inline bool occluded_two_level(const TwoLevel& scene, const Ray& ray, Traversal mode) {
+    const Tlas& tlas = *scene.tlas;
+    if (!one_identity_instance(tlas)) return detail::occluded_through_tlas(scene, ray, mode);
+    const BlasView& blas = scene.blases[tlas.instances[0].blas];
+    return mode == Traversal::Wide ? occluded_wide(*blas.wide, ray) : occluded(*blas.bvh, ray, mode);
+}
 
 /// occluded_batch over both levels (its checks, threads and cancellation).
 void occluded_batch_two_level(const TwoLevel& scene, const RayBatch& rays, bool* occluded, Traversal mode,

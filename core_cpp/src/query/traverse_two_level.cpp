@@ -193,17 +193,17 @@ void check_two_level(const TwoLevel& scene, Traversal mode) {
 
 namespace {
 
-/// Not inlined: where intersect_two_level takes the one-identity-instance path first, this frame
-/// (the TLAS walk's state, its saved registers) is not set up for it (72 instructions a ray when it
-/// was, the flat query's 403 against 478 on bench/two_level.py's `one`).
+/// The closest-hit walk of both levels. The one-identity-instance case is the recorder's alone:
+/// intersect_two_level answers it inline (tlas.h) before intersect_through_tlas, so the query's
+/// walk does not test it again.
 template <class Steps>
-[[gnu::noinline]] InstanceHit intersect_two_level_with(const TwoLevel& scene, const Ray& ray, Traversal mode,
-                                                       std::uint32_t* nodes_visited, Steps& steps) {
+InstanceHit intersect_two_level_with(const TwoLevel& scene, const Ray& ray, Traversal mode,
+                                     std::uint32_t* nodes_visited, Steps& steps) {
     const Tlas& tlas = *scene.tlas;
     InstanceHit best;
     best.hit.t = ray.tmax;
     std::uint32_t visited = 0;
-    if (tlas.instances.size() == 1 && tlas.instances[0].identity) {
+    if (Steps::kRecorded && one_identity_instance(tlas)) {
         // One mesh where it was modelled: the flat query, no TLAS box in the way.
         best.hit = steps.enter(kNoHit, 0, scene.blases[tlas.instances[0].blas], ray, mode, &visited);
         steps.entered(best.hit.ref != kNoHit, 1.0f);
@@ -243,15 +243,8 @@ template <class Steps>
 
 }  // namespace
 
-InstanceHit intersect_two_level(const TwoLevel& scene, const Ray& ray, Traversal mode, std::uint32_t* nodes_visited) {
-    const Tlas& tlas = *scene.tlas;
-    if (tlas.instances.size() == 1 && tlas.instances[0].identity) {  // intersect_two_level_with's first case
-        InstanceHit best;
-        best.hit = intersect_blas(scene.blases[tlas.instances[0].blas], ray, mode, nodes_visited);
-        if (best.hit.ref == kNoHit) best.hit.t = kInfinity;
-        else best.instance = 0;
-        return best;
-    }
+InstanceHit detail::intersect_through_tlas(const TwoLevel& scene, const Ray& ray, Traversal mode,
+                                           std::uint32_t* nodes_visited) {
     NoSteps none;
     return intersect_two_level_with(scene, ray, mode, nodes_visited, none);
 }
@@ -266,9 +259,8 @@ void intersect_batch_two_level(const TwoLevel& scene, const RayBatch& rays, cons
                                std::int32_t* instance, Traversal mode, std::uint32_t threads, Cancellation* cancel) {
     check_two_level(scene, mode);
     const Tlas& tlas = *scene.tlas;
-    if (tlas.instances.size() == 1 && tlas.instances[0].identity) {
-        // One mesh where it was modelled: the flat batch itself (per ray, intersect_two_level's
-        // call and copy of its hit cost 36 instructions more), every hit in instance 0
+    if (one_identity_instance(tlas)) {
+        // One mesh where it was modelled: the flat batch itself, every hit in instance 0
         const BlasView& blas = scene.blases[tlas.instances[0].blas];
         intersect_batch(*blas.bvh, rays, hits, mode, threads, blas.wide, cancel);
         if (instance)
@@ -276,7 +268,7 @@ void intersect_batch_two_level(const TwoLevel& scene, const RayBatch& rays, cons
         return;
     }
     run_ray_batch(rays, hits, threads, cancel, [&](std::size_t i, const Ray& ray, std::uint32_t& visited) {
-        const InstanceHit h = intersect_two_level(scene, ray, mode, &visited);
+        const InstanceHit h = detail::intersect_through_tlas(scene, ray, mode, &visited);
         if (instance) instance[i] = h.hit.ref == kNoHit ? -1 : std::int32_t(h.instance);
         return h.hit;
     });
@@ -286,10 +278,7 @@ void intersect_batch_two_level(const TwoLevel& scene, const RayBatch& rays, cons
 
 namespace bvhlab {
 
-namespace {
-
-/// occluded_two_level past its one-identity-instance case, not inlined (intersect_two_level_with).
-[[gnu::noinline]] bool occluded_through_tlas(const TwoLevel& scene, const Ray& ray, Traversal mode) {
+bool detail::occluded_through_tlas(const TwoLevel& scene, const Ray& ray, Traversal mode) {
     const Tlas& tlas = *scene.tlas;
     if (tlas.tree.empty()) return false;
     const WorldRay world(ray);
@@ -310,26 +299,18 @@ namespace {
     return found;
 }
 
-}  // namespace
-
-bool occluded_two_level(const TwoLevel& scene, const Ray& ray, Traversal mode) {
-    const Tlas& tlas = *scene.tlas;
-    if (tlas.instances.size() == 1 && tlas.instances[0].identity)  // as intersect_two_level
-        return occluded_blas(scene.blases[tlas.instances[0].blas], ray, mode);
-    return occluded_through_tlas(scene, ray, mode);
-}
-
 void occluded_batch_two_level(const TwoLevel& scene, const RayBatch& rays, bool* occluded, Traversal mode,
                               std::uint32_t threads, Cancellation* cancel) {
     check_two_level(scene, mode);
     const Tlas& tlas = *scene.tlas;
-    if (tlas.instances.size() == 1 && tlas.instances[0].identity) {  // the flat batch, as intersect_batch_two_level
+    if (one_identity_instance(tlas)) {  // the flat batch, as intersect_batch_two_level
         const BlasView& blas = scene.blases[tlas.instances[0].blas];
         return occluded_batch(*blas.bvh, rays, occluded, mode, threads, blas.wide, cancel);
     }
     check_tmax(rays);
-    for_each_ray(rays, threads, cancel,
-                 [&](std::size_t i, const Ray& ray, float) { occluded[i] = occluded_two_level(scene, ray, mode); });
+    for_each_ray(rays, threads, cancel, [&](std::size_t i, const Ray& ray, float) {
+        occluded[i] = detail::occluded_through_tlas(scene, ray, mode);
+    });
 }
 
 }  // namespace bvhlab
