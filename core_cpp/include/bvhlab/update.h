@@ -39,8 +39,14 @@ struct UpdateConfig {
     /// adaptive: the most primitives one update rebuilds in subtrees, as a share of all (the
     /// subtrees that would not fit wait for the next update). 0.15 before rebuild_top; with it,
     /// 0.1 kept the bundled animations within 1.04-1.09 of a fresh build's SAH with no full
-    /// rebuild (bench/updates.py; 0.05 let the generated crowd rebuild 10 frames of 23).
-    float restructure_share = 0.1f;
+    /// rebuild (bench/updates.py; 0.05 let the generated crowd rebuild 10 frames of 23). With
+    /// top_growth 1.085 (helper adaptive4, thread CPU time against rebuilding every frame, three
+    /// rounds in one process, 0.1 → 0.08): wave_anim.blend's frames 0.436-0.444 → 0.398-0.422
+    /// (worst SAH ÷ fresh 1.063 → 1.066), crowd_anim.blend's 0.403-0.411 → 0.385-0.394 (1.044 →
+    /// 1.064), the generated crowd 0.537-0.555 → 0.514-0.530 (1.067 → 1.066), the generated wave
+    /// 0.415-0.422 → 0.406-0.414 (1.067); 0.12 cost more everywhere, 0.05 rebuilt the generated
+    /// crowd once (1.092).
+    float restructure_share = 0.08f;
     /// adaptive: the whole tree is rebuilt instead when the restructured tree's cost still exceeds
     /// this times its reference: its cost when built, taken as keeping its A·cost where the root
     /// has grown since (update_bvh.cpp reference_cost; issue 34: within 1.10 of a fresh build's). Before
@@ -63,11 +69,15 @@ struct UpdateConfig {
     std::uint32_t top_cut_primitives = 8;
     /// adaptive: the levels above the cut are rebuilt only while the tree, after its subtrees,
     /// still costs more than this times its cost when built (the step copies every node and builds
-    /// over the cut's boxes: about a fifth of a rebuild in thread CPU time). bench/updates.py: 1.07 ran
-    /// it on 11 of the wave's 23 updates (SAH within 1.050 of a fresh build's) and 15 of the
-    /// .blend crowd's (1.060), on every one of the generated crowd's; 1.05 on 17 of the wave's
-    /// (1.039); 1 (always) 1.037.
-    float top_growth = 1.07f;
+    /// over the cut's boxes: about a fifth of a rebuild in thread CPU time, the largest part of an
+    /// update that runs it). Kept below tree_growth so that the top, not a full rebuild, takes the
+    /// excess. Thread CPU time against rebuilding every frame in one process, two rounds (helper
+    /// adaptive4; share / worst SAH ÷ fresh / frames of 23 running it): 1.085 on wave_anim.blend's
+    /// frames 0.42-0.44 / 1.063 / 13 (1.07: 0.48-0.49 / 1.054 / 17), crowd_anim.blend's 0.40-0.41
+    /// / 1.044 / 11 (0.41 / 1.047 / 12), the generated wave 0.42 / 1.067 / 11 (0.46 / 1.050 /
+    /// 15), the generated crowd 0.54 / 1.067 / 23 (0.55, the same); 1.08 between; 1.088 let the
+    /// .blend crowd reach 1.086.
+    float top_growth = 1.085f;
     /// Also build a fresh tree over the geometry, only to report its SAH cost (UpdateStats::
     /// fresh_sah_cost): on demand, as it costs a build.
     bool measure_fresh = false;
