@@ -437,7 +437,7 @@ TEST(Tlas, ScaleRayIsFrexpAndLdexpBitForBit) {
     std::mt19937 rng(3);
     std::uniform_real_distribution<float> mantissa(-1.0f, 1.0f);
     std::uniform_int_distribution<int> exponent(-80, 79);
-    const float tmaxes[] = {kInfinity, 0.0f, 1.0f, 3.5e38f, 1e-38f, 7.0f};
+    const float tmaxes[] = {kInfinity, 0.0f, 1.0f, 3.0e38f, 1e-38f, 7.0f};
     auto bits = [](float f) {
         std::uint32_t b;
         std::memcpy(&b, &f, sizeof b);

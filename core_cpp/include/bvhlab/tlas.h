@@ -31,6 +31,16 @@ struct BlasView {
     const WideBvh* wide = nullptr;
 };
 
+/// The flat queries of one BLAS, in its object space: `mode` picks the walk (its wide copy for
+/// Traversal::Wide).
+inline Hit intersect_blas(const BlasView& blas, const Ray& ray, Traversal mode, std::uint32_t* visited) {
+    return mode == Traversal::Wide ? intersect_wide(*blas.wide, *blas.bvh, ray, visited)
+                                   : intersect(*blas.bvh, ray, mode, visited);
+}
+inline bool occluded_blas(const BlasView& blas, const Ray& ray, Traversal mode) {
+    return mode == Traversal::Wide ? occluded_wide(*blas.wide, ray) : occluded(*blas.bvh, ray, mode);
+}
+
 /// The TLAS: a Bvh whose leaves' references are instance indices (no geometry packed), built with
 /// the builder of every tree over the instances' world boxes (build_bvh_over_boxes), and its
 /// 8-wide copy (make_wide_tlas), which Traversal::Wide walks: a ray visits a wide node where the
@@ -96,10 +106,8 @@ inline InstanceHit intersect_two_level(const TwoLevel& scene, const Ray& ray, Tr
                                        std::uint32_t* nodes_visited = nullptr) {
     const Tlas& tlas = *scene.tlas;
     if (!one_identity_instance(tlas)) return detail::intersect_through_tlas(scene, ray, mode, nodes_visited);
-    const BlasView& blas = scene.blases[tlas.instances[0].blas];
     InstanceHit best;  // both flat queries give a miss t = inf
-    best.hit = mode == Traversal::Wide ? intersect_wide(*blas.wide, *blas.bvh, ray, nodes_visited)
-                                       : intersect(*blas.bvh, ray, mode, nodes_visited);
+    best.hit = intersect_blas(scene.blases[tlas.instances[0].blas], ray, mode, nodes_visited);
     if (best.hit.ref != kNoHit) best.instance = 0;
     return best;
 }
@@ -109,8 +117,7 @@ inline InstanceHit intersect_two_level(const TwoLevel& scene, const Ray& ray, Tr
 inline bool occluded_two_level(const TwoLevel& scene, const Ray& ray, Traversal mode) {
     const Tlas& tlas = *scene.tlas;
     if (!one_identity_instance(tlas)) return detail::occluded_through_tlas(scene, ray, mode);
-    const BlasView& blas = scene.blases[tlas.instances[0].blas];
-    return mode == Traversal::Wide ? occluded_wide(*blas.wide, ray) : occluded(*blas.bvh, ray, mode);
+    return occluded_blas(scene.blases[tlas.instances[0].blas], ray, mode);
 }
 
 /// occluded_batch over both levels (its checks, threads and cancellation).

@@ -21,15 +21,6 @@
 namespace bvhlab {
 namespace {
 
-Hit intersect_blas(const BlasView& blas, const Ray& ray, Traversal mode, std::uint32_t* visited) {
-    return mode == Traversal::Wide ? intersect_wide(*blas.wide, *blas.bvh, ray, visited)
-                                   : intersect(*blas.bvh, ray, mode, visited);
-}
-
-bool occluded_blas(const BlasView& blas, const Ray& ray, Traversal mode) {
-    return mode == Traversal::Wide ? occluded_wide(*blas.wide, ray) : occluded(*blas.bvh, ray, mode);
-}
-
 /// The TLAS's box test: hit_box's (ray.h) arithmetic, the same products and the same order of
 /// raises and lowers, so the same t's bit for bit, but each axis's near and far plane picked by the
 /// ray's signs once per ray (offsets among the node's floats, as the wide walk's kPlanes), not by
