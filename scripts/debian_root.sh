@@ -2,7 +2,8 @@
 # A Debian root under build/SUITE with a real Blender binary and the Python it embeds, on a Debian
 # 12 machine that has neither. `make test` uses two:
 #   trixie  Debian 13: Blender 4.3 on Python 3.13; the cp313 wheel, the bpy module 5.2 LTS on Python
-#           3.13 (a venv, /opt/py313) and the Blender binary checks (headless and under Xvfb)
+#           3.13 (a venv, /opt/py313), the bpy module 5.3 (a second venv, /opt/bpy53: the newest
+#           blender.org line) and the Blender binary checks (headless and under Xvfb)
 #   sid     Debian unstable: Blender 5.2 on Python 3.14, as Linux distributions build it (against
 #           their system Python); the cp314 wheel and the Blender binary checks
 #
@@ -39,13 +40,15 @@ case "$SUITE" in
     # pip builds the cp313 wheel in a venv that also holds the bpy module (requirements-py313.txt)
     PYTHON_PACKAGES=(python3-dev python3-venv)
     VENV=/opt/py313 REQUIREMENTS=requirements-py313.txt
+    # the bpy module 5.3 beside it (one bpy per venv): only the add-on checks run there
+    EXTRA_VENVS=(/opt/bpy53=requirements-bpy53.txt)
     EXPECT_BLENDER=4.3 EXPECT_PYTHON=3.13
     ;;
   sid)
     # no bpy module for Python 3.14 on PyPI: the cp314 wheel is built with Debian's own build
     # backend (scikit-build-core, nanobind), pip wheel --no-build-isolation, no venv
     PYTHON_PACKAGES=(python3-dev python3-pip python3-nanobind python3-scikit-build-core)
-    VENV="" REQUIREMENTS=""
+    VENV="" REQUIREMENTS="" EXTRA_VENVS=()
     EXPECT_BLENDER=5.2 EXPECT_PYTHON=3.14
     ;;
   *)
@@ -134,14 +137,20 @@ install_packages() {
 
 python_venv() {
   [ -n "$VENV" ] || return 0
-  local want
-  want=$(stamp_of < "$ROOT_DIR/$REQUIREMENTS")
-  [ "$(cat "$STAMPS/venv" 2>/dev/null)" = "$want" ] && return
-  log "Python venv $VENV with $REQUIREMENTS"
-  in_root "test -x $VENV/bin/python || python3 -m venv $VENV; \
-    $VENV/bin/python -m pip install -q --upgrade pip && \
-    $VENV/bin/python -m pip install -q -r /src/$REQUIREMENTS"
-  echo "$want" > "$STAMPS/venv"
+  one_venv "$VENV" "$REQUIREMENTS" venv
+  local extra
+  for extra in "${EXTRA_VENVS[@]}"; do one_venv "${extra%%=*}" "${extra#*=}" "venv-$(basename "${extra%%=*}")"; done
+}
+
+one_venv() {  # PATH REQUIREMENTS STAMP: a venv in the root with a requirements file, again when it changes
+  local venv=$1 requirements=$2 stamp=$3 want
+  want=$(stamp_of < "$ROOT_DIR/$requirements")
+  [ "$(cat "$STAMPS/$stamp" 2>/dev/null)" = "$want" ] && return
+  log "Python venv $venv with $requirements"
+  in_root "test -x $venv/bin/python || python3 -m venv $venv; \
+    $venv/bin/python -m pip install -q --upgrade pip && \
+    $venv/bin/python -m pip install -q -r /src/$requirements"
+  echo "$want" > "$STAMPS/$stamp"
 }
 
 # Run a shell command inside the root, in /src (the repository), with mounts that live only as

@@ -41,6 +41,7 @@ background() {  # NAME TARGET
 rm -f "$LOGS"/*.done
 background "root: Debian 13" trixie
 background "root: Debian sid" sid
+background "venv: bpy 5.0" bpy50-venv
 
 wait_for() {  # TARGET NAME: wait for a background set-up; record its time (its own, not the wait)
   local start
@@ -62,10 +63,13 @@ stage "C++ tests (clang ASan+UBSan, fuzz corpus)" clang-sanitize-test || failed=
 roots=0
 wait_for trixie "root: Debian 13" || roots=1
 wait_for sid "root: Debian sid" || roots=1
+wait_for bpy50-venv "venv: bpy 5.0 (Python 3.11)" || roots=1
 if [ "$roots" = 0 ]; then
   stage "extension zip (cp311, cp313, cp314 wheels)" addon || failed=1
   stage "pytest (Python 3.11, bpy 4.2, lavapipe)" pytest || failed=1
   stage "add-on checks: bpy 5.2 module (Python 3.13)" bpy313-test || failed=1
+  stage "add-on checks: bpy 5.3 module (Python 3.13)" bpy53-test || failed=1
+  stage "add-on checks: bpy 5.0 module (Python 3.11)" bpy50-test || failed=1
   stage "add-on checks: Blender 4.3 binary, headless" blender-binary-test || failed=1
   stage "add-on checks: Blender 4.3 binary, window" blender-ui-test || failed=1
   stage "add-on checks: Blender 5.2 (sid, Python 3.14), headless" blender-sid-test || failed=1

@@ -48,7 +48,16 @@ def render_passes(tmp_dir, name: str = "render") -> dict:
     use_multilayer_exr(settings)
     settings.exr_codec, settings.color_depth = "NONE", "32"
     path = tmp_dir / f"{name}.exr"
-    bpy.data.images["Render Result"].save_render(str(path))
+    # Blender 5.0 writes no multilayer EXR of a render whose pixel aspect is not 1 ("Conflicting
+    # attributes found for header :: ViewLayer.Depth 'pixelAspectRatio'", Cycles' renders too):
+    # the aspect is only the file's header attribute, so save with 1 (the pixels are the same).
+    render = bpy.context.scene.render
+    aspect = render.pixel_aspect_x, render.pixel_aspect_y
+    render.pixel_aspect_x = render.pixel_aspect_y = 1.0
+    try:
+        bpy.data.images["Render Result"].save_render(str(path))
+    finally:
+        render.pixel_aspect_x, render.pixel_aspect_y = aspect
     channels = exr.read_exr(path)
     layer = bpy.context.view_layer.name
     out = {}
@@ -288,11 +297,12 @@ def _principled(name: str, color):
 
 def check_rerender_reads_only_what_changed(tmp_dir) -> None:
     """Persistent Data on (Blender keeps the engine and its depsgraph between renders): a changed
-    material reaches the next render with no object read again, a moved object is placed again
-    (no read; on its first move it gets a mesh and an instance of its own, so mesh 0's tree and
-    its own are built once, and a second move makes a new TLAS only), an edited mesh is read again
-    (its tree refit); every render equals bvhlab.render of a full export. Off: every render exports
-    everything (the box, not animated, is in mesh 0 again: built once), and the tree is then kept."""
+    material reaches the next render with no object read again (5.3: its object, below), a moved
+    object is placed again (no read; on its first move it gets a mesh and an instance of its own,
+    so mesh 0's tree and its own are built once, and a second move makes a new TLAS only), an
+    edited mesh is read again (its tree refit); every render equals bvhlab.render of a full
+    export. Off: every render exports everything (the box, not animated, is in mesh 0 again: built
+    once), and the tree is then kept."""
     scene = harness.boxes_scene()
     box = bpy.data.objects["Box A"]
     box.data.materials.append(_principled("Paint", (0.8, 0.1, 0.1)))
@@ -325,14 +335,16 @@ def check_rerender_reads_only_what_changed(tmp_dir) -> None:
     print(f"engine re-renders (step, full exports, objects read, moved, materials read, tree): {seen}")
     # materials: the empty slot's default and "Paint" at first; the moved box becomes a mover
     # (docs/design.md, "Blender's instancing"); the edited mesh keeps its triangle count and order,
-    # so mesh 0's tree is refit for it
+    # so mesh 0's tree is refit for it. Blender 5.3 flags the object of a changed material as a
+    # geometry update (5.2 as shading only): it is read again, found the same, and the tree kept.
+    again = 1 if bpy.app.version >= (5, 3, 0) else 0
     assert [row[1:] for row in seen] == [
         (1, 3, 0, 2, "built"),
-        (1, 3, 0, 3, "kept"),
-        (1, 3, 1, 3, "built"),
-        (1, 3, 2, 3, "placed"),
-        (1, 4, 2, 3, "refit"),
-        (1, 4, 2, 3, "kept"),
+        (1, 3 + again, 0, 3, "kept"),
+        (1, 3 + again, 1, 3, "built"),
+        (1, 3 + again, 2, 3, "placed"),
+        (1, 4 + again, 2, 3, "refit"),
+        (1, 4 + again, 2, 3, "kept"),
     ], seen
     assert np.abs(images[1] - images[0]).max() > 0.1, "the new colour did not reach the render"
     scene.render.use_persistent_data = False
