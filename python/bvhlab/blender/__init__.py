@@ -7,7 +7,8 @@
 
 One small module per kind of Blender data (glTF-Blender-IO style): `scope` picks the objects,
 `mesh`, `sphere`, `material`, `camera`, `light` and `world` each gather one thing, `live` puts
-them together and keeps them between frames, `export` is one sync of a new LiveScene. `compat`
+them together and keeps them between frames (reading again what `depsgraph_updates` names and
+saying what changed in a `sync_report`), `export` is one sync of a new LiveScene. `compat`
 holds what differs between the supported Blender versions (4.2 LTS to 5.3); nothing else checks
 `bpy.app.version`.
 """
@@ -15,9 +16,10 @@ holds what differs between the supported Blender versions (4.2 LTS to 5.3); noth
 from .errors import ExportError, ExportWarning, SubstituteWarning
 from .export import export_scene, export_scene_file
 from .light import intensity_from_watts
-from .live import LiveScene, SyncReport
+from .live import LiveScene
 from .scope import SCOPES
 from .sphere import SPHERE_PROPERTY, is_analytic_sphere
+from .sync_report import SyncReport
 
 __all__ = [
     "export_scene",

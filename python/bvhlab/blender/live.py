@@ -27,95 +27,26 @@ from __future__ import annotations
 
 import copy
 import warnings
-from dataclasses import dataclass, field
 
-import bpy
 import numpy as np
 
 from ..scene import Scene, default_camera, default_light
 from .camera import gather_camera
+from .depsgraph_updates import Dirty
 from .errors import ExportError, SubstituteWarning
 from .instancing import Item, Layout, SharedMesh, instance_transforms, plan, shared_meshes
 from .light import gather_light
 from .material_table import MaterialTable, map_slots
 from .mesh import CONVERTIBLE_TYPES, MeshData, read_mesh
 from .motion import AnimatedMemo
+from .primitive_sample import primitive_sample
 from .scope import instances_in_scope, matrices_array
 from .sphere import is_analytic_sphere, place_sphere, sphere_bounds
+from .sync_report import SyncReport, SyncTotals
 from .world import gather_sky
 
 #: Object types that can have primitives (meshes, and what converts to a mesh).
 GEOMETRY_TYPES = CONVERTIBLE_TYPES | {"MESH"}
-
-
-@dataclass
-class SyncReport:
-    """What one sync found. `geometry`: the triangles, spheres or instances differ from the last
-    sync; `refittable`: they differ only in position (same primitives, same order, same instances
-    of the same meshes: a refit of the flattened scene can follow); `placeable`: only instance
-    transforms differ (every mesh's arrays are the last sync's: only the TLAS is built again);
-    `materials`: the material table or the primitives' materials differ. `objects_read` counts
-    meshes read (a mesh shared by instances once), `objects_moved` items placed again without a
-    read, `instances_moved` those of them that are instances of a shared mesh (a new transform)."""
-
-    full: bool = False
-    objects_read: int = 0
-    objects_moved: int = 0
-    instances_moved: int = 0
-    materials_read: int = 0
-    geometry: bool = False
-    refittable: bool = False
-    placeable: bool = False
-    materials: bool = False
-
-
-@dataclass
-class SyncTotals:
-    """Counts over a LiveScene's life (tests count exports with them)."""
-
-    syncs: int = 0
-    full_syncs: int = 0
-    objects_read: int = 0
-    objects_moved: int = 0
-    instances_moved: int = 0
-    materials_read: int = 0
-
-    def add(self, report: SyncReport) -> None:
-        self.syncs += 1
-        self.full_syncs += report.full
-        self.objects_read += report.objects_read
-        self.objects_moved += report.objects_moved
-        self.instances_moved += report.instances_moved
-        self.materials_read += report.materials_read
-
-
-@dataclass
-class _Dirty:
-    """Names (original, full) of what depsgraph.updates reports; `everything` on the first sync."""
-
-    everything: bool = False
-    objects: set = field(default_factory=set)
-    meshes: set = field(default_factory=set)
-    materials: set = field(default_factory=set)
-
-    @classmethod
-    def from_updates(cls, depsgraph) -> _Dirty:
-        dirty = cls()
-        for update in depsgraph.updates:
-            data = update.id.original
-            if isinstance(data, bpy.types.Object) and update.is_updated_geometry:
-                dirty.objects.add(data.name_full)
-            elif isinstance(data, bpy.types.Mesh) and update.is_updated_geometry:
-                dirty.meshes.add(data.name_full)
-            elif isinstance(data, (bpy.types.Material, bpy.types.ShaderNodeTree)):
-                dirty.materials.add(data.name_full)
-        return dirty
-
-    def geometry_of(self, obj, key: tuple) -> bool:
-        if self.everything or key[0] in self.objects or key[1] in self.objects:
-            return True
-        data = getattr(obj.original, "data", None)
-        return data is not None and data.name_full in self.meshes
 
 
 def _address(data, addresses: dict) -> int:
@@ -158,7 +89,7 @@ class LiveScene:
         blender_scene = blender_scene or depsgraph.scene
         view_layer = view_layer or depsgraph.view_layer
         full = self.scene is None
-        dirty = _Dirty(everything=True) if full else _Dirty.from_updates(depsgraph)
+        dirty = Dirty(everything=True) if full else Dirty.from_updates(depsgraph)
         known = {k: v for k, v in self._materials.items() if k not in dirty.materials}
         table = MaterialTable(known)
         items, world, by_data, report, seen_moving = self._walk(depsgraph, view_layer, dirty, table)
@@ -169,7 +100,7 @@ class LiveScene:
         arrays = self._arrays(items, world, layout, shared, table, report)
         report.materials_read = table.reads
         scene = self._make_scene(arrays, table, blender_scene, depsgraph, report)
-        light = gather_light(depsgraph, view_layer, _primitive_sample(items, world, scene.spheres))
+        light = gather_light(depsgraph, view_layer, primitive_sample(items, world, scene.spheres))
         if light is None:
             warnings.warn(
                 f"scene '{blender_scene.name}' has no visible light; using a default point light near the camera",
@@ -186,7 +117,7 @@ class LiveScene:
         self.totals.add(report)
         return report
 
-    def _walk(self, depsgraph, view_layer, dirty: _Dirty, table: MaterialTable):
+    def _walk(self, depsgraph, view_layer, dirty: Dirty, table: MaterialTable):
         """Every object in scope, read again when dirty or new (a mesh shared by several items
         once), kept when not; in the depsgraph's order (the order export_scene has always used).
         Each item's material table index of each slot is read here: an instance's object is valid
@@ -395,47 +326,6 @@ class LiveScene:
                 raise
             warnings.warn(f"{error}; using a default camera that frames the geometry", SubstituteWarning, stacklevel=3)
             return None
-
-
-def _primitive_sample(items: dict, world: np.ndarray, spheres: np.ndarray, size: int = 4096) -> np.ndarray:
-    """Centres of about `size` primitives, as float64 (N,3): every k-th triangle of the world
-    triangles in walk order (the flat export's order; instances placed where they are, so an
-    instanced export samples the same triangles as the flat one) and every k-th sphere. `world`:
-    the items' matrices (row i the i-th item's)."""
-    parts = [spheres[:: max(1, len(spheres) // size), :3].astype(np.float64)]
-    meshes: list[MeshData] = []
-    index: dict[int, int] = {}  # id of a mesh → its place in `meshes`
-    rows, mesh_of = [], []  # the items with triangles: their row and mesh
-    for row, item in enumerate(items.values()):
-        mesh = item.mesh
-        if mesh is not None and item.slot_table is not None:
-            k = index.get(id(mesh))
-            if k is None:
-                k = index[id(mesh)] = len(meshes)
-                meshes.append(mesh)
-            rows.append(row)
-            mesh_of.append(k)
-    sizes = np.array([mesh.triangle_count for mesh in meshes], np.int64)
-    blocks = np.array(mesh_of, np.int64)
-    keep = sizes[blocks] > 0 if len(blocks) else np.zeros(0, bool)
-    blocks, rows = blocks[keep], np.array(rows, np.int64)[keep]
-    if len(blocks):
-        counts = sizes[blocks]
-        stride = max(1, int(counts.sum()) // size)
-        offsets = np.cumsum(counts) - counts
-        first = (-offsets) % stride
-        picks = np.maximum(0, (counts - first + stride - 1) // stride)
-        which = np.repeat(np.arange(len(blocks)), picks)
-        local = first[which] + (np.arange(len(which)) - np.repeat(np.cumsum(picks) - picks, picks)) * stride
-        matrices = world[rows[which]]
-        centres = np.empty((len(which), 3))
-        for m, mesh in enumerate(meshes):
-            chosen = np.flatnonzero(blocks[which] == m)
-            corners = mesh.corners.reshape(-1, 3)[local[chosen]]
-            centres[chosen] = mesh.positions[corners].astype(np.float64).mean(1)
-        placed = np.einsum("nij,nj->ni", matrices[:, :3, :3], centres) + matrices[:, :3, 3]
-        parts.insert(0, placed)
-    return np.concatenate(parts)
 
 
 def _nothing_in_scope(scope: str) -> str:
