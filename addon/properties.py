@@ -5,7 +5,7 @@ from __future__ import annotations
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, FloatVectorProperty, IntProperty, StringProperty
 
-from bvhlab.bvh import (
+from bvhlab.build_config import (
     DEFAULT_AXIS,
     DEFAULT_BIN_BOUNDS,
     DEFAULT_BINS,
@@ -286,7 +286,7 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
     def build_config(self):
         """The build these settings ask for, as the one typed object (bvhlab.BuildConfig) the
         sidebar's Build, Render and Export, F12, the viewport and Compare all pass to the core."""
-        from bvhlab.bvh import BuildConfig
+        from bvhlab.build_config import BuildConfig
 
         return BuildConfig(
             method=self.method,

@@ -3,7 +3,8 @@ the label and tooltip a user reads in the UI, and the limits the settings derive
 
 from __future__ import annotations
 
-from bvhlab.bvh import AXES, BIN_BOUNDS, MAX_SAH_BLOCK, MAX_TREE_HEIGHT, METHODS
+from bvhlab.build_config import AXES, BIN_BOUNDS, MAX_SAH_BLOCK, METHODS
+from bvhlab.bvh import MAX_TREE_HEIGHT
 from bvhlab.render import BACKENDS, MODES, TRAVERSALS
 from bvhlab.update import UPDATE_POLICIES, UpdateConfig
 

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bvhlab.bvh import BuildConfig
+from bvhlab.build_config import BuildConfig
 
 #: Trees kept per scene (the least recently used go first): a user trying a few settings back and
 #: forth keeps each; a long comparison does not fill memory.

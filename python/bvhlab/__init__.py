@@ -2,7 +2,8 @@
 Sandén's report (median, mean, binned SAH) and more (midpoint, full-sweep SAH, LBVH, refit)."""
 
 from ._core import BuildCancelled
-from .bvh import AXES, METHODS, NODE_DTYPE, BuildConfig, Bvh, build
+from .build_config import AXES, METHODS, BuildConfig
+from .bvh import NODE_DTYPE, Bvh, build
 from .inspect.tree_file import load_bvh
 from .instanced import InstancedBvh
 from .optimize import OptimizeConfig, OptimizeStats

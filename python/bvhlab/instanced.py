@@ -9,7 +9,8 @@ from collections.abc import Callable
 import numpy as np
 
 from . import _checks, _core
-from .bvh import BuildConfig, Bvh
+from .build_config import BuildConfig
+from .bvh import Bvh
 from .inspect.node_data import NodeData
 from .inspect.two_level_data import TwoLevelNodeData
 from .ray_query import run_occluded_query, run_ray_query

@@ -15,7 +15,7 @@ import numpy as np
 
 import bvhlab
 from bvhlab.blender import export_scene
-from bvhlab.bvh import method_from_label as method_kwargs
+from bvhlab.build_config import method_from_label as method_kwargs
 
 BUILD_VARIANTS = (
     {"method": "sah", "bins": 12},

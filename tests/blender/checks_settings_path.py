@@ -18,7 +18,7 @@ import harness
 import numpy as np
 
 import bvhlab
-from bvhlab.bvh import BuildConfig
+from bvhlab.build_config import BuildConfig
 from bvhlab.render_options import DEFAULT_HEIGHT, DEFAULT_WIDTH, MAX_LINE_WIDTH, RenderOptions, options_from
 
 #: Non-default settings for the paths to agree on (every render setting the panel has, and a build).

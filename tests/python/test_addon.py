@@ -21,19 +21,22 @@ def test_settings_take_names_defaults_and_limits_from_the_core():
     property_items = __import__(harness.addon().__name__ + ".property_items", fromlist=["METHOD_ITEMS"])
     assert [item[0] for item in property_items.METHOD_ITEMS] == list(bvhlab.METHODS)
     assert [item[0] for item in property_items.AXIS_ITEMS] == list(bvhlab.AXES)
-    assert [item[0] for item in property_items.BIN_BOUNDS_ITEMS] == list(bvhlab.bvh.BIN_BOUNDS)
+    assert [item[0] for item in property_items.BIN_BOUNDS_ITEMS] == list(bvhlab.build_config.BIN_BOUNDS)
     labelled = property_items.METHOD_ITEMS + property_items.AXIS_ITEMS + property_items.BIN_BOUNDS_ITEMS
     assert all(label and tooltip for _, label, tooltip in labelled)
     assert property_items.MAX_DEPTH == bvhlab.bvh.MAX_TREE_HEIGHT - 1
     rna = bpy.types.Scene.bl_rna.properties["bvhlab"].fixed_type.properties
-    assert rna["method"].default == bvhlab.bvh.DEFAULT_METHOD and rna["axis"].default == bvhlab.bvh.DEFAULT_AXIS
-    assert rna["bins"].default == bvhlab.bvh.DEFAULT_BINS
-    assert rna["bin_bounds"].default == bvhlab.bvh.DEFAULT_BIN_BOUNDS
+    assert (
+        rna["method"].default == bvhlab.build_config.DEFAULT_METHOD
+        and rna["axis"].default == bvhlab.build_config.DEFAULT_AXIS
+    )
+    assert rna["bins"].default == bvhlab.build_config.DEFAULT_BINS
+    assert rna["bin_bounds"].default == bvhlab.build_config.DEFAULT_BIN_BOUNDS
     assert (rna["bins"].hard_min, rna["bins"].hard_max) == (bvhlab._core.MIN_BINS, bvhlab._core.MAX_BINS)
-    assert rna["max_leaf_size"].default == bvhlab.bvh.DEFAULT_MAX_LEAF_SIZE
+    assert rna["max_leaf_size"].default == bvhlab.build_config.DEFAULT_MAX_LEAF_SIZE
     blocks = [int(i.identifier) for i in rna["sah_block"].enum_items]
-    assert blocks == [1 << k for k in range(bvhlab.bvh.MAX_SAH_BLOCK.bit_length())]
-    assert int(rna["sah_block"].default) == bvhlab.bvh.DEFAULT_SAH_BLOCK
+    assert blocks == [1 << k for k in range(bvhlab.build_config.MAX_SAH_BLOCK.bit_length())]
+    assert int(rna["sah_block"].default) == bvhlab.build_config.DEFAULT_SAH_BLOCK
     assert rna["render_bounces"].hard_max == bvhlab._core.MAX_RAY_DEPTH
     assert rna["render_supersampling"].hard_max == bvhlab._core.MAX_SAMPLES_PER_AXIS
     assert [i.identifier for i in rna["traversal"].enum_items] == list(bvhlab._core.RENDER_TRAVERSALS)

@@ -62,10 +62,10 @@ def test_build_json_and_csv_equal_the_api(tmp_path, capsys):
     assert written["about"]["settings"] == {
         "method": "sah",
         "bins": 32,
-        "axis": bvhlab.bvh.DEFAULT_AXIS,
-        "bin_bounds": bvhlab.bvh.DEFAULT_BIN_BOUNDS,
+        "axis": bvhlab.build_config.DEFAULT_AXIS,
+        "bin_bounds": bvhlab.build_config.DEFAULT_BIN_BOUNDS,
         "max_leaf_size": 2,
-        "sah_block": bvhlab.bvh.DEFAULT_SAH_BLOCK,
+        "sah_block": bvhlab.build_config.DEFAULT_SAH_BLOCK,
     }
     for key in api:
         if key not in ("build_ms",):

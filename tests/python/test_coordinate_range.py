@@ -8,8 +8,9 @@ import pytest
 from oracles import brute_force
 
 import bvhlab
-from bvhlab.bvh import MAX_COORDINATE, MAX_DIRECTION, MIN_DIRECTION, MIN_RADIUS
+from bvhlab.bvh import MAX_DIRECTION, MIN_DIRECTION, MIN_RADIUS
 from bvhlab.library import procedural
+from bvhlab.scene import MAX_COORDINATE
 
 L = MAX_COORDINATE
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..bvh import method_from_label
+from ..build_config import method_from_label
 from ..compare.measure import build_settings
 from ..compare.protocol import MAX_SAMPLES, MIN_SAMPLES
 from .options import checked_build_kwargs, whole_number

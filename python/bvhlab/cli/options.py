@@ -12,7 +12,7 @@ import numpy as np
 from .. import _core
 from .._checks import OutputPathError, output_file
 from .._progress import ProgressBar
-from ..bvh import (
+from ..build_config import (
     AXES,
     BIN_BOUNDS,
     DEFAULT_AXIS,
@@ -25,9 +25,11 @@ from ..bvh import (
     MAX_SAH_BLOCK,
     METHODS,
     MIN_BINS,
+    method_from_label,
+)
+from ..bvh import (
     Bvh,
     build,
-    method_from_label,
 )
 from ..library.files import MESH_SUFFIXES
 from ..optimize import OptimizeConfig, OptimizeStats

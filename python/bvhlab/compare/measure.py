@@ -6,8 +6,8 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
+from ..build_config import method_from_label as method_kwargs  # 'sah32' → sah with 32 bins
 from ..bvh import build
-from ..bvh import method_from_label as method_kwargs  # 'sah32' → sah with 32 bins
 from ..instanced import InstancedBvh
 from ..render import Renderer
 from ..render_options import DEFAULT_HEIGHT, DEFAULT_WIDTH, RenderOptions

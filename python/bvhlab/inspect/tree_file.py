@@ -63,7 +63,8 @@ def load_bvh(path, scene_or_triangles, spheres=None, *, config=None):
     been built with those settings. Raises TreeFileError (a ValueError) for a file that is not a
     tree file, of another format version, cut short or damaged, or saved for other geometry or
     other settings; OSError when it cannot be read."""
-    from ..bvh import BuildConfig, Bvh
+    from ..build_config import BuildConfig
+    from ..bvh import Bvh
     from ..scene import Scene
 
     if isinstance(scene_or_triangles, Scene):

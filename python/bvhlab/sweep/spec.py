@@ -27,7 +27,7 @@ import tomllib
 from dataclasses import dataclass, fields
 from pathlib import Path
 
-from ..bvh import BuildConfig
+from ..build_config import BuildConfig
 from ..library import is_mesh_file
 from ..ray_query import TRAVERSALS
 
