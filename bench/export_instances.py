@@ -25,11 +25,11 @@ import bpy  # noqa: E402
 
 
 def scene_of(count: int) -> None:
-    from test_export_instances import _base_scene, _monkey
+    from blender_instance_scenes import base_scene, suzanne
 
-    scene = _base_scene()
+    scene = base_scene()
     source = bpy.data.collections.new("Source")
-    source.objects.link(_monkey(subdivisions=2))
+    source.objects.link(suzanne(subdivisions=2))
     for i in range(count):
         empty = bpy.data.objects.new(f"Instance {i}", None)
         empty.instance_type, empty.instance_collection = "COLLECTION", source

@@ -41,23 +41,23 @@ _PLAN = live_module.plan
 def movers(on: bool) -> None:
     """Movers on (the exporter as it is) or off (every object used once in mesh 0, as before)."""
 
-    def plan_without_movers(items, share, is_mover=None):
-        return _PLAN(items, share)
+    def plan_without_movers(items, matrices, share, is_mover=None):
+        return _PLAN(items, matrices, share)
 
     live_module.plan = _PLAN if on else plan_without_movers
 
 
 def moving_scene(frames: int):
-    from test_export_instances import _base_scene, _monkey
+    from blender_instance_scenes import base_scene, suzanne
 
-    scene = _base_scene()
-    big = _monkey("Big", subdivisions=4)
+    scene = base_scene()
+    big = suzanne("Big", subdivisions=4)
     scene.collection.objects.link(big)
     big.location = (-1.5, 2.0, 0.0)
     floor = bpy.data.objects.new("Floor", bpy.data.meshes.new("Floor"))
     floor.data.from_pydata([(-8, -8, -1.5), (8, -8, -1.5), (8, 8, -1.5), (-8, 8, -1.5)], [], [(0, 1, 2, 3)])
     scene.collection.objects.link(floor)
-    small = _monkey("Mover")
+    small = suzanne("Mover")
     scene.collection.objects.link(small)
     small.location = (2.0, -2.0, 0.0)
     small.keyframe_insert("location", frame=1)

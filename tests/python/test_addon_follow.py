@@ -12,7 +12,7 @@ import bpy  # noqa: E402  (after harness)
 import harness  # before bpy
 import numpy as np
 import pytest
-from test_export_instances import _monkey  # noqa: E402
+from blender_instance_scenes import suzanne  # noqa: E402
 from test_moving_objects import _same_hits  # noqa: E402
 
 from bvhlab.blender import export_scene  # noqa: E402
@@ -33,7 +33,7 @@ def built_monkey():
     harness.add_camera((0.5, -12.0, 5.0), (0.0, 0.5, 0.0), lens=30)
     harness.add_point_light((3.0, -5.0, 6.0))
     harness.add_box("Floor", (0.0, 0.0, -1.5), size=1.0, scale=(6.0, 6.0, 0.2))
-    monkey = _monkey("Edited", subdivisions=2)
+    monkey = suzanne("Edited", subdivisions=2)
     bpy.context.scene.collection.objects.link(monkey)
     bpy.context.view_layer.update()
     assert bpy.ops.bvhlab.build() == {"FINISHED"} and bpy.context.scene.bvhlab.overlay_show

@@ -16,7 +16,7 @@ import checks_engine_viewport as viewport_checks  # noqa: E402
 import harness  # before bpy
 import numpy as np
 import pytest
-from test_export_instances import PLACES  # noqa: E402  (rotation, non-uniform scale, a mirror)
+from blender_instance_scenes import PLACES  # noqa: E402  (rotation, non-uniform scale, a mirror)
 
 import bvhlab  # noqa: E402
 import bvhlab.blender  # noqa: E402
