@@ -1,8 +1,9 @@
 """The render engine "bvhlab Whitted" under Blender's own render pipeline (bpy.ops.render.render, as
 F12 and `blender -b` run it): the passes read back from a multilayer EXR Blender wrote (read by
 tests/blender/exr.py, not by Blender), against the CPU reference tracer on the same export, a
-brute-force depth and Bvh.intersect's box-test counts; what a re-render reads again; animation
-frames. The add-on must be enabled (harness.enable_addon_from_source or an installed zip)."""
+brute-force depth and Bvh.intersect's box-test counts; what a re-render reads again (animation
+frames: checks_engine_frames.py). The add-on must be enabled (harness.enable_addon_from_source or
+an installed zip)."""
 
 from __future__ import annotations
 
@@ -365,105 +366,6 @@ def _move_vertex(name: str) -> None:
     mesh = bpy.data.objects[name].data
     mesh.vertices[0].co.z += 0.3
     mesh.update()
-
-
-def _exr_rgba(path) -> np.ndarray:
-    channels = exr.read_exr(path)
-    return np.stack([channels[c] for c in "RGBA"], -1)
-
-
-def _red_centroid_x(image: np.ndarray) -> float:
-    """Mean column of the red ball's pixels (red well above green and blue)."""
-    red = (image[..., 0] > image[..., 1] + 0.15) & (image[..., 0] > image[..., 2] + 0.15)
-    assert red.sum() > 30, "the red ball is not in the picture"
-    return float(np.nonzero(red)[1].mean())
-
-
-def _exr_output(scene, path_prefix) -> None:
-    scene.render.filepath = str(path_prefix)
-    settings = scene.render.image_settings
-    settings.file_format, settings.exr_codec, settings.color_depth, settings.color_mode = (
-        "OPEN_EXR",
-        "NONE",
-        "32",
-        "RGBA",
-    )
-
-
-def check_animation_frames(tmp_dir) -> None:
-    """bpy.ops.render.render(animation=True) over frames 1-3 of the animated bundled scene (what
-    `blender -b moving_ball.blend -a` runs), Persistent Data on: three EXR files, each equal to
-    bvhlab.render of that frame's export; the red ball moves right from frame to frame; between
-    frames the two moving objects are placed again, none read again, and the tree is refit."""
-    scene = harness.open_scene("moving_ball")
-    use_engine(scene, backend="cpu", render_supersampling=1)
-    scene.render.use_persistent_data = True
-    _exr_output(scene, tmp_dir / "anim_")
-    assert bpy.ops.render.render(animation=True) == {"FINISHED"}
-    files = sorted(tmp_dir.glob("anim_*.exr"))
-    assert [f.name for f in files] == ["anim_0001.exr", "anim_0002.exr", "anim_0003.exr"], files
-    record = _last_final(scene)
-    totals = record["totals"]
-    assert (totals.full_syncs, totals.objects_read, totals.objects_moved) == (1, 3, 4), totals
-    assert record["tree"] == "refit", record["tree"]
-    centroids = []
-    for frame, path in zip((1, 2, 3), files):
-        scene.frame_set(frame)
-        image = _exr_rgba(path)
-        compare_images(image, reference(scene, samples_per_axis=1)[0], "cpu")
-        centroids.append(_red_centroid_x(image))
-    assert centroids[0] + 10 < centroids[1] < centroids[2] - 10, f"the ball does not move right: {centroids}"
-
-
-def check_command_line_frames(tmp_dir) -> None:
-    """A real Blender binary: `blender -b moving_ball.blend -E BVHLAB_WHITTED -o ... -F OPEN_EXR -f 1
-    -a` in a child process with the installed extension enabled by --addons: frame 1, then the
-    animation (frame 1 again, 2, 3): three files, each equal to bvhlab.render of its frame's export."""
-    import os
-    import subprocess
-
-    blend = harness.SCENES_DIR / harness.scenes_index()["moving_ball"]["file"]
-    command = [
-        bpy.app.binary_path,
-        "--background",
-        "--factory-startup",
-        str(blend),
-        "--addons",
-        harness._addon_module,
-        "--engine",
-        ENGINE,
-        "--render-output",
-        str(tmp_dir / "cli_####"),
-        "--render-format",
-        "OPEN_EXR",
-        "--python-expr",
-        _CLI_SETUP,
-        "--render-frame",
-        "1",
-        "--render-anim",
-    ]
-    done = subprocess.run(command, capture_output=True, text=True, timeout=600, env=dict(os.environ))
-    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
-    files = sorted(p.name for p in tmp_dir.glob("cli_*.exr"))
-    assert files == ["cli_0001.exr", "cli_0002.exr", "cli_0003.exr"], (files, done.stdout[-2000:])
-    scene = harness.open_scene("moving_ball")
-    use_engine(scene, backend="auto", render_supersampling=1)
-    for frame in (1, 2, 3):
-        scene.frame_set(frame)
-        compare_images(
-            _exr_rgba(tmp_dir / f"cli_{frame:04d}.exr"), reference(scene, samples_per_axis=1)[0], _auto_backend()
-        )
-
-
-#: Run by the child Blender before it renders: lossless EXR output (the file's own settings are PNG).
-_CLI_SETUP = (
-    "import bpy; s = bpy.context.scene.render.image_settings; "
-    "s.exr_codec, s.color_depth, s.color_mode = 'NONE', '32', 'RGBA'"
-)
-
-
-def _auto_backend() -> str:
-    return harness.addon().engine.tracer.open_tracer("auto").backend
 
 
 def check_errors_are_reported() -> None:

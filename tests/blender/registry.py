@@ -135,6 +135,7 @@ def _instancing() -> Iterator[Check]:
 
 def _engine() -> Iterator[Check]:
     import checks_engine as engine
+    import checks_engine_frames as frames
     import checks_engine_viewport as viewport
 
     yield Check("engine", "engine_selectable", engine.check_engine_selectable)
@@ -143,7 +144,7 @@ def _engine() -> Iterator[Check]:
         engine.check_heatmap_is_box_tests,
         engine.check_depth_is_camera_z,
         engine.check_rerender_reads_only_what_changed,
-        engine.check_animation_frames,
+        frames.check_animation_frames,
         engine.check_counter_passes_are_the_cpu_counters,
     ):
         yield Check("engine", check.__name__.removeprefix("check_"), check, folder=True)
@@ -156,7 +157,7 @@ def _engine() -> Iterator[Check]:
         viewport.check_viewport_counter_display,
     ):
         yield Check("engine", check.__name__.removeprefix("check_"), check)
-    yield Check("engine", "command_line_frames", engine.check_command_line_frames, folder=True, binary=True)
+    yield Check("engine", "command_line_frames", frames.check_command_line_frames, folder=True, binary=True)
 
 
 def _cameras() -> Iterator[Check]:
