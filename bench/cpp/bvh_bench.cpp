@@ -18,14 +18,8 @@
 
 #include <sys/resource.h>
 
-#if __has_include(<valgrind/callgrind.h>)
-#include <valgrind/callgrind.h>
-#else
-#define CALLGRIND_START_INSTRUMENTATION
-#define CALLGRIND_STOP_INSTRUMENTATION
-#endif
-
 #include "bench_data.h"
+#include "callgrind_marks.h"
 
 namespace bench {
 namespace {

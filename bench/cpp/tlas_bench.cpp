@@ -23,14 +23,8 @@
 #include <string>
 #include <vector>
 
-#if __has_include(<valgrind/callgrind.h>)
-#include <valgrind/callgrind.h>
-#else
-#define CALLGRIND_START_INSTRUMENTATION
-#define CALLGRIND_STOP_INSTRUMENTATION
-#endif
-
 #include "bench_data.h"
+#include "callgrind_marks.h"
 #include "bvhlab/render_settings.h"
 #include "bvhlab/tlas.h"
 #include "bvhlab/wide_bvh.h"
