@@ -1,21 +1,17 @@
 // Two-level trees (tlas.h): the hits through a TLAS and its shared BLASes equal those of one flat
-// tree over the same triangles moved into the world; bad instances are refused with clear errors.
+// tree over the same triangles moved into the world (bad instances and the transforms' arithmetic:
+// test_tlas_transforms.cpp).
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstring>
 #include <memory>
 #include <random>
 #include <stdexcept>
-#include <string>
 
 #include "bvhlab/coordinate_range.h"
 #include "bvhlab/render_settings.h"
-#include "bvhlab/tlas.h"
 #include "bvhlab/two_level_record.h"
-#include "bvhlab/wide_bvh.h"
-#include "test_scenes.h"
-#include "transforms.h"
+#include "two_level_fixture.h"
 
 using namespace bvhlab;
 using namespace bvhlab::test;
@@ -23,27 +19,16 @@ using namespace bvhlab::test;
 namespace {
 
 /// Meshes, their trees, instances, and the same triangles moved into the world as one flat scene.
-struct Instanced {
-    std::vector<Scene> meshes;
-    std::vector<Bvh> trees;
-    std::vector<WideBvh> wides;
+struct Instanced : TwoLevelFixture {
     std::vector<std::uint32_t> blas_of;
     std::vector<Transform> transforms;
-    Tlas tlas;
-    TwoLevel two_level;
     Scene flat;
     std::vector<std::pair<std::uint32_t, std::uint32_t>> flat_origin;  ///< flat triangle → (instance, prim)
     Bvh flat_tree;
     WideBvh flat_wide;
 
     void finish() {
-        for (const Scene& m : meshes) trees.push_back(build_bvh(m.view()));
-        for (const Bvh& t : trees) wides.push_back(make_wide(t));
-        std::vector<const Bvh*> blases;
-        for (const Bvh& t : trees) blases.push_back(&t);
-        tlas = build_tlas(blases, blas_of, transforms);
-        two_level.tlas = &tlas;
-        for (std::size_t b = 0; b < trees.size(); ++b) two_level.blases.push_back({&trees[b], &wides[b]});
+        build_two_level(blas_of, transforms);
         for (std::uint32_t i = 0; i < blas_of.size(); ++i) {
             const GeometryView g = meshes[blas_of[i]].view();
             for (std::uint32_t p = 0; p < g.triangle_count; ++p) {
@@ -334,137 +319,6 @@ TEST(Tlas, InstancesOfAnEmptyMeshAreLeftOut) {
     EXPECT_EQ(intersect_two_level(scene, {{0, 0, -5}, {0, 0, 1}}, Traversal::Stack).hit.ref, kNoHit);
     check_two_level(none, Traversal::Stack);
     EXPECT_THROW(check_two_level(none, Traversal::Wide), std::invalid_argument);
-}
-
-namespace {
-void expect_refused(const std::vector<std::uint32_t>& blas_of, const std::vector<Transform>& transforms,
-                    const std::string& words) {
-    const Scene mesh = random_scene(50, 0, 3);
-    const Bvh tree = build_bvh(mesh.view());
-    try {
-        build_tlas({&tree}, blas_of, transforms);
-        ADD_FAILURE() << "accepted: " << words;
-    } catch (const std::invalid_argument& e) {
-        EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
-    }
-}
-}  // namespace
-
-TEST(Tlas, BadInstancesAreRefusedByName) {
-    Transform nan, zero_axis, flat_axes, far;
-    nan.m[5] = std::nanf("");
-    zero_axis.m[10] = 0.0f;                         // scale z by 0
-    flat_axes.m[1] = 1.0f, flat_axes.m[5] = 1e-9f;  // columns 0 and 1 (nearly) parallel
-    far.m[3] = 0x1p41f;                             // moved beyond the coordinate range
-    expect_refused({0, 3}, {Transform{}, Transform{}}, "instance 1 refers to mesh 3, but the scene has 1 mesh");
-    expect_refused({0, 0}, {Transform{}, nan}, "instance 1: the transform has a NaN");
-    expect_refused({0}, {zero_axis}, "instance 0: the transform cannot be inverted");
-    expect_refused({0}, {flat_axes}, "instance 0: the transform cannot be inverted");
-    expect_refused({0}, {far}, "instance 0: the transform moves the mesh outside");
-    expect_refused({0, 0}, {Transform{}}, "one transform per instance");
-}
-
-TEST(Tlas, InverseUndoesTheTransform) {
-    const Transform t = make_transform({1, 2, 3}, 1.1f, {2.0f, -0.5f, 1.3f}, {-14, 3, 2});
-    const Transform inv = inverse(t);
-    for (Vec3 p : {Vec3{1, 2, 3}, Vec3{-5, 0.25f, 9}}) {
-        const Vec3 back = inv.point(t.point(p));
-        EXPECT_NEAR(back.x, p.x, 1e-5f);
-        EXPECT_NEAR(back.y, p.y, 1e-5f);
-        EXPECT_NEAR(back.z, p.z, 1e-5f);
-    }
-}
-
-/// transform_boxes over boxes made ready once (BoxesToMove: two boxes at a time, the matrix in
-/// double once) and rounded out by bits rather than nextafterf: the same box, bit for bit, as the
-/// box-by-box computation, over transforms and boxes with zeros of both signs, empty boxes, odd
-/// counts and magnitudes from 2^-30 to 2^30.
-TEST(Tlas, MovedBoxesAreTheBoxByBoxUnionBitForBit) {
-    auto box_by_box = [](const Transform& t, const Aabb* boxes, std::size_t count) {
-        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-        for (std::size_t k = 0; k < count; ++k) {
-            const Aabb& b = boxes[k];
-            if (b.empty()) continue;
-            const double c[3] = {0.5 * (double(b.lo.x) + b.hi.x), 0.5 * (double(b.lo.y) + b.hi.y),
-                                 0.5 * (double(b.lo.z) + b.hi.z)};
-            const double h[3] = {0.5 * (double(b.hi.x) - b.lo.x), 0.5 * (double(b.hi.y) - b.lo.y),
-                                 0.5 * (double(b.hi.z) - b.lo.z)};
-            for (int r = 0; r < 3; ++r) {
-                const double m0 = t.m[4 * r], m1 = t.m[4 * r + 1], m2 = t.m[4 * r + 2];
-                const double centre = m0 * c[0] + m1 * c[1] + m2 * c[2] + t.m[4 * r + 3];
-                const double half = std::fabs(m0) * h[0] + std::fabs(m1) * h[1] + std::fabs(m2) * h[2];
-                lo[r] = std::min(lo[r], centre - half), hi[r] = std::max(hi[r], centre + half);
-            }
-        }
-        Aabb out;
-        if (lo[0] > hi[0]) return out;
-        for (int r = 0; r < 3; ++r) {
-            const double pad = 0x1p-20 * std::max({std::fabs(lo[r]), std::fabs(hi[r]), hi[r] - lo[r]});
-            out.lo[r] = std::nextafter(float(lo[r] - pad), -INFINITY);
-            out.hi[r] = std::nextafter(float(hi[r] + pad), INFINITY);
-        }
-        return out;
-    };
-    std::mt19937 rng(5);
-    std::uniform_real_distribution<float> mantissa(-2.0f, 2.0f);
-    std::uniform_int_distribution<int> exponent(-30, 30), kind(0, 5);
-    auto value = [&](int e) { return kind(rng) == 0 ? 0.0f : kind(rng) == 0 ? -0.0f : std::ldexp(mantissa(rng), e); };
-    for (int i = 0; i < 50000; ++i) {
-        Transform t;
-        for (float& x : t.m) x = value(exponent(rng) / 3);
-        Aabb boxes[9];
-        const std::size_t count = std::size_t(i % 10);
-        for (std::size_t k = 0; k < count; ++k) {
-            const int e = exponent(rng);
-            const Vec3 a{value(e), value(e), value(e)}, b{value(e), value(e), value(e)};
-            boxes[k].lo = min(a, b), boxes[k].hi = max(a, b);
-            if (i % 7 == 0 && k == 0) boxes[k] = Aabb{};
-        }
-        const Aabb expected = box_by_box(t, boxes, count);
-        const Aabb got = transform_boxes(t, BoxesToMove(boxes, count));
-        ASSERT_EQ(std::memcmp(&got, &expected, sizeof got), 0) << "case " << i;
-    }
-    const Transform zero{{0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}};  // a point at the origin: ±denorm_min
-    const Aabb origin{{0, 0, 0}, {0, 0, 0}};
-    const Aabb got = transform_boxes(zero, &origin, 1), expected = box_by_box(zero, &origin, 1);
-    EXPECT_EQ(std::memcmp(&got, &expected, sizeof got), 0);
-}
-
-/// scale_ray takes its power of two from the largest component's exponent bits (no frexp, ldexp):
-/// the same ray, bit for bit, as frexp and ldexp give, over the whole range of directions, and
-/// tmin, tmax of every kind (0, inf, subnormal results).
-TEST(Tlas, ScaleRayIsFrexpAndLdexpBitForBit) {
-    std::mt19937 rng(3);
-    std::uniform_real_distribution<float> mantissa(-1.0f, 1.0f);
-    std::uniform_int_distribution<int> exponent(-80, 79);
-    const float tmaxes[] = {kInfinity, 0.0f, 1.0f, 3.0e38f, 1e-38f, 7.0f};
-    auto bits = [](float f) {
-        std::uint32_t b;
-        std::memcpy(&b, &f, sizeof b);
-        return b;
-    };
-    for (int i = 0; i < 20000; ++i) {
-        const int e = exponent(rng);
-        Ray ray{{0, 0, 0}, {std::ldexp(mantissa(rng), e), std::ldexp(mantissa(rng), e), std::ldexp(mantissa(rng), e)}};
-        if (!direction_in_range(ray.dir)) continue;
-        ray.tmin = i % 3 ? 0.0f : std::ldexp(mantissa(rng) + 1.0f, exponent(rng));
-        ray.tmax = tmaxes[i % 6];
-        Ray expected = ray;
-        int k;
-        std::frexp(largest_component(ray.dir), &k);
-        const float expected_scale = k ? std::ldexp(1.0f, -k) : 1.0f;
-        if (k) {
-            expected.dir = ray.dir * std::ldexp(1.0f, -k);
-            expected.tmin = std::ldexp(ray.tmin, k), expected.tmax = std::ldexp(ray.tmax, k);
-        }
-        const float scale = scale_ray(ray);
-        ASSERT_EQ(bits(scale), bits(expected_scale));
-        ASSERT_EQ(bits(ray.dir.x), bits(expected.dir.x));
-        ASSERT_EQ(bits(ray.dir.y), bits(expected.dir.y));
-        ASSERT_EQ(bits(ray.dir.z), bits(expected.dir.z));
-        ASSERT_EQ(bits(ray.tmin), bits(expected.tmin));
-        ASSERT_EQ(bits(ray.tmax), bits(expected.tmax));
-    }
 }
 
 /// The two-level walk scales the world ray once (WorldRay): a ray as given and its copy scaled as

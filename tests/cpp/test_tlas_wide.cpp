@@ -10,10 +10,7 @@
 #include <random>
 #include <vector>
 
-#include "bvhlab/tlas.h"
-#include "bvhlab/wide_bvh.h"
-#include "test_scenes.h"
-#include "transforms.h"
+#include "two_level_fixture.h"
 
 using namespace bvhlab;
 using namespace bvhlab::test;
@@ -22,18 +19,10 @@ namespace {
 
 /// `count` instances of two random meshes, rotated, scaled (some mirrored) and scattered through a
 /// cube 120 wide; `leaf_size` instances at most per TLAS leaf.
-struct Field {
-    std::vector<Scene> meshes;
-    std::vector<Bvh> trees;
-    std::vector<WideBvh> wides;
-    Tlas tlas;
-    TwoLevel two_level;
-
+struct Field : TwoLevelFixture {
     Field(std::uint32_t count, std::uint32_t leaf_size, std::uint32_t seed) {
         meshes.push_back(random_scene(60, 0, seed));
         meshes.push_back(random_scene(200, 0, seed + 1));
-        for (const Scene& m : meshes) trees.push_back(build_bvh(m.view()));
-        for (const Bvh& t : trees) wides.push_back(make_wide(t));
         std::mt19937 rng(seed);
         std::uniform_real_distribution<float> u(0.0f, 1.0f);
         std::vector<std::uint32_t> blas_of;
@@ -47,11 +36,7 @@ struct Field {
         }
         BuildConfig config = default_tlas_config();
         config.max_leaf_size = leaf_size;
-        std::vector<const Bvh*> blases;
-        for (const Bvh& t : trees) blases.push_back(&t);
-        tlas = build_tlas(blases, blas_of, transforms, config);
-        two_level.tlas = &tlas;
-        for (std::size_t b = 0; b < trees.size(); ++b) two_level.blases.push_back({&trees[b], &wides[b]});
+        build_two_level(blas_of, transforms, config);
     }
 };
 

@@ -1,4 +1,4 @@
-// transforms.h — instance transforms for the two-level tests (test_tlas, test_render_tlas).
+// transforms.h — instance transforms for the two-level tests (test_tlas*, test_render_tlas).
 #pragma once
 #include <cmath>
 
