@@ -11,6 +11,7 @@
 #include "bvhlab/coordinate_range.h"
 #include "bvhlab/render_settings.h"
 #include "bvhlab/two_level_record.h"
+#include "traverse_oracles.h"
 #include "two_level_fixture.h"
 
 using namespace bvhlab;
@@ -102,21 +103,6 @@ void expect_same_as_flat(const Instanced& s, Traversal mode, std::uint32_t seed)
     EXPECT_LE(disagreements, rays.size() / 500) << disagreements << " of " << rays.size();
 }
 
-/// Rays scattered through the test scenes' cube, some axis-parallel, some unnormalised.
-std::vector<Ray> scattered_rays(std::uint32_t n, std::uint32_t seed) {
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<float> u(-2.0f, 12.0f);
-    std::normal_distribution<float> g(0.0f, 1.0f);
-    std::vector<Ray> rays;
-    for (std::uint32_t i = 0; i < n; ++i) {
-        Vec3 d{g(rng), g(rng), g(rng)};
-        if (i % 7 == 0) d.y = 0;
-        if (i % 5 == 0) d = d * 3.7f;
-        rays.push_back({{u(rng), u(rng), u(rng)}, d});
-    }
-    return rays;
-}
-
 }  // namespace
 
 TEST(Tlas, HitsEqualOneFlatTreeOverTheMovedTriangles) {
@@ -199,7 +185,7 @@ TEST(Tlas, BatchReportsInstanceAndPrimitive) {
 TEST(Tlas, OccludedEqualsClosestHitBeforeTmax) {
     const Instanced s = mixed_instances();
     auto rays = rays_at(s, 2500, 21);
-    for (const Ray& r : scattered_rays(500, 3)) rays.push_back(r);
+    for (const Ray& r : random_rays(500, 3)) rays.push_back(r);
     for (Traversal mode : {Traversal::Stack, Traversal::Stackless, Traversal::Wide}) {
         std::uint32_t occluded_count = 0;
         std::vector<float> o, d, tmax;
@@ -234,7 +220,7 @@ TEST(Tlas, OneIdentityInstanceIsTheFlatTree) {
     const WideBvh wide = make_wide(tree);
     const Tlas tlas = build_tlas({&tree}, {0}, {Transform{}});
     const TwoLevel scene{&tlas, {{&tree, &wide}}};
-    for (const Ray& ray : scattered_rays(3000, 2)) {
+    for (const Ray& ray : random_rays(3000, 2)) {
         for (Traversal mode : {Traversal::Stack, Traversal::Stackless, Traversal::Wide}) {
             std::uint32_t flat_visits = 0, two_visits = 0;
             const Hit flat = mode == Traversal::Wide ? intersect_wide(wide, tree, ray, &flat_visits)
@@ -248,7 +234,7 @@ TEST(Tlas, OneIdentityInstanceIsTheFlatTree) {
         }
     }
     // The batches are the flat batches themselves, each hit in instance 0
-    const auto rays = scattered_rays(2000, 3);
+    const auto rays = random_rays(2000, 3);
     const std::size_t n = rays.size();
     std::vector<float> o, d, t[2], u[2], v[2];
     for (const Ray& r : rays)

@@ -1,11 +1,9 @@
-// Closest-hit traversal against brute force over every primitive, every traversal mode; the any-hit
-// query (occluded) against the closest hit's t < tmax.
+// Closest-hit traversal against brute force over every primitive, every traversal mode (the any-hit
+// query: test_traverse_occluded.cpp).
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
-#include <memory>
-#include <stdexcept>
 #include <string>
 #include <random>
 
@@ -15,44 +13,14 @@
 #include "bvhlab/traverse.h"
 #include "bvhlab/wide_bvh.h"
 #include "test_scenes.h"
+#include "traverse_oracles.h"
 
 using namespace bvhlab;
+using test::brute_force;
+using test::random_rays;
+using test::supported_isas;
 
 namespace {
-
-/// The oracle: every primitive, no tree.
-Hit brute_force(const Bvh& bvh, const Ray& ray) {
-    RayQuery q(ray);
-    Hit hit;
-    hit.t = ray.tmax;
-    for (std::uint32_t k = 0; k < bvh.prims.size(); ++k)
-        if (hit_prim(bvh.prims[k], q, hit)) hit.slot = k;
-    if (hit.ref == kNoHit) hit.t = kInfinity;
-    return hit;
-}
-
-std::vector<Ray> random_rays(std::uint32_t n, std::uint32_t seed) {
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<float> u(-2.0f, 12.0f);
-    std::normal_distribution<float> g(0.0f, 1.0f);
-    std::vector<Ray> rays;
-    for (std::uint32_t i = 0; i < n; ++i) {
-        Vec3 d{g(rng), g(rng), g(rng)};
-        if (i % 7 == 0) d.y = 0;  // axis-parallel components
-        if (i % 11 == 0) d = {0, 0, i % 2 ? 1.0f : -1.0f};
-        if (i % 5 == 0) d = d * 3.7f;  // unnormalised
-        rays.push_back({{u(rng), u(rng), u(rng)}, d});
-    }
-    return rays;
-}
-
-/// The instruction set paths this CPU can run (isa.h).
-std::vector<Isa> supported_isas() {
-    std::vector<Isa> out;
-    for (Isa isa : {Isa::Portable, Isa::Avx2})
-        if (isa_supported(isa)) out.push_back(isa);
-    return out;
-}
 
 void expect_same_hit(const Hit& got, const Hit& want) {
     ASSERT_EQ(got.t, want.t);      // the same float arithmetic on the same primitive
@@ -328,156 +296,6 @@ TEST(Traverse, BatchAgreesWithSingleRaysOnAnyThreadCount) {
             ASSERT_EQ(kind[i], h.ref != kNoHit && (h.ref & gpu::REF_SPHERE_BIT) ? 1 : 0);
         }
     }
-}
-
-// -- occluded (any hit) ------------------------------------------------------------------------
-
-/// The tmax values each ray is asked with, from its closest hit's t (inf on a miss): no limit, the
-/// hit's t exactly (not occluded: a hit counts only before tmax, as in intersect), the next float
-/// after it (occluded), halfway, and a random one.
-std::vector<float> tmax_cases(float t_closest, std::mt19937& rng) {
-    std::uniform_real_distribution<float> u(0.0f, 20.0f);
-    std::vector<float> out{kInfinity, u(rng), 0.0f};
-    if (t_closest != kInfinity)
-        out.insert(out.end(), {t_closest, std::nextafter(t_closest, kInfinity), std::nextafter(t_closest, 0.0f),
-                               0.5f * t_closest});
-    return out;
-}
-
-/// occluded on every traversal (the wide one on every instruction set path) equals the closest
-/// hit's t < tmax for every ray and every tmax of tmax_cases; returns how many were occluded.
-std::uint32_t expect_occluded_is_closest_before_tmax(const Bvh& bvh, const std::vector<Ray>& rays, std::uint32_t seed) {
-    const WideBvh wide = make_wide(bvh);
-    const Isa before = active_isa();
-    std::mt19937 rng(seed);
-    std::uint32_t occluded_count = 0, wrong = 0;
-    for (Ray ray : rays) {
-        ray.tmax = kInfinity;
-        const float t_closest = brute_force(bvh, ray).t;
-        for (float tmax : tmax_cases(t_closest, rng)) {
-            ray.tmax = tmax;
-            const bool want = t_closest < tmax;
-            occluded_count += want;
-            auto check = [&](bool got, const std::string& what) {
-                if (got != want && ++wrong <= 5)
-                    ADD_FAILURE() << what << ": tmax " << tmax << " closest t " << t_closest;
-            };
-            for (Traversal mode : {Traversal::Stack, Traversal::Stackless})
-                check(occluded(bvh, ray, mode), to_string(mode));
-            for (Isa isa : supported_isas()) {
-                set_isa(isa);
-                check(occluded_wide(wide, ray), "wide " + std::string(isa_name(isa)));
-            }
-            set_isa(before);
-        }
-    }
-    return occluded_count;
-}
-
-TEST(Occluded, EqualsClosestHitBeforeTmaxOnRandomScenes) {
-    for (std::uint32_t seed : {3u, 8u}) {
-        const auto scene = test::random_scene(2500, 300, seed);
-        for (std::uint32_t leaf : {1u, 4u, 8u})
-            for (SplitMethod m : {SplitMethod::Sah, SplitMethod::Lbvh}) {
-                BuildConfig cfg;
-                cfg.method = m, cfg.max_leaf_size = leaf;
-                const Bvh bvh = build_bvh(scene.view(), cfg);
-                auto rays = random_rays(1500, seed + leaf);
-                std::mt19937 rng(seed);
-                std::uniform_real_distribution<float> u(0.0f, 3.0f);
-                for (std::size_t i = 0; i < rays.size(); i += 3) rays[i].tmin = u(rng);  // tmin bounds it too
-                const std::uint32_t n = expect_occluded_is_closest_before_tmax(bvh, rays, seed);
-                EXPECT_GT(n, rays.size() / 4) << "too few occluded rays to test anything";
-            }
-    }
-}
-
-/// Rays through a closed mesh's shared vertices and edges and in the planes of its edges (the
-/// watertight test's hard cases, as in RaysThroughSharedEdgesAndVerticesOfAClosedMeshNeverMiss).
-TEST(Occluded, EqualsClosestHitBeforeTmaxOnRaysGrazingEdgesAndVertices) {
-    const test::Scene mesh = test::octasphere(10, {0.25f, -0.5f, 3.0f}, 2.0f);
-    std::vector<Ray> rays;
-    const Vec3 inside{0.25f, -0.5f, 3.0f}, outside{-3.0f, 2.0f, 6.5f};
-    for (const Vec3& o : {inside, outside})
-        for (std::size_t t = 0; t < mesh.triangles.size() / 9; ++t) {
-            const float* v = &mesh.triangles[9 * t];
-            const Vec3 a{v[0], v[1], v[2]}, b{v[3], v[4], v[5]};
-            rays.push_back({o, a - o});               // through a vertex
-            rays.push_back({o, (a + b) * 0.5f - o});  // an edge's midpoint
-        }
-    for (int i = -30; i <= 30; ++i)
-        for (Vec3 d : {Vec3{0, float(i) / 30.0f, 1}, Vec3{float(i) / 30.0f, 0, -1}}) rays.push_back({inside, d});
-    for (std::uint32_t leaf : {1u, 4u}) {
-        BuildConfig cfg;
-        cfg.max_leaf_size = leaf;
-        const Bvh bvh = build_bvh(mesh.view(), cfg);
-        EXPECT_GT(expect_occluded_is_closest_before_tmax(bvh, rays, leaf), rays.size());
-    }
-}
-
-TEST(Occluded, EmptyTreeAndZeroOrNegativeRangesAreNeverOccluded) {
-    test::Scene empty;
-    const Bvh none = build_bvh(empty.view());
-    EXPECT_FALSE(occluded(none, {{0, 0, 0}, {1, 0, 0}}, Traversal::Stack));
-    EXPECT_FALSE(occluded_wide(make_wide(none), {{0, 0, 0}, {1, 0, 0}}));
-    test::Scene s;
-    s.add_triangle({-1, -1, 2}, {3, -1, 2}, {-1, 3, 2});
-    const Bvh bvh = build_bvh(s.view());
-    const WideBvh wide = make_wide(bvh);
-    for (float tmax : {0.0f, -1.0f, 2.0f}) {  // the hit at t = 2 is not before tmax = 2
-        const Ray ray{{0, 0, 0}, {0, 0, 1}, 0.0f, tmax};
-        EXPECT_FALSE(occluded(bvh, ray, Traversal::Stackless)) << tmax;
-        EXPECT_FALSE(occluded_wide(wide, ray)) << tmax;
-    }
-    EXPECT_TRUE(occluded(bvh, {{0, 0, 0}, {0, 0, 1}, 0.0f, 2.0001f}, Traversal::Stack));
-    EXPECT_FALSE(occluded(bvh, {{0, 0, 0}, {0, 0, 1}, 2.0f, 5.0f}, Traversal::Stack));  // nor at exactly tmin
-}
-
-TEST(Occluded, BatchAgreesWithSingleRaysOnAnyThreadCountWithPerRayTmax) {
-    const auto scene = test::random_scene(2000, 100, 29);
-    const Bvh bvh = build_bvh(scene.view());
-    const WideBvh wide = make_wide(bvh);
-    const auto rays = random_rays(6000, 31);
-    std::vector<float> o, d, tmax;
-    std::mt19937 rng(5);
-    std::uniform_real_distribution<float> u(0.0f, 15.0f);
-    for (const Ray& r : rays) {
-        o.insert(o.end(), {r.origin.x, r.origin.y, r.origin.z}), d.insert(d.end(), {r.dir.x, r.dir.y, r.dir.z});
-        tmax.push_back(u(rng));
-    }
-    RayBatch batch{o.data(), d.data(), rays.size()};
-    batch.tmax_of = tmax.data();
-    for (Traversal mode : {Traversal::Stack, Traversal::Stackless, Traversal::Wide})
-        for (std::uint32_t threads : {1u, 2u, 5u}) {
-            std::unique_ptr<bool[]> got(new bool[rays.size()]);
-            occluded_batch(bvh, batch, got.get(), mode, threads, &wide);
-            for (std::size_t i = 0; i < rays.size(); ++i) {
-                Ray r = rays[i];
-                r.tmax = tmax[i];
-                ASSERT_EQ(got[i], occluded(bvh, r, Traversal::Stack)) << i;
-            }
-        }
-}
-
-TEST(Occluded, BatchRefusesNanAndNegativeTmax) {
-    const auto scene = test::random_scene(100, 0, 2);
-    const Bvh bvh = build_bvh(scene.view());
-    const float o[6] = {0, 0, 0, 1, 1, 1}, d[6] = {1, 0, 0, 0, 1, 0};
-    bool out[2];
-    auto refused = [&](RayBatch b, const char* words) {
-        try {
-            occluded_batch(bvh, b, out, Traversal::Stack);
-            ADD_FAILURE() << "accepted: " << words;
-        } catch (const std::invalid_argument& e) {
-            EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
-        }
-    };
-    refused({o, d, 2, 0.0f, -1.0f}, "tmax must be a number >= 0");
-    refused({o, d, 2, 0.0f, std::nanf("")}, "tmax must be a number >= 0");
-    const float per_ray[2] = {1.0f, std::nanf("")};
-    refused({o, d, 2, 0.0f, kInfinity, per_ray}, "ray 1: tmax must be a number >= 0");
-    const float negative[2] = {-0.5f, 1.0f};
-    refused({o, d, 2, 0.0f, kInfinity, negative}, "ray 0: tmax");
 }
 
 }  // namespace

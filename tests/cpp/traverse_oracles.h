@@ -1,0 +1,49 @@
+// traverse_oracles.h — what the traversal tests (test_traverse, test_traverse_occluded, test_tlas)
+// check against and with: brute force over every primitive, random rays, the instruction set paths.
+#pragma once
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include "bvhlab/bvh.h"
+#include "bvhlab/isa.h"
+#include "bvhlab/ray.h"
+
+namespace bvhlab::test {
+
+/// The oracle: every primitive, no tree.
+inline Hit brute_force(const Bvh& bvh, const Ray& ray) {
+    RayQuery q(ray);
+    Hit hit;
+    hit.t = ray.tmax;
+    for (std::uint32_t k = 0; k < bvh.prims.size(); ++k)
+        if (hit_prim(bvh.prims[k], q, hit)) hit.slot = k;
+    if (hit.ref == kNoHit) hit.t = kInfinity;
+    return hit;
+}
+
+/// Rays through the test scenes' cube (test_scenes.h), some axis-parallel, some unnormalised.
+inline std::vector<Ray> random_rays(std::uint32_t n, std::uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(-2.0f, 12.0f);
+    std::normal_distribution<float> g(0.0f, 1.0f);
+    std::vector<Ray> rays;
+    for (std::uint32_t i = 0; i < n; ++i) {
+        Vec3 d{g(rng), g(rng), g(rng)};
+        if (i % 7 == 0) d.y = 0;  // axis-parallel components
+        if (i % 11 == 0) d = {0, 0, i % 2 ? 1.0f : -1.0f};
+        if (i % 5 == 0) d = d * 3.7f;  // unnormalised
+        rays.push_back({{u(rng), u(rng), u(rng)}, d});
+    }
+    return rays;
+}
+
+/// The instruction set paths this CPU can run (isa.h).
+inline std::vector<Isa> supported_isas() {
+    std::vector<Isa> out;
+    for (Isa isa : {Isa::Portable, Isa::Avx2})
+        if (isa_supported(isa)) out.push_back(isa);
+    return out;
+}
+
+}  // namespace bvhlab::test
