@@ -53,12 +53,14 @@ bool any_hit_nodes(const unsigned char* lines, const Query& q) {
             if (rest) {
                 push_entered(node, rest, stack + sp);
                 sp += std::uint32_t(__builtin_popcount(unsigned(rest)));
+                prefetch(WideView{lines}, node.child[31 - __builtin_clz(unsigned(rest))]);  // the next to pop
             }
             continue;
         }
         if (inner) {  // pushed before the leaves are tested: nothing but the stack outlives their calls
             push_entered(node, inner, stack + sp);
             sp += std::uint32_t(__builtin_popcount(unsigned(inner)));
+            prefetch(WideView{lines}, node.child[31 - __builtin_clz(unsigned(inner))]);
         }
         for (int m = leaves; m; m &= m - 1)
             if (leaf_occludes(lines + std::size_t(node.child[__builtin_ctz(unsigned(m))] & ~kLeafChild) * sizeof(WideLine),
