@@ -23,7 +23,10 @@ bool leaf_occludes(const unsigned char* at, const Query& q) {
 /// The any-hit walk for one octant: tests a node's eight boxes, then at once the leaves among the
 /// children the ray enters, in slot order, ending at the first packet with a hit; the inner
 /// children entered go on, unordered (any hit ends the walk; tinybvh 1.9's IsOccluded pushes
-/// unordered too), the highest slot next. A leaf is never pushed or popped, so every entry is a
+/// unordered too), the lowest slot next where the node entered no leaf: in preorder its subtree is
+/// laid right after the node (wide_bvh.h), where the node's prefetch of the six lines after it
+/// reaches (the highest slot next: Sponza and uniform1m shadow rays 11-12% slower, callgrind 10%
+/// more instructions a ray; design.md). A leaf is never pushed or popped, so every entry is a
 /// node and the loop has no branch on the kind, and a leaf's packets, laid after their node
 /// (wide_bvh.h), are read while the node's prefetch of the lines after it is fresh (Sponza
 /// shadow rays +16% against the walk that pushed leaves as nodes; design.md, "Any-hit queries").
@@ -52,8 +55,8 @@ bool any_hit_nodes(const unsigned char* lines, const Query& q) {
         const int mask = le_bits(t0, t1);
         const int leaves = mask & leaf_bits(node), inner = mask ^ leaves;
         if (!leaves && inner) {  // the commonest case: the next node from the node's words, not the stack
-            const int top = 31 - __builtin_clz(unsigned(inner)), rest = inner ^ (1 << top);
-            cur = node.child[top];
+            const int rest = inner & (inner - 1);
+            cur = node.child[__builtin_ctz(unsigned(inner))];
             if (rest) {
                 push_entered(node, rest, stack + sp);
                 sp += std::uint32_t(__builtin_popcount(unsigned(rest)));
