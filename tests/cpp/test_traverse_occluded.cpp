@@ -123,6 +123,8 @@ TEST(Occluded, EmptyTreeAndZeroOrNegativeRangesAreNeverOccluded) {
         EXPECT_FALSE(occluded_wide(wide, ray)) << tmax;
     }
     EXPECT_TRUE(occluded(bvh, {{0, 0, 0}, {0, 0, 1}, 0.0f, 2.0001f}, Traversal::Stack));
+    // a tree of one leaf: the wide root is a node with the leaf its only child, tested at once
+    EXPECT_TRUE(occluded_wide(wide, {{0, 0, 0}, {0, 0, 1}, 0.0f, 2.0001f}));
     EXPECT_FALSE(occluded(bvh, {{0, 0, 0}, {0, 0, 1}, 2.0f, 5.0f}, Traversal::Stack));  // nor at exactly tmin
 }
 

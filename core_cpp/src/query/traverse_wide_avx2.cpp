@@ -142,6 +142,12 @@ inline void push_entered(const WideNode& node, int mask, std::uint32_t* index) {
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(index), _mm256_permutevar8x32_epi32(children, order));
 }
 
+/// Bit k set where slot k of `node` is a leaf: the child words' bit 31 (kLeafChild) is their
+/// sign bit as floats.
+inline int leaf_bits(const WideNode& node) {
+    return _mm256_movemask_ps(_mm256_load_ps(reinterpret_cast<const float*>(node.child)));
+}
+
 #include "wide_traverse.inl"
 
 }  // namespace bvhlab::avx2

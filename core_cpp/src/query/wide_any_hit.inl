@@ -1,0 +1,79 @@
+// wide_any_hit.inl — the any-hit walk of the 8-wide tree (occluded_wide_kernel): included by
+// wide_traverse.inl, inside the including file's namespace, with its vector types and helpers.
+
+/// Whether a leaf's packets, from `at` on, hold a primitive the ray hits at t in (tmin, tmax):
+/// test_leaf's loop up to the first packet with a hit, the hit kept here rather than the walk's,
+/// so that the walk keeps one value fewer across the call (its registers are full: what does not
+/// fit is written and read back at every node). A hit counts by the closest-hit rule against one
+/// at tmax, so occluded is exactly intersect's t < tmax.
+bool leaf_occludes(const unsigned char* at, const Query& q) {
+    Hit hit{q.ray->tmax, kNoHit, 0.0f, 0.0f, kNoHit};
+    for (;; at += sizeof(PrimPacket)) {
+        const PrimPacket& k = *reinterpret_cast<const PrimPacket*>(at);
+        if (!(k.ref[0] & gpu::REF_SPHERE_BIT)) [[likely]] {
+            test_triangles<true>(k, q, hit);
+        } else {
+            for (int l = 0; l < 4 && k.ref[l] != kNoHit; ++l) hit_packet_sphere(k, l, *q.ray, hit);
+        }
+        if (hit.ref != kNoHit) return true;
+        if (!k.more) return false;
+    }
+}
+
+/// The any-hit walk for one octant: tests a node's eight boxes, then at once the leaves among the
+/// children the ray enters, in slot order, ending at the first packet with a hit; the inner
+/// children entered go on, unordered (any hit ends the walk; tinybvh 1.9's IsOccluded pushes
+/// unordered too), the lowest slot next where the node entered no leaf: in preorder its subtree is
+/// laid right after the node (wide_bvh.h), where the node's prefetch of the six lines after it
+/// reaches (the highest slot next: Sponza and uniform1m shadow rays 11-12% slower, callgrind 10%
+/// more instructions a ray; design.md). A leaf is never pushed or popped, so every entry is a
+/// node and the loop has no branch on the kind, and a leaf's packets, laid after their node
+/// (wide_bvh.h), are read while the node's prefetch of the lines after it is fresh (Sponza
+/// shadow rays +16% against the walk that pushed leaves as nodes; design.md, "Any-hit queries").
+/// No entry distance is kept: the boxes' far limit is the ray's tmax throughout, which every
+/// pushed entry passes.
+/// One copy per octant, each with its plane offsets as constants (tinybvh 1.9's
+/// IsOccludedOctant). The root is a node even in a tree of one leaf (make_wide).
+template <int kOctant>
+bool any_hit_nodes(const unsigned char* lines, const Query& q) {
+    const L8 origin[3] = {L8::splat(q.o[0]), L8::splat(q.o[1]), L8::splat(q.o[2])};
+    const L8 neg_inv[3] = {L8::splat(q.neg_inv[0]), L8::splat(q.neg_inv[1]), L8::splat(q.neg_inv[2])};
+    const L8 neg_inv_far[3] = {L8::splat(q.neg_inv_far[0]), L8::splat(q.neg_inv_far[1]), L8::splat(q.neg_inv_far[2])};
+    const L8 far = L8::splat(q.ray->tmax * gpu::BOX_FAR_SCALE);
+    std::uint32_t stack[Stack::kSize];
+    std::uint32_t sp = 0, cur = 0;
+    for (;;) {
+        const WideNode& node = *reinterpret_cast<const WideNode*>(lines + std::size_t(cur) * sizeof(WideLine));
+        const float* f = node.lo_x;
+        __builtin_prefetch(node.child);  // as enter_children: the child words, and the lines after
+        const char* after = reinterpret_cast<const char*>(&node + 1);
+        for (int line = 0; line < 6; ++line) __builtin_prefetch(after + 64 * line);
+        L8 t0 = L8::load(q.tmin8), t1 = far;
+        for (int a = 0; a < 3; ++a) t0 = raise(t0, (origin[a] - L8::load(f + kPlanes.at[kOctant][a])) * neg_inv[a]);
+        for (int a = 0; a < 3; ++a)
+            t1 = lower(t1, (origin[a] - L8::load(f + kPlanes.at[kOctant][3 + a])) * neg_inv_far[a]);
+        const int mask = le_bits(t0, t1);
+        const int leaves = mask & leaf_bits(node), inner = mask ^ leaves;
+        if (!leaves && inner) {  // the commonest case: the next node from the node's words, not the stack
+            const int rest = inner & (inner - 1);
+            cur = node.child[__builtin_ctz(unsigned(inner))];
+            if (rest) {
+                push_entered(node, rest, stack + sp);
+                sp += std::uint32_t(__builtin_popcount(unsigned(rest)));
+                prefetch(WideView{lines}, node.child[31 - __builtin_clz(unsigned(rest))]);  // the next to pop
+            }
+            continue;
+        }
+        if (inner) {  // pushed before the leaves are tested: nothing but the stack outlives their calls
+            push_entered(node, inner, stack + sp);
+            sp += std::uint32_t(__builtin_popcount(unsigned(inner)));
+            prefetch(WideView{lines}, node.child[31 - __builtin_clz(unsigned(inner))]);
+        }
+        for (int m = leaves; m; m &= m - 1)
+            if (leaf_occludes(
+                    lines + std::size_t(node.child[__builtin_ctz(unsigned(m))] & ~kLeafChild) * sizeof(WideLine), q))
+                return true;
+        if (sp == 0) return false;
+        cur = stack[--sp];
+    }
+}

@@ -1,0 +1,139 @@
+// wide_ray.inl — the wide walks' ray (Query, make_query) and their watertight test of a packet of
+// four triangles (test_triangles): included by wide_traverse.inl inside the including file's
+// namespace, with its vector types (wide_traverse.inl lists them).
+
+/// The ray as the kernel needs it: origin and inverse direction for the boxes; the watertight
+/// test's axis order, the origin in that order and the shear for the triangles (make_query).
+/// Four floats where three are used, so that each is one vector store.
+struct Query {
+    float o[4], inv[4];
+    /// −1/d and −(1/d)·BOX_FAR_SCALE, the box test's factors (traverse_nodes), made here by two
+    /// vector products rather than as six scalar products and negations at the start of the walk
+    float neg_inv[4], neg_inv_far[4];
+    float o_axes[4];  ///< o[kx], o[ky], o[kz]
+    float shear[4];
+    /// tmin in eight lanes: the first raise of every node's box test reads it as it is (a
+    /// memory operand; a broadcast a node before)
+    alignas(32) float tmin8[8];
+    /// 16·kx, 16·ky, 16·kz (AxisOrder::at): where axis k's four lanes start in a PrimPacket
+    /// vertex (v[i][k]), in bytes, so that each of a packet's nine loads is one addressing mode
+    /// (base + offset + vertex), without a shift or an address computed first
+    const std::ptrdiff_t* axis_at;
+    int octant;  ///< bit a set where 1/dir[a] is negative: kPlanes' row, any_hit_walk's copy
+    float tmin;
+    const Ray* ray;  ///< for the spheres (hit_packet_sphere)
+};
+
+/// The watertight test's axis order (geometry.glsl make_ray) for one kz and sign of dir[kz]: kx
+/// and ky the two axes after kz, swapped when dir[kz] < 0. As lane indices of the permutes that
+/// put the origin and direction in that order, and as byte offsets in a PrimPacket vertex.
+struct AxisOrder {
+    alignas(16) std::int32_t origin[4];  ///< kx, ky, kz, 3
+    alignas(16) std::int32_t dir[4];     ///< kx, ky, 3, 3
+    alignas(16) std::int32_t inv[4];     ///< kz, kz, kz, 3
+    std::ptrdiff_t at[3];                ///< 16·kx, 16·ky, 16·kz: axis k's lanes in a PrimPacket vertex
+};
+
+constexpr AxisOrder axis_order(int kz, bool flip) {
+    const int next = kz == 2 ? 0 : kz + 1, last = 3 - kz - next;
+    const int kx = flip ? last : next, ky = flip ? next : last;
+    constexpr std::ptrdiff_t bytes = sizeof(PrimPacket::v[0][0]);
+    return {{kx, ky, kz, 3}, {kx, ky, 3, 3}, {kz, kz, kz, 3}, {bytes * kx, bytes * ky, bytes * kz}};
+}
+
+/// AxisOrder by 2·kz + (dir[kz] < 0): looked up rather than worked out by integer arithmetic and
+/// lane inserts for every ray (Sponza instructions a ray: design.md, traversal's fourth pass).
+constexpr AxisOrder kAxisOrders[6] = {axis_order(0, false), axis_order(0, true),  axis_order(1, false),
+                                      axis_order(1, true),  axis_order(2, false), axis_order(2, true)};
+
+/// The per-ray constants as geometry.glsl make_ray computes them, by the same float operations
+/// (so the same values; every test comparing the wide traversal with the brute force, which goes
+/// through make_ray, checks that bit for bit): 1/d is IEEE's, ±inf for ±0 as inverse_or_infinity;
+/// kz the axis of the largest |component| (ties to the later axis), kx and ky the next two,
+/// swapped when dir[kz] < 0; the shear as products with 1/dir[kz]. Computed here from the ray's
+/// fields rather than copied out of a TraceRay, which cost cheap rays a third of their time.
+/// Without branches: the axes come from comparison flags and the components in axis order from
+/// a permute. Selects by the axis compiled to branches, which random directions mispredicted
+/// (1.4 a ray, a tenth of a random ray's time in room1m).
+Query make_query(const Ray& ray) {
+    const Vec3 o = ray.origin, d = ray.dir;
+    const float x = std::fabs(d.x), y = std::fabs(d.y), z = std::fabs(d.z);
+    const int x_largest = int(x > y) & int(x > z), y_largest = (1 - x_largest) & int(y > z);
+    const int kz = 2 - 2 * x_largest - y_largest;
+    const L4 dir = L4::set(d.x, d.y, d.z, 1.0f), origin = L4::set(o.x, o.y, o.z, 0.0f);
+    const int flip = (bits(L4::splat(0.0f) > dir) >> kz) & 1;  // dir[kz] < 0
+    const AxisOrder& axes = kAxisOrders[2 * kz + flip];
+    const L4 inv = L4::splat(1.0f) / dir;
+    Query q;
+    origin.store(q.o), inv.store(q.inv);
+    (inv * L4::splat(-1.0f)).store(q.neg_inv), (inv * L4::splat(-gpu::BOX_FAR_SCALE)).store(q.neg_inv_far);
+    // (dir[kx], dir[ky], 1, 1) times 1 / dir[kz]: the shear, and 1 / dir[kz] itself in lane 2
+    // (1 · x is x, except a denormal x under denormals-are-zero: 0, which is what the one use of
+    // shear[2], a product, reads x as in that mode anyway)
+    permute(origin, axes.origin).store(q.o_axes);
+    (permute(dir, axes.dir) * permute(inv, axes.inv)).store(q.shear);
+    L8::splat(ray.tmin).store(q.tmin8);
+    q.axis_at = axes.at;
+    q.octant = sign_bits(inv) & 7;
+    q.tmin = ray.tmin, q.ray = &ray;
+    return q;
+}
+
+struct Entry {
+    std::uint32_t index;  ///< a WideNode child word: a node's line, or kLeafChild | a leaf's first packet's
+    float t;              ///< where the ray enters the box
+};
+
+/// Pushed entries (wide_kernel.h, plain data: the TLAS walk keeps one between calls).
+using Stack = WideStack;
+
+/// closer_hit (ray.h), repeated here for the reason given at the top of this file.
+bool closer(float t, std::uint32_t ref, const Hit& hit) {
+    return t < hit.t || (t == hit.t && hit.ref != kNoHit && ref < hit.ref);
+}
+
+/// The watertight test (geometry.glsl hit_triangle) on four triangles at once, its operations in
+/// its order lane by lane; the lanes that pass become hits in lane order under the closest-hit rule.
+/// kAnyHit: the first lane that passes is the hit (its t and ref only; the query wants no more).
+template <bool kAnyHit>
+void test_triangles(const PrimPacket& k, const Query& q, Hit& hit) {
+    const std::ptrdiff_t kx = q.axis_at[0], ky = q.axis_at[1], kz = q.axis_at[2];
+    const L4 ox = L4::splat(q.o_axes[0]), oy = L4::splat(q.o_axes[1]), oz = L4::splat(q.o_axes[2]);
+    const L4 sx = L4::splat(q.shear[0]), sy = L4::splat(q.shear[1]);
+    // v[i][axis] is v[i][0] + 16·axis bytes
+    const auto vertex = [&k](int i) { return reinterpret_cast<const char*>(k.v[i][0]); };
+    const auto at = [](const char* p, std::ptrdiff_t offset) { return reinterpret_cast<const float*>(p + offset); };
+    const char *a = vertex(0), *b = vertex(1), *c = vertex(2);
+    const L4 az = L4::load(at(a, kz)) - oz, bz = L4::load(at(b, kz)) - oz, cz = L4::load(at(c, kz)) - oz;
+    const L4 ax = (L4::load(at(a, kx)) - ox) - sx * az, ay = (L4::load(at(a, ky)) - oy) - sy * az;
+    const L4 bx = (L4::load(at(b, kx)) - ox) - sx * bz, by = (L4::load(at(b, ky)) - oy) - sy * bz;
+    const L4 cx = (L4::load(at(c, kx)) - ox) - sx * cz, cy = (L4::load(at(c, ky)) - oy) - sy * cz;
+    const L4 u = cx * by - cy * bx, v = ax * cy - ay * cx, w = bx * ay - by * ax;
+    const L4 zero = L4::splat(0.0f);
+    // "not (some negative and some positive)"; a NaN lane has a NaN t and fails below
+    const M4 one_sign = (lower(lower(u, v), w) >= zero) | (raise(raise(u, v), w) <= zero);
+    const L4 det = (u + v) + w;
+    const M4 inside = one_sign & (det != zero);
+    if (!bits(inside)) return;  // most packets a ray reaches: no division to wait for
+    const L4 t = (((u * az + v * bz) + w * cz) / det) * L4::splat(q.shear[2]);
+    if constexpr (kAnyHit) {
+        // no hit yet (the walk ends at the first): closer() is t < hit.t, the ray's tmax
+        const int lanes = bits(inside & (t > L4::load(q.tmin8)) & (L4::splat(hit.t) > t));
+        if (!lanes) return;
+        alignas(16) float ts[4];
+        t.store(ts);
+        const int l = __builtin_ctz(unsigned(lanes));
+        hit.t = ts[l], hit.ref = k.ref[l];
+        return;
+    }
+    int lanes = bits(inside & (t > L4::load(q.tmin8)) & (t <= L4::splat(hit.t)));
+    if (!lanes) return;
+    alignas(16) float ts[4], vs[4], ws[4], dets[4];
+    t.store(ts), v.store(vs), w.store(ws), det.store(dets);
+    for (; lanes; lanes &= lanes - 1) {
+        const int l = __builtin_ctz(unsigned(lanes));
+        if (!closer(ts[l], k.ref[l], hit)) continue;
+        hit.t = ts[l], hit.ref = k.ref[l], hit.u = vs[l] / dets[l], hit.v = ws[l] / dets[l];
+        hit.slot = k.slot[l];
+    }
+}
