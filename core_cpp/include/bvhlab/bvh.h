@@ -2,6 +2,7 @@
 #pragma once
 #include <atomic>
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 #include "bvhlab/build_config.h"
 #include "bvhlab/geometry.h"
@@ -22,8 +23,10 @@ struct WrittenBeforeRead<BvhNode> : std::true_type {};
 class LazyFingerprint {
 public:
     LazyFingerprint() = default;
-    LazyFingerprint(const LazyFingerprint& o) { *this = o; }
-    LazyFingerprint& operator=(const LazyFingerprint& o) {
+    // noexcept, so that Bvh's moves are (a std::vector of trees or of parts holding one moves
+    // them when it grows, instead of copying them)
+    LazyFingerprint(const LazyFingerprint& o) noexcept { *this = o; }
+    LazyFingerprint& operator=(const LazyFingerprint& o) noexcept {
         const bool known = o.known_.load(std::memory_order_acquire);
         value_.store(o.value_.load(std::memory_order_relaxed), std::memory_order_relaxed);
         known_.store(known, std::memory_order_release);
@@ -76,6 +79,7 @@ struct Bvh {
 private:
     LazyFingerprint fingerprint_;
 };
+static_assert(std::is_nothrow_move_constructible_v<Bvh> && std::is_nothrow_move_assignable_v<Bvh>);
 
 inline bool is_leaf(const BvhNode& n) { return (n.info & gpu::NODE_INTERNAL_BIT) == 0; }
 inline std::uint32_t leaf_count(const BvhNode& n) { return n.info; }
