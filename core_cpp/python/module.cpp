@@ -138,7 +138,7 @@ void bind_bvh(nb::module_& m) {
         .def_prop_ro("node_count", [](const PyBvh& b) { return b.current()->bvh.nodes.size(); })
         .def_prop_ro("build_ms", [](const PyBvh& b) { return b.current()->bvh.build_ms; })
         .def_prop_ro("revision", [](const PyBvh& b) { return b.current()->revision; })
-        .def_prop_ro("geometry_fingerprint", [](const PyBvh& b) { return b.current()->bvh.geometry_fingerprint; })
+        .def_prop_ro("geometry_fingerprint", [](const PyBvh& b) { return b.current()->bvh.fingerprint(); })
         .def("nodes_bytes",
              [](const PyBvh& b) {
                  TreePtr t = b.current();

@@ -33,7 +33,7 @@ TEST(Fingerprint, SameForEveryThreadCountAndForTheBuild) {
         EXPECT_EQ(refs.size(), scene.view().primitive_count());
         BuildConfig c;
         c.threads = threads;
-        EXPECT_EQ(build_bvh(scene.view(), c).geometry_fingerprint, one) << threads << " threads";
+        EXPECT_EQ(build_bvh(scene.view(), c).fingerprint(), one) << threads << " threads";
     }
 }
 

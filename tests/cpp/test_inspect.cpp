@@ -21,7 +21,7 @@ SavedTree saved_of(const Bvh& bvh) {
     SavedTree s;
     s.nodes.assign(bvh.nodes.begin(), bvh.nodes.end());
     s.refs.assign(bvh.refs.begin(), bvh.refs.end());
-    s.geometry_fingerprint = bvh.geometry_fingerprint;
+    s.geometry_fingerprint = bvh.fingerprint();
     s.config = bvh.config;
     s.build_ms = bvh.build_ms;
     return s;

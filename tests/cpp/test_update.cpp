@@ -143,7 +143,7 @@ TEST(Update, EveryPolicyLeavesAValidTree) {
         const Bvh t = update_bvh(f.tree, f.built, moved.view(), c, built_out, &stats);
         SCOPED_TRACE(to_string(p));
         check_tree(t, moved.view(), f.tree.config.max_leaf_size);
-        EXPECT_EQ(t.geometry_fingerprint, geometry_fingerprint(moved.view()));
+        EXPECT_EQ(t.fingerprint(), geometry_fingerprint(moved.view()));
         ASSERT_EQ(built_out.size(), t.nodes.size() + 1);  // and the reference's area
         EXPECT_NEAR(stats.sah_cost, sah_cost(t), 1e-4 * stats.sah_cost);
         EXPECT_GT(stats.ms, 0.0);

@@ -1,6 +1,8 @@
 // bvh.h — the built tree: flattened depth-first nodes, leaf-ordered references, per-node depth.
 #pragma once
+#include <atomic>
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 #include "bvhlab/build_config.h"
 #include "bvhlab/geometry.h"
@@ -15,6 +17,34 @@ using gpu::BvhNode;
 template <>
 struct WrittenBeforeRead<BvhNode> : std::true_type {};
 
+/// A tree's geometry fingerprint (geometry_fingerprint), known, or to be taken from the tree's
+/// packed primitives when first read (Bvh::fingerprint). Readers on several threads may race to
+/// take it: each computes the same value, so the one stored is right either way.
+class LazyFingerprint {
+public:
+    LazyFingerprint() = default;
+    // noexcept, so that Bvh's moves are (a std::vector of trees or of parts holding one moves
+    // them when it grows, instead of copying them)
+    LazyFingerprint(const LazyFingerprint& o) noexcept { *this = o; }
+    LazyFingerprint& operator=(const LazyFingerprint& o) noexcept {
+        const bool known = o.known_.load(std::memory_order_acquire);
+        value_.store(o.value_.load(std::memory_order_relaxed), std::memory_order_relaxed);
+        known_.store(known, std::memory_order_release);
+        return *this;
+    }
+    bool known() const { return known_.load(std::memory_order_acquire); }
+    std::uint64_t value() const { return value_.load(std::memory_order_relaxed); }  ///< once known()
+    void set(std::uint64_t v) const {
+        value_.store(v, std::memory_order_relaxed);
+        known_.store(true, std::memory_order_release);
+    }
+    void forget() { known_.store(false, std::memory_order_release); }
+
+private:
+    mutable std::atomic<std::uint64_t> value_{0};
+    mutable std::atomic<bool> known_{true};
+};
+
 /// A bounding volume hierarchy over triangles and spheres.
 /// Layout (docs/design.md "Tree layout", report §3.1): nodes in depth-first order, root at 0,
 /// first child at i + 1, second child in `index`; leaves reference the contiguous slice
@@ -27,13 +57,29 @@ struct Bvh {
     BigVector<std::uint8_t> depths;  ///< depth of each node
     BigVector<PackedPrim> prims;     ///< geometry in leaf order, for the CPU traversal
     std::uint32_t triangle_count = 0, sphere_count = 0;
-    std::uint64_t geometry_fingerprint = 0;  ///< of the geometry built over (or last refitted to)
-    BuildConfig config;                      ///< what it was built with (progress callback dropped)
-    double build_ms = 0;                     ///< wall time of the tree build (refs in → nodes out)
+    BuildConfig config;   ///< what it was built with (progress callback dropped)
+    double build_ms = 0;  ///< wall time of the tree build (refs in → nodes out)
+
+    /// geometry_fingerprint of the geometry built over (or last refitted to). A refit leaves it to
+    /// be taken from `prims` when first read (set_fingerprint_from_prims): an update's pass over
+    /// the input that nothing may read (issue 34).
+    std::uint64_t fingerprint() const {
+        if (!fingerprint_.known())
+            fingerprint_.set(packed_fingerprint(prims.data(), prims.size(), triangle_count, sphere_count));
+        return fingerprint_.value();
+    }
+    void set_fingerprint(std::uint64_t value) { fingerprint_.set(value); }
+    /// Only where `prims` holds every primitive once, with its input's exact words (a refit's,
+    /// where no triangle was packed as a point: packed_fingerprint).
+    void set_fingerprint_from_prims() { fingerprint_.forget(); }
 
     bool empty() const { return nodes.empty(); }
     std::uint32_t node_count() const { return static_cast<std::uint32_t>(nodes.size()); }
+
+private:
+    LazyFingerprint fingerprint_;
 };
+static_assert(std::is_nothrow_move_constructible_v<Bvh> && std::is_nothrow_move_assignable_v<Bvh>);
 
 inline bool is_leaf(const BvhNode& n) { return (n.info & gpu::NODE_INTERNAL_BIT) == 0; }
 inline std::uint32_t leaf_count(const BvhNode& n) { return n.info; }

@@ -69,6 +69,13 @@ using PackedPrim = gpu::GpuTriangle;
 template <>
 struct WrittenBeforeRead<PackedPrim> : std::true_type {};
 
+/// geometry_fingerprint of the geometry that `prims` (count of them, in any order) were packed
+/// from, read back from the packed words: right where they hold every primitive once and each
+/// word as the input has it, i.e. no triangle of zero area (packed as a point) among them. A
+/// refit's fingerprint is taken this way when first read (Bvh::fingerprint).
+std::uint64_t packed_fingerprint(const PackedPrim* prims, std::size_t count, std::size_t triangle_count,
+                                 std::size_t sphere_count);
+
 /// Triangle `i` packed with `material`. A triangle of zero area (its edges' cross product is 0 in
 /// float) is stored as three copies of its first vertex, which the watertight test never hits
 /// (its edge functions are exactly 0). The one packing of triangles, for the CPU and the GPU.

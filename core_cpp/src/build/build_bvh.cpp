@@ -147,7 +147,7 @@ Bvh build_bvh(const GeometryView& geometry, const BuildConfig& config) {
     // chunks on the pool, polling for a stop between chunks (check() below rethrows it).
     PrimRefsSummary summary;
     BigVector<PrimRef> prim_refs = make_prim_refs(geometry, config.threads, &summary, &stop.cancel());
-    bvh.geometry_fingerprint = summary.fingerprint;
+    bvh.set_fingerprint(summary.fingerprint);
     check();
     BVHLAB_WORK_MARK("phase tree");
     if (config.method == SplitMethod::Sbvh) {  // its own builder: references may repeat

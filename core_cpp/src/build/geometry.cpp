@@ -151,8 +151,11 @@ inline std::uint64_t term(std::uint64_t index, const float* p) {
 constexpr int kTriangleFloats = 9, kSphereFloats = 4;
 
 /// The fingerprint from the sum of every primitive's term: with the counts mixed in.
+std::uint64_t finish_fingerprint(std::uint64_t triangle_count, std::uint64_t sphere_count, std::uint64_t sum) {
+    return mix(sum ^ mix(triangle_count * kPrime1 + sphere_count * kPrime2));
+}
 std::uint64_t finish_fingerprint(const GeometryView& g, std::uint64_t sum) {
-    return mix(sum ^ mix(g.triangle_count * kPrime1 + g.sphere_count * kPrime2));
+    return finish_fingerprint(g.triangle_count, g.sphere_count, sum);
 }
 
 /// Triangles per chunk of the passes over the input on several threads (~0.6 MB of input).
@@ -278,6 +281,23 @@ std::uint64_t geometry_fingerprint(const GeometryView& g, unsigned threads) {
          }))
         sum += s;
     return finish_fingerprint(g, sum);
+}
+
+std::uint64_t packed_fingerprint(const PackedPrim* prims, std::size_t count, std::size_t triangle_count,
+                                 std::size_t sphere_count) {
+    std::uint64_t sum = 0;
+    for (std::size_t k = 0; k < count; ++k) {
+        const PackedPrim& p = prims[k];
+        if (is_sphere_ref(p.ref)) {  // centre (v0) and radius (v1.x), as the input's four floats
+            const float words[kSphereFloats] = {p.v0.x, p.v0.y, p.v0.z, p.v1.x};
+            sum += term<kSphereFloats>(triangle_count + ref_index(p.ref), words);
+        } else {
+            const float words[kTriangleFloats] = {p.v0.x, p.v0.y, p.v0.z, p.v1.x, p.v1.y,
+                                                  p.v1.z, p.v2.x, p.v2.y, p.v2.z};
+            sum += term<kTriangleFloats>(p.ref, words);
+        }
+    }
+    return finish_fingerprint(triangle_count, sphere_count, sum);
 }
 
 }  // namespace bvhlab

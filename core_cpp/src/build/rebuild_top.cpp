@@ -12,6 +12,8 @@
 #include <algorithm>
 #include <cstring>
 
+#include "bvhlab/simd.h"
+
 namespace bvhlab {
 namespace {
 
@@ -137,13 +139,24 @@ bool rebuild_top(Bvh& tree, NodeCostArray& built, const PartedTree& parted, cons
         const std::uint32_t shift = dest[k] - c.node;  // unsigned: wraps where the subtree moves up
         const std::uint8_t depth_shift = std::uint8_t(dest_depth[k] - from_depths[c.node]);
         for (std::uint32_t i = c.node, o = dest[k]; i < c.node + size[k]; ++i, ++o) {
-            BvhNode m = from[i];
+            const BvhNode& m = from[i];
             // an inner node's child and skip move by `shift` (the skip in info's low bits: no carry,
             // sizes < 2^31), a leaf's first slot by `slot_shift`: by a mask, as leaves and inner
             // nodes alternate at random (a branch mispredicted half the time)
             const std::uint32_t inner = 0u - (m.info >> 31);
-            m.index += (shift & inner) | (slot_shift & ~inner), m.info += shift & inner;
-            nodes[o] = m;
+            const std::uint32_t index_shift = (shift & inner) | (slot_shift & ~inner), info_shift = shift & inner;
+#ifdef BVHLAB_SSE
+            // each row whole, its lane 3 (index, info) moved by an integer add (lanes 0-2 add 0):
+            // two loads and two stores a node (the copy field by field stored it in six pieces)
+            const __m128i* row = reinterpret_cast<const __m128i*>(&m);
+            __m128i* out = reinterpret_cast<__m128i*>(&nodes[o]);
+            _mm_storeu_si128(out, _mm_add_epi32(_mm_loadu_si128(row), _mm_set_epi32(int(index_shift), 0, 0, 0)));
+            _mm_storeu_si128(out + 1, _mm_add_epi32(_mm_loadu_si128(row + 1), _mm_set_epi32(int(info_shift), 0, 0, 0)));
+#else
+            BvhNode moved = m;
+            moved.index += index_shift, moved.info += info_shift;
+            nodes[o] = moved;
+#endif
             depths[o] = std::uint8_t(from_depths[i] + depth_shift);
             out_built[o] = from_built[i];
         }

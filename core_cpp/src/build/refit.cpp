@@ -2,7 +2,9 @@
 //
 // One pass over the nodes, backwards, packs each leaf's geometry (the ray tests' copy, Bvh::prims),
 // takes the leaf's box from the vertices it read and each inner node's from its two children,
-// checking coordinates on the way; the fingerprint is taken in its own pass, in input order
+// checking coordinates on the way; the fingerprint is taken from the packed copy when first read
+// (Bvh::fingerprint; in its own pass over the input, in input order, where a triangle was packed
+// as a point)
 // (summing its terms in this pass, in leaf order, took twice as long: 5 against 2.5 ms for 1M
 // triangles). No primitive references are made and nothing of the old tree is copied but its
 // topology (tinybvh's Refit reads each leaf's vertices the same way). A 1M-triangle refit took
@@ -12,6 +14,7 @@
 // (bench/instancing.py); bench/updates.py has the figures of this pass.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 
@@ -29,6 +32,7 @@ namespace {
 struct Checks {
     F4 poison = F4::splat(0.0f), reach = F4::splat(0.0f);
     bool small_radius = false;
+    bool point = false;  ///< a triangle of zero area was packed as a point (its words not kept)
 
     void row(F4 p) { poison = poison + p * F4::splat(0.0f), reach = max(reach, max(p, neg(p))); }
     /// One triangle: its vertices' sum is finite when they are (in range, they cannot overflow).
@@ -57,6 +61,24 @@ inline void refit_sphere(const GeometryView& g, std::uint32_t ref, PackedPrim* o
 inline void store_node(BvhNode* dst, const BvhNode& n, F4 lo, F4 hi) {
     const F4 xyz = less(F4::splat(0.0f), F4::set3(1, 1, 1));  // lanes 0-2 set
     select(xyz, lo, F4::load(&n.lo.x)).store(&dst->lo.x);
+    select(xyz, hi, F4::load(&n.hi.x)).store(&dst->hi.x);
+}
+
+/// Leaf `n` (as it was) with the box [lo, hi] and its run of slots starting at `first`. The lo
+/// row's lane 3 (the index) is set in a register: setting it in a copy of the node and loading
+/// the row back made every leaf wait on a failed store-to-load forwarding (a 4-byte store under
+/// a 16-byte load; perf put a fifth of the refit's samples there).
+inline void store_leaf(BvhNode* dst, const BvhNode& n, std::uint32_t first, F4 lo, F4 hi) {
+    const F4 xyz = less(F4::splat(0.0f), F4::set3(1, 1, 1));  // lanes 0-2 set
+#ifdef BVHLAB_SSE
+    const __m128 index = _mm_castsi128_ps(_mm_slli_si128(_mm_cvtsi32_si128(int(first)), 12));  // lane 3
+    F4{_mm_or_ps(_mm_and_ps(xyz.v, lo.v), index)}.store(&dst->lo.x);
+#else
+    float row[4];
+    lo.store(row);
+    std::memcpy(&row[3], &first, 4);
+    F4::load(row).store(&dst->lo.x);
+#endif
     select(xyz, hi, F4::load(&n.hi.x)).store(&dst->hi.x);
 }
 
@@ -90,7 +112,7 @@ void refit_pass(const Bvh& old, const GeometryView& g, BvhNode* nodes, std::uint
     };
     for (std::uint32_t k = 0; k < kAhead; ++k) prefetch_next();
     for (std::uint32_t i = old.node_count(); i-- > 0;) {
-        BvhNode n = old.nodes[i];
+        const BvhNode& n = old.nodes[i];
         if (!is_leaf(n)) {
             const BvhNode &a = nodes[i + 1], &b = nodes[n.index];
             store_node(nodes + i, n, min(F4::load(&a.lo.x), F4::load(&b.lo.x)),
@@ -108,12 +130,11 @@ void refit_pass(const Bvh& old, const GeometryView& g, BvhNode* nodes, std::uint
                 continue;
             }
             F4 a, b, c;
-            pack_triangle_rows(prims + slot, g.triangles + 9 * std::size_t(ref), ref, 0, a, b, c);
+            checks.point |= pack_triangle_rows(prims + slot, g.triangles + 9 * std::size_t(ref), ref, 0, a, b, c);
             checks.triangle(a, b, c);
             lo = min(lo, min(a, min(b, c))), hi = max(hi, max(a, max(b, c)));
         }
-        n.index = end;
-        store_node(nodes + i, n, lo, hi);
+        store_leaf(nodes + i, n, end, lo, hi);
     }
 }
 
@@ -141,7 +162,10 @@ Bvh refitted(const Bvh& old, const GeometryView& geometry, unsigned threads) {
     out.triangle_count = old.triangle_count, out.sphere_count = old.sphere_count;
     out.config = old.config;
     out.build_ms = old.build_ms;
-    out.geometry_fingerprint = geometry_fingerprint(geometry, threads);
+    // the fingerprint when first read, from the packed words (each the input's, unless a triangle
+    // was packed as a point): a pass over the input, a sixth of the refit's time, otherwise
+    if (checks.point) out.set_fingerprint(geometry_fingerprint(geometry, threads));
+    else out.set_fingerprint_from_prims();
     return out;
 }
 

@@ -134,7 +134,7 @@ Bvh restore_bvh(SavedTree saved, const GeometryView& geometry, unsigned threads)
     bvh.prims = pack_prims(geometry, bvh.refs, threads);
     bvh.triangle_count = std::uint32_t(geometry.triangle_count);
     bvh.sphere_count = std::uint32_t(geometry.sphere_count);
-    bvh.geometry_fingerprint = fingerprint;
+    bvh.set_fingerprint(fingerprint);
     saved.config.progress = nullptr;
     bvh.config = saved.config;
     bvh.build_ms = saved.build_ms;

@@ -84,7 +84,7 @@ LinkedTree link(const Bvh& bvh) {
 Bvh flatten(const LinkedTree& tree, const Bvh& source, bool merge, std::uint64_t* merged) {
     Bvh out;
     out.triangle_count = source.triangle_count, out.sphere_count = source.sphere_count;
-    out.geometry_fingerprint = source.geometry_fingerprint;
+    out.set_fingerprint(source.fingerprint());
     out.config = source.config;
     out.build_ms = source.build_ms;
     if (tree.root == kNone) return out;

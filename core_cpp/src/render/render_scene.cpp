@@ -54,7 +54,7 @@ std::vector<gpu::GpuMaterial> gpu_materials(const MaterialView& mv) {
 void check_tree_matches(const Bvh& bvh, const GeometryView& g) {
     if (g.triangle_count != bvh.triangle_count || g.sphere_count != bvh.sphere_count)
         throw std::invalid_argument("the geometry does not match the tree (different primitive counts)");
-    if (geometry_fingerprint(g) != bvh.geometry_fingerprint)
+    if (geometry_fingerprint(g) != bvh.fingerprint())
         throw std::invalid_argument(
             "the tree was built for other geometry (same counts, different coordinates): "
             "build it again, or refit it, for these triangles and spheres");
@@ -94,7 +94,7 @@ RenderScene make_render_scene(const Bvh& bvh, const GeometryView& g, const Mater
     if (!bvh.empty()) s.bounds = node_box(bvh.nodes[0]);
     s.node_count = bvh.node_count();
     s.ref_count = static_cast<std::uint32_t>(bvh.refs.size());
-    s.tree_fingerprint = bvh.geometry_fingerprint;
+    s.tree_fingerprint = bvh.fingerprint();
     s.stack_entries = std::max(s.height(), 2u) - 1;
     s.walk_steps = 2ull * s.node_count + s.ref_count + 2;
     return s;
@@ -125,7 +125,7 @@ void set_overlay_boxes(RenderScene& scene, const float* lo, const float* hi, con
 
 void check_render_scene(const RenderScene& scene) {
     if (scene.bvh &&
-        (scene.bvh->geometry_fingerprint != scene.tree_fingerprint || scene.bvh->node_count() != scene.node_count))
+        (scene.bvh->fingerprint() != scene.tree_fingerprint || scene.bvh->node_count() != scene.node_count))
         throw std::invalid_argument(
             "the tree changed (refit) after its render scene was made: make the render scene again");
     if (!scene.two_level() && scene.node_count > 1 && scene.pairs.size() != scene.node_count / 2)
