@@ -20,6 +20,7 @@
 #include "bvhlab/stats.h"
 #include "bvhlab/traverse.h"
 #include "bvhlab/wide_bvh.h"
+#include "../cpp/traverse_oracles.h"
 #include "fuzz_input.h"
 
 namespace bvhlab::fuzz {
@@ -146,15 +147,11 @@ void check_tree(const Bvh& bvh, const GeometryView& g, const BuildConfig& config
     require(s.nodes == 2 * s.leaves - 1 && s.primitives == n && s.references == slots, "stats");
 }
 
-/// The closest hit over every primitive with the same tests and tie rule as the traversals.
+/// The closest hit over every primitive with the same tests and tie rule as the traversals (the
+/// tests' oracle on the ray as the queries scale it, its hit finished and scaled back).
 Hit brute_force(const Bvh& bvh, Ray ray) {
     const float t_scale = scale_ray(ray);
-    RayQuery q(ray);
-    Hit hit;
-    hit.t = ray.tmax;
-    for (std::uint32_t k = 0; k < bvh.prims.size(); ++k)
-        if (hit_prim(bvh.prims[k], q, hit)) hit.slot = k;
-    if (hit.ref == kNoHit) hit.t = kInfinity;
+    Hit hit = test::brute_force(bvh, ray);
     finish_hit(bvh, ray, hit);
     hit.t *= t_scale;
     return hit;
