@@ -48,11 +48,24 @@ def project_version() -> str:
     return found.group(1)
 
 
+def warm_cmake() -> str:
+    """CMake's path, after one `cmake -E capabilities` run with no time limit. scikit-build-core
+    gives that command 5 s to answer before it declares CMake missing, and the first run of a fresh
+    Debian root's CMake, from a cold disk while the other wheels compile, took longer in CI
+    ("Could not find CMake with version >=3.22"; scikit-build-core issues 1127 and 1530)."""
+    cmake = shutil.which("cmake")
+    if cmake is None:
+        raise SystemExit("no cmake on PATH: install it (scripts/install_system_packages.sh)")
+    subprocess.run([cmake, "-E", "capabilities"], stdout=subprocess.DEVNULL, check=True)
+    return cmake
+
+
 def build_wheel(into: Path) -> Path:
     """The bvhlab wheel for the running Python, copied into `into` (older ones of that tag removed).
     CMAKE_CXX_FLAGS is passed on every configure (a kept build folder picks up a change)."""
     tag = f"cp{sys.version_info.major}{sys.version_info.minor}"
     cxx_flags = f"{os.environ.get('CXXFLAGS', '')} -include {GLIBC_COMPAT}".strip()
+    env = {**os.environ, "CMAKE_EXECUTABLE": warm_cmake()}
     with tempfile.TemporaryDirectory() as tmp:
         subprocess.run(
             [
@@ -70,6 +83,7 @@ def build_wheel(into: Path) -> Path:
                 f"--config-settings=cmake.define.CMAKE_CXX_FLAGS={cxx_flags}",
             ],
             cwd=ROOT,
+            env=env,
             check=True,
         )
         built = list(Path(tmp).glob(f"bvhlab-*-{tag}-*.whl"))
