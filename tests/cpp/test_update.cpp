@@ -271,7 +271,9 @@ TEST(Update, RebuildTopKeepsTheLeavesAndLowersTheCost) {
     const std::vector<RebuiltPart> none;
     const PartedTree parted(refit, now, none);
     double sah = 0;
-    ASSERT_TRUE(rebuild_top(tree, built, parted, top_cut(parted, 64), sah));
+    const std::vector<PartNode> cut = top_cut(parted, 64);
+    ASSERT_TRUE(rebuild_top(tree, built, parted, cut, cut_info(parted, cut),
+                            built_top(tree.config, cut_info(parted, cut)), sah));
     check_tree(tree, moved.view(), built_tree.config.max_leaf_size);
     EXPECT_EQ(tree.nodes.size(), refit.nodes.size());
     EXPECT_EQ(built.size(), tree.nodes.size());

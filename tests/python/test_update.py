@@ -106,6 +106,25 @@ def test_adaptive_rebuilds_the_top_over_parts_that_moved(knot):
     assert bvhlab.build(knot).update(moved, top_cut_primitives=0).top_boxes == 0
 
 
+def test_the_top_takes_slabs_that_moved_as_one_whole(knot):
+    """The same slabs with top_intact_primitives: the subtrees inside each slab moved as one (their
+    costs as built), so the top is built over far fewer boxes; the tree stays valid with a fresh
+    build's hits and costs what the stats say. A negative count is refused."""
+    slab = np.minimum(5, ((knot[:, 0, 0] - knot[:, 0, 0].min()) / np.ptp(knot[:, 0, 0]) * 6).astype(int))
+    moved = knot.copy()
+    moved[:, :, 1] += (0.3 * np.sin(3.0 * slab + 1.0)).astype(np.float32)[:, None]
+    moved = np.ascontiguousarray(moved)
+    fine = bvhlab.build(knot).update(moved, top_growth=1.0)
+    tree = bvhlab.build(knot)
+    # tree_growth high: the coarse top is kept whatever it costs (else the fine one may be taken)
+    stats = tree.update(moved, top_growth=1.0, tree_growth=100.0, top_intact_primitives=1024)
+    assert stats.policy == "partial" and 1 < 2 * stats.top_boxes < fine.top_boxes
+    assert stats.sah_cost == pytest.approx(tree.stats["sah_cost"], rel=1e-4)
+    _expect_valid_with_fresh_hits(tree, moved, seed=6)
+    with pytest.raises(ValueError, match="top_intact_primitives"):
+        bvhlab.UpdateConfig(top_intact_primitives=-1)
+
+
 def test_adaptive_compares_with_a_fresh_builds_cost_where_the_geometry_spreads(knot):
     """Slabs of the knot moved apart by up to 0.6: a fresh build's cost (relative to the root's box,
     which grew) falls below the tree's cost when built, and adaptive must still end within the

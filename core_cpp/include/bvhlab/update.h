@@ -78,6 +78,11 @@ struct UpdateConfig {
     /// 15), the generated crowd 0.54 / 1.067 / 23 (0.55, the same); 1.08 between; 1.088 let the
     /// .blend crowd reach 1.086.
     float top_growth = 1.085f;
+    /// adaptive: in the top's cut, a subtree of at most this many primitives is also taken whole
+    /// where it is as built: a subtree the update just rebuilt, or one whose cost relative to its
+    /// own box is its cost when built (within 1e-5: its primitives moved as one, translated), so
+    /// that the top is built over fewer boxes (rebuild_top.h top_cut); 0: only top_cut_primitives.
+    std::uint32_t top_intact_primitives = 64;
     /// Also build a fresh tree over the geometry, only to report its SAH cost (UpdateStats::
     /// fresh_sah_cost): on demand, as it costs a build.
     bool measure_fresh = false;

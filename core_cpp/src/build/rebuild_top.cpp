@@ -10,6 +10,7 @@
 #include "rebuild_top.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
 #include "bvhlab/simd.h"
@@ -19,6 +20,9 @@ namespace {
 
 /// Children whose half areas sum to less than this share of their parent's have come apart.
 constexpr float kApart = 0.5f;
+/// A subtree whose cost (relative to its own box) is within this share of its cost when built
+/// is taken as moved whole (top_cut's intact subtrees).
+constexpr float kIntact = 1e-5f;
 
 /// The end of the subtree at `n` in its own node array.
 std::uint32_t end_of(const PartedTree& t, PartNode n) { return skip_index(t.node(n), n.node); }
@@ -41,8 +45,9 @@ std::uint32_t height_of(const PartedTree& t, PartNode n) {
 
 }  // namespace
 
-PartedTree::PartedTree(const Bvh& tree, const NodeCosts& now, const std::vector<RebuiltPart>& parts)
-    : tree_(tree), now_(now), parts_(parts) {}
+PartedTree::PartedTree(const Bvh& tree, const NodeCosts& now, const std::vector<RebuiltPart>& parts,
+                       const NodeCostArray* built)
+    : tree_(tree), now_(now), parts_(parts), built_(built) {}
 
 namespace {
 
@@ -52,19 +57,28 @@ namespace {
 /// counts and areas are read in order (walking down by the children read them at random, and
 /// a cut node's children, whose areas tell whether they came apart, are near it: it is small).
 void cut_scan(const PartedTree& t, std::int32_t part, std::uint32_t first, std::uint32_t end,
-              std::uint32_t max_primitives, std::vector<PartNode>& cut) {
+              std::uint32_t max_primitives, std::uint32_t intact_primitives, std::vector<PartNode>& cut) {
     const std::vector<RebuiltPart>& parts = t.parts();
     const Bvh& bvh = part < 0 ? t.tree() : parts[std::size_t(part)].part;
     const NodeCosts& costs = part < 0 ? t.tree_costs() : parts[std::size_t(part)].costs;
+    const NodeCostArray* built = t.built();
     std::size_t next = 0;  // the next part (in node order) not yet passed
     for (std::uint32_t i = first; i < end;) {
         if (part < 0 && next < parts.size() && parts[next].root == i) {
-            cut_scan(t, std::int32_t(next), 0, parts[next].part.node_count(), max_primitives, cut);
+            cut_scan(t, std::int32_t(next), 0, parts[next].part.node_count(), max_primitives, intact_primitives, cut);
             i = parts[next++].end;
             continue;
         }
         const BvhNode& n = bvh.nodes[i];
-        const bool whole = is_leaf(n) || (costs.count[i] <= max_primitives &&
+        const std::uint32_t count = costs.count[i];
+        // as built: a part's nodes are; the tree's, where the cost is within kIntact of it
+        const auto intact = [&] {
+            if (part >= 0) return true;
+            if (!built) return false;
+            const float was = (*built)[i], now = costs.cost[i];
+            return std::abs(now - was) <= kIntact * was;
+        };
+        const bool whole = is_leaf(n) || ((count <= max_primitives || (count <= intact_primitives && intact())) &&
                                           !(costs.area[i + 1] + costs.area[n.index] < kApart * costs.area[i]) &&
                                           !(part < 0 && next < parts.size() && parts[next].root < skip_index(n, i)));
         if (whole) {
@@ -78,29 +92,47 @@ void cut_scan(const PartedTree& t, std::int32_t part, std::uint32_t first, std::
 
 }  // namespace
 
-std::vector<PartNode> top_cut(const PartedTree& tree, std::uint32_t max_primitives) {
+std::vector<PartNode> top_cut(const PartedTree& tree, std::uint32_t max_primitives, std::uint32_t intact_primitives) {
     std::vector<PartNode> cut;
-    cut_scan(tree, -1, 0, tree.tree().node_count(), max_primitives, cut);
+    cut_scan(tree, -1, 0, tree.tree().node_count(), max_primitives, intact_primitives, cut);
     return cut;
 }
 
-bool rebuild_top(Bvh& tree, NodeCostArray& built, const PartedTree& parted, const std::vector<PartNode>& cut,
-                 double& sah_cost) {
-    if (tree.empty() || !(node_box(tree.nodes[0]).half_area() > 0)) return false;
-    // what the top needs of each cut node, read in cut (depth-first) order: the nodes, counts and
-    // costs in order, where reading them in the new top's order missed the cache at every one
+CutInfo cut_info(const PartedTree& parted, const std::vector<PartNode>& cut) {
+    // read in cut order: the nodes, counts and costs in order, where reading them in the new
+    // top's order missed the cache at every one
     const std::size_t cuts = cut.size();
-    BigVector<Aabb> boxes(cuts);
-    BigVector<std::uint32_t> size(cuts), count(cuts);
-    BigVector<double> cut_area_cost(cuts);
+    CutInfo info{BigVector<Aabb>(cuts), BigVector<std::uint32_t>(cuts), BigVector<std::uint32_t>(cuts),
+                 BigVector<double>(cuts)};
     for (std::size_t c = 0; c < cuts; ++c) {
-        boxes[c] = node_box(parted.node(cut[c]));
-        size[c] = end_of(parted, cut[c]) - cut[c].node, count[c] = parted.count(cut[c]);
-        cut_area_cost[c] = parted.area_cost(cut[c]);
+        info.boxes[c] = node_box(parted.node(cut[c]));
+        info.size[c] = end_of(parted, cut[c]) - cut[c].node, info.count[c] = parted.count(cut[c]);
+        info.area_cost[c] = parted.area_cost(cut[c]);
     }
-    BuildConfig config = tree.config;
+    return info;
+}
+
+Bvh built_top(const BuildConfig& tree_config, const CutInfo& info) {
+    BuildConfig config = tree_config;
     config.max_leaf_size = 1, config.sah_block = 1, config.threads = 1, config.progress = nullptr;
-    const Bvh top = build_bvh_over_boxes(boxes.data(), boxes.size(), config);
+    return build_bvh_over_boxes(info.boxes.data(), info.boxes.size(), config);
+}
+
+double top_sah_cost(const Bvh& top, const CutInfo& info) {
+    double s = 0;
+    for (std::uint32_t j = 0; j < top.node_count(); ++j) {
+        const BvhNode& n = top.nodes[j];
+        s += is_leaf(n) ? info.area_cost[top.refs[n.index]] : double(node_box(n).half_area());
+    }
+    return top.empty() ? 0.0 : s / node_box(top.nodes[0]).half_area();
+}
+
+bool rebuild_top(Bvh& tree, NodeCostArray& built, const PartedTree& parted, const std::vector<PartNode>& cut,
+                 const CutInfo& info, const Bvh& top, double& sah_cost) {
+    if (tree.empty() || top.empty() || !(node_box(tree.nodes[0]).half_area() > 0)) return false;
+    const std::size_t cuts = cut.size();
+    const BigVector<std::uint32_t>&size = info.size, &count = info.count;
+    const BigVector<double>& cut_area_cost = info.area_cost;
     // where each top node lands: after the top nodes before it and the cut subtrees they hold;
     // dest[c]: where cut node c's subtree goes
     const std::uint32_t top_nodes = top.node_count();

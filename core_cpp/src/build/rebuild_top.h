@@ -27,7 +27,9 @@ struct PartNode {
 class PartedTree {
 public:
     /// `now`: node_costs(tree); `parts` in node order (as build_parts gives them).
-    PartedTree(const Bvh& tree, const NodeCosts& now, const std::vector<RebuiltPart>& parts);
+    /// `built`: the tree's nodes' costs when built (update.h), for top_cut's intact subtrees; null: none.
+    PartedTree(const Bvh& tree, const NodeCosts& now, const std::vector<RebuiltPart>& parts,
+               const NodeCostArray* built = nullptr);
 
     const BvhNode& node(PartNode n) const { return n.part < 0 ? tree_.nodes[n.node] : part(n).nodes[n.node]; }
     std::uint32_t count(PartNode n) const { return costs(n).count[n.node]; }
@@ -37,6 +39,7 @@ public:
     const Bvh& tree() const { return tree_; }
     const NodeCosts& tree_costs() const { return now_; }
     const std::vector<RebuiltPart>& parts() const { return parts_; }
+    const NodeCostArray* built() const { return built_; }
 
 private:
     const Bvh& part(PartNode n) const { return parts_[std::size_t(n.part)].part; }
@@ -45,6 +48,7 @@ private:
     const Bvh& tree_;
     const NodeCosts& now_;
     const std::vector<RebuiltPart>& parts_;
+    const NodeCostArray* built_;
 };
 
 /// The cut the top rebuild works over: the topmost nodes of at most `max_primitives` primitives
@@ -53,10 +57,33 @@ private:
 /// children as cut nodes of their own (rigid parts of a subtree that have moved apart, the case
 /// of objects flying past each other). Every cut node is a leaf or holds at most
 /// `max_primitives`; none lies inside another, nor holds a part inside it; in depth-first order.
-std::vector<PartNode> top_cut(const PartedTree& tree, std::uint32_t max_primitives);
+/// With `intact_primitives` above max_primitives, a node of at most that many primitives whose
+/// cost is within kIntact of its cost when built (PartedTree::built; a rebuilt part's nodes: as
+/// built) is a cut node too, whole: its primitives moved together (translated), so its insides
+/// are as good as when built and only where it stands changed.
+std::vector<PartNode> top_cut(const PartedTree& tree, std::uint32_t max_primitives,
+                              std::uint32_t intact_primitives = 0);
 
-/// The tree with its nodes above `cut` (top_cut) rebuilt by binned SAH over the cut nodes' boxes
-/// (build_bvh_over_boxes: one box a leaf, the report's per-primitive SAH) and each cut node's
+/// What the top needs of each cut node, read in cut (depth-first) order: its box, the nodes of
+/// its subtree, its primitives and S = A·cost.
+struct CutInfo {
+    BigVector<Aabb> boxes;
+    BigVector<std::uint32_t> size, count;
+    BigVector<double> area_cost;
+};
+CutInfo cut_info(const PartedTree& parted, const std::vector<PartNode>& cut);
+
+/// A new top over the cut's boxes: the builder of every tree with the tree's settings
+/// (build_bvh_over_boxes: one box a leaf, the report's per-primitive SAH).
+Bvh built_top(const BuildConfig& tree_config, const CutInfo& info);
+
+/// The SAH cost the tree would have with `top` above the cut (rebuild_top's `sah_cost`), without
+/// the copy: each top node's half area and each cut node's S.
+double top_sah_cost(const Bvh& top, const CutInfo& info);
+
+/// The tree with its nodes above `cut` (top_cut) replaced by `top` (a tree over the cut's boxes:
+/// leaf j holds one reference, top.refs[j], the cut node it stands for: built_top, or the old
+/// top rotated, rotate_top.h) and each cut node's
 /// subtree moved whole below its new place; written into `tree` (its nodes and depths; the slots
 /// stay: the parts' must be placed already) with the parts spliced in, so it replaces
 /// splice_parts. A cut subtree's leaves keep their slots, so the leaves are no longer in
@@ -66,6 +93,6 @@ std::vector<PartNode> top_cut(const PartedTree& tree, std::uint32_t max_primitiv
 /// (PartedTree::area_cost). Returns false, `tree` untouched, where the new tree would pass
 /// MAX_TREE_HEIGHT or its root has no area; else sets `sah_cost` to the new tree's.
 bool rebuild_top(Bvh& tree, NodeCostArray& built, const PartedTree& parted, const std::vector<PartNode>& cut,
-                 double& sah_cost);
+                 const CutInfo& info, const Bvh& top, double& sah_cost);
 
 }  // namespace bvhlab

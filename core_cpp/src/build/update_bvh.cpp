@@ -71,10 +71,22 @@ UpdatePolicy adaptive(Bvh& tree, NodeCostArray& built, const NodeCosts& now, con
     if (!parts.empty()) sah = (now.area_cost(0) - saved) / now.area[0];
     stats.subtrees_rebuilt = static_cast<std::uint32_t>(parts.size()), stats.primitives_rebuilt = primitives_in(parts);
     if (config.top_cut_primitives > 0 && sah > config.top_growth * goal) {
-        const PartedTree parted(tree, now, parts);
-        const std::vector<PartNode> cut = top_cut(parted, config.top_cut_primitives);
-        if (cut.size() > 1 && rebuild_top(tree, built, parted, cut, sah))
-            stats.top_boxes = static_cast<std::uint32_t>(cut.size());
+        const PartedTree parted(tree, now, parts, &built);
+        // first over the cut with the intact subtrees whole (top_intact_primitives: fewer boxes);
+        // over the fine cut where that top would leave the tree past tree_growth (a full rebuild
+        // otherwise: the top over boxes weighs a box of 64 primitives as one of 5)
+        for (const std::uint32_t intact : {config.top_intact_primitives, 0u}) {
+            const bool coarse = intact > config.top_cut_primitives;
+            const std::vector<PartNode> cut = top_cut(parted, config.top_cut_primitives, coarse ? intact : 0u);
+            if (cut.size() <= 1) continue;
+            const CutInfo info = cut_info(parted, cut);
+            const Bvh top = built_top(tree.config, info);
+            if (coarse && top_sah_cost(top, info) > config.tree_growth * goal) continue;
+            if (rebuild_top(tree, built, parted, cut, info, top, sah)) {
+                stats.top_boxes = std::uint32_t(cut.size());
+                break;
+            }
+        }
     }
     if (stats.top_boxes == 0) splice_parts(tree, built, parts);  // the top rebuild splices them itself
     if (parts.empty() && stats.top_boxes == 0 && sah <= config.tree_growth * goal) return UpdatePolicy::Refit;
