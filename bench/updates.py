@@ -13,6 +13,14 @@
 Prints a table; `--json` writes bench/results/updates.json.
 
     .venv/bin/python bench/updates.py [--json] [--frames 24] [--repeat 7]
+
+`--interleaved wave,crowd,FRAMES.npz` instead measures adaptive against rebuilding every frame in
+thread CPU time (the process's other threads and the shared machine's other jobs not counted),
+the two interleaved frame by frame in one process, with the adaptive settings given as JSON
+(`--configs '{"label": {"top_intact_primitives": 0}, ...}'`, each its own tree; default: the
+defaults); an .npz holds one (N, 3, 3) array per frame named f0, f1, ... (the frames of a .blend
+animation, as `bvhlab animate` exports them). Prints per animation and config: the share of
+rebuilding's CPU time, the worst SAH ÷ a fresh build, the frames with a top rebuild, what ran.
 """
 
 from __future__ import annotations
@@ -91,12 +99,48 @@ def policies_over(animation: str, frames: int) -> dict:
             "share_of_rebuild": share, "worst_sah_ratio": worst}  # fmt: skip
 
 
+def frames_of(name: str, frames: int) -> list[np.ndarray]:
+    if name.endswith(".npz"):
+        z = np.load(name)
+        return [z[k] for k in sorted(z.files, key=lambda s: int(s[1:]))]
+    frame = ANIMATIONS[name][0]()
+    return [frame(k / (frames - 1)) for k in range(frames)]
+
+
+def interleaved(name: str, frames: int, configs: dict) -> None:
+    """Adaptive (each config its own tree) against rebuilding every frame, thread CPU time."""
+    geometry = frames_of(name, frames)
+    fresh = [bvhlab.build(t, threads=1).stats["sah_cost"] for t in geometry[1:]]
+    trees = {label: bvhlab.build(geometry[0], threads=1) for label in ["rebuild", *configs]}
+    cpu = dict.fromkeys(trees, 0.0)
+    worst, tops = dict.fromkeys(trees, 0.0), dict.fromkeys(trees, 0)
+    ran: dict = {label: {} for label in trees}
+    for k, tris in enumerate(geometry[1:]):
+        for label, tree in trees.items():
+            settings = {"policy": "rebuild"} if label == "rebuild" else {**configs[label], "policy": "adaptive"}
+            t = time.thread_time()
+            s = tree.update(tris, **settings)
+            cpu[label] += time.thread_time() - t
+            worst[label] = max(worst[label], s.sah_cost / fresh[k])
+            tops[label] += s.top_boxes > 0
+            ran[label][s.policy] = ran[label].get(s.policy, 0) + 1
+    for label in configs:
+        print(f"{Path(name).name:14s} {label:12s} share of rebuilding {cpu[label] / cpu['rebuild']:.3f} "
+              f"worst SAH / fresh {worst[label]:.3f} tops {tops[label]:2d} ran {ran[label]}", flush=True)  # fmt: skip
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__)
     p.add_argument("--json", action="store_true")
     p.add_argument("--frames", type=int, default=ANIMATION_FRAMES)
     p.add_argument("--repeat", type=int, default=7)
+    p.add_argument("--interleaved", default="", help="animations (wave, crowd, FRAMES.npz), comma-separated")
+    p.add_argument("--configs", default='{"defaults": {}}', help="adaptive settings by label, JSON")
     args = p.parse_args()
+    if args.interleaved:
+        for name in args.interleaved.split(","):
+            interleaved(name, args.frames, json.loads(args.configs))
+        return
     refit = refit_against_rebuild(args.repeat)
     print(
         f"refit of {refit['triangles']:,} triangles: {refit['refit_ms']:.1f} ms, rebuild {refit['rebuild_ms']:.1f} ms: "

@@ -81,8 +81,15 @@ struct UpdateConfig {
     /// adaptive: in the top's cut, a subtree of at most this many primitives is also taken whole
     /// where it is as built: a subtree the update just rebuilt, or one whose cost relative to its
     /// own box is its cost when built (within 1e-5: its primitives moved as one, translated), so
-    /// that the top is built over fewer boxes (rebuild_top.h top_cut); 0: only top_cut_primitives.
-    std::uint32_t top_intact_primitives = 64;
+    /// that the top is built over fewer boxes (rebuild_top.h top_cut); where that top would leave
+    /// the tree past tree_growth, the top over the fine cut instead. 0: only top_cut_primitives.
+    /// Thread CPU time against rebuilding every frame (helper adaptive7, 0 → 64; share / worst SAH
+    /// ÷ fresh): the generated crowd 0.50-0.53 → 0.30-0.34 / 1.066 → 1.045, crowd_anim.blend's
+    /// frames 0.35-0.37 → 0.29-0.30 / 1.064 → 1.059, the generated wave 0.37-0.39 → 0.34-0.36 /
+    /// 1.067 → 1.060, wave_anim.blend's 0.37-0.39 → 0.36-0.39 / 1.066 → 1.059 (one top more, +1.3%
+    /// instructions: not better there, so 0 stays the default); 512 took the generated crowd to
+    /// 0.24-0.26 but the wave to 0.40 (docs/design.md has the others).
+    std::uint32_t top_intact_primitives = 0;
     /// Also build a fresh tree over the geometry, only to report its SAH cost (UpdateStats::
     /// fresh_sah_cost): on demand, as it costs a build.
     bool measure_fresh = false;
