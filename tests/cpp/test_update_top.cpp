@@ -122,7 +122,7 @@ TEST(UpdateTop, AdaptiveOverIntactSubtreesIsValidAndTheSameOnEveryThreadCount) {
     // the fine cut over the same update: more boxes for the top
     Bvh tree = build_bvh(rest.view());
     UpdateConfig c;
-    c.top_growth = 1.0f, c.tree_growth = 100.0f;
+    c.top_growth = 1.0f, c.tree_growth = 100.0f, c.top_intact_primitives = 0;
     NodeCostArray out;
     UpdateStats fine;
     update_bvh(tree, subtree_costs(tree), moved.view(), c, out, &fine);

@@ -114,7 +114,7 @@ def test_the_top_takes_slabs_that_moved_as_one_whole(knot):
     moved = knot.copy()
     moved[:, :, 1] += (0.3 * np.sin(3.0 * slab + 1.0)).astype(np.float32)[:, None]
     moved = np.ascontiguousarray(moved)
-    fine = bvhlab.build(knot).update(moved, top_growth=1.0)
+    fine = bvhlab.build(knot).update(moved, top_growth=1.0, top_intact_primitives=0)
     tree = bvhlab.build(knot)
     # tree_growth high: the coarse top is kept whatever it costs (else the fine one may be taken)
     stats = tree.update(moved, top_growth=1.0, tree_growth=100.0, top_intact_primitives=1024)
