@@ -56,8 +56,8 @@ private:
 /// an inner node whose children's half areas sum to less than kApart of its own keeps its
 /// children as cut nodes of their own (rigid parts of a subtree that have moved apart, the case
 /// of objects flying past each other). Every cut node is a leaf or holds at most
-/// `max_primitives`; none lies inside another, nor holds a part inside it; in depth-first order.
-/// With `intact_primitives` above max_primitives, a node of at most that many primitives whose
+/// `max_primitives` (or `intact_primitives`, below); none lies inside another, nor holds a part
+/// inside it; in depth-first order. With `intact_primitives` above max_primitives, a node of at most that many primitives whose
 /// cost is within kIntact of its cost when built (PartedTree::built; a rebuilt part's nodes: as
 /// built) is a cut node too, whole: its primitives moved together (translated), so its insides
 /// are as good as when built and only where it stands changed.
@@ -81,10 +81,9 @@ Bvh built_top(const BuildConfig& tree_config, const CutInfo& info);
 /// the copy: each top node's half area and each cut node's S.
 double top_sah_cost(const Bvh& top, const CutInfo& info);
 
-/// The tree with its nodes above `cut` (top_cut) replaced by `top` (a tree over the cut's boxes:
-/// leaf j holds one reference, top.refs[j], the cut node it stands for: built_top, or the old
-/// top rotated, rotate_top.h) and each cut node's
-/// subtree moved whole below its new place; written into `tree` (its nodes and depths; the slots
+/// The tree with its nodes above `cut` (top_cut) replaced by `top` (a tree over the cut's boxes,
+/// built_top: leaf j holds one reference, top.refs[j], the cut node it stands for) and each cut
+/// node's subtree moved whole below its new place; written into `tree` (its nodes and depths; the slots
 /// stay: the parts' must be placed already) with the parts spliced in, so it replaces
 /// splice_parts. A cut subtree's leaves keep their slots, so the leaves are no longer in
 /// depth-first order of slots (each leaf's run whole; the next refit lays them in order again).
