@@ -13,6 +13,17 @@ the queue when it ends), then schedules them on T ideal threads as the code does
 index order, each to the first free thread; jobs largest first, from one queue): the critical path.
 Waiting and spinning (the workers' `idle`, the caller's `wait`) count as nothing. What it leaves
 out: memory bandwidth, caches, page faults, wake-up latency — the clock's share of the story.
+
+    python bench/build_threads.py --perf [--scenes sponza] [--rounds 4] [--repeat 15] [--against EXE]
+
+The clock's share, in CPU time rather than wall time (which the other users of a shared machine
+spoil): the Release bvh_bench (build/bench) runs its builds under `perf record -e cpu-clock`
+(sampled on-CPU time of every thread, no hardware counters needed) on 1 and on T threads, the two
+alternating for `--rounds` rounds, and the samples are summed per function: CPU milliseconds per
+build, 1T beside T, so that what going parallel adds shows by function (the splice, allocation,
+waking threads, and the kernels' own slow-down where the threads share caches and memory).
+`--against EXE` adds another bvh_bench's columns, interleaved with the first's (before/after).
+On a loaded machine a waiting thread's spin yields the core, so spinning is under-counted there.
 """
 
 from __future__ import annotations
@@ -246,19 +257,84 @@ def summary(name: str, one: dict[str, Phase], many: dict[str, Phase], threads: i
     return {"work_1t": w1, "work": wt, "path": path, "serial": serial, "speedup_estimate": w1 / path, "phases": rows}
 
 
+def perf_samples(exe: Path, mesh: Path, spec: str, threads: int, repeat: int, freq: int) -> tuple[dict, int]:
+    """cpu-clock samples by function of one bvh_bench run's timed builds, pinned to `threads` cores,
+    and how many builds they are."""
+    import _peers
+
+    with tempfile.TemporaryDirectory() as tmp:
+        data = Path(tmp) / "perf.data"
+        cmd = ["perf", "record", "-q", "-e", "cpu-clock", "-F", str(freq), "-k", "CLOCK_MONOTONIC", "-o", str(data)]
+        cmd += ["--"]
+        cmd += ["taskset", "-c", _peers.cores(threads), str(exe), "build", str(mesh), "--peer", spec]
+        out = subprocess.run(cmd + ["--repeat", str(repeat), "--threads", str(threads)], capture_output=True, text=True)
+        if out.returncode:
+            raise SystemExit(f"build_threads: {' '.join(cmd)} failed:\n{out.stderr}")
+        begin, end = json.loads(out.stdout)["timed"]  # the warm-up's builds (first touches) left out
+        report = ["perf", "report", "-i", str(data), "--sort", "sym", "-n", "--stdio", "-q"]
+        report += [f"--time={begin:.6f},{end:.6f}"]
+        text = subprocess.run(report, capture_output=True, text=True, check=True).stdout
+    samples: dict[str, int] = defaultdict(int)
+    for line in text.splitlines():
+        m = re.match(r"\s*[\d.]+%\s+(\d+)\s+\[.\]\s+(.*)", line)
+        if m:  # lambdas by the function they are in; the pool's tasks by what they run
+            name = re.sub(
+                r"^std::_Function_handler<.*?, (?:bvhlab::)?(?:\(anonymous namespace\)::)?(\w+)[(<].*",
+                r"a lambda in \1",
+                m.group(2).strip(),
+            )
+            samples[name] += int(m.group(1))
+    return samples, repeat
+
+
+def perf_compare(exes: list[Path], mesh: Path, spec: str, threads: int, rounds: int, repeat: int) -> dict:
+    """CPU ms per build by function, for each (binary, thread count), interleaved over rounds."""
+    freq = 10000
+    configs = [(k, t) for k in range(len(exes)) for t in (1, threads)]
+    totals: list[dict] = [defaultdict(float) for _ in configs]
+    for _ in range(rounds):
+        for c, (k, t) in enumerate(configs):
+            samples, builds = perf_samples(exes[k], mesh, spec, t, repeat, freq)
+            for name, n in samples.items():
+                totals[c][name] += n * 1e3 / freq / builds / rounds
+    labels = [f"{'AB'[k] if len(exes) > 1 else ''}{t}T ms" for k, t in configs]
+    names = sorted(set().union(*totals), key=lambda f: -max(abs(x.get(f, 0) - totals[0].get(f, 0)) for x in totals))
+    print("  " + " ".join(f"{h:>9s}" for h in labels) + "  function (CPU ms per build, all threads)")
+    print("  " + " ".join(f"{sum(x.values()):9.2f}" for x in totals) + "  all")
+    for f in names[:24]:
+        print("  " + " ".join(f"{x.get(f, 0):9.2f}" for x in totals) + f"  {f[:100]}")
+    return {"configs": labels, "exes": [str(e) for e in exes], "ms_per_build": [dict(x) for x in totals]}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--scenes", default="sponza,room1m,uniform1m")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--spec", default="bvhlab:", help="bvh_bench peer spec (default: bvhlab's defaults)")
-    ap.add_argument("--exe", help="a bvh_bench built with -DBVHLAB_WORK_TRACE=ON (default: build it)")
+    ap.add_argument("--exe", help="a bvh_bench built with -DBVHLAB_WORK_TRACE=ON (default: build it; --perf: Release)")
     ap.add_argument("--keep", help="folder to keep the dumps in (default: a temporary one)")
     ap.add_argument("--json", help="write the figures to this file")
+    ap.add_argument("--perf", action="store_true", help="CPU time by function under perf (see above)")
+    ap.add_argument("--rounds", type=int, default=4, help="--perf: rounds of 1T and T runs")
+    ap.add_argument("--repeat", type=int, default=15, help="--perf: builds per run")
+    ap.add_argument("--against", help="--perf: a second bvh_bench, interleaved with the first")
     args = ap.parse_args()
     import _peers
 
-    exe = Path(args.exe) if args.exe else build_trace_bench()
     results = {}
+    if args.perf:
+        exes = [Path(args.exe) if args.exe else _peers.build_bvh_bench(None)]
+        exes += [Path(args.against)] if args.against else []
+        with tempfile.TemporaryDirectory() as tmp:
+            for name, tris in _peers.scenes(args.scenes.split(",")).items():
+                mesh = Path(tmp) / f"{name}.f32"
+                tris.tofile(mesh)
+                print(f"\n{name}: {len(tris)} triangles, {args.rounds} rounds of {args.repeat} builds")
+                results[name] = perf_compare(exes, mesh, args.spec, args.threads, args.rounds, args.repeat)
+        if args.json:
+            Path(args.json).write_text(json.dumps(results, indent=1))
+        return
+    exe = Path(args.exe) if args.exe else build_trace_bench()
     with tempfile.TemporaryDirectory() as tmp:
         base = Path(args.keep) if args.keep else Path(tmp)
         for name, tris in _peers.scenes(args.scenes.split(",")).items():

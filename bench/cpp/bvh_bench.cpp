@@ -102,6 +102,10 @@ int run_build(const Args& a) {
     for (const auto& spec : a.peers) peers.push_back(make_peer(spec, a.threads));
     std::vector<std::vector<double>> times(peers.size()), cpu(peers.size()), faults(peers.size());
     const int warmups = warm_up(peers, mesh);
+    // where the timed builds begin and end, on CLOCK_MONOTONIC (`perf record -k CLOCK_MONOTONIC`
+    // samples on the same clock: bench/build_threads.py --perf counts only the samples between)
+    timespec timed_from{};
+    clock_gettime(CLOCK_MONOTONIC, &timed_from);
     for (int r = 0; r < a.repeat; ++r)
         for (std::size_t k = 0; k < peers.size(); ++k) {
             const Usage u0 = usage();
@@ -111,8 +115,13 @@ int run_build(const Args& a) {
             const Usage u1 = usage();
             cpu[k].push_back(u1.cpu_seconds - u0.cpu_seconds), faults[k].push_back(double(u1.faults - u0.faults));
         }
-    std::printf("{\"triangles\": %zu, \"threads\": %u, \"warm_up_rounds\": %d, \"peers\": [", mesh.count(), a.threads,
-                warmups);
+    timespec timed_to{};
+    clock_gettime(CLOCK_MONOTONIC, &timed_to);
+    std::printf(
+        "{\"triangles\": %zu, \"threads\": %u, \"warm_up_rounds\": %d, \"timed\": [%lld.%09ld, %lld.%09ld], "
+        "\"peers\": [",
+        mesh.count(), a.threads, warmups, (long long)timed_from.tv_sec, timed_from.tv_nsec, (long long)timed_to.tv_sec,
+        timed_to.tv_nsec);
     for (std::size_t k = 0; k < peers.size(); ++k) {
         TreeInfo info = peers[k]->info();
         std::printf(

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <cstdint>
 #include <stdexcept>
 #include <utility>
 
@@ -43,14 +44,28 @@ void copy_part(const Subtree& p, std::uint32_t base, Bvh& out) {
     // the compiler did not vectorise, took 19 (callgrind, uniform1m's splice on two threads:
     // 37.3 M; bench/build_threads.py).
     static_assert(sizeof(BvhNode) == 32 && offsetof(BvhNode, index) == 12 && offsetof(BvhNode, info) == 28);
+    //
+    // The rows are streamed to memory (non-temporal stores) where aligned: the splice writes every
+    // node of the tree, more than the L2 holds, into memory nothing has read since its last build,
+    // and a plain store first reads each line it writes. The splice's CPU time on two threads
+    // (perf samples, interleaved with plain stores): Sponza 1.12 -> 0.94 ms a build, room1m
+    // 5.05 -> 4.12 ms (bench/build_threads.py --perf; design.md "Building").
     const __m128i shift = _mm_set_epi32(int(base), 0, 0, 0);
     const auto* from = reinterpret_cast<const __m128i*>(p.nodes.data());
     auto* to = reinterpret_cast<__m128i*>(out.nodes.data() + base);
     const std::size_t rows = 2 * p.nodes.size();  // read once: the stores might alias the vector
-    for (std::size_t j = 0; j < rows; j += 2) {
-        const __m128i lo = _mm_loadu_si128(from + j), hi = _mm_loadu_si128(from + j + 1);
-        const __m128i add = _mm_and_si128(_mm_srai_epi32(hi, 31), shift);
-        _mm_storeu_si128(to + j, _mm_add_epi32(lo, add)), _mm_storeu_si128(to + j + 1, _mm_add_epi32(hi, add));
+    const auto copy = [&](auto store) {
+        for (std::size_t j = 0; j < rows; j += 2) {
+            const __m128i lo = _mm_loadu_si128(from + j), hi = _mm_loadu_si128(from + j + 1);
+            const __m128i add = _mm_and_si128(_mm_srai_epi32(hi, 31), shift);
+            store(to + j, _mm_add_epi32(lo, add)), store(to + j + 1, _mm_add_epi32(hi, add));
+        }
+    };
+    if (reinterpret_cast<std::uintptr_t>(to) % 16 == 0) {
+        copy([](__m128i* at, __m128i v) { _mm_stream_si128(at, v); });
+        _mm_sfence();  // before the pool's handover makes them visible to the thread that links
+    } else {
+        copy([](__m128i* at, __m128i v) { _mm_storeu_si128(at, v); });
     }
 #else
     for (std::size_t j = 0; j < p.nodes.size(); ++j) {
