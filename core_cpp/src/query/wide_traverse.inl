@@ -210,8 +210,9 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit, Wid
 
 #include "wide_any_hit.inl"
 
-/// The any-hit walk for the ray's octant (wide_any_hit.inl). The closest-hit walk is one copy for
-/// every octant: eight of it (2.5 KiB each) made random rays slower, though fewer instructions
+/// The any-hit walk for the ray's octant (wide_any_hit.inl). The single-ray closest-hit walk is one
+/// copy for every octant (a batch's rays go through per-octant copies, grouped: wide_batch.inl):
+/// eight of it picked per ray (2.5 KiB each) made random rays slower, though fewer instructions
 /// (callgrind instructions a ray and Mrays/s ÷ the best peer, CPU time of one pinned core, two
 /// interleaved runs: Sponza random 884 → 866, 1.11-1.13 → 1.06-1.07; primary 1,699 → 1,628, 0.93
 /// → 0.94-0.96; room1m random 1.03-1.07 → 0.98-1.00).
