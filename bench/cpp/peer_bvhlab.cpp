@@ -2,11 +2,14 @@
 // or any hit for shadow rays: occluded) through the wide tree (the fastest CPU traversal) or the
 // traversal named by query=. Spec options, comma separated (BuildConfig's fields): method=, axis=,
 // bins=, span=box|centroids, leaf= (max leaf size), block= (sah_block), trav= and isect= (the
-// SAH's costs), alpha=, budget=, unsplit=0|1 (method sbvh); query=stack|stackless|wide; opt=N
+// SAH's costs), alpha=, budget=, unsplit=0|1 (method sbvh); query=stack|stackless|wide; batch=1 traces each set by the
+// batch queries users call (intersect_batch, occluded_batch: checked, scaled, grouped by octant)
+// on one thread rather than ray by ray; opt=N
 // optimises the built tree by reinsertion for at
 // most N batches (optimize.h), part of the build's time.
 #include <sstream>
 #include <stdexcept>
+#include <vector>
 
 #include "bench_data.h"
 #include "bvhlab/bvh.h"
@@ -19,13 +22,16 @@
 namespace bench {
 namespace {
 
-/// The traversal of query= in `options` (wide without one), taken out of `options`.
-bvhlab::Traversal take_query(std::string& options) {
+/// The traversal of query= in `options` (wide without one) and whether batch=1 is there, both
+/// taken out of `options`.
+bvhlab::Traversal take_query(std::string& options, bool& batch) {
     std::stringstream ss(options);
     std::string rest;
     bvhlab::Traversal query = bvhlab::Traversal::Wide;
+    batch = false;
     for (std::string kv; std::getline(ss, kv, ',');) {
         if (kv.rfind("query=", 0) == 0) query = bvhlab::parse_traversal(kv.substr(6));
+        else if (kv.rfind("batch=", 0) == 0) batch = kv.substr(6) != "0";
         else rest += (rest.empty() ? "" : ",") + kv;
     }
     options = rest;
@@ -67,7 +73,7 @@ class BvhlabPeer : public Peer {
 public:
     BvhlabPeer(const std::string& options, unsigned threads) : options_(options) {
         std::string build_options = options;
-        query_ = take_query(build_options);
+        query_ = take_query(build_options, batch_);
         config_ = parse_options(build_options, threads);
     }
     std::string name() const override { return "bvhlab " + (options_.empty() ? std::string("defaults") : options_); }
@@ -81,7 +87,25 @@ public:
     }
     TreeInfo info() const override { return {bvhlab::sah_cost(bvh_), bvh_.nodes.size(), bvh_.refs.size(), digest()}; }
     void prepare_trace() override { wide_ = bvhlab::make_wide(bvh_); }
+    void prepare_rays(const Rays& rays) override {
+        if (!batch_) return;
+        origins_.resize(3 * rays.count()), directions_.resize(3 * rays.count());
+        for (std::size_t i = 0; i < rays.count(); ++i)
+            for (int a = 0; a < 3; ++a)
+                origins_[3 * i + a] = rays.od[6 * i + a], directions_[3 * i + a] = rays.od[6 * i + 3 + a];
+    }
+    bvhlab::RayBatch batch(const Rays& rays) const {
+        bvhlab::RayBatch b;
+        b.origins = origins_.data(), b.directions = directions_.data(), b.count = rays.count();
+        if (!rays.tmax.empty()) b.tmax_of = rays.tmax.data();
+        return b;
+    }
     void trace(const Rays& rays, float* t, std::uint32_t* prim) override {
+        if (batch_) {
+            bvhlab::HitBatch hits;
+            hits.t = t, hits.prim = reinterpret_cast<std::int32_t*>(prim);  // -1 on a miss: ~0u
+            return bvhlab::intersect_batch(bvh_, batch(rays), hits, query_, 1, &wide_);
+        }
         for (std::size_t i = 0; i < rays.count(); ++i) {
             const float* r = rays.od.data() + 6 * i;
             bvhlab::Ray ray{{r[0], r[1], r[2]}, {r[3], r[4], r[5]}};
@@ -91,6 +115,8 @@ public:
         }
     }
     void occluded(const Rays& rays, std::uint8_t* out) override {
+        static_assert(sizeof(bool) == sizeof(std::uint8_t));
+        if (batch_) return bvhlab::occluded_batch(bvh_, batch(rays), reinterpret_cast<bool*>(out), query_, 1, &wide_);
         for (std::size_t i = 0; i < rays.count(); ++i) {
             const float* r = rays.od.data() + 6 * i;
             bvhlab::Ray ray{{r[0], r[1], r[2]}, {r[3], r[4], r[5]}, 0.0f, rays.tmax[i]};
@@ -113,6 +139,8 @@ private:
 
     std::string options_;
     bvhlab::Traversal query_;
+    bool batch_ = false;
+    std::vector<float> origins_, directions_;  ///< batch=1: the ray set's, split (prepare_rays)
     Options config_;
     bvhlab::Bvh bvh_;
     bvhlab::WideBvh wide_;

@@ -89,4 +89,19 @@ Hit intersect_wide(const WideBvh& wide, const Bvh& bvh, const Ray& ray, std::uin
 /// first leaf with a hit nearer than ray.tmax; exactly when intersect_wide's t < ray.tmax.
 bool occluded_wide(const WideBvh& wide, const Ray& ray);
 
+/// The batch's piece that intersect_wide_batch and occluded_wide_batch group by octant at once
+/// (intersect_batch's chunks, ray_batch.h, are this size).
+inline constexpr std::uint32_t kWideBatch = 1024;
+
+/// intersect_wide for each of rays[0, count): hits[i] (and nodes_visited[i], where given) for
+/// rays[i], the same hit bit for bit. The rays are traced grouped by octant (the sign bits of
+/// their direction), each group by the walk compiled for that octant, in pieces of kWideBatch
+/// rays: no walk chosen per ray by an indirect call, one walk's code in use at a time.
+void intersect_wide_batch(const WideBvh& wide, const Bvh& bvh, const Ray* rays, std::size_t count, Hit* hits,
+                          std::uint32_t* nodes_visited = nullptr);
+
+/// occluded_wide for each of rays[0, count), to occluded[i], grouped by octant as
+/// intersect_wide_batch.
+void occluded_wide_batch(const WideBvh& wide, const Ray* rays, std::size_t count, bool* occluded);
+
 }  // namespace bvhlab

@@ -1,5 +1,6 @@
 // Closest-hit traversal of the 8-wide tree: the portable path (SSE on x86-64, plain C++
 // elsewhere), the dispatch to the AVX2 path (isa.h), and the helpers both call.
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -211,6 +212,59 @@ Hit intersect_wide(const WideBvh& wide, const Bvh& bvh, const Ray& ray, std::uin
     // finish_hit's work is a sphere's u, v: a triangle's hit (or a miss) skips the call
     else if (hit.ref & gpu::REF_SPHERE_BIT) [[unlikely]] finish_hit(bvh, ray, hit);
     return hit;
+}
+
+void group_by_octant(const Ray* rays, std::uint32_t count, std::uint32_t* order, std::uint32_t start[9]) {
+    std::uint32_t at[8] = {};
+    std::uint8_t octant[kWideBatch];             // count ≤ kWideBatch (intersect_wide_batch's pieces)
+    for (std::uint32_t i = 0; i < count; ++i) {  // the sign bits, as integers
+        std::uint32_t d[3];
+        std::memcpy(d, &rays[i].dir, sizeof d);
+        octant[i] = std::uint8_t(d[0] >> 31 | (d[1] >> 31) << 1 | (d[2] >> 31) << 2);
+        ++at[octant[i]];
+    }
+    start[0] = 0;
+    for (int k = 0; k < 8; ++k) start[k + 1] = start[k] + at[k], at[k] = start[k];
+    for (std::uint32_t i = 0; i < count; ++i) order[at[octant[i]]++] = i;
+}
+
+void intersect_wide_batch(const WideBvh& wide, const Bvh& bvh, const Ray* rays, std::size_t count, Hit* hits,
+                          std::uint32_t* nodes_visited) {
+    const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
+    std::uint32_t order[kWideBatch], start[9];
+    for (std::size_t begin = 0; begin < count; begin += kWideBatch) {
+        const auto n = std::uint32_t(std::min<std::size_t>(kWideBatch, count - begin));
+        const Ray* r = rays + begin;
+        Hit* h = hits + begin;
+        std::uint32_t* v = nodes_visited ? nodes_visited + begin : nullptr;
+        group_by_octant(r, n, order, start);
+#if defined(BVHLAB_AVX2_KERNELS)
+        if (active_isa() == Isa::Avx2) avx2::intersect_wide_batch_kernel(view, r, order, start, h, v);
+        else portable::intersect_wide_batch_kernel(view, r, order, start, h, v);
+#else
+        portable::intersect_wide_batch_kernel(view, r, order, start, h, v);
+#endif
+        for (std::uint32_t i = 0; i < n; ++i) {  // as intersect_wide finishes its hit
+            if (h[i].ref == kNoHit) h[i].t = kInfinity;
+            else if (h[i].ref & gpu::REF_SPHERE_BIT) [[unlikely]] finish_hit(bvh, r[i], h[i]);
+        }
+    }
+}
+
+void occluded_wide_batch(const WideBvh& wide, const Ray* rays, std::size_t count, bool* occluded) {
+    const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
+    std::uint32_t order[kWideBatch], start[9];
+    for (std::size_t begin = 0; begin < count; begin += kWideBatch) {
+        const auto n = std::uint32_t(std::min<std::size_t>(kWideBatch, count - begin));
+        group_by_octant(rays + begin, n, order, start);
+#if defined(BVHLAB_AVX2_KERNELS)
+        if (active_isa() == Isa::Avx2)
+            avx2::occluded_wide_batch_kernel(view, rays + begin, order, start, occluded + begin);
+        else portable::occluded_wide_batch_kernel(view, rays + begin, order, start, occluded + begin);
+#else
+        portable::occluded_wide_batch_kernel(view, rays + begin, order, start, occluded + begin);
+#endif
+    }
 }
 
 bool occluded_wide(const WideBvh& wide, const Ray& ray) {

@@ -52,6 +52,27 @@ struct TlasWalk {
     bool resumed;  ///< false until the first leaf is handed out: the next call pops
 };
 
+/// Groups rays[0, count) by octant (bit a set where dir[a]'s sign bit is: make_query's octant, the
+/// sign of 1/dir[a]) by a stable counting sort: order[start[k], start[k + 1]) the rays of octant
+/// k in input order, start[0] = 0 and start[8] = count.
+void group_by_octant(const Ray* rays, std::uint32_t count, std::uint32_t* order, std::uint32_t start[9]);
+
+/// The batch kernels (wide_batch.inl): the rays grouped by group_by_octant, each group through
+/// its octant's walk, results in each ray's slot (hits[i], nodes_visited[i] where not null,
+/// occluded[i]); a miss's t is the ray's tmax, as intersect_wide_kernel's.
+namespace portable {
+void intersect_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
+                                 const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited);
+void occluded_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
+                                const std::uint32_t* start, bool* occluded);
+}  // namespace portable
+namespace avx2 {
+void intersect_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
+                                 const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited);
+void occluded_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
+                                const std::uint32_t* start, bool* occluded);
+}  // namespace avx2
+
 namespace portable {
 Hit intersect_wide_kernel(const WideView& wide, const Ray& ray, std::uint32_t* nodes_visited);
 Hit record_wide_kernel(const WideView& wide, const Ray& ray, WideRecorder& record, std::uint32_t* nodes_visited);

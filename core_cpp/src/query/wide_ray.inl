@@ -95,8 +95,11 @@ bool closer(float t, std::uint32_t ref, const Hit& hit) {
 /// The watertight test (geometry.glsl hit_triangle) on four triangles at once, its operations in
 /// its order lane by lane; the lanes that pass become hits in lane order under the closest-hit rule.
 /// kAnyHit: the first lane that passes is the hit (its t and ref only; the query wants no more).
+/// Inlined into its leaf loops, as the compiler did while the closest-hit walk was one copy: with
+/// eight more (the batch walks, wide_batch.inl) it called it out of line (Sponza random rays +22
+/// instructions a ray).
 template <bool kAnyHit>
-void test_triangles(const PrimPacket& k, const Query& q, Hit& hit) {
+[[gnu::always_inline]] inline void test_triangles(const PrimPacket& k, const Query& q, Hit& hit) {
     const std::ptrdiff_t kx = q.axis_at[0], ky = q.axis_at[1], kz = q.axis_at[2];
     const L4 ox = L4::splat(q.o_axes[0]), oy = L4::splat(q.o_axes[1]), oz = L4::splat(q.o_axes[2]);
     const L4 sx = L4::splat(q.shear[0]), sy = L4::splat(q.shear[1]);

@@ -32,7 +32,7 @@ const unsigned char* line_at(const WideView& wide, std::uint32_t i) {
 
 /// The packets of a leaf, from line `first` on, up to the one without `more` (the any-hit walk's
 /// is leaf_occludes, wide_any_hit.inl).
-void test_leaf(const WideView& wide, std::uint32_t first, const Query& q, Hit& hit) {
+[[gnu::always_inline]] inline void test_leaf(const WideView& wide, std::uint32_t first, const Query& q, Hit& hit) {
     for (const unsigned char* at = line_at(wide, first);; at += sizeof(PrimPacket)) {
         const PrimPacket& k = *reinterpret_cast<const PrimPacket*>(at);
         // [[likely]]: the sphere calls out of line; laid out as the rare case, the leaf's entry
@@ -164,7 +164,9 @@ template <bool kPrefetch = true>
 /// kRecord: each node's entered children and each leaf's effect on the hit go to `record` (the
 /// inspector's record, wide_kernel.h WideRecorder); without it the calls compile away and the walk
 /// is the plain one.
-template <bool kRecord = false>
+/// kOctant: the ray's octant where the caller knows it at compile time (the batch walks,
+/// closest_of_octant below: plane offsets as constants), -1 to read it from the query.
+template <bool kRecord = false, int kOctant = -1>
 std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit, WideRecorder* record = nullptr) {
     const L8 origin[3] = {L8::splat(q.o[0]), L8::splat(q.o[1]), L8::splat(q.o[2])};
     // The planes' distances as (origin - plane) · (-1/d), which are hit_box's (plane - origin) ·
@@ -175,7 +177,7 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit, Wid
     const L8 neg_inv[3] = {L8::splat(q.neg_inv[0]), L8::splat(q.neg_inv[1]), L8::splat(q.neg_inv[2])};
     const L8 neg_inv_far[3] = {L8::splat(q.neg_inv_far[0]), L8::splat(q.neg_inv_far[1]), L8::splat(q.neg_inv_far[2])};
     const float s = gpu::BOX_FAR_SCALE;
-    const std::ptrdiff_t* plane = kPlanes[q.octant];
+    const std::ptrdiff_t* plane = kOctant < 0 ? kPlanes[q.octant] : kPlanes.at[kOctant & 7];
     Stack stack;
     std::uint32_t sp = 0, visited = 0;
     Entry cur{0, q.tmin};
@@ -208,8 +210,9 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit, Wid
 
 #include "wide_any_hit.inl"
 
-/// The any-hit walk for the ray's octant (wide_any_hit.inl). The closest-hit walk is one copy for
-/// every octant: eight of it (2.5 KiB each) made random rays slower, though fewer instructions
+/// The any-hit walk for the ray's octant (wide_any_hit.inl). The single-ray closest-hit walk is one
+/// copy for every octant (a batch's rays go through per-octant copies, grouped: wide_batch.inl):
+/// eight of it picked per ray (2.5 KiB each) made random rays slower, though fewer instructions
 /// (callgrind instructions a ray and Mrays/s ÷ the best peer, CPU time of one pinned core, two
 /// interleaved runs: Sponza random 884 → 866, 1.11-1.13 → 1.06-1.07; primary 1,699 → 1,628, 0.93
 /// → 0.94-0.96; room1m random 1.03-1.07 → 0.98-1.00).
@@ -220,9 +223,28 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit, Wid
     return kWalks[q.octant](wide.lines, q);
 }
 
+#ifndef BVHLAB_RECORDED_WIDE_WALK
+#include "wide_batch.inl"
+#endif
+
 }  // namespace
 
 #ifndef BVHLAB_RECORDED_WIDE_WALK
+void intersect_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
+                                 const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited) {
+    if (wide.lines) return closest_of_batch(wide, rays, order, start, hits, nodes_visited);
+    for (std::uint32_t i = 0; i < start[8]; ++i) {
+        hits[i] = Hit{rays[i].tmax, kNoHit, 0.0f, 0.0f, kNoHit};
+        if (nodes_visited) nodes_visited[i] = 0;
+    }
+}
+
+void occluded_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
+                                const std::uint32_t* start, bool* occluded) {
+    if (wide.lines) return occluded_of_batch(wide, rays, order, start, occluded);
+    for (std::uint32_t i = 0; i < start[8]; ++i) occluded[i] = false;
+}
+
 Hit intersect_wide_kernel(const WideView& wide, const Ray& ray, std::uint32_t* nodes_visited) {
     Hit hit{ray.tmax, kNoHit, 0.0f, 0.0f, kNoHit};
     const Query q = make_query(ray);
