@@ -200,6 +200,15 @@ inline int leaf_bits(const WideNode& node) {
 }  // namespace portable
 
 #ifndef BVHLAB_RECORDED_WIDE_WALK
+namespace {
+/// A hit of the wide walk made what every entry point returns: a miss's t is infinity; finish_hit's
+/// work is a sphere's u, v, so a triangle's hit (or a miss) skips the call.
+inline void finish_wide_hit(const Bvh& bvh, const Ray& ray, Hit& hit) {
+    if (hit.ref == kNoHit) hit.t = kInfinity;
+    else if (hit.ref & gpu::REF_SPHERE_BIT) [[unlikely]] finish_hit(bvh, ray, hit);
+}
+}  // namespace
+
 Hit intersect_wide(const WideBvh& wide, const Bvh& bvh, const Ray& ray, std::uint32_t* nodes_visited) {
     const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
 #if defined(BVHLAB_AVX2_KERNELS)
@@ -208,9 +217,7 @@ Hit intersect_wide(const WideBvh& wide, const Bvh& bvh, const Ray& ray, std::uin
 #else
     Hit hit = portable::intersect_wide_kernel(view, ray, nodes_visited);
 #endif
-    if (hit.ref == kNoHit) hit.t = kInfinity;
-    // finish_hit's work is a sphere's u, v: a triangle's hit (or a miss) skips the call
-    else if (hit.ref & gpu::REF_SPHERE_BIT) [[unlikely]] finish_hit(bvh, ray, hit);
+    finish_wide_hit(bvh, ray, hit);
     return hit;
 }
 
@@ -244,10 +251,7 @@ void intersect_wide_batch(const WideBvh& wide, const Bvh& bvh, const Ray* rays, 
 #else
         portable::intersect_wide_batch_kernel(view, r, order, start, h, v);
 #endif
-        for (std::uint32_t i = 0; i < n; ++i) {  // as intersect_wide finishes its hit
-            if (h[i].ref == kNoHit) h[i].t = kInfinity;
-            else if (h[i].ref & gpu::REF_SPHERE_BIT) [[unlikely]] finish_hit(bvh, r[i], h[i]);
-        }
+        for (std::uint32_t i = 0; i < n; ++i) finish_wide_hit(bvh, r[i], h[i]);
     }
 }
 
