@@ -75,9 +75,10 @@ UpdatePolicy adaptive(Bvh& tree, NodeCostArray& built, const NodeCosts& now, con
         // first over the cut with the intact subtrees whole (top_intact_primitives: fewer boxes);
         // over the fine cut where that top would leave the tree past tree_growth (a full rebuild
         // otherwise: the top over boxes weighs a box of 64 primitives as one of 5)
-        for (const std::uint32_t intact : {config.top_intact_primitives, 0u}) {
-            const bool coarse = intact > config.top_cut_primitives;
-            const std::vector<PartNode> cut = top_cut(parted, config.top_cut_primitives, coarse ? intact : 0u);
+        for (const bool coarse : {true, false}) {
+            if (coarse && config.top_intact_primitives <= config.top_cut_primitives) continue;  // no coarser cut
+            const std::vector<PartNode> cut =
+                top_cut(parted, config.top_cut_primitives, coarse ? config.top_intact_primitives : 0u);
             if (cut.size() <= 1) continue;
             const CutInfo info = cut_info(parted, cut);
             const Bvh top = built_top(tree.config, info);
