@@ -46,7 +46,7 @@ def test_progress_is_reported_and_false_cancels_then_the_job_goes_on(renderer):
     job = renderer.start(scene, bvh, 32, 24, samples_per_axis=2, steps_per_dispatch=16)
     with pytest.raises(bvhlab.RenderCancelled):
         job.run(progress=lambda f: False)
-    assert job.samples_done < 4
+    assert job.samples_done == 0  # the check runs before any pixel or dispatch, whatever the threads do
     job.run()
     np.testing.assert_array_equal(job.result().color, whole)
 

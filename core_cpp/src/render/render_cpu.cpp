@@ -130,7 +130,15 @@ private:
 
     /// The calling thread traces rows too; when they run out it keeps polling `cancel` until the
     /// other threads are done, so Ctrl-C stops a render promptly whichever thread holds the work.
+    /// The caller's check runs once before any thread starts: the other threads could otherwise
+    /// take every row before the calling thread reaches its first pixel, and a small image then
+    /// finished without one call of the check (a progress callback never called, a cancel not
+    /// honoured: test_render_api's cancel failed so under load).
     void run_threads(const gpu::FrameParams& frame, RunShared& shared, Cancellation* cancel, double* progress) {
+        if (cancel) {
+            if (progress) *progress = 0.0;
+            if (cancel->poll()) return;
+        }
         auto work = [&](bool caller) {
             try {
                 trace_rows(frame, shared, cancel, progress, caller);
