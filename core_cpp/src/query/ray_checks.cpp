@@ -23,7 +23,6 @@ void check_tmax(const RayBatch& rays) {  // each ray's own tmax: check_rays
     if (!rays.tmax_of && !valid_tmax(rays.tmax)) throw std::invalid_argument(tmax_message("the rays", rays.tmax));
 }
 
-
 void check_rays(const RayBatch& rays) {
     bool all_in_range = true;
     for (std::size_t i = 0; i < rays.count; ++i) {  // without branches: coordinate_range.h
