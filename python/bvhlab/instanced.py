@@ -29,8 +29,8 @@ class InstancedBvh:
     def __init__(self, meshes: list[Bvh], mesh_of: np.ndarray, transforms: np.ndarray, config: BuildConfig):
         self.meshes = meshes
         self.config = config
-        self._core = _make_tlas(meshes, mesh_of, transforms, config.threads)
-        self._placed = (mesh_of, transforms)
+        self._core, *placed = _make_tlas(meshes, mesh_of, transforms, config.threads)
+        self._placed = tuple(placed)
         self._stats: tuple | None = None  # (what they were made of, stats)
         self._tlas: tuple | None = None  # (the core TLAS, it as a Bvh)
         self._tlas_data: tuple | None = None  # (the TLAS it was made of, NodeData, leaf_first, refs)
@@ -130,8 +130,8 @@ class InstancedBvh:
 
     def place(self, mesh_of: np.ndarray, transforms: np.ndarray) -> None:
         """Move the instances (or change them): a new TLAS over the same meshes' trees."""
-        self._core = _make_tlas(self.meshes, mesh_of, transforms, self.config.threads)
-        self._placed = (mesh_of, transforms)
+        self._core, *placed = _make_tlas(self.meshes, mesh_of, transforms, self.config.threads)
+        self._placed = tuple(placed)
 
     def update_mesh(
         self, k: int, triangles: np.ndarray, spheres: np.ndarray | None = None, config=None, **changes
@@ -199,19 +199,25 @@ class InstancedBvh:
         return run_occluded_query(self._core, origins, directions, tmin, tmax, traversal, threads)
 
 
-def _make_tlas(meshes: list[Bvh], mesh_of, transforms, threads: int) -> _core.TwoLevel:
-    """The TLAS with the core's TLAS settings (default_tlas_config) on `threads` threads (0: all)."""
+def _make_tlas(meshes: list[Bvh], mesh_of, transforms, threads: int) -> tuple:
+    """The TLAS with the core's TLAS settings (default_tlas_config) on `threads` threads (0: all),
+    and the checked (mesh index int32 (N,), transforms) it was made of."""
     mesh_of = np.asarray(mesh_of)
     if mesh_of.ndim != 1 or not (np.issubdtype(mesh_of.dtype, np.integer) or mesh_of.size == 0):
         raise ValueError(f"mesh indices must be (N,) integers, got shape {mesh_of.shape} dtype {mesh_of.dtype}")
-    negative = np.flatnonzero(mesh_of < 0)
-    if len(negative):
-        raise ValueError(f"instance {negative[0]} refers to mesh {mesh_of[negative[0]]}, which does not exist")
+    # all of them before the cast: uint32 would wrap -1 or 2^32 to another mesh
+    bad = np.flatnonzero((mesh_of < 0) | (mesh_of >= len(meshes)))
+    if len(bad):
+        raise ValueError(
+            f"instance {bad[0]} refers to mesh {mesh_of[bad[0]]}, but the tree has {len(meshes)} "
+            f"mesh{'es' if len(meshes) != 1 else ''}"
+        )
     transforms = _checks.float32_array("transforms", transforms, (3, 4))
+    mesh_of = np.ascontiguousarray(mesh_of, np.int32)  # as Scene.instances gives them
     core = [m._core for m in meshes]
     config = _core.default_tlas_config()
     config.threads = threads  # the docstring's promise (it was dropped: a TLAS was built on every thread)
-    return _core.build_two_level(core, np.ascontiguousarray(mesh_of, np.uint32), transforms, config)
+    return _core.build_two_level(core, mesh_of.view(np.uint32), transforms, config), mesh_of, transforms
 
 
 def build_instanced(scene, config: BuildConfig, progress: Callable[[float], bool | None] | None) -> InstancedBvh:
