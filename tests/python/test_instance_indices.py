@@ -86,3 +86,18 @@ def test_world_bounds_are_those_of_every_moved_corner():
     corners = np.concatenate(corners)
     np.testing.assert_allclose(lo, corners.min(0), rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(hi, corners.max(0), rtol=1e-12, atol=1e-12)
+
+
+def test_tlas_leaf_lookups_refuse_indices_out_of_range():
+    # a negative index was numpy's: the last instance's (or node's) leaf, silently
+    tris = procedural.random_triangles(20, seed=1)
+    tree = bvhlab.build(bvhlab.Scene(triangles=tris, instance_mesh=np.zeros(3, np.int32), instance_transforms=_eye(3)))
+    nodes = tree.stats["tlas_nodes"]
+    for bad in (-1, 3):
+        with pytest.raises(ValueError, match="instance must be between 0 and 2"):
+            tree.tlas_leaf_of(bad)
+    for bad in (-1, nodes):
+        with pytest.raises(ValueError, match=f"node must be between 0 and {nodes - 1}"):
+            tree.tlas_leaf_instances(bad)
+    leaves = [tree.tlas_leaf_of(i) for i in range(3)]
+    assert all(i in tree.tlas_leaf_instances(leaf).tolist() for i, leaf in enumerate(leaves))
