@@ -29,12 +29,22 @@ class InstancedBvh:
     def __init__(self, meshes: list[Bvh], mesh_of: np.ndarray, transforms: np.ndarray, config: BuildConfig):
         self.meshes = meshes
         self.config = config
-        self._core, *placed = _make_tlas(meshes, mesh_of, transforms, config.threads)
-        self._placed = tuple(placed)
+        # (TLAS core, mesh index, transforms) as one attribute: a place() on another thread swaps
+        # it whole, so no reader sees a new TLAS with the old instances (stats keyed by the one,
+        # made of the other, were kept)
+        self._state = _make_tlas(meshes, mesh_of, transforms, config.threads)
         self._stats: tuple | None = None  # (what they were made of, stats)
         self._tlas: tuple | None = None  # (the core TLAS, it as a Bvh)
         self._tlas_data: tuple | None = None  # (the TLAS it was made of, NodeData, leaf_first, refs)
         self._analysed: tuple | None = None  # (_analysis_key(), TwoLevelNodeData)
+
+    @property
+    def _core(self) -> _core.TwoLevel:
+        return self._state[0]
+
+    @property
+    def _placed(self) -> tuple[np.ndarray, np.ndarray]:
+        return self._state[1], self._state[2]
 
     def __repr__(self) -> str:
         s = self.stats
@@ -48,10 +58,13 @@ class InstancedBvh:
         (two_level_stats.instanced_stats): primitives and triangles stored (each mesh once) and
         flattened (once per instance), nodes, height, memory_bytes, sah_cost (two-level), per-mesh
         lists (mesh_primitives, mesh_instances, mesh_sah_cost, ...) and the meshes' build method."""
-        key = (id(self._core), tuple(m.revision for m in self.meshes), tuple(id(m) for m in self.meshes))
+        core, mesh_of, _ = self._state
+        meshes = list(self.meshes)
+        # the core itself (compared by identity), not its id(): a freed TLAS's id may be a new one's
+        key = (core, tuple(m.revision for m in meshes), tuple(id(m) for m in meshes))
         if self._stats is None or self._stats[0] != key:
-            lo, hi = self.world_boxes()
-            self._stats = (key, instanced_stats(self._core.stats(), self.meshes, self._placed[0], lo, hi))
+            lo, hi = core.world_boxes()
+            self._stats = (key, instanced_stats(core.stats(), meshes, mesh_of, lo, hi))
         return dict(self._stats[1])
 
     @property
@@ -122,7 +135,7 @@ class InstancedBvh:
         return None
 
     def _analysis_key(self) -> tuple:
-        return (id(self._core), tuple(m.revision for m in self.meshes), tuple(id(m) for m in self.meshes))
+        return (self._core, tuple(m.revision for m in self.meshes), tuple(id(m) for m in self.meshes))
 
     def _tlas_nodes(self) -> tuple:
         if self._tlas_data is None or self._tlas_data[0] is not self._core:
@@ -132,8 +145,7 @@ class InstancedBvh:
 
     def place(self, mesh_of: np.ndarray, transforms: np.ndarray) -> None:
         """Move the instances (or change them): a new TLAS over the same meshes' trees."""
-        self._core, *placed = _make_tlas(self.meshes, mesh_of, transforms, self.config.threads)
-        self._placed = tuple(placed)
+        self._state = _make_tlas(self.meshes, mesh_of, transforms, self.config.threads)
 
     def update_mesh(
         self, k: int, triangles: np.ndarray, spheres: np.ndarray | None = None, config=None, **changes
