@@ -48,6 +48,7 @@ nb::dict py_trace_ray(const PyBvh& self, Point origin, Point direction, float tm
                       const std::string& traversal) {
     const Traversal mode = parse_traversal(traversal);
     TreePtr tree = self.current();
+    require_geometry(tree->bvh, "trace_ray");
     Ray ray{{origin[0], origin[1], origin[2]}, {direction[0], direction[1], direction[2]}, tmin, tmax};
     TraversalRecord r;
     {

@@ -81,7 +81,8 @@ void py_intersect(const PyBvh& self, const Vectors& origins, const Vectors& dirs
     RayBatch rays{origins.data(), dirs.data(), n, tmin, tmax};
     HitBatch hits{t.data(), prim.data(), kind.data(), u.data(), v.data(), visited.data()};
     TreePtr tree = self.current();  // this version stays alive (and unchanged) until the rays are done
-    PyStopCheck stop;               // Ctrl-C stops a long batch
+    require_geometry(tree->bvh, "intersect");
+    PyStopCheck stop;  // Ctrl-C stops a long batch
     Cancellation cancel([&stop] { return stop(0.0); });
     try {
         nb::gil_scoped_release release;
@@ -99,6 +100,7 @@ void py_occluded(const PyBvh& self, const Vectors& origins, const Vectors& dirs,
     const RayBatch rays = occluded_rays(origins, dirs, tmin, tmax, tmax_of, out);
     const Traversal mode = parse_traversal(traversal);
     TreePtr tree = self.current();  // this version stays alive (and unchanged) until the rays are done
+    require_geometry(tree->bvh, "occluded");
     run_released([&](Cancellation* cancel) {
         const WideBvh* wide = mode == Traversal::Wide ? &tree->wide() : nullptr;
         occluded_batch(tree->bvh, rays, out.data(), mode, threads, wide, cancel);
@@ -113,11 +115,15 @@ nb::tuple py_boxes(const PyBvh& self, std::uint32_t depth_min, std::uint32_t dep
 }
 
 void py_refit(PyBvh& self, const Triangles& tris, const std::optional<Spheres>& spheres) {
+    require_geometry(self.current()->bvh, "refit");
     GeometryView g = view_of(tris, spheres);
     nb::gil_scoped_release release;
-    // the topology stays, and with it the costs its nodes had when built (update.h)
+    // the topology stays, and with it the costs its nodes had when built (update.h); an SBVH is
+    // rebuilt instead (refitted), a new topology whose costs as built are its own (null: taken
+    // from it when first asked), not the old tree's, which an update would refuse
     self.replace([&](const TreeVersion& old) {
-        return std::pair{refitted(old.bvh, g, old.bvh.config.threads), old.built_costs()};
+        const bool rebuilt = old.bvh.config.method == SplitMethod::Sbvh;
+        return std::pair{refitted(old.bvh, g, old.bvh.config.threads), rebuilt ? CostsPtr() : old.built_costs()};
     });
 }
 
@@ -150,6 +156,21 @@ void bind_bvh(nb::module_& m) {
                  TreePtr t = b.current();
                  return array_owned_by(t, t->bvh.refs.data(), {t->bvh.refs.size()});
              })
+        .def(
+            "file_parts",
+            [](const PyBvh& b) {
+                TreePtr t = b.current();           // one version: a refit or update meanwhile cannot mix two
+                require_geometry(t->bvh, "save");  // load_bvh makes the geometry again from a scene
+                nb::dict d;
+                d["nodes"] = array_owned_by(t, reinterpret_cast<const std::uint8_t*>(t->bvh.nodes.data()),
+                                            {t->bvh.nodes.size(), sizeof(BvhNode)});
+                d["refs"] = array_owned_by(t, t->bvh.refs.data(), {t->bvh.refs.size()});
+                d["geometry_fingerprint"] = t->bvh.fingerprint();
+                d["triangles"] = t->bvh.triangle_count, d["spheres"] = t->bvh.sphere_count;
+                d["build_ms"] = t->bvh.build_ms, d["revision"] = t->revision;
+                return d;
+            },
+            "What a tree file holds (nodes, refs, fingerprint, counts, build_ms), all of one version")
         .def("depths",
              [](const PyBvh& b) {
                  TreePtr t = b.current();

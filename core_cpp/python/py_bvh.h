@@ -12,6 +12,8 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -39,6 +41,16 @@ inline GeometryView view_of(const Triangles& tris, const std::optional<Spheres>&
 }
 
 using CostsPtr = std::shared_ptr<const NodeCostArray>;
+
+/// Throws std::invalid_argument unless `bvh` holds its geometry. The TLAS of a two-level tree as a
+/// tree (`tlas_tree`) has instance indices for references and no primitives: a ray query, a
+/// record, a refit or a file of it would read (or need) primitives that are not there.
+inline void require_geometry(const Bvh& bvh, const char* what) {
+    if (bvh.prims.size() != bvh.refs.size())
+        throw std::invalid_argument(std::string(what) +
+                                    ": this tree holds no geometry (the TLAS of a two-level tree, whose references are "
+                                    "instances); ask the InstancedBvh, or its meshes' trees");
+}
 
 /// One immutable version of a tree, with the views made of it on first use (thread-safe).
 class TreeVersion {

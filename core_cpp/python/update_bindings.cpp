@@ -17,6 +17,7 @@ namespace {
 
 nb::dict update(PyBvh& self, const Triangles& tris, const std::optional<Spheres>& spheres, const UpdateConfig& config) {
     validate(config);
+    require_geometry(self.current()->bvh, "update");
     const GeometryView g = view_of(tris, spheres);
     UpdateStats stats;
     {

@@ -36,9 +36,14 @@ def _camera(scene: Scene, camera) -> _core.Camera:
     if camera is None:  # nothing to frame: bvhlab.defaults' fallback camera
         from .defaults import camera_placement
 
-        framed = scene.primitive_count or scene.is_instanced
-        position, target, up, fov = camera_placement(scene.bounds() if framed else None)
-        camera = Camera(position, target, up, fov)
+        position, target, up, fov = camera_placement(scene.world_bounds())
+        try:
+            camera = Camera(position, target, up, fov)
+        except ValueError as e:  # a scene reaching near ±MAX_COORDINATE: Scene left it without one
+            raise ValueError(
+                f"the default camera, which frames the whole scene, cannot be placed ({e}); "
+                "give one: camera=bvhlab.Camera(position, look_at)"
+            ) from None
     if not isinstance(camera, (Camera, View)):
         raise TypeError(f"camera must be a bvhlab.Camera or bvhlab.View, got {type(camera).__name__}")
     return camera.core()

@@ -105,7 +105,7 @@ class Bvh:
     def __init__(self, core: _core.Bvh, config: BuildConfig):
         self._core = core
         self.config = config
-        self._stats: dict | None = None
+        self._stats: tuple[int, dict] | None = None  # (revision, stats)
         self._node_data: tuple[int, NodeData] | None = None  # (revision, data)
 
     def __repr__(self) -> str:
@@ -123,10 +123,15 @@ class Bvh:
         sah_cost (Σ_internal A/A_root + Σ_leaf A/A_root·N), build_ms, avg_leaf_size, max_leaf_size,
         nodes_per_depth, leaves_per_depth, leaf_size_histogram ([k] = leaves with k primitives),
         memory_bytes, and the build settings."""
-        if self._stats is None:
-            self._stats = self._core.stats()
-            self._stats["threads"] = self.config.threads
-        return dict(self._stats)
+        cached = self._stats
+        revision = self._core.revision
+        if cached is None or cached[0] != revision:
+            stats = self._core.stats()
+            stats["threads"] = self.config.threads
+            if self._core.revision != revision:  # a refit or update on another thread meanwhile
+                return stats  # of one version or the other: not kept, it may be the old one
+            cached = self._stats = (revision, stats)
+        return dict(cached[1])
 
     def node_data(self, *, threads: int = 0) -> NodeData:
         """Every node's box, depth, parent, children, primitives under it, area, SAH term and its
@@ -270,7 +275,6 @@ class Bvh:
         if changes:
             config = config.replace(**changes)
         stats = _core.update_bvh(self._core, triangles, spheres, config.core())
-        self._stats = None
         return UpdateStats(**stats)
 
     def optimize(
@@ -298,7 +302,6 @@ class Bvh:
         if progress is not None and not callable(progress):
             raise TypeError("progress must be callable (fraction -> bool) or None")
         stats = _core.optimize_bvh(self._core, config.core(), progress)
-        self._stats = None
         return OptimizeStats(**stats)
 
     def refit(self, triangles: np.ndarray, spheres: np.ndarray | None = None) -> None:
@@ -309,7 +312,6 @@ class Bvh:
         if spheres is not None:
             spheres = _checks.float32_array("spheres", spheres, (4,))
         self._core.refit(triangles, spheres)
-        self._stats = None
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:

@@ -29,12 +29,22 @@ class InstancedBvh:
     def __init__(self, meshes: list[Bvh], mesh_of: np.ndarray, transforms: np.ndarray, config: BuildConfig):
         self.meshes = meshes
         self.config = config
-        self._core = _make_tlas(meshes, mesh_of, transforms, config.threads)
-        self._placed = (mesh_of, transforms)
+        # (TLAS core, mesh index, transforms) as one attribute: a place() on another thread swaps
+        # it whole, so no reader sees a new TLAS with the old instances (stats keyed by the one,
+        # made of the other, were kept)
+        self._state = _make_tlas(meshes, mesh_of, transforms, config.threads)
         self._stats: tuple | None = None  # (what they were made of, stats)
         self._tlas: tuple | None = None  # (the core TLAS, it as a Bvh)
         self._tlas_data: tuple | None = None  # (the TLAS it was made of, NodeData, leaf_first, refs)
         self._analysed: tuple | None = None  # (_analysis_key(), TwoLevelNodeData)
+
+    @property
+    def _core(self) -> _core.TwoLevel:
+        return self._state[0]
+
+    @property
+    def _placed(self) -> tuple[np.ndarray, np.ndarray]:
+        return self._state[1], self._state[2]
 
     def __repr__(self) -> str:
         s = self.stats
@@ -48,10 +58,13 @@ class InstancedBvh:
         (two_level_stats.instanced_stats): primitives and triangles stored (each mesh once) and
         flattened (once per instance), nodes, height, memory_bytes, sah_cost (two-level), per-mesh
         lists (mesh_primitives, mesh_instances, mesh_sah_cost, ...) and the meshes' build method."""
-        key = (id(self._core), tuple(m.revision for m in self.meshes), tuple(id(m) for m in self.meshes))
+        core, mesh_of, _ = self._state
+        meshes = list(self.meshes)
+        # the core itself (compared by identity), not its id(): a freed TLAS's id may be a new one's
+        key = (core, tuple(m.revision for m in meshes), tuple(id(m) for m in meshes))
         if self._stats is None or self._stats[0] != key:
-            lo, hi = self.world_boxes()
-            self._stats = (key, instanced_stats(self._core.stats(), self.meshes, self._placed[0], lo, hi))
+            lo, hi = core.world_boxes()
+            self._stats = (key, instanced_stats(core.stats(), meshes, mesh_of, lo, hi))
         return dict(self._stats[1])
 
     @property
@@ -84,12 +97,14 @@ class InstancedBvh:
     def tlas_leaf_instances(self, node: int) -> np.ndarray:
         """The instances TLAS leaf `node` holds (none for an inner node)."""
         _, data, leaf_first, refs = self._tlas_nodes()
+        node = _checks.integer("node", node, 0, len(leaf_first) - 1)  # -1 would be the last node
         first = int(leaf_first[node])
         return refs[first : first + int(data.prim_count[node])] if first >= 0 else refs[:0]
 
     def tlas_leaf_of(self, instance: int) -> int:
         """The TLAS leaf holding `instance` (-1 for an instance of an empty mesh, which no leaf holds)."""
-        return int(self.tlas_leaves_of_instances()[instance])
+        leaves = self.tlas_leaves_of_instances()
+        return int(leaves[_checks.integer("instance", instance, 0, len(leaves) - 1)])  # -1: not the last one
 
     def tlas_leaves_of_instances(self) -> np.ndarray:
         """(N,) int64: the TLAS leaf holding each instance (-1 for an empty mesh's instance)."""
@@ -120,7 +135,7 @@ class InstancedBvh:
         return None
 
     def _analysis_key(self) -> tuple:
-        return (id(self._core), tuple(m.revision for m in self.meshes), tuple(id(m) for m in self.meshes))
+        return (self._core, tuple(m.revision for m in self.meshes), tuple(id(m) for m in self.meshes))
 
     def _tlas_nodes(self) -> tuple:
         if self._tlas_data is None or self._tlas_data[0] is not self._core:
@@ -130,8 +145,7 @@ class InstancedBvh:
 
     def place(self, mesh_of: np.ndarray, transforms: np.ndarray) -> None:
         """Move the instances (or change them): a new TLAS over the same meshes' trees."""
-        self._core = _make_tlas(self.meshes, mesh_of, transforms, self.config.threads)
-        self._placed = (mesh_of, transforms)
+        self._state = _make_tlas(self.meshes, mesh_of, transforms, self.config.threads)
 
     def update_mesh(
         self, k: int, triangles: np.ndarray, spheres: np.ndarray | None = None, config=None, **changes
@@ -199,19 +213,25 @@ class InstancedBvh:
         return run_occluded_query(self._core, origins, directions, tmin, tmax, traversal, threads)
 
 
-def _make_tlas(meshes: list[Bvh], mesh_of, transforms, threads: int) -> _core.TwoLevel:
-    """The TLAS with the core's TLAS settings (default_tlas_config) on `threads` threads (0: all)."""
+def _make_tlas(meshes: list[Bvh], mesh_of, transforms, threads: int) -> tuple:
+    """The TLAS with the core's TLAS settings (default_tlas_config) on `threads` threads (0: all),
+    and the checked (mesh index int32 (N,), transforms) it was made of."""
     mesh_of = np.asarray(mesh_of)
     if mesh_of.ndim != 1 or not (np.issubdtype(mesh_of.dtype, np.integer) or mesh_of.size == 0):
         raise ValueError(f"mesh indices must be (N,) integers, got shape {mesh_of.shape} dtype {mesh_of.dtype}")
-    negative = np.flatnonzero(mesh_of < 0)
-    if len(negative):
-        raise ValueError(f"instance {negative[0]} refers to mesh {mesh_of[negative[0]]}, which does not exist")
+    # all of them before the cast: uint32 would wrap -1 or 2^32 to another mesh
+    bad = np.flatnonzero((mesh_of < 0) | (mesh_of >= len(meshes)))
+    if len(bad):
+        raise ValueError(
+            f"instance {bad[0]} refers to mesh {mesh_of[bad[0]]}, but the tree has {len(meshes)} "
+            f"mesh{'es' if len(meshes) != 1 else ''}"
+        )
     transforms = _checks.float32_array("transforms", transforms, (3, 4))
+    mesh_of = np.ascontiguousarray(mesh_of, np.int32)  # as Scene.instances gives them
     core = [m._core for m in meshes]
     config = _core.default_tlas_config()
     config.threads = threads  # the docstring's promise (it was dropped: a TLAS was built on every thread)
-    return _core.build_two_level(core, np.ascontiguousarray(mesh_of, np.uint32), transforms, config)
+    return _core.build_two_level(core, mesh_of.view(np.uint32), transforms, config), mesh_of, transforms
 
 
 def build_instanced(scene, config: BuildConfig, progress: Callable[[float], bool | None] | None) -> InstancedBvh:

@@ -17,10 +17,19 @@ def linear_to_srgb(x: np.ndarray) -> np.ndarray:
 
 
 def to_rgba8(image: np.ndarray) -> np.ndarray:
-    """float (H, W, 3|4) linear → uint8 (H, W, 4) sRGB, alpha kept linear."""
-    image = np.asarray(image, np.float32)
+    """float (H, W, 3|4) linear → uint8 (H, W, 4) sRGB, alpha kept linear. An integer image is
+    refused (TypeError): taken as linear floats, 8-bit values would all clip to white."""
+    image = np.asarray(image)
+    if not np.issubdtype(image.dtype, np.floating):
+        raise TypeError(
+            f"image must hold linear floats in [0, 1], got dtype {image.dtype} "
+            "(for 8-bit values: image.astype(np.float32) / 255, which are sRGB, not linear)"
+        )
+    image = image.astype(np.float32, copy=False)
     if image.ndim != 3 or image.shape[2] not in (3, 4):
         raise ValueError(f"image must be (height, width, 3 or 4), got {image.shape}")
+    if image.shape[0] == 0 or image.shape[1] == 0:  # a PNG has at least one row and column
+        raise ValueError(f"image must be at least 1x1 pixels, got {image.shape[1]}x{image.shape[0]}")
     rgb = linear_to_srgb(image[..., :3])
     alpha = np.clip(image[..., 3:4], 0, 1) if image.shape[2] == 4 else np.ones(image.shape[:2] + (1,), np.float32)
     return (np.concatenate([rgb, alpha], 2) * 255 + 0.5).astype(np.uint8)

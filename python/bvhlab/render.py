@@ -140,10 +140,11 @@ class RenderJob:
         (RenderCancelled); so does Ctrl-C (KeyboardInterrupt). A stopped run keeps every sample
         completed so far, and run() may be called again."""
         target = self.samples_per_pixel if samples is None else _checks.integer("samples", samples, 0, 1 << 16)
+        if progress is not None and not callable(progress):
+            raise TypeError(f"progress must be callable (fraction -> bool) or None, got {type(progress).__name__}")
         if not self._job.run(target, progress):
             raise RenderCancelled(
-                f"render stopped by its progress callable at {self.samples_done} of "
-                f"{self.samples_per_pixel} samples per pixel"
+                f"render stopped by its progress callable at {self.samples_done} of {target} samples per pixel"
             )
 
     def result(

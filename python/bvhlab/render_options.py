@@ -8,6 +8,7 @@ when the options are made."""
 from __future__ import annotations
 
 import dataclasses
+import math
 import numbers
 from dataclasses import dataclass, fields
 
@@ -122,6 +123,8 @@ def _triple(name: str, value) -> tuple[float, float, float]:
         raise TypeError(f"{name} must be three numbers, got {value!r}") from None
     if len(v) != 3:
         raise ValueError(f"{name} must be three numbers, got {len(v)}")
+    if not all(math.isfinite(x) for x in v):  # NaN is bad input (nothing in the core checks a colour)
+        raise ValueError(f"{name} must be finite, got {v}")
     return v
 
 

@@ -77,10 +77,25 @@ class Scene:
         object.__setattr__(self, name, check(self, value) if check else value)
 
     def __post_init__(self):
-        if self.camera is None and (self.primitive_count or any(len(m) for m in self.meshes)):
-            self.camera = default_camera(self.bounds())
+        if self.camera is None:
+            self.camera = self._framing_camera()
         if self.light is None and self.camera is not None:
             self.light = default_light(self.camera)
+
+    def _framing_camera(self) -> Camera | None:
+        """The default camera (`default_camera` of the world's bounds); None when there is nothing
+        to frame (no geometry, or no instance of a mesh with any), or when the geometry reaches so
+        near ±MAX_COORDINATE that a camera framing it would stand outside the coordinate range
+        (valid geometry all the same: it builds and takes rays; `render` asks for a camera)."""
+        if not (self.primitive_count or any(len(m) for m in self.meshes)):
+            return None
+        bounds = self.world_bounds()
+        if bounds is None:
+            return None
+        try:
+            return default_camera(bounds)
+        except ValueError:  # the Camera's own check refused where it would stand
+            return None
 
     def _material_index(self, name: str, value, n: int) -> np.ndarray:
         if value is None:
@@ -193,28 +208,31 @@ class Scene:
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """(lo, hi) of all primitives (of every instance, in the world); raises ValueError for an
         empty scene."""
-        if self.is_instanced:
-            return self._instanced_bounds()
-        box = self._mesh_bounds(0)
+        box = self.world_bounds()
         if box is None:
             raise ValueError("the scene has no geometry")
         return box
 
-    def _instanced_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+    def world_bounds(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """`bounds()`, or None for a scene with no geometry in the world."""
+        return self._instanced_bounds() if self.is_instanced else self._mesh_bounds(0)
+
+    def _instanced_bounds(self) -> tuple[np.ndarray, np.ndarray] | None:
+        # each instance's world box from its mesh's box at once (centre moved, half-extent by |A|:
+        # the box of the moved corners; Arvo 1990), not a Python loop over a million instances
         mesh_of, transforms = self.instances()
         boxes = [self._mesh_bounds(k) for k in range(self.mesh_count)]
-        corners_lo, corners_hi = [], []
-        for k, t in zip(mesh_of, transforms.astype(np.float64)):
-            box = boxes[int(k)]
-            if box is None:
-                continue
-            corners = np.array([[box[(c >> a) & 1][a] for a in range(3)] for c in range(8)])
-            world = corners @ t[:, :3].T + t[:, 3]
-            corners_lo.append(world.min(0))
-            corners_hi.append(world.max(0))
-        if not corners_lo:
-            raise ValueError("the scene has no geometry")
-        return np.min(corners_lo, 0), np.max(corners_hi, 0)
+        has = np.array([b is not None for b in boxes])
+        keep = has[mesh_of] if len(mesh_of) else np.zeros(0, bool)
+        if not keep.any():
+            return None
+        lo = np.array([b[0] if b is not None else np.zeros(3) for b in boxes], np.float64)
+        hi = np.array([b[1] if b is not None else np.zeros(3) for b in boxes], np.float64)
+        k = mesh_of[keep]
+        t = transforms[keep].astype(np.float64)
+        centre = np.einsum("nij,nj->ni", t[:, :, :3], (lo[k] + hi[k]) / 2) + t[:, :, 3]
+        half = np.einsum("nij,nj->ni", np.abs(t[:, :, :3]), (hi[k] - lo[k]) / 2)
+        return (centre - half).min(0), (centre + half).max(0)
 
     def material_table(self) -> np.ndarray:
         """float32 (M, 6): r, g, b, reflective, transparent, ior."""

@@ -53,8 +53,18 @@ def _mesh_tri_material(value) -> list[np.ndarray]:
             raise ValueError(
                 f"mesh_tri_material of mesh {k} must be (T,) integers, got shape {m.shape} dtype {m.dtype}"
             )
-        out.append(np.ascontiguousarray(m, np.int32))
+        out.append(_as_int32(m, f"mesh_tri_material of mesh {k}", "triangle", "material"))
     return out
+
+
+def _as_int32(value: np.ndarray, name: str, item: str, target: str) -> np.ndarray:
+    """Integer `value` as int32, refusing an entry int32 cannot hold (a cast would wrap 2^32 to 0,
+    a silent reference to another mesh or material)."""
+    lo, hi = np.iinfo(np.int32).min, np.iinfo(np.int32).max
+    if value.size and value.dtype.itemsize >= 4 and (value.min() < lo or value.max() > hi):
+        bad = int(np.flatnonzero((value < lo) | (value > hi))[0])
+        raise ValueError(f"{name}: {item} {bad} refers to {target} {value[bad]}, which does not exist")
+    return np.ascontiguousarray(value, np.int32)
 
 
 def _instance_mesh(value) -> np.ndarray | None:
@@ -63,14 +73,14 @@ def _instance_mesh(value) -> np.ndarray | None:
     value = np.asarray(value)
     if value.ndim != 1 or not (np.issubdtype(value.dtype, np.integer) or value.size == 0):
         raise ValueError(f"instance_mesh must be (N,) integers, got shape {value.shape} dtype {value.dtype}")
-    return np.ascontiguousarray(value, np.int32)
+    return _as_int32(value, "instance_mesh", "instance", "mesh")
 
 
 def _instance_transforms(value) -> np.ndarray | None:
     if value is None:
         return None
     value = _checks.float32_array("instance_transforms", value, (3, 4))
-    bad = np.flatnonzero(~np.isfinite(value).reshape(len(value), -1).all(1))
+    bad = np.flatnonzero(~np.isfinite(value).reshape(len(value), 12).all(1))  # 12, not -1: N may be 0
     if len(bad):
         raise ValueError(f"instance {bad[0]}: the transform has a NaN or infinite entry")
     return value

@@ -34,18 +34,20 @@ class TreeFileError(ValueError):
 
 def save_bvh(bvh, path) -> Path:
     """Writes `bvh` to `path` as a whole or not at all (a WriteError leaves what was there)."""
-    nodes = np.ascontiguousarray(bvh.nodes).view(np.uint8)
-    refs = np.ascontiguousarray(bvh.refs, dtype="<u4")
-    stats = bvh.stats
+    # every part from one version of the tree: read one by one, a refit, update or optimize on
+    # another thread could mix two versions into a file that does not load
+    parts = bvh._core.file_parts()
+    nodes = np.ascontiguousarray(parts["nodes"]).view(np.uint8)
+    refs = np.ascontiguousarray(parts["refs"], dtype="<u4")
     header = {
         "format_version": FORMAT_VERSION,
-        "geometry_fingerprint": int(bvh._core.geometry_fingerprint),
-        "triangles": int(stats["triangles"]),
-        "spheres": int(stats["spheres"]),
-        "nodes": int(len(bvh.nodes)),
+        "geometry_fingerprint": int(parts["geometry_fingerprint"]),
+        "triangles": int(parts["triangles"]),
+        "spheres": int(parts["spheres"]),
+        "nodes": int(len(nodes)),
         "refs": int(len(refs)),
         "config": bvh.config.tree_settings(),
-        "build_ms": float(stats["build_ms"]),
+        "build_ms": float(parts["build_ms"]),
     }
     head = json.dumps(header, sort_keys=True).encode()
     digest = hashlib.sha256()

@@ -1,0 +1,32 @@
+"""`bvhlab.save_png` on images it cannot write as asked (probe): an 8-bit image was read as linear
+floats (every pixel clipped to white) and an empty one raised a numpy reshape error or, 0 wide,
+wrote a PNG of width 0 that no reader opens."""
+
+import numpy as np
+import pytest
+from png_reader import read_png  # the tests' own PNG reader (tests/python/png_reader.py)
+
+import bvhlab
+
+
+@pytest.mark.parametrize("dtype", [np.uint8, np.uint16, np.int32, np.bool_])
+def test_an_integer_image_is_refused(tmp_path, dtype):
+    image = np.full((4, 5, 3), 100, dtype) if dtype != np.bool_ else np.ones((4, 5, 3), bool)
+    with pytest.raises(TypeError, match="linear floats"):
+        bvhlab.save_png(image, tmp_path / "x.png")
+    assert not (tmp_path / "x.png").exists()
+
+
+@pytest.mark.parametrize("shape", [(0, 0, 4), (0, 5, 4), (5, 0, 3)])
+def test_an_empty_image_is_refused(tmp_path, shape):
+    with pytest.raises(ValueError, match="at least 1x1"):
+        bvhlab.save_png(np.zeros(shape, np.float32), tmp_path / "x.png")
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_float_images_are_written_as_before(tmp_path):
+    image = np.zeros((2, 3, 4), np.float64)
+    image[..., 0], image[..., 3] = 1.0, 1.0
+    bvhlab.save_png(image, tmp_path / "x.png")
+    rgba = read_png(tmp_path / "x.png")
+    assert rgba.shape[:2] == (2, 3) and (rgba[..., 0] == 255).all() and (rgba[..., 1] == 0).all()
