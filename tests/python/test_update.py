@@ -143,6 +143,7 @@ def test_the_top_is_first_built_over_a_coarser_cut(knot):
     with pytest.raises(ValueError, match="top_coarse_cut_primitives"):
         bvhlab.UpdateConfig(top_coarse_cut_primitives=-1)
 
+
 def test_adaptive_compares_with_a_fresh_builds_cost_where_the_geometry_spreads(knot):
     """Slabs of the knot moved apart by up to 0.6: a fresh build's cost (relative to the root's box,
     which grew) falls below the tree's cost when built, and adaptive must still end within the
