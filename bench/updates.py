@@ -113,7 +113,7 @@ def interleaved(name: str, frames: int, configs: dict) -> None:
     fresh = [bvhlab.build(t, threads=1).stats["sah_cost"] for t in geometry[1:]]
     trees = {label: bvhlab.build(geometry[0], threads=1) for label in ["rebuild", *configs]}
     cpu = dict.fromkeys(trees, 0.0)
-    worst, tops = dict.fromkeys(trees, 0.0), dict.fromkeys(trees, 0)
+    worst, mean, tops = dict.fromkeys(trees, 0.0), dict.fromkeys(trees, 0.0), dict.fromkeys(trees, 0)
     ran: dict = {label: {} for label in trees}
     for k, tris in enumerate(geometry[1:]):
         for label, tree in trees.items():
@@ -122,11 +122,13 @@ def interleaved(name: str, frames: int, configs: dict) -> None:
             s = tree.update(tris, **settings)
             cpu[label] += time.thread_time() - t
             worst[label] = max(worst[label], s.sah_cost / fresh[k])
+            mean[label] += s.sah_cost / fresh[k] / len(fresh)
             tops[label] += s.top_boxes > 0
             ran[label][s.policy] = ran[label].get(s.policy, 0) + 1
     for label in configs:
         print(f"{Path(name).name:14s} {label:12s} share of rebuilding {cpu[label] / cpu['rebuild']:.3f} "
-              f"worst SAH / fresh {worst[label]:.3f} tops {tops[label]:2d} ran {ran[label]}", flush=True)  # fmt: skip
+              f"worst SAH / fresh {worst[label]:.3f} mean {mean[label]:.4f} "
+              f"tops {tops[label]:2d} ran {ran[label]}", flush=True)  # fmt: skip
 
 
 def main() -> None:

@@ -54,6 +54,7 @@ void bind_update(nb::module_& m) {
         .def_rw("top_cut_primitives", &UpdateConfig::top_cut_primitives)
         .def_rw("top_growth", &UpdateConfig::top_growth)
         .def_rw("top_intact_primitives", &UpdateConfig::top_intact_primitives)
+        .def_rw("top_coarse_cut_primitives", &UpdateConfig::top_coarse_cut_primitives)
         .def_rw("measure_fresh", &UpdateConfig::measure_fresh)
         .def(
             "validate", [](const UpdateConfig& self) { validate(self); },

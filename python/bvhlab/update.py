@@ -47,6 +47,9 @@ class UpdateConfig:
     #: adaptive: the top's cut also takes whole a subtree of at most this many primitives that is as
     #: built (just rebuilt, or its cost unchanged: moved as one); 0: never
     top_intact_primitives: int = _CORE_DEFAULTS.top_intact_primitives
+    #: adaptive: the top is first built over subtrees of at most this many primitives (and the
+    #: intact ones whole), over those of top_cut_primitives where that would pass tree_growth
+    top_coarse_cut_primitives: int = _CORE_DEFAULTS.top_coarse_cut_primitives
     #: also build a fresh tree, only to report its SAH cost (UpdateStats.fresh_sah_cost): a build's time
     measure_fresh: bool = _CORE_DEFAULTS.measure_fresh
 
@@ -64,6 +67,9 @@ class UpdateConfig:
         c.top_cut_primitives = _checks.integer("top_cut_primitives", self.top_cut_primitives, 0, 2**32 - 1)
         c.top_growth = _checks.real("top_growth", self.top_growth)
         c.top_intact_primitives = _checks.integer("top_intact_primitives", self.top_intact_primitives, 0, 2**32 - 1)
+        c.top_coarse_cut_primitives = _checks.integer(
+            "top_coarse_cut_primitives", self.top_coarse_cut_primitives, 0, 2**32 - 1
+        )
         if not isinstance(self.measure_fresh, bool):
             raise TypeError(f"measure_fresh must be True or False, got {type(self.measure_fresh).__name__}")
         c.measure_fresh = self.measure_fresh

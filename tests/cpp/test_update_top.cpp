@@ -122,9 +122,51 @@ TEST(UpdateTop, AdaptiveOverIntactSubtreesIsValidAndTheSameOnEveryThreadCount) {
     // the fine cut over the same update: more boxes for the top
     Bvh tree = build_bvh(rest.view());
     UpdateConfig c;
-    c.top_growth = 1.0f, c.tree_growth = 100.0f, c.top_intact_primitives = 0;
+    c.top_growth = 1.0f, c.tree_growth = 100.0f, c.top_intact_primitives = 0, c.top_coarse_cut_primitives = 0;
     NodeCostArray out;
     UpdateStats fine;
     update_bvh(tree, subtree_costs(tree), moved.view(), c, out, &fine);
     EXPECT_GT(fine.top_boxes, 2 * stats[0].top_boxes);
+}
+
+TEST(UpdateTop, TheCoarseCutIsTriedFirstAndTheFineOneWhereItWouldPassTreeGrowth) {
+    const Scene rest = spheres(false), moved = spheres(true);
+    const Bvh tree = build_bvh(rest.view());
+    const NodeCostArray built = subtree_costs(tree);
+    // adaptive's goal: the root's cost when built, kept as A·cost where the root grew (update_bvh.cpp)
+    const double a0 = node_box(tree.nodes[0]).half_area(),
+                 a1 = node_box(refitted(tree, moved.view()).nodes[0]).half_area();
+    const double goal = built[0] * (a1 > a0 ? a0 / a1 : 1.0);
+    auto update = [&](std::uint32_t coarse, float tree_growth, unsigned threads, UpdateStats& s) {
+        Bvh t = tree;
+        t.config.threads = threads;
+        UpdateConfig c;  // the top always rebuilt; no intact subtrees: the coarse cut by size alone
+        c.top_growth = 1.0f, c.tree_growth = tree_growth, c.top_intact_primitives = 0;
+        c.top_coarse_cut_primitives = coarse;
+        NodeCostArray out;
+        Bvh u = update_bvh(t, built, moved.view(), c, out, &s);
+        check_tree(u, moved.view(), tree.config.max_leaf_size);
+        EXPECT_NEAR(s.sah_cost, sah_cost(u), 1e-4 * s.sah_cost);
+        return u;
+    };
+    UpdateStats fine, coarse, coarse4, fallback;
+    // subtrees of up to 1,024 primitives (a sphere's): a top over few boxes, dearer than the fine one
+    const std::uint32_t kCoarse = 1024;
+    update(0, 100.0f, 1, fine);
+    const Bvh one = update(kCoarse, 100.0f, 1, coarse), four = update(kCoarse, 100.0f, 4, coarse4);
+    ASSERT_EQ(fine.policy, UpdatePolicy::Partial);
+    ASSERT_EQ(coarse.policy, UpdatePolicy::Partial);
+    EXPECT_LT(2 * coarse.top_boxes, fine.top_boxes);  // fewer boxes
+    // the same on every thread count
+    EXPECT_EQ(coarse.top_boxes, coarse4.top_boxes);
+    ASSERT_EQ(one.nodes.size(), four.nodes.size());
+    EXPECT_EQ(std::memcmp(one.nodes.data(), four.nodes.data(), one.nodes.size() * sizeof(BvhNode)), 0);
+    // a tree_growth between what the two tops reach: the coarse top would pass it, so the fine one runs
+    ASSERT_GT(coarse.sah_cost, fine.sah_cost);
+    ASSERT_GT(fine.sah_cost, goal);
+    const double between = 0.5 * (coarse.sah_cost + fine.sah_cost) / goal;
+    update(kCoarse, float(between), 1, fallback);
+    EXPECT_EQ(fallback.policy, UpdatePolicy::Partial);
+    EXPECT_EQ(fallback.top_boxes, fine.top_boxes);
+    EXPECT_NEAR(fallback.sah_cost, fine.sah_cost, 1e-6 * fine.sah_cost);
 }

@@ -114,7 +114,7 @@ def test_the_top_takes_slabs_that_moved_as_one_whole(knot):
     moved = knot.copy()
     moved[:, :, 1] += (0.3 * np.sin(3.0 * slab + 1.0)).astype(np.float32)[:, None]
     moved = np.ascontiguousarray(moved)
-    fine = bvhlab.build(knot).update(moved, top_growth=1.0, top_intact_primitives=0)
+    fine = bvhlab.build(knot).update(moved, top_growth=1.0, top_intact_primitives=0, top_coarse_cut_primitives=0)
     tree = bvhlab.build(knot)
     # tree_growth high: the coarse top is kept whatever it costs (else the fine one may be taken)
     stats = tree.update(moved, top_growth=1.0, tree_growth=100.0, top_intact_primitives=1024)
@@ -123,6 +123,25 @@ def test_the_top_takes_slabs_that_moved_as_one_whole(knot):
     _expect_valid_with_fresh_hits(tree, moved, seed=6)
     with pytest.raises(ValueError, match="top_intact_primitives"):
         bvhlab.UpdateConfig(top_intact_primitives=-1)
+
+
+def test_the_top_is_first_built_over_a_coarser_cut(knot):
+    """top_coarse_cut_primitives: the top's first try is over subtrees of up to that many primitives
+    (fewer boxes than the fine cut's); the tree stays valid with a fresh build's hits and costs what
+    the stats say; 0 leaves the fine cut alone. A negative count is refused."""
+    slab = np.minimum(5, ((knot[:, 0, 0] - knot[:, 0, 0].min()) / np.ptp(knot[:, 0, 0]) * 6).astype(int))
+    moved = knot.copy()
+    moved[:, :, 2] += (0.02 * np.sin(7.0 * knot[:, :, 0] + slab[:, None])).astype(np.float32)
+    moved = np.ascontiguousarray(moved)
+    only = {"target_growth": 1.0, "top_growth": 1.0, "tree_growth": 100.0, "top_intact_primitives": 0}
+    fine = bvhlab.build(knot).update(moved, **only, top_coarse_cut_primitives=0)
+    tree = bvhlab.build(knot)
+    stats = tree.update(moved, **only, top_coarse_cut_primitives=64)
+    assert fine.policy == stats.policy == "partial" and 1 < 2 * stats.top_boxes < fine.top_boxes
+    assert stats.sah_cost == pytest.approx(tree.stats["sah_cost"], rel=1e-4)
+    _expect_valid_with_fresh_hits(tree, moved, seed=7)
+    with pytest.raises(ValueError, match="top_coarse_cut_primitives"):
+        bvhlab.UpdateConfig(top_coarse_cut_primitives=-1)
 
 
 def test_adaptive_compares_with_a_fresh_builds_cost_where_the_geometry_spreads(knot):

@@ -91,6 +91,18 @@ struct UpdateConfig {
     /// generated crowd to 0.24-0.26 but the wave to 0.40 (docs/design.md has the others). 64 is the
     /// default: better on three animations, even on the fourth.
     std::uint32_t top_intact_primitives = 64;
+    /// adaptive: where the top's first cut (top_cut_primitives, the intact subtrees whole) is
+    /// dense, more than 0.1 boxes per primitive, it is taken again with subtrees of at most this
+    /// many primitives; the fine cut alone stays the fallback where that top would leave the tree
+    /// past tree_growth. 0 (or at most top_cut_primitives): never. On the waves no subtree is as
+    /// built but the rebuilt parts, and the top's build over their ~40K boxes (0.15-0.17 a
+    /// primitive; the crowds' 0.02-0.06, whose tops stay as they were) was the largest part of an
+    /// update. Thread CPU time against rebuilding every frame (helper adaptive8, 0 → 24;
+    /// bench/updates.py --interleaved, four rounds; share / worst SAH ÷ fresh): the generated
+    /// wave 0.345-0.378 → 0.302-0.332 / 1.060 → 1.068, wave_anim.blend's frames 0.369-0.396 →
+    /// 0.306-0.337 / 1.059 → 1.062, the crowds the same trees; 16 and 32 were dearer, 48 ran
+    /// more tops (docs/design.md).
+    std::uint32_t top_coarse_cut_primitives = 24;
     /// Also build a fresh tree over the geometry, only to report its SAH cost (UpdateStats::
     /// fresh_sah_cost): on demand, as it costs a build.
     bool measure_fresh = false;

@@ -45,6 +45,14 @@ double restructure(Bvh& tree, NodeCostArray& built, const NodeCosts& now, const 
     return subtree_costs(tree)[0];  // a root of zero area: its cost counts nodes
 }
 
+/// The boxes per primitive above which adaptive's first cut is coarsened to top_coarse_cut_
+/// primitives (update.h). The cut of top_cut_primitives with the intact subtrees whole held, per
+/// primitive, 0.152-0.165 boxes on the waves (no subtree as built but the rebuilt parts) and
+/// 0.024-0.061 on the crowds (bench/updates.py's four animations, every top of 23 frames): the
+/// top's build costs about as much per box as a build per primitive, so only the dense cuts are
+/// worth coarsening, and the crowds' tops stay as they were (coarser, they cost more SAH).
+constexpr double kDenseCut = 0.1;
+
 /// Adaptive past target_growth (its caller's check), after a refit whose measured costs are
 /// `now`: first the subtrees that take most of the excess off per primitive are rebuilt from their
 /// primitives (subtrees_by_excess: Yoon, Curtis and Manocha 2007 restructure only where culling
@@ -72,21 +80,26 @@ UpdatePolicy adaptive(Bvh& tree, NodeCostArray& built, const NodeCosts& now, con
     stats.subtrees_rebuilt = static_cast<std::uint32_t>(parts.size()), stats.primitives_rebuilt = primitives_in(parts);
     if (config.top_cut_primitives > 0 && sah > config.top_growth * goal) {
         const PartedTree parted(tree, now, parts, &built);
-        // first over the cut with the intact subtrees whole (top_intact_primitives: fewer boxes);
-        // over the fine cut where that top would leave the tree past tree_growth (a full rebuild
-        // otherwise: the top over boxes weighs a box of 64 primitives as one of 5)
-        for (const bool coarse : {true, false}) {
-            if (coarse && config.top_intact_primitives <= config.top_cut_primitives) continue;  // no coarser cut
-            const std::vector<PartNode> cut =
-                top_cut(parted, config.top_cut_primitives, coarse ? config.top_intact_primitives : 0u);
-            if (cut.size() <= 1) continue;
-            const CutInfo info = cut_info(parted, cut);
-            const Bvh top = built_top(tree.config, info);
-            if (coarse && top_sah_cost(top, info) > config.tree_growth * goal) continue;
-            if (rebuild_top(tree, built, parted, cut, info, top, sah)) {
-                stats.top_boxes = std::uint32_t(cut.size());
-                break;
+        // first over a coarser cut: the intact subtrees of top_intact_primitives whole, and where
+        // that cut is still dense (the waves: no subtree as built but the parts), subtrees of
+        // top_coarse_cut_primitives; over the fine cut of top_cut_primitives alone where that top
+        // would leave the tree past tree_growth (a full rebuild otherwise)
+        const std::uint32_t fine = config.top_cut_primitives;
+        for (const bool first : {true, false}) {
+            std::vector<PartNode> cut = top_cut(parted, fine, first ? config.top_intact_primitives : 0u);
+            bool coarser = first && config.top_intact_primitives > fine;
+            if (first && config.top_coarse_cut_primitives > fine && double(cut.size()) > kDenseCut * now.count[0])
+                cut = top_cut(parted, config.top_coarse_cut_primitives, config.top_intact_primitives), coarser = true;
+            if (cut.size() > 1) {
+                const CutInfo info = cut_info(parted, cut);
+                const Bvh top = built_top(tree.config, info);
+                if (coarser && top_sah_cost(top, info) > config.tree_growth * goal) continue;
+                if (rebuild_top(tree, built, parted, cut, info, top, sah)) {
+                    stats.top_boxes = std::uint32_t(cut.size());
+                    break;
+                }
             }
+            if (!coarser) break;  // the fine cut: tried once
         }
     }
     if (stats.top_boxes == 0) splice_parts(tree, built, parts);  // the top rebuild splices them itself
