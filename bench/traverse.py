@@ -38,8 +38,6 @@ PEERS = [  # (label, bvh_bench spec); Embree MEDIUM first: the others are compar
         "bvhlab wide, batch: Bvh.intersect / Bvh.occluded's entry point (intersect_batch, one thread)",
         "bvhlab:batch=1",
     ),
-    ("bvhlab wide, quantised nodes (WideLayout::Quantised: 8-bit planes, 128-byte nodes)", "bvhlab:wide=q"),
-    ("bvhlab wide, quantised nodes, batch", "bvhlab:batch=1,wide=q"),
     ("bvhlab wide (default tree, optimised: 25 batches of reinsertion, Bvh.optimize)", "bvhlab:opt=25"),
     ("bvhlab stack (default tree)", "bvhlab:query=stack"),
     ("bvhlab stackless (default tree)", "bvhlab:query=stackless"),

@@ -2,8 +2,7 @@
 // or any hit for shadow rays: occluded) through the wide tree (the fastest CPU traversal) or the
 // traversal named by query=. Spec options, comma separated (BuildConfig's fields): method=, axis=,
 // bins=, span=box|centroids, leaf= (max leaf size), block= (sah_block), trav= and isect= (the
-// SAH's costs), alpha=, budget=, unsplit=0|1 (method sbvh); query=stack|stackless|wide; wide=q builds the wide
-// tree with quantised nodes (wide_bvh.h WideQNode); batch=1 traces each set by the
+// SAH's costs), alpha=, budget=, unsplit=0|1 (method sbvh); query=stack|stackless|wide; batch=1 traces each set by the
 // batch queries users call (intersect_batch, occluded_batch: checked, scaled, grouped by octant)
 // on one thread rather than ray by ray; opt=N
 // optimises the built tree by reinsertion for at
@@ -23,9 +22,9 @@
 namespace bench {
 namespace {
 
-/// The traversal of query= in `options` (wide without one), whether batch=1 is there and the wide
-/// tree's layout (wide=q: quantised), all taken out of `options`.
-bvhlab::Traversal take_query(std::string& options, bool& batch, bvhlab::WideLayout& layout) {
+/// The traversal of query= in `options` (wide without one) and whether batch=1 is there, both
+/// taken out of `options`.
+bvhlab::Traversal take_query(std::string& options, bool& batch) {
     std::stringstream ss(options);
     std::string rest;
     bvhlab::Traversal query = bvhlab::Traversal::Wide;
@@ -33,8 +32,6 @@ bvhlab::Traversal take_query(std::string& options, bool& batch, bvhlab::WideLayo
     for (std::string kv; std::getline(ss, kv, ',');) {
         if (kv.rfind("query=", 0) == 0) query = bvhlab::parse_traversal(kv.substr(6));
         else if (kv.rfind("batch=", 0) == 0) batch = kv.substr(6) != "0";
-        else if (kv.rfind("wide=", 0) == 0)
-            layout = kv.substr(5) == "q" ? bvhlab::WideLayout::Quantised : bvhlab::WideLayout::Float;
         else rest += (rest.empty() ? "" : ",") + kv;
     }
     options = rest;
@@ -76,7 +73,7 @@ class BvhlabPeer : public Peer {
 public:
     BvhlabPeer(const std::string& options, unsigned threads) : options_(options) {
         std::string build_options = options;
-        query_ = take_query(build_options, batch_, layout_);
+        query_ = take_query(build_options, batch_);
         config_ = parse_options(build_options, threads);
     }
     std::string name() const override { return "bvhlab " + (options_.empty() ? std::string("defaults") : options_); }
@@ -89,7 +86,7 @@ public:
         }
     }
     TreeInfo info() const override { return {bvhlab::sah_cost(bvh_), bvh_.nodes.size(), bvh_.refs.size(), digest()}; }
-    void prepare_trace() override { wide_ = bvhlab::make_wide(bvh_, layout_); }
+    void prepare_trace() override { wide_ = bvhlab::make_wide(bvh_); }
     void prepare_rays(const Rays& rays) override {
         if (!batch_) return;
         origins_.resize(3 * rays.count()), directions_.resize(3 * rays.count());
@@ -143,7 +140,6 @@ private:
     std::string options_;
     bvhlab::Traversal query_;
     bool batch_ = false;
-    bvhlab::WideLayout layout_ = bvhlab::WideLayout::Float;
     std::vector<float> origins_, directions_;  ///< batch=1: the ray set's, split (prepare_rays)
     Options config_;
     bvhlab::Bvh bvh_;

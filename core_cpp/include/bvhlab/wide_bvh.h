@@ -31,40 +31,6 @@ struct alignas(64) WideNode {
 };
 static_assert(sizeof(WideNode) == 256);
 
-/// The layout of a WideBvh's inner nodes (make_wide): WideNode (float planes, 256 bytes) or
-/// WideQNode (8-bit planes, 128 bytes).
-enum class WideLayout : std::uint8_t { Float, Quantised };
-
-/// A WideNode with its child boxes quantised to 8 bits a plane (Ylitie, Karras and Laine 2017,
-/// "Efficient incoherent ray traversal on GPUs through compressed wide BVHs", §3.2; Embree's
-/// quantised nodes): plane p of axis a is decode_plane(q, scale[a], origin[a]) = q·scale + origin,
-/// the scale a power of two so that the product is exact and the sum rounds once (a fused
-/// multiply-add gives the same bits), and each q rounded outward so that every decoded box holds
-/// its child's true box (make_wide checks it). 128 bytes, two cache lines: the planes, origin and
-/// used slots in the first, the child words (32-byte aligned, as WideNode's) and scales in the
-/// second.
-struct alignas(64) WideQNode {
-    std::uint8_t q[48];       ///< lo_x[8], hi_x[8], lo_y[8], hi_y[8], lo_z[8], hi_z[8]: WideNode's order
-    float origin[3];          ///< the node's box's low corner
-    std::uint32_t used;       ///< bit k set where slot k holds a child (an unused slot's planes say nothing)
-    std::uint32_t child[8];   ///< as WideNode::child
-    float scale[3];           ///< a power of two per axis
-    std::uint32_t unused[5];  ///< keeps the node two whole lines
-    bool leaf(int k) const { return (child[k] & kLeafChild) != 0; }
-    std::uint32_t line(int k) const { return child[k] & ~kLeafChild; }
-};
-static_assert(sizeof(WideQNode) == 128);
-
-/// A quantised plane's value: q·scale + origin, as the kernels compute it (an exact product, one
-/// rounding).
-float decode_plane(std::uint8_t q, float scale, float origin);
-
-/// WideQNode `out` for the boxes of `node` (its child words copied): per axis the origin is the
-/// low corner of the used slots' union and the scale the least power of two with 255·scale over
-/// the union's extent (at least 2^-126, so that no product is subnormal); each low plane's q the
-/// largest whose decoded value is at most the true plane, each high plane's the least at least it.
-void quantise_node(const WideNode& node, WideQNode& out);
-
 /// Four primitives of one kind, structure of arrays (192 bytes, three cache lines):
 /// v[vertex][axis][lane]. Triangles: the three vertices, as PackedPrim has them (the watertight
 /// test reads vertices, so the kernel loads each axis by the ray's axis order). Spheres: centre in
@@ -96,10 +62,8 @@ inline constexpr std::uint32_t kPacketLines = sizeof(PrimPacket) / sizeof(WideLi
 struct WideBvh {
     BigVector<WideLine> lines;  ///< root node at line 0; none when the tree is empty
     std::uint32_t node_count = 0, packet_count = 0;
-    WideLayout layout = WideLayout::Float;  ///< node(line) for Float, qnode(line) for Quantised
 
     const WideNode& node(std::uint32_t line) const { return *reinterpret_cast<const WideNode*>(&lines[line]); }
-    const WideQNode& qnode(std::uint32_t line) const { return *reinterpret_cast<const WideQNode*>(&lines[line]); }
     const PrimPacket& packet(std::uint32_t line) const { return *reinterpret_cast<const PrimPacket*>(&lines[line]); }
 };
 
@@ -108,8 +72,7 @@ struct WideBvh {
 /// cost-optimal collapse of Ylitie et al. 2017; each wide node holds up to eight children). A
 /// tree that is one leaf gets a root node with that leaf as its only child, so its box is tested
 /// as every other traversal tests it.
-/// `layout`: WideLayout::Quantised quantises every node's boxes (WideQNode).
-WideBvh make_wide(const Bvh& bvh, WideLayout layout = WideLayout::Float);
+WideBvh make_wide(const Bvh& bvh);
 
 /// The TLAS's wide copy (tlas.h Tlas::wide): the same collapse over a tree of instances, without
 /// merging (each binary leaf stays a child of its own; a leaf child is kLeafChild | the binary

@@ -120,17 +120,6 @@ struct L8 {
     L4 a, b;
     static L8 load(const float* p) { return {L4::load(p), L4::load(p + 4)}; }
     static L8 splat(float s) { return {L4::splat(s), L4::splat(s)}; }
-    /// Eight bytes as floats (exact: each below 2^8).
-    static L8 load_q(const std::uint8_t* p) {
-#ifdef BVHLAB_SSE
-        const __m128i bytes = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)), zero = _mm_setzero_si128();
-        const __m128i words = _mm_unpacklo_epi8(bytes, zero);
-        return {{_mm_cvtepi32_ps(_mm_unpacklo_epi16(words, zero))}, {_mm_cvtepi32_ps(_mm_unpackhi_epi16(words, zero))}};
-#else
-        return {L4::set(float(p[0]), float(p[1]), float(p[2]), float(p[3])),
-                L4::set(float(p[4]), float(p[5]), float(p[6]), float(p[7]))};
-#endif
-    }
     void store(float* p) const { a.store(p), b.store(p + 4); }
     float lane(int k) const {
         alignas(32) float f[8];
@@ -162,8 +151,7 @@ inline std::int32_t child_key(float middle, int lane) {
 /// index[0, h - 1) and t[0, h - 1) (from t0, the entries), ordered by child_key
 /// largest first (the farthest first); returns the nearest's slot. An insertion sort of the
 /// entered slots only, two (the most common case) by one comparison without a loop.
-template <class Node>
-inline int push_children(const Node& node, L8 t0, L8 t1, int mask, std::uint32_t* index, float* t) {
+inline int push_children(const WideNode& node, L8 t0, L8 t1, int mask, std::uint32_t* index, float* t) {
     alignas(32) float entry[8], exit[8];
     t0.store(entry), t1.store(exit);
     auto key_of = [&](int slot) { return child_key(entry[slot] + exit[slot], slot); };
@@ -191,14 +179,12 @@ inline int push_children(const Node& node, L8 t0, L8 t1, int mask, std::uint32_t
 }
 
 /// The children of `node` in `mask` to index[0, popcount(mask)), in slot order.
-template <class Node>
-inline void push_entered(const Node& node, int mask, std::uint32_t* index) {
+inline void push_entered(const WideNode& node, int mask, std::uint32_t* index) {
     for (; mask; mask &= mask - 1) *index++ = node.child[__builtin_ctz(unsigned(mask))];
 }
 
 /// Bit k set where slot k of `node` is a leaf (kLeafChild).
-template <class Node>
-inline int leaf_bits(const Node& node) {
+inline int leaf_bits(const WideNode& node) {
 #ifdef BVHLAB_SSE
     const auto* f = reinterpret_cast<const float*>(node.child);
     return _mm_movemask_ps(_mm_load_ps(f)) | _mm_movemask_ps(_mm_load_ps(f + 4)) << 4;
@@ -215,11 +201,6 @@ inline int leaf_bits(const Node& node) {
 
 #ifndef BVHLAB_RECORDED_WIDE_WALK
 namespace {
-/// The kernels' view of `wide`.
-inline WideView view_of(const WideBvh& wide) {
-    return {wide.lines.empty() ? nullptr : wide.lines.data()->bytes, wide.layout == WideLayout::Quantised};
-}
-
 /// A hit of the wide walk made what every entry point returns: a miss's t is infinity; finish_hit's
 /// work is a sphere's u, v, so a triangle's hit (or a miss) skips the call.
 inline void finish_wide_hit(const Bvh& bvh, const Ray& ray, Hit& hit) {
@@ -229,7 +210,7 @@ inline void finish_wide_hit(const Bvh& bvh, const Ray& ray, Hit& hit) {
 }  // namespace
 
 Hit intersect_wide(const WideBvh& wide, const Bvh& bvh, const Ray& ray, std::uint32_t* nodes_visited) {
-    const WideView view = view_of(wide);
+    const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
 #if defined(BVHLAB_AVX2_KERNELS)
     Hit hit = active_isa() == Isa::Avx2 ? avx2::intersect_wide_kernel(view, ray, nodes_visited)
                                         : portable::intersect_wide_kernel(view, ray, nodes_visited);
@@ -256,7 +237,7 @@ void group_by_octant(const Ray* rays, std::uint32_t count, std::uint32_t* order,
 
 void intersect_wide_batch(const WideBvh& wide, const Bvh& bvh, const Ray* rays, std::size_t count, Hit* hits,
                           std::uint32_t* nodes_visited) {
-    const WideView view = view_of(wide);
+    const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
     std::uint32_t order[kWideBatch], start[9];
     for (std::size_t begin = 0; begin < count; begin += kWideBatch) {
         const auto n = std::uint32_t(std::min<std::size_t>(kWideBatch, count - begin));
@@ -275,7 +256,7 @@ void intersect_wide_batch(const WideBvh& wide, const Bvh& bvh, const Ray* rays, 
 }
 
 void occluded_wide_batch(const WideBvh& wide, const Ray* rays, std::size_t count, bool* occluded) {
-    const WideView view = view_of(wide);
+    const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
     std::uint32_t order[kWideBatch], start[9];
     for (std::size_t begin = 0; begin < count; begin += kWideBatch) {
         const auto n = std::uint32_t(std::min<std::size_t>(kWideBatch, count - begin));
@@ -291,7 +272,7 @@ void occluded_wide_batch(const WideBvh& wide, const Ray* rays, std::size_t count
 }
 
 bool occluded_wide(const WideBvh& wide, const Ray& ray) {
-    const WideView view = view_of(wide);
+    const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
 #if defined(BVHLAB_AVX2_KERNELS)
     if (active_isa() == Isa::Avx2) return avx2::occluded_wide_kernel(view, ray);
 #endif
@@ -306,7 +287,7 @@ void start_tlas_walk(const Ray& ray, TlasWalk& walk) {
 }
 
 std::uint32_t next_tlas_leaf(const WideBvh& wide, TlasWalk& walk, float hit_t, WideRecorder* record) {
-    const WideView view = view_of(wide);
+    const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
 #if defined(BVHLAB_AVX2_KERNELS)
     if (active_isa() == Isa::Avx2) return avx2::next_tlas_leaf(view, walk, hit_t, record);
 #endif

@@ -46,10 +46,6 @@ struct L8 {
     __m256 v;
     static L8 load(const float* p) { return {_mm256_loadu_ps(p)}; }
     static L8 splat(float s) { return {_mm256_set1_ps(s)}; }
-    /// Eight bytes zero-extended and converted (exact: each below 2^8).
-    static L8 load_q(const std::uint8_t* p) {
-        return {_mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p))))};
-    }
     void store(float* p) const { _mm256_storeu_ps(p, v); }
     /// Lane k by a permute, not a store and a reload (which waits on the store).
     float lane(int k) const { return _mm256_cvtss_f32(_mm256_permutevar8x32_ps(v, _mm256_set1_epi32(k))); }
@@ -72,8 +68,7 @@ inline __m256i exchange(__m256i v, __m256i partner) {
 /// the two keys (b, child_key of every slot) compared as scalars, and the farther one's child
 /// written by the same permutes as the sorting network writes it, so that the stack holds what
 /// the network would have written (tinybvh 1.9 BVH8_CPU's BVH8_2VALIDNODES case).
-template <class Node>
-inline int push_two(const Node& node, L8 t0, __m256i b, int mask, std::uint32_t* index, float* t) {
+inline int push_two(const WideNode& node, L8 t0, __m256i b, int mask, std::uint32_t* index, float* t) {
     const int low = __builtin_ctz(unsigned(mask)), high = 31 - __builtin_clz(unsigned(mask));
     const int key_low = _mm256_cvtsi256_si32(_mm256_permutevar8x32_epi32(b, _mm256_set1_epi32(low)));
     const int key_high = _mm256_cvtsi256_si32(_mm256_permutevar8x32_epi32(b, _mm256_set1_epi32(high)));
@@ -92,8 +87,7 @@ inline int push_two(const Node& node, L8 t0, __m256i b, int mask, std::uint32_t*
 /// sorted largest first by the 19-comparator, depth-6 network for eight inputs (Knuth, TAOCP
 /// vol. 3, 5.3.4), and the children permuted into that order by two vpermd; the nearest's slot
 /// from a minimum across lanes, which does not wait for the sort.
-template <class Node>
-inline int push_children(const Node& node, L8 t0, L8 t1, int mask, std::uint32_t* index, float* t) {
+inline int push_children(const WideNode& node, L8 t0, L8 t1, int mask, std::uint32_t* index, float* t) {
     const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
     // by shifts rather than masks: the walk's registers full, the compiler made each mask anew
     // at every node (three instructions each); (b >> 31) & INT_MAX is 0 or -1 shifted right by
@@ -142,8 +136,7 @@ constexpr CompressTable kCompress;
 
 /// push_entered (traverse_wide.cpp says what it writes) by one permute of the child words: all
 /// eight written, the entered first.
-template <class Node>
-inline void push_entered(const Node& node, int mask, std::uint32_t* index) {
+inline void push_entered(const WideNode& node, int mask, std::uint32_t* index) {
     const __m256i order = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(static_cast<long long>(kCompress.lanes[mask])));
     const __m256i children = _mm256_load_si256(reinterpret_cast<const __m256i*>(node.child));
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(index), _mm256_permutevar8x32_epi32(children, order));
@@ -151,8 +144,7 @@ inline void push_entered(const Node& node, int mask, std::uint32_t* index) {
 
 /// Bit k set where slot k of `node` is a leaf: the child words' bit 31 (kLeafChild) is their
 /// sign bit as floats.
-template <class Node>
-inline int leaf_bits(const Node& node) {
+inline int leaf_bits(const WideNode& node) {
     return _mm256_movemask_ps(_mm256_load_ps(reinterpret_cast<const float*>(node.child)));
 }
 

@@ -34,8 +34,7 @@ bool leaf_occludes(const unsigned char* at, const Query& q) {
 /// pushed entry passes.
 /// One copy per octant, each with its plane offsets as constants (tinybvh 1.9's
 /// IsOccludedOctant). The root is a node even in a tree of one leaf (make_wide).
-/// Node: WideNode, or WideQNode in a quantised tree.
-template <int kOctant, class Node = WideNode>
+template <int kOctant>
 bool any_hit_nodes(const unsigned char* lines, const Query& q) {
     const L8 origin[3] = {L8::splat(q.o[0]), L8::splat(q.o[1]), L8::splat(q.o[2])};
     const L8 neg_inv[3] = {L8::splat(q.neg_inv[0]), L8::splat(q.neg_inv[1]), L8::splat(q.neg_inv[2])};
@@ -44,16 +43,16 @@ bool any_hit_nodes(const unsigned char* lines, const Query& q) {
     std::uint32_t stack[Stack::kSize];
     std::uint32_t sp = 0, cur = 0;
     for (;;) {
-        const Node& node = *reinterpret_cast<const Node*>(lines + std::size_t(cur) * sizeof(WideLine));
+        const WideNode& node = *reinterpret_cast<const WideNode*>(lines + std::size_t(cur) * sizeof(WideLine));
+        const float* f = node.lo_x;
         __builtin_prefetch(node.child);  // as enter_children: the child words, and the lines after
         const char* after = reinterpret_cast<const char*>(&node + 1);
         for (int line = 0; line < 6; ++line) __builtin_prefetch(after + 64 * line);
         L8 t0 = L8::load(q.tmin8), t1 = far;
+        for (int a = 0; a < 3; ++a) t0 = raise(t0, (origin[a] - L8::load(f + kPlanes.at[kOctant][a])) * neg_inv[a]);
         for (int a = 0; a < 3; ++a)
-            t0 = raise(t0, (origin[a] - plane_of(node, kPlanes.at[kOctant][a], a)) * neg_inv[a]);
-        for (int a = 0; a < 3; ++a)
-            t1 = lower(t1, (origin[a] - plane_of(node, kPlanes.at[kOctant][3 + a], a)) * neg_inv_far[a]);
-        const int mask = entered_bits(node, t0, t1);
+            t1 = lower(t1, (origin[a] - L8::load(f + kPlanes.at[kOctant][3 + a])) * neg_inv_far[a]);
+        const int mask = le_bits(t0, t1);
         const int leaves = mask & leaf_bits(node), inner = mask ^ leaves;
         if (!leaves && inner) {  // the commonest case: the next node from the node's words, not the stack
             const int rest = inner & (inner - 1);

@@ -7,25 +7,25 @@
 
 /// The closest hits of rays[order[0, n)], all of octant kOctant, to hits[i] (and the count of
 /// wide nodes visited to visited[i], where given) in each ray's own slot i.
-template <int kOctant, class Node = WideNode>
+template <int kOctant>
 void closest_of_octant(const WideView& wide, const Ray* rays, const std::uint32_t* order, std::uint32_t n, Hit* hits,
                        std::uint32_t* visited) {
     for (std::uint32_t j = 0; j < n; ++j) {
         const std::uint32_t i = order[j];
         Hit hit{rays[i].tmax, kNoHit, 0.0f, 0.0f, kNoHit};
-        const std::uint32_t v = traverse_nodes<false, kOctant, Node>(wide, make_query(rays[i]), hit);
+        const std::uint32_t v = traverse_nodes<false, kOctant>(wide, make_query(rays[i]), hit);
         hits[i] = hit;
         if (visited) visited[i] = v;
     }
 }
 
 /// Whether each of rays[order[0, n)], all of octant kOctant, is occluded, to occluded[i].
-template <int kOctant, class Node = WideNode>
+template <int kOctant>
 void occluded_of_octant(const WideView& wide, const Ray* rays, const std::uint32_t* order, std::uint32_t n,
                         bool* occluded) {
     for (std::uint32_t j = 0; j < n; ++j) {
         const std::uint32_t i = order[j];
-        occluded[i] = any_hit_nodes<kOctant, Node>(wide.lines, make_query(rays[i]));
+        occluded[i] = any_hit_nodes<kOctant>(wide.lines, make_query(rays[i]));
     }
 }
 
@@ -37,13 +37,8 @@ void closest_of_batch(const WideView& wide, const Ray* rays, const std::uint32_t
     static constexpr Walk kWalks[8] = {closest_of_octant<0>, closest_of_octant<1>, closest_of_octant<2>,
                                        closest_of_octant<3>, closest_of_octant<4>, closest_of_octant<5>,
                                        closest_of_octant<6>, closest_of_octant<7>};
-    static constexpr Walk kQWalks[8] = {closest_of_octant<0, WideQNode>, closest_of_octant<1, WideQNode>,
-                                        closest_of_octant<2, WideQNode>, closest_of_octant<3, WideQNode>,
-                                        closest_of_octant<4, WideQNode>, closest_of_octant<5, WideQNode>,
-                                        closest_of_octant<6, WideQNode>, closest_of_octant<7, WideQNode>};
-    const Walk* walks = wide.quantised ? kQWalks : kWalks;
     for (int k = 0; k < 8; ++k)
-        if (start[k + 1] > start[k]) walks[k](wide, rays, order + start[k], start[k + 1] - start[k], hits, visited);
+        if (start[k + 1] > start[k]) kWalks[k](wide, rays, order + start[k], start[k + 1] - start[k], hits, visited);
 }
 
 /// occluded for a batch grouped by octant, as closest_of_batch.
@@ -53,11 +48,6 @@ void occluded_of_batch(const WideView& wide, const Ray* rays, const std::uint32_
     static constexpr Walk kWalks[8] = {occluded_of_octant<0>, occluded_of_octant<1>, occluded_of_octant<2>,
                                        occluded_of_octant<3>, occluded_of_octant<4>, occluded_of_octant<5>,
                                        occluded_of_octant<6>, occluded_of_octant<7>};
-    static constexpr Walk kQWalks[8] = {occluded_of_octant<0, WideQNode>, occluded_of_octant<1, WideQNode>,
-                                        occluded_of_octant<2, WideQNode>, occluded_of_octant<3, WideQNode>,
-                                        occluded_of_octant<4, WideQNode>, occluded_of_octant<5, WideQNode>,
-                                        occluded_of_octant<6, WideQNode>, occluded_of_octant<7, WideQNode>};
-    const Walk* walks = wide.quantised ? kQWalks : kWalks;
     for (int k = 0; k < 8; ++k)
-        if (start[k + 1] > start[k]) walks[k](wide, rays, order + start[k], start[k + 1] - start[k], occluded);
+        if (start[k + 1] > start[k]) kWalks[k](wide, rays, order + start[k], start[k + 1] - start[k], occluded);
 }

@@ -193,17 +193,6 @@ void set_slot(WideNode& w, int k, const BvhNode* c) {
 /// packets), then its inner children in slot order (the job of slot 0 pops first); each node
 /// writes its line into its parent's slot when it is laid down. `leaf(n)`: whether binary node n
 /// ends in a leaf slot; `fill(node, n, children, count)` sets the slots of the node collapsed from n.
-/// The lines a node of `layout` takes.
-std::uint32_t node_lines(WideLayout layout) {
-    return layout == WideLayout::Quantised ? sizeof(WideQNode) / sizeof(WideLine) : kNodeLines;
-}
-
-/// The child words of the node at `line`, in wide.layout.
-std::uint32_t* child_words(WideBvh& wide, std::uint32_t line) {
-    if (wide.layout == WideLayout::Quantised) return reinterpret_cast<WideQNode*>(&wide.lines[line])->child;
-    return reinterpret_cast<WideNode*>(&wide.lines[line])->child;
-}
-
 template <class Leaf, class Fill>
 void lay_down(const Collapse& collapse, WideBvh& wide, Leaf leaf, Fill fill) {
     struct Job {
@@ -216,22 +205,15 @@ void lay_down(const Collapse& collapse, WideBvh& wide, Leaf leaf, Fill fill) {
         const Job job = jobs.back();
         jobs.pop_back();
         const auto at = static_cast<std::uint32_t>(wide.lines.size());
-        const std::uint32_t lines = node_lines(wide.layout);
-        if (at > kLeafChild - lines) throw std::length_error("the wide tree needs over 2^31 lines");
-        wide.lines.resize(at + lines);
+        if (at > kLeafChild - kNodeLines) throw std::length_error("the wide tree needs over 2^31 lines");
+        wide.lines.resize(at + kNodeLines);
         ++wide.node_count;
-        if (job.parent_line != kRoot) child_words(wide, job.parent_line)[job.slot] = at;
+        if (job.parent_line != kRoot) reinterpret_cast<WideNode*>(&wide.lines[job.parent_line])->child[job.slot] = at;
         std::uint32_t children[8];
         const int count = collapse.children(job.binary, children);
         WideNode node;
         fill(node, job.binary, children, count);
-        if (wide.layout == WideLayout::Quantised) {
-            WideQNode q;
-            quantise_node(node, q);
-            std::memcpy(&wide.lines[at], &q, sizeof q);
-        } else {
-            std::memcpy(&wide.lines[at], &node, sizeof node);
-        }
+        std::memcpy(&wide.lines[at], &node, sizeof node);
         for (int k = count - 1; k >= 0; --k)
             if (!leaf(children[k])) jobs.push_back({children[k], at, k});
     }
@@ -239,9 +221,8 @@ void lay_down(const Collapse& collapse, WideBvh& wide, Leaf leaf, Fill fill) {
 
 }  // namespace
 
-WideBvh make_wide(const Bvh& bvh, WideLayout layout) {
+WideBvh make_wide(const Bvh& bvh) {
     WideBvh wide;
-    wide.layout = layout;
     if (bvh.empty()) return wide;
     const SubtreeRanges ranges(bvh);
     const Collapse collapse(bvh, ranges);
@@ -252,7 +233,7 @@ WideBvh make_wide(const Bvh& bvh, WideLayout layout) {
     while (!todo.empty()) {
         const std::uint32_t n = todo.back();
         todo.pop_back();
-        lines += node_lines(layout);
+        lines += kNodeLines;
         std::uint32_t children[8];
         const int count = collapse.children(n, children);
         for (int k = 0; k < count; ++k) {

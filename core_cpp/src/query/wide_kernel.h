@@ -10,7 +10,6 @@ namespace bvhlab {
 /// A WideBvh as a plain pointer to its lines (null when the tree is empty).
 struct WideView {
     const unsigned char* lines;
-    bool quantised = false;  ///< the nodes are WideQNodes (WideLayout::Quantised)
 };
 
 /// hit_sphere (ray.h) on lane `lane` of a sphere packet; updates hit (t, ref) as it does.

@@ -59,29 +59,9 @@ void prefetch(const WideView& wide, std::uint32_t child) {
     __builtin_prefetch(p), __builtin_prefetch(p + 64), __builtin_prefetch(p + 128), __builtin_prefetch(p + 192);
 }
 
-/// The node at `line` (a WideNode or, in a quantised tree, a WideQNode).
-template <class Node = WideNode>
-const Node& node_at(const WideView& wide, std::uint32_t line) {
-    return *reinterpret_cast<const Node*>(line_at(wide, line));
-}
-
-/// A node's planes of axis `a` at float offset `at` (kPlanes) as eight floats: a WideNode's as
-/// they are; a WideQNode's decoded as decode_plane (wide_bvh.h) does, the product and then the
-/// sum on every path (the product is exact, so a fused multiply-add would give the same bits),
-/// its bytes at the same offsets as WideNode's floats.
-[[gnu::always_inline]] inline L8 plane_of(const WideNode& node, std::ptrdiff_t at, int) {
-    return L8::load(node.lo_x + at);
-}
-[[gnu::always_inline]] inline L8 plane_of(const WideQNode& node, std::ptrdiff_t at, int a) {
-    return L8::load_q(node.q + at) * L8::splat(node.scale[a]) + L8::splat(node.origin[a]);
-}
-
-/// The slots a box test entered (le_bits of its entries and exits) that hold a child: a
-/// WideQNode's unused slots are marked in `used`, since planes rounded to a grid cannot make a
-/// box that no ray enters (WideNode's are inverted, lo = +inf).
-[[gnu::always_inline]] inline int entered_bits(const WideNode&, L8 t0, L8 t1) { return le_bits(t0, t1); }
-[[gnu::always_inline]] inline int entered_bits(const WideQNode& node, L8 t0, L8 t1) {
-    return le_bits(t0, t1) & int(node.used);
+/// The node at `line`.
+const WideNode& node_at(const WideView& wide, std::uint32_t line) {
+    return *reinterpret_cast<const WideNode*>(line_at(wide, line));
 }
 
 /// Float offsets in a WideNode of the near plane arrays of x, y, z (lo_x = 0, hi_x = 8, ...), then
@@ -124,11 +104,12 @@ constexpr PlaneTable kPlanes;
 /// Inlined into each walk (the closest-hit walk and the TLAS's).
 /// kPrefetch false (the TLAS's walk, next_tlas_leaf): no prefetches, as a TLAS is small enough to
 /// stay in the caches and its leaf words are no lines.
-template <bool kPrefetch = true, class Node = WideNode>
-[[gnu::always_inline]] inline bool enter_children(const WideView& wide, const Node& node, const L8 origin[3],
+template <bool kPrefetch = true>
+[[gnu::always_inline]] inline bool enter_children(const WideView& wide, const WideNode& node, const L8 origin[3],
                                                   const L8 neg_inv[3], const L8 neg_inv_far[3],
                                                   const std::ptrdiff_t* plane, const float* tmin8, float far_limit,
                                                   Stack& stack, std::uint32_t& sp, Entry& cur) {
+    const float* f = node.lo_x;
     // The children's indices are the node's fourth cache line, read only once the box tests say
     // which: started now, its load overlaps the bounds' instead of following them (a second miss
     // in a row where the node was not in the caches; uniform1m random rays +4-5% best of
@@ -143,9 +124,9 @@ template <bool kPrefetch = true, class Node = WideNode>
     }
     // the same order of raises and lowers as hit_box: NaN from 0·inf on a face is ignored
     L8 t0 = L8::load(tmin8), t1 = L8::splat(far_limit);
-    for (int a = 0; a < 3; ++a) t0 = raise(t0, (origin[a] - plane_of(node, plane[a], a)) * neg_inv[a]);
-    for (int a = 0; a < 3; ++a) t1 = lower(t1, (origin[a] - plane_of(node, plane[3 + a], a)) * neg_inv_far[a]);
-    const int mask = entered_bits(node, t0, t1);
+    for (int a = 0; a < 3; ++a) t0 = raise(t0, (origin[a] - L8::load(f + plane[a])) * neg_inv[a]);
+    for (int a = 0; a < 3; ++a) t1 = lower(t1, (origin[a] - L8::load(f + plane[3 + a])) * neg_inv_far[a]);
+    const int mask = le_bits(t0, t1);
     if (!mask) return false;
     if (!(mask & (mask - 1))) {
         const int k = __builtin_ctz(unsigned(mask));
@@ -185,8 +166,7 @@ template <bool kPrefetch = true, class Node = WideNode>
 /// is the plain one.
 /// kOctant: the ray's octant where the caller knows it at compile time (the batch walks,
 /// closest_of_octant below: plane offsets as constants), -1 to read it from the query.
-/// Node: WideNode, or WideQNode in a quantised tree (WideView::quantised).
-template <bool kRecord = false, int kOctant = -1, class Node = WideNode>
+template <bool kRecord = false, int kOctant = -1>
 std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit, WideRecorder* record = nullptr) {
     const L8 origin[3] = {L8::splat(q.o[0]), L8::splat(q.o[1]), L8::splat(q.o[2])};
     // The planes' distances as (origin - plane) · (-1/d), which are hit_box's (plane - origin) ·
@@ -215,8 +195,8 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit, Wid
         } else {
             ++visited;
             [[maybe_unused]] const std::uint32_t line = cur.index, pushed = sp;
-            const bool entered = enter_children(wide, node_at<Node>(wide, cur.index), origin, neg_inv, neg_inv_far,
-                                                plane, q.tmin8, far_limit, stack, sp, cur);
+            const bool entered = enter_children(wide, node_at(wide, cur.index), origin, neg_inv, neg_inv_far, plane,
+                                                q.tmin8, far_limit, stack, sp, cur);
             if constexpr (kRecord) record->node(line, entered ? cur.index : kNoHit, stack.index + pushed, sp - pushed);
             if (entered) continue;
         }
@@ -240,11 +220,7 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit, Wid
     using Walk = bool (*)(const unsigned char*, const Query&);
     static constexpr Walk kWalks[8] = {any_hit_nodes<0>, any_hit_nodes<1>, any_hit_nodes<2>, any_hit_nodes<3>,
                                        any_hit_nodes<4>, any_hit_nodes<5>, any_hit_nodes<6>, any_hit_nodes<7>};
-    static constexpr Walk kQWalks[8] = {any_hit_nodes<0, WideQNode>, any_hit_nodes<1, WideQNode>,
-                                        any_hit_nodes<2, WideQNode>, any_hit_nodes<3, WideQNode>,
-                                        any_hit_nodes<4, WideQNode>, any_hit_nodes<5, WideQNode>,
-                                        any_hit_nodes<6, WideQNode>, any_hit_nodes<7, WideQNode>};
-    return (wide.quantised ? kQWalks : kWalks)[q.octant](wide.lines, q);
+    return kWalks[q.octant](wide.lines, q);
 }
 
 #ifndef BVHLAB_RECORDED_WIDE_WALK
@@ -272,9 +248,7 @@ void occluded_wide_batch_kernel(const WideView& wide, const Ray* rays, const std
 Hit intersect_wide_kernel(const WideView& wide, const Ray& ray, std::uint32_t* nodes_visited) {
     Hit hit{ray.tmax, kNoHit, 0.0f, 0.0f, kNoHit};
     const Query q = make_query(ray);
-    const std::uint32_t visited = !wide.lines      ? 0
-                                  : wide.quantised ? traverse_nodes<false, -1, WideQNode>(wide, q, hit)
-                                                   : traverse_nodes(wide, q, hit);
+    const std::uint32_t visited = wide.lines ? traverse_nodes(wide, q, hit) : 0;
     if (nodes_visited) *nodes_visited = visited;
     return hit;
 }
@@ -339,9 +313,7 @@ std::uint32_t next_tlas_leaf(const WideView& wide, TlasWalk& w, float hit_t, Wid
 Hit record_wide_kernel(const WideView& wide, const Ray& ray, WideRecorder& record, std::uint32_t* nodes_visited) {
     Hit hit{ray.tmax, kNoHit, 0.0f, 0.0f, kNoHit};
     const Query q = make_query(ray);
-    const std::uint32_t visited = !wide.lines      ? 0
-                                  : wide.quantised ? traverse_nodes<true, -1, WideQNode>(wide, q, hit, &record)
-                                                   : traverse_nodes<true>(wide, q, hit, &record);
+    const std::uint32_t visited = wide.lines ? traverse_nodes<true>(wide, q, hit, &record) : 0;
     if (nodes_visited) *nodes_visited = visited;
     return hit;
 }
