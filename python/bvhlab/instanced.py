@@ -60,8 +60,7 @@ class InstancedBvh:
         lists (mesh_primitives, mesh_instances, mesh_sah_cost, ...) and the meshes' build method."""
         core, mesh_of, _ = self._state
         meshes = list(self.meshes)
-        # the core itself (compared by identity), not its id(): a freed TLAS's id may be a new one's
-        key = (core, tuple(m.revision for m in meshes), tuple(id(m) for m in meshes))
+        key = _version_key(core, meshes)
         if self._stats is None or self._stats[0] != key:
             lo, hi = core.world_boxes()
             self._stats = (key, instanced_stats(core.stats(), meshes, mesh_of, lo, hi))
@@ -135,7 +134,7 @@ class InstancedBvh:
         return None
 
     def _analysis_key(self) -> tuple:
-        return (self._core, tuple(m.revision for m in self.meshes), tuple(id(m) for m in self.meshes))
+        return _version_key(self._core, self.meshes)
 
     def _tlas_nodes(self) -> tuple:
         if self._tlas_data is None or self._tlas_data[0] is not self._core:
@@ -211,6 +210,13 @@ class InstancedBvh:
         """As `Bvh.occluded`, through both levels: the walk ends at the first instance with a hit
         before tmax (exactly `intersect(...)["t"] < tmax`)."""
         return run_occluded_query(self._core, origins, directions, tmin, tmax, traversal, threads)
+
+
+def _version_key(core: _core.TwoLevel, meshes: list[Bvh]) -> tuple:
+    """What cached stats and node data of a two-level tree were made of: the TLAS core itself
+    (compared by identity; not its id(), which a freed TLAS's successor may reuse) and each mesh
+    tree's object and revision."""
+    return (core, tuple(m.revision for m in meshes), tuple(id(m) for m in meshes))
 
 
 def _make_tlas(meshes: list[Bvh], mesh_of, transforms, threads: int) -> tuple:

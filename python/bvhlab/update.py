@@ -47,8 +47,9 @@ class UpdateConfig:
     #: adaptive: the top's cut also takes whole a subtree of at most this many primitives that is as
     #: built (just rebuilt, or its cost unchanged: moved as one); 0: never
     top_intact_primitives: int = _CORE_DEFAULTS.top_intact_primitives
-    #: adaptive: the top is first built over subtrees of at most this many primitives (and the
-    #: intact ones whole), over those of top_cut_primitives where that would pass tree_growth
+    #: adaptive: where the top's first cut is dense (over 0.1 boxes a primitive), it is taken again
+    #: with subtrees of at most this many primitives (the intact ones whole); the cut of
+    #: top_cut_primitives where that top would pass tree_growth; 0: never
     top_coarse_cut_primitives: int = _CORE_DEFAULTS.top_coarse_cut_primitives
     #: also build a fresh tree, only to report its SAH cost (UpdateStats.fresh_sah_cost): a build's time
     measure_fresh: bool = _CORE_DEFAULTS.measure_fresh
