@@ -17,6 +17,7 @@
 #include "bvhlab/depth_order.h"
 #include "bvhlab/render_settings.h"
 #include "bvhlab/stats.h"
+#include "bvhlab/transform.h"
 #include "bvhlab/traverse.h"
 #include "bvhlab/wide_bvh.h"
 #include "py_boxes.h"
@@ -243,6 +244,7 @@ void bind_build_names(nb::module_& m) {
     m.attr("MIN_DIRECTION") = kMinDirection;
     m.attr("MAX_DIRECTION") = kMaxDirection;
     m.attr("MIN_RADIUS") = kMinRadius;
+    m.attr("MAX_TRANSFORM_ENTRY") = kMaxTransformEntry;  // transform.h
     m.attr("NODE_INTERNAL_BIT") = gpu::NODE_INTERNAL_BIT;
     m.attr("REF_SPHERE_BIT") = gpu::REF_SPHERE_BIT;
 }

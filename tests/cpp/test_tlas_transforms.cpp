@@ -16,6 +16,7 @@
 #include "bvhlab/tlas.h"
 #include "bvhlab/transform.h"
 #include "test_scenes.h"
+#include "traverse_oracles.h"
 #include "transforms.h"
 
 using namespace bvhlab;
@@ -47,6 +48,40 @@ TEST(Tlas, BadInstancesAreRefusedByName) {
     expect_refused({0}, {flat_axes}, "instance 0: the transform cannot be inverted");
     expect_refused({0}, {far}, "instance 0: the transform moves the mesh outside");
     expect_refused({0, 0}, {Transform{}}, "one transform per instance");
+}
+
+/// Scales as small as 2^-75 and as large as 2^20 (transform.h, kMaxTransformEntry): an instance
+/// scaled by a power of two s is hit as the unscaled mesh is hit by the ray whose origin is divided
+/// by s (every step exact: the same primitive, t times s bit for bit), on the binary walks; scales
+/// of 2^-77 and 2^77 (1e-25 used to be accepted, and then every ray missed) are refused by name.
+TEST(Tlas, TinyAndLargeScalesAreHitExactlyOrRefused) {
+    const Scene mesh = random_scene(4000, 0, 5);
+    const Bvh tree = build_bvh(mesh.view());
+    for (int e : {-75, -40, -1, 20}) {
+        const float s = std::ldexp(1.0f, e);
+        Transform t;
+        t.m[0] = t.m[5] = t.m[10] = s;
+        const Tlas tlas = build_tlas({&tree}, {0}, {t});
+        const TwoLevel scene{&tlas, {{&tree, nullptr}}};
+        std::uint32_t hits = 0;
+        for (const Ray& flat_ray : random_rays(1000, 41)) {
+            const Ray world{flat_ray.origin * s, flat_ray.dir};
+            for (Traversal mode : {Traversal::Stack, Traversal::Stackless}) {
+                const Hit flat = intersect(tree, flat_ray, mode);
+                const InstanceHit two = intersect_two_level(scene, world, mode);
+                ASSERT_EQ(two.hit.ref, flat.ref) << "scale 2^" << e;
+                if (flat.ref == kNoHit) continue;
+                ASSERT_EQ(two.hit.t, flat.t * s) << "scale 2^" << e;
+                hits += mode == Traversal::Stack;
+            }
+        }
+        EXPECT_GT(hits, 100u) << "scale 2^" << e;
+    }
+    for (int e : {-77, 77, -100}) {  // one axis only: the determinant's test, relative, passes these
+        Transform t;
+        t.m[0] = std::ldexp(1.0f, e);
+        expect_refused({0}, {t}, "instance 0: the transform scales by more than 2^76");
+    }
 }
 
 TEST(Tlas, InverseUndoesTheTransform) {

@@ -209,9 +209,10 @@ def _compare(got, reference) -> None:
 
 
 def test_spheres_stay_spheres_and_zero_scale_instances_stay_in_the_world():
-    """A collection of an analytic sphere and Suzanne, instanced three times, one of them at zero
-    scale: the spheres are spheres of mesh 0 (three), Suzanne is one mesh with two instances, and
-    the zero-scale one (its transform cannot be inverted) is placed in mesh 0 as flat triangles;
+    """A collection of an analytic sphere and Suzanne, instanced four times, one of them at zero
+    scale: the spheres are spheres of mesh 0 (four), Suzanne is one mesh with two instances, and
+    the zero-scale one (its transform cannot be inverted) and one scaled by 1e-25 along x (its
+    inverse beyond MAX_TRANSFORM_ENTRY) are placed in mesh 0 as flat triangles;
     the scene builds and renders two-level."""
     from bvhlab.blender import SPHERE_PROPERTY
 
@@ -223,17 +224,17 @@ def test_spheres_stay_spheres_and_zero_scale_instances_stay_in_the_world():
     bpy.context.scene.collection.objects.unlink(ball)
     source.objects.link(ball)
     ball[SPHERE_PROPERTY] = True
-    for i, scale in enumerate([(1.0, 1.0, 1.0), (0.5, 0.5, 0.5), (0.0, 1.0, 1.0)]):
+    for i, scale in enumerate([(1.0, 1.0, 1.0), (0.5, 0.5, 0.5), (0.0, 1.0, 1.0), (1e-25, 1.0, 1.0)]):
         empty = bpy.data.objects.new(f"Instance {i}", None)
         empty.instance_type, empty.instance_collection = "COLLECTION", source
         bpy.context.scene.collection.objects.link(empty)
         empty.location, empty.scale = (3.0 * i - 3.0, 0.0, 0.0), scale
     bpy.context.view_layer.update()
     exported = export_scene(bpy.context)
-    assert len(exported.spheres) == 3 and len(exported.meshes) == 1
+    assert len(exported.spheres) == 4 and len(exported.meshes) == 1
     assert np.count_nonzero(exported.instance_mesh == 1) == 2
-    assert len(exported.triangles) == 968  # the zero-scale Suzanne, flat
-    assert np.allclose(sorted(exported.spheres[:, 3]), [0.15, 0.3, 0.3], atol=1e-6)  # largest half extent
+    assert len(exported.triangles) == 2 * 968  # the zero-scale and the 1e-25 Suzanne, flat
+    assert np.allclose(sorted(exported.spheres[:, 3]), [0.15, 0.3, 0.3, 0.3], atol=1e-6)  # largest half extent
     bvh = bvhlab.build(exported)
     assert isinstance(bvh, bvhlab.InstancedBvh)
     image, _ = bvhlab.render(exported, bvh, 32, 24, backend="cpu")

@@ -166,6 +166,10 @@ def test_bad_instances_are_refused_by_name(small_scene):
     bad[1, 2, 2] = 0.0  # a zero-scale axis
     with pytest.raises(ValueError, match="instance 1: the transform cannot be inverted"):
         bvhlab.build(bvhlab.Scene(triangles=tris, instance_mesh=[0, 0], instance_transforms=bad))
+    tiny = np.repeat(eye, 2, 0)
+    tiny[1, 0, 0] = 1e-25  # passes the determinant's relative test; every ray would miss it
+    with pytest.raises(ValueError, match=r"instance 1: the transform scales by more than 2\^76"):
+        bvhlab.build(bvhlab.Scene(triangles=tris, instance_mesh=[0, 0], instance_transforms=tiny))
     nan = eye.copy()
     nan[0, 1, 1] = np.nan
     with pytest.raises(ValueError, match="instance 0: the transform has a NaN"):

@@ -27,9 +27,19 @@ struct Transform {
     bool is_identity() const { return m == Transform{}.m; }
 };
 
-/// Throws std::invalid_argument, naming `what`, for a transform with a NaN or infinite entry or
-/// one that cannot be inverted (a zero-scale axis, or axes so nearly parallel that the inverse
-/// would be noise: |det| below 1e-6 of the product of its columns' lengths, Hadamard's bound).
+/// The largest |entry| of an instance's linear part A and of its inverse: 2^76. The two-level walk
+/// moves a world ray's direction d, scaled so that its largest component lies in [0.5, 1)
+/// (coordinate_range.h, scale_ray), into object space, where it must stay within [kMinDirection,
+/// kMaxDirection] = [2^-80, 2^80] to be scaled again: with every entry at most 2^76, A^-1 d has
+/// components below 3·2^76 < 2^80, and |A^-1 d| ≥ |d| / σmax(A) ≥ 0.5 / (3·2^76) (σmax at most
+/// the Frobenius norm), so its largest component is above 2^-80. An instance scaled by 1e-25
+/// passed the determinant's test and then every ray missed it without a word.
+inline constexpr double kMaxTransformEntry = 0x1p76;
+
+/// Throws std::invalid_argument, naming `what`, for a transform with a NaN or infinite entry, one
+/// that cannot be inverted (a zero-scale axis, or axes so nearly parallel that the inverse would
+/// be noise: |det| below 1e-6 of the product of its columns' lengths, Hadamard's bound), or one
+/// whose linear part or inverse has an entry beyond kMaxTransformEntry.
 void validate_transform(const Transform& t, const char* what);
 
 /// What validate_transform accepts, without a message.

@@ -25,14 +25,42 @@ double column_length(const Transform& t, int c) {
     return std::sqrt(x * x + y * y + z * z);
 }
 
+/// The inverse of the linear part, row-major in a[9]: the adjugate over the determinant, in double.
+void inverse_linear(const Transform& t, double det, double a[9]) {
+    const auto& m = t.m;
+    auto d = [&](int i) { return double(m[i]); };
+    const double inv_det = 1.0 / det;
+    const double adj[9] = {d(5) * d(10) - d(6) * d(9), d(2) * d(9) - d(1) * d(10), d(1) * d(6) - d(2) * d(5),
+                           d(6) * d(8) - d(4) * d(10), d(0) * d(10) - d(2) * d(8), d(2) * d(4) - d(0) * d(6),
+                           d(4) * d(9) - d(5) * d(8),  d(1) * d(8) - d(0) * d(9),  d(0) * d(5) - d(1) * d(4)};
+    for (int k = 0; k < 9; ++k) a[k] = adj[k] * inv_det;
+}
+
+/// True when every entry of the linear part and of its inverse is at most kMaxTransformEntry in
+/// magnitude (transform.h says why).
+bool scales_in_range(const Transform& t, double det) {
+    double a[9];
+    inverse_linear(t, det, a);
+    bool in = true;
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c)
+            in &= (std::fabs(double(t.m[4 * r + c])) <= kMaxTransformEntry) &
+                  (std::fabs(a[3 * r + c]) <= kMaxTransformEntry);
+    return in;
+}
+
+bool determinant_invertible(const Transform& t, double det) {
+    const double bound = column_length(t, 0) * column_length(t, 1) * column_length(t, 2);  // Hadamard: |det| <= bound
+    return std::fabs(det) > 1e-6 * bound && std::isfinite(det);
+}
+
 }  // namespace
 
 bool transform_invertible(const Transform& t) {
     for (float x : t.m)
         if (!std::isfinite(x)) return false;
     const double det = det3(t);
-    const double bound = column_length(t, 0) * column_length(t, 1) * column_length(t, 2);  // Hadamard: |det| <= bound
-    return std::fabs(det) > 1e-6 * bound && std::isfinite(det);
+    return determinant_invertible(t, det) && scales_in_range(t, det);
 }
 
 void validate_transform(const Transform& t, const char* what) {
@@ -40,22 +68,21 @@ void validate_transform(const Transform& t, const char* what) {
     for (float x : t.m)
         if (!std::isfinite(x))
             throw std::invalid_argument(std::string(what) + ": the transform has a NaN or infinite entry");
+    const double det = det3(t);
+    if (!determinant_invertible(t, det))
+        throw std::invalid_argument(std::string(what) +
+                                    ": the transform cannot be inverted (a zero-scale axis, or axes "
+                                    "(nearly) parallel: determinant " +
+                                    std::to_string(det) + ")");
     throw std::invalid_argument(std::string(what) +
-                                ": the transform cannot be inverted (a zero-scale axis, or axes "
-                                "(nearly) parallel: determinant " +
-                                std::to_string(det3(t)) + ")");
+                                ": the transform scales by more than 2^76 (7.6e22) or less than 2^-76 (1.3e-23) "
+                                "along some axis, beyond what float32 rays can follow into the mesh");
 }
 
 Transform inverse(const Transform& t) {
-    const auto& m = t.m;
-    auto d = [&](int i) { return double(m[i]); };
-    const double inv_det = 1.0 / det3(t);
-    // The adjugate of the linear part over the determinant, then -A^-1 · translation.
-    double a[9] = {(d(5) * d(10) - d(6) * d(9)) * inv_det, (d(2) * d(9) - d(1) * d(10)) * inv_det,
-                   (d(1) * d(6) - d(2) * d(5)) * inv_det,  (d(6) * d(8) - d(4) * d(10)) * inv_det,
-                   (d(0) * d(10) - d(2) * d(8)) * inv_det, (d(2) * d(4) - d(0) * d(6)) * inv_det,
-                   (d(4) * d(9) - d(5) * d(8)) * inv_det,  (d(1) * d(8) - d(0) * d(9)) * inv_det,
-                   (d(0) * d(5) - d(1) * d(4)) * inv_det};
+    double a[9];
+    inverse_linear(t, det3(t), a);  // then -A^-1 · translation
+    auto d = [&](int i) { return double(t.m[i]); };
     Transform out;
     for (int r = 0; r < 3; ++r) {
         const double tr = -(a[3 * r] * d(3) + a[3 * r + 1] * d(7) + a[3 * r + 2] * d(11));

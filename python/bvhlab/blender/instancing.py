@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import _core
 from ..scene import MAX_COORDINATE
 from .errors import ExportError
 from .material_table import map_slots
@@ -39,6 +40,10 @@ MIN_INSTANCES = 2
 #: refuses 1e-6; a margin of 10 keeps float32 rounding of the matrix from crossing it): such an
 #: instance (a zero scale) goes into mesh 0 as world triangles.
 SINGULAR_FRACTION = 1e-5
+#: The largest |entry| of an instance's linear part and of its inverse: half the core's
+#: MAX_TRANSFORM_ENTRY (2^76, transform.h: beyond it rays cannot follow into the mesh), a margin for
+#: the float32 rounding of the matrix; such an instance (scaled by less than ~1e-23) goes into mesh 0.
+MAX_ENTRY = _core.MAX_TRANSFORM_ENTRY / 2
 
 
 @dataclass(slots=True)
@@ -127,11 +132,18 @@ def _never(key) -> bool:
 
 
 def invertible(linear: np.ndarray) -> np.ndarray:
-    """bool (N,): which of the (N,3,3) linear parts can be inverted (see SINGULAR_FRACTION)."""
+    """bool (N,): which of the (N,3,3) linear parts can be inverted (see SINGULAR_FRACTION) and
+    have their entries and their inverse's within MAX_ENTRY."""
     bound = np.prod(np.linalg.norm(linear, axis=1), axis=1)  # the columns' lengths
     with np.errstate(invalid="ignore", over="ignore"):
         det = np.linalg.det(linear)
-    return np.isfinite(det) & (np.abs(det) > SINGULAR_FRACTION * bound)
+    out = np.isfinite(det) & (np.abs(det) > SINGULAR_FRACTION * bound)
+    out &= (np.abs(linear) <= MAX_ENTRY).all(axis=(1, 2))
+    if out.any():
+        with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+            inverses = np.linalg.inv(linear[out])
+        out[out] = (np.abs(inverses) <= MAX_ENTRY).all(axis=(1, 2))
+    return out
 
 
 @dataclass
