@@ -107,7 +107,11 @@ def rays_for(name: str, tris: np.ndarray) -> dict[str, np.ndarray]:
 
 def shadow_rays(tris: np.ndarray, rays: np.ndarray, up: int) -> np.ndarray:
     """Shadow rays as a renderer casts them (N×7: origin, direction, tmax): from where each of
-    `rays` (N×6) hits the scene, backed off along it by 1e-4 of its distance, to a point light in the
+    `rays` (N×6) hits the scene, backed off along it by 1e-4 of its distance plus 1e-5 of the
+    point's largest coordinate (~80 float32 steps: a hit 1 unit from a ray's origin on vast1m's
+    wall at 5,000 was backed off by less than a float step there, so the shadow ray started on the
+    wall, at a true t of 0, which float rounding put on either side: 5 rays of 200,000 occluded
+    for bvhlab, not for Embree or tinybvh), to a point light in the
     upper middle of the scene's bounds (60% of the way up axis `up`, at the centre of the other
     two), the direction unit length and tmax the light's
     distance, so a ray is occluded exactly where the point lies in shadow. The hits come from
@@ -117,7 +121,9 @@ def shadow_rays(tris: np.ndarray, rays: np.ndarray, up: int) -> np.ndarray:
     o, d = np.ascontiguousarray(rays[:, :3]), np.ascontiguousarray(rays[:, 3:])
     t = bvhlab.build(tris).intersect(o, d)["t"]
     hit = np.isfinite(t)
-    points = o[hit] + d[hit] * (t[hit] * (1 - 1e-4))[:, None]
+    at = o[hit].astype(np.float64) + d[hit] * t[hit, None].astype(np.float64)
+    back = t[hit] * 1e-4 + 1e-5 * np.abs(at).max(1)
+    points = at - d[hit] * (back / np.linalg.norm(d[hit], axis=1))[:, None]
     lo, hi = tris.reshape(-1, 3).min(0), tris.reshape(-1, 3).max(0)
     light = (lo + hi) / 2
     light[up] = lo[up] + 0.6 * (hi[up] - lo[up])
