@@ -11,13 +11,19 @@ from ._atomic import write_bytes
 from ._checks import output_file
 
 
+def _unit(x: np.ndarray) -> np.ndarray:
+    """x clipped to [0, 1], NaN as 0 (a NaN cast to uint8 is undefined: whatever the CPU gives)."""
+    return np.clip(np.nan_to_num(x, nan=0.0), 0.0, 1.0)
+
+
 def linear_to_srgb(x: np.ndarray) -> np.ndarray:
-    x = np.clip(x, 0.0, 1.0)
+    x = _unit(x)
     return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
 
 
 def to_rgba8(image: np.ndarray) -> np.ndarray:
-    """float (H, W, 3|4) linear → uint8 (H, W, 4) sRGB, alpha kept linear. An integer image is
+    """float (H, W, 3|4) linear → uint8 (H, W, 4) sRGB, alpha kept linear; NaN is 0, values are
+    clipped to [0, 1]. An integer image is
     refused (TypeError): taken as linear floats, 8-bit values would all clip to white."""
     image = np.asarray(image)
     if not np.issubdtype(image.dtype, np.floating):
@@ -31,7 +37,7 @@ def to_rgba8(image: np.ndarray) -> np.ndarray:
     if image.shape[0] == 0 or image.shape[1] == 0:  # a PNG has at least one row and column
         raise ValueError(f"image must be at least 1x1 pixels, got {image.shape[1]}x{image.shape[0]}")
     rgb = linear_to_srgb(image[..., :3])
-    alpha = np.clip(image[..., 3:4], 0, 1) if image.shape[2] == 4 else np.ones(image.shape[:2] + (1,), np.float32)
+    alpha = _unit(image[..., 3:4]) if image.shape[2] == 4 else np.ones(image.shape[:2] + (1,), np.float32)
     return (np.concatenate([rgb, alpha], 2) * 255 + 0.5).astype(np.uint8)
 
 

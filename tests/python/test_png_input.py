@@ -30,3 +30,22 @@ def test_float_images_are_written_as_before(tmp_path):
     bvhlab.save_png(image, tmp_path / "x.png")
     rgba = read_png(tmp_path / "x.png")
     assert rgba.shape[:2] == (2, 3) and (rgba[..., 0] == 255).all() and (rgba[..., 1] == 0).all()
+
+
+def test_nan_and_infinite_pixels_are_written_as_defined_bytes(tmp_path):
+    """NaN is 0 and ±inf clips to 1 and 0, in colour and alpha: a NaN cast to uint8 was whatever
+    the CPU gave (0 on x86, with a RuntimeWarning)."""
+    image = np.full((1, 4, 4), 0.5, np.float32)
+    image[0, 0] = np.nan
+    image[0, 1] = np.inf
+    image[0, 2] = -np.inf
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no "invalid value encountered in cast"
+        bvhlab.save_png(image, tmp_path / "x.png")
+    pixels = read_png(tmp_path / "x.png")
+    assert pixels[0, 0].tolist() == [0, 0, 0, 0]
+    assert pixels[0, 1].tolist() == [255, 255, 255, 255]
+    assert pixels[0, 2].tolist() == [0, 0, 0, 0]
+    assert pixels[0, 3].tolist() == [188, 188, 188, 128]  # 0.5 linear is 188 in sRGB
