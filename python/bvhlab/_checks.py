@@ -65,6 +65,20 @@ def real(name: str, value, lo: float = -math.inf, hi: float = math.inf) -> float
     return value
 
 
+#: The largest finite float32 (numpy.finfo(numpy.float32).max).
+FLOAT32_MAX = 3.4028234663852886e38
+
+
+def setting(name: str, value, lo: float = -math.inf, hi: float = math.inf) -> float:
+    """real(...) for a float32 field of a core config struct: a finite number beyond float32's range
+    is refused too (1e300 would arrive as inf and be reported as "got inf"). Ray limits (tmin, tmax)
+    stay real(): beyond float32's range is inf there, which is what such a limit means."""
+    value = real(name, value, lo, hi)
+    if math.isfinite(value) and abs(value) > FLOAT32_MAX:
+        raise ValueError(f"{name} must be within float32's range (±{FLOAT32_MAX:.7g}), got {value:g}")
+    return value
+
+
 class OutputPathError(OSError, ValueError):
     """An output path that cannot be written as given (a folder, under a file, a wrong suffix).
     Both an OSError (it is about the file system) and a ValueError (it is a bad argument)."""

@@ -68,8 +68,8 @@ class BuildConfig:
         c.max_leaf_size = _uint32("max_leaf_size", self.max_leaf_size, (1, MAX_LEAF_SIZE))
         c.sah_block = _uint32("sah_block", self.sah_block, (1, MAX_SAH_BLOCK))
         c.seed = _checks.integer("seed", self.seed, 0, 2**64 - 1)
-        c.sbvh_alpha = _checks.real("sbvh_alpha", self.sbvh_alpha)
-        c.sbvh_budget = _checks.real("sbvh_budget", self.sbvh_budget)
+        c.sbvh_alpha = _checks.setting("sbvh_alpha", self.sbvh_alpha)
+        c.sbvh_budget = _checks.setting("sbvh_budget", self.sbvh_budget)
         if not isinstance(self.sbvh_unsplit, (bool, np.bool_)):
             raise TypeError(f"sbvh_unsplit must be a bool, got {type(self.sbvh_unsplit).__name__}")
         c.sbvh_unsplit = bool(self.sbvh_unsplit)

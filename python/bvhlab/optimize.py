@@ -34,8 +34,8 @@ class OptimizeConfig:
     def core(self) -> _core.OptimizeConfig:
         c = _core.OptimizeConfig()
         c.iterations = _checks.integer("iterations", self.iterations, 0, 2**32 - 1)
-        c.time_budget_ms = _checks.real("time_budget_ms", self.time_budget_ms)
-        c.batch_fraction = _checks.real("batch_fraction", self.batch_fraction)
+        c.time_budget_ms = _checks.setting("time_budget_ms", self.time_budget_ms)
+        c.batch_fraction = _checks.setting("batch_fraction", self.batch_fraction)
         if not isinstance(self.merge_leaves, bool):
             raise TypeError(f"merge_leaves must be True or False, got {type(self.merge_leaves).__name__}")
         c.merge_leaves = self.merge_leaves

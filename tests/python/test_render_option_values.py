@@ -1,4 +1,4 @@
-"""Render options with values no render can use (probe): a NaN or infinite overlay line colour was
+"""Option values no render or build can use (probe): a NaN or infinite overlay line colour was
 taken (nothing checked a colour) and left to whichever backend drew the lines."""
 
 import math
@@ -18,3 +18,15 @@ def test_a_line_color_that_is_not_finite_is_refused(bad):
 
 def test_finite_line_colors_are_taken():
     assert bvhlab.RenderOptions(line_color=(0.0, 0.5, 2.0)).line_color == (0.0, 0.5, 2.0)
+
+
+def test_settings_beyond_float32_are_refused_with_the_value_given():
+    """A build, update or optimize setting of 1e300 arrived in the core's float32 field as inf and
+    was refused as "got inf"; it is refused by its own value."""
+    import numpy as np
+
+    tris = np.arange(36, dtype=np.float32).reshape(4, 3, 3)
+    with pytest.raises(ValueError, match=r"sbvh_alpha must be within float32's range .*got 1e\+300"):
+        bvhlab.build(tris, method="sbvh", sbvh_alpha=1e300)
+    with pytest.raises(ValueError, match=r"tree_growth must be within float32's range .*got -1e\+39"):
+        bvhlab.UpdateConfig(tree_growth=-1e39)
