@@ -158,3 +158,30 @@ def test_an_object_moved_in_the_viewport_is_promoted_once():
         _same_hits(update.bvh, live.scene)
     assert actions[0][0] == "built" and actions[1:] == [("placed", 0, 0)] * 3, actions
     assert len(live.scene.triangles) == BOX  # only the floor is left in mesh 0
+
+
+@pytest.mark.parametrize("hidden", [0.0, 1e-25])
+def test_an_object_scaled_to_nothing_and_back_follows_the_frames(hidden):
+    """Hiding an object by keyframing its scale to 0 (a common trick), or to 1e-25 (which a TLAS
+    refuses: transform.h's kMaxTransformEntry): at the hidden frame the mover cannot be an
+    instance, so it lies flat in mesh 0; before and after it, an instance again. Every frame's
+    tree gives a fresh flat build's hits, and no frame fails."""
+    scene = moving_scene()
+    mover = bpy.data.objects["Mover"]
+    for frame, scale in ((1, 1.0), (4, hidden), (5, hidden), (8, 1.0)):
+        mover.scale = (scale,) * 3
+        mover.keyframe_insert("scale", frame=frame)
+    for curve in mover.animation_data.action.fcurves:  # exactly 0 or 1e-25 at frames 4-5, not eased
+        for key in curve.keyframe_points:
+            key.interpolation = "LINEAR"
+    scene.frame_set(1)
+    assert bpy.ops.bvhlab.build() == {"FINISHED"}
+    built = harness.addon().state.tree_for(scene)
+    for frame in (2, 4, 5, 6, 9, 1):
+        scene.frame_set(frame)
+        assert import_module(f"{harness.addon().__name__}.follow").wait()
+        state = harness.addon().state
+        said = state.messages.get(state.key(scene))
+        assert said is None or said[0] != "WARNING", said  # "The boxes no longer follow the scene: ..."
+        exported = export_scene(bpy.context)
+        _same_hits(built.bvh, exported)
