@@ -4,6 +4,7 @@
 // thread count.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <vector>
@@ -92,6 +93,28 @@ TEST(UpdateTop, TheCutTakesSubtreesThatMovedAsOneWhole) {
     // without the costs when built, only the fine cut
     const PartedTree unknown(refit, now, none);
     EXPECT_EQ(top_cut(unknown, 8, 4096).size(), fine.size());
+}
+
+TEST(UpdateTop, AStoppedCutIsTheBeginningOfTheWholeCut) {
+    // adaptive asks only whether its first cut is dense: the scan stops once the cut holds more
+    // than max_cut nodes, and what it found by then is the whole cut's beginning
+    const Scene rest = spheres(false), moved = spheres(true);
+    const Bvh tree = build_bvh(rest.view());
+    const NodeCostArray built = subtree_costs(tree);
+    const Bvh refit = refitted(tree, moved.view());
+    const NodeCosts now = node_costs(refit);
+    const std::vector<RebuiltPart> none;
+    const PartedTree parted(refit, now, none, &built);
+    for (const std::uint32_t intact : {0u, 4096u}) {
+        const std::vector<PartNode> whole = top_cut(parted, 8, intact);
+        ASSERT_GT(whole.size(), 4u);
+        for (const std::size_t max_cut : {std::size_t(0), std::size_t(3), whole.size() / 2, whole.size() - 1}) {
+            const std::vector<PartNode> stopped = top_cut(parted, 8, intact, max_cut);
+            ASSERT_EQ(stopped.size(), max_cut + 1);
+            EXPECT_TRUE(std::equal(stopped.begin(), stopped.end(), whole.begin()));
+        }
+        EXPECT_TRUE(top_cut(parted, 8, intact, whole.size()) == whole);
+    }
 }
 
 TEST(UpdateTop, AdaptiveOverIntactSubtreesIsValidAndTheSameOnEveryThreadCount) {

@@ -57,7 +57,8 @@ namespace {
 /// counts and areas are read in order (walking down by the children read them at random, and
 /// a cut node's children, whose areas tell whether they came apart, are near it: it is small).
 void cut_scan(const PartedTree& t, std::int32_t part, std::uint32_t first, std::uint32_t end,
-              std::uint32_t max_primitives, std::uint32_t intact_primitives, std::vector<PartNode>& cut) {
+              std::uint32_t max_primitives, std::uint32_t intact_primitives, std::size_t max_cut,
+              std::vector<PartNode>& cut) {
     const std::vector<RebuiltPart>& parts = t.parts();
     const Bvh& bvh = part < 0 ? t.tree() : parts[std::size_t(part)].part;
     const NodeCosts& costs = part < 0 ? t.tree_costs() : parts[std::size_t(part)].costs;
@@ -65,7 +66,9 @@ void cut_scan(const PartedTree& t, std::int32_t part, std::uint32_t first, std::
     std::size_t next = 0;  // the next part (in node order) not yet passed
     for (std::uint32_t i = first; i < end;) {
         if (part < 0 && next < parts.size() && parts[next].root == i) {
-            cut_scan(t, std::int32_t(next), 0, parts[next].part.node_count(), max_primitives, intact_primitives, cut);
+            cut_scan(t, std::int32_t(next), 0, parts[next].part.node_count(), max_primitives, intact_primitives,
+                     max_cut, cut);
+            if (cut.size() > max_cut) return;
             i = parts[next++].end;
             continue;
         }
@@ -83,18 +86,28 @@ void cut_scan(const PartedTree& t, std::int32_t part, std::uint32_t first, std::
                                           !(part < 0 && next < parts.size() && parts[next].root < skip_index(n, i)));
         if (whole) {
             cut.push_back({part, i});
+            if (cut.size() > max_cut) return;
             i = skip_index(n, i);
         } else {
-            ++i;  // its children (at i + 1 and after its first child's subtree) come next
+            // its children (at i + 1 and after its first child's subtree) come next. Every jump
+            // over a cut subtree lands on the second child of a node the scan went into, so that
+            // child is fetched now, while the first child's subtree is scanned (and the second
+            // child of its first child, two steps ahead): the jumps missed the cache at the node
+            // (perf: 70% of the scan's time on the load of its info word, the wave's frames)
+            __builtin_prefetch(&bvh.nodes[n.index]), __builtin_prefetch(&costs.count[n.index]);
+            const BvhNode& first_child = bvh.nodes[i + 1];
+            if (!is_leaf(first_child)) __builtin_prefetch(&bvh.nodes[first_child.index]);
+            ++i;
         }
     }
 }
 
 }  // namespace
 
-std::vector<PartNode> top_cut(const PartedTree& tree, std::uint32_t max_primitives, std::uint32_t intact_primitives) {
+std::vector<PartNode> top_cut(const PartedTree& tree, std::uint32_t max_primitives, std::uint32_t intact_primitives,
+                              std::size_t max_cut) {
     std::vector<PartNode> cut;
-    cut_scan(tree, -1, 0, tree.tree().node_count(), max_primitives, intact_primitives, cut);
+    cut_scan(tree, -1, 0, tree.tree().node_count(), max_primitives, intact_primitives, max_cut, cut);
     return cut;
 }
 
@@ -104,7 +117,10 @@ CutInfo cut_info(const PartedTree& parted, const std::vector<PartNode>& cut) {
     const std::size_t cuts = cut.size();
     CutInfo info{BigVector<Aabb>(cuts), BigVector<std::uint32_t>(cuts), BigVector<std::uint32_t>(cuts),
                  BigVector<double>(cuts)};
+    constexpr std::size_t kAhead = 8;  // the cut nodes lie apart: each missed the cache (perf)
+    for (std::size_t c = 0; c < std::min(cuts, kAhead); ++c) __builtin_prefetch(&parted.node(cut[c]));
     for (std::size_t c = 0; c < cuts; ++c) {
+        if (c + kAhead < cuts) __builtin_prefetch(&parted.node(cut[c + kAhead]));
         info.boxes[c] = node_box(parted.node(cut[c]));
         info.size[c] = end_of(parted, cut[c]) - cut[c].node, info.count[c] = parted.count(cut[c]);
         info.area_cost[c] = parted.area_cost(cut[c]);

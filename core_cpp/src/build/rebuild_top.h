@@ -3,6 +3,7 @@
 // the cut are kept whole (refitted, or rebuilt by build_parts) and moved under the new top, their
 // leaf slots left where they are.
 #pragma once
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -61,8 +62,10 @@ private:
 /// cost is within kIntact of its cost when built (PartedTree::built; a rebuilt part's nodes: as
 /// built) is a cut node too, whole: its primitives moved together (translated), so its insides
 /// are as good as when built and only where it stands changed.
-std::vector<PartNode> top_cut(const PartedTree& tree, std::uint32_t max_primitives,
-                              std::uint32_t intact_primitives = 0);
+/// The scan stops once the cut holds more than `max_cut` nodes (the cut returned is then the
+/// first max_cut + 1 of them: enough for a caller that only asks whether it is that large).
+std::vector<PartNode> top_cut(const PartedTree& tree, std::uint32_t max_primitives, std::uint32_t intact_primitives = 0,
+                              std::size_t max_cut = SIZE_MAX);
 
 /// What the top needs of each cut node, read in cut (depth-first) order: its box, the nodes of
 /// its subtree, its primitives and S = A·cost.
