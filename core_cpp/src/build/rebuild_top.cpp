@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
 
 #include "bvhlab/simd.h"
 
@@ -51,25 +52,41 @@ PartedTree::PartedTree(const Bvh& tree, const NodeCosts& now, const std::vector<
 
 namespace {
 
-/// Appends the cut (top_cut) of the subtree whose nodes are [first, end) of one array: `part` -1
-/// the tree's, with the parts standing in for their roots' subtrees, else parts[part]'s. One
-/// scan forwards in depth-first order, jumping over each cut node's subtree: the nodes, their
-/// counts and areas are read in order (walking down by the children read them at random, and
-/// a cut node's children, whose areas tell whether they came apart, are near it: it is small).
-void cut_scan(const PartedTree& t, std::int32_t part, std::uint32_t first, std::uint32_t end,
-              std::uint32_t max_primitives, std::uint32_t intact_primitives, std::size_t max_cut,
-              std::vector<PartNode>& cut) {
+/// The cuts one scan takes (top_cut, top_cuts): `fine` of fine_primitives, and with `coarse` also
+/// the cut of coarse_primitives (at least fine_primitives; the same intact size), the scan following
+/// the fine cut until it holds more than `dense` nodes and the coarse one after that.
+struct CutScan {
+    std::uint32_t fine_primitives, coarse_primitives, intact_primitives;
+    std::size_t dense;
+    std::vector<PartNode>* fine;
+    std::vector<PartNode>* coarse;  ///< null: the fine cut alone
+    bool past_dense = false;
+};
+
+/// Appends the cuts (top_cut, top_cuts) of the subtree whose nodes are [first, end) of one array:
+/// `part` -1 the tree's, with the parts standing in for their roots' subtrees, else
+/// parts[part]'s. One scan forwards in depth-first order, jumping over each cut node's subtree:
+/// the nodes, their counts and areas are read in order (walking down by the children read them at
+/// random, and a cut node's children, whose areas tell whether they came apart, are near it: it
+/// is small). A node whole for the fine cut is whole for the coarse one, so every coarse cut node
+/// is on the fine cut's path (none of its ancestors whole for either): the coarse cut is taken on
+/// the way, each node whole for it and not inside the last one taken, and once the fine cut is
+/// dense the scan jumps over the coarse cut's subtrees instead (the rest of the coarse scan).
+void cut_scan(const PartedTree& t, std::int32_t part, std::uint32_t first, std::uint32_t end, CutScan& scan) {
     const std::vector<RebuiltPart>& parts = t.parts();
     const Bvh& bvh = part < 0 ? t.tree() : parts[std::size_t(part)].part;
     const NodeCosts& costs = part < 0 ? t.tree_costs() : parts[std::size_t(part)].costs;
     const NodeCostArray* built = t.built();
-    std::size_t next = 0;  // the next part (in node order) not yet passed
+    std::size_t next = 0;              // the next part (in node order) not yet passed
+    std::uint32_t coarse_end = first;  // the end of the last coarse cut node's subtree
     for (std::uint32_t i = first; i < end;) {
         if (part < 0 && next < parts.size() && parts[next].root == i) {
-            cut_scan(t, std::int32_t(next), 0, parts[next].part.node_count(), max_primitives, intact_primitives,
-                     max_cut, cut);
-            if (cut.size() > max_cut) return;
+            cut_scan(t, std::int32_t(next), 0, parts[next].part.node_count(), scan);
             i = parts[next++].end;
+            continue;
+        }
+        if (scan.past_dense && i < coarse_end) {
+            i = coarse_end;
             continue;
         }
         const BvhNode& n = bvh.nodes[i];
@@ -81,13 +98,21 @@ void cut_scan(const PartedTree& t, std::int32_t part, std::uint32_t first, std::
             const float was = (*built)[i], now = costs.cost[i];
             return std::abs(now - was) <= kIntact * was;
         };
-        const bool whole = is_leaf(n) || ((count <= max_primitives || (count <= intact_primitives && intact())) &&
-                                          !(costs.area[i + 1] + costs.area[n.index] < kApart * costs.area[i]) &&
-                                          !(part < 0 && next < parts.size() && parts[next].root < skip_index(n, i)));
-        if (whole) {
-            cut.push_back({part, i});
-            if (cut.size() > max_cut) return;
+        const auto whole = [&](std::uint32_t max_primitives) {
+            return is_leaf(n) || ((count <= max_primitives || (count <= scan.intact_primitives && intact())) &&
+                                  !(costs.area[i + 1] + costs.area[n.index] < kApart * costs.area[i]) &&
+                                  !(part < 0 && next < parts.size() && parts[next].root < skip_index(n, i)));
+        };
+        // whole for the fine cut: whole for the coarse one too (no second test)
+        const bool fine_here = !scan.past_dense && whole(scan.fine_primitives);
+        const bool coarse_here = scan.coarse && i >= coarse_end && (fine_here || whole(scan.coarse_primitives));
+        if (coarse_here) scan.coarse->push_back({part, i}), coarse_end = skip_index(n, i);
+        if (fine_here) {
+            scan.fine->push_back({part, i});
+            scan.past_dense = scan.coarse && scan.fine->size() > scan.dense;
             i = skip_index(n, i);
+        } else if (scan.past_dense && coarse_here) {
+            i = coarse_end;
         } else {
             // its children (at i + 1 and after its first child's subtree) come next. Every jump
             // over a cut subtree lands on the second child of a node the scan went into, so that
@@ -104,11 +129,22 @@ void cut_scan(const PartedTree& t, std::int32_t part, std::uint32_t first, std::
 
 }  // namespace
 
-std::vector<PartNode> top_cut(const PartedTree& tree, std::uint32_t max_primitives, std::uint32_t intact_primitives,
-                              std::size_t max_cut) {
+std::vector<PartNode> top_cut(const PartedTree& tree, std::uint32_t max_primitives, std::uint32_t intact_primitives) {
     std::vector<PartNode> cut;
-    cut_scan(tree, -1, 0, tree.tree().node_count(), max_primitives, intact_primitives, max_cut, cut);
+    CutScan scan{max_primitives, max_primitives, intact_primitives, SIZE_MAX, &cut, nullptr};
+    cut_scan(tree, -1, 0, tree.tree().node_count(), scan);
     return cut;
+}
+
+bool top_cuts(const PartedTree& tree, std::uint32_t fine_primitives, std::uint32_t coarse_primitives,
+              std::uint32_t intact_primitives, std::size_t dense, std::vector<PartNode>& fine,
+              std::vector<PartNode>& coarse) {
+    if (fine_primitives > coarse_primitives)
+        throw std::invalid_argument("top_cuts: the fine cut's size is the smaller");
+    fine.clear(), coarse.clear();
+    CutScan scan{fine_primitives, coarse_primitives, intact_primitives, dense, &fine, &coarse};
+    cut_scan(tree, -1, 0, tree.tree().node_count(), scan);
+    return scan.past_dense;
 }
 
 CutInfo cut_info(const PartedTree& parted, const std::vector<PartNode>& cut) {

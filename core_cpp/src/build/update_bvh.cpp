@@ -86,14 +86,18 @@ UpdatePolicy adaptive(Bvh& tree, NodeCostArray& built, const NodeCosts& now, con
         // would leave the tree past tree_growth (a full rebuild otherwise)
         const std::uint32_t fine = config.top_cut_primitives;
         const bool may_coarsen = config.top_coarse_cut_primitives > fine;
-        const double dense = kDenseCut * now.count[0];
         for (const bool first : {true, false}) {
-            // where a dense first cut is taken again coarser, its scan stops once it is dense
-            const std::size_t max_cut = first && may_coarsen ? std::size_t(std::floor(dense)) : SIZE_MAX;
-            std::vector<PartNode> cut = top_cut(parted, fine, first ? config.top_intact_primitives : 0u, max_cut);
+            // the first cut and, where it is dense, its coarser version, from one scan (top_cuts)
+            std::vector<PartNode> cut, coarse;
             bool coarser = first && config.top_intact_primitives > fine;
-            if (first && may_coarsen && double(cut.size()) > dense)
-                cut = top_cut(parted, config.top_coarse_cut_primitives, config.top_intact_primitives), coarser = true;
+            if (first && may_coarsen) {
+                const auto dense = std::size_t(std::floor(kDenseCut * now.count[0]));  // size > kDenseCut · count
+                if (top_cuts(parted, fine, config.top_coarse_cut_primitives, config.top_intact_primitives, dense, cut,
+                             coarse))
+                    cut = std::move(coarse), coarser = true;
+            } else {
+                cut = top_cut(parted, fine, first ? config.top_intact_primitives : 0u);
+            }
             if (cut.size() > 1) {
                 const CutInfo info = cut_info(parted, cut);
                 const Bvh top = built_top(tree.config, info);
