@@ -132,6 +132,48 @@ TEST(Update, SubtreeCostOfTheRootIsTheTreesSahCost) {
         EXPECT_NEAR(f.built[i], cost_of(f.tree, i, ac), 1e-4 * f.built[i]);
 }
 
+TEST(Update, NodeCostsAndBoxesOfARefittedTreeEqualTheirRecursion) {
+    // the refit and node_costs carry the first child's box, S and count in registers; each
+    // node's box, count and cost must equal those taken from the geometry by recursion
+    const Fixture f;
+    const Scene moved = deformed(f.scene, 20.0f, 3.0f);
+    const Bvh refit = refitted(f.tree, moved.view());
+    const NodeCosts now = node_costs(refit);
+    std::function<Aabb(std::uint32_t)> box_of = [&](std::uint32_t i) {
+        const BvhNode& n = refit.nodes[i];
+        Aabb b;
+        if (!is_leaf(n)) {
+            b = box_of(i + 1);
+            b.grow(box_of(n.index));
+            return b;
+        }
+        for (std::uint32_t k = n.index; k < n.index + leaf_count(n); ++k) {
+            const std::uint32_t ref = refit.refs[k];
+            if (is_sphere_ref(ref)) {  // centre ± radius
+                const float* s = &moved.spheres[4 * std::size_t(ref_index(ref))];
+                b.grow(Vec3{s[0] - s[3], s[1] - s[3], s[2] - s[3]}),
+                    b.grow(Vec3{s[0] + s[3], s[1] + s[3], s[2] + s[3]});
+                continue;
+            }
+            for (int v = 0; v < 3; ++v) {
+                const float* p = &moved.triangles[9 * std::size_t(ref) + 3 * v];
+                b.grow(Vec3{p[0], p[1], p[2]});
+            }
+        }
+        return b;
+    };
+    std::uint32_t differ = 0;
+    for (std::uint32_t i = 0; i < refit.node_count(); ++i) {
+        const Aabb b = box_of(i), got = node_box(refit.nodes[i]);
+        double ac;
+        const double cost = cost_of(refit, i, ac);
+        differ += std::memcmp(&b.lo, &got.lo, sizeof(Vec3)) != 0 || std::memcmp(&b.hi, &got.hi, sizeof(Vec3)) != 0 ||
+                  now.count[i] != prims_under(refit, i) || now.area[i] != float(got.half_area()) ||
+                  now.cost[i] != float(cost);
+    }
+    EXPECT_EQ(differ, 0u);
+}
+
 TEST(Update, EveryPolicyLeavesAValidTree) {
     const Fixture f;
     const Scene moved = deformed(f.scene, 4.0f, 1.5f);

@@ -4,8 +4,10 @@
 // thread count.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
 #include <vector>
 
 #include "bvhlab/stats.h"
@@ -92,6 +94,44 @@ TEST(UpdateTop, TheCutTakesSubtreesThatMovedAsOneWhole) {
     // without the costs when built, only the fine cut
     const PartedTree unknown(refit, now, none);
     EXPECT_EQ(top_cut(unknown, 8, 4096).size(), fine.size());
+}
+
+TEST(UpdateTop, TwoCutsFromOneScanAreTheCutsOfTwoScans) {
+    // adaptive takes its first cut and, where that is dense, a coarser one from one scan: the fine
+    // cut until it passes `dense` nodes (then its beginning), the coarse cut whole, with and
+    // without rebuilt parts standing in for subtrees
+    const Scene rest = spheres(false), moved = spheres(true);
+    const Bvh tree = build_bvh(rest.view());
+    const NodeCostArray built = subtree_costs(tree);
+    const Bvh refit = refitted(tree, moved.view());
+    const NodeCosts now = node_costs(refit);
+    std::vector<std::uint32_t> roots;  // every other node at depth 4
+    for (std::uint32_t i = 0, k = 0; i < refit.node_count(); ++i)
+        if (refit.depths[i] == 4 && k++ % 2 == 0) roots.push_back(i);
+    double saved = 0;
+    const std::vector<RebuiltPart> none, parts = build_parts(refit, roots, moved.view(), now, saved);
+    ASSERT_GT(parts.size(), 3u);
+    int differ = 0;  // cases whose two cuts differ (with intact subtrees whole, rigid spheres' may not)
+    for (const std::vector<RebuiltPart>* with : {&none, &parts}) {
+        const PartedTree parted(refit, now, *with, &built);
+        for (const std::uint32_t intact : {0u, 64u}) {
+            const std::vector<PartNode> fine = top_cut(parted, 4, intact), coarse = top_cut(parted, 24, intact);
+            ASSERT_GE(fine.size(), coarse.size());
+            differ += fine.size() > coarse.size();
+            for (const std::size_t dense :
+                 {std::size_t(0), std::size_t(3), fine.size() / 2, fine.size() - 1, fine.size(), SIZE_MAX}) {
+                std::vector<PartNode> got_fine, got_coarse;
+                const bool past = top_cuts(parted, 4, 24, intact, dense, got_fine, got_coarse);
+                EXPECT_EQ(past, fine.size() > dense);
+                EXPECT_TRUE(got_coarse == coarse);
+                ASSERT_EQ(got_fine.size(), past ? dense + 1 : fine.size());
+                EXPECT_TRUE(std::equal(got_fine.begin(), got_fine.end(), fine.begin()));
+            }
+        }
+    }
+    EXPECT_GE(differ, 2);
+    std::vector<PartNode> a, b;
+    EXPECT_THROW(top_cuts(PartedTree(refit, now, none), 24, 4, 0, SIZE_MAX, a, b), std::invalid_argument);
 }
 
 TEST(UpdateTop, AdaptiveOverIntactSubtreesIsValidAndTheSameOnEveryThreadCount) {

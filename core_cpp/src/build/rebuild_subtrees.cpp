@@ -5,6 +5,7 @@
 #include "rebuild_subtrees.h"
 
 #include <algorithm>
+#include <cstring>
 
 #include "bvhlab/stats.h"
 #include "bvhlab/thread_pool.h"
@@ -22,19 +23,25 @@ std::uint32_t first_slot(const Bvh& bvh, std::uint32_t root) {
 /// A tree over the primitives in slots [first, first + count) of `tree`, built with its settings;
 /// its references and packed primitives name the original primitives.
 Bvh build_part(const Bvh& tree, const GeometryView& g, std::uint32_t first, std::uint32_t count) {
-    NodeCostArray tris, spheres;
-    std::vector<std::uint32_t> tri_ref, sphere_ref;
-    tris.reserve(9 * std::size_t(count)), tri_ref.reserve(count);
+    NodeCostArray tris(9 * std::size_t(count)), spheres;
+    std::vector<std::uint32_t> tri_ref(count), sphere_ref;
+    std::size_t triangles = 0;
+    // the input is gathered at random (slot order): fetched kAhead references ahead, and each
+    // triangle copied whole into its place (an insert a triangle checked its room first)
+    constexpr std::uint32_t kAhead = 16;
+    for (std::uint32_t k = first; k < first + std::min(count, kAhead); ++k) prefetch_prim(g, tree.refs[k]);
     for (std::uint32_t k = first; k < first + count; ++k) {
+        if (k + kAhead < first + count) prefetch_prim(g, tree.refs[k + kAhead]);
         const std::uint32_t ref = tree.refs[k], i = ref_index(ref);
         if (is_sphere_ref(ref)) {
             spheres.insert(spheres.end(), g.spheres + 4 * std::size_t(i), g.spheres + 4 * std::size_t(i) + 4);
             sphere_ref.push_back(ref);
         } else {
-            tris.insert(tris.end(), g.triangles + 9 * std::size_t(i), g.triangles + 9 * std::size_t(i) + 9);
-            tri_ref.push_back(ref);
+            std::memcpy(&tris[9 * triangles], g.triangles + 9 * std::size_t(i), 9 * sizeof(float));
+            tri_ref[triangles++] = ref;
         }
     }
+    tris.resize(9 * triangles), tri_ref.resize(triangles);
     BuildConfig config = tree.config;
     config.threads = 1;  // the parts are small; the result never depends on it
     Bvh part = build_bvh({tris.data(), tri_ref.size(), spheres.data(), sphere_ref.size()}, config);

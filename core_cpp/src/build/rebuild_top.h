@@ -3,6 +3,7 @@
 // the cut are kept whole (refitted, or rebuilt by build_parts) and moved under the new top, their
 // leaf slots left where they are.
 #pragma once
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -63,6 +64,17 @@ private:
 /// are as good as when built and only where it stands changed.
 std::vector<PartNode> top_cut(const PartedTree& tree, std::uint32_t max_primitives,
                               std::uint32_t intact_primitives = 0);
+
+/// top_cut for two sizes in one scan, for a caller that takes the coarse cut where the fine one
+/// is dense: while `fine` holds at most `dense` nodes, it is top_cut(tree, fine_primitives,
+/// intact_primitives), and `coarse` receives top_cut(tree, coarse_primitives, intact_primitives)
+/// (fine_primitives at most coarse_primitives, else std::invalid_argument). Returns whether the
+/// fine cut passed `dense` nodes: its scan stopped there (`fine` then holds its first dense + 1
+/// nodes) and the coarse cut's went on alone. Two scans, the fine one and then the coarse one,
+/// missed the cache at every jump over a cut subtree (adaptive's dense waves).
+bool top_cuts(const PartedTree& tree, std::uint32_t fine_primitives, std::uint32_t coarse_primitives,
+              std::uint32_t intact_primitives, std::size_t dense, std::vector<PartNode>& fine,
+              std::vector<PartNode>& coarse);
 
 /// What the top needs of each cut node, read in cut (depth-first) order: its box, the nodes of
 /// its subtree, its primitives and S = A·cost.

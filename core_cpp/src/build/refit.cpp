@@ -111,12 +111,15 @@ void refit_pass(const Bvh& old, const GeometryView& g, BvhNode* nodes, std::uint
         prefetch_prim(g, refs[--ahead_slot]), --ahead_left;
     };
     for (std::uint32_t k = 0; k < kAhead; ++k) prefetch_next();
+    // the box of node i + 1 (the first child of an inner node i), the last iteration's, kept in
+    // registers: loaded back from the node just stored, each inner node waited on that store
+    F4 next_lo = empty, next_hi = neg(empty);
     for (std::uint32_t i = old.node_count(); i-- > 0;) {
         const BvhNode& n = old.nodes[i];
         if (!is_leaf(n)) {
-            const BvhNode &a = nodes[i + 1], &b = nodes[n.index];
-            store_node(nodes + i, n, min(F4::load(&a.lo.x), F4::load(&b.lo.x)),
-                       max(F4::load(&a.hi.x), F4::load(&b.hi.x)));
+            const BvhNode& b = nodes[n.index];
+            next_lo = min(next_lo, F4::load(&b.lo.x)), next_hi = max(next_hi, F4::load(&b.hi.x));
+            store_node(nodes + i, n, next_lo, next_hi);
             continue;
         }
         F4 lo = empty, hi = neg(empty);
@@ -135,6 +138,7 @@ void refit_pass(const Bvh& old, const GeometryView& g, BvhNode* nodes, std::uint
             lo = min(lo, min(a, min(b, c))), hi = max(hi, max(a, max(b, c)));
         }
         store_leaf(nodes + i, n, end, lo, hi);
+        next_lo = lo, next_hi = hi;
     }
 }
 

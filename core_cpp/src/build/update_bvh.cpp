@@ -85,11 +85,19 @@ UpdatePolicy adaptive(Bvh& tree, NodeCostArray& built, const NodeCosts& now, con
         // top_coarse_cut_primitives; over the fine cut of top_cut_primitives alone where that top
         // would leave the tree past tree_growth (a full rebuild otherwise)
         const std::uint32_t fine = config.top_cut_primitives;
+        const bool may_coarsen = config.top_coarse_cut_primitives > fine;
         for (const bool first : {true, false}) {
-            std::vector<PartNode> cut = top_cut(parted, fine, first ? config.top_intact_primitives : 0u);
+            // the first cut and, where it is dense, its coarser version, from one scan (top_cuts)
+            std::vector<PartNode> cut, coarse;
             bool coarser = first && config.top_intact_primitives > fine;
-            if (first && config.top_coarse_cut_primitives > fine && double(cut.size()) > kDenseCut * now.count[0])
-                cut = top_cut(parted, config.top_coarse_cut_primitives, config.top_intact_primitives), coarser = true;
+            if (first && may_coarsen) {
+                const auto dense = std::size_t(std::floor(kDenseCut * now.count[0]));  // size > kDenseCut · count
+                if (top_cuts(parted, fine, config.top_coarse_cut_primitives, config.top_intact_primitives, dense, cut,
+                             coarse))
+                    cut = std::move(coarse), coarser = true;
+            } else {
+                cut = top_cut(parted, fine, first ? config.top_intact_primitives : 0u);
+            }
             if (cut.size() > 1) {
                 const CutInfo info = cut_info(parted, cut);
                 const Bvh top = built_top(tree.config, info);
@@ -116,15 +124,21 @@ NodeCosts node_costs(const Bvh& bvh) {
     BigVector<double> area_cost(bvh.nodes.size());
     NodeCosts out{NodeCostArray(bvh.nodes.size()), NodeCostArray(bvh.nodes.size()),
                   BigVector<std::uint32_t>(bvh.nodes.size())};
+    // node i + 1's S and count (the first child's) are the last iteration's, kept in registers:
+    // read back from the arrays, each inner node waited on the store just made (the chain of
+    // first children runs through them)
+    double next_area_cost = 0;
+    std::uint32_t next_count = 0;
     for (std::uint32_t i = bvh.node_count(); i-- > 0;) {
         const BvhNode& n = bvh.nodes[i];
         const double area = node_box(n).half_area();
         if (is_leaf(n)) {
-            area_cost[i] = area * leaf_count(n), out.count[i] = leaf_count(n);
+            next_area_cost = area * leaf_count(n), next_count = leaf_count(n);
         } else {
-            area_cost[i] = area + area_cost[i + 1] + area_cost[n.index];
-            out.count[i] = out.count[i + 1] + out.count[n.index];
+            next_area_cost = area + next_area_cost + area_cost[n.index];
+            next_count = next_count + out.count[n.index];
         }
+        area_cost[i] = next_area_cost, out.count[i] = next_count;
         // a leaf's S/A is its count exactly (A·N is exact in double for N < 2^29): no division,
         // which took a third of this pass's time
         const bool exact = is_leaf(n) && leaf_count(n) < (1u << 29);
