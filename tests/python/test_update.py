@@ -66,8 +66,13 @@ def test_adaptive_refits_a_small_motion_and_rebuilds_a_scramble(knot):
 
 def test_bad_updates_are_refused(knot):
     tree = bvhlab.build(knot)
-    with pytest.raises(ValueError, match="same number of triangles"):
-        tree.update(knot[:10].copy())
+    n = len(knot)
+    for policy in ("refit", "partial", "adaptive"):  # each said "refit needs ..." before
+        with pytest.raises(ValueError, match=rf"built over {n} triangles and 0 spheres, got 10 and 0"):
+            tree.update(knot[:10].copy(), policy=policy)
+    with pytest.raises(ValueError, match=rf"built over {n} triangles"):
+        tree.refit(knot[:10].copy())
+    assert bvhlab.build(knot).update(knot[:10].copy(), policy="rebuild").policy == "rebuild"  # as the message says
     with pytest.raises(ValueError, match="policy"):
         bvhlab.UpdateConfig(policy="sometimes")
     with pytest.raises(ValueError, match="subtree_growth"):

@@ -17,6 +17,7 @@
 #include <cstring>
 #include <limits>
 #include <stdexcept>
+#include <string>
 
 #include "bvhlab/bvh.h"
 #include "bvhlab/coordinate_range.h"
@@ -146,7 +147,11 @@ void refit_pass(const Bvh& old, const GeometryView& g, BvhNode* nodes, std::uint
 
 Bvh refitted(const Bvh& old, const GeometryView& geometry, unsigned threads) {
     if (geometry.triangle_count != old.triangle_count || geometry.sphere_count != old.sphere_count)
-        throw std::invalid_argument("refit needs the same number of triangles and spheres the tree was built with");
+        throw std::invalid_argument(
+            "a refit or update keeps the tree's primitives: it was built over " + std::to_string(old.triangle_count) +
+            " triangles and " + std::to_string(old.sphere_count) + " spheres, got " +
+            std::to_string(geometry.triangle_count) + " and " + std::to_string(geometry.sphere_count) +
+            " (for another count, build a new tree, or update with policy rebuild)");
     if ((geometry.triangle_count && !geometry.triangles) || (geometry.sphere_count && !geometry.spheres))
         throw std::invalid_argument("primitive count given without data");
     // An SBVH's leaf boxes hold clipped parts of its primitives (sbvh/chop.h): a refit would have
