@@ -25,11 +25,11 @@ using test::supported_isas;
 
 namespace {
 
-/// Rays of all eight octants in shuffled order, more than one batch piece (kWideBatch), with
+/// Rays of all eight octants in shuffled order, several batch pieces (kWideBatch) and part of one, with
 /// directions whose components are +0 or -0 (octant by the sign bit: -0 is a negative octant, as
 /// 1/-0 = -inf), and each ray's own tmax from a few cases (a miss's t is tmax until finished).
 std::vector<Ray> shuffled_rays(std::uint32_t seed) {
-    auto rays = random_rays(2 * kWideBatch + 300, seed);
+    auto rays = random_rays(8 * kWideBatch + 300, seed);
     for (std::size_t i = 0; i < rays.size(); i += 13)
         if (rays[i].dir.y != 0.0f || rays[i].dir.z != 0.0f) rays[i].dir.x = (i / 13) % 2 ? 0.0f : -0.0f;
     for (std::size_t i = 0; i < rays.size(); i += 17)
@@ -161,4 +161,92 @@ TEST(WideBatch, EmptyTreeAndEmptyBatch) {
     }
     intersect_wide_batch(wide, none, rays.data(), 0, hits.data());  // nothing to do, nothing read
     occluded_wide_batch(wide, rays.data(), 0, occluded);
+}
+
+/// The wide batch checks its rays as it reads them (ray_batch.h prepare_piece, on the bits of
+/// |x|) rather than by check_rays before: it must refuse exactly what check_rays refuses, and
+/// name the same (first) ray, wherever in the batch the ray is and on any thread count.
+TEST(WideBatch, RefusesExactlyWhatCheckRaysRefuses) {
+    const auto scene = test::random_scene(500, 40, 59);
+    const Bvh bvh = build_bvh(scene.view());
+    const WideBvh wide = make_wide(bvh);
+    const float big = 0x1p40f, least = 0x1p-80f, most = 0x1p80f, nan = std::nanf(""), inf = kInfinity;
+    struct Case {
+        Vec3 origin, dir;
+        float tmax;
+    };
+    const Case accepted[] = {
+        {{big, -big, 0.0f}, {0.0f, 0.0f, 1.0f}, 5.0f},       {{0.0f, 0.0f, 0.0f}, {least, 0.0f, -0.0f}, 5.0f},
+        {{0.0f, 0.0f, 0.0f}, {-0.0f, most, 1.0f}, 5.0f},     {{-0.0f, 0.0f, 0.0f}, {0.0f, -least, least}, 0.0f},
+        {{1.0f, 2.0f, 3.0f}, {0x1p-149f, 0.0f, least}, inf},
+    };
+    const Case refused[] = {
+        {{std::nextafter(big, inf), 0.0f, 0.0f}, {0.0f, 0.0f, 1.0f}, 5.0f},
+        {{0.0f, -std::nextafter(big, inf), 0.0f}, {0.0f, 0.0f, 1.0f}, 5.0f},
+        {{0.0f, 0.0f, nan}, {0.0f, 0.0f, 1.0f}, 5.0f},
+        {{0.0f, 0.0f, -inf}, {0.0f, 0.0f, 1.0f}, 5.0f},
+        {{0.0f, 0.0f, 0.0f}, {std::nextafter(least, 0.0f), 0.0f, 0.0f}, 5.0f},
+        {{0.0f, 0.0f, 0.0f}, {0.0f, -std::nextafter(most, inf), 0.0f}, 5.0f},
+        {{0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 0.0f}, 5.0f},
+        {{0.0f, 0.0f, 0.0f}, {1.0f, nan, 0.0f}, 5.0f},
+        {{0.0f, 0.0f, 0.0f}, {1.0f, 0.0f, -inf}, 5.0f},
+        {{0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 1.0f}, nan},
+        {{0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 1.0f}, -1.0f},
+    };
+    const auto rays = random_rays(3000, 61);
+    auto batch_of = [&](const Case& c, std::size_t at, std::vector<float>& o, std::vector<float>& d,
+                        std::vector<float>& tmax) {
+        o.clear(), d.clear(), tmax.clear();
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+            const Ray& r = rays[i];
+            const Vec3 ro = i == at ? c.origin : r.origin, rd = i == at ? c.dir : r.dir;
+            o.insert(o.end(), {ro.x, ro.y, ro.z}), d.insert(d.end(), {rd.x, rd.y, rd.z});
+            tmax.push_back(i == at ? c.tmax : 10.0f);
+        }
+        RayBatch b;
+        b.origins = o.data(), b.directions = d.data(), b.count = rays.size(), b.tmax_of = tmax.data();
+        return b;
+    };
+    std::vector<float> o, d, tmax, t(rays.size()), t_stack(rays.size());
+    std::vector<std::int32_t> prim(rays.size()), prim_stack(rays.size());
+    std::vector<char> occluded(rays.size());
+    const Isa before = active_isa();
+    for (Isa isa : supported_isas()) {
+        set_isa(isa);
+        for (std::uint32_t threads : {1u, 3u}) {
+            for (const Case& c : accepted) {
+                const RayBatch b = batch_of(c, 2100, o, d, tmax);
+                HitBatch hits, stack;
+                hits.t = t.data(), hits.prim = prim.data(), stack.t = t_stack.data(), stack.prim = prim_stack.data();
+                ASSERT_NO_THROW(intersect_batch(bvh, b, hits, Traversal::Wide, threads, &wide));
+                ASSERT_NO_THROW(
+                    occluded_batch(bvh, b, reinterpret_cast<bool*>(occluded.data()), Traversal::Wide, threads, &wide));
+                intersect_batch(bvh, b, stack, Traversal::Stack, 1);
+                EXPECT_TRUE(same_bits(t[2100], t_stack[2100]) && prim[2100] == prim_stack[2100]);
+                EXPECT_EQ(bool(occluded[2100]), t_stack[2100] < c.tmax);
+            }
+            for (const Case& c : refused)
+                for (std::size_t at : {std::size_t(5), std::size_t(2100), std::size_t(2101)}) {
+                    const RayBatch b = batch_of(c, at, o, d, tmax);
+                    if (at == 2101) o[3 * 2900 + 1] = nan;  // a second refused ray after it: the first is named
+                    std::string expected;
+                    try {
+                        check_rays(b);
+                    } catch (const std::invalid_argument& e) { expected = e.what(); }
+                    ASSERT_NE(expected.find("ray " + std::to_string(at)), std::string::npos) << expected;
+                    HitBatch hits;
+                    hits.t = t.data(), hits.prim = prim.data();
+                    try {
+                        intersect_batch(bvh, b, hits, Traversal::Wide, threads, &wide);
+                        ADD_FAILURE() << "accepted: " << expected;
+                    } catch (const std::invalid_argument& e) { EXPECT_EQ(std::string(e.what()), expected); }
+                    try {
+                        occluded_batch(bvh, b, reinterpret_cast<bool*>(occluded.data()), Traversal::Wide, threads,
+                                       &wide);
+                        ADD_FAILURE() << "accepted: " << expected;
+                    } catch (const std::invalid_argument& e) { EXPECT_EQ(std::string(e.what()), expected); }
+                }
+        }
+    }
+    set_isa(before);
 }

@@ -74,6 +74,18 @@ inline float power_of_two(int e) {
     return f;
 }
 
+/// scale_ray (below) for a direction in range whose largest |component| has the bits `largest_bits` (a
+/// batch's rays have them from their check: ray_batch.h prepare_piece).
+inline float scale_ray_by(Ray& ray, std::uint32_t largest_bits) {
+    const int e = int(largest_bits >> 23) - 126;                // m = f·2^e with f in [0.5, 1): m is normal here
+    if (e == 0) return 1.0f;                                    // already in [0.5, 1): nothing to do
+    const float down = power_of_two(-e), up = power_of_two(e);  // e in [-79, 81]: both normal
+    ray.dir = ray.dir * down;
+    ray.tmin *= up;
+    ray.tmax *= up;
+    return down;
+}
+
 /// Scales a ray's direction by 2^-e so that its largest component lies in [0.5, 1), and its
 /// (tmin, tmax) by 2^e, so it describes the same points; returns 2^-e, by which the t of a hit
 /// must be multiplied to be in the caller's units. Powers of two scale exactly, and every test is
@@ -90,13 +102,7 @@ inline float scale_ray(Ray& ray) {
     if (!(m >= kMinDirection && m <= kMaxDirection)) return 1.0f;
     std::uint32_t bits;
     std::memcpy(&bits, &m, sizeof bits);
-    const int e = int(bits >> 23) - 126;                        // m = f·2^e with f in [0.5, 1): m is normal here
-    if (e == 0) return 1.0f;                                    // already in [0.5, 1): nothing to do
-    const float down = power_of_two(-e), up = power_of_two(e);  // e in [-79, 81]: both normal
-    ray.dir = ray.dir * down;
-    ray.tmin *= up;
-    ray.tmax *= up;
-    return down;
+    return scale_ray_by(ray, bits);
 }
 
 }  // namespace bvhlab

@@ -3,19 +3,26 @@
 // (coordinate_range.h), Ctrl-C honoured between chunks.
 #pragma once
 #include <algorithm>
+#include <atomic>
 #include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <stdexcept>
 #include <type_traits>
+#include <utility>
 
 #include "bvhlab/cancel.h"
 #include "bvhlab/coordinate_range.h"
 #include "bvhlab/thread_pool.h"
 #include "bvhlab/traverse.h"
 #include "bvhlab/wide_bvh.h"
+#include "wide_kernel.h"
 
 namespace bvhlab {
 
-/// Rays a task of a batch query takes (one call of for_each_chunk's chunk).
-inline constexpr std::size_t kRayChunk = kWideBatch;
+/// Rays a task of a batch query takes (one call of for_each_chunk's chunk): four of the wide
+/// walks' pieces (kWideBatch).
+inline constexpr std::size_t kRayChunk = 4 * kWideBatch;
 
 /// Room for N objects of a trivial type T (Ray, Hit), left unwritten: a chunk's arrays of T
 /// (whose members have default values) cost a pass of stores when declared as T[N] (Sponza
@@ -25,14 +32,15 @@ struct Scratch {
     static_assert(std::is_trivially_copyable_v<T> && std::is_trivially_destructible_v<T>);
     alignas(T) std::byte bytes[N * sizeof(T)];
     T* data() { return reinterpret_cast<T*>(bytes); }
+    const T* data() const { return reinterpret_cast<const T*>(bytes); }
     T& operator[](std::size_t i) { return data()[i]; }
 };
 
 /// Calls `chunk(begin, end)` for the batch's chunks of kRayChunk rays, spread over the shared pool,
-/// with the checks and cancellation of every batch query.
+/// with the cancellation of every batch query but no check of the rays (for_each_chunk checks
+/// them first; for_each_ray_piece as it reads them).
 template <class Chunk>
-void for_each_chunk(const RayBatch& rays, std::uint32_t threads, Cancellation* cancel, Chunk&& chunk) {
-    check_rays(rays);
+void for_each_unchecked_chunk(const RayBatch& rays, std::uint32_t threads, Cancellation* cancel, Chunk&& chunk) {
     if (cancel && cancel->poll()) throw Cancelled();  // asked to stop before anything started
     auto task = [&](std::size_t k, unsigned slot) {
         // the calling thread (slot 0) runs the check; the others read the flag
@@ -43,6 +51,14 @@ void for_each_chunk(const RayBatch& rays, std::uint32_t threads, Cancellation* c
         if (cancel) cancel->poll();
     });
     if (cancel && cancel->stop_requested()) throw Cancelled();
+}
+
+/// Calls `chunk(begin, end)` for the batch's chunks of kRayChunk rays, spread over the shared pool,
+/// with the checks and cancellation of every batch query.
+template <class Chunk>
+void for_each_chunk(const RayBatch& rays, std::uint32_t threads, Cancellation* cancel, Chunk&& chunk) {
+    check_rays(rays);
+    for_each_unchecked_chunk(rays, threads, cancel, std::forward<Chunk>(chunk));
 }
 
 /// Ray i of the batch (with its own tmax where the batch has one per ray), scaled by scale_ray,
@@ -67,33 +83,115 @@ void for_each_ray(const RayBatch& rays, std::uint32_t threads, Cancellation* can
     });
 }
 
-/// Calls `visit(begin, n, rays, t_scale)` for each chunk of the batch: its rays begin .. begin + n
-/// as rays[0, n) (scaled_ray) with their factors t_scale[0, n), for the queries that trace a
-/// chunk at once (the wide tree's, intersect_wide_batch).
+/// The bits of |x| as an unsigned integer, which orders as |x| does for numbers, above every
+/// number (and infinity) for a NaN.
+inline std::uint32_t magnitude_bits(float x) {
+    std::uint32_t b;
+    std::memcpy(&b, &x, sizeof b);
+    return b & 0x7fffffffu;
+}
+
+/// A piece of a batch as the wide tree's batch walks take it (wide_kernel.h intersect_wide_grouped):
+/// its rays scaled (scaled_ray), each with its factor, and grouped by octant (order_by_octant).
+struct RayPiece {
+    Scratch<Ray, kWideBatch> rays;
+    float t_scale[kWideBatch];
+    std::uint32_t order[kWideBatch], start[9];
+    std::uint32_t count;
+};
+
+/// Rays begin .. end (at most kWideBatch) of the batch to `piece`, in one pass over the caller's
+/// arrays: each checked by check_rays' rules, scaled (scaled_ray) and given its octant (the sign
+/// bits of its direction), then ordered by octant. Returns false where a ray is refused (the
+/// piece is then not to be traced; check_rays names the ray).
+/// The checks are in_coordinate_range and direction_in_range on the bits of |x|
+/// (magnitude_bits): a NaN's exceed every number's, so one integer comparison a bound refuses
+/// it, and the largest |component| is the largest of the bits.
+inline bool prepare_piece(const RayBatch& rays, std::size_t begin, std::size_t end, RayPiece& piece) {
+    constexpr std::uint32_t kMaxOrigin = 0x53800000u;                   // the bits of kMaxCoordinate, 2^40
+    constexpr std::uint32_t kLeast = 0x17800000u, kMost = 0x67800000u;  // of kMinDirection, kMaxDirection
+    static_assert(kMaxCoordinate == 0x1p40f && kMinDirection == 0x1p-80f && kMaxDirection == 0x1p80f);
+    const auto n = std::uint32_t(end - begin);
+    // the batch's fields in locals: the stores to the piece could alias them for the compiler
+    const float *origins = rays.origins + 3 * begin, *directions = rays.directions + 3 * begin;
+    const float* tmax_of = rays.tmax_of ? rays.tmax_of + begin : nullptr;
+    const float tmin = rays.tmin, tmax = rays.tmax;
+    std::uint8_t octant[kWideBatch];
+    std::uint32_t refused = 0;
+    const auto bits = [](const float* p) {
+        std::uint32_t b;
+        std::memcpy(&b, p, sizeof b);
+        return b;
+    };
+    for (std::uint32_t j = 0; j < n; ++j) {  // as bits: no float operation before the scaling
+        const float *o = origins + 3 * j, *d = directions + 3 * j;
+        const std::uint32_t dx = bits(d), dy = bits(d + 1), dz = bits(d + 2), m = 0x7fffffffu;
+        const std::uint32_t dir = std::max(dx & m, std::max(dy & m, dz & m));
+        const std::uint32_t origin = std::max(bits(o) & m, std::max(bits(o + 1) & m, bits(o + 2) & m));
+        refused |= std::uint32_t(origin > kMaxOrigin) | std::uint32_t(dir - kLeast > kMost - kLeast);
+        Ray& ray = piece.rays[j];
+        ray.origin = Vec3{o[0], o[1], o[2]}, ray.dir = Vec3{d[0], d[1], d[2]};
+        ray.tmin = tmin, ray.tmax = tmax_of ? tmax_of[j] : tmax;
+        if (tmax_of) refused |= std::uint32_t(!(ray.tmax >= 0.0f));
+        piece.t_scale[j] = scale_ray_by(ray, dir);  // any float where refused: the piece is not traced
+        octant[j] = std::uint8_t(dx >> 31 | (dy >> 31) << 1 | (dz >> 31) << 2);
+    }
+    if (refused) return false;
+    piece.count = n;
+    order_by_octant(octant, n, piece.order, piece.start);
+    return true;
+}
+
+/// Calls `visit(begin, piece)` for each piece of the batch (prepare_piece: rays begin ..
+/// begin + piece.count, scaled and grouped by octant), for the queries that trace a piece at once
+/// (the wide tree's). The rays are checked as they are read rather than in a pass before (which
+/// read the caller's arrays twice: 44 instructions a ray, repeat1m primary rays); a piece with a
+/// refused ray is not traced, the other threads stop, and check_rays throws naming the first
+/// (the outputs are then left incomplete, as when cancelled).
 template <class Visit>
-void for_each_ray_chunk(const RayBatch& rays, std::uint32_t threads, Cancellation* cancel, Visit&& visit) {
-    for_each_chunk(rays, threads, cancel, [&](std::size_t begin, std::size_t end) {
-        Scratch<Ray, kRayChunk> chunk;
-        float t_scale[kRayChunk];
-        for (std::size_t i = begin; i < end; ++i) chunk[i - begin] = scaled_ray(rays, i, t_scale[i - begin]);
-        visit(begin, end - begin, static_cast<const Ray*>(chunk.data()), static_cast<const float*>(t_scale));
+void for_each_ray_piece(const RayBatch& rays, std::uint32_t threads, Cancellation* cancel, Visit&& visit) {
+    std::atomic<bool> refused{false};
+    for_each_unchecked_chunk(rays, threads, cancel, [&](std::size_t begin, std::size_t end) {
+        RayPiece piece;
+        for (std::size_t at = begin; at < end && !refused.load(std::memory_order_relaxed); at += kWideBatch) {
+            if (!prepare_piece(rays, at, std::min(end, at + kWideBatch), piece)) {
+                refused.store(true, std::memory_order_relaxed);
+                return;
+            }
+            visit(at, static_cast<const RayPiece&>(piece));
+        }
     });
+    if (refused.load()) {
+        check_rays(rays);  // throws, naming the first refused ray
+        throw std::logic_error("a batch refused a ray that check_rays accepts");
+    }
 }
 
 /// hits[0, n) of rays begin .. begin + n (t in the scaled units of t_scale) to `out`, t back in the
-/// caller's units.
-inline void write_hits(const HitBatch& out, std::size_t begin, std::size_t n, const Hit* hits,
-                       const std::uint32_t* visited, const float* t_scale) {
+/// caller's units. kFinish: the hits are as the wide walks leave them (intersect_wide_grouped: a
+/// miss's t is the ray's tmax, a sphere's u, v not yet made), finished here (finish_hit with the
+/// scaled rays[j]) rather than in a pass of their own; `visited` may then be null where `out` has
+/// no nodes_visited.
+template <bool kFinish = false>
+void write_hits(const HitBatch& out, std::size_t begin, std::size_t n, Hit* hits, const std::uint32_t* visited,
+                const float* t_scale, const Bvh* bvh = nullptr, const Ray* rays = nullptr) {
+    // the outputs in locals: the stores could alias `out` for the compiler, which then reloaded it
+    float *t = out.t + begin, *u = out.u ? out.u + begin : nullptr, *v = out.v ? out.v + begin : nullptr;
+    std::int32_t* prim = out.prim + begin;
+    std::uint8_t* kind = out.kind ? out.kind + begin : nullptr;
+    std::uint32_t* nodes_visited = out.nodes_visited ? out.nodes_visited + begin : nullptr;
     for (std::size_t j = 0; j < n; ++j) {
-        const std::size_t i = begin + j;
-        const Hit& h = hits[j];
+        Hit& h = hits[j];
         const bool miss = h.ref == kNoHit;
-        out.t[i] = h.t * t_scale[j];  // inf stays inf
-        out.prim[i] = miss ? -1 : std::int32_t(h.ref & gpu::REF_INDEX_MASK);
-        if (out.kind) out.kind[i] = miss ? 0 : std::uint8_t((h.ref & gpu::REF_SPHERE_BIT) ? 1 : 0);
-        if (out.u) out.u[i] = h.u;
-        if (out.v) out.v[i] = h.v;
-        if (out.nodes_visited) out.nodes_visited[i] = visited[j];
+        if constexpr (kFinish)
+            if (!miss && (h.ref & gpu::REF_SPHERE_BIT)) [[unlikely]]
+                finish_hit(*bvh, rays[j], h);
+        t[j] = kFinish && miss ? kInfinity : h.t * t_scale[j];  // inf stays inf
+        prim[j] = miss ? -1 : std::int32_t(h.ref & gpu::REF_INDEX_MASK);
+        if (kind) kind[j] = miss ? 0 : std::uint8_t((h.ref & gpu::REF_SPHERE_BIT) ? 1 : 0);
+        if (u) u[j] = h.u;
+        if (v) v[j] = h.v;
+        if (nodes_visited) nodes_visited[j] = visited[j];
     }
 }
 
@@ -105,7 +203,7 @@ void run_ray_batch(const RayBatch& rays, const HitBatch& out, std::uint32_t thre
                    Trace&& trace) {
     for_each_ray(rays, threads, cancel, [&](std::size_t i, const Ray& ray, float t_scale) {
         std::uint32_t visited;
-        const Hit h = trace(i, ray, visited);
+        Hit h = trace(i, ray, visited);
         write_hits(out, i, 1, &h, &visited, &t_scale);
     });
 }

@@ -119,11 +119,10 @@ void occluded_batch(const Bvh& bvh, const RayBatch& rays, bool* occluded_out, Tr
                     const WideBvh* wide, Cancellation* cancel) {
     if (mode == Traversal::Wide && !wide) throw std::invalid_argument("Traversal::Wide needs the wide tree");
     check_tmax(rays);
-    if (mode == Traversal::Wide) {  // a chunk at once, grouped by octant (wide_bvh.h occluded_wide_batch)
-        return for_each_ray_chunk(rays, threads, cancel,
-                                  [&](std::size_t begin, std::size_t n, const Ray* chunk, const float*) {
-                                      occluded_wide_batch(*wide, chunk, n, occluded_out + begin);
-                                  });
+    if (mode == Traversal::Wide) {  // a piece at once, grouped by octant (wide_kernel.h occluded_wide_grouped)
+        return for_each_ray_piece(rays, threads, cancel, [&](std::size_t begin, const RayPiece& piece) {
+            occluded_wide_grouped(*wide, piece.rays.data(), piece.order, piece.start, occluded_out + begin);
+        });
     }
     for_each_ray(rays, threads, cancel,
                  [&](std::size_t i, const Ray& ray, float) { occluded_out[i] = occluded(bvh, ray, mode); });
@@ -132,22 +131,15 @@ void occluded_batch(const Bvh& bvh, const RayBatch& rays, bool* occluded_out, Tr
 void intersect_batch(const Bvh& bvh, const RayBatch& rays, const HitBatch& out, Traversal mode, std::uint32_t threads,
                      const WideBvh* wide, Cancellation* cancel) {
     if (mode == Traversal::Wide && !wide) throw std::invalid_argument("Traversal::Wide needs the wide tree");
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic push  // GCC cannot see that for_each_ray_chunk wrote the chunk's n rays (Scratch)
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#endif
-    if (mode == Traversal::Wide) {  // a chunk at once, grouped by octant (wide_bvh.h intersect_wide_batch)
-        return for_each_ray_chunk(rays, threads, cancel,
-                                  [&](std::size_t begin, std::size_t n, const Ray* chunk, const float* t_scale) {
-                                      Scratch<Hit, kRayChunk> hits;
-                                      std::uint32_t visited[kRayChunk];
-                                      intersect_wide_batch(*wide, bvh, chunk, n, hits.data(), visited);
-                                      write_hits(out, begin, n, hits.data(), visited, t_scale);
-                                  });
+    if (mode == Traversal::Wide) {  // a piece at once, grouped by octant (wide_kernel.h intersect_wide_grouped)
+        return for_each_ray_piece(rays, threads, cancel, [&](std::size_t begin, const RayPiece& piece) {
+            Scratch<Hit, kWideBatch> hits;
+            std::uint32_t visited[kWideBatch];
+            std::uint32_t* v = out.nodes_visited ? visited : nullptr;
+            intersect_wide_grouped(*wide, piece.rays.data(), piece.order, piece.start, hits.data(), v);
+            write_hits<true>(out, begin, piece.count, hits.data(), v, piece.t_scale, &bvh, piece.rays.data());
+        });
     }
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic pop
-#endif
     run_ray_batch(rays, out, threads, cancel, [&](std::size_t, const Ray& ray, std::uint32_t& visited) {
         return intersect(bvh, ray, mode, &visited);
     });

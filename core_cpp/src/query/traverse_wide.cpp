@@ -221,53 +221,69 @@ Hit intersect_wide(const WideBvh& wide, const Bvh& bvh, const Ray& ray, std::uin
     return hit;
 }
 
-void group_by_octant(const Ray* rays, std::uint32_t count, std::uint32_t* order, std::uint32_t start[9]) {
+void order_by_octant(const std::uint8_t* octant, std::uint32_t count, std::uint32_t* order, std::uint32_t start[9]) {
     std::uint32_t at[8] = {};
+    for (std::uint32_t i = 0; i < count; ++i) ++at[octant[i]];
+    start[0] = 0;
+    bool one = false;  // all of one octant (a camera's rays, most pieces): the order is the input's
+    for (int k = 0; k < 8; ++k) one |= at[k] == count, start[k + 1] = start[k] + at[k], at[k] = start[k];
+    if (one) {
+        for (std::uint32_t i = 0; i < count; ++i) order[i] = i;
+        return;
+    }
+    for (std::uint32_t i = 0; i < count; ++i) order[at[octant[i]]++] = i;
+}
+
+void group_by_octant(const Ray* rays, std::uint32_t count, std::uint32_t* order, std::uint32_t start[9]) {
     std::uint8_t octant[kWideBatch];             // count ≤ kWideBatch (intersect_wide_batch's pieces)
     for (std::uint32_t i = 0; i < count; ++i) {  // the sign bits, as integers
         std::uint32_t d[3];
         std::memcpy(d, &rays[i].dir, sizeof d);
         octant[i] = std::uint8_t(d[0] >> 31 | (d[1] >> 31) << 1 | (d[2] >> 31) << 2);
-        ++at[octant[i]];
     }
-    start[0] = 0;
-    for (int k = 0; k < 8; ++k) start[k + 1] = start[k] + at[k], at[k] = start[k];
-    for (std::uint32_t i = 0; i < count; ++i) order[at[octant[i]]++] = i;
+    order_by_octant(octant, count, order, start);
+}
+
+void intersect_wide_grouped(const WideBvh& wide, const Ray* rays, const std::uint32_t* order,
+                            const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited) {
+    const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
+#if defined(BVHLAB_AVX2_KERNELS)
+    if (active_isa() == Isa::Avx2) avx2::intersect_wide_batch_kernel(view, rays, order, start, hits, nodes_visited);
+    else portable::intersect_wide_batch_kernel(view, rays, order, start, hits, nodes_visited);
+#else
+    portable::intersect_wide_batch_kernel(view, rays, order, start, hits, nodes_visited);
+#endif
+}
+
+void occluded_wide_grouped(const WideBvh& wide, const Ray* rays, const std::uint32_t* order, const std::uint32_t* start,
+                           bool* occluded) {
+    const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
+#if defined(BVHLAB_AVX2_KERNELS)
+    if (active_isa() == Isa::Avx2) avx2::occluded_wide_batch_kernel(view, rays, order, start, occluded);
+    else portable::occluded_wide_batch_kernel(view, rays, order, start, occluded);
+#else
+    portable::occluded_wide_batch_kernel(view, rays, order, start, occluded);
+#endif
 }
 
 void intersect_wide_batch(const WideBvh& wide, const Bvh& bvh, const Ray* rays, std::size_t count, Hit* hits,
                           std::uint32_t* nodes_visited) {
-    const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
-    std::uint32_t order[kWideBatch], start[9];
-    for (std::size_t begin = 0; begin < count; begin += kWideBatch) {
-        const auto n = std::uint32_t(std::min<std::size_t>(kWideBatch, count - begin));
-        const Ray* r = rays + begin;
-        Hit* h = hits + begin;
-        std::uint32_t* v = nodes_visited ? nodes_visited + begin : nullptr;
-        group_by_octant(r, n, order, start);
-#if defined(BVHLAB_AVX2_KERNELS)
-        if (active_isa() == Isa::Avx2) avx2::intersect_wide_batch_kernel(view, r, order, start, h, v);
-        else portable::intersect_wide_batch_kernel(view, r, order, start, h, v);
-#else
-        portable::intersect_wide_batch_kernel(view, r, order, start, h, v);
-#endif
-        for (std::uint32_t i = 0; i < n; ++i) finish_wide_hit(bvh, r[i], h[i]);
-    }
-}
-
-void occluded_wide_batch(const WideBvh& wide, const Ray* rays, std::size_t count, bool* occluded) {
-    const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
     std::uint32_t order[kWideBatch], start[9];
     for (std::size_t begin = 0; begin < count; begin += kWideBatch) {
         const auto n = std::uint32_t(std::min<std::size_t>(kWideBatch, count - begin));
         group_by_octant(rays + begin, n, order, start);
-#if defined(BVHLAB_AVX2_KERNELS)
-        if (active_isa() == Isa::Avx2)
-            avx2::occluded_wide_batch_kernel(view, rays + begin, order, start, occluded + begin);
-        else portable::occluded_wide_batch_kernel(view, rays + begin, order, start, occluded + begin);
-#else
-        portable::occluded_wide_batch_kernel(view, rays + begin, order, start, occluded + begin);
-#endif
+        intersect_wide_grouped(wide, rays + begin, order, start, hits + begin,
+                               nodes_visited ? nodes_visited + begin : nullptr);
+        for (std::uint32_t i = 0; i < n; ++i) finish_wide_hit(bvh, rays[begin + i], hits[begin + i]);
+    }
+}
+
+void occluded_wide_batch(const WideBvh& wide, const Ray* rays, std::size_t count, bool* occluded) {
+    std::uint32_t order[kWideBatch], start[9];
+    for (std::size_t begin = 0; begin < count; begin += kWideBatch) {
+        const auto n = std::uint32_t(std::min<std::size_t>(kWideBatch, count - begin));
+        group_by_octant(rays + begin, n, order, start);
+        occluded_wide_grouped(wide, rays + begin, order, start, occluded + begin);
     }
 }
 

@@ -52,10 +52,22 @@ struct TlasWalk {
     bool resumed;  ///< false until the first leaf is handed out: the next call pops
 };
 
-/// Groups rays[0, count) by octant (bit a set where dir[a]'s sign bit is: make_query's octant, the
-/// sign of 1/dir[a]) by a stable counting sort: order[start[k], start[k + 1]) the rays of octant
-/// k in input order, start[0] = 0 and start[8] = count.
+/// Orders rays [0, count) by octant[i] by a stable counting sort: order[start[k], start[k + 1])
+/// the rays of octant k in input order, start[0] = 0 and start[8] = count.
+void order_by_octant(const std::uint8_t* octant, std::uint32_t count, std::uint32_t* order, std::uint32_t start[9]);
+
+/// Groups rays[0, count) (count ≤ kWideBatch) by octant (bit a set where dir[a]'s sign bit is:
+/// make_query's octant, the sign of 1/dir[a]) by order_by_octant.
 void group_by_octant(const Ray* rays, std::uint32_t count, std::uint32_t* order, std::uint32_t start[9]);
+
+/// intersect_wide_batch and occluded_wide_batch on rays already grouped (order and start as
+/// group_by_octant writes them; start[8] rays): hits[i] (nodes_visited[i] where not null) and
+/// occluded[i] for rays[i]. The hits are left unfinished: a miss's t is the ray's tmax and a
+/// sphere's u, v are not made (ray_batch.h write_hits<true> finishes them as it writes them).
+void intersect_wide_grouped(const WideBvh& wide, const Ray* rays, const std::uint32_t* order,
+                            const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited);
+void occluded_wide_grouped(const WideBvh& wide, const Ray* rays, const std::uint32_t* order, const std::uint32_t* start,
+                           bool* occluded);
 
 /// The batch kernels (wide_batch.inl): the rays grouped by group_by_octant, each group through
 /// its octant's walk, results in each ray's slot (hits[i], nodes_visited[i] where not null,
