@@ -1,5 +1,6 @@
-"""Batch queries on a thread with a small stack. A chunk of a batch keeps its rays, hits and scale
-factors on the calling thread's stack (ray_batch.h, about 64-96 KiB: a 64 KiB thread crashes), so
+"""Batch queries on a thread with a small stack. A piece of a batch keeps its rays, hits and scale
+factors on the calling thread's stack (ray_batch.h: a 32 KiB thread runs them since the pieces are
+256 rays; with 1,024-ray chunks a 64 KiB thread crashed), so
 the bound is pinned here: a thread of 256 KiB, half of the smallest default any supported platform
 gives a thread (macOS: 512 KiB; Linux 8 MiB, Windows 1 MiB), runs every batch query, flat and
 two-level, with the same results as the main thread. A batch query that grew its stack frame past
