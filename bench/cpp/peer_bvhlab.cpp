@@ -1,7 +1,7 @@
 // bvhlab as a benchmark peer: build_bvh with the options of the spec, single rays (closest hit,
 // or any hit for shadow rays: occluded) through the wide tree (the fastest CPU traversal) or the
 // traversal named by query=. Spec options, comma separated (BuildConfig's fields): method=, axis=,
-// bins=, fine= (fine_bins), span=box|centroids, leaf= (max leaf size), block= (sah_block), trav= and isect= (the
+// bins=, span=box|centroids, leaf= (max leaf size), block= (sah_block), trav= and isect= (the
 // SAH's costs), alpha=, budget=, unsplit=0|1 (method sbvh); query=stack|stackless|wide; batch=1 traces each set by the
 // batch queries users call (intersect_batch, occluded_batch: checked, scaled, grouped by octant)
 // on one thread rather than ray by ray; opt=N
@@ -55,7 +55,6 @@ Options parse_options(const std::string& options, unsigned threads) {
         if (key == "method") cfg.method = bvhlab::parse_split_method(value);
         else if (key == "axis") cfg.axis = bvhlab::parse_axis_policy(value);
         else if (key == "bins") cfg.bins = std::stoul(value);
-        else if (key == "fine") cfg.fine_bins = std::stoul(value);
         else if (key == "span") cfg.bin_bounds = bvhlab::parse_bin_bounds(value);
         else if (key == "leaf") cfg.max_leaf_size = std::stoul(value);
         else if (key == "block") cfg.sah_block = std::stoul(value);

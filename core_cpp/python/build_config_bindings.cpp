@@ -29,7 +29,6 @@ void bind_build_config(nb::module_& m) {
     name_property<BinBounds, &BuildConfig::bin_bounds, parse_bin_bounds>(c, "bin_bounds",
                                                                          "what the binned SAH's buckets divide");
     c.def_rw("bins", &BuildConfig::bins)
-        .def_rw("fine_bins", &BuildConfig::fine_bins, "buckets for ranges of at most FINE_BIN_RANGE (0: bins)")
         .def_rw("max_leaf_size", &BuildConfig::max_leaf_size)
         .def_rw("sah_block", &BuildConfig::sah_block)
         .def_rw("seed", &BuildConfig::seed)
@@ -43,7 +42,6 @@ void bind_build_config(nb::module_& m) {
             "Raises ValueError naming the first setting out of range.");
     m.attr("MIN_BINS") = kMinBins;
     m.attr("MAX_BINS") = kMaxBins;
-    m.attr("FINE_BIN_RANGE") = kFineBinRange;
     m.attr("MAX_LEAF_SIZE") = kMaxLeafSize;
     m.attr("MAX_SAH_BLOCK") = kMaxSahBlock;
     m.def("sbvh_reference_limit", &sbvh_reference_limit, nb::arg("primitives"), nb::arg("config"),

@@ -47,8 +47,7 @@ nb::dict stats_dict(const Bvh& bvh) {
     d["leaf_size_histogram"] = s.leaf_size_histogram;
     d["memory_bytes"] = s.memory_bytes;
     d["method"] = to_string(bvh.config.method), d["axis"] = to_string(bvh.config.axis);
-    d["bins"] = bvh.config.bins, d["fine_bins"] = bvh.config.fine_bins;
-    d["max_leaf_size_config"] = bvh.config.max_leaf_size;
+    d["bins"] = bvh.config.bins, d["max_leaf_size_config"] = bvh.config.max_leaf_size;
     d["bin_bounds"] = to_string(bvh.config.bin_bounds), d["sah_block"] = bvh.config.sah_block;
     return d;
 }
@@ -236,7 +235,6 @@ void bind_build_names(nb::module_& m) {
     m.attr("DEFAULT_METHOD") = to_string(defaults.method);
     m.attr("DEFAULT_AXIS") = to_string(defaults.axis);
     m.attr("DEFAULT_BINS") = defaults.bins;
-    m.attr("DEFAULT_FINE_BINS") = defaults.fine_bins;
     m.attr("DEFAULT_BIN_BOUNDS") = to_string(defaults.bin_bounds);
     m.attr("DEFAULT_MAX_LEAF_SIZE") = defaults.max_leaf_size;
     m.attr("DEFAULT_SAH_BLOCK") = defaults.sah_block;

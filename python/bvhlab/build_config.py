@@ -19,12 +19,10 @@ _CORE_DEFAULTS = _core.BuildConfig()
 DEFAULT_METHOD: str = _CORE_DEFAULTS.method
 DEFAULT_AXIS: str = _CORE_DEFAULTS.axis
 DEFAULT_BINS: int = _CORE_DEFAULTS.bins
-DEFAULT_FINE_BINS: int = _CORE_DEFAULTS.fine_bins
 DEFAULT_BIN_BOUNDS: str = _CORE_DEFAULTS.bin_bounds
 DEFAULT_MAX_LEAF_SIZE: int = _CORE_DEFAULTS.max_leaf_size
 DEFAULT_SAH_BLOCK: int = _CORE_DEFAULTS.sah_block
 MIN_BINS, MAX_BINS = int(_core.MIN_BINS), int(_core.MAX_BINS)
-FINE_BIN_RANGE = int(_core.FINE_BIN_RANGE)
 MAX_LEAF_SIZE = int(_core.MAX_LEAF_SIZE)
 MAX_SAH_BLOCK = int(_core.MAX_SAH_BLOCK)
 
@@ -47,7 +45,6 @@ class BuildConfig:
 
     method: str = DEFAULT_METHOD
     bins: int = DEFAULT_BINS
-    fine_bins: int = DEFAULT_FINE_BINS
     bin_bounds: str = DEFAULT_BIN_BOUNDS
     axis: str = DEFAULT_AXIS
     max_leaf_size: int = DEFAULT_MAX_LEAF_SIZE
@@ -68,7 +65,6 @@ class BuildConfig:
         c.axis = _checks.choice("axis", self.axis, AXES)
         c.bin_bounds = _checks.choice("bin_bounds", self.bin_bounds, BIN_BOUNDS)
         c.bins = _uint32("bins", self.bins, (MIN_BINS, MAX_BINS))
-        c.fine_bins = _uint32("fine_bins", self.fine_bins, (0, MAX_BINS))
         c.max_leaf_size = _uint32("max_leaf_size", self.max_leaf_size, (1, MAX_LEAF_SIZE))
         c.sah_block = _uint32("sah_block", self.sah_block, (1, MAX_SAH_BLOCK))
         c.seed = _checks.integer("seed", self.seed, 0, 2**64 - 1)

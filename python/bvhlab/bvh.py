@@ -49,8 +49,7 @@ def build(
     `method` is one of METHODS, `axis` one of AXES ("auto": all three axes for the SAH methods,
     the largest centroid extent for the others); `bins` (MIN_BINS..MAX_BINS) is used by "sah",
     whose equal buckets divide the node's box (`bin_bounds="box"`) or its centroid bounds
-    ("centroids", the report's §2.3.2); with buckets over the box, ranges of at most FINE_BIN_RANGE
-    (1,024) primitives take `fine_bins` buckets instead (0: `bins`); leaves hold at most `max_leaf_size` primitives, and the SAH
+    ("centroids", the report's §2.3.2); leaves hold at most `max_leaf_size` primitives, and the SAH
     methods may stop earlier when a leaf is cheaper. `sah_block` (a power of two up to
     MAX_SAH_BLOCK) makes the SAH count primitives in whole blocks of that many above a node of one
     block, as the wide CPU traversal tests four triangles at once (Embree's sahBlockSize); 1 is the

@@ -60,13 +60,7 @@ using ProgressCallback = std::function<bool(double)>;
 struct BuildConfig {
     SplitMethod method = SplitMethod::Sah;
     AxisPolicy axis = AxisPolicy::Auto;
-    std::uint32_t bins = 12;  ///< binned SAH buckets, kMinBins..kMaxBins
-    /// Buckets over the node's box (bin_bounds Box) for ranges of at most kFineBinRange references,
-    /// kMinBins..kMaxBins, or 0 for `bins` there too (docs/design.md "Bucket counts and the greedy
-    /// SAH"). Finer buckets where a range is small lowered the SAH of every scene measured, where
-    /// they lowered it at the top only on scenes of many small triangles (32 buckets everywhere:
-    /// room1m +8%).
-    std::uint32_t fine_bins = 32;
+    std::uint32_t bins = 12;                ///< binned SAH buckets, kMinBins..kMaxBins
     BinBounds bin_bounds = BinBounds::Box;  ///< what the binned SAH's buckets divide
     std::uint32_t max_leaf_size = 4;        ///< leaves hold at most this many primitives (>= 1)
     std::uint64_t seed = 0;                 ///< for AxisPolicy::Random
@@ -94,8 +88,6 @@ struct BuildConfig {
 inline constexpr std::uint32_t kMinBins = 2;
 inline constexpr std::uint32_t kMaxBins = 256;
 inline constexpr std::uint32_t kMaxSahBlock = 64;
-/// BuildConfig::fine_bins applies to ranges of at most this many references.
-inline constexpr std::uint32_t kFineBinRange = 256;
 inline constexpr std::uint32_t kMaxLeafSize = 0x7fffffff;  ///< a leaf's count must fit the node's 31 bits
 
 /// Names as the Python API and the CLI spell them (from the table of methods, split.h).
@@ -116,10 +108,6 @@ void validate(const BuildConfig& config);
 /// The most references an SBVH over `primitives` primitives may hold: sbvh_budget per primitive,
 /// rounded down, never fewer than the primitives nor more than a reference slot can index.
 std::uint64_t sbvh_reference_limit(std::uint64_t primitives, const BuildConfig& config);
-
-/// The binned SAH's buckets for a range of `references`: fine_bins for a small range with
-/// buckets over the node's box (when set), else bins.
-std::uint32_t bins_for(const BuildConfig& config, std::uint64_t references);
 
 /// True for the methods that evaluate the SAH (and may stop early at a leaf, PBRT §4.3.2).
 bool uses_sah(SplitMethod m);

@@ -74,20 +74,14 @@ std::uint32_t BinSet::count_of(int axis, std::uint32_t first, std::uint32_t last
     return n;
 }
 
-BinSet BinStore::slot(std::uint32_t s, std::uint32_t bins) {
+BinSet BinStore::slot(std::uint32_t s) {
     if (slots_.size() <= s) slots_.resize(s + 1);
-    Slot& slot = slots_[s];
-    if (slot.capacity < bins) {
+    if (!slots_[s])
         // whole cache lines: the chunks of a parallel pass fill their slots on different threads
-        slot.bucket.reset(static_cast<Bucket*>(std::aligned_alloc(64, (3 * sizeof(Bucket) * bins + 63) / 64 * 64)));
-        if (!slot.bucket) throw std::bad_alloc();
-        slot.capacity = bins;
-    }
-    slot.bins = bins;
-    return {slot.bucket.get(), bins};
+        slots_[s].reset(static_cast<Bucket*>(std::aligned_alloc(64, (3 * sizeof(Bucket) * bins_ + 63) / 64 * 64)));
+    if (!slots_[s]) throw std::bad_alloc();
+    return {slots_[s].get(), bins_};
 }
-
-BinSet BinStore::filled(std::uint32_t s) { return slot(s, s < slots_.size() ? slots_[s].bins : bins_); }
 
 PieceCounts& BinStore::pieces(std::uint32_t s) {
     if (pieces_.size() <= s) pieces_.resize(s + 1);
@@ -147,13 +141,13 @@ struct BinTarget {
 };
 /// What the fused pass needs of one side: the child's frame and its two bucket copies.
 struct SideTarget {
-    F4 origin2, scale, top;
+    F4 origin2, scale;
     BinTarget copy[2];
     bool binned;
 };
 
 SideTarget side_target(const ChildBinning& c) {
-    SideTarget t{c.frame.origin2, c.frame.scale, c.frame.top, {}, c.copies != nullptr};
+    SideTarget t{c.frame.origin2, c.frame.scale, {}, c.copies != nullptr};
     for (int k = 0; k < 2 && t.binned; ++k)
         for (int a = 0; a < 3; ++a) t.copy[k].axis[a] = c.copies[k].bucket + std::size_t(a) * c.copies[k].bins;
     return t;
@@ -231,7 +225,7 @@ std::uint32_t partition_and_bin(const PrimRef* __restrict src, PrimRef* __restri
                                 std::uint32_t right, const BinFrame& parent, const BinSplit& split,
                                 const ChildBinning child[2], CentroidBounds sides[2]) {
     const SideTarget target[2] = {side_target(child[0]), side_target(child[1])};
-    const F4 split_at = split_threshold(parent, split);
+    const F4 split_at = split_threshold(parent, split), top = parent.top;
     // Two accumulators per side (even and odd references), so that a run of references going the
     // same way does not chain through one min.
     CentroidBounds acc[2][2];
@@ -251,7 +245,7 @@ std::uint32_t partition_and_bin(const PrimRef* __restrict src, PrimRef* __restri
         const SideTarget& t = target[1 - l];
         if (!t.binned) continue;
         // The child's box holds the reference's, so c2 - origin2 >= 0: only the top needs a clamp.
-        truncate_to_u32(min((c2 - t.origin2) * t.scale, t.top), k);
+        truncate_to_u32(min((c2 - t.origin2) * t.scale, top), k);
         const BinTarget& b = t.copy[i & 1];
         for (int a = 0; a < 3; ++a) b.axis[a][k[a]].add(lo, neg_hi);
     }

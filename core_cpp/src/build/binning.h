@@ -106,30 +106,21 @@ struct PieceCounts {
     std::vector<std::uint32_t> counts;  ///< [p · 3B + a · B + k]: piece p's references in bucket k of axis a
 };
 
-/// Bucket memory of one thread: slot s (allocated on first use, grown when asked for more buckets
-/// than it holds) holds one BinSet, of the bucket count it was last asked for, and the
+/// Bucket memory of one thread: slot s (allocated on first use) holds one BinSet, and the
 /// PieceCounts of its buckets where a chunked pass filled them.
 class BinStore {
 public:
     explicit BinStore(std::uint32_t bins) : bins_(bins) {}
     std::uint32_t bins() const { return bins_; }
-    /// Slot s as a set of `bins` buckets per axis; a slot is read with the count it was filled with.
-    BinSet slot(std::uint32_t s, std::uint32_t bins);
-    BinSet slot(std::uint32_t s) { return slot(s, bins_); }
-    /// Slot s with the bucket count it was last asked for.
-    BinSet filled(std::uint32_t s);
+    BinSet slot(std::uint32_t s);
     PieceCounts& pieces(std::uint32_t s);
 
 private:
     struct Free {
         void operator()(Bucket* p) const { std::free(p); }
     };
-    struct Slot {
-        std::unique_ptr<Bucket, Free> bucket;  ///< 3 · capacity buckets
-        std::uint32_t capacity = 0, bins = 0;
-    };
     std::uint32_t bins_;
-    std::vector<Slot> slots_;
+    std::vector<std::unique_ptr<Bucket, Free>> slots_;  ///< 3B buckets each
     std::vector<PieceCounts> pieces_;
 };
 

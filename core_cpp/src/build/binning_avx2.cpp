@@ -45,8 +45,8 @@ struct AxisOffsets {
 /// Adds a reference, (lo, -hi) box with +inf in lane 3 and bucket indices k on the three axes,
 /// to one copy of buckets starting at `base`: one min grows the box and keeps the count in lane
 /// 3, one integer add counts the reference (Bucket).
-inline void add_to_buckets(char* base, __m128i axes, __m128i k, __m256 box_of_ref, __m256i count_one) {
-    const __m128i at = _mm_add_epi32(_mm_slli_epi32(k, 5), axes);
+inline void add_to_buckets(char* base, const AxisOffsets& axes, __m128i k, __m256 box_of_ref, __m256i count_one) {
+    const __m128i at = _mm_add_epi32(_mm_slli_epi32(k, 5), axes.bucket);
     const std::uint64_t low = std::uint64_t(_mm_cvtsi128_si64(at));  // lanes 0 and 1 in one move
     char* b[3] = {base + std::uint32_t(low), base + (low >> 32), base + offset(at, Lane<2>())};
     for (char* p : b) {
@@ -84,7 +84,7 @@ void bin_refs(const PrimRef* refs, Range r, const BinFrame& f, const BinSet copi
         const __m256 v = _mm256_and_ps(_mm256_loadu_ps(reinterpret_cast<const float*>(refs + i)), c.xyz);
         const __m128 c2 = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
         const __m128i k = _mm_cvttps_epi32(bucket_coordinate(c2, origin2, scale, top, c.zero));
-        add_to_buckets(base[i & 1], axes.bucket, k, _mm256_xor_ps(v, c.flip_hi), c.count_one);
+        add_to_buckets(base[i & 1], axes, k, _mm256_xor_ps(v, c.flip_hi), c.count_one);
     }
 }
 
@@ -101,12 +101,13 @@ template <bool kCentroids>
 class FusedPass {
 public:
     FusedPass(const BinFrame& parent, const BinSplit& split, const ChildBinning child[2])
-        : to_side_(5u - std::uint32_t(split.axis)), split_at_(split_threshold(parent, split).v) {
+        : to_side_(5u - std::uint32_t(split.axis)),
+          axes_(parent.bins),
+          top_(parent.top.v),
+          split_at_(split_threshold(parent, split).v) {
         for (int s = 0; s < 2; ++s) {
             const int l = 1 - s;
-            const BinFrame& f = child[s].frame;  // each child has its own bucket count (bins_for)
-            side_[l].origin2 = f.origin2.v, side_[l].scale = f.scale.v, side_[l].top = f.top.v;
-            side_[l].axes = AxisOffsets(f.bins).bucket;
+            side_[l].origin2 = child[s].frame.origin2.v, side_[l].scale = child[s].frame.scale.v;
             for (int k = 0; k < 2; ++k)
                 bucket_[l][k] = child[s].copies ? reinterpret_cast<char*>(child[s].copies[k].bucket) : nullptr;
         }
@@ -135,15 +136,13 @@ public:
             const __m256 cc = _mm256_insertf128_ps(_mm256_castps128_ps256(c2), _mm_xor_ps(c2, c_.sign), 1);
             _mm256_store_ps(a, _mm256_min_ps(_mm256_load_ps(a), cc));
         }
-        const char* side = reinterpret_cast<const char*>(side_) + 2 * lb;
+        const char* side = reinterpret_cast<const char*>(side_) + lb;
         if (char* base = *reinterpret_cast<char* const*>(reinterpret_cast<const char*>(bucket_) + lb + 8 * kCopy)) {
             const __m128 origin2 = _mm_load_ps(reinterpret_cast<const float*>(side)),
-                         scale = _mm_load_ps(reinterpret_cast<const float*>(side + 16)),
-                         top = _mm_load_ps(reinterpret_cast<const float*>(side + 32));
-            const __m128i axes = _mm_load_si128(reinterpret_cast<const __m128i*>(side + 48));
+                         scale = _mm_load_ps(reinterpret_cast<const float*>(side + 16));
             // The child's box holds the reference's, so c2 - origin2 >= 0: only the top needs a clamp.
-            const __m128 x = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(c2, origin2), scale), top);
-            add_to_buckets(base, axes, _mm_cvttps_epi32(x), _mm256_xor_ps(v, c_.flip_hi), c_.count_one);
+            const __m128 x = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(c2, origin2), scale), top_);
+            add_to_buckets(base, axes_, _mm_cvttps_epi32(x), _mm256_xor_ps(v, c_.flip_hi), c_.count_one);
         }
     }
 
@@ -160,12 +159,12 @@ public:
 private:
     const Kernel c_;
     const std::uint32_t to_side_;  ///< shifts the split axis's bit of a compare mask to 32
+    const AxisOffsets axes_;
+    const __m128 top_;
     const __m128 split_at_;
-    /// [l]: each child's frame, its clamp and where its axes' buckets start, 64 bytes apart, so
-    /// that twice a reference's 0 or 32 picks its side's.
-    struct alignas(64) Side {
-        __m128 origin2, scale, top;
-        __m128i axes;
+    /// [l]: each child's frame, 32 bytes apart, so that a reference's 0 or 32 picks its side's.
+    struct alignas(32) Side {
+        __m128 origin2, scale;
     } side_[2];
     /// [l][copy]: where the child's buckets start (null: not binned), 32 bytes a side.
     alignas(32) char* bucket_[2][4] = {};

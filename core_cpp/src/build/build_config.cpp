@@ -85,18 +85,10 @@ std::string to_string(BinBounds bounds) {
 
 bool uses_sah(SplitMethod m) { return method_info(m).uses_sah; }
 
-std::uint32_t bins_for(const BuildConfig& config, std::uint64_t references) {
-    const bool fine = config.fine_bins != 0 && config.bin_bounds == BinBounds::Box && references <= kFineBinRange;
-    return fine ? config.fine_bins : config.bins;
-}
-
 void validate(const BuildConfig& config) {
     if (config.bins < kMinBins || config.bins > kMaxBins)
         throw std::invalid_argument("bins must be between " + std::to_string(kMinBins) + " and " +
                                     std::to_string(kMaxBins) + ", got " + std::to_string(config.bins));
-    if (config.fine_bins != 0 && (config.fine_bins < kMinBins || config.fine_bins > kMaxBins))
-        throw std::invalid_argument("fine_bins must be 0 or between " + std::to_string(kMinBins) + " and " +
-                                    std::to_string(kMaxBins) + ", got " + std::to_string(config.fine_bins));
     if (config.max_leaf_size < 1 || config.max_leaf_size > kMaxLeafSize)
         throw std::invalid_argument("max_leaf_size must be between 1 and " + std::to_string(kMaxLeafSize) + ", got " +
                                     std::to_string(config.max_leaf_size));

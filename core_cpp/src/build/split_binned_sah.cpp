@@ -12,7 +12,7 @@ namespace bvhlab {
 namespace {
 
 BinStore& store_of(SplitContext& ctx) {
-    if (!ctx.scratch.bins) ctx.scratch.bins = std::make_unique<BinStore>(ctx.config.bins);  // slots grow on demand
+    if (!ctx.scratch.bins) ctx.scratch.bins = std::make_unique<BinStore>(ctx.config.bins);
     return *ctx.scratch.bins;
 }
 
@@ -36,20 +36,21 @@ void record_pieces(PieceCounts& into, Range range, const std::vector<std::uint32
 BinSet bin_node(SplitContext& ctx, Range r, const PrimRef* in, const BinFrame& f) {
     BinStore& store = store_of(ctx);
     const std::uint32_t chunks = chunk_count(ctx, r);
-    // Taken here, on the calling thread (slot() may allocate); most nodes are one chunk.
-    BinSet two[2];
-    std::vector<BinSet> more(chunks > 1 ? 2 * std::size_t(chunks) : 0);
-    BinSet* const copies = chunks > 1 ? more.data() : two;
-    for (std::uint32_t k = 0; k < 2 * chunks; ++k) (copies[k] = store.slot(kChunkSlots + k, f.bins)).reset();
-    for_each_chunk(ctx, r, chunks, [&](std::uint32_t k, Range c) { bin_refs(in, c, f, &copies[2 * k]); });
-    const BinSet own = store.slot(kOwnSlot, f.bins);
+    for (std::uint32_t k = 0; k < 2 * chunks; ++k) store.slot(kChunkSlots + k).reset();
+    for_each_chunk(ctx, r, chunks, [&](std::uint32_t k, Range c) {
+        const BinSet copies[2] = {store.slot(kChunkSlots + 2 * k), store.slot(kChunkSlots + 2 * k + 1)};
+        bin_refs(in, c, f, copies);
+    });
+    const BinSet own = store.slot(kOwnSlot);
     own.reset();
-    for (std::uint32_t k = 0; k < 2 * chunks; ++k) own.merge(copies[k]);
+    for (std::uint32_t k = 0; k < 2 * chunks; ++k) own.merge(store.slot(kChunkSlots + k));
     PieceCounts& pieces = store.pieces(kOwnSlot);
     pieces.range = {};
     if (!chunks_in_turn(ctx, chunks)) {
         std::vector<std::uint32_t> sizes(chunks);
         for (std::uint32_t k = 0; k < chunks; ++k) sizes[k] = chunk_of(r, k, chunks).size();
+        std::vector<BinSet> copies(2 * std::size_t(chunks));
+        for (std::uint32_t k = 0; k < 2 * chunks; ++k) copies[k] = store.slot(kChunkSlots + k);
         record_pieces(pieces, r, sizes, f.bins, [&](std::size_t p) { return &copies[2 * p]; });
     }
     return own;
@@ -143,8 +144,7 @@ std::uint32_t partition_whole(SplitContext& ctx, Range r, int src, const BinFram
     BinSet copies[2][2];
     for (int s = 0; s < 2; ++s) {
         if (slots[s] < 0) continue;
-        const std::uint32_t bins = child[s].frame.bins;
-        copies[s][0] = store.slot(std::uint32_t(slots[s]), bins), copies[s][1] = store.slot(kChunkSlots + s, bins);
+        copies[s][0] = store.slot(std::uint32_t(slots[s])), copies[s][1] = store.slot(kChunkSlots + s);
         copies[s][0].reset(), copies[s][1].reset();
         child[s].copies = copies[s];
     }
@@ -184,7 +184,7 @@ std::uint32_t partition_chunks(SplitContext& ctx, Range r, int src, std::uint32_
         throw std::logic_error("bvhlab: a chunked pass's chunks or counts disagree with its node");
     std::vector<BinSet> copies(4 * std::size_t(n));  // per chunk: left ×2, right ×2
     for (std::uint32_t k = 0; k < 4 * n; ++k)
-        if (slots[(k / 2) % 2] >= 0) (copies[k] = store.slot(kChunkSlots + k, child[(k / 2) % 2].frame.bins)).reset();
+        if (slots[(k / 2) % 2] >= 0) (copies[k] = store.slot(kChunkSlots + k)).reset();
     const ChunkCursors cursors(r, plan.left_counts, plan.sizes);
     std::vector<CentroidBounds> chunk_sides(2 * std::size_t(n));
     for_each_range(ctx, plan.chunks, [&](std::uint32_t k, Range c) {
@@ -196,7 +196,7 @@ std::uint32_t partition_chunks(SplitContext& ctx, Range r, int src, std::uint32_
     for (int s = 0; s < 2; ++s) {
         for (std::uint32_t k = 0; k < n && sides; ++k) sides[s].merge(chunk_sides[2 * k + s]);
         if (slots[s] < 0) continue;
-        const BinSet target = store.slot(std::uint32_t(slots[s]), child[s].frame.bins);
+        const BinSet target = store.slot(std::uint32_t(slots[s]));
         target.reset();
         for (std::uint32_t k = 0; k < n; ++k)
             target.merge(copies[4 * k + 2 * s]), target.merge(copies[4 * k + 2 * s + 1]);
@@ -209,7 +209,7 @@ std::uint32_t partition_chunks(SplitContext& ctx, Range r, int src, std::uint32_
             sizes[p] = s == 0 ? plan.left_counts[k] : plan.sizes[k] - plan.left_counts[k];
         }
         const Range side = s == 0 ? Range{r.begin, cursors.mid} : Range{cursors.mid, r.end};
-        record_pieces(store.pieces(std::uint32_t(slots[s])), side, sizes, child[s].frame.bins,
+        record_pieces(store.pieces(std::uint32_t(slots[s])), side, sizes, f.bins,
                       [&](std::size_t p) { return &copies[4 * chunk_of_piece(p) + 2 * std::size_t(s)]; });
     }
     return cursors.mid;
@@ -219,7 +219,7 @@ std::uint32_t partition_chunks(SplitContext& ctx, Range r, int src, std::uint32_
 
 std::vector<Bucket> carry_bins(SplitScratch& scratch, std::int32_t slot) {
     if (slot < 0) return {};
-    const BinSet from = scratch.bins->filled(std::uint32_t(slot));
+    const BinSet from = scratch.bins->slot(std::uint32_t(slot));
     return {from.bucket, from.bucket + 3 * std::size_t(from.bins)};
 }
 
@@ -227,15 +227,15 @@ std::int32_t adopt_bins(SplitScratch& scratch, const std::vector<Bucket>& carrie
     if (carried.empty()) return -1;
     const auto bins = static_cast<std::uint32_t>(carried.size() / 3);
     if (!scratch.bins) scratch.bins = std::make_unique<BinStore>(bins);
-    std::copy(carried.begin(), carried.end(), scratch.bins->slot(kCarriedSlot, bins).bucket);
+    std::copy(carried.begin(), carried.end(), scratch.bins->slot(kCarriedSlot).bucket);
     return std::int32_t(kCarriedSlot);
 }
 
 std::optional<Split> split_binned_sah(SplitContext& ctx, Range r, int src, const NodeBounds& b, int axis) {
     const bool by_centroids = ctx.config.bin_bounds == BinBounds::Centroids;
-    const BinFrame frame(by_centroids ? b.centroids : b.box, bins_for(ctx.config, r.size()));
+    const BinFrame frame(by_centroids ? b.centroids : b.box, ctx.config.bins);
     const BinSet bins =
-        b.bins >= 0 ? store_of(ctx).slot(std::uint32_t(b.bins), frame.bins) : bin_node(ctx, r, ctx.buffers[src], frame);
+        b.bins >= 0 ? store_of(ctx).slot(std::uint32_t(b.bins)) : bin_node(ctx, r, ctx.buffers[src], frame);
     const SahCost sah(ctx.config);
     const BinSplit best =
         best_bin_split(bins, frame, axis == kAllAxes ? 0 : axis, axis == kAllAxes ? 2 : axis, sah, b.box.half_area());
@@ -250,8 +250,7 @@ std::optional<Split> split_binned_sah(SplitContext& ctx, Range r, int src, const
     s.left.box = bins.box_of(best.axis, 0, best.last_left + 1);
     s.right.box = bins.box_of(best.axis, best.last_left + 1, frame.bins);
     const std::uint32_t n_left = bins.count_of(best.axis, 0, best.last_left + 1);
-    ChildBinning child[2] = {{BinFrame(s.left.box, bins_for(ctx.config, n_left))},
-                             {BinFrame(s.right.box, bins_for(ctx.config, r.size() - n_left))}};
+    ChildBinning child[2] = {{BinFrame(s.left.box, frame.bins)}, {BinFrame(s.right.box, frame.bins)}};
     // Buckets over centroid bounds: a child's frame is known only after the pass, so it bins itself.
     // Small children are built whole by the small-subtree builder, which needs no buckets.
     const std::uint32_t small = small_subtree_size(ctx.config);
