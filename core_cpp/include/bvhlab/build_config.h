@@ -56,7 +56,9 @@ using ProgressCallback = std::function<bool(double)>;
 /// 16: 31.88, 32: 33.76: which top split carves the walls from the model). The wide traversal
 /// runs about as many instructions a ray on either tree (callgrind, random rays: Sponza +3.7%,
 /// room1m -0.4%, uniform1m -4.2%, the row -1.4%) and the build about as many (Sponza +2.5%,
-/// room1m -1.6%, uniform1m +1.4%).
+/// room1m -1.6%, uniform1m +1.4%). Tried since and not taken (docs/design.md "Bucket counts and the
+/// greedy SAH"): 14 buckets (every bench scene at or below tinybvh, but Sponza's traversal +1.4%),
+/// finer buckets for small ranges only (7-19% more build instructions for 0.1-0.4% on repeat1m).
 struct BuildConfig {
     SplitMethod method = SplitMethod::Sah;
     AxisPolicy axis = AxisPolicy::Auto;
