@@ -97,11 +97,21 @@ def _fmt(c) -> str:
     return str(c)
 
 
+def json_path(name: str) -> Path:
+    """Where --json NAME writes: a bare file name goes into bench/results, a path (with a folder)
+    where it says. Checked when the arguments are read, so a run of minutes cannot end in a
+    folder that does not exist."""
+    path = RESULTS / name if Path(name).name == name else Path(name)
+    if not path.parent.is_dir() and path.parent != RESULTS:
+        raise SystemExit(f"--json {name}: the folder {path.parent} does not exist")
+    return path
+
+
 def write_json(name: str, data: dict) -> Path:
     RESULTS.mkdir(parents=True, exist_ok=True)
     from bvhlab._atomic import write_text  # whole or not at all: a stopped run leaves the old file
 
-    return write_text(RESULTS / name, json.dumps(data, indent=1) + "\n")
+    return write_text(json_path(name), json.dumps(data, indent=1) + "\n")
 
 
 def run_child(script: str, args: list[str], cores: int | None = None) -> dict:

@@ -125,9 +125,10 @@ def main() -> None:
     ap.add_argument("--callgrind", default="sponza", help="scenes whose builds callgrind counts ('' for none)")
     ap.add_argument("--tinybvh", default=os.environ.get("BVHLAB_TINYBVH_DIR"))
     ap.add_argument("--peers", help="comma-separated bvh_bench specs to keep (default: all)")
-    ap.add_argument("--json", default="build.json", help="results file name in bench/results")
+    ap.add_argument("--json", default="build.json", help="results file name in bench/results (or a path)")
     ap.add_argument("--embreex-child", help=argparse.SUPPRESS)
     args = ap.parse_args()
+    _common.json_path(args.json)  # a bad folder fails now, not after the run
     if args.embreex_child:
         import numpy as np
 

@@ -136,7 +136,7 @@ def main() -> None:
     )
     ap.add_argument("--tinybvh", default=os.environ.get("BVHLAB_TINYBVH_DIR"))
     ap.add_argument("--peers", help="comma-separated bvh_bench specs to keep (default: all)")
-    ap.add_argument("--json", default="traverse.json", help="results file name in bench/results")
+    ap.add_argument("--json", default="traverse.json", help="results file name in bench/results (or a path)")
     ap.add_argument(
         "--cpu-time",
         action="store_true",
@@ -145,9 +145,17 @@ def main() -> None:
     args = ap.parse_args()
     exe = _peers.build_bvh_bench(args.tinybvh)
     peers = [(label, spec) for label, spec in PEERS if args.tinybvh or not spec.startswith("tinybvh")]
+    _common.json_path(args.json)  # a bad folder fails now, not after the run
     if args.peers:
-        keep = set(args.peers.split(",")) | {"embree:medium"}
-        peers = [(label, spec) for label, spec in peers if spec in keep]
+        asked = [spec for spec in args.peers.split(",") if spec != "embree:medium"]
+        if not args.tinybvh and any(spec.startswith("tinybvh") for spec in asked):
+            raise SystemExit("--peers tinybvh:...: give --tinybvh DIR (or BVHLAB_TINYBVH_DIR)")
+        known = dict((spec, label) for label, spec in peers)
+        # A spec of no row above (bvhlab:leaf=8) is its own row, named by its spec: it used to be
+        # dropped without a word.
+        peers = [(known["embree:medium"], "embree:medium")] + [
+            (known.get(spec, f"{spec.split(':')[0]} ({spec})"), spec) for spec in asked
+        ]
     results = {"machine": _common.machine(), "scenes": {}}
     with tempfile.TemporaryDirectory() as tmp:
         for scene, tris in _peers.scenes(args.scenes.split(",")).items():

@@ -151,8 +151,9 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=2)
     ap.add_argument("--callgrind", type=int, default=20_000, help="rays per set counted (0: none)")
     ap.add_argument("--peers", help="comma-separated specs to keep (default: all)")
-    ap.add_argument("--json", default="two_level.json", help="results file name in bench/results")
+    ap.add_argument("--json", default="two_level.json", help="results file name in bench/results (or a path)")
     args = ap.parse_args()
+    _common.json_path(args.json)  # a bad folder fails now, not after the run
     peers = [p for p in PEERS if not args.peers or p[1] in args.peers.split(",")]
     exe = _peers.build_bvh_bench(None, "tlas_bench")
     results = {}
