@@ -223,3 +223,29 @@ def test_update_mesh_touches_only_that_mesh(instanced_scene):
         np.testing.assert_array_equal(a["instance"], b["instance"])
         np.testing.assert_array_equal(a["prim"], b["prim"])
         np.testing.assert_array_equal(a["t"], b["t"])
+
+
+def test_the_exporters_invertibility_test_is_numpys():
+    """blender.instancing.invertible (cofactors, no inverse made) against numpy's determinant and
+    inverse over random matrices with scales from ~1e-30 to ~1e30, per axis and uniform, and
+    singular, tiny, huge and NaN ones."""
+    from bvhlab.blender.instancing import MAX_ENTRY, SINGULAR_FRACTION, invertible
+
+    rng = np.random.default_rng(3)
+    m = rng.normal(size=(20_000, 3, 3))
+    m[:5000] *= np.exp(rng.normal(scale=40, size=(5000, 1, 1)))  # uniform scales
+    m[5000:10_000, :, 0] *= np.exp(rng.normal(scale=40, size=(5000, 1)))  # one axis
+    m[10_000:10_100, :, 2] = m[10_000:10_100, :, 1] * 2  # singular
+    m[10_100] = np.diag([1e-25, 1.0, 1.0])
+    m[10_101] = np.diag([1e25, 1.0, 1.0])
+    m[10_102, 1, 1] = np.nan
+    bound = np.prod(np.linalg.norm(m, axis=1), axis=1)
+    with np.errstate(invalid="ignore", over="ignore"):
+        det = np.linalg.det(m)
+    by_det = np.isfinite(det) & (np.abs(det) > SINGULAR_FRACTION * bound)
+    want = by_det & (np.abs(m) <= MAX_ENTRY).all(axis=(1, 2))
+    want[want] = (np.abs(np.linalg.inv(m[want])) <= MAX_ENTRY).all(axis=(1, 2))
+    got = invertible(m)
+    assert 0.5 < want.mean() < 0.95 and (by_det & ~want).sum() > 1000  # refused for the scale alone
+    assert not want[10_000:10_103].any()
+    np.testing.assert_array_equal(got, want)

@@ -133,17 +133,32 @@ def _never(key) -> bool:
 
 def invertible(linear: np.ndarray) -> np.ndarray:
     """bool (N,): which of the (N,3,3) linear parts can be inverted (see SINGULAR_FRACTION) and
-    have their entries and their inverse's within MAX_ENTRY."""
-    bound = np.prod(np.linalg.norm(linear, axis=1), axis=1)  # the columns' lengths
+    have their entries and their inverse's within MAX_ENTRY. The inverse is the adjugate over the
+    determinant, whose rows are the cross products of the columns: its bound is tested as
+    max |adjugate| <= MAX_ENTRY · |det|, with no inverse made (100,000 instances: 24 ms, as
+    np.linalg.det alone took; with np.linalg.inv 300 ms, at every sync of a moving scene)."""
+    m = [[linear[:, r, c] for c in range(3)] for r in range(3)]  # m[r][c]: (N,) each
     with np.errstate(invalid="ignore", over="ignore"):
-        det = np.linalg.det(linear)
-    out = np.isfinite(det) & (np.abs(det) > SINGULAR_FRACTION * bound)
-    out &= (np.abs(linear) <= MAX_ENTRY).all(axis=(1, 2))
-    if out.any():
-        with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
-            inverses = np.linalg.inv(linear[out])
-        out[out] = (np.abs(inverses) <= MAX_ENTRY).all(axis=(1, 2))
-    return out
+        columns = [m[0][c] * m[0][c] + m[1][c] * m[1][c] + m[2][c] * m[2][c] for c in range(3)]
+        bound = np.sqrt(columns[0] * columns[1] * columns[2])  # Hadamard's: the columns' lengths
+        # adjugate[r][c] = the cofactor of m[c][r]: row r is the cross product of columns r + 1, r + 2
+        adjugate = [
+            [
+                m[(c + 1) % 3][(r + 1) % 3] * m[(c + 2) % 3][(r + 2) % 3]
+                - m[(c + 1) % 3][(r + 2) % 3] * m[(c + 2) % 3][(r + 1) % 3]
+                for c in range(3)
+            ]
+            for r in range(3)
+        ]
+        det = m[0][0] * adjugate[0][0] + m[1][0] * adjugate[0][1] + m[2][0] * adjugate[0][2]
+        largest = np.abs(linear).max(axis=(1, 2))
+        largest_adjugate = np.max(np.abs(np.stack([a for row in adjugate for a in row])), axis=0)
+        return (
+            np.isfinite(det)
+            & (np.abs(det) > SINGULAR_FRACTION * bound)
+            & (largest <= MAX_ENTRY)
+            & (largest_adjugate <= MAX_ENTRY * np.abs(det))
+        )
 
 
 @dataclass
