@@ -35,6 +35,16 @@ Scene spheres(bool moved) {
     return s;
 }
 
+/// The spheres built at rest, the costs when built, and the tree refitted to the moved spheres
+/// with its costs now: what the cut is taken over.
+struct MovedSpheres {
+    Scene rest = spheres(false), moved = spheres(true);
+    Bvh tree = build_bvh(rest.view());
+    NodeCostArray built = subtree_costs(tree);
+    Bvh refit = refitted(tree, moved.view());
+    NodeCosts now = node_costs(refit);
+};
+
 /// The primitives under node i and the subtree's cost S/A, by recursion (independent of
 /// node_costs): S(leaf) = A·N, S(inner) = A + S(children).
 double area_cost_of(const Bvh& bvh, std::uint32_t i, std::vector<std::uint32_t>& prims) {
@@ -50,30 +60,26 @@ double area_cost_of(const Bvh& bvh, std::uint32_t i, std::vector<std::uint32_t>&
 }  // namespace
 
 TEST(UpdateTop, TheCutTakesSubtreesThatMovedAsOneWhole) {
-    const Scene rest = spheres(false), moved = spheres(true);
-    const Bvh tree = build_bvh(rest.view());
-    const NodeCostArray built = subtree_costs(tree);
-    const Bvh refit = refitted(tree, moved.view());
-    const NodeCosts now = node_costs(refit);
+    const MovedSpheres m;
     const std::vector<RebuiltPart> none;
-    const PartedTree parted(refit, now, none, &built);
+    const PartedTree parted(m.refit, m.now, none, &m.built);
     const std::vector<PartNode> fine = top_cut(parted, 8), coarse = top_cut(parted, 8, 4096);
     EXPECT_LT(4 * coarse.size(), fine.size());  // each sphere (1,024 triangles here) about one box
-    const std::uint32_t per_sphere = std::uint32_t(rest.triangles.size() / 9 / kSpheres);
-    std::vector<int> seen(rest.triangles.size() / 9, 0);
+    const std::uint32_t per_sphere = std::uint32_t(m.rest.triangles.size() / 9 / kSpheres);
+    std::vector<int> seen(m.rest.triangles.size() / 9, 0);
     std::size_t whole = 0;
     for (const PartNode& c : coarse) {
         ASSERT_EQ(c.part, -1);
         std::vector<std::uint32_t> prims;
-        const double area = node_box(refit.nodes[c.node]).half_area();
-        const double cost = area_cost_of(refit, c.node, prims) / area;
+        const double area = node_box(m.refit.nodes[c.node]).half_area();
+        const double cost = area_cost_of(m.refit, c.node, prims) / area;
         for (std::uint32_t p : prims) ++seen[p];
-        if (prims.size() <= 8 || is_leaf(refit.nodes[c.node])) continue;
+        if (prims.size() <= 8 || is_leaf(m.refit.nodes[c.node])) continue;
         ++whole;
         // taken whole: as built (the cost when built, by the same rule on the tree as built), and
         // so all of one rigid sphere
         std::vector<std::uint32_t> unused;
-        const double was = area_cost_of(tree, c.node, unused) / node_box(tree.nodes[c.node]).half_area();
+        const double was = area_cost_of(m.tree, c.node, unused) / node_box(m.tree.nodes[c.node]).half_area();
         EXPECT_NEAR(cost, was, 2e-5 * was) << "cut node " << c.node;
         EXPECT_LE(prims.size(), 4096u);
         for (std::uint32_t p : prims) EXPECT_EQ(p / per_sphere, prims.front() / per_sphere) << "cut node " << c.node;
@@ -82,17 +88,17 @@ TEST(UpdateTop, TheCutTakesSubtreesThatMovedAsOneWhole) {
     for (std::size_t p = 0; p < seen.size(); ++p) ASSERT_EQ(seen[p], 1) << "primitive " << p;
     // the top over the coarse cut: its cost said before the copy (top_sah_cost, which adaptive
     // weighs against the fine cut's) is the tree's after it
-    Bvh copy = refit;
-    NodeCostArray copy_built = built;
+    Bvh copy = m.refit;
+    NodeCostArray copy_built = m.built;
     const CutInfo info = cut_info(parted, coarse);
     const Bvh top = built_top(copy.config, info);
     double sah = 0;
     ASSERT_TRUE(rebuild_top(copy, copy_built, parted, coarse, info, top, sah));
-    check_tree(copy, moved.view(), tree.config.max_leaf_size);
+    check_tree(copy, m.moved.view(), m.tree.config.max_leaf_size);
     EXPECT_NEAR(top_sah_cost(top, info), sah, 1e-6 * sah);
     EXPECT_NEAR(sah, sah_cost(copy), 1e-4 * sah);
     // without the costs when built, only the fine cut
-    const PartedTree unknown(refit, now, none);
+    const PartedTree unknown(m.refit, m.now, none);
     EXPECT_EQ(top_cut(unknown, 8, 4096).size(), fine.size());
 }
 
@@ -100,20 +106,16 @@ TEST(UpdateTop, TwoCutsFromOneScanAreTheCutsOfTwoScans) {
     // adaptive takes its first cut and, where that is dense, a coarser one from one scan: the fine
     // cut until it passes `dense` nodes (then its beginning), the coarse cut whole, with and
     // without rebuilt parts standing in for subtrees
-    const Scene rest = spheres(false), moved = spheres(true);
-    const Bvh tree = build_bvh(rest.view());
-    const NodeCostArray built = subtree_costs(tree);
-    const Bvh refit = refitted(tree, moved.view());
-    const NodeCosts now = node_costs(refit);
+    const MovedSpheres m;
     std::vector<std::uint32_t> roots;  // every other node at depth 4
-    for (std::uint32_t i = 0, k = 0; i < refit.node_count(); ++i)
-        if (refit.depths[i] == 4 && k++ % 2 == 0) roots.push_back(i);
+    for (std::uint32_t i = 0, k = 0; i < m.refit.node_count(); ++i)
+        if (m.refit.depths[i] == 4 && k++ % 2 == 0) roots.push_back(i);
     double saved = 0;
-    const std::vector<RebuiltPart> none, parts = build_parts(refit, roots, moved.view(), now, saved);
+    const std::vector<RebuiltPart> none, parts = build_parts(m.refit, roots, m.moved.view(), m.now, saved);
     ASSERT_GT(parts.size(), 3u);
     int differ = 0;  // cases whose two cuts differ (with intact subtrees whole, rigid spheres' may not)
     for (const std::vector<RebuiltPart>* with : {&none, &parts}) {
-        const PartedTree parted(refit, now, *with, &built);
+        const PartedTree parted(m.refit, m.now, *with, &m.built);
         for (const std::uint32_t intact : {0u, 64u}) {
             const std::vector<PartNode> fine = top_cut(parted, 4, intact), coarse = top_cut(parted, 24, intact);
             ASSERT_GE(fine.size(), coarse.size());
@@ -131,7 +133,7 @@ TEST(UpdateTop, TwoCutsFromOneScanAreTheCutsOfTwoScans) {
     }
     EXPECT_GE(differ, 2);
     std::vector<PartNode> a, b;
-    EXPECT_THROW(top_cuts(PartedTree(refit, now, none), 24, 4, 0, SIZE_MAX, a, b), std::invalid_argument);
+    EXPECT_THROW(top_cuts(PartedTree(m.refit, m.now, none), 24, 4, 0, SIZE_MAX, a, b), std::invalid_argument);
 }
 
 TEST(UpdateTop, AdaptiveOverIntactSubtreesIsValidAndTheSameOnEveryThreadCount) {
