@@ -20,19 +20,23 @@ bool leaf_occludes(const unsigned char* at, const Query& q) {
     }
 }
 
-/// The any-hit walk for one octant: the farthest child first. A node's entered children, leaves
-/// and nodes alike, are ordered by the middle of the ray's span in each box, the farthest next and
-/// the others pushed so that they pop farthest first (push_children, the closest-hit walk's sort,
-/// on the negated span: −exit as entry and −entry as exit give the same keys negated, exactly);
-/// a leaf is tested when it comes up, and its first packet with a hit ends the walk. Why farthest
-/// first (design.md, "Where repeat1m's shadow rays lose"): shadow rays end at a light, so the
-/// lines near their far end are shared by all rays toward that light and stay in the caches, while
-/// those near each ray's origin (a random surface point; its own leaf, entered first, never
-/// occludes) are read by that ray alone. Measured against the walk it replaced (leaves tested at
-/// once in slot order, the lowest inner slot next): repeat1m shadow rays 26.1 → 3.8 simulated D1
-/// and 6.3 → 0.4 last-level misses a ray (design.md). Nearest first doubles them there.
+/// The any-hit walk for one octant: tests a node's eight boxes, then at once the leaves among the
+/// children the ray enters, in slot order, ending at the first packet with a hit; of the inner
+/// children entered, the farthest (by the middle of the ray's span in its box, farthest_slot:
+/// push_children's key) goes next, the others are pushed unordered below it (any hit ends the
+/// walk; tinybvh 1.9's IsOccluded pushes unordered too). Farthest first because shadow rays end at
+/// a light: the lines near their far end are read by every ray toward that light and stay in the
+/// caches, those near each ray's origin (a surface point; its own leaf never occludes) by that ray
+/// alone, so an occluder found from the far end is mostly found in cached lines (repeat1m shadow
+/// rays, callgrind on 20,000: 31.3 → 12.6 D1 and 8.3 → 2.1 last-level misses a ray against the
+/// lowest slot next, 0.58 → 1.13 of the best peer; nearest first doubled the misses; design.md,
+/// "Where repeat1m's shadow rays lose"). A leaf is never pushed or popped, so every entry is a
+/// node and the loop has no branch on the kind, and a leaf's packets, laid after their node
+/// (wide_bvh.h), are read while the node's prefetch of the lines after it is fresh (Sponza
+/// shadow rays +16% against the walk that pushed leaves as nodes; design.md, "Any-hit queries";
+/// every child farthest first, leaves pushed as nodes, was 0.80 there: design.md).
 /// No entry distance is kept: the boxes' far limit is the ray's tmax throughout, which every
-/// pushed entry passes (push_children writes the distances to `stack.t`, unread).
+/// pushed entry passes.
 /// One copy per octant, each with its plane offsets as constants (tinybvh 1.9's
 /// IsOccludedOctant). The root is a node even in a tree of one leaf (make_wide).
 template <int kOctant>
@@ -40,36 +44,41 @@ bool any_hit_nodes(const unsigned char* lines, const Query& q) {
     const L8 origin[3] = {L8::splat(q.o[0]), L8::splat(q.o[1]), L8::splat(q.o[2])};
     const L8 neg_inv[3] = {L8::splat(q.neg_inv[0]), L8::splat(q.neg_inv[1]), L8::splat(q.neg_inv[2])};
     const L8 neg_inv_far[3] = {L8::splat(q.neg_inv_far[0]), L8::splat(q.neg_inv_far[1]), L8::splat(q.neg_inv_far[2])};
-    const L8 far = L8::splat(q.ray->tmax * gpu::BOX_FAR_SCALE), zero = L8::splat(0.0f);
-    Stack stack;
+    const L8 far = L8::splat(q.ray->tmax * gpu::BOX_FAR_SCALE);
+    std::uint32_t stack[Stack::kSize];
     std::uint32_t sp = 0, cur = 0;
     for (;;) {
-        if (cur & kLeafChild) {
-            if (leaf_occludes(lines + std::size_t(cur & ~kLeafChild) * sizeof(WideLine), q)) return true;
-        } else {
-            const WideNode& node = *reinterpret_cast<const WideNode*>(lines + std::size_t(cur) * sizeof(WideLine));
-            const float* f = node.lo_x;
-            __builtin_prefetch(node.child);  // as enter_children: the child words, and the lines after
-            const char* after = reinterpret_cast<const char*>(&node + 1);
-            for (int line = 0; line < 6; ++line) __builtin_prefetch(after + 64 * line);
-            L8 t0 = L8::load(q.tmin8), t1 = far;
-            for (int a = 0; a < 3; ++a) t0 = raise(t0, (origin[a] - L8::load(f + kPlanes.at[kOctant][a])) * neg_inv[a]);
-            for (int a = 0; a < 3; ++a)
-                t1 = lower(t1, (origin[a] - L8::load(f + kPlanes.at[kOctant][3 + a])) * neg_inv_far[a]);
-            const int mask = le_bits(t0, t1);
-            if (mask & (mask - 1)) {
-                const int k = push_children(node, zero - t1, zero - t0, mask, stack.index + sp, stack.t + sp);
-                sp += std::uint32_t(__builtin_popcount(unsigned(mask))) - 1;
-                cur = node.child[k];
-                prefetch(WideView{lines}, stack.index[sp - 1]);  // the next to pop
+        const WideNode& node = *reinterpret_cast<const WideNode*>(lines + std::size_t(cur) * sizeof(WideLine));
+        const float* f = node.lo_x;
+        __builtin_prefetch(node.child);  // as enter_children: the child words, and the lines after
+        const char* after = reinterpret_cast<const char*>(&node + 1);
+        for (int line = 0; line < 6; ++line) __builtin_prefetch(after + 64 * line);
+        L8 t0 = L8::load(q.tmin8), t1 = far;
+        for (int a = 0; a < 3; ++a) t0 = raise(t0, (origin[a] - L8::load(f + kPlanes.at[kOctant][a])) * neg_inv[a]);
+        for (int a = 0; a < 3; ++a)
+            t1 = lower(t1, (origin[a] - L8::load(f + kPlanes.at[kOctant][3 + a])) * neg_inv_far[a]);
+        const int mask = le_bits(t0, t1);
+        const int leaves = mask & leaf_bits(node), inner = mask ^ leaves;
+        if (inner) {  // the farthest inner child next, the others pushed unordered below it
+            const int next = inner & (inner - 1) ? farthest_slot(t0, t1, inner) : __builtin_ctz(unsigned(inner));
+            const int rest = inner & ~(1 << next);
+            if (rest) {
+                push_entered(node, rest, stack + sp);
+                sp += std::uint32_t(__builtin_popcount(unsigned(rest)));
+                prefetch(WideView{lines}, stack[sp - 1]);  // the next to pop after it
+            }
+            if (!leaves) {  // the commonest case: the next node from the node's words, not the stack
+                cur = node.child[next];
                 continue;
             }
-            if (mask) {
-                cur = node.child[__builtin_ctz(unsigned(mask))];
-                continue;
-            }
+            stack[sp++] = node.child[next];  // pushed before the leaves' calls: popped right after them
+            prefetch(WideView{lines}, node.child[next]);
         }
+        for (int m = leaves; m; m &= m - 1)
+            if (leaf_occludes(
+                    lines + std::size_t(node.child[__builtin_ctz(unsigned(m))] & ~kLeafChild) * sizeof(WideLine), q))
+                return true;
         if (sp == 0) return false;
-        cur = stack.index[--sp];
+        cur = stack[--sp];
     }
 }
