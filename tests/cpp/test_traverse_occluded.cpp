@@ -108,6 +108,66 @@ TEST(Occluded, EqualsClosestHitBeforeTmaxOnRaysGrazingEdgesAndVertices) {
     }
 }
 
+/// Shadow rays as a renderer casts them (the case the wide any-hit walk's farthest-first order is
+/// for: design.md, "Where repeat1m's shadow rays lose"): from points on a row of closed meshes,
+/// each backed off its surface along the ray that found it, to a light above the row's middle,
+/// tmax the light's distance, so that the walk pushes leaves and nodes of many meshes and goes
+/// from the light's end. Single rays on every path and the batch, against the brute force.
+TEST(Occluded, ShadowRaysFromARowOfMeshesToALightEqualTheBruteForce) {
+    test::Scene row;
+    for (int k = 0; k < 12; ++k) {
+        const test::Scene mesh = test::octasphere(6, {3.0f * float(k), 0.0f, 0.0f}, 1.2f);
+        row.triangles.insert(row.triangles.end(), mesh.triangles.begin(), mesh.triangles.end());
+    }
+    const Bvh bvh = build_bvh(row.view());
+    const WideBvh wide = make_wide(bvh);
+    const Vec3 light{16.5f, 0.3f, 0.6f};
+    std::vector<Ray> shadow;
+    for (Ray r : random_rays(3000, 17)) {  // from random rays' hits on the row
+        r.origin = {33.0f * r.origin.x / 10.0f - 0.5f, 3.0f * r.origin.y / 10.0f - 1.5f,
+                    3.0f * r.origin.z / 10.0f - 1.5f};
+        const float t = brute_force(bvh, r).t;
+        if (t == kInfinity) continue;
+        const Vec3 at = r.origin + r.dir * (t * 0.9999f), to = light - at;
+        const float dist = std::sqrt(to.x * to.x + to.y * to.y + to.z * to.z);
+        shadow.push_back({at, to * (1.0f / dist), 0.0f, dist});
+    }
+    ASSERT_GT(shadow.size(), 500u);
+    std::uint32_t wrong = 0, occluded_count = 0;
+    const Isa before = active_isa();
+    for (const Ray& r : shadow) {
+        Ray open = r;
+        open.tmax = kInfinity;
+        const bool want = brute_force(bvh, open).t < r.tmax;
+        occluded_count += want;
+        for (Isa isa : supported_isas()) {
+            set_isa(isa);
+            if (occluded_wide(wide, r) != want && ++wrong <= 5) ADD_FAILURE() << "wide " << isa_name(isa);
+        }
+    }
+    set_isa(before);
+    EXPECT_GT(occluded_count, shadow.size() / 4);
+    EXPECT_LT(occluded_count + 5, shadow.size()) << "too few lit points to test a whole walk";
+    std::vector<float> o, d, tmax;
+    for (const Ray& r : shadow) {
+        o.insert(o.end(), {r.origin.x, r.origin.y, r.origin.z}), d.insert(d.end(), {r.dir.x, r.dir.y, r.dir.z});
+        tmax.push_back(r.tmax);
+    }
+    RayBatch batch{o.data(), d.data(), shadow.size()};
+    batch.tmax_of = tmax.data();
+    for (Isa isa : supported_isas()) {
+        set_isa(isa);
+        std::unique_ptr<bool[]> got(new bool[shadow.size()]);
+        occluded_batch(bvh, batch, got.get(), Traversal::Wide, 2, &wide);
+        for (std::size_t i = 0; i < shadow.size(); ++i) {
+            Ray open = shadow[i];
+            open.tmax = kInfinity;
+            ASSERT_EQ(got[i], brute_force(bvh, open).t < shadow[i].tmax) << i << " " << isa_name(isa);
+        }
+    }
+    set_isa(before);
+}
+
 TEST(Occluded, EmptyTreeAndZeroOrNegativeRangesAreNeverOccluded) {
     test::Scene empty;
     const Bvh none = build_bvh(empty.view());

@@ -178,6 +178,20 @@ inline int push_children(const WideNode& node, L8 t0, L8 t1, int mask, std::uint
     return key[h - 1] & 7;
 }
 
+/// The slot in `mask` (two or more slots the ray enters) of the largest child_key: the child whose
+/// span's middle lies farthest along the ray, as push_children would order it.
+inline int farthest_slot(L8 t0, L8 t1, int mask) {
+    alignas(32) float entry[8], exit[8];
+    t0.store(entry), t1.store(exit);
+    std::int32_t best = std::numeric_limits<std::int32_t>::min();
+    for (int m = mask; m; m &= m - 1) {
+        const int slot = __builtin_ctz(unsigned(m));
+        const std::int32_t k = child_key(entry[slot] + exit[slot], slot);
+        best = k > best ? k : best;
+    }
+    return best & 7;
+}
+
 /// The children of `node` in `mask` to index[0, popcount(mask)), in slot order.
 inline void push_entered(const WideNode& node, int mask, std::uint32_t* index) {
     for (; mask; mask &= mask - 1) *index++ = node.child[__builtin_ctz(unsigned(mask))];

@@ -120,6 +120,22 @@ inline int push_children(const WideNode& node, L8 t0, L8 t1, int mask, std::uint
     return _mm256_cvtsi256_si32(m) & 7;
 }
 
+/// farthest_slot (traverse_wide.cpp says what it returns) without a loop: child_key for the eight
+/// slots as push_children makes them, INT_MIN for a slot not in `mask`, the largest across lanes.
+inline int farthest_slot(L8 t0, L8 t1, int mask) {
+    const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    __m256i b = _mm256_castps_si256(_mm256_add_ps(t0.v, t1.v));
+    b = _mm256_xor_si256(b, _mm256_srli_epi32(_mm256_srai_epi32(b, 31), 1));
+    b = _mm256_or_si256(_mm256_slli_epi32(_mm256_srli_epi32(b, 3), 3), lane);
+    const __m256i bit = _mm256_sllv_epi32(_mm256_set1_epi32(1), lane);
+    const __m256i in = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(mask), bit), bit);
+    __m256i m = _mm256_blendv_epi8(_mm256_set1_epi32(INT_MIN), b, in);
+    m = _mm256_max_epi32(m, _mm256_shuffle_epi32(m, _MM_SHUFFLE(2, 3, 0, 1)));
+    m = _mm256_max_epi32(m, _mm256_shuffle_epi32(m, _MM_SHUFFLE(1, 0, 3, 2)));
+    m = _mm256_max_epi32(m, _mm256_permute2x128_si256(m, m, 1));
+    return _mm256_cvtsi256_si32(m) & 7;
+}
+
 /// For each mask of entered slots, those slots in ascending order, a byte each (the rest 0): the
 /// permute push_entered does (tinybvh 1.9's idxLUT256, a byte a lane rather than a word: 2 KiB).
 struct CompressTable {

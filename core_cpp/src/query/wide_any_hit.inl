@@ -21,15 +21,20 @@ bool leaf_occludes(const unsigned char* at, const Query& q) {
 }
 
 /// The any-hit walk for one octant: tests a node's eight boxes, then at once the leaves among the
-/// children the ray enters, in slot order, ending at the first packet with a hit; the inner
-/// children entered go on, unordered (any hit ends the walk; tinybvh 1.9's IsOccluded pushes
-/// unordered too), the lowest slot next where the node entered no leaf: in preorder its subtree is
-/// laid right after the node (wide_bvh.h), where the node's prefetch of the six lines after it
-/// reaches (the highest slot next: Sponza and uniform1m shadow rays 11-12% slower, callgrind 10%
-/// more instructions a ray; design.md). A leaf is never pushed or popped, so every entry is a
+/// children the ray enters, in slot order, ending at the first packet with a hit; of the inner
+/// children entered, the farthest (by the middle of the ray's span in its box, farthest_slot:
+/// push_children's key) goes next, the others are pushed unordered below it (any hit ends the
+/// walk; tinybvh 1.9's IsOccluded pushes unordered too). Farthest first because shadow rays end at
+/// a light: the lines near their far end are read by every ray toward that light and stay in the
+/// caches, those near each ray's origin (a surface point; its own leaf never occludes) by that ray
+/// alone, so an occluder found from the far end is mostly found in cached lines (repeat1m shadow
+/// rays, callgrind on 20,000: 31.3 → 12.6 D1 and 8.3 → 2.1 last-level misses a ray against the
+/// lowest slot next, 0.58 → 1.13 of the best peer; nearest first doubled the misses; design.md,
+/// "Where repeat1m's shadow rays lose"). A leaf is never pushed or popped, so every entry is a
 /// node and the loop has no branch on the kind, and a leaf's packets, laid after their node
 /// (wide_bvh.h), are read while the node's prefetch of the lines after it is fresh (Sponza
-/// shadow rays +16% against the walk that pushed leaves as nodes; design.md, "Any-hit queries").
+/// shadow rays +16% against the walk that pushed leaves as nodes; design.md, "Any-hit queries";
+/// every child farthest first, leaves pushed as nodes, was 0.80 there: design.md).
 /// No entry distance is kept: the boxes' far limit is the ray's tmax throughout, which every
 /// pushed entry passes.
 /// One copy per octant, each with its plane offsets as constants (tinybvh 1.9's
@@ -54,20 +59,20 @@ bool any_hit_nodes(const unsigned char* lines, const Query& q) {
             t1 = lower(t1, (origin[a] - L8::load(f + kPlanes.at[kOctant][3 + a])) * neg_inv_far[a]);
         const int mask = le_bits(t0, t1);
         const int leaves = mask & leaf_bits(node), inner = mask ^ leaves;
-        if (!leaves && inner) {  // the commonest case: the next node from the node's words, not the stack
-            const int rest = inner & (inner - 1);
-            cur = node.child[__builtin_ctz(unsigned(inner))];
+        if (inner) {  // the farthest inner child next, the others pushed unordered below it
+            const int next = inner & (inner - 1) ? farthest_slot(t0, t1, inner) : __builtin_ctz(unsigned(inner));
+            const int rest = inner & ~(1 << next);
             if (rest) {
                 push_entered(node, rest, stack + sp);
                 sp += std::uint32_t(__builtin_popcount(unsigned(rest)));
-                prefetch(WideView{lines}, node.child[31 - __builtin_clz(unsigned(rest))]);  // the next to pop
+                prefetch(WideView{lines}, stack[sp - 1]);  // the next to pop after it
             }
-            continue;
-        }
-        if (inner) {  // pushed before the leaves are tested: nothing but the stack outlives their calls
-            push_entered(node, inner, stack + sp);
-            sp += std::uint32_t(__builtin_popcount(unsigned(inner)));
-            prefetch(WideView{lines}, node.child[31 - __builtin_clz(unsigned(inner))]);
+            if (!leaves) {  // the commonest case: the next node from the node's words, not the stack
+                cur = node.child[next];
+                continue;
+            }
+            stack[sp++] = node.child[next];  // pushed before the leaves' calls: popped right after them
+            prefetch(WideView{lines}, node.child[next]);
         }
         for (int m = leaves; m; m &= m - 1)
             if (leaf_occludes(

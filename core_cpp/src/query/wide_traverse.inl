@@ -11,9 +11,10 @@
 //       lane indices 0..3, the last 3;
 // and push_children(node, t0, t1, mask, index, t), which writes the children a ray enters
 // but the nearest to the stack's arrays, farthest first, and returns the nearest's slot
-// (traverse_wide.cpp), and push_entered(node, mask, index), which writes the children in `mask`
-// to index[0 .. popcount(mask)) in slot order (and may write up to eight), and leaf_bits(node)
-// (bit k set where slot k is a leaf).
+// (traverse_wide.cpp), farthest_slot(t0, t1, mask), the slot of two or more in `mask` that
+// push_children would put farthest, push_entered(node, mask, index), which writes the children
+// in `mask` to index[0 .. popcount(mask)) in slot order (and may write up to eight), and
+// leaf_bits(node) (bit k set where slot k is a leaf).
 // traverse_wide.cpp includes it for the portable path (SSE or plain C++), traverse_wide_avx2.cpp
 // for AVX2. Both compute, lane by lane, exactly what hit_box (ray.h) and the watertight
 // hit_triangle (shaders/tracer/geometry.glsl) compute, so every path returns the same hit as the
