@@ -24,7 +24,7 @@ def brute_force(tris, spheres, origins, dirs):
             q = np.cross(tv, e1)
             v = np.einsum("rtk,rtk->rt", d.repeat(e1.shape[1], 1), q) * inv
             t = np.einsum("rtk,rtk->rt", e2.repeat(len(o), 0), q) * inv
-        ok = (det != 0) & (u >= 0) & (u <= 1) & (v >= 0) & (u + v <= 1) & (t > 0)
+            ok = (det != 0) & (u >= 0) & (u <= 1) & (v >= 0) & (u + v <= 1) & (t > 0)  # NaN: not ok
         t = np.where(ok, t, np.inf)
         best_id = t.argmin(1)
         best_t = t[np.arange(len(o)), best_id]
