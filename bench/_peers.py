@@ -203,3 +203,16 @@ def embreex_commit_seconds(tris: np.ndarray, repeat: int) -> list[float] | None:
 
 def median(xs: list[float]) -> float:
     return statistics.median(xs)
+
+
+def split_specs(text: str) -> list[str]:
+    """A --peers list of bvh_bench specs: comma-separated, where a piece without a `system:`
+    prefix continues the spec before it (bvhlab:bins=14,leaf=8 is one spec, as bvh_bench reads
+    a spec's options comma-separated)."""
+    specs: list[str] = []
+    for piece in text.split(","):
+        if ":" in piece or not specs:
+            specs.append(piece)
+        else:
+            specs[-1] += "," + piece
+    return specs

@@ -124,7 +124,7 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=2)
     ap.add_argument("--callgrind", default="sponza", help="scenes whose builds callgrind counts ('' for none)")
     ap.add_argument("--tinybvh", default=os.environ.get("BVHLAB_TINYBVH_DIR"))
-    ap.add_argument("--peers", help="comma-separated bvh_bench specs to keep (default: all)")
+    ap.add_argument("--peers", help="comma-separated bvh_bench specs to keep (default: all; _peers.split_specs)")
     ap.add_argument("--json", default="build.json", help="results file name in bench/results (or a path)")
     ap.add_argument("--embreex-child", help=argparse.SUPPRESS)
     args = ap.parse_args()
@@ -139,8 +139,13 @@ def main() -> None:
     threads = [int(t) for t in args.threads.split(",")]
     peers = [(label, spec) for label, spec in PEERS if args.tinybvh or not spec.startswith("tinybvh")]
     if args.peers:
-        keep = set(args.peers.split(","))
-        peers = [(label, spec) for label, spec in peers if spec in keep]
+        asked = _peers.split_specs(args.peers)
+        if not args.tinybvh and any(spec.startswith("tinybvh") for spec in asked):
+            raise SystemExit("--peers tinybvh:...: give --tinybvh DIR (or BVHLAB_TINYBVH_DIR)")
+        known = dict((spec, label) for label, spec in peers)
+        # A spec of no row above (bvhlab:bins=14,leaf=8) is its own row, named by its spec, as in
+        # bench/traverse.py: it used to be dropped without a word.
+        peers = [(known.get(spec, f"{spec.split(':')[0]} ({spec})"), spec) for spec in asked]
     results = {"machine": _common.machine(), "threads": threads, "scenes": {}}
     with tempfile.TemporaryDirectory() as tmp:
         for name, tris in _peers.scenes(args.scenes.split(",")).items():

@@ -135,7 +135,7 @@ def main() -> None:
         "--callgrind", type=int, default=20000, help="rays callgrind counts, spread over each set (0: none)"
     )
     ap.add_argument("--tinybvh", default=os.environ.get("BVHLAB_TINYBVH_DIR"))
-    ap.add_argument("--peers", help="comma-separated bvh_bench specs to keep (default: all)")
+    ap.add_argument("--peers", help="comma-separated bvh_bench specs to keep (default: all; _peers.split_specs)")
     ap.add_argument("--json", default="traverse.json", help="results file name in bench/results (or a path)")
     ap.add_argument(
         "--cpu-time",
@@ -147,7 +147,7 @@ def main() -> None:
     peers = [(label, spec) for label, spec in PEERS if args.tinybvh or not spec.startswith("tinybvh")]
     _common.json_path(args.json)  # a bad folder fails now, not after the run
     if args.peers:
-        asked = [spec for spec in args.peers.split(",") if spec != "embree:medium"]
+        asked = [spec for spec in _peers.split_specs(args.peers) if spec != "embree:medium"]
         if not args.tinybvh and any(spec.startswith("tinybvh") for spec in asked):
             raise SystemExit("--peers tinybvh:...: give --tinybvh DIR (or BVHLAB_TINYBVH_DIR)")
         known = dict((spec, label) for label, spec in peers)

@@ -35,6 +35,8 @@ struct TreeInfo {
     std::uint64_t nodes = 0;
     std::uint64_t references = 0;  ///< primitive slots in the leaves (more than the triangles with spatial splits)
     std::uint64_t digest = 0;      ///< bvhlab: FNV-1a of the nodes and references, to compare builds bit for bit
+    std::uint64_t wide_nodes = 0;  ///< bvhlab, after prepare_trace: the 8-wide copy's nodes
+    std::uint64_t packets = 0;     ///< bvhlab, after prepare_trace: its leaves' packets of four primitives
 };
 
 /// One system under test. build() is what is timed; trace() answers closest hits one ray at a time

@@ -226,7 +226,12 @@ int run_once(const Args& a) {
         if (shadow) peer->occluded(rays, blocked.data());
         else peer->trace(rays, t.data(), prim.data());
         CALLGRIND_STOP_INSTRUMENTATION;
-        std::printf("{\"spec\": \"%s\", \"rays\": %zu}\n", a.peers[0].c_str(), rays.count());
+        const TreeInfo info = peer->info();
+        std::printf(
+            "{\"spec\": \"%s\", \"rays\": %zu, \"sah\": %f, \"nodes\": %llu, \"wide_nodes\": %llu, "
+            "\"packets\": %llu}\n",
+            a.peers[0].c_str(), rays.count(), info.sah, (unsigned long long)info.nodes,
+            (unsigned long long)info.wide_nodes, (unsigned long long)info.packets);
         return 0;
     }
     CALLGRIND_START_INSTRUMENTATION;

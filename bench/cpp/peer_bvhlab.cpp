@@ -85,7 +85,10 @@ public:
             bvh_ = bvhlab::optimized(bvh_, opt);
         }
     }
-    TreeInfo info() const override { return {bvhlab::sah_cost(bvh_), bvh_.nodes.size(), bvh_.refs.size(), digest()}; }
+    TreeInfo info() const override {
+        return {bvhlab::sah_cost(bvh_), bvh_.nodes.size(), bvh_.refs.size(), digest(),
+                wide_.node_count,       wide_.packet_count};
+    }
     void prepare_trace() override { wide_ = bvhlab::make_wide(bvh_); }
     void prepare_rays(const Rays& rays) override {
         if (!batch_) return;
