@@ -216,3 +216,14 @@ def split_specs(text: str) -> list[str]:
         else:
             specs[-1] += "," + piece
     return specs
+
+
+def chosen_rows(text: str, rows: list[tuple[str, str]], tinybvh: str | None) -> list[tuple[str, str]]:
+    """The (label, spec) rows a --peers list asks for, in its order: a spec of no row in `rows`
+    (bvhlab:bins=14,leaf=8) is its own row, named by its spec (it used to be dropped without a
+    word); tinybvh specs need its directory."""
+    asked = split_specs(text)
+    if not tinybvh and any(spec.startswith("tinybvh") for spec in asked):
+        raise SystemExit("--peers tinybvh:...: give --tinybvh DIR (or BVHLAB_TINYBVH_DIR)")
+    known = {spec: label for label, spec in rows}
+    return [(known.get(spec, f"{spec.split(':')[0]} ({spec})"), spec) for spec in asked]

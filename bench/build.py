@@ -139,13 +139,7 @@ def main() -> None:
     threads = [int(t) for t in args.threads.split(",")]
     peers = [(label, spec) for label, spec in PEERS if args.tinybvh or not spec.startswith("tinybvh")]
     if args.peers:
-        asked = _peers.split_specs(args.peers)
-        if not args.tinybvh and any(spec.startswith("tinybvh") for spec in asked):
-            raise SystemExit("--peers tinybvh:...: give --tinybvh DIR (or BVHLAB_TINYBVH_DIR)")
-        known = dict((spec, label) for label, spec in peers)
-        # A spec of no row above (bvhlab:bins=14,leaf=8) is its own row, named by its spec, as in
-        # bench/traverse.py: it used to be dropped without a word.
-        peers = [(known.get(spec, f"{spec.split(':')[0]} ({spec})"), spec) for spec in asked]
+        peers = _peers.chosen_rows(args.peers, peers, args.tinybvh)
     results = {"machine": _common.machine(), "threads": threads, "scenes": {}}
     with tempfile.TemporaryDirectory() as tmp:
         for name, tris in _peers.scenes(args.scenes.split(",")).items():

@@ -147,15 +147,9 @@ def main() -> None:
     peers = [(label, spec) for label, spec in PEERS if args.tinybvh or not spec.startswith("tinybvh")]
     _common.json_path(args.json)  # a bad folder fails now, not after the run
     if args.peers:
-        asked = [spec for spec in _peers.split_specs(args.peers) if spec != "embree:medium"]
-        if not args.tinybvh and any(spec.startswith("tinybvh") for spec in asked):
-            raise SystemExit("--peers tinybvh:...: give --tinybvh DIR (or BVHLAB_TINYBVH_DIR)")
-        known = dict((spec, label) for label, spec in peers)
-        # A spec of no row above (bvhlab:leaf=8) is its own row, named by its spec: it used to be
-        # dropped without a word.
-        peers = [(known["embree:medium"], "embree:medium")] + [
-            (known.get(spec, f"{spec.split(':')[0]} ({spec})"), spec) for spec in asked
-        ]
+        # Embree MEDIUM always first: the others are compared with it
+        chosen = [row for row in _peers.chosen_rows(args.peers, peers, args.tinybvh) if row[1] != "embree:medium"]
+        peers = [row for row in peers if row[1] == "embree:medium"] + chosen
     results = {"machine": _common.machine(), "scenes": {}}
     with tempfile.TemporaryDirectory() as tmp:
         for scene, tris in _peers.scenes(args.scenes.split(",")).items():
