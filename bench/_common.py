@@ -60,20 +60,53 @@ class Embree:
 
 
 def machine() -> dict:
-    cpu = "unknown"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
+    """What ran the benchmark. The model name alone does not tell hosts apart ("AMD EPYC" is every
+    generation on this project's VMs, whose speed differed 2× between a Zen 1 host and a later one),
+    so the CPU's family, model and stepping, its cache sizes and the load average go in too."""
+    info = _cpuinfo(_read("/proc/cpuinfo"))
+    caches = {}
+    for index in sorted(Path("/sys/devices/system/cpu/cpu0/cache").glob("index*")):
+        level, kind, size = (_read(index / f) for f in ("level", "type", "size"))
+        if level and size:
+            caches[f"L{level}{'d' if kind == 'Data' else 'i' if kind == 'Instruction' else ''}"] = size
+    load = _read("/proc/loadavg").split()[:3]
     return {
-        "cpu": cpu,
+        "cpu": info.get("model name", "unknown"),
+        "cpu_id": "/".join(info.get(k, "?") for k in ("vendor_id", "cpu family", "model", "stepping")),
+        "mhz": info.get("cpu MHz"),
+        "caches": caches,
         "cores": os.cpu_count(),
+        "load": [float(x) for x in load],
         "python": platform.python_version(),
         "date": time.strftime("%Y-%m-%d %H:%M:%S"),
     }
+
+
+def machine_line(m: dict) -> str:
+    """machine()'s record in one line, for the head of a benchmark's log."""
+    caches = " ".join(f"{k} {v}" for k, v in m.get("caches", {}).items())
+    load = "/".join(f"{x:.1f}" for x in m.get("load", []))
+    return f"machine: {m['cpu']} ({m.get('cpu_id', '?')}), {m['cores']} cores, {caches}; load {load}; {m['date']}"
+
+
+def _read(path) -> str:
+    try:
+        return Path(path).read_text().strip()
+    except OSError:
+        return ""
+
+
+def _cpuinfo(text: str) -> dict:
+    """The first processor's fields of /proc/cpuinfo, by name."""
+    out = {}
+    for line in text.splitlines():
+        if not line.strip():
+            if out:
+                break
+            continue
+        key, _, value = line.partition(":")
+        out.setdefault(key.strip(), value.strip())
+    return out
 
 
 def print_table(headers: list[str], rows: list[list], title: str = "") -> str:

@@ -141,6 +141,7 @@ def main() -> None:
     if args.peers:
         peers = _peers.chosen_rows(args.peers, peers, args.tinybvh)
     results = {"machine": _common.machine(), "threads": threads, "scenes": {}}
+    print(_common.machine_line(results["machine"]), file=sys.stderr, flush=True)
     with tempfile.TemporaryDirectory() as tmp:
         for name, tris in _peers.scenes(args.scenes.split(",")).items():
             path = Path(tmp) / f"{name}.f32"

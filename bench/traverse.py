@@ -151,6 +151,7 @@ def main() -> None:
         chosen = [row for row in _peers.chosen_rows(args.peers, peers, args.tinybvh) if row[1] != "embree:medium"]
         peers = [row for row in peers if row[1] == "embree:medium"] + chosen
     results = {"machine": _common.machine(), "scenes": {}}
+    print(_common.machine_line(results["machine"]), file=sys.stderr, flush=True)
     with tempfile.TemporaryDirectory() as tmp:
         for scene, tris in _peers.scenes(args.scenes.split(",")).items():
             mesh, rays = _peers.write_inputs(Path(tmp), scene, tris)
