@@ -142,6 +142,42 @@ TEST(WideBatch, BatchQueriesMatchTheStackTraversalOnAnyThreadCount) {
     set_isa(before);
 }
 
+/// The batch's any-hit walk takes its order per piece from the piece's first rays (wide_batch.inl
+/// occluded_of_batch: those of the lowest octant present, as the piece is grouped): every second
+/// piece here has its octant-0 rays cut short, so that they reach nothing and the rest of the piece,
+/// many of them occluded, goes in the layout's order; the other pieces mostly farthest first. Both
+/// give the brute force's answer and the single ray's on every ray and path.
+TEST(WideBatch, AnyHitOrderChosenPerPieceGivesTheBruteForcesAnswers) {
+    const auto scene = test::random_scene(3000, 200, 61);
+    const Bvh bvh = build_bvh(scene.view());
+    const WideBvh wide = make_wide(bvh);
+    auto rays = random_rays(6 * kWideBatch, 67);
+    auto layout_piece = [](std::size_t i) { return (i / kWideBatch) % 2 == 0; };
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        const Vec3 d = rays[i].dir;
+        if (layout_piece(i) && !std::signbit(d.x) && !std::signbit(d.y) && !std::signbit(d.z)) rays[i].tmax = 1e-6f;
+    }
+    std::vector<char> oracle(rays.size());
+    std::uint32_t occluded_in_layout = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        oracle[i] = brute_force(bvh, rays[i]).t < rays[i].tmax;
+        occluded_in_layout += layout_piece(i) && oracle[i];
+    }
+    EXPECT_GT(occluded_in_layout, 100u) << "too few occluded rays in the layout's order to test it";
+    const Isa before = active_isa();
+    for (Isa isa : supported_isas()) {
+        set_isa(isa);
+        std::vector<char> occluded(rays.size());
+        occluded_wide_batch(wide, rays.data(), rays.size(), reinterpret_cast<bool*>(occluded.data()));
+        std::uint32_t wrong = 0;
+        for (std::size_t i = 0; i < rays.size(); ++i)
+            if ((occluded[i] != oracle[i] || bool(occluded[i]) != occluded_wide(wide, rays[i])) && ++wrong <= 5)
+                ADD_FAILURE() << isa_name(isa) << ": ray " << i << " occluded " << int(occluded[i]) << ", brute force "
+                              << int(oracle[i]);
+    }
+    set_isa(before);
+}
+
 TEST(WideBatch, EmptyTreeAndEmptyBatch) {
     test::Scene empty;
     const Bvh none = build_bvh(empty.view());

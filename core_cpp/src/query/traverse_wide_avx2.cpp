@@ -4,6 +4,7 @@
 // inline function of another header.
 #include <immintrin.h>
 
+#include <algorithm>
 #include <climits>
 #include <cmath>
 #include <cstddef>
