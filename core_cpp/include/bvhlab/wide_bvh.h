@@ -98,7 +98,10 @@ inline constexpr std::uint32_t kWideBatch = 256;
 /// intersect_wide for each of rays[0, count): hits[i] (and nodes_visited[i], where given) for
 /// rays[i], the same hit bit for bit. The rays are traced grouped by octant (the sign bits of
 /// their direction), each group by the walk compiled for that octant, in pieces of kWideBatch
-/// rays: no walk chosen per ray by an indirect call, one walk's code in use at a time.
+/// rays: no walk chosen per ray by an indirect call, one walk's code in use at a time. On the AVX2
+/// path, without nodes_visited, eight rays of a group in a row with one origin and directions
+/// within ~5.7° (a camera's neighbouring pixels) go through the tree as one packet
+/// (src/query/wide_packet.inl); nodes_visited asked for, every ray goes alone.
 void intersect_wide_batch(const WideBvh& wide, const Bvh& bvh, const Ray* rays, std::size_t count, Hit* hits,
                           std::uint32_t* nodes_visited = nullptr);
 

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 
 #include "wide_kernel.h"
 
@@ -54,6 +55,7 @@ struct L8 {
 inline L8 operator+(L8 a, L8 b) { return {_mm256_add_ps(a.v, b.v)}; }
 inline L8 operator-(L8 a, L8 b) { return {_mm256_sub_ps(a.v, b.v)}; }
 inline L8 operator*(L8 a, L8 b) { return {_mm256_mul_ps(a.v, b.v)}; }
+inline L8 operator/(L8 a, L8 b) { return {_mm256_div_ps(a.v, b.v)}; }  // the packet walk's 1/d (wide_packet.inl)
 inline L8 raise(L8 acc, L8 t) { return {_mm256_max_ps(t.v, acc.v)}; }  // t > acc ? t : acc
 inline L8 lower(L8 acc, L8 t) { return {_mm256_min_ps(t.v, acc.v)}; }  // t < acc ? t : acc
 inline int le_bits(L8 a, L8 b) { return _mm256_movemask_ps(_mm256_cmp_ps(a.v, b.v, _CMP_LE_OS)); }
@@ -165,6 +167,8 @@ inline int leaf_bits(const WideNode& node) {
     return _mm256_movemask_ps(_mm256_load_ps(reinterpret_cast<const float*>(node.child)));
 }
 
+// the batch's closest-hit walk takes coherent rays as packets of eight (wide_packet.inl)
+#define BVHLAB_WIDE_PACKETS
 #include "wide_traverse.inl"
 
 }  // namespace bvhlab::avx2

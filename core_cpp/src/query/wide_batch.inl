@@ -5,18 +5,36 @@
 // (mispredicted at 87% of shadow rays: design.md, "Any-hit queries") and one copy of the walk's
 // code is hot at a time.
 
+#ifdef BVHLAB_WIDE_PACKETS
+#include "wide_packet.inl"
+#endif
+
 /// The closest hits of rays[order[0, n)], all of octant kOctant, to hits[i] (and the count of
 /// wide nodes visited to visited[i], where given) in each ray's own slot i.
+/// Where the including file defines BVHLAB_WIDE_PACKETS (the AVX2 path) and no visited counts are
+/// asked (a packet's are not the single walk's), each run of kPacket rays that `coherent` accepts
+/// goes through the tree as one packet (wide_packet.inl); the rest ray by ray.
 template <int kOctant>
 void closest_of_octant(const WideView& wide, const Ray* rays, const std::uint32_t* order, std::uint32_t n, Hit* hits,
                        std::uint32_t* visited) {
-    for (std::uint32_t j = 0; j < n; ++j) {
-        const std::uint32_t i = order[j];
+    const auto single = [&](std::uint32_t i) {
         Hit hit{rays[i].tmax, kNoHit, 0.0f, 0.0f, kNoHit};
         const std::uint32_t v = traverse_nodes<false, kOctant>(wide, make_query(rays[i]), hit);
         hits[i] = hit;
         if (visited) visited[i] = v;
-    }
+    };
+    std::uint32_t j = 0;
+#ifdef BVHLAB_WIDE_PACKETS
+    if (!visited)
+        for (; j + kPacket <= n; j += kPacket) {
+            if (coherent(rays, order + j)) {
+                closest_packet<kOctant>(wide, rays, order + j, hits);
+            } else {
+                for (int r = 0; r < kPacket; ++r) single(order[j + r]);
+            }
+        }
+#endif
+    for (; j < n; ++j) single(order[j]);
 }
 
 /// Whether each of rays[order[0, n)], all of octant kOctant, is occluded, to occluded[i], by the

@@ -167,8 +167,11 @@ template <bool kPrefetch = true>
 /// is the plain one.
 /// kOctant: the ray's octant where the caller knows it at compile time (the batch walks,
 /// closest_of_octant below: plane offsets as constants), -1 to read it from the query.
+/// `root`: the node to start from (the packet walk, wide_packet.inl, hands a subtree that few of
+/// its rays enter to each of them alone, with the hit found so far), the tree's root by default.
 template <bool kRecord = false, int kOctant = -1>
-std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit, WideRecorder* record = nullptr) {
+std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit, WideRecorder* record = nullptr,
+                             std::uint32_t root = 0) {
     const L8 origin[3] = {L8::splat(q.o[0]), L8::splat(q.o[1]), L8::splat(q.o[2])};
     // The planes' distances as (origin - plane) · (-1/d), which are hit_box's (plane - origin) ·
     // 1/d (negating is exact, and a zero's sign, the only difference, changes no comparison), so
@@ -181,7 +184,7 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit, Wid
     const std::ptrdiff_t* plane = kOctant < 0 ? kPlanes[q.octant] : kPlanes.at[kOctant & 7];
     Stack stack;
     std::uint32_t sp = 0, visited = 0;
-    Entry cur{0, q.tmin};
+    Entry cur{root, q.tmin};
     float far_limit = hit.t * s;
     for (;;) {
         if (cur.index & kLeafChild) {

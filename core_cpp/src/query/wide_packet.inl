@@ -1,0 +1,177 @@
+// wide_packet.inl — packets of coherent rays through the 8-wide tree (issue 36, design.md "Packets
+// for coherent rays"): the batch's closest-hit walk (closest_of_octant, wide_batch.inl) sends eight
+// rays of one octant that share an origin and nearly a direction (a camera's neighbouring pixels)
+// through the tree together, one ray in each AVX lane: each node's child boxes are loaded once for
+// the eight rays, and the packet is ordered, pushed and popped once. Wald, Slusallek, Benthin and
+// Wagner 2001 ("Interactive rendering with coherent ray tracing": SIMD across the rays of a
+// packet), with per-ray active masks and entry distances on the stack as in Embree's packet
+// traversal (Wald et al. 2014). Only in the AVX2 path (traverse_wide_avx2.cpp defines
+// BVHLAB_WIDE_PACKETS); the portable path keeps single rays.
+//
+// The hits are the single walk's bit for bit: each lane does exactly the single walk's box test
+// (the same raises and lowers of the same products, from the ray's own tmin and far limit), so a
+// ray enters a child exactly where its own walk, at the same closest hit, would; it may visit
+// more (the packet's order is not its own nearest-first order, so its far limit may still be
+// larger), never fewer, and each leaf is tested by test_leaf with the ray's own query, under the
+// order-independent closer-hit rule (ray.h closer_hit).
+
+inline constexpr int kPacket = 8;
+
+/// Directions at most ~5.7° apart (cos² of the angle to the first ray's at least this) count as
+/// one packet's.
+inline constexpr float kPacketCos2 = 0.99f;
+
+/// A subtree entered by at most this many of a packet's rays is walked by each alone.
+inline constexpr int kAlone = 2;
+
+/// Whether rays[ids[0, kPacket)] (one octant) go through the tree as one packet: the same origin
+/// bit for bit (a pinhole camera's rays) and directions within kPacketCos2 of the first's. Random
+/// and shadow rays fail at the first or second ray (a few instructions a ray).
+inline bool coherent(const Ray* rays, const std::uint32_t* ids) {
+    const Ray& first = rays[ids[0]];
+    const float x0 = first.dir.x, y0 = first.dir.y, z0 = first.dir.z;
+    const float n0 = x0 * x0 + y0 * y0 + z0 * z0;
+    for (int r = 1; r < kPacket; ++r) {
+        const Ray& ray = rays[ids[r]];
+        if (ray.origin.x != first.origin.x || ray.origin.y != first.origin.y || ray.origin.z != first.origin.z)
+            return false;
+        const float x = ray.dir.x, y = ray.dir.y, z = ray.dir.z;
+        const float c = x0 * x + y0 * y + z0 * z;
+        if (!(c > 0.0f && c * c >= kPacketCos2 * n0 * (x * x + y * y + z * z))) return false;
+    }
+    return true;
+}
+
+/// The packet walk's stack: a child word and the entry distance of each ray in its lane (NaN where
+/// the ray did not enter it, which no far limit passes).
+struct PacketStack {
+    static constexpr std::uint32_t kSize = WideStack::kSize;
+    alignas(32) float t[kSize][kPacket];
+    std::uint32_t index[kSize];
+};
+
+/// The smallest lane of t among `in` (+inf where none): a packet's child's sort key, of the
+/// middles (t0 + t1) of the rays' spans in its box, as the single walk's order (enter_children
+/// says why: Sponza's camera stands inside boxes; ordered by the least entry instead, Sponza's
+/// primary rays were 7% slower, room1m's 3% faster, repeat1m's and vast1m's even).
+inline float least_lane(__m256 t, __m256 in) {
+    const __m256 m = _mm256_blendv_ps(_mm256_set1_ps(std::numeric_limits<float>::infinity()), t, in);
+    __m128 x = _mm_min_ps(_mm256_castps256_ps128(m), _mm256_extractf128_ps(m, 1));
+    x = _mm_min_ps(x, _mm_movehl_ps(x, x));
+    return _mm_cvtss_f32(_mm_min_ss(x, _mm_shuffle_ps(x, x, 1)));
+}
+
+/// The closest hits of rays[ids[0, kPacket)], all of octant kOctant, to hits[ids[r]] (unfinished,
+/// as closest_of_octant's), by one walk of the packet: nearest child first by the least middle of
+/// the rays' spans in its box (least_lane).
+template <int kOctant>
+void closest_packet(const WideView& wide, const Ray* rays, const std::uint32_t* ids, Hit* hits) {
+    const float s = gpu::BOX_FAR_SCALE;
+    // The box test's factors for the eight rays at once, by make_query's operations lane by lane
+    // (the same IEEE division and products, so the same bits); the origin is one for all
+    // (coherent). The triangle test's query is made for a ray at its first leaf only: most of
+    // room1m's camera rays reach none (design.md).
+    alignas(32) float d[3][kPacket], tmin[kPacket], far[kPacket];
+    Hit h[kPacket];
+    for (int r = 0; r < kPacket; ++r) {
+        const Ray& ray = rays[ids[r]];
+        d[0][r] = ray.dir.x, d[1][r] = ray.dir.y, d[2][r] = ray.dir.z;
+        h[r] = Hit{ray.tmax, kNoHit, 0.0f, 0.0f, kNoHit};
+        tmin[r] = ray.tmin, far[r] = h[r].t * s;  // the single walk's far_limit, lane by lane
+    }
+    const Vec3& eye = rays[ids[0]].origin;
+    const L8 origin[3] = {L8::splat(eye.x), L8::splat(eye.y), L8::splat(eye.z)};
+    L8 neg_inv[3], neg_inv_far[3];
+    for (int a = 0; a < 3; ++a) {
+        const L8 inv = L8::splat(1.0f) / L8::load(d[a]);
+        neg_inv[a] = inv * L8::splat(-1.0f), neg_inv_far[a] = inv * L8::splat(-s);
+    }
+    Query q[kPacket];
+    int made = 0;  // bit r: q[r] made
+    const auto query = [&](int r) -> const Query& {
+        if (!(made >> r & 1)) q[r] = make_query(rays[ids[r]]), made |= 1 << r;
+        return q[r];
+    };
+    const L8 t_min = L8::load(tmin);
+    L8 far_limit = L8::load(far);
+    const std::ptrdiff_t* plane = kPlanes.at[kOctant & 7];
+    const __m256 none = _mm256_set1_ps(std::numeric_limits<float>::quiet_NaN());
+    PacketStack stack;
+    std::uint32_t sp = 0, cur = 0;
+    L8 cur_t = t_min;  // the root: every ray enters it at tmin, as the single walk does
+    for (;;) {
+        // the rays whose entry is within their closest hit so far (ray.h may_hold_closer)
+        const __m256 active = _mm256_cmp_ps(cur_t.v, far_limit.v, _CMP_LE_OS);
+        const int lanes = _mm256_movemask_ps(active);
+        if (!(cur & kLeafChild) && __builtin_popcount(unsigned(lanes)) <= kAlone) {
+            // a subtree few of the rays enter: each of them through it alone (a packet's node
+            // costs a box test of eight rays a child, whatever the rays still in it; Benthin,
+            // Wald et al. 2012, "Combining single and packet-ray tracing", Embree's hybrid walk)
+            for (int m = lanes; m; m &= m - 1) {
+                const int r = __builtin_ctz(unsigned(m));
+                traverse_nodes<false, kOctant>(wide, query(r), h[r], nullptr, cur);
+                far[r] = h[r].t * s;
+            }
+            far_limit = L8::load(far);
+        } else if (cur & kLeafChild) {
+            for (int m = _mm256_movemask_ps(active); m; m &= m - 1) {
+                const int r = __builtin_ctz(unsigned(m));
+                test_leaf(wide, cur & ~kLeafChild, query(r), h[r]);
+                far[r] = h[r].t * s;
+            }
+            far_limit = L8::load(far);
+        } else {
+            const WideNode& node = node_at(wide, cur);
+            __builtin_prefetch(node.child);
+            const float* f = node.lo_x;
+            std::uint32_t child[8];
+            float key[8];
+            alignas(32) float entry[8][kPacket];
+            int n = 0;
+            // the slots in use (an unused slot's box is inverted): a packet tests each child
+            // for its eight rays at once, so an empty slot would cost a whole test
+            for (int slots = le_bits(L8::load(node.lo_x), L8::load(node.hi_x)); slots; slots &= slots - 1) {
+                const int c = __builtin_ctz(unsigned(slots));
+                // hit_box's raises and lowers in enter_children's order, lane by lane
+                L8 t0 = t_min, t1 = far_limit;
+                for (int a = 0; a < 3; ++a) t0 = raise(t0, (origin[a] - L8::splat(f[plane[a] + c])) * neg_inv[a]);
+                for (int a = 0; a < 3; ++a)
+                    t1 = lower(t1, (origin[a] - L8::splat(f[plane[3 + a] + c])) * neg_inv_far[a]);
+                const __m256 in = _mm256_and_ps(_mm256_cmp_ps(t0.v, t1.v, _CMP_LE_OS), active);
+                if (!_mm256_movemask_ps(in)) continue;
+                _mm256_store_ps(entry[n], _mm256_blendv_ps(none, t0.v, in));
+                key[n] = least_lane(_mm256_add_ps(t0.v, t1.v), in);
+                child[n++] = node.child[c];
+            }
+            if (n > 0) {
+                // the farthest pushed first: an insertion sort of at most eight keys, then the
+                // nearest taken as the next entry
+                int rank[8];
+                for (int i = 0; i < n; ++i) {
+                    int j = i;
+                    for (; j > 0 && key[rank[j - 1]] < key[i]; --j) rank[j] = rank[j - 1];
+                    rank[j] = i;
+                }
+                for (int i = 0; i + 1 < n; ++i) {
+                    const int e = rank[i];
+                    stack.index[sp] = child[e];
+                    _mm256_store_ps(stack.t[sp], _mm256_load_ps(entry[e]));
+                    prefetch(wide, child[e]);
+                    ++sp;
+                }
+                cur = child[rank[n - 1]];
+                cur_t = L8{_mm256_load_ps(entry[rank[n - 1]])};
+                continue;
+            }
+        }
+        do {  // pop, skipping entries that no ray may find a closer hit in
+            if (sp == 0) {
+                for (int r = 0; r < kPacket; ++r) hits[ids[r]] = h[r];
+                return;
+            }
+            --sp;
+            cur_t = L8{_mm256_load_ps(stack.t[sp])};
+        } while (!le_bits(cur_t, far_limit));
+        cur = stack.index[sp];
+    }
+}

@@ -1,0 +1,174 @@
+// Packets of coherent rays in the wide batch (wide_packet.inl: the AVX2 path's closest-hit batch
+// walk takes eight rays of one octant with one origin and nearly one direction through the tree
+// together): camera rays, cameras whose packets diverge, mixed octants in one piece, misses, tmin
+// and tmax limits, spheres. Every hit must equal, bit for bit, the ray traced alone
+// (intersect_wide) and the brute force, on every instruction set path and thread count.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <vector>
+
+#include "bvhlab/bvh.h"
+#include "bvhlab/isa.h"
+#include "bvhlab/traverse.h"
+#include "bvhlab/wide_bvh.h"
+#include "test_scenes.h"
+#include "traverse_oracles.h"
+
+using namespace bvhlab;
+using test::brute_force;
+using test::supported_isas;
+
+namespace {
+
+bool same_bits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+/// A pinhole camera's rays, row by row as the bench's primary rays (bench/_peers.py): from `eye`
+/// towards `at`, `width` × `height` pixels over a vertical field of `fov` radians; `jitter`
+/// radians of random turn per ray (0: a plain camera). A packet's rays are at most ~5.7° apart
+/// (wide_packet.inl kPacketCos2): eight pixels of these cameras span 2.5-4°, and 1° at the bench's
+/// 640 × 480.
+std::vector<Ray> camera_rays(Vec3 eye, Vec3 at, int width, int height, float fov, float jitter = 0.0f,
+                             std::uint32_t seed = 1) {
+    const Vec3 f = normalize(at - eye), r = normalize(cross(f, Vec3{0.0f, 0.0f, 1.0f})), u = cross(r, f);
+    const float step = 2.0f * std::tan(fov / 2) / float(height);
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> turn(-jitter, jitter);
+    std::vector<Ray> rays;
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            const float sx = (float(x) + 0.5f - 0.5f * float(width)) * step + turn(rng);
+            const float sy = (0.5f * float(height) - float(y) - 0.5f) * step + turn(rng);
+            Ray ray;
+            ray.origin = eye, ray.dir = f + r * sx + u * sy;
+            rays.push_back(ray);
+        }
+    return rays;
+}
+
+/// Compares intersect_wide_batch (no visited counts: the packet walk where the path has one) with
+/// each ray alone and with the brute force on every instruction set path; returns the hits.
+std::size_t expect_batch_is_single(const Bvh& bvh, const std::vector<Ray>& rays) {
+    const WideBvh wide = make_wide(bvh);
+    const Isa before = active_isa();
+    std::size_t hits = 0;
+    for (Isa isa : supported_isas()) {
+        set_isa(isa);
+        std::vector<Hit> batch(rays.size());
+        intersect_wide_batch(wide, bvh, rays.data(), rays.size(), batch.data());
+        std::uint32_t wrong = 0;
+        hits = 0;
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+            const Hit one = intersect_wide(wide, bvh, rays[i]), oracle = brute_force(bvh, rays[i]);
+            const bool ok = same_bits(batch[i].t, one.t) && batch[i].ref == one.ref && same_bits(batch[i].u, one.u) &&
+                            same_bits(batch[i].v, one.v) && batch[i].slot == one.slot && batch[i].ref == oracle.ref &&
+                            same_bits(batch[i].t, oracle.t);
+            if (!ok && ++wrong <= 5)
+                ADD_FAILURE() << isa_name(isa) << ": ray " << i << " t " << batch[i].t << " ref " << batch[i].ref
+                              << " against " << one.t << " ref " << one.ref << " (brute force " << oracle.t << ")";
+            hits += one.ref != kNoHit;
+        }
+    }
+    set_isa(before);
+    return hits;
+}
+
+}  // namespace
+
+TEST(WidePackets, CameraRaysGiveTheSingleRayHits) {
+    const auto scene = test::random_scene(4000, 150, 71);  // triangles and spheres
+    const Bvh bvh = build_bvh(scene.view());
+    const auto rays = camera_rays({-6.0f, -4.0f, 3.0f}, {5.0f, 5.0f, 5.0f}, 96, 64, 0.6f);
+    EXPECT_GT(expect_batch_is_single(bvh, rays), rays.size() / 3);
+}
+
+/// Rays within the packet's cone of one another but turned at random: the packet's rays part
+/// in the tree and each enters children the others do not.
+TEST(WidePackets, PartlyCoherentRaysGiveTheSingleRayHits) {
+    const auto scene = test::random_scene(4000, 150, 73);
+    const Bvh bvh = build_bvh(scene.view());
+    for (float jitter : {0.005f, 0.02f, 0.3f}) {  // the last refused as packets
+        const auto rays = camera_rays({-6.0f, -4.0f, 3.0f}, {5.0f, 5.0f, 5.0f}, 128, 96, 0.6f, jitter, 5);
+        EXPECT_GT(expect_batch_is_single(bvh, rays), rays.size() / 4) << jitter;
+    }
+}
+
+/// A camera inside the scene looking along an axis: the view spans four octants (each piece of
+/// 256 rays holds rays of several, grouped before the walk), and looking out of the scene's
+/// cube, part of the rays miss everything.
+TEST(WidePackets, MixedOctantsAndMissesGiveTheSingleRayHits) {
+    const auto scene = test::random_scene(4000, 150, 79);
+    const Bvh bvh = build_bvh(scene.view());
+    const auto rays = camera_rays({5.0f, 5.0f, 5.0f}, {5.0f, 15.0f, 5.0f}, 192, 144, 1.2f);
+    int octants = 0;
+    for (int k = 0; k < 8; ++k)
+        for (const Ray& r : rays)
+            if ((int(std::signbit(r.dir.x)) | int(std::signbit(r.dir.y)) << 1 | int(std::signbit(r.dir.z)) << 2) == k) {
+                ++octants;
+                break;
+            }
+    EXPECT_GE(octants, 4);
+    const std::size_t hits = expect_batch_is_single(bvh, rays);
+    EXPECT_GT(hits, rays.size() / 10);
+    EXPECT_LT(hits, rays.size() * 9 / 10) << "some rays should miss";
+    // a camera outside looking away: every ray misses
+    const auto away = camera_rays({-6.0f, -4.0f, 3.0f}, {-16.0f, -14.0f, 3.0f}, 64, 48, 0.5f);
+    EXPECT_EQ(expect_batch_is_single(bvh, away), 0u);
+}
+
+/// Each ray's own tmin and tmax (a packet's rays end at different distances): a ray whose hit
+/// lies beyond its tmax, or before its tmin, must not take it from a packet neighbour's walk.
+TEST(WidePackets, TminAndTmaxLimitsGiveTheSingleRayHits) {
+    const auto scene = test::random_scene(4000, 150, 83);
+    const Bvh bvh = build_bvh(scene.view());
+    auto rays = camera_rays({-6.0f, -4.0f, 3.0f}, {5.0f, 5.0f, 5.0f}, 128, 96, 0.9f);
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    for (Ray& r : rays) {
+        if (u(rng) < 0.5f) r.tmax = 2.0f + 14.0f * u(rng);
+        if (u(rng) < 0.25f) r.tmin = 6.0f * u(rng);
+    }
+    EXPECT_GT(expect_batch_is_single(bvh, rays), rays.size() / 5);
+}
+
+/// Bvh.intersect's entry point (intersect_batch: checked, scaled pieces) with camera rays on 1
+/// and 3 threads: the same hits as the binary stack walk, every path.
+TEST(WidePackets, IntersectBatchOnThreadsGivesTheStackWalksHits) {
+    const auto scene = test::random_scene(4000, 150, 89);
+    const Bvh bvh = build_bvh(scene.view());
+    const WideBvh wide = make_wide(bvh);
+    const auto rays = camera_rays({-6.0f, -4.0f, 3.0f}, {5.0f, 5.0f, 5.0f}, 160, 120, 0.5f);
+    std::vector<float> o, d;
+    for (const Ray& r : rays)
+        o.insert(o.end(), {r.origin.x, r.origin.y, r.origin.z}), d.insert(d.end(), {r.dir.x, r.dir.y, r.dir.z});
+    RayBatch batch;
+    batch.origins = o.data(), batch.directions = d.data(), batch.count = rays.size(), batch.tmax = 30.0f;
+    auto run = [&](Traversal mode, std::uint32_t threads, std::vector<float>& t, std::vector<std::int32_t>& prim,
+                   std::vector<float>& u, std::vector<float>& v) {
+        t.resize(rays.size()), prim.resize(rays.size()), u.resize(rays.size()), v.resize(rays.size());
+        HitBatch hits;
+        hits.t = t.data(), hits.prim = prim.data(), hits.u = u.data(), hits.v = v.data();
+        intersect_batch(bvh, batch, hits, mode, threads, &wide);
+    };
+    std::vector<float> t0, u0, v0, t, u, v;
+    std::vector<std::int32_t> prim0, prim;
+    run(Traversal::Stack, 1, t0, prim0, u0, v0);
+    const Isa before = active_isa();
+    for (Isa isa : supported_isas()) {
+        set_isa(isa);
+        for (std::uint32_t threads : {1u, 3u}) {
+            run(Traversal::Wide, threads, t, prim, u, v);
+            std::uint32_t wrong = 0;
+            for (std::size_t i = 0; i < rays.size(); ++i) {
+                const bool ok =
+                    same_bits(t[i], t0[i]) && prim[i] == prim0[i] && same_bits(u[i], u0[i]) && same_bits(v[i], v0[i]);
+                if (!ok && ++wrong <= 5)
+                    ADD_FAILURE() << isa_name(isa) << ", " << threads << " threads: ray " << i << " t " << t[i]
+                                  << " against " << t0[i];
+            }
+        }
+    }
+    set_isa(before);
+}
