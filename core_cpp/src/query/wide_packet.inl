@@ -21,8 +21,13 @@ inline constexpr int kPacket = 8;
 /// one packet's.
 inline constexpr float kPacketCos2 = 0.99f;
 
-/// A subtree entered by at most this many of a packet's rays is walked by each alone.
-inline constexpr int kAlone = 2;
+/// A subtree entered by at most this many of a packet's rays is walked by each alone: a packet
+/// stays one while at least six of its eight rays go the same way. With 2, uniform1m's camera rays
+/// (a cube of tiny triangles, where neighbouring pixels part within a few levels) were 10% slower
+/// through the batch than without packets (0.95 → 0.85 of the best peer); with 5, 0.93-0.97, and
+/// Sponza, room1m, repeat1m, vast1m, rods1m as with 2 or better (design.md "Packets for coherent
+/// rays").
+inline constexpr int kAlone = 5;
 
 /// Whether rays[ids[0, kPacket)] (one octant) go through the tree as one packet: the same origin
 /// bit for bit (a pinhole camera's rays) and directions within kPacketCos2 of the first's. Random
