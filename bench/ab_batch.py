@@ -1,9 +1,9 @@
-"""trav11's A/B run (design.md "Packets for coherent rays"): bvh_bench trace of main's binary and
-this branch's alternately on each scene's primary (and random) rays, pinned to one core, every
-round Embree 3 MEDIUM, tinybvh 1.9 BVH8_CPU and bvhlab's batch (and single-ray) rows in one process;
-writes trav11_ab.json beside this file.
+"""An A/B run of two bvh_bench binaries (helper trav11's, design.md "Packets for coherent rays"):
+bvh_bench trace of the old binary and the new one alternately on each scene's primary (and random)
+rays, pinned to one core, every round Embree 3 MEDIUM, tinybvh 1.9 BVH8_CPU and bvhlab's batch (and
+single-ray) rows in one process; writes bench/results/trav11_ab.json (--out).
 
-    .venv/bin/python bench/results/trav11_ab.py OLD_BVH_BENCH NEW_BVH_BENCH [--scenes ...]
+    .venv/bin/python bench/ab_batch.py OLD_BVH_BENCH NEW_BVH_BENCH [--scenes ...]
         [--sets primary,random] [--rounds 3] [--repeat 3]
 """
 
@@ -15,7 +15,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _peers  # noqa: E402
 
 
@@ -27,7 +27,7 @@ def main() -> None:
     ap.add_argument("--sets", default="primary,random")
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--out", default=str(Path(__file__).with_name("trav11_ab.json")))
+    ap.add_argument("--out", default=str(Path(__file__).resolve().parent / "results" / "trav11_ab.json"))
     args = ap.parse_args()
     peers = ["embree:medium", "tinybvh:", "bvhlab:", "bvhlab:batch=1"]
     runs: dict = {}
