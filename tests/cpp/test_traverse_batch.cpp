@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <random>
 #include <string>
 #include <vector>
@@ -21,6 +20,8 @@
 using namespace bvhlab;
 using test::brute_force;
 using test::random_rays;
+using test::same_bits;
+using test::same_hit;
 using test::supported_isas;
 
 namespace {
@@ -40,8 +41,6 @@ std::vector<Ray> shuffled_rays(std::uint32_t seed) {
     std::shuffle(rays.begin(), rays.end(), rng);
     return rays;
 }
-
-bool same_bits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
 }  // namespace
 
@@ -72,10 +71,8 @@ TEST(WideBatch, ShuffledMixedOctantsGiveEachRayItsOwnHitOnEveryPath) {
         for (std::size_t i = 0; i < rays.size(); ++i) {
             std::uint32_t one_visited = 0;
             const Hit one = intersect_wide(wide, bvh, rays[i], &one_visited), oracle = brute_force(bvh, rays[i]);
-            const bool ok = same_bits(batch[i].t, one.t) && batch[i].ref == one.ref && same_bits(batch[i].u, one.u) &&
-                            same_bits(batch[i].v, one.v) && batch[i].slot == one.slot && visited[i] == one_visited &&
-                            batch[i].ref == oracle.ref && same_bits(batch[i].t, oracle.t) &&
-                            bool(occluded[i]) == occluded_wide(wide, rays[i]) &&
+            const bool ok = same_hit(batch[i], one) && visited[i] == one_visited && batch[i].ref == oracle.ref &&
+                            same_bits(batch[i].t, oracle.t) && bool(occluded[i]) == occluded_wide(wide, rays[i]) &&
                             bool(occluded[i]) == (oracle.t < rays[i].tmax);
             if (!ok && ++wrong <= 5) ADD_FAILURE() << isa_name(isa) << ": ray " << i;
             if (!first) continue;

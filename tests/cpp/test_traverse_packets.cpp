@@ -6,7 +6,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstring>
 #include <random>
 #include <vector>
 
@@ -19,11 +18,11 @@
 
 using namespace bvhlab;
 using test::brute_force;
+using test::same_bits;
+using test::same_hit;
 using test::supported_isas;
 
 namespace {
-
-bool same_bits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
 /// A pinhole camera's rays, row by row as the bench's primary rays (bench/_peers.py): from `eye`
 /// towards `at`, `width` × `height` pixels over a vertical field of `fov` radians; `jitter`
@@ -62,9 +61,7 @@ std::size_t expect_batch_is_single(const Bvh& bvh, const std::vector<Ray>& rays)
         hits = 0;
         for (std::size_t i = 0; i < rays.size(); ++i) {
             const Hit one = intersect_wide(wide, bvh, rays[i]), oracle = brute_force(bvh, rays[i]);
-            const bool ok = same_bits(batch[i].t, one.t) && batch[i].ref == one.ref && same_bits(batch[i].u, one.u) &&
-                            same_bits(batch[i].v, one.v) && batch[i].slot == one.slot && batch[i].ref == oracle.ref &&
-                            same_bits(batch[i].t, oracle.t);
+            const bool ok = same_hit(batch[i], one) && batch[i].ref == oracle.ref && same_bits(batch[i].t, oracle.t);
             if (!ok && ++wrong <= 5)
                 ADD_FAILURE() << isa_name(isa) << ": ray " << i << " t " << batch[i].t << " ref " << batch[i].ref
                               << " against " << one.t << " ref " << one.ref << " (brute force " << oracle.t << ")";

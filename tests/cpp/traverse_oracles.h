@@ -2,6 +2,7 @@
 // check against and with: brute force over every primitive, random rays, the instruction set paths.
 #pragma once
 #include <cstdint>
+#include <cstring>
 #include <random>
 #include <vector>
 
@@ -20,6 +21,15 @@ inline Hit brute_force(const Bvh& bvh, const Ray& ray) {
         if (hit_prim(bvh.prims[k], q, hit)) hit.slot = k;
     if (hit.ref == kNoHit) hit.t = kInfinity;
     return hit;
+}
+
+/// The same float, bit for bit (a zero's sign and a NaN's payload too).
+inline bool same_bits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+/// The same hit bit for bit: distance, primitive, barycentrics and leaf slot (what the traversals
+/// promise one another: design.md "Conventions").
+inline bool same_hit(const Hit& a, const Hit& b) {
+    return same_bits(a.t, b.t) && a.ref == b.ref && same_bits(a.u, b.u) && same_bits(a.v, b.v) && a.slot == b.slot;
 }
 
 /// Rays through the test scenes' cube (test_scenes.h), some axis-parallel, some unnormalised.

@@ -119,7 +119,7 @@ void closest_packet(const WideView& wide, const Ray* rays, const std::uint32_t* 
             }
             far_limit = L8::load(far);
         } else if (cur & kLeafChild) {
-            for (int m = _mm256_movemask_ps(active); m; m &= m - 1) {
+            for (int m = lanes; m; m &= m - 1) {
                 const int r = __builtin_ctz(unsigned(m));
                 test_leaf(wide, cur & ~kLeafChild, query(r), h[r]);
                 far[r] = h[r].t * s;
