@@ -1,7 +1,7 @@
 """An A/B run of two bvh_bench binaries (helper trav11's, design.md "Packets for coherent rays"):
 bvh_bench trace of the old binary and the new one alternately on each scene's primary (and random)
 rays, pinned to one core, every round Embree 3 MEDIUM, tinybvh 1.9 BVH8_CPU and bvhlab's batch (and
-single-ray) rows in one process; writes bench/results/trav11_ab.json (--out).
+single-ray) rows in one process; writes --json NAME (bench/results/trav11_ab.json by default).
 
     .venv/bin/python bench/ab_batch.py OLD_BVH_BENCH NEW_BVH_BENCH [--scenes ...]
         [--sets primary,random] [--rounds 3] [--repeat 3]
@@ -10,12 +10,12 @@ single-ray) rows in one process; writes bench/results/trav11_ab.json (--out).
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _common  # noqa: E402
 import _peers  # noqa: E402
 
 
@@ -27,8 +27,11 @@ def main() -> None:
     ap.add_argument("--sets", default="primary,random")
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--out", default=str(Path(__file__).resolve().parent / "results" / "trav11_ab.json"))
+    ap.add_argument("--json", default="trav11_ab.json")
     args = ap.parse_args()
+    _common.json_path(args.json)  # a bad folder fails now, not after the run
+    machine = _common.machine()
+    print(_common.machine_line(machine), file=sys.stderr, flush=True)
     peers = ["embree:medium", "tinybvh:", "bvhlab:", "bvhlab:batch=1"]
     runs: dict = {}
     with tempfile.TemporaryDirectory() as tmp:
@@ -54,7 +57,8 @@ def main() -> None:
                             f"single / best {best / rows['bvhlab:']:.3f}",
                             flush=True,
                         )
-    Path(args.out).write_text(json.dumps({"what": __doc__.splitlines()[0], "runs": runs}, indent=1))
+    result = {"what": __doc__.splitlines()[0], "machine": machine, "runs": runs}
+    print(f"wrote {_common.write_json(args.json, result)}")
 
 
 if __name__ == "__main__":
