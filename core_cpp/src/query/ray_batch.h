@@ -10,12 +10,14 @@
 #include <stdexcept>
 #include <type_traits>
 #include <utility>
+#include <vector>
 
 #include "bvhlab/cancel.h"
 #include "bvhlab/coordinate_range.h"
 #include "bvhlab/thread_pool.h"
 #include "bvhlab/traverse.h"
 #include "bvhlab/wide_bvh.h"
+#include "ray_order.h"
 #include "wide_kernel.h"
 
 namespace bvhlab {
@@ -93,12 +95,31 @@ inline std::uint32_t magnitude_bits(float x) {
 
 /// A piece of a batch as the wide tree's batch walks take it (wide_kernel.h intersect_wide_grouped):
 /// its rays scaled (scaled_ray), each with its factor, and grouped by octant (order_by_octant).
+/// Its ray j is the batch's ray base + j, or base + index[j] where its block was reordered
+/// (ray_order.h; `at` says where).
 struct RayPiece {
     Scratch<Ray, kWideBatch> rays;
     float t_scale[kWideBatch];
     std::uint32_t order[kWideBatch], start[9];
     std::uint32_t count;
+    std::size_t base;
+    const std::uint32_t* index;
+    std::size_t at(std::uint32_t j) const { return base + (index ? index[j] : j); }
 };
+
+/// How many rays ahead a reordered piece's gather (prepare_piece) and scatter (write_hits) start
+/// the loads of the caller's lines: enough misses in flight at once, late enough that the
+/// tracing of a piece does not evict them first (a piece ahead, they were: room1m's random rays
+/// gained nothing).
+inline constexpr std::uint32_t kGatherAhead = 16;
+
+/// Starts the loads of ray index[j]'s lines where j < n.
+inline void prefetch_ray(const RayBatch& rays, const std::uint32_t* index, std::uint32_t j, std::uint32_t n) {
+    if (j >= n) return;
+    const std::size_t i = index[j];
+    __builtin_prefetch(rays.origins + 3 * i), __builtin_prefetch(rays.directions + 3 * i);
+    if (rays.tmax_of) __builtin_prefetch(rays.tmax_of + i);
+}
 
 /// Rays begin .. end (at most kWideBatch) of the batch to `piece`, in one pass over the caller's
 /// arrays: each checked by check_rays' rules, scaled (scaled_ray) and given its octant (the sign
@@ -107,14 +128,19 @@ struct RayPiece {
 /// The checks are in_coordinate_range and direction_in_range on the bits of |x|
 /// (magnitude_bits): a NaN's exceed every number's, so one integer comparison a bound refuses
 /// it, and the largest |component| is the largest of the bits.
-inline bool prepare_piece(const RayBatch& rays, std::size_t begin, std::size_t end, RayPiece& piece) {
+/// `index`: the piece's rays are rays index[0, end - begin) of the batch rather than begin .. end
+/// (a reordered block's, ray_order.h).
+template <bool kIndexed = false>
+inline bool prepare_piece(const RayBatch& rays, std::size_t begin, std::size_t end, RayPiece& piece,
+                          const std::uint32_t* index = nullptr) {
     constexpr std::uint32_t kMaxOrigin = 0x53800000u;                   // the bits of kMaxCoordinate, 2^40
     constexpr std::uint32_t kLeast = 0x17800000u, kMost = 0x67800000u;  // of kMinDirection, kMaxDirection
     static_assert(kMaxCoordinate == 0x1p40f && kMinDirection == 0x1p-80f && kMaxDirection == 0x1p80f);
     const auto n = std::uint32_t(end - begin);
     // the batch's fields in locals: the stores to the piece could alias them for the compiler
-    const float *origins = rays.origins + 3 * begin, *directions = rays.directions + 3 * begin;
-    const float* tmax_of = rays.tmax_of ? rays.tmax_of + begin : nullptr;
+    const std::size_t first = kIndexed ? 0 : begin;
+    const float *origins = rays.origins + 3 * first, *directions = rays.directions + 3 * first;
+    const float* tmax_of = rays.tmax_of ? rays.tmax_of + first : nullptr;
     const float tmin = rays.tmin, tmax = rays.tmax;
     std::uint8_t octant[kWideBatch];
     std::uint32_t refused = 0;
@@ -123,15 +149,19 @@ inline bool prepare_piece(const RayBatch& rays, std::size_t begin, std::size_t e
         std::memcpy(&b, p, sizeof b);
         return b;
     };
+    if constexpr (kIndexed)
+        for (std::uint32_t j = 0; j < kGatherAhead; ++j) prefetch_ray(rays, index, j, n);
     for (std::uint32_t j = 0; j < n; ++j) {  // as bits: no float operation before the scaling
-        const float *o = origins + 3 * j, *d = directions + 3 * j;
+        const std::size_t i = kIndexed ? index[j] : j;
+        if constexpr (kIndexed) prefetch_ray(rays, index, j + kGatherAhead, n);
+        const float *o = origins + 3 * i, *d = directions + 3 * i;
         const std::uint32_t dx = bits(d), dy = bits(d + 1), dz = bits(d + 2), m = 0x7fffffffu;
         const std::uint32_t dir = std::max(dx & m, std::max(dy & m, dz & m));
         const std::uint32_t origin = std::max(bits(o) & m, std::max(bits(o + 1) & m, bits(o + 2) & m));
         refused |= std::uint32_t(origin > kMaxOrigin) | std::uint32_t(dir - kLeast > kMost - kLeast);
         Ray& ray = piece.rays[j];
         ray.origin = Vec3{o[0], o[1], o[2]}, ray.dir = Vec3{d[0], d[1], d[2]};
-        ray.tmin = tmin, ray.tmax = tmax_of ? tmax_of[j] : tmax;
+        ray.tmin = tmin, ray.tmax = tmax_of ? tmax_of[i] : tmax;
         if (tmax_of) refused |= std::uint32_t(!(ray.tmax >= 0.0f));
         piece.t_scale[j] = scale_ray_by(ray, dir);  // any float where refused: the piece is not traced
         octant[j] = std::uint8_t(dx >> 31 | (dy >> 31) << 1 | (dz >> 31) << 2);
@@ -142,39 +172,81 @@ inline bool prepare_piece(const RayBatch& rays, std::size_t begin, std::size_t e
     return true;
 }
 
-/// Calls `visit(begin, piece)` for each piece of the batch (prepare_piece: rays begin ..
-/// begin + piece.count, scaled and grouped by octant), for the queries that trace a piece at once
-/// (the wide tree's). The rays are checked as they are read rather than in a pass before (which
-/// read the caller's arrays twice: 44 instructions a ray, repeat1m primary rays); a piece with a
-/// refused ray is not traced, the other threads stop, and check_rays throws naming the first
-/// (the outputs are then left incomplete, as when cancelled).
-template <class Visit>
-void for_each_ray_piece(const RayBatch& rays, std::uint32_t threads, Cancellation* cancel, Visit&& visit) {
+/// Calls `visit(piece)` for each piece of the batch (prepare_piece: its rays scaled and grouped by
+/// octant; piece.at(j) is ray j's index in the batch), for the queries that trace a piece at once
+/// (the wide tree's). With `scene` (the tree's box), the batch goes in blocks of kOrderBlock rays;
+/// where a block of at least kOrderLeast rays is not in ray order already (in_ray_order), its
+/// first piece goes to `probe` instead, which traces it as `visit` would and returns the wide
+/// nodes its rays visited on average, and from kOrderNodes the rest of the block is traced in
+/// order_rays' order (ray_order.h; the results are the same in any order). The rays are checked
+/// as they are read rather than in a pass before (which read the caller's arrays twice: 44
+/// instructions a ray, repeat1m primary rays); a piece with a refused ray is not traced, the
+/// other threads stop, and check_rays throws naming the first (the outputs are then left
+/// incomplete, as when cancelled).
+template <class Visit, class Probe>
+void for_each_ray_piece(const RayBatch& rays, std::uint32_t threads, Cancellation* cancel, Visit&& visit,
+                        const Aabb* scene, Probe&& probe) {
     std::atomic<bool> refused{false};
-    for_each_unchecked_chunk(rays, threads, cancel, [&](std::size_t begin, std::size_t end) {
-        RayPiece piece;
-        for (std::size_t at = begin; at < end && !refused.load(std::memory_order_relaxed); at += kWideBatch) {
-            if (!prepare_piece(rays, at, std::min(end, at + kWideBatch), piece)) {
-                refused.store(true, std::memory_order_relaxed);
-                return;
+    std::vector<std::uint32_t> index;
+    const auto part = [&](std::size_t from, std::size_t count) {
+        RayBatch b = rays;
+        b.count = count;
+        b.origins += 3 * from, b.directions += 3 * from;
+        if (b.tmax_of) b.tmax_of += from;
+        return b;
+    };
+    for (std::size_t base = 0; base < rays.count || base == 0; base += kOrderBlock) {
+        std::size_t first = base;  // the block's rays not probed
+        const std::uint32_t* order = nullptr;
+        const std::size_t count = std::min(kOrderBlock, rays.count - base);
+        if (scene && count >= kOrderLeast) {
+            const RayKeys keys(*scene, count);
+            if (!in_ray_order(part(base, count), keys)) {
+                if (cancel && cancel->poll()) throw Cancelled();
+                RayPiece piece;
+                if (!prepare_piece(rays, base, base + kWideBatch, piece)) {
+                    refused.store(true);
+                    break;
+                }
+                piece.base = base, piece.index = nullptr;
+                first = base + kWideBatch;
+                if (probe(static_cast<const RayPiece&>(piece)) >= kOrderNodes) {
+                    order_rays(part(first, base + count - first), keys, index);
+                    order = index.data();
+                }
             }
-            visit(at, static_cast<const RayPiece&>(piece));
         }
-    });
+        const RayBatch block = part(first, base + count - first);
+        for_each_unchecked_chunk(block, threads, cancel, [&](std::size_t begin, std::size_t end) {
+            RayPiece piece;
+            for (std::size_t at = begin; at < end && !refused.load(std::memory_order_relaxed); at += kWideBatch) {
+                const std::size_t to = std::min(end, at + kWideBatch);
+                piece.base = order ? first : first + at, piece.index = order ? order + at : nullptr;
+                if (!(order ? prepare_piece<true>(block, at, to, piece, order + at)
+                            : prepare_piece(block, at, to, piece))) {
+                    refused.store(true, std::memory_order_relaxed);
+                    return;
+                }
+                visit(static_cast<const RayPiece&>(piece));
+            }
+        });
+        if (refused.load() || count == 0) break;
+    }
     if (refused.load()) {
         check_rays(rays);  // throws, naming the first refused ray
         throw std::logic_error("a batch refused a ray that check_rays accepts");
     }
 }
 
-/// hits[0, n) of rays begin .. begin + n (t in the scaled units of t_scale) to `out`, t back in the
-/// caller's units. kFinish: the hits are as the wide walks leave them (intersect_wide_grouped: a
+/// hits[0, n) of rays begin .. begin + n, or begin + index[j] where `index` is given (t in the
+/// scaled units of t_scale) to `out`, t back in the caller's units. kFinish: the hits are as the wide walks leave them (intersect_wide_grouped: a
 /// miss's t is the ray's tmax, a sphere's u, v not yet made), finished here (finish_hit with the
 /// scaled rays[j]) rather than in a pass of their own; `visited` may then be null where `out` has
 /// no nodes_visited.
 template <bool kFinish = false>
 void write_hits(const HitBatch& out, std::size_t begin, std::size_t n, Hit* hits, const std::uint32_t* visited,
-                const float* t_scale, const Bvh* bvh = nullptr, const Ray* rays = nullptr) {
+                const float* t_scale, const Bvh* bvh = nullptr, const Ray* rays = nullptr,
+                const std::uint32_t* index = nullptr) {
     // the outputs in locals: the stores could alias `out` for the compiler, which then reloaded it
     float *t = out.t + begin, *u = out.u ? out.u + begin : nullptr, *v = out.v ? out.v + begin : nullptr;
     std::int32_t* prim = out.prim + begin;
@@ -186,12 +258,21 @@ void write_hits(const HitBatch& out, std::size_t begin, std::size_t n, Hit* hits
         if constexpr (kFinish)
             if (!miss && (h.ref & gpu::REF_SPHERE_BIT)) [[unlikely]]
                 finish_hit(*bvh, rays[j], h);
-        t[j] = kFinish && miss ? kInfinity : h.t * t_scale[j];  // inf stays inf
-        prim[j] = miss ? -1 : std::int32_t(h.ref & gpu::REF_INDEX_MASK);
-        if (kind) kind[j] = miss ? 0 : std::uint8_t((h.ref & gpu::REF_SPHERE_BIT) ? 1 : 0);
-        if (u) u[j] = h.u;
-        if (v) v[j] = h.v;
-        if (nodes_visited) nodes_visited[j] = visited[j];
+        const std::size_t i = index ? index[j] : j;
+        if (index && j + kGatherAhead < n) {
+            const std::size_t k = index[j + kGatherAhead];
+            __builtin_prefetch(t + k, 1), __builtin_prefetch(prim + k, 1);
+            if (kind) __builtin_prefetch(kind + k, 1);
+            if (u) __builtin_prefetch(u + k, 1);
+            if (v) __builtin_prefetch(v + k, 1);
+            if (nodes_visited) __builtin_prefetch(nodes_visited + k, 1);
+        }
+        t[i] = kFinish && miss ? kInfinity : h.t * t_scale[j];  // inf stays inf
+        prim[i] = miss ? -1 : std::int32_t(h.ref & gpu::REF_INDEX_MASK);
+        if (kind) kind[i] = miss ? 0 : std::uint8_t((h.ref & gpu::REF_SPHERE_BIT) ? 1 : 0);
+        if (u) u[i] = h.u;
+        if (v) v[i] = h.v;
+        if (nodes_visited) nodes_visited[i] = visited[j];
     }
 }
 

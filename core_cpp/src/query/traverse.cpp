@@ -91,6 +91,12 @@ Hit intersect_with(const Bvh& bvh, const Ray& ray, Traversal mode, std::uint32_t
     if (nodes_visited) *nodes_visited = visited;
     return hit;
 }
+/// The mean of visited[0, n).
+double mean_visited(const std::uint32_t* visited, std::uint32_t n) {
+    double sum = 0;
+    for (std::uint32_t j = 0; j < n; ++j) sum += visited[j];
+    return n ? sum / n : 0.0;
+}
 }  // namespace
 
 Hit intersect(const Bvh& bvh, const Ray& ray, Traversal mode, std::uint32_t* nodes_visited) {
@@ -120,9 +126,25 @@ void occluded_batch(const Bvh& bvh, const RayBatch& rays, bool* occluded_out, Tr
     if (mode == Traversal::Wide && !wide) throw std::invalid_argument("Traversal::Wide needs the wide tree");
     check_tmax(rays);
     if (mode == Traversal::Wide) {  // a piece at once, grouped by octant (wide_kernel.h occluded_wide_grouped)
-        return for_each_ray_piece(rays, threads, cancel, [&](std::size_t begin, const RayPiece& piece) {
-            occluded_wide_grouped(*wide, piece.rays.data(), piece.order, piece.start, occluded_out + begin);
-        });
+        const Aabb scene = bvh.empty() ? Aabb{} : node_box(bvh.nodes[0]);
+        return for_each_ray_piece(
+            rays, threads, cancel,
+            [&](const RayPiece& piece) {
+                if (!piece.index)
+                    return occluded_wide_grouped(*wide, piece.rays.data(), piece.order, piece.start,
+                                                 occluded_out + piece.base);
+                bool occluded[kWideBatch];
+                occluded_wide_grouped(*wide, piece.rays.data(), piece.order, piece.start, occluded);
+                for (std::uint32_t j = 0; j < piece.count; ++j) occluded_out[piece.at(j)] = occluded[j];
+            },
+            &scene,
+            [&](const RayPiece& piece) {  // by closest hits, whose t < tmax is `occluded` (traverse.h)
+                Scratch<Hit, kWideBatch> hits;
+                std::uint32_t visited[kWideBatch];
+                intersect_wide_grouped(*wide, piece.rays.data(), piece.order, piece.start, hits.data(), visited);
+                for (std::uint32_t j = 0; j < piece.count; ++j) occluded_out[piece.at(j)] = hits[j].ref != kNoHit;
+                return mean_visited(visited, piece.count);
+            });
     }
     for_each_ray(rays, threads, cancel,
                  [&](std::size_t i, const Ray& ray, float) { occluded_out[i] = occluded(bvh, ray, mode); });
@@ -132,13 +154,26 @@ void intersect_batch(const Bvh& bvh, const RayBatch& rays, const HitBatch& out, 
                      const WideBvh* wide, Cancellation* cancel) {
     if (mode == Traversal::Wide && !wide) throw std::invalid_argument("Traversal::Wide needs the wide tree");
     if (mode == Traversal::Wide) {  // a piece at once, grouped by octant (wide_kernel.h intersect_wide_grouped)
-        return for_each_ray_piece(rays, threads, cancel, [&](std::size_t begin, const RayPiece& piece) {
-            Scratch<Hit, kWideBatch> hits;
-            std::uint32_t visited[kWideBatch];
-            std::uint32_t* v = out.nodes_visited ? visited : nullptr;
-            intersect_wide_grouped(*wide, piece.rays.data(), piece.order, piece.start, hits.data(), v);
-            write_hits<true>(out, begin, piece.count, hits.data(), v, piece.t_scale, &bvh, piece.rays.data());
-        });
+        const Aabb scene = bvh.empty() ? Aabb{} : node_box(bvh.nodes[0]);
+        return for_each_ray_piece(
+            rays, threads, cancel,
+            [&](const RayPiece& piece) {
+                Scratch<Hit, kWideBatch> hits;
+                std::uint32_t visited[kWideBatch];
+                std::uint32_t* v = out.nodes_visited ? visited : nullptr;
+                intersect_wide_grouped(*wide, piece.rays.data(), piece.order, piece.start, hits.data(), v);
+                write_hits<true>(out, piece.base, piece.count, hits.data(), v, piece.t_scale, &bvh, piece.rays.data(),
+                                 piece.index);
+            },
+            &scene,
+            [&](const RayPiece& piece) {  // as above, with the visited counts whether asked or not
+                Scratch<Hit, kWideBatch> hits;
+                std::uint32_t visited[kWideBatch];
+                intersect_wide_grouped(*wide, piece.rays.data(), piece.order, piece.start, hits.data(), visited);
+                write_hits<true>(out, piece.base, piece.count, hits.data(), visited, piece.t_scale, &bvh,
+                                 piece.rays.data());
+                return mean_visited(visited, piece.count);
+            });
     }
     run_ray_batch(rays, out, threads, cancel, [&](std::size_t, const Ray& ray, std::uint32_t& visited) {
         return intersect(bvh, ray, mode, &visited);

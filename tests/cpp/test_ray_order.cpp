@@ -1,0 +1,262 @@
+// The order in which the wide tree's batch queries trace an incoherent batch (src/query/ray_order.h):
+// the keys, the check of an order already good, the sort, the loop that probes a block and traces
+// the rest reordered (ray_batch.h for_each_ray_piece), and intersect_batch / occluded_batch on a
+// batch that is reordered: every result lands in its own ray's slot, equal bit for bit to the ray
+// traced alone, on every instruction set path and thread count; a refused ray is still named.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "bvhlab/bvh.h"
+#include "bvhlab/isa.h"
+#include "bvhlab/traverse.h"
+#include "bvhlab/wide_bvh.h"
+#include "ray_batch.h"
+#include "ray_order.h"
+#include "test_scenes.h"
+#include "traverse_oracles.h"
+
+using namespace bvhlab;
+using test::random_rays;
+using test::same_bits;
+using test::supported_isas;
+
+namespace {
+
+/// A batch's arrays (N×3 origins and directions, N tmax) made from rays.
+struct Arrays {
+    std::vector<float> o, d, tmax;
+    explicit Arrays(const std::vector<Ray>& rays) {
+        for (const Ray& r : rays) {
+            o.insert(o.end(), {r.origin.x, r.origin.y, r.origin.z}), d.insert(d.end(), {r.dir.x, r.dir.y, r.dir.z});
+            tmax.push_back(r.tmax);
+        }
+    }
+    RayBatch batch() const { return {o.data(), d.data(), tmax.size(), 0.0f, kInfinity, tmax.data()}; }
+};
+
+const float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+std::uint32_t key(const RayKeys& keys, Vec3 o, Vec3 d) {
+    const float origin[3] = {o.x, o.y, o.z}, direction[3] = {d.x, d.y, d.z};
+    return keys(origin, direction);
+}
+
+}  // namespace
+
+TEST(RayOrder, KeysAreTheOctantAboveTheMortonCodeOfTheOriginsCellForAnyOrigin) {
+    const RayKeys keys({{0, 0, 0}, {16, 16, 16}}, 16 * kOrderLeast);  // 16 cells an axis, one unit each
+    ASSERT_EQ(keys.bits, 4);
+    ASSERT_EQ(keys.count(), 8u << 12);
+    const Vec3 up{1, 1, 1};
+    EXPECT_EQ(key(keys, {0.5f, 0.5f, 0.5f}, up), 0u);
+    EXPECT_EQ(key(keys, {1.5f, 0.5f, 0.5f}, up), 1u);  // x in bit 0, y in bit 1, z in bit 2
+    EXPECT_EQ(key(keys, {0.5f, 1.5f, 0.5f}, up), 2u);
+    EXPECT_EQ(key(keys, {0.5f, 0.5f, 1.5f}, up), 4u);
+    EXPECT_EQ(key(keys, {2.5f, 0.5f, 0.5f}, up), 8u);
+    EXPECT_EQ(key(keys, {15.9f, 15.9f, 15.9f}, up), 0xfffu);
+    EXPECT_EQ(key(keys, {0.5f, 0.5f, 0.5f}, {-1, 1, 1}), 1u << 12);  // octant: the sign bits of the direction
+    EXPECT_EQ(key(keys, {0.5f, 0.5f, 0.5f}, {1, -0.0f, 1}), 2u << 12);
+    EXPECT_EQ(key(keys, {1.5f, 0.5f, 0.5f}, {-1, -1, -1}), 7u << 12 | 1u);
+    // outside the box, infinite or not a number: the nearest cell, or cell 0, never past the table
+    EXPECT_EQ(key(keys, {-5, 100, 0.5f}, up), key(keys, {0, 15.5f, 0.5f}, up));
+    for (float x : {kNaN, kInfinity, -kInfinity, 1e30f, -1e30f, 3e38f})
+        EXPECT_LT(key(keys, {x, x, 0.5f}, {x, 1, 1}), keys.count()) << x;
+    // a box flat on an axis, tiny or empty: that axis in cell 0
+    for (const Aabb& box : {Aabb{{0, 0, 5}, {16, 16, 5}}, Aabb{{0, 0, 0}, {16, 16, 1e-44f}}})
+        EXPECT_EQ(key(RayKeys(box, 16 * kOrderLeast), {1.5f, 0.5f, 7}, up), 1u);
+    EXPECT_EQ(key(RayKeys(Aabb{}, kOrderLeast), {1.5f, 0.5f, 7}, up), 0u);
+    EXPECT_EQ(RayKeys(Aabb{}, kOrderLeast).bits, 3);
+}
+
+TEST(RayOrder, CameraRaysKeepTheirOrderAndRandomOnesAreSortedStably) {
+    const Aabb box{{-2, -2, -2}, {12, 12, 12}};
+    // a camera's rays (one origin, neighbouring pixels): in order already
+    std::vector<Ray> camera;
+    for (int y = 0; y < 80; ++y)
+        for (int x = 0; x < 100; ++x) camera.push_back({{5, 5, -1}, {float(x - 50), float(y - 40), 60}});
+    const Arrays cam(camera);
+    EXPECT_TRUE(in_ray_order(cam.batch(), RayKeys(box, camera.size())));
+    const auto rays = random_rays(20000, 5);
+    const Arrays arrays(rays);
+    const RayBatch batch = arrays.batch();
+    const RayKeys keys(box, batch.count);
+    EXPECT_FALSE(in_ray_order(batch, keys));
+    std::vector<std::uint32_t> index;
+    order_rays(batch, keys, index);
+    ASSERT_EQ(index.size(), rays.size());
+    std::vector<char> seen(rays.size(), 0);
+    std::uint32_t runs = 0;
+    for (std::size_t k = 0; k < index.size(); ++k) {
+        ASSERT_LT(index[k], rays.size());
+        ASSERT_FALSE(seen[index[k]]) << "ray " << index[k] << " twice";
+        seen[index[k]] = 1;
+        if (k == 0) continue;
+        const std::uint32_t a = keys(&arrays.o[3 * index[k - 1]], &arrays.d[3 * index[k - 1]]),
+                            b = keys(&arrays.o[3 * index[k]], &arrays.d[3 * index[k]]);
+        ASSERT_LE(a, b) << k;
+        if (a == b) ASSERT_LT(index[k - 1], index[k]) << k;  // ties in input order
+        runs += a != b;
+    }
+    EXPECT_GT(runs, 1000u);  // the rays spread over many keys: the check above compared something
+    // sorted, the batch is in order
+    Arrays sorted(rays);
+    for (std::size_t k = 0; k < index.size(); ++k)
+        for (int a = 0; a < 3; ++a)
+            sorted.o[3 * k + a] = arrays.o[3 * index[k] + a], sorted.d[3 * k + a] = arrays.d[3 * index[k] + a];
+    EXPECT_TRUE(in_ray_order(sorted.batch(), keys));
+}
+
+TEST(RayOrder, EachRayIsVisitedOnceInEveryBlockWhateverTheProbeSays) {
+    // more than one block, the last one short; the probe says "costly" or "cheap"
+    const std::size_t n = kOrderBlock + kOrderLeast + 77;
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    std::vector<float> o(3 * n), d(3 * n);
+    for (std::size_t i = 0; i < 3 * n; ++i) o[i] = 8 * u(rng), d[i] = u(rng) + (u(rng) > 0 ? 0.1f : -0.1f);
+    const RayBatch batch{o.data(), d.data(), n};
+    const Aabb box{{-8, -8, -8}, {8, 8, 8}};
+    for (double cost : {0.0, kOrderNodes}) {
+        for (std::uint32_t threads : {1u, 3u}) {
+            std::vector<std::uint8_t> visits(n, 0);
+            std::vector<std::uint32_t> probed;
+            std::size_t reordered = 0;
+            for_each_ray_piece(
+                batch, threads, nullptr,
+                [&](const RayPiece& piece) {
+                    for (std::uint32_t j = 0; j < piece.count; ++j) {
+                        const std::size_t i = piece.at(j);
+                        ++visits[i];  // each ray once: no two pieces share a slot
+                        // the piece's ray j is the batch's ray i, scaled by a power of two
+                        const float s = d[3 * i] != 0.0f ? piece.rays.data()[j].dir.x / d[3 * i] : 1.0f;
+                        if (piece.rays.data()[j].origin.y != o[3 * i + 1] || !(s > 0.0f) || std::ldexp(1.0f, std::ilogb(s)) != s)
+                            ADD_FAILURE() << "piece ray " << j << " is not ray " << i;
+                    }
+                    if (piece.index) __atomic_add_fetch(&reordered, piece.count, __ATOMIC_RELAXED);
+                },
+                &box,
+                [&](const RayPiece& piece) {
+                    for (std::uint32_t j = 0; j < piece.count; ++j) probed.push_back(std::uint32_t(piece.at(j)));
+                    return cost;
+                });
+            // every ray once, the probed ones included
+            for (std::uint32_t i : probed) ++visits[i];
+            EXPECT_EQ(std::count(visits.begin(), visits.end(), 1), std::ptrdiff_t(n)) << cost << " " << threads;
+            // each block's first piece probed (two blocks)
+            ASSERT_EQ(probed.size(), 2 * kWideBatch);
+            EXPECT_EQ(probed[0], 0u);
+            EXPECT_EQ(probed[kWideBatch], std::uint32_t(kOrderBlock));
+            EXPECT_EQ(reordered, cost > 0 ? n - 2 * kWideBatch : 0u);
+        }
+    }
+}
+
+TEST(RayOrder, ReorderedBatchesGiveEachRayItsOwnHitOnEveryPathAndThreadCount) {
+    // many small triangles: random rays visit many nodes, so the batch is reordered (checked below)
+    const auto scene = test::random_scene(60000, 300, 71);
+    const Bvh bvh = build_bvh(scene.view());
+    const WideBvh wide = make_wide(bvh);
+    auto rays = random_rays(4 * kOrderLeast, 73);
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(0.5f, 20.0f);
+    for (std::size_t i = 0; i < rays.size(); i += 3) rays[i].tmax = u(rng);
+    const Arrays arrays(rays);
+    // the premise: not in order, and the first piece's rays visit enough nodes to be reordered
+    ASSERT_FALSE(in_ray_order(arrays.batch(), RayKeys(node_box(bvh.nodes[0]), rays.size())));
+    double visited_first = 0;
+    for (std::size_t i = 0; i < kWideBatch; ++i) {
+        std::uint32_t v = 0;
+        intersect_wide(wide, bvh, rays[i], &v);
+        visited_first += v;
+    }
+    ASSERT_GE(visited_first / kWideBatch, kOrderNodes);
+    const std::size_t n = rays.size();
+    struct Out {
+        std::vector<float> t, u, v;
+        std::vector<std::int32_t> prim;
+        std::vector<std::uint8_t> kind, blocked;
+        std::vector<std::uint32_t> visited;
+        explicit Out(std::size_t n) : t(n), u(n), v(n), prim(n), kind(n), blocked(n), visited(n) {}
+        HitBatch hits(std::size_t at = 0) {
+            return {t.data() + at, prim.data() + at, kind.data() + at, u.data() + at, v.data() + at, visited.data() + at};
+        }
+        bool* occluded(std::size_t at = 0) { return reinterpret_cast<bool*>(blocked.data()) + at; }
+    };
+    const Isa before = active_isa();
+    std::uint32_t hits = 0;
+    for (Isa isa : supported_isas()) {
+        set_isa(isa);
+        // the oracle: the same queries in slices too small to be reordered (input order)
+        Out slices(n);
+        for (std::size_t at = 0; at < n; at += kOrderLeast - 1) {
+            RayBatch slice = arrays.batch();
+            slice.count = std::min(n - at, kOrderLeast - 1);
+            slice.origins += 3 * at, slice.directions += 3 * at, slice.tmax_of += at;
+            intersect_batch(bvh, slice, slices.hits(at), Traversal::Wide, 1, &wide);
+            occluded_batch(bvh, slice, slices.occluded(at), Traversal::Wide, 1, &wide);
+        }
+        for (std::uint32_t threads : {1u, 3u}) {
+            Out got(n);
+            intersect_batch(bvh, arrays.batch(), got.hits(), Traversal::Wide, threads, &wide);
+            occluded_batch(bvh, arrays.batch(), got.occluded(), Traversal::Wide, threads, &wide);
+            std::uint32_t wrong = 0;
+            hits = 0;
+            for (std::size_t i = 0; i < n; ++i) {
+                std::uint32_t one_visited = 0;
+                const Hit one = intersect(bvh, rays[i], Traversal::Stack);  // the binary tree's walk
+                intersect_wide(wide, bvh, rays[i], &one_visited);
+                const bool miss = one.ref == kNoHit;
+                const bool ok = same_bits(got.t[i], slices.t[i]) && same_bits(got.u[i], slices.u[i]) &&
+                                same_bits(got.v[i], slices.v[i]) && got.prim[i] == slices.prim[i] &&
+                                got.kind[i] == slices.kind[i] && got.visited[i] == slices.visited[i] &&
+                                got.blocked[i] == slices.blocked[i] && same_bits(got.t[i], miss ? kInfinity : one.t) &&
+                                got.prim[i] == (miss ? -1 : std::int32_t(one.ref & gpu::REF_INDEX_MASK)) &&
+                                got.kind[i] == (!miss && (one.ref & gpu::REF_SPHERE_BIT) ? 1 : 0) &&
+                                got.visited[i] == one_visited && bool(got.blocked[i]) == !miss;
+                if (!ok && ++wrong <= 5) ADD_FAILURE() << isa_name(isa) << ", " << threads << " threads: ray " << i;
+                hits += !miss;
+            }
+            EXPECT_EQ(wrong, 0u);
+        }
+    }
+    set_isa(before);
+    // both outcomes common: a batch of all misses or all hits would test little
+    EXPECT_GT(hits, rays.size() / 10);
+    EXPECT_LT(hits, rays.size() - rays.size() / 10);
+}
+
+TEST(RayOrder, ARefusedRayIsNamedWhereverTheReorderedBatchHasIt) {
+    const auto scene = test::random_scene(60000, 0, 71);
+    const Bvh bvh = build_bvh(scene.view());
+    const WideBvh wide = make_wide(bvh);
+    const auto rays = random_rays(3 * kOrderLeast, 75);
+    for (std::size_t bad : {std::size_t(10), std::size_t(2 * kOrderLeast + 5)}) {  // in the probed piece, after it
+        Arrays arrays(rays);
+        arrays.d[3 * bad + 1] = kNaN;
+        std::vector<float> t(rays.size());
+        std::vector<std::int32_t> prim(rays.size());
+        auto blocked = std::make_unique<bool[]>(rays.size());
+        for (std::uint32_t threads : {1u, 2u}) {
+            const std::string name = "ray " + std::to_string(bad);
+            try {
+                intersect_batch(bvh, arrays.batch(), {t.data(), prim.data()}, Traversal::Wide, threads, &wide);
+                ADD_FAILURE() << "intersect_batch accepted a NaN direction";
+            } catch (const std::invalid_argument& e) {
+                EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+            }
+            try {
+                occluded_batch(bvh, arrays.batch(), blocked.get(), Traversal::Wide, threads, &wide);
+                ADD_FAILURE() << "occluded_batch accepted a NaN direction";
+            } catch (const std::invalid_argument& e) {
+                EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+            }
+        }
+    }
+}
