@@ -73,14 +73,17 @@ PyBvh* build(const Triangles& tris, const std::optional<Spheres>& spheres, const
 
 void py_intersect(const PyBvh& self, const Vectors& origins, const Vectors& dirs, float tmin, float tmax,
                   const std::string& traversal, std::uint32_t threads, Out1D<float> t, Out1D<std::int32_t> prim,
-                  Out1D<std::uint8_t> kind, Out1D<float> u, Out1D<float> v, Out1D<std::uint32_t> visited) {
+                  Out1D<std::uint8_t> kind, Out1D<float> u, Out1D<float> v,
+                  std::optional<Out1D<std::uint32_t>> visited) {
     const std::size_t n = origins.shape(0);
     if (dirs.shape(0) != n) throw std::invalid_argument("origins and directions differ in length");
-    for (std::size_t len : {t.shape(0), prim.shape(0), kind.shape(0), u.shape(0), v.shape(0), visited.shape(0)})
+    for (std::size_t len :
+         {t.shape(0), prim.shape(0), kind.shape(0), u.shape(0), v.shape(0), visited ? visited->shape(0) : n})
         if (len != n) throw std::invalid_argument("output arrays must have one entry per ray");
     const Traversal mode = parse_traversal(traversal);  // names parsed in one place (render_settings.h)
     RayBatch rays{origins.data(), dirs.data(), n, tmin, tmax};
-    HitBatch hits{t.data(), prim.data(), kind.data(), u.data(), v.data(), visited.data()};
+    // no counts asked: the wide batch may trace camera rays as packets (design.md)
+    HitBatch hits{t.data(), prim.data(), kind.data(), u.data(), v.data(), visited ? visited->data() : nullptr};
     TreePtr tree = self.current();  // this version stays alive (and unchanged) until the rays are done
     require_geometry(tree->bvh, "intersect");
     PyStopCheck stop;  // Ctrl-C stops a long batch
@@ -195,7 +198,7 @@ void bind_bvh(nb::module_& m) {
             "depth_min"_a, "depth_max"_a, "[first, last) in depth_order()'s nodes of the depths depth_min..depth_max")
         .def("intersect", &py_intersect, "origins"_a.noconvert(), "directions"_a.noconvert(), "tmin"_a, "tmax"_a,
              "traversal"_a, "threads"_a, "t"_a.noconvert(), "prim"_a.noconvert(), "kind"_a.noconvert(),
-             "u"_a.noconvert(), "v"_a.noconvert(), "visited"_a.noconvert())
+             "u"_a.noconvert(), "v"_a.noconvert(), "visited"_a.noconvert().none())
         .def("occluded", &py_occluded, "origins"_a.noconvert(), "directions"_a.noconvert(), "tmin"_a, "tmax"_a,
              "tmax_of"_a.noconvert().none(), "traversal"_a, "threads"_a, "out"_a.noconvert())
         .def("refit", &py_refit, "triangles"_a.noconvert(), "spheres"_a.noconvert().none());

@@ -61,16 +61,16 @@ PyTwoLevel* build_two_level(const std::vector<const PyBvh*>& meshes, const MeshI
 
 void py_intersect(const PyTwoLevel& self, const Vectors& origins, const Vectors& dirs, float tmin, float tmax,
                   const std::string& traversal, std::uint32_t threads, Out1D<float> t, Out1D<std::int32_t> prim,
-                  Out1D<std::uint8_t> kind, Out1D<float> u, Out1D<float> v, Out1D<std::uint32_t> visited,
+                  Out1D<std::uint8_t> kind, Out1D<float> u, Out1D<float> v, std::optional<Out1D<std::uint32_t>> visited,
                   Out1D<std::int32_t> instance) {
     const std::size_t n = origins.shape(0);
     if (dirs.shape(0) != n) throw std::invalid_argument("origins and directions differ in length");
-    for (std::size_t len :
-         {t.shape(0), prim.shape(0), kind.shape(0), u.shape(0), v.shape(0), visited.shape(0), instance.shape(0)})
+    for (std::size_t len : {t.shape(0), prim.shape(0), kind.shape(0), u.shape(0), v.shape(0),
+                            visited ? visited->shape(0) : n, instance.shape(0)})
         if (len != n) throw std::invalid_argument("output arrays must have one entry per ray");
     const Traversal mode = parse_traversal(traversal);
     RayBatch rays{origins.data(), dirs.data(), n, tmin, tmax};
-    HitBatch hits{t.data(), prim.data(), kind.data(), u.data(), v.data(), visited.data()};
+    HitBatch hits{t.data(), prim.data(), kind.data(), u.data(), v.data(), visited ? visited->data() : nullptr};
     PyStopCheck stop;  // Ctrl-C stops a long batch
     Cancellation cancel([&stop] { return stop(0.0); });
     try {
@@ -188,7 +188,7 @@ void bind_tlas(nb::module_& m) {
             "The TLAS's node boxes by depth, as Bvh.boxes gives a tree's: (lo (K,3), hi (K,3), depth (K,))")
         .def("intersect", &py_intersect, "origins"_a.noconvert(), "directions"_a.noconvert(), "tmin"_a, "tmax"_a,
              "traversal"_a, "threads"_a, "t"_a.noconvert(), "prim"_a.noconvert(), "kind"_a.noconvert(),
-             "u"_a.noconvert(), "v"_a.noconvert(), "visited"_a.noconvert(), "instance"_a.noconvert())
+             "u"_a.noconvert(), "v"_a.noconvert(), "visited"_a.noconvert().none(), "instance"_a.noconvert())
         .def("tlas_node_data", &py_tlas_node_data, "The TLAS's node data as a dict (Bvh.node_data's, EPO 0).")
         .def("trace_ray", &py_trace_ray, "origin"_a, "direction"_a, "tmin"_a, "tmax"_a, "traversal"_a,
              "One ray's walk through both levels, recorded by the walk itself (two_level_record.h), as a dict.")

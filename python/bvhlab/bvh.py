@@ -200,6 +200,7 @@ class Bvh:
         tmax: float = np.inf,
         traversal: str = "wide",
         threads: int = 0,
+        nodes_visited: bool = False,
     ) -> dict:
         """Closest hits of rays origin + t·direction, t in (tmin, tmax), on every core.
 
@@ -214,8 +215,10 @@ class Bvh:
 
         Returns a dict of arrays: t (inf on a miss), prim (index within its kind, -1 on a miss),
         kind (0 triangle, 1 sphere), u, v (triangle barycentrics; sphere longitude/2π, colatitude/π),
-        nodes_visited (box tests, for heatmaps)."""
-        return run_ray_query(self._core, origins, directions, tmin, tmax, traversal, threads)
+        and with `nodes_visited=True` nodes_visited (box tests, for heatmaps). Counting keeps each
+        ray on its own walk: without it, the wide traversal takes a camera's neighbouring rays
+        through the tree eight at a time (the same hits, faster)."""
+        return run_ray_query(self._core, origins, directions, tmin, tmax, traversal, threads, nodes_visited)
 
     def occluded(
         self,

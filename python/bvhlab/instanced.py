@@ -182,10 +182,13 @@ class InstancedBvh:
         tmax: float = np.inf,
         traversal: str = "wide",
         threads: int = 0,
+        nodes_visited: bool = False,
     ) -> dict:
         """As `Bvh.intersect`, through both levels; the dict also holds `instance` (int32, -1 on a
         miss), and `prim` indexes the triangles (or spheres) of that instance's mesh."""
-        return run_ray_query(self._core, origins, directions, tmin, tmax, traversal, threads, {"instance": np.int32})
+        return run_ray_query(
+            self._core, origins, directions, tmin, tmax, traversal, threads, nodes_visited, {"instance": np.int32}
+        )
 
     def trace_ray(self, origin, direction, *, tmin: float = 0.0, tmax: float = np.inf, traversal: str = "stack"):
         """What `intersect` does for one ray through both levels, step by step

@@ -24,13 +24,22 @@ def _checked_rays(origins, directions, tmin, traversal: str, threads: int):
     return origins, directions, _checks.real("tmin", tmin), traversal, _checks.integer("threads", threads, 0, 4096)
 
 
-def run_ray_query(core, origins, directions, tmin, tmax, traversal: str, threads: int, extra: dict | None = None):
+def run_ray_query(
+    core, origins, directions, tmin, tmax, traversal: str, threads: int, nodes_visited: bool, extra: dict | None = None
+):
     """The checked arguments and output arrays of one `intersect` over a flat or two-level tree
-    (`extra`: more output fields, e.g. the instance), filled by `core.intersect`."""
+    (`nodes_visited`: with that field; `extra`: more output fields, e.g. the instance), filled by
+    `core.intersect`."""
     origins, directions, tmin, traversal, threads = _checked_rays(origins, directions, tmin, traversal, threads)
     tmax = _checks.real("tmax", tmax)
-    out = {name: np.empty(len(origins), dtype) for name, dtype in {**HIT_FIELDS, **(extra or {})}.items()}
-    core.intersect(origins, directions, tmin, tmax, traversal, threads, *out.values())
+    if not isinstance(nodes_visited, bool):
+        raise TypeError(f"nodes_visited must be True or False, not {nodes_visited!r}")
+    fields = {k: v for k, v in HIT_FIELDS.items() if nodes_visited or k != "nodes_visited"}
+    out = {name: np.empty(len(origins), dtype) for name, dtype in {**fields, **(extra or {})}.items()}
+    # None for the counts where not asked (the wide batch may then trace camera rays as packets)
+    core.intersect(
+        origins, directions, tmin, tmax, traversal, threads, *map(out.get, HIT_FIELDS), *map(out.get, extra or {})
+    )
     return out
 
 

@@ -184,14 +184,14 @@ def check_heatmap_is_box_tests(tmp_dir) -> None:
     bvh = bvhlab.build(exported, config=s.build_config())
     directions = _primary_directions(exported.camera, 96, 72)
     origins = np.ascontiguousarray(np.broadcast_to(np.float32(exported.camera.position), directions.shape))
-    visited = bvh.intersect(origins, directions, traversal="stack")["nodes_visited"].reshape(72, 96)
+    visited = bvh.intersect(origins, directions, traversal="stack", nodes_visited=True)["nodes_visited"].reshape(72, 96)
     scale = 8.0 * bvh.stats["height"]
     expected = heat_color(visited / scale)
     off = np.abs(got["BVH Heatmap"][..., :3] - expected).max(-1) > 1e-6
     assert off.mean() <= 1e-3, f"{off.sum()} pixels differ"
     for y, x in zip(*np.nonzero(off)):
         nudged = _ulp_neighbours(directions[y * 96 + x])
-        counts = bvh.intersect(origins[: len(nudged)], nudged, traversal="stack")["nodes_visited"]
+        counts = bvh.intersect(origins[: len(nudged)], nudged, traversal="stack", nodes_visited=True)["nodes_visited"]
         candidates = heat_color(counts / scale)
         assert np.abs(candidates - got["BVH Heatmap"][y, x, :3]).max(-1).min() <= 1e-6, (y, x, visited[y, x])
     assert len(np.unique(visited)) > 10, "the heatmap must vary over the picture"

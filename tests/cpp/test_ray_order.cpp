@@ -136,7 +136,8 @@ TEST(RayOrder, EachRayIsVisitedOnceInEveryBlockWhateverTheProbeSays) {
                         ++visits[i];  // each ray once: no two pieces share a slot
                         // the piece's ray j is the batch's ray i, scaled by a power of two
                         const float s = d[3 * i] != 0.0f ? piece.rays.data()[j].dir.x / d[3 * i] : 1.0f;
-                        if (piece.rays.data()[j].origin.y != o[3 * i + 1] || !(s > 0.0f) || std::ldexp(1.0f, std::ilogb(s)) != s)
+                        if (piece.rays.data()[j].origin.y != o[3 * i + 1] || !(s > 0.0f) ||
+                            std::ldexp(1.0f, std::ilogb(s)) != s)
                             ADD_FAILURE() << "piece ray " << j << " is not ray " << i;
                     }
                     if (piece.index) __atomic_add_fetch(&reordered, piece.count, __ATOMIC_RELAXED);
@@ -185,7 +186,8 @@ TEST(RayOrder, ReorderedBatchesGiveEachRayItsOwnHitOnEveryPathAndThreadCount) {
         std::vector<std::uint32_t> visited;
         explicit Out(std::size_t n) : t(n), u(n), v(n), prim(n), kind(n), blocked(n), visited(n) {}
         HitBatch hits(std::size_t at = 0) {
-            return {t.data() + at, prim.data() + at, kind.data() + at, u.data() + at, v.data() + at, visited.data() + at};
+            return {t.data() + at, prim.data() + at, kind.data() + at,
+                    u.data() + at, v.data() + at,    visited.data() + at};
         }
         bool* occluded(std::size_t at = 0) { return reinterpret_cast<bool*>(blocked.data()) + at; }
     };

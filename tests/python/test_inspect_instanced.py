@@ -30,7 +30,7 @@ def test_records_are_intersects_walk_and_the_flattened_trees_hits(instanced_scen
     mesh_of, _ = tree.instances
     slots = [subtree_slots(m) for m in tree.meshes]
     origins, dirs = _rays(instanced_scene, 300, 5)
-    two = tree.intersect(origins, dirs, traversal=traversal)
+    two = tree.intersect(origins, dirs, traversal=traversal, nodes_visited=True)
     one = flat.intersect(origins, dirs, traversal=traversal)
     disagree = hits = 0
     for i in range(len(origins)):

@@ -41,7 +41,7 @@ def test_records_match_intersect(traversal, small_scene, knot_mesh):
     for tris, spheres in (small_scene, (knot_mesh, None)):
         bvh = bvhlab.build(tris, spheres, max_leaf_size=4)
         origins, dirs = procedural.random_rays(tris, 300, seed=7)
-        hits = bvh.intersect(origins, dirs, traversal=traversal)
+        hits = bvh.intersect(origins, dirs, traversal=traversal, nodes_visited=True)
         assert (hits["prim"] >= 0).sum() > 50 and (hits["prim"] < 0).sum() > 0, "hits and misses to test"
         for i in range(len(origins)):
             rec = bvh.trace_ray(origins[i], dirs[i], traversal=traversal)
@@ -72,7 +72,7 @@ def test_wide_records_match_intersect_and_brute_force(small_scene, knot_mesh):
         bvh = bvhlab.build(tris, spheres)
         first, count = subtree_slots(bvh)
         origins, dirs = procedural.random_rays(tris, 300, seed=7)
-        hits = bvh.intersect(origins, dirs, traversal="wide")
+        hits = bvh.intersect(origins, dirs, traversal="wide", nodes_visited=True)
         for i in range(len(origins)):
             rec = bvh.trace_ray(origins[i], dirs[i], traversal="wide")
             assert rec.nodes_visited == len(rec.wide_nodes) == hits["nodes_visited"][i]
@@ -128,7 +128,7 @@ def test_pixel_records_match_the_tracers_cost(traversal):
             rec = trace_pixel(scene, bvh, x, y, width=w, height=h, options=options)
             assert rec.box_tests == cost[y, x], (x, y)
             o, d = np.float32([rec.origin]), np.float32([rec.direction])
-            hit = bvh.intersect(o, d, tmin=rec.tmin, tmax=rec.tmax, traversal=traversal)
+            hit = bvh.intersect(o, d, tmin=rec.tmin, tmax=rec.tmax, traversal=traversal, nodes_visited=True)
             _check_record(bvh, rec, {k: v[0] for k, v in hit.items()}, hit["nodes_visited"][0])
 
 

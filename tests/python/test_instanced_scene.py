@@ -99,7 +99,7 @@ def test_a_flat_scene_is_one_mesh_and_one_identity_instance(small_scene):
     rng = np.random.default_rng(5)
     origins = rng.uniform(-0.5, 1.5, (3000, 3)).astype(np.float32)
     dirs = rng.normal(size=(3000, 3)).astype(np.float32)
-    a, b = two.intersect(origins, dirs), flat.intersect(origins, dirs)
+    a, b = two.intersect(origins, dirs, nodes_visited=True), flat.intersect(origins, dirs, nodes_visited=True)
     for key in ("t", "prim", "kind", "u", "v", "nodes_visited"):
         np.testing.assert_array_equal(a[key], b[key])
     np.testing.assert_array_equal(a["instance"], np.where(b["prim"] >= 0, 0, -1))

@@ -156,3 +156,22 @@ def test_rays_beside_a_small_distant_sphere_miss_it():
             hits = bvh.intersect(np.zeros((2, 3), np.float32), through, traversal=traversal)
             assert np.all(hits["prim"] == 0) and np.all(hits["kind"] == 1), traversal
             np.testing.assert_allclose(hits["t"], [1 - r / distance, 1 - np.sqrt(0.75) * r / distance], rtol=1e-6)
+
+
+def test_nodes_visited_only_where_asked_and_the_same_hits_either_way(knot_mesh):
+    """Counting keeps each ray on its own walk; without it the wide batch takes a camera's rays
+    through the tree eight at a time: the same hits, bit for bit, on a camera's rays and on random
+    ones, as the binary tree's walk gives."""
+    bvh = bvhlab.build(knot_mesh)
+    camera = procedural.camera_rays(knot_mesh, 160, 120)
+    for o, d in (camera, procedural.random_rays(knot_mesh, 20000, seed=4)):
+        fast, counted = bvh.intersect(o, d), bvh.intersect(o, d, nodes_visited=True)
+        stack = bvh.intersect(o, d, traversal="stack", nodes_visited=True)
+        assert "nodes_visited" not in fast and counted["nodes_visited"].dtype == np.uint32
+        assert 0.1 < np.isfinite(fast["t"]).mean() < 0.9, "hits and misses both, to test anything"
+        for k in ("t", "prim", "kind", "u", "v"):
+            np.testing.assert_array_equal(fast[k], counted[k])
+            np.testing.assert_array_equal(fast[k], stack[k])
+        assert counted["nodes_visited"].sum() > len(o)  # counted: more than the root a ray
+    with pytest.raises(TypeError, match="nodes_visited"):
+        bvh.intersect(*camera, nodes_visited="yes")

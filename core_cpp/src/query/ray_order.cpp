@@ -53,7 +53,8 @@ void order_rays(const RayBatch& block, const RayKeys& keys, std::vector<std::uin
     std::vector<std::uint16_t> key(n);
     std::vector<std::uint32_t> start(keys.count() + 1, 0);
     for (std::uint32_t i = 0; i < n; ++i)
-        ++start[1 + (key[i] = std::uint16_t(keys(block.origins + 3 * std::size_t(i), block.directions + 3 * std::size_t(i))))];
+        ++start[1 + (key[i] = std::uint16_t(
+                         keys(block.origins + 3 * std::size_t(i), block.directions + 3 * std::size_t(i))))];
     for (std::uint32_t k = 0; k < keys.count(); ++k) start[k + 1] += start[k];
     index.resize(n);
     for (std::uint32_t i = 0; i < n; ++i) index[start[key[i]]++] = i;
