@@ -1,6 +1,6 @@
 // The order in which the wide tree's batch queries trace an incoherent batch (src/query/ray_order.h):
 // the keys, the check of an order already good, the sort, the loop that probes a block and traces
-// the rest reordered (ray_batch.h for_each_ray_piece), and intersect_batch / occluded_batch on a
+// it reordered (ray_batch.h for_each_ray_piece), and intersect_batch / occluded_batch on a
 // batch that is reordered: every result lands in its own ray's slot, equal bit for bit to the ray
 // traced alone, on every instruction set path and thread count; a refused ray is still named.
 #include <gtest/gtest.h>
@@ -147,14 +147,15 @@ TEST(RayOrder, EachRayIsVisitedOnceInEveryBlockWhateverTheProbeSays) {
                     for (std::uint32_t j = 0; j < piece.count; ++j) probed.push_back(std::uint32_t(piece.at(j)));
                     return cost;
                 });
-            // every ray once, the probed ones included
-            for (std::uint32_t i : probed) ++visits[i];
+            // every ray once; the probes saw rays spread over each block, from its first to its last
             EXPECT_EQ(std::count(visits.begin(), visits.end(), 1), std::ptrdiff_t(n)) << cost << " " << threads;
-            // each block's first piece probed (two blocks)
             ASSERT_EQ(probed.size(), 2 * kWideBatch);
             EXPECT_EQ(probed[0], 0u);
+            EXPECT_EQ(probed[kWideBatch - 1], std::uint32_t(kOrderBlock - 1));
             EXPECT_EQ(probed[kWideBatch], std::uint32_t(kOrderBlock));
-            EXPECT_EQ(reordered, cost > 0 ? n - 2 * kWideBatch : 0u);
+            EXPECT_EQ(probed.back(), std::uint32_t(n - 1));
+            EXPECT_TRUE(std::is_sorted(probed.begin(), probed.end()));
+            EXPECT_EQ(reordered, cost > 0 ? n : 0u);
         }
     }
 }
@@ -169,15 +170,15 @@ TEST(RayOrder, ReorderedBatchesGiveEachRayItsOwnHitOnEveryPathAndThreadCount) {
     std::uniform_real_distribution<float> u(0.5f, 20.0f);
     for (std::size_t i = 0; i < rays.size(); i += 3) rays[i].tmax = u(rng);
     const Arrays arrays(rays);
-    // the premise: not in order, and the first piece's rays visit enough nodes to be reordered
+    // the premise: not in order, and the rays visit enough nodes (over the probe's sample) to be reordered
     ASSERT_FALSE(in_ray_order(arrays.batch(), RayKeys(node_box(bvh.nodes[0]), rays.size())));
-    double visited_first = 0;
-    for (std::size_t i = 0; i < kWideBatch; ++i) {
+    double visited = 0;
+    for (std::size_t j = 0; j < kWideBatch; ++j) {
         std::uint32_t v = 0;
-        intersect_wide(wide, bvh, rays[i], &v);
-        visited_first += v;
+        intersect_wide(wide, bvh, rays[j * (rays.size() - 1) / (kWideBatch - 1)], &v);
+        visited += v;
     }
-    ASSERT_GE(visited_first / kWideBatch, kOrderNodes);
+    ASSERT_GE(visited / kWideBatch, kOrderNodes);
     const std::size_t n = rays.size();
     struct Out {
         std::vector<float> t, u, v;
@@ -239,7 +240,9 @@ TEST(RayOrder, ARefusedRayIsNamedWhereverTheReorderedBatchHasIt) {
     const Bvh bvh = build_bvh(scene.view());
     const WideBvh wide = make_wide(bvh);
     const auto rays = random_rays(3 * kOrderLeast, 75);
-    for (std::size_t bad : {std::size_t(10), std::size_t(2 * kOrderLeast + 5)}) {  // in the probed piece, after it
+    // the probe's first ray, another of its sample ((n - 1) · 5 / 255), and one it does not read
+    const std::size_t n = rays.size(), sampled = (n - 1) * 5 / (kWideBatch - 1);
+    for (std::size_t bad : {std::size_t(0), sampled, std::size_t(2 * kOrderLeast + 5)}) {
         Arrays arrays(rays);
         arrays.d[3 * bad + 1] = kNaN;
         std::vector<float> t(rays.size());

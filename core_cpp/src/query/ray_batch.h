@@ -175,53 +175,49 @@ inline bool prepare_piece(const RayBatch& rays, std::size_t begin, std::size_t e
 /// Calls `visit(piece)` for each piece of the batch (prepare_piece: its rays scaled and grouped by
 /// octant; piece.at(j) is ray j's index in the batch), for the queries that trace a piece at once
 /// (the wide tree's). With `scene` (the tree's box), the batch goes in blocks of kOrderBlock rays;
-/// where a block of at least kOrderLeast rays is not in ray order already (in_ray_order), its
-/// first piece goes to `probe` instead, which traces it as `visit` would and returns the wide
-/// nodes its rays visited on average, and from kOrderNodes the rest of the block is traced in
-/// order_rays' order (ray_order.h; the results are the same in any order). The rays are checked
-/// as they are read rather than in a pass before (which read the caller's arrays twice: 44
-/// instructions a ray, repeat1m primary rays); a piece with a refused ray is not traced, the
-/// other threads stop, and check_rays throws naming the first (the outputs are then left
-/// incomplete, as when cancelled).
+/// where a block of at least kOrderLeast rays is not in ray order already (in_ray_order),
+/// kWideBatch of its rays spread evenly over it go to `probe`, which traces them without writing
+/// any result and returns the wide nodes they visited on average, and from kOrderNodes the block
+/// is traced in order_rays' order (ray_order.h; the results are the same in any order). The rays
+/// are checked as they are read rather than in a pass before (which read the caller's arrays
+/// twice: 44 instructions a ray, repeat1m primary rays); a piece with a refused ray is not
+/// traced, the other threads stop, and check_rays throws naming the first (the outputs are then
+/// left incomplete, as when cancelled).
 template <class Visit, class Probe>
 void for_each_ray_piece(const RayBatch& rays, std::uint32_t threads, Cancellation* cancel, Visit&& visit,
                         const Aabb* scene, Probe&& probe) {
     std::atomic<bool> refused{false};
     std::vector<std::uint32_t> index;
-    const auto part = [&](std::size_t from, std::size_t count) {
-        RayBatch b = rays;
-        b.count = count;
-        b.origins += 3 * from, b.directions += 3 * from;
-        if (b.tmax_of) b.tmax_of += from;
-        return b;
-    };
     for (std::size_t base = 0; base < rays.count || base == 0; base += kOrderBlock) {
-        std::size_t first = base;  // the block's rays not probed
+        RayBatch block = rays;
+        block.count = std::min(kOrderBlock, rays.count - base);
+        block.origins += 3 * base, block.directions += 3 * base;
+        if (block.tmax_of) block.tmax_of += base;
         const std::uint32_t* order = nullptr;
-        const std::size_t count = std::min(kOrderBlock, rays.count - base);
-        if (scene && count >= kOrderLeast) {
-            const RayKeys keys(*scene, count);
-            if (!in_ray_order(part(base, count), keys)) {
-                if (cancel && cancel->poll()) throw Cancelled();
+        if (scene && block.count >= kOrderLeast) {
+            const RayKeys keys(*scene, block.count);
+            if (!in_ray_order(block, keys)) {
+                // a sample of the whole block: its first rays may lie together (sorted otherwise)
+                std::uint32_t sample[kWideBatch];
+                for (std::uint32_t j = 0; j < kWideBatch; ++j)
+                    sample[j] = std::uint32_t(std::uint64_t(j) * (block.count - 1) / (kWideBatch - 1));
                 RayPiece piece;
-                if (!prepare_piece(rays, base, base + kWideBatch, piece)) {
+                if (!prepare_piece<true>(block, 0, kWideBatch, piece, sample)) {
                     refused.store(true);
                     break;
                 }
-                piece.base = base, piece.index = nullptr;
-                first = base + kWideBatch;
+                piece.base = base, piece.index = sample;
                 if (probe(static_cast<const RayPiece&>(piece)) >= kOrderNodes) {
-                    order_rays(part(first, base + count - first), keys, index);
+                    order_rays(block, keys, index);
                     order = index.data();
                 }
             }
         }
-        const RayBatch block = part(first, base + count - first);
         for_each_unchecked_chunk(block, threads, cancel, [&](std::size_t begin, std::size_t end) {
             RayPiece piece;
             for (std::size_t at = begin; at < end && !refused.load(std::memory_order_relaxed); at += kWideBatch) {
                 const std::size_t to = std::min(end, at + kWideBatch);
-                piece.base = order ? first : first + at, piece.index = order ? order + at : nullptr;
+                piece.base = order ? base : base + at, piece.index = order ? order + at : nullptr;
                 if (!(order ? prepare_piece<true>(block, at, to, piece, order + at)
                             : prepare_piece(block, at, to, piece))) {
                     refused.store(true, std::memory_order_relaxed);
@@ -230,7 +226,7 @@ void for_each_ray_piece(const RayBatch& rays, std::uint32_t threads, Cancellatio
                 visit(static_cast<const RayPiece&>(piece));
             }
         });
-        if (refused.load() || count == 0) break;
+        if (refused.load() || block.count == 0) break;
     }
     if (refused.load()) {
         check_rays(rays);  // throws, naming the first refused ray

@@ -91,11 +91,15 @@ Hit intersect_with(const Bvh& bvh, const Ray& ray, Traversal mode, std::uint32_t
     if (nodes_visited) *nodes_visited = visited;
     return hit;
 }
-/// The mean of visited[0, n).
-double mean_visited(const std::uint32_t* visited, std::uint32_t n) {
+/// The wide nodes the closest-hit walks of a piece's rays visit, on average (for_each_ray_piece's
+/// probe: how much a batch like them would gain from being reordered); no result is kept.
+double probe_wide(const WideBvh& wide, const RayPiece& piece) {
+    Scratch<Hit, kWideBatch> hits;
+    std::uint32_t visited[kWideBatch];
+    intersect_wide_grouped(wide, piece.rays.data(), piece.order, piece.start, hits.data(), visited);
     double sum = 0;
-    for (std::uint32_t j = 0; j < n; ++j) sum += visited[j];
-    return n ? sum / n : 0.0;
+    for (std::uint32_t j = 0; j < piece.count; ++j) sum += visited[j];
+    return piece.count ? sum / piece.count : 0.0;
 }
 }  // namespace
 
@@ -137,14 +141,7 @@ void occluded_batch(const Bvh& bvh, const RayBatch& rays, bool* occluded_out, Tr
                 occluded_wide_grouped(*wide, piece.rays.data(), piece.order, piece.start, occluded);
                 for (std::uint32_t j = 0; j < piece.count; ++j) occluded_out[piece.at(j)] = occluded[j];
             },
-            &scene,
-            [&](const RayPiece& piece) {  // by closest hits, whose t < tmax is `occluded` (traverse.h)
-                Scratch<Hit, kWideBatch> hits;
-                std::uint32_t visited[kWideBatch];
-                intersect_wide_grouped(*wide, piece.rays.data(), piece.order, piece.start, hits.data(), visited);
-                for (std::uint32_t j = 0; j < piece.count; ++j) occluded_out[piece.at(j)] = hits[j].ref != kNoHit;
-                return mean_visited(visited, piece.count);
-            });
+            &scene, [&](const RayPiece& piece) { return probe_wide(*wide, piece); });
     }
     for_each_ray(rays, threads, cancel,
                  [&](std::size_t i, const Ray& ray, float) { occluded_out[i] = occluded(bvh, ray, mode); });
@@ -165,15 +162,7 @@ void intersect_batch(const Bvh& bvh, const RayBatch& rays, const HitBatch& out, 
                 write_hits<true>(out, piece.base, piece.count, hits.data(), v, piece.t_scale, &bvh, piece.rays.data(),
                                  piece.index);
             },
-            &scene,
-            [&](const RayPiece& piece) {  // as above, with the visited counts whether asked or not
-                Scratch<Hit, kWideBatch> hits;
-                std::uint32_t visited[kWideBatch];
-                intersect_wide_grouped(*wide, piece.rays.data(), piece.order, piece.start, hits.data(), visited);
-                write_hits<true>(out, piece.base, piece.count, hits.data(), visited, piece.t_scale, &bvh,
-                                 piece.rays.data());
-                return mean_visited(visited, piece.count);
-            });
+            &scene, [&](const RayPiece& piece) { return probe_wide(*wide, piece); });
     }
     run_ray_batch(rays, out, threads, cancel, [&](std::size_t, const Ray& ray, std::uint32_t& visited) {
         return intersect(bvh, ray, mode, &visited);
