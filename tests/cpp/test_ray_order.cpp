@@ -1,6 +1,6 @@
 // The order in which the wide tree's batch queries trace an incoherent batch (src/query/ray_order.h):
 // the keys, the check of an order already good, the sort, the loop that probes a block and traces
-// it reordered (ray_batch.h for_each_ray_piece), and intersect_batch / occluded_batch on a
+// it in ray order (ray_batch.h for_each_block), and intersect_batch / occluded_batch on a
 // batch that is reordered: every result lands in its own ray's slot, equal bit for bit to the ray
 // traced alone, on every instruction set path and thread count; a refused ray is still named.
 #include <gtest/gtest.h>
@@ -89,15 +89,22 @@ TEST(RayOrder, CameraRaysKeepTheirOrderAndRandomOnesAreSortedStably) {
     const RayBatch batch = arrays.batch();
     const RayKeys keys(box, batch.count);
     EXPECT_FALSE(in_ray_order(batch, keys));
-    std::vector<std::uint32_t> index;
-    order_rays(batch, keys, index);
+    SortedRays sorted;
+    sort_rays(batch, keys, sorted);
+    const std::vector<std::uint32_t>& index = sorted.index;
     ASSERT_EQ(index.size(), rays.size());
+    ASSERT_EQ(sorted.tmax_of.size(), rays.size());
     std::vector<char> seen(rays.size(), 0);
     std::uint32_t runs = 0;
     for (std::size_t k = 0; k < index.size(); ++k) {
         ASSERT_LT(index[k], rays.size());
         ASSERT_FALSE(seen[index[k]]) << "ray " << index[k] << " twice";
         seen[index[k]] = 1;
+        for (int a = 0; a < 3; ++a) {  // position k holds ray index[k]
+            ASSERT_TRUE(same_bits(sorted.origins[3 * k + a], arrays.o[3 * index[k] + a])) << k;
+            ASSERT_TRUE(same_bits(sorted.directions[3 * k + a], arrays.d[3 * index[k] + a])) << k;
+        }
+        ASSERT_TRUE(same_bits(sorted.tmax_of[k], arrays.tmax[index[k]])) << k;
         if (k == 0) continue;
         const std::uint32_t a = keys(&arrays.o[3 * index[k - 1]], &arrays.d[3 * index[k - 1]]),
                             b = keys(&arrays.o[3 * index[k]], &arrays.d[3 * index[k]]);
@@ -106,15 +113,17 @@ TEST(RayOrder, CameraRaysKeepTheirOrderAndRandomOnesAreSortedStably) {
         runs += a != b;
     }
     EXPECT_GT(runs, 1000u);  // the rays spread over many keys: the check above compared something
-    // sorted, the batch is in order
-    Arrays sorted(rays);
-    for (std::size_t k = 0; k < index.size(); ++k)
-        for (int a = 0; a < 3; ++a)
-            sorted.o[3 * k + a] = arrays.o[3 * index[k] + a], sorted.d[3 * k + a] = arrays.d[3 * index[k] + a];
-    EXPECT_TRUE(in_ray_order(sorted.batch(), keys));
+    // the copy is a batch in ray order; the results put back land in their own rays' slots
+    const RayBatch copy = sorted.batch(batch);
+    EXPECT_EQ(copy.count, batch.count);
+    EXPECT_EQ(copy.tmax_of, sorted.tmax_of.data());
+    EXPECT_TRUE(in_ray_order(copy, keys));
+    std::vector<std::uint32_t> back(rays.size());
+    unsort(index.data(), index, back.data());
+    for (std::size_t i = 0; i < rays.size(); ++i) ASSERT_EQ(back[i], i);
 }
 
-TEST(RayOrder, EachRayIsVisitedOnceInEveryBlockWhateverTheProbeSays) {
+TEST(RayOrder, BlocksAreProbedOverTheirWholeLengthAndSortedWhereTheProbeSaysSo) {
     // more than one block, the last one short; the probe says "costly" or "cheap"
     const std::size_t n = kOrderBlock + kOrderLeast + 77;
     std::mt19937 rng(9);
@@ -124,39 +133,42 @@ TEST(RayOrder, EachRayIsVisitedOnceInEveryBlockWhateverTheProbeSays) {
     const RayBatch batch{o.data(), d.data(), n};
     const Aabb box{{-8, -8, -8}, {8, 8, 8}};
     for (double cost : {0.0, kOrderNodes}) {
-        for (std::uint32_t threads : {1u, 3u}) {
-            std::vector<std::uint8_t> visits(n, 0);
-            std::vector<std::uint32_t> probed;
-            std::size_t reordered = 0;
-            for_each_ray_piece(
-                batch, threads, nullptr,
-                [&](const RayPiece& piece) {
-                    for (std::uint32_t j = 0; j < piece.count; ++j) {
-                        const std::size_t i = piece.at(j);
-                        ++visits[i];  // each ray once: no two pieces share a slot
-                        // the piece's ray j is the batch's ray i, scaled by a power of two
-                        const float s = d[3 * i] != 0.0f ? piece.rays.data()[j].dir.x / d[3 * i] : 1.0f;
-                        if (piece.rays.data()[j].origin.y != o[3 * i + 1] || !(s > 0.0f) ||
-                            std::ldexp(1.0f, std::ilogb(s)) != s)
-                            ADD_FAILURE() << "piece ray " << j << " is not ray " << i;
-                    }
-                    if (piece.index) __atomic_add_fetch(&reordered, piece.count, __ATOMIC_RELAXED);
-                },
-                &box,
-                [&](const RayPiece& piece) {
-                    for (std::uint32_t j = 0; j < piece.count; ++j) probed.push_back(std::uint32_t(piece.at(j)));
-                    return cost;
-                });
-            // every ray once; the probes saw rays spread over each block, from its first to its last
-            EXPECT_EQ(std::count(visits.begin(), visits.end(), 1), std::ptrdiff_t(n)) << cost << " " << threads;
-            ASSERT_EQ(probed.size(), 2 * kWideBatch);
-            EXPECT_EQ(probed[0], 0u);
-            EXPECT_EQ(probed[kWideBatch - 1], std::uint32_t(kOrderBlock - 1));
-            EXPECT_EQ(probed[kWideBatch], std::uint32_t(kOrderBlock));
-            EXPECT_EQ(probed.back(), std::uint32_t(n - 1));
-            EXPECT_TRUE(std::is_sorted(probed.begin(), probed.end()));
-            EXPECT_EQ(reordered, cost > 0 ? n : 0u);
-        }
+        std::vector<std::uint32_t> probed;
+        std::vector<std::size_t> bases, counts;
+        for_each_block(
+            batch, box,
+            [&](const RayPiece& piece) {
+                const std::size_t base = probed.size() / kWideBatch * kOrderBlock;
+                const std::size_t count = std::min(kOrderBlock, n - base);
+                EXPECT_EQ(piece.count, kWideBatch);
+                for (std::uint32_t j = 0; j < piece.count; ++j) {  // the sample's rays, evenly spread
+                    const std::size_t i = base + std::size_t(j) * (count - 1) / (kWideBatch - 1);
+                    if (piece.rays.data()[j].origin.y != o[3 * i + 1]) ADD_FAILURE() << "probe ray " << j;
+                    probed.push_back(std::uint32_t(i));
+                }
+                return cost;
+            },
+            [&](std::size_t base, const RayBatch& block, const SortedRays* sorted) {
+                bases.push_back(base), counts.push_back(block.count);
+                EXPECT_EQ(block.origins, o.data() + 3 * base);
+                EXPECT_EQ(sorted != nullptr, cost > 0) << base;
+                if (!sorted) return;
+                std::vector<char> seen(block.count, 0);
+                for (std::uint32_t i : sorted->index) {
+                    ASSERT_LT(i, block.count);
+                    ASSERT_FALSE(seen[i]);
+                    seen[i] = 1;
+                }
+            });
+        EXPECT_EQ(bases, (std::vector<std::size_t>{0, kOrderBlock}));
+        EXPECT_EQ(counts, (std::vector<std::size_t>{kOrderBlock, kOrderLeast + 77}));
+        // each block probed over its whole length, from its first ray to its last
+        ASSERT_EQ(probed.size(), 2 * kWideBatch);
+        EXPECT_EQ(probed[0], 0u);
+        EXPECT_EQ(probed[kWideBatch - 1], std::uint32_t(kOrderBlock - 1));
+        EXPECT_EQ(probed[kWideBatch], std::uint32_t(kOrderBlock));
+        EXPECT_EQ(probed.back(), std::uint32_t(n - 1));
+        EXPECT_TRUE(std::is_sorted(probed.begin(), probed.end()));
     }
 }
 
@@ -264,4 +276,34 @@ TEST(RayOrder, ARefusedRayIsNamedWhereverTheReorderedBatchHasIt) {
             }
         }
     }
+}
+
+TEST(RayOrder, ARefusedRayInALaterBlockIsNamedByItsIndexInTheBatch) {
+    test::Scene scene;
+    scene.add_triangle({0, 0, 5}, {1, 0, 5}, {0, 1, 5});
+    const Bvh bvh = build_bvh(scene.view());
+    const WideBvh wide = make_wide(bvh);
+    const std::size_t n = kOrderBlock + 1000, bad = kOrderBlock + 123;
+    std::vector<float> o(3 * n, 0.25f), d(3 * n, 0.0f), t(n);
+    for (std::size_t i = 0; i < n; ++i) d[3 * i + 2] = 1.0f;
+    std::vector<std::int32_t> prim(n);
+    d[3 * bad + 2] = kNaN;
+    auto blocked = std::make_unique<bool[]>(n);
+    const RayBatch batch{o.data(), d.data(), n};
+    try {
+        intersect_batch(bvh, batch, {t.data(), prim.data()}, Traversal::Wide, 2, &wide);
+        ADD_FAILURE() << "intersect_batch accepted a NaN direction";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("ray " + std::to_string(bad)), std::string::npos) << e.what();
+    }
+    try {
+        occluded_batch(bvh, batch, blocked.get(), Traversal::Wide, 2, &wide);
+        ADD_FAILURE() << "occluded_batch accepted a NaN direction";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("ray " + std::to_string(bad)), std::string::npos) << e.what();
+    }
+    // and without it, every ray of both blocks hits the triangle, at t = 5 - 0.25
+    d[3 * bad + 2] = 1.0f;
+    intersect_batch(bvh, batch, {t.data(), prim.data()}, Traversal::Wide, 2, &wide);
+    EXPECT_EQ(std::count(t.begin(), t.end(), 4.75f), std::ptrdiff_t(n));
 }

@@ -95,31 +95,12 @@ inline std::uint32_t magnitude_bits(float x) {
 
 /// A piece of a batch as the wide tree's batch walks take it (wide_kernel.h intersect_wide_grouped):
 /// its rays scaled (scaled_ray), each with its factor, and grouped by octant (order_by_octant).
-/// Its ray j is the batch's ray base + j, or base + index[j] where its block was reordered
-/// (ray_order.h; `at` says where).
 struct RayPiece {
     Scratch<Ray, kWideBatch> rays;
     float t_scale[kWideBatch];
     std::uint32_t order[kWideBatch], start[9];
     std::uint32_t count;
-    std::size_t base;
-    const std::uint32_t* index;
-    std::size_t at(std::uint32_t j) const { return base + (index ? index[j] : j); }
 };
-
-/// How many rays ahead a reordered piece's gather (prepare_piece) and scatter (write_hits) start
-/// the loads of the caller's lines: enough misses in flight at once, late enough that the
-/// tracing of a piece does not evict them first (a piece ahead, they were: room1m's random rays
-/// gained nothing).
-inline constexpr std::uint32_t kGatherAhead = 16;
-
-/// Starts the loads of ray index[j]'s lines where j < n.
-inline void prefetch_ray(const RayBatch& rays, const std::uint32_t* index, std::uint32_t j, std::uint32_t n) {
-    if (j >= n) return;
-    const std::size_t i = index[j];
-    __builtin_prefetch(rays.origins + 3 * i), __builtin_prefetch(rays.directions + 3 * i);
-    if (rays.tmax_of) __builtin_prefetch(rays.tmax_of + i);
-}
 
 /// Rays begin .. end (at most kWideBatch) of the batch to `piece`, in one pass over the caller's
 /// arrays: each checked by check_rays' rules, scaled (scaled_ray) and given its octant (the sign
@@ -128,8 +109,8 @@ inline void prefetch_ray(const RayBatch& rays, const std::uint32_t* index, std::
 /// The checks are in_coordinate_range and direction_in_range on the bits of |x|
 /// (magnitude_bits): a NaN's exceed every number's, so one integer comparison a bound refuses
 /// it, and the largest |component| is the largest of the bits.
-/// `index`: the piece's rays are rays index[0, end - begin) of the batch rather than begin .. end
-/// (a reordered block's, ray_order.h).
+/// `index` (kIndexed): the piece's rays are rays index[0, end - begin) of the batch rather than
+/// begin .. end (for_each_block's probe).
 template <bool kIndexed = false>
 inline bool prepare_piece(const RayBatch& rays, std::size_t begin, std::size_t end, RayPiece& piece,
                           const std::uint32_t* index = nullptr) {
@@ -149,11 +130,8 @@ inline bool prepare_piece(const RayBatch& rays, std::size_t begin, std::size_t e
         std::memcpy(&b, p, sizeof b);
         return b;
     };
-    if constexpr (kIndexed)
-        for (std::uint32_t j = 0; j < kGatherAhead; ++j) prefetch_ray(rays, index, j, n);
     for (std::uint32_t j = 0; j < n; ++j) {  // as bits: no float operation before the scaling
         const std::size_t i = kIndexed ? index[j] : j;
-        if constexpr (kIndexed) prefetch_ray(rays, index, j + kGatherAhead, n);
         const float *o = origins + 3 * i, *d = directions + 3 * i;
         const std::uint32_t dx = bits(d), dy = bits(d + 1), dz = bits(d + 2), m = 0x7fffffffu;
         const std::uint32_t dir = std::max(dx & m, std::max(dy & m, dz & m));
@@ -172,77 +150,78 @@ inline bool prepare_piece(const RayBatch& rays, std::size_t begin, std::size_t e
     return true;
 }
 
-/// Calls `visit(piece)` for each piece of the batch (prepare_piece: its rays scaled and grouped by
-/// octant; piece.at(j) is ray j's index in the batch), for the queries that trace a piece at once
-/// (the wide tree's). With `scene` (the tree's box), the batch goes in blocks of kOrderBlock rays;
-/// where a block of at least kOrderLeast rays is not in ray order already (in_ray_order),
-/// kWideBatch of its rays spread evenly over it go to `probe`, which traces them without writing
-/// any result and returns the wide nodes they visited on average, and from kOrderNodes the block
-/// is traced in order_rays' order (ray_order.h; the results are the same in any order). The rays
-/// are checked as they are read rather than in a pass before (which read the caller's arrays
-/// twice: 44 instructions a ray, repeat1m primary rays); a piece with a refused ray is not
-/// traced, the other threads stop, and check_rays throws naming the first (the outputs are then
-/// left incomplete, as when cancelled).
-template <class Visit, class Probe>
-void for_each_ray_piece(const RayBatch& rays, std::uint32_t threads, Cancellation* cancel, Visit&& visit,
-                        const Aabb* scene, Probe&& probe) {
+/// Calls `visit(begin, piece)` for each piece of the batch (prepare_piece: rays begin ..
+/// begin + piece.count, scaled and grouped by octant), for the queries that trace a piece at once
+/// (the wide tree's). The rays are checked as they are read rather than in a pass before (which
+/// read the caller's arrays twice: 44 instructions a ray, repeat1m primary rays); a piece with a
+/// refused ray is not traced, the other threads stop, and check_rays throws naming the first
+/// (the outputs are then left incomplete, as when cancelled).
+template <class Visit>
+void for_each_ray_piece(const RayBatch& rays, std::uint32_t threads, Cancellation* cancel, Visit&& visit) {
     std::atomic<bool> refused{false};
-    std::vector<std::uint32_t> index;
-    for (std::size_t base = 0; base < rays.count || base == 0; base += kOrderBlock) {
-        RayBatch block = rays;
-        block.count = std::min(kOrderBlock, rays.count - base);
-        block.origins += 3 * base, block.directions += 3 * base;
-        if (block.tmax_of) block.tmax_of += base;
-        const std::uint32_t* order = nullptr;
-        if (scene && block.count >= kOrderLeast) {
-            const RayKeys keys(*scene, block.count);
-            if (!in_ray_order(block, keys)) {
-                // a sample of the whole block: its first rays may lie together (sorted otherwise)
-                std::uint32_t sample[kWideBatch];
-                for (std::uint32_t j = 0; j < kWideBatch; ++j)
-                    sample[j] = std::uint32_t(std::uint64_t(j) * (block.count - 1) / (kWideBatch - 1));
-                RayPiece piece;
-                if (!prepare_piece<true>(block, 0, kWideBatch, piece, sample)) {
-                    refused.store(true);
-                    break;
-                }
-                piece.base = base, piece.index = sample;
-                if (probe(static_cast<const RayPiece&>(piece)) >= kOrderNodes) {
-                    order_rays(block, keys, index);
-                    order = index.data();
-                }
+    for_each_unchecked_chunk(rays, threads, cancel, [&](std::size_t begin, std::size_t end) {
+        RayPiece piece;
+        for (std::size_t at = begin; at < end && !refused.load(std::memory_order_relaxed); at += kWideBatch) {
+            if (!prepare_piece(rays, at, std::min(end, at + kWideBatch), piece)) {
+                refused.store(true, std::memory_order_relaxed);
+                return;
             }
+            visit(at, static_cast<const RayPiece&>(piece));
         }
-        for_each_unchecked_chunk(block, threads, cancel, [&](std::size_t begin, std::size_t end) {
-            RayPiece piece;
-            for (std::size_t at = begin; at < end && !refused.load(std::memory_order_relaxed); at += kWideBatch) {
-                const std::size_t to = std::min(end, at + kWideBatch);
-                piece.base = order ? base : base + at, piece.index = order ? order + at : nullptr;
-                if (!(order ? prepare_piece<true>(block, at, to, piece, order + at)
-                            : prepare_piece(block, at, to, piece))) {
-                    refused.store(true, std::memory_order_relaxed);
-                    return;
-                }
-                visit(static_cast<const RayPiece&>(piece));
-            }
-        });
-        if (refused.load() || block.count == 0) break;
-    }
+    });
     if (refused.load()) {
         check_rays(rays);  // throws, naming the first refused ray
         throw std::logic_error("a batch refused a ray that check_rays accepts");
     }
 }
 
-/// hits[0, n) of rays begin .. begin + n, or begin + index[j] where `index` is given (t in the
-/// scaled units of t_scale) to `out`, t back in the caller's units. kFinish: the hits are as the wide walks leave them (intersect_wide_grouped: a
+/// Rays [base, base + count) of a batch as a batch of their own.
+inline RayBatch part_of(const RayBatch& rays, std::size_t base, std::size_t count) {
+    RayBatch b = rays;
+    b.count = count;
+    b.origins += 3 * base, b.directions += 3 * base;
+    if (b.tmax_of) b.tmax_of += base;
+    return b;
+}
+
+/// The wide tree's batch queries, block by block (kOrderBlock rays): calls `trace(base, block,
+/// sorted)` for rays [base, base + block.count) of the batch, with `sorted` null where the block is
+/// to be traced as it is, else the block's rays copied in ray order (ray_order.h: trace then
+/// traces sorted->batch(block) and puts each result back at sorted->index). A block of at least
+/// kOrderLeast rays that is not in ray order already (in_ray_order) is reordered where kWideBatch
+/// of its rays, spread evenly over it, visit at least kOrderNodes wide nodes on average, which
+/// `probe(piece)` says (tracing them without keeping any result). Throws, as check_rays does,
+/// where a ray of the probe's is refused.
+template <class Probe, class Trace>
+void for_each_block(const RayBatch& rays, const Aabb& scene, Probe&& probe, Trace&& trace) {
+    SortedRays sorted;
+    for (std::size_t base = 0; base < rays.count || base == 0; base += kOrderBlock) {
+        const RayBatch block = part_of(rays, base, std::min(kOrderBlock, rays.count - base));
+        bool reorder = false;
+        const RayKeys keys(scene, block.count);
+        if (block.count >= kOrderLeast && !in_ray_order(block, keys)) {
+            // a sample of the whole block: its first rays may lie together (sorted otherwise)
+            std::uint32_t sample[kWideBatch];
+            for (std::uint32_t j = 0; j < kWideBatch; ++j)
+                sample[j] = std::uint32_t(std::uint64_t(j) * (block.count - 1) / (kWideBatch - 1));
+            RayPiece piece;
+            if (!prepare_piece<true>(block, 0, kWideBatch, piece, sample)) check_rays(rays);  // throws
+            reorder = probe(static_cast<const RayPiece&>(piece)) >= kOrderNodes;
+        }
+        if (reorder) sort_rays(block, keys, sorted);
+        trace(base, block, reorder ? &sorted : nullptr);
+        if (block.count == 0) break;
+    }
+}
+
+/// hits[0, n) of rays begin .. begin + n (t in the scaled units of t_scale) to `out`, t back in the
+/// caller's units. kFinish: the hits are as the wide walks leave them (intersect_wide_grouped: a
 /// miss's t is the ray's tmax, a sphere's u, v not yet made), finished here (finish_hit with the
 /// scaled rays[j]) rather than in a pass of their own; `visited` may then be null where `out` has
 /// no nodes_visited.
 template <bool kFinish = false>
 void write_hits(const HitBatch& out, std::size_t begin, std::size_t n, Hit* hits, const std::uint32_t* visited,
-                const float* t_scale, const Bvh* bvh = nullptr, const Ray* rays = nullptr,
-                const std::uint32_t* index = nullptr) {
+                const float* t_scale, const Bvh* bvh = nullptr, const Ray* rays = nullptr) {
     // the outputs in locals: the stores could alias `out` for the compiler, which then reloaded it
     float *t = out.t + begin, *u = out.u ? out.u + begin : nullptr, *v = out.v ? out.v + begin : nullptr;
     std::int32_t* prim = out.prim + begin;
@@ -254,21 +233,12 @@ void write_hits(const HitBatch& out, std::size_t begin, std::size_t n, Hit* hits
         if constexpr (kFinish)
             if (!miss && (h.ref & gpu::REF_SPHERE_BIT)) [[unlikely]]
                 finish_hit(*bvh, rays[j], h);
-        const std::size_t i = index ? index[j] : j;
-        if (index && j + kGatherAhead < n) {
-            const std::size_t k = index[j + kGatherAhead];
-            __builtin_prefetch(t + k, 1), __builtin_prefetch(prim + k, 1);
-            if (kind) __builtin_prefetch(kind + k, 1);
-            if (u) __builtin_prefetch(u + k, 1);
-            if (v) __builtin_prefetch(v + k, 1);
-            if (nodes_visited) __builtin_prefetch(nodes_visited + k, 1);
-        }
-        t[i] = kFinish && miss ? kInfinity : h.t * t_scale[j];  // inf stays inf
-        prim[i] = miss ? -1 : std::int32_t(h.ref & gpu::REF_INDEX_MASK);
-        if (kind) kind[i] = miss ? 0 : std::uint8_t((h.ref & gpu::REF_SPHERE_BIT) ? 1 : 0);
-        if (u) u[i] = h.u;
-        if (v) v[i] = h.v;
-        if (nodes_visited) nodes_visited[i] = visited[j];
+        t[j] = kFinish && miss ? kInfinity : h.t * t_scale[j];  // inf stays inf
+        prim[j] = miss ? -1 : std::int32_t(h.ref & gpu::REF_INDEX_MASK);
+        if (kind) kind[j] = miss ? 0 : std::uint8_t((h.ref & gpu::REF_SPHERE_BIT) ? 1 : 0);
+        if (u) u[j] = h.u;
+        if (v) v[j] = h.v;
+        if (nodes_visited) nodes_visited[j] = visited[j];
     }
 }
 

@@ -47,7 +47,14 @@ bool in_ray_order(const RayBatch& block, const RayKeys& keys) {
     return differ <= kOrderCoherent;
 }
 
-void order_rays(const RayBatch& block, const RayKeys& keys, std::vector<std::uint32_t>& index) {
+RayBatch SortedRays::batch(const RayBatch& block) const {
+    RayBatch b = block;
+    b.origins = origins.data(), b.directions = directions.data();
+    b.tmax_of = block.tmax_of ? tmax_of.data() : nullptr;
+    return b;
+}
+
+void sort_rays(const RayBatch& block, const RayKeys& keys, SortedRays& out) {
     const auto n = std::uint32_t(block.count);
     // a stable counting sort of the keys (16 bits: below 8 · 2^12)
     std::vector<std::uint16_t> key(n);
@@ -56,8 +63,15 @@ void order_rays(const RayBatch& block, const RayKeys& keys, std::vector<std::uin
         ++start[1 + (key[i] = std::uint16_t(
                          keys(block.origins + 3 * std::size_t(i), block.directions + 3 * std::size_t(i))))];
     for (std::uint32_t k = 0; k < keys.count(); ++k) start[k + 1] += start[k];
-    index.resize(n);
-    for (std::uint32_t i = 0; i < n; ++i) index[start[key[i]]++] = i;
+    out.origins.resize(3 * std::size_t(n)), out.directions.resize(3 * std::size_t(n)), out.index.resize(n);
+    out.tmax_of.resize(block.tmax_of ? n : 0);
+    for (std::uint32_t i = 0; i < n; ++i) {
+        const std::uint32_t k = start[key[i]]++;
+        std::memcpy(&out.origins[3 * std::size_t(k)], block.origins + 3 * std::size_t(i), 3 * sizeof(float));
+        std::memcpy(&out.directions[3 * std::size_t(k)], block.directions + 3 * std::size_t(i), 3 * sizeof(float));
+        if (block.tmax_of) out.tmax_of[k] = block.tmax_of[i];
+        out.index[k] = i;
+    }
 }
 
 }  // namespace bvhlab

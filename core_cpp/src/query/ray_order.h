@@ -5,7 +5,8 @@
 // reordering for memory coherence: Pharr, Kolb, Gershbein and Hanrahan 1997; sorting by origin
 // cell and direction: Garanzha and Loop 2010 (their hashed keys), Eisenacher et al. 2013 (sorted
 // deferred shading). A batch whose rays already come in such an order (a camera's, shadow rays
-// cast in pixel order) keeps its own: its sampled neighbours mostly share a key.
+// cast in pixel order) keeps its own: its sampled neighbours mostly share a key. Used by
+// ray_batch.h for_each_block.
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -23,11 +24,12 @@ inline constexpr std::size_t kOrderLeast = 4096;
 /// Pairs of neighbouring rays sampled to tell whether a block is coherent already, and how many
 /// of them, at most, may differ in key for it to keep its order.
 inline constexpr std::uint32_t kOrderSamples = 256, kOrderCoherent = kOrderSamples / 4;
-/// The wide nodes a ray of a block's first piece visits, on average, from which the rest of the
-/// block is reordered. Reordering costs ~45 ns a ray on the bench's host (the keys and their sort,
-/// then reading and writing the caller's arrays out of order) and saved, traced from the sorted
-/// rays, 9% (vast1m, 3.6 nodes a random ray), 14% (room1m, 5.3), 18% (Sponza, 5.9), 19%
-/// (repeat1m, 6.7), 28% (rods1m, 12.8) and 76% (uniform1m, 20.4): a gain only from about 8.
+/// The wide nodes a ray visits, on average over a sample of the block (for_each_block's probe),
+/// from which the block is reordered. Sorted outside the library, the bench's random rays were
+/// traced 9% faster on vast1m (3.6 wide nodes a ray), 14% on room1m (5.3), 18% on Sponza (5.9), 19%
+/// on repeat1m (6.7), 28% on rods1m (12.8) and 76% on uniform1m (20.4); the sort, the copy and
+/// putting the results back cost ~35 ns a ray, which on this host's room1m and vast1m is more than
+/// the gain, on Sponza as much (design.md, "Rays in the order of their origins").
 inline constexpr double kOrderNodes = 8.0;
 
 /// The key of a ray: its octant (the sign bits of its direction, as the batch walks group them)
@@ -47,8 +49,24 @@ struct RayKeys {
 /// over the block, differ in key.
 bool in_ray_order(const RayBatch& block, const RayKeys& keys);
 
-/// The order in which to trace rays [0, block.count) (at most kOrderBlock): their indices sorted
-/// by key, ties in input order, into `index`.
-void order_rays(const RayBatch& block, const RayKeys& keys, std::vector<std::uint32_t>& index);
+/// A block's rays (at most kOrderBlock) copied in the order of their keys, ties in input order:
+/// position k holds the block's ray index[k], whose origin, direction and (where the block has
+/// them) tmax are copied. Made in one pass over the block's arrays in their order, and read in
+/// order by the walks, so that neither reads the caller's arrays out of order (a gather from them
+/// at every piece cost twice as much where the tree filled the caches: design.md).
+struct SortedRays {
+    std::vector<float> origins, directions, tmax_of;
+    std::vector<std::uint32_t> index;
+    /// The copy as a batch, with `block`'s tmin and tmax.
+    RayBatch batch(const RayBatch& block) const;
+};
+void sort_rays(const RayBatch& block, const RayKeys& keys, SortedRays& out);
+
+/// out[index[k]] = sorted[k] for k in [0, n): results traced in ray order back to their rays,
+/// one array at a time (its lines stay in the caches while they are written out of order).
+template <class T>
+void unsort(const T* sorted, const std::vector<std::uint32_t>& index, T* out) {
+    for (std::size_t k = 0; k < index.size(); ++k) out[index[k]] = sorted[k];
+}
 
 }  // namespace bvhlab

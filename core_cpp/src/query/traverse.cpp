@@ -1,8 +1,11 @@
 #include "bvhlab/traverse.h"
 
 #include <algorithm>
+#include <memory>
 #include <numbers>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 #include "bvhlab/ray_record.h"
 #include "bvhlab/wide_bvh.h"
@@ -91,7 +94,7 @@ Hit intersect_with(const Bvh& bvh, const Ray& ray, Traversal mode, std::uint32_t
     if (nodes_visited) *nodes_visited = visited;
     return hit;
 }
-/// The wide nodes the closest-hit walks of a piece's rays visit, on average (for_each_ray_piece's
+/// The wide nodes the closest-hit walks of a piece's rays visit, on average (for_each_block's
 /// probe: how much a batch like them would gain from being reordered); no result is kept.
 double probe_wide(const WideBvh& wide, const RayPiece& piece) {
     Scratch<Hit, kWideBatch> hits;
@@ -101,6 +104,52 @@ double probe_wide(const WideBvh& wide, const RayPiece& piece) {
     for (std::uint32_t j = 0; j < piece.count; ++j) sum += visited[j];
     return piece.count ? sum / piece.count : 0.0;
 }
+
+/// The tree's box, over which the ray order's grid lies (empty for an empty tree).
+Aabb scene_box(const Bvh& bvh) { return bvh.empty() ? Aabb{} : node_box(bvh.nodes[0]); }
+
+/// `out`'s arrays from ray `base` on.
+HitBatch offset(const HitBatch& out, std::size_t base) {
+    const auto at = [base](auto* p) { return p ? p + base : p; };
+    return {at(out.t), at(out.prim), at(out.kind), at(out.u), at(out.v), at(out.nodes_visited)};
+}
+
+/// for_each_ray_piece over `block` (a part of `rays`, or its copy in ray order), where a refused
+/// ray is named by its index in `rays` (check_rays on the whole batch) rather than in `block`.
+template <class Visit>
+void trace_block(const RayBatch& rays, const RayBatch& block, std::uint32_t threads, Cancellation* cancel,
+                 Visit&& visit) {
+    try {
+        for_each_ray_piece(block, threads, cancel, std::forward<Visit>(visit));
+    } catch (const std::invalid_argument&) {
+        check_rays(rays);  // throws, naming the ray in the caller's batch
+        throw;
+    }
+}
+
+/// A reordered block's hits in its rays' order (the fields `out` asks for), then put back.
+struct SortedHits {
+    std::vector<float> t, u, v;
+    std::vector<std::int32_t> prim;
+    std::vector<std::uint8_t> kind;
+    std::vector<std::uint32_t> visited;
+    HitBatch make(const HitBatch& out, std::size_t n) {
+        t.resize(n), prim.resize(n);
+        const auto field = [n](auto& a, const void* asked) {
+            a.resize(asked ? n : 0);
+            return asked ? a.data() : nullptr;
+        };
+        return {t.data(),        prim.data(),     field(kind, out.kind),
+                field(u, out.u), field(v, out.v), field(visited, out.nodes_visited)};
+    }
+    void unsort(const std::vector<std::uint32_t>& index, const HitBatch& out) const {
+        bvhlab::unsort(t.data(), index, out.t), bvhlab::unsort(prim.data(), index, out.prim);
+        if (out.kind) bvhlab::unsort(kind.data(), index, out.kind);
+        if (out.u) bvhlab::unsort(u.data(), index, out.u);
+        if (out.v) bvhlab::unsort(v.data(), index, out.v);
+        if (out.nodes_visited) bvhlab::unsort(visited.data(), index, out.nodes_visited);
+    }
+};
 }  // namespace
 
 Hit intersect(const Bvh& bvh, const Ray& ray, Traversal mode, std::uint32_t* nodes_visited) {
@@ -130,18 +179,18 @@ void occluded_batch(const Bvh& bvh, const RayBatch& rays, bool* occluded_out, Tr
     if (mode == Traversal::Wide && !wide) throw std::invalid_argument("Traversal::Wide needs the wide tree");
     check_tmax(rays);
     if (mode == Traversal::Wide) {  // a piece at once, grouped by octant (wide_kernel.h occluded_wide_grouped)
-        const Aabb scene = bvh.empty() ? Aabb{} : node_box(bvh.nodes[0]);
-        return for_each_ray_piece(
-            rays, threads, cancel,
-            [&](const RayPiece& piece) {
-                if (!piece.index)
-                    return occluded_wide_grouped(*wide, piece.rays.data(), piece.order, piece.start,
-                                                 occluded_out + piece.base);
-                bool occluded[kWideBatch];
-                occluded_wide_grouped(*wide, piece.rays.data(), piece.order, piece.start, occluded);
-                for (std::uint32_t j = 0; j < piece.count; ++j) occluded_out[piece.at(j)] = occluded[j];
-            },
-            &scene, [&](const RayPiece& piece) { return probe_wide(*wide, piece); });
+        const auto probe = [&](const RayPiece& piece) { return probe_wide(*wide, piece); };
+        std::unique_ptr<bool[]> in_order;  // a reordered block's answers, in its rays' order
+        return for_each_block(
+            rays, scene_box(bvh), probe, [&](std::size_t base, const RayBatch& block, const SortedRays* sorted) {
+                if (sorted && !in_order) in_order = std::make_unique<bool[]>(kOrderBlock);
+                bool* to = sorted ? in_order.get() : occluded_out + base;
+                trace_block(rays, sorted ? sorted->batch(block) : block, threads, cancel,
+                            [&](std::size_t begin, const RayPiece& piece) {
+                                occluded_wide_grouped(*wide, piece.rays.data(), piece.order, piece.start, to + begin);
+                            });
+                if (sorted) unsort(in_order.get(), sorted->index, occluded_out + base);
+            });
     }
     for_each_ray(rays, threads, cancel,
                  [&](std::size_t i, const Ray& ray, float) { occluded_out[i] = occluded(bvh, ray, mode); });
@@ -151,18 +200,23 @@ void intersect_batch(const Bvh& bvh, const RayBatch& rays, const HitBatch& out, 
                      const WideBvh* wide, Cancellation* cancel) {
     if (mode == Traversal::Wide && !wide) throw std::invalid_argument("Traversal::Wide needs the wide tree");
     if (mode == Traversal::Wide) {  // a piece at once, grouped by octant (wide_kernel.h intersect_wide_grouped)
-        const Aabb scene = bvh.empty() ? Aabb{} : node_box(bvh.nodes[0]);
-        return for_each_ray_piece(
-            rays, threads, cancel,
-            [&](const RayPiece& piece) {
-                Scratch<Hit, kWideBatch> hits;
-                std::uint32_t visited[kWideBatch];
-                std::uint32_t* v = out.nodes_visited ? visited : nullptr;
-                intersect_wide_grouped(*wide, piece.rays.data(), piece.order, piece.start, hits.data(), v);
-                write_hits<true>(out, piece.base, piece.count, hits.data(), v, piece.t_scale, &bvh, piece.rays.data(),
-                                 piece.index);
-            },
-            &scene, [&](const RayPiece& piece) { return probe_wide(*wide, piece); });
+        const auto probe = [&](const RayPiece& piece) { return probe_wide(*wide, piece); };
+        SortedHits in_order;  // a reordered block's hits, in its rays' order
+        return for_each_block(rays, scene_box(bvh), probe,
+                              [&](std::size_t base, const RayBatch& block, const SortedRays* sorted) {
+                                  const HitBatch to = sorted ? in_order.make(out, block.count) : offset(out, base);
+                                  trace_block(rays, sorted ? sorted->batch(block) : block, threads, cancel,
+                                              [&](std::size_t begin, const RayPiece& piece) {
+                                                  Scratch<Hit, kWideBatch> hits;
+                                                  std::uint32_t visited[kWideBatch];
+                                                  std::uint32_t* v = to.nodes_visited ? visited : nullptr;
+                                                  intersect_wide_grouped(*wide, piece.rays.data(), piece.order,
+                                                                         piece.start, hits.data(), v);
+                                                  write_hits<true>(to, begin, piece.count, hits.data(), v,
+                                                                   piece.t_scale, &bvh, piece.rays.data());
+                                              });
+                                  if (sorted) in_order.unsort(sorted->index, offset(out, base));
+                              });
     }
     run_ray_batch(rays, out, threads, cancel, [&](std::size_t, const Ray& ray, std::uint32_t& visited) {
         return intersect(bvh, ray, mode, &visited);
