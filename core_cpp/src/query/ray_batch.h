@@ -205,7 +205,10 @@ void for_each_block(const RayBatch& rays, const Aabb& scene, Probe&& probe, Trac
             for (std::uint32_t j = 0; j < kWideBatch; ++j)
                 sample[j] = std::uint32_t(std::uint64_t(j) * (block.count - 1) / (kWideBatch - 1));
             RayPiece piece;
-            if (!prepare_piece<true>(block, 0, kWideBatch, piece, sample)) check_rays(rays);  // throws
+            if (!prepare_piece<true>(block, 0, kWideBatch, piece, sample)) {
+                check_rays(rays);  // throws, naming the first refused ray
+                throw std::logic_error("a batch refused a ray that check_rays accepts");
+            }
             reorder = probe(static_cast<const RayPiece&>(piece)) >= kOrderNodes;
         }
         if (reorder) sort_rays(block, keys, sorted);
