@@ -201,21 +201,22 @@ void intersect_batch(const Bvh& bvh, const RayBatch& rays, const HitBatch& out, 
     if (mode == Traversal::Wide && !wide) throw std::invalid_argument("Traversal::Wide needs the wide tree");
     if (mode == Traversal::Wide) {  // a piece at once, grouped by octant (wide_kernel.h intersect_wide_grouped)
         const auto probe = [&](const RayPiece& piece) { return probe_wide(*wide, piece); };
+        // the hits of `block`'s pieces to `to` (from its first ray on)
+        const auto trace = [&](const RayBatch& block, const HitBatch& to) {
+            trace_block(rays, block, threads, cancel, [&](std::size_t begin, const RayPiece& piece) {
+                Scratch<Hit, kWideBatch> hits;
+                std::uint32_t visited[kWideBatch];
+                std::uint32_t* v = to.nodes_visited ? visited : nullptr;
+                intersect_wide_grouped(*wide, piece.rays.data(), piece.order, piece.start, hits.data(), v);
+                write_hits<true>(to, begin, piece.count, hits.data(), v, piece.t_scale, &bvh, piece.rays.data());
+            });
+        };
         SortedHits in_order;  // a reordered block's hits, in its rays' order
         return for_each_block(rays, scene_box(bvh), probe,
                               [&](std::size_t base, const RayBatch& block, const SortedRays* sorted) {
-                                  const HitBatch to = sorted ? in_order.make(out, block.count) : offset(out, base);
-                                  trace_block(rays, sorted ? sorted->batch(block) : block, threads, cancel,
-                                              [&](std::size_t begin, const RayPiece& piece) {
-                                                  Scratch<Hit, kWideBatch> hits;
-                                                  std::uint32_t visited[kWideBatch];
-                                                  std::uint32_t* v = to.nodes_visited ? visited : nullptr;
-                                                  intersect_wide_grouped(*wide, piece.rays.data(), piece.order,
-                                                                         piece.start, hits.data(), v);
-                                                  write_hits<true>(to, begin, piece.count, hits.data(), v,
-                                                                   piece.t_scale, &bvh, piece.rays.data());
-                                              });
-                                  if (sorted) in_order.unsort(sorted->index, offset(out, base));
+                                  if (!sorted) return trace(block, offset(out, base));
+                                  trace(sorted->batch(block), in_order.make(out, block.count));
+                                  in_order.unsort(sorted->index, offset(out, base));
                               });
     }
     run_ray_batch(rays, out, threads, cancel, [&](std::size_t, const Ray& ray, std::uint32_t& visited) {
