@@ -1,6 +1,6 @@
 #include "ray_order.h"
 
-#include <cstring>
+#include "wide_kernel.h"
 
 namespace bvhlab {
 namespace {
@@ -31,9 +31,7 @@ std::uint32_t RayKeys::operator()(const float* origin, const float* direction) c
         const std::uint32_t cell = x > 0.0f ? (x < top ? std::uint32_t(x) : std::uint32_t(top)) : 0u;
         key |= kSpread[cell] << a;
     }
-    std::uint32_t d[3];
-    std::memcpy(d, direction, sizeof d);
-    return (d[0] >> 31 | (d[1] >> 31) << 1 | (d[2] >> 31) << 2) << (3 * bits) | key;
+    return octant_of(direction) << (3 * bits) | key;
 }
 
 bool in_ray_order(const RayBatch& block, const RayKeys& keys) {

@@ -249,12 +249,8 @@ void order_by_octant(const std::uint8_t* octant, std::uint32_t count, std::uint3
 }
 
 void group_by_octant(const Ray* rays, std::uint32_t count, std::uint32_t* order, std::uint32_t start[9]) {
-    std::uint8_t octant[kWideBatch];             // count ≤ kWideBatch (intersect_wide_batch's pieces)
-    for (std::uint32_t i = 0; i < count; ++i) {  // the sign bits, as integers
-        std::uint32_t d[3];
-        std::memcpy(d, &rays[i].dir, sizeof d);
-        octant[i] = std::uint8_t(d[0] >> 31 | (d[1] >> 31) << 1 | (d[2] >> 31) << 2);
-    }
+    std::uint8_t octant[kWideBatch];  // count ≤ kWideBatch (intersect_wide_batch's pieces)
+    for (std::uint32_t i = 0; i < count; ++i) octant[i] = std::uint8_t(octant_of(&rays[i].dir.x));
     order_by_octant(octant, count, order, start);
 }
 

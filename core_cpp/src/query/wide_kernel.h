@@ -2,6 +2,7 @@
 // instruction set) see: plain pointers, and the helpers they call out of line.
 #pragma once
 #include <cstdint>
+#include <cstring>
 
 #include "bvhlab/wide_bvh.h"
 
@@ -51,6 +52,14 @@ struct TlasWalk {
     int octant;
     bool resumed;  ///< false until the first leaf is handed out: the next call pops
 };
+
+/// A direction's octant: bit a set where dir[a]'s sign bit is (make_query's octant, the sign of
+/// 1/dir[a]; -0 counts as negative), read from the bits (group_by_octant, ray_order.h RayKeys).
+inline std::uint32_t octant_of(const float* dir) {
+    std::uint32_t d[3];
+    std::memcpy(d, dir, sizeof d);
+    return d[0] >> 31 | (d[1] >> 31) << 1 | (d[2] >> 31) << 2;
+}
 
 /// Orders rays [0, count) by octant[i] by a stable counting sort: order[start[k], start[k + 1])
 /// the rays of octant k in input order, start[0] = 0 and start[8] = count.
