@@ -146,7 +146,10 @@ nb::dict tlas_stats(const PyTwoLevel& self) {
     d["instances"] = tlas.instances.size(), d["meshes"] = self.meshes().size();
     d["tlas_nodes"] = s.nodes, d["tlas_height"] = s.height, d["tlas_sah_cost"] = s.sah_cost;
     d["tlas_build_ms"] = tlas.tree.build_ms;
-    d["tlas_memory_bytes"] = s.memory_bytes + tlas.instances.size() * sizeof(Instance);
+    // the binary tree, its wide copy, the instances and their copies in leaf order
+    d["tlas_memory_bytes"] = s.memory_bytes + tlas.wide.lines.size() * sizeof(WideLine) +
+                             tlas.instances.size() * sizeof(Instance) +
+                             tlas.leaf_instances.size() * sizeof(LeafInstance);
     return d;
 }
 

@@ -64,10 +64,13 @@ void expect_wide_copy_of(const Tlas& tlas) {
             }
             const std::uint32_t c = n.child[k];
             std::uint32_t binary;
-            if (c & kLeafChild) {
-                binary = c & ~kLeafChild;
+            if (c & kLeafChild) {  // the leaf's first instance in leaf_instances, which names the leaf
+                const std::uint32_t first = c & ~kLeafChild;
+                ASSERT_LT(first, tlas.leaf_instances.size());
+                binary = tlas.leaf_instances[first].leaf;
                 ASSERT_LT(binary, tree.node_count());
-                EXPECT_TRUE(is_leaf(tree.nodes[binary]));
+                ASSERT_TRUE(is_leaf(tree.nodes[binary]));
+                EXPECT_EQ(first, tree.nodes[binary].index);
                 ++leaves[binary];
             } else {
                 ASSERT_EQ(c % kNodeLines, 0u);
@@ -82,6 +85,22 @@ void expect_wide_copy_of(const Tlas& tlas) {
     }
     for (std::uint32_t i = 0; i < tree.node_count(); ++i)
         EXPECT_EQ(leaves[i], is_leaf(tree.nodes[i]) ? 1 : 0) << "binary node " << i;
+    // leaf_instances: each ref's instance as it stands in tlas.instances, its leaf, the last flagged
+    ASSERT_EQ(tlas.leaf_instances.size(), tree.refs.size());
+    for (std::uint32_t i = 0; i < tree.node_count(); ++i) {
+        const BvhNode& n = tree.nodes[i];
+        if (!is_leaf(n)) continue;
+        for (std::uint32_t k = n.index, end = n.index + leaf_count(n); k < end; ++k) {
+            const LeafInstance& e = tlas.leaf_instances[k];
+            const Instance& inst = tlas.instances[tree.refs[k]];
+            EXPECT_EQ(e.instance, tree.refs[k]);
+            EXPECT_EQ(e.blas, inst.blas);
+            EXPECT_EQ(e.world_to_object.m, inst.world_to_object.m);
+            EXPECT_EQ(e.identity, inst.identity);
+            EXPECT_EQ(e.leaf, i);
+            EXPECT_EQ(e.last, k + 1 == end) << "ref " << k;
+        }
+    }
     EXPECT_EQ(nodes_reached[0], 0);
     for (std::uint32_t w = 1; w < tlas.wide.node_count; ++w) EXPECT_EQ(nodes_reached[w], 1) << "wide node " << w;
 }

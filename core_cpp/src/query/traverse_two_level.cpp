@@ -67,13 +67,14 @@ struct WorldRay {
     }
 };
 
-/// The world ray (scaled, WorldRay) up to `tmax` in the object space of `inst`, rescaled as the
+/// The world ray (scaled, WorldRay) up to `tmax` in the object space of instance `inst` (as a
+/// TLAS leaf holds it, tlas.h LeafInstance), rescaled as the
 /// batch scales world rays (coordinate_range.h), its scale in `t_scale`: an identity instance walks
 /// the world ray as it is (no transform, nothing to rescale: the one-mesh-and-movers layout of
 /// blender/motion.py, whose mesh 0 is such an instance). The transform is the instance's stored
 /// world_to_object (inverted once when placed, not per ray). False where the moved direction
 /// cannot be scaled (too long or short for float), which cannot hit what lies within the range.
-bool object_ray(const Instance& inst, const Ray& world, float tmax, Ray& ray, float& t_scale) {
+bool object_ray(const LeafInstance& inst, const Ray& world, float tmax, Ray& ray, float& t_scale) {
     ray = world;
     ray.tmax = tmax;
     t_scale = 1.0f;
@@ -109,47 +110,47 @@ struct RecordedSteps {
 
 /// The recorder's view of the wide TLAS walk (wide_kernel.h next_tlas_leaf): each wide node visited
 /// is the box tests of its children, named by the binary nodes they stand for (an inner child's
-/// WideNode::unused[1], a leaf child's word), entered where the walk went on to the child or pushed it.
+/// WideNode::unused[1], a leaf child's LeafInstance::leaf), entered where the walk went on to the
+/// child or pushed it.
 class WideTlasBoxes final : public WideRecorder {
 public:
-    WideTlasBoxes(const WideBvh& wide, TwoLevelRecorder& r) : wide_(wide), r_(r) {}
+    WideTlasBoxes(const Tlas& tlas, TwoLevelRecorder& r) : tlas_(tlas), r_(r) {}
     void node(std::uint32_t line, std::uint32_t nearest, const std::uint32_t* pushed, std::uint32_t count) override {
-        const WideNode& n = wide_.node(line);
+        const WideNode& n = tlas_.wide.node(line);
         for (std::uint32_t k = 0; k < n.unused[0]; ++k) {
             const std::uint32_t c = n.child[k];
-            const std::uint32_t name = (c & kLeafChild) ? c & ~kLeafChild : wide_.node(c).unused[1];
+            const std::uint32_t name =
+                (c & kLeafChild) ? tlas_.leaf_instances[c & ~kLeafChild].leaf : tlas_.wide.node(c).unused[1];
             r_.box(name, c == nearest || std::find(pushed, pushed + count, c) != pushed + count);
         }
     }
     void leaf(std::uint32_t, const Hit&, const Hit&) override {}
 
 private:
-    const WideBvh& wide_;
+    const Tlas& tlas_;
     TwoLevelRecorder& r_;
 };
 
-/// Tests instance `index` (of TLAS leaf `leaf`) with the world ray, whose closest hit so far is
-/// `best` (t in the world ray's scaled units).
+/// Tests instance `inst` with the world ray, whose closest hit so far is `best` (t in the world
+/// ray's scaled units).
 template <class Steps>
-void test_instance(const TwoLevel& scene, std::uint32_t leaf, std::uint32_t index, const WorldRay& world,
-                   Traversal mode, InstanceHit& best, std::uint32_t& visited, Steps& steps) {
-    const Instance& inst = scene.tlas->instances[index];
+void test_instance(const TwoLevel& scene, const LeafInstance& inst, const WorldRay& world, Traversal mode,
+                   InstanceHit& best, std::uint32_t& visited, Steps& steps) {
     Ray ray;
     float t_scale;
     if (!object_ray(inst, world.ray, best.hit.t, ray, t_scale)) return;
     std::uint32_t count = 0;
-    Hit h = steps.enter(leaf, index, scene.blases[inst.blas], ray, mode, &count);
+    Hit h = steps.enter(inst.leaf, inst.instance, scene.blases[inst.blas], ray, mode, &count);
     visited += count;
     if (h.ref == kNoHit) return steps.entered(false, t_scale * world.t_scale);
     h.t *= t_scale;
     const bool closer = h.t < best.hit.t;
     steps.entered(closer, t_scale * world.t_scale);
-    if (closer) best.hit = h, best.instance = index;
+    if (closer) best.hit = h, best.instance = inst.instance;
 }
 
-/// Whether instance `index` holds a hit of the world ray before its tmax.
-bool instance_occludes(const TwoLevel& scene, std::uint32_t index, const WorldRay& world, Traversal mode) {
-    const Instance& inst = scene.tlas->instances[index];
+/// Whether instance `inst` holds a hit of the world ray before its tmax.
+bool instance_occludes(const TwoLevel& scene, const LeafInstance& inst, const WorldRay& world, Traversal mode) {
     const BlasView& blas = scene.blases[inst.blas];
     Ray ray;
     float t_scale;
@@ -202,26 +203,30 @@ InstanceHit intersect_two_level_with(const TwoLevel& scene, const Ray& ray, Trav
     } else if (!tlas.tree.empty()) {
         const WorldRay world(ray);
         best.hit.t = world.ray.tmax;
-        auto leaf = [&](const BvhNode& n) {
-            const auto node = std::uint32_t(&n - tlas.tree.nodes.data());
-            for (std::uint32_t k = n.index, end = n.index + leaf_count(n); k < end; ++k)
-                test_instance(scene, node, tlas.tree.refs[k], world, mode, best, visited, steps);
+        // the instances of the leaf whose first is at `k` in tlas.leaf_instances
+        auto leaf_from = [&](std::uint32_t k) {
+            for (;; ++k) {
+                const LeafInstance& inst = tlas.leaf_instances[k];
+                test_instance(scene, inst, world, mode, best, visited, steps);
+                if (inst.last) return;
+            }
         };
         if (mode == Traversal::Wide) {
             TlasWalk walk;
             start_tlas_walk(world.ray, walk);
             auto walk_to_end = [&](WideRecorder* record) {
-                for (std::uint32_t n; (n = next_tlas_leaf(tlas.wide, walk, best.hit.t, record)) != kNoHit;)
-                    leaf(tlas.tree.nodes[n]);
+                for (std::uint32_t k; (k = next_tlas_leaf(tlas.wide, walk, best.hit.t, record)) != kNoHit;)
+                    leaf_from(k);
             };
             if constexpr (Steps::kRecorded) {
-                WideTlasBoxes boxes(tlas.wide, steps.r);
+                WideTlasBoxes boxes(tlas, steps.r);
                 walk_to_end(&boxes);
             } else {
                 walk_to_end(nullptr);
             }
             visited += walk.visited;
         } else {
+            auto leaf = [&](const BvhNode& n) { leaf_from(n.index); };
             visited += walk_tlas(tlas, world.boxes(), best.hit.t, mode, leaf,
                                  [&](std::uint32_t node, bool entered) { steps.box(node, entered); });
         }
@@ -273,20 +278,23 @@ bool detail::occluded_through_tlas(const TwoLevel& scene, const Ray& ray, Traver
     const Tlas& tlas = *scene.tlas;
     if (tlas.tree.empty()) return false;
     const WorldRay world(ray);
-    bool found = false;
-    auto leaf = [&](const BvhNode& n) {
-        for (std::uint32_t k = n.index, end = n.index + leaf_count(n); k < end && !found; ++k)
-            found = instance_occludes(scene, tlas.tree.refs[k], world, mode);
-        return found;
+    // whether an instance of the leaf whose first is at `k` in tlas.leaf_instances occludes
+    auto leaf_from = [&](std::uint32_t k) {
+        for (;; ++k) {
+            const LeafInstance& inst = tlas.leaf_instances[k];
+            if (instance_occludes(scene, inst, world, mode)) return true;
+            if (inst.last) return false;
+        }
     };
     if (mode == Traversal::Wide) {  // the closest-hit walk of the wide TLAS, its far limit tmax throughout
         TlasWalk walk;
         start_tlas_walk(world.ray, walk);
-        for (std::uint32_t n; (n = next_tlas_leaf(tlas.wide, walk, world.ray.tmax)) != kNoHit;)
-            if (leaf(tlas.tree.nodes[n])) break;
-    } else {
-        walk_tlas(tlas, world.boxes(), world.ray.tmax, mode, leaf);
+        for (std::uint32_t k; (k = next_tlas_leaf(tlas.wide, walk, world.ray.tmax)) != kNoHit;)
+            if (leaf_from(k)) return true;
+        return false;
     }
+    bool found = false;
+    walk_tlas(tlas, world.boxes(), world.ray.tmax, mode, [&](const BvhNode& n) { return found = leaf_from(n.index); });
     return found;
 }
 

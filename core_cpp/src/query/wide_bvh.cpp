@@ -271,7 +271,7 @@ WideBvh make_wide_tlas(const Bvh& tlas) {
             for (int k = 0; k < 8; ++k) {
                 const BvhNode* c = k < count ? &tlas.nodes[children[k]] : nullptr;
                 set_slot(node, k, c);
-                if (c && is_leaf(*c)) node.child[k] = kLeafChild | children[k];
+                if (c && is_leaf(*c)) node.child[k] = kLeafChild | c->index;
             }
             node.unused[0] = std::uint32_t(count), node.unused[1] = binary;
         });

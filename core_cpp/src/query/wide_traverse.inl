@@ -273,7 +273,8 @@ void start_tlas_walk(const Ray& ray, TlasWalk& walk) {
 
 /// The TLAS's wide walk (wide_kernel.h next_tlas_leaf): traverse_nodes' steps on a tree whose
 /// nodes are WideNodes with the count of their children in unused[0] (make_wide_tlas), up to a
-/// leaf, which is handed to the caller (its child word is kLeafChild | the binary leaf's index);
+/// leaf, which is handed to the caller (its child word is kLeafChild | its first instance's
+/// position in Tlas::leaf_instances);
 /// resumed by popping, with the closest hit the caller has found since.
 std::uint32_t next_tlas_leaf(const WideView& wide, TlasWalk& w, float hit_t, WideRecorder* record) {
     const L8 origin[3] = {L8::splat(w.o[0]), L8::splat(w.o[1]), L8::splat(w.o[2])};
