@@ -277,38 +277,49 @@ void start_tlas_walk(const Ray& ray, TlasWalk& walk) {
 /// position in Tlas::leaf_instances);
 /// resumed by popping, with the closest hit the caller has found since.
 std::uint32_t next_tlas_leaf(const WideView& wide, TlasWalk& w, float hit_t, WideRecorder* record) {
+    const float far_limit = hit_t * gpu::BOX_FAR_SCALE;
+    std::uint32_t sp = w.sp;
+    // pops, skipping entries farther than the closest hit so far (ray.h may_hold_closer); false
+    // when none is left
+    const auto pop = [&](Entry& e) {
+        do {
+            if (sp == 0) return false;
+            --sp;
+        } while (!(w.stack.t[sp] <= far_limit));
+        e = {w.stack.index[sp], w.stack.t[sp]};
+        return true;
+    };
+    Entry cur{w.cur, w.cur_t};
+    if (w.resumed && !pop(cur)) {
+        w.sp = 0;
+        return kNoHit;
+    }
+    w.resumed = true;
+    // A resumed walk mostly pops a leaf (the next instance a ray enters), handed out before the
+    // node loop's set-up (its nine broadcasts, the register saves)
+    if (cur.index & kLeafChild) {
+        w.sp = sp;
+        return cur.index & ~kLeafChild;
+    }
     const L8 origin[3] = {L8::splat(w.o[0]), L8::splat(w.o[1]), L8::splat(w.o[2])};
     const L8 neg_inv[3] = {L8::splat(w.neg_inv[0]), L8::splat(w.neg_inv[1]), L8::splat(w.neg_inv[2])};
     const L8 neg_inv_far[3] = {L8::splat(w.neg_inv_far[0]), L8::splat(w.neg_inv_far[1]), L8::splat(w.neg_inv_far[2])};
     const std::ptrdiff_t* plane = kPlanes[w.octant];
-    const float far_limit = hit_t * gpu::BOX_FAR_SCALE;
-    Entry cur{w.cur, w.cur_t};
-    std::uint32_t sp = w.sp;
-    bool pop = w.resumed;
-    w.resumed = true;
     for (;;) {
-        if (!pop) {
-            if (cur.index & kLeafChild) {
-                w.sp = sp;
-                return cur.index & ~kLeafChild;
-            }
-            const WideNode& node = node_at(wide, cur.index);
-            w.visited += node.unused[0];
-            const std::uint32_t line = cur.index, pushed = sp;
-            const bool entered = enter_children<false>(wide, node, origin, neg_inv, neg_inv_far, plane, w.tmin8,
-                                                       far_limit, w.stack, sp, cur);
-            if (record) record->node(line, entered ? cur.index : kNoHit, w.stack.index + pushed, sp - pushed);
-            if (entered) continue;
+        if (cur.index & kLeafChild) {
+            w.sp = sp;
+            return cur.index & ~kLeafChild;
         }
-        pop = false;
-        do {  // pop, skipping entries farther than the closest hit so far (ray.h may_hold_closer)
-            if (sp == 0) {
-                w.sp = 0;
-                return kNoHit;
-            }
-            --sp;
-        } while (!(w.stack.t[sp] <= far_limit));
-        cur = {w.stack.index[sp], w.stack.t[sp]};
+        const WideNode& node = node_at(wide, cur.index);
+        w.visited += node.unused[0];
+        const std::uint32_t line = cur.index, pushed = sp;
+        const bool entered = enter_children<false>(wide, node, origin, neg_inv, neg_inv_far, plane, w.tmin8, far_limit,
+                                                   w.stack, sp, cur);
+        if (record) record->node(line, entered ? cur.index : kNoHit, w.stack.index + pushed, sp - pushed);
+        if (!entered && !pop(cur)) {
+            w.sp = 0;
+            return kNoHit;
+        }
     }
 }
 #else
