@@ -3,6 +3,7 @@
 // test_tlas_transforms.cpp).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <random>
@@ -28,8 +29,8 @@ struct Instanced : TwoLevelFixture {
     Bvh flat_tree;
     WideBvh flat_wide;
 
-    void finish() {
-        build_two_level(blas_of, transforms);
+    void finish(const BuildConfig& config = default_tlas_config()) {
+        build_two_level(blas_of, transforms, config);
         for (std::uint32_t i = 0; i < blas_of.size(); ++i) {
             const GeometryView g = meshes[blas_of[i]].view();
             for (std::uint32_t p = 0; p < g.triangle_count; ++p) {
@@ -43,7 +44,7 @@ struct Instanced : TwoLevelFixture {
     }
 };
 
-Instanced mixed_instances() {
+Instanced mixed_instances(const BuildConfig& config = default_tlas_config()) {
     Instanced s;
     s.meshes.push_back(random_scene(400, 0, 1));
     s.meshes.push_back(octasphere(6, {5, 5, 5}, 3.0f));
@@ -58,7 +59,7 @@ Instanced mixed_instances() {
         make_transform({1, 1, 0}, 0.7f, {3, 3, 3}, {30, 30, -5}),            // uniform scale
         make_transform({0, 0, 1}, 0.0f, {1, 1, 1}, {3, 3, 3}),               // overlaps the first ones
     };
-    s.finish();
+    s.finish(config);
     return s;
 }
 
@@ -93,12 +94,15 @@ void expect_same_as_flat(const Instanced& s, Traversal mode, std::uint32_t seed)
         ++hits;
         const auto [instance, prim] = s.flat_origin[flat.ref];
         const bool same = instance == two.instance && prim == two.hit.ref;
-        // t is in world units in both: the same within float rounding of the moved vertices
+        // t is in world units in both: the same within float rounding of the moved vertices, which
+        // a ray that meets its triangle at a grazing angle magnifies (seed 16: 2.8e-4 of t on the
+        // same triangle), so 1e-4 of t counts against the rays' allowance and 1e-2 fails at once
         const bool near = std::fabs(flat.t - two.hit.t) <= 1e-4f * flat.t;
         if (!same || !near) ++disagreements;
-        if (same) EXPECT_NEAR(two.hit.t, flat.t, 1e-4f * flat.t);
+        if (same) EXPECT_NEAR(two.hit.t, flat.t, 1e-2f * flat.t);
     }
-    // Rays that graze an edge may go either way under different rounding; anything more is a bug.
+    // Rays that graze an edge may go either way under different rounding, and grazing rays meet
+    // their triangle a little apart; anything more is a bug.
     EXPECT_GT(hits, rays.size() / 2);
     EXPECT_LE(disagreements, rays.size() / 500) << disagreements << " of " << rays.size();
 }
@@ -108,6 +112,34 @@ void expect_same_as_flat(const Instanced& s, Traversal mode, std::uint32_t seed)
 TEST(Tlas, HitsEqualOneFlatTreeOverTheMovedTriangles) {
     const Instanced s = mixed_instances();
     for (Traversal mode : {Traversal::Stack, Traversal::Stackless, Traversal::Wide}) expect_same_as_flat(s, mode, 11);
+}
+
+/// TLAS leaves of several instances (a median split, which does not weigh leaves against splits,
+/// fills them up to max_leaf_size; every instance in one leaf at 8): each walk reaches every
+/// instance of a leaf it enters (Tlas::leaf_instances, whose `last` ends a leaf), as the flat tree
+/// finds their triangles.
+TEST(Tlas, LeavesOfSeveralInstancesHitAsOneFlatTree) {
+    for (std::uint32_t leaf_size : {3u, 8u}) {
+        BuildConfig config = default_tlas_config();
+        config.method = SplitMethod::Median, config.max_leaf_size = leaf_size;
+        const Instanced s = mixed_instances(config);
+        std::uint32_t largest = 0;  // the premise: leaves of several instances
+        for (const BvhNode& n : s.tlas.tree.nodes)
+            if (is_leaf(n)) largest = std::max(largest, leaf_count(n));
+        ASSERT_EQ(largest, std::min(leaf_size, 7u));
+        for (Traversal mode : {Traversal::Stack, Traversal::Stackless, Traversal::Wide}) {
+            expect_same_as_flat(s, mode, 13 + leaf_size);
+            for (const Ray& ray : rays_at(s, 1000, 17 + leaf_size)) {  // the any-hit walk: t < tmax exactly
+                const InstanceHit two = intersect_two_level(s.two_level, ray, mode);
+                Ray limited = ray;
+                limited.tmax = two.hit.ref == kNoHit ? 1e4f : two.hit.t;
+                ASSERT_FALSE(occluded_two_level(s.two_level, limited, mode));
+                if (two.hit.ref == kNoHit) continue;
+                limited.tmax = std::nextafter(two.hit.t, kInfinity);
+                ASSERT_TRUE(occluded_two_level(s.two_level, limited, mode));
+            }
+        }
+    }
 }
 
 /// The recorded two-level walk is the query's: the same hit and nodes_visited, made of the TLAS's

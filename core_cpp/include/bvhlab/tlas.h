@@ -39,10 +39,7 @@ struct alignas(64) LeafInstance {
 };
 static_assert(sizeof(LeafInstance) == 64);
 template <>
-struct WrittenBeforeRead<LeafInstance> : std::true_type {};  // make_leaf_instances writes each whole
-
-/// Tlas::leaf_instances of a TLAS whose tree is built (its refs instance indices).
-BigVector<LeafInstance> make_leaf_instances(const Bvh& tree, const BigVector<Instance>& instances);
+struct WrittenBeforeRead<LeafInstance> : std::true_type {};  // build_tlas writes each whole
 
 /// A BLAS as the two-level queries see it: the tree and, for Traversal::Wide, its 8-wide copy.
 /// Borrowed: the caller keeps both alive while the TwoLevel that refers to them is used.
@@ -69,7 +66,7 @@ struct Tlas {
     Bvh tree;
     WideBvh wide;
     /// tree.refs' instances, one a ref in their order (a leaf child of `wide` is kLeafChild | its
-    /// leaf's first position here): what the walks read when they reach a leaf (make_leaf_instances).
+    /// leaf's first position here): what the walks read when they reach a leaf (build_tlas).
     BigVector<LeafInstance> leaf_instances;
     /// From BigVector's cache of freed blocks: a TLAS made again each frame (InstancedBvh.place)
     /// reuses the last one's memory instead of faulting in 128 bytes an instance (3,125 page faults,

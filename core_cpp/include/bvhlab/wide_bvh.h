@@ -76,8 +76,9 @@ WideBvh make_wide(const Bvh& bvh);
 
 /// The TLAS's wide copy (tlas.h Tlas::wide): the same collapse over a tree of instances, without
 /// merging (each binary leaf stays a child of its own; a leaf child is kLeafChild | the position
-/// of the leaf's first ref, where its instances start in Tlas::leaf_instances) and without packets: WideNodes only, each
-/// with the count of its children in unused[0] and the binary node it was made from in unused[1].
+/// of the leaf's first ref, where its instances start in Tlas::leaf_instances) and without
+/// packets: WideNodes only, each with the count of its children in unused[0] and the binary node
+/// it was made from in unused[1].
 WideBvh make_wide_tlas(const Bvh& tlas);
 
 /// Closest hit through the wide tree (nearest child first, by the middle of the ray's span in

@@ -68,12 +68,12 @@ struct WorldRay {
 };
 
 /// The world ray (scaled, WorldRay) up to `tmax` in the object space of instance `inst` (as a
-/// TLAS leaf holds it, tlas.h LeafInstance), rescaled as the
-/// batch scales world rays (coordinate_range.h), its scale in `t_scale`: an identity instance walks
-/// the world ray as it is (no transform, nothing to rescale: the one-mesh-and-movers layout of
-/// blender/motion.py, whose mesh 0 is such an instance). The transform is the instance's stored
-/// world_to_object (inverted once when placed, not per ray). False where the moved direction
-/// cannot be scaled (too long or short for float), which cannot hit what lies within the range.
+/// TLAS leaf holds it, tlas.h LeafInstance), rescaled as the batch scales world rays
+/// (coordinate_range.h), its scale in `t_scale`: an identity instance walks the world ray as it is
+/// (no transform, nothing to rescale: the one-mesh-and-movers layout of blender/motion.py, whose
+/// mesh 0 is such an instance). The transform is the instance's stored world_to_object (inverted
+/// once when placed, not per ray). False where the moved direction cannot be scaled (too long or
+/// short for float), which cannot hit what lies within the range.
 bool object_ray(const LeafInstance& inst, const Ray& world, float tmax, Ray& ray, float& t_scale) {
     ray = world;
     ray.tmax = tmax;
@@ -84,6 +84,18 @@ bool object_ray(const LeafInstance& inst, const Ray& world, float tmax, Ray& ray
     if (!direction_in_range(ray.dir)) return false;
     t_scale = scale_ray(ray);
     return true;
+}
+
+/// Calls `visit(inst)` for the instances of the TLAS leaf whose first is at `first` in
+/// tlas.leaf_instances (where a wide TLAS leaf word points, a binary leaf's index), in their order,
+/// until `visit` returns true; returns whether it did.
+template <class Visit>
+bool any_of_leaf(const Tlas& tlas, std::uint32_t first, Visit&& visit) {
+    for (std::uint32_t k = first;; ++k) {
+        const LeafInstance& inst = tlas.leaf_instances[k];
+        if (visit(inst)) return true;
+        if (inst.last) return false;
+    }
 }
 
 /// What the closest-hit walk reports of its steps: nothing (every query; the calls compile to the
@@ -203,13 +215,11 @@ InstanceHit intersect_two_level_with(const TwoLevel& scene, const Ray& ray, Trav
     } else if (!tlas.tree.empty()) {
         const WorldRay world(ray);
         best.hit.t = world.ray.tmax;
-        // the instances of the leaf whose first is at `k` in tlas.leaf_instances
-        auto leaf_from = [&](std::uint32_t k) {
-            for (;; ++k) {
-                const LeafInstance& inst = tlas.leaf_instances[k];
+        auto leaf_from = [&](std::uint32_t first) {
+            any_of_leaf(tlas, first, [&](const LeafInstance& inst) {
                 test_instance(scene, inst, world, mode, best, visited, steps);
-                if (inst.last) return;
-            }
+                return false;
+            });
         };
         if (mode == Traversal::Wide) {
             TlasWalk walk;
@@ -278,13 +288,9 @@ bool detail::occluded_through_tlas(const TwoLevel& scene, const Ray& ray, Traver
     const Tlas& tlas = *scene.tlas;
     if (tlas.tree.empty()) return false;
     const WorldRay world(ray);
-    // whether an instance of the leaf whose first is at `k` in tlas.leaf_instances occludes
-    auto leaf_from = [&](std::uint32_t k) {
-        for (;; ++k) {
-            const LeafInstance& inst = tlas.leaf_instances[k];
-            if (instance_occludes(scene, inst, world, mode)) return true;
-            if (inst.last) return false;
-        }
+    auto leaf_from = [&](std::uint32_t first) {
+        return any_of_leaf(tlas, first,
+                           [&](const LeafInstance& inst) { return instance_occludes(scene, inst, world, mode); });
     };
     if (mode == Traversal::Wide) {  // the closest-hit walk of the wide TLAS, its far limit tmax throughout
         TlasWalk walk;

@@ -112,8 +112,8 @@ std::uint32_t next_tlas_leaf(const WideView& wide, TlasWalk& walk, float hit_t, 
 /// The wide TLAS walk on the active instruction set (isa.h): start_tlas_walk sets `walk` up for
 /// the (scaled) world ray; each next_tlas_leaf goes on to the next TLAS leaf the ray enters before
 /// `hit_t` (nearest first, as the BLAS's wide walk) and returns where its instances start in
-/// Tlas::leaf_instances (its first ref's position), or kNoHit when the walk is done. `record`, if given, is told of
-/// every wide node visited (WideRecorder::node; ::leaf is never called).
+/// Tlas::leaf_instances (its first ref's position), or kNoHit when the walk is done. `record`, if
+/// given, is told of every wide node visited (WideRecorder::node; ::leaf is never called).
 void start_tlas_walk(const Ray& ray, TlasWalk& walk);
 std::uint32_t next_tlas_leaf(const WideBvh& wide, TlasWalk& walk, float hit_t, WideRecorder* record = nullptr);
 

@@ -274,8 +274,8 @@ void start_tlas_walk(const Ray& ray, TlasWalk& walk) {
 /// The TLAS's wide walk (wide_kernel.h next_tlas_leaf): traverse_nodes' steps on a tree whose
 /// nodes are WideNodes with the count of their children in unused[0] (make_wide_tlas), up to a
 /// leaf, which is handed to the caller (its child word is kLeafChild | its first instance's
-/// position in Tlas::leaf_instances);
-/// resumed by popping, with the closest hit the caller has found since.
+/// position in Tlas::leaf_instances); resumed by popping, with the closest hit the caller has
+/// found since.
 std::uint32_t next_tlas_leaf(const WideView& wide, TlasWalk& w, float hit_t, WideRecorder* record) {
     const float far_limit = hit_t * gpu::BOX_FAR_SCALE;
     std::uint32_t sp = w.sp;

@@ -62,6 +62,36 @@ Instance make_instance(const std::vector<BoxesToMove>& tops, std::uint32_t blas,
     return inst;
 }
 
+/// Tlas::leaf_instances of a TLAS whose tree is built (its refs instance indices).
+BigVector<LeafInstance> make_leaf_instances(const Bvh& tree, const BigVector<Instance>& instances) {
+    const std::size_t count = tree.refs.size();
+    // each position's leaf, the last of a leaf's with the top bit set
+    constexpr std::uint32_t kLast = 1u << 31;
+    std::vector<std::uint32_t> leaf_of(count);
+    for (std::uint32_t n = 0; n < tree.node_count(); ++n) {
+        const BvhNode& node = tree.nodes[n];
+        if (!is_leaf(node)) continue;
+        const std::uint32_t end = node.index + leaf_count(node);
+        for (std::uint32_t k = node.index; k < end; ++k) leaf_of[k] = n;
+        leaf_of[end - 1] |= kLast;
+    }
+    // Each position's instance, read a few positions ahead of its use (the instances, 12.8 MB at
+    // 100,000, read in the refs' order, miss the caches), each entry written whole and in order
+    // (LeafInstance is WrittenBeforeRead: the array is not cleared first).
+    constexpr std::size_t kAhead = 24;
+    BigVector<LeafInstance> out(count);
+    for (std::size_t k = 0; k < count; ++k) {
+        if (k + kAhead < count) {
+            const auto* ahead = reinterpret_cast<const char*>(&instances[tree.refs[k + kAhead]]);
+            __builtin_prefetch(ahead), __builtin_prefetch(ahead + sizeof(Instance) - 1);
+        }
+        const std::uint32_t i = tree.refs[k];
+        const Instance& inst = instances[i];
+        out[k] = {inst.world_to_object, inst.blas, i, leaf_of[k] & ~kLast, inst.identity, (leaf_of[k] & kLast) != 0};
+    }
+    return out;
+}
+
 }  // namespace
 
 Tlas build_tlas(const std::vector<const Bvh*>& blases, const std::vector<std::uint32_t>& blas_of,
@@ -94,35 +124,6 @@ Tlas build_tlas(const std::vector<const Bvh*>& blases, const std::vector<std::ui
     tlas.wide = make_wide_tlas(tlas.tree);
     tlas.leaf_instances = make_leaf_instances(tlas.tree, tlas.instances);
     return tlas;
-}
-
-BigVector<LeafInstance> make_leaf_instances(const Bvh& tree, const BigVector<Instance>& instances) {
-    const std::size_t count = tree.refs.size();
-    // each position's leaf, the last of a leaf's with the top bit set
-    constexpr std::uint32_t kLast = 1u << 31;
-    std::vector<std::uint32_t> leaf_of(count);
-    for (std::uint32_t n = 0; n < tree.node_count(); ++n) {
-        const BvhNode& node = tree.nodes[n];
-        if (!is_leaf(node)) continue;
-        const std::uint32_t end = node.index + leaf_count(node);
-        for (std::uint32_t k = node.index; k < end; ++k) leaf_of[k] = n;
-        leaf_of[end - 1] |= kLast;
-    }
-    // Each position's instance, read a few positions ahead of its use (the instances, 12.8 MB at
-    // 100,000, read in the refs' order, miss the caches), each entry written whole and in order
-    // (LeafInstance is WrittenBeforeRead: the array is not cleared first).
-    constexpr std::size_t kAhead = 24;
-    BigVector<LeafInstance> out(count);
-    for (std::size_t k = 0; k < count; ++k) {
-        if (k + kAhead < count) {
-            const auto* ahead = reinterpret_cast<const char*>(&instances[tree.refs[k + kAhead]]);
-            __builtin_prefetch(ahead), __builtin_prefetch(ahead + sizeof(Instance) - 1);
-        }
-        const std::uint32_t i = tree.refs[k];
-        const Instance& inst = instances[i];
-        out[k] = {inst.world_to_object, inst.blas, i, leaf_of[k] & ~kLast, inst.identity, (leaf_of[k] & kLast) != 0};
-    }
-    return out;
 }
 
 }  // namespace bvhlab
