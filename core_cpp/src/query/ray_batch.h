@@ -142,7 +142,7 @@ inline bool prepare_piece(const RayBatch& rays, std::size_t begin, std::size_t e
         ray.tmin = tmin, ray.tmax = tmax_of ? tmax_of[i] : tmax;
         if (tmax_of) refused |= std::uint32_t(!(ray.tmax >= 0.0f));
         piece.t_scale[j] = scale_ray_by(ray, dir);  // any float where refused: the piece is not traced
-        octant[j] = std::uint8_t(dx >> 31 | (dy >> 31) << 1 | (dz >> 31) << 2);
+        octant[j] = std::uint8_t(octant_of_bits(dx, dy, dz));
     }
     if (refused) return false;
     piece.count = n;

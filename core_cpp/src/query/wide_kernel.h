@@ -53,12 +53,16 @@ struct TlasWalk {
     bool resumed;  ///< false until the first leaf is handed out: the next call pops
 };
 
-/// A direction's octant: bit a set where dir[a]'s sign bit is (make_query's octant, the sign of
-/// 1/dir[a]; -0 counts as negative), read from the bits (group_by_octant, ray_order.h RayKeys).
+/// A direction's octant from the bits of its components: bit a set where dir[a]'s sign bit is
+/// (make_query's octant, the sign of 1/dir[a]; -0 counts as negative). From bits already read
+/// (ray_batch.h prepare_piece), or from the floats (octant_of: group_by_octant, ray_order.h RayKeys).
+inline std::uint32_t octant_of_bits(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+    return x >> 31 | (y >> 31) << 1 | (z >> 31) << 2;
+}
 inline std::uint32_t octant_of(const float* dir) {
     std::uint32_t d[3];
     std::memcpy(d, dir, sizeof d);
-    return d[0] >> 31 | (d[1] >> 31) << 1 | (d[2] >> 31) << 2;
+    return octant_of_bits(d[0], d[1], d[2]);
 }
 
 /// Orders rays [0, count) by octant[i] by a stable counting sort: order[start[k], start[k + 1])
