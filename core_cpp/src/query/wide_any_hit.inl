@@ -37,8 +37,9 @@ bool leaf_occludes(const unsigned char* at, const Query& q) {
 /// every child farthest first, leaves pushed as nodes, was 0.80 there: design.md).
 /// No entry distance is kept: the boxes' far limit is the ray's tmax throughout, which every
 /// pushed entry passes.
-/// One copy per octant, each with its plane offsets as constants (tinybvh 1.9's
-/// IsOccludedOctant). The root is a node even in a tree of one leaf (make_wide).
+/// kOctant: the batch's octant, its plane offsets then constants (one copy per octant, tinybvh
+/// 1.9's IsOccludedOctant), or -1, read from the query (the single-ray walk, any_hit_walk). The
+/// root is a node even in a tree of one leaf (make_wide).
 /// kFarthest false: the lowest inner slot next instead, the layout's order (wide_bvh.h: a node's
 /// leaves' packets, then its inner children's subtrees in slot order, so the lowest slot's lines
 /// follow those the node prefetched), for rays that mostly reach their light, where every order
@@ -50,6 +51,7 @@ bool any_hit_nodes(const unsigned char* lines, const Query& q) {
     const L8 neg_inv[3] = {L8::splat(q.neg_inv[0]), L8::splat(q.neg_inv[1]), L8::splat(q.neg_inv[2])};
     const L8 neg_inv_far[3] = {L8::splat(q.neg_inv_far[0]), L8::splat(q.neg_inv_far[1]), L8::splat(q.neg_inv_far[2])};
     const L8 far = L8::splat(q.ray->tmax * gpu::BOX_FAR_SCALE);
+    const std::ptrdiff_t* plane = kOctant < 0 ? kPlanes[q.octant] : kPlanes.at[kOctant & 7];
     std::uint32_t stack[Stack::kSize];
     std::uint32_t sp = 0, cur = 0;
     for (;;) {
@@ -59,9 +61,8 @@ bool any_hit_nodes(const unsigned char* lines, const Query& q) {
         const char* after = reinterpret_cast<const char*>(&node + 1);
         for (int line = 0; line < 6; ++line) __builtin_prefetch(after + 64 * line);
         L8 t0 = L8::load(q.tmin8), t1 = far;
-        for (int a = 0; a < 3; ++a) t0 = raise(t0, (origin[a] - L8::load(f + kPlanes.at[kOctant][a])) * neg_inv[a]);
-        for (int a = 0; a < 3; ++a)
-            t1 = lower(t1, (origin[a] - L8::load(f + kPlanes.at[kOctant][3 + a])) * neg_inv_far[a]);
+        for (int a = 0; a < 3; ++a) t0 = raise(t0, (origin[a] - L8::load(f + plane[a])) * neg_inv[a]);
+        for (int a = 0; a < 3; ++a) t1 = lower(t1, (origin[a] - L8::load(f + plane[3 + a])) * neg_inv_far[a]);
         const int mask = le_bits(t0, t1);
         const int leaves = mask & leaf_bits(node), inner = mask ^ leaves;
         if (inner) {  // the farthest (or lowest) inner child next, the others pushed unordered below it

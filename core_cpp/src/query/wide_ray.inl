@@ -19,7 +19,7 @@ struct Query {
     /// vertex (v[i][k]), in bytes, so that each of a packet's nine loads is one addressing mode
     /// (base + offset + vertex), without a shift or an address computed first
     const std::ptrdiff_t* axis_at;
-    int octant;  ///< bit a set where 1/dir[a] is negative: kPlanes' row, any_hit_walk's copy
+    int octant;  ///< bit a set where 1/dir[a] is negative: kPlanes' row
     float tmin;
     const Ray* ray;  ///< for the spheres (hit_packet_sphere)
 };

@@ -214,18 +214,17 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit, Wid
 
 #include "wide_any_hit.inl"
 
-/// The any-hit walk for the ray's octant (wide_any_hit.inl). The single-ray closest-hit walk is one
-/// copy for every octant (a batch's rays go through per-octant copies, grouped: wide_batch.inl):
-/// eight of it picked per ray (2.5 KiB each) made random rays slower, though fewer instructions
-/// (callgrind instructions a ray and Mrays/s ÷ the best peer, CPU time of one pinned core, two
-/// interleaved runs: Sponza random 884 → 866, 1.11-1.13 → 1.06-1.07; primary 1,699 → 1,628, 0.93
-/// → 0.94-0.96; room1m random 1.03-1.07 → 0.98-1.00).
-[[maybe_unused]] bool any_hit_walk(const WideView& wide, const Query& q) {
-    using Walk = bool (*)(const unsigned char*, const Query&);
-    static constexpr Walk kWalks[8] = {any_hit_nodes<0>, any_hit_nodes<1>, any_hit_nodes<2>, any_hit_nodes<3>,
-                                       any_hit_nodes<4>, any_hit_nodes<5>, any_hit_nodes<6>, any_hit_nodes<7>};
-    return kWalks[q.octant](wide.lines, q);
-}
+/// The single-ray any-hit walk (wide_any_hit.inl): one copy for every octant, its plane offsets
+/// read from kPlanes by the ray's octant, as the single-ray closest-hit walk does (a batch's rays go
+/// through per-octant copies, grouped: wide_batch.inl). Eight copies picked per ray by an indirect
+/// call were mispredicted where octants vary from ray to ray, most of all in the two-level query,
+/// which walks a BLAS for every instance a shadow ray enters, its object-space octant turned by each
+/// instance's rotation: 1.8 (many) and 2.1 (hundred) mispredicted calls a ray of 2.1 and 2.7 made
+/// (callgrind's branch model, 5,000 shadow rays of bench/two_level.py), gone for 39 instructions a
+/// ray more (+1.7%); in time, interleaved on one pinned core, two-level shadow rays ÷ Embree 3
+/// instanced 0.70-0.75 → 0.75-0.76 (many), 0.79-0.80 → 0.82-0.86 (hundred), the mover and flat
+/// shadow rays (Sponza, room1m, vast1m, rods1m) unchanged within the runs' spread.
+[[maybe_unused]] bool any_hit_walk(const WideView& wide, const Query& q) { return any_hit_nodes<-1>(wide.lines, q); }
 
 #ifndef BVHLAB_RECORDED_WIDE_WALK
 #include "wide_batch.inl"
