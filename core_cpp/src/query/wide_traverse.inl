@@ -219,11 +219,12 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit, Wid
 /// through per-octant copies, grouped: wide_batch.inl). Eight copies picked per ray by an indirect
 /// call were mispredicted where octants vary from ray to ray, most of all in the two-level query,
 /// which walks a BLAS for every instance a shadow ray enters, its object-space octant turned by each
-/// instance's rotation: 1.8 (many) and 2.1 (hundred) mispredicted calls a ray of 2.1 and 2.7 made
+/// instance's rotation: 1.8 (many) and 2.1 (hundred) mispredicted calls a ray of 2.3 and 2.7 made
 /// (callgrind's branch model, 5,000 shadow rays of bench/two_level.py), gone for 39 instructions a
-/// ray more (+1.7%); in time, interleaved on one pinned core, two-level shadow rays ÷ Embree 3
-/// instanced 0.70-0.75 → 0.75-0.76 (many), 0.79-0.80 → 0.82-0.86 (hundred), the mover and flat
-/// shadow rays (Sponza, room1m, vast1m, rods1m) unchanged within the runs' spread.
+/// ray more (+1.7%; a flat shadow ray +25-55, 3%); in time, interleaved on one pinned core,
+/// two-level shadow rays ÷ Embree 3 instanced 0.70-0.75 → 0.75-0.76 (many), 0.79-0.80 → 0.82-0.86
+/// (hundred), the mover and flat shadow rays (Sponza, room1m, vast1m, rods1m) unchanged within the
+/// runs' spread (design.md, "Shadow rays through 10,000 instances").
 [[maybe_unused]] bool any_hit_walk(const WideView& wide, const Query& q) { return any_hit_nodes<-1>(wide.lines, q); }
 
 #ifndef BVHLAB_RECORDED_WIDE_WALK
