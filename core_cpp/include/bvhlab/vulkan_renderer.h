@@ -26,8 +26,8 @@ struct VulkanOptions {
     /// Enable VK_LAYER_KHRONOS_validation (also when BVHLAB_VULKAN_VALIDATION=1) and collect its
     /// messages; throws VulkanUnavailable if the layer is asked for but not installed.
     bool validation = false;
-    /// Upload through a staging buffer even where device memory is host-visible (tests the path
-    /// real GPUs take).
+    /// Upload through a staging buffer, and read each frame back through the readback buffer,
+    /// even where device memory is host-visible (tests the path real GPUs take).
     bool force_staging = false;
 };
 

@@ -109,10 +109,10 @@ void Buffer::write(const void* data, std::size_t bytes, std::size_t offset) {
     memory_.flush();
 }
 
-void Buffer::read(void* out, std::size_t bytes) const {
-    if (!host_visible() || bytes > size_) throw std::logic_error("Buffer::read outside a host-visible buffer");
+void Buffer::read(void* out, std::size_t bytes, std::size_t offset) const {
+    if (!host_visible() || offset + bytes > size_) throw std::logic_error("Buffer::read outside a host-visible buffer");
     memory_.invalidate();
-    std::memcpy(out, memory_.mapped(), bytes);
+    std::memcpy(out, memory_.mapped() + offset, bytes);
 }
 
 Image::Image(const Device& device, VkExtent2D extent, VkFormat format, VkImageUsageFlags usage,

@@ -2,6 +2,7 @@
 #include "vk_passes.h"
 
 #include <algorithm>
+#include <stdexcept>
 
 #include "vk_commands.h"
 
@@ -118,12 +119,18 @@ void record_fill(const Functions& fn, VkCommandBuffer cmd, const Buffer& buffer,
         VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_HOST_READ_BIT);
 }
 
-void record_copy_to_host(const Functions& fn, VkCommandBuffer cmd, const Buffer& from, const Buffer& to) {
+void record_copies_to_host(const Functions& fn, VkCommandBuffer cmd, const HostCopy* copies, std::size_t count,
+                           const Buffer& to) {
     memory_barrier(fn, cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_CLEAR_BIT,
                    VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_COPY_BIT,
                    VK_ACCESS_2_TRANSFER_READ_BIT);
-    VkBufferCopy region{0, 0, std::min(from.size(), to.size())};
-    fn.vkCmdCopyBuffer(cmd, from.handle(), to.handle(), 1, &region);
+    for (std::size_t k = 0; k < count; ++k) {
+        const HostCopy& c = copies[k];
+        if (c.bytes > c.from->size() || c.offset + c.bytes > to.size())
+            throw std::logic_error("a copy to the host outside its buffers");
+        const VkBufferCopy region{0, c.offset, c.bytes};
+        fn.vkCmdCopyBuffer(cmd, c.from->handle(), to.handle(), 1, &region);
+    }
     memory_barrier(fn, cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT,
                    VK_ACCESS_2_HOST_READ_BIT);
 }

@@ -2,6 +2,7 @@
 // when there is no overlay), rounds of the trace pass over a tile, and the fills and copies around
 // them. Each leaves its resources ready for the next, with the barrier that orders them.
 #pragma once
+#include <cstddef>
 #include <cstdint>
 
 #include "gpu_types.h"
@@ -30,6 +31,14 @@ void record_trace_round(const PassContext& pass, VkCommandBuffer cmd, std::uint3
 /// Fills `bytes` of `buffer` with the 32-bit `pattern`, ordered before later compute shaders.
 void record_fill(const Functions& fn, VkCommandBuffer cmd, const Buffer& buffer, std::uint32_t pattern);
 /// Copies `from` into the host-visible `to`, made visible to the host.
-void record_copy_to_host(const Functions& fn, VkCommandBuffer cmd, const Buffer& from, const Buffer& to);
+/// A device buffer's first `bytes` copied to `offset` in a host-visible buffer.
+struct HostCopy {
+    const Buffer* from;
+    VkDeviceSize bytes, offset;
+};
+/// The copies, after the compute passes' writes, and visible to the host's reads after the
+/// submission's fence.
+void record_copies_to_host(const Functions& fn, VkCommandBuffer cmd, const HostCopy* copies, std::size_t count,
+                           const Buffer& to);
 
 }  // namespace bvhlab::vk

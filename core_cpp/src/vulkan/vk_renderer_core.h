@@ -47,6 +47,9 @@ struct RendererCore {
     TraceSlots slots;
     std::shared_ptr<const SceneBuffers> scene;  ///< the last upload; jobs keep theirs
     std::optional<FrameTargets> targets;
+    /// Where a frame's sums come back to the host when they are not host-visible themselves
+    /// (a discrete GPU's memory): kept and grown, not allocated for every frame (vk_trace_job.cpp).
+    std::optional<Buffer> readback;
     std::uint32_t stamp = 0;
 };
 
