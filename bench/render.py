@@ -69,6 +69,7 @@ def main() -> None:
 
 def _measure_table1(scene, renderers: dict, args) -> list[dict]:
     """The report's methods on each backend and traversal (bvhlab compare's protocol)."""
+    import bvhlab
     from bvhlab.compare import measure_methods
 
     rows = []
@@ -85,7 +86,7 @@ def _measure_table1(scene, renderers: dict, args) -> list[dict]:
                 progress=lambda s, backend=backend, traversal=traversal: print(
                     f"  [{backend} {traversal}] {s}", file=sys.stderr
                 ),
-                render_options={"traversal": traversal},
+                options=bvhlab.RenderOptions(traversal=traversal),
             )
             rows += [{**r, "backend": backend, "traversal": traversal} for r in measured]
     return rows
