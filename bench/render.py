@@ -1,6 +1,6 @@
 """Frame time per split method on the Vulkan renderer and the CPU reference (same tracer code).
 
-    python bench/render.py [--scene atrium] [--width 800 --height 600] [--frames 3]
+    python bench/render.py [--scene atrium] [--width 800 --height 600] [--frames 3] [--json NAME]
 
 For median, mean, SAH 12 and SAH 32 (the report's Table 1 rows): average frame ms after a warm-up,
 stack and stackless traversal, on Vulkan (lavapipe here) and on the CPU reference with the same
@@ -34,6 +34,9 @@ def _arguments() -> argparse.Namespace:
     ap.add_argument("--frames", type=int, default=3)
     ap.add_argument("--samples-per-axis", type=int, default=1, help="for the bounded-dispatch table")
     ap.add_argument("--skip-table1", action="store_true", help="only the bounded-dispatch table")
+    ap.add_argument(
+        "--json", help="results file name in bench/results (or a path); default render.json (render_budgets.json)"
+    )
     return ap.parse_args()
 
 
@@ -56,7 +59,7 @@ def main() -> None:
     renderers = {"vulkan": bvhlab.Renderer("vulkan"), "cpu": bvhlab.Renderer("cpu")}
     results["budgets"] = budget_rows(bvhlab, scene, name, renderers, args)
     if args.skip_table1:
-        print(f"\nwrote {_common.write_json('render_budgets.json', results)}")
+        print(f"\nwrote {_common.write_json(args.json or 'render_budgets.json', results)}")
         return
     results["rows"] = _measure_table1(scene, renderers, args)
     _print_table1(
@@ -64,7 +67,7 @@ def main() -> None:
         title=f"\n{name}: frame ms at {args.width}x{args.height}; Vulkan on "
         f"{renderers['vulkan'].device}, CPU reference on {threads} threads",
     )
-    print(f"\nwrote {_common.write_json('render.json', results)}")
+    print(f"\nwrote {_common.write_json(args.json or 'render.json', results)}")
 
 
 def _measure_table1(scene, renderers: dict, args) -> list[dict]:
