@@ -37,7 +37,8 @@ struct HostCopy {
     VkDeviceSize bytes, offset;
 };
 /// The copies, after the compute passes' writes, and visible to the host's reads after the
-/// submission's fence.
+/// submission's fence. The caller checks that each fits both buffers (a throw here would leave the
+/// command buffer recording).
 void record_copies_to_host(const Functions& fn, VkCommandBuffer cmd, const HostCopy* copies, std::size_t count,
                            const Buffer& to);
 

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstddef>
+#include <stdexcept>
 #include <vector>
 
 #include "../render/pixel_sums.h"
@@ -188,6 +189,7 @@ private:
         std::vector<HostCopy> copies;
         VkDeviceSize total = 0;
         for (const Read& r : reads) {
+            if (r.bytes > r.from->size()) throw std::logic_error("a read past the end of a device buffer");
             copies.push_back({r.from, r.bytes, total});
             total += (r.bytes + 15) & ~VkDeviceSize(15);
         }
