@@ -1,11 +1,13 @@
 // Running sums per pixel and the resolve step both renderers share.
 #include "pixel_sums.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
 #include "bvhlab/palette.h"
+#include "bvhlab/thread_pool.h"
 
 namespace bvhlab {
 namespace {
@@ -24,10 +26,18 @@ PixelSums::PixelSums(std::size_t pixels, bool counters) {
     if (counters) counts.assign(pixels, gpu::TraversalCounts{});
 }
 
+PixelSums::View PixelSums::view() const {
+    return {color.data(), depth.data(), samples.data(), counts.empty() ? nullptr : counts.data(), color.size()};
+}
+
 namespace {
 
+/// Pixels a task of resolve's: small enough that two threads share an 800×600 frame evenly, large
+/// enough that handing it out costs nothing beside it.
+constexpr std::size_t kResolveBlock = std::size_t(1) << 14;
+
 /// Each counter of pixel `i` per primary ray (the average over its samples; 0 without samples).
-void resolve_counts(const PixelSums& sums, std::size_t i, float* out) {
+void resolve_counts(const PixelSums::View& sums, std::size_t i, float* out) {
     const std::uint32_t n = sums.samples[i];
     const gpu::TraversalCounts& c = sums.counts[i];
     const std::uint32_t values[gpu::COUNTER_COUNT] = {c.box_tests, c.box_hits, c.prim_tests, c.prim_hits,
@@ -35,35 +45,46 @@ void resolve_counts(const PixelSums& sums, std::size_t i, float* out) {
     for (std::uint32_t k = 0; k < gpu::COUNTER_COUNT; ++k) out[k] = n > 0 ? float(double(values[k]) / n) : 0.0f;
 }
 
-}  // namespace
-
-void resolve(const PixelSums& sums, const gpu::FrameParams& frame, const RenderImages& out) {
-    if (out.counters && sums.counts.empty())
-        throw std::invalid_argument(
-            "this render kept no traversal counters: ask for them when it starts (traversal_counters)");
+/// Pixels [begin, end) of resolve. Heat colours only where an image shows them.
+void resolve_block(const PixelSums::View& sums, const gpu::FrameParams& frame, const RenderImages& out,
+                   std::size_t begin, std::size_t end) {
     gpu::Palette palette;
-    const std::size_t pixels = std::size_t(frame.width) * frame.height;
-    for (std::size_t i = 0; i < pixels; ++i) {
+    const bool heatmap = frame.mode == gpu::MODE_HEATMAP, need_heat = out.heat || (out.color && heatmap);
+    auto store = [](float* image, std::size_t i, const gpu::vec4& v) {
+        float* c = image + 4 * i;
+        c[0] = v.x, c[1] = v.y, c[2] = v.z, c[3] = v.w;
+    };
+    for (std::size_t i = begin; i < end; ++i) {
         const std::uint32_t n = sums.samples[i];
         gpu::vec4 rgba(0.0f), heat(0.0f);
         float cost = 0.0f;
         if (n > 0) {
             const float count = float(n);
-            const gpu::vec4& s = sums.color[i];
+            const gpu::vec4 s = sums.color[i];
             cost = s.w / count;
-            heat = gpu::vec4(palette.heat_color(cost / frame.heatmap_scale), 1.0f);
-            rgba = frame.mode == gpu::MODE_HEATMAP ? heat : gpu::vec4(gpu::vec3(s.x, s.y, s.z) / count, 1.0f);
+            if (need_heat) heat = gpu::vec4(palette.heat_color(cost / frame.heatmap_scale), 1.0f);
+            rgba = heatmap ? heat : gpu::vec4(gpu::vec3(s.x, s.y, s.z) / count, 1.0f);
         }
-        auto store = [i](float* image, const gpu::vec4& v) {
-            float* c = image + 4 * i;
-            c[0] = v.x, c[1] = v.y, c[2] = v.z, c[3] = v.w;
-        };
-        if (out.color) store(out.color, rgba);
-        if (out.heat) store(out.heat, heat);
+        if (out.color) store(out.color, i, rgba);
+        if (out.heat) store(out.heat, i, heat);
         if (out.depth) out.depth[i] = std::isinf(sums.depth[i]) ? kNoDepth : sums.depth[i];
         if (out.cost) out.cost[i] = cost;
         if (out.counters) resolve_counts(sums, i, out.counters + gpu::COUNTER_COUNT * i);
     }
+}
+
+}  // namespace
+
+void resolve(const PixelSums::View& sums, const gpu::FrameParams& frame, const RenderImages& out, unsigned threads) {
+    if (out.counters && !sums.counts)
+        throw std::invalid_argument(
+            "this render kept no traversal counters: ask for them when it starts (traversal_counters)");
+    const std::size_t pixels = std::size_t(frame.width) * frame.height;
+    if (pixels > sums.pixels) throw std::logic_error("resolve: fewer sums than the frame's pixels");
+    const std::size_t blocks = (pixels + kResolveBlock - 1) / kResolveBlock;
+    ThreadPool::shared().run(blocks, threads, [&](std::size_t b, unsigned) {
+        resolve_block(sums, frame, out, b * kResolveBlock, std::min(pixels, (b + 1) * kResolveBlock));
+    });
 }
 
 std::uint64_t step_bound(const RenderScene& scene, const RenderSettings& settings, std::uint32_t samples) {

@@ -20,6 +20,20 @@ struct PixelSums {
 
     /// Zero sums for `pixels` pixels, with counters where `counters` (std::bad_alloc if they do not fit).
     explicit PixelSums(std::size_t pixels = 0, bool counters = false);
+
+    struct View;
+    View view() const;
+};
+
+/// Sums of `pixels` pixels, read-only, wherever they lie: a PixelSums, or the Vulkan renderer's
+/// mapped memory, which resolve reads in place (vk_trace_job.cpp: copied into a PixelSums first,
+/// the copy was a third of the frame's readback on lavapipe).
+struct PixelSums::View {
+    const gpu::vec4* color = nullptr;
+    const float* depth = nullptr;
+    const std::uint32_t* samples = nullptr;
+    const gpu::TraversalCounts* counts = nullptr;  ///< null where the render keeps no counters
+    std::size_t pixels = 0;
 };
 
 /// `sum` += `c`, counter by counter.
@@ -29,8 +43,9 @@ inline void add_counts(gpu::TraversalCounts& sum, const gpu::TraversalCounts& c)
 }
 
 /// Colour (or heat colours), depth and cost of each pixel from its sums: the average of its
-/// samples; a pixel without samples is transparent black with depth kNoDepth and cost 0.
-void resolve(const PixelSums& sums, const gpu::FrameParams& frame, const RenderImages& out);
+/// samples; a pixel without samples is transparent black with depth kNoDepth and cost 0. On up to
+/// `threads` threads of the shared pool (0: every hardware thread), in blocks of pixels.
+void resolve(const PixelSums::View& sums, const gpu::FrameParams& frame, const RenderImages& out, unsigned threads = 0);
 
 /// The most tracer steps a correct trace of `samples` samples of one pixel can take: per sample,
 /// at most 2^(max_ray_depth + 1) - 1 rays, each a closest-hit and a shadow walk of at most

@@ -70,7 +70,7 @@ public:
 
     void resolve(const RenderImages& out) override {
         const auto start = Clock::now();
-        bvhlab::resolve(sums_, frame_, out);
+        bvhlab::resolve(sums_.view(), frame_, out, threads_);
         timings_.readback_ms = ms_since(start);
     }
 

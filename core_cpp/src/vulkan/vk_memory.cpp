@@ -110,9 +110,14 @@ void Buffer::write(const void* data, std::size_t bytes, std::size_t offset) {
 }
 
 void Buffer::read(void* out, std::size_t bytes, std::size_t offset) const {
-    if (!host_visible() || offset + bytes > size_) throw std::logic_error("Buffer::read outside a host-visible buffer");
+    std::memcpy(out, host_bytes(bytes, offset), bytes);
+}
+
+const std::byte* Buffer::host_bytes(std::size_t bytes, std::size_t offset) const {
+    if (!host_visible() || offset > size_ || bytes > size_ - offset)
+        throw std::logic_error("Buffer::read outside a host-visible buffer");
     memory_.invalidate();
-    std::memcpy(out, memory_.mapped() + offset, bytes);
+    return memory_.mapped() + offset;
 }
 
 Image::Image(const Device& device, VkExtent2D extent, VkFormat format, VkImageUsageFlags usage,

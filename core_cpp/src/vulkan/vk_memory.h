@@ -46,6 +46,9 @@ public:
     /// Host access; only where host_visible().
     void write(const void* data, std::size_t bytes, std::size_t offset = 0);
     void read(void* out, std::size_t bytes, std::size_t offset = 0) const;
+    /// The mapped bytes [offset, offset + bytes), the device's writes made visible, to read in
+    /// place; only where host_visible().
+    const std::byte* host_bytes(std::size_t bytes, std::size_t offset = 0) const;
 
 private:
     Memory memory_;  // declared first: freed after the buffer

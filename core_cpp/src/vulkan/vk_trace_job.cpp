@@ -84,22 +84,21 @@ public:
 
     void resolve(const RenderImages& out) override {
         const auto start = std::chrono::steady_clock::now();
-        PixelSums sums;
         {
-            std::lock_guard lock(core_->mutex);
-            sums.color.resize(sums_->pixels);
-            sums.depth.resize(sums_->pixels);
-            sums.samples.resize(sums_->pixels);
-            std::vector<Read> reads{{&sums_->color, sums.color.data(), sums_->pixels * sizeof(gpu::vec4)},
-                                    {&sums_->depth, sums.depth.data(), sums_->pixels * sizeof(float)},
-                                    {&sums_->samples, sums.samples.data(), sums_->pixels * sizeof(std::uint32_t)}};
-            if (sums_->counts.size()) {
-                sums.counts.resize(sums_->pixels);
-                reads.push_back({&sums_->counts, sums.counts.data(), sums_->pixels * sizeof(gpu::TraversalCounts)});
-            }
-            read(reads);
+            std::lock_guard lock(core_->mutex);  // held while the core's readback buffer is read
+            const SumBuffers& b = *sums_;
+            const std::size_t n = b.pixels;
+            std::vector<Read> reads{{&b.color, n * sizeof(gpu::vec4)},
+                                    {&b.depth, n * sizeof(float)},
+                                    {&b.samples, n * sizeof(std::uint32_t)}};
+            if (b.counts.size()) reads.push_back({&b.counts, n * sizeof(gpu::TraversalCounts)});
+            const std::vector<const std::byte*> at = read(reads);
+            const PixelSums::View sums{reinterpret_cast<const gpu::vec4*>(at[0]), reinterpret_cast<const float*>(at[1]),
+                                       reinterpret_cast<const std::uint32_t*>(at[2]),
+                                       at.size() > 3 ? reinterpret_cast<const gpu::TraversalCounts*>(at[3]) : nullptr,
+                                       n};
+            bvhlab::resolve(sums, frame_, out);
         }
-        bvhlab::resolve(sums, frame_, out);
         timings_.readback_ms =
             std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     }
@@ -165,26 +164,29 @@ private:
         else if (ms < kRoundTargetMs / 2) budget_ = std::min(gpu::MAX_STEPS_PER_DISPATCH, budget_ * 2);
     }
 
-    /// A device buffer's first `bytes`, to `out`.
+    /// A device buffer's first `bytes`.
     struct Read {
         const Buffer* from;
-        void* out;
         std::size_t bytes;
     };
 
-    /// Device → host: directly where the memory is host-visible (lavapipe, integrated GPUs), else
-    /// all of them by one submission into the core's readback buffer (made or grown here: the
-    /// caller holds the core's lock). A buffer made and a submission waited for per read, as
-    /// before, took 11.5 ms of a 13.9 ms frame at 800×600 on an NVIDIA H200 (its first GPU run,
-    /// the trace 1.3 ms). The renderer's force_staging takes this path on any device (the tests'
-    /// staging case).
-    void read(const std::vector<Read>& reads) {
+    /// Device → host: where the host reads each read's bytes in place, resolve reading the sums
+    /// there (copied into a PixelSums first, with heat colours made for every pixel, lavapipe's
+    /// readback at 800×600 was 2.8-4.4 ms; in place, 1.3-1.8 on one thread, 0.9-2.0 on two). The
+    /// buffers' own mapped memory where it is host-visible (lavapipe, integrated GPUs), else the
+    /// core's readback buffer, which one submission copies all of them into (made or grown here:
+    /// the caller holds the core's lock, and keeps it while it reads). A buffer made and a
+    /// submission waited for per read, as before that, took 11.5 ms of a 13.9 ms frame at 800×600
+    /// on an NVIDIA H200 (its first GPU run, the trace 1.3 ms). The renderer's force_staging takes
+    /// the copy on any device (the tests' staging case).
+    std::vector<const std::byte*> read(const std::vector<Read>& reads) {
         RendererCore& c = *core_;
+        std::vector<const std::byte*> at;
         bool visible = !c.force_staging;
         for (const Read& r : reads) visible = visible && r.from->host_visible();
         if (visible) {
-            for (const Read& r : reads) r.from->read(r.out, r.bytes);
-            return;
+            for (const Read& r : reads) at.push_back(r.from->host_bytes(r.bytes));
+            return at;
         }
         std::vector<HostCopy> copies;
         VkDeviceSize total = 0;
@@ -197,7 +199,9 @@ private:
             c.readback.emplace(c.device, total, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::Readback);
         c.runner.run(
             [&](VkCommandBuffer cmd) { record_copies_to_host(c.fn, cmd, copies.data(), copies.size(), *c.readback); });
-        for (std::size_t k = 0; k < reads.size(); ++k) c.readback->read(reads[k].out, reads[k].bytes, copies[k].offset);
+        for (std::size_t k = 0; k < reads.size(); ++k)
+            at.push_back(c.readback->host_bytes(reads[k].bytes, copies[k].offset));
+        return at;
     }
 
     // Declared in creation order: the device buffers go before the device.
