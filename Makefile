@@ -175,8 +175,9 @@ check-pytest: build $(CHECK_ZIP)
 $(CHECK_ZIP): build/wheels/.cp311 $(ADDON_SOURCES) scripts/build_addon.py
 	cp "$$($(PY) scripts/build_addon.py package --tags cp311 --output-dir build/check)" $@
 
-# The GPU check's bundle (build/gpu-check: the C++ Vulkan tests, the loader, the validation layer),
-# for a GPU machine without network: carry build/gpu-check and run scripts/gpu_check.sh there.
+# The GPU check's bundle (build/gpu-check: the C++ Vulkan tests, the loader, the validation layer,
+# libglvnd, wheels of the module and numpy for bench/render.py, the atrium), for a GPU machine
+# without network: carry build/gpu-check and run scripts/gpu_check.sh there (one call, ~4 minutes).
 .PHONY: gpu-bundle
 gpu-bundle: build/cpp/build.ninja
 	cmake --build build/cpp -j $(JOBS)
