@@ -72,7 +72,8 @@ void expect_resolved(const PixelSums& sums, std::uint32_t mode, const Images& im
         const gpu::TraversalCounts& c = sums.counts[i];
         const std::uint32_t values[] = {c.box_tests, c.box_hits, c.prim_tests, c.prim_hits, c.instance_hits};
         for (std::uint32_t k = 0; k < gpu::COUNTER_COUNT; ++k)
-            ASSERT_EQ(im.counters[gpu::COUNTER_COUNT * i + k], n ? float(double(values[k]) / n) : 0.0f) << "pixel " << i;
+            ASSERT_EQ(im.counters[gpu::COUNTER_COUNT * i + k], n ? float(double(values[k]) / n) : 0.0f)
+                << "pixel " << i;
     }
 }
 
