@@ -110,12 +110,14 @@ def _print_table1(rows: list[dict], title: str) -> None:
                 cpu["frame_ms"],
                 cell[("cpu", "stackless")]["frame_ms"],
                 vk["frame_ms"] / cpu["frame_ms"],
+                "{trace_ms:.1f} / {readback_ms:.1f}".format(**vk["last_frame"]),
                 vk["primary_mrays_s"],
                 cpu["primary_mrays_s"],
                 REPORT_TABLE1[m][0],
             ]
         )
     header = ["method", "vulkan stack", "vulkan stackless", "cpu stack", "cpu stackless", "vulkan/cpu"]
+    header += ["vk stack trace / readback ms (last frame)"]
     header += ["vk prim Mrays/s", "cpu prim Mrays/s", "report ms"]
     _common.print_table(header, table, title=title)
 

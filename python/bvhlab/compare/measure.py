@@ -175,6 +175,8 @@ def _row(label, settings, bvh, timings) -> dict:
         "leaves": stats["leaves"],
         "device": timings["device"],
         "backend": timings["backend"],
+        # where the last counted frame's time went (frame_ms is their sum, per frame)
+        "last_frame": {k: timings[k] for k in ("overlay_ms", "trace_ms", "readback_ms", "dispatches") if k in timings},
     }
     if isinstance(bvh, InstancedBvh):  # the TLAS's numbers, and the meshes' trees' (each once)
         row.update({name: stats[name] for name in TWO_LEVEL_COLUMNS})
