@@ -26,8 +26,9 @@ struct PixelSums {
 };
 
 /// Sums of `pixels` pixels, read-only, wherever they lie: a PixelSums, or the Vulkan renderer's
-/// mapped memory, which resolve reads in place (vk_trace_job.cpp: copied into a PixelSums first,
-/// the copy was a third of the frame's readback on lavapipe).
+/// mapped memory, which resolve reads in place rather than copied into a PixelSums first
+/// (vk_trace_job.cpp read(): lavapipe's readback and resolve at 800×600 2.8-4.4 → 1.3-1.8 ms on
+/// one thread, with heat colours made only where shown).
 struct PixelSums::View {
     const gpu::vec4* color = nullptr;
     const float* depth = nullptr;

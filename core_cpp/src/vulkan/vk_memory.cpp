@@ -115,7 +115,7 @@ void Buffer::read(void* out, std::size_t bytes, std::size_t offset) const {
 
 const std::byte* Buffer::host_bytes(std::size_t bytes, std::size_t offset) const {
     if (!host_visible() || offset > size_ || bytes > size_ - offset)
-        throw std::logic_error("Buffer::read outside a host-visible buffer");
+        throw std::logic_error("a host read outside a host-visible buffer");
     memory_.invalidate();
     return memory_.mapped() + offset;
 }
