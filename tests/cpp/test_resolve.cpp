@@ -113,6 +113,9 @@ TEST(Resolve, RefusesWhatTheSumsDoNotHold) {
     PixelSums sums(kPixels, false);
     Images im;
     EXPECT_THROW(resolve(sums.view(), frame(gpu::MODE_SHADE), im.all()), std::invalid_argument);  // no counters
+    PixelSums::View no_depth = sums.view();
+    no_depth.depth = nullptr;  // as the Vulkan renderer's where no depth image was asked for
+    EXPECT_THROW(resolve(no_depth, frame(gpu::MODE_SHADE), {im.color.data(), im.depth.data()}), std::logic_error);
     PixelSums small(kPixels - 1, true);
     EXPECT_THROW(resolve(small.view(), frame(gpu::MODE_SHADE), {im.color.data()}), std::logic_error);
 }

@@ -136,6 +136,37 @@ TEST_F(Vulkan, StagingUploadAndReadbackGiveTheSameImage) {
     EXPECT_EQ(render_vulkan(renderer(), s), render_vulkan(staged, s));
     s.mode = RenderMode::Heatmap;
     EXPECT_EQ(render_vulkan(renderer(), s), render_vulkan(staged, s));
+    // Every image, the counters kept (a fourth sum buffer read back), then the colour alone (the
+    // depth and counter sums not read back): the same bits either way
+    s.mode = RenderMode::Shade, s.traversal_counters = true;
+    const std::size_t pixels = std::size_t(s.width) * s.height;
+    struct Images {
+        std::vector<float> color, depth, cost, heat, counters;
+        explicit Images(std::size_t n)
+            : color(4 * n), depth(n), cost(n), heat(4 * n), counters(gpu::COUNTER_COUNT * n) {}
+        RenderImages all() { return {color.data(), depth.data(), cost.data(), heat.data(), counters.data()}; }
+    };
+    Images direct(pixels), copied(pixels);
+    renderer().render(s, direct.all());
+    staged.render(s, copied.all());
+    EXPECT_EQ(direct.color, copied.color);
+    EXPECT_EQ(direct.depth, copied.depth);
+    EXPECT_EQ(direct.cost, copied.cost);
+    EXPECT_EQ(direct.heat, copied.heat);
+    EXPECT_EQ(direct.counters, copied.counters);
+    // and each image what it is (the counters and depth the CPU reference's: the same tracer code)
+    Images reference(pixels);
+    render_cpu(scene->render, s, reference.all());
+    EXPECT_EQ(direct.counters, reference.counters);
+    for (std::size_t i = 0; i < pixels; ++i) {  // depth: the same pixels hit, at depths equal to float rounding
+        ASSERT_EQ(direct.depth[i] == kNoDepth, reference.depth[i] == kNoDepth) << "pixel " << i;
+        ASSERT_NEAR(direct.depth[i], reference.depth[i], 1e-4f * reference.depth[i]) << "pixel " << i;
+    }
+    EXPECT_EQ(direct.cost, reference.cost);
+    EXPECT_GT(*std::max_element(direct.counters.begin(), direct.counters.end()), 0.0f);
+    EXPECT_LT(*std::min_element(direct.depth.begin(), direct.depth.end()), kNoDepth);  // something was hit
+    EXPECT_EQ(render_vulkan(staged, s), direct.color);
+    EXPECT_EQ(render_vulkan(renderer(), s), direct.color);
     expect_no_validation_errors(staged);
 }
 

@@ -81,6 +81,7 @@ void resolve(const PixelSums::View& sums, const gpu::FrameParams& frame, const R
             "this render kept no traversal counters: ask for them when it starts (traversal_counters)");
     const std::size_t pixels = std::size_t(frame.width) * frame.height;
     if (pixels > sums.pixels) throw std::logic_error("resolve: fewer sums than the frame's pixels");
+    if (out.depth && !sums.depth) throw std::logic_error("resolve: a depth image without the depth sums");
     const std::size_t blocks = (pixels + kResolveBlock - 1) / kResolveBlock;
     ThreadPool::shared().run(blocks, threads, [&](std::size_t b, unsigned) {
         resolve_block(sums, frame, out, b * kResolveBlock, std::min(pixels, (b + 1) * kResolveBlock));

@@ -31,7 +31,7 @@ struct PixelSums {
 /// one thread, with heat colours made only where shown).
 struct PixelSums::View {
     const gpu::vec4* color = nullptr;
-    const float* depth = nullptr;
+    const float* depth = nullptr;  ///< may be null where the images want no depth
     const std::uint32_t* samples = nullptr;
     const gpu::TraversalCounts* counts = nullptr;  ///< null where the render keeps no counters
     std::size_t pixels = 0;

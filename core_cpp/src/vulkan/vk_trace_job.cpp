@@ -86,17 +86,20 @@ public:
         const auto start = std::chrono::steady_clock::now();
         {
             std::lock_guard lock(core_->mutex);  // held while the core's readback buffer is read
+            // The sums the images ask for alone: colour and samples always, depth and the counters
+            // where `out` wants them (a viewport's colour: 20 bytes a pixel of 24, or of 44 where
+            // the render keeps counters)
             const SumBuffers& b = *sums_;
             const std::size_t n = b.pixels;
-            std::vector<Read> reads{{&b.color, n * sizeof(gpu::vec4)},
-                                    {&b.depth, n * sizeof(float)},
-                                    {&b.samples, n * sizeof(std::uint32_t)}};
-            if (b.counts.size()) reads.push_back({&b.counts, n * sizeof(gpu::TraversalCounts)});
+            const bool counts = out.counters && b.counts.size();
+            std::vector<Read> reads{{&b.color, n * sizeof(gpu::vec4)}, {&b.samples, n * sizeof(std::uint32_t)}};
+            if (out.depth) reads.push_back({&b.depth, n * sizeof(float)});
+            if (counts) reads.push_back({&b.counts, n * sizeof(gpu::TraversalCounts)});
             const std::vector<const std::byte*> at = read(reads);
-            const PixelSums::View sums{reinterpret_cast<const gpu::vec4*>(at[0]), reinterpret_cast<const float*>(at[1]),
-                                       reinterpret_cast<const std::uint32_t*>(at[2]),
-                                       at.size() > 3 ? reinterpret_cast<const gpu::TraversalCounts*>(at[3]) : nullptr,
-                                       n};
+            PixelSums::View sums{reinterpret_cast<const gpu::vec4*>(at[0]), nullptr,
+                                 reinterpret_cast<const std::uint32_t*>(at[1]), nullptr, n};
+            if (out.depth) sums.depth = reinterpret_cast<const float*>(at[2]);
+            if (counts) sums.counts = reinterpret_cast<const gpu::TraversalCounts*>(at.back());
             bvhlab::resolve(sums, frame_, out);
         }
         timings_.readback_ms =
