@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Packs what scripts/gpu_check.sh needs on a bare GPU machine without network into build/gpu-check
-# (about 60 MB): the release C++ Vulkan tests and the frame-time tool (build/cpp, `make cpp-test`
+# (about 50 MB): the release C++ Vulkan tests and the frame-time tool (build/cpp, `make cpp-test`
 # builds them), the Vulkan loader, the Khronos validation layer and the C++ runtime of this
 # machine; Debian's libglvnd, which the NVIDIA driver's Vulkan library needs (glvnd/); and for
 # bench/render.py, wheels of the module and numpy for the GPU machine's Python (py/) and the
