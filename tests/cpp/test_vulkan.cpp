@@ -124,7 +124,7 @@ TEST_F(Vulkan, StackAndStacklessGiveIdenticalImages) {
 
 // force_staging takes a discrete GPU's paths on any device: the upload through a staging buffer,
 // and the frame's sums back through the core's readback buffer, made at the first frame, reused
-// by the next, grown for a larger one and for the heatmap's counts (a fourth buffer).
+// by the next, grown for a larger one and for the traversal counters (a fourth buffer).
 TEST_F(Vulkan, StagingUploadAndReadbackGiveTheSameImage) {
     auto scene = test::whitted_showcase();
     renderer().upload(scene->render);

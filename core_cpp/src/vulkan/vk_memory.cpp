@@ -109,9 +109,7 @@ void Buffer::write(const void* data, std::size_t bytes, std::size_t offset) {
     memory_.flush();
 }
 
-void Buffer::read(void* out, std::size_t bytes, std::size_t offset) const {
-    std::memcpy(out, host_bytes(bytes, offset), bytes);
-}
+void Buffer::read(void* out, std::size_t bytes) const { std::memcpy(out, host_bytes(bytes), bytes); }
 
 const std::byte* Buffer::host_bytes(std::size_t bytes, std::size_t offset) const {
     if (!host_visible() || offset > size_ || bytes > size_ - offset)

@@ -45,7 +45,7 @@ public:
     bool host_visible() const { return memory_.mapped() != nullptr; }
     /// Host access; only where host_visible().
     void write(const void* data, std::size_t bytes, std::size_t offset = 0);
-    void read(void* out, std::size_t bytes, std::size_t offset = 0) const;
+    void read(void* out, std::size_t bytes) const;
     /// The mapped bytes [offset, offset + bytes), the device's writes made visible, to read in
     /// place; only where host_visible().
     const std::byte* host_bytes(std::size_t bytes, std::size_t offset = 0) const;

@@ -30,7 +30,6 @@ void record_trace_round(const PassContext& pass, VkCommandBuffer cmd, std::uint3
                         std::uint32_t height);
 /// Fills `bytes` of `buffer` with the 32-bit `pattern`, ordered before later compute shaders.
 void record_fill(const Functions& fn, VkCommandBuffer cmd, const Buffer& buffer, std::uint32_t pattern);
-/// Copies `from` into the host-visible `to`, made visible to the host.
 /// A device buffer's first `bytes` copied to `offset` in a host-visible buffer.
 struct HostCopy {
     const Buffer* from;
