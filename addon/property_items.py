@@ -26,6 +26,11 @@ _LABELS = {
     "centroids": ("Centroid bounds", "Equal buckets over the centroids' bounds (the report's, PBRT's)"),
     "stackless": ("Stackless", "Skip indices (report §3.1)"),
     "stack": ("Stack", "A stack, nearer child first (report §3.1); nodes as pairs of child boxes"),
+    "wide": (
+        "Wide (CPU)",
+        "The CPU tracer only (Auto renders it there): each ray through an 8-wide copy of the tree, the "
+        "image of Stack about twice as fast; its heatmap counts 8 box tests a wide node, no other counters",
+    ),
     "shade": ("Shade", "Whitted shading"),
     "heatmap": ("Heatmap", "Box tests per pixel"),
     "vulkan": ("Vulkan", "Vulkan compute tracer"),

@@ -4,7 +4,8 @@
 
 For median, mean, SAH 12 and SAH 32 (the report's Table 1 rows): average frame ms after a warm-up,
 stack and stackless traversal, on Vulkan (lavapipe here) and on the CPU reference with the same
-thread count, primary-ray Mrays/s, and the report's frame time beside.
+thread count (and its wide traversal, the same image), primary-ray Mrays/s, and the report's frame
+time beside.
 
 Then the cost of bounded dispatches (issue 8): the SAH 12 tree rendered with the steps one pixel
 may run per dispatch fixed at 60000 (most frames: one round per tile), 4096, 512 and 64, and left to
@@ -77,7 +78,7 @@ def _measure_table1(scene, renderers: dict, args) -> list[dict]:
 
     rows = []
     for backend, renderer in renderers.items():
-        for traversal in ("stack", "stackless"):
+        for traversal in ("stack", "stackless", "wide") if backend == "cpu" else ("stack", "stackless"):
             measured = measure_methods(
                 scene,
                 METHODS,
@@ -109,6 +110,8 @@ def _print_table1(rows: list[dict], title: str) -> None:
                 cell[("vulkan", "stackless")]["frame_ms"],
                 cpu["frame_ms"],
                 cell[("cpu", "stackless")]["frame_ms"],
+                cell[("cpu", "wide")]["frame_ms"],
+                cpu["frame_ms"] / cell[("cpu", "wide")]["frame_ms"],
                 vk["frame_ms"] / cpu["frame_ms"],
                 "{trace_ms:.1f} / {readback_ms:.1f}".format(**vk["last_frame"]),
                 vk["primary_mrays_s"],
@@ -116,7 +119,8 @@ def _print_table1(rows: list[dict], title: str) -> None:
                 REPORT_TABLE1[m][0],
             ]
         )
-    header = ["method", "vulkan stack", "vulkan stackless", "cpu stack", "cpu stackless", "vulkan/cpu"]
+    header = ["method", "vulkan stack", "vulkan stackless", "cpu stack", "cpu stackless", "cpu wide"]
+    header += ["cpu stack/wide", "vulkan/cpu"]
     header += ["vk stack trace / readback ms (last frame)"]
     header += ["vk prim Mrays/s", "cpu prim Mrays/s", "report ms"]
     _common.print_table(header, table, title=title)

@@ -6,7 +6,8 @@ worker (addon/engine/viewport.py: the code view_draw drives), without a window:
 - the report's §4.1 claim: a frame with the BVH boxes of depths 8-9 traced in against one without
   (full level, same view), the two interleaved, --rounds times each.
 
-    .venv/bin/python bench/viewport.py [--size 1322x784] [--views 5] [--rounds 7] [--json bench/results/viewport.json]
+    .venv/bin/python bench/viewport.py [--size 1322x784] [--views 5] [--rounds 7] [--traversal stackless]
+        [--json bench/results/viewport.json]
 
 The region size default is the 3D viewport of `make blender-ui-test` (1600 × 900 window). The
 viewport traces on all cores but one (VIEWPORT_THREADS); times are the tracer's own (overlay pass +
@@ -33,9 +34,10 @@ def _modules():
 
     harness.enable_addon_from_source()
     package = harness.addon().__name__ + ".engine."
-    return {
-        name: import_module(package + name) for name in ("viewport", "view_camera", "tracer", "scene_tree", "settings")
-    }
+    return {name: import_module(package + name) for name in ("viewport", "view_camera", "settings")}
+
+
+TRAVERSAL = "stackless"  # --traversal
 
 
 def _request(m, scene, width, height, turn: float, samples_per_axis: int, overlay):
@@ -48,14 +50,14 @@ def _request(m, scene, width, height, turn: float, samples_per_axis: int, overla
     view_matrix = world.inverted()
     window = camera.calc_matrix_camera(depsgraph, x=width, y=height)
     frustum = m["view_camera"].view_frustum(view_matrix, window, width, height)
-    settings = m["tracer"].TraceSettings(
-        samples_per_axis=samples_per_axis,
-        max_depth=5,
-        overlay=overlay,
-        traversal="stackless",
-        threads=m["settings"].VIEWPORT_THREADS,
+    from importlib import import_module
+
+    trees = import_module(harness.addon().__name__ + ".trees")
+    scene.bvhlab.traversal = TRAVERSAL
+    settings = scene.bvhlab.render_options(viewport=True).replace(
+        samples_per_axis=samples_per_axis, max_depth=5, overlay_depth=overlay
     )
-    return m["viewport"].ViewRequest(frustum, settings, "auto", m["scene_tree"].BuildSettings(), budget_ms=40.0)
+    return m["viewport"].ViewRequest(frustum, settings, "auto", trees.key_of(scene, scope="visible"), budget_ms=40.0)
 
 
 def _wait_for(session, request, level: str, timeout: float = 600.0):
@@ -128,12 +130,15 @@ def _report(header: str, levels: dict, section: dict) -> list[float]:
 
 
 def main() -> None:
+    global TRAVERSAL
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--size", default="1322x784")
     ap.add_argument("--views", type=int, default=5)
     ap.add_argument("--rounds", type=int, default=7)
     ap.add_argument("--json", type=Path, default=ROOT / "bench" / "results" / "viewport.json")
+    ap.add_argument("--traversal", default=TRAVERSAL, help="the tracer's: stack, stackless or wide (CPU)")
     args = ap.parse_args()
+    TRAVERSAL = args.traversal
     width, height = (int(v) for v in args.size.split("x"))
     m = _modules()
     scene = harness.open_scene("atrium")
@@ -151,13 +156,14 @@ def main() -> None:
     session.close()
     device = build_frame.timings["device"]
     header = (
-        f"atrium {len(live.scene.triangles):,} triangles, viewport {width} × {height}, {device}, "
+        f"atrium {len(live.scene.triangles):,} triangles, viewport {width} × {height}, {device}, {TRAVERSAL}, "
         f"{m['settings'].VIEWPORT_THREADS} thread(s); tree built in {build_frame.timings['build_ms']:.0f} ms"
     )
     ratios = _report(header, levels, section)
     result = {
         "size": [width, height],
         "device": device,
+        "traversal": TRAVERSAL,
         "threads": m["settings"].VIEWPORT_THREADS,
         "build_ms": build_frame.timings["build_ms"],
         "levels": levels,

@@ -151,6 +151,9 @@ struct TraversalCounts {
 /// The traversal variant (report §3.1), a specialization constant of trace.comp.
 BVHLAB_CONST uint TRAVERSAL_STACK = 0u;
 BVHLAB_CONST uint TRAVERSAL_STACKLESS = 1u;
+/// The CPU tracer only: each query answered at once by the CPU queries' 8-wide tree
+/// (cpu_tracer.h wide_walk); where it cannot answer one, the stack walk does.
+BVHLAB_CONST uint TRAVERSAL_WIDE = 2u;
 
 /// Device addresses (buffer_reference_uvec2: low word, high word) of every array the shaders
 /// read or write, so no storage-buffer binding limit (128 MiB on lavapipe) caps a scene.

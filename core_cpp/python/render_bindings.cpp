@@ -105,6 +105,16 @@ PyRenderScene make_two_level_scene(const PyTwoLevel& two, const std::vector<Tria
     return PyRenderScene{nullptr, two.meshes(), make_render_scene(two.tlas(), meshes, mv)};
 }
 
+/// Traversal::Wide: the wide copy of the flat scene's tree, made once per tree version and kept with
+/// it (PyTree::wide), so a viewport's jobs on one tree do not each make their own.
+const WideBvh* wide_copy(const PyRenderScene& s, const RenderSettings& settings) {
+    if (settings.traversal != Traversal::Wide || s.scene.two_level()) return nullptr;
+    if (s.tree && &s.tree->bvh == s.scene.bvh) return &s.tree->wide();
+    for (const TreePtr& m : s.meshes)  // a two-level scene of one identity instance renders flat
+        if (&m->bvh == s.scene.bvh) return &m->wide();
+    return nullptr;
+}
+
 nb::dict timings_dict(const RenderTimings& t) {
     nb::dict d;
     d["upload_ms"] = t.upload_ms, d["overlay_ms"] = t.overlay_ms, d["trace_ms"] = t.trace_ms;
@@ -299,7 +309,7 @@ void bind_render(nb::module_& m) {
         "start_cpu",
         [](const PyRenderScene& scene, const RenderSettings& settings, std::uint32_t threads) {
             nb::gil_scoped_release release;
-            return wrap(start_cpu(scene.scene, settings, threads));
+            return wrap(start_cpu(scene.scene, settings, threads, wide_copy(scene, settings)));
         },
         "scene"_a, "settings"_a, "threads"_a = 0, nb::keep_alive<0, 1>(),
         "A RenderJob on the CPU reference (keeps `scene` alive).");

@@ -119,7 +119,6 @@ void bind_settings(nb::module_& m) {
     m.def("parse_traversal", [](const std::string& name) { return parse_traversal(name); });
     m.def("parse_render_mode", [](const std::string& name) { return parse_render_mode(name); });
     m.attr("TRAVERSALS") = nb::tuple(nb::cast(traversal_names()));
-    m.attr("RENDER_TRAVERSALS") = nb::tuple(nb::cast(render_traversal_names()));
     m.attr("DEFAULT_TRAVERSAL") = to_string(RenderSettings{}.traversal);  // the one definition: render_settings.h
     m.attr("RENDER_MODES") = nb::tuple(nb::cast(render_mode_names()));
     m.def("parse_traversal_counter", [](const std::string& name) { return parse_traversal_counter(name); });

@@ -7,7 +7,7 @@ import numpy as np
 
 from . import _checks, _core
 
-TRAVERSALS = tuple(_core.TRAVERSALS)  # of Bvh.intersect (the renderers have their own: RENDER_TRAVERSALS)
+TRAVERSALS = tuple(_core.TRAVERSALS)  # of Bvh.intersect and the renderers (Vulkan: stack, stackless)
 
 #: The arrays a ray query fills, in the order the core's intersect takes them.
 HIT_FIELDS = {"t": np.float32, "prim": np.int32, "kind": np.uint8, "u": np.float32, "v": np.float32,

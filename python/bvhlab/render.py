@@ -23,7 +23,7 @@ from .render_options import DEFAULT_HEIGHT, DEFAULT_WIDTH, RenderOptions, option
 from .scene import Camera, Scene
 
 BACKENDS = ("auto", "vulkan", "cpu")
-TRAVERSALS: tuple[str, ...] = tuple(_core.RENDER_TRAVERSALS)
+TRAVERSALS: tuple[str, ...] = tuple(_core.TRAVERSALS)
 #: The renderers' traversal where none is asked for (RenderSettings in C++): the stack walk, on pairs
 #: of child boxes, nearer child first.
 DEFAULT_TRAVERSAL: str = _core.DEFAULT_TRAVERSAL
@@ -238,11 +238,13 @@ class Renderer:
         options = options_from(options, option_changes)
         settings = render_settings(scene, bvh, width, height, options, camera)
         start = time.perf_counter()
+        # "auto" renders the wide walk, which only the CPU tracer has, on the CPU
+        wide_on_cpu = self._vulkan is not None and options.traversal == "wide" and self.reason.startswith("auto")
         with self._lock:
             render_scene = self._cache.get(scene, bvh, options)
             prepare_ms = (time.perf_counter() - start) * 1e3
             upload_ms = 0.0
-            if self._vulkan is None:
+            if self._vulkan is None or wide_on_cpu:
                 job = _core.start_cpu(render_scene, settings, threads)
             else:
                 if self._uploaded is not render_scene:
@@ -252,12 +254,12 @@ class Renderer:
         timings = {
             "prepare_ms": prepare_ms,
             "upload_ms": upload_ms,
-            "backend": self.backend,
-            "reason": self.reason,
+            "backend": "cpu" if wide_on_cpu else self.backend,
+            "reason": "auto: the wide traversal is the CPU tracer's" if wide_on_cpu else self.reason,
             "heatmap_scale": render_scene.heatmap_scale(settings),  # the heatmap's legend (bvhlab.legend)
         }
-        if self.fallback:
-            timings["fallback"] = self.fallback
+        if self.fallback or wide_on_cpu:
+            timings["fallback"] = timings["reason"]
         return RenderJob(job, settings, timings)
 
     def render(

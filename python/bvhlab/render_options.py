@@ -34,7 +34,9 @@ class RenderOptions:
     wide; of a two-level tree (an InstancedBvh), `overlay_level` says whose: "tlas" (over the
     instances), "blas" (each mesh's tree moved into the world by each instance; the depth range
     applies within a BLAS; at most overlay_levels.MAX_OVERLAY_BOXES) or "both". `traversal`:
-    "stack" or "stackless" (report §3.1). `mode`: "shade" or "heatmap" (box tests of the primary
+    "stack" or "stackless" (report §3.1), or "wide" (the CPU tracer only: each ray through the
+    8-wide tree of the CPU queries, the same image several times faster; its cost counts 8 box
+    tests a wide node visited; no traversal counters). `mode`: "shade" or "heatmap" (box tests of the primary
     rays, blue = few, red = `heatmap_scale` or more; default 8 × tree height).
     `traversal_counters`: keep every traversal counter per pixel (RenderResult.counters;
     bvhlab.counters; 20 more bytes a pixel). `steps_per_dispatch` (how the work is cut, never the

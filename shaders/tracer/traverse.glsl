@@ -1,6 +1,7 @@
 // traverse.glsl — BVH traversal of the flattened depth-first tree (report §2.2, §3.1), with a
 // stack over its internal nodes as pairs of child boxes (BvhPair), or stackless over its nodes via
-// skip indices (TRAVERSAL, a specialization constant on the GPU), written
+// skip indices (TRAVERSAL, a specialization constant on the GPU; the CPU tracer's TRAVERSAL_WIDE
+// answers a query by the 8-wide tree where it can, and walks as the stack walk where not), written
 // as a resumable walk: each step does one bounded unit of work (a node, a primitive or a pop) and
 // the walk's whole state lives in a Walk, so a trace can stop after any step and continue in the
 // next dispatch (issue 8: lavapipe stops long loops, GPUs have a watchdog). One walk serves
@@ -286,6 +287,10 @@ void step_pop(INOUT(Walk) w, Hit hit) {
 /// instance). `r` is the world ray.
 void walk(INOUT(Walk) walk_state, TraceRay r, bool shadow, INOUT(Hit) query, INOUT(uint) work, INOUT(uint) steps,
           uint budget) {
+#ifdef __cplusplus
+    // The CPU tracer's wide walk (cpu_tracer.h): the whole query at once, the same hit.
+    if (TRAVERSAL == TRAVERSAL_WIDE && wide_walk(walk_state, r, shadow, query, work, steps)) return;
+#endif
     Walk w = walk_state;  // locals: the CPU build keeps them in registers (the state may alias the slot)
     Hit hit = query;
     vec3 world_origin = r.origin;  // `r` is the current tree's ray: the world's, or an instance's

@@ -27,7 +27,8 @@ def test_render_bench_measures_every_method_backend_and_traversal(tmp_path):
     assert (results["width"], results["height"], results["scene"]) == (32, 24, "whitted")
     cells = {(r["method"], r["backend"], r["traversal"]) for r in results["rows"]}
     methods = {"median", "mean", "sah12", "sah32"}
-    assert cells == {(m, b, t) for m in methods for b in ("vulkan", "cpu") for t in ("stack", "stackless")}
+    walks = {"vulkan": ("stack", "stackless"), "cpu": ("stack", "stackless", "wide")}  # wide: the CPU tracer's
+    assert cells == {(m, b, t) for m in methods for b, ts in walks.items() for t in ts}
     assert all(r["frame_ms"] > 0 and r["sah_cost"] > 0 for r in results["rows"])
     budgets = results["budgets"]
     assert len(budgets) == 5 and all(b["vulkan_ms"] > 0 and b["cpu_ms"] > 0 for b in budgets)

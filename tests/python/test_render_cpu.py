@@ -204,9 +204,10 @@ def test_overlay_lines_occlude_and_are_occluded():
     ],
     ids=["whitted_mean", "whitted_leaf8", "root_leaf", "five_spheres_leaf1"],
 )
-def test_stack_and_stackless_images_are_identical(make, build, shape):
+def test_stack_stackless_and_wide_images_are_identical(make, build, shape):
     """The stack walk reads the internal nodes as pairs of child boxes, the stackless one the
-    depth-first nodes: two layouts of one tree, so the same closest hits and the same image."""
+    depth-first nodes, the wide one the tree's 8-wide copy (the CPU queries' walk): three layouts of
+    one tree, so the same closest hits and the same image, bit for bit."""
     scene = make()
     bvh = bvhlab.build(scene, **build)
     for key, value in shape.items():  # the tree has the shape the case is for
@@ -215,6 +216,9 @@ def test_stack_and_stackless_images_are_identical(make, build, shape):
     a, _ = bvhlab.render(scene, bvh, 64, 48, traversal="stack", **kw)
     b, _ = bvhlab.render(scene, bvh, 64, 48, traversal="stackless", **kw)
     np.testing.assert_array_equal(a, b)
+    c, t = bvhlab.render(scene, bvh, 64, 48, traversal="wide", **kw)
+    np.testing.assert_array_equal(a, c)
+    assert "wide walk" in t["device"]
     sky = np.all(np.abs(a[..., :3] - np.array(scene.sky, np.float32)) < 1e-6, -1)
     assert 0.05 < sky.mean() < 0.95  # geometry and sky both in view
 
@@ -253,7 +257,7 @@ def test_supersampling_averages_samples():
         (dict(heatmap_scale=float("inf")), "heatmap_scale"),
         (dict(heatmap_scale=-1.0), "heatmap_scale"),
         (dict(heatmap_scale=5e9), "heatmap_scale"),
-        (dict(traversal="wide"), "no 'wide' traversal"),
+        (dict(traversal="wide", traversal_counters=True), "'stack' or 'stackless'"),
     ],
 )
 def test_bad_settings(kwargs, match):

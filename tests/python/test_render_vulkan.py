@@ -185,3 +185,22 @@ def test_vulkan_walks_an_sbvh_as_the_cpu_reference(vulkan):
         assert t["backend"] == "vulkan"
     lines, _ = vulkan.render(scene, bvh, 96, 64, overlay_depth=(2, 4))
     assert np.any(lines != vk_image, -1).sum() > 100, "the overlay draws the SBVH's boxes"
+
+
+def test_the_wide_traversal_is_the_cpu_tracers(vulkan):
+    """Vulkan refuses "wide" (its tracer walks stack or stackless); "auto" on a Vulkan device renders
+    it on the CPU tracer and says why; the image is the stack walk's."""
+    scene = showcase.whitted()
+    bvh = bvhlab.build(scene)
+    with pytest.raises(ValueError, match="'wide' is the CPU tracer's"):
+        vulkan.render(scene, bvh, 32, 24, traversal="wide")
+    auto = bvhlab.Renderer("auto", device=vulkan.device)  # a device named: Vulkan, even on lavapipe
+    assert auto.backend == "vulkan"
+    wide, t = auto.render(scene, bvh, 48, 32, traversal="wide")
+    assert t["backend"] == "cpu" and "wide traversal is the CPU tracer's" in t["reason"] and "fallback" in t
+    assert t["device"].startswith("CPU reference")
+    stack, t = auto.render(scene, bvh, 48, 32, traversal="stack")
+    assert t["backend"] == "vulkan"
+    reference, _ = bvhlab.render(scene, bvh, 48, 32, backend="cpu", traversal="stack")
+    np.testing.assert_array_equal(wide, reference)
+    compare(stack, wide)

@@ -166,9 +166,10 @@ protected:
 
 /// The CPU reference renderer: the same tracer code as the compute shader, on `threads` threads
 /// (0 = all). `scene` is borrowed and must outlive the job. Throws std::invalid_argument for bad
-/// settings (validate).
+/// settings (validate). Traversal::Wide on a flat scene answers its queries through `wide`,
+/// make_wide(*scene.bvh) (borrowed, as `scene`), made by the job where null.
 std::unique_ptr<RenderJob> start_cpu(const RenderScene& scene, const RenderSettings& settings,
-                                     std::uint32_t threads = 0);
+                                     std::uint32_t threads = 0, const WideBvh* wide = nullptr);
 
 /// start_cpu, every sample, resolve: the whole render at once.
 RenderTimings render_cpu(const RenderScene& scene, const RenderSettings& settings, const RenderImages& out,

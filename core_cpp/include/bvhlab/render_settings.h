@@ -49,8 +49,11 @@ struct RenderSettings {
     /// The overlay's line colour when not by depth: one definition for the tracer's overlay pass
     /// and the add-on's viewport drawing (its colour property's default).
     Vec3 overlay_color = kDefaultOverlayColor;
-    float line_width = 1.0f;                 ///< pixels (Vulkan devices without wide lines draw 1)
-    Traversal traversal = Traversal::Stack;  ///< Stack or Stackless (report §3.1); the tracer has no Wide
+    float line_width = 1.0f;  ///< pixels (Vulkan devices without wide lines draw 1)
+    /// Stack or Stackless (report §3.1); Wide: the CPU tracer answers each query through the CPU
+    /// queries' 8-wide tree (the same image, several times faster; its cost counts 8 box tests a
+    /// wide node, no traversal_counters), the Vulkan tracer refuses it
+    Traversal traversal = Traversal::Stack;
     RenderMode mode = RenderMode::Shade;
     std::optional<float> heatmap_scale;  ///< box tests shown as full red; unset: 8 × tree height
     /// Keep every TraversalCounter per pixel (RenderImages::counters; 20 more bytes a pixel).
@@ -88,8 +91,7 @@ std::string to_string(TraversalCounter counter);
 std::vector<std::string> traversal_counter_names();  ///< box_tests, box_hits, prim_tests, prim_hits, instance_hits
 std::string to_string(Traversal traversal);
 std::string to_string(RenderMode mode);
-std::vector<std::string> traversal_names();         ///< every traversal the CPU queries know
-std::vector<std::string> render_traversal_names();  ///< the tracer's: stack, stackless
+std::vector<std::string> traversal_names();  ///< every traversal (the queries' and the tracers')
 std::vector<std::string> render_mode_names();
 
 /// gpu::TRAVERSAL_STACK / TRAVERSAL_STACKLESS for the tracer.

@@ -57,7 +57,8 @@ public:
     double upload(const RenderScene& scene);
 
     /// A render in sample passes of the scene uploaded last (render.h). Throws
-    /// std::invalid_argument for bad settings (validate(settings, max_image_dimension())).
+    /// std::invalid_argument for bad settings (validate(settings, max_image_dimension())) and for
+    /// Traversal::Wide (the CPU tracer's).
     std::unique_ptr<RenderJob> start(const RenderSettings& settings);
 
     /// start, every sample, resolve: overlay pass (if settings.overlay), trace pass in bounded

@@ -8,10 +8,21 @@
 
 #include "bvhlab/render.h"
 #include "bvhlab/shared_geometry.h"
+#include "bvhlab/wide_bvh.h"
 #include "gpu_types.h"
 #include "pixel_sums.h"
 
 namespace bvhlab::gpu {
+
+/// What TRAVERSAL_WIDE answers queries with (render.h start_cpu): a flat scene's tree and its
+/// 8-wide copy, and whether its shadow rays may be any-hit queries (every material opaque: a
+/// shadow ray's transmission is then 0 or 1; through transparent surfaces it is a product taken
+/// in the walk's order, which the stack walk keeps).
+struct WideScene {
+    const Bvh* bvh = nullptr;
+    const WideBvh* wide = nullptr;
+    bool opaque = false;
+};
 
 /// `Count`: traverse.glsl's COUNT_TRAVERSAL. A render that keeps the traversal counters runs
 /// CpuTracerOf<true>; one that does not, CpuTracerOf<false>, which counts box tests only (the
@@ -22,8 +33,9 @@ public:
     static constexpr bool COUNT_TRAVERSAL = Count;
 
     /// `overlay` (one vec4 per pixel) and `sums` may be null for the overlay rasterizer's use.
+    /// `wide`: TRAVERSAL_WIDE's trees (null: it walks as the stack walk).
     CpuTracerOf(const RenderScene& scene, const FrameParams& params, const vec4* overlay, PixelSums* sums,
-                uint traversal)
+                uint traversal, const WideScene* wide = nullptr)
         : frame(params),
           TRAVERSAL(traversal),
           tree_nodes_(scene.node_data()),
@@ -32,7 +44,8 @@ public:
           triangles_(scene.triangles.data()),
           scene_(scene),
           overlay_(overlay),
-          sums_(sums) {}
+          sums_(sums),
+          wide_(wide) {}
 
     FrameParams frame;
     uint TRAVERSAL;
@@ -73,6 +86,28 @@ public:
     }
 
 #include "tracer/traverse.glsl"
+
+    /// TRAVERSAL_WIDE (traverse.glsl walk): the query answered by the CPU queries' 8-wide walk in one
+    /// step, the hit the stack walk finds bit for bit (the same ray tests, geometry.glsl, and the same
+    /// tie rule: wide_bvh.h intersect_wide); its cost is the child boxes of the wide nodes visited, 8
+    /// each. Returns false, leaving the query to the stack walk, where there is no wide tree or a
+    /// shadow ray may cross a transparent surface.
+    bool wide_walk(INOUT(Walk) w, TraceRay r, bool shadow, INOUT(Hit) hit, INOUT(uint) work, INOUT(uint) steps) const {
+        if (wide_ == nullptr || (shadow && !wide_->opaque)) return false;
+        const Ray ray{{r.origin.x, r.origin.y, r.origin.z}, {r.dir.x, r.dir.y, r.dir.z}, r.tmin, hit.t};
+        if (shadow) {
+            if (occluded_wide(*wide_->wide, ray)) hit.transmission = 0.0f;
+        } else {
+            std::uint32_t visited = 0;
+            const bvhlab::Hit h = intersect_wide(*wide_->wide, *wide_->bvh, ray, &visited);
+            if (h.ref != kNoHit) { hit.t = h.t, hit.ref = h.ref, hit.u = h.u, hit.v = h.v; }
+            hit.counts.box_tests += 8u * visited;
+        }
+        w.state = WALK_FINISHED;
+        steps += 1u;
+        work += 1u;
+        return true;
+    }
 #include "tracer/shade_colors.glsl"
 #include "tracer/shade.glsl"
 #include "tracer/state.glsl"
@@ -86,6 +121,7 @@ private:
     const RenderScene& scene_;
     const vec4* overlay_;
     PixelSums* sums_;
+    const WideScene* wide_;
     std::array<uvec4, STATE_WORDS> state_{};
     std::array<uvec4, 3 * RAY_STACK_SIZE> rays_{};
     std::array<uvec2, 2 * MAX_TREE_HEIGHT> nodes_{};  ///< two-level: a TLAS's entries and a BLAS's

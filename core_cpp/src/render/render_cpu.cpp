@@ -6,6 +6,7 @@
 #include <chrono>
 #include <exception>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include "cpu_tracer.h"
@@ -36,16 +37,17 @@ struct RunShared {
 
 class CpuRenderJob final : public RenderJob {
 public:
-    CpuRenderJob(const RenderScene& scene, const RenderSettings& settings, std::uint32_t threads)
+    CpuRenderJob(const RenderScene& scene, const RenderSettings& settings, std::uint32_t threads, const WideBvh* wide)
         : RenderJob(settings),
           scene_(scene),
           frame_(make_frame_params(scene, settings)),
           threads_(threads ? threads : std::max(1u, std::thread::hardware_concurrency())) {
         const auto start = Clock::now();
+        if (settings.traversal == Traversal::Wide) prepare_wide(wide);
         overlay_ = rasterize_overlay(scene, frame_);
         sums_ = PixelSums(std::size_t(settings.width) * settings.height, settings.traversal_counters);
         timings_.overlay_ms = ms_since(start);
-        timings_.device = "CPU reference (" + std::to_string(threads_) + " threads)";
+        timings_.device = "CPU reference (" + std::to_string(threads_) + " threads" + walk_note(settings) + ")";
         timings_.steps_per_dispatch = settings.steps_per_dispatch.value_or(gpu::MAX_STEPS_PER_DISPATCH);
     }
 
@@ -75,6 +77,23 @@ public:
     }
 
 private:
+    /// Traversal::Wide: a flat scene's wide copy (borrowed, or made here); a two-level scene is
+    /// walked as the stack walk walks it (tlas.h's wide walks index instances and triangles by
+    /// the TLAS's numbering, not the render scene's: not mapped yet).
+    void prepare_wide(const WideBvh* wide) {
+        if (scene_.two_level() || scene_.bvh == nullptr) return;
+        if (wide == nullptr) wide = &own_wide_.emplace(make_wide(*scene_.bvh));
+        bool opaque = true;
+        for (const gpu::GpuMaterial& m : scene_.materials) opaque = opaque && m.transparent_ior.x == 0.0f;
+        wide_scene_ = gpu::WideScene{scene_.bvh, wide, opaque};
+    }
+
+    std::string walk_note(const RenderSettings& settings) const {
+        if (settings.traversal != Traversal::Wide) return "";
+        if (!wide_scene_) return "; two-level: stack walk";
+        return wide_scene_->opaque ? ", wide walk" : ", wide walk; shadow rays: stack walk (transparent surfaces)";
+    }
+
     static void note_budgets(RunShared& shared, std::uint64_t budgets) {
         auto n = std::uint32_t(std::min<std::uint64_t>(budgets, 0xffffffffu));
         for (std::uint32_t seen = shared.most_budgets.load();
@@ -99,21 +118,26 @@ private:
     }
 
     /// Rows are handed out one at a time; the calling thread also polls `cancel` (at most every
-    /// 20 ms, Cancellation::poll) between pixels.
+    /// 20 ms, Cancellation::poll) before pixels 0, kPollPixels, 2 · kPollPixels, ... of each row: poll reads
+    /// the clock, and a clock read before each pixel took 5.6% of a wide-traversal frame (atrium,
+    /// 1322×784, one thread; perf).
     void trace_rows(const gpu::FrameParams& frame, RunShared& shared, Cancellation* cancel, double* progress,
                     bool caller) {
         if (frame.count_traversal) trace_rows_with<gpu::CpuTracerOf<true>>(frame, shared, cancel, progress, caller);
         else trace_rows_with<gpu::CpuTracerOf<false>>(frame, shared, cancel, progress, caller);
     }
 
+    static constexpr std::uint32_t kPollPixels = 64;
+
     template <class Tracer>
     void trace_rows_with(const gpu::FrameParams& frame, RunShared& shared, Cancellation* cancel, double* progress,
                          bool caller) {
-        Tracer tracer(scene_, frame, overlay_.data(), &sums_, gpu_traversal(settings_.traversal));
+        Tracer tracer(scene_, frame, overlay_.data(), &sums_, gpu_traversal(settings_.traversal),
+                      wide_scene_ ? &*wide_scene_ : nullptr);
         const double pixels = double(frame.width) * frame.height;
         for (std::uint32_t y; (y = shared.next_row.fetch_add(1)) < frame.height;) {
             for (std::uint32_t x = 0; x < frame.width; ++x) {
-                if (caller && cancel) {
+                if (caller && cancel && x % kPollPixels == 0) {
                     if (progress) *progress = double(shared.pixels_done.load()) / pixels;
                     cancel->poll();
                 }
@@ -165,16 +189,19 @@ private:
     const RenderScene& scene_;
     gpu::FrameParams frame_;
     std::uint32_t threads_;
+    std::optional<WideBvh> own_wide_;
+    std::optional<gpu::WideScene> wide_scene_;
     std::vector<gpu::vec4> overlay_;
     PixelSums sums_;
 };
 
 }  // namespace
 
-std::unique_ptr<RenderJob> start_cpu(const RenderScene& scene, const RenderSettings& settings, std::uint32_t threads) {
+std::unique_ptr<RenderJob> start_cpu(const RenderScene& scene, const RenderSettings& settings, std::uint32_t threads,
+                                     const WideBvh* wide) {
     validate(settings);
     check_render_scene(scene);
-    return std::make_unique<CpuRenderJob>(scene, settings, threads);
+    return std::make_unique<CpuRenderJob>(scene, settings, threads, wide);
 }
 
 RenderTimings render_cpu(const RenderScene& scene, const RenderSettings& settings, const RenderImages& out,

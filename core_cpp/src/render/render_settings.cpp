@@ -60,7 +60,10 @@ void validate_work(const RenderSettings& s) {
         fail("samples per pixel axis must be 1.." + std::to_string(gpu::MAX_SAMPLES_PER_AXIS));
     if (s.max_ray_depth > gpu::MAX_RAY_DEPTH)
         fail("max_ray_depth must be at most " + std::to_string(gpu::MAX_RAY_DEPTH));
-    if (s.traversal == Traversal::Wide) fail("the tracer has no 'wide' traversal; expected one of: stack stackless");
+    if (s.traversal == Traversal::Wide && s.traversal_counters)
+        fail(
+            "the 'wide' traversal counts box tests only (the heatmap); traversal counters need 'stack' or "
+            "'stackless'");
     if (s.steps_per_dispatch &&
         (*s.steps_per_dispatch < gpu::MIN_STEPS_PER_DISPATCH || *s.steps_per_dispatch > gpu::MAX_STEPS_PER_DISPATCH))
         fail("steps_per_dispatch must be " + std::to_string(gpu::MIN_STEPS_PER_DISPATCH) + ".." +
@@ -117,12 +120,6 @@ std::vector<std::string> traversal_names() {
     for (const auto& entry : kTraversals) out.emplace_back(entry.first);
     return out;
 }
-std::vector<std::string> render_traversal_names() {
-    std::vector<std::string> out;
-    for (const auto& entry : kTraversals)
-        if (entry.second != Traversal::Wide) out.emplace_back(entry.first);
-    return out;
-}
 std::vector<std::string> render_mode_names() {
     std::vector<std::string> out;
     for (const auto& entry : kModes) out.emplace_back(entry.first);
@@ -130,6 +127,7 @@ std::vector<std::string> render_mode_names() {
 }
 
 std::uint32_t gpu_traversal(Traversal traversal) {
+    if (traversal == Traversal::Wide) return gpu::TRAVERSAL_WIDE;
     return traversal == Traversal::Stackless ? gpu::TRAVERSAL_STACKLESS : gpu::TRAVERSAL_STACK;
 }
 

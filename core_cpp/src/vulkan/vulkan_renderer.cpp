@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <cstring>
+#include <stdexcept>
 
 #include "vk_renderer_core.h"
 
@@ -83,6 +84,8 @@ double VulkanRenderer::upload(const RenderScene& scene) {
 
 std::unique_ptr<RenderJob> VulkanRenderer::start(const RenderSettings& settings) {
     validate(settings, max_image_dimension());
+    if (settings.traversal == Traversal::Wide)
+        throw std::invalid_argument("the Vulkan tracer walks 'stack' or 'stackless'; 'wide' is the CPU tracer's");
     std::shared_ptr<const vk::SceneBuffers> scene;
     {
         std::lock_guard lock(core_->mutex);

@@ -253,7 +253,8 @@ def trace_pixel(scene, bvh, x: int, y: int, *, width: int, height: int, options=
     `width`×`height` render of `scene` with `bvh` (a Bvh, or an InstancedBvh: then an
     InstancedRayRecord): the ray the tracer traces there (its camera code and clipping; the
     overlay's lines are not drawn), walked by the traversal of `options.traversal` (stack or
-    stackless), whose box tests are the pixel's cost at one sample."""
+    stackless: its box tests are the pixel's cost at one sample; wide: each wide node's children,
+    where the render's cost counts 8 a wide node, its empty slots too)."""
     from .._render_scene import SceneCache
     from .._render_settings import render_settings
     from ..render_options import options_from

@@ -1,0 +1,150 @@
+// The CPU tracer's wide traversal (render_settings.h Traversal::Wide): each query answered by the
+// CPU queries' 8-wide walk gives the image of the stack walk bit for bit (colour and depth), with
+// spheres, transparent surfaces (their shadow rays left to the stack walk), the overlay's lines,
+// several samples and threads; its cost is 8 box tests a wide node that intersect_wide visits for
+// the pixel's primary ray; what it cannot do is refused or said.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <vector>
+
+#include "bvhlab/pixel_ray.h"
+#include "bvhlab/wide_bvh.h"
+#include "instanced_render.h"
+
+using namespace bvhlab;
+using namespace bvhlab::test;
+
+namespace {
+
+struct Images {
+    std::vector<float> color, depth, cost;
+    RenderTimings timings;
+};
+
+Images render(const RenderScene& scene, RenderSettings settings, Traversal traversal, std::uint32_t threads,
+              const WideBvh* wide = nullptr) {
+    settings.traversal = traversal;
+    const std::size_t n = std::size_t(settings.width) * settings.height;
+    Images out{std::vector<float>(4 * n), std::vector<float>(n), std::vector<float>(n), {}};
+    std::unique_ptr<RenderJob> job = start_cpu(scene, settings, threads, wide);
+    job->run(job->samples_per_pixel());
+    job->resolve({out.color.data(), out.depth.data(), out.cost.data(), nullptr});
+    out.timings = job->timings();
+    return out;
+}
+
+bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+std::size_t hit_pixels(const Images& im) {
+    std::size_t hits = 0;
+    for (float d : im.depth) hits += d < kNoDepth ? 1 : 0;
+    return hits;
+}
+
+/// Stack and wide on 1 and 3 threads: the same colour and depth bits; the scene in view (at least
+/// `in_view` of the pixels hit something).
+void expect_wide_is_stack(const RenderScene& scene, const RenderSettings& settings, double in_view = 0.1) {
+    const Images stack = render(scene, settings, Traversal::Stack, 1);
+    EXPECT_GT(double(hit_pixels(stack)) / double(stack.depth.size()), in_view);
+    for (std::uint32_t threads : {1u, 3u}) {
+        const Images wide = render(scene, settings, Traversal::Wide, threads);
+        EXPECT_TRUE(same_bits(stack.color, wide.color)) << threads << " threads";
+        EXPECT_TRUE(same_bits(stack.depth, wide.depth)) << threads << " threads";
+    }
+}
+
+}  // namespace
+
+TEST(RenderWide, SpheresAndTrianglesGiveTheStackWalksImage) {
+    const ScenePtr s = five_spheres();
+    expect_wide_is_stack(s->render, s->settings);
+    EXPECT_NE(render(s->render, s->settings, Traversal::Wide, 1).timings.device.find("wide walk"), std::string::npos);
+}
+
+TEST(RenderWide, TransparentSurfacesReflectionsAndSamplesGiveTheStackWalksImage) {
+    const ScenePtr s = whitted_showcase();  // glass (shadow rays by the stack walk), mirrors, 2×2 samples
+    expect_wide_is_stack(s->render, s->settings);
+    const std::string device = render(s->render, s->settings, Traversal::Wide, 1).timings.device;
+    EXPECT_NE(device.find("shadow rays: stack walk"), std::string::npos) << device;
+}
+
+TEST(RenderWide, AMeshOfFiftyThousandTrianglesGivesTheStackWalksImage) {
+    const ScenePtr s = bumpy_mesh();
+    RenderSettings settings = s->settings;
+    settings.samples_per_axis = 2;
+    expect_wide_is_stack(s->render, settings);
+    // the wide copy given (as the Python module passes its cached one) or made by the job: the same
+    const WideBvh wide = make_wide(s->bvh);
+    EXPECT_TRUE(same_bits(render(s->render, settings, Traversal::Wide, 2, &wide).color,
+                          render(s->render, settings, Traversal::Wide, 2).color));
+}
+
+TEST(RenderWide, TheOverlaysLinesAndTheClippingPlanesBoundThePrimaryRays) {
+    const ScenePtr s = overlay_sphere();  // the lines in front of the sphere cut its primary rays short
+    expect_wide_is_stack(s->render, s->settings, 0.05);
+    RenderSettings clipped = s->settings;
+    clipped.overlay = false;
+    clipped.camera.clip_start = 6.2f;  // behind the near side of the sphere, in front of its far side
+    clipped.camera.clip_end = 7.5f;
+    expect_wide_is_stack(s->render, clipped, 0.02);  // a ring of the sphere left
+    RenderSettings unclipped = clipped;
+    unclipped.camera.clip_start = 0, unclipped.camera.clip_end = INFINITY;
+    // the planes cut: fewer pixels hit than without them
+    EXPECT_LT(hit_pixels(render(s->render, clipped, Traversal::Wide, 1)),
+              hit_pixels(render(s->render, unclipped, Traversal::Wide, 1)));
+}
+
+TEST(RenderWide, CostIsEightBoxTestsAWideNodeOfThePrimaryRay) {
+    const ScenePtr s = bumpy_mesh(60);
+    RenderSettings settings = s->settings;
+    const WideBvh wide = make_wide(s->bvh);
+    for (RenderMode mode : {RenderMode::Shade, RenderMode::Heatmap}) {
+        settings.mode = mode;
+        const Images im = render(s->render, settings, Traversal::Wide, 2, &wide);
+        std::size_t checked = 0, visiting = 0;
+        for (std::uint32_t y = 0; y < settings.height; ++y)
+            for (std::uint32_t x = 0; x < settings.width; ++x) {
+                std::uint32_t visited = 0;
+                intersect_wide(wide, s->bvh, pixel_ray(s->render, settings, x, y, 0), &visited);
+                const float cost = im.cost[std::size_t(y) * settings.width + x];
+                ASSERT_EQ(cost, float(8 * visited)) << "pixel " << x << ", " << y;
+                ++checked, visiting += visited > 1;
+            }
+        EXPECT_EQ(checked, std::size_t(settings.width) * settings.height);
+        EXPECT_GT(visiting, checked / 4);  // most rays go past the root
+    }
+}
+
+TEST(RenderWide, AnEmptySceneIsSky) {
+    auto s = std::make_unique<RenderTestScene>();
+    s->material({1, 1, 1});
+    s->build();
+    small_image(s->settings, 16, 8);
+    const Images wide = render(s->render, s->settings, Traversal::Wide, 2);
+    EXPECT_EQ(hit_pixels(wide), 0u);
+    EXPECT_TRUE(same_bits(wide.color, render(s->render, s->settings, Traversal::Stack, 2).color));
+}
+
+TEST(RenderWide, TraversalCountersAreRefused) {
+    const ScenePtr s = five_spheres();
+    RenderSettings settings = s->settings;
+    settings.traversal = Traversal::Wide;
+    settings.traversal_counters = true;
+    try {
+        start_cpu(s->render, settings);
+        FAIL() << "no error";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("'stack' or 'stackless'"), std::string::npos) << e.what();
+    }
+}
+
+TEST(RenderWide, TwoLevelScenesAreWalkedByTheStackWalkAndSaySo) {
+    const InstancedPtr p = mixed_instances();
+    const Images stack = render(p->two_level, p->settings, Traversal::Stack, 2);
+    const Images wide = render(p->two_level, p->settings, Traversal::Wide, 2);
+    EXPECT_TRUE(same_bits(stack.color, wide.color));
+    EXPECT_NE(wide.timings.device.find("two-level: stack walk"), std::string::npos) << wide.timings.device;
+}
