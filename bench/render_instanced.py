@@ -1,7 +1,7 @@
 """The two-level tracer (issue 34) on the CPU reference, one thread: frame ms of a flat scene (the
 flat path must not get slower), of the same mesh as one identity instance of an InstancedBvh (the
 flat render scene), and of many instances of one mesh against the flattened scene's tree (frame ms,
-primary Mrays/s, the trees' bytes). The least of `--repeat` frames (the machine is shared).
+primary Mrays/s, the trees' bytes), each by the stack, stackless and wide traversals. The least of `--repeat` frames (the machine is shared).
 
     .venv/bin/python bench/render_instanced.py [--flat-only] [--json]
 
@@ -25,6 +25,7 @@ import bvhlab  # noqa: E402
 from bvhlab.library import procedural  # noqa: E402
 
 WIDTH, HEIGHT = 320, 240
+TRAVERSALS = ("stack", "stackless", "wide")  # wide: the CPU tracer's (the 8-wide copies, the same image)
 
 
 def frame_ms(scene, tree, repeat: int, traversal: str) -> float:
@@ -79,7 +80,7 @@ def main() -> None:
         flat, _ = load_scene(args.scene)
     flat_tree = bvhlab.build(flat)
     rows: dict = {}
-    for traversal in ("stack", "stackless"):
+    for traversal in TRAVERSALS:
         rows[f"flat_{traversal}_ms"] = frame_ms(flat, flat_tree, args.repeat, traversal)
     if not args.flat_only:
         mesh_of, transforms = flat.instances()
@@ -102,7 +103,7 @@ def main() -> None:
         many_tree = bvhlab.build(many)
         flattened = many.flattened()
         flat_many_tree = bvhlab.build(flattened)
-        for traversal in ("stack", "stackless"):
+        for traversal in TRAVERSALS:
             rows[f"instanced_100x20k_{traversal}_ms"] = frame_ms(many, many_tree, args.repeat, traversal)
             rows[f"flattened_2M_{traversal}_ms"] = frame_ms(flattened, flat_many_tree, args.repeat, traversal)
         s = many_tree.stats

@@ -102,17 +102,23 @@ PyRenderScene make_two_level_scene(const PyTwoLevel& two, const std::vector<Tria
     }
     MaterialView mv{materials.data(), materials.shape(0), nullptr, nullptr};
     nb::gil_scoped_release release;
-    return PyRenderScene{nullptr, two.meshes(), make_render_scene(two.tlas(), meshes, mv)};
+    return PyRenderScene{nullptr, two.meshes(), make_render_scene(two.tlas(), meshes, mv), two.shared_tlas()};
 }
 
-/// Traversal::Wide: the wide copy of the flat scene's tree, made once per tree version and kept with
-/// it (PyTree::wide), so a viewport's jobs on one tree do not each make their own.
-const WideBvh* wide_copy(const PyRenderScene& s, const RenderSettings& settings) {
-    if (settings.traversal != Traversal::Wide || s.scene.two_level()) return nullptr;
-    if (s.tree && &s.tree->bvh == s.scene.bvh) return &s.tree->wide();
+/// Traversal::Wide: the wide copy of the flat scene's tree, or of each mesh's of a two-level scene,
+/// made once per tree version and kept with it (PyTree::wide), so a viewport's jobs on one tree do
+/// not each make their own; `two_level` holds the two-level scene's view while the job is started.
+WideTrees wide_trees(const PyRenderScene& s, const RenderSettings& settings, std::optional<TwoLevel>& two_level) {
+    if (settings.traversal != Traversal::Wide) return {};
+    if (s.scene.two_level()) {
+        if (!s.tlas) return {};
+        two_level = PyTwoLevel::view_of(*s.tlas, s.meshes, Traversal::Wide);
+        return {nullptr, &*two_level};
+    }
+    if (s.tree && &s.tree->bvh == s.scene.bvh) return {&s.tree->wide(), nullptr};
     for (const TreePtr& m : s.meshes)  // a two-level scene of one identity instance renders flat
-        if (&m->bvh == s.scene.bvh) return &m->wide();
-    return nullptr;
+        if (&m->bvh == s.scene.bvh) return {&m->wide(), nullptr};
+    return {};
 }
 
 nb::dict timings_dict(const RenderTimings& t) {
@@ -263,8 +269,8 @@ void bind_render(nb::module_& m) {
             [](PyRenderScene* self, const PyBvh& bvh, const Triangles& tris, const std::optional<Spheres>& spheres,
                const Materials& materials, const Indices& tri_material, const Indices& sphere_material) {
                 TreePtr tree = bvh.current();
-                new (self)
-                    PyRenderScene{tree, {}, make_scene(*tree, tris, spheres, materials, tri_material, sphere_material)};
+                new (self) PyRenderScene{
+                    tree, {}, make_scene(*tree, tris, spheres, materials, tri_material, sphere_material), nullptr};
             },
             "bvh"_a, "triangles"_a.noconvert(), "spheres"_a.noconvert().none(), "materials"_a.noconvert(),
             "tri_material"_a.noconvert(), "sphere_material"_a.noconvert())
@@ -283,7 +289,7 @@ void bind_render(nb::module_& m) {
             [](const PyRenderScene& s, const Corners& lo, const Corners& hi, const Depths& depth) {
                 if (hi.shape(0) != lo.shape(0) || depth.shape(0) != lo.shape(0))
                     throw std::invalid_argument("one lo, one hi and one depth per overlay box are needed");
-                auto* out = new PyRenderScene{s.tree, s.meshes, {}};
+                auto* out = new PyRenderScene{s.tree, s.meshes, {}, s.tlas};
                 std::unique_ptr<PyRenderScene> owned(out);
                 {
                     nb::gil_scoped_release release;
@@ -309,7 +315,8 @@ void bind_render(nb::module_& m) {
         "start_cpu",
         [](const PyRenderScene& scene, const RenderSettings& settings, std::uint32_t threads) {
             nb::gil_scoped_release release;
-            return wrap(start_cpu(scene.scene, settings, threads, wide_copy(scene, settings)));
+            std::optional<TwoLevel> two_level;
+            return wrap(start_cpu(scene.scene, settings, threads, wide_trees(scene, settings, two_level)));
         },
         "scene"_a, "settings"_a, "threads"_a = 0, nb::keep_alive<0, 1>(),
         "A RenderJob on the CPU reference (keeps `scene` alive).");

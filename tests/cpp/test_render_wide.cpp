@@ -23,7 +23,7 @@ struct Images {
 };
 
 Images render(const RenderScene& scene, RenderSettings settings, Traversal traversal, std::uint32_t threads,
-              const WideBvh* wide = nullptr) {
+              const WideTrees& wide = {}) {
     settings.traversal = traversal;
     const std::size_t n = std::size_t(settings.width) * settings.height;
     Images out{std::vector<float>(4 * n), std::vector<float>(n), std::vector<float>(n), {}};
@@ -78,7 +78,7 @@ TEST(RenderWide, AMeshOfFiftyThousandTrianglesGivesTheStackWalksImage) {
     expect_wide_is_stack(s->render, settings);
     // the wide copy given (as the Python module passes its cached one) or made by the job: the same
     const WideBvh wide = make_wide(s->bvh);
-    EXPECT_TRUE(same_bits(render(s->render, settings, Traversal::Wide, 2, &wide).color,
+    EXPECT_TRUE(same_bits(render(s->render, settings, Traversal::Wide, 2, {&wide, nullptr}).color,
                           render(s->render, settings, Traversal::Wide, 2).color));
 }
 
@@ -103,7 +103,7 @@ TEST(RenderWide, CostIsEightBoxTestsAWideNodeOfThePrimaryRay) {
     const WideBvh wide = make_wide(s->bvh);
     for (RenderMode mode : {RenderMode::Shade, RenderMode::Heatmap}) {
         settings.mode = mode;
-        const Images im = render(s->render, settings, Traversal::Wide, 2, &wide);
+        const Images im = render(s->render, settings, Traversal::Wide, 2, {&wide, nullptr});
         std::size_t checked = 0, visiting = 0;
         for (std::uint32_t y = 0; y < settings.height; ++y)
             for (std::uint32_t x = 0; x < settings.width; ++x) {
@@ -141,10 +141,85 @@ TEST(RenderWide, TraversalCountersAreRefused) {
     }
 }
 
-TEST(RenderWide, TwoLevelScenesAreWalkedByTheStackWalkAndSaySo) {
+namespace {
+
+/// The two-level queries' view of `s` (tlas.h), each mesh's wide copy in `wides`.
+TwoLevel wide_view(const InstancedRender& s, std::vector<WideBvh>& wides) {
+    wides.clear();
+    for (const Bvh& t : s.trees) wides.push_back(make_wide(t));
+    TwoLevel view{&s.tlas, {}};
+    for (std::size_t k = 0; k < s.trees.size(); ++k) view.blases.push_back({&s.trees[k], &wides[k]});
+    return view;
+}
+
+/// Instances (rotated, scaled unevenly, mirrored) of a triangle mesh between two meshes of spheres
+/// and triangles (the later meshes' primitives numbered after the earlier ones' in the render
+/// scene), every material opaque where `opaque`, else the first glass-like.
+InstancedPtr spheres_and_meshes(bool opaque) {
+    auto p = std::make_unique<InstancedRender>();
+    InstancedRender& s = *p;
+    s.add_mesh(random_scene(150, 20, 7), 1);
+    s.add_mesh(octasphere(3, {0, 0, 0}, 2.0f), 0);
+    s.add_mesh(random_scene(200, 40, 5), 1);
+    if (opaque) s.materials[4] = 0.0f;  // the first material's transparency
+    const float pi = 3.14159265f;
+    s.blas_of = {1, 2, 2, 1, 2, 0};
+    s.transforms = {
+        Transform{},
+        make_transform({0, 0, 1}, pi / 5, {1, 1, 1}, {8, 0, 0}),
+        make_transform({1, 2, 3}, 1.1f, {2.0f, 0.5f, 1.3f}, {0, 10, 2}),  // non-uniform scale
+        make_transform({1, 0, 0}, 0.3f, {-1, 1, 1}, {8, 10, 0}),          // mirrored
+        make_transform({1, 1, 0}, 0.7f, {1.5f, 0.6f, 1.0f}, {16, 6, -1}),
+        make_transform({0, 1, 1}, 2.0f, {0.8f, 0.8f, 0.8f}, {4, 5, 1}),
+    };
+    s.finish();
+    return p;
+}
+
+}  // namespace
+
+TEST(RenderWide, TwoLevelScenesGiveTheStackWalksImage) {
+    for (bool opaque : {true, false}) {
+        const InstancedPtr p = spheres_and_meshes(opaque);
+        ASSERT_TRUE(p->two_level.two_level());
+        std::vector<WideBvh> wides;
+        const TwoLevel view = wide_view(*p, wides);
+        RenderSettings settings = p->settings;
+        settings.samples_per_axis = 2;
+        const Images stack = render(p->two_level, settings, Traversal::Stack, 2);
+        EXPECT_GT(double(hit_pixels(stack)) / double(stack.depth.size()), 0.1);
+        for (std::uint32_t threads : {1u, 3u}) {
+            const Images wide = render(p->two_level, settings, Traversal::Wide, threads, {nullptr, &view});
+            EXPECT_TRUE(same_bits(stack.color, wide.color)) << "opaque " << opaque << ", " << threads << " threads";
+            EXPECT_TRUE(same_bits(stack.depth, wide.depth)) << "opaque " << opaque;
+            EXPECT_NE(wide.timings.device.find(opaque ? ", wide walk)" : "shadow rays: stack walk"), std::string::npos)
+                << wide.timings.device;
+        }
+    }
+    const InstancedPtr many = many_instances();  // 100 instances of one mesh
+    std::vector<WideBvh> wides;
+    const TwoLevel view = wide_view(*many, wides);
+    EXPECT_TRUE(same_bits(render(many->two_level, many->settings, Traversal::Stack, 2).color,
+                          render(many->two_level, many->settings, Traversal::Wide, 2, {nullptr, &view}).color));
+}
+
+TEST(RenderWide, ATwoLevelSceneWithoutItsTlasIsWalkedByTheStackWalkAndSaysSo) {
     const InstancedPtr p = mixed_instances();
     const Images stack = render(p->two_level, p->settings, Traversal::Stack, 2);
     const Images wide = render(p->two_level, p->settings, Traversal::Wide, 2);
     EXPECT_TRUE(same_bits(stack.color, wide.color));
-    EXPECT_NE(wide.timings.device.find("two-level: stack walk"), std::string::npos) << wide.timings.device;
+    EXPECT_NE(wide.timings.device.find("without its TLAS: stack walk"), std::string::npos) << wide.timings.device;
+}
+
+TEST(RenderWide, AnotherScenesTlasOrAMeshWithoutItsWideCopyIsRefused) {
+    const InstancedPtr p = mixed_instances(), other = many_instances();
+    RenderSettings settings = p->settings;
+    settings.traversal = Traversal::Wide;
+    std::vector<WideBvh> wides;
+    const TwoLevel others = wide_view(*other, wides);
+    EXPECT_THROW(start_cpu(p->two_level, settings, 1, {nullptr, &others}), std::invalid_argument);
+    std::vector<WideBvh> own;
+    TwoLevel view = wide_view(*p, own);
+    view.blases[1].wide = nullptr;
+    EXPECT_THROW(start_cpu(p->two_level, settings, 1, {nullptr, &view}), std::invalid_argument);
 }

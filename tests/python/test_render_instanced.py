@@ -87,7 +87,7 @@ MANY = [
 ]
 
 
-@pytest.mark.parametrize("traversal", ["stack", "stackless"])
+@pytest.mark.parametrize("traversal", ["stack", "stackless", "wide"])
 def test_instanced_scene_renders_as_its_flattened_scene(traversal):
     scene = _scene(MANY, [0, 0, 1, 1, 1])
     flat = _flattened_outside_out(scene)
@@ -96,6 +96,25 @@ def test_instanced_scene_renders_as_its_flattened_scene(traversal):
     a, b = _render(scene, two, traversal), _render(flat, bvhlab.build(flat), traversal)
     assert np.isfinite(a.depth).all() and (a.depth < 1e9).mean() > 0.2  # the scene fills the frame
     _assert_same_image(a, b)
+
+
+def test_the_wide_traversal_walks_both_levels_to_the_stack_walks_image():
+    """The CPU tracer's wide traversal answers each ray through the TLAS's and the meshes' 8-wide
+    copies (tlas.h's queries), the hit mapped to the render scene's instance and primitive: the
+    stack walk's image, bit for bit; also after the instances move (the new TLAS is the one walked)."""
+    scene = _scene(MANY, [0, 0, 1, 1, 1])
+    two = bvhlab.build(scene)
+    stack, wide = _render(scene, two, "stack"), _render(scene, two, "wide")
+    assert "wide walk" in wide.timings["device"]
+    np.testing.assert_array_equal(stack.color, wide.color)
+    np.testing.assert_array_equal(stack.depth, wide.depth)
+    scene.instance_transforms = np.stack(
+        [MANY[0], MANY[1], MANY[2], _transform(0.3, (1, 0, 0), (1, -1, 1), (0, 2, 1))] + MANY[4:]
+    )
+    two.place(*scene.instances())
+    moved = _render(scene, two, "wide")
+    assert np.abs(moved.color - wide.color).max() > 0.1
+    np.testing.assert_array_equal(moved.color, _render(scene, two, "stack").color)
 
 
 def test_many_instances_of_one_mesh():
@@ -118,8 +137,9 @@ def test_one_identity_instance_renders_as_the_flat_scene_bit_for_bit(small_scene
     spelled = bvhlab.Scene(triangles=tris, spheres=spheres, instance_mesh=mesh_of, instance_transforms=transforms)
     two = bvhlab.build(spelled)
     assert isinstance(two, bvhlab.InstancedBvh)
-    for mode in ("shade", "heatmap"):
-        a, b = _render(spelled, two, mode=mode), _render(flat, bvhlab.build(flat), mode=mode)
+    for mode, traversal in (("shade", "stack"), ("heatmap", "stack"), ("shade", "wide"), ("heatmap", "wide")):
+        a = _render(spelled, two, traversal, mode=mode)
+        b = _render(flat, bvhlab.build(flat), traversal, mode=mode)
         np.testing.assert_array_equal(a.color, b.color)
         np.testing.assert_array_equal(a.depth, b.depth)
 

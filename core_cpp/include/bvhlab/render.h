@@ -44,6 +44,10 @@ struct RenderScene {
     BigVector<gpu::GpuTriangle>
         forest_prims;  ///< two-level: every BLAS's leaf primitives, refs into `triangles`/`spheres`
     std::vector<gpu::GpuInstance> instances;  ///< two-level: in the TLAS's leaf order; empty: a flat scene
+    /// Two-level: the slot in `instances` of each of the TLAS's instances (Tlas::instances order), and
+    /// each mesh's first triangle and sphere in `triangles` and `spheres`: a hit of tlas.h's queries
+    /// (an instance index, a mesh's own primitive) in the tracer's numbers (the wide traversal).
+    std::vector<std::uint32_t> instance_slots, first_triangle, first_sphere;
     BigVector<gpu::GpuTriangle> triangles;
     std::vector<gpu::GpuSphere> spheres;
     std::vector<gpu::GpuMaterial> materials;
@@ -164,12 +168,20 @@ protected:
     RenderTimings timings_;
 };
 
+/// What Traversal::Wide walks (start_cpu): a flat scene's 8-wide copy, make_wide(*scene.bvh)
+/// (borrowed, as the scene is; made by the job where null), or the TLAS a two-level scene was made
+/// from with its meshes' trees and their wide copies in the scene's mesh order (copied by the job;
+/// what it points to is borrowed; where null, the stack walk walks the scene).
+struct WideTrees {
+    const WideBvh* flat = nullptr;
+    const TwoLevel* two_level = nullptr;
+};
+
 /// The CPU reference renderer: the same tracer code as the compute shader, on `threads` threads
 /// (0 = all). `scene` is borrowed and must outlive the job. Throws std::invalid_argument for bad
-/// settings (validate). Traversal::Wide on a flat scene answers its queries through `wide`,
-/// make_wide(*scene.bvh) (borrowed, as `scene`), made by the job where null.
+/// settings (validate), and for `wide.two_level` that is not the scene's TLAS and meshes.
 std::unique_ptr<RenderJob> start_cpu(const RenderScene& scene, const RenderSettings& settings,
-                                     std::uint32_t threads = 0, const WideBvh* wide = nullptr);
+                                     std::uint32_t threads = 0, const WideTrees& wide = {});
 
 /// start_cpu, every sample, resolve: the whole render at once.
 RenderTimings render_cpu(const RenderScene& scene, const RenderSettings& settings, const RenderImages& out,

@@ -15,12 +15,14 @@
 namespace bvhlab::gpu {
 
 /// What TRAVERSAL_WIDE answers queries with (render.h start_cpu): a flat scene's tree and its
-/// 8-wide copy, and whether its shadow rays may be any-hit queries (every material opaque: a
-/// shadow ray's transmission is then 0 or 1; through transparent surfaces it is a product taken
-/// in the walk's order, which the stack walk keeps).
+/// 8-wide copy, or a two-level scene's TLAS and meshes (tlas.h's queries, Traversal::Wide); and
+/// whether its shadow rays may be any-hit queries (every material opaque: a shadow ray's
+/// transmission is then 0 or 1; through transparent surfaces it is a product taken in the walk's
+/// order, which the stack walk keeps).
 struct WideScene {
     const Bvh* bvh = nullptr;
     const WideBvh* wide = nullptr;
+    const TwoLevel* two_level = nullptr;
     bool opaque = false;
 };
 
@@ -87,20 +89,38 @@ public:
 
 #include "tracer/traverse.glsl"
 
-    /// TRAVERSAL_WIDE (traverse.glsl walk): the query answered by the CPU queries' 8-wide walk in one
-    /// step, the hit the stack walk finds bit for bit (the same ray tests, geometry.glsl, and the same
-    /// tie rule: wide_bvh.h intersect_wide); its cost is the child boxes of the wide nodes visited, 8
-    /// each. Returns false, leaving the query to the stack walk, where there is no wide tree or a
-    /// shadow ray may cross a transparent surface.
+    /// TRAVERSAL_WIDE (traverse.glsl walk): the query answered by the CPU queries' 8-wide walks in
+    /// one step, the hit the stack walk finds (the same ray tests, geometry.glsl, and tie rule;
+    /// flat: intersect_wide, bit for bit; two-level: intersect_two_level, whose instance and
+    /// primitive are mapped to the scene's slot and reference). Its cost: flat, 8 box tests a wide
+    /// node visited; two-level, the query's count (the TLAS's child boxes, a BLAS's wide nodes).
+    /// Returns false, leaving the query to the stack walk, where there is no wide tree or a shadow
+    /// ray may cross a transparent surface.
     bool wide_walk(INOUT(Walk) w, TraceRay r, bool shadow, INOUT(Hit) hit, INOUT(uint) work, INOUT(uint) steps) const {
         if (wide_ == nullptr || (shadow && !wide_->opaque)) return false;
         const Ray ray{{r.origin.x, r.origin.y, r.origin.z}, {r.dir.x, r.dir.y, r.dir.z}, r.tmin, hit.t};
-        if (shadow) {
+        if (wide_->two_level) {
+            if (shadow) {
+                if (occluded_two_level(*wide_->two_level, ray, Traversal::Wide)) hit.transmission = 0.0f;
+            } else {
+                std::uint32_t visited = 0;
+                const InstanceHit h = intersect_two_level(*wide_->two_level, ray, Traversal::Wide, &visited);
+                if (h.hit.ref != kNoHit) {
+                    const std::uint32_t mesh = wide_->two_level->tlas->instances[h.instance].blas;
+                    const bool sphere = (h.hit.ref & REF_SPHERE_BIT) != 0u;
+                    hit.t = h.hit.t, hit.u = h.hit.u, hit.v = h.hit.v;
+                    hit.ref = sphere ? REF_SPHERE_BIT | ((h.hit.ref & REF_INDEX_MASK) + scene_.first_sphere[mesh])
+                                     : h.hit.ref + scene_.first_triangle[mesh];
+                    hit.instance = scene_.instance_slots[h.instance];
+                }
+                hit.counts.box_tests += visited;
+            }
+        } else if (shadow) {
             if (occluded_wide(*wide_->wide, ray)) hit.transmission = 0.0f;
         } else {
             std::uint32_t visited = 0;
             const bvhlab::Hit h = intersect_wide(*wide_->wide, *wide_->bvh, ray, &visited);
-            if (h.ref != kNoHit) { hit.t = h.t, hit.ref = h.ref, hit.u = h.u, hit.v = h.v; }
+            if (h.ref != kNoHit) hit.t = h.t, hit.ref = h.ref, hit.u = h.u, hit.v = h.v;
             hit.counts.box_tests += 8u * visited;
         }
         w.state = WALK_FINISHED;

@@ -7,6 +7,7 @@
 #include <exception>
 #include <mutex>
 #include <optional>
+#include <stdexcept>
 #include <thread>
 
 #include "cpu_tracer.h"
@@ -37,7 +38,7 @@ struct RunShared {
 
 class CpuRenderJob final : public RenderJob {
 public:
-    CpuRenderJob(const RenderScene& scene, const RenderSettings& settings, std::uint32_t threads, const WideBvh* wide)
+    CpuRenderJob(const RenderScene& scene, const RenderSettings& settings, std::uint32_t threads, const WideTrees& wide)
         : RenderJob(settings),
           scene_(scene),
           frame_(make_frame_params(scene, settings)),
@@ -77,20 +78,30 @@ public:
     }
 
 private:
-    /// Traversal::Wide: a flat scene's wide copy (borrowed, or made here); a two-level scene is
-    /// walked as the stack walk walks it (tlas.h's wide walks index instances and triangles by
-    /// the TLAS's numbering, not the render scene's: not mapped yet).
-    void prepare_wide(const WideBvh* wide) {
-        if (scene_.two_level() || scene_.bvh == nullptr) return;
-        if (wide == nullptr) wide = &own_wide_.emplace(make_wide(*scene_.bvh));
+    /// Traversal::Wide: a flat scene's wide copy (borrowed, or made here), or a two-level scene's
+    /// TLAS and meshes (copied; checked against the scene; without them the stack walk walks it).
+    void prepare_wide(const WideTrees& wide) {
         bool opaque = true;
         for (const gpu::GpuMaterial& m : scene_.materials) opaque = opaque && m.transparent_ior.x == 0.0f;
-        wide_scene_ = gpu::WideScene{scene_.bvh, wide, opaque};
+        if (scene_.two_level()) {
+            if (wide.two_level == nullptr) return;
+            check_two_level(*wide.two_level, Traversal::Wide);
+            const Tlas& tlas = *wide.two_level->tlas;
+            if (tlas.instances.size() != scene_.instance_slots.size() ||
+                wide.two_level->blases.size() != scene_.first_triangle.size())
+                throw std::invalid_argument("the wide traversal's TLAS is not the one the scene was made from");
+            two_level_ = *wide.two_level;
+            wide_scene_ = gpu::WideScene{nullptr, nullptr, &*two_level_, opaque};
+            return;
+        }
+        if (scene_.bvh == nullptr) return;
+        const WideBvh* flat = wide.flat ? wide.flat : &own_wide_.emplace(make_wide(*scene_.bvh));
+        wide_scene_ = gpu::WideScene{scene_.bvh, flat, nullptr, opaque};
     }
 
     std::string walk_note(const RenderSettings& settings) const {
         if (settings.traversal != Traversal::Wide) return "";
-        if (!wide_scene_) return "; two-level: stack walk";
+        if (!wide_scene_) return "; two-level without its TLAS: stack walk";
         return wide_scene_->opaque ? ", wide walk" : ", wide walk; shadow rays: stack walk (transparent surfaces)";
     }
 
@@ -190,6 +201,7 @@ private:
     gpu::FrameParams frame_;
     std::uint32_t threads_;
     std::optional<WideBvh> own_wide_;
+    std::optional<TwoLevel> two_level_;
     std::optional<gpu::WideScene> wide_scene_;
     std::vector<gpu::vec4> overlay_;
     PixelSums sums_;
@@ -198,7 +210,7 @@ private:
 }  // namespace
 
 std::unique_ptr<RenderJob> start_cpu(const RenderScene& scene, const RenderSettings& settings, std::uint32_t threads,
-                                     const WideBvh* wide) {
+                                     const WideTrees& wide) {
     validate(settings);
     check_render_scene(scene);
     return std::make_unique<CpuRenderJob>(scene, settings, threads, wide);

@@ -115,6 +115,9 @@ RenderScene make_render_scene(const Tlas& tlas, const std::vector<RenderMesh>& m
         first_sphere.push_back(std::uint32_t(s.spheres.size()));
         append_geometry(s, m, n_materials);
     }
+    s.first_triangle = first_triangle;
+    s.first_sphere = first_sphere;
+    s.instance_slots.assign(tlas.instances.size(), 0);
     append_tree(s, tlas.tree, 0, 0);  // first, at 0; its leaves' slots are those of `instances` (it packs no prims)
     std::vector<TreePlace> places;
     std::uint32_t blas_height = 1;
@@ -126,6 +129,7 @@ RenderScene make_render_scene(const Tlas& tlas, const std::vector<RenderMesh>& m
     for (std::uint32_t index : tlas.tree.refs) {
         const Instance& inst = tlas.instances[index];
         const Bvh& blas = *meshes[inst.blas].bvh;
+        s.instance_slots[index] = std::uint32_t(s.instances.size());
         s.instances.push_back(gpu_instance(inst, places[inst.blas], blas, index));
         walk_steps += 2 + 2ull * blas.node_count() + blas.refs.size() + 2;  // enter, the BLAS's walk, return
     }
