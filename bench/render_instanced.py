@@ -1,7 +1,8 @@
 """The two-level tracer (issue 34) on the CPU reference, one thread: frame ms of a flat scene (the
 flat path must not get slower), of the same mesh as one identity instance of an InstancedBvh (the
 flat render scene), and of many instances of one mesh against the flattened scene's tree (frame ms,
-primary Mrays/s, the trees' bytes), each by the stack, stackless and wide traversals. The least of `--repeat` frames (the machine is shared).
+primary Mrays/s, the trees' bytes), each by the stack, stackless and wide traversals. The least of
+`--repeat` frames (the machine is shared).
 
     .venv/bin/python bench/render_instanced.py [--flat-only] [--json]
 
