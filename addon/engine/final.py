@@ -94,12 +94,11 @@ class FinalRender:
             return
         job = tracer.start(scene, update.bvh, camera, frame.width, frame.height, settings)
         engine.update_progress(TRACE_START)
-        engine.update_stats(
-            "", f"Tracing {frame.width} × {frame.height}, {settings.samples} samples per pixel on {tracer.device}"
-        )
+        on = job.timings["device"]
+        engine.update_stats("", f"Tracing {frame.width} × {frame.height}, {settings.samples} samples per pixel on {on}")
         cancelled = self._trace(engine, job, depsgraph.view_layer.name)
         record = {
-            **_trace_record(tracer, update, job, frame),
+            **_trace_record(update, job, frame),
             "sync": self.report,
             "scene": scene,  # the exported bvhlab.Scene rendered (the checks read it)
             "totals": self.live.totals,
@@ -178,13 +177,15 @@ class FinalRender:
         return update
 
 
-def _trace_record(tracer, update, job, frame) -> dict:
-    """What Render Properties ▸ Last Render shows of a final render, and the checks read."""
+def _trace_record(update, job, frame) -> dict:
+    """What Render Properties ▸ Last Render shows of a final render, and the checks read: the device,
+    backend and note of the job (auto renders the wide traversal on the CPU whatever the Tracer's
+    backend)."""
     timings = job.timings
     return {
-        "device": tracer.device,
-        "backend": tracer.backend,
-        "note": tracer.note,
+        "device": timings["device"],
+        "backend": timings["backend"],
+        "note": timings.get("fallback"),
         "tree": update.action,
         "build_ms": update.ms,
         "trace_ms": timings["trace_ms"],

@@ -243,8 +243,8 @@ class ViewportSession:
                 "frame_ms": wall_ms,
                 "tree": update.action,
                 "build_ms": update.ms,
-                "device": tracer.device,
-                "note": tracer.note,
+                "device": timings["device"],  # the job's: auto renders the wide traversal on the CPU
+                "note": timings.get("fallback"),
                 "overlay_note": capped,
                 "latency_ms": (time.monotonic() - self._request_time) * 1e3,
                 "counter": request.counter.counter if counter_range else None,

@@ -152,6 +152,26 @@ def check_combined_and_heatmap_match_the_tracer(tmp_dir) -> None:
     print(f"engine: whitted 160×120, 4 spp on {record['device']} ({record['backend']}); {record.get('note')}")
 
 
+def check_wide_traversal_renders_the_stack_image(tmp_dir) -> None:
+    """Traversal ▸ Wide (CPU): F12 through the tree's 8-wide copy gives the stack walk's Combined and
+    Depth, bit for bit where both rendered on the CPU (whitted: glass, whose shadow rays the stack
+    walk answers, mirrors, analytic spheres; 2×2 samples); backend auto renders it on the CPU."""
+    scene = harness.open_scene("whitted")
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 96, 72, 100
+    use_engine(scene, backend="auto", render_supersampling=2, render_bounces=5, render_overlay=False, traversal="stack")
+    stack = render_passes(tmp_dir, "stack")
+    stack_backend = _last_final(scene)["backend"]
+    scene.bvhlab.traversal = "wide"
+    wide = render_passes(tmp_dir, "wide")
+    record = _last_final(scene)
+    assert record["backend"] == "cpu" and "wide walk" in record["device"], record
+    compare_images(wide["Combined"], stack["Combined"], stack_backend)
+    if stack_backend == "cpu":
+        assert np.array_equal(wide["Depth"], stack["Depth"])
+    hit = stack["Depth"] < MISS_DEPTH
+    assert 0.1 < hit.mean() < 0.95, hit.mean()
+
+
 def heat_color(x: np.ndarray) -> np.ndarray:
     """shaders/tracer/shade_colors.glsl heat_color, in numpy."""
     t = np.clip(x, 0.0, 1.0)[..., None]

@@ -140,8 +140,9 @@ def _check_build_and_f12(tmp_dir, scene, exported, centres: np.ndarray, half: fl
     assert all(np.array_equal(a.nodes, b.nodes) for a, b in zip(built.bvh.meshes, direct.meshes))
     assert all(np.array_equal(a, b) for a, b in zip(built.bvh.tlas_boxes(), direct.tlas_boxes()))
     exported = exported.flattened()
-    checks_engine.use_engine(scene, backend="cpu", render_supersampling=1, render_overlay=False)
-    depth = checks_engine.render_passes(tmp_dir)["Depth"]
+    checks_engine.use_engine(scene, backend="cpu", render_supersampling=1, render_overlay=False, traversal="stack")
+    passes = checks_engine.render_passes(tmp_dir)
+    depth = passes["Depth"]
     # F12 renders the tree Build made: no second build (its instances may come in another order
     # from the render depsgraph: then only a new TLAS)
     assert trees.counts.snapshot()[0] == builds + 1
@@ -152,6 +153,12 @@ def _check_build_and_f12(tmp_dir, scene, exported, centres: np.ndarray, half: fl
     assert 0.05 < hit.mean() < 0.98, hit.mean()
     agree = np.where(hit, np.abs(depth - expected) <= 1e-4 * expected, depth == np.float32(checks_engine.MISS_DEPTH))
     assert agree.mean() >= 0.99, f"only {agree.mean():.4f} of the pixels have the cubes' depth"
+    # the CPU tracer's wide traversal: through the TLAS's and the cube's 8-wide copies, the same image
+    scene.bvhlab.traversal = "wide"
+    wide = checks_engine.render_passes(tmp_dir, "wide")
+    assert "wide walk" in checks_engine._last_final(scene)["device"]
+    assert np.array_equal(wide["Combined"], passes["Combined"]) and np.array_equal(wide["Depth"], depth)
+    scene.bvhlab.traversal = "stack"
 
 
 def check_geometry_nodes_instances(tmp_dir) -> None:

@@ -141,6 +141,7 @@ def _engine() -> Iterator[Check]:
     yield Check("engine", "engine_selectable", engine.check_engine_selectable)
     for check in (
         engine.check_combined_and_heatmap_match_the_tracer,
+        engine.check_wide_traversal_renders_the_stack_image,
         engine.check_heatmap_is_box_tests,
         engine.check_depth_is_camera_z,
         engine.check_rerender_reads_only_what_changed,

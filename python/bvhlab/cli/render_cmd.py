@@ -59,7 +59,13 @@ def add_parser(sub) -> None:
         help=f"the counter's colour range (default auto: 0 to the {counters.AUTO_PERCENTILE:g}th percentile)",
     )
     p.add_argument("--heatmap", action="store_true", help="the same as --counter box_tests (kept for old scripts)")
-    p.add_argument("--traversal", default=_DEFAULT.traversal, choices=TRAVERSALS)
+    p.add_argument(
+        "--traversal",
+        default=_DEFAULT.traversal,
+        choices=TRAVERSALS,
+        help="stack or stackless (report §3.1), or wide: the CPU tracer through the tree's 8-wide copy, the "
+        f"same image faster (default {_DEFAULT.traversal})",
+    )
     options.add_png_out(p)
     p.set_defaults(run=run)
 
