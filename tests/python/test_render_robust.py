@@ -17,32 +17,37 @@ from bvhlab.library import showcase
 
 
 def test_threads_rendering_at_once_get_their_serial_images():
-    """Four threads, Vulkan (one shared renderer, and the process-wide default) and CPU, each
-    rendering a few frames of its own settings: every image equals the same render made alone."""
+    """Six threads, Vulkan (one shared renderer, and the process-wide default) and CPU (the wide
+    traversal on a shared renderer too, its tree's wide copy made by whichever thread comes first),
+    each rendering a few frames of its own settings: every image equals the same render made alone."""
     scene = showcase.whitted()
     bvh = bvhlab.build(scene)
     shared = bvhlab.Renderer("vulkan", validation=True)
+    cpu = bvhlab.Renderer("cpu", threads=2)
     jobs = [
         (shared, dict(samples_per_axis=2)),
         (shared, dict(traversal="stackless", overlay_depth=(1, 3))),
         (bvhlab.render, dict(backend="vulkan", mode="heatmap")),
         (bvhlab.render, dict(backend="cpu", samples_per_axis=2, threads=1)),
+        (cpu, dict(traversal="wide", samples_per_axis=2)),
+        (cpu, dict(traversal="wide", mode="heatmap")),
     ]
 
-    def run(target, options):
+    def run(target, options, tree=bvh):
         return (
-            target.render(scene, bvh, 40, 30, **options)[0]
+            target.render(scene, tree, 40, 30, **options)[0]
             if isinstance(target, bvhlab.Renderer)
-            else target(scene, bvh, 40, 30, **options)[0]
+            else target(scene, tree, 40, 30, **options)[0]
         )
 
     serial = [run(target, options) for target, options in jobs]
+    fresh = bvhlab.build(scene)  # the same tree, no wide copy yet: the threads race to make it
     results, errors = [None] * len(jobs), []
 
     def worker(k):
         try:
             for _ in range(3):
-                results[k] = run(*jobs[k])
+                results[k] = run(*jobs[k], tree=fresh)
         except Exception as e:  # noqa: BLE001 (reported below)
             errors.append(e)
 
