@@ -215,7 +215,8 @@ class Bvh:
 
         Returns a dict of arrays: t (inf on a miss), prim (index within its kind, -1 on a miss),
         kind (0 triangle, 1 sphere), u, v (triangle barycentrics; sphere longitude/2π, colatitude/π),
-        and with `nodes_visited=True` nodes_visited (box tests, for heatmaps). Counting keeps each
+        and with `nodes_visited=True` nodes_visited (for heatmaps: the binary walks' box tests; the
+        wide walk's wide nodes, each eight child boxes tested at once). Counting keeps each
         ray on its own walk: without it, the wide traversal takes a camera's neighbouring rays
         through the tree eight at a time (the same hits, faster)."""
         return run_ray_query(self._core, origins, directions, tmin, tmax, traversal, threads, nodes_visited)
