@@ -48,7 +48,8 @@ public:
         overlay_ = rasterize_overlay(scene, frame_);
         sums_ = PixelSums(std::size_t(settings.width) * settings.height, settings.traversal_counters);
         timings_.overlay_ms = ms_since(start);
-        timings_.device = "CPU reference (" + std::to_string(threads_) + " threads" + walk_note(settings) + ")";
+        timings_.device = "CPU reference (" + std::to_string(threads_) + (threads_ == 1 ? " thread" : " threads") +
+                          walk_note(settings) + ")";
         timings_.steps_per_dispatch = settings.steps_per_dispatch.value_or(gpu::MAX_STEPS_PER_DISPATCH);
     }
 
