@@ -211,7 +211,7 @@ TEST(RenderWide, ATwoLevelSceneWithoutItsTlasIsWalkedByTheStackWalkAndSaysSo) {
     EXPECT_NE(wide.timings.device.find("without its TLAS: stack walk"), std::string::npos) << wide.timings.device;
 }
 
-TEST(RenderWide, AnotherScenesTlasOrAMeshWithoutItsWideCopyIsRefused) {
+TEST(RenderWide, AnotherScenesOrAMovedTlasOrAMeshWithoutItsWideCopyIsRefused) {
     const InstancedPtr p = mixed_instances(), other = many_instances();
     RenderSettings settings = p->settings;
     settings.traversal = Traversal::Wide;
@@ -220,6 +220,16 @@ TEST(RenderWide, AnotherScenesTlasOrAMeshWithoutItsWideCopyIsRefused) {
     EXPECT_THROW(start_cpu(p->two_level, settings, 1, {nullptr, &others}), std::invalid_argument);
     std::vector<WideBvh> own;
     TwoLevel view = wide_view(*p, own);
+    // the scene's meshes, one instance moved: a TLAS of the same counts, not the scene's
+    std::vector<const Bvh*> blases;
+    for (const Bvh& t : p->trees) blases.push_back(&t);
+    std::vector<Transform> moved = p->transforms;
+    moved[2].m[3] += 1.0f;
+    const Tlas later = build_tlas(blases, p->blas_of, moved);
+    TwoLevel moved_view = view;
+    moved_view.tlas = &later;
+    EXPECT_THROW(start_cpu(p->two_level, settings, 1, {nullptr, &moved_view}), std::invalid_argument);
+    EXPECT_NO_THROW(start_cpu(p->two_level, settings, 1, {nullptr, &view}));
     view.blases[1].wide = nullptr;
     EXPECT_THROW(start_cpu(p->two_level, settings, 1, {nullptr, &view}), std::invalid_argument);
 }

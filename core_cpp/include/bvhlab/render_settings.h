@@ -94,7 +94,7 @@ std::string to_string(RenderMode mode);
 std::vector<std::string> traversal_names();  ///< every traversal (the queries' and the tracers')
 std::vector<std::string> render_mode_names();
 
-/// gpu::TRAVERSAL_STACK / TRAVERSAL_STACKLESS for the tracer.
+/// gpu::TRAVERSAL_STACK / TRAVERSAL_STACKLESS / TRAVERSAL_WIDE (the CPU tracer's) for the tracer.
 std::uint32_t gpu_traversal(Traversal traversal);
 
 }  // namespace bvhlab

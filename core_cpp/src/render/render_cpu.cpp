@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cstring>
 #include <exception>
 #include <mutex>
 #include <optional>
@@ -87,10 +88,9 @@ private:
         if (scene_.two_level()) {
             if (wide.two_level == nullptr) return;
             check_two_level(*wide.two_level, Traversal::Wide);
-            const Tlas& tlas = *wide.two_level->tlas;
-            if (tlas.instances.size() != scene_.instance_slots.size() ||
-                wide.two_level->blases.size() != scene_.first_triangle.size())
-                throw std::invalid_argument("the wide traversal's TLAS is not the one the scene was made from");
+            if (!made_from(*wide.two_level))
+                throw std::invalid_argument(
+                    "the wide traversal's TLAS and meshes are not the ones the scene was made from");
             two_level_ = *wide.two_level;
             wide_scene_ = gpu::WideScene{nullptr, nullptr, &*two_level_, opaque};
             return;
@@ -98,6 +98,33 @@ private:
         if (scene_.bvh == nullptr) return;
         const WideBvh* flat = wide.flat ? wide.flat : &own_wide_.emplace(make_wide(*scene_.bvh));
         wide_scene_ = gpu::WideScene{scene_.bvh, flat, nullptr, opaque};
+    }
+
+    /// Whether `two` holds what the scene was made from: its meshes' primitive counts, and each
+    /// instance in its slot with its transform and a mesh in range (a hit it returns is then one of
+    /// the scene's primitives in a slot that holds it, which the shading reads).
+    bool made_from(const TwoLevel& two) const {
+        const Tlas& tlas = *two.tlas;
+        const std::size_t meshes = scene_.first_triangle.size();
+        if (tlas.instances.size() != scene_.instance_slots.size() || two.blases.size() != meshes) return false;
+        for (std::size_t k = 0; k < meshes; ++k) {
+            const bool last = k + 1 == meshes;
+            const std::size_t triangles =
+                (last ? scene_.triangles.size() : scene_.first_triangle[k + 1]) - scene_.first_triangle[k];
+            const std::size_t spheres =
+                (last ? scene_.spheres.size() : scene_.first_sphere[k + 1]) - scene_.first_sphere[k];
+            if (two.blases[k].bvh->triangle_count != triangles || two.blases[k].bvh->sphere_count != spheres)
+                return false;
+        }
+        for (std::size_t i = 0; i < tlas.instances.size(); ++i) {
+            const std::uint32_t slot = scene_.instance_slots[i];
+            if (slot >= scene_.instances.size() || scene_.instances[slot].tree.w != i) return false;
+            const gpu::GpuInstance& g = scene_.instances[slot];
+            const float rows[12] = {g.row0.x, g.row0.y, g.row0.z, g.row0.w, g.row1.x, g.row1.y,
+                                    g.row1.z, g.row1.w, g.row2.x, g.row2.y, g.row2.z, g.row2.w};
+            if (std::memcmp(rows, tlas.instances[i].world_to_object.m.data(), sizeof rows) != 0) return false;
+        }
+        return true;
     }
 
     std::string walk_note(const RenderSettings& settings) const {
