@@ -16,9 +16,7 @@ namespace bvhlab::gpu {
 
 /// What TRAVERSAL_WIDE answers queries with (render.h start_cpu): a flat scene's tree and its
 /// 8-wide copy, or a two-level scene's TLAS and meshes (tlas.h's queries, Traversal::Wide); and
-/// whether its shadow rays may be any-hit queries (every material opaque: a shadow ray's
-/// transmission is then 0 or 1; through transparent surfaces it is a product taken in the walk's
-/// order, which the stack walk keeps).
+/// whether every material is opaque (a blocked shadow ray's transmission is then 0: wide_walk).
 struct WideScene {
     const Bvh* bvh = nullptr;
     const WideBvh* wide = nullptr;
@@ -94,29 +92,32 @@ public:
     /// flat: intersect_wide, bit for bit; two-level: intersect_two_level, whose instance and
     /// primitive are mapped to the scene's slot and reference). Its cost: flat, 8 box tests a wide
     /// node visited; two-level, the query's count (the TLAS's child boxes, a BLAS's wide nodes).
-    /// Returns false, leaving the query to the stack walk, where there is no wide tree or a shadow
-    /// ray may cross a transparent surface.
+    /// A shadow ray is an any-hit query: blocked, its transmission is 0 where every material is
+    /// opaque; through transparent surfaces it is a product taken in the walk's order (three factors
+    /// multiplied in another order can round otherwise), so there a blocked ray is left to the stack
+    /// walk (returns false) and only a ray that crosses nothing is answered here (transmission 1:
+    /// occluded is exactly "some crossing before tmax", as the stack walk counts crossings). Returns
+    /// false too where there is no wide tree.
     bool wide_walk(INOUT(Walk) w, TraceRay r, bool shadow, INOUT(Hit) hit, INOUT(uint) work, INOUT(uint) steps) const {
-        if (wide_ == nullptr || (shadow && !wide_->opaque)) return false;
+        if (wide_ == nullptr) return false;
         const Ray ray{{r.origin.x, r.origin.y, r.origin.z}, {r.dir.x, r.dir.y, r.dir.z}, r.tmin, hit.t};
-        if (wide_->two_level) {
-            if (shadow) {
-                if (occluded_two_level(*wide_->two_level, ray, Traversal::Wide)) hit.transmission = 0.0f;
-            } else {
-                std::uint32_t visited = 0;
-                const InstanceHit h = intersect_two_level(*wide_->two_level, ray, Traversal::Wide, &visited);
-                if (h.hit.ref != kNoHit) {
-                    const std::uint32_t mesh = wide_->two_level->tlas->instances[h.instance].blas;
-                    const bool sphere = (h.hit.ref & REF_SPHERE_BIT) != 0u;
-                    hit.t = h.hit.t, hit.u = h.hit.u, hit.v = h.hit.v;
-                    hit.ref = sphere ? REF_SPHERE_BIT | ((h.hit.ref & REF_INDEX_MASK) + scene_.first_sphere[mesh])
-                                     : h.hit.ref + scene_.first_triangle[mesh];
-                    hit.instance = scene_.instance_slots[h.instance];
-                }
-                hit.counts.box_tests += visited;
+        if (shadow) {
+            const bool blocked = wide_->two_level ? occluded_two_level(*wide_->two_level, ray, Traversal::Wide)
+                                                  : occluded_wide(*wide_->wide, ray);
+            if (blocked && !wide_->opaque) return false;
+            if (blocked) hit.transmission = 0.0f;
+        } else if (wide_->two_level) {
+            std::uint32_t visited = 0;
+            const InstanceHit h = intersect_two_level(*wide_->two_level, ray, Traversal::Wide, &visited);
+            if (h.hit.ref != kNoHit) {
+                const std::uint32_t mesh = wide_->two_level->tlas->instances[h.instance].blas;
+                const bool sphere = (h.hit.ref & REF_SPHERE_BIT) != 0u;
+                hit.t = h.hit.t, hit.u = h.hit.u, hit.v = h.hit.v;
+                hit.ref = sphere ? REF_SPHERE_BIT | ((h.hit.ref & REF_INDEX_MASK) + scene_.first_sphere[mesh])
+                                 : h.hit.ref + scene_.first_triangle[mesh];
+                hit.instance = scene_.instance_slots[h.instance];
             }
-        } else if (shadow) {
-            if (occluded_wide(*wide_->wide, ray)) hit.transmission = 0.0f;
+            hit.counts.box_tests += visited;
         } else {
             std::uint32_t visited = 0;
             const bvhlab::Hit h = intersect_wide(*wide_->wide, *wide_->bvh, ray, &visited);

@@ -130,7 +130,8 @@ private:
     std::string walk_note(const RenderSettings& settings) const {
         if (settings.traversal != Traversal::Wide) return "";
         if (!wide_scene_) return "; two-level without its TLAS: stack walk";
-        return wide_scene_->opaque ? ", wide walk" : ", wide walk; shadow rays: stack walk (transparent surfaces)";
+        return wide_scene_->opaque ? ", wide walk"
+                                   : ", wide walk; blocked shadow rays: stack walk (transparent surfaces)";
     }
 
     static void note_budgets(RunShared& shared, std::uint64_t budgets) {
