@@ -14,11 +14,10 @@
 
 namespace bvhlab::gpu {
 
-/// What TRAVERSAL_WIDE answers queries with (render.h start_cpu): a flat scene's tree and its
-/// 8-wide copy, or a two-level scene's TLAS and meshes (tlas.h's queries, Traversal::Wide); and
+/// What TRAVERSAL_WIDE answers queries with (render.h start_cpu): a flat scene's 8-wide copy (of
+/// the scene's tree, RenderScene::bvh), or a two-level scene's TLAS and meshes (tlas.h's queries, Traversal::Wide); and
 /// whether every material is opaque (a blocked shadow ray's transmission is then 0: wide_walk).
 struct WideScene {
-    const Bvh* bvh = nullptr;
     const WideBvh* wide = nullptr;
     const TwoLevel* two_level = nullptr;
     bool opaque = false;
@@ -120,7 +119,7 @@ public:
             hit.counts.box_tests += visited;
         } else {
             std::uint32_t visited = 0;
-            const bvhlab::Hit h = intersect_wide(*wide_->wide, *wide_->bvh, ray, &visited);
+            const bvhlab::Hit h = intersect_wide(*wide_->wide, *scene_.bvh, ray, &visited);
             if (h.ref != kNoHit) hit.t = h.t, hit.ref = h.ref, hit.u = h.u, hit.v = h.v;
             hit.counts.box_tests += 8u * visited;
         }

@@ -92,12 +92,12 @@ private:
                 throw std::invalid_argument(
                     "the wide traversal's TLAS and meshes are not the ones the scene was made from");
             two_level_ = *wide.two_level;
-            wide_scene_ = gpu::WideScene{nullptr, nullptr, &*two_level_, opaque};
+            wide_scene_ = gpu::WideScene{nullptr, &*two_level_, opaque};
             return;
         }
         if (scene_.bvh == nullptr) return;
         const WideBvh* flat = wide.flat ? wide.flat : &own_wide_.emplace(make_wide(*scene_.bvh));
-        wide_scene_ = gpu::WideScene{scene_.bvh, flat, nullptr, opaque};
+        wide_scene_ = gpu::WideScene{flat, nullptr, opaque};
     }
 
     /// Whether `two` holds what the scene was made from: its meshes' primitive counts, and each
