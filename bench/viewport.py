@@ -34,7 +34,9 @@ def _modules():
 
     harness.enable_addon_from_source()
     package = harness.addon().__name__ + ".engine."
-    return {name: import_module(package + name) for name in ("viewport", "view_camera", "settings")}
+    modules = {name: import_module(package + name) for name in ("viewport", "view_camera", "settings")}
+    modules["trees"] = import_module(harness.addon().__name__ + ".trees")  # the add-on's one tree cache
+    return modules
 
 
 TRAVERSAL = "stackless"  # --traversal
@@ -50,14 +52,12 @@ def _request(m, scene, width, height, turn: float, samples_per_axis: int, overla
     view_matrix = world.inverted()
     window = camera.calc_matrix_camera(depsgraph, x=width, y=height)
     frustum = m["view_camera"].view_frustum(view_matrix, window, width, height)
-    from importlib import import_module
-
-    trees = import_module(harness.addon().__name__ + ".trees")
     scene.bvhlab.traversal = TRAVERSAL
     settings = scene.bvhlab.render_options(viewport=True).replace(
         samples_per_axis=samples_per_axis, max_depth=5, overlay_depth=overlay
     )
-    return m["viewport"].ViewRequest(frustum, settings, "auto", trees.key_of(scene, scope="visible"), budget_ms=40.0)
+    tree = m["trees"].key_of(scene, scope="visible")
+    return m["viewport"].ViewRequest(frustum, settings, "auto", tree, budget_ms=40.0)
 
 
 def _wait_for(session, request, level: str, timeout: float = 600.0):

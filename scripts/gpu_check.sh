@@ -2,8 +2,8 @@
 # The GPU check (run on a GPU machine from the repository root, with build/gpu-check carried:
 # scripts/gpu_bundle.sh makes it here). Runs the C++ Vulkan tests (every image against the CPU
 # reference, zero validation errors, bounded dispatches), the frame-time tool, and bench/render.py
-# (the report's Table 1: Sponza and the atrium at 800×600, stack and stackless, against the
-# report's frame times) on the GPU's driver, under 8 minutes; writes logs, gtest XML and the
+# (the report's Table 1: Sponza and the atrium at 800×600, stack and stackless, and the CPU
+# reference's wide traversal beside, against the report's frame times) on the GPU's driver, under 8 minutes; writes logs, gtest XML and the
 # benchmark's JSON into $OUT (or build/gpu-check/out).
 set -uo pipefail
 bundle=build/gpu-check

@@ -51,8 +51,9 @@ struct RenderSettings {
     Vec3 overlay_color = kDefaultOverlayColor;
     float line_width = 1.0f;  ///< pixels (Vulkan devices without wide lines draw 1)
     /// Stack or Stackless (report §3.1); Wide: the CPU tracer answers each query through the CPU
-    /// queries' 8-wide tree (the same image, several times faster; its cost counts 8 box tests a
-    /// wide node, no traversal_counters), the Vulkan tracer refuses it
+    /// queries' 8-wide trees (the same image, 1.5-3× faster; no traversal_counters; its cost: 8 box
+    /// tests a wide node in a flat scene, the two-level query's count in a two-level one), the
+    /// Vulkan tracer refuses it
     Traversal traversal = Traversal::Stack;
     RenderMode mode = RenderMode::Shade;
     std::optional<float> heatmap_scale;  ///< box tests shown as full red; unset: 8 × tree height
