@@ -17,7 +17,7 @@ from bvhlab.build_config import (
     MIN_BINS,
 )
 from bvhlab.render import MAX_RAY_DEPTH, MAX_SAMPLES_PER_AXIS
-from bvhlab.render_options import MAX_LINE_WIDTH, RenderOptions
+from bvhlab.render_options import AUTO_TRAVERSAL, MAX_LINE_WIDTH, RenderOptions
 
 from . import state
 from .property_items import (
@@ -221,7 +221,7 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
     )
     traversal: EnumProperty(
         name="Traversal",
-        default=_RENDER.traversal,
+        default=AUTO_TRAVERSAL,  # the fastest walk of the device, the same image (RenderOptions.for_backend)
         items=TRAVERSAL_ITEMS,
         update=_redraw,
     )
@@ -343,7 +343,7 @@ def register_properties() -> None:
     # A pass switch lives on the view layer, like Blender's own (use_pass_z); the engine reads it.
     bpy.types.ViewLayer.bvhlab_use_pass_heatmap = BoolProperty(
         name="BVH Heatmap",
-        default=True,
+        default=False,  # as every diagnostic pass; with it, Traversal Auto walks the binary tree (Stack)
         update=_passes_changed,
         description="The bvhlab render engine's traversal-cost heatmap (box tests of the primary rays) as a pass",
     )

@@ -5,7 +5,8 @@ from __future__ import annotations
 
 from bvhlab.build_config import AXES, BIN_BOUNDS, MAX_SAH_BLOCK, METHODS
 from bvhlab.bvh import MAX_TREE_HEIGHT
-from bvhlab.render import BACKENDS, MODES, TRAVERSALS
+from bvhlab.render import BACKENDS, MODES
+from bvhlab.render_options import RENDER_TRAVERSALS
 from bvhlab.update import UPDATE_POLICIES, UpdateConfig
 
 # Names, defaults and limits come from the core (one definition, bvhlab._core); the add-on only
@@ -36,6 +37,11 @@ _LABELS = {
     "vulkan": ("Vulkan", "Vulkan compute tracer"),
     "cpu": ("CPU", "C++ reference tracer"),
 }
+_TRAVERSAL_AUTO = (
+    "Auto",
+    "The fastest walk of the device that renders: Wide on the CPU, Stack on a GPU; Stack wherever a "
+    "count of the walk is shown (the heatmap, its pass, the counters). The same image",
+)
 _BACKEND_AUTO = (
     "Auto",
     "A Vulkan GPU when there is one, otherwise the CPU reference tracer (also instead of a CPU "
@@ -82,7 +88,12 @@ METHOD_ITEMS = _items(METHODS)
 # not see this module's names)
 BACKEND_ITEMS = [(b, *(_BACKEND_AUTO if b == "auto" else _LABELS[b])) for b in BACKENDS]
 AXIS_ITEMS = _items(AXES)
-TRAVERSAL_ITEMS = _items(TRAVERSALS)
+# Numbered as before Auto came (a .blend stores an enum's number: one saved with Stackless must
+# load as Stackless), Auto listed first.
+TRAVERSAL_ITEMS = [
+    (t, *(_TRAVERSAL_AUTO if t == "auto" else _LABELS[t]), (*RENDER_TRAVERSALS[1:], "auto").index(t))
+    for t in RENDER_TRAVERSALS
+]
 MODE_ITEMS = _items(MODES)
 BIN_BOUNDS_ITEMS = _items(BIN_BOUNDS)
 #: The SAH's block sizes, the powers of two up to the core's limit (a string per item, as an

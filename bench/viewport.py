@@ -136,7 +136,7 @@ def main() -> None:
     ap.add_argument("--views", type=int, default=5)
     ap.add_argument("--rounds", type=int, default=7)
     ap.add_argument("--json", type=Path, default=ROOT / "bench" / "results" / "viewport.json")
-    ap.add_argument("--traversal", default=TRAVERSAL, help="the tracer's: stack, stackless or wide (CPU)")
+    ap.add_argument("--traversal", default=TRAVERSAL, help="the tracer's: stack, stackless, wide (CPU) or auto")
     args = ap.parse_args()
     TRAVERSAL = args.traversal
     width, height = (int(v) for v in args.size.split("x"))

@@ -82,6 +82,10 @@ class FinalRender:
         settings = blender_scene.bvhlab.render_options()
         if passes.counters_wanted(depsgraph.view_layer):  # the counter passes (issue 35)
             settings = settings.replace(traversal_counters=True)
+        # Traversal Auto: the heatmap pass counts the binary tree's box tests, as the heatmap mode
+        settings = settings.for_backend(
+            tracer.backend == "cpu", counts_shown=passes.heatmap_wanted(depsgraph.view_layer)
+        )
         camera, settings, unrendered = self._camera(blender_scene, scene.camera, frame, settings)
         for note in unrendered:
             engine.report({"WARNING"}, f"bvhlab: {note}")

@@ -25,12 +25,16 @@ def counters_wanted(view_layer) -> bool:
     return bool(getattr(view_layer, COUNTERS_PROPERTY, False))
 
 
+def heatmap_wanted(view_layer) -> bool:
+    return bool(getattr(view_layer, HEATMAP_PROPERTY, False))
+
+
 def wanted(view_layer) -> list[tuple[str, int, str, str]]:
     """(name, channels, channel ids, socket type) of each pass the view layer asks for."""
     passes = [(COMBINED, 4, "RGBA", "COLOR")]
     if view_layer.use_pass_z:
         passes.append((DEPTH, 1, "Z", "VALUE"))
-    if getattr(view_layer, HEATMAP_PROPERTY, False):
+    if heatmap_wanted(view_layer):
         passes.append((HEATMAP, 4, "RGBA", "COLOR"))
     if counters_wanted(view_layer):
         passes.extend((name, 1, "X", "VALUE") for name in counter_passes().values())

@@ -235,10 +235,10 @@ class Renderer:
         """A RenderJob (sample passes, nothing traced yet). `options` and its fields by name as for
         `bvhlab.render`. `threads`: CPU reference threads (default: the Renderer's, 0 = every core)."""
         threads = self.threads if threads is None else _checks.integer("threads", threads, 0, 4096)
-        options = options_from(options, option_changes)
+        options = options_from(options, option_changes).for_backend(cpu=self._vulkan is None)
         settings = render_settings(scene, bvh, width, height, options, camera)
         start = time.perf_counter()
-        # "auto" renders the wide walk, which only the CPU tracer has, on the CPU
+        # the backend "auto" renders the wide walk, which only the CPU tracer has, on the CPU
         wide_on_cpu = self._vulkan is not None and options.traversal == "wide" and self.reason.startswith("auto")
         with self._lock:
             render_scene = self._cache.get(scene, bvh, options)
@@ -255,6 +255,7 @@ class Renderer:
             "prepare_ms": prepare_ms,
             "upload_ms": upload_ms,
             "backend": "cpu" if wide_on_cpu else self.backend,
+            "traversal": options.traversal,  # the walk that rendered ("auto" made one: for_backend)
             "reason": "auto: the wide traversal is the CPU tracer's" if wide_on_cpu else self.reason,
             "heatmap_scale": render_scene.heatmap_scale(settings),  # the heatmap's legend (bvhlab.legend)
         }

@@ -20,6 +20,10 @@ _CORE = _core.RenderSettings()
 DEFAULT_WIDTH: int = int(_CORE.width)
 DEFAULT_HEIGHT: int = int(_CORE.height)
 MAX_LINE_WIDTH: float = float(_core.MAX_LINE_WIDTH)
+#: The renderers' traversals: the walks of the core (`bvhlab.TRAVERSALS`) and "auto", the fastest
+#: walk of the backend that renders where no count of the walk is shown (`RenderOptions.for_backend`).
+AUTO_TRAVERSAL = "auto"
+RENDER_TRAVERSALS: tuple[str, ...] = (AUTO_TRAVERSAL, *_core.TRAVERSALS)
 
 
 def _rgb(value) -> tuple[float, float, float]:
@@ -69,6 +73,18 @@ class RenderOptions:
         """Samples per pixel."""
         return self.samples_per_axis**2
 
+    def for_backend(self, cpu: bool, counts_shown: bool = False) -> RenderOptions:
+        """These options with traversal "auto" made the walk it stands for on a backend (`cpu`: the
+        CPU tracer renders; else Vulkan): the wide walk on the CPU where no count of the walk is
+        shown (mode "shade", no traversal counters, and not `counts_shown`, e.g. a heatmap pass
+        beside the image), else the stack walk, whose counts are the binary tree's box tests
+        (report §3.1) and which is the faster walk on a GPU (results.md, "On a GPU"). The same
+        image either way; another traversal is kept as it is."""
+        if self.traversal != AUTO_TRAVERSAL:
+            return self
+        counted = counts_shown or self.mode == "heatmap" or self.traversal_counters
+        return dataclasses.replace(self, traversal="wide" if cpu and not counted else _core.DEFAULT_TRAVERSAL)
+
     def replace(self, **changes) -> RenderOptions:
         """A copy with some options changed (unknown names: TypeError naming them)."""
         names = [f.name for f in fields(self)]
@@ -86,7 +102,7 @@ class RenderOptions:
         s.overlay_color_by_depth = bool(self.color_by_depth)
         s.overlay_color = _triple("line_color", self.line_color)
         s.line_width = _real("line_width", self.line_width)
-        s.traversal = _core.parse_traversal(_name("traversal", self.traversal))
+        s.traversal = _core.parse_traversal(_traversal(self.traversal))
         s.mode = _core.parse_render_mode(_name("mode", self.mode))
         s.heatmap_scale = None if self.heatmap_scale is None else _real("heatmap_scale", self.heatmap_scale)
         s.traversal_counters = bool(self.traversal_counters)
@@ -104,6 +120,13 @@ def options_from(options: RenderOptions | None, changes: dict) -> RenderOptions:
     elif not isinstance(options, RenderOptions):
         raise TypeError(f"options must be a bvhlab.RenderOptions, got {type(options).__name__}")
     return options.replace(**changes) if changes else options
+
+
+def _traversal(value) -> str:
+    """The core's name of a traversal: "auto" where no backend made it one (`for_backend`) is the
+    core's default walk, which every backend has."""
+    name = _checks.choice("traversal", value, RENDER_TRAVERSALS)
+    return _core.DEFAULT_TRAVERSAL if name == AUTO_TRAVERSAL else name
 
 
 def _name(what: str, value) -> str:

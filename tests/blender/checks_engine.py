@@ -140,6 +140,7 @@ def check_combined_and_heatmap_match_the_tracer(tmp_dir) -> None:
         overlay_depth_max=3,
         traversal="stackless",
     )
+    bpy.context.view_layer.bvhlab_use_pass_heatmap = True  # off by default (the file opened next resets it)
     got = render_passes(tmp_dir)
     record = _last_final(scene)
     combined, _, _ = reference(scene, samples_per_axis=2, overlay=(1, 3))
@@ -172,6 +173,33 @@ def check_wide_traversal_renders_the_stack_image(tmp_dir) -> None:
     assert 0.1 < hit.mean() < 0.95, hit.mean()
 
 
+def check_auto_traversal_renders_wide_on_the_cpu_and_stack_for_the_heatmap_pass(tmp_dir) -> None:
+    """Traversal ▸ Auto, the default: F12 on the CPU walks the wide trees (the stack walk's Combined
+    and Depth bit for bit); with the view layer's heatmap pass on (off by default), the stack walk,
+    so the pass is the binary tree's box tests (the stack F12's pass, bit for bit), as the heatmap
+    mode shows."""
+    scene = harness.open_scene("whitted")
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 96, 72, 100
+    assert scene.bvhlab.traversal == "auto", scene.bvhlab.traversal  # a scene saved before Auto: the default
+    assert not bpy.context.view_layer.bvhlab_use_pass_heatmap
+    use_engine(scene, backend="cpu", render_supersampling=2, render_bounces=5, render_overlay=False)
+    auto = render_passes(tmp_dir, "auto")
+    assert "wide walk" in _last_final(scene)["device"], _last_final(scene)
+    scene.bvhlab.traversal = "stack"
+    stack = render_passes(tmp_dir, "stack")
+    assert np.array_equal(auto["Combined"], stack["Combined"]) and np.array_equal(auto["Depth"], stack["Depth"])
+    bpy.context.view_layer.bvhlab_use_pass_heatmap = True
+    try:
+        stack_heat = render_passes(tmp_dir, "stack_heat")
+        scene.bvhlab.traversal = "auto"
+        auto_heat = render_passes(tmp_dir, "auto_heat")
+    finally:
+        bpy.context.view_layer.bvhlab_use_pass_heatmap = False
+    assert "wide walk" not in _last_final(scene)["device"], _last_final(scene)
+    assert np.array_equal(auto_heat["BVH Heatmap"], stack_heat["BVH Heatmap"])
+    assert np.array_equal(auto_heat["Combined"], auto["Combined"])
+
+
 def heat_color(x: np.ndarray) -> np.ndarray:
     """shaders/tracer/shade_colors.glsl heat_color, in numpy."""
     t = np.clip(x, 0.0, 1.0)[..., None]
@@ -198,6 +226,7 @@ def check_heatmap_is_box_tests(tmp_dir) -> None:
     scene = harness.open_scene("suzanne_250k")
     scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 96, 72, 100
     use_engine(scene, backend="cpu", render_supersampling=1, render_overlay=False, traversal="stack")
+    bpy.context.view_layer.bvhlab_use_pass_heatmap = True
     got = render_passes(tmp_dir)
     exported = export_scene(bpy.context)
     s = scene.bvhlab  # the tree the engine builds: the panel's settings

@@ -19,7 +19,14 @@ import numpy as np
 
 import bvhlab
 from bvhlab.build_config import BuildConfig
-from bvhlab.render_options import DEFAULT_HEIGHT, DEFAULT_WIDTH, MAX_LINE_WIDTH, RenderOptions, options_from
+from bvhlab.render_options import (
+    AUTO_TRAVERSAL,
+    DEFAULT_HEIGHT,
+    DEFAULT_WIDTH,
+    MAX_LINE_WIDTH,
+    RenderOptions,
+    options_from,
+)
 
 #: Non-default settings for the paths to agree on (every render setting the panel has, and a build).
 SETTINGS = {
@@ -61,7 +68,10 @@ def check_defaults_are_the_cores() -> None:
     # the add-on's settings
     assert _rna("render_supersampling").default == render.samples_per_axis
     assert _rna("render_bounces").default == render.max_depth
-    assert _rna("traversal").default == render.traversal and _rna("render_mode").default == render.mode
+    # the add-on and the render CLI ask for the image by the device's fastest walk; the library's
+    # default is the report's walk (RenderOptions, the C++ RenderSettings)
+    assert render.traversal == bvhlab._core.DEFAULT_TRAVERSAL and _rna("traversal").default == AUTO_TRAVERSAL
+    assert _rna("render_mode").default == render.mode
     assert _rna("overlay_color_by_depth").default == render.color_by_depth
     np.testing.assert_allclose(tuple(_rna("overlay_color").default_array)[:3], render.line_color, atol=1e-6)
     assert _rna("overlay_line_width").default == render.line_width
@@ -87,7 +97,7 @@ def check_defaults_are_the_cores() -> None:
     assert (args.samples_per_axis, args.max_depth, args.traversal) == (
         render.samples_per_axis,
         render.max_depth,
-        render.traversal,
+        AUTO_TRAVERSAL,
     )
     from bvhlab.cli.options import build_kwargs
 

@@ -39,5 +39,8 @@ def test_settings_take_names_defaults_and_limits_from_the_core():
     assert int(rna["sah_block"].default) == bvhlab.build_config.DEFAULT_SAH_BLOCK
     assert rna["render_bounces"].hard_max == bvhlab._core.MAX_RAY_DEPTH
     assert rna["render_supersampling"].hard_max == bvhlab._core.MAX_SAMPLES_PER_AXIS
-    assert [i.identifier for i in rna["traversal"].enum_items] == list(bvhlab._core.TRAVERSALS)
+    assert [i.identifier for i in rna["traversal"].enum_items] == ["auto", *bvhlab._core.TRAVERSALS]
+    assert rna["traversal"].default == "auto"  # the device's fastest walk (RenderOptions.for_backend)
+    # a .blend stores the number: those saved before Auto came (stack 0, stackless 1, wide 2) load as saved
+    assert [i.value for i in rna["traversal"].enum_items] == [3, 0, 1, 2]
     assert [i.identifier for i in rna["backend"].enum_items] == ["auto", "vulkan", "cpu"]

@@ -83,7 +83,10 @@ def line_pixels(png_path, depth: int) -> int:
     return int(np.all(np.abs(image - colour) <= 1, -1).sum())
 
 
-def test_render_with_overlay_and_heatmap(tmp_path):
+def test_render_with_overlay_and_heatmap(tmp_path, capsys):
+    """Traversal auto (the default) on the CPU: the wide walk for the image (the stack walk's PNG,
+    byte for byte), the stack walk where the counts are the picture (--heatmap: the stack walk's
+    box tests)."""
     out = tmp_path / "render.png"
     assert (
         main(
@@ -109,6 +112,11 @@ def test_render_with_overlay_and_heatmap(tmp_path):
     strip = legend.depth_legend(96, [1]).shape[0]  # the depth colours' legend under the image
     assert read_png(out).shape == (64 + strip, 96, 4)
     assert line_pixels(out, 1) > 20 and line_pixels(out, 2) == 0
+    assert "wide walk" in capsys.readouterr().out
+    stack_out = tmp_path / "stack.png"
+    shape = ["--width", "96", "--height", "64", "--backend", "cpu", "--method", "median", "--bvh-depth", "1:1"]
+    assert main(["render", "gen:five_spheres", *shape, "--traversal", "stack", "--out", str(stack_out)]) == 0
+    assert stack_out.read_bytes() == out.read_bytes()
     heat = tmp_path / "heat.png"
     assert (
         main(
@@ -130,6 +138,11 @@ def test_render_with_overlay_and_heatmap(tmp_path):
     )
     assert read_png(heat).shape == (24 + legend.heat_bar(32, 0, 1).shape[0], 32, 4)  # --counter box_tests
     assert np.load(heat.with_suffix(".npy")).shape == (24, 32)
+    assert "wide walk" not in capsys.readouterr().out
+    stack_heat = tmp_path / "stack_heat.png"
+    small = ["--width", "32", "--height", "24", "--backend", "cpu", "--heatmap", "--traversal", "stack"]
+    assert main(["render", "gen:five_spheres", *small, "--out", str(stack_heat)]) == 0
+    np.testing.assert_array_equal(np.load(heat.with_suffix(".npy")), np.load(stack_heat.with_suffix(".npy")))
 
 
 def test_errors_have_exit_code_2(tmp_path, capsys):

@@ -223,6 +223,53 @@ def test_stack_stackless_and_wide_images_are_identical(make, build, shape):
     assert 0.05 < sky.mean() < 0.95  # geometry and sky both in view
 
 
+def _job(scene, bvh, **options):
+    job = bvhlab.Renderer("cpu").start(scene, bvh, 64, 48, samples_per_axis=2, max_depth=4, **options)
+    job.run()
+    return job.result(heat=True, counters=bool(options.get("traversal_counters")))
+
+
+def test_auto_traversal_is_the_wide_walk_on_the_cpu_and_the_stack_walk_where_counts_show():
+    """Traversal "auto" (the add-on's and the render CLI's default) on the CPU: the wide walk where
+    the image shows no count of the walk (its image and cost are the wide walk's, the image the
+    stack walk's); in mode "heatmap" and with traversal counters the stack walk, whose counts are
+    the binary tree's box tests (its heat and counters equal the stack walk's, not the wide one's)."""
+    scene = showcase.whitted()
+    bvh = bvhlab.build(scene)
+    stack, wide, auto = (_job(scene, bvh, traversal=t) for t in ("stack", "wide", "auto"))
+    assert auto.timings["traversal"] == "wide" and "wide walk" in auto.timings["device"]
+    np.testing.assert_array_equal(auto.color, stack.color)
+    np.testing.assert_array_equal(auto.depth, stack.depth)
+    np.testing.assert_array_equal(auto.cost, wide.cost)
+    assert not np.array_equal(wide.cost, stack.cost)  # the units differ: the case below can fail
+    heat = _job(scene, bvh, traversal="auto", mode="heatmap")
+    assert heat.timings["traversal"] == "stack"
+    np.testing.assert_array_equal(heat.color, _job(scene, bvh, traversal="stack", mode="heatmap").color)
+    counted = _job(scene, bvh, traversal="auto", traversal_counters=True)
+    assert counted.timings["traversal"] == "stack"
+    np.testing.assert_array_equal(
+        counted.counters, _job(scene, bvh, traversal="stack", traversal_counters=True).counters
+    )
+
+
+def test_auto_traversal_options():
+    """ "auto" is a render option, made a walk by the backend (RenderOptions.for_backend); the
+    library's default stays the report's stack walk; another traversal passes through unchanged."""
+    options = bvhlab.RenderOptions(traversal="auto")
+    assert bvhlab.RenderOptions().traversal == "stack"
+    assert options.for_backend(cpu=True).traversal == "wide"
+    assert options.for_backend(cpu=False).traversal == "stack"
+    assert options.for_backend(cpu=True, counts_shown=True).traversal == "stack"
+    assert options.replace(mode="heatmap").for_backend(cpu=True).traversal == "stack"
+    for name in ("stack", "stackless", "wide"):
+        assert options.replace(traversal=name).for_backend(cpu=False, counts_shown=True).traversal == name
+    with pytest.raises(ValueError, match="auto, stack, stackless, wide"):
+        bvhlab.RenderOptions(traversal="fastest")
+    settings = bvhlab._core.RenderSettings()
+    options.apply(settings)  # where nothing made it a walk: the core's default, which every backend has
+    assert settings.traversal.name == bvhlab._core.DEFAULT_TRAVERSAL
+
+
 def test_heatmap_shows_more_box_tests_where_the_geometry_is():
     scene = showcase.whitted()
     heat = render(scene, 64, 48, mode="heatmap")

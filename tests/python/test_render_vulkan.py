@@ -204,3 +204,18 @@ def test_the_wide_traversal_is_the_cpu_tracers(vulkan):
     reference, _ = bvhlab.render(scene, bvh, 48, 32, backend="cpu", traversal="stack")
     np.testing.assert_array_equal(wide, reference)
     compare(stack, wide)
+
+
+def test_auto_traversal_walks_the_stack_on_vulkan(vulkan):
+    """Traversal "auto" on a Vulkan device is the stack walk there (the faster walk on a GPU), not a
+    trip to the CPU: the Vulkan stack walk's image and cost."""
+    scene = showcase.whitted()
+    bvh = bvhlab.build(scene)
+    auto = vulkan.start(scene, bvh, 48, 32, traversal="auto")
+    auto.run()
+    stack = vulkan.start(scene, bvh, 48, 32, traversal="stack")
+    stack.run()
+    a, s = auto.result(), stack.result()
+    assert a.timings["traversal"] == "stack" and a.timings["backend"] == "vulkan" and "fallback" not in a.timings
+    np.testing.assert_array_equal(a.color, s.color)
+    np.testing.assert_array_equal(a.cost, s.cost)

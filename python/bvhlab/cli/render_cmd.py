@@ -16,8 +16,8 @@ from .. import Bvh, InstancedBvh, build, counters, histogram, legend, save_png
 from .._atomic import replacing
 from .._progress import ProgressBar
 from ..library import load_scene
-from ..render import BACKENDS, TRAVERSALS, default_renderer
-from ..render_options import RenderOptions
+from ..render import BACKENDS, default_renderer
+from ..render_options import AUTO_TRAVERSAL, RENDER_TRAVERSALS, RenderOptions
 from . import options
 
 _DEFAULT = RenderOptions()  # the defaults are the core's (one definition)
@@ -61,10 +61,10 @@ def add_parser(sub) -> None:
     p.add_argument("--heatmap", action="store_true", help="the same as --counter box_tests (kept for old scripts)")
     p.add_argument(
         "--traversal",
-        default=_DEFAULT.traversal,
-        choices=TRAVERSALS,
-        help="stack or stackless (report §3.1), or wide: the CPU tracer through the tree's 8-wide copy, the "
-        f"same image faster (default {_DEFAULT.traversal})",
+        default=AUTO_TRAVERSAL,
+        choices=RENDER_TRAVERSALS,
+        help="stack or stackless (report §3.1), wide: the CPU tracer through the tree's 8-wide copy, the "
+        "same image faster, or auto (the default): wide on the CPU, stack on a GPU and with --counter",
     )
     options.add_png_out(p)
     p.set_defaults(run=run)

@@ -259,7 +259,7 @@ def trace_pixel(scene, bvh, x: int, y: int, *, width: int, height: int, options=
     from .._render_settings import render_settings
     from ..render_options import options_from
 
-    options = options_from(options, {})
+    options = options_from(options, {}).for_backend(cpu=True, counts_shown=True)  # "auto": a record is counts
     settings = render_settings(scene, bvh, width, height, options, camera)
     render_scene = SceneCache().get(scene, bvh)
     x = _checks.integer("x", x, 0, 2**32 - 1)
