@@ -5,6 +5,7 @@ from __future__ import annotations
 import bpy
 
 from . import state
+from .engine.settings import final_threads
 from .image_output import IMAGE_NAME, show_render
 from .operator_support import current_tree, export_scene, run_reported
 
@@ -23,7 +24,9 @@ def render_with_settings(context, exported, bvh):
 
     width, height = render_size(context.scene)
     settings = context.scene.bvhlab
-    return bvhlab.render(exported, bvh, width, height, backend=settings.backend, options=settings.render_options())
+    options = settings.render_options()
+    threads = final_threads(context.scene)  # as F12: Render Properties ▸ Performance ▸ Threads
+    return bvhlab.render(exported, bvh, width, height, backend=settings.backend, options=options, threads=threads)
 
 
 class BVHLAB_OT_render(bpy.types.Operator):

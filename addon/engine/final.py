@@ -19,7 +19,7 @@ from .. import state
 from ..trees import cache, key_of, update_config
 from . import passes
 from .border import final_frame
-from .settings import backend
+from .settings import backend, final_threads
 from .tracer import TraceCancelled, open_tracer
 
 #: Progress (RenderEngine.update_progress) at the start of each stage.
@@ -96,7 +96,7 @@ class FinalRender:
         if engine.test_break():
             engine.update_stats("", "Cancelled")
             return
-        job = tracer.start(scene, update.bvh, camera, frame.width, frame.height, settings)
+        job = tracer.start(scene, update.bvh, camera, frame.width, frame.height, settings, final_threads(blender_scene))
         engine.update_progress(TRACE_START)
         on = job.timings["device"]
         engine.update_stats("", f"Tracing {frame.width} × {frame.height}, {settings.samples} samples per pixel on {on}")
@@ -175,7 +175,9 @@ class FinalRender:
 
         started = time.perf_counter()
         refittable = self.report is not None and self.report.refittable
-        update = tree.update(scene, refittable, progress, policy=update_config(blender_scene))
+        update = tree.update(
+            scene, refittable, progress, threads=final_threads(blender_scene), policy=update_config(blender_scene)
+        )
         if update.action != "kept":
             engine.update_stats("", f"BVH {update.action} in {(time.perf_counter() - started) * 1e3:.0f} ms")
         return update

@@ -7,8 +7,15 @@ from __future__ import annotations
 import os
 
 #: The viewport leaves one core to Blender's UI thread (orbiting stays fluid while a frame traces
-#: or the tree builds). Final renders use every core (0).
+#: or the tree builds). Final renders use Blender's render threads (final_threads).
 VIEWPORT_THREADS = max(1, (os.cpu_count() or 2) - 1)
+
+
+def final_threads(blender_scene) -> int:
+    """The threads of a final render (its tree and its trace on the CPU): Render Properties ▸
+    Performance ▸ Threads, as Cycles takes them. `render.threads` is the count Blender itself
+    works out: every core with Auto-detect, the number with Fixed, N after `blender -t N`."""
+    return max(1, int(blender_scene.render.threads))
 
 
 def backend(blender_scene) -> str:

@@ -200,6 +200,29 @@ def check_auto_traversal_renders_wide_on_the_cpu_and_stack_for_the_heatmap_pass(
     assert np.array_equal(auto_heat["Combined"], auto["Combined"])
 
 
+def check_final_render_takes_blenders_render_threads(tmp_dir) -> None:
+    """F12 and the sidebar's Render trace on Render Properties ▸ Performance ▸ Threads, as Cycles
+    does (Fixed: that many; Auto-detect: Blender's count, every core; `blender -t N` sets the
+    same count): the job says how many, and the image is the same on 1 and 3 threads."""
+    scene = harness.open_scene("whitted")
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 64, 48, 100
+    use_engine(scene, backend="cpu", render_supersampling=2, render_overlay=False)
+    scene.render.threads_mode = "FIXED"
+    images = {}
+    for n, said in ((1, "(1 thread,"), (3, "(3 threads,")):
+        scene.render.threads = n
+        images[n] = render_passes(tmp_dir, f"threads_{n}")["Combined"]
+        assert said in _last_final(scene)["device"], (n, _last_final(scene)["device"])
+        assert bpy.ops.bvhlab.render() == {"FINISHED"}
+        sidebar = harness.addon().state.last_render[harness.addon().state.key(scene)]["device"]
+        assert said in sidebar, (n, sidebar)
+    assert np.array_equal(images[1], images[3])
+    scene.render.threads_mode = "AUTO"
+    said = f"({scene.render.threads} thread"
+    render_passes(tmp_dir, "threads_auto")
+    assert said in _last_final(scene)["device"], (said, _last_final(scene)["device"])
+
+
 def heat_color(x: np.ndarray) -> np.ndarray:
     """shaders/tracer/shade_colors.glsl heat_color, in numpy."""
     t = np.clip(x, 0.0, 1.0)[..., None]
