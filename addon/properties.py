@@ -304,9 +304,9 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
     def render_options(self, *, viewport: bool = False) -> RenderOptions:
         """How this scene is traced, as the one typed object (bvhlab.RenderOptions) that F12, the
         sidebar's Render, Compare and the Rendered viewport all pass to the core: they cannot
-        disagree. They differ in one thing, which switch shows the boxes: "Boxes in image" for
-        the renders, "Show boxes" for the viewport (which traces n × n samples only once the view
-        is still)."""
+        disagree. They differ in which switch shows the boxes: "Boxes in image" for the renders,
+        "Show boxes" for the viewport (which traces n × n samples only once the view is still),
+        and in Blender's Film ▸ Transparent, which only the renders take."""
         show_boxes = self.overlay_show if viewport else self.render_overlay
         return RenderOptions(
             samples_per_axis=self.render_supersampling,
@@ -319,6 +319,8 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
             traversal=self.traversal,
             mode=self.render_mode,
             traversal_counters=viewport and self.viewport_counter != "none",
+            # Film ▸ Transparent: the renders' alpha (the viewport draws its frames opaque)
+            film_transparent=not viewport and self.id_data.render.film_transparent,
         )
 
 

@@ -175,6 +175,8 @@ struct DeviceAddresses {
     uvec2 slot_nodes;     ///< uvec2[node_stack_entries] per slot: its traversal stack (child, entry t; traverse.glsl)
     uvec2 counters;       ///< uint[2], atomic: slots that ended a dispatch with work left, that failed
     uvec2 accum_counts;   ///< uint[COUNTER_COUNT] per pixel: sums of the traversal counters (frame.count_traversal)
+    uvec2 accum_covered;  ///< uint per pixel: samples whose primary ray showed a surface or the overlay's
+                          ///< line (frame.film_transparent: the pixel's alpha)
 };
 
 /// FrameParams::projection (camera.h Projection, in its order).
@@ -234,6 +236,9 @@ struct FrameParams {
     float focus_distance;     ///< the thin lens's focus, along the view axis
     uint instance_count;      ///< two-level scenes: instances in the TLAS (0: a flat scene, one level)
     uint count_traversal;     ///< 1: the trace pass sums the traversal counters into addr.accum_counts
+    uint film_transparent;    ///< 1: a camera ray that shows nothing adds no colour, and addr.accum_covered
+                              ///< counts those that show something (RenderSettings::film_transparent)
+    uint unused_word;         ///< keeps addr 8-aligned
     DeviceAddresses addr;
 };
 
@@ -279,9 +284,9 @@ static_assert(sizeof(BvhNode) == 32, "BvhNode must stay 32 bytes (std430 layout)
 static_assert(sizeof(BvhPair) == 64, "BvhPair must stay 64 bytes (std430 layout)");
 static_assert(sizeof(GpuTriangle) == 48 && sizeof(GpuSphere) == 32 && sizeof(GpuMaterial) == 32);
 static_assert(sizeof(TraversalCounts) == COUNTER_COUNT * 4);
-static_assert(sizeof(GpuBox) == 32 && sizeof(GpuInstance) == 64 && sizeof(DeviceAddresses) == 16 * 8);
-static_assert(offsetof(FrameParams, width) == 160 && offsetof(FrameParams, addr) == 256);
-static_assert(sizeof(FrameParams) == 256 + sizeof(DeviceAddresses));
+static_assert(sizeof(GpuBox) == 32 && sizeof(GpuInstance) == 64 && sizeof(DeviceAddresses) == 17 * 8);
+static_assert(offsetof(FrameParams, width) == 160 && offsetof(FrameParams, addr) == 264);
+static_assert(sizeof(FrameParams) == 264 + sizeof(DeviceAddresses));
 }  // namespace bvhlab::gpu
 #endif
 #endif  // BVHLAB_GPU_TYPES_H

@@ -54,6 +54,7 @@ uint sync_steps(uint steps) { return subgroupMax(steps); }
 vec4 g_sum;        // colour (rgb) and box tests (a) of the samples so far
 float g_depth;     // nearest primary hit
 uint g_samples;
+uint g_covered;  // samples whose camera ray showed something (frame.film_transparent)
 TraversalCounts g_counts;  // traversal counters of the samples so far (frame.count_traversal)
 uint g_slot;
 uvec4 state_load(uint k) { return Uvec4Array(frame.addr.slot_state).v[g_slot * STATE_WORDS + k]; }
@@ -63,10 +64,11 @@ void ray_word_store(uint k, uvec4 w) { Uvec4Array(frame.addr.slot_rays).v[g_slot
 uvec2 node_stack_load(uint k) { return Uvec2Array(frame.addr.slot_nodes).v[g_slot * frame.node_stack_entries + k]; }
 void node_stack_store(uint k, uvec2 e) { Uvec2Array(frame.addr.slot_nodes).v[g_slot * frame.node_stack_entries + k] = e; }
 uint samples_done(uvec2 p) { return g_samples; }
-void accumulate_sample(uvec2 p, vec3 color, TraversalCounts counts, float depth) {
+void accumulate_sample(uvec2 p, vec3 color, TraversalCounts counts, float depth, bool covered) {
     g_sum = g_sum + vec4(color, float(counts.box_tests));  // in sample order, as the CPU reference adds them
     g_depth = min(g_depth, depth);
     g_samples = g_samples + 1u;
+    g_covered = g_covered + (covered ? 1u : 0u);
     g_counts.box_tests += counts.box_tests;
     g_counts.box_hits += counts.box_hits;
     g_counts.prim_tests += counts.prim_tests;
@@ -82,6 +84,7 @@ void load_sums(uvec2 p) {
     g_sum = Vec4Array(frame.addr.accum_color).v[i];
     g_depth = FloatArray(frame.addr.accum_depth).v[i];
     g_samples = UintArray(frame.addr.accum_samples).v[i];
+    g_covered = frame.film_transparent != 0u ? UintArray(frame.addr.accum_covered).v[i] : 0u;
     if (frame.count_traversal == 0u) return;
     UintArray c = UintArray(frame.addr.accum_counts);
     uint k = i * COUNTER_COUNT;
@@ -94,6 +97,7 @@ void store_sums(uvec2 p) {
     Vec4Array(frame.addr.accum_color).v[i] = g_sum;
     FloatArray(frame.addr.accum_depth).v[i] = g_depth;
     UintArray(frame.addr.accum_samples).v[i] = g_samples;
+    if (frame.film_transparent != 0u) UintArray(frame.addr.accum_covered).v[i] = g_covered;
     if (frame.count_traversal == 0u) return;
     UintArray c = UintArray(frame.addr.accum_counts);
     uint k = i * COUNTER_COUNT;

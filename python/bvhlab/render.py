@@ -49,7 +49,9 @@ class RenderCancelled(Exception):
 @dataclass(frozen=True)
 class RenderResult:
     """What a render produces, row 0 at the top (None where not asked for).
-    color: float32 (H, W, 4), linear RGB, alpha 1 (heat colours in mode "heatmap").
+    color: float32 (H, W, 4), linear RGB, alpha 1 (heat colours in mode "heatmap"); with
+    film_transparent, alpha is the share of the pixel's camera rays that show something and the
+    colour is premultiplied by it.
     depth: float32 (H, W), Blender's Z pass: the distance along the view axis of the nearest
     primary hit over the pixel's samples (where the overlay draws a line in front, the line's);
     1e10 where nothing was hit, as Cycles writes.

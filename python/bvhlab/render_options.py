@@ -43,8 +43,11 @@ class RenderOptions:
     tests a wide node visited; no traversal counters). `mode`: "shade" or "heatmap" (box tests of the primary
     rays, blue = few, red = `heatmap_scale` or more; default 8 × tree height).
     `traversal_counters`: keep every traversal counter per pixel (RenderResult.counters;
-    bvhlab.counters; 20 more bytes a pixel). `steps_per_dispatch` (how the work is cut, never the
-    image; default adaptive) and
+    bvhlab.counters; 20 more bytes a pixel). `film_transparent` (Blender's Film ▸ Transparent): a
+    pixel's alpha is the share of its samples whose camera ray shows a surface or the overlay's
+    line, its colour premultiplied (those that show nothing add none), as Cycles writes it; rays
+    after a bounce still see the sky; mode "shade" only (the heatmap stays opaque).
+    `steps_per_dispatch` (how the work is cut, never the image; default adaptive) and
     `max_steps_per_pixel` (a pixel needing more work in one run raises RenderIncomplete; default:
     the most a correct trace of the scene can take)."""
 
@@ -59,6 +62,7 @@ class RenderOptions:
     mode: str = _CORE.mode.name
     heatmap_scale: float | None = None
     traversal_counters: bool = bool(_CORE.traversal_counters)
+    film_transparent: bool = bool(_CORE.film_transparent)
     steps_per_dispatch: int | None = None
     max_steps_per_pixel: int | None = None
 
@@ -106,6 +110,7 @@ class RenderOptions:
         s.mode = _core.parse_render_mode(_name("mode", self.mode))
         s.heatmap_scale = None if self.heatmap_scale is None else _real("heatmap_scale", self.heatmap_scale)
         s.traversal_counters = bool(self.traversal_counters)
+        s.film_transparent = bool(self.film_transparent)
         if self.steps_per_dispatch is not None:
             s.steps_per_dispatch = _checks.integer("steps_per_dispatch", self.steps_per_dispatch, 0, 2**31)
         if self.max_steps_per_pixel is not None:

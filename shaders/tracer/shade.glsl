@@ -171,12 +171,12 @@ void start_sample(INOUT(TraceState) s) {
     s.phase = dot(s.task.dir, s.task.dir) > 0.0f ? PHASE_START : PHASE_NEXT_RAY;
 }
 
-/// The next ray off the stack becomes the task, or the sample is complete: its colour, counters
-/// and depth go into the pixel's sums (whole samples only, so a stopped render leaves consistent
-/// sums).
+/// The next ray off the stack becomes the task, or the sample is complete: its colour, counters,
+/// depth and whether its camera ray showed something (a finite depth: a surface or the overlay's
+/// line) go into the pixel's sums (whole samples only, so a stopped render leaves consistent sums).
 void next_ray(INOUT(TraceState) s) {
     if (s.rays == 0u) {
-        accumulate_sample(s.pixel, s.color, s.counts, s.depth);
+        accumulate_sample(s.pixel, s.color, s.counts, s.depth, s.depth < infinity());
         s.sample_index += 1u;
         s.phase = PHASE_SAMPLE;
         return;
@@ -216,7 +216,8 @@ bool after_closest(INOUT(TraceState) s) {
         s.depth = s.hit.ref != NO_HIT ? camera_depth(s.task, s.hit.t) : (line ? camera_depth(s.task, s.overlay.w) : infinity());
     }
     if (s.hit.ref != NO_HIT) return true;
-    s.color += s.task.weight * (line ? xyz(s.overlay) : frame.sky);
+    bool transparent = s.task.depth == 0u && frame.film_transparent != 0u;  // Film ▸ Transparent: no colour
+    s.color += s.task.weight * (line ? xyz(s.overlay) : (transparent ? vec3(0.0f) : frame.sky));
     s.phase = PHASE_NEXT_RAY;
     return false;
 }

@@ -200,6 +200,31 @@ def check_auto_traversal_renders_wide_on_the_cpu_and_stack_for_the_heatmap_pass(
     assert np.array_equal(auto_heat["Combined"], auto["Combined"])
 
 
+def check_film_transparent_gives_the_share_of_camera_rays_as_alpha(tmp_dir) -> None:
+    """Render Properties ▸ Film ▸ Transparent: F12's Combined alpha is the share of each pixel's
+    camera rays that show something (the CPU reference's with film_transparent, bit for bit on the
+    CPU; 0 where only the sky is seen, quarters at silhouettes at 2×2 samples), its colour
+    premultiplied; the Depth pass is the opaque render's. Off, every pixel is opaque."""
+    scene = harness.open_scene("whitted")
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 64, 48, 100
+    use_engine(scene, backend="cpu", render_supersampling=2, render_bounces=5, render_overlay=False)
+    opaque = render_passes(tmp_dir, "opaque")
+    assert np.all(opaque["Combined"][..., 3] == 1.0)
+    scene.render.film_transparent = True
+    film = render_passes(tmp_dir, "film")
+    exported = export_scene(bpy.context)
+    bvh = bvhlab.build(exported, config=scene.bvhlab.build_config())
+    options = scene.bvhlab.render_options()
+    assert options.film_transparent
+    expected, _ = bvhlab.render(exported, bvh, 64, 48, backend="cpu", options=options)
+    np.testing.assert_array_equal(film["Combined"], expected)
+    alpha = film["Combined"][..., 3]
+    assert (alpha == 0).any() and (alpha == 1).any() and ((alpha > 0) & (alpha < 1)).any()
+    assert np.all(film["Combined"][..., :3] <= opaque["Combined"][..., :3] + 1e-6)
+    np.testing.assert_array_equal(film["Depth"], opaque["Depth"])
+    assert not scene.bvhlab.render_options(viewport=True).film_transparent  # the viewport draws opaque
+
+
 def check_final_render_takes_blenders_render_threads(tmp_dir) -> None:
     """F12 and the sidebar's Render trace on Render Properties ▸ Performance ▸ Threads, as Cycles
     does (Fixed: that many; Auto-detect: Blender's count, every core; `blender -t N` sets the

@@ -42,15 +42,20 @@ def _dof_scene(use_dof: bool):
 
 
 def _engine_coverage(tmp_dir, name: str) -> np.ndarray:
-    """The share of each pixel's 16×16 samples that see the square: 1 - colour / sky (it is black;
-    the sky is the world's colour as the export reads it)."""
+    """The engine's alpha with a transparent film, as Cycles' below: the share of each pixel's
+    16×16 camera rays that see the square. Checked against the opaque film's colour: the square
+    is black, so the sky's share of the colour is 1 - alpha."""
     scene = bpy.context.scene
     scene.render.engine = ENGINE
     scene.bvhlab.backend, scene.bvhlab.render_supersampling, scene.bvhlab.render_overlay = "cpu", 16, False
-    combined = render_passes(tmp_dir, name)["Combined"]
+    scene.render.film_transparent = False
+    combined = render_passes(tmp_dir, name + "_opaque")["Combined"]
     sky = np.float32(export_scene(bpy.context).sky)
     channel = int(np.argmax(sky))
-    return 1.0 - combined[..., channel] / sky[channel]
+    scene.render.film_transparent = True
+    alpha = render_passes(tmp_dir, name)["Combined"][..., 3]
+    np.testing.assert_allclose(alpha, 1.0 - combined[..., channel] / sky[channel], atol=1e-5)
+    return alpha
 
 
 def _cycles_coverage(tmp_dir, name: str) -> np.ndarray:

@@ -119,3 +119,38 @@ TEST(Resolve, RefusesWhatTheSumsDoNotHold) {
     PixelSums small(kPixels - 1, true);
     EXPECT_THROW(resolve(small.view(), frame(gpu::MODE_SHADE), {im.color.data()}), std::logic_error);
 }
+
+TEST(Resolve, TransparentFilmAlphaIsTheCoveredShare) {
+    // Film ▸ Transparent: a shaded pixel's alpha is covered / samples (its colour as summed: the
+    // samples that showed nothing added none); the heatmap and the other images stay as they were.
+    PixelSums sums = random_sums(9);
+    sums.covered.assign(kPixels, 0u);
+    std::mt19937 rng(10);
+    for (std::size_t i = 0; i < kPixels; ++i) sums.covered[i] = sums.samples[i] ? rng() % (sums.samples[i] + 1) : 0u;
+    gpu::FrameParams film = frame(gpu::MODE_SHADE);
+    film.film_transparent = 1;
+    Images im, opaque;
+    resolve(sums.view(), film, im.all(), 2);
+    resolve(sums.view(), frame(gpu::MODE_SHADE), opaque.all(), 2);
+    int partial = 0;
+    for (std::size_t i = 0; i < kPixels; ++i) {
+        const std::uint32_t n = sums.samples[i];
+        const float alpha = n ? float(sums.covered[i]) / float(n) : 0.0f;
+        const float* o = &opaque.color[4 * i];
+        expect_rgba(&im.color[4 * i], o[0], o[1], o[2], alpha, i);
+        partial += alpha > 0.0f && alpha < 1.0f;
+    }
+    EXPECT_GT(partial, 1000);
+    EXPECT_EQ(im.depth, opaque.depth);
+    EXPECT_EQ(im.heat, opaque.heat);
+    film.mode = gpu::MODE_HEATMAP;  // heat colours are opaque
+    Images heat, heat_opaque;
+    resolve(sums.view(), film, heat.all());
+    resolve(sums.view(), frame(gpu::MODE_HEATMAP), heat_opaque.all());
+    EXPECT_EQ(heat.color, heat_opaque.color);
+    film.mode = gpu::MODE_SHADE;
+    PixelSums::View none = sums.view();
+    none.covered = nullptr;  // a render that was not asked for them
+    EXPECT_THROW(resolve(none, film, {im.color.data()}), std::logic_error);
+    resolve(none, film, {nullptr, im.depth.data()});  // no colour: nothing needs them
+}

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -108,6 +109,19 @@ TEST_F(Vulkan, HeatmapMatchesCpuReference) {
     RenderSettings s = scene->settings;
     s.mode = RenderMode::Heatmap;  // also checks the default full scale (8 × tree height) survives upload
     expect_matches_reference(*scene, s);
+}
+
+// Film ▸ Transparent: the covered-sample sums go through the GPU's buffers as the CPU's; the alpha
+// is the share of a pixel's camera rays that show something (2×2 samples: quarters at silhouettes).
+TEST_F(Vulkan, TransparentFilmMatchesCpuReference) {
+    auto scene = test::whitted_showcase();
+    RenderSettings s = scene->settings;
+    s.samples_per_axis = 2, s.film_transparent = true;
+    expect_matches_reference(*scene, s);
+    const std::vector<float> image = render_reference(scene->render, s);
+    std::set<float> alphas;
+    for (std::size_t i = 3; i < image.size(); i += 4) alphas.insert(image[i]);
+    EXPECT_EQ(alphas, (std::set<float>{0.0f, 0.25f, 0.5f, 0.75f, 1.0f}));
 }
 
 TEST_F(Vulkan, StackAndStacklessGiveIdenticalImages) {

@@ -59,6 +59,11 @@ struct RenderSettings {
     std::optional<float> heatmap_scale;  ///< box tests shown as full red; unset: 8 × tree height
     /// Keep every TraversalCounter per pixel (RenderImages::counters; 20 more bytes a pixel).
     bool traversal_counters = false;
+    /// Blender's Film ▸ Transparent: where a camera ray shows nothing the sample adds no colour, and
+    /// a pixel's alpha is the share of its samples whose camera ray shows a surface or the overlay's
+    /// line (colour premultiplied, as Cycles writes it; 4 more bytes a pixel). Rays after a bounce
+    /// still see the sky. The shaded image only: the heatmap stays opaque.
+    bool film_transparent = false;
     /// Tracer steps one pixel may run per dispatch (gpu::MIN_STEPS_PER_DISPATCH ..
     /// MAX_STEPS_PER_DISPATCH); unset: chosen by the renderer. Only how the work is cut changes,
     /// never the image.

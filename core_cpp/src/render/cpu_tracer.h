@@ -76,11 +76,12 @@ public:
     // The pixel's sums (a pixel is traced by one thread at a time).
     std::size_t pixel_index(uvec2 p) const { return std::size_t(p.y) * frame.width + p.x; }
     uint samples_done(uvec2 p) const { return sums_->samples[pixel_index(p)]; }
-    void accumulate_sample(uvec2 p, vec3 color, TraversalCounts counts, float depth) {
+    void accumulate_sample(uvec2 p, vec3 color, TraversalCounts counts, float depth, bool covered) {
         const std::size_t i = pixel_index(p);
         sums_->color[i] = sums_->color[i] + vec4(color, float(counts.box_tests));
         sums_->depth[i] = min(sums_->depth[i], depth);
         sums_->samples[i] = sums_->samples[i] + 1u;
+        if (frame.film_transparent) sums_->covered[i] += covered ? 1u : 0u;
         if (Count && frame.count_traversal) add_counts(sums_->counts[i], counts);
     }
 

@@ -19,15 +19,18 @@ std::uint64_t saturating_mul(std::uint64_t a, std::uint64_t b) {
 
 }  // namespace
 
-PixelSums::PixelSums(std::size_t pixels, bool counters) {
+PixelSums::PixelSums(std::size_t pixels, bool counters, bool film_transparent) {
     color.assign(pixels, gpu::vec4(0.0f));
     depth.assign(pixels, std::numeric_limits<float>::infinity());
     samples.assign(pixels, 0u);
     if (counters) counts.assign(pixels, gpu::TraversalCounts{});
+    if (film_transparent) covered.assign(pixels, 0u);
 }
 
 PixelSums::View PixelSums::view() const {
-    return {color.data(), depth.data(), samples.data(), counts.empty() ? nullptr : counts.data(), color.size()};
+    return {color.data(),   depth.data(),
+            samples.data(), counts.empty() ? nullptr : counts.data(),
+            color.size(),   covered.empty() ? nullptr : covered.data()};
 }
 
 namespace {
@@ -50,6 +53,8 @@ void resolve_block(const PixelSums::View& sums, const gpu::FrameParams& frame, c
                    std::size_t begin, std::size_t end) {
     gpu::Palette palette;
     const bool heatmap = frame.mode == gpu::MODE_HEATMAP, need_heat = out.heat || (out.color && heatmap);
+    // the covered samples are read only for a shaded colour image (resolve checks they are there)
+    const bool transparent = frame.film_transparent && !heatmap && out.color;
     auto store = [](float* image, std::size_t i, const gpu::vec4& v) {
         float* c = image + 4 * i;
         c[0] = v.x, c[1] = v.y, c[2] = v.z, c[3] = v.w;
@@ -63,7 +68,8 @@ void resolve_block(const PixelSums::View& sums, const gpu::FrameParams& frame, c
             const gpu::vec4 s = sums.color[i];
             cost = s.w / count;
             if (need_heat) heat = gpu::vec4(palette.heat_color(cost / frame.heatmap_scale), 1.0f);
-            rgba = heatmap ? heat : gpu::vec4(gpu::vec3(s.x, s.y, s.z) / count, 1.0f);
+            const float alpha = transparent ? float(sums.covered[i]) / count : 1.0f;
+            rgba = heatmap ? heat : gpu::vec4(gpu::vec3(s.x, s.y, s.z) / count, alpha);
         }
         if (out.color) store(out.color, i, rgba);
         if (out.heat) store(out.heat, i, heat);
@@ -82,6 +88,8 @@ void resolve(const PixelSums::View& sums, const gpu::FrameParams& frame, const R
     const std::size_t pixels = std::size_t(frame.width) * frame.height;
     if (pixels > sums.pixels) throw std::logic_error("resolve: fewer sums than the frame's pixels");
     if (out.depth && !sums.depth) throw std::logic_error("resolve: a depth image without the depth sums");
+    if (out.color && frame.film_transparent && !sums.covered)
+        throw std::logic_error("resolve: a transparent film without the covered samples");
     const std::size_t blocks = (pixels + kResolveBlock - 1) / kResolveBlock;
     ThreadPool::shared().run(blocks, threads, [&](std::size_t b, unsigned) {
         resolve_block(sums, frame, out, b * kResolveBlock, std::min(pixels, (b + 1) * kResolveBlock));

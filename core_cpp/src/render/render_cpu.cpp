@@ -47,7 +47,8 @@ public:
         const auto start = Clock::now();
         if (settings.traversal == Traversal::Wide) prepare_wide(wide);
         overlay_ = rasterize_overlay(scene, frame_);
-        sums_ = PixelSums(std::size_t(settings.width) * settings.height, settings.traversal_counters);
+        sums_ = PixelSums(std::size_t(settings.width) * settings.height, settings.traversal_counters,
+                          settings.film_transparent);
         timings_.overlay_ms = ms_since(start);
         timings_.device = "CPU reference (" + std::to_string(threads_) + (threads_ == 1 ? " thread" : " threads") +
                           walk_note(settings) + ")";

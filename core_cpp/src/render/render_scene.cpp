@@ -173,6 +173,7 @@ gpu::FrameParams make_frame_params(const RenderScene& scene, const RenderSetting
     f.node_stack_entries = std::max(scene.stack_entries, 1u);
     f.instance_count = std::uint32_t(scene.instances.size());
     f.count_traversal = s.traversal_counters ? 1u : 0u;
+    f.film_transparent = s.film_transparent ? 1u : 0u;
     return f;
 }
 

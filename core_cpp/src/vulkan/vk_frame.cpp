@@ -120,12 +120,13 @@ std::uint32_t TraceSlots::failed() const {
     return n[1];
 }
 
-SumBuffers::SumBuffers(const Device& device, std::size_t pixels, bool counters)
+SumBuffers::SumBuffers(const Device& device, std::size_t pixels, bool counters, bool film_transparent)
     : pixels(pixels),
       color(shader_array(device, pixels * sizeof(gpu::vec4))),
       depth(shader_array(device, pixels * sizeof(float))),
       samples(shader_array(device, pixels * sizeof(std::uint32_t))) {
     if (counters) counts = shader_array(device, pixels * sizeof(gpu::TraversalCounts));
+    if (film_transparent) covered = shader_array(device, pixels * sizeof(std::uint32_t));
 }
 
 void SumBuffers::address(gpu::FrameParams& frame) const {
@@ -133,6 +134,7 @@ void SumBuffers::address(gpu::FrameParams& frame) const {
     frame.addr.accum_depth = words(depth.address());
     frame.addr.accum_samples = words(samples.address());
     if (counts.size()) frame.addr.accum_counts = words(counts.address());
+    if (covered.size()) frame.addr.accum_covered = words(covered.address());
 }
 
 }  // namespace bvhlab::vk

@@ -60,14 +60,15 @@ private:
     std::uint32_t slots_ = 0, ray_entries_ = 0, node_entries_ = 0;
 };
 
-/// A render's running sums per pixel (pixel_sums.h): colour + box tests, depth, sample count, and
-/// the traversal counters where `counters` (no buffer otherwise).
+/// A render's running sums per pixel (pixel_sums.h): colour + box tests, depth, sample count, the
+/// traversal counters where `counters` and the covered samples where `film_transparent` (no buffer
+/// otherwise).
 struct SumBuffers {
-    SumBuffers(const Device& device, std::size_t pixels, bool counters);
+    SumBuffers(const Device& device, std::size_t pixels, bool counters, bool film_transparent);
     void address(gpu::FrameParams& frame) const;
 
     std::size_t pixels;
-    Buffer color, depth, samples, counts;
+    Buffer color, depth, samples, counts, covered;
 };
 
 }  // namespace bvhlab::vk

@@ -55,13 +55,15 @@ public:
           frame_(scene_->frame_params(settings)),
           tiles_(settings.width, settings.height, slot_bytes(frame_)) {
         std::lock_guard lock(core_->mutex);
-        sums_.emplace(core_->device, std::size_t(settings.width) * settings.height, settings.traversal_counters);
+        sums_.emplace(core_->device, std::size_t(settings.width) * settings.height, settings.traversal_counters,
+                      settings.film_transparent);
         sums_->address(frame_);
         core_->runner.run([&](VkCommandBuffer cmd) {
             record_fill(core_->fn, cmd, sums_->color, 0u);
             record_fill(core_->fn, cmd, sums_->depth, 0x7f800000u);  // +inf: nothing hit yet
             record_fill(core_->fn, cmd, sums_->samples, 0u);
             if (sums_->counts.size()) record_fill(core_->fn, cmd, sums_->counts, 0u);
+            if (sums_->covered.size()) record_fill(core_->fn, cmd, sums_->covered, 0u);
         });
         timings_.device = core_->device.physical().name();
         budget_ = settings.steps_per_dispatch.value_or(
@@ -91,15 +93,18 @@ public:
             // the render keeps counters)
             const SumBuffers& b = *sums_;
             const std::size_t n = b.pixels;
-            const bool counts = out.counters && b.counts.size();
+            const bool counts = out.counters && b.counts.size(), covered = out.color && b.covered.size();
             std::vector<Read> reads{{&b.color, n * sizeof(gpu::vec4)}, {&b.samples, n * sizeof(std::uint32_t)}};
             if (out.depth) reads.push_back({&b.depth, n * sizeof(float)});
             if (counts) reads.push_back({&b.counts, n * sizeof(gpu::TraversalCounts)});
+            if (covered) reads.push_back({&b.covered, n * sizeof(std::uint32_t)});
             const std::vector<const std::byte*> at = read(reads);
             PixelSums::View sums{reinterpret_cast<const gpu::vec4*>(at[0]), nullptr,
                                  reinterpret_cast<const std::uint32_t*>(at[1]), nullptr, n};
-            if (out.depth) sums.depth = reinterpret_cast<const float*>(at[2]);
-            if (counts) sums.counts = reinterpret_cast<const gpu::TraversalCounts*>(at.back());
+            std::size_t next = 2;
+            if (out.depth) sums.depth = reinterpret_cast<const float*>(at[next++]);
+            if (counts) sums.counts = reinterpret_cast<const gpu::TraversalCounts*>(at[next++]);
+            if (covered) sums.covered = reinterpret_cast<const std::uint32_t*>(at[next++]);
             bvhlab::resolve(sums, frame_, out);
         }
         timings_.readback_ms =
