@@ -21,6 +21,13 @@ def linear_to_srgb(x: np.ndarray) -> np.ndarray:
     return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
 
 
+def straight_alpha(image: np.ndarray) -> np.ndarray:
+    """A premultiplied float RGBA image (a render with film_transparent, as Blender's Render Result
+    holds it) with straight alpha, as PNG stores it: colour divided by alpha where alpha > 0."""
+    alpha = image[..., 3:4]
+    return np.concatenate([image[..., :3] / np.where(alpha > 0, alpha, 1), alpha], -1).astype(np.float32)
+
+
 def to_rgba8(image: np.ndarray) -> np.ndarray:
     """float (H, W, 3|4) linear → uint8 (H, W, 4) sRGB, alpha kept linear; NaN is 0, values are
     clipped to [0, 1]. An integer image is

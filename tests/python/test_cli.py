@@ -13,7 +13,7 @@ from png_reader import read_png
 import bvhlab
 from bvhlab import legend
 from bvhlab.cli import main
-from bvhlab.library import load_scene, procedural
+from bvhlab.library import load_scene, procedural, showcase
 from bvhlab.png import linear_to_srgb
 from bvhlab.render import HAS_VULKAN
 
@@ -143,6 +143,30 @@ def test_render_with_overlay_and_heatmap(tmp_path, capsys):
     small = ["--width", "32", "--height", "24", "--backend", "cpu", "--heatmap", "--traversal", "stack"]
     assert main(["render", "gen:five_spheres", *small, "--out", str(stack_heat)]) == 0
     np.testing.assert_array_equal(np.load(heat.with_suffix(".npy")), np.load(stack_heat.with_suffix(".npy")))
+
+
+def test_render_with_a_transparent_film(tmp_path):
+    """--film-transparent: the PNG's alpha is the share of each pixel's camera rays that hit (the
+    sky 0, the spheres' insides 255), its colour straight (PNG's convention): where every ray hits,
+    the opaque render's pixel."""
+    args = ["render", "gen:five_spheres", "--width", "48", "--height", "32", "--backend", "cpu"]
+    args += ["--samples-per-axis", "2"]
+    film, opaque = tmp_path / "film.png", tmp_path / "opaque.png"
+    assert main([*args, "--film-transparent", "--out", str(film)]) == 0
+    assert main([*args, "--out", str(opaque)]) == 0
+    a, b = read_png(film).astype(int), read_png(opaque).astype(int)
+    alpha = a[..., 3]
+    assert (alpha == 0).mean() > 0.2 and (alpha == 255).mean() > 0.05 and ((alpha > 0) & (alpha < 255)).any()
+    assert np.all(b[..., 3] == 255)
+    full = alpha == 255
+    assert np.abs(a[full][:, :3] - b[full][:, :3]).max() <= 1
+    # at silhouettes, the straight colour over the sky is the opaque image's pixel (in linear light;
+    # within the 8-bit rounding of both PNGs)
+    edge = (alpha > 0) & (alpha < 255)
+    linear = lambda c: np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)  # noqa: E731
+    sky = np.array(showcase.five_spheres().sky)
+    over = linear(a[edge][:, :3] / 255) * (alpha[edge] / 255)[:, None] + sky * (1 - alpha[edge] / 255)[:, None]
+    assert np.abs(over - linear(b[edge][:, :3] / 255)).max() < 0.02
 
 
 def test_errors_have_exit_code_2(tmp_path, capsys):

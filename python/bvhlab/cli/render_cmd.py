@@ -16,6 +16,7 @@ from .. import Bvh, InstancedBvh, build, counters, histogram, legend, save_png
 from .._atomic import replacing
 from .._progress import ProgressBar
 from ..library import load_scene
+from ..png import straight_alpha
 from ..render import BACKENDS, default_renderer
 from ..render_options import AUTO_TRAVERSAL, RENDER_TRAVERSALS, RenderOptions
 from . import options
@@ -66,6 +67,12 @@ def add_parser(sub) -> None:
         help="stack or stackless (report §3.1), wide: the CPU tracer through the tree's 8-wide copy, the "
         "same image faster, or auto (the default): wide on the CPU, stack on a GPU and with --counter",
     )
+    p.add_argument(
+        "--film-transparent",
+        action="store_true",
+        help="Blender's Film ▸ Transparent: alpha is the share of a pixel's camera rays that hit something "
+        "(the sky transparent)",
+    )
     options.add_png_out(p)
     p.set_defaults(run=run)
 
@@ -86,6 +93,7 @@ def run(args) -> int:
         overlay_depth=args.bvh_depth,
         traversal=args.traversal,
         traversal_counters=counter is not None,
+        film_transparent=args.film_transparent,
     )
     scene, name = load_scene(args.scene)
     with ProgressBar(f"building {args.method}") as bar:
@@ -100,7 +108,8 @@ def run(args) -> int:
     if result.counters is not None:
         _write_counter(result.counters, counter, args.range, args.out)
     elif result.color is not None:
-        image = legend.render_legends(result.color, render_options, t["heatmap_scale"], legend.overlay_height(bvh))
+        color = straight_alpha(result.color) if args.film_transparent else result.color  # PNG: straight alpha
+        image = legend.render_legends(color, render_options, t["heatmap_scale"], legend.overlay_height(bvh))
         save_png(image, args.out)
     print(f"{name}: {args.width}x{args.height} on {t['device']} ({t['backend']}: {t['reason']})")
     print(f"trace {t['trace_ms']:.1f} ms, total {t['total_ms']:.1f} ms; {_tree_summary(bvh)}")
