@@ -305,8 +305,7 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
         """How this scene is traced, as the one typed object (bvhlab.RenderOptions) that F12, the
         sidebar's Render, Compare and the Rendered viewport all pass to the core: they cannot
         disagree. They differ in which switch shows the boxes: "Boxes in image" for the renders,
-        "Show boxes" for the viewport (which traces n × n samples only once the view is still),
-        and in Blender's Film ▸ Transparent, which only the renders take."""
+        "Show boxes" for the viewport (which traces n × n samples only once the view is still)."""
         show_boxes = self.overlay_show if viewport else self.render_overlay
         return RenderOptions(
             samples_per_axis=self.render_supersampling,
@@ -319,8 +318,8 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
             traversal=self.traversal,
             mode=self.render_mode,
             traversal_counters=viewport and self.viewport_counter != "none",
-            # Film ▸ Transparent: the renders' alpha (the viewport draws its frames opaque)
-            film_transparent=not viewport and self.id_data.render.film_transparent,
+            # Film ▸ Transparent: the alpha (the viewport draws premultiplied: its background shows)
+            film_transparent=self.id_data.render.film_transparent,
         )
 
 

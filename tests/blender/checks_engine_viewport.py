@@ -94,7 +94,9 @@ def _wait(condition, timeout: float = 120.0, what: str = "the viewport worker"):
     raise AssertionError(f"{what} did not get there within {timeout} s")
 
 
-def _session_for(scene, width: int, height: int, samples_per_axis: int, overlay=None, counter=None):
+def _session_for(
+    scene, width: int, height: int, samples_per_axis: int, overlay=None, counter=None, film_transparent=False
+):
     """A viewport worker fed the way view_update / view_draw feed it, looking through the scene
     camera; returns (session, request)."""
     from bvhlab.blender import LiveScene
@@ -110,6 +112,7 @@ def _session_for(scene, width: int, height: int, samples_per_axis: int, overlay=
         overlay_depth=overlay,
         traversal="stackless",
         traversal_counters=counter is not None,
+        film_transparent=film_transparent,
     )
     tree = _trees().TreeKey(scene.session_uid, "visible", bvhlab.BuildConfig())
     request = viewport.ViewRequest(frustum, settings, "cpu", tree, budget_ms=5.0, counter=counter)
@@ -162,6 +165,48 @@ def check_viewport_worker_levels() -> None:
         if "preview" in names:
             assert levels[names.index("preview")][1][1] < 240
         print(f"viewport worker levels on the atrium at 240×160 (level, size, trace ms): {levels}")
+    finally:
+        session.close()
+
+
+def check_viewport_film_transparent() -> None:
+    """Film ▸ Transparent in the Rendered viewport, as in Cycles': the scene's settings ask for it
+    (render_options(viewport=True)), and the worker's refined frame is bvhlab.render's with
+    film_transparent, alpha and all (the sky's pixels 0: display.py draws premultiplied, so the
+    viewport's background shows there)."""
+    scene = harness.open_scene("whitted")
+    updated: list = []  # setting it tags the scene: Blender calls view_update and redraws
+
+    def note(blender_scene, depsgraph):
+        updated.extend(u.id.original for u in depsgraph.updates if isinstance(u.id, bpy.types.Scene))
+
+    bpy.context.view_layer.update()
+    bpy.app.handlers.depsgraph_update_post.append(note)
+    try:
+        scene.render.film_transparent = True
+        bpy.context.view_layer.update()
+    finally:
+        bpy.app.handlers.depsgraph_update_post.remove(note)
+    assert scene in updated
+    assert scene.bvhlab.render_options(viewport=True).film_transparent
+    session, request, live = _session_for(scene, 96, 64, samples_per_axis=2, film_transparent=True)
+    try:
+        frame = _wait(lambda: (f := session.latest_frame()) is not None and f.level == "refined" and f or None)
+        expected, _ = bvhlab.render(
+            live.scene,
+            _tree_of(request).bvh,
+            96,
+            64,
+            backend="cpu",
+            camera=request.frustum.camera(),
+            samples_per_axis=2,
+            max_depth=5,
+            traversal="stackless",
+            film_transparent=True,
+        )
+        compare_images(frame.image, expected, "cpu")
+        alpha = frame.image[..., 3]
+        assert (alpha == 0).any() and (alpha == 1).any(), np.unique(alpha)
     finally:
         session.close()
 
@@ -245,7 +290,9 @@ def viewport_settings(scene) -> set[str]:
     context = SimpleNamespace(region=SimpleNamespace(width=64, height=48), region_data=region_data, space_data=None)
     noting = _NotingReads(scene.bvhlab)
     _engine_module("view_request").view_request(context, SimpleNamespace(bvhlab=noting, session_uid=scene.session_uid))
-    return noting.names
+    # not id_data: the scene itself (Film ▸ Transparent is read through it), whose own render
+    # settings Blender tags when set
+    return {name for name in noting.names if name in scene.bvhlab.bl_rna.properties}
 
 
 def _another_value(settings, name: str):

@@ -158,6 +158,7 @@ def _engine() -> Iterator[Check]:
         viewport.check_viewport_worker_levels,
         viewport.check_viewport_build_cancels,
         viewport.check_viewport_settings_update,
+        viewport.check_viewport_film_transparent,
         viewport.check_viewport_counter_display,
     ):
         yield Check("engine", check.__name__.removeprefix("check_"), check)
