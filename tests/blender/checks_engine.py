@@ -225,6 +225,33 @@ def check_film_transparent_gives_the_share_of_camera_rays_as_alpha(tmp_dir) -> N
     np.testing.assert_array_equal(film["Depth"], opaque["Depth"])
 
 
+def check_final_render_shows_what_renders_not_what_the_viewport_shows(tmp_dir) -> None:
+    """F12 renders what Blender renders: an object hidden in the viewport (the eye, or Disable in
+    Viewports) is in the image, as in Cycles, and one disabled in renders is not; an export from
+    the viewport's depsgraph (the sidebar, the Rendered viewport) keeps to what the viewport shows."""
+    scene = harness.boxes_scene()
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 32, 24, 100
+    use_engine(scene, backend="cpu", render_overlay=False)
+    boxes = sorted((o for o in scene.objects if o.type == "MESH"), key=lambda o: o.name)
+    each = len(boxes[0].data.polygons) * 2  # triangles of one box (quads)
+
+    def rendered() -> int:
+        render_passes(tmp_dir, "visibility")
+        return len(_last_final(scene)["scene"].triangles)
+
+    everything = rendered()
+    assert everything == each * len(boxes), everything
+    boxes[0].hide_set(True)
+    boxes[1].hide_viewport = True
+    boxes[2].hide_render = True
+    bpy.context.view_layer.update()
+    assert rendered() == everything - each  # only the one disabled in renders is gone
+    # the viewport shows only the one disabled in renders
+    assert len(export_scene(bpy.context, scope="visible").triangles) == everything - 2 * each
+    boxes[2].hide_render = False
+    assert rendered() == everything
+
+
 def check_final_render_takes_blenders_render_threads(tmp_dir) -> None:
     """F12 and the sidebar's Render trace on Render Properties ▸ Performance ▸ Threads, as Cycles
     does (Fixed: that many; Auto-detect: Blender's count, every core; `blender -t N` sets the

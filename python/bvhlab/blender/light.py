@@ -21,14 +21,16 @@ import numpy as np
 
 from ..scene import Light
 from .errors import ExportWarning
+from .scope import visibility
 
 
 def gather_light(depsgraph, view_layer, primitive_points: np.ndarray) -> Light | None:
-    """The first visible point light by name (another kind of light stands in, at its position,
-    with an ExportWarning); None when the scene has no visible light. `primitive_points` (N,3),
+    """The first visible point light (scope.visibility) by name (another kind of light stands in,
+    at its position, with an ExportWarning); None when the scene has no visible light. `primitive_points` (N,3),
     a sample of primitive centres, calibrates the intensity."""
+    visible = visibility(depsgraph)
     lights = sorted(
-        (obj for obj in depsgraph.objects if obj.type == "LIGHT" and obj.original.visible_get(view_layer=view_layer)),
+        (obj for obj in depsgraph.objects if obj.type == "LIGHT" and visible(obj.original, view_layer)),
         key=lambda obj: (obj.data.type != "POINT", obj.name),
     )
     if not lights:

@@ -51,7 +51,7 @@ def instances_in_scope(depsgraph, view_layer, scope: str, types=None) -> Iterato
     is only valid until the next item: use it before moving on."""
     if scope not in SCOPES:
         raise ExportError(f"unknown scope '{scope}'; expected one of: {', '.join(SCOPES)}")
-    in_scope = _selected if scope == "selected" else _visible
+    in_scope = _selected if scope == "selected" else visibility(depsgraph)
     # Blender's structs hash and compare by the address they wrap, so the evaluated owner and the
     # original shown are dict keys without a call to as_pointer (a method call: slower than the
     # reads it saves). An instancer owns thousands of instances: its original, name and scope are
@@ -94,6 +94,19 @@ def matrices_array(matrices: list) -> np.ndarray:
 
 def _selected(obj, view_layer) -> bool:
     return obj.select_get(view_layer=view_layer)
+
+
+def visibility(depsgraph):
+    """Whether an original object is visible to an export from `depsgraph`, as (object, view
+    layer) -> bool. A final render's depsgraph holds only what renders (Blender leaves out what is
+    disabled in renders, and collections excluded from them), so all of it is visible, also what
+    the viewport hides (the eye, Disable in Viewports), as Cycles renders it; a viewport's
+    depsgraph, what the viewport shows."""
+    return _rendered if depsgraph.mode == "RENDER" else _visible
+
+
+def _rendered(obj, view_layer) -> bool:
+    return True
 
 
 def _visible(obj, view_layer) -> bool:
