@@ -84,7 +84,8 @@ void load_sums(uvec2 p) {
     g_sum = Vec4Array(frame.addr.accum_color).v[i];
     g_depth = FloatArray(frame.addr.accum_depth).v[i];
     g_samples = UintArray(frame.addr.accum_samples).v[i];
-    g_covered = frame.film_transparent != 0u ? UintArray(frame.addr.accum_covered).v[i] : 0u;
+    g_covered = 0u;  // a branch, not a select: no load from the null address of an opaque film's render
+    if (frame.film_transparent != 0u) g_covered = UintArray(frame.addr.accum_covered).v[i];
     if (frame.count_traversal == 0u) return;
     UintArray c = UintArray(frame.addr.accum_counts);
     uint k = i * COUNTER_COUNT;
