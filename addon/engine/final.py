@@ -122,7 +122,7 @@ class FinalRender:
     def _camera(blender_scene, camera, frame, settings):
         """The scene camera for this frame's part (the render border), the settings, and what of the
         scene's settings bvhlab does not render, in words (said, never silently left out)."""
-        unrendered = unrendered_features(blender_scene.render)
+        unrendered = unrendered_features(blender_scene)
         if camera.projection in ("equirectangular", "fisheye") and settings.overlay_depth is not None:
             unrendered.append(f"the box overlay is not drawn through {camera.projection} cameras")
             settings = settings.replace(overlay_depth=None)
@@ -211,9 +211,29 @@ def sample_passes(total: int) -> list[int]:
     return [*targets, total]
 
 
-def unrendered_features(render) -> list[str]:
-    """What Blender's render settings ask for that bvhlab does not render, each in words."""
+#: Object Properties ▸ Visibility ▸ Ray Visibility (Cycles' flags): bvhlab shows every object to
+#: every ray.
+RAY_VISIBILITY = ("visible_camera", "visible_diffuse", "visible_glossy", "visible_transmission", "visible_shadow")
+
+
+def unrendered_features(blender_scene) -> list[str]:
+    """What Blender's settings ask for that bvhlab does not render, each in words."""
+    render = blender_scene.render
     notes = []
+    from bvhlab.blender.mesh import CONVERTIBLE_TYPES
+
+    shapes = {"MESH", *CONVERTIBLE_TYPES}  # what the export reads (a light's flags are its own)
+    limited = [
+        obj.name
+        for obj in blender_scene.objects
+        if obj.type in shapes and not obj.hide_render and not all(getattr(obj, f, True) for f in RAY_VISIBILITY)
+    ]
+    if limited:
+        more = f" and {len(limited) - 1} more" if len(limited) > 1 else ""
+        notes.append(
+            f"ray visibility is not rendered (Object ▸ Visibility ▸ Ray Visibility of '{limited[0]}'{more}): "
+            "every object is seen by every ray"
+        )
     if render.use_motion_blur:
         notes.append("motion blur is not rendered (Render ▸ Motion Blur is on): the frame shows one moment")
     if render.use_multiview:

@@ -92,14 +92,22 @@ def check_depth_of_field_against_cycles(tmp_dir) -> None:
 
 
 def check_unrendered_settings_are_said(tmp_dir) -> None:
-    """Motion blur on, and the box overlay with a panoramic camera: the render goes on and the
-    engine says what it leaves out (Blender's warning report; the engine's record of it)."""
+    """Motion blur on, an object hidden from camera rays (Cycles' ray visibility), and the box
+    overlay with a panoramic camera: the render goes on and the engine says what it leaves out
+    (Blender's warning report; the engine's record of it)."""
     scene = camera_scene()
-    scene.render.use_motion_blur = True
     scene.render.engine = ENGINE
     scene.bvhlab.backend, scene.bvhlab.render_overlay = "cpu", True
+    render_passes(tmp_dir, "plain")
+    assert _last_final(scene)["unrendered"] == [], _last_final(scene)["unrendered"]
+    scene.render.use_motion_blur = True
+    mesh = next(o for o in scene.objects if o.type == "MESH")
+    mesh.visible_camera = False
     render_passes(tmp_dir, "motion_blur")
-    assert any("motion blur" in note for note in _last_final(scene)["unrendered"]), _last_final(scene)
+    notes = _last_final(scene)["unrendered"]
+    assert any("motion blur" in note for note in notes), notes
+    assert any("ray visibility" in note and mesh.name in note for note in notes), notes
+    mesh.visible_camera = True
     _panorama(scene.camera.data, "EQUIRECTANGULAR")
     render_passes(tmp_dir, "panorama_overlay")
     assert any("overlay" in note for note in _last_final(scene)["unrendered"]), _last_final(scene)
