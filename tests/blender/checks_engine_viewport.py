@@ -122,6 +122,24 @@ def _session_for(
     return session, request, live
 
 
+def _oracle(live, request, width: int, height: int, **options):
+    """bvhlab.render on the CPU of what a _session_for worker traces at 2×2 samples: the same scene,
+    tree and camera, as the request's options say (`options`: those that differ from the defaults)."""
+    image, _ = bvhlab.render(
+        live.scene,
+        _tree_of(request).bvh,
+        width,
+        height,
+        backend="cpu",
+        camera=request.frustum.camera(),
+        samples_per_axis=2,
+        max_depth=5,
+        traversal="stackless",
+        **options,
+    )
+    return image
+
+
 def _trees():
     return import_module(harness.addon().__name__ + ".trees")
 
@@ -147,19 +165,7 @@ def check_viewport_worker_levels() -> None:
             return frame if frame is not None and frame.level == "refined" else None
 
         frame = _wait(refined)
-        expected, _ = bvhlab.render(
-            live.scene,
-            _tree_of(request).bvh,
-            240,
-            160,
-            backend="cpu",
-            camera=request.frustum.camera(),
-            samples_per_axis=2,
-            max_depth=5,
-            overlay_depth=(8, 9),
-            traversal="stackless",
-        )
-        compare_images(frame.image, expected, "cpu")
+        compare_images(frame.image, _oracle(live, request, 240, 160, overlay_depth=(8, 9)), "cpu")
         names = [name for name, _, _ in levels]
         assert names[-2:] == ["full", "refined"] and set(names) <= {"preview", "full", "refined"}, levels
         if "preview" in names:
@@ -192,19 +198,7 @@ def check_viewport_film_transparent() -> None:
     session, request, live = _session_for(scene, 96, 64, samples_per_axis=2, film_transparent=True)
     try:
         frame = _wait(lambda: (f := session.latest_frame()) is not None and f.level == "refined" and f or None)
-        expected, _ = bvhlab.render(
-            live.scene,
-            _tree_of(request).bvh,
-            96,
-            64,
-            backend="cpu",
-            camera=request.frustum.camera(),
-            samples_per_axis=2,
-            max_depth=5,
-            traversal="stackless",
-            film_transparent=True,
-        )
-        compare_images(frame.image, expected, "cpu")
+        compare_images(frame.image, _oracle(live, request, 96, 64, film_transparent=True), "cpu")
         alpha = frame.image[..., 3]
         assert (alpha == 0).any() and (alpha == 1).any(), np.unique(alpha)
     finally:
