@@ -26,7 +26,7 @@ import bvhlab  # noqa: E402
 from bvhlab.library import procedural  # noqa: E402
 
 WIDTH, HEIGHT = 320, 240
-TRAVERSALS = ("stack", "stackless", "wide")  # wide: the CPU tracer's (the 8-wide copies, the same image)
+TRAVERSALS = bvhlab.TRAVERSALS  # wide: the CPU tracer's (the 8-wide copies, the same image)
 
 
 def frame_ms(scene, tree, repeat: int, traversal: str) -> float:

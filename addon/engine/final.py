@@ -218,10 +218,10 @@ RAY_VISIBILITY = ("visible_camera", "visible_diffuse", "visible_glossy", "visibl
 
 def unrendered_features(blender_scene) -> list[str]:
     """What Blender's settings ask for that bvhlab does not render, each in words."""
+    from bvhlab.blender.mesh import CONVERTIBLE_TYPES  # bvhlab.blender is imported when first used
+
     render = blender_scene.render
     notes = []
-    from bvhlab.blender.mesh import CONVERTIBLE_TYPES
-
     shapes = {"MESH", *CONVERTIBLE_TYPES}  # what the export reads (a light's flags are its own)
     limited = [
         obj.name
