@@ -126,6 +126,7 @@ nb::dict timings_dict(const RenderTimings& t) {
     d["upload_ms"] = t.upload_ms, d["overlay_ms"] = t.overlay_ms, d["trace_ms"] = t.trace_ms;
     d["readback_ms"] = t.readback_ms, d["total_ms"] = t.total_ms, d["device"] = t.device;
     d["dispatches"] = t.dispatches, d["steps_per_dispatch"] = t.steps_per_dispatch;
+    d["shadow_rays_opaque"] = t.shadow_rays_opaque, d["shadow_rays_glass"] = t.shadow_rays_glass;
     return d;
 }
 

@@ -91,8 +91,11 @@ def render(
 
     image: float32 (height, width, 4), row 0 at the top, linear RGB, alpha 1.
     timings: upload_ms, overlay_ms, trace_ms, readback_ms, total_ms, dispatches, device (which
-    device rendered), backend ("vulkan" or "cpu"), reason (why that backend) and heatmap_scale (the
-    box tests the heatmap shows red: its legend's top).
+    device rendered), backend ("vulkan" or "cpu"), reason (why that backend), heatmap_scale (the
+    box tests the heatmap shows red: its legend's top), traversal (the walk that rendered), and
+    shadow_rays_opaque / shadow_rays_glass (the CPU's wide walk in a scene with a transparent
+    material: shadow rays whose nearest crossing was opaque, answered by it, and glass, left to
+    the stack walk; 0 elsewhere).
 
     backend: "auto" (a Vulkan GPU if there is one, else the CPU reference: on a CPU Vulkan
     driver such as lavapipe the CPU reference is several times faster), "vulkan" or "cpu".

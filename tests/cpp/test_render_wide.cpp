@@ -1,7 +1,7 @@
 // The CPU tracer's wide traversal (render_settings.h Traversal::Wide): each query answered by the
 // CPU queries' 8-wide walk gives the image of the stack walk bit for bit (colour and depth), with
-// spheres, transparent surfaces (their shadow rays left to the stack walk), the overlay's lines,
-// several samples and threads; its cost is 8 box tests a wide node that intersect_wide visits for
+// spheres, transparent surfaces (a shadow ray whose nearest crossing is glass left to the stack
+// walk), the overlay's lines, several samples and threads; its cost is 8 box tests a wide node that intersect_wide visits for
 // the pixel's primary ray; what it cannot do is refused or said.
 #include <gtest/gtest.h>
 
@@ -64,11 +64,31 @@ TEST(RenderWide, SpheresAndTrianglesGiveTheStackWalksImage) {
     EXPECT_NE(render(s->render, s->settings, Traversal::Wide, 1).timings.device.find("wide walk"), std::string::npos);
 }
 
+/// A scene with a transparent material: the wide walk answered shadow rays whose nearest crossing
+/// was opaque (transmission 0) and left those whose nearest was glass to the stack walk, the image
+/// still the stack walk's (expect_wide_is_stack); the stack walk counts neither.
+void expect_both_kinds_of_blocked_shadow_rays(const RenderTimings& wide, const RenderTimings& stack) {
+    EXPECT_GT(wide.shadow_rays_opaque, 0u) << wide.device;
+    EXPECT_GT(wide.shadow_rays_glass, 0u) << wide.device;
+    EXPECT_EQ(stack.shadow_rays_opaque + stack.shadow_rays_glass, 0u);
+    EXPECT_NE(wide.device.find("shadows through glass: stack walk"), std::string::npos) << wide.device;
+}
+
 TEST(RenderWide, TransparentSurfacesReflectionsAndSamplesGiveTheStackWalksImage) {
-    const ScenePtr s = whitted_showcase();  // glass (shadow rays by the stack walk), mirrors, 2×2 samples
+    const ScenePtr s = whitted_showcase();  // glass, mirrors, 2×2 samples
     expect_wide_is_stack(s->render, s->settings);
-    const std::string device = render(s->render, s->settings, Traversal::Wide, 1).timings.device;
-    EXPECT_NE(device.find("shadows through glass: stack walk"), std::string::npos) << device;
+    const Images wide = render(s->render, s->settings, Traversal::Wide, 1);
+    const Images wide3 = render(s->render, s->settings, Traversal::Wide, 3);
+    expect_both_kinds_of_blocked_shadow_rays(wide.timings, render(s->render, s->settings, Traversal::Stack, 1).timings);
+    // every pixel's rays are the same whichever thread traces them
+    EXPECT_EQ(wide3.timings.shadow_rays_opaque, wide.timings.shadow_rays_opaque);
+    EXPECT_EQ(wide3.timings.shadow_rays_glass, wide.timings.shadow_rays_glass);
+}
+
+TEST(RenderWide, AnOpaqueSceneCountsNoShadowRaysByTheirNearestCrossing) {
+    const ScenePtr s = five_spheres();  // every material opaque: the any-hit walk answers
+    const RenderTimings wide = render(s->render, s->settings, Traversal::Wide, 2).timings;
+    EXPECT_EQ(wide.shadow_rays_opaque + wide.shadow_rays_glass, 0u);
 }
 
 TEST(RenderWide, AMeshOfFiftyThousandTrianglesGivesTheStackWalksImage) {
@@ -192,9 +212,8 @@ TEST(RenderWide, TwoLevelScenesGiveTheStackWalksImage) {
             const Images wide = render(p->two_level, settings, Traversal::Wide, threads, {nullptr, &view});
             EXPECT_TRUE(same_bits(stack.color, wide.color)) << "opaque " << opaque << ", " << threads << " threads";
             EXPECT_TRUE(same_bits(stack.depth, wide.depth)) << "opaque " << opaque;
-            EXPECT_NE(wide.timings.device.find(opaque ? ", wide walk)" : "shadows through glass: stack walk"),
-                      std::string::npos)
-                << wide.timings.device;
+            if (opaque) EXPECT_NE(wide.timings.device.find(", wide walk)"), std::string::npos) << wide.timings.device;
+            else expect_both_kinds_of_blocked_shadow_rays(wide.timings, stack.timings);
         }
     }
     const InstancedPtr many = many_instances();  // 100 instances of one mesh

@@ -33,3 +33,37 @@ def test_render_bench_measures_every_method_backend_and_traversal(tmp_path):
     budgets = results["budgets"]
     assert len(budgets) == 5 and all(b["vulkan_ms"] > 0 and b["cpu_ms"] > 0 for b in budgets)
     assert "frame ms at 32x24" in run.stdout
+
+
+def test_render_glass_bench_counts_the_shadow_rays_of_each_walk(tmp_path):
+    """bench/render_glass.py end to end on whitted (glass already: no variant made), and its glass
+    variant of a scene without: the material of fewest triangles made transparent."""
+    out = tmp_path / "glass.json"
+    run = subprocess.run(
+        [sys.executable, "bench/render_glass.py", "--scenes", "gen:whitted", "--size", "48x32", "--rounds", "1"]
+        + ["--json", str(out)],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert run.returncode == 0, run.stderr[-2000:]
+    (whitted,) = json.loads(out.read_text())["scenes"]
+    (stack,), (wide,) = whitted["runs"]["stack"], whitted["runs"]["wide"]
+    assert stack["shadow_rays_opaque"] == stack["shadow_rays_glass"] == 0
+    assert wide["shadow_rays_opaque"] > 0 and wide["shadow_rays_glass"] > 0 and wide["trace_ms"] > 0
+
+    sys.path.insert(0, str(ROOT / "bench"))
+    import dataclasses
+
+    import render_glass
+
+    from bvhlab.library import showcase
+
+    floor, cells = showcase.checker_floor(4, 2.0)  # 32 triangles: 2 of material 2, the rest of 0
+    cells[:] = 0
+    cells[:2] = 2
+    scene = dataclasses.replace(showcase.five_spheres(), triangles=floor, tri_material=cells)
+    glassy, k = render_glass.with_glass(scene, None)
+    assert k == 2 and glassy.materials[2].transparent > 0 and scene.materials[2].transparent == 0
+    assert render_glass.with_glass(glassy, None) is None  # glass already

@@ -238,6 +238,9 @@ def test_auto_traversal_is_the_wide_walk_on_the_cpu_and_the_stack_walk_where_cou
     bvh = bvhlab.build(scene)
     stack, wide, auto = (_job(scene, bvh, traversal=t) for t in ("stack", "wide", "auto"))
     assert auto.timings["traversal"] == "wide" and "wide walk" in auto.timings["device"]
+    # whitted's glass: the wide walk answered the shadow rays blocked by an opaque surface first
+    assert auto.timings["shadow_rays_opaque"] > 0 and auto.timings["shadow_rays_glass"] > 0
+    assert stack.timings["shadow_rays_opaque"] == stack.timings["shadow_rays_glass"] == 0
     np.testing.assert_array_equal(auto.color, stack.color)
     np.testing.assert_array_equal(auto.depth, stack.depth)
     np.testing.assert_array_equal(auto.cost, wide.cost)

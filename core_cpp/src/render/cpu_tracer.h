@@ -92,22 +92,47 @@ public:
     /// flat: intersect_wide, bit for bit; two-level: intersect_two_level, whose instance and
     /// primitive are mapped to the scene's slot and reference). Its cost: flat, 8 box tests a wide
     /// node visited; two-level, the query's count (the TLAS's child boxes, a BLAS's wide nodes).
-    /// A shadow ray is an any-hit query: blocked, its transmission is 0 where every material is
-    /// opaque; through transparent surfaces it is a product taken in the walk's order (three factors
-    /// multiplied in another order can round otherwise), so there a blocked ray is left to the stack
-    /// walk (returns false) and only a ray that crosses nothing is answered here (transmission 1:
-    /// occluded is exactly "some crossing before tmax", as the stack walk counts crossings). Returns
-    /// false too where there is no wide tree.
-    bool wide_walk(INOUT(Walk) w, TraceRay r, bool shadow, INOUT(Hit) hit, INOUT(uint) work, INOUT(uint) steps) const {
+    /// A shadow ray where every material is opaque is an any-hit query: blocked, its transmission
+    /// is 0 (occluded is exactly "some crossing before tmax", as the stack walk counts crossings).
+    /// Where a material is transparent the stack walk's transmission is a product over the
+    /// crossings taken in its order (three factors multiplied in another order can round otherwise),
+    /// so the wide walk finds the ray's nearest crossing instead: none, transmission 1; an opaque
+    /// surface, 0, which the stack walk's product is in any order (a factor of 0 among factors in
+    /// [0, 1]); a transparent one, the ray is left to the stack walk (returns false). The shadow
+    /// rays so answered are counted (shadow_opaque, shadow_glass: RenderTimings). Returns false too
+    /// where there is no wide tree.
+    bool wide_walk(INOUT(Walk) w, TraceRay r, bool shadow, INOUT(Hit) hit, INOUT(uint) work, INOUT(uint) steps) {
         if (wide_ == nullptr) return false;
         const Ray ray{{r.origin.x, r.origin.y, r.origin.z}, {r.dir.x, r.dir.y, r.dir.z}, r.tmin, hit.t};
-        if (shadow) {
+        if (shadow && wide_->opaque) {
             const bool blocked = wide_->two_level ? occluded_two_level(*wide_->two_level, ray, Traversal::Wide)
                                                   : occluded_wide(*wide_->wide, ray);
-            if (blocked && !wide_->opaque) return false;
             if (blocked) hit.transmission = 0.0f;
-        } else if (wide_->two_level) {
-            std::uint32_t visited = 0;
+        } else if (shadow) {
+            Hit nearest = hit;
+            nearest_hit(ray, nearest);
+            if (nearest.ref != NO_HIT) {
+                if (load_material(material_of(nearest.ref)).transparent_ior.x != 0.0f) {
+                    shadow_glass += 1u;
+                    return false;
+                }
+                shadow_opaque += 1u;
+                hit.transmission = 0.0f;
+            }
+        } else {
+            nearest_hit(ray, hit);
+        }
+        w.state = WALK_FINISHED;
+        steps += 1u;
+        work += 1u;
+        return true;
+    }
+    /// The closest hit of `ray` through the wide trees into `hit` (the scene's reference and
+    /// instance slot; untouched on a miss) and its cost: flat, 8 box tests a wide node visited;
+    /// two-level, the query's count.
+    void nearest_hit(const Ray& ray, INOUT(Hit) hit) const {
+        std::uint32_t visited = 0;
+        if (wide_->two_level) {
             const InstanceHit h = intersect_two_level(*wide_->two_level, ray, Traversal::Wide, &visited);
             if (h.hit.ref != kNoHit) {
                 const std::uint32_t mesh = wide_->two_level->tlas->instances[h.instance].blas;
@@ -119,16 +144,16 @@ public:
             }
             hit.counts.box_tests += visited;
         } else {
-            std::uint32_t visited = 0;
             const bvhlab::Hit h = intersect_wide(*wide_->wide, *scene_.bvh, ray, &visited);
             if (h.ref != kNoHit) hit.t = h.t, hit.ref = h.ref, hit.u = h.u, hit.v = h.v;
             hit.counts.box_tests += 8u * visited;
         }
-        w.state = WALK_FINISHED;
-        steps += 1u;
-        work += 1u;
-        return true;
     }
+
+    /// Shadow rays of a scene with a transparent material the wide walk answered: nearest crossing
+    /// opaque (transmission 0), and nearest crossing transparent (left to the stack walk).
+    std::uint64_t shadow_opaque = 0, shadow_glass = 0;
+
 #include "tracer/shade_colors.glsl"
 #include "tracer/shade.glsl"
 #include "tracer/state.glsl"

@@ -32,7 +32,8 @@ struct RunShared {
     std::atomic<std::uint64_t> pixels_done{0}, pixels_failed{0};
     std::atomic<std::uint32_t> most_budgets{0};  ///< budgets of steps the slowest pixel needed
     std::atomic<std::uint32_t> workers_left{0};
-    std::atomic<bool> abort{false};  ///< a pixel failed or threw: the run ends
+    std::atomic<std::uint64_t> shadow_opaque{0}, shadow_glass{0};  ///< RenderTimings::shadow_rays_*
+    std::atomic<bool> abort{false};                                ///< a pixel failed or threw: the run ends
     std::exception_ptr error;
     std::mutex error_mutex;
 };
@@ -67,6 +68,8 @@ public:
         timings_.trace_ms += ms_since(start);
         timings_.total_ms = timings_.overlay_ms + timings_.trace_ms;
         timings_.dispatches += shared.most_budgets.load();
+        timings_.shadow_rays_opaque += shared.shadow_opaque.load();
+        timings_.shadow_rays_glass += shared.shadow_glass.load();
         if (shared.error) std::rethrow_exception(shared.error);
         if (cancel && cancel->stop_requested()) throw Cancelled();
         if (shared.pixels_failed)
@@ -175,6 +178,14 @@ private:
                          bool caller) {
         Tracer tracer(scene_, frame, overlay_.data(), &sums_, gpu_traversal(settings_.traversal),
                       wide_scene_ ? &*wide_scene_ : nullptr);
+        trace_rows_of(tracer, frame, shared, cancel, progress, caller);
+        shared.shadow_opaque.fetch_add(tracer.shadow_opaque);
+        shared.shadow_glass.fetch_add(tracer.shadow_glass);
+    }
+
+    template <class Tracer>
+    void trace_rows_of(Tracer& tracer, const gpu::FrameParams& frame, RunShared& shared, Cancellation* cancel,
+                       double* progress, bool caller) {
         const double pixels = double(frame.width) * frame.height;
         for (std::uint32_t y; (y = shared.next_row.fetch_add(1)) < frame.height;) {
             for (std::uint32_t x = 0; x < frame.width; ++x) {
