@@ -252,6 +252,36 @@ def check_final_render_shows_what_renders_not_what_the_viewport_shows(tmp_dir) -
     assert rendered() == everything
 
 
+def check_an_object_in_edit_mode_is_rendered_with_its_edits(tmp_dir) -> None:
+    """A mesh in Edit Mode is in F12 and in the sidebar's tree, with the edits made so far, as
+    Cycles renders it (its evaluated data is Blender's wrapper of the edit mesh, without polygons
+    until converted: it was left out without a word). Its image is the one F12 gives once the edit
+    is applied in Object Mode, bit for bit."""
+    import bmesh
+
+    scene = harness.boxes_scene()
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 32, 24, 100
+    use_engine(scene, backend="cpu", render_overlay=False)
+    box = bpy.data.objects["Box A"]
+    everything = sum(len(o.data.polygons) * 2 for o in scene.objects if o.type == "MESH")
+    before = render_passes(tmp_dir, "object_mode")["Depth"]
+    bpy.context.view_layer.objects.active = box
+    bpy.ops.object.mode_set(mode="EDIT")
+    try:
+        edit = bmesh.from_edit_mesh(box.data)
+        for vertex in edit.verts:
+            vertex.co.z += 0.6  # up by most of its height: its silhouette moves
+        bmesh.update_edit_mesh(box.data)
+        in_edit = render_passes(tmp_dir, "edit_mode")["Depth"]
+        assert len(_last_final(scene)["scene"].triangles) == everything
+        assert bpy.ops.bvhlab.build() == {"FINISHED"}
+        assert harness.addon().state.tree_for(scene).bvh.stats["primitives"] == everything
+    finally:
+        bpy.ops.object.mode_set(mode="OBJECT")
+    assert not np.array_equal(in_edit, before)  # the edit shows
+    np.testing.assert_array_equal(in_edit, render_passes(tmp_dir, "applied")["Depth"])
+
+
 def check_final_render_takes_blenders_render_threads(tmp_dir) -> None:
     """F12 and the sidebar's Render trace on Render Properties ▸ Performance ▸ Threads, as Cycles
     does (Fixed: that many; Auto-detect: Blender's count, every core; `blender -t N` sets the

@@ -144,6 +144,7 @@ def _engine() -> Iterator[Check]:
         engine.check_wide_traversal_renders_the_stack_image,
         engine.check_auto_traversal_renders_wide_on_the_cpu_and_stack_for_the_heatmap_pass,
         engine.check_final_render_shows_what_renders_not_what_the_viewport_shows,
+        engine.check_an_object_in_edit_mode_is_rendered_with_its_edits,
         engine.check_final_render_takes_blenders_render_threads,
         engine.check_film_transparent_gives_the_share_of_camera_rays_as_alpha,
         engine.check_heatmap_is_box_tests,

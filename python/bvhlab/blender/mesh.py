@@ -74,10 +74,14 @@ def gather_mesh_triangles(obj, matrix_world: np.ndarray, name: str):
 
 def read_mesh(obj, name: str) -> MeshData:
     """The evaluated geometry of an object in its own space (EMPTY_MESH for objects without any).
-    Raises ExportError naming the object when a vertex is NaN or infinite."""
-    if obj.type == "MESH":
+    Raises ExportError naming the object when a vertex is NaN or infinite.
+
+    A mesh object in Edit Mode is read through to_mesh, as curves are: its evaluated `data` is
+    Blender's wrapper of the edit mesh, whose polygons are empty until converted (the object
+    would otherwise be left out, where Cycles renders it with the edits so far)."""
+    if obj.type == "MESH" and obj.mode != "EDIT":
         return _read(obj.data, name)
-    if obj.type not in CONVERTIBLE_TYPES:
+    if obj.type != "MESH" and obj.type not in CONVERTIBLE_TYPES:
         return EMPTY_MESH
     mesh = obj.to_mesh()
     try:
