@@ -21,6 +21,7 @@ from . import passes
 from .border import final_frame
 from .settings import backend, final_threads
 from .tracer import TraceCancelled, open_tracer
+from .unrendered import unrendered_features
 
 #: Progress (RenderEngine.update_progress) at the start of each stage.
 BUILD_START, TRACE_START = 0.05, 0.35
@@ -86,7 +87,7 @@ class FinalRender:
         settings = settings.for_backend(
             tracer.backend == "cpu", counts_shown=passes.heatmap_wanted(depsgraph.view_layer)
         )
-        camera, settings, unrendered = self._camera(blender_scene, scene.camera, frame, settings)
+        camera, settings, unrendered = self._camera(depsgraph, scene.camera, frame, settings)
         for note in unrendered:
             engine.report({"WARNING"}, f"bvhlab: {note}")
         update = self._tree(engine, blender_scene)
@@ -119,10 +120,10 @@ class FinalRender:
         engine.update_stats("", _summary(record))
 
     @staticmethod
-    def _camera(blender_scene, camera, frame, settings):
+    def _camera(depsgraph, camera, frame, settings):
         """The scene camera for this frame's part (the render border), the settings, and what of the
         scene's settings bvhlab does not render, in words (said, never silently left out)."""
-        unrendered = unrendered_features(blender_scene)
+        unrendered = unrendered_features(depsgraph)
         if camera.projection in ("equirectangular", "fisheye") and settings.overlay_depth is not None:
             unrendered.append(f"the box overlay is not drawn through {camera.projection} cameras")
             settings = settings.replace(overlay_depth=None)
@@ -209,36 +210,6 @@ def sample_passes(total: int) -> list[int]:
         targets.append(n)
         n *= 2
     return [*targets, total]
-
-
-#: Object Properties ▸ Visibility ▸ Ray Visibility (Cycles' flags): bvhlab shows every object to
-#: every ray.
-RAY_VISIBILITY = ("visible_camera", "visible_diffuse", "visible_glossy", "visible_transmission", "visible_shadow")
-
-
-def unrendered_features(blender_scene) -> list[str]:
-    """What Blender's settings ask for that bvhlab does not render, each in words."""
-    from bvhlab.blender.mesh import CONVERTIBLE_TYPES  # bvhlab.blender is imported when first used
-
-    render = blender_scene.render
-    notes = []
-    shapes = {"MESH", *CONVERTIBLE_TYPES}  # what the export reads (a light's flags are its own)
-    limited = [
-        obj.name
-        for obj in blender_scene.objects
-        if obj.type in shapes and not obj.hide_render and not all(getattr(obj, f, True) for f in RAY_VISIBILITY)
-    ]
-    if limited:
-        more = f" and {len(limited) - 1} more" if len(limited) > 1 else ""
-        notes.append(
-            f"ray visibility is not rendered (Object ▸ Visibility ▸ Ray Visibility of '{limited[0]}'{more}): "
-            "every object is seen by every ray"
-        )
-    if render.use_motion_blur:
-        notes.append("motion blur is not rendered (Render ▸ Motion Blur is on): the frame shows one moment")
-    if render.use_multiview:
-        notes.append("stereoscopy is not rendered (Output ▸ Stereoscopy is on): one view is rendered")
-    return notes
 
 
 def _summary(record: dict) -> str:

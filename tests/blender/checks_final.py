@@ -113,6 +113,55 @@ def check_unrendered_settings_are_said(tmp_dir) -> None:
     assert any("overlay" in note for note in _last_final(scene)["unrendered"]), _last_final(scene)
 
 
+def check_geometry_and_effects_not_rendered_are_said(tmp_dir) -> None:
+    """Hair curves, particle hair drawn as strands, a holdout object, and collections with Holdout
+    and Indirect Only: bvhlab renders none of them as Cycles does (strands and curves are not
+    exported; holdouts and indirect-only objects are rendered as surfaces), and F12 says each,
+    naming an object or collection; an excluded collection's flags and a particle system off in
+    renders say nothing."""
+    scene = camera_scene()
+    scene.render.engine = ENGINE
+    scene.bvhlab.backend, scene.bvhlab.render_overlay = "cpu", False
+
+    def notes() -> list[str]:
+        render_passes(tmp_dir, "notes")
+        return _last_final(scene)["unrendered"]
+
+    def box_in(collection_name: str):
+        collection = bpy.data.collections.new(collection_name)
+        scene.collection.children.link(collection)
+        box = harness.add_box(f"{collection_name} box", (0.0, -2.0, 0.5), size=0.4)
+        scene.collection.objects.unlink(box)
+        collection.objects.link(box)
+        return bpy.context.view_layer.layer_collection.children[collection_name]
+
+    assert notes() == []
+    hair = bpy.data.hair_curves.new("Strands")
+    hair.add_curves([2] * 4)
+    scene.collection.objects.link(bpy.data.objects.new("Strands", hair))
+    floor = bpy.data.objects["Floor"]
+    strands = floor.modifiers.new("Hair", "PARTICLE_SYSTEM").particle_system.settings
+    strands.type, strands.render_type, strands.count = "HAIR", "PATH", 10
+    holdout_box = harness.add_box("Holdout box", (1.0, -2.0, 0.5), size=0.4)
+    holdout_box.is_holdout = True
+    box_in("Held out").holdout = True
+    box_in("Indirect").indirect_only = True
+    excluded = box_in("Excluded")
+    excluded.holdout, excluded.exclude = True, True
+    said = notes()
+    for words in (
+        "hair curves are not rendered (object 'Strands')",
+        "particle hair drawn as strands is not rendered (on 'Floor')",
+        "holdout is not rendered (object 'Holdout box')",
+        "holdout is not rendered: the collection's objects are rendered as surfaces (collection 'Held out')",
+        "Indirect Only is not rendered: the collection's objects are seen by camera rays (collection 'Indirect')",
+    ):
+        assert sum(words in note for note in said) == 1, (words, said)
+    assert not any("Excluded" in note for note in said), said
+    floor.modifiers["Hair"].show_render = False
+    assert not any("particle hair" in note for note in notes())
+
+
 def check_odd_borders_are_sized_as_blender_sizes_them(tmp_dir) -> None:
     """Render borders whose edges fall between pixels, cropped, on a 37×29 frame at 70%: the
     engine traces exactly the Render Result Blender makes for each (its EXR's size)."""

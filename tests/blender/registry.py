@@ -178,6 +178,7 @@ def _cameras() -> Iterator[Check]:
     for check in (
         final.check_depth_of_field_against_cycles,
         final.check_unrendered_settings_are_said,
+        final.check_geometry_and_effects_not_rendered_are_said,
         final.check_odd_borders_are_sized_as_blender_sizes_them,
     ):
         yield Check("cameras", check.__name__.removeprefix("check_"), check, folder=True)

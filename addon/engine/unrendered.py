@@ -1,0 +1,98 @@
+"""What a scene asks of a final render that bvhlab does not render, in words: F12 says each (a
+warning report and the Last Render record's `unrendered`), as it says motion blur is not
+rendered, and renders the rest. Read from the render depsgraph, which holds what renders in the
+view layer being rendered."""
+
+from __future__ import annotations
+
+#: Object Properties ▸ Visibility ▸ Ray Visibility (Cycles' flags): bvhlab shows every object to
+#: every ray.
+RAY_VISIBILITY = ("visible_camera", "visible_diffuse", "visible_glossy", "visible_transmission", "visible_shadow")
+
+#: Object types Blender renders whose geometry the export does not read (it reads meshes and what
+#: converts to one: mesh.py CONVERTIBLE_TYPES).
+UNREAD_TYPES = {"CURVES": "hair curves", "POINTCLOUD": "point clouds", "VOLUME": "volumes"}
+
+#: Object Properties ▸ Visibility: per-object render effects bvhlab does not make.
+OBJECT_EFFECTS = {"is_holdout": "holdout", "is_shadow_catcher": "shadow catcher"}
+
+#: View Layer ▸ collection flags bvhlab does not honour, and what it does instead.
+COLLECTION_FLAGS = {
+    "holdout": "holdout is not rendered: the collection's objects are rendered as surfaces",
+    "indirect_only": "Indirect Only is not rendered: the collection's objects are seen by camera rays",
+}
+
+
+def _named(what: str, names: list[str]) -> str:
+    more = f" and {len(names) - 1} more" if len(names) > 1 else ""
+    return f"{what} '{names[0]}'{more}"
+
+
+def unrendered_features(depsgraph) -> list[str]:
+    """What the render depsgraph's scene, view layer and objects ask for that bvhlab does not
+    render, each in words."""
+    from bvhlab.blender.mesh import CONVERTIBLE_TYPES  # bvhlab.blender is imported when first used
+
+    render = depsgraph.scene.render
+    shapes = {"MESH", *CONVERTIBLE_TYPES}  # what the export reads (a light's flags are its own)
+    limited: list[str] = []
+    unread: dict[str, list[str]] = {}
+    effects: dict[str, list[str]] = {}
+    strands: list[str] = []
+    for obj in depsgraph.objects:  # what renders: a render depsgraph leaves out the rest
+        if obj.type in UNREAD_TYPES:
+            unread.setdefault(obj.type, []).append(obj.name)
+            continue
+        if obj.type not in shapes:
+            continue
+        if not all(getattr(obj, flag, True) for flag in RAY_VISIBILITY):
+            limited.append(obj.name)
+        for flag in OBJECT_EFFECTS:
+            if getattr(obj, flag, False):
+                effects.setdefault(flag, []).append(obj.name)
+        if any(_renders_strands(m) for m in obj.modifiers):
+            strands.append(obj.name)
+    notes = []
+    if limited:
+        notes.append(
+            f"ray visibility is not rendered ({_named('Object ▸ Visibility ▸ Ray Visibility of', limited)}): "
+            "every object is seen by every ray"
+        )
+    for kind, names in unread.items():
+        notes.append(f"{UNREAD_TYPES[kind]} are not rendered ({_named('object', names)})")
+    if strands:
+        notes.append(f"particle hair drawn as strands is not rendered ({_named('on', strands)})")
+    for flag, names in effects.items():
+        notes.append(f"{OBJECT_EFFECTS[flag]} is not rendered ({_named('object', names)}): it is rendered as a surface")
+    for flag, names in _flagged_collections(depsgraph.view_layer.layer_collection).items():
+        notes.append(f"{COLLECTION_FLAGS[flag]} ({_named('collection', names)})")
+    if render.use_motion_blur:
+        notes.append("motion blur is not rendered (Render ▸ Motion Blur is on): the frame shows one moment")
+    if render.use_multiview:
+        notes.append("stereoscopy is not rendered (Output ▸ Stereoscopy is on): one view is rendered")
+    return notes
+
+
+def _renders_strands(modifier) -> bool:
+    """A particle system modifier on in renders whose particles are hair drawn as paths."""
+    if modifier.type != "PARTICLE_SYSTEM" or not modifier.show_render:
+        return False
+    settings = modifier.particle_system.settings
+    return settings.type == "HAIR" and settings.render_type == "PATH"
+
+
+def _flagged_collections(layer_collection) -> dict[str, list[str]]:
+    """The collections of the view layer, not excluded and holding objects, with a flag of
+    COLLECTION_FLAGS set (a flag holds for the collections below too: named once, at the top)."""
+    found: dict[str, list[str]] = {}
+    stack = [(child, frozenset()) for child in layer_collection.children]
+    while stack:
+        child, inherited = stack.pop()
+        if child.exclude or child.collection.hide_render:
+            continue
+        flags = {flag for flag in COLLECTION_FLAGS if getattr(child, flag, False)} - inherited
+        if flags and len(child.collection.all_objects):
+            for flag in sorted(flags):
+                found.setdefault(flag, []).append(child.name)
+        stack.extend((grandchild, inherited | flags) for grandchild in child.children)
+    return found
