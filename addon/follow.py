@@ -4,7 +4,9 @@ mode. Blender's depsgraph_update_post and frame_change_post handlers sync a Live
 tree's scope (only what the depsgraph reports as changed is read again) and update the tree as the
 render engine does (trees.SceneTree.update): moving an instance makes a new TLAS only, a moved or
 edited mesh has its tree updated with the scene's update policy. Only while the boxes are shown
-and no build is running.
+and no build is running: with them hidden an edit marks the tree behind (state.BuiltTree.behind,
+said in the panel), as an undo or redo marks every tree, and the next update with the boxes shown
+reads the whole scene again and brings the tree up to date.
 
 Where the work runs: the sync reads bpy data, so it runs on the UI thread, in the handler. A new
 TLAS alone (only instances moved: `SyncReport.placeable`) is made there too: it is bounded by the
@@ -126,11 +128,17 @@ def follow(scene, depsgraph):
 
     key = state.key(scene)
     built = state.tree_for(scene)
-    if built is None or not scene.bvhlab.overlay_show or key in state.builds or _busy[0]:
+    if built is None or key in state.builds or _busy[0]:
         return None
-    if not _moved_or_edited(depsgraph):  # a selection, a setting: no walk over the scene's objects
+    if not scene.bvhlab.overlay_show:  # not followed: the panel says the tree is behind
+        if not built.behind and _moved_or_edited(depsgraph):
+            built.behind = state.EDITED
         return None
     live_key = (key, built.key.scope)
+    if built.behind:  # catch up: the whole scene read again (the LiveScene kept may be older)
+        _live.pop(live_key, None)
+    elif not _moved_or_edited(depsgraph):  # a selection, a setting: no walk over the scene's objects
+        return None
     live = _live.get(live_key)
     if live is None:
         live = _live[live_key] = LiveScene(built.key.scope, require_camera=False)
@@ -142,6 +150,7 @@ def follow(scene, depsgraph):
         return None
     finally:
         _busy[0] = False
+    built.behind = ""
     if not report.geometry and not report.full:
         return None
     job = _Job(key, built, live.scene, report.refittable, update_config(scene))
@@ -187,11 +196,17 @@ def _watch_worker() -> None:
 
 def _moved_or_edited(depsgraph) -> bool:
     """The depsgraph's last evaluation moved an object or changed its geometry (an edited mesh
-    reports its objects too); a changed setting of the scene (the overlay's, say) does not count."""
-    return any(
-        isinstance(update.id, bpy.types.Object) and (update.is_updated_transform or update.is_updated_geometry)
-        for update in depsgraph.updates
-    )
+    reports its objects too), or changed what a collection holds: an object added, deleted, or
+    disabled in viewports reports its collections' geometry (a deleted object reports nothing of
+    its own). A changed setting of the scene (the overlay's, say) does not count; nor, unseen
+    here, an object hidden by the eye or a collection excluded (view-layer state the depsgraph
+    reports as no change: the tree follows them at the next edit)."""
+    for update in depsgraph.updates:
+        if isinstance(update.id, bpy.types.Object) and (update.is_updated_transform or update.is_updated_geometry):
+            return True
+        if isinstance(update.id, bpy.types.Collection) and update.is_updated_geometry:
+            return True
+    return False
 
 
 @persistent
@@ -201,17 +216,37 @@ def _on_update(scene, depsgraph=None) -> None:
     follow(scene, depsgraph)
 
 
+def _handlers():
+    """(Blender's handler list, this module's handler) pairs."""
+    handlers = bpy.app.handlers
+    return [
+        (handlers.depsgraph_update_post, _on_update),
+        (handlers.frame_change_post, _on_update),
+        (handlers.undo_post, _after_undo),
+        (handlers.redo_post, _after_undo),
+    ]
+
+
 def register() -> None:
-    for handlers in (bpy.app.handlers.depsgraph_update_post, bpy.app.handlers.frame_change_post):
-        if _on_update not in handlers:
-            handlers.append(_on_update)
+    for handlers, handler in _handlers():
+        if handler not in handlers:
+            handlers.append(handler)
 
 
 def unregister() -> None:
-    for handlers in (bpy.app.handlers.depsgraph_update_post, bpy.app.handlers.frame_change_post):
-        if _on_update in handlers:
-            handlers.remove(_on_update)
+    for handlers, handler in _handlers():
+        if handler in handlers:
+            handlers.remove(handler)
     forget()
+
+
+@persistent
+def _after_undo(*_args) -> None:
+    """An undo or redo can change any object: every tree may be behind its scene (the next update
+    with the boxes shown reads the scene again), and the scenes kept for following are dropped."""
+    for built in state.trees.values():
+        built.behind = state.UNDONE
+    _live.clear()
 
 
 def forget() -> None:

@@ -13,7 +13,8 @@ from .properties import output_path_options
 
 class BVHLAB_OT_export_stats(bpy.types.Operator, ExportHelper):
     """Write the BVH statistics (per-depth node counts, leaf-size histogram...) as JSON and CSV
-    (the CSV beside the JSON, same name). Builds a tree first if the scene has none"""
+    (the CSV beside the JSON, same name). Builds a tree first if the scene has none, or brings it
+    up to date when the scene may have changed since"""
 
     bl_idname = "bvhlab.export_stats"
     bl_label = "Export BVH Stats"
@@ -39,7 +40,7 @@ class BVHLAB_OT_export_stats(bpy.types.Operator, ExportHelper):
 
         json_path = stats_json_path(self.filepath)  # refused before any work
         built = state.tree_for(context.scene)
-        if built is None:
+        if built is None or built.behind:  # the stats of the scene as it is (kept if the tree fits)
             current_tree(context, export_scene(context, require_camera=False))
             built = state.tree_for(context.scene)
         csv_path = json_path.with_suffix(".csv")

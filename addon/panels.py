@@ -125,6 +125,15 @@ def _stats_box(layout, built, settings) -> None:
         box.operator("bvhlab.fresh_sah", icon="TIME")
     if built.settings != settings.build_settings():
         box.label(text="Settings changed; build again", icon="INFO")
+    if built.behind:
+        box.label(text=BEHIND_NOTES[built.behind], icon="INFO")
+
+
+#: What the panel says of a tree the scene may have left behind (state.BuiltTree.behind).
+BEHIND_NOTES = {
+    state.EDITED: "Scene edited since; show the boxes or build again",
+    state.UNDONE: "Undo since; show the boxes or build again",
+}
 
 
 class BVHLAB_PT_overlay(_BvhPanel, bpy.types.Panel):

@@ -23,6 +23,11 @@ class BuiltTree:
     tree: SceneTree
     scene: object  # the exported bvhlab.Scene it was made over
     built_at: float = field(default_factory=time.time)
+    #: Why the scene may differ from the tree now ("" while it fits, as far as the add-on knows):
+    #: EDITED, objects moved or edited while the boxes were hidden (the tree follows the scene only
+    #: while they are shown: follow.py); UNDONE, an undo or redo, which can change anything. The
+    #: panel says it; showing the boxes brings the tree up to date, as Build and Export stats do.
+    behind: str = ""
 
     @property
     def bvh(self):
@@ -47,6 +52,9 @@ class BuiltTree:
         """Changes whenever the tree does (a build, a refit): what the overlay's batch depends on."""
         return (id(self.tree), self.tree.generation)
 
+
+#: BuiltTree.behind's reasons
+EDITED, UNDONE = "edited", "undone"
 
 trees: dict[int, BuiltTree] = {}
 comparisons: dict[int, list[dict]] = {}

@@ -99,3 +99,69 @@ def test_an_error_on_the_worker_is_said_and_the_tree_kept():
     assert level == "WARNING" and "failed on purpose" in message
     assert state.tree_for(bpy.context.scene).bvh is before
     assert np.isfinite(before.stats["sah_cost"])
+
+
+def test_a_tree_left_behind_is_said_and_caught_up_when_the_boxes_show(tmp_path):
+    """With the boxes hidden the tree does not follow: an edit marks it behind (the panel says so),
+    and showing the boxes reads the scene again and updates the tree; an undo marks it behind too
+    (the probe's case: a tree over a sphere undone away kept 972 primitives for a 12-triangle
+    scene), and Export stats then writes the stats of the scene as it is."""
+    built, monkey = built_monkey()
+    state, follow, panels = harness.addon().state, _addon("follow"), _addon("panels")
+    scene = bpy.context.scene
+    settings = scene.bvhlab
+    triangles = built.bvh.stats["primitives"]
+    settings.overlay_show = False
+    bpy.context.view_layer.update()
+    assert not state.tree_for(scene).behind  # a setting is not an edit
+    _edit(monkey, 0.3)
+    assert state.tree_for(scene).behind == state.EDITED and "edited" in panels.BEHIND_NOTES[state.EDITED]
+    generation = built.tree.generation
+    settings.overlay_show = True
+    bpy.context.view_layer.update()  # the handler catches up
+    assert follow.wait()
+    assert not state.tree_for(scene).behind and built.tree.generation > generation
+    _same_hits(state.tree_for(scene).bvh, export_scene(bpy.context, require_camera=False))
+
+    settings.overlay_show = False
+    bpy.ops.ed.undo_push(message="before the box")
+    harness.add_box("Added", (3.0, 0.0, 0.0))
+    bpy.context.view_layer.update()
+    bpy.ops.ed.undo_push(message="the box")
+    assert bpy.ops.bvhlab.build() == {"FINISHED"} and settings.overlay_show  # Build shows the boxes
+    bpy.ops.ed.undo_push(message="built")
+    assert state.tree_for(scene).bvh.stats["primitives"] == triangles + 12
+    bpy.ops.ed.undo()
+    bpy.ops.ed.undo()  # the box is gone, the boxes hidden as they were
+    scene = bpy.context.scene
+    assert "Added" not in scene.objects and not scene.bvhlab.overlay_show
+    assert state.tree_for(scene).behind == state.UNDONE
+    assert state.tree_for(scene).bvh.stats["primitives"] == triangles + 12  # as built
+    assert bpy.ops.bvhlab.export_stats(filepath=str(tmp_path / "behind.json")) == {"FINISHED"}
+    assert not state.tree_for(scene).behind
+    assert state.tree_for(scene).bvh.stats["primitives"] == triangles
+
+
+def test_a_deleted_or_disabled_object_is_followed():
+    """An object deleted, or disabled in viewports, reports no change of its own to the depsgraph,
+    only its collection's: the boxes follow it (they kept the deleted object's boxes), and with the
+    boxes hidden the tree is marked behind."""
+    built, monkey = built_monkey()
+    state, follow = harness.addon().state, _addon("follow")
+    scene = bpy.context.scene
+    triangles = built.bvh.stats["primitives"]
+    floor = bpy.data.objects["Floor"]
+    floor.hide_viewport = True
+    bpy.context.view_layer.update()
+    assert follow.wait() and state.tree_for(scene).bvh.stats["primitives"] == triangles - 12
+    floor.hide_viewport = False
+    bpy.context.view_layer.update()
+    assert follow.wait() and state.tree_for(scene).bvh.stats["primitives"] == triangles
+    bpy.data.objects.remove(floor)
+    bpy.context.view_layer.update()
+    assert follow.wait() and state.tree_for(scene).bvh.stats["primitives"] == triangles - 12
+    scene.bvhlab.overlay_show = False
+    bpy.context.view_layer.update()
+    bpy.data.objects.remove(monkey)
+    bpy.context.view_layer.update()
+    assert state.tree_for(scene).behind == state.EDITED
