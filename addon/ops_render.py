@@ -77,7 +77,8 @@ def show_in_image_editor(context, image) -> str:
     Image Editor). Returns where it is, for the report."""
     if _image_editors(context, image):
         return "in the Image Editor"
-    if context.window is None or context.preferences.view.render_display_type == "NONE":
+    # background: no window to open (a file loaded there has windows, whose operators Blender refuses)
+    if bpy.app.background or context.window is None or context.preferences.view.render_display_type == "NONE":
         return "open it in an Image Editor"
     before = {area.as_pointer() for area in _image_editors(context)}
     bpy.ops.render.view_show("INVOKE_DEFAULT")  # Blender's render view: opens the editor F12 would

@@ -15,6 +15,8 @@ from dataclasses import dataclass, fields
 from . import _checks, _core
 from .overlay_levels import LEVELS
 
+#: The core's defaults, read while the module loads (deleted after: a nanobind object still alive
+#: when the interpreter ends is reported as a leak, which Blender 4.3 and bpy printed at every exit).
 _CORE = _core.RenderSettings()
 #: The image size where none is given (RenderSettings in C++), and the limits the UI shows.
 DEFAULT_WIDTH: int = int(_CORE.width)
@@ -166,3 +168,6 @@ def _set_overlay(s, overlay_depth) -> None:
     s.overlay = True
     s.overlay_depth_min = _checks.integer("overlay depth_min", overlay_depth[0], 0, 255)
     s.overlay_depth_max = _checks.integer("overlay depth_max", overlay_depth[1], 0, 255)
+
+
+del _CORE

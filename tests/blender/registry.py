@@ -137,6 +137,7 @@ def _engine() -> Iterator[Check]:
     import checks_engine as engine
     import checks_engine_frames as frames
     import checks_engine_viewport as viewport
+    import checks_final as final
 
     yield Check("engine", "engine_selectable", engine.check_engine_selectable)
     for check in (
@@ -165,6 +166,7 @@ def _engine() -> Iterator[Check]:
     ):
         yield Check("engine", check.__name__.removeprefix("check_"), check)
     yield Check("engine", "command_line_frames", frames.check_command_line_frames, folder=True, binary=True)
+    yield Check("engine", "exits_without_leaks", final.check_exits_without_leaks, binary=True)
 
 
 def _cameras() -> Iterator[Check]:
