@@ -288,8 +288,11 @@ void step_pop(INOUT(Walk) w, Hit hit) {
 void walk(INOUT(Walk) walk_state, TraceRay r, bool shadow, INOUT(Hit) query, INOUT(uint) work, INOUT(uint) steps,
           uint budget) {
 #ifdef __cplusplus
-    // The CPU tracer's wide walk (cpu_tracer.h): the whole query at once, the same hit.
-    if (TRAVERSAL == TRAVERSAL_WIDE && wide_walk(walk_state, r, shadow, query, work, steps)) return;
+    // The CPU tracer's wide walk (cpu_tracer.h): the whole query at once, the same hit; asked once
+    // a query, where it starts (a query it leaves to the stack walk goes on there in later budgets).
+    if (TRAVERSAL == TRAVERSAL_WIDE && steps < budget && walk_state.state == WALK_ROOT &&
+        walk_state.instance == NO_INSTANCE && wide_walk(walk_state, r, shadow, query, work, steps))
+        return;
 #endif
     Walk w = walk_state;  // locals: the CPU build keeps them in registers (the state may alias the slot)
     Hit hit = query;

@@ -80,9 +80,17 @@ TEST(RenderWide, TransparentSurfacesReflectionsAndSamplesGiveTheStackWalksImage)
     const Images wide = render(s->render, s->settings, Traversal::Wide, 1);
     const Images wide3 = render(s->render, s->settings, Traversal::Wide, 3);
     expect_both_kinds_of_blocked_shadow_rays(wide.timings, render(s->render, s->settings, Traversal::Stack, 1).timings);
-    // every pixel's rays are the same whichever thread traces them
+    // every pixel's rays are the same whichever thread traces them, and however the trace is cut
+    // into budgets of steps (a query left to the stack walk goes on there: asked and counted once)
     EXPECT_EQ(wide3.timings.shadow_rays_opaque, wide.timings.shadow_rays_opaque);
     EXPECT_EQ(wide3.timings.shadow_rays_glass, wide.timings.shadow_rays_glass);
+    RenderSettings cut = s->settings;
+    cut.steps_per_dispatch = gpu::MIN_STEPS_PER_DISPATCH;
+    const Images small = render(s->render, cut, Traversal::Wide, 2);
+    EXPECT_GT(small.timings.dispatches, 2 * wide.timings.dispatches);  // the traces were cut
+    EXPECT_EQ(small.timings.shadow_rays_opaque, wide.timings.shadow_rays_opaque);
+    EXPECT_EQ(small.timings.shadow_rays_glass, wide.timings.shadow_rays_glass);
+    EXPECT_TRUE(same_bits(small.color, wide.color));
 }
 
 TEST(RenderWide, AnOpaqueSceneCountsNoShadowRaysByTheirNearestCrossing) {
