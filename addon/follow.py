@@ -32,6 +32,8 @@ from bpy.app.handlers import persistent
 from . import state
 
 _live: dict[tuple, object] = {}  # (scene key, scope) → the LiveScene kept between updates
+_failed: set[tuple] = set()  # the (scene key, scope)s whose last catch-up failed to export
+_edited_while_building: set[int] = set()  # scene keys changed while their Build ran
 _busy = [False]  # a handler does not run inside itself (the sync may evaluate the depsgraph)
 #: How often (s) the UI timer looks for a finished worker update to redraw.
 REDRAW_POLL_S = 0.05
@@ -128,14 +130,16 @@ def follow(scene, depsgraph):
 
     key = state.key(scene)
     built = state.tree_for(scene)
-    if built is None or key in state.builds or _busy[0]:
+    if _busy[0] or (built is None and key not in state.builds):
         return None
-    if not scene.bvhlab.overlay_show:  # not followed: the panel says the tree is behind
-        if not built.behind and _moved_or_edited(depsgraph):
-            built.behind = state.EDITED
+    if key in state.builds or not scene.bvhlab.overlay_show:  # not followed: the tree falls behind
+        if _moved_or_edited(depsgraph):
+            _fell_behind(key, built, building=key in state.builds)
         return None
     live_key = (key, built.key.scope)
     if built.behind:  # catch up: the whole scene read again (the LiveScene kept may be older)
+        if live_key in _failed and not _moved_or_edited(depsgraph):
+            return None  # the last catch-up failed: again after an edit, not at every click
         _live.pop(live_key, None)
     elif not _moved_or_edited(depsgraph):  # a selection, a setting: no walk over the scene's objects
         return None
@@ -147,10 +151,12 @@ def follow(scene, depsgraph):
         report = live.sync(depsgraph, scene, depsgraph.view_layer)
     except (ExportError, ValueError) as error:  # said in the panel, never raised into Blender
         state.messages[key] = ("WARNING", f"The boxes no longer follow the scene: {error}")
+        _failed.add(live_key)
         return None
     finally:
         _busy[0] = False
     built.behind = ""
+    _failed.discard(live_key)
     if not report.geometry and not report.full:
         return None
     job = _Job(key, built, live.scene, report.refittable, update_config(scene))
@@ -162,6 +168,31 @@ def follow(scene, depsgraph):
     _worker.give(job)
     _watch_worker()
     return None
+
+
+def _fell_behind(key: int, built, building: bool) -> None:
+    """The scene changed where the tree does not follow it: the scenes kept for following it are
+    dropped (an edited mesh whose evaluated data kept its address would be taken as unchanged), and
+    the tree is marked (one a Build is making now, when it is done: tree_made)."""
+    for live_key in [k for k in _live if k[0] == key]:
+        del _live[live_key]
+    if building:
+        _edited_while_building.add(key)
+    elif built is not None and not built.behind:
+        built.behind = state.EDITED
+
+
+def export_taken(key: int) -> None:
+    """A Build has read the scene (ops_build): changes from now on are made while it runs."""
+    _edited_while_building.discard(key)
+
+
+def tree_made(key: int, built) -> None:
+    """A new tree is the sidebar's (operator_support.remember_tree): behind if the scene changed
+    while its Build ran (after the Build read it: export_taken)."""
+    if key in _edited_while_building:
+        _edited_while_building.discard(key)
+        built.behind = state.EDITED
 
 
 def wait(timeout: float = 60.0) -> bool:
@@ -247,6 +278,7 @@ def _after_undo(*_args) -> None:
     for built in state.trees.values():
         built.behind = state.UNDONE
     _live.clear()
+    _failed.clear()
 
 
 def forget() -> None:
@@ -254,6 +286,8 @@ def forget() -> None:
     the cache may forget: nothing of bpy is touched)."""
     _worker.forget()
     _live.clear()
+    _failed.clear()
+    _edited_while_building.clear()
     if _timer[0] is not None and bpy.app.timers.is_registered(_timer[0]):
         bpy.app.timers.unregister(_timer[0])
     _timer[0] = None

@@ -79,8 +79,11 @@ def window_progress(context):
 def remember_tree(context, key: TreeKey, exported) -> state.BuiltTree:
     """Make the cache's tree of `key` the one the sidebar shows, and keep the overlay's depth range
     inside its height."""
+    from . import follow
+
     built = state.BuiltTree(key, cache.tree(key), exported)
     state.trees[state.key(context.scene)] = built
+    follow.tree_made(state.key(context.scene), built)
     settings = context.scene.bvhlab
     deepest = built.height - 1
     if settings.overlay_depth_max > deepest:

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import bpy
 
-from . import state
+from . import follow, state
 from .background import UI_WORK_THREADS, BackgroundTask, ModalTaskMixin, TaskCancelled
 from .operator_support import export_scene, remember_tree, run_reported, window_progress
 from .trees import cache, key_of
@@ -50,6 +50,7 @@ class BVHLAB_OT_build(ModalTaskMixin, bpy.types.Operator):
         import bvhlab
 
         self._exported = exported = export_scene(context, require_camera=False)  # bpy: on the UI thread
+        follow.export_taken(state.key(context.scene))
         self._key = key = key_of(context.scene)  # the settings as they are now, not when it ends
         config = key.config.replace(threads=UI_WORK_THREADS)
 
@@ -90,6 +91,7 @@ class BVHLAB_OT_build(ModalTaskMixin, bpy.types.Operator):
         try:
             tree_key = key_of(context.scene)
             exported = export_scene(context, require_camera=False)  # a tree needs no camera
+            follow.export_taken(key)
             with window_progress(context) as progress:
                 bvh = bvhlab.build(exported, config=tree_key.config, progress=progress)
             cache.tree(tree_key).store(bvh, exported)

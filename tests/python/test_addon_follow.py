@@ -165,3 +165,60 @@ def test_a_deleted_or_disabled_object_is_followed():
     bpy.data.objects.remove(monkey)
     bpy.context.view_layer.update()
     assert state.tree_for(scene).behind == state.EDITED
+
+
+def test_a_tree_made_or_caught_up_elsewhere_is_followed_from_the_scene_as_it_is():
+    """An edit the tree does not follow drops the scene kept for following it (a mesh edited then,
+    whose evaluated data kept its address, would later be taken as unchanged); an edit made while a
+    Build runs marks the tree that Build makes (it read the scene before), and a Build that reads
+    the scene after the edit does not."""
+    built, monkey = built_monkey()
+    state, follow, support = harness.addon().state, _addon("follow"), _addon("operator_support")
+    scene = bpy.context.scene
+    key = state.key(scene)
+    _edit(monkey, 0.2)  # followed: a LiveScene is kept
+    assert follow.wait() and any(k[0] == key for k in follow._live)
+    scene.bvhlab.overlay_show = False
+    _edit(monkey, 0.3)
+    assert state.tree_for(scene).behind == state.EDITED and not any(k[0] == key for k in follow._live)
+
+    state.builds[key] = "a Build running"  # as the modal Build's task holds it
+    try:
+        _edit(monkey, -0.2)
+    finally:
+        del state.builds[key]
+    exported = export_scene(bpy.context, require_camera=False)
+    made = support.remember_tree(bpy.context, built.key, exported)  # what the Build's end does
+    assert made.behind == state.EDITED
+    assert bpy.ops.bvhlab.build() == {"FINISHED"} and not state.tree_for(scene).behind
+    _same_hits(state.tree_for(scene).bvh, export_scene(bpy.context, require_camera=False))
+
+
+def test_a_catch_up_that_fails_is_tried_again_after_an_edit_not_at_every_update(monkeypatch):
+    """A scene that cannot be exported (a NaN vertex) fails the catch-up once, says so, and is read
+    again only after an edit: not at a selection or a setting."""
+    from bvhlab.blender import LiveScene
+
+    built, monkey = built_monkey()
+    state = harness.addon().state
+    scene = bpy.context.scene
+    scene.bvhlab.overlay_show = False
+    bpy.context.view_layer.update()
+    monkey.data.vertices[0].co.x = float("nan")
+    monkey.data.update()
+    bpy.context.view_layer.update()
+    assert state.tree_for(scene).behind == state.EDITED
+    syncs = []
+    sync = LiveScene.sync
+    monkeypatch.setattr(LiveScene, "sync", lambda self, *a, **k: syncs.append(1) or sync(self, *a, **k))
+    scene.bvhlab.overlay_show = True
+    bpy.context.view_layer.update()
+    assert len(syncs) == 1 and "no longer follow" in state.messages[state.key(scene)][1]
+    bpy.data.objects["Floor"].select_set(True)
+    scene.bvhlab.overlay_depth_max = 3
+    bpy.context.view_layer.update()
+    assert len(syncs) == 1  # not read again
+    monkey.data.vertices[0].co.x = 0.0
+    monkey.data.update()
+    bpy.context.view_layer.update()
+    assert len(syncs) == 2 and not state.tree_for(scene).behind
