@@ -29,6 +29,8 @@ class BVHLAB_OT_fresh_sah(bpy.types.Operator):
         fresh = built.tree.fresh_sah_cost()
         current = built.bvh.stats["sah_cost"]
         message = f"SAH cost {current:.2f}; a fresh build's {fresh:.2f} ({current / fresh:.3f}×)"
+        if built.behind:  # both over the geometry the tree holds (state.BuiltTree.behind)
+            message += "; both over the tree's geometry: the scene changed since"
         self.report({"INFO"}, message)
         state.messages[state.key(context.scene)] = ("INFO", message)
         return {"FINISHED"}

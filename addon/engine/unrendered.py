@@ -31,27 +31,21 @@ def _named(what: str, names: list[str]) -> str:
 def unrendered_features(depsgraph) -> list[str]:
     """What the render depsgraph's scene, view layer and objects ask for that bvhlab does not
     render, each in words."""
-    from bvhlab.blender.mesh import CONVERTIBLE_TYPES  # bvhlab.blender is imported when first used
-
     render = depsgraph.scene.render
-    shapes = {"MESH", *CONVERTIBLE_TYPES}  # what the export reads (a light's flags are its own)
-    limited: list[str] = []
-    unread: dict[str, list[str]] = {}
-    effects: dict[str, list[str]] = {}
-    strands: list[str] = []
+    found = _Found()
     for obj in depsgraph.objects:  # what renders: a render depsgraph leaves out the rest
-        if obj.type in UNREAD_TYPES:
-            unread.setdefault(obj.type, []).append(obj.name)
+        found.look_at(obj, obj.name)
+    # objects shown only as instances (a collection instanced, geometry nodes' output), each once
+    seen = set()
+    for instance in depsgraph.object_instances:
+        if not instance.is_instance:
             continue
-        if obj.type not in shapes:
-            continue
-        if not all(getattr(obj, flag, True) for flag in RAY_VISIBILITY):
-            limited.append(obj.name)
-        for flag in OBJECT_EFFECTS:
-            if getattr(obj, flag, False):
-                effects.setdefault(flag, []).append(obj.name)
-        if any(_renders_strands(m) for m in obj.modifiers):
-            strands.append(obj.name)
+        obj = instance.object  # valid until the iterator moves on: looked at now
+        original = obj.original
+        if original not in seen:
+            seen.add(original)
+            found.look_at(obj, original.name)
+    limited, unread, effects, strands = found.limited, found.unread, found.effects, found.strands
     notes = []
     if limited:
         notes.append(
@@ -71,6 +65,34 @@ def unrendered_features(depsgraph) -> list[str]:
     if render.use_multiview:
         notes.append("stereoscopy is not rendered (Output ▸ Stereoscopy is on): one view is rendered")
     return notes
+
+
+class _Found:
+    """What the objects looked at ask for, by kind: the names of the objects asking."""
+
+    def __init__(self):
+        from bvhlab.blender.mesh import CONVERTIBLE_TYPES  # bvhlab.blender is imported when first used
+
+        self.shapes = {"MESH", *CONVERTIBLE_TYPES}  # what the export reads (a light's flags are its own)
+        self.limited: list[str] = []
+        self.unread: dict[str, list[str]] = {}
+        self.effects: dict[str, list[str]] = {}
+        self.strands: list[str] = []
+
+    def look_at(self, obj, name: str) -> None:
+        kind = obj.type
+        if kind in UNREAD_TYPES:
+            self.unread.setdefault(kind, []).append(name)
+            return
+        if kind not in self.shapes:
+            return
+        if not all(getattr(obj, flag, True) for flag in RAY_VISIBILITY):
+            self.limited.append(name)
+        for flag in OBJECT_EFFECTS:
+            if getattr(obj, flag, False):
+                self.effects.setdefault(flag, []).append(name)
+        if len(obj.particle_systems) and any(_renders_strands(m) for m in obj.modifiers):
+            self.strands.append(name)
 
 
 def _renders_strands(modifier) -> bool:

@@ -117,8 +117,8 @@ def check_geometry_and_effects_not_rendered_are_said(tmp_dir) -> None:
     """Hair curves, particle hair drawn as strands, a holdout object, and collections with Holdout
     and Indirect Only: bvhlab renders none of them as Cycles does (strands and curves are not
     exported; holdouts and indirect-only objects are rendered as surfaces), and F12 says each,
-    naming an object or collection; an excluded collection's flags and a particle system off in
-    renders say nothing."""
+    naming an object or collection, also of objects shown only by a collection instance; an
+    excluded collection's flags and a particle system off in renders say nothing."""
     scene = camera_scene()
     scene.render.engine = ENGINE
     scene.bvhlab.backend, scene.bvhlab.render_overlay = "cpu", False
@@ -160,6 +160,26 @@ def check_geometry_and_effects_not_rendered_are_said(tmp_dir) -> None:
     assert not any("Excluded" in note for note in said), said
     floor.modifiers["Hair"].show_render = False
     assert not any("particle hair" in note for note in notes())
+    # objects shown only as instances: a collection outside the scene, instanced by an empty
+    holdout_box.is_holdout = False
+    bpy.data.objects.remove(bpy.data.objects["Strands"])
+    asset = bpy.data.collections.new("Asset")
+    inner = harness.add_box("Asset holdout", (-1.0, -2.0, 0.5), size=0.4)
+    scene.collection.objects.unlink(inner)
+    asset.objects.link(inner)
+    inner.is_holdout = True
+    asset_hair = bpy.data.hair_curves.new("Asset strands")
+    asset_hair.add_curves([2] * 2)
+    asset.objects.link(bpy.data.objects.new("Asset strands", asset_hair))
+    empty = bpy.data.objects.new("Asset instance", None)
+    empty.instance_type, empty.instance_collection = "COLLECTION", asset
+    scene.collection.objects.link(empty)
+    said = notes()
+    for words in (
+        "hair curves are not rendered (object 'Asset strands')",
+        "holdout is not rendered (object 'Asset holdout')",
+    ):
+        assert sum(words in note for note in said) == 1, (words, said)
 
 
 def check_odd_borders_are_sized_as_blender_sizes_them(tmp_dir) -> None:
