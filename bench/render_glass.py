@@ -8,8 +8,8 @@ window in a room, unless --glass names it.
     .venv/bin/python bench/render_glass.py [--scenes atrium,gen:whitted] [--size 640x360]
         [--rounds 3] [--threads 1] [--glass K] [--json render_glass.json]
 
-Medians of the rounds; wide ÷ stack is the median of the rounds' ratios (the machine's speed
-moves between rounds, not within one).
+Pinned to as many cores as threads; medians of the rounds; wide ÷ stack is the median of the
+rounds' ratios (the machine's speed moves between rounds, not within one).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _common import json_path, machine, machine_line, print_table, write_json  # noqa: E402
+from _common import json_path, machine, machine_line, pin_to_cores, print_table, write_json  # noqa: E402
 
 import bvhlab  # noqa: E402
 from bvhlab.library import load_scene  # noqa: E402
@@ -79,6 +79,7 @@ def main() -> None:
     args = ap.parse_args()
     json_path(args.json)  # a folder that does not exist fails now, not after the renders
     size = tuple(int(v) for v in args.size.split("x"))
+    pin_to_cores(args.threads)  # as many cores as threads: the other's load moves the figures less
     m = machine()
     print(machine_line(m))
     results, rows = [], []
