@@ -72,7 +72,7 @@ def read_scene(cls: type[Scene], path, *, max_expansion: float = MAX_EXPANSION) 
         )
     try:
         cam, light = f.get("camera"), f.get("light")
-        return cls(
+        scene = cls(
             triangles=np.ascontiguousarray(f["triangles"], np.float32),
             spheres=np.ascontiguousarray(f["spheres"], np.float32),
             materials=[Material(tuple(r[:3]), r[3], r[4], r[5]) for r in f["materials"]],
@@ -83,6 +83,11 @@ def read_scene(cls: type[Scene], path, *, max_expansion: float = MAX_EXPANSION) 
             sky=tuple(f["sky"]),
             **_instancing_fields(f),
         )
+        if scene.is_instanced:  # checked now, naming the file (the Scene checks them when used)
+            scene.instances()
+            for k in range(1, scene.mesh_count):
+                scene.mesh_triangle_material(k)
+        return scene
     except (ValueError, TypeError) as e:
         raise SceneFileError(f"{path}: {e}") from None
 
@@ -121,7 +126,9 @@ def _instancing_fields(f: dict) -> dict:
         raise ValueError("mesh_triangles and mesh_triangle_counts are stored together")
     if "mesh_triangles" in f:
         counts = np.asarray(f["mesh_triangle_counts"], np.int64)
-        if np.any(counts < 0) or counts.sum() != len(f["mesh_triangles"]):
+        total = len(f["mesh_triangles"])
+        # each count in range before the sum: counts near 2**62 would wrap it to the total
+        if np.any(counts < 0) or np.any(counts > total) or counts.sum() != total:
             raise ValueError(
                 f"mesh_triangle_counts {counts.tolist()} do not add up to the {len(f['mesh_triangles'])} mesh triangles"
             )

@@ -139,6 +139,31 @@ def test_scene_file_keeps_meshes_and_instances(instanced_scene, tmp_path):
         np.testing.assert_array_equal(a, b)
 
 
+def test_hostile_instancing_members_are_refused_when_the_file_loads(instanced_scene, tmp_path):
+    """A file whose mesh counts wrap their sum (four of 2**62 and the real 3: they loaded as the
+    same meshes twice), or whose instances name a mesh that is not there or pair with another
+    number of transforms (loaded, then failed at the build without the file's name), is refused
+    by Scene.load naming the file (the probe's cases; the scene keeps a camera, which had skipped
+    the only check made while loading)."""
+    from bvhlab.scene import SceneFileError
+
+    good = dict(np.load(instanced_scene.save(tmp_path / "good.npz")))
+    assert "camera" in good
+    total = len(good["mesh_triangles"])
+    cases = {
+        "wrapped": ({"mesh_triangle_counts": np.array([2**62] * 4 + [total], np.int64)}, "do not add up"),
+        "mesh": ({"instance_mesh": np.array([0, 5, 0, 1, 1])}, "instance 1 refers to mesh 5"),
+        "pairs": ({"instance_mesh": np.array([0, 1])}, "2 instance meshes but 5 instance transforms"),
+        "materials": ({"mesh_tri_material": np.full(total, 3, np.int32)}, "material that does not exist"),
+    }
+    for name, (change, problem) in cases.items():
+        path = tmp_path / f"{name}.npz"
+        np.savez(path, **{**good, **change})
+        with pytest.raises(SceneFileError, match=problem) as caught:
+            bvhlab.Scene.load(path)
+        assert str(path) in str(caught.value)
+
+
 def test_format_1_files_still_load(small_scene, tmp_path):
     tris, spheres = small_scene
     path = tmp_path / "old.npz"
