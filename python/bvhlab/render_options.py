@@ -103,7 +103,7 @@ class RenderOptions:
         """Write these options into the core's RenderSettings (types checked here; values by its
         validate)."""
         s.samples_per_axis = _checks.integer("samples_per_axis", self.samples_per_axis, 0, 2**31)
-        s.max_ray_depth = _checks.integer("max_depth", self.max_depth, 0, 2**31)
+        s.max_ray_depth = _checks.integer("max_depth", self.max_depth, 0, int(_core.MAX_RAY_DEPTH))
         _set_overlay(s, self.overlay_depth)
         s.overlay_color_by_depth = bool(self.color_by_depth)
         s.overlay_color = _triple("line_color", self.line_color)

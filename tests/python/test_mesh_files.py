@@ -132,6 +132,17 @@ def test_folder_with_a_mesh_suffix(tmp_path):
         load_mesh_file(tmp_path / "dir.obj")
 
 
+def test_gltf_whose_buffer_is_missing_names_the_gltf_and_the_buffer(tmp_path, source):
+    """The probe's case: a .gltf whose buffer file is gone said only "missing.bin" (a bare
+    FileNotFoundError of the buffer, as if the .gltf itself were missing)."""
+    source.export(tmp_path / "sphere.gltf")  # writes sphere.gltf and its buffer file beside it
+    gltf = json.loads((tmp_path / "sphere.gltf").read_text())
+    gltf["buffers"][0]["uri"] = "missing.bin"
+    (tmp_path / "sphere.gltf").write_text(json.dumps(gltf))
+    with pytest.raises(SceneFileError, match=r"sphere\.gltf refers to .*missing\.bin.*, which is missing"):
+        load_mesh_file(tmp_path / "sphere.gltf")
+
+
 def test_missing_file_is_file_not_found(tmp_path):
     with pytest.raises(FileNotFoundError):
         load_mesh_file(tmp_path / "missing.stl")

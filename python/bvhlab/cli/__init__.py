@@ -1,5 +1,6 @@
-"""The `bvhlab` command line: build, render, compare (the report's Table 1 and figures),
-snapshot (raster level sheets) and scenes.
+"""The `bvhlab` command line: build, render, compare (the report's Table 1 and figures), snapshot
+(raster level sheets), inspect (a node, a pixel's walk, the costliest subtrees), sweep (scenes ×
+settings on Dask), animate (update policies frame by frame) and scenes.
 
     bvhlab build SCENE [--method M] [--bins B] [--bin-bounds box|centroids] [--axis A] [--max-leaf-size N]
                  [--sah-block N] [--optimize N [--optimize-ms MS]] [--json PATH] [--csv PATH]

@@ -149,11 +149,16 @@ def _print(rows: list[FrameRow], totals: dict) -> None:
         cells = []
         for p in policies:
             r = next(r for r in rows if r.frame == k and r.policy == p)
-            cells.append(f"{r.update_ms:9.2f} {r.sah_ratio:6.3f} {r.ran[:8]:>10}")
+            cells.append(f"{r.update_ms:9.2f} {_ratio(r.sah_ratio):>6} {r.ran[:8]:>10}")
         print(f"{k:>5}  " + "  ".join(f"{c:>28}" for c in cells))
     for p, t in totals.items():
         share = f", {t['share_of_rebuild']:.2f} of rebuilding every frame" if "share_of_rebuild" in t else ""
-        print(f"{p}: {t['total_ms']:.1f} ms in all{share}; SAH ÷ fresh worst {t['worst_sah_ratio']:.3f}")
+        print(f"{p}: {t['total_ms']:.1f} ms in all{share}; SAH ÷ fresh worst {_ratio(t['worst_sah_ratio'])}")
+
+
+def _ratio(value: float) -> str:
+    """A SAH ratio for the table; "–" where none was measured (the two-level rows: NaN in the JSON)."""
+    return "–" if math.isnan(value) else f"{value:.3f}"
 
 
 def _plot(rows: list[FrameRow], path: Path, title: str) -> Path:

@@ -63,7 +63,10 @@ def _triangles(path: Path, kind: str) -> np.ndarray:
         vertices = np.asarray(getattr(mesh, "vertices", np.zeros((0, 3))), np.float64)
         faces = getattr(mesh, "faces", None)  # a point cloud has none
         faces = np.zeros((0, 3), np.int64) if faces is None else np.asarray(faces)
-    except (FileNotFoundError, PermissionError, MemoryError):
+    except FileNotFoundError as e:  # the file itself is there (_check_regular_file): one it refers to is not
+        missing = e.filename or str(e).strip() or "a file"
+        raise SceneFileError(f"{path} refers to {missing}, which is missing (a glTF's buffer or image?)") from None
+    except (PermissionError, MemoryError):
         raise
     except Exception as e:  # a third-party parser on hostile input: any of its errors is "cannot read"
         reason = str(e).strip() or type(e).__name__
