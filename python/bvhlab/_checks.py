@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import math
 import numbers
+import os
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -105,5 +107,19 @@ def output_file(path, suffixes: tuple[str, ...], what: str) -> Path:
         if parent.exists():
             if not parent.is_dir():
                 raise OutputPathError(f"{path}: {parent} is a file, not a folder")
+            check_writable(parent, path)
             break
     return path
+
+
+def check_writable(folder: Path, target: Path) -> None:
+    """Whether a file can be made in `folder` (the nearest existing folder of the output `target`),
+    found by making one and deleting it: permissions say nothing of read-only mounts and /proc or
+    /sys, whose refusal came only after the work (a whole animation experiment). Raises
+    OutputPathError naming the target."""
+    try:
+        handle, name = tempfile.mkstemp(prefix=".bvhlab-write-check-", dir=folder)
+    except OSError as e:
+        raise OutputPathError(f"cannot write {target}: {folder} does not take new files ({e.strerror or e})") from None
+    os.close(handle)
+    os.unlink(name)

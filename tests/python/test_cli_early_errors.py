@@ -171,3 +171,22 @@ def test_the_interval_of_the_largest_count_is_the_exact_one():
     assert all(protocol._order_rank(n) == by_definition(n) for n in range(1, 400))
     n = protocol.MAX_SAMPLES
     assert abs(protocol._order_rank(n) - (n / 2 - 1.6449 * math.sqrt(n) / 2)) < 1.5
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ("animate", "wave", "--size", "10", "--frames", "0-1", "--out", "/proc/bvhlab_animate"),
+        ("build", "gen:five_spheres", "--json", "/proc/bvhlab_stats.json"),
+        ("inspect", "gen:five_spheres", "--node", "0", "--json", "/proc/bvhlab_inspect.json"),
+        ("compare", "gen:five_spheres", "--out", "/proc/bvhlab_compare"),
+        ("render", "gen:five_spheres", "--out", "/proc/bvhlab.png"),
+    ],
+)
+def test_an_output_where_no_file_can_be_made_is_refused_before_the_work(args):
+    """The probe's case: an output under /proc or /sys (or a read-only mount) was refused only when
+    written, after the work (a whole animation experiment); the folder is tried first, by making a
+    file there and deleting it (permissions alone say nothing of such folders, or to root)."""
+    code, out, err = run_cli(*args)
+    assert code == 2 and "does not take new files" in last_line(err), err
+    assert out == ""  # nothing ran: no progress, no table

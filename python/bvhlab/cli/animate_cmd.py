@@ -27,6 +27,7 @@ from ..render import BACKENDS
 from ..scene import Scene
 from ..update import UPDATE_POLICIES
 from . import options
+from .compare_args import output_dir
 
 #: The most frames one run takes (the CLI's other per-frame limits are the same).
 MAX_FRAMES = 10_000
@@ -55,7 +56,7 @@ def add_parser(sub) -> None:
     )
     p.add_argument("--backend", default="none", choices=("none", *BACKENDS), help="trace each frame (default: none)")
     options.add_image_size(p)
-    p.add_argument("--out", type=Path, required=True, metavar="DIR")
+    p.add_argument("--out", type=output_dir, required=True, metavar="DIR")
     p.set_defaults(run=run)
 
 

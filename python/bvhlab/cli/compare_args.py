@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from .._checks import OutputPathError, check_writable
 from ..build_config import method_from_label
 from ..compare.measure import build_settings
 from ..compare.protocol import MAX_SAMPLES, MIN_SAMPLES
@@ -77,13 +78,20 @@ def backend_list(text: str) -> list[str]:
 
 def output_dir(text: str) -> Path:
     """A directory to write into: it may exist (as a directory), but neither it nor a folder above it
-    may be a file. The path is used as given, never renamed."""
+    may be a file, and the nearest that exists must take new files (checked before any work). The
+    path is used as given, never renamed."""
     path = Path(text)
     if path.exists() and not path.is_dir():
         raise argparse.ArgumentTypeError(
             f"{path} exists and is not a directory (compare writes a directory of tables, charts and figures)"
         )
-    for parent in path.parents:
-        if parent.exists() and not parent.is_dir():
-            raise argparse.ArgumentTypeError(f"cannot create {path}: {parent} is a file")
+    for folder in (path, *path.parents):
+        if folder.exists():
+            if not folder.is_dir():
+                raise argparse.ArgumentTypeError(f"cannot create {path}: {folder} is a file")
+            try:
+                check_writable(folder, path)
+            except OutputPathError as e:
+                raise argparse.ArgumentTypeError(str(e)) from None
+            break
     return path
