@@ -133,3 +133,19 @@ def test_the_cli_runs_the_experiment_on_a_blend(frames, tmp_path):
         if r["policy"] == "adaptive":
             assert ratio <= 1.10  # issue 34: within 10% of a fresh build (tree_growth 1.09 × its reference)
     assert (tmp_path / "animate.png").exists()
+
+
+def test_frames_outside_the_files_range_are_said(tmp_path):
+    """The probe's case: --frames 50-60 on a 3-frame .blend ran 11 frames of a still scene without a
+    word; a range inside the file's says nothing."""
+    blend = ROOT / "blender_scenes" / "moving_ball.blend"
+    said = []
+    for frames in ("2-5", "1-3"):
+        done = subprocess.run(
+            [sys.executable, "-m", "bvhlab", "animate", str(blend), "--frames", frames, "--backend", "none"]
+            + ["--policy", "refit", "--out", str(tmp_path / frames)],
+            capture_output=True, text=True, timeout=300, cwd=ROOT,
+        )  # fmt: skip
+        assert done.returncode == 0, done.stderr[-2000:]
+        said.append("reach outside" in done.stderr and "frame range 1-3" in done.stderr)
+    assert said == [True, False]

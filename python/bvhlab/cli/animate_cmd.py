@@ -14,6 +14,7 @@ import csv
 import io
 import json
 import math
+import sys
 from collections.abc import Callable
 from pathlib import Path
 
@@ -93,6 +94,12 @@ def _frames_of(args) -> tuple[Callable[[int], np.ndarray | Scene], range]:
         from ..blender.animation import open_animation
 
         scene_at, frames = open_animation(Path(args.animation))
+        if args.frames and (args.frames[0] < frames[0] or args.frames[-1] > frames[-1]):
+            print(
+                f"note: frames {args.frames[0]}-{args.frames[-1]} reach outside {args.animation}'s frame range "
+                f"{frames[0]}-{frames[-1]}: its animation holds there",
+                file=sys.stderr,
+            )
         return scene_at, args.frames or frames
     make = ANIMATIONS[args.animation][0]
     frame_of = make(args.size) if args.size else make()
