@@ -15,5 +15,7 @@ layout(location = 1) flat in vec3 line_color;
 layout(location = 0) out vec4 color_distance;
 
 void main() {
-    color_distance = vec4(line_color, overlay_distance(world_position - frame.camera_position));
+    float d = overlay_distance(world_position - frame.camera_position);
+    color_distance = vec4(line_color, d);
+    gl_FragDepth = overlay_line_depth(d);  // the lines' own test (overlay.glsl), as the CPU reference's
 }

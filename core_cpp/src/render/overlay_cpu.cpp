@@ -67,7 +67,8 @@ std::pair<int, int> pixel_span(float from, float to, std::uint32_t extent) {
 }
 
 /// Steps along the major axis through pixel centres (a DDA), interpolating the camera-relative
-/// position perspective-correctly for the distance, and depth linearly in screen space.
+/// position perspective-correctly for the distance (which the lines are depth-tested by:
+/// overlay_line_depth), and the clip depth linearly in screen space (outside [0, 1]: not drawn).
 void draw_line(Target& t, Segment s, vec3 color) {
     if (!clip_to_view(s)) return;
     const vec4 a = s.a, b = s.b;
@@ -88,9 +89,12 @@ void draw_line(Target& t, Segment s, vec3 color) {
         float persp = (s_major / b.w) / ((1 - s_major) / a.w + s_major / b.w);  // screen → world parameter
         vec3 p = s.pa + (s.pb - s.pa) * persp;
         std::size_t k = std::size_t(py) * t.width + std::size_t(px);
-        if (depth < 0 || depth > 1 || depth >= t.depth[k]) continue;
-        t.depth[k] = depth;
-        t.color[k] = vec4(color, t.distance(p));  // p is relative to the camera
+        if (depth < 0 || depth > 1) continue;
+        const float distance = t.distance(p);                            // p is relative to the camera
+        const float line_depth = t.tracer.overlay_line_depth(distance);  // the GPU's test (overlay.frag)
+        if (line_depth >= t.depth[k]) continue;
+        t.depth[k] = line_depth;
+        t.color[k] = vec4(color, distance);
     }
 }
 

@@ -12,7 +12,11 @@ Device::Device(Functions& fn, const PhysicalDevice& physical) : fn_(fn), physica
     queue.queueCount = 1;
     queue.pQueuePriorities = &priority;
     // select_physical_device checked that these are supported.
-    VkPhysicalDeviceVulkan13Features v13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
+    VkPhysicalDeviceLineRasterizationFeaturesEXT lines{
+        VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_LINE_RASTERIZATION_FEATURES_EXT};
+    lines.bresenhamLines = VK_TRUE;  // where offered (PhysicalDevice::bresenham_lines): the overlay's rule
+    VkPhysicalDeviceVulkan13Features v13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES,
+                                         physical.bresenham_lines ? &lines : nullptr};
     v13.dynamicRendering = VK_TRUE;
     v13.synchronization2 = VK_TRUE;
     v13.maintenance4 = VK_TRUE;
@@ -23,6 +27,8 @@ Device::Device(Functions& fn, const PhysicalDevice& physical) : fn_(fn), physica
     VkDeviceCreateInfo info{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO, &features};
     info.queueCreateInfoCount = 1;
     info.pQueueCreateInfos = &queue;
+    const char* line_extension = VK_EXT_LINE_RASTERIZATION_EXTENSION_NAME;
+    if (physical.bresenham_lines) info.enabledExtensionCount = 1, info.ppEnabledExtensionNames = &line_extension;
     VK_CHECK(fn.vkCreateDevice(physical.handle, &info, nullptr, &device_));
     try {
         fn.load_device(device_);

@@ -20,6 +20,7 @@ namespace bvhlab::vk {
 #define BVHLAB_VK_INSTANCE_FUNCTIONS(X)         \
     X(vkDestroyInstance)                        \
     X(vkEnumeratePhysicalDevices)               \
+    X(vkEnumerateDeviceExtensionProperties)     \
     X(vkGetPhysicalDeviceProperties)            \
     X(vkGetPhysicalDeviceProperties2)           \
     X(vkGetPhysicalDeviceFeatures2)             \

@@ -30,8 +30,14 @@ struct OverlayState {
     VkPipelineDynamicStateCreateInfo dynamic{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
     VkFormat color_format = kColorFormat;
     VkPipelineRenderingCreateInfo rendering{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO};
+    VkPipelineRasterizationLineStateCreateInfoEXT line{
+        VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_LINE_STATE_CREATE_INFO_EXT};
 
-    OverlayState() {
+    explicit OverlayState(bool bresenham) {
+        if (bresenham) {  // one pixel a column or row, as the CPU reference steps (overlay_cpu.cpp)
+            line.lineRasterizationMode = VK_LINE_RASTERIZATION_MODE_BRESENHAM_EXT;
+            raster.pNext = &line;
+        }
         assembly.topology = VK_PRIMITIVE_TOPOLOGY_LINE_LIST;
         viewport.viewportCount = viewport.scissorCount = 1;
         raster.polygonMode = VK_POLYGON_MODE_FILL;
@@ -61,7 +67,7 @@ OwnedPipeline create_overlay_pipeline(const Device& device, VkPipelineLayout lay
     OwnedShaderModule frag = make_shader_module(device, overlay_frag_spirv());
     VkPipelineShaderStageCreateInfo stages[2] = {shader_stage(VK_SHADER_STAGE_VERTEX_BIT, vert.get()),
                                                  shader_stage(VK_SHADER_STAGE_FRAGMENT_BIT, frag.get())};
-    const OverlayState s;
+    const OverlayState s(device.physical().bresenham_lines);
     VkGraphicsPipelineCreateInfo info{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO, &s.rendering};
     info.stageCount = 2;
     info.pStages = stages;

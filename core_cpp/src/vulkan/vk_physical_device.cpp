@@ -5,6 +5,7 @@
 #include <cctype>
 #include <charconv>
 #include <cstdlib>
+#include <cstring>
 #include <vector>
 
 #include "bvhlab/vulkan_renderer.h"
@@ -83,17 +84,33 @@ int find_queue_family(const Functions& fn, VkPhysicalDevice device) {
     return -1;
 }
 
+/// Whether the device offers the extension `name`.
+bool has_extension(const Functions& fn, VkPhysicalDevice device, const char* name) {
+    std::uint32_t count = 0;
+    if (fn.vkEnumerateDeviceExtensionProperties(device, nullptr, &count, nullptr) != VK_SUCCESS) return false;
+    std::vector<VkExtensionProperties> extensions(count);
+    if (fn.vkEnumerateDeviceExtensionProperties(device, nullptr, &count, extensions.data()) != VK_SUCCESS) return false;
+    for (const VkExtensionProperties& e : extensions)
+        if (std::strcmp(e.extensionName, name) == 0) return true;
+    return false;
+}
+
 /// The features the shaders and the passes use: buffer device addresses (the SPIR-V declares
 /// PhysicalStorageBufferAddresses: the scene is read through them, so no binding limit caps it),
 /// dynamic rendering (the overlay pass), synchronization2 (every barrier and submit), and
 /// maintenance4: SPIR-V 1.6 (glslc --target-env=vulkan1.3) declares the workgroup size with
 /// LocalSizeId, which needs it.
 std::string missing_feature(const Functions& fn, PhysicalDevice& d) {
-    VkPhysicalDeviceVulkan13Features v13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
+    VkPhysicalDeviceLineRasterizationFeaturesEXT lines{
+        VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_LINE_RASTERIZATION_FEATURES_EXT};
+    const bool line_extension = has_extension(fn, d.handle, VK_EXT_LINE_RASTERIZATION_EXTENSION_NAME);
+    VkPhysicalDeviceVulkan13Features v13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES,
+                                         line_extension ? &lines : nullptr};
     VkPhysicalDeviceVulkan12Features v12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES, &v13};
     VkPhysicalDeviceFeatures2 features{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &v12};
     fn.vkGetPhysicalDeviceFeatures2(d.handle, &features);
     d.wide_lines = features.features.wideLines;
+    d.bresenham_lines = line_extension && lines.bresenhamLines;  // optional: the overlay's pixel rule
     if (!v12.bufferDeviceAddress) return "feature bufferDeviceAddress";
     if (!v13.dynamicRendering) return "feature dynamicRendering";
     if (!v13.synchronization2) return "feature synchronization2";

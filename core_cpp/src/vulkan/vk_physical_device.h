@@ -12,8 +12,12 @@ struct PhysicalDevice {
     VkPhysicalDevice handle = VK_NULL_HANDLE;
     VkPhysicalDeviceProperties properties{};
     VkPhysicalDeviceMemoryProperties memory{};
-    std::uint32_t queue_family = 0;   ///< graphics + compute (+ transfer, implied)
-    bool wide_lines = false;          ///< line widths other than 1 (the overlay's line_width)
+    std::uint32_t queue_family = 0;  ///< graphics + compute (+ transfer, implied)
+    bool wide_lines = false;         ///< line widths other than 1 (the overlay's line_width)
+    /// VK_EXT_line_rasterization's Bresenham lines: the overlay's pixels are then the CPU
+    /// reference's (overlay_cpu.cpp steps one pixel per column or row); without it, the default
+    /// rule (rectangles where strictLines) covers a second pixel on some steps of a sloped line.
+    bool bresenham_lines = false;
     VkDeviceSize max_allocation = 0;  ///< maxMemoryAllocationSize
 
     std::string name() const { return properties.deviceName; }
