@@ -144,6 +144,12 @@ RayTask pop_ray(INOUT(TraceState) s) {
                     vec3(uintBitsToFloat(c.x), uintBitsToFloat(c.y), uintBitsToFloat(c.z)), a.w);
 }
 
+/// A line lying on a surface (a box's face on a floor or a wall) shows: the primary ray's query
+/// stops 2^-12 of the line's distance short of it, far above the rounding of the two rasterizers
+/// and of the tracer, so both backends draw such a line whole (compared exactly, whichever last
+/// bits each had left it dashed, and differently on the GPU and the CPU reference).
+LOCAL_CONST float LINE_ON_SURFACE = 1.0f - 1.0f / 4096.0f;
+
 /// Starts the closest-hit query of `task`. Where the overlay drew a line in front of the primary
 /// ray's surface, the line wins: the query only looks up to the line's distance (report §3.3).
 /// A primary ray looks only between the camera's clipping planes (Cycles' camera_sample_*).
@@ -152,7 +158,7 @@ void start_closest(INOUT(TraceState) s) {
     bool line = primary && s.overlay.w > 0.0f;
     float k = primary ? clip_scale(s.task.dir) : 0.0f;  // camera rays see between the clipping planes
     s.ray = make_ray(s.task.origin, s.task.dir, primary ? frame.clip_start * k : 0.0f);
-    s.hit = empty_hit(min(line ? s.overlay.w : FAR_AWAY, primary ? frame.clip_end * k : FAR_AWAY));
+    s.hit = empty_hit(min(line ? s.overlay.w * LINE_ON_SURFACE : FAR_AWAY, primary ? frame.clip_end * k : FAR_AWAY));
     s.walk = start_walk();
     s.phase = PHASE_CLOSEST;
 }

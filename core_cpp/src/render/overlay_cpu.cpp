@@ -82,7 +82,10 @@ void draw_line(Target& t, Segment s, vec3 color) {
     for (int i = first; i <= last; ++i) {
         float s_major = length_major != 0 ? ((float(i) + 0.5f) - (x_major ? ax : ay)) / length_major : 0.0f;
         s_major = std::clamp(s_major, 0.0f, 1.0f);
-        float minor = std::floor(x_major ? ay + dy * s_major : ax + dx * s_major);
+        // the pixel the line crosses at this column's (row's) centre; a line exactly on the edge
+        // between two pixels takes the one before it, as Vulkan's Bresenham lines do on lavapipe
+        // (floor took the one after: a vertical edge at the image's centre moved one pixel)
+        float minor = std::ceil(x_major ? ay + dy * s_major : ax + dx * s_major) - 1.0f;
         if (!(minor >= 0.0f && minor < float(x_major ? t.height : t.width))) continue;
         int px = x_major ? i : int(minor), py = x_major ? int(minor) : i;
         float depth = (a.z / a.w) * (1 - s_major) + (b.z / b.w) * s_major;
