@@ -83,7 +83,7 @@ def output_dir(text: str) -> Path:
     path = Path(text)
     if path.exists() and not path.is_dir():
         raise argparse.ArgumentTypeError(
-            f"{path} exists and is not a directory (compare writes a directory of tables, charts and figures)"
+            f"{path} exists and is not a directory (--out names a folder the results are written into)"
         )
     for folder in (path, *path.parents):
         if folder.exists():
