@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
 import numbers
 import os
-import tempfile
+import secrets
 from pathlib import Path
 
 import numpy as np
@@ -117,9 +118,17 @@ def check_writable(folder: Path, target: Path) -> None:
     found by making one and deleting it: permissions say nothing of read-only mounts and /proc or
     /sys, whose refusal came only after the work (a whole animation experiment). Raises
     OutputPathError naming the target."""
-    try:
-        handle, name = tempfile.mkstemp(prefix=".bvhlab-write-check-", dir=folder)
-    except OSError as e:
-        raise OutputPathError(f"cannot write {target}: {folder} does not take new files ({e.strerror or e})") from None
-    os.close(handle)
-    os.unlink(name)
+    for _ in range(16):  # a name taken: another (mkstemp would retry for hours on Windows' access denied)
+        probe = folder / f".bvhlab-write-check-{secrets.token_hex(8)}"
+        try:
+            handle = os.open(probe, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600)
+        except FileExistsError:
+            continue
+        except OSError as e:
+            raise OutputPathError(
+                f"cannot write {target}: {folder} does not take new files ({e.strerror or e})"
+            ) from None
+        os.close(handle)
+        with contextlib.suppress(OSError):  # an append-only folder keeps it: harmless, hidden
+            os.unlink(probe)
+        return

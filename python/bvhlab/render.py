@@ -206,6 +206,12 @@ class Renderer:
         return self._vulkan.device_name if self._vulkan else "CPU reference"
 
     @property
+    def bresenham_lines(self) -> bool:
+        """Whether the overlay's lines follow the CPU reference's rule, one pixel a column or row
+        (the CPU reference: always; Vulkan: where the device has Bresenham lines)."""
+        return bool(self._vulkan.bresenham_lines) if self._vulkan else True
+
+    @property
     def max_image_dimension(self) -> int:
         """Pixels per side this backend renders at most (Vulkan: the device's limit)."""
         return int(self._vulkan.max_image_dimension) if self._vulkan else int(_core.MAX_IMAGE_DIMENSION)

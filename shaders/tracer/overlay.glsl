@@ -42,13 +42,14 @@ float overlay_distance(vec3 v) {
 }
 
 /// What the overlay's lines are depth-tested by, in [0, 1): where two lines fall on one pixel the
-/// nearer shows, and of two within one step of each other the one drawn first (boxes in depth
+/// nearer shows, and of two in the same step the one drawn first (boxes in depth
 /// order). The camera distance `d` as d / (d + far), its float's last 8 bits cleared: steps of
 /// 2^-15 of the value (6e-5 of the distance or finer), far above the last-bit differences between
 /// the GPU's rasterizer and the CPU reference's. Two box edges on one line (a child's edge on its
 /// parent's face) then compare equal in both, and the same box shows; compared unrounded, the
 /// two rasterizers' last bits picked different boxes on ~6% of whitted's line pixels.
 float overlay_line_depth(float d) {
+    d = max(d, 0.0f);  // an orthographic line's end may reach a little behind its start plane
     float q = d / (d + frame.overlay_far);
     return uintBitsToFloat(floatBitsToUint(q) & 0xFFFFFF00u);
 }

@@ -144,10 +144,12 @@ RayTask pop_ray(INOUT(TraceState) s) {
                     vec3(uintBitsToFloat(c.x), uintBitsToFloat(c.y), uintBitsToFloat(c.z)), a.w);
 }
 
-/// A line lying on a surface (a box's face on a floor or a wall) shows: the primary ray's query
-/// stops 2^-12 of the line's distance short of it, far above the rounding of the two rasterizers
-/// and of the tracer, so both backends draw such a line whole (compared exactly, whichever last
-/// bits each had left it dashed, and differently on the GPU and the CPU reference).
+/// A line lying on a surface (a box's face on a floor or a wall) is not lost to rounding: the
+/// primary ray's query stops 2^-12 of the line's distance short of it, far above the rounding of
+/// the two rasterizers and of the tracer (compared exactly, whichever last bits each had hid some
+/// of its pixels, differently on the GPU and the CPU reference). Where the pixel's centre meets
+/// the surface farther in front of the line (a surface at a grazing angle: the centre is up to
+/// half a pixel off the line), the surface still hides it (test_render_cpu.py).
 LOCAL_CONST float LINE_ON_SURFACE = 1.0f - 1.0f / 4096.0f;
 
 /// Starts the closest-hit query of `task`. Where the overlay drew a line in front of the primary

@@ -255,7 +255,9 @@ TEST_F(Vulkan, OverlayLinesAreTheCpuReferences) {
         auto scene = make();
         renderer().upload(scene->render);
         RenderSettings s = scene->settings;
-        s.width = 160, s.height = 120, s.samples_per_axis = 1;
+        // odd: an edge through the camera's axis falls on a pixel centre, where the rules agree,
+        // not on the edge between two pixels, where a device may pick either (the spec allows it)
+        s.width = 161, s.height = 121, s.samples_per_axis = 1;
         s.overlay = false;
         const std::vector<float> plain = render_reference(scene->render, s);
         s.overlay = true, s.overlay_color_by_depth = true;
@@ -276,8 +278,9 @@ TEST_F(Vulkan, OverlayLinesAreTheCpuReferences) {
         }
         std::printf("line pixels %zu, differing %zu, in another colour %zu\n", lines, differ, recoloured);
         EXPECT_GT(lines, 500u) << "the boxes of depths 2-4 are drawn";
-        EXPECT_LE(double(differ), 0.015 * double(lines));
         EXPECT_LE(double(recoloured), 0.01 * double(lines)) << "another box won pixels both draw";
+        // a device without Bresenham lines draws its default rule's pixels: not the CPU's
+        if (renderer().bresenham_lines()) EXPECT_LE(double(differ), 0.015 * double(lines));
     }
 }
 

@@ -72,16 +72,18 @@ def test_vulkan_overlay_lines_are_the_cpus(vulkan, make):
     scene = make()
     bvh = bvhlab.build(scene)
     options = dict(overlay_depth=(2, 4), traversal="stack")
-    plain, _ = bvhlab.render(scene, bvh, 160, 120, backend="cpu", traversal="stack")
-    cpu, _ = bvhlab.render(scene, bvh, 160, 120, backend="cpu", **options)
-    gpu, _ = vulkan.render(scene, bvh, 160, 120, **options)
+    size = (161, 121)  # odd: an edge through the camera's axis falls on a pixel centre, not an edge
+    plain, _ = bvhlab.render(scene, bvh, *size, backend="cpu", traversal="stack")
+    cpu, _ = bvhlab.render(scene, bvh, *size, backend="cpu", **options)
+    gpu, _ = vulkan.render(scene, bvh, *size, **options)
     lines_cpu = np.abs(cpu - plain).max(-1) > 2e-3
     lines_gpu = np.abs(gpu - plain).max(-1) > 2e-3
     assert lines_cpu.sum() > 500, "the boxes of depths 2-4 are drawn"
-    differ = np.abs(cpu - gpu).max(-1) > 2e-3
-    assert differ.sum() <= 0.015 * lines_cpu.sum(), (differ.sum(), lines_cpu.sum())
+    differ = (np.abs(cpu - gpu).max(-1) > 2e-3) & (lines_cpu | lines_gpu)  # the trace's own flips: elsewhere
     both = lines_cpu & lines_gpu
-    assert (differ & both).sum() <= 3, "lines on both, in other colours: another box won the pixel"
+    assert (differ & both).sum() <= 0.01 * lines_cpu.sum(), "lines on both, in other colours: another box won"
+    assert vulkan.bresenham_lines  # lavapipe has them; without, the default rule draws other pixels
+    assert differ.sum() <= 0.015 * lines_cpu.sum(), (differ.sum(), lines_cpu.sum())
 
 
 def test_vulkan_bad_sizes(vulkan):

@@ -51,6 +51,9 @@ public:
     std::string device_type() const;  ///< "discrete", "integrated", "virtual", "cpu" or "other"
     /// The largest image side: the device's limit, at most kMaxImageDimension.
     std::uint32_t max_image_dimension() const;
+    /// Whether the overlay's lines are drawn as Bresenham lines (VK_EXT/KHR_line_rasterization),
+    /// the CPU reference's rule of one pixel a column or row; else the device's default rule.
+    bool bresenham_lines() const;
 
     /// Copies the scene to the device for the renders started after it; returns milliseconds. The
     /// RenderScene may be destroyed afterwards.

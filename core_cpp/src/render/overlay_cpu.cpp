@@ -95,7 +95,7 @@ void draw_line(Target& t, Segment s, vec3 color) {
         if (depth < 0 || depth > 1) continue;
         const float distance = t.distance(p);                            // p is relative to the camera
         const float line_depth = t.tracer.overlay_line_depth(distance);  // the GPU's test (overlay.frag)
-        if (line_depth >= t.depth[k]) continue;
+        if (!(line_depth < t.depth[k])) continue;                        // NaN: not drawn, as the GPU's LESS test
         t.depth[k] = line_depth;
         t.color[k] = vec4(color, distance);
     }

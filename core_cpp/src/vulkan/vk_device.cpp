@@ -27,8 +27,8 @@ Device::Device(Functions& fn, const PhysicalDevice& physical) : fn_(fn), physica
     VkDeviceCreateInfo info{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO, &features};
     info.queueCreateInfoCount = 1;
     info.pQueueCreateInfos = &queue;
-    const char* line_extension = VK_EXT_LINE_RASTERIZATION_EXTENSION_NAME;
-    if (physical.bresenham_lines) info.enabledExtensionCount = 1, info.ppEnabledExtensionNames = &line_extension;
+    if (physical.bresenham_lines)
+        info.enabledExtensionCount = 1, info.ppEnabledExtensionNames = &physical.line_extension;
     VK_CHECK(fn.vkCreateDevice(physical.handle, &info, nullptr, &device_));
     try {
         fn.load_device(device_);

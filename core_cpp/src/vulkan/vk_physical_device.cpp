@@ -103,7 +103,10 @@ bool has_extension(const Functions& fn, VkPhysicalDevice device, const char* nam
 std::string missing_feature(const Functions& fn, PhysicalDevice& d) {
     VkPhysicalDeviceLineRasterizationFeaturesEXT lines{
         VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_LINE_RASTERIZATION_FEATURES_EXT};
-    const bool line_extension = has_extension(fn, d.handle, VK_EXT_LINE_RASTERIZATION_EXTENSION_NAME);
+    // the KHR promotion (Vulkan 1.4) has the same structures and values; a driver may list only it
+    const char* line_extension = nullptr;
+    for (const char* name : {VK_EXT_LINE_RASTERIZATION_EXTENSION_NAME, "VK_KHR_line_rasterization"})
+        if (!line_extension && has_extension(fn, d.handle, name)) line_extension = name;
     VkPhysicalDeviceVulkan13Features v13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES,
                                          line_extension ? &lines : nullptr};
     VkPhysicalDeviceVulkan12Features v12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES, &v13};
@@ -111,6 +114,7 @@ std::string missing_feature(const Functions& fn, PhysicalDevice& d) {
     fn.vkGetPhysicalDeviceFeatures2(d.handle, &features);
     d.wide_lines = features.features.wideLines;
     d.bresenham_lines = line_extension && lines.bresenhamLines;  // optional: the overlay's pixel rule
+    d.line_extension = d.bresenham_lines ? line_extension : nullptr;
     if (!v12.bufferDeviceAddress) return "feature bufferDeviceAddress";
     if (!v13.dynamicRendering) return "feature dynamicRendering";
     if (!v13.synchronization2) return "feature synchronization2";

@@ -18,7 +18,8 @@ struct PhysicalDevice {
     /// reference's (overlay_cpu.cpp steps one pixel per column or row); without it, the default
     /// rule (rectangles where strictLines) covers a second pixel on some steps of a sloped line.
     bool bresenham_lines = false;
-    VkDeviceSize max_allocation = 0;  ///< maxMemoryAllocationSize
+    const char* line_extension = nullptr;  ///< the name the device lists it by (EXT, or KHR from Vulkan 1.4)
+    VkDeviceSize max_allocation = 0;       ///< maxMemoryAllocationSize
 
     std::string name() const { return properties.deviceName; }
     std::string type_name() const;  ///< "discrete", "integrated", "virtual", "cpu" or "other"

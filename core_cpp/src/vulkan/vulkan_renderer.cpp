@@ -62,6 +62,7 @@ VulkanRenderer::~VulkanRenderer() = default;
 
 std::string VulkanRenderer::device_name() const { return core_->device.physical().name(); }
 std::string VulkanRenderer::device_type() const { return core_->device.physical().type_name(); }
+bool VulkanRenderer::bresenham_lines() const { return core_->device.physical().bresenham_lines; }
 std::uint32_t VulkanRenderer::max_image_dimension() const {
     return std::min(core_->device.physical().properties.limits.maxImageDimension2D, kMaxImageDimension);
 }

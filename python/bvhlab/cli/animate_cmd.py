@@ -97,7 +97,7 @@ def _frames_of(args) -> tuple[Callable[[int], np.ndarray | Scene], range]:
         if args.frames and (args.frames[0] < frames[0] or args.frames[-1] > frames[-1]):
             print(
                 f"note: frames {args.frames[0]}-{args.frames[-1]} reach outside {args.animation}'s frame range "
-                f"{frames[0]}-{frames[-1]}: its animation holds there",
+                f"{frames[0]}-{frames[-1]} (what it shows there is what its keyframes give)",
                 file=sys.stderr,
             )
         return scene_at, args.frames or frames

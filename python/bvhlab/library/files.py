@@ -63,7 +63,9 @@ def _triangles(path: Path, kind: str) -> np.ndarray:
         vertices = np.asarray(getattr(mesh, "vertices", np.zeros((0, 3))), np.float64)
         faces = getattr(mesh, "faces", None)  # a point cloud has none
         faces = np.zeros((0, 3), np.int64) if faces is None else np.asarray(faces)
-    except FileNotFoundError as e:  # the file itself is there (_check_regular_file): one it refers to is not
+    except FileNotFoundError as e:  # the file was there (_check_regular_file): one it refers to is not
+        if not path.exists():
+            raise
         missing = e.filename or str(e).strip() or "a file"
         raise SceneFileError(f"{path} refers to {missing}, which is missing (a glTF's buffer or image?)") from None
     except (PermissionError, MemoryError):
