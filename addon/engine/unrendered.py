@@ -33,13 +33,10 @@ def unrendered_features(depsgraph) -> list[str]:
     render, each in words."""
     render = depsgraph.scene.render
     found = _Found()
-    for obj in depsgraph.objects:  # what renders: a render depsgraph leaves out the rest
-        found.look_at(obj, obj.name)
-    # objects shown only as instances (a collection instanced, geometry nodes' output), each once
+    # what renders (a render depsgraph leaves out the rest): the objects and what they instance (a
+    # collection instanced, geometry nodes' output), each object once
     seen = set()
     for instance in depsgraph.object_instances:
-        if not instance.is_instance:
-            continue
         obj = instance.object  # valid until the iterator moves on: looked at now
         original = obj.original
         if original not in seen:
