@@ -241,6 +241,7 @@ void bind_vulkan(nb::module_& m) {
         .def_prop_ro("device_type", &VulkanRenderer::device_type)
         .def_prop_ro("max_image_dimension", &VulkanRenderer::max_image_dimension)
         .def_prop_ro("bresenham_lines", &VulkanRenderer::bresenham_lines)
+        .def_prop_ro("max_line_width", &VulkanRenderer::max_line_width)
         .def("upload",
              [](VulkanRenderer& r, const PyRenderScene& scene) {
                  nb::gil_scoped_release release;

@@ -212,6 +212,12 @@ class Renderer:
         return bool(self._vulkan.bresenham_lines) if self._vulkan else True
 
     @property
+    def max_line_width(self) -> float:
+        """The widest overlay line this backend draws: `line_width` is clamped to it (the CPU
+        reference: the settings' limit, 16; Vulkan: the device's, 1 without wide lines)."""
+        return float(self._vulkan.max_line_width) if self._vulkan else float(_core.MAX_LINE_WIDTH)
+
+    @property
     def max_image_dimension(self) -> int:
         """Pixels per side this backend renders at most (Vulkan: the device's limit)."""
         return int(self._vulkan.max_image_dimension) if self._vulkan else int(_core.MAX_IMAGE_DIMENSION)

@@ -249,39 +249,43 @@ TEST_F(Vulkan, OverlayLinesInFrontShowBehindAreHiddenElsewhereUnchanged) {
 /// drawn first in both (overlay_line_depth: compared unrounded, lavapipe and the CPU picked other
 /// boxes on 65 of whitted's 1,067 line pixels), and lines step one pixel a column or row in both
 /// where the device has Bresenham lines (lavapipe's default rectangles added 18 pixels of
-/// five_spheres' 769). Left: a line's end pixel (the diamond-exit rule against pixel centres).
+/// five_spheres' 769). Left: a line's end pixel (the diamond-exit rule against pixel centres). At
+/// width 3 both draw 3 pixels across each column or row of the line (the CPU drew 1 before).
 TEST_F(Vulkan, OverlayLinesAreTheCpuReferences) {
-    for (auto make : {test::whitted_showcase, test::five_spheres}) {
-        auto scene = make();
-        renderer().upload(scene->render);
-        RenderSettings s = scene->settings;
-        // odd: an edge through the camera's axis falls on a pixel centre, where the rules agree,
-        // not on the edge between two pixels, where a device may pick either (the spec allows it)
-        s.width = 161, s.height = 121, s.samples_per_axis = 1;
-        s.overlay = false;
-        const std::vector<float> plain = render_reference(scene->render, s);
-        s.overlay = true, s.overlay_color_by_depth = true;
-        s.overlay_depth_min = 2, s.overlay_depth_max = 4;
-        const std::vector<float> cpu = render_reference(scene->render, s), gpu = render_vulkan(renderer(), s);
-        auto apart = [](const float* a, const float* b) {
-            float most = 0.0f;
-            for (int c = 0; c < 3; ++c) most = std::max(most, std::fabs(a[c] - b[c]));
-            return most > 2e-3f;
-        };
-        std::size_t lines = 0, differ = 0, recoloured = 0;
-        for (std::size_t p = 0; p < cpu.size(); p += 4) {
-            const bool line_cpu = apart(&cpu[p], &plain[p]), line_gpu = apart(&gpu[p], &plain[p]);
-            lines += line_cpu;
-            if (!(line_cpu || line_gpu) || !apart(&cpu[p], &gpu[p])) continue;  // the trace's own flips: elsewhere
-            ++differ;
-            recoloured += line_cpu && line_gpu;
+    for (auto make : {test::whitted_showcase, test::five_spheres})
+        for (float width : {1.0f, 3.0f}) {
+            if (width > renderer().max_line_width()) continue;  // the device draws narrower lines
+            auto scene = make();
+            renderer().upload(scene->render);
+            RenderSettings s = scene->settings;
+            // odd: an edge through the camera's axis falls on a pixel centre, where the rules agree,
+            // not on the edge between two pixels, where a device may pick either (the spec allows it)
+            s.width = 161, s.height = 121, s.samples_per_axis = 1;
+            s.overlay = false;
+            const std::vector<float> plain = render_reference(scene->render, s);
+            s.overlay = true, s.overlay_color_by_depth = true;
+            s.overlay_depth_min = 2, s.overlay_depth_max = 4, s.line_width = width;
+            const std::vector<float> cpu = render_reference(scene->render, s), gpu = render_vulkan(renderer(), s);
+            auto apart = [](const float* a, const float* b) {
+                float most = 0.0f;
+                for (int c = 0; c < 3; ++c) most = std::max(most, std::fabs(a[c] - b[c]));
+                return most > 2e-3f;
+            };
+            std::size_t lines = 0, differ = 0, recoloured = 0;
+            for (std::size_t p = 0; p < cpu.size(); p += 4) {
+                const bool line_cpu = apart(&cpu[p], &plain[p]), line_gpu = apart(&gpu[p], &plain[p]);
+                lines += line_cpu;
+                if (!(line_cpu || line_gpu) || !apart(&cpu[p], &gpu[p])) continue;  // the trace's own flips: elsewhere
+                ++differ;
+                recoloured += line_cpu && line_gpu;
+            }
+            std::printf("width %g: line pixels %zu, differing %zu, in another colour %zu\n", double(width), lines,
+                        differ, recoloured);
+            EXPECT_GT(double(lines), 500.0 * width) << "the boxes of depths 2-4 are drawn";
+            EXPECT_LE(double(recoloured), 0.01 * double(lines)) << "another box won pixels both draw";
+            // a device without Bresenham lines draws its default rule's pixels: not the CPU's
+            if (renderer().bresenham_lines()) EXPECT_LE(double(differ), 0.015 * double(lines));
         }
-        std::printf("line pixels %zu, differing %zu, in another colour %zu\n", lines, differ, recoloured);
-        EXPECT_GT(lines, 500u) << "the boxes of depths 2-4 are drawn";
-        EXPECT_LE(double(recoloured), 0.01 * double(lines)) << "another box won pixels both draw";
-        // a device without Bresenham lines draws its default rule's pixels: not the CPU's
-        if (renderer().bresenham_lines()) EXPECT_LE(double(differ), 0.015 * double(lines));
-    }
 }
 
 TEST_F(Vulkan, BadSettingsThrowInvalidArgument) {

@@ -193,6 +193,38 @@ def test_overlay_lines_occlude_and_are_occluded():
     assert not any(is_line[p] for p in near_pixels(scene.camera, w, h, back))
 
 
+@pytest.mark.parametrize("width", [2, 3, 4.6])
+def test_overlay_line_width_widens_every_line_in_its_minor_direction(width):
+    """`line_width` w on the CPU: each column (row) of a 1-pixel line becomes the round(w) pixels
+    of the minor axis centred on it, as Vulkan's wide Bresenham lines (lavapipe: the same pixels,
+    tests/python/test_render_vulkan.py); the CPU drew 1-pixel lines whatever the width."""
+    # two specks far apart: the root box's twelve edges over the sky, none hidden
+    scene = bvhlab.Scene(
+        spheres=np.array([[-1, -1, -0.6, 0.02], [1, 1, 0.6, 0.02]], np.float32),
+        camera=bvhlab.Camera((2, -6, 1.5), (0, 0, 0), fov_y=40),
+        sky=SKY,
+    )
+    bvh = bvhlab.build(scene)
+    w, h = 161, 121
+    color = np.float32([0.2, 0.9, 0.4])
+    kw = dict(backend="cpu", overlay_depth=(0, 0), color_by_depth=False, line_color=tuple(color))
+    thin, _ = bvhlab.render(scene, bvh, w, h, **kw)
+    wide, _ = bvhlab.render(scene, bvh, w, h, line_width=width, **kw)
+    is_thin = np.all(np.abs(thin[..., :3] - color) < 1e-6, -1)
+    is_wide = np.all(np.abs(wide[..., :3] - color) < 1e-6, -1)
+    assert is_thin.sum() > 100
+    n = round(width)
+    # the wide lines hold the thin ones' pixels, and about n times as many (fewer where lines
+    # cross or meet at corners)
+    assert np.all(is_wide[is_thin])
+    assert 0.8 * n * is_thin.sum() <= is_wide.sum() <= n * is_thin.sum()
+    # no pixel of a wide line is farther than n/2 pixels from a thin line's
+    ys, xs = np.nonzero(is_wide)
+    ty, tx = np.nonzero(is_thin)
+    near = np.min(np.maximum(np.abs(ys[:, None] - ty[None]), np.abs(xs[:, None] - tx[None])), axis=1)
+    assert near.max() <= n // 2
+
+
 @pytest.mark.parametrize(
     "make, build, shape",
     [

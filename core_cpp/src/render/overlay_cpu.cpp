@@ -1,5 +1,5 @@
-// The overlay pass on the CPU (report §3.3): the boxes of a depth range as 1-pixel lines with a
-// depth test, colour in rgb and camera distance in alpha — what overlay.vert/.frag make the GPU's
+// The overlay pass on the CPU (report §3.3): the boxes of a depth range as lines `line_width`
+// pixels wide with a depth test, colour in rgb and camera distance in alpha — what overlay.vert/.frag make the GPU's
 // rasterizer do. The projection is the shared overlay_clip(); only clipping and stepping are local.
 #include <algorithm>
 #include <cmath>
@@ -17,6 +17,7 @@ struct Target {
     std::vector<vec4>& color;  // rgb + distance along the primary ray
     std::vector<float>& depth;
     std::uint32_t width, height;
+    int line_width;          // whole pixels across the line, in its minor direction
     gpu::CpuTracer& tracer;  // the shared overlay code (overlay.glsl)
 
     float distance(vec3 from_camera) { return tracer.overlay_distance(from_camera); }
@@ -69,6 +70,12 @@ std::pair<int, int> pixel_span(float from, float to, std::uint32_t extent) {
 /// Steps along the major axis through pixel centres (a DDA), interpolating the camera-relative
 /// position perspective-correctly for the distance (which the lines are depth-tested by:
 /// overlay_line_depth), and the clip depth linearly in screen space (outside [0, 1]: not drawn).
+/// At each step the line covers the `line_width` pixels of the minor axis whose centres lie within
+/// half the width of it, the one at the far edge left out: Vulkan's Bresenham lines wider than a
+/// pixel (the rule of OpenGL's aliased wide lines, "offset in the minor direction"; lavapipe draws
+/// them as a parallelogram that wide in the minor direction), and at width 1 the pixel the line
+/// crosses, the one before it where the line lies exactly on the edge between two (floor took the
+/// one after: a vertical edge at the image's centre moved one pixel against lavapipe).
 void draw_line(Target& t, Segment s, vec3 color) {
     if (!clip_to_view(s)) return;
     const vec4 a = s.a, b = s.b;
@@ -79,37 +86,43 @@ void draw_line(Target& t, Segment s, vec3 color) {
     auto [first, last] = x_major ? pixel_span(std::min(ax, bx), std::max(ax, bx), t.width)
                                  : pixel_span(std::min(ay, by), std::max(ay, by), t.height);
     float length_major = x_major ? dx : dy;
+    const float half = 0.5f * float(t.line_width);
+    const int minor_extent = int(x_major ? t.height : t.width);
     for (int i = first; i <= last; ++i) {
         float s_major = length_major != 0 ? ((float(i) + 0.5f) - (x_major ? ax : ay)) / length_major : 0.0f;
         s_major = std::clamp(s_major, 0.0f, 1.0f);
-        // the pixel the line crosses at this column's (row's) centre; a line exactly on the edge
-        // between two pixels takes the one before it, as Vulkan's Bresenham lines do on lavapipe
-        // (floor took the one after: a vertical edge at the image's centre moved one pixel)
-        float minor = std::ceil(x_major ? ay + dy * s_major : ax + dx * s_major) - 1.0f;
-        if (!(minor >= 0.0f && minor < float(x_major ? t.height : t.width))) continue;
-        int px = x_major ? i : int(minor), py = x_major ? int(minor) : i;
+        const float centre = x_major ? ay + dy * s_major : ax + dx * s_major;  // where the line crosses
+        // the pixels k with k + 0.5 in [centre - half, centre + half)
+        const float lo = std::max(std::ceil(centre - half - 0.5f), 0.0f);
+        const float hi = std::min(std::ceil(centre + half - 0.5f) - 1.0f, float(minor_extent - 1));
+        if (!(lo <= hi)) continue;  // off the image (or NaN)
         float depth = (a.z / a.w) * (1 - s_major) + (b.z / b.w) * s_major;
+        if (depth < 0 || depth > 1) continue;
         float persp = (s_major / b.w) / ((1 - s_major) / a.w + s_major / b.w);  // screen → world parameter
         vec3 p = s.pa + (s.pb - s.pa) * persp;
-        std::size_t k = std::size_t(py) * t.width + std::size_t(px);
-        if (depth < 0 || depth > 1) continue;
         const float distance = t.distance(p);                            // p is relative to the camera
         const float line_depth = t.tracer.overlay_line_depth(distance);  // the GPU's test (overlay.frag)
-        if (!(line_depth < t.depth[k])) continue;                        // NaN: not drawn, as the GPU's LESS test
-        t.depth[k] = line_depth;
-        t.color[k] = vec4(color, distance);
+        for (int minor = int(lo); minor <= int(hi); ++minor) {
+            int px = x_major ? i : minor, py = x_major ? minor : i;
+            std::size_t k = std::size_t(py) * t.width + std::size_t(px);
+            if (!(line_depth < t.depth[k])) continue;  // NaN: not drawn, as the GPU's LESS test
+            t.depth[k] = line_depth;
+            t.color[k] = vec4(color, distance);
+        }
     }
 }
 
 }  // namespace
 
-std::vector<gpu::vec4> rasterize_overlay(const RenderScene& scene, const gpu::FrameParams& frame) {
+std::vector<gpu::vec4> rasterize_overlay(const RenderScene& scene, const gpu::FrameParams& frame, float line_width) {
     const std::size_t pixels = std::size_t(frame.width) * frame.height;
     std::vector<vec4> color(pixels, vec4(0.0f));
     if (!frame.overlay_enabled) return color;
     std::vector<float> depth(pixels, 2.0f);
     gpu::CpuTracer tracer(scene, frame, nullptr, nullptr, gpu::TRAVERSAL_STACK);
-    Target target{color, depth, frame.width, frame.height, tracer};
+    // whole pixels, as Vulkan's rasterizers round a width (lavapipe: roundf, half away from zero)
+    const int width = std::max(1, int(std::round(line_width)));
+    Target target{color, depth, frame.width, frame.height, width, tracer};
     // distances are measured from the camera: work relative to it
     const vec3 cam = frame.camera_position;
     for (std::uint32_t b = frame.overlay_first_box; b < frame.overlay_last_box; ++b) {

@@ -63,6 +63,11 @@ VulkanRenderer::~VulkanRenderer() = default;
 std::string VulkanRenderer::device_name() const { return core_->device.physical().name(); }
 std::string VulkanRenderer::device_type() const { return core_->device.physical().type_name(); }
 bool VulkanRenderer::bresenham_lines() const { return core_->device.physical().bresenham_lines; }
+
+float VulkanRenderer::max_line_width() const {
+    const vk::PhysicalDevice& p = core_->device.physical();
+    return p.wide_lines ? p.properties.limits.lineWidthRange[1] : 1.0f;
+}
 std::uint32_t VulkanRenderer::max_image_dimension() const {
     return std::min(core_->device.physical().properties.limits.maxImageDimension2D, kMaxImageDimension);
 }
