@@ -232,13 +232,14 @@ struct FrameParams {
     uint tile_y;
     uint tile_width;
     uint tile_height;
-    uint max_work_per_pixel;  ///< a trace with more steps of work in a pass fails (0xffffffff: no cap)
-    float focus_distance;     ///< the thin lens's focus, along the view axis
-    uint instance_count;      ///< two-level scenes: instances in the TLAS (0: a flat scene, one level)
-    uint count_traversal;     ///< 1: the trace pass sums the traversal counters into addr.accum_counts
-    uint film_transparent;    ///< 1: a camera ray that shows nothing adds no colour, and addr.accum_covered
-                              ///< counts those that show something (RenderSettings::film_transparent)
-    uint unused_word;         ///< keeps addr 8-aligned
+    uint max_work_per_pixel;   ///< a trace with more steps of work in a pass fails (0xffffffff: no cap)
+    float focus_distance;      ///< the thin lens's focus, along the view axis
+    uint instance_count;       ///< two-level scenes: instances in the TLAS (0: a flat scene, one level)
+    uint count_traversal;      ///< 1: the trace pass sums the traversal counters into addr.accum_counts
+    uint film_transparent;     ///< 1: a camera ray that shows nothing adds no colour, and addr.accum_covered
+                               ///< counts those that show something (RenderSettings::film_transparent)
+    float overlay_line_width;  ///< whole pixels across the overlay's lines (RenderSettings::line_width rounded,
+                               ///< as the rasterizers draw it): the trace pass's slope bias (line_on_surface)
     DeviceAddresses addr;
 };
 

@@ -99,6 +99,19 @@ RayTask camera_ray(uvec2 p, uint sample_index) {
     return ray_task(origin, ray ? normalize(dir) : dir, vec3(1.0f), 0u);
 }
 
+/// The size of a pixel across the primary ray of unit direction `dir` at distance t along it
+/// (at most: the largest of a pixel's two sides, and a perspective pixel's size on the axis):
+/// how far apart the rays of neighbouring pixels are there.
+float pixel_footprint(vec3 dir, float t) {
+    float step = max(abs(frame.screen.z), abs(frame.screen.w));
+    uint projection = frame.projection;
+    if (projection == PROJECTION_ORTHOGRAPHIC) return step;
+    if (projection == PROJECTION_PERSPECTIVE) return t * step * abs(dot(dir, frame.camera_forward));
+    if (projection == PROJECTION_EQUIRECTANGULAR)
+        return t * max(abs(frame.panorama.x * frame.screen.z), abs(frame.panorama.z * frame.screen.w));
+    return t * frame.panorama.x * step;  // fisheye: the angle from the axis grows by the field of view across
+}
+
 /// Blender's Depth of the point at `t` along a primary ray (Cycles' camera_z_depth,
 /// kernel/camera/camera.h): its distance along the view axis from the camera (perspective,
 /// orthographic), or from the camera (panoramic).

@@ -148,8 +148,8 @@ RayTask pop_ray(INOUT(TraceState) s) {
 /// primary ray's query stops 2^-12 of the line's distance short of it, far above the rounding of
 /// the two rasterizers and of the tracer (compared exactly, whichever last bits each had hid some
 /// of its pixels, differently on the GPU and the CPU reference). Where the pixel's centre meets
-/// the surface farther in front of the line (a surface at a grazing angle: the centre is up to
-/// half a pixel off the line), the surface still hides it (test_render_cpu.py).
+/// the surface farther in front of the line (a surface at a grazing angle, the centre up to half
+/// the line's width off it), line_on_surface decides.
 LOCAL_CONST float LINE_ON_SURFACE = 1.0f - 1.0f / 4096.0f;
 
 /// Starts the closest-hit query of `task`. Where the overlay drew a line in front of the primary
@@ -215,10 +215,27 @@ void finish_shading(INOUT(TraceState) s, Surface f) {
         push_ray(s, ray_task(f.p + f.facing * eps, reflect(s.task.dir, f.facing), s.task.weight * reflect_weight, s.task.depth + 1u));
 }
 
+/// Whether the overlay's line at a pixel (`overlay`: colour, distance) lies on the surface `hit`
+/// that the pixel's primary ray `task` met in front of it: the line is behind the hit by no more
+/// than the surface's distance along the ray changes over half the line's width and half a pixel
+/// across it — a bias by the surface's slope, as polygon offset's (the pixel's footprint there
+/// times the tangent of the angle between the ray and the surface's normal; the half pixel for
+/// the curvature of that change at a grazing angle). A floor's own box seen at a grazing angle
+/// lost the pixels of its far edges whose centres meet the floor in front of the line.
+bool line_on_surface(RayTask task, Hit hit, vec4 overlay) {
+    Surface f = surface_at(task, hit);
+    float c = abs(dot(f.facing, task.dir));
+    float slope = sqrt(max(1.0f - c * c, 0.0f)) / c;  // +inf seen edge-on
+    float slack = pixel_footprint(task.dir, hit.t) * 0.5f * (frame.overlay_line_width + 1.0f) * slope;
+    return overlay.w - hit.t <= slack;
+}
+
 /// The closest-hit query of `task` is answered: the primary ray's traversal counters and depth; the sky
-/// (or the overlay's line, report §3.3) for a miss. Returns true for a hit.
+/// (or the overlay's line, report §3.3) for a miss, or for a hit the line lies on. Returns true for
+/// a hit that is shaded.
 bool after_closest(INOUT(TraceState) s) {
     bool line = s.task.depth == 0u && s.overlay.w > 0.0f;
+    if (line && s.hit.ref != NO_HIT && line_on_surface(s.task, s.hit, s.overlay)) s.hit.ref = NO_HIT;
     if (s.task.depth == 0u) {
         s.counts = s.hit.counts;
         s.depth = s.hit.ref != NO_HIT ? camera_depth(s.task, s.hit.t) : (line ? camera_depth(s.task, s.overlay.w) : infinity());

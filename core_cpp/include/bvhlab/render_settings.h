@@ -1,6 +1,8 @@
 // render_settings.h — what a render is asked to do, with documented defaults, the names the Python
 // API and the CLI use for its choices, and its limits. Checked once, here (validate).
 #pragma once
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -78,6 +80,10 @@ struct RenderSettings {
 inline constexpr std::uint32_t kMaxImageDimension = 16384;  ///< pixels per side (CPU; Vulkan: the device's)
 inline constexpr float kMaxHeatmapScale = 1e6f;             ///< box tests per ray at full red
 inline constexpr float kMaxLineWidth = 16.0f;
+
+/// The whole pixels across a line `line_width` wide, as rasterizers draw it (Vulkan's wide lines:
+/// the width rounded, half away from zero, lavapipe's roundf; at least 1).
+inline float whole_line_width(float line_width) { return std::max(1.0f, std::round(line_width)); }
 
 /// Throws std::invalid_argument when width × height is empty or above max_dimension per side: what
 /// validate checks first, for callers that must refuse a size before they allocate for it.

@@ -54,8 +54,8 @@ public:
     /// Whether the overlay's lines are drawn as Bresenham lines (VK_EXT/KHR_line_rasterization),
     /// the CPU reference's rule of one pixel a column or row; else the device's default rule.
     bool bresenham_lines() const;
-    /// The widest overlay line the device draws (its lineWidthRange; 1 without wideLines):
-    /// RenderSettings::line_width is clamped to it.
+    /// The widest overlay line the device draws, in whole pixels (its lineWidthRange; 1 without
+    /// wideLines): RenderSettings::line_width, rounded, is clamped to it.
     float max_line_width() const;
 
     /// Copies the scene to the device for the renders started after it; returns milliseconds. The

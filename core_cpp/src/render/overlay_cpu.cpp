@@ -1,5 +1,5 @@
-// The overlay pass on the CPU (report §3.3): the boxes of a depth range as lines `line_width`
-// pixels wide with a depth test, colour in rgb and camera distance in alpha — what overlay.vert/.frag make the GPU's
+// The overlay pass on the CPU (report §3.3): the boxes of a depth range as lines
+// frame.overlay_line_width pixels wide with a depth test, colour in rgb and camera distance in alpha — what overlay.vert/.frag make the GPU's
 // rasterizer do. The projection is the shared overlay_clip(); only clipping and stepping are local.
 #include <algorithm>
 #include <cmath>
@@ -114,15 +114,13 @@ void draw_line(Target& t, Segment s, vec3 color) {
 
 }  // namespace
 
-std::vector<gpu::vec4> rasterize_overlay(const RenderScene& scene, const gpu::FrameParams& frame, float line_width) {
+std::vector<gpu::vec4> rasterize_overlay(const RenderScene& scene, const gpu::FrameParams& frame) {
     const std::size_t pixels = std::size_t(frame.width) * frame.height;
     std::vector<vec4> color(pixels, vec4(0.0f));
     if (!frame.overlay_enabled) return color;
     std::vector<float> depth(pixels, 2.0f);
     gpu::CpuTracer tracer(scene, frame, nullptr, nullptr, gpu::TRAVERSAL_STACK);
-    // whole pixels, as Vulkan's rasterizers round a width (lavapipe: roundf, half away from zero)
-    const int width = std::max(1, int(std::round(line_width)));
-    Target target{color, depth, frame.width, frame.height, width, tracer};
+    Target target{color, depth, frame.width, frame.height, int(frame.overlay_line_width), tracer};
     // distances are measured from the camera: work relative to it
     const vec3 cam = frame.camera_position;
     for (std::uint32_t b = frame.overlay_first_box; b < frame.overlay_last_box; ++b) {

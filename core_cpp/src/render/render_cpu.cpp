@@ -47,7 +47,7 @@ public:
           threads_(threads ? threads : std::max(1u, std::thread::hardware_concurrency())) {
         const auto start = Clock::now();
         if (settings.traversal == Traversal::Wide) prepare_wide(wide);
-        overlay_ = rasterize_overlay(scene, frame_, settings.line_width);
+        overlay_ = rasterize_overlay(scene, frame_);
         sums_ = PixelSums(std::size_t(settings.width) * settings.height, settings.traversal_counters,
                           settings.film_transparent);
         timings_.overlay_ms = ms_since(start);

@@ -168,6 +168,7 @@ gpu::FrameParams make_frame_params(const RenderScene& scene, const RenderSetting
     f.overlay_color = gpu::vec4(v3(s.overlay_color), 1.0f);
     f.overlay_first_box = first;
     f.overlay_last_box = s.overlay ? last : first;
+    f.overlay_line_width = whole_line_width(s.line_width);
     f.ray_stack_entries = s.max_ray_depth + 1;
     f.max_work_per_pixel = gpu::NO_WORK_CAP;  // set per run (pixel_sums.h work_cap)
     f.node_stack_entries = std::max(scene.stack_entries, 1u);

@@ -26,7 +26,10 @@ struct RendererCore {
 
     /// Overlay targets of this size, bound to the descriptor set.
     void ensure_targets(std::uint32_t width, std::uint32_t height);
-    /// settings.line_width where the device draws wide lines, else 1 (the only width allowed).
+    /// The widest line the device draws in whole pixels: 1 without wideLines.
+    float max_line_width() const;
+    /// settings.line_width in whole pixels (whole_line_width) where the device draws wide lines, at most
+    /// its widest; else 1 (the only width allowed).
     float line_width(const RenderSettings& settings) const;
     /// A stamp no slot holds yet (trace.comp); after 2^32 - 1 of them the slots are cleared.
     std::uint32_t next_stamp();

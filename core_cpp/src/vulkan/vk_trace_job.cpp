@@ -55,6 +55,7 @@ public:
           frame_(scene_->frame_params(settings)),
           tiles_(settings.width, settings.height, slot_bytes(frame_)) {
         std::lock_guard lock(core_->mutex);
+        frame_.overlay_line_width = core_->line_width(settings);  // what this device draws
         sums_.emplace(core_->device, std::size_t(settings.width) * settings.height, settings.traversal_counters,
                       settings.film_transparent);
         sums_->address(frame_);
@@ -128,7 +129,7 @@ private:
         c.bindings.write_params(frame);
         const PassContext pass = c.pass();
         timings_.overlay_ms += c.runner.run([&](VkCommandBuffer cmd) {
-            if (frame.overlay_enabled) record_overlay(pass, cmd, frame, c.line_width(settings_));
+            if (frame.overlay_enabled) record_overlay(pass, cmd, frame, frame.overlay_line_width);
             else record_clear(pass, cmd);
         });
     }

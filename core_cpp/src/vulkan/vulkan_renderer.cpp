@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <stdexcept>
@@ -40,11 +41,13 @@ void RendererCore::ensure_targets(std::uint32_t width, std::uint32_t height) {
     bindings.bind_overlay(targets->color.view());
 }
 
-float RendererCore::line_width(const RenderSettings& settings) const {
+float RendererCore::max_line_width() const {
     const PhysicalDevice& p = device.physical();
-    if (!p.wide_lines) return 1.0f;
-    return std::clamp(settings.line_width, p.properties.limits.lineWidthRange[0],
-                      p.properties.limits.lineWidthRange[1]);
+    return p.wide_lines ? std::max(1.0f, std::floor(p.properties.limits.lineWidthRange[1])) : 1.0f;
+}
+
+float RendererCore::line_width(const RenderSettings& settings) const {
+    return std::min(whole_line_width(settings.line_width), max_line_width());
 }
 
 std::uint32_t RendererCore::next_stamp() {
@@ -64,10 +67,7 @@ std::string VulkanRenderer::device_name() const { return core_->device.physical(
 std::string VulkanRenderer::device_type() const { return core_->device.physical().type_name(); }
 bool VulkanRenderer::bresenham_lines() const { return core_->device.physical().bresenham_lines; }
 
-float VulkanRenderer::max_line_width() const {
-    const vk::PhysicalDevice& p = core_->device.physical();
-    return p.wide_lines ? p.properties.limits.lineWidthRange[1] : 1.0f;
-}
+float VulkanRenderer::max_line_width() const { return core_->max_line_width(); }
 std::uint32_t VulkanRenderer::max_image_dimension() const {
     return std::min(core_->device.physical().properties.limits.maxImageDimension2D, kMaxImageDimension);
 }
