@@ -1,7 +1,7 @@
 """Named scenes: the bundled `.blend` files (blender_scenes/), Crytek Sponza (`sponza`, bundled as
 an `.npz`, no Blender needed), generated scenes (`gen:...`, no Blender needed), and files (`.blend`
-read through bpy with the add-on's exporter, `.npz`, and OBJ, PLY, STL, glTF/GLB through trimesh:
-library.files)."""
+read through bpy with the add-on's exporter, `.npz`, OBJ, PLY and STL by bvhlab's readers, glTF/GLB
+through trimesh: library.files)."""
 
 from __future__ import annotations
 

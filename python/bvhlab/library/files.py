@@ -1,28 +1,30 @@
-"""Scenes from the mesh files model repositories publish: OBJ, PLY, STL, glTF and GLB, read by
-trimesh (a maintained importer; bvhlab has no parser of its own). Every mesh of the file, placed by
-its scene graph, becomes one triangle soup with bvhlab's default camera, light and material.
+"""Scenes from the mesh files model repositories publish: OBJ, PLY and STL read by bvhlab's own
+readers (obj_reader.py, ply_reader.py, stl_reader.py: trimesh's lost a concave polygon's shape,
+resolved OBJ's relative indices from the file's end and refused Blender's binary PLY), glTF and GLB
+by trimesh after gltf_checks.py refuses what trimesh would read wrong. Every mesh of the file,
+placed by its scene graph, becomes one triangle soup with bvhlab's default camera, light and
+material.
 
 A file that cannot be read (missing importer, truncated, the wrong format for its extension, NaN or
 out-of-range vertices, faces that point past the vertices, no faces at all, a header claiming more
-elements than the file could hold) raises SceneFileError (a ValueError) naming the file. Sizes a
-header declares are checked against the file's size before trimesh reads it, so a small file cannot
-make it allocate gigabytes."""
+elements than the file holds) raises SceneFileError (a ValueError) naming the file."""
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 
 import numpy as np
 
 from .._npz import SceneFileError
 from ..scene import Scene
+from .gltf_checks import check_gltf
+from .obj_reader import read_obj
+from .ply_reader import read_ply
+from .stl_reader import read_stl
 
-#: Suffix → trimesh's file type.
+#: Suffix → file type.
 MESH_SUFFIXES = {".obj": "obj", ".ply": "ply", ".stl": "stl", ".gltf": "gltf", ".glb": "glb"}
-#: How much of a PLY file may be header (the PLY format has no limit; real headers are < 1 KB).
-_MAX_PLY_HEADER = 64 << 10
-_STL_HEADER, _STL_TRIANGLE = 84, 50
+_READERS = {"obj": read_obj, "ply": read_ply, "stl": read_stl}
 
 
 def is_mesh_file(spec: str) -> bool:
@@ -36,8 +38,16 @@ def load_mesh_file(path) -> Scene:
     if kind is None:
         raise SceneFileError(f"{path}: not a mesh file; expected one of {', '.join(MESH_SUFFIXES)}")
     _check_regular_file(path)
-    _check_declared_sizes(path, kind)
-    triangles = _triangles(path, kind)
+    if kind in _READERS:
+        try:
+            vertices, faces = _READERS[kind](path)
+        except SceneFileError:
+            raise
+        except (ValueError, OverflowError) as e:  # a number that is not one, a count numpy refuses
+            raise SceneFileError(f"{path} cannot be read as {kind.upper()}: {e}") from None
+        triangles = _checked_triangles(path, vertices, faces)
+    else:
+        triangles = _triangles(path, kind)
     try:
         return Scene(triangles=triangles)
     except ValueError as e:  # a vertex out of range: the core's message names the triangle
@@ -58,6 +68,7 @@ def _triangles(path: Path, kind: str) -> np.ndarray:
         import trimesh
     except ImportError:
         raise SceneFileError(f"{path}: reading {kind} files needs trimesh (pip install 'bvhlab[files]')") from None
+    kind = check_gltf(path)  # "gltf" or "glb" by the file's contents
     try:
         mesh = trimesh.load(str(path), file_type=kind, force="mesh", process=False)
         vertices = np.asarray(getattr(mesh, "vertices", np.zeros((0, 3))), np.float64)
@@ -84,32 +95,7 @@ def _checked_triangles(path: Path, vertices: np.ndarray, faces: np.ndarray) -> n
     if faces.min() < 0 or faces.max() >= len(vertices):
         raise SceneFileError(f"{path}: a face refers to a vertex that does not exist (have {len(vertices)})")
     triangles = vertices[faces]
-    bad = ~np.isfinite(triangles).all(axis=(1, 2))
+    bad = ~(np.abs(triangles) <= np.finfo(np.float32).max).all(axis=(1, 2))  # NaN fails too
     if bad.any():
-        raise SceneFileError(f"{path}: triangle {int(np.argmax(bad))} has a NaN or infinite vertex")
+        raise SceneFileError(f"{path}: triangle {int(np.argmax(bad))} has a NaN, infinite or out-of-range vertex")
     return np.ascontiguousarray(triangles, np.float32)
-
-
-def _check_declared_sizes(path: Path, kind: str) -> None:
-    """Refuses element counts a header declares that the file's size cannot hold (every PLY element
-    takes at least one byte; a binary STL triangle 50): trimesh would otherwise size arrays by them."""
-    size = path.stat().st_size
-    with open(path, "rb") as f:
-        head = f.read(_MAX_PLY_HEADER if kind == "ply" else _STL_HEADER)
-    if kind == "ply":
-        end = head.find(b"end_header")
-        if head.startswith(b"ply") and end < 0:
-            raise SceneFileError(f"{path}: no end_header in the first {_MAX_PLY_HEADER} bytes (truncated or not PLY)")
-        for name, count in re.findall(rb"^element\s+(\S+)\s+(\d+)", head[:end], re.MULTILINE):
-            if int(count) > size:
-                raise SceneFileError(
-                    f"{path}: the header declares {int(count)} {name.decode(errors='replace')} elements, "
-                    f"more than the file's {size} bytes can hold"
-                )
-    elif kind == "stl" and len(head) == _STL_HEADER and not head.lstrip().startswith(b"solid"):
-        count = int.from_bytes(head[80:84], "little")
-        if _STL_HEADER + _STL_TRIANGLE * count > size:
-            raise SceneFileError(
-                f"{path}: the header declares {count} triangles ({_STL_HEADER + _STL_TRIANGLE * count} bytes), "
-                f"the file has {size} bytes (truncated?)"
-            )

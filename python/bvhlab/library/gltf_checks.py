@@ -1,0 +1,67 @@
+"""What trimesh reads wrong in a glTF 2.0 file (Khronos, glTF 2.0 specification), refused before
+it reads it: extensions the file requires that change its geometry or that bvhlab does not know
+(Draco and meshopt compression, read as placeholder zeros), GPU instancing (its instances lost),
+sparse accessors (their values ignored), normalized quantized positions (read unscaled), triangle
+fans (read as no triangles); and a file that is not glTF at all (not JSON, empty) named as such
+rather than as a missing file."""
+
+from __future__ import annotations
+
+import json
+import struct
+from pathlib import Path
+
+from .._npz import SceneFileError
+
+#: Required extensions that leave the geometry as the core format says (materials, textures,
+#: lights, metadata) or that trimesh reads (KHR_mesh_quantization's non-normalized positions).
+_KNOWN_PREFIXES = ("KHR_materials_", "KHR_texture_", "EXT_texture_", "MSFT_texture_", "KHR_lights_")
+_KNOWN = {"KHR_mesh_quantization", "KHR_xmp_json_ld"}
+_TRIANGLE_FAN = 6
+
+
+def check_gltf(path: Path) -> str:
+    """ "glb" or "gltf", by the file's contents (a GLB named .gltf is read as GLB); raises
+    SceneFileError for a file bvhlab would read wrong (see the module's docstring)."""
+    with open(path, "rb") as f:
+        head = f.read(20)
+        kind = "glb" if head[:4] == b"glTF" else "gltf"
+        if kind == "glb":
+            if len(head) < 20 or head[16:20] != b"JSON":
+                raise SceneFileError(f"{path}: a GLB file without its JSON chunk (truncated?)")
+            text = f.read(struct.unpack_from("<I", head, 12)[0])
+        else:
+            text = head + f.read()
+    try:
+        doc = json.loads(text.decode("utf-8-sig"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise SceneFileError(f"{path} is not glTF: its JSON cannot be read ({e})") from None
+    if not isinstance(doc, dict) or not isinstance(doc.get("asset"), dict):
+        raise SceneFileError(f"{path} is not glTF: no 'asset' object")
+    for name in doc.get("extensionsRequired") or []:
+        if name not in _KNOWN and not str(name).startswith(_KNOWN_PREFIXES):
+            raise SceneFileError(f"{path} requires the glTF extension {name}, which bvhlab does not read")
+    if any("EXT_mesh_gpu_instancing" in (node.get("extensions") or {}) for node in _list(doc, "nodes")):
+        raise SceneFileError(f"{path}: nodes instanced by EXT_mesh_gpu_instancing, which bvhlab does not read")
+    accessors = _list(doc, "accessors")
+    for m, mesh in enumerate(_list(doc, "meshes")):
+        for primitive in _list(mesh, "primitives"):
+            where = f"{path}: mesh {mesh.get('name') or m}"
+            if primitive.get("mode") == _TRIANGLE_FAN:
+                raise SceneFileError(f"{where} has triangle fans (mode 6), which bvhlab does not read")
+            position = _accessor(accessors, (primitive.get("attributes") or {}).get("POSITION"))
+            indices = _accessor(accessors, primitive.get("indices"))
+            if position.get("normalized"):
+                raise SceneFileError(f"{where}: normalized positions (KHR_mesh_quantization) are not read")
+            if "sparse" in position or "sparse" in indices:
+                raise SceneFileError(f"{where}: sparse accessors are not read")
+    return kind
+
+
+def _list(doc: dict, key: str) -> list[dict]:
+    value = doc.get(key) or []
+    return [v for v in value if isinstance(v, dict)] if isinstance(value, list) else []
+
+
+def _accessor(accessors: list[dict], index) -> dict:
+    return accessors[index] if isinstance(index, int) and 0 <= index < len(accessors) else {}

@@ -1,0 +1,187 @@
+"""PLY's geometry (Turk, "The PLY Polygon File Format", 1994): the `vertex` element's x, y, z and
+the `face` element's vertex_indices (or vertex_index) lists, in ASCII or binary of either byte
+order; every other element and property is read past. Faces of any size in one file (Blender's
+binary export of a mesh of triangles and quads), triangulated by polygons.py. The header's counts
+are the file's: a file that ends early or goes on after its last element is refused."""
+
+from __future__ import annotations
+
+import struct
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .._npz import SceneFileError
+from .polygons import triangulate_all
+
+#: PLY's scalar type names (both spellings) → numpy's.
+_TYPES = {
+    "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1",
+    "short": "i2", "int16": "i2", "ushort": "u2", "uint16": "u2",
+    "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",
+    "float": "f4", "float32": "f4", "double": "f8", "float64": "f8",
+}  # fmt: skip
+_MAX_HEADER = 64 << 10  # the format sets no limit; real headers are < 1 KB
+
+
+@dataclass
+class _Property:
+    name: str
+    type: str  # numpy type of the value, or of a list's items
+    count_type: str | None = None  # numpy type of a list's length; None: a scalar
+
+
+@dataclass
+class _Element:
+    name: str
+    count: int
+    properties: list[_Property] = field(default_factory=list)
+
+
+def read_ply(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """float64 (V, 3) positions and int64 (T, 3) triangles of the PLY file at `path`."""
+    data = path.read_bytes()
+    fmt, elements, start = _header(path, data)
+    if fmt == "ascii":
+        values = _read_ascii(path, data[start:], elements)
+    else:
+        values = _read_binary(path, data, start, elements, "<" if fmt == "binary_little_endian" else ">")
+    vertex, face = values.get("vertex"), values.get("face")
+    if vertex is None or not all(axis in vertex for axis in "xyz"):
+        raise SceneFileError(f"{path}: no vertex element with x, y and z")
+    positions = np.stack([np.asarray(vertex[axis], np.float64) for axis in "xyz"], axis=1)
+    lists = None if face is None else face.get("vertex_indices", face.get("vertex_index"))
+    if lists is None:
+        raise SceneFileError(f"{path}: no face element with vertex_indices")
+    return positions, _triangles(path, lists, positions)
+
+
+def _header(path: Path, data: bytes) -> tuple[str, list[_Element], int]:
+    end = data.find(b"end_header", 0, _MAX_HEADER)
+    if not data.startswith(b"ply") or end < 0:
+        raise SceneFileError(f"{path}: not a PLY file (no 'ply' ... 'end_header' header)")
+    newline = data.find(b"\n", end)
+    start = len(data) if newline < 0 else newline + 1
+    fmt, elements = None, []
+    for line in data[:end].decode("ascii", errors="replace").splitlines()[1:]:
+        words = line.split()
+        if not words or words[0] in ("comment", "obj_info"):
+            continue
+        try:
+            if words[0] == "format":
+                fmt = words[1]
+            elif words[0] == "element":
+                elements.append(_Element(words[1], int(words[2])))
+            elif words[0] == "property" and words[1] == "list":
+                elements[-1].properties.append(_Property(words[4], _TYPES[words[3]], _TYPES[words[2]]))
+            elif words[0] == "property":
+                elements[-1].properties.append(_Property(words[2], _TYPES[words[1]]))
+        except (IndexError, KeyError, ValueError):
+            raise SceneFileError(f"{path}: header line {line.strip()!r} is not PLY") from None
+    if fmt not in ("ascii", "binary_little_endian", "binary_big_endian"):
+        raise SceneFileError(f"{path}: unknown PLY format {fmt!r}")
+    for e in elements:
+        if e.count < 0 or e.count > len(data):  # every element takes at least a byte
+            raise SceneFileError(f"{path}: the header declares {e.count} {e.name} elements for a {len(data)}-byte file")
+    return fmt, elements, start
+
+
+def _read_ascii(path: Path, body: bytes, elements: list[_Element]) -> dict[str, dict]:
+    words = body.split()
+    at = 0
+    out: dict[str, dict] = {}  # element → property → values
+    for e in elements:
+        if all(p.count_type is None for p in e.properties):  # a table of numbers
+            n = e.count * len(e.properties)
+            if at + n > len(words):
+                raise SceneFileError(f"{path}: the file ends inside its {e.name} elements (truncated?)")
+            table = np.array(words[at : at + n], dtype=np.float64).reshape(e.count, len(e.properties))
+            out[e.name] = {p.name: table[:, i] for i, p in enumerate(e.properties)}
+            at += n
+            continue
+        columns: dict[str, list] = {p.name: [] for p in e.properties}
+        try:
+            for _ in range(e.count):
+                for p in e.properties:
+                    if p.count_type is None:
+                        columns[p.name].append(float(words[at]))
+                        at += 1
+                    else:
+                        k = int(words[at])
+                        if k < 0:
+                            raise ValueError(f"a list of {k} items")
+                        columns[p.name].append([int(w) for w in words[at + 1 : at + 1 + k]])
+                        if len(columns[p.name][-1]) < k:
+                            raise IndexError
+                        at += 1 + k
+        except IndexError:
+            raise SceneFileError(f"{path}: the file ends inside its {e.name} elements (truncated?)") from None
+        except ValueError as err:
+            raise SceneFileError(f"{path}: a {e.name} element is not PLY ({err})") from None
+        out[e.name] = columns
+    if at != len(words):
+        raise SceneFileError(f"{path}: {len(words) - at} values after the elements the header declares")
+    return out
+
+
+def _read_binary(path: Path, data: bytes, at: int, elements: list[_Element], order: str) -> dict:
+    out = {}
+    for e in elements:
+        if all(p.count_type is None for p in e.properties):
+            dtype = np.dtype([(f"p{i}", order + p.type) for i, p in enumerate(e.properties)])
+            size = dtype.itemsize * e.count
+            if at + size > len(data):
+                raise SceneFileError(f"{path}: the file ends inside its {e.name} elements (truncated?)")
+            table = np.frombuffer(data, dtype, e.count, at)
+            out[e.name] = {p.name: table[f"p{i}"] for i, p in enumerate(e.properties)}
+            at += size
+        else:
+            out[e.name], at = _binary_lists(path, data, at, e, order)
+    if at != len(data):
+        raise SceneFileError(f"{path}: {len(data) - at} bytes after the elements the header declares")
+    return out
+
+
+_STRUCT = {"i1": "b", "u1": "B", "i2": "h", "u2": "H", "i4": "i", "u4": "I", "f4": "f", "f8": "d"}
+
+
+def _binary_lists(path: Path, data: bytes, at: int, e: _Element, order: str) -> tuple[dict, int]:
+    """An element with lists, record by record (each list's length is in the data)."""
+    columns: dict[str, list] = {p.name: [] for p in e.properties}
+    steps = [
+        (
+            columns[p.name],
+            struct.Struct(order + _STRUCT[p.type]),
+            p.count_type and struct.Struct(order + _STRUCT[p.count_type]),
+        )
+        for p in e.properties
+    ]
+    lists: dict[tuple[str, int], struct.Struct] = {}
+    try:
+        for _ in range(e.count):
+            for column, item, count in steps:
+                if not count:
+                    column.append(item.unpack_from(data, at)[0])
+                    at += item.size
+                    continue
+                (k,) = count.unpack_from(data, at)
+                at += count.size
+                if k < 0:
+                    raise SceneFileError(f"{path}: a {e.name} element has a list of {k} items")
+                items = lists.get((item.format, k)) or lists.setdefault(
+                    (item.format, k), struct.Struct(f"{order}{k}{item.format[-1]}")
+                )
+                column.append(items.unpack_from(data, at))
+                at += items.size
+    except struct.error:  # past the end
+        raise SceneFileError(f"{path}: the file ends inside its {e.name} elements (truncated?)") from None
+    return columns, at
+
+
+def _triangles(path: Path, lists, positions: np.ndarray) -> np.ndarray:
+    polygons = [corners for corners in lists if len(corners) >= 3]  # points and edges: no surface
+    for i, corners in enumerate(polygons):
+        if min(corners) < 0 or max(corners) >= len(positions):
+            raise SceneFileError(f"{path}: face {i} refers to a vertex that does not exist (have {len(positions)})")
+    return triangulate_all(polygons, positions)

@@ -1,0 +1,112 @@
+"""Polygons of mesh files into triangles: a fan where the polygon is convex (its corners all turn
+the same way about its normal), ear clipping where it is not (Eberly, "Triangulation by Ear
+Clipping", 2002) — a fan over a concave polygon covers space outside it (a concave pentagon of
+area 2.5 became triangles of area 3.5). Both give n − 2 triangles of the polygon's own corners."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+
+def triangulate(corners, positions: np.ndarray) -> list[tuple[int, int, int]]:
+    """Triangles (vertex indices) covering the polygon whose vertices are `corners` (indices into
+    `positions`, float (V, 3)), in the polygon's winding. Degenerate polygons (collinear, repeated
+    or self-intersecting corners, where no ear is found) fall back to a fan."""
+    corners = list(corners)
+    n = len(corners)
+    if n == 3:
+        return [(corners[0], corners[1], corners[2])]
+    p = positions[corners]
+    normal = _newell_normal(p)
+    turns = np.cross(np.roll(p, 1, axis=0) - p, np.roll(p, -1, axis=0) - p) @ normal  # < 0 where convex
+    if not (turns > 0).any() or not np.any(normal):  # convex, or no area to clip ears from
+        return _fan(corners)
+    return _ear_clip(corners, _projected(p, normal)) or _fan(corners)
+
+
+def triangulate_all(polygons: Sequence[Sequence[int] | np.ndarray], positions: np.ndarray) -> np.ndarray:
+    """int64 (T, 3): `triangulate` of every polygon, triangles and quads in numpy at once (a mesh
+    file's millions of faces), in the polygons' order by size (3, 4, then larger ones)."""
+    by_size: dict[int, list[Sequence[int] | np.ndarray]] = {}
+    for corners in polygons:
+        if len(corners) >= 3:
+            by_size.setdefault(len(corners), []).append(corners)
+    out = [np.zeros((0, 3), np.int64)]
+    for size in sorted(by_size):
+        faces = np.array(by_size[size], np.int64)
+        if size == 3:
+            out.append(faces)
+        elif size == 4:
+            out.append(_quads(faces, positions))
+        else:
+            out.append(np.array([t for f in by_size[size] for t in triangulate(f, positions)], np.int64))
+    return np.concatenate(out)
+
+
+def _quads(faces: np.ndarray, positions: np.ndarray) -> np.ndarray:
+    """Two triangles per quad (a, b, c, d): across a–c, or across b–d where b or d is a reflex
+    corner (a simple quad has at most one; a–c would leave the quad there)."""
+    p = positions[faces]  # (F, 4, 3)
+    normal = np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 1])  # Newell's normal of a quad
+    turns = np.einsum("fkc,fc->fk", np.cross(np.roll(p, 1, axis=1) - p, np.roll(p, -1, axis=1) - p), normal)
+    other = (turns[:, 1] > 0) | (turns[:, 3] > 0)
+    a, b, c, d = faces.T
+    first = np.where(other[:, None], np.stack([b, c, d], 1), np.stack([a, b, c], 1))
+    second = np.where(other[:, None], np.stack([b, d, a], 1), np.stack([a, c, d], 1))
+    return np.stack([first, second], 1).reshape(-1, 3)
+
+
+def _fan(corners: list[int]) -> list[tuple[int, int, int]]:
+    return [(corners[0], corners[i], corners[i + 1]) for i in range(1, len(corners) - 1)]
+
+
+def _newell_normal(p: np.ndarray) -> np.ndarray:
+    """The polygon's normal by Newell's method (robust for non-planar and concave polygons)."""
+    q = np.roll(p, -1, axis=0)
+    return np.array(
+        [
+            np.sum((p[:, 1] - q[:, 1]) * (p[:, 2] + q[:, 2])),
+            np.sum((p[:, 2] - q[:, 2]) * (p[:, 0] + q[:, 0])),
+            np.sum((p[:, 0] - q[:, 0]) * (p[:, 1] + q[:, 1])),
+        ]
+    )
+
+
+def _projected(p: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """2D coordinates in the polygon's plane, counter-clockwise for its winding."""
+    axis = int(np.argmax(np.abs(normal)))
+    u, v = [(1, 2), (2, 0), (0, 1)][axis]
+    xy = p[:, [u, v]]
+    return xy if normal[axis] > 0 else xy[:, ::-1]
+
+
+def _cross2(o, a, b) -> float:
+    return float((a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]))
+
+
+def _ear_clip(corners: list[int], xy: np.ndarray) -> list[tuple[int, int, int]] | None:
+    """Ear clipping of a counter-clockwise simple polygon; None where it finds no ear."""
+    left = list(range(len(corners)))
+    out = []
+    while len(left) > 3:
+        for k in range(len(left)):
+            a, b, c = left[k - 1], left[k], left[(k + 1) % len(left)]
+            if _cross2(xy[a], xy[b], xy[c]) <= 0:
+                continue  # a reflex or flat corner is no ear
+            if any(_inside(xy[i], xy[a], xy[b], xy[c]) for i in left if i not in (a, b, c)):
+                continue
+            out.append((corners[a], corners[b], corners[c]))
+            del left[k]
+            break
+        else:
+            return None
+    a, b, c = left
+    out.append((corners[a], corners[b], corners[c]))
+    return out
+
+
+def _inside(p, a, b, c) -> bool:
+    """Whether p lies in the closed triangle abc (counter-clockwise)."""
+    return _cross2(a, b, p) >= 0 and _cross2(b, c, p) >= 0 and _cross2(c, a, p) >= 0

@@ -1,0 +1,46 @@
+"""STL's triangles (3D Systems, "StereoLithography Interface Specification", 1988), binary or
+ASCII. A file is binary when its size is what its triangle count says (84 + 50 per triangle),
+whatever its first bytes (binary headers often start with "solid"); else ASCII if it starts with
+"solid" in any case (after a UTF-8 byte-order mark or spaces), its `vertex x y z` lines read three
+to a facet. Anything else is refused."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+from .._npz import SceneFileError
+
+_HEADER, _TRIANGLE = 84, 50
+_BINARY = np.dtype([("normal", "<f4", 3), ("vertices", "<f4", (3, 3)), ("attribute", "<u2")])
+_NUMBER = rb"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?:nan|inf)\w*)"
+_VERTEX = re.compile(rb"vertex\s+" + rb"\s+".join([_NUMBER] * 3), re.IGNORECASE)
+
+
+def read_stl(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """float64 (3T, 3) positions and int64 (T, 3) triangles (every triangle its own three) of the
+    STL file at `path`."""
+    data = path.read_bytes()
+    count = int.from_bytes(data[80:84], "little") if len(data) >= _HEADER else -1
+    if count >= 0 and len(data) == _HEADER + _TRIANGLE * count:
+        vertices = np.frombuffer(data, _BINARY, count, _HEADER)["vertices"].astype(np.float64).reshape(-1, 3)
+    elif data.lstrip(b"\xef\xbb\xbf \t\r\n")[:5].lower() == b"solid":
+        found = _VERTEX.findall(data)
+        if not found and count >= 0:
+            raise SceneFileError(
+                f"{path}: no facets: starts as ASCII STL but has no vertex lines, and as binary STL its header "
+                f"declares {count} triangles ({_HEADER + _TRIANGLE * count} bytes) for its {len(data)} bytes"
+            )
+        if len(found) % 3:
+            raise SceneFileError(f"{path}: {len(found)} vertex lines, not three to every facet (truncated?)")
+        vertices = np.array(found, dtype=np.float64).reshape(-1, 3)
+    elif count >= 0:
+        raise SceneFileError(
+            f"{path}: the header declares {count} triangles ({_HEADER + _TRIANGLE * count} bytes), "
+            f"the file has {len(data)} bytes (truncated?), and it is not ASCII STL"
+        )
+    else:
+        raise SceneFileError(f"{path}: {len(data)} bytes: neither binary STL (84 at least) nor ASCII")
+    return vertices, np.arange(len(vertices), dtype=np.int64).reshape(-1, 3)

@@ -1,0 +1,204 @@
+"""bvhlab's own OBJ, PLY and STL readers and the glTF checks, on files written here by hand, each
+against figures computed here (triangle counts, areas by the shoelace formula, positions): the
+cases trimesh read wrong or refused (a probe of real files: Blender's binary PLY of a mesh of
+triangles and quads, OBJ's relative indices, a concave polygon, Draco and sparse glTF)."""
+
+import json
+import struct
+
+import numpy as np
+import pytest
+
+from bvhlab._npz import SceneFileError
+from bvhlab.library.files import load_mesh_file
+
+
+def area(triangles: np.ndarray) -> float:
+    t = np.asarray(triangles, np.float64)
+    return float(0.5 * np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1).sum())
+
+
+def load(tmp_path, name: str, data) -> np.ndarray:
+    path = tmp_path / name
+    path.write_bytes(data.encode() if isinstance(data, str) else data)
+    return load_mesh_file(path).triangles
+
+
+# a concave pentagon (an arrow head): shoelace area 2.5; a fan from its first corner covers 3.5
+CONCAVE = [(0, 0, 0), (2, 0, 0), (2, 2, 0), (1, 0.5, 0), (0, 2, 0)]
+CONCAVE_AREA = 0.5 * abs(sum(x0 * y1 - x1 * y0 for (x0, y0, _), (x1, y1, _) in zip(CONCAVE, CONCAVE[1:] + CONCAVE[:1])))
+
+
+def test_concave_polygon_keeps_its_shape_in_obj_and_ply(tmp_path):
+    assert CONCAVE_AREA == 2.5
+    vertices = "".join(f"v {x} {y} {z}\n" for x, y, z in CONCAVE)
+    obj = load(tmp_path, "arrow.obj", vertices + "f 1 2 3 4 5\n")
+    assert len(obj) == 3 and area(obj) == pytest.approx(2.5)
+    # the same polygon starting at its reflex corner, and as a concave quad
+    obj = load(tmp_path, "arrow2.obj", vertices + "f 4 5 1 2 3\n")
+    assert area(obj) == pytest.approx(2.5)
+    quad = load(tmp_path, "dart.obj", "v 0 0 0\nv 2 0 0\nv 0.5 0.5 0\nv 0 2 0\nf 1 2 3 4\nf 2 3 4 1\n")
+    assert area(quad) == pytest.approx(2 * 1.0)  # the dart's area: 2 × (0.5·2·0.5) each way round
+    ply = ply_ascii(CONCAVE, [[0, 1, 2, 3, 4]])
+    assert area(load(tmp_path, "arrow.ply", ply)) == pytest.approx(2.5)
+
+
+def test_obj_relative_indices_count_back_from_the_vertices_so_far(tmp_path):
+    text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\nv 5 5 5\nv 6 5 5\nv 6 6 5\nf -3 -2 -1\nf 1 -2 -1\n"
+    t = load(tmp_path, "rel.obj", text)
+    np.testing.assert_array_equal(t[0], [(0, 0, 0), (1, 0, 0), (0, 1, 0)])
+    np.testing.assert_array_equal(t[1], [(5, 5, 5), (6, 5, 5), (6, 6, 5)])
+    np.testing.assert_array_equal(t[2], [(0, 0, 0), (6, 5, 5), (6, 6, 5)])
+
+
+def test_obj_as_people_write_it(tmp_path):
+    # tabs, comments at line ends, a continued line, CRLF, a byte-order mark, v/vt/vn corners
+    # and a face naming vertices defined after it
+    text = (
+        "\ufeff# made by hand\r\nf 1/1/1 2//1 3/2\r\nv\t0 0 0 # origin\r\nv 1 0\\\r\n 0\r\n"
+        "v 0 1 0 1.0\r\nvt 0 0\r\nvn 0 0 1\r\nv  0  0  2\r\nf 1 2 4\r\n"
+    )
+    t = load(tmp_path, "odd.obj", text)
+    np.testing.assert_array_equal(t[0], [(0, 0, 0), (1, 0, 0), (0, 1, 0)])
+    np.testing.assert_array_equal(t[1], [(0, 0, 0), (1, 0, 0), (0, 0, 2)])
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", "line 4: vertex index 0"),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -4 -2 -1\n", "line 4: vertex -4 does not exist"),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", "line 4: vertex 4 does not exist"),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n", "line 4: 'f 1 2 x' is not vertex indices"),
+        ("v 0 0 0\nv 1 0\nv 0 1 0\nf 1 2 3\n", "vertex 2 needs x, y and z"),
+        ("v 0 0 0\nv 1,5 0 0\nv 0 1 0\nf 1 2 3\n", "not a number"),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 99999999999999999999\n", "line 4: vertex .* does not exist"),
+    ],
+)
+def test_obj_errors_name_the_line(tmp_path, text, message):
+    with pytest.raises(SceneFileError, match=message):
+        load(tmp_path, "bad.obj", text)
+
+
+def ply_ascii(vertices, faces, extra: str = "") -> str:
+    head = f"ply\nformat ascii 1.0\nelement vertex {len(vertices)}\nproperty float x\nproperty float y\n"
+    head += f"property float z\nelement face {len(faces)}\nproperty list uchar int vertex_indices\n{extra}end_header\n"
+    body = "".join(f"{x} {y} {z}\n" for x, y, z in vertices)
+    return head + body + "".join(f"{len(f)} {' '.join(map(str, f))}\n" for f in faces)
+
+
+def ply_binary(vertices, faces, order: str, count: str = "B", index: str = "i") -> bytes:
+    fmt = "binary_little_endian" if order == "<" else "binary_big_endian"
+    names = {"B": "uchar", "H": "ushort", "i": "int", "I": "uint"}
+    head = (
+        f"ply\nformat {fmt} 1.0\ncomment a mesh of triangles and quads, as Blender writes it\n"
+        f"element vertex {len(vertices)}\nproperty float x\nproperty float y\nproperty float z\n"
+        f"property uchar red\nelement face {len(faces)}\n"
+        f"property list {names[count]} {names[index]} vertex_indices\nelement edge 1\nproperty int vertex1\n"
+        "property int vertex2\nend_header\n"
+    ).encode()
+    body = b"".join(struct.pack(order + "fffB", *v, 7) for v in vertices)
+    body += b"".join(struct.pack(f"{order}{count}{len(f)}{index}", len(f), *f) for f in faces)
+    return head + body + struct.pack(order + "ii", 0, 1)
+
+
+CUBE = [(x, y, z) for x in (0, 1) for y in (0, 2) for z in (0, 3)]  # corners: index = 4x + 2y' + z'
+MIXED = [[0, 4, 6, 2], [1, 3, 7, 5], [0, 1, 5, 4], [2, 6, 7], [2, 7, 3]]  # quads and two triangles
+MIXED_AREA = 2 * 1 + 2 * 1 + 1 * 3 + 1 * 3  # two 1×2 faces, a 1×3 face, a 1×3 face in two triangles
+
+
+@pytest.mark.parametrize("order", ["<", ">"])
+@pytest.mark.parametrize("count, index", [("B", "i"), ("B", "I"), ("H", "i")])
+def test_binary_ply_of_triangles_and_quads(tmp_path, order, count, index):
+    t = load(tmp_path, "mixed.ply", ply_binary(CUBE, MIXED, order, count, index))
+    assert len(t) == 8 and area(t) == pytest.approx(MIXED_AREA)
+    assert set(map(tuple, t.reshape(-1, 3).tolist())) <= set(CUBE)
+
+
+@pytest.mark.parametrize(
+    "data, message",
+    [
+        (ply_binary(CUBE, MIXED, "<")[:-3], "ends inside its edge elements"),
+        (ply_binary(CUBE, MIXED, "<") + b"\0" * 5, "5 bytes after the elements"),
+        (ply_ascii(CUBE, MIXED)[: -len("3 2 7 3\n")], "ends inside its face elements"),
+        (ply_ascii(CUBE, MIXED) + "3 0 1 2\n", "4 values after the elements"),
+        (ply_ascii(CUBE, [[0, 1, 99]]), "face 0 refers to a vertex that does not exist"),
+    ],
+)
+def test_ply_whose_header_lies_is_refused(tmp_path, data, message):
+    with pytest.raises(SceneFileError, match=message):
+        load(tmp_path, "lies.ply", data)
+
+
+@pytest.mark.parametrize("lead", [b"SOLID", b"\xef\xbb\xbfsolid", b"  Solid"])
+def test_ascii_stl_in_any_case_or_after_a_byte_order_mark(tmp_path, lead):
+    text = lead + b" x\nfacet normal 0 0 1\nouter loop\nVERTEX 0 0 0\nvertex 1 0 0\nvertex 0 1 1e0\nendloop\nendfacet\n"
+    t = load(tmp_path, "upper.stl", text + b"endsolid x\n")
+    np.testing.assert_array_equal(t[0], [(0, 0, 0), (1, 0, 0), (0, 1, 1)])
+
+
+def test_binary_stl_whose_header_starts_with_solid(tmp_path):
+    body = struct.pack("<12fH", 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0)
+    t = load(tmp_path, "solid.stl", b"solid by some exporter".ljust(80, b" ") + struct.pack("<I", 1) + body)
+    np.testing.assert_array_equal(t[0], [(0, 0, 0), (1, 0, 0), (0, 1, 0)])
+
+
+def gltf(**changes) -> str:
+    """A glTF of one triangle (positions in a data: URI), with top-level fields changed."""
+    data = np.array([0, 0, 0, 1, 0, 0, 0, 1, 0], np.float32).tobytes()
+    import base64
+
+    doc = {
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "buffers": [
+            {"byteLength": 36, "uri": "data:application/octet-stream;base64," + base64.b64encode(data).decode()}
+        ],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}
+        ],
+    }
+    for key, change in changes.items():
+        change(doc) if callable(change) else doc.__setitem__(key, change)
+    return json.dumps(doc)
+
+
+def _set(path: list, value):
+    def change(doc):
+        target = doc
+        for key in path[:-1]:
+            target = target[key]
+        target[path[-1]] = value
+
+    return change
+
+
+@pytest.mark.parametrize(
+    "changes, message",
+    [
+        ({"extensionsRequired": ["KHR_draco_mesh_compression"]}, "requires the glTF extension KHR_draco"),
+        ({"extensionsRequired": ["EXT_meshopt_compression"]}, "requires the glTF extension EXT_meshopt"),
+        ({"n": _set(["nodes", 0, "extensions"], {"EXT_mesh_gpu_instancing": {"attributes": {}}})}, "gpu_instancing"),
+        ({"s": _set(["accessors", 0, "sparse"], {"count": 1})}, "sparse accessors are not read"),
+        ({"q": _set(["accessors", 0, "normalized"], True)}, "normalized positions"),
+        ({"f": _set(["meshes", 0, "primitives", 0, "mode"], 6)}, "triangle fans"),
+    ],
+)
+def test_gltf_that_trimesh_would_read_wrong_is_refused(tmp_path, changes, message):
+    with pytest.raises(SceneFileError, match=message):
+        load(tmp_path, "model.gltf", gltf(**changes))
+
+
+def test_gltf_checks_leave_good_files_alone(tmp_path):
+    t = load(tmp_path, "model.gltf", gltf(extensionsRequired=["KHR_materials_emissive_strength"]))
+    np.testing.assert_array_equal(t[0], [(0, 0, 0), (1, 0, 0), (0, 1, 0)])
+
+
+@pytest.mark.parametrize("text", ["", '{"asset": ', "not json"])
+def test_gltf_that_is_not_json_says_so(tmp_path, text):
+    with pytest.raises(SceneFileError, match="is not glTF: its JSON cannot be read"):
+        load(tmp_path, "model.gltf", text)
