@@ -187,3 +187,29 @@ def test_a_tree_whose_top_was_rebuilt_saves_loads_and_records_its_walks(knot, tm
     for k in range(0, 2000, 97):
         record = tree.trace_ray(origins[k], dirs[k], traversal="wide")
         assert record.prim == a["prim"][k] and (record.t == a["t"][k] or a["prim"][k] < 0)
+
+
+@pytest.mark.parametrize("policy", ["partial", "adaptive"])
+@pytest.mark.parametrize("collapse", ["point", "line"])
+def test_restructuring_resumes_after_the_geometry_collapsed(knot, policy, collapse):
+    """A mesh built while scaled to 0 (a pop-in), or squashed onto a line and back: the tree's
+    boxes had no area, their costs nothing to compare with. Partial and adaptive kept refitting
+    that tree once the mesh spread out again, at 122× a fresh build's SAH (a probe's 20K triangles
+    grown from scale 0; 39-60× squashed onto a line and back); they restructure now."""
+    line = np.float32([1, 0, 0]) if collapse == "line" else np.float32([0, 0, 0])
+
+    def frame(k):  # k = 0: collapsed; 10: as the knot is
+        t = knot
+        centre = t.reshape(-1, 3).mean(0)
+        flat = centre + ((t - centre) @ line)[..., None] * line  # its shadow on the line, or the point
+        return (flat + (t - flat) * np.float32(k / 10)).astype(np.float32)
+
+    grown = bvhlab.build(frame(0))  # built collapsed, then grown frame by frame
+    for k in range(1, 11):
+        stats = grown.update(frame(k), policy=policy, measure_fresh=True)
+    assert stats.sah_cost <= 1.3 * stats.fresh_sah_cost, (stats.policy, stats.sah_cost, stats.fresh_sah_cost)
+    squashed = bvhlab.build(frame(10))  # as built, collapsed, and back
+    for k in (5, 0, 5, 10, 10):
+        stats = squashed.update(frame(k), policy=policy, measure_fresh=True)
+    assert stats.sah_cost <= 1.3 * stats.fresh_sah_cost, (stats.policy, stats.sah_cost, stats.fresh_sah_cost)
+    _expect_valid_with_fresh_hits(grown, frame(10), seed=5)

@@ -125,8 +125,11 @@ struct UpdateStats {
 using NodeCostArray = BigVector<float>;
 
 /// Each node's SAH cost relative to its own box: S(n)/A(n) with S(leaf) = A·N and S(inner) =
-/// A·C_trav + S(children) (C_trav = C_isect = 1, sah_cost's formula), so entry 0 is sah_cost(bvh).
-/// A node of zero area gets the count its subtree would cost if every node were hit.
+/// A·C_trav + S(children) (C_trav = C_isect = 1, sah_cost's formula), so entry 0 is sah_cost(bvh)
+/// (rounded to float) where the root has an area.
+/// A node of zero area gets 0 (no cost to compare: a tree whose boxes had no area when built says
+/// nothing of the geometry spread out again); sah_cost of a tree with a root of zero area counts
+/// nodes instead.
 NodeCostArray subtree_costs(const Bvh& bvh);
 
 /// The tree over `geometry` (same counts) by `config.policy`, from `old` (untouched) and the

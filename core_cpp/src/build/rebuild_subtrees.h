@@ -14,6 +14,7 @@ namespace bvhlab {
 struct NodeCosts {
     NodeCostArray cost, area;
     BigVector<std::uint32_t> count;
+    double root_cost = 0;  ///< cost[0] unrounded: the tree's SAH cost as stats and sah_cost() give it
 
     /// S(n) = A(n)·cost(n): node i's share of the root's A·cost, in the root's units.
     double area_cost(std::uint32_t i) const { return double(area[i]) * cost[i]; }

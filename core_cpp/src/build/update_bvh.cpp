@@ -42,7 +42,7 @@ double restructure(Bvh& tree, NodeCostArray& built, const NodeCosts& now, const 
     stats.primitives_rebuilt = rebuild_subtrees(tree, built, roots, g, now, saved);
     stats.subtrees_rebuilt = static_cast<std::uint32_t>(roots.size());
     if (now.area[0] > 0) return (now.area_cost(0) - saved) / now.area[0];
-    return subtree_costs(tree)[0];  // a root of zero area: its cost counts nodes
+    return node_costs(tree).root_cost;  // a root of zero area: its cost counts nodes
 }
 
 /// The boxes per primitive above which adaptive's first cut is coarsened to top_coarse_cut_
@@ -118,9 +118,11 @@ UpdatePolicy adaptive(Bvh& tree, NodeCostArray& built, const NodeCosts& now, con
 }  // namespace
 
 NodeCosts node_costs(const Bvh& bvh) {
-    // S(n); for a node of zero area, U(n) (every node counted as hit): its inner nodes, (size - 1)
-    // / 2 of its subtree's `size` nodes (each has two children), and its primitives (no array of
-    // its own: one write and two reads a node less)
+    // S(n); for a node of zero area no cost (0: S/A has no value there, and a count of nodes, the
+    // cost were every node hit, stood as a reference no tree spread out again came under: a mesh
+    // grown from scale 0 stayed a refit at 122× a fresh build's SAH); the root's cost unrounded,
+    // and for a root of zero area U(n) (every node counted as hit: its inner nodes, (size - 1) / 2
+    // of its subtree's `size` nodes, and its primitives), sah_cost's convention
     BigVector<double> area_cost(bvh.nodes.size());
     NodeCosts out{NodeCostArray(bvh.nodes.size()), NodeCostArray(bvh.nodes.size()),
                   BigVector<std::uint32_t>(bvh.nodes.size())};
@@ -142,9 +144,11 @@ NodeCosts node_costs(const Bvh& bvh) {
         // a leaf's S/A is its count exactly (A·N is exact in double for N < 2^29): no division,
         // which took a third of this pass's time
         const bool exact = is_leaf(n) && leaf_count(n) < (1u << 29);
-        out.cost[i] = float(area > 0 ? (exact ? double(leaf_count(n)) : area_cost[i] / area)
-                                     : double((skip_index(n, i) - i - 1) / 2) + double(out.count[i]));
+        out.cost[i] = float(area > 0 ? (exact ? double(leaf_count(n)) : area_cost[i] / area) : 0.0);
         out.area[i] = float(area);
+        if (i == 0)
+            out.root_cost =
+                area > 0 ? area_cost[0] / area : double((skip_index(n, i) - i - 1) / 2) + double(out.count[i]);
     }
     return out;
 }
@@ -168,7 +172,7 @@ Bvh update_bvh(const Bvh& old, const NodeCostArray& built, const GeometryView& g
         tree = build_bvh(g, old.config);
         const NodeCosts fresh = node_costs(tree);
         built_out = fresh.cost;
-        stats.sah_cost = tree.empty() ? 0.0 : fresh.cost[0];
+        stats.sah_cost = tree.empty() ? 0.0 : fresh.root_cost;
         ref_cost = stats.sah_cost, ref_area = tree.empty() ? 0.0 : fresh.area[0];
         stats.policy = UpdatePolicy::Rebuild, stats.subtrees_rebuilt = 1,
         stats.primitives_rebuilt = g.primitive_count();
@@ -179,33 +183,43 @@ Bvh update_bvh(const Bvh& old, const NodeCostArray& built, const GeometryView& g
     } else {
         tree = refitted(old, g, old.config.threads);
         const NodeCosts now = node_costs(tree);
-        stats.sah_cost = tree.empty() ? 0.0 : now.cost[0];
-        built_out = built;
-        if (config.policy == UpdatePolicy::Adaptive && !tree.empty())
-            built_out[0] = float(reference_cost(ref_cost, ref_area, now.area[0]));  // what adaptive aims for
-        double sah = stats.sah_cost;
-        UpdatePolicy ran = UpdatePolicy::Refit;
-        if (config.policy == UpdatePolicy::Partial) {
-            const std::vector<std::uint32_t> roots =
-                subtrees_past(tree, now, built, config.subtree_growth, config.min_subtree_primitives);
-            if (!roots.empty()) sah = restructure(tree, built_out, now, roots, g, stats);
-            ran = UpdatePolicy::Partial;
-        } else if (config.policy == UpdatePolicy::Adaptive && !tree.empty() &&
-                   now.cost[0] > config.target_growth * built_out[0]) {
-            ran = adaptive(tree, built_out, now, g, config, stats, sah);
-        }
-        if (ran == UpdatePolicy::Rebuild) {
-            stats.subtrees_rebuilt = 0, stats.top_boxes = 0;
+        stats.sah_cost = tree.empty() ? 0.0 : now.root_cost;
+        // A tree built (or last rebuilt) over geometry of no area (a mesh scaled to 0, squashed onto
+        // a line or a point) has costs that count nodes, not areas, and a shape that says nothing of
+        // the geometry spread out again: partial's and adaptive's references from then were never
+        // passed (a mesh grown from scale 0 stayed a refit at 122× a fresh build's SAH). Once the
+        // geometry has area again, they rebuild.
+        const bool restructures = config.policy == UpdatePolicy::Partial || config.policy == UpdatePolicy::Adaptive;
+        if (restructures && ref_area <= 0 && !tree.empty() && now.area[0] > 0) {
             rebuild();
         } else {
-            // the reference follows the best a restructured tree reached: the geometry's own
-            // shape may have made a good tree cheaper than the first build
-            if (config.policy == UpdatePolicy::Adaptive && !tree.empty()) {
-                if (ran == UpdatePolicy::Partial && sah < reference_cost(ref_cost, ref_area, now.area[0]))
-                    ref_cost = sah, ref_area = now.area[0];
-                built_out[0] = float(ref_cost);
+            built_out = built;
+            if (config.policy == UpdatePolicy::Adaptive && !tree.empty())
+                built_out[0] = float(reference_cost(ref_cost, ref_area, now.area[0]));  // what adaptive aims for
+            double sah = stats.sah_cost;
+            UpdatePolicy ran = UpdatePolicy::Refit;
+            if (config.policy == UpdatePolicy::Partial) {
+                const std::vector<std::uint32_t> roots =
+                    subtrees_past(tree, now, built, config.subtree_growth, config.min_subtree_primitives);
+                if (!roots.empty()) sah = restructure(tree, built_out, now, roots, g, stats);
+                ran = UpdatePolicy::Partial;
+            } else if (config.policy == UpdatePolicy::Adaptive && !tree.empty() &&
+                       now.cost[0] > config.target_growth * built_out[0]) {
+                ran = adaptive(tree, built_out, now, g, config, stats, sah);
             }
-            stats.sah_cost = sah, stats.policy = ran;
+            if (ran == UpdatePolicy::Rebuild) {
+                stats.subtrees_rebuilt = 0, stats.top_boxes = 0;
+                rebuild();
+            } else {
+                // the reference follows the best a restructured tree reached: the geometry's own
+                // shape may have made a good tree cheaper than the first build
+                if (config.policy == UpdatePolicy::Adaptive && !tree.empty()) {
+                    if (ran == UpdatePolicy::Partial && sah < reference_cost(ref_cost, ref_area, now.area[0]))
+                        ref_cost = sah, ref_area = now.area[0];
+                    built_out[0] = float(ref_cost);
+                }
+                stats.sah_cost = sah, stats.policy = ran;
+            }
         }
     }
     built_out.resize(tree.nodes.size() + 1);  // the reference's area after the nodes' costs
