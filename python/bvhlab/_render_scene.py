@@ -33,6 +33,8 @@ class SceneCache:
     def get(self, scene, bvh, options=None) -> _core.RenderScene:
         """The RenderScene of `scene` and `bvh`; `options` (RenderOptions) picks its overlay boxes."""
         two_level = isinstance(bvh, InstancedBvh)
+        if two_level:
+            bvh = bvh.snapshot()  # one TLAS for the key, the scene and its boxes (another thread may place)
         if scene.is_instanced and not two_level:
             raise ValueError("an instanced scene renders with its two-level tree: bvhlab.build(scene)")
         if two_level and len(bvh.meshes) != scene.mesh_count:

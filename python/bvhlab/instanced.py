@@ -4,6 +4,7 @@ core_cpp/include/bvhlab/tlas.h). `bvhlab.build` makes one for a scene with insta
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable
 
 import numpy as np
@@ -27,24 +28,56 @@ class InstancedBvh:
     `update_mesh` updates one mesh's tree and then the TLAS."""
 
     def __init__(self, meshes: list[Bvh], mesh_of: np.ndarray, transforms: np.ndarray, config: BuildConfig):
-        self.meshes = meshes
         self.config = config
-        # (TLAS core, mesh index, transforms) as one attribute: a place() on another thread swaps
-        # it whole, so no reader sees a new TLAS with the old instances (stats keyed by the one,
-        # made of the other, were kept)
-        self._state = _make_tlas(meshes, mesh_of, transforms, config.threads)
+        # (TLAS core, mesh index, transforms, meshes, their revisions) as one attribute: place() and
+        # update_mesh() on another thread swap it whole, so no reader sees a new TLAS with the old
+        # instances or meshes (stats keyed by the one, made of the other, were kept; figures and
+        # boxes read in several steps mixed two TLASes); snapshot() holds one for helpers that read
+        # in several steps
+        self._state = _make_state(tuple(meshes), mesh_of, transforms, config.threads)
+        self._frozen = False
+        self._lock = threading.Lock()  # one TLAS made again at a time where a mesh was updated
         self._stats: tuple | None = None  # (what they were made of, stats)
         self._tlas: tuple | None = None  # (the core TLAS, it as a Bvh)
         self._tlas_data: tuple | None = None  # (the TLAS it was made of, NodeData, leaf_first, refs)
         self._analysed: tuple | None = None  # (_analysis_key(), TwoLevelNodeData)
 
     @property
+    def meshes(self) -> tuple[Bvh, ...]:
+        """The meshes' trees, mesh k's at k (a tuple: `update_mesh` replaces one). A tree updated
+        through it (`meshes[k].update(...)`) is followed: the next query, render or figure makes
+        the TLAS again over it (it kept answering for the old geometry)."""
+        return self._current()[3]
+
+    def snapshot(self) -> InstancedBvh:
+        """This tree as it is now, for reading in several steps (figures, boxes, picks) while
+        another thread may call `place` or `update_mesh` on it: its own TLAS and meshes stay (a
+        mesh tree updated in place is the one exception: its object is shared)."""
+        state = self._current()
+        view = object.__new__(InstancedBvh)
+        view.__dict__.update(self.__dict__)
+        view._state, view._frozen, view._lock = state, True, threading.Lock()
+        return view
+
+    def _current(self) -> tuple:
+        """The state, made again first where a mesh's tree changed since its TLAS was made."""
+        state = self._state
+        if self._frozen or all(m.revision == r for m, r in zip(state[3], state[4])):
+            return state
+        with self._lock:
+            state = self._state
+            if not all(m.revision == r for m, r in zip(state[3], state[4])):
+                state = self._state = _make_state(state[3], state[1], state[2], self.config.threads)
+        return state
+
+    @property
     def _core(self) -> _core.TwoLevel:
-        return self._state[0]
+        return self._current()[0]
 
     @property
     def _placed(self) -> tuple[np.ndarray, np.ndarray]:
-        return self._state[1], self._state[2]
+        state = self._current()
+        return state[1], state[2]
 
     def __repr__(self) -> str:
         s = self.stats
@@ -58,22 +91,23 @@ class InstancedBvh:
         (two_level_stats.instanced_stats): primitives and triangles stored (each mesh once) and
         flattened (once per instance), nodes, height, memory_bytes, sah_cost (two-level), per-mesh
         lists (mesh_primitives, mesh_instances, mesh_sah_cost, ...) and the meshes' build method."""
-        core, mesh_of, _ = self._state
-        meshes = list(self.meshes)
+        core, mesh_of, _, meshes, _ = self._current()
         key = _version_key(core, meshes)
-        if self._stats is None or self._stats[0] != key:
+        made = self._stats
+        if made is None or made[0] != key:
             lo, hi = core.world_boxes()
-            self._stats = (key, instanced_stats(core.stats(), meshes, mesh_of, lo, hi))
-        return dict(self._stats[1])
+            made = self._stats = (key, instanced_stats(core.stats(), list(meshes), mesh_of, lo, hi))
+        return dict(made[1])
 
     @property
     def tlas(self) -> Bvh:
         """The TLAS as a Bvh (a copy, made once per TLAS): its node boxes are in world space, its
         references are instance indices (one per leaf), it holds no geometry; its `config` is the
         meshes' (the TLAS is built with the core's default_tlas_config)."""
-        if self._tlas is None or self._tlas[0] is not self._core:
-            self._tlas = (self._core, Bvh(self._core.tlas_tree(), self.config))
-        return self._tlas[1]
+        core, made = self._core, self._tlas
+        if made is None or made[0] is not core:
+            made = self._tlas = (core, Bvh(core.tlas_tree(), self.config))
+        return made[1]
 
     @property
     def instances(self) -> tuple[np.ndarray, np.ndarray]:
@@ -107,8 +141,9 @@ class InstancedBvh:
 
     def tlas_leaves_of_instances(self) -> np.ndarray:
         """(N,) int64: the TLAS leaf holding each instance (-1 for an empty mesh's instance)."""
-        _, data, leaf_first, refs = self._tlas_nodes()
-        out = np.full(len(self._placed[0]), -1, np.int64)
+        core, mesh_of, *_ = self._current()
+        _, data, leaf_first, refs = self._tlas_nodes(core)
+        out = np.full(len(mesh_of), -1, np.int64)
         leaves = np.flatnonzero(np.asarray(leaf_first) >= 0)
         counts = data.prim_count[leaves].astype(np.int64)
         slots = np.repeat(leaf_first[leaves].astype(np.int64), counts) + (
@@ -120,31 +155,43 @@ class InstancedBvh:
     def node_data(self) -> TwoLevelNodeData:
         """The figures of the tree the TLAS and the meshes' trees make together
         (bvhlab.inspect.two_level_data): each mesh tree analysed once (`Bvh.node_data`)."""
-        key = self._analysis_key()
-        if self._analysed is None or self._analysed[0] != key:
-            self._analysed = (key, TwoLevelNodeData.of(self))
-        return self._analysed[1]
+        view = self.snapshot()  # one TLAS and one set of meshes throughout
+        key = view._analysis_key()
+        analysed = self._analysed
+        if analysed is None or analysed[0] != key:
+            analysed = self._analysed = (key, TwoLevelNodeData.of(view))
+        return analysed[1]
 
     def cached_node_data(self) -> TwoLevelNodeData | None:
         """What `node_data()` made for the current TLAS and meshes, or None (never computes)."""
-        if self._analysed is not None and self._analysed[0] == self._analysis_key():
-            return self._analysed[1]
+        analysed = self._analysed
+        if analysed is not None and analysed[0] == self._analysis_key():
+            return analysed[1]
         if all(m.cached_node_data() is not None for m in self.meshes):
             return self.node_data()  # only the joining arrays are left to make (milliseconds)
         return None
 
     def _analysis_key(self) -> tuple:
-        return _version_key(self._core, self.meshes)
+        state = self._current()
+        return _version_key(state[0], state[3])
 
-    def _tlas_nodes(self) -> tuple:
-        if self._tlas_data is None or self._tlas_data[0] is not self._core:
-            d = self._core.tlas_node_data()
-            self._tlas_data = (self._core, NodeData.from_core(d), d["leaf_first"], d["refs"])
-        return self._tlas_data
+    def _tlas_nodes(self, core=None) -> tuple:
+        core = core or self._core
+        made = self._tlas_data
+        if made is None or made[0] is not core:
+            d = core.tlas_node_data()
+            made = self._tlas_data = (core, NodeData.from_core(d), d["leaf_first"], d["refs"])
+        return made
 
     def place(self, mesh_of: np.ndarray, transforms: np.ndarray) -> None:
         """Move the instances (or change them): a new TLAS over the same meshes' trees."""
-        self._state = _make_tlas(self.meshes, mesh_of, transforms, self.config.threads)
+        self._writable()
+        with self._lock:
+            self._state = _make_state(self._state[3], mesh_of, transforms, self.config.threads)
+
+    def _writable(self) -> None:
+        if self._frozen:
+            raise RuntimeError("a snapshot of an InstancedBvh is read-only: place or update the tree it was taken of")
 
     def update_mesh(
         self, k: int, triangles: np.ndarray, spheres: np.ndarray | None = None, config=None, **changes
@@ -153,20 +200,27 @@ class InstancedBvh:
         (`config`/`changes`: an UpdateConfig), with other counts it is rebuilt; the other meshes'
         trees are not touched. Then the TLAS is made again over the same instances (their world
         boxes follow the mesh). Returns what ran on mesh k."""
-        k = _checks.integer("mesh", k, 0, len(self.meshes) - 1)
+        self._writable()
+        meshes = self._current()[3]
+        k = _checks.integer("mesh", k, 0, len(meshes) - 1)
         triangles = _checks.float32_array("triangles", triangles, (3, 3))
+        old = meshes[k].stats
+        if spheres is None and old["spheres"]:  # as Bvh.update: dropping them must be asked for
+            raise ValueError(
+                f"mesh {k} has {old['spheres']} spheres: pass them (or an empty (0, 4) array to remove them)"
+            )
         if spheres is not None:
             spheres = _checks.float32_array("spheres", spheres, (4,))
-        old = self.meshes[k].stats
         n_spheres = 0 if spheres is None else len(spheres)
         if len(triangles) == old["triangles"] and n_spheres == old["spheres"]:
-            stats = self.meshes[k].update(triangles, spheres, config, **changes)
+            stats = meshes[k].update(triangles, spheres, config, **changes)
         else:  # another count: a new tree for this mesh alone
             tree = Bvh(_core.build(triangles, spheres, self.config.core(), None), self.config)
             s = tree.stats
             stats = UpdateStats("rebuild", s["build_ms"], s["sah_cost"], 1, s["primitives"])
-            self.meshes[k] = tree
-        self.place(*self._placed)
+            meshes = meshes[:k] + (tree,) + meshes[k + 1 :]
+        with self._lock:  # the new mesh and the TLAS over it in one swap
+            self._state = _make_state(meshes, self._state[1], self._state[2], self.config.threads)
         return stats
 
     def world_boxes(self) -> tuple[np.ndarray, np.ndarray]:
@@ -222,7 +276,15 @@ def _version_key(core: _core.TwoLevel, meshes: list[Bvh]) -> tuple:
     return (core, tuple(m.revision for m in meshes), tuple(id(m) for m in meshes))
 
 
-def _make_tlas(meshes: list[Bvh], mesh_of, transforms, threads: int) -> tuple:
+def _make_state(meshes: tuple[Bvh, ...], mesh_of, transforms, threads: int) -> tuple:
+    """(TLAS, mesh index int32 (N,), transforms, meshes, the meshes' revisions it was made over):
+    InstancedBvh's state, its TLAS with the core's TLAS settings (default_tlas_config) on
+    `threads` threads (0: all)."""
+    revisions = tuple(m.revision for m in meshes)  # before the TLAS reads them: a later update is seen
+    return (*_make_tlas(meshes, mesh_of, transforms, threads), meshes, revisions)
+
+
+def _make_tlas(meshes, mesh_of, transforms, threads: int) -> tuple:
     """The TLAS with the core's TLAS settings (default_tlas_config) on `threads` threads (0: all),
     and the checked (mesh index int32 (N,), transforms) it was made of."""
     mesh_of = np.asarray(mesh_of)

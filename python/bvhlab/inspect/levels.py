@@ -132,6 +132,7 @@ def shown_boxes(
     the depth range, at most `cap` of them (module docstring)."""
     if level not in LEVELS:
         raise ValueError(f"level must be one of {LEVELS}, got {level!r}")
+    bvh = bvh.snapshot()  # one TLAS and one set of meshes throughout (another thread may place)
     mesh_of, transforms = bvh.instances
     mesh_of = np.asarray(mesh_of, np.int64)
     parts = []  # (lo, hi, depth, level, instance, node)

@@ -119,6 +119,7 @@ def pick_two_level(
     BLAS leaf of the hit primitive in its instance (the TLAS leaf of the hit instance when only
     the TLAS is shown)."""
     origin, direction = _pick_ray(origin, direction)
+    bvh = bvh.snapshot()  # one TLAS and one set of meshes throughout (another thread may place)
     shown = shown_boxes(bvh, level, depth_range[0], depth_range[1], leaves_only, cap)
     record = bvh.trace_ray(origin.astype(np.float32), direction.astype(np.float32))
     t_hit = float(record.t)

@@ -37,6 +37,7 @@ class TwoLevelNodeData:
     @classmethod
     def of(cls, bvh) -> TwoLevelNodeData:
         """The figures of a bvhlab.InstancedBvh (analyses each mesh tree once: Bvh.node_data)."""
+        bvh = bvh.snapshot()  # one TLAS and one set of meshes throughout (another thread may place)
         tlas = bvh.tlas_node_data()
         meshes = tuple(m.node_data() for m in bvh.meshes)
         mesh_of = np.asarray(bvh.instances[0], np.int64)
