@@ -76,3 +76,17 @@ def test_a_ray_that_misses_everything_picks_nothing(tree):
         got = pick(tree, origin, direction)
         assert (got.node, got.how) == (None, "nothing") and np.isinf(got.t_hit)
     assert np.all(lo < origin)
+
+
+@pytest.mark.parametrize("distance", [10.0, 1e3, 1e4])
+def test_a_box_behind_the_hit_is_not_picked_from_far_away(distance):
+    """A wall, and small triangles 0.02-0.05 behind it: the ray from `distance` away picks the
+    wall's box, entered at the hit. A slack relative to the distance (1e-4) took a box 0.018
+    behind the wall from 1,000 and 10,000 away (an orthographic view's mouse ray starts far)."""
+    wall = np.array([[[-50, -50, 0], [50, -50, 0], [0, 50, 0]]], np.float32)
+    rng = np.random.default_rng(0)
+    behind = rng.uniform([-1, -1, 0.02], [1, 1, 0.05], (400, 1, 3)) + rng.normal(0, 0.003, (400, 3, 3))
+    bvh = bvhlab.build(np.concatenate([wall, behind.astype(np.float32)]), max_leaf_size=1)
+    picked = pick(bvh, np.array([0.1, 0.1, -distance]), np.array([0.0, 0.0, 1.0]), (0, 255))
+    assert picked.t_hit == pytest.approx(distance)
+    assert picked.t_enter <= picked.t_hit  # not a box behind the wall
