@@ -19,8 +19,11 @@ _keymaps: list = []
 
 
 def register() -> None:
+    from .final import forget_job_light
+
     for cls in classes:
         bpy.utils.register_class(cls)
+    bpy.app.handlers.render_init.append(forget_job_light)  # a render job's frames share a light
     for panel in engine_panels():
         panel.COMPAT_ENGINES.add(ENGINE_ID)
     _add_keymap()
@@ -28,9 +31,12 @@ def register() -> None:
 
 def unregister() -> None:
     from .display import forget_shader
+    from .final import forget_job_light
     from .tracer import forget_tracers
     from .viewport import close_all
 
+    if forget_job_light in bpy.app.handlers.render_init:
+        bpy.app.handlers.render_init.remove(forget_job_light)
     _remove_keymap()
     close_all()
     forget_shader()

@@ -13,6 +13,8 @@ import time
 import warnings
 from dataclasses import replace
 
+import bpy
+
 from bvhlab.overlay_levels import traced_cap_note
 
 from .. import state
@@ -27,6 +29,19 @@ from .unrendered import unrendered_features
 BUILD_START, TRACE_START = 0.05, 0.35
 
 
+#: A render job's light calibration (LiveScene.light_distance) by scene name: measured at its first
+#: frame, kept for an animation's others (without Persistent Data each frame has an engine and a
+#: LiveScene of its own); cleared when a render job starts (render_init: forget_job_light). Not
+#: RenderEngine.is_animation: with Persistent Data an engine made for an animation keeps it set
+#: for the F12 stills after it.
+_JOB_LIGHT: dict[str, float] = {}
+
+
+@bpy.app.handlers.persistent
+def forget_job_light(*_args) -> None:
+    _JOB_LIGHT.clear()
+
+
 class FinalRender:
     """One engine instance's final-render state: the scene it keeps between frames."""
 
@@ -39,9 +54,12 @@ class FinalRender:
         self.notes: list[str] = []
 
     def sync(self, depsgraph) -> None:
-        """Export what changed since the last frame (all of it the first time)."""
+        """Export what changed since the last frame (all of it the first time); the frames of a
+        render job are lit by its first frame's calibration of the light."""
         from bvhlab.blender import ExportError, ExportWarning
 
+        name = depsgraph.scene.name
+        self.live.light_distance = _JOB_LIGHT.get(name)  # None: measured (Persistent Data kept the last)
         self.error, self.notes = None, []
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", ExportWarning)
@@ -49,6 +67,8 @@ class FinalRender:
                 self.report = self.live.sync(depsgraph)
             except ExportError as error:
                 self.error = str(error)
+        if self.live.light_distance is not None:
+            _JOB_LIGHT.setdefault(name, self.live.light_distance)
         self.notes = [str(w.message) for w in caught if issubclass(w.category, ExportWarning)]
 
     def render(self, engine, depsgraph) -> None:

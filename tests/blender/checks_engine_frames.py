@@ -10,6 +10,8 @@ import harness
 import numpy as np
 from checks_engine import ENGINE, _last_final, compare_images, reference, use_engine
 
+from bvhlab.blender import export_scene
+
 
 def _exr_rgba(path) -> np.ndarray:
     channels = exr.read_exr(path)
@@ -50,13 +52,54 @@ def check_animation_frames(tmp_dir) -> None:
     totals = record["totals"]
     assert (totals.full_syncs, totals.objects_read, totals.objects_moved) == (1, 3, 4), totals
     assert record["tree"] == "refit", record["tree"]
-    centroids = []
+    centroids, first_light = [], None
     for frame, path in zip((1, 2, 3), files):
         scene.frame_set(frame)
         image = _exr_rgba(path)
-        compare_images(image, reference(scene, samples_per_axis=1)[0], "cpu")
+        exported = _with_light_of(export_scene(bpy.context), first_light)  # an animation keeps frame 1's
+        first_light = first_light or exported.light
+        compare_images(image, reference(scene, samples_per_axis=1, exported=exported)[0], "cpu")
         centroids.append(_red_centroid_x(image))
     assert centroids[0] + 10 < centroids[1] < centroids[2] - 10, f"the ball does not move right: {centroids}"
+
+
+def _with_light_of(exported, light):
+    """`exported` lit by `light` (an earlier frame's), where given."""
+    if light is not None:
+        exported.light = light
+    return exported
+
+
+def check_animation_light_is_steady(tmp_dir) -> None:
+    """A static light over a static floor while a ball rolls away, frames 1-3, Persistent Data
+    off and on: the floor's pixels are the same on every frame (the light's intensity was measured
+    again each frame from the distances to the geometry: 0.416 → 0.121 → 0.087 at a floor pixel),
+    and a still F12 afterwards measures it again for the scene as it is then."""
+    scene = harness.empty_scene((48, 36))
+    harness.add_camera((0, -10, 6), (0, 0, 0), lens=30)
+    harness.add_point_light((0, 0, 5))
+    floor = harness.add_box("Floor", (0, 0, -0.05), scale=(12, 12, 0.1))
+    ball = harness.add_box("Ball", (3, 3, 0.5))
+    ball.keyframe_insert("location", frame=1)
+    ball.location = (3, 80, 0.5)
+    ball.keyframe_insert("location", frame=3)
+    scene.frame_start, scene.frame_end = 1, 3
+    use_engine(scene, backend="cpu", render_supersampling=1)
+    floor_pixel = (30, 10)  # row, column: on the floor, away from the ball's path
+    for persistent in (False, True):
+        scene.render.use_persistent_data = persistent
+        _exr_output(scene, tmp_dir / f"steady{int(persistent)}_")
+        assert bpy.ops.render.render(animation=True) == {"FINISHED"}
+        images = [_exr_rgba(p) for p in sorted(tmp_dir.glob(f"steady{int(persistent)}_*.exr"))]
+        assert len(images) == 3
+        values = [float(image[floor_pixel][0]) for image in images]
+        assert values[0] > 0.05 and values[0] == values[1] == values[2], (persistent, values)
+    scene.frame_set(3)
+    floor.scale = (40, 40, 0.1)  # the scene changed: a still is lit by it as it is now
+    still = reference(scene, samples_per_axis=1)[1]
+    assert bpy.ops.render.render() == {"FINISHED"}
+    got = _last_final(scene)["scene"].light.intensity
+    assert got == still.light.intensity, (got, still.light.intensity)
 
 
 def check_command_line_frames(tmp_dir) -> None:
@@ -92,11 +135,13 @@ def check_command_line_frames(tmp_dir) -> None:
     assert files == ["cli_0001.exr", "cli_0002.exr", "cli_0003.exr"], (files, done.stdout[-2000:])
     scene = harness.open_scene("moving_ball")
     use_engine(scene, backend="auto", render_supersampling=1)
+    first_light = None
     for frame in (1, 2, 3):
         scene.frame_set(frame)
-        compare_images(
-            _exr_rgba(tmp_dir / f"cli_{frame:04d}.exr"), reference(scene, samples_per_axis=1)[0], _auto_backend()
-        )
+        exported = _with_light_of(export_scene(bpy.context), first_light)  # -a keeps frame 1's light
+        first_light = first_light or exported.light
+        oracle = reference(scene, samples_per_axis=1, exported=exported)[0]
+        compare_images(_exr_rgba(tmp_dir / f"cli_{frame:04d}.exr"), oracle, _auto_backend())
 
 
 #: Run by the child Blender before it renders: lossless EXR output (the file's own settings are PNG).

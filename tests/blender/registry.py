@@ -152,6 +152,7 @@ def _engine() -> Iterator[Check]:
         engine.check_depth_is_camera_z,
         engine.check_rerender_reads_only_what_changed,
         frames.check_animation_frames,
+        frames.check_animation_light_is_steady,
         engine.check_counter_passes_are_the_cpu_counters,
     ):
         yield Check("engine", check.__name__.removeprefix("check_"), check, folder=True)

@@ -9,7 +9,10 @@ delivers an irradiance of about P / (4π d²) at distance d, and a Lambertian su
 
 (d at least 1e-3): a typical surface of the scene is lit about as brightly as in Blender. The
 median keeps one object next to the light from deciding it. Blender's default 1000 W light,
-7.4 m from the default cube, becomes ≈ 0.46.
+7.4 m from the default cube, becomes ≈ 0.46. d is measured once and kept by whoever renders
+frame after frame (LiveScene.light_distance; an animation's frames in the add-on): measured every
+frame, a ball rolling away from a static light darkened the static floor under it 0.416 → 0.084
+over four frames.
 """
 
 from __future__ import annotations
@@ -24,10 +27,13 @@ from .errors import ExportWarning
 from .scope import visibility
 
 
-def gather_light(depsgraph, view_layer, primitive_points: np.ndarray) -> Light | None:
+def gather_light(
+    depsgraph, view_layer, primitive_points: np.ndarray, distance: float | None = None
+) -> tuple[Light, float] | None:
     """The first visible point light (scope.visibility) by name (another kind of light stands in,
-    at its position, with an ExportWarning); None when the scene has no visible light. `primitive_points` (N,3),
-    a sample of primitive centres, calibrates the intensity."""
+    at its position, with an ExportWarning), and the distance d its intensity is calibrated by;
+    None when the scene has no visible light. d is `distance` where given, else the median
+    distance to `primitive_points` (N,3), a sample of primitive centres."""
     visible = visibility(depsgraph)
     lights = sorted(
         (obj for obj in depsgraph.objects if obj.type == "LIGHT" and visible(obj.original, view_layer)),
@@ -44,8 +50,12 @@ def gather_light(depsgraph, view_layer, primitive_points: np.ndarray) -> Light |
             stacklevel=2,
         )
     position = np.array(light.matrix_world.translation, np.float64)
-    distance = float(np.median(np.linalg.norm(primitive_points - position, axis=1)))
-    return Light(tuple(position), tuple(light.data.color), intensity_from_watts(light.data.energy, distance))
+    if distance is None:
+        distance = (
+            float(np.median(np.linalg.norm(primitive_points - position, axis=1))) if len(primitive_points) else 1.0
+        )
+    light_ = Light(tuple(position), tuple(light.data.color), intensity_from_watts(light.data.energy, distance))
+    return light_, distance
 
 
 def intensity_from_watts(watts: float, distance: float) -> float:

@@ -74,6 +74,10 @@ class LiveScene:
     def __init__(self, scope: str = "visible", *, require_camera: bool = True, instancing: bool = True):
         self.scope, self.require_camera, self.instancing = scope, require_camera, instancing
         self.scene: Scene | None = None
+        #: The distance the light's intensity is calibrated by (light.py): measured at the first sync
+        #: with a light, then kept, so a static light lights static geometry alike on every frame;
+        #: None measures it again at the next sync.
+        self.light_distance: float | None = None
         self.totals = SyncTotals()
         self._items: dict[tuple, Item] = {}
         self._by_data: dict[int, MeshData] = {}  # mesh data address → mesh, as last read
@@ -100,7 +104,10 @@ class LiveScene:
         arrays = self._arrays(items, world, layout, shared, table, report)
         report.materials_read = table.reads
         scene = self._make_scene(arrays, table, blender_scene, depsgraph, report)
-        light = gather_light(depsgraph, view_layer, primitive_sample(items, world, scene.spheres))
+        found = gather_light(depsgraph, view_layer, primitive_sample(items, world, scene.spheres), self.light_distance)
+        light = None
+        if found is not None:
+            light, self.light_distance = found
         if light is None:
             warnings.warn(
                 f"scene '{blender_scene.name}' has no visible light; using a default point light near the camera",
