@@ -50,11 +50,12 @@ def run_experiment(
     frames: range,
     policies=UPDATE_POLICIES,
     *,
-    trace: Callable[[np.ndarray, object], float] | None = None,
+    trace: Callable[[Scene, object], float] | None = None,
     progress: Callable[[float], object] | None = None,
 ) -> list[FrameRow]:
     """`frame_geometry(k)` gives frame k's triangles (the same count every frame), or its Scene;
-    `trace(tris, bvh)` (optional) renders a frame and returns its trace ms. Every policy builds on
+    `trace(geometry, bvh)` (optional: a Scene of the frame's triangles and spheres) renders a frame
+    and returns its trace ms. Every policy builds on
     the first frame (one thread, the default settings), then updates its own tree at each next
     frame; a fresh build per frame gives the SAH cost the policies are compared with. An
     instanced Scene's policies update trees over its flattened triangles, and a TWO_LEVEL row per
@@ -68,7 +69,7 @@ def run_experiment(
         raise ValueError(f"the experiment needs at least two frames, got {len(frames)}")
     rows: list[FrameRow] = []
     first_scene = as_scene(frame_geometry(frames[0]))
-    first = _flat_triangles(first_scene)
+    first = _flat(first_scene)
     two_level = _TwoLevel(first_scene) if first_scene.is_instanced else None
 
     start = _flat_tree(first)
@@ -85,16 +86,21 @@ def run_experiment(
     done = 0
     for k in frames[1:]:
         scene = as_scene(frame_geometry(k))
-        tris = _flat_triangles(scene)
-        if len(tris) != len(first):
-            raise ValueError(
-                f"frame {k} has {len(tris)} triangles, frame {frames[0]} {len(first)}: an update needs the same count"
-            )
-        fresh = float(_flat_tree(tris).stats["sah_cost"])  # the same settings as every policy's tree
+        flat = _flat(scene)
+        for kind, now, then in (
+            ("triangles", flat.triangles, first.triangles),
+            ("spheres", flat.spheres, first.spheres),
+        ):
+            if len(now) != len(then):
+                raise ValueError(
+                    f"frame {k} has {len(now)} {kind}, frame {frames[0]} {len(then)}: an update needs the same count"
+                )
+        fresh = float(_flat_tree(flat).stats["sah_cost"])  # the same settings as every policy's tree
+        spheres = flat.spheres if len(flat.spheres) else None
         for p in policies:
             tree = trees[p]
-            s = tree.update(tris, policy=p)  # rebuilds with the tree's settings (1 thread)
-            t = trace(tris, tree) if trace else math.nan
+            s = tree.update(flat.triangles, spheres, policy=p)  # rebuilds with the tree's settings (1 thread)
+            t = trace(flat, tree) if trace else math.nan
             rows.append(FrameRow(k, p, s.policy, s.ms, s.sah_cost, fresh, s.subtrees_rebuilt, s.primitives_rebuilt, t))
             done += 1
             if progress is not None and progress(done / steps) is False:
@@ -108,12 +114,16 @@ def as_scene(geometry) -> Scene:
     return geometry if isinstance(geometry, Scene) else Scene(triangles=geometry)
 
 
-def _flat_triangles(scene: Scene) -> np.ndarray:
-    return scene.flattened().triangles if scene.is_instanced else scene.triangles
+def _flat(scene: Scene) -> Scene:
+    """The frame's geometry as one mesh: its triangles (an instanced scene's flattened) and its
+    analytic spheres (they move too: the experiment read triangles alone, a rising sphere left
+    every row at a SAH ratio of 1 and the two-level tree's hits where it started)."""
+    flat = scene.flattened() if scene.is_instanced else scene
+    return Scene(triangles=flat.triangles, spheres=flat.spheres)
 
 
-def _flat_tree(tris: np.ndarray) -> Bvh:
-    tree = build(Scene(triangles=tris), threads=1)
+def _flat_tree(geometry: Scene) -> Bvh:
+    tree = build(geometry, threads=1)
     assert isinstance(tree, Bvh)  # one mesh, no instances
     return tree
 
@@ -126,6 +136,12 @@ class _TwoLevel:
         tree = build(scene, threads=1)
         assert isinstance(tree, InstancedBvh)
         self.tree, self.meshes = tree, [scene.mesh_triangles(k) for k in range(scene.mesh_count)]
+        self.spheres = scene.spheres  # mesh 0's
+
+    def _same(self, k: int, scene: Scene) -> bool:
+        """Whether mesh k is as it was (mesh 0: its spheres too)."""
+        same = np.array_equal(scene.mesh_triangles(k), self.meshes[k])
+        return same and (k != 0 or np.array_equal(scene.spheres, self.spheres))
 
     def first_row(self, frame: int) -> FrameRow:
         s = self.tree.stats
@@ -136,11 +152,12 @@ class _TwoLevel:
         if scene.mesh_count != len(self.meshes):
             raise ValueError(f"frame {frame} has {scene.mesh_count} meshes, the first frame {len(self.meshes)}")
         # which meshes deformed: the exporter knows (LiveScene's SyncReport); not part of the time
-        changed = [k for k in range(scene.mesh_count) if not np.array_equal(scene.mesh_triangles(k), self.meshes[k])]
+        changed = [k for k in range(scene.mesh_count) if not self._same(k, scene)]
         start = time.perf_counter()
         for k in changed:
             self.meshes[k] = scene.mesh_triangles(k)
-            self.tree.meshes[k].update(self.meshes[k], scene.spheres if k == 0 else None)
+            self.spheres = scene.spheres
+            self.tree.meshes[k].update(self.meshes[k], scene.spheres if k == 0 else None)  # place() follows it
         self.tree.place(*scene.instances())
         ms = (time.perf_counter() - start) * 1e3
         ran = "tlas" + (f"+{len(changed)} meshes" if changed else "")

@@ -120,8 +120,9 @@ def run(args) -> int:
         eye = (centre[0] - 0.2 * extent, centre[1] - 1.1 * extent, centre[2] + 0.8 * extent)
         camera = Camera(eye, centre, fov_y=45)
 
-        def trace(tris, bvh) -> float:
-            _, t = render(Scene(triangles=tris, camera=camera), bvh, args.width, args.height, backend=args.backend)
+        def trace(geometry, bvh) -> float:
+            scene = Scene(triangles=geometry.triangles, spheres=geometry.spheres, camera=camera)
+            _, t = render(scene, bvh, args.width, args.height, backend=args.backend)
             return float(t["trace_ms"])
 
     with ProgressBar(f"{args.animation}, {len(frames)} frames × {len(args.policy)} policies") as bar:
