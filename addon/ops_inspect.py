@@ -47,14 +47,39 @@ def node_view(built, picked):
     return data, picked.node, lo, hi, f"Instance {picked.instance} · BLAS {what} {picked.node}"
 
 
+def whole_tree_figures(built, picked) -> dict | None:
+    """The picked node's figures in the whole tree (depth, primitives under it, subtree SAH, its
+    share of the tree's SAH cost `of`): a flat tree's own; a two-level tree's as the Cost panel and
+    `bvhlab inspect --node` give them (TwoLevelNodeData.figures: a mesh tree's node weighed by its
+    instance, a TLAS node with its instances' trees; the panel showed the TLAS's or the mesh tree's
+    own, every instance of a mesh at the same share), once the tree is analysed (None before)."""
+    if not overlay.is_two_level(built):
+        data = built.bvh.node_data()
+        n = picked
+        return {
+            "depth": int(data.depth[n]),
+            "prim_count": int(data.prim_count[n]),
+            "subtree_sah": float(data.subtree_sah[n]),
+            "sah_share": float(data.sah_share[n]),
+            "of": data.sah_cost,
+        }
+    analysed = built.bvh.cached_node_data()
+    if analysed is None:
+        return None
+    return {**analysed.figures(picked), "of": analysed.sah_cost}
+
+
 def _report_pick(operator, built, picked) -> None:
     data, n, _, _, name = node_view(built, picked)
-    under = "instances" if getattr(picked, "level", None) == "tlas" else "primitives"
-    operator.report(
-        {"INFO"},
-        f"Picked {name} (depth {int(data.depth[n])}, {int(data.prim_count[n])} {under}, "
-        f"{100 * data.sah_share[n]:.2f}% of the SAH cost)",
-    )
+    whole = whole_tree_figures(built, picked)
+    if whole is None:  # a two-level tree not analysed: its own tree's figures, said so
+        where = "the TLAS" if picked.level == "tlas" else "its mesh tree"
+        figures = f"depth {int(data.depth[n])} in {where}, {int(data.prim_count[n])} primitives"
+    else:
+        figures = (
+            f"depth {whole['depth']}, {whole['prim_count']} primitives, {100 * whole['sah_share']:.2f}% of the SAH cost"
+        )
+    operator.report({"INFO"}, f"Picked {name} ({figures})")
 
 
 def pick_ray(operator, context, origin, direction) -> set[str]:
@@ -248,15 +273,22 @@ def draw_inspect_panel(layout, scene) -> None:
     data, node, lo, hi, name = node_view(built, picked)
     leaf = data.left[node] < 0
     col = layout.column(align=True)
-    if overlay.is_two_level(built):  # two short lines: the sidebar is narrow
+    whole = whole_tree_figures(built, picked)
+    if overlay.is_two_level(built):  # short lines: the sidebar is narrow
         col.label(text=name)
-        col.label(text=f"Depth {int(data.depth[node])} in {'the TLAS' if picked.level == 'tlas' else 'its mesh tree'}")
+        where = "the TLAS" if picked.level == "tlas" else "its mesh tree"
+        depth = f"Depth {int(data.depth[node])} in {where}"
+        col.label(text=depth if whole is None else f"{depth}, {whole['depth']} in the tree")
     else:
         col.label(text=f"{name} · depth {int(data.depth[node])}")
-    under = "Instances" if overlay.is_two_level(built) and picked.level == "tlas" else "Primitives"
-    col.label(text=f"{under} under it: {int(data.prim_count[node])}")
-    share = f"{100 * data.sah_share[node]:.2f}% of {data.sah_cost:.4g}"
-    col.label(text=f"Subtree SAH: {data.subtree_sah[node]:.4g} ({share})")
+    if whole is None:  # a two-level tree not analysed yet: its own tree's figures only
+        under = "Instances" if picked.level == "tlas" else "Primitives"
+        col.label(text=f"{under} under it: {int(data.prim_count[node])}")
+        col.label(text="Analyse Tree for its share of the SAH", icon="INFO")
+    else:
+        col.label(text=f"Primitives under it: {whole['prim_count']}")
+        share = f"{100 * whole['sah_share']:.2f}% of {whole['of']:.4g}"
+        col.label(text=f"Subtree SAH: {whole['subtree_sah']:.4g} ({share})")
     col.label(text=f"Own SAH term: {data.sah_term[node]:.4g}")
     if not leaf:
         col.label(text=f"Child overlap: {data.child_overlap[node]:.3f}")

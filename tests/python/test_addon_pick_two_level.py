@@ -166,6 +166,14 @@ def test_cost_panel_and_measures_of_the_whole_tree(built):
     _, node, instance = next(r for r in rows if r[2] >= 0)
     assert bpy.ops.bvhlab.pick_node(node=node, instance=instance) == {"FINISHED"}
     assert state.picked_node(scene) == TreeNode("blas", node, instance)
+    # the Inspect panel and Pick's report give the whole tree's figures, as the Cost panel's row
+    # (they gave the mesh tree's own: depth 0 of 19.04 for a row of 12.05%)
+    _, inspect = built[1], built[2]
+    picked = TreeNode("blas", node, instance)
+    whole = inspect.whole_tree_figures(tree, picked)
+    assert whole["sah_share"] > 0 and whole["sah_share"] == pytest.approx(data.figures(picked)["sah_share"])
+    assert whole["depth"] == data.depth(picked) == depth and whole["of"] == pytest.approx(data.sah_cost)
+    assert whole["subtree_sah"] == pytest.approx(dict(expected)[picked])  # the row's cost
     with pytest.raises(RuntimeError, match="does not exist"):
         bpy.ops.bvhlab.pick_node(node=10**6, instance=instance)
     with pytest.raises(RuntimeError, match="instance 99 does not exist"):
