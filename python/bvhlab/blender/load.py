@@ -28,4 +28,5 @@ def load_blend(path: Path) -> Scene:
     from .export import export_scene
 
     bpy.ops.wm.open_mainfile(filepath=str(path.resolve()), load_ui=False)
-    return export_scene(bpy.context, scope="visible")
+    # a file without a camera is framed by the default camera, as a mesh file is (design.md, Defaults)
+    return export_scene(bpy.context, scope="visible", require_camera=False)

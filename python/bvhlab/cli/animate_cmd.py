@@ -75,7 +75,7 @@ def frame_range(text: str) -> range:
 
 
 def animation_spec(text: str) -> str:
-    if text in ANIMATIONS or (text.endswith(".blend") and Path(text).is_file()):
+    if text in ANIMATIONS or (Path(text).suffix.lower() == ".blend" and Path(text).is_file()):
         return text
     raise argparse.ArgumentTypeError(f"'{text}' is neither one of {', '.join(ANIMATIONS)} nor an existing .blend file")
 
@@ -90,7 +90,7 @@ def policy_list(text: str) -> tuple[str, ...]:
 
 def _frames_of(args) -> tuple[Callable[[int], np.ndarray | Scene], range]:
     """Frame k's geometry, and the frames to run."""
-    if args.animation.endswith(".blend"):
+    if Path(args.animation).suffix.lower() == ".blend":
         from ..blender.animation import open_animation
 
         scene_at, frames = open_animation(Path(args.animation))

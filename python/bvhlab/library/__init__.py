@@ -101,9 +101,9 @@ def load_scene(spec: str) -> tuple[Scene, str]:
     path = Path(spec)
     if is_mesh_file(spec):
         return load_mesh_file(path), path.stem
-    if spec.endswith(".npz"):
+    if path.suffix.lower() == ".npz":  # any case, as the mesh files' (S.BLEND: "no scene 'S.BLEND'")
         return Scene.load(path), path.stem
-    if spec.endswith(".blend"):
+    if path.suffix.lower() == ".blend":
         return _load_blend(path), path.stem
     generated = _generated()
     if spec in generated:
@@ -121,7 +121,7 @@ def load_scene(spec: str) -> tuple[Scene, str]:
 def scene_file(spec: str) -> Path | None:
     """The file a scene spec reads (a path given, or a bundled name's file); None for `gen:` names
     and for names that do not exist."""
-    if spec.endswith((".npz", ".blend")) or is_mesh_file(spec):
+    if Path(spec).suffix.lower() in (".npz", ".blend") or is_mesh_file(spec):
         return Path(spec)
     if spec == "sponza":
         return _sponza_path()
