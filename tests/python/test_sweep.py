@@ -217,3 +217,23 @@ def test_cli_sends_the_cells_to_a_running_scheduler(tmp_path, models, capsys):
     assert "8 cells (8 run now, 0 stored before), 4 failed" in capsys.readouterr().out
     rows = pq.read_table(out / PARQUET).to_pylist()
     assert {r["worker"] for r in rows} <= workers
+
+
+def test_a_gltf_buffer_is_part_of_the_scene_and_two_files_of_one_name_are_two_scenes(tmp_path):
+    """A .gltf's geometry is in its .bin: a changed .bin is a new cell (the key hashed the .gltf
+    alone: the old SAH came back from the store, and two .gltf files of one JSON were one scene);
+    two meshes named alike in two folders are two scenes in the table, the plots and the summary
+    (they were drawn as one 'bunny' panel with one Pareto front)."""
+    for folder, extents in (("a", (1, 2, 3)), ("b", (3, 1, 1))):
+        (tmp_path / folder).mkdir()
+        trimesh.creation.box(extents=extents).export(tmp_path / folder / "model.gltf")
+    spec = read_spec(_write_spec(tmp_path, ["a/model.gltf", "b/model.gltf"], grid="method = ['sah']"))
+    cells = plan_cells(spec)
+    assert len({c.key for c in cells}) == 2, "the same JSON, other buffers: two scenes"
+    result = run_sweep(spec, tmp_path / "out", plot=False)
+    assert sorted(r["scene"] for r in result.rows) == ["a/model.gltf", "b/model.gltf"]
+    trimesh.creation.box(extents=(5, 5, 1)).export(tmp_path / "b" / "model.gltf")  # rewrites its .bin too
+    again = run_sweep(spec, tmp_path / "out", plot=False)
+    assert again.ran == 1
+    fresh = build(load_scene(str(tmp_path / "b" / "model.gltf"))[0], method="sah").stats["sah_cost"]
+    assert [r["sah_cost"] for r in again.rows if r["scene"] == "b/model.gltf"] == [pytest.approx(fresh)]

@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import struct
 from pathlib import Path
+from urllib.parse import unquote
 
 from .._npz import SceneFileError
 
@@ -65,3 +66,18 @@ def _list(doc: dict, key: str) -> list[dict]:
 
 def _accessor(accessors: list[dict], index) -> dict:
     return accessors[index] if isinstance(index, int) and 0 <= index < len(accessors) else {}
+
+
+def gltf_buffers(path: Path) -> list[Path]:
+    """The files a .gltf's buffers are in (not data: URIs), in its order; [] for anything else or a
+    file that cannot be read (the loader says why). What a cache of its geometry must hash."""
+    if path.suffix.lower() != ".gltf":
+        return []
+    try:
+        doc = json.loads(path.read_bytes().decode("utf-8-sig"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+        return []
+    if not isinstance(doc, dict):
+        return []
+    uris = [b.get("uri") for b in _list(doc, "buffers")]
+    return [path.parent / unquote(u) for u in uris if isinstance(u, str) and not u.startswith("data:")]

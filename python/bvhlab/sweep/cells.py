@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..library import load_scene, scene_file
+from ..library.gltf_checks import gltf_buffers
 from .spec import DEFAULT_REPEATS, Setting, SweepSpec
 
 #: Bumped when what a cell measures changes, so old results are not mistaken for new ones.
@@ -27,6 +28,7 @@ class Cell:
     rays: int
     ray_seed: int
     repeats: int = DEFAULT_REPEATS
+    name: str = ""  # the scene's name in tables and plots (scene_names); "" : its file's stem
 
     @property
     def key(self) -> str:
@@ -44,7 +46,7 @@ class Cell:
         """What names the cell in the table: key, scene, settings as columns."""
         return {
             "key": self.key,
-            "scene": scene_name(self.scene),
+            "scene": self.name or scene_name(self.scene),
             "source": self.scene,
             "scene_hash": self.scene_hash[:16],
             **self.setting.columns(),
@@ -58,10 +60,11 @@ def plan_cells(spec: SweepSpec) -> list[Cell]:
     """Every cell of the spec, scene by scene, in the grid's order; a scene whose content equals an
     earlier one's (a copied file) is the same cells, measured once."""
     cells: dict[str, Cell] = {}
+    names = scene_names(spec.scenes)
     for scene in spec.scenes:
         content = scene_hash(scene)
         for setting in spec.settings:
-            cell = Cell(scene, content, setting, spec.rays, spec.ray_seed, spec.repeats)
+            cell = Cell(scene, content, setting, spec.rays, spec.ray_seed, spec.repeats, names[scene])
             cells.setdefault(cell.key, cell)
     return list(cells.values())
 
@@ -70,12 +73,37 @@ def scene_name(spec: str) -> str:
     return spec.split(":", 1)[1] if spec.startswith("gen:") else Path(spec).stem
 
 
+def scene_names(specs) -> dict[str, str]:
+    """A name for each scene spec, unique among `specs`: its stem (scene_name), or where two share
+    one (a/bunny.obj, b/bunny.stl) as much of its path as tells them apart (the plots and the
+    summary group by name: two meshes of one stem were drawn as one scene)."""
+    names = {spec: scene_name(spec) for spec in specs}
+    for parts in (1, 2, None):
+        counts: dict[str, int] = {}
+        for name in names.values():
+            counts[name] = counts.get(name, 0) + 1
+        clashing = [spec for spec, name in names.items() if counts[name] > 1]
+        if not clashing:
+            break
+        for spec in clashing:
+            path = Path(spec).parts
+            names[spec] = spec if parts is None else "/".join(path[-parts:])
+    return names
+
+
 def scene_hash(spec: str) -> str:
     """sha256 of the file behind `spec` (files, bundled names), or of a generated scene's arrays;
     "" when there is nothing to read (a missing file, an unknown name: the cell records the error)."""
     path = scene_file(spec)
     if path is not None:
-        return _file_hash(path) if path.is_file() else ""
+        if not path.is_file():
+            return ""
+        files = [path, *gltf_buffers(path)]  # a glTF's .bin is its geometry too
+        return (
+            hashlib.sha256("".join(_file_hash(f) for f in files).encode()).hexdigest()
+            if len(files) > 1
+            else _file_hash(path)
+        )
     if not spec.startswith("gen:"):
         return ""
     try:
