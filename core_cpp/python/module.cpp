@@ -148,6 +148,9 @@ void bind_bvh(nb::module_& m) {
         .def_prop_ro("node_count", [](const PyBvh& b) { return b.current()->bvh.nodes.size(); })
         .def_prop_ro("build_ms", [](const PyBvh& b) { return b.current()->bvh.build_ms; })
         .def_prop_ro("revision", [](const PyBvh& b) { return b.current()->revision; })
+        .def(
+            "fork", [](const PyBvh& b) { return new PyBvh(b.current()); }, nb::rv_policy::take_ownership,
+            "a new tree at this one's current version (shared, not copied): updates of either leave the other")
         .def_prop_ro("geometry_fingerprint", [](const PyBvh& b) { return b.current()->bvh.fingerprint(); })
         .def("nodes_bytes",
              [](const PyBvh& b) {

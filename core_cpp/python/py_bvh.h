@@ -99,6 +99,8 @@ using TreePtr = std::shared_ptr<const TreeVersion>;
 class PyBvh {
 public:
     explicit PyBvh(Bvh tree) : current_(std::make_shared<const TreeVersion>(std::move(tree), 0)) {}
+    /// A tree whose current version is `version` (shared, immutable): fork's copy-on-write.
+    explicit PyBvh(TreePtr version) : current_(std::move(version)) {}
 
     TreePtr current() const {
         std::lock_guard<std::mutex> lock(mutex_);

@@ -36,7 +36,7 @@ class InstancedBvh:
         # in several steps
         self._state = _make_state(tuple(meshes), mesh_of, transforms, config.threads)
         self._frozen = False
-        self._lock = threading.Lock()  # one TLAS made again at a time where a mesh was updated
+        self._lock = threading.RLock()  # writers (place, update_mesh, a TLAS made again) one at a time
         self._stats: tuple | None = None  # (what they were made of, stats)
         self._tlas: tuple | None = None  # (the core TLAS, it as a Bvh)
         self._tlas_data: tuple | None = None  # (the TLAS it was made of, NodeData, leaf_first, refs)
@@ -51,12 +51,13 @@ class InstancedBvh:
 
     def snapshot(self) -> InstancedBvh:
         """This tree as it is now, for reading in several steps (figures, boxes, picks) while
-        another thread may call `place` or `update_mesh` on it: its own TLAS and meshes stay (a
-        mesh tree updated in place is the one exception: its object is shared)."""
+        another thread may call `place` or `update_mesh` on it: its own TLAS and meshes stay
+        (update_mesh makes a new tree object for the mesh; a mesh tree updated by its caller
+        through `meshes[k]` is the one exception: that object is shared)."""
         state = self._current()
         view = object.__new__(InstancedBvh)
         view.__dict__.update(self.__dict__)
-        view._state, view._frozen, view._lock = state, True, threading.Lock()
+        view._state, view._frozen, view._lock = state, True, threading.RLock()
         return view
 
     def _current(self) -> tuple:
@@ -164,10 +165,13 @@ class InstancedBvh:
 
     def cached_node_data(self) -> TwoLevelNodeData | None:
         """What `node_data()` made for the current TLAS and meshes, or None (never computes)."""
+        state = self._state  # as it is: a mesh updated through meshes[k] is not analysed here
+        if not all(m.revision == r for m, r in zip(state[3], state[4])):
+            return None
         analysed = self._analysed
-        if analysed is not None and analysed[0] == self._analysis_key():
+        if analysed is not None and analysed[0] == _version_key(state[0], state[3]):
             return analysed[1]
-        if all(m.cached_node_data() is not None for m in self.meshes):
+        if all(m.cached_node_data() is not None for m in state[3]):
             return self.node_data()  # only the joining arrays are left to make (milliseconds)
         return None
 
@@ -186,7 +190,7 @@ class InstancedBvh:
     def place(self, mesh_of: np.ndarray, transforms: np.ndarray) -> None:
         """Move the instances (or change them): a new TLAS over the same meshes' trees."""
         self._writable()
-        with self._lock:
+        with self._lock:  # after a writer before it (update_mesh's new mesh is kept)
             self._state = _make_state(self._state[3], mesh_of, transforms, self.config.threads)
 
     def _writable(self) -> None:
@@ -201,7 +205,11 @@ class InstancedBvh:
         trees are not touched. Then the TLAS is made again over the same instances (their world
         boxes follow the mesh). Returns what ran on mesh k."""
         self._writable()
-        meshes = self._current()[3]
+        with self._lock:  # writers one at a time: a second update_mesh kept the first one's mesh out
+            return self._update_mesh(k, triangles, spheres, config, **changes)
+
+    def _update_mesh(self, k, triangles, spheres, config, **changes) -> UpdateStats:
+        meshes = self._state[3]
         k = _checks.integer("mesh", k, 0, len(meshes) - 1)
         triangles = _checks.float32_array("triangles", triangles, (3, 3))
         old = meshes[k].stats
@@ -213,14 +221,17 @@ class InstancedBvh:
             spheres = _checks.float32_array("spheres", spheres, (4,))
         n_spheres = 0 if spheres is None else len(spheres)
         if len(triangles) == old["triangles"] and n_spheres == old["spheres"]:
-            stats = meshes[k].update(triangles, spheres, config, **changes)
+            # a new tree object from the current version (copy-on-write): a snapshot taken before
+            # keeps the mesh tree its TLAS was made over
+            tree = Bvh(meshes[k]._core.fork(), meshes[k].config)
+            stats = tree.update(triangles, spheres, config, **changes)
         else:  # another count: a new tree for this mesh alone
             tree = Bvh(_core.build(triangles, spheres, self.config.core(), None), self.config)
             s = tree.stats
             stats = UpdateStats("rebuild", s["build_ms"], s["sah_cost"], 1, s["primitives"])
-            meshes = meshes[:k] + (tree,) + meshes[k + 1 :]
-        with self._lock:  # the new mesh and the TLAS over it in one swap
-            self._state = _make_state(meshes, self._state[1], self._state[2], self.config.threads)
+        meshes = meshes[:k] + (tree,) + meshes[k + 1 :]
+        # the new mesh and the TLAS over it in one swap
+        self._state = _make_state(meshes, self._state[1], self._state[2], self.config.threads)
         return stats
 
     def world_boxes(self) -> tuple[np.ndarray, np.ndarray]:

@@ -359,3 +359,31 @@ def test_readers_see_one_tlas_while_another_thread_places(instanced_scene):
         writer.join()
     assert not errors, errors[:3]
     assert len(seen) == 2, "the writer placed both while the readers read"
+
+
+def test_update_mesh_on_two_threads_keeps_both_and_a_snapshot_keeps_its_meshes(instanced_scene):
+    """Two update_mesh calls on two threads: each mesh's new tree stays (the second swap was made
+    from the meshes before the first: one new tree lost); a snapshot taken before keeps the mesh
+    trees its TLAS was made over (update_mesh updated the shared tree object in place: the
+    snapshot's TLAS and its mesh's boxes parted)."""
+    import threading
+
+    tree = bvhlab.build(instanced_scene)
+    before = tree.snapshot()
+    old_box = before.meshes[1].nodes["hi"][0].copy()
+    cloud, knot = instanced_scene.triangles, instanced_scene.meshes[0]
+    for _ in range(5):
+        jobs = [
+            threading.Thread(target=tree.update_mesh, args=(0, np.ascontiguousarray(cloud[:100]))),
+            threading.Thread(target=tree.update_mesh, args=(1, knot * np.float32(3))),
+        ]
+        for job in jobs:
+            job.start()
+        for job in jobs:
+            job.join()
+        assert tree.meshes[0].stats["triangles"] == 100 and tree.meshes[1].stats["sah_cost"] > 0
+        assert np.allclose(tree.meshes[1].nodes["hi"][0], 3 * old_box, rtol=1e-5)
+        tree = bvhlab.build(instanced_scene)
+    np.testing.assert_array_equal(before.meshes[1].nodes["hi"][0], old_box)
+    lo, hi = before.world_boxes()
+    assert np.all(hi <= bvhlab.build(instanced_scene).world_boxes()[1] + 1e-6)
