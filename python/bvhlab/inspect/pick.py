@@ -89,7 +89,10 @@ def _pick_ray(origin, direction) -> tuple[np.ndarray, np.ndarray]:
     direction = np.asarray(direction, np.float64).reshape(3)
     if not (np.all(np.isfinite(origin)) and np.all(np.isfinite(direction)) and np.any(direction != 0)):
         raise ValueError(f"a pick ray needs a finite origin and a finite non-zero direction, got {origin}, {direction}")
-    return origin, direction
+    # the float32 ray the trace walks, for the boxes' entries too: a float64 origin's entries and
+    # the float32 trace's hit parted by a float32 step of the origin (a wall 0.01 away from x =
+    # 1,000 was missed in 99 of 200 picks)
+    return origin.astype(np.float32).astype(np.float64), direction.astype(np.float32).astype(np.float64)
 
 
 @dataclass(frozen=True)
