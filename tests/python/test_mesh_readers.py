@@ -202,3 +202,66 @@ def test_gltf_checks_leave_good_files_alone(tmp_path):
 def test_gltf_that_is_not_json_says_so(tmp_path, text):
     with pytest.raises(SceneFileError, match="is not glTF: its JSON cannot be read"):
         load(tmp_path, "model.gltf", text)
+
+
+def test_a_polygon_bridged_to_its_hole_keeps_the_hole(tmp_path):
+    """A square with a square hole, joined by a bridge whose corners repeat (a "keyhole"): area
+    16 - 4 = 12. Ear clipping refused ears at the repeated corners and fell back to a fan (24)."""
+    outer, inner = [(0, 0), (4, 0), (4, 4), (0, 4)], [(1, 1), (1, 3), (3, 3), (3, 1)]
+    ring = outer + [outer[0], inner[0]] + inner[1:] + [inner[0]]
+    vertices = "".join(f"v {x} {y} 0\n" for x, y in ring)
+    t = load(tmp_path, "keyhole.obj", vertices + "f " + " ".join(str(i + 1) for i in range(len(ring))) + "\n")
+    assert area(t) == pytest.approx(12.0)
+
+
+@pytest.mark.parametrize(
+    "text, triangles",
+    [
+        ("f 1 2 3 # note\u2028f 2 4 3\n", 1),  # a line separator inside a comment: not a line end
+        ("f 1 2 3 # note\u0085f 2 4 3\n", 1),
+        ("f 1 2 3\v4\n", 2),  # a vertical tab between corners: a space
+        ("f 1 2\u00a04 3\n", 2),  # a no-break space likewise
+        ("f 1 2 \\  \n 4 3\n", 2),  # a continued line, spaces after the backslash
+        ("f 1 2 3\rf 2 4 3\r", 2),  # old Mac line ends
+    ],
+)
+def test_obj_line_ends_and_spaces(tmp_path, text, triangles):
+    t = load(tmp_path, "ends.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n" + text)
+    assert len(t) == triangles
+
+
+@pytest.mark.parametrize(
+    "data, message",
+    [
+        (ply_ascii(CUBE, MIXED).replace("ply\n", "ply\ncomment no end_header here\n", 1), None),
+        (ply_ascii(CUBE, MIXED).replace("property list uchar int vertex_indices", "property int vertex_indices"),
+         "must be a list of integers|values after the elements"),
+        (ply_ascii(CUBE, MIXED).replace("list uchar int", "list uchar float"), "must be a list of integers"),
+    ],
+)  # fmt: skip
+def test_ply_header_words_in_comments_and_face_types(tmp_path, data, message):
+    if message is None:
+        assert area(load(tmp_path, "c.ply", data)) == pytest.approx(MIXED_AREA)
+    else:
+        with pytest.raises(SceneFileError, match=message):
+            load(tmp_path, "c.ply", data)
+
+
+def test_ascii_stl_vertex_lines_are_three_numbers(tmp_path):
+    facet = "facet normal 0 0 1\nouter loop\n{}\nendloop\nendfacet\n"
+    for lines in ("vertex 0 0 0junk\nvertex 1 0 0\nvertex 0 1 0", "vertex 0 0\nvertex 1 0 0\nvertex 0 1 0"):
+        with pytest.raises(SceneFileError, match="not 'vertex x y z'"):
+            load(tmp_path, "bad.stl", "solid x\n" + facet.format(lines) + "endsolid x\n")
+
+
+@pytest.mark.parametrize(
+    "changes",
+    [
+        {"extensionsRequired": 5},
+        {"extensionsRequired": "KHR_materials_x"},
+        {"a": _set(["meshes", 0, "primitives", 0, "attributes"], [1])},
+    ],
+)
+def test_gltf_with_values_of_the_wrong_type_is_not_gltf(tmp_path, changes):
+    with pytest.raises(SceneFileError):  # TypeError and AttributeError escaped
+        load(tmp_path, "model.gltf", gltf(**changes))

@@ -39,10 +39,21 @@ def check_gltf(path: Path) -> str:
         raise SceneFileError(f"{path} is not glTF: its JSON cannot be read ({e})") from None
     if not isinstance(doc, dict) or not isinstance(doc.get("asset"), dict):
         raise SceneFileError(f"{path} is not glTF: no 'asset' object")
-    for name in doc.get("extensionsRequired") or []:
+    try:
+        _check(path, doc)
+    except (TypeError, AttributeError, KeyError, IndexError) as e:  # a value of the wrong JSON type
+        raise SceneFileError(f"{path} is not glTF: {type(e).__name__}: {e}") from None
+    return kind
+
+
+def _check(path: Path, doc: dict) -> None:
+    required = doc.get("extensionsRequired") or []
+    if not isinstance(required, list) or not all(isinstance(name, str) for name in required):
+        raise SceneFileError(f"{path} is not glTF: extensionsRequired is not a list of names")
+    for name in required:
         if name not in _KNOWN and not str(name).startswith(_KNOWN_PREFIXES):
             raise SceneFileError(f"{path} requires the glTF extension {name}, which bvhlab does not read")
-    if any("EXT_mesh_gpu_instancing" in (node.get("extensions") or {}) for node in _list(doc, "nodes")):
+    if any("EXT_mesh_gpu_instancing" in _dict(node, "extensions") for node in _list(doc, "nodes")):
         raise SceneFileError(f"{path}: nodes instanced by EXT_mesh_gpu_instancing, which bvhlab does not read")
     accessors = _list(doc, "accessors")
     for m, mesh in enumerate(_list(doc, "meshes")):
@@ -50,13 +61,12 @@ def check_gltf(path: Path) -> str:
             where = f"{path}: mesh {mesh.get('name') or m}"
             if primitive.get("mode") == _TRIANGLE_FAN:
                 raise SceneFileError(f"{where} has triangle fans (mode 6), which bvhlab does not read")
-            position = _accessor(accessors, (primitive.get("attributes") or {}).get("POSITION"))
+            position = _accessor(accessors, _dict(primitive, "attributes").get("POSITION"))
             indices = _accessor(accessors, primitive.get("indices"))
             if position.get("normalized"):
                 raise SceneFileError(f"{where}: normalized positions (KHR_mesh_quantization) are not read")
             if "sparse" in position or "sparse" in indices:
                 raise SceneFileError(f"{where}: sparse accessors are not read")
-    return kind
 
 
 def _list(doc: dict, key: str) -> list[dict]:
@@ -64,18 +74,24 @@ def _list(doc: dict, key: str) -> list[dict]:
     return [v for v in value if isinstance(v, dict)] if isinstance(value, list) else []
 
 
+def _dict(doc: dict, key: str) -> dict:
+    value = doc.get(key)
+    return value if isinstance(value, dict) else {}
+
+
 def _accessor(accessors: list[dict], index) -> dict:
     return accessors[index] if isinstance(index, int) and 0 <= index < len(accessors) else {}
 
 
 def gltf_buffers(path: Path) -> list[Path]:
-    """The files a .gltf's buffers are in (not data: URIs), in its order; [] for anything else or a
-    file that cannot be read (the loader says why). What a cache of its geometry must hash."""
-    if path.suffix.lower() != ".gltf":
-        return []
+    """The files a glTF's or GLB's buffers are in (not data: URIs), in its order; [] for anything
+    else or a file that cannot be read (the loader says why). What a cache of its geometry hashes."""
     try:
-        doc = json.loads(path.read_bytes().decode("utf-8-sig"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+        data = path.read_bytes()
+        if data[:4] == b"glTF":  # a GLB's JSON chunk (its own buffer is the BIN chunk, no uri)
+            data = data[20 : 20 + struct.unpack_from("<I", data, 12)[0]]
+        doc = json.loads(data.decode("utf-8-sig"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError, struct.error):
         return []
     if not isinstance(doc, dict):
         return []

@@ -22,13 +22,16 @@ def read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
     over the lines sorts out the statements; numbers are parsed in numpy (a million-triangle file
     in a few seconds)."""
     text = path.read_bytes().decode("utf-8", errors="replace").lstrip("\ufeff")
-    text = text.replace("\\\r\n", " ").replace("\\\n", " ")
+    text = text.replace("\r\n", "\n").replace("\r", "\n")  # lines end at \n, \r\n or \r only
+    if _ODD_SPACE.search(text):  # \v, \f, no-break or line-separator spaces: spaces, not line ends
+        text = _ODD_SPACE.sub(" ", text)
+    text = _CONTINUED.sub(" ", text)
     vertex_lines: list[str] = []
     face_lines: list[str] = []
     face_numbers: list[int] = []  # the file's line of each face
     defined: list[int] = []  # vertices defined before each face (negative indices count from there)
     comments = "#" in text
-    for number, line in enumerate(text.splitlines(), 1):
+    for number, line in enumerate(text.split("\n"), 1):
         if comments:
             line = line.split("#", 1)[0]
         line = line.strip()
@@ -45,8 +48,10 @@ def read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
     # each corner's vertex index: `v`, `v/vt`, `v//vn` or `v/vt/vn`
     index = _numbers(re.sub(r"/\S*", "", " ".join(line[1:] for line in face_lines)), np.int64)
     if index is None or index.size != sizes.sum():
-        bad = next((i for i, line in enumerate(face_lines) if not all(_is_index(w) for w in line.split()[1:])), 0)
-        raise SceneFileError(f"{path}, line {face_numbers[bad]}: {face_lines[bad]!r} is not vertex indices")
+        for line, number in zip(face_lines, face_numbers):  # the line to name
+            if not all(_is_index(w) for w in line.split()[1:]):
+                raise SceneFileError(f"{path}, line {number}: {line!r} is not vertex indices")
+        raise SceneFileError(f"{path}: faces that are not vertex indices")  # not reached: a line fails above
     face_of = np.repeat(np.arange(len(face_lines)), sizes)
     resolved = np.where(index > 0, index - 1, np.asarray(defined, np.int64)[face_of] + index)
     wrong = (index == 0) | (resolved < 0) | (resolved >= len(vertices))
@@ -65,6 +70,13 @@ def read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
     starts = np.concatenate([[0], np.cumsum(sizes)])
     polygons = [resolved[a:b] for a, b, n in zip(starts[:-1], starts[1:], sizes) if n >= 3]
     return vertices, triangulate_all(polygons, vertices)
+
+
+#: Whitespace other than a space, a tab or a line end (Python's \s: \v, \f, U+0085, U+00A0,
+#: U+2028, ...): str.splitlines ended lines there (a commented-out face after U+2028 was read).
+_ODD_SPACE = re.compile(r"[^\S\n \t]")
+#: A backslash at a line's end (spaces may follow it) joins the next line, as OBJ writers use it.
+_CONTINUED = re.compile(r"\\[ \t]*(?:\n|$)")
 
 
 def _vertices(path: Path, lines: list[str]) -> np.ndarray:

@@ -6,6 +6,7 @@ are the file's: a file that ends early or goes on after its last element is refu
 
 from __future__ import annotations
 
+import re
 import struct
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -51,18 +52,22 @@ def read_ply(path: Path) -> tuple[np.ndarray, np.ndarray]:
     if vertex is None or not all(axis in vertex for axis in "xyz"):
         raise SceneFileError(f"{path}: no vertex element with x, y and z")
     positions = np.stack([np.asarray(vertex[axis], np.float64) for axis in "xyz"], axis=1)
-    lists = None if face is None else face.get("vertex_indices", face.get("vertex_index"))
-    if lists is None:
+    name = None if face is None else next((n for n in ("vertex_indices", "vertex_index") if n in face), None)
+    if face is None or name is None:
         raise SceneFileError(f"{path}: no face element with vertex_indices")
+    kind = next(p for e in elements if e.name == "face" for p in e.properties if p.name == name)
+    if kind.count_type is None or kind.type[0] == "f":
+        raise SceneFileError(f"{path}: the face element's {name} must be a list of integers")
+    lists = face[name]
     return positions, _triangles(path, lists, positions)
 
 
 def _header(path: Path, data: bytes) -> tuple[str, list[_Element], int]:
-    end = data.find(b"end_header", 0, _MAX_HEADER)
-    if not data.startswith(b"ply") or end < 0:
+    # the line "end_header" (not the words in a comment)
+    found = re.search(rb"(?:^|\n)end_header[ \t]*\r?(?:\n|$)", data[:_MAX_HEADER])
+    if not data.startswith(b"ply") or found is None:
         raise SceneFileError(f"{path}: not a PLY file (no 'ply' ... 'end_header' header)")
-    newline = data.find(b"\n", end)
-    start = len(data) if newline < 0 else newline + 1
+    end, start = found.start(), found.end()
     fmt, elements = None, []
     for line in data[:end].decode("ascii", errors="replace").splitlines()[1:]:
         words = line.split()
@@ -180,8 +185,7 @@ def _binary_lists(path: Path, data: bytes, at: int, e: _Element, order: str) -> 
 
 
 def _triangles(path: Path, lists, positions: np.ndarray) -> np.ndarray:
-    polygons = [corners for corners in lists if len(corners) >= 3]  # points and edges: no surface
-    for i, corners in enumerate(polygons):
-        if min(corners) < 0 or max(corners) >= len(positions):
+    for i, corners in enumerate(lists):
+        if len(corners) and (min(corners) < 0 or max(corners) >= len(positions)):
             raise SceneFileError(f"{path}: face {i} refers to a vertex that does not exist (have {len(positions)})")
-    return triangulate_all(polygons, positions)
+    return triangulate_all([c for c in lists if len(c) >= 3], positions)  # points and edges: no surface

@@ -95,7 +95,10 @@ def _ear_clip(corners: list[int], xy: np.ndarray) -> list[tuple[int, int, int]] 
             a, b, c = left[k - 1], left[k], left[(k + 1) % len(left)]
             if _cross2(xy[a], xy[b], xy[c]) <= 0:
                 continue  # a reflex or flat corner is no ear
-            if any(_inside(xy[i], xy[a], xy[b], xy[c]) for i in left if i not in (a, b, c)):
+            ear = (xy[a], xy[b], xy[c])
+            # another corner inside the ear blocks it; one at the ear's own corners (a polygon
+            # bridged to its hole, "keyhole", repeats them) does not: it fanned over the hole
+            if any(_inside(xy[i], *ear) for i in left if i not in (a, b, c) and not _at_any(xy[i], ear)):
                 continue
             out.append((corners[a], corners[b], corners[c]))
             del left[k]
@@ -105,6 +108,10 @@ def _ear_clip(corners: list[int], xy: np.ndarray) -> list[tuple[int, int, int]] 
     a, b, c = left
     out.append((corners[a], corners[b], corners[c]))
     return out
+
+
+def _at_any(p, corners) -> bool:
+    return any(p[0] == q[0] and p[1] == q[1] for q in corners)
 
 
 def _inside(p, a, b, c) -> bool:

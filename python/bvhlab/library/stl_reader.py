@@ -16,7 +16,8 @@ from .._npz import SceneFileError
 _HEADER, _TRIANGLE = 84, 50
 _BINARY = np.dtype([("normal", "<f4", 3), ("vertices", "<f4", (3, 3)), ("attribute", "<u2")])
 _NUMBER = rb"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?:nan|inf)\w*)"
-_VERTEX = re.compile(rb"vertex\s+" + rb"\s+".join([_NUMBER] * 3), re.IGNORECASE)
+_VERTEX = re.compile(rb"\bvertex\s+" + rb"\s+".join([_NUMBER] * 3) + rb"(?=\s|$)", re.IGNORECASE)
+_VERTEX_WORD = re.compile(rb"\bvertex\b", re.IGNORECASE)
 
 
 def read_stl(path: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -28,6 +29,8 @@ def read_stl(path: Path) -> tuple[np.ndarray, np.ndarray]:
         vertices = np.frombuffer(data, _BINARY, count, _HEADER)["vertices"].astype(np.float64).reshape(-1, 3)
     elif data.lstrip(b"\xef\xbb\xbf \t\r\n")[:5].lower() == b"solid":
         found = _VERTEX.findall(data)
+        if len(found) != len(_VERTEX_WORD.findall(data)):  # a vertex line of other than three numbers
+            raise SceneFileError(f"{path}: a vertex line is not 'vertex x y z' (three numbers)")
         if not found and count >= 0:
             raise SceneFileError(
                 f"{path}: no facets: starts as ASCII STL but has no vertex lines, and as binary STL its header "

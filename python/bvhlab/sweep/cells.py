@@ -98,7 +98,7 @@ def scene_hash(spec: str) -> str:
     if path is not None:
         if not path.is_file():
             return ""
-        files = [path, *gltf_buffers(path)]  # a glTF's .bin is its geometry too
+        files = [path, *gltf_buffers(path)]  # a glTF's buffers are its geometry too
         return (
             hashlib.sha256("".join(_file_hash(f) for f in files).encode()).hexdigest()
             if len(files) > 1
