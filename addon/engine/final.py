@@ -58,7 +58,7 @@ class FinalRender:
         render job are lit by its first frame's calibration of the light."""
         from bvhlab.blender import ExportError, ExportWarning
 
-        name = depsgraph.scene.name
+        name = depsgraph.scene.name_full  # a linked scene of the same name is another
         self.live.light_distance = _JOB_LIGHT.get(name)  # None: measured (Persistent Data kept the last)
         self.error, self.notes = None, []
         with warnings.catch_warnings(record=True) as caught:

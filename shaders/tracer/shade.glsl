@@ -225,7 +225,9 @@ void finish_shading(INOUT(TraceState) s, Surface f) {
 bool line_on_surface(RayTask task, Hit hit, vec4 overlay) {
     Surface f = surface_at(task, hit);
     float c = abs(dot(f.facing, task.dir));
-    float slope = sqrt(max(1.0f - c * c, 0.0f)) / c;  // +inf seen edge-on
+    // at most 64 (a surface within 0.9° of edge-on), as polygon offset's slope is bounded: a
+    // sphere's rim or a silhouette seen edge-on let lines far behind it show
+    float slope = min(sqrt(max(1.0f - c * c, 0.0f)) / c, 64.0f);
     float slack = pixel_footprint(task.dir, hit.t) * 0.5f * (frame.overlay_line_width + 1.0f) * slope;
     return overlay.w - hit.t <= slack;
 }

@@ -127,9 +127,10 @@ using NodeCostArray = BigVector<float>;
 /// Each node's SAH cost relative to its own box: S(n)/A(n) with S(leaf) = A·N and S(inner) =
 /// A·C_trav + S(children) (C_trav = C_isect = 1, sah_cost's formula), so entry 0 is sah_cost(bvh)
 /// (rounded to float) where the root has an area.
-/// A node of zero area gets 0 (no cost to compare: a tree whose boxes had no area when built says
-/// nothing of the geometry spread out again); sah_cost of a tree with a root of zero area counts
-/// nodes instead.
+/// A node of zero area gets 0: a tree whose boxes had no area when built says nothing of the
+/// geometry spread out again, so such a node counts as past any growth once it has an area (its
+/// whole cost the excess: partial and adaptive rebuild it first) and never while it has none;
+/// sah_cost of a tree with a root of zero area counts nodes instead.
 NodeCostArray subtree_costs(const Bvh& bvh);
 
 /// The tree over `geometry` (same counts) by `config.policy`, from `old` (untouched) and the

@@ -14,7 +14,9 @@ namespace bvhlab {
 struct NodeCosts {
     NodeCostArray cost, area;
     BigVector<std::uint32_t> count;
-    double root_cost = 0;  ///< cost[0] unrounded: the tree's SAH cost as stats and sah_cost() give it
+    /// The tree's SAH cost as stats and sah_cost() give it: cost[0] unrounded, or for a root of zero
+    /// area (whose cost[0] is 0) the count sah_cost() gives, every node counted as hit.
+    double root_cost = 0;
 
     /// S(n) = A(n)·cost(n): node i's share of the root's A·cost, in the root's units.
     double area_cost(std::uint32_t i) const { return double(area[i]) * cost[i]; }

@@ -260,8 +260,8 @@ bool rebuild_top(Bvh& tree, NodeCostArray& built, const PartedTree& parted, cons
         depths[at[j]] = top.depths[j];
         const double area = node_box(n).half_area();
         area_cost[j] = area + area_cost[j + 1] + area_cost[n.index];
-        // a node of zero area weighs nothing in any excess (A·(cost - built)): any cost will do
-        out_built[at[j]] = float(area > 0 ? area_cost[j] / area : 1.0);
+        // a node of zero area has no cost to compare with (node_costs' convention: 0)
+        out_built[at[j]] = float(area > 0 ? area_cost[j] / area : 0.0);
     }
     out_built[0] = built[0];  // the root's cost when built stays the update's reference
     sah_cost = area_cost[0] / node_box(top.nodes[0]).half_area();  // the old root's box: not 0

@@ -66,7 +66,9 @@ constexpr double kDenseCut = 0.1;
 /// receives the tree's cost after it. bench/updates.py has the figures.
 UpdatePolicy adaptive(Bvh& tree, NodeCostArray& built, const NodeCosts& now, const GeometryView& g,
                       const UpdateConfig& config, UpdateStats& stats, double& sah) {
-    if (now.area[0] <= 0) return UpdatePolicy::Rebuild;  // no areas to weigh the subtrees by
+    // a root of zero area costs 0 (node_costs), so its caller's check never sends one here; kept
+    // for callers that would: no areas to weigh the subtrees by
+    if (now.area[0] <= 0) return UpdatePolicy::Rebuild;
     const double goal = built[0];
     const double excess = double(now.area[0]) * (double(now.cost[0]) - goal);
     double covered = 0;

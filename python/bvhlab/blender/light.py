@@ -29,11 +29,12 @@ from .scope import visibility
 
 def gather_light(
     depsgraph, view_layer, primitive_points: np.ndarray, distance: float | None = None
-) -> tuple[Light, float] | None:
+) -> tuple[Light, float | None] | None:
     """The first visible point light (scope.visibility) by name (another kind of light stands in,
     at its position, with an ExportWarning), and the distance d its intensity is calibrated by;
     None when the scene has no visible light. d is `distance` where given, else the median
-    distance to `primitive_points` (N,3), a sample of primitive centres."""
+    distance to `primitive_points` (N,3), a sample of primitive centres (None where there are
+    none: the intensity is then that of d = 1, and the next call measures)."""
     visible = visibility(depsgraph)
     lights = sorted(
         (obj for obj in depsgraph.objects if obj.type == "LIGHT" and visible(obj.original, view_layer)),
@@ -50,12 +51,12 @@ def gather_light(
             stacklevel=2,
         )
     position = np.array(light.matrix_world.translation, np.float64)
-    if distance is None:
-        distance = (
-            float(np.median(np.linalg.norm(primitive_points - position, axis=1))) if len(primitive_points) else 1.0
-        )
-    light_ = Light(tuple(position), tuple(light.data.color), intensity_from_watts(light.data.energy, distance))
-    return light_, distance
+    measured = distance
+    if measured is None and len(primitive_points):
+        measured = float(np.median(np.linalg.norm(primitive_points - position, axis=1)))
+    # nothing to measure (no geometry yet): d = 1 for now, and None kept, so the next sync measures
+    intensity = intensity_from_watts(light.data.energy, 1.0 if measured is None else measured)
+    return Light(tuple(position), tuple(light.data.color), intensity), measured
 
 
 def intensity_from_watts(watts: float, distance: float) -> float:
