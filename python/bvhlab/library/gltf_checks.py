@@ -87,9 +87,14 @@ def gltf_buffers(path: Path) -> list[Path]:
     """The files a glTF's or GLB's buffers are in (not data: URIs), in its order; [] for anything
     else or a file that cannot be read (the loader says why). What a cache of its geometry hashes."""
     try:
-        data = path.read_bytes()
-        if data[:4] == b"glTF":  # a GLB's JSON chunk (its own buffer is the BIN chunk, no uri)
-            data = data[20 : 20 + struct.unpack_from("<I", data, 12)[0]]
+        with open(path, "rb") as f:
+            head = f.read(20)
+            if head[:4] == b"glTF" and len(head) == 20:  # a GLB: its JSON chunk alone
+                data = f.read(struct.unpack_from("<I", head, 12)[0])
+            elif path.suffix.lower() == ".gltf":
+                data = head + f.read()
+            else:  # another format: not read (a scene file may be gigabytes)
+                return []
         doc = json.loads(data.decode("utf-8-sig"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError, struct.error):
         return []

@@ -56,15 +56,19 @@ def read_ply(path: Path) -> tuple[np.ndarray, np.ndarray]:
     if face is None or name is None:
         raise SceneFileError(f"{path}: no face element with vertex_indices")
     kind = next(p for e in elements if e.name == "face" for p in e.properties if p.name == name)
-    if kind.count_type is None or kind.type[0] == "f":
-        raise SceneFileError(f"{path}: the face element's {name} must be a list of integers")
+    if kind.count_type is None:
+        raise SceneFileError(f"{path}: the face element's {name} must be a list of vertex indices")
     lists = face[name]
+    if kind.type[0] == "f":  # indices written as floats (rare writers): whole numbers only
+        if not all(float(c).is_integer() for corners in lists for c in corners):
+            raise SceneFileError(f"{path}: the face element's {name} holds numbers that are not indices")
+        lists = [[int(c) for c in corners] for corners in lists]
     return positions, _triangles(path, lists, positions)
 
 
 def _header(path: Path, data: bytes) -> tuple[str, list[_Element], int]:
     # the line "end_header" (not the words in a comment)
-    found = re.search(rb"(?:^|\n)end_header[ \t]*\r?(?:\n|$)", data[:_MAX_HEADER])
+    found = re.search(rb"(?:^|\n)[ \t]*end_header[ \t]*\r?(?:\n|$)", data[:_MAX_HEADER])
     if not data.startswith(b"ply") or found is None:
         raise SceneFileError(f"{path}: not a PLY file (no 'ply' ... 'end_header' header)")
     end, start = found.start(), found.end()
@@ -116,7 +120,8 @@ def _read_ascii(path: Path, body: bytes, elements: list[_Element]) -> dict[str, 
                         k = int(words[at])
                         if k < 0:
                             raise ValueError(f"a list of {k} items")
-                        columns[p.name].append([int(w) for w in words[at + 1 : at + 1 + k]])
+                        number = float if p.type[0] == "f" else int  # texture coordinates are lists too
+                        columns[p.name].append([number(w) for w in words[at + 1 : at + 1 + k]])
                         if len(columns[p.name][-1]) < k:
                             raise IndexError
                         at += 1 + k
@@ -185,7 +190,7 @@ def _binary_lists(path: Path, data: bytes, at: int, e: _Element, order: str) -> 
 
 
 def _triangles(path: Path, lists, positions: np.ndarray) -> np.ndarray:
-    for i, corners in enumerate(lists):
-        if len(corners) and (min(corners) < 0 or max(corners) >= len(positions)):
+    for i, corners in enumerate(lists):  # points and edges (fewer than 3 corners) are dropped unread
+        if len(corners) >= 3 and (min(corners) < 0 or max(corners) >= len(positions)):
             raise SceneFileError(f"{path}: face {i} refers to a vertex that does not exist (have {len(positions)})")
     return triangulate_all([c for c in lists if len(c) >= 3], positions)  # points and edges: no surface

@@ -16,8 +16,9 @@ from .._npz import SceneFileError
 _HEADER, _TRIANGLE = 84, 50
 _BINARY = np.dtype([("normal", "<f4", 3), ("vertices", "<f4", (3, 3)), ("attribute", "<u2")])
 _NUMBER = rb"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?:nan|inf)\w*)"
-_VERTEX = re.compile(rb"\bvertex\s+" + rb"\s+".join([_NUMBER] * 3) + rb"(?=\s|$)", re.IGNORECASE)
-_VERTEX_WORD = re.compile(rb"\bvertex\b", re.IGNORECASE)
+# statements at a line's start (a solid's name may say "vertex": "solid vertex colors")
+_VERTEX = re.compile(rb"(?m)^[ \t]*vertex[ \t]+" + rb"[ \t]+".join([_NUMBER] * 3) + rb"(?=\s|$)", re.IGNORECASE)
+_VERTEX_WORD = re.compile(rb"(?m)^[ \t]*vertex\b", re.IGNORECASE)
 
 
 def read_stl(path: Path) -> tuple[np.ndarray, np.ndarray]:
