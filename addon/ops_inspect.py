@@ -55,14 +55,7 @@ def whole_tree_figures(built, picked) -> dict | None:
     own, every instance of a mesh at the same share), once the tree is analysed (None before)."""
     if not overlay.is_two_level(built):
         data = built.bvh.node_data()
-        n = picked
-        return {
-            "depth": int(data.depth[n]),
-            "prim_count": int(data.prim_count[n]),
-            "subtree_sah": float(data.subtree_sah[n]),
-            "sah_share": float(data.sah_share[n]),
-            "of": data.sah_cost,
-        }
+        return {**data.node(picked), "of": data.sah_cost}
     analysed = built.bvh.cached_node_data()
     if analysed is None:
         return None

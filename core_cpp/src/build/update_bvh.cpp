@@ -148,9 +148,11 @@ NodeCosts node_costs(const Bvh& bvh) {
         const bool exact = is_leaf(n) && leaf_count(n) < (1u << 29);
         out.cost[i] = float(area > 0 ? (exact ? double(leaf_count(n)) : area_cost[i] / area) : 0.0);
         out.area[i] = float(area);
-        if (i == 0)
-            out.root_cost =
-                area > 0 ? area_cost[0] / area : double((skip_index(n, i) - i - 1) / 2) + double(out.count[i]);
+    }
+    if (bvh.node_count() > 0) {  // the root's cost unrounded (its U(n) where it has no area)
+        const double area = node_box(bvh.nodes[0]).half_area();
+        out.root_cost =
+            area > 0 ? area_cost[0] / area : double((skip_index(bvh.nodes[0], 0) - 1) / 2) + double(out.count[0]);
     }
     return out;
 }

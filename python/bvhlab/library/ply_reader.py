@@ -153,17 +153,14 @@ def _read_binary(path: Path, data: bytes, at: int, elements: list[_Element], ord
     return out
 
 
-_STRUCT = {"i1": "b", "u1": "B", "i2": "h", "u2": "H", "i4": "i", "u4": "I", "f4": "f", "f8": "d"}
-
-
 def _binary_lists(path: Path, data: bytes, at: int, e: _Element, order: str) -> tuple[dict, int]:
     """An element with lists, record by record (each list's length is in the data)."""
     columns: dict[str, list] = {p.name: [] for p in e.properties}
     steps = [
         (
             columns[p.name],
-            struct.Struct(order + _STRUCT[p.type]),
-            p.count_type and struct.Struct(order + _STRUCT[p.count_type]),
+            struct.Struct(order + np.dtype(p.type).char),  # numpy's type codes are struct's
+            p.count_type and struct.Struct(order + np.dtype(p.count_type).char),
         )
         for p in e.properties
     ]
