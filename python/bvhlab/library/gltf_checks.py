@@ -21,18 +21,27 @@ _KNOWN = {"KHR_mesh_quantization", "KHR_xmp_json_ld"}
 _TRIANGLE_FAN = 6
 
 
+def _json_text(path: Path, any_suffix: bool = True) -> tuple[str, bytes] | None:
+    """("glb" or "gltf", the file's JSON bytes): a GLB's JSON chunk alone (a GLB named .gltf is
+    GLB), a .gltf whole; None for a file of another suffix unless `any_suffix` (not read: a scene
+    file may be gigabytes). Raises SceneFileError for a GLB without its JSON chunk."""
+    with open(path, "rb") as f:
+        head = f.read(20)
+        if head[:4] == b"glTF":
+            if len(head) < 20 or head[16:20] != b"JSON":
+                raise SceneFileError(f"{path}: a GLB file without its JSON chunk (truncated?)")
+            return "glb", f.read(struct.unpack_from("<I", head, 12)[0])
+        if not any_suffix and path.suffix.lower() != ".gltf":
+            return None
+        return "gltf", head + f.read()
+
+
 def check_gltf(path: Path) -> str:
     """ "glb" or "gltf", by the file's contents (a GLB named .gltf is read as GLB); raises
     SceneFileError for a file bvhlab would read wrong (see the module's docstring)."""
-    with open(path, "rb") as f:
-        head = f.read(20)
-        kind = "glb" if head[:4] == b"glTF" else "gltf"
-        if kind == "glb":
-            if len(head) < 20 or head[16:20] != b"JSON":
-                raise SceneFileError(f"{path}: a GLB file without its JSON chunk (truncated?)")
-            text = f.read(struct.unpack_from("<I", head, 12)[0])
-        else:
-            text = head + f.read()
+    found = _json_text(path)
+    assert found is not None  # every suffix is read
+    kind, text = found
     try:
         doc = json.loads(text.decode("utf-8-sig"))
     except (UnicodeDecodeError, json.JSONDecodeError) as e:
@@ -87,16 +96,11 @@ def gltf_buffers(path: Path) -> list[Path]:
     """The files a glTF's or GLB's buffers are in (not data: URIs), in its order; [] for anything
     else or a file that cannot be read (the loader says why). What a cache of its geometry hashes."""
     try:
-        with open(path, "rb") as f:
-            head = f.read(20)
-            if head[:4] == b"glTF" and len(head) == 20:  # a GLB: its JSON chunk alone
-                data = f.read(struct.unpack_from("<I", head, 12)[0])
-            elif path.suffix.lower() == ".gltf":
-                data = head + f.read()
-            else:  # another format: not read (a scene file may be gigabytes)
-                return []
-        doc = json.loads(data.decode("utf-8-sig"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError, struct.error):
+        found = _json_text(path, any_suffix=False)
+        if found is None:
+            return []
+        doc = json.loads(found[1].decode("utf-8-sig"))
+    except (OSError, SceneFileError, UnicodeDecodeError, json.JSONDecodeError):
         return []
     if not isinstance(doc, dict):
         return []
