@@ -8,6 +8,7 @@
 #include <cstring>
 #include <functional>
 #include <map>
+#include <random>
 #include <stdexcept>
 
 #include "bvhlab/stats.h"
@@ -186,7 +187,7 @@ TEST(Update, EveryPolicyLeavesAValidTree) {
         SCOPED_TRACE(to_string(p));
         check_tree(t, moved.view(), f.tree.config.max_leaf_size);
         EXPECT_EQ(t.fingerprint(), geometry_fingerprint(moved.view()));
-        ASSERT_EQ(built_out.size(), t.nodes.size() + 1);  // and the reference's area
+        ASSERT_EQ(built_out.size(), t.nodes.size() + 2);  // and the reference's area and leaves
         EXPECT_NEAR(stats.sah_cost, sah_cost(t), 1e-4 * stats.sah_cost);
         EXPECT_GT(stats.ms, 0.0);
         if (p != UpdatePolicy::Adaptive) EXPECT_EQ(stats.policy, p);
@@ -349,6 +350,66 @@ TEST(Update, AdaptiveRebuildsTheTopOverPartsThatMovedApart) {
     EXPECT_EQ(without.policy, UpdatePolicy::Rebuild);  // the subtrees alone could not mend it
 }
 
+TEST(Update, AdaptiveRefitsGeometryThatGrowsAsAWhole) {
+    // scaled up by 1.1 a frame about a point: every node's cost relative to its box stays, and so
+    // does a fresh build's; the reference, which kept its A·cost where the root grew, fell 17% a
+    // frame, and every update was a full rebuild to the same cost
+    const Fixture f;
+    UpdateConfig c;  // adaptive
+    c.measure_fresh = true;
+    Bvh tree = f.tree;
+    NodeCostArray built = f.built;
+    const double cost = sah_cost(f.tree);
+    for (int frame = 1; frame <= 6; ++frame) {
+        SCOPED_TRACE(frame);
+        const float s = std::pow(1.1f, float(frame));
+        Scene grown = f.scene;
+        for (std::size_t i = 0; i < grown.triangles.size(); ++i) grown.triangles[i] = (grown.triangles[i] - 3.0f) * s;
+        for (std::size_t i = 0; i < grown.spheres.size(); ++i)
+            grown.spheres[i] = i % 4 == 3 ? grown.spheres[i] * s : (grown.spheres[i] - 3.0f) * s;
+        NodeCostArray out;
+        UpdateStats stats;
+        tree = update_bvh(tree, built, grown.view(), c, out, &stats);
+        built = std::move(out);
+        check_tree(tree, grown.view(), f.tree.config.max_leaf_size);
+        EXPECT_EQ(stats.policy, UpdatePolicy::Refit);
+        EXPECT_NEAR(stats.sah_cost, cost, 1e-4 * cost);
+        EXPECT_NEAR(stats.sah_cost, stats.fresh_sah_cost, 1e-3 * cost);
+    }
+}
+
+TEST(Update, AdaptiveKeepsATurningMeshNearAFreshBuild) {
+    // long thin triangles turning about z by 6 degrees a frame: their boxes grow as the root's
+    // does, as if the mesh grew, but their surface does not; taken for growth (the primitives'
+    // boxes), the refit stood at 1.19 of a fresh build's cost
+    std::mt19937 rng(3);
+    std::normal_distribution<float> g(0.0f, 1.0f);
+    Scene slab;
+    for (int t = 0; t < 20000; ++t) {
+        const Vec3 centre{8 * g(rng), g(rng), 0.3f * g(rng)};
+        auto corner = [&] { return centre + Vec3{0.16f * g(rng), 0.02f * g(rng), 0.006f * g(rng)}; };
+        slab.add_triangle(corner(), corner(), corner());
+    }
+    Bvh tree = build_bvh(slab.view());
+    NodeCostArray built = subtree_costs(tree);
+    UpdateConfig c;  // adaptive
+    c.measure_fresh = true;
+    for (int frame = 1; frame <= 15; ++frame) {
+        SCOPED_TRACE(frame);
+        const float a = 0.10471976f * float(frame), cs = std::cos(a), sn = std::sin(a);
+        Scene turned = slab;
+        for (std::size_t i = 0; i < turned.triangles.size(); i += 3) {
+            const float x = slab.triangles[i], y = slab.triangles[i + 1];
+            turned.triangles[i] = cs * x - sn * y, turned.triangles[i + 1] = sn * x + cs * y;
+        }
+        NodeCostArray out;
+        UpdateStats stats;
+        tree = update_bvh(tree, built, turned.view(), c, out, &stats);
+        built = std::move(out);
+        EXPECT_LT(stats.sah_cost, 1.1 * stats.fresh_sah_cost);
+    }
+}
+
 TEST(Update, AdaptiveSplicesItsPartsUnderTheNewTopTheSameOnEveryThreadCount) {
     // one region deformed (subtrees rebuilt) and rigid slabs moved apart (the top rebuilt): both
     // in one update, the parts spliced under the new top by its one copy of the nodes
@@ -365,7 +426,7 @@ TEST(Update, AdaptiveSplicesItsPartsUnderTheNewTopTheSameOnEveryThreadCount) {
         trees.push_back(update_bvh(tree, f.built, moved.view(), c, out, &stats[trees.size()]));
         SCOPED_TRACE(threads);
         check_tree(trees.back(), moved.view(), f.tree.config.max_leaf_size);
-        EXPECT_EQ(out.size(), trees.back().nodes.size() + 1);
+        EXPECT_EQ(out.size(), trees.back().nodes.size() + 2);
         EXPECT_NEAR(stats[trees.size() - 1].sah_cost, sah_cost(trees.back()), 1e-4 * sah_cost(trees.back()));
     }
     ASSERT_EQ(stats[0].policy, UpdatePolicy::Partial);

@@ -135,9 +135,10 @@ NodeCostArray subtree_costs(const Bvh& bvh);
 
 /// The tree over `geometry` (same counts) by `config.policy`, from `old` (untouched) and the
 /// costs its nodes had when built (`built`, subtree_costs of the tree as built, one per node of
-/// `old`, and after them, as update_bvh leaves them, the root's half area when entry 0, adaptive's
-/// reference, was taken: without it, `old`'s root's). `built_out` receives those for the new tree
-/// (rebuilt nodes' own, the others' carried over, then the reference's area). Throws
+/// `old`, and after them, as update_bvh leaves them, the root's half area and the primitives' surface
+/// area when entry 0, adaptive's reference, was taken: without them, `old`'s). `built_out` receives
+/// those for the new tree (rebuilt nodes' own, the others' carried over, then the reference's two
+/// figures). Throws
 /// std::invalid_argument as refit and build_bvh do.
 Bvh update_bvh(const Bvh& old, const NodeCostArray& built, const GeometryView& geometry, const UpdateConfig& config,
                NodeCostArray& built_out, UpdateStats* stats = nullptr);

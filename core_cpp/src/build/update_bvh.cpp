@@ -18,20 +18,58 @@ using Clock = std::chrono::steady_clock;
 
 constexpr std::string_view kNames[] = {"rebuild", "refit", "partial", "adaptive"};
 
-/// Adaptive's reference for the root: its cost when built, `cost`, relative to the root's box
-/// then, of half area `area` (update.h, `built`), for the root's box now, of half area `now`. A
-/// cost relative to the root's box falls where the geometry spreads and its parts stay as they
-/// were, while a fresh build's area-weighted cost A·cost stays about the same (slabs of a knot
-/// moved apart by 0.6: A·cost 2,545 to 2,660, +4.5%, its cost 35.11 to 33.27, -5.2%, as the
-/// root's area grew 10.3%); compared with the cost when built, a restructured tree sat at 1.13 of a
-/// fresh build's. So where the root is larger than when the reference was taken, the reference
-/// keeps its A·cost (the estimate errs low: a rebuild sooner, which takes the fresh cost as the
-/// new reference); where it is smaller, the cost stays (a fresh build's cost rises where parts
-/// come together, and a uniform shrink leaves it as it was). Kept with its area, not rescaled
-/// frame by frame: a root that grows and shrinks back (the crowd's, ±1.2%) would ratchet it down
-/// (6 rebuilds of 23 frames on the generated crowd, 3 on the wave).
-double reference_cost(double cost, double area, double now) {
-    return now > area && area > 0 ? cost * (area / now) : cost;
+/// Where adaptive's reference was taken: the root's cost then (relative to its box), the root's
+/// half area then and its primitives' surface area then (surface_area; < 0: not known). Carried
+/// after the nodes' costs in `built` (update.h): entries n and n + 1.
+struct Reference {
+    double cost = 0, area = 0, primitives = -1;
+};
+
+/// The surface area of a tree's primitives (its packed geometry; a triangle of zero area is packed
+/// as a point): what grows with the geometry's scale and not as it turns or moves apart.
+double surface_area(const Bvh& bvh) {
+    constexpr double kFourPi = 12.566370614359172;
+    double sum = 0;
+    for (const PackedPrim& p : bvh.prims) {
+        if (is_sphere_ref(p.ref)) {
+            sum += kFourPi * double(p.v1.x) * double(p.v1.x);
+        } else {
+            const Vec3 a{p.v0.x, p.v0.y, p.v0.z}, e1 = Vec3{p.v1.x, p.v1.y, p.v1.z} - a,
+                                                  e2 = Vec3{p.v2.x, p.v2.y, p.v2.z} - a;
+            sum += 0.5 * double(length(cross(e1, e2)));
+        }
+    }
+    return sum;
+}
+
+/// Adaptive's reference for the root now, of half area `now`, whose primitives' surface area is
+/// `primitives` (surface_area; < 0: not measured): an estimate of a fresh build's cost. A cost
+/// relative to the root's box falls where the geometry spreads and its parts stay as they were,
+/// while a fresh build's area-weighted cost A·cost stays about the same (slabs of a knot moved
+/// apart by 0.6: A·cost 2,545 to 2,660, +4.5%, its cost 35.11 to 33.27, -5.2%, as the root's area
+/// grew 10.3%); compared with the cost when built, a restructured tree sat at 1.13 of a fresh
+/// build's. But where the geometry grows as a whole (a mesh scaled up), the cost stays and its
+/// A·cost grows with the root: kept at its A·cost, every update of a mesh scaled up by 1.1 a frame
+/// was a full rebuild to the same cost (45.47, 12 frames of 12). The primitives' surface area tells
+/// the two apart: it grows with the geometry's scale, not as its parts move apart, turn or tear
+/// leaves apart (the primitives' boxes grew as much as the root's where long thin triangles turned:
+/// taken for growth, a turning slab of them stayed refitted at 1.19 of a fresh build's cost). So
+/// where the root is larger than when the reference was taken, the reference's A·cost grows as the
+/// surface did, at most as the root's (the cost kept) and at least not at all (the estimate errs
+/// low: a rebuild sooner, which takes the fresh cost as the new reference). Small parts flying
+/// apart (50,000 triangles, by 1.1 a frame, their refit within 1.02 of a fresh build's) still
+/// rebuild at every update: keeping the inner nodes' cost relative to the root instead (their
+/// boxes taken to grow with it) erred high elsewhere (spheres moved apart stayed refitted at 1.13
+/// of a fresh build's cost, test_update_top.cpp). Where the root is smaller, the cost stays (a
+/// fresh build's cost rises where parts come together, and a uniform shrink leaves it as it was).
+/// Kept with its areas, not rescaled frame by frame: a root that grows and shrinks back (the
+/// crowd's, ±1.2%) would ratchet it down (6 rebuilds of 23 frames on the generated crowd, 3 on the
+/// wave).
+double reference_cost(const Reference& ref, double now, double primitives) {
+    if (!(now > ref.area && ref.area > 0)) return ref.cost;
+    const double grown =
+        ref.primitives > 0 && primitives >= 0 ? std::clamp(primitives / ref.primitives, 1.0, now / ref.area) : 1.0;
+    return ref.cost * grown * (ref.area / now);
 }
 
 /// The restructuring after a refit: rebuild `roots` and splice them in; returns the new tree's
@@ -163,11 +201,15 @@ Bvh update_bvh(const Bvh& old, const NodeCostArray& built, const GeometryView& g
                NodeCostArray& built_out, UpdateStats* stats_out) {
     validate(config);
     const std::size_t n = old.nodes.size();
-    if (built.size() != n && built.size() != n + 1)
+    if (built.size() < n || built.size() > n + 2)
         throw std::invalid_argument("update: the built costs must have one entry per node of the tree");
-    // adaptive's reference: the root's cost when built and the root's half area then
-    double ref_cost = n ? built[0] : 0.0, ref_area = n ? node_box(old.nodes[0]).half_area() : 0.0;
-    if (built.size() > n) ref_area = built[n];
+    // adaptive's reference: the root's cost when built, its half area and the surface area then
+    // (`old`'s where it is the tree as built; not known where only the area was carried)
+    const bool adaptive_policy = config.policy == UpdatePolicy::Adaptive;
+    Reference ref{n ? built[0] : 0.0, n ? node_box(old.nodes[0]).half_area() : 0.0};
+    if (built.size() > n) ref.area = built[n];
+    if (built.size() > n + 1) ref.primitives = built[n + 1];
+    else if (built.size() == n && adaptive_policy) ref.primitives = surface_area(old);
     const auto start = Clock::now();
     UpdateStats stats;
     stats.policy = config.policy;
@@ -177,7 +219,7 @@ Bvh update_bvh(const Bvh& old, const NodeCostArray& built, const GeometryView& g
         const NodeCosts fresh = node_costs(tree);
         built_out = fresh.cost;
         stats.sah_cost = tree.empty() ? 0.0 : fresh.root_cost;
-        ref_cost = stats.sah_cost, ref_area = tree.empty() ? 0.0 : fresh.area[0];
+        ref = {stats.sah_cost, tree.empty() ? 0.0 : fresh.area[0], adaptive_policy ? surface_area(tree) : -1.0};
         stats.policy = UpdatePolicy::Rebuild, stats.subtrees_rebuilt = 1,
         stats.primitives_rebuilt = g.primitive_count();
     };
@@ -194,12 +236,21 @@ Bvh update_bvh(const Bvh& old, const NodeCostArray& built, const GeometryView& g
         // passed (a mesh grown from scale 0 stayed a refit at 122× a fresh build's SAH). Once the
         // geometry has area again, they rebuild.
         const bool restructures = config.policy == UpdatePolicy::Partial || config.policy == UpdatePolicy::Adaptive;
-        if (restructures && ref_area <= 0 && !tree.empty() && now.area[0] > 0) {
+        if (restructures && ref.area <= 0 && !tree.empty() && now.area[0] > 0) {
             rebuild();
         } else {
             built_out = built;
-            if (config.policy == UpdatePolicy::Adaptive && !tree.empty())
-                built_out[0] = float(reference_cost(ref_cost, ref_area, now.area[0]));  // what adaptive aims for
+            // what adaptive aims for: the primitives measured only where the root grew and its
+            // cost is past the reference kept at its A·cost (a pass over them)
+            double primitives = -1, goal = 0;
+            if (adaptive_policy && !tree.empty()) {
+                goal = reference_cost(ref, now.area[0], primitives);
+                if (now.cost[0] > config.target_growth * goal && now.area[0] > ref.area) {
+                    primitives = surface_area(tree);
+                    goal = reference_cost(ref, now.area[0], primitives);
+                }
+                built_out[0] = float(goal);
+            }
             double sah = stats.sah_cost;
             UpdatePolicy ran = UpdatePolicy::Refit;
             if (config.policy == UpdatePolicy::Partial) {
@@ -218,16 +269,17 @@ Bvh update_bvh(const Bvh& old, const NodeCostArray& built, const GeometryView& g
                 // the reference follows the best a restructured tree reached: the geometry's own
                 // shape may have made a good tree cheaper than the first build
                 if (config.policy == UpdatePolicy::Adaptive && !tree.empty()) {
-                    if (ran == UpdatePolicy::Partial && sah < reference_cost(ref_cost, ref_area, now.area[0]))
-                        ref_cost = sah, ref_area = now.area[0];
-                    built_out[0] = float(ref_cost);
+                    if (ran == UpdatePolicy::Partial && sah < goal)
+                        ref = {sah, now.area[0], primitives >= 0 ? primitives : surface_area(tree)};
+                    built_out[0] = float(ref.cost);
                 }
                 stats.sah_cost = sah, stats.policy = ran;
             }
         }
     }
-    built_out.resize(tree.nodes.size() + 1);  // the reference's area after the nodes' costs
-    built_out[tree.nodes.size()] = float(ref_area);
+    built_out.resize(tree.nodes.size() + 2);         // the reference's area after the nodes' costs
+    built_out[tree.nodes.size()] = float(ref.area);  // and the primitives' surface area
+    built_out[tree.nodes.size() + 1] = float(ref.primitives);
     stats.ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     if (config.measure_fresh) {  // not part of the update's time
         const Bvh fresh = stats.policy == UpdatePolicy::Rebuild ? Bvh{} : build_bvh(g, old.config);
