@@ -47,7 +47,8 @@ def view_frustum(view_matrix, window_matrix, region_width: int, region_height: i
     forward, eye = -back, to_world[:3, 3]
     half_width, half_height = 1.0 / projection[0, 0], 1.0 / projection[1, 1]
     larger = 2 * max(half_width, half_height)
-    lens: dict = {"aspect": half_width / half_height}
+    # a camera view of a camera with left-handed axes (a scale of -1) shows the mirrored image
+    lens: dict = {"aspect": half_width / half_height, "mirrored": bool(np.linalg.det(to_world[:3, :3]) < 0)}
     if projection[3, 3] == 0.0:  # perspective: clip w = -z
         centre = projection[0, 2] * half_width, projection[1, 2] * half_height
         near, far = projection[2, 3] / (projection[2, 2] - 1), projection[2, 3] / (projection[2, 2] + 1)

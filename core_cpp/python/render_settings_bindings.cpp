@@ -59,6 +59,7 @@ void bind_camera(nb::module_& m) {
         .def_rw("longitude_min", &Camera::longitude_min)
         .def_rw("longitude_max", &Camera::longitude_max)
         .def_rw("region", &Camera::region, "x0, y0, x1, y1: the part of the frame the image shows (from the top left)")
+        .def_rw("mirrored", &Camera::mirrored, "the image mirrored left to right (camera.h)")
         .def("validate", [](const Camera& self) { validate(self); }, "Raises ValueError naming the first bad value.");
     m.def("parse_projection", [](const std::string& name) { return parse_projection(name); });
     m.attr("PROJECTIONS") = nb::tuple(nb::cast(projection_names()));

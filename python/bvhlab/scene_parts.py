@@ -92,7 +92,8 @@ class Lens:
     of field through a thin lens. fisheye_fov: degrees across the frame. latitude, longitude:
     (min, max) degrees of the equirectangular frame (bottom, top; left, right).
     region: (x0, y0, x1, y1), the part of the frame the image shows, in fractions of the frame
-    from its top-left corner (Blender's render border)."""
+    from its top-left corner (Blender's render border). mirrored: the image mirrored left to
+    right (a Blender camera whose world matrix has a negative determinant, as Cycles renders it)."""
 
     projection: str = "perspective"
     ortho_scale: float | None = None
@@ -107,6 +108,7 @@ class Lens:
     latitude: tuple[float, float] = (-90.0, 90.0)
     longitude: tuple[float, float] = (-180.0, 180.0)
     region: tuple[float, float, float, float] = (0.0, 0.0, 1.0, 1.0)
+    mirrored: bool = False
 
     def _check_lens(self) -> None:
         """Types here (TypeError), values by the C++ camera's own checks (ValueError)."""
@@ -121,6 +123,9 @@ class Lens:
         object.__setattr__(self, "latitude", _reals("camera latitude", self.latitude, 2))
         object.__setattr__(self, "longitude", _reals("camera longitude", self.longitude, 2))
         object.__setattr__(self, "region", _reals("camera region", self.region, 4))
+        if not isinstance(self.mirrored, (bool, np.bool_)):
+            raise TypeError(f"camera mirrored must be a bool, got {type(self.mirrored).__name__}")
+        object.__setattr__(self, "mirrored", bool(self.mirrored))
 
     def _set_lens(self, c) -> None:
         """Copies the lens into a _core.Camera."""
@@ -134,6 +139,7 @@ class Lens:
         c.latitude_min, c.latitude_max = self.latitude
         c.longitude_min, c.longitude_max = self.longitude
         c.region = self.region
+        c.mirrored = self.mirrored
 
     def lens_row(self) -> list[float]:
         """The lens as numbers, in LENS_ROW's order (the scene file's camera row after its first 10)."""
@@ -151,12 +157,18 @@ class Lens:
             *self.latitude,
             *self.longitude,
             *self.region,
+            float(self.mirrored),
         ]
 
     @staticmethod
     def lens_fields(row) -> dict:
-        """The keyword fields of a lens_row."""
+        """The keyword fields of a lens_row (LENS_ROW numbers, or one fewer: written before
+        `mirrored`)."""
         r = [float(x) for x in row]
+        if len(r) not in (LENS_ROW, LENS_ROW - 1):
+            raise ValueError(f"a lens row has {LENS_ROW} numbers, got {len(r)}")
+        if len(r) > 18 and r[18] not in (0.0, 1.0):
+            raise ValueError(f"a lens row's mirrored flag is 0 or 1, got {r[18]}")
         index = int(r[0])
         if not (r[0] == index and 0 <= index < len(PROJECTIONS)):
             raise ValueError(f"camera projection code {r[0]} is not one of 0..{len(PROJECTIONS) - 1}")
@@ -174,11 +186,12 @@ class Lens:
             "latitude": (r[10], r[11]),
             "longitude": (r[12], r[13]),
             "region": (r[14], r[15], r[16], r[17]),
+            "mirrored": len(r) > 18 and r[18] == 1.0,
         }
 
 
 #: Numbers of a Lens in a scene file's camera row (after position, look_at, up and fov_y).
-LENS_ROW = 18
+LENS_ROW = 19
 
 
 @dataclass(frozen=True)
@@ -224,9 +237,10 @@ class Camera(Lens):
 
     @classmethod
     def from_row(cls, row) -> Camera:
-        """The camera of a scene file's row: 10 numbers (a pinhole) or 10 + LENS_ROW."""
+        """The camera of a scene file's row: 10 numbers (a pinhole) or 10 + LENS_ROW (one fewer in
+        files written before `mirrored`)."""
         row = [float(x) for x in row]
-        if len(row) not in (10, 10 + LENS_ROW):
+        if len(row) not in (10, 10 + LENS_ROW, 9 + LENS_ROW):
             raise ValueError(f"a camera row has 10 or {10 + LENS_ROW} numbers, got {len(row)}")
         lens = Lens.lens_fields(row[10:]) if len(row) > 10 else {}
         return cls(_row3(row, 0), _row3(row, 3), _row3(row, 6), row[9], **lens)

@@ -108,6 +108,21 @@ def _lens_shift(scene, data):
     data.shift_x, data.shift_y = 0.15, -0.1
 
 
+def _mirrored(scene, data):
+    """A scale of -1 on the camera's x: Blender and Cycles mirror the image (the probe's F12 and
+    viewport were the unmirrored image: 392 of 3,072 pixels apart), its lens shift with it."""
+    scene.camera.scale = (-0.7, 0.5, 0.9)
+    data.shift_x = 0.12
+    bpy.context.view_layer.update()
+
+
+def _mirrored_y(scene, data):
+    """A scale of -1 on the camera's y: the image upside down (mirrored, its up turned)."""
+    scene.camera.scale = (0.7, -0.5, 0.9)
+    data.shift_y = 0.1
+    bpy.context.view_layer.update()
+
+
 def _orthographic(scene, data):
     data.type, data.ortho_scale, data.sensor_fit = "ORTHO", 9.0, "VERTICAL"
     data.shift_x, data.shift_y = 0.05, 0.08
@@ -174,6 +189,8 @@ SETTINGS = {
     "portrait_vertical_fit": (_portrait_vertical_fit, True),
     "portrait_horizontal_fit": (_portrait_horizontal_fit, True),
     "lens_shift": (_lens_shift, True),
+    "mirrored": (_mirrored, True),
+    "mirrored_y": (_mirrored_y, True),
     "orthographic": (_orthographic, True),
     "orthographic_portrait": (_orthographic_portrait, True),
     "pixel_aspect": (_pixel_aspect, True),

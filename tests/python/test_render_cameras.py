@@ -40,7 +40,8 @@ def basis(view):
     forward = np.array(view.forward, np.float64) / np.linalg.norm(view.forward)
     right = np.cross(forward, view.up)
     right /= np.linalg.norm(right)
-    return forward, right, np.cross(right, forward)
+    up = np.cross(right, forward)
+    return forward, -right if view.mirrored else right, up
 
 
 def pixel_rays(view, width, height):
@@ -120,6 +121,11 @@ VIEWS = {
         (0.0, -1.5, 0.2), (0.2, 1.0, 0.0), projection="equirectangular", clip_start=1.2, clip_end=1.8
     ),
     "region": bvhlab.View((0.4, -3.2, 1.1), (-0.1, 1.0, -0.3), fov_y=40, region=(0.2, 0.1, 0.7, 0.9)),
+    # a Blender camera of negative determinant (a scale of -1): the image mirrored, its shift too
+    "mirrored": bvhlab.View((0.4, -3.2, 1.1), (-0.1, 1.0, -0.3), fov_y=40, aspect=1.6, shift_x=0.15, mirrored=True),
+    "mirrored_equirectangular": bvhlab.View(
+        (0.0, -1.5, 0.2), (0.2, 1.0, 0.0), projection="equirectangular", longitude=(-100, 140), mirrored=True
+    ),
 }
 
 
@@ -256,6 +262,15 @@ def test_a_camera_lens_is_saved_and_loaded(tmp_path):
     assert bvhlab.Scene.load(path).camera == scene.camera
     scene.camera = bvhlab.Camera((1.0, -8.0, 2.0), (0.0, 0.0, 0.5), projection="equirectangular", latitude=(-30, 60))
     assert bvhlab.Scene.load(scene.save(path)).camera == scene.camera
+    scene.camera = bvhlab.Camera((1.0, -8.0, 2.0), (0.0, 0.0, 0.5), shift_x=0.1, mirrored=True)
+    assert bvhlab.Scene.load(scene.save(path)).camera == scene.camera
+    # a row written before `mirrored` (one number fewer) loads unmirrored
+    row = scene.camera.as_row()[:-1]
+    assert bvhlab.Camera.from_row(row) == replace(scene.camera, mirrored=False)
+    with pytest.raises(ValueError, match="mirrored flag"):
+        bvhlab.Camera.from_row(row + [0.5])
+    with pytest.raises(TypeError, match="mirrored must be a bool"):
+        bvhlab.View((0, 0, 0), (0, 1, 0), mirrored="yes")
 
 
 def test_the_overlay_needs_straight_lines():

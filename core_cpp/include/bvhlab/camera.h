@@ -53,6 +53,10 @@ struct Camera {
     /// The part of the frame the image shows, in fractions of the frame from its top-left corner:
     /// x0, y0, x1, y1 (Blender's render border; the whole frame by default).
     std::array<float, 4> region{0, 0, 1, 1};
+    /// The image mirrored left to right: the camera's right is -(forward × up), as where Blender's
+    /// camera has a world matrix of negative determinant (a scale of -1 on one axis, its own or a
+    /// parent's; Cycles keeps the axes' signs as it clears their scale).
+    bool mirrored = false;
 
     bool panoramic() const {
         return projection == Projection::Equirectangular || projection == Projection::FisheyeEquidistant;

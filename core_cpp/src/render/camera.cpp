@@ -151,7 +151,8 @@ void set_camera_frame(gpu::FrameParams& f, const Camera& c, std::uint32_t width,
     f.projection = std::uint32_t(c.projection);
     f.camera_position = {c.position.x, c.position.y, c.position.z};
     f.camera_forward = {forward.x, forward.y, forward.z};
-    f.camera_right = {right.x, right.y, right.z};
+    const Vec3 across = c.mirrored ? Vec3{-right.x, -right.y, -right.z} : right;
+    f.camera_right = {across.x, across.y, across.z};
     const Vec3 up = cross(right, forward);
     f.camera_up = {up.x, up.y, up.z};
     f.clip_start = c.clip_start;

@@ -79,6 +79,8 @@ def camera_matrix(camera, aspect: float, near: float, far: float) -> np.ndarray:
     r = np.cross(f, up)
     r /= np.linalg.norm(r)
     u = np.cross(r, f)
+    if getattr(camera, "mirrored", False):  # the image mirrored left to right, as the tracer's
+        r = -r
     view = np.eye(4)
     view[0, :3], view[1, :3], view[2, :3] = r, u, -f
     view[:3, 3] = -view[:3, :3] @ pos
