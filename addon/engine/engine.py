@@ -60,7 +60,7 @@ class BVHLAB_RE_whitted(bpy.types.RenderEngine):
         from .viewport import ViewportSession
 
         if self._viewport is None:
-            self._viewport, self._live = ViewportSession(), LiveScene("visible", require_camera=False)
+            self._viewport, self._live = ViewportSession(), LiveScene("visible", require_camera=False, allow_empty=True)
             _watch_for_frames(self._viewport)
         try:
             with _quiet_export_warnings():

@@ -48,7 +48,7 @@ class FinalRender:
     def __init__(self):
         from bvhlab.blender import LiveScene
 
-        self.live = LiveScene("visible", require_camera=True)
+        self.live = LiveScene("visible", require_camera=True, allow_empty=True)
         self.error: str | None = None
         self.report = None
         self.notes: list[str] = []

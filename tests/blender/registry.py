@@ -138,6 +138,7 @@ def _engine() -> Iterator[Check]:
     import checks_engine_frames as frames
     import checks_engine_viewport as viewport
     import checks_final as final
+    import checks_scene_features as features
 
     yield Check("engine", "engine_selectable", engine.check_engine_selectable)
     for check in (
@@ -154,9 +155,19 @@ def _engine() -> Iterator[Check]:
         frames.check_animation_frames,
         frames.check_animation_light_is_steady,
         engine.check_counter_passes_are_the_cpu_counters,
+        features.check_animated_world_colour_follows_the_frames,
+        features.check_a_frame_with_nothing_to_render_is_the_world,
+        features.check_a_hidden_particle_emitter_is_not_rendered,
+        features.check_material_override_stands_in_every_slot,
     ):
         yield Check("engine", check.__name__.removeprefix("check_"), check, folder=True)
     yield Check("engine", "errors_are_reported", engine.check_errors_are_reported)
+    yield Check("engine", "depth_of_field_focuses_on_a_bone", features.check_depth_of_field_focuses_on_a_bone)
+    yield Check(
+        "engine",
+        "a_mirrored_camera_mirrors_the_exported_view",
+        features.check_a_mirrored_camera_mirrors_the_exported_view,
+    )
     for check in (
         viewport.check_view_frustum,
         viewport.check_viewport_worker_levels,

@@ -23,34 +23,44 @@ PANORAMAS = {"EQUIRECTANGULAR": "equirectangular", "FISHEYE_EQUIDISTANT": "fishe
 
 def gather_camera(scene, depsgraph) -> Camera:
     """Position and orientation from the evaluated camera's world matrix (it looks along its -Z,
-    its +Y is up; scale ignored, as Cycles clears it; look_at is ahead along the view axis), and
+    its +Y is up; scale ignored, as Cycles clears it, but not the axes' signs: a matrix of negative
+    determinant mirrors the image, as in Cycles; look_at is ahead along the view axis), and
     its lens for the scene's render resolution. Raises ExportError when there is no usable camera
     or it is of a kind bvhlab does not render."""
     camera = scene.camera
     if camera is None:
         raise ExportError(f"scene '{scene.name}' has no camera: add one and make it the active camera")
     if camera.type != "CAMERA":
-        raise ExportError(f"the scene camera '{camera.name}' is a {camera.type.lower()}, not a camera")
+        raise ExportError(f"the scene camera '{camera.name}' is {_a(camera.type.lower())}, not a camera")
     evaluated = camera.evaluated_get(depsgraph)  # animation and drivers applied
-    position, forward, up = _placement(camera.name, np.array(evaluated.matrix_world, np.float64))
+    position, forward, up, mirrored = _placement(camera.name, np.array(evaluated.matrix_world, np.float64))
     # look_at far enough ahead to differ from the position in float32 (the tracer's precision)
     ahead = max(1.0, float(np.abs(position).max()) * 2.0**-10)
     lens = lens_fields(scene, evaluated.data, camera.name, position, forward)
+    lens["mirrored"] = mirrored
     try:
         return Camera(tuple(position), tuple(position + forward * ahead), tuple(up), **lens)
     except ValueError as error:
         raise ExportError(f"camera '{camera.name}': {error}") from None
 
 
+def _a(noun: str) -> str:
+    """`noun` after its indefinite article ("an equiangular cubemap face", "a mirror ball")."""
+    return ("an " if noun[:1] in "aeiou" else "a ") + noun
+
+
 def _placement(name: str, matrix: np.ndarray):
-    """(position, unit forward, unit up) of a camera's world matrix."""
+    """(position, unit forward, unit up, mirrored) of a camera's world matrix: mirrored where its
+    axes are left-handed (a scale of -1 on one of them, the camera's own or a parent's), which
+    Cycles keeps (transform_clear_scale normalises each axis, its sign kept)."""
     z_length, y_length = np.linalg.norm(matrix[:3, 2]), np.linalg.norm(matrix[:3, 1])
     if not (np.isfinite(matrix).all() and z_length > 0 and y_length > 0):
         raise ExportError(
             f"camera '{name}' has no usable orientation (a scale of 0, or a location, rotation "
             f"or scale that is not a number)"
         )
-    return matrix[:3, 3], -matrix[:3, 2] / z_length, matrix[:3, 1] / y_length
+    mirrored = bool(np.linalg.det(matrix[:3, :3]) < 0)
+    return matrix[:3, 3], -matrix[:3, 2] / z_length, matrix[:3, 1] / y_length, mirrored
 
 
 def render_size(render) -> tuple[int, int]:
@@ -104,7 +114,7 @@ def _panorama(data, name: str) -> dict:
     kind = getattr(settings, "panorama_type", None)
     if settings is None or kind not in PANORAMAS:
         raise ExportError(
-            f"camera '{name}' is a {str(kind).replace('_', ' ').lower()} panorama; bvhlab renders the "
+            f"camera '{name}' is {_a(str(kind).replace('_', ' ').lower())} panorama; bvhlab renders the "
             f"equirectangular and fisheye equidistant panoramas only"
         )
     fields = {"projection": PANORAMAS[kind], "shift_x": data.shift_x, "shift_y": data.shift_y}
@@ -116,10 +126,22 @@ def _panorama(data, name: str) -> dict:
     return fields
 
 
+def _focus_point(dof) -> np.ndarray:
+    """Where the focus object is: its origin, or the head of its pose bone named by the focus
+    subtarget (an armature's bone, as Cycles' blender_camera_focal_distance takes it)."""
+    obj = dof.focus_object
+    matrix = np.array(obj.matrix_world, np.float64)
+    bone_name = getattr(dof, "focus_subtarget", "")
+    bone = obj.pose.bones.get(bone_name) if bone_name and obj.pose is not None else None
+    if bone is not None:
+        matrix = matrix @ np.array(bone.matrix, np.float64)
+    return matrix[:3, 3]
+
+
 def _depth_of_field(data, name: str, position, forward) -> dict:
     """A thin lens as Cycles makes it (blender_camera_from_object): its radius from the focal
     length and f-stop (orthographic: from the f-stop alone), in scene units; the focus distance,
-    or the focus object's distance along the view axis (blender_camera_focal_distance)."""
+    or the focus object's (or its bone's) distance along the view axis (blender_camera_focal_distance)."""
     dof = data.dof
     if not dof.use_dof:
         return {}
@@ -127,7 +149,7 @@ def _depth_of_field(data, name: str, position, forward) -> dict:
     radius = 1.0 / (2 * fstop) if data.type == "ORTHO" else data.lens * 1e-3 / (2 * fstop)
     focus = dof.focus_distance
     if dof.focus_object is not None and position is not None:
-        target = np.array(dof.focus_object.matrix_world, np.float64)[:3, 3]
+        target = _focus_point(dof)
         focus = abs(float(np.dot(forward, target - position)))
     if dof.aperture_blades >= 3 or dof.aperture_ratio != 1.0:
         warnings.warn(

@@ -33,7 +33,7 @@ import numpy as np
 from ..scene import Scene, default_camera, default_light
 from .camera import gather_camera
 from .depsgraph_updates import Dirty
-from .errors import ExportError, SubstituteWarning
+from .errors import ExportError, ExportWarning, SubstituteWarning
 from .instancing import Item, Layout, SharedMesh, instance_transforms, plan, shared_meshes
 from .light import gather_light
 from .material_table import MaterialTable, map_slots
@@ -69,10 +69,16 @@ class LiveScene:
     """The scene of one depsgraph, kept between syncs. `scene` is the last exported bvhlab.Scene
     (a new object after every sync that changed anything; arrays that did not change are shared
     with the previous one). `totals` counts reads over the LiveScene's life. `instancing`: False
-    places every instance's triangles into the world (the flat export of before)."""
+    places every instance's triangles into the world (the flat export of before). `allow_empty`:
+    nothing in scope gives a scene of no geometry (a render of the world alone, as other engines
+    render it, with an ExportWarning) instead of an ExportError: a render engine's frames (an
+    animation whose only mesh is hidden on one frame stopped there, its later frames lost)."""
 
-    def __init__(self, scope: str = "visible", *, require_camera: bool = True, instancing: bool = True):
+    def __init__(
+        self, scope: str = "visible", *, require_camera: bool = True, instancing: bool = True, allow_empty: bool = False
+    ):
         self.scope, self.require_camera, self.instancing = scope, require_camera, instancing
+        self.allow_empty = allow_empty
         self.scene: Scene | None = None
         #: The distance the light's intensity is calibrated by (light.py): measured at the first sync
         #: with a light, then kept, so a static light lights static geometry alike on every frame;
@@ -86,16 +92,20 @@ class LiveScene:
         self._materials: dict = {}  # material name → bvhlab.Material, as last read
         self._seen_moving: set[tuple] = set()  # keys of the items seen moving (movers from then on)
         self._world = np.zeros((0, 4, 4))  # the items' world matrices, row i the i-th item's
+        self._override_key: str | None = None  # the view layer's Material Override when last synced
 
     def sync(self, depsgraph, blender_scene=None, view_layer=None) -> SyncReport:
         """Bring `scene` up to date with the evaluated depsgraph. Raises ExportError (see
         export_scene); on an error the previous scene and cache stay as they were."""
         blender_scene = blender_scene or depsgraph.scene
         view_layer = view_layer or depsgraph.view_layer
-        full = self.scene is None
+        # the view layer's Material Override in every slot; set or cleared, every item's slots anew
+        override = getattr(view_layer, "material_override", None)
+        override_key = None if override is None else override.original.name_full
+        full = self.scene is None or override_key != self._override_key
         dirty = Dirty(everything=True) if full else Dirty.from_updates(depsgraph)
         known = {k: v for k, v in self._materials.items() if k not in dirty.materials}
-        table = MaterialTable(known)
+        table = MaterialTable(known, override)
         items, world, by_data, report, seen_moving = self._walk(depsgraph, view_layer, dirty, table)
         report.full = full
         animated = AnimatedMemo()
@@ -121,6 +131,7 @@ class LiveScene:
         self._items, self._by_data, self._layout, self._shared = items, by_data, layout, shared
         self._world = world
         self._seen_moving = seen_moving
+        self._override_key = override_key
         self.totals.add(report)
         return report
 
@@ -241,7 +252,9 @@ class LiveScene:
                 triangles.append(item.placed)
                 tri_material.append(map_slots(item.slot_table, item.mesh.slots))
         if not triangles and not spheres and not shared:
-            raise ExportError(_nothing_in_scope(self.scope))
+            if not self.allow_empty:
+                raise ExportError(_nothing_in_scope(self.scope))
+            warnings.warn(f"{_nothing_in_scope(self.scope)}: the world alone is rendered", ExportWarning, stacklevel=3)
         previous = self.scene
         same_order = list(self._items) == list(items)
         same_layout = layout.same_as(self._layout)
@@ -303,15 +316,15 @@ class LiveScene:
 
     def _make_scene(self, arrays: dict, table: MaterialTable, blender_scene, depsgraph, report) -> Scene:
         camera = self._camera(blender_scene, depsgraph)
-        sky = gather_sky(blender_scene)
+        sky = gather_sky(blender_scene, depsgraph)
         previous = self.scene
         if previous is not None and not report.geometry and not report.materials:
             scene = copy.copy(previous)  # the same arrays: renderers keep what they uploaded
-            scene.camera = camera if camera is not None else default_camera(scene.bounds())
+            scene.camera = camera if camera is not None else default_camera(scene.world_bounds())
             r, g, b = (float(c) for c in sky)
             scene.sky = (r, g, b)
             return scene
-        return Scene(
+        scene = Scene(
             triangles=arrays["triangles"],
             spheres=arrays["spheres"],
             materials=table.materials,
@@ -324,6 +337,9 @@ class LiveScene:
             instance_mesh=arrays["instance_mesh"],
             instance_transforms=arrays["instance_transforms"],
         )
+        if scene.camera is None:  # nothing to frame (allow_empty): the fallback camera
+            scene.camera = default_camera(None)
+        return scene
 
     def _camera(self, blender_scene, depsgraph):
         try:
@@ -337,5 +353,11 @@ class LiveScene:
 
 def _nothing_in_scope(scope: str) -> str:
     if scope == "selected":
-        return "no mesh in scope: no selected object has geometry (select meshes, or use scope 'visible')"
-    return "no mesh in scope: no visible object has geometry (add a mesh or unhide one)"
+        return (
+            "no mesh in scope: no selected object has faces or spheres (select meshes, or use scope 'visible'; "
+            "loose edges and vertices are not rendered)"
+        )
+    return (
+        "no mesh in scope: no visible object has faces or spheres (add a mesh or unhide one; loose edges and "
+        "vertices are not rendered)"
+    )

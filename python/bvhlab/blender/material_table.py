@@ -11,9 +11,12 @@ from .material import gather_material
 class MaterialTable:
     """Collects materials in first-use order; every Blender material is read once. `known` (name →
     Material) holds materials read before and still valid: they are taken from it instead of read
-    again, and every material read is added to it (`reads` counts them)."""
+    again, and every material read is added to it (`reads` counts them). `override`: a material
+    that stands in every slot of every object (the view layer's Material Override, as Cycles and
+    EEVEE render it), or None."""
 
-    def __init__(self, known: dict[str, Material] | None = None):
+    def __init__(self, known: dict[str, Material] | None = None, override=None):
+        self.override = override
         self.materials: list[Material] = []
         self.known = {} if known is None else known
         self.reads = 0
@@ -41,6 +44,8 @@ class MaterialTable:
         known = self._slots.get(key) if key is not None else None
         if known is None:
             slots = [slot.material for slot in obj.material_slots] or [None]
+            if self.override is not None:
+                slots = [self.override] * len(slots)
             known = np.array([self.index_of(m) for m in slots], np.int32)
             if key is not None:
                 self._slots[key] = known

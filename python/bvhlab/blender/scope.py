@@ -47,7 +47,8 @@ def item_name(key: tuple) -> str:
 
 def instances_in_scope(depsgraph, view_layer, scope: str, types=None) -> Iterator[InScope]:
     """Every object and instance the depsgraph shows whose owner (the object itself, or the object
-    that instances it) is in `scope`, of the object `types` given (None: all). An instance's `obj`
+    that instances it) is in `scope`, of the object `types` given (None: all); not an instancer's
+    own geometry where the depsgraph does not show it (`show_self`). An instance's `obj`
     is only valid until the next item: use it before moving on."""
     if scope not in SCOPES:
         raise ExportError(f"unknown scope '{scope}'; expected one of: {', '.join(SCOPES)}")
@@ -64,6 +65,10 @@ def instances_in_scope(depsgraph, view_layer, scope: str, types=None) -> Iterato
         if types is not None and kind not in types:
             continue
         is_instance = instance.is_instance
+        # an instancer whose own geometry is not shown (a particle emitter with Show Emitter off
+        # for the depsgraph's mode, render or viewport), as Cycles skips it; its instances stay
+        if not is_instance and not instance.show_self:
+            continue
         holder = instance.parent if is_instance else obj
         known = owners.get(holder)
         if known is None:

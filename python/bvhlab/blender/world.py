@@ -9,13 +9,16 @@ from .compat import shader_tree
 from .errors import ExportWarning
 
 
-def gather_sky(scene) -> tuple[float, float, float]:
+def gather_sky(scene, depsgraph=None) -> tuple[float, float, float]:
     """Colour × strength of the world's Background node when it is a plain colour; the world's
     viewport colour when the background is a texture (with an ExportWarning); bvhlab's default
-    sky when the scene has no world."""
+    sky when the scene has no world. With `depsgraph`, the evaluated world's (its animation at the
+    depsgraph's frame: the original's values are whatever was last written to it)."""
     world = scene.world
     if world is None:
         return DEFAULT_SKY
+    if depsgraph is not None:
+        world = world.evaluated_get(depsgraph)
     background = _background_node(world)
     if background is None:
         return tuple(world.color)
