@@ -20,6 +20,7 @@
 #include "bvhlab/render_settings.h"
 #include "bvhlab/restore.h"
 #include "py_bvh.h"
+#include "py_cancel.h"
 #include "py_record.h"
 #include "py_render_scene.h"
 
@@ -33,9 +34,14 @@ namespace {
 nb::dict py_node_data(const PyBvh& self, unsigned threads) {
     TreePtr tree = self.current();
     NodeData d;
-    {
+    PyStopCheck stop;  // Ctrl-C stops the EPO pass (seconds to minutes on a soup)
+    Cancellation cancel([&stop] { return stop(0.0); });
+    try {
         nb::gil_scoped_release release;
-        d = compute_node_data(tree->bvh, threads);
+        d = compute_node_data(tree->bvh, threads, &cancel);
+    } catch (const Cancelled&) {
+        stop.rethrow();
+        throw;
     }
     nb::dict out = node_data_dict(std::move(d));
     out["revision"] = tree->revision;

@@ -23,9 +23,11 @@ def linear_to_srgb(x: np.ndarray) -> np.ndarray:
 
 def straight_alpha(image: np.ndarray) -> np.ndarray:
     """A premultiplied float RGBA image (a render with film_transparent, as Blender's Render Result
-    holds it) with straight alpha, as PNG stores it: colour divided by alpha where alpha > 0."""
+    holds it) with straight alpha, as PNG stores it: colour divided by alpha where 0 < alpha < 1
+    (alpha 0, 1 or not a number leaves the colour as it is)."""
     alpha = image[..., 3:4]
-    return np.concatenate([image[..., :3] / np.where(alpha > 0, alpha, 1), alpha], -1).astype(np.float32)
+    between = (alpha > 0) & (alpha < 1)
+    return np.concatenate([image[..., :3] / np.where(between, alpha, 1), alpha], -1).astype(np.float32)
 
 
 def to_rgba8(image: np.ndarray) -> np.ndarray:

@@ -5,9 +5,9 @@ written whole or not at all (bvhlab._atomic)."""
 from __future__ import annotations
 
 import csv
-import json
 from pathlib import Path
 
+from . import _json as strict_json
 from ._atomic import replacing, write_text
 from ._checks import output_file
 from .two_level_stats import MESH_METRICS
@@ -31,7 +31,7 @@ def csv_path(path) -> Path:
 def write_stats_json(path: Path, stats: dict, about: dict) -> None:
     """{"about": {...scene, file, scope...}, "stats": <Bvh.stats, unchanged>}."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    write_text(path, json.dumps({"about": about, "stats": stats}, indent=1) + "\n")
+    write_text(path, strict_json.dumps({"about": about, "stats": stats}, indent=1) + "\n")
 
 
 def write_stats_csv(path: Path, stats: dict) -> None:

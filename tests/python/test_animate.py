@@ -115,3 +115,19 @@ def test_analytic_spheres_move_in_the_experiment():
     down = np.array([[0, 0, -1]], np.float32)
     expected = bvhlab.build(instanced(3)).intersect(origins, down)["t"]
     np.testing.assert_array_equal(two_level.tree.intersect(origins, down)["t"], expected)
+
+
+def _strict(text: str):
+    """json.loads refusing NaN and Infinity, which strict JSON parsers refuse."""
+
+    def refuse(token):
+        raise ValueError(f"not JSON: {token}")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_animate_json_is_strict_json_without_a_backend(tmp_path):
+    """No backend: no trace time (it was written as NaN, 16 tokens a strict parser refuses); null."""
+    assert main(["animate", "crowd", "--size", "2", "--frames", "0-3", "--out", str(tmp_path)]) == 0
+    report = _strict((tmp_path / "animate.json").read_text())
+    assert report["rows"] and all(r["trace_ms"] is None for r in report["rows"])

@@ -97,3 +97,35 @@ def test_bad_requests(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "X,Y" in err and "not allowed with" in err and "one of the arguments" in err
     np.testing.assert_equal(sorted(p.name for p in tmp_path.iterdir()), ["w.bvhtree"])
+
+
+def test_a_missed_pixel_is_strict_json(tmp_path):
+    """A pixel whose ray hits nothing: its distance is null (it was Infinity, which strict JSON
+    parsers refuse)."""
+    path = tmp_path / "px.json"
+    assert (
+        main(["inspect", "gen:whitted", "--pixel", "0,0", "--width", "16", "--height", "12", "--json", str(path)]) == 0
+    )
+
+    def refuse(token):
+        raise ValueError(f"not JSON: {token}")
+
+    report = json.loads(path.read_text(), parse_constant=refuse)
+    assert report["pixel"]["t"] is None and report["pixel"]["prim"] < 0
+
+
+def test_build_options_beside_a_saved_tree_must_be_its_own(tmp_path, capsys):
+    """--tree with --method median on a tree saved as sah32: refused (the options were ignored and the
+    saved tree inspected as if it were the one asked for); the tree's own options, or none, read it."""
+    tree = tmp_path / "w.bvhtree"
+    assert main(["inspect", "gen:whitted", "--method", "sah32", "--node", "0", "--save-tree", str(tree)]) == 0
+    capsys.readouterr()
+    assert main(["inspect", "gen:whitted", "--tree", str(tree), "--method", "median", "--node", "0"]) == 2
+    assert "was built with method" in capsys.readouterr().err
+    assert main(["inspect", "gen:whitted", "--tree", str(tree), "--method", "sah32", "--node", "0"]) == 0
+    assert main(["inspect", "gen:whitted", "--tree", str(tree), "--node", "0"]) == 0
+
+
+def test_optimize_ms_needs_optimize(capsys):
+    assert main(["build", "gen:whitted", "--optimize-ms", "5"]) == 2
+    assert "--optimize N" in capsys.readouterr().err

@@ -43,9 +43,32 @@ def test_nan_and_infinite_pixels_are_written_as_defined_bytes(tmp_path):
 
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # no "invalid value encountered in cast"
-        bvhlab.save_png(image, tmp_path / "x.png")
+        bvhlab.save_png(image, tmp_path / "x.png", premultiplied=False)
     pixels = read_png(tmp_path / "x.png")
     assert pixels[0, 0].tolist() == [0, 0, 0, 0]
     assert pixels[0, 1].tolist() == [255, 255, 255, 255]
     assert pixels[0, 2].tolist() == [0, 0, 0, 0]
     assert pixels[0, 3].tolist() == [188, 188, 188, 128]  # 0.5 linear is 188 in sRGB
+
+
+def _srgb8(linear: float) -> int:
+    """The sRGB transfer function (IEC 61966-2-1), rounded to 8 bits."""
+    s = 12.92 * linear if linear <= 0.0031308 else 1.055 * linear ** (1 / 2.4) - 0.055
+    return int(s * 255 + 0.5)
+
+
+def test_a_premultiplied_render_is_written_with_straight_alpha(tmp_path):
+    """A render with Film ▸ Transparent is premultiplied (colour × coverage): its edge pixel of
+    0.06 at alpha 0.25 is colour 0.24 (it was written as 0.06: dark fringes); opaque and empty
+    pixels as they are; premultiplied=False writes the colour as given."""
+    image = np.zeros((1, 3, 4), np.float32)
+    image[0, 0] = (0.06, 0.06, 0.06, 0.25)
+    image[0, 1] = (0.5, 0.25, 0.1, 1.0)
+    image[0, 2] = (0.0, 0.0, 0.0, 0.0)
+    bvhlab.save_png(image, tmp_path / "p.png")
+    pixels = read_png(tmp_path / "p.png")
+    assert pixels[0, 0].tolist() == [_srgb8(0.24)] * 3 + [64]
+    assert pixels[0, 1].tolist() == [_srgb8(0.5), _srgb8(0.25), _srgb8(0.1), 255]
+    assert pixels[0, 2].tolist() == [0, 0, 0, 0]
+    bvhlab.save_png(image, tmp_path / "s.png", premultiplied=False)
+    assert read_png(tmp_path / "s.png")[0, 0].tolist() == [_srgb8(0.06)] * 3 + [64]

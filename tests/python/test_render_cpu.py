@@ -406,7 +406,7 @@ def test_png_round_trip(tmp_path):
     from png_reader import read_png
 
     image = np.random.default_rng(0).random((5, 7, 4)).astype(np.float32)
-    bvhlab.save_png(image, tmp_path / "x.png")
+    bvhlab.save_png(image, tmp_path / "x.png", premultiplied=False)  # straight: colour above alpha
     back = read_png(tmp_path / "x.png")
     assert back.shape == (5, 7, 4)
     srgb = np.where(image[..., :3] <= 0.0031308, 12.92 * image[..., :3], 1.055 * image[..., :3] ** (1 / 2.4) - 0.055)

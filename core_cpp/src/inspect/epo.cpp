@@ -77,7 +77,7 @@ double surface_area(const Bvh& bvh) {
     return total;
 }
 
-std::vector<double> epo_terms(const Bvh& bvh, unsigned threads) {
+std::vector<double> epo_terms(const Bvh& bvh, unsigned threads, Cancellation* cancel) {
     const std::uint32_t count = bvh.node_count();
     std::vector<double> terms(count, 0.0);
     if (count == 0) return terms;
@@ -96,37 +96,45 @@ std::vector<double> epo_terms(const Bvh& bvh, unsigned threads) {
 
     const unsigned slots = ThreadPool::resolve(threads);
     std::vector<std::vector<std::uint64_t>> sums(slots, std::vector<std::uint64_t>(count, 0));
-    constexpr std::size_t kChunk = 256;
+    // small chunks: a stop is polled before each (a triangle of a soup may clip against thousands
+    // of boxes), and a worker looks at the stop before each triangle; sums in fixed point, so the
+    // same terms whatever the chunks and threads
+    constexpr std::size_t kChunk = 16;
     const std::size_t chunks = (bvh.prims.size() + kChunk - 1) / kChunk;
-    ThreadPool::shared().run(chunks, slots, [&](std::size_t c, unsigned slot) {
-        std::vector<std::uint32_t> stack;
-        std::uint64_t* sum = sums[slot].data();
-        for (std::size_t k = c * kChunk, end = std::min(bvh.prims.size(), k + kChunk); k < end; ++k) {
-            if (!is_triangle(k)) continue;
-            double v[3][3], t_lo[3], t_hi[3];
-            vertices(k, v);
-            for (int a = 0; a < 3; ++a)
-                t_lo[a] = std::min({v[0][a], v[1][a], v[2][a]}), t_hi[a] = std::max({v[0][a], v[1][a], v[2][a]});
-            const std::uint32_t leaf = leaf_of_slot[k];
-            stack.assign(1, 0);
-            while (!stack.empty()) {
-                const std::uint32_t i = stack.back();
-                stack.pop_back();
-                const BvhNode& n = bvh.nodes[i];
-                const double lo[3] = {n.lo.x, n.lo.y, n.lo.z}, hi[3] = {n.hi.x, n.hi.y, n.hi.z};
-                const bool ancestor = i <= leaf && leaf < skip_index(n, i);
-                if (!ancestor) {
-                    if (t_lo[0] > hi[0] || t_lo[1] > hi[1] || t_lo[2] > hi[2] || t_hi[0] < lo[0] || t_hi[1] < lo[1] ||
-                        t_hi[2] < lo[2])
-                        continue;  // boxes apart: nothing to clip
-                    const double a = clipped_triangle_area(v[0], v[1], v[2], lo, hi);
-                    if (a <= 0) continue;  // nothing of it here, nor in the children
-                    sum[i] += std::uint64_t(std::llround(a / total_area * kFixedScale));
+    const bool finished = ThreadPool::shared().run_until_stopped(
+        chunks, slots,
+        [&](std::size_t c, unsigned slot) {
+            std::vector<std::uint32_t> stack;
+            std::uint64_t* sum = sums[slot].data();
+            for (std::size_t k = c * kChunk, end = std::min(bvh.prims.size(), k + kChunk); k < end; ++k) {
+                if (cancel && cancel->stop_requested()) return;
+                if (!is_triangle(k)) continue;
+                double v[3][3], t_lo[3], t_hi[3];
+                vertices(k, v);
+                for (int a = 0; a < 3; ++a)
+                    t_lo[a] = std::min({v[0][a], v[1][a], v[2][a]}), t_hi[a] = std::max({v[0][a], v[1][a], v[2][a]});
+                const std::uint32_t leaf = leaf_of_slot[k];
+                stack.assign(1, 0);
+                while (!stack.empty()) {
+                    const std::uint32_t i = stack.back();
+                    stack.pop_back();
+                    const BvhNode& n = bvh.nodes[i];
+                    const double lo[3] = {n.lo.x, n.lo.y, n.lo.z}, hi[3] = {n.hi.x, n.hi.y, n.hi.z};
+                    const bool ancestor = i <= leaf && leaf < skip_index(n, i);
+                    if (!ancestor) {
+                        if (t_lo[0] > hi[0] || t_lo[1] > hi[1] || t_lo[2] > hi[2] || t_hi[0] < lo[0] ||
+                            t_hi[1] < lo[1] || t_hi[2] < lo[2])
+                            continue;  // boxes apart: nothing to clip
+                        const double a = clipped_triangle_area(v[0], v[1], v[2], lo, hi);
+                        if (a <= 0) continue;  // nothing of it here, nor in the children
+                        sum[i] += std::uint64_t(std::llround(a / total_area * kFixedScale));
+                    }
+                    if (!is_leaf(n)) stack.push_back(n.index), stack.push_back(i + 1);
                 }
-                if (!is_leaf(n)) stack.push_back(n.index), stack.push_back(i + 1);
             }
-        }
-    });
+        },
+        cancel);
+    if (!finished || (cancel && cancel->stop_requested())) throw Cancelled();
     for (std::uint32_t i = 0; i < count; ++i) {
         std::uint64_t s = 0;
         for (const auto& part : sums) s += part[i];

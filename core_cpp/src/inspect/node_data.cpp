@@ -27,7 +27,7 @@ void resize_all(NodeData& d, std::size_t n) {
 
 }  // namespace
 
-NodeData compute_node_data(const Bvh& bvh, unsigned threads) {
+NodeData compute_node_data(const Bvh& bvh, unsigned threads, Cancellation* cancel) {
     NodeData d;
     const std::uint32_t n = bvh.node_count();
     resize_all(d, n);
@@ -61,7 +61,7 @@ NodeData compute_node_data(const Bvh& bvh, unsigned threads) {
     }
     for (std::uint32_t i = 0; i < n; ++i) d.sah_share[i] = d.sah_cost > 0 ? d.subtree_sah[i] / d.sah_cost : 0.0;
     // A TLAS (tlas.h) packs no geometry: its boxes hold instances, whose EPO it cannot clip.
-    d.epo = bvh.prims.empty() ? std::vector<double>(n, 0.0) : epo_terms(bvh, threads);
+    d.epo = bvh.prims.empty() ? std::vector<double>(n, 0.0) : epo_terms(bvh, threads, cancel);
     for (double e : d.epo) d.epo_cost += e;
     d.surface_area = surface_area(bvh);
     return d;

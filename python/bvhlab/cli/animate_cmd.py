@@ -12,7 +12,6 @@ from __future__ import annotations
 import argparse
 import csv
 import io
-import json
 import math
 import sys
 from collections.abc import Callable
@@ -20,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import _json as strict_json
 from .._atomic import write_text
 from .._progress import ProgressBar
 from ..animate import FrameRow, as_scene, run_experiment, summary
@@ -134,7 +134,7 @@ def run(args) -> int:
     write_text(args.out / "animate.csv", _csv(rows))
     write_text(
         args.out / "animate.json",
-        json.dumps({"about": about, "summary": totals, "rows": [r.as_dict() for r in rows]}, indent=1) + "\n",
+        strict_json.dumps({"about": about, "summary": totals, "rows": [r.as_dict() for r in rows]}, indent=1) + "\n",
     )
     _plot(rows, args.out / "animate.png", f"{Path(args.animation).stem}: update policies over frames {first}-{last}")
     print(f"wrote {args.out / 'animate.csv'}, animate.json, animate.png")

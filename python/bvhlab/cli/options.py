@@ -113,8 +113,11 @@ def add_optimize(p: argparse.ArgumentParser) -> None:
 
 
 def optimize_config(args) -> OptimizeConfig | None:
-    """The OptimizeConfig of --optimize/--optimize-ms (checked, ValueError), or None without --optimize."""
+    """The OptimizeConfig of --optimize/--optimize-ms (checked, ValueError), or None without --optimize
+    (--optimize-ms alone is refused: it bounds an optimisation that would not run)."""
     config = OptimizeConfig(iterations=args.optimize, time_budget_ms=args.optimize_ms)
+    if args.optimize_ms and not args.optimize:
+        raise ValueError("--optimize-ms bounds --optimize N's optimisation: give --optimize N too")
     return config if args.optimize else None
 
 
@@ -131,6 +134,20 @@ def optimize_tree(bvh, config: OptimizeConfig | None) -> OptimizeStats | None:
         raise ValueError(OPTIMIZE_FLAT_ONLY)
     with ProgressBar("optimizing") as bar:
         return bvh.optimize(config, progress=bar)
+
+
+def default_build_kwargs() -> dict:
+    """build_kwargs of a command line that gives no build option."""
+    return build_kwargs(
+        argparse.Namespace(
+            method=DEFAULT_METHOD,
+            bins=None,
+            axis=DEFAULT_AXIS,
+            bin_bounds=DEFAULT_BIN_BOUNDS,
+            max_leaf_size=DEFAULT_MAX_LEAF_SIZE,
+            sah_block=DEFAULT_SAH_BLOCK,
+        )
+    )
 
 
 def build_kwargs(args) -> dict:

@@ -7,12 +7,12 @@ OUT.histogram.json; --heatmap is --counter box_tests)."""
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 import numpy as np
 
 from .. import Bvh, InstancedBvh, build, counters, histogram, legend, save_png
+from .. import _json as strict_json
 from .._atomic import replacing
 from .._progress import ProgressBar
 from ..library import load_scene
@@ -110,7 +110,7 @@ def run(args) -> int:
     elif result.color is not None:
         color = straight_alpha(result.color) if args.film_transparent else result.color  # PNG: straight alpha
         image = legend.render_legends(color, render_options, t["heatmap_scale"], legend.overlay_height(bvh))
-        save_png(image, args.out)
+        save_png(image, args.out, premultiplied=False)
     print(f"{name}: {args.width}x{args.height} on {t['device']} ({t['backend']}: {t['reason']})")
     print(f"trace {t['trace_ms']:.1f} ms, total {t['total_ms']:.1f} ms; {_tree_summary(bvh)}")
     print(f"wrote {args.out}")
@@ -144,7 +144,7 @@ def _write_counter(all_counters, counter: str | None, value_range, out: Path) ->
     strip_png, numbers = histogram_paths(out)
     save_png(histogram.histogram_strip(hist, values.shape[1]), strip_png)
     with replacing(numbers, text=True) as f:
-        f.write(json.dumps(hist.to_json(), indent=2))
+        f.write(strict_json.dumps(hist.to_json(), indent=2))
     how = "auto: 0 to the 99th percentile" if value_range is None else "given"
     p = hist.percentiles
     print(

@@ -6,11 +6,11 @@ difference."""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 
+from .. import _json as strict_json
 from .. import counters, legend, palette
 from .._atomic import replacing
 from ..render import Renderer, save_png
@@ -121,5 +121,5 @@ def write_difference(result: dict, out: Path, stem: str) -> dict:
     with replacing(paths["npy"]) as f:
         np.save(f, np.stack([result["a"], result["b"], result["difference"]]))
     with replacing(paths["json"], text=True) as f:
-        f.write(json.dumps(result["summary"], indent=2))
+        f.write(strict_json.dumps(result["summary"], indent=2))
     return paths

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import csv
-import json
 import math
 from pathlib import Path
 
+from .. import _json as strict_json
 from .._atomic import replacing, write_text
 from .protocol import paired_ratio
 
@@ -94,7 +94,7 @@ def write_tables(rows: list[dict], out: Path, meta: dict, checks: list[dict], ex
     write_text(paths["md"], markdown(rows, meta, checks) + extra_markdown)
     write_text(
         paths["json"],
-        json.dumps(_plain({"meta": meta, "rows": rows, "checks": checks, "report_table1": REPORT_TABLE1}), indent=1),
+        strict_json.dumps({"meta": meta, "rows": rows, "checks": checks, "report_table1": REPORT_TABLE1}, indent=1),
     )
     return paths
 
@@ -195,14 +195,3 @@ def _cell(v):
     if isinstance(v, float):
         return "" if math.isnan(v) else f"{v:.4g}"
     return "" if v is None else v
-
-
-def _plain(value):
-    """JSON-safe: NaN becomes null."""
-    if isinstance(value, float) and math.isnan(value):
-        return None
-    if isinstance(value, dict):
-        return {k: _plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    return value
