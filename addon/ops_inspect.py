@@ -86,6 +86,9 @@ def pick_ray(operator, context, origin, direction) -> set[str]:
         return {"CANCELLED"}
     settings = scene.bvhlab
     shown = _shown_range(scene, built)
+    if shown[0] > shown[1]:  # Min depth below the tree's deepest level: no box is drawn to pick
+        operator.report({"INFO"}, "No box under the cursor (no box is drawn at these depths)")
+        return {"CANCELLED"}
     if overlay.is_two_level(built):
         got = pick_two_level(
             built.bvh, origin, direction, settings.overlay_level, shown, leaves_only=settings.overlay_leaves_only

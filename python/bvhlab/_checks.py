@@ -21,6 +21,11 @@ def float32_array(name: str, value, trailing_shape: tuple[int, ...]) -> np.ndarr
     want = "(N, " + ", ".join(str(d) for d in trailing_shape) + ")"
     if not isinstance(value, np.ndarray):
         raise TypeError(f"{name} must be a numpy float32 array of shape {want}, got {type(value).__name__}")
+    if isinstance(value, np.ma.MaskedArray):  # its mask would be dropped: masked triangles built and hit
+        raise TypeError(
+            f"{name} is a masked array, whose mask bvhlab would ignore: pass {name}.compressed() rows "
+            f"or {name}.filled(...) instead"
+        )
     if value.dtype != np.float32:
         raise TypeError(
             f"{name} must have dtype float32, got {value.dtype} (convert explicitly with {name}.astype(np.float32))"
@@ -63,9 +68,22 @@ def real(name: str, value, lo: float = -math.inf, hi: float = math.inf) -> float
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise TypeError(f"{name} must be a number, got {type(value).__name__}")
     value = float(value)
+    if math.isnan(value):
+        raise ValueError(f"{name} must be a number, got NaN")
     if not lo <= value <= hi:
-        raise ValueError(f"{name} must be between {lo} and {hi}, got {value}")
+        raise ValueError(f"{name} must be {_range_text(lo, hi)}, got {value}")
     return value
+
+
+def _range_text(lo: float, hi: float) -> str:
+    """'between 0 and 1', 'at least 0', 'at most 1' (no infinite bound written out)."""
+    if math.isinf(lo) and math.isinf(hi):
+        return "finite"
+    if math.isinf(hi):
+        return f"at least {lo:g}"
+    if math.isinf(lo):
+        return f"at most {hi:g}"
+    return f"between {lo:g} and {hi:g}"
 
 
 #: The largest finite float32 (numpy.finfo(numpy.float32).max).

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from . import _checks, _core
-from .scene_parts import Camera, Light, Material, _vec3
+from .scene_parts import Camera, Light, Material, _radiance
 
 if TYPE_CHECKING:
     from .scene import Scene
@@ -114,7 +114,7 @@ FIELD_CHECKS = {
     "sphere_material": lambda scene, v: scene._material_index("sphere_material", v, len(scene.spheres)),
     "camera": _instance_of(Camera, "camera"),
     "light": _instance_of(Light, "light"),
-    "sky": lambda scene, v: _vec3("sky", v),
+    "sky": lambda scene, v: _radiance("sky", v),
     "meshes": lambda scene, v: _meshes(v),
     "mesh_tri_material": lambda scene, v: _mesh_tri_material(v),
     "instance_mesh": lambda scene, v: _instance_mesh(v),

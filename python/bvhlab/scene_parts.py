@@ -29,6 +29,20 @@ def _vec3(name: str, value) -> tuple[float, float, float]:
     return v
 
 
+#: The largest colour, light intensity or light power (colour × intensity) a scene takes: the tracer
+#: sums them in float32 (3.4e38), a few times over a pixel (a light colour of 3e38 gave infinite
+#: pixels).
+MAX_RADIANCE = 1e30
+
+
+def _radiance(name: str, value) -> tuple[float, float, float]:
+    """Three finite numbers in [0, MAX_RADIANCE] (a colour: a negative one darkened pixels below 0)."""
+    v = _vec3(name, value)
+    if not all(0.0 <= x <= MAX_RADIANCE for x in v):
+        raise ValueError(f"{name} must be three numbers in [0, {MAX_RADIANCE:g}], got {v}")
+    return v
+
+
 def _row3(row: np.ndarray, first: int) -> tuple[float, float, float]:
     """Three numbers of a saved row, from `first`."""
     return float(row[first]), float(row[first + 1]), float(row[first + 2])
@@ -44,14 +58,15 @@ class Material:
     ior: float = defaults.MATERIAL[5]
 
     def __post_init__(self):
-        object.__setattr__(self, "color", _vec3("material color", self.color))
+        object.__setattr__(self, "color", _radiance("material color", self.color))
         for name in ("reflective", "transparent"):
             x = float(getattr(self, name))
             if not 0.0 <= x <= 1.0:
                 raise ValueError(f"material {name} must be in [0, 1], got {x}")
             object.__setattr__(self, name, x)
-        if not (math.isfinite(self.ior) and self.ior > 0):
-            raise ValueError(f"material ior must be a positive number, got {self.ior}")
+        # finite in float32, the tracer's (1e300 was taken, then refused at render time as "NaN")
+        if not (math.isfinite(self.ior) and 0 < self.ior <= float(np.finfo(np.float32).max)):
+            raise ValueError(f"material ior must be a positive number within float32's range, got {self.ior}")
 
     def as_row(self) -> list[float]:
         return [*self.color, self.reflective, self.transparent, float(self.ior)]
@@ -282,9 +297,18 @@ class Light:
 
     def __post_init__(self):
         object.__setattr__(self, "position", _vec3("light position", self.position))
-        object.__setattr__(self, "color", _vec3("light color", self.color))
-        if not (math.isfinite(self.intensity) and self.intensity >= 0):
-            raise ValueError(f"light intensity must be a non-negative number, got {self.intensity}")
+        object.__setattr__(self, "color", _radiance("light color", self.color))
+        if not (math.isfinite(self.intensity) and 0 <= self.intensity <= MAX_RADIANCE):
+            raise ValueError(f"light intensity must be a number in [0, {MAX_RADIANCE:g}], got {self.intensity}")
+        if max(self.color) * self.intensity > MAX_RADIANCE:
+            raise ValueError(
+                f"light color × intensity must be at most {MAX_RADIANCE:g}, got {self.color} × {self.intensity}"
+            )
+        if max(abs(x) for x in self.position) > MAX_COORDINATE:
+            raise ValueError(
+                f"light position {self.position} lies outside the supported coordinate range "
+                f"±{MAX_COORDINATE:.5g} (2^40)"
+            )
 
     def as_row(self) -> list[float]:
         return [*self.position, *self.color, float(self.intensity)]

@@ -164,3 +164,42 @@ def test_bad_scene_parts():
         bvhlab.Material(reflective=1.5)
     with pytest.raises(ValueError, match="no geometry"):
         bvhlab.Scene().bounds()
+
+
+def test_values_a_float32_tracer_cannot_hold_are_refused():
+    """Found by a probe: each was accepted and gave black or infinite pixels, or an error at render
+    time naming the wrong cause."""
+    cases = [
+        (lambda: bvhlab.View((0, 0, 0), (0, 1, 0), aspect=1e20), "aspect must be between"),
+        (lambda: bvhlab.View((0, 0, 0), (0, 1, 0), shift_y=-1e20), "lens shift must be within"),
+        (lambda: bvhlab.Light((0, 0, 0), (3e38, 1, 1), 10), "light color must be three numbers in"),
+        (lambda: bvhlab.Light((0, 0, 0), (1e20, 1, 1), 1e20), "color × intensity"),
+        (lambda: bvhlab.Light((3e38, 0, 0)), "coordinate range"),
+        (lambda: bvhlab.Material(color=(-1, 0, 0)), "material color must be three numbers in"),
+        (lambda: bvhlab.Material(ior=1e300), "float32's range"),
+        (lambda: bvhlab.Scene(triangles=np.zeros((1, 3, 3), np.float32), sky=(3e38, 0, 0)), "sky must be"),
+    ]
+    for make, message in cases:
+        with pytest.raises(ValueError, match=message):
+            make()
+
+
+def test_a_masked_array_is_refused():
+    tris = np.ma.masked_array(np.zeros((2, 3, 3), np.float32), mask=[[[0] * 3] * 3, [[1] * 3] * 3])
+    with pytest.raises(TypeError, match="masked array"):
+        bvhlab.build(tris)
+
+
+def test_a_nan_setting_says_nan():
+    with pytest.raises(ValueError, match="must be a number, got NaN"):
+        bvhlab.BuildConfig(sbvh_budget=float("nan"))
+
+
+def test_a_pick_depth_range_must_be_min_max():
+    from bvhlab.inspect.pick import pick
+
+    bvh = bvhlab.build(np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]]], np.float32))
+    for bad, error in (((5, 2), ValueError), ((-3, 2), ValueError), ("ab", TypeError), ((0, 300), ValueError)):
+        with pytest.raises(error, match="depth_range"):
+            pick(bvh, (0.2, 0.2, 1), (0, 0, -1), bad)
+    assert pick(bvh, (0.2, 0.2, 1), (0, 0, -1), (0, 0)).node == 0

@@ -173,3 +173,37 @@ def test_save_is_atomic(saved, monkeypatch):
     assert path.read_bytes() == before
     assert [p.name for p in path.parent.iterdir()] == [path.name]
     assert bvhlab.load_bvh(path, tris, spheres).config == bvh.config
+
+
+def _rewrite_header(path, change):
+    """The file with its JSON header changed by `change(header)` and a checksum that fits again."""
+    data = path.read_bytes()
+    start = len(tree_file.MAGIC) + 8
+    head_len = struct.unpack_from("<I", data, len(tree_file.MAGIC) + 4)[0]
+    header = json.loads(data[start : start + head_len])
+    change(header)
+    head = json.dumps(header, sort_keys=True).encode()
+    prefix = data[: len(tree_file.MAGIC) + 4] + struct.pack("<I", len(head))
+    body = prefix + head + data[start + head_len : -32]
+    path.write_bytes(body + hashlib.sha256(body).digest())
+
+
+@pytest.mark.parametrize(
+    "key, value",
+    [
+        ("geometry_fingerprint", 2**70),
+        ("geometry_fingerprint", -1),
+        ("build_ms", None),
+        ("triangles", "100"),
+        ("spheres", 1.5),
+        ("config", [1, 2]),
+    ],  # fmt: skip
+)
+def test_a_header_field_of_the_wrong_kind_is_a_damaged_header(saved, key, value):
+    """A crafted header with a valid checksum: TreeFileError naming the field (a fingerprint of
+    2^70 raised nanobind's TypeError, build_ms null a TypeError, triangles "100" said "saved for
+    100 triangles, this scene has 100")."""
+    _, path, tris, spheres = saved
+    _rewrite_header(path, lambda header: header.__setitem__(key, value))
+    with pytest.raises(tree_file.TreeFileError, match=f"damaged header.*{key}"):
+        bvhlab.load_bvh(path, tris, spheres)

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <utility>
 
@@ -63,11 +64,28 @@ void validate_projection(const Camera& c) {
     }
 }
 
+constexpr float kMinAspect = 1e-8f, kMaxShift = 1000.0f;
+
+/// A number for a message, in %g's short form (std::to_string writes 1e20 in 27 digits).
+std::string short_number(double x) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", x);
+    return text;
+}
+
 void validate_lens(const Camera& c) {
     if (!(c.clip_start >= 0 && c.clip_end > c.clip_start))
         fail("camera clipping must be 0 <= clip_start < clip_end, got " + std::to_string(c.clip_start) + ", " +
              std::to_string(c.clip_end));
     if (c.aperture_radius < 0) fail("camera aperture_radius must be >= 0 (0: no depth of field)");
+    // within what float32 rays hold: an aspect of 1e20 or a shift of -1e20 overflowed the ray
+    // directions to inf, and half the image or all of it came out black. Blender's widest frame
+    // (65,536 × 4 pixels at a pixel aspect of 200) is 3.3e6 wide; its shifts are within ±10.
+    if (c.aspect != 0 && !(c.aspect >= kMinAspect && c.aspect <= 1 / kMinAspect))
+        fail("camera aspect must be between 1e-8 and 1e8 (or 0: the image's), got " + short_number(c.aspect));
+    if (!(std::fabs(c.shift_x) <= kMaxShift && std::fabs(c.shift_y) <= kMaxShift))
+        fail("camera lens shift must be within ±1000 (fractions of the image plane), got " + std::to_string(c.shift_x) +
+             ", " + std::to_string(c.shift_y));
     if (c.aperture_radius > 0 && !(c.focus_distance > 0)) fail("camera focus_distance must be > 0");
     const auto& r = c.region;
     if (!(r[0] >= 0 && r[0] < r[2] && r[2] <= 1 && r[1] >= 0 && r[1] < r[3] && r[3] <= 1))

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import _checks
 from .levels import MAX_OVERLAY_BOXES, TreeNode, blas_world_boxes, shown_boxes
 from .node_data import NodeData
 
@@ -55,6 +56,18 @@ def box_entry_distances(lo: np.ndarray, hi: np.ndarray, origin, direction) -> np
     return np.where(t_in <= t_out, t_in, np.inf)
 
 
+def _depth_range(value) -> tuple[int, int]:
+    """(min, max) depths, 0 <= min <= max <= 255 (a reversed or negative range picked silently)."""
+    try:
+        lo, hi = value
+    except (TypeError, ValueError):
+        raise TypeError(f"depth_range must be two depths (min, max), got {value!r}") from None
+    lo, hi = _checks.integer("depth_range min", lo, 0, 255), _checks.integer("depth_range max", hi, 0, 255)
+    if lo > hi:
+        raise ValueError(f"depth_range must be (min, max) with min <= max, got ({lo}, {hi})")
+    return lo, hi
+
+
 def pick(
     bvh,
     origin,
@@ -66,6 +79,7 @@ def pick(
     """The box a ray picks among those the overlay shows (module docstring). `bvh` is a
     bvhlab.Bvh; `depth_range` the overlay's (min, max) depth, both included."""
     origin, direction = _pick_ray(origin, direction)
+    depth_range = _depth_range(depth_range)
     data = bvh.node_data()
     record = bvh.trace_ray(origin.astype(np.float32), direction.astype(np.float32))
     t_hit = float(record.t)
@@ -123,6 +137,7 @@ def pick_two_level(
     BLAS leaf of the hit primitive in its instance (the TLAS leaf of the hit instance when only
     the TLAS is shown)."""
     origin, direction = _pick_ray(origin, direction)
+    depth_range = _depth_range(depth_range)
     bvh = bvh.snapshot()  # one TLAS and one set of meshes throughout (another thread may place)
     shown = shown_boxes(bvh, level, depth_range[0], depth_range[1], leaves_only, cap)
     record = bvh.trace_ray(origin.astype(np.float32), direction.astype(np.float32))

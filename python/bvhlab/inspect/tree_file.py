@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import struct
 from pathlib import Path
 
@@ -131,6 +132,16 @@ def _read(path: Path) -> tuple[dict, np.ndarray, np.ndarray]:
         missing = [k for k in ("geometry_fingerprint", "triangles", "spheres", "config", "build_ms") if k not in header]
         if missing:
             raise KeyError(", ".join(missing))
+        # each field of its type and range (a crafted fingerprint of 2^70 raised nanobind's
+        # TypeError, a build_ms of null a TypeError, triangles of "100" said "saved for 100
+        # triangles, this scene has 100")
+        for key in ("triangles", "spheres", "geometry_fingerprint"):
+            if type(header[key]) is not int or not 0 <= header[key] < 2**64:
+                raise ValueError(f"{key} is {header[key]!r}, not a whole number of 64 bits")
+        if type(header["build_ms"]) not in (int, float) or not math.isfinite(header["build_ms"]):
+            raise ValueError(f"build_ms is {header['build_ms']!r}, not a number")
+        if not isinstance(header["config"], dict):
+            raise ValueError(f"config is {header['config']!r}, not a table of settings")
     except (ValueError, KeyError, TypeError, AttributeError) as e:
         raise TreeFileError(f"{path} has a damaged header ({e})") from None
     body = start + head_len
