@@ -64,6 +64,12 @@ class Material:
             if not 0.0 <= x <= 1.0:
                 raise ValueError(f"material {name} must be in [0, 1], got {x}")
             object.__setattr__(self, name, x)
+        # what is reflected and what is transmitted of the light arriving (report §2.1): more than
+        # all of it made light (reflective 1 with transparent 1: pixels up to 1.8, 22.5 between two)
+        if self.reflective + self.transparent > 1.0 + 1e-6:
+            raise ValueError(
+                f"material reflective + transparent must be at most 1, got {self.reflective} + {self.transparent}"
+            )
         # finite in float32, the tracer's (1e300 was taken, then refused at render time as "NaN")
         if not (math.isfinite(self.ior) and 0 < self.ior <= float(np.finfo(np.float32).max)):
             raise ValueError(f"material ior must be a positive number within float32's range, got {self.ior}")

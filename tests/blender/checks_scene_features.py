@@ -197,3 +197,21 @@ def check_a_mirrored_camera_mirrors_the_exported_view() -> None:
         camera.scale = scale
         bpy.context.view_layer.update()
         assert export_scene(bpy.context).camera.mirrored is mirrored, scale
+
+
+def check_principled_metal_lies_over_transmission() -> None:
+    """A Principled BSDF's metal lies over its dielectric base, whose transmission is the rest's:
+    metallic 1 with transmission 1 exports a mirror (it exported reflective 1 and transparent 1,
+    twice the light arriving), metallic 0.25 with transmission 1 reflects 0.25 and transmits 0.75."""
+    harness.empty_scene((16, 12))
+    harness.add_camera((0, -10, 0), (0, 0, 0))
+    box = harness.add_box("Box", (0, 0, 0))
+    material = _plain("Metal glass", (0.8, 0.8, 0.8))
+    box.data.materials.append(material)
+    principled = material.node_tree.nodes["Principled BSDF"]
+    for metallic, want in ((1.0, (1.0, 0.0)), (0.25, (0.25, 0.75)), (0.0, (0.0, 1.0))):
+        principled.inputs["Metallic"].default_value = metallic
+        principled.inputs["Transmission Weight"].default_value = 1.0
+        exported = export_scene(bpy.context).materials[0]
+        got = (exported.reflective, exported.transparent)
+        assert np.allclose(got, want, atol=1e-6), (metallic, got)

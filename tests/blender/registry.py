@@ -164,6 +164,9 @@ def _engine() -> Iterator[Check]:
     yield Check("engine", "errors_are_reported", engine.check_errors_are_reported)
     yield Check("engine", "depth_of_field_focuses_on_a_bone", features.check_depth_of_field_focuses_on_a_bone)
     yield Check(
+        "engine", "principled_metal_lies_over_transmission", features.check_principled_metal_lies_over_transmission
+    )
+    yield Check(
         "engine",
         "a_mirrored_camera_mirrors_the_exported_view",
         features.check_a_mirrored_camera_mirrors_the_exported_view,

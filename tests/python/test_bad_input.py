@@ -203,3 +203,11 @@ def test_a_pick_depth_range_must_be_min_max():
         with pytest.raises(error, match="depth_range"):
             pick(bvh, (0.2, 0.2, 1), (0, 0, -1), bad)
     assert pick(bvh, (0.2, 0.2, 1), (0, 0, -1), (0, 0)).node == 0
+
+
+def test_a_material_that_returns_more_light_than_arrives_is_refused():
+    """reflective + transparent past 1 (the Whitted model's k_r + k_t, report §2.1): reflective 1 with
+    transparent 1 gave pixels up to 1.8 (22.5 between two such spheres)."""
+    with pytest.raises(ValueError, match="reflective \\+ transparent must be at most 1"):
+        bvhlab.Material(reflective=1.0, transparent=1.0)
+    assert bvhlab.Material(reflective=0.1, transparent=0.9).transparent == 0.9

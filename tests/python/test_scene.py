@@ -109,7 +109,7 @@ def _bad_files(tmp_path):
         .name: r"'materials' has shape \(1, 5\); expected \(N, 6\)",
         _scene_file(tmp_path, camera=np.zeros(4))
         .rename(tmp_path / "cam.npz")
-        .name: r"a camera row has 10 or 28 numbers, got 4",
+        .name: r"a camera row has 10 or 29 numbers, got 4",
         _scene_file(tmp_path, tri_material=np.zeros(3, np.int32))
         .rename(tmp_path / "tm.npz")
         .name: "'triangles' has 40 rows but 'tri_material' has 3",
@@ -144,7 +144,7 @@ def _write_bomb(path, rows: int) -> None:
     arrays = {
         "format_version": np.array(1),
         "spheres": np.zeros((0, 4), np.float32),
-        "materials": np.ones((1, 6)),
+        "materials": np.array([[1.0, 1.0, 1.0, 0.5, 0.5, 1.5]]),
         "sphere_material": np.zeros(0, np.int32),
         "sky": np.ones(3),
         "tri_material": np.zeros(rows, np.int8),

@@ -73,10 +73,15 @@ def _material(color, reflective=0.0, transparent=0.0, ior=1.5) -> Material:
 
 
 def _principled(node, material) -> Material:
+    # the Principled BSDF lays the metal over the dielectric base, whose transmission is the rest's:
+    # metallic 1 with transmission 1 is a mirror (it was reflective 1 and transparent 1, twice the
+    # light arriving)
+    metallic = float(np.clip(_input(node, "Metallic", material, material.metallic), 0, 1))
+    transmission = float(np.clip(_input(node, "Transmission Weight", material, 0.0), 0, 1))
     return _material(
         _input(node, "Base Color", material, material.diffuse_color),
-        reflective=_input(node, "Metallic", material, material.metallic),
-        transparent=_input(node, "Transmission Weight", material, 0.0),
+        reflective=metallic,
+        transparent=transmission * (1.0 - metallic),
         ior=_input(node, "IOR", material, 1.5),
     )
 
