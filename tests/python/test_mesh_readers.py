@@ -186,6 +186,8 @@ def _set(path: list, value):
         ({"s": _set(["accessors", 0, "sparse"], {"count": 1})}, "sparse accessors are not read"),
         ({"q": _set(["accessors", 0, "normalized"], True)}, "normalized positions"),
         ({"f": _set(["meshes", 0, "primitives", 0, "mode"], 6)}, "triangle fans"),
+        # a skinned mesh was placed by its node (skinning ignores it): 100 units off Blender's import
+        ({"k": _set(["nodes", 0, "skin"], 0)}, "skinned mesh"),
     ],
 )
 def test_gltf_that_trimesh_would_read_wrong_is_refused(tmp_path, changes, message):

@@ -57,6 +57,9 @@ def test_spec_grid_is_every_combination(tmp_path, models):
         ("[rays]\ncount = true", "count"),
         ("method = 'sah'\n[report]\nbaseline = 'median'", "baseline 'median' is not a method of the grid"),
         ("[report]\ncolour = 'red'", "unknown key"),
+        # a seed past int64: every cell ran, then writing the table failed (OverflowError), every rerun
+        ("seed = 9223372036854775808", "seed must be at most"),
+        ("[rays]\nseed = 9223372036854775808", "seed must be a whole number from 0"),
     ],
 )
 def test_bad_grid_is_refused_naming_the_setting(tmp_path, grid, message):
@@ -237,3 +240,29 @@ def test_a_gltf_buffer_is_part_of_the_scene_and_two_files_of_one_name_are_two_sc
     assert again.ran == 1
     fresh = build(load_scene(str(tmp_path / "b" / "model.gltf"))[0], method="sah").stats["sah_cost"]
     assert [r["sah_cost"] for r in again.rows if r["scene"] == "b/model.gltf"] == [pytest.approx(fresh)]
+
+
+def test_a_file_changed_after_planning_is_an_error_not_another_scenes_row(tmp_path, models):
+    """The scene file replaced after the sweep was planned: the cell's row was the new file's figures
+    under the old file's key, and a later run reused them."""
+    from bvhlab.sweep.task import run_cell
+
+    spec = read_spec(_write_spec(tmp_path, ["box.obj"], "method = 'sah'"))
+    (cell,) = plan_cells(spec)
+    trimesh.creation.icosphere(subdivisions=1).export(models / "box.obj")
+    row = run_cell(cell)
+    assert row["status"] == "error" and "changed after the sweep was planned" in row["error"], row
+    assert row["triangles"] is None
+
+
+def test_summary_tells_seeds_apart(tmp_path, models):
+    """Three seeds of a random-axis grid: each seed's own median is its baseline (the three rows were
+    one label, each divided by the last seed's median)."""
+    spec = read_spec(
+        _write_spec(tmp_path, ["ball.ply"], "method = ['median', 'sah']\naxis = 'random'\nseed = [1, 2, 3]")
+    )
+    run_sweep(spec, tmp_path / "out", plot=False)
+    lines = (tmp_path / "out" / SUMMARY).read_text().splitlines()[2:]
+    medians = [line.split(" | ") for line in lines if " | median seed" in line]
+    assert sorted(cells[1] for cells in medians) == ["median seed1", "median seed2", "median seed3"]
+    assert all(float(cells[3]) == 1.0 for cells in medians)

@@ -38,6 +38,9 @@ def load_mesh_file(path) -> Scene:
     if kind is None:
         raise SceneFileError(f"{path}: not a mesh file; expected one of {', '.join(MESH_SUFFIXES)}")
     _check_regular_file(path)
+    with open(path, "rb") as f:
+        if f.read(2) == b"\x1f\x8b":  # every reader saw no faces in it: "has no triangles (0 faces)"
+            raise SceneFileError(f"{path} is gzip-compressed: decompress it first (gunzip)")
     if kind in _READERS:
         try:
             vertices, faces = _READERS[kind](path)

@@ -2,8 +2,8 @@
 it reads it: extensions the file requires that change its geometry or that bvhlab does not know
 (Draco and meshopt compression, read as placeholder zeros), GPU instancing (its instances lost),
 sparse accessors (their values ignored), normalized quantized positions (read unscaled), triangle
-fans (read as no triangles); and a file that is not glTF at all (not JSON, empty) named as such
-rather than as a missing file."""
+fans (read as no triangles), skinned meshes (placed by their node, which skinning ignores); and a
+file that is not glTF at all (not JSON, empty) named as such rather than as a missing file."""
 
 from __future__ import annotations
 
@@ -64,6 +64,16 @@ def _check(path: Path, doc: dict) -> None:
             raise SceneFileError(f"{path} requires the glTF extension {name}, which bvhlab does not read")
     if any("EXT_mesh_gpu_instancing" in _dict(node, "extensions") for node in _list(doc, "nodes")):
         raise SceneFileError(f"{path}: nodes instanced by EXT_mesh_gpu_instancing, which bvhlab does not read")
+    # a skinned mesh's vertices follow its skeleton's joints and ignore its node's transform (glTF
+    # 2.0 §3.7.3.3); read as a plain mesh, it was placed by the node: 100 units off Blender's import
+    skinned = [n for n, node in enumerate(_list(doc, "nodes")) if "skin" in node and "mesh" in node]
+    if skinned:
+        raise SceneFileError(
+            f"{path}: node {skinned[0]} is a skinned mesh, which bvhlab does not read (pose it and "
+            "export it without its skin, or apply the armature)"
+        )
+    if _list(doc, "meshes") and not _list(doc, "scenes"):  # trimesh read no triangles: "0 faces"
+        raise SceneFileError(f"{path} has meshes but no scenes that place them (glTF 2.0: nothing to show)")
     accessors = _list(doc, "accessors")
     for m, mesh in enumerate(_list(doc, "meshes")):
         for primitive in _list(mesh, "primitives"):

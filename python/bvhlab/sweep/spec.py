@@ -59,6 +59,11 @@ class SweepSpec:
     baseline: str = "median"  # a method of the grid: summary.md and its plot divide by its cells
 
 
+#: The largest seed a sweep takes: the table's columns are 64-bit signed (Parquet's int64); a seed
+#: of 2^63 ran every cell, then failed to write the table (and every rerun the same way).
+MAX_SEED = 2**63 - 1
+
+
 def read_spec(path) -> SweepSpec:
     """The spec at `path`, checked (ValueError naming the file and the problem)."""
     path = Path(path)
@@ -76,8 +81,8 @@ def read_spec(path) -> SweepSpec:
     count, seed, repeats = rays.get("count", DEFAULT_RAYS), rays.get("seed", 1), rays.get("repeats", DEFAULT_REPEATS)
     if not _whole(count) or not 1 <= count <= MAX_RAYS:
         raise ValueError(f"{path}: [rays] count must be a whole number from 1 to {MAX_RAYS}, got {count!r}")
-    if not _whole(seed) or seed < 0:
-        raise ValueError(f"{path}: [rays] seed must be a whole number >= 0, got {seed!r}")
+    if not _whole(seed) or not 0 <= seed <= MAX_SEED:
+        raise ValueError(f"{path}: [rays] seed must be a whole number from 0 to {MAX_SEED}, got {seed!r}")
     if not _whole(repeats) or not 1 <= repeats <= MAX_REPEATS:
         raise ValueError(f"{path}: [rays] repeats must be a whole number from 1 to {MAX_REPEATS}, got {repeats!r}")
     return SweepSpec(scenes, settings, count, seed, repeats, _baseline(path, doc.get("report", {}), settings))
@@ -136,6 +141,8 @@ def _grid(path: Path, grid) -> tuple[Setting, ...]:
             config = BuildConfig(**dict(zip(axes, combination)))
         except (TypeError, ValueError) as e:
             raise ValueError(f"{path}: [grid] {e}") from None
+        if config.seed > MAX_SEED:
+            raise ValueError(f"{path}: [grid] seed must be at most {MAX_SEED} in a sweep, got {config.seed}")
         for traversal in traversals:
             if traversal not in TRAVERSALS:
                 raise ValueError(f"{path}: [grid] unknown traversal {traversal!r}; expected: {', '.join(TRAVERSALS)}")

@@ -11,8 +11,16 @@ from .plot import panel_grid, save_panels
 
 SUMMARY, RATIO_PLOT = "summary.md", "mrays_vs_baseline.png"
 #: Setting columns a label names when they vary over the grid (method always).
-_LABELLED = ("bins", "bin_bounds", "axis", "max_leaf_size", "sah_block", "traversal")
-_SHORT = {"bins": "b", "max_leaf_size": "leaf", "sah_block": "block", "bin_bounds": "", "axis": "", "traversal": ""}
+#: (Every setting of the grid: the seed and the SBVH settings left out, three seeds' rows were one
+#: label, each divided by the last seed's baseline.)
+_LABELLED = (
+    *("bins", "bin_bounds", "axis", "max_leaf_size", "sah_block", "seed"),
+    *("sbvh_alpha", "sbvh_budget", "sbvh_unsplit", "traversal"),
+)
+_SHORT = {
+    **{"bins": "b", "max_leaf_size": "leaf", "sah_block": "block", "bin_bounds": "", "axis": "", "traversal": ""},
+    **{"seed": "seed", "sbvh_alpha": "α", "sbvh_budget": "budget", "sbvh_unsplit": "unsplit"},
+}
 
 
 def setting_labels(rows: list[dict]) -> dict[str, str]:

@@ -11,7 +11,7 @@ import numpy as np
 from ..bvh import build
 from ..library import load_scene
 from ..scene import Scene
-from .cells import Cell
+from .cells import Cell, scene_hash
 
 #: The columns every row has, in the table's order after the cell's own (Cell.columns).
 MEASURED = (
@@ -45,7 +45,11 @@ def error_row(cell: Cell, error: BaseException | str) -> dict:
 
 def _measure(cell: Cell) -> dict:
     scene = _scene(cell)
-    bvh = build(scene, config=cell.setting.config.replace(threads=1))  # one thread: one core per worker
+    config = cell.setting.config.replace(threads=1)  # one thread: one core per worker
+    # a build untimed first: a process's first build of a scene is 3-5× slower (its memory's pages
+    # faulted in, the code cold): the first cell on each worker, and so the order, changed build_ms
+    build(scene, config=config)
+    bvh = build(scene, config=config)
     stats = bvh.stats
     origins, directions = fixed_rays(scene, cell.rays, cell.ray_seed)
     traversal = cell.setting.traversal
@@ -86,7 +90,13 @@ def _scene(cell: Cell) -> Scene:
     key = (cell.scene, cell.scene_hash)
     if _last_scene is None or _last_scene[0] != key:
         _last_scene = None  # free the old scene before loading the next
-        _last_scene = (key, load_scene(cell.scene)[0])
+        scene = load_scene(cell.scene)[0]
+        # what was loaded must be what the cell's key says: a file replaced after the sweep was
+        # planned (or another host's copy of the path) stored another scene's figures under the
+        # key, and later runs reused them
+        if scene_hash(cell.scene) != cell.scene_hash:
+            raise ValueError(f"{cell.scene} changed after the sweep was planned: run the sweep again")
+        _last_scene = (key, scene)
     return _last_scene[1]
 
 
