@@ -89,6 +89,7 @@ inline vec3 min(vec3 a, vec3 b) { return {min(a.x, b.x), min(a.y, b.y), min(a.z,
 inline vec3 max(vec3 a, vec3 b) { return {max(a.x, b.x), max(a.y, b.y), max(a.z, b.z)}; }
 inline vec3 clamp(vec3 x, float lo, float hi) { return {clamp(x.x, lo, hi), clamp(x.y, lo, hi), clamp(x.z, lo, hi)}; }
 inline float abs(float x) { return std::fabs(x); }
+inline vec3 abs(vec3 v) { return {std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)}; }
 inline float sqrt(float x) { return std::sqrt(x); }
 inline float pow(float x, float y) { return std::pow(x, y); }
 inline float floor(float x) { return std::floor(x); }

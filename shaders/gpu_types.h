@@ -207,7 +207,7 @@ struct FrameParams {
                             ///< min, latitude span, π/2 - latitude min; radians); fisheye: x = field of view
     vec4 overlay_color;     ///< rgb: the overlay's lines when not coloured by depth (w unused)
     vec3 light_position;
-    float ray_epsilon;    ///< offset of secondary and shadow ray origins from a surface
+    float reserved;       ///< unused (keeps the layout: each vec3 is followed by a 4-byte scalar)
     vec3 light_color;     ///< rgb, already multiplied by the intensity
     float heatmap_scale;  ///< box tests per primary ray shown as full red (MODE_HEATMAP)
     vec3 sky;             ///< rgb: the atmosphere colour of rays that hit nothing (report §2.1)

@@ -61,13 +61,23 @@ float infinity() { return uintBitsToFloat(0x7f800000u); }
 
 #include "camera.glsl"
 
+#include "ray_offset.glsl"
+
 /// A hit as shading sees it.
 struct Surface {
-    vec3 p;
+    vec3 p;          ///< the hit point: on the primitive where the scene is flat (surface_at)
+    vec3 p_error;    ///< a bound on p's error, per coordinate (pbrt-v4 §6.8.5)
+    float t_error;   ///< two-level hits: a bound on the traced t's error times |cos| to the normal
     vec3 facing;     ///< the geometric normal on the side the ray came from
     bool entering;   ///< the ray hit the outside
     GpuMaterial m;
     float opaque;    ///< what is neither reflected nor transmitted
+    bool triangle;   ///< a triangle, whose vertices (in its instance's object space) follow
+    vec3 v0;
+    vec3 v1;
+    vec3 v2;
+    bool moved;      ///< a two-level hit, in instance `inst`
+    GpuInstance inst;
 };
 
 /// A point moved by an instance's world-to-object transform.
@@ -84,32 +94,76 @@ vec3 normal_to_world(GpuInstance inst, vec3 n) {
     return xyz(inst.row0) * n.x + xyz(inst.row1) * n.y + xyz(inst.row2) * n.z;
 }
 
-/// The hit point, its geometric normal (unit, outwards; triangles: by winding in the mesh's own
-/// space) and material, the primitive fetched once; a two-level hit's normal comes from its
-/// instance's object space.
+/// A direction moved by an instance's world-to-object transform (as instance_level moves a ray).
+vec3 object_dir(GpuInstance inst, vec3 d) { return vec3(dot(xyz(inst.row0), d), dot(xyz(inst.row1), d), dot(xyz(inst.row2), d)); }
+
+/// The hit point with a bound on its error, its geometric normal (unit, outwards; triangles: by
+/// winding in the mesh's own space) and material, the primitive fetched once; a two-level hit's
+/// normal comes from its instance's object space. Where the scene is flat the point is recomputed
+/// on the primitive (pbrt-v4 §6.8.5), since origin + t·dir carries the error of the origin and of
+/// t (which grows with the distance and, for the watertight test, with the triangle's size): a
+/// triangle's is v0 + b1·e1 + b2·e2 from the hit's barycentrics (any barycentrics give a point of
+/// the plane; only the rounding of this sum moves it off), a sphere's the traced point projected
+/// onto it, c + (p - c)·r / |p - c|. A two-level hit keeps origin + t·dir (there is no object-to-
+/// world transform to carry a point back), bounded by the rounding of that sum, of the instance's
+/// transform and, for a triangle, the test's error in t (t_error).
 Surface surface_at(RayTask task, Hit hit) {
     Surface s;
-    s.p = task.origin + task.dir * hit.t;
-    bool moved = hit.instance != NO_INSTANCE;
-    GpuInstance inst;
-    if (moved) inst = load_instance(hit.instance);
+    vec3 traced = task.origin + task.dir * hit.t;
+    s.moved = hit.instance != NO_INSTANCE;
+    if (s.moved) s.inst = load_instance(hit.instance);
+    s.p_error = gamma_bound(16.0f) * (abs(task.origin) + abs(task.dir * hit.t));
+    s.p = traced;
+    s.t_error = 0.0f;
     vec3 n;
     uint material;
     if ((hit.ref & REF_SPHERE_BIT) != 0u) {
         GpuSphere sphere = load_sphere(hit.ref & REF_INDEX_MASK);
-        n = (moved ? object_point(inst, s.p) : s.p) - xyz(sphere.center_radius);
+        vec3 c = xyz(sphere.center_radius);
+        n = (s.moved ? object_point(s.inst, traced) : traced) - c;
+        float len = length(n);
+        if (len > 0.0f) n = n * (sphere.center_radius.w / len);
+        // γ(5)|q| for the reprojection (pbrt), γ(4)|q| more for the sphere test's own rounding of
+        // |o - c|² - r², whose sign decides whether a ray leaving the surface meets it again
+        if (!s.moved) s.p = c + n;
+        if (!s.moved) s.p_error = gamma_bound(9.0f) * abs(n) + gamma_bound(1.0f) * abs(s.p);
         material = sphere.material.x;
+        s.triangle = false;
     } else {
         GpuTriangle tri = load_triangle(hit.ref);
-        n = cross(tri.v1 - tri.v0, tri.v2 - tri.v0);
+        vec3 e1 = tri.v1 - tri.v0;
+        vec3 e2 = tri.v2 - tri.v0;
+        n = cross(e1, e2);
+        if (!s.moved) s.p = tri.v0 + (e1 * hit.u + e2 * hit.v);
+        if (!s.moved) s.p_error = gamma_bound(3.0f) * (abs(e1 * hit.u) + abs(e2 * hit.v)) + gamma_bound(1.0f) * abs(s.p);
         material = tri.material;
+        s.triangle = true;
+        s.v0 = tri.v0;
+        s.v1 = tri.v1;
+        s.v2 = tri.v2;
     }
-    n = normalize(moved ? normal_to_world(inst, n) : n);
+    n = normalize(s.moved ? normal_to_world(s.inst, n) : n);
+    if (s.moved && s.triangle)
+        s.t_error = triangle_t_error(s.v0, s.v1, s.v2, object_point(s.inst, task.origin), object_dir(s.inst, task.dir)) * abs(dot(task.dir, n));
     s.entering = dot(n, task.dir) < 0.0f;
     s.facing = s.entering ? n : -n;
     s.m = load_material(material);
     s.opaque = max(1.0f - s.m.color_reflective.w - s.m.transparent_ior.x, 0.0f);
     return s;
+}
+
+/// Where a ray leaving the surface `f` along `dir` starts (outward: to the side of `facing`,
+/// else through it): off the surface by p's error bound projected onto the normal (pbrt-v4
+/// §6.8.6), plus, for a triangle, how far the watertight test's t for this very ray may be off
+/// (pbrt's deltaT, §6.8.4; in the instance's space, where the test runs: t is the same number).
+vec3 ray_origin(Surface f, vec3 dir, bool outward) {
+    float amount = dot(abs(f.facing), f.p_error) + f.t_error;
+    if (f.triangle) {
+        vec3 o = f.moved ? object_point(f.inst, f.p) : f.p;
+        vec3 d = f.moved ? object_dir(f.inst, dir) : dir;
+        amount += triangle_t_error(f.v0, f.v1, f.v2, o, d) * abs(dot(dir, f.facing));
+    }
+    return offset_origin(f.p, outward ? f.facing : -f.facing, amount);
 }
 
 /// Ambient, plus diffuse and a Blinn-Phong highlight from the point light scaled by the shadow
@@ -200,19 +254,22 @@ void finish_shading(INOUT(TraceState) s, Surface f) {
         s.color += s.task.weight * f.opaque * direct_light(f.p, f.facing, s.task.dir, xyz(f.m.color_reflective), s.hit.transmission);
     s.phase = PHASE_NEXT_RAY;
     if (s.task.depth >= frame.max_ray_depth) return;
-    float eps = frame.ray_epsilon;
     float transparent = f.m.transparent_ior.x;
     float reflect_weight = f.m.color_reflective.w;
     if (transparent > 0.0f) {
         float eta = f.entering ? 1.0f / f.m.transparent_ior.y : f.m.transparent_ior.y;
         vec3 refracted = refract(s.task.dir, f.facing, eta);
-        if (dot(refracted, refracted) > 0.0f)
-            push_ray(s, ray_task(f.p - f.facing * eps, normalize(refracted), s.task.weight * transparent, s.task.depth + 1u));
+        if (dot(refracted, refracted) > 0.0f) {
+            vec3 dir = normalize(refracted);
+            push_ray(s, ray_task(ray_origin(f, dir, false), dir, s.task.weight * transparent, s.task.depth + 1u));
+        }
         else
             reflect_weight += transparent;
     }
-    if (reflect_weight > 0.0f)
-        push_ray(s, ray_task(f.p + f.facing * eps, reflect(s.task.dir, f.facing), s.task.weight * reflect_weight, s.task.depth + 1u));
+    if (reflect_weight > 0.0f) {
+        vec3 dir = reflect(s.task.dir, f.facing);
+        push_ray(s, ray_task(ray_origin(f, dir, true), dir, s.task.weight * reflect_weight, s.task.depth + 1u));
+    }
 }
 
 /// Whether the overlay's line at a pixel (`overlay`: colour, distance) lies on the surface `hit`
@@ -250,15 +307,21 @@ bool after_closest(INOUT(TraceState) s) {
 }
 
 /// Starts a shadow ray toward the light where it lights an opaque part of the surface `f` of the
-/// closest hit (report §2.1); returns false where there is none to trace.
+/// closest hit (report §2.1); returns false where there is none to trace. It starts off the
+/// surface (ray_origin) and stops short of the light by a bound on where the ray's arithmetic
+/// puts the light (the rounding of its length and direction, relative to the distance, and of
+/// the light's coordinates).
 bool start_shadow(INOUT(TraceState) s, Surface f) {
     vec3 to_light = frame.light_position - f.p;
-    float dist = length(to_light);
-    vec3 l = to_light / dist;
+    vec3 l = to_light / length(to_light);
     if (!(f.opaque > 0.0f && dot(f.facing, l) > 0.0f)) return false;
-    float eps = frame.ray_epsilon;
-    s.ray = make_ray(f.p + f.facing * eps, l, 0.0f);
-    s.hit = empty_hit(dist - eps);
+    vec3 origin = ray_origin(f, l, true);
+    vec3 to_end = frame.light_position - origin;
+    float dist = length(to_end);
+    vec3 light = abs(frame.light_position);
+    float short_of_light = gamma_bound(8.0f) * dist + gamma_bound(2.0f) * max(max(light.x, light.y), light.z);
+    s.ray = make_ray(origin, to_end / dist, 0.0f);
+    s.hit = empty_hit(dist - short_of_light);
     s.walk = start_walk();
     s.phase = PHASE_SHADOW;
     return true;

@@ -139,12 +139,12 @@ float heatmap_scale(const RenderScene& scene, const RenderSettings& s) {
 gpu::FrameParams make_frame_params(const RenderScene& scene, const RenderSettings& s) {
     gpu::FrameParams f{};
     set_camera_frame(f, s.camera, s.width, s.height);
-    // ray offsets and the overlay's depth range scale with the scene
+    // the overlay's depth range scales with the scene (ray offsets are each hit point's own:
+    // shaders/tracer/ray_offset.glsl)
     Aabb b = scene.bounds;
     if (b.empty()) b.grow(s.camera.position + unit(s.camera.forward));
     Vec3 far_corner = max(abs3(b.lo - s.camera.position), abs3(b.hi - s.camera.position));
     float diagonal = std::max(length(b.extent()), 1e-6f);
-    f.ray_epsilon = 1e-4f * diagonal;
     // The overlay's depth range: the scene's, within the camera's clipping (a perspective projection
     // needs a near plane in front of the camera; an orthographic one starts at clip_start).
     const float scene_near = std::max(1e-3f * diagonal, 1e-6f);
