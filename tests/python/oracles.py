@@ -112,3 +112,112 @@ def subtree_slots(bvh):
         if not leaf[i]:
             first[i], count[i] = first[i + 1], count[i + 1] + count[nodes["index"][i]]
     return first, count
+
+
+# -- a float64 Whitted tracer: the shading model of shaders/tracer/shade.glsl, written again --------
+AMBIENT, SPECULAR, SHININESS = 0.1, 0.25, 48.0  # shade_colors.glsl's constants
+
+
+def _unit(v):
+    return v / np.linalg.norm(v)
+
+
+class Whitted64:
+    """The tracer's image, worked out in float64 by brute force over a small scene's primitives:
+    reflection, refraction (Snell, total internal reflection into reflection), one shadow ray to
+    the point light attenuated by the transparencies it crosses, the sky for misses. A secondary
+    ray starts `eps` off its surface, which float64 resolves far below any object's size."""
+
+    def __init__(self, scene, max_depth, eps=1e-6):
+        self.spheres = np.asarray(scene.spheres, np.float64).reshape(-1, 4)
+        self.tris = np.asarray(scene.triangles, np.float64).reshape(-1, 3, 3)
+        self.materials = [(np.asarray(m.color, float), m.reflective, m.transparent, m.ior) for m in scene.materials]
+        self.sphere_material, self.tri_material = list(scene.sphere_material), list(scene.tri_material)
+        light = scene.light
+        self.light, self.light_color = np.asarray(light.position, float), np.asarray(light.color) * light.intensity
+        self.sky, self.eps, self.max_depth = np.asarray(scene.sky, float), eps, max_depth
+
+    def _crossings(self, o, d):
+        """(t, kind, index) of every crossing of the line o + t·d with a primitive."""
+        for i, s in enumerate(self.spheres):
+            f = o - s[:3]
+            b, c = f @ d, f @ f - s[3] ** 2
+            disc = b * b - c
+            if disc >= 0:
+                yield from ((t, "s", i) for t in (-b - math.sqrt(disc), -b + math.sqrt(disc)))
+        for i, v in enumerate(self.tris):  # Möller–Trumbore
+            e1, e2 = v[1] - v[0], v[2] - v[0]
+            p = np.cross(d, e2)
+            det = e1 @ p
+            if det == 0:
+                continue
+            s = o - v[0]
+            u = (s @ p) / det
+            q = np.cross(s, e1)
+            w = (d @ q) / det
+            if u >= 0 and w >= 0 and u + w <= 1:
+                yield (e2 @ q) / det, "t", i
+
+    def _material(self, kind, i):
+        return self.materials[(self.sphere_material if kind == "s" else self.tri_material)[i]]
+
+    def _direct(self, p, n, d, albedo):
+        to_light = self.light - p
+        dist = np.linalg.norm(to_light)
+        l = to_light / dist
+        lambert, color = n @ l, albedo * AMBIENT
+        if lambert <= 0:
+            return color
+        o = p + n * self.eps
+        transmission = np.prod([self._material(k, i)[2] for t, k, i in self._crossings(o, l) if 0 < t < dist])
+        if transmission <= 0:
+            return color
+        highlight = max(n @ _unit(l - d), 0) ** SHININESS * SPECULAR
+        return color + self.light_color * transmission * (1 - AMBIENT) * (albedo * lambert + highlight)
+
+    def trace(self, o, d):
+        color, rays = np.zeros(3), [(o, d, np.ones(3), 0)]
+        while rays:
+            o, d, weight, depth = rays.pop()
+            hits = [h for h in self._crossings(o, d) if h[0] > 0]
+            if not hits:
+                color += weight * self.sky
+                continue
+            t, kind, i = min(hits, key=lambda h: h[0])
+            p = o + d * t
+            v = self.tris[i] if kind == "t" else None
+            n = _unit(p - self.spheres[i][:3] if kind == "s" else np.cross(v[1] - v[0], v[2] - v[0]))
+            entering = n @ d < 0
+            n = n if entering else -n
+            albedo, reflective, transparent, ior = self._material(kind, i)
+            opaque = max(1 - reflective - transparent, 0)
+            if opaque > 0:
+                color += weight * opaque * self._direct(p, n, d, albedo)
+            if depth >= self.max_depth:
+                continue
+            if transparent > 0:
+                eta, cos_i = (1 / ior if entering else ior), -(n @ d)
+                k = 1 - eta * eta * (1 - cos_i * cos_i)
+                if k < 0:
+                    reflective += transparent
+                else:
+                    refracted = _unit(eta * d + (eta * cos_i - math.sqrt(k)) * n)
+                    rays.append((p - n * self.eps, refracted, weight * transparent, depth + 1))
+            if reflective > 0:
+                rays.append((p + n * self.eps, d - 2 * (d @ n) * n, weight * reflective, depth + 1))
+        return color
+
+    def render(self, camera, width, height):
+        """One sample at each pixel's centre through a pinhole camera (camera.glsl's perspective)."""
+        pos = np.asarray(camera.position, float)
+        forward = _unit(np.asarray(camera.look_at, float) - pos)
+        right = _unit(np.cross(forward, _unit(np.asarray(camera.up, float))))
+        up = np.cross(right, forward)
+        h = 2 * math.tan(math.radians(camera.fov_y) / 2)
+        w = h * width / height
+        image = np.zeros((height, width, 3))
+        for y in range(height):
+            for x in range(width):
+                d = _unit(forward + right * (-w / 2 + (x + 0.5) * w / width) + up * (h / 2 - (y + 0.5) * h / height))
+                image[y, x] = self.trace(pos, d)
+        return image

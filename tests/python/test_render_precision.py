@@ -5,6 +5,7 @@ distant sphere miss it (Haines et al., Ray Tracing Gems 2019 ch. 7). Checked aga
 worked out here in float64, on both backends and both traversals (and the CPU tracer's wide one,
 which answers each ray through the tree's 8-wide copy with the same ray tests)."""
 
+import functools
 import math
 
 import numpy as np
@@ -12,6 +13,7 @@ import pytest
 
 import bvhlab
 from bvhlab.library import procedural
+from oracles import Whitted64
 
 SKY_DEPTH = 1e10  # RenderResult.depth where nothing was hit
 
@@ -87,3 +89,90 @@ def test_rays_beside_a_small_distant_sphere_miss_it_in_the_tracer(renderer, trav
         f"up to {beside[hit & outside].max() / r:.1f} radii beside the sphere hit it"
     )
     np.testing.assert_allclose(depth[inside], distance - r, rtol=2e-5)
+
+
+# -- where secondary and shadow rays start (shaders/tracer/ray_offset.glsl) -------------------------
+# Until 2026-12 they started 1e-4 of the scene's diagonal off the surface: below float32's spacing
+# far from the origin (shadow acne), far above a small object's size in a large scene.
+
+SIZE = (40, 30)
+
+
+def spheres_on_a_floor(offset):
+    """An 8-unit floor, two spheres and the light, moved by `offset` on every axis (exactly
+    representable at 1e5: the same scene in float32 as at the origin)."""
+    floor = np.array([[[-4, -4, -1], [4, -4, -1], [4, 4, -1]], [[-4, -4, -1], [4, 4, -1], [-4, 4, -1]]], np.float64)
+    spheres = np.array([[0, 0, 0, 0.9], [1.5, 1, 0, 0.5]])
+    spheres[:, :3] += offset
+
+    def at(p):
+        return tuple(np.array(p, float) + offset)
+
+    return bvhlab.Scene(
+        triangles=(floor + offset).astype(np.float32),
+        spheres=spheres.astype(np.float32),
+        materials=[
+            bvhlab.Material((0.8, 0.8, 0.8)),
+            bvhlab.Material((0.9, 0.5, 0.2)),
+            bvhlab.Material((0.2, 0.2, 0.9)),
+        ],
+        sphere_material=[1, 2],
+        camera=bvhlab.Camera(at((0, -6, 1.5)), at((0, 0, 0))),
+        light=bvhlab.Light(at((2, -3, 5))),
+    )
+
+
+def glass_and_mirror_on_a_floor(half):
+    """A 1-unit glass sphere, a mirror sphere and a red one on a floor `half` units across each
+    way (Blender's usual large ground plane under small objects)."""
+    floor = np.array([[[-1, -1, -1], [1, -1, -1], [1, 1, -1]], [[-1, -1, -1], [1, 1, -1], [-1, 1, -1]]], np.float32)
+    return bvhlab.Scene(
+        triangles=floor * np.float32([half, half, 1]),
+        spheres=np.array([[0, 0, 0, 1], [2.2, 0.5, -0.4, 0.6], [-2, 1.5, -0.5, 0.5]], np.float32),
+        materials=[
+            bvhlab.Material((0.8, 0.8, 0.8)),
+            bvhlab.Material((1, 1, 1), transparent=0.9, ior=1.5),
+            bvhlab.Material((0.9, 0.9, 0.9), reflective=0.9),
+            bvhlab.Material((0.9, 0.2, 0.1)),
+        ],
+        sphere_material=[1, 2, 3],
+        camera=bvhlab.Camera((0, -6, 1.5), (0, 0, -0.3)),
+        light=bvhlab.Light((2, -3, 5)),
+    )
+
+
+def pixels_off(image, reference):
+    return int((np.abs(image[..., :3] - reference).max(-1) > 0.05).sum())
+
+
+@pytest.fixture(scope="module")
+def far_reference():
+    return Whitted64(spheres_on_a_floor(0.0), max_depth=5).render(spheres_on_a_floor(0.0).camera, *SIZE)
+
+
+@pytest.mark.parametrize("offset", [0.0, 3e4, 1e5])
+def test_no_shadow_acne_far_from_the_origin(renderer, far_reference, offset):
+    """The scene moved 1e5 on every axis is the same float32 scene, but its hit points are only
+    known to float32's spacing there (0.0078): each ray starts off its surface by its own point's
+    error bound. With the scene-wide offset: 25 of 1,200 pixels off at 3e4, 48 at 1e5 (acne on the
+    floor and the spheres); now 0, and 1 at 1e5 (a shadow's edge, moved by the spacing)."""
+    scene = spheres_on_a_floor(offset)
+    image = renderer.render(scene, bvhlab.build(scene), *SIZE)[0]
+    assert pixels_off(image, far_reference) <= (2 if offset >= 1e5 else 0)
+
+
+@functools.cache
+def floor_reference(half):
+    scene = glass_and_mirror_on_a_floor(half)
+    return Whitted64(scene, max_depth=6).render(scene.camera, *SIZE)
+
+
+@pytest.mark.parametrize("half", [5, 500, 50000])
+def test_a_large_floor_keeps_small_objects_intact(renderer, half):
+    """The floor's size does not change the spheres near the camera (against the float64 tracer
+    on the same scene): with 1e-4 of the diagonal as the offset, 35 of 1,200 pixels were off at half-size 500 and 153 at 50,000 (the refracted
+    ray started past the glass sphere's back, the mirror sphere's shadow was gone); now none, or
+    one at 50,000 (float32's rounding of a shadow edge on both sides of the comparison)."""
+    scene = glass_and_mirror_on_a_floor(half)
+    image = renderer.render(scene, bvhlab.build(scene), *SIZE, max_depth=6)[0]
+    assert pixels_off(image, floor_reference(half)) <= (1 if half > 500 else 0)
