@@ -164,15 +164,15 @@ class Whitted64:
     def _direct(self, p, n, d, albedo):
         to_light = self.light - p
         dist = np.linalg.norm(to_light)
-        l = to_light / dist
-        lambert, color = n @ l, albedo * AMBIENT
+        to_l = to_light / dist
+        lambert, color = n @ to_l, albedo * AMBIENT
         if lambert <= 0:
             return color
         o = p + n * self.eps
-        transmission = np.prod([self._material(k, i)[2] for t, k, i in self._crossings(o, l) if 0 < t < dist])
+        transmission = np.prod([self._material(k, i)[2] for t, k, i in self._crossings(o, to_l) if 0 < t < dist])
         if transmission <= 0:
             return color
-        highlight = max(n @ _unit(l - d), 0) ** SHININESS * SPECULAR
+        highlight = max(n @ _unit(to_l - d), 0) ** SHININESS * SPECULAR
         return color + self.light_color * transmission * (1 - AMBIENT) * (albedo * lambert + highlight)
 
     def trace(self, o, d):

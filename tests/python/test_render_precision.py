@@ -10,10 +10,10 @@ import math
 
 import numpy as np
 import pytest
+from oracles import Whitted64
 
 import bvhlab
 from bvhlab.library import procedural
-from oracles import Whitted64
 
 SKY_DEPTH = 1e10  # RenderResult.depth where nothing was hit
 
@@ -170,9 +170,10 @@ def floor_reference(half):
 @pytest.mark.parametrize("half", [5, 500, 50000])
 def test_a_large_floor_keeps_small_objects_intact(renderer, half):
     """The floor's size does not change the spheres near the camera (against the float64 tracer
-    on the same scene): with 1e-4 of the diagonal as the offset, 35 of 1,200 pixels were off at half-size 500 and 153 at 50,000 (the refracted
-    ray started past the glass sphere's back, the mirror sphere's shadow was gone); now none, or
-    one at 50,000 (float32's rounding of a shadow edge on both sides of the comparison)."""
+    on the same scene): with 1e-4 of the diagonal as the offset, 35 of 1,200 pixels were off at
+    half-size 500 and 153 at 50,000 (the refracted ray started past the glass sphere's back, the
+    mirror sphere's shadow was gone); now none, or one at 50,000 (a shadow's edge, which float32
+    and float64 round to different sides)."""
     scene = glass_and_mirror_on_a_floor(half)
     image = renderer.render(scene, bvhlab.build(scene), *SIZE, max_depth=6)[0]
     assert pixels_off(image, floor_reference(half)) <= (1 if half > 500 else 0)
