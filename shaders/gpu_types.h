@@ -269,7 +269,7 @@ BVHLAB_CONST uint MIN_STEPS_PER_DISPATCH = 16u;
 /// FrameParams::max_work_per_pixel meaning "no cap".
 BVHLAB_CONST uint NO_WORK_CAP = 0xffffffffu;
 /// Words (uvec4) of a slot's saved trace state (state.glsl).
-BVHLAB_CONST uint STATE_WORDS = 14u;
+BVHLAB_CONST uint STATE_WORDS = 15u;
 BVHLAB_CONST uint NO_HIT = 0xffffffffu;
 BVHLAB_CONST uint NODE_SKIP_MASK = 0x7fffffffu;
 BVHLAB_CONST float FAR_AWAY = 3.0e38f;  ///< tmax of a ray that may go anywhere

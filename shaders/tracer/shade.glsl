@@ -65,8 +65,10 @@ float infinity() { return uintBitsToFloat(0x7f800000u); }
 
 /// A hit as shading sees it.
 struct Surface {
-    vec3 p;          ///< the hit point: on the primitive where the scene is flat (surface_at)
-    vec3 p_error;    ///< a bound on p's error, per coordinate (pbrt-v4 §6.8.5)
+    vec3 p;          ///< the hit point as traced, origin + t·dir: where the surface is shaded
+    vec3 base;       ///< where rays leaving it start from: p recomputed on the primitive where the
+                     ///< scene is flat (surface_at)
+    vec3 p_error;    ///< a bound on base's error, per coordinate (pbrt-v4 §6.8.5)
     float t_error;   ///< two-level hits: a bound on the traced t's error times |cos| to the normal
     vec3 facing;     ///< the geometric normal on the side the ray came from
     bool entering;   ///< the ray hit the outside
@@ -97,7 +99,8 @@ vec3 normal_to_world(GpuInstance inst, vec3 n) {
 /// A direction moved by an instance's world-to-object transform (as instance_level moves a ray).
 vec3 object_dir(GpuInstance inst, vec3 d) { return vec3(dot(xyz(inst.row0), d), dot(xyz(inst.row1), d), dot(xyz(inst.row2), d)); }
 
-/// The hit point with a bound on its error, its geometric normal (unit, outwards; triangles: by
+/// The hit point (shaded where traced, as the flattened copy of a two-level scene is), the point
+/// rays leave it from with a bound on its error, its geometric normal (unit, outwards; triangles: by
 /// winding in the mesh's own space) and material, the primitive fetched once; a two-level hit's
 /// normal comes from its instance's object space. Where the scene is flat the point is recomputed
 /// on the primitive (pbrt-v4 §6.8.5), since origin + t·dir carries the error of the origin and of
@@ -114,6 +117,7 @@ Surface surface_at(RayTask task, Hit hit) {
     if (s.moved) s.inst = load_instance(hit.instance);
     s.p_error = gamma_bound(16.0f) * (abs(task.origin) + abs(task.dir * hit.t));
     s.p = traced;
+    s.base = traced;
     s.t_error = 0.0f;
     vec3 n;
     uint material;
@@ -125,8 +129,8 @@ Surface surface_at(RayTask task, Hit hit) {
         if (len > 0.0f) n = n * (sphere.center_radius.w / len);
         // γ(5)|q| for the reprojection (pbrt), γ(4)|q| more for the sphere test's own rounding of
         // |o - c|² - r², whose sign decides whether a ray leaving the surface meets it again
-        if (!s.moved) s.p = c + n;
-        if (!s.moved) s.p_error = gamma_bound(9.0f) * abs(n) + gamma_bound(1.0f) * abs(s.p);
+        if (!s.moved) s.base = c + n;
+        if (!s.moved) s.p_error = gamma_bound(9.0f) * abs(n) + gamma_bound(1.0f) * abs(s.base);
         material = sphere.material.x;
         s.triangle = false;
     } else {
@@ -134,8 +138,8 @@ Surface surface_at(RayTask task, Hit hit) {
         vec3 e1 = tri.v1 - tri.v0;
         vec3 e2 = tri.v2 - tri.v0;
         n = cross(e1, e2);
-        if (!s.moved) s.p = tri.v0 + (e1 * hit.u + e2 * hit.v);
-        if (!s.moved) s.p_error = gamma_bound(3.0f) * (abs(e1 * hit.u) + abs(e2 * hit.v)) + gamma_bound(1.0f) * abs(s.p);
+        if (!s.moved) s.base = tri.v0 + (e1 * hit.u + e2 * hit.v);
+        if (!s.moved) s.p_error = gamma_bound(3.0f) * (abs(e1 * hit.u) + abs(e2 * hit.v)) + gamma_bound(1.0f) * abs(s.base);
         material = tri.material;
         s.triangle = true;
         s.v0 = tri.v0;
@@ -159,11 +163,11 @@ Surface surface_at(RayTask task, Hit hit) {
 vec3 ray_origin(Surface f, vec3 dir, bool outward) {
     float amount = dot(abs(f.facing), f.p_error) + f.t_error;
     if (f.triangle) {
-        vec3 o = f.moved ? object_point(f.inst, f.p) : f.p;
+        vec3 o = f.moved ? object_point(f.inst, f.base) : f.base;
         vec3 d = f.moved ? object_dir(f.inst, dir) : dir;
         amount += triangle_t_error(f.v0, f.v1, f.v2, o, d) * abs(dot(dir, f.facing));
     }
-    return offset_origin(f.p, outward ? f.facing : -f.facing, amount);
+    return offset_origin(f.base, outward ? f.facing : -f.facing, amount);
 }
 
 /// Ambient, plus diffuse and a Blinn-Phong highlight from the point light scaled by the shadow
@@ -313,7 +317,7 @@ bool after_closest(INOUT(TraceState) s) {
 /// the light's coordinates).
 bool start_shadow(INOUT(TraceState) s, Surface f) {
     vec3 to_light = frame.light_position - f.p;
-    vec3 l = to_light / length(to_light);
+    vec3 l = to_light / length(to_light);  // as direct_light's
     if (!(f.opaque > 0.0f && dot(f.facing, l) > 0.0f)) return false;
     vec3 origin = ray_origin(f, l, true);
     vec3 to_end = frame.light_position - origin;
