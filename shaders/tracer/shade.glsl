@@ -66,20 +66,16 @@ float infinity() { return uintBitsToFloat(0x7f800000u); }
 /// A hit as shading sees it.
 struct Surface {
     vec3 p;          ///< the hit point as traced, origin + t·dir: where the surface is shaded
-    vec3 base;       ///< where rays leaving it start from: p recomputed on the primitive where the
-                     ///< scene is flat (surface_at)
+    vec3 base;       ///< where rays leaving it start from: p recomputed on the primitive (surface_at)
     vec3 p_error;    ///< a bound on base's error, per coordinate (pbrt-v4 §6.8.5)
-    float t_error;   ///< two-level hits: a bound on the traced t's error times |cos| to the normal
     vec3 facing;     ///< the geometric normal on the side the ray came from
     bool entering;   ///< the ray hit the outside
     GpuMaterial m;
     float opaque;    ///< what is neither reflected nor transmitted
-    bool triangle;   ///< a triangle, whose vertices (in its instance's object space) follow
+    bool triangle;   ///< a triangle, whose vertices in the world follow
     vec3 v0;
     vec3 v1;
     vec3 v2;
-    bool moved;      ///< a two-level hit, in instance `inst`
-    GpuInstance inst;
 };
 
 /// A point moved by an instance's world-to-object transform.
@@ -96,59 +92,66 @@ vec3 normal_to_world(GpuInstance inst, vec3 n) {
     return xyz(inst.row0) * n.x + xyz(inst.row1) * n.y + xyz(inst.row2) * n.z;
 }
 
-/// A direction moved by an instance's world-to-object transform (as instance_level moves a ray).
-vec3 object_dir(GpuInstance inst, vec3 d) { return vec3(dot(xyz(inst.row0), d), dot(xyz(inst.row1), d), dot(xyz(inst.row2), d)); }
+/// A point of an instance's object space in the world: the world-to-object transform undone, its
+/// 3×3 part inverted by its adjugate (the inverse's columns are the rows' cross products over the
+/// determinant).
+vec3 world_point(GpuInstance inst, vec3 q) {
+    vec3 r0 = xyz(inst.row0), r1 = xyz(inst.row1), r2 = xyz(inst.row2);
+    vec3 d = q - vec3(inst.row0.w, inst.row1.w, inst.row2.w);
+    return (cross(r1, r2) * d.x + cross(r2, r0) * d.y + cross(r0, r1) * d.z) / dot(r0, cross(r1, r2));
+}
 
 /// The hit point (shaded where traced, as the flattened copy of a two-level scene is), the point
 /// rays leave it from with a bound on its error, its geometric normal (unit, outwards; triangles: by
 /// winding in the mesh's own space) and material, the primitive fetched once; a two-level hit's
-/// normal comes from its instance's object space. Where the scene is flat the point is recomputed
-/// on the primitive (pbrt-v4 §6.8.5), since origin + t·dir carries the error of the origin and of
-/// t (which grows with the distance and, for the watertight test, with the triangle's size): a
+/// normal comes from its instance's object space. The point rays leave from is recomputed on the
+/// primitive (pbrt-v4 §6.8.5), since origin + t·dir carries the error of the origin and of t
+/// (which grows with the distance and, for the watertight test, with the triangle's size): a
 /// triangle's is v0 + b1·e1 + b2·e2 from the hit's barycentrics (any barycentrics give a point of
-/// the plane; only the rounding of this sum moves it off), a sphere's the traced point projected
-/// onto it, c + (p - c)·r / |p - c|. A two-level hit keeps origin + t·dir (there is no object-to-
-/// world transform to carry a point back), bounded by the rounding of that sum, of the instance's
-/// transform and, for a triangle, the test's error in t (t_error).
+/// the plane; only the rounding of this sum moves it off), from its vertices in the world (an
+/// instance's moved there: the same barycentrics, and the same offsets as its flattened copy's;
+/// from the object space's, an instanced glass knot and its flattened copy were 124 pixels apart,
+/// 14 before), a sphere's the traced point projected onto it, c + (p - c)·r / |p - c| (an
+/// instanced sphere keeps origin + t·dir, bounded by the rounding of that sum and its transform).
 Surface surface_at(RayTask task, Hit hit) {
     Surface s;
     vec3 traced = task.origin + task.dir * hit.t;
-    s.moved = hit.instance != NO_INSTANCE;
-    if (s.moved) s.inst = load_instance(hit.instance);
+    bool moved = hit.instance != NO_INSTANCE;
+    GpuInstance inst;
+    if (moved) inst = load_instance(hit.instance);
     s.p_error = gamma_bound(16.0f) * (abs(task.origin) + abs(task.dir * hit.t));
     s.p = traced;
     s.base = traced;
-    s.t_error = 0.0f;
     vec3 n;
     uint material;
     if ((hit.ref & REF_SPHERE_BIT) != 0u) {
         GpuSphere sphere = load_sphere(hit.ref & REF_INDEX_MASK);
         vec3 c = xyz(sphere.center_radius);
-        n = (s.moved ? object_point(s.inst, traced) : traced) - c;
+        n = (moved ? object_point(inst, traced) : traced) - c;
         float len = length(n);
         if (len > 0.0f) n = n * (sphere.center_radius.w / len);
         // γ(5)|q| for the reprojection (pbrt), γ(4)|q| more for the sphere test's own rounding of
         // |o - c|² - r², whose sign decides whether a ray leaving the surface meets it again
-        if (!s.moved) s.base = c + n;
-        if (!s.moved) s.p_error = gamma_bound(9.0f) * abs(n) + gamma_bound(1.0f) * abs(s.base);
+        if (!moved) s.base = c + n;
+        if (!moved) s.p_error = gamma_bound(9.0f) * abs(n) + gamma_bound(1.0f) * abs(s.base);
         material = sphere.material.x;
         s.triangle = false;
     } else {
         GpuTriangle tri = load_triangle(hit.ref);
-        vec3 e1 = tri.v1 - tri.v0;
-        vec3 e2 = tri.v2 - tri.v0;
-        n = cross(e1, e2);
-        if (!s.moved) s.base = tri.v0 + (e1 * hit.u + e2 * hit.v);
-        if (!s.moved) s.p_error = gamma_bound(3.0f) * (abs(e1 * hit.u) + abs(e2 * hit.v)) + gamma_bound(1.0f) * abs(s.base);
+        n = cross(tri.v1 - tri.v0, tri.v2 - tri.v0);
+        s.v0 = moved ? world_point(inst, tri.v0) : tri.v0;
+        s.v1 = moved ? world_point(inst, tri.v1) : tri.v1;
+        s.v2 = moved ? world_point(inst, tri.v2) : tri.v2;
+        vec3 e1 = s.v1 - s.v0;
+        vec3 e2 = s.v2 - s.v0;
+        s.base = s.v0 + (e1 * hit.u + e2 * hit.v);
+        s.p_error = gamma_bound(3.0f) * (abs(e1 * hit.u) + abs(e2 * hit.v)) + gamma_bound(1.0f) * abs(s.base);
+        // the world vertices of an instance: the rounding of its inverted transform too
+        if (moved) s.p_error += gamma_bound(16.0f) * (abs(s.v0) + abs(e1 * hit.u) + abs(e2 * hit.v));
         material = tri.material;
         s.triangle = true;
-        s.v0 = tri.v0;
-        s.v1 = tri.v1;
-        s.v2 = tri.v2;
     }
-    n = normalize(s.moved ? normal_to_world(s.inst, n) : n);
-    if (s.moved && s.triangle)
-        s.t_error = triangle_t_error(s.v0, s.v1, s.v2, object_point(s.inst, task.origin), object_dir(s.inst, task.dir)) * abs(dot(task.dir, n));
+    n = normalize(moved ? normal_to_world(inst, n) : n);
     s.entering = dot(n, task.dir) < 0.0f;
     s.facing = s.entering ? n : -n;
     s.m = load_material(material);
@@ -159,14 +162,12 @@ Surface surface_at(RayTask task, Hit hit) {
 /// Where a ray leaving the surface `f` along `dir` starts (outward: to the side of `facing`,
 /// else through it): off the surface by p's error bound projected onto the normal (pbrt-v4
 /// §6.8.6), plus, for a triangle, how far the watertight test's t for this very ray may be off
-/// (pbrt's deltaT, §6.8.4; in the instance's space, where the test runs: t is the same number).
+/// (pbrt's deltaT, §6.8.4; measured in the world for an instance too, whose test runs in its
+/// object space: the bound is doubled, and a flat scene and its instanced copy start their rays
+/// alike).
 vec3 ray_origin(Surface f, vec3 dir, bool outward) {
-    float amount = dot(abs(f.facing), f.p_error) + f.t_error;
-    if (f.triangle) {
-        vec3 o = f.moved ? object_point(f.inst, f.base) : f.base;
-        vec3 d = f.moved ? object_dir(f.inst, dir) : dir;
-        amount += triangle_t_error(f.v0, f.v1, f.v2, o, d) * abs(dot(dir, f.facing));
-    }
+    float amount = dot(abs(f.facing), f.p_error);
+    if (f.triangle) amount += triangle_t_error(f.v0, f.v1, f.v2, f.base, dir) * abs(dot(dir, f.facing));
     return offset_origin(f.base, outward ? f.facing : -f.facing, amount);
 }
 
