@@ -20,7 +20,7 @@ class SceneCache:
     """Remembers the RenderScene last made and the key it was made for: the tree (object and
     revision, which refit bumps; for a two-level tree its TLAS object, which holds the meshes' tree
     versions), the geometry's fingerprint (so in-place edits of the arrays are seen) and the
-    materials (by value). And the copy last made of it whose overlay pass draws a two-level tree's
+    materials and every mesh's material indices (by value). And the copy last made of it whose overlay pass draws a two-level tree's
     BLAS boxes (RenderOptions.overlay_level), by (level, depth range)."""
 
     def __init__(self):
@@ -67,6 +67,9 @@ class SceneCache:
             tuple(scene.materials),
             _array_key(scene.tri_material),
             _array_key(scene.sphere_material),
+            # the other meshes' too: a shared mesh whose faces changed material kept the old indices
+            # (one Renderer for F12 and the viewport: 736 pixels of a linked duplicate stayed red)
+            tuple(_array_key(scene.mesh_triangle_material(k)) for k in meshes if k > 0),
         )
 
 

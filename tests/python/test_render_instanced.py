@@ -267,3 +267,35 @@ def test_overlay_boxes_out_of_order_or_not_boxes_are_refused():
     for a, b, depth, message in bad:
         with pytest.raises(ValueError, match=message):
             render_scene.with_overlay_boxes(a, b, depth)
+
+
+def test_a_shared_meshs_new_material_indices_are_rendered():
+    """One Renderer, a two-level scene rendered, then the shared mesh's faces given another material
+    (the tree kept: nothing moved): the render cache's key left the meshes' material indices out,
+    and the old colours were traced (a probe: 736 pixels of F12 and the viewport stayed red)."""
+    quad = np.array([[[-1, -1, 0], [1, -1, 0], [1, 1, 0]], [[-1, -1, 0], [1, 1, 0], [-1, 1, 0]]], np.float32)
+    transforms = np.tile(np.eye(3, 4, dtype=np.float32), (2, 1, 1))
+    transforms[0, :, 3], transforms[1, :, 3] = (-1.2, 0, 0), (1.2, 0, 0)
+    materials = [bvhlab.Material(color=(1, 0, 0)), bvhlab.Material(color=(0, 0, 1))]
+    camera = bvhlab.Camera((0, 0, 6), (0, 0, 0), (0, 1, 0), 45.0)
+
+    def scene(index):
+        return bvhlab.Scene(
+            triangles=np.zeros((0, 3, 3), np.float32), materials=materials, meshes=[quad],
+            mesh_tri_material=[np.array([index, index], np.int32)], instance_mesh=np.ones(2, np.int32),
+            instance_transforms=transforms, camera=camera,
+        )  # fmt: skip
+
+    bvh = bvhlab.build(scene(0))
+    renderer = bvhlab.Renderer("cpu")
+
+    def colour(renderer, s):
+        job = renderer.start(s, bvh, 32, 24)
+        job.run()
+        return job.result().color
+
+    red = colour(renderer, scene(0))
+    again = colour(renderer, scene(1))
+    fresh = colour(bvhlab.Renderer("cpu"), scene(1))
+    np.testing.assert_array_equal(again, fresh)
+    assert red[12, 8, 0] > 0.5 and again[12, 8, 2] > 0.5 and again[12, 8, 0] < 0.1
