@@ -20,8 +20,9 @@ class SceneCache:
     """Remembers the RenderScene last made and the key it was made for: the tree (object and
     revision, which refit bumps; for a two-level tree its TLAS object, which holds the meshes' tree
     versions), the geometry's fingerprint (so in-place edits of the arrays are seen) and the
-    materials and every mesh's material indices (by value). And the copy last made of it whose overlay pass draws a two-level tree's
-    BLAS boxes (RenderOptions.overlay_level), by (level, depth range)."""
+    materials and every mesh's material indices (by value). And the copy last made of it whose
+    overlay pass draws a two-level tree's BLAS boxes (RenderOptions.overlay_level), by (level,
+    depth range)."""
 
     def __init__(self):
         self._lock = threading.Lock()

@@ -43,8 +43,8 @@ def read_stl(path: Path) -> tuple[np.ndarray, np.ndarray]:
     elif count >= 0:
         raise SceneFileError(
             f"{path}: the header declares {count} triangles ({_HEADER + _TRIANGLE * count} bytes), "
-            f"the file has {len(data)} bytes "
-            f"({'truncated?' if len(data) < _HEADER + _TRIANGLE * count else 'more than that'}), and it is not ASCII STL"
+            f"the file has {len(data)} bytes ({'truncated?' if len(data) < _HEADER + _TRIANGLE * count else 'more'}), "
+            "and it is not ASCII STL"
         )
     else:
         raise SceneFileError(f"{path}: {len(data)} bytes: neither binary STL (84 at least) nor ASCII")
