@@ -243,7 +243,10 @@ void start_sample(INOUT(TraceState) s) {
 /// line) go into the pixel's sums (whole samples only, so a stopped render leaves consistent sums).
 void next_ray(INOUT(TraceState) s) {
     if (s.rays == 0u) {
-        accumulate_sample(s.pixel, s.color, s.counts, s.depth, s.depth < infinity());
+        // a sample with no camera ray (outside the fisheye's ellipse) is opaque black, as Cycles
+        // writes it with Film ▸ Transparent (it was alpha 0); its task is that zero ray
+        bool no_ray = dot(s.task.dir, s.task.dir) == 0.0f;
+        accumulate_sample(s.pixel, s.color, s.counts, s.depth, s.depth < infinity() || no_ray);
         s.sample_index += 1u;
         s.phase = PHASE_SAMPLE;
         return;

@@ -278,3 +278,17 @@ def test_the_overlay_needs_straight_lines():
     view = bvhlab.View((0.0, -8.0, 1.0), (0.0, 1.0, 0.0), projection="fisheye")
     with pytest.raises(ValueError, match="perspective or orthographic camera"):
         bvhlab.render(scene, bvhlab.build(scene), 16, 12, backend="cpu", camera=view, overlay_depth=(0, 2))
+
+
+def test_a_fisheyes_corners_are_opaque_black_with_film_transparent(renderer):
+    """Outside the fisheye's ellipse there is no camera ray: Cycles writes opaque black there with
+    Film ▸ Transparent (a probe: bvhlab wrote alpha 0); the sky inside stays transparent."""
+    scene = showcase.five_spheres()
+    view = bvhlab.View((0, -8, 1), (0, 1, 0), projection="fisheye", fisheye_fov=120)
+    job = renderer.start(scene, bvhlab.build(scene), 40, 30, camera=view, film_transparent=True)
+    job.run()
+    color = job.result().color
+    for corner in (color[0, 0], color[0, -1], color[-1, 0], color[-1, -1]):
+        assert corner.tolist() == [0.0, 0.0, 0.0, 1.0]
+    inside_sky = color[15, :, 3] == 0
+    assert inside_sky.any(), "the test's view: some sky inside the ellipse"
