@@ -76,14 +76,19 @@ def real(name: str, value, lo: float = -math.inf, hi: float = math.inf) -> float
 
 
 def _range_text(lo: float, hi: float) -> str:
-    """'between 0 and 1', 'at least 0', 'at most 1' (no infinite bound written out)."""
+    """'between 0 and 1', 'at least 0', 'at most 1' (no infinite bound written out; whole numbers
+    whole, as 4294967295)."""
+
+    def text(x: float) -> str:
+        return str(int(x)) if float(x).is_integer() else f"{x:g}"
+
     if math.isinf(lo) and math.isinf(hi):
         return "finite"
     if math.isinf(hi):
-        return f"at least {lo:g}"
+        return f"at least {text(lo)}"
     if math.isinf(lo):
-        return f"at most {hi:g}"
-    return f"between {lo:g} and {hi:g}"
+        return f"at most {text(hi)}"
+    return f"between {text(lo)} and {text(hi)}"
 
 
 #: The largest finite float32 (numpy.finfo(numpy.float32).max).

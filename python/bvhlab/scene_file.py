@@ -3,6 +3,7 @@ checked reading of meshes and instances (format 2)."""
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -75,7 +76,7 @@ def read_scene(cls: type[Scene], path, *, max_expansion: float = MAX_EXPANSION) 
         scene = cls(
             triangles=np.ascontiguousarray(f["triangles"], np.float32),
             spheres=np.ascontiguousarray(f["spheres"], np.float32),
-            materials=[Material(tuple(r[:3]), r[3], r[4], r[5]) for r in f["materials"]],
+            materials=[_material_of_row(r, path) for r in f["materials"]],
             tri_material=f["tri_material"],
             sphere_material=f["sphere_material"],
             camera=Camera.from_row(cam) if cam is not None else None,
@@ -117,6 +118,21 @@ _INSTANCING_MEMBERS = (
     "instance_mesh",
     "instance_transforms",
 )
+
+
+def _material_of_row(row, path) -> Material:
+    """A scene file's material; one written before reflective + transparent was bounded by 1 (the
+    add-on exported a Principled BSDF of metallic 1 and transmission 1 as 1 and 1) transmits what it
+    does not reflect, as the add-on exports it now, with a warning."""
+    reflective, transparent = float(row[3]), float(row[4])
+    if reflective + transparent > 1.0 + 1e-6 and 0.0 <= reflective <= 1.0:
+        warnings.warn(
+            f"{path}: a material of reflective {reflective} and transparent {transparent} (more light than "
+            f"arrives) is read with transparent {1.0 - reflective:g}",
+            stacklevel=3,
+        )
+        transparent = 1.0 - reflective
+    return Material(tuple(row[:3]), reflective, transparent, row[5])
 
 
 def _instancing_fields(f: dict) -> dict:

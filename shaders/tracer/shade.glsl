@@ -92,13 +92,35 @@ vec3 normal_to_world(GpuInstance inst, vec3 n) {
     return xyz(inst.row0) * n.x + xyz(inst.row1) * n.y + xyz(inst.row2) * n.z;
 }
 
-/// A point of an instance's object space in the world: the world-to-object transform undone, its
-/// 3×3 part inverted by its adjugate (the inverse's columns are the rows' cross products over the
-/// determinant).
-vec3 world_point(GpuInstance inst, vec3 q) {
-    vec3 r0 = xyz(inst.row0), r1 = xyz(inst.row1), r2 = xyz(inst.row2);
+/// What each component of cross(a, b) sums in magnitude: the scale of its rounding.
+vec3 cross_magnitude(vec3 a, vec3 b) {
+    a = abs(a);
+    b = abs(b);
+    return vec3(a.y * b.z + a.z * b.y, a.z * b.x + a.x * b.z, a.x * b.y + a.y * b.x);
+}
+
+/// A point q of an instance's object space in the world, `p`: the world-to-object transform undone,
+/// its 3×3 part inverted by its adjugate (the inverse's columns are the rows' cross products over
+/// the determinant), and `err`, a bound on that arithmetic's error per coordinate: γ(7) of what the
+/// adjugate's products sum over |q - T| (each entry two roundings, the sum three, q - T one, the
+/// division one), plus |p| times the determinant's relative error, γ(5)·(|r0|·|adj|)/|det| — large
+/// where the transform is skewed and stretched (a bound of γ(16)·|p| alone was 262× too small at
+/// 100:1 with skew: a stretched sphere's instance shadowed itself). False where it is no usable
+/// number (a determinant over- or underflowed, an object scale beyond about 1e±12, or one so
+/// ill-conditioned that the bound fails): p is not made.
+bool world_point(GpuInstance inst, vec3 q, OUT(vec3) p, OUT(vec3) err) {
+    vec3 r0 = xyz(inst.row0);
+    vec3 r1 = xyz(inst.row1);
+    vec3 r2 = xyz(inst.row2);
     vec3 d = q - vec3(inst.row0.w, inst.row1.w, inst.row2.w);
-    return (cross(r1, r2) * d.x + cross(r2, r0) * d.y + cross(r0, r1) * d.z) / dot(r0, cross(r1, r2));
+    vec3 a0 = cross(r1, r2);
+    float det = dot(r0, a0);
+    float det_rel = gamma_bound(5.0f) * dot(abs(r0), cross_magnitude(r1, r2)) / abs(det);
+    if (!(abs(det) >= SMALLEST_NORMAL && det_rel < 0.5f)) return false;
+    p = (a0 * d.x + cross(r2, r0) * d.y + cross(r0, r1) * d.z) / det;
+    vec3 sums = cross_magnitude(r1, r2) * abs(d.x) + cross_magnitude(r2, r0) * abs(d.y) + cross_magnitude(r0, r1) * abs(d.z);
+    err = gamma_bound(7.0f) * sums / abs(det) + (det_rel + gamma_bound(1.0f)) * abs(p);
+    return max(max(err.x, err.y), err.z) < 1e30f;
 }
 
 /// The hit point (shaded where traced, as the flattened copy of a two-level scene is), the point
@@ -139,17 +161,32 @@ Surface surface_at(RayTask task, Hit hit) {
     } else {
         GpuTriangle tri = load_triangle(hit.ref);
         n = cross(tri.v1 - tri.v0, tri.v2 - tri.v0);
-        s.v0 = moved ? world_point(inst, tri.v0) : tri.v0;
-        s.v1 = moved ? world_point(inst, tri.v1) : tri.v1;
-        s.v2 = moved ? world_point(inst, tri.v2) : tri.v2;
-        vec3 e1 = s.v1 - s.v0;
-        vec3 e2 = s.v2 - s.v0;
-        s.base = s.v0 + (e1 * hit.u + e2 * hit.v);
-        s.p_error = gamma_bound(3.0f) * (abs(e1 * hit.u) + abs(e2 * hit.v)) + gamma_bound(1.0f) * abs(s.base);
-        // the world vertices of an instance: the rounding of its inverted transform too
-        if (moved) s.p_error += gamma_bound(16.0f) * (abs(s.v0) + abs(e1 * hit.u) + abs(e2 * hit.v));
         material = tri.material;
-        s.triangle = true;
+        s.v0 = tri.v0;
+        s.v1 = tri.v1;
+        s.v2 = tri.v2;
+        vec3 err0 = vec3(0.0f);
+        vec3 err1 = vec3(0.0f);
+        vec3 err2 = vec3(0.0f);
+        // an instance's vertices in the world, with the error of the inverted transform; where it
+        // has no usable inverse, the traced point and its bound (and no triangle's t bound)
+        s.triangle = !moved || (world_point(inst, tri.v0, s.v0, err0) && world_point(inst, tri.v1, s.v1, err1) &&
+                                world_point(inst, tri.v2, s.v2, err2));
+        if (!s.triangle) {
+            // the traced point's t as the test made it, in the instance's space (t is the same
+            // number there), four times over for the ray that leaves (its own bound needs the
+            // world vertices this transform has none of)
+            vec3 o = object_point(inst, task.origin);
+            vec3 d = vec3(dot(xyz(inst.row0), task.dir), dot(xyz(inst.row1), task.dir), dot(xyz(inst.row2), task.dir));
+            s.p_error += vec3(4.0f * triangle_t_error(tri.v0, tri.v1, tri.v2, o, d));
+        }
+        if (s.triangle) {
+            vec3 e1 = s.v1 - s.v0;
+            vec3 e2 = s.v2 - s.v0;
+            s.base = s.v0 + (e1 * hit.u + e2 * hit.v);
+            s.p_error = gamma_bound(3.0f) * (abs(e1 * hit.u) + abs(e2 * hit.v)) + gamma_bound(1.0f) * abs(s.base) + err0 +
+                        (err0 + err1) * hit.u + (err0 + err2) * hit.v;
+        }
     }
     n = normalize(moved ? normal_to_world(inst, n) : n);
     s.entering = dot(n, task.dir) < 0.0f;
@@ -168,6 +205,8 @@ Surface surface_at(RayTask task, Hit hit) {
 vec3 ray_origin(Surface f, vec3 dir, bool outward) {
     float amount = dot(abs(f.facing), f.p_error);
     if (f.triangle) amount += triangle_t_error(f.v0, f.v1, f.v2, f.base, dir) * abs(dot(dir, f.facing));
+    // a finite start, however far the bound (a grazing ray near ±2^40 overflowed it: NaN origins)
+    amount = min(amount, 1e30f);
     return offset_origin(f.base, outward ? f.facing : -f.facing, amount);
 }
 

@@ -187,7 +187,7 @@ TEST(Update, EveryPolicyLeavesAValidTree) {
         SCOPED_TRACE(to_string(p));
         check_tree(t, moved.view(), f.tree.config.max_leaf_size);
         EXPECT_EQ(t.fingerprint(), geometry_fingerprint(moved.view()));
-        ASSERT_EQ(built_out.size(), t.nodes.size() + 2);  // and the reference's area and leaves
+        ASSERT_EQ(built_out.size(), t.nodes.size() + 2);  // and the reference's area and surface
         EXPECT_NEAR(stats.sah_cost, sah_cost(t), 1e-4 * stats.sah_cost);
         EXPECT_GT(stats.ms, 0.0);
         if (p != UpdatePolicy::Adaptive) EXPECT_EQ(stats.policy, p);

@@ -124,6 +124,15 @@ def test_build_options_beside_a_saved_tree_must_be_its_own(tmp_path, capsys):
     assert "was built with method" in capsys.readouterr().err
     assert main(["inspect", "gen:whitted", "--tree", str(tree), "--method", "sah32", "--node", "0"]) == 0
     assert main(["inspect", "gen:whitted", "--tree", str(tree), "--node", "0"]) == 0
+    # an option typed that is the default is compared too; one typed alone is compared alone
+    # (a review: --method sah passed on an SBVH tree, --max-leaf-size 8 was refused on its own tree)
+    sbvh = tmp_path / "s.bvhtree"
+    assert main(["inspect", "gen:whitted", "--method", "sbvh", "--max-leaf-size", "8", "--node", "0",
+                 "--save-tree", str(sbvh)]) == 0  # fmt: skip
+    capsys.readouterr()
+    assert main(["inspect", "gen:whitted", "--tree", str(sbvh), "--method", "sah", "--node", "0"]) == 2
+    assert "was built with method=sbvh, not method=sah" in capsys.readouterr().err
+    assert main(["inspect", "gen:whitted", "--tree", str(sbvh), "--max-leaf-size", "8", "--node", "0"]) == 0
 
 
 def test_optimize_ms_needs_optimize(capsys):

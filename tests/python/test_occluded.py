@@ -102,8 +102,8 @@ def tree_and_rays():
 @pytest.mark.parametrize(
     "tmax, error, match",
     [
-        (float("nan"), ValueError, "tmax must be between"),
-        (-1.0, ValueError, "tmax must be between"),
+        (float("nan"), ValueError, "tmax must be a number, got NaN"),
+        (-1.0, ValueError, "tmax must be at least 0, got -1.0"),
         (np.array([1, np.nan, 1, 1], np.float32), ValueError, "ray 1: tmax must be a number >= 0"),
         (np.array([1, 1, 1, -0.5], np.float32), ValueError, "ray 3: tmax must be a number >= 0"),
         (np.ones(3, np.float32), ValueError, "tmax has 3 entries for 4 rays"),

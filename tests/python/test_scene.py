@@ -229,3 +229,18 @@ def test_camera_outside_the_range_or_coinciding_in_float32_is_refused():
         bvhlab.Camera((2e12, 0, 0), (0, 0, 0))
     with pytest.raises(ValueError, match="coincide"):
         bvhlab.Camera((1e12, 0, 0), (1e12 + 1, 0, 0))  # distinct in float64, not in float32
+
+
+def test_a_file_with_a_material_returning_more_light_loads_with_a_warning(tmp_path):
+    """A file written before reflective + transparent was bounded by 1 (the add-on exported metallic 1
+    with transmission 1 as 1 and 1): read with transparent 1 - reflective, and said (a review: it was
+    refused, the file lost)."""
+    scene = bvhlab.Scene(triangles=procedural.random_triangles(10), materials=[bvhlab.Material(reflective=1.0)])
+    path = scene.save(tmp_path / "old.npz")
+    with np.load(path) as f:
+        arrays = dict(f)
+    arrays["materials"] = np.array([[1.0, 1.0, 1.0, 1.0, 1.0, 1.5]])
+    np.savez(path, **arrays)
+    with pytest.warns(UserWarning, match="read with transparent 0"):
+        loaded = bvhlab.Scene.load(path)
+    assert (loaded.materials[0].reflective, loaded.materials[0].transparent) == (1.0, 0.0)

@@ -19,7 +19,7 @@ using Clock = std::chrono::steady_clock;
 constexpr std::string_view kNames[] = {"rebuild", "refit", "partial", "adaptive"};
 
 /// Where adaptive's reference was taken: the root's cost then (relative to its box), the root's
-/// half area then and its primitives' surface area then (surface_area; < 0: not known). Carried
+/// half area then and its primitives' surface area then (primitives_surface_area; < 0: not known). Carried
 /// after the nodes' costs in `built` (update.h): entries n and n + 1.
 struct Reference {
     double cost = 0, area = 0, primitives = -1;
@@ -27,7 +27,7 @@ struct Reference {
 
 /// The surface area of a tree's primitives (its packed geometry; a triangle of zero area is packed
 /// as a point): what grows with the geometry's scale and not as it turns or moves apart.
-double surface_area(const Bvh& bvh) {
+double primitives_surface_area(const Bvh& bvh) {
     constexpr double kFourPi = 12.566370614359172;
     double sum = 0;
     for (const PackedPrim& p : bvh.prims) {
@@ -43,7 +43,7 @@ double surface_area(const Bvh& bvh) {
 }
 
 /// Adaptive's reference for the root now, of half area `now`, whose primitives' surface area is
-/// `primitives` (surface_area; < 0: not measured): an estimate of a fresh build's cost. A cost
+/// `primitives` (primitives_surface_area; < 0: not measured): an estimate of a fresh build's cost. A cost
 /// relative to the root's box falls where the geometry spreads and its parts stay as they were,
 /// while a fresh build's area-weighted cost A·cost stays about the same (slabs of a knot moved
 /// apart by 0.6: A·cost 2,545 to 2,660, +4.5%, its cost 35.11 to 33.27, -5.2%, as the root's area
@@ -209,7 +209,7 @@ Bvh update_bvh(const Bvh& old, const NodeCostArray& built, const GeometryView& g
     Reference ref{n ? built[0] : 0.0, n ? node_box(old.nodes[0]).half_area() : 0.0};
     if (built.size() > n) ref.area = built[n];
     if (built.size() > n + 1) ref.primitives = built[n + 1];
-    else if (built.size() == n && adaptive_policy) ref.primitives = surface_area(old);
+    else if (built.size() == n && adaptive_policy) ref.primitives = primitives_surface_area(old);
     const auto start = Clock::now();
     UpdateStats stats;
     stats.policy = config.policy;
@@ -219,7 +219,8 @@ Bvh update_bvh(const Bvh& old, const NodeCostArray& built, const GeometryView& g
         const NodeCosts fresh = node_costs(tree);
         built_out = fresh.cost;
         stats.sah_cost = tree.empty() ? 0.0 : fresh.root_cost;
-        ref = {stats.sah_cost, tree.empty() ? 0.0 : fresh.area[0], adaptive_policy ? surface_area(tree) : -1.0};
+        ref = {stats.sah_cost, tree.empty() ? 0.0 : fresh.area[0],
+               adaptive_policy ? primitives_surface_area(tree) : -1.0};
         stats.policy = UpdatePolicy::Rebuild, stats.subtrees_rebuilt = 1,
         stats.primitives_rebuilt = g.primitive_count();
     };
@@ -246,7 +247,7 @@ Bvh update_bvh(const Bvh& old, const NodeCostArray& built, const GeometryView& g
             if (adaptive_policy && !tree.empty()) {
                 goal = reference_cost(ref, now.area[0], primitives);
                 if (now.cost[0] > config.target_growth * goal && now.area[0] > ref.area) {
-                    primitives = surface_area(tree);
+                    primitives = primitives_surface_area(tree);
                     goal = reference_cost(ref, now.area[0], primitives);
                 }
                 built_out[0] = float(goal);
@@ -270,7 +271,7 @@ Bvh update_bvh(const Bvh& old, const NodeCostArray& built, const GeometryView& g
                 // shape may have made a good tree cheaper than the first build
                 if (config.policy == UpdatePolicy::Adaptive && !tree.empty()) {
                     if (ran == UpdatePolicy::Partial && sah < goal)
-                        ref = {sah, now.area[0], primitives >= 0 ? primitives : surface_area(tree)};
+                        ref = {sah, now.area[0], primitives >= 0 ? primitives : primitives_surface_area(tree)};
                     built_out[0] = float(ref.cost);
                 }
                 stats.sah_cost = sah, stats.policy = ran;

@@ -66,8 +66,9 @@ def instances_in_scope(depsgraph, view_layer, scope: str, types=None) -> Iterato
             continue
         is_instance = instance.is_instance
         # an instancer whose own geometry is not shown (a particle emitter with Show Emitter off
-        # for the depsgraph's mode, render or viewport), as Cycles skips it; its instances stay
-        if not is_instance and not instance.show_self:
+        # for the depsgraph's mode, render or viewport; one inside an instanced collection too), as
+        # Cycles skips it; its instances stay
+        if not instance.show_self:
             continue
         holder = instance.parent if is_instance else obj
         known = owners.get(holder)

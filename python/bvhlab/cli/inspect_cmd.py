@@ -12,13 +12,13 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .. import BuildConfig, InstancedBvh, build, load_bvh
+from .. import InstancedBvh, build, load_bvh
 from .. import _json as strict_json
 from .._atomic import write_text
 from .._progress import ProgressBar
 from ..inspect.levels import TreeNode
 from ..inspect.ray_record import PIXEL_TRAVERSALS, trace_pixel
-from ..inspect.tree_file import SUFFIX
+from ..inspect.tree_file import SUFFIX, TreeFileError
 from ..library import load_scene
 from ..render_options import RenderOptions
 from . import options
@@ -54,6 +54,7 @@ def add_parser(sub) -> None:
     )
     options.add_scene(p)
     options.add_build(p)
+    options.typed_build_options(p)  # with --tree, the ones typed must be the saved tree's
     options.add_optimize(p)
     what = p.add_mutually_exclusive_group(required=True)
     what.add_argument("--node", type=lambda t: options.whole_number(t, 0, 2**32 - 1), metavar="N", help="node index")
@@ -100,13 +101,17 @@ def pixel_spec(text: str) -> tuple[int, int]:
 
 
 def run(args) -> int:
+    typed = options.fill_build_defaults(args)
     settings = options.build_kwargs(args)  # checked before the scene is loaded
     optimize = options.optimize_config(args)
     scene, name = load_scene(args.scene)
     if args.tree:
-        # build options given beside --tree must be the saved tree's (they were ignored)
-        given = settings != options.default_build_kwargs()
-        bvh = load_bvh(args.tree, scene, config=BuildConfig(**settings) if given else None)
+        bvh = load_bvh(args.tree, scene)
+        # build options typed beside --tree must be the saved tree's (they were ignored; those not
+        # typed are not compared: a default is no claim about the file)
+        for key, value in typed.items():
+            if getattr(bvh.config, key) != value:
+                raise TreeFileError(f"{args.tree} was built with {key}={getattr(bvh.config, key)}, not {key}={value}")
     else:
         with ProgressBar(f"building {args.method}") as bar:
             bvh = build(scene, progress=bar, **settings)

@@ -136,18 +136,36 @@ def optimize_tree(bvh, config: OptimizeConfig | None) -> OptimizeStats | None:
         return bvh.optimize(config, progress=bar)
 
 
-def default_build_kwargs() -> dict:
-    """build_kwargs of a command line that gives no build option."""
-    return build_kwargs(
-        argparse.Namespace(
-            method=DEFAULT_METHOD,
-            bins=None,
-            axis=DEFAULT_AXIS,
-            bin_bounds=DEFAULT_BIN_BOUNDS,
-            max_leaf_size=DEFAULT_MAX_LEAF_SIZE,
-            sah_block=DEFAULT_SAH_BLOCK,
-        )
-    )
+def typed_build_options(p: argparse.ArgumentParser) -> None:
+    """add_build's options with no default: run() tells the ones typed (not None) from the rest,
+    then fills those with fill_build_defaults."""
+    p.set_defaults(**dict.fromkeys(BUILD_DEFAULTS))
+
+
+#: add_build's defaults, by option.
+BUILD_DEFAULTS = {
+    "method": DEFAULT_METHOD,
+    "bins": None,
+    "axis": DEFAULT_AXIS,
+    "bin_bounds": DEFAULT_BIN_BOUNDS,
+    "max_leaf_size": DEFAULT_MAX_LEAF_SIZE,
+    "sah_block": DEFAULT_SAH_BLOCK,
+}
+
+
+def fill_build_defaults(args) -> dict:
+    """The build settings typed on a command line of typed_build_options (their BuildConfig fields
+    and values: `sah32` gives method and bins), the rest set to add_build's defaults in `args`."""
+    typed: dict = {}
+    if args.method is not None:
+        typed |= method_kwargs(args.method)
+    for name in ("bins", "axis", "bin_bounds", "max_leaf_size", "sah_block"):
+        if getattr(args, name) is not None:
+            typed[name] = getattr(args, name)
+    for name, default in BUILD_DEFAULTS.items():
+        if getattr(args, name) is None:
+            setattr(args, name, default)
+    return typed
 
 
 def build_kwargs(args) -> dict:
