@@ -112,27 +112,48 @@ INLINE float box_entry(vec3 lo, vec3 hi, TraceRay r, float tmax) {
 /// over 1e-4, relative, all still hits; the float64 distance is Embree's). Unlike the paper we do
 /// not redo u, v, w in double precision when one is 0: a ray through a shared edge or vertex then
 /// hits both triangles, and the tie rule (closer_hit) picks one — still watertight.
+/// The triangle as that test sees it: the vertices relative to the ray's origin in its axes (a, b,
+/// c; z their distance along the ray's kz axis), x and y sheared so that the ray runs along +z,
+/// and the edge functions u, v, w. One definition for the test and for the bound on its t error
+/// (ray_offset.glsl).
+struct ShearedTriangle {
+    vec3 a;
+    vec3 b;
+    vec3 c;
+    float ax, ay, bx, by, cx, cy;
+    float u, v, w;
+};
+
+INLINE ShearedTriangle sheared_triangle(vec3 p0, vec3 p1, vec3 p2, TraceRay r) {
+    ShearedTriangle s;
+    s.a = in_ray_axes(p0 - r.origin, r);
+    s.b = in_ray_axes(p1 - r.origin, r);
+    s.c = in_ray_axes(p2 - r.origin, r);
+    s.ax = s.a.x - r.shear.x * s.a.z;
+    s.ay = s.a.y - r.shear.y * s.a.z;
+    s.bx = s.b.x - r.shear.x * s.b.z;
+    s.by = s.b.y - r.shear.y * s.b.z;
+    s.cx = s.c.x - r.shear.x * s.c.z;
+    s.cy = s.c.y - r.shear.y * s.c.z;
+    s.u = s.cx * s.by - s.cy * s.bx;
+    s.v = s.ax * s.cy - s.ay * s.cx;
+    s.w = s.bx * s.ay - s.by * s.ax;
+    return s;
+}
+
 /// t = ((u·a + v·b) + w·c) / det · (1/dir[kz]) with a, b, c the vertices' unsheared kz distances:
 /// dividing before the scaling keeps it in range (coordinate_range.h). A hit in (tmin, t_best]
 /// returns true with tuv = (t, barycentric of p1, of p2); t_best is inclusive so that the caller
 /// can apply the tie rule.
 INLINE bool hit_triangle(vec3 p0, vec3 p1, vec3 p2, TraceRay r, float t_best, OUT(vec3) tuv) {
-    vec3 a = in_ray_axes(p0 - r.origin, r);
-    vec3 b = in_ray_axes(p1 - r.origin, r);
-    vec3 c = in_ray_axes(p2 - r.origin, r);
-    float ax = a.x - r.shear.x * a.z;
-    float ay = a.y - r.shear.y * a.z;
-    float bx = b.x - r.shear.x * b.z;
-    float by = b.y - r.shear.y * b.z;
-    float cx = c.x - r.shear.x * c.z;
-    float cy = c.y - r.shear.y * c.z;
-    float u = cx * by - cy * bx;
-    float v = ax * cy - ay * cx;
-    float w = bx * ay - by * ax;
+    ShearedTriangle s = sheared_triangle(p0, p1, p2, r);
+    float u = s.u;
+    float v = s.v;
+    float w = s.w;
     if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f)) return false;
     float det = u + v + w;
     if (det == 0.0f) return false;  // seen edge-on, or a zero-area triangle (stored as one point)
-    float t = (u * a.z + v * b.z + w * c.z) / det * r.shear.z;
+    float t = (u * s.a.z + v * s.b.z + w * s.c.z) / det * r.shear.z;
     if (!(t > r.tmin && t <= t_best)) return false;
     tuv = vec3(t, v / det, w / det);
     return true;

@@ -33,24 +33,13 @@ float next_float_down(float v) { return -next_float_up(-v); }
 /// meet the plane behind it at a computed t > 0.
 float triangle_t_error(vec3 v0, vec3 v1, vec3 v2, vec3 origin, vec3 dir) {
     TraceRay r = make_ray(origin, dir, 0.0f);
-    vec3 a = in_ray_axes(v0 - origin, r);
-    vec3 b = in_ray_axes(v1 - origin, r);
-    vec3 c = in_ray_axes(v2 - origin, r);
-    float max_z = max(max(abs(a.z), abs(b.z)), abs(c.z));
-    float max_x = max(max(abs(a.x - r.shear.x * a.z), abs(b.x - r.shear.x * b.z)), abs(c.x - r.shear.x * c.z));
-    float max_y = max(max(abs(a.y - r.shear.y * a.z), abs(b.y - r.shear.y * b.z)), abs(c.y - r.shear.y * c.z));
-    float bx = b.x - r.shear.x * b.z;
-    float by = b.y - r.shear.y * b.z;
-    float cx = c.x - r.shear.x * c.z;
-    float cy = c.y - r.shear.y * c.z;
-    float ax = a.x - r.shear.x * a.z;
-    float ay = a.y - r.shear.y * a.z;
-    float u = cx * by - cy * bx;
-    float v = ax * cy - ay * cx;
-    float w = bx * ay - by * ax;
-    float det = abs(u + v + w);
+    ShearedTriangle s = sheared_triangle(v0, v1, v2, r);
+    float max_z = max(max(abs(s.a.z), abs(s.b.z)), abs(s.c.z));
+    float max_x = max(max(abs(s.ax), abs(s.bx)), abs(s.cx));
+    float max_y = max(max(abs(s.ay), abs(s.by)), abs(s.cy));
+    float det = abs(s.u + s.v + s.w);
     if (det == 0.0f) return 0.0f;  // seen edge-on: the test never hits it
-    float max_e = max(max(abs(u), abs(v)), abs(w));
+    float max_e = max(max(abs(s.u), abs(s.v)), abs(s.w));
     float dx = gamma_bound(5.0f) * (max_x + max_z);
     float dy = gamma_bound(5.0f) * (max_y + max_z);
     float de = 2.0f * (gamma_bound(2.0f) * max_x * max_y + dy * max_x + dx * max_y);
