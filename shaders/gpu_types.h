@@ -107,7 +107,7 @@ struct GpuMaterial {
 /// leaf order (a TLAS leaf's slot is its instance's place here). The rows of the 3×4 world-to-object
 /// transform (w: the translation) move a world ray into object space; their transpose's 3×3 part is
 /// the inverse transpose of the object-to-world transform, which carries normals back into the world
-/// (traverse.glsl instance_ray, shade.glsl surface_at). `tree` places the instance's BLAS in the
+/// (traverse.glsl instance_ray, surface.glsl surface_at). `tree` places the instance's BLAS in the
 /// scene's forest of trees (make_render_scene, render_scene.cpp).
 struct GpuInstance {
     vec4 row0;
