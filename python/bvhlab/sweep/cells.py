@@ -91,8 +91,9 @@ def scene_names(specs) -> dict[str, str]:
     return names
 
 
-def scene_hash(spec: str) -> str:
-    """sha256 of the file behind `spec` (files, bundled names), or of a generated scene's arrays;
+def scene_hash(spec: str, loaded=None) -> str:
+    """sha256 of the file behind `spec` (files, bundled names), or of a generated scene's arrays
+    (those of `loaded`, the Scene already made from `spec`, where given: not generated again);
     "" when there is nothing to read (a missing file, an unknown name: the cell records the error)."""
     path = scene_file(spec)
     if path is not None:
@@ -107,7 +108,7 @@ def scene_hash(spec: str) -> str:
     if not spec.startswith("gen:"):
         return ""
     try:
-        scene, _ = load_scene(spec)  # generated here once: cheap next to the builds
+        scene = loaded if loaded is not None else load_scene(spec)[0]  # cheap next to the builds
     except (OSError, ValueError):
         return ""
     digest = hashlib.sha256()

@@ -94,7 +94,7 @@ def _scene(cell: Cell) -> Scene:
         # what was loaded must be what the cell's key says: a file replaced after the sweep was
         # planned (or another host's copy of the path) stored another scene's figures under the
         # key, and later runs reused them
-        if scene_hash(cell.scene) != cell.scene_hash:
+        if scene_hash(cell.scene, scene) != cell.scene_hash:  # a generated scene's from its arrays
             raise ValueError(f"{cell.scene} changed after the sweep was planned: run the sweep again")
         _last_scene = (key, scene)
     return _last_scene[1]
