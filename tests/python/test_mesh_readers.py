@@ -216,6 +216,41 @@ def test_a_polygon_bridged_to_its_hole_keeps_the_hole(tmp_path):
     assert area(t) == pytest.approx(12.0)
 
 
+def shoelace(xy) -> float:
+    x, y = np.asarray(xy, np.float64).T
+    return 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
+
+
+def test_a_comb_of_4002_corners_keeps_its_shape(tmp_path):
+    """A polygon of 2,000 teeth (half its corners reflex), as a long outline in a CAD export is:
+    n − 2 triangles of its own area. Ear clipping by whole scans took 7 s for 2,002 corners and
+    about an hour for 16,002 (O(n³)); the kept ear tests take 0.35 s and 6 s."""
+    teeth = 2000
+    ring = [(0.0, -1.0), (float(teeth), -1.0)]
+    for i in range(teeth - 1, -1, -1):
+        ring += [(i + 1.0, 1.0), (i + 0.5, 0.0)]
+    vertices = "".join(f"v {x} {y} 0\n" for x, y in ring)
+    t = load(tmp_path, "comb.obj", vertices + "f " + " ".join(str(i + 1) for i in range(len(ring))) + "\n")
+    assert len(t) == len(ring) - 2
+    assert area(t) == pytest.approx(shoelace(ring), rel=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_simple_polygons_are_covered_exactly(tmp_path, seed):
+    """Random star-shaped polygons (simple, concave, some radii repeated: collinear and equal
+    corners), either winding: triangles of their corners whose areas sum to the polygon's."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(5, 90))
+    angle, radius = np.sort(rng.uniform(0, 2 * np.pi, n)), rng.uniform(0.2, 1.0, n)
+    if seed % 3 == 0:
+        radius = np.round(radius, 1)
+    ring = np.stack([radius * np.cos(angle), radius * np.sin(angle)], 1)[:: 1 if seed % 2 else -1]
+    vertices = "".join(f"v {x!r} {y!r} 0\n" for x, y in ring)
+    t = load(tmp_path, "star.obj", vertices + "f " + " ".join(str(i + 1) for i in range(n)) + "\n")
+    assert len(t) == n - 2
+    assert area(t) == pytest.approx(shoelace(ring), rel=1e-6)  # float32 positions
+
+
 @pytest.mark.parametrize(
     "text, triangles",
     [

@@ -82,38 +82,60 @@ def _projected(p: np.ndarray, normal: np.ndarray) -> np.ndarray:
     return xy if normal[axis] > 0 else xy[:, ::-1]
 
 
-def _cross2(o, a, b) -> float:
-    return float((a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]))
-
-
 def _ear_clip(corners: list[int], xy: np.ndarray) -> list[tuple[int, int, int]] | None:
-    """Ear clipping of a counter-clockwise simple polygon; None where it finds no ear."""
-    left = list(range(len(corners)))
+    """Ear clipping of a counter-clockwise simple polygon; None where it finds no ear. Each corner's
+    ear test is kept and done again only for the two neighbours of a clipped ear (the rest keep
+    theirs), and only corners that are not strictly convex can lie in an ear (Eberly §2), tested
+    all at once: O(n·r) for r such corners (a 16,000-corner outline took 360 s as whole scans)."""
+    n = len(corners)
+    xy = np.asarray(xy, np.float64)
+    nxt, prv = np.roll(np.arange(n), -1), np.roll(np.arange(n), 1)
+    alive = np.ones(n, bool)
+    blocking = _turn(xy[prv], xy, xy[nxt]) <= 0  # reflex or flat: the only corners an ear can hold
+    ear = np.array([_is_ear(xy, prv[b], b, nxt[b], blocking) for b in range(n)])
     out = []
-    while len(left) > 3:
-        for k in range(len(left)):
-            a, b, c = left[k - 1], left[k], left[(k + 1) % len(left)]
-            if _cross2(xy[a], xy[b], xy[c]) <= 0:
-                continue  # a reflex or flat corner is no ear
-            ear = (xy[a], xy[b], xy[c])
-            # another corner inside the ear blocks it; one at the ear's own corners (a polygon
-            # bridged to its hole, "keyhole", repeats them) does not: it fanned over the hole
-            if any(_inside(xy[i], *ear) for i in left if i not in (a, b, c) and not _at_any(xy[i], ear)):
-                continue
-            out.append((corners[a], corners[b], corners[c]))
-            del left[k]
-            break
-        else:
+    b, left = 0, n
+    while left > 3:
+        candidates = np.flatnonzero(ear & alive)
+        if not len(candidates):
             return None
-    a, b, c = left
-    out.append((corners[a], corners[b], corners[c]))
+        # the next ear on from the last one clipped (the walk Eberly's ear list makes)
+        after = candidates[candidates >= b]
+        b = int(after[0] if len(after) else candidates[0])
+        a, c = prv[b], nxt[b]
+        out.append((corners[a], corners[b], corners[c]))
+        alive[b] = blocking[b] = ear[b] = False
+        nxt[a], prv[c] = c, a
+        left -= 1
+        for v in (a, c):  # only the neighbours' corners changed
+            blocking[v] = _turn(xy[prv[v]], xy[v], xy[nxt[v]]) <= 0
+        for v in (a, c):
+            ear[v] = _is_ear(xy, prv[v], v, nxt[v], blocking)
+        b = c
+    a = int(np.flatnonzero(alive)[0])
+    out.append((corners[a], corners[nxt[a]], corners[nxt[nxt[a]]]))
     return out
 
 
-def _at_any(p, corners) -> bool:
-    return any(p[0] == q[0] and p[1] == q[1] for q in corners)
+def _turn(o: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The cross product (a − o) × (b − o) in 2D, row by row: > 0 where o, a, b turn left."""
+    return (a[..., 0] - o[..., 0]) * (b[..., 1] - o[..., 1]) - (a[..., 1] - o[..., 1]) * (b[..., 0] - o[..., 0])
 
 
-def _inside(p, a, b, c) -> bool:
-    """Whether p lies in the closed triangle abc (counter-clockwise)."""
-    return _cross2(a, b, p) >= 0 and _cross2(b, c, p) >= 0 and _cross2(c, a, p) >= 0
+def _is_ear(xy: np.ndarray, a: int, b: int, c: int, blocking: np.ndarray) -> bool:
+    """Whether corner b (between a and c) is an ear: convex, and no other corner that can block
+    lies in the closed triangle abc. A corner at one of the ear's own corners (a polygon bridged to
+    its hole, a "keyhole", repeats them) does not block: it fanned over the hole."""
+    pa, pb, pc = xy[a], xy[b], xy[c]
+    if _turn(pa, pb, pc) <= 0:
+        return False  # a reflex or flat corner is no ear
+    others = np.flatnonzero(blocking)
+    others = others[(others != a) & (others != b) & (others != c)]
+    if not len(others):
+        return True
+    p = xy[others]
+    inside = (_turn(pa, pb, p) >= 0) & (_turn(pb, pc, p) >= 0) & (_turn(pc, pa, p) >= 0)
+    at_corner = np.zeros(len(p), bool)
+    for q in (pa, pb, pc):
+        at_corner |= (p[:, 0] == q[0]) & (p[:, 1] == q[1])
+    return not np.any(inside & ~at_corner)
