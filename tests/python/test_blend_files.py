@@ -31,3 +31,53 @@ def test_a_blend_without_a_camera_builds_with_the_default_camera(tmp_path):
     report = json.loads(out.read_text())
     assert report["stats"]["triangles"] == 12 and report["about"]["scene"] == "NO_CAMERA"
     assert "using a default camera that frames the geometry" in done.stderr
+
+
+LIBRARY = """
+import sys, bpy
+bpy.ops.wm.read_homefile(use_empty=True)
+if sys.argv[2] == "cube":
+    bpy.ops.mesh.primitive_cube_add(size=2.0)
+else:
+    bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=1)
+bpy.context.object.name = "Part"
+bpy.ops.wm.save_as_mainfile(filepath=sys.argv[1])
+"""
+
+LINKING = """
+import sys, bpy
+bpy.ops.wm.read_homefile(use_empty=True)
+with bpy.data.libraries.load(sys.argv[2], link=True) as (source, linked):
+    linked.objects = ["Part"]
+bpy.context.scene.collection.objects.link(linked.objects[0])
+bpy.ops.wm.save_as_mainfile(filepath=sys.argv[1])
+"""
+
+SWEEP = """
+import json, sys
+from bvhlab.sweep import read_spec, run_sweep
+result = run_sweep(read_spec(sys.argv[1]), sys.argv[2], plot=False)
+print(json.dumps({"ran": result.ran, "triangles": [row["triangles"] for row in result.rows]}))
+"""
+
+
+def test_a_sweep_of_a_blend_sees_its_linked_library_change(tmp_path):
+    """A .blend whose mesh is linked from another file: the library edited, the sweep measures the
+    new mesh (its cells were keyed by the .blend's bytes alone: the old figures came back)."""
+    library, scene = tmp_path / "library.blend", tmp_path / "scene.blend"
+    for args in ([LIBRARY, str(library), "cube"], [LINKING, str(scene), str(library)]):
+        made = _run(["-c", *args])
+        assert made.returncode == 0, made.stderr[-2000:]
+    spec = tmp_path / "spec.toml"
+    spec.write_text(f'scenes = ["{scene}"]\n[grid]\nmethod = "sah"\n[rays]\ncount = 500\n')
+
+    def sweep() -> dict:
+        done = _run(["-c", SWEEP, str(spec), str(tmp_path / "out")])
+        assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
+        return json.loads(done.stdout.strip().splitlines()[-1])
+
+    assert sweep() == {"ran": 1, "triangles": [12]}
+    assert sweep() == {"ran": 0, "triangles": [12]}  # nothing changed: nothing run again
+    made = _run(["-c", LIBRARY, str(library), "ico"])
+    assert made.returncode == 0, made.stderr[-2000:]
+    assert sweep() == {"ran": 1, "triangles": [20]}  # an icosahedron

@@ -92,11 +92,14 @@ def scene_names(specs) -> dict[str, str]:
 
 
 def scene_hash(spec: str, loaded=None) -> str:
-    """sha256 of the file behind `spec` (files, bundled names), or of a generated scene's arrays
-    (those of `loaded`, the Scene already made from `spec`, where given: not generated again);
-    "" when there is nothing to read (a missing file, an unknown name: the cell records the error)."""
+    """sha256 of the file behind `spec` (files, bundled names), or of the scene's arrays for a
+    generated scene and a .blend (those of `loaded`, the Scene already made from `spec`, where
+    given: not made again); "" when there is nothing to read (a missing file, an unknown name, a
+    .blend without bpy: the cell records the error). A .blend's geometry is also in the files it
+    links (a library's mesh edited, the sweep reused the cells of the old one) and in what its
+    modifiers make of them: what bpy exports of it is what the cells measure."""
     path = scene_file(spec)
-    if path is not None:
+    if path is not None and path.suffix.lower() != ".blend":
         if not path.is_file():
             return ""
         files = [path, *gltf_buffers(path)]  # a glTF's buffers are its geometry too
@@ -105,11 +108,11 @@ def scene_hash(spec: str, loaded=None) -> str:
             if len(files) > 1
             else _file_hash(path)
         )
-    if not spec.startswith("gen:"):
+    if (path is None and not spec.startswith("gen:")) or (path is not None and not path.is_file()):
         return ""
     try:
         scene = loaded if loaded is not None else load_scene(spec)[0]  # cheap next to the builds
-    except (OSError, ValueError):
+    except (OSError, ValueError, RuntimeError):  # RuntimeError: a .blend without bpy
         return ""
     digest = hashlib.sha256()
     for array in (scene.triangles, scene.spheres):
