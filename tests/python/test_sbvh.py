@@ -202,3 +202,76 @@ def test_cpu_tracer_and_overlay_with_repeated_references(long_triangles):
     np.testing.assert_array_equal(a, b)
     lo, hi, depth = spatial.boxes()
     assert len(lo) == len(spatial.nodes) and np.all(lo <= hi)
+
+
+def test_a_leaf_box_shrunk_off_part_of_a_triangle_is_refused_on_load(long_triangles, tmp_path):
+    """A saved SBVH whose leaf box no longer holds all of a triangle's part (the box shrunk along
+    its longest axis, still meeting each of its primitives' boxes, the file's checksum made to fit):
+    it loaded (an SBVH leaf's box need only meet its primitives'), and rays through the part it
+    dropped missed the triangle. The leaves' boxes of each primitive must cover all of it."""
+    from test_tree_file import _rewrite
+
+    bvh = sbvh(long_triangles)
+    path = tmp_path / "t.bvhtree"
+    bvh.save(path)
+    nodes, refs = bvh.nodes, bvh.refs
+    leaves = np.flatnonzero(bvh.is_leaf)
+    points = sample_points(long_triangles, k=9)
+    corner_lo, corner_hi = long_triangles.min(axis=1), long_triangles.max(axis=1)
+
+    def holds(lo, hi, tri):
+        p = points[tri]
+        return np.all((p >= lo) & (p <= hi), axis=1)
+
+    for leaf in leaves:
+        lo, hi = nodes["lo"][leaf].copy(), nodes["hi"][leaf].copy()
+        tris = refs[nodes["index"][leaf] : nodes["index"][leaf] + nodes["info"][leaf]]
+        axis = int(np.argmax(hi - lo))
+        shrunk = hi.copy()
+        shrunk[axis] = max(lo[axis], float(corner_lo[tris, axis].max()))
+        if shrunk[axis] > hi[axis] - 0.2 * (hi[axis] - lo[axis]):
+            continue
+        # a triangle of the leaf with sample points now held by none of its leaves' boxes
+        lost = False
+        for tri in tris:
+            covered = np.zeros(len(points[tri]), bool)
+            for other in leaves:
+                first, count = nodes["index"][other], nodes["info"][other]
+                if tri in refs[first : first + count]:
+                    box_hi = shrunk if other == leaf else nodes["hi"][other]
+                    covered |= holds(nodes["lo"][other], box_hi, tri)
+            lost |= not covered.all()
+        if lost:
+            break
+    else:
+        pytest.fail("no leaf whose shrinking uncovers a triangle")
+    assert np.all(shrunk >= corner_lo[tris].min(axis=0)) and np.all(lo <= corner_hi[tris].max(axis=0))
+    bvhlab.load_bvh(path, long_triangles)  # as saved: it loads
+
+    def change(saved_nodes):
+        saved_nodes["hi"][leaf] = shrunk
+
+    _rewrite(path, change)
+    with pytest.raises(ValueError, match="is not covered by its leaves' boxes"):
+        bvhlab.load_bvh(path, long_triangles)
+
+
+def test_every_saved_sbvh_loads(long_triangles, small_scene, tmp_path):
+    """The coverage check refuses no tree the builder makes: triangles and spheres, every leaf
+    size, α and budget, optimised."""
+    tris, spheres = small_scene
+    for k, (geometry, settings) in enumerate(
+        [
+            ((long_triangles, None), {}),
+            ((long_triangles, None), {"max_leaf_size": 1}),
+            ((long_triangles, None), {"sbvh_alpha": 0.0, "max_leaf_size": 8}),
+            ((tris, spheres), {"max_leaf_size": 2}),
+            ((tris, spheres), {"sbvh_alpha": 1e-9}),
+        ]
+    ):
+        bvh = sbvh(*geometry, **settings)
+        if k == 1:
+            bvh.optimize(iterations=5)
+        bvh.save(tmp_path / f"{k}.bvhtree")
+        back = bvhlab.load_bvh(tmp_path / f"{k}.bvhtree", *geometry)
+        assert back.nodes.tobytes() == bvh.nodes.tobytes()

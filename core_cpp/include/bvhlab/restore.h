@@ -23,7 +23,8 @@ struct SavedTree {
 /// scene, or the same scene changed), or when the nodes and references are not a tree over it:
 /// a node or child out of range, children not in depth-first order, a wrong skip index, a leaf
 /// that is empty or whose slots do not follow the previous leaf's, a reference out of range or
-/// used twice, a box that is not finite or does not hold its children or primitives, a tree
+/// used twice, a box that is not finite or does not hold its children or primitives (an SBVH's
+/// leaves' boxes together all of each primitive: inspect/coverage.h), a tree
 /// deeper than MAX_TREE_HEIGHT. O(nodes + primitives), no recursion.
 Bvh restore_bvh(SavedTree saved, const GeometryView& geometry, unsigned threads = 0);
 

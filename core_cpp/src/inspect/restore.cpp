@@ -10,6 +10,7 @@
 
 #include "bvhlab/geometry.h"
 #include "bvhlab/prim_ref.h"
+#include "coverage.h"
 
 namespace bvhlab {
 
@@ -111,6 +112,43 @@ void check_boxes(const std::vector<BvhNode>& nodes, const std::vector<std::uint3
     }
 }
 
+/// An SBVH's references of each primitive stand for its parts inside their leaves' boxes: those
+/// boxes together must hold all of it (a file whose leaf box was shrunk loaded, each box meeting
+/// its primitives', and its rays missed what the box no longer held).
+void check_coverage(const std::vector<BvhNode>& nodes, const std::vector<std::uint32_t>& refs, const GeometryView& g) {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> owners;  // (primitive, leaf) for each slot
+    owners.reserve(refs.size());
+    for (std::uint32_t i = 0; i < nodes.size(); ++i) {
+        const BvhNode& node = nodes[i];
+        if (!is_leaf(node)) continue;
+        for (std::uint32_t k = node.index; k < node.index + leaf_count(node); ++k) {
+            const std::uint32_t ref = refs[k];
+            owners.emplace_back(is_sphere_ref(ref) ? std::uint32_t(g.triangle_count + ref_index(ref)) : ref, i);
+        }
+    }
+    std::sort(owners.begin(), owners.end());
+    std::vector<Aabb> parts;
+    for (std::size_t first = 0; first < owners.size();) {
+        const std::uint32_t prim = owners[first].first;
+        parts.clear();
+        std::size_t last = first;
+        for (; last < owners.size() && owners[last].first == prim; ++last)
+            parts.push_back(node_box(nodes[owners[last].second]));
+        const bool sphere = prim >= g.triangle_count;
+        bool ok;
+        if (sphere) {
+            ok = box_covered(prim_box(g, std::uint32_t(prim - g.triangle_count) | gpu::REF_SPHERE_BIT), parts);
+        } else {
+            const Vec3 v[3] = {g.vertex(prim, 0), g.vertex(prim, 1), g.vertex(prim, 2)};
+            ok = triangle_covered(v, parts);
+        }
+        if (!ok)
+            refuse(std::string(sphere ? "sphere " : "triangle ") +
+                   std::to_string(sphere ? prim - g.triangle_count : prim) + " is not covered by its leaves' boxes");
+        first = last;
+    }
+}
+
 }  // namespace
 
 Bvh restore_bvh(SavedTree saved, const GeometryView& geometry, unsigned threads) {
@@ -125,7 +163,9 @@ Bvh restore_bvh(SavedTree saved, const GeometryView& geometry, unsigned threads)
     check_refs(saved.refs, geometry, saved.config);
     std::vector<std::uint8_t> depths;
     check_layout(saved.nodes, saved.refs.size(), depths);
-    check_boxes(saved.nodes, saved.refs, geometry, saved.config.method == SplitMethod::Sbvh);
+    const bool clipped = saved.config.method == SplitMethod::Sbvh;
+    check_boxes(saved.nodes, saved.refs, geometry, clipped);
+    if (clipped) check_coverage(saved.nodes, saved.refs, geometry);
 
     Bvh bvh;
     bvh.nodes.assign(saved.nodes.begin(), saved.nodes.end());
