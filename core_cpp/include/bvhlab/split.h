@@ -146,8 +146,10 @@ const SplitMethodInfo& method_info(SplitMethod method);
 /// 56.5 at 28), 16 before the small builder's branches were removed.
 inline constexpr std::uint32_t kSmallSubtree = 32;
 /// The binned SAH over centroid bounds is the report's method (§2.3.2, Table 1): it bins every
-/// range of more than this many, as it did before the small-subtree builder, so the report's
-/// trees keep their meaning (only ties between equal costs may fall differently).
+/// range of more than this many, as it did before the small-subtree builder; ranges of at most
+/// this many are split by the exact SAH of every position (small_subtree.h), where the report
+/// binned them too: a departure from the report in its trees' last levels (at a node the exact
+/// split is never dearer than a binned one, though the greedy tree as a whole need not be cheaper).
 inline constexpr std::uint32_t kSmallExactReport = 8;
 /// kSmallSubtree for the sweep SAH and the default binned SAH (buckets over the node's box),
 /// kSmallExactReport for the binned SAH over centroid bounds, 0 for the other methods.
