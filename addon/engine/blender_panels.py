@@ -10,11 +10,11 @@ import bpy
 SHADING_PANELS = ("EEVEE_MATERIAL_PT_context_material", "EEVEE_MATERIAL_PT_surface", "EEVEE_WORLD_PT_surface")
 #: Generic panels that make no sense for an engine with its own pass panel.
 EXCLUDED_PANELS = ("VIEWLAYER_PT_filter", "VIEWLAYER_PT_layer_passes")
-#: Panels of what the engine does not render: stereoscopy and multi-view (it renders one view: the
-#: right eye of a stereo render comes out empty). Freestyle and Grease Pencil keep theirs: Blender
-#: draws both over the engine's image (Freestyle through EEVEE); measured under bpy 4.2 and 5.2
-#: (tests/blender/checks_addon.py check_engine_panels_follow_the_renders).
-UNSUPPORTED_PANELS = ("RENDER_PT_stereoscopy", "RENDER_PT_output_views", "DATA_PT_camera_stereoscopy")
+#: Panels of what the engine does not render: none now (stereoscopy and multi-view render each
+#: view). Freestyle and Grease Pencil keep theirs: Blender draws both over the engine's image
+#: (Freestyle through EEVEE); measured under bpy 4.2 and 5.2 (tests/blender/checks_addon.py
+#: check_engine_panels_follow_the_renders).
+UNSUPPORTED_PANELS: tuple[str, ...] = ()
 
 
 def engine_panels() -> list:

@@ -117,11 +117,24 @@ class FinalRender:
         if engine.test_break():
             engine.update_stats("", "Cancelled")
             return
-        job = tracer.start(scene, update.bvh, camera, frame.width, frame.height, settings, final_threads(blender_scene))
+        layer = depsgraph.view_layer.name
+        views = render_views(engine, blender_scene.render, layer)  # [None]: one view; else each eye or view by name
         engine.update_progress(TRACE_START)
-        on = job.timings["device"]
-        engine.update_stats("", f"Tracing {frame.width} × {frame.height}, {settings.samples} samples per pixel on {on}")
-        cancelled = self._trace(engine, job, depsgraph.view_layer.name)
+        for index, view in enumerate(views):
+            if view is not None:  # the view's camera: an eye's offset and convergence (Stereoscopy)
+                engine.active_view_set(view)
+                view_camera = self._view_camera(engine, depsgraph, view, frame)
+            else:
+                view_camera = camera
+            threads = final_threads(blender_scene)
+            job = tracer.start(scene, update.bvh, view_camera, frame.width, frame.height, settings, threads)
+            on, named = job.timings["device"], "" if view is None else f" ({view})"
+            engine.update_stats(
+                "", f"Tracing {frame.width} × {frame.height}{named}, {settings.samples} samples per pixel on {on}"
+            )
+            cancelled = self._trace(engine, job, layer, view, (index, len(views)))
+            if cancelled:
+                break
         record = {
             **_trace_record(update, job, frame),
             "sync": self.report,
@@ -149,12 +162,36 @@ class FinalRender:
             settings = settings.replace(overlay_depth=None)
         return (camera if frame.whole else replace(camera, region=frame.region)), settings, unrendered
 
-    def _trace(self, engine, job, layer_name: str) -> bool:
-        """Traces into Blender's Render Result in sample passes (1, 2, 4, ... samples per pixel),
-        writing the passes after each, so that Esc keeps the samples finished so far, as Cycles
-        does. Returns True when Esc stopped it."""
+    @staticmethod
+    def _view_camera(engine, depsgraph, view: str, frame):
+        """The camera of one view of a stereo or multi-view render (its view active in `engine`),
+        framed as the scene camera is: the border's part of it."""
+        from bvhlab.blender import ExportError
+        from bvhlab.blender.camera import StereoView, gather_camera, view_camera_object
+
+        blender_scene = depsgraph.scene
+        camera_object = view_camera_object(blender_scene, view)
+        evaluated = camera_object.evaluated_get(depsgraph)
+        # no spherical stereo (bl_use_spherical_stereo off): a panorama's eyes are two panoramas
+        # from the eyes' positions, as Blender frames them for such an engine
+        stereo = StereoView(
+            camera_object,
+            engine.camera_model_matrix(evaluated, use_spherical_stereo=False),
+            engine.camera_shift_x(evaluated, use_spherical_stereo=False),
+        )
+        try:
+            camera = gather_camera(blender_scene, depsgraph, view=stereo)
+        except ExportError as error:
+            raise ValueError(f"view '{view}': {error}") from None
+        return camera if frame.whole else replace(camera, region=frame.region)
+
+    def _trace(self, engine, job, layer_name: str, view: str | None = None, part: tuple[int, int] = (0, 1)) -> bool:
+        """Traces into Blender's Render Result (the view's, where `view` is named) in sample passes
+        (1, 2, 4, ... samples per pixel), writing the passes after each, so that Esc keeps the
+        samples finished so far, as Cycles does. `part`: this view's index and the number of views
+        (the progress bar's share). Returns True when Esc stopped it."""
         width, height = job.size
-        result = engine.begin_result(0, 0, width, height, layer=layer_name)
+        result = engine.begin_result(0, 0, width, height, layer=layer_name, view=view or "")
         cancelled = False
         try:
             layer = result.layers[0]
@@ -172,7 +209,8 @@ class FinalRender:
                 engine.update_result(result)
                 if cancelled:
                     break
-                engine.update_progress(TRACE_START + (1.0 - TRACE_START) * target / total)
+                done = (part[0] + target / total) / part[1]
+                engine.update_progress(TRACE_START + (1.0 - TRACE_START) * done)
                 engine.update_stats("", f"Sample {target}/{total}")
         finally:
             engine.end_result(result)
@@ -221,6 +259,19 @@ def _trace_record(update, job, frame) -> dict:
         "frame": frame,
         "samples": job.samples_done,
     }
+
+
+def render_views(engine, render, layer_name: str) -> list[str | None]:
+    """The views a render makes, by name, as Cycles asks for them (an empty result's views): the
+    eyes of Output ▸ Stereoscopy, the views of a multi-view render; [None] without multi-view."""
+    if not render.use_multiview:
+        return [None]
+    result = engine.begin_result(0, 0, 1, 1, layer=layer_name)
+    try:
+        names = [v.name for v in result.views]
+    finally:
+        engine.end_result(result, cancel=True, highlight=False, do_merge_results=False)
+    return names if len(names) > 1 else [None]
 
 
 def sample_passes(total: int) -> list[int]:

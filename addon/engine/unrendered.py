@@ -59,8 +59,12 @@ def unrendered_features(depsgraph) -> list[str]:
         notes.append(f"{COLLECTION_FLAGS[flag]} ({_named('collection', names)})")
     if render.use_motion_blur:
         notes.append("motion blur is not rendered (Render ▸ Motion Blur is on): the frame shows one moment")
-    if render.use_multiview:
-        notes.append("stereoscopy is not rendered (Output ▸ Stereoscopy is on): one view is rendered")
+    camera = depsgraph.scene.camera
+    if render.use_multiview and camera is not None and getattr(camera.data, "type", "") == "PANO":
+        notes.append(
+            "a panorama's stereoscopy is two panoramas from the eyes' positions (as Blender frames it for "
+            "an engine without Cycles' spherical stereo)"
+        )
     return notes
 
 

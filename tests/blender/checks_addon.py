@@ -341,8 +341,9 @@ def _add_grease_pencil_monkey(location) -> None:
 def check_engine_panels_follow_the_renders(tmp_dir) -> None:
     """Blender's panels show for the engine where its renders follow them. Grease Pencil: Blender
     draws a Grease Pencil object over the engine's image (a render with one in front of the
-    camera differs from one without), its panels show. Stereoscopy: the engine renders one view
-    (the right eye of a stereo render is empty), its panels do not. Freestyle is drawn too
+    camera differs from one without), its panels show. Stereoscopy: the engine renders each view
+    (the right eye of a stereo render was empty: its panels were hidden), its panels show.
+    Freestyle is drawn too
     (through EEVEE: minutes on llvmpipe, not rendered here), its panels show."""
     shown = {p.__name__ for p in _blender_panels() if ENGINE in p.COMPAT_ENGINES}
     listed = {p.__name__ for p in _blender_panels() if "BLENDER_RENDER" in p.COMPAT_ENGINES}

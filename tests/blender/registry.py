@@ -187,11 +187,23 @@ def _engine() -> Iterator[Check]:
 def _cameras() -> Iterator[Check]:
     import checks_cameras as cameras
     import checks_final as final
+    import checks_stereo as stereo
 
     for name in cameras.SETTINGS:
         yield Check(
             "cameras", f"{name}_against_cycles", cameras.check_setting_against_cycles, args=(name,), folder=True
         )
+    for mode in stereo.MODES:
+        yield Check(
+            "cameras",
+            f"stereo_{mode.lower()}_against_cycles",
+            stereo.check_stereo_eyes_against_cycles,
+            args=(mode,),
+            folder=True,
+        )
+    yield Check(
+        "cameras", "multiview_cameras_against_cycles", stereo.check_multiview_cameras_against_cycles, folder=True
+    )
     for check in (
         final.check_depth_of_field_against_cycles,
         final.check_unrendered_settings_are_said,

@@ -1,6 +1,8 @@
 """The scene camera → `bvhlab.Camera`, framed as Cycles frames Blender's camera: perspective and
 orthographic with sensor fit and lens shift, the render's aspect with its pixel aspect, clipping,
-depth of field (thin lens), and the panoramic equirectangular and fisheye equidistant projections.
+depth of field (thin lens), and the panoramic equirectangular and fisheye equidistant projections;
+and each view of a stereo or multi-view render (StereoView: the eye's matrix and lens shift as
+the render engine gives them, the view's own camera in multi-view).
 
 Cycles' own conversion is the model (intern/cycles/blender/camera.cpp: blender_camera_from_object,
 blender_camera_viewplane, blender_camera_focal_distance); bvhlab.Camera's conventions are those of
@@ -11,6 +13,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -21,27 +24,61 @@ from .errors import ExportError, ExportWarning
 PANORAMAS = {"EQUIRECTANGULAR": "equirectangular", "FISHEYE_EQUIDISTANT": "fisheye"}
 
 
-def gather_camera(scene, depsgraph) -> Camera:
+def gather_camera(scene, depsgraph, *, view=None) -> Camera:
     """Position and orientation from the evaluated camera's world matrix (it looks along its -Z,
     its +Y is up; scale ignored, as Cycles clears it, but not the axes' signs: a matrix of negative
     determinant mirrors the image, as in Cycles; look_at is ahead along the view axis), and
-    its lens for the scene's render resolution. Raises ExportError when there is no usable camera
-    or it is of a kind bvhlab does not render."""
-    camera = scene.camera
+    its lens for the scene's render resolution. `view` (a StereoView): one view of a stereo or
+    multi-view render instead, as the render engine gives it. Raises ExportError when there is no
+    usable camera or it is of a kind bvhlab does not render."""
+    camera = scene.camera if view is None else view.camera
     if camera is None:
         raise ExportError(f"scene '{scene.name}' has no camera: add one and make it the active camera")
     if camera.type != "CAMERA":
         raise ExportError(f"the scene camera '{camera.name}' is {_a(camera.type.lower())}, not a camera")
     evaluated = camera.evaluated_get(depsgraph)  # animation and drivers applied
-    position, forward, up, mirrored = _placement(camera.name, np.array(evaluated.matrix_world, np.float64))
+    matrix = evaluated.matrix_world if view is None else view.matrix
+    position, forward, up, mirrored = _placement(camera.name, np.array(matrix, np.float64))
     # look_at far enough ahead to differ from the position in float32 (the tracer's precision)
     ahead = max(1.0, float(np.abs(position).max()) * 2.0**-10)
-    lens = lens_fields(scene, evaluated.data, camera.name, position, forward)
+    shift_x = None if view is None else view.shift_x
+    lens = lens_fields(scene, evaluated.data, camera.name, position, forward, shift_x=shift_x)
     lens["mirrored"] = mirrored
     try:
         return Camera(tuple(position), tuple(position + forward * ahead), tuple(up), **lens)
     except ValueError as error:
         raise ExportError(f"camera '{camera.name}': {error}") from None
+
+
+@dataclass(frozen=True)
+class StereoView:
+    """One view of a stereo (Output ▸ Stereoscopy) or multi-view render, as Blender's render
+    engine gives it (RenderEngine.camera_model_matrix and camera_shift_x with the view active,
+    as Cycles' blender_camera_from_object takes them): the camera object whose lens the view uses
+    (multi-view: the camera of the view's suffix), its world matrix for the view (an eye's
+    interocular offset, toe-in) and its horizontal lens shift (off-axis convergence)."""
+
+    camera: object
+    matrix: object
+    shift_x: float
+
+
+def view_camera_object(scene, view_name: str):
+    """The camera a view of a multi-view render sees through: the scene camera's name with its view
+    suffix (the longest of the views' that it ends with) replaced by this view's, where such an
+    object exists in the scene (Blender's camera_multiview_advanced); the scene camera otherwise,
+    and always in Stereo 3D."""
+    render, camera = scene.render, scene.camera
+    views = render.views
+    if camera is None or render.views_format != "MULTIVIEW" or view_name not in views:
+        return camera
+    name = camera.name
+    suffixes = [v.camera_suffix for v in views if v.camera_suffix and name.endswith(v.camera_suffix)]
+    if not suffixes:
+        return camera
+    prefix = name[: len(name) - len(max(suffixes, key=len))]
+    found = scene.objects.get(prefix + views[view_name].camera_suffix)
+    return found if found is not None and found.type == "CAMERA" else camera
 
 
 def _a(noun: str) -> str:
@@ -72,26 +109,28 @@ def render_size(render) -> tuple[int, int]:
     )
 
 
-def lens_fields(scene, data, name: str, position=None, forward=None) -> dict:
+def lens_fields(scene, data, name: str, position=None, forward=None, *, shift_x: float | None = None) -> dict:
     """bvhlab.Camera's keyword fields (bvhlab.scene.Lens) for Blender camera data `data` rendered
-    at the scene's resolution."""
+    at the scene's resolution; `shift_x` in Blender's units stands for the data's (a stereo view's
+    shift: its lens shift and the off-axis convergence's)."""
     render = scene.render
     width, height = render_size(render)
     aspect = (max(width, 1) * render.pixel_aspect_x) / (max(height, 1) * render.pixel_aspect_y)
     fields: dict = {"clip_start": data.clip_start, "clip_end": data.clip_end}
     if render.pixel_aspect_x != render.pixel_aspect_y:  # else the image's own, at any size it is rendered
         fields["aspect"] = aspect
+    shift = (data.shift_x if shift_x is None else float(shift_x), data.shift_y)
     if data.type == "PANO":
-        fields.update(_panorama(data, name))
+        fields.update(_panorama(data, name, shift))
     elif data.type in ("PERSP", "ORTHO"):
-        fields.update(_view_plane(data, aspect))
+        fields.update(_view_plane(data, aspect, shift))
     else:
         raise ExportError(f"camera '{name}' is of type {data.type}, which bvhlab does not render")
     fields.update(_depth_of_field(data, name, position, forward))
     return fields
 
 
-def _view_plane(data, aspect: float) -> dict:
+def _view_plane(data, aspect: float, shift: tuple[float, float]) -> dict:
     """Perspective or orthographic: Cycles' blender_camera_viewplane. The sensor (or ortho_scale)
     spans the fitted side, lens shift is in fractions of it; bvhlab takes the vertical field of
     view, ortho_scale and shift along the larger side (sensor fit Auto)."""
@@ -101,13 +140,13 @@ def _view_plane(data, aspect: float) -> dict:
     fitted = data.ortho_scale if data.type == "ORTHO" else sensor / data.lens  # the fitted side's extent
     plane_width, plane_height = (fitted, fitted / aspect) if horizontal else (fitted * aspect, fitted)
     larger = max(plane_width, plane_height)
-    fields = {"shift_x": data.shift_x * fitted / larger, "shift_y": data.shift_y * fitted / larger}
+    fields = {"shift_x": shift[0] * fitted / larger, "shift_y": shift[1] * fitted / larger}
     if data.type == "ORTHO":
         return {**fields, "projection": "orthographic", "ortho_scale": larger}
     return {**fields, "projection": "perspective", "fov_y": math.degrees(2 * math.atan(plane_height / 2))}
 
 
-def _panorama(data, name: str) -> dict:
+def _panorama(data, name: str, shift: tuple[float, float]) -> dict:
     """Equirectangular or fisheye equidistant; the panorama settings are the camera's own from
     Blender 4.0 (data.panorama_type), Cycles' before (data.cycles.panorama_type)."""
     settings = data if hasattr(data, "panorama_type") else getattr(data, "cycles", None)
@@ -117,7 +156,7 @@ def _panorama(data, name: str) -> dict:
             f"camera '{name}' is {_a(str(kind).replace('_', ' ').lower())} panorama; bvhlab renders the "
             f"equirectangular and fisheye equidistant panoramas only"
         )
-    fields = {"projection": PANORAMAS[kind], "shift_x": data.shift_x, "shift_y": data.shift_y}
+    fields = {"projection": PANORAMAS[kind], "shift_x": shift[0], "shift_y": shift[1]}
     if kind == "EQUIRECTANGULAR":
         fields["latitude"] = (math.degrees(settings.latitude_min), math.degrees(settings.latitude_max))
         fields["longitude"] = (math.degrees(settings.longitude_min), math.degrees(settings.longitude_max))
