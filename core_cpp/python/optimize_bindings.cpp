@@ -18,6 +18,9 @@ namespace {
 
 nb::dict optimize(PyBvh& self, const OptimizeConfig& config, std::optional<nb::callable> progress) {
     validate(config);
+    // the TLAS copy of a two-level tree is a view of it, made once and handed out again: optimised,
+    // every later InstancedBvh.tlas was another tree than the one its queries and stats walk
+    require_geometry(self.current()->bvh, "optimize");
     // Ctrl-C or a false progress stops it (BuildCancelled), the tree as it was
     PyStopCheck stop(progress ? nb::object(*progress) : nb::none());
     OptimizeStats stats;

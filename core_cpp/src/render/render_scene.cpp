@@ -52,6 +52,12 @@ std::vector<gpu::GpuMaterial> gpu_materials(const MaterialView& mv) {
 }
 
 void check_tree_matches(const Bvh& bvh, const GeometryView& g) {
+    // the TLAS of a two-level tree as a tree: its references are instances (over a scene without
+    // primitives its counts matched, 0 and 0, and the tracer read instances as primitives: a crash)
+    if (bvh.prims.size() != bvh.refs.size())
+        throw std::invalid_argument(
+            "this tree holds no geometry (the TLAS of a two-level tree, whose references are instances): "
+            "render the InstancedBvh");
     if (g.triangle_count != bvh.triangle_count || g.sphere_count != bvh.sphere_count)
         throw std::invalid_argument("the geometry does not match the tree (different primitive counts)");
     if (geometry_fingerprint(g) != bvh.fingerprint())
