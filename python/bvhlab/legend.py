@@ -139,7 +139,8 @@ def render_legends(
     if options.overlay_depth is not None and options.color_by_depth:
         lo, hi = options.overlay_depth
         hi = hi if tree_height is None else min(hi, tree_height - 1)
-        image = below(image, depth_legend(width, range(lo, hi + 1)))
+        if lo <= hi:  # no strip for a range past the tree's deepest boxes: nothing was drawn
+            image = below(image, depth_legend(width, range(lo, hi + 1)))
     return image
 
 

@@ -116,6 +116,8 @@ def test_boxes_by_depth_range(knot_mesh):
     np.testing.assert_array_equal(root_lo[0], knot_mesh.reshape(-1, 3).min(0))
     np.testing.assert_array_equal(root_hi[0], knot_mesh.reshape(-1, 3).max(0))
     assert len(bvh.boxes(60, 63)[0]) == 0
+    with pytest.raises(ValueError, match="depth_min 5 is greater than depth_max 2"):
+        bvh.boxes(5, 2)  # gave no boxes, silently
 
 
 def test_sah_cost_formula(small_scene):

@@ -117,6 +117,12 @@ def test_render_with_overlay_and_heatmap(tmp_path, capsys):
     shape = ["--width", "96", "--height", "64", "--backend", "cpu", "--method", "median", "--bvh-depth", "1:1"]
     assert main(["render", "gen:five_spheres", *shape, "--traversal", "stack", "--out", str(stack_out)]) == 0
     assert stack_out.read_bytes() == out.read_bytes()
+    # a range past the tree's deepest boxes: said, and no empty legend strip (it drew nothing silently)
+    past = tmp_path / "past.png"
+    shape[-1] = "40:45"
+    assert main(["render", "gen:five_spheres", *shape, "--out", str(past)]) == 0
+    assert read_png(past).shape == (64, 96, 4)
+    assert "--bvh-depth 40:45 draws none" in capsys.readouterr().err
     heat = tmp_path / "heat.png"
     assert (
         main(

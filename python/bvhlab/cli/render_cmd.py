@@ -7,6 +7,7 @@ OUT.histogram.json; --heatmap is --counter box_tests)."""
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -98,6 +99,12 @@ def run(args) -> int:
     scene, name = load_scene(args.scene)
     with ProgressBar(f"building {args.method}") as bar:
         bvh = build(scene, progress=bar, **settings)  # an instanced scene: a two-level tree, rendered as it is
+    deepest = legend.overlay_height(bvh) - 1
+    if args.bvh_depth is not None and args.bvh_depth[0] > deepest:  # it drew nothing, silently
+        a, b = args.bvh_depth
+        print(
+            f"warning: the tree's deepest boxes are at depth {deepest}: --bvh-depth {a}:{b} draws none", file=sys.stderr
+        )
     renderer = default_renderer(args.backend)
     with ProgressBar("rendering") as bar:
         job = renderer.start(scene, bvh, args.width, args.height, options=render_options)
