@@ -138,3 +138,21 @@ def test_build_options_beside_a_saved_tree_must_be_its_own(tmp_path, capsys):
 def test_optimize_ms_needs_optimize(capsys):
     assert main(["build", "gen:whitted", "--optimize-ms", "5"]) == 2
     assert "--optimize N" in capsys.readouterr().err
+
+
+def test_a_node_out_of_range_is_refused_before_the_node_figures(tmp_path, monkeypatch, capsys):
+    """--node past the tree: refused from the tree's node count, before node_data's EPO pass (it
+    came after it: 39 s of a 15,000-triangle soup); --worst over a one-node tree says one subtree
+    ("the 5 subtrees" over one row)."""
+
+    def no_epo(self):
+        raise AssertionError("node_data ran")
+
+    monkeypatch.setattr(bvhlab.Bvh, "node_data", no_epo)
+    assert main(["inspect", "gen:whitted", "--node", "100000"]) == 2
+    assert "--node 100000 does not exist: the tree has" in capsys.readouterr().err
+    monkeypatch.undo()
+    one = tmp_path / "one.npz"
+    bvhlab.Scene(triangles=np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]]], np.float32)).save(one)
+    assert main(["inspect", str(one), "--worst", "5"]) == 0
+    assert "the one subtree of largest SAH cost" in capsys.readouterr().out
