@@ -148,6 +148,10 @@ def test_report_claims_on_rows_with_known_answers():
         assert checks[claim]["verdict"] == verdict, (claim, checks[claim])
     reversed_rows = _rows(rng, {"median": 60.0, "sah12": 100.0}, n=15, stalls=0.0)
     assert report_checks(reversed_rows)[0]["verdict"] == protocol.FAILS
+    # a tie for the lowest: it holds, and the detail says with which (it said "holds" alone)
+    tied = _rows(rng, {"median": 60.0, "mean": 60.0}, n=15, heights={"median": 1, "mean": 1})
+    check = next(c for c in report_checks(tied) if c["claim"] == "median gives the lowest tree")
+    assert check["verdict"] == protocol.HOLDS and "lowest together with mean" in check["detail"], check
 
 
 def test_finding_and_ranking_are_read_from_the_numbers():

@@ -118,12 +118,14 @@ def _check_heights(out, rows):
     median = _row(rows, "median")
     if median and len(rows) > 1:
         lowest = min(r["height"] for r in rows)
+        tied = [r["method"] for r in rows if r is not median and r["height"] == median["height"] == lowest]
         _claim(
             out,
             "§4.2",
             "median gives the lowest tree",
             HOLDS if median["height"] == lowest else FAILS,
-            f"heights: {heights} (report: median 20, mean 34, SAH 30)",
+            f"heights: {heights} (report: median 20, mean 34, SAH 30)"
+            + (f"; lowest together with {', '.join(tied)}" if tied else ""),
         )
     for reading in MEAN_READINGS:
         mean = _row(rows, reading)
