@@ -165,7 +165,7 @@ def _check_node(bvh, args, two_level: bool) -> None:
     if two_level and args.instance is not None:
         mesh_of, _ = bvh.instances
         if args.instance >= len(mesh_of):
-            raise ValueError(f"--instance {args.instance}: the scene has {len(mesh_of)} instances")
+            raise ValueError(f"--instance {args.instance} does not exist: the scene has {len(mesh_of)} instances")
         tree, what = bvh.meshes[int(mesh_of[args.instance])], f"instance {args.instance}'s mesh tree"
         count = len(tree.nodes)
     else:
