@@ -104,8 +104,9 @@ struct GpuMaterial {
 };
 
 /// An instance of a two-level scene as the tracer reads it (issue 34), 64 bytes, stored in the TLAS's
-/// leaf order (a TLAS leaf's slot is its instance's place here). The rows of the 3×4 world-to-object
-/// transform (w: the translation) move a world ray into object space; their transpose's 3×3 part is
+/// leaf order (a TLAS leaf's slot is its instance's place here). The rows of the world-to-object
+/// transform's 3×3 part L, and in w the object's origin in the world P (ObjectMap, transform.h: a
+/// world point p goes to L·(p - P)), move a world ray into object space; L's transpose is
 /// the inverse transpose of the object-to-world transform, which carries normals back into the world
 /// (traverse.glsl instance_ray, surface.glsl surface_at). `tree` places the instance's BLAS in the
 /// scene's forest of trees (make_render_scene, render_scene.cpp).

@@ -18,10 +18,11 @@ struct Surface {
     vec3 v2;
 };
 
-/// A point moved by an instance's world-to-object transform.
+/// A point moved by an instance's world-to-object transform, relative to the object's origin in
+/// the world (GpuInstance: L·(p - P), as the walk moves rays).
 vec3 object_point(GpuInstance inst, vec3 p) {
-    return vec3(dot(xyz(inst.row0), p) + inst.row0.w, dot(xyz(inst.row1), p) + inst.row1.w,
-                dot(xyz(inst.row2), p) + inst.row2.w);
+    vec3 d = p - vec3(inst.row0.w, inst.row1.w, inst.row2.w);
+    return vec3(dot(xyz(inst.row0), d), dot(xyz(inst.row1), d), dot(xyz(inst.row2), d));
 }
 
 /// An object-space normal in the world: times the inverse transpose of the object-to-world
@@ -40,26 +41,27 @@ vec3 cross_magnitude(vec3 a, vec3 b) {
 }
 
 /// A point q of an instance's object space in the world, `p`: the world-to-object transform undone,
-/// its 3×3 part inverted by its adjugate (the inverse's columns are the rows' cross products over
-/// the determinant), and `err`, a bound on that arithmetic's error per coordinate: γ(7) of what the
-/// adjugate's products sum over |q - T| (each entry two roundings, the sum three, q - T one, the
-/// division one), plus |p| times the determinant's relative error, γ(5)·(|r0|·|adj|)/|det| — large
-/// where the transform is skewed and stretched (a bound of γ(16)·|p| alone was 262× too small at
-/// 100:1 with skew: a stretched sphere's instance shadowed itself). False where it is no usable
-/// number (a determinant over- or underflowed, an object scale beyond about 1e±12, or one so
-/// ill-conditioned that the bound fails): p is not made.
+/// its 3×3 part L inverted by its adjugate (the inverse's columns are the rows' cross products over
+/// the determinant), then the object's origin P added (GpuInstance), and `err`, a bound on that
+/// arithmetic's error per coordinate: γ(6) of what the adjugate's products sum over |q| (each entry
+/// two roundings, the sum three, the division one), plus |L⁻¹q| times the determinant's relative
+/// error, γ(5)·(|r0|·|adj|)/|det| — large where the transform is skewed and stretched (a bound of
+/// γ(16)·|p| alone was 262× too small at 100:1 with skew: a stretched sphere's instance shadowed
+/// itself) — and γ(1)·|p| for adding P. False where it is no usable number (a determinant over- or
+/// underflowed, an object scale beyond about 1e±12, or one so ill-conditioned that the bound
+/// fails): p is not made.
 bool world_point(GpuInstance inst, vec3 q, OUT(vec3) p, OUT(vec3) err) {
     vec3 r0 = xyz(inst.row0);
     vec3 r1 = xyz(inst.row1);
     vec3 r2 = xyz(inst.row2);
-    vec3 d = q - vec3(inst.row0.w, inst.row1.w, inst.row2.w);
     vec3 a0 = cross(r1, r2);
     float det = dot(r0, a0);
     float det_rel = gamma_bound(5.0f) * dot(abs(r0), cross_magnitude(r1, r2)) / abs(det);
     if (!(abs(det) >= SMALLEST_NORMAL && det_rel < 0.5f)) return false;
-    p = (a0 * d.x + cross(r2, r0) * d.y + cross(r0, r1) * d.z) / det;
-    vec3 sums = cross_magnitude(r1, r2) * abs(d.x) + cross_magnitude(r2, r0) * abs(d.y) + cross_magnitude(r0, r1) * abs(d.z);
-    err = gamma_bound(7.0f) * sums / abs(det) + (det_rel + gamma_bound(1.0f)) * abs(p);
+    vec3 local = (a0 * q.x + cross(r2, r0) * q.y + cross(r0, r1) * q.z) / det;
+    p = local + vec3(inst.row0.w, inst.row1.w, inst.row2.w);
+    vec3 sums = cross_magnitude(r1, r2) * abs(q.x) + cross_magnitude(r2, r0) * abs(q.y) + cross_magnitude(r0, r1) * abs(q.z);
+    err = gamma_bound(6.0f) * sums / abs(det) + det_rel * abs(local) + gamma_bound(1.0f) * abs(p);
     return max(max(err.x, err.y), err.z) < 1e30f;
 }
 

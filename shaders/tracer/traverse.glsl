@@ -146,14 +146,14 @@ Level top_level() {
 }
 
 /// An instance's BLAS; `ray` goes from world space into the instance's object space: origin and
-/// direction by the world-to-object transform, the direction left unnormalised so that t is the
+/// direction by the world-to-object transform (the origin relative to the object's, ObjectMap in
+/// transform.h), the direction left unnormalised so that t is the
 /// same number in both spaces (as the CPU queries do: core_cpp/src/query/traverse_two_level.cpp).
 Level instance_level(uint slot, INOUT(TraceRay) ray) {
     GpuInstance inst = load_instance(slot);
-    vec3 o = ray.origin;
+    vec3 o = ray.origin - vec3(inst.row0.w, inst.row1.w, inst.row2.w);  // relative to the object's origin
     vec3 d = ray.dir;
-    vec3 origin = vec3(dot(xyz(inst.row0), o) + inst.row0.w, dot(xyz(inst.row1), o) + inst.row1.w,
-                       dot(xyz(inst.row2), o) + inst.row2.w);
+    vec3 origin = vec3(dot(xyz(inst.row0), o), dot(xyz(inst.row1), o), dot(xyz(inst.row2), o));
     vec3 dir = vec3(dot(xyz(inst.row0), d), dot(xyz(inst.row1), d), dot(xyz(inst.row2), d));
     ray = make_ray(origin, dir, ray.tmin);
     Level l;

@@ -71,16 +71,16 @@ struct WorldRay {
 /// TLAS leaf holds it, tlas.h LeafInstance), rescaled as the batch scales world rays
 /// (coordinate_range.h), its scale in `t_scale`: an identity instance walks the world ray as it is
 /// (no transform, nothing to rescale: the one-mesh-and-movers layout of blender/motion.py, whose
-/// mesh 0 is such an instance). The transform is the instance's stored world_to_object (inverted
-/// once when placed, not per ray). False where the moved direction cannot be scaled (too long or
+/// mesh 0 is such an instance). The transform is the instance's ObjectMap (inverted once when
+/// placed, not per ray; the origin moved relative to the object's, transform.h). False where the moved direction cannot be scaled (too long or
 /// short for float), which cannot hit what lies within the range.
 bool object_ray(const LeafInstance& inst, const Ray& world, float tmax, Ray& ray, float& t_scale) {
     ray = world;
     ray.tmax = tmax;
     t_scale = 1.0f;
     if (inst.identity) return true;
-    ray.origin = inst.world_to_object.point(world.origin);
-    ray.dir = inst.world_to_object.vector(world.dir);
+    ray.origin = inst.to_object.point(world.origin);
+    ray.dir = inst.to_object.vector(world.dir);
     if (!direction_in_range(ray.dir)) return false;
     t_scale = scale_ray(ray);
     return true;

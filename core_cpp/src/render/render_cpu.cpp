@@ -126,7 +126,9 @@ private:
             const gpu::GpuInstance& g = scene_.instances[slot];
             const float rows[12] = {g.row0.x, g.row0.y, g.row0.z, g.row0.w, g.row1.x, g.row1.y,
                                     g.row1.z, g.row1.w, g.row2.x, g.row2.y, g.row2.z, g.row2.w};
-            if (std::memcmp(rows, tlas.instances[i].world_to_object.m.data(), sizeof rows) != 0) return false;
+            const Instance& inst = tlas.instances[i];
+            const ObjectMap map = object_map(inst.object_to_world, inst.world_to_object);
+            if (std::memcmp(rows, map.m.data(), sizeof rows) != 0) return false;
         }
         return true;
     }

@@ -74,7 +74,7 @@ std::uint32_t tree_height(const Bvh& bvh) {
 }
 
 gpu::GpuInstance gpu_instance(const Instance& inst, const TreePlace& at, const Bvh& blas, std::uint32_t index) {
-    const auto& m = inst.world_to_object.m;
+    const auto m = object_map(inst.object_to_world, inst.world_to_object).m;  // as the CPU walks (transform.h)
     return {{m[0], m[1], m[2], m[3]},
             {m[4], m[5], m[6], m[7]},
             {m[8], m[9], m[10], m[11]},

@@ -87,7 +87,12 @@ BigVector<LeafInstance> make_leaf_instances(const Bvh& tree, const BigVector<Ins
         }
         const std::uint32_t i = tree.refs[k];
         const Instance& inst = instances[i];
-        out[k] = {inst.world_to_object, inst.blas, i, leaf_of[k] & ~kLast, inst.identity, (leaf_of[k] & kLast) != 0};
+        out[k] = {object_map(inst.object_to_world, inst.world_to_object),
+                  inst.blas,
+                  i,
+                  leaf_of[k] & ~kLast,
+                  inst.identity,
+                  (leaf_of[k] & kLast) != 0};
     }
     return out;
 }
