@@ -95,7 +95,12 @@ void expect_wide_copy_of(const Tlas& tlas) {
             const Instance& inst = tlas.instances[tree.refs[k]];
             EXPECT_EQ(e.instance, tree.refs[k]);
             EXPECT_EQ(e.blas, inst.blas);
-            EXPECT_EQ(e.world_to_object.m, inst.world_to_object.m);
+            // the inverse's linear part, and in its fourth column the object's origin in the world
+            EXPECT_EQ(e.to_object.m, object_map(inst.object_to_world, inst.world_to_object).m);
+            for (int r = 0; r < 3; ++r) {
+                EXPECT_EQ(e.to_object.m[4 * r + 3], inst.object_to_world.m[4 * r + 3]);
+                for (int c = 0; c < 3; ++c) EXPECT_EQ(e.to_object.m[4 * r + c], inst.world_to_object.m[4 * r + c]);
+            }
             EXPECT_EQ(e.identity, inst.identity);
             EXPECT_EQ(e.leaf, i);
             EXPECT_EQ(e.last, k + 1 == end) << "ref " << k;
