@@ -204,64 +204,77 @@ def test_cpu_tracer_and_overlay_with_repeated_references(long_triangles):
     assert len(lo) == len(spatial.nodes) and np.all(lo <= hi)
 
 
-def test_a_leaf_box_shrunk_off_part_of_a_triangle_is_refused_on_load(long_triangles, tmp_path):
+@pytest.fixture(scope="module")
+def floor_under_clutter():
+    """Two triangles of a 10 × 10 floor under 3,000 small ones: the floor's triangles are cut into
+    many parts, in columns of parts sharing their planes."""
+    floor = np.array([[(0, 0, 0), (10, 0, 0), (10, 10, 0)], [(0, 0, 0), (10, 10, 0), (0, 10, 0)]], np.float32)
+    clutter = procedural.random_triangles(3000, size=0.05, seed=5) * np.float32([10, 10, 0.3])
+    return np.ascontiguousarray(np.concatenate([floor, clutter]).astype(np.float32))
+
+
+@pytest.mark.parametrize("scene", ["long_triangles", "floor_under_clutter"])
+def test_a_leaf_box_shrunk_off_part_of_a_triangle_is_refused_on_load(scene, request, tmp_path):
     """A saved SBVH whose leaf box no longer holds all of a triangle's part (the box shrunk along
     its longest axis, still meeting each of its primitives' boxes, the file's checksum made to fit):
     it loaded (an SBVH leaf's box need only meet its primitives'), and rays through the part it
-    dropped missed the triangle. The leaves' boxes of each primitive must cover all of it."""
+    dropped missed the triangle. The leaves' boxes of each primitive must cover all of it. On the
+    floor, a triangle in many parts (the check once followed pieces of no area, doubling them at
+    each part of a column, and gave up)."""
     from test_tree_file import _rewrite
 
-    bvh = sbvh(long_triangles)
+    tris = request.getfixturevalue(scene)
+    bvh = sbvh(tris)
     path = tmp_path / "t.bvhtree"
     bvh.save(path)
     nodes, refs = bvh.nodes, bvh.refs
     leaves = np.flatnonzero(bvh.is_leaf)
-    points = sample_points(long_triangles, k=9)
-    corner_lo, corner_hi = long_triangles.min(axis=1), long_triangles.max(axis=1)
+    slots = {leaf: refs[nodes["index"][leaf] : nodes["index"][leaf] + nodes["info"][leaf]] for leaf in leaves}
+    corner_lo, corner_hi = tris.min(axis=1), tris.max(axis=1)
+    candidates = range(len(tris)) if scene == "long_triangles" else (0, 1)
+    if scene == "floor_under_clutter":
+        assert min(np.count_nonzero(refs == t) for t in candidates) >= 20, "the floor in many parts"
 
-    def holds(lo, hi, tri):
-        p = points[tri]
-        return np.all((p >= lo) & (p <= hi), axis=1)
+    def lost_part(leaf, shrunk, tri) -> bool:
+        """Whether sample points of `tri` are held by none of its leaves' boxes, `leaf`'s shrunk."""
+        p = sample_points(tris[tri : tri + 1], k=9 if scene == "long_triangles" else 300)[0]
+        covered = np.zeros(len(p), bool)
+        for other, held in slots.items():
+            if tri in held:
+                hi = shrunk if other == leaf else nodes["hi"][other]
+                covered |= np.all((p >= nodes["lo"][other]) & (p <= hi), axis=1)
+        return not covered.all()
 
-    for leaf in leaves:
+    for leaf in (leaf for leaf in leaves if any(t in candidates for t in slots[leaf])):
         lo, hi = nodes["lo"][leaf].copy(), nodes["hi"][leaf].copy()
-        tris = refs[nodes["index"][leaf] : nodes["index"][leaf] + nodes["info"][leaf]]
+        held = slots[leaf]
         axis = int(np.argmax(hi - lo))
         shrunk = hi.copy()
-        shrunk[axis] = max(lo[axis], float(corner_lo[tris, axis].max()))
+        shrunk[axis] = max(lo[axis], float(corner_lo[held, axis].max()))
         if shrunk[axis] > hi[axis] - 0.2 * (hi[axis] - lo[axis]):
             continue
-        # a triangle of the leaf with sample points now held by none of its leaves' boxes
-        lost = False
-        for tri in tris:
-            covered = np.zeros(len(points[tri]), bool)
-            for other in leaves:
-                first, count = nodes["index"][other], nodes["info"][other]
-                if tri in refs[first : first + count]:
-                    box_hi = shrunk if other == leaf else nodes["hi"][other]
-                    covered |= holds(nodes["lo"][other], box_hi, tri)
-            lost |= not covered.all()
-        if lost:
+        if any(lost_part(leaf, shrunk, t) for t in held if t in candidates):
             break
     else:
         pytest.fail("no leaf whose shrinking uncovers a triangle")
-    assert np.all(shrunk >= corner_lo[tris].min(axis=0)) and np.all(lo <= corner_hi[tris].max(axis=0))
-    bvhlab.load_bvh(path, long_triangles)  # as saved: it loads
+    assert np.all(shrunk >= corner_lo[held].min(axis=0)) and np.all(lo <= corner_hi[held].max(axis=0))
+    bvhlab.load_bvh(path, tris)  # as saved: it loads
 
     def change(saved_nodes):
         saved_nodes["hi"][leaf] = shrunk
 
     _rewrite(path, change)
     with pytest.raises(ValueError, match="is not covered by its leaves' boxes"):
-        bvhlab.load_bvh(path, long_triangles)
+        bvhlab.load_bvh(path, tris)
 
 
-def test_every_saved_sbvh_loads(long_triangles, small_scene, tmp_path):
+def test_every_saved_sbvh_loads(long_triangles, small_scene, floor_under_clutter, tmp_path):
     """The coverage check refuses no tree the builder makes: triangles and spheres, every leaf
-    size, α and budget, optimised."""
+    size, α and budget, optimised, a floor in many parts."""
     tris, spheres = small_scene
     for k, (geometry, settings) in enumerate(
         [
+            ((floor_under_clutter, None), {}),
             ((long_triangles, None), {}),
             ((long_triangles, None), {"max_leaf_size": 1}),
             ((long_triangles, None), {"sbvh_alpha": 0.0, "max_leaf_size": 8}),
@@ -270,7 +283,7 @@ def test_every_saved_sbvh_loads(long_triangles, small_scene, tmp_path):
         ]
     ):
         bvh = sbvh(*geometry, **settings)
-        if k == 1:
+        if k == 2:
             bvh.optimize(iterations=5)
         bvh.save(tmp_path / f"{k}.bvhtree")
         back = bvhlab.load_bvh(tmp_path / f"{k}.bvhtree", *geometry)

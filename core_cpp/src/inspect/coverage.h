@@ -10,7 +10,9 @@ namespace bvhlab {
 
 /// Whether the boxes `parts` together hold all of triangle `v` (its whole area) or of the box
 /// `sphere_box` (a sphere's references are its box cut as a box). Worked out in double, each box
-/// widened by a rounding margin; a primitive of no area (volume) is covered by any parts.
+/// widened by a rounding margin; a primitive of no area (volume) is covered by any parts. Past
+/// kMostPieces uncovered pieces at once (coverage.cpp), each piece's centre must lie in a part
+/// not yet taken away: a point outside every part is refused, one inside proves less (accepted).
 bool triangle_covered(const Vec3 v[3], const std::vector<Aabb>& parts);
 bool box_covered(const Aabb& sphere_box, const std::vector<Aabb>& parts);
 
