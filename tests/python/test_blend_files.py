@@ -7,6 +7,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[2]
 
 MAKE = """
@@ -49,8 +51,20 @@ import sys, bpy
 bpy.ops.wm.read_homefile(use_empty=True)
 with bpy.data.libraries.load(sys.argv[2], link=True) as (source, linked):
     linked.objects = ["Part"]
-bpy.context.scene.collection.objects.link(linked.objects[0])
+part = linked.objects[0]
+bpy.context.scene.collection.objects.link(part)
+if sys.argv[3] == "twice":  # a linked duplicate of it beside it: the export's instances of one mesh
+    copy = bpy.data.objects.new("Copy", part.data)
+    copy.location = (3.0, 0.0, 0.0)
+    bpy.context.scene.collection.objects.link(copy)
 bpy.ops.wm.save_as_mainfile(filepath=sys.argv[1])
+"""
+
+MOVE = """
+import sys, bpy
+bpy.ops.wm.open_mainfile(filepath=sys.argv[1])
+bpy.data.objects["Copy"].location.x += 2.0
+bpy.ops.wm.save_mainfile()
 """
 
 SWEEP = """
@@ -61,11 +75,14 @@ print(json.dumps({"ran": result.ran, "triangles": [row["triangles"] for row in r
 """
 
 
-def test_a_sweep_of_a_blend_sees_its_linked_library_change(tmp_path):
-    """A .blend whose mesh is linked from another file: the library edited, the sweep measures the
-    new mesh (its cells were keyed by the .blend's bytes alone: the old figures came back)."""
+@pytest.mark.parametrize("copies", ["once", "twice"])
+def test_a_sweep_of_a_blend_sees_its_linked_library_change(tmp_path, copies):
+    """A .blend whose mesh is linked from another file (once, or twice: two instances of one mesh):
+    the library edited, the sweep measures the new mesh (its cells were keyed by the .blend's bytes
+    alone: the old figures came back; then by the arrays of its own mesh alone, which an instanced
+    mesh is not)."""
     library, scene = tmp_path / "library.blend", tmp_path / "scene.blend"
-    for args in ([LIBRARY, str(library), "cube"], [LINKING, str(scene), str(library)]):
+    for args in ([LIBRARY, str(library), "cube"], [LINKING, str(scene), str(library), copies]):
         made = _run(["-c", *args])
         assert made.returncode == 0, made.stderr[-2000:]
     spec = tmp_path / "spec.toml"
@@ -76,8 +93,13 @@ def test_a_sweep_of_a_blend_sees_its_linked_library_change(tmp_path):
         assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
         return json.loads(done.stdout.strip().splitlines()[-1])
 
+    # (two copies: one mesh stored once, its triangles counted once)
     assert sweep() == {"ran": 1, "triangles": [12]}
     assert sweep() == {"ran": 0, "triangles": [12]}  # nothing changed: nothing run again
+    if copies == "twice":  # the duplicate moved: its instance's transform (the mesh's arrays alike)
+        made = _run(["-c", MOVE, str(scene)])
+        assert made.returncode == 0, made.stderr[-2000:]
+        assert sweep() == {"ran": 1, "triangles": [12]}
     made = _run(["-c", LIBRARY, str(library), "ico"])
     assert made.returncode == 0, made.stderr[-2000:]
     assert sweep() == {"ran": 1, "triangles": [20]}  # an icosahedron

@@ -114,9 +114,22 @@ def scene_hash(spec: str, loaded=None) -> str:
         scene = loaded if loaded is not None else load_scene(spec)[0]  # cheap next to the builds
     except (OSError, ValueError, RuntimeError):  # RuntimeError: a .blend without bpy
         return ""
+    return arrays_hash(scene)
+
+
+def arrays_hash(scene) -> str:
+    """sha256 of a Scene's geometry: its triangles and spheres, and where it has instances (a .blend's
+    linked duplicates and collection instances, its moving objects) every mesh and the instances'
+    meshes and transforms; each array's dtype and shape before its bytes, so that no two cut apart
+    differently hash alike (two .blend files of instances alone hashed as one empty scene)."""
     digest = hashlib.sha256()
-    for array in (scene.triangles, scene.spheres):
-        digest.update(np.ascontiguousarray(array).tobytes())
+    arrays = [scene.triangles, scene.spheres]
+    if scene.is_instanced:
+        arrays += [*scene.meshes, *scene.instances()]
+    for array in arrays:
+        array = np.ascontiguousarray(array)
+        digest.update(f"{array.dtype.str}{array.shape};".encode())
+        digest.update(array.tobytes())
     return digest.hexdigest()
 
 
