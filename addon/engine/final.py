@@ -271,7 +271,7 @@ def render_views(engine, render, layer_name: str) -> list[str | None]:
         names = [v.name for v in result.views]
     finally:
         engine.end_result(result, cancel=True, highlight=False, do_merge_results=False)
-    return names if len(names) > 1 else [None]
+    return names or [None]  # one view enabled of a multi-view render: still through its own camera
 
 
 def sample_passes(total: int) -> list[int]:
