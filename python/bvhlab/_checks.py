@@ -47,6 +47,17 @@ def integer(name: str, value, lo: int, hi: int) -> int:
     return value
 
 
+def depth_range(depth_min, depth_max) -> tuple[int, int]:
+    """A range of tree depths for boxes (Bvh.boxes, InstancedBvh.tlas_boxes): depth_max None is
+    every depth; a depth_min above depth_max raises ValueError, as the overlay's range does (it gave
+    no boxes, silently)."""
+    lo = integer("depth_min", depth_min, 0, 255)
+    hi = 255 if depth_max is None else integer("depth_max", depth_max, 0, 255)
+    if lo > hi:
+        raise ValueError(f"depth_min {lo} is greater than depth_max {hi}")
+    return lo, hi
+
+
 def power_of_two(name: str, value, hi: int) -> int:
     """An int that is a power of two from 1 to hi."""
     value = integer(name, value, 1, hi)

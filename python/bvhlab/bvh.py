@@ -186,13 +186,8 @@ class Bvh:
         """Boxes of the nodes whose depth d satisfies depth_min <= d <= depth_max (only the leaves
         with `leaves_only`), sorted by depth (depth-first order within a depth; report §3.3.1).
         Returns new arrays (lo (K,3) float32, hi (K,3) float32, depth (K,) uint8); a range past
-        the tree's height gives none. A depth_min above depth_max raises ValueError, as the
-        overlay's range does (it gave no boxes, silently)."""
-        depth_min = _checks.integer("depth_min", depth_min, 0, 255)
-        depth_max = 255 if depth_max is None else _checks.integer("depth_max", depth_max, 0, 255)
-        if depth_min > depth_max:
-            raise ValueError(f"depth_min {depth_min} is greater than depth_max {depth_max}")
-        return self._core.boxes(depth_min, depth_max, bool(leaves_only))
+        the tree's height gives none; a depth_min above depth_max raises ValueError."""
+        return self._core.boxes(*_checks.depth_range(depth_min, depth_max), bool(leaves_only))
 
     # -- queries -----------------------------------------------------------------------------
     def intersect(

@@ -119,9 +119,7 @@ class InstancedBvh:
         """The TLAS's node boxes (world space) in the depth range, as `Bvh.boxes` gives a tree's:
         (lo (K,3) float32, hi (K,3) float32, depth (K,) uint8), by depth; its leaves are the
         instances' world boxes."""
-        depth_min = _checks.integer("depth_min", depth_min, 0, 255)
-        depth_max = 255 if depth_max is None else _checks.integer("depth_max", depth_max, 0, 255)
-        return self._core.tlas_boxes(depth_min, depth_max, bool(leaves_only))
+        return self._core.tlas_boxes(*_checks.depth_range(depth_min, depth_max), bool(leaves_only))
 
     def tlas_node_data(self) -> NodeData:
         """The TLAS's node data (`Bvh.node_data`'s figures over its nodes, whose primitives are

@@ -93,6 +93,8 @@ def test_tlas_node_data_is_its_boxes_and_instances(trees):
     assert data.epo_cost == 0
     lo, hi, depth = tree.tlas_boxes()
     np.testing.assert_array_equal(np.sort(depth), np.sort(data.depth))
+    with pytest.raises(ValueError, match="depth_min 3 is greater than depth_max 1"):
+        tree.tlas_boxes(3, 1)  # gave no boxes, silently
 
 
 def _pick_by_brute_force(shown, o, d, t_hit):

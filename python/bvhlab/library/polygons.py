@@ -86,7 +86,8 @@ def _ear_clip(corners: list[int], xy: np.ndarray) -> list[tuple[int, int, int]] 
     """Ear clipping of a counter-clockwise simple polygon; None where it finds no ear. Each corner's
     ear test is kept and done again only for the two neighbours of a clipped ear (the rest keep
     theirs), and only corners that are not strictly convex can lie in an ear (Eberly §2), tested
-    all at once: O(n·r) for r such corners (a 16,000-corner outline took 360 s as whole scans)."""
+    all at once: n·r tests for r such corners, and O(n) numpy work a step (a 16,000-corner outline
+    took 360 s as whole scans in Python)."""
     n = len(corners)
     xy = np.asarray(xy, np.float64)
     nxt, prv = np.roll(np.arange(n), -1), np.roll(np.arange(n), 1)
