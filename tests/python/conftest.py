@@ -32,9 +32,9 @@ def knot_mesh():
 # -- selection (pyproject's markers): `make check` runs -m "not slow and not full_zip" -----------
 #: Modules that use a Vulkan device, and modules that import bpy or run Blender in a child.
 VULKAN_MODULES = {
-    "test_bench_render", "test_cli", "test_export_instances", "test_render_api", "test_render_bounded",
-    "test_render_cameras", "test_render_cpu", "test_render_precision", "test_render_reentry", "test_render_robust",
-    "test_render_vulkan",
+    "test_bench_render", "test_cli", "test_cli_compare", "test_counters", "test_export_instances",
+    "test_instance_precision", "test_render_api", "test_render_bounded", "test_render_cameras", "test_render_cpu",
+    "test_render_precision", "test_render_reentry", "test_render_robust", "test_render_vulkan",
 }  # fmt: skip
 BPY_MODULES = {
     "test_addon", "test_addon_install", "test_addon_writes", "test_blender_checks", "test_blender_errors",
@@ -46,8 +46,8 @@ VULKAN_GROUPS = {"addon", "engine", "cameras", "no_vulkan", "gpu"}
 #: Tests over about 2 s in a full run here (pytest --durations; 2026-12-02, 2 cores: 125 s in all,
 #: these 12 took 49 s). Matched as the start of the test's node id within its module.
 SLOW = (
-    "test_cli.py::test_compare_writes_table_charts_figures_and_sheets",
-    "test_cli.py::test_compare_measures_the_overlay_claim",
+    "test_cli_compare.py::test_compare_writes_table_charts_figures_and_sheets",
+    "test_cli_compare.py::test_compare_measures_the_overlay_claim",
     "test_blender_checks.py::test_check[instancing/",  # one child runs the group: its first test takes the time
     "test_render_robust.py::test_ctrl_c_stops_a_long_render",
     "test_docs_code.py::test_the_documented_code_runs[docs/api.md]",  # an 800×600 CPU render and node data
