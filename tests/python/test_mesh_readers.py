@@ -237,8 +237,8 @@ def test_a_comb_of_4002_corners_keeps_its_shape(tmp_path):
 
 @pytest.mark.parametrize("seed", range(40))
 def test_simple_polygons_are_covered_exactly(tmp_path, seed):
-    """Random star-shaped polygons (simple, concave, some radii repeated: collinear and equal
-    corners), either winding: triangles of their corners whose areas sum to the polygon's."""
+    """Random star-shaped polygons (simple, concave, some with radii rounded to tenths), either
+    winding: triangles of their corners whose areas sum to the polygon's."""
     rng = np.random.default_rng(seed)
     n = int(rng.integers(5, 90))
     angle, radius = np.sort(rng.uniform(0, 2 * np.pi, n)), rng.uniform(0.2, 1.0, n)
@@ -249,6 +249,27 @@ def test_simple_polygons_are_covered_exactly(tmp_path, seed):
     t = load(tmp_path, "star.obj", vertices + "f " + " ".join(str(i + 1) for i in range(n)) + "\n")
     assert len(t) == n - 2
     assert area(t) == pytest.approx(shoelace(ring), rel=1e-6)  # float32 positions
+
+
+@pytest.mark.parametrize(
+    "ring",
+    [
+        # a concave hexagon with a corner in the middle of a straight edge (flat: 180°)
+        [(0, 0), (2, 0), (4, 0), (4, 2), (2, 1), (0, 2)],
+        # the same with a corner repeated (a zero-length edge)
+        [(0, 0), (2, 0), (2, 0), (4, 0), (4, 2), (2, 1), (0, 2)],
+        # clockwise
+        [(0, 2), (2, 1), (4, 2), (4, 0), (2, 0), (0, 0)],
+        # a comb whose teeth's tips lie on one line with the base's corner
+        [(0, 0), (6, 0), (6, 3), (5, 1), (4, 3), (3, 1), (2, 3), (1, 1), (0, 3)],
+    ],
+)
+def test_degenerate_corners_keep_the_area(tmp_path, ring):
+    """Flat, repeated and clockwise corners: the polygon's area, no triangle outside it."""
+    vertices = "".join(f"v {x} {y} 0\n" for x, y in ring)
+    t = load(tmp_path, "odd.obj", vertices + "f " + " ".join(str(i + 1) for i in range(len(ring))) + "\n")
+    assert len(t) == len(ring) - 2
+    assert area(t) == pytest.approx(shoelace(ring), rel=1e-6)
 
 
 @pytest.mark.parametrize(
