@@ -268,6 +268,7 @@ def test_cli_inspects_nodes_of_both_levels(instanced_scene, trees, tmp_path, cap
         ("--node", "0", "--instance", "100000"): "instance 100000 does not exist",
         ("--worst", "2", "--save-tree", str(tmp_path / "t.bvhtree")): "two-level",
         ("--node", "100000"): "node 100000 does not exist",
+        ("--worst", "2", "--instance", "7"): "--instance I goes with --node N",  # it was ignored
     }
     for args, said in bad.items():
         assert main(["inspect", str(path), *args]) == 2

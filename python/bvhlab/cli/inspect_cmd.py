@@ -104,6 +104,8 @@ def run(args) -> int:
     typed = options.fill_build_defaults(args)
     settings = options.build_kwargs(args)  # checked before the scene is loaded
     optimize = options.optimize_config(args)
+    if args.instance is not None and args.node is None:  # it was ignored, out of range or not
+        raise ValueError("--instance I goes with --node N (node N of instance I's mesh tree)")
     scene, name = load_scene(args.scene)
     if args.tree:
         bvh = load_bvh(args.tree, scene)
