@@ -6,13 +6,15 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <vector>
+
+#include "clip_polygon.h"
 
 namespace bvhlab {
 
 namespace {
 
 using Point = std::array<double, 3>;
-using Polygon = std::vector<Point>;  // convex, in the triangle's plane
 
 /// The most pieces followed: a triangle cut into many parts leaves a few pieces at a time (those
 /// the boxes not yet taken away cover); past this many, each piece's centre is looked for in the
@@ -21,35 +23,13 @@ constexpr std::size_t kMostPieces = 1 << 14;
 /// What is left may be this share of the whole (slivers of rounding where two boxes meet).
 constexpr double kLeftShare = 1e-9;
 
-/// The part of `p` on one side of the plane x[axis] = pos: below it (`below`) or above it
-/// (Sutherland and Hodgman 1974, one plane).
-Polygon cut(const Polygon& p, int axis, double pos, bool below) {
-    Polygon out;
-    const auto inside = [&](const Point& q) { return below ? q[axis] <= pos : q[axis] >= pos; };
-    for (std::size_t i = 0; i < p.size(); ++i) {
-        const Point& a = p[i];
-        const Point& b = p[(i + 1) % p.size()];
-        if (inside(a)) out.push_back(a);
-        if (inside(a) != inside(b) && a[axis] != b[axis]) {
-            const double t = (pos - a[axis]) / (b[axis] - a[axis]);
-            Point c;
-            for (int k = 0; k < 3; ++k) c[k] = k == axis ? pos : a[k] + (b[k] - a[k]) * t;
-            out.push_back(c);
-        }
-    }
-    return out.size() >= 3 ? out : Polygon{};
-}
-
-double area(const Polygon& p) {
-    Point sum{0, 0, 0};  // twice the vector area: the sum of the fan's cross products
-    for (std::size_t i = 1; i + 1 < p.size(); ++i) {
-        const Point u{p[i][0] - p[0][0], p[i][1] - p[0][1], p[i][2] - p[0][2]};
-        const Point w{p[i + 1][0] - p[0][0], p[i + 1][1] - p[0][1], p[i + 1][2] - p[0][2]};
-        sum[0] += u[1] * w[2] - u[2] * w[1];
-        sum[1] += u[2] * w[0] - u[0] * w[2];
-        sum[2] += u[0] * w[1] - u[1] * w[0];
-    }
-    return 0.5 * std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
+/// The part of a triangle's piece on one side of the plane x[axis] = pos: below it (`below`) or
+/// above it (clip_polygon.h); none where fewer than three corners are left.
+ClipPolygon cut(const ClipPolygon& piece, int axis, double pos, bool below) {
+    ClipPolygon out;
+    clip(piece, out, axis, pos, below ? 1.0 : -1.0);
+    if (out.n < 3) out.n = 0;
+    return out;
 }
 
 /// A part's box in double, widened by a margin of rounding: the parts' boxes hold their parts in
@@ -59,22 +39,25 @@ std::array<Point, 2> widened(const Aabb& b, double scale) {
     return {{{b.lo.x - margin, b.lo.y - margin, b.lo.z - margin}, {b.hi.x + margin, b.hi.y + margin, b.hi.z + margin}}};
 }
 
-/// Whether the piece (its points: a polygon's corners, a box's two) lies outside `box` but for a
-/// part of no measure (touching one of its planes at most): kept whole, not cut.
-bool apart(const std::vector<Point>& piece, const std::array<Point, 2>& box) {
+/// Whether the piece (its corners: a polygon's, or a box's low and high) lies outside `box` but
+/// for a part of no measure (touching one of its planes at most): kept whole, not cut.
+template <class Piece>
+bool apart(const Piece& piece, const std::array<Point, 2>& box) {
     for (int k = 0; k < 3; ++k) {
         bool below = true, above = true;
-        for (const Point& p : piece) below = below && p[k] <= box[0][k], above = above && p[k] >= box[1][k];
+        for (int i = 0; i < piece.n; ++i)
+            below = below && piece.p[i][k] <= box[0][k], above = above && piece.p[i][k] >= box[1][k];
         if (below || above) return true;
     }
     return false;
 }
 
-/// The mean of the piece's points: inside it (it is convex).
-Point centre(const std::vector<Point>& piece) {
+/// The mean of the piece's corners: inside it (it is convex).
+template <class Piece>
+Point centre(const Piece& piece) {
     Point c{0, 0, 0};
-    for (const Point& p : piece)
-        for (int k = 0; k < 3; ++k) c[k] += p[k] / double(piece.size());
+    for (int i = 0; i < piece.n; ++i)
+        for (int k = 0; k < 3; ++k) c[k] += piece.p[i][k] / double(piece.n);
     return c;
 }
 
@@ -108,12 +91,12 @@ bool covered(Piece whole, const Aabb& bounds, const std::vector<Aabb>& parts, do
                 next.push_back(std::move(piece));
                 continue;
             }
-            for (int side = 0; side < 6 && !piece.empty(); ++side) {
+            for (int side = 0; side < 6 && piece.n > 0; ++side) {
                 const int axis = side % 3;
                 const bool low = side < 3;  // the half-space below the box's low plane is outside it
                 const double pos = low ? box[0][axis] : box[1][axis];
                 Piece outside = cut_piece(piece, axis, pos, low);
-                const double m = outside.empty() ? 0.0 : measure(outside);
+                const double m = outside.n > 0 ? measure(outside) : 0.0;
                 if (m > negligible) next.push_back(std::move(outside));
                 else left += m;
                 piece = cut_piece(piece, axis, pos, !low);
@@ -137,17 +120,24 @@ bool covered(Piece whole, const Aabb& bounds, const std::vector<Aabb>& parts, do
     return left <= kLeftShare * total;
 }
 
-using Box = std::vector<Point>;  // empty, or {lo, hi}
+/// A piece of a sphere's box: its low and high corners (n = 2), or none (n = 0).
+struct BoxPiece {
+    double p[2][3];
+    int n = 0;
+};
 
-Box cut_box(const Box& b, int axis, double pos, bool below) {
-    if (b.empty()) return {};
-    Box out = b;
-    if (below) out[1][axis] = std::fmin(out[1][axis], pos);
-    else out[0][axis] = std::fmax(out[0][axis], pos);
-    return out[0][axis] < out[1][axis] ? out : Box{};
+BoxPiece cut_box(const BoxPiece& b, int axis, double pos, bool below) {
+    if (!b.n) return b;
+    BoxPiece out = b;
+    if (below) out.p[1][axis] = std::fmin(out.p[1][axis], pos);
+    else out.p[0][axis] = std::fmax(out.p[0][axis], pos);
+    if (!(out.p[0][axis] < out.p[1][axis])) out.n = 0;
+    return out;
 }
 
-double volume(const Box& b) { return b.empty() ? 0 : (b[1][0] - b[0][0]) * (b[1][1] - b[0][1]) * (b[1][2] - b[0][2]); }
+double volume(const BoxPiece& b) {
+    return b.n ? (b.p[1][0] - b.p[0][0]) * (b.p[1][1] - b.p[0][1]) * (b.p[1][2] - b.p[0][2]) : 0.0;
+}
 
 double extent(const Aabb& b) {
     double m = 0;
@@ -159,18 +149,20 @@ double extent(const Aabb& b) {
 
 bool triangle_covered(const Vec3 v[3], const std::vector<Aabb>& parts) {
     Aabb bounds;
-    Polygon triangle;
+    ClipPolygon triangle;
+    triangle.n = 3;
     for (int k = 0; k < 3; ++k) {
         bounds.grow(v[k]);
-        triangle.push_back({double(v[k].x), double(v[k].y), double(v[k].z)});
+        for (int a = 0; a < 3; ++a) triangle.p[k][a] = double(v[k][a]);
     }
-    return covered(std::move(triangle), bounds, parts, extent(bounds), cut, area);
+    return covered(triangle, bounds, parts, extent(bounds), cut, polygon_area);
 }
 
 bool box_covered(const Aabb& sphere_box, const std::vector<Aabb>& parts) {
-    Box whole{{double(sphere_box.lo.x), double(sphere_box.lo.y), double(sphere_box.lo.z)},
-              {double(sphere_box.hi.x), double(sphere_box.hi.y), double(sphere_box.hi.z)}};
-    return covered(std::move(whole), sphere_box, parts, extent(sphere_box), cut_box, volume);
+    BoxPiece whole;
+    whole.n = 2;
+    for (int a = 0; a < 3; ++a) whole.p[0][a] = double(sphere_box.lo[a]), whole.p[1][a] = double(sphere_box.hi[a]);
+    return covered(whole, sphere_box, parts, extent(sphere_box), cut_box, volume);
 }
 
 }  // namespace bvhlab

@@ -11,42 +11,11 @@
 #include "bvhlab/node_data.h"
 #include "bvhlab/stats.h"
 #include "bvhlab/thread_pool.h"
+#include "clip_polygon.h"
 
 namespace bvhlab {
 
 namespace {
-
-struct Polygon {
-    double p[9][3];  // a triangle clipped by six planes has at most 3 + 6 vertices
-    int n = 0;
-};
-
-/// Sutherland–Hodgman: keeps the part of `in` with sign·(x[axis] - plane) <= 0.
-void clip(const Polygon& in, Polygon& out, int axis, double plane, double sign) {
-    out.n = 0;
-    for (int i = 0; i < in.n; ++i) {
-        const double* a = in.p[i];
-        const double* b = in.p[(i + 1) % in.n];
-        const double da = sign * (a[axis] - plane), db = sign * (b[axis] - plane);
-        if (da <= 0) std::copy(a, a + 3, out.p[out.n++]);
-        if ((da < 0 && db > 0) || (da > 0 && db < 0)) {
-            const double s = da / (da - db);
-            double* q = out.p[out.n++];
-            for (int k = 0; k < 3; ++k) q[k] = a[k] + s * (b[k] - a[k]);
-            q[axis] = plane;  // exactly on the plane, whatever the rounding of s
-        }
-    }
-}
-
-double polygon_area(const Polygon& poly) {
-    double sx = 0, sy = 0, sz = 0;  // Σ p_i × p_{i+1} = twice the vector area
-    for (int i = 0; i < poly.n; ++i) {
-        const double* a = poly.p[i];
-        const double* b = poly.p[(i + 1) % poly.n];
-        sx += a[1] * b[2] - a[2] * b[1], sy += a[2] * b[0] - a[0] * b[2], sz += a[0] * b[1] - a[1] * b[0];
-    }
-    return 0.5 * std::sqrt(sx * sx + sy * sy + sz * sz);
-}
 
 constexpr double kFixedScale = 4503599627370496.0;  // 2^52: a node's sum is at most A(Q), i.e. 1
 
@@ -54,7 +23,7 @@ constexpr double kFixedScale = 4503599627370496.0;  // 2^52: a node's sum is at 
 
 double clipped_triangle_area(const double a[3], const double b[3], const double c[3], const double lo[3],
                              const double hi[3]) {
-    Polygon x, y;
+    ClipPolygon x, y;
     x.n = 3;
     std::copy(a, a + 3, x.p[0]), std::copy(b, b + 3, x.p[1]), std::copy(c, c + 3, x.p[2]);
     for (int axis = 0; axis < 3 && x.n > 0; ++axis) {
