@@ -18,13 +18,6 @@ struct Surface {
     vec3 v2;
 };
 
-/// A point moved by an instance's world-to-object transform, relative to the object's origin in
-/// the world (GpuInstance: L·(p - P), as the walk moves rays).
-vec3 object_point(GpuInstance inst, vec3 p) {
-    vec3 d = p - vec3(inst.row0.w, inst.row1.w, inst.row2.w);
-    return vec3(dot(xyz(inst.row0), d), dot(xyz(inst.row1), d), dot(xyz(inst.row2), d));
-}
-
 /// An object-space normal in the world: times the inverse transpose of the object-to-world
 /// transform, i.e. the transpose of the world-to-object one (PBRT §3.10.3, "Normals"). No sign
 /// flip for a mirroring transform: the outside stays the outside, as Blender and Cycles keep a
@@ -119,8 +112,7 @@ Surface surface_at(RayTask task, Hit hit) {
             // number there), four times over for the ray that leaves (its own bound needs the
             // world vertices this transform has none of)
             vec3 o = object_point(inst, task.origin);
-            vec3 d = vec3(dot(xyz(inst.row0), task.dir), dot(xyz(inst.row1), task.dir), dot(xyz(inst.row2), task.dir));
-            s.p_error += vec3(4.0f * triangle_t_error(tri.v0, tri.v1, tri.v2, o, d));
+            s.p_error += vec3(4.0f * triangle_t_error(tri.v0, tri.v1, tri.v2, o, object_vector(inst, task.dir)));
         }
         if (s.triangle) {
             vec3 e1 = s.v1 - s.v0;

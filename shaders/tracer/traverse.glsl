@@ -145,17 +145,24 @@ Level top_level() {
     return l;
 }
 
+/// A direction moved by an instance's world-to-object transform (its 3×3 part L).
+vec3 object_vector(GpuInstance inst, vec3 d) {
+    return vec3(dot(xyz(inst.row0), d), dot(xyz(inst.row1), d), dot(xyz(inst.row2), d));
+}
+
+/// A point moved by an instance's world-to-object transform, relative to the object's origin in
+/// the world (GpuInstance: L·(p - P)), as rays enter it and shading finds points in it.
+vec3 object_point(GpuInstance inst, vec3 p) {
+    return object_vector(inst, p - vec3(inst.row0.w, inst.row1.w, inst.row2.w));
+}
+
 /// An instance's BLAS; `ray` goes from world space into the instance's object space: origin and
 /// direction by the world-to-object transform (the origin relative to the object's, ObjectMap in
 /// transform.h), the direction left unnormalised so that t is the
 /// same number in both spaces (as the CPU queries do: core_cpp/src/query/traverse_two_level.cpp).
 Level instance_level(uint slot, INOUT(TraceRay) ray) {
     GpuInstance inst = load_instance(slot);
-    vec3 o = ray.origin - vec3(inst.row0.w, inst.row1.w, inst.row2.w);  // relative to the object's origin
-    vec3 d = ray.dir;
-    vec3 origin = vec3(dot(xyz(inst.row0), o), dot(xyz(inst.row1), o), dot(xyz(inst.row2), o));
-    vec3 dir = vec3(dot(xyz(inst.row0), d), dot(xyz(inst.row1), d), dot(xyz(inst.row2), d));
-    ray = make_ray(origin, dir, ray.tmin);
+    ray = make_ray(object_point(inst, ray.origin), object_vector(inst, ray.dir), ray.tmin);
     Level l;
     l.root = inst.tree.x;
     l.end = inst.tree.y;
