@@ -206,23 +206,32 @@ SETTINGS = {
 
 
 # -- rendering and comparing ------------------------------------------------------------------------
-def cycles_depth(tmp_dir, name: str) -> np.ndarray:
-    """Cycles' Depth pass: 1 sample, box filter of width 0.01, no denoising, CPU."""
-    scene = bpy.context.scene
+def use_cycles_reference(scene) -> None:
+    """Cycles as the reference renders: 1 sample, box filter of width 0.01 (the ray through the
+    pixel centre), no denoising, CPU; the Depth pass on."""
     scene.render.engine = "CYCLES"
     c = scene.cycles
     c.device, c.samples, c.use_adaptive_sampling, c.use_denoising = "CPU", 1, False, False
     c.pixel_filter_type, c.filter_width = "BOX", 0.01
     bpy.context.view_layer.use_pass_z = True
+
+
+def use_engine(scene, backend: str) -> None:
+    """The engine on `backend`, 1 sample per pixel, no overlay; the Depth pass on."""
+    scene.render.engine = ENGINE
+    scene.bvhlab.backend, scene.bvhlab.render_supersampling, scene.bvhlab.render_overlay = backend, 1, False
+    bpy.context.view_layer.use_pass_z = True
+
+
+def cycles_depth(tmp_dir, name: str) -> np.ndarray:
+    """Cycles' Depth pass (use_cycles_reference)."""
+    use_cycles_reference(bpy.context.scene)
     return render_passes(tmp_dir, f"{name}_cycles")["Depth"]
 
 
 def engine_depth(tmp_dir, name: str, backend: str) -> np.ndarray:
     """The engine's Depth pass (F12 through Blender's pipeline), 1 sample per pixel."""
-    scene = bpy.context.scene
-    scene.render.engine = ENGINE
-    scene.bvhlab.backend, scene.bvhlab.render_supersampling, scene.bvhlab.render_overlay = backend, 1, False
-    bpy.context.view_layer.use_pass_z = True
+    use_engine(bpy.context.scene, backend)
     return render_passes(tmp_dir, f"{name}_{backend}")["Depth"]
 
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import bpy
 import exr
 import numpy as np
-from checks_cameras import camera_scene, compare_depth, vulkan_backends
+from checks_cameras import camera_scene, compare_depth, use_cycles_reference, use_engine, vulkan_backends
 from checks_engine import ENGINE
 
 from bvhlab.blender.compat import use_multilayer_exr
@@ -44,14 +44,10 @@ def views_depth(tmp_dir, name: str) -> dict[str, np.ndarray]:
 
 def _render(tmp_dir, name: str, engine: str, backend: str = "cpu") -> dict[str, np.ndarray]:
     scene = bpy.context.scene
-    scene.render.engine = engine
     if engine == "CYCLES":
-        c = scene.cycles
-        c.device, c.samples, c.use_adaptive_sampling, c.use_denoising = "CPU", 1, False, False
-        c.pixel_filter_type, c.filter_width = "BOX", 0.01
+        use_cycles_reference(scene)
     else:
-        scene.bvhlab.backend, scene.bvhlab.render_supersampling, scene.bvhlab.render_overlay = backend, 1, False
-    bpy.context.view_layer.use_pass_z = True
+        use_engine(scene, backend)
     return views_depth(tmp_dir, f"{name}_{engine}_{backend}")
 
 
