@@ -120,13 +120,13 @@ class FinalRender:
         layer = depsgraph.view_layer.name
         views = render_views(engine, blender_scene.render, layer)  # [None]: one view; else each eye or view by name
         engine.update_progress(TRACE_START)
+        threads = final_threads(blender_scene)
         for index, view in enumerate(views):
             if view is not None:  # the view's camera: an eye's offset and convergence (Stereoscopy)
                 engine.active_view_set(view)
                 view_camera = self._view_camera(engine, depsgraph, view, frame)
             else:
                 view_camera = camera
-            threads = final_threads(blender_scene)
             job = tracer.start(scene, update.bvh, view_camera, frame.width, frame.height, settings, threads)
             on, named = job.timings["device"], "" if view is None else f" ({view})"
             engine.update_stats(
