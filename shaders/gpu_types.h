@@ -100,7 +100,8 @@ struct GpuSphere {
 /// A Whitted material (report §2.1, 32 bytes): colour, reflective and transparent factors, IOR.
 struct GpuMaterial {
     vec4 color_reflective;  ///< rgb colour, a = reflective factor
-    vec4 transparent_ior;   ///< x = transparent factor, y = index of refraction
+    vec4 transparent_ior;   ///< x = transparent factor, y = index of refraction, z = holdout (1: a hole in the
+                            ///< image where a camera ray meets it, black where another ray does; Cycles' holdout)
 };
 
 /// An instance of a two-level scene as the tracer reads it (issue 34), 64 bytes, stored in the TLAS's
@@ -176,8 +177,8 @@ struct DeviceAddresses {
     uvec2 slot_nodes;     ///< uvec2[node_stack_entries] per slot: its traversal stack (child, entry t; traverse.glsl)
     uvec2 counters;       ///< uint[2], atomic: slots that ended a dispatch with work left, that failed
     uvec2 accum_counts;   ///< uint[COUNTER_COUNT] per pixel: sums of the traversal counters (frame.count_traversal)
-    uvec2 accum_covered;  ///< uint per pixel: samples whose primary ray showed a surface or the overlay's
-                          ///< line (frame.film_transparent: the pixel's alpha)
+    uvec2 accum_covered;  ///< uint per pixel: samples whose primary ray showed something but a holdout (with
+                          ///< film_transparent: a surface or the overlay's line); frame.count_covered: the alpha
 };
 
 /// FrameParams::projection (camera.h Projection, in its order).
@@ -208,7 +209,8 @@ struct FrameParams {
                             ///< min, latitude span, π/2 - latitude min; radians); fisheye: x = field of view
     vec4 overlay_color;     ///< rgb: the overlay's lines when not coloured by depth (w unused)
     vec3 light_position;
-    float reserved;       ///< unused (keeps the layout: each vec3 is followed by a 4-byte scalar)
+    uint count_covered;   ///< 1: addr.accum_covered counts each pixel's covered samples, its alpha (film_transparent,
+                          ///< or a scene with a holdout material: its camera rays' samples are uncovered)
     vec3 light_color;     ///< rgb, already multiplied by the intensity
     float heatmap_scale;  ///< box tests per primary ray shown as full red (MODE_HEATMAP)
     vec3 sky;             ///< rgb: the atmosphere colour of rays that hit nothing (report §2.1)

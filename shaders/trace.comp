@@ -54,7 +54,7 @@ uint sync_steps(uint steps) { return subgroupMax(steps); }
 vec4 g_sum;        // colour (rgb) and box tests (a) of the samples so far
 float g_depth;     // nearest primary hit
 uint g_samples;
-uint g_covered;  // samples whose camera ray showed something (frame.film_transparent)
+uint g_covered;  // samples whose camera ray showed something but a holdout (frame.count_covered)
 TraversalCounts g_counts;  // traversal counters of the samples so far (frame.count_traversal)
 uint g_slot;
 uvec4 state_load(uint k) { return Uvec4Array(frame.addr.slot_state).v[g_slot * STATE_WORDS + k]; }
@@ -84,8 +84,8 @@ void load_sums(uvec2 p) {
     g_sum = Vec4Array(frame.addr.accum_color).v[i];
     g_depth = FloatArray(frame.addr.accum_depth).v[i];
     g_samples = UintArray(frame.addr.accum_samples).v[i];
-    g_covered = 0u;  // a branch, not a select: no load from the null address of an opaque film's render
-    if (frame.film_transparent != 0u) g_covered = UintArray(frame.addr.accum_covered).v[i];
+    g_covered = 0u;  // a branch, not a select: no load from the null address of a render without alpha
+    if (frame.count_covered != 0u) g_covered = UintArray(frame.addr.accum_covered).v[i];
     if (frame.count_traversal == 0u) return;
     UintArray c = UintArray(frame.addr.accum_counts);
     uint k = i * COUNTER_COUNT;
@@ -98,7 +98,7 @@ void store_sums(uvec2 p) {
     Vec4Array(frame.addr.accum_color).v[i] = g_sum;
     FloatArray(frame.addr.accum_depth).v[i] = g_depth;
     UintArray(frame.addr.accum_samples).v[i] = g_samples;
-    if (frame.film_transparent != 0u) UintArray(frame.addr.accum_covered).v[i] = g_covered;
+    if (frame.count_covered != 0u) UintArray(frame.addr.accum_covered).v[i] = g_covered;
     if (frame.count_traversal == 0u) return;
     UintArray c = UintArray(frame.addr.accum_counts);
     uint k = i * COUNTER_COUNT;

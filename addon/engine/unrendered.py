@@ -13,12 +13,13 @@ RAY_VISIBILITY = ("visible_camera", "visible_diffuse", "visible_glossy", "visibl
 #: converts to one: mesh.py CONVERTIBLE_TYPES).
 UNREAD_TYPES = {"CURVES": "hair curves", "POINTCLOUD": "point clouds", "VOLUME": "volumes"}
 
-#: Object Properties ▸ Visibility: per-object render effects bvhlab does not make.
-OBJECT_EFFECTS = {"is_holdout": "holdout", "is_shadow_catcher": "shadow catcher"}
+#: Object Properties ▸ Visibility: per-object render effects bvhlab does not make (holdout it
+#: makes: Material.holdout, material_table.py).
+OBJECT_EFFECTS = {"is_shadow_catcher": "shadow catcher"}
 
-#: View Layer ▸ collection flags bvhlab does not honour, and what it does instead.
+#: View Layer ▸ collection flags bvhlab does not honour, and what it does instead (holdout it
+#: honours, as an object's).
 COLLECTION_FLAGS = {
-    "holdout": "holdout is not rendered: the collection's objects are rendered as surfaces",
     "indirect_only": "Indirect Only is not rendered: the collection's objects are seen by camera rays",
 }
 

@@ -15,6 +15,7 @@
 #include "bvhlab/owned_mutex.h"
 #include "bvhlab/palette.h"
 #include "bvhlab/render.h"
+#include "bvhlab/render_defaults.h"
 #include "py_bvh.h"
 #include "py_cancel.h"
 #include "py_render_scene.h"
@@ -30,7 +31,7 @@ using namespace bvhlab::python;
 
 namespace {
 
-using Materials = nb::ndarray<const float, nb::shape<-1, 6>, nb::c_contig, nb::device::cpu>;
+using Materials = nb::ndarray<const float, nb::shape<-1, nb::ssize_t(kMaterialFloats)>, nb::c_contig, nb::device::cpu>;
 using Indices = nb::ndarray<const std::int32_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
 using Rgba = nb::ndarray<float, nb::shape<-1, -1, 4>, nb::c_contig, nb::device::cpu>;
 using Plane = nb::ndarray<float, nb::ndim<2>, nb::c_contig, nb::device::cpu>;

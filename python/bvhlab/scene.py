@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import defaults
 from ._npz import MAX_EXPANSION, SceneFileError
 from .scene_checks import FIELD_CHECKS
 from .scene_file import FORMAT_VERSION, READ_FORMAT_VERSIONS, read_scene, write_scene
@@ -235,8 +236,8 @@ class Scene:
         return (centre - half).min(0), (centre + half).max(0)
 
     def material_table(self) -> np.ndarray:
-        """float32 (M, 6): r, g, b, reflective, transparent, ior."""
-        return np.array([m.as_row() for m in self.materials], np.float32).reshape(-1, 6)
+        """float32 (M, 7): r, g, b, reflective, transparent, ior, holdout (0 or 1)."""
+        return np.array([m.as_row() for m in self.materials], np.float32).reshape(-1, len(defaults.MATERIAL))
 
     # -- files (scene_file.py) ------------------------------------------------------------------
     def save(self, path) -> Path:

@@ -9,17 +9,19 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import _checks
+from . import _checks, defaults
 from ._npz import MAX_EXPANSION, Member, SceneFileError, read_npz, write_npz
 from .scene_parts import Camera, Light, Material, _row3
 
 if TYPE_CHECKING:
     from .scene import Scene
 
-#: Written by Scene.save; 2 added meshes and instances (issue 34). Files of every version listed in
-#: READ_FORMAT_VERSIONS load.
-FORMAT_VERSION = 2
-READ_FORMAT_VERSIONS = (1, 2)
+#: Written by Scene.save; 2 added meshes and instances (issue 34), 3 a material's holdout (a seventh
+#: column of `materials`). Files of every version listed in READ_FORMAT_VERSIONS load.
+FORMAT_VERSION = 3
+READ_FORMAT_VERSIONS = (1, 2, 3)
+#: Columns of a file's materials by format: r, g, b, reflective, transparent, ior (, holdout).
+_MATERIAL_COLUMNS = {1: 6, 2: 6, 3: len(defaults.MATERIAL)}
 
 
 def write_scene(scene: Scene, path) -> Path:
@@ -31,7 +33,7 @@ def write_scene(scene: Scene, path) -> Path:
         "format_version": np.array(FORMAT_VERSION),
         "triangles": scene.triangles,
         "spheres": scene.spheres,
-        "materials": np.array([m.as_row() for m in scene.materials], np.float64).reshape(-1, 6),
+        "materials": np.array([m.as_row() for m in scene.materials], np.float64).reshape(-1, len(defaults.MATERIAL)),
         "tri_material": scene.tri_material,
         "sphere_material": scene.sphere_material,
         "sky": np.array(scene.sky, np.float64),
@@ -66,10 +68,16 @@ def read_scene(cls: type[Scene], path, *, max_expansion: float = MAX_EXPANSION) 
         max_expansion=max_expansion,
         same_length=(("triangles", "tri_material"), ("spheres", "sphere_material")),
     )
-    if int(f["format_version"]) not in READ_FORMAT_VERSIONS:
+    version = int(f["format_version"])
+    if version not in READ_FORMAT_VERSIONS:
         raise SceneFileError(
-            f"{path} is a bvhlab scene of format {int(f['format_version'])}; "
+            f"{path} is a bvhlab scene of format {version}; "
             f"this version reads formats {', '.join(map(str, READ_FORMAT_VERSIONS))}"
+        )
+    columns = f["materials"].shape[1]
+    if columns != _MATERIAL_COLUMNS[version]:
+        raise SceneFileError(
+            f"{path}: materials has {columns} columns; a scene of format {version} has {_MATERIAL_COLUMNS[version]}"
         )
     try:
         cam, light = f.get("camera"), f.get("light")
@@ -98,7 +106,7 @@ _FILE_MEMBERS = {
     "format_version": Member("iu", ()),
     "triangles": Member("f", (None, 3, 3)),
     "spheres": Member("f", (None, 4)),
-    "materials": Member("f", (None, 6)),
+    "materials": Member("f", (None, None)),  # _MATERIAL_COLUMNS by format
     "tri_material": Member("iu", (None,)),
     "sphere_material": Member("iu", (None,)),
     "sky": Member("f", (3,)),
@@ -132,7 +140,10 @@ def _material_of_row(row, path) -> Material:
             stacklevel=3,
         )
         transparent = 1.0 - reflective
-    return Material(tuple(row[:3]), reflective, transparent, row[5])
+    holdout = float(row[6]) if len(row) > 6 else 0.0
+    if holdout not in (0.0, 1.0):
+        raise ValueError(f"a material's holdout must be 0 or 1, got {holdout}")
+    return Material(tuple(row[:3]), reflective, transparent, row[5], holdout=bool(holdout))
 
 
 def _instancing_fields(f: dict) -> dict:

@@ -50,12 +50,15 @@ def _row3(row: np.ndarray, first: int) -> tuple[float, float, float]:
 
 @dataclass(frozen=True)
 class Material:
-    """Whitted material (report §2.1): a colour, a reflective and a transparent factor, an IOR."""
+    """Whitted material (report §2.1): a colour, a reflective and a transparent factor, an IOR; and
+    `holdout` (Cycles' Holdout): a hole in the image where a camera ray meets it (no colour, alpha 0,
+    the sky's depth, on an opaque film too), black to other rays; its shadow stays."""
 
     color: tuple[float, float, float] = defaults.MATERIAL[:3]  # type: ignore[assignment]  # three, by the core
     reflective: float = defaults.MATERIAL[3]
     transparent: float = defaults.MATERIAL[4]
     ior: float = defaults.MATERIAL[5]
+    holdout: bool = bool(defaults.MATERIAL[6])
 
     def __post_init__(self):
         object.__setattr__(self, "color", _radiance("material color", self.color))
@@ -73,9 +76,13 @@ class Material:
         # finite in float32, the tracer's (1e300 was taken, then refused at render time as "NaN")
         if not (math.isfinite(self.ior) and 0 < self.ior <= float(np.finfo(np.float32).max)):
             raise ValueError(f"material ior must be a positive number within float32's range, got {self.ior}")
+        if not isinstance(self.holdout, (bool, np.bool_)):
+            raise TypeError(f"material holdout must be True or False, got {self.holdout!r}")
+        object.__setattr__(self, "holdout", bool(self.holdout))
 
     def as_row(self) -> list[float]:
-        return [*self.color, self.reflective, self.transparent, float(self.ior)]
+        """The material as the core reads it (render_defaults.h kMaterialFloats)."""
+        return [*self.color, self.reflective, self.transparent, float(self.ior), float(self.holdout)]
 
 
 #: Camera projections (core_cpp/include/bvhlab/camera.h): "perspective", "orthographic",

@@ -54,7 +54,8 @@ struct TraceState {
     TraversalCounts counts;  ///< of this sample's primary ray's closest-hit walk (issue 35: secondary and
                              ///< shadow rays are not counted, so a pixel's counters describe the tree
                              ///< seen from the camera, as Bvh.trace_pixel records it)
-    float depth;      ///< view-axis depth of what this sample's primary ray shows (inf: sky)
+    float depth;      ///< view-axis depth of what this sample's primary ray shows (inf: sky or a holdout)
+    bool holdout;     ///< this sample's primary ray met a holdout: no colour and no alpha (Cycles' holdout)
 };
 
 float infinity() { return uintBitsToFloat(0x7f800000u); }
@@ -128,19 +129,22 @@ void start_sample(INOUT(TraceState) s) {
     s.color = vec3(0.0f);
     s.counts = no_counts();
     s.depth = infinity();
+    s.holdout = false;
     // no ray (outside the fisheye's ellipse): a black sample that hit nothing, as in Cycles
     s.phase = dot(s.task.dir, s.task.dir) > 0.0f ? PHASE_START : PHASE_NEXT_RAY;
 }
 
 /// The next ray off the stack becomes the task, or the sample is complete: its colour, counters,
-/// depth and whether its camera ray showed something (a finite depth: a surface or the overlay's
-/// line) go into the pixel's sums (whole samples only, so a stopped render leaves consistent sums).
+/// depth and whether it covers the pixel (its alpha: its camera ray met no holdout, and with
+/// Film ▸ Transparent showed something, a finite depth: a surface or the overlay's line) go into
+/// the pixel's sums (whole samples only, so a stopped render leaves consistent sums).
 void next_ray(INOUT(TraceState) s) {
     if (s.rays == 0u) {
         // a sample with no camera ray (outside the fisheye's ellipse) is opaque black, as Cycles
         // writes it with Film ▸ Transparent (it was alpha 0); its task is that zero ray
         bool no_ray = dot(s.task.dir, s.task.dir) == 0.0f;
-        accumulate_sample(s.pixel, s.color, s.counts, s.depth, s.depth < infinity() || no_ray);
+        bool shows = frame.film_transparent == 0u || s.depth < infinity() || no_ray;
+        accumulate_sample(s.pixel, s.color, s.counts, s.depth, shows && !s.holdout);
         s.sample_index += 1u;
         s.phase = PHASE_SAMPLE;
         return;
@@ -230,10 +234,22 @@ bool start_shadow(INOUT(TraceState) s, Surface f) {
 }
 
 /// The closest hit is known: a shadow ray starts where the light may reach the surface, else the
-/// hit is shaded (returns true: finish_shading now, with no light but the ambient).
+/// hit is shaded (returns true: finish_shading now, with no light but the ambient). A holdout
+/// (Cycles' Holdout: Object ▸ Visibility, a view layer's collection, the Holdout shader) ends the
+/// ray with no colour, and where a camera ray meets it the sample is a hole: uncovered (alpha 0),
+/// with the sky's depth, as Cycles writes both passes there (returns false: the next ray).
 bool shade_or_shadow(INOUT(TraceState) s) {
     s.closest = s.hit;
-    if (start_shadow(s, surface_at(s.task, s.closest))) return false;
+    Surface f = surface_at(s.task, s.closest);
+    if (f.m.transparent_ior.z != 0.0f) {
+        if (s.task.depth == 0u) {
+            s.holdout = true;
+            s.depth = infinity();
+        }
+        s.phase = PHASE_NEXT_RAY;
+        return false;
+    }
+    if (start_shadow(s, f)) return false;
     s.hit.transmission = 0.0f;  // no shadow ray: direct_light adds ambient only
     return true;
 }
@@ -289,5 +305,6 @@ TraceState begin_pixel(uvec2 p, uint first, uint target) {
     s.color = vec3(0.0f);
     s.counts = no_counts();
     s.depth = infinity();
+    s.holdout = false;
     return s;
 }

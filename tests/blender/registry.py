@@ -187,6 +187,7 @@ def _engine() -> Iterator[Check]:
 def _cameras() -> Iterator[Check]:
     import checks_cameras as cameras
     import checks_final as final
+    import checks_holdout as holdout
     import checks_stereo as stereo
 
     for name in cameras.SETTINGS:
@@ -204,6 +205,7 @@ def _cameras() -> Iterator[Check]:
     yield Check(
         "cameras", "multiview_cameras_against_cycles", stereo.check_multiview_cameras_against_cycles, folder=True
     )
+    yield Check("cameras", "holdouts_against_cycles", holdout.check_holdouts_against_cycles, folder=True)
     for check in (
         final.check_depth_of_field_against_cycles,
         final.check_unrendered_settings_are_said,

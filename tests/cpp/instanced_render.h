@@ -21,8 +21,8 @@ struct InstancedRender {
     std::vector<Bvh> trees;
     std::vector<std::uint32_t> blas_of;
     std::vector<Transform> transforms;
-    std::vector<float> materials{0.8f, 0.8f, 0.8f, 0.2f, 0.4f, 1.3f,  // glass-like: refraction sees the normals
-                                 0.9f, 0.3f, 0.2f, 0.0f, 0.0f, 1.0f};
+    std::vector<float> materials{0.8f, 0.8f, 0.8f, 0.2f, 0.4f, 1.3f, 0.0f,  // glass-like: refraction sees the normals
+                                 0.9f, 0.3f, 0.2f, 0.0f, 0.0f, 1.0f, 0.0f};
     RenderTestScene flat;
     Tlas tlas;
     RenderScene two_level;
@@ -57,7 +57,8 @@ struct InstancedRender {
             render_meshes.push_back({&trees[k], meshes[k].view(), mesh_materials[k].data(), nullptr});
         }
         tlas = build_tlas(blases, blas_of, transforms);
-        two_level = make_render_scene(tlas, render_meshes, {materials.data(), materials.size() / 6, nullptr, nullptr});
+        two_level = make_render_scene(tlas, render_meshes,
+                                      {materials.data(), materials.size() / kMaterialFloats, nullptr, nullptr});
         settings.camera = look_at({9, -6, 12}, {9, 8, 0}, {0, 0, 1}, 60);
         settings.light.position = {20, -10, 40};
         settings.max_ray_depth = 4;

@@ -9,21 +9,24 @@
 #include <vector>
 
 #include "bvhlab/render.h"
+#include "bvhlab/render_defaults.h"
 #include "test_scenes.h"
 
 namespace bvhlab::test {
 
 struct RenderTestScene {
     Scene geometry;
-    std::vector<float> materials;  // M×6: r, g, b, reflective, transparent, ior
+    std::vector<float> materials;  // M×kMaterialFloats: r, g, b, reflective, transparent, ior, holdout
     std::vector<std::int32_t> triangle_material, sphere_material;
     Bvh bvh;
     RenderScene render;
     RenderSettings settings;
 
-    std::int32_t material(Vec3 color, float reflective = 0, float transparent = 0, float ior = 1.5f) {
-        for (float v : {color.x, color.y, color.z, reflective, transparent, ior}) materials.push_back(v);
-        return std::int32_t(materials.size() / 6 - 1);
+    std::int32_t material(Vec3 color, float reflective = 0, float transparent = 0, float ior = 1.5f,
+                          bool holdout = false) {
+        for (float v : {color.x, color.y, color.z, reflective, transparent, ior, holdout ? 1.0f : 0.0f})
+            materials.push_back(v);
+        return std::int32_t(materials.size() / kMaterialFloats - 1);
     }
     void sphere(Vec3 center, float radius, std::int32_t m) {
         geometry.add_sphere(center, radius);
@@ -46,7 +49,8 @@ struct RenderTestScene {
     }
     void build(const BuildConfig& config = {}) {
         bvh = build_bvh(geometry.view(), config);
-        MaterialView mv{materials.data(), materials.size() / 6, triangle_material.data(), sphere_material.data()};
+        MaterialView mv{materials.data(), materials.size() / kMaterialFloats, triangle_material.data(),
+                        sphere_material.data()};
         render = make_render_scene(bvh, geometry.view(), mv);
     }
 };

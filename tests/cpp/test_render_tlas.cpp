@@ -65,7 +65,7 @@ TEST(RenderTwoLevel, OneIdentityInstanceIsTheFlatSceneBitForBit) {
     const Tlas tlas = build_tlas({&flat->bvh}, {0}, {Transform{}});
     const RenderScene one = make_render_scene(
         tlas, {{&flat->bvh, flat->geometry.view(), flat->triangle_material.data(), flat->sphere_material.data()}},
-        {flat->materials.data(), flat->materials.size() / 6, nullptr, nullptr});
+        {flat->materials.data(), flat->materials.size() / kMaterialFloats, nullptr, nullptr});
     EXPECT_FALSE(one.two_level());
     for (Traversal t : {Traversal::Stack, Traversal::Stackless}) {
         RenderSettings settings = flat->settings;
@@ -80,7 +80,7 @@ TEST(RenderTwoLevel, RefusesMeshesThatAreNotTheTlas) {
     InstancedPtr p = mixed_instances();
     InstancedRender& s = *p;
     std::vector<RenderMesh> one_mesh{{&s.trees[0], s.meshes[0].view(), s.mesh_materials[0].data(), nullptr}};
-    const MaterialView mv{s.materials.data(), s.materials.size() / 6, nullptr, nullptr};
+    const MaterialView mv{s.materials.data(), s.materials.size() / kMaterialFloats, nullptr, nullptr};
     EXPECT_THROW(make_render_scene(s.tlas, one_mesh, mv), std::invalid_argument);
     std::vector<RenderMesh> swapped{{&s.trees[1], s.meshes[0].view(), nullptr, nullptr},
                                     {&s.trees[0], s.meshes[1].view(), nullptr, nullptr}};

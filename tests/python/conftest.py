@@ -32,7 +32,7 @@ def knot_mesh():
 # -- selection (pyproject's markers): `make check` runs -m "not slow and not full_zip" -----------
 #: Modules that use a Vulkan device, and modules that import bpy or run Blender in a child.
 VULKAN_MODULES = {
-    "test_bench_render", "test_cli", "test_cli_compare", "test_counters", "test_export_instances",
+    "test_bench_render", "test_cli", "test_cli_compare", "test_counters", "test_export_instances", "test_holdout",
     "test_instance_precision", "test_render_api", "test_render_bounded", "test_render_cameras", "test_render_cpu",
     "test_render_precision", "test_render_reentry", "test_render_robust", "test_render_vulkan",
 }  # fmt: skip

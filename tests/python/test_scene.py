@@ -106,7 +106,10 @@ def _bad_files(tmp_path):
         _scene_file(tmp_path, triangles=None).rename(tmp_path / "no_triangles.npz").name: "has no 'triangles'",
         _scene_file(tmp_path, materials=np.zeros((1, 5)))
         .rename(tmp_path / "m5.npz")
-        .name: r"'materials' has shape \(1, 5\); expected \(N, 6\)",
+        .name: "materials has 5 columns; a scene of format 3 has 7",
+        _scene_file(tmp_path, materials=np.array([[1.0, 1.0, 1.0, 0.0, 0.0, 1.5, 0.5]]))
+        .rename(tmp_path / "half_holdout.npz")
+        .name: "holdout must be 0 or 1, got 0.5",
         _scene_file(tmp_path, camera=np.zeros(4))
         .rename(tmp_path / "cam.npz")
         .name: r"a camera row has 10 or 29 numbers, got 4",
@@ -239,8 +242,10 @@ def test_a_file_with_a_material_returning_more_light_loads_with_a_warning(tmp_pa
     path = scene.save(tmp_path / "old.npz")
     with np.load(path) as f:
         arrays = dict(f)
-    arrays["materials"] = np.array([[1.0, 1.0, 1.0, 1.0, 1.0, 1.5]])
+    arrays["materials"] = np.array([[1.0, 1.0, 1.0, 1.0, 1.0, 1.5]])  # format 2's six columns
+    arrays["format_version"] = np.array(2)
     np.savez(path, **arrays)
     with pytest.warns(UserWarning, match="read with transparent 0"):
         loaded = bvhlab.Scene.load(path)
     assert (loaded.materials[0].reflective, loaded.materials[0].transparent) == (1.0, 0.0)
+    assert not loaded.materials[0].holdout

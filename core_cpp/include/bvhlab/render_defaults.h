@@ -3,6 +3,7 @@
 // frames a scene and the light beside it. Exported to Python (bvhlab.defaults), which reads them.
 #pragma once
 #include <array>
+#include <cstddef>
 
 #include "bvhlab/aabb.h"
 #include "bvhlab/vec3.h"
@@ -12,8 +13,11 @@ namespace bvhlab {
 // In double precision, as Python's floats see them; the renderers use them as float.
 /// A soft blue atmosphere (report §2.1: the colour of rays that hit nothing).
 inline constexpr std::array<double, 3> kDefaultSkyRgb{0.55, 0.7, 0.9};
-/// Matte white: r, g, b, reflective, transparent, ior (the layout of a material row).
-inline constexpr std::array<double, 6> kDefaultMaterial{0.8, 0.8, 0.8, 0.0, 0.0, 1.5};
+/// Matte white: r, g, b, reflective, transparent, ior, holdout (the layout of a material row,
+/// kMaterialFloats).
+inline constexpr std::array<double, 7> kDefaultMaterial{0.8, 0.8, 0.8, 0.0, 0.0, 1.5, 0.0};
+/// Floats in a material row (MaterialView, bvhlab.Material.as_row).
+inline constexpr std::size_t kMaterialFloats = kDefaultMaterial.size();
 /// Vertical field of view of the default camera, degrees.
 inline constexpr double kDefaultFovY = 45.0;
 /// Where the camera stands, and what it looks at, when there is nothing to frame.

@@ -81,7 +81,7 @@ public:
         sums_->color[i] = sums_->color[i] + vec4(color, float(counts.box_tests));
         sums_->depth[i] = min(sums_->depth[i], depth);
         sums_->samples[i] = sums_->samples[i] + 1u;
-        if (frame.film_transparent) sums_->covered[i] += covered ? 1u : 0u;
+        if (frame.count_covered) sums_->covered[i] += covered ? 1u : 0u;
         if (Count && frame.count_traversal) add_counts(sums_->counts[i], counts);
     }
 

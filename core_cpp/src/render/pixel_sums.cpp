@@ -19,12 +19,12 @@ std::uint64_t saturating_mul(std::uint64_t a, std::uint64_t b) {
 
 }  // namespace
 
-PixelSums::PixelSums(std::size_t pixels, bool counters, bool film_transparent) {
+PixelSums::PixelSums(std::size_t pixels, bool counters, bool covered_samples) {
     color.assign(pixels, gpu::vec4(0.0f));
     depth.assign(pixels, std::numeric_limits<float>::infinity());
     samples.assign(pixels, 0u);
     if (counters) counts.assign(pixels, gpu::TraversalCounts{});
-    if (film_transparent) covered.assign(pixels, 0u);
+    if (covered_samples) covered.assign(pixels, 0u);
 }
 
 PixelSums::View PixelSums::view() const {
@@ -54,7 +54,7 @@ void resolve_block(const PixelSums::View& sums, const gpu::FrameParams& frame, c
     gpu::Palette palette;
     const bool heatmap = frame.mode == gpu::MODE_HEATMAP, need_heat = out.heat || (out.color && heatmap);
     // the covered samples are read only for a shaded colour image (resolve checks they are there)
-    const bool transparent = frame.film_transparent && !heatmap && out.color;
+    const bool transparent = frame.count_covered && !heatmap && out.color;
     auto store = [](float* image, std::size_t i, const gpu::vec4& v) {
         float* c = image + 4 * i;
         c[0] = v.x, c[1] = v.y, c[2] = v.z, c[3] = v.w;
@@ -88,8 +88,8 @@ void resolve(const PixelSums::View& sums, const gpu::FrameParams& frame, const R
     const std::size_t pixels = std::size_t(frame.width) * frame.height;
     if (pixels > sums.pixels) throw std::logic_error("resolve: fewer sums than the frame's pixels");
     if (out.depth && !sums.depth) throw std::logic_error("resolve: a depth image without the depth sums");
-    if (out.color && frame.film_transparent && !sums.covered)
-        throw std::logic_error("resolve: a transparent film without the covered samples");
+    if (out.color && frame.count_covered && !sums.covered)
+        throw std::logic_error("resolve: an image with alpha without the covered samples");
     const std::size_t blocks = (pixels + kResolveBlock - 1) / kResolveBlock;
     ThreadPool::shared().run(blocks, threads, [&](std::size_t b, unsigned) {
         resolve_block(sums, frame, out, b * kResolveBlock, std::min(pixels, (b + 1) * kResolveBlock));

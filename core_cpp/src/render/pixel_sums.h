@@ -17,13 +17,14 @@ struct PixelSums {
     /// Traversal counters summed over the samples (issue 35); empty unless the render keeps them
     /// (RenderSettings::traversal_counters: 20 bytes a pixel).
     BigVector<gpu::TraversalCounts> counts;
-    /// Samples whose camera ray showed something (a surface or the overlay's line): the alpha of
-    /// RenderSettings::film_transparent; empty unless the render asks for it.
+    /// Samples whose camera ray showed something but a holdout (with RenderSettings::
+    /// film_transparent: a surface or the overlay's line), the alpha; empty unless the frame counts
+    /// them (FrameParams::count_covered: a transparent film, or a scene with a holdout).
     BigVector<std::uint32_t> covered;
 
     /// Zero sums for `pixels` pixels, with counters where `counters` and covered samples where
-    /// `film_transparent` (std::bad_alloc if they do not fit).
-    explicit PixelSums(std::size_t pixels = 0, bool counters = false, bool film_transparent = false);
+    /// `covered_samples` (std::bad_alloc if they do not fit).
+    explicit PixelSums(std::size_t pixels = 0, bool counters = false, bool covered_samples = false);
 
     struct View;
     View view() const;
@@ -39,7 +40,7 @@ struct PixelSums::View {
     const std::uint32_t* samples = nullptr;
     const gpu::TraversalCounts* counts = nullptr;  ///< null where the render keeps no counters
     std::size_t pixels = 0;
-    const std::uint32_t* covered = nullptr;  ///< null where the film is not transparent
+    const std::uint32_t* covered = nullptr;  ///< null where the frame counts no alpha (count_covered)
 };
 
 /// `sum` += `c`, counter by counter.
@@ -50,8 +51,8 @@ inline void add_counts(gpu::TraversalCounts& sum, const gpu::TraversalCounts& c)
 
 /// Colour (or heat colours), depth and cost of each pixel from its sums: the average of its
 /// samples; a pixel without samples is transparent black with depth kNoDepth and cost 0. With
-/// frame.film_transparent, a shaded pixel's alpha is its covered samples' share (its colour is
-/// premultiplied already: the samples that showed nothing added none). On up to
+/// frame.count_covered, a shaded pixel's alpha is its covered samples' share (its colour is
+/// premultiplied already: the samples that showed nothing, or a holdout, added none). On up to
 /// `threads` threads of the shared pool (0: every hardware thread), in blocks of pixels.
 void resolve(const PixelSums::View& sums, const gpu::FrameParams& frame, const RenderImages& out, unsigned threads = 0);
 

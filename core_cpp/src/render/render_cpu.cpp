@@ -49,7 +49,7 @@ public:
         if (settings.traversal == Traversal::Wide) prepare_wide(wide);
         overlay_ = rasterize_overlay(scene, frame_);
         sums_ = PixelSums(std::size_t(settings.width) * settings.height, settings.traversal_counters,
-                          settings.film_transparent);
+                          frame_.count_covered != 0);
         timings_.overlay_ms = ms_since(start);
         timings_.device = "CPU reference (" + std::to_string(threads_) + (threads_ == 1 ? " thread" : " threads") +
                           walk_note(settings) + ")";

@@ -31,7 +31,7 @@ std::uint32_t material_index(const std::int32_t* table, std::size_t i, std::size
 namespace {
 template <class T>
 gpu::GpuMaterial gpu_material(const T* m) {
-    return {{float(m[0]), float(m[1]), float(m[2]), float(m[3])}, {float(m[4]), float(m[5]), 0, 0}};
+    return {{float(m[0]), float(m[1]), float(m[2]), float(m[3])}, {float(m[4]), float(m[5]), float(m[6]), 0}};
 }
 
 }  // namespace
@@ -39,16 +39,23 @@ gpu::GpuMaterial gpu_material(const T* m) {
 std::vector<gpu::GpuMaterial> gpu_materials(const MaterialView& mv) {
     std::vector<gpu::GpuMaterial> out;
     for (std::size_t i = 0; i < mv.material_count; ++i) {
-        const float* m = mv.materials + 6 * i;
-        for (int k = 0; k < 6; ++k)
+        const float* m = mv.materials + kMaterialFloats * i;
+        for (std::size_t k = 0; k < kMaterialFloats; ++k)
             if (!std::isfinite(m[k])) throw std::invalid_argument("material " + std::to_string(i) + " has a NaN value");
         if (m[3] < 0 || m[3] > 1 || m[4] < 0 || m[4] > 1 || m[5] <= 0)
             throw std::invalid_argument("material " + std::to_string(i) +
                                         ": reflective and transparent must be in [0, 1] and ior > 0");
+        if (m[6] != 0 && m[6] != 1)
+            throw std::invalid_argument("material " + std::to_string(i) + ": holdout must be 0 or 1");
         out.push_back(gpu_material(m));
     }
     if (out.empty()) out.push_back(gpu_material(kDefaultMaterial.data()));
     return out;
+}
+
+bool any_holdout(const std::vector<gpu::GpuMaterial>& materials) {
+    return std::any_of(materials.begin(), materials.end(),
+                       [](const gpu::GpuMaterial& m) { return m.transparent_ior.z != 0.0f; });
 }
 
 void check_tree_matches(const Bvh& bvh, const GeometryView& g) {
@@ -86,6 +93,7 @@ RenderScene make_render_scene(const Bvh& bvh, const GeometryView& g, const Mater
     RenderScene s;
     s.bvh = &bvh;
     s.materials = gpu_materials(mv);
+    s.holdout = any_holdout(s.materials);
     const std::size_t n_materials = mv.material_count ? mv.material_count : 1;
     s.triangles.resize(g.triangle_count);
     for (std::size_t i = 0; i < g.triangle_count; ++i)
@@ -181,6 +189,7 @@ gpu::FrameParams make_frame_params(const RenderScene& scene, const RenderSetting
     f.instance_count = std::uint32_t(scene.instances.size());
     f.count_traversal = s.traversal_counters ? 1u : 0u;
     f.film_transparent = s.film_transparent ? 1u : 0u;
+    f.count_covered = s.film_transparent || scene.holdout ? 1u : 0u;
     return f;
 }
 

@@ -120,13 +120,13 @@ std::uint32_t TraceSlots::failed() const {
     return n[1];
 }
 
-SumBuffers::SumBuffers(const Device& device, std::size_t pixels, bool counters, bool film_transparent)
+SumBuffers::SumBuffers(const Device& device, std::size_t pixels, bool counters, bool covered_samples)
     : pixels(pixels),
       color(shader_array(device, pixels * sizeof(gpu::vec4))),
       depth(shader_array(device, pixels * sizeof(float))),
       samples(shader_array(device, pixels * sizeof(std::uint32_t))) {
     if (counters) counts = shader_array(device, pixels * sizeof(gpu::TraversalCounts));
-    if (film_transparent) covered = shader_array(device, pixels * sizeof(std::uint32_t));
+    if (covered_samples) covered = shader_array(device, pixels * sizeof(std::uint32_t));
 }
 
 void SumBuffers::address(gpu::FrameParams& frame) const {

@@ -61,10 +61,10 @@ private:
 };
 
 /// A render's running sums per pixel (pixel_sums.h): colour + box tests, depth, sample count, the
-/// traversal counters where `counters` and the covered samples where `film_transparent` (no buffer
-/// otherwise).
+/// traversal counters where `counters` and the covered samples where `covered_samples` (no buffer
+/// otherwise: FrameParams::count_covered).
 struct SumBuffers {
-    SumBuffers(const Device& device, std::size_t pixels, bool counters, bool film_transparent);
+    SumBuffers(const Device& device, std::size_t pixels, bool counters, bool covered_samples);
     void address(gpu::FrameParams& frame) const;
 
     std::size_t pixels;

@@ -34,6 +34,7 @@ SceneBuffers::SceneBuffers(const Device& device, CommandRunner& runner, const Re
     summary_.ref_count = scene.ref_count;
     summary_.stack_entries = scene.stack_entries;
     summary_.walk_steps = scene.walk_steps;
+    summary_.holdout = scene.holdout;
     summary_.instances.resize(scene.instances.size());  // make_frame_params counts them (never read)
 }
 

@@ -57,7 +57,7 @@ public:
         std::lock_guard lock(core_->mutex);
         frame_.overlay_line_width = core_->line_width(settings);  // what this device draws
         sums_.emplace(core_->device, std::size_t(settings.width) * settings.height, settings.traversal_counters,
-                      settings.film_transparent);
+                      frame_.count_covered != 0);
         sums_->address(frame_);
         core_->runner.run([&](VkCommandBuffer cmd) {
             record_fill(core_->fn, cmd, sums_->color, 0u);

@@ -149,7 +149,8 @@ class LiveScene:
         items: dict[tuple, Item] = {}
         fresh: dict[int, MeshData] = {}  # meshes read in this sync, by data address
         by_data: dict[int, MeshData] = {}
-        parts: dict[tuple, tuple] = {}  # (shown object's name, data address) → (sphere, slot table)
+        parts: dict[tuple, tuple] = {}  # (shown object's name, data address, holdout) → (sphere, slot table)
+        holdouts: dict = {}  # owner (original) → whether it is a holdout in the view layer
         addresses: dict = {}  # evaluated mesh (hashed by its address) → its address: as_pointer once
         report = SyncReport()
         for entry in instances_in_scope(depsgraph, view_layer, self.scope, GEOMETRY_TYPES):
@@ -157,7 +158,11 @@ class LiveScene:
             old = self._items.get(key)
             changed = dirty.everything or dirty.geometry_of(obj, key)
             data = _address(obj.data, addresses) if entry.type == "MESH" else None  # None: a mesh of its own
-            part = parts.get((key[1], data)) if data is not None else None
+            # a holdout as Cycles decides it: of the object, or of the object instancing it
+            holdout = holdouts.get(entry.owner)
+            if holdout is None:
+                holdout = holdouts[entry.owner] = bool(entry.owner.holdout_get(view_layer=view_layer))
+            part = parts.get((key[1], data, holdout)) if data is not None else None
             if part is None:
                 part = (entry.type == "MESH" and is_analytic_sphere(obj), None)
             if part[0]:
@@ -167,7 +172,7 @@ class LiveScene:
                 else:
                     assert old.bounds is not None  # a sphere keeps its object-space bounds
                     bounds = old.bounds
-                item = Item(None, bounds, entry.matrix, None, table.slot_indices(obj), key)
+                item = Item(None, bounds, entry.matrix, None, table.slot_indices(obj, holdout=holdout), key)
             else:
                 mesh = fresh.get(data) if data is not None else None
                 if mesh is None:
@@ -181,9 +186,9 @@ class LiveScene:
                     by_data[data] = mesh
                 slots = part[1]
                 if slots is None and mesh.triangle_count:
-                    slots = table.slot_indices(obj, data)
+                    slots = table.slot_indices(obj, data, holdout)
                     if data is not None:
-                        parts[(key[1], data)] = (False, slots)
+                        parts[(key[1], data, holdout)] = (False, slots)
                 item = Item(mesh, None, entry.matrix, data, slots, key)
             item.origin = (key[0], entry.owner, key[1], entry.source)
             items[key] = item

@@ -14,7 +14,7 @@ from .errors import ExportWarning
 def gather_material(material) -> Material:
     """Read the shader that feeds the material's output: Principled BSDF gives base colour,
     metallic → reflective, transmission weight → transparent, IOR; Diffuse, Glossy, Glass,
-    Refraction and Emission map to the obvious Whitted material. Anything else falls back to the
+    Refraction and Emission map to the obvious Whitted material, Holdout to a holdout. Anything else falls back to the
     viewport display colour and metallic, with an ExportWarning. `None` (an empty slot) is matte grey."""
     if material is None:
         return Material()
@@ -100,6 +100,11 @@ def _glass(node, material) -> Material:
     )
 
 
+def _holdout(node, material) -> Material:
+    # Cycles' Holdout shader: a hole in the image (alpha 0), black to other rays (Material.holdout)
+    return Material((0.0, 0.0, 0.0), holdout=True)
+
+
 _READERS = {
     "ShaderNodeBsdfPrincipled": _principled,
     "ShaderNodeBsdfDiffuse": _diffuse,
@@ -108,4 +113,5 @@ _READERS = {
     "ShaderNodeBsdfAnisotropic": _glossy,
     "ShaderNodeBsdfGlass": _glass,
     "ShaderNodeBsdfRefraction": _glass,
+    "ShaderNodeHoldout": _holdout,
 }
