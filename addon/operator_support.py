@@ -27,7 +27,7 @@ def run_reported(operator, context, work, quiet: tuple = ()) -> set[str]:
         try:
             result = work()
         except Exception as error:  # every failure is reported, none raised (Blender conventions)
-            result, failure = {"CANCELLED"}, _describe(error)
+            result, failure = {"CANCELLED"}, describe_error(error)
     for warning in caught:
         if not issubclass(warning.category, ExportWarning):  # not ours to report: show it as usual
             warnings.showwarning(warning.message, warning.category, warning.filename, warning.lineno)
@@ -40,7 +40,9 @@ def run_reported(operator, context, work, quiet: tuple = ()) -> set[str]:
     return result
 
 
-def _describe(error: Exception) -> str:
+def describe_error(error: Exception) -> str:
+    """What an operator (or F12) reports of an exception: bad input's own message; a bug's type and
+    message, its traceback printed to the console."""
     import bvhlab
 
     if isinstance(error, bvhlab.VulkanUnavailable):

@@ -67,6 +67,10 @@ class FinalRender:
                 self.report = self.live.sync(depsgraph)
             except ExportError as error:
                 self.error = str(error)
+            except Exception as error:  # a bug: said in render(), never raised into Blender's update
+                from ..operator_support import describe_error
+
+                self.error = describe_error(error)
         if self.live.light_distance is not None:
             _JOB_LIGHT.setdefault(name, self.live.light_distance)
         self.notes = [str(w.message) for w in caught if issubclass(w.category, ExportWarning)]

@@ -35,13 +35,14 @@ def unrendered_features(depsgraph) -> list[str]:
     render = depsgraph.scene.render
     found = _Found()
     # what renders (a render depsgraph leaves out the rest): the objects and what they instance (a
-    # collection instanced, geometry nodes' output), each object once
+    # collection instanced, geometry nodes' output), each object once for each kind of geometry it
+    # shows (a mesh object whose geometry nodes put out points shows a mesh and a point cloud)
     seen = set()
     for instance in depsgraph.object_instances:
         obj = instance.object  # valid until the iterator moves on: looked at now
         original = obj.original
-        if original not in seen:
-            seen.add(original)
+        if (original, obj.type) not in seen:
+            seen.add((original, obj.type))
             found.look_at(obj, original.name)
     limited, unread, effects, strands = found.limited, found.unread, found.effects, found.strands
     notes = []
@@ -82,19 +83,26 @@ class _Found:
         self.strands: list[str] = []
 
     def look_at(self, obj, name: str) -> None:
+        """An object or instance of kind obj.type whose original is named `name` (asked once for each
+        kind an original shows: each name is kept once in each list)."""
         kind = obj.type
         if kind in UNREAD_TYPES:
-            self.unread.setdefault(kind, []).append(name)
+            _add(self.unread.setdefault(kind, []), name)
             return
         if kind not in self.shapes:
             return
         if not all(getattr(obj, flag, True) for flag in RAY_VISIBILITY):
-            self.limited.append(name)
+            _add(self.limited, name)
         for flag in OBJECT_EFFECTS:
             if getattr(obj, flag, False):
-                self.effects.setdefault(flag, []).append(name)
+                _add(self.effects.setdefault(flag, []), name)
         if len(obj.particle_systems) and any(_renders_strands(m) for m in obj.modifiers):
-            self.strands.append(name)
+            _add(self.strands, name)
+
+
+def _add(names: list[str], name: str) -> None:
+    if name not in names:
+        names.append(name)
 
 
 def _renders_strands(modifier) -> bool:

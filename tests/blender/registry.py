@@ -188,6 +188,7 @@ def _cameras() -> Iterator[Check]:
     import checks_cameras as cameras
     import checks_final as final
     import checks_holdout as holdout
+    import checks_node_outputs as node_outputs
     import checks_stereo as stereo
 
     for name in cameras.SETTINGS:
@@ -206,6 +207,12 @@ def _cameras() -> Iterator[Check]:
         "cameras", "multiview_cameras_against_cycles", stereo.check_multiview_cameras_against_cycles, folder=True
     )
     yield Check("cameras", "holdouts_against_cycles", holdout.check_holdouts_against_cycles, folder=True)
+    yield Check(
+        "cameras",
+        "node_curves_and_points_beside_a_mesh",
+        node_outputs.check_node_curves_and_points_beside_a_mesh,
+        folder=True,
+    )
     for check in (
         final.check_depth_of_field_against_cycles,
         final.check_unrendered_settings_are_said,

@@ -85,7 +85,9 @@ def read_mesh(obj, name: str) -> MeshData:
         return EMPTY_MESH
     mesh = obj.to_mesh()
     try:
-        return _read(mesh, name)
+        # None for a curve that geometry nodes put out on a mesh object (an instance of type CURVE,
+        # with no surface): nothing to read, and Cycles renders nothing of it either
+        return _read(mesh, name) if mesh is not None else EMPTY_MESH
     finally:
         obj.to_mesh_clear()
 
