@@ -68,6 +68,11 @@ class BVHLAB_RE_whitted(bpy.types.RenderEngine):
         except ExportError as error:
             self._viewport.set_error(f"bvhlab: {error}")
             return
+        except Exception as error:  # a bug: shown in the viewport, never raised into Blender's update
+            from ..operator_support import describe_error
+
+            self._viewport.set_error(f"bvhlab: {describe_error(error)}")
+            return
         # an instanced scene is traced two-level, with the tree the sidebar and F12 use (issue 34)
         self._viewport.set_scene(self._live.scene, report)
 
