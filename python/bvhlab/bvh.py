@@ -57,8 +57,9 @@ def build(
     settings are method="sah", bins=12, bin_bounds="centroids", axis="largest", max_leaf_size=1,
     sah_block=1. `threads` = 0 uses every core; the tree never depends on it.
     Bad input raises TypeError or ValueError; a vertex or sphere outside ±MAX_COORDINATE (2^40 ≈
-    1.1e12, where float32 ray tests would overflow) and a sphere radius below MIN_RADIUS (2^-60,
-    where its square underflows) are bad input.
+    1.1e12, where float32 ray tests would overflow), a sphere radius below MIN_RADIUS (2^-60,
+    where its square underflows) and triangles in a scene less than 2^-32 (2.3e-10) units across
+    (where the triangle test's products underflow) are bad input.
 
     `progress(fraction)` is called on this thread now and then, last with 1.0; its result is taken
     by its truth value (None means go on), and a false one cancels the build (BuildCancelled),

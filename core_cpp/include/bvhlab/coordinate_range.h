@@ -25,6 +25,14 @@
 // Spheres: a radius of at least kMinRadius = 2^-60 keeps r² ≥ 2^-120 a normal float. A smaller
 // one underflows: c = |oc|² - r² then rounds to 0 for a ray passing ~1e-37 away, and the quadratic
 // counts that as a hit (the fuzzer found a 7e-41 sphere "hit" from 4e-37 away).
+// Small scenes: the watertight triangle test (geometry.glsl hit_triangle, the wide walks') makes
+// t·det as a sum of products of three coordinates relative to the ray's origin, which shrink like
+// the cube of the scene's size s: below s ≈ 2^-42 they leave float32's normal range, lose their
+// bits and then flush to zero (random triangles at 1e-13 gave 5 of 5,000 rays the wrong triangle,
+// at 1e-14 1,865, at 1e-15 all but 2 missed). A tree whose primitives' box spans less than
+// kMinExtent = 2^-32 on its largest side is refused when it holds triangles (spheres alone keep
+// working down to kMinRadius); at 2^-32, triangles down to 2^-15 of the scene's size keep every
+// product normal. A box of no extent (every triangle at one point: none can be hit) is allowed.
 // Directions: the rescaled t is t' · 2^-e where d's largest component is f·2^e, f in [0.5, 1).
 // With that component in [kMinDirection, kMaxDirection] = [2^-80, 2^80], t ≤ 2^43 · 2^80 = 2^123
 // cannot overflow (below about 2^-84 it could), and a hit farther than 2^-45 from the origin of
@@ -45,6 +53,7 @@ inline constexpr float kMaxCoordinate = 0x1p40f;  ///< |x| ≤ 2^40 ≈ 1.0995e1
 inline constexpr float kMinDirection = 0x1p-80f;  ///< smallest allowed largest |component| of a direction
 inline constexpr float kMaxDirection = 0x1p80f;   ///< largest allowed largest |component| of a direction
 inline constexpr float kMinRadius = 0x1p-60f;     ///< smallest sphere radius (≈ 8.7e-19)
+inline constexpr float kMinExtent = 0x1p-32f;     ///< smallest largest side of a tree's box with triangles (≈ 2.3e-10)
 
 // The two rules below are written with `&` rather than `&&` so that they compile without branches
 // (a NaN fails every comparison; |x| <= FLT_MAX is x finite): check_rays runs them on every ray of

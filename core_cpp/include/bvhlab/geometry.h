@@ -29,9 +29,15 @@ struct GeometryView {
 
 /// Throws std::invalid_argument naming the first bad primitive: a NaN or infinite coordinate, a
 /// coordinate (or sphere extent) outside ±kMaxCoordinate (coordinate_range.h), a radius that is
-/// not a finite number of at least kMinRadius, or more primitives than a reference can index.
+/// not a finite number of at least kMinRadius, or more primitives than a reference can index; and
+/// triangles in a scene too small for the triangle test (check_extent).
 /// Degenerate (zero-area) triangles are valid: they are built into the tree and never hit.
 void validate(const GeometryView& geometry);
+
+/// Throws std::invalid_argument when a tree holding `triangle_count` > 0 triangles has a box
+/// `box` (of all its primitives) whose largest side is above 0 and below kMinExtent
+/// (coordinate_range.h: the triangle test would lose hits).
+void check_extent(const Aabb& box, std::size_t triangle_count);
 
 /// The box of primitive `ref` (a triangle's three vertices, a sphere's centre ± radius): the box
 /// make_prim_refs gives its reference. The one definition (the saved-tree checks and the tests use it).

@@ -97,6 +97,18 @@ void validate_counts(const GeometryView& g) {
 
 }  // namespace
 
+void check_extent(const Aabb& box, std::size_t triangle_count) {
+    const Vec3 side = box.hi - box.lo;
+    const float extent = std::max(side.x, std::max(side.y, side.z));
+    if (triangle_count == 0 || !(extent > 0.0f) || extent >= kMinExtent) return;
+    char text[320];
+    std::snprintf(text, sizeof text,
+                  "the scene spans only %.3g units (the largest side of its primitives' box): below 2^-32 "
+                  "(%.3g) float32's triangle test loses hits (its products underflow); scale the scene up",
+                  double(extent), double(kMinExtent));
+    throw std::invalid_argument(text);
+}
+
 void validate(const GeometryView& g) {
     validate_counts(g);
     for (std::size_t i = 0; i < g.triangle_count; ++i)
@@ -105,6 +117,11 @@ void validate(const GeometryView& g) {
         for (int c = 0; c < 3; ++c)
             if (!in_coordinate_range(g.vertex(i, c))) throw_far_triangle(g);
     validate_spheres(g);
+    Aabb box;
+    for (std::size_t i = 0; i < g.primitive_count(); ++i)
+        box.grow(prim_box(
+            g, i < g.triangle_count ? std::uint32_t(i) : gpu::REF_SPHERE_BIT | std::uint32_t(i - g.triangle_count)));
+    check_extent(box, g.triangle_count);
 }
 
 Aabb prim_box(const GeometryView& g, std::uint32_t ref) {
@@ -262,6 +279,7 @@ BigVector<PrimRef> make_prim_refs(const GeometryView& g, unsigned threads, PrimR
         r = sphere_ref(g, i);
         all.grow(r.lo4(), r.hi4());
     }
+    if (!refs.empty()) check_extent(to_aabb(all.lo, all.hi), g.triangle_count);
     if (summary) {
         summary->fingerprint = finish_fingerprint(g, all.sum + sphere_terms(g));
         if (!refs.empty()) {  // as bounds_of has them: the centroids are halved twice-centroids

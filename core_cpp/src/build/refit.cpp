@@ -163,10 +163,12 @@ Bvh refitted(const Bvh& old, const GeometryView& geometry, unsigned threads) {
     out.refs = BigVector<std::uint32_t>(old.refs.size());
     Checks checks;
     refit_pass(old, geometry, out.nodes.data(), out.refs.data(), out.prims.data(), checks);
-    if (checks.bad(out.nodes.empty() ? Aabb{Vec3{0.0f}, Vec3{0.0f}} : node_box(out.nodes[0]))) {
+    const Aabb root = out.nodes.empty() ? Aabb{Vec3{0.0f}, Vec3{0.0f}} : node_box(out.nodes[0]);
+    if (checks.bad(root)) {
         validate(geometry);  // names the first bad primitive
         throw std::invalid_argument("refit: the geometry has a coordinate out of range");
     }
+    check_extent(root, geometry.triangle_count);
     out.depths = old.depths;
     out.triangle_count = old.triangle_count, out.sphere_count = old.sphere_count;
     out.config = old.config;
