@@ -158,3 +158,68 @@ def test_cli_builds_a_mesh_file_and_refuses_a_hostile_one(tmp_path, source, caps
     assert cli.main(["build", str(bad)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("bvhlab build: error:") and str(bad) in err[0]
+
+
+def _glb_with_json(glb: bytes, doc: dict) -> bytes:
+    """A GLB with its JSON chunk replaced by `doc` (spaces to a multiple of 4 bytes), its binary
+    chunk kept."""
+    old = struct.unpack_from("<I", glb, 12)[0]
+    text = json.dumps(doc).encode()
+    text += b" " * (-len(text) % 4)
+    rest = glb[20 + old :]
+    chunk = struct.pack("<I4s", len(text), b"JSON") + text
+    return struct.pack("<4sII", b"glTF", 2, 12 + len(chunk) + len(rest)) + chunk + rest
+
+
+def _camera_nodes(doc: dict) -> dict:
+    """The mesh twice: on a node that also holds a camera (moved 5 in x), and below a camera node
+    (moved 3 in z), as a mesh parented to a camera; trimesh alone left out both."""
+    doc["cameras"] = [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1}}]
+    doc["nodes"] = [
+        {"mesh": 0, "camera": 0, "translation": [5, 0, 0]},
+        {"camera": 0, "translation": [0, 0, 3], "children": [2]},
+        {"mesh": 0},
+    ]
+    doc["scenes"] = [{"nodes": [0, 1]}]
+    doc["scene"] = 0
+    return doc
+
+
+@pytest.mark.parametrize("kind", ["gltf", "glb"])
+def test_meshes_on_and_below_camera_nodes_are_read(tmp_path, source, kind):
+    """The probe's case: a mesh on a camera node was dropped silently (2 of 4 triangles loaded),
+    one parented to a camera failed with "No path from world->1"."""
+    path = tmp_path / f"sphere.{kind}"
+    source.export(path)  # a .gltf's buffer is written beside it: found when the file is mended
+    if kind == "gltf":
+        path.write_text(json.dumps(_camera_nodes(json.loads(path.read_text()))))
+    else:
+        glb = path.read_bytes()
+        doc = json.loads(glb[20 : 20 + struct.unpack_from("<I", glb, 12)[0]])
+        path.write_bytes(_glb_with_json(glb, _camera_nodes(doc)))
+    scene = load_mesh_file(path)
+    assert len(scene.triangles) == 2 * len(source.faces)
+    lo, hi = scene.bounds()
+    np.testing.assert_allclose(lo, source.bounds[0], atol=1e-5)  # the copy below the camera: z + 3
+    np.testing.assert_allclose(hi, source.bounds[1] + (5, 0, 3), atol=1e-5)
+
+
+def test_morph_targets_shown_with_a_weight_are_refused(tmp_path, source):
+    """trimesh reads the base shape: a morph target with weight 1 (the mesh's or the node's) gave
+    a shape half the size without a word; at weight 0 the base shape is what is shown."""
+    path = tmp_path / "sphere.gltf"
+    source.export(path)
+    doc = json.loads(path.read_text())
+    position = doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"]
+    doc["meshes"][0]["primitives"][0]["targets"] = [{"POSITION": position}]
+    for weights, node_weights in (([1.0], None), ([0.0], [0.5])):
+        doc["meshes"][0]["weights"] = weights
+        doc["nodes"][0].pop("weights", None)
+        if node_weights is not None:
+            doc["nodes"][0]["weights"] = node_weights
+        path.write_text(json.dumps(doc))
+        with pytest.raises(SceneFileError, match="morph target weights .* bvhlab does not apply"):
+            load_mesh_file(path)
+    doc["nodes"][0]["weights"] = [0.0]
+    path.write_text(json.dumps(doc))
+    assert len(load_mesh_file(path).triangles) == len(source.faces)

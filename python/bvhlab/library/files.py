@@ -11,6 +11,7 @@ elements than the file holds) raises SceneFileError (a ValueError) naming the fi
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 import numpy as np
@@ -71,9 +72,13 @@ def _triangles(path: Path, kind: str) -> np.ndarray:
         import trimesh
     except ImportError:
         raise SceneFileError(f"{path}: reading {kind} files needs trimesh (pip install 'bvhlab[files]')") from None
-    kind = check_gltf(path)  # "gltf" or "glb" by the file's contents
+    kind, mended = check_gltf(path)  # "gltf" or "glb" by the file's contents; mended: without cameras
     try:
-        mesh = trimesh.load(str(path), file_type=kind, force="mesh", process=False)
+        if mended is None:
+            mesh = trimesh.load(str(path), file_type=kind, force="mesh", process=False)
+        else:  # a .gltf's buffers are found beside the file
+            resolver = trimesh.resolvers.FilePathResolver(str(path))
+            mesh = trimesh.load(io.BytesIO(mended), file_type=kind, force="mesh", process=False, resolver=resolver)
         vertices = np.asarray(getattr(mesh, "vertices", np.zeros((0, 3))), np.float64)
         faces = getattr(mesh, "faces", None)  # a point cloud has none
         faces = np.zeros((0, 3), np.int64) if faces is None else np.asarray(faces)

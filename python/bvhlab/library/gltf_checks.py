@@ -2,8 +2,11 @@
 it reads it: extensions the file requires that change its geometry or that bvhlab does not know
 (Draco and meshopt compression, read as placeholder zeros), GPU instancing (its instances lost),
 sparse accessors (their values ignored), normalized quantized positions (read unscaled), triangle
-fans (read as no triangles), skinned meshes (placed by their node, which skinning ignores); and a
-file that is not glTF at all (not JSON, empty) named as such rather than as a missing file."""
+fans (read as no triangles), skinned meshes (placed by their node, which skinning ignores), morph
+targets given weight (read in their base shape); and a file that is not glTF at all (not JSON,
+empty) named as such rather than as a missing file. One thing it reads wrong is mended instead
+(`without_cameras`): trimesh skips the first node with a camera, and the mesh on it and the nodes
+below it with it (a mesh parented to a camera), so trimesh is given the file without its cameras."""
 
 from __future__ import annotations
 
@@ -36,9 +39,11 @@ def _json_text(path: Path, any_suffix: bool = True) -> tuple[str, bytes] | None:
         return "gltf", head + f.read()
 
 
-def check_gltf(path: Path) -> str:
-    """ "glb" or "gltf", by the file's contents (a GLB named .gltf is read as GLB); raises
-    SceneFileError for a file bvhlab would read wrong (see the module's docstring)."""
+def check_gltf(path: Path) -> tuple[str, bytes | None]:
+    """("glb" or "gltf" by the file's contents (a GLB named .gltf is read as GLB), the file as
+    trimesh should read it: None for the file itself, else its bytes without cameras
+    (without_cameras)); raises SceneFileError for a file bvhlab would read wrong (see the module's
+    docstring)."""
     found = _json_text(path)
     assert found is not None  # every suffix is read
     kind, text = found
@@ -52,7 +57,29 @@ def check_gltf(path: Path) -> str:
         _check(path, doc)
     except (TypeError, AttributeError, KeyError, IndexError) as e:  # a value of the wrong JSON type
         raise SceneFileError(f"{path} is not glTF: {type(e).__name__}: {e}") from None
-    return kind
+    return kind, without_cameras(path, kind, doc, len(text))
+
+
+def without_cameras(path: Path, kind: str, doc: dict, json_bytes: int) -> bytes | None:
+    """The file with no node holding a camera (None where none does): trimesh 5 takes the first
+    node with a camera for the camera alone, leaving out the mesh on that node and every node
+    below it ("No path from world->1" where a mesh is parented to a camera). A camera places no
+    geometry, so bvhlab reads the file without them: a .gltf's JSON (its buffers found beside it
+    by the caller's resolver), or a GLB with its JSON chunk replaced and its binary chunk kept."""
+    nodes = _list(doc, "nodes")
+    if not any("camera" in node for node in nodes):
+        return None
+    for node in nodes:
+        node.pop("camera", None)
+    text = json.dumps(doc).encode()
+    if kind == "gltf":
+        return text
+    text += b" " * (-len(text) % 4)  # a GLB chunk is padded to 4 bytes, JSON with spaces
+    with open(path, "rb") as f:
+        f.seek(20 + json_bytes)
+        rest = f.read()  # the chunks after the JSON chunk (the binary buffer), as they are
+    chunk = struct.pack("<I4s", len(text), b"JSON") + text
+    return struct.pack("<4sII", b"glTF", 2, 12 + len(chunk) + len(rest)) + chunk + rest
 
 
 def _check(path: Path, doc: dict) -> None:
@@ -72,6 +99,7 @@ def _check(path: Path, doc: dict) -> None:
             f"{path}: node {skinned[0]} is a skinned mesh, which bvhlab does not read (pose it and "
             "export it without its skin, or apply the armature)"
         )
+    _check_morph_weights(path, doc)
     if _list(doc, "meshes") and not _list(doc, "scenes"):  # trimesh read no triangles: "0 faces"
         raise SceneFileError(f"{path} has meshes but no scenes that place them (glTF 2.0: nothing to show)")
     accessors = _list(doc, "accessors")
@@ -86,6 +114,26 @@ def _check(path: Path, doc: dict) -> None:
                 raise SceneFileError(f"{where}: normalized positions (KHR_mesh_quantization) are not read")
             if "sparse" in position or "sparse" in indices:
                 raise SceneFileError(f"{where}: sparse accessors are not read")
+
+
+def _check_morph_weights(path: Path, doc: dict) -> None:
+    """Morph targets shown with a weight (a node's `weights`, else its mesh's; glTF 2.0 §3.7.2.2)
+    change the shape, which trimesh reads without them; at weight 0 (the default) the base shape is
+    what is shown."""
+    meshes = doc.get("meshes") if isinstance(doc.get("meshes"), list) else []
+    for n, node in enumerate(_list(doc, "nodes")):
+        m = node.get("mesh")
+        if not isinstance(m, int) or not 0 <= m < len(meshes) or not isinstance(meshes[m], dict):
+            continue
+        mesh = meshes[m]
+        if not any(_list(p, "targets") for p in _list(mesh, "primitives")):
+            continue
+        weights = node.get("weights", mesh.get("weights")) or []
+        if any(w != 0 for w in weights if isinstance(w, (int, float))):
+            raise SceneFileError(
+                f"{path}: node {n} shows mesh {mesh.get('name') or m} with morph target weights {weights}, which "
+                "bvhlab does not apply (it would read the base shape; apply the shape keys before exporting)"
+            )
 
 
 def _list(doc: dict, key: str) -> list[dict]:
