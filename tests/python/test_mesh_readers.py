@@ -316,6 +316,16 @@ def test_ascii_stl_whose_name_says_vertex(tmp_path):
     assert len(load(tmp_path, "named.stl", text + "endloop\nendfacet\nendsolid vertex colors\n")) == 1
 
 
+def test_ascii_stl_facets_on_one_line(tmp_path):
+    """STL is whitespace-separated: a facet written on one line (a probe's file was refused as "no
+    vertex lines ... as binary STL its header declares 1886351212 triangles"), or the whole file."""
+    facet = "facet normal 0 0 1 outer loop vertex 0 0 0 vertex {} 0 0 vertex 0 1 0 endloop endfacet"
+    lines = "solid x\n" + facet.format(1) + "\n" + facet.format(2) + "\nendsolid x\n"
+    assert area(load(tmp_path, "lines.stl", lines)) == pytest.approx(1.5)
+    whole = "solid vertex " + facet.format(1) + " " + facet.format(2) + " endsolid vertex"
+    assert area(load(tmp_path, "whole.stl", whole)) == pytest.approx(1.5)
+
+
 def test_ascii_stl_vertex_lines_are_three_numbers(tmp_path):
     facet = "facet normal 0 0 1\nouter loop\n{}\nendloop\nendfacet\n"
     for lines in ("vertex 0 0 0junk\nvertex 1 0 0\nvertex 0 1 0", "vertex 0 0\nvertex 1 0 0\nvertex 0 1 0"):

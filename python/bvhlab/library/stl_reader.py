@@ -1,8 +1,9 @@
 """STL's triangles (3D Systems, "StereoLithography Interface Specification", 1988), binary or
 ASCII. A file is binary when its size is what its triangle count says (84 + 50 per triangle),
 whatever its first bytes (binary headers often start with "solid"); else ASCII if it starts with
-"solid" in any case (after a UTF-8 byte-order mark or spaces), its `vertex x y z` lines read three
-to a facet. Anything else is refused."""
+"solid" in any case (after a UTF-8 byte-order mark or spaces), its `vertex x y z` statements read
+three to a facet, wherever its lines break (STL is whitespace-separated: a facet may be one line).
+Anything else is refused."""
 
 from __future__ import annotations
 
@@ -16,9 +17,11 @@ from .._npz import SceneFileError
 _HEADER, _TRIANGLE = 84, 50
 _BINARY = np.dtype([("normal", "<f4", 3), ("vertices", "<f4", (3, 3)), ("attribute", "<u2")])
 _NUMBER = rb"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?:nan|inf)\w*)"
-# statements at a line's start (a solid's name may say "vertex": "solid vertex colors")
-_VERTEX = re.compile(rb"(?m)^[ \t]*vertex[ \t]+" + rb"[ \t]+".join([_NUMBER] * 3) + rb"(?=\s|$)", re.IGNORECASE)
-_VERTEX_WORD = re.compile(rb"(?m)^[ \t]*vertex\b", re.IGNORECASE)
+# words between whitespace, in the facets (from the first `facet` to the last `endfacet`: a solid's
+# name is free text and may say "vertex", "solid vertex colors")
+_VERTEX = re.compile(rb"(?<!\S)vertex\s+" + rb"\s+".join([_NUMBER] * 3) + rb"(?=\s|$)", re.IGNORECASE)
+_VERTEX_WORD = re.compile(rb"(?<!\S)vertex(?!\S)", re.IGNORECASE)
+_FACET, _END_FACET = re.compile(rb"(?<!\S)facet(?!\S)", re.IGNORECASE), re.compile(rb"(?<!\S)endfacet(?!\S)", re.I)
 
 
 def read_stl(path: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -29,8 +32,10 @@ def read_stl(path: Path) -> tuple[np.ndarray, np.ndarray]:
     if count >= 0 and len(data) == _HEADER + _TRIANGLE * count:
         vertices = np.frombuffer(data, _BINARY, count, _HEADER)["vertices"].astype(np.float64).reshape(-1, 3)
     elif data.lstrip(b"\xef\xbb\xbf \t\r\n")[:5].lower() == b"solid":
-        found = _VERTEX.findall(data)
-        if len(found) != len(_VERTEX_WORD.findall(data)):  # a vertex line of other than three numbers
+        first, ends = _FACET.search(data), [m.end() for m in _END_FACET.finditer(data)]
+        facets = data[first.start() : ends[-1]] if first and ends else b""
+        found = _VERTEX.findall(facets)
+        if len(found) != len(_VERTEX_WORD.findall(facets)):  # a vertex of other than three numbers
             raise SceneFileError(f"{path}: a vertex line is not 'vertex x y z' (three numbers)")
         if not found and count >= 0:
             raise SceneFileError(
