@@ -120,7 +120,8 @@ def _check_morph_weights(path: Path, doc: dict) -> None:
     """Morph targets shown with a weight (a node's `weights`, else its mesh's; glTF 2.0 §3.7.2.2)
     change the shape, which trimesh reads without them; at weight 0 (the default) the base shape is
     what is shown."""
-    meshes = doc.get("meshes") if isinstance(doc.get("meshes"), list) else []
+    found = doc.get("meshes")
+    meshes: list = found if isinstance(found, list) else []
     for n, node in enumerate(_list(doc, "nodes")):
         m = node.get("mesh")
         if not isinstance(m, int) or not 0 <= m < len(meshes) or not isinstance(meshes[m], dict):
