@@ -125,6 +125,7 @@ class FinalRender:
         views = render_views(engine, blender_scene.render, layer)  # [None]: one view; else each eye or view by name
         engine.update_progress(TRACE_START)
         threads = final_threads(blender_scene)
+        jobs = []
         for index, view in enumerate(views):
             if view is not None:  # the view's camera: an eye's offset and convergence (Stereoscopy)
                 engine.active_view_set(view)
@@ -132,6 +133,7 @@ class FinalRender:
             else:
                 view_camera = camera
             job = tracer.start(scene, update.bvh, view_camera, frame.width, frame.height, settings, threads)
+            jobs.append(job)
             on, named = job.timings["device"], "" if view is None else f" ({view})"
             engine.update_stats(
                 "", f"Tracing {frame.width} × {frame.height}{named}, {settings.samples} samples per pixel on {on}"
@@ -140,7 +142,8 @@ class FinalRender:
             if cancelled:
                 break
         record = {
-            **_trace_record(update, job, frame),
+            **_trace_record(update, jobs, frame),
+            "views": views[: len(jobs)],
             "sync": self.report,
             "scene": scene,  # the exported bvhlab.Scene rendered (the checks read it)
             "totals": self.live.totals,
@@ -246,22 +249,22 @@ class FinalRender:
         return update
 
 
-def _trace_record(update, job, frame) -> dict:
+def _trace_record(update, jobs: list, frame) -> dict:
     """What Render Properties ▸ Last Render shows of a final render, and the checks read: the device,
-    backend and note of the job (auto renders the wide traversal on the CPU whatever the Tracer's
-    backend)."""
-    timings = job.timings
+    backend and note of the jobs (one a view; auto renders the wide traversal on the CPU whatever
+    the Tracer's backend), their times added up, the samples every view has."""
+    timings = jobs[0].timings
     return {
         "device": timings["device"],
         "backend": timings["backend"],
         "note": timings.get("fallback"),
         "tree": update.action,
         "build_ms": update.ms,
-        "trace_ms": timings["trace_ms"],
-        "total_ms": timings["total_ms"],
+        "trace_ms": sum(job.timings["trace_ms"] for job in jobs),
+        "total_ms": sum(job.timings["total_ms"] for job in jobs),
         "size": (frame.width, frame.height),
         "frame": frame,
-        "samples": job.samples_done,
+        "samples": min(job.samples_done for job in jobs),
     }
 
 

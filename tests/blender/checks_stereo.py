@@ -11,7 +11,7 @@ import bpy
 import exr
 import numpy as np
 from checks_cameras import camera_scene, compare_depth, use_cycles_reference, use_engine, vulkan_backends
-from checks_engine import ENGINE
+from checks_engine import ENGINE, _last_final
 
 from bvhlab.blender.compat import use_multilayer_exr
 
@@ -59,6 +59,9 @@ def _compare_views(tmp_dir, name: str) -> list[str]:
     for backend in vulkan_backends():
         ours = _render(tmp_dir, name, ENGINE, backend)
         assert sorted(ours) == sorted(cycles), f"{name} {backend}: views {sorted(ours)}, Cycles {sorted(cycles)}"
+        # Last Render's record: every view traced, their times added (it kept the last view's)
+        record = _last_final(bpy.context.scene)
+        assert sorted(record["views"]) == sorted(cycles), record["views"]
         for view, depth in ours.items():
             lines.append(compare_depth(depth, cycles[view], f"{name} {view} F12 {backend}"))
         first, *others = ours.values()
