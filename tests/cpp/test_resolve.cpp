@@ -121,14 +121,15 @@ TEST(Resolve, RefusesWhatTheSumsDoNotHold) {
 }
 
 TEST(Resolve, TransparentFilmAlphaIsTheCoveredShare) {
-    // Film ▸ Transparent: a shaded pixel's alpha is covered / samples (its colour as summed: the
-    // samples that showed nothing added none); the heatmap and the other images stay as they were.
+    // Film ▸ Transparent (or a holdout: make_frame_params counts the covered samples for both): a
+    // shaded pixel's alpha is covered / samples (its colour as summed: the samples that showed
+    // nothing, or a holdout, added none); the heatmap and the other images stay as they were.
     PixelSums sums = random_sums(9);
     sums.covered.assign(kPixels, 0u);
     std::mt19937 rng(10);
     for (std::size_t i = 0; i < kPixels; ++i) sums.covered[i] = sums.samples[i] ? rng() % (sums.samples[i] + 1) : 0u;
     gpu::FrameParams film = frame(gpu::MODE_SHADE);
-    film.film_transparent = 1;
+    film.film_transparent = film.count_covered = 1;
     Images im, opaque;
     resolve(sums.view(), film, im.all(), 2);
     resolve(sums.view(), frame(gpu::MODE_SHADE), opaque.all(), 2);
