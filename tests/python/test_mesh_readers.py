@@ -318,12 +318,15 @@ def test_ascii_stl_whose_name_says_vertex(tmp_path):
 
 def test_ascii_stl_facets_on_one_line(tmp_path):
     """STL is whitespace-separated: a facet written on one line (a probe's file was refused as "no
-    vertex lines ... as binary STL its header declares 1886351212 triangles"), or the whole file."""
+    vertex lines ... as binary STL its header declares 1886351212 triangles"), under a name that
+    says "facet vertex" (a name is free text to its line's end); a file cut in a vertex is refused
+    (the review: reading up to the last `endfacet` dropped its last facet silently)."""
     facet = "facet normal 0 0 1 outer loop vertex 0 0 0 vertex {} 0 0 vertex 0 1 0 endloop endfacet"
-    lines = "solid x\n" + facet.format(1) + "\n" + facet.format(2) + "\nendsolid x\n"
+    lines = "solid facet vertex colors\n" + facet.format(1) + "\n" + facet.format(2) + "\nendsolid facet vertex\n"
     assert area(load(tmp_path, "lines.stl", lines)) == pytest.approx(1.5)
-    whole = "solid vertex " + facet.format(1) + " " + facet.format(2) + " endsolid vertex"
-    assert area(load(tmp_path, "whole.stl", whole)) == pytest.approx(1.5)
+    with pytest.raises(SceneFileError, match="not 'vertex x y z'"):
+        cut = "\nfacet normal 0 0 1 outer loop vertex 0 0 0 vertex 1 0"
+        load(tmp_path, "cut.stl", "solid x\n" + facet.format(1) + cut)
 
 
 def test_ascii_stl_vertex_lines_are_three_numbers(tmp_path):

@@ -17,11 +17,11 @@ from .._npz import SceneFileError
 _HEADER, _TRIANGLE = 84, 50
 _BINARY = np.dtype([("normal", "<f4", 3), ("vertices", "<f4", (3, 3)), ("attribute", "<u2")])
 _NUMBER = rb"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?:nan|inf)\w*)"
-# words between whitespace, in the facets (from the first `facet` to the last `endfacet`: a solid's
-# name is free text and may say "vertex", "solid vertex colors")
+# words between whitespace, outside the `solid name` and `endsolid name` lines (a name is free
+# text to its line's end and may say "vertex" or "facet": "solid vertex colors")
 _VERTEX = re.compile(rb"(?<!\S)vertex\s+" + rb"\s+".join([_NUMBER] * 3) + rb"(?=\s|$)", re.IGNORECASE)
 _VERTEX_WORD = re.compile(rb"(?<!\S)vertex(?!\S)", re.IGNORECASE)
-_FACET, _END_FACET = re.compile(rb"(?<!\S)facet(?!\S)", re.IGNORECASE), re.compile(rb"(?<!\S)endfacet(?!\S)", re.I)
+_SOLID_LINE = re.compile(rb"(?mi)^[ \t]*(?:\xef\xbb\xbf)?[ \t]*(?:end)?solid\b[^\r\n]*")
 
 
 def read_stl(path: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -32,8 +32,7 @@ def read_stl(path: Path) -> tuple[np.ndarray, np.ndarray]:
     if count >= 0 and len(data) == _HEADER + _TRIANGLE * count:
         vertices = np.frombuffer(data, _BINARY, count, _HEADER)["vertices"].astype(np.float64).reshape(-1, 3)
     elif data.lstrip(b"\xef\xbb\xbf \t\r\n")[:5].lower() == b"solid":
-        first, ends = _FACET.search(data), [m.end() for m in _END_FACET.finditer(data)]
-        facets = data[first.start() : ends[-1]] if first and ends else b""
+        facets = _SOLID_LINE.sub(b"", data)
         found = _VERTEX.findall(facets)
         if len(found) != len(_VERTEX_WORD.findall(facets)):  # a vertex of other than three numbers
             raise SceneFileError(f"{path}: a vertex line is not 'vertex x y z' (three numbers)")
