@@ -50,8 +50,8 @@ class RenderCancelled(Exception):
 class RenderResult:
     """What a render produces, row 0 at the top (None where not asked for).
     color: float32 (H, W, 4), linear RGB, alpha 1 (heat colours in mode "heatmap"); with
-    film_transparent, alpha is the share of the pixel's camera rays that show something and the
-    colour is premultiplied by it.
+    film_transparent, alpha is the share of the pixel's camera rays that show something, and with
+    a holdout material (on any film) the share that meet none, the colour premultiplied by it.
     depth: float32 (H, W), Blender's Z pass: the distance along the view axis of the nearest
     primary hit over the pixel's samples (where the overlay draws a line in front, the line's);
     1e10 where nothing was hit, as Cycles writes.
@@ -89,7 +89,8 @@ def render(
     its `InstancedBvh` (`bvhlab.build(scene)`): the tracers walk the TLAS and each mesh's tree, and
     the box overlay draws the TLAS's boxes.
 
-    image: float32 (height, width, 4), row 0 at the top, linear RGB, alpha 1.
+    image: float32 (height, width, 4), row 0 at the top, linear RGB, alpha 1 (with film_transparent
+    or a holdout: RenderResult.color's alpha, premultiplied).
     timings: upload_ms, overlay_ms, trace_ms, readback_ms, total_ms, dispatches, device (which
     device rendered), backend ("vulkan" or "cpu"), reason (why that backend), heatmap_scale (the
     box tests the heatmap shows red: its legend's top), traversal (the walk that rendered), and

@@ -115,7 +115,7 @@ def run(args) -> int:
     if result.counters is not None:
         _write_counter(result.counters, counter, args.range, args.out)
     elif result.color is not None:
-        color = straight_alpha(result.color) if args.film_transparent else result.color  # PNG: straight alpha
+        color = straight_alpha(result.color)  # PNG: straight alpha (Film ▸ Transparent, a holdout's edges)
         image = legend.render_legends(color, render_options, t["heatmap_scale"], legend.overlay_height(bvh))
         save_png(image, args.out, premultiplied=False)
     print(f"{name}: {args.width}x{args.height} on {t['device']} ({t['backend']}: {t['reason']})")
