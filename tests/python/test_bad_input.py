@@ -216,8 +216,10 @@ def test_a_material_that_returns_more_light_than_arrives_is_refused():
 def test_a_scene_too_small_for_the_triangle_test_is_refused():
     """The watertight test's products shrink like the cube of the scene's size (coordinate_range.h):
     random triangles 1e-14 across gave 1,865 of 5,000 rays the wrong hit, at 1e-15 all but 2
-    missed, silently. Below 2^-32 units a scene with triangles is refused (build, Scene, refit);
-    just above it every ray hits what the float64 brute force hits; spheres alone keep working, and
+    missed, silently. A tree over triangles spanning less than 2^-32 units is refused (build,
+    refit, the build of a Scene); just above it every ray hits what the float64 brute force hits;
+    the span is the tree's, spheres included (a Scene's triangles alone are not checked: the review
+    found a scene of 2 units refused for its small triangles); spheres alone keep working, and
     triangles all at one point (none can be hit) are allowed."""
     from oracles import brute_force
 
@@ -231,9 +233,11 @@ def test_a_scene_too_small_for_the_triangle_test_is_refused():
         assert np.isfinite(t).sum() > 1500
         assert np.array_equal(hits["prim"], prim), (scale, int((hits["prim"] != prim).sum()))
     tiny = (unit * 1e-10).astype(np.float32)
-    for make in (lambda: bvhlab.build(tiny), lambda: bvhlab.Scene(triangles=tiny)):
+    for make in (lambda: bvhlab.build(tiny), lambda: bvhlab.build(bvhlab.Scene(triangles=tiny))):
         with pytest.raises(ValueError, match=r"spans only 1e-10 units.*scale the scene up"):
             make()
+    big_sphere = np.array([[0, 0, 0, 1]], np.float32)
+    assert len(bvhlab.build(bvhlab.Scene(triangles=tiny, spheres=big_sphere)).nodes) > 0  # 2 units across
     tree = bvhlab.build((unit * 1e-3).astype(np.float32))
     with pytest.raises(ValueError, match="spans only 1e-10 units"):
         tree.refit(tiny)

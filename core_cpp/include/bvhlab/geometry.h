@@ -29,8 +29,8 @@ struct GeometryView {
 
 /// Throws std::invalid_argument naming the first bad primitive: a NaN or infinite coordinate, a
 /// coordinate (or sphere extent) outside ±kMaxCoordinate (coordinate_range.h), a radius that is
-/// not a finite number of at least kMinRadius, or more primitives than a reference can index; and
-/// triangles in a scene too small for the triangle test (check_extent).
+/// not a finite number of at least kMinRadius, or more primitives than a reference can index.
+/// (A tree's extent is checked where it is made: check_extent, by make_prim_refs and the refit.)
 /// Degenerate (zero-area) triangles are valid: they are built into the tree and never hit.
 void validate(const GeometryView& geometry);
 

@@ -117,11 +117,6 @@ void validate(const GeometryView& g) {
         for (int c = 0; c < 3; ++c)
             if (!in_coordinate_range(g.vertex(i, c))) throw_far_triangle(g);
     validate_spheres(g);
-    Aabb box;
-    for (std::size_t i = 0; i < g.primitive_count(); ++i)
-        box.grow(prim_box(
-            g, i < g.triangle_count ? std::uint32_t(i) : gpu::REF_SPHERE_BIT | std::uint32_t(i - g.triangle_count)));
-    check_extent(box, g.triangle_count);
 }
 
 Aabb prim_box(const GeometryView& g, std::uint32_t ref) {
