@@ -239,8 +239,8 @@ struct FrameParams {
     float focus_distance;      ///< the thin lens's focus, along the view axis
     uint instance_count;       ///< two-level scenes: instances in the TLAS (0: a flat scene, one level)
     uint count_traversal;      ///< 1: the trace pass sums the traversal counters into addr.accum_counts
-    uint film_transparent;     ///< 1: a camera ray that shows nothing adds no colour, and addr.accum_covered
-                               ///< counts those that show something (RenderSettings::film_transparent)
+    uint film_transparent;     ///< 1: a camera ray that shows nothing adds no colour and does not cover the
+                               ///< pixel (RenderSettings::film_transparent; count_covered says it is counted)
     float overlay_line_width;  ///< whole pixels across the overlay's lines (RenderSettings::line_width rounded,
                                ///< as the rasterizers draw it): the trace pass's slope bias (line_on_surface)
     DeviceAddresses addr;

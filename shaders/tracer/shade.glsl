@@ -55,7 +55,8 @@ struct TraceState {
                              ///< shadow rays are not counted, so a pixel's counters describe the tree
                              ///< seen from the camera, as Bvh.trace_pixel records it)
     float depth;      ///< view-axis depth of what this sample's primary ray shows (inf: sky or a holdout)
-    bool holdout;     ///< this sample's primary ray met a holdout: no colour and no alpha (Cycles' holdout)
+    bool holdout;     ///< this sample's primary ray met a holdout: no colour and no alpha (Cycles' holdout);
+                      ///< set and read in one step (shade_or_shadow, next_ray): never saved
 };
 
 float infinity() { return uintBitsToFloat(0x7f800000u); }

@@ -23,7 +23,7 @@ void save_state(TraceState s, uint stamp) {
     state_store(11u, uvec4(s.walk.instance, s.walk.outer, s.hit.instance, s.closest.instance));
     state_store(12u, uvec4(s.hit.counts.prim_tests, s.hit.counts.prim_hits, s.hit.counts.instance_hits, 0u));
     state_store(13u, uvec4(s.counts.box_hits, s.counts.prim_tests, s.counts.prim_hits, s.counts.instance_hits));
-    state_store(14u, uvec4(floatBitsToUint(s.closest.u), floatBitsToUint(s.closest.v), s.holdout ? 1u : 0u, 0u));
+    state_store(14u, uvec4(floatBitsToUint(s.closest.u), floatBitsToUint(s.closest.v), 0u, 0u));
 }
 
 uint slot_stamp() { return state_load(2u).w; }
@@ -39,7 +39,8 @@ void save_done(TraceState s, uint stamp) {
 bool slot_done(uint stamp) { return slot_stamp() == stamp && state_load(0u).z >= PHASE_DONE; }
 
 /// The state save_state stored. (The closest hit's transmission and counters are not kept:
-/// shading never reads them; its barycentrics are, for the point rays leave it from: surface_at.)
+/// shading never reads them; its barycentrics are, for the point rays leave it from: surface_at.
+/// Nor is `holdout`: a camera ray meeting a holdout ends its sample in that step, next_ray.)
 TraceState load_state() {
     uvec4 w0 = state_load(0u);
     uvec4 w1 = state_load(1u);
@@ -72,7 +73,6 @@ TraceState load_state() {
     uvec4 w14 = state_load(14u);
     s.closest.u = uintBitsToFloat(w14.x);
     s.closest.v = uintBitsToFloat(w14.y);
-    s.holdout = w14.z != 0u;
     s.task = ray_task(vec3_of(w7), vec3_of(w8), vec3_of(w9), w7.w);
     s.counts.box_tests = w8.w;
     s.depth = uintBitsToFloat(w9.w);

@@ -101,7 +101,8 @@ def test_other_rays_see_a_holdout_black():
 
 
 def test_a_holdout_trace_cut_into_many_dispatches_is_the_same():
-    """The holdout flag of a sample in progress is part of the saved trace (state.glsl)."""
+    """A render cut into dispatches of 20 steps equals one run: a camera ray meeting a holdout ends
+    its sample in the step that meets it (so nothing of it is saved between dispatches: state.glsl)."""
     scene = holdout_scene()
     bvh = bvhlab.build(scene)
     options = bvhlab.RenderOptions(samples_per_axis=N, max_depth=2)
@@ -136,3 +137,54 @@ def test_holdout_is_a_material_field_saved_with_the_scene(tmp_path):
     assert loaded.materials[-1].holdout and not loaded.materials[0].holdout
     with pytest.raises(TypeError, match="holdout must be True or False"):
         bvhlab.Material(holdout=1)
+
+
+def test_holdouts_in_a_two_level_scene():
+    """Instances of a knot whose material is a holdout over a floor in mesh 0: the alpha of every
+    pixel is the share of its camera rays that meet no knot (InstancedBvh.intersect over the
+    tracer's own rays), on each walk of the CPU reference, and Vulkan's image is the CPU's."""
+    from bvhlab._render_scene import SceneCache
+    from bvhlab._render_settings import render_settings
+    from bvhlab.library import procedural
+
+    floor, floor_material = showcase.checker_floor(6, 12.0)
+    knot = procedural.torus_knot(2000)
+    transforms = np.stack([np.eye(4, dtype=np.float32)[:3] for _ in range(3)])
+    transforms[:, :, 3] = [(-2.5, 0, 1.2), (0, 1.5, 1.0), (2.5, 0, 1.4)]
+    scene = bvhlab.Scene(
+        triangles=floor,
+        tri_material=floor_material,
+        meshes=[knot],
+        mesh_tri_material=[np.full(len(knot), 2, np.int32)],
+        materials=[bvhlab.Material((0.9, 0.9, 0.85)), bvhlab.Material((0.3, 0.3, 0.3)), bvhlab.Material(holdout=True)],
+        instance_mesh=np.array([1, 1, 1], np.int32),
+        instance_transforms=transforms,
+        camera=bvhlab.Camera((0.0, -9.0, 5.0), (0.0, 0.0, 1.0), fov_y=45.0),
+    )
+    tree = bvhlab.build(scene)
+    assert isinstance(tree, bvhlab.InstancedBvh)
+    options = bvhlab.RenderOptions(samples_per_axis=N)
+    settings = render_settings(scene, tree, W, H, options)
+    render_scene = SceneCache().get(scene, tree)
+    rays = [
+        bvhlab._core.pixel_ray(render_scene, settings, x, y, k)
+        for y in range(H)
+        for x in range(W)
+        for k in range(N * N)
+    ]
+    origins, directions = (np.array([r[i] for r in rays], np.float32) for i in (0, 1))
+    held = np.zeros(len(rays), bool)
+    for i, (_, _, tmin, tmax) in enumerate(rays):
+        hit = tree.intersect(origins[i : i + 1], directions[i : i + 1], tmin=tmin, tmax=tmax)
+        held[i] = hit["instance"][0] >= 0 and scene.instance_mesh[hit["instance"][0]] == 1
+    alpha = (~held).reshape(H, W, N * N).mean(-1).astype(np.float32)
+    assert (alpha == 0).sum() > 20 and ((alpha > 0) & (alpha < 1)).any()
+    for traversal in ("stack", "stackless", "wide"):
+        result = cpu_result(scene, tree, options.replace(traversal=traversal))
+        np.testing.assert_array_equal(result.color[..., 3], alpha, err_msg=traversal)
+    renderer = bvhlab.Renderer("vulkan", validation=True)
+    job = renderer.start(scene, tree, W, H, options=options)
+    job.run()
+    vk, cpu = job.result(), cpu_result(scene, tree, options)
+    assert (vk.color[..., 3] != cpu.color[..., 3]).mean() <= 0.01
+    assert renderer.validation_errors == 0, renderer.validation_messages()
