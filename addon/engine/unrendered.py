@@ -24,9 +24,11 @@ COLLECTION_FLAGS = {
 }
 
 
-def _named(what: str, names: list[str]) -> str:
+def _named(what: str, names) -> str:
+    """`what` and the first of `names` (a list, or a dict's keys in insertion order)."""
+    first = next(iter(names))
     more = f" and {len(names) - 1} more" if len(names) > 1 else ""
-    return f"{what} '{names[0]}'{more}"
+    return f"{what} '{first}'{more}"
 
 
 def unrendered_features(depsgraph) -> list[str]:
@@ -77,32 +79,29 @@ class _Found:
         from bvhlab.blender.mesh import CONVERTIBLE_TYPES  # bvhlab.blender is imported when first used
 
         self.shapes = {"MESH", *CONVERTIBLE_TYPES}  # what the export reads (a light's flags are its own)
-        self.limited: list[str] = []
-        self.unread: dict[str, list[str]] = {}
-        self.effects: dict[str, list[str]] = {}
-        self.strands: list[str] = []
+        # names in the order first seen, each once (dicts as ordered sets: 10,000 objects were a
+        # list scan each)
+        self.limited: dict[str, None] = {}
+        self.unread: dict[str, dict[str, None]] = {}
+        self.effects: dict[str, dict[str, None]] = {}
+        self.strands: dict[str, None] = {}
 
     def look_at(self, obj, name: str) -> None:
         """An object or instance of kind obj.type whose original is named `name` (asked once for each
         kind an original shows: each name is kept once in each list)."""
         kind = obj.type
         if kind in UNREAD_TYPES:
-            _add(self.unread.setdefault(kind, []), name)
+            self.unread.setdefault(kind, {})[name] = None
             return
         if kind not in self.shapes:
             return
         if not all(getattr(obj, flag, True) for flag in RAY_VISIBILITY):
-            _add(self.limited, name)
+            self.limited[name] = None
         for flag in OBJECT_EFFECTS:
             if getattr(obj, flag, False):
-                _add(self.effects.setdefault(flag, []), name)
+                self.effects.setdefault(flag, {})[name] = None
         if len(obj.particle_systems) and any(_renders_strands(m) for m in obj.modifiers):
-            _add(self.strands, name)
-
-
-def _add(names: list[str], name: str) -> None:
-    if name not in names:
-        names.append(name)
+            self.strands[name] = None
 
 
 def _renders_strands(modifier) -> bool:
