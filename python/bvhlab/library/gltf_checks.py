@@ -129,7 +129,7 @@ def _check_morph_weights(path: Path, doc: dict) -> None:
         mesh = meshes[m]
         if not any(_list(p, "targets") for p in _list(mesh, "primitives")):
             continue
-        weights = node.get("weights", mesh.get("weights")) or []
+        weights = node.get("weights") or mesh.get("weights") or []
         if any(w != 0 for w in weights if isinstance(w, (int, float))):
             raise SceneFileError(
                 f"{path}: node {n} shows mesh {mesh.get('name') or m} with morph target weights {weights}, which "
