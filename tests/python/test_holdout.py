@@ -188,3 +188,25 @@ def test_holdouts_in_a_two_level_scene():
     vk, cpu = job.result(), cpu_result(scene, tree, options)
     assert (vk.color[..., 3] != cpu.color[..., 3]).mean() <= 0.01
     assert renderer.validation_errors == 0, renderer.validation_messages()
+
+
+def test_the_cli_writes_a_holdouts_edges_with_straight_alpha(tmp_path):
+    """`bvhlab render` of a scene file with a holdout, opaque film: the PNG's partly covered edge
+    pixels hold the colour divided by alpha, as PNG stores it (they were written premultiplied,
+    dark fringes, where only --film-transparent converted)."""
+    from png_reader import read_png
+
+    from bvhlab.cli import main
+    from bvhlab.png import straight_alpha, to_rgba8
+
+    scene = holdout_scene()
+    path = scene.save(tmp_path / "holdout.npz")
+    out = tmp_path / "holdout.png"
+    args = ["--width", str(W), "--height", str(H), "--samples-per-axis", str(N), "--backend", "cpu"]
+    assert main(["render", str(path), *args, "--out", str(out)]) == 0
+    result = cpu_result(scene, bvhlab.build(scene), bvhlab.RenderOptions(samples_per_axis=N))
+    edge = (result.color[..., 3] > 0) & (result.color[..., 3] < 1)
+    assert edge.sum() > 5
+    png = read_png(out).astype(int)
+    expected = to_rgba8(straight_alpha(result.color)).astype(int)
+    assert np.abs(png - expected)[edge].max() <= 1  # 8-bit rounding
