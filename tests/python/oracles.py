@@ -221,3 +221,28 @@ class Whitted64:
                 d = _unit(forward + right * (-w / 2 + (x + 0.5) * w / width) + up * (h / 2 - (y + 0.5) * h / height))
                 image[y, x] = self.trace(pos, d)
         return image
+
+
+def camera_ray_hits(scene, tree, width: int, height: int, options) -> dict:
+    """What `tree.intersect` (a Bvh or an InstancedBvh: independent of the tracer's walk) hits with
+    each of the tracer's own camera rays (bvhlab._core.pixel_ray, each between its clipping planes):
+    the hit fields, each shaped (height, width, n·n) for n×n samples a pixel."""
+    import bvhlab
+    from bvhlab._render_scene import SceneCache
+    from bvhlab._render_settings import render_settings
+
+    settings = render_settings(scene, tree, width, height, options)
+    render_scene = SceneCache().get(scene, tree)
+    n2 = options.samples_per_axis**2
+    rays = [
+        bvhlab._core.pixel_ray(render_scene, settings, x, y, k)
+        for y in range(height)
+        for x in range(width)
+        for k in range(n2)
+    ]
+    origins, directions = (np.array([r[i] for r in rays], np.float32) for i in (0, 1))
+    hits = [
+        tree.intersect(origins[i : i + 1], directions[i : i + 1], tmin=tmin, tmax=tmax)
+        for i, (_, _, tmin, tmax) in enumerate(rays)
+    ]
+    return {key: np.concatenate([h[key] for h in hits]).reshape(height, width, n2) for key in hits[0]}

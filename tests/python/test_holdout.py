@@ -9,6 +9,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+from oracles import camera_ray_hits
 
 import bvhlab
 from bvhlab.library import showcase
@@ -29,23 +30,8 @@ def holdout_scene(film_transparent=False):
 def camera_hits(scene, bvh, options):
     """Of each of the tracer's camera rays (H, W, N·N), by Bvh.intersect: whether it hits
     something, and whether what it hits is the holdout sphere."""
-    from bvhlab._render_scene import SceneCache
-    from bvhlab._render_settings import render_settings
-
-    settings = render_settings(scene, bvh, W, H, options)
-    render_scene = SceneCache().get(scene, bvh)
-    hits = np.zeros(H * W * N * N, bool)
-    held = np.zeros(H * W * N * N, bool)
-    i = 0
-    for y in range(H):
-        for x in range(W):
-            for k in range(N * N):
-                o, d, tmin, tmax = bvhlab._core.pixel_ray(render_scene, settings, x, y, k)
-                hit = bvh.intersect(np.array([o], np.float32), np.array([d], np.float32), tmin=tmin, tmax=tmax)
-                hits[i] = hit["prim"][0] >= 0
-                held[i] = hit["kind"][0] == 1 and hit["prim"][0] == HOLDOUT_SPHERE
-                i += 1
-    return hits.reshape(H, W, N * N), held.reshape(H, W, N * N)
+    hit = camera_ray_hits(scene, bvh, W, H, options)
+    return hit["prim"] >= 0, (hit["kind"] == 1) & (hit["prim"] == HOLDOUT_SPHERE)
 
 
 def cpu_result(scene, bvh, options):
@@ -143,8 +129,6 @@ def test_holdouts_in_a_two_level_scene():
     """Instances of a knot whose material is a holdout over a floor in mesh 0: the alpha of every
     pixel is the share of its camera rays that meet no knot (InstancedBvh.intersect over the
     tracer's own rays), on each walk of the CPU reference, and Vulkan's image is the CPU's."""
-    from bvhlab._render_scene import SceneCache
-    from bvhlab._render_settings import render_settings
     from bvhlab.library import procedural
 
     floor, floor_material = showcase.checker_floor(6, 12.0)
@@ -164,20 +148,9 @@ def test_holdouts_in_a_two_level_scene():
     tree = bvhlab.build(scene)
     assert isinstance(tree, bvhlab.InstancedBvh)
     options = bvhlab.RenderOptions(samples_per_axis=N)
-    settings = render_settings(scene, tree, W, H, options)
-    render_scene = SceneCache().get(scene, tree)
-    rays = [
-        bvhlab._core.pixel_ray(render_scene, settings, x, y, k)
-        for y in range(H)
-        for x in range(W)
-        for k in range(N * N)
-    ]
-    origins, directions = (np.array([r[i] for r in rays], np.float32) for i in (0, 1))
-    held = np.zeros(len(rays), bool)
-    for i, (_, _, tmin, tmax) in enumerate(rays):
-        hit = tree.intersect(origins[i : i + 1], directions[i : i + 1], tmin=tmin, tmax=tmax)
-        held[i] = hit["instance"][0] >= 0 and scene.instance_mesh[hit["instance"][0]] == 1
-    alpha = (~held).reshape(H, W, N * N).mean(-1).astype(np.float32)
+    hit = camera_ray_hits(scene, tree, W, H, options)
+    held = (hit["instance"] >= 0) & (scene.instance_mesh[hit["instance"]] == 1)
+    alpha = (~held).mean(-1).astype(np.float32)
     assert (alpha == 0).sum() > 20 and ((alpha > 0) & (alpha < 1)).any()
     for traversal in ("stack", "stackless", "wide"):
         result = cpu_result(scene, tree, options.replace(traversal=traversal))

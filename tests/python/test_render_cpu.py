@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from oracles import camera_ray_hits
 
 import bvhlab
 from bvhlab.library import showcase
@@ -311,28 +312,13 @@ def test_film_transparent_alpha_is_the_share_of_camera_rays_that_hit():
     hit something, counted here by Bvh.intersect over the tracer's own camera rays (pixel_ray);
     the colour is premultiplied: the opaque image less the sky's share; depth and cost unchanged;
     the overlay's lines count as covered; the heatmap stays opaque."""
-    from bvhlab._render_scene import SceneCache
-    from bvhlab._render_settings import render_settings
-
     scene = showcase.whitted()
     bvh = bvhlab.build(scene)
     w, h, n = 40, 30, 2
     options = bvhlab.RenderOptions(samples_per_axis=n, film_transparent=True)
     film = _sized_job(scene, bvh, w, h, options)
     opaque = _sized_job(scene, bvh, w, h, options.replace(film_transparent=False))
-    settings = render_settings(scene, bvh, w, h, options)
-    render_scene = SceneCache().get(scene, bvh)
-    rays = [
-        bvhlab._core.pixel_ray(render_scene, settings, x, y, k)
-        for y in range(h)
-        for x in range(w)
-        for k in range(n * n)
-    ]
-    origins, directions = (np.array([r[i] for r in rays], np.float32) for i in (0, 1))
-    hits = np.zeros(len(rays), bool)
-    for i, (_, _, tmin, tmax) in enumerate(rays):  # each ray between its own clipping planes
-        hits[i] = bvh.intersect(origins[i : i + 1], directions[i : i + 1], tmin=tmin, tmax=tmax)["prim"][0] >= 0
-    alpha = hits.reshape(h, w, n * n).mean(-1).astype(np.float32)
+    alpha = (camera_ray_hits(scene, bvh, w, h, options)["prim"] >= 0).mean(-1).astype(np.float32)
     np.testing.assert_array_equal(film.color[..., 3], alpha)
     assert 0.05 < (alpha == 0).mean() < 0.95 and ((alpha > 0) & (alpha < 1)).any()
     sky = np.array(scene.sky, np.float32)
