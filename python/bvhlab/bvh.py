@@ -206,8 +206,8 @@ class Bvh:
 
         Origins lie within ±MAX_COORDINATE (2^40) and the largest component of each direction in
         [2^-80, 2^80]; directions need not be normalised (each ray is scaled by a power of two for
-        the arithmetic, exactly, so t is in units of the given direction). Anything else raises
-        ValueError naming the ray. Ctrl-C stops a long batch (KeyboardInterrupt).
+        the arithmetic, exactly, so t is in units of the given direction); `tmax` is a number >= 0
+        (inf: no limit). Anything else raises ValueError naming the ray. Ctrl-C stops a long batch (KeyboardInterrupt).
 
         `traversal`: "stack" (binary tree, nearer child first), "stackless" (skip indices,
         report §3.1), or "wide" (an 8-wide copy of the tree made on first use; the fastest).

@@ -31,7 +31,7 @@ def run_ray_query(
     (`nodes_visited`: with that field; `extra`: more output fields, e.g. the instance), filled by
     `core.intersect`."""
     origins, directions, tmin, traversal, threads = _checked_rays(origins, directions, tmin, traversal, threads)
-    tmax = _checks.real("tmax", tmax)
+    tmax = _checks.real("tmax", tmax, 0.0)  # as occluded: a negative tmax is a caller's mistake, not all misses
     if not isinstance(nodes_visited, bool):
         raise TypeError(f"nodes_visited must be True or False, not {nodes_visited!r}")
     fields = {k: v for k, v in HIT_FIELDS.items() if nodes_visited or k != "nodes_visited"}

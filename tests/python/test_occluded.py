@@ -10,6 +10,7 @@ import pytest
 from test_instanced_scene import _rays, _transform
 
 import bvhlab
+from bvhlab import ray_query
 from bvhlab.library import procedural
 
 
@@ -163,3 +164,30 @@ def test_threads_give_the_same_answers(knot_mesh):
     assert not errors
     for k in range(6):
         np.testing.assert_array_equal(got[k], want)
+
+
+@pytest.mark.parametrize("two_level", [False, True])
+@pytest.mark.parametrize("tmax, match", [(-1.0, "tmax must be at least 0, got -1.0"), (float("nan"), "got NaN")])
+def test_intersect_refuses_the_tmax_occluded_refuses(tree_and_rays, two_level, tmax, match):
+    """A negative tmax was answered by misses in `intersect` (an empty interval) where `occluded`
+    refused it: both refuse it now, on flat and two-level trees, through Python and the core."""
+    bvh, o, d = tree_and_rays
+    if two_level:
+        knot = procedural.torus_knot(200)
+        move = np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 2]], np.float32)
+        bvh = bvhlab.build(
+            bvhlab.Scene(
+                meshes=[knot],
+                instance_mesh=np.array([0, 0]),
+                instance_transforms=np.stack([np.eye(3, 4, dtype=np.float32), move]),
+            )
+        )
+        assert isinstance(bvh, bvhlab.InstancedBvh)
+    for query in (bvh.intersect, bvh.occluded):
+        with pytest.raises(ValueError, match=match):
+            query(o, d, tmax=tmax)
+    n = len(o)  # the core's own check, under Python's: its arrays as run_ray_query makes them
+    out = [np.empty(n, t) if k != "nodes_visited" else None for k, t in ray_query.HIT_FIELDS.items()]
+    out += [np.empty(n, np.int32)] * two_level  # the instance of each hit
+    with pytest.raises(ValueError, match="tmax must be a number >= 0"):
+        bvh._core.intersect(o, d, 0.0, tmax, "wide", 1, *out)

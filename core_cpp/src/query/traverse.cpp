@@ -199,6 +199,7 @@ void occluded_batch(const Bvh& bvh, const RayBatch& rays, bool* occluded_out, Tr
 void intersect_batch(const Bvh& bvh, const RayBatch& rays, const HitBatch& out, Traversal mode, std::uint32_t threads,
                      const WideBvh* wide, Cancellation* cancel) {
     if (mode == Traversal::Wide && !wide) throw std::invalid_argument("Traversal::Wide needs the wide tree");
+    check_tmax(rays);               // a negative tmax is refused as occluded_batch refuses it, not answered by misses
     if (mode == Traversal::Wide) {  // a piece at once, grouped by octant (wide_kernel.h intersect_wide_grouped)
         const auto probe = [&](const RayPiece& piece) { return probe_wide(*wide, piece); };
         // the hits of `block`'s pieces to `to` (from its first ray on)

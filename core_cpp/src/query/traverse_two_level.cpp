@@ -264,6 +264,7 @@ InstanceHit detail::intersect_two_level_recorded(const TwoLevel& scene, const Ra
 void intersect_batch_two_level(const TwoLevel& scene, const RayBatch& rays, const HitBatch& hits,
                                std::int32_t* instance, Traversal mode, std::uint32_t threads, Cancellation* cancel) {
     check_two_level(scene, mode);
+    check_tmax(rays);
     const Tlas& tlas = *scene.tlas;
     if (one_identity_instance(tlas)) {
         // One mesh where it was modelled: the flat batch itself, every hit in instance 0
