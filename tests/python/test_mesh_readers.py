@@ -347,3 +347,39 @@ def test_ascii_stl_vertex_lines_are_three_numbers(tmp_path):
 def test_gltf_with_values_of_the_wrong_type_is_not_gltf(tmp_path, changes):
     with pytest.raises(SceneFileError):  # TypeError and AttributeError escaped
         load(tmp_path, "model.gltf", gltf(**changes))
+
+
+UTF16_TEXTS = {
+    "obj": "# exported\nv 0 0 0\nv 2 0 0\nv 0 3 0\nf 1 2 3\n",
+    "stl": "solid tri\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 2 0 0\nvertex 0 3 0\nendloop\n"
+    "endfacet\nendsolid tri\n",
+    "ply": "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+    "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n2 0 0\n0 3 0\n3 0 1 2\n",
+}
+
+
+@pytest.mark.parametrize("codec", ["utf-16", "utf-16-be"])
+@pytest.mark.parametrize("kind", sorted(UTF16_TEXTS))
+def test_text_files_saved_as_utf16_read_as_utf8(tmp_path, kind, codec):
+    """Notepad's "Unicode" and PowerShell 5's `>` write UTF-16 with a byte-order mark: the OBJ read
+    as "0 faces", the STL and PLY as not STL or PLY."""
+    text = UTF16_TEXTS[kind]
+    data = text.encode(codec) if codec == "utf-16" else b"\xfe\xff" + text.encode(codec)
+    assert data[:2] in (b"\xff\xfe", b"\xfe\xff")
+    got = load(tmp_path, f"tri.{kind}", data)
+    np.testing.assert_array_equal(got, load(tmp_path, f"utf8.{kind}", text))
+    assert got.tolist() == [[[0, 0, 0], [2, 0, 0], [0, 3, 0]]]
+
+
+@pytest.mark.parametrize(
+    "name, data, message",
+    [
+        ("no_mark.obj", UTF16_TEXTS["obj"].encode("utf-16-le"), "a NUL byte at byte 1, which OBJ text has not"),
+        ("nul.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\x00\n", "a NUL byte at byte 31"),
+        ("half.obj", b"\xff\xfev\x00 \x00\x00\xd8", "a UTF-16 byte-order mark but is not UTF-16"),
+        ("half.stl", b"\xff\xfes\x00\x00\xdc", "a UTF-16 byte-order mark but is not UTF-16"),
+    ],
+)
+def test_text_files_that_are_not_utf8_or_utf16_say_so(tmp_path, name, data, message):
+    with pytest.raises(SceneFileError, match=message):
+        load(tmp_path, name, data)

@@ -15,13 +15,16 @@ import numpy as np
 
 from .._npz import SceneFileError
 from .polygons import triangulate_all
+from .text_bytes import refuse_nul, utf8_bytes
 
 
 def read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
     """float64 (V, 3) positions and int64 (T, 3) triangles of the OBJ file at `path`. One pass
     over the lines sorts out the statements; numbers are parsed in numpy (a million-triangle file
     in a few seconds)."""
-    text = path.read_bytes().decode("utf-8", errors="replace").lstrip("\ufeff")
+    data = utf8_bytes(path, path.read_bytes())
+    refuse_nul(path, data, "OBJ")
+    text = data.decode("utf-8", errors="replace").lstrip("\ufeff")
     text = text.replace("\r\n", "\n").replace("\r", "\n")  # lines end at \n, \r\n or \r only
     if _ODD_SPACE.search(text):  # \v, \f, no-break or line-separator spaces: spaces, not line ends
         text = _ODD_SPACE.sub(" ", text)

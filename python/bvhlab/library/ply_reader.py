@@ -15,6 +15,7 @@ import numpy as np
 
 from .._npz import SceneFileError
 from .polygons import triangulate_all
+from .text_bytes import utf8_bytes
 
 #: PLY's scalar type names (both spellings) → numpy's.
 _TYPES = {
@@ -42,7 +43,7 @@ class _Element:
 
 def read_ply(path: Path) -> tuple[np.ndarray, np.ndarray]:
     """float64 (V, 3) positions and int64 (T, 3) triangles of the PLY file at `path`."""
-    data = path.read_bytes()
+    data = utf8_bytes(path, path.read_bytes())  # an ASCII PLY saved as UTF-16
     fmt, elements, start = _header(path, data)
     if fmt == "ascii":
         values = _read_ascii(path, data[start:], elements)

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from .._npz import SceneFileError
+from .text_bytes import utf8_bytes
 
 _HEADER, _TRIANGLE = 84, 50
 _BINARY = np.dtype([("normal", "<f4", 3), ("vertices", "<f4", (3, 3)), ("attribute", "<u2")])
@@ -29,10 +30,12 @@ def read_stl(path: Path) -> tuple[np.ndarray, np.ndarray]:
     STL file at `path`."""
     data = path.read_bytes()
     count = int.from_bytes(data[80:84], "little") if len(data) >= _HEADER else -1
-    if count >= 0 and len(data) == _HEADER + _TRIANGLE * count:
+    binary = count >= 0 and len(data) == _HEADER + _TRIANGLE * count
+    text = b"" if binary else utf8_bytes(path, data)  # an ASCII STL saved as UTF-16
+    if binary:
         vertices = np.frombuffer(data, _BINARY, count, _HEADER)["vertices"].astype(np.float64).reshape(-1, 3)
-    elif data.lstrip(b"\xef\xbb\xbf \t\r\n")[:5].lower() == b"solid":
-        facets = _SOLID_LINE.sub(b"", data)
+    elif text.lstrip(b"\xef\xbb\xbf \t\r\n")[:5].lower() == b"solid":
+        facets = _SOLID_LINE.sub(b"", text)
         found = _VERTEX.findall(facets)
         if len(found) != len(_VERTEX_WORD.findall(facets)):  # a vertex of other than three numbers
             raise SceneFileError(f"{path}: a vertex line is not 'vertex x y z' (three numbers)")

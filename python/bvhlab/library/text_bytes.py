@@ -1,0 +1,35 @@
+"""The bytes of a text mesh file (OBJ, ASCII STL and PLY) as UTF-8. Windows' Notepad ("Unicode")
+and PowerShell 5's `>` save text as UTF-16 with a byte-order mark, in which every other byte of
+an ASCII file is NUL: read as UTF-8, such a file has no statements at all ("0 faces")."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .._npz import SceneFileError
+
+_UTF16_MARKS = {b"\xff\xfe": "utf-16-le", b"\xfe\xff": "utf-16-be"}
+
+
+def utf8_bytes(path: Path, data: bytes) -> bytes:
+    """`data` as UTF-8: a UTF-16 file (by its byte-order mark) decoded; anything else as it is."""
+    for mark, codec in _UTF16_MARKS.items():
+        if data.startswith(mark):
+            try:
+                return data[len(mark) :].decode(codec).encode("utf-8")
+            except UnicodeDecodeError as e:
+                raise SceneFileError(
+                    f"{path}: starts with a UTF-16 byte-order mark but is not UTF-16 "
+                    f"({e.reason} at byte {e.start + len(mark)})"
+                ) from None
+    return data
+
+
+def refuse_nul(path: Path, data: bytes, kind: str) -> None:
+    """A text file has no NUL bytes: one that has is UTF-16 without its mark, or not `kind` text."""
+    at = data.find(b"\x00")
+    if at >= 0:
+        raise SceneFileError(
+            f"{path}: a NUL byte at byte {at}, which {kind} text has not (UTF-16 without a byte-order mark, "
+            "or not a text file? save it as UTF-8)"
+        )
