@@ -207,3 +207,35 @@ def test_a_header_field_of_the_wrong_kind_is_a_damaged_header(saved, key, value)
     _rewrite_header(path, lambda header: header.__setitem__(key, value))
     with pytest.raises(tree_file.TreeFileError, match=f"damaged header.*{key}"):
         bvhlab.load_bvh(path, tris, spheres)
+
+
+def test_a_file_of_a_scene_too_small_to_trace_is_refused(tmp_path):
+    """A tree saved before `build` refused scenes under 2^-32 across (their hits were lost: the
+    triangle test's products underflow) is refused on load as build refuses it. The file is the
+    tree of a unit-scale scene with every coordinate scaled by 1e-10 (rounding is monotone, so
+    its boxes still hold the scaled triangles): loaded at 2e-10 it would be a valid tree."""
+    unit = np.random.default_rng(5).random((300, 3, 3)).astype(np.float32)
+    path = tmp_path / "tiny.bvhtree"
+    bvhlab.build(unit).save(path)
+    data = path.read_bytes()
+    start = len(tree_file.MAGIC) + 8
+    head_len = struct.unpack_from("<I", data, len(tree_file.MAGIC) + 4)[0]
+    header = json.loads(data[start : start + head_len])
+
+    def scaled(scale):
+        tiny = (unit.astype(np.float64) * scale).astype(np.float32)
+        header["geometry_fingerprint"] = int(bvhlab._core.geometry_fingerprint(tiny, None))
+        head = json.dumps(header, sort_keys=True).encode()
+        nodes = np.frombuffer(data, bvhlab.bvh.NODE_DTYPE, header["nodes"], start + head_len).copy()
+        for field in ("lo", "hi"):
+            nodes[field] = (nodes[field].astype(np.float64) * scale).astype(np.float32)
+        rest = data[start + head_len + nodes.nbytes : -32]
+        body = data[: len(tree_file.MAGIC) + 4] + struct.pack("<I", len(head)) + head + nodes.tobytes() + rest
+        path.write_bytes(body + hashlib.sha256(body).digest())
+        return tiny
+
+    tiny = scaled(2.4e-10)  # just above 2^-32: loads
+    assert len(bvhlab.load_bvh(path, tiny).nodes) > 0
+    tiny = scaled(1e-10)
+    with pytest.raises(ValueError, match="spans only 1e-10 units"):
+        bvhlab.load_bvh(path, tiny)

@@ -25,7 +25,8 @@ struct SavedTree {
 /// that is empty or whose slots do not follow the previous leaf's, a reference out of range or
 /// used twice, a box that is not finite or does not hold its children or primitives (an SBVH's
 /// leaves' boxes together all of each primitive: inspect/coverage.h), a tree
-/// deeper than MAX_TREE_HEIGHT. O(nodes + primitives), an SBVH's references sorted by primitive
+/// deeper than MAX_TREE_HEIGHT, a scene with triangles too small to trace (check_extent, as the build
+/// refuses it). O(nodes + primitives), an SBVH's references sorted by primitive
 /// and its many-part primitives clipped by their parts' boxes (coverage.h); no recursion.
 Bvh restore_bvh(SavedTree saved, const GeometryView& geometry, unsigned threads = 0);
 

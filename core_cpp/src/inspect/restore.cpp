@@ -166,6 +166,8 @@ Bvh restore_bvh(SavedTree saved, const GeometryView& geometry, unsigned threads)
     const bool clipped = saved.config.method == SplitMethod::Sbvh;
     check_boxes(saved.nodes, saved.refs, geometry, clipped);
     if (clipped) check_coverage(saved.nodes, saved.refs, geometry);
+    // a file made before build refused tiny scenes: its root holds the primitives (check_boxes)
+    if (!saved.nodes.empty()) check_extent(node_box(saved.nodes[0]), geometry.triangle_count);
 
     Bvh bvh;
     bvh.nodes.assign(saved.nodes.begin(), saved.nodes.end());
