@@ -101,7 +101,8 @@ struct GpuSphere {
 struct GpuMaterial {
     vec4 color_reflective;  ///< rgb colour, a = reflective factor
     vec4 transparent_ior;   ///< x = transparent factor, y = index of refraction, z = holdout (1: a hole in the
-                            ///< image where a camera ray meets it, black where another ray does; Cycles' holdout)
+                            ///< image where a camera ray meets it, black where another ray does; Cycles' holdout),
+                            ///< w = the RAY_* bits of the rays that pass through it as if it were not there
 };
 
 /// An instance of a two-level scene as the tracer reads it (issue 34), 64 bytes, stored in the TLAS's
@@ -181,6 +182,15 @@ struct DeviceAddresses {
                           ///< film_transparent: a surface or the overlay's line); frame.count_covered: the alpha
 };
 
+/// The Whitted tracer's rays (report §2.1), as bits of a material's hidden rays (GpuMaterial.transparent_ior.w:
+/// Cycles' Object ▸ Visibility ▸ Ray Visibility, whose Glossy and Transmission are the reflection and the
+/// refraction here; the tracer sends no diffuse rays).
+BVHLAB_CONST uint RAY_CAMERA = 1u;
+BVHLAB_CONST uint RAY_SHADOW = 2u;
+BVHLAB_CONST uint RAY_REFLECTION = 4u;
+BVHLAB_CONST uint RAY_REFRACTION = 8u;
+BVHLAB_CONST uint RAY_KINDS = 15u;  ///< every bit
+
 /// FrameParams::projection (camera.h Projection, in its order).
 BVHLAB_CONST uint PROJECTION_PERSPECTIVE = 0u;
 BVHLAB_CONST uint PROJECTION_ORTHOGRAPHIC = 1u;
@@ -243,6 +253,9 @@ struct FrameParams {
                                ///< pixel (RenderSettings::film_transparent; count_covered says it is counted)
     float overlay_line_width;  ///< whole pixels across the overlay's lines (RenderSettings::line_width rounded,
                                ///< as the rasterizers draw it): the trace pass's slope bias (line_on_surface)
+    uint hidden_materials;     ///< 1: a material hides from some rays (GpuMaterial.transparent_ior.w): the walks
+                               ///< look at each hit's material (0: every surface is seen by every ray)
+    uint reserved;             ///< unused (keeps `addr` on 8 bytes, as GLSL's std430 puts it)
     DeviceAddresses addr;
 };
 
@@ -289,8 +302,8 @@ static_assert(sizeof(BvhPair) == 64, "BvhPair must stay 64 bytes (std430 layout)
 static_assert(sizeof(GpuTriangle) == 48 && sizeof(GpuSphere) == 32 && sizeof(GpuMaterial) == 32);
 static_assert(sizeof(TraversalCounts) == COUNTER_COUNT * 4);
 static_assert(sizeof(GpuBox) == 32 && sizeof(GpuInstance) == 64 && sizeof(DeviceAddresses) == 17 * 8);
-static_assert(offsetof(FrameParams, width) == 160 && offsetof(FrameParams, addr) == 264);
-static_assert(sizeof(FrameParams) == 264 + sizeof(DeviceAddresses));
+static_assert(offsetof(FrameParams, width) == 160 && offsetof(FrameParams, addr) == 272);
+static_assert(sizeof(FrameParams) == 272 + sizeof(DeviceAddresses));
 }  // namespace bvhlab::gpu
 #endif
 #endif  // BVHLAB_GPU_TYPES_H

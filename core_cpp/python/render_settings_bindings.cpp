@@ -138,6 +138,10 @@ void bind_settings(nb::module_& m) {
 void bind_defaults(nb::module_& m) {
     m.attr("DEFAULT_SKY") = nb::tuple(nb::cast(kDefaultSkyRgb));
     m.attr("DEFAULT_MATERIAL") = nb::tuple(nb::cast(kDefaultMaterial));
+    nb::dict rays;  // the tracer's rays, as bits of a material's hidden rays (gpu_types.h RAY_*)
+    rays["CAMERA"] = gpu::RAY_CAMERA, rays["SHADOW"] = gpu::RAY_SHADOW;
+    rays["REFLECTION"] = gpu::RAY_REFLECTION, rays["REFRACTION"] = gpu::RAY_REFRACTION;
+    m.attr("RAY_BITS") = rays;
     m.attr("DEFAULT_FOV_Y") = kDefaultFovY;
     m.def(
         "default_camera",

@@ -21,6 +21,7 @@ from .render import (
 )
 from .render_options import RenderOptions
 from .scene import Camera, Light, Material, Scene
+from .scene_parts import Rays
 from .update import UPDATE_POLICIES, UpdateConfig, UpdateStats
 
 __version__ = "0.1.0"
@@ -40,6 +41,7 @@ __all__ = [
     "Camera",
     "Light",
     "Material",
+    "Rays",
     "METHODS",
     "AXES",
     "TRAVERSALS",

@@ -236,7 +236,8 @@ class Scene:
         return (centre - half).min(0), (centre + half).max(0)
 
     def material_table(self) -> np.ndarray:
-        """float32 (M, 7): r, g, b, reflective, transparent, ior, holdout (0 or 1)."""
+        """float32 (M, 8): r, g, b, reflective, transparent, ior, holdout (0 or 1), the bits of the rays
+        it is hidden from (Material.hidden_from)."""
         return np.array([m.as_row() for m in self.materials], np.float32).reshape(-1, len(defaults.MATERIAL))
 
     # -- files (scene_file.py) ------------------------------------------------------------------

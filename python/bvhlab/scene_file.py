@@ -11,17 +11,19 @@ import numpy as np
 
 from . import _checks, defaults
 from ._npz import MAX_EXPANSION, Member, SceneFileError, read_npz, write_npz
-from .scene_parts import Camera, Light, Material, _row3
+from .scene_parts import Camera, Light, Material, Rays, _row3
 
 if TYPE_CHECKING:
     from .scene import Scene
 
 #: Written by Scene.save; 2 added meshes and instances (issue 34), 3 a material's holdout (a seventh
-#: column of `materials`). Files of every version listed in READ_FORMAT_VERSIONS load.
-FORMAT_VERSION = 3
-READ_FORMAT_VERSIONS = (1, 2, 3)
-#: Columns of a file's materials by format: r, g, b, reflective, transparent, ior (, holdout).
-_MATERIAL_COLUMNS = {1: 6, 2: 6, 3: len(defaults.MATERIAL)}
+#: column of `materials`), 4 the rays it is hidden from (an eighth). Files of every version listed in
+#: READ_FORMAT_VERSIONS load.
+FORMAT_VERSION = 4
+READ_FORMAT_VERSIONS = (1, 2, 3, 4)
+#: Columns of a file's materials by format: r, g, b, reflective, transparent, ior (, holdout (, the
+#: rays it is hidden from: Material.hidden_from's bits)).
+_MATERIAL_COLUMNS = {1: 6, 2: 6, 3: 7, 4: len(defaults.MATERIAL)}
 
 
 def write_scene(scene: Scene, path) -> Path:
@@ -143,7 +145,12 @@ def _material_of_row(row, path) -> Material:
     holdout = float(row[6]) if len(row) > 6 else 0.0
     if holdout not in (0.0, 1.0):
         raise ValueError(f"a material's holdout must be 0 or 1, got {holdout}")
-    return Material(tuple(row[:3]), reflective, transparent, row[5], holdout=bool(holdout))
+    hidden = float(row[7]) if len(row) > 7 else 0.0
+    if not (hidden.is_integer() and 0 <= hidden <= int(~Rays(0))):
+        raise ValueError(f"a material's hidden rays must be Rays flags (0 to {int(~Rays(0))}), got {hidden}")
+    return Material(
+        tuple(row[:3]), reflective, transparent, row[5], holdout=bool(holdout), hidden_from=Rays(int(hidden))
+    )
 
 
 def _instancing_fields(f: dict) -> dict:

@@ -4,6 +4,7 @@ a scene's bounds."""
 
 from __future__ import annotations
 
+import enum
 import math
 import numbers
 from dataclasses import dataclass
@@ -48,17 +49,31 @@ def _row3(row: np.ndarray, first: int) -> tuple[float, float, float]:
     return float(row[first]), float(row[first + 1]), float(row[first + 2])
 
 
+#: The tracer's rays (report §2.1), for Material.hidden_from: Rays.CAMERA, SHADOW, REFLECTION,
+#: REFRACTION (Cycles' Object ▸ Visibility ▸ Ray Visibility: Camera, Shadow, Glossy, Transmission).
+class Rays(enum.IntFlag):
+    """The tracer's rays, as bits (Material.hidden_from); the core's values (gpu_types.h RAY_*)."""
+
+    CAMERA = int(_core.RAY_BITS["CAMERA"])
+    SHADOW = int(_core.RAY_BITS["SHADOW"])
+    REFLECTION = int(_core.RAY_BITS["REFLECTION"])
+    REFRACTION = int(_core.RAY_BITS["REFRACTION"])
+
+
 @dataclass(frozen=True)
 class Material:
     """Whitted material (report §2.1): a colour, a reflective and a transparent factor, an IOR; and
     `holdout` (Cycles' Holdout): a hole in the image where a camera ray meets it (no colour, alpha 0,
-    the sky's depth, on an opaque film too), black to other rays; its shadow stays."""
+    the sky's depth, on an opaque film too), black to other rays; its shadow stays. `hidden_from`:
+    the rays (Rays flags) that pass through it as if it were not there (Cycles' Ray Visibility:
+    Rays.CAMERA | Rays.SHADOW, say, is seen only in reflections and refractions)."""
 
     color: tuple[float, float, float] = defaults.MATERIAL[:3]  # type: ignore[assignment]  # three, by the core
     reflective: float = defaults.MATERIAL[3]
     transparent: float = defaults.MATERIAL[4]
     ior: float = defaults.MATERIAL[5]
     holdout: bool = bool(defaults.MATERIAL[6])
+    hidden_from: Rays = Rays(int(defaults.MATERIAL[7]))
 
     def __post_init__(self):
         object.__setattr__(self, "color", _radiance("material color", self.color))
@@ -79,10 +94,17 @@ class Material:
         if not isinstance(self.holdout, (bool, np.bool_)):
             raise TypeError(f"material holdout must be True or False, got {self.holdout!r}")
         object.__setattr__(self, "holdout", bool(self.holdout))
+        hidden = self.hidden_from
+        if isinstance(hidden, (bool, np.bool_)) or not isinstance(hidden, (numbers.Integral, Rays)):
+            raise TypeError(f"material hidden_from must be Rays flags, got {hidden!r}")
+        if not 0 <= int(hidden) <= int(~Rays(0)):
+            raise ValueError(f"material hidden_from must be Rays flags (0 to {int(~Rays(0))}), got {int(hidden)}")
+        object.__setattr__(self, "hidden_from", Rays(int(hidden)))
 
     def as_row(self) -> list[float]:
         """The material as the core reads it (render_defaults.h kMaterialFloats)."""
-        return [*self.color, self.reflective, self.transparent, float(self.ior), float(self.holdout)]
+        row = [*self.color, self.reflective, self.transparent, float(self.ior)]
+        return [*row, float(self.holdout), float(int(self.hidden_from))]
 
 
 #: Camera projections (core_cpp/include/bvhlab/camera.h): "perspective", "orthographic",

@@ -14,14 +14,16 @@ struct RayTask {
     vec3 dir;
     vec3 weight;  ///< how much this ray contributes to the pixel
     uint depth;   ///< bounces so far (0: the primary ray)
+    uint kind;    ///< RAY_CAMERA, RAY_REFLECTION or RAY_REFRACTION: which surfaces it sees (traverse.glsl sees)
 };
 
-RayTask ray_task(vec3 origin, vec3 dir, vec3 weight, uint depth) {
+RayTask ray_task(vec3 origin, vec3 dir, vec3 weight, uint depth, uint kind) {
     RayTask t;
     t.origin = origin;
     t.dir = dir;
     t.weight = weight;
     t.depth = depth;
+    t.kind = kind;
     return t;
 }
 
@@ -83,7 +85,7 @@ vec3 direct_light(vec3 p, vec3 n, vec3 view_dir, vec3 albedo, float transmission
 void push_ray(INOUT(TraceState) s, RayTask t) {
     uint k = 3u * s.rays;
     ray_word_store(k, uvec4(floatBitsToUint(t.origin.x), floatBitsToUint(t.origin.y), floatBitsToUint(t.origin.z), t.depth));
-    ray_word_store(k + 1u, uvec4(floatBitsToUint(t.dir.x), floatBitsToUint(t.dir.y), floatBitsToUint(t.dir.z), 0u));
+    ray_word_store(k + 1u, uvec4(floatBitsToUint(t.dir.x), floatBitsToUint(t.dir.y), floatBitsToUint(t.dir.z), t.kind));
     ray_word_store(k + 2u, uvec4(floatBitsToUint(t.weight.x), floatBitsToUint(t.weight.y), floatBitsToUint(t.weight.z), 0u));
     s.rays += 1u;
 }
@@ -96,7 +98,7 @@ RayTask pop_ray(INOUT(TraceState) s) {
     uvec4 c = ray_word_load(k + 2u);
     return ray_task(vec3(uintBitsToFloat(a.x), uintBitsToFloat(a.y), uintBitsToFloat(a.z)),
                     vec3(uintBitsToFloat(b.x), uintBitsToFloat(b.y), uintBitsToFloat(b.z)),
-                    vec3(uintBitsToFloat(c.x), uintBitsToFloat(c.y), uintBitsToFloat(c.z)), a.w);
+                    vec3(uintBitsToFloat(c.x), uintBitsToFloat(c.y), uintBitsToFloat(c.z)), a.w, b.w);
 }
 
 /// A line lying on a surface (a box's face on a floor or a wall) is not lost to rounding: the
@@ -168,14 +170,16 @@ void finish_shading(INOUT(TraceState) s, Surface f) {
         vec3 refracted = refract(s.task.dir, f.facing, eta);
         if (dot(refracted, refracted) > 0.0f) {
             vec3 dir = normalize(refracted);
-            push_ray(s, ray_task(ray_origin(f, dir, false), dir, s.task.weight * transparent, s.task.depth + 1u));
+            push_ray(s, ray_task(ray_origin(f, dir, false), dir, s.task.weight * transparent, s.task.depth + 1u,
+                                 RAY_REFRACTION));
         }
         else
             reflect_weight += transparent;
     }
     if (reflect_weight > 0.0f) {
         vec3 dir = reflect(s.task.dir, f.facing);
-        push_ray(s, ray_task(ray_origin(f, dir, true), dir, s.task.weight * reflect_weight, s.task.depth + 1u));
+        push_ray(s, ray_task(ray_origin(f, dir, true), dir, s.task.weight * reflect_weight, s.task.depth + 1u,
+                             RAY_REFLECTION));
     }
 }
 
@@ -273,11 +277,11 @@ void trace_steps(INOUT(TraceState) s, uint budget) {
         steps += 1u;
         s.work += 1u;
         bool finish = false;
-        if (s.phase == PHASE_CLOSEST) walk(s.walk, s.ray, false, s.hit, s.work, steps, budget);
+        if (s.phase == PHASE_CLOSEST) walk(s.walk, s.ray, s.task.kind, s.hit, s.work, steps, budget);
         steps = sync_steps(steps) + WALK_LOOPS;
         if (s.work > frame.max_work_per_pixel) s.phase = PHASE_FAILED;
         if (s.phase == PHASE_CLOSEST && s.walk.state == WALK_FINISHED && after_closest(s)) finish = shade_or_shadow(s);
-        if (s.phase == PHASE_SHADOW) walk(s.walk, s.ray, true, s.hit, s.work, steps, budget);
+        if (s.phase == PHASE_SHADOW) walk(s.walk, s.ray, RAY_SHADOW, s.hit, s.work, steps, budget);
         steps = sync_steps(steps) + WALK_LOOPS;
         if (s.work > frame.max_work_per_pixel) s.phase = PHASE_FAILED;
         if (s.phase == PHASE_SHADOW && s.walk.state == WALK_FINISHED) finish = true;
@@ -301,7 +305,7 @@ TraceState begin_pixel(uvec2 p, uint first, uint target) {
     s.ray = make_ray(vec3(0.0f), vec3(0.0f, 0.0f, 1.0f), 0.0f);
     s.hit = empty_hit(0.0f);
     s.closest = s.hit;
-    s.task = ray_task(vec3(0.0f), vec3(0.0f), vec3(0.0f), 0u);
+    s.task = ray_task(vec3(0.0f), vec3(0.0f), vec3(0.0f), 0u, RAY_CAMERA);
     s.overlay = overlay_at(p);
     s.color = vec3(0.0f);
     s.counts = no_counts();

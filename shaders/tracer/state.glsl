@@ -21,7 +21,7 @@ void save_state(TraceState s, uint stamp) {
     state_store(9u, word3(s.task.weight, floatBitsToUint(s.depth)));
     state_store(10u, word3(s.color, s.work));
     state_store(11u, uvec4(s.walk.instance, s.walk.outer, s.hit.instance, s.closest.instance));
-    state_store(12u, uvec4(s.hit.counts.prim_tests, s.hit.counts.prim_hits, s.hit.counts.instance_hits, 0u));
+    state_store(12u, uvec4(s.hit.counts.prim_tests, s.hit.counts.prim_hits, s.hit.counts.instance_hits, s.task.kind));
     state_store(13u, uvec4(s.counts.box_hits, s.counts.prim_tests, s.counts.prim_hits, s.counts.instance_hits));
     state_store(14u, uvec4(floatBitsToUint(s.closest.u), floatBitsToUint(s.closest.v), 0u, 0u));
 }
@@ -73,7 +73,8 @@ TraceState load_state() {
     uvec4 w14 = state_load(14u);
     s.closest.u = uintBitsToFloat(w14.x);
     s.closest.v = uintBitsToFloat(w14.y);
-    s.task = ray_task(vec3_of(w7), vec3_of(w8), vec3_of(w9), w7.w);
+    uvec4 w12 = state_load(12u);
+    s.task = ray_task(vec3_of(w7), vec3_of(w8), vec3_of(w9), w7.w, w12.w);
     s.counts.box_tests = w8.w;
     s.depth = uintBitsToFloat(w9.w);
     uvec4 w10 = state_load(10u);
@@ -84,7 +85,6 @@ TraceState load_state() {
     s.walk.outer = w11.y;
     s.hit.instance = w11.z;
     s.closest.instance = w11.w;
-    uvec4 w12 = state_load(12u);
     s.hit.counts.prim_tests = w12.x;
     s.hit.counts.prim_hits = w12.y;
     s.hit.counts.instance_hits = w12.z;

@@ -62,27 +62,38 @@ uint material_of(uint ref) {
     return load_triangle(ref).material;
 }
 
+/// Whether a ray of `kind` (a RAY_* bit) sees the primitive `ref`: not where its material hides from
+/// that kind (Cycles' Object ▸ Visibility ▸ Ray Visibility; the material's hidden bits); such a
+/// surface is passed through as if it were not there. Asked only of a hit, and only where some
+/// material hides (frame.hidden_materials).
+bool sees(uint ref, uint kind) {
+    return frame.hidden_materials == 0u || (uint(load_material(material_of(ref)).transparent_ior.w) & kind) == 0u;
+}
+
 /// One primitive of a leaf, as the tree keeps it in leaf order (Bvh::prims: a triangle's vertices,
 /// or a sphere's centre in v0 and radius in v1.x, its reference in `ref`), so a leaf's primitives
 /// are read in one run with no reference to follow to the scene's arrays (the leaf layout of Aila
 /// and Laine 2009). Closest-hit keeps the nearest; a shadow ray multiplies its transmission by the
 /// transparent factor of every surface it crosses (a sphere can be crossed twice). Returns true
 /// when the walk may stop (a shadow ray that is fully blocked).
-/// `instance`: the instance slot whose BLAS holds the primitive (NO_INSTANCE in a flat scene).
-bool visit_primitive(GpuTriangle p, TraceRay r, bool shadow, uint instance, INOUT(Hit) hit) {
+/// `kind`: the ray's RAY_* bit (RAY_SHADOW: a shadow ray); a primitive whose material hides from it
+/// is not hit (sees). `instance`: the instance slot whose BLAS holds the primitive (NO_INSTANCE in a
+/// flat scene).
+bool visit_primitive(GpuTriangle p, TraceRay r, uint kind, uint instance, INOUT(Hit) hit) {
+    bool shadow = kind == RAY_SHADOW;
     uint crossings = 0u;
     if ((p.ref & REF_SPHERE_BIT) != 0u) {
         float t;
         if (shadow) crossings = sphere_crossings(p.v0, p.v1.x, r, hit.t);
-        else if (hit_sphere(p.v0, p.v1.x, r, hit.t, t) && closer(t, p.ref, hit)) { hit.t = t; hit.ref = p.ref; hit.instance = instance; if (COUNT_TRAVERSAL) hit.counts.prim_hits += 1u; }
+        else if (hit_sphere(p.v0, p.v1.x, r, hit.t, t) && closer(t, p.ref, hit) && sees(p.ref, kind)) { hit.t = t; hit.ref = p.ref; hit.instance = instance; if (COUNT_TRAVERSAL) hit.counts.prim_hits += 1u; }
     } else {
         vec3 tuv;
         if (hit_triangle(p.v0, p.v1, p.v2, r, hit.t, tuv)) {
             if (shadow) crossings = tuv.x < hit.t ? 1u : 0u;
-            else if (closer(tuv.x, p.ref, hit)) { hit.t = tuv.x; hit.u = tuv.y; hit.v = tuv.z; hit.ref = p.ref; hit.instance = instance; if (COUNT_TRAVERSAL) hit.counts.prim_hits += 1u; }
+            else if (closer(tuv.x, p.ref, hit) && sees(p.ref, kind)) { hit.t = tuv.x; hit.u = tuv.y; hit.v = tuv.z; hit.ref = p.ref; hit.instance = instance; if (COUNT_TRAVERSAL) hit.counts.prim_hits += 1u; }
         }
     }
-    if (crossings == 0u) return false;
+    if (crossings == 0u || !sees(p.ref, RAY_SHADOW)) return false;
     float transparent = load_material(material_of(p.ref)).transparent_ior.x;
     hit.transmission *= crossings == 2u ? transparent * transparent : transparent;
     return hit.transmission <= 0.0f;
@@ -254,11 +265,11 @@ void step_stackless_node(INOUT(Walk) w, TraceRay r, uint end, INOUT(Hit) hit) {
 
 /// The next primitive of the leaf; after the last, the stack traversal pops and the stackless
 /// one goes on with the next node in depth-first order.
-void step_leaf(INOUT(Walk) w, TraceRay r, bool shadow, INOUT(Hit) hit) {
+void step_leaf(INOUT(Walk) w, TraceRay r, uint kind, INOUT(Hit) hit) {
     GpuTriangle p = load_leaf_prim(w.leaf_next);
     w.leaf_next += 1u;
     if (COUNT_TRAVERSAL) hit.counts.prim_tests += 1u;
-    if (visit_primitive(p, r, shadow, w.instance, hit)) w.state = WALK_FINISHED;
+    if (visit_primitive(p, r, kind, w.instance, hit)) w.state = WALK_FINISHED;
     else if (w.leaf_next >= w.leaf_end) {
         w.state = TRAVERSAL == TRAVERSAL_STACKLESS ? WALK_NODE : WALK_POP;
         w.node += 1u;  // stackless: past the leaf; the stack walk reads `node` only once a pop sets it
@@ -291,14 +302,15 @@ void step_pop(INOUT(Walk) w, Hit hit) {
 /// below the iterations the SIMD vector ran, which is what lavapipe's loop limit counts (see
 /// MAX_STEPS_PER_DISPATCH), and a walk cut short by the budget continues from `w` later. `work`
 /// counts this lane's own steps (a node, a primitive, a pop; two-level: entering or leaving an
-/// instance). `r` is the world ray.
-void walk(INOUT(Walk) walk_state, TraceRay r, bool shadow, INOUT(Hit) query, INOUT(uint) work, INOUT(uint) steps,
+/// instance). `r` is the world ray; `kind` its RAY_* bit (RAY_SHADOW: a shadow ray, which multiplies
+/// the transmissions it crosses; the others find the closest hit they see).
+void walk(INOUT(Walk) walk_state, TraceRay r, uint kind, INOUT(Hit) query, INOUT(uint) work, INOUT(uint) steps,
           uint budget) {
 #ifdef __cplusplus
     // The CPU tracer's wide walk (cpu_tracer.h): the whole query at once, the same hit; asked once
     // a query, where it starts (a query it leaves to the stack walk goes on there in later budgets).
     if (TRAVERSAL == TRAVERSAL_WIDE && steps < budget && walk_state.state == WALK_ROOT &&
-        walk_state.instance == NO_INSTANCE && wide_walk(walk_state, r, shadow, query, work, steps))
+        walk_state.instance == NO_INSTANCE && wide_walk(walk_state, r, kind, query, work, steps))
         return;
 #endif
     Walk w = walk_state;  // locals: the CPU build keeps them in registers (the state may alias the slot)
@@ -336,7 +348,7 @@ void walk(INOUT(Walk) walk_state, TraceRay r, bool shadow, INOUT(Hit) query, INO
         while (w.state == WALK_LEAF && steps < budget) {
             steps += 1u;
             work += 1u;
-            step_leaf(w, r, shadow, hit);
+            step_leaf(w, r, kind, hit);
         }
         steps = sync_steps(steps) + 1u;
         while (w.state == WALK_POP && steps < budget) {

@@ -21,8 +21,9 @@ struct InstancedRender {
     std::vector<Bvh> trees;
     std::vector<std::uint32_t> blas_of;
     std::vector<Transform> transforms;
-    std::vector<float> materials{0.8f, 0.8f, 0.8f, 0.2f, 0.4f, 1.3f, 0.0f,  // glass-like: refraction sees the normals
-                                 0.9f, 0.3f, 0.2f, 0.0f, 0.0f, 1.0f, 0.0f};
+    std::vector<float> materials{
+        0.8f, 0.8f, 0.8f, 0.2f, 0.4f, 1.3f, 0.0f, 0.0f,  // glass-like: refraction sees the normals
+        0.9f, 0.3f, 0.2f, 0.0f, 0.0f, 1.0f, 0.0f, 0.0f};
     RenderTestScene flat;
     Tlas tlas;
     RenderScene two_level;

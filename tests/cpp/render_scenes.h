@@ -16,15 +16,15 @@ namespace bvhlab::test {
 
 struct RenderTestScene {
     Scene geometry;
-    std::vector<float> materials;  // M×kMaterialFloats: r, g, b, reflective, transparent, ior, holdout
+    std::vector<float> materials;  // M×kMaterialFloats: r, g, b, reflective, transparent, ior, holdout, hidden
     std::vector<std::int32_t> triangle_material, sphere_material;
     Bvh bvh;
     RenderScene render;
     RenderSettings settings;
 
     std::int32_t material(Vec3 color, float reflective = 0, float transparent = 0, float ior = 1.5f,
-                          bool holdout = false) {
-        for (float v : {color.x, color.y, color.z, reflective, transparent, ior, holdout ? 1.0f : 0.0f})
+                          bool holdout = false, std::uint32_t hidden = 0) {
+        for (float v : {color.x, color.y, color.z, reflective, transparent, ior, holdout ? 1.0f : 0.0f, float(hidden)})
             materials.push_back(v);
         return std::int32_t(materials.size() / kMaterialFloats - 1);
     }

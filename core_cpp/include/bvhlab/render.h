@@ -22,8 +22,8 @@
 namespace bvhlab {
 
 /// Per-primitive materials, borrowed from the caller: M rows of kMaterialFloats floats (r, g, b,
-/// reflective, transparent, ior, holdout: 0 or 1, render_defaults.h) and one material index per
-/// triangle and per sphere.
+/// reflective, transparent, ior, holdout: 0 or 1, hidden: the gpu::RAY_* bits of the rays that do not
+/// see it; render_defaults.h) and one material index per triangle and per sphere.
 struct MaterialView {
     const float* materials = nullptr;
     std::size_t material_count = 0;
@@ -55,6 +55,9 @@ struct RenderScene {
     /// Some material is a holdout: the render counts each pixel's covered samples, its alpha, also
     /// on an opaque film (FrameParams::count_covered)
     bool holdout = false;
+    /// Some material hides from some rays (its `hidden` bits): the walks look at each hit's material
+    /// (FrameParams::hidden_materials)
+    bool hidden = false;
     BigVector<gpu::GpuBox> boxes;   ///< in `order`: the boxes of depth d are order.range(d, d)
     DepthOrder order;               ///< of the tree's nodes (depth_order.h), or of the boxes given
     std::uint32_t tree_height = 0;  ///< of the tree (two-level: the TLAS's), whatever boxes the overlay draws

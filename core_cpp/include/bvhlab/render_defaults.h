@@ -13,9 +13,9 @@ namespace bvhlab {
 // In double precision, as Python's floats see them; the renderers use them as float.
 /// A soft blue atmosphere (report §2.1: the colour of rays that hit nothing).
 inline constexpr std::array<double, 3> kDefaultSkyRgb{0.55, 0.7, 0.9};
-/// Matte white: r, g, b, reflective, transparent, ior, holdout (the layout of a material row,
-/// kMaterialFloats).
-inline constexpr std::array<double, 7> kDefaultMaterial{0.8, 0.8, 0.8, 0.0, 0.0, 1.5, 0.0};
+/// Matte white: r, g, b, reflective, transparent, ior, holdout, hidden (the rays that do not see it:
+/// gpu::RAY_* bits, 0 for none) — the layout of a material row, kMaterialFloats.
+inline constexpr std::array<double, 8> kDefaultMaterial{0.8, 0.8, 0.8, 0.0, 0.0, 1.5, 0.0, 0.0};
 /// Floats in a material row (MaterialView, bvhlab.Material.as_row).
 inline constexpr std::size_t kMaterialFloats = kDefaultMaterial.size();
 /// Vertical field of view of the default camera, degrees.

@@ -16,7 +16,8 @@ namespace bvhlab::gpu {
 
 /// What TRAVERSAL_WIDE answers queries with (render.h start_cpu): a flat scene's 8-wide copy (of
 /// the scene's tree, RenderScene::bvh), or a two-level scene's TLAS and meshes (tlas.h's queries, Traversal::Wide); and
-/// whether every material is opaque (a blocked shadow ray's transmission is then 0: wide_walk).
+/// whether every material is opaque and seen by shadow rays (a blocked shadow ray's transmission is
+/// then 0: wide_walk).
 struct WideScene {
     const WideBvh* wide = nullptr;
     const TwoLevel* two_level = nullptr;
@@ -99,10 +100,14 @@ public:
     /// so the wide walk finds the ray's nearest crossing instead: none, transmission 1; an opaque
     /// surface, 0, which the stack walk's product is in any order (a factor of 0 among factors in
     /// [0, 1]); a transparent one, the ray is left to the stack walk (returns false). The shadow
-    /// rays so answered are counted (shadow_opaque, shadow_glass: RenderTimings). Returns false too
-    /// where there is no wide tree.
-    bool wide_walk(INOUT(Walk) w, TraceRay r, bool shadow, INOUT(Hit) hit, INOUT(uint) work, INOUT(uint) steps) {
+    /// rays so answered are counted (shadow_opaque, shadow_glass: RenderTimings). A surface whose
+    /// material hides from the ray's kind (traverse.glsl sees) is not in the wide trees' answers:
+    /// where the nearest hit or crossing is one, the ray is left to the stack walk, which passes
+    /// through it (counted as shadow_glass for a shadow ray). Returns false too where there is no
+    /// wide tree.
+    bool wide_walk(INOUT(Walk) w, TraceRay r, uint kind, INOUT(Hit) hit, INOUT(uint) work, INOUT(uint) steps) {
         if (wide_ == nullptr) return false;
+        const bool shadow = kind == RAY_SHADOW;
         const Ray ray{{r.origin.x, r.origin.y, r.origin.z}, {r.dir.x, r.dir.y, r.dir.z}, r.tmin, hit.t};
         if (shadow && wide_->opaque) {
             const bool blocked = wide_->two_level ? occluded_two_level(*wide_->two_level, ray, Traversal::Wide)
@@ -112,7 +117,7 @@ public:
             Hit nearest = hit;
             nearest_hit(ray, nearest);
             if (nearest.ref != NO_HIT) {
-                if (load_material(material_of(nearest.ref)).transparent_ior.x != 0.0f) {
+                if (load_material(material_of(nearest.ref)).transparent_ior.x != 0.0f || !sees(nearest.ref, kind)) {
                     shadow_glass += 1u;
                     return false;
                 }
@@ -120,7 +125,10 @@ public:
                 hit.transmission = 0.0f;
             }
         } else {
-            nearest_hit(ray, hit);
+            Hit nearest = hit;
+            nearest_hit(ray, nearest);
+            if (nearest.ref != NO_HIT && !sees(nearest.ref, kind)) return false;
+            hit = nearest;
         }
         w.state = WALK_FINISHED;
         steps += 1u;

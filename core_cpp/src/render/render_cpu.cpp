@@ -88,7 +88,9 @@ private:
     /// TLAS and meshes (copied; checked against the scene; without them the stack walk walks it).
     void prepare_wide(const WideTrees& wide) {
         bool opaque = true;
-        for (const gpu::GpuMaterial& m : scene_.materials) opaque = opaque && m.transparent_ior.x == 0.0f;
+        for (const gpu::GpuMaterial& m : scene_.materials)
+            opaque =
+                opaque && m.transparent_ior.x == 0.0f && (std::uint32_t(m.transparent_ior.w) & gpu::RAY_SHADOW) == 0u;
         if (scene_.two_level()) {
             if (wide.two_level == nullptr) return;
             check_two_level(*wide.two_level, Traversal::Wide);

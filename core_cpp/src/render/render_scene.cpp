@@ -31,7 +31,7 @@ std::uint32_t material_index(const std::int32_t* table, std::size_t i, std::size
 namespace {
 template <class T>
 gpu::GpuMaterial gpu_material(const T* m) {
-    return {{float(m[0]), float(m[1]), float(m[2]), float(m[3])}, {float(m[4]), float(m[5]), float(m[6]), 0}};
+    return {{float(m[0]), float(m[1]), float(m[2]), float(m[3])}, {float(m[4]), float(m[5]), float(m[6]), float(m[7])}};
 }
 
 }  // namespace
@@ -47,6 +47,9 @@ std::vector<gpu::GpuMaterial> gpu_materials(const MaterialView& mv) {
                                         ": reflective and transparent must be in [0, 1] and ior > 0");
         if (m[6] != 0 && m[6] != 1)
             throw std::invalid_argument("material " + std::to_string(i) + ": holdout must be 0 or 1");
+        if (!(m[7] >= 0 && m[7] <= float(gpu::RAY_KINDS)) || m[7] != std::floor(m[7]))
+            throw std::invalid_argument("material " + std::to_string(i) + ": hidden must be a whole number in [0, " +
+                                        std::to_string(gpu::RAY_KINDS) + "] (RAY_* bits)");
         out.push_back(gpu_material(m));
     }
     if (out.empty()) out.push_back(gpu_material(kDefaultMaterial.data()));
@@ -56,6 +59,11 @@ std::vector<gpu::GpuMaterial> gpu_materials(const MaterialView& mv) {
 bool any_holdout(const std::vector<gpu::GpuMaterial>& materials) {
     return std::any_of(materials.begin(), materials.end(),
                        [](const gpu::GpuMaterial& m) { return m.transparent_ior.z != 0.0f; });
+}
+
+bool any_hidden(const std::vector<gpu::GpuMaterial>& materials) {
+    return std::any_of(materials.begin(), materials.end(),
+                       [](const gpu::GpuMaterial& m) { return m.transparent_ior.w != 0.0f; });
 }
 
 void check_tree_matches(const Bvh& bvh, const GeometryView& g) {
@@ -94,6 +102,7 @@ RenderScene make_render_scene(const Bvh& bvh, const GeometryView& g, const Mater
     s.bvh = &bvh;
     s.materials = gpu_materials(mv);
     s.holdout = any_holdout(s.materials);
+    s.hidden = any_hidden(s.materials);
     const std::size_t n_materials = mv.material_count ? mv.material_count : 1;
     s.triangles.resize(g.triangle_count);
     for (std::size_t i = 0; i < g.triangle_count; ++i)
@@ -190,6 +199,7 @@ gpu::FrameParams make_frame_params(const RenderScene& scene, const RenderSetting
     f.count_traversal = s.traversal_counters ? 1u : 0u;
     f.film_transparent = s.film_transparent ? 1u : 0u;
     f.count_covered = s.film_transparent || scene.holdout ? 1u : 0u;
+    f.hidden_materials = scene.hidden ? 1u : 0u;
     return f;
 }
 

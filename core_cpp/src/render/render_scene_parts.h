@@ -17,6 +17,8 @@ std::uint32_t material_index(const std::int32_t* table, std::size_t i, std::size
 std::vector<gpu::GpuMaterial> gpu_materials(const MaterialView& mv);
 /// Whether any of `materials` is a holdout (RenderScene::holdout).
 bool any_holdout(const std::vector<gpu::GpuMaterial>& materials);
+/// Whether any of `materials` hides from some rays (RenderScene::hidden).
+bool any_hidden(const std::vector<gpu::GpuMaterial>& materials);
 
 /// Throws std::invalid_argument unless `bvh` was built (or refitted) over `g`.
 void check_tree_matches(const Bvh& bvh, const GeometryView& g);

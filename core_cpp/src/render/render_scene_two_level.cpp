@@ -109,6 +109,7 @@ RenderScene make_render_scene(const Tlas& tlas, const std::vector<RenderMesh>& m
     RenderScene s;
     s.materials = gpu_materials(mv);
     s.holdout = any_holdout(s.materials);
+    s.hidden = any_hidden(s.materials);
     const std::size_t n_materials = mv.material_count ? mv.material_count : 1;
     std::vector<std::uint32_t> first_triangle, first_sphere;
     for (const RenderMesh& m : meshes) {

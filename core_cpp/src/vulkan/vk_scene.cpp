@@ -35,6 +35,7 @@ SceneBuffers::SceneBuffers(const Device& device, CommandRunner& runner, const Re
     summary_.stack_entries = scene.stack_entries;
     summary_.walk_steps = scene.walk_steps;
     summary_.holdout = scene.holdout;
+    summary_.hidden = scene.hidden;
     summary_.instances.resize(scene.instances.size());  // make_frame_params counts them (never read)
 }
 
