@@ -5,16 +5,12 @@ view layer being rendered."""
 
 from __future__ import annotations
 
-#: Object Properties ▸ Visibility ▸ Ray Visibility (Cycles' flags): bvhlab shows every object to
-#: every ray.
-RAY_VISIBILITY = ("visible_camera", "visible_diffuse", "visible_glossy", "visible_transmission", "visible_shadow")
-
 #: Object types Blender renders whose geometry the export does not read (it reads meshes and what
 #: converts to one: mesh.py CONVERTIBLE_TYPES).
 UNREAD_TYPES = {"CURVES": "hair curves", "POINTCLOUD": "point clouds", "VOLUME": "volumes"}
 
-#: Object Properties ▸ Visibility: per-object render effects bvhlab does not make (holdout it
-#: makes: Material.holdout, material_table.py).
+#: Object Properties ▸ Visibility: per-object render effects bvhlab does not make (holdout and ray
+#: visibility it makes: Material.holdout and hidden_from, material_table.py).
 OBJECT_EFFECTS = {"is_shadow_catcher": "shadow catcher"}
 
 #: View Layer ▸ collection flags bvhlab does not honour, and what it does instead (holdout it
@@ -46,13 +42,8 @@ def unrendered_features(depsgraph) -> list[str]:
         if (original, obj.type) not in seen:
             seen.add((original, obj.type))
             found.look_at(obj, original.name)
-    limited, unread, effects, strands = found.limited, found.unread, found.effects, found.strands
+    unread, effects, strands = found.unread, found.effects, found.strands
     notes = []
-    if limited:
-        notes.append(
-            f"ray visibility is not rendered ({_named('Object ▸ Visibility ▸ Ray Visibility of', limited)}): "
-            "every object is seen by every ray"
-        )
     for kind, names in unread.items():
         notes.append(f"{UNREAD_TYPES[kind]} are not rendered ({_named('object', names)})")
     if strands:
@@ -81,7 +72,6 @@ class _Found:
         self.shapes = {"MESH", *CONVERTIBLE_TYPES}  # what the export reads (a light's flags are its own)
         # names in the order first seen, each once (dicts as ordered sets: 10,000 objects were a
         # list scan each)
-        self.limited: dict[str, None] = {}
         self.unread: dict[str, dict[str, None]] = {}
         self.effects: dict[str, dict[str, None]] = {}
         self.strands: dict[str, None] = {}
@@ -95,8 +85,6 @@ class _Found:
             return
         if kind not in self.shapes:
             return
-        if not all(getattr(obj, flag, True) for flag in RAY_VISIBILITY):
-            self.limited[name] = None
         for flag in OBJECT_EFFECTS:
             if getattr(obj, flag, False):
                 self.effects.setdefault(flag, {})[name] = None

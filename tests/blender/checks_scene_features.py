@@ -215,3 +215,60 @@ def check_principled_metal_lies_over_transmission() -> None:
         exported = export_scene(bpy.context).materials[0]
         got = (exported.reflective, exported.transparent)
         assert np.allclose(got, want, atol=1e-6), (metallic, got)
+
+
+def check_curves_text_surfaces_and_metaballs_are_exported_once() -> None:
+    """A text, a bevelled curve, a filled 2D curve, a NURBS surface and a metaball: the depsgraph
+    shows each as itself and as an instance of type MESH holding its surface, which Cycles renders
+    once; the export has exactly the triangles of that surface in the world (every one was
+    exported twice: through the object's to_mesh too), and a curve without a surface has none."""
+    adders = {
+        "text": lambda: bpy.ops.object.text_add(),
+        "bevelled curve": lambda: (bpy.ops.curve.primitive_bezier_circle_add(), _set_data(bevel_depth=0.2)),
+        "filled 2D curve": lambda: (
+            bpy.ops.curve.primitive_bezier_circle_add(),
+            _set_data(dimensions="2D", fill_mode="BOTH"),
+        ),
+        "surface": lambda: bpy.ops.surface.primitive_nurbs_surface_sphere_add(),
+        "metaball": lambda: bpy.ops.object.metaball_add(),
+    }
+    for kind, add in adders.items():
+        harness.empty_scene((32, 24))
+        harness.add_camera((0, -9, 7), (0, 0, 0))
+        add()
+        obj = bpy.context.active_object
+        obj.location, obj.rotation_euler = (0.3, 0.2, 0.5), (0.4, 0.1, 0.7)
+        bpy.context.view_layer.update()
+        depsgraph = bpy.context.evaluated_depsgraph_get()
+        evaluated = obj.evaluated_get(depsgraph)
+        mesh = evaluated.to_mesh()
+        mesh.calc_loop_triangles()
+        corners = np.array([list(t.vertices) for t in mesh.loop_triangles], np.int64).reshape(-1, 3)
+        local = np.array([v.co[:] for v in mesh.vertices], np.float64)
+        evaluated.to_mesh_clear()
+        world = np.array(obj.matrix_world)
+        expected = (local @ world[:3, :3].T + world[:3, 3])[corners]
+        exported = export_scene(bpy.context).flattened().triangles.astype(np.float64)
+        assert len(expected) > 40 and len(exported) == len(expected), (kind, len(exported), len(expected))
+        # the same corners and area (a quad may be split along the other diagonal)
+        a, b = exported.reshape(-1, 3), expected.reshape(-1, 3)
+        apart = np.linalg.norm(a[:, None] - b[None], axis=-1)
+        assert apart.min(1).max() < 1e-4 and apart.min(0).max() < 1e-4, kind
+        assert abs(_area(exported) - _area(expected)) <= 1e-4 * _area(expected), kind
+    harness.empty_scene((32, 24))
+    harness.add_camera((0, -9, 7), (0, 0, 0))
+    bpy.ops.curve.primitive_bezier_circle_add()  # a curve with no surface: nothing to export
+    harness.add_box("Box", (0, 0, 0))
+    assert len(export_scene(bpy.context).flattened().triangles) == 12
+
+
+def _area(triangles: np.ndarray) -> float:
+    return float(
+        0.5
+        * np.linalg.norm(np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0]), axis=1).sum()
+    )
+
+
+def _set_data(**values) -> None:
+    for name, value in values.items():
+        setattr(bpy.context.active_object.data, name, value)

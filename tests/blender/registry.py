@@ -164,6 +164,11 @@ def _engine() -> Iterator[Check]:
     yield Check("engine", "errors_are_reported", engine.check_errors_are_reported)
     yield Check("engine", "depth_of_field_focuses_on_a_bone", features.check_depth_of_field_focuses_on_a_bone)
     yield Check(
+        "engine",
+        "curves_text_surfaces_and_metaballs_are_exported_once",
+        features.check_curves_text_surfaces_and_metaballs_are_exported_once,
+    )
+    yield Check(
         "engine", "principled_metal_lies_over_transmission", features.check_principled_metal_lies_over_transmission
     )
     yield Check(
@@ -190,6 +195,7 @@ def _cameras() -> Iterator[Check]:
     import checks_holdout as holdout
     import checks_node_outputs as node_outputs
     import checks_stereo as stereo
+    import checks_visibility as visibility
 
     for name in cameras.SETTINGS:
         yield Check(
@@ -207,6 +213,7 @@ def _cameras() -> Iterator[Check]:
         "cameras", "multiview_cameras_against_cycles", stereo.check_multiview_cameras_against_cycles, folder=True
     )
     yield Check("cameras", "holdouts_against_cycles", holdout.check_holdouts_against_cycles, folder=True)
+    yield Check("cameras", "ray_visibility_against_cycles", visibility.check_ray_visibility_against_cycles, folder=True)
     yield Check(
         "cameras",
         "node_curves_and_points_beside_a_mesh",

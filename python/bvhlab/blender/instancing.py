@@ -65,6 +65,7 @@ class Item:
     placed: np.ndarray | None = None
     moved: bool = False  # the same mesh as last sync, a different matrix
     origin: tuple = ()  # (owner's name, owner, shown object's name, shown object): originals (motion.py)
+    sphere_data: int | None = None  # a sphere's mesh data address: its bounds are that data's
 
     @property
     def name(self) -> str:

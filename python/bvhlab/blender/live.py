@@ -36,8 +36,8 @@ from .depsgraph_updates import Dirty
 from .errors import ExportError, ExportWarning, SubstituteWarning
 from .instancing import Item, Layout, SharedMesh, instance_transforms, plan, shared_meshes
 from .light import gather_light
-from .material_table import MaterialTable, map_slots
-from .mesh import CONVERTIBLE_TYPES, MeshData, read_mesh
+from .material_table import PLAIN, Look, MaterialTable, hidden_rays, map_slots
+from .mesh import MeshData, read_mesh
 from .motion import AnimatedMemo
 from .primitive_sample import primitive_sample
 from .scope import instances_in_scope, matrices_array
@@ -45,8 +45,12 @@ from .sphere import is_analytic_sphere, place_sphere, sphere_bounds
 from .sync_report import SyncReport, SyncTotals
 from .world import gather_sky
 
-#: Object types that can have primitives (meshes, and what converts to a mesh).
-GEOMETRY_TYPES = CONVERTIBLE_TYPES | {"MESH"}
+#: Object types that can have primitives. A curve, text, surface or metaball object (mesh.py
+#: CONVERTIBLE_TYPES) is shown by the depsgraph as itself (its data a Curve, TextCurve, ...) and as
+#: an instance of type MESH holding its evaluated surface (Blender 4.2 to 5.3 alike): Cycles renders
+#: the mesh alone (object_is_geometry: the object's data is a Mesh), and so does the export — read
+#: through the object too, every such triangle was exported twice.
+GEOMETRY_TYPES = frozenset({"MESH"})
 
 
 def _address(data, addresses: dict) -> int:
@@ -93,18 +97,31 @@ class LiveScene:
         self._seen_moving: set[tuple] = set()  # keys of the items seen moving (movers from then on)
         self._world = np.zeros((0, 4, 4))  # the items' world matrices, row i the i-th item's
         self._override_key: str | None = None  # the view layer's Material Override when last synced
+        self._failed = False  # the last sync raised: the next reads everything
 
     def sync(self, depsgraph, blender_scene=None, view_layer=None) -> SyncReport:
         """Bring `scene` up to date with the evaluated depsgraph. Raises ExportError (see
-        export_scene); on an error the previous scene and cache stay as they were."""
+        export_scene); on an error the previous scene and cache stay as they were, and the next
+        sync reads everything: the updates this evaluation names are not named again, so an edit
+        made while the scene could not be exported (an object out of range) would stay unread."""
+        try:
+            report = self._sync(depsgraph, blender_scene, view_layer)
+        except BaseException:
+            self._failed = True
+            raise
+        self._failed = False
+        return report
+
+    def _sync(self, depsgraph, blender_scene, view_layer) -> SyncReport:
         blender_scene = blender_scene or depsgraph.scene
         view_layer = view_layer or depsgraph.view_layer
         # the view layer's Material Override in every slot; set or cleared, every item's slots anew
         override = getattr(view_layer, "material_override", None)
         override_key = None if override is None else override.original.name_full
-        full = self.scene is None or override_key != self._override_key
+        full = self.scene is None or override_key != self._override_key or self._failed
         dirty = Dirty(everything=True) if full else Dirty.from_updates(depsgraph)
-        known = {k: v for k, v in self._materials.items() if k not in dirty.materials}
+        # materials read before and not changed since (after a failed sync, none is known unchanged)
+        known = {} if self._failed else {k: v for k, v in self._materials.items() if k not in dirty.materials}
         table = MaterialTable(known, override)
         items, world, by_data, report, seen_moving = self._walk(depsgraph, view_layer, dirty, table)
         report.full = full
@@ -149,7 +166,8 @@ class LiveScene:
         items: dict[tuple, Item] = {}
         fresh: dict[int, MeshData] = {}  # meshes read in this sync, by data address
         by_data: dict[int, MeshData] = {}
-        parts: dict[tuple, tuple] = {}  # (shown object's name, data address, holdout) → (sphere, slot table)
+        parts: dict[tuple, tuple] = {}  # (shown object's name, data address, look) → (sphere, slot table)
+        looks: dict[tuple, Look] = {}  # (owner, shown object), originals → how it shows its materials
         holdouts: dict = {}  # owner (original) → whether it is a holdout in the view layer
         addresses: dict = {}  # evaluated mesh (hashed by its address) → its address: as_pointer once
         report = SyncReport()
@@ -158,21 +176,28 @@ class LiveScene:
             old = self._items.get(key)
             changed = dirty.everything or dirty.geometry_of(obj, key)
             data = _address(obj.data, addresses) if entry.type == "MESH" else None  # None: a mesh of its own
-            # a holdout as Cycles decides it: of the object, or of the object instancing it
-            holdout = holdouts.get(entry.owner)
-            if holdout is None:
-                holdout = holdouts[entry.owner] = bool(entry.owner.holdout_get(view_layer=view_layer))
-            part = parts.get((key[1], data, holdout)) if data is not None else None
+            # a holdout as Cycles decides it: of the object, or of the object instancing it; the rays
+            # that see it, those both let see it
+            look = looks.get((entry.owner, entry.source))
+            if look is None:
+                holdout = holdouts.get(entry.owner)
+                if holdout is None:
+                    holdout = holdouts[entry.owner] = bool(entry.owner.holdout_get(view_layer=view_layer))
+                hidden = hidden_rays(entry.owner, entry.source)
+                look = looks[entry.owner, entry.source] = Look(holdout, hidden) if holdout or hidden else PLAIN
+            part = parts.get((key[1], data, look)) if data is not None else None
             if part is None:
                 part = (entry.type == "MESH" and is_analytic_sphere(obj), None)
             if part[0]:
-                if old is None or old.mesh is not None or changed:
+                # an item of this name before may be another object's sphere (renamed to this name)
+                if old is None or old.mesh is not None or old.sphere_data != data or changed:
                     bounds = sphere_bounds(obj)
                     report.objects_read += 1
                 else:
                     assert old.bounds is not None  # a sphere keeps its object-space bounds
                     bounds = old.bounds
-                item = Item(None, bounds, entry.matrix, None, table.slot_indices(obj, holdout=holdout), key)
+                slots = table.slot_indices(obj, look=look)
+                item = Item(None, bounds, entry.matrix, None, slots, key, sphere_data=data)
             else:
                 mesh = fresh.get(data) if data is not None else None
                 if mesh is None:
@@ -186,9 +211,9 @@ class LiveScene:
                     by_data[data] = mesh
                 slots = part[1]
                 if slots is None and mesh.triangle_count:
-                    slots = table.slot_indices(obj, data, holdout)
+                    slots = table.slot_indices(obj, data, look)
                     if data is not None:
-                        parts[(key[1], data, holdout)] = (False, slots)
+                        parts[(key[1], data, look)] = (False, slots)
                 item = Item(mesh, None, entry.matrix, data, slots, key)
             item.origin = (key[0], entry.owner, key[1], entry.source)
             items[key] = item
@@ -228,7 +253,7 @@ class LiveScene:
 
     def _known_mesh(self, old: Item | None, data: int | None, obj) -> MeshData | None:
         """The mesh read before for an item whose geometry did not change, or None to read it."""
-        if old is not None and old.mesh is not None and old.data == data:
+        if old is not None and old.mesh is not None and data is not None and old.data == data:
             return old.mesh
         mesh = self._by_data.get(data) if data is not None else None
         if mesh is not None and len(mesh.positions) == _vertex_count(obj):

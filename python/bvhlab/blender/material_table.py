@@ -1,14 +1,47 @@
-"""One `bvhlab.Material` per Blender material used (and its holdout, where a holdout object shows
-it), and the slot → table index of each object."""
+"""One `bvhlab.Material` per Blender material used (and its variant where an object shows it as a
+holdout or hidden from some rays: Look), and the slot → table index of each object."""
 
 from __future__ import annotations
 
 import dataclasses
+from typing import NamedTuple
 
 import numpy as np
 
 from ..scene import Material
+from ..scene_parts import Rays
 from .material import gather_material
+
+#: Object ▸ Visibility ▸ Ray Visibility's flags and the tracer's rays they hide (Cycles' Glossy and
+#: Transmission are the reflection and the refraction; the tracer sends no diffuse or volume rays).
+RAY_VISIBILITY = {
+    "visible_camera": Rays.CAMERA,
+    "visible_shadow": Rays.SHADOW,
+    "visible_glossy": Rays.REFLECTION,
+    "visible_transmission": Rays.REFRACTION,
+}
+
+
+class Look(NamedTuple):
+    """How an object shows its materials, as Cycles decides it (blender/object.cpp): a holdout (of the
+    object, or of the object instancing it), and the rays it is hidden from (its flags and its
+    instancer's: a ray sees an instance only where both let it)."""
+
+    holdout: bool = False
+    hidden: Rays = Rays(0)
+
+
+PLAIN = Look()
+
+
+def hidden_rays(*objects) -> Rays:
+    """The rays any of `objects` (original Blender objects) hides from (Ray Visibility flags off)."""
+    hidden = Rays(0)
+    for obj in objects:
+        for flag, ray in RAY_VISIBILITY.items():
+            if not getattr(obj, flag, True):
+                hidden |= ray
+    return hidden
 
 
 class MaterialTable:
@@ -23,37 +56,42 @@ class MaterialTable:
         self.materials: list[Material] = []
         self.known = {} if known is None else known
         self.reads = 0
-        self._index: dict[tuple, int] = {}  # (original material's full name, '' for an empty slot; holdout)
-        self._slots: dict[tuple, np.ndarray] = {}  # (original object, mesh data, holdout) → slot_indices
+        self._index: dict[tuple, int] = {}  # (original material's full name, '' for an empty slot; look)
+        self._slots: dict[tuple, np.ndarray] = {}  # (original object, mesh data, look) → slot_indices
 
-    def index_of(self, material, holdout: bool = False) -> int:
-        """Table index of a Blender material (evaluated or original; None = empty slot), or of its
-        holdout (Material.holdout: what a holdout object shows in its place, as Cycles renders it)."""
+    def index_of(self, material, look: Look = PLAIN) -> int:
+        """Table index of a Blender material (evaluated or original; None = empty slot) as an object
+        of `look` shows it: its holdout (Material.holdout: what a holdout object shows in its place,
+        as Cycles renders it), hidden from the look's rays besides its own (Material.hidden_from)."""
         key = "" if material is None else material.original.name_full
-        if (key, holdout) not in self._index:
+        if (key, look) not in self._index:
             if key not in self.known:
                 self.known[key] = gather_material(material)
                 self.reads += 1
-            self._index[key, holdout] = len(self.materials)
+            self._index[key, look] = len(self.materials)
             read = self.known[key]
-            self.materials.append(dataclasses.replace(read, holdout=True) if holdout else read)
-        return self._index[key, holdout]
+            if look != PLAIN:
+                read = dataclasses.replace(
+                    read, holdout=read.holdout or look.holdout, hidden_from=read.hidden_from | look.hidden
+                )
+            self.materials.append(read)
+        return self._index[key, look]
 
-    def slot_indices(self, obj, data: int | None = None, holdout: bool = False) -> np.ndarray:
+    def slot_indices(self, obj, data: int | None = None, look: Look = PLAIN) -> np.ndarray:
         """int32 table index of each material slot of an evaluated object (one entry if it has none).
         `data`, the address of its evaluated mesh data (live._data_of), lets the many instances of
         one object showing one mesh read the slots once: an object's slots are its original's
         (object-linked materials) and its data's, so (original, data) decides them; reading 10,000
-        instances' slots took about 0.1 s of a 10,000-instance export. `holdout`: the object is a
-        holdout (Object ▸ Visibility ▸ Holdout, or in a view layer's holdout collection): every slot
-        the holdout of its material."""
-        key = None if data is None else (obj.original.as_pointer(), data, holdout)
+        instances' slots took about 0.1 s of a 10,000-instance export. `look`: the object is a holdout
+        (Object ▸ Visibility ▸ Holdout, or in a view layer's holdout collection) or hidden from some
+        rays: every slot its material as the look shows it."""
+        key = None if data is None else (obj.original.as_pointer(), data, look)
         known = self._slots.get(key) if key is not None else None
         if known is None:
             slots = [slot.material for slot in obj.material_slots] or [None]
             if self.override is not None:
                 slots = [self.override] * len(slots)
-            known = np.array([self.index_of(m, holdout) for m in slots], np.int32)
+            known = np.array([self.index_of(m, look) for m in slots], np.int32)
             if key is not None:
                 self._slots[key] = known
         return known
