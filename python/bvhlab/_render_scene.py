@@ -4,16 +4,46 @@ its materials, and kept by a Renderer (one SceneCache each) while they stay the 
 from __future__ import annotations
 
 import threading
+from dataclasses import dataclass
 
 import numpy as np
 
 from . import _core
 from .instanced import InstancedBvh
 from .overlay_levels import traced_level, two_level_boxes
+from .scene_parts import material_rows
 
 
 def _array_key(a: np.ndarray) -> tuple:
     return a.shape, hash(a.tobytes())
+
+
+@dataclass(frozen=True)
+class _Parts:
+    """What a RenderScene is made of, read from the Scene once: the cache's key and the scene it
+    makes come from the same read (read twice, a material set on another thread between the two
+    left a scene of the new materials under the old key, and renders in the wrong colours until
+    the key changed again)."""
+
+    triangles: tuple  # of each mesh (one: a flat scene)
+    spheres: np.ndarray  # mesh 0's
+    materials: tuple
+    tri_material: tuple  # of each mesh
+    sphere_material: np.ndarray
+
+    @classmethod
+    def of(cls, scene, two_level: bool) -> _Parts:
+        meshes = range(scene.mesh_count) if two_level else range(1)
+        return cls(
+            tuple(scene.mesh_triangles(k) for k in meshes),
+            scene.spheres,
+            tuple(scene.materials),
+            tuple(scene.mesh_triangle_material(k) for k in meshes),
+            scene.sphere_material,
+        )
+
+    def material_table(self) -> np.ndarray:
+        return material_rows(self.materials)
 
 
 class SceneCache:
@@ -40,12 +70,13 @@ class SceneCache:
             raise ValueError("an instanced scene renders with its two-level tree: bvhlab.build(scene)")
         if two_level and len(bvh.meshes) != scene.mesh_count:
             raise ValueError(f"the tree has {len(bvh.meshes)} meshes, the scene {scene.mesh_count}")
-        key = self._key_of(scene, bvh, two_level)
+        parts = _Parts.of(scene, two_level)
+        key = self._key_of(parts, bvh, two_level)
         level = traced_level(bvh, options)
         with self._lock:
             if self._key != key:
                 self._scene = self._overlay_scene = self._key = self._overlay_key = None  # the old go first
-                self._scene, self._key = _make(scene, bvh, two_level), key
+                self._scene, self._key = _make(parts, bvh, two_level), key
             render_scene = self._scene
             assert render_scene is not None  # made above for this key
             if level is None:
@@ -57,37 +88,40 @@ class SceneCache:
             return self._overlay_scene
 
     @staticmethod
-    def _key_of(scene, bvh, two_level: bool) -> tuple:
-        meshes = range(scene.mesh_count) if two_level else range(1)
-        spheres = [scene.spheres if k == 0 else None for k in meshes]
+    def _key_of(parts: _Parts, bvh, two_level: bool) -> tuple:
+        spheres = [parts.spheres] + [None] * (len(parts.triangles) - 1)
         tree = bvh._core
         return (
             tree,
             0 if two_level else tree.revision,
-            tuple(_core.geometry_fingerprint(scene.mesh_triangles(k), s) for k, s in zip(meshes, spheres)),
-            tuple(scene.materials),
-            _array_key(scene.tri_material),
-            _array_key(scene.sphere_material),
-            # the other meshes' too: a shared mesh whose faces changed material kept the old indices
-            # (one Renderer for F12 and the viewport: 736 pixels of a linked duplicate stayed red)
-            tuple(_array_key(scene.mesh_triangle_material(k)) for k in meshes if k > 0),
+            tuple(_core.geometry_fingerprint(t, s) for t, s in zip(parts.triangles, spheres)),
+            parts.materials,
+            _array_key(parts.sphere_material),
+            # every mesh's: a shared mesh whose faces changed material kept the old indices (one
+            # Renderer for F12 and the viewport: 736 pixels of a linked duplicate stayed red)
+            tuple(_array_key(m) for m in parts.tri_material),
         )
 
 
-def _make(scene, bvh, two_level: bool) -> _core.RenderScene:
+def _make(parts: _Parts, bvh, two_level: bool) -> _core.RenderScene:
     if not two_level:
         return _core.RenderScene(
-            bvh._core, scene.triangles, scene.spheres, scene.material_table(), scene.tri_material, scene.sphere_material
+            bvh._core,
+            parts.triangles[0],
+            parts.spheres,
+            parts.material_table(),
+            parts.tri_material[0],
+            parts.sphere_material,
         )
     # The two-level tracer (issue 34): the meshes' own triangles, placed by the TLAS's instances;
     # the scene's spheres belong to mesh 0.
-    n = scene.mesh_count
+    n = len(parts.triangles)
     no_spheres = np.zeros(0, np.int32)
     return _core.RenderScene(
         bvh._core,
-        [scene.mesh_triangles(k) for k in range(n)],
-        [scene.spheres if k == 0 else None for k in range(n)],
-        scene.material_table(),
-        [scene.mesh_triangle_material(k) for k in range(n)],
-        [scene.sphere_material if k == 0 else no_spheres for k in range(n)],
+        list(parts.triangles),
+        [parts.spheres if k == 0 else None for k in range(n)],
+        parts.material_table(),
+        list(parts.tri_material),
+        [parts.sphere_material if k == 0 else no_spheres for k in range(n)],
     )

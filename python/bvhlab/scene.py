@@ -9,7 +9,6 @@ from pathlib import Path
 
 import numpy as np
 
-from . import defaults
 from ._npz import MAX_EXPANSION, SceneFileError
 from .scene_checks import FIELD_CHECKS
 from .scene_file import FORMAT_VERSION, READ_FORMAT_VERSIONS, read_scene, write_scene
@@ -24,6 +23,7 @@ from .scene_parts import (
     View,
     default_camera,
     default_light,
+    material_rows,
 )
 
 __all__ = [
@@ -238,7 +238,7 @@ class Scene:
     def material_table(self) -> np.ndarray:
         """float32 (M, 8): r, g, b, reflective, transparent, ior, holdout (0 or 1), the bits of the rays
         it is hidden from (Material.hidden_from)."""
-        return np.array([m.as_row() for m in self.materials], np.float32).reshape(-1, len(defaults.MATERIAL))
+        return material_rows(self.materials)
 
     # -- files (scene_file.py) ------------------------------------------------------------------
     def save(self, path) -> Path:

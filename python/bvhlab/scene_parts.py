@@ -107,6 +107,11 @@ class Material:
         return [*row, float(self.holdout), float(int(self.hidden_from))]
 
 
+def material_rows(materials) -> np.ndarray:
+    """float32 (M, 8): the materials' rows as the core reads them (Material.as_row)."""
+    return np.array([m.as_row() for m in materials], np.float32).reshape(-1, len(defaults.MATERIAL))
+
+
 #: Camera projections (core_cpp/include/bvhlab/camera.h): "perspective", "orthographic",
 #: "equirectangular", "fisheye" (equidistant), as Blender's camera data and Cycles define them.
 PROJECTIONS: tuple[str, ...] = tuple(_core.PROJECTIONS)
