@@ -266,12 +266,17 @@ class Bvh:
         default adaptive, with any of its fields given by name on top: `update(tris, policy="partial")`).
         Publishes a new version of the tree, as refit does, and returns what ran (UpdateStats).
         Costs are compared with the nodes' costs when they were built (this tree as built, or as
-        the last rebuild of each subtree left it)."""
+        the last rebuild of each subtree left it). A tree with spheres needs them given (an empty
+        (0, 4) array removes them, where the policy allows other counts)."""
         from .update import UpdateConfig, UpdateStats
 
         triangles = _checks.float32_array("triangles", triangles, (3, 3))
         if spheres is not None:
             spheres = _checks.float32_array("spheres", spheres, (4,))
+        elif self.stats["spheres"]:  # the rebuild policy took no spheres as none: they were dropped
+            raise ValueError(
+                f"the tree has {self.stats['spheres']} spheres: pass them (or an empty (0, 4) array to remove them)"
+            )
         if config is None:
             config = UpdateConfig()
         elif not isinstance(config, UpdateConfig):

@@ -211,7 +211,7 @@ class InstancedBvh:
         k = _checks.integer("mesh", k, 0, len(meshes) - 1)
         triangles = _checks.float32_array("triangles", triangles, (3, 3))
         old = meshes[k].stats
-        if spheres is None and old["spheres"]:  # as Bvh.update: dropping them must be asked for
+        if spheres is None and old["spheres"]:  # as Bvh.update: removing them must be asked for
             raise ValueError(
                 f"mesh {k} has {old['spheres']} spheres: pass them (or an empty (0, 4) array to remove them)"
             )

@@ -86,6 +86,23 @@ def test_bad_updates_are_refused(knot):
     assert tree.revision == 0  # nothing published
 
 
+@pytest.mark.parametrize("policy", ["refit", "partial", "adaptive", "rebuild"])
+def test_a_trees_spheres_are_kept_unless_removal_is_asked_for(knot, policy):
+    """Without `spheres`, the rebuild policy built the triangles alone: the tree's spheres were
+    gone without a word (a ray onto one missed), where the other policies refused the call."""
+    spheres = np.array([[5.0, 5.0, 5.0, 0.3]], np.float32)
+    tree = bvhlab.build(knot, spheres)
+    with pytest.raises(ValueError, match="the tree has 1 spheres: pass them"):
+        tree.update(knot, policy=policy)
+    assert tree.stats["spheres"] == 1 and tree.revision == 0
+    down = np.array([[5.0, 5.0, 10.0]], np.float32), np.array([[0.0, 0.0, -1.0]], np.float32)
+    tree.update(knot, spheres, policy=policy)
+    assert tree.intersect(*down)["t"][0] == pytest.approx(4.7)
+    if policy == "rebuild":  # the policy that takes other counts: removal when asked
+        tree.update(knot, np.zeros((0, 4), np.float32), policy=policy)
+        assert tree.stats["spheres"] == 0 and np.isinf(tree.intersect(*down)["t"][0])
+
+
 def test_fresh_sah_is_measured_on_demand(knot):
     tree = bvhlab.build(knot)
     moved = _moved(knot, 0.3)
