@@ -44,6 +44,10 @@ __all__ = [
 ]
 
 
+#: Each kind of primitive's material index field.
+_INDICES = {"triangles": "tri_material", "spheres": "sphere_material"}
+
+
 @dataclass
 class Scene:
     """What bvhlab builds and renders. Missing parts get defaults that make a two-line script work:
@@ -76,6 +80,14 @@ class Scene:
         # holds a float64 array, a NaN vertex or a camera that is a tuple (the error names the field).
         check = FIELD_CHECKS.get(name)
         object.__setattr__(self, name, check(self, value) if check else value)
+        # material indices never given (material 0 for all) follow their geometry: a scene made of
+        # triangles alone and given others (`scene.triangles = next_frame`) kept indices of the old
+        # count, built, and then failed to render, and saved a file that would not load
+        defaulted = self.__dict__.setdefault("_defaulted_indices", set())
+        if name in _INDICES.values():
+            (defaulted.add if value is None else defaulted.discard)(name)
+        elif _INDICES.get(name) in defaulted:
+            object.__setattr__(self, _INDICES[name], np.zeros(len(getattr(self, name)), np.int32))
 
     def __post_init__(self):
         if self.camera is None:

@@ -29,8 +29,11 @@ _MATERIAL_COLUMNS = {1: 6, 2: 6, 3: 7, 4: len(defaults.MATERIAL)}
 def write_scene(scene: Scene, path) -> Path:
     """Writes `scene` as an `.npz` (no pickled objects) that `Scene.load` and the CLI read, exactly at `path`,
     which must end in .npz (never renamed); an existing file is replaced only once the new one
-    is complete. Returns the path."""
+    is complete. Returns the path. A scene whose parts disagree (material indices not one per
+    primitive, or naming a material it lacks, after a field was set) raises ValueError and writes
+    nothing: its file would not load."""
     path = _checks.output_file(path, (".npz",), "scene file")
+    _check_consistent(scene)
     arrays: dict[str, np.ndarray] = {
         "format_version": np.array(FORMAT_VERSION),
         "triangles": scene.triangles,
@@ -128,6 +131,21 @@ _INSTANCING_MEMBERS = (
     "instance_mesh",
     "instance_transforms",
 )
+
+
+def _check_consistent(scene: Scene) -> None:
+    """What Scene.load checks across fields, checked before writing."""
+    for name, what in (("tri_material", "triangles"), ("sphere_material", "spheres")):
+        index, count = getattr(scene, name), len(getattr(scene, what))
+        if len(index) != count:
+            raise ValueError(f"cannot save the scene: {name} has {len(index)} entries for its {count} {what}")
+        if count and (index.min() < 0 or index.max() >= len(scene.materials)):
+            raise ValueError(
+                f"cannot save the scene: {name} refers to material {int(index.max())}, and it has "
+                f"{len(scene.materials)}"
+            )
+    for k in range(1, scene.mesh_count):
+        scene.mesh_triangle_material(k)  # raises ValueError naming the mesh
 
 
 def _material_of_row(row, path) -> Material:

@@ -106,8 +106,8 @@ def _bad_files(tmp_path):
         _scene_file(tmp_path, triangles=None).rename(tmp_path / "no_triangles.npz").name: "has no 'triangles'",
         _scene_file(tmp_path, materials=np.zeros((1, 5)))
         .rename(tmp_path / "m5.npz")
-        .name: "materials has 5 columns; a scene of format 3 has 7",
-        _scene_file(tmp_path, materials=np.array([[1.0, 1.0, 1.0, 0.0, 0.0, 1.5, 0.5]]))
+        .name: "materials has 5 columns; a scene of format 4 has 8",
+        _scene_file(tmp_path, materials=np.array([[1.0, 1.0, 1.0, 0.0, 0.0, 1.5, 0.5, 0.0]]))
         .rename(tmp_path / "half_holdout.npz")
         .name: "holdout must be 0 or 1, got 0.5",
         _scene_file(tmp_path, camera=np.zeros(4))
@@ -249,3 +249,29 @@ def test_a_file_with_a_material_returning_more_light_loads_with_a_warning(tmp_pa
         loaded = bvhlab.Scene.load(path)
     assert (loaded.materials[0].reflective, loaded.materials[0].transparent) == (1.0, 0.0)
     assert not loaded.materials[0].holdout
+
+
+def test_material_indices_never_given_follow_the_geometry_and_save_checks_the_rest(tmp_path):
+    """`scene.triangles = next_frame` (or spheres added) on a scene made without material indices
+    kept the old count of indices: it built, then render refused it, and save wrote a file load
+    refused. Indices never given follow the geometry; given ones that no longer fit are refused by
+    save, which writes nothing (a probe, 2026-12-05)."""
+    tris = procedural.random_triangles(10, seed=2)
+    scene = bvhlab.Scene(triangles=tris)
+    scene.spheres = np.array([[0, 0, 0, 1]], np.float32)
+    scene.triangles = np.concatenate([tris, tris + 1])
+    assert scene.tri_material.shape == (20,) and scene.sphere_material.shape == (1,)
+    bvhlab.render(scene, bvhlab.build(scene), 8, 8, backend="cpu")
+    loaded = bvhlab.Scene.load(scene.save(tmp_path / "follows.npz"))
+    assert len(loaded.triangles) == 20 and len(loaded.spheres) == 1
+    given = bvhlab.Scene(
+        triangles=tris, materials=[bvhlab.Material(), bvhlab.Material()], tri_material=np.ones(10, np.int32)
+    )
+    given.triangles = np.concatenate([tris, tris])  # the indices given stay as given
+    with pytest.raises(ValueError, match="tri_material has 10 entries for its 20 triangles"):
+        given.save(tmp_path / "given.npz")
+    given.tri_material = np.ones(20, np.int32)
+    given.materials = [bvhlab.Material()]
+    with pytest.raises(ValueError, match="refers to material 1, and it has 1"):
+        given.save(tmp_path / "given.npz")
+    assert not (tmp_path / "given.npz").exists()
