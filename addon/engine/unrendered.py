@@ -13,12 +13,6 @@ UNREAD_TYPES = {"CURVES": "hair curves", "POINTCLOUD": "point clouds", "VOLUME":
 #: visibility it makes: Material.holdout and hidden_from, material_table.py).
 OBJECT_EFFECTS = {"is_shadow_catcher": "shadow catcher"}
 
-#: View Layer ▸ collection flags bvhlab does not honour, and what it does instead (holdout it
-#: honours, as an object's).
-COLLECTION_FLAGS = {
-    "indirect_only": "Indirect Only is not rendered: the collection's objects are seen by camera rays",
-}
-
 
 def _named(what: str, names) -> str:
     """`what` and the first of `names` (a list, or a dict's keys in insertion order)."""
@@ -35,13 +29,18 @@ def unrendered_features(depsgraph) -> list[str]:
     # what renders (a render depsgraph leaves out the rest): the objects and what they instance (a
     # collection instanced, geometry nodes' output), each object once for each kind of geometry it
     # shows (a mesh object whose geometry nodes put out points shows a mesh and a point cloud)
-    seen = set()
+    seen, instancers = set(), set()
     for instance in depsgraph.object_instances:
         obj = instance.object  # valid until the iterator moves on: looked at now
         original = obj.original
         if (original, obj.type) not in seen:
             seen.add((original, obj.type))
             found.look_at(obj, original.name)
+        if instance.is_instance:  # an instancer's effects are its instances' too (Cycles ors them)
+            parent = instance.parent.original
+            if parent not in instancers:
+                instancers.add(parent)
+                found.look_at_effects(parent, parent.name)
     unread, effects, strands = found.unread, found.effects, found.strands
     notes = []
     for kind, names in unread.items():
@@ -50,8 +49,6 @@ def unrendered_features(depsgraph) -> list[str]:
         notes.append(f"particle hair drawn as strands is not rendered ({_named('on', strands)})")
     for flag, names in effects.items():
         notes.append(f"{OBJECT_EFFECTS[flag]} is not rendered ({_named('object', names)}): it is rendered as a surface")
-    for flag, names in _flagged_collections(depsgraph.view_layer.layer_collection).items():
-        notes.append(f"{COLLECTION_FLAGS[flag]} ({_named('collection', names)})")
     if render.use_motion_blur:
         notes.append("motion blur is not rendered (Render ▸ Motion Blur is on): the frame shows one moment")
     camera = depsgraph.scene.camera
@@ -76,6 +73,12 @@ class _Found:
         self.effects: dict[str, dict[str, None]] = {}
         self.strands: dict[str, None] = {}
 
+    def look_at_effects(self, obj, name: str) -> None:
+        """The render effects of OBJECT_EFFECTS `obj` (named `name`) asks for."""
+        for flag in OBJECT_EFFECTS:
+            if getattr(obj, flag, False):
+                self.effects.setdefault(flag, {})[name] = None
+
     def look_at(self, obj, name: str) -> None:
         """An object or instance of kind obj.type whose original is named `name` (asked once for each
         kind an original shows: each name is kept once in each list)."""
@@ -85,9 +88,7 @@ class _Found:
             return
         if kind not in self.shapes:
             return
-        for flag in OBJECT_EFFECTS:
-            if getattr(obj, flag, False):
-                self.effects.setdefault(flag, {})[name] = None
+        self.look_at_effects(obj, name)
         if len(obj.particle_systems) and any(_renders_strands(m) for m in obj.modifiers):
             self.strands[name] = None
 
@@ -98,20 +99,3 @@ def _renders_strands(modifier) -> bool:
         return False
     settings = modifier.particle_system.settings
     return settings.type == "HAIR" and settings.render_type == "PATH"
-
-
-def _flagged_collections(layer_collection) -> dict[str, list[str]]:
-    """The collections of the view layer, not excluded and holding objects, with a flag of
-    COLLECTION_FLAGS set (a flag holds for the collections below too: named once, at the top)."""
-    found: dict[str, list[str]] = {}
-    stack = [(child, frozenset()) for child in layer_collection.children]
-    while stack:
-        child, inherited = stack.pop()
-        if child.exclude or child.collection.hide_render:
-            continue
-        flags = {flag for flag in COLLECTION_FLAGS if getattr(child, flag, False)} - inherited
-        if flags and len(child.collection.all_objects):
-            for flag in sorted(flags):
-                found.setdefault(flag, []).append(child.name)
-        stack.extend((grandchild, inherited | flags) for grandchild in child.children)
-    return found

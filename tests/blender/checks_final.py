@@ -114,11 +114,13 @@ def check_unrendered_settings_are_said(tmp_dir) -> None:
 
 
 def check_geometry_and_effects_not_rendered_are_said(tmp_dir) -> None:
-    """Hair curves, particle hair drawn as strands, and a collection with Indirect Only: bvhlab
-    renders none of them as Cycles does (strands and curves are not exported; indirect-only objects
-    are rendered as surfaces), and F12 says each, naming an object or collection, also of objects
-    shown only by a collection instance; an excluded collection's flags, a particle system off in
-    renders and holdouts (rendered: checks_holdout.py) say nothing."""
+    """Hair curves, particle hair drawn as strands and a shadow catcher: bvhlab renders none of them
+    as Cycles does (strands and curves are not exported; a shadow catcher is rendered as a
+    surface), and F12 says each, naming an object, also of objects shown only by a collection
+    instance and of a shadow catcher that instances them (Cycles ors the instancer's flag); an
+    excluded collection's flags, a particle system off in renders, holdouts (rendered:
+    checks_holdout.py) and Indirect Only (rendered as hidden from camera rays, as Cycles renders it:
+    checks_visibility.py) say nothing."""
     scene = camera_scene()
     scene.render.engine = ENGINE
     scene.bvhlab.backend, scene.bvhlab.render_overlay = "cpu", False
@@ -152,10 +154,9 @@ def check_geometry_and_effects_not_rendered_are_said(tmp_dir) -> None:
     for words in (
         "hair curves are not rendered (object 'Strands')",
         "particle hair drawn as strands is not rendered (on 'Floor')",
-        "Indirect Only is not rendered: the collection's objects are seen by camera rays (collection 'Indirect')",
     ):
         assert sum(words in note for note in said) == 1, (words, said)
-    assert not any("Excluded" in note or "holdout" in note for note in said), said
+    assert not any("Excluded" in note or "holdout" in note or "Indirect" in note for note in said), said
     floor.modifiers["Hair"].show_render = False
     assert not any("particle hair" in note for note in notes())
     # objects shown only as instances: a collection outside the scene, instanced by an empty
@@ -170,8 +171,10 @@ def check_geometry_and_effects_not_rendered_are_said(tmp_dir) -> None:
     empty = bpy.data.objects.new("Asset instance", None)
     empty.instance_type, empty.instance_collection = "COLLECTION", asset
     scene.collection.objects.link(empty)
+    empty.is_shadow_catcher = True
     said = notes()
     assert sum("hair curves are not rendered (object 'Asset strands')" in note for note in said) == 1, said
+    assert sum("shadow catcher is not rendered (object 'Asset instance')" in note for note in said) == 1, said
 
 
 def check_odd_borders_are_sized_as_blender_sizes_them(tmp_dir) -> None:

@@ -31,6 +31,7 @@ import warnings
 import numpy as np
 
 from ..scene import Scene, default_camera, default_light
+from ..scene_parts import Rays
 from .camera import gather_camera
 from .depsgraph_updates import Dirty
 from .errors import ExportError, ExportWarning, SubstituteWarning
@@ -168,22 +169,27 @@ class LiveScene:
         by_data: dict[int, MeshData] = {}
         parts: dict[tuple, tuple] = {}  # (shown object's name, data address, look) → (sphere, slot table)
         looks: dict[tuple, Look] = {}  # (owner, shown object), originals → how it shows its materials
-        holdouts: dict = {}  # owner (original) → whether it is a holdout in the view layer
+        layer_flags: dict = {}  # owner (original) → (holdout, indirect only) in the view layer
         addresses: dict = {}  # evaluated mesh (hashed by its address) → its address: as_pointer once
         report = SyncReport()
         for entry in instances_in_scope(depsgraph, view_layer, self.scope, GEOMETRY_TYPES):
             obj, key = entry.obj, entry.key
             old = self._items.get(key)
             changed = dirty.everything or dirty.geometry_of(obj, key)
-            data = _address(obj.data, addresses) if entry.type == "MESH" else None  # None: a mesh of its own
-            # a holdout as Cycles decides it: of the object, or of the object instancing it; the rays
-            # that see it, those both let see it
+            data = _address(obj.data, addresses)  # every entry is a MESH (GEOMETRY_TYPES)
+            # a holdout as Cycles decides it (blender/object.cpp): of the object, or of the object
+            # instancing it; the rays that see it, those both let see it, but camera rays where the
+            # owner is Indirect Only (in such a collection) and not a holdout
             look = looks.get((entry.owner, entry.source))
             if look is None:
-                holdout = holdouts.get(entry.owner)
-                if holdout is None:
-                    holdout = holdouts[entry.owner] = bool(entry.owner.holdout_get(view_layer=view_layer))
-                hidden = hidden_rays(entry.owner, entry.source)
+                flags = layer_flags.get(entry.owner)
+                if flags is None:
+                    owner = entry.owner
+                    holdout = bool(owner.holdout_get(view_layer=view_layer))
+                    indirect = not holdout and bool(owner.indirect_only_get(view_layer=view_layer))
+                    flags = layer_flags[owner] = (holdout, indirect)
+                holdout = flags[0]
+                hidden = hidden_rays(entry.owner, entry.source) | (Rays.CAMERA if flags[1] else Rays(0))
                 look = looks[entry.owner, entry.source] = Look(holdout, hidden) if holdout or hidden else PLAIN
             part = parts.get((key[1], data, look)) if data is not None else None
             if part is None:
