@@ -18,6 +18,10 @@ namespace {
 nb::dict update(PyBvh& self, const Triangles& tris, const std::optional<Spheres>& spheres, const UpdateConfig& config) {
     validate(config);
     require_geometry(self.current()->bvh, "update");
+    // without spheres the rebuild policy built the triangles alone: the tree's spheres were gone
+    if (const std::uint32_t had = self.current()->bvh.sphere_count; !spheres && had)
+        throw std::invalid_argument("the tree has " + std::to_string(had) +
+                                    " spheres: pass them (or an empty (0, 4) array to remove them)");
     const GeometryView g = view_of(tris, spheres);
     UpdateStats stats;
     {

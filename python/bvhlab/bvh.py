@@ -271,12 +271,8 @@ class Bvh:
         from .update import UpdateConfig, UpdateStats
 
         triangles = _checks.float32_array("triangles", triangles, (3, 3))
-        if spheres is not None:
+        if spheres is not None:  # None on a tree with spheres raises ValueError (the core checks)
             spheres = _checks.float32_array("spheres", spheres, (4,))
-        elif self.stats["spheres"]:  # the rebuild policy took no spheres as none: they were dropped
-            raise ValueError(
-                f"the tree has {self.stats['spheres']} spheres: pass them (or an empty (0, 4) array to remove them)"
-            )
         if config is None:
             config = UpdateConfig()
         elif not isinstance(config, UpdateConfig):

@@ -7,7 +7,7 @@ from . import _core
 
 #: The atmosphere colour of rays that hit nothing (report §2.1): a soft blue.
 SKY: tuple[float, float, float] = tuple(_core.DEFAULT_SKY)
-#: Matte white: r, g, b, reflective, transparent, ior, holdout (the core's material row).
+#: Matte white: r, g, b, reflective, transparent, ior, holdout, hidden rays (the core's material row).
 MATERIAL: tuple[float, ...] = tuple(_core.DEFAULT_MATERIAL)
 #: Vertical field of view of the default camera, degrees.
 FOV_Y: float = float(_core.DEFAULT_FOV_Y)

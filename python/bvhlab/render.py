@@ -95,8 +95,8 @@ def render(
     device rendered), backend ("vulkan" or "cpu"), reason (why that backend), heatmap_scale (the
     box tests the heatmap shows red: its legend's top), traversal (the walk that rendered), and
     shadow_rays_opaque / shadow_rays_glass (the CPU's wide walk in a scene with a transparent
-    material: shadow rays whose nearest crossing was opaque, answered by it, and glass, left to
-    the stack walk; 0 elsewhere).
+    material, or one hidden from shadow rays: shadow rays whose nearest crossing was opaque,
+    answered by it, and glass or hidden, left to the stack walk; 0 elsewhere).
 
     backend: "auto" (a Vulkan GPU if there is one, else the CPU reference: on a CPU Vulkan
     driver such as lavapipe the CPU reference is several times faster), "vulkan" or "cpu".

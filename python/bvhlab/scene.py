@@ -82,10 +82,12 @@ class Scene:
         object.__setattr__(self, name, check(self, value) if check else value)
         # material indices never given (material 0 for all) follow their geometry: a scene made of
         # triangles alone and given others (`scene.triangles = next_frame`) kept indices of the old
-        # count, built, and then failed to render, and saved a file that would not load
-        defaulted = self.__dict__.setdefault("_defaulted_indices", set())
+        # count, built, and then failed to render, and saved a file that would not load (a copy of
+        # the scene keeps the set of its own: replaced, never changed in place)
+        defaulted = self.__dict__.get("_defaulted_indices", frozenset())
         if name in _INDICES.values():
-            (defaulted.add if value is None else defaulted.discard)(name)
+            defaulted = defaulted | {name} if value is None else defaulted - {name}
+            object.__setattr__(self, "_defaulted_indices", defaulted)
         elif _INDICES.get(name) in defaulted:
             object.__setattr__(self, _INDICES[name], np.zeros(len(getattr(self, name)), np.int32))
 

@@ -34,12 +34,12 @@ def knot_mesh():
 VULKAN_MODULES = {
     "test_bench_render", "test_cli", "test_cli_compare", "test_counters", "test_export_instances", "test_holdout",
     "test_instance_precision", "test_render_api", "test_render_bounded", "test_render_cameras", "test_render_cpu",
-    "test_render_precision", "test_render_reentry", "test_render_robust", "test_render_vulkan",
+    "test_render_precision", "test_render_reentry", "test_render_robust", "test_render_vulkan", "test_ray_visibility",
 }  # fmt: skip
 BPY_MODULES = {
     "test_addon", "test_addon_install", "test_addon_writes", "test_blender_checks", "test_blender_errors",
     "test_docs_pictures", "test_addon_pick", "test_export_instances", "test_animate_blend", "test_addon_counters",
-    "test_addon_pick_two_level",
+    "test_addon_pick_two_level", "test_live_sync",
 }  # fmt: skip
 #: test_blender_checks.py's tests (tests/blender/registry.py) of these groups use a Vulkan device.
 VULKAN_GROUPS = {"addon", "engine", "cameras", "no_vulkan", "gpu"}

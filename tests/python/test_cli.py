@@ -231,7 +231,7 @@ def bad_scene_files(tmp_path_factory):
     [
         (["build", "{d}/truncated.npz"], "truncated.npz is not an .npz file"),
         (["build", "{d}/no_triangles.npz"], "no_triangles.npz has no 'triangles'"),
-        (["build", "{d}/materials5.npz"], "materials has 5 columns; a scene of format 3 has 7"),
+        (["build", "{d}/materials5.npz"], "materials has 5 columns; a scene of format 4 has 8"),
         (["build", "{d}/good.npz", "--json", "{d}/a_file/stats.json"], "a_file is a file, not a folder"),
         (["build", "{d}/good.npz", "--json", "{d}/a_folder"], "a_folder is a folder"),
         (["build", "{d}/good.npz", "--csv", "{d}/stats.json"], "written as .csv"),

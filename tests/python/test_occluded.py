@@ -170,7 +170,8 @@ def test_threads_give_the_same_answers(knot_mesh):
 @pytest.mark.parametrize("tmax, match", [(-1.0, "tmax must be at least 0, got -1.0"), (float("nan"), "got NaN")])
 def test_intersect_refuses_the_tmax_occluded_refuses(tree_and_rays, two_level, tmax, match):
     """A negative tmax was answered by misses in `intersect` (an empty interval) where `occluded`
-    refused it: both refuse it now, on flat and two-level trees, through Python and the core."""
+    refused it: both refuse it now, on flat and two-level trees, through Python and the core, and
+    so does the inspector's trace_ray."""
     bvh, o, d = tree_and_rays
     if two_level:
         knot = procedural.torus_knot(200)
@@ -178,11 +179,13 @@ def test_intersect_refuses_the_tmax_occluded_refuses(tree_and_rays, two_level, t
         bvh = bvhlab.build(
             bvhlab.Scene(
                 meshes=[knot],
-                instance_mesh=np.array([0, 0]),
+                instance_mesh=np.array([1, 1]),  # the knot twice (mesh 0, the scene's own, is empty)
                 instance_transforms=np.stack([np.eye(3, 4, dtype=np.float32), move]),
             )
         )
         assert isinstance(bvh, bvhlab.InstancedBvh)
+        o, d = _rays(bvhlab.Scene(meshes=[knot]), 64, 3)  # at the knot where its first instance is
+        assert np.isfinite(bvh.intersect(o, d)["t"]).sum() > 10
     for query in (bvh.intersect, bvh.occluded):
         with pytest.raises(ValueError, match=match):
             query(o, d, tmax=tmax)
@@ -191,3 +194,6 @@ def test_intersect_refuses_the_tmax_occluded_refuses(tree_and_rays, two_level, t
     out += [np.empty(n, np.int32)] * two_level  # the instance of each hit
     with pytest.raises(ValueError, match="tmax must be a number >= 0"):
         bvh._core.intersect(o, d, 0.0, tmax, "wide", 1, *out)
+    if not two_level:
+        with pytest.raises(ValueError, match=match):
+            bvh.trace_ray(o[0], d[0], tmax=tmax)

@@ -1,5 +1,7 @@
 """bvhlab.Scene: defaults that frame the geometry, and .npz round trips without pickle."""
 
+import copy
+
 import numpy as np
 import pytest
 
@@ -264,6 +266,10 @@ def test_material_indices_never_given_follow_the_geometry_and_save_checks_the_re
     bvhlab.render(scene, bvhlab.build(scene), 8, 8, backend="cpu")
     loaded = bvhlab.Scene.load(scene.save(tmp_path / "follows.npz"))
     assert len(loaded.triangles) == 20 and len(loaded.spheres) == 1
+    copied = copy.copy(scene)  # a copy's indices given do not make the original's given
+    copied.tri_material = np.zeros(20, np.int32)
+    scene.triangles = tris
+    assert scene.tri_material.shape == (10,) and copied.tri_material.shape == (20,)
     given = bvhlab.Scene(
         triangles=tris, materials=[bvhlab.Material(), bvhlab.Material()], tri_material=np.ones(10, np.int32)
     )

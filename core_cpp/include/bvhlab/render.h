@@ -140,9 +140,10 @@ struct RenderTimings {
     std::string device;                    ///< which device rendered
     std::uint32_t dispatches = 0;          ///< trace dispatches (CPU: the most budgets of steps a pixel needed)
     std::uint32_t steps_per_dispatch = 0;  ///< the last budget of steps per pixel and dispatch
-    /// Traversal::Wide on the CPU in a scene with a transparent material: shadow rays whose nearest
-    /// crossing was opaque (transmission 0 from the wide walk) and those whose nearest was
-    /// transparent (left to the stack walk); 0 elsewhere. Summed over the job's runs.
+    /// Traversal::Wide on the CPU in a scene with a transparent material (or one hidden from shadow
+    /// rays): shadow rays whose nearest crossing was opaque (transmission 0 from the wide walk) and
+    /// those whose nearest was transparent or hidden from them (left to the stack walk); 0
+    /// elsewhere. Summed over the job's runs.
     std::uint64_t shadow_rays_opaque = 0, shadow_rays_glass = 0;
 };
 

@@ -139,7 +139,8 @@ private:
         if (settings.traversal != Traversal::Wide) return "";
         if (!wide_scene_) return "; two-level without its TLAS: stack walk";
         // short: the Last Render box shows it (a scene with a transparent material: design.md, "The tracer")
-        return wide_scene_->opaque ? ", wide walk" : ", wide walk; shadows through glass: stack walk";
+        return wide_scene_->opaque ? ", wide walk"
+                                   : ", wide walk; shadows through glass or hidden surfaces: stack walk";
     }
 
     static void note_budgets(RunShared& shared, std::uint64_t budgets) {

@@ -51,7 +51,7 @@ class Item:
     """One object or instance as last read: its mesh (None for a sphere), a sphere's object-space
     bounds, the world matrix (4×4 float64, a row of the sync's matrices, see `plan`; during the
     walk the mathutils.Matrix read), the address of its evaluated mesh data during this evaluation
-    (None: a mesh of its own, as converted curves and text are), the material table index of each
+    (None for a sphere), the material table index of each
     slot (None: no primitives), its key (scope.InScope.key, which names it), its world-space
     primitives once placed (kept while neither mesh nor matrix changes), whether only its matrix
     changed, and the original objects it comes from (whose animation makes it a mover)."""
@@ -118,7 +118,7 @@ def plan(items: dict, matrices: np.ndarray, share: bool, is_mover=None) -> Layou
         slots = tables.get(id(table))
         if slots is None:
             slots = tables[id(table)] = table.tobytes()
-        data = item.data if item.data is not None else ("item", key)  # a converted curve: its own
+        data = item.data if item.data is not None else ("item", key)  # no mesh data known: its own
         members.setdefault((data, slots), []).append(key)
     for group, keys in members.items():
         if len(keys) >= MIN_INSTANCES or any(is_mover(key) for key in keys):
