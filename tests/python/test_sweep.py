@@ -127,7 +127,10 @@ def test_ctrl_c_keeps_the_finished_cells(tmp_path, models):
         run_sweep(spec, tmp_path / "out", progress=interrupt_after_three, plot=False)
     assert len(list((tmp_path / "out" / "cells").glob("*.json"))) == 3
     assert len(pq.read_table(tmp_path / "out" / PARQUET)) == 3  # the table of what finished
+    # which says so (it looked complete: only the exit status and stderr told)
+    assert "**Incomplete: 3 of 8 cells**" in (tmp_path / "out" / "summary.md").read_text()
     assert run_sweep(spec, tmp_path / "out", plot=False).ran == 5
+    assert "Incomplete" not in (tmp_path / "out" / "summary.md").read_text()
 
 
 def _without_varying(rows):

@@ -46,10 +46,20 @@ def _ratio(value, base) -> float | None:
     return value / base if base and value is not None else None
 
 
-def summary_table(rows: list[dict], baseline: str) -> str:
-    """The Markdown table: scene, setting, SAH cost, ÷ baseline, build ms, Mrays/s, ÷ baseline."""
+def summary_table(rows: list[dict], baseline: str, planned: int | None = None) -> str:
+    """The Markdown table: scene, setting, SAH cost, ÷ baseline, build ms, Mrays/s, ÷ baseline;
+    headed by how many of the `planned` cells it lacks, where it lacks some (a sweep stopped)."""
     labels = setting_labels(rows)
+    missing = (
+        []
+        if planned is None or len(rows) >= planned
+        else [
+            f"**Incomplete: {len(rows)} of {planned} cells** (the sweep was stopped; the same command runs the rest).",
+            "",
+        ]
+    )
     lines = [
+        *missing,
         f"| scene | setting | SAH cost | SAH ÷ {baseline} | build ms | Mrays/s | Mrays/s ÷ {baseline} |",
         "|---|---|---|---|---|---|---|",
     ]
@@ -71,9 +81,12 @@ def _fmt(ratio: float | None) -> str:
     return "–" if ratio is None else f"{ratio:.2f}"
 
 
-def write_summary(rows: list[dict], baseline: str, out: Path, plot: bool = True) -> list[Path]:
-    """summary.md, and (with `plot`) the ratio plot when any cell has a baseline to divide by."""
-    files = [write_text(out / SUMMARY, summary_table(rows, baseline))]
+def write_summary(
+    rows: list[dict], baseline: str, out: Path, plot: bool = True, planned: int | None = None
+) -> list[Path]:
+    """summary.md (saying so where it lacks some of the `planned` cells), and (with `plot`) the ratio
+    plot when any cell has a baseline to divide by."""
+    files = [write_text(out / SUMMARY, summary_table(rows, baseline, planned))]
     pairs = [(r, b) for r, b in baseline_pairs(rows, baseline) if b is not None]
     if plot and pairs:
         files.append(_plot_ratios(pairs, setting_labels(rows), baseline, out / RATIO_PLOT))
