@@ -57,8 +57,7 @@ GEOMETRY_TYPES = frozenset({"MESH"})
 def _address(data, addresses: dict) -> int:
     """The address of an evaluated mesh object's mesh data during this evaluation: the same for
     every object and instance that shows that mesh (linked duplicates without modifiers of their
-    own, collection, vertex, face and geometry-nodes instances). Objects converted to a mesh
-    (curves, text...) have none: they get a mesh of their own. `addresses` remembers it per mesh
+    own, collection, vertex, face and geometry-nodes instances). `addresses` remembers it per mesh
     for the walk (bpy structs hash by their address; as_pointer is a slower method call)."""
     address = addresses.get(data)
     if address is None:
@@ -191,9 +190,9 @@ class LiveScene:
                 holdout = flags[0]
                 hidden = hidden_rays(entry.owner, entry.source) | (Rays.CAMERA if flags[1] else Rays(0))
                 look = looks[entry.owner, entry.source] = Look(holdout, hidden) if holdout or hidden else PLAIN
-            part = parts.get((key[1], data, look)) if data is not None else None
+            part = parts.get((key[1], data, look))
             if part is None:
-                part = (entry.type == "MESH" and is_analytic_sphere(obj), None)
+                part = (is_analytic_sphere(obj), None)
             if part[0]:
                 # an item of this name before may be another object's sphere (renamed to this name)
                 if old is None or old.mesh is not None or old.sphere_data != data or changed:
@@ -205,21 +204,17 @@ class LiveScene:
                 slots = table.slot_indices(obj, look=look)
                 item = Item(None, bounds, entry.matrix, None, slots, key, sphere_data=data)
             else:
-                mesh = fresh.get(data) if data is not None else None
+                mesh = fresh.get(data)
                 if mesh is None:
                     mesh = None if changed else self._known_mesh(old, data, obj)
                     if mesh is None:
-                        mesh = read_mesh(obj, entry.name)
+                        mesh = fresh[data] = read_mesh(obj, entry.name)
                         report.objects_read += 1
-                        if data is not None:
-                            fresh[data] = mesh
-                if data is not None:
-                    by_data[data] = mesh
+                by_data[data] = mesh
                 slots = part[1]
                 if slots is None and mesh.triangle_count:
                     slots = table.slot_indices(obj, data, look)
-                    if data is not None:
-                        parts[(key[1], data, look)] = (False, slots)
+                    parts[(key[1], data, look)] = (False, slots)
                 item = Item(mesh, None, entry.matrix, data, slots, key)
             item.origin = (key[0], entry.owner, key[1], entry.source)
             items[key] = item
@@ -257,11 +252,11 @@ class LiveScene:
                     report.objects_moved += 1
         return seen_moving
 
-    def _known_mesh(self, old: Item | None, data: int | None, obj) -> MeshData | None:
+    def _known_mesh(self, old: Item | None, data: int, obj) -> MeshData | None:
         """The mesh read before for an item whose geometry did not change, or None to read it."""
-        if old is not None and old.mesh is not None and data is not None and old.data == data:
+        if old is not None and old.mesh is not None and old.data == data:
             return old.mesh
-        mesh = self._by_data.get(data) if data is not None else None
+        mesh = self._by_data.get(data)
         if mesh is not None and len(mesh.positions) == _vertex_count(obj):
             return mesh
         return None
