@@ -42,9 +42,6 @@ class _Parts:
             scene.sphere_material,
         )
 
-    def material_table(self) -> np.ndarray:
-        return material_rows(self.materials)
-
 
 class SceneCache:
     """Remembers the RenderScene last made and the key it was made for: the tree (object and
@@ -109,7 +106,7 @@ def _make(parts: _Parts, bvh, two_level: bool) -> _core.RenderScene:
             bvh._core,
             parts.triangles[0],
             parts.spheres,
-            parts.material_table(),
+            material_rows(parts.materials),
             parts.tri_material[0],
             parts.sphere_material,
         )
@@ -121,7 +118,7 @@ def _make(parts: _Parts, bvh, two_level: bool) -> _core.RenderScene:
         bvh._core,
         list(parts.triangles),
         [parts.spheres if k == 0 else None for k in range(n)],
-        parts.material_table(),
+        material_rows(parts.materials),
         list(parts.tri_material),
         [parts.sphere_material if k == 0 else no_spheres for k in range(n)],
     )
