@@ -134,18 +134,16 @@ _INSTANCING_MEMBERS = (
 
 
 def _check_consistent(scene: Scene) -> None:
-    """What Scene.load checks across fields, checked before writing."""
-    for name, what in (("tri_material", "triangles"), ("sphere_material", "spheres")):
-        index, count = getattr(scene, name), len(getattr(scene, what))
-        if len(index) != count:
-            raise ValueError(f"cannot save the scene: {name} has {len(index)} entries for its {count} {what}")
-        if count and (index.min() < 0 or index.max() >= len(scene.materials)):
-            raise ValueError(
-                f"cannot save the scene: {name} refers to material {int(index.max())}, and it has "
-                f"{len(scene.materials)}"
-            )
-    for k in range(1, scene.mesh_count):
-        scene.mesh_triangle_material(k)  # raises ValueError naming the mesh
+    """What Scene.load checks across fields, checked before writing: each kind's material indices
+    as setting them checks them (one per primitive, each naming a material), against the fields
+    set since."""
+    try:
+        for k in range(scene.mesh_count):
+            scene.mesh_triangle_material(k)  # the other meshes' are checked as they are read
+        scene._material_index("tri_material", scene.tri_material, len(scene.triangles))
+        scene._material_index("sphere_material", scene.sphere_material, len(scene.spheres))
+    except ValueError as e:
+        raise ValueError(f"cannot save the scene: {e}") from None
 
 
 def _material_of_row(row, path) -> Material:
