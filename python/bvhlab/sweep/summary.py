@@ -50,14 +50,10 @@ def summary_table(rows: list[dict], baseline: str, planned: int | None = None) -
     """The Markdown table: scene, setting, SAH cost, ÷ baseline, build ms, Mrays/s, ÷ baseline;
     headed by how many of the `planned` cells it lacks, where it lacks some (a sweep stopped)."""
     labels = setting_labels(rows)
-    missing = (
-        []
-        if planned is None or len(rows) >= planned
-        else [
-            f"**Incomplete: {len(rows)} of {planned} cells** (the sweep was stopped; the same command runs the rest).",
-            "",
-        ]
-    )
+    missing = []
+    if planned is not None and len(rows) < planned:
+        stopped = "the sweep was stopped; the same command runs the rest"
+        missing = [f"**Incomplete: {len(rows)} of {planned} cells** ({stopped}).", ""]
     lines = [
         *missing,
         f"| scene | setting | SAH cost | SAH ÷ {baseline} | build ms | Mrays/s | Mrays/s ÷ {baseline} |",
