@@ -130,6 +130,43 @@ TEST(WidePackets, TminAndTmaxLimitsGiveTheSingleRayHits) {
     EXPECT_GT(expect_batch_is_single(bvh, rays), rays.size() / 5);
 }
 
+/// A packet whose rays run in a plane of the tree's boxes: tents standing on z = 5 (each a
+/// vertical triangle, its base on the plane, so every box ends at z = 5), seen from z = 5 inside
+/// the field by rays taken down each column, the middle row's direction z −0. A packet holds that
+/// ray and seven going down, which enter the boxes around the eye at t = 0 and none ahead; its
+/// bound of −(1/d_z)·s is +inf, and 0 · inf (the eye's distance to the boxes' far plane z = 5) is
+/// NaN, which each ray's own test ignores (the middle ray grazes the tents' base edges ahead and
+/// hits them). The packet's whole-node cull (wide_packet.inl maybe_entered) must not drop the
+/// boxes ahead: without its check of the factors (Interval::valid), it does (t 0.566 where 0.203).
+TEST(WidePackets, RaysInABoxPlaneWithZeroDirectionComponentsGiveTheSingleRayHits) {
+    test::Scene scene;
+    std::mt19937 rng(97);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    for (int i = 0; i < 3000; ++i) {
+        const float x = 10.0f * u(rng), y = 1.0f + 9.0f * u(rng), w = 0.2f + 0.8f * u(rng), h = 0.2f + u(rng);
+        scene.add_triangle({x, y, 5.0f}, {x + w, y, 5.0f}, {x + 0.5f * w, y, 5.0f + h});
+    }
+    const Bvh bvh = build_bvh(scene.view());
+    const int width = 64, height = 33;        // odd: the middle row's z is 0
+    const float step = 0.2f / float(height);  // eight rays of a column within a packet's cone
+    std::vector<Ray> rays;
+    std::size_t middle = 0;
+    for (int x = 0; x < width; ++x)
+        for (int y = 0; y < height; ++y) {
+            Ray ray;
+            ray.origin = {5.0f, 5.0f, 5.0f};  // inside the boxes: rays going down enter them at t = 0
+            const float sz = (0.5f * float(height) - float(y) - 0.5f) * step;
+            ray.dir = {(float(x) + 0.5f - 0.5f * float(width)) * step, 1.0f, sz == 0.0f ? -0.0f : sz};
+            middle += sz == 0.0f;
+            rays.push_back(ray);
+        }
+    ASSERT_EQ(middle, std::size_t(width));
+    std::size_t edge_hits = 0;
+    for (const Ray& ray : rays) edge_hits += ray.dir.z == 0.0f && intersect(bvh, ray, Traversal::Stack).ref != kNoHit;
+    EXPECT_GT(edge_hits, std::size_t(width) / 2) << "the middle row's rays should hit the tents' base edges";
+    EXPECT_GT(expect_batch_is_single(bvh, rays), rays.size() / 4);
+}
+
 /// Bvh.intersect's entry point (intersect_batch: checked, scaled pieces) with camera rays on 1
 /// and 3 threads: the same hits as the binary stack walk, every path.
 TEST(WidePackets, IntersectBatchOnThreadsGivesTheStackWalksHits) {

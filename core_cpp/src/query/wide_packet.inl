@@ -13,7 +13,9 @@
 // ray enters a child exactly where its own walk, at the same closest hit, would; it may visit
 // more (the packet's order is not its own nearest-first order, so its far limit may still be
 // larger), never fewer, and each leaf is tested by test_leaf with the ray's own query, under the
-// order-independent closer-hit rule (ray.h closer_hit).
+// order-independent closer-hit rule (ray.h closer_hit). From a packet's second node, one vector
+// test of the whole packet against the eight child boxes (maybe_entered: interval arithmetic over
+// the rays' factors) drops the slots no ray enters before the per-ray tests.
 
 inline constexpr int kPacket = 8;
 
@@ -66,6 +68,74 @@ inline float least_lane(__m256 t, __m256 in) {
     return _mm_cvtss_f32(_mm_min_ss(x, _mm_shuffle_ps(x, x, 1)));
 }
 
+/// The least and the largest of x's lanes, in every lane.
+inline L8 least(L8 x) {
+    __m256 m = _mm256_min_ps(x.v, _mm256_permute2f128_ps(x.v, x.v, 1));
+    m = _mm256_min_ps(m, _mm256_shuffle_ps(m, m, _MM_SHUFFLE(1, 0, 3, 2)));
+    return {_mm256_min_ps(m, _mm256_shuffle_ps(m, m, _MM_SHUFFLE(2, 3, 0, 1)))};
+}
+inline L8 largest(L8 x) {
+    __m256 m = _mm256_max_ps(x.v, _mm256_permute2f128_ps(x.v, x.v, 1));
+    m = _mm256_max_ps(m, _mm256_shuffle_ps(m, m, _MM_SHUFFLE(1, 0, 3, 2)));
+    return {_mm256_max_ps(m, _mm256_shuffle_ps(m, m, _MM_SHUFFLE(2, 3, 0, 1)))};
+}
+
+/// The bounds of a packet's box-test factors over its rays (Boulos, Wald et al. 2006, "Geometric
+/// and arithmetic culling methods for entire ray packets": interval arithmetic over the packet),
+/// so that one vector test of a node's eight children drops those no ray of the packet enters
+/// before the per-ray tests of the others (maybe_entered), each bound in every lane. `valid` is
+/// false where some ray's factor is infinite or zero (a direction with a zero component) or under
+/// the least normal float: a
+/// product with a plane difference could then be NaN, which the per-ray test ignores and a bound
+/// cannot, so such a packet tests every child ray by ray.
+struct Interval {
+    L8 near_lo[3], near_hi[3], far_lo[3], far_hi[3];  // per axis: the least and largest factor
+    L8 tmin_lo;                                       // the least tmin
+    L8 limit_hi;                                      // the largest far limit (renewed after leaves)
+    bool valid;
+};
+
+/// The packet's Interval from its rays' factors (closest_packet's neg_inv and neg_inv_far, a ray a
+/// lane), tmin and far limits.
+inline Interval packet_interval(const L8* neg_inv, const L8* neg_inv_far, L8 tmin, L8 far_limit) {
+    Interval span{};
+    const __m256 inf = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+    const __m256 magnitude = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+    const __m256 normal = _mm256_set1_ps(std::numeric_limits<float>::min());
+    __m256 ok = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+    for (int a = 0; a < 3; ++a) {
+        // |−(1/d)·s| < inf and |−(1/d)| normal (a denormal reads as 0 under denormals-are-zero)
+        ok = _mm256_and_ps(ok, _mm256_cmp_ps(_mm256_and_ps(neg_inv_far[a].v, magnitude), inf, _CMP_LT_OQ));
+        ok = _mm256_and_ps(ok, _mm256_cmp_ps(_mm256_and_ps(neg_inv[a].v, magnitude), normal, _CMP_GE_OQ));
+        span.near_lo[a] = least(neg_inv[a]), span.near_hi[a] = largest(neg_inv[a]);
+        span.far_lo[a] = least(neg_inv_far[a]), span.far_hi[a] = largest(neg_inv_far[a]);
+    }
+    span.tmin_lo = least(tmin), span.limit_hi = largest(far_limit);
+    span.valid = _mm256_movemask_ps(ok) == 0xff;
+    return span;
+}
+
+/// The slots of the node whose planes start at `f` that some ray of the packet may enter: a slot
+/// no ray enters (the per-ray test's entry after its exit for every ray) is left out, and every
+/// slot some ray enters is in. Why it is exact in floats: a per-ray plane distance is one product
+/// fl(x · n_r) of the difference x = origin − plane, the same for every ray (one origin), and the
+/// ray's factor n_r; rounding is monotone, so fl(x · n_r) lies between fl(x · n_lo) and
+/// fl(x · n_hi) whichever the sign of x. With no NaN (span.valid), each ray's entry (the largest
+/// of tmin and the three near distances) is at least the largest of the lower bounds, and its exit
+/// (the least of its far limit and the three far distances) at most the least of the upper bounds;
+/// where the first exceeds the second, no ray's entry is at or before its exit.
+inline int maybe_entered(const Interval& span, const float* f, const std::ptrdiff_t* plane, const L8* origin) {
+    if (!span.valid) return 0xff;
+    L8 t0 = span.tmin_lo, t1 = span.limit_hi;
+    for (int a = 0; a < 3; ++a) {
+        const L8 x = origin[a] - L8::load(f + plane[a]);
+        t0 = raise(t0, lower(x * span.near_lo[a], x * span.near_hi[a]));
+        const L8 y = origin[a] - L8::load(f + plane[3 + a]);
+        t1 = lower(t1, raise(y * span.far_lo[a], y * span.far_hi[a]));
+    }
+    return le_bits(t0, t1);
+}
+
 /// The closest hits of rays[ids[0, kPacket)], all of octant kOctant, to hits[ids[r]] (unfinished,
 /// as closest_of_octant's), by one walk of the packet: nearest child first by the least middle of
 /// the rays' spans in its box (least_lane).
@@ -99,6 +169,10 @@ void closest_packet(const WideView& wide, const Ray* rays, const std::uint32_t* 
     };
     const L8 t_min = L8::load(tmin);
     L8 far_limit = L8::load(far);
+    // made at the packet's second node: most of room1m's and repeat1m's camera packets end at the
+    // root (every ray misses), where the per-ray tests of its children cost less than the bounds
+    Interval span{};
+    int packet_nodes = 0;
     const std::ptrdiff_t* plane = kPlanes.at[kOctant & 7];
     const __m256 none = _mm256_set1_ps(std::numeric_limits<float>::quiet_NaN());
     PacketStack stack;
@@ -118,6 +192,7 @@ void closest_packet(const WideView& wide, const Ray* rays, const std::uint32_t* 
                 far[r] = h[r].t * s;
             }
             far_limit = L8::load(far);
+            span.limit_hi = largest(far_limit);
         } else if (cur & kLeafChild) {
             for (int m = lanes; m; m &= m - 1) {
                 const int r = __builtin_ctz(unsigned(m));
@@ -125,6 +200,7 @@ void closest_packet(const WideView& wide, const Ray* rays, const std::uint32_t* 
                 far[r] = h[r].t * s;
             }
             far_limit = L8::load(far);
+            span.limit_hi = largest(far_limit);
         } else {
             const WideNode& node = node_at(wide, cur);
             __builtin_prefetch(node.child);
@@ -135,7 +211,10 @@ void closest_packet(const WideView& wide, const Ray* rays, const std::uint32_t* 
             int n = 0;
             // the slots in use (an unused slot's box is inverted): a packet tests each child
             // for its eight rays at once, so an empty slot would cost a whole test
-            for (int slots = le_bits(L8::load(node.lo_x), L8::load(node.hi_x)); slots; slots &= slots - 1) {
+            int slots = le_bits(L8::load(node.lo_x), L8::load(node.hi_x));
+            if (packet_nodes++ == 1) span = packet_interval(neg_inv, neg_inv_far, t_min, far_limit);
+            if (packet_nodes > 1) slots &= maybe_entered(span, f, plane, origin);
+            for (; slots; slots &= slots - 1) {
                 const int c = __builtin_ctz(unsigned(slots));
                 // hit_box's raises and lowers in enter_children's order, lane by lane
                 L8 t0 = t_min, t1 = far_limit;
