@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <random>
@@ -306,4 +307,64 @@ TEST(RayOrder, ARefusedRayInALaterBlockIsNamedByItsIndexInTheBatch) {
     d[3 * bad + 2] = 1.0f;
     intersect_batch(bvh, batch, {t.data(), prim.data()}, Traversal::Wide, 2, &wide);
     EXPECT_EQ(std::count(t.begin(), t.end(), 4.75f), std::ptrdiff_t(n));
+}
+
+/// prepare_piece's pass over the caller's rays (ray_batch.h) writes the same piece, bit for bit,
+/// on every instruction set path (the AVX2 path eight rays at a time, the rest of the piece ray by
+/// ray): rays of every octant, directions from 2^-70 to 2^70 (scaled by a power of two) and 1
+/// (not scaled), components of ±0, per-ray tmax of 0, numbers and infinity, a piece whose length
+/// is not a multiple of eight; a refused ray (NaN, out of range) refuses the piece on every path.
+TEST(RayOrder, PiecesAreTheSameBitsOnEveryPath) {
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    std::uniform_int_distribution<int> power(-70, 70);
+    const std::uint32_t n = kWideBatch - 5;
+    std::vector<float> o(3 * n), d(3 * n), tmax(n);
+    for (std::uint32_t i = 0; i < n; ++i) {
+        const float scale = i % 5 == 0 ? 1.0f : std::ldexp(1.0f, power(rng));
+        for (int a = 0; a < 3; ++a) {
+            o[3 * i + a] = 100.0f * u(rng);
+            d[3 * i + a] = i % 7 == a ? (i % 2 ? -0.0f : 0.0f) : scale * u(rng);
+        }
+        d[3 * i + 2] = d[3 * i + 2] == 0.0f && d[3 * i] == 0.0f && d[3 * i + 1] == 0.0f ? scale : d[3 * i + 2];
+        tmax[i] = i % 11 == 0 ? kInfinity : i % 13 == 0 ? 0.0f : 50.0f * (u(rng) + 1.0f);
+    }
+    const Isa before = active_isa();
+    auto piece_on = [&](Isa isa, const RayBatch& batch, bool& ok) {
+        set_isa(isa);
+        auto piece = std::make_unique<RayPiece>();
+        ok = prepare_piece(batch, 0, batch.count, *piece);
+        return piece;
+    };
+    for (const bool per_ray : {false, true}) {
+        RayBatch batch{o.data(), d.data(), n};
+        batch.tmin = 0.25f, batch.tmax = 40.0f;
+        if (per_ray) batch.tmax_of = tmax.data();
+        bool ok_portable = false;
+        const auto portable = piece_on(Isa::Portable, batch, ok_portable);
+        ASSERT_TRUE(ok_portable);
+        for (Isa isa : supported_isas()) {
+            bool ok = false;
+            const auto piece = piece_on(isa, batch, ok);
+            ASSERT_TRUE(ok) << isa_name(isa);
+            ASSERT_EQ(piece->count, n);
+            EXPECT_EQ(std::memcmp(piece->rays.data(), portable->rays.data(), n * sizeof(Ray)), 0) << isa_name(isa);
+            EXPECT_EQ(std::memcmp(piece->t_scale, portable->t_scale, n * sizeof(float)), 0) << isa_name(isa);
+            EXPECT_EQ(std::memcmp(piece->order, portable->order, n * sizeof(std::uint32_t)), 0) << isa_name(isa);
+            EXPECT_EQ(std::memcmp(piece->start, portable->start, sizeof portable->start), 0) << isa_name(isa);
+        }
+        // one refused ray anywhere in the piece (inside an eight, or in the tail) refuses it
+        for (std::uint32_t at : {3u, 100u, n - 2}) {
+            std::vector<float> bad = d;
+            bad[3 * at + 1] = std::nanf("");
+            RayBatch refused = batch;
+            refused.directions = bad.data();
+            for (Isa isa : supported_isas()) {
+                bool ok = true;
+                piece_on(isa, refused, ok);
+                EXPECT_FALSE(ok) << isa_name(isa) << " ray " << at;
+            }
+        }
+    }
+    set_isa(before);
 }

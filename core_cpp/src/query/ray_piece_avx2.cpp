@@ -1,0 +1,109 @@
+// The batch's pass over the caller's rays (ray_batch.h prepare_piece, prepare_rays) eight rays at a time, for
+// CPUs with AVX2 (compiled with -mavx2, chosen at run time, isa.h): the same checks, the same
+// scaling by powers of two and the same octants, so the piece holds the same bits as the scalar
+// pass writes. See binning_avx2.cpp for why nothing here may call an inline function of another
+// header: this file uses intrinsics alone, and Ray's layout through static_asserts.
+#include <immintrin.h>
+
+#include <cstddef>
+#include <cstdint>
+
+#include "bvhlab/ray.h"
+
+namespace bvhlab::avx2 {
+namespace {
+
+static_assert(sizeof(Ray) == 8 * sizeof(float) && offsetof(Ray, origin) == 0 && offsetof(Ray, dir) == 12 &&
+                  offsetof(Ray, tmin) == 24 && offsetof(Ray, tmax) == 28,
+              "a Ray is one 32-byte row: origin, direction, tmin, tmax");
+
+/// Component k (0, 1, 2) of the eight triples in a, b, c (loads of 24 consecutive floats).
+template <int k>
+inline __m256 component(__m256 a, __m256 b, __m256 c) {
+    // where component k of triple `lane` is, float 3·lane + k of the 24: in A, B or C
+    alignas(32) static constexpr std::int32_t kIndex[3][3][8] = {
+        {{0, 3, 6, 0, 0, 0, 0, 0}, {0, 0, 0, 1, 4, 7, 0, 0}, {0, 0, 0, 0, 0, 0, 2, 5}},
+        {{1, 4, 7, 0, 0, 0, 0, 0}, {0, 0, 0, 2, 5, 0, 0, 0}, {0, 0, 0, 0, 0, 0, 3, 6}},
+        {{2, 5, 0, 0, 0, 0, 0, 0}, {0, 0, 0, 3, 6, 0, 0, 0}, {0, 0, 0, 0, 0, 1, 4, 7}},
+    };
+    // x: A 0-2, B 3-5, C 6-7; y: A 0-2, B 3-4, C 5-7; z: A 0-1, B 2-4, C 5-7
+    constexpr int kTakeB[3] = {0b00111000, 0b00011000, 0b00011100};
+    constexpr int kTakeC[3] = {0b11000000, 0b11100000, 0b11100000};
+    const auto index = [](const std::int32_t* p) { return _mm256_load_si256(reinterpret_cast<const __m256i*>(p)); };
+    __m256 r = _mm256_permutevar8x32_ps(a, index(kIndex[k][0]));
+    r = _mm256_blend_ps(r, _mm256_permutevar8x32_ps(b, index(kIndex[k][1])), kTakeB[k]);
+    return _mm256_blend_ps(r, _mm256_permutevar8x32_ps(c, index(kIndex[k][2])), kTakeC[k]);
+}
+
+}  // namespace
+
+std::uint32_t prepare_rays(const float* origins, const float* directions, const float* tmax_of, float tmin, float tmax,
+                           std::uint32_t n, Ray* rays, float* t_scale, std::uint8_t* octant, std::uint32_t& refused) {
+    const __m256i magnitude = _mm256_set1_epi32(0x7fffffff);
+    // the bounds of ray_batch.h prepare_piece, as signed integers (every magnitude's bits are
+    // below 2^31, a NaN's above every number's)
+    const __m256i max_origin = _mm256_set1_epi32(0x53800000), least = _mm256_set1_epi32(0x17800000),
+                  most = _mm256_set1_epi32(0x67800000);
+    __m256i bad = _mm256_setzero_si256();
+    std::uint32_t j = 0;
+    for (; j + 8 <= n; j += 8) {
+        const float *o = origins + 3 * j, *d = directions + 3 * j;
+        const __m256 oa = _mm256_loadu_ps(o), ob = _mm256_loadu_ps(o + 8), oc = _mm256_loadu_ps(o + 16);
+        const __m256 da = _mm256_loadu_ps(d), db = _mm256_loadu_ps(d + 8), dc = _mm256_loadu_ps(d + 16);
+        const __m256 ox = component<0>(oa, ob, oc), oy = component<1>(oa, ob, oc), oz = component<2>(oa, ob, oc);
+        const __m256 dx = component<0>(da, db, dc), dy = component<1>(da, db, dc), dz = component<2>(da, db, dc);
+        const auto bits = [&](__m256 x) { return _mm256_and_si256(_mm256_castps_si256(x), magnitude); };
+        const __m256i origin = _mm256_max_epi32(bits(ox), _mm256_max_epi32(bits(oy), bits(oz)));
+        const __m256i dir = _mm256_max_epi32(bits(dx), _mm256_max_epi32(bits(dy), bits(dz)));
+        bad = _mm256_or_si256(bad, _mm256_cmpgt_epi32(origin, max_origin));
+        bad = _mm256_or_si256(bad, _mm256_or_si256(_mm256_cmpgt_epi32(least, dir), _mm256_cmpgt_epi32(dir, most)));
+        __m256 far = _mm256_set1_ps(tmax);
+        if (tmax_of) {
+            far = _mm256_loadu_ps(tmax_of + j);
+            bad = _mm256_or_si256(bad, _mm256_castps_si256(_mm256_cmp_ps(far, _mm256_setzero_ps(), _CMP_NGE_UQ)));
+        }
+        // coordinate_range.h scale_ray_by: e = exponent − 126, down = 2^−e, up = 2^e (1 and 1 where
+        // e = 0, which the scalar pass skips: a product with 1 is the number itself)
+        const __m256i exponent = _mm256_srli_epi32(dir, 23);
+        const __m256 down =
+            _mm256_castsi256_ps(_mm256_slli_epi32(_mm256_sub_epi32(_mm256_set1_epi32(253), exponent), 23));
+        const __m256 up = _mm256_castsi256_ps(_mm256_slli_epi32(_mm256_add_epi32(exponent, _mm256_set1_epi32(1)), 23));
+        const __m256 sx = _mm256_mul_ps(dx, down), sy = _mm256_mul_ps(dy, down), sz = _mm256_mul_ps(dz, down);
+        const __m256 near = _mm256_mul_ps(_mm256_set1_ps(tmin), up);
+        far = _mm256_mul_ps(far, up);
+        _mm256_storeu_ps(t_scale + j, down);
+        // the octant: bit a set where dir[a]'s sign bit is (wide_kernel.h octant_of_bits), to bytes
+        const __m256i sign_x = _mm256_srli_epi32(_mm256_castps_si256(dx), 31);
+        const __m256i sign_y = _mm256_slli_epi32(_mm256_srli_epi32(_mm256_castps_si256(dy), 31), 1);
+        const __m256i sign_z = _mm256_slli_epi32(_mm256_srli_epi32(_mm256_castps_si256(dz), 31), 2);
+        const __m256i oct = _mm256_or_si256(sign_x, _mm256_or_si256(sign_y, sign_z));
+        const __m128i words = _mm_packus_epi32(_mm256_castsi256_si128(oct), _mm256_extracti128_si256(oct, 1));
+        _mm_storel_epi64(reinterpret_cast<__m128i*>(octant + j), _mm_packus_epi16(words, words));
+        // the eight fields' vectors to eight rays (an 8 × 8 transpose: row k is ray j + k)
+        const __m256 t0 = _mm256_unpacklo_ps(ox, oy), t1 = _mm256_unpackhi_ps(ox, oy);
+        const __m256 t2 = _mm256_unpacklo_ps(oz, sx), t3 = _mm256_unpackhi_ps(oz, sx);
+        const __m256 t4 = _mm256_unpacklo_ps(sy, sz), t5 = _mm256_unpackhi_ps(sy, sz);
+        const __m256 t6 = _mm256_unpacklo_ps(near, far), t7 = _mm256_unpackhi_ps(near, far);
+        const __m256 u0 = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
+        const __m256 u1 = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
+        const __m256 u2 = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
+        const __m256 u3 = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2));
+        const __m256 u4 = _mm256_shuffle_ps(t4, t6, _MM_SHUFFLE(1, 0, 1, 0));
+        const __m256 u5 = _mm256_shuffle_ps(t4, t6, _MM_SHUFFLE(3, 2, 3, 2));
+        const __m256 u6 = _mm256_shuffle_ps(t5, t7, _MM_SHUFFLE(1, 0, 1, 0));
+        const __m256 u7 = _mm256_shuffle_ps(t5, t7, _MM_SHUFFLE(3, 2, 3, 2));
+        float* row = reinterpret_cast<float*>(rays + j);
+        _mm256_storeu_ps(row + 0, _mm256_permute2f128_ps(u0, u4, 0x20));
+        _mm256_storeu_ps(row + 8, _mm256_permute2f128_ps(u1, u5, 0x20));
+        _mm256_storeu_ps(row + 16, _mm256_permute2f128_ps(u2, u6, 0x20));
+        _mm256_storeu_ps(row + 24, _mm256_permute2f128_ps(u3, u7, 0x20));
+        _mm256_storeu_ps(row + 32, _mm256_permute2f128_ps(u0, u4, 0x31));
+        _mm256_storeu_ps(row + 40, _mm256_permute2f128_ps(u1, u5, 0x31));
+        _mm256_storeu_ps(row + 48, _mm256_permute2f128_ps(u2, u6, 0x31));
+        _mm256_storeu_ps(row + 56, _mm256_permute2f128_ps(u3, u7, 0x31));
+    }
+    refused |= std::uint32_t(!_mm256_testz_si256(bad, bad));
+    return j;
+}
+
+}  // namespace bvhlab::avx2
