@@ -31,22 +31,59 @@ inline constexpr float kPacketCos2 = 0.99f;
 /// rays").
 inline constexpr int kAlone = 5;
 
-/// Whether rays[ids[0, kPacket)] (one octant) go through the tree as one packet: the same origin
-/// bit for bit (a pinhole camera's rays) and directions within kPacketCos2 of the first's. Random
-/// and shadow rays fail at the first or second ray (a few instructions a ray).
-inline bool coherent(const Ray* rays, const std::uint32_t* ids) {
-    const Ray& first = rays[ids[0]];
-    const float x0 = first.dir.x, y0 = first.dir.y, z0 = first.dir.z;
-    const float n0 = x0 * x0 + y0 * y0 + z0 * z0;
-    for (int r = 1; r < kPacket; ++r) {
-        const Ray& ray = rays[ids[r]];
-        if (ray.origin.x != first.origin.x || ray.origin.y != first.origin.y || ray.origin.z != first.origin.z)
-            return false;
-        const float x = ray.dir.x, y = ray.dir.y, z = ray.dir.z;
-        const float c = x0 * x + y0 * y + z0 * z;
-        if (!(c > 0.0f && c * c >= kPacketCos2 * n0 * (x * x + y * y + z * z))) return false;
-    }
-    return true;
+static_assert(sizeof(Ray) == 8 * sizeof(float) && offsetof(Ray, dir) == 12 && offsetof(Ray, tmin) == 24 &&
+                  offsetof(Ray, tmax) == 28,
+              "a Ray is one 32-byte row: origin, direction, tmin, tmax");
+
+/// Eight rays' fields a vector each, ray r in lane r: the rows rays[ids[0, kPacket)] read as
+/// vectors and transposed (8 × 8), for the coherence test and the packet's set-up at once.
+struct PacketRays {
+    __m256 o[3], d[3], tmin, tmax;
+};
+
+inline PacketRays packet_rays(const Ray* rays, const std::uint32_t* ids) {
+    const auto row = [&](int r) { return _mm256_loadu_ps(reinterpret_cast<const float*>(rays + ids[r])); };
+    const __m256 r0 = row(0), r1 = row(1), r2 = row(2), r3 = row(3), r4 = row(4), r5 = row(5), r6 = row(6), r7 = row(7);
+    const __m256 t0 = _mm256_unpacklo_ps(r0, r1), t1 = _mm256_unpackhi_ps(r0, r1);
+    const __m256 t2 = _mm256_unpacklo_ps(r2, r3), t3 = _mm256_unpackhi_ps(r2, r3);
+    const __m256 t4 = _mm256_unpacklo_ps(r4, r5), t5 = _mm256_unpackhi_ps(r4, r5);
+    const __m256 t6 = _mm256_unpacklo_ps(r6, r7), t7 = _mm256_unpackhi_ps(r6, r7);
+    const __m256 u0 = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
+    const __m256 u1 = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
+    const __m256 u2 = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
+    const __m256 u3 = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2));
+    const __m256 u4 = _mm256_shuffle_ps(t4, t6, _MM_SHUFFLE(1, 0, 1, 0));
+    const __m256 u5 = _mm256_shuffle_ps(t4, t6, _MM_SHUFFLE(3, 2, 3, 2));
+    const __m256 u6 = _mm256_shuffle_ps(t5, t7, _MM_SHUFFLE(1, 0, 1, 0));
+    const __m256 u7 = _mm256_shuffle_ps(t5, t7, _MM_SHUFFLE(3, 2, 3, 2));
+    PacketRays p;
+    p.o[0] = _mm256_permute2f128_ps(u0, u4, 0x20), p.o[1] = _mm256_permute2f128_ps(u1, u5, 0x20);
+    p.o[2] = _mm256_permute2f128_ps(u2, u6, 0x20), p.d[0] = _mm256_permute2f128_ps(u3, u7, 0x20);
+    p.d[1] = _mm256_permute2f128_ps(u0, u4, 0x31), p.d[2] = _mm256_permute2f128_ps(u1, u5, 0x31);
+    p.tmin = _mm256_permute2f128_ps(u2, u6, 0x31), p.tmax = _mm256_permute2f128_ps(u3, u7, 0x31);
+    return p;
+}
+
+/// Lane 0 of x in every lane.
+inline __m256 first_lane(__m256 x) { return _mm256_permutevar8x32_ps(x, _mm256_setzero_si256()); }
+
+/// Whether the eight rays (one octant) go through the tree as one packet: the same origin as the
+/// first ray's (as floats: −0 and 0 alike; a pinhole camera's rays) and directions within
+/// kPacketCos2 of the first's, eight lanes at once. Random and shadow rays fail (their origins).
+inline bool coherent(const PacketRays& p) {
+    __m256 ok = _mm256_cmp_ps(p.o[0], first_lane(p.o[0]), _CMP_EQ_OQ);
+    ok = _mm256_and_ps(ok, _mm256_cmp_ps(p.o[1], first_lane(p.o[1]), _CMP_EQ_OQ));
+    ok = _mm256_and_ps(ok, _mm256_cmp_ps(p.o[2], first_lane(p.o[2]), _CMP_EQ_OQ));
+    const __m256 x0 = first_lane(p.d[0]), y0 = first_lane(p.d[1]), z0 = first_lane(p.d[2]);
+    const auto dot = [](__m256 ax, __m256 ay, __m256 az, __m256 bx, __m256 by, __m256 bz) {
+        return _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ax, bx), _mm256_mul_ps(ay, by)), _mm256_mul_ps(az, bz));
+    };
+    const __m256 c = dot(x0, y0, z0, p.d[0], p.d[1], p.d[2]);
+    const __m256 n0 = dot(x0, y0, z0, x0, y0, z0), n = dot(p.d[0], p.d[1], p.d[2], p.d[0], p.d[1], p.d[2]);
+    ok = _mm256_and_ps(ok, _mm256_cmp_ps(c, _mm256_setzero_ps(), _CMP_GT_OQ));
+    const __m256 least = _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(kPacketCos2), n0), n);
+    ok = _mm256_and_ps(ok, _mm256_cmp_ps(_mm256_mul_ps(c, c), least, _CMP_GE_OQ));
+    return _mm256_movemask_ps(ok) == 0xff;
 }
 
 /// The packet walk's stack: a child word and the entry distance of each ray in its lane (NaN where
@@ -138,27 +175,24 @@ inline int maybe_entered(const Interval& span, const float* f, const std::ptrdif
 
 /// The closest hits of rays[ids[0, kPacket)], all of octant kOctant, to hits[ids[r]] (unfinished,
 /// as closest_of_octant's), by one walk of the packet: nearest child first by the least middle of
-/// the rays' spans in its box (least_lane).
+/// the rays' spans in its box (least_lane). `p`: the rays' fields, as packet_rays reads them.
 template <int kOctant>
-void closest_packet(const WideView& wide, const Ray* rays, const std::uint32_t* ids, Hit* hits) {
+void closest_packet(const WideView& wide, const Ray* rays, const std::uint32_t* ids, const PacketRays& p, Hit* hits) {
     const float s = gpu::BOX_FAR_SCALE;
     // The box test's factors for the eight rays at once, by make_query's operations lane by lane
     // (the same IEEE division and products, so the same bits); the origin is one for all
     // (coherent). The triangle test's query is made for a ray at its first leaf only: most of
     // room1m's camera rays reach none (design.md).
-    alignas(32) float d[3][kPacket], tmin[kPacket], far[kPacket];
+    alignas(32) float tmax[kPacket], far[kPacket];
+    _mm256_store_ps(tmax, p.tmax);
+    _mm256_store_ps(far, _mm256_mul_ps(p.tmax, _mm256_set1_ps(s)));  // the single walk's far_limit, lane by lane
     Hit h[kPacket];
-    for (int r = 0; r < kPacket; ++r) {
-        const Ray& ray = rays[ids[r]];
-        d[0][r] = ray.dir.x, d[1][r] = ray.dir.y, d[2][r] = ray.dir.z;
-        h[r] = Hit{ray.tmax, kNoHit, 0.0f, 0.0f, kNoHit};
-        tmin[r] = ray.tmin, far[r] = h[r].t * s;  // the single walk's far_limit, lane by lane
-    }
-    const Vec3& eye = rays[ids[0]].origin;
-    const L8 origin[3] = {L8::splat(eye.x), L8::splat(eye.y), L8::splat(eye.z)};
+    for (int r = 0; r < kPacket; ++r) h[r] = Hit{tmax[r], kNoHit, 0.0f, 0.0f, kNoHit};
+    // the first ray's origin for all (coherent: the others' equal it), as the interval cull needs
+    const L8 origin[3] = {L8{first_lane(p.o[0])}, L8{first_lane(p.o[1])}, L8{first_lane(p.o[2])}};
     L8 neg_inv[3], neg_inv_far[3];
     for (int a = 0; a < 3; ++a) {
-        const L8 inv = L8::splat(1.0f) / L8::load(d[a]);
+        const L8 inv = L8::splat(1.0f) / L8{p.d[a]};
         neg_inv[a] = inv * L8::splat(-1.0f), neg_inv_far[a] = inv * L8::splat(-s);
     }
     Query q[kPacket];
@@ -167,7 +201,7 @@ void closest_packet(const WideView& wide, const Ray* rays, const std::uint32_t* 
         if (!(made >> r & 1)) q[r] = make_query(rays[ids[r]]), made |= 1 << r;
         return q[r];
     };
-    const L8 t_min = L8::load(tmin);
+    const L8 t_min{p.tmin};
     L8 far_limit = L8::load(far);
     // made at the packet's second node: most of room1m's and repeat1m's camera packets end at the
     // root (every ray misses), where the per-ray tests of its children cost less than the bounds
