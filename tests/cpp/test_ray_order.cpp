@@ -4,6 +4,9 @@
 // batch that is reordered: every result lands in its own ray's slot, equal bit for bit to the ray
 // traced alone, on every instruction set path and thread count; a refused ray is still named.
 #include <gtest/gtest.h>
+#if defined(__SSE__)
+#include <xmmintrin.h>
+#endif
 
 #include <algorithm>
 #include <cmath>
@@ -327,7 +330,8 @@ TEST(RayOrder, PiecesAreTheSameBitsOnEveryPath) {
             d[3 * i + a] = i % 7 == a ? (i % 2 ? -0.0f : 0.0f) : scale * u(rng);
         }
         d[3 * i + 2] = d[3 * i + 2] == 0.0f && d[3 * i] == 0.0f && d[3 * i + 1] == 0.0f ? scale : d[3 * i + 2];
-        tmax[i] = i % 11 == 0 ? kInfinity : i % 13 == 0 ? 0.0f : 50.0f * (u(rng) + 1.0f);
+        if (i % 10 == 5) d[3 * i + 1] = 1e-40f;  // a denormal beside a largest component in [0.5, 1) or not
+        tmax[i] = i % 11 == 0 ? kInfinity : i % 13 == 0 ? 0.0f : i % 17 == 0 ? 1e-40f : 50.0f * (u(rng) + 1.0f);
     }
     const Isa before = active_isa();
     auto piece_on = [&](Isa isa, const RayBatch& batch, bool& ok) {
@@ -336,9 +340,21 @@ TEST(RayOrder, PiecesAreTheSameBitsOnEveryPath) {
         ok = prepare_piece(batch, 0, batch.count, *piece);
         return piece;
     };
-    for (const bool per_ray : {false, true}) {
+    // also with denormals read as zero (Blender's and other hosts' threads may set it): a field
+    // the scalar pass leaves as it is (no scaling needed) must not be multiplied by 1 and flushed
+    for (unsigned mode = 0; mode < 4; ++mode) {
+        const bool per_ray = mode & 1, daz = mode & 2;
+#if defined(__SSE__)
+        struct Csr {  // flush-to-zero and denormals-are-zero while set, the caller's mode after
+            unsigned before = _mm_getcsr();
+            explicit Csr(bool on) { _mm_setcsr(on ? before | 0x8040u : before); }
+            ~Csr() { _mm_setcsr(before); }
+        } csr(daz);
+#else
+        if (daz) continue;
+#endif
         RayBatch batch{o.data(), d.data(), n};
-        batch.tmin = 0.25f, batch.tmax = 40.0f;
+        batch.tmin = daz ? 1e-40f : 0.25f, batch.tmax = 40.0f;
         if (per_ray) batch.tmax_of = tmax.data();
         bool ok_portable = false;
         const auto portable = piece_on(Isa::Portable, batch, ok_portable);

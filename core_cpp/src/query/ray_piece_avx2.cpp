@@ -20,7 +20,8 @@ static_assert(sizeof(Ray) == 8 * sizeof(float) && offsetof(Ray, origin) == 0 && 
 /// Component k (0, 1, 2) of the eight triples in a, b, c (loads of 24 consecutive floats).
 template <int k>
 inline __m256 component(__m256 a, __m256 b, __m256 c) {
-    // where component k of triple `lane` is, float 3·lane + k of the 24: in A, B or C
+    // where component k of triple `lane` is, float 3·lane + k of the 24: in A, B or C (a lane
+    // another source fills holds 0, which is also the right index where the table shows 0)
     alignas(32) static constexpr std::int32_t kIndex[3][3][8] = {
         {{0, 3, 6, 0, 0, 0, 0, 0}, {0, 0, 0, 1, 4, 7, 0, 0}, {0, 0, 0, 0, 0, 0, 2, 5}},
         {{1, 4, 7, 0, 0, 0, 0, 0}, {0, 0, 0, 2, 5, 0, 0, 0}, {0, 0, 0, 0, 0, 0, 3, 6}},
@@ -62,15 +63,18 @@ std::uint32_t prepare_rays(const float* origins, const float* directions, const 
             far = _mm256_loadu_ps(tmax_of + j);
             bad = _mm256_or_si256(bad, _mm256_castps_si256(_mm256_cmp_ps(far, _mm256_setzero_ps(), _CMP_NGE_UQ)));
         }
-        // coordinate_range.h scale_ray_by: e = exponent − 126, down = 2^−e, up = 2^e (1 and 1 where
-        // e = 0, which the scalar pass skips: a product with 1 is the number itself)
+        // coordinate_range.h scale_ray_by: e = exponent − 126, down = 2^−e, up = 2^e; where e = 0 the
+        // scalar pass leaves the fields as they are, so they are kept there rather than multiplied
+        // by 1 (which would flush a denormal under denormals-are-zero)
         const __m256i exponent = _mm256_srli_epi32(dir, 23);
         const __m256 down =
             _mm256_castsi256_ps(_mm256_slli_epi32(_mm256_sub_epi32(_mm256_set1_epi32(253), exponent), 23));
         const __m256 up = _mm256_castsi256_ps(_mm256_slli_epi32(_mm256_add_epi32(exponent, _mm256_set1_epi32(1)), 23));
-        const __m256 sx = _mm256_mul_ps(dx, down), sy = _mm256_mul_ps(dy, down), sz = _mm256_mul_ps(dz, down);
-        const __m256 near = _mm256_mul_ps(_mm256_set1_ps(tmin), up);
-        far = _mm256_mul_ps(far, up);
+        const __m256 keep = _mm256_castsi256_ps(_mm256_cmpeq_epi32(exponent, _mm256_set1_epi32(126)));
+        const auto scaled = [keep](__m256 x, __m256 by) { return _mm256_blendv_ps(_mm256_mul_ps(x, by), x, keep); };
+        const __m256 sx = scaled(dx, down), sy = scaled(dy, down), sz = scaled(dz, down);
+        const __m256 near = scaled(_mm256_set1_ps(tmin), up);
+        far = scaled(far, up);
         _mm256_storeu_ps(t_scale + j, down);
         // the octant: bit a set where dir[a]'s sign bit is (wide_kernel.h octant_of_bits), to bytes
         const __m256i sign_x = _mm256_srli_epi32(_mm256_castps_si256(dx), 31);

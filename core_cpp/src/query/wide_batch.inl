@@ -29,13 +29,14 @@ void closest_of_octant(const WideView& wide, const Ray* rays, const std::uint32_
         for (; j + kPacket <= n; j += kPacket) {
             // random and shadow rays part at the second ray's origin: no gather for them
             const Vec3 &a = rays[order[j]].origin, &b = rays[order[j + 1]].origin;
-            const bool maybe = a.x == b.x && a.y == b.y && a.z == b.z;
-            const PacketRays p = maybe ? packet_rays(rays, order + j) : PacketRays{};
-            if (maybe && coherent(p)) {
-                closest_packet<kOctant>(wide, rays, order + j, p, hits);
-            } else {
-                for (int r = 0; r < kPacket; ++r) single(order[j + r]);
+            if (a.x == b.x && a.y == b.y && a.z == b.z) {
+                const PacketRays p = packet_rays(rays, order + j);
+                if (coherent(p)) {
+                    closest_packet<kOctant>(wide, rays, order + j, p, hits);
+                    continue;
+                }
             }
+            for (int r = 0; r < kPacket; ++r) single(order[j + r]);
         }
 #endif
     for (; j < n; ++j) single(order[j]);

@@ -121,7 +121,7 @@ inline L8 largest(L8 x) {
 /// and arithmetic culling methods for entire ray packets": interval arithmetic over the packet),
 /// so that one vector test of a node's eight children drops those no ray of the packet enters
 /// before the per-ray tests of the others (maybe_entered), each bound in every lane. `valid` is
-/// false where some ray's factor is infinite or zero (a direction with a zero component) or under
+/// false where some ray's factor is infinite, zero (a direction with a zero component) or under
 /// the least normal float: a
 /// product with a plane difference could then be NaN, which the per-ray test ignores and a bound
 /// cannot, so such a packet tests every child ray by ray.
