@@ -28,12 +28,14 @@ inline __m256 component(__m256 a, __m256 b, __m256 c) {
         {{2, 5, 0, 0, 0, 0, 0, 0}, {0, 0, 0, 3, 6, 0, 0, 0}, {0, 0, 0, 0, 0, 1, 4, 7}},
     };
     // x: A 0-2, B 3-5, C 6-7; y: A 0-2, B 3-4, C 5-7; z: A 0-1, B 2-4, C 5-7
-    constexpr int kTakeB[3] = {0b00111000, 0b00011000, 0b00011100};
-    constexpr int kTakeC[3] = {0b11000000, 0b11100000, 0b11100000};
+    // (plain constants, not array elements: GCC with sanitizers did not fold those to the blend's
+    // immediate)
+    constexpr int kTakeB = k == 0 ? 0b00111000 : k == 1 ? 0b00011000 : 0b00011100;
+    constexpr int kTakeC = k == 0 ? 0b11000000 : 0b11100000;
     const auto index = [](const std::int32_t* p) { return _mm256_load_si256(reinterpret_cast<const __m256i*>(p)); };
     __m256 r = _mm256_permutevar8x32_ps(a, index(kIndex[k][0]));
-    r = _mm256_blend_ps(r, _mm256_permutevar8x32_ps(b, index(kIndex[k][1])), kTakeB[k]);
-    return _mm256_blend_ps(r, _mm256_permutevar8x32_ps(c, index(kIndex[k][2])), kTakeC[k]);
+    r = _mm256_blend_ps(r, _mm256_permutevar8x32_ps(b, index(kIndex[k][1])), kTakeB);
+    return _mm256_blend_ps(r, _mm256_permutevar8x32_ps(c, index(kIndex[k][2])), kTakeC);
 }
 
 }  // namespace
