@@ -231,6 +231,13 @@ void for_each_block(const RayBatch& rays, const Aabb& scene, Probe&& probe, Trac
     }
 }
 
+/// write_hits<true>'s work (below) on hits[0, n − n mod 8) (n ≤ 256) eight at a time, where the
+/// active instruction set has a vector pass (AVX2: ray_piece_avx2.cpp), else none: each eight that
+/// holds no sphere's hit written as write_hits writes it. Returns the eights written (bit g:
+/// hits 8g .. 8g + 7), which the scalar loop then skips.
+std::uint32_t write_hits_vector(const HitBatch& out, std::size_t begin, std::uint32_t n, const Hit* hits,
+                                const std::uint32_t* visited, const float* t_scale);
+
 /// hits[0, n) of rays begin .. begin + n (t in the scaled units of t_scale) to `out`, t back in the
 /// caller's units. kFinish: the hits are as the wide walks leave them (intersect_wide_grouped: a
 /// miss's t is the ray's tmax, a sphere's u, v not yet made), finished here (finish_hit with the
@@ -244,7 +251,14 @@ void write_hits(const HitBatch& out, std::size_t begin, std::size_t n, Hit* hits
     std::int32_t* prim = out.prim + begin;
     std::uint8_t* kind = out.kind ? out.kind + begin : nullptr;
     std::uint32_t* nodes_visited = out.nodes_visited ? out.nodes_visited + begin : nullptr;
+    // a piece's eights without a sphere's hit in one vector pass (kFinish: a piece of the wide batch)
+    std::uint32_t written = 0;
+    if constexpr (kFinish) written = write_hits_vector(out, begin, std::uint32_t(n), hits, visited, t_scale);
     for (std::size_t j = 0; j < n; ++j) {
+        if (written >> (j / 8) & 1) {
+            j += 7;
+            continue;
+        }
         Hit& h = hits[j];
         const bool miss = h.ref == kNoHit;
         if constexpr (kFinish)

@@ -1,5 +1,6 @@
-// prepare_rays (ray_batch.h): the batch's vector pass over the caller's rays on the active
-// instruction set (isa.h), or none (the scalar pass of prepare_piece then reads every ray).
+// prepare_rays and write_hits_vector (ray_batch.h): the batch's vector passes over the caller's
+// rays and over a piece's hits on the active instruction set (isa.h), or none (the scalar loops of
+// prepare_piece and write_hits then do all the work).
 #include <cstdint>
 
 #include "bvhlab/isa.h"
@@ -11,6 +12,9 @@ namespace bvhlab {
 namespace avx2 {
 std::uint32_t prepare_rays(const float* origins, const float* directions, const float* tmax_of, float tmin, float tmax,
                            std::uint32_t n, Ray* rays, float* t_scale, std::uint8_t* octant, std::uint32_t& refused);
+std::uint32_t write_hits(float* t, std::int32_t* prim, std::uint8_t* kind, float* u, float* v,
+                         std::uint32_t* nodes_visited, std::uint32_t n, const Hit* hits, const std::uint32_t* visited,
+                         const float* t_scale);
 }  // namespace avx2
 #endif
 
@@ -22,6 +26,19 @@ std::uint32_t prepare_rays(const float* origins, const float* directions, const 
 #endif
     (void)origins, (void)directions, (void)tmax_of, (void)tmin, (void)tmax, (void)n, (void)rays, (void)t_scale;
     (void)octant, (void)refused;
+    return 0;
+}
+
+std::uint32_t write_hits_vector(const HitBatch& out, std::size_t begin, std::uint32_t n, const Hit* hits,
+                                const std::uint32_t* visited, const float* t_scale) {
+#if defined(BVHLAB_AVX2_KERNELS)
+    if (active_isa() == Isa::Avx2) {
+        const auto at = [begin](auto* p) { return p ? p + begin : p; };
+        return avx2::write_hits(out.t + begin, out.prim + begin, at(out.kind), at(out.u), at(out.v),
+                                at(out.nodes_visited), n, hits, visited, t_scale);
+    }
+#endif
+    (void)out, (void)begin, (void)n, (void)hits, (void)visited, (void)t_scale;
     return 0;
 }
 

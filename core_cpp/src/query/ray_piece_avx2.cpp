@@ -9,6 +9,7 @@
 #include <cstdint>
 
 #include "bvhlab/ray.h"
+#include "gpu_types.h"
 
 namespace bvhlab::avx2 {
 namespace {
@@ -110,6 +111,41 @@ std::uint32_t prepare_rays(const float* origins, const float* directions, const 
     }
     refused |= std::uint32_t(!_mm256_testz_si256(bad, bad));
     return j;
+}
+
+static_assert(sizeof(Hit) == 5 * sizeof(float) && offsetof(Hit, ref) == 4 && offsetof(Hit, u) == 8 &&
+                  offsetof(Hit, v) == 12,
+              "a Hit is five words: t, ref, u, v, slot");
+
+std::uint32_t write_hits(float* t, std::int32_t* prim, std::uint8_t* kind, float* u, float* v,
+                         std::uint32_t* nodes_visited, std::uint32_t n, const Hit* hits, const std::uint32_t* visited,
+                         const float* t_scale) {
+    const __m256i stride = _mm256_setr_epi32(0, 5, 10, 15, 20, 25, 30, 35);  // a Hit is five words
+    const __m256i no_hit = _mm256_set1_epi32(std::int32_t(kNoHit));
+    const __m256i sphere_bit = _mm256_set1_epi32(std::int32_t(gpu::REF_SPHERE_BIT));
+    std::uint32_t written = 0;
+    for (std::uint32_t j = 0; j + 8 <= n; j += 8) {
+        const float* at = reinterpret_cast<const float*>(hits + j);
+        const __m256i ref = _mm256_i32gather_epi32(reinterpret_cast<const int*>(at) + 1, stride, 4);
+        const __m256i miss = _mm256_cmpeq_epi32(ref, no_hit);
+        // a sphere's hit (the bit set, not a miss) is finished by the scalar loop: its eight left
+        const __m256i sphere =
+            _mm256_andnot_si256(miss, _mm256_cmpeq_epi32(_mm256_and_si256(ref, sphere_bit), sphere_bit));
+        if (!_mm256_testz_si256(sphere, sphere)) continue;
+        const __m256 hit_t = _mm256_i32gather_ps(at, stride, 4);
+        const __m256 scaled = _mm256_mul_ps(hit_t, _mm256_loadu_ps(t_scale + j));
+        _mm256_storeu_ps(t + j, _mm256_blendv_ps(scaled, _mm256_set1_ps(kInfinity), _mm256_castsi256_ps(miss)));
+        // the index as it is (no sphere bit here), a miss's kNoHit as it is: −1
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(prim + j), ref);
+        if (kind) _mm_storel_epi64(reinterpret_cast<__m128i*>(kind + j), _mm_setzero_si128());  // triangles, misses: 0
+        if (u) _mm256_storeu_ps(u + j, _mm256_i32gather_ps(at + 2, stride, 4));
+        if (v) _mm256_storeu_ps(v + j, _mm256_i32gather_ps(at + 3, stride, 4));
+        if (nodes_visited)
+            _mm256_storeu_si256(reinterpret_cast<__m256i*>(nodes_visited + j),
+                                _mm256_loadu_si256(reinterpret_cast<const __m256i*>(visited + j)));
+        written |= 1u << (j / 8);
+    }
+    return written;
 }
 
 }  // namespace bvhlab::avx2
