@@ -107,8 +107,9 @@ struct RayPiece {
 /// else none: each ray's origin and direction from origins and directions (3 floats a ray), its
 /// tmax from tmax_of[i] (or `tmax` where null); the checks or-ed into `refused`, the scaled rays,
 /// their factors and their octants written as the scalar pass writes them. Returns the rays done.
-std::uint32_t prepare_rays(const float* origins, const float* directions, const float* tmax_of, float tmin, float tmax,
-                           std::uint32_t n, Ray* rays, float* t_scale, std::uint8_t* octant, std::uint32_t& refused);
+std::uint32_t prepare_rays_vector(const float* origins, const float* directions, const float* tmax_of, float tmin,
+                                  float tmax, std::uint32_t n, Ray* rays, float* t_scale, std::uint8_t* octant,
+                                  std::uint32_t& refused);
 
 /// Rays begin .. end (at most kWideBatch) of the batch to `piece`, in one pass over the caller's
 /// arrays: each checked by check_rays' rules, scaled (scaled_ray) and given its octant (the sign
@@ -119,7 +120,7 @@ std::uint32_t prepare_rays(const float* origins, const float* directions, const 
 /// it, and the largest |component| is the largest of the bits.
 /// `index` (kIndexed): the piece's rays are rays index[0, end - begin) of the batch rather than
 /// begin .. end (for_each_block's probe). A contiguous piece's rays go eight at a time through the
-/// vector pass where there is one (prepare_rays; repeat1m's camera rays: 68 instructions a ray in
+/// vector pass where there is one (prepare_rays_vector; repeat1m's camera rays: 68 instructions a ray in
 /// this function without it).
 template <bool kIndexed = false>
 inline bool prepare_piece(const RayBatch& rays, std::size_t begin, std::size_t end, RayPiece& piece,
@@ -142,8 +143,8 @@ inline bool prepare_piece(const RayBatch& rays, std::size_t begin, std::size_t e
     };
     std::uint32_t j = 0;
     if (!kIndexed)
-        j = prepare_rays(origins, directions, tmax_of, tmin, tmax, n, piece.rays.data(), piece.t_scale, octant,
-                         refused);
+        j = prepare_rays_vector(origins, directions, tmax_of, tmin, tmax, n, piece.rays.data(), piece.t_scale, octant,
+                                refused);
     for (; j < n; ++j) {  // as bits: no float operation before the scaling
         const std::size_t i = kIndexed ? index[j] : j;
         const float *o = origins + 3 * i, *d = directions + 3 * i;
@@ -231,7 +232,7 @@ void for_each_block(const RayBatch& rays, const Aabb& scene, Probe&& probe, Trac
     }
 }
 
-/// write_hits<true>'s work (below) on hits[0, n − n mod 8) (n ≤ 256) eight at a time, where the
+/// write_hits<true>'s work (below) on hits[0, n − n mod 8) (up to 256 of them) eight at a time, where the
 /// active instruction set has a vector pass (AVX2: ray_piece_avx2.cpp), else none: each eight that
 /// holds no sphere's hit written as write_hits writes it. Returns the eights written (bit g:
 /// hits 8g .. 8g + 7), which the scalar loop then skips.

@@ -1,4 +1,4 @@
-// prepare_rays and write_hits_vector (ray_batch.h): the batch's vector passes over the caller's
+// prepare_rays_vector and write_hits_vector (ray_batch.h): the batch's vector passes over the caller's
 // rays and over a piece's hits on the active instruction set (isa.h), or none (the scalar loops of
 // prepare_piece and write_hits then do all the work).
 #include <cstdint>
@@ -10,19 +10,21 @@ namespace bvhlab {
 
 #if defined(BVHLAB_AVX2_KERNELS)
 namespace avx2 {
-std::uint32_t prepare_rays(const float* origins, const float* directions, const float* tmax_of, float tmin, float tmax,
-                           std::uint32_t n, Ray* rays, float* t_scale, std::uint8_t* octant, std::uint32_t& refused);
+std::uint32_t prepare_rays_vector(const float* origins, const float* directions, const float* tmax_of, float tmin,
+                                  float tmax, std::uint32_t n, Ray* rays, float* t_scale, std::uint8_t* octant,
+                                  std::uint32_t& refused);
 std::uint32_t write_hits(float* t, std::int32_t* prim, std::uint8_t* kind, float* u, float* v,
                          std::uint32_t* nodes_visited, std::uint32_t n, const Hit* hits, const std::uint32_t* visited,
                          const float* t_scale);
 }  // namespace avx2
 #endif
 
-std::uint32_t prepare_rays(const float* origins, const float* directions, const float* tmax_of, float tmin, float tmax,
-                           std::uint32_t n, Ray* rays, float* t_scale, std::uint8_t* octant, std::uint32_t& refused) {
+std::uint32_t prepare_rays_vector(const float* origins, const float* directions, const float* tmax_of, float tmin,
+                                  float tmax, std::uint32_t n, Ray* rays, float* t_scale, std::uint8_t* octant,
+                                  std::uint32_t& refused) {
 #if defined(BVHLAB_AVX2_KERNELS)
     if (active_isa() == Isa::Avx2)
-        return avx2::prepare_rays(origins, directions, tmax_of, tmin, tmax, n, rays, t_scale, octant, refused);
+        return avx2::prepare_rays_vector(origins, directions, tmax_of, tmin, tmax, n, rays, t_scale, octant, refused);
 #endif
     (void)origins, (void)directions, (void)tmax_of, (void)tmin, (void)tmax, (void)n, (void)rays, (void)t_scale;
     (void)octant, (void)refused;
@@ -33,6 +35,7 @@ std::uint32_t write_hits_vector(const HitBatch& out, std::size_t begin, std::uin
                                 const std::uint32_t* visited, const float* t_scale) {
 #if defined(BVHLAB_AVX2_KERNELS)
     if (active_isa() == Isa::Avx2) {
+        n = n < 256 ? n : 256;  // a bit an eight in the answer: the rest to the scalar loop
         const auto at = [begin](auto* p) { return p ? p + begin : p; };
         return avx2::write_hits(out.t + begin, out.prim + begin, at(out.kind), at(out.u), at(out.v),
                                 at(out.nodes_visited), n, hits, visited, t_scale);

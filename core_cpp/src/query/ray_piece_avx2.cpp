@@ -1,8 +1,9 @@
-// The batch's pass over the caller's rays (ray_batch.h prepare_piece, prepare_rays) eight rays at a time, for
-// CPUs with AVX2 (compiled with -mavx2, chosen at run time, isa.h): the same checks, the same
-// scaling by powers of two and the same octants, so the piece holds the same bits as the scalar
-// pass writes. See binning_avx2.cpp for why nothing here may call an inline function of another
-// header: this file uses intrinsics alone, and Ray's layout through static_asserts.
+// The batch's vector passes for CPUs with AVX2 (compiled with -mavx2, chosen at run time, isa.h;
+// ray_piece.cpp picks): over the caller's rays eight at a time (ray_batch.h prepare_piece: the
+// same checks, scaling by powers of two and octants, so the piece holds the same bits as the
+// scalar pass writes) and over a piece's hits eight at a time (write_hits). See binning_avx2.cpp
+// for why nothing here may call an inline function of another header: this file uses intrinsics
+// alone, and Ray's and Hit's layouts through static_asserts.
 #include <immintrin.h>
 
 #include <cstddef>
@@ -41,8 +42,9 @@ inline __m256 component(__m256 a, __m256 b, __m256 c) {
 
 }  // namespace
 
-std::uint32_t prepare_rays(const float* origins, const float* directions, const float* tmax_of, float tmin, float tmax,
-                           std::uint32_t n, Ray* rays, float* t_scale, std::uint8_t* octant, std::uint32_t& refused) {
+std::uint32_t prepare_rays_vector(const float* origins, const float* directions, const float* tmax_of, float tmin,
+                                  float tmax, std::uint32_t n, Ray* rays, float* t_scale, std::uint8_t* octant,
+                                  std::uint32_t& refused) {
     const __m256i magnitude = _mm256_set1_epi32(0x7fffffff);
     // the bounds of ray_batch.h prepare_piece, as signed integers (every magnitude's bits are
     // below 2^31, a NaN's above every number's)

@@ -122,9 +122,8 @@ inline L8 largest(L8 x) {
 /// so that one vector test of a node's eight children drops those no ray of the packet enters
 /// before the per-ray tests of the others (maybe_entered), each bound in every lane. `valid` is
 /// false where some ray's factor is infinite, zero (a direction with a zero component) or under
-/// the least normal float: a
-/// product with a plane difference could then be NaN, which the per-ray test ignores and a bound
-/// cannot, so such a packet tests every child ray by ray.
+/// the least normal float: a product with a plane difference could then be NaN, which the per-ray
+/// test ignores and a bound cannot, so such a packet tests every child ray by ray.
 struct Interval {
     L8 near_lo[3], near_hi[3], far_lo[3], far_hi[3];  // per axis: the least and largest factor
     L8 tmin_lo;                                       // the least tmin
