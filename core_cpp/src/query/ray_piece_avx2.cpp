@@ -11,6 +11,7 @@
 
 #include "bvhlab/ray.h"
 #include "gpu_types.h"
+#include "transpose_avx2.h"
 
 namespace bvhlab::avx2 {
 namespace {
@@ -88,28 +89,10 @@ std::uint32_t prepare_rays_vector(const float* origins, const float* directions,
         const __m256i oct = _mm256_or_si256(sign_x, _mm256_or_si256(sign_y, sign_z));
         const __m128i words = _mm_packus_epi32(_mm256_castsi256_si128(oct), _mm256_extracti128_si256(oct, 1));
         _mm_storel_epi64(reinterpret_cast<__m128i*>(octant + j), _mm_packus_epi16(words, words));
-        // the eight fields' vectors to eight rays (an 8 × 8 transpose: row k is ray j + k)
-        const __m256 t0 = _mm256_unpacklo_ps(ox, oy), t1 = _mm256_unpackhi_ps(ox, oy);
-        const __m256 t2 = _mm256_unpacklo_ps(oz, sx), t3 = _mm256_unpackhi_ps(oz, sx);
-        const __m256 t4 = _mm256_unpacklo_ps(sy, sz), t5 = _mm256_unpackhi_ps(sy, sz);
-        const __m256 t6 = _mm256_unpacklo_ps(near, far), t7 = _mm256_unpackhi_ps(near, far);
-        const __m256 u0 = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
-        const __m256 u1 = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
-        const __m256 u2 = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
-        const __m256 u3 = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2));
-        const __m256 u4 = _mm256_shuffle_ps(t4, t6, _MM_SHUFFLE(1, 0, 1, 0));
-        const __m256 u5 = _mm256_shuffle_ps(t4, t6, _MM_SHUFFLE(3, 2, 3, 2));
-        const __m256 u6 = _mm256_shuffle_ps(t5, t7, _MM_SHUFFLE(1, 0, 1, 0));
-        const __m256 u7 = _mm256_shuffle_ps(t5, t7, _MM_SHUFFLE(3, 2, 3, 2));
-        float* row = reinterpret_cast<float*>(rays + j);
-        _mm256_storeu_ps(row + 0, _mm256_permute2f128_ps(u0, u4, 0x20));
-        _mm256_storeu_ps(row + 8, _mm256_permute2f128_ps(u1, u5, 0x20));
-        _mm256_storeu_ps(row + 16, _mm256_permute2f128_ps(u2, u6, 0x20));
-        _mm256_storeu_ps(row + 24, _mm256_permute2f128_ps(u3, u7, 0x20));
-        _mm256_storeu_ps(row + 32, _mm256_permute2f128_ps(u0, u4, 0x31));
-        _mm256_storeu_ps(row + 40, _mm256_permute2f128_ps(u1, u5, 0x31));
-        _mm256_storeu_ps(row + 48, _mm256_permute2f128_ps(u2, u6, 0x31));
-        _mm256_storeu_ps(row + 56, _mm256_permute2f128_ps(u3, u7, 0x31));
+        // the eight fields' vectors to eight rays (row k is ray j + k)
+        __m256 row[8] = {ox, oy, oz, sx, sy, sz, near, far};
+        transpose8(row);
+        for (int k = 0; k < 8; ++k) _mm256_storeu_ps(reinterpret_cast<float*>(rays + j + k), row[k]);
     }
     refused |= std::uint32_t(!_mm256_testz_si256(bad, bad));
     return j;

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <limits>
 
+#include "transpose_avx2.h"
 #include "wide_kernel.h"
 
 namespace bvhlab::avx2 {

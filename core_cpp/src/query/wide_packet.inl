@@ -42,26 +42,10 @@ struct PacketRays {
 };
 
 inline PacketRays packet_rays(const Ray* rays, const std::uint32_t* ids) {
-    const auto row = [&](int r) { return _mm256_loadu_ps(reinterpret_cast<const float*>(rays + ids[r])); };
-    const __m256 r0 = row(0), r1 = row(1), r2 = row(2), r3 = row(3), r4 = row(4), r5 = row(5), r6 = row(6), r7 = row(7);
-    const __m256 t0 = _mm256_unpacklo_ps(r0, r1), t1 = _mm256_unpackhi_ps(r0, r1);
-    const __m256 t2 = _mm256_unpacklo_ps(r2, r3), t3 = _mm256_unpackhi_ps(r2, r3);
-    const __m256 t4 = _mm256_unpacklo_ps(r4, r5), t5 = _mm256_unpackhi_ps(r4, r5);
-    const __m256 t6 = _mm256_unpacklo_ps(r6, r7), t7 = _mm256_unpackhi_ps(r6, r7);
-    const __m256 u0 = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
-    const __m256 u1 = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
-    const __m256 u2 = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
-    const __m256 u3 = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2));
-    const __m256 u4 = _mm256_shuffle_ps(t4, t6, _MM_SHUFFLE(1, 0, 1, 0));
-    const __m256 u5 = _mm256_shuffle_ps(t4, t6, _MM_SHUFFLE(3, 2, 3, 2));
-    const __m256 u6 = _mm256_shuffle_ps(t5, t7, _MM_SHUFFLE(1, 0, 1, 0));
-    const __m256 u7 = _mm256_shuffle_ps(t5, t7, _MM_SHUFFLE(3, 2, 3, 2));
-    PacketRays p;
-    p.o[0] = _mm256_permute2f128_ps(u0, u4, 0x20), p.o[1] = _mm256_permute2f128_ps(u1, u5, 0x20);
-    p.o[2] = _mm256_permute2f128_ps(u2, u6, 0x20), p.d[0] = _mm256_permute2f128_ps(u3, u7, 0x20);
-    p.d[1] = _mm256_permute2f128_ps(u0, u4, 0x31), p.d[2] = _mm256_permute2f128_ps(u1, u5, 0x31);
-    p.tmin = _mm256_permute2f128_ps(u2, u6, 0x31), p.tmax = _mm256_permute2f128_ps(u3, u7, 0x31);
-    return p;
+    __m256 r[8];
+    for (int k = 0; k < 8; ++k) r[k] = _mm256_loadu_ps(reinterpret_cast<const float*>(rays + ids[k]));
+    transpose8(r);  // transpose_avx2.h, included by traverse_wide_avx2.cpp
+    return {{r[0], r[1], r[2]}, {r[3], r[4], r[5]}, r[6], r[7]};
 }
 
 /// Lane 0 of x in every lane.
