@@ -39,6 +39,7 @@
 // the ray keeps a normal (not subnormal) t even for the longest directions.
 #pragma once
 #include <algorithm>
+#include <bit>
 #include <cfloat>
 #include <cmath>
 #include <cstdint>
@@ -52,8 +53,13 @@ namespace bvhlab {
 inline constexpr float kMaxCoordinate = 0x1p40f;  ///< |x| ≤ 2^40 ≈ 1.0995e12 for every point
 inline constexpr float kMinDirection = 0x1p-80f;  ///< smallest allowed largest |component| of a direction
 inline constexpr float kMaxDirection = 0x1p80f;   ///< largest allowed largest |component| of a direction
-inline constexpr float kMinRadius = 0x1p-60f;     ///< smallest sphere radius (≈ 8.7e-19)
-inline constexpr float kMinExtent = 0x1p-32f;     ///< smallest largest side of a tree's box with triangles (≈ 2.3e-10)
+/// The three bounds' bits: the batch checks compare the bits of |x| with them (ray_batch.h
+/// prepare_piece, its vector pass), a NaN's bits above every number's.
+inline constexpr std::uint32_t kMaxCoordinateBits = std::bit_cast<std::uint32_t>(kMaxCoordinate);
+inline constexpr std::uint32_t kMinDirectionBits = std::bit_cast<std::uint32_t>(kMinDirection);
+inline constexpr std::uint32_t kMaxDirectionBits = std::bit_cast<std::uint32_t>(kMaxDirection);
+inline constexpr float kMinRadius = 0x1p-60f;  ///< smallest sphere radius (≈ 8.7e-19)
+inline constexpr float kMinExtent = 0x1p-32f;  ///< smallest largest side of a tree's box with triangles (≈ 2.3e-10)
 
 // The two rules below are written with `&` rather than `&&` so that they compile without branches
 // (a NaN fails every comparison; |x| <= FLT_MAX is x finite): check_rays runs them on every ray of

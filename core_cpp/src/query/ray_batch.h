@@ -125,9 +125,7 @@ std::uint32_t prepare_rays_vector(const float* origins, const float* directions,
 template <bool kIndexed = false>
 inline bool prepare_piece(const RayBatch& rays, std::size_t begin, std::size_t end, RayPiece& piece,
                           const std::uint32_t* index = nullptr) {
-    constexpr std::uint32_t kMaxOrigin = 0x53800000u;                   // the bits of kMaxCoordinate, 2^40
-    constexpr std::uint32_t kLeast = 0x17800000u, kMost = 0x67800000u;  // of kMinDirection, kMaxDirection
-    static_assert(kMaxCoordinate == 0x1p40f && kMinDirection == 0x1p-80f && kMaxDirection == 0x1p80f);
+    constexpr std::uint32_t kMaxOrigin = kMaxCoordinateBits, kLeast = kMinDirectionBits, kMost = kMaxDirectionBits;
     const auto n = std::uint32_t(end - begin);
     // the batch's fields in locals: the stores to the piece could alias them for the compiler
     const std::size_t first = kIndexed ? 0 : begin;

@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "bvhlab/coordinate_range.h"  // its constants alone
 #include "bvhlab/ray.h"
 #include "gpu_types.h"
 #include "transpose_avx2.h"
@@ -49,8 +50,9 @@ std::uint32_t prepare_rays_vector(const float* origins, const float* directions,
     const __m256i magnitude = _mm256_set1_epi32(0x7fffffff);
     // the bounds of ray_batch.h prepare_piece, as signed integers (every magnitude's bits are
     // below 2^31, a NaN's above every number's)
-    const __m256i max_origin = _mm256_set1_epi32(0x53800000), least = _mm256_set1_epi32(0x17800000),
-                  most = _mm256_set1_epi32(0x67800000);
+    const __m256i max_origin = _mm256_set1_epi32(std::int32_t(kMaxCoordinateBits)),
+                  least = _mm256_set1_epi32(std::int32_t(kMinDirectionBits)),
+                  most = _mm256_set1_epi32(std::int32_t(kMaxDirectionBits));
     __m256i bad = _mm256_setzero_si256();
     std::uint32_t j = 0;
     for (; j + 8 <= n; j += 8) {
