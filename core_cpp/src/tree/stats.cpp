@@ -4,16 +4,6 @@
 
 namespace bvhlab {
 
-double node_half_area(const BvhNode& n) {
-    double x = double(n.hi.x) - n.lo.x, y = double(n.hi.y) - n.lo.y, z = double(n.hi.z) - n.lo.z;
-    return x * y + y * z + z * x;
-}
-
-double sah_term(const BvhNode& n, double root_half_area) {
-    double p = root_half_area > 0 ? node_half_area(n) / root_half_area : 1.0;
-    return is_leaf(n) ? p * leaf_count(n) : p;
-}
-
 double sah_cost(const Bvh& bvh) {
     if (bvh.empty()) return 0.0;
     const double root_area = node_half_area(bvh.nodes[0]);
@@ -30,9 +20,11 @@ BvhStats compute_stats(const Bvh& bvh) {
     s.references = bvh.refs.size();
     s.nodes = bvh.nodes.size();
     s.build_ms = bvh.build_ms;
-    s.sah_cost = sah_cost(bvh);
+    // one pass: sah_cost's terms summed in its order (the same bits), the counts beside them
+    const double root_area = bvh.empty() ? 0.0 : node_half_area(bvh.nodes[0]);
     for (std::size_t i = 0; i < bvh.nodes.size(); ++i) {
         const BvhNode& n = bvh.nodes[i];
+        s.sah_cost += sah_term(n, root_area);
         std::uint32_t d = bvh.depths[i];
         if (s.nodes_per_depth.size() <= d) s.nodes_per_depth.resize(d + 1), s.leaves_per_depth.resize(d + 1);
         ++s.nodes_per_depth[d];
