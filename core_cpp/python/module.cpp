@@ -146,6 +146,13 @@ void bind_bvh(nb::module_& m) {
     nb::class_<PyBvh>(m, "Bvh")
         .def("stats", [](const PyBvh& b) { return stats_dict(b.current()->bvh); })
         .def_prop_ro("node_count", [](const PyBvh& b) { return b.current()->bvh.nodes.size(); })
+        .def_prop_ro(
+            "primitive_counts",
+            [](const PyBvh& b) {
+                TreePtr t = b.current();
+                return nb::make_tuple(t->bvh.triangle_count, t->bvh.sphere_count);
+            },
+            "(triangles, spheres) of one version, without the stats' pass over the nodes")
         .def_prop_ro("build_ms", [](const PyBvh& b) { return b.current()->bvh.build_ms; })
         .def_prop_ro("revision", [](const PyBvh& b) { return b.current()->revision; })
         .def(
