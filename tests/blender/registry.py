@@ -81,6 +81,7 @@ def _install() -> Iterator[Check]:
 def _export() -> Iterator[Check]:
     import checks_bundled
     import checks_cases as cases
+    import checks_live
 
     for name in json.loads(SCENES_JSON.read_text()):
         yield Check("export", f"bundled_{name}", checks_bundled.check_bundled_scene, args=(name,))
@@ -96,6 +97,9 @@ def _export() -> Iterator[Check]:
         yield Check("export", check.__name__.removeprefix("check_"), check)
     yield Check("export", "scene_file_round_trip", cases.check_scene_file_round_trip, folder=True)
     yield Check("export", "large_export", checks_bundled.check_large_export)
+    yield Check(
+        "export", "moves_are_placed_as_the_walk_places_them", checks_live.check_moves_are_placed_as_the_walk_places_them
+    )
 
 
 def _addon() -> Iterator[Check]:

@@ -59,6 +59,14 @@ class MaterialTable:
         self._index: dict[tuple, int] = {}  # (original material's full name, '' for an empty slot; look)
         self._slots: dict[tuple, np.ndarray] = {}  # (original object, mesh data, look) → slot_indices
 
+    @classmethod
+    def kept(cls, materials: list[Material], known: dict[str, Material], override=None) -> MaterialTable:
+        """The table of a sync that reads no object (placed_only.py): the last sync's `materials`,
+        in its order, and what it read."""
+        table = cls(dict(known), override)
+        table.materials = list(materials)
+        return table
+
     def index_of(self, material, look: Look = PLAIN) -> int:
         """Table index of a Blender material (evaluated or original; None = empty slot) as an object
         of `look` shows it: its holdout (Material.holdout: what a holdout object shows in its place,

@@ -13,9 +13,12 @@ class SyncReport:
     transforms differ (every mesh's arrays are the last sync's: only the TLAS is built again);
     `materials`: the material table or the primitives' materials differ. `objects_read` counts
     meshes read (a mesh shared by instances once), `objects_moved` items placed again without a
-    read, `instances_moved` those of them that are instances of a shared mesh (a new transform)."""
+    read, `instances_moved` those of them that are instances of a shared mesh (a new transform).
+    `placed_only`: the depsgraph was not walked, the updates said that only instances (or the
+    camera or light) moved (placed_only.py)."""
 
     full: bool = False
+    placed_only: bool = False
     objects_read: int = 0
     objects_moved: int = 0
     instances_moved: int = 0

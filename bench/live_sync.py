@@ -1,0 +1,119 @@
+"""A LiveScene sync (what the Rendered viewport and F12 with Persistent Data run at every depsgraph
+update) in a scene of N objects while one of them is moved, bpy as a module: one LiveScene that
+takes the moved instances' matrices from the updates (bvhlab/blender/placed_only.py) and one that
+walks the depsgraph at every sync (`place_from_updates=False`, what every sync did before), both
+synced from the same updates in one depsgraph handler, in alternating order, by thread CPU time.
+
+Scenes: N linked duplicates of one box (instances of one mesh), and N boxes of their own meshes
+of which the moved one has moved before (a mover: its own instance).
+
+    .venv/bin/python bench/live_sync.py [--counts 2000,20000] [--moves 9] [--json live_sync.json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+import warnings
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests" / "blender"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import _common  # noqa: E402
+import bpy  # noqa: E402
+import harness  # noqa: E402
+
+from bvhlab.blender import LiveScene  # noqa: E402
+
+
+def scene_of(count: int, shared: bool):
+    """`count` unit boxes on a grid (one mesh for all where `shared`), a camera and a light."""
+    scene = harness.empty_scene()
+    harness.add_camera((-30.0, -30.0, 30.0), (0.0, 0.0, 0.0))
+    harness.add_point_light((0.0, 0.0, 40.0))
+    first = harness.add_box("Box0", (0.0, 0.0, 0.0), size=0.5)
+    side = round(count ** (1 / 3)) + 1
+    for i in range(1, count):
+        data = first.data if shared else first.data.copy()
+        obj = bpy.data.objects.new(f"Box{i}", data)
+        scene.collection.objects.link(obj)
+        obj.location = (i % side, (i // side) % side, i // (side * side))
+    bpy.context.view_layer.update()
+    return scene, first
+
+
+def measure(count: int, shared: bool, moves: int) -> dict:
+    scene, moved = scene_of(count, shared)
+    lives = {"placed": LiveScene("visible"), "walked": LiveScene("visible", place_from_updates=False)}
+    times: dict[str, list[float]] = {name: [] for name in lives}
+    flags: list[bool] = []
+    order = list(lives)
+
+    def synced(scene, depsgraph):
+        for name in order:
+            start = time.thread_time()
+            report = lives[name].sync(depsgraph, scene)
+            times[name].append((time.thread_time() - start) * 1e3)
+            if name == "placed":
+                flags.append(report.placed_only)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for live in lives.values():
+            live.sync(bpy.context.evaluated_depsgraph_get(), scene)
+        bpy.app.handlers.depsgraph_update_post.append(synced)
+        try:
+            for k in range(moves + 1):  # the first move makes a box of its own mesh a mover
+                order.reverse()
+                moved.location.x += 0.25 if k % 2 else -0.25
+                bpy.context.view_layer.update()
+        finally:
+            bpy.app.handlers.depsgraph_update_post.remove(synced)
+    return {
+        "objects": count,
+        "one_mesh": shared,
+        "placed_ms": statistics.median(times["placed"][1:]),
+        "walked_ms": statistics.median(times["walked"][1:]),
+        "placed_only": flags[1:],
+    }
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--counts", default="2000,20000")
+    ap.add_argument("--moves", type=int, default=9)
+    ap.add_argument("--json", default="live_sync.json")
+    args = ap.parse_args()
+    _common.json_path(args.json)
+    machine = _common.machine()
+    print(_common.machine_line(machine), file=sys.stderr, flush=True)
+    rows = []
+    for count in (int(c) for c in args.counts.split(",")):
+        for shared in (True, False):
+            row = measure(count, shared, args.moves)
+            rows.append(row)
+            print(row, file=sys.stderr, flush=True)
+    _common.print_table(
+        ["objects", "one mesh", "walk ms", "placed ms", "walk ÷ placed", "placed every move"],
+        [
+            [
+                r["objects"],
+                "yes" if r["one_mesh"] else "no",
+                f"{r['walked_ms']:.1f}",
+                f"{r['placed_ms']:.1f}",
+                f"{r['walked_ms'] / r['placed_ms']:.1f}",
+                all(r["placed_only"]),
+            ]
+            for r in rows
+        ],
+        title=f"LiveScene sync after moving one object, medians of {args.moves} moves (thread CPU time)",
+    )
+    _common.write_json(args.json, {"machine": machine, "rows": rows})
+
+
+if __name__ == "__main__":
+    main()
