@@ -27,22 +27,31 @@ from .errors import ExportWarning
 from .scope import visibility
 
 
-def gather_light(
-    depsgraph, view_layer, primitive_points: np.ndarray, distance: float | None = None
-) -> tuple[Light, float | None] | None:
-    """The first visible point light (scope.visibility) by name (another kind of light stands in,
-    at its position, with an ExportWarning), and the distance d its intensity is calibrated by;
-    None when the scene has no visible light. d is `distance` where given, else the median
-    distance to `primitive_points` (N,3), a sample of primitive centres (None where there are
-    none: the intensity is then that of d = 1, and the next call measures)."""
+def first_light(depsgraph, view_layer):
+    """The first visible light object (scope.visibility), evaluated: a point light by name, else
+    another kind by name; None when the scene has none. (A pass over every object of the
+    depsgraph: 15 ms for 20,000.)"""
     visible = visibility(depsgraph)
     lights = sorted(
         (obj for obj in depsgraph.objects if obj.type == "LIGHT" and visible(obj.original, view_layer)),
         key=lambda obj: (obj.data.type != "POINT", obj.name),
     )
-    if not lights:
-        return None
-    light = lights[0]
+    return lights[0] if lights else None
+
+
+def gather_light(
+    depsgraph, view_layer, primitive_points: np.ndarray, distance: float | None = None, light=None
+) -> tuple[Light, float | None] | None:
+    """The first visible point light (first_light; another kind of light stands in, at its
+    position, with an ExportWarning), or the evaluated light object `light` where the caller knows
+    it, and the distance d its intensity is calibrated by; None when the scene has no visible
+    light. d is `distance` where given, else the median distance to `primitive_points` (N,3), a
+    sample of primitive centres (None where there are none: the intensity is then that of d = 1,
+    and the next call measures)."""
+    if light is None:
+        light = first_light(depsgraph, view_layer)
+        if light is None:
+            return None
     if light.data.type != "POINT":
         warnings.warn(
             f"no point light; light '{light.name}' ({light.data.type.lower()}) is used as a "

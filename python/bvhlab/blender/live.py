@@ -13,7 +13,7 @@ view_update and after `depsgraph.update()`):
 - camera, light and sky are gathered every sync (a few attribute reads);
 - where the updates name only transforms of instances (and of cameras, lights, parents), the
   depsgraph is not walked at all: the moved instances' matrices come from the updates
-  (`placed_only.py`; 20,000 objects: 0.8-1.8 s a sync → 40-54 ms).
+  (`placed_only.py`; 20,000 objects: 0.8-1.0 s a sync → 15-17 ms).
 
 Instancing (collection instances, linked duplicates, instancing by vertices or faces, geometry-nodes
 instances) becomes meshes and instances of the Scene (`instancing.py`); static objects used once
@@ -39,7 +39,7 @@ from .camera import gather_camera
 from .depsgraph_updates import Dirty
 from .errors import ExportError, ExportWarning, SubstituteWarning
 from .instancing import Item, Layout, SharedMesh, plan, shared_meshes
-from .light import gather_light
+from .light import first_light, gather_light
 from .material_table import PLAIN, Look, MaterialTable, hidden_rays
 from .mesh import MeshData, read_mesh
 from .motion import AnimatedMemo
@@ -113,6 +113,9 @@ class LiveScene:
         self._override_key: str | None = None  # the view layer's Material Override when last synced
         self._failed = False  # the last sync raised: the next reads everything
         self._index: MoverIndex | None = None  # the items an update places alone (placed_only.py)
+        self._light: tuple[str, str] | None = None  # the last sync's light object: (name, full name)
+        self._moved: list[tuple] = []  # the keys of the last sync's items that moved (Item.moved)
+        self._moved_now: list[tuple] = []  # this sync's, kept once it succeeds
 
     def sync(self, depsgraph, blender_scene=None, view_layer=None) -> SyncReport:
         """Bring `scene` up to date with the evaluated depsgraph. Raises ExportError (see
@@ -137,8 +140,9 @@ class LiveScene:
         # only instances moved (placed_only.py): the last sync's items with their new matrices
         moved = None if full or not self.place_from_updates else moved_items(depsgraph, self._mover_index())
         placed = None if moved is None else self._placed(moved, override)
+        moved_keys = None  # the keys of the items that moved, where known without a pass over them
         if placed is not None:
-            items, world, report, seen_moving, table = placed
+            items, world, report, seen_moving, moved_keys, table = placed
             layout, shared, by_data = self._layout, self._shared, self._by_data
         else:
             dirty = Dirty(everything=True) if full else Dirty.from_updates(depsgraph)
@@ -151,12 +155,14 @@ class LiveScene:
             layout = plan(items, world, self.instancing, lambda key: key in seen_moving or animated(items[key].origin))
             shared = shared_meshes(items, layout, self._shared)
         assert layout is not None
-        arrays = self._arrays(items, world, layout, shared, table, report, kept=placed is not None)
+        arrays = self._arrays(items, world, layout, shared, table, report, moved_keys)
         report.materials_read = table.reads
         scene = self._make_scene(arrays, table, blender_scene, depsgraph, report)
         # the sample only where the light's distance is to be measured (a pass over every item)
         points = primitive_sample(items, world, scene.spheres) if self.light_distance is None else np.zeros((0, 3))
-        found = gather_light(depsgraph, view_layer, points, self.light_distance)
+        # where only instances moved, the light of the last sync (no light came or went)
+        lamp = self._light_again(depsgraph, view_layer) if placed is not None else first_light(depsgraph, view_layer)
+        found = None if lamp is None else gather_light(depsgraph, view_layer, points, self.light_distance, lamp)
         light = None
         if found is not None:
             light, self.light_distance = found
@@ -175,6 +181,8 @@ class LiveScene:
         self._seen_moving = seen_moving
         if placed is None:  # the items' keys, order or layout may have changed
             self._index = None
+        self._light = None if lamp is None else (lamp.original.name, lamp.original.name_full)
+        self._moved = self._moved_now
         self._override_key = override_key
         self.totals.add(report)
         return report
@@ -253,6 +261,17 @@ class LiveScene:
                 item.mesh, item.placed, item.moved = fresh[item.data], None, False
         return items, world, by_data, report, seen_moving
 
+    def _light_again(self, depsgraph, view_layer):
+        """The last sync's light object, evaluated, looked up by its name (first_light where the
+        name now names another object); None where that sync had none."""
+        if self._light is None:
+            return None
+        name, full = self._light
+        lamp = depsgraph.objects.get(name)
+        if lamp is None or lamp.original.name_full != full:
+            return first_light(depsgraph, view_layer)
+        return lamp
+
     def _mover_index(self) -> MoverIndex:
         if self._index is None:
             assert self._layout is not None  # a sync ran
@@ -260,10 +279,10 @@ class LiveScene:
         return self._index
 
     def _placed(self, moved: dict, override) -> tuple | None:
-        """(items, world, report, seen moving, material table) of the last sync with the matrices
+        """(items, world, report, seen moving, moved keys, material table) of the last sync with the matrices
         of `moved` (placed_only.place_moved); None where the walk must run after all."""
         assert self.scene is not None
-        placed = place_moved(self._items, self._world, self._seen_moving, moved, self.instancing)
+        placed = place_moved(self._items, self._world, self._moved, self._seen_moving, moved, self.instancing)
         if placed is None:
             return None
         return (*placed, MaterialTable.kept(self.scene.materials, self._materials, override))
@@ -311,13 +330,15 @@ class LiveScene:
         shared: list[SharedMesh],
         table: MaterialTable,
         report,
-        kept: bool = False,
+        moved: list | None = None,
     ) -> dict:
         """Mesh 0 (the items placed in the world: triangles, spheres and their material indices, in
         walk order; the material table is rebuilt in that order every sync), the shared meshes and
-        the instances; the previous arrays where nothing changed. `kept`: the last sync's items in
-        its order and layout, only instances moved (placed_only.py): mesh 0 is the last sync's."""
+        the instances; the previous arrays where nothing changed. `moved`: given (the keys of the
+        items that moved) where the items are the last sync's in its order and layout and only
+        instances moved (placed_only.py): mesh 0 is the last sync's."""
         previous = self.scene
+        kept = moved is not None
         if kept:
             assert previous is not None
             tri_material, sphere_material = [previous.tri_material], list(previous.sphere_material)
@@ -333,7 +354,9 @@ class LiveScene:
             warnings.warn(f"{_nothing_in_scope(self.scope)}: the world alone is rendered", ExportWarning, stacklevel=3)
         same_order = kept or list(self._items) == list(items)
         same_layout = kept or layout.same_as(self._layout)
-        moved = [key for key, item in items.items() if item.moved]
+        if moved is None:
+            moved = [key for key, item in items.items() if item.moved]
+        self._moved_now = moved
         report.instances_moved = sum(1 for key in moved if layout.mesh_of[key])
         report.geometry = bool(previous is None or report.objects_read or moved or not same_order or not same_layout)
         report.refittable = (

@@ -90,11 +90,14 @@ def moved_items(depsgraph, index: MoverIndex) -> dict[tuple, tuple] | None:
     return moved if reported else None
 
 
-def place_moved(items: dict, world: np.ndarray, seen_moving: set, moved: dict, instancing: bool) -> tuple | None:
-    """(items, world, report, seen moving) of a sync that found the last sync's `items` and
-    `world` (its matrices, row i the i-th item's) with the matrices of `moved` (moved_items), as
-    the walk would find them (live.py `_compare_matrices`); None where a new matrix cannot be
-    inverted as `instancing.plan` asks of an instance (the walk then places that item in mesh 0)."""
+def place_moved(
+    items: dict, world: np.ndarray, moved_before: list, seen_moving: set, moved: dict, instancing: bool
+) -> tuple | None:
+    """(items, world, report, seen moving, the keys of the items moved) of a sync that found the
+    last sync's `items` and `world` (its matrices, row i the i-th item's; `moved_before`: the keys
+    of its items that moved) with the matrices of `moved` (moved_items), as the walk would find
+    them (live.py `_compare_matrices`); None where a new matrix cannot be inverted as
+    `instancing.plan` asks of an instance (the walk then places that item in mesh 0)."""
     before, world = world, world.copy()
     rows = np.fromiter((row for row, _ in moved.values()), np.int64, len(moved))
     if len(rows):
@@ -103,15 +106,19 @@ def place_moved(items: dict, world: np.ndarray, seen_moving: set, moved: dict, i
             return None
     # the items, none of them moved (those that moved last sync keep their new place), then those
     # whose matrix changed (NaN: changed, as the walk counts it)
-    items = {key: dataclasses.replace(item, moved=False) if item.moved else item for key, item in items.items()}
+    items = dict(items)
+    for key in moved_before:
+        items[key] = dataclasses.replace(items[key], moved=False)
     changed = ~(before[rows] == world[rows]).all(axis=(1, 2))
     report = SyncReport(placed_only=True)
     seen_moving = set(seen_moving)
+    now = []
     for (key, (row, _)), differs in zip(moved.items(), changed):
         if not differs:
             continue
         items[key] = dataclasses.replace(items[key], matrix=world[row], placed=None, moved=True)
-        report.objects_moved += 1
+        now.append(key)
         if instancing:
             seen_moving.add(key)
-    return items, world, report, seen_moving
+    report.objects_moved = len(now)
+    return items, world, report, seen_moving, now
