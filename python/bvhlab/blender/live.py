@@ -29,6 +29,7 @@ primitives in the same order, moved) or rebuild it (anything else).
 from __future__ import annotations
 
 import copy
+import gc
 import warnings
 
 import numpy as np
@@ -122,11 +123,19 @@ class LiveScene:
         export_scene); on an error the previous scene and cache stay as they were, and the next
         sync reads everything: the updates this evaluation names are not named again, so an edit
         made while the scene could not be exported (an object out of range) would stay unread."""
+        # The walk makes a few objects per item and frees none: the collector ran and re-ran over
+        # the whole heap (20,000 objects: 60-90 ms of a 0.55 s sync, and its spread); it runs
+        # again afterwards, on what is left.
+        collecting = gc.isenabled()
+        gc.disable()
         try:
             report = self._sync(depsgraph, blender_scene, view_layer)
         except BaseException:
             self._failed = True
             raise
+        finally:
+            if collecting:
+                gc.enable()
         self._failed = False
         return report
 

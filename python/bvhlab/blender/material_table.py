@@ -34,14 +34,22 @@ class Look(NamedTuple):
 PLAIN = Look()
 
 
+#: RAY_VISIBILITY as (flag, bit) pairs: hidden_rays runs once per object of a walk, where the
+#: enum's own `|` (Python code) was most of its time (20,000 objects: 0.20 of a 0.5 s sync).
+_RAY_BITS = tuple((flag, int(ray)) for flag, ray in RAY_VISIBILITY.items())
+
+
 def hidden_rays(*objects) -> Rays:
-    """The rays any of `objects` (original Blender objects) hides from (Ray Visibility flags off)."""
-    hidden = Rays(0)
-    for obj in objects:
-        for flag, ray in RAY_VISIBILITY.items():
+    """The rays any of `objects` (original Blender objects; one read once where it is given twice,
+    an object as its own owner) hides from (Ray Visibility flags off)."""
+    hidden = 0
+    for k, obj in enumerate(objects):
+        if k and obj is objects[k - 1]:
+            continue
+        for flag, bit in _RAY_BITS:
             if not getattr(obj, flag, True):
-                hidden |= ray
-    return hidden
+                hidden |= bit
+    return Rays(hidden)
 
 
 class MaterialTable:
