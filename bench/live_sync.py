@@ -5,7 +5,8 @@ walks the depsgraph at every sync (`place_from_updates=False`, what every sync d
 synced from the same updates in one depsgraph handler, in alternating order, by thread CPU time.
 
 Scenes: N linked duplicates of one box (instances of one mesh), and N boxes of their own meshes
-of which the moved one has moved before (a mover: its own instance).
+of which the moved one has moved before (a mover: its own instance). Changes: the box moved (as a
+drag in the viewport), or the frame changed with the box's location keyframed (playback).
 
     .venv/bin/python bench/live_sync.py [--counts 2000,20000] [--moves 9] [--json live_sync.json]
 """
@@ -46,8 +47,15 @@ def scene_of(count: int, shared: bool):
     return scene, first
 
 
-def measure(count: int, shared: bool, moves: int) -> dict:
+def measure(count: int, shared: bool, moves: int, frames: bool = False) -> dict:
+    """Syncs after `moves` moves of one object, or (`frames`) after `moves` frame changes with that
+    object's location keyframed (playback)."""
     scene, moved = scene_of(count, shared)
+    if frames:
+        for frame, x in ((1, 0.0), (moves + 2, 5.0)):
+            moved.location.x = x
+            moved.keyframe_insert("location", frame=frame)
+        scene.frame_set(1)
     lives = {"placed": LiveScene("visible"), "walked": LiveScene("visible", place_from_updates=False)}
     times: dict[str, list[float]] = {name: [] for name in lives}
     flags: list[bool] = []
@@ -65,16 +73,21 @@ def measure(count: int, shared: bool, moves: int) -> dict:
         warnings.simplefilter("ignore")
         for live in lives.values():
             live.sync(bpy.context.evaluated_depsgraph_get(), scene)
-        bpy.app.handlers.depsgraph_update_post.append(synced)
+        handlers = bpy.app.handlers.frame_change_post if frames else bpy.app.handlers.depsgraph_update_post
+        handlers.append(synced)
         try:
             for k in range(moves + 1):  # the first move makes a box of its own mesh a mover
                 order.reverse()
-                moved.location.x += 0.25 if k % 2 else -0.25
+                if frames:
+                    scene.frame_set(k + 2)
+                else:
+                    moved.location.x += 0.25 if k % 2 else -0.25
                 bpy.context.view_layer.update()
         finally:
-            bpy.app.handlers.depsgraph_update_post.remove(synced)
+            handlers.remove(synced)
     return {
         "objects": count,
+        "change": "frame" if frames else "move",
         "one_mesh": shared,
         "placed_ms": statistics.median(times["placed"][1:]),
         "walked_ms": statistics.median(times["walked"][1:]),
@@ -93,15 +106,17 @@ def main() -> None:
     print(_common.machine_line(machine), file=sys.stderr, flush=True)
     rows = []
     for count in (int(c) for c in args.counts.split(",")):
-        for shared in (True, False):
-            row = measure(count, shared, args.moves)
-            rows.append(row)
-            print(row, file=sys.stderr, flush=True)
+        for frames in (False, True):
+            for shared in (True, False):
+                row = measure(count, shared, args.moves, frames)
+                rows.append(row)
+                print(row, file=sys.stderr, flush=True)
     _common.print_table(
-        ["objects", "one mesh", "walk ms", "placed ms", "walk ÷ placed", "placed every move"],
+        ["objects", "change", "one mesh", "walk ms", "placed ms", "walk ÷ placed", "placed every time"],
         [
             [
                 r["objects"],
+                r["change"],
                 "yes" if r["one_mesh"] else "no",
                 f"{r['walked_ms']:.1f}",
                 f"{r['placed_ms']:.1f}",
@@ -110,7 +125,7 @@ def main() -> None:
             ]
             for r in rows
         ],
-        title=f"LiveScene sync after moving one object, medians of {args.moves} moves (thread CPU time)",
+        title=f"LiveScene sync after one object moved or a frame changed, medians of {args.moves} (thread CPU time)",
     )
     _common.write_json(args.json, {"machine": machine, "rows": rows})
 

@@ -41,16 +41,29 @@ def transform_animated(obj) -> bool:
     return False
 
 
-def _animates_transform(animation) -> bool:
+def _animated_paths(animation) -> set[str]:
+    """The data paths an object's animation data animates: its action's, its unmuted NLA strips'
+    and its drivers'."""
     if animation is None:
-        return False
+        return set()
     paths = action_data_paths(animation.action)
     for track in animation.nla_tracks:
         if not track.mute:
             for strip in track.strips:
                 paths |= action_data_paths(strip.action)
     paths.update(driver.data_path for driver in animation.drivers)
-    return not TRANSFORM_PATHS.isdisjoint(paths)
+    return paths
+
+
+def _animates_transform(animation) -> bool:
+    return not TRANSFORM_PATHS.isdisjoint(_animated_paths(animation))
+
+
+def animates_only_transform(obj) -> bool:
+    """Whether `obj` (an original bpy Object) has animation data and it animates its transform
+    alone: a frame change then moves it and changes nothing else of it (placed_only.py)."""
+    paths = _animated_paths(obj.animation_data)
+    return bool(paths) and paths <= TRANSFORM_PATHS
 
 
 class AnimatedMemo:

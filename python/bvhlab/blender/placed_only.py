@@ -20,6 +20,12 @@ transform, and no more, of:
 - a camera or a light (a sync gathers both anyway);
 - an empty that instances nothing and is in no item's key (a parent, reported with its children).
 Anything else, or no update at all, and the walk runs (`moved_items` returns None).
+
+A frame change (playback, scrubbing) names each animated object with its transform and shading,
+and each action that animates them (shading). There, an object's shading is let through where its
+animation data animates its transform alone (`motion.animates_only_transform`: its action's, NLA
+strips' and drivers' paths all transform paths), and the actions are passed over; keyframed
+visibility, ray visibility, materials or data still walk (named without a transform, or as data).
 """
 
 from __future__ import annotations
@@ -32,6 +38,7 @@ import bpy
 import numpy as np
 
 from .instancing import invertible
+from .motion import animates_only_transform
 from .scope import matrices_array
 from .sync_report import SyncReport
 
@@ -64,19 +71,24 @@ class MoverIndex:
         return cls(plain, frozenset(uses))
 
 
-def moved_items(depsgraph, index: MoverIndex) -> dict[tuple, tuple] | None:
+def moved_items(depsgraph, index: MoverIndex, frame_changed: bool = False) -> dict[tuple, tuple] | None:
     """{key: (row, world matrix as a mathutils.Matrix copy)} of the items whose objects' updates
-    are all the evaluation reports, or None where the walk must run (the module's docstring)."""
+    are all the evaluation reports, or None where the walk must run (the module's docstring).
+    `frame_changed`: the scene's frame is not the last sync's (see the module's docstring)."""
     moved: dict[tuple, tuple] = {}
     reported = False
     for update in depsgraph.updates:
         reported = True
         obj = update.id  # the evaluated ID
+        if frame_changed and isinstance(obj, bpy.types.Action):
+            continue  # named with the objects it animates, which are judged by their own updates
         if not isinstance(obj, bpy.types.Object):
             return None
-        if not update.is_updated_transform or update.is_updated_geometry or update.is_updated_shading:
+        if not update.is_updated_transform or update.is_updated_geometry:
             return None
         original = obj.original
+        if update.is_updated_shading and not (frame_changed and animates_only_transform(original)):
+            return None
         name = original.name_full
         found = index.plain.get(name)
         if found is not None:
