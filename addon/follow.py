@@ -25,13 +25,17 @@ from __future__ import annotations
 
 import threading
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import bpy
 from bpy.app.handlers import persistent
 
 from . import state
 
-_live: dict[tuple, object] = {}  # (scene key, scope) → the LiveScene kept between updates
+if TYPE_CHECKING:
+    from bvhlab.blender import LiveScene
+
+_live: dict[tuple, LiveScene] = {}  # (scene key, scope) → the LiveScene kept between updates
 _failed: set[tuple] = set()  # the (scene key, scope)s whose last catch-up failed to export
 _edited_while_building: set[int] = set()  # scene keys changed while their Build ran
 _busy = [False]  # a handler does not run inside itself (the sync may evaluate the depsgraph)
@@ -131,8 +135,10 @@ def follow(scene, depsgraph):
     key = state.key(scene)
     built = state.tree_for(scene)
     if _busy[0] or (built is None and key not in state.builds):
+        _missed(key)
         return None
     if key in state.builds or not scene.bvhlab.overlay_show:  # not followed: the tree falls behind
+        _missed(key)
         if _moved_or_edited(depsgraph):
             _fell_behind(key, built, building=key in state.builds)
         return None
@@ -142,6 +148,7 @@ def follow(scene, depsgraph):
             return None  # the last catch-up failed: again after an edit, not at every click
         _live.pop(live_key, None)
     elif not _moved_or_edited(depsgraph):  # a selection, a setting: no walk over the scene's objects
+        _missed(key)
         return None
     live = _live.get(live_key)
     if live is None:
@@ -223,6 +230,14 @@ def _watch_worker() -> None:
 
     _timer[0] = tick
     bpy.app.timers.register(tick, first_interval=REDRAW_POLL_S)
+
+
+def _missed(key) -> None:
+    """An evaluation of scene `key` not synced: its LiveScenes walk at their next sync (one
+    placed from the next updates alone would keep an object hidden by the eye meanwhile)."""
+    for (scene_key, _scope), live in _live.items():
+        if scene_key == key:
+            live.missed()
 
 
 def _moved_or_edited(depsgraph) -> bool:

@@ -222,3 +222,34 @@ def test_a_catch_up_that_fails_is_tried_again_after_an_edit_not_at_every_update(
     monkey.data.update()
     bpy.context.view_layer.update()
     assert len(syncs) == 2 and not state.tree_for(scene).behind
+
+
+def test_an_object_hidden_while_the_boxes_follow_is_gone_after_the_next_move():
+    """Hiding an object by the eye reports only the scene: the follow skips it (no walk at a click)
+    and says so to its LiveScene, so the next move, whose updates name that move alone, reads the
+    scene again instead of placing the instance from its update (the hidden object's boxes were
+    kept until some other edit)."""
+    built, monkey = built_monkey()
+    state, follow = harness.addon().state, _addon("follow")
+    scene = bpy.context.scene
+    first = bpy.data.objects["Floor"]
+    duplicates = []
+    for i in range(4):  # instances of the floor's mesh
+        obj = bpy.data.objects.new(f"Tile{i}", first.data)
+        scene.collection.objects.link(obj)
+        obj.location = (-4.5 + 3 * i, 4.0, -1.5)
+        duplicates.append(obj)
+    bpy.context.view_layer.update()
+    assert follow.wait()
+    duplicates[0].location.z += 0.5  # followed, placed from its update
+    bpy.context.view_layer.update()
+    assert follow.wait() and state.tree_for(scene).tree.last.action == "placed"
+    primitives = state.tree_for(scene).bvh.stats["primitives_flattened"]
+    duplicates[1].hide_set(True)  # skipped: the tree falls behind until the next edit
+    bpy.context.view_layer.update()
+    duplicates[2].location.z += 0.5
+    bpy.context.view_layer.update()
+    assert follow.wait()
+    tree = state.tree_for(scene)
+    assert tree.bvh.stats["primitives_flattened"] == primitives - 12
+    _same_hits(tree.bvh, export_scene(bpy.context, require_camera=False))

@@ -118,6 +118,7 @@ class LiveScene:
         self._moved: list[tuple] = []  # the keys of the last sync's items that moved (Item.moved)
         self._moved_now: list[tuple] = []  # this sync's, kept once it succeeds
         self._frame: tuple | None = None  # the scene's frame and subframe at the last sync
+        self._missed = False  # an evaluation went unsynced (missed()): the next sync walks
 
     def sync(self, depsgraph, blender_scene=None, view_layer=None) -> SyncReport:
         """Bring `scene` up to date with the evaluated depsgraph. Raises ExportError (see
@@ -149,7 +150,7 @@ class LiveScene:
         full = self.scene is None or override_key != self._override_key or self._failed
         # only instances moved (placed_only.py): the last sync's items with their new matrices
         frame = (blender_scene.frame_current, blender_scene.frame_subframe)
-        placing = self.place_from_updates and not full
+        placing = self.place_from_updates and not full and not self._missed
         moved = moved_items(depsgraph, self._mover_index(), frame != self._frame) if placing else None
         placed = None if moved is None else self._placed(moved, override)
         moved_keys = None  # the keys of the items that moved, where known without a pass over them
@@ -196,6 +197,7 @@ class LiveScene:
         self._light = None if lamp is None else (lamp.original.name, lamp.original.name_full)
         self._moved = self._moved_now
         self._frame = frame
+        self._missed = False
         self._override_key = override_key
         self.totals.add(report)
         return report
@@ -273,6 +275,12 @@ class LiveScene:
             if item.data is not None and item.data in fresh and item.mesh is not fresh[item.data]:
                 item.mesh, item.placed, item.moved = fresh[item.data], None, False
         return items, world, by_data, report, seen_moving
+
+    def missed(self) -> None:
+        """Say that an evaluation of the depsgraph was not synced (a caller that syncs only some
+        of them: the sidebar's follow skips a hidden object or a new selection): the next sync
+        walks the depsgraph, since the updates it is given do not name what changed before."""
+        self._missed = True
 
     def _light_again(self, depsgraph, view_layer):
         """The last sync's light object, evaluated, looked up by its name (first_light where the

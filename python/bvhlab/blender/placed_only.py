@@ -16,7 +16,8 @@ visibility or holdout flag reports shading. So the walk is skipped only where ev
 transform, and no more, of:
 - an object that is one item of the last sync, as itself (key (name, name, ())), an instance of
   the scene (`Layout.mesh_of` nonzero), and named in no other item's key (not an instancer, not
-  shown by instances);
+  shown by instances), that instances nothing and whose parent instances nothing (setting
+  Instancing or Parent names only a transform, though the walk would find new instances);
 - a camera or a light (a sync gathers both anyway);
 - an empty that instances nothing and is in no item's key (a parent, reported with its children).
 Anything else, or no update at all, and the walk runs (`moved_items` returns None).
@@ -92,6 +93,11 @@ def moved_items(depsgraph, index: MoverIndex, frame_changed: bool = False) -> di
         name = original.name_full
         found = index.plain.get(name)
         if found is not None:
+            # a transform is all Blender names when an object becomes an instancer or the child of
+            # one (Instancing, Parent: new instances the walk would find)
+            parent = original.parent
+            if original.instance_type != "NONE" or (parent is not None and parent.instance_type != "NONE"):
+                return None
             key, row = found
             moved[key] = (row, obj.matrix_world.copy())
             continue
