@@ -34,8 +34,8 @@ class Look(NamedTuple):
 PLAIN = Look()
 
 
-#: RAY_VISIBILITY as (flag, bit) pairs: hidden_rays runs once per object of a walk, where the
-#: enum's own `|` (Python code) was most of its time (20,000 objects: 0.20 of a 0.5 s sync).
+#: RAY_VISIBILITY as (flag, bit) pairs: hidden_rays runs once per object of a walk, and the enum's
+#: `|` is Python code (with an object read once as its own owner: 20,000 objects 55 → 37 ms).
 _RAY_BITS = tuple((flag, int(ray)) for flag, ray in RAY_VISIBILITY.items())
 
 
