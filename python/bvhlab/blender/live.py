@@ -300,8 +300,8 @@ class LiveScene:
         return self._index
 
     def _placed(self, moved: dict, override) -> tuple | None:
-        """(items, world, report, seen moving, moved keys, material table) of the last sync with the matrices
-        of `moved` (placed_only.place_moved); None where the walk must run after all."""
+        """(items, world, report, seen moving, moved keys, material table) of the last sync with
+        the matrices of `moved` (placed_only.place_moved); None where the walk must run after all."""
         assert self.scene is not None
         placed = place_moved(self._items, self._world, self._moved, self._seen_moving, moved, self.instancing)
         if placed is None:
