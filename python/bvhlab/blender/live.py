@@ -116,7 +116,6 @@ class LiveScene:
         self._index: MoverIndex | None = None  # the items an update places alone (placed_only.py)
         self._light: tuple[str, str] | None = None  # the last sync's light object: (name, full name)
         self._moved: list[tuple] = []  # the keys of the last sync's items that moved (Item.moved)
-        self._moved_now: list[tuple] = []  # this sync's, kept once it succeeds
         self._frame: tuple | None = None  # the scene's frame and subframe at the last sync
         self._missed = False  # an evaluation went unsynced (missed()): the next sync walks
 
@@ -151,11 +150,10 @@ class LiveScene:
         # only instances moved (placed_only.py): the last sync's items with their new matrices
         frame = (blender_scene.frame_current, blender_scene.frame_subframe)
         placing = self.place_from_updates and not full and not self._missed
-        moved = moved_items(depsgraph, self._mover_index(), frame != self._frame) if placing else None
-        placed = None if moved is None else self._placed(moved, override)
-        moved_keys = None  # the keys of the items that moved, where known without a pass over them
+        reported = moved_items(depsgraph, self._mover_index(), frame != self._frame) if placing else None
+        placed = None if reported is None else self._placed(reported, override)
         if placed is not None:
-            items, world, report, seen_moving, moved_keys, table = placed
+            items, world, report, seen_moving, moved, table = placed
             layout, shared, by_data = self._layout, self._shared, self._by_data
         else:
             dirty = Dirty(everything=True) if full else Dirty.from_updates(depsgraph)
@@ -167,8 +165,9 @@ class LiveScene:
             animated = AnimatedMemo()
             layout = plan(items, world, self.instancing, lambda key: key in seen_moving or animated(items[key].origin))
             shared = shared_meshes(items, layout, self._shared)
+            moved = [key for key, item in items.items() if item.moved]
         assert layout is not None
-        arrays = self._arrays(items, world, layout, shared, table, report, moved_keys)
+        arrays = self._arrays(items, world, layout, shared, table, report, moved, kept=placed is not None)
         report.materials_read = table.reads
         scene = self._make_scene(arrays, table, blender_scene, depsgraph, report)
         # the sample only where the light's distance is to be measured (a pass over every item)
@@ -195,7 +194,7 @@ class LiveScene:
         if placed is None:  # the items' keys, order or layout may have changed
             self._index = None
         self._light = None if lamp is None else (lamp.original.name, lamp.original.name_full)
-        self._moved = self._moved_now
+        self._moved = moved
         self._frame = frame
         self._missed = False
         self._override_key = override_key
@@ -351,15 +350,15 @@ class LiveScene:
         shared: list[SharedMesh],
         table: MaterialTable,
         report,
-        moved: list | None = None,
+        moved: list,
+        kept: bool = False,
     ) -> dict:
         """Mesh 0 (the items placed in the world: triangles, spheres and their material indices, in
         walk order; the material table is rebuilt in that order every sync), the shared meshes and
-        the instances; the previous arrays where nothing changed. `moved`: given (the keys of the
-        items that moved) where the items are the last sync's in its order and layout and only
+        the instances; the previous arrays where nothing changed. `moved`: the keys of the items
+        that moved; `kept`: the items are the last sync's in its order and layout and only
         instances moved (placed_only.py): mesh 0 is the last sync's."""
         previous = self.scene
-        kept = moved is not None
         if kept:
             assert previous is not None
             tri_material, sphere_material = [previous.tri_material], list(previous.sphere_material)
@@ -375,9 +374,6 @@ class LiveScene:
             warnings.warn(f"{_nothing_in_scope(self.scope)}: the world alone is rendered", ExportWarning, stacklevel=3)
         same_order = kept or list(self._items) == list(items)
         same_layout = kept or layout.same_as(self._layout)
-        if moved is None:
-            moved = [key for key, item in items.items() if item.moved]
-        self._moved_now = moved
         report.instances_moved = sum(1 for key in moved if layout.mesh_of[key])
         report.geometry = bool(previous is None or report.objects_read or moved or not same_order or not same_layout)
         report.refittable = (
