@@ -5,8 +5,10 @@ walks the depsgraph at every sync (`place_from_updates=False`, what every sync d
 synced from the same updates in one depsgraph handler, in alternating order, by thread CPU time.
 
 Scenes: N linked duplicates of one box (instances of one mesh), and N boxes of their own meshes
-of which the moved one has moved before (a mover: its own instance). Changes: the box moved (as a
-drag in the viewport), or the frame changed with the box's location keyframed (playback).
+of which the changed one has changed before (a mover: its own instance). Changes: the box moved
+(as a drag in the viewport), the frame changed with the box's location keyframed (playback), a
+vertex of the box's own mesh moved (an edit: `mesh.update()`, as a modifier's setting names it),
+or the frame changed with a shape key of the box keyframed (a deforming object's playback).
 
     .venv/bin/python bench/live_sync.py [--counts 2000,20000] [--moves 9] [--json live_sync.json]
 """
@@ -47,14 +49,27 @@ def scene_of(count: int, shared: bool):
     return scene, first
 
 
-def measure(count: int, shared: bool, moves: int, frames: bool = False) -> dict:
-    """Syncs after `moves` moves of one object, or (`frames`) after `moves` frame changes with that
-    object's location keyframed (playback)."""
+#: The changes measured: (name, whether it is a frame change).
+CHANGES = (("move", False), ("frame", True), ("edit", False), ("shape key", True))
+
+
+def measure(count: int, shared: bool, moves: int, change: str = "move") -> dict:
+    """Syncs after `moves` changes of one object (CHANGES; the module's docstring)."""
     scene, moved = scene_of(count, shared)
-    if frames:
+    frames = dict(CHANGES)[change]
+    if change == "frame":
         for frame, x in ((1, 0.0), (moves + 2, 5.0)):
             moved.location.x = x
             moved.keyframe_insert("location", frame=frame)
+    elif change == "shape key":
+        moved.shape_key_add(name="Basis")
+        key = moved.shape_key_add(name="Up")
+        for point in key.data:
+            point.co.z += 0.5
+        for frame, value in ((1, 0.0), (moves + 2, 1.0)):
+            key.value = value
+            key.keyframe_insert("value", frame=frame)
+    if frames:
         scene.frame_set(1)
     lives = {"placed": LiveScene("visible"), "walked": LiveScene("visible", place_from_updates=False)}
     times: dict[str, list[float]] = {name: [] for name in lives}
@@ -80,6 +95,9 @@ def measure(count: int, shared: bool, moves: int, frames: bool = False) -> dict:
                 order.reverse()
                 if frames:
                     scene.frame_set(k + 2)
+                elif change == "edit":
+                    moved.data.vertices[0].co.z += 0.05 if k % 2 else -0.05
+                    moved.data.update()
                 else:
                     moved.location.x += 0.25 if k % 2 else -0.25
                 bpy.context.view_layer.update()
@@ -87,7 +105,7 @@ def measure(count: int, shared: bool, moves: int, frames: bool = False) -> dict:
             handlers.remove(synced)
     return {
         "objects": count,
-        "change": "frame" if frames else "move",
+        "change": change,
         "one_mesh": shared,
         "placed_ms": statistics.median(times["placed"][1:]),
         "walked_ms": statistics.median(times["walked"][1:]),
@@ -106,9 +124,10 @@ def main() -> None:
     print(_common.machine_line(machine), file=sys.stderr, flush=True)
     rows = []
     for count in (int(c) for c in args.counts.split(",")):
-        for frames in (False, True):
-            for shared in (True, False):
-                row = measure(count, shared, args.moves, frames)
+        for change, _ in CHANGES:
+            # an edit of the shared mesh changes every duplicate: their own meshes only
+            for shared in (True, False) if change in ("move", "frame") else (False,):
+                row = measure(count, shared, args.moves, change)
                 rows.append(row)
                 print(row, file=sys.stderr, flush=True)
     _common.print_table(
@@ -125,7 +144,7 @@ def main() -> None:
             ]
             for r in rows
         ],
-        title=f"LiveScene sync after one object moved or a frame changed, medians of {args.moves} (thread CPU time)",
+        title=f"LiveScene sync after one object changed or a frame changed, medians of {args.moves} (thread CPU time)",
     )
     _common.write_json(args.json, {"machine": machine, "rows": rows})
 

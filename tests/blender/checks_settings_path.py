@@ -178,4 +178,4 @@ def check_one_tree_for_build_f12_render_export(tmp_dir) -> None:
     scene.bvhlab.method = "median"
     assert bpy.ops.render.render() == {"FINISHED"}
     assert bpy.ops.render.render() == {"FINISHED"}
-    assert trees.counts.snapshot()[0] == builds + 2
+    assert trees.counts.snapshot()[0] == builds + 2, (trees.counts.snapshot(), builds)

@@ -13,13 +13,16 @@ view_update and after `depsgraph.update()`):
 - camera, light and sky are gathered every sync (a few attribute reads);
 - where the updates name only transforms of instances (and of cameras, lights, parents), the
   depsgraph is not walked at all: the moved instances' matrices come from the updates
-  (`placed_only.py`, on a move or a frame change; 20,000 objects: 0.6-0.9 s a sync → 10-19 ms).
+  (`placed_only.py`, on a move or a frame change; 20,000 objects: 0.6-0.9 s a sync → 10-19 ms);
+  likewise where they name only the geometry of objects that are each the one instance of their
+  mesh (an object edited or deformed before): only those meshes are read again.
 
 Instancing (collection instances, linked duplicates, instancing by vertices or faces, geometry-nodes
 instances) becomes meshes and instances of the Scene (`instancing.py`); static objects used once
 stay in mesh 0, in world space, as before. Movers (an animated transform, `motion.py`, or an item
-seen moving between two syncs, remembered by its key from then on) get a mesh and an instance of
-their own, so that moving them only changes a transform.
+seen moving or its mesh changing between two syncs, remembered by its key from then on) get a
+mesh and an instance of their own, so that moving them only changes a transform, and editing
+them only their own mesh.
 
 Each sync returns a `SyncReport` saying what changed, so a caller can keep its tree (nothing moved),
 place its instances again (only instance transforms changed: a new TLAS), refit it (same
@@ -35,44 +38,20 @@ import warnings
 import numpy as np
 
 from ..scene import Scene, default_camera, default_light
-from ..scene_parts import Rays
 from .camera import gather_camera
 from .depsgraph_updates import Dirty
 from .errors import ExportError, ExportWarning, SubstituteWarning
 from .instancing import Item, Layout, SharedMesh, plan, shared_meshes
 from .light import first_light, gather_light
-from .material_table import PLAIN, Look, MaterialTable, hidden_rays
-from .mesh import MeshData, read_mesh
+from .material_table import MaterialTable
+from .mesh import MeshData
 from .motion import AnimatedMemo
-from .placed_only import MoverIndex, moved_items, place_moved
+from .placed_only import MoverIndex, Placing, place_moved, place_reshaped, placing_from_updates
 from .primitive_sample import primitive_sample
 from .scene_arrays import instances, mesh_zero
-from .scope import instances_in_scope, matrices_array
-from .sphere import is_analytic_sphere, sphere_bounds
 from .sync_report import SyncReport, SyncTotals
+from .walk import LastSync, walk
 from .world import gather_sky
-
-#: Object types that can have primitives. A curve, text, surface or metaball object (mesh.py
-#: CONVERTIBLE_TYPES) is shown by the depsgraph as itself (its data a Curve, TextCurve, ...) and as
-#: an instance of type MESH holding its evaluated surface (Blender 4.2 to 5.3 alike): Cycles renders
-#: the mesh alone (object_is_geometry: the object's data is a Mesh), and so does the export — read
-#: through the object too, every such triangle was exported twice.
-GEOMETRY_TYPES = frozenset({"MESH"})
-
-
-def _address(data, addresses: dict) -> int:
-    """The address of an evaluated mesh object's mesh data during this evaluation: the same for
-    every object and instance that shows that mesh (linked duplicates without modifiers of their
-    own, collection, vertex, face and geometry-nodes instances). `addresses` remembers it per mesh
-    for the walk (bpy structs hash by their address; as_pointer is a slower method call)."""
-    address = addresses.get(data)
-    if address is None:
-        address = addresses[data] = data.as_pointer()
-    return address
-
-
-def _vertex_count(obj) -> int:
-    return len(obj.data.vertices) if obj.type == "MESH" and obj.data is not None else -1
 
 
 class LiveScene:
@@ -108,8 +87,8 @@ class LiveScene:
         self._by_data: dict[int, MeshData] = {}  # mesh data address → mesh, as last read
         self._layout: Layout | None = None
         self._shared: list[SharedMesh] = []
-        self._materials: dict = {}  # material name → bvhlab.Material, as last read
-        self._seen_moving: set[tuple] = set()  # keys of the items seen moving (movers from then on)
+        self._table: MaterialTable | None = None  # the last sync's materials, as read
+        self._seen_moving: set[tuple] = set()  # keys of the items seen moving or reshaped (movers from then on)
         self._world = np.zeros((0, 4, 4))  # the items' world matrices, row i the i-th item's
         self._override_key: str | None = None  # the view layer's Material Override when last synced
         self._failed = False  # the last sync raised: the next reads everything
@@ -150,24 +129,31 @@ class LiveScene:
         # only instances moved (placed_only.py): the last sync's items with their new matrices
         frame = (blender_scene.frame_current, blender_scene.frame_subframe)
         placing = self.place_from_updates and not full and not self._missed
-        reported = moved_items(depsgraph, self._mover_index(), frame != self._frame) if placing else None
-        placed = None if reported is None else self._placed(reported, override)
+        reported = placing_from_updates(depsgraph, self._mover_index(), frame != self._frame) if placing else None
+        placed = None if reported is None else self._placed(reported, override, view_layer)
         if placed is not None:
-            items, world, report, seen_moving, moved, table = placed
-            layout, shared, by_data = self._layout, self._shared, self._by_data
+            assert reported is not None
+            items, world, report, seen_moving, moved, table, shared = placed
+            layout, by_data = self._layout, self._kept_meshes(items, reported.reshaped)
         else:
             dirty = Dirty(everything=True) if full else Dirty.from_updates(depsgraph)
             # materials read before and not changed since (after a failed sync, none is known unchanged)
-            known = {} if self._failed else {k: v for k, v in self._materials.items() if k not in dirty.materials}
-            table = MaterialTable(known, override)
-            items, world, by_data, report, seen_moving = self._walk(depsgraph, view_layer, dirty, table)
+            read = {} if self._table is None or self._failed else self._table.known
+            table = MaterialTable({k: v for k, v in read.items() if k not in dirty.materials}, override)
+            last = LastSync(self._items, self._by_data, self._world, self._seen_moving)
+            items, world, by_data, report, seen_moving = walk(
+                depsgraph, view_layer, self.scope, dirty, table, last, self.instancing
+            )
             report.full = full
             animated = AnimatedMemo()
             layout = plan(items, world, self.instancing, lambda key: key in seen_moving or animated(items[key].origin))
             shared = shared_meshes(items, layout, self._shared)
             moved = [key for key, item in items.items() if item.moved]
         assert layout is not None
-        arrays = self._arrays(items, world, layout, shared, table, report, moved, kept=placed is not None)
+        reshaped = () if reported is None or placed is None else tuple(reported.reshaped)
+        arrays = self._arrays(
+            items, world, layout, shared, table, report, moved, kept=placed is not None, reshaped=reshaped
+        )
         report.materials_read = table.reads
         scene = self._make_scene(arrays, table, blender_scene, depsgraph, report)
         # the sample only where the light's distance is to be measured (a pass over every item)
@@ -187,7 +173,7 @@ class LiveScene:
             assert scene.camera is not None  # _make_scene always gives the scene a camera
             light = default_light(scene.camera)
         scene.light = light
-        self.scene, self._materials = scene, table.known
+        self.scene, self._table = scene, table
         self._items, self._by_data, self._layout, self._shared = items, by_data, layout, shared
         self._world = world
         self._seen_moving = seen_moving
@@ -200,80 +186,6 @@ class LiveScene:
         self._override_key = override_key
         self.totals.add(report)
         return report
-
-    def _walk(self, depsgraph, view_layer, dirty: Dirty, table: MaterialTable):
-        """Every object in scope, read again when dirty or new (a mesh shared by several items
-        once), kept when not; in the depsgraph's order (the order export_scene has always used).
-        Each item's material table index of each slot is read here: an instance's object is valid
-        only while it is the depsgraph iterator's current item (geometry-nodes and nested
-        collection instances crashed Blender when their slots were read after the loop had moved
-        on). Returns (items, their world matrices (N,4,4) in walk order, meshes by data address,
-        the report, the keys of the items seen moving so far: movers, `instancing.plan`).
-
-        10,000 instances of one object make one part (shown object, mesh data): whether it is a
-        sphere and its slots are asked once per part; per item only what differs (key, matrix)."""
-        items: dict[tuple, Item] = {}
-        fresh: dict[int, MeshData] = {}  # meshes read in this sync, by data address
-        by_data: dict[int, MeshData] = {}
-        parts: dict[tuple, tuple] = {}  # (shown object's name, data address, look) → (sphere, slot table)
-        looks: dict[tuple, Look] = {}  # (owner, shown object), originals → how it shows its materials
-        layer_flags: dict = {}  # owner (original) → (holdout, indirect only) in the view layer
-        addresses: dict = {}  # evaluated mesh (hashed by its address) → its address: as_pointer once
-        report = SyncReport()
-        for entry in instances_in_scope(depsgraph, view_layer, self.scope, GEOMETRY_TYPES):
-            obj, key = entry.obj, entry.key
-            old = self._items.get(key)
-            changed = dirty.everything or dirty.geometry_of(obj, key)
-            data = _address(obj.data, addresses)  # every entry is a MESH (GEOMETRY_TYPES)
-            # a holdout as Cycles decides it (blender/object.cpp): of the object, or of the object
-            # instancing it; the rays that see it, those both let see it, but camera rays where the
-            # owner is Indirect Only (in such a collection) and not a holdout
-            look = looks.get((entry.owner, entry.source))
-            if look is None:
-                flags = layer_flags.get(entry.owner)
-                if flags is None:
-                    owner = entry.owner
-                    holdout = bool(owner.holdout_get(view_layer=view_layer))
-                    indirect = not holdout and bool(owner.indirect_only_get(view_layer=view_layer))
-                    flags = layer_flags[owner] = (holdout, indirect)
-                holdout = flags[0]
-                hidden = hidden_rays(entry.owner, entry.source) | (Rays.CAMERA if flags[1] else Rays(0))
-                look = looks[entry.owner, entry.source] = Look(holdout, hidden) if holdout or hidden else PLAIN
-            part = parts.get((key[1], data, look))
-            if part is None:
-                part = (is_analytic_sphere(obj), None)
-            if part[0]:
-                # an item of this name before may be another object's sphere (renamed to this name)
-                if old is None or old.mesh is not None or old.sphere_data != data or changed:
-                    bounds = sphere_bounds(obj)
-                    report.objects_read += 1
-                else:
-                    assert old.bounds is not None  # a sphere keeps its object-space bounds
-                    bounds = old.bounds
-                slots = table.slot_indices(obj, look=look)
-                item = Item(None, bounds, entry.matrix, None, slots, key, sphere_data=data)
-            else:
-                mesh = fresh.get(data)
-                if mesh is None:
-                    mesh = None if changed else self._known_mesh(old, data, obj)
-                    if mesh is None:
-                        mesh = fresh[data] = read_mesh(obj, entry.name)
-                        report.objects_read += 1
-                by_data[data] = mesh
-                slots = part[1]
-                if slots is None and mesh.triangle_count:
-                    slots = table.slot_indices(obj, data, look)
-                    parts[(key[1], data, look)] = (False, slots)
-                item = Item(mesh, None, entry.matrix, data, slots, key)
-            item.origin = (key[0], entry.owner, key[1], entry.source)
-            items[key] = item
-        # each item's Matrix copy (a key seen twice keeps its last, as the dict does), all at once
-        world = matrices_array([item.matrix for item in items.values()])
-        seen_moving = self._compare_matrices(items, world, report)
-        for item in items.values():  # a clean item seen before a changed one of the same mesh
-            if item.data is not None and item.data in fresh and item.mesh is not fresh[item.data]:
-                item.mesh, item.placed, item.moved = fresh[item.data], None, False
-        return items, world, by_data, report, seen_moving
 
     def missed(self) -> None:
         """Say that an evaluation of the depsgraph was not synced (a caller that syncs only some
@@ -298,49 +210,32 @@ class LiveScene:
             self._index = MoverIndex.of(self._items, self._layout.mesh_of)
         return self._index
 
-    def _placed(self, moved: dict, override) -> tuple | None:
-        """(items, world, report, seen moving, moved keys, material table) of the last sync with
-        the matrices of `moved` (placed_only.place_moved); None where the walk must run after all."""
-        assert self.scene is not None
-        placed = place_moved(self._items, self._world, self._moved, self._seen_moving, moved, self.instancing)
+    def _placed(self, placing: Placing, override, view_layer) -> tuple | None:
+        """(items, world, report, seen moving, moved keys, material table, shared meshes) of the
+        last sync with the matrices and meshes of `placing` (placed_only.place_moved,
+        place_reshaped); None where the walk must run after all."""
+        assert self.scene is not None and self._layout is not None
+        placed = place_moved(self._items, self._world, self._moved, self._seen_moving, placing.moved, self.instancing)
         if placed is None:
             return None
-        return (*placed, MaterialTable.kept(self.scene.materials, self._materials, override))
+        assert self._table is not None
+        table = MaterialTable.kept(self._table, override)
+        if not placing.reshaped:
+            return (*placed, table, self._shared)
+        shared = place_reshaped(
+            placed, self._layout, self._shared, placing.reshaped, table, view_layer, self.instancing
+        )
+        return None if shared is None else (*placed, table, shared)
 
-    def _compare_matrices(self, items: dict, world: np.ndarray, report: SyncReport) -> set:
-        """Give each item its row of `world`; an item seen last sync with the same mesh keeps its
-        placed primitives if its matrix is the same, else is `moved`. Returns the keys of the items
-        seen moving so far (this sync's and before, of the items still there)."""
-        seen_moving = self._seen_moving & items.keys()
-        previous = {key: row for row, key in enumerate(self._items)}
-        rows = np.fromiter((previous.get(key, -1) for key in items), np.int64, len(items))
-        same = np.ones(len(items), bool)  # new items count as unmoved
-        known = np.flatnonzero(rows >= 0)
-        same[known] = (self._world[rows[known]] == world[known]).all(axis=(1, 2))  # NaN: moved
-        olds = self._items
-        for (key, item), matrix, row, unmoved in zip(items.items(), world, rows, same):
-            item.matrix = matrix
-            if row < 0:
-                continue
-            if not unmoved and self.instancing:
-                seen_moving.add(key)
-            old = olds[key]
-            if old.mesh is item.mesh and old.bounds is item.bounds:
-                if unmoved:
-                    item.placed = old.placed
-                else:
-                    item.moved = True
-                    report.objects_moved += 1
-        return seen_moving
-
-    def _known_mesh(self, old: Item | None, data: int, obj) -> MeshData | None:
-        """The mesh read before for an item whose geometry did not change, or None to read it."""
-        if old is not None and old.mesh is not None and old.data == data:
-            return old.mesh
-        mesh = self._by_data.get(data)
-        if mesh is not None and len(mesh.positions) == _vertex_count(obj):
-            return mesh
-        return None
+    def _kept_meshes(self, items: dict, reshaped: dict) -> dict:
+        """The last sync's meshes by data address, each reshaped item's under its new address only."""
+        if not reshaped:
+            return self._by_data
+        by_data = dict(self._by_data)
+        for key in reshaped:  # a reshaped item is a mesh (placed_only.MoverIndex: an instance)
+            by_data.pop(self._items[key].data or 0, None)
+        by_data.update((items[key].data, items[key].mesh) for key in reshaped)
+        return by_data
 
     def _arrays(
         self,
@@ -352,12 +247,14 @@ class LiveScene:
         report,
         moved: list,
         kept: bool = False,
+        reshaped: tuple = (),
     ) -> dict:
         """Mesh 0 (the items placed in the world: triangles, spheres and their material indices, in
         walk order; the material table is rebuilt in that order every sync), the shared meshes and
         the instances; the previous arrays where nothing changed. `moved`: the keys of the items
         that moved; `kept`: the items are the last sync's in its order and layout and only
-        instances moved (placed_only.py): mesh 0 is the last sync's."""
+        instances moved or were reshaped (placed_only.py; `reshaped`: their keys): mesh 0 is the
+        last sync's."""
         previous = self.scene
         if kept:
             assert previous is not None
@@ -380,7 +277,11 @@ class LiveScene:
             report.geometry
             and same_order
             and same_layout
-            and (kept or [p.shape for p in self._items.values()] == [p.shape for p in items.values()])
+            and (
+                all(self._items[key].shape == items[key].shape for key in reshaped)
+                if kept
+                else [p.shape for p in self._items.values()] == [p.shape for p in items.values()]
+            )
         )
         report.placeable = (
             report.geometry
@@ -397,10 +298,9 @@ class LiveScene:
             "meshes": [m.triangles for m in shared],
             "mesh_tri_material": [m.tri_material for m in shared],
         }
-        if previous is not None and (not report.geometry or report.placeable):
+        if previous is not None and (kept or not report.geometry or report.placeable):
             arrays["triangles"], arrays["spheres"] = previous.triangles, previous.spheres
         else:
-            assert not kept  # kept items are placeable or unchanged
             arrays["triangles"] = np.concatenate(triangles) if triangles else np.zeros((0, 3, 3), np.float32)
             arrays["spheres"] = np.array(spheres, np.float32).reshape(-1, 4)
         arrays["instance_mesh"], arrays["instance_transforms"] = instances(

@@ -52,6 +52,23 @@ def hidden_rays(*objects) -> Rays:
     return Rays(hidden)
 
 
+def look_of(owner, source, view_layer, flags: dict | None = None) -> Look:
+    """How `source` shown by `owner` (originals; an object shown as itself is its own owner) shows
+    its materials, as Cycles decides it (blender/object.cpp): a holdout where the owner is one (its
+    flag, or a holdout collection of the view layer); hidden from the rays either hides from, and
+    from camera rays where the owner is Indirect Only (in such a collection) and not a holdout.
+    `flags` (owner → (holdout, indirect only)) keeps the view layer's answers for the owner's
+    other instances."""
+    known = None if flags is None else flags.get(owner)
+    if known is None:
+        holdout = bool(owner.holdout_get(view_layer=view_layer))
+        known = (holdout, not holdout and bool(owner.indirect_only_get(view_layer=view_layer)))
+        if flags is not None:
+            flags[owner] = known
+    hidden = hidden_rays(owner, source) | (Rays.CAMERA if known[1] else Rays(0))
+    return Look(known[0], hidden) if known[0] or hidden else PLAIN
+
+
 class MaterialTable:
     """Collects materials in first-use order; every Blender material is read once. `known` (name →
     Material) holds materials read before and still valid: they are taken from it instead of read
@@ -68,11 +85,13 @@ class MaterialTable:
         self._slots: dict[tuple, np.ndarray] = {}  # (original object, mesh data, look) → slot_indices
 
     @classmethod
-    def kept(cls, materials: list[Material], known: dict[str, Material], override=None) -> MaterialTable:
-        """The table of a sync that reads no object (placed_only.py): the last sync's `materials`,
-        in its order, and what it read."""
-        table = cls(dict(known), override)
-        table.materials = list(materials)
+    def kept(cls, last: MaterialTable, override=None) -> MaterialTable:
+        """The table of a sync that keeps the last sync's items (placed_only.py): `last`'s
+        materials, in its order, what it read and which index each material has in each look;
+        `override` as `last`'s (the same material, evaluated again)."""
+        table = cls(dict(last.known), override)
+        table.materials = list(last.materials)
+        table._index = dict(last._index)
         return table
 
     def index_of(self, material, look: Look = PLAIN) -> int:

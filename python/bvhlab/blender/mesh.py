@@ -30,6 +30,15 @@ class MeshData:
     def triangle_count(self) -> int:
         return len(self.slots)
 
+    def same_as(self, other: MeshData) -> bool:
+        """The same vertices, triangles and slots (a mesh read again, where Blender named an
+        object's geometry though it did not change: a setting's update, a material's under 5.3)."""
+        return self is other or (
+            np.array_equal(self.positions, other.positions)
+            and np.array_equal(self.corners, other.corners)
+            and np.array_equal(self.slots, other.slots)
+        )
+
     @cached_property
     def triangles(self) -> np.ndarray:
         """float32 (T,3,3) object-space triangles (a shared mesh's, placed by its instances); made

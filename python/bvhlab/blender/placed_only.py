@@ -1,6 +1,6 @@
-"""Evaluations that only moved instances (LiveScene's placing without the walk).
+"""Evaluations that only moved instances or changed their own meshes (placed without the walk).
 
-A sync walks every object and instance the depsgraph shows (`LiveScene._walk`): about 40 µs an
+A sync walks every object and instance the depsgraph shows (`walk.py`): about 40 µs an
 item under bpy 4.2, so moving one object of 20,000 linked duplicates took 0.84-1.05 s a sync, a
 frame a second while an object is dragged in the Rendered viewport. Where all that
 `depsgraph.updates` reports is that some objects moved, and each of them is an instance of the
@@ -20,7 +20,23 @@ transform, and no more, of:
   Instancing or Parent names only a transform, though the walk would find new instances);
 - a camera or a light (a sync gathers both anyway);
 - an empty that instances nothing and is in no item's key (a parent, reported with its children).
-Anything else, or no update at all, and the walk runs (`moved_items` returns None).
+Anything else, or no update at all, and the walk runs (`placing_from_updates` returns None).
+
+Reshaped objects: an edit of one object's mesh in Edit Mode names the object and its mesh with
+their geometry; a modifier's setting or `mesh.update()` names both with geometry and shading too;
+playback of an armature-deformed or shape-keyed object names the armature (geometry, shading),
+the object and its mesh (geometry) and the shape keys (geometry, shading). The walk makes an object
+whose geometry it read again a mover (an instance of its own, as a move does), so from the second
+edit on such an object is one item, and its mesh its own; there the sync reads that one object's
+mesh again (`place_reshaped`) and keeps every other item, where:
+- the object is a plain item (above) and the only item of its scene mesh;
+- every mesh named is the data of such an object and has no other user, every set of shape keys
+  named belongs to such a mesh;
+- the object is still no sphere, its mesh has triangles, and its slots give the same material
+  table indices as before (which checks a shading flag: a holdout or a ray visibility changed
+  walks);
+- an armature is named in no item's key (an armature object is never exported: its pose reaches
+  the meshes it deforms, which Blender names, and the children of its bones, named as moved).
 
 A frame change (playback, scrubbing) names each animated object with its transform and shading,
 and each action that animates them (shading). There, an object's shading is let through where its
@@ -38,23 +54,31 @@ from dataclasses import dataclass
 import bpy
 import numpy as np
 
-from .instancing import invertible
+from .instancing import Item, Layout, SharedMesh, invertible
+from .material_table import MaterialTable, look_of, map_slots
+from .mesh import read_mesh
 from .motion import animates_only_transform
 from .scope import matrices_array
+from .sphere import is_analytic_sphere
 from .sync_report import SyncReport
 
 #: Object types whose transform moves no item by itself (see the module's docstring).
 PASSIVE_TYPES = frozenset({"CAMERA", "LIGHT"})
+#: Object types never exported whose every update reaches the exported items only through updates
+#: of their own (an armature: the objects it deforms, the children of its bones).
+DEFORMER_TYPES = frozenset({"ARMATURE"})
 
 
 @dataclass
 class MoverIndex:
     """The items of a sync that an update of their object's transform places alone: `plain` maps an
     original object's full name to (its item's key, its row in the sync's matrices); `named` holds
-    every name in an item's key (owners and shown objects)."""
+    every name in an item's key (owners and shown objects); `alone` the keys of the plain items
+    that are the only instance of their scene mesh (whose geometry an update may read alone)."""
 
     plain: dict[str, tuple[tuple, int]]
     named: frozenset[str]
+    alone: frozenset[tuple] = frozenset()
 
     @classmethod
     def of(cls, items: dict, mesh_of: dict) -> MoverIndex:
@@ -69,43 +93,87 @@ class MoverIndex:
             for row, key in enumerate(items)
             if not key[2] and key[0] == key[1] and uses[key[0]] == 1 and mesh_of[key]
         }
-        return cls(plain, frozenset(uses))
+        members = Counter(mesh_of.values())
+        alone = frozenset(key for key, _ in plain.values() if members[mesh_of[key]] == 1)
+        return cls(plain, frozenset(uses), alone)
 
 
-def moved_items(depsgraph, index: MoverIndex, frame_changed: bool = False) -> dict[tuple, tuple] | None:
-    """{key: (row, world matrix as a mathutils.Matrix copy)} of the items whose objects' updates
-    are all the evaluation reports, or None where the walk must run (the module's docstring).
-    `frame_changed`: the scene's frame is not the last sync's (see the module's docstring)."""
-    moved: dict[tuple, tuple] = {}
+@dataclass
+class Placing:
+    """What an evaluation changed where the walk can be skipped (placing_from_updates): `moved` maps an
+    item's key to (its row, its world matrix as a mathutils.Matrix copy); `reshaped` an item's key
+    to its evaluated object, whose mesh is to be read again."""
+
+    moved: dict[tuple, tuple]
+    reshaped: dict[tuple, object]
+
+
+def placing_from_updates(depsgraph, index: MoverIndex, frame_changed: bool = False) -> Placing | None:
+    """The items whose objects' updates are all the evaluation reports, moved or reshaped, or None
+    where the walk must run (the module's docstring). `frame_changed`: the scene's frame is not the
+    last sync's (see the module's docstring)."""
+    placing = Placing({}, {})
+    meshes = []  # the meshes and shape keys named, judged once every object is known
     reported = False
     for update in depsgraph.updates:
         reported = True
         obj = update.id  # the evaluated ID
         if frame_changed and isinstance(obj, bpy.types.Action):
             continue  # named with the objects it animates, which are judged by their own updates
+        if isinstance(obj, (bpy.types.Mesh, bpy.types.Key)):
+            meshes.append(obj.original)
+            continue
         if not isinstance(obj, bpy.types.Object):
             return None
-        if not update.is_updated_transform or update.is_updated_geometry:
-            return None
         original = obj.original
-        if update.is_updated_shading and not (frame_changed and animates_only_transform(original)):
-            return None
         name = original.name_full
         found = index.plain.get(name)
+        if found is not None and update.is_updated_geometry:
+            key, row = found
+            if key not in index.alone or _instances(original):
+                return None
+            placing.reshaped[key] = obj  # its slots are checked as it is read (a shading flag)
+            if update.is_updated_transform:
+                placing.moved[key] = (row, obj.matrix_world.copy())
+            continue
+        if original.type in DEFORMER_TYPES and name not in index.named:
+            continue
+        if not update.is_updated_transform or update.is_updated_geometry:
+            return None
+        if update.is_updated_shading and not (frame_changed and animates_only_transform(original)):
+            return None
         if found is not None:
             # a transform is all Blender names when an object becomes an instancer or the child of
             # one (Instancing, Parent: new instances the walk would find)
-            parent = original.parent
-            if original.instance_type != "NONE" or (parent is not None and parent.instance_type != "NONE"):
+            if _instances(original):
                 return None
             key, row = found
-            moved[key] = (row, obj.matrix_world.copy())
+            placing.moved[key] = (row, obj.matrix_world.copy())
             continue
         kind = original.type
         passive = kind in PASSIVE_TYPES or (kind == "EMPTY" and original.instance_type == "NONE")
         if name in index.named or not passive:
             return None
-    return moved if reported else None
+    if meshes and not _own_meshes(meshes, placing.reshaped.values()):
+        return None
+    return placing if reported else None
+
+
+def _instances(original) -> bool:
+    """Whether an object instances, or its parent does."""
+    parent = original.parent
+    return original.instance_type != "NONE" or (parent is not None and parent.instance_type != "NONE")
+
+
+def _own_meshes(named: list, reshaped) -> bool:
+    """Whether each mesh in `named` (originals) is the data of a reshaped object and of nothing
+    else, and each set of shape keys the keys of such a mesh."""
+    own = {obj.original.data.name_full for obj in reshaped if obj.original.data is not None}
+    for data in named:
+        mesh = data.user if isinstance(data, bpy.types.Key) else data
+        if mesh is None or mesh.name_full not in own or mesh.users != 1:
+            return False
+    return True
 
 
 def place_moved(
@@ -113,8 +181,8 @@ def place_moved(
 ) -> tuple | None:
     """(items, world, report, seen moving, the keys of the items moved) of a sync that found the
     last sync's `items` and `world` (its matrices, row i the i-th item's; `moved_before`: the keys
-    of its items that moved) with the matrices of `moved` (moved_items), as the walk would find
-    them (live.py `_compare_matrices`); None where a new matrix cannot be inverted as
+    of its items that moved) with the matrices of `moved` (placing_from_updates), as the walk would find
+    them (walk.py `_compare_matrices`); None where a new matrix cannot be inverted as
     `instancing.plan` asks of an instance (the walk then places that item in mesh 0)."""
     before, world = world, world.copy()
     rows = np.fromiter((row for row, _ in moved.values()), np.int64, len(moved))
@@ -140,3 +208,42 @@ def place_moved(
             seen_moving.add(key)
     report.objects_moved = len(now)
     return items, world, report, seen_moving, now
+
+
+def place_reshaped(
+    placed: tuple,
+    layout: Layout,
+    shared: list[SharedMesh],
+    reshaped: dict,
+    table: MaterialTable,
+    view_layer,
+    instancing: bool,
+) -> list[SharedMesh] | None:
+    """The shared meshes of a placed sync (`placed`: place_moved's tuple, whose items, report, seen
+    moving and moved keys are updated in place) with each reshaped item's (placing_from_updates) mesh read
+    again, as the walk reads it; None where the walk must run after all (the object became a
+    sphere, has no triangles now, or its slots give other material indices)."""
+    items, _, report, seen_moving, now = placed
+    shared = list(shared)
+    for key, obj in reshaped.items():
+        item: Item = items[key]
+        if is_analytic_sphere(obj):
+            return None
+        mesh = read_mesh(obj, item.name)
+        if not mesh.triangle_count:
+            return None
+        data = obj.data.as_pointer()
+        tables = len(table.materials)
+        original = obj.original
+        slots = table.slot_indices(obj, data, look_of(original, original, view_layer))
+        if len(table.materials) != tables or item.slot_table is None or not np.array_equal(slots, item.slot_table):
+            return None
+        shared[layout.mesh_of[key] - 1] = SharedMesh(mesh, mesh.triangles, map_slots(slots, mesh.slots))
+        items[key] = dataclasses.replace(item, mesh=mesh, data=data, placed=None, moved=False)
+        report.objects_read += 1
+        if key in now:  # a new mesh: the walk counts no move of it (walk.py _compare_matrices)
+            now.remove(key)
+            report.objects_moved -= 1
+        if instancing:
+            seen_moving.add(key)
+    return shared
