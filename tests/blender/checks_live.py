@@ -60,12 +60,36 @@ def _scene():
     skin = harness.add_box("Skin", (4.5, 0.0, 0.0), size=0.6)
     skin.modifiers.new("Rig", "ARMATURE").object = rig
     skin.vertex_groups.new(name="Bone").add(list(range(len(skin.data.vertices))), 1.0, "REPLACE")
+    _sprout()
     morph = harness.add_box("Morph", (-4.5, -2.0, 0.0), size=0.6)
     morph.shape_key_add(name="Basis")
     for point in morph.shape_key_add(name="Up").data:
         point.co.z += 0.5
     bpy.context.view_layer.update()
     return scene, camera, light, duplicates, parent, box, instancer
+
+
+def _sprout():
+    """A box whose geometry-nodes modifier (off for now) instances another box at each vertex."""
+    sprout = harness.add_box("Sprout", (-3.0, 3.0, 0.0), size=0.5)
+    seed = harness.add_box("Seed", (0.0, 6.0, 0.0), size=0.1)
+    tree = bpy.data.node_groups.new("Sprout", "GeometryNodeTree")
+    tree.interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
+    tree.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
+    nodes, links = tree.nodes, tree.links
+    given, result = nodes.new("NodeGroupInput"), nodes.new("NodeGroupOutput")
+    info = nodes.new("GeometryNodeObjectInfo")
+    info.inputs["Object"].default_value = seed
+    info.inputs["As Instance"].default_value = True
+    on_points, join = nodes.new("GeometryNodeInstanceOnPoints"), nodes.new("GeometryNodeJoinGeometry")
+    links.new(given.outputs[0], on_points.inputs["Points"])
+    links.new(info.outputs["Geometry"], on_points.inputs["Instance"])
+    links.new(given.outputs[0], join.inputs[0])
+    links.new(on_points.outputs[0], join.inputs[0])
+    links.new(join.outputs[0], result.inputs[0])
+    modifier = sprout.modifiers.new("Sprout", "NODES")
+    modifier.node_group = tree
+    modifier.show_viewport = False
 
 
 def _same(placed, walked) -> None:
@@ -189,6 +213,20 @@ def check_moves_are_placed_as_the_walk_places_them() -> None:
             up.value = value
             up.keyframe_insert("value", frame=f)
 
+    def hide_keyframes():
+        morph = bpy.data.objects["Morph"]
+        for f, hidden in ((1, False), (5, True)):
+            morph.hide_viewport = hidden
+            morph.keyframe_insert("hide_viewport", frame=f)
+
+    def sprout(on):
+        return lambda: setattr(bpy.data.objects["Sprout"].modifiers["Sprout"], "show_viewport", on)
+
+    def still():
+        """A box keyframed once: a mover (animated) that never moves."""
+        obj = harness.add_box("Still", (1.0, -3.0, 0.0), size=0.4)
+        obj.keyframe_insert("location", frame=1)
+
     # (what, the edit, whether the sync may skip the walk; None: either, the scenes compared all the
     # same; an object's name: both refuse the scene, naming it)
     steps = [
@@ -286,6 +324,21 @@ def check_moves_are_placed_as_the_walk_places_them() -> None:
         ("frame 3 (both deformed)", frame(3), None),
         ("frame 5", frame(5), True),
         ("frame 1", frame(1), True),
+        # a keyframed visibility is named as geometry on a frame change: walked
+        ("keyframe the shape-keyed box's visibility", hide_keyframes, False),
+        ("frame 3", frame(3), False),
+        ("frame 4", frame(4), False),
+        ("frame 5 (the box hidden)", frame(5), False),
+        ("frame 2 (shown)", frame(2), False),
+        # geometry nodes make instances where an edit names only the geometry: walked
+        ("edit a box with a geometry-nodes modifier (a mover from now on)", edit(bpy.data.objects["Sprout"]), False),
+        ("edit it again", edit(bpy.data.objects["Sprout"]), False),
+        ("its modifier on (instances of a box at its corners)", sprout(True), False),
+        ("its modifier off", sprout(False), False),
+        # an update that changes no mesh makes no mover of the object
+        ("a box keyframed once (animated, never moved)", still, False),
+        ("its mesh updated, unchanged", lambda: bpy.data.objects["Still"].data.update(), True),
+        ("its animation removed (in mesh 0 again)", lambda: bpy.data.objects["Still"].animation_data_clear(), False),
     ]
     bpy.context.view_layer.update()
     placed.sync(bpy.context.evaluated_depsgraph_get(), scene)

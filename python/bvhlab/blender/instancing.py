@@ -23,6 +23,7 @@ winding of a mirrored object placed in mesh 0 to match)."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from itertools import islice
 
 import numpy as np
 
@@ -84,9 +85,20 @@ class Layout:
 
     mesh_of: dict = field(default_factory=dict)
     groups: list = field(default_factory=list)
+    _rows: tuple | None = field(default=None, repr=False, compare=False)
 
     def same_as(self, other: Layout | None) -> bool:
         return other is not None and self.mesh_of == other.mesh_of
+
+    def instance_rows(self) -> tuple[np.ndarray, np.ndarray]:
+        """(the scene mesh of each item, int32 (N,), 0 for mesh 0; each item's position among the
+        instances in walk order, int64 (N,), -1 for mesh 0's), made once per layout."""
+        if self._rows is None:
+            every = np.fromiter(self.mesh_of.values(), np.int32, len(self.mesh_of))
+            position = np.cumsum(every != 0) - 1
+            position[every == 0] = -1
+            self._rows = (every, position)
+        return self._rows
 
 
 def plan(items: dict, matrices: np.ndarray, share: bool, is_mover=None) -> Layout:
@@ -194,7 +206,7 @@ def instance_transforms(
     """(mesh index int32 (N,), object-to-world float32 (N,3,4)) of the instanced items, in walk
     order (`matrices`: every item's, as given to `plan`). Raises ExportError naming an instance
     that reaches outside the coordinate range."""
-    every = np.fromiter(layout.mesh_of.values(), np.int32, len(layout.mesh_of))
+    every = layout.instance_rows()[0]
     rows = np.flatnonzero(every)
     mesh_of, chosen_matrices = every[rows], matrices[rows, :3, :4]
     keys = list(layout.mesh_of)
@@ -204,6 +216,28 @@ def instance_transforms(
             shared.mesh.bounds, chosen_matrices[chosen], lambda i, chosen=chosen: item_name(keys[rows[chosen[i]]])
         )
     return mesh_of, chosen_matrices.astype(np.float32)
+
+
+def transforms_again(
+    transforms: np.ndarray, layout: Layout, matrices: np.ndarray, meshes: list[SharedMesh], rows: np.ndarray
+) -> np.ndarray:
+    """`transforms`, instance_transforms' float32 (M,3,4) of a sync with the same layout (after
+    mesh 0's identity where the scene leads with it), with the instances of the items at `rows`
+    made from `matrices` (every item's, as given to `plan`) again: the others kept, not converted
+    and checked again (a sync that moved one instance of 20,000). Raises ExportError as
+    instance_transforms does for those it makes."""
+    every, position = layout.instance_rows()
+    rows = np.unique(rows)
+    rows = rows[every[rows] != 0]
+    out = transforms.copy()
+    for row in rows:
+        _check_reach(
+            meshes[every[row] - 1].mesh.bounds,
+            matrices[row : row + 1, :3, :4],
+            lambda i, row=row: item_name(next(islice(layout.mesh_of, row, None))),
+        )
+    out[len(transforms) - int(np.count_nonzero(every)) + position[rows]] = matrices[rows, :3, :4].astype(np.float32)
+    return out
 
 
 def _check_reach(bounds: np.ndarray, matrices: np.ndarray, name_of) -> None:

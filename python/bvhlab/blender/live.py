@@ -150,10 +150,7 @@ class LiveScene:
             shared = shared_meshes(items, layout, self._shared)
             moved = [key for key, item in items.items() if item.moved]
         assert layout is not None
-        reshaped = () if reported is None or placed is None else tuple(reported.reshaped)
-        arrays = self._arrays(
-            items, world, layout, shared, table, report, moved, kept=placed is not None, reshaped=reshaped
-        )
+        arrays = self._arrays(items, world, layout, shared, table, report, moved, None if placed is None else reported)
         report.materials_read = table.reads
         scene = self._make_scene(arrays, table, blender_scene, depsgraph, report)
         # the sample only where the light's distance is to be measured (a pass over every item)
@@ -246,16 +243,16 @@ class LiveScene:
         table: MaterialTable,
         report,
         moved: list,
-        kept: bool = False,
-        reshaped: tuple = (),
+        placing: Placing | None = None,
     ) -> dict:
         """Mesh 0 (the items placed in the world: triangles, spheres and their material indices, in
         walk order; the material table is rebuilt in that order every sync), the shared meshes and
         the instances; the previous arrays where nothing changed. `moved`: the keys of the items
-        that moved; `kept`: the items are the last sync's in its order and layout and only
-        instances moved or were reshaped (placed_only.py; `reshaped`: their keys): mesh 0 is the
-        last sync's."""
+        that moved; `placing`: the items are the last sync's in its order and layout and only the
+        instances `placing` names moved or were reshaped (placed_only.py): mesh 0 is the last
+        sync's, and the instances' transforms but theirs."""
         previous = self.scene
+        kept = placing is not None
         if kept:
             assert previous is not None
             tri_material, sphere_material = [previous.tri_material], list(previous.sphere_material)
@@ -278,8 +275,8 @@ class LiveScene:
             and same_order
             and same_layout
             and (
-                all(self._items[key].shape == items[key].shape for key in reshaped)
-                if kept
+                all(self._items[key].shape == items[key].shape for key in placing.reshaped)
+                if placing is not None
                 else [p.shape for p in self._items.values()] == [p.shape for p in items.values()]
             )
         )
@@ -304,7 +301,7 @@ class LiveScene:
             arrays["triangles"] = np.concatenate(triangles) if triangles else np.zeros((0, 3, 3), np.float32)
             arrays["spheres"] = np.array(spheres, np.float32).reshape(-1, 4)
         arrays["instance_mesh"], arrays["instance_transforms"] = instances(
-            previous, world, layout, shared, arrays, report
+            previous, world, layout, shared, arrays, report, None if placing is None else placing.rows()
         )
         report.materials = previous is None or not (
             previous.materials == table.materials

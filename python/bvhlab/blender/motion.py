@@ -66,6 +66,12 @@ def animates_only_transform(obj) -> bool:
     return bool(paths) and paths <= TRANSFORM_PATHS
 
 
+def animates_more_than_transform(obj) -> bool:
+    """Whether `obj`'s (an original bpy Object) animation data animates anything but its transform
+    (its visibility, say): a frame change may then change more of it than its update names."""
+    return not _animated_paths(obj.animation_data) <= TRANSFORM_PATHS
+
+
 class AnimatedMemo:
     """`transform_animated` asked once per object and sync (an instancer owns thousands of
     instances), by name."""

@@ -57,7 +57,7 @@ import numpy as np
 from .instancing import Item, Layout, SharedMesh, invertible
 from .material_table import MaterialTable, look_of, map_slots
 from .mesh import read_mesh
-from .motion import animates_only_transform
+from .motion import animates_more_than_transform, animates_only_transform
 from .scope import matrices_array
 from .sphere import is_analytic_sphere
 from .sync_report import SyncReport
@@ -100,12 +100,17 @@ class MoverIndex:
 
 @dataclass
 class Placing:
-    """What an evaluation changed where the walk can be skipped (placing_from_updates): `moved` maps an
-    item's key to (its row, its world matrix as a mathutils.Matrix copy); `reshaped` an item's key
-    to its evaluated object, whose mesh is to be read again."""
+    """What an evaluation changed where the walk can be skipped (placing_from_updates): `moved` maps
+    an item's key to (its row, its world matrix as a mathutils.Matrix copy); `reshaped` an item's
+    key to (its row, its evaluated object, whose mesh is to be read again)."""
 
     moved: dict[tuple, tuple]
-    reshaped: dict[tuple, object]
+    reshaped: dict[tuple, tuple]
+
+    def rows(self) -> np.ndarray:
+        """The rows of the items moved or reshaped (a row may be given twice)."""
+        rows = [row for row, _ in self.moved.values()] + [row for row, _ in self.reshaped.values()]
+        return np.array(rows, np.int64)
 
 
 def placing_from_updates(depsgraph, index: MoverIndex, frame_changed: bool = False) -> Placing | None:
@@ -130,9 +135,13 @@ def placing_from_updates(depsgraph, index: MoverIndex, frame_changed: bool = Fal
         found = index.plain.get(name)
         if found is not None and update.is_updated_geometry:
             key, row = found
-            if key not in index.alone or _instances(original):
+            # its new geometry may hold instances (the walk would find them), and on a frame change
+            # its keyframed visibility is named as geometry too
+            if key not in index.alone or _instances(original) or _may_instance(original):
                 return None
-            placing.reshaped[key] = obj  # its slots are checked as it is read (a shading flag)
+            if frame_changed and animates_more_than_transform(original):
+                return None
+            placing.reshaped[key] = (row, obj)  # its slots are checked as it is read (a shading flag)
             if update.is_updated_transform:
                 placing.moved[key] = (row, obj.matrix_world.copy())
             continue
@@ -154,7 +163,7 @@ def placing_from_updates(depsgraph, index: MoverIndex, frame_changed: bool = Fal
         passive = kind in PASSIVE_TYPES or (kind == "EMPTY" and original.instance_type == "NONE")
         if name in index.named or not passive:
             return None
-    if meshes and not _own_meshes(meshes, placing.reshaped.values()):
+    if meshes and not _own_meshes(meshes, [obj for _, obj in placing.reshaped.values()]):
         return None
     return placing if reported else None
 
@@ -163,6 +172,13 @@ def _instances(original) -> bool:
     """Whether an object instances, or its parent does."""
     parent = original.parent
     return original.instance_type != "NONE" or (parent is not None and parent.instance_type != "NONE")
+
+
+def _may_instance(original) -> bool:
+    """Whether an object's evaluated geometry may hold instances: it has a geometry-nodes modifier
+    or a particle system (an edit of its settings names its geometry alone, and neither
+    `instance_type` nor `is_instancer` says so under bpy 4.2)."""
+    return bool(original.particle_systems) or any(m.type == "NODES" for m in original.modifiers)
 
 
 def _own_meshes(named: list, reshaped) -> bool:
@@ -181,8 +197,8 @@ def place_moved(
 ) -> tuple | None:
     """(items, world, report, seen moving, the keys of the items moved) of a sync that found the
     last sync's `items` and `world` (its matrices, row i the i-th item's; `moved_before`: the keys
-    of its items that moved) with the matrices of `moved` (placing_from_updates), as the walk would find
-    them (walk.py `_compare_matrices`); None where a new matrix cannot be inverted as
+    of its items that moved) with the matrices of `moved` (placing_from_updates), as the walk
+    would find them (walk.py `_compare_matrices`); None where a new matrix cannot be inverted as
     `instancing.plan` asks of an instance (the walk then places that item in mesh 0)."""
     before, world = world, world.copy()
     rows = np.fromiter((row for row, _ in moved.values()), np.int64, len(moved))
@@ -220,12 +236,12 @@ def place_reshaped(
     instancing: bool,
 ) -> list[SharedMesh] | None:
     """The shared meshes of a placed sync (`placed`: place_moved's tuple, whose items, report, seen
-    moving and moved keys are updated in place) with each reshaped item's (placing_from_updates) mesh read
-    again, as the walk reads it; None where the walk must run after all (the object became a
-    sphere, has no triangles now, or its slots give other material indices)."""
+    moving and moved keys are updated in place) with each reshaped item's (placing_from_updates)
+    mesh read again, as the walk reads it; None where the walk must run after all (the object
+    became a sphere, has no triangles now, or its slots give other material indices)."""
     items, _, report, seen_moving, now = placed
     shared = list(shared)
-    for key, obj in reshaped.items():
+    for key, (_, obj) in reshaped.items():
         item: Item = items[key]
         if is_analytic_sphere(obj):
             return None
@@ -244,6 +260,6 @@ def place_reshaped(
         if key in now:  # a new mesh: the walk counts no move of it (walk.py _compare_matrices)
             now.remove(key)
             report.objects_moved -= 1
-        if instancing:
+        if instancing and (item.mesh is None or not mesh.same_as(item.mesh)):  # as the walk counts it
             seen_moving.add(key)
     return shared

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..scene import Scene
-from .instancing import Layout, SharedMesh, instance_transforms
+from .instancing import Layout, SharedMesh, instance_transforms, transforms_again
 from .material_table import map_slots
 from .sphere import place_sphere
 
@@ -33,15 +33,25 @@ def mesh_zero(items: dict, layout: Layout) -> tuple[list, list, list, list]:
 
 
 def instances(
-    previous: Scene | None, world: np.ndarray, layout: Layout, shared: list[SharedMesh], arrays: dict, report
+    previous: Scene | None,
+    world: np.ndarray,
+    layout: Layout,
+    shared: list[SharedMesh],
+    arrays: dict,
+    report,
+    changed: np.ndarray | None = None,
 ) -> tuple:
     """(instance_mesh, instance_transforms): mesh 0 once where it was modelled (when it has
     primitives), then the shared meshes' instances; (None, None) without shared meshes; the
-    `previous` sync's where the geometry did not change."""
+    `previous` sync's where the geometry did not change. `changed`: the rows of the only items
+    that moved or changed their meshes, in the `previous` sync's layout and mesh 0 (placed_only.py):
+    the previous transforms with theirs made again."""
     if not shared:
         return None, None
     if previous is not None and not report.geometry and previous.instance_transforms is not None:
         return previous.instance_mesh, previous.instance_transforms
+    if changed is not None and previous is not None and previous.instance_transforms is not None:
+        return previous.instance_mesh, transforms_again(previous.instance_transforms, layout, world, shared, changed)
     mesh_of, transforms = instance_transforms(layout, world, shared)
     if len(arrays["triangles"]) or len(arrays["spheres"]):
         identity = np.eye(4, dtype=np.float32)[None, :3]
