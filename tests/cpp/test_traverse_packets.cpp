@@ -1,11 +1,14 @@
 // Packets of coherent rays in the wide batch (wide_packet.inl: the AVX2 path's closest-hit batch
 // walk takes eight rays of one octant with one origin and nearly one direction through the tree
 // together): camera rays, cameras whose packets diverge, mixed octants in one piece, misses, tmin
-// and tmax limits, spheres. Every hit must equal, bit for bit, the ray traced alone
-// (intersect_wide) and the brute force, on every instruction set path and thread count.
+// and tmax limits, spheres; and shadow rays of neighbouring points toward one light through the
+// any-hit batch. Every hit must equal, bit for bit, the ray traced alone (intersect_wide) and the
+// brute force, every answer the single any-hit walk's and the closest hit's, on every instruction
+// set path and thread count.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <random>
 #include <vector>
 
@@ -70,6 +73,51 @@ std::size_t expect_batch_is_single(const Bvh& bvh, const std::vector<Ray>& rays)
     }
     set_isa(before);
     return hits;
+}
+
+/// Compares occluded_wide_batch (the shadow packets where the path has them and a piece's rays
+/// mostly reach their light) with each ray alone and with the closest hit (t < tmax) on every
+/// instruction set path; returns how many are occluded.
+std::size_t expect_occluded_batch_is_single(const Bvh& bvh, const std::vector<Ray>& rays) {
+    const WideBvh wide = make_wide(bvh);
+    const Isa before = active_isa();
+    std::size_t occluded = 0;
+    for (Isa isa : supported_isas()) {
+        set_isa(isa);
+        std::unique_ptr<bool[]> batch(new bool[rays.size()]);
+        occluded_wide_batch(wide, rays.data(), rays.size(), batch.get());
+        std::uint32_t wrong = 0;
+        occluded = 0;
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+            const bool one = occluded_wide(wide, rays[i]),
+                       oracle = intersect(bvh, rays[i], Traversal::Stack).t < rays[i].tmax;
+            if ((batch[i] != one || one != oracle) && ++wrong <= 5)
+                ADD_FAILURE() << isa_name(isa) << ": shadow ray " << i << " batch " << batch[i] << " alone " << one
+                              << " closest hit " << oracle;
+            occluded += one;
+        }
+    }
+    set_isa(before);
+    return occluded;
+}
+
+/// Shadow rays toward a light above the scene from the points a camera looking down on it hits,
+/// in pixel order (neighbouring rays: neighbouring points, directions within a packet's cone).
+std::vector<Ray> shadow_rays(const Bvh& bvh, Vec3 light, std::uint32_t seed) {
+    std::vector<Ray> out;
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    for (const Ray& ray : camera_rays({-6.0f, -4.0f, 12.0f}, {5.0f, 5.0f, 2.0f}, 128, 96, 0.9f)) {
+        const Hit hit = intersect(bvh, ray, Traversal::Stack);
+        if (hit.ref == kNoHit) continue;
+        Ray shadow;
+        shadow.origin = ray.origin + ray.dir * hit.t;
+        shadow.dir = light - shadow.origin;
+        shadow.tmin = 1e-4f;
+        shadow.tmax = u(rng) < 0.2f ? 0.5f : 1.0f;  // some end halfway to the light
+        out.push_back(shadow);
+    }
+    return out;
 }
 
 }  // namespace
@@ -205,4 +253,27 @@ TEST(WidePackets, IntersectBatchOnThreadsGivesTheStackWalksHits) {
         }
     }
     set_isa(before);
+}
+
+/// Shadow rays from the points a camera sees toward one light (wide_packet.inl occluded_packet:
+/// eight rays whose directions lie within the packet's cone, each from its own point, through the
+/// tree together in the pieces whose rays mostly reach the light): in a sparse scene most reach
+/// it (the packets), in a dense one most are occluded (ray by ray, farthest first); every answer
+/// the single walk's and the closest hit's, every path.
+TEST(WidePackets, ShadowRaysGiveTheSingleRayAnswers) {
+    for (std::uint32_t triangles : {300u, 4000u}) {
+        auto scene = test::random_scene(triangles, triangles / 20, 101);
+        scene.add_triangle({-30.0f, -30.0f, 0.0f}, {40.0f, -30.0f, 0.0f}, {40.0f, 40.0f, 0.0f});  // a floor
+        scene.add_triangle({-30.0f, -30.0f, 0.0f}, {40.0f, 40.0f, 0.0f}, {-30.0f, 40.0f, 0.0f});
+        const Bvh bvh = build_bvh(scene.view());
+        const auto rays = shadow_rays(bvh, {5.0f, 4.0f, 30.0f}, 3);
+        ASSERT_GT(rays.size(), 2000u);
+        const std::size_t occluded = expect_occluded_batch_is_single(bvh, rays);
+        if (triangles == 300u) {
+            EXPECT_LT(occluded, rays.size() / 4) << "most should reach the light";
+        } else {
+            EXPECT_GT(occluded, rays.size() / 4);
+        }
+        EXPECT_GT(occluded, 0u);
+    }
 }
