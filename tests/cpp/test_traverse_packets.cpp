@@ -2,9 +2,9 @@
 // walk takes eight rays of one octant with one origin and nearly one direction through the tree
 // together): camera rays, cameras whose packets diverge, mixed octants in one piece, misses, tmin
 // and tmax limits, spheres; and shadow rays of neighbouring points toward one light through the
-// any-hit batch. Every hit must equal, bit for bit, the ray traced alone (intersect_wide) and the
-// brute force, every answer the single any-hit walk's and the closest hit's, on every instruction
-// set path and thread count.
+// any-hit batch (where shadow packets were tried: design.md). Every hit must equal, bit for bit,
+// the ray traced alone (intersect_wide) and the brute force, every answer the single any-hit
+// walk's and the closest hit's, on every instruction set path and thread count.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -75,8 +75,7 @@ std::size_t expect_batch_is_single(const Bvh& bvh, const std::vector<Ray>& rays)
     return hits;
 }
 
-/// Compares occluded_wide_batch (the shadow packets where the path has them and a piece's rays
-/// mostly reach their light) with each ray alone and with the closest hit (t < tmax) on every
+/// Compares occluded_wide_batch with each ray alone and with the closest hit (t < tmax) on every
 /// instruction set path; returns how many are occluded.
 std::size_t expect_occluded_batch_is_single(const Bvh& bvh, const std::vector<Ray>& rays) {
     const WideBvh wide = make_wide(bvh);
@@ -255,11 +254,10 @@ TEST(WidePackets, IntersectBatchOnThreadsGivesTheStackWalksHits) {
     set_isa(before);
 }
 
-/// Shadow rays from the points a camera sees toward one light (wide_packet.inl occluded_packet:
-/// eight rays whose directions lie within the packet's cone, each from its own point, through the
-/// tree together in the pieces whose rays mostly reach the light): in a sparse scene most reach
-/// it (the packets), in a dense one most are occluded (ray by ray, farthest first); every answer
-/// the single walk's and the closest hit's, every path.
+/// Shadow rays from the points a camera sees toward one light, in pixel order (the rays a packet
+/// of shadow rays would take; design.md "Shadow packets, tried"): in a sparse scene most reach the
+/// light (the batch's pieces go in the layout's order), in a dense one most are occluded
+/// (farthest first); every answer the single walk's and the closest hit's, every path.
 TEST(WidePackets, ShadowRaysGiveTheSingleRayAnswers) {
     for (std::uint32_t triangles : {300u, 4000u}) {
         auto scene = test::random_scene(triangles, triangles / 20, 101);

@@ -45,17 +45,15 @@ bool leaf_occludes(const unsigned char* at, const Query& q) {
 /// follow those the node prefetched), for rays that mostly reach their light, where every order
 /// visits the same nodes and the farthest only costs its choice (room1m and vast1m shadow rays, 95%
 /// and 100% unoccluded, 6-7% slower with it; the batch picks: wide_batch.inl occluded_of_batch).
-/// `root`: the node to start from (the shadow packets' walk, wide_packet.inl, hands a subtree that
-/// few of its rays enter to each of them alone), the tree's root by default.
 template <int kOctant, bool kFarthest = true>
-bool any_hit_nodes(const unsigned char* lines, const Query& q, std::uint32_t root = 0) {
+bool any_hit_nodes(const unsigned char* lines, const Query& q) {
     const L8 origin[3] = {L8::splat(q.o[0]), L8::splat(q.o[1]), L8::splat(q.o[2])};
     const L8 neg_inv[3] = {L8::splat(q.neg_inv[0]), L8::splat(q.neg_inv[1]), L8::splat(q.neg_inv[2])};
     const L8 neg_inv_far[3] = {L8::splat(q.neg_inv_far[0]), L8::splat(q.neg_inv_far[1]), L8::splat(q.neg_inv_far[2])};
     const L8 far = L8::splat(q.ray->tmax * gpu::BOX_FAR_SCALE);
     const std::ptrdiff_t* plane = kOctant < 0 ? kPlanes[q.octant] : kPlanes.at[kOctant & 7];
     std::uint32_t stack[Stack::kSize];
-    std::uint32_t sp = 0, cur = root;
+    std::uint32_t sp = 0, cur = 0;
     for (;;) {
         const WideNode& node = *reinterpret_cast<const WideNode*>(lines + std::size_t(cur) * sizeof(WideLine));
         const float* f = node.lo_x;

@@ -44,27 +44,13 @@ void closest_of_octant(const WideView& wide, const Ray* rays, const std::uint32_
 
 /// Whether each of rays[order[0, n)], all of octant kOctant, is occluded, to occluded[i], by the
 /// any-hit walk's farthest-first order or (kFarthest false) the layout's (any_hit_nodes).
-/// Where the including file defines BVHLAB_WIDE_PACKETS (the AVX2 path), each run of kPacket rays
-/// whose directions `aligned` accepts (shadow rays from neighbouring points toward one light) goes
-/// through the tree as one packet (wide_packet.inl occluded_packet); the rest ray by ray.
 template <int kOctant, bool kFarthest>
 void occluded_of_octant(const WideView& wide, const Ray* rays, const std::uint32_t* order, std::uint32_t n,
                         bool* occluded) {
-    const auto single = [&](std::uint32_t i) {
+    for (std::uint32_t j = 0; j < n; ++j) {
+        const std::uint32_t i = order[j];
         occluded[i] = any_hit_nodes<kOctant, kFarthest>(wide.lines, make_query(rays[i]));
-    };
-    std::uint32_t j = 0;
-#ifdef BVHLAB_WIDE_PACKETS
-    for (; !kFarthest && j + kPacket <= n; j += kPacket) {
-        const PacketRays p = packet_rays(rays, order + j);
-        if (aligned(p)) {
-            occluded_packet<kOctant, kFarthest>(wide, rays, order + j, p, occluded);
-            continue;
-        }
-        for (int r = 0; r < kPacket; ++r) single(order[j + r]);
     }
-#endif
-    for (; j < n; ++j) single(order[j]);
 }
 
 /// The closest hits of a batch grouped by octant (group_by_octant: order[start[k], start[k + 1])

@@ -51,19 +51,6 @@ inline PacketRays packet_rays(const Ray* rays, const std::uint32_t* ids) {
 /// Lane 0 of x in every lane.
 inline __m256 first_lane(__m256 x) { return _mm256_permutevar8x32_ps(x, _mm256_setzero_si256()); }
 
-/// The lanes (all bits set) whose direction is within kPacketCos2 of the first ray's.
-inline __m256 aligned_lanes(const PacketRays& p) {
-    const __m256 x0 = first_lane(p.d[0]), y0 = first_lane(p.d[1]), z0 = first_lane(p.d[2]);
-    const auto dot = [](__m256 ax, __m256 ay, __m256 az, __m256 bx, __m256 by, __m256 bz) {
-        return _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ax, bx), _mm256_mul_ps(ay, by)), _mm256_mul_ps(az, bz));
-    };
-    const __m256 c = dot(x0, y0, z0, p.d[0], p.d[1], p.d[2]);
-    const __m256 n0 = dot(x0, y0, z0, x0, y0, z0), n = dot(p.d[0], p.d[1], p.d[2], p.d[0], p.d[1], p.d[2]);
-    const __m256 least = _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(kPacketCos2), n0), n);
-    return _mm256_and_ps(_mm256_cmp_ps(c, _mm256_setzero_ps(), _CMP_GT_OQ),
-                         _mm256_cmp_ps(_mm256_mul_ps(c, c), least, _CMP_GE_OQ));
-}
-
 /// Whether the eight rays (one octant) go through the tree as one packet: the same origin as the
 /// first ray's (as floats: −0 and 0 alike; a pinhole camera's rays) and directions within
 /// kPacketCos2 of the first's, eight lanes at once. Random and shadow rays fail (their origins).
@@ -71,13 +58,17 @@ inline bool coherent(const PacketRays& p) {
     __m256 ok = _mm256_cmp_ps(p.o[0], first_lane(p.o[0]), _CMP_EQ_OQ);
     ok = _mm256_and_ps(ok, _mm256_cmp_ps(p.o[1], first_lane(p.o[1]), _CMP_EQ_OQ));
     ok = _mm256_and_ps(ok, _mm256_cmp_ps(p.o[2], first_lane(p.o[2]), _CMP_EQ_OQ));
-    return _mm256_movemask_ps(_mm256_and_ps(ok, aligned_lanes(p))) == 0xff;
+    const __m256 x0 = first_lane(p.d[0]), y0 = first_lane(p.d[1]), z0 = first_lane(p.d[2]);
+    const auto dot = [](__m256 ax, __m256 ay, __m256 az, __m256 bx, __m256 by, __m256 bz) {
+        return _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ax, bx), _mm256_mul_ps(ay, by)), _mm256_mul_ps(az, bz));
+    };
+    const __m256 c = dot(x0, y0, z0, p.d[0], p.d[1], p.d[2]);
+    const __m256 n0 = dot(x0, y0, z0, x0, y0, z0), n = dot(p.d[0], p.d[1], p.d[2], p.d[0], p.d[1], p.d[2]);
+    ok = _mm256_and_ps(ok, _mm256_cmp_ps(c, _mm256_setzero_ps(), _CMP_GT_OQ));
+    const __m256 least = _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(kPacketCos2), n0), n);
+    ok = _mm256_and_ps(ok, _mm256_cmp_ps(_mm256_mul_ps(c, c), least, _CMP_GE_OQ));
+    return _mm256_movemask_ps(ok) == 0xff;
 }
-
-/// Whether the eight rays (one octant) go through the any-hit walk as one packet: directions
-/// within kPacketCos2 of the first's, origins of their own (shadow rays from neighbouring points
-/// toward one light).
-inline bool aligned(const PacketRays& p) { return _mm256_movemask_ps(aligned_lanes(p)) == 0xff; }
 
 /// The packet walk's stack: a child word and the entry distance of each ray in its lane (NaN where
 /// the ray did not enter it, which no far limit passes).
@@ -97,12 +88,6 @@ inline L8 largest(L8 x) {
     __m256 m = _mm256_max_ps(x.v, _mm256_permute2f128_ps(x.v, x.v, 1));
     m = _mm256_max_ps(m, _mm256_shuffle_ps(m, m, _MM_SHUFFLE(1, 0, 3, 2)));
     return {_mm256_max_ps(m, _mm256_shuffle_ps(m, m, _MM_SHUFFLE(2, 3, 0, 1)))};
-}
-
-/// The lanes (all bits set) of the bits set in `bits` (bit r: lane r).
-inline __m256 lanes_mask(int bits) {
-    const __m256i bit = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
-    return _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(bits), bit), bit));
 }
 
 /// The smallest lane of t among `in` (+inf where none): a packet's child's sort key, of the
@@ -287,101 +272,5 @@ void closest_packet(const WideView& wide, const Ray* rays, const std::uint32_t* 
             cur_t = L8{_mm256_load_ps(stack.t[sp])};
         } while (!le_bits(cur_t, far_limit));
         cur = stack.index[sp];
-    }
-}
-
-/// Whether each of rays[ids[0, kPacket)] (one octant, aligned: shadow rays from neighbouring points
-/// toward one light) is occluded, to occluded[ids[r]], by one walk of the packet (the shadow
-/// packets of design.md "Packets for coherent rays"): a node's child boxes are tested for each ray
-/// still unoccluded that entered it, by the single any-hit walk's box test lane by lane (the same
-/// raises and lowers from the ray's own origin, tmin and far limit tmax · BOX_FAR_SCALE, so each
-/// ray enters exactly the children its own walk enters); the leaves entered are tested at once for
-/// their rays, a ray done at its first hit; a subtree entered by kAlone rays or fewer is walked by
-/// each of them alone (any_hit_nodes from that node). A ray is occluded where some leaf in a box
-/// it enters holds a hit before its tmax, whatever the order the leaves are tested in, so the
-/// answers are the single walk's. Inner children: the farthest next (kFarthest, by the largest
-/// middle of the rays' spans in its box: the single walk's reason) or the lowest slot, the others
-/// pushed with the rays that entered them.
-template <int kOctant, bool kFarthest>
-void occluded_packet(const WideView& wide, const Ray* rays, const std::uint32_t* ids, const PacketRays& p,
-                     bool* occluded) {
-    const L8 origin[3] = {L8{p.o[0]}, L8{p.o[1]}, L8{p.o[2]}};
-    L8 neg_inv[3], neg_inv_far[3];
-    for (int a = 0; a < 3; ++a) {  // make_query's operations, lane by lane
-        const L8 inv = L8::splat(1.0f) / L8{p.d[a]};
-        neg_inv[a] = inv * L8::splat(-1.0f), neg_inv_far[a] = inv * L8::splat(-gpu::BOX_FAR_SCALE);
-    }
-    const L8 t_min{p.tmin}, far{_mm256_mul_ps(p.tmax, _mm256_set1_ps(gpu::BOX_FAR_SCALE))};
-    Query q[kPacket];
-    int made = 0;  // bit r: q[r] made
-    const auto query = [&](int r) -> const Query& {
-        if (!(made >> r & 1)) q[r] = make_query(rays[ids[r]]), made |= 1 << r;
-        return q[r];
-    };
-    const std::ptrdiff_t* plane = kPlanes.at[kOctant & 7];
-    const auto leaf_at = [&](std::uint32_t child) { return line_at(wide, child & ~kLeafChild); };
-    std::uint32_t stack[Stack::kSize];
-    int stack_lanes[Stack::kSize];
-    std::uint32_t sp = 0, cur = 0;  // the root is a node (make_wide)
-    int live = 0xff, lanes = 0xff;  // the rays not yet occluded; those that entered `cur`
-    for (;;) {
-        if (__builtin_popcount(unsigned(lanes)) <= kAlone) {
-            for (int m = lanes; m; m &= m - 1) {
-                const int r = __builtin_ctz(unsigned(m));
-                if (any_hit_nodes<kOctant, kFarthest>(wide.lines, query(r), cur)) live &= ~(1 << r);
-            }
-        } else {
-            const WideNode& node = node_at(wide, cur);
-            __builtin_prefetch(node.child);  // as the single walk: the child words, the lines after
-            const char* after = reinterpret_cast<const char*>(&node + 1);
-            for (int line = 0; line < 6; ++line) __builtin_prefetch(after + 64 * line);
-            const float* f = node.lo_x;
-            const int leaf = leaf_bits(node);
-            int entered[8];
-            int inner = 0, next = -1;
-            float farthest = -std::numeric_limits<float>::infinity();
-            // the slots in use (an unused slot's box is inverted)
-            for (int slots = le_bits(L8::load(node.lo_x), L8::load(node.hi_x)); slots; slots &= slots - 1) {
-                const int c = __builtin_ctz(unsigned(slots));
-                L8 t0 = t_min, t1 = far;
-                for (int a = 0; a < 3; ++a) t0 = raise(t0, (origin[a] - L8::splat(f[plane[a] + c])) * neg_inv[a]);
-                for (int a = 0; a < 3; ++a)
-                    t1 = lower(t1, (origin[a] - L8::splat(f[plane[3 + a] + c])) * neg_inv_far[a]);
-                const int in = le_bits(t0, t1) & lanes;
-                if (!in) continue;
-                if (leaf >> c & 1) {  // tested at once, as the single walk tests a node's leaves
-                    for (int m = in & live; m; m &= m - 1) {
-                        const int r = __builtin_ctz(unsigned(m));
-                        if (leaf_occludes(leaf_at(node.child[c]), query(r))) live &= ~(1 << r);
-                    }
-                    continue;
-                }
-                entered[c] = in, inner |= 1 << c;
-                if (kFarthest) {
-                    const float middle =
-                        -least_lane(_mm256_sub_ps(_mm256_setzero_ps(), _mm256_add_ps(t0.v, t1.v)), lanes_mask(in));
-                    if (next < 0 || middle > farthest) next = c, farthest = middle;
-                } else if (next < 0) {
-                    next = c;
-                }
-            }
-            for (int m = inner & ~(next < 0 ? 0 : 1 << next); m; m &= m - 1) {
-                const int c = __builtin_ctz(unsigned(m));
-                stack[sp] = node.child[c], stack_lanes[sp++] = entered[c];
-            }
-            if (sp) prefetch(wide, stack[sp - 1]);  // the next to pop after it
-            if (next >= 0 && (entered[next] & live)) {
-                cur = node.child[next], lanes = entered[next] & live;
-                continue;
-            }
-        }
-        do {  // pop, skipping entries whose rays are all occluded by now
-            if (sp == 0 || !live) {
-                for (int r = 0; r < kPacket; ++r) occluded[ids[r]] = !(live >> r & 1);
-                return;
-            }
-            --sp;
-            cur = stack[sp], lanes = stack_lanes[sp] & live;
-        } while (!lanes);
     }
 }
