@@ -26,10 +26,13 @@ Reshaped objects: an edit of one object's mesh in Edit Mode names the object and
 their geometry; a modifier's setting or `mesh.update()` names both with geometry and shading too;
 playback of an armature-deformed or shape-keyed object names the armature (geometry, shading),
 the object and its mesh (geometry) and the shape keys (geometry, shading). The walk makes an object
-whose geometry it read again a mover (an instance of its own, as a move does), so from the second
-edit on such an object is one item, and its mesh its own; there the sync reads that one object's
-mesh again (`place_reshaped`) and keeps every other item, where:
-- the object is a plain item (above) and the only item of its scene mesh;
+whose mesh it read again and found changed a mover (an instance of its own, as a move does), so
+from the second edit on such an object is one item, and its mesh its own; there the sync reads
+that one object's mesh again (`place_reshaped`) and keeps every other item, where:
+- the object is a plain item (above), the only item of its scene mesh, and has no geometry-nodes
+  modifier or particle system (whose new instances only the walk finds);
+- on a frame change, its own animation animates nothing but its transform (a keyframed
+  visibility is named as geometry);
 - every mesh named is the data of such an object and has no other user, every set of shape keys
   named belongs to such a mesh;
 - the object is still no sphere, its mesh has triangles, and its slots give the same material
