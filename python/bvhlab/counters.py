@@ -2,7 +2,9 @@
 Analyzer): box tests, box hits, primitive tests, primitive hits and instance hits of each pixel's
 primary rays, averaged over its samples. Counted by the tracer itself (shaders/tracer/
 traverse.glsl), the same on the CPU reference and on Vulkan; reflection, refraction and shadow
-rays are not counted, so a pixel's counters are those `Bvh.trace_pixel` records for it.
+rays are not counted, so a pixel's counters are those `Bvh.trace_pixel` records for it (but where a
+surface hidden from camera rays covers the pixel: the tracer passes it by, the record does not,
+and trace_pixel warns of it).
 
 The names come from the core's TraversalCounter enum (render_settings.h); this module adds the
 ranges and images: a manual range, or the auto range (0 to the AUTO_PERCENTILE-th percentile of

@@ -7,7 +7,7 @@ import pytest
 from oracles import subtree_slots
 
 import bvhlab
-from bvhlab.inspect.ray_record import trace_pixel
+from bvhlab.inspect.ray_record import HiddenSurfaceWarning, trace_pixel
 from bvhlab.library import procedural, showcase
 
 
@@ -158,3 +158,43 @@ def test_bad_requests_are_refused():
         trace_pixel(scene, bvh, 24, 0, width=24, height=16)
     with pytest.raises(ValueError, match="sample"):
         trace_pixel(scene, bvh, 0, 0, width=24, height=16, sample=1)
+
+
+def test_pixels_of_a_surface_hidden_from_camera_rays_are_said_to_differ():
+    """The Whitted scene's spheres hidden from camera rays: the tracer passes them by and its cost
+    there is not the record's (which walks to the closest surface, a hidden sphere), and
+    trace_pixel says so; the scene without the hiding gets no warning and the tracer's cost."""
+    import dataclasses
+    import warnings
+
+    scene = showcase.whitted()
+    bvh = bvhlab.build(scene, max_leaf_size=2)
+    w, h = 32, 24
+    options = bvhlab.RenderOptions(samples_per_axis=1)
+
+    def costs():
+        job = bvhlab.Renderer("cpu").start(scene, bvh, w, h, options=options)
+        job.run()
+        return job.result(color=False, depth=False).cost
+
+    before = costs()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no warning without the hiding
+        plain = {(x, y): trace_pixel(scene, bvh, x, y, width=w, height=h, options=options) for x, y in _grid(w, h)}
+    assert all(rec.box_tests == before[y, x] for (x, y), rec in plain.items())
+    scene.materials = [
+        dataclasses.replace(m, hidden_from=bvhlab.Rays.CAMERA) if k in set(scene.sphere_material.tolist()) else m
+        for k, m in enumerate(scene.materials)
+    ]
+    after = costs()
+    records = {}
+    for x, y in _grid(w, h):
+        with pytest.warns(HiddenSurfaceWarning, match="hidden from camera rays"):
+            records[x, y] = trace_pixel(scene, bvh, x, y, width=w, height=h, options=options)
+    assert all(records[xy].box_tests == plain[xy].box_tests for xy in records)  # the record walks as before
+    differ = [(x, y) for (x, y), rec in records.items() if rec.box_tests != after[y, x]]
+    assert differ, "the hidden spheres should change the tracer's cost somewhere"
+
+
+def _grid(w: int, h: int):
+    return [(x, y) for y in range(0, h, 2) for x in range(0, w, 2)]

@@ -4,17 +4,25 @@ made by the tracer's own camera code."""
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from .. import _checks, _core
+from ..scene_parts import Rays
 
 #: Traversals that can be recorded: the binary walks and the wide one (`Bvh.intersect`'s default),
 #: whose wide nodes and leaves are named by the binary nodes they stand for.
 RECORD_TRAVERSALS = ("stack", "stackless", "wide")
 #: Traversals of the tracer (RenderOptions.traversal), which trace_pixel records.
 PIXEL_TRAVERSALS = ("stack", "stackless")
+
+
+class HiddenSurfaceWarning(UserWarning):
+    """trace_pixel on a scene with surfaces hidden from camera rays: the record walks the tree to
+    the closest surface, the tracer passes a hidden one by and goes on (its hit, box tests and
+    counters can differ from the record's at the pixels such a surface covers)."""
 
 
 @dataclass(frozen=True)
@@ -254,12 +262,21 @@ def trace_pixel(scene, bvh, x: int, y: int, *, width: int, height: int, options=
     InstancedRayRecord): the ray the tracer traces there (its camera code and clipping; the
     overlay's lines are not drawn), walked by the traversal of `options.traversal` (stack or
     stackless: its box tests are the pixel's cost at one sample; wide: each wide node's children,
-    where the render's cost counts 8 a wide node, its empty slots too)."""
+    where the render's cost counts 8 a wide node, its empty slots too). A scene with surfaces
+    hidden from camera rays gets a HiddenSurfaceWarning: the record walks to the closest surface,
+    hidden or not, where the tracer passes a hidden one by."""
     from .._render_scene import SceneCache
     from .._render_settings import render_settings
     from ..render_options import options_from
 
     options = options_from(options, {}).for_backend(cpu=True, counts_shown=True)  # "auto": a record is counts
+    if _hidden_from_camera(scene):
+        warnings.warn(
+            "the scene has surfaces hidden from camera rays, which the tracer passes by and this record "
+            "does not: at the pixels they cover its hit and box tests are the tree's closest surface's",
+            HiddenSurfaceWarning,
+            stacklevel=2,
+        )
     settings = render_settings(scene, bvh, width, height, options, camera)
     render_scene = SceneCache().get(scene, bvh)
     x = _checks.integer("x", x, 0, 2**32 - 1)
@@ -269,6 +286,13 @@ def trace_pixel(scene, bvh, x: int, y: int, *, width: int, height: int, options=
     if isinstance(bvh._core, _core.TwoLevel):
         return record_instanced(bvh._core, origin, direction, tmin, tmax, options.traversal, pixel=(x, y, sample))
     return record(bvh._core, origin, direction, tmin, tmax, options.traversal, pixel=(x, y, sample))
+
+
+def _hidden_from_camera(scene) -> bool:
+    """Whether a primitive of `scene` has a material hidden from camera rays (Material.hidden_from)."""
+    hidden = [i for i, m in enumerate(scene.materials) if Rays(m.hidden_from) & Rays.CAMERA]
+    used = [scene.tri_material, scene.sphere_material, *scene.mesh_tri_material]
+    return bool(hidden) and any(np.isin(np.asarray(a), hidden).any() for a in used)
 
 
 def _point(name: str, value) -> tuple:
