@@ -9,6 +9,9 @@ of which the changed one has changed before (a mover: its own instance). Changes
 (as a drag in the viewport), the frame changed with the box's location keyframed (playback), a
 vertex of the box's own mesh moved (an edit: `mesh.update()`, as a modifier's setting names it),
 or the frame changed with a shape key of the box keyframed (a deforming object's playback).
+After each placed sync, the tree update that follows it (the add-on's `SceneTree.update` with the
+sync's `refittable`, one thread): a new TLAS after a move, the changed object's tree refit after
+an edit.
 
     .venv/bin/python bench/live_sync.py [--counts 2000,20000] [--moves 9] [--json live_sync.json]
 """
@@ -30,7 +33,11 @@ import _common  # noqa: E402
 import bpy  # noqa: E402
 import harness  # noqa: E402
 
+import bvhlab  # noqa: E402
 from bvhlab.blender import LiveScene  # noqa: E402
+
+sys.path.insert(0, str(ROOT))
+from addon.trees import SceneTree  # noqa: E402
 
 
 def scene_of(count: int, shared: bool):
@@ -74,6 +81,7 @@ def measure(count: int, shared: bool, moves: int, change: str = "move") -> dict:
     lives = {"placed": LiveScene("visible"), "walked": LiveScene("visible", place_from_updates=False)}
     times: dict[str, list[float]] = {name: [] for name in lives}
     flags: list[bool] = []
+    tree, tree_ms, actions = SceneTree(bvhlab.BuildConfig()), [], []
     order = list(lives)
 
     def synced(scene, depsgraph):
@@ -83,11 +91,16 @@ def measure(count: int, shared: bool, moves: int, change: str = "move") -> dict:
             times[name].append((time.thread_time() - start) * 1e3)
             if name == "placed":
                 flags.append(report.placed_only)
+                start = time.thread_time()
+                update = tree.update(lives[name].scene, refittable=report.refittable, threads=1)
+                tree_ms.append((time.thread_time() - start) * 1e3)
+                actions.append(update.action)
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         for live in lives.values():
             live.sync(bpy.context.evaluated_depsgraph_get(), scene)
+        tree.update(lives["placed"].scene, threads=1)
         handlers = bpy.app.handlers.frame_change_post if frames else bpy.app.handlers.depsgraph_update_post
         handlers.append(synced)
         try:
@@ -110,6 +123,8 @@ def measure(count: int, shared: bool, moves: int, change: str = "move") -> dict:
         "placed_ms": statistics.median(times["placed"][1:]),
         "walked_ms": statistics.median(times["walked"][1:]),
         "placed_only": flags[1:],
+        "tree_ms": statistics.median(tree_ms[1:]),
+        "tree_actions": actions[1:],
     }
 
 
@@ -131,7 +146,17 @@ def main() -> None:
                 rows.append(row)
                 print(row, file=sys.stderr, flush=True)
     _common.print_table(
-        ["objects", "change", "one mesh", "walk ms", "placed ms", "walk ÷ placed", "placed every time"],
+        [
+            "objects",
+            "change",
+            "one mesh",
+            "walk ms",
+            "placed ms",
+            "walk ÷ placed",
+            "placed every time",
+            "tree ms",
+            "tree",
+        ],
         [
             [
                 r["objects"],
@@ -141,6 +166,8 @@ def main() -> None:
                 f"{r['placed_ms']:.1f}",
                 f"{r['walked_ms'] / r['placed_ms']:.1f}",
                 all(r["placed_only"]),
+                f"{r['tree_ms']:.2f}",
+                "/".join(sorted(set(r["tree_actions"]))),
             ]
             for r in rows
         ],

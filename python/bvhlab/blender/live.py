@@ -15,7 +15,7 @@ view_update and after `depsgraph.update()`):
   depsgraph is not walked at all: the moved instances' matrices come from the updates
   (`placed_only.py`, on a move or a frame change); likewise where they name only the geometry of
   objects that are each the one instance of their mesh (an object edited or deformed before):
-  only those meshes are read again (20,000 objects: 0.5-1.4 s a sync → 4.5-14 ms).
+  only those meshes are read again (20,000 objects: 0.7-1.0 s a sync → 5-13 ms).
 
 Instancing (collection instances, linked duplicates, instancing by vertices or faces, geometry-nodes
 instances) becomes meshes and instances of the Scene (`instancing.py`); static objects used once
