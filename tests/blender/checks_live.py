@@ -61,6 +61,8 @@ def _scene():
     skin.modifiers.new("Rig", "ARMATURE").object = rig
     skin.vertex_groups.new(name="Bone").add(list(range(len(skin.data.vertices))), 1.0, "REPLACE")
     _sprout()
+    held = harness.add_box("Held", (4.0, 3.0, 0.0), size=0.4)  # a mover by its constraint alone
+    held.constraints.new("LIMIT_LOCATION")
     morph = harness.add_box("Morph", (-4.5, -2.0, 0.0), size=0.6)
     morph.shape_key_add(name="Basis")
     for point in morph.shape_key_add(name="Up").data:
@@ -339,6 +341,14 @@ def check_moves_are_placed_as_the_walk_places_them() -> None:
         ("a box keyframed once (animated, never moved)", still, False),
         ("its mesh updated, unchanged", lambda: bpy.data.objects["Still"].data.update(), True),
         ("its animation removed (in mesh 0 again)", lambda: bpy.data.objects["Still"].animation_data_clear(), False),
+        # a constraint removed names only a transform: the object, not moved, goes back to mesh 0
+        (
+            "the constraint of a box it keeps in place removed",
+            lambda: bpy.data.objects["Held"].constraints.remove(bpy.data.objects["Held"].constraints[0]),
+            False,
+        ),
+        ("move that box (a mover from now on)", move(bpy.data.objects["Held"], dz=0.2), False),
+        ("move it again", move(bpy.data.objects["Held"], dz=0.2), True),
     ]
     bpy.context.view_layer.update()
     placed.sync(bpy.context.evaluated_depsgraph_get(), scene)

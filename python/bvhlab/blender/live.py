@@ -129,7 +129,11 @@ class LiveScene:
         # only instances moved (placed_only.py): the last sync's items with their new matrices
         frame = (blender_scene.frame_current, blender_scene.frame_subframe)
         placing = self.place_from_updates and not full and not self._missed
-        reported = placing_from_updates(depsgraph, self._mover_index(), frame != self._frame) if placing else None
+        reported = (
+            placing_from_updates(depsgraph, self._mover_index(), frame != self._frame, self._seen_moving)
+            if placing
+            else None
+        )
         placed = None if reported is None else self._placed(reported, override, view_layer)
         if placed is not None:
             assert reported is not None

@@ -20,7 +20,9 @@ transform, and no more, of:
   Instancing or Parent names only a transform, though the walk would find new instances);
 - a camera or a light (a sync gathers both anyway);
 - an empty that instances nothing and is in no item's key (a parent, reported with its children).
-Anything else, or no update at all, and the walk runs (`placing_from_updates` returns None).
+An object that is an instance of its own only for its animation (not seen moving) walks where the
+animation is gone (removing a constraint names only a transform). Anything else, or no update at
+all, and the walk runs (`placing_from_updates` returns None).
 
 Reshaped objects: an edit of one object's mesh in Edit Mode names the object and its mesh with
 their geometry; a modifier's setting or `mesh.update()` names both with geometry and shading too;
@@ -60,7 +62,7 @@ import numpy as np
 from .instancing import Item, Layout, SharedMesh, invertible
 from .material_table import MaterialTable, look_of, map_slots
 from .mesh import read_mesh
-from .motion import animates_more_than_transform, animates_only_transform
+from .motion import animates_more_than_transform, animates_only_transform, transform_animated
 from .scope import matrices_array
 from .sphere import is_analytic_sphere
 from .sync_report import SyncReport
@@ -116,10 +118,13 @@ class Placing:
         return np.array(rows, np.int64)
 
 
-def placing_from_updates(depsgraph, index: MoverIndex, frame_changed: bool = False) -> Placing | None:
+def placing_from_updates(
+    depsgraph, index: MoverIndex, frame_changed: bool = False, seen_moving: set | frozenset = frozenset()
+) -> Placing | None:
     """The items whose objects' updates are all the evaluation reports, moved or reshaped, or None
     where the walk must run (the module's docstring). `frame_changed`: the scene's frame is not the
-    last sync's (see the module's docstring)."""
+    last sync's (see the module's docstring); `seen_moving`: the keys of the items seen moving or
+    reshaped so far (LiveScene's)."""
     placing = Placing({}, {})
     meshes = []  # the meshes and shape keys named, judged once every object is known
     reported = False
@@ -160,6 +165,10 @@ def placing_from_updates(depsgraph, index: MoverIndex, frame_changed: bool = Fal
             if _instances(original):
                 return None
             key, row = found
+            # an instance of its own only for its animation, which is gone (removing a constraint
+            # names only a transform): the walk puts it back into mesh 0 where it did not move
+            if key in index.alone and key not in seen_moving and not transform_animated(original):
+                return None
             placing.moved[key] = (row, obj.matrix_world.copy())
             continue
         kind = original.type
