@@ -71,6 +71,7 @@ def walk(depsgraph, view_layer, scope: str, dirty: Dirty, table: MaterialTable, 
     addresses: dict = {}  # evaluated mesh (hashed by its address) → its address: as_pointer once
     report = SyncReport()
     reshaped = []  # the keys of the items seen before whose mesh changed: movers from now on
+    differs: dict[tuple, bool] = {}  # (data address, id of the old mesh) → the mesh read differs
     for entry in instances_in_scope(depsgraph, view_layer, scope, GEOMETRY_TYPES):
         obj, key = entry.obj, entry.key
         old = last.items.get(key)
@@ -100,8 +101,13 @@ def walk(depsgraph, view_layer, scope: str, dirty: Dirty, table: MaterialTable, 
                     mesh = fresh[data] = read_mesh(obj, entry.name)
                     report.objects_read += 1
             by_data[data] = mesh
-            if changed and old is not None and old.mesh is not None and not mesh.same_as(old.mesh):
-                reshaped.append(key)
+            if changed and old is not None and old.mesh is not None:
+                # compared once per mesh, not per item: 10,000 duplicates of an edited mesh share both
+                pair = (data, id(old.mesh))
+                if pair not in differs:
+                    differs[pair] = not mesh.same_as(old.mesh)
+                if differs[pair]:
+                    reshaped.append(key)
             slots = part[1]
             if slots is None and mesh.triangle_count:
                 slots = table.slot_indices(obj, data, look)
