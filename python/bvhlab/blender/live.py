@@ -257,14 +257,18 @@ class LiveScene:
         sync's, and the instances' transforms but theirs."""
         previous = self.scene
         kept = placing is not None
-        if kept:
+        triangles: list = []
+        spheres: list = []
+        if kept:  # mesh 0's arrays are the last sync's, as they are (not concatenated again)
             assert previous is not None
-            tri_material, sphere_material = [previous.tri_material], list(previous.sphere_material)
-            triangles: list = []  # not needed: the arrays are the last sync's
-            spheres: list = []
+            materials0 = (previous.tri_material, previous.sphere_material)
             empty = not len(previous.triangles) and not len(previous.spheres) and not shared
         else:
             tri_material, triangles, spheres, sphere_material = mesh_zero(items, layout)
+            materials0 = (
+                np.concatenate(tri_material) if tri_material else np.zeros(0, np.int32),
+                np.array(sphere_material, np.int32),
+            )
             empty = not triangles and not spheres and not shared
         if empty:
             if not self.allow_empty:
@@ -294,8 +298,8 @@ class LiveScene:
             and all(a is b for a, b in zip(shared, self._shared))
         )
         arrays: dict = {
-            "tri_material": np.concatenate(tri_material) if tri_material else np.zeros(0, np.int32),
-            "sphere_material": np.array(sphere_material, np.int32),
+            "tri_material": materials0[0],
+            "sphere_material": materials0[1],
             "meshes": [m.triangles for m in shared],
             "mesh_tri_material": [m.tri_material for m in shared],
         }
