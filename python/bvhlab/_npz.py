@@ -7,6 +7,7 @@ at all (`write_npz`)."""
 from __future__ import annotations
 
 import zipfile
+import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -54,8 +55,12 @@ def read_npz(
             _check_lengths(path, headers, same_length)
             _check_total_size(path, headers, max_expansion)
             return {name: _read(path, archive, name, header) for name, header in headers.items()}
-    except zipfile.BadZipFile:
+    except zipfile.BadZipFile as e:
+        if "CRC" in str(e):  # a member read whole whose checksum does not match
+            raise SceneFileError(f"{path} is damaged ({e})") from None
         raise SceneFileError(f"{path} is not an .npz file (not a zip archive, or a truncated one)") from None
+    except zlib.error as e:  # a member's compressed data damaged
+        raise SceneFileError(f"{path} is damaged (its compressed data cannot be read: {e})") from None
     except (OSError, EOFError, zipfile.LargeZipFile, NotImplementedError) as e:
         if isinstance(e, (FileNotFoundError, PermissionError)):
             raise

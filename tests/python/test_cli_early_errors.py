@@ -114,6 +114,26 @@ def test_scene_load_refuses_a_fifo_without_hanging(tmp_path):
     )
 
 
+def test_tree_load_refuses_a_fifo_without_hanging(tmp_path):
+    """load_bvh read a FIFO whole (and `bvhlab inspect --tree FIFO` waited with it) until a writer came."""
+    fifo = tmp_path / "t.bvhtree"
+    os.mkfifo(fifo)
+    done = run_python(
+        f"""
+        import numpy as np
+        import bvhlab
+        try:
+            bvhlab.load_bvh({str(fifo)!r}, np.zeros((1, 3, 3), np.float32))
+        except ValueError as e:
+            print(type(e).__name__, e)
+        """,
+        timeout=30,
+    )
+    assert (
+        done.stdout.strip() == f"TreeFileError {fifo} is not a regular file (a FIFO, device or socket), not a tree file"
+    )
+
+
 def test_compare_refuses_a_bad_method_setting_before_any_work(tmp_path):
     """`--methods sah1` was refused only after the scene was loaded and the measurement started
     ("bins must be between 2 and 256, got 1"): now by argparse, with build's own message."""

@@ -188,6 +188,37 @@ def test_load_checks_sizes_before_reading_data(tmp_path):
         bvhlab.Scene.load(small)
 
 
+def test_load_names_a_damaged_member_as_damaged(tmp_path):
+    """A member's compressed data damaged raised zlib.error out of Scene.load (the CLI printed a
+    traceback); a member whose checksum does not match was called "not a zip archive"."""
+    import struct
+    import zipfile
+
+    from bvhlab.scene import SceneFileError
+
+    path = tmp_path / "s.npz"
+    bvhlab.Scene(triangles=procedural.random_triangles(50)).save(path)
+    data = path.read_bytes()
+    with zipfile.ZipFile(path) as archive:
+        info = archive.getinfo("triangles.npy")
+    name_len, extra_len = struct.unpack_from("<HH", data, info.header_offset + 26)  # its local header's
+    start = info.header_offset + 30 + name_len + extra_len  # the member's data
+    deflated = bytearray(data)
+    for k in range(8):
+        deflated[start + 8 + k] ^= 0xFF
+    crc = bytearray(data)
+    for entry in range(data.index(b"PK\x01\x02"), len(data)):  # the central entry of triangles.npy
+        if data.startswith(b"PK\x01\x02", entry) and b"triangles.npy" in data[entry + 46 : entry + 60]:
+            crc[entry + 16] ^= 0xFF  # its CRC-32 field
+            break
+    assert crc != data
+    for damaged, problem in ((deflated, "is damaged"), (crc, r"is damaged \(Bad CRC-32")):
+        path.write_bytes(bytes(damaged))
+        with pytest.raises(SceneFileError, match=problem) as caught:
+            bvhlab.Scene.load(path)
+        assert str(path) in str(caught.value)
+
+
 def test_save_writes_exactly_the_path_given(tmp_path):
     """Issue 8.10: save(dir) wrote dir.npz, save('x.txt') wrote x.txt.npz, silently."""
     from bvhlab._checks import OutputPathError
