@@ -110,8 +110,9 @@ std::uint32_t work_cap(const RenderScene& scene, const RenderSettings& settings,
 }
 
 std::string incomplete_message(std::uint64_t pixels, std::uint64_t cap) {
-    return std::to_string(pixels) + " pixel(s) did not finish within " + std::to_string(cap) +
-           " tracer steps (max_steps_per_pixel); no image is returned";
+    // "at least": the render stops once a pixel fails, so the others were never all traced
+    return "at least " + std::to_string(pixels) + " pixel(s) did not finish within " + std::to_string(cap) +
+           " tracer steps (max_steps_per_pixel; the render stops at the first); no image is returned";
 }
 
 }  // namespace bvhlab
