@@ -50,17 +50,24 @@ nb::dict py_node_data(const PyBvh& self, unsigned threads) {
 
 using Point = std::array<float, 3>;
 
+/// `camera_of`: the render scene whose camera rays the record walks as (passing by what they do
+/// not see: hidden_from_camera); none: every primitive is seen.
 nb::dict py_trace_ray(const PyBvh& self, Point origin, Point direction, float tmin, float tmax,
-                      const std::string& traversal) {
+                      const std::string& traversal, const PyRenderScene* camera_of) {
     const Traversal mode = parse_traversal(traversal);
     TreePtr tree = self.current();
     require_geometry(tree->bvh, "trace_ray");
     Ray ray{{origin[0], origin[1], origin[2]}, {direction[0], direction[1], direction[2]}, tmin, tmax};
+    const HiddenPrims hidden = camera_of ? hidden_from_camera(camera_of->scene) : HiddenPrims{};
+    if (hidden && mode == Traversal::Wide)
+        throw std::invalid_argument("trace_ray: the wide walk does not pass hidden primitives by");
+    if (camera_of && camera_of->tree.get() != tree.get())
+        throw std::invalid_argument("trace_ray: the render scene is of another version of the tree");
     TraversalRecord r;
     {
         nb::gil_scoped_release release;
         r = mode == Traversal::Wide ? record_wide_traversal(tree->bvh, tree->wide(), tree->wide_names(), ray)
-                                    : record_traversal(tree->bvh, ray, mode);
+                                    : record_traversal(tree->bvh, ray, mode, hidden);
     }
     nb::dict out = record_dict(std::move(r), tree->bvh.refs.data());
     out["revision"] = tree->revision;
@@ -100,7 +107,9 @@ void bind_inspect(nb::module_& m) {
     bvh.def("node_data", &py_node_data, "threads"_a,
             "Every node's data (node_data.h) as a dict of arrays, plus sah_cost and epo_cost.");
     bvh.def("trace_ray", &py_trace_ray, "origin"_a, "direction"_a, "tmin"_a, "tmax"_a, "traversal"_a,
-            "One ray's traversal, recorded by the traversal itself (ray_record.h), as a dict.");
+            "camera_of"_a = nb::none(),
+            "One ray's traversal, recorded by the traversal itself (ray_record.h), as a dict; with camera_of "
+            "(a RenderScene of this tree), passing by the primitives its camera rays do not see.");
     m.attr("NODE_BYTES") = sizeof(BvhNode);
     m.def("restore_bvh", &py_restore, "nodes"_a.noconvert(), "refs"_a.noconvert(), "triangles"_a.noconvert(),
           "spheres"_a.noconvert().none(), "config"_a, "build_ms"_a, "geometry_fingerprint"_a,

@@ -22,8 +22,9 @@
 #include "py_boxes.h"
 #include "py_bvh.h"
 #include "py_cancel.h"
-#include "py_record.h"
 #include "py_occluded.h"
+#include "py_record.h"
+#include "py_render_scene.h"
 #include "py_two_level.h"
 
 namespace nb = nanobind;
@@ -97,8 +98,11 @@ using Point = std::array<float, 3>;
 /// One ray's two-level walk (two_level_record.h) as a dict: "tlas" (its record, whose primitives
 /// are the instances entered), "blas" (a record per instance entered), the hit and its instance.
 nb::dict py_trace_ray(const PyTwoLevel& self, Point origin, Point direction, float tmin, float tmax,
-                      const std::string& traversal) {
+                      const std::string& traversal, const PyRenderScene* camera_of) {
     const Traversal mode = parse_traversal(traversal);
+    const HiddenPrims hidden = camera_of ? hidden_from_camera(camera_of->scene) : HiddenPrims{};
+    if (camera_of && (camera_of->tlas != self.shared_tlas() || camera_of->meshes != self.meshes()))
+        throw std::invalid_argument("trace_ray: the render scene is of another two-level scene");
     Ray ray{{origin[0], origin[1], origin[2]}, {direction[0], direction[1], direction[2]}, tmin, tmax};
     TwoLevelRecord r;
     {
@@ -106,7 +110,7 @@ nb::dict py_trace_ray(const PyTwoLevel& self, Point origin, Point direction, flo
         std::vector<const WideNames*> names;
         if (mode == Traversal::Wide)
             for (const TreePtr& m : self.meshes()) names.push_back(&m->wide_names());
-        r = record_two_level(self.view(mode), ray, mode, names);
+        r = record_two_level(self.view(mode), ray, mode, names, hidden);
     }
     nb::dict out;
     const bool miss = r.hit.hit.ref == kNoHit;
@@ -194,7 +198,9 @@ void bind_tlas(nb::module_& m) {
              "u"_a.noconvert(), "v"_a.noconvert(), "visited"_a.noconvert().none(), "instance"_a.noconvert())
         .def("tlas_node_data", &py_tlas_node_data, "The TLAS's node data as a dict (Bvh.node_data's, EPO 0).")
         .def("trace_ray", &py_trace_ray, "origin"_a, "direction"_a, "tmin"_a, "tmax"_a, "traversal"_a,
-             "One ray's walk through both levels, recorded by the walk itself (two_level_record.h), as a dict.")
+             "camera_of"_a = nb::none(),
+             "One ray's walk through both levels, recorded by the walk itself (two_level_record.h), as a dict; "
+             "with camera_of (a RenderScene of this scene), passing by the primitives its camera rays do not see.")
         .def("occluded", &py_occluded, "origins"_a.noconvert(), "directions"_a.noconvert(), "tmin"_a, "tmax"_a,
              "tmax_of"_a.noconvert().none(), "traversal"_a, "threads"_a, "out"_a.noconvert());
     m.def("build_two_level", &build_two_level, "meshes"_a, "mesh_of"_a.noconvert(), "transforms"_a.noconvert(),

@@ -198,6 +198,47 @@ def test_pixel_records_of_a_two_level_scene_are_the_tracers_counters(instanced_s
             assert rec.nodes_visited == s["box_tests"]
 
 
+@pytest.mark.parametrize("traversal", ["stack", "stackless"])
+def test_pixel_records_of_a_two_level_scene_pass_hidden_surfaces_by(instanced_scene, traversal):  # noqa: F811
+    """Every third triangle of each mesh made hidden from camera rays (a material of their own):
+    the record's BLAS walks pass them by as the tracer does, so its counters are still the
+    tracer's at every pixel, and its hit is never a hidden triangle."""
+    import dataclasses
+    import warnings
+
+    from bvhlab.inspect.ray_record import trace_pixel
+
+    materials = [bvhlab.Material(), bvhlab.Material((1, 0, 0), hidden_from=bvhlab.Rays.CAMERA)]
+    hidden_of = [(np.arange(len(instanced_scene.mesh_triangles(k))) % 3 == 0).astype(np.int32) for k in (0, 1)]
+    scene = dataclasses.replace(
+        instanced_scene, materials=materials, tri_material=hidden_of[0], mesh_tri_material=[hidden_of[1]]
+    )
+    tree = bvhlab.build(scene)
+    w, h = 32, 24
+    options = bvhlab.RenderOptions(traversal=traversal, samples_per_axis=1, traversal_counters=True)
+    job = bvhlab.Renderer("cpu").start(scene, tree, w, h, options=options)
+    job.run()
+    counters = job.result(counters=True).counters
+    plain = bvhlab.Renderer("cpu").start(instanced_scene, bvhlab.build(instanced_scene), w, h, options=options)
+    plain.run()
+    assert (plain.result(counters=True).counters != counters).any(axis=-1).sum() > 20, "the hiding changes the walks"
+    mesh_of, _ = tree.instances
+    hits = 0
+    for y in range(h):
+        for x in range(w):
+            with warnings.catch_warnings():
+                warnings.simplefilter("error")
+                rec = trace_pixel(scene, tree, x, y, width=w, height=h, options=options)
+            s = rec.summary()
+            closer = sum(int(b.prim_closer.sum()) for b in rec.blas)
+            got = (s["box_tests"], s["box_hits"], s["prim_tests"], closer, s["instances_entered"])
+            assert got == tuple(counters[y, x].tolist()), (x, y, got, counters[y, x])
+            if rec.instance >= 0:
+                hits += 1
+                assert not hidden_of[int(mesh_of[rec.instance])][rec.prim], (x, y)
+    assert hits > 40, "pixels that hit something"
+
+
 def test_cli_inspects_a_pixel_of_an_instanced_scene(instanced_scene, trees, tmp_path, capsys):  # noqa: F811
     """`bvhlab inspect SCENE --pixel X,Y` on a scene file with instances: the pixel's walk through
     both levels, its box tests the CPU tracer's cost there."""

@@ -158,42 +158,62 @@ def test_bad_requests_are_refused():
         trace_pixel(scene, bvh, 24, 0, width=24, height=16)
     with pytest.raises(ValueError, match="sample"):
         trace_pixel(scene, bvh, 0, 0, width=24, height=16, sample=1)
+    from bvhlab._render_scene import SceneCache
+
+    other = bvhlab.build(scene)  # a render scene of another tree cannot say what this one's rays see
+    with pytest.raises(ValueError, match="another version of the tree"):
+        bvh._core.trace_ray((0, 0, 0), (1, 0, 0), 0.0, np.inf, "stack", SceneCache().get(scene, other))
 
 
-def test_pixels_of_a_surface_hidden_from_camera_rays_are_said_to_differ():
-    """The Whitted scene's spheres hidden from camera rays: the tracer passes them by and its cost
-    there is not the record's (which walks to the closest surface, a hidden sphere), and
-    trace_pixel says so; the scene without the hiding gets no warning and the tracer's cost."""
+@pytest.mark.parametrize("traversal", ["stack", "stackless"])
+def test_pixel_records_pass_surfaces_hidden_from_camera_rays_by(traversal):
+    """The Whitted scene's spheres hidden from camera rays: the tracer passes them by, and so does the
+    pixel's record (before, it walked to the hidden sphere and said so with a warning): its box
+    tests, box hits, primitive tests and hits are the tracer's counters at every pixel, where
+    the hiding changed them, and its hit is the closest of the triangles alone (a tree without the
+    spheres). The wide walk's record still walks to the closest surface, and warns."""
     import dataclasses
     import warnings
 
     scene = showcase.whitted()
     bvh = bvhlab.build(scene, max_leaf_size=2)
     w, h = 32, 24
-    options = bvhlab.RenderOptions(samples_per_axis=1)
+    options = bvhlab.RenderOptions(traversal=traversal, samples_per_axis=1, traversal_counters=True)
 
-    def costs():
+    def counters():
         job = bvhlab.Renderer("cpu").start(scene, bvh, w, h, options=options)
         job.run()
-        return job.result(color=False, depth=False).cost
+        return job.result(color=False, depth=False, counters=True).counters
 
-    before = costs()
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")  # no warning without the hiding
-        plain = {(x, y): trace_pixel(scene, bvh, x, y, width=w, height=h, options=options) for x, y in _grid(w, h)}
-    assert all(rec.box_tests == before[y, x] for (x, y), rec in plain.items())
+    before = counters()
+    spheres_only = set(scene.sphere_material.tolist()) - set(scene.tri_material.tolist())
+    assert spheres_only, "materials only the spheres use"
     scene.materials = [
-        dataclasses.replace(m, hidden_from=bvhlab.Rays.CAMERA) if k in set(scene.sphere_material.tolist()) else m
+        dataclasses.replace(m, hidden_from=bvhlab.Rays.CAMERA) if k in spheres_only else m
         for k, m in enumerate(scene.materials)
     ]
-    after = costs()
-    records = {}
+    after = counters()
+    triangles_alone = bvhlab.build(scene.triangles)
+    changed = 0
     for x, y in _grid(w, h):
-        with pytest.warns(HiddenSurfaceWarning, match="hidden from camera rays"):
-            records[x, y] = trace_pixel(scene, bvh, x, y, width=w, height=h, options=options)
-    assert all(records[xy].box_tests == plain[xy].box_tests for xy in records)  # the record walks as before
-    differ = [(x, y) for (x, y), rec in records.items() if rec.box_tests != after[y, x]]
-    assert differ, "the hidden spheres should change the tracer's cost somewhere"
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # no HiddenSurfaceWarning: the record passes them by
+            rec = trace_pixel(scene, bvh, x, y, width=w, height=h, options=options)
+        assert _counted(rec) == after[y, x].tolist(), (x, y)
+        changed += after[y, x].tolist() != before[y, x].tolist()
+        hit = triangles_alone.intersect(np.float32([rec.origin]), np.float32([rec.direction]), tmin=rec.tmin)
+        assert (rec.prim, rec.kind) == (hit["prim"][0], 0 if hit["prim"][0] >= 0 else rec.kind), (x, y)
+        assert rec.t == hit["t"][0], (x, y)
+    assert changed > 10, "the hidden spheres should change the tracer's counters at many pixels"
+    wide = dataclasses.replace(options, traversal="wide", traversal_counters=False)
+    with pytest.warns(HiddenSurfaceWarning, match="wide walk"):
+        trace_pixel(scene, bvh, 16, 12, width=w, height=h, options=wide)
+
+
+def _counted(rec) -> list:
+    """The tracer's five counters of a flat tree's record: box tests, box hits, primitive tests,
+    primitives that became the closest hit, instances entered (none)."""
+    return [rec.box_tests, rec.box_hits, rec.prim_tests, int(rec.prim_closer.sum()), 0]
 
 
 def _grid(w: int, h: int):

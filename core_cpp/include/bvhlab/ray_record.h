@@ -2,6 +2,7 @@
 // order and whether each was hit, the primitives it tested, and where its closest hit lies.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <unordered_map>
 #include <vector>
 
@@ -34,9 +35,15 @@ struct TraversalRecord {
     std::vector<std::uint32_t> box_wide_step;
 };
 
-/// Records the traversal of `ray` (Stack or Stackless; the wide walk is record_wide_traversal).
-/// The ray is checked and scaled as intersect_batch does (std::invalid_argument for a ray it refuses).
-TraversalRecord record_traversal(const Bvh& bvh, Ray ray, Traversal mode);
+/// The primitives a recorded walk passes by as if they were not there, as the tracer passes a
+/// surface whose material hides from its rays (Material.hidden_from; traverse.glsl `sees`):
+/// hides(mesh, ref) for primitive `ref` of mesh `mesh`'s tree (0 for a flat tree). Empty: none.
+using HiddenPrims = std::function<bool(std::uint32_t mesh, std::uint32_t ref)>;
+
+/// Records the traversal of `ray` (Stack or Stackless; the wide walk is record_wide_traversal),
+/// passing by the primitives `hidden` names. The ray is checked and scaled as intersect_batch
+/// does (std::invalid_argument for a ray it refuses).
+TraversalRecord record_traversal(const Bvh& bvh, Ray ray, Traversal mode, const HiddenPrims& hidden = {});
 
 /// Which binary node each node and leaf of a wide tree (wide_bvh.h) stands for, by line: a wide
 /// node's line, or a leaf's first packet's. A wide node stands for the binary node it was made
@@ -57,8 +64,10 @@ WideNames name_wide_nodes(const Bvh& bvh, const WideBvh& wide);
 TraversalRecord record_wide_traversal(const Bvh& bvh, const WideBvh& wide, const WideNames& names, Ray ray);
 
 namespace detail {
-/// intersect() with every box and primitive test reported to `record` (traverse.cpp).
-Hit intersect_recorded(const Bvh& bvh, const Ray& ray, Traversal mode, TraversalRecord& record);
+/// intersect() with every box and primitive test reported to `record` (traverse.cpp); a primitive
+/// `hidden` names (as primitive of mesh `mesh`) is tested but never taken as the hit.
+Hit intersect_recorded(const Bvh& bvh, const Ray& ray, Traversal mode, TraversalRecord& record,
+                       const HiddenPrims& hidden = {}, std::uint32_t mesh = 0);
 /// intersect_wide() recorded into `record` (wide_record.cpp); the ray already scaled, t as the walk
 /// returns it.
 Hit intersect_wide_recorded(const Bvh& bvh, const WideBvh& wide, const WideNames& names, const Ray& ray,

@@ -30,9 +30,11 @@ struct TwoLevelRecord {
 
 /// Records the walk of `ray` (checked and scaled as intersect_batch_two_level does) through a
 /// scene check_two_level accepts. Traversal::Wide needs `wide_names[b]` (name_wide_nodes of BLAS
-/// b's wide tree) for every BLAS b; the other traversals ignore it.
+/// b's wide tree) for every BLAS b; the other traversals ignore it. The BLAS walks pass by the
+/// primitives `hidden` names (its mesh: the BLAS's index); not with Traversal::Wide
+/// (std::invalid_argument).
 TwoLevelRecord record_two_level(const TwoLevel& scene, Ray ray, Traversal mode,
-                                const std::vector<const WideNames*>& wide_names = {});
+                                const std::vector<const WideNames*>& wide_names = {}, const HiddenPrims& hidden = {});
 
 /// What the two-level walk reports when recorded (traverse_two_level.cpp calls it).
 class TwoLevelRecorder {

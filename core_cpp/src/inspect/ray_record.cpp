@@ -25,11 +25,11 @@ TraversalRecord recorded(Ray ray, Walk&& walk) {
 
 }  // namespace
 
-TraversalRecord record_traversal(const Bvh& bvh, Ray ray, Traversal mode) {
+TraversalRecord record_traversal(const Bvh& bvh, Ray ray, Traversal mode, const HiddenPrims& hidden) {
     if (mode == Traversal::Wide)
         throw std::invalid_argument("record_traversal: the wide walk is record_wide_traversal");
     return recorded(ray, [&](const Ray& scaled, TraversalRecord& record) {
-        const Hit hit = detail::intersect_recorded(bvh, scaled, mode, record);
+        const Hit hit = detail::intersect_recorded(bvh, scaled, mode, record, hidden);
         record.nodes_visited = std::uint32_t(record.box_nodes.size());
         return hit;
     });

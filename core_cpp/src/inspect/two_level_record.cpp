@@ -13,8 +13,9 @@ namespace {
 
 class Recorder final : public TwoLevelRecorder {
 public:
-    Recorder(const TwoLevel& scene, const std::vector<const WideNames*>& names, TwoLevelRecord& r)
-        : scene_(scene), names_(names), r_(r) {}
+    Recorder(const TwoLevel& scene, const std::vector<const WideNames*>& names, const HiddenPrims& hidden,
+             TwoLevelRecord& r)
+        : scene_(scene), names_(names), hidden_(hidden), r_(r) {}
 
     void box(std::uint32_t node, bool entered) override {
         r_.tlas.box_nodes.push_back(node), r_.tlas.box_hit.push_back(entered);
@@ -30,7 +31,7 @@ public:
         if (mode == Traversal::Wide) {
             h = detail::intersect_wide_recorded(*blas.bvh, *blas.wide, names(index), ray, b);
         } else {
-            h = detail::intersect_recorded(*blas.bvh, ray, mode, b);
+            h = detail::intersect_recorded(*blas.bvh, ray, mode, b, hidden_, scene_.tlas->instances[index].blas);
             b.nodes_visited = std::uint32_t(b.box_nodes.size());
         }
         *visited = b.nodes_visited;
@@ -57,19 +58,22 @@ private:
 
     const TwoLevel& scene_;
     const std::vector<const WideNames*>& names_;
+    const HiddenPrims& hidden_;
     TwoLevelRecord& r_;
 };
 
 }  // namespace
 
 TwoLevelRecord record_two_level(const TwoLevel& scene, Ray ray, Traversal mode,
-                                const std::vector<const WideNames*>& wide_names) {
+                                const std::vector<const WideNames*>& wide_names, const HiddenPrims& hidden) {
     check_two_level(scene, mode);
+    if (hidden && mode == Traversal::Wide)
+        throw std::invalid_argument("record_two_level: the wide walk does not pass hidden primitives by");
     const float origin[3] = {ray.origin.x, ray.origin.y, ray.origin.z}, dir[3] = {ray.dir.x, ray.dir.y, ray.dir.z};
     check_rays(RayBatch{origin, dir, 1, ray.tmin, ray.tmax});  // the checks and scaling of the batch
     const float t_scale = scale_ray(ray);
     TwoLevelRecord record;
-    Recorder recorder(scene, wide_names, record);
+    Recorder recorder(scene, wide_names, hidden, record);
     record.hit = detail::intersect_two_level_recorded(scene, ray, mode, recorder, &record.nodes_visited);
     record.tlas.nodes_visited = std::uint32_t(record.tlas.box_nodes.size());
     record.hit.hit.t *= t_scale;

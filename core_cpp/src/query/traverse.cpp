@@ -18,11 +18,17 @@ namespace {
 /// What intersect() reports of its steps: nothing (every query but the inspector's record; it
 /// compiles to the code it was before), or each test into a TraversalRecord (ray_record.h).
 struct NoRecord {
+    static constexpr bool kHides = false;
     void box(std::uint32_t, bool) {}
     void prim(std::uint32_t, std::uint32_t, bool) {}
+    bool hides(std::uint32_t) const { return false; }
 };
 struct Recorder {
+    static constexpr bool kHides = true;
     TraversalRecord& r;
+    const HiddenPrims& hidden;
+    std::uint32_t mesh;
+    bool hides(std::uint32_t ref) const { return hidden && hidden(mesh, ref); }
     void box(std::uint32_t node, bool hit) { r.box_nodes.push_back(node), r.box_hit.push_back(hit); }
     void prim(std::uint32_t leaf, std::uint32_t slot, bool closer) {
         r.prim_slots.push_back(slot), r.prim_leaf.push_back(leaf), r.prim_closer.push_back(closer);
@@ -35,9 +41,16 @@ template <class Record>
 void test_leaf(const Bvh& bvh, const BvhNode& n, const RayQuery& q, Hit& hit, Record& record) {
     const auto i = std::uint32_t(&n - bvh.nodes.data());
     for (std::uint32_t k = n.index, end = n.index + leaf_count(n); k < end; ++k) {
-        const bool closer = hit_prim(bvh.prims[k], q, hit);
-        if (closer) hit.slot = k;
-        record.prim(i, k, closer);
+        if constexpr (Record::kHides) {  // a hidden primitive's hit is not taken (traverse.glsl visit_primitive)
+            Hit tried = hit;
+            const bool closer = hit_prim(bvh.prims[k], q, tried) && !record.hides(bvh.prims[k].ref);
+            if (closer) hit = tried, hit.slot = k;
+            record.prim(i, k, closer);
+        } else {
+            const bool closer = hit_prim(bvh.prims[k], q, hit);
+            if (closer) hit.slot = k;
+            record.prim(i, k, closer);
+        }
     }
 }
 
@@ -157,8 +170,9 @@ Hit intersect(const Bvh& bvh, const Ray& ray, Traversal mode, std::uint32_t* nod
     return intersect_with(bvh, ray, mode, nodes_visited, none);
 }
 
-Hit detail::intersect_recorded(const Bvh& bvh, const Ray& ray, Traversal mode, TraversalRecord& record) {
-    Recorder recorder{record};
+Hit detail::intersect_recorded(const Bvh& bvh, const Ray& ray, Traversal mode, TraversalRecord& record,
+                               const HiddenPrims& hidden, std::uint32_t mesh) {
+    Recorder recorder{record, hidden, mesh};
     return intersect_with(bvh, ray, mode, nullptr, recorder);
 }
 

@@ -20,9 +20,10 @@ PIXEL_TRAVERSALS = ("stack", "stackless")
 
 
 class HiddenSurfaceWarning(UserWarning):
-    """trace_pixel on a scene with surfaces hidden from camera rays: the record walks the tree to
-    the closest surface, the tracer passes a hidden one by and goes on (its hit, box tests and
-    counters can differ from the record's at the pixels such a surface covers)."""
+    """trace_pixel of the wide walk on a scene with surfaces hidden from camera rays: its record
+    walks the tree to the closest surface, the tracer passes a hidden one by and goes on (its hit,
+    box tests and counters can differ from the record's at the pixels such a surface covers). The
+    stack and stackless records pass them by as the tracer does."""
 
 
 @dataclass(frozen=True)
@@ -114,13 +115,17 @@ class RayRecord:
         }
 
 
-def record(core_bvh, origin, direction, tmin: float, tmax: float, traversal: str, pixel=None) -> RayRecord:
-    """The record of one ray through `core_bvh` (a `_core.Bvh`); types checked here, values in C++."""
+def record(
+    core_bvh, origin, direction, tmin: float, tmax: float, traversal: str, pixel=None, camera_of=None
+) -> RayRecord:
+    """The record of one ray through `core_bvh` (a `_core.Bvh`); types checked here, values in C++.
+    `camera_of`: a `_core.RenderScene` of the tree whose camera rays the record walks as (the
+    primitives they do not see passed by, as the tracer passes them)."""
     origin = _point("origin", origin)
     direction = _point("direction", direction)
     _checks.choice("traversal", traversal, RECORD_TRAVERSALS)
     tmin, tmax = _checks.real("tmin", tmin), _checks.real("tmax", tmax, 0.0)
-    d = core_bvh.trace_ray(origin, direction, tmin, tmax, traversal)
+    d = core_bvh.trace_ray(origin, direction, tmin, tmax, traversal, camera_of)
     d.pop("revision")
     return _from_core(d, origin, direction, tmin, tmax, traversal, pixel)
 
@@ -236,13 +241,15 @@ class InstancedRayRecord:
 _NO_NODE = 0xFFFFFFFF
 
 
-def record_instanced(core_two_level, origin, direction, tmin: float, tmax: float, traversal: str, pixel=None):
-    """The record of one ray through `core_two_level` (a `_core.TwoLevel`)."""
+def record_instanced(
+    core_two_level, origin, direction, tmin: float, tmax: float, traversal: str, pixel=None, camera_of=None
+):
+    """The record of one ray through `core_two_level` (a `_core.TwoLevel`); `camera_of` as record's."""
     origin = _point("origin", origin)
     direction = _point("direction", direction)
     _checks.choice("traversal", traversal, RECORD_TRAVERSALS)
     tmin, tmax = _checks.real("tmin", tmin), _checks.real("tmax", tmax, 0.0)
-    d = core_two_level.trace_ray(origin, direction, tmin, tmax, traversal)
+    d = core_two_level.trace_ray(origin, direction, tmin, tmax, traversal, camera_of)
     ray = (origin, direction, tmin, tmax, traversal)
     blas = tuple(_from_core(b, *ray) for b in d["blas"])
     return InstancedRayRecord(
@@ -262,18 +269,21 @@ def trace_pixel(scene, bvh, x: int, y: int, *, width: int, height: int, options=
     InstancedRayRecord): the ray the tracer traces there (its camera code and clipping; the
     overlay's lines are not drawn), walked by the traversal of `options.traversal` (stack or
     stackless: its box tests are the pixel's cost at one sample; wide: each wide node's children,
-    where the render's cost counts 8 a wide node, its empty slots too). A scene with surfaces
-    hidden from camera rays gets a HiddenSurfaceWarning: the record walks to the closest surface,
-    hidden or not, where the tracer passes a hidden one by."""
+    where the render's cost counts 8 a wide node, its empty slots too). Surfaces hidden from camera
+    rays (Material.hidden_from) are passed by as the tracer passes them: tested, never the hit. The
+    wide walk does not pass them by (the tracer's wide walk leaves such a ray to the stack walk): a
+    scene with them gets a HiddenSurfaceWarning there, its record walking to the closest surface."""
     from .._render_scene import SceneCache
     from .._render_settings import render_settings
     from ..render_options import options_from
 
     options = options_from(options, {}).for_backend(cpu=True, counts_shown=True)  # "auto": a record is counts
-    if _hidden_from_camera(scene):
+    hidden = _hidden_from_camera(scene)
+    if hidden and options.traversal == "wide":
         warnings.warn(
-            "the scene has surfaces hidden from camera rays, which the tracer passes by and this record "
-            "does not: at the pixels they cover its hit and box tests are the tree's closest surface's",
+            "the scene has surfaces hidden from camera rays, which the tracer passes by and the wide walk's "
+            "record does not: at the pixels they cover its hit and box tests are the tree's closest surface's "
+            "(a stack or stackless record passes them by)",
             HiddenSurfaceWarning,
             stacklevel=2,
         )
@@ -283,9 +293,11 @@ def trace_pixel(scene, bvh, x: int, y: int, *, width: int, height: int, options=
     y = _checks.integer("y", y, 0, 2**32 - 1)
     sample = _checks.integer("sample", sample, 0, 2**32 - 1)
     origin, direction, tmin, tmax = _core.pixel_ray(render_scene, settings, x, y, sample)
+    camera_of = render_scene if hidden and options.traversal != "wide" else None
+    ray = (origin, direction, tmin, tmax, options.traversal)
     if isinstance(bvh._core, _core.TwoLevel):
-        return record_instanced(bvh._core, origin, direction, tmin, tmax, options.traversal, pixel=(x, y, sample))
-    return record(bvh._core, origin, direction, tmin, tmax, options.traversal, pixel=(x, y, sample))
+        return record_instanced(bvh._core, *ray, pixel=(x, y, sample), camera_of=camera_of)
+    return record(bvh._core, *ray, pixel=(x, y, sample), camera_of=camera_of)
 
 
 def _hidden_from_camera(scene) -> bool:
