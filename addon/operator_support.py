@@ -59,11 +59,14 @@ def export_scene(context, require_camera: bool):
     two-level tree, as F12 and the viewport do (the one cache of trees, trees.py)."""
     from bvhlab.blender import export_scene as export
 
+    from .engine.settings import fixed_light_distance
+
     return export(
         context,
         scope=context.scene.bvhlab.scope,
         depsgraph=context.evaluated_depsgraph_get(),
         require_camera=require_camera,
+        light_distance=fixed_light_distance(context.scene),
     )
 
 

@@ -196,6 +196,18 @@ class BVHLAB_PG_settings(bpy.types.PropertyGroup):
         "triangle count); moving an instance only rebuilds the TLAS",
     )
 
+    light_distance: FloatProperty(
+        name="Light Distance",
+        min=0.0,
+        default=0.0,
+        soft_max=1000.0,
+        subtype="DISTANCE",
+        update=_redraw,
+        description="The distance a point light's watts are calibrated by (intensity = W / (4π² d²)). 0: "
+        "measured, the median distance from the light to the scene, once per render job at its first frame "
+        "and once per viewport session; set it (Measure takes the current frame's) so that frames rendered "
+        "in separate jobs, such as a render farm's chunks, are lit alike",
+    )
     render_bounces: IntProperty(
         name="Bounces",
         min=0,

@@ -12,9 +12,10 @@ import bpy
 from . import panels
 from .blender_panels import engine_panels
 from .engine import ENGINE_ID, BVHLAB_RE_whitted
+from .light_distance import BVHLAB_OT_measure_light_distance
 from .operators import BVHLAB_OT_viewport_cancel
 
-classes = (BVHLAB_RE_whitted, BVHLAB_OT_viewport_cancel, *panels.classes)
+classes = (BVHLAB_RE_whitted, BVHLAB_OT_viewport_cancel, BVHLAB_OT_measure_light_distance, *panels.classes)
 _keymaps: list = []
 
 

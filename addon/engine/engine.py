@@ -13,6 +13,7 @@ import bpy
 
 from .. import state
 from . import passes
+from .settings import fixed_light_distance
 
 ENGINE_ID = "BVHLAB_WHITTED"
 #: How often (s) the UI thread looks for a new viewport frame to draw.
@@ -30,6 +31,7 @@ class BVHLAB_RE_whitted(bpy.types.RenderEngine):
         self._final = None
         self._viewport = None
         self._live = None
+        self._light_fixed = False  # the viewport's LiveScene is lit by the scene's fixed light distance
         self._display = None
 
     def __del__(self):
@@ -62,6 +64,11 @@ class BVHLAB_RE_whitted(bpy.types.RenderEngine):
         if self._viewport is None:
             self._viewport, self._live = ViewportSession(), LiveScene("visible", require_camera=False, allow_empty=True)
             _watch_for_frames(self._viewport)
+        fixed = fixed_light_distance(context.scene)
+        if fixed is not None:
+            self._live.light_distance, self._light_fixed = fixed, True
+        elif self._light_fixed:  # back to measured: measured again at this sync
+            self._live.light_distance, self._light_fixed = None, False
         try:
             with _quiet_export_warnings():
                 report = self._live.sync(depsgraph, context.scene, context.view_layer)

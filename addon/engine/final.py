@@ -21,7 +21,7 @@ from .. import state
 from ..trees import cache, key_of, update_config
 from . import passes
 from .border import final_frame
-from .settings import backend, final_threads
+from .settings import backend, final_threads, fixed_light_distance
 from .tracer import TraceCancelled, open_tracer
 from .unrendered import unrendered_features
 
@@ -55,11 +55,14 @@ class FinalRender:
 
     def sync(self, depsgraph) -> None:
         """Export what changed since the last frame (all of it the first time); the frames of a
-        render job are lit by its first frame's calibration of the light."""
+        render job are lit by the scene's fixed calibration of the light, else by its first
+        frame's."""
         from bvhlab.blender import ExportError, ExportWarning
 
         name = depsgraph.scene.name_full  # a linked scene of the same name is another
-        self.live.light_distance = _JOB_LIGHT.get(name)  # None: measured (Persistent Data kept the last)
+        fixed = fixed_light_distance(depsgraph.scene)
+        # None: measured (Persistent Data kept the last)
+        self.live.light_distance = fixed if fixed is not None else _JOB_LIGHT.get(name)
         self.error, self.notes = None, []
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", ExportWarning)
@@ -71,7 +74,7 @@ class FinalRender:
                 from ..operator_support import describe_error
 
                 self.error = describe_error(error)
-        if self.live.light_distance is not None:
+        if self.live.light_distance is not None and fixed is None:
             _JOB_LIGHT.setdefault(name, self.live.light_distance)
         self.notes = [str(w.message) for w in caught if issubclass(w.category, ExportWarning)]
 

@@ -18,5 +18,12 @@ def final_threads(blender_scene) -> int:
     return max(1, int(blender_scene.render.threads))
 
 
+def fixed_light_distance(blender_scene) -> float | None:
+    """The light calibration the scene fixes (BVHLAB_PG_settings.light_distance), or None where it
+    is left to be measured (0)."""
+    distance = float(blender_scene.bvhlab.light_distance)
+    return distance if distance > 0.0 else None
+
+
 def backend(blender_scene) -> str:
     return blender_scene.bvhlab.backend

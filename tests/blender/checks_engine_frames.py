@@ -102,6 +102,63 @@ def check_animation_light_is_steady(tmp_dir) -> None:
     assert got == still.light.intensity, (got, still.light.intensity)
 
 
+def check_a_fixed_light_distance_lights_every_chunk_alike(tmp_dir) -> None:
+    """A render farm renders an animation in chunks, each a render job of its own: measured at each
+    job's first frame, the light of a chunk starting at frame 3 (the ball far away) differs from
+    the light of frames 1-3 rendered in one job. Light Distance measured at frame 1 (Measure) and
+    kept in the scene: a chunk of frames 2-3 is lit as the one job lit them, and its frame 3 is
+    bvhlab.render of frame 3 exported with that distance; the sidebar's export takes it too.
+    Measure refuses a scene without a light."""
+    scene = harness.empty_scene((48, 36))
+    harness.add_camera((0, -10, 6), (0, 0, 0), lens=30)
+    lamp = harness.add_point_light((0, 0, 5))
+    harness.add_box("Floor", (0, 0, -0.05), scale=(12, 12, 0.1))
+    ball = harness.add_box("Ball", (3, 3, 0.5))
+    ball.keyframe_insert("location", frame=1)
+    ball.location = (3, 80, 0.5)
+    ball.keyframe_insert("location", frame=3)
+    use_engine(scene, backend="cpu", render_supersampling=1)
+    floor_pixel = (30, 10)  # row, column: on the floor, away from the ball's path
+
+    def chunk(first: int, last: int, name: str) -> list[np.ndarray]:
+        scene.frame_start, scene.frame_end = first, last
+        _exr_output(scene, tmp_dir / f"{name}_")
+        assert bpy.ops.render.render(animation=True) == {"FINISHED"}
+        return [_exr_rgba(p) for p in sorted(tmp_dir.glob(f"{name}_*.exr"))]
+
+    assert scene.bvhlab.light_distance == 0.0  # measured by default
+    whole = chunk(1, 3, "whole")
+    late = chunk(3, 3, "late")
+    assert len(whole) == 3 and len(late) == 1
+    lit = float(whole[0][floor_pixel][0])
+    assert lit > 0.05 and float(whole[2][floor_pixel][0]) == lit
+    assert float(late[0][floor_pixel][0]) < 0.5 * lit, "a chunk measured at its own first frame is lit otherwise"
+
+    scene.frame_set(1)
+    assert bpy.ops.bvhlab.measure_light_distance() == {"FINISHED"}
+    distance = scene.bvhlab.light_distance
+    assert distance > 0.0
+    fixed = chunk(2, 3, "fixed")
+    assert len(fixed) == 2
+    assert [float(image[floor_pixel][0]) for image in fixed] == [lit, lit]
+    scene.frame_set(3)
+    exported = export_scene(bpy.context, light_distance=distance)
+    compare_images(fixed[1], reference(scene, samples_per_axis=1, exported=exported)[0], "cpu")
+    from bvhlab.blender.light import intensity_from_watts
+
+    sidebar = harness.addon().operator_support.export_scene(bpy.context, require_camera=True)  # its Render's
+    assert sidebar.light.intensity == intensity_from_watts(1000.0, distance)
+
+    lamp.hide_render = lamp.hide_viewport = True  # no light to measure from: refused, the distance kept
+    try:
+        bpy.ops.bvhlab.measure_light_distance()
+    except RuntimeError as error:  # the operator's ERROR report
+        assert "the scene has no visible light" in str(error), error
+    else:
+        raise AssertionError("Measure did not refuse a scene without a light")
+    assert scene.bvhlab.light_distance == distance
+
+
 def check_command_line_frames(tmp_dir) -> None:
     """A real Blender binary: `blender -b moving_ball.blend -E BVHLAB_WHITTED -o ... -F OPEN_EXR -f 1
     -a` in a child process with the installed extension enabled by --addons: frame 1, then the

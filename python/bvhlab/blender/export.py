@@ -17,6 +17,7 @@ def export_scene(
     *,
     require_camera: bool = True,
     instancing: bool = True,
+    light_distance: float | None = None,
 ) -> Scene:
     """Export the evaluated scene (modifiers applied, world space) as a `bvhlab.Scene`.
 
@@ -27,6 +28,8 @@ def export_scene(
     instancing (collection, vertex, face and geometry-nodes instances, linked duplicates) becomes
     meshes stored once and instances of them (`instancing.py`; `Scene.flattened()` gives the world
     triangles); `instancing=False` places every instance's triangles into the world instead.
+    `light_distance`: the distance the light's watts are calibrated by (light.py; None: measured,
+    the median distance from the light to the exported primitives).
     Raises ExportError (a ValueError) for nothing in scope, a NaN vertex (naming the object), or no
     camera when `require_camera`. Otherwise a missing camera becomes one that frames the bounds
     and a missing light bvhlab's default light (SubstituteWarning), a missing world the default
@@ -37,6 +40,7 @@ def export_scene(
         depsgraph = view_layer.depsgraph
         depsgraph.update()  # evaluates what changed since the last update; cheap when nothing did
     live = LiveScene(scope, require_camera=require_camera, instancing=instancing)  # a first sync reads everything
+    live.light_distance = light_distance
     live.sync(depsgraph, scene, view_layer)
     assert live.scene is not None  # a sync either makes the scene or raises ExportError
     return live.scene
@@ -50,10 +54,18 @@ def export_scene_file(
     *,
     require_camera: bool = True,
     instancing: bool = True,
+    light_distance: float | None = None,
 ) -> Scene:
     """Export like `export_scene` and write the `.npz` that `bvhlab.Scene.load` and the CLI read.
     Returns the exported Scene."""
-    scene = export_scene(context_or_scene, scope, depsgraph, require_camera=require_camera, instancing=instancing)
+    scene = export_scene(
+        context_or_scene,
+        scope,
+        depsgraph,
+        require_camera=require_camera,
+        instancing=instancing,
+        light_distance=light_distance,
+    )
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     scene.save(path)

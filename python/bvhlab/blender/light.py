@@ -12,7 +12,8 @@ median keeps one object next to the light from deciding it. Blender's default 10
 7.4 m from the default cube, becomes ≈ 0.46. d is measured once and kept by whoever renders
 frame after frame (LiveScene.light_distance; an animation's frames in the add-on): measured every
 frame, a ball rolling away from a static light darkened the static floor under it 0.416 → 0.084
-over four frames.
+over four frames. The add-on's Light Distance fixes d in the scene (export_scene(light_distance=)),
+so that render jobs starting at other frames (a render farm's chunks) light alike.
 """
 
 from __future__ import annotations
@@ -62,7 +63,9 @@ def gather_light(
     position = np.array(light.matrix_world.translation, np.float64)
     measured = distance
     if measured is None and len(primitive_points):
-        measured = float(np.median(np.linalg.norm(primitive_points - position, axis=1)))
+        # a float32, as a Blender float property keeps it (the add-on's Light Distance): a distance
+        # measured and one measured, stored and read back light alike
+        measured = float(np.float32(np.median(np.linalg.norm(primitive_points - position, axis=1))))
     # nothing to measure (no geometry yet): d = 1 for now, and None kept, so the next sync measures
     intensity = intensity_from_watts(light.data.energy, 1.0 if measured is None else measured)
     return Light(tuple(position), tuple(light.data.color), intensity), measured
