@@ -18,7 +18,7 @@ def float32_array(name: str, value, trailing_shape: tuple[int, ...]) -> np.ndarr
     Wrong types and dtypes raise TypeError, wrong shapes or layouts ValueError: silently copying a
     float64 array would hide a doubling of memory and time from the caller.
     """
-    want = "(N, " + ", ".join(str(d) for d in trailing_shape) + ")"
+    want = "(" + ", ".join(["N", *map(str, trailing_shape)]) + ("," if not trailing_shape else "") + ")"
     if not isinstance(value, np.ndarray):
         raise TypeError(f"{name} must be a numpy float32 array of shape {want}, got {type(value).__name__}")
     if isinstance(value, np.ma.MaskedArray):  # its mask would be dropped: masked triangles built and hit
@@ -35,6 +35,13 @@ def float32_array(name: str, value, trailing_shape: tuple[int, ...]) -> np.ndarr
     if not value.flags.c_contiguous:
         raise ValueError(f"{name} must be C-contiguous (np.ascontiguousarray({name}) makes a copy)")
     return value
+
+
+def flag(name: str, value) -> bool:
+    """True or False (numpy's np.True_ and np.False_ too); anything else a TypeError, not truthiness."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name} must be True or False, got {value!r} ({type(value).__name__})")
+    return bool(value)
 
 
 def integer(name: str, value, lo: int, hi: int) -> int:

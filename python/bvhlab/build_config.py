@@ -6,8 +6,6 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field, fields
 
-import numpy as np
-
 from . import _checks, _core
 
 #: Split methods and axis policies as the C++ core names them (its table of methods), and the
@@ -70,9 +68,7 @@ class BuildConfig:
         c.seed = _checks.integer("seed", self.seed, 0, 2**64 - 1)
         c.sbvh_alpha = _checks.setting("sbvh_alpha", self.sbvh_alpha)
         c.sbvh_budget = _checks.setting("sbvh_budget", self.sbvh_budget)
-        if not isinstance(self.sbvh_unsplit, (bool, np.bool_)):
-            raise TypeError(f"sbvh_unsplit must be a bool, got {type(self.sbvh_unsplit).__name__}")
-        c.sbvh_unsplit = bool(self.sbvh_unsplit)
+        c.sbvh_unsplit = _checks.flag("sbvh_unsplit", self.sbvh_unsplit)
         c.threads = _checks.integer("threads", self.threads, 0, 4096)
         c.validate()
         return c

@@ -36,9 +36,7 @@ class OptimizeConfig:
         c.iterations = _checks.integer("iterations", self.iterations, 0, 2**32 - 1)
         c.time_budget_ms = _checks.setting("time_budget_ms", self.time_budget_ms)
         c.batch_fraction = _checks.setting("batch_fraction", self.batch_fraction)
-        if not isinstance(self.merge_leaves, bool):
-            raise TypeError(f"merge_leaves must be True or False, got {type(self.merge_leaves).__name__}")
-        c.merge_leaves = self.merge_leaves
+        c.merge_leaves = _checks.flag("merge_leaves", self.merge_leaves)
         c.validate()
         return c
 

@@ -32,8 +32,7 @@ def run_ray_query(
     `core.intersect`."""
     origins, directions, tmin, traversal, threads = _checked_rays(origins, directions, tmin, traversal, threads)
     tmax = _checks.real("tmax", tmax, 0.0)  # as occluded: a negative tmax is a caller's mistake, not all misses
-    if not isinstance(nodes_visited, bool):
-        raise TypeError(f"nodes_visited must be True or False, not {nodes_visited!r}")
+    nodes_visited = _checks.flag("nodes_visited", nodes_visited)
     fields = {k: v for k, v in HIT_FIELDS.items() if nodes_visited or k != "nodes_visited"}
     out = {name: np.empty(len(origins), dtype) for name, dtype in {**fields, **(extra or {})}.items()}
     # None for the counts where not asked (the wide batch may then trace camera rays as packets)
@@ -48,6 +47,8 @@ def run_occluded_query(core, origins, directions, tmin, tmax, traversal: str, th
     one per ray) from `core.occluded`. `tmax`: a number >= 0, or a float32 array of one per ray
     (which the core checks: a NaN or negative one raises ValueError naming the ray)."""
     origins, directions, tmin, traversal, threads = _checked_rays(origins, directions, tmin, traversal, threads)
+    if isinstance(tmax, np.ndarray) and tmax.ndim == 0:  # a 0-d array is a number, as np.float32(2.0) is
+        tmax = tmax.item()
     if isinstance(tmax, np.ndarray):
         tmax_of = _checks.float32_array("tmax", tmax, ())
         if len(tmax_of) != len(origins):

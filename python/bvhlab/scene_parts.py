@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import _core, defaults
+from . import _checks, _core, defaults
 
 #: Points (vertices, sphere extents, ray origins, the camera) lie within ±MAX_COORDINATE, where
 #: bvhlab's float32 ray tests cannot overflow (core_cpp/include/bvhlab/coordinate_range.h says why).
@@ -91,9 +91,7 @@ class Material:
         # finite in float32, the tracer's (1e300 was taken, then refused at render time as "NaN")
         if not (math.isfinite(self.ior) and 0 < self.ior <= float(np.finfo(np.float32).max)):
             raise ValueError(f"material ior must be a positive number within float32's range, got {self.ior}")
-        if not isinstance(self.holdout, (bool, np.bool_)):
-            raise TypeError(f"material holdout must be True or False, got {self.holdout!r}")
-        object.__setattr__(self, "holdout", bool(self.holdout))
+        object.__setattr__(self, "holdout", _checks.flag("material holdout", self.holdout))
         hidden = self.hidden_from
         if isinstance(hidden, (bool, np.bool_)) or not isinstance(hidden, (numbers.Integral, Rays)):
             raise TypeError(f"material hidden_from must be Rays flags, got {hidden!r}")
@@ -178,9 +176,7 @@ class Lens:
         object.__setattr__(self, "latitude", _reals("camera latitude", self.latitude, 2))
         object.__setattr__(self, "longitude", _reals("camera longitude", self.longitude, 2))
         object.__setattr__(self, "region", _reals("camera region", self.region, 4))
-        if not isinstance(self.mirrored, (bool, np.bool_)):
-            raise TypeError(f"camera mirrored must be a bool, got {type(self.mirrored).__name__}")
-        object.__setattr__(self, "mirrored", bool(self.mirrored))
+        object.__setattr__(self, "mirrored", _checks.flag("camera mirrored", self.mirrored))
 
     def _set_lens(self, c) -> None:
         """Copies the lens into a _core.Camera."""

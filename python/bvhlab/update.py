@@ -71,9 +71,7 @@ class UpdateConfig:
         c.top_coarse_cut_primitives = _checks.integer(
             "top_coarse_cut_primitives", self.top_coarse_cut_primitives, 0, 2**32 - 1
         )
-        if not isinstance(self.measure_fresh, bool):
-            raise TypeError(f"measure_fresh must be True or False, got {type(self.measure_fresh).__name__}")
-        c.measure_fresh = self.measure_fresh
+        c.measure_fresh = _checks.flag("measure_fresh", self.measure_fresh)
         c.validate()
         return c
 

@@ -173,5 +173,10 @@ def test_nodes_visited_only_where_asked_and_the_same_hits_either_way(knot_mesh):
             np.testing.assert_array_equal(fast[k], counted[k])
             np.testing.assert_array_equal(fast[k], stack[k])
         assert counted["nodes_visited"].sum() > len(o)  # counted: more than the root a ray
-    with pytest.raises(TypeError, match="nodes_visited"):
+    with pytest.raises(TypeError, match="nodes_visited must be True or False, got 'yes'"):
         bvh.intersect(*camera, nodes_visited="yes")
+    o, d = camera[0][:50], camera[1][:50]  # numpy's booleans are booleans (np.True_ was refused)
+    np.testing.assert_array_equal(
+        bvh.intersect(o, d, nodes_visited=np.True_)["nodes_visited"],
+        bvh.intersect(o, d, nodes_visited=True)["nodes_visited"],
+    )

@@ -120,6 +120,17 @@ def test_bad_tmax(tree_and_rays, tmax, error, match):
         bvh.occluded(o, d, tmax)
 
 
+def test_a_tmax_of_no_dimensions_is_a_number(tree_and_rays):
+    """np.array(2.0) said "tmax must have shape (N,), got ()" where np.float32(2.0) was taken."""
+    bvh, o, d = tree_and_rays
+    for tmax in (0.5, 100.0):
+        expected = bvh.occluded(o, d, tmax)
+        np.testing.assert_array_equal(bvh.occluded(o, d, np.array(tmax, np.float32)), expected)
+        np.testing.assert_array_equal(bvh.occluded(o, d, np.array(tmax)), expected)
+    with pytest.raises(ValueError, match="tmax must be at least 0"):
+        bvh.occluded(o, d, np.array(-1.0))
+
+
 def test_bad_rays_as_for_intersect(tree_and_rays):
     bvh, o, d = tree_and_rays
     with pytest.raises(ValueError, match="differ in length"):

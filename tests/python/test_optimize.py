@@ -97,8 +97,9 @@ def test_wrong_types_and_stops(small_scene, knot):
         tree.optimize(config={"iterations": 3})
     with pytest.raises(TypeError):
         tree.optimize(steps=3)
-    with pytest.raises(TypeError):
+    with pytest.raises(TypeError, match="merge_leaves must be True or False, got 1"):
         bvhlab.OptimizeConfig(merge_leaves=1)
+    assert bvhlab.OptimizeConfig(merge_leaves=np.False_).core().merge_leaves is False  # numpy's bool taken
     big = bvhlab.build(knot, method="median")
     nodes = big.nodes.copy()
     with pytest.raises(bvhlab.BuildCancelled):

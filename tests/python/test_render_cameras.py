@@ -269,7 +269,7 @@ def test_a_camera_lens_is_saved_and_loaded(tmp_path):
     assert bvhlab.Camera.from_row(row) == replace(scene.camera, mirrored=False)
     with pytest.raises(ValueError, match="mirrored flag"):
         bvhlab.Camera.from_row(row + [0.5])
-    with pytest.raises(TypeError, match="mirrored must be a bool"):
+    with pytest.raises(TypeError, match="mirrored must be True or False"):
         bvhlab.View((0, 0, 0), (0, 1, 0), mirrored="yes")
 
 

@@ -209,6 +209,29 @@ def test_a_header_field_of_the_wrong_kind_is_a_damaged_header(saved, key, value)
         bvhlab.load_bvh(path, tris, spheres)
 
 
+def test_a_header_of_infinite_or_huge_numbers_or_deep_nesting_is_a_damaged_header(saved):
+    """JSON's Infinity and numbers beyond a double raised OverflowError out of load_bvh, a header
+    nested 100,000 deep RecursionError (helper probe)."""
+    _, path, tris, spheres = saved
+    data = path.read_bytes()
+    start = len(tree_file.MAGIC) + 8
+    head_len = struct.unpack_from("<I", data, len(tree_file.MAGIC) + 4)[0]
+    header = json.loads(data[start : start + head_len])
+    heads = [
+        json.dumps({**header, "nodes": 1}).replace('"nodes": 1', '"nodes": Infinity'),
+        json.dumps({**header, "refs": 1}).replace('"refs": 1', '"refs": -Infinity'),
+        json.dumps({**header, "nodes": 1}).replace('"nodes": 1', '"nodes": 1e400'),
+        json.dumps({**header, "build_ms": 10**400}),
+        "[" * 100_000 + "]" * 100_000,
+    ]
+    for head in heads:
+        prefix = data[: len(tree_file.MAGIC) + 4] + struct.pack("<I", len(head))
+        body = prefix + head.encode() + data[start + head_len : -32]
+        path.write_bytes(body + hashlib.sha256(body).digest())
+        with pytest.raises(tree_file.TreeFileError, match="damaged header"):
+            bvhlab.load_bvh(path, tris, spheres)
+
+
 def test_a_file_of_a_scene_too_small_to_trace_is_refused(tmp_path):
     """A tree saved before `build` refused scenes under 2^-32 across (their hits were lost: the
     triangle test's products underflow) is refused on load as build refuses it. The file is the

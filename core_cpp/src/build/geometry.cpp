@@ -39,12 +39,17 @@ PrimRef sphere_ref(const GeometryView& g, std::size_t i) {
             0};
 }
 
+/// What the exact searches below say where the fast check found a bad triangle and they find none.
+constexpr const char* kChangedWhileRead =
+    "the triangles changed while they were read (another thread writing into the array during the call?)";
+
 /// Throws naming the first non-finite triangle (the slow, exact search behind the fast check).
 [[noreturn]] void throw_bad_triangle(const GeometryView& g) {
     for (std::size_t i = 0; i < g.triangle_count; ++i)
         if (!finite_floats(g.triangles + 9 * i, 9))
             throw std::invalid_argument("triangle " + std::to_string(i) + " has a NaN or infinite vertex coordinate");
-    throw std::logic_error("throw_bad_triangle: no bad triangle");
+    // the fast check saw one, this search none: the caller's arrays changed in between
+    throw std::invalid_argument(kChangedWhileRead);
 }
 
 std::string range_text() {
@@ -62,7 +67,7 @@ std::string range_text() {
                                             range_text() +
                                             ", where float32 ray tests would overflow; move or scale "
                                             "the scene nearer the origin");
-    throw std::logic_error("throw_far_triangle: no such triangle");
+    throw std::invalid_argument(kChangedWhileRead);
 }
 
 void validate_spheres(const GeometryView& g) {

@@ -144,8 +144,9 @@ def _read(path: Path) -> tuple[dict, np.ndarray, np.ndarray]:
             raise ValueError(f"build_ms is {header['build_ms']!r}, not a number")
         if not isinstance(header["config"], dict):
             raise ValueError(f"config is {header['config']!r}, not a table of settings")
-    except (ValueError, KeyError, TypeError, AttributeError) as e:
-        raise TreeFileError(f"{path} has a damaged header ({e})") from None
+    # OverflowError: int(inf), isfinite(10**400); RecursionError: a header nested 100,000 deep
+    except (ValueError, KeyError, TypeError, AttributeError, OverflowError, RecursionError) as e:
+        raise TreeFileError(f"{path} has a damaged header ({type(e).__name__}: {e})") from None
     body = start + head_len
     node_bytes = n_nodes * _core.NODE_BYTES
     if n_nodes < 0 or n_refs < 0 or len(data) - _DIGEST - body != node_bytes + 4 * n_refs:
