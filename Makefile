@@ -120,7 +120,7 @@ blender-sid-test: addon
 # Blender 5.2.2 on Python 3.14 corrupts Python's memory (a draw hook calling it, then making a dict,
 # segfaults Blender with no add-on enabled; 4.3 on Python 3.13 is fine).
 blender-sid-ui-test: addon
-	$(SID) run python3 tests/blender/ui/run_ui.py --zip dist/bvhlab.zip --out build/ui-sid --only build_cancel build_races viewport pick
+	$(SID) run python3 tests/blender/ui/run_ui.py --zip dist/bvhlab.zip --out build/ui-sid --only build_cancel build_races viewport pick undo
 blender-test: bpy313-test bpy53-test bpy50-test blender-binary-test blender-ui-test blender-sid-test blender-sid-ui-test
 
 # clang with ASan, UBSan and float-cast-overflow (GCC's -fsanitize=undefined has no float→int
