@@ -12,7 +12,7 @@ from ..operator_support import run_reported
 
 class BVHLAB_OT_measure_light_distance(bpy.types.Operator):
     """Set Light Distance to the current frame's: the median distance from the scene's light to the
-    visible primitives, which F12 measures at a render job's first frame"""
+    primitives the viewport shows (F12 measures it over what renders, at a render job's first frame)"""
 
     bl_idname = "bvhlab.measure_light_distance"
     bl_label = "Measure Light Distance"

@@ -48,9 +48,8 @@ class BVHLAB_PT_engine_tracing(_EnginePanel, bpy.types.Panel):
         col.prop(settings, "render_supersampling", text="Samples")  # n × n: its tooltip says so
         col.prop(settings, "traversal")
         col.prop(settings, "backend")
-        row = col.row(align=True)  # 0: measured at a render job's first frame (its tooltip says so)
-        row.prop(settings, "light_distance", text="Light Distance")
-        row.operator("bvhlab.measure_light_distance", text="", icon="EYEDROPPER")
+        col.prop(settings, "light_distance", text="Light")  # its distance; 0: measured (the tooltip says so)
+        col.operator("bvhlab.measure_light_distance", text="Measure Light Distance", icon="EYEDROPPER")
 
 
 class BVHLAB_PT_engine_boxes(_EnginePanel, bpy.types.Panel):

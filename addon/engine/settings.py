@@ -20,9 +20,10 @@ def final_threads(blender_scene) -> int:
 
 def fixed_light_distance(blender_scene) -> float | None:
     """The light calibration the scene fixes (BVHLAB_PG_settings.light_distance), or None where it
-    is left to be measured (0)."""
-    distance = float(blender_scene.bvhlab.light_distance)
-    return distance if distance > 0.0 else None
+    is left to be measured (0); the one reading of it, the CLI's too (bvhlab.blender.light)."""
+    from bvhlab.blender.light import saved_light_distance
+
+    return saved_light_distance(blender_scene)
 
 
 def backend(blender_scene) -> str:

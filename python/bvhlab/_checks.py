@@ -82,7 +82,10 @@ def choice(name: str, value, options: tuple[str, ...]) -> str:
 
 
 def real(name: str, value, lo: float = -math.inf, hi: float = math.inf) -> float:
-    """A real number (int or float, not bool) in [lo, hi]; NaN is rejected."""
+    """A real number (int or float, not bool; a numpy array of no dimensions too) in [lo, hi]; NaN
+    is rejected."""
+    if type(value) is np.ndarray and value.ndim == 0 and value.dtype.kind in "iuf":  # not a masked array
+        value = value.item()
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise TypeError(f"{name} must be a number, got {type(value).__name__}")
     value = float(value)

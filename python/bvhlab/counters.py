@@ -2,9 +2,9 @@
 Analyzer): box tests, box hits, primitive tests, primitive hits and instance hits of each pixel's
 primary rays, averaged over its samples. Counted by the tracer itself (shaders/tracer/
 traverse.glsl), the same on the CPU reference and on Vulkan; reflection, refraction and shadow
-rays are not counted, so a pixel's counters are those `Bvh.trace_pixel` records for it (but where a
-surface hidden from camera rays covers the pixel: the tracer passes it by, the record does not,
-and trace_pixel warns of it).
+rays are not counted, so a pixel's counters are those `bvhlab.inspect.ray_record.trace_pixel`
+records for it with the stack or stackless walk (a surface hidden from camera rays passed by in
+both; the wide walk's record does not pass it by, and warns).
 
 The names come from the core's TraversalCounter enum (render_settings.h); this module adds the
 ranges and images: a manual range, or the auto range (0 to the AUTO_PERCENTILE-th percentile of

@@ -47,9 +47,7 @@ def run_occluded_query(core, origins, directions, tmin, tmax, traversal: str, th
     one per ray) from `core.occluded`. `tmax`: a number >= 0, or a float32 array of one per ray
     (which the core checks: a NaN or negative one raises ValueError naming the ray)."""
     origins, directions, tmin, traversal, threads = _checked_rays(origins, directions, tmin, traversal, threads)
-    if isinstance(tmax, np.ndarray) and tmax.ndim == 0:  # a 0-d array is a number, as np.float32(2.0) is
-        tmax = tmax.item()
-    if isinstance(tmax, np.ndarray):
+    if isinstance(tmax, np.ndarray) and tmax.ndim > 0:  # one per ray (a 0-d array is a number: _checks.real)
         tmax_of = _checks.float32_array("tmax", tmax, ())
         if len(tmax_of) != len(origins):
             raise ValueError(f"tmax has {len(tmax_of)} entries for {len(origins)} rays (give one per ray, or a number)")

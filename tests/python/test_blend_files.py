@@ -103,3 +103,43 @@ def test_a_sweep_of_a_blend_sees_its_linked_library_change(tmp_path, copies):
     made = _run(["-c", LIBRARY, str(library), "ico"])
     assert made.returncode == 0, made.stderr[-2000:]
     assert sweep() == {"ran": 1, "triangles": [20]}  # an icosahedron
+
+
+SAVED_DISTANCE = """
+import sys, bpy
+bpy.ops.wm.read_homefile(use_empty=True)
+bpy.ops.mesh.primitive_cube_add(size=2.0)
+bpy.ops.object.light_add(type="POINT", location=(0.0, 0.0, 6.0))
+bpy.context.active_object.data.energy = 1000.0
+if float(sys.argv[2]) > 0:  # the add-on's settings group as it registers it, set, then saved
+    class Settings(bpy.types.PropertyGroup):
+        light_distance: bpy.props.FloatProperty(default=0.0)
+    bpy.utils.register_class(Settings)
+    bpy.types.Scene.bvhlab = bpy.props.PointerProperty(type=Settings)
+    bpy.context.scene.bvhlab.light_distance = float(sys.argv[2])
+bpy.ops.wm.save_as_mainfile(filepath=sys.argv[1])
+"""
+READ_LIGHT = """
+import sys
+from pathlib import Path
+from bvhlab.blender.load import load_blend
+print(repr(load_blend(Path(sys.argv[1])).light.intensity))
+"""
+
+
+def test_a_blend_is_lit_by_its_saved_light_distance(tmp_path):
+    """The add-on's Light Distance saved in a .blend lights it in the CLI too (`bvhlab render
+    FILE.blend` measured the distance again: another intensity than F12's); unset, it is measured.
+    Read by a bpy without the add-on, from the values Blender keeps for the unregistered group."""
+    from bvhlab.blender.light import intensity_from_watts
+
+    intensities = {}
+    for distance in (0.0, 4.5):
+        blend = tmp_path / f"lit_{distance}.blend"
+        made = _run(["-c", SAVED_DISTANCE, str(blend), str(distance)])
+        assert made.returncode == 0, made.stderr[-2000:]
+        read = _run(["-c", READ_LIGHT, str(blend)])
+        assert read.returncode == 0, read.stderr[-2000:]
+        intensities[distance] = float(read.stdout.strip().splitlines()[-1])
+    assert intensities[4.5] == intensity_from_watts(1000.0, 4.5)
+    assert intensities[0.0] != intensities[4.5]  # measured: the cube's faces lie 5 to 7 from the light

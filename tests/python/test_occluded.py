@@ -129,6 +129,13 @@ def test_a_tmax_of_no_dimensions_is_a_number(tree_and_rays):
         np.testing.assert_array_equal(bvh.occluded(o, d, np.array(tmax)), expected)
     with pytest.raises(ValueError, match="tmax must be at least 0"):
         bvh.occluded(o, d, np.array(-1.0))
+    for key in ("t", "prim"):  # intersect's tmin and tmax alike
+        np.testing.assert_array_equal(
+            bvh.intersect(o, d, tmin=np.array(0.25), tmax=np.array(50.0, np.float32))[key],
+            bvh.intersect(o, d, tmin=0.25, tmax=50.0)[key],
+        )
+    with pytest.raises(TypeError, match="tmax must be a number"):  # a masked array is not taken as one
+        bvh.occluded(o, d, np.ma.masked_array(2.0, mask=True))
 
 
 def test_bad_rays_as_for_intersect(tree_and_rays):

@@ -71,6 +71,24 @@ def gather_light(
     return Light(tuple(position), tuple(light.data.color), intensity), measured
 
 
+def saved_light_distance(blender_scene) -> float | None:
+    """The add-on's Light Distance saved in `blender_scene` (scene.bvhlab.light_distance), or None
+    where it is 0 or was never set: through the registered property where the add-on is enabled,
+    else from the values Blender keeps for an unregistered property group (a .blend read by the
+    CLI: among the scene's ID properties up to 4.x, its system properties from 5.0)."""
+    settings = getattr(blender_scene, "bvhlab", None)
+    if settings is not None and hasattr(settings, "light_distance"):
+        value = settings.light_distance
+    else:
+        system = getattr(blender_scene, "bl_system_properties_get", None)
+        stores = ([system()] if system is not None else []) + [blender_scene]
+        groups = [store.get("bvhlab") for store in stores if store is not None]
+        value = next((g.get("light_distance") for g in groups if hasattr(g, "get")), None)
+    if not isinstance(value, (int, float)) or isinstance(value, bool):
+        return None
+    return float(value) if math.isfinite(value) and value > 0 else None
+
+
 def intensity_from_watts(watts: float, distance: float) -> float:
     """The mapping in this module's docstring."""
     return max(float(watts), 0.0) / (4 * math.pi**2 * max(distance, 1e-3) ** 2)

@@ -26,7 +26,10 @@ def load_blend(path: Path) -> Scene:
         raise FileNotFoundError(f"no such file: {path}")
     bpy = bpy_module()
     from .export import export_scene
+    from .light import saved_light_distance
 
     bpy.ops.wm.open_mainfile(filepath=str(path.resolve()), load_ui=False)
-    # a file without a camera is framed by the default camera, as a mesh file is (design.md, Defaults)
-    return export_scene(bpy.context, scope="visible", require_camera=False)
+    # a file without a camera is framed by the default camera, as a mesh file is (design.md, Defaults);
+    # its light lit as the add-on lights it (its saved Light Distance, where set)
+    distance = saved_light_distance(bpy.context.scene)
+    return export_scene(bpy.context, scope="visible", require_camera=False, light_distance=distance)

@@ -293,7 +293,8 @@ def trace_pixel(scene, bvh, x: int, y: int, *, width: int, height: int, options=
     y = _checks.integer("y", y, 0, 2**32 - 1)
     sample = _checks.integer("sample", sample, 0, 2**32 - 1)
     origin, direction, tmin, tmax = _core.pixel_ray(render_scene, settings, x, y, sample)
-    camera_of = render_scene if hidden and options.traversal != "wide" else None
+    # the core's rule is empty where no material hides (RenderScene.hidden): always asked
+    camera_of = render_scene if options.traversal != "wide" else None
     ray = (origin, direction, tmin, tmax, options.traversal)
     if isinstance(bvh._core, _core.TwoLevel):
         return record_instanced(bvh._core, *ray, pixel=(x, y, sample), camera_of=camera_of)
@@ -303,7 +304,8 @@ def trace_pixel(scene, bvh, x: int, y: int, *, width: int, height: int, options=
 def _hidden_from_camera(scene) -> bool:
     """Whether a primitive of `scene` has a material hidden from camera rays (Material.hidden_from)."""
     hidden = [i for i, m in enumerate(scene.materials) if Rays(m.hidden_from) & Rays.CAMERA]
-    used = [scene.tri_material, scene.sphere_material, *scene.mesh_tri_material]
+    # every mesh's, as the render scene takes them (a mesh without mesh_tri_material: material 0)
+    used = [scene.sphere_material, *(scene.mesh_triangle_material(k) for k in range(scene.mesh_count))]
     return bool(hidden) and any(np.isin(np.asarray(a), hidden).any() for a in used)
 
 
