@@ -75,6 +75,15 @@ def _report_pick(operator, built, picked) -> None:
     operator.report({"INFO"}, f"Picked {name} ({figures})")
 
 
+def _traced_view(context) -> bool:
+    """Whether the 3D viewport picked in shows bvhlab's traced picture (Rendered shading, this engine)."""
+    from .engine.engine import ENGINE_ID
+
+    space = getattr(context, "space_data", None)
+    shading = getattr(space, "shading", None)
+    return shading is not None and shading.type == "RENDERED" and context.scene.render.engine == ENGINE_ID
+
+
 def pick_ray(operator, context, origin, direction) -> set[str]:
     """Pick with one ray (world space) on the scene's tree and remember it for the panel."""
     from bvhlab.inspect.pick import pick, pick_two_level
@@ -89,13 +98,22 @@ def pick_ray(operator, context, origin, direction) -> set[str]:
     if shown[0] > shown[1]:  # Min depth below the tree's deepest level: no box is drawn to pick
         operator.report({"INFO"}, "No box under the cursor (no box is drawn at these depths)")
         return {"CANCELLED"}
+    # in the Rendered viewport the picture is the tracer's: what the ray reaches is what camera rays
+    # see (a surface hidden from them passed by); elsewhere Blender draws every surface
+    seen = built.scene if _traced_view(context) else None
     if overlay.is_two_level(built):
         got = pick_two_level(
-            built.bvh, origin, direction, settings.overlay_level, shown, leaves_only=settings.overlay_leaves_only
+            built.bvh,
+            origin,
+            direction,
+            settings.overlay_level,
+            shown,
+            leaves_only=settings.overlay_leaves_only,
+            scene=seen,
         )
         picked, how = got.box, got.how
     else:
-        got = pick(built.bvh, origin, direction, shown, leaves_only=settings.overlay_leaves_only)
+        got = pick(built.bvh, origin, direction, shown, leaves_only=settings.overlay_leaves_only, scene=seen)
         picked, how = got.node, got.how
     if picked is None:
         state.picked.pop(state.key(scene), None)

@@ -127,3 +127,44 @@ def test_cost_per_depth_and_the_costliest_subtrees(built):
     assert state.picked_node(scene) == expected[0]
     with pytest.raises(RuntimeError, match="does not exist"):
         bpy.ops.bvhlab.pick_node(node=len(data))
+
+
+def test_in_the_rendered_viewport_pick_box_passes_a_surface_hidden_from_camera_rays_by(built):
+    """The sphere hidden from camera rays (Object ▸ Visibility ▸ Camera off): the Rendered viewport
+    (bvhlab's engine) shows the boxes behind it, and Pick Box there picks as the tracer sees
+    (inspect.pick with the built scene); in Solid shading Blender draws the sphere, and Pick Box
+    stops at it as before. Rays through the sphere pick otherwise in the two."""
+    from types import SimpleNamespace
+
+    import bpy
+
+    from bvhlab.inspect.pick import pick
+
+    scene, state = built
+    sphere, engine = bpy.data.objects["Sphere"], scene.render.engine
+    sphere.visible_camera = False
+    try:
+        assert bpy.ops.bvhlab.build() == {"FINISHED"}
+        settings = scene.bvhlab
+        settings.overlay_depth_min, settings.overlay_depth_max, settings.overlay_leaves_only = 0, 40, True
+        tree = state.tree_for(scene)
+        shown = (0, min(40, tree.height - 1))
+        ops_inspect = __import__(harness.addon().__name__ + ".ops_inspect", fromlist=["pick_ray"])
+        operator = SimpleNamespace(report=lambda *_: None)
+        scene.render.engine = "BVHLAB_WHITTED"
+        differ = 0
+        for o, d in zip(*_rays(40)):
+            picked = {}
+            for shading in ("RENDERED", "SOLID"):
+                view = SimpleNamespace(scene=scene, space_data=SimpleNamespace(shading=SimpleNamespace(type=shading)))
+                assert ops_inspect.pick_ray(operator, view, o, d) == {"FINISHED"}
+                picked[shading] = state.picked_node(scene)
+            seen = pick(tree.bvh, o, d, shown, leaves_only=True, scene=tree.scene).node
+            drawn = pick(tree.bvh, o, d, shown, leaves_only=True).node
+            assert (picked["RENDERED"], picked["SOLID"]) == (seen, drawn)
+            differ += seen != drawn
+        assert differ >= 3, "rays through the hidden sphere pick otherwise in the traced picture"
+    finally:
+        sphere.visible_camera = True
+        scene.render.engine = engine
+        assert bpy.ops.bvhlab.build() == {"FINISHED"}

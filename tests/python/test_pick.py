@@ -102,3 +102,36 @@ def test_a_float64_origin_picks_as_its_float32_ray_traces():
         origin = np.array([1000.3 - gap + 1e-9, rng.uniform(-1, 1), rng.uniform(-1, 1)])
         picked = pick(bvh, origin, np.array([1.0, 0.0, 0.0]), (0, 255))
         assert picked.node == 0 and picked.how == "box", (gap, picked)  # entered, not the hit's fallback
+
+
+def test_the_traced_picture_picks_through_a_surface_hidden_from_camera_rays():
+    """In the Rendered viewport the tracer passes a surface hidden from camera rays by (the
+    add-on gives pick the scene there): a ray through a hidden sphere to a wall reaches the wall,
+    and picks the wall's leaf at the wall's depth; in Blender's own drawing (no scene) it reaches
+    the sphere and picks the sphere's leaf, as before."""
+    wall = np.array([[[-3, -3, -5], [3, -3, -5], [3, 3, -5]], [[-3, -3, -5], [3, 3, -5], [-3, 3, -5]]], np.float32)
+    scene = bvhlab.Scene(
+        triangles=wall,
+        spheres=np.array([[0, 0, 0, 1]], np.float32),
+        materials=[bvhlab.Material(), bvhlab.Material(hidden_from=bvhlab.Rays.CAMERA)],
+        tri_material=np.array([0, 0], np.int32),
+        sphere_material=np.array([1], np.int32),
+    )
+    bvh = bvhlab.build(scene, max_leaf_size=1)
+    data = bvh.node_data()
+    origin, direction = (0.1, 0.2, 5.0), (0.0, 0.0, -1.0)
+    wall_hit = bvhlab.build(wall).intersect(np.float32([origin]), np.float32([direction]))
+    seen = pick(bvh, origin, direction, leaves_only=True, scene=scene)
+    drawn = pick(bvh, origin, direction, leaves_only=True)
+    assert drawn.t_hit == pytest.approx(5 - np.sqrt(1 - 0.1**2 - 0.2**2), abs=1e-5)  # the sphere
+    assert seen.t_hit == wall_hit["t"][0]  # the wall, as a tree without the sphere has it
+    sphere_slot = int(np.flatnonzero(bvh.refs & bvhlab.bvh.REF_SPHERE_BIT)[0])
+    sphere_leaf = int(np.flatnonzero((data.left < 0) & (bvh.nodes["index"] == sphere_slot))[0])  # leaves of one
+    assert drawn.node == sphere_leaf, "in Blender's drawing the sphere's leaf is entered first"
+    wall_depths = {int(data.depth[n]) for n in np.flatnonzero(data.left < 0) if n != sphere_leaf}
+    only_walls = max(wall_depths - {int(data.depth[sphere_leaf])})  # wall leaves, not the sphere's
+    seen = pick(bvh, origin, direction, (only_walls, only_walls), leaves_only=True, scene=scene)
+    drawn = pick(bvh, origin, direction, (only_walls, only_walls), leaves_only=True)
+    assert (drawn.node, drawn.how) == (sphere_leaf, "hit leaf")  # no wall box before the sphere
+    assert seen.how == "box" and seen.t_enter == pytest.approx(10.0, abs=1e-4)
+    assert int(data.depth[seen.node]) == only_walls and data.left[seen.node] < 0

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import _checks
+from .. import _checks, _core
 from .levels import MAX_OVERLAY_BOXES, TreeNode, blas_world_boxes, shown_boxes
 from .node_data import NodeData
 
@@ -75,13 +75,17 @@ def pick(
     depth_range: tuple[int, int] = (0, 255),
     *,
     leaves_only: bool = False,
+    scene=None,
 ) -> Pick:
     """The box a ray picks among those the overlay shows (module docstring). `bvh` is a
-    bvhlab.Bvh; `depth_range` the overlay's (min, max) depth, both included."""
+    bvhlab.Bvh; `depth_range` the overlay's (min, max) depth, both included. `scene`: the
+    bvhlab.Scene the tree was built over, where the picture is the tracer's (the Rendered
+    viewport): the geometry the ray reaches is then what camera rays see, surfaces hidden from them
+    (Material.hidden_from) passed by (_hit_record)."""
     origin, direction = _pick_ray(origin, direction)
     depth_range = _depth_range(depth_range)
     data = bvh.node_data()
-    record = bvh.trace_ray(origin.astype(np.float32), direction.astype(np.float32))
+    record = _hit_record(bvh, origin, direction, scene)
     t_hit = float(record.t)
     t_enter = entry_distances(data, origin, direction)
     shown = (data.depth >= depth_range[0]) & (data.depth <= depth_range[1])
@@ -96,6 +100,20 @@ def pick(
     if record.hit_leaf >= 0:
         return Pick(int(record.hit_leaf), "hit leaf", float(t_enter[record.hit_leaf]), t_hit)
     return Pick(None, "nothing", float("inf"), t_hit)
+
+
+def _hit_record(bvh, origin, direction, scene):
+    """The stack walk's record of the pick ray through `bvh` (a Bvh or an InstancedBvh): to the
+    closest surface, or with `scene` to the closest its camera rays see (the tracer's rule, from
+    the scene's render scene: ray_record.trace_pixel's)."""
+    o, d = origin.astype(np.float32), direction.astype(np.float32)
+    if scene is None:
+        return bvh.trace_ray(o, d)
+    from .._render_scene import SceneCache
+    from .ray_record import record, record_instanced
+
+    walk = record_instanced if isinstance(bvh._core, _core.TwoLevel) else record
+    return walk(bvh._core, o, d, 0.0, float("inf"), "stack", camera_of=SceneCache().get(scene, bvh))
 
 
 def _pick_ray(origin, direction) -> tuple[np.ndarray, np.ndarray]:
@@ -129,18 +147,19 @@ def pick_two_level(
     *,
     leaves_only: bool = False,
     cap: int = MAX_OVERLAY_BOXES,
+    scene=None,
 ) -> TwoLevelPick:
     """The box a ray picks among those the overlay shows of a two-level tree (`bvh` a
     bvhlab.InstancedBvh; `level`, the depth range, leaves-only and the cap as
     bvhlab.inspect.levels.shown_boxes takes them): the rule of `pick` with BLAS boxes deeper than
     TLAS boxes (a BLAS box lies inside its instance's TLAS leaf); where the ray enters none, the
     BLAS leaf of the hit primitive in its instance (the TLAS leaf of the hit instance when only
-    the TLAS is shown)."""
+    the TLAS is shown). `scene` as pick's."""
     origin, direction = _pick_ray(origin, direction)
     depth_range = _depth_range(depth_range)
     bvh = bvh.snapshot()  # one TLAS and one set of meshes throughout (another thread may place)
     shown = shown_boxes(bvh, level, depth_range[0], depth_range[1], leaves_only, cap)
-    record = bvh.trace_ray(origin.astype(np.float32), direction.astype(np.float32))
+    record = _hit_record(bvh, origin, direction, scene)
     t_hit = float(record.t)
     t_enter = box_entry_distances(shown.lo, shown.hi, origin, direction)
     candidates = np.flatnonzero(np.isfinite(t_enter) & (t_enter <= t_hit * (1 + HIT_SLACK)))
