@@ -344,3 +344,28 @@ def test_cli_inspects_nodes_of_both_levels(instanced_scene, trees, tmp_path, cap
         assert said in capsys.readouterr().err
     assert main(["inspect", "gen:whitted", "--node", "0", "--instance", "0"]) == 2
     assert "this scene is flat" in capsys.readouterr().err
+
+
+def test_pick_with_the_scene_reaches_what_camera_rays_see(instanced_scene):  # noqa: F811
+    """pick_two_level with the scene (the Rendered viewport's pick): the knot's material hidden
+    from camera rays, each ray reaches the geometry a scene without the knot's instances holds."""
+    import dataclasses
+
+    materials = [bvhlab.Material(), bvhlab.Material(hidden_from=bvhlab.Rays.CAMERA)]
+    knot = np.ones(len(instanced_scene.meshes[0]), np.int32)
+    scene = dataclasses.replace(instanced_scene, materials=materials, mesh_tri_material=[knot])
+    tree = bvhlab.build(scene)
+    mesh_of, transforms = instanced_scene.instances()
+    cloud_only = dataclasses.replace(
+        instanced_scene, instance_mesh=mesh_of[mesh_of == 0], instance_transforms=transforms[mesh_of == 0]
+    )
+    expected = bvhlab.build(cloud_only)
+    origins, dirs = _rays(instanced_scene, 200, 9)
+    want = expected.intersect(origins, dirs, traversal="stack")["t"]
+    differ = 0
+    for i in range(len(origins)):
+        seen = pick_two_level(tree, origins[i], dirs[i], scene=scene)
+        drawn = pick_two_level(tree, origins[i], dirs[i])
+        assert seen.t_hit == want[i] or (np.isinf(seen.t_hit) and np.isinf(want[i])), i
+        differ += seen.t_hit != drawn.t_hit
+    assert differ > 20, "rays that reach the hidden knot"
