@@ -28,7 +28,8 @@ class BVHLAB_OT_measure_light_distance(bpy.types.Operator):
         depsgraph = context.evaluated_depsgraph_get()
         if first_light(depsgraph, context.view_layer) is None:
             raise ValueError("nothing to measure: the scene has no visible light")
-        live = LiveScene("visible", require_camera=False, allow_empty=True)  # what F12 exports
+        # exported as F12 exports, from the viewport's evaluation (its visibility and modifier levels)
+        live = LiveScene("visible", require_camera=False, allow_empty=True)
         live.sync(depsgraph, context.scene, context.view_layer)
         if live.light_distance is None:
             raise ValueError("nothing to measure: the scene has no visible geometry")
