@@ -189,13 +189,9 @@ def _labels(layout):
 
 
 def _until(condition, timeout: float, what: str):
-    import time
+    from session import until  # at run time, under Blender (the driver imports this file without bpy)
 
-    deadline = time.monotonic() + timeout
-    while not condition():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"no {what} within {timeout} s")
-        yield 0.1
+    return until(condition, timeout, what)
 
 
 # -- checks, run by the driver (no bpy) --------------------------------------------------------

@@ -85,6 +85,15 @@ class Session:
         }
 
 
+def until(condition, timeout: float, what: str):
+    """Steps that wait, the UI drawing, until condition() holds; AssertionError after `timeout` s."""
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"no {what} within {timeout} s")
+        yield 0.1
+
+
 def run(steps, argv=None) -> None:
     """Start the scenario `steps(session)` from a timer; write result.json when it ends."""
     argv = sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else []
