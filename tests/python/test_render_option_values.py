@@ -30,3 +30,21 @@ def test_settings_beyond_float32_are_refused_with_the_value_given():
         bvhlab.build(tris, method="sbvh", sbvh_alpha=1e300)
     with pytest.raises(ValueError, match=r"tree_growth must be within float32's range .*got -1e\+39"):
         bvhlab.UpdateConfig(tree_growth=-1e39)
+
+
+def test_refused_numbers_are_shown_as_given():
+    """The core's messages showed a refused float in six decimals: "got -1.000000", and a
+    sbvh_alpha of -1e-9 as "got -0.000000", a value that would pass. Each now reads as given."""
+    import numpy as np
+
+    tris = np.arange(36, dtype=np.float32).reshape(4, 3, 3)
+    cases = [
+        (lambda: bvhlab.build(tris, method="sbvh", sbvh_alpha=-1e-9), r"sbvh_alpha .*got -1e-09$"),
+        (lambda: bvhlab.build(tris, method="sbvh", sbvh_budget=0.5), r"sbvh_budget .*got 0\.5$"),
+        (lambda: bvhlab.View((0, 0, 0), (0, 1, 0), clip_start=2.0, clip_end=1.0), r"got 2, 1$"),
+        (lambda: bvhlab.View((0, 0, 0), (0, 1, 0), shift_x=1500.25), r"got 1500\.25, 0$"),
+        (lambda: bvhlab.RenderOptions(heatmap_scale=1e9), r"heatmap_scale .*got 1e\+09$"),
+    ]
+    for make, match in cases:
+        with pytest.raises(ValueError, match=match):
+            make()

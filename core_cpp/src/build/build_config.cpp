@@ -6,6 +6,7 @@
 #include <utility>
 #include <vector>
 
+#include "../platform/number_text.h"
 #include "bvhlab/split.h"
 
 namespace bvhlab {
@@ -100,11 +101,10 @@ void validate(const BuildConfig& config) {
         config.traversal_cost < 0.0f || config.intersection_cost <= 0.0f)
         throw std::invalid_argument("SAH costs must be finite, traversal >= 0 and intersection > 0");
     if (!(config.sbvh_alpha >= 0.0f) || !std::isfinite(config.sbvh_alpha))
-        throw std::invalid_argument("sbvh_alpha must be a finite number >= 0, got " +
-                                    std::to_string(config.sbvh_alpha));
+        throw std::invalid_argument("sbvh_alpha must be a finite number >= 0, got " + number_text(config.sbvh_alpha));
     if (!(config.sbvh_budget >= 1.0f) || !(config.sbvh_budget <= 64.0f))
         throw std::invalid_argument("sbvh_budget must be a number from 1 to 64 (references per primitive), got " +
-                                    std::to_string(config.sbvh_budget));
+                                    number_text(config.sbvh_budget));
 }
 
 }  // namespace bvhlab

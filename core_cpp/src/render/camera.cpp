@@ -2,6 +2,7 @@
 // (shaders/tracer/camera.glsl) reads. The view plane follows Cycles' blender_camera_viewplane
 // (intern/cycles/blender/camera.cpp), the panoramic ranges Cycles' Camera::update
 // (intern/cycles/scene/camera.cpp: equirectangular_range).
+#include "../platform/number_text.h"
 #include "camera_frame.h"
 
 #include <algorithm>
@@ -66,26 +67,19 @@ void validate_projection(const Camera& c) {
 
 constexpr float kMinAspect = 1e-8f, kMaxShift = 1000.0f;
 
-/// A number for a message, in %g's short form (std::to_string writes 1e20 in 27 digits).
-std::string short_number(double x) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%g", x);
-    return text;
-}
-
 void validate_lens(const Camera& c) {
     if (!(c.clip_start >= 0 && c.clip_end > c.clip_start))
-        fail("camera clipping must be 0 <= clip_start < clip_end, got " + std::to_string(c.clip_start) + ", " +
-             std::to_string(c.clip_end));
+        fail("camera clipping must be 0 <= clip_start < clip_end, got " + number_text(c.clip_start) + ", " +
+             number_text(c.clip_end));
     if (c.aperture_radius < 0) fail("camera aperture_radius must be >= 0 (0: no depth of field)");
     // within what float32 rays hold: an aspect of 1e20 or a shift of -1e20 overflowed the ray
     // directions to inf, and half the image or all of it came out black. Blender's widest frame
     // (65,536 × 4 pixels at a pixel aspect of 200) is 3.3e6 wide; its shifts are within ±10.
     if (c.aspect != 0 && !(c.aspect >= kMinAspect && c.aspect <= 1 / kMinAspect))
-        fail("camera aspect must be between 1e-8 and 1e8 (or 0: the image's), got " + short_number(c.aspect));
+        fail("camera aspect must be between 1e-8 and 1e8 (or 0: the image's), got " + number_text(c.aspect));
     if (!(std::fabs(c.shift_x) <= kMaxShift && std::fabs(c.shift_y) <= kMaxShift))
-        fail("camera lens shift must be within ±1000 (fractions of the image plane), got " + std::to_string(c.shift_x) +
-             ", " + std::to_string(c.shift_y));
+        fail("camera lens shift must be within ±1000 (fractions of the image plane), got " + number_text(c.shift_x) +
+             ", " + number_text(c.shift_y));
     if (c.aperture_radius > 0 && !(c.focus_distance > 0)) fail("camera focus_distance must be > 0");
     const auto& r = c.region;
     if (!(r[0] >= 0 && r[0] < r[2] && r[2] <= 1 && r[1] >= 0 && r[1] < r[3] && r[3] <= 1))

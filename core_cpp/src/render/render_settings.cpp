@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "../platform/number_text.h"
 #include "gpu_types.h"
 
 namespace bvhlab {
@@ -75,7 +76,7 @@ void validate_look(const RenderSettings& s) {
     if (s.heatmap_scale &&
         !(std::isfinite(*s.heatmap_scale) && *s.heatmap_scale > 0 && *s.heatmap_scale <= kMaxHeatmapScale))
         fail("heatmap_scale must be a positive number of box tests up to " + std::to_string(int(kMaxHeatmapScale)) +
-             ", got " + std::to_string(*s.heatmap_scale));
+             ", got " + number_text(*s.heatmap_scale));
     if (!(s.line_width >= 1.0f && s.line_width <= kMaxLineWidth)) fail("line_width must be in [1, 16]");
     if (s.overlay && s.overlay_depth_min > s.overlay_depth_max)
         fail("overlay depth_min " + std::to_string(s.overlay_depth_min) + " is greater than depth_max " +

@@ -1,6 +1,7 @@
 // transform.cpp — checks, inverse and boxes of instance transforms (transform.h).
 #include "bvhlab/transform.h"
 
+#include "../platform/number_text.h"
 #include "bvhlab/simd.h"
 
 #include <algorithm>
@@ -73,7 +74,7 @@ void validate_transform(const Transform& t, const char* what) {
         throw std::invalid_argument(std::string(what) +
                                     ": the transform cannot be inverted (a zero-scale axis, or axes "
                                     "(nearly) parallel: determinant " +
-                                    std::to_string(det) + ")");
+                                    number_text(det) + ")");
     throw std::invalid_argument(std::string(what) +
                                 ": the transform scales by more than 2^76 (7.6e22) or less than 2^-76 (1.3e-23) "
                                 "along some axis, beyond what float32 rays can follow into the mesh");
