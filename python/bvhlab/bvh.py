@@ -242,7 +242,7 @@ class Bvh:
         return run_occluded_query(self._core, origins, directions, tmin, tmax, traversal, threads)
 
     def save(self, path) -> None:
-        """Writes the tree to `path` (a .bvhtree file, as a whole or not at all): its nodes and
+        """Writes the tree to `path` (a name ending in .bvhtree, as a whole or not at all): its nodes and
         references, the geometry's fingerprint and the build settings (bvhlab.inspect.tree_file);
         `bvhlab.load_bvh(path, scene)` reads it back over the same geometry."""
         from .inspect.tree_file import save_bvh

@@ -49,6 +49,24 @@ def test_round_trip_of_a_scene_renders_the_same(tmp_path):
     np.testing.assert_array_equal(a, b)
 
 
+def test_save_needs_the_suffix_and_overwrites_nothing_else(tmp_path, small_scene):
+    """`Bvh.save` writes only a .bvhtree: a scene's .npz (or any other name) is refused before
+    anything is written, and the file already there is left as it was (it used to be replaced)."""
+    tris, spheres = small_scene
+    scene_file = bvhlab.Scene(triangles=tris, spheres=spheres).save(tmp_path / "scene.npz")
+    before = scene_file.read_bytes()
+    bvh = bvhlab.build(tris, spheres)
+    for name in ("scene.npz", "tree.txt", "tree", ".bvhtree"):
+        with pytest.raises(OSError, match="tree file|no stem"):
+            bvh.save(tmp_path / name)
+    assert scene_file.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["scene.npz"]
+    with pytest.raises(OSError, match="is a folder"):
+        bvh.save(tmp_path)
+    assert bvh.save(tmp_path / "Tree.BVHTREE") is None  # any case of the suffix, as for scene files
+    assert bvhlab.load_bvh(tmp_path / "Tree.BVHTREE", tris, spheres).stats == bvh.stats
+
+
 def test_empty_tree(tmp_path):
     tris = np.zeros((0, 3, 3), np.float32)
     bvhlab.build(tris).save(tmp_path / "e.bvhtree")

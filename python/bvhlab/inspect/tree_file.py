@@ -34,7 +34,11 @@ class TreeFileError(ValueError):
 
 
 def save_bvh(bvh, path) -> Path:
-    """Writes `bvh` to `path` as a whole or not at all (a WriteError leaves what was there)."""
+    """Writes `bvh` to `path`, which must end in .bvhtree (never renamed; a scene's .npz or any
+    other file is not overwritten by a tree), as a whole or not at all (a WriteError leaves what
+    was there). Raises OutputPathError for another name, a folder or a folder that cannot be
+    written, before any work."""
+    path = _checks.output_file(path, (SUFFIX,), "tree file")
     # every part from one version of the tree: read one by one, a refit, update or optimize on
     # another thread could mix two versions into a file that does not load
     parts = bvh._core.file_parts()
@@ -57,7 +61,7 @@ def save_bvh(bvh, path) -> Path:
             digest.update(part)
             f.write(part)
         f.write(digest.digest())
-    return Path(path)
+    return path
 
 
 def load_bvh(path, scene_or_triangles, spheres=None, *, config=None):
