@@ -4,6 +4,8 @@ nodes_visited) and against one flat tree over the same triangles moved into the 
 (Scene.flattened); the pick against a loop over the boxes the overlay shows; the TLAS's node data
 against its boxes and instances."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 from oracles import box_entry, subtree_slots
@@ -12,6 +14,7 @@ from test_instanced_scene import _rays, instanced_scene  # noqa: F401  (the fixt
 import bvhlab
 from bvhlab.inspect.levels import TreeNode, shown_boxes, world_boxes
 from bvhlab.inspect.pick import HIT_SLACK, node_world_box, pick_two_level
+from bvhlab.library import showcase
 
 
 @pytest.fixture(scope="module")
@@ -172,6 +175,36 @@ def test_a_blas_roots_world_box_is_its_tlas_leafs_box(instanced_scene, trees):  
         assert np.all(arvo_lo[0, 0] <= lo + 1e-5) and np.all(hi <= arvo_hi[0, 0] + 1e-5)
         tighter += bool(np.any(arvo_lo[0, 0] < lo - 1e-4) or np.any(hi > arvo_hi[0, 0] + 1e-4))
     assert tighter, "the scene has a rotated instance whose moved root box sticks out of its TLAS leaf"
+
+
+@pytest.mark.parametrize("traversal", ["stack", "stackless"])
+def test_pixel_records_of_one_identity_instance_are_the_tracers_counters(traversal):
+    """A scene of one mesh placed where it was modelled, as instances (a Blender scene of one
+    object): the tracer walks it flat and counts no instance; the record entered it (its one walk
+    is recorded) and said 1 instance entered at every pixel. All five counters now agree."""
+    from bvhlab.inspect.ray_record import trace_pixel
+
+    flat = showcase.whitted()
+    identity = np.eye(3, 4, dtype=np.float32)[None]
+    scene = dataclasses.replace(flat, instance_mesh=np.zeros(1, np.int32), instance_transforms=identity)
+    tree = bvhlab.build(scene)
+    assert isinstance(tree, bvhlab.InstancedBvh)
+    w, h = 24, 16
+    options = bvhlab.RenderOptions(traversal=traversal, samples_per_axis=1, traversal_counters=True)
+    job = bvhlab.Renderer("cpu").start(scene, tree, w, h, options=options)
+    job.run()
+    counters = job.result(counters=True).counters
+    assert (counters[..., 4] == 0).all() and (counters[..., 0] > 0).all()
+    hits = 0
+    for y in range(h):
+        for x in range(w):
+            rec = trace_pixel(scene, tree, x, y, width=w, height=h, options=options)
+            s = rec.summary()
+            closer = sum(int(b.prim_closer.sum()) for b in rec.blas)
+            got = (s["box_tests"], s["box_hits"], s["prim_tests"], closer, s["instances_entered"])
+            assert got == tuple(counters[y, x].tolist()), (x, y, got, counters[y, x])
+            hits += rec.instance == 0
+    assert hits > w * h // 4, "the walks are recorded: the hits keep their instance"
 
 
 @pytest.mark.parametrize("traversal", ["stack", "stackless"])

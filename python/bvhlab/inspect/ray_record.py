@@ -202,7 +202,9 @@ class InstancedRayRecord:
         return {
             **_ray_fields(self),
             "tlas_box_tests": self.tlas.box_tests,
-            "instances_entered": len(self.blas),
+            # through a TLAS leaf: a scene of one identity instance is walked flat, as the tracer
+            # walks it (its instance_hits counter is 0 there), though its one walk is recorded
+            "instances_entered": int(np.count_nonzero(self.tlas.prim_leaf != _NO_NODE)),
             "box_tests": self.tlas.box_tests + sum(b.box_tests for b in self.blas),
             "box_hits": self.tlas.box_hits + sum(b.box_hits for b in self.blas),
             "prim_tests": sum(b.prim_tests for b in self.blas),
