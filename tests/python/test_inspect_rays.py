@@ -218,3 +218,42 @@ def _counted(rec) -> list:
 
 def _grid(w: int, h: int):
     return [(x, y) for y in range(0, h, 2) for x in range(0, w, 2)]
+
+
+def test_pixel_records_and_picks_make_the_render_scene_once(monkeypatch):
+    """trace_pixel and the pick's rule for hidden surfaces made a render scene at every call
+    (about a second for a million triangles, at every pixel asked and box picked in the Rendered
+    viewport): one is kept while the scene, its materials and the tree stay, shared by threads, and
+    a pick on a scene where nothing hides makes none."""
+    import dataclasses
+    from concurrent.futures import ThreadPoolExecutor
+
+    from bvhlab import _render_scene
+    from bvhlab.inspect.pick import pick
+
+    made = []
+    real = _render_scene._make
+    monkeypatch.setattr(_render_scene, "_make", lambda *a: made.append(1) or real(*a))
+    scene = showcase.whitted()
+    bvh = bvhlab.build(scene)
+    w, h = 16, 12
+    first = [trace_pixel(scene, bvh, x, y, width=w, height=h).summary() for x, y in _grid(w, h)]
+    assert len(made) == 1
+    origin, direction = np.asarray(first[40]["origin"]), np.asarray(first[40]["direction"])
+    plain = pick(bvh, origin, direction)
+    assert pick(bvh, origin, direction, scene=scene) == plain and len(made) == 1  # nothing hides: none made
+    assert np.isfinite(plain.t_hit)
+
+    hidden = dataclasses.replace(
+        scene, materials=[dataclasses.replace(m, hidden_from=bvhlab.Rays.CAMERA) for m in scene.materials]
+    )
+    with ThreadPoolExecutor(4) as pool:  # two scenes asked in turn by four threads: each answer its scene's
+        got = list(pool.map(lambda k: trace_pixel((scene, hidden)[k % 2], bvh, 8, 6, width=w, height=h), range(16)))
+    assert all(r.summary() == got[0].summary() for r in got[0::2])
+    assert all(r.summary() == got[1].summary() for r in got[1::2])
+    assert got[1].prim == -1 and got[0].prim >= 0, "everything hidden: the record passes all by"
+    made.clear()
+    for _ in range(5):
+        assert pick(bvh, origin, direction, scene=hidden).t_hit == np.inf  # every surface passed by
+        trace_pixel(hidden, bvh, 3, 4, width=w, height=h)
+    assert len(made) <= 1, "the same scene again: the kept render scene"

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import _checks, _core
+from .. import _checks
 from .levels import MAX_OVERLAY_BOXES, TreeNode, blas_world_boxes, shown_boxes
 from .node_data import NodeData
 
@@ -106,14 +106,11 @@ def _hit_record(bvh, origin, direction, scene):
     """The stack walk's record of the pick ray through `bvh` (a Bvh or an InstancedBvh): to the
     closest surface, or with `scene` to the closest its camera rays see (the tracer's rule, from
     the scene's render scene: ray_record.trace_pixel's)."""
-    o, d = origin.astype(np.float32), direction.astype(np.float32)
-    if scene is None:
-        return bvh.trace_ray(o, d)
-    from .._render_scene import SceneCache
-    from .ray_record import record, record_instanced
+    from .ray_record import camera_rule, record_of
 
-    walk = record_instanced if isinstance(bvh._core, _core.TwoLevel) else record
-    return walk(bvh._core, o, d, 0.0, float("inf"), "stack", camera_of=SceneCache().get(scene, bvh))
+    o, d = origin.astype(np.float32), direction.astype(np.float32)
+    rule = None if scene is None else camera_rule(scene, bvh)
+    return record_of(bvh, o, d, 0.0, float("inf"), "stack", camera_of=rule)
 
 
 def _pick_ray(origin, direction) -> tuple[np.ndarray, np.ndarray]:

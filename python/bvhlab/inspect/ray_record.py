@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import _checks, _core
+from .._render_scene import SceneCache
 from ..scene_parts import Rays
 
 #: Traversals that can be recorded: the binary walks and the wide one (`Bvh.intersect`'s default),
@@ -17,6 +18,10 @@ from ..scene_parts import Rays
 RECORD_TRAVERSALS = ("stack", "stackless", "wide")
 #: Traversals of the tracer (RenderOptions.traversal), which trace_pixel records.
 PIXEL_TRAVERSALS = ("stack", "stackless")
+#: The render scene trace_pixel and the pick's rule for hidden surfaces last used, made again only
+#: when the scene, its materials or the tree change (SceneCache's key; it is safe across threads).
+#: Each call made one: about a second for a million triangles, on every pixel asked or box picked.
+_RENDER_SCENES = SceneCache()
 
 
 class HiddenSurfaceWarning(UserWarning):
@@ -275,7 +280,6 @@ def trace_pixel(scene, bvh, x: int, y: int, *, width: int, height: int, options=
     rays (Material.hidden_from) are passed by as the tracer passes them: tested, never the hit. The
     wide walk does not pass them by (the tracer's wide walk leaves such a ray to the stack walk): a
     scene with them gets a HiddenSurfaceWarning there, its record walking to the closest surface."""
-    from .._render_scene import SceneCache
     from .._render_settings import render_settings
     from ..render_options import options_from
 
@@ -290,17 +294,28 @@ def trace_pixel(scene, bvh, x: int, y: int, *, width: int, height: int, options=
             stacklevel=2,
         )
     settings = render_settings(scene, bvh, width, height, options, camera)
-    render_scene = SceneCache().get(scene, bvh)
+    render_scene = _RENDER_SCENES.get(scene, bvh)
     x = _checks.integer("x", x, 0, 2**32 - 1)
     y = _checks.integer("y", y, 0, 2**32 - 1)
     sample = _checks.integer("sample", sample, 0, 2**32 - 1)
     origin, direction, tmin, tmax = _core.pixel_ray(render_scene, settings, x, y, sample)
     # the core's rule is empty where no material hides (RenderScene.hidden): always asked
     camera_of = render_scene if options.traversal != "wide" else None
-    ray = (origin, direction, tmin, tmax, options.traversal)
-    if isinstance(bvh._core, _core.TwoLevel):
-        return record_instanced(bvh._core, *ray, pixel=(x, y, sample), camera_of=camera_of)
-    return record(bvh._core, *ray, pixel=(x, y, sample), camera_of=camera_of)
+    return record_of(bvh, origin, direction, tmin, tmax, options.traversal, pixel=(x, y, sample), camera_of=camera_of)
+
+
+def record_of(bvh, origin, direction, tmin, tmax, traversal, *, pixel=None, camera_of=None):
+    """The record of one ray through `bvh`: a RayRecord for a bvhlab.Bvh, an InstancedRayRecord for
+    an InstancedBvh (record, record_instanced)."""
+    walk = record_instanced if isinstance(bvh._core, _core.TwoLevel) else record
+    return walk(bvh._core, origin, direction, tmin, tmax, traversal, pixel=pixel, camera_of=camera_of)
+
+
+def camera_rule(scene, bvh):
+    """What a record passes by as the tracer's camera rays do (`camera_of`): the render scene of
+    `scene` and `bvh`, or None where no surface of the scene hides from camera rays (the same walk,
+    no render scene made)."""
+    return _RENDER_SCENES.get(scene, bvh) if _hidden_from_camera(scene) else None
 
 
 def _hidden_from_camera(scene) -> bool:
