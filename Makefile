@@ -20,13 +20,13 @@ ADDON_SOURCES := $(shell find addon -type f -not -path '*/__pycache__/*' -not -p
 WHEEL_INPUTS  := $(CORE_SOURCES) $(PY_SOURCES) CMakeLists.txt pyproject.toml scripts/wheel_glibc_compat.h \
                  $(wildcard blender_scenes/*.blend blender_scenes/scenes.json)
 
-.PHONY: help setup system venv bpy50-venv trixie sid build check check-pytest test cpp-test scalar-test asan-test pytest blender-test \
-        bpy313-test bpy53-test bpy50-test \
+.PHONY: help setup system venv bpy45-venv bpy50-venv trixie sid build check check-pytest test cpp-test scalar-test asan-test pytest blender-test \
+        bpy313-test bpy53-test bpy51-test bpy50-test bpy45-test \
         blender-binary-test blender-ui-test blender-sid-test blender-sid-ui-test demo bench addon screenshots scenes clean
 
 help:
 	@echo "make test         install what is missing, build, run all tests (C++, ASan/UBSan, pytest on bpy 4.2,"
-	@echo "                  the add-on checks on bpy 5.0 (Python 3.11), 5.2 and 5.3 (Python 3.13), real Blender"
+	@echo "                  the add-on checks on bpy 4.5 and 5.0 (Python 3.11), 5.1, 5.2 and 5.3 (Python 3.13), real Blender"
 	@echo "                  binaries 4.3 (Python 3.13) and 5.2 (Python 3.14)"
 	@echo "                  headless and with their UI)"
 	@echo "make check        the quick loop: lint, C++ tests, pytest without the slow tests (no Debian roots)"
@@ -97,19 +97,21 @@ pytest: build addon
 # sid root, its Blender 5.2 on Python 3.14 headless and with its UI.
 bpy313-test: addon
 	$(TRIXIE) run python tests/blender/run.py --zip dist/bvhlab.zip
-# The same checks on the newest line of each Python: bpy 5.3 (Python 3.13, the root's second venv)
-# and bpy 5.0 (Python 3.11, build/venv-bpy50 beside .venv's 4.2 LTS).
-bpy53-test: addon
-	$(TRIXIE) run /opt/bpy53/bin/python tests/blender/run.py --zip dist/bvhlab.zip
-BPY50 := build/venv-bpy50
-bpy50-venv: $(BPY50)/.deps
-$(BPY50)/.deps: requirements-bpy50.txt | system
-	@test -x $(BPY50)/bin/python || { py=$$(scripts/find_python311.sh) && $$py -m venv $(BPY50); }
-	$(BPY50)/bin/python -m pip install -q --upgrade pip
-	$(BPY50)/bin/python -m pip install -q -r requirements-bpy50.txt
+# The same checks on the newest line of each Python: bpy 5.3 (Python 3.13, a venv of the root's
+# own) and bpy 5.0 (Python 3.11); and on the lines between: 5.1 (blender.org's first on Python
+# 3.13, the root's third venv) and 4.5 LTS, the last 4.x line (Python 3.11). Each Python 3.11 bpy
+# has a venv of its own beside .venv's 4.2 LTS: build/venv-bpy45, build/venv-bpy50 (one per
+# requirements-bpyNN.txt).
+bpy51-test bpy53-test: bpy%-test: addon
+	$(TRIXIE) run /opt/bpy$*/bin/python tests/blender/run.py --zip dist/bvhlab.zip
+build/venv-bpy%/.deps: requirements-bpy%.txt | system
+	@test -x $(@D)/bin/python || { py=$$(scripts/find_python311.sh) && $$py -m venv $(@D); }
+	$(@D)/bin/python -m pip install -q --upgrade pip
+	$(@D)/bin/python -m pip install -q -r $<
 	@touch $@
-bpy50-test: addon bpy50-venv
-	$(BPY50)/bin/python tests/blender/run.py --zip dist/bvhlab.zip
+bpy45-venv bpy50-venv: bpy%-venv: build/venv-bpy%/.deps
+bpy45-test bpy50-test: bpy%-test: addon build/venv-bpy%/.deps
+	build/venv-bpy$*/bin/python tests/blender/run.py --zip dist/bvhlab.zip
 blender-binary-test: addon
 	$(TRIXIE) run blender --background --factory-startup --python-exit-code 1 --python tests/blender/run.py -- --zip dist/bvhlab.zip
 blender-ui-test: addon
@@ -121,7 +123,7 @@ blender-sid-test: addon
 # segfaults Blender with no add-on enabled; 4.3 on Python 3.13 is fine).
 blender-sid-ui-test: addon
 	$(SID) run python3 tests/blender/ui/run_ui.py --zip dist/bvhlab.zip --out build/ui-sid --only build_cancel build_races viewport pick undo
-blender-test: bpy313-test bpy53-test bpy50-test blender-binary-test blender-ui-test blender-sid-test blender-sid-ui-test
+blender-test: bpy313-test bpy53-test bpy51-test bpy50-test bpy45-test blender-binary-test blender-ui-test blender-sid-test blender-sid-ui-test
 
 # clang with ASan, UBSan and float-cast-overflow (GCC's -fsanitize=undefined has no float→int
 # check); its ctest also replays the fuzz corpus (tests/fuzz/corpus) under them.

@@ -2,8 +2,9 @@
 # A Debian root under build/SUITE with a real Blender binary and the Python it embeds, on a Debian
 # 12 machine that has neither. `make test` uses two:
 #   trixie  Debian 13: Blender 4.3 on Python 3.13; the cp313 wheel, the bpy module 5.2 LTS on Python
-#           3.13 (a venv, /opt/py313), the bpy module 5.3 (a second venv, /opt/bpy53: the newest
-#           blender.org line) and the Blender binary checks (headless and under Xvfb)
+#           3.13 (a venv, /opt/py313), the bpy modules 5.3 and 5.1 (venvs /opt/bpy53 and /opt/bpy51:
+#           blender.org's newest line and its first on Python 3.13) and the Blender binary checks
+#           (headless and under Xvfb)
 #   sid     Debian unstable: Blender 5.2 on Python 3.14, as Linux distributions build it (against
 #           their system Python); the cp314 wheel and the Blender binary checks
 #
@@ -40,8 +41,8 @@ case "$SUITE" in
     # pip builds the cp313 wheel in a venv that also holds the bpy module (requirements-py313.txt)
     PYTHON_PACKAGES=(python3-dev python3-venv)
     VENV=/opt/py313 REQUIREMENTS=requirements-py313.txt
-    # the bpy module 5.3 beside it (one bpy per venv): only the add-on checks run there
-    EXTRA_VENVS=(/opt/bpy53=requirements-bpy53.txt)
+    # the bpy modules 5.3 and 5.1 beside it (one bpy per venv): only the add-on checks run there
+    EXTRA_VENVS=(/opt/bpy53=requirements-bpy53.txt /opt/bpy51=requirements-bpy51.txt)
     EXPECT_BLENDER=4.3 EXPECT_PYTHON=3.13
     ;;
   sid)

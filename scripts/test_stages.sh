@@ -42,6 +42,7 @@ rm -f "$LOGS"/*.done
 background "root: Debian 13" trixie
 background "root: Debian sid" sid
 background "venv: bpy 5.0" bpy50-venv
+background "venv: bpy 4.5 LTS" bpy45-venv
 
 wait_for() {  # TARGET NAME: wait for a background set-up; record its time (its own, not the wait)
   local start
@@ -64,12 +65,15 @@ roots=0
 wait_for trixie "root: Debian 13" || roots=1
 wait_for sid "root: Debian sid" || roots=1
 wait_for bpy50-venv "venv: bpy 5.0 (Python 3.11)" || roots=1
+wait_for bpy45-venv "venv: bpy 4.5 LTS (Python 3.11)" || roots=1
 if [ "$roots" = 0 ]; then
   stage "extension zip (cp311, cp313, cp314 wheels)" addon || failed=1
   stage "pytest (Python 3.11, bpy 4.2, lavapipe)" pytest || failed=1
   stage "add-on checks: bpy 5.2 module (Python 3.13)" bpy313-test || failed=1
   stage "add-on checks: bpy 5.3 module (Python 3.13)" bpy53-test || failed=1
+  stage "add-on checks: bpy 5.1 module (Python 3.13)" bpy51-test || failed=1
   stage "add-on checks: bpy 5.0 module (Python 3.11)" bpy50-test || failed=1
+  stage "add-on checks: bpy 4.5 LTS module (Python 3.11)" bpy45-test || failed=1
   stage "add-on checks: Blender 4.3 binary, headless" blender-binary-test || failed=1
   stage "add-on checks: Blender 4.3 binary, window" blender-ui-test || failed=1
   stage "add-on checks: Blender 5.2 (sid, Python 3.14), headless" blender-sid-test || failed=1
