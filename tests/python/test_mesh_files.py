@@ -143,6 +143,27 @@ def test_gltf_whose_buffer_is_missing_names_the_gltf_and_the_buffer(tmp_path, so
         load_mesh_file(tmp_path / "sphere.gltf")
 
 
+@pytest.mark.parametrize("cameras", [False, True])
+def test_gltf_buffer_uris_are_percent_decoded(tmp_path, source, cameras):
+    """The probe's case: Blender's glTF export of "my model.gltf" writes its buffer's URI as
+    "my%20model.bin" (URIs are percent-encoded); trimesh looked for that name as written and the
+    file was "missing". Read both where trimesh reads the file and where bvhlab mends it first
+    (a camera node). A name whose "%" was written unencoded is still found as written."""
+    source.export(tmp_path / "sphere.gltf")
+    doc = json.loads((tmp_path / "sphere.gltf").read_text())
+    if cameras:
+        doc = _camera_nodes(doc)
+    current = tmp_path / doc["buffers"][0]["uri"]
+    for name, uri in (("my model #1.bin", "my%20model%20%231.bin"), ("100%.bin", "100%.bin")):
+        current = current.rename(tmp_path / name)
+        doc["buffers"][0]["uri"] = uri
+        path = tmp_path / "my model.gltf"
+        path.write_text(json.dumps(doc))
+        scene = load_mesh_file(path)
+        assert len(scene.triangles) == (2 if cameras else 1) * len(source.faces), uri
+        np.testing.assert_allclose(scene.bounds()[0], source.bounds[0], atol=1e-5)
+
+
 def test_missing_file_is_file_not_found(tmp_path):
     with pytest.raises(FileNotFoundError):
         load_mesh_file(tmp_path / "missing.stl")

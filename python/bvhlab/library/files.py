@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import io
 from pathlib import Path
+from urllib.parse import unquote
 
 import numpy as np
 
@@ -74,11 +75,9 @@ def _triangles(path: Path, kind: str) -> np.ndarray:
         raise SceneFileError(f"{path}: reading {kind} files needs trimesh (pip install 'bvhlab[files]')") from None
     kind, mended = check_gltf(path)  # "gltf" or "glb" by the file's contents; mended: without cameras
     try:
-        if mended is None:
-            mesh = trimesh.load(str(path), file_type=kind, force="mesh", process=False)
-        else:  # a .gltf's buffers are found beside the file
-            resolver = trimesh.resolvers.FilePathResolver(str(path))
-            mesh = trimesh.load(io.BytesIO(mended), file_type=kind, force="mesh", process=False, resolver=resolver)
+        resolver = _uri_resolver(trimesh, path)  # the files it refers to, found beside it
+        source = str(path) if mended is None else io.BytesIO(mended)
+        mesh = trimesh.load(source, file_type=kind, force="mesh", process=False, resolver=resolver)
         vertices = np.asarray(getattr(mesh, "vertices", np.zeros((0, 3))), np.float64)
         faces = getattr(mesh, "faces", None)  # a point cloud has none
         faces = np.zeros((0, 3), np.int64) if faces is None else np.asarray(faces)
@@ -93,6 +92,26 @@ def _triangles(path: Path, kind: str) -> np.ndarray:
         reason = str(e).strip() or type(e).__name__
         raise SceneFileError(f"{path} cannot be read as {kind.upper()}: {reason}") from None
     return _checked_triangles(path, vertices, faces)
+
+
+def _uri_resolver(trimesh, path: Path):
+    """trimesh's resolver of the files beside `path`, reading a glTF URI percent-decoded first:
+    URIs are RFC 3986 references (the glTF 2.0 specification, "URIs"), so Blender writes the buffer of "my
+    model.gltf" as "my%20model.bin", which trimesh looked for as written ("which is missing");
+    gltf_checks.gltf_buffers decodes them too. As written where the decoded name is not there (a
+    file named with a "%" its exporter did not encode)."""
+
+    class Decoding(trimesh.resolvers.FilePathResolver):
+        def get(self, name: str):
+            decoded = unquote(name)
+            if decoded != name:
+                try:
+                    return super().get(decoded)
+                except FileNotFoundError:
+                    pass
+            return super().get(name)
+
+    return Decoding(str(path))
 
 
 def _checked_triangles(path: Path, vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
