@@ -126,6 +126,17 @@ def setting(name: str, value, lo: float = -math.inf, hi: float = math.inf) -> fl
     return value
 
 
+def input_file(path: Path, what: str, error: type[Exception]) -> None:
+    """Refuses, before it is opened, a `path` that exists and is not a regular file: a folder, or
+    a FIFO, device or socket (opening a FIFO blocks until someone writes to it). A missing file is
+    left to the reader (FileNotFoundError). `what` names the file expected ("scene file"),
+    `error` is the reader's own error type."""
+    if path.is_dir():
+        raise error(f"{path} is a folder, not a {what}")
+    if path.exists() and not path.is_file():
+        raise error(f"{path} is not a regular file (a FIFO, device or socket), not a {what}")
+
+
 class OutputPathError(OSError, ValueError):
     """An output path that cannot be written as given (a folder, under a file, a wrong suffix).
     Both an OSError (it is about the file system) and a ValueError (it is a bad argument)."""

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import _checks
 from ._atomic import replacing
 
 #: A file may expand to at most this many times its size once the arrays exceed MIN_CHECKED_BYTES.
@@ -44,10 +45,7 @@ def read_npz(
 ) -> dict[str, np.ndarray]:
     """The arrays named in `members` (those in `optional` may be absent), checked as described above;
     each pair in `same_length` must agree in their first dimension."""
-    if path.is_dir():
-        raise SceneFileError(f"{path} is a folder, not a scene file")
-    if path.exists() and not path.is_file():  # a FIFO would block the reader until someone writes
-        raise SceneFileError(f"{path} is not a regular file (a FIFO, device or socket), not a scene file")
+    _checks.input_file(path, "scene file", SceneFileError)
     try:
         with zipfile.ZipFile(path) as archive:
             headers = {name: _header(path, archive, name) for name in members if _has(archive, name)}

@@ -81,18 +81,40 @@ def test_an_output_name_without_a_stem_is_named_so(tmp_path, args, name):
     assert os.listdir(tmp_path) == []
 
 
-@pytest.mark.parametrize("command", ["build", "render", "compare"])
-def test_a_fifo_as_the_scene_is_refused_without_hanging(tmp_path, command):
-    """Opening a FIFO blocks until a writer comes: the CLI used to hang, then said "not an .npz"."""
-    fifo = tmp_path / "s.npz"
+@pytest.mark.parametrize("command, name", [("build", "s.npz"), ("render", "s.BLEND"), ("compare", "s.Obj")])
+def test_a_fifo_as_the_scene_is_refused_without_hanging(tmp_path, command, name):
+    """Opening a FIFO blocks until a writer comes: the CLI used to hang, then said "not an .npz";
+    a suffix in upper case (s.BLEND, which the loader reads as a .blend) still hung (probe)."""
+    fifo = tmp_path / name
     os.mkfifo(fifo)
     extra = {"build": [], "render": ["--out", tmp_path / "r.png"], "compare": ["--out", tmp_path / "c"]}[command]
     code, _, err = run_cli(command, fifo, *extra, timeout=30)
     assert code == 2 and last_line(err) == (
         f"bvhlab {command}: error: argument SCENE: {fifo} is not a regular file (a FIFO, device or "
-        f"socket); give a .blend or .npz file"
+        f"socket); give a scene file (.blend, .npz, .obj, .ply, .stl, .gltf, .glb)"
     )
-    assert os.listdir(tmp_path) == ["s.npz"]
+    assert os.listdir(tmp_path) == [name]
+
+
+def test_load_scene_refuses_a_fifo_blend_without_hanging(tmp_path):
+    """bvhlab.library.load_scene of a FIFO named .blend blocked in bpy's open (probe: the CLI's
+    upper-case case reached it)."""
+    fifo = tmp_path / "s.blend"
+    os.mkfifo(fifo)
+    done = run_python(
+        f"""
+        from bvhlab.library import load_scene
+        try:
+            load_scene({str(fifo)!r})
+        except ValueError as e:
+            print(type(e).__name__, e)
+        """,
+        timeout=60,
+    )
+    assert (
+        done.stdout.strip()
+        == f"SceneFileError {fifo} is not a regular file (a FIFO, device or socket), not a .blend file"
+    )
 
 
 def test_scene_load_refuses_a_fifo_without_hanging(tmp_path):

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from .. import _checks
+from .._npz import SceneFileError
 from ..scene import Scene
 
 
@@ -24,6 +26,7 @@ def load_blend(path: Path) -> Scene:
     """Open a .blend with bpy (Blender as a Python module) and export it with the add-on's code."""
     if not path.exists():
         raise FileNotFoundError(f"no such file: {path}")
+    _checks.input_file(path, ".blend file", SceneFileError)  # a FIFO blocked bpy's open
     bpy = bpy_module()
     from .export import export_scene
     from .light import saved_light_distance

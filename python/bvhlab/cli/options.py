@@ -31,6 +31,7 @@ from ..bvh import (
     Bvh,
     build,
 )
+from ..library import FILE_KINDS
 from ..library.files import MESH_SUFFIXES
 from ..optimize import OptimizeConfig, OptimizeStats
 from ..render_options import DEFAULT_HEIGHT, DEFAULT_WIDTH
@@ -51,17 +52,20 @@ def add_scene(p: argparse.ArgumentParser) -> None:
 
 
 def scene_spec(text: str) -> str:
-    """A SCENE argument. A scene file (.npz, .blend) that exists but is not a regular file (a FIFO,
-    which would block the reader until someone writes to it, a device, a folder) is refused before
-    any work; names, and files that do not exist, are left to the loader, which lists the names."""
+    """A SCENE argument. A scene file (a suffix of SCENE_SUFFIXES, in any case, as the loader reads
+    them) that exists but is not a regular file (a FIFO, which would block the reader until someone
+    writes to it, a device, a folder) is refused before any work; names, and files that do not
+    exist, are left to the loader, which lists the names."""
     path = Path(text)
-    if not text.endswith(SCENE_SUFFIXES) or not path.exists() or path.is_file():
+    if path.suffix.lower() not in SCENE_SUFFIXES:
         return text
     if path.is_dir():
-        raise argparse.ArgumentTypeError(f"{text} is a folder; give a .blend or .npz file")
-    raise argparse.ArgumentTypeError(
-        f"{text} is not a regular file (a FIFO, device or socket); give a .blend or .npz file"
-    )
+        raise argparse.ArgumentTypeError(f"{text} is a folder; give a scene file ({FILE_KINDS})")
+    if path.exists() and not path.is_file():
+        raise argparse.ArgumentTypeError(
+            f"{text} is not a regular file (a FIFO, device or socket); give a scene file ({FILE_KINDS})"
+        )
+    return text
 
 
 def add_build(p: argparse.ArgumentParser) -> None:

@@ -115,8 +115,7 @@ def load_bvh(path, scene_or_triangles, spheres=None, *, config=None):
 
 
 def _read(path: Path) -> tuple[dict, np.ndarray, np.ndarray]:
-    if path.exists() and not path.is_file() and not path.is_dir():  # a FIFO would block the reader
-        raise TreeFileError(f"{path} is not a regular file (a FIFO, device or socket), not a tree file")
+    _checks.input_file(path, "tree file", TreeFileError)
     data = path.read_bytes()
     if not data.startswith(MAGIC):
         raise TreeFileError(f"{path} is not a bvhlab tree file")

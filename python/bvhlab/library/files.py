@@ -17,6 +17,7 @@ from urllib.parse import unquote
 
 import numpy as np
 
+from .. import _checks
 from .._npz import SceneFileError
 from ..scene import Scene
 from .gltf_checks import check_gltf
@@ -60,10 +61,7 @@ def load_mesh_file(path) -> Scene:
 
 
 def _check_regular_file(path: Path) -> None:
-    if path.is_dir():
-        raise SceneFileError(f"{path} is a folder, not a mesh file")
-    if path.exists() and not path.is_file():  # a FIFO would block the reader
-        raise SceneFileError(f"{path} is not a regular file (a FIFO, device or socket), not a mesh file")
+    _checks.input_file(path, "mesh file", SceneFileError)
     path.stat()  # FileNotFoundError / PermissionError as themselves: the CLI prints them
 
 
