@@ -232,3 +232,16 @@ def test_an_output_where_no_file_can_be_made_is_refused_before_the_work(args):
     code, out, err = run_cli(*args)
     assert code == 2 and "does not take new files" in last_line(err), err
     assert out == ""  # nothing ran: no progress, no table
+
+
+@pytest.mark.parametrize("side", ["c.npy", "c.histogram.png", "c.histogram.json"])
+def test_render_counter_checks_the_files_beside_out_before_any_work(tmp_path, side):
+    """The probe's case: a folder named as one of the files `render --counter` writes beside OUT
+    (the counts, the histogram) was found after the render, with OUT written and the rest not."""
+    (tmp_path / side).mkdir()
+    code, stdout, err = run_cli(
+        "render", "gen:five_spheres", "--width", 16, "--height", 12, "--backend", "cpu", "--counter", "box_tests",
+        "--out", tmp_path / "c.png",
+    )  # fmt: skip
+    assert code == 2 and last_line(err).startswith(f"bvhlab render: error: {tmp_path / side} is a folder")
+    assert "building" not in err and stdout == "" and sorted(os.listdir(tmp_path)) == [side]

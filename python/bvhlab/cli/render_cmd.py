@@ -15,6 +15,7 @@ import numpy as np
 from .. import Bvh, InstancedBvh, build, counters, histogram, legend, save_png
 from .. import _json as strict_json
 from .._atomic import replacing
+from .._checks import OutputPathError
 from .._progress import ProgressBar
 from ..library import load_scene
 from ..png import straight_alpha
@@ -96,6 +97,13 @@ def run(args) -> int:
         traversal_counters=counter is not None,
         film_transparent=args.film_transparent,
     )
+    if counter is not None:  # the files written beside OUT (its folder checked with it), before any work
+        for path in counter_paths(args.out):
+            if path.exists() and not path.is_file():
+                raise OutputPathError(
+                    f"{path} is a folder or not a regular file; --counter writes the counts and their "
+                    f"histogram beside --out {args.out} there: move it, or give another --out"
+                )
     scene, name = load_scene(args.scene)
     with ProgressBar(f"building {args.method}") as bar:
         bvh = build(scene, progress=bar, **settings)  # an instanced scene: a two-level tree, rendered as it is
@@ -137,6 +145,11 @@ def histogram_paths(out: Path) -> tuple[Path, Path]:
     return out.with_suffix(".histogram.png"), out.with_suffix(".histogram.json")
 
 
+def counter_paths(out: Path) -> tuple[Path, Path, Path]:
+    """Every file `render --counter` writes beside OUT: the counts (OUT.npy) and the histogram."""
+    return (out.with_suffix(".npy"), *histogram_paths(out))
+
+
 def _write_counter(all_counters, counter: str | None, value_range, out: Path) -> None:
     """The counter's image with its scale bar (OUT), its values per primary ray (OUT.npy) and
     their histogram over the colour range (histogram_paths: a strip and its numbers)."""
@@ -144,11 +157,10 @@ def _write_counter(all_counters, counter: str | None, value_range, out: Path) ->
     values = counters.counter_plane(all_counters, counter)
     image, (lo, hi) = counters.counter_image(values, value_range)
     save_png(image, out)
-    raw = out.with_suffix(".npy")
+    raw, strip_png, numbers = counter_paths(out)
     with replacing(raw) as f:
         np.save(f, values)
     hist = histogram.counter_histogram(values, counter, value_range)
-    strip_png, numbers = histogram_paths(out)
     save_png(histogram.histogram_strip(hist, values.shape[1]), strip_png)
     with replacing(numbers, text=True) as f:
         f.write(strict_json.dumps(hist.to_json(), indent=2))
