@@ -336,6 +336,20 @@ def test_ascii_stl_vertex_lines_are_three_numbers(tmp_path):
             load(tmp_path, "bad.stl", "solid x\n" + facet.format(lines) + "endsolid x\n")
 
 
+def test_ascii_stl_facets_of_other_than_three_vertices_are_refused(tmp_path):
+    """The probe's cases: a facet of four vertices and one of two were read as two triangles of
+    parts of both, and `vertex 0 0 0 7` as the vertex (0, 0, 0), with no error."""
+    facet = "facet normal 0 0 1\nouter loop\n{}endloop\nendfacet\n"
+    vertex = "vertex {} 0 0\n".format
+    four_two = facet.format("".join(vertex(k) for k in range(4))) + facet.format(vertex(5) + vertex(6))
+    with pytest.raises(SceneFileError, match="facet 1 has 4 vertices, not three"):
+        load(tmp_path, "a.stl", "solid x\n" + four_two + "endsolid x\n")
+    with pytest.raises(SceneFileError, match="not 'vertex x y z'"):
+        load(tmp_path, "b.stl", "solid x\n" + facet.format("vertex 0 0 0 7\n" + vertex(1) + vertex(2)))
+    with pytest.raises(SceneFileError, match="after the last endfacet"):
+        load(tmp_path, "c.stl", "solid x\n" + facet.format(vertex(0) + vertex(1) + vertex(2)) + vertex(3))
+
+
 @pytest.mark.parametrize(
     "changes",
     [

@@ -1,9 +1,9 @@
 """STL's triangles (3D Systems, "StereoLithography Interface Specification", 1988), binary or
 ASCII. A file is binary when its size is what its triangle count says (84 + 50 per triangle),
 whatever its first bytes (binary headers often start with "solid"); else ASCII if it starts with
-"solid" in any case (after a UTF-8 byte-order mark or spaces), its `vertex x y z` statements read
-three to a facet, wherever its lines break (STL is whitespace-separated: a facet may be one line).
-Anything else is refused."""
+"solid" in any case (after a UTF-8 byte-order mark or spaces), each facet's three `vertex x y z`
+statements read wherever its lines break (STL is whitespace-separated: a facet may be one line).
+Anything else is refused, a facet of other than three vertices too."""
 
 from __future__ import annotations
 
@@ -20,8 +20,13 @@ _BINARY = np.dtype([("normal", "<f4", 3), ("vertices", "<f4", (3, 3)), ("attribu
 _NUMBER = rb"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?:nan|inf)\w*)"
 # words between whitespace, outside the `solid name` and `endsolid name` lines (a name is free
 # text to its line's end and may say "vertex" or "facet": "solid vertex colors")
-_VERTEX = re.compile(rb"(?<!\S)vertex\s+" + rb"\s+".join([_NUMBER] * 3) + rb"(?=\s|$)", re.IGNORECASE)
+# (three numbers and then the next vertex, or the loop's or facet's end: `vertex 0 0 0 7` is not one)
+_VERTEX = re.compile(
+    rb"(?<!\S)vertex\s+" + rb"\s+".join([_NUMBER] * 3) + rb"(?=\s+(?:vertex|endloop|endfacet)(?!\S)|\s*$)",
+    re.IGNORECASE,
+)
 _VERTEX_WORD = re.compile(rb"(?<!\S)vertex(?!\S)", re.IGNORECASE)
+_ENDFACET = re.compile(rb"(?<!\S)endfacet(?!\S)", re.IGNORECASE)
 _SOLID_LINE = re.compile(rb"(?mi)^[ \t]*(?:\xef\xbb\xbf)?[ \t]*(?:end)?solid\b[^\r\n]*")
 
 
@@ -44,8 +49,7 @@ def read_stl(path: Path) -> tuple[np.ndarray, np.ndarray]:
                 f"{path}: no facets: starts as ASCII STL but has no vertex lines, and as binary STL its header "
                 f"declares {count} triangles ({_HEADER + _TRIANGLE * count} bytes) for its {len(data)} bytes"
             )
-        if len(found) % 3:
-            raise SceneFileError(f"{path}: {len(found)} vertex lines, not three to every facet (truncated?)")
+        _check_facets(path, facets)
         vertices = np.array(found, dtype=np.float64).reshape(-1, 3)
     elif count >= 0:
         raise SceneFileError(
@@ -56,3 +60,20 @@ def read_stl(path: Path) -> tuple[np.ndarray, np.ndarray]:
     else:
         raise SceneFileError(f"{path}: {len(data)} bytes: neither binary STL (84 at least) nor ASCII")
     return vertices, np.arange(len(vertices), dtype=np.int64).reshape(-1, 3)
+
+
+def _check_facets(path: Path, facets: bytes) -> None:
+    """Every facet of an ASCII STL has three vertices and ends with `endfacet`: the vertices are
+    read three to a triangle, so a facet of four and one of two made two triangles of parts of
+    both, with no error."""
+    ends = np.fromiter((m.start() for m in _ENDFACET.finditer(facets)), np.int64)
+    starts = np.fromiter((m.start() for m in _VERTEX_WORD.finditer(facets)), np.int64)
+    per_facet = np.bincount(np.searchsorted(ends, starts), minlength=len(ends) + 1)
+    if per_facet[-1]:
+        raise SceneFileError(f"{path}: {per_facet[-1]} vertex lines after the last endfacet (truncated?)")
+    wrong = np.flatnonzero(per_facet[:-1] != 3)
+    if len(wrong):
+        k = int(wrong[0])
+        raise SceneFileError(
+            f"{path}: facet {k + 1} has {per_facet[k]} vertices, not three ({len(wrong)} such facet(s))"
+        )
