@@ -92,6 +92,9 @@ def _vertices(path: Path, lines: list[str]) -> np.ndarray:
     short = next((i for i, r in enumerate(rows) if len(r) < 3), None)
     if short is not None:
         raise SceneFileError(f"{path}: vertex {short + 1} needs x, y and z, got {lines[short]!r}")
+    odd = next((i for i, r in enumerate(rows) if any("_" in w for w in r)), None)
+    if odd is not None:  # Python's float() reads "1_0" as 10, numpy's fast path refuses it
+        raise SceneFileError(f"{path}: vertex {odd + 1}: a coordinate is not a number: {lines[odd]!r}")
     try:
         return np.array(rows, dtype=np.float64).reshape(-1, 3)
     except ValueError as e:
