@@ -386,6 +386,25 @@ def test_text_files_saved_as_utf16_read_as_utf8(tmp_path, kind, codec):
     assert got.tolist() == [[[0, 0, 0], [2, 0, 0], [0, 3, 0]]]
 
 
+@pytest.mark.parametrize("kind", sorted(UTF16_TEXTS))
+def test_text_files_with_a_utf8_byte_order_mark(tmp_path, kind):
+    """Notepad's "UTF-8 with BOM": the PLY was "not a PLY file" (probe); OBJ and STL read it."""
+    text = UTF16_TEXTS[kind]
+    got = load(tmp_path, f"bom.{kind}", b"\xef\xbb\xbf" + text.encode())
+    assert got.tolist() == [[[0, 0, 0], [2, 0, 0], [0, 3, 0]]]
+
+
+def test_ply_magic_line_and_long_header(tmp_path):
+    """The probe's cases: a first line "plyx" was read as PLY; a header longer than the reader
+    looks (64 KiB of comments) was called "not a PLY file"."""
+    text = UTF16_TEXTS["ply"]
+    with pytest.raises(SceneFileError, match="its first line is not 'ply'"):
+        load(tmp_path, "x.ply", text.replace("ply\n", "plyx\n", 1))
+    long = text.replace("ply\n", "ply\n" + "comment padding\n" * 5000, 1)
+    with pytest.raises(SceneFileError, match="no 'end_header' line in its first 64 KiB"):
+        load(tmp_path, "long.ply", long)
+
+
 @pytest.mark.parametrize(
     "name, data, message",
     [

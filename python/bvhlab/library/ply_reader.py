@@ -70,8 +70,10 @@ def read_ply(path: Path) -> tuple[np.ndarray, np.ndarray]:
 def _header(path: Path, data: bytes) -> tuple[str, list[_Element], int]:
     # the line "end_header" (not the words in a comment)
     found = re.search(rb"(?:^|\n)[ \t]*end_header[ \t]*\r?(?:\n|$)", data[:_MAX_HEADER])
-    if not data.startswith(b"ply") or found is None:
-        raise SceneFileError(f"{path}: not a PLY file (no 'ply' ... 'end_header' header)")
+    if not re.match(rb"ply[ \t]*\r?\n", data):  # the magic line ("plyx" is not it)
+        raise SceneFileError(f"{path}: not a PLY file (its first line is not 'ply')")
+    if found is None:
+        raise SceneFileError(f"{path}: no 'end_header' line in its first {_MAX_HEADER >> 10} KiB (not a PLY file?)")
     end, start = found.start(), found.end()
     fmt, elements = None, []
     for line in data[:end].decode("ascii", errors="replace").splitlines()[1:]:

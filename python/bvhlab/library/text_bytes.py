@@ -12,7 +12,11 @@ _UTF16_MARKS = {b"\xff\xfe": "utf-16-le", b"\xfe\xff": "utf-16-be"}
 
 
 def utf8_bytes(path: Path, data: bytes) -> bytes:
-    """`data` as UTF-8: a UTF-16 file (by its byte-order mark) decoded; anything else as it is."""
+    """`data` as UTF-8: a UTF-16 file (by its byte-order mark) decoded, a UTF-8 byte-order mark
+    dropped (a PLY saved by Notepad as "UTF-8 with BOM" was "not a PLY file"); anything else as it
+    is."""
+    if data.startswith(b"\xef\xbb\xbf"):
+        return data[3:]
     for mark, codec in _UTF16_MARKS.items():
         if data.startswith(mark):
             try:
