@@ -245,3 +245,25 @@ def test_render_counter_checks_the_files_beside_out_before_any_work(tmp_path, si
     )  # fmt: skip
     assert code == 2 and last_line(err).startswith(f"bvhlab render: error: {tmp_path / side} is a folder")
     assert "building" not in err and stdout == "" and sorted(os.listdir(tmp_path)) == [side]
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["render", "gen:five_spheres", "--counter", "box_tests", "--film-transparent", "--out", "{d}/r.png"],
+         "--film-transparent is for the shaded image"),
+        (["compare", "gen:five_spheres", "--counter", "prim_hits", "--out", "{d}/c"],
+         "--counter is the counter of --counter-diff A,B"),
+        (["animate", "{blend}", "--size", "7", "--out", "{d}/a"], "--size sizes the generated animations"),
+    ],
+)  # fmt: skip
+def test_options_that_would_be_ignored_are_refused(tmp_path, args, message):
+    """The probe's cases, each accepted and ignored: a counter's image with --film-transparent came
+    out byte for byte the same, compare --counter without --counter-diff ran the whole comparison,
+    animate --size on a .blend was written into animate.json as if used."""
+    from bvhlab.library import bundled_dir
+
+    blend = next(bundled_dir().glob("*.blend"))
+    code, stdout, err = run_cli(*(a.format(d=tmp_path, blend=blend) for a in args))
+    assert code == 2 and message in last_line(err), err
+    assert "building" not in err and os.listdir(tmp_path) == []

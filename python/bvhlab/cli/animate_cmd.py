@@ -91,6 +91,8 @@ def policy_list(text: str) -> tuple[str, ...]:
 def _frames_of(args) -> tuple[Callable[[int], np.ndarray | Scene], range]:
     """Frame k's geometry, and the frames to run."""
     if Path(args.animation).suffix.lower() == ".blend":
+        if args.size is not None:  # was ignored, and written into animate.json as if used
+            raise ValueError("--size sizes the generated animations (wave, crowd); a .blend is run as it is")
         from ..blender.animation import open_animation
 
         scene_at, frames = open_animation(Path(args.animation))

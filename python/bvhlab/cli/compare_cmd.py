@@ -73,7 +73,7 @@ def add_parser(sub) -> None:
     p.add_argument(
         "--counter",
         choices=counters.COUNTERS,
-        default="box_tests",
+        default=None,
         help="the counter of --counter-diff (default box_tests)",
     )
     p.add_argument("--out", type=cargs.output_dir, required=True, help="directory for tables, charts and figures")
@@ -85,6 +85,9 @@ def say(text: str) -> None:
 
 
 def run(args) -> int:
+    if args.counter is not None and not args.counter_diff:  # was run as the whole comparison, silently
+        raise ValueError("--counter is the counter of --counter-diff A,B; give both")
+    args.counter = args.counter or "box_tests"
     scene, name = load_scene(args.scene)
     scene = scene.flattened()  # Table 1 compares split methods over the geometry as it stands
     if not scene.primitive_count:

@@ -137,6 +137,8 @@ def _counter(args) -> str | None:
         raise ValueError("--heatmap is --counter box_tests: give one of them")
     if args.range is not None and not (args.counter or args.heatmap):
         raise ValueError("--range needs --counter")
+    if args.film_transparent and (args.counter or args.heatmap):  # a counter's image has no sky to clear
+        raise ValueError("--film-transparent is for the shaded image; a counter's image has no transparency")
     return "box_tests" if args.heatmap else args.counter
 
 
