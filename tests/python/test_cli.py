@@ -221,6 +221,7 @@ def bad_scene_files(tmp_path_factory):
     np.savez(d / "no_triangles.npz", **{k: v for k, v in arrays.items() if k != "triangles"})
     np.savez(d / "materials5.npz", **{**arrays, "materials": np.zeros((1, 5))})
     (d / "truncated.npz").write_bytes(good.read_bytes()[:300])
+    (d / "text.blend").write_text("not a .blend file")
     (d / "a_file").write_text("")
     (d / "a_folder").mkdir()
     return d
@@ -232,6 +233,8 @@ def bad_scene_files(tmp_path_factory):
         (["build", "{d}/truncated.npz"], "truncated.npz is not an .npz file"),
         (["build", "{d}/no_triangles.npz"], "no_triangles.npz has no 'triangles'"),
         (["build", "{d}/materials5.npz"], "materials has 5 columns; a scene of format 4 has 8"),
+        # bpy's RuntimeError, "Error: File format is not supported …" and a blank line after the CLI's
+        (["build", "{d}/text.blend"], r"text\.blend cannot be read as a \.blend file: File format is not supported"),
         (["build", "{d}/good.npz", "--json", "{d}/a_file/stats.json"], "a_file is a file, not a folder"),
         (["build", "{d}/good.npz", "--json", "{d}/a_folder"], "a_folder is a folder"),
         (["build", "{d}/good.npz", "--csv", "{d}/stats.json"], "written as .csv"),
@@ -241,6 +244,11 @@ def bad_scene_files(tmp_path_factory):
         (["render", "{d}/good.npz", "--bvh-depth", "-1:2", "--out", "{d}/r.png"], "depth range -1:2: need 0 <= A <= B"),
         (["inspect", "{d}/good.npz", "--pixel", "-1,5"], "pixel -1,5: coordinates must be >= 0"),
         (["inspect", "{d}/good.npz", "--pixel", "3,-2"], "pixel 3,-2: coordinates must be >= 0"),
+        (
+            ["render", "{d}/good.npz", "--counter", "box_tests", "--range", "-1,-5", "--out", "{d}/r.png"],
+            "range must be two finite numbers LO < HI, got -1.0, -5.0",
+        ),
+        (["animate", "wave", "--frames", "-1-2", "--out", "{d}/a"], "frames must look like A-B"),
         (
             ["render", "{d}/good.npz", "--width", "100000", "--out", "{d}/r.png"],
             "between 1 and 16384 pixels, got 100000",

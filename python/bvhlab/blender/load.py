@@ -31,7 +31,11 @@ def load_blend(path: Path) -> Scene:
     from .export import export_scene
     from .light import saved_light_distance
 
-    bpy.ops.wm.open_mainfile(filepath=str(path.resolve()), load_ui=False)
+    try:
+        bpy.ops.wm.open_mainfile(filepath=str(path.resolve()), load_ui=False)
+    except RuntimeError as e:  # bpy's "Error: File format is not supported in file '…'\n"
+        reason = str(e).strip().removeprefix("Error:").strip()
+        raise SceneFileError(f"{path} cannot be read as a .blend file: {reason}") from None
     # a file without a camera is framed by the default camera, as a mesh file is (design.md, Defaults);
     # its light lit as the add-on lights it (its saved Light Distance, where set)
     distance = saved_light_distance(bpy.context.scene)

@@ -264,12 +264,12 @@ def output_file_type(suffix: str, what: str) -> Callable[[str], Path]:
 #: Options whose value may start with '-' (a depth range such as -1:2 or a pixel such as -1,5
 #: would otherwise be taken for an option by argparse, which then says "expected one argument"
 #: instead of what is wrong).
-_DASH_VALUE_OPTIONS = ("--bvh-depth", "--pixel")
+_DASH_VALUE_OPTIONS = ("--bvh-depth", "--pixel", "--range", "--frames")
 
 
 def join_dash_values(argv: list[str]) -> list[str]:
-    """['--bvh-depth', '-1:2'] → ['--bvh-depth=-1:2'] (and '--pixel -1,5'), so the value's own check
-    explains."""
+    """['--bvh-depth', '-1:2'] → ['--bvh-depth=-1:2'] (and '--pixel -1,5', '--range -1,5',
+    '--frames -1-2'), so the value's own check explains, or takes it."""
     out: list[str] = []
     for arg in argv:
         if out and out[-1] in _DASH_VALUE_OPTIONS and re.fullmatch(r"-[\d:,-]+", arg):
