@@ -250,6 +250,10 @@ def bad_scene_files(tmp_path_factory):
         ),
         (["animate", "wave", "--frames", "-1-2", "--out", "{d}/a"], "frames must look like A-B"),
         (
+            ["render", "{d}/good.npz", "--max-depth", "20", "--out", "{d}/r.png"],
+            "argument --max-depth: must be between 0 and 15, got 20",
+        ),  # was "max_depth must be ..."
+        (
             ["render", "{d}/good.npz", "--width", "100000", "--out", "{d}/r.png"],
             "between 1 and 16384 pixels, got 100000",
         ),

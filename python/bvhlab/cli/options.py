@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import re
 from collections.abc import Callable
 from pathlib import Path
@@ -109,7 +110,7 @@ def add_optimize(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--optimize-ms",
-        type=float,
+        type=milliseconds,
         default=0.0,
         metavar="MS",
         help="with --optimize: stop after this many ms, keeping what it did (default 0: no budget)",
@@ -235,6 +236,18 @@ def whole_number(text: str, lo: int | None = None, hi: int | None = None, unit: 
         raise argparse.ArgumentTypeError(f"expected a whole number{unit and ' of' + unit}, got '{text}'") from None
     if lo is not None and hi is not None and not lo <= value <= hi:
         raise argparse.ArgumentTypeError(f"must be between {lo} and {hi}{unit}, got {value}")
+    return value
+
+
+def milliseconds(text: str) -> float:
+    """An argparse value: a finite number of ms, at least 0 (the core's check said "time_budget_ms",
+    a name the command line does not use)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of ms, got '{text}'") from None
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"must be a finite number of ms, at least 0 (0: no budget), got {text}")
     return value
 
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import Bvh, InstancedBvh, build, counters, histogram, legend, save_png
+from .. import Bvh, InstancedBvh, _core, build, counters, histogram, legend, save_png
 from .. import _json as strict_json
 from .._atomic import replacing
 from .._checks import OutputPathError
@@ -43,7 +43,7 @@ def add_parser(sub) -> None:
     )
     p.add_argument(
         "--max-depth",
-        type=int,
+        type=lambda text: options.whole_number(text, 0, int(_core.MAX_RAY_DEPTH)),
         default=_DEFAULT.max_depth,
         help=f"bounces of reflection and refraction (default {_DEFAULT.max_depth})",
     )
