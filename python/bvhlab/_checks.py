@@ -155,8 +155,9 @@ def output_file(path, suffixes: tuple[str, ...], what: str) -> Path:
         example = path.with_name("out" + path.name)
         raise OutputPathError(f"{path}: the file name has no stem, only the suffix; name the file, e.g. {example}")
     if path.suffix.lower() not in suffixes:
+        article = "an" if what[0] in "aeiou" else "a"  # "an inspection file"
         raise OutputPathError(
-            f"{path}: a {what} is written as {' or '.join(suffixes)}; name the file so "
+            f"{path}: {article} {what} is written as {' or '.join(suffixes)}; name the file so "
             f"(e.g. {path.with_name(path.stem + suffixes[0])}), it is not renamed for you"
         )
     for parent in path.parents:

@@ -63,8 +63,8 @@ void validate_work(const RenderSettings& s) {
         fail("max_ray_depth must be at most " + std::to_string(gpu::MAX_RAY_DEPTH));
     if (s.traversal == Traversal::Wide && s.traversal_counters)
         fail(
-            "the 'wide' traversal counts box tests only (the heatmap); traversal counters need 'stack' or "
-            "'stackless'");
+            "traversal counters need the 'stack' or 'stackless' traversal; 'wide' keeps only the heatmap "
+            "mode's cost (8 box tests a wide node visited)");
     if (s.steps_per_dispatch &&
         (*s.steps_per_dispatch < gpu::MIN_STEPS_PER_DISPATCH || *s.steps_per_dispatch > gpu::MAX_STEPS_PER_DISPATCH))
         fail("steps_per_dispatch must be " + std::to_string(gpu::MIN_STEPS_PER_DISPATCH) + ".." +
