@@ -12,7 +12,7 @@ import pyarrow.parquet as pq
 import pytest
 import trimesh
 
-from bvhlab import build, cli
+from bvhlab import BuildConfig, build, cli
 from bvhlab.library import load_scene
 from bvhlab.sweep import local_cluster, plan_cells, read_spec, run_sweep
 from bvhlab.sweep.plot import pareto_front
@@ -72,6 +72,25 @@ def test_bad_grid_is_refused_naming_the_setting(tmp_path, grid, message):
 def test_glob_matching_nothing_is_refused(tmp_path):
     with pytest.raises(ValueError, match="matches no file"):
         read_spec(_write_spec(tmp_path, ["*.stl"]))
+
+
+def test_glob_takes_the_scene_files_it_matches(tmp_path, models):
+    """The probe's case: "models/*" beside a readme made a cell "FileNotFoundError: no scene" of
+    the readme; a glob matching only files that are not scenes is refused as such."""
+    (tmp_path / "readme.txt").write_text("the models")
+    (tmp_path / "Ball.PLY").write_bytes((tmp_path / "ball.ply").read_bytes())
+    spec = read_spec(_write_spec(tmp_path, ["*"]))
+    assert [s.rsplit("/", 1)[-1] for s in spec.scenes] == ["Ball.PLY", "ball.ply", "box.obj", "nan.obj"]
+    with pytest.raises(ValueError, match=r"'\*\.txt' matches no scene file \(of 1 files\)"):
+        read_spec(_write_spec(tmp_path, ["*.txt"]))
+
+
+def test_grid_methods_are_read_as_the_cli_reads_them(tmp_path):
+    """`method = 'sah12'` was refused in a spec, where `--method sah12` builds method sah with 12 bins."""
+    spec = read_spec(_write_spec(tmp_path, ["gen:five_spheres"], "method = ['median', 'sah20']"))
+    assert {(s.config.method, s.config.bins) for s in spec.settings} == {("median", BuildConfig().bins), ("sah", 20)}
+    with pytest.raises(ValueError, match="gives the bins; give bins or sah<B>, not both"):
+        read_spec(_write_spec(tmp_path, ["gen:five_spheres"], "method = 'sah12'\nbins = [8, 16]"))
 
 
 def test_key_changes_with_the_content_and_the_settings(tmp_path, models):

@@ -2,7 +2,7 @@
 
     scenes = ["gen:knot", "sponza", "models/*.ply", "extra/bunny.obj"]   # names, files, globs
     [grid]                    # each a value or a list; every combination is one cell
-    method = ["median", "sah"]
+    method = ["median", "sah"]  # or "sah32": method sah with 32 bins, as --method reads it
     bins = [12, 32]
     bin_bounds = "box"
     axis = "auto"
@@ -17,7 +17,8 @@
     baseline = "median"       # the method the summary's ratios divide by (default: the grid's first)
 
 Settings a grid leaves out keep BuildConfig's defaults. Globs and relative paths are relative to the
-spec's folder; a glob that matches nothing is an error (ValueError naming it)."""
+spec's folder; a glob takes the scene files it matches (mesh files, .blend, .npz), and one that
+matches none is an error (ValueError naming it)."""
 
 from __future__ import annotations
 
@@ -27,7 +28,7 @@ import tomllib
 from dataclasses import dataclass, fields
 from pathlib import Path
 
-from ..build_config import BuildConfig
+from ..build_config import BuildConfig, method_from_label
 from ..library import is_mesh_file
 from ..ray_query import TRAVERSALS
 
@@ -109,6 +110,10 @@ def _only(path: Path, where: str, table, allowed: tuple[str, ...]) -> None:
         raise ValueError(f"{path}: unknown key(s) in {where}: {', '.join(unknown)}; expected: {', '.join(allowed)}")
 
 
+def _is_scene_file(name: str) -> bool:
+    return is_mesh_file(name) or Path(name).suffix.lower() in _SCENE_FILE_SUFFIXES
+
+
 def _scenes(path: Path, entries) -> tuple[str, ...]:
     if isinstance(entries, str):
         entries = [entries]
@@ -117,15 +122,30 @@ def _scenes(path: Path, entries) -> tuple[str, ...]:
     out: list[str] = []
     for entry in entries:
         if glob.has_magic(entry):
-            matches = sorted(glob.glob(str(path.parent.resolve() / entry), recursive=True))
+            found = sorted(glob.glob(str(path.parent.resolve() / entry), recursive=True))
+            # the scene files among them ("models/*" beside a readme.txt made a row "no scene")
+            matches = [m for m in found if _is_scene_file(m)]
             if not matches:
-                raise ValueError(f"{path}: the scene glob '{entry}' matches no file")
+                what = f"no scene file (of {len(found)} files)" if found else "no file"
+                raise ValueError(f"{path}: the scene glob '{entry}' matches {what}")
             out.extend(matches)
-        elif is_mesh_file(entry) or entry.endswith(_SCENE_FILE_SUFFIXES):
+        elif _is_scene_file(entry):
             out.append(str(path.parent.resolve() / entry))  # a missing file becomes the cell's error row
         else:
             out.append(entry)
     return tuple(dict.fromkeys(out))  # each scene once, in the order given
+
+
+def _settings(values: dict) -> dict:
+    """A grid point's build settings, a method label read as --method reads it ("sah12": method sah
+    with 12 bins; it was refused here)."""
+    method = values.get("method")
+    if not isinstance(method, str):
+        return values
+    label = method_from_label(method)
+    if "bins" in label and "bins" in values:
+        raise ValueError(f"method '{method}' gives the bins; give bins or sah<B>, not both")
+    return {**values, **label}
 
 
 def _grid(path: Path, grid) -> tuple[Setting, ...]:
@@ -138,7 +158,7 @@ def _grid(path: Path, grid) -> tuple[Setting, ...]:
     settings = []
     for combination in itertools.product(*axes.values()):
         try:
-            config = BuildConfig(**dict(zip(axes, combination)))
+            config = BuildConfig(**_settings(dict(zip(axes, combination))))
         except (TypeError, ValueError) as e:
             raise ValueError(f"{path}: [grid] {e}") from None
         if config.seed > MAX_SEED:
