@@ -99,6 +99,23 @@ def test_bad_requests(tmp_path, capsys):
     np.testing.assert_equal(sorted(p.name for p in tmp_path.iterdir()), ["w.bvhtree"])
 
 
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["--worst", "1", "--sample", "3"],
+        ["--node", "0", "--width", "3"],
+        ["--node", "0", "--traversal", "stackless"],
+        ["--worst", "2", "--samples-per-axis", "4"],
+        ["--node", "0", "--height", "600"],
+    ],
+)
+def test_pixel_options_need_pixel(args, capsys):
+    """The probe's cases: the options of --pixel were accepted with --node and --worst, and ignored."""
+    assert main(["inspect", "gen:whitted", *args]) == 2
+    option = args[2]
+    assert f"{option} is an option of --pixel X,Y" in capsys.readouterr().err
+
+
 def test_a_missed_pixel_is_strict_json(tmp_path):
     """A pixel whose ray hits nothing: its distance is null (it was Infinity, which strict JSON
     parsers refuse)."""

@@ -20,7 +20,7 @@ from ..inspect.levels import TreeNode
 from ..inspect.ray_record import PIXEL_TRAVERSALS, trace_pixel
 from ..inspect.tree_file import SUFFIX, TreeFileError
 from ..library import load_scene
-from ..render_options import RenderOptions
+from ..render_options import DEFAULT_HEIGHT, DEFAULT_WIDTH, RenderOptions
 from . import options
 
 _DEFAULT = RenderOptions()
@@ -75,16 +75,12 @@ def add_parser(sub) -> None:
     p.add_argument(
         "--save-tree", type=options.output_file_type(SUFFIX, "tree file"), metavar="FILE", help="also save the tree"
     )
-    options.add_image_size(p)
+    options.add_image_size(p, defaults=False)  # the pixel's options: None unless given (PIXEL_DEFAULTS)
     p.add_argument(
-        "--samples-per-axis",
-        type=options.samples_per_axis,
-        default=_DEFAULT.samples_per_axis,
-        metavar="N",
-        help="N×N samples per pixel (--pixel)",
+        "--samples-per-axis", type=options.samples_per_axis, metavar="N", help="N×N samples per pixel (--pixel)"
     )
-    p.add_argument("--sample", type=lambda t: options.whole_number(t, 0, 2**32 - 1), default=0, help="(--pixel)")
-    p.add_argument("--traversal", default=_DEFAULT.traversal, choices=PIXEL_TRAVERSALS, help="(--pixel)")
+    p.add_argument("--sample", type=lambda t: options.whole_number(t, 0, 2**32 - 1), help="(--pixel)")
+    p.add_argument("--traversal", choices=PIXEL_TRAVERSALS, help="(--pixel)")
     p.add_argument("--json", type=options.output_file_type(".json", "inspection file"), metavar="PATH")
     p.set_defaults(run=run)
 
@@ -100,7 +96,23 @@ def pixel_spec(text: str) -> tuple[int, int]:
     return x, y
 
 
+#: The options of --pixel, and their values where not given.
+PIXEL_DEFAULTS = {
+    "width": DEFAULT_WIDTH,
+    "height": DEFAULT_HEIGHT,
+    "samples_per_axis": _DEFAULT.samples_per_axis,
+    "sample": 0,
+    "traversal": _DEFAULT.traversal,
+}
+
+
 def run(args) -> int:
+    given = [key for key in PIXEL_DEFAULTS if getattr(args, key) is not None]
+    if given and args.pixel is None:  # they were accepted and ignored
+        raise ValueError(f"--{given[0].replace('_', '-')} is an option of --pixel X,Y (the render the pixel is of)")
+    for key, value in PIXEL_DEFAULTS.items():
+        if getattr(args, key) is None:
+            setattr(args, key, value)
     typed = options.fill_build_defaults(args)
     settings = options.build_kwargs(args)  # checked before the scene is loaded
     optimize = options.optimize_config(args)

@@ -200,10 +200,11 @@ def checked_build_kwargs(kwargs: dict) -> dict:
 method_kwargs = method_from_label
 
 
-def add_image_size(p: argparse.ArgumentParser) -> None:
-    """--width and --height of the image (by default the core's, 800 × 600: the report's)."""
-    p.add_argument("--width", type=image_side, default=DEFAULT_WIDTH)
-    p.add_argument("--height", type=image_side, default=DEFAULT_HEIGHT)
+def add_image_size(p: argparse.ArgumentParser, defaults: bool = True) -> None:
+    """--width and --height of the image (by default the core's, 800 × 600: the report's; None with
+    `defaults` False, for a command that tells whether they were given)."""
+    p.add_argument("--width", type=image_side, default=DEFAULT_WIDTH if defaults else None)
+    p.add_argument("--height", type=image_side, default=DEFAULT_HEIGHT if defaults else None)
 
 
 def add_png_out(p: argparse.ArgumentParser) -> None:
