@@ -325,6 +325,9 @@ def test_ascii_stl_facets_on_one_line(tmp_path):
     facet = "facet normal 0 0 1 outer loop vertex 0 0 0 vertex {} 0 0 vertex 0 1 0 endloop endfacet"
     lines = "solid facet vertex colors\n" + facet.format(1) + "\n" + facet.format(2) + "\nendsolid facet vertex\n"
     assert area(load(tmp_path, "lines.stl", lines)) == pytest.approx(1.5)
+    for name in ("t ", ""):  # the whole file on one line (probe): its solid's line held every facet
+        one = f"solid {name}{facet.format(1)} {facet.format(2)} endsolid {name}"
+        assert area(load(tmp_path, "one.stl", one)) == pytest.approx(1.5)
     with pytest.raises(SceneFileError, match="not 'vertex x y z'"):
         cut = "\nfacet normal 0 0 1 outer loop vertex 0 0 0 vertex 1 0"
         load(tmp_path, "cut.stl", "solid x\n" + facet.format(1) + cut)

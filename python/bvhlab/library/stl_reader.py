@@ -28,6 +28,8 @@ _VERTEX = re.compile(
 _VERTEX_WORD = re.compile(rb"(?<!\S)vertex(?!\S)", re.IGNORECASE)
 _ENDFACET = re.compile(rb"(?<!\S)endfacet(?!\S)", re.IGNORECASE)
 _SOLID_LINE = re.compile(rb"(?mi)^[ \t]*(?:\xef\xbb\xbf)?[ \t]*(?:end)?solid\b[^\r\n]*")
+# a file written on one line ("solid t facet normal ... endsolid t"): a name of one word, if any
+_SOLID_WORDS = re.compile(rb"(?i)(?<!\S)(?:end)?solid(?:[ \t]+(?!facet(?!\S))[^\s]+)?(?!\S)")
 
 
 def read_stl(path: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -41,6 +43,8 @@ def read_stl(path: Path) -> tuple[np.ndarray, np.ndarray]:
         vertices = np.frombuffer(data, _BINARY, count, _HEADER)["vertices"].astype(np.float64).reshape(-1, 3)
     elif text.lstrip(b"\xef\xbb\xbf \t\r\n")[:5].lower() == b"solid":
         facets = _SOLID_LINE.sub(b"", text)
+        if not _VERTEX_WORD.search(facets):  # the solid's line held the facets: the whole file on one line
+            facets = _SOLID_WORDS.sub(b"", text)
         found = _VERTEX.findall(facets)
         if len(found) != len(_VERTEX_WORD.findall(facets)):  # a vertex of other than three numbers
             raise SceneFileError(f"{path}: a vertex line is not 'vertex x y z' (three numbers)")
