@@ -108,7 +108,11 @@ class FinalRender:
         # refused only after gigabytes of passes)
         tracer.check_size(frame.width, frame.height)
         settings = blender_scene.bvhlab.render_options()
-        if passes.counters_wanted(depsgraph.view_layer):  # the counter passes (issue 35)
+        # the counter passes (issue 35); the heatmap pass too where the walk keeps counters, so that
+        # its box tests are the walks' whole (a render that keeps none stops a primary ray at the
+        # overlay's line; the wide walk keeps only the heatmap's cost)
+        heat = passes.heatmap_wanted(depsgraph.view_layer) and settings.traversal != "wide"
+        if passes.counters_wanted(depsgraph.view_layer) or heat:
             settings = settings.replace(traversal_counters=True)
         # Traversal Auto: the heatmap pass counts the binary tree's box tests, as the heatmap mode
         settings = settings.for_backend(

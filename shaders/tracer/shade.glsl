@@ -101,25 +101,29 @@ RayTask pop_ray(INOUT(TraceState) s) {
                     vec3(uintBitsToFloat(c.x), uintBitsToFloat(c.y), uintBitsToFloat(c.z)), a.w, b.w);
 }
 
-/// A line lying on a surface (a box's face on a floor or a wall) is not lost to rounding: a
-/// primary ray's hit from 2^-12 of the line's distance short of it on counts as behind it, far
-/// above the rounding of the two rasterizers and of the tracer (compared exactly, whichever last
-/// bits each had hid some of its pixels, differently on the GPU and the CPU reference). Where the pixel's centre meets
+/// A line lying on a surface (a box's face on a floor or a wall) is not lost to rounding: the
+/// primary ray's query stops 2^-12 of the line's distance short of it (a hit from there on counts
+/// as behind it), far above the rounding of the two rasterizers and of the tracer (compared
+/// exactly, whichever last bits each had hid some of its pixels, differently on the GPU and the
+/// CPU reference). Where the pixel's centre meets
 /// the surface farther in front of the line (a surface at a grazing angle, the centre up to half
 /// the line's width off it), line_on_surface decides.
 LOCAL_CONST float LINE_ON_SURFACE = 1.0f - 1.0f / 4096.0f;
 
-/// Starts the closest-hit query of `task`. A primary ray looks only between the camera's clipping
-/// planes (Cycles' camera_sample_*). Where the overlay drew a line, the query still walks to the
-/// surface (after_closest puts the line in front of a surface behind it): a walk cut short at the
-/// line's distance showed the same picture, but its box tests, the heatmap's and the traversal
-/// counters' cost, then changed with the boxes drawn (a line took a pixel from 21 box tests to 13,
-/// where Bvh.trace_pixel records 21).
+/// Starts the closest-hit query of `task`. Where the overlay drew a line in front of the primary
+/// ray's surface, the line wins: the query only looks up to the line's distance (report §3.3) —
+/// unless the render measures the walks (the heatmap mode, the traversal counters): then it walks
+/// to the surface and after_closest puts the line in front of a surface behind it, the same
+/// picture, but box tests that do not change with the boxes drawn (cut at the line, a pixel's 21
+/// box tests were 13; Bvh.trace_pixel records 21). A primary ray looks only between the camera's
+/// clipping planes (Cycles' camera_sample_*).
 void start_closest(INOUT(TraceState) s) {
     bool primary = s.task.depth == 0u;
+    bool measured = frame.mode == MODE_HEATMAP || frame.count_traversal != 0u;
+    bool line = primary && s.overlay.w > 0.0f && !measured;
     float k = primary ? clip_scale(s.task.dir) : 0.0f;  // camera rays see between the clipping planes
     s.ray = make_ray(s.task.origin, s.task.dir, primary ? frame.clip_start * k : 0.0f);
-    s.hit = empty_hit(primary ? frame.clip_end * k : FAR_AWAY);
+    s.hit = empty_hit(min(line ? s.overlay.w * LINE_ON_SURFACE : FAR_AWAY, primary ? frame.clip_end * k : FAR_AWAY));
     s.walk = start_walk();
     s.phase = PHASE_CLOSEST;
 }
@@ -203,8 +207,8 @@ bool line_on_surface(RayTask task, Hit hit, vec4 overlay) {
 }
 
 /// The closest-hit query of `task` is answered: the primary ray's traversal counters and depth; the sky
-/// (or the overlay's line, report §3.3) for a miss, or for a hit behind the line or that the line
-/// lies on: the line wins. Returns true for a hit that is shaded.
+/// (or the overlay's line, report §3.3) for a miss, or for a hit behind the line (a measured walk's:
+/// start_closest) or that the line lies on: the line wins. Returns true for a hit that is shaded.
 bool after_closest(INOUT(TraceState) s) {
     bool line = s.task.depth == 0u && s.overlay.w > 0.0f;
     if (line && s.hit.ref != NO_HIT &&

@@ -55,9 +55,11 @@ def test_pixel_counters_are_the_recorded_traversal(traversal):
 def test_overlay_lines_change_neither_the_counters_nor_the_picture_beneath(backend):
     """The probe's case: `render --counter box_tests --bvh-depth 3:4` changed 1,908 of 76,800
     pixels' counters (the primary walk stopped at the overlay's line: a pixel 13 box tests with the
-    boxes drawn, 21 without, 21 recorded by trace_pixel). The walk now goes on to the surface and
-    the line wins after: every counter and the heat equal a render without boxes (whose counters
-    are trace_pixel's records: the tests above; the pictures with lines, the overlay tests')."""
+    boxes drawn, 21 without, 21 recorded by trace_pixel). A render that measures the walks (the
+    counters, the heatmap mode) walks on to the surface and the line wins after: every counter and
+    the heatmap's cost equal a render without boxes. A shaded render that keeps no counters still
+    stops at the line (report §3.3: the frame's own work, lower where lines are), and its picture
+    is the measured render's, bit for bit."""
     if backend == "vulkan":
         try:
             renderer = bvhlab.Renderer("vulkan", validation=True)
@@ -68,14 +70,25 @@ def test_overlay_lines_change_neither_the_counters_nor_the_picture_beneath(backe
     scene = showcase.whitted()
     bvh = bvhlab.build(scene)
     w, h = 96, 72
+
+    def render(options):
+        job = renderer.start(scene, bvh, w, h, options=options)
+        job.run()
+        return job.result(counters=options.traversal_counters)
+
     for traversal in ("stack", "stackless"):
-        options = bvhlab.RenderOptions(traversal=traversal, samples_per_axis=2)
-        plain = _counters(scene, bvh, renderer, width=w, height=h, options=options)
-        boxes = _counters(scene, bvh, renderer, width=w, height=h, options=options.replace(overlay_depth=(2, 5)))
-        lines = (boxes.color != plain.color).any(-1)
+        plain = bvhlab.RenderOptions(traversal=traversal, samples_per_axis=2)
+        boxes = plain.replace(overlay_depth=(2, 5))
+        counted = [render(o.replace(traversal_counters=True)) for o in (plain, boxes)]
+        lines = (counted[1].color != counted[0].color).any(-1)
         assert lines.mean() > 0.05, "the boxes' lines cover many pixels"
-        np.testing.assert_array_equal(boxes.counters, plain.counters)
-        np.testing.assert_array_equal(boxes.cost, plain.cost)  # the heatmap's
+        np.testing.assert_array_equal(counted[1].counters, counted[0].counters)
+        np.testing.assert_array_equal(counted[1].cost, counted[0].cost)
+        heat = [render(o.replace(mode="heatmap")) for o in (plain, boxes)]
+        np.testing.assert_array_equal(heat[1].cost, heat[0].cost)
+        shaded = render(boxes)  # no counters: cut at the lines
+        np.testing.assert_array_equal(shaded.color, counted[1].color)
+        assert (shaded.cost[lines] < counted[1].cost[lines]).mean() > 0.5, "the cut walk does less"
 
 
 def _camera_on_box_planes():
