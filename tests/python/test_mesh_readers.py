@@ -296,6 +296,8 @@ def test_obj_line_ends_and_spaces(tmp_path, text, triangles):
         (ply_ascii(CUBE, MIXED).replace("property list uchar int vertex_indices", "property int vertex_indices"),
          "must be a list of integers|values after the elements"),
         (ply_ascii(CUBE, MIXED).replace("list uchar int", "list uchar float"), None),  # whole numbers: indices
+        (ply_binary(CUBE, MIXED, "<").replace(b"list uchar int", b"list float int"),
+         "a binary list's length must have an integer type"),  # was "ends inside its face elements"
         (ply_ascii(CUBE, [[0, 1, 2]]).replace("list uchar int", "list uchar float").replace("3 0 1 2", "3 0 1 2.5"),
          "not indices"),
         (ply_ascii(CUBE, MIXED).replace("end_header", " end_header"), None),

@@ -93,6 +93,12 @@ def _header(path: Path, data: bytes) -> tuple[str, list[_Element], int]:
             raise SceneFileError(f"{path}: header line {line.strip()!r} is not PLY") from None
     if fmt not in ("ascii", "binary_little_endian", "binary_big_endian"):
         raise SceneFileError(f"{path}: unknown PLY format {fmt!r}")
+    for e in elements:  # a float length read "ends inside its face elements" (an ASCII one reads)
+        for p in e.properties:
+            if fmt != "ascii" and p.count_type is not None and np.dtype(p.count_type).kind not in "iu":
+                raise SceneFileError(
+                    f"{path}: the {e.name} element's list {p.name}: a binary list's length must have an integer type"
+                )
     for e in elements:
         if e.count < 0 or e.count > len(data):  # every element takes at least a byte
             raise SceneFileError(f"{path}: the header declares {e.count} {e.name} elements for a {len(data)}-byte file")
