@@ -73,7 +73,7 @@ def test_obj_as_people_write_it(tmp_path):
         ("v 0 0 0\nv 1 0\nv 0 1 0\nf 1 2 3\n", "vertex 2 needs x, y and z"),
         ("v 0 0 0\nv 1,5 0 0\nv 0 1 0\nf 1 2 3\n", "not a number"),
         ("v 0 0 0\nv 1_0 0 0\nv 0 1 0\nf 1 2 3\n", "vertex 2: a coordinate is not a number"),  # was x = 10
-        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 99999999999999999999\n", "line 4: vertex .* does not exist"),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 99999999999999999999\n", "line 4: vertex 99999999999999999999 does not"),
     ],
 )
 def test_obj_errors_name_the_line(tmp_path, text, message):

@@ -60,14 +60,17 @@ def read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
     wrong = (index == 0) | (resolved < 0) | (resolved >= len(vertices))
     if wrong.any():
         k = int(np.argmax(wrong))
-        line, i = face_numbers[face_of[k]], int(index[k])
+        face = int(face_of[k])
+        at, i = face_numbers[face], int(index[k])
+        # the index as written (numpy's parse saturates one past int64 at 2^63 - 1)
+        written = face_lines[face].split()[1 + k - int(np.cumsum(sizes)[face] - sizes[face])].split("/")[0]
         if i == 0:
-            raise SceneFileError(f"{path}, line {line}: vertex index 0 (OBJ counts vertices from 1)")
+            raise SceneFileError(f"{path}, line {at}: vertex index 0 (OBJ counts vertices from 1)")
         if i < 0:
             raise SceneFileError(
-                f"{path}, line {line}: vertex {i} does not exist ({defined[face_of[k]]} defined before it)"
+                f"{path}, line {at}: vertex {written} does not exist ({defined[face]} defined before it)"
             )
-        raise SceneFileError(f"{path}, line {line}: vertex {i} does not exist (the file has {len(vertices)})")
+        raise SceneFileError(f"{path}, line {at}: vertex {written} does not exist (the file has {len(vertices)})")
     if len(sizes) and (sizes == 3).all():  # triangles only
         return vertices, resolved.reshape(-1, 3)
     starts = np.concatenate([[0], np.cumsum(sizes)])
