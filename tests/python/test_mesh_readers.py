@@ -72,7 +72,8 @@ def test_obj_as_people_write_it(tmp_path):
         ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n", "line 4: 'f 1 2 x' is not vertex indices"),
         ("v 0 0 0\nv 1 0\nv 0 1 0\nf 1 2 3\n", "vertex 2 needs x, y and z"),
         ("v 0 0 0\nv 1,5 0 0\nv 0 1 0\nf 1 2 3\n", "not a number"),
-        ("v 0 0 0\nv 1_0 0 0\nv 0 1 0\nf 1 2 3\n", "vertex 2: a coordinate is not a number"),  # was x = 10
+        ("v 0 0 0\nv 1_0 0 0\nv 0 1 0\nf 1 2 3\n", "a vertex coordinate: '1_0' is not a number"),  # was x = 10
+        ("v 0 0 0\nv \uff11 0 0\nv 0 1 0\nf 1 2 3\n", "'\uff11' is not a number"),  # fullwidth 1: was x = 1
         ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 99999999999999999999\n", "line 4: vertex 99999999999999999999 does not"),
     ],
 )
@@ -296,6 +297,7 @@ def test_obj_line_ends_and_spaces(tmp_path, text, triangles):
         (ply_ascii(CUBE, MIXED).replace("property list uchar int vertex_indices", "property int vertex_indices"),
          "must be a list of integers|values after the elements"),
         (ply_ascii(CUBE, MIXED).replace("list uchar int", "list uchar float"), None),  # whole numbers: indices
+        (ply_ascii(CUBE, MIXED).replace("\n1 0 0\n", "\n1_0 0 0\n", 1), "'1_0' is not a number"),  # was x = 10
         (ply_binary(CUBE, MIXED, "<").replace(b"list uchar int", b"list float int"),
          "a binary list's length must have an integer type"),  # was "ends inside its face elements"
         (ply_ascii(CUBE, [[0, 1, 2]]).replace("list uchar int", "list uchar float").replace("3 0 1 2", "3 0 1 2.5"),

@@ -15,7 +15,7 @@ import numpy as np
 
 from .._npz import SceneFileError
 from .polygons import triangulate_all
-from .text_bytes import refuse_nul, utf8_bytes
+from .text_bytes import refuse_nul, refuse_odd_numbers, utf8_bytes
 
 
 def read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -95,9 +95,8 @@ def _vertices(path: Path, lines: list[str]) -> np.ndarray:
     short = next((i for i, r in enumerate(rows) if len(r) < 3), None)
     if short is not None:
         raise SceneFileError(f"{path}: vertex {short + 1} needs x, y and z, got {lines[short]!r}")
-    odd = next((i for i, r in enumerate(rows) if any("_" in w for w in r)), None)
-    if odd is not None:  # Python's float() reads "1_0" as 10, numpy's fast path refuses it
-        raise SceneFileError(f"{path}: vertex {odd + 1}: a coordinate is not a number: {lines[odd]!r}")
+    # float() reads "1_0" as 10 and "１" as 1, where the fast parse refuses both
+    refuse_odd_numbers(path, " ".join(" ".join(r) for r in rows).encode(), "a vertex coordinate")
     try:
         return np.array(rows, dtype=np.float64).reshape(-1, 3)
     except ValueError as e:

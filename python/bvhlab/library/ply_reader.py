@@ -15,7 +15,7 @@ import numpy as np
 
 from .._npz import SceneFileError
 from .polygons import triangulate_all
-from .text_bytes import utf8_bytes
+from .text_bytes import refuse_odd_numbers, utf8_bytes
 
 #: PLY's scalar type names (both spellings) → numpy's.
 _TYPES = {
@@ -106,6 +106,7 @@ def _header(path: Path, data: bytes) -> tuple[str, list[_Element], int]:
 
 
 def _read_ascii(path: Path, body: bytes, elements: list[_Element]) -> dict[str, dict]:
+    refuse_odd_numbers(path, body, "its elements")  # float() and int() below would read "1_0" as 10
     words = body.split()
     at = 0
     out: dict[str, dict] = {}  # element → property → values

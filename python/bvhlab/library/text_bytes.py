@@ -4,6 +4,7 @@ an ASCII file is NUL: read as UTF-8, such a file has no statements at all ("0 fa
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 from .._npz import SceneFileError
@@ -37,3 +38,18 @@ def refuse_nul(path: Path, data: bytes, kind: str) -> None:
             f"{path}: a NUL byte at byte {at}, which {kind} text has not (UTF-16 without a byte-order mark, "
             "or not a text file? save it as UTF-8)"
         )
+
+
+#: What Python's float() and int() read and a number in a mesh file is not: digit separators
+#: ("1_0" read as 10) and digits of other scripts ("１", "١" read as 1). numpy's fast parse refuses
+#: both; the slower paths that parse word by word must too.
+_NOT_IN_A_NUMBER = re.compile(rb"_|[^\x00-\x7f]")
+
+
+def refuse_odd_numbers(path: Path, text: bytes, where: str) -> None:
+    """Refuses `text` (the words of numbers) holding a digit separator or a non-ASCII character."""
+    found = _NOT_IN_A_NUMBER.search(text)
+    if found:
+        start = max(text.rfind(space, 0, found.start()) for space in (b" ", b"\t", b"\n", b"\r")) + 1
+        word = text[start : found.end() + 8].split()[0].decode("utf-8", errors="replace")
+        raise SceneFileError(f"{path}: {where}: {word!r} is not a number (ASCII digits, no '_')")
