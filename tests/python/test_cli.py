@@ -245,8 +245,8 @@ def bad_scene_files(tmp_path_factory):
         (["inspect", "{d}/good.npz", "--pixel", "-1,5"], "pixel -1,5: coordinates must be >= 0"),
         (["inspect", "{d}/good.npz", "--pixel", "3,-2"], "pixel 3,-2: coordinates must be >= 0"),
         (
-            ["render", "{d}/good.npz", "--counter", "box_tests", "--range", "-1,-5", "--out", "{d}/r.png"],
-            "range must be two finite numbers LO < HI, got -1.0, -5.0",
+            ["render", "{d}/good.npz", "--counter", "box_tests", "--range", "-1.5e0,-5", "--out", "{d}/r.png"],
+            "range must be two finite numbers LO < HI, got -1.5, -5.0",
         ),
         (["animate", "wave", "--frames", "-1-2", "--out", "{d}/a"], "frames must look like A-B"),
         (

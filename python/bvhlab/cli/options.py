@@ -286,7 +286,7 @@ def join_dash_values(argv: list[str]) -> list[str]:
     '--frames -1-2'), so the value's own check explains, or takes it."""
     out: list[str] = []
     for arg in argv:
-        if out and out[-1] in _DASH_VALUE_OPTIONS and re.fullmatch(r"-[\d:,-]+", arg):
+        if out and out[-1] in _DASH_VALUE_OPTIONS and re.fullmatch(r"-[\d.eE+:,-]+", arg):
             out[-1] = f"{out[-1]}={arg}"
         else:
             out.append(arg)
