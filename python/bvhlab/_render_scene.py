@@ -1,5 +1,6 @@
 """The scene in GPU layout (`_core.RenderScene`), made once per version of a tree, its geometry and
-its materials, and kept by a Renderer (one SceneCache each) while they stay the same."""
+its materials, and kept by a Renderer (one SceneCache each), and by the traversal records
+(inspect.ray_record: trace_pixel and the pick's rule), while they stay the same."""
 
 from __future__ import annotations
 

@@ -257,3 +257,20 @@ def test_pixel_records_and_picks_make_the_render_scene_once(monkeypatch):
         assert pick(bvh, origin, direction, scene=hidden).t_hit == np.inf  # every surface passed by
         trace_pixel(hidden, bvh, 3, 4, width=w, height=h)
     assert len(made) <= 1, "the same scene again: the kept render scene"
+
+
+def test_the_kept_render_scene_goes_with_its_tree():
+    """The records' render scene is kept while its tree lives, then dropped with it (review: the
+    cache's key held the tree's core, which stayed in memory with its render scene)."""
+    import gc
+
+    from bvhlab.inspect import ray_record
+
+    scene = showcase.whitted()
+    bvh = bvhlab.build(scene)
+    trace_pixel(scene, bvh, 3, 4, width=16, height=12)
+    kept = ray_record._RENDER_SCENES
+    assert kept._owner() is bvh and kept._cache._scene is not None
+    del bvh
+    gc.collect()
+    assert kept._owner is None and kept._cache._scene is None

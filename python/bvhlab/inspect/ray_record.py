@@ -4,7 +4,9 @@ made by the tracer's own camera code."""
 
 from __future__ import annotations
 
+import threading
 import warnings
+import weakref
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -18,10 +20,39 @@ from ..scene_parts import Rays
 RECORD_TRAVERSALS = ("stack", "stackless", "wide")
 #: Traversals of the tracer (RenderOptions.traversal), which trace_pixel records.
 PIXEL_TRAVERSALS = ("stack", "stackless")
-#: The render scene trace_pixel and the pick's rule for hidden surfaces last used, made again only
-#: when the scene, its materials or the tree change (SceneCache's key; it is safe across threads).
-#: Each call made one: about a second for a million triangles, on every pixel asked or box picked.
-_RENDER_SCENES = SceneCache()
+
+
+class _KeptRenderScene:
+    """The render scene trace_pixel and the pick's rule for hidden surfaces last used, made again
+    only when the scene, its materials or the tree change (SceneCache's key); each call made one,
+    about a second for a million triangles, on every pixel asked or box picked. Dropped when the
+    tree it was made for is (its owner, a weak reference): the cache's key holds the tree's core,
+    which would otherwise stay in memory, with its render scene, until another tree is asked.
+    Safe across threads."""
+
+    def __init__(self):
+        self._lock = threading.RLock()  # a finalizer may run in a thread holding it (a collection in get)
+        self._cache = SceneCache()
+        self._owner: weakref.ref | None = None
+        self._watched: weakref.WeakSet = weakref.WeakSet()  # trees with a finalizer (one each)
+
+    def get(self, scene, bvh) -> _core.RenderScene:
+        with self._lock:
+            if self._owner is None or self._owner() is not bvh:
+                self._cache, self._owner = SceneCache(), weakref.ref(bvh)
+                if bvh not in self._watched:
+                    self._watched.add(bvh)
+                    weakref.finalize(bvh, self._drop, self._owner)
+            cache = self._cache
+        return cache.get(scene, bvh)
+
+    def _drop(self, owner: weakref.ref) -> None:
+        with self._lock:
+            if self._owner is owner or (self._owner is not None and self._owner() is None):
+                self._cache, self._owner = SceneCache(), None
+
+
+_RENDER_SCENES = _KeptRenderScene()
 
 
 class HiddenSurfaceWarning(UserWarning):
