@@ -267,3 +267,13 @@ def test_options_that_would_be_ignored_are_refused(tmp_path, args, message):
     code, stdout, err = run_cli(*(a.format(d=tmp_path, blend=blend) for a in args))
     assert code == 2 and message in last_line(err), err
     assert "building" not in err and os.listdir(tmp_path) == []
+
+
+def test_sweep_refuses_a_fifo_spec_without_hanging(tmp_path):
+    """`bvhlab sweep FIFO` blocked until a writer came (review)."""
+    fifo = tmp_path / "spec.toml"
+    os.mkfifo(fifo)
+    code, _, err = run_cli("sweep", fifo, "--out", tmp_path / "out", timeout=30)
+    assert code == 2 and last_line(err) == (
+        f"bvhlab sweep: error: {fifo} is not a regular file (a FIFO, device or socket), not a sweep spec"
+    )

@@ -2,6 +2,7 @@
 round-trips a known mesh, and each hostile file gets a clear error naming it."""
 
 import json
+import os
 import struct
 
 import numpy as np
@@ -12,6 +13,7 @@ from bvhlab import cli
 from bvhlab._npz import SceneFileError
 from bvhlab.library import load_scene
 from bvhlab.library.files import load_mesh_file
+from bvhlab.library.gltf_checks import gltf_buffers
 
 FORMATS = ("obj", "ply", "stl", "gltf", "glb")
 
@@ -154,7 +156,7 @@ def test_gltf_buffer_uris_are_percent_decoded(tmp_path, source, cameras):
     if cameras:
         doc = _camera_nodes(doc)
     current = tmp_path / doc["buffers"][0]["uri"]
-    for name, uri in (("my model #1.bin", "my%20model%20%231.bin"), ("100%.bin", "100%.bin")):
+    for name, uri in (("my model #1.bin", "my%20model%20%231.bin"), ("a%20b.bin", "a%20b.bin")):
         current = current.rename(tmp_path / name)
         doc["buffers"][0]["uri"] = uri
         path = tmp_path / "my model.gltf"
@@ -162,6 +164,17 @@ def test_gltf_buffer_uris_are_percent_decoded(tmp_path, source, cameras):
         scene = load_mesh_file(path)
         assert len(scene.triangles) == (2 if cameras else 1) * len(source.faces), uri
         np.testing.assert_allclose(scene.bounds()[0], source.bounds[0], atol=1e-5)
+        assert gltf_buffers(path)[0] == current, "the sweep's cache hashes the file the loader read"
+
+
+def test_a_fifo_as_a_gltf_buffer_is_refused_without_hanging(tmp_path, source):
+    """A buffer file that is a FIFO blocked trimesh's read (review)."""
+    source.export(tmp_path / "s.gltf")
+    doc = json.loads((tmp_path / "s.gltf").read_text())
+    (tmp_path / doc["buffers"][0]["uri"]).unlink()
+    os.mkfifo(tmp_path / doc["buffers"][0]["uri"])
+    with pytest.raises(SceneFileError, match="is not a regular file .*not a glTF buffer"):
+        load_mesh_file(tmp_path / "s.gltf")
 
 
 def test_missing_file_is_file_not_found(tmp_path):

@@ -56,6 +56,7 @@ def test_spec_grid_is_every_combination(tmp_path, models):
         ("[rays]\nrepeats = 0", "repeats"),
         ("[rays]\ncount = true", "count"),
         ("method = 'sah'\n[report]\nbaseline = 'median'", "baseline 'median' is not a method of the grid"),
+        ("method = ['median', 'sah32']\n[report]\nbaseline = 'sah32'", r"the baseline is a method, 'sah'"),
         ("[report]\ncolour = 'red'", "unknown key"),
         # a seed past int64: every cell ran, then writing the table failed (OverflowError), every rerun
         ("seed = 9223372036854775808", "seed must be at most"),

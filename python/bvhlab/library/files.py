@@ -13,14 +13,13 @@ from __future__ import annotations
 
 import io
 from pathlib import Path
-from urllib.parse import unquote
 
 import numpy as np
 
 from .. import _checks
 from .._npz import SceneFileError
 from ..scene import Scene
-from .gltf_checks import check_gltf
+from .gltf_checks import check_gltf, gltf_buffers, uri_name
 from .obj_reader import read_obj
 from .ply_reader import read_ply
 from .stl_reader import read_stl
@@ -72,6 +71,8 @@ def _triangles(path: Path, kind: str) -> np.ndarray:
     except ImportError:
         raise SceneFileError(f"{path}: reading {kind} files needs trimesh (pip install 'bvhlab[files]')") from None
     kind, mended = check_gltf(path)  # "gltf" or "glb" by the file's contents; mended: without cameras
+    for buffer in gltf_buffers(path):  # a FIFO would block trimesh's read
+        _checks.input_file(buffer, "glTF buffer", SceneFileError)
     try:
         resolver = _uri_resolver(trimesh, path)  # the files it refers to, found beside it
         source = str(path) if mended is None else io.BytesIO(mended)
@@ -93,21 +94,12 @@ def _triangles(path: Path, kind: str) -> np.ndarray:
 
 
 def _uri_resolver(trimesh, path: Path):
-    """trimesh's resolver of the files beside `path`, reading a glTF URI percent-decoded first:
-    URIs are RFC 3986 references (the glTF 2.0 specification, "URIs"), so Blender writes the buffer of "my
-    model.gltf" as "my%20model.bin", which trimesh looked for as written ("which is missing");
-    gltf_checks.gltf_buffers decodes them too. As written where the decoded name is not there (a
-    file named with a "%" its exporter did not encode)."""
+    """trimesh's resolver of the files beside `path`, reading a glTF URI as gltf_checks.uri_name
+    does (trimesh looked for "my%20model.bin" as written: "which is missing")."""
 
     class Decoding(trimesh.resolvers.FilePathResolver):
         def get(self, name: str):
-            decoded = unquote(name)
-            if decoded != name:
-                try:
-                    return super().get(decoded)
-                except FileNotFoundError:
-                    pass
-            return super().get(name)
+            return super().get(uri_name(Path(self.parent), name))
 
     return Decoding(str(path))
 

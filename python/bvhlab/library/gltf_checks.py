@@ -164,4 +164,15 @@ def gltf_buffers(path: Path) -> list[Path]:
     if not isinstance(doc, dict):
         return []
     uris = [b.get("uri") for b in _list(doc, "buffers")]
-    return [path.parent / unquote(u) for u in uris if isinstance(u, str) and not u.startswith("data:")]
+    return [path.parent / uri_name(path.parent, u) for u in uris if isinstance(u, str) and not u.startswith("data:")]
+
+
+def uri_name(folder: Path, uri: str) -> str:
+    """The name of the file a glTF URI refers to in `folder` (the loader's and the sweep cache's
+    one answer): percent-decoded, as URIs are RFC 3986 references (the glTF 2.0 specification,
+    "URIs": Blender writes the buffer of "my model.gltf" as "my%20model.bin"), or as written where
+    only that file is there (a "%" its exporter did not encode, "a%20b.bin" on disk)."""
+    decoded = unquote(uri)
+    if decoded != uri and not (folder / decoded).exists() and (folder / uri).exists():
+        return uri
+    return decoded

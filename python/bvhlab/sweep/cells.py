@@ -135,6 +135,8 @@ def arrays_hash(scene) -> str:
 
 def _file_hash(path: Path) -> str:
     digest = hashlib.sha256()
+    if path.exists() and not path.is_file():  # a FIFO would block the read: hashed as missing
+        return ""
     try:
         with open(path, "rb") as f:
             while chunk := f.read(_CHUNK):

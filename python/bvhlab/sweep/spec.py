@@ -28,6 +28,7 @@ import tomllib
 from dataclasses import dataclass, fields
 from pathlib import Path
 
+from .. import _checks
 from ..build_config import BuildConfig, method_from_label
 from ..library import is_mesh_file
 from ..ray_query import TRAVERSALS
@@ -68,6 +69,7 @@ MAX_SEED = 2**63 - 1
 def read_spec(path) -> SweepSpec:
     """The spec at `path`, checked (ValueError naming the file and the problem)."""
     path = Path(path)
+    _checks.input_file(path, "sweep spec", ValueError)  # a FIFO blocked the read
     try:
         doc = tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as e:
@@ -94,7 +96,11 @@ def _baseline(path: Path, report, settings: tuple[Setting, ...]) -> str:
     methods = list(dict.fromkeys(s.config.method for s in settings))
     baseline = report.get("baseline", methods[0])
     if baseline not in methods:
-        raise ValueError(f"{path}: [report] baseline {baseline!r} is not a method of the grid: {', '.join(methods)}")
+        named = isinstance(baseline, str) and baseline.startswith("sah") and baseline[3:].isdigit()
+        hint = " (the baseline is a method, 'sah', whose cells the summary divides by)" if named else ""
+        raise ValueError(
+            f"{path}: [report] baseline {baseline!r} is not a method of the grid: {', '.join(methods)}{hint}"
+        )
     return baseline
 
 
