@@ -41,6 +41,8 @@ def test_refused_numbers_are_shown_as_given():
     cases = [
         (lambda: bvhlab.build(tris, method="sbvh", sbvh_alpha=-1e-9), r"sbvh_alpha .*got -1e-09$"),
         (lambda: bvhlab.build(tris, method="sbvh", sbvh_budget=0.5), r"sbvh_budget .*got 0\.5$"),
+        (lambda: bvhlab.build(tris, method="sbvh", sbvh_budget=64.00001), r"sbvh_budget .*got 64\.00001$"),  # %g: 64
+        (lambda: bvhlab.View((0, 0, 0), (0, 1, 0), clip_start=1.0000001, clip_end=1.0), r"got 1\.0000001, 1$"),
         (lambda: bvhlab.View((0, 0, 0), (0, 1, 0), clip_start=2.0, clip_end=1.0), r"got 2, 1$"),
         (lambda: bvhlab.View((0, 0, 0), (0, 1, 0), shift_x=1500.25), r"got 1500\.25, 0$"),
         (lambda: bvhlab.RenderOptions(heatmap_scale=1e9), r"heatmap_scale .*got 1e\+09$"),
