@@ -255,6 +255,7 @@ def test_render_counter_checks_the_files_beside_out_before_any_work(tmp_path, si
         (["compare", "gen:five_spheres", "--counter", "prim_hits", "--out", "{d}/c"],
          "--counter is the counter of --counter-diff A,B"),
         (["animate", "{blend}", "--size", "7", "--out", "{d}/a"], "--size sizes the generated animations"),
+        (["animate", "wave", "--width", "64", "--out", "{d}/a"], "--width and --height size the traced frames"),
     ],
 )  # fmt: skip
 def test_options_that_would_be_ignored_are_refused(tmp_path, args, message):

@@ -25,6 +25,7 @@ from .._progress import ProgressBar
 from ..animate import FrameRow, as_scene, run_experiment, summary
 from ..library.animations import ANIMATIONS
 from ..render import BACKENDS
+from ..render_options import DEFAULT_HEIGHT, DEFAULT_WIDTH
 from ..scene import Scene
 from ..update import UPDATE_POLICIES
 from . import options
@@ -56,7 +57,7 @@ def add_parser(sub) -> None:
         help="the animation's size (wave: quads per side; crowd: knots), smaller for a quick run",
     )
     p.add_argument("--backend", default="none", choices=("none", *BACKENDS), help="trace each frame (default: none)")
-    options.add_image_size(p)
+    options.add_image_size(p, defaults=False)  # the traced frames' (--backend), by default 800 × 600
     p.add_argument("--out", type=output_dir, required=True, metavar="DIR")
     p.set_defaults(run=run)
 
@@ -110,6 +111,9 @@ def _frames_of(args) -> tuple[Callable[[int], np.ndarray | Scene], range]:
 
 
 def run(args) -> int:
+    if args.backend == "none" and (args.width or args.height):  # they were accepted and ignored
+        raise ValueError("--width and --height size the traced frames: give --backend cpu, vulkan or auto")
+    args.width, args.height = args.width or DEFAULT_WIDTH, args.height or DEFAULT_HEIGHT
     geometry, frames = _frames_of(args)
     first, last = frames[0], frames[-1]
     trace = None
