@@ -332,6 +332,8 @@ def test_ascii_stl_facets_on_one_line(tmp_path):
     for name in ("t ", ""):  # the whole file on one line (probe): its solid's line held every facet
         one = f"solid {name}{facet.format(1)} {facet.format(2)} endsolid {name}"
         assert area(load(tmp_path, "one.stl", one)) == pytest.approx(1.5)
+        first = f"solid {name}{facet.format(1)}\n{facet.format(2)}\nendsolid {name}"  # and the first facet only
+        assert area(load(tmp_path, "first.stl", first)) == pytest.approx(1.5)
     with pytest.raises(SceneFileError, match="not 'vertex x y z'"):
         cut = "\nfacet normal 0 0 1 outer loop vertex 0 0 0 vertex 1 0"
         load(tmp_path, "cut.stl", "solid x\n" + facet.format(1) + cut)

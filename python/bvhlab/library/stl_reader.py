@@ -42,9 +42,10 @@ def read_stl(path: Path) -> tuple[np.ndarray, np.ndarray]:
     if binary:
         vertices = np.frombuffer(data, _BINARY, count, _HEADER)["vertices"].astype(np.float64).reshape(-1, 3)
     elif text.lstrip(b"\xef\xbb\xbf \t\r\n")[:5].lower() == b"solid":
-        facets = _SOLID_LINE.sub(b"", text)
-        if not _VERTEX_WORD.search(facets):  # the solid's line held the facets: the whole file on one line
-            facets = _SOLID_WORDS.sub(b"", text)
+        # a solid's line that ends a facet held facets ("solid t facet ... endfacet", the whole file
+        # or its first facets on one line): then only a name of one word is the solid's
+        held = any(_ENDFACET.search(line) for line in _SOLID_LINE.findall(text))
+        facets = (_SOLID_WORDS if held else _SOLID_LINE).sub(b"", text)
         found = _VERTEX.findall(facets)
         if len(found) != len(_VERTEX_WORD.findall(facets)):  # a vertex of other than three numbers
             raise SceneFileError(f"{path}: a vertex line is not 'vertex x y z' (three numbers)")
