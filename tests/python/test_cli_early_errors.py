@@ -96,64 +96,34 @@ def test_a_fifo_as_the_scene_is_refused_without_hanging(tmp_path, command, name)
     assert os.listdir(tmp_path) == [name]
 
 
-def test_load_scene_refuses_a_fifo_blend_without_hanging(tmp_path):
-    """bvhlab.library.load_scene of a FIFO named .blend blocked in bpy's open (probe: the CLI's
-    upper-case case reached it)."""
-    fifo = tmp_path / "s.blend"
-    os.mkfifo(fifo)
-    done = run_python(
-        f"""
-        from bvhlab.library import load_scene
-        try:
-            load_scene({str(fifo)!r})
-        except ValueError as e:
-            print(type(e).__name__, e)
-        """,
-        timeout=60,
-    )
-    assert (
-        done.stdout.strip()
-        == f"SceneFileError {fifo} is not a regular file (a FIFO, device or socket), not a .blend file"
-    )
-
-
-def test_scene_load_refuses_a_fifo_without_hanging(tmp_path):
-    fifo = tmp_path / "s.npz"
-    os.mkfifo(fifo)
-    done = run_python(
-        f"""
-        import bvhlab
-        try:
-            bvhlab.Scene.load({str(fifo)!r})
-        except ValueError as e:
-            print(type(e).__name__, e)
-        """,
-        timeout=30,
-    )
-    assert (
-        done.stdout.strip()
-        == f"SceneFileError {fifo} is not a regular file (a FIFO, device or socket), not a scene file"
-    )
-
-
-def test_tree_load_refuses_a_fifo_without_hanging(tmp_path):
-    """load_bvh read a FIFO whole (and `bvhlab inspect --tree FIFO` waited with it) until a writer came."""
-    fifo = tmp_path / "t.bvhtree"
+@pytest.mark.parametrize(
+    "name, call, error, what",
+    [
+        # load_bvh read a FIFO whole (and `bvhlab inspect --tree FIFO` waited with it)
+        ("t.bvhtree", "bvhlab.load_bvh({path!r}, np.zeros((1, 3, 3), np.float32))", "TreeFileError", "a tree file"),
+        ("s.npz", "bvhlab.Scene.load({path!r})", "SceneFileError", "a scene file"),
+        # load_scene of a .blend blocked in bpy's open (probe: the CLI's upper-case case reached it)
+        ("s.blend", "bvhlab.library.load_scene({path!r})", "SceneFileError", "a .blend file"),
+        ("s.ply", "bvhlab.library.load_scene({path!r})", "SceneFileError", "a mesh file"),
+    ],
+)
+def test_a_fifo_is_refused_by_every_reader_without_hanging(tmp_path, name, call, error, what):
+    """Opening a FIFO blocks until a writer comes: each reader refuses one first (_checks.input_file)."""
+    fifo = tmp_path / name
     os.mkfifo(fifo)
     done = run_python(
         f"""
         import numpy as np
         import bvhlab
+        import bvhlab.library
         try:
-            bvhlab.load_bvh({str(fifo)!r}, np.zeros((1, 3, 3), np.float32))
+            {call.format(path=str(fifo))}
         except ValueError as e:
             print(type(e).__name__, e)
         """,
-        timeout=30,
+        timeout=60,
     )
-    assert (
-        done.stdout.strip() == f"TreeFileError {fifo} is not a regular file (a FIFO, device or socket), not a tree file"
-    )
+    assert done.stdout.strip() == f"{error} {fifo} is not a regular file (a FIFO, device or socket), not {what}"
 
 
 def test_compare_refuses_a_bad_method_setting_before_any_work(tmp_path):
