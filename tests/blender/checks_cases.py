@@ -154,3 +154,31 @@ def check_missing_camera_and_light_substituted() -> None:
     messages = [str(w.message) for w in caught if issubclass(w.category, SubstituteWarning)]
     assert any("no camera" in m for m in messages) and any("no visible light" in m for m in messages), messages
     assert exported.camera is not None and exported.light is not None
+
+
+def check_linked_duplicates_of_a_mesh_in_edit_mode() -> None:
+    """Two objects sharing one mesh, either in Edit Mode: both are exported, each where it stands
+    (the probe: under 4.2 the export failed, KeyError 'position'; under 4.5 one box was left out,
+    its evaluated mesh the edit mesh's wrapper though its own mode was Object Mode). Against the
+    corners of both through mathutils, with instancing and without."""
+    scene = harness.empty_scene((32, 24))
+    harness.add_camera((0, -12, 2), (1.5, 0, 0))
+    a = harness.add_box("A", (0, 0, 0))
+    b = bpy.data.objects.new("B", a.data)  # a linked duplicate
+    scene.collection.objects.link(b)
+    b.location, b.rotation_euler = (3, 0, 0), (0.3, 0, 0)
+    bpy.context.view_layer.update()
+    corners = np.concatenate([_world_cube_corners(a), _world_cube_corners(b)])
+    for edited in (a, b):
+        bpy.context.view_layer.objects.active = edited
+        edited.select_set(True)
+        bpy.ops.object.mode_set(mode="EDIT")
+        try:
+            for instancing in (True, False):
+                got = export_scene(bpy.context, instancing=instancing).flattened().triangles.reshape(-1, 3)
+                assert len(got) == 2 * 12 * 3, (edited.name, instancing, len(got))
+                # every exported vertex is a corner of one of the boxes, and every corner is exported
+                d = np.abs(got[:, None, :] - corners[None, :, :]).max(-1)
+                assert d.min(1).max() < 1e-5 and d.min(0).max() < 1e-5, (edited.name, instancing)
+        finally:
+            bpy.ops.object.mode_set(mode="OBJECT")

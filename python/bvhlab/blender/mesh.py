@@ -85,10 +85,13 @@ def read_mesh(obj, name: str) -> MeshData:
     """The evaluated geometry of an object in its own space (EMPTY_MESH for objects without any).
     Raises ExportError naming the object when a vertex is NaN or infinite.
 
-    A mesh object in Edit Mode is read through to_mesh, as curves are: its evaluated `data` is
-    Blender's wrapper of the edit mesh, whose polygons are empty until converted (the object
-    would otherwise be left out, where Cycles renders it with the edits so far)."""
-    if obj.type == "MESH" and obj.mode != "EDIT":
+    A mesh in Edit Mode is read through to_mesh, as curves are: its evaluated `data` is Blender's
+    wrapper of the edit mesh, whose polygons are empty until converted (the object would
+    otherwise be left out, where Cycles renders it with the edits so far) and which has no
+    attributes under 4.2 (KeyError 'position'). So is a linked duplicate of it, whose own mode is
+    Object Mode (`data.is_editmode` says it; the probe: one of two boxes was left out under 4.5,
+    the export failed under 4.2)."""
+    if obj.type == "MESH" and obj.mode != "EDIT" and not getattr(obj.data, "is_editmode", False):
         return _read(obj.data, name)
     if obj.type != "MESH" and obj.type not in CONVERTIBLE_TYPES:
         return EMPTY_MESH
