@@ -182,3 +182,31 @@ def check_linked_duplicates_of_a_mesh_in_edit_mode() -> None:
                 assert d.min(1).max() < 1e-5 and d.min(0).max() < 1e-5, (edited.name, instancing)
         finally:
             bpy.ops.object.mode_set(mode="OBJECT")
+
+
+def check_a_scene_or_view_layer_not_yet_evaluated() -> None:
+    """export_scene of another scene, or of a view layer just made: Blender has not evaluated them
+    (`view_layer.depsgraph` is None) and the export raised AttributeError (probe); now evaluated
+    first. Each exports its own objects: the other scene's box only, the new layer's both boxes."""
+    harness.empty_scene((32, 24))
+    a = harness.add_box("A", (0, 0, 0))
+    other = bpy.data.scenes.new("Other")
+    other.collection.objects.link(bpy.data.objects.new("B", a.data))
+    try:
+        assert other.view_layers[0].depsgraph is None
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", SubstituteWarning)  # no camera, no light
+            assert len(export_scene(other, require_camera=False).flattened().triangles) == 12
+            scene = bpy.context.scene
+            scene.collection.objects.link(bpy.data.objects.new("C", a.data))
+            layer = scene.view_layers.new("Fresh")
+            assert layer.depsgraph is None
+
+            class Context:  # what export_scene reads of a context
+                pass
+
+            context = Context()
+            context.scene, context.view_layer = scene, layer
+            assert len(export_scene(context, require_camera=False).flattened().triangles) == 24
+    finally:
+        bpy.data.scenes.remove(other)

@@ -94,6 +94,7 @@ def _export() -> Iterator[Check]:
         cases.check_bad_input_errors,
         cases.check_missing_camera_and_light_substituted,
         cases.check_linked_duplicates_of_a_mesh_in_edit_mode,
+        cases.check_a_scene_or_view_layer_not_yet_evaluated,
     ):
         yield Check("export", check.__name__.removeprefix("check_"), check)
     yield Check("export", "scene_file_round_trip", cases.check_scene_file_round_trip, folder=True)

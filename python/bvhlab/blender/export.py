@@ -37,7 +37,7 @@ def export_scene(
     """
     scene, view_layer = _scene_and_view_layer(context_or_scene)
     if depsgraph is None:
-        depsgraph = view_layer.depsgraph
+        depsgraph = view_layer.depsgraph or _evaluated(scene, view_layer)
         depsgraph.update()  # evaluates what changed since the last update; cheap when nothing did
     live = LiveScene(scope, require_camera=require_camera, instancing=instancing)  # a first sync reads everything
     live.light_distance = light_distance
@@ -80,3 +80,10 @@ def _scene_and_view_layer(context_or_scene):
         active = bpy.context.view_layer
         return scene, active if bpy.context.scene == scene and active is not None else scene.view_layers[0]
     return context_or_scene.scene, context_or_scene.view_layer
+
+
+def _evaluated(scene, view_layer):
+    """The depsgraph of a view layer Blender has not evaluated yet (another scene's, a layer just
+    made: its `depsgraph` is None; the probe: AttributeError), evaluated as the context would."""
+    with bpy.context.temp_override(scene=scene, view_layer=view_layer):
+        return bpy.context.evaluated_depsgraph_get()
