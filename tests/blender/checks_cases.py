@@ -101,6 +101,13 @@ def check_analytic_sphere_radius() -> None:
     exported = export_scene(bpy.context)
     assert len(exported.spheres) == 1 and len(exported.triangles) == 36
     np.testing.assert_allclose(exported.spheres[0], (3.0, 1.0, 2.0, 1.5), atol=1e-5)
+    # scaled to nothing (a common way to hide an instance; an animated sphere shrinking away): no
+    # sphere, as Blender renders nothing there; the export failed ("has no extent")
+    ball.scale = (0.0, 0.0, 0.0)
+    exported = export_scene(bpy.context)
+    assert len(exported.spheres) == 0 and len(exported.triangles) == 36
+    ball.scale = (2.0, 3.0, 1.0)
+    assert len(export_scene(bpy.context).spheres) == 1
 
 
 def check_camera_sensor_fits() -> None:

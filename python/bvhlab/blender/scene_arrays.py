@@ -22,8 +22,9 @@ def mesh_zero(items: dict, layout: Layout) -> tuple[list, list, list, list]:
             assert item.bounds is not None  # a sphere keeps its object-space bounds
             if item.placed is None:
                 item.placed = place_sphere(item.bounds, item.matrix, item.name)
-            spheres.append(item.placed)
-            sphere_material.append(item.slot_table[0])
+            if item.placed.size:  # none where scaled to nothing
+                spheres.append(item.placed)
+                sphere_material.append(item.slot_table[0])
         else:
             if item.placed is None:
                 item.placed = item.mesh.world_triangles(item.matrix, item.name)
