@@ -182,7 +182,10 @@ class Scene:
     def flattened(self) -> Scene:
         """The same geometry as one flat mesh: every instance's triangles moved into the world (the
         flat scene that a two-level tree must agree with). Spheres of mesh 0 move with its
-        instances, which must then keep them spheres (rotation, uniform scale, translation)."""
+        instances, which must then keep them spheres (rotation, uniform scale, translation). Each
+        triangle keeps its vertices' order, so a hit's u, v are the two-level walk's: a mirrored
+        instance's triangles then wind the other way from the Blender export's instancing=False
+        (which reverses them); every shading of bvhlab is two-sided."""
         if not self.is_instanced:
             return self
         mesh_of, transforms = self.instances()
