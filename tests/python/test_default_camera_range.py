@@ -46,3 +46,31 @@ def test_a_render_without_a_camera_asks_for_one_and_renders_with_one():
 def test_a_scene_within_reach_keeps_its_default_camera():
     tris = _wide_triangle() * np.float32(1e-3)
     assert bvhlab.Scene(triangles=tris).camera is not None
+
+
+def _light_beside(camera) -> np.ndarray:
+    """The default light's place as documented: 0.3 of the camera's distance to its target to the
+    right and up of the camera (numpy, independent of the core's)."""
+    position, target, up = (np.array(v, np.float64) for v in (camera.position, camera.look_at, camera.up))
+    forward = target - position
+    right = np.cross(forward, up)
+    return position + 0.3 * np.linalg.norm(forward) * (right / np.linalg.norm(right) + up)
+
+
+def test_a_default_light_near_the_range_limit_is_moved_within_it():
+    """The probe's scene: triangles at x = 1e6 and x = 1e12, both within the range: the camera that
+    frames them stands within it, the default light beside the camera did not, and the Scene (and
+    the Blender export of such a scene) was refused for a light it had not been given. The light is
+    now moved towards the camera's target until it is within the range; the scene renders."""
+    tris = np.array([[[1e6, 0, 0], [1e6 + 1, 0, 0], [1e6, 1, 0]], [[1e12, 0, 0], [1e12 + 1e9, 0, 0], [1e12, 1e9, 0]]])
+    near = bvhlab.Scene(triangles=(tris * 1e-3).astype(np.float32))  # within reach: where documented
+    np.testing.assert_allclose(near.light.position, _light_beside(near.camera), rtol=1e-9)
+    scene = bvhlab.Scene(triangles=tris.astype(np.float32))
+    assert scene.camera is not None and np.abs(scene.camera.position).max() <= MAX_COORDINATE
+    light, beside, target = np.array(scene.light.position), _light_beside(scene.camera), np.array(scene.camera.look_at)
+    assert np.abs(beside).max() > MAX_COORDINATE >= np.abs(light).max() > 0.98 * MAX_COORDINATE
+    way = (light - target) / (beside - target)  # on the way from the target to where it was
+    np.testing.assert_allclose(way, way[0], rtol=1e-9)
+    assert 0 < way[0] < 1
+    image, _ = bvhlab.render(scene, bvhlab.build(scene), 8, 6, backend="cpu")
+    assert np.isfinite(image).all()

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "bvhlab/coordinate_range.h"
+
 namespace bvhlab {
 namespace {
 
@@ -17,6 +19,21 @@ D3 cross(const D3& a, const D3& b) {
     return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
 }
 D3 d3(Vec3 v) { return {v.x, v.y, v.z}; }
+
+/// The point nearest `p` on the segment from `inside` (within the coordinate range) to `p` that
+/// lies within the range, with a margin: the default light of a camera near the range's edge
+/// stood outside it, and the scene was refused for a light it did not have (geometry at x = 1e12,
+/// within 2^40: "light position ... outside the supported range"). (A default camera that would
+/// stand outside is not made: Scene leaves the camera to the caller.)
+D3 pulled_within_range(const D3& inside, const D3& p) {
+    const double limit = double(kMaxCoordinate) * 0.99;
+    double s = 1.0;
+    for (int k = 0; k < 3; ++k) {
+        const double d = p[k] - inside[k];
+        if (std::fabs(p[k]) > limit && d != 0.0) s = std::min(s, ((d > 0 ? limit : -limit) - inside[k]) / d);
+    }
+    return add_scaled(inside, sub(p, inside), std::max(s, 0.0));
+}
 
 }  // namespace
 
@@ -44,7 +61,7 @@ std::array<double, 3> default_light_position(const CameraPlacement& camera) {
     const double dist = norm(forward);
     D3 out = camera.position;
     for (int k = 0; k < 3; ++k) out[k] = out[k] + right[k] * 0.3 * dist + camera.up[k] * 0.3 * dist;
-    return out;
+    return pulled_within_range(camera.target, out);
 }
 
 }  // namespace bvhlab
