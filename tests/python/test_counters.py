@@ -51,6 +51,16 @@ def test_pixel_counters_are_the_recorded_traversal(traversal):
             assert c[y, x].tolist() == _recorded(rec), (x, y)
 
 
+def _renderer(backend: str) -> bvhlab.Renderer:
+    """The CPU reference, or Vulkan under the validation layer (the test skipped without Vulkan)."""
+    if backend == "cpu":
+        return bvhlab.Renderer("cpu")
+    try:
+        return bvhlab.Renderer("vulkan", validation=True)
+    except bvhlab.VulkanUnavailable as e:
+        pytest.skip(str(e))
+
+
 @pytest.mark.parametrize("backend", ["cpu", pytest.param("vulkan", marks=pytest.mark.vulkan)])
 def test_overlay_lines_change_neither_the_counters_nor_the_picture_beneath(backend):
     """The probe's case: `render --counter box_tests --bvh-depth 3:4` changed 1,908 of 76,800
@@ -60,13 +70,7 @@ def test_overlay_lines_change_neither_the_counters_nor_the_picture_beneath(backe
     the heatmap's cost equal a render without boxes. A shaded render that keeps no counters still
     stops at the line (report §3.3: the frame's own work, lower where lines are), and its picture
     is the measured render's, bit for bit."""
-    if backend == "vulkan":
-        try:
-            renderer = bvhlab.Renderer("vulkan", validation=True)
-        except bvhlab.VulkanUnavailable as e:
-            pytest.skip(str(e))
-    else:
-        renderer = bvhlab.Renderer("cpu")
+    renderer = _renderer(backend)
     scene = showcase.whitted()
     bvh = bvhlab.build(scene)
     w, h = 96, 72
@@ -116,13 +120,7 @@ def _camera_on_box_planes():
 
 @pytest.mark.parametrize("backend", ["cpu", pytest.param("vulkan", marks=pytest.mark.vulkan)])
 def test_every_pixel_of_a_camera_on_box_planes_is_its_recorded_traversal(backend):
-    if backend == "vulkan":
-        try:
-            renderer = bvhlab.Renderer("vulkan", validation=True)
-        except bvhlab.VulkanUnavailable as e:
-            pytest.skip(str(e))
-    else:
-        renderer = bvhlab.Renderer("cpu")
+    renderer = _renderer(backend)
     w, h = 24, 18
     differing = {}
     for name, scene in _camera_on_box_planes().items():

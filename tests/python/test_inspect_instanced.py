@@ -177,6 +177,14 @@ def test_a_blas_roots_world_box_is_its_tlas_leafs_box(instanced_scene, trees):  
     assert tighter, "the scene has a rotated instance whose moved root box sticks out of its TLAS leaf"
 
 
+def _counted(rec) -> tuple:
+    """The tracer's five counters of a two-level record: box tests, box hits, primitive tests,
+    primitives that became the closest hit, instances entered."""
+    s = rec.summary()
+    closer = sum(int(b.prim_closer.sum()) for b in rec.blas)
+    return s["box_tests"], s["box_hits"], s["prim_tests"], closer, s["instances_entered"]
+
+
 @pytest.mark.parametrize("traversal", ["stack", "stackless"])
 def test_pixel_records_of_one_identity_instance_are_the_tracers_counters(traversal):
     """A scene of one mesh placed where it was modelled, as instances (a Blender scene of one
@@ -199,9 +207,7 @@ def test_pixel_records_of_one_identity_instance_are_the_tracers_counters(travers
     for y in range(h):
         for x in range(w):
             rec = trace_pixel(scene, tree, x, y, width=w, height=h, options=options)
-            s = rec.summary()
-            closer = sum(int(b.prim_closer.sum()) for b in rec.blas)
-            got = (s["box_tests"], s["box_hits"], s["prim_tests"], closer, s["instances_entered"])
+            got = _counted(rec)
             assert got == tuple(counters[y, x].tolist()), (x, y, got, counters[y, x])
             hits += rec.instance == 0
     assert hits > w * h // 4, "the walks are recorded: the hits keep their instance"
@@ -224,11 +230,9 @@ def test_pixel_records_of_a_two_level_scene_are_the_tracers_counters(instanced_s
     for y in range(0, h, 2):
         for x in range(0, w, 2):
             rec = trace_pixel(instanced_scene, tree, x, y, width=w, height=h, options=options)
-            s = rec.summary()
-            closer = sum(int(b.prim_closer.sum()) for b in rec.blas)
-            got = (s["box_tests"], s["box_hits"], s["prim_tests"], closer, s["instances_entered"])
+            got = _counted(rec)
             assert got == tuple(counters[y, x].tolist()), (x, y, got, counters[y, x])
-            assert rec.nodes_visited == s["box_tests"]
+            assert rec.nodes_visited == got[0]
 
 
 @pytest.mark.parametrize("traversal", ["stack", "stackless"])
@@ -262,9 +266,7 @@ def test_pixel_records_of_a_two_level_scene_pass_hidden_surfaces_by(instanced_sc
             with warnings.catch_warnings():
                 warnings.simplefilter("error")
                 rec = trace_pixel(scene, tree, x, y, width=w, height=h, options=options)
-            s = rec.summary()
-            closer = sum(int(b.prim_closer.sum()) for b in rec.blas)
-            got = (s["box_tests"], s["box_hits"], s["prim_tests"], closer, s["instances_entered"])
+            got = _counted(rec)
             assert got == tuple(counters[y, x].tolist()), (x, y, got, counters[y, x])
             if rec.instance >= 0:
                 hits += 1
@@ -293,9 +295,7 @@ def test_pixel_records_pass_a_hidden_material_0_of_a_mesh_without_materials_by(i
     for y in range(h):
         for x in range(w):
             rec = trace_pixel(scene, tree, x, y, width=w, height=h, options=options)
-            s = rec.summary()
-            closer = sum(int(b.prim_closer.sum()) for b in rec.blas)
-            got = (s["box_tests"], s["box_hits"], s["prim_tests"], closer, s["instances_entered"])
+            got = _counted(rec)
             assert got == tuple(counters[y, x].tolist()), (x, y, got, counters[y, x])
             assert rec.instance < 0 or mesh_of[rec.instance] == 0, (x, y)  # never the hidden knot
 
