@@ -27,6 +27,9 @@ class InstancedBvh:
     `place` rebuilds only the TLAS, for instances that moved (the meshes' trees are kept);
     `update_mesh` updates one mesh's tree and then the TLAS."""
 
+    #: On a snapshot: the tree it is a view of (what caches of a tree's render scene key by).
+    _source: InstancedBvh
+
     def __init__(self, meshes: list[Bvh], mesh_of: np.ndarray, transforms: np.ndarray, config: BuildConfig):
         self.config = config
         # (TLAS core, mesh index, transforms, meshes, their revisions) as one attribute: place() and
@@ -58,6 +61,7 @@ class InstancedBvh:
         view = object.__new__(InstancedBvh)
         view.__dict__.update(self.__dict__)
         view._state, view._frozen, view._lock = state, True, threading.RLock()
+        view._source = getattr(self, "_source", self)  # the tree it is a view of (what caches key by)
         return view
 
     def _current(self) -> tuple:

@@ -37,12 +37,13 @@ class _KeptRenderScene:
         self._watched: weakref.WeakSet = weakref.WeakSet()  # trees with a finalizer (one each)
 
     def get(self, scene, bvh) -> _core.RenderScene:
+        owner = getattr(bvh, "_source", bvh)  # a two-level tree's snapshot (InstancedBvh.snapshot) stands for it
         with self._lock:
-            if self._owner is None or self._owner() is not bvh:
-                self._cache, self._owner = SceneCache(), weakref.ref(bvh)
-                if bvh not in self._watched:
-                    self._watched.add(bvh)
-                    weakref.finalize(bvh, self._drop, self._owner)
+            if self._owner is None or self._owner() is not owner:
+                self._cache, self._owner = SceneCache(), weakref.ref(owner)
+                if owner not in self._watched:
+                    self._watched.add(owner)
+                    weakref.finalize(owner, self._drop, self._owner).atexit = False
             cache = self._cache
         return cache.get(scene, bvh)
 
