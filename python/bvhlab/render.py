@@ -55,7 +55,10 @@ class RenderResult:
     depth: float32 (H, W), Blender's Z pass: the distance along the view axis of the nearest
     primary hit over the pixel's samples (where the overlay draws a line in front, the line's);
     1e10 where nothing was hit, as Cycles writes.
-    cost: float32 (H, W), box tests per primary ray, averaged over the pixel's samples.
+    cost: float32 (H, W), box tests per primary ray, averaged over the pixel's samples. Where the
+    overlay draws a line in front of a surface, a render that measures the walks (mode "heatmap",
+    traversal_counters) counts the whole walk; a shaded render without counters stops the primary
+    ray at the line (report §3.3), and its cost there is that shorter walk's.
     heat: float32 (H, W, 4), `cost` in the heatmap's colours (what mode "heatmap" shows as colour).
     counters: float32 (H, W, 5), the traversal counters per primary ray in bvhlab.counters.COUNTERS
     order, averaged over the pixel's samples (renders with RenderOptions(traversal_counters=True)).
