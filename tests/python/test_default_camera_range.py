@@ -61,16 +61,21 @@ def test_a_default_light_near_the_range_limit_is_moved_within_it():
     """The probe's scene: triangles at x = 1e6 and x = 1e12, both within the range: the camera that
     frames them stands within it, the default light beside the camera did not, and the Scene (and
     the Blender export of such a scene) was refused for a light it had not been given. The light is
-    now moved towards the camera's target until it is within the range; the scene renders."""
+    now moved towards the camera until it is within the range; the scene renders."""
     tris = np.array([[[1e6, 0, 0], [1e6 + 1, 0, 0], [1e6, 1, 0]], [[1e12, 0, 0], [1e12 + 1e9, 0, 0], [1e12, 1e9, 0]]])
     near = bvhlab.Scene(triangles=(tris * 1e-3).astype(np.float32))  # within reach: where documented
     np.testing.assert_allclose(near.light.position, _light_beside(near.camera), rtol=1e-9)
     scene = bvhlab.Scene(triangles=tris.astype(np.float32))
     assert scene.camera is not None and np.abs(scene.camera.position).max() <= MAX_COORDINATE
-    light, beside, target = np.array(scene.light.position), _light_beside(scene.camera), np.array(scene.camera.look_at)
+    light, beside, camera = np.array(scene.light.position), _light_beside(scene.camera), np.array(scene.camera.position)
     assert np.abs(beside).max() > MAX_COORDINATE >= np.abs(light).max() > 0.98 * MAX_COORDINATE
-    way = (light - target) / (beside - target)  # on the way from the target to where it was
+    way = (light - camera) / (beside - camera)  # on the way from the camera to where it was
     np.testing.assert_allclose(way, way[0], rtol=1e-9)
     assert 0 < way[0] < 1
+    # geometry reaching past the margin (x = 1.09e12 of 1.0995e12): the light still off its plane
+    edge = np.array([[[1.09e12, 0, 0], [1.09e12, 1e9, 0], [1.09e12, 0, 1e9]]], np.float32)
+    lit = bvhlab.Scene(triangles=edge)
+    assert lit.camera is not None and np.abs(lit.light.position).max() <= MAX_COORDINATE
+    assert lit.light.position[0] != lit.camera.look_at[0], "not in the triangle's plane x = 1.09e12"
     image, _ = bvhlab.render(scene, bvhlab.build(scene), 8, 6, backend="cpu")
     assert np.isfinite(image).all()

@@ -21,14 +21,14 @@ D3 cross(const D3& a, const D3& b) {
 D3 d3(Vec3 v) { return {v.x, v.y, v.z}; }
 
 /// The point nearest `p` on the segment from `inside` (within the coordinate range) to `p` that
-/// lies within the range, with a margin: the default light of a camera near the range's edge
-/// stood outside it, and the scene was refused for a light it did not have (geometry at x = 1e12,
-/// within 2^40: "light position ... outside the supported range"). (A default camera that would
-/// stand outside is not made: Scene leaves the camera to the caller.)
+/// lies within the range, with a margin where `inside` leaves room for one: the default light of a
+/// camera near the range's edge stood outside it, and the scene was refused for a light it did not
+/// have (geometry at x = 1e12, within 2^40: "light position ... outside the supported range"). (A
+/// default camera that would stand outside is not made: Scene leaves the camera to the caller.)
 D3 pulled_within_range(const D3& inside, const D3& p) {
-    const double limit = double(kMaxCoordinate) * 0.99;
     double s = 1.0;
     for (int k = 0; k < 3; ++k) {
+        const double limit = std::max(double(kMaxCoordinate) * 0.99, std::fabs(inside[k]));
         const double d = p[k] - inside[k];
         if (std::fabs(p[k]) > limit && d != 0.0) s = std::min(s, ((d > 0 ? limit : -limit) - inside[k]) / d);
     }
@@ -61,7 +61,7 @@ std::array<double, 3> default_light_position(const CameraPlacement& camera) {
     const double dist = norm(forward);
     D3 out = camera.position;
     for (int k = 0; k < 3; ++k) out[k] = out[k] + right[k] * 0.3 * dist + camera.up[k] * 0.3 * dist;
-    return pulled_within_range(camera.target, out);
+    return pulled_within_range(camera.position, out);  // towards the camera, whose side it is on
 }
 
 }  // namespace bvhlab
