@@ -167,13 +167,18 @@ def test_gltf_buffer_uris_are_percent_decoded(tmp_path, source, cameras):
         assert gltf_buffers(path)[0] == current, "the sweep's cache hashes the file the loader read"
 
 
-def test_a_fifo_as_a_gltf_buffer_is_refused_without_hanging(tmp_path, source):
-    """A buffer file that is a FIFO blocked trimesh's read (review)."""
+@pytest.mark.parametrize("kind", ["buffers", "images"])
+def test_a_fifo_a_gltf_refers_to_is_refused_without_hanging(tmp_path, source, kind):
+    """A buffer or image file that is a FIFO blocked trimesh's read (the reviews)."""
     source.export(tmp_path / "s.gltf")
     doc = json.loads((tmp_path / "s.gltf").read_text())
-    (tmp_path / doc["buffers"][0]["uri"]).unlink()
-    os.mkfifo(tmp_path / doc["buffers"][0]["uri"])
-    with pytest.raises(SceneFileError, match="is not a regular file .*not a glTF buffer"):
+    if kind == "images":
+        doc["images"] = [{"uri": "texture.png"}]
+        (tmp_path / "s.gltf").write_text(json.dumps(doc))
+    name = doc[kind][0]["uri"]
+    (tmp_path / name).unlink(missing_ok=True)
+    os.mkfifo(tmp_path / name)
+    with pytest.raises(SceneFileError, match="is not a regular file .*not a file a glTF refers to"):
         load_mesh_file(tmp_path / "s.gltf")
 
 

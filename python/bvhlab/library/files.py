@@ -19,7 +19,7 @@ import numpy as np
 from .. import _checks
 from .._npz import SceneFileError
 from ..scene import Scene
-from .gltf_checks import check_gltf, gltf_buffers, uri_name
+from .gltf_checks import check_gltf, gltf_files, uri_name
 from .obj_reader import read_obj
 from .ply_reader import read_ply
 from .stl_reader import read_stl
@@ -71,8 +71,8 @@ def _triangles(path: Path, kind: str) -> np.ndarray:
     except ImportError:
         raise SceneFileError(f"{path}: reading {kind} files needs trimesh (pip install 'bvhlab[files]')") from None
     kind, mended = check_gltf(path)  # "gltf" or "glb" by the file's contents; mended: without cameras
-    for buffer in gltf_buffers(path):  # a FIFO would block trimesh's read
-        _checks.input_file(buffer, "glTF buffer", SceneFileError)
+    for referenced in gltf_files(path):  # a FIFO buffer or image would block trimesh's read
+        _checks.input_file(referenced, "file a glTF refers to", SceneFileError)
     try:
         resolver = _uri_resolver(trimesh, path)  # the files it refers to, found beside it
         source = str(path) if mended is None else io.BytesIO(mended)

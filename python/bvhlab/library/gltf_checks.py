@@ -154,6 +154,16 @@ def _accessor(accessors: list[dict], index) -> dict:
 def gltf_buffers(path: Path) -> list[Path]:
     """The files a glTF's or GLB's buffers are in (not data: URIs), in its order; [] for anything
     else or a file that cannot be read (the loader says why). What a cache of its geometry hashes."""
+    return _referenced(path, ("buffers",))
+
+
+def gltf_files(path: Path) -> list[Path]:
+    """Every file a glTF or GLB refers to that its loader opens: its buffers' and its images'
+    (each checked before trimesh opens it: a FIFO blocked the read)."""
+    return _referenced(path, ("buffers", "images"))
+
+
+def _referenced(path: Path, kinds: tuple[str, ...]) -> list[Path]:
     try:
         found = _json_text(path, any_suffix=False)
         if found is None:
@@ -163,7 +173,7 @@ def gltf_buffers(path: Path) -> list[Path]:
         return []
     if not isinstance(doc, dict):
         return []
-    uris = [b.get("uri") for b in _list(doc, "buffers")]
+    uris = [item.get("uri") for kind in kinds for item in _list(doc, kind) if isinstance(item, dict)]
     return [path.parent / uri_name(path.parent, u) for u in uris if isinstance(u, str) and not u.startswith("data:")]
 
 
