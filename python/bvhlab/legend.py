@@ -148,3 +148,12 @@ def overlay_height(bvh) -> int:
     """The height of the tree whose boxes the overlay draws (a two-level tree's: its TLAS's)."""
     stats = bvh.stats
     return int(stats["tlas_height"] if "tlas_height" in stats else stats["height"])
+
+
+def no_boxes_warning(height: int, depth_range: tuple[int, int]) -> str | None:
+    """What the CLI says where a depth range lies below a tree of `height` (overlay_height): it
+    draws no box, silently otherwise. None where it draws some (or the tree has no nodes)."""
+    a, b = depth_range
+    if height < 1 or a <= height - 1:
+        return None
+    return f"warning: the tree's deepest boxes are at depth {height - 1}: --bvh-depth {a}:{b} draws none"

@@ -122,6 +122,9 @@ def test_render_with_overlay_and_heatmap(tmp_path, capsys):
     assert main(["render", "gen:five_spheres", *shape, "--out", str(past)]) == 0
     assert read_png(past).shape == (64, 96, 4)
     assert "--bvh-depth 40:45 draws none" in capsys.readouterr().err
+    snapshot = tmp_path / "snapshot.png"  # the raster's snapshot says it too (probe: it was silent)
+    assert main(["snapshot", "gen:five_spheres", "--bvh-depth", "40:45", "--out", str(snapshot)]) == 0
+    assert "--bvh-depth 40:45 draws none" in capsys.readouterr().err and snapshot.exists()
     heat = tmp_path / "heat.png"
     assert (
         main(

@@ -107,12 +107,9 @@ def run(args) -> int:
     scene, name = load_scene(args.scene)
     with ProgressBar(f"building {args.method}") as bar:
         bvh = build(scene, progress=bar, **settings)  # an instanced scene: a two-level tree, rendered as it is
-    deepest = legend.overlay_height(bvh) - 1  # -1: a tree of no nodes (an empty scene)
-    if args.bvh_depth is not None and deepest >= 0 and args.bvh_depth[0] > deepest:  # drew nothing, silently
-        a, b = args.bvh_depth
-        print(
-            f"warning: the tree's deepest boxes are at depth {deepest}: --bvh-depth {a}:{b} draws none", file=sys.stderr
-        )
+    warning = legend.no_boxes_warning(legend.overlay_height(bvh), args.bvh_depth) if args.bvh_depth else None
+    if warning:  # drew nothing, silently
+        print(warning, file=sys.stderr)
     renderer = default_renderer(args.backend)
     with ProgressBar("rendering") as bar:
         job = renderer.start(scene, bvh, args.width, args.height, options=render_options)

@@ -66,4 +66,7 @@ def _run(scene_spec: str, build_kwargs: dict, out: Path, extra: list[str]) -> Pa
     if done.returncode != 0:
         lines = (done.stderr or done.stdout).strip().splitlines()
         raise RuntimeError(f"snapshot failed: {lines[-1] if lines else f'exit code {done.returncode}'}")
+    for line in done.stderr.splitlines():  # the worker's warnings (a depth range below the tree)
+        if line.startswith("warning: "):
+            print(line, file=sys.stderr)
     return out

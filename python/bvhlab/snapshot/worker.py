@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 
 import numpy as np
 
@@ -38,6 +39,11 @@ def main(argv=None) -> None:
 
     height = bvh.stats["height"]
     if not args.sheet:
+        from .. import legend
+
+        warning = legend.no_boxes_warning(height, tuple(args.depth))
+        if warning:  # drew nothing, silently (passed on by bvhlab.snapshot)
+            print(warning, file=sys.stderr)
         image = raster.draw(*boxes(*args.depth))
         shown = range(args.depth[0], min(args.depth[1], height - 1) + 1)
         _save_srgb(with_depth_legend(image, shown), args.out)
