@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "../platform/number_text.h"
 #include "bvhlab/build_config.h"
 #include "bvhlab/cancel.h"
 #include "bvhlab/coordinate_range.h"
@@ -75,14 +76,10 @@ void validate_spheres(const GeometryView& g) {
         if (!finite_floats(g.spheres + 4 * i, 3))
             throw std::invalid_argument("sphere " + std::to_string(i) + " has a NaN or infinite centre");
         float r = g.sphere_radius(i);
-        if (!(r >= kMinRadius) || !std::isfinite(r)) {
-            char text[160];
-            std::snprintf(text, sizeof text,
-                          "sphere %zu has radius %g; a radius must be a finite number of at "
-                          "least 2^-60 (8.7e-19), below which its square underflows",
-                          i, double(r));
-            throw std::invalid_argument(text);
-        }
+        if (!(r >= kMinRadius) || !std::isfinite(r))
+            throw std::invalid_argument("sphere " + std::to_string(i) + " has radius " + number_text(r) +
+                                        "; a radius must be a finite number of at least 2^-60 (8.7e-19), below "
+                                        "which its square underflows");
         Aabb box = sphere_ref(g, i).box();
         if (!in_coordinate_range(box.lo) || !in_coordinate_range(box.hi))
             throw std::invalid_argument("sphere " + std::to_string(i) + " (centre ± radius) reaches outside " +
