@@ -173,7 +173,7 @@ def _referenced(path: Path, kinds: tuple[str, ...]) -> list[Path]:
         return []
     if not isinstance(doc, dict):
         return []
-    uris = [item.get("uri") for kind in kinds for item in _list(doc, kind) if isinstance(item, dict)]
+    uris = [item.get("uri") for kind in kinds for item in _list(doc, kind)]
     return [path.parent / uri_name(path.parent, u) for u in uris if isinstance(u, str) and not u.startswith("data:")]
 
 
