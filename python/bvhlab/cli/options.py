@@ -32,15 +32,12 @@ from ..bvh import (
     Bvh,
     build,
 )
-from ..library import FILE_KINDS
-from ..library.files import MESH_SUFFIXES
+from ..library import FILE_KINDS, is_scene_file
 from ..optimize import OptimizeConfig, OptimizeStats
 from ..render_options import DEFAULT_HEIGHT, DEFAULT_WIDTH
 
 #: Largest image side the CLI accepts (OpenGL's and most Vulkan drivers' framebuffer limit).
 MAX_IMAGE_SIDE = _core.MAX_IMAGE_DIMENSION  # the renderers' limit, one definition
-#: What `library.load_scene` reads as a file rather than a scene name.
-SCENE_SUFFIXES = (".npz", ".blend", *MESH_SUFFIXES)
 
 
 def add_scene(p: argparse.ArgumentParser) -> None:
@@ -53,12 +50,12 @@ def add_scene(p: argparse.ArgumentParser) -> None:
 
 
 def scene_spec(text: str) -> str:
-    """A SCENE argument. A scene file (a suffix of SCENE_SUFFIXES, in any case, as the loader reads
-    them) that exists but is not a regular file (a FIFO, which would block the reader until someone
+    """A SCENE argument. A scene file (library.is_scene_file: by its suffix, in any case, as the
+    loader reads them) that exists but is not a regular file (a FIFO, which would block the reader until someone
     writes to it, a device, a folder) is refused before any work; names, and files that do not
     exist, are left to the loader, which lists the names."""
     path = Path(text)
-    if path.suffix.lower() not in SCENE_SUFFIXES:
+    if not is_scene_file(text):
         return text
     if path.is_dir():
         raise argparse.ArgumentTypeError(f"{text} is a folder; give a scene file ({FILE_KINDS})")

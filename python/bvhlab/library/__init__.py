@@ -12,10 +12,16 @@ from pathlib import Path
 
 from ..scene import Scene
 from . import sponza
-from .files import is_mesh_file, load_mesh_file
+from .files import MESH_SUFFIXES, is_mesh_file, load_mesh_file
 
-#: The scene files load_scene reads, as a message lists them.
-FILE_KINDS = ".blend, .npz, .obj, .ply, .stl, .gltf, .glb"
+#: The suffixes of the scene files load_scene reads (in any case), and as a message lists them.
+SCENE_FILE_SUFFIXES = (".blend", ".npz", *MESH_SUFFIXES)
+FILE_KINDS = ", ".join(SCENE_FILE_SUFFIXES)
+
+
+def is_scene_file(spec: str) -> bool:
+    """Whether load_scene reads `spec` as a file (by its suffix) rather than a scene's name."""
+    return Path(spec).suffix.lower() in SCENE_FILE_SUFFIXES
 
 
 @dataclass(frozen=True)
@@ -121,7 +127,7 @@ def load_scene(spec: str) -> tuple[Scene, str]:
 def scene_file(spec: str) -> Path | None:
     """The file a scene spec reads (a path given, or a bundled name's file); None for `gen:` names
     and for names that do not exist."""
-    if Path(spec).suffix.lower() in (".npz", ".blend") or is_mesh_file(spec):
+    if is_scene_file(spec):
         return Path(spec)
     if spec == "sponza":
         return _sponza_path()

@@ -30,14 +30,13 @@ from pathlib import Path
 
 from .. import _checks
 from ..build_config import BuildConfig, method_from_label
-from ..library import is_mesh_file
+from ..library import is_scene_file
 from ..ray_query import TRAVERSALS
 
 #: The grid's keys: BuildConfig's tree settings (threads is the sweep's: one per worker) and traversal.
 GRID_KEYS = tuple(f.name for f in fields(BuildConfig) if f.compare) + ("traversal",)
 DEFAULT_RAYS, MAX_RAYS = 100_000, 100_000_000
 DEFAULT_REPEATS, MAX_REPEATS = 3, 100
-_SCENE_FILE_SUFFIXES = (".blend", ".npz")
 
 
 @dataclass(frozen=True)
@@ -96,7 +95,10 @@ def _baseline(path: Path, report, settings: tuple[Setting, ...]) -> str:
     methods = list(dict.fromkeys(s.config.method for s in settings))
     baseline = report.get("baseline", methods[0])
     if baseline not in methods:
-        named = isinstance(baseline, str) and baseline.startswith("sah") and baseline[3:].isdigit()
+        try:  # a label of a method with its bins ("sah32")
+            named = isinstance(baseline, str) and "bins" in method_from_label(baseline)
+        except ValueError:
+            named = False
         hint = " (the baseline is a method, 'sah', whose cells the summary divides by)" if named else ""
         raise ValueError(
             f"{path}: [report] baseline {baseline!r} is not a method of the grid: {', '.join(methods)}{hint}"
@@ -116,10 +118,6 @@ def _only(path: Path, where: str, table, allowed: tuple[str, ...]) -> None:
         raise ValueError(f"{path}: unknown key(s) in {where}: {', '.join(unknown)}; expected: {', '.join(allowed)}")
 
 
-def _is_scene_file(name: str) -> bool:
-    return is_mesh_file(name) or Path(name).suffix.lower() in _SCENE_FILE_SUFFIXES
-
-
 def _scenes(path: Path, entries) -> tuple[str, ...]:
     if isinstance(entries, str):
         entries = [entries]
@@ -130,12 +128,12 @@ def _scenes(path: Path, entries) -> tuple[str, ...]:
         if glob.has_magic(entry):
             found = sorted(glob.glob(str(path.parent.resolve() / entry), recursive=True))
             # the scene files among them ("models/*" beside a readme.txt made a row "no scene")
-            matches = [m for m in found if _is_scene_file(m)]
+            matches = [m for m in found if is_scene_file(m)]
             if not matches:
                 what = f"no scene file (of {len(found)} files)" if found else "no file"
                 raise ValueError(f"{path}: the scene glob '{entry}' matches {what}")
             out.extend(matches)
-        elif _is_scene_file(entry):
+        elif is_scene_file(entry):
             out.append(str(path.parent.resolve() / entry))  # a missing file becomes the cell's error row
         else:
             out.append(entry)
