@@ -141,9 +141,11 @@ def test_compare_refuses_a_bad_method_setting_before_any_work(tmp_path):
     "args, message",
     [
         (["--method", "sah1"], "bins must be between 2 and 256, got 1"),
-        (["--bins", "300"], "bins must be between 2 and 256, got 300"),
-        (["--max-leaf-size", "0"], "max_leaf_size must be between 1 and 2147483647, got 0"),
-        (["--sah-block", "3"], "sah_block must be a power of two from 1 to 64, got 3"),
+        (["--bins", "300"], "argument --bins: must be between 2 and 256, got 300"),
+        (["--max-leaf-size", "0"], "argument --max-leaf-size: must be between 1 and 2147483647, got 0"),
+        (["--max-leaf-size", "4.5"], "argument --max-leaf-size: expected a whole number, got '4.5'"),
+        (["--sah-block", "3"], "argument --sah-block: must be a power of two from 1 to 64, got 3"),
+        (["--sah-block", "128"], "argument --sah-block: must be a power of two from 1 to 64, got 128"),
     ],
 )
 @pytest.mark.parametrize("command", ["build", "render"])

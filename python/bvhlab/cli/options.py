@@ -23,6 +23,7 @@ from ..build_config import (
     DEFAULT_METHOD,
     DEFAULT_SAH_BLOCK,
     MAX_BINS,
+    MAX_LEAF_SIZE,
     MAX_SAH_BLOCK,
     METHODS,
     MIN_BINS,
@@ -71,7 +72,10 @@ def add_build(p: argparse.ArgumentParser) -> None:
         "--method", default=DEFAULT_METHOD, help=f"split method: {', '.join(METHODS)} (or sah<B>, e.g. sah32)"
     )
     p.add_argument(
-        "--bins", type=int, default=None, help=f"binned SAH buckets, {MIN_BINS}..{MAX_BINS} (default {DEFAULT_BINS})"
+        "--bins",
+        type=lambda text: whole_number(text, MIN_BINS, MAX_BINS),
+        default=None,
+        help=f"binned SAH buckets, {MIN_BINS}..{MAX_BINS} (default {DEFAULT_BINS})",
     )
     p.add_argument(
         "--bin-bounds",
@@ -82,13 +86,13 @@ def add_build(p: argparse.ArgumentParser) -> None:
     p.add_argument("--axis", default=DEFAULT_AXIS, choices=AXES, help=f"split axis policy (default {DEFAULT_AXIS})")
     p.add_argument(
         "--max-leaf-size",
-        type=int,
+        type=lambda text: whole_number(text, 1, MAX_LEAF_SIZE),
         default=DEFAULT_MAX_LEAF_SIZE,
         help=f"primitives per leaf at most (default {DEFAULT_MAX_LEAF_SIZE})",
     )
     p.add_argument(
         "--sah-block",
-        type=int,
+        type=sah_block,
         default=DEFAULT_SAH_BLOCK,
         help=f"the SAH counts primitives in blocks of this many, a power of two up to {MAX_SAH_BLOCK} "
         f"(default {DEFAULT_SAH_BLOCK}, the report's SAH; 4: the triangles the CPU traversal tests at once)",
@@ -234,6 +238,15 @@ def whole_number(text: str, lo: int | None = None, hi: int | None = None, unit: 
         raise argparse.ArgumentTypeError(f"expected a whole number{unit and ' of' + unit}, got '{text}'") from None
     if lo is not None and hi is not None and not lo <= value <= hi:
         raise argparse.ArgumentTypeError(f"must be between {lo} and {hi}{unit}, got {value}")
+    return value
+
+
+def sah_block(text: str) -> int:
+    """An argparse value: --sah-block's power of two, 1..MAX_SAH_BLOCK (the core's check named the
+    setting `sah_block`, which the command line does not use)."""
+    value = whole_number(text)
+    if not (1 <= value <= MAX_SAH_BLOCK and value & (value - 1) == 0):
+        raise argparse.ArgumentTypeError(f"must be a power of two from 1 to {MAX_SAH_BLOCK}, got {value}")
     return value
 
 
