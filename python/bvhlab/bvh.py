@@ -206,8 +206,9 @@ class Bvh:
 
         Origins lie within ±MAX_COORDINATE (2^40) and the largest component of each direction in
         [2^-80, 2^80]; directions need not be normalised (each ray is scaled by a power of two for
-        the arithmetic, exactly, so t is in units of the given direction); `tmax` is a number >= 0
-        (inf: no limit). Anything else raises ValueError naming the ray. Ctrl-C stops a long batch (KeyboardInterrupt).
+        the arithmetic, exactly, so t is in units of the given direction); `tmin` and `tmax` are
+        numbers >= 0 (tmax inf: no limit). Anything else raises ValueError naming the ray. Ctrl-C
+        stops a long batch (KeyboardInterrupt).
 
         `traversal`: "stack" (binary tree, nearer child first), "stackless" (skip indices,
         report §3.1), or "wide" (an 8-wide copy of the tree made on first use; the fastest).
@@ -237,7 +238,8 @@ class Bvh:
         on every traversal; a hit at exactly tmax does not count, as in `intersect`.
 
         `tmax`: a number >= 0 (inf: the whole ray), or a float32 array with one per ray. Rays,
-        tmin, traversal and threads as for `intersect`; a NaN or negative tmax raises ValueError.
+        tmin, traversal and threads as for `intersect`; a NaN or negative tmin or tmax raises
+        ValueError.
         Returns a bool array, one per ray."""
         return run_occluded_query(self._core, origins, directions, tmin, tmax, traversal, threads)
 

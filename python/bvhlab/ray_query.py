@@ -21,7 +21,7 @@ def _checked_rays(origins, directions, tmin, traversal: str, threads: int):
     if len(origins) != len(directions):
         raise ValueError(f"origins ({len(origins)}) and directions ({len(directions)}) differ in length")
     _checks.choice("traversal", traversal, TRAVERSALS)
-    return origins, directions, _checks.real("tmin", tmin), traversal, _checks.integer("threads", threads, 0, 4096)
+    return origins, directions, _checks.real("tmin", tmin, 0.0), traversal, _checks.integer("threads", threads, 0, 4096)
 
 
 def run_ray_query(

@@ -235,4 +235,34 @@ TEST(Occluded, BatchRefusesNanAndNegativeTmax) {
     refused({o, d, 2, 0.0f, kInfinity, negative}, "ray 0: tmax");
 }
 
+// A negative tmin was answered, wrongly: the box test widens a box's far side by scaling its
+// distance (ray.h hit_box), which narrows it where the distance is negative, so a triangle behind
+// the origin in a box flat on an axis was missed. Refused by every batch query, with its value.
+TEST(Occluded, BatchesRefuseNanAndNegativeTmin) {
+    const float tri[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    const Bvh bvh = build_bvh(GeometryView{tri, 1});
+    const WideBvh wide = make_wide(bvh);
+    const float o[3] = {0.2f, 0.2f, 1.0f}, d[3] = {0, 0, 1};
+    float t, u, v;
+    std::int32_t prim;
+    std::uint8_t kind;
+    bool out;
+    for (const float tmin : {-10.0f, -1e-30f, std::nanf("")}) {
+        const RayBatch rays{o, d, 1, tmin, kInfinity};
+        for (const Traversal mode : {Traversal::Stack, Traversal::Stackless, Traversal::Wide}) {
+            try {
+                intersect_batch(bvh, rays, HitBatch{&t, &prim, &kind, &u, &v}, mode, 1, &wide);
+                ADD_FAILURE() << "intersect_batch accepted tmin " << tmin;
+            } catch (const std::invalid_argument& e) {
+                EXPECT_NE(std::string(e.what()).find("the rays: tmin must be a number >= 0, got"), std::string::npos)
+                    << e.what();
+            }
+            EXPECT_THROW(occluded_batch(bvh, rays, &out, mode, 1, &wide), std::invalid_argument);
+        }
+    }
+    intersect_batch(bvh, RayBatch{o, d, 1, -0.0f, kInfinity}, HitBatch{&t, &prim, &kind, &u, &v}, Traversal::Wide, 1,
+                    &wide);  // -0 is 0
+    EXPECT_EQ(t, kInfinity);
+}
+
 }  // namespace

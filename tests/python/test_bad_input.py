@@ -247,3 +247,30 @@ def test_a_scene_too_small_for_the_triangle_test_is_refused():
     )
     assert hit["t"][0] == pytest.approx(9e-15, rel=1e-5)
     bvhlab.build(np.full((3, 3, 3), 0.5, np.float32))  # one point: no extent, nothing to hit
+
+
+def test_a_negative_tmin_is_refused_by_every_ray_query():
+    """A negative tmin was accepted and answered wrongly: the box test widens a box's far side by
+    scaling its distance, which narrows it where that distance is negative, so a triangle behind the
+    origin in a box flat on an axis was missed (one triangle at z = 0, a ray from z = 1 going up
+    with tmin -10: no hit on any traversal, where t = -1 lies in (tmin, tmax)); the wide walk found
+    it with three triangles, the binary walks did not. Refused now, as Embree takes tnear >= 0."""
+    tris = np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[5, 5, 1], [6, 5, 1], [5, 6, 2]]], np.float32)
+    flat = bvhlab.build(tris)
+    moved = np.stack([np.eye(3, 4, dtype=np.float32)] * 2)
+    moved[1, :, 3] = (20, 0, 0)
+    instanced = bvhlab.build(bvhlab.Scene(meshes=[tris], instance_mesh=np.array([1, 1]), instance_transforms=moved))
+    assert isinstance(instanced, bvhlab.InstancedBvh)
+    o = np.array([[0.2, 0.2, 1.0]], np.float32)
+    d = np.array([[0.0, 0.0, 1.0]], np.float32)
+    for tree in (flat, instanced):
+        for traversal in ("stack", "stackless", "wide"):
+            with pytest.raises(ValueError, match="tmin must be at least 0, got -10.0"):
+                tree.intersect(o, d, tmin=-10.0, traversal=traversal)
+            with pytest.raises(ValueError, match="tmin must be at least 0, got -1e-30"):
+                tree.occluded(o, d, tmin=-1e-30, traversal=traversal)
+        with pytest.raises(ValueError, match="tmin must be at least 0"):
+            tree.trace_ray(o[0], d[0], tmin=-1.0)
+        hit = tree.intersect(o, d, tmin=-0.0)  # -0.0 is 0: accepted, the ray from its origin on
+        assert hit["t"][0] == np.inf
+        assert tree.intersect(o, -d, tmin=0.0)["t"][0] == 1.0  # the triangle below, seen the right way

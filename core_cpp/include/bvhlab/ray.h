@@ -12,7 +12,9 @@ namespace bvhlab {
 inline constexpr float kInfinity = std::numeric_limits<float>::infinity();
 inline constexpr std::uint32_t kNoHit = 0xffffffffu;
 
-/// A ray: points origin + t·dir for t in (tmin, tmax). dir need not be normalised.
+/// A ray: points origin + t·dir for t in (tmin, tmax). dir need not be normalised. tmin >= 0 (the
+/// batch queries refuse others, check_limits): the box test widens a box's far side by scaling its
+/// distance, which holds only for distances >= 0.
 struct Ray {
     Vec3 origin, dir;
     float tmin = 0.0f, tmax = kInfinity;

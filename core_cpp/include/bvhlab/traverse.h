@@ -44,7 +44,8 @@ struct HitBatch {
 /// Closest hits of a batch, spread over `threads` threads (0 = all). Results do not depend on it.
 /// Traversal::Wide needs `wide` (make_wide(bvh)). Throws std::invalid_argument naming the first
 /// ray whose origin lies outside ±kMaxCoordinate or whose direction's largest component lies
-/// outside [kMinDirection, kMaxDirection] (coordinate_range.h); each ray is scaled by a power of
+/// outside [kMinDirection, kMaxDirection] (coordinate_range.h), and a NaN or negative tmin or
+/// scalar tmax (check_limits); each ray is scaled by a power of
 /// two for the arithmetic (scale_ray), which changes no result but keeps it in range.
 /// With `cancel`, the calling thread polls it between chunks of rays and every thread stops
 /// soon after a stop is requested; then it throws Cancelled (the outputs are left incomplete).
@@ -60,9 +61,9 @@ void occluded_batch(const Bvh& bvh, const RayBatch& rays, bool* occluded, Traver
 /// Throws std::invalid_argument naming the first ray of `rays` that intersect_batch refuses (and
 /// the first NaN or negative per-ray tmax, where the batch has them).
 void check_rays(const RayBatch& rays);
-/// Throws std::invalid_argument unless the batch's scalar tmax is a number ≥ 0 (with per-ray ones,
-/// check_rays checks those).
-void check_tmax(const RayBatch& rays);
+/// Throws std::invalid_argument unless the batch's tmin and its scalar tmax are numbers ≥ 0 (with
+/// per-ray tmax, check_rays checks those). A negative tmin is refused, not answered: ray.h Ray.
+void check_limits(const RayBatch& rays);
 
 /// Sphere u, v from the hit point (done once per ray, not per candidate).
 void finish_hit(const Bvh& bvh, const Ray& ray, Hit& hit);

@@ -12,15 +12,22 @@ namespace bvhlab {
 namespace {
 bool valid_tmax(float tmax) { return tmax >= 0.0f; }  // false for NaN too
 
-std::string tmax_message(const std::string& what, float tmax) {
+/// "WHAT: LIMIT must be a number >= 0[ (inf for no limit)], got VALUE"
+std::string limit_message(const std::string& what, const char* limit, float value) {
     char got[32];
-    std::snprintf(got, sizeof got, "%g", double(tmax));
-    return what + ": tmax must be a number >= 0 (inf for no limit), got " + got;
+    std::snprintf(got, sizeof got, "%g", double(value));
+    const bool far = std::string(limit) == "tmax";
+    return what + ": " + limit + " must be a number >= 0" + (far ? " (inf for no limit)" : "") + ", got " + got;
 }
 }  // namespace
 
-void check_tmax(const RayBatch& rays) {  // each ray's own tmax: check_rays
-    if (!rays.tmax_of && !valid_tmax(rays.tmax)) throw std::invalid_argument(tmax_message("the rays", rays.tmax));
+void check_limits(const RayBatch& rays) {  // each ray's own tmax: check_rays
+    // A negative tmin is no ray segment the walks can answer: the far side of a box is widened by
+    // scaling its distance (ray.h hit_box), which narrows it where that distance is negative, so
+    // boxes flat on an axis behind the origin would be missed (Embree and OptiX take tnear >= 0 too)
+    if (!(rays.tmin >= 0.0f)) throw std::invalid_argument(limit_message("the rays", "tmin", rays.tmin));
+    if (!rays.tmax_of && !valid_tmax(rays.tmax))
+        throw std::invalid_argument(limit_message("the rays", "tmax", rays.tmax));
 }
 
 void check_rays(const RayBatch& rays) {
@@ -35,7 +42,7 @@ void check_rays(const RayBatch& rays) {
     // a ray is refused: the first one, tmax first, as before
     for (std::size_t i = 0; rays.tmax_of && i < rays.count; ++i)
         if (!valid_tmax(rays.tmax_of[i]))
-            throw std::invalid_argument(tmax_message("ray " + std::to_string(i), rays.tmax_of[i]));
+            throw std::invalid_argument(limit_message("ray " + std::to_string(i), "tmax", rays.tmax_of[i]));
     for (std::size_t i = 0; i < rays.count; ++i) {
         const float* o = rays.origins + 3 * i;
         const float* d = rays.directions + 3 * i;

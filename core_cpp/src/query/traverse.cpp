@@ -191,7 +191,7 @@ bool occluded(const Bvh& bvh, const Ray& ray, Traversal mode) {
 void occluded_batch(const Bvh& bvh, const RayBatch& rays, bool* occluded_out, Traversal mode, std::uint32_t threads,
                     const WideBvh* wide, Cancellation* cancel) {
     if (mode == Traversal::Wide && !wide) throw std::invalid_argument("Traversal::Wide needs the wide tree");
-    check_tmax(rays);
+    check_limits(rays);
     if (mode == Traversal::Wide) {  // a piece at once, grouped by octant (wide_kernel.h occluded_wide_grouped)
         const auto probe = [&](const RayPiece& piece) { return probe_wide(*wide, piece); };
         std::unique_ptr<bool[]> in_order;  // a reordered block's answers, in its rays' order
@@ -213,7 +213,7 @@ void occluded_batch(const Bvh& bvh, const RayBatch& rays, bool* occluded_out, Tr
 void intersect_batch(const Bvh& bvh, const RayBatch& rays, const HitBatch& out, Traversal mode, std::uint32_t threads,
                      const WideBvh* wide, Cancellation* cancel) {
     if (mode == Traversal::Wide && !wide) throw std::invalid_argument("Traversal::Wide needs the wide tree");
-    check_tmax(rays);               // a negative tmax is refused as occluded_batch refuses it, not answered by misses
+    check_limits(rays);             // a negative tmax is refused as occluded_batch refuses it, not answered by misses
     if (mode == Traversal::Wide) {  // a piece at once, grouped by octant (wide_kernel.h intersect_wide_grouped)
         const auto probe = [&](const RayPiece& piece) { return probe_wide(*wide, piece); };
         // the hits of `block`'s pieces to `to` (from its first ray on)

@@ -264,7 +264,7 @@ InstanceHit detail::intersect_two_level_recorded(const TwoLevel& scene, const Ra
 void intersect_batch_two_level(const TwoLevel& scene, const RayBatch& rays, const HitBatch& hits,
                                std::int32_t* instance, Traversal mode, std::uint32_t threads, Cancellation* cancel) {
     check_two_level(scene, mode);
-    check_tmax(rays);
+    check_limits(rays);
     const Tlas& tlas = *scene.tlas;
     if (one_identity_instance(tlas)) {
         // One mesh where it was modelled: the flat batch itself, every hit in instance 0
@@ -313,7 +313,7 @@ void occluded_batch_two_level(const TwoLevel& scene, const RayBatch& rays, bool*
         const BlasView& blas = scene.blases[tlas.instances[0].blas];
         return occluded_batch(*blas.bvh, rays, occluded, mode, threads, blas.wide, cancel);
     }
-    check_tmax(rays);
+    check_limits(rays);
     for_each_ray(rays, threads, cancel, [&](std::size_t i, const Ray& ray, float) {
         occluded[i] = detail::occluded_through_tlas(scene, ray, mode);
     });
