@@ -120,7 +120,6 @@ def _update(job: _Job):
     except Exception as error:  # said in the panel, never raised into Blender
         state.messages[job.key] = ("WARNING", f"The boxes no longer follow the scene: {error}")
         return None
-    job.built.scene = job.scene
     return update
 
 
@@ -134,6 +133,12 @@ def follow(scene, depsgraph):
 
     key = state.key(scene)
     built = state.tree_for(scene)
+    if depsgraph.mode != "VIEWPORT":
+        # a render's (F12, an animation's frames, by any engine): it holds what renders show (not
+        # objects disabled in renders, but objects hidden by the eye), not what the sidebar's
+        # tree is of; followed, it made the tree the render's until the next edit
+        _missed(key)
+        return None
     if _busy[0] or (built is None and key not in state.builds):
         _missed(key)
         return None

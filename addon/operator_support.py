@@ -81,12 +81,12 @@ def window_progress(context):
         window_manager.progress_end()
 
 
-def remember_tree(context, key: TreeKey, exported) -> state.BuiltTree:
-    """Make the cache's tree of `key` the one the sidebar shows, and keep the overlay's depth range
-    inside its height."""
+def remember_tree(context, key: TreeKey) -> state.BuiltTree:
+    """Make the cache's tree of `key` (with the scene it was made over: trees.SceneTree.scene) the
+    one the sidebar shows, and keep the overlay's depth range inside its height."""
     from . import follow
 
-    built = state.BuiltTree(key, cache.tree(key), exported)
+    built = state.BuiltTree(key, cache.tree(key))
     state.trees[state.key(context.scene)] = built
     follow.tree_made(state.key(context.scene), built)
     settings = context.scene.bvhlab
@@ -108,7 +108,7 @@ def current_tree(context, exported):
     key = key_of(context.scene)
     with window_progress(context) as progress:
         update = cache.tree(key).update(exported, progress=progress)
-    remember_tree(context, key, exported)
+    remember_tree(context, key)
     return update.bvh
 
 

@@ -81,7 +81,7 @@ class BVHLAB_OT_build(ModalTaskMixin, bpy.types.Operator):
         if task.error is not None:
             raise task.error
         cache.tree(self._key).store(task.result, self._exported)
-        return self._done(context, self._key, self._exported)
+        return self._done(context, self._key)
 
     def _build(self, context):
         import bvhlab
@@ -95,13 +95,13 @@ class BVHLAB_OT_build(ModalTaskMixin, bpy.types.Operator):
             with window_progress(context) as progress:
                 bvh = bvhlab.build(exported, config=tree_key.config, progress=progress)
             cache.tree(tree_key).store(bvh, exported)
-            return self._done(context, tree_key, exported)
+            return self._done(context, tree_key)
         finally:
             if state.builds.get(key) is self:
                 del state.builds[key]
 
-    def _done(self, context, tree_key, exported):
-        built = remember_tree(context, tree_key, exported)
+    def _done(self, context, tree_key):
+        built = remember_tree(context, tree_key)
         context.scene.bvhlab.overlay_show = True  # the user pressed Build to see the boxes
         s = built.bvh.stats
         message = (

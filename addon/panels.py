@@ -133,6 +133,7 @@ def _stats_box(layout, built, settings) -> None:
 BEHIND_NOTES = {
     state.EDITED: "Scene edited since; show the boxes or build again",
     state.UNDONE: "Undo since; show the boxes or build again",
+    state.RENDERED: "A render changed the tree; show the boxes or build again",
 }
 
 

@@ -347,6 +347,13 @@ def _set_sphere(obj, value: bool) -> None:
     obj[SPHERE_PROPERTY] = bool(value)
 
 
+def _sphere_changed(obj, _context) -> None:
+    """The flag is read with the object's geometry: tagged so, the next sync reads the object again
+    (a custom property changes nothing Blender evaluates, and a sync of moved objects alone kept it
+    as it was: a flag set from a script took effect only at some later walk over the scene)."""
+    obj.update_tag(refresh={"DATA"})
+
+
 def _passes_changed(view_layer, _context) -> None:
     view_layer.update_render_passes()  # the compositor's Render Layers node shows the pass
 
@@ -372,6 +379,7 @@ def register_properties() -> None:
         name="Analytic sphere",
         get=_get_sphere,
         set=_set_sphere,
+        update=_sphere_changed,
         description="Export this object as one exact sphere (centre and radius from its bounds)",
     )
 

@@ -21,17 +21,23 @@ class BuiltTree:
 
     key: TreeKey
     tree: SceneTree
-    scene: object  # the exported bvhlab.Scene it was made over
     built_at: float = field(default_factory=time.time)
     #: Why the scene may differ from the tree now ("" while it fits, as far as the add-on knows):
     #: EDITED, objects moved or edited while the boxes were hidden (the tree follows the scene only
-    #: while they are shown: follow.py); UNDONE, an undo or redo, which can change anything. The
+    #: while they are shown: follow.py); UNDONE, an undo or redo, which can change anything;
+    #: RENDERED, a final render made the shared tree fit what renders show (rendered_over). The
     #: panel says it; showing the boxes brings the tree up to date, as Build and Export stats do.
     behind: str = ""
 
     @property
     def bvh(self):
         return self.tree.bvh
+
+    @property
+    def scene(self):
+        """The exported bvhlab.Scene the tree was last made to fit: the cache's (trees.SceneTree
+        .scene), so a Rendered viewport that updates the shared tree updates it too."""
+        return self.tree.scene
 
     @property
     def settings(self) -> dict:
@@ -54,7 +60,7 @@ class BuiltTree:
 
 
 #: BuiltTree.behind's reasons
-EDITED, UNDONE = "edited", "undone"
+EDITED, UNDONE, RENDERED = "edited", "undone", "rendered"
 
 trees: dict[int, BuiltTree] = {}
 comparisons: dict[int, list[dict]] = {}
@@ -86,6 +92,16 @@ def picked_node(scene) -> int | None:
     """The node picked on the scene's current tree, or None."""
     built, pick = tree_for(scene), picked.get(key(scene))
     return pick[1] if built is not None and pick is not None and pick[0] == built.serial else None
+
+
+def rendered_over(tree: SceneTree) -> None:
+    """A final render (F12, an animation's frame) changed `tree` to fit what renders show (objects
+    disabled in renders left out, ones hidden by the eye in): the one cache's trees are shared, so
+    a sidebar that shows this tree is behind its scene (RENDERED) until it catches up (the next
+    update with the boxes shown, Build, Export stats). Any thread (the render's): one assignment."""
+    for built in list(trees.values()):
+        if built.tree is tree and not built.behind:
+            built.behind = RENDERED
 
 
 def key(scene) -> int:

@@ -96,6 +96,10 @@ class SceneTree:
     def __init__(self, config: BuildConfig):
         self.config = config
         self.bvh = None
+        #: the bvhlab.Scene the tree was last made to fit (update or store): what a pick's rule
+        #: for surfaces hidden from camera rays reads beside it, so that a tree updated by the
+        #: Rendered viewport (the cache's trees are shared) never goes with another scene
+        self.scene = None
         self.lock = threading.Lock()
         self._source: tuple = ([], (None, None))  # [(triangles, spheres) per mesh], (mesh_of, transforms)
         self.generation = 0  # counts the trees it has held (builds, updates, TLASes)
@@ -140,10 +144,10 @@ class SceneTree:
             same = len(trees) == len(old_meshes) and not built and not updated
             if same and self.bvh is not None and two_level == _is_instanced(self.bvh):
                 if not two_level or _same_arrays(old_instances, instances):
-                    self._source = (sources, instances)
+                    self._source, self.scene = (sources, instances), scene
                     return TreeUpdate("kept", self.bvh)
             self._hold(trees, instances, two_level, threads)
-            self._source = (sources, instances)
+            self._source, self.scene = (sources, instances), scene
             action = "built" if built else "refit" if updated else "placed"
             # a flat tree updated in place: the update's own SAH cost (no second pass over the nodes)
             sah = stats.sah_cost if not two_level and stats is not None else self.bvh.stats["sah_cost"]
@@ -164,7 +168,7 @@ class SceneTree:
     def store(self, bvh, scene) -> None:
         """A tree built elsewhere with this config over `scene` (the sidebar's Build, on its thread)."""
         with self.lock:
-            self.bvh = bvh
+            self.bvh, self.scene = bvh, scene
             self._source = _sources(scene)
             self.generation += 1
             meshes = len(self._meshes())

@@ -253,6 +253,7 @@ class FinalRender:
         )
         if update.action != "kept":
             engine.update_stats("", f"BVH {update.action} in {(time.perf_counter() - started) * 1e3:.0f} ms")
+            state.rendered_over(tree)
         return update
 
 

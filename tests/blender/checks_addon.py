@@ -372,3 +372,36 @@ def check_engine_panels_follow_the_renders(tmp_dir) -> None:
             f"{feature} is {'' if rendered else 'not '}rendered, yet these show otherwise: {sorted(wrong)}"
         )
     print(f"stereo right eye rendered: {stereo_rendered}; grease pencil drawn: {pencil_drawn}")
+
+
+def check_the_sphere_switch_set_from_a_script_is_synced() -> None:
+    """Object ▸ Analytic sphere set from a script tagged nothing (a get/set property without an
+    update function): a sync after it (the Rendered viewport's, the sidebar's) kept the object as
+    triangles, and the syncs of moved objects that placed them from Blender's updates alone kept
+    it so, while a fresh export had the sphere. Now the switch tags the object's geometry."""
+    from bvhlab.blender import LiveScene
+
+    scene = harness.boxes_scene()
+    ball = bpy.data.objects["Box A"]
+    other = bpy.data.objects["Box B"]
+    live = LiveScene("visible", require_camera=False)
+    live.sync(bpy.context.evaluated_depsgraph_get(), scene)
+    synced = []
+
+    def sync(blender_scene, depsgraph):
+        synced.append(live.sync(depsgraph, blender_scene).placed_only)
+
+    bpy.app.handlers.depsgraph_update_post.append(sync)
+    try:
+        for on in (True, False, True):
+            ball.bvhlab_analytic_sphere = on
+            bpy.context.view_layer.update()
+            other.location.x += 0.25  # then a move placed from its update alone
+            bpy.context.view_layer.update()
+            synced_scene = live.scene.flattened()
+            fresh = export_scene(bpy.context, require_camera=False).flattened()
+            assert len(synced_scene.spheres) == len(fresh.spheres) == int(on), (on, len(synced_scene.spheres))
+            assert len(synced_scene.triangles) == len(fresh.triangles) == 36 - 12 * on
+    finally:
+        bpy.app.handlers.depsgraph_update_post.remove(sync)
+    assert any(synced), "no sync placed the moved object from its update alone: the case is not met"

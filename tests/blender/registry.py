@@ -116,6 +116,7 @@ def _addon() -> Iterator[Check]:
         addon.check_bad_input_reports,
         addon.check_render,
         addon.check_render_without_light,
+        addon.check_the_sphere_switch_set_from_a_script_is_synced,
     ):
         yield Check("addon", check.__name__.removeprefix("check_"), check)
     yield Check("addon", "export_stats", addon.check_export_stats, folder=True)
@@ -126,6 +127,12 @@ def _addon() -> Iterator[Check]:
         "addon",
         "one_tree_for_build_f12_render_export",
         settings_path.check_one_tree_for_build_f12_render_export,
+        folder=True,
+    )
+    yield Check(
+        "addon",
+        "renders_and_the_viewport_leave_the_sidebar_a_tree_and_its_scene",
+        settings_path.check_renders_and_the_viewport_leave_the_sidebar_a_tree_and_its_scene,
         folder=True,
     )
     yield Check("addon", "path_properties", addon.check_path_properties, folder=True)
