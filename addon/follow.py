@@ -131,14 +131,14 @@ def follow(scene, depsgraph):
 
     from .trees import update_config
 
-    key = state.key(scene)
-    built = state.tree_for(scene)
     if depsgraph.mode != "VIEWPORT":
         # a render's (F12, an animation's frames, by any engine): it holds what renders show (not
         # objects disabled in renders, but objects hidden by the eye), not what the sidebar's
-        # tree is of; followed, it made the tree the render's until the next edit
-        _missed(key)
+        # tree is of; followed, it made the tree the render's until the next edit. Nothing is
+        # touched: the viewport's evaluations are its own, and this may be the render's thread
         return None
+    key = state.key(scene)
+    built = state.tree_for(scene)
     if _busy[0] or (built is None and key not in state.builds):
         _missed(key)
         return None
