@@ -128,7 +128,9 @@ TEST(RayOrder, CameraRaysKeepTheirOrderAndRandomOnesAreSortedStably) {
 }
 
 TEST(RayOrder, BlocksAreProbedOverTheirWholeLengthAndSortedWhereTheProbeSaysSo) {
-    // more than one block, the last one short; the probe says "costly" or "cheap"
+    // more than one block, the last one short; the probe says "costly" (the whole block sorted)
+    // or "cheap": then the block's first rays are traced as they are, and the rest sorted where
+    // the timed part (a sample of the rest traced twice) says so, its answer fixed here
     const std::size_t n = kOrderBlock + kOrderLeast + 77;
     std::mt19937 rng(9);
     std::uniform_real_distribution<float> u(-1.0f, 1.0f);
@@ -136,50 +138,72 @@ TEST(RayOrder, BlocksAreProbedOverTheirWholeLengthAndSortedWhereTheProbeSaysSo) 
     for (std::size_t i = 0; i < 3 * n; ++i) o[i] = 8 * u(rng), d[i] = u(rng) + (u(rng) > 0 ? 0.1f : -0.1f);
     const RayBatch batch{o.data(), d.data(), n};
     const Aabb box{{-8, -8, -8}, {8, 8, 8}};
-    for (double cost : {0.0, kOrderNodes}) {
-        std::vector<std::uint32_t> probed;
+    const double inf = std::numeric_limits<double>::infinity();
+    struct Case {
+        double cost, stall_ns;
+        bool sorted;
+    };
+    const std::size_t last = kOrderLeast + 77, warm[2] = {kOrderWarmRays, last / 16};
+    for (const Case c : {Case{0.0, inf, false}, Case{0.0, -inf, true}, Case{kOrderNodes, inf, true}}) {
+        std::vector<std::vector<float>> probed;  // each call's rays, by their origins' y
         std::vector<std::size_t> bases, counts;
+        std::vector<bool> was_sorted;
         for_each_block(
             batch, box,
             [&](const RayPiece& piece) {
-                const std::size_t base = probed.size() / kWideBatch * kOrderBlock;
-                const std::size_t count = std::min(kOrderBlock, n - base);
                 EXPECT_EQ(piece.count, kWideBatch);
-                for (std::uint32_t j = 0; j < piece.count; ++j) {  // the sample's rays, evenly spread
-                    const std::size_t i = base + std::size_t(j) * (count - 1) / (kWideBatch - 1);
-                    if (piece.rays.data()[j].origin.y != o[3 * i + 1]) ADD_FAILURE() << "probe ray " << j;
-                    probed.push_back(std::uint32_t(i));
-                }
-                return cost;
+                std::vector<float> y;
+                for (std::uint32_t j = 0; j < piece.count; ++j) y.push_back(piece.rays.data()[j].origin.y);
+                probed.push_back(y);
+                return c.cost;
             },
-            [&](std::size_t base, const RayBatch& block, const SortedRays* sorted) {
-                bases.push_back(base), counts.push_back(block.count);
-                EXPECT_EQ(block.origins, o.data() + 3 * base);
-                EXPECT_EQ(sorted != nullptr, cost > 0) << base;
+            [&](std::size_t base, const RayBatch& part, const SortedRays* sorted) {
+                bases.push_back(base), counts.push_back(part.count), was_sorted.push_back(sorted != nullptr);
+                EXPECT_EQ(part.origins, o.data() + 3 * base);
                 if (!sorted) return;
-                std::vector<char> seen(block.count, 0);
+                std::vector<char> seen(part.count, 0);
                 for (std::uint32_t i : sorted->index) {
-                    ASSERT_LT(i, block.count);
+                    ASSERT_LT(i, part.count);
                     ASSERT_FALSE(seen[i]);
                     seen[i] = 1;
                 }
-            });
-        EXPECT_EQ(bases, (std::vector<std::size_t>{0, kOrderBlock}));
-        EXPECT_EQ(counts, (std::vector<std::size_t>{kOrderBlock, kOrderLeast + 77}));
-        // each block probed over its whole length, from its first ray to its last
-        ASSERT_EQ(probed.size(), 2 * kWideBatch);
-        EXPECT_EQ(probed[0], 0u);
-        EXPECT_EQ(probed[kWideBatch - 1], std::uint32_t(kOrderBlock - 1));
-        EXPECT_EQ(probed[kWideBatch], std::uint32_t(kOrderBlock));
-        EXPECT_EQ(probed.back(), std::uint32_t(n - 1));
-        EXPECT_TRUE(std::is_sorted(probed.begin(), probed.end()));
+            },
+            c.stall_ns);
+        const bool whole = c.cost >= kOrderNodes;
+        if (whole) {
+            EXPECT_EQ(bases, (std::vector<std::size_t>{0, kOrderBlock}));
+            EXPECT_EQ(counts, (std::vector<std::size_t>{kOrderBlock, last}));
+            EXPECT_EQ(was_sorted, (std::vector<bool>{true, true}));
+        } else {  // the first rays as they are, the rest as the timed part says
+            EXPECT_EQ(bases, (std::vector<std::size_t>{0, warm[0], kOrderBlock, kOrderBlock + warm[1]}));
+            EXPECT_EQ(counts, (std::vector<std::size_t>{warm[0], kOrderBlock - warm[0], warm[1], last - warm[1]}));
+            EXPECT_EQ(was_sorted, (std::vector<bool>{false, c.sorted, false, c.sorted}));
+        }
+        // each block probed over its whole length, from its first ray to its last; where the nodes
+        // do not decide, a sample of the rest, halfway between evenly spread rays, traced twice
+        const std::size_t calls = whole ? 1 : 3;
+        ASSERT_EQ(probed.size(), 2 * calls);
+        for (std::size_t b = 0; b < 2; ++b) {
+            const std::size_t base = b * kOrderBlock, count = b ? last : kOrderBlock;
+            const auto y = [&](std::size_t i) { return o[3 * (base + i) + 1]; };
+            const auto& first = probed[b * calls];
+            for (std::uint32_t j = 0; j < kWideBatch; ++j)
+                ASSERT_EQ(first[j], y(std::size_t(j) * (count - 1) / (kWideBatch - 1))) << b << " " << j;
+            if (whole) continue;
+            EXPECT_EQ(probed[b * calls + 1], probed[b * calls + 2]);
+            const std::size_t rest = count - warm[b];
+            for (std::uint32_t j = 0; j < kWideBatch; ++j)
+                ASSERT_EQ(probed[b * calls + 1][j],
+                          y(warm[b] + (2 * std::size_t(j) + 1) * (rest - 1) / (2 * kWideBatch)));
+        }
     }
 }
 
-TEST(RayOrder, ReorderedBatchesGiveEachRayItsOwnHitOnEveryPathAndThreadCount) {
-    // many small triangles: random rays visit many nodes, so the batch is reordered (checked below)
-    const auto scene = test::random_scene(60000, 300, 71);
-    const Bvh bvh = build_bvh(scene.view());
+/// A batch of random rays (a third with their own tmax) through `bvh`, reordered (whole, or after
+/// its first rays: `whole`, whose premise is checked), against the same queries in slices too small
+/// to be reordered and against the single walks, bit for bit, on every instruction set path and
+/// with 1 and 3 threads.
+void expect_each_ray_its_own_hit(const Bvh& bvh, bool whole) {
     const WideBvh wide = make_wide(bvh);
     auto rays = random_rays(4 * kOrderLeast, 73);
     std::mt19937 rng(7);
@@ -194,7 +218,8 @@ TEST(RayOrder, ReorderedBatchesGiveEachRayItsOwnHitOnEveryPathAndThreadCount) {
         intersect_wide(wide, bvh, rays[j * (rays.size() - 1) / (kWideBatch - 1)], &v);
         visited += v;
     }
-    ASSERT_GE(visited / kWideBatch, kOrderNodes);
+    if (whole) ASSERT_GE(visited / kWideBatch, kOrderNodes);
+    else ASSERT_LT(visited / kWideBatch, kOrderNodes);
     const std::size_t n = rays.size();
     struct Out {
         std::vector<float> t, u, v;
@@ -249,6 +274,21 @@ TEST(RayOrder, ReorderedBatchesGiveEachRayItsOwnHitOnEveryPathAndThreadCount) {
     // both outcomes common: a batch of all misses or all hits would test little
     EXPECT_GT(hits, rays.size() / 10);
     EXPECT_LT(hits, rays.size() - rays.size() / 10);
+}
+
+TEST(RayOrder, ReorderedBatchesGiveEachRayItsOwnHitOnEveryPathAndThreadCount) {
+    // many small triangles: random rays visit many nodes, so the whole batch is reordered
+    const auto scene = test::random_scene(60000, 300, 71);
+    expect_each_ray_its_own_hit(build_bvh(scene.view()), true);
+}
+
+TEST(RayOrder, BatchesReorderedAfterTheirFirstRaysGiveEachRayItsOwnHit) {
+    // few, large triangles: the rays visit few nodes, and the timed choice is made "reorder", so
+    // each block's first rays go as they are and the rest in ray order
+    const auto scene = test::random_scene(3000, 600, 72);
+    const double before = detail::order_stall_ns.exchange(-std::numeric_limits<double>::infinity());
+    expect_each_ray_its_own_hit(build_bvh(scene.view()), false);
+    detail::order_stall_ns = before;
 }
 
 TEST(RayOrder, ARefusedRayIsNamedWhereverTheReorderedBatchHasIt) {

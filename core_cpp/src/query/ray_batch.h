@@ -4,6 +4,7 @@
 #pragma once
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -197,36 +198,74 @@ inline RayBatch part_of(const RayBatch& rays, std::size_t base, std::size_t coun
     return b;
 }
 
-/// The wide tree's batch queries, block by block (kOrderBlock rays): calls `trace(base, block,
-/// sorted)` for rays [base, base + block.count) of the batch, with `sorted` null where the block is
-/// to be traced as it is, else the block's rays copied in ray order (ray_order.h: trace then
-/// traces sorted->batch(block) and puts each result back at sorted->index). A block of at least
-/// kOrderLeast rays that is not in ray order already (in_ray_order) is reordered where kWideBatch
-/// of its rays, spread evenly over it, visit at least kOrderNodes wide nodes on average, which
-/// `probe(piece)` says (tracing them without keeping any result). Throws, as check_rays does,
-/// where a ray of the probe's is refused.
+/// A sample of kWideBatch of `part`'s rays for for_each_block's probe: evenly spread over the
+/// whole part (its first rays may lie together: sorted otherwise), from its first ray to its
+/// last, or (`between`) each halfway to the next. Throws, as check_rays does, where a ray is refused.
+inline void probe_sample(const RayBatch& rays, const RayBatch& part, bool between, RayPiece& piece) {
+    std::uint32_t sample[kWideBatch];
+    for (std::uint32_t j = 0; j < kWideBatch; ++j)
+        sample[j] = between ? std::uint32_t(std::uint64_t(2 * j + 1) * (part.count - 1) / (2 * kWideBatch))
+                            : std::uint32_t(std::uint64_t(j) * (part.count - 1) / (kWideBatch - 1));
+    if (!prepare_piece<true>(part, 0, kWideBatch, piece, sample)) {
+        check_rays(rays);  // throws, naming the first refused ray
+        throw std::logic_error("a batch refused a ray that check_rays accepts");
+    }
+}
+
+/// The time (ns) a ray of `part` waits on memory (kOrderStallNs, ray_order.h): a sample of its
+/// rays traced twice by `probe`, the first time with the caches as the rays traced before left
+/// them, the second with the sample's own lines in them; the difference a ray.
+template <class Probe>
+double memory_stall_ns(const RayBatch& rays, const RayBatch& part, Probe& probe) {
+    RayPiece piece;
+    probe_sample(rays, part, true, piece);
+    using Clock = std::chrono::steady_clock;
+    const auto start = Clock::now();
+    probe(static_cast<const RayPiece&>(piece));
+    const auto again = Clock::now();
+    probe(static_cast<const RayPiece&>(piece));
+    const std::chrono::duration<double, std::nano> cold = again - start, warm = Clock::now() - again;
+    return (cold - warm).count() / kWideBatch;
+}
+
+/// The wide tree's batch queries, block by block (kOrderBlock rays): calls `trace(base, part,
+/// sorted)` for consecutive parts [base, base + part.count) of the batch, with `sorted` null where
+/// the part is traced as it is, else the part's rays copied in ray order (ray_order.h: trace then
+/// traces sorted->batch(part) and puts each result back at sorted->index). A block of at least
+/// kOrderLeast rays that is not in ray order already (in_ray_order) is reordered
+/// - whole, where a sample of its rays, spread evenly over it, visit at least kOrderNodes wide
+///   nodes on average, which `probe(piece)` says (it traces a piece's rays without keeping any
+///   result and returns the wide nodes they visit on average);
+/// - else from its kOrderWarmRays-th ray on, where its first kOrderWarmRays rays (at most a 16th),
+///   traced as they are, leave the caches as the rest would find them and a sample of the rest
+///   still waits on memory at least `stall_ns` a ray (memory_stall_ns; detail::order_stall_ns,
+///   kOrderStallNs but where a test fixes the answer with ±inf).
+/// Throws, as check_rays does, where a ray of a sample is refused.
 template <class Probe, class Trace>
-void for_each_block(const RayBatch& rays, const Aabb& scene, Probe&& probe, Trace&& trace) {
+void for_each_block(const RayBatch& rays, const Aabb& scene, Probe&& probe, Trace&& trace,
+                    double stall_ns = detail::order_stall_ns.load(std::memory_order_relaxed)) {
     SortedRays sorted;
     for (std::size_t base = 0; base < rays.count || base == 0; base += kOrderBlock) {
         const RayBatch block = part_of(rays, base, std::min(kOrderBlock, rays.count - base));
-        bool reorder = false;
         const RayKeys keys(scene, block.count);
-        if (block.count >= kOrderLeast && !in_ray_order(block, keys)) {
-            // a sample of the whole block: its first rays may lie together (sorted otherwise)
-            std::uint32_t sample[kWideBatch];
-            for (std::uint32_t j = 0; j < kWideBatch; ++j)
-                sample[j] = std::uint32_t(std::uint64_t(j) * (block.count - 1) / (kWideBatch - 1));
-            RayPiece piece;
-            if (!prepare_piece<true>(block, 0, kWideBatch, piece, sample)) {
-                check_rays(rays);  // throws, naming the first refused ray
-                throw std::logic_error("a batch refused a ray that check_rays accepts");
-            }
-            reorder = probe(static_cast<const RayPiece&>(piece)) >= kOrderNodes;
+        if (block.count < kOrderLeast || in_ray_order(block, keys)) {
+            trace(base, block, nullptr);
+            if (block.count == 0) break;
+            continue;
         }
-        if (reorder) sort_rays(block, keys, sorted);
-        trace(base, block, reorder ? &sorted : nullptr);
-        if (block.count == 0) break;
+        RayPiece piece;
+        probe_sample(rays, block, false, piece);
+        if (probe(static_cast<const RayPiece&>(piece)) >= kOrderNodes) {
+            sort_rays(block, keys, sorted);
+            trace(base, block, &sorted);
+            continue;
+        }
+        const std::size_t warm = std::min(kOrderWarmRays, block.count / 16);
+        trace(base, part_of(block, 0, warm), nullptr);
+        const RayBatch rest = part_of(block, warm, block.count - warm);
+        const bool reorder = memory_stall_ns(rays, rest, probe) >= stall_ns;
+        if (reorder) sort_rays(rest, keys, sorted);
+        trace(base + warm, rest, reorder ? &sorted : nullptr);
     }
 }
 

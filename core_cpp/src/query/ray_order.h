@@ -8,6 +8,7 @@
 // cast in pixel order) keeps its own: its sampled neighbours mostly share a key. Used by
 // ray_batch.h for_each_block.
 #pragma once
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -31,6 +32,25 @@ inline constexpr std::uint32_t kOrderSamples = 256, kOrderCoherent = kOrderSampl
 /// putting the results back cost ~35 ns a ray, which on this host's room1m and vast1m is more than
 /// the gain, on Sponza as much (design.md, "Rays in the order of their origins").
 inline constexpr double kOrderNodes = 8.0;
+/// And, where they visit fewer, the time a ray of the block waits on memory (ns), over which the
+/// block is reordered too, from its kOrderWarmRays-th ray on (for_each_block): after the block's
+/// first rays, traced as they are, a sample of the rest is traced twice, the first time with the
+/// caches as those rays left them, the second with all its lines cached; the difference a ray.
+/// The sort and putting the results back cost ~20-25 ns a ray (a 2-core Intel Xeon VM,
+/// 2026-12-06), so the order pays where the rays wait about three times that. Measured there
+/// after 2,048 rays, each batch traced between Embree's and tinybvh's passes: Sponza's random and
+/// shadow rays waited 98-122 and 88-100 ns a ray and gained 0-5% and 12-14% from the order,
+/// repeat1m's 329-346 and 209-214 ns (+5-8%, +15-20%), but room1m's 27-37 and 35-39 ns and
+/// vast1m's 9-10 and 11-13 ns, which lose 14-20% and 30-37% to it (design.md, "Rays in the order
+/// of their origins"). A timed choice changes the speed only, never a result.
+inline constexpr double kOrderStallNs = 60.0;
+/// The rays a block traces as it is before its wait on memory is measured (at most a 16th of it).
+inline constexpr std::size_t kOrderWarmRays = 2048;
+namespace detail {
+/// The wait (ns a ray) the batch queries reorder over: kOrderStallNs, but -inf or +inf in tests
+/// that need the timed choice made one way (test_ray_order.cpp).
+inline std::atomic<double> order_stall_ns{kOrderStallNs};
+}  // namespace detail
 
 /// The key of a ray: its octant (the sign bits of its direction, as the batch walks group them)
 /// above the Morton code of its origin's cell in a grid of 2^bits cells an axis over `scene`
