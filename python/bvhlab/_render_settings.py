@@ -7,9 +7,11 @@ import numpy as np
 
 from . import _checks, _core
 from .bvh import Bvh
+from .defaults import light_position
 from .instanced import InstancedBvh
 from .render_options import RenderOptions
 from .scene import Camera, Scene, View
+from .scene_parts import Light
 
 
 def render_settings(
@@ -52,8 +54,20 @@ def _camera(scene: Scene, camera) -> _core.Camera:
 def _set_light(s, scene: Scene, camera) -> None:
     light = scene.light
     if light is None:
-        from .scene import default_light
-
-        look = s.camera
-        light = default_light(Camera(tuple(look.position), tuple(np.add(look.position, look.forward)), tuple(look.up)))
+        light = _default_light(s.camera, scene.camera if camera is None else camera)
     s.light.position, s.light.color, s.light.intensity = light.position, light.color, float(light.intensity)
+
+
+def _default_light(look, given) -> Light:
+    """The default light of a scene without one, for the camera the render uses (`look`, its
+    _core.Camera; `given`, the Camera or View it was made from, None for the fallback): above and
+    to the right of it (default_light_position). A Camera places it by the point it looks at; a
+    View gives a direction only, so its light is placed as for the point one unit along it, in
+    double precision: made from position + forward, a View's forward ×100 moved the light 100×
+    as far (the same view, another picture), and far from the origin (a unit forward at 1e8) the
+    two points were one in float32 and a valid View was refused as a camera looking at itself."""
+    if isinstance(given, View):
+        position, forward = np.asarray(look.position, np.float64), np.asarray(look.forward, np.float64)
+        target = position + forward / np.linalg.norm(forward)
+        return Light(light_position(tuple(position), tuple(target), tuple(look.up)))
+    return Light(light_position(tuple(look.position), tuple(np.add(look.position, look.forward)), tuple(look.up)))

@@ -105,14 +105,15 @@ class RenderOptions:
         s.samples_per_axis = _checks.integer("samples_per_axis", self.samples_per_axis, 0, 2**31)
         s.max_ray_depth = _checks.integer("max_depth", self.max_depth, 0, int(_core.MAX_RAY_DEPTH))
         _set_overlay(s, self.overlay_depth)
-        s.overlay_color_by_depth = bool(self.color_by_depth)
+        s.overlay_color_by_depth = _checks.flag("color_by_depth", self.color_by_depth)
         s.overlay_color = _triple("line_color", self.line_color)
         s.line_width = _real("line_width", self.line_width)
         s.traversal = _core.parse_traversal(_traversal(self.traversal))
         s.mode = _core.parse_render_mode(_name("mode", self.mode))
-        s.heatmap_scale = None if self.heatmap_scale is None else _real("heatmap_scale", self.heatmap_scale)
-        s.traversal_counters = bool(self.traversal_counters)
-        s.film_transparent = bool(self.film_transparent)
+        # a number beyond float32's range is refused as given, not as the inf it would become
+        s.heatmap_scale = None if self.heatmap_scale is None else _checks.setting("heatmap_scale", self.heatmap_scale)
+        s.traversal_counters = _checks.flag("traversal_counters", self.traversal_counters)
+        s.film_transparent = _checks.flag("film_transparent", self.film_transparent)
         if self.steps_per_dispatch is not None:
             s.steps_per_dispatch = _checks.integer("steps_per_dispatch", self.steps_per_dispatch, 0, 2**31)
         if self.max_steps_per_pixel is not None:

@@ -7,6 +7,7 @@ import pytest
 
 import bvhlab
 from bvhlab.scene import MAX_COORDINATE
+from bvhlab.scene_parts import default_light
 
 
 def _wide_triangle() -> np.ndarray:
@@ -54,7 +55,7 @@ def _light_beside(camera) -> np.ndarray:
     position, target, up = (np.array(v, np.float64) for v in (camera.position, camera.look_at, camera.up))
     forward = target - position
     right = np.cross(forward, up)
-    return position + 0.3 * np.linalg.norm(forward) * (right / np.linalg.norm(right) + up)
+    return position + 0.3 * np.linalg.norm(forward) * (right / np.linalg.norm(right) + up / np.linalg.norm(up))
 
 
 def test_a_default_light_near_the_range_limit_is_moved_within_it():
@@ -78,4 +79,37 @@ def test_a_default_light_near_the_range_limit_is_moved_within_it():
     assert lit.camera is not None and np.abs(lit.light.position).max() <= MAX_COORDINATE
     assert lit.light.position[0] != lit.camera.look_at[0], "not in the triangle's plane x = 1.09e12"
     image, _ = bvhlab.render(scene, bvhlab.build(scene), 8, 6, backend="cpu")
+    assert np.isfinite(image).all()
+
+
+def test_the_default_light_depends_on_the_view_not_on_the_lengths_of_its_vectors():
+    """A render without a light puts one beside the camera. From a View it was placed by the point
+    position + forward, so the same view with forward ×100 (or ×0.01) lit the scene from elsewhere
+    (1,856 of 3,072 pixels off by up to 0.81), and up ×10 set it 10× as high; far from the origin
+    (a unit forward at 1e8) that point was the position itself in float32 and a valid View was
+    refused ("camera position and look_at coincide"). A View's light is now placed for the point
+    one unit along its direction, and up counts as a direction (Camera's too), on both backends."""
+    rng = np.random.default_rng(3)
+    tris = (rng.random((300, 3, 3)) * 4 - 2).astype(np.float32)
+    scene = bvhlab.Scene(triangles=tris)
+    scene.light = None  # no light: the renders place the default one
+    bvh = bvhlab.build(scene)
+    forward = np.array([0.2, 1.0, -0.3])
+    for backend in ("cpu", "vulkan"):
+        first = None
+        for f, up in ((forward, (0, 0, 1)), (forward * 100, (0, 0, 1)), (forward * 0.01, (0, 0, 10))):
+            view = bvhlab.View((0.5, -9.0, 2.5), tuple(f), up, 40.0)
+            image, _ = bvhlab.render(scene, bvh, 48, 32, backend=backend, camera=view)
+            if first is None:
+                first = image
+            np.testing.assert_allclose(image, first, atol=1e-4)  # the primary rays' own rounding
+    # the placement itself: a unit up, and the same light for up scaled (Camera's default light too)
+    camera = bvhlab.Camera((0.5, -9.0, 2.5), (0.0, 0.0, 0.0), (0.0, 0.0, 1.0))
+    scaled = bvhlab.Camera((0.5, -9.0, 2.5), (0.0, 0.0, 0.0), (0.0, 0.0, 10.0))
+    np.testing.assert_allclose(default_light(scaled).position, _light_beside(camera), rtol=1e-12)
+    # far from the origin, a unit forward: rendered (the sky at least), not refused
+    far = bvhlab.Scene(triangles=(tris + np.float32(1e8)).astype(np.float32))
+    far.light = None
+    view = bvhlab.View((1e8, 1e8 - 20.0, 1e8), (0.0, 1.0, 0.0))
+    image, _ = bvhlab.render(far, bvhlab.build(far), 8, 6, backend="cpu", camera=view)
     assert np.isfinite(image).all()

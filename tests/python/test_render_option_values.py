@@ -32,6 +32,23 @@ def test_settings_beyond_float32_are_refused_with_the_value_given():
         bvhlab.UpdateConfig(tree_growth=-1e39)
 
 
+@pytest.mark.parametrize("name", ["film_transparent", "color_by_depth", "traversal_counters"])
+@pytest.mark.parametrize("bad", ["False", 0, 1, 0.5, None])
+def test_switches_are_true_or_false_not_truthy(name, bad):
+    """film_transparent="False" rendered a transparent film (probe: 289 of 768 pixels with alpha
+    0, on both backends): the switches took any value by its truthiness, where the others (Material
+    holdout, Camera mirrored) refuse what is not True or False."""
+    with pytest.raises(TypeError, match=f"{name} must be True or False, got {bad!r}"):
+        bvhlab.RenderOptions(**{name: bad})
+    with pytest.raises(TypeError, match=f"{name} must be True or False"):
+        bvhlab.RenderOptions().replace(**{name: bad})
+
+
+def test_a_heatmap_scale_beyond_float32_is_refused_as_given():
+    with pytest.raises(ValueError, match=r"heatmap_scale must be within float32's range .*got 1e\+39"):
+        bvhlab.RenderOptions(mode="heatmap", heatmap_scale=1e39)
+
+
 def test_refused_numbers_are_shown_as_given():
     """The core's messages showed a refused float in six decimals: "got -1.000000", and a
     sbvh_alpha of -1e-9 as "got -0.000000", a value that would pass. Each now reads as given."""

@@ -41,7 +41,9 @@ struct CameraPlacement {
 /// placement when `bounds` is empty.
 CameraPlacement default_camera(const Aabb& bounds);
 
-/// A point light a little above and to the right of the camera (0.3 × the viewing distance each).
+/// A point light a little above and to the right of the camera: 0.3 × the viewing distance (from
+/// position to target) along the camera's right and along its up (a direction: its length does
+/// not count).
 std::array<double, 3> default_light_position(const CameraPlacement& camera);
 
 }  // namespace bvhlab

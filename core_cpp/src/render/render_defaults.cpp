@@ -56,11 +56,13 @@ CameraPlacement default_camera(const Aabb& bounds) {
 std::array<double, 3> default_light_position(const CameraPlacement& camera) {
     const D3 forward = sub(camera.target, camera.position);
     D3 right = cross(forward, camera.up);
-    const double r = norm(right);
+    const double r = norm(right), u = norm(camera.up);
     right = {right[0] / r, right[1] / r, right[2] / r};
+    // up as a direction: its length (Camera takes any) moved the light (up ×10: 10× as high)
+    const D3 up = {camera.up[0] / u, camera.up[1] / u, camera.up[2] / u};
     const double dist = norm(forward);
     D3 out = camera.position;
-    for (int k = 0; k < 3; ++k) out[k] = out[k] + right[k] * 0.3 * dist + camera.up[k] * 0.3 * dist;
+    for (int k = 0; k < 3; ++k) out[k] = out[k] + right[k] * 0.3 * dist + up[k] * 0.3 * dist;
     return pulled_within_range(camera.position, out);  // towards the camera, whose side it is on
 }
 
