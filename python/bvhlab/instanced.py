@@ -205,7 +205,8 @@ class InstancedBvh:
         """Mesh k moved or changed: with the same counts its tree is updated as `Bvh.update` does
         (`config`/`changes`: an UpdateConfig), with other counts it is rebuilt; the other meshes'
         trees are not touched. Then the TLAS is made again over the same instances (their world
-        boxes follow the mesh). Returns what ran on mesh k."""
+        boxes follow the mesh). Returns what ran on mesh k. Spheres only for mesh 0, as a Scene has
+        them (ValueError for another)."""
         self._writable()
         with self._lock:  # writers one at a time: a second update_mesh kept the first one's mesh out
             return self._update_mesh(k, triangles, spheres, config, **changes)
@@ -221,6 +222,10 @@ class InstancedBvh:
         if spheres is not None:
             spheres = _checks.float32_array("spheres", spheres, (4,))
         n_spheres = 0 if spheres is None else len(spheres)
+        if k and n_spheres:  # a tree no Scene describes: its renders refused the scene as another's
+            raise ValueError(
+                f"mesh {k} cannot hold spheres: only mesh 0 (the scene's own geometry) has them in a Scene"
+            )
         if len(triangles) == old_triangles and n_spheres == old_spheres:
             # a new tree object from the current version (copy-on-write): a snapshot taken before
             # keeps the mesh tree its TLAS was made over

@@ -311,6 +311,13 @@ def test_update_mesh_keeps_spheres_unless_told(instanced_scene):
     assert tree.update_mesh(0, scene.triangles, spheres).policy in bvhlab.UPDATE_POLICIES
     tree.update_mesh(0, scene.triangles, np.zeros((0, 4), np.float32))
     assert tree.meshes[0].stats["spheres"] == 0
+    # another mesh given spheres was accepted, a tree no Scene describes (its renders then refused
+    # the scene: "the geometry does not match the tree"); refused, the tree as it was
+    before = tree.meshes[1].stats["primitives"]
+    with pytest.raises(ValueError, match="mesh 1 cannot hold spheres: only mesh 0"):
+        tree.update_mesh(1, scene.meshes[0], spheres)
+    assert tree.meshes[1].stats["primitives"] == before and tree.meshes[1].stats["spheres"] == 0
+    tree.update_mesh(1, scene.meshes[0], np.zeros((0, 4), np.float32))  # none: as before
 
 
 def test_readers_see_one_tlas_while_another_thread_places(instanced_scene):
