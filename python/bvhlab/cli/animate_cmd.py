@@ -23,7 +23,7 @@ from .. import _json as strict_json
 from .._atomic import write_text
 from .._progress import ProgressBar
 from ..animate import FrameRow, as_scene, run_experiment, summary
-from ..library.animations import ANIMATIONS
+from ..library.animations import ANIMATION_FRAMES, ANIMATIONS, frame_phase
 from ..render import BACKENDS
 from ..render_options import DEFAULT_HEIGHT, DEFAULT_WIDTH
 from ..scene import Scene
@@ -47,7 +47,8 @@ def add_parser(sub) -> None:
         type=frame_range,
         default=None,
         metavar="A-B",
-        help="frames A..B (default 0-23; a .blend: its range)",
+        help="frames A..B (default 0-23, the generated animations' motion, the same frame in any range; "
+        "a .blend: its range)",
     )
     p.add_argument("--policy", type=policy_list, default=UPDATE_POLICIES, metavar="P,Q", help="policies (default all)")
     p.add_argument(
@@ -106,8 +107,10 @@ def _frames_of(args) -> tuple[Callable[[int], np.ndarray | Scene], range]:
         return scene_at, args.frames or frames
     make = ANIMATIONS[args.animation][0]
     frame_of = make(args.size) if args.size else make()
-    frames = args.frames or range(0, 24)
-    return (lambda k: frame_of((k - frames[0]) / max(frames[-1] - frames[0], 1))), frames
+    # frame k is the same geometry whatever the range run (a .blend's frames are too): spread over
+    # the range asked for, frame 12 of 12-23 was frame 0 and a shorter range moved more a frame
+    last = ANIMATION_FRAMES - 1
+    return (lambda k: frame_of(frame_phase(k, 0, last))), args.frames or range(0, last + 1)
 
 
 def run(args) -> int:
