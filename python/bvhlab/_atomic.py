@@ -13,7 +13,9 @@ import contextlib
 import io
 import os
 import secrets
+import signal
 import stat
+import threading
 from collections.abc import Iterator
 from pathlib import Path
 from typing import IO, BinaryIO, Literal, TextIO, overload
@@ -124,6 +126,59 @@ def write_bytes(path, data: bytes) -> Path:
     with replacing(path) as f:
         f.write(data)
     return Path(path)
+
+
+def write_together(files: dict[Path, bytes]) -> None:
+    """Several files written as one (a run's table, report and plot): each to a temporary beside it
+    and flushed to the disk first, then all renamed into place one after another with Ctrl-C held
+    back until the last is in (on the main thread), so that an interrupt leaves either every file
+    as it was or every file new, never a mix of two runs' (`bvhlab animate`: an interrupt while the
+    plot was drawn left the new CSV and JSON beside the old plot). An error before the renames
+    removes the temporaries and leaves every file as it was."""
+    staged: list[tuple[Path, Path]] = []
+    current = Path()
+    try:
+        for path, data in files.items():
+            current = Path(path)
+            target = _target(current)
+            temporary, fd = _create_temporary(target)
+            staged.append((temporary, target))
+            with os.fdopen(fd, "wb") as f:
+                f.write(data)
+                f.flush()
+                os.fsync(f.fileno())
+        folders = {target.parent for _, target in staged}
+        with _interrupts_held():
+            for temporary, target in staged:
+                current = target
+                os.replace(temporary, target)
+        staged.clear()
+        for folder in folders:
+            _sync_folder(folder)
+    except BaseException as error:
+        for temporary, _ in staged:
+            with contextlib.suppress(OSError):
+                os.unlink(temporary)
+        if isinstance(error, OSError) and not isinstance(error, WriteError):
+            raise _write_error(current, error) from error
+        raise
+
+
+@contextlib.contextmanager
+def _interrupts_held() -> Iterator[None]:
+    """Ctrl-C (SIGINT) held back inside, and raised after it if one came (main thread only: other
+    threads never receive it)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    came: list[bool] = []
+    previous = signal.signal(signal.SIGINT, lambda *_: came.append(True))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    if came:
+        raise KeyboardInterrupt
 
 
 def write_text(path, text: str) -> Path:

@@ -175,3 +175,44 @@ def test_every_writer_of_the_package_and_the_addon_goes_through_the_atomic_write
                 if _DIRECT_WRITE.search(line) and not line.lstrip().startswith("#"):
                     offenders.append(f"{source.relative_to(REPO)}:{number}: {line.strip()}")
     assert offenders == []
+
+
+def test_files_written_together_are_all_old_or_all_new(tmp_path):
+    """`bvhlab animate` wrote its CSV, JSON and plot one after another, and Ctrl-C while the plot
+    was drawn left the new table and report beside the old plot (probe). write_together stages all
+    of them first: a real SIGINT arriving between the renames is held until the last is in place
+    (then raised), and an error while staging leaves every file as it was, without temporaries."""
+    names = ("animate.csv", "animate.json", "animate.png")
+    for name in names:
+        (tmp_path / name).write_bytes(b"old " + name.encode())
+    done = run_python(
+        f"""
+        import os, signal
+        from pathlib import Path
+        from bvhlab import _atomic
+        folder = Path({str(tmp_path)!r})
+        real = os.replace
+        def replace_then_interrupt(a, b):
+            real(a, b)
+            os.kill(os.getpid(), signal.SIGINT)  # after the first rename: two files still old
+        _atomic.os.replace = replace_then_interrupt
+        try:
+            _atomic.write_together({{folder / n: b"new " + n.encode() for n in {names!r}}})
+        except KeyboardInterrupt:
+            print("interrupted after the renames")
+        """,
+        timeout=60,
+        preexec_fn=default_sigint,
+    )
+    assert done.stdout.strip() == "interrupted after the renames", done.stderr
+    assert [(tmp_path / n).read_bytes() for n in names] == [b"new " + n.encode() for n in names]
+    assert _listing(tmp_path) == sorted(names)
+    # an error while staging (the last target is a folder): every file as it was
+    from bvhlab._atomic import WriteError, write_together
+
+    (tmp_path / "plot.png").mkdir()
+    files = {tmp_path / "animate.csv": b"newer", tmp_path / "animate.json": b"newer", tmp_path / "plot.png": b"x"}
+    with pytest.raises(WriteError, match="plot.png"):
+        write_together(files)
+    assert [(tmp_path / n).read_bytes() for n in names] == [b"new " + n.encode() for n in names]
+    assert _listing(tmp_path) == sorted([*names, "plot.png"])

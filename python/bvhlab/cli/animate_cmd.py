@@ -20,7 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from .. import _json as strict_json
-from .._atomic import write_text
+from .._atomic import write_together
+from .._folder_lock import folder_lock
 from .._progress import ProgressBar
 from ..animate import FrameRow, as_scene, run_experiment, summary
 from ..library.animations import ANIMATION_FRAMES, ANIMATIONS, frame_phase
@@ -134,18 +135,25 @@ def run(args) -> int:
             _, t = render(scene, bvh, args.width, args.height, backend=args.backend)
             return float(t["trace_ms"])
 
-    with ProgressBar(f"{args.animation}, {len(frames)} frames × {len(args.policy)} policies") as bar:
-        rows = run_experiment(geometry, frames, args.policy, trace=trace, progress=bar)
-    totals = summary(rows)
-    _print(rows, totals)
     args.out.mkdir(parents=True, exist_ok=True)
-    about = {"animation": args.animation, "size": args.size, "frames": [first, last], "backend": args.backend}
-    write_text(args.out / "animate.csv", _csv(rows))
-    write_text(
-        args.out / "animate.json",
-        strict_json.dumps({"about": about, "summary": totals, "rows": [r.as_dict() for r in rows]}, indent=1) + "\n",
-    )
-    _plot(rows, args.out / "animate.png", f"{Path(args.animation).stem}: update policies over frames {first}-{last}")
+    # one run at a time in a folder (a second is refused at once, naming the first), and its three
+    # files all or none (an interrupt while the plot was drawn left the new table and report
+    # beside the old plot)
+    with folder_lock(args.out, "bvhlab animate"):
+        with ProgressBar(f"{args.animation}, {len(frames)} frames × {len(args.policy)} policies") as bar:
+            rows = run_experiment(geometry, frames, args.policy, trace=trace, progress=bar)
+        totals = summary(rows)
+        _print(rows, totals)
+        about = {"animation": args.animation, "size": args.size, "frames": [first, last], "backend": args.backend}
+        report = {"about": about, "summary": totals, "rows": [r.as_dict() for r in rows]}
+        plot = _plot(rows, f"{Path(args.animation).stem}: update policies over frames {first}-{last}")
+        write_together(
+            {
+                args.out / "animate.csv": _csv(rows).encode(),
+                args.out / "animate.json": (strict_json.dumps(report, indent=1) + "\n").encode(),
+                args.out / "animate.png": plot,
+            }
+        )
     print(f"wrote {args.out / 'animate.csv'}, animate.json, animate.png")
     return 0
 
@@ -179,8 +187,9 @@ def _ratio(value: float) -> str:
     return "–" if math.isnan(value) else f"{value:.3f}"
 
 
-def _plot(rows: list[FrameRow], path: Path, title: str) -> Path:
-    from ..compare.charts import _plt, _save
+def _plot(rows: list[FrameRow], title: str) -> bytes:
+    """The plot as PNG bytes: SAH ÷ a fresh build's and update ms, frame by frame, by policy."""
+    from ..compare.charts import _plt
 
     plt = _plt()
     fig, (left, right) = plt.subplots(1, 2, figsize=(10, 3.8))
@@ -197,4 +206,10 @@ def _plot(rows: list[FrameRow], path: Path, title: str) -> Path:
         ax.set_xlabel("frame")
         ax.legend(fontsize=8)
     fig.suptitle(title)
-    return _save(fig, plt, path)
+    try:
+        fig.tight_layout()
+        f = io.BytesIO()  # written with the table and the report: write_together
+        fig.savefig(f, format="png", dpi=110)
+    finally:
+        plt.close(fig)
+    return f.getvalue()
