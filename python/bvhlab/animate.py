@@ -31,6 +31,9 @@ class FrameRow:
     subtrees_rebuilt: int
     primitives_rebuilt: int
     trace_ms: float  #: nan without a backend
+    #: adaptive: the subtrees whose boxes the levels above them were rebuilt over (0: not; `ran`
+    #: says "partial" either way, the policy adaptive chose below them: UpdateStats.top_boxes)
+    top_boxes: int = 0
 
     @property
     def sah_ratio(self) -> float:
@@ -101,7 +104,11 @@ def run_experiment(
             tree = trees[p]
             s = tree.update(flat.triangles, spheres, policy=p)  # rebuilds with the tree's settings (1 thread)
             t = trace(flat, tree) if trace else math.nan
-            rows.append(FrameRow(k, p, s.policy, s.ms, s.sah_cost, fresh, s.subtrees_rebuilt, s.primitives_rebuilt, t))
+            rows.append(
+                FrameRow(
+                    k, p, s.policy, s.ms, s.sah_cost, fresh, s.subtrees_rebuilt, s.primitives_rebuilt, t, s.top_boxes
+                )
+            )
             done += 1
             if progress is not None and progress(done / steps) is False:
                 raise KeyboardInterrupt
@@ -160,8 +167,8 @@ class _TwoLevel:
             self.tree.meshes[k].update(self.meshes[k], scene.spheres if k == 0 else None)  # place() follows it
         self.tree.place(*scene.instances())
         ms = (time.perf_counter() - start) * 1e3
-        ran = "tlas" + (f"+{len(changed)} meshes" if changed else "")
-        return FrameRow(frame, TWO_LEVEL, ran, ms, math.nan, math.nan, len(changed), 0, math.nan)
+        ran = "tlas" + (f"+{len(changed)} meshes" if changed else "")  # the meshes updated: no subtrees
+        return FrameRow(frame, TWO_LEVEL, ran, ms, math.nan, math.nan, 0, 0, math.nan)
 
 
 def summary(rows: list[FrameRow]) -> dict[str, dict]:

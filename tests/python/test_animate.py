@@ -150,3 +150,14 @@ def test_a_generated_frame_is_the_same_in_any_range(tmp_path, name):
     whole, late = fresh("0-13"), fresh("12-13")
     assert late == {12: whole[12], 13: whole[13]}
     assert whole[0] != whole[12]  # the frames differ: the comparison means something
+
+
+def test_adaptive_rows_say_where_the_top_was_rebuilt():
+    """Adaptive's rows said "partial" whether or not it also rebuilt the levels above the subtrees
+    (probe); each row now carries UpdateStats.top_boxes, here against a replay of the same frames."""
+    frame = wave(30)
+    rows = [r for r in run_experiment(lambda k: frame(k / 9), range(10), ["adaptive"]) if r.ran != "build"]
+    tree = bvhlab.build(bvhlab.Scene(triangles=frame(0)), threads=1)
+    replay = [tree.update(frame(k / 9), policy="adaptive").top_boxes for k in range(1, 10)]
+    assert [r.top_boxes for r in rows] == replay
+    assert any(replay), "no frame rebuilt the top: the case is not met"
