@@ -67,3 +67,15 @@ def test_refused_numbers_are_shown_as_given():
     for make, match in cases:
         with pytest.raises(ValueError, match=match):
             make()
+
+
+@pytest.mark.parametrize("name", ["aspect", "ortho_scale"])
+def test_a_camera_value_float32_cannot_hold_is_refused_as_given(name):
+    """aspect=1e-40 was refused (its range), but 1e-50 arrived as 0, "the image's", and rendered as
+    the default (probe); 1e39 arrived as inf. Both are refused by their own value now."""
+    projection = "orthographic" if name == "ortho_scale" else "perspective"
+    with pytest.raises(ValueError, match=f"camera {name} must be 0 or None .*got 1e-50"):
+        bvhlab.View((0, 0, 0), (0, 1, 0), projection=projection, **{name: 1e-50})
+    with pytest.raises(ValueError, match=rf"camera {name} must be within float32's range .*got 1e\+39"):
+        bvhlab.Camera((0, 0, 0), (0, 1, 0), projection=projection, **{name: 1e39})
+    bvhlab.View((0, 0, 0), (0, 1, 0), projection=projection, **{name: 2.0})
