@@ -89,8 +89,11 @@ class SceneCache:
     def _key_of(parts: _Parts, bvh, two_level: bool) -> tuple:
         spheres = [parts.spheres] + [None] * (len(parts.triangles) - 1)
         tree = bvh._core
+        # a flat tree's snapshot (Bvh._snapshot: a fork sharing the version) keys as its tree at
+        # that revision: the render scene made for one snapshot serves the next of the same version
+        owner = getattr(bvh, "_source", bvh)._core if not two_level else tree
         return (
-            tree,
+            owner,
             0 if two_level else tree.revision,
             tuple(_core.geometry_fingerprint(t, s) for t, s in zip(parts.triangles, spheres)),
             parts.materials,

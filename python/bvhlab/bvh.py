@@ -103,11 +103,22 @@ class Bvh:
     A Bvh may be shared between threads: `intersect`, `boxes` and the arrays read one version of
     the tree; `refit` publishes a new version, so a reader sees the old tree or the new one."""
 
+    _source: Bvh  #: the tree a snapshot is of (_snapshot; a tree itself has none)
+
     def __init__(self, core: _core.Bvh, config: BuildConfig):
         self._core = core
         self.config = config
         self._stats: tuple[int, dict] | None = None  # (revision, stats)
         self._node_data: tuple[int, NodeData] | None = None  # (revision, data)
+
+    def _snapshot(self) -> Bvh:
+        """This tree's current version, for a reading in several steps (a pick's boxes and its hit,
+        a pixel's render scene and record) while another thread may refit or update it: the core's
+        copy-on-write fork, which keeps the version; `_source` names the tree it is of (what the
+        inspection's caches key by, as InstancedBvh.snapshot's)."""
+        view = Bvh(self._core.fork(), self.config)
+        view._source = getattr(self, "_source", self)  # not set on a tree itself: no cycle to collect
+        return view
 
     def __repr__(self) -> str:
         s = self.stats

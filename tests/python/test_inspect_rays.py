@@ -274,3 +274,60 @@ def test_the_kept_render_scene_goes_with_its_tree():
     del bvh
     gc.collect()
     assert kept._owner is None and kept._cache._scene is None
+
+
+def test_picks_and_pixel_records_read_one_version_while_another_thread_refits():
+    """pick read the boxes and the hit in two calls, and a refit on another thread between them
+    (the add-on's viewport worker refits in the background) mixed two trees: 280 of 3,000 picks a
+    box without its hit or a leaf never entered; trace_pixel refused 3 of 300 pixels ("the render
+    scene is of another version of the tree") while the tree was refit to the same geometry. Both
+    now read one version (a snapshot) throughout."""
+    import threading
+
+    from bvhlab.inspect.pick import pick
+    from bvhlab.inspect.ray_record import trace_pixel
+
+    rng = np.random.default_rng(0)
+    near = rng.random((2000, 3, 3), dtype=np.float32)
+    near[:, 1:] = near[:, :1] + 0.05 * (near[:, 1:] - 0.5)
+    far = near.copy()
+    far[..., 0] += 10.0  # the same mesh moved away: the pick ray misses it
+    scene = bvhlab.Scene(triangles=near)
+    bvh = bvhlab.build(scene)
+    c = near[7].mean(0)
+    origin, direction = np.array([c[0], c[1], -5.0], np.float32), np.array([0, 0, 1.0], np.float32)
+
+    def refitting(geometries, read):
+        """`read()` while another thread refits the tree to each of `geometries` in turn."""
+        stop = threading.Event()
+
+        def refits():
+            k = 0
+            while not stop.is_set():
+                bvh.refit(geometries[k % len(geometries)])
+                k += 1
+
+        thread = threading.Thread(target=refits)
+        thread.start()
+        try:
+            read()
+        finally:
+            stop.set()
+            thread.join()
+        bvh.refit(near)
+
+    seen = set()
+
+    def picks():
+        for _ in range(600):
+            p = pick(bvh, origin, direction)
+            assert (p.how == "box" and np.isfinite(p.t_hit)) or (p.how, p.node) == ("nothing", None), p
+            seen.add(p.how)
+
+    def pixels():  # refit to the same geometry: every pixel's record is the render's ray
+        for _ in range(100):
+            assert trace_pixel(scene, bvh, 16, 12, width=32, height=24).t > 0
+
+    refitting([far, near], picks)
+    refitting([near], pixels)
+    assert seen == {"box", "nothing"}, "the refits never fell between: the case is not met"

@@ -325,7 +325,12 @@ def trace_pixel(scene, bvh, x: int, y: int, *, width: int, height: int, options=
             HiddenSurfaceWarning,
             stacklevel=2,
         )
-    settings = render_settings(scene, bvh, width, height, options, camera)
+    from ..instanced import InstancedBvh
+
+    settings = render_settings(scene, bvh, width, height, options, camera)  # types checked
+    # one version for the render scene and the record: a refit or `place` on another thread between
+    # them was refused as "the render scene is of another version of the tree" (probe)
+    bvh = bvh.snapshot() if isinstance(bvh, InstancedBvh) else bvh._snapshot()
     render_scene = _RENDER_SCENES.get(scene, bvh)
     x = _checks.integer("x", x, 0, 2**32 - 1)
     y = _checks.integer("y", y, 0, 2**32 - 1)
