@@ -26,15 +26,17 @@ _TRIANGLE_FAN = 6
 
 def _json_text(path: Path, any_suffix: bool = True) -> tuple[str, bytes] | None:
     """("glb" or "gltf", the file's JSON bytes): a GLB's JSON chunk alone (a GLB named .gltf is
-    GLB), a .gltf whole; None for a file of another suffix unless `any_suffix` (not read: a scene
-    file may be gigabytes). Raises SceneFileError for a GLB without its JSON chunk."""
+    GLB), a .gltf or .glb of JSON whole; None for a file of another suffix unless `any_suffix` (not
+    read: a scene file may be gigabytes). Raises SceneFileError for a GLB without its JSON chunk."""
     with open(path, "rb") as f:
         head = f.read(20)
         if head[:4] == b"glTF":
             if len(head) < 20 or head[16:20] != b"JSON":
                 raise SceneFileError(f"{path}: a GLB file without its JSON chunk (truncated?)")
             return "glb", f.read(struct.unpack_from("<I", head, 12)[0])
-        if not any_suffix and path.suffix.lower() != ".gltf":
+        # a glTF's suffix either way: a JSON glTF saved as .glb is read by its contents (check_gltf)
+        # and its buffers are its geometry too (the sweep's cache key missed them: stale figures)
+        if not any_suffix and path.suffix.lower() not in (".gltf", ".glb"):
             return None
         return "gltf", head + f.read()
 
