@@ -278,6 +278,33 @@ def test_a_file_changed_after_planning_is_an_error_not_another_scenes_row(tmp_pa
     assert row["triangles"] is None
 
 
+def test_a_row_of_a_file_changed_during_the_sweep_is_run_again(tmp_path, models):
+    """A file rewritten while the sweep ran and then put back as planned: its error ("changed after
+    the sweep was planned", or the half-written file's own) was stored under the planned file's key
+    and reused by every later run, which its advice ("run the sweep again") could not mend (probe).
+    Such a row is run again by the next sweep."""
+    from bvhlab.sweep import task
+
+    spec = read_spec(_write_spec(tmp_path, ["box.obj"], "method = 'sah'"))
+    planned = (models / "box.obj").read_bytes()
+    real_load = task.load_scene
+
+    def load_while_rewritten(name):  # another writer is half-way through the file as it is read
+        (models / "box.obj").write_bytes(planned[: len(planned) // 2])
+        return real_load(name)
+
+    task.load_scene = load_while_rewritten
+    try:
+        first = run_sweep(spec, tmp_path / "out", plot=False)
+    finally:
+        task.load_scene = real_load
+        (models / "box.obj").write_bytes(planned)  # the writer done: the file as planned
+    assert [r["status"] for r in first.rows] == ["error"]
+    again = run_sweep(spec, tmp_path / "out", plot=False)
+    assert again.ran == 1 and [r["status"] for r in again.rows] == ["ok"]
+    assert again.rows[0]["triangles"] == 12
+
+
 def test_summary_tells_seeds_apart(tmp_path, models):
     """Three seeds of a random-axis grid: each seed's own median is its baseline (the three rows were
     one label, each divided by the last seed's median)."""

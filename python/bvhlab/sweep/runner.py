@@ -50,7 +50,8 @@ def run_sweep(
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     cells = plan_cells(spec)
-    stored = stored_rows(out, [c.key for c in cells])
+    # a row whose scene file was not its key's (task.SceneChanged) is no result: run again
+    stored = {k: r for k, r in stored_rows(out, [c.key for c in cells]).items() if not r.get("retry")}
     if retry_failed:
         stored = {k: r for k, r in stored.items() if r.get("status") == "ok"}
     todo = [c for c in cells if c.key not in stored]

@@ -34,7 +34,17 @@ def run_cell(cell: Cell) -> dict:
         row["status"] = "ok"
     except (Exception, MemoryError) as e:  # the cell's error row; Ctrl-C still stops the sweep
         row["status"], row["error"] = "error", f"{type(e).__name__}: {e}"
+        if isinstance(e, SceneChanged):  # not the key's scene's error: run again next time
+            row["retry"] = True
     return row
+
+
+class SceneChanged(ValueError):
+    """The scene file read was not the one the cell's key was made of (changed after the sweep was
+    planned, or being written while it was read): its error is no figure of the key's scene, so
+    its row is run again by the next sweep (runner.run_sweep) rather than reused. Stored under the
+    key, it was reused when the file was back as planned, and its advice ("run the sweep again")
+    did not help."""
 
 
 def error_row(cell: Cell, error: BaseException | str) -> dict:
@@ -90,12 +100,17 @@ def _scene(cell: Cell) -> Scene:
     key = (cell.scene, cell.scene_hash)
     if _last_scene is None or _last_scene[0] != key:
         _last_scene = None  # free the old scene before loading the next
-        scene = load_scene(cell.scene)[0]
+        try:
+            scene = load_scene(cell.scene)[0]
+        except Exception as e:  # a file half-written as it was read is no error of the key's scene
+            if scene_hash(cell.scene) != cell.scene_hash:
+                raise SceneChanged(f"{cell.scene} changed after the sweep was planned ({e})") from e
+            raise
         # what was loaded must be what the cell's key says: a file replaced after the sweep was
         # planned (or another host's copy of the path) stored another scene's figures under the
         # key, and later runs reused them
         if scene_hash(cell.scene, scene) != cell.scene_hash:  # a generated scene's from its arrays
-            raise ValueError(f"{cell.scene} changed after the sweep was planned: run the sweep again")
+            raise SceneChanged(f"{cell.scene} changed after the sweep was planned: it is run again next time")
         _last_scene = (key, scene)
     return _last_scene[1]
 
