@@ -81,6 +81,24 @@ def test_whole_counts_get_bins_of_whole_numbers_and_averages_bins_of_their_grid(
         histogram.counter_histogram(np.float32([1, np.nan]), "box_tests")
 
 
+@pytest.mark.parametrize("q", [9, 25, 36, 49, 81])
+def test_averages_of_q_samples_at_the_range_top_lie_in_a_bin(q):
+    """Averages over 3×3 (5×5, ...) samples are float32 k/q: the range's top, say float32(34/9),
+    times 9 is 33.9999990, so the grid's bins ended at 33/9 and the top value's pixels were in no
+    bin of their own (probe: 10 pixels at 3.78 past the last edge, 3.72). Every value of the range
+    now lies within the edges, in the bin of its own grid point."""
+    k = np.arange(0, 4 * q + 1)
+    values = (k / q).astype(np.float32)
+    for top in values[q:]:
+        h = histogram.counter_histogram(values, "prim_tests", (0.0, float(top)))
+        inside = values[values <= top]
+        assert h.edges[0] <= inside.min() and inside.max() <= h.edges[-1], (q, top, h.edges[-2:])
+        assert h.counts.sum() == len(values) and h.above == len(values) - len(inside)
+        # each value in the bin whose edges hold it (the top's pixels in the last bin by value)
+        bins = np.searchsorted(h.edges, inside.astype(np.float64), side="right") - 1
+        assert (bins < len(h.counts)).all()
+
+
 def test_percentiles_from_distinct_values_are_numpys():
     rng = np.random.default_rng(3)
     for trial in range(300):
