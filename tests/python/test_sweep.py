@@ -4,6 +4,7 @@ table from a two-worker Dask LocalCluster as from the in-process run."""
 import itertools
 import json
 import os
+import re
 import signal
 import textwrap
 
@@ -316,3 +317,16 @@ def test_summary_tells_seeds_apart(tmp_path, models):
     medians = [line.split(" | ") for line in lines if " | median seed" in line]
     assert sorted(cells[1] for cells in medians) == ["median seed1", "median seed2", "median seed3"]
     assert all(float(cells[3]) == 1.0 for cells in medians)
+
+
+def test_a_bar_in_a_scene_name_keeps_the_summary_table_in_its_columns(tmp_path, models):
+    """A file "left|right.obj": its summary row had one cell more, and every figure stood under
+    the heading to its left in Markdown (probe)."""
+    (models / "box.obj").rename(models / "left|right.obj")
+    spec = read_spec(_write_spec(tmp_path, ["left|right.obj"], "method = ['median', 'sah']"))
+    run_sweep(spec, tmp_path / "out", plot=False)
+    lines = (tmp_path / "out" / SUMMARY).read_text().splitlines()
+    header, rows = lines[0], [line for line in lines[2:] if line.startswith("|")]
+    cells = lambda line: [c for c in re.split(r"(?<!\\)\|", line)[1:-1]]  # noqa: E731
+    assert len(rows) == 2 and all(len(cells(r)) == len(cells(header)) for r in rows), rows
+    assert cells(rows[0])[0].strip() == "left\\|right"

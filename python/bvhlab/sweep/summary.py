@@ -63,7 +63,7 @@ def summary_table(rows: list[dict], baseline: str, planned: int | None = None) -
         sah = _ratio(row["sah_cost"], base and base["sah_cost"])
         speed = _ratio(row["mrays_per_s"], base and base["mrays_per_s"])
         lines.append(
-            f"| {row['scene']} | {labels[row['key']]} | {row['sah_cost']:.1f} | {_fmt(sah)} | "
+            f"| {_cell(row['scene'])} | {_cell(labels[row['key']])} | {row['sah_cost']:.1f} | {_fmt(sah)} | "
             f"{row['build_ms']:.1f} | {row['mrays_per_s']:.2f} | {_fmt(speed)} |"
         )
     failed = [r for r in rows if r.get("status") != "ok"]
@@ -71,6 +71,12 @@ def summary_table(rows: list[dict], baseline: str, planned: int | None = None) -
         lines.append("")
         lines.extend(f"- {r['scene']} {labels[r['key']]}: {r.get('error')}" for r in failed)
     return "\n".join(lines) + "\n"
+
+
+def _cell(text: str) -> str:
+    """Text for a Markdown table cell: a "|" in a scene's name (a file "left|right.obj") split the
+    row into one cell more, and every figure stood under the wrong heading (probe)."""
+    return str(text).replace("\\", "\\\\").replace("|", "\\|").replace("\n", " ")
 
 
 def _fmt(ratio: float | None) -> str:
