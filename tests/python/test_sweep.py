@@ -7,6 +7,7 @@ import os
 import re
 import signal
 import textwrap
+from pathlib import Path
 
 import numpy as np
 import pyarrow.parquet as pq
@@ -330,3 +331,19 @@ def test_a_bar_in_a_scene_name_keeps_the_summary_table_in_its_columns(tmp_path, 
     cells = lambda line: [c for c in re.split(r"(?<!\\)\|", line)[1:-1]]  # noqa: E731
     assert len(rows) == 2 and all(len(cells(r)) == len(cells(header)) for r in rows), rows
     assert cells(rows[0])[0].strip() == "left\\|right"
+
+
+def test_a_stored_row_is_named_by_the_spec_that_shows_it(tmp_path, models):
+    """A second spec with a copy of a file under another name reused the first's cells (the same
+    content) and took their scene name from the new spec, but its source column still named the
+    first spec's file, which might be deleted by then (probe)."""
+    (models / "copy").mkdir()
+    (models / "copy" / "box2.obj").write_bytes((models / "box.obj").read_bytes())
+    run_sweep(read_spec(_write_spec(tmp_path, ["box.obj"], "method = 'sah'")), tmp_path / "out", plot=False)
+    (models / "box.obj").unlink()
+    again = run_sweep(
+        read_spec(_write_spec(tmp_path, ["copy/box2.obj"], "method = 'sah'")), tmp_path / "out", plot=False
+    )
+    assert again.ran == 0
+    (row,) = again.rows
+    assert row["scene"] == "box2" and Path(row["source"]).resolve() == (models / "copy" / "box2.obj").resolve(), row

@@ -110,8 +110,13 @@ def _run_on_dask(client, todo: list[Cell], finished: Callable[[dict], None]) -> 
 
 def _write_results(out: Path, cells: list[Cell], ran: int, plot: bool, baseline: str) -> SweepResult:
     rows_by_key = stored_rows(out, [c.key for c in cells])
-    # named as this spec names them (a row stored by an earlier sweep keeps its measurements)
-    rows = [{**rows_by_key[c.key], "scene": c.columns()["scene"]} for c in cells if c.key in rows_by_key]
+    # named as this spec names them, scene and source file (a row stored by an earlier sweep keeps
+    # its measurements; its source was the earlier spec's file, perhaps deleted since: probe)
+    rows = [
+        {**rows_by_key[c.key], **{k: c.columns()[k] for k in ("scene", "source")}}
+        for c in cells
+        if c.key in rows_by_key
+    ]
     files: list[Path] = []
     if rows:
         columns = [*cells[0].columns(), *MEASURED, "workers_on_host"]
