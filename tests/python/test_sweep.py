@@ -347,3 +347,30 @@ def test_a_stored_row_is_named_by_the_spec_that_shows_it(tmp_path, models):
     assert again.ran == 0
     (row,) = again.rows
     assert row["scene"] == "box2" and Path(row["source"]).resolve() == (models / "copy" / "box2.obj").resolve(), row
+
+
+def test_rays_of_a_scene_near_the_coordinate_limit_start_within_it(tmp_path):
+    """Geometry at ±5e11 (within the ±2^40 range) failed every cell: the rays started on a sphere
+    of the bounds' diagonal around them, outside the range (probe). Such a start is moved towards
+    its target, into the range; the rays of other scenes are as before."""
+    from bvhlab.scene import MAX_COORDINATE, Scene
+    from bvhlab.sweep.task import fixed_rays
+
+    far = np.array([[[-5e11, -5e11, 0], [5e11, -5e11, 0], [0, 5e11, 1e11]]], np.float32)
+    origins, directions = fixed_rays(Scene(triangles=far), 5000, 1)
+    assert np.abs(origins).max() <= MAX_COORDINATE
+    targets = origins.astype(np.float64) + directions
+    lo, hi = far.reshape(-1, 3).min(0), far.reshape(-1, 3).max(0)
+    assert (targets >= lo - 1e6).all() and (targets <= hi + 1e6).all()  # still aimed into the bounds
+    unit = np.random.default_rng(2).random((50, 3, 3), dtype=np.float32)
+    o, d = fixed_rays(Scene(triangles=unit), 1000, 3)
+    rng = np.random.default_rng(3)  # the documented rays, where nothing is out of range
+    lo, hi = (b.astype(np.float64) for b in Scene(triangles=unit).bounds())
+    sphere = rng.normal(size=(1000, 3))
+    sphere /= np.linalg.norm(sphere, axis=1, keepdims=True)
+    start = (lo + hi) / 2 + np.linalg.norm(hi - lo) * sphere
+    np.testing.assert_array_equal(o, start.astype(np.float32))
+    np.testing.assert_array_equal(d, (lo + rng.random((1000, 3)) * (hi - lo) - start).astype(np.float32))
+    (tmp_path / "far.obj").write_text("v -5e11 -5e11 0\nv 5e11 -5e11 0\nv 0 5e11 1e11\nf 1 2 3\n")
+    result = run_sweep(read_spec(_write_spec(tmp_path, ["far.obj"], "method = 'sah'")), tmp_path / "out", plot=False)
+    assert [r["status"] for r in result.rows] == ["ok"] and result.rows[0]["hits"] > 0

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..bvh import build
 from ..library import load_scene
-from ..scene import Scene
+from ..scene import MAX_COORDINATE, Scene
 from .cells import Cell, scene_hash
 
 #: The columns every row has, in the table's order after the cell's own (Cell.columns).
@@ -81,7 +81,10 @@ def _measure(cell: Cell) -> dict:
 
 def fixed_rays(scene: Scene, count: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
     """`count` rays, the same for a given scene and seed on every machine: each starts on the sphere
-    around the scene's bounds and aims at a uniformly random point inside them."""
+    around the scene's bounds and aims at a uniformly random point inside them; where that start
+    lies outside the coordinate range (a scene near ±MAX_COORDINATE, valid geometry), it is moved
+    along the ray towards its target until within it (every cell of such a scene failed: "ray 0
+    starts outside the supported coordinate range")."""
     rng = np.random.default_rng(seed)
     lo, hi = (b.astype(np.float64) for b in scene.bounds())
     centre, radius = (lo + hi) / 2, max(float(np.linalg.norm(hi - lo)), 1e-6)
@@ -89,6 +92,13 @@ def fixed_rays(scene: Scene, count: int, seed: int) -> tuple[np.ndarray, np.ndar
     on_sphere /= np.linalg.norm(on_sphere, axis=1, keepdims=True)
     origins = centre + radius * on_sphere
     targets = lo + rng.random((count, 3)) * (hi - lo)
+    limit = 0.999 * MAX_COORDINATE  # float32's rounding of the start stays within the range
+    outside = np.abs(origins) > limit
+    if outside.any():
+        way = origins - targets  # targets lie within the bounds, so within the range
+        with np.errstate(divide="ignore", invalid="ignore"):
+            share = np.where(outside, (np.sign(origins) * limit - targets) / way, 1.0)
+        origins = targets + np.minimum(share.min(axis=1), 1.0)[:, None] * way
     return origins.astype(np.float32), (targets - origins).astype(np.float32)
 
 
