@@ -14,6 +14,7 @@ import tempfile
 from pathlib import Path
 
 from ..render_options import DEFAULT_HEIGHT, DEFAULT_WIDTH
+from .raster import RASTER_PROJECTIONS
 
 
 def run_snapshot(
@@ -44,6 +45,12 @@ def _run(scene_spec: str, build_kwargs: dict, out: Path, extra: list[str]) -> Pa
     scene, name = load_scene(scene_spec)
     if not scene.primitive_count:
         raise ValueError(f"scene '{name}' has no geometry")
+    projection = scene.camera.projection if scene.camera is not None else "perspective"
+    if projection not in RASTER_PROJECTIONS:  # before the child process: its error would come back late
+        raise ValueError(
+            f"scene '{name}': its camera is {projection}; the snapshot draws {' and '.join(RASTER_PROJECTIONS)} "
+            "cameras (bvhlab render traces every camera)"
+        )
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:

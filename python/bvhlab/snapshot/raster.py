@@ -72,8 +72,21 @@ def unit_sphere(subdivisions: int = 2) -> np.ndarray:
     return (verts / np.linalg.norm(verts, axis=1, keepdims=True)).astype(np.float32)
 
 
+#: The projections the raster draws (the panoramas are no matrix: `bvhlab render` traces them).
+RASTER_PROJECTIONS = ("perspective", "orthographic")
+
+
 def camera_matrix(camera, aspect: float, near: float, far: float) -> np.ndarray:
-    """Projection × view (OpenGL conventions) of the tracer's pinhole camera."""
+    """Projection × view (OpenGL conventions) of the tracer's camera (camera.h): perspective or
+    orthographic, its lens shift, image-plane aspect (`camera.aspect`, else the frame's `aspect`),
+    region of the frame and mirroring, so that the snapshot frames a scene as the render does (it
+    drew every camera as an unshifted perspective one: an orthographic camera's snapshot showed
+    another view). The image plane: 2·tan(fov_y/2) high at unit distance, or ortho_scale along its
+    larger side; aspect times as wide; shifted by fractions of its larger side; the region a part
+    of the frame from its top-left corner."""
+    projection = getattr(camera, "projection", "perspective")
+    if projection not in RASTER_PROJECTIONS:
+        raise ValueError(f"the snapshot draws {' and '.join(RASTER_PROJECTIONS)} cameras, not {projection}")
     pos, look, up = (np.array(v, np.float64) for v in (camera.position, camera.look_at, camera.up))
     f = (look - pos) / np.linalg.norm(look - pos)
     r = np.cross(f, up)
@@ -84,12 +97,31 @@ def camera_matrix(camera, aspect: float, near: float, far: float) -> np.ndarray:
     view = np.eye(4)
     view[0, :3], view[1, :3], view[2, :3] = r, u, -f
     view[:3, 3] = -view[:3, :3] @ pos
-    t = 1 / math.tan(math.radians(camera.fov_y) / 2)
+    x0, y0, x1, y1 = getattr(camera, "region", (0.0, 0.0, 1.0, 1.0))
+    aspect = getattr(camera, "aspect", None) or aspect * (y1 - y0) / (x1 - x0)  # the whole frame's
     proj = np.zeros((4, 4))
-    proj[0, 0], proj[1, 1] = t / aspect, t
-    proj[2, 2], proj[2, 3] = (far + near) / (near - far), 2 * far * near / (near - far)
-    proj[3, 2] = -1
-    return (proj @ view).astype(np.float32)
+    if projection == "perspective":
+        height = 2 * math.tan(math.radians(camera.fov_y) / 2)
+        larger = height * max(aspect, 1.0)
+    else:
+        larger = camera.ortho_scale
+        height = larger if aspect < 1 else larger / aspect
+    width = height * aspect
+    shift = (getattr(camera, "shift_x", 0.0) * larger, getattr(camera, "shift_y", 0.0) * larger)
+    if projection == "perspective":  # x_ndc = (x / -z - shift) / (width / 2)
+        proj[0, 0], proj[0, 2] = 2 / width, 2 * shift[0] / width
+        proj[1, 1], proj[1, 2] = 2 / height, 2 * shift[1] / height
+        proj[2, 2], proj[2, 3] = (far + near) / (near - far), 2 * far * near / (near - far)
+        proj[3, 2] = -1
+    else:  # x_ndc = (x - shift) / (width / 2)
+        proj[0, 0], proj[0, 3] = 2 / width, -2 * shift[0] / width
+        proj[1, 1], proj[1, 3] = 2 / height, -2 * shift[1] / height
+        proj[2, 2], proj[2, 3] = -2 / (far - near), -(far + near) / (far - near)
+        proj[3, 3] = 1
+    region = np.eye(4)  # the frame's part the image shows: its NDC from the frame's, in clip space
+    region[0, 0], region[0, 3] = 1 / (x1 - x0), (1 - 2 * x0) / (x1 - x0) - 1
+    region[1, 1], region[1, 3] = 1 / (y1 - y0), 1 - (1 - 2 * y0) / (y1 - y0)
+    return (region @ proj @ view).astype(np.float32)
 
 
 class Rasterizer:
