@@ -173,3 +173,11 @@ def test_a_node_out_of_range_is_refused_before_the_node_figures(tmp_path, monkey
     bvhlab.Scene(triangles=np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]]], np.float32)).save(one)
     assert main(["inspect", str(one), "--worst", "5"]) == 0
     assert "the one subtree of largest SAH cost" in capsys.readouterr().out
+
+
+def test_inspect_writes_into_folders_it_makes_as_build_does(tmp_path):
+    """--json and --save-tree into a folder that did not exist were refused after the build and the
+    analysis ("No such file or directory"); build --json makes the folder (probe)."""
+    report, tree = tmp_path / "a" / "b" / "s.json", tmp_path / "c" / "t.bvhtree"
+    assert main(["inspect", "gen:five_spheres", "--worst", "2", "--json", str(report), "--save-tree", str(tree)]) == 0
+    assert json.loads(report.read_text()) and tree.stat().st_size > 0

@@ -136,6 +136,7 @@ def run(args) -> int:
     if not two_level and args.instance is not None:
         raise ValueError(FLAT_HAS_NO_INSTANCES)
     if args.save_tree:
+        Path(args.save_tree).parent.mkdir(parents=True, exist_ok=True)  # as build --json makes its folder
         bvh.save(args.save_tree)
         print(f"wrote {args.save_tree}")
     stats = bvh.stats
@@ -167,6 +168,7 @@ def run(args) -> int:
     else:
         report["worst"] = _print_worst(data, args.worst)
     if args.json:
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         write_text(args.json, strict_json.dumps(report, indent=1) + "\n")
         print(f"wrote {args.json}")
     return 0
