@@ -331,3 +331,17 @@ def test_picks_and_pixel_records_read_one_version_while_another_thread_refits():
     refitting([far, near], picks)
     refitting([near], pixels)
     assert seen == {"box", "nothing"}, "the refits never fell between: the case is not met"
+
+
+def test_a_miss_has_no_kind_in_the_summaries():
+    """A ray that hits nothing was summarised as "kind triangle" with prim -1 (the printout, the
+    JSON of inspect --pixel; probe)."""
+    tris = np.float32([[[0, 0, 0], [1, 0, 0], [0, 1, 0]]])
+    bvh = bvhlab.build(tris)
+    assert bvh.trace_ray((5, 5, 1), (0, 0, 1)).summary()["kind"] is None
+    assert bvh.trace_ray((0.2, 0.2, 1), (0, 0, -1)).summary()["kind"] == "triangle"
+    scene = bvhlab.Scene(
+        meshes=[tris], instance_mesh=np.array([1]), instance_transforms=np.eye(3, 4, dtype=np.float32)[None]
+    )
+    instanced = bvhlab.build(scene)
+    assert instanced.trace_ray((5, 5, 1), (0, 0, 1)).summary()["kind"] is None

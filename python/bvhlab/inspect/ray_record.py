@@ -146,7 +146,7 @@ class RayRecord:
             "prim_tests": self.prim_tests,
             "t": self.t,
             "prim": self.prim,
-            "kind": "sphere" if self.kind else "triangle",
+            "kind": _kind_name(self.kind, self.prim),
             "hit_leaf": self.hit_leaf,
             "hit_slot": self.hit_slot,
         }
@@ -247,7 +247,7 @@ class InstancedRayRecord:
             "prim_tests": sum(b.prim_tests for b in self.blas),
             "t": self.t,
             "prim": self.prim,
-            "kind": "sphere" if self.kind else "triangle",
+            "kind": _kind_name(self.kind, self.prim),
             "instance": self.instance,
             "hit_tlas_leaf": self.hit_tlas_leaf,
             "hit_leaf": -1 if hit is None else hit.hit_leaf,
@@ -361,6 +361,11 @@ def _hidden_from_camera(scene) -> bool:
     # every mesh's, as the render scene takes them (a mesh without mesh_tri_material: material 0)
     used = [scene.sphere_material, *(scene.mesh_triangle_material(k) for k in range(scene.mesh_count))]
     return bool(hidden) and any(np.isin(np.asarray(a), hidden).any() for a in used)
+
+
+def _kind_name(kind: int, prim: int) -> str | None:
+    """What a summary says of the closest hit's kind: None for a miss (it said "triangle")."""
+    return None if prim < 0 else "sphere" if kind else "triangle"
 
 
 def _point(name: str, value) -> tuple:
