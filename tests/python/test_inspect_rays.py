@@ -345,3 +345,18 @@ def test_a_miss_has_no_kind_in_the_summaries():
     )
     instanced = bvhlab.build(scene)
     assert instanced.trace_ray((5, 5, 1), (0, 0, 1)).summary()["kind"] is None
+
+
+def test_node_figures_take_whole_numbers_only():
+    """NodeData.node(True) raised numpy's "truth value of an array is ambiguous", node(1.5) an
+    IndexError, and costliest_at_depth(2, 2.7) quietly took 2 (probe): a TypeError naming it."""
+    data = bvhlab.build(np.random.default_rng(1).random((50, 3, 3), dtype=np.float32)).node_data()
+    for call, words in (
+        (lambda: data.node(True), "node must be an integer, got bool"),
+        (lambda: data.node(1.5), "node must be an integer, got float"),
+        (lambda: data.costliest_at_depth(2, 2.7), "k must be an integer, got float"),
+        (lambda: data.worst("3"), "k must be an integer, got str"),
+    ):
+        with pytest.raises(TypeError, match=words):
+            call()
+    assert data.node(np.int64(3))["node"] == 3 and len(data.worst(np.int32(3))) == 3

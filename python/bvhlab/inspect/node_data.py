@@ -7,6 +7,8 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
+from .. import _checks
+
 
 @dataclass(frozen=True)
 class NodeData:
@@ -48,6 +50,7 @@ class NodeData:
 
     def node(self, node: int) -> dict:
         """One node's figures as plain Python values (what the CLI prints and writes)."""
+        node = _checks.integer("node", node, -(2**63), 2**63 - 1)  # True, 1.5: TypeError, not numpy's
         if not 0 <= node < len(self):
             raise ValueError(f"node {node} does not exist; the tree has nodes 0..{len(self) - 1}")
         out: dict = {"node": int(node), "leaf": self.is_leaf(node)}
@@ -60,13 +63,16 @@ class NodeData:
     def costliest_at_depth(self, depth: int, k: int) -> np.ndarray:
         """The k nodes of one depth whose subtrees cost the most SAH, largest first (ties: the lower
         index): where a tree at that depth is expensive."""
+        depth = _checks.integer("depth", depth, -(2**63), 2**63 - 1)
+        k = _checks.integer("k", k, -(2**63), 2**63 - 1)  # 2.7 was taken as 2
         at = np.flatnonzero(self.depth == depth)
         order = np.lexsort((at, -self.subtree_sah[at]))
-        return at[order[: max(0, int(k))]]
+        return at[order[: max(0, k)]]
 
     def worst(self, k: int) -> np.ndarray:
         """The k nodes whose subtrees cost the most SAH, largest first (ties: the lower index). A
         subtree costs at least as much as any below it, so the root comes first and a node's
         ancestors before it."""
+        k = _checks.integer("k", k, -(2**63), 2**63 - 1)
         order = np.lexsort((np.arange(len(self)), -self.subtree_sah))
-        return order[: max(0, int(k))]
+        return order[: max(0, k)]
