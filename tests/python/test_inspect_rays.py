@@ -2,6 +2,8 @@
 queries report for it (Bvh.intersect's hit and box-test count; the CPU tracer's cost image for a
 pixel), and against the tree's structure."""
 
+import warnings
+
 import numpy as np
 import pytest
 from oracles import subtree_slots
@@ -360,3 +362,16 @@ def test_node_figures_take_whole_numbers_only():
         with pytest.raises(TypeError, match=words):
             call()
     assert data.node(np.int64(3))["node"] == 3 and len(data.worst(np.int32(3))) == 3
+
+
+def test_a_pick_ray_float32_cannot_hold_is_refused_as_given():
+    """A direction of 1e-50 passed the pick's check and became 0 in float32 (the core then said
+    "got 0"); an origin of 1e39 became inf with an overflow warning and "must be finite" (probe)."""
+    from bvhlab.inspect.pick import pick
+
+    bvh = bvhlab.build(np.random.default_rng(1).random((50, 3, 3), dtype=np.float32))
+    for origin, direction, shown in (((0, 0, 0), (1e-50, 0, 0), r"1e-50"), ((1e39, 0, 0), (1, 0, 0), r"1e\+39")):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            with pytest.raises(ValueError, match=f"a pick ray needs .* float32 holds, got .*{shown}"):
+                pick(bvh, origin, direction)
