@@ -129,9 +129,10 @@ def _ear_clip(corners: list[int], xy: np.ndarray) -> list[tuple[int, int, int]] 
 
 class _Blockers:
     """The corners that can block an ear, on a uniform grid of about n cells over the polygon's
-    bounds, sorted by cell: the corners whose cell lies in an ear's bounding box are all that can
-    lie in the ear. A cell is a monotone function of a point, so a point inside a box has its cell
-    within the box's corners' cells: the test's answers are those of a test of every corner.
+    bounds, sorted by cell: the corners whose cell lies in an ear's bounding box (or next to it:
+    near) are all that can lie in the ear. A cell is a monotone function of a point, so a point
+    inside a box has its cell within the box's corners' cells: the test's answers are those of a
+    test of every corner.
     Clipping ears turns corners convex, never reflex, in a simple polygon (Eberly §2); a corner
     that does turn reflex (a degenerate or self-intersecting outline) joins a list read by every
     ear. Corners that stopped blocking stay on the grid and are passed over by the caller."""
@@ -141,11 +142,18 @@ class _Blockers:
         #: the corners as Python floats: an ear's own test in scalars (~100,000 ears in a large
         #: outline), the same IEEE double operations as `_turn`'s
         self.xy = [(float(x), float(y)) for x, y in xy]
-        self.cells = max(1, int(np.sqrt(len(xy))))
-        self.lo = [float(v) for v in xy.min(axis=0)]
-        span = xy.max(axis=0) - xy.min(axis=0)
-        self.size = [float(v / self.cells) if v > 0 else 1.0 for v in span]
-        cell = np.clip(((xy - self.lo) / self.size).astype(np.int64), 0, self.cells - 1)
+        with np.errstate(over="ignore", invalid="ignore"):
+            span = xy.max(axis=0) - xy.min(axis=0)
+        # one cell where the bounds are not finite (corners near ±1e308: the reader refuses them
+        # after; a grid of them raised "cannot convert float NaN to integer" first)
+        self.cells = max(1, int(np.sqrt(len(xy)))) if np.isfinite(span).all() else 1
+        self.lo = [float(v) for v in xy.min(axis=0)] if self.cells > 1 else [0.0, 0.0]
+        self.size = [float(v / self.cells) if v > 0 else 1.0 for v in span] if self.cells > 1 else [1.0, 1.0]
+        cell = (
+            np.clip(((xy - self.lo) / self.size).astype(np.int64), 0, self.cells - 1)
+            if self.cells > 1
+            else np.zeros((len(xy), 2), np.int64)
+        )
         keys = cell[:, 1] * self.cells + cell[:, 0]
         on_grid = np.flatnonzero(blocking)
         self.order = on_grid[np.argsort(keys[on_grid], kind="stable")]
@@ -156,6 +164,8 @@ class _Blockers:
 
     def _cell(self, x: float, axis: int) -> int:
         """The cell of coordinate x along axis, as __init__ computes it for every corner."""
+        if self.cells == 1:
+            return 0
         return min(max(int((x - self.lo[axis]) / self.size[axis]), 0), self.cells - 1)
 
     def include(self, v: int, blocks: bool) -> None:
@@ -164,10 +174,13 @@ class _Blockers:
             self.extra.append(v)
 
     def near(self, x0: float, y0: float, x1: float, y1: float) -> list[np.ndarray]:
-        """The corners on the grid whose cells meet the box [x0, x1] × [y0, y1], and the extra
-        ones, as arrays."""
-        cx0, cx1 = self._cell(x0, 0), self._cell(x1, 0)
-        rows = range(self._cell(y0, 1), self._cell(y1, 1) + 1)
+        """The corners on the grid whose cells meet the box [x0, x1] × [y0, y1] or a cell next to
+        it, and the extra ones, as arrays. One cell more on every side: the turn tests, in floating
+        point, can take a corner a rounding outside the box as inside the triangle (review: a
+        corner 2^-53 off the box's edge, in the next cell, made an ear the test of every corner
+        refuses)."""
+        cx0, cx1 = max(self._cell(x0, 0) - 1, 0), min(self._cell(x1, 0) + 1, self.cells - 1)
+        rows = range(max(self._cell(y0, 1) - 1, 0), min(self._cell(y1, 1) + 1, self.cells - 1) + 1)
         if len(rows) > 4:  # a long ear: its rows' ranges at once
             first = np.arange(rows.start, rows.stop) * self.cells
             starts = np.searchsorted(self.keys_array, first + cx0, "left")
