@@ -134,7 +134,8 @@ def write_together(files: dict[Path, bytes]) -> None:
     back until the last is in (on the main thread), so that an interrupt leaves either every file
     as it was or every file new, never a mix of two runs' (`bvhlab animate`: an interrupt while the
     plot was drawn left the new CSV and JSON beside the old plot). An error before the renames
-    removes the temporaries and leaves every file as it was."""
+    removes the temporaries and leaves every file as it was; one during them (a rename refused)
+    leaves the files before it new and those after it old, and names the file refused."""
     staged: list[tuple[Path, Path]] = []
     current = Path()
     try:
@@ -166,19 +167,29 @@ def write_together(files: dict[Path, bytes]) -> None:
 
 @contextlib.contextmanager
 def _interrupts_held() -> Iterator[None]:
-    """Ctrl-C (SIGINT) held back inside, and raised after it if one came (main thread only: other
-    threads never receive it)."""
-    if threading.current_thread() is not threading.main_thread():
+    """Ctrl-C (SIGINT) held back inside and handed, after it, to the handler that was there before:
+    Python's (KeyboardInterrupt), another callable, or the default action. Nothing is held where
+    SIGINT is ignored (a background job's) or handled outside Python, or off the main thread
+    (which never receives it)."""
+    previous = signal.getsignal(signal.SIGINT)
+    if (
+        threading.current_thread() is not threading.main_thread()
+        or previous is None  # a handler installed from C: left alone
+        or previous == signal.SIG_IGN
+    ):
         yield
         return
     came: list[bool] = []
-    previous = signal.signal(signal.SIGINT, lambda *_: came.append(True))
+    signal.signal(signal.SIGINT, lambda *_: came.append(True))
     try:
         yield
     finally:
         signal.signal(signal.SIGINT, previous)
-    if came:
-        raise KeyboardInterrupt
+        if came:
+            if previous == signal.SIG_DFL:
+                os.kill(os.getpid(), signal.SIGINT)
+            elif callable(previous):
+                previous(signal.SIGINT, None)  # Python's own raises KeyboardInterrupt
 
 
 def write_text(path, text: str) -> Path:

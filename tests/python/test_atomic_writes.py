@@ -216,3 +216,31 @@ def test_files_written_together_are_all_old_or_all_new(tmp_path):
         write_together(files)
     assert [(tmp_path / n).read_bytes() for n in names] == [b"new " + n.encode() for n in names]
     assert _listing(tmp_path) == sorted([*names, "plot.png"])
+
+
+def test_an_interrupt_held_while_files_are_written_together_goes_to_the_handler_there_was(tmp_path):
+    """The held SIGINT was raised as KeyboardInterrupt whatever handled it before: ignored (a
+    background job's) or a caller's own handler (review). It now goes to that handler."""
+    done = run_python(
+        f"""
+        import os, signal
+        from pathlib import Path
+        from bvhlab import _atomic
+        folder = Path({str(tmp_path)!r})
+        real = os.replace
+        def replace_then_interrupt(a, b):
+            real(a, b)
+            os.kill(os.getpid(), signal.SIGINT)
+        _atomic.os.replace = replace_then_interrupt
+        for label, handler in (("ignored", signal.SIG_IGN), ("own", lambda *_: print("own handler"))):
+            signal.signal(signal.SIGINT, handler)
+            try:
+                _atomic.write_together({{folder / "a": b"1", folder / "b": b"2"}})
+                print(label, "written")
+            except KeyboardInterrupt:
+                print(label, "KeyboardInterrupt")
+        """,
+        timeout=60,
+        preexec_fn=default_sigint,
+    )
+    assert done.stdout.splitlines()[:3] == ["ignored written", "own handler", "own written"], done.stdout
