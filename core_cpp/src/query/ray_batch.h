@@ -236,8 +236,9 @@ double memory_stall_ns(const RayBatch& rays, const RayBatch& part, Probe& probe)
 /// - whole, where a sample of its rays, spread evenly over it, visit at least kOrderNodes wide
 ///   nodes on average, which `probe(piece)` says (it traces a piece's rays without keeping any
 ///   result and returns the wide nodes they visit on average);
-/// - else from its kOrderWarmRays-th ray on, where its first kOrderWarmRays rays (at most a 16th),
-///   traced as they are, leave the caches as the rest would find them and a sample of the rest
+/// - else, in a block of at least kOrderTimedLeast rays, from its kOrderWarmRays-th ray on, where
+///   its first kOrderWarmRays rays, traced as they are, leave the caches as the rest would find
+///   them and a sample of the rest
 ///   still waits on memory at least `stall_ns` a ray (memory_stall_ns; detail::order_stall_ns,
 ///   kOrderStallNs but where a test fixes the answer with ±inf).
 /// Throws, as check_rays does, where a ray of a sample is refused.
@@ -255,12 +256,13 @@ void for_each_block(const RayBatch& rays, const Aabb& scene, Probe&& probe, Trac
         }
         RayPiece piece;
         probe_sample(rays, block, false, piece);
-        if (probe(static_cast<const RayPiece&>(piece)) >= kOrderNodes) {
-            sort_rays(block, keys, sorted);
-            trace(base, block, &sorted);
+        const bool costly = probe(static_cast<const RayPiece&>(piece)) >= kOrderNodes;
+        if (costly || block.count < kOrderTimedLeast) {
+            if (costly) sort_rays(block, keys, sorted);
+            trace(base, block, costly ? &sorted : nullptr);
             continue;
         }
-        const std::size_t warm = std::min(kOrderWarmRays, block.count / 16);
+        const std::size_t warm = kOrderWarmRays;
         trace(base, part_of(block, 0, warm), nullptr);
         const RayBatch rest = part_of(block, warm, block.count - warm);
         const bool reorder = memory_stall_ns(rays, rest, probe) >= stall_ns;

@@ -29,8 +29,9 @@ inline constexpr std::uint32_t kOrderSamples = 256, kOrderCoherent = kOrderSampl
 /// from which the block is reordered. Sorted outside the library, the bench's random rays were
 /// traced 9% faster on vast1m (3.6 wide nodes a ray), 14% on room1m (5.3), 18% on Sponza (5.9), 19%
 /// on repeat1m (6.7), 28% on rods1m (12.8) and 76% on uniform1m (20.4); the sort, the copy and
-/// putting the results back cost ~35 ns a ray, which on this host's room1m and vast1m is more than
-/// the gain, on Sponza as much (design.md, "Rays in the order of their origins").
+/// putting the results back cost ~35 ns a ray on the 2-core AMD EPYC VM of that measurement, which
+/// on its room1m and vast1m is more than the gain, on Sponza as much (design.md, "Rays in the order
+/// of their origins").
 inline constexpr double kOrderNodes = 8.0;
 /// And, where they visit fewer, the time a ray of the block waits on memory (ns), over which the
 /// block is reordered too, from its kOrderWarmRays-th ray on (for_each_block): after the block's
@@ -44,8 +45,10 @@ inline constexpr double kOrderNodes = 8.0;
 /// vast1m's 9-10 and 11-13 ns, which lose 14-20% and 30-37% to it (design.md, "Rays in the order
 /// of their origins"). A timed choice changes the speed only, never a result.
 inline constexpr double kOrderStallNs = 60.0;
-/// The rays a block traces as it is before its wait on memory is measured (at most a 16th of it).
-inline constexpr std::size_t kOrderWarmRays = 2048;
+/// The rays a block traces as it is before its wait on memory is measured, and the fewest a block
+/// must have for that (the rest is traced after the timed sample, on the calling thread alone: a
+/// block of 4,096 rays on several threads waited on it, 76-79 → 87 ns a ray in the review's run).
+inline constexpr std::size_t kOrderWarmRays = 2048, kOrderTimedLeast = 16 * kOrderWarmRays;
 namespace detail {
 /// The wait (ns a ray) the batch queries reorder over: kOrderStallNs, but -inf or +inf in tests
 /// that need the timed choice made one way (test_ray_order.cpp).
