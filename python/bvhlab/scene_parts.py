@@ -365,6 +365,15 @@ def default_camera(bounds) -> Camera:
     return Camera(position, target, up, fov)
 
 
-def default_light(camera: Camera) -> Light:
-    """A point light a little above and to the right of the camera."""
+def default_light(camera: Camera | View) -> Light:
+    """A point light a little above and to the right of the camera (defaults.light_position). A
+    Camera places it by the point it looks at; a View gives a direction only, so its light is
+    placed as for the point one unit along it, in double precision: made from position + forward,
+    a View's forward ×100 moved the light 100× as far (the same view, another picture), and far
+    from the origin (a unit forward at 1e8) the two points were one in float32 and a valid View
+    was refused as a camera looking at itself (a render without a light: probe)."""
+    if isinstance(camera, View):
+        position, forward = np.asarray(camera.position, np.float64), np.asarray(camera.forward, np.float64)
+        target = tuple(position + forward / np.linalg.norm(forward))
+        return Light(defaults.light_position(camera.position, target, camera.up))
     return Light(defaults.light_position(camera.position, camera.look_at, camera.up))
