@@ -189,7 +189,7 @@ def _ratio(value: float) -> str:
 
 def _plot(rows: list[FrameRow], title: str) -> bytes:
     """The plot as PNG bytes: SAH ÷ a fresh build's and update ms, frame by frame, by policy."""
-    from ..compare.charts import _plt
+    from ..compare.charts import _figure_bytes, _plt
 
     plt = _plt()
     fig, (left, right) = plt.subplots(1, 2, figsize=(10, 3.8))
@@ -206,10 +206,4 @@ def _plot(rows: list[FrameRow], title: str) -> bytes:
         ax.set_xlabel("frame")
         ax.legend(fontsize=8)
     fig.suptitle(title)
-    try:
-        fig.tight_layout()
-        f = io.BytesIO()  # written with the table and the report: write_together
-        fig.savefig(f, format="png", dpi=110)
-    finally:
-        plt.close(fig)
-    return f.getvalue()
+    return _figure_bytes(fig, plt)  # written with the table and the report: write_together

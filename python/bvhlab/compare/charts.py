@@ -3,6 +3,7 @@ nodes per depth, SAH cost per depth, and the leaf-size histogram."""
 
 from __future__ import annotations
 
+import io
 import math
 from pathlib import Path
 
@@ -27,13 +28,20 @@ def value_label(v: float) -> str:
 
 
 def _save(fig, plt, path: Path) -> Path:
+    with replacing(path) as f:  # whole or not at all
+        f.write(_figure_bytes(fig, plt, Path(path).suffix[1:] or "png"))
+    return path
+
+
+def _figure_bytes(fig, plt, kind: str = "png") -> bytes:
+    """The figure, laid out, in a file format's bytes (`kind`: png, svg, pdf); closed after."""
     try:
         fig.tight_layout()
-        with replacing(path) as f:  # whole or not at all
-            fig.savefig(f, format=Path(path).suffix[1:] or "png", dpi=110)
+        f = io.BytesIO()
+        fig.savefig(f, format=kind, dpi=110)
     finally:
         plt.close(fig)
-    return path
+    return f.getvalue()
 
 
 def times_chart(rows: list[dict], path: Path, title: str) -> Path:
