@@ -147,6 +147,12 @@ def _pinhole(position, look_at, fov_y: float, width: int = 640, height: int = 48
     return np.concatenate([np.broadcast_to(pos, d.shape).reshape(-1, 3), d.reshape(-1, 3)], 1)
 
 
+def ray_args(name: str, path: Path) -> list[str]:
+    """bvh_bench's arguments for a ray set: shadow rays (N×7) after --shadow (bench/ab_batch.py
+    passed them as rays of 6 floats: its shadow rows were other rays' closest hits)."""
+    return ["--shadow", str(path)] if name == "shadow" else [str(path)]
+
+
 def cores(threads: int) -> str:
     """The first `threads` cores this process may use, for taskset."""
     return ",".join(str(c) for c in sorted(os.sched_getaffinity(0))[:threads])

@@ -43,7 +43,7 @@ def main() -> None:
                 for r in range(args.rounds):
                     for label in ("old", "new"):
                         exe = Path(getattr(args, label))
-                        cmd = ["trace", str(mesh), str(rays[name])]
+                        cmd = ["trace", str(mesh), *_peers.ray_args(name, rays[name])]
                         for p in peers:
                             cmd += ["--peer", p]
                         out = _peers.run(exe, cmd + ["--repeat", str(args.repeat)], 1)

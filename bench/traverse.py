@@ -54,17 +54,12 @@ PEERS = [  # (label, bvh_bench spec); Embree MEDIUM first: the others are compar
 ]
 
 
-def ray_args(name: str, path: Path) -> list[str]:
-    """bvh_bench's arguments for a ray set: shadow rays (N×7) after --shadow."""
-    return ["--shadow", str(path)] if name == "shadow" else [str(path)]
-
-
 def measure(
     exe: Path, mesh: Path, rays: dict[str, Path], repeat: int, rounds: int, peers: list, clock: str = "seconds"
 ) -> dict:
     """Times of each peer on each ray set; `clock` "seconds" (wall) or "cpu_seconds" (the tracing
     thread's CPU time, which a loaded machine disturbs far less)."""
-    args = ["trace", str(mesh), *(a for name, path in rays.items() for a in ray_args(name, path))]
+    args = ["trace", str(mesh), *(a for name, path in rays.items() for a in _peers.ray_args(name, path))]
     args += [a for _, s in peers for a in ("--peer", s)]
     args += ["--repeat", str(repeat)]
     out = {name: {} for name in rays}
@@ -92,7 +87,7 @@ def count_instructions(exe: Path, mesh: Path, rays: dict[str, Path], sample: int
         subset = all_rays[:: max(1, len(all_rays) // sample)][:sample]
         np.ascontiguousarray(subset).tofile(few)
         for spec, row in result[name].items():
-            n = _peers.instructions(exe, [str(mesh), *ray_args(name, few), "--peer", spec])
+            n = _peers.instructions(exe, [str(mesh), *_peers.ray_args(name, few), "--peer", spec])
             row["instructions_per_ray"] = n / len(subset) if n else None
             print(f"  callgrind {name} {row['label']}: {n}", file=sys.stderr, flush=True)
 

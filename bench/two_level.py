@@ -99,13 +99,9 @@ def write_inputs(folder: Path, name: str) -> tuple[list[str], dict[str, Path]]:
     return args, paths
 
 
-def ray_args(name: str, path: Path) -> list[str]:
-    return ["--shadow", str(path)] if name == "shadow" else [str(path)]
-
-
 def measure(exe, scene_args, rays, repeat, rounds, peers, sample) -> dict:
     out = {name: {spec: {"label": label, "seconds": []} for label, spec in peers} for name in rays}
-    args = ["trace", *scene_args, *(a for n, p in rays.items() for a in ray_args(n, p))]
+    args = ["trace", *scene_args, *(a for n, p in rays.items() for a in _peers.ray_args(n, p))]
     args += [a for _, s in peers for a in ("--peer", s)] + ["--repeat", str(repeat)]
     for _ in range(rounds):
         result = _peers.run(exe, args, 1)
@@ -121,7 +117,7 @@ def measure(exe, scene_args, rays, repeat, rounds, peers, sample) -> dict:
             subset = all_rays[:: max(1, len(all_rays) // sample)][:sample]
             np.ascontiguousarray(subset).tofile(few)
             for spec, row in out[name].items():
-                n = _peers.instructions(exe, [*scene_args, *ray_args(name, few), "--peer", spec])
+                n = _peers.instructions(exe, [*scene_args, *_peers.ray_args(name, few), "--peer", spec])
                 row["instructions_per_ray"] = n / len(subset) if n else None
     return out
 

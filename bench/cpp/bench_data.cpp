@@ -2,6 +2,7 @@
 
 #include <fstream>
 #include <stdexcept>
+#include <string>
 
 namespace bench {
 namespace {
@@ -15,13 +16,25 @@ std::vector<float> load_floats(const std::string& path) {
     return v;
 }
 
+/// A file of whole rows of `width` floats, or an error saying what it holds: a file of shadow rays
+/// (7 floats a ray) read as rays of 6 was traced as other rays, without a word (bench/ab_batch.py
+/// passed them without --shadow).
+std::vector<float> load_rows(const std::string& path, std::size_t width, const char* what) {
+    std::vector<float> v = load_floats(path);
+    if (v.size() % width)
+        throw std::invalid_argument(path + " holds " + std::to_string(v.size()) + " floats, not whole " + what +
+                                    " of " + std::to_string(width) +
+                                    (width == 6 ? " (shadow rays: --shadow FILE)" : ""));
+    return v;
+}
+
 }  // namespace
 
-Mesh load_mesh(const std::string& path) { return {load_floats(path)}; }
-Rays load_rays(const std::string& path) { return {load_floats(path), {}}; }
+Mesh load_mesh(const std::string& path) { return {load_rows(path, 9, "triangles")}; }
+Rays load_rays(const std::string& path) { return {load_rows(path, 6, "rays"), {}}; }
 
 Rays load_shadow_rays(const std::string& path) {
-    const std::vector<float> all = load_floats(path);
+    const std::vector<float> all = load_rows(path, 7, "shadow rays");
     Rays rays;
     for (std::size_t i = 0; i + 7 <= all.size(); i += 7) {
         rays.od.insert(rays.od.end(), all.begin() + std::ptrdiff_t(i), all.begin() + std::ptrdiff_t(i + 6));
