@@ -38,13 +38,14 @@ inline constexpr double kOrderNodes = 8.0;
 /// first rays, traced as they are, a sample of the rest is traced twice, the first time with the
 /// caches as those rays left them, the second with all its lines cached; the difference a ray.
 /// The sort and putting the results back cost ~20-25 ns a ray (a 2-core Intel Xeon VM,
-/// 2026-12-06), so the order pays where the rays wait about three times that. Measured there
-/// after 2,048 rays, each batch traced between Embree's and tinybvh's passes: Sponza's random and
-/// shadow rays waited 98-122 and 88-100 ns a ray and gained 0-5% and 12-14% from the order,
-/// repeat1m's 329-346 and 209-214 ns (+5-8%, +15-20%), but room1m's 27-37 and 35-39 ns and
-/// vast1m's 9-10 and 11-13 ns, which lose 14-20% and 30-37% to it (design.md, "Rays in the order
-/// of their origins"). A timed choice changes the speed only, never a result.
-inline constexpr double kOrderStallNs = 60.0;
+/// 2026-12-06), so the order pays where the rays wait a few times that. Measured there after
+/// 2,048 rays, each batch traced between Embree's and tinybvh's passes: Sponza's random and
+/// shadow rays waited 126-138 and 175-361 ns a ray and gain 0-2% and 6% from the order,
+/// repeat1m's random rays 436-466 ns (+7%), but room1m's 38-73 and 9-31 ns and vast1m's 12-14
+/// and 8-9 ns, which lose 14-20% and 30-37% to it (73: a process's first batch, its tree not yet
+/// in the caches; design.md, "Rays in the order of their origins"). A timed choice changes the
+/// speed only, never a result.
+inline constexpr double kOrderStallNs = 80.0;
 /// The rays a block traces as it is before its wait on memory is measured, and the fewest a block
 /// must have for that (the rest is traced after the timed sample, on the calling thread alone: a
 /// block of 4,096 rays on several threads waited on it, 76-79 → 87 ns a ray in the review's run).
