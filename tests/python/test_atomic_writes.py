@@ -177,6 +177,22 @@ def test_every_writer_of_the_package_and_the_addon_goes_through_the_atomic_write
     assert offenders == []
 
 
+def _interrupting_renames(folder) -> str:
+    """A child's script start: `folder`, and every rename of bvhlab._atomic followed by a real
+    SIGINT to the process (after the first, the other files are still old)."""
+    return f"""
+        import os, signal
+        from pathlib import Path
+        from bvhlab import _atomic
+        folder = Path({str(folder)!r})
+        real = os.replace
+        def replace_then_interrupt(a, b):
+            real(a, b)
+            os.kill(os.getpid(), signal.SIGINT)
+        _atomic.os.replace = replace_then_interrupt
+        """
+
+
 def test_files_written_together_are_all_old_or_all_new(tmp_path):
     """`bvhlab animate` wrote its CSV, JSON and plot one after another, and Ctrl-C while the plot
     was drawn left the new table and report beside the old plot (probe). write_together stages all
@@ -186,16 +202,8 @@ def test_files_written_together_are_all_old_or_all_new(tmp_path):
     for name in names:
         (tmp_path / name).write_bytes(b"old " + name.encode())
     done = run_python(
-        f"""
-        import os, signal
-        from pathlib import Path
-        from bvhlab import _atomic
-        folder = Path({str(tmp_path)!r})
-        real = os.replace
-        def replace_then_interrupt(a, b):
-            real(a, b)
-            os.kill(os.getpid(), signal.SIGINT)  # after the first rename: two files still old
-        _atomic.os.replace = replace_then_interrupt
+        _interrupting_renames(tmp_path)
+        + f"""
         try:
             _atomic.write_together({{folder / n: b"new " + n.encode() for n in {names!r}}})
         except KeyboardInterrupt:
@@ -222,20 +230,12 @@ def test_an_interrupt_held_while_files_are_written_together_goes_to_the_handler_
     """The held SIGINT was raised as KeyboardInterrupt whatever handled it before: ignored (a
     background job's) or a caller's own handler (review). It now goes to that handler."""
     done = run_python(
-        f"""
-        import os, signal
-        from pathlib import Path
-        from bvhlab import _atomic
-        folder = Path({str(tmp_path)!r})
-        real = os.replace
-        def replace_then_interrupt(a, b):
-            real(a, b)
-            os.kill(os.getpid(), signal.SIGINT)
-        _atomic.os.replace = replace_then_interrupt
+        _interrupting_renames(tmp_path)
+        + """
         for label, handler in (("ignored", signal.SIG_IGN), ("own", lambda *_: print("own handler"))):
             signal.signal(signal.SIGINT, handler)
             try:
-                _atomic.write_together({{folder / "a": b"1", folder / "b": b"2"}})
+                _atomic.write_together({folder / "a": b"1", folder / "b": b"2"})
                 print(label, "written")
             except KeyboardInterrupt:
                 print(label, "KeyboardInterrupt")
