@@ -238,9 +238,9 @@ double memory_stall_ns(const RayBatch& rays, const RayBatch& part, Probe& probe)
 ///   result and returns the wide nodes they visit on average);
 /// - else, in a block of at least kOrderTimedLeast rays, from its kOrderWarmRays-th ray on, where
 ///   its first kOrderWarmRays rays, traced as they are, leave the caches as the rest would find
-///   them and a sample of the rest
-///   still waits on memory at least `stall_ns` a ray (memory_stall_ns; detail::order_stall_ns,
-///   kOrderStallNs but where a test fixes the answer with ±inf).
+///   them and a sample of the rest still waits on memory at least `stall_ns` a ray
+///   (memory_stall_ns; detail::order_stall_ns, kOrderStallNs but where a test fixes the answer
+///   with ±inf).
 /// Throws, as check_rays does, where a ray of a sample is refused.
 template <class Probe, class Trace>
 void for_each_block(const RayBatch& rays, const Aabb& scene, Probe&& probe, Trace&& trace,
