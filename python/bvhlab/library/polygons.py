@@ -157,8 +157,7 @@ class _Blockers:
         keys = cell[:, 1] * self.cells + cell[:, 0]
         on_grid = np.flatnonzero(blocking)
         self.order = on_grid[np.argsort(keys[on_grid], kind="stable")]
-        self.keys_array = keys[self.order]
-        self.keys = self.keys_array.tolist()
+        self.keys = keys[self.order].tolist()
         self.on_grid = blocking.copy()
         self.extra: list[int] = []
 
@@ -181,18 +180,12 @@ class _Blockers:
         refuses)."""
         cx0, cx1 = max(self._cell(x0, 0) - 1, 0), min(self._cell(x1, 0) + 1, self.cells - 1)
         rows = range(max(self._cell(y0, 1) - 1, 0), min(self._cell(y1, 1) + 1, self.cells - 1) + 1)
-        if len(rows) > 4:  # a long ear: its rows' ranges at once
-            first = np.arange(rows.start, rows.stop) * self.cells
-            starts = np.searchsorted(self.keys_array, first + cx0, "left")
-            ends = np.searchsorted(self.keys_array, first + cx1, "right")
-            parts = [self.order[s:e] for s, e in zip(starts.tolist(), ends.tolist()) if e > s]
-        else:
-            parts = []
-            for row in rows:
-                start = bisect.bisect_left(self.keys, row * self.cells + cx0)
-                end = bisect.bisect_right(self.keys, row * self.cells + cx1, lo=start)
-                if end > start:
-                    parts.append(self.order[start:end])
+        parts = []
+        for row in rows:
+            start = bisect.bisect_left(self.keys, row * self.cells + cx0)
+            end = bisect.bisect_right(self.keys, row * self.cells + cx1, lo=start)
+            if end > start:
+                parts.append(self.order[start:end])
         if self.extra:
             parts.append(np.array(self.extra, np.int64))
         return parts
