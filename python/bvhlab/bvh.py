@@ -123,8 +123,10 @@ class Bvh:
 
     def __repr__(self) -> str:
         s = self.stats
+        # a TLAS (InstancedBvh.tlas) holds no geometry: its references are instances
+        held = f"{s['references']} instances" if s["references"] and not s["primitives"] else f"{s['primitives']} primitives"
         return (
-            f"<bvhlab.Bvh {self.config.method} {s['primitives']} primitives, {s['nodes']} nodes, "
+            f"<bvhlab.Bvh {s['method']} {held}, {s['nodes']} nodes, "
             f"height {s['height']}, SAH {s['sah_cost']:.2f}>"
         )
 

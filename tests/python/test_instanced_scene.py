@@ -105,6 +105,14 @@ def test_a_flat_scene_is_one_mesh_and_one_identity_instance(small_scene):
     np.testing.assert_array_equal(a["instance"], np.where(b["prim"] >= 0, 0, -1))
 
 
+def test_the_tlas_says_it_holds_instances(instanced_scene):
+    tree = bvhlab.build(instanced_scene)
+    count = len(tree.instances[0])
+    # its stats count no primitives (it holds no geometry): the repr said "0 primitives"
+    assert f" {count} instances," in repr(tree.tlas) and "primitives" not in repr(tree.tlas)
+    assert tree.tlas.stats["references"] == count and tree.tlas.stats["primitives"] == 0
+
+
 def test_place_moves_instances_without_rebuilding_meshes(instanced_scene):
     tree = bvhlab.build(instanced_scene)
     meshes = list(tree.meshes)
