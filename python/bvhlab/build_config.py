@@ -54,7 +54,14 @@ class BuildConfig:
     threads: int = field(default=_CORE_DEFAULTS.threads, compare=False)
 
     def __post_init__(self):
-        self.core()
+        c = self.core()
+        # each setting as the Python type of its field, so that equal settings written differently
+        # (sbvh_alpha 1 and 1.0, bins 12 and numpy's 12) record and hash alike (stats files, sweep keys)
+        for name in ("bins", "max_leaf_size", "sah_block", "seed", "threads"):
+            object.__setattr__(self, name, int(getattr(c, name)))
+        for name in ("sbvh_alpha", "sbvh_budget"):
+            object.__setattr__(self, name, float(getattr(self, name)))
+        object.__setattr__(self, "sbvh_unsplit", bool(self.sbvh_unsplit))
 
     def core(self) -> _core.BuildConfig:
         """The C++ BuildConfig (types checked here, values by the core's validate)."""

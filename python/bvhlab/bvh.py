@@ -124,7 +124,8 @@ class Bvh:
     def __repr__(self) -> str:
         s = self.stats
         # a TLAS (InstancedBvh.tlas) holds no geometry: its references are instances
-        held = f"{s['references']} instances" if s["references"] and not s["primitives"] else f"{s['primitives']} primitives"
+        tlas = s["references"] and not s["primitives"]
+        held = f"{s['references']} instances" if tlas else f"{s['primitives']} primitives"
         return (
             f"<bvhlab.Bvh {s['method']} {held}, {s['nodes']} nodes, "
             f"height {s['height']}, SAH {s['sah_cost']:.2f}>"

@@ -105,6 +105,17 @@ def test_key_changes_with_the_content_and_the_settings(tmp_path, models):
     assert not set(keys) & {c.key for c in plan_cells(spec)}
 
 
+def test_equal_settings_written_differently_have_one_key(tmp_path, models):
+    # a float setting written as a whole number: the keys differed, and a rerun measured its cells again
+    keys = [
+        [c.key for c in plan_cells(read_spec(_write_spec(tmp_path, ["box.obj"], grid)))]
+        for grid in ("method = ['sbvh']\nsbvh_alpha = [1]", "method = ['sbvh']\nsbvh_alpha = [1.0]")
+    ]
+    assert keys[0] == keys[1]
+    assert BuildConfig(sbvh_alpha=1).tree_settings() == BuildConfig(sbvh_alpha=1.0).tree_settings()
+    assert type(BuildConfig(bins=np.int64(12)).bins) is int
+
+
 def test_in_process_sweep_rows_match_an_independent_build(tmp_path, models):
     spec = read_spec(_write_spec(tmp_path, ["box.obj", "gen:five_spheres"]))
     result = run_sweep(spec, tmp_path / "out", plot=False)
