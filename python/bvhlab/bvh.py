@@ -126,10 +126,7 @@ class Bvh:
         # a TLAS (InstancedBvh.tlas) holds no geometry: its references are instances
         tlas = s["references"] and not s["primitives"]
         held = f"{s['references']} instances" if tlas else f"{s['primitives']} primitives"
-        return (
-            f"<bvhlab.Bvh {s['method']} {held}, {s['nodes']} nodes, "
-            f"height {s['height']}, SAH {s['sah_cost']:.2f}>"
-        )
+        return f"<bvhlab.Bvh {s['method']} {held}, {s['nodes']} nodes, height {s['height']}, SAH {s['sah_cost']:.2f}>"
 
     # -- numbers ---------------------------------------------------------------------------
     @property
