@@ -53,7 +53,7 @@ def two_level_sah_cost_per_depth(tlas, mesh_of, mesh_per_depth: list[list[float]
     Compare is read like a flat tree's: the cost a ray meets at each level of its walk.
     `tlas`: the TLAS as a Bvh (InstancedBvh.tlas; its references are instance indices); `mesh_of`:
     each instance's mesh; `mesh_per_depth[k]`: compare.tree_stats.sah_cost_per_depth of mesh k's
-    tree (empty for a box without area: its whole `mesh_sah[k]` at BLAS depth 0)."""
+    tree (empty for an empty tree: its whole `mesh_sah[k]` at BLAS depth 0)."""
     nodes = tlas.nodes
     if len(nodes) == 0:
         return []

@@ -232,6 +232,16 @@ def test_sah_cost_per_depth_adds_up_to_the_tree_cost(knot_mesh, method, leaf):
     assert sah_cost_per_depth(bvhlab.build(np.zeros((0, 3, 3), np.float32))) == []
 
 
+def test_sah_cost_per_depth_of_a_root_without_area_adds_up_too():
+    # triangles at one point: every node's area ratio is 1 in the tree's cost (stats.h sah_term);
+    # the split by depth was [] while the cost counted every node
+    points = np.zeros((40, 3, 3), np.float32)
+    bvh = bvhlab.build(points, max_leaf_size=1, method="median")
+    per_depth = sah_cost_per_depth(bvh)
+    assert len(per_depth) == bvh.stats["height"] > 1
+    assert sum(per_depth) == pytest.approx(bvh.stats["sah_cost"], rel=1e-9)
+
+
 def test_chart_labels_keep_three_significant_digits(tmp_path):
     assert [charts.value_label(v) for v in (0.0412, 0.9, 1.5, 12.34, 604.0, 1395.2)] == [
         "0.0412",
