@@ -90,6 +90,7 @@ def reference(scene, samples_per_axis: int, overlay=None, mode="shade", exported
         mode=mode,
         color_by_depth=settings.overlay_color_by_depth,
         line_width=settings.overlay_line_width,
+        film_transparent=scene.render.film_transparent,
     )
     return image, exported, bvh
 

@@ -70,6 +70,42 @@ def _with_light_of(exported, light):
     return exported
 
 
+def check_keyframed_visibility_follows_the_frames(tmp_dir) -> None:
+    """Object ▸ Visibility flags keyframed (Box A hidden from camera rays from frame 2; the crate's
+    instancer 'Crate 1' a holdout from frame 2, on a transparent film): an animation render
+    shows each frame's flags, every frame equal to the CPU reference of that frame's export. They
+    were read from the original objects, which a render's depsgraph never updates: every frame
+    showed frame 1's (the UI frame's) flags, Box A and the crate's alpha in all three."""
+    from checks_cameras import camera_scene
+
+    scene = camera_scene((64, 48))
+    box, crate = bpy.data.objects["Box A"], bpy.data.objects["Crate 1"]
+    for frame, on in ((1, False), (2, True)):
+        box.visible_camera = not on
+        box.keyframe_insert("visible_camera", frame=frame)
+        crate.is_holdout = on
+        crate.keyframe_insert("is_holdout", frame=frame)
+    scene.frame_start, scene.frame_end = 1, 3
+    scene.frame_set(1)
+    scene.render.film_transparent = True
+    use_engine(scene, backend="cpu", render_supersampling=1)
+    _exr_output(scene, tmp_dir / "flags_")
+    assert bpy.ops.render.render(animation=True) == {"FINISHED"}
+    images = [_exr_rgba(p) for p in sorted(tmp_dir.glob("flags_*.exr"))]
+    assert len(images) == 3, len(images)
+    first_light = None
+    for frame, image in zip((1, 2, 3), images):
+        scene.frame_set(frame)  # the view layer's depsgraph writes the frame's flags to the originals
+        exported = _with_light_of(export_scene(bpy.context), first_light)
+        first_light = first_light or exported.light
+        compare_images(image, reference(scene, samples_per_axis=1, exported=exported)[0], "cpu")
+    holes = (images[1][..., 3] == 0) & (images[0][..., 3] > 0)  # the crate held out from frame 2
+    changed = np.abs(images[1] - images[0]).max(-1) > 1e-3
+    assert holes.sum() > 20 and changed.sum() > holes.sum() + 20, (holes.sum(), changed.sum())
+    assert np.array_equal(images[1], images[2])
+    scene.frame_set(1)
+
+
 def check_animation_light_is_steady(tmp_dir) -> None:
     """A static light over a static floor while a ball rolls away, frames 1-3, Persistent Data
     off and on: the floor's pixels are the same on every frame (the light's intensity was measured

@@ -167,6 +167,7 @@ def _engine() -> Iterator[Check]:
         engine.check_rerender_reads_only_what_changed,
         frames.check_animation_frames,
         frames.check_animation_light_is_steady,
+        frames.check_keyframed_visibility_follows_the_frames,
         frames.check_a_fixed_light_distance_lights_every_chunk_alike,
         engine.check_counter_passes_are_the_cpu_counters,
         features.check_animated_world_colour_follows_the_frames,

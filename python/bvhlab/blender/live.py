@@ -134,7 +134,7 @@ class LiveScene:
             if placing
             else None
         )
-        placed = None if reported is None else self._placed(reported, override, view_layer)
+        placed = None if reported is None else self._placed(reported, override, depsgraph.view_layer_eval)
         if placed is not None:
             assert reported is not None
             items, world, report, seen_moving, moved, table, shared = placed
@@ -211,10 +211,11 @@ class LiveScene:
             self._index = MoverIndex.of(self._items, self._layout.mesh_of)
         return self._index
 
-    def _placed(self, placing: Placing, override, view_layer) -> tuple | None:
+    def _placed(self, placing: Placing, override, layer_eval) -> tuple | None:
         """(items, world, report, seen moving, moved keys, material table, shared meshes) of the
         last sync with the matrices and meshes of `placing` (placed_only.place_moved,
-        place_reshaped); None where the walk must run after all."""
+        place_reshaped; `layer_eval`: the depsgraph's evaluated view layer, which the reshaped
+        objects' flags are read in); None where the walk must run after all."""
         assert self.scene is not None and self._layout is not None
         placed = place_moved(self._items, self._world, self._moved, self._seen_moving, placing.moved, self.instancing)
         if placed is None:
@@ -224,7 +225,7 @@ class LiveScene:
         if not placing.reshaped:
             return (*placed, table, self._shared)
         shared = place_reshaped(
-            placed, self._layout, self._shared, placing.reshaped, table, view_layer, self.instancing
+            placed, self._layout, self._shared, placing.reshaped, table, layer_eval, self.instancing
         )
         return None if shared is None else (*placed, table, shared)
 

@@ -40,8 +40,9 @@ _RAY_BITS = tuple((flag, int(ray)) for flag, ray in RAY_VISIBILITY.items())
 
 
 def hidden_rays(*objects) -> Rays:
-    """The rays any of `objects` (original Blender objects; one read once where it is given twice,
-    an object as its own owner) hides from (Ray Visibility flags off)."""
+    """The rays any of `objects` (evaluated Blender objects, whose flags are the depsgraph's frame;
+    one read once where it is given twice, an object as its own owner) hides from (Ray Visibility
+    flags off)."""
     hidden = 0
     for k, obj in enumerate(objects):
         if k and obj is objects[k - 1]:
@@ -53,12 +54,13 @@ def hidden_rays(*objects) -> Rays:
 
 
 def look_of(owner, source, view_layer, flags: dict | None = None) -> Look:
-    """How `source` shown by `owner` (originals; an object shown as itself is its own owner) shows
-    its materials, as Cycles decides it (blender/object.cpp): a holdout where the owner is one (its
-    flag, or a holdout collection of the view layer); hidden from the rays either hides from, and
-    from camera rays where the owner is Indirect Only (in such a collection) and not a holdout.
-    `flags` (owner → (holdout, indirect only)) keeps the view layer's answers for the owner's
-    other instances."""
+    """How `source` shown by `owner` (evaluated objects and the depsgraph's evaluated view layer,
+    as Cycles reads them in blender/object.cpp: an original's keyframed flags are the UI frame's in
+    a render; an object shown as itself is its own owner) shows its materials: a holdout where the
+    owner is one (its flag, or a holdout collection of the view layer); hidden from the rays either
+    hides from, and from camera rays where the owner is Indirect Only (in such a collection) and
+    not a holdout. `flags` (owner → (holdout, indirect only)) keeps the view layer's answers for
+    the owner's other instances."""
     known = None if flags is None else flags.get(owner)
     if known is None:
         holdout = bool(owner.holdout_get(view_layer=view_layer))

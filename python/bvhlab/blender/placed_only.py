@@ -244,7 +244,7 @@ def place_reshaped(
     shared: list[SharedMesh],
     reshaped: dict,
     table: MaterialTable,
-    view_layer,
+    layer_eval,
     instancing: bool,
 ) -> list[SharedMesh] | None:
     """The shared meshes of a placed sync (`placed`: place_moved's tuple, whose items, report, seen
@@ -262,8 +262,7 @@ def place_reshaped(
             return None
         data = obj.data.as_pointer()
         tables = len(table.materials)
-        original = obj.original
-        slots = table.slot_indices(obj, data, look_of(original, original, view_layer))
+        slots = table.slot_indices(obj, data, look_of(obj, obj, layer_eval))
         if len(table.materials) != tables or item.slot_table is None or not np.array_equal(slots, item.slot_table):
             return None
         shared[layout.mesh_of[key] - 1] = SharedMesh(mesh, mesh.triangles, map_slots(slots, mesh.slots))

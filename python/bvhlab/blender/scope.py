@@ -25,7 +25,10 @@ class InScope(NamedTuple):
     (owner's full name, shown object's full name, persistent id of the instance or ()). `matrix`:
     its world matrix, a `mathutils.Matrix` copy (`matrices_array`). `owner`: the original object
     itself, or the original object that instances it; `source`: the original object shown (the
-    owner itself for an object). Originals stay valid after the iterator moves on; `obj` does not."""
+    owner itself for an object). Originals stay valid after the iterator moves on; `obj` does not.
+    `holder`: the owner as evaluated (`obj` itself for an object, the evaluated instancer): what
+    the frame's flags are read from (a render's depsgraph never writes its animation back to the
+    originals: keyframed Ray Visibility and Holdout stayed at the UI frame's in renders)."""
 
     obj: Any  # a bpy.types.Object (bpy has no type stubs)
     type: str  # obj.type, read once
@@ -33,6 +36,7 @@ class InScope(NamedTuple):
     key: tuple
     owner: Any = None
     source: Any = None
+    holder: Any = None
 
     @property
     def name(self) -> str:
@@ -87,7 +91,7 @@ def instances_in_scope(depsgraph, view_layer, scope: str, types=None) -> Iterato
         else:
             source, key = owner, (owner_name, owner_name, ())
         # a copy: the depsgraph's matrix wraps Blender's memory of this instance only
-        yield InScope(obj, kind, instance.matrix_world.copy(), key, owner, source)
+        yield InScope(obj, kind, instance.matrix_world.copy(), key, owner, source, holder)
 
 
 def matrices_array(matrices: list) -> np.ndarray:

@@ -67,7 +67,8 @@ def walk(depsgraph, view_layer, scope: str, dirty: Dirty, table: MaterialTable, 
     by_data: dict[int, MeshData] = {}
     parts: dict[tuple, tuple] = {}  # (shown object's name, data address, look) → (sphere, slot table)
     looks: dict[tuple, Look] = {}  # (owner, shown object), originals → how it shows its materials
-    layer_flags: dict = {}  # owner (original) → (holdout, indirect only) in the view layer
+    layer_flags: dict = {}  # owner (evaluated) → (holdout, indirect only) in the view layer
+    layer_eval = depsgraph.view_layer_eval  # what the evaluated owners' flags are asked of
     addresses: dict = {}  # evaluated mesh (hashed by its address) → its address: as_pointer once
     report = SyncReport()
     reshaped = []  # the keys of the items seen before whose mesh changed: movers from now on
@@ -79,7 +80,7 @@ def walk(depsgraph, view_layer, scope: str, dirty: Dirty, table: MaterialTable, 
         data = _address(obj.data, addresses)  # every entry is a MESH (GEOMETRY_TYPES)
         look = looks.get((entry.owner, entry.source))
         if look is None:
-            look = looks[entry.owner, entry.source] = look_of(entry.owner, entry.source, view_layer, layer_flags)
+            look = looks[entry.owner, entry.source] = look_of(entry.holder, obj, layer_eval, layer_flags)
         part = parts.get((key[1], data, look))
         if part is None:
             part = (is_analytic_sphere(obj), None)
