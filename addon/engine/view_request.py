@@ -30,8 +30,10 @@ def camera_view_note(view, space, blender_scene) -> str:
     if view.view_perspective != "CAMERA":
         return ""
     camera = (space.camera if space is not None and space.use_local_camera else None) or blender_scene.camera
-    if camera is None or camera.type != "CAMERA":
+    if camera is None:
         return ""
+    if camera.type != "CAMERA":
+        return "F12 renders Cycles' lens for an object that is not a camera; the viewport shows Blender's"
     data = camera.data
     if data.type == "PANO":
         return "F12 renders the panorama; the viewport shows Blender's perspective view of it"

@@ -182,6 +182,28 @@ def _panorama(data, kind: str) -> None:
     (data if hasattr(data, "panorama_type") else data.cycles).panorama_type = kind
 
 
+def _looking_through(scene, kind: str):
+    """The scene camera an object of `kind` (an empty, or a spot light of a 70° cone) where the
+    camera is: Cycles renders through it with its default lens or the cone's."""
+    camera = scene.camera
+    data = None if kind == "EMPTY" else bpy.data.lights.new("Spot", "SPOT")
+    if data is not None:
+        data.spot_size = math.radians(70)
+    stand_in = bpy.data.objects.new(f"Looking through {kind.lower()}", data)
+    scene.collection.objects.link(stand_in)
+    bpy.context.view_layer.update()
+    stand_in.matrix_world = camera.matrix_world.copy()
+    scene.camera = stand_in
+
+
+def _empty_camera(scene, data):
+    _looking_through(scene, "EMPTY")
+
+
+def _spot_light_camera(scene, data):
+    _looking_through(scene, "LIGHT")
+
+
 #: name → (setting, whether the Rendered viewport has it in camera view: the viewport traces the
 #: region's own projection, so render borders, the resolution percentage and panoramas are F12's)
 SETTINGS = {
@@ -202,6 +224,10 @@ SETTINGS = {
     "equirectangular": (_equirectangular, False),
     "equirectangular_shifted": (_equirectangular_shifted, False),
     "fisheye": (_fisheye, False),
+    # Blender's viewport draws these with a 35 mm lens (BKE_camera_params_from_object), Cycles
+    # renders them with 50 mm or the cone's: F12's
+    "empty_camera": (_empty_camera, False),
+    "spot_light_camera": (_spot_light_camera, False),
 }
 
 

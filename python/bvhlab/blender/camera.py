@@ -34,20 +34,55 @@ def gather_camera(scene, depsgraph, *, view=None) -> Camera:
     camera = scene.camera if view is None else view.camera
     if camera is None:
         raise ExportError(f"scene '{scene.name}' has no camera: add one and make it the active camera")
-    if camera.type != "CAMERA":
-        raise ExportError(f"the scene camera '{camera.name}' is {_a(camera.type.lower())}, not a camera")
     evaluated = camera.evaluated_get(depsgraph)  # animation and drivers applied
     matrix = evaluated.matrix_world if view is None else view.matrix
     position, forward, up, mirrored = _placement(camera.name, np.array(matrix, np.float64))
     # look_at far enough ahead to differ from the position in float32 (the tracer's precision)
     ahead = max(1.0, float(np.abs(position).max()) * 2.0**-10)
     shift_x = None if view is None else view.shift_x
-    lens = lens_fields(scene, evaluated.data, camera.name, position, forward, shift_x=shift_x)
+    data = evaluated.data if camera.type == "CAMERA" else stand_in_lens(evaluated)
+    lens = lens_fields(scene, data, camera.name, position, forward, shift_x=shift_x)
     lens["mirrored"] = mirrored
     try:
         return Camera(tuple(position), tuple(position + forward * ahead), tuple(up), **lens)
     except ValueError as error:
         raise ExportError(f"camera '{camera.name}': {error}") from None
+
+
+@dataclass(frozen=True)
+class _NoDepthOfField:
+    use_dof: bool = False
+
+
+@dataclass(frozen=True)
+class StandInLens:
+    """The lens Cycles gives a scene camera that is not a camera (an empty, a light, any object:
+    blender_camera_init's defaults, a spot light's cone as its field of view), with the fields of
+    Blender's camera data that lens_fields reads."""
+
+    lens: float = 50.0
+    type: str = "PERSP"
+    sensor_fit: str = "AUTO"
+    sensor_width: float = 36.0
+    sensor_height: float = 24.0
+    shift_x: float = 0.0
+    shift_y: float = 0.0
+    clip_start: float = 1e-5
+    clip_end: float = 1e5
+    ortho_scale: float = 1.0
+    dof: _NoDepthOfField = _NoDepthOfField()
+
+
+def stand_in_lens(obj) -> StandInLens:
+    """The lens of a scene camera `obj` (evaluated) that is not a camera, as Cycles renders it
+    (blender_camera_from_object): a spot light's focal length 16 / tan(spot size / 2), Cycles'
+    defaults otherwise (Blender's own viewport draws such a view with a 35 mm lens)."""
+    data = obj.data
+    if obj.type == "LIGHT" and data is not None and data.type == "SPOT":
+        lens = 16.0 / math.tan(data.spot_size * 0.5)
+        if lens > 0:
+            return StandInLens(lens=lens)
+    return StandInLens()
 
 
 @dataclass(frozen=True)
