@@ -186,10 +186,16 @@ def _interrupts_held() -> Iterator[None]:
     finally:
         signal.signal(signal.SIGINT, previous)
         if came:
-            if previous == signal.SIG_DFL:
-                os.kill(os.getpid(), signal.SIGINT)
-            elif callable(previous):
-                previous(signal.SIGINT, None)  # Python's own raises KeyboardInterrupt
+            deliver_interrupt(previous)
+
+
+def deliver_interrupt(handler) -> None:
+    """A Ctrl-C held back, handed to `handler` (what signal.getsignal(SIGINT) gave): the default
+    action, or a Python callable (Python's own raises KeyboardInterrupt)."""
+    if handler == signal.SIG_DFL:
+        os.kill(os.getpid(), signal.SIGINT)
+    elif callable(handler):
+        handler(signal.SIGINT, None)
 
 
 def write_text(path, text: str) -> Path:

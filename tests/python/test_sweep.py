@@ -6,6 +6,8 @@ import json
 import os
 import re
 import signal
+import subprocess
+import sys
 import textwrap
 from pathlib import Path
 
@@ -164,6 +166,39 @@ def test_ctrl_c_keeps_the_finished_cells(tmp_path, models):
     assert "**Incomplete: 3 of 8 cells**" in (tmp_path / "out" / "summary.md").read_text()
     assert run_sweep(spec, tmp_path / "out", plot=False).ran == 5
     assert "Incomplete" not in (tmp_path / "out" / "summary.md").read_text()
+
+
+#: A process of its own group: inside _workers_deaf_to_ctrl_c, a child it spawns and the Ctrl-C a
+#: terminal sends to the group (os.killpg), then what came of it.
+_DEAF = """
+import os, signal, subprocess, sys, time
+from bvhlab.sweep.runner import _workers_deaf_to_ctrl_c
+try:
+    with _workers_deaf_to_ctrl_c():
+        child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])
+        time.sleep(0.5)
+        ignored = int(open(f"/proc/{child.pid}/status").read().split("SigIgn:")[1].split()[0], 16)
+        print("child ignores", bool(ignored >> (signal.SIGINT - 1) & 1), flush=True)
+        if sys.argv[1] == "ctrl-c":
+            os.killpg(0, signal.SIGINT)
+            time.sleep(0.5)
+        child.kill()
+    print("no interrupt", flush=True)
+except KeyboardInterrupt:
+    child.kill()
+    print("KeyboardInterrupt", flush=True)
+"""
+
+
+@pytest.mark.parametrize("sent", ["ctrl-c", "nothing"])
+def test_ctrl_c_while_the_workers_start_is_raised_once_they_are_up(sent):
+    # the workers start with Ctrl-C ignored, and so did this process: one while they started was
+    # lost (the sweep ran to its end, exit status 0)
+    got = subprocess.run(
+        [sys.executable, "-c", _DEAF, sent], capture_output=True, text=True, timeout=60, start_new_session=True
+    )
+    assert got.stdout.split("\n")[0] == "child ignores True", got.stdout + got.stderr
+    assert got.stdout.split("\n")[1] == ("KeyboardInterrupt" if sent == "ctrl-c" else "no interrupt"), got.stderr
 
 
 def _without_varying(rows):

@@ -7,11 +7,16 @@ from __future__ import annotations
 
 import contextlib
 import os
+import signal
+import subprocess
+import sys
+import threading
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from .._atomic import deliver_interrupt
 from .cells import Cell, plan_cells
 from .plot import PLOT, plot_sah_against_build_time
 from .spec import SweepSpec
@@ -132,22 +137,66 @@ def local_cluster(workers: int | None = None):
     """A Dask LocalCluster of `workers` processes (default: one per core), one thread each, so that
     timings are not disturbed by a neighbour's threads; and a client on it."""
     import logging
-    import signal
-    import threading
 
     from distributed import Client, LocalCluster
 
     n = workers or os.cpu_count() or 1
-    # The workers start with Ctrl-C ignored (a process inherits an ignored signal, and Python then
-    # installs no KeyboardInterrupt handler): Ctrl-C in a terminal reaches the whole process group,
-    # and only this process should act on it, cancelling the tasks and closing the cluster.
-    main = threading.current_thread() is threading.main_thread()
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
+    cluster = None
     try:
-        cluster = LocalCluster(
-            n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.ERROR
-        )
-    finally:
-        if main and previous is not None:
-            signal.signal(signal.SIGINT, previous)
+        with _workers_deaf_to_ctrl_c():
+            cluster = LocalCluster(
+                n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.ERROR
+            )
+    except BaseException:
+        if cluster is not None:  # a Ctrl-C while the workers started: the cluster is up, closed again
+            cluster.close()
+        raise
     return cluster, Client(cluster)
+
+
+#: The Ctrl-C watch's program (_workers_deaf_to_ctrl_c): 'r' once its handler is in, 'c' for each
+#: Ctrl-C, until its stdin closes.
+_CTRL_C_WATCH = (
+    "import signal, sys\n"
+    "out = sys.stdout.buffer\n"
+    "signal.signal(signal.SIGINT, lambda *_: out.write(b'c'))\n"
+    "out.write(b'r'); out.flush()\n"
+    "sys.stdin.buffer.read()\n"
+    "out.flush()\n"
+)
+
+
+@contextlib.contextmanager
+def _workers_deaf_to_ctrl_c():
+    """The workers of a cluster started inside start with Ctrl-C ignored (a process inherits an
+    ignored signal, and Python then installs no KeyboardInterrupt handler): Ctrl-C in a terminal
+    reaches the whole process group, and only this process should act on it (cancelling the tasks,
+    closing the cluster). This process ignores it meanwhile too (one disposition for the process
+    and the children it spawns), so a watch process of the same group, started first, sees the
+    Ctrl-C a terminal sends meanwhile, which is raised here once the workers are up (ignored alone,
+    it was lost: the sweep ran to its end and exited 0)."""
+    previous = signal.getsignal(signal.SIGINT)
+    if threading.current_thread() is not threading.main_thread() or previous in (None, signal.SIG_IGN):
+        yield  # off the main thread, or SIGINT ignored or handled outside Python: left as it is
+        return
+    watch = subprocess.Popen(
+        [sys.executable, "-I", "-S", "-c", _CTRL_C_WATCH],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+    )
+    assert watch.stdin is not None and watch.stdout is not None
+    seen = b""
+    try:
+        seen = watch.stdout.read(1)  # b"r": its handler is in (a Ctrl-C before: raised here)
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        try:
+            yield
+        finally:
+            signal.signal(signal.SIGINT, previous)
+    finally:
+        watch.stdin.close()
+        seen += watch.stdout.read()
+        watch.wait()
+    if b"c" in seen:
+        deliver_interrupt(previous)
