@@ -149,7 +149,7 @@ def write_together(files: dict[Path, bytes]) -> None:
                 f.flush()
                 os.fsync(f.fileno())
         folders = {target.parent for _, target in staged}
-        with _interrupts_held():
+        with interrupts_held():
             for temporary, target in staged:
                 current = target
                 os.replace(temporary, target)
@@ -166,7 +166,7 @@ def write_together(files: dict[Path, bytes]) -> None:
 
 
 @contextlib.contextmanager
-def _interrupts_held() -> Iterator[None]:
+def interrupts_held() -> Iterator[None]:
     """Ctrl-C (SIGINT) held back inside and handed, after it, to the handler that was there before:
     Python's (KeyboardInterrupt), another callable, or the default action. Nothing is held where
     SIGINT is ignored (a background job's) or handled outside Python, or off the main thread

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from child import default_sigint
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -143,3 +144,31 @@ def test_a_blend_is_lit_by_its_saved_light_distance(tmp_path):
         intensities[distance] = float(read.stdout.strip().splitlines()[-1])
     assert intensities[4.5] == intensity_from_watts(1000.0, 4.5)
     assert intensities[0.0] != intensities[4.5]  # measured: the cube's faces lie 5 to 7 from the light
+
+
+#: Ctrl-C (a SIGINT from a timer) `delay` seconds into Blender's module loading (~0.3 s: its
+#: add-ons enabled, which print and swallow a KeyboardInterrupt).
+CTRL_C_WHILE_BPY_LOADS = """
+import os, signal, sys
+import bvhlab
+signal.signal(signal.SIGALRM, lambda *_: os.kill(os.getpid(), signal.SIGINT))
+signal.setitimer(signal.ITIMER_REAL, float(sys.argv[1]))
+try:
+    import bvhlab.blender
+    print("imported")
+except KeyboardInterrupt:
+    print("KeyboardInterrupt")
+"""
+
+
+@pytest.mark.parametrize("delay", [0.05, 0.2])
+def test_ctrl_c_while_blender_loads_is_raised(delay):
+    # it was lost in bpy's loading (every command with a .blend scene ran on and exited 0)
+    got = subprocess.run(
+        [sys.executable, "-c", CTRL_C_WHILE_BPY_LOADS, str(delay)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        preexec_fn=default_sigint,
+    )
+    assert got.stdout.strip() == "KeyboardInterrupt", (got.stdout, got.stderr[-2000:])

@@ -15,6 +15,7 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 import trimesh
+from child import default_sigint
 
 from bvhlab import BuildConfig, build, cli
 from bvhlab.library import load_scene
@@ -195,7 +196,12 @@ def test_ctrl_c_while_the_workers_start_is_raised_once_they_are_up(sent):
     # the workers start with Ctrl-C ignored, and so did this process: one while they started was
     # lost (the sweep ran to its end, exit status 0)
     got = subprocess.run(
-        [sys.executable, "-c", _DEAF, sent], capture_output=True, text=True, timeout=60, start_new_session=True
+        [sys.executable, "-c", _DEAF, sent],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        start_new_session=True,
+        preexec_fn=default_sigint,
     )
     assert got.stdout.split("\n")[0] == "child ignores True", got.stdout + got.stderr
     assert got.stdout.split("\n")[1] == ("KeyboardInterrupt" if sent == "ctrl-c" else "no interrupt"), got.stderr

@@ -13,13 +13,16 @@ holds what differs between the supported Blender versions (4.2 LTS to 5.3); noth
 `bpy.app.version`.
 """
 
-from .errors import ExportError, ExportWarning, SubstituteWarning
-from .export import export_scene, export_scene_file
-from .light import intensity_from_watts
-from .live import LiveScene
-from .scope import SCOPES
-from .sphere import SPHERE_PROPERTY, is_analytic_sphere
-from .sync_report import SyncReport
+from .load import bpy_module
+
+bpy_module()  # first: a clear error where bpy is missing, a Ctrl-C while it loads held back
+from .errors import ExportError, ExportWarning, SubstituteWarning  # noqa: E402
+from .export import export_scene, export_scene_file  # noqa: E402
+from .light import intensity_from_watts  # noqa: E402
+from .live import LiveScene  # noqa: E402
+from .scope import SCOPES  # noqa: E402
+from .sphere import SPHERE_PROPERTY, is_analytic_sphere  # noqa: E402
+from .sync_report import SyncReport  # noqa: E402
 
 __all__ = [
     "export_scene",

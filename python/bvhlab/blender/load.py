@@ -6,14 +6,18 @@ from __future__ import annotations
 from pathlib import Path
 
 from .. import _checks
+from .._atomic import interrupts_held
 from .._npz import SceneFileError
 from ..scene import Scene
 
 
 def bpy_module():
-    """Blender's Python module, or RuntimeError saying how to install it."""
+    """Blender's Python module, or RuntimeError saying how to install it. A Ctrl-C while it loads
+    (Blender enabling its add-ons, which prints and swallows the KeyboardInterrupt: the command then
+    ran on and exited 0) is held back and raised once it is in."""
     try:
-        import bpy
+        with interrupts_held():
+            import bpy
     except ImportError as e:
         raise RuntimeError(
             "reading .blend files needs Blender's Python module: pip install bpy (4.2 to "
@@ -32,7 +36,8 @@ def load_blend(path: Path) -> Scene:
     from .light import saved_light_distance
 
     try:
-        bpy.ops.wm.open_mainfile(filepath=str(path.resolve()), load_ui=False)
+        with interrupts_held():  # as bpy_module: opening a file enables add-ons again
+            bpy.ops.wm.open_mainfile(filepath=str(path.resolve()), load_ui=False)
     except RuntimeError as e:  # bpy's "Error: File format is not supported in file '…'\n"
         reason = str(e).strip().removeprefix("Error:").strip()
         raise SceneFileError(f"{path} cannot be read as a .blend file: {reason}") from None
