@@ -181,3 +181,31 @@ def test_inspect_writes_into_folders_it_makes_as_build_does(tmp_path):
     report, tree = tmp_path / "a" / "b" / "s.json", tmp_path / "c" / "t.bvhtree"
     assert main(["inspect", "gen:five_spheres", "--worst", "2", "--json", str(report), "--save-tree", str(tree)]) == 0
     assert json.loads(report.read_text()) and tree.stat().st_size > 0
+
+
+@pytest.mark.parametrize("request_", [["--node", "99999"], ["--pixel", "5000,5000"]])
+def test_a_request_the_tree_cannot_answer_saves_nothing(tmp_path, capsys, request_):
+    # the tree was built and saved, then the node or pixel refused (exit 2 beside a new file)
+    tree = tmp_path / "t.bvhtree"
+    assert main(["inspect", "gen:whitted", *request_, "--save-tree", str(tree)]) == 2
+    assert not tree.exists()
+    err = capsys.readouterr().err
+    assert "does not exist" in err or "outside the 800×600 image" in err, err
+
+
+def test_a_reader_gone_keeps_the_files_and_ends_quietly(tmp_path):
+    # `bvhlab inspect ... --json F | head -1`: the report was printed before F was written, and the
+    # broken pipe ended the command ("error: [Errno 32] Broken pipe", 2) without F
+    import subprocess
+    import sys
+
+    report = tmp_path / "w.json"
+    for args in (["inspect", "gen:whitted", "--worst", "50", "--json", str(report)], ["scenes"]):
+        child = subprocess.Popen(
+            [sys.executable, "-m", "bvhlab", *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+        )
+        assert child.stdout is not None and child.stderr is not None
+        child.stdout.close()  # the reader gone before the first line
+        err = child.stderr.read()
+        assert child.wait(timeout=300) == 141 and "Broken pipe" not in err and "Traceback" not in err, err
+    assert json.loads(report.read_text())["worst"]

@@ -18,6 +18,8 @@ settings on Dask), animate (update policies frame by frame) and scenes.
 from __future__ import annotations
 
 import argparse
+import os
+import signal
 import sys
 
 from .._atomic import WriteError
@@ -54,6 +56,12 @@ def main(argv=None) -> int:
     args = parser().parse_args(options.join_dash_values(sys.argv[1:] if argv is None else list(argv)))
     try:
         return args.run(args) or 0
+    except BrokenPipeError:
+        # the reader of the output went away (`bvhlab scenes | head -1`): quiet, as a command that
+        # SIGPIPE ends ("error: [Errno 32] Broken pipe" and 2 before); stdout to /dev/null, so that
+        # the interpreter's last flush does not fail again
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 128 + signal.SIGPIPE
     except (OSError, ValueError, TypeError, RuntimeError, BuildCancelled) as e:
         return _error(args.command, e)
     except MemoryError as e:

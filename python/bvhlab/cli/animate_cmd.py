@@ -143,7 +143,6 @@ def run(args) -> int:
         with ProgressBar(f"{args.animation}, {len(frames)} frames × {len(args.policy)} policies") as bar:
             rows = run_experiment(geometry, frames, args.policy, trace=trace, progress=bar)
         totals = summary(rows)
-        _print(rows, totals)
         about = {"animation": args.animation, "size": args.size, "frames": [first, last], "backend": args.backend}
         report = {"about": about, "summary": totals, "rows": [r.as_dict() for r in rows]}
         plot = _plot(rows, f"{Path(args.animation).stem}: update policies over frames {first}-{last}")
@@ -154,6 +153,7 @@ def run(args) -> int:
                 args.out / "animate.png": plot,
             }
         )
+    _print(rows, totals)  # after the files: a reader gone (`| head`) lost them
     print(f"wrote {args.out / 'animate.csv'}, animate.json, animate.png")
     return 0
 
