@@ -36,7 +36,7 @@ class BVHLAB_OT_export_stats(bpy.types.Operator, ExportHelper):
         return run_reported(self, context, lambda: self._export(context), quiet=(SubstituteWarning,))
 
     def _export(self, context):
-        from bvhlab.stats_files import write_stats_csv, write_stats_json
+        from bvhlab.stats_files import write_stats
 
         json_path = stats_json_path(self.filepath)  # refused before any work
         built = state.tree_for(context.scene)
@@ -46,8 +46,7 @@ class BVHLAB_OT_export_stats(bpy.types.Operator, ExportHelper):
         csv_path = json_path.with_suffix(".csv")
         stats = built.bvh.stats
         about = {"scene": context.scene.name, "blend_file": bpy.data.filepath, "settings": built.settings}
-        write_stats_json(json_path, stats, about)
-        write_stats_csv(csv_path, stats)
+        write_stats(stats, about, json_path, csv_path)
         message = f"Wrote {json_path} and {csv_path.name}"
         self.report({"INFO"}, message)
         state.messages[state.key(context.scene)] = ("INFO", message)

@@ -13,8 +13,10 @@ import contextlib
 import io
 import os
 import secrets
+import shutil
 import signal
 import stat
+import tempfile
 import threading
 from collections.abc import Iterator
 from pathlib import Path
@@ -163,6 +165,38 @@ def write_together(files: dict[Path, bytes]) -> None:
         if isinstance(error, OSError) and not isinstance(error, WriteError):
             raise _write_error(current, error) from error
         raise
+
+
+@contextlib.contextmanager
+def staged_folder(folder: Path) -> Iterator[Path]:
+    """A new hidden folder inside `folder` for a command that writes many files over minutes
+    (`bvhlab compare`: tables, charts, renders): when the block ends without an error its files
+    are moved into `folder` together (with Ctrl-C held, as write_together renames), each replacing
+    the file of its name there; after an error or a Ctrl-C it is removed and `folder` is as it
+    was (an interrupt left the new tables beside the old charts)."""
+    folder = Path(folder)
+    stage = Path(tempfile.mkdtemp(prefix=".staged-", dir=folder))
+    try:
+        try:
+            yield stage
+        except WriteError as error:  # named by the file it was to become
+            staged = Path(error.filename or "")
+            if staged.is_relative_to(stage):
+                raise WriteError(
+                    error.errno or 0, error.strerror or "", str(folder / staged.relative_to(stage))
+                ) from None
+            raise
+        names = sorted(p.relative_to(stage) for p in stage.rglob("*") if p.is_file() and not p.is_symlink())
+        targets = []
+        for name in names:
+            (folder / name).parent.mkdir(parents=True, exist_ok=True)
+            targets.append(_target(folder / name))  # a folder or FIFO of that name: refused before any move
+        with interrupts_held():
+            for name, target in zip(names, targets):
+                os.replace(stage / name, target)
+        _sync_folder(folder)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
 
 
 @contextlib.contextmanager

@@ -55,6 +55,11 @@ def write_png(image: np.ndarray, path) -> None:
     the bytes are PNG, so a .jpg name would be a lie). An old file is replaced only by a complete
     new one (WriteError naming the file otherwise)."""
     path = output_file(path, (".png",), "PNG image")
+    write_bytes(path, png_bytes(image))
+
+
+def png_bytes(image: np.ndarray) -> bytes:
+    """`image` (see to_rgba8) as the bytes of an 8-bit RGBA PNG file."""
     rgba = to_rgba8(image)
     h, w, _ = rgba.shape
     raw = np.zeros((h, 1 + 4 * w), np.uint8)  # filter byte 0 per row
@@ -63,10 +68,9 @@ def write_png(image: np.ndarray, path) -> None:
     def chunk(tag: bytes, data: bytes) -> bytes:
         return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
 
-    png = (
+    return (
         b"\x89PNG\r\n\x1a\n"
         + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 6, 0, 0, 0))
         + chunk(b"IDAT", zlib.compress(raw.tobytes(), 6))
         + chunk(b"IEND", b"")
     )
-    write_bytes(path, png)

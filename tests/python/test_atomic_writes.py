@@ -12,7 +12,7 @@ import pytest
 from child import default_sigint, run_python
 
 import bvhlab
-from bvhlab._atomic import replacing, write_bytes, write_text
+from bvhlab._atomic import WriteError, replacing, staged_folder, write_bytes, write_text
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -244,3 +244,23 @@ def test_an_interrupt_held_while_files_are_written_together_goes_to_the_handler_
         preexec_fn=default_sigint,
     )
     assert done.stdout.splitlines()[:3] == ["ignored written", "own handler", "own written"], done.stdout
+
+
+def test_a_staged_folder_moves_its_files_in_together_or_not_at_all(tmp_path):
+    (tmp_path / "a.txt").write_text("old a")
+    (tmp_path / "b.txt").write_text("old b")
+    with pytest.raises(KeyboardInterrupt), staged_folder(tmp_path) as stage:
+        (stage / "a.txt").write_text("new a")
+        raise KeyboardInterrupt  # before b was written
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.txt", "b.txt"]
+    assert (tmp_path / "a.txt").read_text() == "old a"
+    with staged_folder(tmp_path) as stage:
+        write_text(stage / "a.txt", "new a")
+        (stage / "sub").mkdir()
+        write_text(stage / "sub" / "c.txt", "c")
+    assert [(tmp_path / n).read_text() for n in ("a.txt", "b.txt", "sub/c.txt")] == ["new a", "old b", "c"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.txt", "b.txt", "sub"]
+    # an error writing a staged file names the file it was to become
+    (tmp_path / "d.txt").mkdir()
+    with pytest.raises(WriteError, match=r"cannot write .*/d\.txt/x: "), staged_folder(tmp_path) as stage:
+        raise WriteError(28, "No space left on device", str(stage / "d.txt" / "x"))

@@ -84,3 +84,23 @@ def test_the_lock_is_one_holder_at_a_time(tmp_path):
                 pass
     with folder_lock(tmp_path, "third"):
         assert "third" in (tmp_path / LOCK_NAME).read_text()
+
+
+def test_an_interrupted_compare_leaves_the_folder_as_it_was(tmp_path, monkeypatch):
+    # its files went in one at a time: an interrupt while the charts were drawn left the new tables
+    # beside the old charts; now they are staged and moved in together at the end
+    from cli_args import QUICK_COMPARE as quick
+
+    from bvhlab.cli import compare_cmd, main
+
+    out = tmp_path / "out"
+    assert main(["compare", "gen:five_spheres", *quick, "--out", str(out)]) == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    assert {"table.csv", "table.md", "times.png"} <= set(before)
+
+    def interrupted(*_):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(compare_cmd, "_write_charts", interrupted)  # after the tables are written
+    assert main(["compare", "gen:five_spheres", *quick, "--frames", "6", "--out", str(out)]) == 130
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before  # no staging folder left either

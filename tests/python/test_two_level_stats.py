@@ -7,7 +7,7 @@ import numpy as np
 
 import bvhlab
 from bvhlab.library import procedural
-from bvhlab.stats_files import write_stats_csv
+from bvhlab.stats_files import write_stats
 
 
 def _scene(instances: int = 6) -> bvhlab.Scene:
@@ -59,7 +59,7 @@ def test_stored_against_flattened_and_per_mesh_lists():
 def test_stats_csv_writes_one_row_per_mesh(tmp_path):
     tree = bvhlab.build(_scene(4))
     path = tmp_path / "stats.csv"
-    write_stats_csv(path, tree.stats)
+    write_stats(tree.stats, {}, csv_file=path)
     rows = list(csv.reader(path.open()))
     assert ["mesh_instances", "0", "1"] in rows and ["mesh_instances", "1", "3"] in rows
     assert ["instances", "", "4"] in rows

@@ -8,7 +8,7 @@ import dataclasses
 from .. import InstancedBvh, build
 from .._progress import ProgressBar
 from ..library import load_scene
-from ..stats_files import write_stats_csv, write_stats_json
+from ..stats_files import write_stats
 from . import options
 
 
@@ -53,12 +53,10 @@ def run(args) -> int:
             f"{optimized.iterations} batches, {optimized.reinsertions} reinsertions ({optimized.stop})"
         )
         about["optimize"] = {**dataclasses.asdict(optimize), "stats": dataclasses.asdict(optimized)}
-    if args.json:
-        write_stats_json(args.json, stats, about)
-        print(f"wrote {args.json}")
-    if args.csv:
-        write_stats_csv(args.csv, stats)
-        print(f"wrote {args.csv}")
+    write_stats(stats, about, args.json, args.csv)
+    for written in (args.json, args.csv):
+        if written:
+            print(f"wrote {written}")
     return 0
 
 

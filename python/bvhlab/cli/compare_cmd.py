@@ -15,6 +15,7 @@ import time
 from pathlib import Path
 
 from .. import build, counters
+from .._atomic import staged_folder
 from .._folder_lock import folder_lock
 from ..compare import charts, counter_diff, figures, measure_methods, overlay, report_checks, write_tables
 from ..compare.measure import REPORT_BUILD, build_settings, render_frame
@@ -110,7 +111,8 @@ def _counter_diff(scene, name: str, args, out: Path) -> int:
     result = counter_diff.counter_difference(
         scene, tree_a, tree_b, args.counter, args.width, args.height, renderer=renderer, labels=(first, second)
     )
-    paths = counter_diff.write_difference(result, out, f"counter_diff_{args.counter}_{first}_{second}")
+    with staged_folder(out) as stage:  # the four files together, as _compare's
+        paths = counter_diff.write_difference(result, stage, f"counter_diff_{args.counter}_{first}_{second}")
     s = result["summary"]
     for label in (first, second, "first_minus_second"):
         v = s[label]
@@ -126,17 +128,21 @@ def _compare(scene, name: str, args, out: Path) -> int:
     if renderer.fallback:
         say(renderer.fallback)
     started = time.perf_counter()
-    rows = _measure(scene, name, args, renderer)
-    uniform = None if args.no_uniform else _uniform_rows(args, renderer)
-    overlay_results, overlay_md = _overlay_check(args, out)
-    meta = _meta(args, name, scene, renderer, uniform, overlay_results)
-    paths = write_tables(rows, out, meta, report_checks(rows, uniform), overlay_md)
-    print(paths["md"].read_text())
-    _write_charts(rows, scene, name, out)
-    if not args.no_figures:
-        _figure6(scene, name, renderer, args, out)
-        _write_figures(args.methods, out, renderer)
-        _write_sheets(args.scene, args.methods, out)
+    # every file written in a folder of its own, moved into `out` together at the end: a Ctrl-C or
+    # an error leaves `out` as it was (an interrupt left the new tables beside the old charts)
+    with staged_folder(out) as stage:
+        rows = _measure(scene, name, args, renderer)
+        uniform = None if args.no_uniform else _uniform_rows(args, renderer)
+        overlay_results, overlay_md = _overlay_check(args, stage)
+        meta = _meta(args, name, scene, renderer, uniform, overlay_results)
+        paths = write_tables(rows, stage, meta, report_checks(rows, uniform), overlay_md)
+        table = paths["md"].read_text()
+        _write_charts(rows, scene, name, stage)
+        if not args.no_figures:
+            _figure6(scene, name, renderer, args, stage)
+            _write_figures(args.methods, stage, renderer)
+            _write_sheets(args.scene, args.methods, stage)
+    print(table)
     say(f"compare finished in {time.perf_counter() - started:.0f} s; wrote {out}")
     return 0
 

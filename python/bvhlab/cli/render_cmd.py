@@ -7,6 +7,7 @@ OUT.histogram.json; --heatmap is --counter box_tests)."""
 from __future__ import annotations
 
 import argparse
+import io
 import sys
 from pathlib import Path
 
@@ -14,12 +15,12 @@ import numpy as np
 
 from .. import Bvh, InstancedBvh, _core, build, counters, histogram, legend, save_png
 from .. import _json as strict_json
-from .._atomic import replacing
+from .._atomic import write_together
 from .._checks import OutputPathError
 from .._progress import ProgressBar
 from ..library import load_scene
 from ..png import straight_alpha
-from ..render import BACKENDS, default_renderer
+from ..render import BACKENDS, default_renderer, png_file_bytes
 from ..render_options import AUTO_TRAVERSAL, RENDER_TRAVERSALS, RenderOptions
 from . import options
 
@@ -155,14 +156,19 @@ def _write_counter(all_counters, counter: str | None, value_range, out: Path) ->
     assert counter is not None  # the render kept counters because one was asked for
     values = counters.counter_plane(all_counters, counter)
     image, (lo, hi) = counters.counter_image(values, value_range)
-    save_png(image, out)
     raw, strip_png, numbers = counter_paths(out)
-    with replacing(raw) as f:
-        np.save(f, values)
     hist = histogram.counter_histogram(values, counter, value_range)
-    save_png(histogram.histogram_strip(hist, values.shape[1]), strip_png)
-    with replacing(numbers, text=True) as f:
-        f.write(strict_json.dumps(hist.to_json(), indent=2))
+    buffer = io.BytesIO()
+    np.save(buffer, values)
+    # the four together (an interrupt left the new image and counts beside the old histogram)
+    write_together(
+        {
+            out: png_file_bytes(image),
+            raw: buffer.getvalue(),
+            strip_png: png_file_bytes(histogram.histogram_strip(hist, values.shape[1])),
+            numbers: strict_json.dumps(hist.to_json(), indent=2).encode(),
+        }
+    )
     how = "auto: 0 to the 99th percentile" if value_range is None else "given"
     p = hist.percentiles
     print(
