@@ -292,7 +292,8 @@ def test_cli_sends_the_cells_to_a_running_scheduler(tmp_path, models, capsys):
     cluster, client = local_cluster(2)
     with cluster, client:
         out = tmp_path / "out"
-        assert cli.main(["sweep", str(spec), "--out", str(out), "--scheduler", cluster.scheduler_address]) == 0
+        # 1: cells failed (nan.obj's), as a script running the sweep is told
+        assert cli.main(["sweep", str(spec), "--out", str(out), "--scheduler", cluster.scheduler_address]) == 1
         workers = set(client.scheduler_info()["workers"])
     assert "8 cells (8 run now, 0 stored before), 4 failed" in capsys.readouterr().out
     rows = pq.read_table(out / PARQUET).to_pylist()
@@ -426,3 +427,17 @@ def test_rays_of_a_scene_near_the_coordinate_limit_start_within_it(tmp_path):
     (tmp_path / "far.obj").write_text("v -5e11 -5e11 0\nv 5e11 -5e11 0\nv 0 5e11 1e11\nf 1 2 3\n")
     result = run_sweep(read_spec(_write_spec(tmp_path, ["far.obj"], "method = 'sah'")), tmp_path / "out", plot=False)
     assert [r["status"] for r in result.rows] == ["ok"] and result.rows[0]["hits"] > 0
+
+
+def test_a_sweep_whose_cells_all_fail_says_so_and_keeps_no_old_plot(tmp_path, models, capsys):
+    # it exited 0, and the plots of an earlier spec's cells stood beside the new table
+    out = tmp_path / "out"
+    assert cli.main(["sweep", str(_write_spec(tmp_path, ["box.obj"])), "--out", str(out), "--workers", "0"]) == 0
+    assert (out / "sah_vs_build.png").exists() and (out / RATIO_PLOT).exists()
+    failing = tmp_path / "failing"
+    failing.mkdir()
+    spec = _write_spec(failing, ["nan.obj"])
+    capsys.readouterr()
+    assert cli.main(["sweep", str(spec), "--out", str(out), "--workers", "0"]) == 1
+    assert "4 of 4 cells failed" in capsys.readouterr().err
+    assert not (out / "sah_vs_build.png").exists() and not (out / RATIO_PLOT).exists()

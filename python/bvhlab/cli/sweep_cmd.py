@@ -3,11 +3,13 @@ and CPU intersect throughput (Mrays/s on fixed random rays) for every scene and 
 spec, one Dask task per cell: on a LocalCluster of single-threaded worker processes (one per core,
 or --workers N), on a running Dask cluster (--scheduler tcp://HOST:8786), or in this process
 (--workers 0). Writes DIR/results.parquet, DIR/results.csv and DIR/sah_vs_build.png; cells already
-in DIR are not run again, so an interrupted sweep continues where it stopped."""
+in DIR are not run again, so an interrupted sweep continues where it stopped. Exits 1 when a cell
+failed (its row holds the error), 2 for a bad spec, 130 on Ctrl-C."""
 
 from __future__ import annotations
 
 import contextlib
+import sys
 from pathlib import Path
 
 from .._folder_lock import folder_lock
@@ -57,6 +59,12 @@ def run(args) -> int:
     )
     for path in result.files:
         print(f"wrote {path}")
+    if result.failed:  # a script running the sweep is told (it exited 0 with every cell failed)
+        print(
+            f"bvhlab sweep: {result.failed} of {len(result.rows)} cells failed (their rows hold the errors)",
+            file=sys.stderr,
+        )
+        return 1
     return 0
 
 

@@ -129,6 +129,8 @@ def _write_results(out: Path, cells: list[Cell], ran: int, plot: bool, baseline:
         chart = plot_sah_against_build_time(rows, out / PLOT) if plot else None
         if chart is not None:
             files.append(chart)
+        elif plot:  # no cell measured: an earlier run's plot no longer goes with the table
+            (out / PLOT).unlink(missing_ok=True)
         files.extend(write_summary(rows, baseline, out, plot=plot, planned=len(cells)))
     return SweepResult(rows, ran, sum(r.get("status") != "ok" for r in rows), files)
 

@@ -87,11 +87,14 @@ def write_summary(
     rows: list[dict], baseline: str, out: Path, plot: bool = True, planned: int | None = None
 ) -> list[Path]:
     """summary.md (saying so where it lacks some of the `planned` cells), and (with `plot`) the ratio
-    plot when any cell has a baseline to divide by."""
+    plot when any cell has a baseline to divide by; where none has, an earlier run's plot is removed
+    (it stood beside the new table, showing other cells)."""
     files = [write_text(out / SUMMARY, summary_table(rows, baseline, planned))]
     pairs = [(r, b) for r, b in baseline_pairs(rows, baseline) if b is not None]
     if plot and pairs:
         files.append(_plot_ratios(pairs, setting_labels(rows), baseline, out / RATIO_PLOT))
+    elif plot:
+        (out / RATIO_PLOT).unlink(missing_ok=True)
     return files
 
 
