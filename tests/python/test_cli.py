@@ -3,6 +3,7 @@ and numbers equal to the Python API's for the same builds."""
 
 import csv
 import json
+import struct
 import subprocess
 import sys
 
@@ -125,6 +126,13 @@ def test_render_with_overlay_and_heatmap(tmp_path, capsys):
     snapshot = tmp_path / "snapshot.png"  # the raster's snapshot says it too (probe: it was silent)
     assert main(["snapshot", "gen:five_spheres", "--bvh-depth", "40:45", "--out", str(snapshot)]) == 0
     assert "--bvh-depth 40:45 draws none" in capsys.readouterr().err and snapshot.exists()
+    # --width and --height of a sheet are its panels' (they were accepted and ignored)
+    sheets = [tmp_path / "sheet.png", tmp_path / "small_sheet.png"]
+    assert main(["snapshot", "gen:five_spheres", "--sheet", "--out", str(sheets[0])]) == 0
+    size = ["--width", "100", "--height", "80"]
+    assert main(["snapshot", "gen:five_spheres", "--sheet", *size, "--out", str(sheets[1])]) == 0
+    (w0, h0), (w1, h1) = (struct.unpack(">II", s.read_bytes()[16:24]) for s in sheets)  # IHDR
+    assert w1 * 320 == w0 * 100 and h1 < h0, (w0, h0, w1, h1)
     heat = tmp_path / "heat.png"
     assert (
         main(
@@ -262,6 +270,8 @@ def bad_scene_files(tmp_path_factory):
         ),
         (["snapshot", "{d}/good.npz", "--width", "0", "--out", "{d}/s.png"], "between 1 and 16384 pixels, got 0"),
         (["snapshot", "{d}/good.npz", "--height", "100000", "--out", "{d}/s.png"], "between 1 and 16384 pixels"),
+        # it ran a local cluster instead
+        (["sweep", "{d}/spec.toml", "--scheduler", " ", "--out", "{d}/w"], "the scheduler's address is empty"),
     ],
 )
 def test_bad_files_and_paths_are_one_error_line(bad_scene_files, args, message):

@@ -373,3 +373,7 @@ def test_cli_compare_counter_diff(tmp_path, capsys):
     assert summary["median"]["mean"] == pytest.approx(float(a.mean()))
     assert stem.with_suffix(".png").exists() and "median - sah12" in capsys.readouterr().out
     assert (out / f"{stem.name}_side_by_side.png").exists()
+    # the comparison's options are refused beside it (they were accepted and ignored)
+    for extra in (["--frames", "6"], ["--methods", "median"], ["--no-figures"], ["--threads", "2"]):
+        assert main([*argv, *extra, "--out", str(tmp_path / "other")]) == 2
+        assert f"{extra[0]} is an option of the comparison" in capsys.readouterr().err

@@ -32,20 +32,20 @@ def add_parser(sub) -> None:
     p.add_argument(
         "--methods",
         type=cargs.method_list,
-        default=cargs.DEFAULT_METHODS,
+        default=None,
         help="comma-separated: median, mean, midpoint, lbvh, sweep_sah, sah<B> "
         f"(default: {cargs.DEFAULT_METHODS}, the report's with both readings of 'mean')",
     )
     p.add_argument(
         "--frames",
         type=cargs.sample_count,
-        default=DEFAULT_FRAMES,
+        default=None,
         help=f"frames per method after one warm-up, {MIN_SAMPLES} to {MAX_SAMPLES} (default {DEFAULT_FRAMES})",
     )
     p.add_argument(
         "--builds",
         type=cargs.sample_count,
-        default=DEFAULT_BUILDS,
+        default=None,
         help=f"builds per method after one warm-up, {MIN_SAMPLES} to {MAX_SAMPLES} (default {DEFAULT_BUILDS})",
     )
     options.add_image_size(p)
@@ -53,14 +53,14 @@ def add_parser(sub) -> None:
     p.add_argument(
         "--threads",
         type=cargs.thread_count,
-        default=1,
+        default=None,
         help="CPU reference threads per frame (default 1, like the builds: on a shared machine one "
         "thread's CPU time measures the work, not the neighbours; 0 = every core)",
     )
     p.add_argument(
         "--overlay-backends",
         type=cargs.backend_list,
-        default="cpu,vulkan",
+        default=None,
         help="backends for the §4.1 overlay measurement (Figure 5), or 'none' (default: cpu,vulkan)",
     )
     p.add_argument("--no-figures", action="store_true", help="skip Figures 3-6 and the level sheets")
@@ -85,9 +85,30 @@ def say(text: str) -> None:
     print(text, file=sys.stderr, flush=True)
 
 
+#: The comparison's own options (None: not given) and their defaults; --counter-diff refuses them
+#: (they were accepted and ignored).
+COMPARISON_DEFAULTS = {
+    "methods": cargs.method_list(cargs.DEFAULT_METHODS),
+    "frames": DEFAULT_FRAMES,
+    "builds": DEFAULT_BUILDS,
+    "threads": 1,
+    "overlay_backends": cargs.backend_list("cpu,vulkan"),
+    "no_figures": False,
+    "no_uniform": False,
+}
+
+
 def run(args) -> int:
     if args.counter is not None and not args.counter_diff:  # was run as the whole comparison, silently
         raise ValueError("--counter is the counter of --counter-diff A,B; give both")
+    given = [key for key in COMPARISON_DEFAULTS if getattr(args, key) not in (None, False)]
+    if args.counter_diff and given:
+        raise ValueError(
+            f"--{given[0].replace('_', '-')} is an option of the comparison (Table 1), not of --counter-diff"
+        )
+    for key, value in COMPARISON_DEFAULTS.items():
+        if getattr(args, key) is None:
+            setattr(args, key, value)
     args.counter = args.counter or "box_tests"
     scene, name = load_scene(args.scene)
     scene = scene.flattened()  # Table 1 compares split methods over the geometry as it stands

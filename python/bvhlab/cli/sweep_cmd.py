@@ -8,6 +8,7 @@ failed (its row holds the error), 2 for a bad spec, 130 on Ctrl-C."""
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import sys
 from pathlib import Path
@@ -25,7 +26,9 @@ def add_parser(sub) -> None:
     p.add_argument("spec", type=Path, metavar="SPEC.toml", help="the scenes and the grid of build settings")
     p.add_argument("--out", type=cargs.output_dir, required=True, help="directory for the cells, table and plot")
     where = p.add_mutually_exclusive_group()
-    where.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="a running Dask scheduler's address")
+    where.add_argument(
+        "--scheduler", type=_address, metavar="tcp://HOST:PORT", help="a running Dask scheduler's address"
+    )
     where.add_argument(
         "--workers",
         type=lambda text: options.whole_number(text, 0, 4096),
@@ -43,7 +46,7 @@ def run(args) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     with folder_lock(args.out, "bvhlab sweep"), contextlib.ExitStack() as stack:
         client = None
-        if args.scheduler:
+        if args.scheduler is not None:
             from distributed import Client
 
             client = stack.enter_context(Client(args.scheduler, timeout="20s"))
@@ -84,3 +87,10 @@ def _require_sweep_packages() -> None:
         raise RuntimeError(
             f"bvhlab sweep needs dask[distributed] and pyarrow ({e}): pip install 'bvhlab[sweep]'"
         ) from None
+
+
+def _address(text: str) -> str:
+    """A scheduler's address; an empty one is refused (it ran a local cluster instead, silently)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("the scheduler's address is empty (e.g. tcp://10.0.0.5:8786)")
+    return text.strip()

@@ -34,7 +34,17 @@ def run_snapshot(
     )
 
 
-def run_sheet(scene_spec: str, build_kwargs: dict, out: Path, panel_width: int = 320, panel_height: int = 240) -> Path:
+#: A sheet's panel by default (width, height).
+SHEET_PANEL = (320, 240)
+
+
+def run_sheet(
+    scene_spec: str,
+    build_kwargs: dict,
+    out: Path,
+    panel_width: int = SHEET_PANEL[0],
+    panel_height: int = SHEET_PANEL[1],
+) -> Path:
     """A grid with one panel per depth, 0 … height - 1."""
     return _run(scene_spec, build_kwargs, out, ["--sheet", "--size", str(panel_width), str(panel_height)])
 
