@@ -44,7 +44,7 @@ def flag(name: str, value) -> bool:
     return bool(value)
 
 
-def integer(name: str, value, lo: int, hi: int) -> int:
+def integer(name: str, value, lo: float, hi: float) -> int:
     """An int in [lo, hi]; bools and floats are rejected rather than truncated."""
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         raise TypeError(f"{name} must be an integer, got {type(value).__name__}")

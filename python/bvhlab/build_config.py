@@ -4,6 +4,7 @@ defaults and limits it is checked against (one definition, in the C++ core's bui
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass, field, fields
 
 from . import _checks, _core
@@ -28,7 +29,7 @@ MAX_SAH_BLOCK = int(_core.MAX_SAH_BLOCK)
 def _uint32(name: str, value, limits: tuple[int, int]) -> int:
     """An int for a uint32 field of the core's config: its type is checked here; its range by the
     core's validate (`limits` only word the message for a value no uint32 holds)."""
-    value = _checks.integer(name, value, -(2**63), 2**63)
+    value = _checks.integer(name, value, -math.inf, math.inf)  # the type; the range by `limits`
     if not 0 <= value < 2**32:
         raise ValueError(f"{name} must be between {limits[0]} and {limits[1]}, got {value}")
     return value
@@ -97,7 +98,7 @@ class BuildConfig:
 def method_from_label(label: str) -> dict:
     """Build settings of a method label as tables and the CLI write them: 'sah32' → method sah
     with 32 bins; every other label is a method name."""
-    if label.startswith("sah") and label[3:].isdigit():
+    if label.startswith("sah") and label[3:].isascii() and label[3:].isdigit():  # not 'sah²' (int() refused it)
         return {"method": "sah", "bins": int(label[3:])}
     if label not in METHODS:
         raise ValueError(f"unknown method '{label}'; expected one of: {', '.join(METHODS)}, or sah<B> such as sah32")

@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import _core, legend, palette
+from ._checks import FLOAT32_MAX
 
 #: Counter names in the core's order (RenderResult.counters' last axis).
 COUNTERS: tuple[str, ...] = tuple(_core.TRAVERSAL_COUNTERS)
@@ -74,6 +75,9 @@ def parse_range(text: str) -> tuple[float, float] | None:
 def check_range(lo: float, hi: float) -> None:
     if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
         raise ValueError(f"range must be two finite numbers LO < HI, got {lo}, {hi}")
+    # the counters and their scale are float32 (1e40 overflowed in the histogram's grid)
+    if max(abs(lo), abs(hi)) > FLOAT32_MAX or not np.float32(lo) < np.float32(hi):
+        raise ValueError(f"range must be two numbers LO < HI that float32 tells apart, got {lo:g}, {hi:g}")
 
 
 def counter_image(values: np.ndarray, value_range: tuple[float, float] | None = None) -> tuple[np.ndarray, tuple]:

@@ -272,6 +272,14 @@ def bad_scene_files(tmp_path_factory):
         (["snapshot", "{d}/good.npz", "--height", "100000", "--out", "{d}/s.png"], "between 1 and 16384 pixels"),
         # it ran a local cluster instead
         (["sweep", "{d}/spec.toml", "--scheduler", " ", "--out", "{d}/w"], "the scheduler's address is empty"),
+        # the messages named int64's bounds, the API's name, numpy's overflow warning before the image
+        (["build", "{d}/good.npz", "--method", "sah99999999999999999999"], "bins must be between 2 and 256, got"),
+        (["build", "{d}/good.npz", "--method", "sah²"], "unknown method 'sah²'"),
+        (["build", "{d}/good.npz", "--optimize", "2", "--optimize-ms", "1e308"], "--optimize-ms must be within"),
+        (
+            ["render", "{d}/good.npz", "--counter", "box_tests", "--range", "1e40,1e41", "--out", "{d}/r.png"],
+            "range must be two numbers LO < HI that float32 tells apart",
+        ),
     ],
 )
 def test_bad_files_and_paths_are_one_error_line(bad_scene_files, args, message):

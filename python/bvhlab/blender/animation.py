@@ -16,13 +16,11 @@ def open_animation(path: Path) -> tuple[Callable[[int], Scene], range]:
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"no such file: {path}")
-    from .._atomic import interrupts_held
     from .export import export_scene
-    from .load import bpy_module
+    from .load import bpy_module, open_blend
 
     bpy = bpy_module()
-    with interrupts_held():  # as load_blend: opening a file enables Blender's add-ons again
-        bpy.ops.wm.open_mainfile(filepath=str(path.resolve()), load_ui=False)
+    open_blend(bpy, path)
     scene = bpy.context.scene
 
     def scene_at(frame: int) -> Scene:

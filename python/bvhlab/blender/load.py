@@ -3,6 +3,8 @@ it with the same code the add-on uses."""
 
 from __future__ import annotations
 
+import os
+import sys
 from pathlib import Path
 
 from .. import _checks
@@ -26,6 +28,22 @@ def bpy_module():
     return bpy
 
 
+def open_blend(bpy, path: Path) -> None:
+    """bpy.ops.wm.open_mainfile without the UI, a Ctrl-C held as bpy_module holds it (opening a
+    file enables add-ons again), and Blender's "Read blend: ..." line sent to stderr: a command's
+    stdout is its own output (the line stood before a build's figures)."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        os.dup2(2, 1)
+        with interrupts_held():
+            bpy.ops.wm.open_mainfile(filepath=str(Path(path).resolve()), load_ui=False)
+    finally:
+        sys.stdout.flush()
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
 def load_blend(path: Path) -> Scene:
     """Open a .blend with bpy (Blender as a Python module) and export it with the add-on's code."""
     if not path.exists():
@@ -36,8 +54,7 @@ def load_blend(path: Path) -> Scene:
     from .light import saved_light_distance
 
     try:
-        with interrupts_held():  # as bpy_module: opening a file enables add-ons again
-            bpy.ops.wm.open_mainfile(filepath=str(path.resolve()), load_ui=False)
+        open_blend(bpy, path)
     except RuntimeError as e:  # bpy's "Error: File format is not supported in file '…'\n"
         reason = str(e).strip().removeprefix("Error:").strip()
         raise SceneFileError(f"{path} cannot be read as a .blend file: {reason}") from None

@@ -85,8 +85,9 @@ def _print_instanced(name: str, bvh: InstancedBvh) -> None:
     """A two-level tree (issue 34): the TLAS, then one line per mesh's tree."""
     stats = bvh.stats
     print(f"{name}: {stats['instances']} instances of {stats['meshes']} meshes")
+    width = max(map(len, stats)) + 2  # the longest name (primitives_flattened ran into its value)
     for key, value in stats.items():
-        print(f"  {key:<20}{value:.3f}" if isinstance(value, float) else f"  {key:<20}{value}")
+        print(f"  {key:<{width}}{value:.3f}" if isinstance(value, float) else f"  {key:<{width}}{value}")
     for k, mesh in enumerate(bvh.meshes):
         m = mesh.stats
         print(f"  mesh {k}: {m['primitives']} primitives, {m['nodes']} nodes, SAH {m['sah_cost']:.3f}")

@@ -121,9 +121,13 @@ def add_optimize(p: argparse.ArgumentParser) -> None:
 def optimize_config(args) -> OptimizeConfig | None:
     """The OptimizeConfig of --optimize/--optimize-ms (checked, ValueError), or None without --optimize
     (--optimize-ms alone is refused: it bounds an optimisation that would not run)."""
-    config = OptimizeConfig(iterations=args.optimize, time_budget_ms=args.optimize_ms)
     if args.optimize_ms and not args.optimize:
         raise ValueError("--optimize-ms bounds --optimize N's optimisation: give --optimize N too")
+    try:
+        config = OptimizeConfig(iterations=args.optimize, time_budget_ms=args.optimize_ms)
+    except ValueError as e:  # named by the options typed (it said time_budget_ms)
+        text = str(e).replace("time_budget_ms", "--optimize-ms").replace("iterations", "--optimize")
+        raise ValueError(text) from None
     return config if args.optimize else None
 
 
