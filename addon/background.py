@@ -108,6 +108,7 @@ class ModalTaskMixin:
     _window_manager = None
     _workspace = None
     _abandoned = False
+    _ended = False
 
     def start_task(self, context, work, label: str) -> set[str]:
         self._task, self._label = BackgroundTask(work), label
@@ -123,6 +124,7 @@ class ModalTaskMixin:
     def modal(self, context, event):
         task = self._task
         if self._abandoned:  # stop_all ended it: nothing of the scene may be touched now
+            self._remove_timer()
             return {"CANCELLED"}
         if event.type == "ESC" and event.value == "PRESS":
             task.cancel()
@@ -143,16 +145,26 @@ class ModalTaskMixin:
         text = f"{self._label}: {task.text} {state}" if task.text else f"{self._label} {state}"
         context.workspace.status_text_set(f"{text}   (Esc to cancel)")
 
-    def _end(self) -> None:
+    def _end(self, keep_timer: bool = False) -> None:
         """Stop drawing progress (once: stop_all may have ended the operator before)."""
-        if self._timer is None:
+        if self._ended:
             return
+        self._ended = True
         _running.pop(self._task, None)
-        self._window_manager.event_timer_remove(self._timer)
-        self._timer = None
+        if not keep_timer:
+            self._remove_timer()
         self._window_manager.progress_end()
         self._workspace.status_text_set(None)
 
+    def _remove_timer(self) -> None:
+        if self._timer is not None:
+            self._window_manager.event_timer_remove(self._timer)
+            self._timer = None
+
     def _abandon(self) -> None:
+        """Ended by stop_all (the add-on disabled, another file loading): the progress goes now;
+        the timer stays until the operator's next call, which it brings, ends the operator (its
+        handler, left in the window with no event to end it, crashed Blender 4.3 when the add-on,
+        enabled again, ran Build: probe)."""
+        self._end(keep_timer=True)
         self._abandoned = True
-        self._end()

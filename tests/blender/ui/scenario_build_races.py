@@ -5,7 +5,10 @@ million triangles (bundled suzanne_1m; the full-sweep SAH takes seconds), issue 
   (a full sweep started first, an LBVH second: before, the sweep finished last and was kept,
   labelled LBVH);
 - the add-on disabled while a build runs: its thread is stopped, nothing is reported as failed
-  and Blender goes on; enabled again, Build works.
+  and Blender goes on; enabled again, Build works, as the button runs it (modal) and at once. (A
+  probe's script crashed Blender 4.3 there: the disabled build's operator was left in the window
+  with no event to end it; this scenario's window gets events enough, and did not crash before
+  the fix, background.ModalTaskMixin._abandon.)
 
 Blender runs this file (--python) and the driver (run_ui.py) imports it for `check`."""
 
@@ -107,6 +110,13 @@ def steps(session):
     }
     bpy.ops.preferences.addon_enable(module=module)
     state = importlib.import_module(f"{module}.state")
+    background = importlib.import_module(f"{module}.background")
+    bpy.context.scene.bvhlab.method = "median"
+    yield 0.5
+    modal = _invoke_build(session, area)  # as the button runs it
+    yield from _wait_idle(background)
+    yield 0.5
+    session.info["enabled_again_modal"] = {"started": modal, "tree": _tree(state)}
     bpy.context.scene.bvhlab.method = "lbvh"
     with bpy.context.temp_override(window=session.window(), area=area):
         result = sorted(bpy.ops.bvhlab.build())  # at once, as a script does
@@ -143,6 +153,9 @@ def check(shots: dict, info: dict) -> list[str]:
     again = info.get("enabled_again") or {}
     if again.get("result") != ["FINISHED"] or (again.get("tree") or {}).get("stats_method") != "lbvh":
         failures.append(f"enabled again, Build: {again}")
+    modal = info.get("enabled_again_modal") or {}
+    if modal.get("started") != ["RUNNING_MODAL"] or (modal.get("tree") or {}).get("stats_method") != "median":
+        failures.append(f"enabled again, Build as the button runs it: {modal}")
     return failures
 
 
