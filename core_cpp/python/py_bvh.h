@@ -20,6 +20,7 @@
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 
+#include "bvhlab/owned_mutex.h"
 #include "bvhlab/bvh.h"
 #include "bvhlab/depth_order.h"
 #include "bvhlab/ray_record.h"
@@ -110,9 +111,12 @@ public:
     /// from the current one without copying it first (refitted, update_bvh): changes are serialised
     /// (the last call wins, as it would without threads); readers are never blocked by them. Call
     /// without the GIL.
+    /// A change asked for on the thread making one (from an optimisation's or update's progress
+    /// callback) raises ReentrantCall, RuntimeError in Python: it waited for itself, and Ctrl-C
+    /// could not end the wait.
     template <class Make>
     void replace(Make&& make) {
-        std::lock_guard<std::mutex> writer(writer_mutex_);
+        std::lock_guard<OwnedMutex> writer(writer_mutex_);
         TreePtr old = current();
         auto [tree, built] = make(*old);
         auto version = std::make_shared<const TreeVersion>(std::move(tree), old->revision + 1, std::move(built));
@@ -121,8 +125,8 @@ public:
     }
 
 private:
-    mutable std::mutex mutex_;  ///< guards current_ (held only to copy or swap the pointer)
-    std::mutex writer_mutex_;   ///< one update at a time
+    mutable std::mutex mutex_;              ///< guards current_ (held only to copy or swap the pointer)
+    OwnedMutex writer_mutex_{"this tree"};  ///< one update at a time
     TreePtr current_;
 };
 

@@ -136,3 +136,33 @@ def test_cli_build_and_inspect_optimize(tmp_path, capsys):
     path = bvhlab.Scene(triangles=knot, instance_mesh=[0, 0], instance_transforms=transforms).save(tmp_path / "i.npz")
     assert main(["build", str(path), "--optimize", "5"]) == 2
     assert "flat scene" in capsys.readouterr().err
+
+
+def test_a_change_of_the_tree_from_its_own_progress_callback_is_refused():
+    # refit, update or optimize called from optimize's progress callable waited, on the same thread,
+    # for the lock that optimize held: forever, and Ctrl-C could not end it (probe). In a child, so
+    # that a regression fails by its timeout rather than hanging the run.
+    from child import check_python
+
+    out = check_python(
+        """
+        import numpy as np, bvhlab
+        tris = np.random.default_rng(0).random((3000, 3, 3), dtype=np.float32)
+        for change in ("refit", "update", "optimize"):
+            bvh = bvhlab.build(tris)
+            calls = []
+            def progress(fraction):
+                try:
+                    getattr(bvh, change)(tris) if change != "optimize" else bvh.optimize(iterations=1)
+                    calls.append("changed")
+                except RuntimeError as error:
+                    calls.append(str(error))
+                return True
+            bvh.optimize(iterations=2, progress=progress)
+            assert calls and all("this tree is busy on this thread" in c for c in calls), calls
+            bvh.refit(tris)  # after its work, a change goes through
+        print("refused")
+        """,
+        timeout=120,
+    )
+    assert out.strip() == "refused"

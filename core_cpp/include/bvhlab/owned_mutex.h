@@ -52,8 +52,8 @@ private:
     void refuse_reentry() const {
         if (held_by_this_thread())
             throw ReentrantCall(what_ +
-                                " is busy on this thread (a call from inside its own run, such as its "
-                                "progress callback); call it after run() returns");
+                                " is busy on this thread (a call from inside its own work, such as its "
+                                "progress callback); call it after that work returns");
     }
 
     std::timed_mutex mutex_;
