@@ -378,6 +378,14 @@ def test_cli_inspects_nodes_of_both_levels(instanced_scene, trees, tmp_path, cap
         assert said in capsys.readouterr().err
     assert main(["inspect", "gen:whitted", "--node", "0", "--instance", "0"]) == 2
     assert "this scene is flat" in capsys.readouterr().err
+    # a flat tree of the scene's own triangles (mesh 0's) loaded against it silently, and every
+    # other instance went missing from the hits (probe)
+    mesh0 = tmp_path / "mesh0.bvhtree"
+    bvhlab.build(bvhlab.Scene.load(path).triangles).save(mesh0)
+    assert main(["inspect", str(path), "--worst", "2", "--tree", str(mesh0)]) == 2
+    assert "this scene has instances" in capsys.readouterr().err
+    with pytest.raises(ValueError, match="this scene has instances"):  # a TreeFileError
+        bvhlab.load_bvh(mesh0, bvhlab.Scene.load(path))
 
 
 def test_pick_with_the_scene_reaches_what_camera_rays_see(instanced_scene):  # noqa: F811

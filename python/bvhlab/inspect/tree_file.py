@@ -77,6 +77,12 @@ def load_bvh(path, scene_or_triangles, spheres=None, *, config=None):
     if isinstance(scene_or_triangles, Scene):
         if spheres is not None:
             raise ValueError("pass spheres inside the Scene, not beside it")
+        if scene_or_triangles.is_instanced:  # its own triangles are mesh 0's alone: a tree of them
+            # loaded silently, and missed every other instance
+            raise TreeFileError(
+                f"{path} holds a flat tree, and this scene has instances (a two-level tree), whose trees "
+                "are not saved to a file"
+            )
         triangles, spheres = scene_or_triangles.triangles, scene_or_triangles.spheres
     else:
         triangles = scene_or_triangles
