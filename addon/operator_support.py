@@ -81,15 +81,17 @@ def window_progress(context):
         window_manager.progress_end()
 
 
-def remember_tree(context, key: TreeKey) -> state.BuiltTree:
+def remember_tree(context, key: TreeKey, scene=None) -> state.BuiltTree:
     """Make the cache's tree of `key` (with the scene it was made over: trees.SceneTree.scene) the
-    one the sidebar shows, and keep the overlay's depth range inside its height."""
+    one the sidebar of `scene` (default: the context's) shows, and keep the overlay's depth range
+    inside its height."""
     from . import follow
 
+    scene = context.scene if scene is None else scene
     built = state.BuiltTree(key, cache.tree(key))
-    state.trees[state.key(context.scene)] = built
-    follow.tree_made(state.key(context.scene), built)
-    settings = context.scene.bvhlab
+    state.trees[state.key(scene)] = built
+    follow.tree_made(state.key(scene), built)
+    settings = scene.bvhlab
     deepest = built.height - 1
     if settings.overlay_depth_max > deepest:
         settings.overlay_depth_max = deepest  # its update callback pulls min along

@@ -50,7 +50,10 @@ class BVHLAB_OT_build(ModalTaskMixin, bpy.types.Operator):
         import bvhlab
 
         self._exported = exported = export_scene(context, require_camera=False)  # bpy: on the UI thread
-        follow.export_taken(state.key(context.scene))
+        # the scene it builds for: the window may show another one by the time it ends (its tree was
+        # then thrown away as "replaced", and this scene kept a build that never ended: probe)
+        self._scene_key = state.key(context.scene)
+        follow.export_taken(self._scene_key)
         self._key = key = key_of(context.scene)  # the settings as they are now, not when it ends
         config = key.config.replace(threads=UI_WORK_THREADS)
 
@@ -68,7 +71,12 @@ class BVHLAB_OT_build(ModalTaskMixin, bpy.types.Operator):
     def _finish(self, context, task):
         import bvhlab
 
-        key = state.key(context.scene)
+        key = self._scene_key
+        scene = next((s for s in bpy.data.scenes if state.key(s) == key), None)
+        if scene is None:  # deleted while it built
+            state.builds.pop(key, None)
+            self.report({"WARNING"}, "The scene was deleted while its BVH was built; the tree is not kept")
+            return {"CANCELLED"}
         if state.builds.get(key) is not task:  # replaced by a build started after it
             self.report({"INFO"}, "Build replaced by the one started after it; its tree is not kept")
             return {"CANCELLED"}
@@ -81,7 +89,7 @@ class BVHLAB_OT_build(ModalTaskMixin, bpy.types.Operator):
         if task.error is not None:
             raise task.error
         cache.tree(self._key).store(task.result, self._exported)
-        return self._done(context, self._key)
+        return self._done(context, self._key, scene)
 
     def _build(self, context):
         import bvhlab
@@ -95,14 +103,14 @@ class BVHLAB_OT_build(ModalTaskMixin, bpy.types.Operator):
             with window_progress(context) as progress:
                 bvh = bvhlab.build(exported, config=tree_key.config, progress=progress)
             cache.tree(tree_key).store(bvh, exported)
-            return self._done(context, tree_key)
+            return self._done(context, tree_key, context.scene)
         finally:
             if state.builds.get(key) is self:
                 del state.builds[key]
 
-    def _done(self, context, tree_key):
-        built = remember_tree(context, tree_key)
-        context.scene.bvhlab.overlay_show = True  # the user pressed Build to see the boxes
+    def _done(self, context, tree_key, scene):
+        built = remember_tree(context, tree_key, scene)
+        scene.bvhlab.overlay_show = True  # the user pressed Build to see the boxes
         s = built.bvh.stats
         message = (
             f"Built {s['method']} BVH over {s['primitives']} primitives: {s['nodes']} nodes, "
@@ -112,5 +120,5 @@ class BVHLAB_OT_build(ModalTaskMixin, bpy.types.Operator):
             flattened = s["triangles_flattened"]
             message += f" ({s['instances']:,} instances of {s['meshes']} meshes: {flattened:,} triangles flattened)"
         self.report({"INFO"}, message)
-        state.messages[state.key(context.scene)] = ("INFO", message)
+        state.messages[state.key(scene)] = ("INFO", message)
         return {"FINISHED"}

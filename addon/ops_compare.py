@@ -78,7 +78,7 @@ class BVHLAB_OT_compare(ModalTaskMixin, bpy.types.Operator):
             if isinstance(task.error, TaskCancelled):
                 message = "Comparison cancelled (Esc)"
                 self.report({"WARNING"}, message)
-                state.messages[state.key(context.scene)] = ("WARNING", message)
+                state.messages[self._scene_key] = ("WARNING", message)
                 return {"CANCELLED"}
             if task.error is not None:
                 raise task.error
@@ -92,6 +92,8 @@ class BVHLAB_OT_compare(ModalTaskMixin, bpy.types.Operator):
         from bvhlab.render import default_renderer
 
         settings = context.scene.bvhlab
+        # the scene measured: the window may show another one by the time the rows come back
+        self._scene_key = state.key(context.scene)
         exported = export_scene(context, require_camera=True)
         width, height = render_size(context.scene)
         options = {
@@ -123,12 +125,12 @@ class BVHLAB_OT_compare(ModalTaskMixin, bpy.types.Operator):
         labels = {method: label for label, method in COMPARE_METHODS}
         for row in rows:
             row["label"] = labels[row["method"]]
-        state.comparisons[state.key(context.scene)] = rows
+        state.comparisons[self._scene_key] = rows
         path = write_csv(rows, self._csv_path)
         best = min(rows, key=lambda row: row["frame_ms"])
         message = (
             f"Compared {len(rows)} methods; fastest frame: {best['label']} ({best['frame_ms']:.1f} ms); wrote {path}"
         )
         self.report({"INFO"}, message)
-        state.messages[state.key(context.scene)] = ("INFO", message)
+        state.messages[self._scene_key] = ("INFO", message)
         return {"FINISHED"}

@@ -94,7 +94,28 @@ def steps(session):
         "message": state.messages.get(state.key(bpy.context.scene)),
     }
 
-    # 3. the add-on disabled while a build runs, then enabled again
+    # 3. the window switched to another scene while a build runs: the tree is the first scene's
+    # (it was thrown away as "replaced", and the first scene kept a build that never ended)
+    state.trees.clear()
+    state.messages.clear()
+    first_scene = bpy.context.scene
+    other = bpy.data.scenes.new("Other scene")
+    settings.method = "sweep_sah"
+    _invoke_build(session, area)
+    yield 0.3
+    session.window().scene = other
+    yield from _wait_idle(background)
+    yield 0.5
+    session.info["scene_switched"] = {
+        "builds_left": len(state.builds),
+        "tree_of_first": (state.tree_for(first_scene) or None) is not None,
+        "tree_of_other": (state.tree_for(other) or None) is not None,
+        "message": state.messages.get(state.key(first_scene)),
+    }
+    session.window().scene = first_scene
+    yield 0.3
+
+    # 4. the add-on disabled while a build runs, then enabled again
     state.messages.clear()
     settings.method = "sweep_sah"
     _invoke_build(session, area)
@@ -142,6 +163,11 @@ def check(shots: dict, info: dict) -> list[str]:
         failures.append(f"second press: the tree kept is {tree}, not the second build's (lbvh)")
     if not second.get("message") or second["message"][0] != "INFO" or "lbvh" not in second["message"][1]:
         failures.append(f"second press: last message {second.get('message')}")
+    switched = info.get("scene_switched") or {}
+    if switched != {**switched, "builds_left": 0, "tree_of_first": True, "tree_of_other": False}:
+        failures.append(f"scene switched during a build: {switched}")
+    elif not switched.get("message") or "sweep_sah" not in switched["message"][1]:
+        failures.append(f"scene switched during a build: the first scene's message is {switched.get('message')}")
     disabled = info.get("disabled") or {}
     if disabled.get("running_before") != 1:
         failures.append(f"disable: {disabled.get('running_before')} builds ran before disabling, not 1")
