@@ -7,6 +7,8 @@ import dataclasses
 import math
 from dataclasses import dataclass, field, fields
 
+import numpy as np
+
 from . import _checks, _core
 
 #: Split methods and axis policies as the C++ core names them (its table of methods), and the
@@ -57,11 +59,13 @@ class BuildConfig:
     def __post_init__(self):
         c = self.core()
         # each setting as the Python type of its field, so that equal settings written differently
-        # (sbvh_alpha 1 and 1.0, bins 12 and numpy's 12) record and hash alike (stats files, sweep keys)
+        # (sbvh_alpha 1 and 1.0, bins 12 and numpy's 12) record and hash alike (stats files, sweep
+        # keys), and a float as the core holds it (float32): the default sbvh_alpha is float32(3e-4),
+        # which 3e-4 typed did not equal (a tree file saved with the default was refused for it)
         for name in ("bins", "max_leaf_size", "sah_block", "seed", "threads"):
             object.__setattr__(self, name, int(getattr(c, name)))
         for name in ("sbvh_alpha", "sbvh_budget"):
-            object.__setattr__(self, name, float(getattr(self, name)))
+            object.__setattr__(self, name, float(np.float32(getattr(self, name))))
         object.__setattr__(self, "sbvh_unsplit", bool(self.sbvh_unsplit))
 
     def core(self) -> _core.BuildConfig:

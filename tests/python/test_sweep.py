@@ -117,6 +117,9 @@ def test_equal_settings_written_differently_have_one_key(tmp_path, models):
     assert keys[0] == keys[1]
     assert BuildConfig(sbvh_alpha=1).tree_settings() == BuildConfig(sbvh_alpha=1.0).tree_settings()
     assert type(BuildConfig(bins=np.int64(12)).bins) is int
+    # the float settings as the core holds them: the default sbvh_alpha is float32(3e-4), which 3e-4
+    # typed did not equal (a tree file saved with the default was refused with it)
+    assert BuildConfig(method="sbvh") == BuildConfig(method="sbvh", sbvh_alpha=3e-4)
 
 
 def test_in_process_sweep_rows_match_an_independent_build(tmp_path, models):
