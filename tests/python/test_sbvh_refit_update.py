@@ -22,3 +22,16 @@ def test_update_after_an_sbvh_refit_gives_a_fresh_builds_hits(policy):
     np.testing.assert_array_equal(got["t"], want["t"])
     np.testing.assert_array_equal(got["prim"], want["prim"])
     assert bvh.revision == 2
+
+
+@pytest.mark.parametrize("policy", ["refit", "partial", "adaptive"])
+def test_an_sbvh_update_that_keeps_primitives_refuses_other_counts_as_refit_does(policy):
+    # refit refused 60 triangles for a tree of 100; update rebuilt over them and said "rebuild" (probe)
+    tris = np.random.default_rng(3).random((100, 3, 3), dtype=np.float32)
+    bvh = bvhlab.build(tris, method="sbvh")
+    before = bvh.revision
+    with pytest.raises(ValueError, match="keeps the tree's primitives"):
+        bvh.update(tris[:60], policy=policy)
+    assert bvh.revision == before  # the tree as it was
+    assert bvh.update(tris[:60], policy="rebuild").policy == "rebuild"
+    assert bvh.stats["triangles"] == 60

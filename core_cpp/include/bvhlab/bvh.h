@@ -112,6 +112,10 @@ void refit(Bvh& bvh, const GeometryView& geometry);
 /// `geometry` (the fingerprint on up to `threads` threads of the pool, 0: all).
 Bvh refitted(const Bvh& old, const GeometryView& geometry, unsigned threads = 1);
 
+/// std::invalid_argument unless `geometry` has the primitive counts `old` was built over (and data
+/// for them): what a refit and the updates that keep a tree's primitives require.
+void check_same_primitives(const Bvh& old, const GeometryView& geometry);
+
 /// Thrown when a build is cancelled through its progress callback.
 struct BuildCancelled : std::exception {
     const char* what() const noexcept override { return "build cancelled"; }

@@ -145,7 +145,7 @@ void refit_pass(const Bvh& old, const GeometryView& g, BvhNode* nodes, std::uint
 
 }  // namespace
 
-Bvh refitted(const Bvh& old, const GeometryView& geometry, unsigned threads) {
+void check_same_primitives(const Bvh& old, const GeometryView& geometry) {
     if (geometry.triangle_count != old.triangle_count || geometry.sphere_count != old.sphere_count)
         throw std::invalid_argument(
             "a refit or update keeps the tree's primitives: it was built over " + std::to_string(old.triangle_count) +
@@ -154,6 +154,10 @@ Bvh refitted(const Bvh& old, const GeometryView& geometry, unsigned threads) {
             " (for another count, build a new tree, or update with policy rebuild)");
     if ((geometry.triangle_count && !geometry.triangles) || (geometry.sphere_count && !geometry.spheres))
         throw std::invalid_argument("primitive count given without data");
+}
+
+Bvh refitted(const Bvh& old, const GeometryView& geometry, unsigned threads) {
+    check_same_primitives(old, geometry);
     // An SBVH's leaf boxes hold clipped parts of its primitives (sbvh/chop.h): a refit would have
     // to clip again at planes the tree does not keep, so it is rebuilt with its settings instead.
     if (old.config.method == SplitMethod::Sbvh) return build_bvh(geometry, old.config);

@@ -224,7 +224,10 @@ Bvh update_bvh(const Bvh& old, const NodeCostArray& built, const GeometryView& g
         stats.policy = UpdatePolicy::Rebuild, stats.subtrees_rebuilt = 1,
         stats.primitives_rebuilt = g.primitive_count();
     };
-    // an SBVH refits by a rebuild (refitted), and its subtrees' references are not whole primitives
+    // an SBVH refits by a rebuild (refitted), and its subtrees' references are not whole primitives;
+    // its refit, partial and adaptive keep the primitives as any tree's do (they rebuilt over other
+    // counts, where refit refused them)
+    if (config.policy != UpdatePolicy::Rebuild && old.config.method == SplitMethod::Sbvh) check_same_primitives(old, g);
     if (config.policy == UpdatePolicy::Rebuild || old.config.method == SplitMethod::Sbvh) {
         rebuild();
     } else {
