@@ -47,7 +47,8 @@ def build(
     (`config`, default BuildConfig()), with any of its fields given by name on top
     (`build(scene, method="median")`):
     `method` is one of METHODS, `axis` one of AXES ("auto": all three axes for the SAH methods,
-    the largest centroid extent for the others); `bins` (MIN_BINS..MAX_BINS) is used by "sah",
+    the largest centroid extent for the others; "lbvh" and "sbvh", which split on all three axes
+    their own way, ignore it); `bins` (MIN_BINS..MAX_BINS) is used by "sah",
     whose equal buckets divide the node's box (`bin_bounds="box"`) or its centroid bounds
     ("centroids", the report's §2.3.2); leaves hold at most `max_leaf_size` primitives, and the SAH
     methods may stop earlier when a leaf is cheaper. `sah_block` (a power of two up to
