@@ -116,8 +116,17 @@ def current_tree(context, exported):
 
 def output_path(path: str, default_name: str) -> Path:
     """An absolute output path: '//' is the .blend's folder, or Blender's temporary folder while
-    the file is unsaved; an empty path means '//<default_name>'."""
+    the file is unsaved (temporary_note says so); an empty path means '//<default_name>'."""
     path = path or "//" + default_name
     if path.startswith("//") and not bpy.data.filepath:
         return Path(bpy.app.tempdir or ".") / path[2:]
     return Path(bpy.path.abspath(path))
+
+
+def temporary_note(path: Path) -> str:
+    """What a report adds for a file written into Blender's temporary folder, which Blender deletes
+    when it quits (an unsaved file's '//': the report named the file as if it stayed)."""
+    temporary = bpy.app.tempdir
+    if temporary and Path(path).resolve().is_relative_to(Path(temporary).resolve()):
+        return " (Blender's temporary folder, deleted when Blender quits: save the .blend to write beside it)"
+    return ""

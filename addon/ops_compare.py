@@ -9,7 +9,7 @@ import bpy
 
 from . import state
 from .background import ModalTaskMixin, TaskCancelled
-from .operator_support import export_scene, output_path, run_reported
+from .operator_support import export_scene, output_path, run_reported, temporary_note
 from .ops_render import render_size
 
 #: (label, method label of bvhlab.compare): every split method, SAH at the report's 12 and 32 bins.
@@ -130,6 +130,7 @@ class BVHLAB_OT_compare(ModalTaskMixin, bpy.types.Operator):
         best = min(rows, key=lambda row: row["frame_ms"])
         message = (
             f"Compared {len(rows)} methods; fastest frame: {best['label']} ({best['frame_ms']:.1f} ms); wrote {path}"
+            + temporary_note(path)
         )
         self.report({"INFO"}, message)
         state.messages[self._scene_key] = ("INFO", message)

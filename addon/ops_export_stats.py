@@ -7,7 +7,7 @@ from bpy.props import StringProperty
 from bpy_extras.io_utils import ExportHelper
 
 from . import state
-from .operator_support import current_tree, export_scene, output_path, run_reported
+from .operator_support import current_tree, export_scene, output_path, run_reported, temporary_note
 from .properties import output_path_options
 
 
@@ -47,7 +47,7 @@ class BVHLAB_OT_export_stats(bpy.types.Operator, ExportHelper):
         stats = built.bvh.stats
         about = {"scene": context.scene.name, "blend_file": bpy.data.filepath, "settings": built.settings}
         write_stats(stats, about, json_path, csv_path)
-        message = f"Wrote {json_path} and {csv_path.name}"
+        message = f"Wrote {json_path} and {csv_path.name}" + temporary_note(json_path)
         self.report({"INFO"}, message)
         state.messages[state.key(context.scene)] = ("INFO", message)
         return {"FINISHED"}

@@ -7,6 +7,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import os
 import warnings
 
 import bpy
@@ -38,6 +39,12 @@ def _configure(**settings):
 
 def _built():
     return harness.addon().state.tree_for(bpy.context.scene)
+
+
+def _message() -> tuple:
+    """The panel's last message for the scene: (level, text)."""
+    state = harness.addon().state
+    return state.messages[state.key(bpy.context.scene)]
 
 
 def check_build_matches_direct(name: str, variants=BUILD_VARIANTS) -> None:
@@ -293,6 +300,12 @@ def check_path_properties(tmp_dir) -> None:
         if blend_relative:
             assert prop.is_path_supports_blend_relative, f"{owner}.{name} does not take a '//' path"
     harness.boxes_scene()
+    # unsaved, '//' is Blender's temporary folder, which it deletes when it quits: the report says so
+    # (it named the file as if it stayed: probe)
+    assert not bpy.data.filepath
+    assert bpy.ops.bvhlab.export_stats(filepath="//unsaved_stats.json") == {"FINISHED"}
+    said = _message()[1]
+    assert "deleted when Blender quits" in said and os.path.isfile(bpy.app.tempdir + "unsaved_stats.json"), said
     bpy.ops.wm.save_as_mainfile(filepath=str(tmp_dir / "paths.blend"))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -302,6 +315,7 @@ def check_path_properties(tmp_dir) -> None:
     relative = [str(w.message) for w in caught if "relative" in str(w.message)]
     assert not relative, relative
     assert (tmp_dir / "paths_compare.csv").is_file() and (tmp_dir / "paths_stats.json").is_file()
+    assert "deleted when Blender quits" not in _message()[1]
     print(f"path properties: {sorted(names)}")
 
 
