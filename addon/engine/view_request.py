@@ -33,7 +33,7 @@ def camera_view_note(view, space, blender_scene) -> str:
     if camera is None:
         return ""
     if camera.type != "CAMERA":
-        return "F12 renders Cycles' lens for an object that is not a camera; the viewport shows Blender's"
+        return "F12 renders Cycles' lens for an object that is not a camera; the viewport may show another"
     data = camera.data
     if data.type == "PANO":
         return "F12 renders the panorama; the viewport shows Blender's perspective view of it"

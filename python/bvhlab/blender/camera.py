@@ -57,8 +57,8 @@ class _NoDepthOfField:
 @dataclass(frozen=True)
 class StandInLens:
     """The lens Cycles gives a scene camera that is not a camera (an empty, a light, any object:
-    blender_camera_init's defaults, a spot light's cone as its field of view), with the fields of
-    Blender's camera data that lens_fields reads."""
+    blender_camera_init's defaults, a spot light's cone as its field of view; stand_in_lens), with
+    the fields of Blender's camera data that lens_fields reads."""
 
     lens: float = 50.0
     type: str = "PERSP"
@@ -76,13 +76,15 @@ class StandInLens:
 def stand_in_lens(obj) -> StandInLens:
     """The lens of a scene camera `obj` (evaluated) that is not a camera, as Cycles renders it
     (blender_camera_from_object): a spot light's focal length 16 / tan(spot size / 2), Cycles'
-    defaults otherwise (Blender's own viewport draws such a view with a 35 mm lens)."""
+    defaults otherwise, whose focal length changed in 5.3 (compat.NON_CAMERA_LENS_MM)."""
+    from .compat import NON_CAMERA_LENS_MM
+
     data = obj.data
     if obj.type == "LIGHT" and data is not None and data.type == "SPOT":
         lens = 16.0 / math.tan(data.spot_size * 0.5)
         if lens > 0:
             return StandInLens(lens=lens)
-    return StandInLens()
+    return StandInLens(lens=NON_CAMERA_LENS_MM)
 
 
 @dataclass(frozen=True)

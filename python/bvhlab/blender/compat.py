@@ -11,6 +11,9 @@
   unprefixed name everywhere.
 - Multilayer OpenEXR output: from 5.0 a media type must be chosen before the file format:
   `use_multilayer_exr`.
+- A scene camera that is not a camera (an empty, a light other than a spot): Cycles gives it a
+  50 mm lens up to 5.2 and Blender's 35 mm from 5.3 (measured against a camera of each lens:
+  `NON_CAMERA_LENS_MM`).
 Mesh attributes (`attributes["position"]`, `loop_triangle_polygons`, `material_index`) and the
 Principled BSDF socket names ("Transmission Weight") are the same from 4.2 on.
 """
@@ -23,6 +26,9 @@ import numpy as np
 #: 5.0 and later: materials and worlds always render with their node tree (reading `use_nodes`
 #: there only raises a DeprecationWarning).
 ALWAYS_NODES = bpy.app.version >= (5, 0, 0)
+
+#: The focal length (mm) Cycles renders a scene camera with that is not a camera (camera.StandInLens).
+NON_CAMERA_LENS_MM = 35.0 if bpy.app.version >= (5, 3, 0) else 50.0
 
 
 def shader_tree(id_data):
