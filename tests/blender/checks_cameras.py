@@ -327,12 +327,35 @@ def _fresh(setting):
     return scene
 
 
+def _cycles_reference(tmp_dir, name: str, scene) -> np.ndarray:
+    """Cycles' Depth pass of the scene's camera; an empty as the camera under Blender 5.1 and 5.2,
+    whose Cycles crashes rendering through one (a segfault, measured; Workbench and EEVEE render it
+    with Blender's 35 mm, as 5.3's Cycles does), through a camera of the lens bvhlab gives it
+    (compat.NON_CAMERA_LENS_MM) in its place."""
+    from bvhlab.blender.compat import NON_CAMERA_LENS_MM
+
+    stand_in = scene.camera
+    if stand_in.type != "EMPTY" or not (5, 1, 0) <= bpy.app.version < (5, 3, 0):
+        return cycles_depth(tmp_dir, name)
+    data = bpy.data.cameras.new("In the empty's place")
+    data.lens = NON_CAMERA_LENS_MM
+    data.clip_start, data.clip_end = 1e-5, 1e5  # Cycles' for an object that is not a camera
+    camera = bpy.data.objects.new("In the empty's place", data)
+    scene.collection.objects.link(camera)
+    camera.matrix_world = stand_in.matrix_world.copy()
+    scene.camera = camera
+    try:
+        return cycles_depth(tmp_dir, name)
+    finally:
+        scene.camera = stand_in
+
+
 def check_setting_against_cycles(tmp_dir, name: str) -> None:
     """One setting of SETTINGS: F12 on each backend there is, and the viewport's camera where it has
     the setting, against Cycles' Depth pass."""
     setting, in_viewport = SETTINGS[name]
     scene = _fresh(setting)
-    reference = cycles_depth(tmp_dir, name)
+    reference = _cycles_reference(tmp_dir, name, scene)
     lines = [
         compare_depth(engine_depth(tmp_dir, name, backend), reference, f"{name} F12 {backend}")
         for backend in vulkan_backends()

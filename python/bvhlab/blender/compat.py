@@ -12,8 +12,9 @@
 - Multilayer OpenEXR output: from 5.0 a media type must be chosen before the file format:
   `use_multilayer_exr`.
 - A scene camera that is not a camera (an empty, a light other than a spot): Cycles gives it a
-  50 mm lens up to 5.2 and Blender's 35 mm from 5.3 (measured against a camera of each lens:
-  `NON_CAMERA_LENS_MM`).
+  50 mm lens up to 5.0 and Blender's 35 mm in 5.3 (measured against a camera of each lens); 5.1
+  and 5.2's Cycles crash rendering through one (a segfault), their Workbench and EEVEE take 35 mm
+  as Blender's other engines always have: `NON_CAMERA_LENS_MM`.
 Mesh attributes (`attributes["position"]`, `loop_triangle_polygons`, `material_index`) and the
 Principled BSDF socket names ("Transmission Weight") are the same from 4.2 on.
 """
@@ -28,7 +29,7 @@ import numpy as np
 ALWAYS_NODES = bpy.app.version >= (5, 0, 0)
 
 #: The focal length (mm) Cycles renders a scene camera with that is not a camera (camera.StandInLens).
-NON_CAMERA_LENS_MM = 35.0 if bpy.app.version >= (5, 3, 0) else 50.0
+NON_CAMERA_LENS_MM = 35.0 if bpy.app.version >= (5, 1, 0) else 50.0
 
 
 def shader_tree(id_data):
