@@ -12,6 +12,8 @@ the rest is imported when an operator runs.
 
 from __future__ import annotations
 
+import sys
+
 import bpy
 from bpy.app.handlers import persistent
 
@@ -66,6 +68,13 @@ def _forget_trees(*_args) -> None:
 
 
 def register() -> None:
+    from pathlib import Path
+
+    from .core_check import core_mismatch
+
+    state.core_warning = core_mismatch(Path(__file__).parent)
+    if state.core_warning:
+        print(f"bvhlab: {state.core_warning}", file=sys.stderr)
     _register_classes()
     register_properties()
     engine.register()

@@ -34,6 +34,8 @@ class BVHLAB_PT_main(_BvhPanel, bpy.types.Panel):
     def draw(self, context):
         layout = self.layout
         settings = context.scene.bvhlab
+        if state.core_warning:
+            wrapped_label(layout.box(), context, state.core_warning, icon="ERROR")
         col = layout.column(align=True)
         col.prop(settings, "scope", expand=True)
         col = layout.column()

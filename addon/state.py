@@ -66,6 +66,8 @@ trees: dict[int, BuiltTree] = {}
 comparisons: dict[int, list[dict]] = {}
 last_render: dict[int, dict] = {}
 messages: dict[int, tuple[str, str]] = {}  # (level, text) of the last report
+#: What the panel says above all else when the core loaded is not this zip's (core_check.py), or "".
+core_warning = ""
 #: The build running for a scene (a background.BackgroundTask, or the operator itself for a build
 #: run at once from a script): one at a time, the last one started is the one whose tree is kept.
 builds: dict[int, object] = {}

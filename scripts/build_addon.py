@@ -21,16 +21,32 @@ bpy.ops.extensions.package_install_files(filepath=ZIP, repo="user_default").
 from __future__ import annotations
 
 import argparse
+import importlib.util
+import json
 import os
 import re
 import shutil
 import subprocess
 import sys
 import tempfile
+import zipfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 ADDON = ROOT / "addon"
+
+
+def _core_check():
+    """addon/core_check.py, loaded by its path (the add-on's package imports bpy)."""
+    spec = importlib.util.spec_from_file_location("bvhlab_core_check", ADDON / "core_check.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+core_check = _core_check()
+
 VERSION_FILE = ROOT / "python" / "bvhlab" / "__init__.py"
 #: Included first in each C++ file of a wheel: keeps libm's symbol versions at glibc 2.34's.
 GLIBC_COMPAT = ROOT / "scripts" / "wheel_glibc_compat.h"
@@ -127,6 +143,20 @@ def stage_manifest(source: str, version: str, wheel_names: list[str]) -> str:
     return text
 
 
+def wheel_digests(wheels: list[Path]) -> dict[str, str]:
+    """{python tag: digest of the wheel's bvhlab package} (addon/core_check.py, which the add-on
+    compares with the package it imports)."""
+    digests = {}
+    for wheel in wheels:
+        tag = wheel.name.split("-")[2]
+        with zipfile.ZipFile(wheel) as archive:
+            files = [
+                (n, archive.read(n)) for n in archive.namelist() if n.startswith("bvhlab/") and not n.endswith("/")
+            ]
+        digests[tag] = core_check.package_digest(files)
+    return digests
+
+
 def stage(wheels: list[Path], version: str) -> Path:
     """addon/ copied to build/addon-stage with the wheels and the generated manifest."""
     staged = ROOT / "build" / "addon-stage" / "bvhlab"
@@ -135,6 +165,7 @@ def stage(wheels: list[Path], version: str) -> Path:
     (staged / "wheels").mkdir()
     for wheel in wheels:
         shutil.copy2(wheel, staged / "wheels" / wheel.name)
+    (staged / core_check.DIGESTS).write_text(json.dumps(wheel_digests(wheels), indent=1) + "\n")
     manifest = staged / "blender_manifest.toml"
     manifest.write_text(stage_manifest(manifest.read_text(), version, [w.name for w in wheels]))
     return staged

@@ -25,6 +25,38 @@ def _registered() -> dict[str, bool]:
     return found
 
 
+def _check_the_core_is_the_bundled_one(site: Path) -> None:
+    """The add-on compares the bvhlab package imported with the zip's digest of its wheel's
+    (addon/core_check.py): no warning for the wheel just installed; a package that differs (a
+    rebuilt zip of the same version installed over an older one: its old core stayed loaded, and
+    Blender kept its wheel) is named. Under the bpy module the venv's own bvhlab may be the one
+    imported, which is not the bundled one: only its wheel's copy is compared."""
+    import bvhlab
+
+    package = sys.modules[MODULE]
+    check = sys.modules[f"{MODULE}.core_check"]
+    installed = Path(bvhlab.__file__).resolve().parent
+    if not installed.is_relative_to(site.resolve()):
+        installed = next(site.rglob("bvhlab/__init__.py")).parent
+        assert check.package_digest(check.installed_files(installed)) == _bundled_digest(package, check)
+        return
+    assert package.state.core_warning == "", package.state.core_warning
+    assert check.core_mismatch(Path(package.__file__).parent) == ""
+    marker = installed / "probe_marker.txt"  # the package as another build left it
+    marker.write_text("another build")
+    try:
+        assert check.core_mismatch(Path(package.__file__).parent) == check.MISMATCH
+    finally:
+        marker.unlink()
+
+
+def _bundled_digest(package, check) -> str:
+    import json
+
+    digests = json.loads((Path(package.__file__).parent / check.DIGESTS).read_text())
+    return digests[check.python_tag()]
+
+
 def _build_default_scene() -> None:
     harness.boxes_scene()
     assert bpy.ops.bvhlab.build() == {"FINISHED"}
@@ -45,6 +77,7 @@ def check_install_enable_disable(zip_path: Path) -> None:
     site = Path(bpy.utils.user_resource("EXTENSIONS", path=".local"))
     assert list(site.rglob("bvhlab/_core*.so")), f"the bundled wheel was not installed under {site}"
     assert list(site.rglob("bvhlab/blender/export.py")), "the wheel lacks bvhlab.blender"
+    _check_the_core_is_the_bundled_one(site)
     harness.enable(MODULE)
     _build_default_scene()
 

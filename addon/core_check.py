@@ -1,0 +1,63 @@
+"""Whether the bvhlab package Python imports is the one this extension's zip bundles for it.
+
+Blender keeps an extension's wheel while its file name stays (bvhlab-VERSION-cpXY-...), and a
+Python module stays loaded until Blender quits: a zip rebuilt at the same version, installed over
+the one before, ran its new add-on code on the old core, also after a restart (probe). The zip
+carries a digest of each wheel's bvhlab package (scripts/build_addon.py writes DIGESTS, with
+package_digest over the wheel's entries); at register the add-on takes the same digest of the
+package imported and says what to do where they differ. No bpy here: the build script uses it."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import sys
+from collections.abc import Iterable
+from pathlib import Path
+
+#: The zip's file of {python tag: digest of that wheel's bvhlab package}.
+DIGESTS = "wheel_digests.json"
+
+MISMATCH = (
+    "The bvhlab core Python has loaded is not the one this extension bundles (a build of the same "
+    "version installed over another): restart Blender; if this stays, remove the extension, "
+    "restart Blender and install it again"
+)
+
+
+def package_digest(files: Iterable[tuple[str, bytes]]) -> str:
+    """sha256 of a package's files, (name relative to site-packages, "bvhlab/...", and bytes),
+    in the order of their names: a wheel's entries or the files installed from it."""
+    digest = hashlib.sha256()
+    for name, data in sorted(files):
+        digest.update(name.encode() + b"\0" + len(data).to_bytes(8, "little"))
+        digest.update(data)
+    return digest.hexdigest()
+
+
+def installed_files(package: Path) -> Iterable[tuple[str, bytes]]:
+    """The files of an installed package folder as package_digest takes them (bytecode caches,
+    which Python writes there itself, left out)."""
+    for path in package.rglob("*"):
+        if path.is_file() and "__pycache__" not in path.parts and path.suffix != ".pyc":
+            yield path.relative_to(package.parent).as_posix(), path.read_bytes()
+
+
+def python_tag() -> str:
+    return f"cp{sys.version_info.major}{sys.version_info.minor}"
+
+
+def core_mismatch(addon_folder: Path) -> str:
+    """MISMATCH where the imported bvhlab package is not the one the zip at `addon_folder` bundles
+    for this Python; "" where it is, or where there is no zip's digest to compare with (the add-on
+    used in place, during development)."""
+    path = addon_folder / DIGESTS
+    if not path.is_file():
+        return ""
+    expected = json.loads(path.read_text()).get(python_tag())
+    if expected is None:
+        return ""
+    import bvhlab
+
+    found = package_digest(installed_files(Path(bvhlab.__file__).parent))
+    return "" if found == expected else MISMATCH
