@@ -196,16 +196,26 @@ def test_a_request_the_tree_cannot_answer_saves_nothing(tmp_path, capsys, reques
 def test_a_reader_gone_keeps_the_files_and_ends_quietly(tmp_path):
     # `bvhlab inspect ... --json F | head -1`: the report was printed before F was written, and the
     # broken pipe ended the command ("error: [Errno 32] Broken pipe", 2) without F
+    import os
     import subprocess
     import sys
 
-    report = tmp_path / "w.json"
-    for args in (["inspect", "gen:whitted", "--worst", "50", "--json", str(report)], ["scenes"]):
+    report, stats = tmp_path / "w.json", tmp_path / "b.json"
+    # a pipe's output is buffered (unless PYTHONUNBUFFERED is set, as on some machines): both ways
+    buffered = {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}
+    runs = [
+        (["inspect", "gen:whitted", "--worst", "50", "--json", str(report)], buffered),
+        (["inspect", "gen:whitted", "--worst", "50", "--json", str(report)], {**buffered, "PYTHONUNBUFFERED": "1"}),
+        (["build", "gen:whitted", "--json", str(stats)], {**buffered, "PYTHONUNBUFFERED": "1"}),
+        (["scenes"], buffered),
+        (["scenes"], {**buffered, "PYTHONUNBUFFERED": "1"}),
+    ]
+    for args, env in runs:
         child = subprocess.Popen(
-            [sys.executable, "-m", "bvhlab", *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+            [sys.executable, "-m", "bvhlab", *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env
         )
         assert child.stdout is not None and child.stderr is not None
         child.stdout.close()  # the reader gone before the first line
         err = child.stderr.read()
         assert child.wait(timeout=300) == 141 and "Broken pipe" not in err and "Traceback" not in err, err
-    assert json.loads(report.read_text())["worst"]
+    assert json.loads(report.read_text())["worst"] and json.loads(stats.read_text())["stats"]

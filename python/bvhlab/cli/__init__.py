@@ -55,12 +55,13 @@ def main(argv=None) -> int:
     returns 130 (the shell's code for SIGINT); neither shows a traceback."""
     args = parser().parse_args(options.join_dash_values(sys.argv[1:] if argv is None else list(argv)))
     try:
-        return args.run(args) or 0
+        code = args.run(args) or 0
+        sys.stdout.flush()  # here, not at exit: a pipe's buffered output fails now if its reader left
+        return code
     except BrokenPipeError:
         # the reader of the output went away (`bvhlab scenes | head -1`): quiet, as a command that
-        # SIGPIPE ends ("error: [Errno 32] Broken pipe" and 2 before); stdout to /dev/null, so that
-        # the interpreter's last flush does not fail again
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        # SIGPIPE ends ("error: [Errno 32] Broken pipe" and 2 before)
+        _quiet_stdout()
         return 128 + signal.SIGPIPE
     except (OSError, ValueError, TypeError, RuntimeError, BuildCancelled) as e:
         return _error(args.command, e)
@@ -69,6 +70,18 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print(f"bvhlab {args.command}: interrupted", file=sys.stderr)
         return 130
+
+
+def _quiet_stdout() -> None:
+    """stdout to /dev/null, so that the interpreter's last flush does not fail again on the broken
+    pipe ("Exception ignored ... BrokenPipeError", exit 120); nothing where stdout is no file."""
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):  # io.UnsupportedOperation is an OSError
+        return
+    null = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(null, fd)
+    os.close(null)
 
 
 def _error(command: str, error) -> int:

@@ -42,18 +42,19 @@ def run(args) -> int:
         bvh = build(scene, progress=bar, **settings)
     optimized = options.optimize_tree(bvh, optimize)
     stats = bvh.stats
+    about = {"scene": name, "source": args.scene, "settings": settings}
+    if optimize is not None and optimized is not None:
+        about["optimize"] = {**dataclasses.asdict(optimize), "stats": dataclasses.asdict(optimized)}
+    write_stats(stats, about, args.json, args.csv)  # before the printout: a reader gone lost them
     if isinstance(bvh, InstancedBvh):
         _print_instanced(name, bvh)
     else:
         _print_flat(name, stats)
-    about = {"scene": name, "source": args.scene, "settings": settings}
     if optimize is not None and optimized is not None:
         print(
             f"  optimized     SAH {optimized.sah_before:.3f} -> {optimized.sah_after:.3f} in {optimized.ms:.0f} ms, "
             f"{optimized.iterations} batches, {optimized.reinsertions} reinsertions ({optimized.stop})"
         )
-        about["optimize"] = {**dataclasses.asdict(optimize), "stats": dataclasses.asdict(optimized)}
-    write_stats(stats, about, args.json, args.csv)
     for written in (args.json, args.csv):
         if written:
             print(f"wrote {written}")
