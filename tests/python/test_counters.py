@@ -371,9 +371,12 @@ def test_cli_compare_counter_diff(tmp_path, capsys):
     np.testing.assert_array_equal(d, a - b)
     summary = json.loads(stem.with_suffix(".json").read_text())
     assert summary["median"]["mean"] == pytest.approx(float(a.mean()))
-    assert stem.with_suffix(".png").exists() and "median - sah12" in capsys.readouterr().out
+    said = capsys.readouterr()
+    assert stem.with_suffix(".png").exists() and "median - sah12" in said.out
     assert (out / f"{stem.name}_side_by_side.png").exists()
     # the comparison's options are refused beside it (they were accepted and ignored)
-    for extra in (["--frames", "6"], ["--methods", "median"], ["--no-figures"], ["--threads", "2"]):
+    # the figures' folder named where they went (it named the staging folder, gone by then)
+    assert f"wrote {stem.with_suffix('.png')}," in said.err
+    for extra in (["--frames", "6"], ["--methods", "median"], ["--no-figures"], ["--threads", "2"], ["--threads", "0"]):
         assert main([*argv, *extra, "--out", str(tmp_path / "other")]) == 2
         assert f"{extra[0]} is an option of the comparison" in capsys.readouterr().err

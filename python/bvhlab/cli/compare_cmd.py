@@ -101,7 +101,7 @@ COMPARISON_DEFAULTS = {
 def run(args) -> int:
     if args.counter is not None and not args.counter_diff:  # was run as the whole comparison, silently
         raise ValueError("--counter is the counter of --counter-diff A,B; give both")
-    given = [key for key in COMPARISON_DEFAULTS if getattr(args, key) not in (None, False)]
+    given = [key for key in COMPARISON_DEFAULTS if getattr(args, key) is not None and getattr(args, key) is not False]
     if args.counter_diff and given:
         raise ValueError(
             f"--{given[0].replace('_', '-')} is an option of the comparison (Table 1), not of --counter-diff"
@@ -140,7 +140,8 @@ def _counter_diff(scene, name: str, args, out: Path) -> int:
         shown = f"{first} - {second}" if label == "first_minus_second" else label
         print(f"{name} {args.counter} {shown}: mean {v['mean']:.2f}, median {v['median']:g}, p99 {v['p99']:g}")
     print(f"colour span ±{result['span']:g} (auto: the {s['auto_percentile']:g}th percentile of |difference|)")
-    say(f"wrote {paths['png']}, {paths['side_by_side'].name}, {paths['npy'].name}, {paths['json'].name}")
+    # named where they went (`paths` are the staging folder's, gone now)
+    say(f"wrote {out / paths['png'].name}, {paths['side_by_side'].name}, {paths['npy'].name}, {paths['json'].name}")
     return 0
 
 
