@@ -161,10 +161,22 @@ class ModalTaskMixin:
             self._window_manager.event_timer_remove(self._timer)
             self._timer = None
 
+    def cancel(self, context) -> None:
+        """Blender ends the operator itself (another file loading, its window closing): its timer
+        goes with it (it stayed, a window timer for the rest of the session: review)."""
+        if self._task is not None:
+            self._task.cancel()  # its result would come to no one
+        self._end()
+        self._remove_timer()  # also where stop_all abandoned it before (_end is done by then)
+        self._abandoned = True
+
     def _abandon(self) -> None:
-        """Ended by stop_all (the add-on disabled, another file loading): the progress goes now;
-        the timer stays until the operator's next call, which it brings, ends the operator (its
-        handler, left in the window with no event to end it, crashed Blender 4.3 when the add-on,
-        enabled again, ran Build: probe)."""
+        """Ended by stop_all (the add-on disabled, another file loading): the progress goes now,
+        the timer stays. Disabling the add-on frees the operator and leaves its handler in the
+        window for Blender to drop at the window's next event, which the timer brings (without
+        it, the handler stayed until some event came, and Blender 4.3 crashed when the add-on,
+        enabled again, ran Build first: probe). The timer then stays, idle, until its window
+        closes: removing it later from a bpy.app timer could touch a timer Blender freed with a
+        closed window. Another file loading calls `cancel`, which removes it."""
         self._end(keep_timer=True)
         self._abandoned = True
