@@ -183,11 +183,11 @@ def _panorama(data, kind: str) -> None:
 
 
 def _looking_through(scene, kind: str):
-    """The scene camera an object of `kind` (an empty, or a spot light of a 70° cone) where the
-    camera is: Cycles renders through it with its default lens or the cone's."""
+    """The scene camera an object of `kind` (an empty, a spot light of a 70° cone, a point light)
+    where the camera is: Cycles renders through it with its default lens or the light's cone."""
     camera = scene.camera
-    data = None if kind == "EMPTY" else bpy.data.lights.new("Spot", "SPOT")
-    if data is not None:
+    data = None if kind == "EMPTY" else bpy.data.lights.new(kind.title(), "POINT" if kind == "POINT" else "SPOT")
+    if data is not None and data.type == "SPOT":
         data.spot_size = math.radians(70)
     stand_in = bpy.data.objects.new(f"Looking through {kind.lower()}", data)
     scene.collection.objects.link(stand_in)
@@ -202,6 +202,10 @@ def _empty_camera(scene, data):
 
 def _spot_light_camera(scene, data):
     _looking_through(scene, "LIGHT")
+
+
+def _point_light_camera(scene, data):
+    _looking_through(scene, "POINT")
 
 
 #: name → (setting, whether the Rendered viewport has it in camera view: the viewport traces the
@@ -228,6 +232,7 @@ SETTINGS = {
     # renders them with 50 mm or the cone's: F12's
     "empty_camera": (_empty_camera, False),
     "spot_light_camera": (_spot_light_camera, False),
+    "point_light_camera": (_point_light_camera, False),
 }
 
 

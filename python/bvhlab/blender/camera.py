@@ -56,9 +56,9 @@ class _NoDepthOfField:
 
 @dataclass(frozen=True)
 class StandInLens:
-    """The lens Cycles gives a scene camera that is not a camera (an empty, a light, any object:
-    blender_camera_init's defaults, a spot light's cone as its field of view; stand_in_lens), with
-    the fields of Blender's camera data that lens_fields reads."""
+    """The lens Blender's renderers give a scene camera that is not a camera (an empty, a light,
+    any object: Cycles' blender_camera_init defaults, a light's cone as its field of view;
+    stand_in_lens), with the fields of Blender's camera data that lens_fields reads."""
 
     lens: float = 50.0
     type: str = "PERSP"
@@ -73,15 +73,23 @@ class StandInLens:
     dof: _NoDepthOfField = _NoDepthOfField()
 
 
+#: The spot size every light keeps, spot or not (Blender's default, 45°): what a point, sun or area
+#: light as the camera is framed by. One that was a spot light before keeps its own, which bpy
+#: does not show on other kinds of light.
+DEFAULT_SPOT_SIZE = math.radians(45.0)
+
+
 def stand_in_lens(obj) -> StandInLens:
     """The lens of a scene camera `obj` (evaluated) that is not a camera, as Cycles renders it
-    (blender_camera_from_object): a spot light's focal length 16 / tan(spot size / 2), Cycles'
-    defaults otherwise, whose focal length changed in 5.3 (compat.NON_CAMERA_LENS_MM)."""
+    (blender_camera_from_object): any light's focal length is 16 / tan(spot size / 2) (a spot
+    light's own size, DEFAULT_SPOT_SIZE for the others: a point light was given 50 mm, not
+    Cycles' 38.6: review); anything else has the focal length of compat.NON_CAMERA_LENS_MM."""
     from .compat import NON_CAMERA_LENS_MM
 
     data = obj.data
-    if obj.type == "LIGHT" and data is not None and data.type == "SPOT":
-        lens = 16.0 / math.tan(data.spot_size * 0.5)
+    if obj.type == "LIGHT" and data is not None:
+        size = data.spot_size if data.type == "SPOT" else DEFAULT_SPOT_SIZE
+        lens = 16.0 / math.tan(size * 0.5)
         if lens > 0:
             return StandInLens(lens=lens)
     return StandInLens(lens=NON_CAMERA_LENS_MM)
