@@ -60,12 +60,14 @@ class BuildConfig:
         c = self.core()
         # each setting as the Python type of its field, so that equal settings written differently
         # (sbvh_alpha 1 and 1.0, bins 12 and numpy's 12) record and hash alike (stats files, sweep
-        # keys), and a float as the core holds it (float32): the default sbvh_alpha is float32(3e-4),
-        # which 3e-4 typed did not equal (a tree file saved with the default was refused for it)
+        # keys); a float as the shortest decimal of the float32 the core holds: the default
+        # sbvh_alpha, float32(3e-4), did not equal 3e-4 typed (a tree file saved with the default
+        # was refused with it), and float32's own digits (9.999999747378752e-06 for 1e-5) would show
+        # in tables and labels (review)
         for name in ("bins", "max_leaf_size", "sah_block", "seed", "threads"):
             object.__setattr__(self, name, int(getattr(c, name)))
         for name in ("sbvh_alpha", "sbvh_budget"):
-            object.__setattr__(self, name, float(np.float32(getattr(self, name))))
+            object.__setattr__(self, name, float(str(np.float32(getattr(self, name)))))
         object.__setattr__(self, "sbvh_unsplit", bool(self.sbvh_unsplit))
 
     def core(self) -> _core.BuildConfig:

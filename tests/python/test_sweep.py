@@ -120,6 +120,8 @@ def test_equal_settings_written_differently_have_one_key(tmp_path, models):
     # the float settings as the core holds them: the default sbvh_alpha is float32(3e-4), which 3e-4
     # typed did not equal (a tree file saved with the default was refused with it)
     assert BuildConfig(method="sbvh") == BuildConfig(method="sbvh", sbvh_alpha=3e-4)
+    # as their shortest decimals, not float32's digits (9.999999747378752e-06 showed in labels)
+    assert BuildConfig(sbvh_alpha=1e-5).sbvh_alpha == 1e-5 and BuildConfig().sbvh_alpha == 3e-4
 
 
 def test_in_process_sweep_rows_match_an_independent_build(tmp_path, models):
