@@ -14,13 +14,15 @@ from . import state
 from .trees import TreeKey, cache, key_of
 
 
-def run_reported(operator, context, work, quiet: tuple = ()) -> set[str]:
+def run_reported(operator, context, work, quiet: tuple = (), scene_key: int | None = None) -> set[str]:
     """Run `work()` (returns the operator's result set). Export warnings, except those of the
     `quiet` classes, become WARNING reports; any exception becomes an ERROR report and
-    {'CANCELLED'}: nothing escapes into Blender. The last message is kept for the panel."""
+    {'CANCELLED'}: nothing escapes into Blender. The last message is kept for the panel of the
+    scene `scene_key` names (default: the context's; a build ending after the window switched
+    scene reports to the scene it built for)."""
     from bvhlab.blender import ExportWarning
 
-    key = state.key(context.scene)
+    key = state.key(context.scene) if scene_key is None else scene_key
     failure = None
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ExportWarning)

@@ -66,7 +66,7 @@ class BVHLAB_OT_build(ModalTaskMixin, bpy.types.Operator):
         return started
 
     def finish_task(self, context, task):
-        return run_reported(self, context, lambda: self._finish(context, task))
+        return run_reported(self, context, lambda: self._finish(context, task), scene_key=self._scene_key)
 
     def _finish(self, context, task):
         import bvhlab

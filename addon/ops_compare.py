@@ -84,7 +84,7 @@ class BVHLAB_OT_compare(ModalTaskMixin, bpy.types.Operator):
                 raise task.error
             return self._done(context, task.result)
 
-        return run_reported(self, context, finish)
+        return run_reported(self, context, finish, scene_key=self._scene_key)
 
     def _measurement(self, context):
         """measure(progress) → rows; everything read from bpy is read here, on the UI thread."""

@@ -336,7 +336,8 @@ def _cycles_reference(tmp_dir, name: str, scene) -> np.ndarray:
     """Cycles' Depth pass of the scene's camera; an empty as the camera under Blender 5.1 and 5.2,
     whose Cycles crashes rendering through one (a segfault, measured; Workbench and EEVEE render it
     with Blender's 35 mm, as 5.3's Cycles does), through a camera of the lens bvhlab gives it
-    (compat.NON_CAMERA_LENS_MM) in its place."""
+    (compat.NON_CAMERA_LENS_MM) in its place: there the check tests the framing with that lens,
+    not the lens itself (no Cycles of those versions can say which)."""
     from bvhlab.blender.compat import NON_CAMERA_LENS_MM
 
     stand_in = scene.camera
