@@ -295,3 +295,34 @@ def test_bad_files_and_paths_are_one_error_line(bad_scene_files, args, message):
     last = err.strip().splitlines()[-1]
     assert last.startswith(f"bvhlab {args[0]}: error: ") and re.search(message, last), err
     assert sorted(p.name for p in bad_scene_files.iterdir()) == before
+
+
+def test_files_that_go_together_are_kept_together_when_interrupted(tmp_path, monkeypatch, capsys):
+    # one file at a time, an interrupt left a new counter image beside its old histogram, and a new
+    # stats JSON beside its old CSV (probe); now all of them are written at once or none
+    from bvhlab import stats_files
+    from bvhlab.cli import render_cmd
+
+    out = tmp_path / "c.png"
+    render = ["render", "gen:five_spheres", "--counter", "box_tests", "--width", "24", "--height", "16"]
+    assert main([*render, "--backend", "cpu", "--out", str(out)]) == 0
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    assert len(before) == 4, sorted(before)  # the image, its counts, the histogram strip and numbers
+
+    def interrupted(*_args, **_kwargs):
+        raise KeyboardInterrupt
+
+    real = render_cmd.histogram.histogram_strip
+    monkeypatch.setattr(render_cmd.histogram, "histogram_strip", interrupted)  # after the image's bytes
+    assert main([*render, "--width", "32", "--backend", "cpu", "--out", str(out)]) == 130
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
+    monkeypatch.setattr(render_cmd.histogram, "histogram_strip", real)
+
+    stats = tmp_path / "stats"
+    build = ["build", "gen:five_spheres", "--json", str(stats / "s.json"), "--csv", str(stats / "s.csv")]
+    assert main(build) == 0
+    kept = {p.name: p.read_bytes() for p in stats.iterdir()}
+    monkeypatch.setattr(stats_files, "stats_csv", interrupted)  # after the JSON's text
+    assert main([*build, "--method", "median"]) == 130
+    assert {p.name: p.read_bytes() for p in stats.iterdir()} == kept
+    capsys.readouterr()
