@@ -44,6 +44,7 @@ def installed_files(package: Path) -> Iterable[tuple[str, bytes]]:
 
 
 def python_tag() -> str:
+    """The running Python's wheel tag (cp311, cp313, cp314): which of the zip's wheels is its own."""
     return f"cp{sys.version_info.major}{sys.version_info.minor}"
 
 

@@ -79,7 +79,7 @@ def warm_cmake() -> str:
 def build_wheel(into: Path) -> Path:
     """The bvhlab wheel for the running Python, copied into `into` (older ones of that tag removed).
     CMAKE_CXX_FLAGS is passed on every configure (a kept build folder picks up a change)."""
-    tag = f"cp{sys.version_info.major}{sys.version_info.minor}"
+    tag = core_check.python_tag()
     cxx_flags = f"{os.environ.get('CXXFLAGS', '')} -include {GLIBC_COMPAT}".strip()
     env = {**os.environ, "CMAKE_EXECUTABLE": warm_cmake()}
     with tempfile.TemporaryDirectory() as tmp:
