@@ -1,11 +1,15 @@
 """Whether the bvhlab package Python imports is the one this extension's zip bundles for it.
 
-Blender keeps an extension's wheel while its file name stays (bvhlab-VERSION-cpXY-...), and a
-Python module stays loaded until Blender quits: a zip rebuilt at the same version, installed over
-the one before, ran its new add-on code on the old core, also after a restart (probe). The zip
-carries a digest of each wheel's bvhlab package (scripts/build_addon.py writes DIGESTS, with
-package_digest over the wheel's entries); at register the add-on takes the same digest of the
-package imported and says what to do where they differ. No bpy here: the build script uses it."""
+Blender installs an extension's wheel again only where its name changes, and a Python module stays
+loaded until Blender quits: a zip rebuilt at the same version, installed over the one before, ran
+its new add-on code on the old core, also after a restart (probe). So each wheel's version carries
+the digest of its package (`+` LABEL_DIGITS hex digits, scripts/build_addon.py relabel_wheel) and
+Blender replaces it; the zip carries the digests (DIGESTS, package_digest over the wheel's
+entries). At register the add-on takes the same digest of the package installed: where it differs
+from the zip's, the installed one is another build's; where it differs from the digest taken when
+bvhlab was first checked in this Blender (kept on the module, which outlives the add-on's
+reloads), the files were replaced under the loaded core, and a restart loads them. No bpy here: the
+build script uses it."""
 
 from __future__ import annotations
 
@@ -18,11 +22,19 @@ from pathlib import Path
 #: The zip's file of {python tag: digest of that wheel's bvhlab package}.
 DIGESTS = "wheel_digests.json"
 
+#: Hex digits of a package's digest in its wheel's local version label.
+LABEL_DIGITS = 16
+
 MISMATCH = (
-    "The bvhlab core Python has loaded is not the one this extension bundles (a build of the same "
-    "version installed over another): restart Blender; if this stays, remove the extension, "
+    "The bvhlab core installed is not the one this extension bundles: remove the extension, "
     "restart Blender and install it again"
 )
+RESTART = (
+    "The bvhlab core was updated while Blender ran, and the one loaded is the one before: restart Blender to load it"
+)
+
+#: The bvhlab module's attribute holding its package's digest as first checked in this process.
+_LOADED_DIGEST = "_addon_loaded_digest"
 
 
 def package_digest(files: Iterable[tuple[str, bytes]]) -> str:
@@ -49,8 +61,9 @@ def python_tag() -> str:
 
 
 def core_mismatch(addon_folder: Path) -> str:
-    """MISMATCH where the imported bvhlab package is not the one the zip at `addon_folder` bundles
-    for this Python; "" where it is, or where there is no zip's digest to compare with (the add-on
+    """MISMATCH where the installed bvhlab package is not the one the zip at `addon_folder` bundles
+    for this Python, RESTART where it is but was installed after the loaded one; "" where the
+    loaded package is the zip's, or where there is no zip's digest to compare with (the add-on
     used in place, during development)."""
     path = addon_folder / DIGESTS
     if not path.is_file():
@@ -61,4 +74,10 @@ def core_mismatch(addon_folder: Path) -> str:
     import bvhlab
 
     found = package_digest(installed_files(Path(bvhlab.__file__).parent))
-    return "" if found == expected else MISMATCH
+    loaded = getattr(bvhlab, _LOADED_DIGEST, None)
+    if loaded is None:
+        setattr(bvhlab, _LOADED_DIGEST, found)
+        loaded = found
+    if found != expected:
+        return MISMATCH
+    return "" if loaded == found else RESTART

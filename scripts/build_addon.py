@@ -143,12 +143,17 @@ def stage_manifest(source: str, version: str, wheel_names: list[str]) -> str:
     return text
 
 
+def wheel_tag(wheel: Path) -> str:
+    """The Python tag of a wheel's file name (cp311 of bvhlab-0.1.0-cp311-cp311-linux_x86_64.whl)."""
+    return wheel.name.split("-")[2]
+
+
 def wheel_digests(wheels: list[Path]) -> dict[str, str]:
     """{python tag: digest of the wheel's bvhlab package} (addon/core_check.py, which the add-on
     compares with the package it imports)."""
     digests = {}
     for wheel in wheels:
-        tag = wheel.name.split("-")[2]
+        tag = wheel_tag(wheel)
         with zipfile.ZipFile(wheel) as archive:
             files = [
                 (n, archive.read(n)) for n in archive.namelist() if n.startswith("bvhlab/") and not n.endswith("/")
@@ -157,17 +162,69 @@ def wheel_digests(wheels: list[Path]) -> dict[str, str]:
     return digests
 
 
+def relabel_wheel(wheel: Path, into: Path, label: str) -> Path:
+    """A copy of `wheel` in `into` whose version carries the local label `+label` (PEP 440; one
+    there before is replaced): in its file name, its .dist-info folder, METADATA's Version and
+    RECORD, whose rows are made again (csv, sha256 in unpadded urlsafe base64, size).
+
+    Blender installs an extension's wheel again only where the name of its .dist-info folder
+    changes (`apply_action` in _bpy_internal/extensions/wheel_manager.py keeps a folder of the
+    same name), so a zip rebuilt at the same version, installed over the one before, kept the
+    old core for good; labelled with its package's digest, each build's wheel is a new one."""
+    import base64
+    import csv
+    import hashlib
+    import io
+
+    name, version, *tags = wheel.name.split("-")
+    release = version.split("+")[0]
+    labelled = f"{release}+{label}"
+    old_info, new_info = f"{name}-{version}.dist-info/", f"{name}-{labelled}.dist-info/"
+    record = new_info + "RECORD"
+    out = into / "-".join([name, labelled, *tags])
+    with zipfile.ZipFile(wheel) as source:
+        entries = []  # (the entry's ZipInfo, its new name, its bytes), RECORD's last
+        for info in source.infolist():
+            data = source.read(info)
+            renamed = info.filename
+            if renamed.startswith(old_info):
+                renamed = new_info + renamed[len(old_info) :]
+            if renamed == new_info + "METADATA":
+                data, count = re.subn(rb"^Version: .*$", f"Version: {labelled}".encode(), data, count=1, flags=re.M)
+                if count != 1:
+                    raise SystemExit(f"{wheel.name}: METADATA has no Version line")
+            entries.append((info, renamed, data))
+    entries.sort(key=lambda entry: entry[1] == record)
+    if entries[-1][1] != record:
+        raise SystemExit(f"{wheel.name} has no {old_info}RECORD")
+    rows = io.StringIO()
+    writer = csv.writer(rows, lineterminator="\n")
+    for _, renamed, data in entries[:-1]:
+        digest = base64.urlsafe_b64encode(hashlib.sha256(data).digest()).rstrip(b"=").decode()
+        writer.writerow([renamed, f"sha256={digest}", len(data)])
+    writer.writerow([record, "", ""])
+    entries[-1] = (entries[-1][0], record, rows.getvalue().encode())
+    with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as target:
+        for info, renamed, data in entries:
+            entry = zipfile.ZipInfo(renamed, date_time=info.date_time)
+            entry.external_attr = info.external_attr
+            entry.compress_type = zipfile.ZIP_DEFLATED
+            target.writestr(entry, data)
+    return out
+
+
 def stage(wheels: list[Path], version: str) -> Path:
-    """addon/ copied to build/addon-stage with the wheels and the generated manifest."""
+    """addon/ copied to build/addon-stage with the wheels, each labelled with the digest of its
+    package (relabel_wheel), and the generated manifest."""
     staged = ROOT / "build" / "addon-stage" / "bvhlab"
     shutil.rmtree(staged.parent, ignore_errors=True)
     shutil.copytree(ADDON, staged, ignore=shutil.ignore_patterns("__pycache__", "wheels", "*.pyc"))
     (staged / "wheels").mkdir()
-    for wheel in wheels:
-        shutil.copy2(wheel, staged / "wheels" / wheel.name)
-    (staged / core_check.DIGESTS).write_text(json.dumps(wheel_digests(wheels), indent=1) + "\n")
+    digests = wheel_digests(wheels)
+    labelled = [relabel_wheel(w, staged / "wheels", digests[wheel_tag(w)][: core_check.LABEL_DIGITS]) for w in wheels]
+    (staged / core_check.DIGESTS).write_text(json.dumps(digests, indent=1) + "\n")
     manifest = staged / "blender_manifest.toml"
-    manifest.write_text(stage_manifest(manifest.read_text(), version, [w.name for w in wheels]))
+    manifest.write_text(stage_manifest(manifest.read_text(), version, [w.name for w in labelled]))
     return staged
 
 

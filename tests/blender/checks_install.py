@@ -4,7 +4,12 @@ Run in a process of its own with BLENDER_USER_RESOURCES pointing at a temporary 
 
 from __future__ import annotations
 
+import importlib.util
+import json
+import re
 import sys
+import tempfile
+import zipfile
 from pathlib import Path
 
 import bpy
@@ -94,3 +99,82 @@ def check_install_enable_disable(zip_path: Path) -> None:
     bpy.ops.preferences.addon_enable(module=MODULE)
     assert all(_registered().values()), _registered()
     _build_default_scene()
+
+
+def _build_script():
+    """scripts/build_addon.py, which labels the zip's wheels (relabel_wheel, wheel_digests)."""
+    spec = importlib.util.spec_from_file_location("bvhlab_build_addon", harness.ROOT / "scripts" / "build_addon.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _another_build(zip_path: Path, out: Path, tag: str) -> tuple[Path, str]:
+    """The zip as a rebuild of the same version with another core would be: this Python's wheel
+    with one more file in its package, labelled with its new digest as `make addon` labels it, and
+    the manifest and the digests naming it. Returns the zip and the new package's digest."""
+    build = _build_script()
+    with zipfile.ZipFile(zip_path) as source:
+        names = source.namelist()
+        old = next(n for n in names if re.search(rf"-{tag}-{tag}-[^/]*\.whl$", n))
+        changed = out / Path(old).name
+        with zipfile.ZipFile(source.open(old)) as wheel, zipfile.ZipFile(changed, "w") as rebuilt:
+            for info in wheel.infolist():
+                rebuilt.writestr(info, wheel.read(info))
+            rebuilt.writestr("bvhlab/rebuilt_marker.txt", "another build of the same version")
+        digest = build.wheel_digests([changed])[tag]
+        (out / "wheels").mkdir()
+        new = build.relabel_wheel(changed, out / "wheels", digest[: build.core_check.LABEL_DIGITS])
+        new_name = f"wheels/{new.name}"
+        probe = out / "bvhlab_rebuilt.zip"
+        with zipfile.ZipFile(probe, "w") as target:
+            for name in names:
+                data = source.read(name)
+                if name == old:
+                    name, data = new_name, new.read_bytes()
+                elif name == "blender_manifest.toml":
+                    data = data.replace(old.encode(), new_name.encode())
+                elif name == build.core_check.DIGESTS:
+                    data = json.dumps(dict(json.loads(data), **{tag: digest})).encode()
+                target.writestr(name, data)
+    return probe, digest
+
+
+def _install(zip_path: Path) -> None:
+    result = bpy.ops.extensions.package_install_files(
+        filepath=str(zip_path), repo="user_default", enable_on_install=True
+    )
+    assert result == {"FINISHED"}, result
+
+
+def check_installed_over_while_running(zip_path: Path) -> None:
+    """Under a Blender binary, after the zip's install. A rebuild of the same version installed
+    while Blender runs (the probe's upgrade) replaces the core's files, as its wheel's version
+    carries its package's digest, and the panel asks for a restart, as the core loaded is the one
+    before; the first zip installed again leaves no warning. (Before the label, Blender kept the
+    old wheel, and the new add-on ran on the old core, also after a restart.)"""
+    import bvhlab
+
+    site = Path(bpy.utils.user_resource("EXTENSIONS", path=".local"))
+    installed = Path(bvhlab.__file__).resolve().parent
+    assert installed.is_relative_to(site.resolve()), f"bvhlab loaded from {installed}, not from the zip's wheel"
+    package = sys.modules[MODULE]
+    check = sys.modules[f"{MODULE}.core_check"]
+    assert package.state.core_warning == "", package.state.core_warning
+    loaded = check.package_digest(check.installed_files(installed))
+    with tempfile.TemporaryDirectory() as tmp:
+        rebuilt, digest = _another_build(zip_path, Path(tmp), check.python_tag())
+        assert digest != loaded
+        _install(rebuilt)
+        package = sys.modules[MODULE]  # the add-on's modules were imported again
+        assert package.state.core_warning == check.RESTART, package.state.core_warning
+        assert (installed / "rebuilt_marker.txt").is_file(), "Blender kept the wheel installed before"
+        assert check.package_digest(check.installed_files(installed)) == digest
+        infos = sorted(p.name for p in site.rglob("bvhlab-*.dist-info"))
+        assert len(infos) == 1 and digest[: check.LABEL_DIGITS] in infos[0], infos
+    _install(zip_path)
+    package = sys.modules[MODULE]
+    assert package.state.core_warning == "", package.state.core_warning
+    assert not (installed / "rebuilt_marker.txt").exists()
+    assert check.package_digest(check.installed_files(installed)) == loaded

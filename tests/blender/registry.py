@@ -76,6 +76,13 @@ def _install() -> Iterator[Check]:
     )
     yield Check("install", "install_enable_disable", checks_install.check_install_enable_disable, zip=True)
     yield Check("install", "installed_core_is_this_pythons", checks_versions.check_installed_core_is_this_pythons)
+    yield Check(
+        "install",
+        "installed_over_while_running",
+        checks_install.check_installed_over_while_running,
+        zip=True,
+        binary=True,
+    )
 
 
 def _export() -> Iterator[Check]:

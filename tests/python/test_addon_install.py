@@ -4,6 +4,7 @@ unregisters without leftovers and enables again is the install group of tests/bl
 (under bpy 4.2 in test_blender_checks.py; under bpy 5.2 and the Blender binaries 4.3, Python 3.13,
 and 5.2, Python 3.14, by `make blender-test`)."""
 
+import json
 import re
 import tomllib
 import zipfile
@@ -34,10 +35,52 @@ def test_zip_has_a_wheel_for_each_blender_python_and_one_version():
         names = set(archive.namelist())
     version = bvhlab.__version__
     assert manifest["version"] == version
+    labels = {tag: digest[:16] for tag, digest in _digests().items()}
     assert sorted(manifest["wheels"]) == [
-        f"./wheels/bvhlab-{version}-{tag}-{tag}-linux_x86_64.whl" for tag in BLENDER_PYTHONS
+        f"./wheels/bvhlab-{version}+{labels[tag]}-{tag}-{tag}-linux_x86_64.whl" for tag in BLENDER_PYTHONS
     ]
     assert all(wheel[2:] in names for wheel in manifest["wheels"]), (manifest["wheels"], names)
+
+
+def _digests() -> dict[str, str]:
+    with zipfile.ZipFile(_zip()) as archive:
+        return json.loads(archive.read("wheel_digests.json"))
+
+
+@pytest.mark.full_zip
+def test_each_wheel_is_labelled_with_its_package_and_its_record_holds():
+    """Blender installs a wheel again only where its .dist-info folder's name changes, so each
+    wheel's version carries the digest of its bvhlab package (scripts/build_addon.py
+    relabel_wheel): the digest recomputed here from the wheel's files (sha256 over name, size and
+    bytes in name order, as addon/core_check.py takes it), the .dist-info folder and METADATA's
+    Version carrying it, and RECORD naming every other entry with its sha256 and size."""
+    import base64
+    import csv
+    import hashlib
+    import io
+
+    expected = _digests()
+    with zipfile.ZipFile(_zip()) as archive:
+        wheels = [n for n in archive.namelist() if n.endswith(".whl")]
+        for name in wheels:
+            tag = name.split("-")[2]
+            with zipfile.ZipFile(io.BytesIO(archive.read(name))) as wheel:
+                files = {n: wheel.read(n) for n in wheel.namelist() if not n.endswith("/")}
+            digest = hashlib.sha256()
+            for path in sorted(n for n in files if n.startswith("bvhlab/")):
+                digest.update(path.encode() + b"\0" + len(files[path]).to_bytes(8, "little") + files[path])
+            assert digest.hexdigest() == expected[tag], name
+            labelled = f"{bvhlab.__version__}+{expected[tag][:16]}"
+            info = f"bvhlab-{labelled}.dist-info/"
+            assert f"Version: {labelled}\n" in files[info + "METADATA"].decode(), name
+            rows = list(csv.reader(io.StringIO(files[info + "RECORD"].decode())))
+            assert sorted(r[0] for r in rows) == sorted(files), name
+            for path, hashed, size in rows:
+                if path == info + "RECORD":
+                    assert (hashed, size) == ("", ""), name
+                    continue
+                sha = base64.urlsafe_b64encode(hashlib.sha256(files[path]).digest()).rstrip(b"=").decode()
+                assert (hashed, int(size)) == (f"sha256={sha}", len(files[path])), (name, path)
 
 
 def test_version_is_written_once():
