@@ -227,6 +227,18 @@ def test_a_header_field_of_the_wrong_kind_is_a_damaged_header(saved, key, value)
         bvhlab.load_bvh(path, tris, spheres)
 
 
+def test_leaves_larger_than_the_headers_max_leaf_size_are_refused(saved):
+    """The file says max_leaf_size=1 over a tree with leaves of 3 (every builder, update and
+    optimize keeps leaves within the setting): it loaded, also with config= asking for 1, and its
+    tables showed a setting the tree does not have (helper probe)."""
+    bvh, path, tris, spheres = saved
+    assert bvh.stats["max_leaf_size"] == 3
+    _rewrite_header(path, lambda header: header["config"].__setitem__("max_leaf_size", 1))
+    for config in (None, bvhlab.BuildConfig(method="sah", bins=16, max_leaf_size=1)):
+        with pytest.raises(ValueError, match="holds [23] primitives, more than its max_leaf_size 1"):
+            bvhlab.load_bvh(path, tris, spheres, config=config)
+
+
 def test_a_header_of_infinite_or_huge_numbers_or_deep_nesting_is_a_damaged_header(saved):
     """JSON's Infinity and numbers beyond a double raised OverflowError out of load_bvh, a header
     nested 100,000 deep RecursionError (helper probe)."""

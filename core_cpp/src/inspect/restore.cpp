@@ -49,7 +49,8 @@ void check_refs(const std::vector<std::uint32_t>& refs, const GeometryView& g, c
 
 /// Depth-first layout, skip indices, leaf slots and depths (bvh.h, docs/design.md "Tree layout").
 /// Children come after their parent, so subtree ends are found in one backward pass.
-void check_layout(const std::vector<BvhNode>& nodes, std::size_t ref_count, std::vector<std::uint8_t>& depths) {
+void check_layout(const std::vector<BvhNode>& nodes, std::size_t ref_count, std::uint32_t max_leaf_size,
+                  std::vector<std::uint8_t>& depths) {
     const std::uint32_t n = std::uint32_t(nodes.size());
     depths.assign(n, 0);
     if (n == 0) return;
@@ -77,6 +78,11 @@ void check_layout(const std::vector<BvhNode>& nodes, std::size_t ref_count, std:
         }
         if (leaf_count(node) == 0 || std::uint64_t(node.index) + leaf_count(node) > ref_count)
             refuse("leaf " + std::to_string(i) + " has wrong slots");
+        // every builder, update and optimize keeps leaves within the setting (a file whose header
+        // says otherwise would show false settings in tables and pass `config=` checks)
+        if (leaf_count(node) > max_leaf_size)
+            refuse("leaf " + std::to_string(i) + " holds " + std::to_string(leaf_count(node)) +
+                   " primitives, more than its max_leaf_size " + std::to_string(max_leaf_size));
         runs.emplace_back(node.index, i);
     }
     // the leaves' runs of slots tile the references: in depth-first order after a build, in any
@@ -162,7 +168,7 @@ Bvh restore_bvh(SavedTree saved, const GeometryView& geometry, unsigned threads)
     if (saved.nodes.empty() != (geometry.primitive_count() == 0)) refuse("nodes and primitives disagree");
     check_refs(saved.refs, geometry, saved.config);
     std::vector<std::uint8_t> depths;
-    check_layout(saved.nodes, saved.refs.size(), depths);
+    check_layout(saved.nodes, saved.refs.size(), saved.config.max_leaf_size, depths);
     const bool clipped = saved.config.method == SplitMethod::Sbvh;
     check_boxes(saved.nodes, saved.refs, geometry, clipped);
     if (clipped) check_coverage(saved.nodes, saved.refs, geometry);
