@@ -341,3 +341,26 @@ def test_a_skewed_stretched_instance_does_not_shadow_itself():
     got, flat = colour(instanced), colour(instanced.flattened())
     assert (flat.max(-1) > 0.3).sum() > 1000, "the test's view: the sphere lit"
     assert int((np.abs(got - flat).max(-1) > 0.1).sum()) == 0
+
+
+def test_a_tree_placed_otherwise_than_its_scene_is_refused_and_renders_once_placed_again():
+    """A two-level tree renders the scene it was placed for: a scene whose instance moved since,
+    or one with an instance more or less, is refused (it rendered the tree's placement without a
+    word, helper probe), as a flat tree over other geometry is; placed again, the tree renders
+    the moved scene exactly as a tree built over it."""
+    placed = [_transform(0.0, (0, 0, 1), (1, 1, 1), (0, 0, 0)), _transform(0.5, (0, 1, 0), (1, 1, 1), (3, 0, 0))]
+    tree = bvhlab.build(_scene(placed, [0, 1]))
+    moved = _scene([placed[0], _transform(0.5, (0, 1, 0), (1, 1, 1), (0, 3, 0))], [0, 1])
+    with pytest.raises(ValueError, match="not placed as the scene's"):
+        bvhlab.render(moved, tree, 48, 32, backend="cpu")
+    with pytest.raises(ValueError, match="not placed as the scene's"):
+        bvhlab.render(_scene(placed, [0, 0]), tree, 48, 32, backend="cpu")  # another mesh in a place
+    with pytest.raises(ValueError, match="the tree has 2 instances, the scene 3"):
+        bvhlab.render(_scene([*placed, placed[1]], [0, 1, 1]), tree, 48, 32, backend="cpu")
+    flat = bvhlab.Scene(triangles=moved.triangles, camera=moved.camera, light=moved.light)
+    with pytest.raises(ValueError, match="the tree has 2 meshes, the scene 1"):
+        bvhlab.render(flat, tree, 48, 32, backend="cpu")
+    tree.place(*moved.instances())
+    image, _ = bvhlab.render(moved, tree, 48, 32, backend="cpu")
+    expected, _ = bvhlab.render(moved, bvhlab.build(moved), 48, 32, backend="cpu")
+    assert np.array_equal(image, expected)
