@@ -14,6 +14,7 @@
 #include "bvhlab/cancel.h"
 #include "bvhlab/coordinate_range.h"
 #include "bvhlab/traverse.h"
+#include "bvhlab/wide_bvh.h"
 #include "test_scenes.h"
 
 using namespace bvhlab;
@@ -170,6 +171,7 @@ TEST(BadInput, CancellationStopsARayBatch) {
 TEST(BadInput, CancellationIsSeenInsideAChunk) {
     auto scene = test::random_scene(2000, 0, 1);
     Bvh bvh = build_bvh(scene.view());
+    const WideBvh wide = make_wide(bvh);
     const std::size_t n = 1024;
     std::vector<float> o(3 * n, 1.0f), d(3 * n), t(n);
     for (std::size_t i = 0; i < n; ++i) d[3 * i] = 1.0f, d[3 * i + 1] = float(i % 17) - 8.0f, d[3 * i + 2] = 0.5f;
@@ -178,7 +180,7 @@ TEST(BadInput, CancellationIsSeenInsideAChunk) {
         int polls = 0;
         Cancellation cancel([&] { return ++polls == 3; }, std::chrono::milliseconds(0));
         std::fill(t.begin(), t.end(), -1.0f);
-        EXPECT_THROW(intersect_batch(bvh, {o.data(), d.data(), n}, {t.data(), prim.data()}, mode, 1, nullptr, &cancel),
+        EXPECT_THROW(intersect_batch(bvh, {o.data(), d.data(), n}, {t.data(), prim.data()}, mode, 1, &wide, &cancel),
                      Cancelled);
         EXPECT_EQ(polls, 3);
         EXPECT_LE(n - std::size_t(std::count(t.begin(), t.end(), -1.0f)), std::size_t(most)) << int(mode);

@@ -47,8 +47,9 @@ struct HitBatch {
 /// outside [kMinDirection, kMaxDirection] (coordinate_range.h), and a NaN or negative tmin or
 /// scalar tmax (check_limits); each ray is scaled by a power of
 /// two for the arithmetic (scale_ray), which changes no result but keeps it in range.
-/// With `cancel`, the calling thread polls it between chunks of rays and every thread stops
-/// soon after a stop is requested; then it throws Cancelled (the outputs are left incomplete).
+/// With `cancel`, the calling thread polls it between chunks of rays and inside them (every 16
+/// rays, or piece of 256 on the wide tree), and every thread stops soon after a stop is
+/// requested; then it throws Cancelled (the outputs are left incomplete).
 void intersect_batch(const Bvh& bvh, const RayBatch& rays, const HitBatch& hits, Traversal mode,
                      std::uint32_t threads = 0, const WideBvh* wide = nullptr, Cancellation* cancel = nullptr);
 
