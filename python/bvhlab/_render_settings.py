@@ -21,7 +21,7 @@ def render_settings(
     if not isinstance(bvh, (Bvh, InstancedBvh)):
         raise TypeError(f"bvh must be a bvhlab.Bvh or bvhlab.InstancedBvh, got {type(bvh).__name__}")
     s = _core.RenderSettings()
-    s.width, s.height = _checks.integer("width", width, 0, 2**31), _checks.integer("height", height, 0, 2**31)
+    s.width, s.height = _checks.integer("width", width, 1, 2**31), _checks.integer("height", height, 1, 2**31)
     looking = _camera(scene, camera)
     s.camera = looking.core()
     light = scene.light if scene.light is not None else default_light(looking)

@@ -133,6 +133,8 @@ class InstancedBvh:
     def tlas_leaf_instances(self, node: int) -> np.ndarray:
         """The instances TLAS leaf `node` holds (none for an inner node)."""
         _, data, leaf_first, refs = self._tlas_nodes()
+        if not len(leaf_first):
+            raise ValueError("the tree has no instances: its TLAS has no nodes")
         node = _checks.integer("node", node, 0, len(leaf_first) - 1)  # -1 would be the last node
         first = int(leaf_first[node])
         return refs[first : first + int(data.prim_count[node])] if first >= 0 else refs[:0]
@@ -140,6 +142,8 @@ class InstancedBvh:
     def tlas_leaf_of(self, instance: int) -> int:
         """The TLAS leaf holding `instance` (-1 for an instance of an empty mesh, which no leaf holds)."""
         leaves = self.tlas_leaves_of_instances()
+        if not len(leaves):
+            raise ValueError("the tree has no instances")
         return int(leaves[_checks.integer("instance", instance, 0, len(leaves) - 1)])  # -1: not the last one
 
     def tlas_leaves_of_instances(self) -> np.ndarray:

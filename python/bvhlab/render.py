@@ -230,7 +230,7 @@ class Renderer:
         """Raises ValueError for an image size this backend does not render (empty, or above
         max_image_dimension per side), TypeError for a size that is not two integers: for callers
         that must refuse a size before they allocate anything for it (as `start` does)."""
-        width, height = _checks.integer("width", width, 0, 2**31), _checks.integer("height", height, 0, 2**31)
+        width, height = _checks.integer("width", width, 1, 2**31), _checks.integer("height", height, 1, 2**31)
         _core.validate_image_size(width, height, self.max_image_dimension)
 
     def validation_messages(self) -> list[str]:

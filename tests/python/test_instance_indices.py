@@ -101,3 +101,9 @@ def test_tlas_leaf_lookups_refuse_indices_out_of_range():
             tree.tlas_leaf_instances(bad)
     leaves = [tree.tlas_leaf_of(i) for i in range(3)]
     assert all(i in tree.tlas_leaf_instances(leaf).tolist() for i, leaf in enumerate(leaves))
+    # "must be between 0 and -1" where there are none (helper probe)
+    empty = bvhlab.build(bvhlab.Scene(triangles=tris, instance_mesh=np.zeros(0, np.int32), instance_transforms=_eye(0)))
+    with pytest.raises(ValueError, match="the tree has no instances$"):
+        empty.tlas_leaf_of(0)
+    with pytest.raises(ValueError, match="the tree has no instances: its TLAS has no nodes"):
+        empty.tlas_leaf_instances(0)

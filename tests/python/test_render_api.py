@@ -228,3 +228,12 @@ def test_a_pixel_that_cannot_finish_is_an_error(renderer):
         renderer.render(scene, bvh, 8, 8, max_steps_per_pixel=5000)
     image, _ = renderer.render(scene, bvh, 8, 8)  # with the default cap it finishes
     assert np.all(image[..., 3] == 1)
+
+
+def test_an_image_size_below_one_is_refused_in_one_voice():
+    """Width -1 said "between 0 and 2147483648" and 0 "at least 1" (helper probe)."""
+    scene = bvhlab.Scene(triangles=np.random.default_rng(0).random((20, 3, 3), dtype=np.float32))
+    bvh = bvhlab.build(scene)
+    for width, height, name in ((-1, 5, "width"), (0, 5, "width"), (5, 0, "height"), (5, -3, "height")):
+        with pytest.raises(ValueError, match=f"{name} must be between 1 and 2147483648, got {min(width, height)}"):
+            bvhlab.render(scene, bvh, width, height, backend="cpu")
