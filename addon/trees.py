@@ -47,7 +47,7 @@ class TreeKey:
 class TreeUpdate:
     """What `SceneTree.update` did: "built", "refit", "placed" (a new TLAS over the same meshes'
     trees) or "kept", how long it took, and the Bvh (or InstancedBvh) that fits the scene it was
-    given (use this one: another thread may update the SceneTree next). `policy`: what the core's
+    given, as it was then (a view of the SceneTree's: another thread may update that next). `policy`: what the core's
     update ran on the trees updated in place (UpdateStats.policy, several joined by "+"), "" when
     none was; `sah_cost` the tree's after it (two-level for an InstancedBvh); `meshes_built`,
     `meshes_updated`: trees of meshes built and updated in place; `tlas`: a new TLAS was made."""
@@ -145,7 +145,7 @@ class SceneTree:
             if same and self.bvh is not None and two_level == _is_instanced(self.bvh):
                 if not two_level or _same_arrays(old_instances, instances):
                     self._source, self.scene = (sources, instances), scene
-                    return TreeUpdate("kept", self.bvh)
+                    return TreeUpdate("kept", _view(self.bvh))
             self._hold(trees, instances, two_level, threads)
             self._source, self.scene = (sources, instances), scene
             action = "built" if built else "refit" if updated else "placed"
@@ -153,7 +153,7 @@ class SceneTree:
             sah = stats.sah_cost if not two_level and stats is not None else self.bvh.stats["sah_cost"]
             update = TreeUpdate(
                 action,
-                self.bvh,
+                _view(self.bvh),
                 (time.perf_counter() - start) * 1e3,
                 "+".join(dict.fromkeys(ran)),
                 sah,
@@ -225,6 +225,15 @@ class SceneTree:
         else:
             self.bvh = trees[0]
         self.generation += 1
+
+
+def _view(bvh):
+    """The tree as it is now, for the caller to render or read while another thread updates the
+    cache's tree in place (the trees are shared: the Rendered viewport's refit between an F12's
+    update and its trace failed 19 to 21 of 30 F12s with "the tree was built for other geometry",
+    probe): a flat tree's copy-on-write fork, or a two-level tree's snapshot, whose TLAS holds its
+    meshes' versions."""
+    return bvh.snapshot() if _is_instanced(bvh) else bvh._snapshot()
 
 
 def _sources(scene) -> tuple[list, tuple]:
