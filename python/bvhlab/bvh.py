@@ -105,6 +105,7 @@ class Bvh:
     the tree; `refit` publishes a new version, so a reader sees the old tree or the new one."""
 
     _source: Bvh  #: the tree a snapshot is of (_snapshot; a tree itself has none)
+    _of_instances = False  #: a TLAS (InstancedBvh.tlas): its references are instances
 
     def __init__(self, core: _core.Bvh, config: BuildConfig):
         self._core = core
@@ -125,8 +126,7 @@ class Bvh:
     def __repr__(self) -> str:
         s = self.stats
         # a TLAS (InstancedBvh.tlas) holds no geometry: its references are instances
-        tlas = s["references"] and not s["primitives"]
-        held = f"{s['references']} instances" if tlas else f"{s['primitives']} primitives"
+        held = f"{s['references']} instances" if self._of_instances else f"{s['primitives']} primitives"
         return f"<bvhlab.Bvh {s['method']} {held}, {s['nodes']} nodes, height {s['height']}, SAH {s['sah_cost']:.2f}>"
 
     # -- numbers ---------------------------------------------------------------------------

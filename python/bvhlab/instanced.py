@@ -111,7 +111,9 @@ class InstancedBvh:
         meshes' (the TLAS is built with the core's default_tlas_config)."""
         core, made = self._core, self._tlas
         if made is None or made[0] is not core:
-            made = self._tlas = (core, Bvh(core.tlas_tree(), self.config))
+            tlas = Bvh(core.tlas_tree(), self.config)
+            tlas._of_instances = True  # its references are instances, also where there are none
+            made = self._tlas = (core, tlas)
         return made[1]
 
     @property

@@ -111,6 +111,14 @@ def test_the_tlas_says_it_holds_instances(instanced_scene):
     # its stats count no primitives (it holds no geometry): the repr said "0 primitives"
     assert f" {count} instances," in repr(tree.tlas) and "primitives" not in repr(tree.tlas)
     assert tree.tlas.stats["references"] == count and tree.tlas.stats["primitives"] == 0
+    none = bvhlab.build(  # the TLAS of no instances said "0 primitives" still (helper probe)
+        bvhlab.Scene(
+            triangles=instanced_scene.triangles,
+            instance_mesh=np.zeros(0, np.int32),
+            instance_transforms=np.zeros((0, 3, 4), np.float32),
+        )
+    )
+    assert " 0 instances," in repr(none.tlas), repr(none.tlas)
 
 
 def test_place_moves_instances_without_rebuilding_meshes(instanced_scene):
