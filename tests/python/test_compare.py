@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import bvhlab
+from bvhlab import _render_scene
 from bvhlab.compare import build_settings, charts, measure_methods, overlay, protocol, report_checks
 from bvhlab.compare.measure import samples_columns
 from bvhlab.compare.report import finding, markdown, ranking
@@ -170,23 +171,31 @@ def test_finding_and_ranking_are_read_from_the_numbers():
 
 # -- measuring --------------------------------------------------------------------------------------
 class CountingRenderer(bvhlab.Renderer):
-    """The real CPU reference, recording which tree each frame used."""
+    """The real CPU reference, recording which tree each frame used (its `like()`s into the same
+    list)."""
 
-    def __init__(self):
+    def __init__(self, trees: list | None = None):
         super().__init__("cpu")
-        self.trees = []
+        self.trees = [] if trees is None else trees
+
+    def like(self):
+        return CountingRenderer(self.trees)
 
     def render(self, scene, bvh, width=800, height=600, **options):
         self.trees.append(id(bvh))
         return super().render(scene, bvh, width, height, **options)
 
 
-def test_measure_methods_warms_up_interleaves_and_counts(small_scene):
+def test_measure_methods_warms_up_interleaves_and_counts(small_scene, monkeypatch):
     tris, spheres = small_scene
     scene = bvhlab.Scene(triangles=tris, spheres=spheres)
     renderer = CountingRenderer()
     labels = ["median", "midpoint", "sah12"]
+    made = []  # the render scenes made: one a tree, by its warm-up frame (every frame's, in turn)
+    real_make = _render_scene._make
+    monkeypatch.setattr(_render_scene, "_make", lambda *a: made.append(1) or real_make(*a))
     rows = measure_methods(scene, labels, frames=5, builds=6, width=24, height=16, renderer=renderer)
+    assert len(made) == 3, len(made)
     assert [r["method"] for r in rows] == labels
     assert len(renderer.trees) == 3 * (5 + 1)  # one warm-up frame each, not counted
     rounds = [renderer.trees[i : i + 3] for i in range(0, len(renderer.trees), 3)]
