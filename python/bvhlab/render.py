@@ -196,7 +196,7 @@ class Renderer:
         _checks.choice("backend", backend, BACKENDS)
         self.threads = _checks.integer("threads", threads, 0, 4096)
         self._vulkan, self.backend, self.reason = _choose_backend(backend, device, validation, force_staging)
-        self._made_with = (backend, {"device": device, "validation": validation, "force_staging": force_staging})
+        self._made_with = (backend, device, validation, force_staging)
         self._cache = SceneCache()
         self._lock = threading.Lock()  # the cached scene, the upload and the job started on it go together
         self._uploaded = None
@@ -205,8 +205,10 @@ class Renderer:
         """A new Renderer made as this one was (backend, device, validation, threads), with its own
         scene cache and upload: for frames of several trees taken in turn, each of which would
         otherwise make and upload its scene again at every frame (compare's rounds)."""
-        backend, settings = self._made_with
-        return Renderer(backend, threads=self.threads, **settings)
+        backend, device, validation, force_staging = self._made_with
+        return Renderer(
+            backend, device=device, validation=validation, force_staging=force_staging, threads=self.threads
+        )
 
     @property
     def fallback(self) -> str | None:
