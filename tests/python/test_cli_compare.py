@@ -69,6 +69,22 @@ def test_compare_writes_table_charts_figures_and_sheets(tmp_path):
         assert line_pixels(out / f"figure5_{method}.png", 8) + line_pixels(out / f"figure5_{method}.png", 9) > 0
 
 
+def test_compare_frames_take_the_walk_asked_for(tmp_path):
+    """--traversal stackless: the report's fixed depth-first order (§3.1) rather than the ordered
+    stack walk (review: the table did not say which walk its frames took); the table says it."""
+    out = tmp_path / "walk"
+    code, stdout, stderr = run_cli(
+        "compare", "gen:five_spheres", "--methods", "median,sah12", "--frames", "5", "--builds", "5",
+        "--width", "16", "--height", "12", "--backend", "cpu", "--overlay-backends", "none",
+        "--no-figures", "--no-uniform", "--traversal", "stackless", "--out", out,
+    )  # fmt: skip
+    assert code == 0, stderr
+    table = json.loads((out / "table.json").read_text())
+    assert table["meta"]["traversal"] == "stackless"
+    assert [r["traversal"] for r in table["rows"]] == ["stackless", "stackless"]
+    assert "the stackless walk (the report's fixed depth-first order)" in (out / "table.md").read_text()
+
+
 def test_compare_measures_the_overlay_claim(tmp_path):
     """Report §4.1 on the >700,000-triangle model, on the CPU reference and on Vulkan."""
     out = tmp_path / "cmp"
@@ -120,6 +136,7 @@ def test_compare_measures_the_overlay_claim(tmp_path):
         (["--width", "0"], "argument --width: must be between 1 and 16384 pixels, got 0"),
         (["--height", "100000"], "argument --height: must be between 1 and 16384 pixels, got 100000"),
         (["--overlay-backends", "gpu"], "argument --overlay-backends: expected cpu, vulkan"),
+        (["--traversal", "wide"], "argument --traversal: invalid choice: 'wide'"),
     ],
 )
 def test_compare_rejects_bad_arguments(tmp_path, args, message):

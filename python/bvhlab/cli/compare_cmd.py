@@ -22,6 +22,7 @@ from ..compare.measure import REPORT_BUILD, build_settings, render_frame
 from ..compare.protocol import DEFAULT_BUILDS, DEFAULT_FRAMES, MAX_SAMPLES, MIN_SAMPLES
 from ..library import load_scene
 from ..render import BACKENDS, Renderer, VulkanUnavailable, save_png
+from ..render_options import RenderOptions
 from . import compare_args as cargs
 from . import options
 
@@ -58,6 +59,13 @@ def add_parser(sub) -> None:
         "thread's CPU time measures the work, not the neighbours; 0 = every core)",
     )
     p.add_argument(
+        "--traversal",
+        choices=TABLE1_TRAVERSALS,
+        default=None,
+        help="the walk of Table 1's frames (default stack: nearer child first, entries beyond the hit "
+        "dropped; stackless: the report's fixed depth-first order, by skip links, §3.1)",
+    )
+    p.add_argument(
         "--overlay-backends",
         type=cargs.backend_list,
         default=None,
@@ -85,6 +93,10 @@ def say(text: str) -> None:
     print(text, file=sys.stderr, flush=True)
 
 
+#: The walks Table 1's frames may take: the binary tree's (the report's is the fixed depth-first order,
+#: which the stackless walk follows; the stack walk orders children by distance).
+TABLE1_TRAVERSALS = ("stack", "stackless")
+
 #: The comparison's own options (None: not given) and their defaults; --counter-diff refuses them
 #: (they were accepted and ignored).
 COMPARISON_DEFAULTS = {
@@ -92,6 +104,7 @@ COMPARISON_DEFAULTS = {
     "frames": DEFAULT_FRAMES,
     "builds": DEFAULT_BUILDS,
     "threads": 1,
+    "traversal": "stack",
     "overlay_backends": cargs.backend_list("cpu,vulkan"),
     "no_figures": False,
     "no_uniform": False,
@@ -185,6 +198,7 @@ def _measure(scene, label: str, args, renderer) -> list[dict]:
         width=args.width,
         height=args.height,
         renderer=renderer,
+        options=RenderOptions(traversal=args.traversal),
         threads=args.threads,
         progress=lambda s: say(f"[{label}] {s}"),
     )
@@ -203,6 +217,7 @@ def _meta(args, name, scene, renderer, uniform, overlay_results) -> dict:
         "backend": renderer.backend,
         "build_threads": REPORT_BUILD["threads"],
         "render_threads": args.threads if renderer.backend == "cpu" else None,
+        "traversal": args.traversal,
         "build_settings": "one primitive per leaf, split axis of largest centroid extent, SAH with the "
         "bins of its label (12 or 32)",
         "uniform_rows": uniform,

@@ -180,6 +180,7 @@ def _row(label, settings, bvh, timings) -> dict:
         "leaves": stats["leaves"],
         "device": timings["device"],
         "backend": timings["backend"],
+        "traversal": timings["traversal"],  # the walk that rendered the frames
         # where the last counted frame's time went (frame_ms is overlay + trace + read-back; making and
         # uploading its scene, prepare_ms and upload_ms, is outside it and ~0 once warm)
         "last_frame": {

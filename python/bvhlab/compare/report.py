@@ -140,12 +140,21 @@ def _preamble(meta: dict, clock: str) -> str:
     )
     return (
         f"Scene **{meta['scene']}** ({meta['triangles']} triangles, {meta['spheres']} spheres), "
-        f"{meta['width']}×{meta['height']}, device: {meta['device']}{_threads(meta)}. Frame: median of "
+        f"{meta['width']}×{meta['height']}, device: {meta['device']}{_threads(meta)}"
+        f"{_walk(meta)}. Frame: median of "
         f"{meta['frames']} frames; build: median of {meta['builds']} builds on "
         f"{meta.get('build_threads', 1)} thread(s); "
         f"each after a warm-up that is not counted, methods interleaved round by round. Build settings: "
         f"{meta.get('build_settings', 'one primitive per leaf, largest-extent axis')}.{why}"
     )
+
+
+def _walk(meta: dict) -> str:
+    walk = meta.get("traversal")
+    if walk is None:
+        return ""
+    order = "nearer child first" if walk == "stack" else "the report's fixed depth-first order"
+    return f", the {walk} walk ({order})"
 
 
 def _threads(meta: dict) -> str:
