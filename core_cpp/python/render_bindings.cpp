@@ -39,6 +39,14 @@ using Counters = nb::ndarray<float, nb::shape<-1, -1, gpu::COUNTER_COUNT>, nb::c
 using Corners = nb::ndarray<const float, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
 using Depths = nb::ndarray<const std::uint8_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
 
+/// Between the slices of a wait for the Vulkan renderer's lock (lock_in_slices, a WaitCheck):
+/// raises KeyboardInterrupt (or what Python's signal handler raised) out of the wait. Called
+/// without the GIL.
+void check_signals_while_waiting() {
+    nb::gil_scoped_acquire gil;
+    if (PyErr_CheckSignals() != 0) throw nb::python_error();
+}
+
 /// A RenderJob used from Python: one call at a time (a job's sums are not for two threads). The
 /// lock is only ever waited for without the GIL, and in slices, so that Ctrl-C still reaches a
 /// thread waiting for another thread's run. A call from inside the job's own run (its progress
@@ -59,6 +67,7 @@ struct PyRenderJob {
             }
         }
         nb::gil_scoped_release release;
+        const WaitCheck::Scope waiting(&check_signals_while_waiting);  // for the renderer's lock
         return f(*job);
     }
 
@@ -246,12 +255,14 @@ void bind_vulkan(nb::module_& m) {
         .def("upload",
              [](VulkanRenderer& r, const PyRenderScene& scene) {
                  nb::gil_scoped_release release;
+                 const WaitCheck::Scope waiting(&check_signals_while_waiting);
                  return r.upload(scene.scene);
              })
         .def(
             "start",
             [](VulkanRenderer& r, const RenderSettings& settings) {
                 nb::gil_scoped_release release;
+                const WaitCheck::Scope waiting(&check_signals_while_waiting);
                 return wrap(r.start(settings));
             },
             "settings"_a, "A RenderJob of the scene uploaded last.")

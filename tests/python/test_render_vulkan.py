@@ -251,3 +251,102 @@ def test_auto_traversal_walks_the_stack_on_vulkan(vulkan):
     assert a.timings["traversal"] == "stack" and a.timings["backend"] == "vulkan" and "fallback" not in a.timings
     np.testing.assert_array_equal(a.color, s.color)
     np.testing.assert_array_equal(a.cost, s.cost)
+
+
+def _pile(n: int = 100_000) -> bvhlab.Scene:
+    """n coincident triangles filling the view: every pixel's ray tests all of them (a render of
+    seconds at a few pixels on lavapipe)."""
+    one = np.array([[-10, -10, 0], [10, -10, 0], [0, 10, 0]], np.float32)
+    camera = bvhlab.Camera((0, -3, 6), (0, 0, 0), fov_y=50)
+    return bvhlab.Scene(triangles=np.ascontiguousarray(np.repeat(one[None], n, 0)), camera=camera)
+
+
+def test_an_overlay_of_many_boxes_is_drawn_in_parts_and_once_a_job(vulkan):
+    """The overlay pass draws at most kOverlayBoxesPerPart (65,536) boxes a submission (2M boxes in
+    one draw took 3.8 s of lavapipe, Ctrl-C waiting for it, probe), keeping the lines' depth across
+    parts; and once a job: a progressive render's later runs find it drawn (it was drawn again at
+    every run). 87,240 boxes, two parts: the line pixels are the CPU reference's (the second part
+    clearing the first's would leave half of them; where dense lines overlap, which box's colour
+    wins is the residue the other overlay tests bound: the same with the parts as with one draw,
+    measured by a build whose part held every box)."""
+    scene = bvhlab.Scene(triangles=procedural.torus_knot(60000))
+    bvh = bvhlab.build(scene, max_leaf_size=1)
+    depths = (15, 19)
+    assert len(bvh.boxes(*depths)[0]) == 87_240
+    size, options = (320, 240), dict(overlay_depth=depths, traversal="stack", samples_per_axis=2)
+    plain, _ = bvhlab.render(scene, bvh, *size, backend="cpu", traversal="stack", samples_per_axis=2)
+    cpu, _ = bvhlab.render(scene, bvh, *size, backend="cpu", **options)
+    job = vulkan.start(scene, bvh, *size, **options)
+    job.run(1)
+    drawn = job.timings["overlay_ms"]
+    job.run(4)
+    assert job.timings["overlay_ms"] == drawn, "the job's later run drew its overlay again"
+    lines_cpu = np.abs(cpu - plain).max(-1) > 2e-3
+    lines_gpu = np.abs(job.result().color - plain).max(-1) > 2e-3
+    assert lines_cpu.sum() > 5_000
+    assert (lines_cpu ^ lines_gpu).sum() <= 0.01 * lines_cpu.sum(), ((lines_cpu ^ lines_gpu).sum(), lines_cpu.sum())
+
+
+def test_a_small_images_first_round_is_bounded(vulkan):
+    """The first dispatch round aims at 2^28 steps for the tile, at most kFirstRoundMaxSteps
+    (2,048) a pixel: a 16 × 16 image got the whole 60,000 a pixel, and a scene whose pixels need
+    them all ran its first round for seconds before Ctrl-C was looked at (17 s at 64 × 64, probe).
+    The job stopped after its first round says the budget that round had."""
+    scene = _pile()
+    bvh = bvhlab.build(scene)
+    job = vulkan.start(scene, bvh, 16, 16, max_depth=0)
+    calls = []
+    with pytest.raises(bvhlab.RenderCancelled):
+        job.run(progress=lambda fraction: calls.append(fraction) or len(calls) < 2)
+    assert job.timings["dispatches"] == 1
+    assert 1024 <= job.timings["steps_per_dispatch"] <= 2048, job.timings["steps_per_dispatch"]
+
+
+def test_ctrl_c_reaches_a_thread_waiting_for_the_renderer(tmp_path):
+    """A thread waiting for the Vulkan renderer while another thread's render holds it (its own
+    job's run, or another scene's upload and start) raises KeyboardInterrupt while that render is
+    still running: the renderer's lock is waited for in slices that look at Python's signals (it
+    waited for the whole render: 36 s after the Ctrl-C, probe). In a child process: a regression
+    hangs there, not here. The other render is then stopped by its progress callable."""
+    code = f"""
+import os, signal, sys, threading, time
+import numpy as np, bvhlab
+sys.path.insert(0, {os.path.dirname(__file__)!r})
+from test_render_vulkan import _pile
+from bvhlab.library import showcase
+heavy = _pile(); hb = bvhlab.build(heavy)
+small = showcase.five_spheres(); sb = bvhlab.build(small)
+r = bvhlab.Renderer("vulkan", validation=True)
+r.render(small, sb, 4, 4)
+for mode in ("run", "render"):
+    hjob = r.start(heavy, hb, 24, 24, max_depth=0)
+    mine = r.start(heavy, hb, 2, 2, max_depth=0) if mode == "run" else None
+    stop, state = threading.Event(), {{}}
+    def worker():
+        state["started"] = True
+        try:
+            hjob.run(progress=lambda f: not stop.is_set())
+        except bvhlab.RenderCancelled:
+            pass
+        state["ended"] = True
+    threading.Thread(target=worker).start()
+    while "started" not in state:
+        time.sleep(0.01)
+    time.sleep(0.5)
+    threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT)).start()
+    try:
+        mine.run() if mode == "run" else r.render(small, sb, 16, 16)
+        print(mode, "not interrupted")
+    except KeyboardInterrupt:
+        print(mode, "interrupted", "after" if "ended" in state else "during", "the other render")
+    stop.set()
+    while "ended" not in state:
+        time.sleep(0.01)
+image, _ = r.render(small, sb, 16, 16)
+print("usable", image.shape, r.validation_errors)
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr[-3000:]
+    lines = out.stdout.splitlines()
+    assert lines[:2] == ["run interrupted during the other render", "render interrupted during the other render"], out
+    assert lines[2] == "usable (16, 16, 4) 0", out

@@ -61,4 +61,42 @@ private:
     std::string what_;
 };
 
+/// What a thread does between the slices of a wait for an OwnedMutex (lock_in_slices), set for a
+/// scope with WaitCheck::Scope: Python's bindings check Ctrl-C there and throw, so that a thread
+/// waiting for another thread's long render stays interruptible (it waited for the whole render:
+/// 36 s after a Ctrl-C, probe). Per thread; none by default (the wait is a plain one).
+class WaitCheck {
+public:
+    using Fn = void (*)();
+
+    static Fn current() { return slot(); }
+
+    /// Sets `fn` for this thread until the scope ends (the one before is restored).
+    class Scope {
+    public:
+        explicit Scope(Fn fn) : saved_(slot()) { slot() = fn; }
+        ~Scope() { slot() = saved_; }
+        Scope(const Scope&) = delete;
+        Scope& operator=(const Scope&) = delete;
+
+    private:
+        Fn saved_;
+    };
+
+private:
+    static Fn& slot() {
+        static thread_local Fn fn = nullptr;
+        return fn;
+    }
+};
+
+/// `mutex` locked, waited for in slices of 20 ms between which this thread's WaitCheck runs (and
+/// may throw, before anything is locked).
+inline std::unique_lock<OwnedMutex> lock_in_slices(OwnedMutex& mutex) {
+    std::unique_lock<OwnedMutex> lock(mutex, std::defer_lock);
+    while (!lock.try_lock_for(std::chrono::milliseconds(20)))
+        if (const WaitCheck::Fn check = WaitCheck::current()) check();
+    return lock;
+}
+
 }  // namespace bvhlab

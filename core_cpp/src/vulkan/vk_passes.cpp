@@ -9,9 +9,11 @@ namespace bvhlab::vk {
 namespace {
 
 // The overlay image's states through a run. A run starts by discarding the previous contents,
-// after the previous run's trace pass read them.
-constexpr ImageState kColorDiscarded{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_NONE,
-                                     VK_IMAGE_LAYOUT_UNDEFINED};
+// after the previous run's trace pass read them, or after the parts an interrupted overlay pass
+// drew (Cancelled between parts).
+constexpr ImageState kColorDiscarded{
+    VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_NONE,
+    VK_IMAGE_LAYOUT_UNDEFINED};
 constexpr ImageState kColorAttachment{VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
                                       VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
 constexpr ImageState kColorCleared{VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
@@ -27,26 +29,28 @@ constexpr ImageState kDepthAttachment{
     kDepthStages, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
     VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL};
 
-VkRenderingAttachmentInfo attachment(VkImageView view, VkImageLayout layout, VkAttachmentStoreOp store,
-                                     VkClearValue clear) {
+VkRenderingAttachmentInfo attachment(VkImageView view, VkImageLayout layout, VkAttachmentLoadOp load,
+                                     VkAttachmentStoreOp store, VkClearValue clear) {
     VkRenderingAttachmentInfo info{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
     info.imageView = view;
     info.imageLayout = layout;
-    info.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+    info.loadOp = load;
     info.storeOp = store;
     info.clearValue = clear;
     return info;
 }
 
-void begin_overlay_rendering(const PassContext& pass, VkCommandBuffer cmd) {
+void begin_overlay_rendering(const PassContext& pass, VkCommandBuffer cmd, const OverlayPart& part) {
     const FrameTargets& t = pass.targets;
     VkClearValue no_line{}, far_depth{};
     far_depth.depthStencil.depth = 1.0f;
+    const VkAttachmentLoadOp load = part.opens ? VK_ATTACHMENT_LOAD_OP_CLEAR : VK_ATTACHMENT_LOAD_OP_LOAD;
     // colour (0,0,0,0): alpha 0 tells the trace pass "no line here" (report §3.3)
     VkRenderingAttachmentInfo color =
-        attachment(t.color.view(), kColorAttachment.layout, VK_ATTACHMENT_STORE_OP_STORE, no_line);
+        attachment(t.color.view(), kColorAttachment.layout, load, VK_ATTACHMENT_STORE_OP_STORE, no_line);
     VkRenderingAttachmentInfo depth =
-        attachment(t.depth.view(), kDepthAttachment.layout, VK_ATTACHMENT_STORE_OP_DONT_CARE, far_depth);
+        attachment(t.depth.view(), kDepthAttachment.layout, load,
+                   part.closes ? VK_ATTACHMENT_STORE_OP_DONT_CARE : VK_ATTACHMENT_STORE_OP_STORE, far_depth);
     VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
     info.renderArea = {{0, 0}, {t.width, t.height}};
     info.layerCount = 1;
@@ -58,12 +62,15 @@ void begin_overlay_rendering(const PassContext& pass, VkCommandBuffer cmd) {
 
 }  // namespace
 
-void record_overlay(const PassContext& pass, VkCommandBuffer cmd, const gpu::FrameParams& frame, float line_width) {
+void record_overlay(const PassContext& pass, VkCommandBuffer cmd, float line_width, const OverlayPart& part) {
     const Functions& fn = pass.fn;
     const FrameTargets& t = pass.targets;
-    image_barrier(fn, cmd, t.color.handle(), VK_IMAGE_ASPECT_COLOR_BIT, kColorDiscarded, kColorAttachment);
-    image_barrier(fn, cmd, t.depth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT, kDepthDiscarded, kDepthAttachment);
-    begin_overlay_rendering(pass, cmd);
+    // the first part discards what was there; a later one reads what the parts before drew
+    image_barrier(fn, cmd, t.color.handle(), VK_IMAGE_ASPECT_COLOR_BIT, part.opens ? kColorDiscarded : kColorAttachment,
+                  kColorAttachment);
+    image_barrier(fn, cmd, t.depth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT, part.opens ? kDepthDiscarded : kDepthAttachment,
+                  kDepthAttachment);
+    begin_overlay_rendering(pass, cmd, part);
     fn.vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pass.pipelines.overlay());
     VkDescriptorSet set = pass.set;
     fn.vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pass.pipelines.layout(), 0, 1, &set, 0, nullptr);
@@ -73,9 +80,10 @@ void record_overlay(const PassContext& pass, VkCommandBuffer cmd, const gpu::Fra
     fn.vkCmdSetScissor(cmd, 0, 1, &scissor);
     fn.vkCmdSetLineWidth(cmd, line_width);
     // overlay.vert reads box gl_InstanceIndex, which starts at firstInstance
-    fn.vkCmdDraw(cmd, 24, frame.overlay_last_box - frame.overlay_first_box, 0, frame.overlay_first_box);
+    if (part.count) fn.vkCmdDraw(cmd, 24, part.count, 0, part.first);
     fn.vkCmdEndRendering(cmd);
-    image_barrier(fn, cmd, t.color.handle(), VK_IMAGE_ASPECT_COLOR_BIT, kColorAttachment, kColorTraced);
+    if (part.closes)
+        image_barrier(fn, cmd, t.color.handle(), VK_IMAGE_ASPECT_COLOR_BIT, kColorAttachment, kColorTraced);
 }
 
 void record_clear(const PassContext& pass, VkCommandBuffer cmd) {

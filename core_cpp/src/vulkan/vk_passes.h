@@ -18,10 +18,22 @@ struct PassContext {
     const FrameTargets& targets;
 };
 
-/// Clears colour to 0 and depth to 1, draws the boxes [overlay_first_box, overlay_last_box) as
-/// 24-vertex line lists (report §3.3.1: a depth range is one first instance and one count); leaves
-/// the colour image for the trace pass to read.
-void record_overlay(const PassContext& pass, VkCommandBuffer cmd, const gpu::FrameParams& frame, float line_width);
+/// Boxes the overlay pass draws in one submission (its parts, OverlayPart): a flat tree's range
+/// of 2M boxes in one draw took 3.8 s on lavapipe, and Ctrl-C waited for it (probe).
+inline constexpr std::uint32_t kOverlayBoxesPerPart = 1u << 16;
+
+/// Which of the overlay pass's boxes one submission draws: [first, first + count); the first part
+/// clears colour to 0 and depth to 1, the others keep what the parts before drew (depth too, so
+/// the nearest line wins across parts as within one), the last leaves the colour image for the
+/// trace pass to read.
+struct OverlayPart {
+    std::uint32_t first, count;
+    bool opens, closes;
+};
+
+/// Draws one part of the boxes [overlay_first_box, overlay_last_box) as 24-vertex line lists
+/// (report §3.3.1: a depth range is one first instance and one count).
+void record_overlay(const PassContext& pass, VkCommandBuffer cmd, float line_width, const OverlayPart& part);
 /// No overlay: the trace pass reads zero everywhere (no line anywhere).
 void record_clear(const PassContext& pass, VkCommandBuffer cmd);
 /// One dispatch of trace.comp over a tile of width × height pixels, ordered after every earlier

@@ -54,6 +54,9 @@ struct RendererCore {
     /// (a discrete GPU's memory): kept and grown, not allocated for every frame (vk_trace_job.cpp).
     std::optional<Buffer> readback;
     std::uint32_t stamp = 0;
+    /// Jobs started on this core, and the number of the one whose overlay (or clear) the targets
+    /// hold whole (0: none): a job's later runs do not draw it again.
+    std::uint64_t jobs = 0, overlay_job = 0;
 };
 
 /// A render job on `scene` (vk_trace_job.cpp); takes `core->mutex` itself.

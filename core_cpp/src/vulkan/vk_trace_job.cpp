@@ -21,9 +21,13 @@ namespace {
 constexpr std::size_t kSlotBytes = std::size_t(64) << 20;
 constexpr double kRoundTargetMs = 100.0;
 /// The first round's steps per invocation: about 2^28 for the whole tile (most pixels of ordinary
-/// scenes finish in one round), at least kFirstRoundMinSteps; later rounds adapt to their time.
+/// scenes finish in one round), between kFirstRoundMinSteps and kFirstRoundMaxSteps; later rounds
+/// adapt to their time. The cap bounds a small image's first round where every pixel needs far
+/// more (2^28 / 4,096 pixels was the whole 60,000 a pixel: 64 × 64 over 100,000 coincident
+/// triangles ran 17 s on lavapipe before its first look at Ctrl-C, probe; 2,048 a pixel, ~0.6 s).
 constexpr std::uint64_t kFirstRoundSteps = std::uint64_t(1) << 28;
 constexpr std::uint32_t kFirstRoundMinSteps = 1024;
+constexpr std::uint32_t kFirstRoundMaxSteps = 2048;
 constexpr std::uint32_t kMinSteps = 64;
 
 std::uint32_t round_up(std::uint32_t x, std::uint32_t m) { return (x + m - 1) / m * m; }
@@ -54,7 +58,8 @@ public:
           scene_(std::move(scene)),
           frame_(scene_->frame_params(settings)),
           tiles_(settings.width, settings.height, slot_bytes(frame_)) {
-        std::lock_guard lock(core_->mutex);
+        const auto lock = lock_in_slices(core_->mutex);
+        serial_ = ++core_->jobs;
         frame_.overlay_line_width = core_->line_width(settings);  // what this device draws
         sums_.emplace(core_->device, std::size_t(settings.width) * settings.height, settings.traversal_counters,
                       frame_.count_covered != 0);
@@ -69,17 +74,17 @@ public:
         timings_.device = core_->device.physical().name();
         budget_ = settings.steps_per_dispatch.value_or(
             std::uint32_t(std::clamp<std::uint64_t>(kFirstRoundSteps / (std::uint64_t(tiles_.width) * tiles_.height),
-                                                    kFirstRoundMinSteps, gpu::MAX_STEPS_PER_DISPATCH)));
+                                                    kFirstRoundMinSteps, kFirstRoundMaxSteps)));
     }
 
     void run(std::uint32_t samples, Cancellation* cancel, double* progress) override {
         const std::uint32_t target = std::min(samples, samples_per_pixel());
         if (target <= samples_done_) return;
-        std::lock_guard lock(core_->mutex);
+        const auto lock = lock_in_slices(core_->mutex);
         gpu::FrameParams frame = frame_;
         frame.sample_target = target;
         frame.max_work_per_pixel = work_cap(scene_->summary(), settings_, target - samples_done_);
-        prepare(frame);
+        prepare(frame, cancel);
         for (std::uint32_t t = 0; t < tiles_.count(); ++t) run_tile(frame, t, cancel, progress);
         timings_.total_ms = timings_.overlay_ms + timings_.trace_ms;
         samples_done_ = target;
@@ -88,7 +93,7 @@ public:
     void resolve(const RenderImages& out) override {
         const auto start = std::chrono::steady_clock::now();
         {
-            std::lock_guard lock(core_->mutex);  // held while the core's readback buffer is read
+            const auto lock = lock_in_slices(core_->mutex);  // held while the core's readback buffer is read
             // The sums the images ask for alone: colour and samples always, depth and the counters
             // where `out` wants them (a viewport's colour: 20 bytes a pixel of 24, or of 44 where
             // the render keeps counters)
@@ -119,19 +124,35 @@ private:
     }
 
     /// Slots and overlay targets for this job (another job may have used them since), then the
-    /// overlay pass, or a clear: the trace pass reads the image either way.
-    void prepare(gpu::FrameParams& frame) {
+    /// overlay pass, or a clear: the trace pass reads the image either way. The overlay is drawn
+    /// in parts of kOverlayBoxesPerPart boxes, one submission each, `cancel` polled between them;
+    /// and once a job: a later run() finds it in the targets unless another job drew there since
+    /// (each run of a progressive render drew it again: 3.8 s a run over 2M boxes, probe).
+    void prepare(gpu::FrameParams& frame, Cancellation* cancel) {
         RendererCore& c = *core_;
         if (c.slots.reserve(tiles_.width * tiles_.height, frame.ray_stack_entries, frame.node_stack_entries))
             c.runner.run([&](VkCommandBuffer cmd) { record_fill(c.fn, cmd, c.slots.state(), 0u); });
         c.slots.address(frame);
         c.ensure_targets(settings_.width, settings_.height);
         c.bindings.write_params(frame);
+        if (c.overlay_job == serial_) return;
+        c.overlay_job = 0;  // the targets hold no job's overlay until its last part is drawn
         const PassContext pass = c.pass();
-        timings_.overlay_ms += c.runner.run([&](VkCommandBuffer cmd) {
-            if (frame.overlay_enabled) record_overlay(pass, cmd, frame, frame.overlay_line_width);
-            else record_clear(pass, cmd);
-        });
+        if (!frame.overlay_enabled) {
+            timings_.overlay_ms += c.runner.run([&](VkCommandBuffer cmd) { record_clear(pass, cmd); });
+        } else {
+            const std::uint32_t first = frame.overlay_first_box, last = frame.overlay_last_box;
+            for (std::uint32_t at = first;;) {
+                const std::uint32_t count = std::min(last - at, kOverlayBoxesPerPart);
+                const OverlayPart part{at, count, at == first, at + count == last};
+                timings_.overlay_ms += c.runner.run(
+                    [&](VkCommandBuffer cmd) { record_overlay(pass, cmd, frame.overlay_line_width, part); });
+                at += count;
+                if (part.closes) break;
+                if (cancel && cancel->poll()) throw Cancelled();
+            }
+        }
+        c.overlay_job = serial_;
     }
 
     /// Rounds over tile `index` until each of its pixels has its samples, or `cancel` says stop
@@ -220,6 +241,7 @@ private:
     Tiling tiles_;
     std::optional<SumBuffers> sums_;
     std::uint32_t budget_ = gpu::MAX_STEPS_PER_DISPATCH;
+    std::uint64_t serial_ = 0;  ///< this job's number among the core's (RendererCore::jobs)
 };
 
 }  // namespace

@@ -75,7 +75,7 @@ std::uint32_t VulkanRenderer::max_image_dimension() const {
 double VulkanRenderer::upload(const RenderScene& scene) {
     const auto start = std::chrono::steady_clock::now();
     check_render_scene(scene);  // before the scene in place is freed: bad input loses nothing
-    std::lock_guard lock(core_->mutex);
+    const auto lock = lock_in_slices(core_->mutex);
     vk::RendererCore& c = *core_;
     c.scene.reset();  // free the old scene (unless a job still holds it) before allocating the new one
     try {
@@ -94,7 +94,7 @@ std::unique_ptr<RenderJob> VulkanRenderer::start(const RenderSettings& settings)
         throw std::invalid_argument("the Vulkan tracer walks 'stack' or 'stackless'; 'wide' is the CPU tracer's");
     std::shared_ptr<const vk::SceneBuffers> scene;
     {
-        std::lock_guard lock(core_->mutex);
+        const auto lock = lock_in_slices(core_->mutex);
         scene = core_->scene;
     }
     return vk::start_vulkan_job(core_, std::move(scene), settings);
