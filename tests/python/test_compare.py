@@ -184,7 +184,9 @@ def test_finding_and_ranking_are_read_from_the_numbers():
         n=15,
         heights={"median": 20, "mean": 25, "midpoint": 34, "sah12": 30},
     )
-    assert "mean split the midpoint" in finding(rows) and "centroid mean 25, midpoint 34" in finding(rows)
+    assert "consistent with a split at the midpoint" in finding(rows) and "centroid mean 25, midpoint 34" in finding(
+        rows
+    )
     rows[2]["height"] = 33
     assert "neither matches" in finding(rows)
     assert ranking(rows).startswith("Frame-time ranking: sah12 < mean ≈ midpoint < median")

@@ -172,9 +172,10 @@ def finding(rows: list[dict]) -> str:
     said = f"centroid mean {readings['mean']}, midpoint {readings['midpoint']}"
     if matching == ["midpoint"]:
         return (
-            f"**Finding:** the report's Mean row has height {report_height}; here the {said}. The report's "
-            f"mean split the midpoint of the centroid bounds (PBRT's Middle), not the centroid mean §2.3.1 "
-            f"describes."
+            f"**Finding:** the report's Mean row has height {report_height}; here the {said}: the report's "
+            f"mean is consistent with a split at the midpoint of the centroid bounds (PBRT's Middle, which "
+            f"§2.3.1 names beside it) rather than at the centroid mean §2.3.1 describes (one height, on a "
+            f"mesh that may differ from the report's by a few triangles)."
         )
     return f"**Finding:** the report's Mean row has height {report_height}; here the {said}: " + (
         f"{' and '.join(matching)} match{'es' if len(matching) == 1 else ''}." if matching else "neither matches."

@@ -31,7 +31,8 @@ TRIANGLES = 262_205
 SOURCE_SHA256 = "e36e2e881611408c59887e68367d318b30365f069b7b193c5eafd37f66653537"
 ATTRIBUTION = "Crytek Sponza by Frank Meinl (Crytek), Morgan McGuire's version, CC BY 3.0; 2 of 383 sub-objects missing"
 
-#: The report's Figure 6 (800×600): a view along the atrium that shows the whole nave.
+#: A view like the report's Figure 6 (800×600), which gives no camera: ours, along the atrium, showing the
+#: whole nave.
 CAMERA = Camera(position=(-110.0, 20.0, -4.0), look_at=(100.0, 45.0, 2.0), up=(0.0, 1.0, 0.0), fov_y=60.0)
 #: A point light high in the open court, over the middle of the nave (report §2.1: one point light).
 LIGHT = Light(position=(10.0, 110.0, 0.0), color=(1.0, 0.95, 0.85), intensity=1.0)
@@ -102,5 +103,6 @@ def load_triangles(path: Path) -> np.ndarray:
 
 
 def scene(path: Path) -> Scene:
-    """Sponza with the report's Figure 6 camera, one point light over the nave and stone material."""
+    """Sponza with a camera like the report's Figure 6 (it gives none: ours), one point light over
+    the nave and one matte stone material (a primary and a shadow ray a pixel)."""
     return Scene(triangles=load_triangles(path), materials=[STONE], camera=CAMERA, light=LIGHT, sky=SKY)
