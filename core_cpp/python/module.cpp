@@ -1,7 +1,9 @@
 // The nanobind module `bvhlab._core`: thin bindings; checks of Python-side types live in
 // python/bvhlab (clear messages), checks of values in the C++ core (std::invalid_argument →
 // ValueError). The GIL is released for builds and traversal.
+#include <chrono>
 #include <memory>
+#include <thread>
 
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
@@ -266,6 +268,22 @@ void bind_build_names(nb::module_& m) {
 
 NB_MODULE(_core, m) {
     m.doc() = "bvhlab C++ core: BVH construction, stats, CPU traversal and the renderers";
+    m.def(
+        "_finishing", [] { return long_calls().finishing.load(); },
+        "Whether the interpreter is finishing (_finish_long_calls ran): long calls stop at once.");
+    m.def(
+        "_finish_long_calls",
+        [](double seconds) {
+            long_calls().finishing.store(true);
+            nb::gil_scoped_release release;
+            const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+            while (long_calls().alive.load() > 0 && std::chrono::steady_clock::now() < until)
+                std::this_thread::sleep_for(std::chrono::milliseconds(5));
+            return long_calls().alive.load() == 0;
+        },
+        "seconds"_a,
+        "At exit (bvhlab's atexit handler): every long call from Python in progress on another thread "
+        "is told to stop, and waited for up to `seconds` until it is back in Python; True when none is left.");
     nb::exception<BuildCancelled>(m, "BuildCancelled");
     bind_render(m);
     bind_bvh(m);

@@ -1,6 +1,7 @@
 // py_cancel.h — long work started from Python stops on Ctrl-C and when a progress callable says so,
 // and what Python raised is raised again, as itself, once every worker thread has stopped.
 #pragma once
+#include <atomic>
 #include <optional>
 #include <utility>
 
@@ -12,6 +13,30 @@ namespace bvhlab::python {
 
 namespace nb = nanobind;
 
+/// Long calls from Python in progress (PyLongCall), and whether the interpreter is finishing
+/// (finish_long_calls, from bvhlab's atexit handler). A thread still inside one when Python
+/// finalizes is ended by pthread_exit as it takes the GIL back, whose unwinding through C++
+/// aborts the process ("terminate called without an active exception": Blender 4.3 quit while a
+/// daemon thread rendered, probe); so at exit every such call is told to stop, and waited for.
+struct LongCalls {
+    std::atomic<int> alive{0};
+    std::atomic<bool> finishing{false};
+};
+
+inline LongCalls& long_calls() {
+    static LongCalls calls;
+    return calls;
+}
+
+/// One long call from Python, counted while it lasts: made and destroyed with the GIL held, so
+/// when none is counted, none is between releasing the GIL and taking it back.
+struct PyLongCall {
+    PyLongCall() { long_calls().alive.fetch_add(1); }
+    ~PyLongCall() { long_calls().alive.fetch_sub(1); }
+    PyLongCall(const PyLongCall&) = delete;
+    PyLongCall& operator=(const PyLongCall&) = delete;
+};
+
 /// The check of a Cancellation (cancel.h) for work started from Python. Runs on the calling
 /// thread, with the GIL released around it: it takes the GIL, runs Python's signal handlers
 /// (Ctrl-C raises KeyboardInterrupt there) and then the progress callable, if any. The callable's
@@ -21,8 +46,10 @@ class PyStopCheck {
 public:
     explicit PyStopCheck(nb::object progress = nb::none()) : progress_(std::move(progress)) {}
 
-    /// True to stop. `fraction` is passed to the progress callable.
+    /// True to stop. `fraction` is passed to the progress callable. While the interpreter
+    /// finishes: true, without taking the GIL.
     bool operator()(double fraction) {
+        if (long_calls().finishing.load()) return true;
         nb::gil_scoped_acquire gil;
         if (error_) return true;
         if (PyErr_CheckSignals() != 0) return keep_error();
@@ -52,6 +79,7 @@ private:
         return true;
     }
 
+    PyLongCall counted_;
     nb::object progress_;
     std::optional<nb::python_error> error_;
 };

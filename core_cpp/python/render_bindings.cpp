@@ -43,6 +43,7 @@ using Depths = nb::ndarray<const std::uint8_t, nb::ndim<1>, nb::c_contig, nb::de
 /// raises KeyboardInterrupt (or what Python's signal handler raised) out of the wait. Called
 /// without the GIL.
 void check_signals_while_waiting() {
+    if (long_calls().finishing.load()) throw Cancelled();  // no GIL to take: the interpreter finishes
     nb::gil_scoped_acquire gil;
     if (PyErr_CheckSignals() != 0) throw nb::python_error();
 }
@@ -58,6 +59,7 @@ struct PyRenderJob {
 
     template <class F>
     auto locked(F&& f) {
+        const PyLongCall counted;
         std::unique_lock<OwnedMutex> lock(mutex, std::defer_lock);
         {
             nb::gil_scoped_release release;
@@ -254,6 +256,7 @@ void bind_vulkan(nb::module_& m) {
         .def_prop_ro("max_line_width", &VulkanRenderer::max_line_width)
         .def("upload",
              [](VulkanRenderer& r, const PyRenderScene& scene) {
+                 const PyLongCall counted;  // it may wait for another thread's render
                  nb::gil_scoped_release release;
                  const WaitCheck::Scope waiting(&check_signals_while_waiting);
                  return r.upload(scene.scene);
@@ -261,6 +264,7 @@ void bind_vulkan(nb::module_& m) {
         .def(
             "start",
             [](VulkanRenderer& r, const RenderSettings& settings) {
+                const PyLongCall counted;  // it may wait for another thread's render
                 nb::gil_scoped_release release;
                 const WaitCheck::Scope waiting(&check_signals_while_waiting);
                 return wrap(r.start(settings));

@@ -1,6 +1,9 @@
 """bvhlab: bounding volume hierarchies over triangles and spheres, with the split methods of
 Sandén's report (median, mean, binned SAH) and more (midpoint, full-sweep SAH, LBVH, refit)."""
 
+import atexit as _atexit
+
+from . import _core
 from ._core import BuildCancelled
 from .build_config import AXES, METHODS, BuildConfig
 from .bvh import NODE_DTYPE, Bvh, build
@@ -57,3 +60,8 @@ __all__ = [
     "VulkanUnavailable",
     "save_png",
 ]
+
+#: At exit, long calls still running on other threads (a daemon thread's build or render) are told
+#: to stop and waited for, up to 10 s, before Python finalizes: a thread that took the GIL back
+#: after that was ended in a way that aborted the process (Blender quit while one rendered).
+_atexit.register(_core._finish_long_calls, 10.0)
