@@ -269,21 +269,20 @@ void bind_build_names(nb::module_& m) {
 NB_MODULE(_core, m) {
     m.doc() = "bvhlab C++ core: BVH construction, stats, CPU traversal and the renderers";
     m.def(
-        "_finishing", [] { return long_calls().finishing.load(); },
-        "Whether the interpreter is finishing (_finish_long_calls ran): long calls stop at once.");
-    m.def(
         "_finish_long_calls",
         [](double seconds) {
             long_calls().finishing.store(true);
             nb::gil_scoped_release release;
             const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
-            while (long_calls().alive.load() > 0 && std::chrono::steady_clock::now() < until)
+            const auto settled = [] { return long_calls().alive.load() <= long_calls().parked.load(); };
+            while (!settled() && std::chrono::steady_clock::now() < until)
                 std::this_thread::sleep_for(std::chrono::milliseconds(5));
-            return long_calls().alive.load() == 0;
+            return settled();
         },
         "seconds"_a,
         "At exit (bvhlab's atexit handler): every long call from Python in progress on another thread "
-        "is told to stop, and waited for up to `seconds` until it is back in Python; True when none is left.");
+        "parks at its next look at Ctrl-C, without the GIL, until the process ends; waited for up to "
+        "`seconds`. True when every one has parked.");
     nb::exception<BuildCancelled>(m, "BuildCancelled");
     bind_render(m);
     bind_bvh(m);

@@ -43,7 +43,7 @@ using Depths = nb::ndarray<const std::uint8_t, nb::ndim<1>, nb::c_contig, nb::de
 /// raises KeyboardInterrupt (or what Python's signal handler raised) out of the wait. Called
 /// without the GIL.
 void check_signals_while_waiting() {
-    if (long_calls().finishing.load()) throw Cancelled();  // no GIL to take: the interpreter finishes
+    park_if_finishing();  // no GIL to take: the interpreter finishes
     nb::gil_scoped_acquire gil;
     if (PyErr_CheckSignals() != 0) throw nb::python_error();
 }

@@ -61,7 +61,8 @@ __all__ = [
     "save_png",
 ]
 
-#: At exit, long calls still running on other threads (a daemon thread's build or render) are told
-#: to stop and waited for, up to 10 s, before Python finalizes: a thread that took the GIL back
-#: after that was ended in a way that aborted the process (Blender quit while one rendered).
+#: At exit, long calls still running on other threads (a daemon thread's build or render) park,
+#: without the GIL, until the process ends, and Python finalizes once they have (up to 10 s): a
+#: thread that took the GIL back during finalization was ended in a way that aborted the process
+#: (Blender quit while one rendered).
 _atexit.register(_core._finish_long_calls, 10.0)

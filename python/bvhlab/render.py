@@ -152,8 +152,9 @@ class RenderJob:
         if progress is not None and not callable(progress):
             raise TypeError(f"progress must be callable (fraction -> bool) or None, got {type(progress).__name__}")
         if not self._job.run(target, progress):
-            why = "the interpreter is exiting" if _core._finishing() else "its progress callable"
-            raise RenderCancelled(f"render stopped by {why} at {self.samples_done} of {target} samples per pixel")
+            raise RenderCancelled(
+                f"render stopped by its progress callable at {self.samples_done} of {target} samples per pixel"
+            )
 
     def result(
         self, color: bool = True, depth: bool = True, cost: bool = True, heat: bool = False, counters: bool = False

@@ -257,6 +257,35 @@ def check_exits_without_leaks() -> None:
     assert "view_show" not in output and "invalid operator call" not in output, output[-3000:]
 
 
+_QUIT_WHILE_RENDERING = textwrap.dedent(
+    """
+    import threading, time
+    import numpy as np, bvhlab
+    one = np.array([[-10, -10, 0], [10, -10, 0], [0, 10, 0]], np.float32)
+    heavy = bvhlab.Scene(triangles=np.ascontiguousarray(np.repeat(one[None], 100_000, 0)),
+                         camera=bvhlab.Camera((0, -3, 6), (0, 0, 0), fov_y=50))
+    tree = bvhlab.build(heavy)
+    renderer = bvhlab.Renderer("cpu")
+    threading.Thread(target=lambda: renderer.render(heavy, tree, 48, 48, max_depth=0), daemon=True).start()
+    time.sleep(1.0)
+    print("QUITTING", flush=True)
+    """
+)
+
+
+def check_quits_while_a_thread_renders() -> None:
+    """Blender quits while a daemon thread (as the add-on's viewport, Build and Compare threads
+    are) renders with bvhlab: it exits 0. Blender 4.3 aborted ("terminate called without an active
+    exception", exit 134): the thread took the GIL back while Python finalized and was ended by
+    pthread_exit through C++ frames; bvhlab's atexit handler now stops such calls first. Twice:
+    the abort depended on when the thread next looked at Ctrl-C."""
+    for _ in range(2):
+        run = subprocess.run(_child_command(_QUIT_WHILE_RENDERING), capture_output=True, text=True, timeout=300)
+        output = run.stdout + run.stderr
+        assert run.returncode == 0 and "QUITTING" in run.stdout, (run.returncode, output[-3000:])
+        assert "terminate called" not in output, output[-3000:]
+
+
 _HUGE_F12 = textwrap.dedent(
     """
     scene = harness.boxes_scene()

@@ -209,6 +209,7 @@ def _engine() -> Iterator[Check]:
         yield Check("engine", check.__name__.removeprefix("check_"), check)
     yield Check("engine", "command_line_frames", frames.check_command_line_frames, folder=True, binary=True)
     yield Check("engine", "exits_without_leaks", final.check_exits_without_leaks, binary=True)
+    yield Check("engine", "quits_while_a_thread_renders", final.check_quits_while_a_thread_renders, binary=True)
 
 
 def _cameras() -> Iterator[Check]:
