@@ -2,7 +2,7 @@
 
     python bench/render.py [--scene atrium] [--width 800 --height 600] [--frames 3] [--json NAME]
 
-For median, mean, SAH 12 and SAH 32 (the report's Table 1 rows): average frame ms after a warm-up,
+For median, mean, SAH 12 and SAH 32 (the report's Table 1 rows): median frame ms after a warm-up,
 stack and stackless traversal, on Vulkan (lavapipe here) and on the CPU reference with the same
 thread count (and its wide traversal, the same image), primary-ray Mrays/s, and the report's frame
 time beside.
