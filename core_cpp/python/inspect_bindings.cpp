@@ -37,7 +37,7 @@ nb::dict py_node_data(const PyBvh& self, unsigned threads) {
     PyStopCheck stop;  // Ctrl-C stops the EPO pass (seconds to minutes on a soup)
     Cancellation cancel([&stop] { return stop(0.0); });
     try {
-        nb::gil_scoped_release release;
+        const LongRelease release;
         d = compute_node_data(tree->bvh, threads, &cancel);
     } catch (const Cancelled&) {
         stop.rethrow();
@@ -65,7 +65,7 @@ nb::dict py_trace_ray(const PyBvh& self, Point origin, Point direction, float tm
         throw std::invalid_argument("trace_ray: the render scene is of another version of the tree");
     TraversalRecord r;
     {
-        nb::gil_scoped_release release;
+        const LongRelease release;
         r = mode == Traversal::Wide ? record_wide_traversal(tree->bvh, tree->wide(), tree->wide_names(), ray)
                                     : record_traversal(tree->bvh, ray, mode, hidden);
     }
@@ -94,7 +94,7 @@ PyBvh* py_restore(const NodeBytes& nodes, const Refs& refs, const Triangles& tri
     GeometryView g = view_of(tris, spheres);
     Bvh bvh;
     {
-        nb::gil_scoped_release release;
+        const LongRelease release;
         bvh = restore_bvh(std::move(saved), g, config.threads);
     }
     return new PyBvh(std::move(bvh));

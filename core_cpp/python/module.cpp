@@ -64,7 +64,7 @@ PyBvh* build(const Triangles& tris, const std::optional<Spheres>& spheres, const
     GeometryView g = view_of(tris, spheres);
     Bvh bvh;
     try {
-        nb::gil_scoped_release release;
+        const LongRelease release;
         bvh = build_bvh(g, cfg);
     } catch (const BuildCancelled&) {
         stop.rethrow();  // what the callable (or Ctrl-C) raised, as itself
@@ -91,7 +91,7 @@ void py_intersect(const PyBvh& self, const Vectors& origins, const Vectors& dirs
     PyStopCheck stop;  // Ctrl-C stops a long batch
     Cancellation cancel([&stop] { return stop(0.0); });
     try {
-        nb::gil_scoped_release release;
+        const LongRelease release;
         const WideBvh* wide = mode == Traversal::Wide ? &tree->wide() : nullptr;
         intersect_batch(tree->bvh, rays, hits, mode, threads, wide, &cancel);
     } catch (const Cancelled&) {
@@ -123,7 +123,7 @@ nb::tuple py_boxes(const PyBvh& self, std::uint32_t depth_min, std::uint32_t dep
 void py_refit(PyBvh& self, const Triangles& tris, const std::optional<Spheres>& spheres) {
     require_geometry(self.current()->bvh, "refit");
     GeometryView g = view_of(tris, spheres);
-    nb::gil_scoped_release release;
+    const LongRelease release;
     // the topology stays, and with it the costs its nodes had when built (update.h); an SBVH is
     // rebuilt instead (refitted), a new topology whose costs as built are its own (null: taken
     // from it when first asked), not the old tree's, which an update would refuse
@@ -221,7 +221,7 @@ void bind_functions(nb::module_& m) {  // geometry checks and the build
         "geometry_fingerprint",
         [](const Triangles& tris, const std::optional<Spheres>& spheres) {
             GeometryView g = view_of(tris, spheres);
-            nb::gil_scoped_release release;
+            const LongRelease release;
             return geometry_fingerprint(g);
         },
         "triangles"_a.noconvert(), "spheres"_a.noconvert().none());
@@ -229,7 +229,7 @@ void bind_functions(nb::module_& m) {  // geometry checks and the build
         "validate_geometry",
         [](const Triangles& tris, const std::optional<Spheres>& spheres) {
             GeometryView g = view_of(tris, spheres);
-            nb::gil_scoped_release release;
+            const LongRelease release;
             validate(g);
         },
         "triangles"_a.noconvert(), "spheres"_a.noconvert().none(),
@@ -271,17 +271,21 @@ NB_MODULE(_core, m) {
     m.def(
         "_finish_long_calls",
         [](double seconds) {
-            long_calls().finishing.store(true);
-            nb::gil_scoped_release release;
-            const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+            long_calls().finishing.store(true);  // with the GIL: a call is counted already, or begins after
             const auto settled = [] { return long_calls().alive.load() <= long_calls().parked.load(); };
-            while (!settled() && std::chrono::steady_clock::now() < until)
-                std::this_thread::sleep_for(std::chrono::milliseconds(5));
+            {
+                nb::gil_scoped_release release;
+                const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+                while (!settled() && std::chrono::steady_clock::now() < until)
+                    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+            }
+            // a parked call keeps its objects alive: nanobind's leak report at exit would blame them
+            if (long_calls().parked.load() > 0) nb::set_leak_warnings(false);
             return settled();
         },
         "seconds"_a,
-        "At exit (bvhlab's atexit handler): every long call from Python in progress on another thread "
-        "parks at its next look at Ctrl-C, without the GIL, until the process ends; waited for up to "
+        "At exit (bvhlab's atexit handler): every long call from Python begun before parks at its next "
+        "look at Ctrl-C or on its way back, without the GIL, until the process ends; waited for up to "
         "`seconds`. True when every one has parked.");
     nb::exception<BuildCancelled>(m, "BuildCancelled");
     bind_render(m);

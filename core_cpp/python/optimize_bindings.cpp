@@ -25,7 +25,7 @@ nb::dict optimize(PyBvh& self, const OptimizeConfig& config, std::optional<nb::c
     PyStopCheck stop(progress ? nb::object(*progress) : nb::none());
     OptimizeStats stats;
     try {
-        nb::gil_scoped_release release;
+        const LongRelease release;
         // the fraction reported is of the iteration bound (a run that converges ends earlier)
         Cancellation cancel([&stop, &stats, &config] {
             return stop(config.iterations ? double(stats.iterations) / config.iterations : 1.0);

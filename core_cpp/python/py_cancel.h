@@ -21,8 +21,10 @@ namespace nb = nanobind;
 /// aborts the process ("terminate called without an active exception": Blender 4.3 quit while a
 /// daemon thread rendered, probe); let back into Python before that, it may still be writing its
 /// traceback when finalization takes stderr (Python's own fatal error, abort). So at exit every
-/// such call parks at its next look at Ctrl-C, without the GIL, until the process ends (as Python
-/// 3.14 parks daemon threads), and the exit waits for that.
+/// call begun before parks, without the GIL, until the process ends (as Python 3.14 parks daemon
+/// threads): at its next look at Ctrl-C or on its way back to Python (LongRelease), and the exit
+/// waits for that. Calls begun after (the exiting thread's own, a later atexit handler's) run as
+/// ever.
 struct LongCalls {
     std::atomic<int> alive{0};
     std::atomic<int> parked{0};
@@ -34,32 +36,62 @@ inline LongCalls& long_calls() {
     return calls;
 }
 
-/// While the interpreter finishes: this thread (in a long call, without the GIL) sleeps until the
-/// process ends. Otherwise returns.
-inline void park_if_finishing() {
-    if (!long_calls().finishing.load()) return;
+/// This thread's nesting of PyLongCall, and whether its outermost began before the finish.
+struct ThreadCalls {
+    int depth = 0;
+    bool may_park = false;
+};
+
+inline ThreadCalls& thread_calls() {
+    static thread_local ThreadCalls calls;
+    return calls;
+}
+
+/// Whether this thread is in a call begun before the interpreter started finishing, now finishing.
+inline bool should_park() { return long_calls().finishing.load() && thread_calls().may_park; }
+
+/// Sleeps until the process ends, the GIL released first where this thread holds it.
+[[noreturn]] inline void park() {
     long_calls().parked.fetch_add(1);
+    if (PyGILState_Check()) (void)PyEval_SaveThread();
     for (;;) std::this_thread::sleep_for(std::chrono::hours(1));
 }
 
-/// One long call from Python, counted while it lasts: made and destroyed with the GIL held, so
-/// when none is counted, none is between releasing the GIL and taking it back. A thread counts
-/// once however many are nested (a job's run: its lock's and its check's), as it parks once.
+/// One long call from Python, counted while it lasts where it began before the finish: made and
+/// destroyed with the GIL held (so the finish, which holds the GIL, sees it counted or not yet
+/// begun). A thread counts once however many are nested, as it parks once.
 struct PyLongCall {
     PyLongCall() {
-        if (depth()++ == 0) long_calls().alive.fetch_add(1);
+        ThreadCalls& t = thread_calls();
+        if (t.depth++ != 0) return;
+        t.may_park = !long_calls().finishing.load();
+        if (t.may_park) long_calls().alive.fetch_add(1);
     }
     ~PyLongCall() {
-        if (--depth() == 0) long_calls().alive.fetch_sub(1);
+        ThreadCalls& t = thread_calls();
+        if (--t.depth == 0 && t.may_park) long_calls().alive.fetch_sub(1);
     }
     PyLongCall(const PyLongCall&) = delete;
     PyLongCall& operator=(const PyLongCall&) = delete;
+};
+
+/// The GIL released for a call that may be long: counted (PyLongCall) and, while the interpreter
+/// finishes, parked on its way back, before the GIL would be taken again (also when unwinding).
+class LongRelease {
+public:
+    LongRelease() = default;
+    LongRelease(const LongRelease&) = delete;
+    LongRelease& operator=(const LongRelease&) = delete;
 
 private:
-    static int& depth() {
-        static thread_local int nested = 0;
-        return nested;
-    }
+    struct ParkOnReturn {
+        ~ParkOnReturn() {
+            if (should_park()) park();
+        }
+    };
+    PyLongCall counted_;  // constructed first, with the GIL; destroyed last, with it again
+    nb::gil_scoped_release release_;
+    ParkOnReturn park_;
 };
 
 /// The check of a Cancellation (cancel.h) for work started from Python. Runs on the calling
@@ -72,9 +104,9 @@ public:
     explicit PyStopCheck(nb::object progress = nb::none()) : progress_(std::move(progress)) {}
 
     /// True to stop. `fraction` is passed to the progress callable. While the interpreter
-    /// finishes, the thread parks instead (park_if_finishing).
+    /// finishes, a call begun before parks instead (park).
     bool operator()(double fraction) {
-        park_if_finishing();
+        if (should_park()) park();
         nb::gil_scoped_acquire gil;
         if (error_) return true;
         if (PyErr_CheckSignals() != 0) return keep_error();

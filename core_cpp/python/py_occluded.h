@@ -34,7 +34,7 @@ void run_released(Run&& run) {
     PyStopCheck stop;
     Cancellation cancel([&stop] { return stop(0.0); });
     try {
-        nb::gil_scoped_release release;
+        const LongRelease release;
         run(&cancel);
     } catch (const Cancelled&) {
         stop.rethrow();

@@ -43,7 +43,7 @@ using Depths = nb::ndarray<const std::uint8_t, nb::ndim<1>, nb::c_contig, nb::de
 /// raises KeyboardInterrupt (or what Python's signal handler raised) out of the wait. Called
 /// without the GIL.
 void check_signals_while_waiting() {
-    park_if_finishing();  // no GIL to take: the interpreter finishes
+    if (should_park()) park();  // no GIL to take: the interpreter finishes
     nb::gil_scoped_acquire gil;
     if (PyErr_CheckSignals() != 0) throw nb::python_error();
 }
@@ -59,16 +59,16 @@ struct PyRenderJob {
 
     template <class F>
     auto locked(F&& f) {
-        const PyLongCall counted;
         std::unique_lock<OwnedMutex> lock(mutex, std::defer_lock);
         {
-            nb::gil_scoped_release release;
+            const LongRelease release;
             while (!lock.try_lock_for(std::chrono::milliseconds(20))) {
+                if (should_park()) park();  // the interpreter finishes: no GIL to take
                 nb::gil_scoped_acquire gil;
                 if (PyErr_CheckSignals() != 0) throw nb::python_error();
             }
         }
-        nb::gil_scoped_release release;
+        const LongRelease release;
         const WaitCheck::Scope waiting(&check_signals_while_waiting);  // for the renderer's lock
         return f(*job);
     }
@@ -88,7 +88,7 @@ RenderScene make_scene(const TreeVersion& tree, const Triangles& tris, const std
     if (tri_material.shape(0) != g.triangle_count || sphere_material.shape(0) != g.sphere_count)
         throw std::invalid_argument("one material index per triangle and per sphere is needed");
     MaterialView mv{materials.data(), materials.shape(0), tri_material.data(), sphere_material.data()};
-    nb::gil_scoped_release release;
+    const LongRelease release;
     return make_render_scene(tree.bvh, g, mv);
 }
 
@@ -113,7 +113,7 @@ PyRenderScene make_two_level_scene(const PyTwoLevel& two, const std::vector<Tria
         meshes[k].sphere_material = sphere_material[k].data();
     }
     MaterialView mv{materials.data(), materials.shape(0), nullptr, nullptr};
-    nb::gil_scoped_release release;
+    const LongRelease release;
     return PyRenderScene{nullptr, two.meshes(), make_render_scene(two.tlas(), meshes, mv), two.shared_tlas()};
 }
 
@@ -245,7 +245,7 @@ void bind_vulkan(nb::module_& m) {
             [](VulkanRenderer* self, const std::string& device, bool validation, bool force_staging) {
                 VulkanOptions o;
                 o.device = device, o.validation = validation, o.force_staging = force_staging;
-                nb::gil_scoped_release release;
+                const LongRelease release;
                 new (self) VulkanRenderer(o);
             },
             "device"_a, "validation"_a, "force_staging"_a)
@@ -256,16 +256,14 @@ void bind_vulkan(nb::module_& m) {
         .def_prop_ro("max_line_width", &VulkanRenderer::max_line_width)
         .def("upload",
              [](VulkanRenderer& r, const PyRenderScene& scene) {
-                 const PyLongCall counted;  // it may wait for another thread's render
-                 nb::gil_scoped_release release;
+                 const LongRelease release;
                  const WaitCheck::Scope waiting(&check_signals_while_waiting);
                  return r.upload(scene.scene);
              })
         .def(
             "start",
             [](VulkanRenderer& r, const RenderSettings& settings) {
-                const PyLongCall counted;  // it may wait for another thread's render
-                nb::gil_scoped_release release;
+                const LongRelease release;
                 const WaitCheck::Scope waiting(&check_signals_while_waiting);
                 return wrap(r.start(settings));
             },
@@ -311,7 +309,7 @@ void bind_render(nb::module_& m) {
                 auto* out = new PyRenderScene{s.tree, s.meshes, {}, s.tlas};
                 std::unique_ptr<PyRenderScene> owned(out);
                 {
-                    nb::gil_scoped_release release;
+                    const LongRelease release;
                     out->scene = s.scene;  // a copy: renders in flight keep reading `s`
                     set_overlay_boxes(out->scene, lo.data(), hi.data(), depth.data(), lo.shape(0));
                 }
@@ -333,7 +331,7 @@ void bind_render(nb::module_& m) {
     m.def(
         "start_cpu",
         [](const PyRenderScene& scene, const RenderSettings& settings, std::uint32_t threads) {
-            nb::gil_scoped_release release;
+            const LongRelease release;
             std::optional<TwoLevel> two_level;
             return wrap(start_cpu(scene.scene, settings, threads, wide_trees(scene, settings, two_level)));
         },

@@ -55,7 +55,7 @@ PyTwoLevel* build_two_level(const std::vector<const PyBvh*>& meshes, const MeshI
     std::vector<std::uint32_t> blas_of(mesh_of.data(), mesh_of.data() + n);
     std::vector<Transform> placed(n);
     for (std::size_t i = 0; i < n; ++i) std::copy_n(transforms.data() + 12 * i, 12, placed[i].m.begin());
-    nb::gil_scoped_release release;
+    const LongRelease release;
     Tlas tlas = build_tlas(blases, blas_of, placed, config);
     return new PyTwoLevel(std::move(versions), std::move(tlas));
 }
@@ -75,7 +75,7 @@ void py_intersect(const PyTwoLevel& self, const Vectors& origins, const Vectors&
     PyStopCheck stop;  // Ctrl-C stops a long batch
     Cancellation cancel([&stop] { return stop(0.0); });
     try {
-        nb::gil_scoped_release release;
+        const LongRelease release;
         intersect_batch_two_level(self.view(mode), rays, hits, instance.data(), mode, threads, &cancel);
     } catch (const Cancelled&) {
         stop.rethrow();
@@ -106,7 +106,7 @@ nb::dict py_trace_ray(const PyTwoLevel& self, Point origin, Point direction, flo
     Ray ray{{origin[0], origin[1], origin[2]}, {direction[0], direction[1], direction[2]}, tmin, tmax};
     TwoLevelRecord r;
     {
-        nb::gil_scoped_release release;
+        const LongRelease release;
         std::vector<const WideNames*> names;
         if (mode == Traversal::Wide)
             for (const TreePtr& m : self.meshes()) names.push_back(&m->wide_names());

@@ -7,6 +7,7 @@
 
 #include "bvhlab/update.h"
 #include "py_bvh.h"
+#include "py_cancel.h"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -25,7 +26,7 @@ nb::dict update(PyBvh& self, const Triangles& tris, const std::optional<Spheres>
     const GeometryView g = view_of(tris, spheres);
     UpdateStats stats;
     {
-        nb::gil_scoped_release release;
+        const LongRelease release;
         self.replace([&](const TreeVersion& old) {
             auto built = std::make_shared<NodeCostArray>();
             Bvh tree = update_bvh(old.bvh, *old.built_costs(), g, config, *built, &stats);

@@ -8,6 +8,7 @@ traceback when finalization took stderr (Python's fatal error, abort)."""
 
 import subprocess
 import sys
+import time
 
 import pytest
 
@@ -42,3 +43,62 @@ def test_exit_while_daemon_threads_work(backend):
         assert out.returncode == 0, (out.returncode, out.stderr[-2000:])
         assert out.stdout.strip() == "exiting" and "terminate called" not in out.stderr
         assert "Traceback" not in out.stderr, out.stderr[-2000:]  # parked: no thread is let back into Python
+
+
+CASES = {
+    # the job's final check, made with the GIL held, as the interpreter starts finishing (set here
+    # from the run's own progress call): it parked holding the GIL, and the exit hung (review)
+    "final check with the GIL": """
+import threading, time
+import numpy as np, bvhlab
+from bvhlab import _core
+scene = bvhlab.Scene(triangles=np.array([[[-1, -1, 0], [1, -1, 0], [0, 1, 0]]], np.float32))
+tree = bvhlab.build(scene)
+job = bvhlab.Renderer("cpu", threads=1).start(scene, tree, 4, 4)
+finish = lambda fraction: _core._finish_long_calls(0.0) if fraction < 1.0 else None
+threading.Thread(target=lambda: job.run(progress=finish), daemon=True).start()
+time.sleep(1.0)
+print("exiting", flush=True)
+""",
+    # a thread waiting for the job's own lock, held by another thread's run: it never looked at
+    # the finish, took the GIL back during finalization and aborted after the 10 s wait (review)
+    "waiting for a job": """
+import threading, time
+import numpy as np, bvhlab
+one = np.array([[-10, -10, 0], [10, -10, 0], [0, 10, 0]], np.float32)
+heavy = bvhlab.Scene(triangles=np.ascontiguousarray(np.repeat(one[None], 100_000, 0)),
+                     camera=bvhlab.Camera((0, -3, 6), (0, 0, 0), fov_y=50))
+tree = bvhlab.build(heavy)
+job = bvhlab.Renderer("cpu", threads=1).start(heavy, tree, 48, 48, max_depth=0)
+threading.Thread(target=job.run, daemon=True).start()
+time.sleep(0.3)
+threading.Thread(target=job.run, daemon=True).start()
+time.sleep(0.7)
+print("exiting", flush=True)
+""",
+    # an atexit handler registered before bvhlab's runs after it: its build on the exiting
+    # thread parked that thread, and the exit hung (review)
+    "a build after the finish": """
+import atexit
+import numpy as np
+def late():
+    import bvhlab
+    bvhlab.build(np.random.default_rng(0).random((1000, 3, 3), dtype=np.float32))
+    print("late build done", flush=True)
+atexit.register(late)
+import bvhlab
+print("exiting", flush=True)
+""",
+}
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_exit_parks_only_what_it_must_and_never_hangs(case):
+    start = time.monotonic()
+    out = subprocess.run([sys.executable, "-c", CASES[case]], capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0, (out.returncode, out.stderr[-2000:])
+    assert out.stdout.startswith("exiting") and "terminate called" not in out.stderr, out
+    assert "Traceback" not in out.stderr, out.stderr[-2000:]
+    if case == "a build after the finish":
+        assert out.stdout.splitlines() == ["exiting", "late build done"], out.stdout
+    assert time.monotonic() - start < 9.0, "the exit waited out the 10 s for a call that never parked"
