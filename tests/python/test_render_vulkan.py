@@ -289,12 +289,13 @@ def test_an_overlay_of_many_boxes_is_drawn_in_parts_and_once_a_job(vulkan):
 
 def test_a_small_images_first_round_is_bounded(vulkan):
     """The first dispatch round aims at 2^28 steps for the tile, at most kFirstRoundMaxSteps
-    (2,048) a pixel: a 16 × 16 image got the whole 60,000 a pixel, and a scene whose pixels need
-    them all ran its first round for seconds before Ctrl-C was looked at (17 s at 64 × 64, probe).
-    The job stopped after its first round says the budget that round had."""
+    (2,048) a pixel: a 64 × 64 image got the whole 60,000 a pixel, and a scene whose pixels need
+    them all ran its first round 17 s before Ctrl-C was looked at (probe). The job stopped after
+    its first round (long enough that the progress callable, polled at most every 20 ms, is asked
+    after it) says the budget that round had."""
     scene = _pile()
     bvh = bvhlab.build(scene)
-    job = vulkan.start(scene, bvh, 16, 16, max_depth=0)
+    job = vulkan.start(scene, bvh, 64, 64, max_depth=0)
     calls = []
     with pytest.raises(bvhlab.RenderCancelled):
         job.run(progress=lambda fraction: calls.append(fraction) or len(calls) < 2)

@@ -16,6 +16,11 @@ constexpr ImageState kColorDiscarded{
     VK_IMAGE_LAYOUT_UNDEFINED};
 constexpr ImageState kColorAttachment{VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
                                       VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
+// A later part of the overlay loads what the parts before drew (LOAD_OP_LOAD reads the attachment).
+constexpr ImageState kColorAttachmentLoaded{
+    VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+    VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+    VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
 constexpr ImageState kColorCleared{VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
                                    VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL};
 constexpr ImageState kColorTraced{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT,
@@ -67,7 +72,7 @@ void record_overlay(const PassContext& pass, VkCommandBuffer cmd, float line_wid
     const FrameTargets& t = pass.targets;
     // the first part discards what was there; a later one reads what the parts before drew
     image_barrier(fn, cmd, t.color.handle(), VK_IMAGE_ASPECT_COLOR_BIT, part.opens ? kColorDiscarded : kColorAttachment,
-                  kColorAttachment);
+                  part.opens ? kColorAttachment : kColorAttachmentLoaded);
     image_barrier(fn, cmd, t.depth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT, part.opens ? kDepthDiscarded : kDepthAttachment,
                   kDepthAttachment);
     begin_overlay_rendering(pass, cmd, part);

@@ -36,6 +36,7 @@ RendererCore::RendererCore(const VulkanOptions& options)
 
 void RendererCore::ensure_targets(std::uint32_t width, std::uint32_t height) {
     if (targets && targets->width == width && targets->height == height) return;
+    overlay_job = 0;  // new targets hold no job's overlay (also where making them fails)
     targets.reset();  // free the old size first
     targets.emplace(device, width, height);
     bindings.bind_overlay(targets->color.view());
