@@ -320,8 +320,10 @@ def _make_tlas(meshes, mesh_of, transforms, threads: int) -> tuple:
             f"instance {bad[0]} refers to mesh {mesh_of[bad[0]]}, but the tree has {len(meshes)} "
             f"mesh{'es' if len(meshes) != 1 else ''}"
         )
-    transforms = _checks.float32_array("transforms", transforms, (3, 4))
-    mesh_of = np.ascontiguousarray(mesh_of, np.int32)  # as Scene.instances gives them
+    # copies: the caller's arrays (a Scene's) may change in place later, and the tree's placement
+    # (InstancedBvh.instances, which a render compares with the scene's) must not change with them
+    transforms = np.array(_checks.float32_array("transforms", transforms, (3, 4)), copy=True)
+    mesh_of = np.array(mesh_of, np.int32, copy=True)  # as Scene.instances gives them
     core = [m._core for m in meshes]
     config = _core.default_tlas_config()
     config.threads = threads  # the docstring's promise (it was dropped: a TLAS was built on every thread)

@@ -205,7 +205,11 @@ class Renderer:
         """A new Renderer made as this one was (backend, device, validation, threads), with its own
         scene cache and upload: for frames of several trees taken in turn, each of which would
         otherwise make and upload its scene again at every frame (compare's rounds)."""
-        backend, device, validation, force_staging = self._made_with
+        _, device, validation, force_staging = self._made_with
+        if self._vulkan is not None:  # the device this one resolved to, not "auto" again
+            device, backend = self._vulkan.device_name, "vulkan"
+        else:
+            device, backend = None, "cpu"
         return Renderer(
             backend, device=device, validation=validation, force_staging=force_staging, threads=self.threads
         )

@@ -360,6 +360,12 @@ def test_a_tree_placed_otherwise_than_its_scene_is_refused_and_renders_once_plac
     flat = bvhlab.Scene(triangles=moved.triangles, camera=moved.camera, light=moved.light)
     with pytest.raises(ValueError, match="the tree has 2 meshes, the scene 1"):
         bvhlab.render(flat, tree, 48, 32, backend="cpu")
+    # the tree keeps copies: a scene's transforms changed in place after the build are not its own
+    built = _scene(placed, [0, 1])
+    own = bvhlab.build(built)
+    built.instance_transforms[1, :, 3] = (0.0, 3.0, 0.0)
+    with pytest.raises(ValueError, match="not placed as the scene's"):
+        bvhlab.render(built, own, 48, 32, backend="cpu")
     tree.place(*moved.instances())
     image, _ = bvhlab.render(moved, tree, 48, 32, backend="cpu")
     expected, _ = bvhlab.render(moved, bvhlab.build(moved), 48, 32, backend="cpu")
