@@ -3,7 +3,7 @@
 Blender installs an extension's wheel again only where its name changes, and a Python module stays
 loaded until Blender quits: a zip rebuilt at the same version, installed over the one before, ran
 its new add-on code on the old core, also after a restart (probe). So each wheel's version carries
-the digest of its package (`+` LABEL_DIGITS hex digits, scripts/build_addon.py relabel_wheel) and
+the digest of its package (`+g` and LABEL_DIGITS hex digits, wheel_label; scripts/build_addon.py relabel_wheel) and
 Blender replaces it; the zip carries the digests (DIGESTS, package_digest over the wheel's
 entries). At register the add-on takes the same digest of the package installed: where it differs
 from the zip's, the installed one is another build's; where it differs from the digest taken when
@@ -24,6 +24,13 @@ DIGESTS = "wheel_digests.json"
 
 #: Hex digits of a package's digest in its wheel's local version label.
 LABEL_DIGITS = 16
+
+
+def wheel_label(digest: str) -> str:
+    """A wheel's local version label for its package's digest: "g" and LABEL_DIGITS hex digits (the
+    letter first, so that PEP 440's normalisation never drops a leading zero of all-digit labels)."""
+    return "g" + digest[:LABEL_DIGITS]
+
 
 MISMATCH = (
     "The bvhlab core installed is not the one this extension bundles: remove the extension, "

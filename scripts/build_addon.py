@@ -221,7 +221,7 @@ def stage(wheels: list[Path], version: str) -> Path:
     shutil.copytree(ADDON, staged, ignore=shutil.ignore_patterns("__pycache__", "wheels", "*.pyc"))
     (staged / "wheels").mkdir()
     digests = wheel_digests(wheels)
-    labelled = [relabel_wheel(w, staged / "wheels", digests[wheel_tag(w)][: core_check.LABEL_DIGITS]) for w in wheels]
+    labelled = [relabel_wheel(w, staged / "wheels", core_check.wheel_label(digests[wheel_tag(w)])) for w in wheels]
     (staged / core_check.DIGESTS).write_text(json.dumps(digests, indent=1) + "\n")
     manifest = staged / "blender_manifest.toml"
     manifest.write_text(stage_manifest(manifest.read_text(), version, [w.name for w in labelled]))

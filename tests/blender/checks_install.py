@@ -125,7 +125,7 @@ def _another_build(zip_path: Path, out: Path, tag: str) -> tuple[Path, str]:
             rebuilt.writestr("bvhlab/rebuilt_marker.txt", "another build of the same version")
         digest = build.wheel_digests([changed])[tag]
         (out / "wheels").mkdir()
-        new = build.relabel_wheel(changed, out / "wheels", digest[: build.core_check.LABEL_DIGITS])
+        new = build.relabel_wheel(changed, out / "wheels", build.core_check.wheel_label(digest))
         new_name = f"wheels/{new.name}"
         probe = out / "bvhlab_rebuilt.zip"
         with zipfile.ZipFile(probe, "w") as target:

@@ -35,7 +35,7 @@ def test_zip_has_a_wheel_for_each_blender_python_and_one_version():
         names = set(archive.namelist())
     version = bvhlab.__version__
     assert manifest["version"] == version
-    labels = {tag: digest[:16] for tag, digest in _digests().items()}
+    labels = {tag: "g" + digest[:16] for tag, digest in _digests().items()}
     assert sorted(manifest["wheels"]) == sorted(
         f"./wheels/bvhlab-{version}+{labels[tag]}-{tag}-{tag}-linux_x86_64.whl" for tag in BLENDER_PYTHONS
     )
@@ -70,7 +70,7 @@ def test_each_wheel_is_labelled_with_its_package_and_its_record_holds():
             for path in sorted(n for n in files if n.startswith("bvhlab/")):
                 digest.update(path.encode() + b"\0" + len(files[path]).to_bytes(8, "little") + files[path])
             assert digest.hexdigest() == expected[tag], name
-            labelled = f"{bvhlab.__version__}+{expected[tag][:16]}"
+            labelled = f"{bvhlab.__version__}+g{expected[tag][:16]}"
             info = f"bvhlab-{labelled}.dist-info/"
             assert f"Version: {labelled}\n" in files[info + "METADATA"].decode(), name
             rows = list(csv.reader(io.StringIO(files[info + "RECORD"].decode())))
