@@ -271,6 +271,7 @@ NB_MODULE(_core, m) {
     m.def(
         "_finish_long_calls",
         [](double seconds) {
+            long_calls().finisher.store(std::this_thread::get_id());
             long_calls().finishing.store(true);  // with the GIL: a call is counted already, or begins after
             const auto settled = [] { return long_calls().alive.load() <= long_calls().parked.load(); };
             {
@@ -284,9 +285,9 @@ NB_MODULE(_core, m) {
             return settled();
         },
         "seconds"_a,
-        "At exit (bvhlab's atexit handler): every long call from Python begun before parks at its next "
-        "look at Ctrl-C or on its way back, without the GIL, until the process ends; waited for up to "
-        "`seconds`. True when every one has parked.");
+        "At exit (bvhlab's atexit handler): every long call from Python on another thread parks at its "
+        "next look at Ctrl-C or on its way back, without the GIL, until the process ends; those in "
+        "progress are waited for up to `seconds`. True when every one has parked.");
     nb::exception<BuildCancelled>(m, "BuildCancelled");
     bind_render(m);
     bind_bvh(m);

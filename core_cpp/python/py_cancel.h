@@ -21,13 +21,14 @@ namespace nb = nanobind;
 /// aborts the process ("terminate called without an active exception": Blender 4.3 quit while a
 /// daemon thread rendered, probe); let back into Python before that, it may still be writing its
 /// traceback when finalization takes stderr (Python's own fatal error, abort). So at exit every
-/// call begun before parks, without the GIL, until the process ends (as Python 3.14 parks daemon
-/// threads): at its next look at Ctrl-C or on its way back to Python (LongRelease), and the exit
-/// waits for that. Calls begun after (the exiting thread's own, a later atexit handler's) run as
-/// ever.
+/// call on another thread parks, without the GIL, until the process ends (as Python 3.14 parks
+/// daemon threads): at its next look at Ctrl-C or on its way back to Python (LongRelease), and the
+/// exit waits for those in progress. The exiting thread's own calls (a later atexit handler's, a
+/// finalizer's) run as ever.
 struct LongCalls {
     std::atomic<int> alive{0};
     std::atomic<int> parked{0};
+    std::atomic<std::thread::id> finisher{};  ///< the thread that runs the finish (set first)
     std::atomic<bool> finishing{false};
 };
 
@@ -36,10 +37,10 @@ inline LongCalls& long_calls() {
     return calls;
 }
 
-/// This thread's nesting of PyLongCall, and whether its outermost began before the finish.
+/// This thread's nesting of PyLongCall, and whether its outermost is counted.
 struct ThreadCalls {
     int depth = 0;
-    bool may_park = false;
+    bool counted = false;
 };
 
 inline ThreadCalls& thread_calls() {
@@ -47,8 +48,10 @@ inline ThreadCalls& thread_calls() {
     return calls;
 }
 
-/// Whether this thread is in a call begun before the interpreter started finishing, now finishing.
-inline bool should_park() { return long_calls().finishing.load() && thread_calls().may_park; }
+/// Whether the interpreter finishes and this thread is not the one finishing it.
+inline bool should_park() {
+    return long_calls().finishing.load() && long_calls().finisher.load() != std::this_thread::get_id();
+}
 
 /// Sleeps until the process ends, the GIL released first where this thread holds it.
 [[noreturn]] inline void park() {
@@ -57,19 +60,19 @@ inline bool should_park() { return long_calls().finishing.load() && thread_calls
     for (;;) std::this_thread::sleep_for(std::chrono::hours(1));
 }
 
-/// One long call from Python, counted while it lasts where it began before the finish: made and
+/// One long call from Python, counted while it lasts (not on the finishing thread): made and
 /// destroyed with the GIL held (so the finish, which holds the GIL, sees it counted or not yet
 /// begun). A thread counts once however many are nested, as it parks once.
 struct PyLongCall {
     PyLongCall() {
         ThreadCalls& t = thread_calls();
         if (t.depth++ != 0) return;
-        t.may_park = !long_calls().finishing.load();
-        if (t.may_park) long_calls().alive.fetch_add(1);
+        t.counted = long_calls().finisher.load() != std::this_thread::get_id();
+        if (t.counted) long_calls().alive.fetch_add(1);
     }
     ~PyLongCall() {
         ThreadCalls& t = thread_calls();
-        if (--t.depth == 0 && t.may_park) long_calls().alive.fetch_sub(1);
+        if (--t.depth == 0 && t.counted) long_calls().alive.fetch_sub(1);
     }
     PyLongCall(const PyLongCall&) = delete;
     PyLongCall& operator=(const PyLongCall&) = delete;
@@ -104,7 +107,7 @@ public:
     explicit PyStopCheck(nb::object progress = nb::none()) : progress_(std::move(progress)) {}
 
     /// True to stop. `fraction` is passed to the progress callable. While the interpreter
-    /// finishes, a call begun before parks instead (park).
+    /// finishes, a call on another thread than the finishing one parks instead (park).
     bool operator()(double fraction) {
         if (should_park()) park();
         nb::gil_scoped_acquire gil;

@@ -55,7 +55,10 @@ from bvhlab import _core
 scene = bvhlab.Scene(triangles=np.array([[[-1, -1, 0], [1, -1, 0], [0, 1, 0]]], np.float32))
 tree = bvhlab.build(scene)
 job = bvhlab.Renderer("cpu", threads=1).start(scene, tree, 4, 4)
-finish = lambda fraction: _core._finish_long_calls(0.0) if fraction < 1.0 else None
+def finish(fraction):  # the exit begins on another thread between the run's polls
+    if fraction < 1.0:
+        threading.Thread(target=_core._finish_long_calls, args=(0.0,)).start()
+        time.sleep(0.2)
 threading.Thread(target=lambda: job.run(progress=finish), daemon=True).start()
 time.sleep(1.0)
 print("exiting", flush=True)
