@@ -3,6 +3,7 @@
 // ValueError). The GIL is released for builds and traversal.
 #include <chrono>
 #include <memory>
+#include <pthread.h>
 #include <thread>
 
 #include <nanobind/nanobind.h>
@@ -268,6 +269,9 @@ void bind_build_names(nb::module_& m) {
 
 NB_MODULE(_core, m) {
     m.doc() = "bvhlab C++ core: BVH construction, stats, CPU traversal and the renderers";
+    // a forked child has only the forking thread, outside any call: the parent's calls in progress
+    // are not its own (counted, its exit waited 10 s for them)
+    pthread_atfork(nullptr, nullptr, [] { long_calls().alive.store(0); });
     m.def(
         "_finish_long_calls",
         [](double seconds) {

@@ -105,3 +105,27 @@ def test_exit_parks_only_what_it_must_and_never_hangs(case):
     if case == "a build after the finish":
         assert out.stdout.splitlines() == ["exiting", "late build done"], out.stdout
     assert time.monotonic() - start < 9.0, "the exit waited out the 10 s for a call that never parked"
+
+
+def test_a_forked_child_does_not_wait_for_its_parents_calls():
+    """A child forked while another thread of the parent is inside a long call exits at once (it
+    inherited the parent's count of calls in progress and waited its 10 s: review)."""
+    code = """
+import os, threading, time
+import numpy as np, bvhlab
+one = np.array([[-10, -10, 0], [10, -10, 0], [0, 10, 0]], np.float32)
+heavy = bvhlab.Scene(triangles=np.ascontiguousarray(np.repeat(one[None], 100_000, 0)),
+                     camera=bvhlab.Camera((0, -3, 6), (0, 0, 0), fov_y=50))
+tree = bvhlab.build(heavy)
+threading.Thread(target=lambda: bvhlab.render(heavy, tree, 48, 48, backend="cpu", max_depth=0), daemon=True).start()
+time.sleep(0.5)
+start = time.monotonic()
+pid = os.fork()
+if pid == 0:
+    raise SystemExit(0)  # the child's normal exit runs bvhlab's atexit handler
+os.waitpid(pid, 0)
+print(f"child took {time.monotonic() - start:.1f} s", flush=True)
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert float(out.stdout.split()[2]) < 5.0, out.stdout
