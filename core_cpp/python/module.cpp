@@ -1,10 +1,7 @@
 // The nanobind module `bvhlab._core`: thin bindings; checks of Python-side types live in
 // python/bvhlab (clear messages), checks of values in the C++ core (std::invalid_argument →
 // ValueError). The GIL is released for builds and traversal.
-#include <chrono>
 #include <memory>
-#include <pthread.h>
-#include <thread>
 
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
@@ -269,29 +266,11 @@ void bind_build_names(nb::module_& m) {
 
 NB_MODULE(_core, m) {
     m.doc() = "bvhlab C++ core: BVH construction, stats, CPU traversal and the renderers";
-    // a forked child has only the forking thread, outside any call: the parent's calls in progress
-    // are not its own (counted, its exit waited 10 s for them)
-    pthread_atfork(nullptr, nullptr, [] { long_calls().alive.store(0); });
-    m.def(
-        "_finish_long_calls",
-        [](double seconds) {
-            long_calls().finisher.store(std::this_thread::get_id());
-            long_calls().finishing.store(true);  // with the GIL: a call is counted already, or begins after
-            const auto settled = [] { return long_calls().alive.load() <= long_calls().parked.load(); };
-            {
-                nb::gil_scoped_release release;
-                const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
-                while (!settled() && std::chrono::steady_clock::now() < until)
-                    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-            }
-            // a parked call keeps its objects alive: nanobind's leak report at exit would blame them
-            if (long_calls().parked.load() > 0) nb::set_leak_warnings(false);
-            return settled();
-        },
-        "seconds"_a,
-        "At exit (bvhlab's atexit handler): every long call from Python on another thread parks at its "
-        "next look at Ctrl-C or on its way back, without the GIL, until the process ends; those in "
-        "progress are waited for up to `seconds`. True when every one has parked.");
+    forget_long_calls_in_forked_children();
+    m.def("_finish_long_calls", &finish_long_calls, "seconds"_a,
+          "At exit (bvhlab's atexit handler): every long call from Python on another thread parks at its "
+          "next look at Ctrl-C or on its way back, without the GIL, until the process ends; those in "
+          "progress are waited for up to `seconds`. True when every one has parked.");
     nb::exception<BuildCancelled>(m, "BuildCancelled");
     bind_render(m);
     bind_bvh(m);

@@ -5,6 +5,8 @@
 #include <chrono>
 #include <optional>
 #include <thread>
+
+#include <pthread.h>
 #include <utility>
 
 #include <nanobind/nanobind.h>
@@ -97,6 +99,30 @@ private:
     ParkOnReturn park_;
 };
 
+/// The atexit handler's work (_core._finish_long_calls): marks the interpreter as finishing, from
+/// this thread, and waits up to `seconds` until every counted call has parked. True when all have.
+inline bool finish_long_calls(double seconds) {
+    LongCalls& calls = long_calls();
+    calls.finisher.store(std::this_thread::get_id());
+    calls.finishing.store(true);  // with the GIL: a call is counted already, or begins after
+    const auto settled = [&calls] { return calls.alive.load() <= calls.parked.load(); };
+    {
+        nb::gil_scoped_release release;
+        const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+        while (!settled() && std::chrono::steady_clock::now() < until)
+            std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    // a parked call keeps its objects alive: nanobind's leak report at exit would blame them
+    if (calls.parked.load() > 0) nb::set_leak_warnings(false);
+    return settled();
+}
+
+/// A forked child has only the forking thread, outside any call: the parent's calls in progress
+/// are not its own (counted, its exit waited 10 s for them). Registered once, at import.
+inline void forget_long_calls_in_forked_children() {
+    pthread_atfork(nullptr, nullptr, [] { long_calls().alive.store(0); });
+}
+
 /// The check of a Cancellation (cancel.h) for work started from Python. Runs on the calling
 /// thread, with the GIL released around it: it takes the GIL, runs Python's signal handlers
 /// (Ctrl-C raises KeyboardInterrupt there) and then the progress callable, if any. The callable's
@@ -139,7 +165,6 @@ private:
         return true;
     }
 
-    PyLongCall counted_;
     nb::object progress_;
     std::optional<nb::python_error> error_;
 };

@@ -39,9 +39,9 @@ using Counters = nb::ndarray<float, nb::shape<-1, -1, gpu::COUNTER_COUNT>, nb::c
 using Corners = nb::ndarray<const float, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
 using Depths = nb::ndarray<const std::uint8_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
 
-/// Between the slices of a wait for the Vulkan renderer's lock (lock_in_slices, a WaitCheck):
-/// raises KeyboardInterrupt (or what Python's signal handler raised) out of the wait. Called
-/// without the GIL.
+/// Between the slices of a wait for a job's or the Vulkan renderer's lock (lock_in_slices, a
+/// WaitCheck): raises KeyboardInterrupt (or what Python's signal handler raised) out of the wait.
+/// Called without the GIL.
 void check_signals_while_waiting() {
     if (should_park()) park();  // no GIL to take: the interpreter finishes
     nb::gil_scoped_acquire gil;
@@ -59,17 +59,9 @@ struct PyRenderJob {
 
     template <class F>
     auto locked(F&& f) {
-        std::unique_lock<OwnedMutex> lock(mutex, std::defer_lock);
-        {
-            const LongRelease release;
-            while (!lock.try_lock_for(std::chrono::milliseconds(20))) {
-                if (should_park()) park();  // the interpreter finishes: no GIL to take
-                nb::gil_scoped_acquire gil;
-                if (PyErr_CheckSignals() != 0) throw nb::python_error();
-            }
-        }
         const LongRelease release;
-        const WaitCheck::Scope waiting(&check_signals_while_waiting);  // for the renderer's lock
+        const WaitCheck::Scope waiting(&check_signals_while_waiting);  // this job's lock, then the renderer's
+        const auto lock = lock_in_slices(mutex);
         return f(*job);
     }
 
