@@ -196,7 +196,7 @@ class Renderer:
         _checks.choice("backend", backend, BACKENDS)
         self.threads = _checks.integer("threads", threads, 0, 4096)
         self._vulkan, self.backend, self.reason = _choose_backend(backend, device, validation, force_staging)
-        self._made_with = (backend, device, validation, force_staging)
+        self._validation, self._force_staging = validation, force_staging  # for like()
         self._cache = SceneCache()
         self._lock = threading.Lock()  # the cached scene, the upload and the job started on it go together
         self._uploaded = None
@@ -205,13 +205,14 @@ class Renderer:
         """A new Renderer made as this one was (backend, device, validation, threads), with its own
         scene cache and upload: for frames of several trees taken in turn, each of which would
         otherwise make and upload its scene again at every frame (compare's rounds)."""
-        _, device, validation, force_staging = self._made_with
-        if self._vulkan is not None:  # the device this one resolved to, not "auto" again
-            device, backend = self._vulkan.device_name, "vulkan"
-        else:
-            device, backend = None, "cpu"
+        # the backend and device this one resolved to, not "auto" again
+        device = self._vulkan.device_name if self._vulkan is not None else None
         return Renderer(
-            backend, device=device, validation=validation, force_staging=force_staging, threads=self.threads
+            "vulkan" if device is not None else "cpu",
+            device=device,
+            validation=self._validation,
+            force_staging=self._force_staging,
+            threads=self.threads,
         )
 
     @property
