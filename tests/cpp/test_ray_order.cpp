@@ -139,15 +139,18 @@ TEST(RayOrder, BlocksAreProbedOverTheirWholeLengthAndSortedWhereTheProbeSaysSo) 
     const RayBatch batch{o.data(), d.data(), n};
     const Aabb box{{-8, -8, -8}, {8, 8, 8}};
     const double inf = std::numeric_limits<double>::infinity();
+    // the timed part's answers fixed: reorder (stall_ns) and interleave (interleave_ns) or not
     struct Case {
-        double cost, stall_ns;
-        bool sorted;
+        double cost, stall_ns, interleave_ns;
+        bool sorted, interleaved;
     };
     const std::size_t last = kOrderLeast + 77, warm = kOrderWarmRays;  // the last block: too few to time
-    for (const Case c : {Case{0.0, inf, false}, Case{0.0, -inf, true}, Case{kOrderNodes, inf, true}}) {
+    for (const Case c :
+         {Case{0.0, inf, inf, false, false}, Case{0.0, -inf, inf, true, false}, Case{0.0, -inf, -inf, true, true},
+          Case{0.0, inf, -inf, false, true}, Case{kOrderNodes, inf, inf, true, true}}) {
         std::vector<std::vector<float>> probed;  // each call's rays, by their origins' y
         std::vector<std::size_t> bases, counts;
-        std::vector<bool> was_sorted;
+        std::vector<bool> was_sorted, interleaved;
         for_each_block(
             batch, box,
             [&](const RayPiece& piece) {
@@ -157,8 +160,9 @@ TEST(RayOrder, BlocksAreProbedOverTheirWholeLengthAndSortedWhereTheProbeSaysSo) 
                 probed.push_back(y);
                 return c.cost;
             },
-            [&](std::size_t base, const RayBatch& part, const SortedRays* sorted) {
+            [&](std::size_t base, const RayBatch& part, const SortedRays* sorted, WideWalk walk) {
                 bases.push_back(base), counts.push_back(part.count), was_sorted.push_back(sorted != nullptr);
+                interleaved.push_back(walk == WideWalk::Interleaved);
                 EXPECT_EQ(part.origins, o.data() + 3 * base);
                 if (!sorted) return;
                 std::vector<char> seen(part.count, 0);
@@ -168,16 +172,18 @@ TEST(RayOrder, BlocksAreProbedOverTheirWholeLengthAndSortedWhereTheProbeSaysSo) 
                     seen[i] = 1;
                 }
             },
-            c.stall_ns);
+            c.stall_ns, c.interleave_ns);
         const bool whole = c.cost >= kOrderNodes;
-        if (whole) {
+        if (whole) {  // costly: sorted and interleaved, the timed answers not asked
             EXPECT_EQ(bases, (std::vector<std::size_t>{0, kOrderBlock}));
             EXPECT_EQ(counts, (std::vector<std::size_t>{kOrderBlock, last}));
             EXPECT_EQ(was_sorted, (std::vector<bool>{true, true}));
+            EXPECT_EQ(interleaved, (std::vector<bool>{true, true}));
         } else {  // the first rays as they are, the rest as the timed part says; the last whole
             EXPECT_EQ(bases, (std::vector<std::size_t>{0, warm, kOrderBlock}));
             EXPECT_EQ(counts, (std::vector<std::size_t>{warm, kOrderBlock - warm, last}));
             EXPECT_EQ(was_sorted, (std::vector<bool>{false, c.sorted, false}));
+            EXPECT_EQ(interleaved, (std::vector<bool>{false, c.interleaved, false}));
         }
         // each block probed over its whole length, from its first ray to its last; where the nodes
         // do not decide, a sample of the rest, halfway between evenly spread rays, traced twice
@@ -274,20 +280,29 @@ void expect_each_ray_its_own_hit(const Bvh& bvh, bool whole, std::size_t count =
 }
 
 TEST(RayOrder, ReorderedBatchesGiveEachRayItsOwnHitOnEveryPathAndThreadCount) {
-    // many small triangles: random rays visit many nodes, so the whole batch is reordered
+    // many small triangles: random rays visit many nodes, so the whole batch is reordered and
+    // interleaved (wide_bvh.h WideWalk)
     const auto scene = test::random_scene(60000, 300, 71);
     expect_each_ray_its_own_hit(build_bvh(scene.view()), true);
 }
 
 TEST(RayOrder, BatchesReorderedAfterTheirFirstRaysGiveEachRayItsOwnHit) {
     // few, large triangles: the rays visit few nodes, and the timed choice is made "reorder", so
-    // each block's first rays go as they are and the rest in ray order
+    // each block's first rays go as they are and the rest in ray order, interleaved or alone
     const auto scene = test::random_scene(3000, 600, 72);
     struct Restore {  // also where an assertion returns early: the other tests time as they should
         double before = detail::order_stall_ns.exchange(-std::numeric_limits<double>::infinity());
-        ~Restore() { detail::order_stall_ns = before; }
+        double interleave = detail::interleave_stall_ns.load();
+        ~Restore() { detail::order_stall_ns = before, detail::interleave_stall_ns = interleave; }
     } restore;
-    expect_each_ray_its_own_hit(build_bvh(scene.view()), false, kOrderTimedLeast + 1000);
+    const Bvh bvh = build_bvh(scene.view());
+    // the rest interleaved (wide_bvh.h WideWalk), then one ray after another
+    for (const double interleave :
+         {-std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()}) {
+        SCOPED_TRACE(interleave < 0 ? "interleaved" : "alone");
+        detail::interleave_stall_ns = interleave;
+        expect_each_ray_its_own_hit(bvh, false, kOrderTimedLeast + 1000);
+    }
 }
 
 TEST(RayOrder, ARefusedRayIsNamedWhereverTheReorderedBatchHasIt) {

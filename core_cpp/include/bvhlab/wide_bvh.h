@@ -96,18 +96,27 @@ bool occluded_wide(const WideBvh& wide, const Ray& ray);
 /// KiB: repeat1m primary rays 3.45 simulated D1 misses a ray through the batch, 0.79 ray by ray).
 inline constexpr std::uint32_t kWideBatch = 256;
 
+/// How a batch's closest-hit walk takes the rays that go alone (not as a packet): one after
+/// another, or several at a time on one thread, each walk stepped in turn so that their cache
+/// misses overlap (wide_interleaved.inl). The same hits either way, bit for bit; Interleaved pays
+/// where the rays wait on memory and costs where the tree stays in the caches (ray_batch.h
+/// for_each_block chooses).
+enum class WideWalk { Alone, Interleaved };
+
 /// intersect_wide for each of rays[0, count): hits[i] (and nodes_visited[i], where given) for
 /// rays[i], the same hit bit for bit. The rays are traced grouped by octant (the sign bits of
 /// their direction), each group by the walk compiled for that octant, in pieces of kWideBatch
 /// rays: no walk chosen per ray by an indirect call, one walk's code in use at a time. On the AVX2
 /// path, without nodes_visited, eight rays of a group in a row with one origin and directions
 /// within ~5.7° (a camera's neighbouring pixels) go through the tree as one packet
-/// (src/query/wide_packet.inl); nodes_visited asked for, every ray goes alone.
+/// (src/query/wide_packet.inl); nodes_visited asked for, every ray goes alone. The rays that go
+/// alone go one after another or interleaved (`walk`).
 void intersect_wide_batch(const WideBvh& wide, const Bvh& bvh, const Ray* rays, std::size_t count, Hit* hits,
-                          std::uint32_t* nodes_visited = nullptr);
+                          std::uint32_t* nodes_visited = nullptr, WideWalk walk = WideWalk::Alone);
 
 /// occluded_wide for each of rays[0, count), to occluded[i], grouped by octant as
-/// intersect_wide_batch.
-void occluded_wide_batch(const WideBvh& wide, const Ray* rays, std::size_t count, bool* occluded);
+/// intersect_wide_batch, its rays one after another or interleaved (`walk`).
+void occluded_wide_batch(const WideBvh& wide, const Ray* rays, std::size_t count, bool* occluded,
+                         WideWalk walk = WideWalk::Alone);
 
 }  // namespace bvhlab

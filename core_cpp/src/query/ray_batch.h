@@ -246,28 +246,32 @@ double memory_stall_ns(const RayBatch& rays, const RayBatch& part, Probe& probe)
 }
 
 /// The wide tree's batch queries, block by block (kOrderBlock rays): calls `trace(base, part,
-/// sorted)` for consecutive parts [base, base + part.count) of the batch, with `sorted` null where
-/// the part is traced as it is, else the part's rays copied in ray order (ray_order.h: trace then
-/// traces sorted->batch(part) and puts each result back at sorted->index). A block of at least
+/// sorted, walk)` for consecutive parts [base, base + part.count) of the batch, with `sorted` null
+/// where the part is traced as it is, else the part's rays copied in ray order (ray_order.h: trace
+/// then traces sorted->batch(part) and puts each result back at sorted->index), and `walk` how the
+/// closest-hit walks take the rays that go alone (wide_bvh.h WideWalk). A block of at least
 /// kOrderLeast rays that is not in ray order already (in_ray_order) is reordered
 /// - whole, where a sample of its rays, spread evenly over it, visit at least kOrderNodes wide
 ///   nodes on average, which `probe(piece)` says (it traces a piece's rays without keeping any
-///   result and returns the wide nodes they visit on average);
+///   result, each alone, and returns the wide nodes they visit on average); its rays then go
+///   interleaved;
 /// - else, in a block of at least kOrderTimedLeast rays, from its kOrderWarmRays-th ray on, where
 ///   its first kOrderWarmRays rays, traced as they are, leave the caches as the rest would find
 ///   them and a sample of the rest still waits on memory at least `stall_ns` a ray
 ///   (memory_stall_ns; detail::order_stall_ns, kOrderStallNs but where a test fixes the answer
-///   with ±inf).
-/// Throws, as check_rays does, where a ray of a sample is refused.
+///   with ±inf); the rest goes interleaved where the wait is at least detail::interleave_stall_ns
+///   (kInterleaveStallNs).
+/// Every other part goes alone. Throws, as check_rays does, where a ray of a sample is refused.
 template <class Probe, class Trace>
 void for_each_block(const RayBatch& rays, const Aabb& scene, Probe&& probe, Trace&& trace,
-                    double stall_ns = detail::order_stall_ns.load(std::memory_order_relaxed)) {
+                    double stall_ns = detail::order_stall_ns.load(std::memory_order_relaxed),
+                    double interleave_ns = detail::interleave_stall_ns.load(std::memory_order_relaxed)) {
     SortedRays sorted;
     for (std::size_t base = 0; base < rays.count || base == 0; base += kOrderBlock) {
         const RayBatch block = part_of(rays, base, std::min(kOrderBlock, rays.count - base));
         const RayKeys keys(scene, block.count);
         if (block.count < kOrderLeast || in_ray_order(block, keys)) {
-            trace(base, block, nullptr);
+            trace(base, block, nullptr, WideWalk::Alone);
             if (block.count == 0) break;
             continue;
         }
@@ -276,15 +280,17 @@ void for_each_block(const RayBatch& rays, const Aabb& scene, Probe&& probe, Trac
         const bool costly = probe(static_cast<const RayPiece&>(piece)) >= kOrderNodes;
         if (costly || block.count < kOrderTimedLeast) {
             if (costly) sort_rays(block, keys, sorted);
-            trace(base, block, costly ? &sorted : nullptr);
+            trace(base, block, costly ? &sorted : nullptr, costly ? WideWalk::Interleaved : WideWalk::Alone);
             continue;
         }
         const std::size_t warm = kOrderWarmRays;
-        trace(base, part_of(block, 0, warm), nullptr);
+        trace(base, part_of(block, 0, warm), nullptr, WideWalk::Alone);
         const RayBatch rest = part_of(block, warm, block.count - warm);
-        const bool reorder = memory_stall_ns(rays, rest, probe) >= stall_ns;
+        const double stall = memory_stall_ns(rays, rest, probe);
+        const bool reorder = stall >= stall_ns;
         if (reorder) sort_rays(rest, keys, sorted);
-        trace(base + warm, rest, reorder ? &sorted : nullptr);
+        trace(base + warm, rest, reorder ? &sorted : nullptr,
+              stall >= interleave_ns ? WideWalk::Interleaved : WideWalk::Alone);
     }
 }
 

@@ -50,10 +50,21 @@ inline constexpr double kOrderStallNs = 80.0;
 /// must have for that (the rest is traced after the timed sample, on the calling thread alone: a
 /// block of 4,096 rays on several threads waited on it, 76-79 → 87 ns a ray in the review's run).
 inline constexpr std::size_t kOrderWarmRays = 2048, kOrderTimedLeast = 16 * kOrderWarmRays;
+/// The wait on memory (ns a ray, as kOrderStallNs) over which a block of rays that visit fewer
+/// than kOrderNodes wide nodes goes through the interleaved closest-hit walk (wide_bvh.h
+/// WideWalk::Interleaved; those that visit more always do). Interleaving costs where the tree stays
+/// in the caches (+30% instructions a ray on Sponza and room1m's random rays) and gains where it
+/// does not. Measured on a 2-core AMD EPYC VM (Zen 5, 2026-12-06), random rays ÷ the faster of
+/// Embree 3 MEDIUM and tinybvh 1.9 through the batch, alone → interleaved: waits of 365-385 ns a
+/// ray (repeat1m) 1.04-1.07 → 1.88-1.95; 150-160 ns (Sponza, whose block is reordered) 1.06 →
+/// 0.86-0.97; 60-65 ns (room1m) and 12-15 (vast1m) lose 10-25% (design.md, "Several rays at once").
+inline constexpr double kInterleaveStallNs = 250.0;
 namespace detail {
 /// The wait (ns a ray) the batch queries reorder over: kOrderStallNs, but -inf or +inf in tests
 /// that need the timed choice made one way (test_ray_order.cpp).
 inline std::atomic<double> order_stall_ns{kOrderStallNs};
+/// The wait over which they interleave: kInterleaveStallNs, or ±inf in tests, as order_stall_ns.
+inline std::atomic<double> interleave_stall_ns{kInterleaveStallNs};
 }  // namespace detail
 
 /// The key of a ray: its octant (the sign bits of its direction, as the batch walks group them)

@@ -195,16 +195,17 @@ void occluded_batch(const Bvh& bvh, const RayBatch& rays, bool* occluded_out, Tr
     if (mode == Traversal::Wide) {  // a piece at once, grouped by octant (wide_kernel.h occluded_wide_grouped)
         const auto probe = [&](const RayPiece& piece) { return probe_wide(*wide, piece); };
         std::unique_ptr<bool[]> in_order;  // a reordered block's answers, in its rays' order
-        return for_each_block(
-            rays, scene_box(bvh), probe, [&](std::size_t base, const RayBatch& block, const SortedRays* sorted) {
-                if (sorted && !in_order) in_order = std::make_unique<bool[]>(kOrderBlock);
-                bool* to = sorted ? in_order.get() : occluded_out + base;
-                trace_block(rays, sorted ? sorted->batch(block) : block, threads, cancel,
-                            [&](std::size_t begin, const RayPiece& piece) {
-                                occluded_wide_grouped(*wide, piece.rays.data(), piece.order, piece.start, to + begin);
-                            });
-                if (sorted) unsort(in_order.get(), sorted->index, occluded_out + base);
-            });
+        return for_each_block(rays, scene_box(bvh), probe,
+                              [&](std::size_t base, const RayBatch& block, const SortedRays* sorted, WideWalk walk) {
+                                  if (sorted && !in_order) in_order = std::make_unique<bool[]>(kOrderBlock);
+                                  bool* to = sorted ? in_order.get() : occluded_out + base;
+                                  trace_block(rays, sorted ? sorted->batch(block) : block, threads, cancel,
+                                              [&](std::size_t begin, const RayPiece& piece) {
+                                                  occluded_wide_grouped(*wide, piece.rays.data(), piece.order,
+                                                                        piece.start, to + begin, walk);
+                                              });
+                                  if (sorted) unsort(in_order.get(), sorted->index, occluded_out + base);
+                              });
     }
     for_each_ray(rays, threads, cancel,
                  [&](std::size_t i, const Ray& ray, float) { occluded_out[i] = occluded(bvh, ray, mode); });
@@ -217,20 +218,20 @@ void intersect_batch(const Bvh& bvh, const RayBatch& rays, const HitBatch& out, 
     if (mode == Traversal::Wide) {  // a piece at once, grouped by octant (wide_kernel.h intersect_wide_grouped)
         const auto probe = [&](const RayPiece& piece) { return probe_wide(*wide, piece); };
         // the hits of `block`'s pieces to `to` (from its first ray on)
-        const auto trace = [&](const RayBatch& block, const HitBatch& to) {
+        const auto trace = [&](const RayBatch& block, const HitBatch& to, WideWalk walk) {
             trace_block(rays, block, threads, cancel, [&](std::size_t begin, const RayPiece& piece) {
                 Scratch<Hit, kWideBatch> hits;
                 std::uint32_t visited[kWideBatch];
                 std::uint32_t* v = to.nodes_visited ? visited : nullptr;
-                intersect_wide_grouped(*wide, piece.rays.data(), piece.order, piece.start, hits.data(), v);
+                intersect_wide_grouped(*wide, piece.rays.data(), piece.order, piece.start, hits.data(), v, walk);
                 write_hits<true>(to, begin, piece.count, hits.data(), v, piece.t_scale, &bvh, piece.rays.data());
             });
         };
         SortedHits in_order;  // a reordered block's hits, in its rays' order
         return for_each_block(rays, scene_box(bvh), probe,
-                              [&](std::size_t base, const RayBatch& block, const SortedRays* sorted) {
-                                  if (!sorted) return trace(block, offset(out, base));
-                                  trace(sorted->batch(block), in_order.make(out, block.count));
+                              [&](std::size_t base, const RayBatch& block, const SortedRays* sorted, WideWalk walk) {
+                                  if (!sorted) return trace(block, offset(out, base), walk);
+                                  trace(sorted->batch(block), in_order.make(out, block.count), walk);
                                   in_order.unsort(sorted->index, offset(out, base));
                               });
     }

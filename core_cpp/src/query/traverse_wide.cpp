@@ -255,45 +255,46 @@ void group_by_octant(const Ray* rays, std::uint32_t count, std::uint32_t* order,
 }
 
 void intersect_wide_grouped(const WideBvh& wide, const Ray* rays, const std::uint32_t* order,
-                            const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited) {
+                            const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited, WideWalk walk) {
     const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
 #if defined(BVHLAB_AVX2_KERNELS)
-    if (active_isa() == Isa::Avx2) avx2::intersect_wide_batch_kernel(view, rays, order, start, hits, nodes_visited);
-    else portable::intersect_wide_batch_kernel(view, rays, order, start, hits, nodes_visited);
+    if (active_isa() == Isa::Avx2)
+        avx2::intersect_wide_batch_kernel(view, rays, order, start, hits, nodes_visited, walk);
+    else portable::intersect_wide_batch_kernel(view, rays, order, start, hits, nodes_visited, walk);
 #else
-    portable::intersect_wide_batch_kernel(view, rays, order, start, hits, nodes_visited);
+    portable::intersect_wide_batch_kernel(view, rays, order, start, hits, nodes_visited, walk);
 #endif
 }
 
 void occluded_wide_grouped(const WideBvh& wide, const Ray* rays, const std::uint32_t* order, const std::uint32_t* start,
-                           bool* occluded) {
+                           bool* occluded, WideWalk walk) {
     const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
 #if defined(BVHLAB_AVX2_KERNELS)
-    if (active_isa() == Isa::Avx2) avx2::occluded_wide_batch_kernel(view, rays, order, start, occluded);
-    else portable::occluded_wide_batch_kernel(view, rays, order, start, occluded);
+    if (active_isa() == Isa::Avx2) avx2::occluded_wide_batch_kernel(view, rays, order, start, occluded, walk);
+    else portable::occluded_wide_batch_kernel(view, rays, order, start, occluded, walk);
 #else
-    portable::occluded_wide_batch_kernel(view, rays, order, start, occluded);
+    portable::occluded_wide_batch_kernel(view, rays, order, start, occluded, walk);
 #endif
 }
 
 void intersect_wide_batch(const WideBvh& wide, const Bvh& bvh, const Ray* rays, std::size_t count, Hit* hits,
-                          std::uint32_t* nodes_visited) {
+                          std::uint32_t* nodes_visited, WideWalk walk) {
     std::uint32_t order[kWideBatch], start[9];
     for (std::size_t begin = 0; begin < count; begin += kWideBatch) {
         const auto n = std::uint32_t(std::min<std::size_t>(kWideBatch, count - begin));
         group_by_octant(rays + begin, n, order, start);
         intersect_wide_grouped(wide, rays + begin, order, start, hits + begin,
-                               nodes_visited ? nodes_visited + begin : nullptr);
+                               nodes_visited ? nodes_visited + begin : nullptr, walk);
         for (std::uint32_t i = 0; i < n; ++i) finish_wide_hit(bvh, rays[begin + i], hits[begin + i]);
     }
 }
 
-void occluded_wide_batch(const WideBvh& wide, const Ray* rays, std::size_t count, bool* occluded) {
+void occluded_wide_batch(const WideBvh& wide, const Ray* rays, std::size_t count, bool* occluded, WideWalk walk) {
     std::uint32_t order[kWideBatch], start[9];
     for (std::size_t begin = 0; begin < count; begin += kWideBatch) {
         const auto n = std::uint32_t(std::min<std::size_t>(kWideBatch, count - begin));
         group_by_octant(rays + begin, n, order, start);
-        occluded_wide_grouped(wide, rays + begin, order, start, occluded + begin);
+        occluded_wide_grouped(wide, rays + begin, order, start, occluded + begin, walk);
     }
 }
 

@@ -8,6 +8,14 @@
 #ifdef BVHLAB_WIDE_PACKETS
 #include "wide_packet.inl"
 #endif
+#include "wide_interleaved.inl"
+
+/// The walks an interleaved batch steps in turn (wide_interleaved.inl). Random rays ÷ the best
+/// peer through the batch (2-core AMD EPYC VM, 2026-12-06, two rounds each, A/B in one run): 4
+/// ways rods1m 1.09-1.10 against 6's 1.15-1.20; 6, 10 and 14 within the runs' spread (rods1m
+/// 1.32-1.37 / 1.24-1.45 / 1.36-1.41, repeat1m 1.81-1.89 / 1.69-1.99 / 1.92-1.95, uniform1m
+/// 2.17-2.39 / 2.10-2.70 / 2.00-2.62). Eight walkers' stacks take 31 KiB of the thread's stack.
+inline constexpr int kInterleavedWays = 8;
 
 /// The closest hits of rays[order[0, n)], all of octant kOctant, to hits[i] (and the count of
 /// wide nodes visited to visited[i], where given) in each ray's own slot i.
@@ -16,13 +24,8 @@
 /// goes through the tree as one packet (wide_packet.inl); the rest ray by ray.
 template <int kOctant>
 void closest_of_octant(const WideView& wide, const Ray* rays, const std::uint32_t* order, std::uint32_t n, Hit* hits,
-                       std::uint32_t* visited) {
-    const auto single = [&](std::uint32_t i) {
-        Hit hit{rays[i].tmax, kNoHit, 0.0f, 0.0f, kNoHit};
-        const std::uint32_t v = traverse_nodes<false, kOctant>(wide, make_query(rays[i]), hit);
-        hits[i] = hit;
-        if (visited) visited[i] = v;
-    };
+                       std::uint32_t* visited, WideWalk walk) {
+    std::uint32_t alone[kWideBatch], m = 0;  // the rays that go alone (n ≤ kWideBatch)
     std::uint32_t j = 0;
 #ifdef BVHLAB_WIDE_PACKETS
     if (!visited)
@@ -36,17 +39,29 @@ void closest_of_octant(const WideView& wide, const Ray* rays, const std::uint32_
                     continue;
                 }
             }
-            for (int r = 0; r < kPacket; ++r) single(order[j + r]);
+            for (int r = 0; r < kPacket; ++r) alone[m++] = order[j + r];
         }
 #endif
-    for (; j < n; ++j) single(order[j]);
+    for (; j < n; ++j) alone[m++] = order[j];
+    if (walk == WideWalk::Interleaved)
+        return closest_interleaved<kOctant, kInterleavedWays>(wide, rays, alone, m, hits, visited);
+    for (std::uint32_t r = 0; r < m; ++r) {
+        const std::uint32_t i = alone[r];
+        Hit hit{rays[i].tmax, kNoHit, 0.0f, 0.0f, kNoHit};
+        const std::uint32_t v = traverse_nodes<false, kOctant>(wide, make_query(rays[i]), hit);
+        hits[i] = hit;
+        if (visited) visited[i] = v;
+    }
 }
 
 /// Whether each of rays[order[0, n)], all of octant kOctant, is occluded, to occluded[i], by the
-/// any-hit walk's farthest-first order or (kFarthest false) the layout's (any_hit_nodes).
+/// any-hit walk's farthest-first order or (kFarthest false) the layout's (any_hit_nodes), one ray
+/// after another or interleaved (`walk`).
 template <int kOctant, bool kFarthest>
 void occluded_of_octant(const WideView& wide, const Ray* rays, const std::uint32_t* order, std::uint32_t n,
-                        bool* occluded) {
+                        bool* occluded, WideWalk walk) {
+    if (walk == WideWalk::Interleaved)
+        return occluded_interleaved<kOctant, kFarthest, kInterleavedWays>(wide, rays, order, n, occluded);
     for (std::uint32_t j = 0; j < n; ++j) {
         const std::uint32_t i = order[j];
         occluded[i] = any_hit_nodes<kOctant, kFarthest>(wide.lines, make_query(rays[i]));
@@ -56,28 +71,30 @@ void occluded_of_octant(const WideView& wide, const Ray* rays, const std::uint32
 /// The closest hits of a batch grouped by octant (group_by_octant: order[start[k], start[k + 1])
 /// the rays of octant k), each group through its octant's walk.
 void closest_of_batch(const WideView& wide, const Ray* rays, const std::uint32_t* order, const std::uint32_t* start,
-                      Hit* hits, std::uint32_t* visited) {
-    using Walk = void (*)(const WideView&, const Ray*, const std::uint32_t*, std::uint32_t, Hit*, std::uint32_t*);
+                      Hit* hits, std::uint32_t* visited, WideWalk walk) {
+    using Walk =
+        void (*)(const WideView&, const Ray*, const std::uint32_t*, std::uint32_t, Hit*, std::uint32_t*, WideWalk);
     static constexpr Walk kWalks[8] = {closest_of_octant<0>, closest_of_octant<1>, closest_of_octant<2>,
                                        closest_of_octant<3>, closest_of_octant<4>, closest_of_octant<5>,
                                        closest_of_octant<6>, closest_of_octant<7>};
     for (int k = 0; k < 8; ++k)
-        if (start[k + 1] > start[k]) kWalks[k](wide, rays, order + start[k], start[k + 1] - start[k], hits, visited);
+        if (start[k + 1] > start[k])
+            kWalks[k](wide, rays, order + start[k], start[k + 1] - start[k], hits, visited, walk);
 }
 
 /// occluded for the entries order[from, to) of a batch grouped by octant, each through its
 /// octant's walk in the order kFarthest says.
 template <bool kFarthest>
 void occluded_of_entries(const WideView& wide, const Ray* rays, const std::uint32_t* order, const std::uint32_t* start,
-                         std::uint32_t from, std::uint32_t to, bool* occluded) {
-    using Walk = void (*)(const WideView&, const Ray*, const std::uint32_t*, std::uint32_t, bool*);
+                         std::uint32_t from, std::uint32_t to, bool* occluded, WideWalk walk) {
+    using Walk = void (*)(const WideView&, const Ray*, const std::uint32_t*, std::uint32_t, bool*, WideWalk);
     static constexpr Walk kWalks[8] = {occluded_of_octant<0, kFarthest>, occluded_of_octant<1, kFarthest>,
                                        occluded_of_octant<2, kFarthest>, occluded_of_octant<3, kFarthest>,
                                        occluded_of_octant<4, kFarthest>, occluded_of_octant<5, kFarthest>,
                                        occluded_of_octant<6, kFarthest>, occluded_of_octant<7, kFarthest>};
     for (int k = 0; k < 8; ++k) {
         const std::uint32_t lo = std::max(start[k], from), hi = std::min(start[k + 1], to);
-        if (hi > lo) kWalks[k](wide, rays, order + lo, hi - lo, occluded);
+        if (hi > lo) kWalks[k](wide, rays, order + lo, hi - lo, occluded, walk);
     }
 }
 
@@ -91,13 +108,14 @@ void occluded_of_entries(const WideView& wide, const Ray* rays, const std::uint3
 /// threads each take their own).
 inline constexpr std::uint32_t kOrderProbe = 16, kOrderProbeOccluded = 4;
 
-/// occluded for a batch grouped by octant, as closest_of_batch, in the order its first rays say.
+/// occluded for a batch grouped by octant, as closest_of_batch, in the order its first rays say,
+/// one ray after another or interleaved (`walk`).
 void occluded_of_batch(const WideView& wide, const Ray* rays, const std::uint32_t* order, const std::uint32_t* start,
-                       bool* occluded) {
+                       bool* occluded, WideWalk walk) {
     const std::uint32_t n = start[8], probe = std::min(n, kOrderProbe);
-    occluded_of_entries<true>(wide, rays, order, start, 0, probe, occluded);
+    occluded_of_entries<true>(wide, rays, order, start, 0, probe, occluded, walk);
     std::uint32_t found = 0;
     for (std::uint32_t j = 0; j < probe; ++j) found += occluded[order[j]];
-    if (found >= kOrderProbeOccluded) occluded_of_entries<true>(wide, rays, order, start, probe, n, occluded);
-    else occluded_of_entries<false>(wide, rays, order, start, probe, n, occluded);
+    if (found >= kOrderProbeOccluded) occluded_of_entries<true>(wide, rays, order, start, probe, n, occluded, walk);
+    else occluded_of_entries<false>(wide, rays, order, start, probe, n, occluded, walk);
 }

@@ -78,24 +78,25 @@ void group_by_octant(const Ray* rays, std::uint32_t count, std::uint32_t* order,
 /// occluded[i] for rays[i]. The hits are left unfinished: a miss's t is the ray's tmax and a
 /// sphere's u, v are not made (ray_batch.h write_hits<true> finishes them as it writes them).
 void intersect_wide_grouped(const WideBvh& wide, const Ray* rays, const std::uint32_t* order,
-                            const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited);
+                            const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited,
+                            WideWalk walk = WideWalk::Alone);
 void occluded_wide_grouped(const WideBvh& wide, const Ray* rays, const std::uint32_t* order, const std::uint32_t* start,
-                           bool* occluded);
+                           bool* occluded, WideWalk walk = WideWalk::Alone);
 
 /// The batch kernels (wide_batch.inl): the rays grouped by group_by_octant, each group through
 /// its octant's walk, results in each ray's slot (hits[i], nodes_visited[i] where not null,
 /// occluded[i]); a miss's t is the ray's tmax, as intersect_wide_kernel's.
 namespace portable {
 void intersect_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
-                                 const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited);
+                                 const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited, WideWalk walk);
 void occluded_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
-                                const std::uint32_t* start, bool* occluded);
+                                const std::uint32_t* start, bool* occluded, WideWalk walk);
 }  // namespace portable
 namespace avx2 {
 void intersect_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
-                                 const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited);
+                                 const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited, WideWalk walk);
 void occluded_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
-                                const std::uint32_t* start, bool* occluded);
+                                const std::uint32_t* start, bool* occluded, WideWalk walk);
 }  // namespace avx2
 
 namespace portable {

@@ -235,8 +235,8 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit, Wid
 
 #ifndef BVHLAB_RECORDED_WIDE_WALK
 void intersect_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
-                                 const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited) {
-    if (wide.lines) return closest_of_batch(wide, rays, order, start, hits, nodes_visited);
+                                 const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited, WideWalk walk) {
+    if (wide.lines) return closest_of_batch(wide, rays, order, start, hits, nodes_visited, walk);
     for (std::uint32_t i = 0; i < start[8]; ++i) {
         hits[i] = Hit{rays[i].tmax, kNoHit, 0.0f, 0.0f, kNoHit};
         if (nodes_visited) nodes_visited[i] = 0;
@@ -244,8 +244,8 @@ void intersect_wide_batch_kernel(const WideView& wide, const Ray* rays, const st
 }
 
 void occluded_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
-                                const std::uint32_t* start, bool* occluded) {
-    if (wide.lines) return occluded_of_batch(wide, rays, order, start, occluded);
+                                const std::uint32_t* start, bool* occluded, WideWalk walk) {
+    if (wide.lines) return occluded_of_batch(wide, rays, order, start, occluded, walk);
     for (std::uint32_t i = 0; i < start[8]; ++i) occluded[i] = false;
 }
 
