@@ -205,8 +205,9 @@ TEST(RayOrder, BlocksAreProbedOverTheirWholeLengthAndSortedWhereTheProbeSaysSo) 
 /// A batch of random rays (a third with their own tmax) through `bvh`, reordered (whole, or after
 /// its first rays: `whole`, whose premise is checked), against the same queries in slices too small
 /// to be reordered and against the single walks, bit for bit, on every instruction set path and
-/// with 1 and 3 threads.
-void expect_each_ray_its_own_hit(const Bvh& bvh, bool whole, std::size_t count = 4 * kOrderLeast) {
+/// with 1 and 3 threads; each query's reordered part through the interleaved walks, or not
+/// (`interleaved`).
+void expect_each_ray_its_own_hit(const Bvh& bvh, bool whole, bool interleaved, std::size_t count = 4 * kOrderLeast) {
     const WideBvh wide = make_wide(bvh);
     auto rays = random_rays(count, 73);
     std::mt19937 rng(7);
@@ -251,8 +252,15 @@ void expect_each_ray_its_own_hit(const Bvh& bvh, bool whole, std::size_t count =
         }
         for (std::uint32_t threads : {1u, 3u}) {
             Out got(n);
+            // each query passes its blocks' choice of walk on (wide_kernel.h detail::interleaved_pieces)
+            const auto pieces = [] { return detail::interleaved_pieces.load(); };
+            const std::uint64_t before_closest = pieces();
             intersect_batch(bvh, arrays.batch(), got.hits(), Traversal::Wide, threads, &wide);
+            const std::uint64_t before_any = pieces();
             occluded_batch(bvh, arrays.batch(), got.occluded(), Traversal::Wide, threads, &wide);
+            const std::uint64_t after = pieces();
+            EXPECT_EQ(before_any > before_closest, interleaved) << "intersect_batch, " << threads << " threads";
+            EXPECT_EQ(after > before_any, interleaved) << "occluded_batch, " << threads << " threads";
             std::uint32_t wrong = 0;
             hits = 0;
             for (std::size_t i = 0; i < n; ++i) {
@@ -283,7 +291,7 @@ TEST(RayOrder, ReorderedBatchesGiveEachRayItsOwnHitOnEveryPathAndThreadCount) {
     // many small triangles: random rays visit many nodes, so the whole batch is reordered and
     // interleaved (wide_bvh.h WideWalk)
     const auto scene = test::random_scene(60000, 300, 71);
-    expect_each_ray_its_own_hit(build_bvh(scene.view()), true);
+    expect_each_ray_its_own_hit(build_bvh(scene.view()), true, true);
 }
 
 TEST(RayOrder, BatchesReorderedAfterTheirFirstRaysGiveEachRayItsOwnHit) {
@@ -301,7 +309,7 @@ TEST(RayOrder, BatchesReorderedAfterTheirFirstRaysGiveEachRayItsOwnHit) {
          {-std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()}) {
         SCOPED_TRACE(interleave < 0 ? "interleaved" : "alone");
         detail::interleave_stall_ns = interleave;
-        expect_each_ray_its_own_hit(bvh, false, kOrderTimedLeast + 1000);
+        expect_each_ray_its_own_hit(bvh, false, interleave < 0, kOrderTimedLeast + 1000);
     }
 }
 

@@ -50,27 +50,31 @@ std::vector<Ray> camera_rays(Vec3 eye, Vec3 at, int width, int height, float fov
     return rays;
 }
 
-/// Compares intersect_wide_batch (no visited counts: the packet walk where the path has one) with
-/// each ray alone and with the brute force on every instruction set path; returns the hits.
+/// Compares intersect_wide_batch (no visited counts: the packet walk where the path has one, the
+/// rays it does not take one after another and interleaved) with each ray alone and with the brute
+/// force on every instruction set path; returns the hits.
 std::size_t expect_batch_is_single(const Bvh& bvh, const std::vector<Ray>& rays) {
     const WideBvh wide = make_wide(bvh);
     const Isa before = active_isa();
     std::size_t hits = 0;
-    for (Isa isa : supported_isas()) {
-        set_isa(isa);
-        std::vector<Hit> batch(rays.size());
-        intersect_wide_batch(wide, bvh, rays.data(), rays.size(), batch.data());
-        std::uint32_t wrong = 0;
-        hits = 0;
-        for (std::size_t i = 0; i < rays.size(); ++i) {
-            const Hit one = intersect_wide(wide, bvh, rays[i]), oracle = brute_force(bvh, rays[i]);
-            const bool ok = same_hit(batch[i], one) && batch[i].ref == oracle.ref && same_bits(batch[i].t, oracle.t);
-            if (!ok && ++wrong <= 5)
-                ADD_FAILURE() << isa_name(isa) << ": ray " << i << " t " << batch[i].t << " ref " << batch[i].ref
-                              << " against " << one.t << " ref " << one.ref << " (brute force " << oracle.t << ")";
-            hits += one.ref != kNoHit;
+    for (Isa isa : supported_isas())
+        for (WideWalk walk : {WideWalk::Alone, WideWalk::Interleaved}) {
+            set_isa(isa);
+            std::vector<Hit> batch(rays.size());
+            intersect_wide_batch(wide, bvh, rays.data(), rays.size(), batch.data(), nullptr, walk);
+            std::uint32_t wrong = 0;
+            hits = 0;
+            for (std::size_t i = 0; i < rays.size(); ++i) {
+                const Hit one = intersect_wide(wide, bvh, rays[i]), oracle = brute_force(bvh, rays[i]);
+                const bool ok =
+                    same_hit(batch[i], one) && batch[i].ref == oracle.ref && same_bits(batch[i].t, oracle.t);
+                if (!ok && ++wrong <= 5)
+                    ADD_FAILURE() << isa_name(isa) << (walk == WideWalk::Interleaved ? ", interleaved" : "") << ": ray "
+                                  << i << " t " << batch[i].t << " ref " << batch[i].ref << " against " << one.t
+                                  << " ref " << one.ref << " (brute force " << oracle.t << ")";
+                hits += one.ref != kNoHit;
+            }
         }
-    }
     set_isa(before);
     return hits;
 }
@@ -81,21 +85,22 @@ std::size_t expect_occluded_batch_is_single(const Bvh& bvh, const std::vector<Ra
     const WideBvh wide = make_wide(bvh);
     const Isa before = active_isa();
     std::size_t occluded = 0;
-    for (Isa isa : supported_isas()) {
-        set_isa(isa);
-        std::unique_ptr<bool[]> batch(new bool[rays.size()]);
-        occluded_wide_batch(wide, rays.data(), rays.size(), batch.get());
-        std::uint32_t wrong = 0;
-        occluded = 0;
-        for (std::size_t i = 0; i < rays.size(); ++i) {
-            const bool one = occluded_wide(wide, rays[i]),
-                       oracle = intersect(bvh, rays[i], Traversal::Stack).t < rays[i].tmax;
-            if ((batch[i] != one || one != oracle) && ++wrong <= 5)
-                ADD_FAILURE() << isa_name(isa) << ": shadow ray " << i << " batch " << batch[i] << " alone " << one
-                              << " closest hit " << oracle;
-            occluded += one;
+    for (Isa isa : supported_isas())
+        for (WideWalk walk : {WideWalk::Alone, WideWalk::Interleaved}) {
+            set_isa(isa);
+            std::unique_ptr<bool[]> batch(new bool[rays.size()]);
+            occluded_wide_batch(wide, rays.data(), rays.size(), batch.get(), walk);
+            std::uint32_t wrong = 0;
+            occluded = 0;
+            for (std::size_t i = 0; i < rays.size(); ++i) {
+                const bool one = occluded_wide(wide, rays[i]),
+                           oracle = intersect(bvh, rays[i], Traversal::Stack).t < rays[i].tmax;
+                if ((batch[i] != one || one != oracle) && ++wrong <= 5)
+                    ADD_FAILURE() << isa_name(isa) << ": shadow ray " << i << " batch " << batch[i] << " alone " << one
+                                  << " closest hit " << oracle;
+                occluded += one;
+            }
         }
-    }
     set_isa(before);
     return occluded;
 }

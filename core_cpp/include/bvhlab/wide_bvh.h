@@ -96,11 +96,12 @@ bool occluded_wide(const WideBvh& wide, const Ray& ray);
 /// KiB: repeat1m primary rays 3.45 simulated D1 misses a ray through the batch, 0.79 ray by ray).
 inline constexpr std::uint32_t kWideBatch = 256;
 
-/// How a batch's closest-hit walk takes the rays that go alone (not as a packet): one after
-/// another, or several at a time on one thread, each walk stepped in turn so that their cache
-/// misses overlap (wide_interleaved.inl). The same hits either way, bit for bit; Interleaved pays
-/// where the rays wait on memory and costs where the tree stays in the caches (ray_batch.h
-/// for_each_block chooses).
+/// How a batch's walks (closest hit and any hit) take the rays that go alone (not as a packet):
+/// one after another, or several at a time on one thread, each walk stepped in turn so that their
+/// cache misses overlap (src/query/wide_interleaved.inl). The same results either way, bit for
+/// bit; Interleaved pays where the rays wait on memory and costs where the tree stays in the
+/// caches (intersect_batch and occluded_batch choose per block: src/query/ray_batch.h
+/// for_each_block).
 enum class WideWalk { Alone, Interleaved };
 
 /// intersect_wide for each of rays[0, count): hits[i] (and nodes_visited[i], where given) for

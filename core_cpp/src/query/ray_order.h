@@ -50,14 +50,16 @@ inline constexpr double kOrderStallNs = 80.0;
 /// must have for that (the rest is traced after the timed sample, on the calling thread alone: a
 /// block of 4,096 rays on several threads waited on it, 76-79 → 87 ns a ray in the review's run).
 inline constexpr std::size_t kOrderWarmRays = 2048, kOrderTimedLeast = 16 * kOrderWarmRays;
-/// The wait on memory (ns a ray, as kOrderStallNs) over which a block of rays that visit fewer
-/// than kOrderNodes wide nodes goes through the interleaved closest-hit walk (wide_bvh.h
-/// WideWalk::Interleaved; those that visit more always do). Interleaving costs where the tree stays
-/// in the caches (+30% instructions a ray on Sponza and room1m's random rays) and gains where it
+/// The wait on memory (ns a ray, as kOrderStallNs) from which a timed block's rest goes through the
+/// interleaved walks (wide_bvh.h WideWalk::Interleaved, closest and any hit; for_each_block: a
+/// block whose rays visit at least kOrderNodes wide nodes goes so whole, untimed; one of fewer than
+/// kOrderLeast rays, or in ray order already, never). Interleaving costs where the tree stays in
+/// the caches (+30% instructions a ray on Sponza's and room1m's random rays) and gains where it
 /// does not. Measured on a 2-core AMD EPYC VM (Zen 5, 2026-12-06), random rays ÷ the faster of
-/// Embree 3 MEDIUM and tinybvh 1.9 through the batch, alone → interleaved: waits of 365-385 ns a
+/// Embree 3 MEDIUM and tinybvh 1.9 through the batch, alone → interleaved: waits of 360-385 ns a
 /// ray (repeat1m) 1.04-1.07 → 1.88-1.95; 150-160 ns (Sponza, whose block is reordered) 1.06 →
-/// 0.86-0.97; 60-65 ns (room1m) and 12-15 (vast1m) lose 10-25% (design.md, "Several rays at once").
+/// 0.86-0.97; 60-65 ns (room1m) and 12-15 (vast1m) lose 10-25% (design.md, "Several rays at once
+/// on a thread").
 inline constexpr double kInterleaveStallNs = 250.0;
 namespace detail {
 /// The wait (ns a ray) the batch queries reorder over: kOrderStallNs, but -inf or +inf in tests

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <functional>
 #include <limits>
+#include <memory>
 
 #include "bvhlab/isa.h"
 #include "bvhlab/simd.h"
@@ -257,6 +258,7 @@ void group_by_octant(const Ray* rays, std::uint32_t count, std::uint32_t* order,
 void intersect_wide_grouped(const WideBvh& wide, const Ray* rays, const std::uint32_t* order,
                             const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited, WideWalk walk) {
     const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
+    if (walk == WideWalk::Interleaved) detail::interleaved_pieces.fetch_add(1, std::memory_order_relaxed);
 #if defined(BVHLAB_AVX2_KERNELS)
     if (active_isa() == Isa::Avx2)
         avx2::intersect_wide_batch_kernel(view, rays, order, start, hits, nodes_visited, walk);
@@ -269,6 +271,7 @@ void intersect_wide_grouped(const WideBvh& wide, const Ray* rays, const std::uin
 void occluded_wide_grouped(const WideBvh& wide, const Ray* rays, const std::uint32_t* order, const std::uint32_t* start,
                            bool* occluded, WideWalk walk) {
     const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
+    if (walk == WideWalk::Interleaved) detail::interleaved_pieces.fetch_add(1, std::memory_order_relaxed);
 #if defined(BVHLAB_AVX2_KERNELS)
     if (active_isa() == Isa::Avx2) avx2::occluded_wide_batch_kernel(view, rays, order, start, occluded, walk);
     else portable::occluded_wide_batch_kernel(view, rays, order, start, occluded, walk);

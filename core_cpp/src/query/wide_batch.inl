@@ -10,22 +10,17 @@
 #endif
 #include "wide_interleaved.inl"
 
-/// The walks an interleaved batch steps in turn (wide_interleaved.inl). Random rays ÷ the best
-/// peer through the batch (2-core AMD EPYC VM, 2026-12-06, two rounds each, A/B in one run): 4
-/// ways rods1m 1.09-1.10 against 6's 1.15-1.20; 6, 10 and 14 within the runs' spread (rods1m
-/// 1.32-1.37 / 1.24-1.45 / 1.36-1.41, repeat1m 1.81-1.89 / 1.69-1.99 / 1.92-1.95, uniform1m
-/// 2.17-2.39 / 2.10-2.70 / 2.00-2.62). Eight walkers' stacks take 31 KiB of the thread's stack.
-inline constexpr int kInterleavedWays = 8;
-
 /// The closest hits of rays[order[0, n)], all of octant kOctant, to hits[i] (and the count of
 /// wide nodes visited to visited[i], where given) in each ray's own slot i.
 /// Where the including file defines BVHLAB_WIDE_PACKETS (the AVX2 path) and no visited counts are
 /// asked (a packet's are not the single walk's), each run of kPacket rays that `coherent` accepts
-/// goes through the tree as one packet (wide_packet.inl); the rest ray by ray.
+/// goes through the tree as one packet (wide_packet.inl); the rest go alone after the packets, one
+/// after another or interleaved (`walk`, wide_interleaved.inl). n is at most kWideBatch (a piece:
+/// group_by_octant, ray_batch.h prepare_piece).
 template <int kOctant>
 void closest_of_octant(const WideView& wide, const Ray* rays, const std::uint32_t* order, std::uint32_t n, Hit* hits,
                        std::uint32_t* visited, WideWalk walk) {
-    std::uint32_t alone[kWideBatch], m = 0;  // the rays that go alone (n ≤ kWideBatch)
+    std::uint32_t alone[kWideBatch], m = 0;  // the rays that go alone
     std::uint32_t j = 0;
 #ifdef BVHLAB_WIDE_PACKETS
     if (!visited)
@@ -43,8 +38,7 @@ void closest_of_octant(const WideView& wide, const Ray* rays, const std::uint32_
         }
 #endif
     for (; j < n; ++j) alone[m++] = order[j];
-    if (walk == WideWalk::Interleaved)
-        return closest_interleaved<kOctant, kInterleavedWays>(wide, rays, alone, m, hits, visited);
+    if (walk == WideWalk::Interleaved) return closest_interleaved<kOctant>(wide, rays, alone, m, hits, visited);
     for (std::uint32_t r = 0; r < m; ++r) {
         const std::uint32_t i = alone[r];
         Hit hit{rays[i].tmax, kNoHit, 0.0f, 0.0f, kNoHit};
@@ -60,8 +54,7 @@ void closest_of_octant(const WideView& wide, const Ray* rays, const std::uint32_
 template <int kOctant, bool kFarthest>
 void occluded_of_octant(const WideView& wide, const Ray* rays, const std::uint32_t* order, std::uint32_t n,
                         bool* occluded, WideWalk walk) {
-    if (walk == WideWalk::Interleaved)
-        return occluded_interleaved<kOctant, kFarthest, kInterleavedWays>(wide, rays, order, n, occluded);
+    if (walk == WideWalk::Interleaved) return occluded_interleaved<kOctant, kFarthest>(wide, rays, order, n, occluded);
     for (std::uint32_t j = 0; j < n; ++j) {
         const std::uint32_t i = order[j];
         occluded[i] = any_hit_nodes<kOctant, kFarthest>(wide.lines, make_query(rays[i]));

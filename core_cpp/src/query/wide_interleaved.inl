@@ -5,19 +5,37 @@
 // A random ray's walk through a tree larger than the caches is a chain of misses, each node's
 // address read from the node before (rods1m: ~14 last-level misses a ray, ~75 ns a wide node
 // visited: design.md, "rods1m's random rays"). A core keeps many loads in flight; one walk has
-// one to wait for. So the batch keeps kWays walks and steps them in turn, one node or leaf of one
-// ray a step, each step prefetching the entry its walk goes to next: by that walk's next turn its
-// lines have come while the others worked (asynchronous memory access chaining: Kocberber,
+// one to wait for. So the batch keeps several walks (kInterleavedWays) and steps them in turn, one
+// node or leaf of one ray a step, each step prefetching the entry its walk goes to next: by that
+// walk's next turn its lines have come while the others worked (asynchronous memory access chaining: Kocberber,
 // Falsafi and Grot 2015, "Asynchronous Memory Access Chaining", PVLDB 9(4)). Each walk is
 // traverse_nodes' (any_hit_nodes') own, entry by entry, so each ray's hit is the single walk's,
 // bit for bit.
 
-/// Runs n walks kWays at a time: start(w, j) starts walker w on the j-th, step(w) takes one turn of
-/// it (false when its walk is done), finish(w) keeps its result; a walker whose walk ends starts
-/// the next, and the turns go round the walkers in use.
-template <int kWays, class Walker, class Start, class Step, class Finish>
+/// The walks an interleaved batch steps in turn. Random rays ÷ the faster of Embree 3 MEDIUM and
+/// tinybvh 1.9 through the batch (a 2-core AMD EPYC VM, 2026-12-06, two rounds, two binaries
+/// alternately in one run): 4 ways against 10, rods1m 1.04-1.09 / 1.19-1.28, uniform1m 1.63-1.67 /
+/// 1.95-2.15; 6, 10 and 14 within the runs' spread (rods1m 1.32-1.37 / 1.24-1.45 / 1.36-1.41,
+/// repeat1m 1.81-1.89 / 1.69-1.99 / 1.92-1.95, uniform1m 2.17-2.39 / 2.10-2.70 / 2.00-2.62).
+inline constexpr int kInterleavedWays = 8;
+
+/// The calling thread's kInterleavedWays walkers of type W, made at its first interleaved batch and
+/// kept until it ends: off the thread's stack (eight walkers' stacks are 31 KiB, and a thread of
+/// 32 KiB runs every batch query: design.md, "Threading model"), and not allocated anew a piece.
+/// A thread runs one batch walk at a time, so one set a thread serves every batch.
+template <class W>
+W* thread_walkers() {
+    thread_local const std::unique_ptr<W[]> walkers(new W[kInterleavedWays]);
+    return walkers.get();
+}
+
+/// Runs n walks kInterleavedWays at a time: start(w, j) starts walker w on the j-th, step(w) takes
+/// one turn of it (false when its walk is done), finish(w) keeps its result; a walker whose walk
+/// ends starts the next, and the turns go round the walkers in use.
+template <class Walker, class Start, class Step, class Finish>
 [[gnu::always_inline]] inline void interleave(std::uint32_t n, Start&& start, Step&& step, Finish&& finish) {
-    Walker walkers[kWays];
+    constexpr int kWays = kInterleavedWays;
+    Walker* walkers = thread_walkers<Walker>();
     int live[kWays];  // the walkers in use, live[0, count)
     int count = 0;
     std::uint32_t next = 0;
@@ -38,7 +56,7 @@ template <int kWays, class Walker, class Start, class Step, class Finish>
     }
 }
 
-/// One ray's closest-hit walk between its steps: traverse_nodes' state.
+/// One ray's closest-hit walk between its turns: traverse_nodes' state.
 struct Walker {
     Query q;
     Hit hit;
@@ -88,11 +106,11 @@ template <int kOctant>
 }
 
 /// The closest hits of rays[ids[0, n)], all of octant kOctant, to hits[i] (and the count of wide
-/// nodes visited to visited[i], where given), kWays walks stepped in turn.
-template <int kOctant, int kWays>
+/// nodes visited to visited[i], where given), kInterleavedWays walks stepped in turn.
+template <int kOctant>
 void closest_interleaved(const WideView& wide, const Ray* rays, const std::uint32_t* ids, std::uint32_t n, Hit* hits,
                          std::uint32_t* visited) {
-    interleave<kWays, Walker>(
+    interleave<Walker>(
         n, [&](Walker& w, std::uint32_t j) { start_walker(w, rays, ids[j]); },
         [&](Walker& w) { return step_walker<kOctant>(wide, w); },
         [&](const Walker& w) {
@@ -110,12 +128,12 @@ struct AnyHitWalker {
 };
 
 /// Whether each of rays[ids[0, n)], all of octant kOctant, is occluded, to occluded[i]: the walks
-/// of any_hit_nodes (in the order kFarthest says), kWays stepped in turn, a node a turn, each
-/// turn prefetching the node its walk goes to next.
-template <int kOctant, bool kFarthest, int kWays>
+/// of any_hit_nodes (in the order kFarthest says), kInterleavedWays stepped in turn, a node a
+/// turn, each turn prefetching the node its walk goes to next.
+template <int kOctant, bool kFarthest>
 void occluded_interleaved(const WideView& wide, const Ray* rays, const std::uint32_t* ids, std::uint32_t n,
                           bool* occluded) {
-    interleave<kWays, AnyHitWalker>(
+    interleave<AnyHitWalker>(
         n,
         [&](AnyHitWalker& w, std::uint32_t j) {
             w.ray = ids[j], w.q = make_query(rays[w.ray]);

@@ -1,6 +1,7 @@
 // wide_kernel.h — what the traversal kernels of the wide tree (wide_traverse.inl, one copy per
 // instruction set) see: plain pointers, and the helpers they call out of line.
 #pragma once
+#include <atomic>
 #include <cstdint>
 #include <cstring>
 
@@ -72,6 +73,13 @@ void order_by_octant(const std::uint8_t* octant, std::uint32_t count, std::uint3
 /// Groups rays[0, count) (count ≤ kWideBatch) by octant (bit a set where dir[a]'s sign bit is:
 /// make_query's octant, the sign of 1/dir[a]) by order_by_octant.
 void group_by_octant(const Ray* rays, std::uint32_t count, std::uint32_t* order, std::uint32_t start[9]);
+
+namespace detail {
+/// Pieces traced through the interleaved walks (intersect_wide_grouped and occluded_wide_grouped
+/// with WideWalk::Interleaved), counted for the tests that check a batch query passes its block's
+/// choice on (test_ray_order.cpp); a piece of 256 rays adds one.
+inline std::atomic<std::uint64_t> interleaved_pieces{0};
+}  // namespace detail
 
 /// intersect_wide_batch and occluded_wide_batch on rays already grouped (order and start as
 /// group_by_octant writes them; start[8] rays): hits[i] (nodes_visited[i] where not null) and
