@@ -1,10 +1,12 @@
-"""Batch queries on a thread with a small stack. A piece of a batch keeps its rays, hits and scale
-factors on the calling thread's stack (ray_batch.h: a 32 KiB thread runs them since the pieces are
-256 rays; with 1,024-ray chunks a 64 KiB thread crashed), so
-the bound is pinned here: a thread of 256 KiB, half of the smallest default any supported platform
-gives a thread (macOS: 512 KiB; Linux 8 MiB, Windows 1 MiB), runs every batch query, flat and
-two-level, with the same results as the main thread. A batch query that grew its stack frame past
-it crashes this test's process instead of a user's Blender."""
+"""Batch queries on a thread with a small stack. A batch keeps its pieces' rays and hits, the
+packet walk's stack and the interleaved walkers off the calling thread's stack (ray_batch.h
+RayPiece; wide_traverse.inl thread_room): its frames are a few KiB, so the bound is pinned here at
+the least Python allows, 32 KiB (a thread of 48 KiB crashed on a batch whose block was probed and
+sorted: the probe's two pieces and the chunk's made 53 KiB of frames). Every batch query, flat and
+two-level, in each of its ways (a block probed, sorted and interleaved; a block timed; camera rays
+as packets; a batch too small to probe), runs there with the same results as on the main thread.
+A batch query that grew its frames past it crashes this test's process instead of a user's
+Blender."""
 
 import threading
 
@@ -13,7 +15,7 @@ import numpy as np
 import bvhlab
 from bvhlab.library import procedural
 
-STACK = 256 * 1024
+STACK = 32 * 1024  # threading.stack_size's least
 
 
 def _queries(tree, origins, directions):
@@ -72,3 +74,23 @@ def test_two_level_batches_on_a_small_stack():
         transforms[i, :, 3] = (i - 1.5, 0.3 * i, 0.0)
     scene = bvhlab.Scene(triangles=knot, instance_mesh=np.zeros(4, np.int64), instance_transforms=transforms)
     _check_same(bvhlab.build(scene), *_rays(seed=2))
+
+
+def test_probed_sorted_and_interleaved_batches_on_a_small_stack():
+    # many small triangles: random rays visit many nodes, so a block of them is probed, sorted and
+    # walked interleaved; 40,000 rays also time a block (and 3,000 are too few to probe)
+    tris = procedural.random_triangles(60_000, size=0.08, seed=3)
+    lo, hi = tris.reshape(-1, 3).min(0), tris.reshape(-1, 3).max(0)
+    tree = bvhlab.build(tris)
+    rng = np.random.default_rng(4)
+    for n in (3000, 40_000):
+        origins = rng.uniform(lo, hi, (n, 3)).astype(np.float32)
+        directions = rng.normal(size=(n, 3)).astype(np.float32)
+        _check_same(tree, origins, directions)
+
+
+def test_camera_batches_on_a_small_stack():
+    # a camera's rays go through the tree as packets of eight (the packet walk's stack)
+    knot = procedural.torus_knot(40_000)
+    origins, directions = procedural.camera_rays(knot, 160, 120)
+    _check_same(bvhlab.build(knot), origins, directions)

@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <memory>
 #include <stdexcept>
 #include <type_traits>
 #include <utility>
@@ -112,12 +113,17 @@ inline std::uint32_t magnitude_bits(float x) {
 
 /// A piece of a batch as the wide tree's batch walks take it (wide_kernel.h intersect_wide_grouped):
 /// its rays scaled (scaled_ray), each with its factor, and grouped by octant (order_by_octant).
+/// 10 KiB: made on the heap (make_piece), not on the calling thread's stack, which a batch query
+/// keeps small (design.md, "Threading model": a thread of 32 KiB runs every batch query).
 struct RayPiece {
     Scratch<Ray, kWideBatch> rays;
     float t_scale[kWideBatch];
     std::uint32_t order[kWideBatch], start[9];
     std::uint32_t count;
 };
+
+/// A RayPiece on the heap, left unwritten (prepare_piece writes what is read).
+inline std::unique_ptr<RayPiece> make_piece() { return std::unique_ptr<RayPiece>(new RayPiece); }
 
 /// prepare_piece's pass (below) over the caller's rays [0, n − n mod 8), eight at a time, where
 /// the active instruction set has a vector pass (AVX2: ray_piece_avx2.cpp; ray_piece.cpp picks),
@@ -190,14 +196,14 @@ template <class Visit>
 void for_each_ray_piece(const RayBatch& rays, std::uint32_t threads, Cancellation* cancel, Visit&& visit) {
     std::atomic<bool> refused{false};
     for_each_unchecked_chunk(rays, threads, cancel, [&](std::size_t begin, std::size_t end, const ChunkStop& stop) {
-        RayPiece piece;
+        const std::unique_ptr<RayPiece> piece = make_piece();
         for (std::size_t at = begin; at < end && !refused.load(std::memory_order_relaxed); at += kWideBatch) {
             if (at != begin && stop()) return;
-            if (!prepare_piece(rays, at, std::min(end, at + kWideBatch), piece)) {
+            if (!prepare_piece(rays, at, std::min(end, at + kWideBatch), *piece)) {
                 refused.store(true, std::memory_order_relaxed);
                 return;
             }
-            visit(at, static_cast<const RayPiece&>(piece));
+            visit(at, static_cast<const RayPiece&>(*piece));
         }
     });
     if (refused.load()) {
@@ -234,13 +240,13 @@ inline void probe_sample(const RayBatch& rays, const RayBatch& part, bool betwee
 /// them, the second with the sample's own lines in them; the difference a ray.
 template <class Probe>
 double memory_stall_ns(const RayBatch& rays, const RayBatch& part, Probe& probe) {
-    RayPiece piece;
-    probe_sample(rays, part, true, piece);
+    const std::unique_ptr<RayPiece> piece = make_piece();
+    probe_sample(rays, part, true, *piece);
     using Clock = std::chrono::steady_clock;
     const auto start = Clock::now();
-    probe(static_cast<const RayPiece&>(piece));
+    probe(static_cast<const RayPiece&>(*piece));
     const auto again = Clock::now();
-    probe(static_cast<const RayPiece&>(piece));
+    probe(static_cast<const RayPiece&>(*piece));
     const std::chrono::duration<double, std::nano> cold = again - start, warm = Clock::now() - again;
     return (cold - warm).count() / kWideBatch;
 }
@@ -275,9 +281,9 @@ void for_each_block(const RayBatch& rays, const Aabb& scene, Probe&& probe, Trac
             if (block.count == 0) break;
             continue;
         }
-        RayPiece piece;
-        probe_sample(rays, block, false, piece);
-        const bool costly = probe(static_cast<const RayPiece&>(piece)) >= kOrderNodes;
+        const std::unique_ptr<RayPiece> piece = make_piece();
+        probe_sample(rays, block, false, *piece);
+        const bool costly = probe(static_cast<const RayPiece&>(*piece)) >= kOrderNodes;
         if (costly || block.count < kOrderTimedLeast) {
             if (costly) sort_rays(block, keys, sorted);
             trace(base, block, costly ? &sorted : nullptr, costly ? WideWalk::Interleaved : WideWalk::Alone);

@@ -107,12 +107,26 @@ Hit intersect_with(const Bvh& bvh, const Ray& ray, Traversal mode, std::uint32_t
     if (nodes_visited) *nodes_visited = visited;
     return hit;
 }
+/// A piece's hits and visited counts as the wide walks leave them (6 KiB).
+struct PieceHits {
+    Scratch<Hit, kWideBatch> hits;
+    std::uint32_t visited[kWideBatch];
+};
+
+/// The calling thread's PieceHits, kept off its stack (ray_batch.h RayPiece says why): made at its
+/// first batch query and kept until it ends. Used by one piece at a time: a piece's walks call no
+/// batch query.
+PieceHits& piece_hits() {
+    thread_local const std::unique_ptr<PieceHits> room(new PieceHits);
+    return *room;
+}
+
 /// The wide nodes the closest-hit walks of a piece's rays visit, on average (for_each_block's
 /// probe: how much a batch like them would gain from being reordered); no result is kept.
 double probe_wide(const WideBvh& wide, const RayPiece& piece) {
-    Scratch<Hit, kWideBatch> hits;
-    std::uint32_t visited[kWideBatch];
-    intersect_wide_grouped(wide, piece.rays.data(), piece.order, piece.start, hits.data(), visited);
+    PieceHits& room = piece_hits();
+    std::uint32_t* visited = room.visited;
+    intersect_wide_grouped(wide, piece.rays.data(), piece.order, piece.start, room.hits.data(), visited);
     double sum = 0;
     for (std::uint32_t j = 0; j < piece.count; ++j) sum += visited[j];
     return piece.count ? sum / piece.count : 0.0;
@@ -220,11 +234,10 @@ void intersect_batch(const Bvh& bvh, const RayBatch& rays, const HitBatch& out, 
         // the hits of `block`'s pieces to `to` (from its first ray on)
         const auto trace = [&](const RayBatch& block, const HitBatch& to, WideWalk walk) {
             trace_block(rays, block, threads, cancel, [&](std::size_t begin, const RayPiece& piece) {
-                Scratch<Hit, kWideBatch> hits;
-                std::uint32_t visited[kWideBatch];
-                std::uint32_t* v = to.nodes_visited ? visited : nullptr;
-                intersect_wide_grouped(*wide, piece.rays.data(), piece.order, piece.start, hits.data(), v, walk);
-                write_hits<true>(to, begin, piece.count, hits.data(), v, piece.t_scale, &bvh, piece.rays.data());
+                PieceHits& room = piece_hits();
+                std::uint32_t* v = to.nodes_visited ? room.visited : nullptr;
+                intersect_wide_grouped(*wide, piece.rays.data(), piece.order, piece.start, room.hits.data(), v, walk);
+                write_hits<true>(to, begin, piece.count, room.hits.data(), v, piece.t_scale, &bvh, piece.rays.data());
             });
         };
         SortedHits in_order;  // a reordered block's hits, in its rays' order

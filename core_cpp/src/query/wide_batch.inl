@@ -23,19 +23,21 @@ void closest_of_octant(const WideView& wide, const Ray* rays, const std::uint32_
     std::uint32_t alone[kWideBatch], m = 0;  // the rays that go alone
     std::uint32_t j = 0;
 #ifdef BVHLAB_WIDE_PACKETS
-    if (!visited)
+    if (!visited) {
+        PacketStack& stack = *thread_room<PacketStack, 1>();
         for (; j + kPacket <= n; j += kPacket) {
             // random and shadow rays part at the second ray's origin: no gather for them
             const Vec3 &a = rays[order[j]].origin, &b = rays[order[j + 1]].origin;
             if (a.x == b.x && a.y == b.y && a.z == b.z) {
                 const PacketRays p = packet_rays(rays, order + j);
                 if (coherent(p)) {
-                    closest_packet<kOctant>(wide, rays, order + j, p, hits);
+                    closest_packet<kOctant>(wide, rays, order + j, p, hits, stack);
                     continue;
                 }
             }
             for (int r = 0; r < kPacket; ++r) alone[m++] = order[j + r];
         }
+    }
 #endif
     for (; j < n; ++j) alone[m++] = order[j];
     if (walk == WideWalk::Interleaved) return closest_interleaved<kOctant>(wide, rays, alone, m, hits, visited);

@@ -19,24 +19,14 @@
 /// repeat1m 1.81-1.89 / 1.69-1.99 / 1.92-1.95, uniform1m 2.17-2.39 / 2.10-2.70 / 2.00-2.62).
 inline constexpr int kInterleavedWays = 8;
 
-/// The calling thread's kInterleavedWays walkers of type W, made at its first interleaved batch and
-/// kept until it ends: off the thread's stack (eight walkers' stacks are 31 KiB, and a thread of
-/// 32 KiB runs every batch query: design.md, "Threading model"), and not allocated anew a piece.
-/// A thread runs one batch walk at a time, so one set a thread serves every batch.
-template <class W>
-W* thread_walkers() {
-    thread_local const std::unique_ptr<W[]> walkers(new W[kInterleavedWays]);
-    return walkers.get();
-}
-
 /// Runs n walks kInterleavedWays at a time: start(w, j) starts walker w on the j-th, step(w) takes
 /// one turn of it (false when its walk is done), finish(w) keeps its result; a walker whose walk
 /// ends starts the next, and the turns go round the walkers in use.
 template <class Walker, class Start, class Step, class Finish>
 [[gnu::always_inline]] inline void interleave(std::uint32_t n, Start&& start, Step&& step, Finish&& finish) {
     constexpr int kWays = kInterleavedWays;
-    Walker* walkers = thread_walkers<Walker>();
-    int live[kWays];  // the walkers in use, live[0, count)
+    Walker* walkers = thread_room<Walker, kWays>();  // eight stacks: 31 KiB
+    int live[kWays];                                 // the walkers in use, live[0, count)
     int count = 0;
     std::uint32_t next = 0;
     for (; count < kWays && next < n; ++count) start(walkers[count], next++), live[count] = count;

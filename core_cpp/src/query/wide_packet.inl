@@ -156,9 +156,11 @@ inline int maybe_entered(const Interval& span, const float* f, const std::ptrdif
 
 /// The closest hits of rays[ids[0, kPacket)], all of octant kOctant, to hits[ids[r]] (unfinished,
 /// as closest_of_octant's), by one walk of the packet: nearest child first by the least middle of
-/// the rays' spans in its box (least_lane). `p`: the rays' fields, as packet_rays reads them.
+/// the rays' spans in its box (least_lane). `p`: the rays' fields, as packet_rays reads them;
+/// `stack`: the walk's (19 KiB, the calling thread's: thread_room).
 template <int kOctant>
-void closest_packet(const WideView& wide, const Ray* rays, const std::uint32_t* ids, const PacketRays& p, Hit* hits) {
+void closest_packet(const WideView& wide, const Ray* rays, const std::uint32_t* ids, const PacketRays& p, Hit* hits,
+                    PacketStack& stack) {
     const float s = gpu::BOX_FAR_SCALE;
     // The box test's factors for the eight rays at once, by make_query's operations lane by lane
     // (the same IEEE division and products, so the same bits); the origin is one for all
@@ -190,7 +192,6 @@ void closest_packet(const WideView& wide, const Ray* rays, const std::uint32_t* 
     int packet_nodes = 0;
     const std::ptrdiff_t* plane = kPlanes.at[kOctant & 7];
     const __m256 none = _mm256_set1_ps(std::numeric_limits<float>::quiet_NaN());
-    PacketStack stack;
     std::uint32_t sp = 0, cur = 0;
     L8 cur_t = t_min;  // the root: every ray enters it at tmin, as the single walk does
     for (;;) {

@@ -214,6 +214,17 @@ std::uint32_t traverse_nodes(const WideView& wide, const Query& q, Hit& hit, Wid
 
 #include "wide_any_hit.inl"
 
+/// N objects of type T for the calling thread, made at its first use and kept until it ends: the
+/// batch walks' large state (the packet walk's stack, the interleaved walkers), off the thread's
+/// stack (a thread of 32 KiB runs every batch query: design.md, "Threading model") and not
+/// allocated anew a piece. A thread runs one batch walk at a time (a walk calls no batch query),
+/// so one set a thread serves them all.
+template <class T, int N>
+T* thread_room() {
+    thread_local const std::unique_ptr<T[]> room(new T[N]);
+    return room.get();
+}
+
 /// The single-ray any-hit walk (wide_any_hit.inl): one copy for every octant, its plane offsets
 /// read from kPlanes by the ray's octant, as the single-ray closest-hit walk does (a batch's rays go
 /// through per-octant copies, grouped: wide_batch.inl). Eight copies picked per ray by an indirect
