@@ -471,3 +471,65 @@ def test_a_polygon_with_corners_beyond_float_range_is_refused_by_the_vertex_chec
     path.write_text("".join(f"v {x!r} {y!r} 0\n" for x, y in corners) + "f 1 2 3 4 5 6\n")
     with pytest.raises(SceneFileError, match="NaN, infinite or out-of-range vertex"):
         load_mesh_file(path)
+
+
+def test_gltf_buffers_are_read_where_their_uris_say(tmp_path):
+    """A probe's case: a URI that leads out of the glTF's folder ("../shared/buf.bin", an absolute
+    path, a URL) was read from a file of the same name beside the glTF, another mesh, silently."""
+    real = np.array([0, 0, 0, 1, 0, 0, 0, 1, 0], np.float32)
+    (tmp_path / "shared").mkdir()
+    (tmp_path / "shared" / "buf.bin").write_bytes(real.tobytes())
+    (tmp_path / "A").mkdir()
+    (tmp_path / "A" / "buf.bin").write_bytes((real + 50).tobytes())  # same name, other triangle
+
+    def with_uri(uri: str) -> str:
+        return gltf(buffers=[{"byteLength": 36, "uri": uri}])
+
+    for uri in ("../shared/buf.bin", str(tmp_path / "shared" / "buf.bin"), "../shared/b%75f.bin"):
+        t = load(tmp_path / "A", "model.gltf", with_uri(uri))
+        np.testing.assert_array_equal(t[0], real.reshape(3, 3), err_msg=uri)
+    np.testing.assert_array_equal(load(tmp_path / "A", "model.gltf", with_uri("buf.bin"))[0], (real + 50).reshape(3, 3))
+    for uri in ("http://example.com/buf.bin", "file:///tmp/buf.bin"):
+        with pytest.raises(SceneFileError, match="a URL: only files are read"):
+            load(tmp_path / "A", "model.gltf", with_uri(uri))
+    with pytest.raises(SceneFileError, match="missing"):
+        load(tmp_path / "A", "model.gltf", with_uri("../elsewhere/buf.bin"))
+
+
+@pytest.mark.parametrize(
+    "header, message",
+    [
+        ("element face 1\nproperty list uchar int vertex_indices\n" * 2, "2 elements named 'face'"),
+        (
+            "element face 1\nproperty list uchar int vertex_indices\nproperty list uchar int vertex_indices\n",
+            "2 properties named 'vertex_indices'",
+        ),
+    ],
+)
+def test_ply_names_declared_twice_are_refused(tmp_path, header, message):
+    """A probe's case: a second `element face` replaced the first's faces (one of two triangles read)."""
+    text = (
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+        + header
+        + "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 2 1 0\n"
+    )
+    with pytest.raises(SceneFileError, match=message):
+        load(tmp_path, "twice.ply", text)
+
+
+def test_ascii_stl_of_long_numbers_is_refused_at_once(tmp_path):
+    """A probe's case: three 160-digit numbers and a letter on a vertex line took 38 s to refuse
+    (the number pattern split a run of digits many ways); 2,000 digits took far longer. Read in a
+    child process, so that a return of the backtracking fails this test instead of hanging it."""
+    import subprocess
+    import sys
+
+    d = "1" * 2000
+    path = tmp_path / "long.stl"
+    path.write_text(f"solid t\nfacet normal 0 0 1\nouter loop\nvertex {d} {d} {d}x\nendloop\nendfacet\nendsolid t\n")
+    code = (
+        "import sys\nfrom bvhlab.library.files import load_mesh_file\n"
+        "try:\n    load_mesh_file(sys.argv[1])\nexcept Exception as e:\n    print(type(e).__name__, e)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True, text=True, timeout=120)
+    assert "not 'vertex x y z'" in out.stdout, out.stdout + out.stderr

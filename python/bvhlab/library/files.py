@@ -19,7 +19,7 @@ import numpy as np
 from .. import _checks
 from .._npz import SceneFileError
 from ..scene import Scene
-from .gltf_checks import check_gltf, gltf_files, uri_name
+from .gltf_checks import check_gltf, gltf_files, referenced_path
 from .obj_reader import read_obj
 from .ply_reader import read_ply
 from .stl_reader import read_stl
@@ -94,14 +94,20 @@ def _triangles(path: Path, kind: str) -> np.ndarray:
 
 
 def _uri_resolver(trimesh, path: Path):
-    """trimesh's resolver of the files beside `path`, reading a glTF URI as gltf_checks.uri_name
-    does (trimesh looked for "my%20model.bin" as written: "which is missing")."""
+    """trimesh's resolver for the files a glTF refers to, each read where its URI says
+    (gltf_checks.referenced_path: what gltf_files checked before the read, and the sweep's cache
+    hashes). trimesh's own read a file of the same name beside the glTF where the URI led out of
+    its folder ("../shared/buf.bin", an absolute path, a URL): another file's triangles, silently,
+    or a FIFO there that the check had not seen, which blocked. A URL is refused."""
 
-    class Decoding(trimesh.resolvers.FilePathResolver):
+    class Exact(trimesh.resolvers.FilePathResolver):
         def get(self, name: str):
-            return super().get(uri_name(Path(self.parent), name))
+            where = referenced_path(path, name)
+            if where is None:
+                raise SceneFileError(f"it refers to {name!r}, a URL: only files are read")
+            return where.read_bytes()  # FileNotFoundError: "refers to ..., which is missing"
 
-    return Decoding(str(path))
+    return Exact(str(path))
 
 
 def _checked_triangles(path: Path, vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:

@@ -11,6 +11,7 @@ below it with it (a mesh parented to a camera), so trimesh is given the file wit
 from __future__ import annotations
 
 import json
+import re
 import struct
 from pathlib import Path
 from urllib.parse import unquote
@@ -176,7 +177,23 @@ def _referenced(path: Path, kinds: tuple[str, ...]) -> list[Path]:
     if not isinstance(doc, dict):
         return []
     uris = [item.get("uri") for kind in kinds for item in _list(doc, kind)]
-    return [path.parent / uri_name(path.parent, u) for u in uris if isinstance(u, str) and not u.startswith("data:")]
+    paths = [referenced_path(path, u) for u in uris if isinstance(u, str)]
+    return [p for p in paths if p is not None]
+
+
+# a URI's scheme (RFC 3986 §3.1; two letters at least: "C:" is a drive)
+_SCHEME = re.compile(r"[A-Za-z][A-Za-z0-9+.-]+:")
+
+
+def referenced_path(gltf: Path, uri: str) -> Path | None:
+    """The file a URI of the glTF at `gltf` refers to, the one its loader reads (files.py
+    _uri_resolver) and its checks and the sweep's cache look at: the URI resolved against the
+    glTF's folder (RFC 3986: "../shared/buf.bin" in the folder beside it, an absolute path where it
+    says), percent-decoded as uri_name reads it; None for a data: URI or a URL (http:, file:),
+    which name no file here."""
+    if _SCHEME.match(uri):
+        return None
+    return gltf.parent / uri_name(gltf.parent, uri)
 
 
 def uri_name(folder: Path, uri: str) -> str:

@@ -93,6 +93,18 @@ def _header(path: Path, data: bytes) -> tuple[str, list[_Element], int]:
             raise SceneFileError(f"{path}: header line {line.strip()!r} is not PLY") from None
     if fmt not in ("ascii", "binary_little_endian", "binary_big_endian"):
         raise SceneFileError(f"{path}: unknown PLY format {fmt!r}")
+    # one element and one property of each name: the reader keeps them by name, and a second
+    # `element face` replaced the first's faces (of two declared, one triangle read)
+    names = [e.name for e in elements]
+    for e in elements:
+        if names.count(e.name) > 1:
+            raise SceneFileError(f"{path}: the header declares {names.count(e.name)} elements named {e.name!r}")
+        props = [p.name for p in e.properties]
+        for name in props:
+            if props.count(name) > 1:
+                raise SceneFileError(
+                    f"{path}: the {e.name} element declares {props.count(name)} properties named {name!r}"
+                )
     for e in elements:  # a float length read "ends inside its face elements" (an ASCII one reads)
         for p in e.properties:
             if fmt != "ascii" and p.count_type is not None and np.dtype(p.count_type).kind not in "iu":
