@@ -533,3 +533,25 @@ def test_ascii_stl_of_long_numbers_is_refused_at_once(tmp_path):
     )
     out = subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True, text=True, timeout=120)
     assert "not 'vertex x y z'" in out.stdout, out.stdout + out.stderr
+
+
+@pytest.mark.parametrize(
+    "changes, message",
+    [
+        (
+            {"v": _set(["bufferViews", 0, "byteLength"], 48)},
+            r"buffer view 0 \(0 \+ 48 bytes\) runs past the end of buffer 0",
+        ),
+        (
+            {"a": _set(["accessors", 0, "count"], 4)},
+            r"accessor 0 \(4 elements, 48 bytes\) runs past the end of buffer view 0",
+        ),
+        ({"n": _set(["nodes", 0, "mesh"], 5)}, r"node 0 refers to mesh 5, which the file does not have \(1\)"),
+        ({"p": _set(["meshes", 0, "primitives", 0, "attributes", "POSITION"], 3)}, "POSITION refers to accessor 3"),
+        ({"i": _set(["meshes", 0, "primitives", 0, "indices"], 0)}, "indices have component type 5126"),
+    ],
+)
+def test_gltf_references_that_lead_nowhere_are_named(tmp_path, changes, message):
+    """A probe's cases: trimesh refused them as "AssertionError", or read "0 faces"."""
+    with pytest.raises(SceneFileError, match=message):
+        load(tmp_path, "model.gltf", gltf(**changes))

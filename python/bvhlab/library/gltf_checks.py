@@ -117,6 +117,67 @@ def _check(path: Path, doc: dict) -> None:
                 raise SceneFileError(f"{where}: normalized positions (KHR_mesh_quantization) are not read")
             if "sparse" in position or "sparse" in indices:
                 raise SceneFileError(f"{where}: sparse accessors are not read")
+    _check_references(path, doc)
+
+
+_COMPONENT_BYTES = {5120: 1, 5121: 1, 5122: 2, 5123: 2, 5125: 4, 5126: 4}
+_TYPE_COMPONENTS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
+_INDEX_TYPES = (5121, 5123, 5125)  # unsigned byte, short, int (glTF 2.0 §3.7.2.1)
+
+
+def _check_references(path: Path, doc: dict) -> None:
+    """What trimesh's reader asserts without saying what (its message was "AssertionError", or "0
+    faces" for a node whose mesh is not there): each node's mesh, each primitive's POSITION and
+    indices accessors, their buffer views and buffers exist, every view lies in its buffer and
+    every accessor in its view, and indices are unsigned integers."""
+    meshes, accessors = _list(doc, "meshes"), _list(doc, "accessors")
+    views, buffers = _list(doc, "bufferViews"), _list(doc, "buffers")
+
+    def item(items: list, index, what: str, where: str) -> dict:
+        if not isinstance(index, int) or not 0 <= index < len(items):
+            raise SceneFileError(
+                f"{path}: {where} refers to {what} {index!r}, which the file does not have ({len(items)})"
+            )
+        return items[index]
+
+    for n, node in enumerate(_list(doc, "nodes")):
+        if "mesh" in node:
+            item(meshes, node["mesh"], "mesh", f"node {n}")
+    for m, mesh in enumerate(meshes):
+        for primitive in _list(mesh, "primitives"):
+            where = f"mesh {mesh.get('name') or m}"
+            for role, index in (
+                ("POSITION", _dict(primitive, "attributes").get("POSITION")),
+                ("indices", primitive.get("indices")),
+            ):
+                if index is None:
+                    continue
+                accessor = item(accessors, index, "accessor", f"{where}'s {role}")
+                if role == "indices" and accessor.get("componentType") not in _INDEX_TYPES:
+                    raise SceneFileError(
+                        f"{path}: {where}'s indices have component type {accessor.get('componentType')!r}: glTF "
+                        "indices are unsigned bytes, shorts or ints (5121, 5123, 5125)"
+                    )
+                if "bufferView" not in accessor:
+                    continue  # all zeros (glTF 2.0 §3.6.2.3)
+                view = item(views, accessor["bufferView"], "buffer view", f"accessor {index}")
+                buffer = item(buffers, view.get("buffer"), "buffer", f"buffer view {accessor['bufferView']}")
+                start, length = view.get("byteOffset", 0), view.get("byteLength", 0)
+                if start + length > buffer.get("byteLength", 0):
+                    raise SceneFileError(
+                        f"{path}: buffer view {accessor['bufferView']} ({start} + {length} bytes) runs past the "
+                        f"end of buffer {view.get('buffer')} ({buffer.get('byteLength', 0)} bytes)"
+                    )
+                component, kind = accessor.get("componentType"), accessor.get("type")
+                size = _COMPONENT_BYTES.get(component, 0) if isinstance(component, int) else 0
+                size *= _TYPE_COMPONENTS.get(kind, 0) if isinstance(kind, str) else 0
+                count = accessor.get("count", 0)
+                end = accessor.get("byteOffset", 0) + (count - 1) * view.get("byteStride", size) + size if count else 0
+                if end > length:
+                    raise SceneFileError(
+                        f"{path}: accessor {index} ({count} elements, {end} bytes) runs past the end of buffer view "
+                        f"{accessor['bufferView']} ({length} bytes)"
+                    )
 
 
 def _check_morph_weights(path: Path, doc: dict) -> None:
