@@ -85,22 +85,21 @@ std::size_t expect_occluded_batch_is_single(const Bvh& bvh, const std::vector<Ra
     const WideBvh wide = make_wide(bvh);
     const Isa before = active_isa();
     std::size_t occluded = 0;
-    for (Isa isa : supported_isas())
-        for (WideWalk walk : {WideWalk::Alone, WideWalk::Interleaved}) {
-            set_isa(isa);
-            std::unique_ptr<bool[]> batch(new bool[rays.size()]);
-            occluded_wide_batch(wide, rays.data(), rays.size(), batch.get(), walk);
-            std::uint32_t wrong = 0;
-            occluded = 0;
-            for (std::size_t i = 0; i < rays.size(); ++i) {
-                const bool one = occluded_wide(wide, rays[i]),
-                           oracle = intersect(bvh, rays[i], Traversal::Stack).t < rays[i].tmax;
-                if ((batch[i] != one || one != oracle) && ++wrong <= 5)
-                    ADD_FAILURE() << isa_name(isa) << ": shadow ray " << i << " batch " << batch[i] << " alone " << one
-                                  << " closest hit " << oracle;
-                occluded += one;
-            }
+    for (Isa isa : supported_isas()) {
+        set_isa(isa);
+        std::unique_ptr<bool[]> batch(new bool[rays.size()]);
+        occluded_wide_batch(wide, rays.data(), rays.size(), batch.get());
+        std::uint32_t wrong = 0;
+        occluded = 0;
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+            const bool one = occluded_wide(wide, rays[i]),
+                       oracle = intersect(bvh, rays[i], Traversal::Stack).t < rays[i].tmax;
+            if ((batch[i] != one || one != oracle) && ++wrong <= 5)
+                ADD_FAILURE() << isa_name(isa) << ": shadow ray " << i << " batch " << batch[i] << " alone " << one
+                              << " closest hit " << oracle;
+            occluded += one;
         }
+    }
     set_isa(before);
     return occluded;
 }

@@ -96,12 +96,11 @@ bool occluded_wide(const WideBvh& wide, const Ray& ray);
 /// KiB: repeat1m primary rays 3.45 simulated D1 misses a ray through the batch, 0.79 ray by ray).
 inline constexpr std::uint32_t kWideBatch = 256;
 
-/// How a batch's walks (closest hit and any hit) take the rays that go alone (not as a packet):
-/// one after another, or several at a time on one thread, each walk stepped in turn so that their
-/// cache misses overlap (src/query/wide_interleaved.inl). The same results either way, bit for
-/// bit; Interleaved pays where the rays wait on memory and costs where the tree stays in the
-/// caches (intersect_batch and occluded_batch choose per block: src/query/ray_batch.h
-/// for_each_block).
+/// How a batch's closest-hit walk takes the rays that go alone (not as a packet): one after
+/// another, or several at a time on one thread, each walk stepped in turn so that their cache
+/// misses overlap (src/query/wide_interleaved.inl). The same hits either way, bit for bit;
+/// Interleaved pays where the rays wait on memory and costs where the tree stays in the caches
+/// (intersect_batch chooses per block: src/query/ray_batch.h for_each_block).
 enum class WideWalk { Alone, Interleaved };
 
 /// intersect_wide for each of rays[0, count): hits[i] (and nodes_visited[i], where given) for
@@ -116,8 +115,7 @@ void intersect_wide_batch(const WideBvh& wide, const Bvh& bvh, const Ray* rays, 
                           std::uint32_t* nodes_visited = nullptr, WideWalk walk = WideWalk::Alone);
 
 /// occluded_wide for each of rays[0, count), to occluded[i], grouped by octant as
-/// intersect_wide_batch, its rays one after another or interleaved (`walk`).
-void occluded_wide_batch(const WideBvh& wide, const Ray* rays, std::size_t count, bool* occluded,
-                         WideWalk walk = WideWalk::Alone);
+/// intersect_wide_batch (one ray after another: the any-hit walk is not interleaved).
+void occluded_wide_batch(const WideBvh& wide, const Ray* rays, std::size_t count, bool* occluded);
 
 }  // namespace bvhlab

@@ -51,7 +51,7 @@ inline constexpr double kOrderStallNs = 80.0;
 /// block of 4,096 rays on several threads waited on it, 76-79 → 87 ns a ray in the review's run).
 inline constexpr std::size_t kOrderWarmRays = 2048, kOrderTimedLeast = 16 * kOrderWarmRays;
 /// The wait on memory (ns a ray, as kOrderStallNs) from which a timed block's rest goes through the
-/// interleaved walks (wide_bvh.h WideWalk::Interleaved, closest and any hit; for_each_block: a
+/// interleaved closest-hit walk (wide_bvh.h WideWalk::Interleaved: intersect_batch; for_each_block: a
 /// block whose rays visit at least kOrderNodes wide nodes goes so whole, untimed; one of fewer than
 /// kOrderLeast rays, or in ray order already, never). Interleaving costs where the tree stays in
 /// the caches (+30% instructions a ray on Sponza's and room1m's random rays) and gains where it

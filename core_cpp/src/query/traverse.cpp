@@ -210,13 +210,14 @@ void occluded_batch(const Bvh& bvh, const RayBatch& rays, bool* occluded_out, Tr
         const auto probe = [&](const RayPiece& piece) { return probe_wide(*wide, piece); };
         std::unique_ptr<bool[]> in_order;  // a reordered block's answers, in its rays' order
         return for_each_block(rays, scene_box(bvh), probe,
-                              [&](std::size_t base, const RayBatch& block, const SortedRays* sorted, WideWalk walk) {
+                              // the any-hit walk goes ray by ray (WideWalk is the closest-hit walk's choice)
+                              [&](std::size_t base, const RayBatch& block, const SortedRays* sorted, WideWalk) {
                                   if (sorted && !in_order) in_order = std::make_unique<bool[]>(kOrderBlock);
                                   bool* to = sorted ? in_order.get() : occluded_out + base;
                                   trace_block(rays, sorted ? sorted->batch(block) : block, threads, cancel,
                                               [&](std::size_t begin, const RayPiece& piece) {
                                                   occluded_wide_grouped(*wide, piece.rays.data(), piece.order,
-                                                                        piece.start, to + begin, walk);
+                                                                        piece.start, to + begin);
                                               });
                                   if (sorted) unsort(in_order.get(), sorted->index, occluded_out + base);
                               });

@@ -269,14 +269,13 @@ void intersect_wide_grouped(const WideBvh& wide, const Ray* rays, const std::uin
 }
 
 void occluded_wide_grouped(const WideBvh& wide, const Ray* rays, const std::uint32_t* order, const std::uint32_t* start,
-                           bool* occluded, WideWalk walk) {
+                           bool* occluded) {
     const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
-    if (walk == WideWalk::Interleaved) detail::interleaved_pieces.fetch_add(1, std::memory_order_relaxed);
 #if defined(BVHLAB_AVX2_KERNELS)
-    if (active_isa() == Isa::Avx2) avx2::occluded_wide_batch_kernel(view, rays, order, start, occluded, walk);
-    else portable::occluded_wide_batch_kernel(view, rays, order, start, occluded, walk);
+    if (active_isa() == Isa::Avx2) avx2::occluded_wide_batch_kernel(view, rays, order, start, occluded);
+    else portable::occluded_wide_batch_kernel(view, rays, order, start, occluded);
 #else
-    portable::occluded_wide_batch_kernel(view, rays, order, start, occluded, walk);
+    portable::occluded_wide_batch_kernel(view, rays, order, start, occluded);
 #endif
 }
 
@@ -292,12 +291,12 @@ void intersect_wide_batch(const WideBvh& wide, const Bvh& bvh, const Ray* rays, 
     }
 }
 
-void occluded_wide_batch(const WideBvh& wide, const Ray* rays, std::size_t count, bool* occluded, WideWalk walk) {
+void occluded_wide_batch(const WideBvh& wide, const Ray* rays, std::size_t count, bool* occluded) {
     std::uint32_t order[kWideBatch], start[9];
     for (std::size_t begin = 0; begin < count; begin += kWideBatch) {
         const auto n = std::uint32_t(std::min<std::size_t>(kWideBatch, count - begin));
         group_by_octant(rays + begin, n, order, start);
-        occluded_wide_grouped(wide, rays + begin, order, start, occluded + begin, walk);
+        occluded_wide_grouped(wide, rays + begin, order, start, occluded + begin);
     }
 }
 

@@ -20,65 +20,6 @@ bool leaf_occludes(const unsigned char* at, const Query& q) {
     }
 }
 
-/// The any-hit walk's per-ray vectors (any_hit_nodes broadcasts them once a ray).
-struct AnyHitRay {
-    L8 origin[3], neg_inv[3], neg_inv_far[3], far;
-    const std::ptrdiff_t* plane;
-};
-
-template <int kOctant>
-[[gnu::always_inline]] inline AnyHitRay any_hit_ray(const Query& q) {
-    return {{L8::splat(q.o[0]), L8::splat(q.o[1]), L8::splat(q.o[2])},
-            {L8::splat(q.neg_inv[0]), L8::splat(q.neg_inv[1]), L8::splat(q.neg_inv[2])},
-            {L8::splat(q.neg_inv_far[0]), L8::splat(q.neg_inv_far[1]), L8::splat(q.neg_inv_far[2])},
-            L8::splat(q.ray->tmax * gpu::BOX_FAR_SCALE),
-            kOctant < 0 ? kPlanes[q.octant] : kPlanes.at[kOctant & 7]};
-}
-
-/// What one node of the any-hit walk leads to: a hit (the ray is occluded), the node in `cur`
-/// next, or the walk's end without a hit.
-enum class AnyHitStep { kOccluded, kGoOn, kDone };
-
-/// One node of the any-hit walk, `cur`: its boxes, the leaves among the children entered, and the
-/// next node (to `cur`, popped where no inner child was entered).
-template <bool kFarthest>
-[[gnu::always_inline]] inline AnyHitStep any_hit_node(const unsigned char* lines, const Query& q, const AnyHitRay& r,
-                                                      std::uint32_t* stack, std::uint32_t& sp, std::uint32_t& cur) {
-    const WideNode& node = *reinterpret_cast<const WideNode*>(lines + std::size_t(cur) * sizeof(WideLine));
-    const float* f = node.lo_x;
-    __builtin_prefetch(node.child);  // as enter_children: the child words, and the lines after
-    const char* after = reinterpret_cast<const char*>(&node + 1);
-    for (int line = 0; line < 6; ++line) __builtin_prefetch(after + 64 * line);
-    L8 t0 = L8::load(q.tmin8), t1 = r.far;
-    for (int a = 0; a < 3; ++a) t0 = raise(t0, (r.origin[a] - L8::load(f + r.plane[a])) * r.neg_inv[a]);
-    for (int a = 0; a < 3; ++a) t1 = lower(t1, (r.origin[a] - L8::load(f + r.plane[3 + a])) * r.neg_inv_far[a]);
-    const int mask = le_bits(t0, t1);
-    const int leaves = mask & leaf_bits(node), inner = mask ^ leaves;
-    if (inner) {  // the farthest (or lowest) inner child next, the others pushed unordered below it
-        const int next =
-            kFarthest && (inner & (inner - 1)) ? farthest_slot(t0, t1, inner) : __builtin_ctz(unsigned(inner));
-        const int rest = inner & ~(1 << next);
-        if (rest) {
-            push_entered(node, rest, stack + sp);
-            sp += std::uint32_t(__builtin_popcount(unsigned(rest)));
-            prefetch(WideView{lines}, stack[sp - 1]);  // the next to pop after it
-        }
-        if (!leaves) {  // the commonest case: the next node from the node's words, not the stack
-            cur = node.child[next];
-            return AnyHitStep::kGoOn;
-        }
-        stack[sp++] = node.child[next];  // pushed before the leaves' calls: popped right after them
-        prefetch(WideView{lines}, node.child[next]);
-    }
-    for (int m = leaves; m; m &= m - 1)
-        if (leaf_occludes(lines + std::size_t(node.child[__builtin_ctz(unsigned(m))] & ~kLeafChild) * sizeof(WideLine),
-                          q))
-            return AnyHitStep::kOccluded;
-    if (sp == 0) return AnyHitStep::kDone;
-    cur = stack[--sp];
-    return AnyHitStep::kGoOn;
-}
-
 /// The any-hit walk for one octant: tests a node's eight boxes, then at once the leaves among the
 /// children the ray enters, in slot order, ending at the first packet with a hit; of the inner
 /// children entered, the farthest (by the middle of the ray's span in its box, farthest_slot:
@@ -106,11 +47,45 @@ template <bool kFarthest>
 /// and 100% unoccluded, 6-7% slower with it; the batch picks: wide_batch.inl occluded_of_batch).
 template <int kOctant, bool kFarthest = true>
 bool any_hit_nodes(const unsigned char* lines, const Query& q) {
-    const AnyHitRay r = any_hit_ray<kOctant>(q);
+    const L8 origin[3] = {L8::splat(q.o[0]), L8::splat(q.o[1]), L8::splat(q.o[2])};
+    const L8 neg_inv[3] = {L8::splat(q.neg_inv[0]), L8::splat(q.neg_inv[1]), L8::splat(q.neg_inv[2])};
+    const L8 neg_inv_far[3] = {L8::splat(q.neg_inv_far[0]), L8::splat(q.neg_inv_far[1]), L8::splat(q.neg_inv_far[2])};
+    const L8 far = L8::splat(q.ray->tmax * gpu::BOX_FAR_SCALE);
+    const std::ptrdiff_t* plane = kOctant < 0 ? kPlanes[q.octant] : kPlanes.at[kOctant & 7];
     std::uint32_t stack[Stack::kSize];
     std::uint32_t sp = 0, cur = 0;
     for (;;) {
-        const AnyHitStep next = any_hit_node<kFarthest>(lines, q, r, stack, sp, cur);
-        if (next != AnyHitStep::kGoOn) return next == AnyHitStep::kOccluded;
+        const WideNode& node = *reinterpret_cast<const WideNode*>(lines + std::size_t(cur) * sizeof(WideLine));
+        const float* f = node.lo_x;
+        __builtin_prefetch(node.child);  // as enter_children: the child words, and the lines after
+        const char* after = reinterpret_cast<const char*>(&node + 1);
+        for (int line = 0; line < 6; ++line) __builtin_prefetch(after + 64 * line);
+        L8 t0 = L8::load(q.tmin8), t1 = far;
+        for (int a = 0; a < 3; ++a) t0 = raise(t0, (origin[a] - L8::load(f + plane[a])) * neg_inv[a]);
+        for (int a = 0; a < 3; ++a) t1 = lower(t1, (origin[a] - L8::load(f + plane[3 + a])) * neg_inv_far[a]);
+        const int mask = le_bits(t0, t1);
+        const int leaves = mask & leaf_bits(node), inner = mask ^ leaves;
+        if (inner) {  // the farthest (or lowest) inner child next, the others pushed unordered below it
+            const int next =
+                kFarthest && (inner & (inner - 1)) ? farthest_slot(t0, t1, inner) : __builtin_ctz(unsigned(inner));
+            const int rest = inner & ~(1 << next);
+            if (rest) {
+                push_entered(node, rest, stack + sp);
+                sp += std::uint32_t(__builtin_popcount(unsigned(rest)));
+                prefetch(WideView{lines}, stack[sp - 1]);  // the next to pop after it
+            }
+            if (!leaves) {  // the commonest case: the next node from the node's words, not the stack
+                cur = node.child[next];
+                continue;
+            }
+            stack[sp++] = node.child[next];  // pushed before the leaves' calls: popped right after them
+            prefetch(WideView{lines}, node.child[next]);
+        }
+        for (int m = leaves; m; m &= m - 1)
+            if (leaf_occludes(
+                    lines + std::size_t(node.child[__builtin_ctz(unsigned(m))] & ~kLeafChild) * sizeof(WideLine), q))
+                return true;
+        if (sp == 0) return false;
+        cur = stack[--sp];
     }
 }

@@ -51,12 +51,10 @@ void closest_of_octant(const WideView& wide, const Ray* rays, const std::uint32_
 }
 
 /// Whether each of rays[order[0, n)], all of octant kOctant, is occluded, to occluded[i], by the
-/// any-hit walk's farthest-first order or (kFarthest false) the layout's (any_hit_nodes), one ray
-/// after another or interleaved (`walk`).
+/// any-hit walk's farthest-first order or (kFarthest false) the layout's (any_hit_nodes).
 template <int kOctant, bool kFarthest>
 void occluded_of_octant(const WideView& wide, const Ray* rays, const std::uint32_t* order, std::uint32_t n,
-                        bool* occluded, WideWalk walk) {
-    if (walk == WideWalk::Interleaved) return occluded_interleaved<kOctant, kFarthest>(wide, rays, order, n, occluded);
+                        bool* occluded) {
     for (std::uint32_t j = 0; j < n; ++j) {
         const std::uint32_t i = order[j];
         occluded[i] = any_hit_nodes<kOctant, kFarthest>(wide.lines, make_query(rays[i]));
@@ -81,15 +79,15 @@ void closest_of_batch(const WideView& wide, const Ray* rays, const std::uint32_t
 /// octant's walk in the order kFarthest says.
 template <bool kFarthest>
 void occluded_of_entries(const WideView& wide, const Ray* rays, const std::uint32_t* order, const std::uint32_t* start,
-                         std::uint32_t from, std::uint32_t to, bool* occluded, WideWalk walk) {
-    using Walk = void (*)(const WideView&, const Ray*, const std::uint32_t*, std::uint32_t, bool*, WideWalk);
+                         std::uint32_t from, std::uint32_t to, bool* occluded) {
+    using Walk = void (*)(const WideView&, const Ray*, const std::uint32_t*, std::uint32_t, bool*);
     static constexpr Walk kWalks[8] = {occluded_of_octant<0, kFarthest>, occluded_of_octant<1, kFarthest>,
                                        occluded_of_octant<2, kFarthest>, occluded_of_octant<3, kFarthest>,
                                        occluded_of_octant<4, kFarthest>, occluded_of_octant<5, kFarthest>,
                                        occluded_of_octant<6, kFarthest>, occluded_of_octant<7, kFarthest>};
     for (int k = 0; k < 8; ++k) {
         const std::uint32_t lo = std::max(start[k], from), hi = std::min(start[k + 1], to);
-        if (hi > lo) kWalks[k](wide, rays, order + lo, hi - lo, occluded, walk);
+        if (hi > lo) kWalks[k](wide, rays, order + lo, hi - lo, occluded);
     }
 }
 
@@ -103,14 +101,13 @@ void occluded_of_entries(const WideView& wide, const Ray* rays, const std::uint3
 /// threads each take their own).
 inline constexpr std::uint32_t kOrderProbe = 16, kOrderProbeOccluded = 4;
 
-/// occluded for a batch grouped by octant, as closest_of_batch, in the order its first rays say,
-/// one ray after another or interleaved (`walk`).
+/// occluded for a batch grouped by octant, as closest_of_batch, in the order its first rays say.
 void occluded_of_batch(const WideView& wide, const Ray* rays, const std::uint32_t* order, const std::uint32_t* start,
-                       bool* occluded, WideWalk walk) {
+                       bool* occluded) {
     const std::uint32_t n = start[8], probe = std::min(n, kOrderProbe);
-    occluded_of_entries<true>(wide, rays, order, start, 0, probe, occluded, walk);
+    occluded_of_entries<true>(wide, rays, order, start, 0, probe, occluded);
     std::uint32_t found = 0;
     for (std::uint32_t j = 0; j < probe; ++j) found += occluded[order[j]];
-    if (found >= kOrderProbeOccluded) occluded_of_entries<true>(wide, rays, order, start, probe, n, occluded, walk);
-    else occluded_of_entries<false>(wide, rays, order, start, probe, n, occluded, walk);
+    if (found >= kOrderProbeOccluded) occluded_of_entries<true>(wide, rays, order, start, probe, n, occluded);
+    else occluded_of_entries<false>(wide, rays, order, start, probe, n, occluded);
 }

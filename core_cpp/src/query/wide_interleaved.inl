@@ -1,6 +1,7 @@
-// wide_interleaved.inl — the batch's walks of rays that go alone (closest hit and any hit), several
-// rays at once on one thread: included by wide_batch.inl, inside the including file's namespace,
-// with the walks' parts (wide_traverse.inl, wide_any_hit.inl).
+// wide_interleaved.inl — the batch's closest-hit walk of rays that go alone, several rays at once on
+// one thread: included by wide_batch.inl, inside the including file's namespace, with the walk's
+// parts (wide_traverse.inl). The any-hit walk is not interleaved: it lost on every shadow-ray set
+// measured (design.md, "Several rays at once on a thread").
 //
 // A random ray's walk through a tree larger than the caches is a chain of misses, each node's
 // address read from the node before (rods1m: ~14 last-level misses a ray, ~75 ns a wide node
@@ -9,8 +10,7 @@
 // node or leaf of one ray a step, each step prefetching the entry its walk goes to next: by that
 // walk's next turn its lines have come while the others worked (asynchronous memory access chaining: Kocberber,
 // Falsafi and Grot 2015, "Asynchronous Memory Access Chaining", PVLDB 9(4)). Each walk is
-// traverse_nodes' (any_hit_nodes') own, entry by entry, so each ray's hit is the single walk's,
-// bit for bit.
+// traverse_nodes' own, entry by entry, so each ray's hit is the single walk's, bit for bit.
 
 /// The walks an interleaved batch steps in turn. Random rays ÷ the faster of Embree 3 MEDIUM and
 /// tinybvh 1.9 through the batch (a 2-core AMD EPYC VM, 2026-12-06, two rounds, two binaries
@@ -107,37 +107,4 @@ void closest_interleaved(const WideView& wide, const Ray* rays, const std::uint3
             hits[w.ray] = w.hit;
             if (visited) visited[w.ray] = w.visited;
         });
-}
-
-/// One ray's any-hit walk between its turns: any_hit_nodes' state.
-struct AnyHitWalker {
-    Query q;
-    std::uint32_t sp, cur, ray;
-    bool occluded;
-    std::uint32_t stack[Stack::kSize];
-};
-
-/// Whether each of rays[ids[0, n)], all of octant kOctant, is occluded, to occluded[i]: the walks
-/// of any_hit_nodes (in the order kFarthest says), kInterleavedWays stepped in turn, a node a
-/// turn, each turn prefetching the node its walk goes to next.
-template <int kOctant, bool kFarthest>
-void occluded_interleaved(const WideView& wide, const Ray* rays, const std::uint32_t* ids, std::uint32_t n,
-                          bool* occluded) {
-    interleave<AnyHitWalker>(
-        n,
-        [&](AnyHitWalker& w, std::uint32_t j) {
-            w.ray = ids[j], w.q = make_query(rays[w.ray]);
-            w.sp = 0, w.cur = 0, w.occluded = false;
-        },
-        [&](AnyHitWalker& w) {
-            const AnyHitStep next =
-                any_hit_node<kFarthest>(wide.lines, w.q, any_hit_ray<kOctant>(w.q), w.stack, w.sp, w.cur);
-            if (next != AnyHitStep::kGoOn) {
-                w.occluded = next == AnyHitStep::kOccluded;
-                return false;
-            }
-            prefetch(wide, w.cur);
-            return true;
-        },
-        [&](const AnyHitWalker& w) { occluded[w.ray] = w.occluded; });
 }

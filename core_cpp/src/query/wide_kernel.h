@@ -75,8 +75,7 @@ void order_by_octant(const std::uint8_t* octant, std::uint32_t count, std::uint3
 void group_by_octant(const Ray* rays, std::uint32_t count, std::uint32_t* order, std::uint32_t start[9]);
 
 namespace detail {
-/// Pieces traced through the interleaved walks (intersect_wide_grouped and occluded_wide_grouped
-/// with WideWalk::Interleaved), counted for the tests that check a batch query passes its block's
+/// Pieces traced through the interleaved walk (intersect_wide_grouped with WideWalk::Interleaved), counted for the tests that check a batch query passes its block's
 /// choice on (test_ray_order.cpp); a piece of 256 rays adds one.
 inline std::atomic<std::uint64_t> interleaved_pieces{0};
 }  // namespace detail
@@ -89,7 +88,7 @@ void intersect_wide_grouped(const WideBvh& wide, const Ray* rays, const std::uin
                             const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited,
                             WideWalk walk = WideWalk::Alone);
 void occluded_wide_grouped(const WideBvh& wide, const Ray* rays, const std::uint32_t* order, const std::uint32_t* start,
-                           bool* occluded, WideWalk walk = WideWalk::Alone);
+                           bool* occluded);
 
 /// The batch kernels (wide_batch.inl): the rays grouped by group_by_octant, each group through
 /// its octant's walk, results in each ray's slot (hits[i], nodes_visited[i] where not null,
@@ -98,13 +97,13 @@ namespace portable {
 void intersect_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
                                  const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited, WideWalk walk);
 void occluded_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
-                                const std::uint32_t* start, bool* occluded, WideWalk walk);
+                                const std::uint32_t* start, bool* occluded);
 }  // namespace portable
 namespace avx2 {
 void intersect_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
                                  const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited, WideWalk walk);
 void occluded_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
-                                const std::uint32_t* start, bool* occluded, WideWalk walk);
+                                const std::uint32_t* start, bool* occluded);
 }  // namespace avx2
 
 namespace portable {

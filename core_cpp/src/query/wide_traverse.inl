@@ -255,8 +255,8 @@ void intersect_wide_batch_kernel(const WideView& wide, const Ray* rays, const st
 }
 
 void occluded_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
-                                const std::uint32_t* start, bool* occluded, WideWalk walk) {
-    if (wide.lines) return occluded_of_batch(wide, rays, order, start, occluded, walk);
+                                const std::uint32_t* start, bool* occluded) {
+    if (wide.lines) return occluded_of_batch(wide, rays, order, start, occluded);
     for (std::uint32_t i = 0; i < start[8]; ++i) occluded[i] = false;
 }
 
