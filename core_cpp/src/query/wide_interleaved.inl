@@ -7,10 +7,10 @@
 // address read from the node before (rods1m: ~14 last-level misses a ray, ~75 ns a wide node
 // visited: design.md, "rods1m's random rays"). A core keeps many loads in flight; one walk has
 // one to wait for. So the batch keeps several walks (kInterleavedWays) and steps them in turn, one
-// node or leaf of one ray a step, each step prefetching the entry its walk goes to next: by that
-// walk's next turn its lines have come while the others worked (asynchronous memory access chaining: Kocberber,
-// Falsafi and Grot 2015, "Asynchronous Memory Access Chaining", PVLDB 9(4)). Each walk is
-// traverse_nodes' own, entry by entry, so each ray's hit is the single walk's, bit for bit.
+// node or leaf of one ray a turn, each turn prefetching the entry its walk goes to next: by that
+// walk's next turn its lines have come while the others worked (Kocberber, Falsafi and Grot 2015,
+// "Asynchronous Memory Access Chaining", PVLDB 9(4)). Each walk is traverse_nodes' own, entry by
+// entry, so each ray's hit is the single walk's, bit for bit.
 
 /// The walks an interleaved batch steps in turn. Random rays ÷ the faster of Embree 3 MEDIUM and
 /// tinybvh 1.9 through the batch (a 2-core AMD EPYC VM, 2026-12-06, two rounds, two binaries
@@ -22,16 +22,16 @@ inline constexpr int kInterleavedWays = 8;
 /// Runs n walks kInterleavedWays at a time: start(w, j) starts walker w on the j-th, step(w) takes
 /// one turn of it (false when its walk is done), finish(w) keeps its result; a walker whose walk
 /// ends starts the next, and the turns go round the walkers in use.
-template <class Walker, class Start, class Step, class Finish>
+template <class W, class Start, class Step, class Finish>
 [[gnu::always_inline]] inline void interleave(std::uint32_t n, Start&& start, Step&& step, Finish&& finish) {
     constexpr int kWays = kInterleavedWays;
-    Walker* walkers = thread_room<Walker, kWays>();  // eight stacks: 31 KiB
-    int live[kWays];                                 // the walkers in use, live[0, count)
+    W* walkers = thread_room<W, kWays>();  // eight stacks: 31 KiB
+    int live[kWays];                       // the walkers in use, live[0, count)
     int count = 0;
     std::uint32_t next = 0;
     for (; count < kWays && next < n; ++count) start(walkers[count], next++), live[count] = count;
     for (int k = 0; count > 0;) {
-        Walker& w = walkers[live[k]];
+        W& w = walkers[live[k]];
         if (!step(w)) {
             finish(w);
             if (next < n) {
