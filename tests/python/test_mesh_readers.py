@@ -555,3 +555,35 @@ def test_gltf_references_that_lead_nowhere_are_named(tmp_path, changes, message)
     """A probe's cases: trimesh refused them as "AssertionError", or read "0 faces"."""
     with pytest.raises(SceneFileError, match=message):
         load(tmp_path, "model.gltf", gltf(**changes))
+
+
+def test_gltf_uri_query_fragment_and_network_paths(tmp_path):
+    """The review's cases: "buf.bin?v=2" names buf.bin (RFC 3986: the query is no part of the
+    path), a "#" an exporter left unencoded still finds its file, and "//host/share/buf.bin" (a
+    network path, a UNC share on Windows) is a URL, not read."""
+    real = np.array([0, 0, 0, 1, 0, 0, 0, 1, 0], np.float32)
+    (tmp_path / "buf.bin").write_bytes(real.tobytes())
+    (tmp_path / "a#b.bin").write_bytes((real + 5).tobytes())
+
+    def with_uri(uri: str) -> str:
+        return gltf(buffers=[{"byteLength": 36, "uri": uri}])
+
+    np.testing.assert_array_equal(load(tmp_path, "m.gltf", with_uri("buf.bin?v=2"))[0], real.reshape(3, 3))
+    np.testing.assert_array_equal(load(tmp_path, "m.gltf", with_uri("buf.bin#x"))[0], real.reshape(3, 3))
+    np.testing.assert_array_equal(load(tmp_path, "m.gltf", with_uri("a#b.bin"))[0], (real + 5).reshape(3, 3))
+    for uri in ("//host/share/buf.bin", "\\\\host\\share\\buf.bin"):
+        with pytest.raises(SceneFileError, match="a URL: only files are read"):
+            load(tmp_path, "m.gltf", with_uri(uri))
+
+
+def test_ply_names_it_does_not_read_may_repeat(tmp_path):
+    """The review's case: names the reader skips (a second `element edge`, a repeated `property
+    uchar red`) were read right before the refusal of names declared twice, and still are."""
+    text = (
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+        "property uchar red\nproperty uchar red\nelement face 1\nproperty list uchar int vertex_indices\n"
+        "element edge 1\nproperty int a\nelement edge 1\nproperty int a\n"
+        "end_header\n0 0 0 1 1\n1 0 0 1 1\n0 1 0 1 1\n3 0 1 2\n7\n8\n"
+    )
+    t = load(tmp_path, "ok.ply", text)
+    np.testing.assert_array_equal(t, [[(0, 0, 0), (1, 0, 0), (0, 1, 0)]])

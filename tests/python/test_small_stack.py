@@ -2,9 +2,10 @@
 packet walk's stack and the interleaved walkers off the calling thread's stack (ray_batch.h
 RayPiece; wide_traverse.inl thread_room): its frames are a few KiB, so the bound is pinned here at
 the least Python allows, 32 KiB (a thread of 48 KiB crashed on a batch whose block was probed and
-sorted: the probe's two pieces and the chunk's made 53 KiB of frames). Every batch query, flat and
-two-level, in each of its ways (a block probed, sorted and interleaved; a block timed; camera rays
-as packets; a batch too small to probe), runs there with the same results as on the main thread.
+sorted: the probe's two pieces and the chunk's made 53 KiB of frames). Every batch query runs
+there with the same results as on the main thread: flat, in each of its ways (a block probed,
+sorted and interleaved; a block timed; camera rays as packets; a batch too small to probe), and
+two-level (ray by ray).
 A batch query that grew its frames past it crashes this test's process instead of a user's
 Blender."""
 
@@ -76,17 +77,35 @@ def test_two_level_batches_on_a_small_stack():
     _check_same(bvhlab.build(scene), *_rays(seed=2))
 
 
+def _visited(tree, origins, directions) -> float:
+    return float(tree.intersect(origins, directions, nodes_visited=True)["nodes_visited"].mean())
+
+
 def test_probed_sorted_and_interleaved_batches_on_a_small_stack():
-    # many small triangles: random rays visit many nodes, so a block of them is probed, sorted and
-    # walked interleaved; 40,000 rays also time a block (and 3,000 are too few to probe)
+    # many small triangles: random rays visit at least 8 wide nodes (bvhlab's kOrderNodes), so a
+    # block of them is probed, sorted and walked interleaved; 3,000 are too few to probe
     tris = procedural.random_triangles(60_000, size=0.08, seed=3)
     lo, hi = tris.reshape(-1, 3).min(0), tris.reshape(-1, 3).max(0)
     tree = bvhlab.build(tris)
     rng = np.random.default_rng(4)
-    for n in (3000, 40_000):
+    for n in (3000, 8000):
         origins = rng.uniform(lo, hi, (n, 3)).astype(np.float32)
         directions = rng.normal(size=(n, 3)).astype(np.float32)
+        assert _visited(tree, origins, directions) >= 8  # the premise: a costly block
         _check_same(tree, origins, directions)
+
+
+def test_timed_batches_on_a_small_stack():
+    # rays that visit fewer than 8 wide nodes, 40,000 of them: the block's first rays go as they
+    # are, and a sample of the rest is timed (twice) before the rest goes sorted or not
+    knot = procedural.torus_knot(40_000)
+    lo, hi = knot.reshape(-1, 3).min(0), knot.reshape(-1, 3).max(0)
+    tree = bvhlab.build(knot)
+    rng = np.random.default_rng(5)
+    origins = rng.uniform(lo, hi, (40_000, 3)).astype(np.float32)
+    directions = rng.normal(size=(40_000, 3)).astype(np.float32)
+    assert _visited(tree, origins, directions) < 8  # the premise: a timed block
+    _check_same(tree, origins, directions)
 
 
 def test_camera_batches_on_a_small_stack():

@@ -56,10 +56,10 @@ inline constexpr std::size_t kOrderWarmRays = 2048, kOrderTimedLeast = 16 * kOrd
 /// kOrderLeast rays, or in ray order already, never). Interleaving costs where the tree stays in
 /// the caches (+30% instructions a ray on Sponza's and room1m's random rays) and gains where it
 /// does not. Measured on a 2-core AMD EPYC VM (Zen 5, 2026-12-06), random rays ÷ the faster of
-/// Embree 3 MEDIUM and tinybvh 1.9 through the batch, alone → interleaved: waits of 360-385 ns a
-/// ray (repeat1m) 1.04-1.07 → 1.88-1.95; 150-160 ns (Sponza, whose block is reordered) 1.06 →
-/// 0.86-0.97; 60-65 ns (room1m) and 12-15 (vast1m) lose 10-25% (design.md, "Several rays at once
-/// on a thread").
+/// Embree 3 MEDIUM and tinybvh 1.9 through the batch, alone → interleaved (every block forced
+/// interleaved, one A/B run): waits of 360-385 ns a ray (repeat1m) 1.04-1.07 → 1.88-1.95; 150-160
+/// ns (Sponza, whose block is reordered) 1.06 → 0.86-0.97; 60-65 ns (room1m) and 12-15 (vast1m)
+/// lose 10-25% (design.md, "Several rays at once on a thread", has the chosen version's run).
 inline constexpr double kInterleaveStallNs = 250.0;
 namespace detail {
 /// The wait (ns a ray) the batch queries reorder over: kOrderStallNs, but -inf or +inf in tests

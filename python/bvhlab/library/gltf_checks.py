@@ -242,19 +242,24 @@ def _referenced(path: Path, kinds: tuple[str, ...]) -> list[Path]:
     return [p for p in paths if p is not None]
 
 
-# a URI's scheme (RFC 3986 §3.1; two letters at least: "C:" is a drive)
-_SCHEME = re.compile(r"[A-Za-z][A-Za-z0-9+.-]+:")
+# a URI's scheme (RFC 3986 §3.1; two letters at least: "C:" is a drive), or a network-path
+# reference ("//host/share/buf.bin", §4.2: a UNC path on Windows)
+_SCHEME = re.compile(r"[A-Za-z][A-Za-z0-9+.-]+:|//|\\\\")
 
 
 def referenced_path(gltf: Path, uri: str) -> Path | None:
     """The file a URI of the glTF at `gltf` refers to, the one its loader reads (files.py
     _uri_resolver) and its checks and the sweep's cache look at: the URI resolved against the
     glTF's folder (RFC 3986: "../shared/buf.bin" in the folder beside it, an absolute path where it
-    says), percent-decoded as uri_name reads it; None for a data: URI or a URL (http:, file:),
-    which name no file here."""
+    says), its query and fragment ("?v=2", "#part") left out (unless only the file named with them
+    is there: a "#" its exporter did not encode) and percent-decoded as uri_name reads it; None for
+    a data: URI or a URL (http:, file:, //host/...), which name no file here."""
     if _SCHEME.match(uri):
         return None
-    return gltf.parent / uri_name(gltf.parent, uri)
+    folder = gltf.parent
+    path = folder / uri_name(folder, re.split(r"[?#]", uri, maxsplit=1)[0])
+    whole = folder / uri_name(folder, uri)
+    return whole if not path.exists() and whole.exists() else path
 
 
 def uri_name(folder: Path, uri: str) -> str:

@@ -67,6 +67,10 @@ def read_ply(path: Path) -> tuple[np.ndarray, np.ndarray]:
     return positions, _triangles(path, lists, positions)
 
 
+# the elements and properties the reader reads (read_ply)
+_READ = {"vertex": ("x", "y", "z"), "face": ("vertex_indices", "vertex_index")}
+
+
 def _header(path: Path, data: bytes) -> tuple[str, list[_Element], int]:
     # the line "end_header" (not the words in a comment)
     found = re.search(rb"(?:^|\n)[ \t]*end_header[ \t]*\r?(?:\n|$)", data[:_MAX_HEADER])
@@ -93,14 +97,17 @@ def _header(path: Path, data: bytes) -> tuple[str, list[_Element], int]:
             raise SceneFileError(f"{path}: header line {line.strip()!r} is not PLY") from None
     if fmt not in ("ascii", "binary_little_endian", "binary_big_endian"):
         raise SceneFileError(f"{path}: unknown PLY format {fmt!r}")
-    # one element and one property of each name: the reader keeps them by name, and a second
-    # `element face` replaced the first's faces (of two declared, one triangle read)
+    # one vertex and one face element, and one of each property read from them: the reader keeps
+    # them by name, and a second `element face` replaced the first's faces (of two declared, one
+    # triangle read); names it does not read may repeat
     names = [e.name for e in elements]
     for e in elements:
+        if e.name not in _READ:
+            continue
         if names.count(e.name) > 1:
             raise SceneFileError(f"{path}: the header declares {names.count(e.name)} elements named {e.name!r}")
         props = [p.name for p in e.properties]
-        for name in props:
+        for name in _READ[e.name]:
             if props.count(name) > 1:
                 raise SceneFileError(
                     f"{path}: the {e.name} element declares {props.count(name)} properties named {name!r}"
