@@ -10,6 +10,7 @@ from .bvh import NODE_DTYPE, Bvh, build
 from .inspect.tree_file import load_bvh
 from .instanced import InstancedBvh
 from .optimize import OptimizeConfig, OptimizeStats
+from .png import save_png
 from .ray_query import TRAVERSALS
 from .render import (
     RenderCancelled,
@@ -20,7 +21,6 @@ from .render import (
     View,
     VulkanUnavailable,
     render,
-    save_png,
 )
 from .render_options import RenderOptions
 from .scene import Camera, Light, Material, Scene

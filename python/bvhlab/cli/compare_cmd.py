@@ -21,7 +21,8 @@ from ..compare import charts, counter_diff, figures, measure_methods, overlay, r
 from ..compare.measure import REPORT_BUILD, build_settings, render_frame
 from ..compare.protocol import DEFAULT_BUILDS, DEFAULT_FRAMES, MAX_SAMPLES, MIN_SAMPLES
 from ..library import load_scene
-from ..render import BACKENDS, Renderer, VulkanUnavailable, save_png
+from ..png import save_png
+from ..render import BACKENDS, Renderer, VulkanUnavailable
 from ..render_options import RenderOptions
 from . import compare_args as cargs
 from . import options

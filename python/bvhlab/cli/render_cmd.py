@@ -19,8 +19,8 @@ from .._atomic import write_together
 from .._checks import OutputPathError
 from .._progress import ProgressBar
 from ..library import load_scene
-from ..png import straight_alpha
-from ..render import BACKENDS, default_renderer, png_file_bytes
+from ..png import png_file_bytes, straight_alpha
+from ..render import BACKENDS, default_renderer
 from ..render_options import AUTO_TRAVERSAL, RENDER_TRAVERSALS, RenderOptions
 from . import options
 

@@ -13,7 +13,8 @@ import numpy as np
 from .. import _json as strict_json
 from .. import counters, legend, palette
 from .._atomic import replacing
-from ..render import Renderer, save_png
+from ..png import save_png
+from ..render import Renderer
 from ..render_options import options_from
 
 

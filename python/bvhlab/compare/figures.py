@@ -10,7 +10,8 @@ from pathlib import Path
 from .. import legend
 from ..bvh import build
 from ..library import bundled_dir, load_scene
-from ..render import Renderer, save_png
+from ..png import save_png
+from ..render import Renderer
 from ..scene import Scene
 from .measure import build_settings, render_frame
 
