@@ -105,19 +105,21 @@ def _check(path: Path, doc: dict) -> None:
     _check_morph_weights(path, doc)
     if _list(doc, "meshes") and not _list(doc, "scenes"):  # trimesh read no triangles: "0 faces"
         raise SceneFileError(f"{path} has meshes but no scenes that place them (glTF 2.0: nothing to show)")
-    accessors = _list(doc, "accessors")
-    for m, mesh in enumerate(_list(doc, "meshes")):
+    meshes = _list(doc, "meshes")
+    for n, node in enumerate(_list(doc, "nodes")):  # trimesh read "0 faces" for a mesh not there
+        if "mesh" in node:
+            _item(path, meshes, node["mesh"], "mesh", f"node {n}")
+    for m, mesh in enumerate(meshes):
         for primitive in _list(mesh, "primitives"):
-            where = f"{path}: mesh {mesh.get('name') or m}"
+            where = f"mesh {mesh.get('name') or m}"
             if primitive.get("mode") == _TRIANGLE_FAN:
-                raise SceneFileError(f"{where} has triangle fans (mode 6), which bvhlab does not read")
-            position = _accessor(accessors, _dict(primitive, "attributes").get("POSITION"))
-            indices = _accessor(accessors, primitive.get("indices"))
+                raise SceneFileError(f"{path}: {where} has triangle fans (mode 6), which bvhlab does not read")
+            position = _primitive_accessor(path, doc, _dict(primitive, "attributes").get("POSITION"), where, False)
+            indices = _primitive_accessor(path, doc, primitive.get("indices"), where, True)
             if position.get("normalized"):
-                raise SceneFileError(f"{where}: normalized positions (KHR_mesh_quantization) are not read")
+                raise SceneFileError(f"{path}: {where}: normalized positions (KHR_mesh_quantization) are not read")
             if "sparse" in position or "sparse" in indices:
-                raise SceneFileError(f"{where}: sparse accessors are not read")
-    _check_references(path, doc)
+                raise SceneFileError(f"{path}: {where}: sparse accessors are not read")
 
 
 _COMPONENT_BYTES = {5120: 1, 5121: 1, 5122: 2, 5123: 2, 5125: 4, 5126: 4}
@@ -125,59 +127,49 @@ _TYPE_COMPONENTS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MA
 _INDEX_TYPES = (5121, 5123, 5125)  # unsigned byte, short, int (glTF 2.0 §3.7.2.1)
 
 
-def _check_references(path: Path, doc: dict) -> None:
-    """What trimesh's reader asserts without saying what (its message was "AssertionError", or "0
-    faces" for a node whose mesh is not there): each node's mesh, each primitive's POSITION and
-    indices accessors, their buffer views and buffers exist, every view lies in its buffer and
-    every accessor in its view, and indices are unsigned integers."""
-    meshes, accessors = _list(doc, "meshes"), _list(doc, "accessors")
-    views, buffers = _list(doc, "bufferViews"), _list(doc, "buffers")
+def _item(path: Path, items: list, index, what: str, where: str) -> dict:
+    """items[index], which `where` refers to; SceneFileError where the file has no such item."""
+    if not isinstance(index, int) or not 0 <= index < len(items):
+        raise SceneFileError(f"{path}: {where} refers to {what} {index!r}, which the file does not have ({len(items)})")
+    return items[index]
 
-    def item(items: list, index, what: str, where: str) -> dict:
-        if not isinstance(index, int) or not 0 <= index < len(items):
-            raise SceneFileError(
-                f"{path}: {where} refers to {what} {index!r}, which the file does not have ({len(items)})"
-            )
-        return items[index]
 
-    for n, node in enumerate(_list(doc, "nodes")):
-        if "mesh" in node:
-            item(meshes, node["mesh"], "mesh", f"node {n}")
-    for m, mesh in enumerate(meshes):
-        for primitive in _list(mesh, "primitives"):
-            where = f"mesh {mesh.get('name') or m}"
-            for role, index in (
-                ("POSITION", _dict(primitive, "attributes").get("POSITION")),
-                ("indices", primitive.get("indices")),
-            ):
-                if index is None:
-                    continue
-                accessor = item(accessors, index, "accessor", f"{where}'s {role}")
-                if role == "indices" and accessor.get("componentType") not in _INDEX_TYPES:
-                    raise SceneFileError(
-                        f"{path}: {where}'s indices have component type {accessor.get('componentType')!r}: glTF "
-                        "indices are unsigned bytes, shorts or ints (5121, 5123, 5125)"
-                    )
-                if "bufferView" not in accessor:
-                    continue  # all zeros (glTF 2.0 §3.6.2.3)
-                view = item(views, accessor["bufferView"], "buffer view", f"accessor {index}")
-                buffer = item(buffers, view.get("buffer"), "buffer", f"buffer view {accessor['bufferView']}")
-                start, length = view.get("byteOffset", 0), view.get("byteLength", 0)
-                if start + length > buffer.get("byteLength", 0):
-                    raise SceneFileError(
-                        f"{path}: buffer view {accessor['bufferView']} ({start} + {length} bytes) runs past the "
-                        f"end of buffer {view.get('buffer')} ({buffer.get('byteLength', 0)} bytes)"
-                    )
-                component, kind = accessor.get("componentType"), accessor.get("type")
-                size = _COMPONENT_BYTES.get(component, 0) if isinstance(component, int) else 0
-                size *= _TYPE_COMPONENTS.get(kind, 0) if isinstance(kind, str) else 0
-                count = accessor.get("count", 0)
-                end = accessor.get("byteOffset", 0) + (count - 1) * view.get("byteStride", size) + size if count else 0
-                if end > length:
-                    raise SceneFileError(
-                        f"{path}: accessor {index} ({count} elements, {end} bytes) runs past the end of buffer view "
-                        f"{accessor['bufferView']} ({length} bytes)"
-                    )
+def _primitive_accessor(path: Path, doc: dict, index, where: str, indices: bool) -> dict:
+    """The accessor `index` of a primitive of mesh `where` (its POSITION, or its `indices`), {} for
+    none, checked as trimesh's reader asserts without saying what (its message was
+    "AssertionError"): it, its buffer view and buffer exist, the view lies in its buffer and the
+    accessor in its view, and indices are unsigned integers."""
+    if index is None:
+        return {}
+    role = "indices" if indices else "POSITION"
+    accessor = _item(path, _list(doc, "accessors"), index, "accessor", f"{where}'s {role}")
+    component, kind = accessor.get("componentType"), accessor.get("type")
+    if indices and component not in _INDEX_TYPES:
+        raise SceneFileError(
+            f"{path}: {where}'s indices have component type {component!r}: glTF indices are unsigned bytes, "
+            "shorts or ints (5121, 5123, 5125)"
+        )
+    if "bufferView" not in accessor:
+        return accessor  # all zeros (glTF 2.0 §3.6.2.3)
+    v = accessor["bufferView"]
+    view = _item(path, _list(doc, "bufferViews"), v, "buffer view", f"accessor {index}")
+    buffer = _item(path, _list(doc, "buffers"), view.get("buffer"), "buffer", f"buffer view {v}")
+    start, length, room = view.get("byteOffset", 0), view.get("byteLength", 0), buffer.get("byteLength", 0)
+    if start + length > room:
+        raise SceneFileError(
+            f"{path}: buffer view {v} ({start} + {length} bytes) runs past the end of buffer "
+            f"{view.get('buffer')} ({room} bytes)"
+        )
+    size = _COMPONENT_BYTES.get(component, 0) if isinstance(component, int) else 0
+    size *= _TYPE_COMPONENTS.get(kind, 0) if isinstance(kind, str) else 0
+    count = accessor.get("count", 0)
+    end = accessor.get("byteOffset", 0) + (count - 1) * view.get("byteStride", size) + size if count else 0
+    if end > length:
+        raise SceneFileError(
+            f"{path}: accessor {index} ({count} elements, {end} bytes) runs past the end of buffer view {v} "
+            f"({length} bytes)"
+        )
+    return accessor
 
 
 def _check_morph_weights(path: Path, doc: dict) -> None:
@@ -209,10 +201,6 @@ def _list(doc: dict, key: str) -> list[dict]:
 def _dict(doc: dict, key: str) -> dict:
     value = doc.get(key)
     return value if isinstance(value, dict) else {}
-
-
-def _accessor(accessors: list[dict], index) -> dict:
-    return accessors[index] if isinstance(index, int) and 0 <= index < len(accessors) else {}
 
 
 def gltf_buffers(path: Path) -> list[Path]:
