@@ -139,7 +139,16 @@ class FinalRender:
                 view_camera = self._view_camera(engine, depsgraph, view, frame)
             else:
                 view_camera = camera
-            job = tracer.start(scene, update.bvh, view_camera, frame.width, frame.height, settings, threads)
+            job = tracer.start(
+                scene,
+                update.bvh,
+                view_camera,
+                frame.width,
+                frame.height,
+                settings,
+                threads,
+                heat=passes.heatmap_wanted(depsgraph.view_layer),
+            )
             jobs.append(job)
             on, named = job.timings["device"], "" if view is None else f" ({view})"
             engine.update_stats(

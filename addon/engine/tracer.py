@@ -92,10 +92,16 @@ class Tracer:
         """ValueError for an image this backend does not render, before anything is allocated."""
         self.renderer.check_size(width, height)
 
-    def start(self, scene, bvh, camera, width: int, height: int, options, threads: int = 0) -> TraceJob:
+    def start(
+        self, scene, bvh, camera, width: int, height: int, options, threads: int = 0, heat: bool = False
+    ) -> TraceJob:
         """A render of `scene` seen from `camera` (a bvhlab.Camera or View) with `options` (a
-        bvhlab.RenderOptions), nothing traced yet; `threads`: the CPU reference's (0: every core)."""
-        job = self.renderer.start(scene, bvh, width, height, camera=camera, options=options, threads=threads)
+        bvhlab.RenderOptions), nothing traced yet; `threads`: the CPU reference's (0: every core);
+        `heat`: its images will include the heatmap pass (the cost kept; without it the CPU's wide
+        walk traces camera rays ahead, eight at a time)."""
+        job = self.renderer.start(
+            scene, bvh, width, height, camera=camera, options=options, threads=threads, keep_cost=heat
+        )
         return TraceJob(job, width, height, options.traversal_counters)
 
     def trace(self, scene, bvh, camera, width: int, height: int, options, threads: int = 0, cancelled=None):

@@ -131,6 +131,7 @@ nb::dict timings_dict(const RenderTimings& t) {
     d["readback_ms"] = t.readback_ms, d["total_ms"] = t.total_ms, d["device"] = t.device;
     d["dispatches"] = t.dispatches, d["steps_per_dispatch"] = t.steps_per_dispatch;
     d["shadow_rays_opaque"] = t.shadow_rays_opaque, d["shadow_rays_glass"] = t.shadow_rays_glass;
+    d["camera_rays_ahead"] = t.camera_rays_ahead;
     return d;
 }
 

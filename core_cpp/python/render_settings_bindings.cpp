@@ -101,6 +101,9 @@ void bind_settings(nb::module_& m) {
         .def_rw("heatmap_scale", &RenderSettings::heatmap_scale, "box tests at full red; None: 8 × tree height")
         .def_rw("traversal_counters", &RenderSettings::traversal_counters,
                 "keep every traversal counter per pixel (RenderJob.resolve's counters)")
+        .def_rw("keep_cost", &RenderSettings::keep_cost,
+                "keep each pixel's cost (RenderJob.resolve's cost and heat); off, the CPU tracer's wide "
+                "traversal traces camera rays eight at a time (the same image)")
         .def_rw("film_transparent", &RenderSettings::film_transparent,
                 "Blender's Film ▸ Transparent: alpha = the share of a pixel's camera rays that show something")
         .def_rw("steps_per_dispatch", &RenderSettings::steps_per_dispatch)

@@ -58,7 +58,8 @@ class RenderResult:
     cost: float32 (H, W), box tests per primary ray, averaged over the pixel's samples. Where the
     overlay draws a line in front of a surface, a render that measures the walks (mode "heatmap",
     traversal_counters) counts the whole walk; a shaded render without counters stops the primary
-    ray at the line (report §3.3), and its cost there is that shorter walk's.
+    ray at the line (report §3.3), and its cost there is that shorter walk's. None where the job
+    keeps no cost (Renderer.start's keep_cost).
     heat: float32 (H, W, 4), `cost` in the heatmap's colours (what mode "heatmap" shows as colour).
     counters: float32 (H, W, 5), the traversal counters per primary ray in bvhlab.counters.COUNTERS
     order, averaged over the pixel's samples (renders with RenderOptions(traversal_counters=True)).
@@ -99,7 +100,9 @@ def render(
     box tests the heatmap shows red: its legend's top), traversal (the walk that rendered), and
     shadow_rays_opaque / shadow_rays_glass (the CPU's wide walk in a scene with a transparent
     material, or one hidden from shadow rays: shadow rays whose nearest crossing was opaque,
-    answered by it, and glass or hidden, left to the stack walk; 0 elsewhere).
+    answered by it, and glass or hidden, left to the stack walk; 0 elsewhere), camera_rays_ahead
+    (the CPU's wide walk of a flat scene: camera rays traced ahead, eight at a time where they run
+    together, as a render that returns no cost image traces them; 0 elsewhere).
 
     backend: "auto" (a Vulkan GPU if there is one, else the CPU reference: on a CPU Vulkan
     driver such as lavapipe the CPU reference is several times faster), "vulkan" or "cpu".
@@ -157,10 +160,18 @@ class RenderJob:
             )
 
     def result(
-        self, color: bool = True, depth: bool = True, cost: bool = True, heat: bool = False, counters: bool = False
+        self,
+        color: bool = True,
+        depth: bool = True,
+        cost: bool | None = None,
+        heat: bool = False,
+        counters: bool = False,
     ) -> RenderResult:
-        """The images of the samples so far (see RenderResult). `counters` needs a job started with
-        traversal_counters=True (ValueError otherwise)."""
+        """The images of the samples so far (see RenderResult). `cost` and `heat` need a job that
+        keeps the cost (Renderer.start's keep_cost; `cost` None: where it does), `counters` one
+        started with traversal_counters=True (ValueError otherwise)."""
+        if cost is None:
+            cost = bool(self._settings.keep_cost)
         h, w = self._settings.height, self._settings.width
         images = (
             np.empty((h, w, 4), np.float32) if color else None,
@@ -266,13 +277,19 @@ class Renderer:
         camera: Camera | View | None = None,
         options: RenderOptions | None = None,
         threads: int | None = None,
+        keep_cost: bool = True,
         **option_changes,
     ) -> RenderJob:
         """A RenderJob (sample passes, nothing traced yet). `options` and its fields by name as for
-        `bvhlab.render`. `threads`: CPU reference threads (default: the Renderer's, 0 = every core)."""
+        `bvhlab.render`. `threads`: CPU reference threads (default: the Renderer's, 0 = every core).
+        `keep_cost`: keep each pixel's cost (box tests per primary ray: RenderJob.result's cost and
+        heat); without it the CPU tracer's wide walk traces a flat scene's camera rays ahead, eight
+        at a time where they run together (the same image, faster), and result(cost=True) or
+        heat=True raise ValueError. The heatmap mode, whose image the cost is, keeps it."""
         threads = self.threads if threads is None else _checks.integer("threads", threads, 0, 4096)
         options = options_from(options, option_changes).for_backend(cpu=self._vulkan is None)
         settings = render_settings(scene, bvh, width, height, options, camera)
+        settings.keep_cost = _checks.flag("keep_cost", keep_cost) or options.mode == "heatmap"
         start = time.perf_counter()
         # the backend "auto" renders the wide walk, which only the CPU tracer has, on the CPU
         wide_on_cpu = self._vulkan is not None and options.traversal == "wide" and self.reason.startswith("auto")
@@ -309,8 +326,9 @@ class Renderer:
         progress=None,
         **start_arguments,
     ):
-        """The whole render at once: (image, timings), as `bvhlab.render`."""
-        job = self.start(scene, bvh, width, height, **start_arguments)
+        """The whole render at once: (image, timings), as `bvhlab.render` (no cost kept: the image
+        alone is returned)."""
+        job = self.start(scene, bvh, width, height, keep_cost=False, **start_arguments)
         job.run(progress=progress)
         result = job.result(depth=False, cost=False)
         return result.color, result.timings

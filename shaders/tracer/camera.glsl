@@ -99,6 +99,11 @@ RayTask camera_ray(uvec2 p, uint sample_index) {
     return ray_task(origin, ray ? normalize(dir) : dir, vec3(1.0f), 0u, RAY_CAMERA);
 }
 
+/// Whether `task` is a ray: camera_ray's direction is zero where the projection has none.
+bool has_ray(RayTask task) {
+    return dot(task.dir, task.dir) > 0.0f;
+}
+
 /// The size of a pixel across the primary ray of unit direction `dir` at distance t along it
 /// (at most: the largest of a pixel's two sides, and a perspective pixel's size on the axis):
 /// how far apart the rays of neighbouring pixels are there.

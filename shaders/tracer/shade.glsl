@@ -110,6 +110,17 @@ RayTask pop_ray(INOUT(TraceState) s) {
 /// the line's width off it), line_on_surface decides.
 LOCAL_CONST float LINE_ON_SURFACE = 1.0f - 1.0f / 4096.0f;
 
+/// The tmin and tmax of the closest-hit query of `task` (start_closest), `overlay` the pixel's
+/// overlay (its line's distance in w).
+vec2 query_span(RayTask task, vec4 overlay) {
+    bool primary = task.depth == 0u;
+    bool measured = frame.mode == MODE_HEATMAP || frame.count_traversal != 0u;
+    bool line = primary && overlay.w > 0.0f && !measured;
+    float k = primary ? clip_scale(task.dir) : 0.0f;  // camera rays see between the clipping planes
+    return vec2(primary ? frame.clip_start * k : 0.0f,
+                min(line ? overlay.w * LINE_ON_SURFACE : FAR_AWAY, primary ? frame.clip_end * k : FAR_AWAY));
+}
+
 /// Starts the closest-hit query of `task`. Where the overlay drew a line in front of the primary
 /// ray's surface, the line wins: the query only looks up to the line's distance (report §3.3) —
 /// unless the render measures the walks (the heatmap mode, the traversal counters): then it walks
@@ -118,12 +129,9 @@ LOCAL_CONST float LINE_ON_SURFACE = 1.0f - 1.0f / 4096.0f;
 /// box tests were 13; Bvh.trace_pixel records 21). A primary ray looks only between the camera's
 /// clipping planes (Cycles' camera_sample_*).
 void start_closest(INOUT(TraceState) s) {
-    bool primary = s.task.depth == 0u;
-    bool measured = frame.mode == MODE_HEATMAP || frame.count_traversal != 0u;
-    bool line = primary && s.overlay.w > 0.0f && !measured;
-    float k = primary ? clip_scale(s.task.dir) : 0.0f;  // camera rays see between the clipping planes
-    s.ray = make_ray(s.task.origin, s.task.dir, primary ? frame.clip_start * k : 0.0f);
-    s.hit = empty_hit(min(line ? s.overlay.w * LINE_ON_SURFACE : FAR_AWAY, primary ? frame.clip_end * k : FAR_AWAY));
+    vec2 span = query_span(s.task, s.overlay);
+    s.ray = make_ray(s.task.origin, s.task.dir, span.x);
+    s.hit = empty_hit(span.y);
     s.walk = start_walk();
     s.phase = PHASE_CLOSEST;
 }
@@ -134,13 +142,17 @@ void start_sample(INOUT(TraceState) s) {
         s.phase = PHASE_DONE;
         return;
     }
+#ifdef __cplusplus
+    s.task = camera_task(s.pixel, s.sample_index);  // cpu_tracer.h: camera_ray, or the one traced ahead
+#else
     s.task = camera_ray(s.pixel, s.sample_index);
+#endif
     s.color = vec3(0.0f);
     s.counts = no_counts();
     s.depth = infinity();
     s.holdout = false;
     // no ray (outside the fisheye's ellipse): a black sample that hit nothing, as in Cycles
-    s.phase = dot(s.task.dir, s.task.dir) > 0.0f ? PHASE_START : PHASE_NEXT_RAY;
+    s.phase = has_ray(s.task) ? PHASE_START : PHASE_NEXT_RAY;
 }
 
 /// The next ray off the stack becomes the task, or the sample is complete: its colour, counters,

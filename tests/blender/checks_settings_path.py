@@ -115,7 +115,7 @@ class _Recorder:
         original, calls = self._original, self.calls
 
         def start(renderer, scene, bvh, *args, options=None, **kwargs):
-            changes = {k: v for k, v in kwargs.items() if k not in ("camera", "threads")}
+            changes = {k: v for k, v in kwargs.items() if k not in ("camera", "threads", "keep_cost")}
             calls.append((options_from(options, changes), bvh.config))
             return original(renderer, scene, bvh, *args, options=options, **kwargs)
 

@@ -1,8 +1,10 @@
 // The CPU tracer's wide traversal (render_settings.h Traversal::Wide): each query answered by the
 // CPU queries' 8-wide walk gives the image of the stack walk bit for bit (colour and depth), with
 // spheres, transparent surfaces (a shadow ray whose nearest crossing is glass left to the stack
-// walk), the overlay's lines, several samples and threads; its cost is 8 box tests a wide node that intersect_wide visits for
-// the pixel's primary ray; what it cannot do is refused or said.
+// walk), the overlay's lines, several samples and threads, with the cost kept and without it (the
+// camera rays then traced ahead, eight at a time where they run together); its cost is 8 box tests
+// a wide node that intersect_wide visits for the pixel's primary ray; what it cannot do is refused
+// or said.
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -22,6 +24,7 @@ struct Images {
     RenderTimings timings;
 };
 
+/// The images of a whole render (the cost where the settings keep it).
 Images render(const RenderScene& scene, RenderSettings settings, Traversal traversal, std::uint32_t threads,
               const WideTrees& wide = {}) {
     settings.traversal = traversal;
@@ -29,9 +32,16 @@ Images render(const RenderScene& scene, RenderSettings settings, Traversal trave
     Images out{std::vector<float>(4 * n), std::vector<float>(n), std::vector<float>(n), {}};
     std::unique_ptr<RenderJob> job = start_cpu(scene, settings, threads, wide);
     job->run(job->samples_per_pixel());
-    job->resolve({out.color.data(), out.depth.data(), out.cost.data(), nullptr});
+    job->resolve({out.color.data(), out.depth.data(), settings.keep_cost ? out.cost.data() : nullptr, nullptr});
     out.timings = job->timings();
     return out;
+}
+
+/// `settings` without the cost: the wide walk's camera rays traced ahead (cpu_tracer.h
+/// trace_camera_rays).
+RenderSettings without_cost(RenderSettings settings) {
+    settings.keep_cost = false;
+    return settings;
 }
 
 bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
@@ -44,15 +54,26 @@ std::size_t hit_pixels(const Images& im) {
     return hits;
 }
 
-/// Stack and wide on 1 and 3 threads: the same colour and depth bits; the scene in view (at least
-/// `in_view` of the pixels hit something).
-void expect_wide_is_stack(const RenderScene& scene, const RenderSettings& settings, double in_view = 0.1) {
+/// Stack and wide on 1 and 3 threads, wide with the cost kept and without it (the camera rays
+/// traced ahead, in packets where they run together): the same colour and depth bits; the scene in
+/// view (at least `in_view` of the pixels hit something). Without the cost, `ahead` of the camera
+/// rays were answered from the runs traced ahead (every one where the scene's every surface is seen
+/// by camera rays, each traced ahead as the trace makes it); with it, none.
+void expect_wide_is_stack(const RenderScene& scene, const RenderSettings& settings, double in_view = 0.1,
+                          double ahead = 1.0) {
     const Images stack = render(scene, settings, Traversal::Stack, 1);
     EXPECT_GT(double(hit_pixels(stack)) / double(stack.depth.size()), in_view);
+    const double camera_rays = double(stack.depth.size()) * settings.samples_per_axis * settings.samples_per_axis;
     for (std::uint32_t threads : {1u, 3u}) {
         const Images wide = render(scene, settings, Traversal::Wide, threads);
         EXPECT_TRUE(same_bits(stack.color, wide.color)) << threads << " threads";
         EXPECT_TRUE(same_bits(stack.depth, wide.depth)) << threads << " threads";
+        EXPECT_EQ(wide.timings.camera_rays_ahead, 0u);
+        const Images packets = render(scene, without_cost(settings), Traversal::Wide, threads);
+        EXPECT_TRUE(same_bits(stack.color, packets.color)) << threads << " threads, camera rays ahead";
+        EXPECT_TRUE(same_bits(stack.depth, packets.depth)) << threads << " threads, camera rays ahead";
+        EXPECT_GE(double(packets.timings.camera_rays_ahead), ahead * camera_rays) << threads << " threads";
+        EXPECT_LE(double(packets.timings.camera_rays_ahead), camera_rays);
     }
 }
 
@@ -92,6 +113,56 @@ TEST(RenderWide, TransparentSurfacesReflectionsAndSamplesGiveTheStackWalksImage)
     EXPECT_EQ(small.timings.shadow_rays_opaque, wide.timings.shadow_rays_opaque);
     EXPECT_EQ(small.timings.shadow_rays_glass, wide.timings.shadow_rays_glass);
     EXPECT_TRUE(same_bits(small.color, wide.color));
+    // the camera rays traced ahead with the traces cut into budgets: the same image, every camera
+    // ray answered from them
+    const Images ahead = render(s->render, without_cost(cut), Traversal::Wide, 2);
+    EXPECT_TRUE(same_bits(ahead.color, wide.color));
+    EXPECT_EQ(ahead.timings.camera_rays_ahead, std::uint64_t(s->settings.width) * s->settings.height * 4);
+}
+
+TEST(RenderWide, CameraRaysAheadUnderEveryProjectionAndALensGiveTheStackWalksImage) {
+    const ScenePtr s = bumpy_mesh(60);
+    RenderSettings settings = s->settings;
+    settings.samples_per_axis = 2;
+    Camera& c = settings.camera;
+    const Camera pinhole = c;
+    c.aperture_radius = 0.05f, c.focus_distance = 8.0f;  // rays from points of a lens: fewer packets
+    expect_wide_is_stack(s->render, settings);
+    c = pinhole, c.projection = Projection::Orthographic, c.ortho_scale = 6.0f;  // parallel rays
+    expect_wide_is_stack(s->render, settings);
+    c = pinhole, c.projection = Projection::Equirectangular;
+    expect_wide_is_stack(s->render, settings, 0.01);
+    // the fisheye's frame corners lie outside its circle: samples without a camera ray, none traced
+    c = pinhole, c.projection = Projection::FisheyeEquidistant, c.fisheye_fov_degrees = 150;
+    expect_wide_is_stack(s->render, settings, 0.01, 0.6);
+    const Images fisheye = render(s->render, without_cost(settings), Traversal::Wide, 1);
+    EXPECT_LT(double(fisheye.timings.camera_rays_ahead), 0.9 * 4 * double(fisheye.depth.size()));
+}
+
+TEST(RenderWide, ARenderWithoutTheCostRefusesItAndTheHeatmap) {
+    const ScenePtr s = five_spheres();
+    RenderSettings settings = without_cost(s->settings);
+    settings.traversal = Traversal::Wide;
+    std::unique_ptr<RenderJob> job = start_cpu(s->render, settings, 1);
+    job->run(1);
+    const std::size_t n = std::size_t(settings.width) * settings.height;
+    std::vector<float> color(4 * n), cost(n), heat(4 * n);
+    job->resolve({color.data(), nullptr, nullptr, nullptr});  // the colour alone is there
+    for (const RenderImages& out : {RenderImages{color.data(), nullptr, cost.data(), nullptr},
+                                    RenderImages{nullptr, nullptr, nullptr, heat.data()}})
+        try {
+            job->resolve(out);
+            ADD_FAILURE() << "no error";
+        } catch (const std::invalid_argument& e) {
+            EXPECT_NE(std::string(e.what()).find("keep_cost"), std::string::npos) << e.what();
+        }
+    settings.mode = RenderMode::Heatmap;  // whose image the cost is
+    try {
+        start_cpu(s->render, settings);
+        ADD_FAILURE() << "no error";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("keep_cost"), std::string::npos) << e.what();
+    }
 }
 
 TEST(RenderWide, AnOpaqueSceneCountsNoShadowRaysByTheirNearestCrossing) {
@@ -223,6 +294,11 @@ TEST(RenderWide, TwoLevelScenesGiveTheStackWalksImage) {
             EXPECT_TRUE(same_bits(stack.depth, wide.depth)) << "opaque " << opaque;
             if (opaque) EXPECT_NE(wide.timings.device.find(", wide walk)"), std::string::npos) << wide.timings.device;
             else expect_both_kinds_of_blocked_shadow_rays(wide.timings, stack.timings);
+            // no camera rays ahead in a two-level scene (no packets through instances): the same image
+            const Images uncosted =
+                render(p->two_level, without_cost(settings), Traversal::Wide, threads, {nullptr, &view});
+            EXPECT_TRUE(same_bits(stack.color, uncosted.color));
+            EXPECT_EQ(uncosted.timings.camera_rays_ahead, 0u);
         }
     }
     const InstancedPtr many = many_instances();  // 100 instances of one mesh

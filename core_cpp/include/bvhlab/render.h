@@ -145,6 +145,9 @@ struct RenderTimings {
     /// those whose nearest was transparent or hidden from them (left to the stack walk); 0
     /// elsewhere. Summed over the job's runs.
     std::uint64_t shadow_rays_opaque = 0, shadow_rays_glass = 0;
+    /// Traversal::Wide on the CPU without RenderSettings::keep_cost: camera rays answered from the
+    /// runs traced ahead (cpu_tracer.h trace_camera_rays); 0 elsewhere. Summed over the job's runs.
+    std::uint64_t camera_rays_ahead = 0;
 };
 
 /// A pixel did not finish within RenderSettings::max_steps_per_pixel; no image is returned.
@@ -164,8 +167,14 @@ public:
     /// between dispatches (Vulkan) or budgets of steps (CPU); when it asks to stop, throws Cancelled.
     /// `progress` (if given) receives the fraction of this run done before each poll.
     virtual void run(std::uint32_t samples, Cancellation* cancel = nullptr, double* progress = nullptr) = 0;
-    /// The images of the samples so far (each pixel averaged over its own count).
-    virtual void resolve(const RenderImages& out) = 0;
+    /// The images of the samples so far (each pixel averaged over its own count). Throws
+    /// std::invalid_argument for a cost or heat image of a job without RenderSettings::keep_cost.
+    void resolve(const RenderImages& out) {
+        if ((out.cost || out.heat) && !settings_.keep_cost)
+            throw std::invalid_argument(
+                "this render kept no cost (box tests per primary ray): ask for it when it starts (keep_cost)");
+        resolve_images(out);
+    }
 
     const RenderSettings& settings() const { return settings_; }
     std::uint32_t samples_per_pixel() const { return settings_.samples_per_axis * settings_.samples_per_axis; }
@@ -175,6 +184,7 @@ public:
 
 protected:
     explicit RenderJob(const RenderSettings& settings) : settings_(settings) {}
+    virtual void resolve_images(const RenderImages& out) = 0;  ///< resolve's work, its outputs checked
     RenderSettings settings_;
     std::uint32_t samples_done_ = 0;
     RenderTimings timings_;

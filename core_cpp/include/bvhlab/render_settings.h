@@ -61,6 +61,12 @@ struct RenderSettings {
     std::optional<float> heatmap_scale;  ///< box tests shown as full red; unset: 8 × tree height
     /// Keep every TraversalCounter per pixel (RenderImages::counters; 20 more bytes a pixel).
     bool traversal_counters = false;
+    /// Keep each pixel's cost (box tests per primary ray: RenderImages::cost and ::heat). Off, the
+    /// CPU tracer's wide traversal of a flat scene traces camera rays eight at a time where they
+    /// run together (the batch's packets, wide_bvh.h intersect_wide_batch: the same hits, so the
+    /// same image), which count no box tests, and the job refuses cost and heat (RenderJob::resolve).
+    /// The heatmap mode, whose image the cost is, needs it.
+    bool keep_cost = true;
     /// Blender's Film ▸ Transparent: where a camera ray shows nothing the sample adds no colour, and
     /// a pixel's alpha is the share of its samples whose camera ray shows a surface or the overlay's
     /// line (colour premultiplied, as Cycles writes it; 4 more bytes a pixel). Rays after a bounce

@@ -5,10 +5,12 @@
 // slot (a thread traces its pixels one after another through it).
 #pragma once
 #include <array>
+#include <vector>
 
 #include "bvhlab/render.h"
 #include "bvhlab/shared_geometry.h"
 #include "bvhlab/wide_bvh.h"
+#include "camera_packets.h"
 #include "gpu_types.h"
 #include "pixel_sums.h"
 
@@ -126,7 +128,7 @@ public:
             }
         } else {
             Hit nearest = hit;
-            nearest_hit(ray, nearest);
+            nearest_hit(ray, nearest, kind == RAY_CAMERA);
             if (nearest.ref != NO_HIT && !sees(nearest.ref, kind)) return false;
             hit = nearest;
         }
@@ -137,8 +139,9 @@ public:
     }
     /// The closest hit of `ray` through the wide trees into `hit` (the scene's reference and
     /// instance slot; untouched on a miss) and its cost: flat, 8 box tests a wide node visited;
-    /// two-level, the query's count.
-    void nearest_hit(const Ray& ray, INOUT(Hit) hit) const {
+    /// two-level, the query's count. A flat scene's `camera` ray that the pixel's run traced
+    /// ahead (trace_camera_rays) takes that hit, the same, and counts nothing.
+    void nearest_hit(const Ray& ray, INOUT(Hit) hit, bool camera = false) {
         std::uint32_t visited = 0;
         if (wide_->two_level) {
             const InstanceHit h = intersect_two_level(*wide_->two_level, ray, Traversal::Wide, &visited);
@@ -152,20 +155,72 @@ public:
             }
             hit.counts.box_tests += visited;
         } else {
-            const bvhlab::Hit h = intersect_wide(*wide_->wide, *scene_.bvh, ray, &visited);
+            bvhlab::Hit h;
+            if (!(camera && tracing_ && camera_ahead_ &&
+                  camera_.find(tracing_->pixel.x, tracing_->pixel.y, tracing_->sample_index, ray, h))) {
+                h = intersect_wide(*wide_->wide, *scene_.bvh, ray, &visited);
+                hit.counts.box_tests += 8u * visited;
+            } else {
+                camera_ahead += 1u;
+            }
             if (h.ref != kNoHit) hit.t = h.t, hit.ref = h.ref, hit.u = h.u, hit.v = h.v;
-            hit.counts.box_tests += 8u * visited;
         }
     }
 
     /// Shadow rays of a scene with a transparent material the wide walk answered: nearest crossing
     /// opaque (transmission 0), and nearest crossing transparent (left to the stack walk).
     std::uint64_t shadow_opaque = 0, shadow_glass = 0;
+    /// Camera rays nearest_hit answered from a run traced ahead (RenderTimings::camera_rays_ahead).
+    std::uint64_t camera_ahead = 0;
 
 #include "tracer/shade_colors.glsl"
 #include "tracer/shade.glsl"
 #include "tracer/state.glsl"
 #include "tracer/overlay.glsl"
+
+    /// Whether the camera rays of a flat scene's wide walk can be traced ahead (trace_camera_rays).
+    bool traces_camera_rays_ahead() const { return wide_ != nullptr && wide_->wide != nullptr; }
+
+    /// Traces ahead the camera queries of pixels [x0, x1) of row y, each pixel's samples from
+    /// samples_done to frame.sample_target (camera_packets.h), which nearest_hit then answers
+    /// from, and camera_task takes the rays from, until the next run: each query as the trace
+    /// makes it (camera_ray, has_ray, query_span: start_sample and start_closest). Only for a
+    /// render without the cost (RenderSettings::keep_cost), which packets do not count, and a flat
+    /// scene (traces_camera_rays_ahead).
+    void trace_camera_rays(uint y, uint x0, uint x1) {
+        camera_.begin(y, x0, x1 - x0);
+        camera_tasks_.clear();
+        for (uint x = x0; x < x1; ++x) {
+            const uvec2 p(x, y);
+            const uint first = samples_done(p), target = frame.sample_target;
+            const vec4 overlay = overlay_at(p);
+            camera_.pixel(x - x0, first, target > first ? target - first : 0u);
+            for (uint k = first; k < target; ++k) {
+                const RayTask task = camera_ray(p, k);
+                const bool traced = has_ray(task);
+                Ray ray{};
+                if (traced) {
+                    const vec2 span = query_span(task, overlay);
+                    ray = Ray{{task.origin.x, task.origin.y, task.origin.z},
+                              {task.dir.x, task.dir.y, task.dir.z},
+                              span.x,
+                              span.y};
+                    camera_tasks_.push_back(task);
+                }
+                camera_.add(ray, traced);
+            }
+        }
+        camera_.trace(*wide_->wide, *scene_.bvh);
+        camera_ahead_ = true;
+    }
+    /// start_sample's camera ray of pixel p's sample: the one the run traced ahead, else
+    /// camera_ray's (the same function of the same pixel and sample: the same bits).
+    RayTask camera_task(uvec2 p, uint sample_index) {
+        const std::uint32_t slot = camera_ahead_ ? camera_.slot(p.x, p.y, sample_index) : kNoHit;
+        return slot != kNoHit ? camera_tasks_[slot] : camera_ray(p, sample_index);
+    }
+    /// The trace whose pixel and sample nearest_hit's camera rays belong to (null between pixels).
+    void follow(const TraceState* s) { tracing_ = s; }
 
 private:
     const BvhNode* tree_nodes_;
@@ -176,6 +231,10 @@ private:
     const vec4* overlay_;
     PixelSums* sums_;
     const WideScene* wide_;
+    CameraPackets camera_;                 ///< the run's camera rays traced ahead (trace_camera_rays)
+    std::vector<RayTask> camera_tasks_;    ///< the run's camera rays as tasks, by camera_.slot
+    bool camera_ahead_ = false;            ///< camera_ holds a run
+    const TraceState* tracing_ = nullptr;  ///< the pixel's trace (follow)
     std::array<uvec4, STATE_WORDS> state_{};
     std::array<uvec4, 3 * RAY_STACK_SIZE> rays_{};
     std::array<uvec2, 2 * MAX_TREE_HEIGHT> nodes_{};  ///< two-level: a TLAS's entries and a BLAS's

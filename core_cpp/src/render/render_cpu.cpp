@@ -36,6 +36,7 @@ struct RunShared {
     std::mutex done_mutex;  ///< with done: the last worker wakes the polling caller
     std::condition_variable done;
     std::atomic<std::uint64_t> shadow_opaque{0}, shadow_glass{0};  ///< RenderTimings::shadow_rays_*
+    std::atomic<std::uint64_t> camera_ahead{0};                    ///< RenderTimings::camera_rays_ahead
     std::atomic<bool> abort{false};                                ///< a pixel failed or threw: the run ends
     std::exception_ptr error;
     std::mutex error_mutex;
@@ -73,6 +74,7 @@ public:
         timings_.dispatches += shared.most_budgets.load();
         timings_.shadow_rays_opaque += shared.shadow_opaque.load();
         timings_.shadow_rays_glass += shared.shadow_glass.load();
+        timings_.camera_rays_ahead += shared.camera_ahead.load();
         if (shared.error) std::rethrow_exception(shared.error);
         if (cancel && cancel->stop_requested()) throw Cancelled();
         if (shared.pixels_failed)
@@ -80,7 +82,7 @@ public:
         samples_done_ = target;
     }
 
-    void resolve(const RenderImages& out) override {
+    void resolve_images(const RenderImages& out) override {
         const auto start = Clock::now();
         bvhlab::resolve(sums_.view(), frame_, out, threads_);
         timings_.readback_ms = ms_since(start);
@@ -157,6 +159,11 @@ private:
     template <class Tracer>
     PixelResult trace_pixel(Tracer& tracer, gpu::uvec2 p, RunShared& shared, const Cancellation* cancel) const {
         typename Tracer::TraceState s = tracer.begin_pixel(p, tracer.samples_done(p), tracer.frame.sample_target);
+        struct Following {  // the camera rays traced ahead are found by the trace's pixel and sample
+            Tracer& tracer;
+            ~Following() { tracer.follow(nullptr); }
+        } following{tracer};
+        tracer.follow(&s);
         for (std::uint32_t budgets = 1;; ++budgets) {
             tracer.trace_steps(s, timings_.steps_per_dispatch);
             if (s.phase >= Tracer::PHASE_DONE) {
@@ -189,19 +196,28 @@ private:
         trace_rows_of(tracer, frame, shared, cancel, progress, caller);
         shared.shadow_opaque.fetch_add(tracer.shadow_opaque);
         shared.shadow_glass.fetch_add(tracer.shadow_glass);
+        shared.camera_ahead.fetch_add(tracer.camera_ahead);
     }
 
     template <class Tracer>
     void trace_rows_of(Tracer& tracer, const gpu::FrameParams& frame, RunShared& shared, Cancellation* cancel,
                        double* progress, bool caller) {
         const double pixels = double(frame.width) * frame.height;
+        // a render without the cost traces a flat scene's camera rays ahead, a run of pixels at a
+        // time, eight together where they run together (cpu_tracer.h trace_camera_rays)
+        const bool ahead = !settings_.keep_cost && tracer.traces_camera_rays_ahead();
+        const std::uint32_t run = CameraPackets::run_pixels(frame.sample_target);
         for (std::uint32_t y; (y = shared.next_row.fetch_add(1)) < frame.height;) {
-            for (std::uint32_t x = 0; x < frame.width; ++x) {
+            for (std::uint32_t x = 0, run_end = 0; x < frame.width; ++x) {
                 if (caller && cancel && x % kPollPixels == 0) {
                     if (progress) *progress = double(shared.pixels_done.load()) / pixels;
                     cancel->poll();
                 }
                 if ((cancel && cancel->stop_requested()) || shared.abort.load()) return;
+                if (ahead && x == run_end) {
+                    run_end = std::min(frame.width, x + run);
+                    tracer.trace_camera_rays(y, x, run_end);
+                }
                 PixelResult r = trace_pixel(tracer, gpu::uvec2(x, y), shared, cancel);
                 if (r == PixelResult::Done) shared.pixels_done.fetch_add(1);
                 if (r == PixelResult::Failed) {

@@ -65,6 +65,8 @@ void validate_work(const RenderSettings& s) {
         fail(
             "traversal counters need the 'stack' or 'stackless' traversal; 'wide' keeps only the heatmap "
             "mode's cost (8 box tests a wide node visited)");
+    if (s.mode == RenderMode::Heatmap && !s.keep_cost)
+        fail("the heatmap mode shows each pixel's cost: it needs keep_cost");
     if (s.steps_per_dispatch &&
         (*s.steps_per_dispatch < gpu::MIN_STEPS_PER_DISPATCH || *s.steps_per_dispatch > gpu::MAX_STEPS_PER_DISPATCH))
         fail("steps_per_dispatch must be " + std::to_string(gpu::MIN_STEPS_PER_DISPATCH) + ".." +

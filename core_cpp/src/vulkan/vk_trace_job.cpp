@@ -90,7 +90,7 @@ public:
         samples_done_ = target;
     }
 
-    void resolve(const RenderImages& out) override {
+    void resolve_images(const RenderImages& out) override {
         const auto start = std::chrono::steady_clock::now();
         {
             const auto lock = lock_in_slices(core_->mutex);  // held while the core's readback buffer is read

@@ -113,7 +113,7 @@ def run(args) -> int:
         print(warning, file=sys.stderr)
     renderer = default_renderer(args.backend)
     with ProgressBar("rendering") as bar:
-        job = renderer.start(scene, bvh, args.width, args.height, options=render_options)
+        job = renderer.start(scene, bvh, args.width, args.height, options=render_options, keep_cost=False)
         job.run(progress=bar)
     result = job.result(depth=False, cost=False, counters=counter is not None)
     t = result.timings
