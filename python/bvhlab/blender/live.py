@@ -154,6 +154,8 @@ class LiveScene:
             shared = shared_meshes(items, layout, self._shared)
             moved = [key for key, item in items.items() if item.moved]
         assert layout is not None
+        # the last MoverIndex holds where only instances moved, or a walk found the same items
+        index_holds = placed is not None or self._same_items(items, layout)
         arrays = self._arrays(items, world, layout, shared, table, report, moved, None if placed is None else reported)
         report.materials_read = table.reads
         scene = self._make_scene(arrays, table, blender_scene, depsgraph, report, kept=placed is not None)
@@ -178,7 +180,7 @@ class LiveScene:
         self._items, self._by_data, self._layout, self._shared = items, by_data, layout, shared
         self._world = world
         self._seen_moving = seen_moving
-        if placed is None:  # the items' keys, order or layout may have changed
+        if not index_holds:
             self._index = None
         self._light = None if lamp is None else (lamp.original.name, lamp.original.name_full)
         self._moved = moved
@@ -204,6 +206,13 @@ class LiveScene:
         if lamp is None or lamp.original.name_full != full:
             return first_light(depsgraph, view_layer)
         return lamp
+
+    def _same_items(self, items: dict, layout) -> bool:
+        """Whether a walked sync's items have the last sync's keys in its order and its layout's
+        instances: what MoverIndex.of reads (a scene walked at every frame, e.g. an animated
+        scatter, made it anew at each: 14-60 ms at 10,000 items, helper probe)."""
+        old = self._layout
+        return old is not None and list(items) == list(self._items) and layout.mesh_of == old.mesh_of
 
     def _mover_index(self) -> MoverIndex:
         if self._index is None:
