@@ -324,11 +324,13 @@ class Renderer:
         height: int = DEFAULT_HEIGHT,
         *,
         progress=None,
+        keep_cost: bool = False,
         **start_arguments,
     ):
-        """The whole render at once: (image, timings), as `bvhlab.render` (no cost kept: the image
-        alone is returned)."""
-        job = self.start(scene, bvh, width, height, keep_cost=False, **start_arguments)
+        """The whole render at once: (image, timings), as `bvhlab.render`. The image alone is
+        returned, so no cost is kept unless `keep_cost` (`start`'s: each camera ray then walks
+        alone, as a render that keeps the cost walks it)."""
+        job = self.start(scene, bvh, width, height, keep_cost=keep_cost, **start_arguments)
         job.run(progress=progress)
         result = job.result(depth=False, cost=False)
         return result.color, result.timings

@@ -7,9 +7,11 @@
 // or said.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstring>
 #include <vector>
 
+#include "bvhlab/isa.h"
 #include "bvhlab/pixel_ray.h"
 #include "bvhlab/wide_bvh.h"
 #include "instanced_render.h"
@@ -54,26 +56,45 @@ std::size_t hit_pixels(const Images& im) {
     return hits;
 }
 
+/// The instruction sets this build and CPU run (isa.h), each set in turn by the loop's body; the
+/// one in use before is set back at the end.
+struct EachIsa {
+    std::vector<Isa> isas;
+    Isa before = active_isa();
+    EachIsa() {
+        for (Isa isa : {Isa::Portable, Isa::Avx2})
+            if (isa_supported(isa)) isas.push_back(isa);
+    }
+    ~EachIsa() { set_isa(before); }
+};
+
 /// Stack and wide on 1 and 3 threads, wide with the cost kept and without it (the camera rays
-/// traced ahead, in packets where they run together): the same colour and depth bits; the scene in
-/// view (at least `in_view` of the pixels hit something). Without the cost, `ahead` of the camera
-/// rays were answered from the runs traced ahead (every one where the scene's every surface is seen
-/// by camera rays, each traced ahead as the trace makes it); with it, none.
+/// traced ahead, in packets where they run together: the AVX2 path; the portable one walks each
+/// alone, as with the cost), on every instruction set: the same colour and depth bits; the scene
+/// in view (at least `in_view` of the pixels hit something). Without the cost on AVX2, `ahead` of
+/// the camera rays were answered from the runs traced ahead (every one where the scene's every
+/// surface is seen by camera rays, each traced ahead as the trace makes it); else none.
 void expect_wide_is_stack(const RenderScene& scene, const RenderSettings& settings, double in_view = 0.1,
                           double ahead = 1.0) {
     const Images stack = render(scene, settings, Traversal::Stack, 1);
     EXPECT_GT(double(hit_pixels(stack)) / double(stack.depth.size()), in_view);
     const double camera_rays = double(stack.depth.size()) * settings.samples_per_axis * settings.samples_per_axis;
-    for (std::uint32_t threads : {1u, 3u}) {
-        const Images wide = render(scene, settings, Traversal::Wide, threads);
-        EXPECT_TRUE(same_bits(stack.color, wide.color)) << threads << " threads";
-        EXPECT_TRUE(same_bits(stack.depth, wide.depth)) << threads << " threads";
-        EXPECT_EQ(wide.timings.camera_rays_ahead, 0u);
-        const Images packets = render(scene, without_cost(settings), Traversal::Wide, threads);
-        EXPECT_TRUE(same_bits(stack.color, packets.color)) << threads << " threads, camera rays ahead";
-        EXPECT_TRUE(same_bits(stack.depth, packets.depth)) << threads << " threads, camera rays ahead";
-        EXPECT_GE(double(packets.timings.camera_rays_ahead), ahead * camera_rays) << threads << " threads";
-        EXPECT_LE(double(packets.timings.camera_rays_ahead), camera_rays);
+    const EachIsa each;
+    for (Isa isa : each.isas) {
+        set_isa(isa);
+        for (std::uint32_t threads : {1u, 3u}) {
+            const Images wide = render(scene, settings, Traversal::Wide, threads);
+            EXPECT_TRUE(same_bits(stack.color, wide.color)) << threads << " threads, " << isa_name(isa);
+            EXPECT_TRUE(same_bits(stack.depth, wide.depth)) << threads << " threads, " << isa_name(isa);
+            EXPECT_EQ(wide.timings.camera_rays_ahead, 0u);
+            const Images packets = render(scene, without_cost(settings), Traversal::Wide, threads);
+            EXPECT_TRUE(same_bits(stack.color, packets.color)) << threads << " threads, ahead, " << isa_name(isa);
+            EXPECT_TRUE(same_bits(stack.depth, packets.depth)) << threads << " threads, ahead, " << isa_name(isa);
+            const double answered = double(packets.timings.camera_rays_ahead);
+            if (isa == Isa::Avx2) EXPECT_GE(answered, ahead * camera_rays) << threads << " threads";
+            else EXPECT_EQ(answered, 0.0) << isa_name(isa);
+            EXPECT_LE(answered, camera_rays);
+        }
     }
 }
 
@@ -114,10 +135,40 @@ TEST(RenderWide, TransparentSurfacesReflectionsAndSamplesGiveTheStackWalksImage)
     EXPECT_EQ(small.timings.shadow_rays_glass, wide.timings.shadow_rays_glass);
     EXPECT_TRUE(same_bits(small.color, wide.color));
     // the camera rays traced ahead with the traces cut into budgets: the same image, every camera
-    // ray answered from them
+    // ray answered from them (on the AVX2 path: the packets')
     const Images ahead = render(s->render, without_cost(cut), Traversal::Wide, 2);
     EXPECT_TRUE(same_bits(ahead.color, wide.color));
-    EXPECT_EQ(ahead.timings.camera_rays_ahead, std::uint64_t(s->settings.width) * s->settings.height * 4);
+    if (active_isa() == Isa::Avx2)
+        EXPECT_EQ(ahead.timings.camera_rays_ahead, std::uint64_t(s->settings.width) * s->settings.height * 4);
+}
+
+TEST(RenderWide, CameraRaysAheadInSamplePassesAndAfterACancelGiveTheWholeRendersImage) {
+    // a job run in passes of samples (a viewport's refinement), and one cancelled mid-way and run
+    // again: each pass's camera rays traced ahead from each pixel's own samples so far
+    const ScenePtr s = bumpy_mesh(60);
+    RenderSettings settings = s->settings;
+    settings.samples_per_axis = 3;  // 9 samples: passes of 1, 2 and 6 more
+    settings.traversal = Traversal::Wide;
+    const Images whole = render(s->render, settings, Traversal::Wide, 2);
+    const std::size_t n = std::size_t(settings.width) * settings.height;
+    std::vector<float> color(4 * n);
+    for (std::uint32_t threads : {1u, 3u}) {
+        std::unique_ptr<RenderJob> job = start_cpu(s->render, without_cost(settings), threads);
+        for (std::uint32_t samples : {1u, 3u, 9u}) job->run(samples);
+        job->resolve({color.data(), nullptr, nullptr, nullptr});
+        EXPECT_TRUE(same_bits(color, whole.color)) << threads << " threads, in passes";
+        if (active_isa() == Isa::Avx2) EXPECT_EQ(job->timings().camera_rays_ahead, 9 * n);
+        // cancelled at the calling thread's third look (some rows and pixels done, some not: each
+        // pixel's own samples so far), then run again
+        std::unique_ptr<RenderJob> cut = start_cpu(s->render, without_cost(settings), threads);
+        int looks = 0;
+        Cancellation cancel([&] { return ++looks >= 3; }, std::chrono::milliseconds(0));
+        EXPECT_THROW(cut->run(9, &cancel), Cancelled);
+        EXPECT_EQ(looks, 3);
+        cut->run(9);
+        cut->resolve({color.data(), nullptr, nullptr, nullptr});
+        EXPECT_TRUE(same_bits(color, whole.color)) << threads << " threads, after a cancel";
+    }
 }
 
 TEST(RenderWide, CameraRaysAheadUnderEveryProjectionAndALensGiveTheStackWalksImage) {

@@ -55,8 +55,10 @@ def test_the_reach_of_many_meshes_is_checked_in_one_pass(monkeypatch):
     assert np.allclose(out[:, 1, 3], 1.0)
 
 
+@pytest.mark.parametrize("chunk", [1 << 16, 7])  # one pass, or many (each its own bounds and names)
 @pytest.mark.parametrize("row", [0, 1234, 4999])
-def test_an_instance_out_of_range_is_named(row):
+def test_an_instance_out_of_range_is_named(row, chunk, monkeypatch):
+    monkeypatch.setattr(instancing, "_REACH_CHUNK", chunk)
     keys, layout, meshes, matrices = _movers(5000)
     _, transforms = instancing.instance_transforms(layout, matrices, meshes)
     far = matrices.copy()

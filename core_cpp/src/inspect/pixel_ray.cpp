@@ -1,7 +1,6 @@
 // pixel_ray.cpp — a pixel's primary ray through the tracer's own camera code (cpu_tracer.h).
 #include "bvhlab/pixel_ray.h"
 
-#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -23,16 +22,15 @@ Ray pixel_ray(const RenderScene& scene, const RenderSettings& settings, std::uin
     const gpu::FrameParams frame = make_frame_params(scene, settings);
     gpu::CpuTracer tracer(scene, frame, nullptr, nullptr, gpu_traversal(settings.traversal));
     const auto task = tracer.camera_ray(gpu::uvec2(x, y), sample_index);
-    if (!(gpu::dot(task.dir, task.dir) > 0.0f))
+    if (!tracer.has_ray(task))
         throw std::invalid_argument("pixel (" + std::to_string(x) + ", " + std::to_string(y) +
                                     ") has no ray (outside the fisheye's frame)");
-    // As start_closest (shade.glsl) clips a primary ray, without the overlay's lines.
-    const float k = tracer.clip_scale(task.dir);
+    // the span start_closest (shade.glsl) gives a primary ray's query, without the overlay's lines
+    const gpu::vec2 span = tracer.query_span(task, gpu::vec4(0.0f));
     Ray ray;
     ray.origin = {task.origin.x, task.origin.y, task.origin.z};
     ray.dir = {task.dir.x, task.dir.y, task.dir.z};
-    ray.tmin = frame.clip_start * k;
-    ray.tmax = std::min(frame.clip_end * k, gpu::FAR_AWAY);
+    ray.tmin = span.x, ray.tmax = span.y;
     return ray;
 }
 

@@ -19,8 +19,8 @@ namespace bvhlab {
 
 class CameraPackets {
 public:
-    /// Camera rays a run holds at most (a run of pixels is at least kLeastPixels whatever their
-    /// samples): its rays, hits and tables stay a few hundred KiB a thread.
+    /// Camera rays a run holds (at most, but where a pixel has over kRays / kLeastPixels samples
+    /// to trace: a run is at least kLeastPixels): its rays, hits and tables stay ~100 KiB a thread.
     static constexpr std::uint32_t kRays = 1024, kLeastPixels = 8;
 
     /// The pixels of a run for `samples` camera rays a pixel: as many as kRays holds, at least

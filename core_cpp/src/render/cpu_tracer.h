@@ -7,6 +7,7 @@
 #include <array>
 #include <vector>
 
+#include "bvhlab/isa.h"
 #include "bvhlab/render.h"
 #include "bvhlab/shared_geometry.h"
 #include "bvhlab/wide_bvh.h"
@@ -178,8 +179,12 @@ public:
 #include "tracer/state.glsl"
 #include "tracer/overlay.glsl"
 
-    /// Whether the camera rays of a flat scene's wide walk can be traced ahead (trace_camera_rays).
-    bool traces_camera_rays_ahead() const { return wide_ != nullptr && wide_->wide != nullptr; }
+    /// Whether the camera rays of a flat scene's wide walk are worth tracing ahead
+    /// (trace_camera_rays): where the batch walk has packets (the AVX2 path, wide_packet.inl;
+    /// elsewhere it would walk them alone all the same).
+    bool traces_camera_rays_ahead() const {
+        return wide_ != nullptr && wide_->wide != nullptr && active_isa() == Isa::Avx2;
+    }
 
     /// Traces ahead the camera queries of pixels [x0, x1) of row y, each pixel's samples from
     /// samples_done to frame.sample_target (camera_packets.h), which nearest_hit then answers

@@ -206,7 +206,8 @@ private:
         // a render without the cost traces a flat scene's camera rays ahead, a run of pixels at a
         // time, eight together where they run together (cpu_tracer.h trace_camera_rays)
         const bool ahead = !settings_.keep_cost && tracer.traces_camera_rays_ahead();
-        const std::uint32_t run = CameraPackets::run_pixels(frame.sample_target);
+        const std::uint32_t run =
+            CameraPackets::run_pixels(frame.sample_target - std::min(frame.sample_target, samples_done_));
         for (std::uint32_t y; (y = shared.next_row.fetch_add(1)) < frame.height;) {
             for (std::uint32_t x = 0, run_end = 0; x < frame.width; ++x) {
                 if (caller && cancel && x % kPollPixels == 0) {

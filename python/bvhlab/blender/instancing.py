@@ -264,18 +264,13 @@ _REACH_CHUNK = 1 << 16
 
 def _check_reach(bounds: np.ndarray, matrices: np.ndarray, name_of) -> None:
     """The world corners of each instance's box must be inside the coordinate range; `bounds`:
-    one mesh's (2, 3) box for every instance, or (N, 2, 3), each instance's own; `name_of(i)`:
-    instance i's name, for the message."""
+    (N, 2, 3), each instance's mesh's box; `name_of(i)`: instance i's name, for the message."""
     bounds = np.asarray(bounds, np.float64)
     axes = np.arange(3)
     for start in range(0, len(matrices), _REACH_CHUNK):
         part = matrices[start : start + _REACH_CHUNK]
-        if bounds.ndim == 2:
-            corners = bounds[_CORNER_BITS, axes]  # (8, 3)
-            world = corners @ part[:, :, :3].transpose(0, 2, 1) + part[:, None, :, 3]  # (n,8,3)
-        else:
-            corners = bounds[start : start + _REACH_CHUNK, _CORNER_BITS, axes]  # (n, 8, 3)
-            world = np.einsum("nkj,nij->nki", corners, part[:, :, :3]) + part[:, None, :, 3]
+        corners = bounds[start : start + _REACH_CHUNK, _CORNER_BITS, axes]  # (n, 8, 3)
+        world = np.einsum("nkj,nij->nki", corners, part[:, :, :3]) + part[:, None, :, 3]
         outside = ~(np.abs(world) <= MAX_COORDINATE).reshape(len(part), -1).all(1)
         if outside.any():
             i = int(np.flatnonzero(outside)[0])
