@@ -75,8 +75,9 @@ void order_by_octant(const std::uint8_t* octant, std::uint32_t count, std::uint3
 void group_by_octant(const Ray* rays, std::uint32_t count, std::uint32_t* order, std::uint32_t start[9]);
 
 namespace detail {
-/// Pieces traced through the interleaved walk (intersect_wide_grouped with WideWalk::Interleaved), counted for the tests that check a batch query passes its block's
-/// choice on (test_ray_order.cpp); a piece of 256 rays adds one.
+/// Pieces traced through the interleaved walk (intersect_wide_grouped with WideWalk::Interleaved),
+/// counted for the tests that check a batch query passes its block's choice on
+/// (test_ray_order.cpp); a piece of 256 rays adds one.
 inline std::atomic<std::uint64_t> interleaved_pieces{0};
 }  // namespace detail
 

@@ -59,11 +59,10 @@ public:
         if (sample < first_[k] || sample - first_[k] >= start_[k + 1] - start_[k]) return kNoHit;
         return slot_[start_[k] + sample - first_[k]];
     }
-    /// The hit of pixel (x, y)'s sample `sample` where its ray was traced ahead and is `ray`, bit
-    /// for bit; else false.
-    bool find(std::uint32_t x, std::uint32_t y, std::uint32_t sample, const Ray& ray, Hit& hit) const {
-        const std::uint32_t at = slot(x, y, sample);
-        if (at == kNoHit || !same_bits(rays_[at], ray)) return false;
+    /// The hit of the ray in `at` (a slot) where it is `ray`, bit for bit; else false (and where
+    /// `at` is not a slot of this run: kNoHit).
+    bool find(std::uint32_t at, const Ray& ray, Hit& hit) const {
+        if (at >= rays_.size() || !same_bits(rays_[at], ray)) return false;
         hit = hits_[at];
         return true;
     }

@@ -157,8 +157,7 @@ public:
             hit.counts.box_tests += visited;
         } else {
             bvhlab::Hit h;
-            if (!(camera && tracing_ && camera_ahead_ &&
-                  camera_.find(tracing_->pixel.x, tracing_->pixel.y, tracing_->sample_index, ray, h))) {
+            if (!(camera && camera_.find(camera_slot_, ray, h))) {
                 h = intersect_wide(*wide_->wide, *scene_.bvh, ray, &visited);
                 hit.counts.box_tests += 8u * visited;
             } else {
@@ -195,6 +194,7 @@ public:
     void trace_camera_rays(uint y, uint x0, uint x1) {
         camera_.begin(y, x0, x1 - x0);
         camera_tasks_.clear();
+        camera_slot_ = kNoHit;
         for (uint x = x0; x < x1; ++x) {
             const uvec2 p(x, y);
             const uint first = samples_done(p), target = frame.sample_target;
@@ -216,16 +216,14 @@ public:
             }
         }
         camera_.trace(*wide_->wide, *scene_.bvh);
-        camera_ahead_ = true;
     }
     /// start_sample's camera ray of pixel p's sample: the one the run traced ahead, else
-    /// camera_ray's (the same function of the same pixel and sample: the same bits).
+    /// camera_ray's (the same function of the same pixel and sample: the same bits). The sample's
+    /// camera query (nearest_hit) is then answered from that ray's slot.
     RayTask camera_task(uvec2 p, uint sample_index) {
-        const std::uint32_t slot = camera_ahead_ ? camera_.slot(p.x, p.y, sample_index) : kNoHit;
-        return slot != kNoHit ? camera_tasks_[slot] : camera_ray(p, sample_index);
+        camera_slot_ = camera_.slot(p.x, p.y, sample_index);
+        return camera_slot_ != kNoHit ? camera_tasks_[camera_slot_] : camera_ray(p, sample_index);
     }
-    /// The trace whose pixel and sample nearest_hit's camera rays belong to (null between pixels).
-    void follow(const TraceState* s) { tracing_ = s; }
 
 private:
     const BvhNode* tree_nodes_;
@@ -236,10 +234,9 @@ private:
     const vec4* overlay_;
     PixelSums* sums_;
     const WideScene* wide_;
-    CameraPackets camera_;                 ///< the run's camera rays traced ahead (trace_camera_rays)
-    std::vector<RayTask> camera_tasks_;    ///< the run's camera rays as tasks, by camera_.slot
-    bool camera_ahead_ = false;            ///< camera_ holds a run
-    const TraceState* tracing_ = nullptr;  ///< the pixel's trace (follow)
+    CameraPackets camera_;                ///< the run's camera rays traced ahead (trace_camera_rays)
+    std::vector<RayTask> camera_tasks_;   ///< the run's camera rays as tasks, by camera_.slot
+    std::uint32_t camera_slot_ = kNoHit;  ///< the slot of the sample camera_task last gave
     std::array<uvec4, STATE_WORDS> state_{};
     std::array<uvec4, 3 * RAY_STACK_SIZE> rays_{};
     std::array<uvec2, 2 * MAX_TREE_HEIGHT> nodes_{};  ///< two-level: a TLAS's entries and a BLAS's

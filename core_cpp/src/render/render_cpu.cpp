@@ -159,11 +159,6 @@ private:
     template <class Tracer>
     PixelResult trace_pixel(Tracer& tracer, gpu::uvec2 p, RunShared& shared, const Cancellation* cancel) const {
         typename Tracer::TraceState s = tracer.begin_pixel(p, tracer.samples_done(p), tracer.frame.sample_target);
-        struct Following {  // the camera rays traced ahead are found by the trace's pixel and sample
-            Tracer& tracer;
-            ~Following() { tracer.follow(nullptr); }
-        } following{tracer};
-        tracer.follow(&s);
         for (std::uint32_t budgets = 1;; ++budgets) {
             tracer.trace_steps(s, timings_.steps_per_dispatch);
             if (s.phase >= Tracer::PHASE_DONE) {
