@@ -51,9 +51,7 @@ class ShownBoxes:
     @property
     def note(self) -> str:
         """What the cap left out, in words ("" when nothing)."""
-        return (_tlas_note(self.tlas_shown, self.tlas_boxes) + _cap_note(self.instances_shown, self.instances)).rstrip(
-            "; "
-        )
+        return _notes(self.tlas_shown, self.tlas_boxes, self.instances_shown, self.instances)
 
     def tree_node(self, k: int) -> TreeNode:
         """What box k is."""
@@ -62,16 +60,18 @@ class ShownBoxes:
         return TreeNode("blas", int(self.node[k]), int(self.instance[k]))
 
 
-def _cap_note(shown: int, instances: int) -> str:
-    if shown == instances:
-        return ""
-    return f"BLAS boxes of {shown:,} of {instances:,} instances (at most {MAX_OVERLAY_BOXES:,} boxes)"
-
-
-def _tlas_note(shown: int, boxes: int) -> str:
-    if shown == boxes:
-        return ""
-    return f"the {shown:,} shallowest of {boxes:,} TLAS boxes (at most {MAX_OVERLAY_BOXES:,} boxes); "
+def _notes(tlas_shown: int, tlas_boxes: int, instances_shown: int, instances: int) -> str:
+    """What the cap left out of each level, in words, joined ("" when nothing)."""
+    parts = []
+    if tlas_shown != tlas_boxes:
+        parts.append(
+            f"the {tlas_shown:,} shallowest of {tlas_boxes:,} TLAS boxes (at most {MAX_OVERLAY_BOXES:,} boxes)"
+        )
+    if instances_shown != instances:
+        parts.append(
+            f"BLAS boxes of {instances_shown:,} of {instances:,} instances (at most {MAX_OVERLAY_BOXES:,} boxes)"
+        )
+    return "; ".join(parts)
 
 
 def _instances_within(counts: np.ndarray, budget: int) -> int:
@@ -92,10 +92,10 @@ def cap_note(bvh, level: str, depth_min: int, depth_max: int, leaves_only: bool 
         boxes = len(nodes_in_range(data.depth, data.left < 0, depth_min, depth_max, leaves_only))
         tlas = min(boxes, cap)
     if level == "tlas":
-        return _tlas_note(tlas, boxes).rstrip("; ")
+        return _notes(tlas, boxes, 0, 0)
     per_mesh = [len(nodes_in_range(m.depths, m.is_leaf, depth_min, depth_max, leaves_only)) for m in bvh.meshes]
     counts = np.array(per_mesh, np.int64)[mesh_of]
-    return (_tlas_note(tlas, boxes) + _cap_note(_instances_within(counts, cap - tlas), len(mesh_of))).rstrip("; ")
+    return _notes(tlas, boxes, _instances_within(counts, cap - tlas), len(mesh_of))
 
 
 def world_boxes(lo: np.ndarray, hi: np.ndarray, transforms: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -147,13 +147,14 @@ def shown_boxes(
     mesh_of, transforms = bvh.instances
     mesh_of = np.asarray(mesh_of, np.int64)
     parts = []  # (lo, hi, depth, level, instance, node)
-    tlas_boxes = 0
+    tlas_boxes = tlas_shown = 0
     if level in ("tlas", "both"):
         data = bvh.tlas_node_data()
         ids = nodes_in_range(data.depth, data.left < 0, depth_min, depth_max, leaves_only)
         # the cap bounds the TLAS's boxes too (1,000,000 instances: 2,000,000 boxes, 61 MB of texture,
         # 1.3-1.7 s to make at every change of the depth range): the shallowest, as sorted
         tlas_boxes, ids = len(ids), ids[:cap]
+        tlas_shown = len(ids)
         parts.append((data.lo[ids], data.hi[ids], data.depth[ids], TLAS, np.full(len(ids), -1), ids))
     shown = 0
     if level in ("blas", "both"):
@@ -163,7 +164,7 @@ def shown_boxes(
             ids = nodes_in_range(m.depths, m.is_leaf, depth_min, depth_max, leaves_only)
             per_mesh.append((nodes["lo"][ids], nodes["hi"][ids], m.depths[ids], ids))
         counts = np.array([len(b[3]) for b in per_mesh], np.int64)[mesh_of]
-        shown = _instances_within(counts, cap - sum(len(p[0]) for p in parts))
+        shown = _instances_within(counts, cap - tlas_shown)
         for k, (lo, hi, depth, ids) in enumerate(per_mesh):
             chosen = np.flatnonzero(mesh_of[:shown] == k)
             if len(chosen) and len(ids):
@@ -190,7 +191,7 @@ def shown_boxes(
         node[order].astype(np.int32),
         shown if blas_shown else 0,
         len(mesh_of) if blas_shown else 0,
-        len(parts[0][0]) if level != "blas" else 0,
+        tlas_shown,
         tlas_boxes,
     )
 
