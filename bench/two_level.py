@@ -1,5 +1,6 @@
-"""Two-level walks against flat trees (issue 34): single rays on one core through an instanced
-scene's TLAS and BLASes (bvhlab wide, stack, stackless; Embree 3's instances) beside one flat tree
+"""Two-level walks against flat trees (issue 34): rays on one core through an instanced scene's
+TLAS and BLASes (bvhlab wide, stack, stackless, one ray at a time, and wide through the batch
+queries, which reorder incoherent rays; Embree 3's instances) beside one flat tree
 over the same triangles moved into the world (bvhlab wide, Embree 3 MEDIUM), interleaved in one
 process (bench/cpp/tlas_bench), and callgrind instructions per ray.
 
@@ -33,6 +34,7 @@ from instancing import _placements  # noqa: E402
 PEERS = [  # the first is what the others are compared with
     ("bvhlab flat wide", "flat/bvhlab:"),
     ("bvhlab two-level wide", "two/bvhlab"),
+    ("bvhlab two-level wide, batch (one thread)", "two/bvhlab:batch=1"),
     ("bvhlab flat stack", "flat/bvhlab:query=stack"),
     ("bvhlab two-level stack", "two/bvhlab:query=stack"),
     ("bvhlab flat stackless", "flat/bvhlab:query=stackless"),

@@ -16,6 +16,8 @@ std::vector<float> load_floats(const std::string& path) {
     return v;
 }
 
+}  // namespace
+
 /// A file of whole rows of `width` floats, or an error saying what it holds: a file of shadow rays
 /// (7 floats a ray) read as rays of 6 was traced as other rays, without a word (bench/ab_batch.py
 /// passed them without --shadow).
@@ -27,8 +29,6 @@ std::vector<float> load_rows(const std::string& path, std::size_t width, const c
                                     (width == 6 ? " (shadow rays: --shadow FILE)" : ""));
     return v;
 }
-
-}  // namespace
 
 Mesh load_mesh(const std::string& path) { return {load_rows(path, 9, "triangles")}; }
 Rays load_rays(const std::string& path) { return {load_rows(path, 6, "rays"), {}}; }

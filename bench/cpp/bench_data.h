@@ -25,6 +25,8 @@ struct Rays {
     std::size_t count() const { return od.size() / 6; }
 };
 
+/// A file of whole rows of `width` floats (`what` names them in the error otherwise).
+std::vector<float> load_rows(const std::string& path, std::size_t width, const char* what);
 Mesh load_mesh(const std::string& path);
 Rays load_rays(const std::string& path);
 Rays load_shadow_rays(const std::string& path);

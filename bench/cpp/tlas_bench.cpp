@@ -1,4 +1,4 @@
-// tlas_bench — single rays through an instanced scene (issue 34): two-level trees (bvhlab's TLAS
+// tlas_bench — rays through an instanced scene (issue 34): two-level trees (bvhlab's TLAS
 // over BLASes, Embree 3's instances) beside one flat tree over the same triangles moved into the
 // world (bvh_bench's peers), interleaved, and prints JSON.
 //   tlas_bench trace --mesh M.f32 [--mesh M.f32 ...] --instances I.f32 RAYS.f32 [--shadow S.f32 ...]
@@ -10,12 +10,14 @@
 // M: a mesh's triangles, T×3×3 float32; I: N×13 float32 (the mesh index, then the 3×4 row-major
 // object-to-world transform); RAYS and SHADOW as bvh_bench reads them.
 // SPEC: "flat/" + a bvh_bench spec (bvhlab:..., embree:...), built over the flattened triangles;
-// "two/bvhlab[:query=stack|stackless|wide]"; "two/embree" (rtcNewScene per mesh, instanced by
-// RTC_GEOMETRY_TYPE_INSTANCE into a top scene, both MEDIUM).
+// "two/bvhlab[:query=stack|stackless|wide][,batch=1]" (batch=1: the batch queries on one thread,
+// the Python API's); "two/embree" (rtcNewScene per mesh, instanced by RTC_GEOMETRY_TYPE_INSTANCE
+// into a top scene, both MEDIUM).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <memory>
 #include <random>
 #include <sys/resource.h>
 #include <sstream>
@@ -47,12 +49,17 @@ Mesh InstancedScene::flattened() const {
 
 namespace {
 
-/// bvhlab's TLAS over one BLAS per mesh (the default builds), queried one ray at a time.
+/// bvhlab's TLAS over one BLAS per mesh (the default builds), queried one ray at a time, or with
+/// batch=1 through the batch queries on one thread (intersect_batch_two_level: the Python API's).
 class BvhlabTwoLevel : public InstancedPeer {
 public:
     explicit BvhlabTwoLevel(const std::string& options) : options_(options) {
-        if (options.rfind("query=", 0) == 0) mode_ = bvhlab::parse_traversal(options.substr(6));
-        else if (!options.empty()) throw std::invalid_argument("two/bvhlab takes query= only");
+        std::istringstream in(options);
+        for (std::string option; std::getline(in, option, ',');) {
+            if (option.rfind("query=", 0) == 0) mode_ = bvhlab::parse_traversal(option.substr(6));
+            else if (option == "batch=1") batch_ = true;
+            else if (!option.empty()) throw std::invalid_argument("two/bvhlab takes query= and batch=1 only");
+        }
     }
     std::string name() const override { return "bvhlab two-level " + options_; }
     void build(const InstancedScene& s) override {
@@ -72,6 +79,15 @@ public:
         bvhlab::check_two_level(scene_, mode_);
     }
     void trace(const Rays& rays, float* t, std::uint32_t* prim) override {
+        if (batch_) {
+            std::vector<std::int32_t> found(rays.count());
+            bvhlab::HitBatch out;
+            out.t = t, out.prim = found.data();
+            bvhlab::intersect_batch_two_level(scene_, {origins_.data(), directions_.data(), rays.count()}, out, nullptr,
+                                              mode_, 1);
+            for (std::size_t i = 0; i < rays.count(); ++i) prim[i] = std::uint32_t(found[i]);
+            return;
+        }
         for (std::size_t i = 0; i < rays.count(); ++i) {
             const float* r = rays.od.data() + 6 * i;
             const bvhlab::InstanceHit h =
@@ -80,6 +96,14 @@ public:
         }
     }
     void occluded(const Rays& rays, std::uint8_t* out) override {
+        if (batch_) {
+            bvhlab::RayBatch batch{origins_.data(), directions_.data(), rays.count()};
+            batch.tmax_of = rays.tmax.data();
+            const std::unique_ptr<bool[]> blocked(new bool[rays.count()]);
+            bvhlab::occluded_batch_two_level(scene_, batch, blocked.get(), mode_, 1);
+            for (std::size_t i = 0; i < rays.count(); ++i) out[i] = blocked[i];
+            return;
+        }
         for (std::size_t i = 0; i < rays.count(); ++i) {
             const float* r = rays.od.data() + 6 * i;
             out[i] =
@@ -87,9 +111,21 @@ public:
         }
     }
 
+    /// batch=1: the rays' origins and directions as the batch queries take them (untimed, as
+    /// bvh_bench's batch peer).
+    void prepare_rays(const Rays& rays) override {
+        if (!batch_) return;
+        origins_.resize(3 * rays.count()), directions_.resize(3 * rays.count());
+        for (std::size_t i = 0; i < rays.count(); ++i)
+            for (int a = 0; a < 3; ++a)
+                origins_[3 * i + a] = rays.od[6 * i + a], directions_[3 * i + a] = rays.od[6 * i + 3 + a];
+    }
+
 private:
     std::string options_;
     bvhlab::Traversal mode_ = bvhlab::Traversal::Wide;
+    bool batch_ = false;
+    std::vector<float> origins_, directions_;
     std::vector<bvhlab::Bvh> blases_;
     std::vector<bvhlab::WideBvh> wides_;
     bvhlab::Tlas tlas_;
@@ -105,6 +141,7 @@ public:
         peer_->build(s.flattened());
         peer_->prepare_trace();
     }
+    void prepare_rays(const Rays& rays) override { peer_->prepare_rays(rays); }
     void trace(const Rays& rays, float* t, std::uint32_t* prim) override { peer_->trace(rays, t, prim); }
     void occluded(const Rays& rays, std::uint8_t* out) override { peer_->occluded(rays, out); }
 
@@ -125,7 +162,7 @@ std::unique_ptr<InstancedPeer> make_instanced_peer(const std::string& spec) {
 InstancedScene load_scene(const std::vector<std::string>& meshes, const std::string& instances) {
     InstancedScene s;
     for (const auto& m : meshes) s.meshes.push_back(load_mesh(m));
-    const std::vector<float> rows = load_mesh(instances).xyz;
+    const std::vector<float> rows = load_rows(instances, 13, "instances");  // a mesh index and a 3×4 transform
     for (std::size_t i = 0; i + 13 <= rows.size(); i += 13) {
         const auto mesh = std::uint32_t(rows[i]);
         if (mesh >= s.meshes.size()) throw std::invalid_argument("an instance of a missing mesh");
@@ -184,6 +221,7 @@ void run_set(const Args& a, std::size_t s, const std::vector<std::unique_ptr<Ins
     std::vector<std::uint32_t> prim(rays.count());
     std::vector<std::uint8_t> blocked(rays.count());
     std::vector<std::vector<double>> times(peers.size());
+    for (const auto& peer : peers) peer->prepare_rays(rays);
     for (int r = 0; r < (once ? 1 : a.repeat); ++r)
         for (std::size_t k = 0; k < peers.size(); ++k) {
             const auto t0 = std::chrono::steady_clock::now();

@@ -22,12 +22,15 @@ struct InstancedScene {
     Mesh flattened() const;
 };
 
-/// One system under test on an instanced scene (Peer's trace and occluded, one ray at a time).
+/// One system under test on an instanced scene (Peer's trace and occluded, one ray at a time or
+/// as a batch).
 class InstancedPeer {
 public:
     virtual ~InstancedPeer() = default;
     virtual std::string name() const = 0;
     virtual void build(const InstancedScene& scene) = 0;
+    /// Before a ray set's timed passes (Peer::prepare_rays: a batch's split copy).
+    virtual void prepare_rays(const Rays&) {}
     virtual void trace(const Rays& rays, float* t, std::uint32_t* prim) = 0;
     virtual void occluded(const Rays& rays, std::uint8_t* occluded) = 0;
 };
