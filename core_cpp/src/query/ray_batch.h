@@ -24,7 +24,7 @@
 
 namespace bvhlab {
 
-/// Rays a task of a batch query takes (one call of for_each_chunk's chunk): four of the wide
+/// Rays a task of a batch query takes (one call of for_each_unchecked_chunk's chunk): four of the wide
 /// walks' pieces (kWideBatch).
 inline constexpr std::size_t kRayChunk = 4 * kWideBatch;
 
@@ -38,6 +38,7 @@ struct Scratch {
     T* data() { return reinterpret_cast<T*>(bytes); }
     const T* data() const { return reinterpret_cast<const T*>(bytes); }
     T& operator[](std::size_t i) { return data()[i]; }
+    const T& operator[](std::size_t i) const { return data()[i]; }
 };
 
 /// Rays a per-ray walk (for_each_ray) traces between two looks at its ChunkStop: a chunk of
@@ -56,7 +57,7 @@ struct ChunkStop {
 
 /// Calls `chunk(begin, end, stop)` for the batch's chunks of kRayChunk rays, spread over the shared
 /// pool, with the cancellation of every batch query (`stop`, a ChunkStop, for a look inside a
-/// chunk) but no check of the rays (for_each_chunk checks them first; for_each_ray_piece as it
+/// chunk) but no check of the rays (for_each_ray checks them first; for_each_ray_piece as it
 /// reads them).
 template <class Chunk>
 void for_each_unchecked_chunk(const RayBatch& rays, std::uint32_t threads, Cancellation* cancel, Chunk&& chunk) {
@@ -72,14 +73,6 @@ void for_each_unchecked_chunk(const RayBatch& rays, std::uint32_t threads, Cance
     if (cancel && cancel->stop_requested()) throw Cancelled();
 }
 
-/// Calls `chunk(begin, end, stop)` for the batch's chunks of kRayChunk rays, spread over the shared pool,
-/// with the checks and cancellation of every batch query.
-template <class Chunk>
-void for_each_chunk(const RayBatch& rays, std::uint32_t threads, Cancellation* cancel, Chunk&& chunk) {
-    check_rays(rays);
-    for_each_unchecked_chunk(rays, threads, cancel, std::forward<Chunk>(chunk));
-}
-
 /// Ray i of the batch (with its own tmax where the batch has one per ray), scaled by scale_ray,
 /// whose factor goes to `t_scale`: a t of the scaled ray times t_scale is one in the caller's units.
 inline Ray scaled_ray(const RayBatch& rays, std::size_t i, float& t_scale) {
@@ -90,10 +83,14 @@ inline Ray scaled_ray(const RayBatch& rays, std::size_t i, float& t_scale) {
     return ray;
 }
 
-/// Calls `visit(i, ray, t_scale)` for every ray of the batch (scaled_ray).
+/// Calls `visit(i, ray, t_scale)` for every ray of the batch (scaled_ray), the rays checked first
+/// (check_rays) unless `checked` says the caller has (a reordered copy, whose refused ray would be
+/// named by its place in the copy).
 template <class Visit>
-void for_each_ray(const RayBatch& rays, std::uint32_t threads, Cancellation* cancel, Visit&& visit) {
-    for_each_chunk(rays, threads, cancel, [&](std::size_t begin, std::size_t end, const ChunkStop& stop) {
+void for_each_ray(const RayBatch& rays, std::uint32_t threads, Cancellation* cancel, Visit&& visit,
+                  bool checked = false) {
+    if (!checked) check_rays(rays);
+    for_each_unchecked_chunk(rays, threads, cancel, [&](std::size_t begin, std::size_t end, const ChunkStop& stop) {
         for (std::size_t i = begin; i < end; ++i) {
             if (i != begin && (i - begin) % kRaysBetweenStops == 0 && stop()) return;
             float t_scale;
@@ -243,11 +240,13 @@ double memory_stall_ns(const RayBatch& rays, const RayBatch& part, Probe& probe)
     const std::unique_ptr<RayPiece> piece = make_piece();
     probe_sample(rays, part, true, *piece);
     using Clock = std::chrono::steady_clock;
+    volatile double kept;  // the probe's answers kept: a probe without effects is still timed
     const auto start = Clock::now();
-    probe(static_cast<const RayPiece&>(*piece));
+    kept = probe(static_cast<const RayPiece&>(*piece));
     const auto again = Clock::now();
-    probe(static_cast<const RayPiece&>(*piece));
+    kept = probe(static_cast<const RayPiece&>(*piece));
     const std::chrono::duration<double, std::nano> cold = again - start, warm = Clock::now() - again;
+    (void)kept;
     return (cold - warm).count() / kWideBatch;
 }
 
@@ -260,7 +259,8 @@ double memory_stall_ns(const RayBatch& rays, const RayBatch& part, Probe& probe)
 /// - whole, where a sample of its rays, spread evenly over it, visit at least kOrderNodes wide
 ///   nodes on average, which `probe(piece)` says (it traces a piece's rays without keeping any
 ///   result, each alone, and returns the wide nodes they visit on average); its rays then go
-///   interleaved;
+///   interleaved. Not with kByNodes false (the two-level walks, whose counts are not one tree's
+///   wide nodes): their probe is only timed;
 /// - else, in a block of at least kOrderTimedLeast rays, from its kOrderWarmRays-th ray on, where
 ///   its first kOrderWarmRays rays, traced as they are, leave the caches as the rest would find
 ///   them and a sample of the rest still waits on memory at least `stall_ns` a ray
@@ -268,7 +268,7 @@ double memory_stall_ns(const RayBatch& rays, const RayBatch& part, Probe& probe)
 ///   with ±inf); the rest goes interleaved where the wait is at least detail::interleave_stall_ns
 ///   (kInterleaveStallNs).
 /// Every other part goes alone. Throws, as check_rays does, where a ray of a sample is refused.
-template <class Probe, class Trace>
+template <bool kByNodes = true, class Probe, class Trace>
 void for_each_block(const RayBatch& rays, const Aabb& scene, Probe&& probe, Trace&& trace,
                     double stall_ns = detail::order_stall_ns.load(std::memory_order_relaxed),
                     double interleave_ns = detail::interleave_stall_ns.load(std::memory_order_relaxed)) {
@@ -281,9 +281,12 @@ void for_each_block(const RayBatch& rays, const Aabb& scene, Probe&& probe, Trac
             if (block.count == 0) break;
             continue;
         }
-        const std::unique_ptr<RayPiece> piece = make_piece();
-        probe_sample(rays, block, false, *piece);
-        const bool costly = probe(static_cast<const RayPiece&>(*piece)) >= kOrderNodes;
+        bool costly = false;
+        if constexpr (kByNodes) {
+            const std::unique_ptr<RayPiece> piece = make_piece();
+            probe_sample(rays, block, false, *piece);
+            costly = probe(static_cast<const RayPiece&>(*piece)) >= kOrderNodes;
+        }
         if (costly || block.count < kOrderTimedLeast) {
             if (costly) sort_rays(block, keys, sorted);
             trace(base, block, costly ? &sorted : nullptr, costly ? WideWalk::Interleaved : WideWalk::Alone);
@@ -344,15 +347,18 @@ void write_hits(const HitBatch& out, std::size_t begin, std::size_t n, Hit* hits
 
 /// Calls `trace(i, ray, visited)` for every ray of the batch (for_each_ray); `trace` returns the
 /// ray's Hit (t in the scaled units) and its visited count, which are written to `out` (t back in
-/// the caller's units).
+/// the caller's units); `checked` as for_each_ray's.
 template <class Trace>
 void run_ray_batch(const RayBatch& rays, const HitBatch& out, std::uint32_t threads, Cancellation* cancel,
-                   Trace&& trace) {
-    for_each_ray(rays, threads, cancel, [&](std::size_t i, const Ray& ray, float t_scale) {
-        std::uint32_t visited;
-        Hit h = trace(i, ray, visited);
-        write_hits(out, i, 1, &h, &visited, &t_scale);
-    });
+                   Trace&& trace, bool checked = false) {
+    for_each_ray(
+        rays, threads, cancel,
+        [&](std::size_t i, const Ray& ray, float t_scale) {
+            std::uint32_t visited;
+            Hit h = trace(i, ray, visited);
+            write_hits(out, i, 1, &h, &visited, &t_scale);
+        },
+        checked);
 }
 
 }  // namespace bvhlab

@@ -106,4 +106,34 @@ void unsort(const T* sorted, const std::vector<std::uint32_t>& index, T* out) {
     for (std::size_t k = 0; k < index.size(); ++k) out[index[k]] = sorted[k];
 }
 
+/// `out`'s arrays from ray `base` on.
+inline HitBatch offset(const HitBatch& out, std::size_t base) {
+    const auto at = [base](auto* p) { return p ? p + base : p; };
+    return {at(out.t), at(out.prim), at(out.kind), at(out.u), at(out.v), at(out.nodes_visited)};
+}
+
+/// A reordered block's hits in its rays' order (the fields `out` asks for), then put back.
+struct SortedHits {
+    std::vector<float> t, u, v;
+    std::vector<std::int32_t> prim;
+    std::vector<std::uint8_t> kind;
+    std::vector<std::uint32_t> visited;
+    HitBatch make(const HitBatch& out, std::size_t n) {
+        t.resize(n), prim.resize(n);
+        const auto field = [n](auto& a, const void* asked) {
+            a.resize(asked ? n : 0);
+            return asked ? a.data() : nullptr;
+        };
+        return {t.data(),        prim.data(),     field(kind, out.kind),
+                field(u, out.u), field(v, out.v), field(visited, out.nodes_visited)};
+    }
+    void unsort(const std::vector<std::uint32_t>& index, const HitBatch& out) const {
+        bvhlab::unsort(t.data(), index, out.t), bvhlab::unsort(prim.data(), index, out.prim);
+        if (out.kind) bvhlab::unsort(kind.data(), index, out.kind);
+        if (out.u) bvhlab::unsort(u.data(), index, out.u);
+        if (out.v) bvhlab::unsort(v.data(), index, out.v);
+        if (out.nodes_visited) bvhlab::unsort(visited.data(), index, out.nodes_visited);
+    }
+};
+
 }  // namespace bvhlab

@@ -135,12 +135,6 @@ double probe_wide(const WideBvh& wide, const RayPiece& piece) {
 /// The tree's box, over which the ray order's grid lies (empty for an empty tree).
 Aabb scene_box(const Bvh& bvh) { return bvh.empty() ? Aabb{} : node_box(bvh.nodes[0]); }
 
-/// `out`'s arrays from ray `base` on.
-HitBatch offset(const HitBatch& out, std::size_t base) {
-    const auto at = [base](auto* p) { return p ? p + base : p; };
-    return {at(out.t), at(out.prim), at(out.kind), at(out.u), at(out.v), at(out.nodes_visited)};
-}
-
 /// for_each_ray_piece over `block` (a part of `rays`, or its copy in ray order), where a refused
 /// ray is named by its index in `rays` (check_rays on the whole batch) rather than in `block`.
 template <class Visit>
@@ -154,29 +148,6 @@ void trace_block(const RayBatch& rays, const RayBatch& block, std::uint32_t thre
     }
 }
 
-/// A reordered block's hits in its rays' order (the fields `out` asks for), then put back.
-struct SortedHits {
-    std::vector<float> t, u, v;
-    std::vector<std::int32_t> prim;
-    std::vector<std::uint8_t> kind;
-    std::vector<std::uint32_t> visited;
-    HitBatch make(const HitBatch& out, std::size_t n) {
-        t.resize(n), prim.resize(n);
-        const auto field = [n](auto& a, const void* asked) {
-            a.resize(asked ? n : 0);
-            return asked ? a.data() : nullptr;
-        };
-        return {t.data(),        prim.data(),     field(kind, out.kind),
-                field(u, out.u), field(v, out.v), field(visited, out.nodes_visited)};
-    }
-    void unsort(const std::vector<std::uint32_t>& index, const HitBatch& out) const {
-        bvhlab::unsort(t.data(), index, out.t), bvhlab::unsort(prim.data(), index, out.prim);
-        if (out.kind) bvhlab::unsort(kind.data(), index, out.kind);
-        if (out.u) bvhlab::unsort(u.data(), index, out.u);
-        if (out.v) bvhlab::unsort(v.data(), index, out.v);
-        if (out.nodes_visited) bvhlab::unsort(visited.data(), index, out.nodes_visited);
-    }
-};
 }  // namespace
 
 Hit intersect(const Bvh& bvh, const Ray& ray, Traversal mode, std::uint32_t* nodes_visited) {

@@ -6,8 +6,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "bvhlab/coordinate_range.h"
 #include "bvhlab/ray.h"
@@ -180,6 +182,9 @@ std::uint32_t walk_tlas(const Tlas& tlas, const TlasQuery& q, const float& hit_t
                : walk::stack(tlas.tree.nodes.data(), q, hit_t, leaf, on_box);
 }
 
+/// The TLAS's box, over which the ray order's grid lies (ray_order.h; empty for an empty TLAS).
+Aabb tlas_box(const Tlas& tlas) { return tlas.tree.empty() ? Aabb{} : node_box(tlas.tree.nodes[0]); }
+
 }  // namespace
 
 void check_two_level(const TwoLevel& scene, Traversal mode) {
@@ -274,11 +279,34 @@ void intersect_batch_two_level(const TwoLevel& scene, const RayBatch& rays, cons
             for (std::size_t i = 0; i < rays.count; ++i) instance[i] = hits.prim[i] < 0 ? -1 : 0;
         return;
     }
-    run_ray_batch(rays, hits, threads, cancel, [&](std::size_t i, const Ray& ray, std::uint32_t& visited) {
-        const InstanceHit h = detail::intersect_through_tlas(scene, ray, mode, &visited);
-        if (instance) instance[i] = h.hit.ref == kNoHit ? -1 : std::int32_t(h.instance);
-        return h.hit;
-    });
+    check_rays(rays);  // once: a reordered block's copy would name a refused ray by its place there
+    // the hits of `block`'s rays to `to` and `inst` (from its first ray on)
+    const auto trace = [&](const RayBatch& block, const HitBatch& to, std::int32_t* inst) {
+        const auto one = [&](std::size_t i, const Ray& ray, std::uint32_t& visited) {
+            const InstanceHit h = detail::intersect_through_tlas(scene, ray, mode, &visited);
+            if (inst) inst[i] = h.hit.ref == kNoHit ? -1 : std::int32_t(h.instance);
+            return h.hit;
+        };
+        run_ray_batch(block, to, threads, cancel, one, true);
+    };
+    const auto probe = [&](const RayPiece& piece) {
+        double t = 0;  // the hits summed: the probe is timed (for_each_block<false>) and must not be dropped
+        for (std::uint32_t j = 0; j < piece.count; ++j)
+            t += detail::intersect_through_tlas(scene, piece.rays[j], mode, nullptr).hit.t;
+        return t;
+    };
+    SortedHits in_order;  // a reordered block's hits, in its rays' order
+    std::vector<std::int32_t> instance_in_order;
+    for_each_block<false>(rays, tlas_box(tlas), probe,
+                          [&](std::size_t base, const RayBatch& block, const SortedRays* sorted, WideWalk) {
+                              if (!sorted)
+                                  return trace(block, offset(hits, base), instance ? instance + base : nullptr);
+                              instance_in_order.resize(instance ? block.count : 0);
+                              trace(sorted->batch(block), in_order.make(hits, block.count),
+                                    instance ? instance_in_order.data() : nullptr);
+                              in_order.unsort(sorted->index, offset(hits, base));
+                              if (instance) unsort(instance_in_order.data(), sorted->index, instance + base);
+                          });
 }
 
 }  // namespace bvhlab
@@ -314,9 +342,27 @@ void occluded_batch_two_level(const TwoLevel& scene, const RayBatch& rays, bool*
         return occluded_batch(*blas.bvh, rays, occluded, mode, threads, blas.wide, cancel);
     }
     check_limits(rays);
-    for_each_ray(rays, threads, cancel, [&](std::size_t i, const Ray& ray, float) {
-        occluded[i] = detail::occluded_through_tlas(scene, ray, mode);
-    });
+    check_rays(rays);  // once, as intersect_batch_two_level
+    const auto trace = [&](const RayBatch& block, bool* to) {
+        const auto one = [&](std::size_t i, const Ray& ray, float) {
+            to[i] = detail::occluded_through_tlas(scene, ray, mode);
+        };
+        for_each_ray(block, threads, cancel, one, true);
+    };
+    const auto probe = [&](const RayPiece& piece) {
+        double blocked = 0;  // counted: the probe is timed and must not be dropped
+        for (std::uint32_t j = 0; j < piece.count; ++j)
+            blocked += detail::occluded_through_tlas(scene, piece.rays[j], mode);
+        return blocked;
+    };
+    std::unique_ptr<bool[]> in_order;  // a reordered block's answers, in its rays' order
+    for_each_block<false>(rays, tlas_box(tlas), probe,
+                          [&](std::size_t base, const RayBatch& block, const SortedRays* sorted, WideWalk) {
+                              if (!sorted) return trace(block, occluded + base);
+                              if (!in_order) in_order = std::make_unique<bool[]>(kOrderBlock);
+                              trace(sorted->batch(block), in_order.get());
+                              unsort(in_order.get(), sorted->index, occluded + base);
+                          });
 }
 
 }  // namespace bvhlab
