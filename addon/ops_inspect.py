@@ -94,6 +94,9 @@ def pick_ray(operator, context, origin, direction) -> set[str]:
         operator.report({"WARNING"}, NO_TREE)
         return {"CANCELLED"}
     settings = scene.bvhlab
+    if not settings.overlay_show:  # what is picked is the deepest box drawn: none is
+        operator.report({"INFO"}, "No box under the cursor (the boxes are hidden: show them to pick one)")
+        return {"CANCELLED"}
     shown = _shown_range(scene, built)
     if shown[0] > shown[1]:  # Min depth below the tree's deepest level: no box is drawn to pick
         operator.report({"INFO"}, "No box under the cursor (no box is drawn at these depths)")
@@ -154,14 +157,15 @@ class BVHLAB_OT_pick_box(bpy.types.Operator):
         return {"RUNNING_MODAL"}
 
     def modal(self, context, event):
-        if event.type in {"ESC", "RIGHTMOUSE"}:
+        over = _over_viewport(context.area, context.region, event)
+        if event.type == "ESC" or (event.type == "RIGHTMOUSE" and over):
             if context.area is not None:
                 context.area.header_text_set(None)
             return {"FINISHED"}
         if event.type == "LEFTMOUSE" and event.value == "PRESS":
             region, view = context.region, context.region_data
-            if region is None or view is None or region.type != "WINDOW":
-                return {"PASS_THROUGH"}
+            if not over or view is None:
+                return {"PASS_THROUGH"}  # the sidebar, the header, another area: Blender's click
             from bpy_extras import view3d_utils
 
             xy = (event.mouse_region_x, event.mouse_region_y)
@@ -169,7 +173,20 @@ class BVHLAB_OT_pick_box(bpy.types.Operator):
             direction = view3d_utils.region_2d_to_vector_3d(region, view, xy)
             run_reported(self, context, lambda: pick_ray(self, context, origin, direction))
             return {"RUNNING_MODAL"}
-        return {"PASS_THROUGH"}  # orbit, zoom and the sidebar keep working
+        return {"PASS_THROUGH"}  # orbit, zoom and the rest of the window keep working
+
+
+def _inside(region, event) -> bool:
+    return region.x <= event.mouse_x < region.x + region.width and region.y <= event.mouse_y < region.y + region.height
+
+
+def _over_viewport(area, region, event) -> bool:
+    """Whether the event is over the drawing of the viewport Pick Box started in: inside its region
+    (the modal's context keeps it wherever the mouse is) and under none of the area's regions drawn
+    over it (the sidebar, the toolbar and the headers overlap the view in Blender 4.2+)."""
+    if area is None or region is None or region.type != "WINDOW" or not _inside(region, event):
+        return False
+    return not any(r.type != "WINDOW" and r.width > 1 and r.height > 1 and _inside(r, event) for r in area.regions)
 
 
 STEPS = [

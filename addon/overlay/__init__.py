@@ -92,7 +92,8 @@ def _draw_callback() -> None:
     if built is None or built.serial in _failed or context.region_data is None:
         return
     try:
-        _draw_picked(context.scene)
+        if context.scene.bvhlab.overlay_show:  # the pick is among the boxes shown: none are
+            _draw_picked(context.scene)
         if context.space_data.shading.type == "RENDERED" and context.engine == "BVHLAB_WHITTED":
             return  # the engine traces the boxes into its image, depth-correct (report §3.3)
         draw_scene_overlay(context.scene, context.region_data.perspective_matrix)

@@ -168,3 +168,21 @@ def test_in_the_rendered_viewport_pick_box_passes_a_surface_hidden_from_camera_r
         sphere.visible_camera = True
         scene.render.engine = engine
         assert bpy.ops.bvhlab.build() == {"FINISHED"}
+
+
+def test_with_the_boxes_hidden_nothing_is_picked(built):
+    """The pick is the deepest box shown: with the boxes hidden there is none (the helper's probe
+    found the hidden boxes picked and the pick's white box drawn alone)."""
+    import bpy
+
+    scene, state = built
+    origins, directions = _rays(1)
+    assert bpy.ops.bvhlab.pick_box(origin=origins[0].tolist(), direction=directions[0].tolist()) == {"FINISHED"}
+    before = state.picked_node(scene)
+    scene.bvhlab.overlay_show = False
+    try:
+        got = bpy.ops.bvhlab.pick_box(origin=origins[0].tolist(), direction=(-directions[0]).tolist())
+        assert got == {"CANCELLED"}
+        assert state.picked_node(scene) == before
+    finally:
+        scene.bvhlab.overlay_show = True
