@@ -2,8 +2,9 @@
 boxes of depth 2, start Pick Box (INVOKE_DEFAULT, as the button does) and click with the mouse
 (xdotool) at three points of the 3D viewport. Checked: each click picks what bvhlab.inspect.pick
 gives for the ray through that pixel (from Blender's own region_2d_to_* functions); the picked box
-is drawn in white (the screenshot has white pixels it did not have before the pick); Esc leaves the
-mode, after which a click picks nothing new.
+is drawn in white (the screenshot has white pixels it did not have before the pick); clicks in the
+timeline and in the sidebar reach them and keep the pick; Esc leaves the mode, after which a click
+picks nothing new.
 
 Blender runs this file (--python) and the driver (run_ui.py) imports it for `check`."""
 
@@ -56,6 +57,28 @@ def steps(session):
         session.info["clicks"].append({"expected": expected, "picked": state.picked_node(scene)})
         if i == 0:
             yield {"action": "capture", "name": "picked"}
+    # clicks outside the viewport's own drawing go to Blender, not to the pick (each click of the
+    # window was once taken as a pick through the viewport's projection: helper probe): the
+    # timeline, another area, takes its frame; a click in the sidebar, drawn over the view, keeps it
+    rx, ry = int(CLICKS[0][0] * region.width), int(CLICKS[0][1] * region.height)  # a pick to keep
+    yield {"action": "click", "x": rect["x"] + rx, "y": rect["y"] + region.height - 1 - ry}
+    yield 1.0
+    kept, frame = state.picked_node(scene), scene.frame_current
+    timeline = next(a for a in session.window().screen.areas if a.type == "DOPESHEET_EDITOR")
+    strip = session.rect(session.region(timeline, "WINDOW"))
+    yield {"action": "click", "x": strip["x"] + int(0.7 * strip["width"]), "y": strip["y"] + strip["height"] // 2}
+    yield 1.0
+    area.spaces.active.show_region_ui = True
+    yield 1.0
+    sidebar = session.rect(session.region(area, "UI"))
+    yield {"action": "click", "x": sidebar["x"] + sidebar["width"] // 2, "y": sidebar["y"] + sidebar["height"] - 30}
+    yield 1.0
+    session.info["outside"] = {
+        "kept": kept,
+        "after": state.picked_node(scene),
+        "frame": frame,
+        "frame_after": scene.frame_current,
+    }
     yield {"action": "key", "key": "Escape", "x": rect["x"] + 20, "y": rect["y"] + 40}
     yield 0.5
     before_last = state.picked_node(scene)
@@ -79,6 +102,11 @@ def check(shots: dict, info: dict) -> list[str]:
             failures.append(f"a click picked {click['picked']}, the ray through its pixel {click['expected']}")
     if not any(c["expected"] is not None for c in clicks):
         failures.append("no click was on a box: the scenario's clicks miss the scene")
+    outside = info.get("outside", {})
+    if outside.get("kept") is None or outside.get("after") != outside.get("kept"):
+        failures.append(f"a click outside the viewport changed the pick (or none was kept): {outside}")
+    if outside.get("frame_after") == outside.get("frame"):
+        failures.append(f"a click in the timeline did not reach it while Pick Box ran: {outside}")
     after = info.get("after_esc", {})
     if after.get("before") != after.get("after"):
         failures.append(f"a click after Esc still picked: {after}")
