@@ -106,8 +106,8 @@ TEST(TlasBatchOrder, EachRayGetsItsOwnHitReorderedOrNot) {
                     std::uint32_t one_visited = 0;
                     const InstanceHit one = intersect_two_level(s.two_level, rays[i], mode, &one_visited);
                     const bool miss = one.hit.ref == kNoHit;
-                    const bool ok = same_bits(t[i], one.hit.t) && (miss || (same_bits(u[i], one.hit.u) &&
-                                                                            same_bits(v[i], one.hit.v))) &&
+                    const bool ok = same_bits(t[i], one.hit.t) &&
+                                    (miss || (same_bits(u[i], one.hit.u) && same_bits(v[i], one.hit.v))) &&
                                     prim[i] == (miss ? -1 : std::int32_t(one.hit.ref)) && kind[i] == 0 &&
                                     instance[i] == (miss ? -1 : std::int32_t(one.instance)) &&
                                     visited[i] == one_visited && blocked[i] == !miss &&
