@@ -53,7 +53,7 @@ class BVHLAB_OT_build(ModalTaskMixin, bpy.types.Operator):
         # the scene it builds for: the window may show another one by the time it ends (its tree was
         # then thrown away as "replaced", and this scene kept a build that never ended: probe)
         self._scene_key = state.key(context.scene)
-        follow.export_taken(self._scene_key)
+        follow.export_taken(self._scene_key, context.view_layer, context.scene.bvhlab.scope)
         self._key = key = key_of(context.scene)  # the settings as they are now, not when it ends
         config = key.config.replace(threads=UI_WORK_THREADS)
 
@@ -99,7 +99,7 @@ class BVHLAB_OT_build(ModalTaskMixin, bpy.types.Operator):
         try:
             tree_key = key_of(context.scene)
             exported = export_scene(context, require_camera=False)  # a tree needs no camera
-            follow.export_taken(key)
+            follow.export_taken(key, context.view_layer, context.scene.bvhlab.scope)
             with window_progress(context) as progress:
                 bvh = bvhlab.build(exported, config=tree_key.config, progress=progress)
             cache.tree(tree_key).store(bvh, exported)

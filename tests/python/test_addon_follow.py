@@ -223,11 +223,11 @@ def test_a_catch_up_that_fails_is_tried_again_after_an_edit_not_at_every_update(
     assert len(syncs) == 2 and not state.tree_for(scene).behind
 
 
-def test_an_object_hidden_while_the_boxes_follow_is_gone_after_the_next_move():
-    """Hiding an object by the eye reports only the scene: the follow skips it (no walk at a click)
-    and says so to its LiveScene, so the next move, whose updates name that move alone, reads the
-    scene again instead of placing the instance from its update (the hidden object's boxes were
-    kept until some other edit)."""
+def test_an_object_hidden_while_the_boxes_follow_is_gone_at_once_and_after_the_next_move():
+    """Hiding an object by the eye reports only the scene, as a selection does: the follow tells
+    them apart by the objects the tree's scope covers, and follows the hide at once (its boxes were
+    kept until the next edit, with nothing said: helper probe); the next move, whose updates name
+    that move alone, keeps it hidden."""
     built, monkey = built_monkey()
     state, follow = harness.addon().state, _addon("follow")
     scene = bpy.context.scene
@@ -244,11 +244,63 @@ def test_an_object_hidden_while_the_boxes_follow_is_gone_after_the_next_move():
     bpy.context.view_layer.update()
     assert follow.wait() and state.tree_for(scene).tree.last.action == "placed"
     primitives = state.tree_for(scene).bvh.stats["primitives_flattened"]
-    duplicates[1].hide_set(True)  # skipped: the tree falls behind until the next edit
+    duplicates[1].hide_set(True)
     bpy.context.view_layer.update()
+    assert follow.wait() and state.tree_for(scene).bvh.stats["primitives_flattened"] == primitives - 12
     duplicates[2].location.z += 0.5
     bpy.context.view_layer.update()
     assert follow.wait()
     tree = state.tree_for(scene)
     assert tree.bvh.stats["primitives_flattened"] == primitives - 12
     _same_hits(tree.bvh, export_scene(bpy.context, require_camera=False))
+
+
+def test_a_selection_reads_nothing_and_the_next_move_is_placed_from_its_update(monkeypatch):
+    """A click that selects (the scene alone named, the objects in scope the same) walks nothing,
+    and the next move is placed from its update: every selection made the next move walk the whole
+    scene (100,000 geometry-nodes instances: 2 s a move, helper probe)."""
+    from bvhlab.blender import LiveScene
+
+    built, monkey = built_monkey()
+    state, follow = harness.addon().state, _addon("follow")
+    scene = bpy.context.scene
+    tiles = []
+    for i in range(3):  # instances of the floor's mesh: a move of one is placed from its update
+        obj = bpy.data.objects.new(f"Tile{i}", bpy.data.objects["Floor"].data)
+        scene.collection.objects.link(obj)
+        obj.location = (-4.5 + 3 * i, 4.0, -1.5)
+        tiles.append(obj)
+    bpy.context.view_layer.update()
+    assert follow.wait()
+    tiles[0].location.z += 0.5
+    bpy.context.view_layer.update()
+    assert follow.wait() and state.tree_for(scene).tree.last.action == "placed"
+    reports = []
+    sync = LiveScene.sync
+    monkeypatch.setattr(LiveScene, "sync", lambda self, *a, **k: reports.append(sync(self, *a, **k)) or reports[-1])
+    tiles[2].select_set(True)
+    bpy.context.view_layer.objects.active = tiles[1]
+    bpy.context.view_layer.update()
+    assert reports == []
+    tiles[0].location.z += 0.5
+    bpy.context.view_layer.update()
+    assert follow.wait()
+    assert [r.placed_only for r in reports] == [True]
+    assert state.tree_for(scene).tree.last.action == "placed"
+    _same_hits(state.tree_for(scene).bvh, export_scene(bpy.context, require_camera=False))
+
+
+def test_an_object_hidden_with_the_boxes_hidden_leaves_the_tree_behind():
+    """With the boxes hidden nothing is followed: an object hidden by the eye then marks the tree
+    behind (said in the panel; Export Stats exports again), as an edit does; a selection does not."""
+    built, monkey = built_monkey()
+    state = harness.addon().state
+    scene = bpy.context.scene
+    scene.bvhlab.overlay_show = False
+    bpy.context.view_layer.update()
+    bpy.data.objects["Floor"].select_set(True)
+    bpy.context.view_layer.update()
+    assert not state.tree_for(scene).behind
+    bpy.data.objects["Floor"].hide_set(True)
+    bpy.context.view_layer.update()
+    assert state.tree_for(scene).behind == state.EDITED
