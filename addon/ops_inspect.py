@@ -32,7 +32,7 @@ def node_view(built, picked):
     """What the panel, the steps and the highlight need of a picked node: (NodeData of its tree,
     its index there, world lo, world hi, its name in words)."""
     if not overlay.is_two_level(built):
-        data = built.bvh.node_data()
+        data = built.bvh.node_data(epo=False)  # the whole data where analysed (Bvh.node_data)
         return data, picked, data.lo[picked], data.hi[picked], f"{'Leaf' if data.left[picked] < 0 else 'Node'} {picked}"
     from bvhlab.inspect.pick import node_world_box
 
@@ -42,7 +42,7 @@ def node_view(built, picked):
         data = bvh.tlas_node_data()
         what = "leaf" if data.left[picked.node] < 0 else "node"
         return data, picked.node, lo, hi, f"TLAS {what} {picked.node}"
-    data = bvh.meshes[int(bvh.instances[0][picked.instance])].node_data()
+    data = bvh.meshes[int(bvh.instances[0][picked.instance])].node_data(epo=False)
     what = "leaf" if data.left[picked.node] < 0 else "node"
     return data, picked.node, lo, hi, f"Instance {picked.instance} · BLAS {what} {picked.node}"
 
@@ -54,7 +54,7 @@ def whole_tree_figures(built, picked) -> dict | None:
     instance, a TLAS node with its instances' trees; the panel showed the TLAS's or the mesh tree's
     own, every instance of a mesh at the same share), once the tree is analysed (None before)."""
     if not overlay.is_two_level(built):
-        data = built.bvh.node_data()
+        data = built.bvh.node_data(epo=False)
         return {**data.node(picked), "of": data.sah_cost}
     analysed = built.bvh.cached_node_data()
     if analysed is None:
@@ -215,7 +215,7 @@ class BVHLAB_OT_pick_step(bpy.types.Operator):
         if overlay.is_two_level(built):
             target = two_level_step(built.bvh, node, self.step)
         else:
-            target = flat_step(built.bvh.node_data(), node, self.step)
+            target = flat_step(built.bvh.node_data(epo=False), node, self.step)
         if target is None:
             self.report({"WARNING"}, f"{node_view(built, node)[4]} has no {self.step.lower()}")
             return {"CANCELLED"}
@@ -250,7 +250,7 @@ def two_level_step(bvh, picked, step: str):
     if picked.node == 0 and step == "PARENT":
         leaf = bvh.tlas_leaf_of(picked.instance)
         return TreeNode("tlas", leaf) if leaf >= 0 else None
-    target = flat_step(mesh.node_data(), picked.node, step)
+    target = flat_step(mesh.node_data(epo=False), picked.node, step)
     return None if target is None else TreeNode("blas", target, picked.instance)
 
 
@@ -323,7 +323,8 @@ def draw_inspect_panel(layout, scene) -> None:
     col.label(text=f"Own SAH term: {data.sah_term[node]:.4g}")
     if not leaf:
         col.label(text=f"Child overlap: {data.child_overlap[node]:.3f}")
-    col.label(text=f"EPO term: {data.epo[node]:.4g} (tree {data.epo_cost:.4g})")
+    if data.has_epo:  # made by Analyse Tree (a pick does not wait for the EPO pass)
+        col.label(text=f"EPO term: {data.epo[node]:.4g} (tree {data.epo_cost:.4g})")
     size = hi - lo  # in the world (a BLAS box moved by its instance)
     col.label(text="Size: " + " × ".join(f"{v:.3g}" for v in size))
     row = layout.row(align=True)

@@ -31,14 +31,14 @@ using namespace bvhlab::python;
 
 namespace {
 
-nb::dict py_node_data(const PyBvh& self, unsigned threads) {
+nb::dict py_node_data(const PyBvh& self, unsigned threads, bool epo) {
     TreePtr tree = self.current();
     NodeData d;
     PyStopCheck stop;  // Ctrl-C stops the EPO pass (seconds to minutes on a soup)
     Cancellation cancel([&stop] { return stop(0.0); });
     try {
         const LongRelease release;
-        d = compute_node_data(tree->bvh, threads, &cancel);
+        d = compute_node_data(tree->bvh, threads, &cancel, epo);
     } catch (const Cancelled&) {
         stop.rethrow();
         throw;
@@ -104,8 +104,8 @@ PyBvh* py_restore(const NodeBytes& nodes, const Refs& refs, const Triangles& tri
 
 void bind_inspect(nb::module_& m) {
     nb::class_<PyBvh> bvh = nb::borrow<nb::class_<PyBvh>>(m.attr("Bvh"));
-    bvh.def("node_data", &py_node_data, "threads"_a,
-            "Every node's data (node_data.h) as a dict of arrays, plus sah_cost and epo_cost.");
+    bvh.def("node_data", &py_node_data, "threads"_a, "epo"_a = true,
+            "Every node's data (node_data.h) as a dict of arrays, plus sah_cost and epo_cost (NaN without epo).");
     bvh.def("trace_ray", &py_trace_ray, "origin"_a, "direction"_a, "tmin"_a, "tmax"_a, "traversal"_a,
             "camera_of"_a = nb::none(),
             "One ray's traversal, recorded by the traversal itself (ray_record.h), as a dict; with camera_of "

@@ -112,6 +112,7 @@ class Bvh:
         self.config = config
         self._stats: tuple[int, dict] | None = None  # (revision, stats)
         self._node_data: tuple[int, NodeData] | None = None  # (revision, data)
+        self._node_structure: tuple[int, NodeData] | None = None  # (revision, data without EPO)
 
     def _snapshot(self) -> Bvh:
         """This tree's current version, for a reading in several steps (a pick's boxes and its hit,
@@ -147,24 +148,42 @@ class Bvh:
             cached = self._stats = (revision, stats)
         return dict(cached[1])
 
-    def node_data(self, *, threads: int = 0) -> NodeData:
+    def node_data(self, *, threads: int = 0, epo: bool = True) -> NodeData:
         """Every node's box, depth, parent, children, primitives under it, area, SAH term and its
         subtree's share of the SAH cost, child overlap and end-point overlap (EPO), as arrays made
-        in C++ for all nodes at once (bvhlab.inspect.node_data.NodeData). Made once per revision."""
+        in C++ for all nodes at once (bvhlab.inspect.node_data.NodeData). Made once per revision.
+        Without `epo` the EPO terms are NaN (`NodeData.has_epo`): the rest takes a few ms a
+        100,000 nodes, EPO most of the time (1M triangles: 1.4 of 1.45 s); the whole data, where
+        made already, serves both."""
         threads = _checks.integer("threads", threads, 0, 4096)
-        if self._node_data is None or self._node_data[0] != self._core.revision:
-            # a snapshot (_snapshot) and its tree share a version's node data both ways: a pick
-            # on a snapshot made them again at every click (0.17 → 0.8 s a pick, 500K triangles)
-            source = getattr(self, "_source", None)
-            shared = source._node_data if source is not None else None
-            if shared is not None and shared[0] == self._core.revision:
-                self._node_data = shared
-            else:
-                d = self._core.node_data(threads)  # of one version, whatever a refit does meanwhile
-                self._node_data = (d["revision"], NodeData.from_core(d))
-                if source is not None and source._core.revision == d["revision"]:
-                    source._node_data = self._node_data
-        return self._node_data[1]
+        epo = _checks.flag("epo", epo)
+        whole = self._own_node_data("_node_data")
+        if whole is not None:
+            return whole
+        if epo:
+            return self._make_node_data("_node_data", threads, True)
+        return self._own_node_data("_node_structure") or self._make_node_data("_node_structure", threads, False)
+
+    def _own_node_data(self, slot: str) -> NodeData | None:
+        """This revision's node data in `slot`, this tree's or (a snapshot) its source's, or None:
+        a snapshot (_snapshot) and its tree share a version's node data both ways (a pick on a
+        snapshot made them again at every click: 0.17 → 0.8 s a pick, 500K triangles)."""
+        revision = self._core.revision
+        for holder in (self, getattr(self, "_source", None)):
+            cached = getattr(holder, slot, None) if holder is not None else None
+            if cached is not None and cached[0] == revision:
+                setattr(self, slot, cached)
+                return cached[1]
+        return None
+
+    def _make_node_data(self, slot: str, threads: int, epo: bool) -> NodeData:
+        d = self._core.node_data(threads, epo)  # of one version, whatever a refit does meanwhile
+        made = (d["revision"], NodeData.from_core(d))
+        setattr(self, slot, made)
+        source = getattr(self, "_source", None)
+        if source is not None and source._core.revision == d["revision"]:
+            setattr(source, slot, made)
+        return made[1]
 
     def cached_node_data(self) -> NodeData | None:
         """The node data `node_data()` made for this revision of the tree, or None (never computes:

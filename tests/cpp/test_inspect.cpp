@@ -2,6 +2,7 @@
 // the sanitizer builds run them (make asan-test): hostile saved trees are refused, never misread.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <random>
 #include <stdexcept>
@@ -40,6 +41,17 @@ TEST(NodeData, SumsAndCounts) {
     EXPECT_GT(d.epo_cost, 0.0);
     NodeData one = compute_node_data(bvh, 1);
     EXPECT_EQ(one.epo, d.epo);  // fixed-point sums: the same for any number of threads
+    // without the EPO pass: the rest the same, the EPO terms NaN (not zeros that read as figures)
+    NodeData rest = compute_node_data(bvh, 2, nullptr, false);
+    EXPECT_EQ(rest.lo, d.lo);
+    EXPECT_EQ(rest.parent, d.parent);
+    EXPECT_EQ(rest.prim_count, d.prim_count);
+    EXPECT_EQ(rest.subtree_sah, d.subtree_sah);
+    EXPECT_EQ(rest.child_overlap, d.child_overlap);
+    EXPECT_EQ(rest.surface_area, d.surface_area);
+    ASSERT_EQ(rest.epo.size(), d.epo.size());
+    for (double e : rest.epo) ASSERT_TRUE(std::isnan(e));
+    EXPECT_TRUE(std::isnan(rest.epo_cost));
 }
 
 TEST(NodeData, ClippedArea) {

@@ -2,6 +2,7 @@
 #include "bvhlab/node_data.h"
 
 #include <algorithm>
+#include <limits>
 
 #include "bvhlab/stats.h"
 
@@ -27,7 +28,7 @@ void resize_all(NodeData& d, std::size_t n) {
 
 }  // namespace
 
-NodeData compute_node_data(const Bvh& bvh, unsigned threads, Cancellation* cancel) {
+NodeData compute_node_data(const Bvh& bvh, unsigned threads, Cancellation* cancel, bool epo) {
     NodeData d;
     const std::uint32_t n = bvh.node_count();
     resize_all(d, n);
@@ -60,9 +61,14 @@ NodeData compute_node_data(const Bvh& bvh, unsigned threads, Cancellation* cance
         }
     }
     for (std::uint32_t i = 0; i < n; ++i) d.sah_share[i] = d.sah_cost > 0 ? d.subtree_sah[i] / d.sah_cost : 0.0;
-    // A TLAS (tlas.h) packs no geometry: its boxes hold instances, whose EPO it cannot clip.
-    d.epo = bvh.prims.empty() ? std::vector<double>(n, 0.0) : epo_terms(bvh, threads, cancel);
-    for (double e : d.epo) d.epo_cost += e;
+    if (!epo) {
+        d.epo.assign(n, std::numeric_limits<double>::quiet_NaN());
+        d.epo_cost = std::numeric_limits<double>::quiet_NaN();
+    } else {
+        // A TLAS (tlas.h) packs no geometry: its boxes hold instances, whose EPO it cannot clip.
+        d.epo = bvh.prims.empty() ? std::vector<double>(n, 0.0) : epo_terms(bvh, threads, cancel);
+        for (double e : d.epo) d.epo_cost += e;
+    }
     d.surface_area = surface_area(bvh);
     return d;
 }

@@ -27,9 +27,9 @@ class NodeData:
     subtree_sah: np.ndarray  #: float64 Σ sah_term over the subtree (the root's is the tree's SAH cost)
     sah_share: np.ndarray  #: float64 subtree_sah / SAH cost
     child_overlap: np.ndarray  #: float64 area(left ∩ right) / area(node); 0 for a leaf
-    epo: np.ndarray  #: float64 end-point overlap term (Aila, Karras and Laine 2013; triangles only)
+    epo: np.ndarray  #: float64 end-point overlap term (Aila, Karras and Laine 2013; triangles only), NaN not made
     sah_cost: float  #: Σ sah_term
-    epo_cost: float  #: Σ epo
+    epo_cost: float  #: Σ epo (NaN where not made: Bvh.node_data(epo=False))
     surface_area: float  #: A(Q), the triangles' area: what EPO terms are shares of (0 for a TLAS)
 
     @classmethod
@@ -41,6 +41,11 @@ class NodeData:
                 v.flags.writeable = False
             values[f.name] = v
         return cls(**values)
+
+    @property
+    def has_epo(self) -> bool:
+        """Whether the EPO terms were made (Bvh.node_data(epo=True))."""
+        return not np.isnan(self.epo_cost)
 
     def __len__(self) -> int:
         return len(self.depth)
