@@ -31,6 +31,13 @@ std::vector<float> load_rows(const std::string& path, std::size_t width, const c
 }
 
 Mesh load_mesh(const std::string& path) { return {load_rows(path, 9, "triangles")}; }
+void split_rays(const Rays& rays, std::vector<float>& origins, std::vector<float>& directions) {
+    origins.resize(3 * rays.count()), directions.resize(3 * rays.count());
+    for (std::size_t i = 0; i < rays.count(); ++i)
+        for (int a = 0; a < 3; ++a)
+            origins[3 * i + a] = rays.od[6 * i + a], directions[3 * i + a] = rays.od[6 * i + 3 + a];
+}
+
 Rays load_rays(const std::string& path) { return {load_rows(path, 6, "rays"), {}}; }
 
 Rays load_shadow_rays(const std::string& path) {

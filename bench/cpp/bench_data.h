@@ -28,6 +28,8 @@ struct Rays {
 /// A file of whole rows of `width` floats (`what` names them in the error otherwise).
 std::vector<float> load_rows(const std::string& path, std::size_t width, const char* what);
 Mesh load_mesh(const std::string& path);
+/// The rays' origins and directions apart (N×3 each), as the batch queries take them.
+void split_rays(const Rays& rays, std::vector<float>& origins, std::vector<float>& directions);
 Rays load_rays(const std::string& path);
 Rays load_shadow_rays(const std::string& path);
 

@@ -115,10 +115,7 @@ public:
     /// bvh_bench's batch peer).
     void prepare_rays(const Rays& rays) override {
         if (!batch_) return;
-        origins_.resize(3 * rays.count()), directions_.resize(3 * rays.count());
-        for (std::size_t i = 0; i < rays.count(); ++i)
-            for (int a = 0; a < 3; ++a)
-                origins_[3 * i + a] = rays.od[6 * i + a], directions_[3 * i + a] = rays.od[6 * i + 3 + a];
+        split_rays(rays, origins_, directions_);
     }
 
 private:

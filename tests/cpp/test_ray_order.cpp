@@ -30,21 +30,10 @@
 using namespace bvhlab;
 using test::random_rays;
 using test::same_bits;
+using Arrays = test::RayArrays;
 using test::supported_isas;
 
 namespace {
-
-/// A batch's arrays (N×3 origins and directions, N tmax) made from rays.
-struct Arrays {
-    std::vector<float> o, d, tmax;
-    explicit Arrays(const std::vector<Ray>& rays) {
-        for (const Ray& r : rays) {
-            o.insert(o.end(), {r.origin.x, r.origin.y, r.origin.z}), d.insert(d.end(), {r.dir.x, r.dir.y, r.dir.z});
-            tmax.push_back(r.tmax);
-        }
-    }
-    RayBatch batch() const { return {o.data(), d.data(), tmax.size(), 0.0f, kInfinity, tmax.data()}; }
-};
 
 const float kNaN = std::numeric_limits<float>::quiet_NaN();
 

@@ -21,6 +21,7 @@
 
 using namespace bvhlab;
 using test::same_bits;
+using Arrays = test::RayArrays;
 
 namespace {
 
@@ -45,18 +46,6 @@ struct ManyInstances : test::TwoLevelFixture {
         }
         build_two_level(blas_of, transforms);
     }
-};
-
-/// A batch's arrays (N×3 origins and directions, N tmax) made from rays.
-struct Arrays {
-    std::vector<float> o, d, tmax;
-    explicit Arrays(const std::vector<Ray>& rays) {
-        for (const Ray& r : rays) {
-            o.insert(o.end(), {r.origin.x, r.origin.y, r.origin.z}), d.insert(d.end(), {r.dir.x, r.dir.y, r.dir.z});
-            tmax.push_back(r.tmax);
-        }
-    }
-    RayBatch batch() const { return {o.data(), d.data(), tmax.size(), 0.0f, kInfinity, tmax.data()}; }
 };
 
 /// The timed choice made one way (detail::order_stall_ns: -inf reorders every timed block, +inf

@@ -9,6 +9,7 @@
 #include "bvhlab/bvh.h"
 #include "bvhlab/isa.h"
 #include "bvhlab/ray.h"
+#include "bvhlab/traverse.h"
 
 namespace bvhlab::test {
 
@@ -47,6 +48,18 @@ inline std::vector<Ray> random_rays(std::uint32_t n, std::uint32_t seed) {
     }
     return rays;
 }
+
+/// A batch's arrays (N×3 origins and directions, N tmax) made from rays, for the batch queries.
+struct RayArrays {
+    std::vector<float> o, d, tmax;
+    explicit RayArrays(const std::vector<Ray>& rays) {
+        for (const Ray& r : rays) {
+            o.insert(o.end(), {r.origin.x, r.origin.y, r.origin.z}), d.insert(d.end(), {r.dir.x, r.dir.y, r.dir.z});
+            tmax.push_back(r.tmax);
+        }
+    }
+    RayBatch batch() const { return {o.data(), d.data(), tmax.size(), 0.0f, kInfinity, tmax.data()}; }
+};
 
 /// The instruction set paths this CPU can run (isa.h).
 inline std::vector<Isa> supported_isas() {
