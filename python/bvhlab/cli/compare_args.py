@@ -79,7 +79,10 @@ def backend_list(text: str) -> list[str]:
 def output_dir(text: str) -> Path:
     """A directory to write into: it may exist (as a directory), but neither it nor a folder above it
     may be a file, and the nearest that exists must take new files (checked before any work). The
-    path is used as given, never renamed."""
+    path is used as given, never renamed. An empty one is refused (Path("") is the current folder:
+    a sweep's files were written there, helper probe)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("the output folder is empty (e.g. --out out/study)")
     path = Path(text)
     if path.exists() and not path.is_dir():
         raise argparse.ArgumentTypeError(

@@ -4,13 +4,15 @@ spec, one Dask task per cell: on a LocalCluster of single-threaded worker proces
 or --workers N), on a running Dask cluster (--scheduler tcp://HOST:8786), or in this process
 (--workers 0). Writes DIR/results.parquet, DIR/results.csv and DIR/sah_vs_build.png; cells already
 in DIR are not run again, so an interrupted sweep continues where it stopped. Exits 1 when a cell
-failed (its row holds the error), 2 for a bad spec, 130 on Ctrl-C."""
+failed (its row holds the error) or was not run (the scheduler lost: the same command runs it), 2
+for a bad spec or a scheduler that does not answer, 130 on Ctrl-C."""
 
 from __future__ import annotations
 
 import argparse
 import contextlib
 import sys
+import threading
 from pathlib import Path
 
 from .._folder_lock import folder_lock
@@ -40,6 +42,7 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from ..sweep import local_cluster, read_spec, run_sweep
+    from ..sweep.runner import CellsNotRun
 
     spec = read_spec(args.spec)  # checked before a cluster starts
     _require_sweep_packages()
@@ -47,15 +50,17 @@ def run(args) -> int:
     with folder_lock(args.out, "bvhlab sweep"), contextlib.ExitStack() as stack:
         client = None
         if args.scheduler is not None:
-            from distributed import Client
-
-            client = stack.enter_context(Client(args.scheduler, timeout="20s"))
+            client = stack.enter_context(_connect(args.scheduler))
         elif args.workers != 0:
             cluster, client = local_cluster(args.workers)
             stack.enter_context(cluster)
             stack.enter_context(client)
         bar = stack.enter_context(ProgressBar("sweep"))
-        result = run_sweep(spec, args.out, client=client, retry_failed=args.retry_failed, progress=_drawer(bar))
+        try:
+            result = run_sweep(spec, args.out, client=client, retry_failed=args.retry_failed, progress=_drawer(bar))
+        except CellsNotRun as lost:  # the table of what finished is written
+            print(f"bvhlab sweep: {lost}", file=sys.stderr)
+            return 1
     print(
         f"sweep: {len(result.rows)} cells ({result.ran} run now, {len(result.rows) - result.ran} stored before), "
         f"{result.failed} failed"
@@ -87,6 +92,45 @@ def _require_sweep_packages() -> None:
         raise RuntimeError(
             f"bvhlab sweep needs dask[distributed] and pyarrow ({e}): pip install 'bvhlab[sweep]'"
         ) from None
+
+
+#: How long (s) a scheduler has to answer, the connection and Dask's handshake both.
+CONNECT_S = 20.0
+
+
+def _connect(address: str):
+    """A client of the Dask scheduler at `address`, or a SchedulerUnreachable after CONNECT_S.
+    Dask's own timeout bounds the connection only: a peer that accepts it and never answers held
+    the sweep for good, and one that answers in another protocol (an HTTP server) read as a
+    message length of exabytes, "out of memory" (helper probe). So the client is made on a daemon
+    thread and waited for."""
+    from distributed import Client
+
+    made: dict = {}
+
+    def connect() -> None:
+        try:
+            made["client"] = Client(address, timeout=f"{CONNECT_S:g}s")
+        except BaseException as error:  # noqa: BLE001 (handed to the caller's thread)
+            made["error"] = error
+
+    thread = threading.Thread(target=connect, name="bvhlab-sweep-connect", daemon=True)
+    thread.start()
+    thread.join(CONNECT_S + 5)
+    if "client" in made:
+        return made["client"]
+    error = made.get("error")
+    if thread.is_alive():
+        why = f"it accepted the connection but did not answer within {CONNECT_S:g} s"
+    elif isinstance(error, MemoryError):
+        why = "what answered does not speak Dask's protocol"
+    else:
+        why = f"{type(error).__name__}: {error}"
+    raise SchedulerUnreachable(f"no Dask scheduler at {address}: {why}")
+
+
+class SchedulerUnreachable(RuntimeError):
+    """--scheduler names no scheduler that answers."""
 
 
 def _address(text: str) -> str:

@@ -16,11 +16,11 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from .._atomic import deliver_interrupt
+from .._atomic import deliver_interrupt, staged_folder
 from .cells import Cell, plan_cells
 from .plot import PLOT, plot_sah_against_build_time
 from .spec import SweepSpec
-from .summary import write_summary
+from .summary import RATIO_PLOT, write_summary
 from .table import store_row, stored_rows, write_table
 from .task import MEASURED, error_row, run_cell
 
@@ -91,19 +91,31 @@ class _Counts:
         self.failed += row["status"] != "ok"
 
 
+class CellsNotRun(RuntimeError):
+    """Cells whose Dask tasks were cancelled by the cluster (the connection to the scheduler lost,
+    the scheduler restarted): they never ran, so nothing is stored for them and the same command
+    runs them again (stored as errors, they were failures for good: only --retry-failed ran them)."""
+
+
 def _run_on_dask(client, todo: list[Cell], finished: Callable[[dict], None]) -> None:
+    from concurrent.futures import CancelledError
+
     from distributed import as_completed
 
     per_host = Counter(w["host"] for w in client.scheduler_info()["workers"].values())
     futures = {
         client.submit(run_cell, cell, key=f"bvhlab-cell-{cell.key}", retries=TASK_RETRIES): cell for cell in todo
     }
+    lost: list[str] = []  # why each cancelled task was cancelled
     try:
         for future in as_completed(futures):
             cell = futures[future]
             try:
                 row = future.result()
-            except Exception as e:  # KilledWorker and the like: the task never returned a row
+            except CancelledError as e:  # not by this sweep (it cancels only on its way out): not run
+                lost.append(str(e))
+                continue
+            except Exception as e:  # KilledWorker and the like: the task ran and never returned a row
                 row = error_row(cell, e)
             host = str(row.get("worker") or "").removeprefix("tcp://").rpartition(":")[0]
             finished({**row, "workers_on_host": per_host.get(host)})
@@ -111,6 +123,12 @@ def _run_on_dask(client, todo: list[Cell], finished: Callable[[dict], None]) -> 
     finally:  # Ctrl-C: nothing left running for this sweep (best effort: the table comes first)
         with contextlib.suppress(Exception):
             client.cancel(list(futures))
+    if lost:
+        reason = lost[0].rpartition("reason: ")[2].rstrip(".") or "none given"
+        raise CellsNotRun(
+            f"{len(lost)} of {len(todo)} cells were not run: the cluster cancelled their tasks (the scheduler "
+            f"lost or closed; Dask's reason: {reason}); nothing is stored for them: the same command runs them"
+        )
 
 
 def _write_results(out: Path, cells: list[Cell], ran: int, plot: bool, baseline: str) -> SweepResult:
@@ -125,13 +143,17 @@ def _write_results(out: Path, cells: list[Cell], ran: int, plot: bool, baseline:
     files: list[Path] = []
     if rows:
         columns = [*cells[0].columns(), *MEASURED, "workers_on_host"]
-        files.extend(write_table(out, rows, columns))
-        chart = plot_sah_against_build_time(rows, out / PLOT) if plot else None
-        if chart is not None:
-            files.append(chart)
-        elif plot:  # no cell measured: an earlier run's plot no longer goes with the table
-            (out / PLOT).unlink(missing_ok=True)
-        files.extend(write_summary(rows, baseline, out, plot=plot, planned=len(cells)))
+        # the table, its plots and its summary moved in together (a second Ctrl-C while they were
+        # written left a new table beside the last run's plots and summary: helper probe)
+        with staged_folder(out) as stage:
+            staged = list(write_table(stage, rows, columns))
+            chart = plot_sah_against_build_time(rows, stage / PLOT) if plot else None
+            staged += [chart] if chart is not None else []
+            staged += write_summary(rows, baseline, stage, plot=plot, planned=len(cells))
+            files = [out / p.relative_to(stage) for p in staged]
+        for name in (PLOT, RATIO_PLOT):  # an earlier run's plot that this table no longer has
+            if plot and out / name not in files:
+                (out / name).unlink(missing_ok=True)
     return SweepResult(rows, ran, sum(r.get("status") != "ok" for r in rows), files)
 
 

@@ -23,21 +23,38 @@ _SHORT = {
 }
 
 
+def _varying(rows: list[dict]) -> list[str]:
+    """The settings (_LABELLED) that take more than one value over `rows`."""
+    return [c for c in _LABELLED if len({r.get(c) for r in rows}) > 1]
+
+
+def _by_method(rows: list[dict]) -> dict[str, list[dict]]:
+    out: dict[str, list[dict]] = {}
+    for r in rows:
+        out.setdefault(r["method"], []).append(r)
+    return out
+
+
 def setting_labels(rows: list[dict]) -> dict[str, str]:
     """A short label for each row's setting ('sah b32 leaf4'): its method and the settings that
-    vary over the rows, keyed by the row's key."""
-    varying = [c for c in _LABELLED if len({r.get(c) for r in rows}) > 1]
-    return {r["key"]: " ".join([r["method"], *(f"{_SHORT[c]}{r.get(c)}" for c in varying)]) for r in rows}
+    vary over its method's rows, keyed by the row's key (bins only where a method's cells take
+    several: the grid's method = ["median", "sah12", "sah32"] labelled every median cell "b12")."""
+    varying = {method: _varying(of) for method, of in _by_method(rows).items()}
+    return {r["key"]: " ".join([r["method"], *(f"{_SHORT[c]}{r.get(c)}" for c in varying[r["method"]])]) for r in rows}
 
 
 def baseline_pairs(rows: list[dict], baseline: str) -> list[tuple[dict, dict | None]]:
-    """Each ok row with the ok row of method `baseline` for the same scene and the same other
-    settings (None where the grid has none, e.g. a setting only another method takes)."""
-    ok = [r for r in rows if r.get("status") == "ok"]
+    """Each ok row with the ok row of method `baseline` for the same scene and the same settings of
+    those the baseline's cells vary in (None where the grid has none, or that cell failed). The
+    grid is a product, so the baseline holds one value of a setting only where every method does,
+    or where the setting is a method label's (the bins of "sah32"): those are not matched (sah32's
+    cells had no median cell of 32 bins to divide by)."""
+    matched = _varying([r for r in rows if r["method"] == baseline])  # failed cells too: their settings
 
     def others(row: dict) -> tuple:
-        return (row["scene_hash"], *(row.get(c) for c in _LABELLED))
+        return (row["scene_hash"], *(row.get(c) for c in matched))
 
+    ok = [r for r in rows if r.get("status") == "ok"]
     bases = {others(r): r for r in ok if r["method"] == baseline}
     return [(r, bases.get(others(r))) for r in ok]
 
@@ -87,14 +104,12 @@ def write_summary(
     rows: list[dict], baseline: str, out: Path, plot: bool = True, planned: int | None = None
 ) -> list[Path]:
     """summary.md (saying so where it lacks some of the `planned` cells), and (with `plot`) the ratio
-    plot when any cell has a baseline to divide by; where none has, an earlier run's plot is removed
-    (it stood beside the new table, showing other cells)."""
+    plot when any cell has a baseline to divide by (where none has, the runner removes an earlier
+    run's, which stood beside the new table showing other cells)."""
     files = [write_text(out / SUMMARY, summary_table(rows, baseline, planned))]
     pairs = [(r, b) for r, b in baseline_pairs(rows, baseline) if b is not None]
     if plot and pairs:
         files.append(_plot_ratios(pairs, setting_labels(rows), baseline, out / RATIO_PLOT))
-    elif plot:
-        (out / RATIO_PLOT).unlink(missing_ok=True)
     return files
 
 

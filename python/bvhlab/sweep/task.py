@@ -4,6 +4,7 @@ scene is recorded, not retried."""
 
 from __future__ import annotations
 
+import threading
 import time
 
 import numpy as np
@@ -22,8 +23,10 @@ MEASURED = (
 VARYING = ("build_ms", "intersect_ms", "mrays_per_s", "worker", "workers_on_host")
 _WARM_UP_RAYS = 1000
 
-# The last scene this process loaded: cells of one scene usually follow each other on a worker.
-_last_scene: tuple[tuple[str, str], Scene] | None = None
+# The last scene each thread loaded: cells of one scene usually follow each other on a worker; a
+# worker of several threads runs several cells at once (a module-wide cache gave a cell another
+# scene's figures, or None: helper probe).
+_last = threading.local()
 
 
 def run_cell(cell: Cell) -> dict:
@@ -103,13 +106,13 @@ def fixed_rays(scene: Scene, count: int, seed: int) -> tuple[np.ndarray, np.ndar
 
 
 def _scene(cell: Cell) -> Scene:
-    global _last_scene
     if not cell.scene_hash:
         load_scene(cell.scene)  # raises what is wrong (missing file, unknown name)
         raise ValueError(f"{cell.scene} could not be read when the sweep was planned")
     key = (cell.scene, cell.scene_hash)
-    if _last_scene is None or _last_scene[0] != key:
-        _last_scene = None  # free the old scene before loading the next
+    last = getattr(_last, "scene", None)
+    if last is None or last[0] != key:
+        _last.scene = None  # free the old scene before loading the next
         try:
             scene = load_scene(cell.scene)[0]
         except Exception as e:  # a file half-written as it was read is no error of the key's scene
@@ -121,8 +124,8 @@ def _scene(cell: Cell) -> Scene:
         # key, and later runs reused them
         if scene_hash(cell.scene, scene) != cell.scene_hash:  # a generated scene's from its arrays
             raise SceneChanged(f"{cell.scene} changed after the sweep was planned: it is run again next time")
-        _last_scene = (key, scene)
-    return _last_scene[1]
+        last = _last.scene = (key, scene)
+    return last[1]
 
 
 def _worker_name() -> str:
