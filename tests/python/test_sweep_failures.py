@@ -16,7 +16,7 @@ import trimesh
 from bvhlab import cli
 from bvhlab.cli import sweep_cmd
 from bvhlab.sweep import local_cluster, plan_cells, read_spec, run_sweep, runner, task
-from bvhlab.sweep.summary import SUMMARY, baseline_pairs, setting_labels
+from bvhlab.sweep.summary import RATIO_PLOT, SUMMARY, baseline_pairs, setting_labels
 from bvhlab.sweep.table import CSV
 
 
@@ -209,3 +209,20 @@ def test_method_labels_bins_are_divided_by_the_baseline_and_labelled_where_they_
         f"sah b{b} leaf{n}" for b in (12, 32) for n in (1, 4)
     }
     assert "–" not in (tmp_path / "out" / SUMMARY).read_text()
+
+
+def test_plots_draw_at_most_max_panels_scenes_and_bars_get_room(tmp_path, monkeypatch):
+    """600 scenes drew two figures 70,000 pixels tall for minutes at every run (a Ctrl-C waited for
+    them); 63 settings' bars printed their labels over each other in a fixed panel."""
+    from PIL import Image
+
+    from bvhlab.sweep import plot
+
+    monkeypatch.setattr(plot, "MAX_PANELS", 2)
+    for k in range(4):
+        _soup(tmp_path / f"s{k}.ply", 50, k)
+    grid = "method = ['median', 'sah', 'mean']\nmax_leaf_size = [1, 2, 3, 4, 5, 6, 7, 8]"
+    run_sweep(read_spec(_spec(tmp_path, [f"s{k}.ply" for k in range(4)], grid, rays=200)), tmp_path / "out")
+    with Image.open(tmp_path / "out" / "sah_vs_build.png") as chart, Image.open(tmp_path / "out" / RATIO_PLOT) as bars:
+        assert chart.size[1] < 500 and bars.size[1] < 500  # one row of two panels each
+        assert bars.size[1] >= 100 * (0.8 + 0.14 * 24) - 2  # 24 bars a panel: 4.2 inches at 100 dpi

@@ -7,6 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .._atomic import write_text
+from . import plot as _plots  # its MAX_PANELS read at each plot (tests change it)
 from .plot import panel_grid, save_panels
 
 SUMMARY, RATIO_PLOT = "summary.md", "mrays_vs_baseline.png"
@@ -114,8 +115,11 @@ def write_summary(
 
 
 def _plot_ratios(pairs: list[tuple[dict, dict]], labels: dict[str, str], baseline: str, path: Path) -> Path:
-    scenes = list(dict.fromkeys(r["scene"] for r, _ in pairs))
-    fig, axes = panel_grid(len(scenes), 3.4)
+    every = list(dict.fromkeys(r["scene"] for r, _ in pairs))
+    scenes = every[: _plots.MAX_PANELS]
+    most = max(sum(r["scene"] == scene for r, _ in pairs) for scene in scenes)
+    # a bar's label a line of 7-point text: 63 settings in a fixed 3.4-inch panel printed over each other
+    fig, axes = panel_grid(len(scenes), max(3.4, 0.8 + 0.14 * most))
     for ax, scene in zip(axes.flat, scenes):
         mine = [(r, b) for r, b in pairs if r["scene"] == scene]
         ratios = [r["mrays_per_s"] / b["mrays_per_s"] for r, b in mine]
@@ -124,4 +128,4 @@ def _plot_ratios(pairs: list[tuple[dict, dict]], labels: dict[str, str], baselin
         ax.axvline(1.0, color="0.3", lw=0.8)
         ax.invert_yaxis()
         ax.set(title=scene, xlabel=f"Mrays/s ÷ {baseline} (higher is faster)")
-    return save_panels(fig, axes, len(scenes), path)
+    return save_panels(fig, axes, len(scenes), path, len(every))
