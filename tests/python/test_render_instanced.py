@@ -188,7 +188,7 @@ def test_the_overlay_pass_draws_the_level_asked_for(backend):
     box): a pixel on the vertical edge of a cloud's box where the two clouds split shows the line
     colour with "blas" and "both", and not with "tlas" (the TLAS's depth-1 boxes are the
     instances' boxes, with no edge there). The Vulkan tracer draws the same box list."""
-    from test_render_cpu import near_pixels
+    from test_render_cpu_overlay import near_pixels
 
     from bvhlab.overlay_levels import two_level_boxes
 
