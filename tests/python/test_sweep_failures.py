@@ -226,3 +226,17 @@ def test_plots_draw_at_most_max_panels_scenes_and_bars_get_room(tmp_path, monkey
     with Image.open(tmp_path / "out" / "sah_vs_build.png") as chart, Image.open(tmp_path / "out" / RATIO_PLOT) as bars:
         assert chart.size[1] < 500 and bars.size[1] < 500  # one row of two panels each
         assert bars.size[1] >= 100 * (0.8 + 0.14 * 24) - 2  # 24 bars a panel: 4.2 inches at 100 dpi
+
+
+def test_a_stopped_sweeps_summary_divides_by_the_planned_baseline_cell_or_none(tmp_path):
+    """A table the sweep stopped in lacks some baseline cells: a setting the baseline varies in
+    looked fixed, and a leaf-4 cell was divided by the leaf-2 baseline (review); it gets none."""
+    trimesh.creation.icosphere(subdivisions=2).export(tmp_path / "ball.ply")
+    spec = read_spec(_spec(tmp_path, ["ball.ply"], "method = ['median', 'sah']\nmax_leaf_size = [2, 4]"))
+    rows = run_sweep(spec, tmp_path / "out").rows
+    planned = [c.columns() for c in plan_cells(spec)]
+    stopped = [r for r in rows if not (r["method"] == "median" and r["max_leaf_size"] == 4)]
+    pairs = {r["max_leaf_size"]: base for r, base in baseline_pairs(stopped, "median", planned) if r["method"] == "sah"}
+    assert pairs[2] is not None and pairs[2]["max_leaf_size"] == 2
+    assert pairs[4] is None
+    assert setting_labels(stopped, planned)[stopped[0]["key"]].endswith("leaf2")

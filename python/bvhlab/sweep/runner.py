@@ -149,7 +149,7 @@ def _write_results(out: Path, cells: list[Cell], ran: int, plot: bool, baseline:
             staged = list(write_table(stage, rows, columns))
             chart = plot_sah_against_build_time(rows, stage / PLOT) if plot else None
             staged += [chart] if chart is not None else []
-            staged += write_summary(rows, baseline, stage, plot=plot, planned=len(cells))
+            staged += write_summary(rows, baseline, stage, plot=plot, planned=[c.columns() for c in cells])
             files = [out / p.relative_to(stage) for p in staged]
         for name in (PLOT, RATIO_PLOT):  # an earlier run's plot that this table no longer has
             if plot and out / name not in files:

@@ -36,21 +36,29 @@ def _by_method(rows: list[dict]) -> dict[str, list[dict]]:
     return out
 
 
-def setting_labels(rows: list[dict]) -> dict[str, str]:
+def setting_labels(rows: list[dict], planned: list[dict] | None = None) -> dict[str, str]:
     """A short label for each row's setting ('sah b32 leaf4'): its method and the settings that
-    vary over its method's rows, keyed by the row's key (bins only where a method's cells take
-    several: the grid's method = ["median", "sah12", "sah32"] labelled every median cell "b12")."""
-    varying = {method: _varying(of) for method, of in _by_method(rows).items()}
-    return {r["key"]: " ".join([r["method"], *(f"{_SHORT[c]}{r.get(c)}" for c in varying[r["method"]])]) for r in rows}
+    vary over its method's cells (the `planned` ones, every cell of the grid, run or not; else
+    `rows`), keyed by the row's key (bins only where a method's cells take several: the grid's
+    method = ["median", "sah12", "sah32"] labelled every median cell "b12")."""
+    varying = {method: _varying(of) for method, of in _by_method(planned or rows).items()}
+    return {
+        r["key"]: " ".join([r["method"], *(f"{_SHORT[c]}{r.get(c)}" for c in varying.get(r["method"], []))])
+        for r in rows
+    }
 
 
-def baseline_pairs(rows: list[dict], baseline: str) -> list[tuple[dict, dict | None]]:
+def baseline_pairs(
+    rows: list[dict], baseline: str, planned: list[dict] | None = None
+) -> list[tuple[dict, dict | None]]:
     """Each ok row with the ok row of method `baseline` for the same scene and the same settings of
-    those the baseline's cells vary in (None where the grid has none, or that cell failed). The
-    grid is a product, so the baseline holds one value of a setting only where every method does,
-    or where the setting is a method label's (the bins of "sah32"): those are not matched (sah32's
-    cells had no median cell of 32 bins to divide by)."""
-    matched = _varying([r for r in rows if r["method"] == baseline])  # failed cells too: their settings
+    those the baseline's cells vary in (None where the grid has none, or that cell failed or has not
+    run). The cells are the `planned` ones (every cell of the grid: a table the sweep stopped in
+    lacks some, and a setting the baseline varies in then looked fixed, so leaf-4 cells were divided
+    by a leaf-2 baseline; review), else `rows`. The grid is a product, so the baseline holds one
+    value of a setting only where every method does, or where the setting is a method label's (the
+    bins of "sah32"): those are not matched (sah32's cells had no median cell of 32 bins)."""
+    matched = _varying([r for r in planned or rows if r["method"] == baseline])
 
     def others(row: dict) -> tuple:
         return (row["scene_hash"], *(row.get(c) for c in matched))
@@ -64,20 +72,21 @@ def _ratio(value, base) -> float | None:
     return value / base if base and value is not None else None
 
 
-def summary_table(rows: list[dict], baseline: str, planned: int | None = None) -> str:
+def summary_table(rows: list[dict], baseline: str, planned: list[dict] | None = None) -> str:
     """The Markdown table: scene, setting, SAH cost, ÷ baseline, build ms, Mrays/s, ÷ baseline;
-    headed by how many of the `planned` cells it lacks, where it lacks some (a sweep stopped)."""
-    labels = setting_labels(rows)
+    headed by how many of the `planned` cells (Cell.columns of every cell) it lacks, where it lacks
+    some (a sweep stopped)."""
+    labels = setting_labels(rows, planned)
     missing = []
-    if planned is not None and len(rows) < planned:
+    if planned is not None and len(rows) < len(planned):
         stopped = "the sweep was stopped; the same command runs the rest"
-        missing = [f"**Incomplete: {len(rows)} of {planned} cells** ({stopped}).", ""]
+        missing = [f"**Incomplete: {len(rows)} of {len(planned)} cells** ({stopped}).", ""]
     lines = [
         *missing,
         f"| scene | setting | SAH cost | SAH ÷ {baseline} | build ms | Mrays/s | Mrays/s ÷ {baseline} |",
         "|---|---|---|---|---|---|---|",
     ]
-    for row, base in baseline_pairs(rows, baseline):
+    for row, base in baseline_pairs(rows, baseline, planned):
         sah = _ratio(row["sah_cost"], base and base["sah_cost"])
         speed = _ratio(row["mrays_per_s"], base and base["mrays_per_s"])
         lines.append(
@@ -102,15 +111,16 @@ def _fmt(ratio: float | None) -> str:
 
 
 def write_summary(
-    rows: list[dict], baseline: str, out: Path, plot: bool = True, planned: int | None = None
+    rows: list[dict], baseline: str, out: Path, plot: bool = True, planned: list[dict] | None = None
 ) -> list[Path]:
-    """summary.md (saying so where it lacks some of the `planned` cells), and (with `plot`) the ratio
-    plot when any cell has a baseline to divide by (where none has, the runner removes an earlier
-    run's, which stood beside the new table showing other cells)."""
+    """summary.md (saying so where it lacks some of the `planned` cells: Cell.columns of every cell
+    of the grid), and (with `plot`) the ratio plot when any cell has a baseline to divide by (where
+    none has, the runner removes an earlier run's, which stood beside the new table showing other
+    cells)."""
     files = [write_text(out / SUMMARY, summary_table(rows, baseline, planned))]
-    pairs = [(r, b) for r, b in baseline_pairs(rows, baseline) if b is not None]
+    pairs = [(r, b) for r, b in baseline_pairs(rows, baseline, planned) if b is not None]
     if plot and pairs:
-        files.append(_plot_ratios(pairs, setting_labels(rows), baseline, out / RATIO_PLOT))
+        files.append(_plot_ratios(pairs, setting_labels(rows, planned), baseline, out / RATIO_PLOT))
     return files
 
 
