@@ -38,8 +38,9 @@ if TYPE_CHECKING:
 _live: dict[tuple, LiveScene] = {}  # (scene key, scope) → the LiveScene kept between updates
 _failed: set[tuple] = set()  # the (scene key, scope)s whose last catch-up failed to export
 _edited_while_building: set[int] = set()  # scene keys changed while their Build ran
-#: scene key → the objects its tree's scope covered at the last export or walk (_shown_objects)
-_shown: dict[int, frozenset] = {}
+#: (scene key, view layer name, scope) → the objects that scope covered at the last export or walk
+#: (_shown_objects)
+_shown: dict[tuple, frozenset] = {}
 _busy = [False]  # a handler does not run inside itself (the sync may evaluate the depsgraph)
 #: How often (s) the UI timer looks for a finished worker update to redraw.
 REDRAW_POLL_S = 0.05
@@ -146,7 +147,10 @@ def follow(scene, depsgraph):
         return None
     if key in state.builds or not scene.bvhlab.overlay_show:  # not followed: the tree falls behind
         _missed(key)
-        if _moved_or_edited(depsgraph) or (built is not None and _shown_changed(key, depsgraph, built.key.scope)):
+        # (a tree behind already is read again whole at its catch-up: no set to keep)
+        if _moved_or_edited(depsgraph) or (
+            built is not None and not built.behind and _shown_changed(key, depsgraph, built.key.scope)
+        ):
             _fell_behind(key, built, building=key in state.builds)
         return None
     live_key = (key, built.key.scope)
@@ -161,7 +165,8 @@ def follow(scene, depsgraph):
         _missed(key)  # the next sync walks: the updates do not name what changed
         if shown_changed is None:  # a material, a flag: followed at the next move or edit
             return None
-        # an object hidden by the eye (or shown, selected in scope "selected"): followed now
+        # an object hidden by the eye, a collection excluded (or an object selected in scope
+        # "selected"): followed now
     live = _live.get(live_key)
     if live is None:
         live = _live[live_key] = LiveScene(built.key.scope, require_camera=False)
@@ -177,7 +182,7 @@ def follow(scene, depsgraph):
     built.behind = ""
     _failed.discard(live_key)
     if not report.placed_only:  # walked: objects may have come or gone
-        _shown[key] = _shown_objects(depsgraph.view_layer, built.key.scope)
+        _shown[key, depsgraph.view_layer.name, built.key.scope] = _shown_objects(depsgraph.view_layer, built.key.scope)
     if not report.geometry and not report.full:
         return None
     job = _Job(key, built, live.scene, report.refittable, update_config(scene))
@@ -206,7 +211,7 @@ def _fell_behind(key: int, built, building: bool) -> None:
 def export_taken(key: int, view_layer, scope: str) -> None:
     """A Build has read the scene (ops_build) in `scope`: changes from now on are made while it runs."""
     _edited_while_building.discard(key)
-    _shown[key] = _shown_objects(view_layer, scope)
+    _shown[key, view_layer.name, scope] = _shown_objects(view_layer, scope)
 
 
 def tree_made(key: int, built) -> None:
@@ -266,15 +271,25 @@ def _shown_objects(view_layer, scope: str) -> frozenset:
 
 
 def _shown_changed(key: int, depsgraph, scope: str) -> bool | None:
-    """Whether an evaluation whose updates name the scene alone changed which objects `scope`
-    covers: hiding an object by the eye, selecting one, making one active and a scene setting are
-    all reported so (Blender 4.2 to 5.3). None where that cannot be told: another ID is named (a
-    material, a flag), or no set was recorded since the tree was made. Records the set."""
-    if not all(isinstance(update.id, bpy.types.Scene) for update in depsgraph.updates):
+    """For an evaluation that moved and edited nothing (_moved_or_edited), whether it changed which
+    objects `scope` covers: True where it did (an object hidden by the eye or a layer collection's
+    eye, both reported as the scene alone; a collection excluded, reported as the scene and its
+    objects' shading; a selection in scope "selected"); False where it did not and named the scene
+    alone (a selection, the active object, a scene setting: nothing to follow); None where it did
+    not and named something else (a material, a holdout or ray-visibility flag: followed at the
+    next move or edit, which walks), or named nothing, or no set was recorded since the tree was
+    made. Records the set (per view layer and scope: two windows on two view layers of one scene
+    would swap it back and forth)."""
+    updates = list(depsgraph.updates)
+    view_layer = depsgraph.view_layer
+    shown = _shown_objects(view_layer, scope)
+    before = _shown.get((key, view_layer.name, scope))
+    _shown[key, view_layer.name, scope] = shown
+    if before is None or not updates:
         return None
-    shown = _shown_objects(depsgraph.view_layer, scope)
-    before, _shown[key] = _shown.get(key), shown
-    return None if before is None else shown != before
+    if shown != before:
+        return True
+    return False if all(isinstance(update.id, bpy.types.Scene) for update in updates) else None
 
 
 def _moved_or_edited(depsgraph) -> bool:
@@ -283,7 +298,7 @@ def _moved_or_edited(depsgraph) -> bool:
     disabled in viewports reports its collections' geometry (a deleted object reports nothing of
     its own). A changed setting of the scene (the overlay's, say) does not count; nor, unseen
     here, an object hidden by the eye or a collection excluded (view-layer state the depsgraph
-    reports as the scene alone: _shown_changed)."""
+    reports as the scene alone, or with its objects' shading: _shown_changed)."""
     for update in depsgraph.updates:
         if isinstance(update.id, bpy.types.Object) and (update.is_updated_transform or update.is_updated_geometry):
             return True

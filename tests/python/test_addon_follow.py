@@ -304,3 +304,23 @@ def test_an_object_hidden_with_the_boxes_hidden_leaves_the_tree_behind():
     bpy.data.objects["Floor"].hide_set(True)
     bpy.context.view_layer.update()
     assert state.tree_for(scene).behind == state.EDITED
+
+
+def test_a_collection_excluded_while_the_boxes_follow_is_gone_at_once():
+    """Excluding a collection reports the scene and its objects' shading, no move or edit: the
+    objects the tree's scope covers differ, so it is followed at once (review)."""
+    built, monkey = built_monkey()
+    state, follow = harness.addon().state, _addon("follow")
+    scene = bpy.context.scene
+    crates = bpy.data.collections.new("Crates")
+    scene.collection.children.link(crates)
+    crate = bpy.data.objects.new("Crate", bpy.data.objects["Floor"].data.copy())
+    crates.objects.link(crate)
+    bpy.context.view_layer.update()
+    assert follow.wait()
+    primitives = state.tree_for(scene).bvh.stats["primitives"]  # one flat tree: every mesh used once
+    bpy.context.view_layer.layer_collection.children["Crates"].exclude = True
+    bpy.context.view_layer.update()
+    assert follow.wait()
+    assert state.tree_for(scene).bvh.stats["primitives"] == primitives - 12
+    _same_hits(state.tree_for(scene).bvh, export_scene(bpy.context, require_camera=False))
