@@ -141,3 +141,12 @@ TEST(TlasBatchOrder, ARefusedRayInTheReorderedPartIsNamedByItsIndexInTheBatch) {
         }
     }
 }
+
+TEST(TlasBatchOrder, AnEmptyBatchIsAnsweredWithNothing) {
+    const ManyInstances s;
+    const RayBatch none{nullptr, nullptr, 0};
+    for (std::uint32_t threads : {1u, 3u}) {
+        EXPECT_NO_THROW(intersect_batch_two_level(s.two_level, none, {}, nullptr, Traversal::Wide, threads));
+        EXPECT_NO_THROW(occluded_batch_two_level(s.two_level, none, nullptr, Traversal::Wide, threads));
+    }
+}

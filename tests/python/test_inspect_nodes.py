@@ -150,7 +150,10 @@ def test_node_data_follows_refit(small_tree):
 
 
 def test_empty_tree_and_spheres():
-    d = bvhlab.build(np.zeros((0, 3, 3), np.float32)).node_data()
+    empty = bvhlab.build(np.zeros((0, 3, 3), np.float32))
+    rest = empty.node_data(epo=False)
+    assert len(rest) == 0 and empty.node_data(epo=False) is rest  # kept, though of length 0 (falsy)
+    d = empty.node_data()
     assert len(d) == 0 and d.sah_cost == 0 and d.epo_cost == 0
     spheres = procedural.random_spheres(50, seed=1)
     d = bvhlab.build(np.zeros((0, 3, 3), np.float32), spheres).node_data()
