@@ -24,6 +24,7 @@ viewports when it is done."""
 from __future__ import annotations
 
 import threading
+import warnings
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -130,7 +131,7 @@ def follow(scene, depsgraph):
     """Bring the scene's shown tree up to date with the evaluated depsgraph; returns the
     trees.TreeUpdate of a new TLAS made here, or None (nothing to follow, nothing changed, or the
     update was given to the worker: `wait()` waits for it)."""
-    from bvhlab.blender import ExportError, LiveScene
+    from bvhlab.blender import ExportError, ExportWarning, LiveScene, SubstituteWarning
 
     from .trees import update_config
 
@@ -169,10 +170,15 @@ def follow(scene, depsgraph):
         # "selected"): followed now
     live = _live.get(live_key)
     if live is None:
-        live = _live[live_key] = LiveScene(built.key.scope, require_camera=False)
+        # a scene emptied (its last object deleted or hidden) is followed to an empty tree: an
+        # error here kept the deleted objects' boxes drawn, and Pick Box picked them
+        live = _live[live_key] = LiveScene(built.key.scope, require_camera=False, allow_empty=True)
     _busy[0] = True
     try:
-        report = live.sync(depsgraph, scene, depsgraph.view_layer)
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", "no mesh in scope", ExportWarning)  # the empty tree says it
+            warnings.simplefilter("ignore", SubstituteWarning)  # a tree needs no camera or light (as Build)
+            report = live.sync(depsgraph, scene, depsgraph.view_layer)
     except (ExportError, ValueError) as error:  # said in the panel, never raised into Blender
         state.messages[key] = ("WARNING", f"The boxes no longer follow the scene: {error}")
         _failed.add(live_key)

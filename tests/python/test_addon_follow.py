@@ -324,3 +324,25 @@ def test_a_collection_excluded_while_the_boxes_follow_is_gone_at_once():
     assert follow.wait()
     assert state.tree_for(scene).bvh.stats["primitives"] == primitives - 12
     _same_hits(state.tree_for(scene).bvh, export_scene(bpy.context, require_camera=False))
+
+
+def test_a_scene_emptied_while_the_boxes_follow_has_an_empty_tree_and_is_followed_again():
+    """Deleting the scene's last object left its boxes drawn (and picked) under "the boxes no longer
+    follow the scene: no mesh in scope": the tree follows it to empty, and back."""
+    harness.empty_scene()
+    harness.add_box("Floor", (0.0, 0.0, -1.5), size=1.0, scale=(6.0, 6.0, 0.2))
+    bpy.context.view_layer.update()
+    assert bpy.ops.bvhlab.build() == {"FINISHED"}
+    state, follow = harness.addon().state, _addon("follow")
+    scene = bpy.context.scene
+    assert state.tree_for(scene).bvh.stats["primitives"] == 12
+    bpy.data.objects.remove(bpy.data.objects["Floor"])
+    bpy.context.view_layer.update()
+    assert follow.wait()
+    assert state.tree_for(scene).bvh.stats["primitives"] == 0
+    assert "no longer follow" not in (state.messages.get(state.key(scene)) or ("", ""))[1]
+    harness.add_box("Floor again", (0.0, 0.0, -1.0), size=1.0, scale=(6.0, 6.0, 0.2))
+    bpy.context.view_layer.update()
+    assert follow.wait()
+    assert state.tree_for(scene).bvh.stats["primitives"] == 12
+    _same_hits(state.tree_for(scene).bvh, export_scene(bpy.context, require_camera=False))
