@@ -8,12 +8,14 @@ Scenes: N linked duplicates of one box (instances of one mesh), and N boxes of t
 of which the changed one has changed before (a mover: its own instance). Changes: the box moved
 (as a drag in the viewport), the frame changed with the box's location keyframed (playback), a
 vertex of the box's own mesh moved (an edit: `mesh.update()`, as a modifier's setting names it),
-or the frame changed with a shape key of the box keyframed (a deforming object's playback).
+or the frame changed with a shape key of the box keyframed (a deforming object's playback), or
+the box is an analytic sphere (mesh 0's) and moved.
 After each placed sync, the tree update that follows it (the add-on's `SceneTree.update` with the
 sync's `refittable`, one thread): a new TLAS after a move, the changed object's tree refit after
 an edit.
 
-    .venv/bin/python bench/live_sync.py [--counts 2000,20000] [--moves 9] [--json live_sync.json]
+    .venv/bin/python bench/live_sync.py [--counts 2000,20000] [--moves 9] [--changes move,sphere]
+        [--json live_sync.json]
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ import harness  # noqa: E402
 
 import bvhlab  # noqa: E402
 from bvhlab.blender import LiveScene  # noqa: E402
+from bvhlab.blender.sphere import SPHERE_PROPERTY  # noqa: E402
 
 sys.path.insert(0, str(ROOT))
 from addon.trees import SceneTree  # noqa: E402
@@ -57,7 +60,7 @@ def scene_of(count: int, shared: bool):
 
 
 #: The changes measured: (name, whether it is a frame change).
-CHANGES = (("move", False), ("frame", True), ("edit", False), ("shape key", True))
+CHANGES = (("move", False), ("frame", True), ("edit", False), ("shape key", True), ("sphere", False))
 
 
 def measure(count: int, shared: bool, moves: int, change: str = "move") -> dict:
@@ -76,6 +79,8 @@ def measure(count: int, shared: bool, moves: int, change: str = "move") -> dict:
         for frame, value in ((1, 0.0), (moves + 2, 1.0)):
             key.value = value
             key.keyframe_insert("value", frame=frame)
+    elif change == "sphere":
+        moved[SPHERE_PROPERTY] = True
     if frames:
         scene.frame_set(1)
     lives = {"placed": LiveScene("visible"), "walked": LiveScene("visible", place_from_updates=False)}
@@ -132,6 +137,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--counts", default="2000,20000")
     ap.add_argument("--moves", type=int, default=9)
+    ap.add_argument("--changes", default=",".join(name for name, _ in CHANGES))
     ap.add_argument("--json", default="live_sync.json")
     args = ap.parse_args()
     _common.json_path(args.json)
@@ -139,9 +145,11 @@ def main() -> None:
     print(_common.machine_line(machine), file=sys.stderr, flush=True)
     rows = []
     for count in (int(c) for c in args.counts.split(",")):
-        for change, _ in CHANGES:
+        for change in args.changes.split(","):
+            if change not in dict(CHANGES):
+                raise SystemExit(f"live_sync: unknown change {change!r}")
             # an edit of the shared mesh changes every duplicate: their own meshes only
-            for shared in (True, False) if change in ("move", "frame") else (False,):
+            for shared in (True, False) if change in ("move", "frame", "sphere") else (False,):
                 row = measure(count, shared, args.moves, change)
                 rows.append(row)
                 print(row, file=sys.stderr, flush=True)

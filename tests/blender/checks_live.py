@@ -16,6 +16,7 @@ import harness
 import numpy as np
 
 from bvhlab.blender import ExportError, LiveScene
+from bvhlab.blender.sphere import SPHERE_PROPERTY
 
 #: Linked duplicates of one box: instances of one mesh of the scene.
 DUPLICATES = 12
@@ -49,6 +50,8 @@ def _scene():
     instancer.location = (0.0, 3.0, 1.0)
     scene.collection.objects.link(instancer)
     harness.add_box("Blob", (3.0, -2.0, 0.0), size=0.8)  # edited: a mover from its first edit on
+    for name, x in (("Ball", -2.0), ("Marble", 2.0)):  # analytic spheres: mesh 0's, placed by row
+        harness.add_box(name, (x, -3.0, 0.5), size=0.6)[SPHERE_PROPERTY] = True
     # a box deformed by an armature's bone, another by a shape key (both animated later)
     rig = bpy.data.objects.new("Rig", bpy.data.armatures.new("Rig"))
     scene.collection.objects.link(rig)
@@ -250,6 +253,13 @@ def check_moves_are_placed_as_the_walk_places_them() -> None:
         ("move a duplicate out of range", move(duplicates[10], dx=1e13), "Dup10"),
         ("move it back", move(duplicates[10], dx=-1e13), False),
         ("move a duplicate again", move(duplicates[11], dz=0.3), True),
+        # an analytic sphere stays in mesh 0: its row of the scene's spheres placed again
+        ("move a sphere", move(bpy.data.objects["Marble"], dx=0.5), True),
+        ("scale the other", scale(bpy.data.objects["Ball"], 1.5), True),
+        ("move both", both(move(bpy.data.objects["Ball"], dz=0.2), move(bpy.data.objects["Marble"], dz=-0.2)), True),
+        ("scale a sphere to nothing (its row gone)", scale(bpy.data.objects["Ball"], 0.0), False),
+        ("move the other", move(bpy.data.objects["Marble"], dx=-0.5), True),
+        ("scale it back", scale(bpy.data.objects["Ball"], 1.0), False),
         # Instancing and Parent name only a transform (Blender's rna_object), yet make new instances
         (
             "a duplicate instances its child at its vertices",
@@ -279,6 +289,12 @@ def check_moves_are_placed_as_the_walk_places_them() -> None:
         ("frame 4", frame(4), True),
         ("animate the camera", keyframes(camera, "location", [(1, (0, -16, 7)), (9, (2, -15, 8))]), False),
         ("frame 6", frame(6), True),
+        (
+            "animate a sphere",
+            keyframes(bpy.data.objects["Ball"], "location", [(1, (-2, -3, 0.5)), (9, (-2, -4, 2))]),
+            False,
+        ),
+        ("frame 5 (the sphere moved)", frame(5), True),
         (
             "animate a duplicate's location and camera visibility",
             both(

@@ -46,7 +46,7 @@ from .light import first_light, gather_light
 from .material_table import MaterialTable
 from .mesh import MeshData
 from .motion import AnimatedMemo
-from .placed_only import MoverIndex, Placing, place_moved, place_reshaped, placing_from_updates
+from .placed_only import MoverIndex, Placing, place_moved, place_reshaped, place_spheres, placing_from_updates
 from .primitive_sample import primitive_sample
 from .scene_arrays import instances, mesh_zero
 from .sync_report import SyncReport, SyncTotals
@@ -93,6 +93,7 @@ class LiveScene:
         self._override_key: str | None = None  # the view layer's Material Override when last synced
         self._failed = False  # the last sync raised: the next reads everything
         self._index: MoverIndex | None = None  # the items an update places alone (placed_only.py)
+        self._sphere_rows: dict[tuple, int] = {}  # mesh 0's spheres' rows by item key (mesh_zero)
         self._light: tuple[str, str] | None = None  # the last sync's light object: (name, full name)
         self._moved: list[tuple] = []  # the keys of the last sync's items that moved (Item.moved)
         self._frame: tuple | None = None  # the scene's frame and subframe at the last sync
@@ -178,7 +179,7 @@ class LiveScene:
         scene.light = light
         self.scene, self._table = scene, table
         self._items, self._by_data, self._layout, self._shared = items, by_data, layout, shared
-        self._world = world
+        self._world, self._sphere_rows = world, arrays["sphere_rows"]
         self._seen_moving = seen_moving
         if not index_holds:
             self._index = None
@@ -229,6 +230,10 @@ class LiveScene:
         placed = place_moved(self._items, self._world, self._moved, self._seen_moving, placing.moved, self.instancing)
         if placed is None:
             return None
+        spheres = place_spheres(placed, self._sphere_rows)
+        if spheres is None:
+            return None
+        placing.spheres = spheres
         assert self._table is not None
         table = MaterialTable.kept(self._table, override)
         if not placing.reshaped:
@@ -263,18 +268,19 @@ class LiveScene:
         walk order; the material table is rebuilt in that order every sync), the shared meshes and
         the instances; the previous arrays where nothing changed. `moved`: the keys of the items
         that moved; `placing`: the items are the last sync's in its order and layout and only the
-        instances `placing` names moved or were reshaped (placed_only.py): mesh 0 is the last
-        sync's, and the instances' transforms but theirs."""
+        instances (and spheres) `placing` names moved or were reshaped (placed_only.py): mesh 0 is
+        the last sync's but the moved spheres' rows, and the instances' transforms but theirs."""
         previous = self.scene
         kept = placing is not None
         triangles: list = []
         spheres: list = []
+        sphere_rows = self._sphere_rows  # a placed sync's spheres keep their rows (place_spheres)
         if kept:  # mesh 0's arrays are the last sync's, as they are (not concatenated again)
             assert previous is not None
             materials0 = (previous.tri_material, previous.sphere_material)
             empty = not len(previous.triangles) and not len(previous.spheres) and not shared
         else:
-            tri_material, triangles, spheres, sphere_material = mesh_zero(items, layout)
+            tri_material, triangles, spheres, sphere_material, sphere_rows = mesh_zero(items, layout)
             materials0 = (
                 np.concatenate(tri_material) if tri_material else np.zeros(0, np.int32),
                 np.array(sphere_material, np.int32),
@@ -308,6 +314,7 @@ class LiveScene:
             and all(a is b for a, b in zip(shared, self._shared))
         )
         arrays: dict = {
+            "sphere_rows": sphere_rows,
             "tri_material": materials0[0],
             "sphere_material": materials0[1],
             "meshes": [m.triangles for m in shared],
@@ -315,6 +322,10 @@ class LiveScene:
         }
         if previous is not None and (kept or not report.geometry or report.placeable):
             arrays["triangles"], arrays["spheres"] = previous.triangles, previous.spheres
+            if placing is not None and placing.spheres:  # spheres moved (placed_only.place_spheres)
+                arrays["spheres"] = previous.spheres.copy()
+                for row, sphere in placing.spheres.items():
+                    arrays["spheres"][row] = sphere
         else:
             arrays["triangles"] = np.concatenate(triangles) if triangles else np.zeros((0, 3, 3), np.float32)
             arrays["spheres"] = np.array(spheres, np.float32).reshape(-1, 4)
@@ -334,11 +345,11 @@ class LiveScene:
         self, arrays: dict, table: MaterialTable, blender_scene, depsgraph, report, kept: bool = False
     ) -> Scene:
         """The sync's Scene: a copy of the last one where nothing but the camera and sky changed
-        (the same arrays: renderers keep what they uploaded), or where only instances moved or
-        changed their meshes (`kept`, placed_only.py: mesh 0's arrays and the materials the last
-        sync's, the instances' set again), else a new one. Fields are checked as they are set
-        (scene.py), so a copy checks only what changed (mesh 0's 240,000 triangles took 3.4 ms a
-        placed sync, and grow with the static scene)."""
+        (the same arrays: renderers keep what they uploaded), or where only instances or spheres
+        moved or instances changed their meshes (`kept`, placed_only.py: mesh 0's triangles and
+        the materials the last sync's, the instances and spheres set again), else a new one.
+        Fields are checked as they are set (scene.py), so a copy checks only what changed (mesh
+        0's 240,000 triangles took 3.4 ms a placed sync, and grow with the static scene)."""
         camera = self._camera(blender_scene, depsgraph)
         sky = gather_sky(blender_scene, depsgraph)
         previous = self.scene
@@ -348,7 +359,7 @@ class LiveScene:
                 for name in ("meshes", "mesh_tri_material"):
                     if any(a is not b for a, b in zip(arrays[name], getattr(previous, name), strict=True)):
                         setattr(scene, name, arrays[name])
-                for name in ("instance_mesh", "instance_transforms"):
+                for name in ("spheres", "instance_mesh", "instance_transforms"):
                     if arrays[name] is not getattr(previous, name):
                         setattr(scene, name, arrays[name])
             scene.camera = camera if camera is not None else default_camera(scene.world_bounds())

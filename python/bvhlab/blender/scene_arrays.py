@@ -11,10 +11,15 @@ from .material_table import map_slots
 from .sphere import place_sphere
 
 
-def mesh_zero(items: dict, layout: Layout) -> tuple[list, list, list, list]:
-    """(material index arrays, world triangles, spheres, sphere materials) of the items placed in
-    mesh 0, in walk order; each item placed once while neither its mesh nor matrix changes."""
-    triangles, tri_material, spheres, sphere_material = [], [], [], []
+def mesh_zero(items: dict, layout: Layout) -> tuple[list, list, list, list, dict]:
+    """(material index arrays, world triangles, spheres, sphere materials, each sphere's row by its
+    item's key) of the items placed in mesh 0, in walk order; each item placed once while neither
+    its mesh nor matrix changes. A sphere scaled to nothing has no row."""
+    triangles: list = []
+    tri_material: list = []
+    spheres: list = []
+    sphere_material: list = []
+    sphere_rows: dict[tuple, int] = {}
     for key, item in items.items():
         if layout.mesh_of[key] or item.slot_table is None:
             continue
@@ -23,6 +28,7 @@ def mesh_zero(items: dict, layout: Layout) -> tuple[list, list, list, list]:
             if item.placed is None:
                 item.placed = place_sphere(item.bounds, item.matrix, item.name)
             if item.placed.size:  # none where scaled to nothing
+                sphere_rows[key] = len(spheres)
                 spheres.append(item.placed)
                 sphere_material.append(item.slot_table[0])
         else:
@@ -30,7 +36,7 @@ def mesh_zero(items: dict, layout: Layout) -> tuple[list, list, list, list]:
                 item.placed = item.mesh.world_triangles(item.matrix, item.name)
             triangles.append(item.placed)
             tri_material.append(map_slots(item.slot_table, item.mesh.slots))
-    return tri_material, triangles, spheres, sphere_material
+    return tri_material, triangles, spheres, sphere_material, sphere_rows
 
 
 def instances(
