@@ -45,7 +45,7 @@ class BVHLAB_RE_whitted(bpy.types.RenderEngine):
 
         if self._final is None:
             self._final = FinalRender()
-        self._final.sync(depsgraph)
+        self._final.sync(self, depsgraph)
 
     def render(self, depsgraph):
         if self._final is not None:

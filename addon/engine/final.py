@@ -53,12 +53,15 @@ class FinalRender:
         self.report = None
         self.notes: list[str] = []
 
-    def sync(self, depsgraph) -> None:
+    def sync(self, engine, depsgraph) -> None:
         """Export what changed since the last frame (all of it the first time); the frames of a
         render job are lit by the scene's fixed calibration of the light, else by its first
-        frame's."""
+        frame's. The camera is the one `engine` renders through (a Sequencer strip's camera
+        override) at the size it renders (another scene's, where that scene's compositor renders
+        this one), as Cycles frames them."""
         from bvhlab.blender import ExportError, ExportWarning
 
+        self.live.camera_object, self.live.frame_size = engine.camera_override, _frame_size(engine)
         name = depsgraph.scene.name_full  # a linked scene of the same name is another
         fixed = fixed_light_distance(depsgraph.scene)
         # None: measured (Persistent Data kept the last)
@@ -119,6 +122,7 @@ class FinalRender:
             tracer.backend == "cpu", counts_shown=passes.heatmap_wanted(depsgraph.view_layer)
         )
         camera, settings, unrendered = self._camera(depsgraph, scene.camera, frame, settings)
+        shown = settings  # the overlay's settings, for the views whose cameras can draw it
         for note in unrendered:
             engine.report({"WARNING"}, f"bvhlab: {note}")
         update = self._tree(engine, blender_scene)
@@ -137,6 +141,8 @@ class FinalRender:
             if view is not None:  # the view's camera: an eye's offset and convergence (Stereoscopy)
                 engine.active_view_set(view)
                 view_camera = self._view_camera(engine, depsgraph, view, frame)
+                # a view's panorama draws no boxes (the scene camera's said so above already)
+                settings = _overlay_for(view_camera, shown, unrendered, engine)
             else:
                 view_camera = camera
             job = tracer.start(
@@ -180,8 +186,8 @@ class FinalRender:
         """The scene camera for this frame's part (the render border), the settings, and what of the
         scene's settings bvhlab does not render, in words (said, never silently left out)."""
         unrendered = unrendered_features(depsgraph)
-        if camera.projection in ("equirectangular", "fisheye") and settings.overlay_depth is not None:
-            unrendered.append(f"the box overlay is not drawn through {camera.projection} cameras")
+        if _draws_no_boxes(camera) and settings.overlay_depth is not None:
+            unrendered.append(_no_boxes_note(camera))
             settings = settings.replace(overlay_depth=None)
         return (camera if frame.whole else replace(camera, region=frame.region)), settings, unrendered
 
@@ -193,7 +199,7 @@ class FinalRender:
         from bvhlab.blender.camera import StereoView, gather_camera, view_camera_object
 
         blender_scene = depsgraph.scene
-        camera_object = view_camera_object(blender_scene, view)
+        camera_object = view_camera_object(blender_scene, view, engine.camera_override)
         evaluated = camera_object.evaluated_get(depsgraph)
         # no spherical stereo (bl_use_spherical_stereo off): a panorama's eyes are two panoramas
         # from the eyes' positions, as Blender frames them for such an engine
@@ -203,7 +209,7 @@ class FinalRender:
             engine.camera_shift_x(evaluated, use_spherical_stereo=False),
         )
         try:
-            camera = gather_camera(blender_scene, depsgraph, view=stereo)
+            camera = gather_camera(blender_scene, depsgraph, view=stereo, size=_frame_size(engine))
         except ExportError as error:
             raise ValueError(f"view '{view}': {error}") from None
         return camera if frame.whole else replace(camera, region=frame.region)
@@ -264,6 +270,33 @@ class FinalRender:
             engine.update_stats("", f"BVH {update.action} in {(time.perf_counter() - started) * 1e3:.0f} ms")
             state.rendered_over(tree)
         return update
+
+
+def _frame_size(engine) -> tuple[int, int]:
+    """The frame the engine renders, in pixels (the scene's resolution at its percentage, or the
+    size of the scene whose compositor renders this one): what the camera's aspect fits."""
+    return engine.resolution_x, engine.resolution_y
+
+
+def _draws_no_boxes(camera) -> bool:
+    """Whether the box overlay cannot be drawn through `camera` (its lines are straight)."""
+    return camera.projection in ("equirectangular", "fisheye")
+
+
+def _no_boxes_note(camera) -> str:
+    return f"the box overlay is not drawn through {camera.projection} cameras"
+
+
+def _overlay_for(camera, settings, unrendered: list, engine):
+    """`settings` for a view seen through `camera`: without the overlay where the camera cannot draw
+    it, said once (a multi-view render's panorama; the scene camera's is said by _camera)."""
+    if settings.overlay_depth is None or not _draws_no_boxes(camera):
+        return settings
+    note = _no_boxes_note(camera)
+    if note not in unrendered:
+        unrendered.append(note)
+        engine.report({"WARNING"}, f"bvhlab: {note}")
+    return settings.replace(overlay_depth=None)
 
 
 def _trace_record(update, jobs: list, frame) -> dict:

@@ -213,6 +213,7 @@ def _engine() -> Iterator[Check]:
 
 
 def _cameras() -> Iterator[Check]:
+    import checks_camera_sources as sources
     import checks_cameras as cameras
     import checks_final as final
     import checks_holdout as holdout
@@ -250,6 +251,16 @@ def _cameras() -> Iterator[Check]:
         final.check_odd_borders_are_sized_as_blender_sizes_them,
     ):
         yield Check("cameras", check.__name__.removeprefix("check_"), check, folder=True)
+    for check in (
+        sources.check_a_strips_camera_override_is_rendered_through,
+        sources.check_another_scenes_compositor_frames_at_its_size,
+    ):
+        yield Check("cameras", check.__name__.removeprefix("check_"), check, folder=True)
+    yield Check(
+        "cameras",
+        "a_panorama_views_camera_drops_the_overlay_and_renders",
+        sources.check_a_panorama_views_camera_drops_the_overlay_and_renders,
+    )
     yield Check("cameras", "viewport_says_what_it_does_not_show", final.check_viewport_says_what_it_does_not_show)
     yield Check("cameras", "huge_f12_is_refused_before_allocating", final.check_huge_f12_is_refused_before_allocating)
     yield Check(

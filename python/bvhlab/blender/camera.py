@@ -24,14 +24,17 @@ from .errors import ExportError, ExportWarning
 PANORAMAS = {"EQUIRECTANGULAR": "equirectangular", "FISHEYE_EQUIDISTANT": "fisheye"}
 
 
-def gather_camera(scene, depsgraph, *, view=None) -> Camera:
+def gather_camera(scene, depsgraph, *, view=None, camera=None, size: tuple[int, int] | None = None) -> Camera:
     """Position and orientation from the evaluated camera's world matrix (it looks along its -Z,
     its +Y is up; scale ignored, as Cycles clears it, but not the axes' signs: a matrix of negative
     determinant mirrors the image, as in Cycles; look_at is ahead along the view axis), and
     its lens for the scene's render resolution. `view` (a StereoView): one view of a stereo or
-    multi-view render instead, as the render engine gives it. Raises ExportError when there is no
-    usable camera or it is of a kind bvhlab does not render."""
-    camera = scene.camera if view is None else view.camera
+    multi-view render instead, as the render engine gives it. `camera`: the object rendered through
+    instead of the scene camera (RenderEngine.camera_override: a Sequencer strip's camera); `size`:
+    the frame's pixels where they are not the scene's (RenderEngine.resolution_x, _y: a scene
+    rendered by another's compositor is rendered at that scene's size). Raises ExportError when
+    there is no usable camera or it is of a kind bvhlab does not render."""
+    camera = (camera or scene.camera) if view is None else view.camera
     if camera is None:
         raise ExportError(f"scene '{scene.name}' has no camera: add one and make it the active camera")
     evaluated = camera.evaluated_get(depsgraph)  # animation and drivers applied
@@ -41,7 +44,7 @@ def gather_camera(scene, depsgraph, *, view=None) -> Camera:
     ahead = max(1.0, float(np.abs(position).max()) * 2.0**-10)
     shift_x = None if view is None else view.shift_x
     data = evaluated.data if camera.type == "CAMERA" else stand_in_lens(evaluated)
-    lens = lens_fields(scene, data, camera.name, position, forward, shift_x=shift_x)
+    lens = lens_fields(scene, data, camera.name, position, forward, shift_x=shift_x, size=size)
     lens["mirrored"] = mirrored
     try:
         return Camera(tuple(position), tuple(position + forward * ahead), tuple(up), **lens)
@@ -108,12 +111,12 @@ class StereoView:
     shift_x: float
 
 
-def view_camera_object(scene, view_name: str):
-    """The camera a view of a multi-view render sees through: the scene camera's name with its view
-    suffix (the longest of the views' that it ends with) replaced by this view's, where such an
-    object exists in the scene (Blender's camera_multiview_advanced); the scene camera otherwise,
-    and always in Stereo 3D."""
-    render, camera = scene.render, scene.camera
+def view_camera_object(scene, view_name: str, camera=None):
+    """The camera a view of a multi-view render sees through: the scene camera's (or `camera`'s, a
+    RenderEngine.camera_override) name with its view suffix (the longest of the views' that it ends
+    with) replaced by this view's, where such an object exists in the scene (Blender's
+    camera_multiview_advanced); that camera otherwise, and always in Stereo 3D."""
+    render, camera = scene.render, camera or scene.camera
     views = render.views
     if camera is None or render.views_format != "MULTIVIEW" or view_name not in views:
         return camera
@@ -154,12 +157,15 @@ def render_size(render) -> tuple[int, int]:
     )
 
 
-def lens_fields(scene, data, name: str, position=None, forward=None, *, shift_x: float | None = None) -> dict:
+def lens_fields(
+    scene, data, name: str, position=None, forward=None, *, shift_x: float | None = None, size=None
+) -> dict:
     """bvhlab.Camera's keyword fields (bvhlab.scene.Lens) for Blender camera data `data` rendered
-    at the scene's resolution; `shift_x` in Blender's units stands for the data's (a stereo view's
-    shift: its lens shift and the off-axis convergence's)."""
+    at the scene's resolution (or `size`, (width, height) in pixels, where given: its aspect fits
+    the sensor); `shift_x` in Blender's units stands for the data's (a stereo view's shift: its lens
+    shift and the off-axis convergence's)."""
     render = scene.render
-    width, height = render_size(render)
+    width, height = size or render_size(render)
     aspect = (max(width, 1) * render.pixel_aspect_x) / (max(height, 1) * render.pixel_aspect_y)
     fields: dict = {"clip_start": data.clip_start, "clip_end": data.clip_end}
     if render.pixel_aspect_x != render.pixel_aspect_y:  # else the image's own, at any size it is rendered

@@ -78,6 +78,10 @@ class LiveScene:
         #: the tests compare the two)
         self.place_from_updates = place_from_updates
         self.scene: Scene | None = None
+        #: The render engine's camera and frame size where they are not the scene's own
+        #: (RenderEngine.camera_override, resolution_x and _y: gather_camera), set before a sync.
+        self.camera_object = None
+        self.frame_size: tuple[int, int] | None = None
         #: The distance the light's intensity is calibrated by (light.py): measured at the first sync
         #: with a light, then kept, so a static light lights static geometry alike on every frame;
         #: None measures it again at the next sync.
@@ -385,7 +389,7 @@ class LiveScene:
 
     def _camera(self, blender_scene, depsgraph):
         try:
-            return gather_camera(blender_scene, depsgraph)
+            return gather_camera(blender_scene, depsgraph, camera=self.camera_object, size=self.frame_size)
         except ExportError as error:
             if self.require_camera:
                 raise
