@@ -142,8 +142,10 @@ class Lens:
     sensor fit Auto; panoramic: fractions of the frame's width and height).
     clip_start, clip_end: primary rays see only what lies between them, along the view axis
     (panoramic: from the camera). aperture_radius (world units; 0: none) and focus_distance: depth
-    of field through a thin lens. fisheye_fov: degrees across the frame. latitude, longitude:
-    (min, max) degrees of the equirectangular frame (bottom, top; left, right).
+    of field through a thin lens. fisheye_fov: degrees across the frame, up to 1800 (past 360 the
+    angle from the axis keeps growing to the frame's edge, as in Blender). latitude, longitude:
+    (min, max) degrees of the equirectangular frame (bottom, top; left, right): latitudes within
+    ±90, longitudes wrap past ±180, and a range from its max to its min mirrors the frame.
     region: (x0, y0, x1, y1), the part of the frame the image shows, in fractions of the frame
     from its top-left corner (Blender's render border). mirrored: the image mirrored left to
     right (a Blender camera whose world matrix has a negative determinant, as Cycles renders it)."""

@@ -176,6 +176,15 @@ def _fisheye(scene, data):
     data.fisheye_fov = math.radians(200)
 
 
+def _equirectangular_inverted(scene, data):
+    """Ranges from max to min (the image mirrored), as Blender takes them and Cycles renders them
+    (refused before: a probe, 2026-12-07; a fisheye past 360 degrees and longitudes past ±180 are
+    test_render_cameras.py's: this scene is too small in them for the comparison's interior)."""
+    _panorama(data, "EQUIRECTANGULAR")
+    data.latitude_min, data.latitude_max = math.radians(40), math.radians(-30)
+    data.longitude_min, data.longitude_max = math.radians(60), math.radians(-50)
+
+
 def _panorama(data, kind: str) -> None:
     """Blender 4.0 and later keep the panorama settings on the camera; earlier, Cycles did."""
     data.type = "PANO"
@@ -228,6 +237,7 @@ SETTINGS = {
     "equirectangular": (_equirectangular, False),
     "equirectangular_shifted": (_equirectangular_shifted, False),
     "fisheye": (_fisheye, False),
+    "equirectangular_inverted": (_equirectangular_inverted, False),
     # Blender's viewport draws these with a 35 mm lens (BKE_camera_params_from_object), Cycles
     # renders them with 50 mm or the cone's: F12's
     "empty_camera": (_empty_camera, False),

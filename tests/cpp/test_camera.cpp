@@ -65,8 +65,20 @@ TEST(Camera, BadValuesAreRefusedByName) {
     expect_refused(c, "region");
     c = Camera{}, c.projection = Projection::Equirectangular, c.latitude_max = 95;
     expect_refused(c, "latitude");
-    c = Camera{}, c.projection = Projection::FisheyeEquidistant, c.fisheye_fov_degrees = 400;
+    c = Camera{}, c.projection = Projection::Equirectangular, c.longitude_min = -2e5f;
+    expect_refused(c, "longitude");
+    c = Camera{}, c.projection = Projection::FisheyeEquidistant, c.fisheye_fov_degrees = 1900;
     expect_refused(c, "fisheye_fov");
+    c = Camera{}, c.projection = Projection::FisheyeEquidistant, c.fisheye_fov_degrees = 0;
+    expect_refused(c, "fisheye_fov");
+    // what Blender's settings take and Cycles renders: accepted
+    c = Camera{}, c.projection = Projection::FisheyeEquidistant, c.fisheye_fov_degrees = 400;
+    EXPECT_NO_THROW(validate(c));
+    c = Camera{}, c.projection = Projection::Equirectangular, c.longitude_min = 60, c.longitude_max = -50;
+    c.latitude_min = c.latitude_max = 10;
+    EXPECT_NO_THROW(validate(c));
+    c.longitude_min = -300, c.longitude_max = 300;
+    EXPECT_NO_THROW(validate(c));
     c = Camera{}, c.clip_end = std::nanf("");
     expect_refused(c, "NaN");
     EXPECT_THROW(parse_projection("cylindrical"), std::invalid_argument);

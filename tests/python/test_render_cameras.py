@@ -116,6 +116,15 @@ VIEWS = {
         (0.0, -1.5, 0.2), (0.2, 1.0, 0.0), projection="equirectangular", latitude=(-50, 70), longitude=(-100, 140)
     ),
     "fisheye": bvhlab.View((0.0, -2.5, 0.2), (0.0, 1.0, 0.1), projection="fisheye", fisheye_fov=150, shift_x=0.05),
+    # what Blender's settings take and Cycles renders: ranges from max to min (mirrored), longitudes
+    # past ±180 (wrapped), a fisheye past 360 degrees
+    "equirectangular_inverted": bvhlab.View(
+        (0.0, -1.5, 0.2), (0.2, 1.0, 0.0), projection="equirectangular", latitude=(70, -50), longitude=(140, -100)
+    ),
+    "equirectangular_wrapped": bvhlab.View(
+        (0.0, -1.5, 0.2), (0.2, 1.0, 0.0), projection="equirectangular", longitude=(-300, 300)
+    ),
+    "fisheye_past_360": bvhlab.View((0.0, -2.5, 0.2), (0.0, 1.0, 0.1), projection="fisheye", fisheye_fov=400),
     "clipped": bvhlab.View((0.4, -3.2, 1.1), (-0.1, 1.0, -0.3), fov_y=40, clip_start=2.9, clip_end=3.3),
     "clipped_equirectangular": bvhlab.View(
         (0.0, -1.5, 0.2), (0.2, 1.0, 0.0), projection="equirectangular", clip_start=1.2, clip_end=1.8

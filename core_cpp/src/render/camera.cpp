@@ -42,6 +42,10 @@ bool all_values_finite(const Camera& c) {
            std::all_of(std::begin(values), std::end(values), [](float v) { return std::isfinite(v); });
 }
 
+/// Blender's largest fisheye field of view (its RNA's hard bound, 10π), and a bound on longitudes
+/// (Blender sets none) within which float32 keeps a tenth of a degree.
+constexpr double kMaxFisheyeDegrees = 1800, kMaxLongitude = 1e5;
+
 void validate_projection(const Camera& c) {
     switch (c.projection) {
         case Projection::Perspective:
@@ -50,15 +54,19 @@ void validate_projection(const Camera& c) {
         case Projection::Orthographic:
             if (!(c.ortho_scale > 0)) fail("an orthographic camera needs ortho_scale > 0 (the view's larger side)");
             break;
+        // The panoramas take what Blender's camera settings take and Cycles renders (a probe,
+        // 2026-12-07): a field of view past 360 degrees (the angle from the axis keeps growing to
+        // the ellipse's edge, up to Blender's 1800), a range from its max to its min (the image
+        // mirrored), or of no extent, and longitudes past ±180 (the directions wrap around).
         case Projection::FisheyeEquidistant:
-            if (!(c.fisheye_fov_degrees > 0 && c.fisheye_fov_degrees <= 360))
-                fail("camera fisheye_fov must be in (0, 360] degrees");
+            if (!(c.fisheye_fov_degrees > 0 && c.fisheye_fov_degrees <= kMaxFisheyeDegrees))
+                fail("camera fisheye_fov must be in (0, 1800] degrees");
             break;
         case Projection::Equirectangular:
-            if (!(c.latitude_min >= -90 && c.latitude_min < c.latitude_max && c.latitude_max <= 90))
-                fail("camera latitude must be a range min < max within [-90, 90] degrees");
-            if (!(c.longitude_min >= -180 && c.longitude_min < c.longitude_max && c.longitude_max <= 180))
-                fail("camera longitude must be a range min < max within [-180, 180] degrees");
+            if (!(std::fabs(c.latitude_min) <= 90 && std::fabs(c.latitude_max) <= 90))
+                fail("camera latitude must be within [-90, 90] degrees");
+            if (!(std::fabs(c.longitude_min) <= kMaxLongitude && std::fabs(c.longitude_max) <= kMaxLongitude))
+                fail("camera longitude must be within ±100,000 degrees");
             break;
         default:
             fail("unknown camera projection " + std::to_string(std::uint32_t(c.projection)));
