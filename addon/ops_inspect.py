@@ -47,14 +47,16 @@ def node_view(built, picked):
     return data, picked.node, lo, hi, f"Instance {picked.instance} · BLAS {what} {picked.node}"
 
 
-def whole_tree_figures(built, picked) -> dict | None:
+def whole_tree_figures(built, picked, data=None) -> dict | None:
     """The picked node's figures in the whole tree (depth, primitives under it, subtree SAH, its
-    share of the tree's SAH cost `of`): a flat tree's own; a two-level tree's as the Cost panel and
-    `bvhlab inspect --node` give them (TwoLevelNodeData.figures: a mesh tree's node weighed by its
-    instance, a TLAS node with its instances' trees; the panel showed the TLAS's or the mesh tree's
-    own, every instance of a mesh at the same share), once the tree is analysed (None before)."""
+    share of the tree's SAH cost `of`): a flat tree's own (from `data`, node_view's NodeData, where
+    given: the figures beside it are then of one version of a tree the follow refits); a two-level
+    tree's as the Cost panel and `bvhlab inspect --node` give them (TwoLevelNodeData.figures: a mesh
+    tree's node weighed by its instance, a TLAS node with its instances' trees; the panel showed the
+    TLAS's or the mesh tree's own, every instance of a mesh at the same share), once the tree is
+    analysed (None before)."""
     if not overlay.is_two_level(built):
-        data = built.bvh.node_data(epo=False)
+        data = data if data is not None else built.bvh.node_data(epo=False)
         return {**data.node(picked), "of": data.sah_cost}
     analysed = built.bvh.cached_node_data()
     if analysed is None:
@@ -64,7 +66,7 @@ def whole_tree_figures(built, picked) -> dict | None:
 
 def _report_pick(operator, built, picked) -> None:
     data, n, _, _, name = node_view(built, picked)
-    whole = whole_tree_figures(built, picked)
+    whole = whole_tree_figures(built, picked, data)
     if whole is None:  # a two-level tree not analysed: its own tree's figures, said so
         where = "the TLAS" if picked.level == "tlas" else "its mesh tree"
         figures = f"depth {int(data.depth[n])} in {where}, {int(data.prim_count[n])} primitives"
@@ -304,7 +306,7 @@ def draw_inspect_panel(layout, scene) -> None:
     data, node, lo, hi, name = node_view(built, picked)
     leaf = data.left[node] < 0
     col = layout.column(align=True)
-    whole = whole_tree_figures(built, picked)
+    whole = whole_tree_figures(built, picked, data)
     if overlay.is_two_level(built):  # short lines: the sidebar is narrow
         col.label(text=name)
         where = "the TLAS" if picked.level == "tlas" else "its mesh tree"
