@@ -131,7 +131,7 @@ def follow(scene, depsgraph):
     """Bring the scene's shown tree up to date with the evaluated depsgraph; returns the
     trees.TreeUpdate of a new TLAS made here, or None (nothing to follow, nothing changed, or the
     update was given to the worker: `wait()` waits for it)."""
-    from bvhlab.blender import ExportError, ExportWarning, LiveScene, SubstituteWarning
+    from bvhlab.blender import EmptySceneWarning, ExportError, LiveScene, SubstituteWarning
 
     from .trees import update_config
 
@@ -176,7 +176,7 @@ def follow(scene, depsgraph):
     _busy[0] = True
     try:
         with warnings.catch_warnings():
-            warnings.filterwarnings("ignore", "no mesh in scope", ExportWarning)  # the empty tree says it
+            warnings.simplefilter("ignore", EmptySceneWarning)  # the empty tree says it
             warnings.simplefilter("ignore", SubstituteWarning)  # a tree needs no camera or light (as Build)
             report = live.sync(depsgraph, scene, depsgraph.view_layer)
     except (ExportError, ValueError) as error:  # said in the panel, never raised into Blender

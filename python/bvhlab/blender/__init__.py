@@ -16,7 +16,7 @@ holds what differs between the supported Blender versions (4.2 LTS to 5.3); noth
 from .load import bpy_module
 
 bpy_module()  # first: a clear error where bpy is missing, a Ctrl-C while it loads held back
-from .errors import ExportError, ExportWarning, SubstituteWarning  # noqa: E402
+from .errors import EmptySceneWarning, ExportError, ExportWarning, SubstituteWarning  # noqa: E402
 from .export import export_scene, export_scene_file  # noqa: E402
 from .light import intensity_from_watts  # noqa: E402
 from .live import LiveScene  # noqa: E402
@@ -32,6 +32,7 @@ __all__ = [
     "ExportError",
     "ExportWarning",
     "SubstituteWarning",
+    "EmptySceneWarning",
     "SCOPES",
     "SPHERE_PROPERTY",
     "is_analytic_sphere",

@@ -14,3 +14,8 @@ class ExportWarning(UserWarning):
 class SubstituteWarning(ExportWarning):
     """A missing camera or light was replaced by bvhlab's default (it matters for rendering, not
     for building a tree)."""
+
+
+class EmptySceneWarning(ExportWarning):
+    """Nothing in scope was exported, and the caller allowed that (a render engine's frame: the
+    world alone is rendered; the sidebar's follow: an empty tree)."""

@@ -40,7 +40,7 @@ import numpy as np
 from ..scene import Scene, default_camera, default_light
 from .camera import gather_camera
 from .depsgraph_updates import Dirty
-from .errors import ExportError, ExportWarning, SubstituteWarning
+from .errors import EmptySceneWarning, ExportError, SubstituteWarning
 from .instancing import Item, Layout, SharedMesh, plan, shared_meshes
 from .light import first_light, gather_light
 from .material_table import MaterialTable
@@ -60,7 +60,7 @@ class LiveScene:
     with the previous one). `totals` counts reads over the LiveScene's life. `instancing`: False
     places every instance's triangles into the world (the flat export of before). `allow_empty`:
     nothing in scope gives a scene of no geometry (a render of the world alone, as other engines
-    render it, with an ExportWarning) instead of an ExportError: a render engine's frames (an
+    render it, with an EmptySceneWarning) instead of an ExportError: a render engine's frames (an
     animation whose only mesh is hidden on one frame stopped there, its later frames lost)."""
 
     def __init__(
@@ -293,7 +293,9 @@ class LiveScene:
         if empty:
             if not self.allow_empty:
                 raise ExportError(_nothing_in_scope(self.scope))
-            warnings.warn(f"{_nothing_in_scope(self.scope)}: the world alone is rendered", ExportWarning, stacklevel=3)
+            warnings.warn(
+                f"{_nothing_in_scope(self.scope)}: the world alone is rendered", EmptySceneWarning, stacklevel=3
+            )
         same_order = kept or list(self._items) == list(items)
         same_layout = kept or layout.same_as(self._layout)
         report.instances_moved = sum(1 for key in moved if layout.mesh_of[key])
