@@ -84,7 +84,7 @@ TEST(RayOrder, CameraRaysKeepTheirOrderAndRandomOnesAreSortedStably) {
     EXPECT_FALSE(in_ray_order(batch, keys));
     SortedRays sorted;
     sort_rays(batch, keys, sorted);
-    const std::vector<std::uint32_t>& index = sorted.index;
+    const auto& index = sorted.index;
     ASSERT_EQ(index.size(), rays.size());
     ASSERT_EQ(sorted.tmax_of.size(), rays.size());
     std::vector<char> seen(rays.size(), 0);

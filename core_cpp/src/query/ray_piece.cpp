@@ -1,6 +1,7 @@
-// prepare_rays_vector and write_hits_vector (ray_batch.h): the batch's vector passes over the caller's
-// rays and over a piece's hits on the active instruction set (isa.h), or none (the scalar loops of
-// prepare_piece and write_hits then do all the work).
+// prepare_rays_vector, write_hits_vector (ray_batch.h) and RayKeys::of_rays (ray_order.h): the
+// batch's vector passes over the caller's rays and over a piece's hits on the active instruction
+// set (isa.h), or none (the scalar loops of prepare_piece, write_hits and of_rays then do all the
+// work).
 #include <cstdint>
 
 #include "bvhlab/isa.h"
@@ -16,8 +17,18 @@ std::uint32_t prepare_rays_vector(const float* origins, const float* directions,
 std::uint32_t write_hits(float* t, std::int32_t* prim, std::uint8_t* kind, float* u, float* v,
                          std::uint32_t* nodes_visited, std::uint32_t n, const Hit* hits, const std::uint32_t* visited,
                          const float* t_scale);
+std::uint32_t ray_keys(const float* origins, const float* directions, std::uint32_t n, const float lo[3],
+                       const float scale[3], float top, int bits, std::uint16_t* key);
 }  // namespace avx2
 #endif
+
+void RayKeys::of_rays(const float* origins, const float* directions, std::uint32_t n, std::uint16_t* key) const {
+    std::uint32_t j = 0;
+#if defined(BVHLAB_AVX2_KERNELS)
+    if (active_isa() == Isa::Avx2) j = avx2::ray_keys(origins, directions, n, lo, scale, top, bits, key);
+#endif
+    for (; j < n; ++j) key[j] = std::uint16_t((*this)(origins + 3 * std::size_t(j), directions + 3 * std::size_t(j)));
+}
 
 std::uint32_t prepare_rays_vector(const float* origins, const float* directions, const float* tmax_of, float tmin,
                                   float tmax, std::uint32_t n, Ray* rays, float* t_scale, std::uint8_t* octant,

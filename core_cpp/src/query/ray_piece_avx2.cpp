@@ -100,6 +100,40 @@ std::uint32_t prepare_rays_vector(const float* origins, const float* directions,
     return j;
 }
 
+std::uint32_t ray_keys(const float* origins, const float* directions, std::uint32_t n, const float lo[3],
+                       const float scale[3], float top, int bits, std::uint16_t* key) {
+    const __m256 zero = _mm256_setzero_ps(), highest = _mm256_set1_ps(top);
+    // the cell on each axis as RayKeys::operator() makes it: (o − lo) · scale truncated, below 0
+    // (or NaN: the comparison is false) cell 0, from `top` on `top`; its bits spread three apart
+    const auto cell = [&](__m256 o, int a) {
+        const __m256 x = _mm256_mul_ps(_mm256_sub_ps(o, _mm256_set1_ps(lo[a])), _mm256_set1_ps(scale[a]));
+        const __m256i c = _mm256_and_si256(_mm256_cvttps_epi32(_mm256_min_ps(x, highest)),
+                                           _mm256_castps_si256(_mm256_cmp_ps(x, zero, _CMP_GT_OQ)));
+        // b3 b2 b1 b0 → b0 at bit 0, b1 at 3, b2 at 6, b3 at 9 (kSpread)
+        const __m256i x4 = _mm256_and_si256(_mm256_or_si256(c, _mm256_slli_epi32(c, 4)), _mm256_set1_epi32(0x0C3));
+        const __m256i x2 = _mm256_and_si256(_mm256_or_si256(x4, _mm256_slli_epi32(x4, 2)), _mm256_set1_epi32(0x249));
+        return _mm256_slli_epi32(x2, a);
+    };
+    std::uint32_t j = 0;
+    for (; j + 8 <= n; j += 8) {
+        const float *o = origins + 3 * std::size_t(j), *d = directions + 3 * std::size_t(j);
+        const __m256 oa = _mm256_loadu_ps(o), ob = _mm256_loadu_ps(o + 8), oc = _mm256_loadu_ps(o + 16);
+        const __m256 da = _mm256_loadu_ps(d), db = _mm256_loadu_ps(d + 8), dc = _mm256_loadu_ps(d + 16);
+        const __m256i sign_x = _mm256_srli_epi32(_mm256_castps_si256(component<0>(da, db, dc)), 31);
+        const __m256i sign_y = _mm256_srli_epi32(_mm256_castps_si256(component<1>(da, db, dc)), 31);
+        const __m256i sign_z = _mm256_srli_epi32(_mm256_castps_si256(component<2>(da, db, dc)), 31);
+        const __m256i octant =
+            _mm256_or_si256(sign_x, _mm256_or_si256(_mm256_slli_epi32(sign_y, 1), _mm256_slli_epi32(sign_z, 2)));
+        const __m256i k = _mm256_or_si256(
+            _mm256_or_si256(cell(component<0>(oa, ob, oc), 0), cell(component<1>(oa, ob, oc), 1)),
+            _mm256_or_si256(cell(component<2>(oa, ob, oc), 2), _mm256_sll_epi32(octant, _mm_cvtsi32_si128(3 * bits))));
+        // below 2^15: the 16-bit lanes of a signed pack hold them as they are
+        const __m128i words = _mm_packs_epi32(_mm256_castsi256_si128(k), _mm256_extracti128_si256(k, 1));
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(key + j), words);
+    }
+    return j;
+}
+
 static_assert(sizeof(Hit) == 5 * sizeof(float) && offsetof(Hit, ref) == 4 && offsetof(Hit, u) == 8 &&
                   offsetof(Hit, v) == 12,
               "a Hit is five words: t, ref, u, v, slot");
