@@ -117,6 +117,25 @@ def test_the_wide_traversal_walks_both_levels_to_the_stack_walks_image():
     np.testing.assert_array_equal(moved.color, _render(scene, two, "stack").color)
 
 
+def test_instances_of_an_empty_mesh_render_with_every_traversal():
+    """The TLAS leaves an instance of an empty mesh out of its tree; the wide traversal refused such
+    a scene ("the wide traversal's TLAS and meshes are not the ones the scene was made from", helper
+    probe 2026-12-07), which `bvhlab render` walks by default. Empty-mesh instances first, between
+    and last: every traversal's image is the stack walk's, and the scene's without them."""
+    scene = _scene(MANY, [0, 0, 1, 1, 1])
+    with_empty = _scene(MANY, [0, 0, 1, 1, 1])
+    with_empty.meshes = [scene.meshes[0], np.zeros((0, 3, 3), np.float32)]  # mesh 2: empty
+    with_empty.instance_transforms = np.stack([MANY[1], *MANY[:3], MANY[2], *MANY[3:], MANY[4]])
+    with_empty.instance_mesh = np.array([2, 0, 0, 1, 2, 1, 1, 2])
+    two, without = bvhlab.build(with_empty), _render(scene, bvhlab.build(scene), "stack")
+    stack = _render(with_empty, two, "stack")
+    for traversal in ("stackless", "wide"):
+        other = _render(with_empty, two, traversal)
+        np.testing.assert_array_equal(other.color, stack.color, err_msg=traversal)
+        np.testing.assert_array_equal(other.depth, stack.depth, err_msg=traversal)
+    np.testing.assert_array_equal(stack.color, without.color)
+
+
 def test_many_instances_of_one_mesh():
     rng = np.random.default_rng(7)
     transforms = [

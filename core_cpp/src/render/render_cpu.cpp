@@ -113,7 +113,9 @@ private:
 
     /// Whether `two` holds what the scene was made from: its meshes' primitive counts, and each
     /// instance in its slot with its transform and a mesh in range (a hit it returns is then one of
-    /// the scene's primitives in a slot that holds it, which the shading reads).
+    /// the scene's primitives in a slot that holds it, which the shading reads); an instance the
+    /// TLAS's tree leaves out (of an empty mesh: refused before, helper probe 2026-12-07) has no
+    /// slot, and is never hit.
     bool made_from(const TwoLevel& two) const {
         const Tlas& tlas = *two.tlas;
         const std::size_t meshes = scene_.first_triangle.size();
@@ -129,6 +131,10 @@ private:
         }
         for (std::size_t i = 0; i < tlas.instances.size(); ++i) {
             const std::uint32_t slot = scene_.instance_slots[i];
+            if (slot == RenderScene::kNoSlot) {
+                if (!tlas.instances[i].world_box.empty()) return false;
+                continue;
+            }
             if (slot >= scene_.instances.size() || scene_.instances[slot].tree.w != i) return false;
             const gpu::GpuInstance& g = scene_.instances[slot];
             const float rows[12] = {g.row0.x, g.row0.y, g.row0.z, g.row0.w, g.row1.x, g.row1.y,
