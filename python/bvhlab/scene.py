@@ -129,6 +129,17 @@ class Scene:
         """Primitives of the scene's own geometry (mesh 0)."""
         return len(self.triangles) + len(self.spheres)
 
+    @property
+    def has_geometry(self) -> bool:
+        """Whether any primitive is placed in the world: mesh 0's where the scene is flat, else an
+        instance of a mesh that has some (an instanced scene's own geometry may be empty and its
+        instances not: Blender's linked duplicates alone export so)."""
+        if not self.is_instanced:
+            return bool(self.primitive_count)
+        mesh_of, _ = self.instances()
+        sizes = np.array([self.primitive_count, *(len(m) for m in self.meshes)])
+        return bool((sizes[mesh_of] > 0).any())
+
     # -- instancing ----------------------------------------------------------------------------
     @property
     def is_instanced(self) -> bool:

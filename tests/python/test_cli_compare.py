@@ -4,11 +4,12 @@ overlay claim measured, bad arguments refused, nothing written over, and a width
 import csv
 import json
 
+import numpy as np
 import pytest
 from test_cli import line_pixels, run_cli
 
 import bvhlab
-from bvhlab.library import load_scene
+from bvhlab.library import load_scene, procedural
 from bvhlab.render import HAS_VULKAN
 
 
@@ -182,3 +183,33 @@ def test_compare_at_width_one(tmp_path):
     )
     assert code == 0, stderr
     assert "got 0" not in stderr and "1×1" in stdout and "random spheres" in stderr
+
+
+def test_compare_and_snapshot_take_an_instanced_scene_whose_own_geometry_is_empty(tmp_path):
+    """Instances alone (what Blender's linked duplicates export: mesh 0 empty): the snapshot said
+    "has no geometry", and compare, which reaches the sheets last, threw the whole measured run
+    away for it (helper probe, 2026-12-07)."""
+    knot = procedural.torus_knot(400)
+    identity = np.eye(4, dtype=np.float32)[:3]
+    moved = identity.copy()
+    moved[0, 3] = 3.0
+    scene = bvhlab.Scene(meshes=[knot], instance_mesh=np.array([1, 1]), instance_transforms=np.stack([identity, moved]))
+    assert scene.primitive_count == 0 and scene.has_geometry
+    path = tmp_path / "duplicates.npz"
+    scene.save(path)
+    code, _, stderr = run_cli("snapshot", path, "--out", tmp_path / "snap.png")
+    assert code == 0, stderr
+    assert (tmp_path / "snap.png").stat().st_size > 1000
+    out = tmp_path / "cmp"
+    code, _, stderr = run_cli(
+        "compare", path, "--methods", "median,sah12", "--frames", "5", "--builds", "5", "--width", "32",
+        "--height", "24", "--backend", "cpu", "--no-uniform", "--overlay-backends", "none", "--out", out,
+    )  # fmt: skip
+    assert code == 0, stderr
+    rows = list(csv.DictReader((out / "table.csv").open()))
+    assert [r["method"] for r in rows] == ["median", "sah12"]
+    assert (out / "sheet_sah12.png").stat().st_size > 1000
+    # an instance of an empty mesh alone places nothing
+    empty = bvhlab.Scene(meshes=[np.zeros((0, 3, 3), np.float32), knot], instance_mesh=np.array([1]),
+                         instance_transforms=identity[None])  # fmt: skip
+    assert not empty.has_geometry

@@ -288,6 +288,8 @@ def _write_sheets(scene_spec: str, labels: list[str], out: Path) -> None:
         say(f"[sheets] {label}")
         try:
             run_sheet(scene_spec, {**build_settings(label), "threads": 0}, out / f"sheet_{label}.png")
-        except RuntimeError as e:  # no OpenGL (EGL) on this machine: say so, keep the rest
+        except (RuntimeError, ValueError) as e:
+            # no OpenGL (EGL) on this machine, or a scene the sheet does not draw: said, and the
+            # measured run kept (a sheet's refusal after the figures threw the whole run away)
             say(f"[sheets] skipped: {e}")
             return

@@ -53,7 +53,7 @@ def _run(scene_spec: str, build_kwargs: dict, out: Path, extra: list[str]) -> Pa
     from ..library import load_scene
 
     scene, name = load_scene(scene_spec)
-    if not scene.primitive_count:
+    if not scene.has_geometry:
         raise ValueError(f"scene '{name}' has no geometry")
     projection = scene.camera.projection if scene.camera is not None else "perspective"
     if projection not in RASTER_PROJECTIONS:  # before the child process: its error would come back late
