@@ -183,6 +183,42 @@ def test_inspect_writes_into_folders_it_makes_as_build_does(tmp_path):
     assert json.loads(report.read_text()) and tree.stat().st_size > 0
 
 
+def test_the_tree_and_the_report_are_written_together(tmp_path, monkeypatch):
+    """--save-tree was written before the report was made: a Ctrl-C during the report (its EPO pass
+    takes seconds on large trees) or a report that could not be written left the old tree replaced
+    and no report (helper probe, 2026-12-07). Now both are written together, or neither."""
+    from bvhlab.cli import inspect_cmd
+
+    tree, report = tmp_path / "t.bvhtree", tmp_path / "r.json"
+    assert main(["inspect", "gen:five_spheres", "--method", "median", "--node", "0", "--save-tree", str(tree)]) == 0
+    before = tree.read_bytes()
+    real = inspect_cmd._report
+
+    def interrupted(*args, **kwargs):
+        real(*args, **kwargs)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(inspect_cmd, "_report", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        inspect_cmd.run(
+            inspect_cmd_args(["gen:five_spheres", "--node", "0", "--save-tree", str(tree), "--json", str(report)])
+        )
+    assert tree.read_bytes() == before and not report.exists()
+    assert [p.name for p in tmp_path.iterdir()] == ["t.bvhtree"]  # no temporary left
+    monkeypatch.undo()
+    assert main(["inspect", "gen:five_spheres", "--node", "0", "--save-tree", str(tree), "--json", str(report)]) == 0
+    assert tree.read_bytes() != before and json.loads(report.read_text())["tree"]
+    scene, _ = load_scene("gen:five_spheres")
+    assert bvhlab.load_bvh(tree, scene).config.method == "sah"
+
+
+def inspect_cmd_args(argv: list[str]):
+    """`bvhlab inspect ARGV`'s parsed arguments, as main gives them to inspect_cmd.run."""
+    from bvhlab.cli import parser
+
+    return parser().parse_args(["inspect", *argv])
+
+
 @pytest.mark.parametrize("request_", [["--node", "99999"], ["--pixel", "5000,5000"]])
 def test_a_request_the_tree_cannot_answer_saves_nothing(tmp_path, capsys, request_):
     # the tree was built and saved, then the node or pixel refused (exit 2 beside a new file)

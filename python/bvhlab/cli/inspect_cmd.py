@@ -17,11 +17,11 @@ from pathlib import Path
 
 from .. import InstancedBvh, build, load_bvh
 from .. import _json as strict_json
-from .._atomic import write_text
+from .._atomic import write_together
 from .._progress import ProgressBar
 from ..inspect.levels import TreeNode
 from ..inspect.ray_record import PIXEL_TRAVERSALS, trace_pixel
-from ..inspect.tree_file import SUFFIX, TreeFileError
+from ..inspect.tree_file import SUFFIX, TreeFileError, tree_bytes, tree_path
 from ..library import load_scene
 from ..render_options import DEFAULT_HEIGHT, DEFAULT_WIDTH, RenderOptions
 from . import options
@@ -144,19 +144,22 @@ def run(args) -> int:
     # before the tree is saved (it was, then refused) and the node figures' EPO pass (39 s of a
     # 15,000-triangle soup)
     _check_node(bvh, args, two_level)
-    if args.save_tree:
-        Path(args.save_tree).parent.mkdir(parents=True, exist_ok=True)  # as build --json makes its folder
-        bvh.save(args.save_tree)
-        print(f"wrote {args.save_tree}")
-    # the report is printed after its file is written (a reader gone, `| head`, lost the file)
+    # the report is printed after its files are written (a reader gone, `| head`, lost the file)
     with contextlib.redirect_stdout(io.StringIO()) as printed:
         report = _report(args, scene, name, bvh, two_level)
+    # the tree and the report written together, whole or not at all: the tree was saved before the
+    # report was made, so a Ctrl-C there or a report that could not be written had replaced it alone
+    files: dict[Path, bytes] = {}
+    if args.save_tree:
+        files[tree_path(args.save_tree)] = tree_bytes(bvh)
     if args.json:
-        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        write_text(args.json, strict_json.dumps(report, indent=1) + "\n")
+        files[Path(args.json)] = (strict_json.dumps(report, indent=1) + "\n").encode()
+    for path in files:
+        path.parent.mkdir(parents=True, exist_ok=True)  # as build --json makes its folder
+    write_together(files)
     sys.stdout.write(printed.getvalue())
-    if args.json:
-        print(f"wrote {args.json}")
+    for path in files:
+        print(f"wrote {path}")
     return 0
 
 

@@ -38,7 +38,31 @@ def save_bvh(bvh, path) -> Path:
     other file is not overwritten by a tree), as a whole or not at all (a WriteError leaves what
     was there). Raises OutputPathError for another name, a folder or a folder that cannot be
     written, before any work."""
-    path = _checks.output_file(path, (SUFFIX,), "tree file")
+    path = tree_path(path)
+    digest = hashlib.sha256()
+    with _atomic.replacing(path) as f:
+        for part in _tree_parts(bvh):
+            digest.update(part)
+            f.write(part)
+        f.write(digest.digest())
+    return path
+
+
+def tree_path(path) -> Path:
+    """`path` checked as a tree file's (a name ending in .bvhtree, in a folder that can be written):
+    OutputPathError otherwise."""
+    return _checks.output_file(path, (SUFFIX,), "tree file")
+
+
+def tree_bytes(bvh) -> bytes:
+    """The file save_bvh writes, as bytes (for a caller that writes it together with other files:
+    `bvhlab inspect --save-tree --json`)."""
+    body = b"".join(_tree_parts(bvh))
+    return body + hashlib.sha256(body).digest()
+
+
+def _tree_parts(bvh) -> tuple[bytes, ...]:
+    """The file's parts before its digest: magic, version and header length, header, nodes, refs."""
     # every part from one version of the tree: read one by one, a refit, update or optimize on
     # another thread could mix two versions into a file that does not load
     parts = bvh._core.file_parts()
@@ -55,13 +79,7 @@ def save_bvh(bvh, path) -> Path:
         "build_ms": float(parts["build_ms"]),
     }
     head = json.dumps(header, sort_keys=True).encode()
-    digest = hashlib.sha256()
-    with _atomic.replacing(path) as f:
-        for part in (MAGIC, _PREFIX.pack(FORMAT_VERSION, len(head)), head, nodes.tobytes(), refs.tobytes()):
-            digest.update(part)
-            f.write(part)
-        f.write(digest.digest())
-    return path
+    return MAGIC, _PREFIX.pack(FORMAT_VERSION, len(head)), head, nodes.tobytes(), refs.tobytes()
 
 
 def load_bvh(path, scene_or_triangles, spheres=None, *, config=None):
