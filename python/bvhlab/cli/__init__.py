@@ -53,7 +53,14 @@ def main(argv=None) -> int:
     """Runs one command. Bad input (a file that cannot be read or written, a wrong value) prints one
     line `bvhlab CMD: error: ...` and returns 2; Ctrl-C prints `bvhlab CMD: interrupted` and
     returns 130 (the shell's code for SIGINT); neither shows a traceback."""
-    args = parser().parse_args(options.join_dash_values(sys.argv[1:] if argv is None else list(argv)))
+    argv = sys.argv[1:] if argv is None else list(argv)
+    try:  # its checks of paths may fail too ("File name too long") or be interrupted
+        args = parser().parse_args(options.join_dash_values(argv))
+    except KeyboardInterrupt:
+        print("bvhlab: interrupted", file=sys.stderr)
+        return 130
+    except OSError as e:
+        return _error(argv[0] if argv else "", e)
     try:
         code = args.run(args) or 0
         sys.stdout.flush()  # here, not at exit: a pipe's buffered output fails now if its reader left

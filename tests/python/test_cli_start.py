@@ -1,0 +1,86 @@
+"""The `bvhlab` command before and after its work (helper probes, 2026-12-06 and 12-07): Ctrl-C
+while numpy and the core load ended in a traceback (or, inside numpy's own import, a chained
+ImportError and exit 1); a path too long for the system, checked while the arguments are read,
+in one ("OSError: [Errno 36] File name too long", exit 1). The entry point (python/bvhlab_main)
+is run in this process with the package's import made to receive a SIGINT."""
+
+import builtins
+import os
+import signal
+import sys
+
+import bvhlab_main
+import pytest
+
+from bvhlab.cli import main
+
+
+@pytest.fixture()
+def cli_unloaded(monkeypatch):
+    """bvhlab.cli forgotten, so that the entry point imports it again (through `import_hook`)."""
+    monkeypatch.delitem(sys.modules, "bvhlab.cli")
+    real = builtins.__import__
+    hooks = []
+
+    def importing(name, *args, **kwargs):
+        if name == "bvhlab.cli" and hooks:
+            hooks.pop()()
+        return real(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", importing)
+    return hooks
+
+
+def _sigint() -> None:
+    os.kill(os.getpid(), signal.SIGINT)
+
+
+def _sigint_in_a_c_import() -> None:
+    """As numpy's C import turns the KeyboardInterrupt it meets into an ImportError."""
+    try:
+        _sigint()
+    except KeyboardInterrupt:
+        raise ImportError("PyCapsule_Import could not import module 'datetime'") from None
+
+
+@pytest.mark.parametrize("hook", [_sigint, _sigint_in_a_c_import])
+def test_ctrl_c_while_the_package_loads_ends_quietly(cli_unloaded, hook, capsys):
+    before = signal.getsignal(signal.SIGINT)
+    cli_unloaded.append(hook)
+    assert bvhlab_main.main() == 130
+    assert capsys.readouterr().err == "bvhlab: interrupted\n"
+    assert signal.getsignal(signal.SIGINT) is before  # put back
+
+
+def test_an_import_error_without_ctrl_c_is_raised(cli_unloaded):
+    def broken():
+        raise ImportError("a broken install")
+
+    cli_unloaded.append(broken)
+    with pytest.raises(ImportError, match="a broken install"):
+        bvhlab_main.main()
+
+
+def test_the_command_runs_and_then_ignores_ctrl_c(monkeypatch, capsys):
+    monkeypatch.setattr(sys, "argv", ["bvhlab", "scenes"])
+    before = signal.getsignal(signal.SIGINT)
+    try:
+        assert bvhlab_main.main() == 0
+        assert "gen:five_spheres" in capsys.readouterr().out
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN  # the exit handlers run whole
+    finally:
+        signal.signal(signal.SIGINT, before)
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["build", "a" * 300 + ".obj"],
+        ["build", "gen:five_spheres", "--json", "a" * 300 + ".json"],
+        ["render", "gen:five_spheres", "--out", "a" * 300 + "/x.png"],
+    ],
+)
+def test_a_path_too_long_while_the_arguments_are_read_is_one_line(args, capsys):
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"bvhlab {args[0]}: error: ") and "File name too long" in err and len(err.splitlines()) == 1
