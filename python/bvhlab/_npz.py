@@ -68,8 +68,16 @@ def read_npz(
 def write_npz(path: Path, arrays: dict[str, np.ndarray]) -> Path:
     """`arrays` as a compressed `.npz` at exactly `path` (no suffix added, no pickled objects); an
     old file is replaced only by a complete new one (bvhlab._atomic). Returns the path."""
-    with replacing(path) as f:  # a file object: numpy adds no suffix
-        np.savez_compressed(f, **arrays)
+    # the archive closed by its own `with` (np.savez_compressed left its ZipFile open when Ctrl-C
+    # came mid-write, and its __del__ later wrote into the file `replacing` had closed: "Exception
+    # ignored ... seek of closed file" after "interrupted"); the members as savez_compressed makes them
+    with (
+        replacing(path) as f,  # a file object: no suffix added
+        zipfile.ZipFile(f, "w", zipfile.ZIP_DEFLATED, allowZip64=True) as archive,
+    ):
+        for name, array in arrays.items():
+            with archive.open(name + ".npy", "w", force_zip64=True) as member:
+                np.lib.format.write_array(member, np.asanyarray(array), allow_pickle=False)
     return path
 
 
