@@ -68,6 +68,17 @@ def test_a_real_sigint_mid_write_keeps_the_old_file(tmp_path):
     assert path.read_bytes() == b"old png" and _listing(tmp_path) == ["good.png"]
 
 
+def test_a_name_near_the_limit_in_bytes_is_written(tmp_path):
+    """The temporary's name was the target's cut by characters: 120 'ü' (240 bytes, a valid name)
+    made a 259-byte temporary, and the write failed after all the work (helper probe, 2026-12-07)."""
+    for name in ("ü" * 120 + ".json", "€" * 81 + ".json", "a" * 250 + ".json"):
+        target = tmp_path / name
+        assert len(os.fsencode(name)) <= 255
+        write_text(target, "{}")
+        assert target.read_text() == "{}"
+    assert len(list(tmp_path.iterdir())) == 3  # no temporary left
+
+
 def test_permissions_are_kept_or_follow_the_umask(tmp_path):
     """A temporary file would be 0600: a replaced file keeps its mode, a new one gets open()'s."""
     old = tmp_path / "old.json"
