@@ -133,6 +133,8 @@ def test_compare_measures_the_overlay_claim(tmp_path):
         (["--methods", ","], "argument --methods: no methods given"),
         (["--methods", "median,,sah12"], "argument --methods: empty method name"),
         (["--methods", "median,median"], "argument --methods: method given more than once: median"),
+        (["--methods", "sah,median,sah12"], "argument --methods: sah and sah12 are the same build: give one"),
+        (["--methods", "sah012,sah12"], "argument --methods: sah012 and sah12 are the same build"),
         (["--methods", "quick"], "argument --methods: unknown method 'quick'"),
         (["--width", "0"], "argument --width: must be between 1 and 16384 pixels, got 0"),
         (["--height", "100000"], "argument --height: must be between 1 and 16384 pixels, got 100000"),

@@ -54,6 +54,12 @@ def method_list(text: str) -> list[str]:
     repeated = sorted({m for m in labels if labels.count(m) > 1})
     if repeated:
         raise argparse.ArgumentTypeError(f"method given more than once: {', '.join(repeated)}")
+    # one build under two names (sah, sah12 and sah012 are one): measured twice, its figures twice
+    seen: dict[str, str] = {}
+    for label in labels:
+        same = seen.setdefault(repr(sorted(build_settings(label).items())), label)
+        if same != label:
+            raise argparse.ArgumentTypeError(f"{same} and {label} are the same build: give one of them")
     return labels
 
 
