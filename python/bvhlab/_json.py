@@ -11,7 +11,7 @@ from typing import Any
 
 def plain(value: Any) -> Any:
     """`value` with every float that is not finite (NaN, ±inf, numpy's too) replaced by None, in
-    dicts, lists and tuples at any depth."""
+    dicts, lists, tuples and numpy arrays (made lists) at any depth."""
     if isinstance(value, float):  # numpy's float64 is a float
         return value if math.isfinite(value) else None
     if isinstance(value, dict):
@@ -20,6 +20,8 @@ def plain(value: Any) -> Any:
         return [plain(v) for v in value]
     if hasattr(value, "dtype") and getattr(value, "shape", None) == ():  # a numpy scalar
         return plain(value.item())
+    if hasattr(value, "dtype") and hasattr(value, "tolist"):  # a numpy array: a list (of lists)
+        return plain(value.tolist())
     return value
 
 
