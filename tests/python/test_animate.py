@@ -75,6 +75,19 @@ def test_bad_arguments_stop_before_any_work(tmp_path, capsys, args, message):
     assert not (tmp_path / "out").exists()
 
 
+def test_a_folder_where_an_output_goes_is_refused_before_the_experiment(tmp_path, capsys, monkeypatch):
+    """A folder named animate.png in --out was found only when the files were written, after the
+    whole experiment (helper probe, 2026-12-07)."""
+    from bvhlab.cli import animate_cmd
+
+    (tmp_path / "out" / "animate.png").mkdir(parents=True)
+    ran = []
+    monkeypatch.setattr(animate_cmd, "run_experiment", lambda *a, **k: ran.append(1))
+    assert main(["animate", "wave", "--frames", "0-3", "--out", str(tmp_path / "out")]) == 2
+    assert "animate.png is a folder: the run writes its plot there" in capsys.readouterr().err
+    assert not ran and sorted(p.name for p in (tmp_path / "out").iterdir()) == ["animate.png"]
+
+
 def test_the_animations_keep_their_triangle_counts():
     for make, _ in ANIMATIONS.values():
         frame = make()

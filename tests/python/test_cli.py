@@ -260,6 +260,9 @@ def bad_scene_files(tmp_path_factory):
             "range must be two finite numbers LO < HI, got -1.5, -5.0",
         ),
         (["animate", "wave", "--frames", "-1-2", "--out", "{d}/a"], "frames must look like A-B"),
+        # int() took them: 10-12, and another script's digits
+        (["animate", "wave", "--frames", "1_0-12", "--out", "{d}/a"], "frames must look like A-B"),
+        (["animate", "wave", "--frames", "\u0661-\u0663", "--out", "{d}/a"], "frames must look like A-B"),
         (
             ["render", "{d}/good.npz", "--max-depth", "20", "--out", "{d}/r.png"],
             "argument --max-depth: must be between 0 and 15, got 20",

@@ -13,6 +13,7 @@ import argparse
 import csv
 import io
 import math
+import re
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -65,11 +66,11 @@ def add_parser(sub) -> None:
 
 
 def frame_range(text: str) -> range:
-    """'0-23' → range(0, 24)."""
-    try:
-        a, b = (int(v) for v in text.split("-"))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"frames must look like A-B (e.g. 0-23), got '{text}'") from None
+    """'0-23' → range(0, 24). ASCII digits only (int() also took '1_0' and other scripts' digits)."""
+    match = re.fullmatch(r"([0-9]+)-([0-9]+)", text)
+    if match is None:
+        raise argparse.ArgumentTypeError(f"frames must look like A-B (e.g. 0-23), got '{text}'")
+    a, b = int(match[1]), int(match[2])
     if not 0 <= a < b:
         raise argparse.ArgumentTypeError(f"frames {text}: need 0 <= A < B")
     if b - a + 1 > MAX_FRAMES:
@@ -114,11 +115,22 @@ def _frames_of(args) -> tuple[Callable[[int], np.ndarray | Scene], range]:
     return (lambda k: frame_of(frame_phase(k, 0, last))), args.frames or range(0, last + 1)
 
 
+#: The files a run writes into --out, and what each is (for the messages).
+OUTPUTS = (("animate.csv", "table"), ("animate.json", "report"), ("animate.png", "plot"))
+
+
 def run(args) -> int:
     if args.backend == "none" and (args.width or args.height):  # they were accepted and ignored
         raise ValueError("--width and --height size the traced frames: give --backend cpu, vulkan or auto")
     args.width, args.height = args.width or DEFAULT_WIDTH, args.height or DEFAULT_HEIGHT
     geometry, frames = _frames_of(args)
+    if len(frames) < 2:  # before the folder is made (an empty one was left) and any work
+        raise ValueError(f"the experiment needs at least two frames, got {len(frames)}")
+    # the three files' names, before the experiment (a folder named animate.png was found after it)
+    outputs = {name: args.out / name for name, _ in OUTPUTS}
+    for name, what in OUTPUTS:
+        if outputs[name].is_dir():
+            raise ValueError(f"{outputs[name]} is a folder: the run writes its {what} there (move the folder away)")
     first, last = frames[0], frames[-1]
     trace = None
     if args.backend != "none":
@@ -148,9 +160,9 @@ def run(args) -> int:
         plot = _plot(rows, f"{Path(args.animation).stem}: update policies over frames {first}-{last}")
         write_together(
             {
-                args.out / "animate.csv": _csv(rows).encode(),
-                args.out / "animate.json": (strict_json.dumps(report, indent=1) + "\n").encode(),
-                args.out / "animate.png": plot,
+                outputs["animate.csv"]: _csv(rows).encode(),
+                outputs["animate.json"]: (strict_json.dumps(report, indent=1) + "\n").encode(),
+                outputs["animate.png"]: plot,
             }
         )
     _print(rows, totals)  # after the files: a reader gone (`| head`) lost them

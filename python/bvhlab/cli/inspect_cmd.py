@@ -209,7 +209,7 @@ def _check_node(bvh, args, two_level: bool) -> None:
     else:
         count, what = (bvh.stats["tlas_nodes"], "the TLAS") if two_level else (bvh.stats["nodes"], "the tree")
     if args.node >= count:
-        nodes = f"{count} nodes (0 to {count - 1})" if count else "no nodes"
+        nodes = "one node (0)" if count == 1 else f"{count} nodes (0 to {count - 1})" if count else "no nodes"
         raise ValueError(f"--node {args.node} does not exist: {what} has {nodes}")
 
 
