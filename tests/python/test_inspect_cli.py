@@ -212,6 +212,28 @@ def test_the_tree_and_the_report_are_written_together(tmp_path, monkeypatch):
     assert bvhlab.load_bvh(tree, scene).config.method == "sah"
 
 
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["gen:five_spheres", "--pixel", "1,1", "--sample", "1"], "sample 1 does not exist: a pixel has one sample"),
+        (["gen:five_spheres", "--node", "0", "--tree", "{d}/missing.bvhtree"], "missing.bvhtree: No such file"),
+        (["gen:five_spheres", "--node", "0", "--tree", "{d}"], "is a folder, not a tree file"),
+        (["gen:knot_field", "--node", "0", "--save-tree", "{d}/t.bvhtree"], "--save-tree takes a flat scene's tree"),
+        (["gen:knot_field", "--node", "0", "--optimize", "3"], "--optimize takes a flat scene's tree"),
+    ],
+)
+def test_requests_the_scene_or_tree_cannot_answer_are_refused_before_the_build(
+    tmp_path, capsys, monkeypatch, argv, message
+):
+    """Each was refused after the scene was loaded and its tree built (helper probe, 2026-12-07)."""
+    from bvhlab.cli import inspect_cmd
+
+    built = []
+    monkeypatch.setattr(inspect_cmd, "build", lambda *a, **k: built.append(1))
+    assert main(["inspect", *(a.replace("{d}", str(tmp_path)) for a in argv)]) == 2
+    assert message in capsys.readouterr().err and not built
+
+
 def inspect_cmd_args(argv: list[str]):
     """`bvhlab inspect ARGV`'s parsed arguments, as main gives them to inspect_cmd.run."""
     from bvhlab.cli import parser

@@ -18,6 +18,7 @@ from pathlib import Path
 from .. import InstancedBvh, build, load_bvh
 from .. import _json as strict_json
 from .._atomic import write_together
+from .._checks import input_file
 from .._progress import ProgressBar
 from ..inspect.levels import TreeNode
 from ..inspect.ray_record import PIXEL_TRAVERSALS, trace_pixel
@@ -124,7 +125,22 @@ def run(args) -> int:
     optimize = options.optimize_config(args)
     if args.instance is not None and args.node is None:  # it was ignored, out of range or not
         raise ValueError("--instance I goes with --node N (node N of instance I's mesh tree)")
+    # before the scene is loaded and the tree built (each was refused after them: a probe)
+    n = args.samples_per_axis * args.samples_per_axis
+    if args.pixel is not None and args.sample >= n:
+        raise ValueError(
+            f"sample {args.sample} does not exist: a pixel has {'one sample' if n == 1 else f'{n} samples'}"
+        )
+    if args.tree:
+        tree_file = Path(args.tree)
+        input_file(tree_file, "tree file", TreeFileError)
+        if not tree_file.exists():
+            raise FileNotFoundError(2, "No such file or directory", str(tree_file))
     scene, name = load_scene(args.scene)
+    if scene.is_instanced and args.save_tree:
+        raise ValueError(TWO_LEVEL_NOT_SAVED)
+    if scene.is_instanced and optimize is not None:
+        raise ValueError(options.OPTIMIZE_FLAT_ONLY)
     if args.tree:
         bvh = load_bvh(args.tree, scene)
         # build options typed beside --tree must be the saved tree's (they were ignored; those not
@@ -137,8 +153,6 @@ def run(args) -> int:
             bvh = build(scene, progress=bar, **settings)
     options.optimize_tree(bvh, optimize)
     two_level = isinstance(bvh, InstancedBvh)
-    if two_level and args.save_tree:
-        raise ValueError(TWO_LEVEL_NOT_SAVED)
     if not two_level and args.instance is not None:
         raise ValueError(FLAT_HAS_NO_INSTANCES)
     # before the tree is saved (it was, then refused) and the node figures' EPO pass (39 s of a
