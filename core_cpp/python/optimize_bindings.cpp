@@ -1,6 +1,9 @@
 // optimize_bindings.cpp — optimisation of a Python Bvh after its build (optimize.h): the
 // OptimizeConfig and `_core.optimize_bvh`, which publishes the optimised tree as a new version of
 // the Bvh (py_bvh.h) and returns what the optimisation did.
+#include <algorithm>
+#include <chrono>
+
 #include <nanobind/nanobind.h>
 #include <nanobind/stl/optional.h>
 #include <nanobind/stl/string.h>
@@ -26,13 +29,25 @@ nb::dict optimize(PyBvh& self, const OptimizeConfig& config, std::optional<nb::c
     OptimizeStats stats;
     try {
         const LongRelease release;
-        // the fraction reported is of the iteration bound (a run that converges ends earlier)
-        Cancellation cancel([&stop, &stats, &config] {
-            return stop(config.iterations ? double(stats.iterations) / config.iterations : 1.0);
+        // the fraction reported is of the iteration bound, or of the time budget where that is
+        // further (a bar of iterations stood at 3% when 300 ms ran out); a run that converges ends
+        // earlier (Bvh.optimize reports 1 once done)
+        const auto start = std::chrono::steady_clock::now();
+        Cancellation cancel([&stop, &stats, &config, start] {
+            double fraction = config.iterations ? double(stats.iterations) / config.iterations : 1.0;
+            if (config.time_budget_ms > 0) {
+                const std::chrono::duration<double, std::milli> ran = std::chrono::steady_clock::now() - start;
+                fraction = std::max(fraction, ran.count() / config.time_budget_ms);
+            }
+            return stop(std::min(fraction, 1.0));
         });
         self.replace([&](const TreeVersion& old) {
+            Bvh out = optimized(old.bvh, config, &cancel, &stats);
+            // done: 1 reported before the tree is published, under the same rules (a false answer
+            // or Ctrl-C still leaves the tree as it was; a change from the callable is refused)
+            if (stop(1.0)) throw Cancelled();
             // the optimised tree is a tree as built: its costs are its own (null: taken on first need)
-            return std::pair{optimized(old.bvh, config, &cancel, &stats), CostsPtr()};
+            return std::pair{std::move(out), CostsPtr()};
         });
     } catch (const Cancelled&) {
         stop.rethrow();  // what the callable (or Ctrl-C) raised, as itself

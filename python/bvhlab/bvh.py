@@ -338,8 +338,9 @@ class Bvh:
         `optimize(iterations=20, time_budget_ms=50)`). Leaves move whole (sizes kept) and no
         geometry is needed. Publishes a new version of the tree, as refit does, never of a higher
         SAH cost, the same whatever the number of threads; returns what it did (OptimizeStats).
-        `progress(fraction of the iteration bound)` and Ctrl-C stop it as they stop a build
-        (BuildCancelled, or what the callable raised), the tree left as it was."""
+        `progress(fraction)` (of the iteration bound, or of the time budget where that is further;
+        1.0 once done) and Ctrl-C stop it as they stop a build (BuildCancelled, or what the callable
+        raised), the tree left as it was."""
         from .optimize import OptimizeConfig, OptimizeStats
 
         if config is None:

@@ -117,6 +117,18 @@ def test_wrong_types_and_stops(small_scene, knot):
     check_tree_layout(big, knot)
 
 
+def test_progress_follows_the_time_budget_and_ends_at_one(knot):
+    """The fraction was of the iteration bound alone: 1,000 iterations in 300 ms stopped the bar at
+    3%, and no run reported 1 (the bar ended at 90% and cleared: helper probe, 2026-12-07)."""
+    for changes in (dict(iterations=30), dict(iterations=100000, time_budget_ms=60.0)):
+        seen = []
+        stats = bvhlab.build(knot, method="median").optimize(progress=seen.append, **changes)
+        assert seen[-1] == 1.0 and seen == sorted(seen) and all(0 <= f <= 1 for f in seen)
+        if "time_budget_ms" in changes:
+            assert stats.stop == "time_budget" and stats.iterations < 1000
+            assert max(seen[:-1]) > 0.5  # the time ran, not the iterations (< 1%)
+
+
 def test_cli_build_and_inspect_optimize(tmp_path, capsys):
     assert main(["build", "gen:whitted", "--optimize", "5"]) == 0
     assert "optimized     SAH" in capsys.readouterr().out
