@@ -149,3 +149,18 @@ def test_frames_outside_the_files_range_are_said(tmp_path):
         assert done.returncode == 0, done.stderr[-2000:]
         said.append("reach outside" in done.stderr and "frame range 1-3" in done.stderr)
     assert said == [True, False]
+
+
+def test_a_file_bpy_cannot_read_is_one_clear_line(tmp_path):
+    """bpy's own "Error: ...\\n" was passed on as it was: "error: Error: ..." and a blank line."""
+    bad = tmp_path / "bad.blend"
+    bad.write_bytes(b"not a blend file")
+    done = subprocess.run(
+        [sys.executable, "-m", "bvhlab", "animate", str(bad), "--frames", "0-2", "--out", str(tmp_path / "out")],
+        capture_output=True, text=True, timeout=300, cwd=ROOT,
+    )  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    ours = [line for line in done.stderr.splitlines() if line.startswith("bvhlab animate")]
+    assert ours == [f"bvhlab animate: error: {bad} cannot be read as a .blend file: File format is not supported "
+                    f'in file "{bad}"'], done.stderr  # fmt: skip
+    assert not done.stderr.endswith("\n\n")

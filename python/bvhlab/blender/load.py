@@ -31,13 +31,19 @@ def bpy_module():
 def open_blend(bpy, path: Path) -> None:
     """bpy.ops.wm.open_mainfile without the UI, a Ctrl-C held as bpy_module holds it (opening a
     file enables add-ons again), and Blender's "Read blend: ..." line sent to stderr: a command's
-    stdout is its own output (the line stood before a build's figures)."""
+    stdout is its own output (the line stood before a build's figures). A file bpy cannot read is a
+    SceneFileError saying why (bpy's own "Error: ...\n" was passed on as it was: `bvhlab animate`
+    printed "error: Error: ..." and a blank line)."""
+    _checks.input_file(path, ".blend file", SceneFileError)  # a FIFO blocked bpy's open
     sys.stdout.flush()
     saved = os.dup(1)
     try:
         os.dup2(2, 1)
         with interrupts_held():
             bpy.ops.wm.open_mainfile(filepath=str(Path(path).resolve()), load_ui=False)
+    except RuntimeError as e:  # bpy's "Error: File format is not supported in file '…'\n"
+        reason = str(e).strip().removeprefix("Error:").strip()
+        raise SceneFileError(f"{path} cannot be read as a .blend file: {reason}") from None
     finally:
         sys.stdout.flush()
         os.dup2(saved, 1)
@@ -48,16 +54,11 @@ def load_blend(path: Path) -> Scene:
     """Open a .blend with bpy (Blender as a Python module) and export it with the add-on's code."""
     if not path.exists():
         raise FileNotFoundError(f"no such file: {path}")
-    _checks.input_file(path, ".blend file", SceneFileError)  # a FIFO blocked bpy's open
     bpy = bpy_module()
     from .export import export_scene
     from .light import saved_light_distance
 
-    try:
-        open_blend(bpy, path)
-    except RuntimeError as e:  # bpy's "Error: File format is not supported in file '…'\n"
-        reason = str(e).strip().removeprefix("Error:").strip()
-        raise SceneFileError(f"{path} cannot be read as a .blend file: {reason}") from None
+    open_blend(bpy, path)
     # a file without a camera is framed by the default camera, as a mesh file is (design.md, Defaults);
     # its light lit as the add-on lights it (its saved Light Distance, where set)
     distance = saved_light_distance(bpy.context.scene)
