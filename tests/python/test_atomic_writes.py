@@ -168,8 +168,9 @@ def test_concurrent_writers_leave_one_whole_file(tmp_path):
 
 # What writes a file without the atomic writer: open(.., "w"/"wb"/"a"), Path.write_text/bytes,
 # matplotlib's savefig/imsave to a name, numpy's save/savez to a name, a ZipFile opened on a name.
+# (a member of a zip archive written inside `replacing`, archive.open(name, "w"), is no file by name)
 _DIRECT_WRITE = re.compile(
-    r"""open\([^)]*["'][wax]b?\+?["']|\.write_(text|bytes)\(|\.(savefig|imsave)\((?!f\b)|"""
+    r"""(?<!archive\.)open\([^)]*["'][wax]b?\+?["']|\.write_(text|bytes)\(|\.(savefig|imsave)\((?!f\b)|"""
     r"""np\.(save|savez|savez_compressed)\((?!f\b|buffer\b)|ZipFile\((?!f\b)[^)]*["']w["']|\.tofile\("""
 )
 
