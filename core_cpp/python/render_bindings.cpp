@@ -55,7 +55,7 @@ void check_signals_while_waiting() {
 /// the reads that are safe there: the samples and timings of the runs before (issue 39).
 struct PyRenderJob {
     std::unique_ptr<RenderJob> job;
-    OwnedMutex mutex{"this render job"};
+    OwnedMutex mutex{"this render job", LockRank::Job};
 
     template <class F>
     auto locked(F&& f) {
@@ -163,13 +163,22 @@ float* pixels_of(const std::optional<Array>& a, const RenderSettings& s, const c
     return a->data();
 }
 
-void resolve_job(PyRenderJob& self, const std::optional<Rgba>& color, const std::optional<Plane>& depth,
-                 const std::optional<Plane>& cost, const std::optional<Rgba>& heat,
-                 const std::optional<Counters>& counters) {
+/// Writes the images of the samples so far into the arrays given; returns (those samples, the
+/// timings then), read under the same lock: a run on another thread between the images and a
+/// separate read of samples_done made a result say more samples than its images held (9 for 1).
+nb::tuple resolve_job(PyRenderJob& self, const std::optional<Rgba>& color, const std::optional<Plane>& depth,
+                      const std::optional<Plane>& cost, const std::optional<Rgba>& heat,
+                      const std::optional<Counters>& counters) {
     const RenderSettings& s = self.job->settings();
     RenderImages out{pixels_of(color, s, "color"), pixels_of(depth, s, "depth"), pixels_of(cost, s, "cost"),
                      pixels_of(heat, s, "heat"), pixels_of(counters, s, "counters")};
-    self.locked([&](RenderJob& job) { job.resolve(out); });
+    std::uint32_t samples = 0;
+    RenderTimings timings;
+    self.locked([&](RenderJob& job) {
+        job.resolve(out);
+        samples = job.samples_done(), timings = job.timings();
+    });
+    return nb::make_tuple(samples, timings_dict(timings));
 }
 
 void bind_job(nb::module_& m) {
@@ -179,7 +188,7 @@ void bind_job(nb::module_& m) {
         .def("resolve", &resolve_job, "color"_a.noconvert().none(), "depth"_a.noconvert().none(),
              "cost"_a.noconvert().none(), "heat"_a.noconvert().none() = nb::none(),
              "counters"_a.noconvert().none() = nb::none(),
-             "Writes the images of the samples so far into the given arrays.")
+             "Writes the images of the samples so far into the given arrays; (their samples, the timings).")
         .def_prop_ro("samples_done",
                      [](PyRenderJob& j) { return j.read([](const RenderJob& job) { return job.samples_done(); }); })
         .def_prop_ro("samples_per_pixel", [](PyRenderJob& j) { return j.job->samples_per_pixel(); })
@@ -272,6 +281,10 @@ void bind_render_settings(nb::module_& m);  // render_settings_bindings.cpp
 
 void bind_render(nb::module_& m) {
     bind_render_settings(m);
+    m.def(
+        "inside_render_work", [] { return OwnedMutex::highest_held() != LockRank::None; },
+        "Whether this thread holds a render job's or renderer's lock (it runs a progress callable of a "
+        "render): it must not wait for a lock another thread holds (owned_mutex.h LockRank).");
     nb::exception<RenderIncomplete>(m, "RenderIncomplete", PyExc_RuntimeError);
     nb::class_<PyRenderScene>(m, "RenderScene")
         .def(

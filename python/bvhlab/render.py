@@ -180,9 +180,9 @@ class RenderJob:
         )
         heat_image = np.empty((h, w, 4), np.float32) if heat else None
         counter_image = np.empty((h, w, len(_core.TRAVERSAL_COUNTERS)), np.float32) if counters else None
-        self._job.resolve(*images, heat_image, counter_image)
+        samples, timings = self._job.resolve(*images, heat_image, counter_image)  # of one moment
         return RenderResult(
-            *images, samples=self.samples_done, timings=self.timings, heat=heat_image, counters=counter_image
+            *images, samples=samples, timings={**timings, **self._timings}, heat=heat_image, counters=counter_image
         )
 
     @property
@@ -293,7 +293,14 @@ class Renderer:
         start = time.perf_counter()
         # the backend "auto" renders the wide walk, which only the CPU tracer has, on the CPU
         wide_on_cpu = self._vulkan is not None and options.traversal == "wide" and self.reason.startswith("auto")
-        with self._lock:
+        # a thread inside a render's work (its progress callable) holds that render's locks, which a
+        # thread holding this lock may be waiting for (it starts a job): asked once, not waited for
+        if not self._lock.acquire(blocking=not _core.inside_render_work()):
+            raise RuntimeError(
+                "this renderer is starting a job on another thread, and this thread is inside a render's work "
+                "(a call from its progress callable): call it after that work returns"
+            )
+        try:
             render_scene = self._cache.get(scene, bvh, options)
             prepare_ms = (time.perf_counter() - start) * 1e3
             upload_ms = 0.0
@@ -304,6 +311,8 @@ class Renderer:
                     upload_ms = self._vulkan.upload(render_scene)
                     self._uploaded = render_scene
                 job = self._vulkan.start(settings)
+        finally:
+            self._lock.release()
         timings = {
             "prepare_ms": prepare_ms,
             "upload_ms": upload_ms,

@@ -37,7 +37,7 @@ struct RendererCore {
 
     /// Held by every public operation of the renderer and its jobs; a job's progress callback
     /// calling back into the renderer gets ReentrantCall instead of a deadlock.
-    OwnedMutex mutex{"the Vulkan renderer"};
+    OwnedMutex mutex{"the Vulkan renderer", LockRank::Renderer};
     // Declared in creation order: destroyed in reverse.
     const bool force_staging;
     Functions fn;
