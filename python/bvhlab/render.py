@@ -308,6 +308,8 @@ class Renderer:
                 job = _core.start_cpu(render_scene, settings, threads)
             else:
                 if self._uploaded is not render_scene:
+                    # a failed upload leaves the device's scene empty (sky): no scene is on it then
+                    self._uploaded = None
                     upload_ms = self._vulkan.upload(render_scene)
                     self._uploaded = render_scene
                 job = self._vulkan.start(settings)
