@@ -152,3 +152,34 @@ def test_the_boxes_follow_a_moved_sphere_by_a_refit_and_hit_what_a_fresh_export_
         assert built.tree.last.action in ("refit", "built"), built.tree.last
         _same_hits(built.bvh, export_scene(bpy.context, require_camera=False))
     assert built.tree.last.action == "refit", built.tree.last  # from the second move on: placed
+
+
+def _sorted_triangles(scene) -> np.ndarray:
+    """The world's triangles in one order (a live scene's movers are instances of their own, a
+    fresh scene's in mesh 0)."""
+    t = scene.flattened().triangles.reshape(-1, 9)
+    return t[np.lexsort(t.T[::-1])]
+
+
+@pytest.mark.parametrize("instancing", [True, False], ids=["instanced", "flat"])
+def test_a_sphere_made_a_mesh_again_moves_as_a_mesh(instancing, monkeypatch):
+    """The index of what an update places kept the item as a sphere of mesh 0 when its flag came off
+    (the walk found the same keys and layout), and its next move left mesh 0's triangles where they
+    were (the review)."""
+    spheres_among_duplicates()
+    with synced(instancing, monkeypatch) as (live, errors, _):
+        a = bpy.data.objects["A"]
+        for change in (
+            lambda: setattr(a.location, "x", a.location.x + 1.0),  # placed as a sphere
+            lambda: (a.pop(SPHERE_PROPERTY), a.data.update()),  # a mesh again (the flag alone names nothing)
+            lambda: setattr(a.location, "x", a.location.x + 3.0),
+            lambda: setattr(a.location, "z", a.location.z - 1.0),
+            lambda: (a.__setitem__(SPHERE_PROPERTY, True), a.data.update()),  # a sphere again
+            lambda: setattr(a.location, "y", a.location.y + 2.0),
+        ):
+            change()
+            bpy.context.view_layer.update()
+            assert not errors, errors
+            want = _fresh(instancing)
+            np.testing.assert_array_equal(live.scene.spheres, want.spheres)
+            np.testing.assert_allclose(_sorted_triangles(live.scene), _sorted_triangles(want), atol=1e-5)

@@ -217,7 +217,15 @@ class LiveScene:
         instances: what MoverIndex.of reads (a scene walked at every frame, e.g. an animated
         scatter, made it anew at each: 14-60 ms at 10,000 items, helper probe)."""
         old = self._layout
-        return old is not None and list(items) == list(self._items) and layout.mesh_of == old.mesh_of
+        return (
+            old is not None
+            and list(items) == list(self._items)
+            and layout.mesh_of == old.mesh_of
+            # which items are spheres with primitives: the index places those of mesh 0 (a sphere
+            # made a mesh again kept its place in the index, and its next move left mesh 0's
+            # triangles where they were: the review)
+            and [_placed_as(i) for i in items.values()] == [_placed_as(i) for i in self._items.values()]
+        )
 
     def _mover_index(self) -> MoverIndex:
         if self._index is None:
@@ -234,7 +242,7 @@ class LiveScene:
         placed = place_moved(self._items, self._world, self._moved, self._seen_moving, placing.moved, self.instancing)
         if placed is None:
             return None
-        spheres = place_spheres(placed, self._sphere_rows)
+        spheres = place_spheres(placed, self._sphere_rows, self._layout.mesh_of)
         if spheres is None:
             return None
         placing.spheres = spheres
@@ -397,6 +405,11 @@ class LiveScene:
                 raise
             warnings.warn(f"{error}; using a default camera that frames the geometry", SubstituteWarning, stacklevel=3)
             return None
+
+
+def _placed_as(item: Item) -> tuple[bool, bool]:
+    """What of an item the index of movers reads beside its key and mesh: sphere, and primitives."""
+    return item.mesh is None, item.slot_table is not None
 
 
 def _nothing_in_scope(scope: str) -> str:

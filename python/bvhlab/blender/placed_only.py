@@ -252,17 +252,20 @@ def place_moved(
     return items, world, report, seen_moving, now
 
 
-def place_spheres(placed: tuple, rows: dict[tuple, int]) -> dict[int, np.ndarray] | None:
+def place_spheres(placed: tuple, rows: dict[tuple, int], mesh_of: dict) -> dict[int, np.ndarray] | None:
     """The new (cx, cy, cz, radius) of each sphere that moved in a placed sync (`placed`:
     place_moved's tuple, whose items get them as placed), by its row in mesh 0's spheres (`rows`:
     scene_arrays.mesh_zero's, of the last sync that made mesh 0); None where one is scaled to
-    nothing now and was not before, or the other way round (the walk then makes mesh 0 again).
-    Raises ExportError as the walk's export does (a centre out of range)."""
+    nothing now and was not before, or the other way round, or where an item of mesh 0 that moved
+    is no sphere (the walk then makes mesh 0 again). Raises ExportError as the walk's export does
+    (a centre out of range)."""
     items, now = placed[0], placed[4]
     spheres = {}
     for key in now:
         item: Item = items[key]
         if item.mesh is not None:
+            if not mesh_of[key]:  # its triangles are mesh 0's, placed where it was: only the walk places them
+                return None
             continue
         assert item.bounds is not None  # a sphere keeps its object-space bounds
         sphere, row = place_sphere(item.bounds, item.matrix, item.name), rows.get(key)
