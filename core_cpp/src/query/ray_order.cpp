@@ -55,15 +55,16 @@ RayBatch SortedRays::batch(const RayBatch& block) const {
 void sort_rays(const RayBatch& block, const RayKeys& keys, SortedRays& out) {
     const auto n = std::uint32_t(block.count);
     // a stable counting sort of the keys (16 bits: below 8 · 2^12)
-    std::uint16_t* key = out.key.resize(n);
+    out.key.resize(n);
+    std::uint16_t* key = out.key.data();
     keys.of_rays(block.origins, block.directions, n, key);
     std::vector<std::uint32_t> start(keys.count() + 1, 0);
     for (std::uint32_t i = 0; i < n; ++i) ++start[1 + key[i]];
     for (std::uint32_t k = 0; k < keys.count(); ++k) start[k + 1] += start[k];
-    float* origins = out.origins.resize(3 * std::size_t(n));
-    float* directions = out.directions.resize(3 * std::size_t(n));
-    std::uint32_t* index = out.index.resize(n);
-    float* tmax_of = out.tmax_of.resize(block.tmax_of ? n : 0);
+    out.origins.resize(3 * std::size_t(n)), out.directions.resize(3 * std::size_t(n)), out.index.resize(n);
+    out.tmax_of.resize(block.tmax_of ? n : 0);
+    float *origins = out.origins.data(), *directions = out.directions.data(), *tmax_of = out.tmax_of.data();
+    std::uint32_t* index = out.index.data();
     for (std::uint32_t i = 0; i < n; ++i) {
         const std::uint32_t k = start[key[i]]++;
         std::memcpy(origins + 3 * std::size_t(k), block.origins + 3 * std::size_t(i), 3 * sizeof(float));

@@ -11,11 +11,10 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
-#include <memory>
-#include <type_traits>
 #include <vector>
 
 #include "bvhlab/aabb.h"
+#include "bvhlab/big_vector.h"
 #include "bvhlab/traverse.h"
 
 namespace bvhlab {
@@ -92,41 +91,18 @@ struct RayKeys {
 /// over the block, differ in key.
 bool in_ray_order(const RayBatch& block, const RayKeys& keys);
 
-/// Room for n objects of a trivially copyable T, left unwritten when made or grown (a vector's
-/// resize writes every element, a pass of stores before the sort or the trace writes them again:
-/// 1-1.4% of a sorted Sponza batch's time in memset); kept for the next block of the batch.
-template <class T>
-class Unwritten {
-    static_assert(std::is_trivially_copyable_v<T>);
-
-public:
-    T* resize(std::size_t n) {
-        if (n > room_) data_ = std::make_unique_for_overwrite<T[]>(n), room_ = n;
-        size_ = n;
-        return data_.get();
-    }
-    T* data() { return data_.get(); }
-    const T* data() const { return data_.get(); }
-    std::size_t size() const { return size_; }
-    T& operator[](std::size_t i) { return data_[i]; }
-    const T& operator[](std::size_t i) const { return data_[i]; }
-    const T* begin() const { return data_.get(); }
-    const T* end() const { return data_.get() + size_; }
-
-private:
-    std::unique_ptr<T[]> data_;
-    std::size_t size_ = 0, room_ = 0;
-};
-
 /// A block's rays (at most kOrderBlock) copied in the order of their keys, ties in input order:
 /// position k holds the block's ray index[k], whose origin, direction and (where the block has
 /// them) tmax are copied. Made in one pass over the block's arrays in their order, and read in
 /// order by the walks, so that neither reads the caller's arrays out of order (a gather from them
 /// at every piece cost twice as much where the tree filled the caches: design.md).
+/// BigVectors: grown without a pass of stores before the sort writes them (a vector's resize
+/// zero-filled them: 1-1.4% of a sorted Sponza batch's time in memset), from the cache of freed
+/// blocks, so that the next batch takes no page faults for them either.
 struct SortedRays {
-    Unwritten<float> origins, directions, tmax_of;
-    Unwritten<std::uint32_t> index;
-    Unwritten<std::uint16_t> key;  ///< the keys in input order (sort_rays' own)
+    BigVector<float> origins, directions, tmax_of;
+    BigVector<std::uint32_t> index;
+    BigVector<std::uint16_t> key;  ///< the keys in input order (sort_rays' own)
     /// The copy as a batch, with `block`'s tmin and tmax.
     RayBatch batch(const RayBatch& block) const;
 };
@@ -135,7 +111,7 @@ void sort_rays(const RayBatch& block, const RayKeys& keys, SortedRays& out);
 /// out[index[k]] = sorted[k] for k in [0, n): results traced in ray order back to their rays,
 /// one array at a time (its lines stay in the caches while they are written out of order).
 template <class T>
-void unsort(const T* sorted, const Unwritten<std::uint32_t>& index, T* out) {
+void unsort(const T* sorted, const BigVector<std::uint32_t>& index, T* out) {
     for (std::size_t k = 0; k < index.size(); ++k) out[index[k]] = sorted[k];
 }
 
@@ -147,16 +123,20 @@ inline HitBatch offset(const HitBatch& out, std::size_t base) {
 
 /// A reordered block's hits in its rays' order (the fields `out` asks for), then put back.
 struct SortedHits {
-    Unwritten<float> t, u, v;
-    Unwritten<std::int32_t> prim;
-    Unwritten<std::uint8_t> kind;
-    Unwritten<std::uint32_t> visited;
+    BigVector<float> t, u, v;
+    BigVector<std::int32_t> prim;
+    BigVector<std::uint8_t> kind;
+    BigVector<std::uint32_t> visited;
     HitBatch make(const HitBatch& out, std::size_t n) {
-        const auto field = [n](auto& a, const void* asked) { return asked ? a.resize(n) : nullptr; };
-        return {t.resize(n),     prim.resize(n),  field(kind, out.kind),
+        t.resize(n), prim.resize(n);
+        const auto field = [n](auto& a, const void* asked) {
+            a.resize(asked ? n : 0);
+            return asked ? a.data() : nullptr;
+        };
+        return {t.data(),        prim.data(),     field(kind, out.kind),
                 field(u, out.u), field(v, out.v), field(visited, out.nodes_visited)};
     }
-    void unsort(const Unwritten<std::uint32_t>& index, const HitBatch& out) const {
+    void unsort(const BigVector<std::uint32_t>& index, const HitBatch& out) const {
         bvhlab::unsort(t.data(), index, out.t), bvhlab::unsort(prim.data(), index, out.prim);
         if (out.kind) bvhlab::unsort(kind.data(), index, out.kind);
         if (out.u) bvhlab::unsort(u.data(), index, out.u);

@@ -295,8 +295,8 @@ void intersect_batch_two_level(const TwoLevel& scene, const RayBatch& rays, cons
             t += detail::intersect_through_tlas(scene, piece.rays[j], mode, nullptr).hit.t;
         return t;
     };
-    SortedHits in_order;  // a reordered block's hits, in its rays' order
-    std::vector<std::int32_t> instance_in_order;
+    SortedHits in_order;                        // a reordered block's hits, in its rays' order
+    BigVector<std::int32_t> instance_in_order;  // as SortedHits: grown without a fill
     for_each_block<false>(rays, tlas_box(tlas), probe,
                           [&](std::size_t base, const RayBatch& block, const SortedRays* sorted, WideWalk) {
                               if (!sorted)
