@@ -46,11 +46,11 @@ struct RenderScene {
         forest_prims;  ///< two-level: every BLAS's leaf primitives, refs into `triangles`/`spheres`
     std::vector<gpu::GpuInstance> instances;  ///< two-level: in the TLAS's leaf order; empty: a flat scene
     /// Two-level: the slot in `instances` of each of the TLAS's instances (Tlas::instances order;
-    /// kNoSlot for one the TLAS's tree leaves out: an instance of an empty mesh, never hit), and
-    /// each mesh's first triangle and sphere in `triangles` and `spheres`: a hit of tlas.h's queries
-    /// (an instance index, a mesh's own primitive) in the tracer's numbers (the wide traversal).
+    /// gpu::NO_INSTANCE for one the TLAS's tree leaves out: an instance of an empty mesh, never
+    /// hit), and each mesh's first triangle and sphere in `triangles` and `spheres`: a hit of
+    /// tlas.h's queries (an instance index, a mesh's own primitive) in the tracer's numbers (the
+    /// wide traversal).
     std::vector<std::uint32_t> instance_slots, first_triangle, first_sphere;
-    static constexpr std::uint32_t kNoSlot = 0xffffffffu;
     BigVector<gpu::GpuTriangle> triangles;
     std::vector<gpu::GpuSphere> spheres;
     std::vector<gpu::GpuMaterial> materials;

@@ -131,7 +131,7 @@ private:
         }
         for (std::size_t i = 0; i < tlas.instances.size(); ++i) {
             const std::uint32_t slot = scene_.instance_slots[i];
-            if (slot == RenderScene::kNoSlot) {
+            if (slot == gpu::NO_INSTANCE) {
                 if (!tlas.instances[i].world_box.empty()) return false;
                 continue;
             }

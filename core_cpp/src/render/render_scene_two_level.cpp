@@ -119,7 +119,7 @@ RenderScene make_render_scene(const Tlas& tlas, const std::vector<RenderMesh>& m
     }
     s.first_triangle = first_triangle;
     s.first_sphere = first_sphere;
-    s.instance_slots.assign(tlas.instances.size(), RenderScene::kNoSlot);
+    s.instance_slots.assign(tlas.instances.size(), gpu::NO_INSTANCE);
     append_tree(s, tlas.tree, 0, 0);  // first, at 0; its leaves' slots are those of `instances` (it packs no prims)
     std::vector<TreePlace> places;
     std::uint32_t blas_height = 1;
