@@ -121,8 +121,8 @@ class FinalRender:
         settings = settings.for_backend(
             tracer.backend == "cpu", counts_shown=passes.heatmap_wanted(depsgraph.view_layer)
         )
+        shown = settings  # with the overlay: each view's camera decides for its own (a multi-view render)
         camera, settings, unrendered = self._camera(depsgraph, scene.camera, frame, settings)
-        shown = settings  # the overlay's settings, for the views whose cameras can draw it
         for note in unrendered:
             engine.report({"WARNING"}, f"bvhlab: {note}")
         update = self._tree(engine, blender_scene)
@@ -141,7 +141,7 @@ class FinalRender:
             if view is not None:  # the view's camera: an eye's offset and convergence (Stereoscopy)
                 engine.active_view_set(view)
                 view_camera = self._view_camera(engine, depsgraph, view, frame)
-                # a view's panorama draws no boxes (the scene camera's said so above already)
+                # a view's panorama draws no boxes, another view's camera may (said once)
                 settings = _overlay_for(view_camera, shown, unrendered, engine)
             else:
                 view_camera = camera

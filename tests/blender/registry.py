@@ -254,6 +254,7 @@ def _cameras() -> Iterator[Check]:
     for check in (
         sources.check_a_strips_camera_override_is_rendered_through,
         sources.check_another_scenes_compositor_frames_at_its_size,
+        sources.check_each_views_camera_decides_whether_it_draws_the_overlay,
     ):
         yield Check("cameras", check.__name__.removeprefix("check_"), check, folder=True)
     yield Check(
