@@ -17,10 +17,9 @@ def open_animation(path: Path) -> tuple[Callable[[int], Scene], range]:
     if not path.exists():
         raise FileNotFoundError(f"no such file: {path}")
     from .export import export_scene
-    from .load import bpy_module, open_blend
+    from .load import open_blend
 
-    bpy = bpy_module()
-    open_blend(bpy, path)
+    bpy = open_blend(path)
     scene = bpy.context.scene
 
     def scene_at(frame: int) -> Scene:

@@ -28,13 +28,15 @@ def bpy_module():
     return bpy
 
 
-def open_blend(bpy, path: Path) -> None:
+def open_blend(path: Path):
     """bpy.ops.wm.open_mainfile without the UI, a Ctrl-C held as bpy_module holds it (opening a
     file enables add-ons again), and Blender's "Read blend: ..." line sent to stderr: a command's
     stdout is its own output (the line stood before a build's figures). A file bpy cannot read is a
     SceneFileError saying why (bpy's own "Error: ...\n" was passed on as it was: `bvhlab animate`
-    printed "error: Error: ..." and a blank line)."""
+    printed "error: Error: ..." and a blank line). Returns bpy (bpy_module), imported after the
+    path's check (a folder or a FIFO is refused before the second bpy takes to load)."""
     _checks.input_file(path, ".blend file", SceneFileError)  # a FIFO blocked bpy's open
+    bpy = bpy_module()
     sys.stdout.flush()
     saved = os.dup(1)
     try:
@@ -48,17 +50,17 @@ def open_blend(bpy, path: Path) -> None:
         sys.stdout.flush()
         os.dup2(saved, 1)
         os.close(saved)
+    return bpy
 
 
 def load_blend(path: Path) -> Scene:
     """Open a .blend with bpy (Blender as a Python module) and export it with the add-on's code."""
     if not path.exists():
         raise FileNotFoundError(f"no such file: {path}")
-    bpy = bpy_module()
+    bpy = open_blend(path)
     from .export import export_scene
     from .light import saved_light_distance
 
-    open_blend(bpy, path)
     # a file without a camera is framed by the default camera, as a mesh file is (design.md, Defaults);
     # its light lit as the add-on lights it (its saved Light Distance, where set)
     distance = saved_light_distance(bpy.context.scene)
