@@ -64,8 +64,9 @@ def _create_temporary(target: Path) -> tuple[Path, int]:
     """A new, empty file beside `target`, created with the permissions open() would give (0666
     less the umask) or the old file's; returns its path and descriptor."""
     # within the system's limit in bytes, not characters (a name of 120 'ü' is 240 bytes: its
-    # temporary came to 259 and the write failed after the work); cut at a whole character
-    stem = os.fsencode(target.name)[: _NAME_MAX - 20].decode(errors="ignore")
+    # temporary came to 259 and the write failed after the work); a character cut in two, or a
+    # name that is no UTF-8, keeps its bytes (fsdecode's surrogate escapes)
+    stem = os.fsdecode(os.fsencode(target.name)[: _NAME_MAX - 20])
     for _ in range(100):
         temporary = target.with_name(f".{stem}.{secrets.token_hex(4)}.tmp")
         try:
