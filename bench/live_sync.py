@@ -143,11 +143,13 @@ def main() -> None:
     _common.json_path(args.json)
     machine = _common.machine()
     print(_common.machine_line(machine), file=sys.stderr, flush=True)
+    changes = args.changes.split(",")
+    unknown = [c for c in changes if c not in dict(CHANGES)]
+    if unknown:  # before any is measured
+        raise SystemExit(f"live_sync: unknown change {', '.join(map(repr, unknown))}")
     rows = []
     for count in (int(c) for c in args.counts.split(",")):
-        for change in args.changes.split(","):
-            if change not in dict(CHANGES):
-                raise SystemExit(f"live_sync: unknown change {change!r}")
+        for change in changes:
             # an edit of the shared mesh changes every duplicate: their own meshes only
             for shared in (True, False) if change in ("move", "frame", "sphere") else (False,):
                 row = measure(count, shared, args.moves, change)
