@@ -61,13 +61,50 @@ def test_an_import_error_without_ctrl_c_is_raised(cli_unloaded):
         bvhlab_main.main()
 
 
-def test_the_command_runs_and_then_ignores_ctrl_c(monkeypatch, capsys):
+def test_the_command_runs_and_then_ctrl_c_ends_the_process_at_once(monkeypatch, capsys):
     monkeypatch.setattr(sys, "argv", ["bvhlab", "scenes"])
     before = signal.getsignal(signal.SIGINT)
     try:
         assert bvhlab_main.main() == 0
         assert "gen:five_spheres" in capsys.readouterr().out
-        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN  # the exit handlers run whole
+        assert signal.getsignal(signal.SIGINT) is bvhlab_main._end_now  # not inside the exit handlers
+    finally:
+        signal.signal(signal.SIGINT, before)
+
+
+def test_ctrl_c_after_the_work_ends_with_130_and_no_traceback(tmp_path):
+    """The command's exit handlers (here one that waits, as bpy's and Dask's may) take no
+    KeyboardInterrupt: the process ends at once, with 130."""
+    import subprocess
+    import time
+
+    script = tmp_path / "run.py"
+    script.write_text(
+        "import atexit, sys, time\n"
+        "atexit.register(lambda: (print('in exit', flush=True), time.sleep(30)))\n"
+        "import bvhlab_main\n"
+        "sys.argv = ['bvhlab', 'scenes']\n"
+        "sys.exit(bvhlab_main.main())\n"
+    )
+    child = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    printed = []
+    for line in child.stdout:
+        if line.startswith("in exit"):
+            break
+        printed.append(line)
+    assert any("gen:five_spheres" in line for line in printed), printed  # the command's output, whole
+    time.sleep(0.2)
+    child.send_signal(signal.SIGINT)
+    assert child.wait(20) == 130
+    assert "Traceback" not in child.stderr.read()
+
+
+def test_a_process_started_ignoring_ctrl_c_keeps_ignoring_it(monkeypatch, capsys):
+    monkeypatch.setattr(sys, "argv", ["bvhlab", "scenes"])
+    before = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        assert bvhlab_main.main() == 0
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
     finally:
         signal.signal(signal.SIGINT, before)
 
