@@ -122,7 +122,7 @@ class FinalRender:
             tracer.backend == "cpu", counts_shown=passes.heatmap_wanted(depsgraph.view_layer)
         )
         shown = settings  # with the overlay: each view's camera decides for its own (a multi-view render)
-        camera, settings, unrendered = self._camera(depsgraph, scene.camera, frame, settings)
+        camera, settings, unrendered = self._camera(depsgraph, scene.camera, frame, settings, engine.camera_override)
         for note in unrendered:
             engine.report({"WARNING"}, f"bvhlab: {note}")
         update = self._tree(engine, blender_scene)
@@ -182,10 +182,11 @@ class FinalRender:
         engine.update_stats("", _summary(record))
 
     @staticmethod
-    def _camera(depsgraph, camera, frame, settings):
+    def _camera(depsgraph, camera, frame, settings, camera_object=None):
         """The scene camera for this frame's part (the render border), the settings, and what of the
-        scene's settings bvhlab does not render, in words (said, never silently left out)."""
-        unrendered = unrendered_features(depsgraph)
+        scene's settings bvhlab does not render, in words (said, never silently left out);
+        `camera_object` the one rendered through where it is not the scene's (a strip's)."""
+        unrendered = unrendered_features(depsgraph, camera_object)
         if _draws_no_boxes(camera) and settings.overlay_depth is not None:
             unrendered.append(_no_boxes_note(camera))
             settings = settings.replace(overlay_depth=None)

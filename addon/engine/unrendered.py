@@ -21,9 +21,10 @@ def _named(what: str, names) -> str:
     return f"{what} '{first}'{more}"
 
 
-def unrendered_features(depsgraph) -> list[str]:
+def unrendered_features(depsgraph, camera=None) -> list[str]:
     """What the render depsgraph's scene, view layer and objects ask for that bvhlab does not
-    render, each in words."""
+    render, each in words. `camera`: the object rendered through where it is not the scene camera
+    (RenderEngine.camera_override: a Sequencer strip's)."""
     render = depsgraph.scene.render
     found = _Found()
     # what renders (a render depsgraph leaves out the rest): the objects and what they instance (a
@@ -51,7 +52,7 @@ def unrendered_features(depsgraph) -> list[str]:
         notes.append(f"{OBJECT_EFFECTS[flag]} is not rendered ({_named('object', names)}): it is rendered as a surface")
     if render.use_motion_blur:
         notes.append("motion blur is not rendered (Render ▸ Motion Blur is on): the frame shows one moment")
-    camera = depsgraph.scene.camera
+    camera = camera or depsgraph.scene.camera
     if render.use_multiview and camera is not None and getattr(camera.data, "type", "") == "PANO":
         notes.append(
             "a panorama's stereoscopy is two panoramas from the eyes' positions (as Blender frames it for "
