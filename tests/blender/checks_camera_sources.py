@@ -108,28 +108,9 @@ def check_another_scenes_compositor_frames_at_its_size(tmp_dir) -> None:
     assert np.array_equal(got > 0.5, want > 0.5), (columns.min(), columns.max())
 
 
-def _views_color(tmp_dir, name: str) -> dict:
-    """F12 written one multilayer EXR a view, each view's Combined red channel: {view: (h, w)}."""
-    from checks_engine import use_multilayer_exr
-
-    scene = bpy.context.scene
-    settings = scene.render.image_settings
-    use_multilayer_exr(settings)
-    settings.exr_codec, settings.color_depth, settings.views_format = "NONE", "32", "INDIVIDUAL"
-    scene.render.filepath = str(tmp_dir / name)
-    assert bpy.ops.render.render(write_still=True) == {"FINISHED"}
-    layer = bpy.context.view_layer.name
-    return {
-        view.name: exr.read_exr(tmp_dir / f"{name}{view.file_suffix}.exr")[f"{layer}.Combined.R"]
-        for view in scene.render.views
-        if view.use
-    }
-
-
-def check_each_views_camera_decides_whether_it_draws_the_overlay(tmp_dir) -> None:
-    """A multi-view render whose scene camera (the left view's) is a fisheye and whose right view's
-    camera is a perspective one: the right view draws the boxes, the left one not (every view lost
-    them where the scene camera could not draw them: the review)."""
+def _two_views(fisheye: str):
+    """A multi-view render of the boxes by bvhlab (Cam_L for the left view, the scene camera, and
+    Cam_R for the right one), the camera of view `fisheye` a 180° fisheye; returns the scene."""
     scene = harness.boxes_scene()
     render = scene.render
     left = scene.camera
@@ -139,34 +120,33 @@ def check_each_views_camera_decides_whether_it_draws_the_overlay(tmp_dir) -> Non
     right = left.copy()
     right.data, right.name = left.data.copy(), "Cam_R"
     scene.collection.objects.link(right)
-    left.data.type = "PANO"
-    settings = left.data if hasattr(left.data, "panorama_type") else left.data.cycles  # 4.0 moved them
+    data = (left if fisheye == "left" else right).data
+    data.type = "PANO"
+    settings = data if hasattr(data, "panorama_type") else data.cycles  # 4.0 moved them
     settings.panorama_type, settings.fisheye_fov = "FISHEYE_EQUIDISTANT", math.radians(180)
     scene.render.engine = "BVHLAB_WHITTED"
     scene.bvhlab.render_supersampling = 1
+    return scene
+
+
+def check_each_views_camera_decides_whether_it_draws_the_overlay(tmp_dir) -> None:
+    """A multi-view render whose scene camera (the left view's) is a fisheye and whose right view's
+    camera is a perspective one: the right view draws the boxes, the left one not (every view lost
+    them where the scene camera could not draw them: the review)."""
+    from checks_stereo import views_pass
+
+    scene = _two_views(fisheye="left")
     scene.bvhlab.render_overlay = False
-    plain = _views_color(tmp_dir, "plain")
+    plain = views_pass(tmp_dir, "plain", "Combined.R")
     scene.bvhlab.render_overlay = True
-    boxes = _views_color(tmp_dir, "boxes")
+    boxes = views_pass(tmp_dir, "boxes", "Combined.R")
     assert np.array_equal(boxes["left"], plain["left"])  # the fisheye's view: no boxes
     assert (boxes["right"] != plain["right"]).sum() > 50, (boxes["right"] != plain["right"]).sum()
 
 
 def check_a_panorama_views_camera_drops_the_overlay_and_renders() -> None:
-    scene = harness.boxes_scene()
-    render = scene.render
-    camera = scene.camera
-    camera.name = "Cam_L"
-    render.use_multiview, render.views_format = True, "MULTIVIEW"
-    render.views["left"].camera_suffix, render.views["right"].camera_suffix = "_L", "_R"
-    right = camera.copy()
-    right.data, right.name = camera.data.copy(), "Cam_R"
-    scene.collection.objects.link(right)
-    right.data.type = "PANO"
-    settings = right.data if hasattr(right.data, "panorama_type") else right.data.cycles  # 4.0 moved them
-    settings.panorama_type, settings.fisheye_fov = "FISHEYE_EQUIDISTANT", math.radians(180)
-    scene.render.engine = "BVHLAB_WHITTED"
-    scene.bvhlab.render_overlay, scene.bvhlab.render_supersampling = True, 1
+    scene = _two_views(fisheye="right")
+    scene.bvhlab.render_overlay = True
     assert bpy.ops.render.render() == {"FINISHED"}
     record = harness.addon().state.last_final[harness.addon().state.key(scene)]
     assert record["views"] == ["left", "right"] and not record["cancelled"], record["views"]

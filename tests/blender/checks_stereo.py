@@ -22,10 +22,15 @@ PIVOTS = {"OFFAXIS": "CENTER", "PARALLEL": "RIGHT", "TOE": "CENTER"}
 
 
 def views_depth(tmp_dir, name: str) -> dict[str, np.ndarray]:
+    """views_pass of the Depth pass."""
+    return views_pass(tmp_dir, name, "Depth.Z")
+
+
+def views_pass(tmp_dir, name: str, channel: str) -> dict[str, np.ndarray]:
     """F12 written as one multilayer EXR per view (Output ▸ Views Format Individual: the view's
-    file suffix after `name`), each view's Depth pass read back: {view name: top-row-first float32
-    (h, w)}. (The Render Result of several views is not saved by Image.save_render in the
-    background.)"""
+    file suffix after `name`), each view's `channel` ("Depth.Z", "Combined.R") read back: {view
+    name: top-row-first float32 (h, w)}. (The Render Result of several views is not saved by
+    Image.save_render in the background.)"""
     scene = bpy.context.scene
     settings = scene.render.image_settings
     use_multilayer_exr(settings)
@@ -38,7 +43,7 @@ def views_depth(tmp_dir, name: str) -> dict[str, np.ndarray]:
         if view.use:
             path = tmp_dir / f"{name}{view.file_suffix}.exr"
             assert path.is_file(), f"view {view.name} was not written: {sorted(p.name for p in tmp_dir.iterdir())}"
-            out[view.name] = exr.read_exr(path)[f"{layer}.Depth.Z"]
+            out[view.name] = exr.read_exr(path)[f"{layer}.{channel}"]
     return out
 
 

@@ -5,8 +5,6 @@ against a fresh LiveScene of the same depsgraph, bit for bit; the walks counted;
 nothing and back walks (its row comes or goes). The add-on's boxes follow such a move by a refit
 of mesh 0 and a new TLAS, and hit what a fresh export's tree hits."""
 
-import warnings
-from contextlib import contextmanager
 from importlib import import_module
 
 import blender_checks  # noqa: F401  (import path for the shared checks)
@@ -14,10 +12,10 @@ import bpy  # noqa: E402  (after harness)
 import harness  # before bpy
 import numpy as np
 import pytest
+from test_live_sync import _sorted_triangles, fresh_scene, synced  # noqa: E402
 from test_moving_objects import _same_hits  # noqa: E402
 
-from bvhlab.blender import ExportError, LiveScene, export_scene  # noqa: E402
-from bvhlab.blender import live as live_module  # noqa: E402
+from bvhlab.blender import export_scene  # noqa: E402
 from bvhlab.blender.sphere import SPHERE_PROPERTY  # noqa: E402
 
 
@@ -46,43 +44,6 @@ def spheres_among_duplicates():
     bpy.context.view_layer.update()
 
 
-@contextmanager
-def synced(instancing: bool, monkeypatch):
-    """A LiveScene synced at every depsgraph update (as the Rendered viewport syncs it); yields it,
-    the errors its syncs raised and the walks they made (a list, one entry a walk)."""
-    live = LiveScene("visible", require_camera=False, allow_empty=True, instancing=instancing)
-    errors, walks = [], []
-    real = live_module.walk
-
-    def counted(*args, **kwargs):
-        walks.append(1)
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(live_module, "walk", counted)
-
-    def view_update(scene, depsgraph):
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                live.sync(depsgraph, scene, depsgraph.view_layer)
-        except ExportError as error:
-            errors.append(str(error))
-
-    bpy.app.handlers.depsgraph_update_post.append(view_update)
-    try:
-        yield live, errors, walks
-    finally:
-        bpy.app.handlers.depsgraph_update_post.remove(view_update)
-
-
-def _fresh(instancing: bool):
-    live = LiveScene("visible", require_camera=False, allow_empty=True, instancing=instancing)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        live.sync(bpy.context.evaluated_depsgraph_get())
-    return live.scene
-
-
 @pytest.mark.parametrize("instancing", [True, False], ids=["instanced", "flat"])
 def test_a_moved_sphere_is_placed_without_the_walk_and_equals_a_fresh_export(instancing, monkeypatch):
     spheres_among_duplicates()
@@ -98,7 +59,7 @@ def test_a_moved_sphere_is_placed_without_the_walk_and_equals_a_fresh_export(ins
             bpy.context.view_layer.update()
             assert not errors, errors
             assert len(walks) - before == walked, (change.__name__, walks)
-            want = _fresh(instancing)
+            want = fresh_scene(instancing)
             np.testing.assert_array_equal(live.scene.spheres, want.spheres)
             np.testing.assert_array_equal(live.scene.sphere_material, want.sphere_material)
             if instancing:
@@ -154,13 +115,6 @@ def test_the_boxes_follow_a_moved_sphere_by_a_refit_and_hit_what_a_fresh_export_
     assert built.tree.last.action == "refit", built.tree.last  # from the second move on: placed
 
 
-def _sorted_triangles(scene) -> np.ndarray:
-    """The world's triangles in one order (a live scene's movers are instances of their own, a
-    fresh scene's in mesh 0)."""
-    t = scene.flattened().triangles.reshape(-1, 9)
-    return t[np.lexsort(t.T[::-1])]
-
-
 @pytest.mark.parametrize("instancing", [True, False], ids=["instanced", "flat"])
 def test_a_sphere_made_a_mesh_again_moves_as_a_mesh(instancing, monkeypatch):
     """The index of what an update places kept the item as a sphere of mesh 0 when its flag came off
@@ -180,6 +134,6 @@ def test_a_sphere_made_a_mesh_again_moves_as_a_mesh(instancing, monkeypatch):
             change()
             bpy.context.view_layer.update()
             assert not errors, errors
-            want = _fresh(instancing)
+            want = fresh_scene(instancing)
             np.testing.assert_array_equal(live.scene.spheres, want.spheres)
             np.testing.assert_allclose(_sorted_triangles(live.scene), _sorted_triangles(want), atol=1e-5)

@@ -4,6 +4,7 @@ under bpy 4.2, against a fresh LiveScene of the same depsgraph after each change
 a deleted sphere's name keeps its own size."""
 
 import warnings
+from contextlib import contextmanager
 
 import blender_checks  # noqa: F401  (import path for the shared checks)
 import bpy  # noqa: E402  (after harness)
@@ -15,14 +16,21 @@ from bvhlab.blender import ExportError, LiveScene  # noqa: E402
 from bvhlab.blender.sphere import SPHERE_PROPERTY  # noqa: E402
 
 
-@pytest.fixture()
-def viewport():
+@contextmanager
+def synced(instancing: bool, monkeypatch):
     """A LiveScene synced from every depsgraph update, as RenderEngine.view_update syncs it; yields
-    it with the errors its syncs raised."""
-    harness.empty_scene()
-    harness.add_camera((0, -15, 0), (0, 0, 0))
-    live = LiveScene("visible", require_camera=False, allow_empty=True)
-    errors = []
+    it, the errors its syncs raised and the walks they made (a list, one entry a walk)."""
+    from bvhlab.blender import live as live_module
+
+    live = LiveScene("visible", require_camera=False, allow_empty=True, instancing=instancing)
+    errors, walks = [], []
+    real = live_module.walk
+
+    def counted(*args, **kwargs):
+        walks.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(live_module, "walk", counted)
 
     def view_update(scene, depsgraph):
         try:
@@ -34,13 +42,22 @@ def viewport():
 
     bpy.app.handlers.depsgraph_update_post.append(view_update)
     try:
-        yield live, errors
+        yield live, errors, walks
     finally:
         bpy.app.handlers.depsgraph_update_post.remove(view_update)
 
 
-def fresh_scene():
-    live = LiveScene("visible", require_camera=False, allow_empty=True)
+@pytest.fixture()
+def viewport(monkeypatch):
+    """synced's LiveScene and errors, in a scene of a camera alone."""
+    harness.empty_scene()
+    harness.add_camera((0, -15, 0), (0, 0, 0))
+    with synced(True, monkeypatch) as (live, errors, _):
+        yield live, errors
+
+
+def fresh_scene(instancing: bool = True):
+    live = LiveScene("visible", require_camera=False, allow_empty=True, instancing=instancing)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         live.sync(bpy.context.evaluated_depsgraph_get())
