@@ -294,8 +294,10 @@ class Renderer:
         # the backend "auto" renders the wide walk, which only the CPU tracer has, on the CPU
         wide_on_cpu = self._vulkan is not None and options.traversal == "wide" and self.reason.startswith("auto")
         # a thread inside a render's work (its progress callable) holds that render's locks, which a
-        # thread holding this lock may be waiting for (it starts a job): asked once, not waited for
-        if not self._lock.acquire(blocking=not _core.inside_render_work()):
+        # thread holding this lock may be waiting for (it uploads to the Vulkan device or starts a
+        # job there): asked once, not waited for (the CPU tracer's start waits for no such lock)
+        waits = self._vulkan is None or not _core.inside_render_work()
+        if not self._lock.acquire(blocking=waits):
             raise RuntimeError(
                 "this renderer is starting a job on another thread, and this thread is inside a render's work "
                 "(a call from its progress callable): call it after that work returns"
