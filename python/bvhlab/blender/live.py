@@ -49,6 +49,7 @@ from .motion import AnimatedMemo
 from .placed_only import MoverIndex, Placing, place_moved, place_reshaped, place_spheres, placing_from_updates
 from .primitive_sample import primitive_sample
 from .scene_arrays import instances, mesh_zero
+from .scope import nothing_in_scope
 from .sync_report import SyncReport, SyncTotals
 from .walk import LastSync, walk
 from .world import gather_sky
@@ -160,7 +161,7 @@ class LiveScene:
             moved = [key for key, item in items.items() if item.moved]
         assert layout is not None
         # the last MoverIndex holds where only instances moved, or a walk found the same items
-        index_holds = placed is not None or self._same_items(items, layout)
+        index_holds = placed is not None or MoverIndex.still_holds(self._items, self._layout, items, layout)
         arrays = self._arrays(items, world, layout, shared, table, report, moved, None if placed is None else reported)
         report.materials_read = table.reads
         scene = self._make_scene(arrays, table, blender_scene, depsgraph, report, kept=placed is not None)
@@ -211,21 +212,6 @@ class LiveScene:
         if lamp is None or lamp.original.name_full != full:
             return first_light(depsgraph, view_layer)
         return lamp
-
-    def _same_items(self, items: dict, layout) -> bool:
-        """Whether a walked sync's items have the last sync's keys in its order and its layout's
-        instances: what MoverIndex.of reads (a scene walked at every frame, e.g. an animated
-        scatter, made it anew at each: 14-60 ms at 10,000 items, helper probe)."""
-        old = self._layout
-        return (
-            old is not None
-            and list(items) == list(self._items)
-            and layout.mesh_of == old.mesh_of
-            # which items are spheres with primitives: the index places those of mesh 0 (a sphere
-            # made a mesh again kept its place in the index, and its next move left mesh 0's
-            # triangles where they were: the review)
-            and [_placed_as(i) for i in items.values()] == [_placed_as(i) for i in self._items.values()]
-        )
 
     def _mover_index(self) -> MoverIndex:
         if self._index is None:
@@ -300,9 +286,9 @@ class LiveScene:
             empty = not triangles and not spheres and not shared
         if empty:
             if not self.allow_empty:
-                raise ExportError(_nothing_in_scope(self.scope))
+                raise ExportError(nothing_in_scope(self.scope))
             warnings.warn(
-                f"{_nothing_in_scope(self.scope)}: the world alone is rendered", EmptySceneWarning, stacklevel=3
+                f"{nothing_in_scope(self.scope)}: the world alone is rendered", EmptySceneWarning, stacklevel=3
             )
         same_order = kept or list(self._items) == list(items)
         same_layout = kept or layout.same_as(self._layout)
@@ -405,20 +391,3 @@ class LiveScene:
                 raise
             warnings.warn(f"{error}; using a default camera that frames the geometry", SubstituteWarning, stacklevel=3)
             return None
-
-
-def _placed_as(item: Item) -> tuple[bool, bool]:
-    """What of an item the index of movers reads beside its key and mesh: sphere, and primitives."""
-    return item.mesh is None, item.slot_table is not None
-
-
-def _nothing_in_scope(scope: str) -> str:
-    if scope == "selected":
-        return (
-            "no mesh in scope: no selected object has faces or spheres (select meshes, or use scope 'visible'; "
-            "loose edges and vertices are not rendered)"
-        )
-    return (
-        "no mesh in scope: no visible object has faces or spheres (add a mesh or unhide one; loose edges and "
-        "vertices are not rendered)"
-    )

@@ -114,6 +114,25 @@ class MoverIndex:
         alone = frozenset(key for key, _ in plain.values() if mesh_of[key] and members[mesh_of[key]] == 1)
         return cls(plain, frozenset(uses), alone)
 
+    @staticmethod
+    def still_holds(old_items: dict, old_layout: Layout | None, items: dict, layout: Layout) -> bool:
+        """Whether the index `of` the last sync's items and layout is that of a walked sync's too:
+        the same keys in the same order, the same instances, and the same items spheres with
+        primitives (a scene walked at every frame, e.g. an animated scatter, made it anew at each:
+        14-60 ms at 10,000 items, helper probe; a sphere made a mesh again kept its place as a
+        sphere, and its next move left mesh 0's triangles where they were: the review)."""
+        return (
+            old_layout is not None
+            and list(items) == list(old_items)
+            and layout.mesh_of == old_layout.mesh_of
+            and [_placed_as(i) for i in items.values()] == [_placed_as(i) for i in old_items.values()]
+        )
+
+
+def _placed_as(item: Item) -> tuple[bool, bool]:
+    """What of an item MoverIndex.of reads beside its key and mesh: sphere, and primitives."""
+    return item.mesh is None, item.slot_table is not None
+
 
 @dataclass
 class Placing:

@@ -121,3 +121,16 @@ def _rendered(obj, view_layer) -> bool:
 
 def _visible(obj, view_layer) -> bool:
     return obj.visible_get(view_layer=view_layer)
+
+
+def nothing_in_scope(scope: str) -> str:
+    """The error (or, where allowed, the warning) of an export with no mesh in `scope`."""
+    if scope == "selected":
+        return (
+            "no mesh in scope: no selected object has faces or spheres (select meshes, or use scope 'visible'; "
+            "loose edges and vertices are not rendered)"
+        )
+    return (
+        "no mesh in scope: no visible object has faces or spheres (add a mesh or unhide one; loose edges and "
+        "vertices are not rendered)"
+    )
