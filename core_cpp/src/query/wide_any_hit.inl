@@ -6,7 +6,14 @@
 /// so that the walk keeps one value fewer across the call (its registers are full: what does not
 /// fit is written and read back at every node). A hit counts by the closest-hit rule against one
 /// at tmax, so occluded is exactly intersect's t < tmax.
-bool leaf_occludes(const unsigned char* at, const Query& q) {
+/// kBoxesOnly: q holds the box fields alone (make_box_query), and the watertight test's are made
+/// here from q.ray, at each leaf the walk reaches rather than for each ray (the layout's order:
+/// any_hit_nodes).
+template <bool kBoxesOnly>
+bool leaf_occludes(const unsigned char* at, const Query& boxes) {
+    Query lazy;
+    if constexpr (kBoxesOnly) make_triangle_query(*boxes.ray, lazy);
+    const Query& q = kBoxesOnly ? lazy : boxes;
     Hit hit{q.ray->tmax, kNoHit, 0.0f, 0.0f, kNoHit};
     for (;; at += sizeof(PrimPacket)) {
         const PrimPacket& k = *reinterpret_cast<const PrimPacket*>(at);
@@ -45,6 +52,8 @@ bool leaf_occludes(const unsigned char* at, const Query& q) {
 /// follow those the node prefetched), for rays that mostly reach their light, where every order
 /// visits the same nodes and the farthest only costs its choice (room1m and vast1m shadow rays, 95%
 /// and 100% unoccluded, 6-7% slower with it; the batch picks: wide_batch.inl occluded_of_batch).
+/// Such rays reach few leaves and wait on few lines, so this order also takes q with the box
+/// fields alone (make_box_query; leaf_occludes makes the rest) and prefetches nothing.
 template <int kOctant, bool kFarthest = true>
 bool any_hit_nodes(const unsigned char* lines, const Query& q) {
     const L8 origin[3] = {L8::splat(q.o[0]), L8::splat(q.o[1]), L8::splat(q.o[2])};
@@ -57,9 +66,11 @@ bool any_hit_nodes(const unsigned char* lines, const Query& q) {
     for (;;) {
         const WideNode& node = *reinterpret_cast<const WideNode*>(lines + std::size_t(cur) * sizeof(WideLine));
         const float* f = node.lo_x;
-        __builtin_prefetch(node.child);  // as enter_children: the child words, and the lines after
-        const char* after = reinterpret_cast<const char*>(&node + 1);
-        for (int line = 0; line < 6; ++line) __builtin_prefetch(after + 64 * line);
+        if constexpr (kFarthest) {
+            __builtin_prefetch(node.child);  // as enter_children: the child words, and the lines after
+            const char* after = reinterpret_cast<const char*>(&node + 1);
+            for (int line = 0; line < 6; ++line) __builtin_prefetch(after + 64 * line);
+        }
         L8 t0 = L8::load(q.tmin8), t1 = far;
         for (int a = 0; a < 3; ++a) t0 = raise(t0, (origin[a] - L8::load(f + plane[a])) * neg_inv[a]);
         for (int a = 0; a < 3; ++a) t1 = lower(t1, (origin[a] - L8::load(f + plane[3 + a])) * neg_inv_far[a]);
@@ -72,17 +83,17 @@ bool any_hit_nodes(const unsigned char* lines, const Query& q) {
             if (rest) {
                 push_entered(node, rest, stack + sp);
                 sp += std::uint32_t(__builtin_popcount(unsigned(rest)));
-                prefetch(WideView{lines}, stack[sp - 1]);  // the next to pop after it
+                if constexpr (kFarthest) prefetch(WideView{lines}, stack[sp - 1]);  // the next to pop after it
             }
             if (!leaves) {  // the commonest case: the next node from the node's words, not the stack
                 cur = node.child[next];
                 continue;
             }
             stack[sp++] = node.child[next];  // pushed before the leaves' calls: popped right after them
-            prefetch(WideView{lines}, node.child[next]);
+            if constexpr (kFarthest) prefetch(WideView{lines}, node.child[next]);
         }
         for (int m = leaves; m; m &= m - 1)
-            if (leaf_occludes(
+            if (leaf_occludes<!kFarthest>(
                     lines + std::size_t(node.child[__builtin_ctz(unsigned(m))] & ~kLeafChild) * sizeof(WideLine), q))
                 return true;
         if (sp == 0) return false;

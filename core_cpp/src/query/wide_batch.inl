@@ -57,7 +57,8 @@ void occluded_of_octant(const WideView& wide, const Ray* rays, const std::uint32
                         bool* occluded) {
     for (std::uint32_t j = 0; j < n; ++j) {
         const std::uint32_t i = order[j];
-        occluded[i] = any_hit_nodes<kOctant, kFarthest>(wide.lines, make_query(rays[i]));
+        occluded[i] =
+            any_hit_nodes<kOctant, kFarthest>(wide.lines, kFarthest ? make_query(rays[i]) : make_box_query(rays[i]));
     }
 }
 

@@ -58,7 +58,7 @@ struct Walker {
 
 /// Starts `w` on rays[i]: traverse_nodes' start from the root.
 inline void start_walker(Walker& w, const Ray* rays, std::uint32_t i) {
-    w.q = make_query(rays[i]);
+    set_query<true, true>(rays[i], w.q);
     w.hit = Hit{rays[i].tmax, kNoHit, 0.0f, 0.0f, kNoHit};
     w.cur = {0, w.q.tmin};
     w.far_limit = w.hit.t * gpu::BOX_FAR_SCALE;

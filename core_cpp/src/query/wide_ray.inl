@@ -46,6 +46,22 @@ constexpr AxisOrder axis_order(int kz, bool flip) {
 constexpr AxisOrder kAxisOrders[6] = {axis_order(0, false), axis_order(0, true),  axis_order(1, false),
                                       axis_order(1, true),  axis_order(2, false), axis_order(2, true)};
 
+/// The watertight test's fields of q (o_axes, shear, axis_at) from the ray, make_query's operations.
+[[gnu::always_inline]] inline void set_triangle_fields(const Ray& ray, const L4 origin, const L4 dir, const L4 inv,
+                                                       Query& q) {
+    const float x = std::fabs(ray.dir.x), y = std::fabs(ray.dir.y), z = std::fabs(ray.dir.z);
+    const int x_largest = int(x > y) & int(x > z), y_largest = (1 - x_largest) & int(y > z);
+    const int kz = 2 - 2 * x_largest - y_largest;
+    const int flip = (bits(L4::splat(0.0f) > dir) >> kz) & 1;  // dir[kz] < 0
+    const AxisOrder& axes = kAxisOrders[2 * kz + flip];
+    // (dir[kx], dir[ky], 1, 1) times 1 / dir[kz]: the shear, and 1 / dir[kz] itself in lane 2
+    // (1 · x is x, except a denormal x under denormals-are-zero: 0, which is what the one use of
+    // shear[2], a product, reads x as in that mode anyway)
+    permute(origin, axes.origin).store(q.o_axes);
+    (permute(dir, axes.dir) * permute(inv, axes.inv)).store(q.shear);
+    q.axis_at = axes.at;
+}
+
 /// The per-ray constants as geometry.glsl make_ray computes them, by the same float operations
 /// (so the same values; every test comparing the wide traversal with the brute force, which goes
 /// through make_ray, checks that bit for bit): 1/d is IEEE's, ±inf for ±0 as inverse_or_infinity;
@@ -55,29 +71,41 @@ constexpr AxisOrder kAxisOrders[6] = {axis_order(0, false), axis_order(0, true),
 /// Without branches: the axes come from comparison flags and the components in axis order from
 /// a permute. Selects by the axis compiled to branches, which random directions mispredicted
 /// (1.4 a ray, a tenth of a random ray's time in room1m).
-Query make_query(const Ray& ray) {
+/// Written into q in place (the interleaved walks keep their query in the walker, where a returned
+/// one was made out of line and copied: vast1m random rays through the batch, 67 instructions a
+/// ray). kBoxes: the box test's fields (o, inv, neg_inv, neg_inv_far, octant); kTriangles: the
+/// watertight test's (o_axes, shear, axis_at); tmin8, tmin and ray always.
+template <bool kBoxes, bool kTriangles>
+[[gnu::always_inline]] inline void set_query(const Ray& ray, Query& q) {
     const Vec3 o = ray.origin, d = ray.dir;
-    const float x = std::fabs(d.x), y = std::fabs(d.y), z = std::fabs(d.z);
-    const int x_largest = int(x > y) & int(x > z), y_largest = (1 - x_largest) & int(y > z);
-    const int kz = 2 - 2 * x_largest - y_largest;
     const L4 dir = L4::set(d.x, d.y, d.z, 1.0f), origin = L4::set(o.x, o.y, o.z, 0.0f);
-    const int flip = (bits(L4::splat(0.0f) > dir) >> kz) & 1;  // dir[kz] < 0
-    const AxisOrder& axes = kAxisOrders[2 * kz + flip];
     const L4 inv = L4::splat(1.0f) / dir;
-    Query q;
-    origin.store(q.o), inv.store(q.inv);
-    (inv * L4::splat(-1.0f)).store(q.neg_inv), (inv * L4::splat(-gpu::BOX_FAR_SCALE)).store(q.neg_inv_far);
-    // (dir[kx], dir[ky], 1, 1) times 1 / dir[kz]: the shear, and 1 / dir[kz] itself in lane 2
-    // (1 · x is x, except a denormal x under denormals-are-zero: 0, which is what the one use of
-    // shear[2], a product, reads x as in that mode anyway)
-    permute(origin, axes.origin).store(q.o_axes);
-    (permute(dir, axes.dir) * permute(inv, axes.inv)).store(q.shear);
+    if constexpr (kBoxes) {
+        origin.store(q.o), inv.store(q.inv);
+        (inv * L4::splat(-1.0f)).store(q.neg_inv), (inv * L4::splat(-gpu::BOX_FAR_SCALE)).store(q.neg_inv_far);
+    }
+    if constexpr (kTriangles) set_triangle_fields(ray, origin, dir, inv, q);
     L8::splat(ray.tmin).store(q.tmin8);
-    q.axis_at = axes.at;
-    q.octant = sign_bits(inv) & 7;
+    if constexpr (kBoxes) q.octant = sign_bits(inv) & 7;
     q.tmin = ray.tmin, q.ray = &ray;
+}
+Query make_query(const Ray& ray) {
+    Query q;
+    set_query<true, true>(ray, q);
     return q;
 }
+/// make_query without the watertight test's fields, what the boxes need, for a walk that makes
+/// those fields at the leaves it reaches (make_triangle_query), since most of its rays reach none
+/// (the any-hit walk in the layout's order: design.md, "Any-hit queries").
+[[maybe_unused]] Query make_box_query(const Ray& ray) {
+    Query q;
+    set_query<true, false>(ray, q);
+    return q;
+}
+
+/// The fields test_triangles and hit_packet_sphere read (o_axes, shear, axis_at, tmin8, ray), as
+/// make_query makes them; the box fields are left unset.
+[[gnu::always_inline]] inline void make_triangle_query(const Ray& ray, Query& q) { set_query<false, true>(ray, q); }
 
 struct Entry {
     std::uint32_t index;  ///< a WideNode child word: a node's line, or kLeafChild | a leaf's first packet's
