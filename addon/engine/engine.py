@@ -16,6 +16,8 @@ from . import passes
 from .settings import fixed_light_distance
 
 ENGINE_ID = "BVHLAB_WHITTED"
+#: Each engine's viewport worker by the engine's id (closed by the engine's __del__).
+_viewports: dict[int, object] = {}
 #: How often (s) the UI thread looks for a new viewport frame to draw.
 REDRAW_POLL_S = 0.05
 
@@ -35,7 +37,9 @@ class BVHLAB_RE_whitted(bpy.types.RenderEngine):
         self._display = None
 
     def __del__(self):
-        viewport = getattr(self, "_viewport", None)
+        # by id, not self._viewport: an engine freed after Blender removed its RNA struct (a
+        # traceback holding it) cannot read its own attributes, and its worker thread stayed
+        viewport = _viewports.pop(id(self), None)
         if viewport is not None:
             viewport.close()
 
@@ -63,6 +67,7 @@ class BVHLAB_RE_whitted(bpy.types.RenderEngine):
 
         if self._viewport is None:
             self._viewport, self._live = ViewportSession(), LiveScene("visible", require_camera=False, allow_empty=True)
+            _viewports[id(self)] = self._viewport
             _watch_for_frames(self._viewport)
         fixed = fixed_light_distance(context.scene)
         if fixed is not None:
@@ -90,7 +95,14 @@ class BVHLAB_RE_whitted(bpy.types.RenderEngine):
         if self._viewport is None:
             return
         blender_scene = depsgraph.scene
-        self._viewport.request(view_request(context, blender_scene))
+        try:
+            request = view_request(context, blender_scene)
+        except Exception as error:  # a bug: said in the viewport's status, never raised into Blender's draw
+            from ..operator_support import describe_error
+
+            self.update_stats("", f"bvhlab: {describe_error(error)}")
+            return
+        self._viewport.request(request)
         frame = self._viewport.latest_frame()
         if frame is not None:
             if self._display is None:

@@ -5,13 +5,14 @@ from __future__ import annotations
 from ..trees import key_of, update_config
 from .counter_view import counter_view
 from .settings import backend
-from .view_camera import view_frustum
+from .view_camera import region_camera, view_clip, view_frustum
 from .viewport import ViewRequest
 
 
 def view_request(context, blender_scene) -> ViewRequest:
     region, view = context.region, context.region_data
-    frustum = view_frustum(view.view_matrix, view.window_matrix, region.width, region.height)
+    clip = view_clip(view, context.space_data, blender_scene)
+    frustum = view_frustum(view.view_matrix, view.window_matrix, region.width, region.height, clip)
     return ViewRequest(
         frustum,
         blender_scene.bvhlab.render_options(viewport=True),
@@ -29,7 +30,7 @@ def camera_view_note(view, space, blender_scene) -> str:
     empty elsewhere."""
     if view.view_perspective != "CAMERA":
         return ""
-    camera = (space.camera if space is not None and space.use_local_camera else None) or blender_scene.camera
+    camera = region_camera(space, blender_scene)
     if camera is None:
         return ""
     if camera.type != "CAMERA":

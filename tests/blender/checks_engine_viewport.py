@@ -82,6 +82,65 @@ def check_view_frustum() -> None:
     print("view frustum against Blender's projection:", "; ".join(errors))
 
 
+def check_view_frustum_clip_range() -> None:
+    """The clip range of the camera the viewport traces is Blender's own, also where the float32
+    window matrix no longer holds the far plane (clip_end / clip_start past ~1e5: read from the
+    matrix, 10,000 came out 8,389, and 1e6 as -inf, which blanked the viewport: a helper's probe);
+    a clip range that is not the matrix's is not taken, and without one a far plane the matrix
+    lost is left open."""
+    view_camera = _engine_module("view_camera")
+    scene = harness.boxes_scene()
+    cam = scene.camera.data
+    cam.type = "PERSP"
+    for start, end in ((0.01, 1e4), (0.001, 1e4), (0.01, 1e5), (0.01, 1e6), (0.001, 1e5), (1e-4, 1e8)):
+        cam.clip_start, cam.clip_end = start, end
+        view, window = _camera_matrices(scene, 320, 200)
+        camera = view_camera.view_frustum(view, window, 320, 200, (cam.clip_start, cam.clip_end)).camera()
+        assert (camera.clip_start, camera.clip_end) == (cam.clip_start, cam.clip_end), (start, end, camera)
+        alone = view_camera.view_frustum(view, window, 320, 200).camera()  # no source: never fails
+        assert alone.clip_end > alone.clip_start >= 0 and math.isclose(alone.clip_start, start, rel_tol=1e-3)
+        other = view_camera.view_frustum(view, window, 320, 200, (start * 3, end)).camera()  # not the matrix's
+        assert math.isclose(other.clip_start, start, rel_tol=1e-3), (start, end, other)
+    cam.clip_start, cam.clip_end = 0.1, 100.0
+
+
+def check_orthographic_view_fitted_to_the_scene() -> None:
+    """A user orthographic view puts its near plane clip_end / 2 behind the eye: the viewport's
+    rays start a little before the scene's bounds instead (Clip End 1e8 lost every object, 1e6
+    tore silhouettes: a helper's probe). The picture equals that of the same view unfitted with
+    Clip End 1,000 (the default: its rays start 500 behind the eye) but for pixels on silhouettes
+    (float32 rounding of the two starts); a scene wholly beyond the far plane keeps the view (a
+    negative clip_end was made: the viewport stopped on the error)."""
+    import dataclasses
+
+    from bvhlab.library import procedural
+
+    view_camera = _engine_module("view_camera")
+    scene = bvhlab.Scene(triangles=procedural.torus_knot(4000))
+    bvh = bvhlab.build(scene)
+    forward = np.array([0.3, 1.0, -0.4]) / np.linalg.norm([0.3, 1.0, -0.4])
+    base = bvhlab.View(position=tuple(-8 * forward), forward=tuple(forward), projection="orthographic", ortho_scale=4.0)
+
+    def pulled(clip_end: float):  # as view_frustum makes a user orthographic view's
+        return dataclasses.replace(base, position=tuple(-8 * forward - forward * clip_end / 2), clip_end=clip_end)
+
+    def image(view):
+        return bvhlab.render(scene, bvh, 96, 64, backend="cpu", camera=view)[0]
+
+    unfitted = image(pulled(1e3))
+    for clip_end in (1e3, 1e6, 1e8):
+        fitted = view_camera.ViewFrustum(pulled(clip_end), 96, 64, (0, 0, 96, 64)).fitted(scene.world_bounds)
+        assert np.linalg.norm(fitted.position) < 10, fitted.position
+        differ = (np.abs(image(fitted) - unfitted).max(-1) > 1e-3).mean()
+        assert differ <= 0.005, (clip_end, differ)
+    lost = image(pulled(1e8))
+    assert (np.abs(lost - unfitted).max(-1) > 1e-3).mean() > 0.05, "the unfitted view far away should differ"
+    near_only = dataclasses.replace(base, clip_end=2.0)  # the knot lies 6-10 ahead: beyond the far plane
+    frustum = view_camera.ViewFrustum(near_only, 96, 64, (0, 0, 96, 64))
+    assert frustum.fitted(scene.world_bounds) == near_only
+    assert frustum.fitted(lambda: None) == near_only
+
+
 def _wait(condition, timeout: float = 120.0, what: str = "the viewport worker"):
     import time
 

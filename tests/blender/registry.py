@@ -200,6 +200,8 @@ def _engine() -> Iterator[Check]:
     )
     for check in (
         viewport.check_view_frustum,
+        viewport.check_view_frustum_clip_range,
+        viewport.check_orthographic_view_fitted_to_the_scene,
         viewport.check_viewport_worker_levels,
         viewport.check_viewport_build_cancels,
         viewport.check_viewport_settings_update,

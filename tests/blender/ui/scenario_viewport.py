@@ -58,6 +58,8 @@ def steps(session):
     yield {"action": "capture", "name": "light_moved"}
     yield from _orbit(session, viewport, area, region)
     yield from _section_41(session, viewport, scene, region)
+    yield from _huge_clip_range(session, viewport, area, region)
+    yield from _failed_draw_then_solid(session, module, area)
 
 
 def _prepare(scene, area) -> None:
@@ -275,6 +277,62 @@ def _section_41(session, viewport, scene, region):
             )
             times[name].append(round(_frame(viewport, "full", region, wanted).timings["trace_ms"], 1))
     session.info["section_4_1_trace_ms"] = times
+
+
+def _huge_clip_range(session, viewport, area, region):
+    """View ▸ Clip Start 0.0001, Clip End 10,000: the float32 window matrix no longer holds the
+    far plane (read from it: -inf, and every redraw failed, the region grey; a helper's probe).
+    A full frame of that view comes, clipped where Blender clips it."""
+    space = area.spaces.active
+    before = space.clip_start, space.clip_end
+    space.clip_start, space.clip_end = 1e-4, 1e4
+    area.tag_redraw()
+    yield from _until(
+        lambda: (
+            (f := _frame(viewport, "full", region)) is not None and f.request.frustum.view.clip_end == space.clip_end
+        ),
+        120,
+        "a full frame with Clip Start 0.0001 and Clip End 10000",
+    )
+    session.info["huge_clip_range_clip_end"] = _frame(viewport, "full", region).request.frustum.view.clip_end
+    space.clip_start, space.clip_end = before
+    yield 0.5
+
+
+def _failed_draw_then_solid(session, module, area):
+    """A view_draw whose view fails (a stand-in that raises), then Solid shading: the engine goes
+    and its worker thread with it (the failure's traceback kept the engine until Blender had freed
+    its RNA, whose __del__ then could not read its worker: the thread stayed, a second joined it at
+    the next Rendered; a helper's probe)."""
+    import gc
+    import importlib
+    import threading
+
+    requests = importlib.import_module(f"{module}.engine.view_request")
+    original = requests.view_request
+
+    def failing(context, blender_scene):
+        raise RuntimeError("a view that fails (the UI scenario's stand-in)")
+
+    requests.view_request = failing
+    try:
+        area.tag_redraw()
+        yield 1.0
+    finally:
+        requests.view_request = original
+    area.spaces.active.shading.type = "SOLID"
+    yield 0.5
+    gc.collect()
+
+    def workers():
+        return [t for t in threading.enumerate() if t.name == "bvhlab viewport" and t.is_alive()]
+
+    def none_left():
+        gc.collect()
+        return not workers()
+
+    yield from _until(none_left, 30, "no viewport worker after Solid shading")
+    session.info["workers_after_solid"] = len(workers())
 
 
 # -- checks, run by the driver on the captured pictures (numpy only, no bpy) ---------------------
