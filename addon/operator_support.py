@@ -125,6 +125,17 @@ def output_path(path: str, default_name: str) -> Path:
     return Path(bpy.path.abspath(path))
 
 
+def named_output_path(path: str, default_name: str) -> Path:
+    """output_path, with the default name's suffix added to a name without one (the file browser's
+    convention); a folder, or a name that is the suffix alone (".json": no stem), kept as it is for
+    the writer's check to refuse."""
+    out = output_path(path, default_name)
+    suffix = Path(default_name).suffix
+    if not out.suffix and not out.is_dir() and out.name.lower() != suffix:
+        out = out.with_name(out.name + suffix)
+    return out
+
+
 def temporary_note(path: Path) -> str:
     """What a report adds for a file written into Blender's temporary folder, which Blender deletes
     when it quits (an unsaved file's '//': the report named the file as if it stayed)."""

@@ -7,7 +7,7 @@ from bpy.props import StringProperty
 from bpy_extras.io_utils import ExportHelper
 
 from . import state
-from .operator_support import current_tree, export_scene, output_path, run_reported, temporary_note
+from .operator_support import current_tree, export_scene, named_output_path, run_reported, temporary_note
 from .properties import output_path_options
 
 
@@ -38,7 +38,10 @@ class BVHLAB_OT_export_stats(bpy.types.Operator, ExportHelper):
     def _export(self, context):
         from bvhlab.stats_files import write_stats
 
+        from . import follow
+
         json_path = stats_json_path(self.filepath)  # refused before any work
+        follow.settle(state.key(context.scene))  # an update the follow is making: its stats
         built = state.tree_for(context.scene)
         if built is None or built.behind:  # the stats of the scene as it is (kept if the tree fits)
             current_tree(context, export_scene(context, require_camera=False))
@@ -58,7 +61,5 @@ def stats_json_path(filepath: str):
     browser's convention); a folder or another suffix is refused, never rewritten (issue 8.10)."""
     from bvhlab.stats_files import json_path
 
-    path = output_path(filepath, "bvh_stats.json")
-    if not path.suffix and not path.is_dir():
-        path = path.with_name(path.name + ".json")
-    return json_path(path)
+    # (".json" alone is a stem-less name, refused by json_path: it was written as ".json.json")
+    return json_path(named_output_path(filepath, "bvh_stats.json"))

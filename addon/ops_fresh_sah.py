@@ -22,13 +22,17 @@ class BVHLAB_OT_fresh_sah(bpy.types.Operator):
         return run_reported(self, context, lambda: self._measure(context))
 
     def _measure(self, context):
+        from . import follow
+
+        follow.settle(state.key(context.scene))  # the tree the follow is updating, once it has
         built = state.tree_for(context.scene)
         if built is None:
             self.report({"WARNING"}, "Build a tree first (BVH ▸ Build)")
             return {"CANCELLED"}
         fresh = built.tree.fresh_sah_cost()
         current = built.bvh.stats["sah_cost"]
-        message = f"SAH cost {current:.2f}; a fresh build's {fresh:.2f} ({current / fresh:.3f}×)"
+        ratio = f" ({current / fresh:.3f}×)" if fresh > 0 else ""  # an emptied scene's tree costs 0
+        message = f"SAH cost {current:.2f}; a fresh build's {fresh:.2f}{ratio}"
         if built.behind:  # both over the geometry the tree holds (state.BuiltTree.behind)
             message += "; both over the tree's geometry: the scene changed since"
         self.report({"INFO"}, message)

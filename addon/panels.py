@@ -136,6 +136,7 @@ BEHIND_NOTES = {
     state.EDITED: "Scene edited since; show the boxes or build again",
     state.UNDONE: "Undo since; show the boxes or build again",
     state.RENDERED: "A render changed the tree; show the boxes or build again",
+    state.NOT_FOLLOWED: "The boxes stopped following the scene; build again",
 }
 
 

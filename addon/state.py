@@ -25,7 +25,8 @@ class BuiltTree:
     #: Why the scene may differ from the tree now ("" while it fits, as far as the add-on knows):
     #: EDITED, objects moved or edited while the boxes were hidden (the tree follows the scene only
     #: while they are shown: follow.py); UNDONE, an undo or redo, which can change anything;
-    #: RENDERED, a final render made the shared tree fit what renders show (rendered_over). The
+    #: RENDERED, a final render made the shared tree fit what renders show (rendered_over);
+    #: NOT_FOLLOWED, the follow failed to read or update the scene (follow.py). The
     #: panel says it; showing the boxes brings the tree up to date, as Build and Export stats do.
     behind: str = ""
 
@@ -60,7 +61,7 @@ class BuiltTree:
 
 
 #: BuiltTree.behind's reasons
-EDITED, UNDONE, RENDERED = "edited", "undone", "rendered"
+EDITED, UNDONE, RENDERED, NOT_FOLLOWED = "edited", "undone", "rendered", "not followed"
 
 trees: dict[int, BuiltTree] = {}
 comparisons: dict[int, list[dict]] = {}
