@@ -44,6 +44,7 @@ if sys.argv[2] == "cube":
 else:
     bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=1)
 bpy.context.object.name = "Part"
+bpy.context.object.data.name = "Part mesh"  # one name for both shapes: a duplicate linking it keeps it
 bpy.ops.wm.save_as_mainfile(filepath=sys.argv[1])
 """
 
@@ -104,6 +105,54 @@ def test_a_sweep_of_a_blend_sees_its_linked_library_change(tmp_path, copies):
     made = _run(["-c", LIBRARY, str(library), "ico"])
     assert made.returncode == 0, made.stderr[-2000:]
     assert sweep() == {"ran": 1, "triangles": [20]}  # an icosahedron
+
+
+def test_a_blend_whose_linked_library_is_missing_is_refused(tmp_path):
+    """Blender opens it with the linked mesh left out and says so on stderr only: a build counted
+    the file's own triangles and exited 0, a sweep's row said "ok" (a helper's probe)."""
+    library, scene = tmp_path / "library.blend", tmp_path / "scene.blend"
+    for args in ([LIBRARY, str(library), "cube"], [LINKING, str(scene), str(library), "once"]):
+        made = _run(["-c", *args])
+        assert made.returncode == 0, made.stderr[-2000:]
+    library.unlink()
+    done = _run(["-m", "bvhlab", "build", str(scene)])
+    assert done.returncode == 2, done.stdout[-2000:] + done.stderr[-2000:]
+    assert "links 1 .blend library that is missing: //library.blend" in done.stderr
+
+
+RENAME = """
+import sys, bpy
+bpy.ops.wm.open_mainfile(filepath=sys.argv[1])
+bpy.data.objects["Part"].name = "Renamed"
+bpy.ops.wm.save_mainfile()
+"""
+
+
+def test_a_blend_whose_library_lost_the_linked_object_is_refused(tmp_path):
+    """The library is there but the object linked from it was renamed: Blender leaves it out and
+    says so on stderr only (the review: 20 triangles for 32, exit 0)."""
+    library, scene = tmp_path / "library.blend", tmp_path / "scene.blend"
+    for args in ([LIBRARY, str(library), "cube"], [LINKING, str(scene), str(library), "once"], [RENAME, str(library)]):
+        made = _run(["-c", *args])
+        assert made.returncode == 0, made.stderr[-2000:]
+    done = _run(["-m", "bvhlab", "build", str(scene)])
+    assert done.returncode == 2, done.stdout[-2000:] + done.stderr[-2000:]
+    assert "links data its library no longer holds: object 'Part' from //library.blend" in done.stderr
+
+
+def test_a_blend_saved_by_a_newer_blender_says_so(tmp_path):
+    """bpy 4.2 reads Blender 5.0's file format as "not a blend file": the header names the Blender
+    that saved it (a file of that header and nothing after it; the bpy of this test is older)."""
+    from bvhlab.blender.load import saved_by_version
+
+    newer = tmp_path / "newer.blend"
+    newer.write_bytes(b"BLENDER17-01v9900" + bytes(64))
+    assert saved_by_version(newer) == (99, 0)
+    done = _run(["-m", "bvhlab", "build", str(newer)])
+    assert done.returncode == 2 and "it was saved by Blender 99.0, newer than this bpy" in done.stderr, done.stderr
+    for head, version in ((b"BLENDER-v402REND", (4, 2)), (b"BLENDER_V293", (2, 93)), (b"\x28\xb5\x2f\xfd", None)):
+        newer.write_bytes(head + bytes(16))
+        assert saved_by_version(newer) == version, head
 
 
 SAVED_DISTANCE = """

@@ -1,16 +1,15 @@
-"""bvhlab's own OBJ, PLY and STL readers and the glTF checks, on files written here by hand, each
-against figures computed here (triangle counts, areas by the shoelace formula, positions): the
-cases trimesh read wrong or refused (a probe of real files: Blender's binary PLY of a mesh of
-triangles and quads, OBJ's relative indices, a concave polygon, Draco and sparse glTF)."""
+"""bvhlab's own OBJ, PLY and STL readers, on files written here by hand, each against figures
+computed here (triangle counts, areas by the shoelace formula, positions): the cases trimesh read
+wrong or refused (a probe of real files: Blender's binary PLY of a mesh of triangles and quads,
+OBJ's relative indices, a concave polygon). The glTF checks: test_gltf_files.py; polygons into
+triangles: test_polygon_files.py."""
 
-import json
 import struct
 
 import numpy as np
 import pytest
 
 from bvhlab._npz import SceneFileError
-from bvhlab.library import polygons
 from bvhlab.library.files import load_mesh_file
 
 
@@ -146,135 +145,6 @@ def test_binary_stl_whose_header_starts_with_solid(tmp_path):
     np.testing.assert_array_equal(t[0], [(0, 0, 0), (1, 0, 0), (0, 1, 0)])
 
 
-def gltf(**changes) -> str:
-    """A glTF of one triangle (positions in a data: URI), with top-level fields changed."""
-    data = np.array([0, 0, 0, 1, 0, 0, 0, 1, 0], np.float32).tobytes()
-    import base64
-
-    doc = {
-        "asset": {"version": "2.0"},
-        "scene": 0,
-        "scenes": [{"nodes": [0]}],
-        "nodes": [{"mesh": 0}],
-        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
-        "buffers": [
-            {"byteLength": 36, "uri": "data:application/octet-stream;base64," + base64.b64encode(data).decode()}
-        ],
-        "bufferViews": [{"buffer": 0, "byteLength": 36}],
-        "accessors": [
-            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}
-        ],
-    }
-    for key, change in changes.items():
-        change(doc) if callable(change) else doc.__setitem__(key, change)
-    return json.dumps(doc)
-
-
-def _set(path: list, value):
-    def change(doc):
-        target = doc
-        for key in path[:-1]:
-            target = target[key]
-        target[path[-1]] = value
-
-    return change
-
-
-@pytest.mark.parametrize(
-    "changes, message",
-    [
-        ({"extensionsRequired": ["KHR_draco_mesh_compression"]}, "requires the glTF extension KHR_draco"),
-        ({"extensionsRequired": ["EXT_meshopt_compression"]}, "requires the glTF extension EXT_meshopt"),
-        ({"n": _set(["nodes", 0, "extensions"], {"EXT_mesh_gpu_instancing": {"attributes": {}}})}, "gpu_instancing"),
-        ({"s": _set(["accessors", 0, "sparse"], {"count": 1})}, "sparse accessors are not read"),
-        ({"q": _set(["accessors", 0, "normalized"], True)}, "normalized positions"),
-        ({"f": _set(["meshes", 0, "primitives", 0, "mode"], 6)}, "triangle fans"),
-        # a skinned mesh was placed by its node (skinning ignores it): 100 units off Blender's import
-        ({"k": _set(["nodes", 0, "skin"], 0)}, "skinned mesh"),
-    ],
-)
-def test_gltf_that_trimesh_would_read_wrong_is_refused(tmp_path, changes, message):
-    with pytest.raises(SceneFileError, match=message):
-        load(tmp_path, "model.gltf", gltf(**changes))
-
-
-def test_gltf_checks_leave_good_files_alone(tmp_path):
-    t = load(tmp_path, "model.gltf", gltf(extensionsRequired=["KHR_materials_emissive_strength"]))
-    np.testing.assert_array_equal(t[0], [(0, 0, 0), (1, 0, 0), (0, 1, 0)])
-
-
-@pytest.mark.parametrize("text", ["", '{"asset": ', "not json"])
-def test_gltf_that_is_not_json_says_so(tmp_path, text):
-    with pytest.raises(SceneFileError, match="is not glTF: its JSON cannot be read"):
-        load(tmp_path, "model.gltf", text)
-
-
-def test_a_polygon_bridged_to_its_hole_keeps_the_hole(tmp_path):
-    """A square with a square hole, joined by a bridge whose corners repeat (a "keyhole"): area
-    16 - 4 = 12. Ear clipping refused ears at the repeated corners and fell back to a fan (24)."""
-    outer, inner = [(0, 0), (4, 0), (4, 4), (0, 4)], [(1, 1), (1, 3), (3, 3), (3, 1)]
-    ring = outer + [outer[0], inner[0]] + inner[1:] + [inner[0]]
-    vertices = "".join(f"v {x} {y} 0\n" for x, y in ring)
-    t = load(tmp_path, "keyhole.obj", vertices + "f " + " ".join(str(i + 1) for i in range(len(ring))) + "\n")
-    assert area(t) == pytest.approx(12.0)
-
-
-def shoelace(xy) -> float:
-    x, y = np.asarray(xy, np.float64).T
-    return 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
-
-
-def test_a_comb_of_4002_corners_keeps_its_shape(tmp_path):
-    """A polygon of 2,000 teeth (half its corners reflex), as a long outline in a CAD export is:
-    n − 2 triangles of its own area. Ear clipping by whole scans took 7 s for 2,002 corners and
-    about an hour for 16,002 (O(n³)); the kept ear tests take 0.35 s and 6 s."""
-    teeth = 2000
-    ring = [(0.0, -1.0), (float(teeth), -1.0)]
-    for i in range(teeth - 1, -1, -1):
-        ring += [(i + 1.0, 1.0), (i + 0.5, 0.0)]
-    vertices = "".join(f"v {x} {y} 0\n" for x, y in ring)
-    t = load(tmp_path, "comb.obj", vertices + "f " + " ".join(str(i + 1) for i in range(len(ring))) + "\n")
-    assert len(t) == len(ring) - 2
-    assert area(t) == pytest.approx(shoelace(ring), rel=1e-12)
-
-
-@pytest.mark.parametrize("seed", range(40))
-def test_simple_polygons_are_covered_exactly(tmp_path, seed):
-    """Random star-shaped polygons (simple, concave, some with radii rounded to tenths), either
-    winding: triangles of their corners whose areas sum to the polygon's."""
-    rng = np.random.default_rng(seed)
-    n = int(rng.integers(5, 90))
-    angle, radius = np.sort(rng.uniform(0, 2 * np.pi, n)), rng.uniform(0.2, 1.0, n)
-    if seed % 3 == 0:
-        radius = np.round(radius, 1)
-    ring = np.stack([radius * np.cos(angle), radius * np.sin(angle)], 1)[:: 1 if seed % 2 else -1]
-    vertices = "".join(f"v {x!r} {y!r} 0\n" for x, y in ring)
-    t = load(tmp_path, "star.obj", vertices + "f " + " ".join(str(i + 1) for i in range(n)) + "\n")
-    assert len(t) == n - 2
-    assert area(t) == pytest.approx(shoelace(ring), rel=1e-6)  # float32 positions
-
-
-@pytest.mark.parametrize(
-    "ring",
-    [
-        # a concave hexagon with a corner in the middle of a straight edge (flat: 180°)
-        [(0, 0), (2, 0), (4, 0), (4, 2), (2, 1), (0, 2)],
-        # the same with a corner repeated (a zero-length edge)
-        [(0, 0), (2, 0), (2, 0), (4, 0), (4, 2), (2, 1), (0, 2)],
-        # clockwise
-        [(0, 2), (2, 1), (4, 2), (4, 0), (2, 0), (0, 0)],
-        # a comb whose teeth's tips lie on one line with the base's corner
-        [(0, 0), (6, 0), (6, 3), (5, 1), (4, 3), (3, 1), (2, 3), (1, 1), (0, 3)],
-    ],
-)
-def test_degenerate_corners_keep_the_area(tmp_path, ring):
-    """Flat, repeated and clockwise corners: the polygon's area, no triangle outside it."""
-    vertices = "".join(f"v {x} {y} 0\n" for x, y in ring)
-    t = load(tmp_path, "odd.obj", vertices + "f " + " ".join(str(i + 1) for i in range(len(ring))) + "\n")
-    assert len(t) == len(ring) - 2
-    assert area(t) == pytest.approx(shoelace(ring), rel=1e-6)
-
-
 @pytest.mark.parametrize(
     "text, triangles",
     [
@@ -361,19 +231,6 @@ def test_ascii_stl_facets_of_other_than_three_vertices_are_refused(tmp_path):
         load(tmp_path, "c.stl", "solid x\n" + facet.format(vertex(0) + vertex(1) + vertex(2)) + vertex(3))
 
 
-@pytest.mark.parametrize(
-    "changes",
-    [
-        {"extensionsRequired": 5},
-        {"extensionsRequired": "KHR_materials_x"},
-        {"a": _set(["meshes", 0, "primitives", 0, "attributes"], [1])},
-    ],
-)
-def test_gltf_with_values_of_the_wrong_type_is_not_gltf(tmp_path, changes):
-    with pytest.raises(SceneFileError):  # TypeError and AttributeError escaped
-        load(tmp_path, "model.gltf", gltf(**changes))
-
-
 UTF16_TEXTS = {
     "obj": "# exported\nv 0 0 0\nv 2 0 0\nv 0 3 0\nf 1 2 3\n",
     "stl": "solid tri\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 2 0 0\nvertex 0 3 0\nendloop\n"
@@ -429,40 +286,6 @@ def test_text_files_that_are_not_utf8_or_utf16_say_so(tmp_path, name, data, mess
         load(tmp_path, name, data)
 
 
-def _every_corner(self, x0, y0, x1, y1):
-    """polygons._Blockers.near without the grid: every corner that may block, for the reference."""
-    return [self.order] + ([np.array(self.extra, np.int64)] if self.extra else [])
-
-
-def test_the_ear_grid_gives_the_triangles_of_a_test_of_every_corner(monkeypatch):
-    """The grid that made a 32,000-corner outline 3× faster only skips corners that cannot lie in
-    an ear: the same triangles as testing every blocking corner, on random simple, clockwise,
-    self-intersecting and rounded polygons in every rotation of their corners, and on the review's
-    polygon, whose corner 2^-53 off an ear's box made a grid without its margin cell clip an ear
-    the full test refuses."""
-    rng = np.random.default_rng(7)
-    polygons_ = [np.array([(0, 0), (1, 2**-20), (1, 1), (-1, 1), (-1, -1), (-0.5, -1), (-(2**-53), 0)])]
-    for trial in range(120):
-        n = int(rng.integers(5, 120))
-        angle = np.sort(rng.uniform(0, 2 * np.pi, n))
-        p = np.stack([np.cos(angle), np.sin(angle)], 1) * rng.uniform(0.2, 1, (n, 1))
-        if trial % 4 == 1:
-            p = np.round(p * 4) / 4  # repeated and collinear corners
-        if trial % 4 == 2:
-            p = p[::-1]  # clockwise
-        if trial % 4 == 3:
-            p = p[rng.permutation(n)]  # self-intersecting
-        polygons_.append(p * 10.0 ** rng.integers(-6, 7))
-    for p in polygons_:
-        xy = np.concatenate([p, np.zeros((len(p), 1))], 1)
-        for start in range(0, len(p), max(1, len(p) // 4)):
-            corners = list(np.roll(np.arange(len(p)), -start))
-            got = polygons.triangulate(corners, xy)
-            with monkeypatch.context() as m:
-                m.setattr(polygons._Blockers, "near", _every_corner)
-                assert got == polygons.triangulate(corners, xy)
-
-
 def test_a_polygon_with_corners_beyond_float_range_is_refused_by_the_vertex_check(tmp_path):
     """Corners at ±1e308 overflowed the grid's span: "cannot convert float NaN to integer" rather
     than the reader's own message (review)."""
@@ -471,29 +294,6 @@ def test_a_polygon_with_corners_beyond_float_range_is_refused_by_the_vertex_chec
     path.write_text("".join(f"v {x!r} {y!r} 0\n" for x, y in corners) + "f 1 2 3 4 5 6\n")
     with pytest.raises(SceneFileError, match="NaN, infinite or out-of-range vertex"):
         load_mesh_file(path)
-
-
-def test_gltf_buffers_are_read_where_their_uris_say(tmp_path):
-    """A probe's case: a URI that leads out of the glTF's folder ("../shared/buf.bin", an absolute
-    path, a URL) was read from a file of the same name beside the glTF, another mesh, silently."""
-    real = np.array([0, 0, 0, 1, 0, 0, 0, 1, 0], np.float32)
-    (tmp_path / "shared").mkdir()
-    (tmp_path / "shared" / "buf.bin").write_bytes(real.tobytes())
-    (tmp_path / "A").mkdir()
-    (tmp_path / "A" / "buf.bin").write_bytes((real + 50).tobytes())  # same name, other triangle
-
-    def with_uri(uri: str) -> str:
-        return gltf(buffers=[{"byteLength": 36, "uri": uri}])
-
-    for uri in ("../shared/buf.bin", str(tmp_path / "shared" / "buf.bin"), "../shared/b%75f.bin"):
-        t = load(tmp_path / "A", "model.gltf", with_uri(uri))
-        np.testing.assert_array_equal(t[0], real.reshape(3, 3), err_msg=uri)
-    np.testing.assert_array_equal(load(tmp_path / "A", "model.gltf", with_uri("buf.bin"))[0], (real + 50).reshape(3, 3))
-    for uri in ("http://example.com/buf.bin", "file:///tmp/buf.bin"):
-        with pytest.raises(SceneFileError, match="a URL: only files are read"):
-            load(tmp_path / "A", "model.gltf", with_uri(uri))
-    with pytest.raises(SceneFileError, match="missing"):
-        load(tmp_path / "A", "model.gltf", with_uri("../elsewhere/buf.bin"))
 
 
 @pytest.mark.parametrize(
@@ -533,47 +333,6 @@ def test_ascii_stl_of_long_numbers_is_refused_at_once(tmp_path):
     )
     out = subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True, text=True, timeout=120)
     assert "not 'vertex x y z'" in out.stdout, out.stdout + out.stderr
-
-
-@pytest.mark.parametrize(
-    "changes, message",
-    [
-        (
-            {"v": _set(["bufferViews", 0, "byteLength"], 48)},
-            r"buffer view 0 \(0 \+ 48 bytes\) runs past the end of buffer 0",
-        ),
-        (
-            {"a": _set(["accessors", 0, "count"], 4)},
-            r"accessor 0 \(4 elements, 48 bytes\) runs past the end of buffer view 0",
-        ),
-        ({"n": _set(["nodes", 0, "mesh"], 5)}, r"node 0 refers to mesh 5, which the file does not have \(1\)"),
-        ({"p": _set(["meshes", 0, "primitives", 0, "attributes", "POSITION"], 3)}, "POSITION refers to accessor 3"),
-        ({"i": _set(["meshes", 0, "primitives", 0, "indices"], 0)}, "indices have component type 5126"),
-    ],
-)
-def test_gltf_references_that_lead_nowhere_are_named(tmp_path, changes, message):
-    """A probe's cases: trimesh refused them as "AssertionError", or read "0 faces"."""
-    with pytest.raises(SceneFileError, match=message):
-        load(tmp_path, "model.gltf", gltf(**changes))
-
-
-def test_gltf_uri_query_fragment_and_network_paths(tmp_path):
-    """The review's cases: "buf.bin?v=2" names buf.bin (RFC 3986: the query is no part of the
-    path), a "#" an exporter left unencoded still finds its file, and "//host/share/buf.bin" (a
-    network path, a UNC share on Windows) is a URL, not read."""
-    real = np.array([0, 0, 0, 1, 0, 0, 0, 1, 0], np.float32)
-    (tmp_path / "buf.bin").write_bytes(real.tobytes())
-    (tmp_path / "a#b.bin").write_bytes((real + 5).tobytes())
-
-    def with_uri(uri: str) -> str:
-        return gltf(buffers=[{"byteLength": 36, "uri": uri}])
-
-    np.testing.assert_array_equal(load(tmp_path, "m.gltf", with_uri("buf.bin?v=2"))[0], real.reshape(3, 3))
-    np.testing.assert_array_equal(load(tmp_path, "m.gltf", with_uri("buf.bin#x"))[0], real.reshape(3, 3))
-    np.testing.assert_array_equal(load(tmp_path, "m.gltf", with_uri("a#b.bin"))[0], (real + 5).reshape(3, 3))
-    for uri in ("//host/share/buf.bin", "\\\\host\\share\\buf.bin"):
-        with pytest.raises(SceneFileError, match="a URL: only files are read"):
-            load(tmp_path, "m.gltf", with_uri(uri))
 
 
 def test_ply_names_it_does_not_read_may_repeat(tmp_path):

@@ -7,7 +7,6 @@ import dataclasses
 
 from .. import InstancedBvh, build
 from .._progress import ProgressBar
-from ..library import load_scene
 from ..stats_files import write_stats
 from . import options
 
@@ -35,7 +34,7 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     settings = options.build_kwargs(args)  # checked before the scene is loaded
     optimize = options.optimize_config(args)
-    scene, name = load_scene(args.scene)
+    scene, name = options.read_scene(args.scene)
     if optimize is not None and scene.is_instanced:  # refused before the build
         raise ValueError(options.OPTIMIZE_FLAT_ONLY)
     with ProgressBar(f"building {args.method}") as bar:

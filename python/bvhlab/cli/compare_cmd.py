@@ -124,7 +124,7 @@ def run(args) -> int:
         if getattr(args, key) is None:
             setattr(args, key, value)
     args.counter = args.counter or "box_tests"
-    scene, name = load_scene(args.scene)
+    scene, name = options.read_scene(args.scene)
     scene = scene.flattened()  # Table 1 compares split methods over the geometry as it stands
     if not scene.primitive_count:
         raise ValueError(f"scene '{name}' has no geometry")

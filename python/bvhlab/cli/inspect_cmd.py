@@ -23,7 +23,6 @@ from .._progress import ProgressBar
 from ..inspect.levels import TreeNode
 from ..inspect.ray_record import PIXEL_TRAVERSALS, trace_pixel
 from ..inspect.tree_file import SUFFIX, TreeFileError, tree_bytes, tree_path
-from ..library import load_scene
 from ..render_options import DEFAULT_HEIGHT, DEFAULT_WIDTH, RenderOptions
 from . import options
 
@@ -136,7 +135,7 @@ def run(args) -> int:
         input_file(tree_file, "tree file", TreeFileError)
         if not tree_file.exists():
             raise FileNotFoundError(2, "No such file or directory", str(tree_file))
-    scene, name = load_scene(args.scene)
+    scene, name = options.read_scene(args.scene)
     if scene.is_instanced and args.save_tree:
         raise ValueError(TWO_LEVEL_NOT_SAVED)
     if scene.is_instanced and optimize is not None:

@@ -12,7 +12,7 @@ import numpy as np
 
 from .. import _core
 from .._checks import OutputPathError, output_file
-from .._progress import ProgressBar
+from .._progress import ProgressBar, Ticker
 from ..build_config import (
     AXES,
     BIN_BOUNDS,
@@ -65,6 +65,19 @@ def scene_spec(text: str) -> str:
             f"{text} is not a regular file (a FIFO, device or socket); give a scene file ({FILE_KINDS})"
         )
     return text
+
+
+def read_scene(spec: str):
+    """library.load_scene with the time it takes shown on a terminal (Ticker): a scene file of
+    millions of triangles reads for seconds before the build's bar."""
+    from ..library import load_scene, scene_file
+
+    path = scene_file(spec)
+    if path is None or not path.is_file():
+        return load_scene(spec)
+    size = path.stat().st_size
+    with Ticker(f"reading {path.name} ({size / 1e6:.0f} MB)" if size >= 1e6 else f"reading {path.name}"):
+        return load_scene(spec)
 
 
 def add_build(p: argparse.ArgumentParser) -> None:

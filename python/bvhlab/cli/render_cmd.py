@@ -18,7 +18,6 @@ from .. import _json as strict_json
 from .._atomic import write_together
 from .._checks import OutputPathError
 from .._progress import ProgressBar
-from ..library import load_scene
 from ..png import png_file_bytes, straight_alpha
 from ..render import BACKENDS, default_renderer
 from ..render_options import AUTO_TRAVERSAL, RENDER_TRAVERSALS, RenderOptions
@@ -105,7 +104,7 @@ def run(args) -> int:
                     f"{path} is a folder or not a regular file; --counter writes the counts and their "
                     f"histogram beside --out {args.out} there: move it, or give another --out"
                 )
-    scene, name = load_scene(args.scene)
+    scene, name = options.read_scene(args.scene)
     with ProgressBar(f"building {args.method}") as bar:
         bvh = build(scene, progress=bar, **settings)  # an instanced scene: a two-level tree, rendered as it is
     warning = legend.no_boxes_warning(legend.overlay_height(bvh), args.bvh_depth) if args.bvh_depth else None

@@ -23,6 +23,10 @@ from .._npz import SceneFileError
 _KNOWN_PREFIXES = ("KHR_materials_", "KHR_texture_", "EXT_texture_", "MSFT_texture_", "KHR_lights_")
 _KNOWN = {"KHR_mesh_quantization", "KHR_xmp_json_ld"}
 _TRIANGLE_FAN = 6
+_BOM = b"\xef\xbb\xbf"
+#: Primitive extensions that hold the geometry elsewhere: without a fallback (accessors with no
+#: buffer view) trimesh reads placeholder zeros.
+_COMPRESSED = ("KHR_draco_mesh_compression",)
 
 
 def _json_text(path: Path, any_suffix: bool = True) -> tuple[str, bytes] | None:
@@ -57,10 +61,15 @@ def check_gltf(path: Path) -> tuple[str, bytes | None]:
     if not isinstance(doc, dict) or not isinstance(doc.get("asset"), dict):
         raise SceneFileError(f"{path} is not glTF: no 'asset' object")
     try:
-        _check(path, doc)
+        _check(path, doc, _buffer_sizes(path, kind, doc, len(text)))
     except (TypeError, AttributeError, KeyError, IndexError) as e:  # a value of the wrong JSON type
         raise SceneFileError(f"{path} is not glTF: {type(e).__name__}: {e}") from None
-    return kind, without_cameras(path, kind, doc, len(text))
+    mended = without_cameras(path, kind, doc, len(text))
+    if mended is None and kind == "gltf" and text.startswith(_BOM):
+        # read above as utf-8-sig; trimesh's JSON parse failed on it and it looked for a
+        # "model.gltf" instead ("refers to model.gltf, which is missing": a helper's probe)
+        return kind, text[len(_BOM) :]
+    return kind, mended
 
 
 def without_cameras(path: Path, kind: str, doc: dict, json_bytes: int) -> bytes | None:
@@ -85,7 +94,7 @@ def without_cameras(path: Path, kind: str, doc: dict, json_bytes: int) -> bytes 
     return struct.pack("<4sII", b"glTF", 2, 12 + len(chunk) + len(rest)) + chunk + rest
 
 
-def _check(path: Path, doc: dict) -> None:
+def _check(path: Path, doc: dict, sizes: list[int | None]) -> None:
     required = doc.get("extensionsRequired") or []
     if not isinstance(required, list) or not all(isinstance(name, str) for name in required):
         raise SceneFileError(f"{path} is not glTF: extensionsRequired is not a list of names")
@@ -114,8 +123,18 @@ def _check(path: Path, doc: dict) -> None:
             where = f"mesh {mesh.get('name') or m}"
             if primitive.get("mode") == _TRIANGLE_FAN:
                 raise SceneFileError(f"{path}: {where} has triangle fans (mode 6), which bvhlab does not read")
-            position = _primitive_accessor(path, doc, _dict(primitive, "attributes").get("POSITION"), where, False)
-            indices = _primitive_accessor(path, doc, primitive.get("indices"), where, True)
+            position = _primitive_accessor(
+                path, doc, sizes, _dict(primitive, "attributes").get("POSITION"), where, False
+            )
+            indices = _primitive_accessor(path, doc, sizes, primitive.get("indices"), where, True)
+            compressed = [name for name in _COMPRESSED if name in _dict(primitive, "extensions")]
+            if compressed and position and "bufferView" not in position:
+                # an extension the file uses but does not require (the Draco extension's rules ask
+                # for a fallback then; files without one exist): read as zeros, exit 0 (a probe)
+                raise SceneFileError(
+                    f"{path}: {where} is compressed by {compressed[0]} without uncompressed data, which bvhlab "
+                    "does not read (export it without compression)"
+                )
             if position.get("normalized"):
                 raise SceneFileError(f"{path}: {where}: normalized positions (KHR_mesh_quantization) are not read")
             if "sparse" in position or "sparse" in indices:
@@ -134,11 +153,12 @@ def _item(path: Path, items: list, index, what: str, where: str) -> dict:
     return items[index]
 
 
-def _primitive_accessor(path: Path, doc: dict, index, where: str, indices: bool) -> dict:
+def _primitive_accessor(path: Path, doc: dict, sizes: list[int | None], index, where: str, indices: bool) -> dict:
     """The accessor `index` of a primitive of mesh `where` (its POSITION, or its `indices`), {} for
     none, checked as trimesh's reader asserts without saying what (its message was
-    "AssertionError"): it, its buffer view and buffer exist, the view lies in its buffer and the
-    accessor in its view, and indices are unsigned integers."""
+    "AssertionError"): it, its buffer view and buffer exist, the view lies in its buffer (as the
+    file declares it and as many bytes as the file holds: `sizes`, _buffer_sizes) and the accessor
+    in its view, and indices are unsigned integers."""
     if index is None:
         return {}
     role = "indices" if indices else "POSITION"
@@ -160,6 +180,12 @@ def _primitive_accessor(path: Path, doc: dict, index, where: str, indices: bool)
             f"{path}: buffer view {v} ({start} + {length} bytes) runs past the end of buffer "
             f"{view.get('buffer')} ({room} bytes)"
         )
+    held = sizes[view["buffer"]]
+    if held is not None and start + length > held:  # trimesh: "AssertionError", "list index out of range"
+        raise SceneFileError(
+            f"{path}: buffer view {v} ({start} + {length} bytes) runs past the {held} bytes the file holds for "
+            f"buffer {view.get('buffer')} (declared {room}: truncated?)"
+        )
     size = _COMPONENT_BYTES.get(component, 0) if isinstance(component, int) else 0
     size *= _TYPE_COMPONENTS.get(kind, 0) if isinstance(kind, str) else 0
     count = accessor.get("count", 0)
@@ -170,6 +196,37 @@ def _primitive_accessor(path: Path, doc: dict, index, where: str, indices: bool)
             f"({length} bytes)"
         )
     return accessor
+
+
+def _buffer_sizes(path: Path, kind: str, doc: dict, json_bytes: int) -> list[int | None]:
+    """The bytes each buffer of the file holds (not its declared byteLength): a data: URI's decoded
+    payload, a file's size, a GLB's binary chunk for the buffer without a URI (0 in a .gltf, or a
+    GLB without that chunk); None where that is not known here (a file that is not there: the
+    loader says it is missing; a URL: refused by the loader)."""
+    sizes: list[int | None] = []
+    for buffer in _list(doc, "buffers"):  # as _item indexes them
+        uri = buffer.get("uri")
+        if not isinstance(uri, str):
+            sizes.append(_glb_binary_bytes(path, json_bytes) if kind == "glb" else 0)
+        elif uri.startswith("data:"):
+            payload = uri.partition(",")[2]
+            sizes.append(len(payload) * 3 // 4 - payload[-2:].count("=") if ";base64," in uri else None)
+        else:
+            where = referenced_path(path, uri)
+            sizes.append(where.stat().st_size if where is not None and where.is_file() else None)
+    return sizes
+
+
+def _glb_binary_bytes(path: Path, json_bytes: int) -> int:
+    """The length of a GLB's binary chunk (the one after its JSON chunk), 0 where there is none."""
+    with open(path, "rb") as f:
+        f.seek(20 + json_bytes)
+        head = f.read(8)
+        if len(head) < 8 or head[4:8] != b"BIN\0":
+            return 0
+        stated = struct.unpack_from("<I", head)[0]
+        f.seek(0, 2)
+        return min(stated, f.tell() - (28 + json_bytes))
 
 
 def _check_morph_weights(path: Path, doc: dict) -> None:
