@@ -25,14 +25,18 @@ def unrendered_features(depsgraph, camera=None) -> list[str]:
     """What the render depsgraph's scene, view layer and objects ask for that bvhlab does not
     render, each in words. `camera`: the object rendered through where it is not the scene camera
     (RenderEngine.camera_override: a Sequencer strip's)."""
+    from bvhlab.blender.scope import shown_object  # bvhlab.blender is imported when first used
+
     render = depsgraph.scene.render
     found = _Found()
     # what renders (a render depsgraph leaves out the rest): the objects and what they instance (a
     # collection instanced, geometry nodes' output), each object once for each kind of geometry it
     # shows (a mesh object whose geometry nodes put out points shows a mesh and a point cloud)
-    seen, instancers = set(), set()
+    seen, instancers, copies = set(), set(), {}
     for instance in depsgraph.object_instances:
-        obj = instance.object  # valid until the iterator moves on: looked at now
+        # valid until the iterator moves on: looked at now (an instance's without leaking Blender's
+        # wrapper where it can: scope.shown_object)
+        obj = shown_object(instance, copies) if instance.is_instance else instance.object
         original = obj.original
         if (original, obj.type) not in seen:
             seen.add((original, obj.type))

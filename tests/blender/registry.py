@@ -89,6 +89,7 @@ def _export() -> Iterator[Check]:
     import checks_bundled
     import checks_cases as cases
     import checks_live
+    import checks_shown_object as shown
 
     for name in json.loads(SCENES_JSON.read_text()):
         yield Check("export", f"bundled_{name}", checks_bundled.check_bundled_scene, args=(name,))
@@ -109,6 +110,8 @@ def _export() -> Iterator[Check]:
     yield Check(
         "export", "moves_are_placed_as_the_walk_places_them", checks_live.check_moves_are_placed_as_the_walk_places_them
     )
+    for check in (shown.check_instances_are_read_as_blender_shows_them, shown.check_walks_of_instances_leak_nothing):
+        yield Check("export", check.__name__.removeprefix("check_"), check)
 
 
 def _addon() -> Iterator[Check]:
