@@ -1,0 +1,87 @@
+"""ASCII STL read by its writers' layout (stl_reader._as_written: words split a piece at a time)
+against the exact path (the patterns that read any whitespace and name each error): the same
+vertices bit for bit where the layout's path reads a file, and every other file left to the exact
+path, which reads it or refuses it as before."""
+
+import numpy as np
+import pytest
+
+from bvhlab._npz import SceneFileError
+from bvhlab.library import stl_reader
+from bvhlab.library.stl_reader import read_stl
+
+FACET = "facet normal {n}\n  outer loop\n{v}  endloop\nendfacet\n"
+NUMBERS = ["0", "-0", "+1.5", "1E5", "2.5e-3", "-.75", "7.", "nan", "inf", "-Infinity", "1e400", "3.4028236e38"]
+
+
+def facets(count: int, seed: int = 5, fmt: str = "{:.9g}") -> str:
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(count):
+        v = "".join("    vertex " + " ".join(fmt.format(x) for x in rng.normal(size=3) * 10) + "\n" for _ in range(3))
+        out.append(FACET.format(n="0 0 1", v=v))
+    return "".join(out)
+
+
+def exact(path, monkeypatch):
+    """read_stl by the exact path alone."""
+    with monkeypatch.context() as m:
+        m.setattr(stl_reader, "_as_written", lambda text: None)
+        return read_stl(path)
+
+
+def write(tmp_path, text: str | bytes):
+    path = tmp_path / "t.stl"
+    path.write_bytes(text.encode() if isinstance(text, str) else text)
+    return path
+
+
+@pytest.mark.parametrize("piece", [1 << 22, 700])  # pieces cut between facets many times over
+def test_the_writers_layout_gives_the_exact_paths_vertices(tmp_path, monkeypatch, piece):
+    odd = "".join(
+        FACET.format(n="-0 nan 1", v="".join(f"vertex {a} {b} {c}\n" for a, b, c in [NUMBERS[k : k + 3]] * 3))
+        for k in range(0, len(NUMBERS), 3)
+    )
+    body = facets(300) + odd + facets(200, seed=6, fmt="{:e}")
+    for text in ("solid part\n" + body + "endsolid part\n", ("solid\r\n" + body + "endsolid").replace("\n", "\r\n")):
+        path = write(tmp_path, text.replace("    vertex", "\tvertex  "))
+        monkeypatch.setattr(stl_reader, "_PIECE", piece)
+        assert stl_reader._as_written(path.read_bytes()) is not None  # the layout's path read it
+        vertices, triangles = read_stl(path)
+        want, want_triangles = exact(path, monkeypatch)
+        assert vertices.shape == (3 * (500 + len(NUMBERS) // 3), 3)
+        np.testing.assert_array_equal(vertices.view(np.uint64), want.view(np.uint64))  # NaN, -0 and inf too
+        np.testing.assert_array_equal(triangles, want_triangles)
+
+
+LEFT_TO_THE_EXACT_PATH = {
+    "keywords in upper case": ("solid x\n" + facets(2).upper() + "endsolid x\n", None),
+    "a name that says facet": ("solid facet maker\n" + facets(2) + "endsolid facet maker\n", None),
+    "facets on the solid's line": ("solid x " + facets(2).replace("\n", " ") + "endsolid x\n", None),
+    "two solids": ("solid a\n" + facets(2) + "endsolid a\nsolid b\n" + facets(1) + "endsolid b\n", None),
+    "no endsolid": ("solid x\n" + facets(2), None),
+    "a normal of words": ("solid x\n" + facets(2).replace("normal 0 0 1", "normal a b c") + "endsolid x\n", None),
+    "an underscore in the name": ("solid my_part\n" + facets(2) + "endsolid my_part\n", None),
+    "an underscore in a number": ("solid x\n" + facets(2).replace("vertex ", "vertex 1_0", 1) + "endsolid x\n",
+                                  "not 'vertex x y z'"),
+    "a long number": ("solid x\n" + facets(1).replace("vertex ", "vertex " + "1" * 100 + " ", 1), "not 'vertex x y z'"),
+    "four numbers": ("solid x\n" + facets(2).replace("vertex ", "vertex 7 ", 1) + "endsolid x\n", "not 'vertex x y z'"),
+    "four vertices": ("solid x\n" + facets(2).replace("endloop", "vertex 0 0 0\nendloop", 1) + "endsolid x\n",
+                      "facet 1 has 4 vertices"),
+    "a word for a number": ("solid x\n" + facets(2).replace("vertex ", "vertex 1e5x ", 1) + "endsolid x\n",
+                            "not 'vertex x y z'"),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("case", LEFT_TO_THE_EXACT_PATH)
+def test_other_files_are_left_to_the_exact_path(tmp_path, monkeypatch, case):
+    text, message = LEFT_TO_THE_EXACT_PATH[case]
+    path = write(tmp_path, text)
+    assert stl_reader._as_written(path.read_bytes()) is None
+    if message is None:
+        vertices, _ = read_stl(path)
+        np.testing.assert_array_equal(vertices.view(np.uint64), exact(path, monkeypatch)[0].view(np.uint64))
+        assert len(vertices) % 3 == 0 and len(vertices) >= 3
+    else:
+        with pytest.raises(SceneFileError, match=message):
+            read_stl(path)
