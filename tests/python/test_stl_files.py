@@ -36,6 +36,17 @@ def write(tmp_path, text: str | bytes):
     return path
 
 
+def test_endfacet_glued_where_a_piece_ends_is_left_to_the_exact_path(tmp_path, monkeypatch):
+    body = facets(6)
+    glued = body.replace("endfacet\nfacet", "endfacetfacet", 3)  # the first three facets' ends
+    for cut in range(len(glued) - 10, 100, -97):  # pieces ending at many places
+        monkeypatch.setattr(stl_reader, "_PIECE", cut)
+        path = write(tmp_path, "solid x\n" + glued + "endsolid x\n")
+        assert stl_reader._as_written(path.read_bytes()) is None, cut
+    with pytest.raises(SceneFileError, match="facet 1 has 12 vertices, not three"):
+        read_stl(path)
+
+
 @pytest.mark.parametrize("piece", [1 << 22, 700])  # pieces cut between facets many times over
 def test_the_writers_layout_gives_the_exact_paths_vertices(tmp_path, monkeypatch, piece):
     odd = "".join(
@@ -43,7 +54,10 @@ def test_the_writers_layout_gives_the_exact_paths_vertices(tmp_path, monkeypatch
         for k in range(0, len(NUMBERS), 3)
     )
     body = facets(300) + odd + facets(200, seed=6, fmt="{:e}")
-    for text in ("solid part\n" + body + "endsolid part\n", ("solid\r\n" + body + "endsolid").replace("\n", "\r\n")):
+    for text in (
+        "solid my_part\n" + body + "endsolid my_part\n",
+        ("solid\r\n" + body + "endsolid").replace("\n", "\r\n"),
+    ):
         path = write(tmp_path, text.replace("    vertex", "\tvertex  "))
         monkeypatch.setattr(stl_reader, "_PIECE", piece)
         assert stl_reader._as_written(path.read_bytes()) is not None  # the layout's path read it
@@ -61,10 +75,20 @@ LEFT_TO_THE_EXACT_PATH = {
     "two solids": ("solid a\n" + facets(2) + "endsolid a\nsolid b\n" + facets(1) + "endsolid b\n", None),
     "no endsolid": ("solid x\n" + facets(2), None),
     "a normal of words": ("solid x\n" + facets(2).replace("normal 0 0 1", "normal a b c") + "endsolid x\n", None),
-    "an underscore in the name": ("solid my_part\n" + facets(2) + "endsolid my_part\n", None),
     "an underscore in a number": ("solid x\n" + facets(2).replace("vertex ", "vertex 1_0", 1) + "endsolid x\n",
                                   "not 'vertex x y z'"),
-    "a long number": ("solid x\n" + facets(1).replace("vertex ", "vertex " + "1" * 100 + " ", 1), "not 'vertex x y z'"),
+    "a long number": ("solid x\n" + facets(1).replace("vertex ", "vertex " + "1" * 100 + " ", 1) + "endsolid x\n",
+                      "not 'vertex x y z'"),
+    "a long word": ("solid x\n" + facets(2).replace("outer", "x" * (1 << 20) + " outer", 1) + "endsolid x\n", None),
+    # a review's cases: `endfacet` glued to the next word, a vertex after `endsolid`, NUL bytes
+    "endfacetendsolid": ("solid x\n" + facets(2)[:-1] + "endsolid x\n", "after the last endfacet"),
+    "a vertex after endsolid": ("solid x\n" + facets(2) + "endsolid x\nvertex 1 2 3\n", "after the last endfacet"),
+    "a NUL after a number": (
+        "solid x\n" + FACET.format(n="0 0 1", v="vertex 1\0 2 3\nvertex 4 5 6\nvertex 7 8 9\n") + "endsolid x\n",
+        "not 'vertex x y z'",
+    ),
+    "a NUL after a keyword": ("solid x\n" + facets(2).replace("endloop", "endloop\0", 1) + "endsolid x\n",
+                              "not 'vertex x y z'|facet"),
     "four numbers": ("solid x\n" + facets(2).replace("vertex ", "vertex 7 ", 1) + "endsolid x\n", "not 'vertex x y z'"),
     "four vertices": ("solid x\n" + facets(2).replace("endloop", "vertex 0 0 0\nendloop", 1) + "endsolid x\n",
                       "facet 1 has 4 vertices"),
@@ -73,9 +97,13 @@ LEFT_TO_THE_EXACT_PATH = {
 }  # fmt: skip
 
 
+@pytest.mark.parametrize("piece", [1 << 22, 300])
 @pytest.mark.parametrize("case", LEFT_TO_THE_EXACT_PATH)
-def test_other_files_are_left_to_the_exact_path(tmp_path, monkeypatch, case):
+def test_other_files_are_left_to_the_exact_path(tmp_path, monkeypatch, case, piece):
+    """Each file as it is, its pieces cut where the file is whole or a few facets apart (a facet's
+    `endfacet` glued to the next facet where a piece ends was read: the review's case)."""
     text, message = LEFT_TO_THE_EXACT_PATH[case]
+    monkeypatch.setattr(stl_reader, "_PIECE", piece)
     path = write(tmp_path, text)
     assert stl_reader._as_written(path.read_bytes()) is None
     if message is None:

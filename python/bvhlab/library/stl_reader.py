@@ -86,18 +86,27 @@ def _as_written(text: bytes) -> np.ndarray | None:
     size in memory): a `solid` line that holds no facet, facets of exactly the 21 words of
     _FACET_WORDS in lower case (any whitespace between them), one `endsolid` line at the end.
     None for any other file, which the exact path then reads or refuses with its message: the
-    numbers are those the exact path takes (Python's float reads "1_0" too: a file with an
-    underscore is left to it), so both give the same vertices, bit for bit."""
-    if b"_" in text:
-        return None
+    numbers are those the exact path takes (Python's float reads "1_0" too, and numpy drops a word's
+    trailing NUL bytes: facets with an underscore or a NUL are left to it), each `endfacet` must end
+    its word, and nothing may follow the `endsolid` line, so both give the same vertices, bit for
+    bit, or this path gives None (a review's cases: `endfacetendsolid`, `endfacetfacet` where a
+    piece ends, a vertex after `endsolid`, `vertex 1\\0 2 3`)."""
     start = text.find(b"\n") + 1
     tail = text.rfind(b"endsolid")
-    if start == 0 or tail < start or b"facet" in text[:start].lower() or b"facet" in text[tail:].lower():
+    if start == 0 or tail < start or not text[tail - 1 : tail].isspace():
+        return None
+    line_end = text.find(b"\n", tail)
+    after = len(text) if line_end < 0 else line_end
+    if b"facet" in text[:start].lower() or b"facet" in text[tail:after].lower() or text[after:].strip():
+        return None
+    if text.find(b"_", start, tail) >= 0 or text.find(b"\0", start, tail) >= 0:
         return None
     pieces, at = [], start
     while (cut := text.rfind(b"endfacet", at, min(at + _PIECE, tail))) >= 0:
         words = text[at : cut + len(b"endfacet")].split()
         at = cut + len(b"endfacet")
+        if not text[at : at + 1].isspace():  # `endfacetfacet`: not the word endfacet
+            return None
         if len(words) % len(_FACET_WORDS) or max(map(len, words)) > _LONGEST:
             return None
         grid = np.array(words).reshape(-1, len(_FACET_WORDS))
