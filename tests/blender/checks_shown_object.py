@@ -103,7 +103,10 @@ def check_instances_are_read_as_blender_shows_them() -> None:
     """For every instance of every kind, what shown_object gives is what `instance.object` says (its
     type, data, original, material slots); the copies are taken for the instances of plain objects
     and `instance.object` read for what geometry nodes instance as geometry, and for what a text,
-    curve or metaball shows (a mesh that is not the object's)."""
+    curve or metaball shows (a mesh that is not the object's). Blender hands back the instanced
+    object's own wrapper for an instance once that object has one (the temporary copy is made from
+    it, its Python instance with it: a review's finding), so only the instances `instance.object`
+    shows as the temporary copy itself compare two readings; those are counted by kind."""
     _every_kind_scene()
     depsgraph = bpy.context.evaluated_depsgraph_get()
     copies: dict = {}
@@ -111,15 +114,18 @@ def check_instances_are_read_as_blender_shows_them() -> None:
     for instance in depsgraph.object_instances:
         if not instance.is_instance:
             continue
+        said = instance.object  # what Blender says, read before shown_object wraps the object instanced
+        want = _what(said)
+        source = instance.instance_object.as_pointer()
         shown = shown_object(instance, copies)
-        copied = shown == instance.instance_object
-        want = _what(instance.object)  # what Blender says (read after shown_object: no shortcut)
         assert _what(shown) == want, (instance.instance_object.name, _what(shown), want)
-        kinds[(want[0], copied)] = kinds.get((want[0], copied), 0) + 1
+        if said.as_pointer() != source:  # the temporary copy: a comparison of two readings
+            copied = shown.as_pointer() == source
+            kinds[(want[0], copied)] = kinds.get((want[0], copied), 0) + 1
     # the kinds the scene must have given: copies of meshes and lights, and meshes read anew (the
     # geometry instanced as geometry, a text's, curve's and metaball's surfaces)
-    assert kinds.get(("MESH", True), 0) >= 2 * 1 + 2 + 9, kinds
-    assert kinds.get(("LIGHT", True), 0) == 2, kinds
+    assert kinds.get(("MESH", True), 0) >= 3, kinds
+    assert kinds.get(("LIGHT", True), 0) >= 1, kinds
     assert kinds.get(("MESH", False), 0) >= 9 + 2 * 3, kinds
     keys = [entry.key for entry in instances_in_scope(depsgraph, bpy.context.view_layer, "visible")]
     assert len(keys) == len(set(keys)), "two instances under one key"
