@@ -123,6 +123,9 @@ bool obviously_leaf(const BuildShared& shared, std::uint32_t n) {
     return n == 1 || (n <= shared.config.max_leaf_size && !shared.method.uses_sah);
 }
 
+/// Nodes of at least this many references are each preceded by a stop check (should_stop).
+constexpr std::uint32_t kStopCheckRange = 1u << 16;
+
 /// True when the build should stop: polls the cancellation on the calling thread (which runs
 /// the caller's progress check at most every 20 ms), reads the flag on workers.
 bool should_stop(BuildShared& shared, const SubtreeRun& run) {
@@ -174,7 +177,9 @@ void build_subtree(BuildShared& shared, SplitScratch& scratch, const WorkItem& r
     const std::uint32_t small_size = small_subtree_size(shared.config);
     Split split;
     for (std::uint32_t nodes = 0; !stack.empty(); ++nodes) {
-        if ((nodes & 63) == 0) {
+        // every 64 nodes, and before each large one: 64 nodes at the top of a tree are most of its
+        // work (a full-sweep SAH build of 2M references, two threads: 3.1 s between stop checks)
+        if ((nodes & 63) == 0 || stack.back().range.size() >= kStopCheckRange) {
             writer.flush_leaf_count();
             if (should_stop(shared, run)) return;
         }
