@@ -328,12 +328,22 @@ TEST_F(Vulkan, ManyFramesDoNotGrowMemory) {
         renderer().render(s, {image.data()});
     };
     for (int i = 0; i < 8; ++i) frame(i);  // warm-up: pipelines compiled, pools sized
-    const std::size_t before = resident_bytes();
-    for (int i = 0; i < 30; ++i) frame(i);
-    const std::size_t after = resident_bytes();
-    const long growth = long(after) - long(before);
-    std::printf("resident: %.1f MiB, growth over 30 frames: %ld KiB\n", double(after) / (1 << 20), growth / 1024);
-    EXPECT_LT(growth, 512 * 1024);
+    // Windows of 30 frames until one stays flat: lavapipe's threads (one a CPU) size their memory
+    // over the first frames, longer the more there are (a helper's audit, LP_NUM_THREADS 16 and
+    // 32: 0.7 and 2.4 MiB over the 30 frames after the warm-up, then 352, 60, 0 KiB a window),
+    // where a leak grows in every window.
+    long growth = 0;
+    int window = 0;
+    for (; window < 6; ++window) {
+        const std::size_t before = resident_bytes();
+        for (int i = 0; i < 30; ++i) frame(i);
+        const std::size_t after = resident_bytes();
+        growth = long(after) - long(before);
+        std::printf("resident: %.1f MiB, growth over window %d of 30 frames: %ld KiB\n", double(after) / (1 << 20),
+                    window, growth / 1024);
+        if (growth < 512 * 1024) break;
+    }
+    EXPECT_LT(growth, 512 * 1024) << "each of " << window << " windows of 30 frames grew";
 }
 
 TEST_F(Vulkan, TrianglesBeyondTheBindingLimitRender) {
