@@ -53,10 +53,11 @@ class HeldUpdate:
 
     def __init__(self, tree, fail: bool = False):
         self.tree, self.update, self.fail = tree, tree.update, fail
-        self.release, self.threads = threading.Event(), []
+        self.release, self.entered, self.threads = threading.Event(), threading.Event(), []
 
     def __call__(self, *args, **kwargs):
         self.threads.append(threading.current_thread())
+        self.entered.set()
         assert self.release.wait(60), "never released"
         if self.fail:
             raise RuntimeError("the update failed on purpose")
@@ -71,6 +72,9 @@ def test_an_edited_mesh_is_followed_on_a_worker_keeping_the_last_tree_drawn():
     held = tree.update = HeldUpdate(tree)
     try:
         _edit(monkey, 0.3)  # returns although the update is held: it is not on this thread
+        # the worker is in the update before the next edits (a fast edit could come before it
+        # starts and join the first: a helper's audit)
+        assert held.entered.wait(60), "the update never started"
         _edit(monkey, 0.2)  # and again while it runs: pending
         _edit(monkey, -0.1)  # replaces the pending one
         assert len(held.threads) == 1 and held.threads[0] is not threading.main_thread()
