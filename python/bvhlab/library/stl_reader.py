@@ -72,7 +72,7 @@ def read_stl(path: Path) -> tuple[np.ndarray, np.ndarray]:
 
 
 # The layout STL writers use, facet by facet: 21 words, the numbers' places None.
-_FACET_WORDS = (b"facet", b"normal", None, None, None, b"outer", b"loop")
+_FACET_WORDS: tuple[bytes | None, ...] = (b"facet", b"normal", None, None, None, b"outer", b"loop")
 _FACET_WORDS += (b"vertex", None, None, None) * 3 + (b"endloop", b"endfacet")
 _KEYWORDS = [(k, word) for k, word in enumerate(_FACET_WORDS) if word is not None]
 _NUMBERS = [k for k, word in enumerate(_FACET_WORDS) if word is None]  # the normal's three, then the vertices'
