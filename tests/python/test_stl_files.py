@@ -54,25 +54,32 @@ def test_the_writers_layout_gives_the_exact_paths_vertices(tmp_path, monkeypatch
         for k in range(0, len(NUMBERS), 3)
     )
     body = facets(300) + odd + facets(200, seed=6, fmt="{:e}")
+    more = "solid a\n" + facets(100, 7) + "endsolid a\n\n" + "SOLID B\n" + facets(150, 8).upper() + "ENDSOLID B\n"
     for text in (
         "solid my_part\n" + body + "endsolid my_part\n",
         ("solid\r\n" + body + "endsolid").replace("\n", "\r\n"),
+        "solid my_part\n" + body + "endsolid my_part\n" + more,  # three solids (CAD bodies), one in upper case
+        "solid endsolid\n" + body + "endsolid endsolid\n",  # the name is no end: looked for after its line
     ):
         path = write(tmp_path, text.replace("    vertex", "\tvertex  "))
         monkeypatch.setattr(stl_reader, "_PIECE", piece)
         assert stl_reader._as_written(path.read_bytes()) is not None  # the layout's path read it
         vertices, triangles = read_stl(path)
         want, want_triangles = exact(path, monkeypatch)
-        assert vertices.shape == (3 * (500 + len(NUMBERS) // 3), 3)
+        assert len(vertices) == 3 * (500 + len(NUMBERS) // 3 + (250 if "SOLID B" in text else 0))
         np.testing.assert_array_equal(vertices.view(np.uint64), want.view(np.uint64))  # NaN, -0 and inf too
         np.testing.assert_array_equal(triangles, want_triangles)
 
 
 LEFT_TO_THE_EXACT_PATH = {
-    "keywords in upper case": ("solid x\n" + facets(2).upper() + "endsolid x\n", None),
+    "keywords in mixed case": ("solid x\n" + facets(2).replace("endfacet", "EndFacet") + "endsolid x\n", None),
     "a name that says facet": ("solid facet maker\n" + facets(2) + "endsolid facet maker\n", None),
     "facets on the solid's line": ("solid x " + facets(2).replace("\n", " ") + "endsolid x\n", None),
-    "two solids": ("solid a\n" + facets(2) + "endsolid a\nsolid b\n" + facets(1) + "endsolid b\n", None),
+    "two solids on a line": ("solid a\n" + facets(2) + "endsolid a solid b\n" + facets(1) + "endsolid b\n", None),
+    "words between solids": (
+        "solid a\n" + facets(2) + "endsolid a\nvertex 1 2 3\nsolid b\n" + facets(1) + "endsolid b\n",
+        "after the last endfacet|not 'vertex|vertices",
+    ),
     "no endsolid": ("solid x\n" + facets(2), None),
     "a normal of words": ("solid x\n" + facets(2).replace("normal 0 0 1", "normal a b c") + "endsolid x\n", None),
     "an underscore in a number": ("solid x\n" + facets(2).replace("vertex ", "vertex 1_0", 1) + "endsolid x\n",

@@ -83,26 +83,51 @@ _LONGEST = 64  # bytes of a number read by the layout's path (longer ones: the e
 def _as_written(text: bytes) -> np.ndarray | None:
     """The vertices of an ASCII STL laid out as its writers write it, read a piece at a time by
     splitting words (the exact path's patterns took 31 s for a million facets and ~7× the file's
-    size in memory): a `solid` line that holds no facet, facets of exactly the 21 words of
-    _FACET_WORDS in lower case (any whitespace between them), one `endsolid` line at the end.
-    None for any other file, which the exact path then reads or refuses with its message: the
-    numbers are those the exact path takes (Python's float reads "1_0" too, and numpy drops a word's
-    trailing NUL bytes: facets with an underscore or a NUL are left to it), each `endfacet` must end
-    its word, and nothing may follow the `endsolid` line, so both give the same vertices, bit for
-    bit, or this path gives None (a review's cases: `endfacetendsolid`, `endfacetfacet` where a
-    piece ends, a vertex after `endsolid`, `vertex 1\\0 2 3`)."""
-    start = text.find(b"\n") + 1
-    tail = text.rfind(b"endsolid")
-    if start == 0 or tail < start or not text[tail - 1 : tail].isspace():
+    size in memory): one or more solids (CAD tools write a body a solid), each a `solid` line that
+    holds no facet, facets of exactly the 21 words of _FACET_WORDS in lower or upper case (any
+    whitespace between them) and an `endsolid` line, nothing after the last. None for any other
+    file, which the exact path then reads or refuses with its message: the numbers are those the
+    exact path takes (Python's float reads "1_0" too, and numpy drops a word's trailing NUL bytes:
+    facets with an underscore or a NUL are left to it), each `endfacet` must end its word, so both
+    give the same vertices, bit for bit, or this path gives None (a review's cases:
+    `endfacetendsolid`, `endfacetfacet` where a piece ends, a vertex after `endsolid`,
+    `vertex 1\\0 2 3`)."""
+    solids, at = [], 0
+    while True:
+        # this solid ends at the first `endsolid` after its `solid` line (a name that says
+        # endsolid: its facets fail the layout's words, and the exact path reads the file)
+        line = text.find(b"\n", at) + 1
+        ends = [e for e in (text.find(b"endsolid", line), text.find(b"ENDSOLID", line)) if e >= 0]
+        if line == 0 or not ends:
+            return None
+        tail = min(ends)
+        after = text.find(b"\n", tail)
+        after = len(text) if after < 0 else after
+        vertices = _solid_as_written(text, at, line, tail, after)
+        if vertices is None:
+            return None
+        solids.append(vertices)
+        rest = text[after : after + 64].lstrip()
+        if not rest:
+            return np.concatenate(solids) if len(solids) > 1 else solids[0]
+        if rest[:5].lower() != b"solid":
+            return None
+        at = text.find(rest[:5], after)  # past the blank lines between the solids
+
+
+def _solid_as_written(text: bytes, at: int, line: int, tail: int, after: int) -> np.ndarray | None:
+    """_as_written's reading of one solid: its `solid` line text[at:line], its facets
+    text[line:tail], its `endsolid` line text[tail:after]."""
+    if not text[tail - 1 : tail].isspace() or b"facet" in text[at:line].lower() or b"facet" in text[tail:after].lower():
         return None
-    line_end = text.find(b"\n", tail)
-    after = len(text) if line_end < 0 else line_end
-    if b"facet" in text[:start].lower() or b"facet" in text[tail:after].lower() or text[after:].strip():
+    if text.find(b"_", line, tail) >= 0 or text.find(b"\0", line, tail) >= 0:
         return None
-    if text.find(b"_", start, tail) >= 0 or text.find(b"\0", start, tail) >= 0:
-        return None
-    pieces, at = [], start
-    while (cut := text.rfind(b"endfacet", at, min(at + _PIECE, tail))) >= 0:
+    pieces, at = [], line
+    while True:
+        limit = min(at + _PIECE, tail)
+        cut = max(text.rfind(b"endfacet", at, limit), text.rfind(b"ENDFACET", at, limit))
+        if cut < 0:
+            break
         words = text[at : cut + len(b"endfacet")].split()
         at = cut + len(b"endfacet")
         if not text[at : at + 1].isspace():  # `endfacetfacet`: not the word endfacet
@@ -110,8 +135,10 @@ def _as_written(text: bytes) -> np.ndarray | None:
         if len(words) % len(_FACET_WORDS) or max(map(len, words)) > _LONGEST:
             return None
         grid = np.array(words).reshape(-1, len(_FACET_WORDS))
-        if not all((grid[:, k] == word).all() for k, word in _KEYWORDS):
-            return None
+        for k, word in _KEYWORDS:
+            column = grid[:, k]
+            if not any((column == w).all() for w in (word, word.upper())) and not (np.char.lower(column) == word).all():
+                return None
         try:
             pieces.append(grid[:, _NUMBERS].astype(np.float64)[:, 3:].reshape(-1, 3))
         except ValueError:  # not a number (the normal's too: a word there is the exact path's to judge)
