@@ -211,12 +211,10 @@ def _tree_of(request):
 def check_viewport_worker_levels() -> None:
     """The viewport's worker, fed one scene and one view: a preview at a fraction of the resolution,
     then full resolution, then 2×2 samples; the last equals bvhlab.render from the view's camera
-    (with the boxes of depths 8-9 traced in). Frame times are printed, not asserted. The levels are
-    taken as the worker publishes them: sampled every 20 ms, the full frame was missed where the
-    refined one took less (a helper's audit: 72-110 ms here on one thread, ~3-10 ms on eight)."""
+    (boxes of depths 8-9 traced in). Frame times printed, not asserted. The levels are taken as the
+    worker publishes them (sampled every 20 ms, a fast machine's full frame was missed: an audit)."""
     scene = harness.open_scene("atrium")
-    session_class = _engine_module("viewport").ViewportSession
-    levels = []
+    session_class, levels, session = _engine_module("viewport").ViewportSession, [], None
 
     def publish(self, frame) -> None:
         levels.append((frame.level, frame.image.shape[:2], round(frame.timings["trace_ms"], 1)))
@@ -224,7 +222,6 @@ def check_viewport_worker_levels() -> None:
 
     publish.__wrapped__ = session_class._publish
     session_class._publish = publish  # until the session is closed: the worker looks it up each frame
-    session = None
     try:
         session, request, live = _session_for(scene, 240, 160, samples_per_axis=2, overlay=(8, 9))
 
