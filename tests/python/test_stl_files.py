@@ -36,6 +36,16 @@ def write(tmp_path, text: str | bytes):
     return path
 
 
+def test_a_solid_after_many_blank_lines_is_read(tmp_path, monkeypatch):
+    """The review's: the next solid was looked for in the 64 bytes after an `endsolid` line, and a
+    file whose second solid came after more blank lines lost it without an error."""
+    text = "solid a\n" + facets(2) + "endsolid a\n" + "\r\n" * 100 + "  solid b\n" + facets(3, 9) + "endsolid b"
+    path = write(tmp_path, text)
+    vertices = stl_reader._as_written(path.read_bytes())
+    assert vertices is not None and len(vertices) == 15
+    np.testing.assert_array_equal(vertices.view(np.uint64), exact(path, monkeypatch)[0].view(np.uint64))
+
+
 def test_endfacet_glued_where_a_piece_ends_is_left_to_the_exact_path(tmp_path, monkeypatch):
     body = facets(6)
     glued = body.replace("endfacet\nfacet", "endfacetfacet", 3)  # the first three facets' ends
@@ -57,7 +67,7 @@ def test_the_writers_layout_gives_the_exact_paths_vertices(tmp_path, monkeypatch
     more = "solid a\n" + facets(100, 7) + "endsolid a\n\n" + "SOLID B\n" + facets(150, 8).upper() + "ENDSOLID B\n"
     for text in (
         "solid my_part\n" + body + "endsolid my_part\n",
-        ("solid\r\n" + body + "endsolid").replace("\n", "\r\n"),
+        ("solid\n" + body + "endsolid").replace("\n", "\r\n"),
         "solid my_part\n" + body + "endsolid my_part\n" + more,  # three solids (CAD bodies), one in upper case
         "solid endsolid\n" + body + "endsolid endsolid\n",  # the name is no end: looked for after its line
     ):
@@ -76,6 +86,17 @@ LEFT_TO_THE_EXACT_PATH = {
     "a name that says facet": ("solid facet maker\n" + facets(2) + "endsolid facet maker\n", None),
     "facets on the solid's line": ("solid x " + facets(2).replace("\n", " ") + "endsolid x\n", None),
     "two solids on a line": ("solid a\n" + facets(2) + "endsolid a solid b\n" + facets(1) + "endsolid b\n", None),
+    # the review's: a solid after 64 blank bytes was dropped, and names that say `vertex` on lines
+    # the exact path does not take for a solid's were read
+    "a vertex after blank lines": ("solid a\n" + facets(2) + "endsolid a\n" + "\n" * 70 + "vertex 1 2 3\n",
+                                   "after the last endfacet"),
+    "a name after a form feed": ("solid a\n" + facets(2) + "endsolid a\n\x0csolid vertex colors\n" + facets(1)
+                                 + "endsolid b\n", "not 'vertex x y z'"),
+    "a name after a lone CR": ("solid a\rvertex 1 2 3\n" + facets(2) + "endsolid a\n", "after the last|not 'vertex"),
+    "endsolid on endfacet's line": ("solid a\n" + facets(2).rstrip() + " endsolid vertex colors\n",
+                                    "not 'vertex x y z'"),
+    "solidx": ("solid a\n" + facets(1) + "endsolid a\nsolidx vertex 1 2 3\n" + facets(1) + "endsolid b\n",
+               "not 'vertex x y z'"),
     "words between solids": (
         "solid a\n" + facets(2) + "endsolid a\nvertex 1 2 3\nsolid b\n" + facets(1) + "endsolid b\n",
         "after the last endfacet|not 'vertex|vertices",

@@ -76,6 +76,10 @@ _FACET_WORDS: tuple[bytes | None, ...] = (b"facet", b"normal", None, None, None,
 _FACET_WORDS += (b"vertex", None, None, None) * 3 + (b"endloop", b"endfacet")
 _KEYWORDS = [(k, word) for k, word in enumerate(_FACET_WORDS) if word is not None]
 _NUMBERS = [k for k, word in enumerate(_FACET_WORDS) if word is None]  # the normal's three, then the vertices'
+# a solid's first and last lines, as _SOLID_LINE takes them (its line break included in the first)
+_SOLID_START = re.compile(rb"[ \t]*(?:\xef\xbb\xbf)?[ \t]*solid\b[^\r\n]*\r?\n", re.IGNORECASE)
+_SOLID_END = re.compile(rb"[ \t]*(?:\xef\xbb\xbf)?[ \t]*endsolid\b[^\r\n]*\r?", re.IGNORECASE)
+_NOT_SPACE = re.compile(rb"\S")
 _PIECE = 1 << 22  # bytes of facets split into words at a time
 _LONGEST = 64  # bytes of a number read by the layout's path (longer ones: the exact path's checks)
 
@@ -107,18 +111,22 @@ def _as_written(text: bytes) -> np.ndarray | None:
         if vertices is None:
             return None
         solids.append(vertices)
-        rest = text[after : after + 64].lstrip()
-        if not rest:
+        following = _NOT_SPACE.search(text, after)  # past the blank lines between the solids
+        if following is None:
             return np.concatenate(solids) if len(solids) > 1 else solids[0]
-        if rest[:5].lower() != b"solid":
-            return None
-        at = text.find(rest[:5], after)  # past the blank lines between the solids
+        at = text.rfind(b"\n", 0, following.start()) + 1  # the next solid's line, from its start
 
 
 def _solid_as_written(text: bytes, at: int, line: int, tail: int, after: int) -> np.ndarray | None:
     """_as_written's reading of one solid: its `solid` line text[at:line], its facets
     text[line:tail], its `endsolid` line text[tail:after]."""
-    if not text[tail - 1 : tail].isspace() or b"facet" in text[at:line].lower() or b"facet" in text[tail:after].lower():
+    # the lines the exact path takes for a solid's (_SOLID_LINE), and no others: a name is free
+    # text, and one that says `vertex` after a form feed or a lone CR was read here and refused
+    # there (the review's)
+    end_line = text.rfind(b"\n", 0, tail) + 1
+    if not _SOLID_START.fullmatch(text, at, line) or not _SOLID_END.fullmatch(text, end_line, after):
+        return None
+    if b"facet" in text[at:line].lower() or b"facet" in text[tail:after].lower():
         return None
     if text.find(b"_", line, tail) >= 0 or text.find(b"\0", line, tail) >= 0:
         return None
