@@ -137,3 +137,15 @@ def test_polygons_of_one_size_at_once_are_triangulated_one_by_one(n):
     faces[::5] = faces[::5, ::-1]
     one_by_one = [t for f in faces for t in polygons.triangulate(list(f), positions)]
     assert np.array_equal(polygons.triangulate_all(list(faces), positions), np.array(one_by_one))
+
+
+def test_integer_positions_are_clipped_as_floats():
+    """The review's: the Python-float clipping took integer positions as exact integers where the
+    numpy clipping takes them as doubles (corners near 2^53): other triangles."""
+    big = 2**53
+    ring = [[0, 2, 0], [big + 3, 1, 0], [big + 1, -3, 0], [-2, -3, 0], [big, -3, 0], [big + 1, 0, 0]]
+    positions = np.array(ring, np.int64)
+    faces = [list(range(6))]
+    assert polygons.triangulate_all(faces, positions).tolist() == [
+        list(t) for t in polygons.triangulate(faces[0], positions)
+    ]

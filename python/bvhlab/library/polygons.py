@@ -68,7 +68,10 @@ def _larger(faces: np.ndarray, positions: np.ndarray) -> np.ndarray:
     xy = np.stack([p[rows, at, np.array([1, 2, 0])[axis][:, None]], p[rows, at, np.array([2, 0, 1])[axis][:, None]]], 2)
     flip = ~(normal[clipped, axis] > 0)
     xy[flip] = xy[flip][..., ::-1]
-    for f, corners, points in zip(clipped.tolist(), faces[clipped].tolist(), xy.tolist(), strict=True):
+    # as floats whatever the positions' type, as _ear_clip's (integers were exact: the review's)
+    for f, corners, points in zip(
+        clipped.tolist(), faces[clipped].tolist(), xy.astype(np.float64).tolist(), strict=True
+    ):
         out[f] = _ear_clip_small(corners, points) or _fan(corners)
     return out.reshape(-1, 3)
 
