@@ -3,6 +3,8 @@ against the exact path (the patterns that read any whitespace and name each erro
 vertices bit for bit where the layout's path reads a file, and every other file left to the exact
 path, which reads it or refuses it as before."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -97,6 +99,9 @@ LEFT_TO_THE_EXACT_PATH = {
                                     "not 'vertex x y z'"),
     "solidx": ("solid a\n" + facets(1) + "endsolid a\nsolidx vertex 1 2 3\n" + facets(1) + "endsolid b\n",
                "not 'vertex x y z'"),
+    # a bare ValueError before (the review's)
+    "nanx": ("solid x\n" + re.sub("vertex \\S+", "vertex nanx", facets(2), count=1) + "endsolid x\n",
+             "not 'vertex x y z'"),
     "words between solids": (
         "solid a\n" + facets(2) + "endsolid a\nvertex 1 2 3\nsolid b\n" + facets(1) + "endsolid b\n",
         "after the last endfacet|not 'vertex|vertices",

@@ -59,7 +59,10 @@ def read_stl(path: Path) -> tuple[np.ndarray, np.ndarray]:
                 f"declares {count} triangles ({_HEADER + _TRIANGLE * count} bytes) for its {len(data)} bytes"
             )
         _check_facets(path, facets)
-        vertices = np.array(found, dtype=np.float64).reshape(-1, 3)
+        try:
+            vertices = np.array(found, dtype=np.float64).reshape(-1, 3)
+        except ValueError:  # a word the pattern takes for nan or inf ("nanx", "infinit"): a review's
+            raise SceneFileError(f"{path}: a vertex line is not 'vertex x y z' (three numbers)") from None
     elif count >= 0:
         raise SceneFileError(
             f"{path}: the header declares {count} triangles ({_HEADER + _TRIANGLE * count} bytes), "
