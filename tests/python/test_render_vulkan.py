@@ -351,8 +351,8 @@ for mode in ("run", "render"):
     hjob = r.start(heavy, hb, 24, 24, max_depth=0)
     mine = r.start(heavy, hb, 2, 2, max_depth=0) if mode == "run" else None
     stop, state = threading.Event(), {{}}
-    def hold(fraction):
-        stop.wait()
+    def hold(fraction):  # bounded: a Ctrl-C missed must fail the test, not hang it (the review's)
+        stop.wait(30)
         return False
     def worker():
         state["started"] = True

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "bvhlab/build_config.h"
+#include "bvhlab/cancel.h"
 #include "bvhlab/prim_ref.h"
 #include "bvhlab/sah.h"
 
@@ -73,7 +74,8 @@ struct ParallelPasses {
     ThreadPool* pool = nullptr;
     unsigned threads = 1;
     const std::function<void()>* while_waiting = nullptr;  ///< the calling thread's cancellation check
-    std::uint32_t root_size = 0;  ///< the root's range, [0, root_size): cut into chunks from kMinParallelRoot
+    std::uint32_t root_size = 0;           ///< the root's range, [0, root_size): cut into chunks from kMinParallelRoot
+    const Cancellation* cancel = nullptr;  ///< what while_waiting polls: a split may end its work early on a stop
 };
 
 struct SplitContext {

@@ -78,7 +78,7 @@ void build_tree(BigVector<PrimRef>& prim_refs, const PrimRefsSummary& summary, c
     const unsigned threads = ThreadPool::resolve(cfg.threads);
     BigVector<PrimRef> other(n);  // not zeroed (BigAllocator): every slot is written before it is read
     const std::function<void()> poll = [&] { stop.cancel().poll(); };
-    const ParallelPasses parallel{&ThreadPool::shared(), threads, &poll, n};
+    const ParallelPasses parallel{&ThreadPool::shared(), threads, &poll, n, &stop.cancel()};
     const SplitMethodInfo& method = method_info(cfg.method);
     SplitScratch scratch;
     SplitContext ctx{{prim_refs.data(), other.data()}, cfg, scratch, &parallel};

@@ -59,8 +59,12 @@ std::optional<Split> split_sweep_sah(SplitContext& ctx, Range r, int src, const 
         sweep(ctx, sorted, b, a, best);
         // a top node's sorts are the build's longest stretch without a stop check (2M references,
         // two threads: 3.1 s between the caller's progress calls): the calling thread polls
-        // after each axis (the builder stops at its next node; a worker has no `parallel`)
-        if (ctx.parallel && ctx.parallel->while_waiting) (*ctx.parallel->while_waiting)();
+        // after each axis and, once a stop is asked, splits on the axes swept so far (the tree is
+        // thrown away: the builder stops at its next node; a worker has no `parallel`)
+        if (ctx.parallel && ctx.parallel->while_waiting) {
+            (*ctx.parallel->while_waiting)();
+            if (best.axis >= 0 && ctx.parallel->cancel && ctx.parallel->cancel->stop_requested()) break;
+        }
     }
     if (best.axis < 0) return std::nullopt;
     if (sorted_axis != best.axis) sorted.assign(in + r.begin, in + r.end), sort_on_axis(sorted, best.axis);
