@@ -62,16 +62,9 @@ def _larger(faces: np.ndarray, positions: np.ndarray) -> np.ndarray:
         for f in clipped:
             out[f] = triangulate(faces[f].tolist(), positions)
         return out.reshape(-1, 3)
-    # _projected for all of them at once: the same axes and coordinates, as Python floats
-    axis = np.argmax(np.abs(normal[clipped]), axis=1)
-    rows, at = clipped[:, None], np.arange(n)[None, :]
-    xy = np.stack([p[rows, at, np.array([1, 2, 0])[axis][:, None]], p[rows, at, np.array([2, 0, 1])[axis][:, None]]], 2)
-    flip = ~(normal[clipped, axis] > 0)
-    xy[flip] = xy[flip][..., ::-1]
     # as floats whatever the positions' type, as _ear_clip's (integers were exact: the review's)
-    for f, corners, points in zip(
-        clipped.tolist(), faces[clipped].tolist(), xy.astype(np.float64).tolist(), strict=True
-    ):
+    xy = _projected_all(p[clipped], normal[clipped]).astype(np.float64)
+    for f, corners, points in zip(clipped.tolist(), faces[clipped].tolist(), xy.tolist(), strict=True):
         out[f] = _ear_clip_small(corners, points) or _fan(corners)
     return out.reshape(-1, 3)
 
@@ -111,12 +104,11 @@ def _ear_clip_small(corners: list[int], xy: list[list[float]]) -> list[tuple[int
     out = []
     b, left = 0, n
     while left > 3:
-        found = next((k for k in range(b, min(b + 64, n)) if ear[k] and alive[k]), -1)
-        if found < 0:
-            candidates = [k for k in range(n) if ear[k] and alive[k]]
-            if not candidates:
-                return None
-            found = next((k for k in candidates if k >= b), candidates[0])
+        # _ear_clip's walk: the next ear from b on, else the first (its 64-corner window holds a
+        # whole small polygon)
+        found = next((k for k in [*range(b, n), *range(b)] if ear[k] and alive[k]), None)
+        if found is None:
+            return None
         b = found
         a, c = prv[b], nxt[b]
         out.append((corners[a], corners[b], corners[c]))
@@ -175,10 +167,18 @@ def _newell_normals(p: np.ndarray) -> np.ndarray:
 
 def _projected(p: np.ndarray, normal: np.ndarray) -> np.ndarray:
     """2D coordinates in the polygon's plane, counter-clockwise for its winding."""
-    axis = int(np.argmax(np.abs(normal)))
-    u, v = [(1, 2), (2, 0), (0, 1)][axis]
-    xy = p[:, [u, v]]
-    return xy if normal[axis] > 0 else xy[:, ::-1]
+    return _projected_all(p[None], normal[None])[0]
+
+
+def _projected_all(p: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """_projected of polygons p (F, n, 3) with normals (F, 3) at once: (F, n, 2), each dropping
+    the axis its normal is largest along."""
+    axis = np.argmax(np.abs(normal), axis=1)
+    u, v = np.array([1, 2, 0])[axis], np.array([2, 0, 1])[axis]
+    xy = np.concatenate([np.take_along_axis(p, w[:, None, None], axis=2) for w in (u, v)], axis=2)
+    flip = ~(normal[np.arange(len(p)), axis] > 0)
+    xy[flip] = xy[flip][..., ::-1]
+    return xy
 
 
 def _ear_clip(corners: list[int], xy: np.ndarray) -> list[tuple[int, int, int]] | None:
