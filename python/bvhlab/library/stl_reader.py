@@ -29,7 +29,8 @@ _VERTEX = re.compile(
 )
 _VERTEX_WORD = re.compile(rb"(?<!\S)vertex(?!\S)", re.IGNORECASE)
 _ENDFACET = re.compile(rb"(?<!\S)endfacet(?!\S)", re.IGNORECASE)
-_SOLID_LINE = re.compile(rb"(?mi)^[ \t]*(?:\xef\xbb\xbf)?[ \t]*(?:end)?solid\b[^\r\n]*")
+_SOLID_TEXT = rb"[ \t]*(?:\xef\xbb\xbf)?[ \t]*(?:end)?solid\b[^\r\n]*"  # a solid's line, from its start
+_SOLID_LINE = re.compile(rb"(?mi)^" + _SOLID_TEXT)
 # a file written on one line ("solid t facet normal ... endsolid t"): a name of one word, if any
 _SOLID_WORDS = re.compile(rb"(?i)(?<!\S)(?:end)?solid(?:[ \t]+(?!facet(?!\S))[^\s]+)?(?!\S)")
 
@@ -80,8 +81,8 @@ _FACET_WORDS += (b"vertex", None, None, None) * 3 + (b"endloop", b"endfacet")
 _KEYWORDS = [(k, word) for k, word in enumerate(_FACET_WORDS) if word is not None]
 _NUMBERS = [k for k, word in enumerate(_FACET_WORDS) if word is None]  # the normal's three, then the vertices'
 # a solid's first and last lines, as _SOLID_LINE takes them (its line break included in the first)
-_SOLID_START = re.compile(rb"[ \t]*(?:\xef\xbb\xbf)?[ \t]*solid\b[^\r\n]*\r?\n", re.IGNORECASE)
-_SOLID_END = re.compile(rb"[ \t]*(?:\xef\xbb\xbf)?[ \t]*endsolid\b[^\r\n]*\r?", re.IGNORECASE)
+_SOLID_START = re.compile(_SOLID_TEXT + rb"\r?\n", re.IGNORECASE)
+_SOLID_END = re.compile(_SOLID_TEXT + rb"\r?", re.IGNORECASE)
 _NOT_SPACE = re.compile(rb"\S")
 _PIECE = 1 << 22  # bytes of facets split into words at a time
 _LONGEST = 64  # bytes of a number read by the layout's path (longer ones: the exact path's checks)
