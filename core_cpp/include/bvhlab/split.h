@@ -61,6 +61,7 @@ struct SplitScratch {
     SplitScratch();
     ~SplitScratch();
     std::vector<PrimRef> sorted;        ///< sweep SAH: the range sorted on one axis
+    std::vector<PrimRef> merged;        ///< sweep SAH: the other side of a sort's merges (sort_in_chunks)
     std::vector<float> areas;           ///< sweep SAH suffix areas
     std::vector<std::uint32_t> counts;  ///< median: histogram
     std::vector<std::uint16_t> bucket;  ///< median: each reference's histogram bucket

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "bvhlab/split.h"
+#include "sort_chunks.h"
 
 namespace bvhlab {
 namespace {
@@ -15,9 +16,14 @@ struct Best {
     std::uint32_t mid = 0;  ///< offset within the range
 };
 
-void sort_on_axis(std::vector<PrimRef>& refs, int axis) {
-    // Ties keep a fixed order (by reference), so the result depends on nothing but the input.
-    std::sort(refs.begin(), refs.end(), [axis](const PrimRef& p, const PrimRef& q) {
+/// ctx.scratch.sorted becomes r's references of `in` sorted on `axis`, on the pool in chunks where
+/// the node is at the top of the tree (chunk_count; sort_in_chunks).
+void sort_on_axis(SplitContext& ctx, Range r, const PrimRef* in, int axis) {
+    auto& sorted = ctx.scratch.sorted;
+    sorted.assign(in + r.begin, in + r.end);
+    // Ties keep a fixed order (by reference): a total order, so the result depends on nothing but
+    // the input (not on the chunks)
+    sort_in_chunks(ctx, chunk_count(ctx, r), sorted, ctx.scratch.merged, [axis](const PrimRef& p, const PrimRef& q) {
         float cp = p.lo[axis] + p.hi[axis], cq = q.lo[axis] + q.hi[axis];
         return cp < cq || (cp == cq && p.ref < q.ref);
     });
@@ -53,8 +59,7 @@ std::optional<Split> split_sweep_sah(SplitContext& ctx, Range r, int src, const 
     int sorted_axis = -1;
     for (int a = 0; a < 3; ++a) {
         if ((axis != kAllAxes && a != axis) || !(extent[a] > 0.0f)) continue;
-        sorted.assign(in + r.begin, in + r.end);
-        sort_on_axis(sorted, a);
+        sort_on_axis(ctx, r, in, a);
         sorted_axis = a;
         sweep(ctx, sorted, b, a, best);
         // a top node's sorts are the build's longest stretch without a stop check (2M references,
@@ -67,7 +72,7 @@ std::optional<Split> split_sweep_sah(SplitContext& ctx, Range r, int src, const 
         }
     }
     if (best.axis < 0) return std::nullopt;
-    if (sorted_axis != best.axis) sorted.assign(in + r.begin, in + r.end), sort_on_axis(sorted, best.axis);
+    if (sorted_axis != best.axis) sort_on_axis(ctx, r, in, best.axis);
     std::copy(sorted.begin(), sorted.end(), ctx.buffers[1 - src] + r.begin);
     Split s = split_at(ctx, r, 1 - src, b, r.begin + best.mid);
     s.cost = best.cost;
