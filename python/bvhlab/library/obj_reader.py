@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from .._npz import SceneFileError
-from .polygons import triangulate_all
+from .polygons import triangulate_runs
 from .text_bytes import refuse_nul, refuse_odd_numbers, utf8_bytes
 
 
@@ -73,9 +73,7 @@ def read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
         raise SceneFileError(f"{path}, line {at}: vertex {written} does not exist (the file has {len(vertices)})")
     if len(sizes) and (sizes == 3).all():  # triangles only
         return vertices, resolved.reshape(-1, 3)
-    starts = np.concatenate([[0], np.cumsum(sizes)])
-    polygons = [resolved[a:b] for a, b, n in zip(starts[:-1], starts[1:], sizes) if n >= 3]
-    return vertices, triangulate_all(polygons, vertices)
+    return vertices, triangulate_runs(resolved, sizes, vertices)
 
 
 #: Whitespace other than a space, a tab or a line end (Python's \s: \v, \f, U+0085, U+00A0,
