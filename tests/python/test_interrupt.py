@@ -23,7 +23,7 @@ CHILD = """
     if work == "build":
         tris = procedural.random_triangles(4_000_000, seed=1)
         run = lambda progress=None: bvhlab.build(tris, method="sah", threads=2, progress=progress)
-    elif work == "sweep_sah":  # the top nodes' sorts: the longest stretch without a stop check
+    elif work == "sweep_sah":  # the top nodes' sorts: once the longest stretch without a stop check
         tris = procedural.torus_knot(1_000_000)
         run = lambda progress=None: bvhlab.build(tris, method="sweep_sah", threads=2, progress=progress)
     elif work == "node_data":  # the EPO pass over a soup of large overlapping triangles

@@ -109,6 +109,9 @@ void build_tree(BigVector<PrimRef>& prim_refs, const PrimRefsSummary& summary, c
     Subtree top;
     BVHLAB_WORK_MARK("phase top");  // each phase mark ends the serial part of the one before
     build_subtree(shared, scratch, root, top, {defer_size, true, &parallel, serial_below});
+    // the full sweep's copies of the largest node's references (2M: 2 × 64 MB), not kept through
+    // the phases below
+    std::vector<PrimRef>().swap(scratch.sorted), std::vector<PrimRef>().swap(scratch.merged);
     BVHLAB_WORK_MARK("phase deferred");
     if (!top.deferred.empty() && !stop.cancel().stop_requested())
         build_deferred(shared, top, part_size_for(defer_size), threads, poll);

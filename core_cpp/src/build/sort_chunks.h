@@ -30,10 +30,10 @@ void sort_in_chunks(const SplitContext& ctx, std::uint32_t chunks, std::vector<T
     spare.resize(v.size());
     while (runs.size() > 1) {
         // run 2i and 2i + 1 merged into one; an odd last run copied as it is
-        std::vector<Range> merged((runs.size() + 1) / 2);
-        for (std::size_t i = 0; i < merged.size(); ++i)
-            merged[i] = {runs[2 * i].begin, (2 * i + 1 < runs.size() ? runs[2 * i + 1] : runs[2 * i]).end};
-        for_each_range(ctx, merged, [&](std::uint32_t i, Range m) {
+        std::vector<Range> joined((runs.size() + 1) / 2);
+        for (std::size_t i = 0; i < joined.size(); ++i)
+            joined[i] = {runs[2 * i].begin, (2 * i + 1 < runs.size() ? runs[2 * i + 1] : runs[2 * i]).end};
+        for_each_range(ctx, joined, [&](std::uint32_t i, Range m) {
             const auto at = [&](std::uint32_t k) { return v.begin() + k; };
             if (2 * i + 1 < runs.size()) {
                 const Range a = runs[2 * i], b = runs[2 * i + 1];
@@ -43,7 +43,7 @@ void sort_in_chunks(const SplitContext& ctx, std::uint32_t chunks, std::vector<T
             }
         });
         v.swap(spare);
-        runs = std::move(merged);
+        runs = std::move(joined);
     }
 }
 
