@@ -47,8 +47,8 @@ TEST(SortInChunks, SameAsStdSortForEveryChunkAndThreadCount) {
                 for (std::uint32_t chunks : {1u, 2u, 3u, 4u, 5u, 8u, 9u, 64u}) {
                     std::vector<Item> v = input, spare;
                     sort_in_chunks(ctx, chunks, v, spare, by_key);
-                    EXPECT_EQ(v, expected) << n << " items, " << distinct << " keys, " << threads << " threads, "
-                                           << chunks << " chunks";
+                    EXPECT_EQ(v, expected)
+                        << n << " items, " << distinct << " keys, " << threads << " threads, " << chunks << " chunks";
                 }
             }
         }
