@@ -150,6 +150,23 @@ def check_bad_input_errors() -> None:
     _expect_error("no camera")
 
 
+def check_loose_vertices_far_or_not_a_number_are_not_refused() -> None:
+    """A vertex in no face (a loose one) that is not a number, or far outside the coordinate range,
+    is not rendered (Cycles renders the mesh without it): the export is the mesh's triangles as
+    without it (the audit: F12, Build and Render refused the scene). A NaN vertex a face uses is
+    still refused (check_bad_input_errors)."""
+    harness.boxes_scene()
+    expected = export_scene(bpy.context).triangles
+    mesh = bpy.data.objects["Box A"].data
+    mesh.vertices.add(1)
+    for co in ((math.nan, 0.0, 0.0), (1e13, 0.0, 0.0), (0.0, -math.inf, 0.0)):
+        mesh.vertices[-1].co = co
+        mesh.update()
+        bpy.context.view_layer.update()
+        got = export_scene(bpy.context).triangles
+        assert np.array_equal(got, expected), co
+
+
 def check_missing_camera_and_light_substituted() -> None:
     """Without a camera (when not required) or a light, bvhlab's defaults stand in, with warnings."""
     harness.boxes_scene()

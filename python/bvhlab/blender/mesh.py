@@ -63,7 +63,7 @@ class MeshData:
         linear, offset = matrix_world[:3, :3].astype(np.float32), matrix_world[:3, 3].astype(np.float32)
         with np.errstate(over="ignore", invalid="ignore"):
             world = self.positions @ linear.T + offset
-        check_world_positions(world, name)
+        check_world_positions(world, name, self.corners)
         corners = self.corners
         if np.linalg.det(matrix_world[:3, :3]) < 0:
             corners = corners.reshape(-1, 3)[:, ::-1].reshape(-1)
@@ -110,27 +110,45 @@ def _read(mesh, name: str) -> MeshData:
     positions = np.empty(len(mesh.vertices) * 3, np.float32)
     mesh.attributes["position"].data.foreach_get("vector", positions)
     positions = positions.reshape(-1, 3)
-    finite = np.isfinite(positions)
-    if not finite.all():
-        bad = int(np.flatnonzero(~finite.all(1))[0])
-        raise ExportError(
-            f"object '{name}' has a vertex that is not a finite number (vertex {bad}: "
-            f"{tuple(float(x) for x in positions[bad])}); fix or delete it before building"
-        )
     corners, face_of_triangle = _loop_triangles(mesh)
+    finite = np.isfinite(positions).all(1)
+    if not finite.all():
+        bad = _first_used(~finite, corners)
+        if bad is not None:
+            raise ExportError(
+                f"object '{name}' has a vertex that is not a finite number (vertex {bad}: "
+                f"{tuple(float(x) for x in positions[bad])}); fix or delete it before building"
+            )
+        # only vertices in no face (loose ones, which Cycles does not render either): read as the
+        # origin, so that no later pass over every vertex meets a NaN
+        positions[~finite] = 0.0
     return MeshData(positions, corners, _triangle_material_slots(mesh, face_of_triangle))
 
 
-def check_world_positions(world: np.ndarray, name: str) -> None:
+def _first_used(flagged: np.ndarray, corners: np.ndarray) -> int | None:
+    """The first vertex among `flagged` (bool per vertex) that a triangle uses (`corners`), or None
+    where only vertices in no triangle are (a loose vertex far away or not a number must not refuse
+    a mesh that renders without it)."""
+    used = np.zeros(len(flagged), bool)
+    used[corners] = True
+    bad = np.flatnonzero(flagged & used)
+    return int(bad[0]) if len(bad) else None
+
+
+def check_world_positions(world: np.ndarray, name: str, corners: np.ndarray | None = None) -> None:
     """Raises ExportError naming the object when a world-space point is NaN (a NaN location,
     rotation or scale) or lies outside ±MAX_COORDINATE, where bvhlab's float32 ray tests would
-    overflow (Blender stores an infinite coordinate as ±3.4e38: it lands here too)."""
+    overflow (Blender stores an infinite coordinate as ±3.4e38: it lands here too). `corners`:
+    only the points triangles use count (a mesh's loose vertices are not rendered)."""
     from ..scene import MAX_COORDINATE
 
-    inside = np.abs(world) <= MAX_COORDINATE  # False for NaN
+    inside = (np.abs(world) <= MAX_COORDINATE).all(1)  # False for NaN
     if inside.all():
         return
-    bad = int(np.flatnonzero(~inside.all(1))[0])
+    first = _first_used(~inside, corners) if corners is not None else int(np.flatnonzero(~inside)[0])
+    if first is None:
+        return
+    bad = first
     where = f"vertex {bad} at {tuple(float(x) for x in world[bad])}"
     if np.isnan(world[bad]).any():
         raise ExportError(
