@@ -150,6 +150,31 @@ def check_bad_input_errors() -> None:
     _expect_error("no camera")
 
 
+def check_a_bad_light_material_or_world_is_named() -> None:
+    """A light, material or world whose values a scene refuses (not a number here) is named in the
+    ExportError, as a mesh's bad vertex names its object (the audit: "light position must be
+    finite", without saying which light)."""
+    harness.boxes_scene()
+    light = next(o for o in bpy.context.scene.objects if o.type == "LIGHT")
+    light.location.y = math.nan
+    assert f"light '{light.name}'" in _expect_error("must be finite")
+    light.location.y = -3.0
+    world = bpy.context.scene.world
+    world.color = (math.nan, 0.0, 0.0)  # what 4.x reads without nodes; 5.x's world has a Background node
+    background = world.node_tree.nodes.get("Background") if world.node_tree is not None else None
+    if background is not None:
+        background.inputs["Color"].default_value = (math.nan, 0.0, 0.0, 1.0)
+    assert "world 'World'" in _expect_error("must be finite")
+    world.color = (0.2, 0.3, 0.5)
+    if background is not None:
+        background.inputs["Color"].default_value = (0.2, 0.3, 0.5, 1.0)
+    material = bpy.data.materials.new("Not a number")
+    ensure_shader_tree(material)
+    material.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (math.nan, 0.5, 0.5, 1.0)
+    bpy.data.objects["Box A"].data.materials.append(material)
+    assert "material 'Not a number'" in _expect_error("must be finite")
+
+
 def check_loose_vertices_far_or_not_a_number_are_not_refused() -> None:
     """A vertex in no face (a loose one) that is not a number, or far outside the coordinate range,
     is not rendered (Cycles renders the mesh without it): the export is the mesh's triangles as

@@ -24,7 +24,7 @@ import warnings
 import numpy as np
 
 from ..scene import Light
-from .errors import ExportWarning
+from .errors import ExportWarning, naming
 from .scope import visibility
 
 
@@ -68,7 +68,8 @@ def gather_light(
         measured = float(np.float32(np.median(np.linalg.norm(primitive_points - position, axis=1))))
     # nothing to measure (no geometry yet): d = 1 for now, and None kept, so the next sync measures
     intensity = intensity_from_watts(light.data.energy, 1.0 if measured is None else measured)
-    return Light(tuple(position), tuple(light.data.color), intensity), measured
+    with naming("light", light.name):
+        return Light(tuple(position), tuple(light.data.color), intensity), measured
 
 
 def saved_light_distance(blender_scene) -> float | None:

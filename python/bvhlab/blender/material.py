@@ -8,16 +8,22 @@ import numpy as np
 
 from ..scene import Material
 from .compat import shader_tree
-from .errors import ExportWarning
+from .errors import ExportWarning, naming
 
 
 def gather_material(material) -> Material:
+    """_gather's Whitted material, its errors naming the material (ExportError)."""
+    if material is None:
+        return Material()
+    with naming("material", material.name):
+        return _gather(material)
+
+
+def _gather(material) -> Material:
     """Read the shader that feeds the material's output: Principled BSDF gives base colour,
     metallic → reflective, transmission weight → transparent, IOR; Diffuse, Glossy, Glass,
     Refraction and Emission map to the obvious Whitted material, Holdout to a holdout. Anything else falls back to the
     viewport display colour and metallic, with an ExportWarning. `None` (an empty slot) is matte grey."""
-    if material is None:
-        return Material()
     if shader_tree(material) is None:  # no nodes (4.x): Blender renders the viewport colour
         return _material(material.diffuse_color[:3], reflective=material.metallic)
     shader = _surface_shader(material)

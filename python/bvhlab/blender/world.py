@@ -6,10 +6,20 @@ import warnings
 
 from ..scene import DEFAULT_SKY
 from .compat import shader_tree
-from .errors import ExportWarning
+from ..scene_checks import FIELD_CHECKS
+from .errors import ExportWarning, naming
 
 
 def gather_sky(scene, depsgraph=None) -> tuple[float, float, float]:
+    """_sky's colour, checked as a Scene checks its sky, its errors naming the world (ExportError)."""
+    sky = _sky(scene, depsgraph)
+    if scene.world is not None:
+        with naming("world", scene.world.name):
+            FIELD_CHECKS["sky"](None, sky)
+    return sky
+
+
+def _sky(scene, depsgraph=None) -> tuple[float, float, float]:
     """Colour × strength of the world's Background node when it is a plain colour; the world's
     viewport colour when the background is a texture (with an ExportWarning); bvhlab's default
     sky when the scene has no world. With `depsgraph`, the evaluated world's (its animation at the
