@@ -5,8 +5,8 @@ from __future__ import annotations
 import warnings
 
 from ..scene import DEFAULT_SKY
-from .compat import shader_tree
 from ..scene_checks import FIELD_CHECKS
+from .compat import shader_tree
 from .errors import ExportWarning, naming
 
 
