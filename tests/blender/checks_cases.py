@@ -150,6 +150,31 @@ def check_bad_input_errors() -> None:
     _expect_error("no camera")
 
 
+def check_a_sheared_camera_is_warned_of() -> None:
+    """A camera under an unevenly scaled parent, turned against its axes, has slanted axes, which
+    Blender and Cycles render through and bvhlab does not (square axes along its view and up): an
+    ExportWarning says so (the audit: the frame was ~9 px off on 120 × 90, silently). A parent
+    scaled evenly, or unevenly along the camera's own axes, shears nothing: no warning."""
+    scene = harness.boxes_scene()
+    rig = bpy.data.objects.new("Rig", None)
+    scene.collection.objects.link(rig)
+    scene.camera.parent = rig
+    scene.camera.rotation_euler = (math.radians(80), 0.0, math.radians(25))
+
+    def sheared(scale, rotation) -> bool:
+        rig.scale, scene.camera.rotation_euler = scale, rotation
+        bpy.context.view_layer.update()
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            export_scene(bpy.context)
+        return any("is sheared" in str(w.message) for w in caught)
+
+    turned = (math.radians(80), 0.0, math.radians(25))
+    assert sheared((1.0, 2.5, 1.0), turned)
+    assert not sheared((2.0, 2.0, 2.0), turned)
+    assert not sheared((1.0, 2.5, 1.0), (0.0, 0.0, 0.0))  # scaled along the camera's own axes
+
+
 def check_a_bad_light_material_or_world_is_named() -> None:
     """A light, material or world whose values a scene refuses (not a number here) is named in the
     ExportError, as a mesh's bad vertex names its object (the audit: "light position must be

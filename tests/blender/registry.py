@@ -102,6 +102,7 @@ def _export() -> Iterator[Check]:
         cases.check_bad_input_errors,
         cases.check_loose_vertices_far_or_not_a_number_are_not_refused,
         cases.check_a_bad_light_material_or_world_is_named,
+        cases.check_a_sheared_camera_is_warned_of,
         cases.check_missing_camera_and_light_substituted,
         cases.check_linked_duplicates_of_a_mesh_in_edit_mode,
         cases.check_a_scene_or_view_layer_not_yet_evaluated,

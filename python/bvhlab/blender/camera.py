@@ -145,7 +145,21 @@ def _placement(name: str, matrix: np.ndarray):
             f"or scale that is not a number)"
         )
     mirrored = bool(np.linalg.det(matrix[:3, :3]) < 0)
+    axes = matrix[:3, :3] / np.linalg.norm(matrix[:3, :3], axis=0).clip(1e-300)
+    if np.abs(np.triu(axes.T @ axes, 1)).max() > _SHEARED:
+        warnings.warn(
+            f"camera '{name}' is sheared (a parent scales it unevenly along axes it is turned "
+            "against): Blender renders through its slanted axes, bvhlab through square ones along "
+            "its view and up axes, so the image is framed differently",
+            ExportWarning,
+            stacklevel=3,
+        )
     return matrix[:3, 3], -matrix[:3, 2] / z_length, matrix[:3, 1] / y_length, mirrored
+
+
+#: The largest |cosine| between two of a camera's axes (normalised) taken as square: a float32
+#: matrix's rounding stays far below it, a shear that moves the image by a pixel far above.
+_SHEARED = 1e-4
 
 
 def render_size(render) -> tuple[int, int]:
