@@ -4,4 +4,5 @@
 #define OUT(T) out T
 #define LOCAL_CONST const
 #define INLINE
+#define PRECISE precise
 vec3 xyz(vec4 v) { return v.xyz; }

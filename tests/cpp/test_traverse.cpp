@@ -131,6 +131,47 @@ std::vector<Hit> all_traversals(const Bvh& bvh, const WideBvh& wide, const Ray& 
             intersect_wide(wide, bvh, ray)};
 }
 
+TEST(Traverse, RaysFarFromATinyTriangleNeverHitIt) {
+    // A triangle 1.8e-5 across at the origin beside a large one, rays from 100-500 units away (a
+    // helper's audit): relative to such an origin the tiny triangle's vertices are nearly one
+    // vector, and two of its edge functions' products rounded to equal floats, two zeros that passed
+    // the sign test: 1,070 of 200,000 rays "hit" it at points hundreds of units from it, on every
+    // traversal. Zero edge functions are made again exactly now (geometry.glsl exact_edge).
+    const float s = 1.7864242e-05f;
+    test::Scene scene;
+    scene.add_triangle({s, 0, 0}, {s, s, 0}, {s, 0, s});
+    scene.add_triangle({1000, 1000, 1000}, {1000, 1000, 0}, {0, 0, 1000});
+    Bvh bvh = build_bvh(scene.view(), BuildConfig{});
+    std::vector<Ray> rays{{{284.92874f, 222.90292f, 260.5462f}, {1.1115526f, -1.2859659f, 1.163311f}}};
+    std::mt19937 rng(0);
+    std::uniform_real_distribution<float> at(100.0f, 500.0f);
+    std::normal_distribution<float> g(0.0f, 1.0f);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    while (rays.size() < 20000) {
+        const Vec3 o{at(rng), at(rng), at(rng)};
+        if (rays.size() % 2) {  // at random, as the audit's
+            rays.push_back({o, {g(rng), g(rng), g(rng)}});
+        } else {  // toward a point of the large triangle (hits, for expect_same_hits to compare)
+            const float a = unit(rng), b = unit(rng) * (1.0f - a);
+            const Vec3 p = Vec3{1000, 1000, 1000} * (1.0f - a - b) + Vec3{1000, 1000, 0} * a + Vec3{0, 0, 1000} * b;
+            rays.push_back({o, p - o});
+        }
+    }
+    int near_tiny = 0;
+    for (const Ray& ray : rays) {
+        const Hit hit = brute_force(bvh, ray);
+        if (hit.ref != 0) continue;  // the tiny triangle is primitive 0
+        // where it is hit, in double: within a hair of it (0.01 units; its own size is 1.8e-5)
+        const double x = double(ray.origin.x) + double(hit.t) * ray.dir.x,
+                     y = double(ray.origin.y) + double(hit.t) * ray.dir.y,
+                     z = double(ray.origin.z) + double(hit.t) * ray.dir.z;
+        EXPECT_LT(std::sqrt((x - s) * (x - s) + y * y + z * z), 0.01) << "a hit far from the tiny triangle";
+        ++near_tiny;
+    }
+    EXPECT_LT(near_tiny, 5);  // a ray at random passes within 0.01 of it hardly ever
+    expect_same_hits(bvh, rays);
+}
+
 TEST(Traverse, RaysOnBoxFacesAndEdgesHit) {
     // The unit square as two triangles: rays straight down on its edges, x = 1 and y = 1 included,
     // lie in the root box's faces (a zero direction component on a slab plane) and must hit.

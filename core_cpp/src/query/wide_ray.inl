@@ -120,6 +120,29 @@ bool closer(float t, std::uint32_t ref, const Hit& hit) {
     return t < hit.t || (t == hit.t && hit.ref != kNoHit && ref < hit.ref);
 }
 
+/// geometry.glsl exact_edge: a·b − c·d exactly, rounded once, by the products' rounding errors
+/// (__builtin_fmaf, not std::fma: an inline function of a header compiled here for AVX2 could be
+/// the copy the linker keeps for the portable path, wide_traverse.inl's note).
+inline float exact_edge(float a, float b, float c, float d) {
+    const float p = a * b, q = c * d;
+    return __builtin_fmaf(a, b, -p) - __builtin_fmaf(c, d, -q);
+}
+
+/// The edge functions u, v, w of the lanes in `lanes` that are 0 made again exactly (exact_edge).
+[[gnu::noinline]] inline void redo_zero_edges(int lanes, L4 ax, L4 ay, L4 bx, L4 by, L4 cx, L4 cy, L4& u, L4& v,
+                                              L4& w) {
+    alignas(16) float a_x[4], a_y[4], b_x[4], b_y[4], c_x[4], c_y[4], us[4], vs[4], ws[4];
+    ax.store(a_x), ay.store(a_y), bx.store(b_x), by.store(b_y), cx.store(c_x), cy.store(c_y);
+    u.store(us), v.store(vs), w.store(ws);
+    for (; lanes; lanes &= lanes - 1) {
+        const int l = __builtin_ctz(unsigned(lanes));
+        if (us[l] == 0.0f) us[l] = exact_edge(c_x[l], b_y[l], c_y[l], b_x[l]);
+        if (vs[l] == 0.0f) vs[l] = exact_edge(a_x[l], c_y[l], a_y[l], c_x[l]);
+        if (ws[l] == 0.0f) ws[l] = exact_edge(b_x[l], a_y[l], b_y[l], a_x[l]);
+    }
+    u = L4::load(us), v = L4::load(vs), w = L4::load(ws);
+}
+
 /// The watertight test (geometry.glsl hit_triangle) on four triangles at once, its operations in
 /// its order lane by lane; the lanes that pass become hits in lane order under the closest-hit rule.
 /// kAnyHit: the first lane that passes is the hit (its t and ref only; the query wants no more).
@@ -139,13 +162,24 @@ template <bool kAnyHit>
     const L4 ax = (L4::load(at(a, kx)) - ox) - sx * az, ay = (L4::load(at(a, ky)) - oy) - sy * az;
     const L4 bx = (L4::load(at(b, kx)) - ox) - sx * bz, by = (L4::load(at(b, ky)) - oy) - sy * bz;
     const L4 cx = (L4::load(at(c, kx)) - ox) - sx * cz, cy = (L4::load(at(c, ky)) - oy) - sy * cz;
-    const L4 u = cx * by - cy * bx, v = ax * cy - ay * cx, w = bx * ay - by * ax;
+    L4 u = cx * by - cy * bx, v = ax * cy - ay * cx, w = bx * ay - by * ax;
     const L4 zero = L4::splat(0.0f);
     // "not (some negative and some positive)"; a NaN lane has a NaN t and fails below
-    const M4 one_sign = (lower(lower(u, v), w) >= zero) | (raise(raise(u, v), w) <= zero);
-    const L4 det = (u + v) + w;
-    const M4 inside = one_sign & (det != zero);
+    M4 one_sign = (lower(lower(u, v), w) >= zero) | (raise(raise(u, v), w) <= zero);
+    L4 det = (u + v) + w;
+    M4 inside = one_sign & (det != zero);
     if (!bits(inside)) return;  // most packets a ray reaches: no division to wait for
+    // A lane that passes with an edge function of 0 (one or two of them: det ≠ 0; a product that
+    // underflows only sends a lane here for nothing): those made again exactly, as geometry.glsl
+    // sheared_triangle does (exact_edge). A lane that fails keeps failing (its other two differ in
+    // sign), and an empty lane (all three 0) is refused by det, as there.
+    if (const int zeros = bits(inside) & ~bits((u * v) * w != zero)) [[unlikely]] {
+        redo_zero_edges(zeros, ax, ay, bx, by, cx, cy, u, v, w);
+        one_sign = (lower(lower(u, v), w) >= zero) | (raise(raise(u, v), w) <= zero);
+        det = (u + v) + w;
+        inside = one_sign & (det != zero);
+        if (!bits(inside)) return;
+    }
     const L4 t = (((u * az + v * bz) + w * cz) / det) * L4::splat(q.shear[2]);
     if constexpr (kAnyHit) {
         // no hit yet (the walk ends at the first): closer() is t < hit.t, the ray's tmax
