@@ -3,6 +3,8 @@ asked for: `build_config.BuildConfig`)."""
 
 from __future__ import annotations
 
+import copy
+
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
@@ -146,7 +148,7 @@ class Bvh:
             if self._core.revision != revision:  # a refit or update on another thread meanwhile
                 return stats  # of one version or the other: not kept, it may be the old one
             cached = self._stats = (revision, stats)
-        return dict(cached[1])
+        return copy.deepcopy(cached[1])  # its lists too: an edit of one returned changed the next
 
     def node_data(self, *, threads: int = 0, epo: bool = True) -> NodeData:
         """Every node's box, depth, parent, children, primitives under it, area, SAH term and its

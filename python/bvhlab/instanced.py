@@ -4,6 +4,8 @@ core_cpp/include/bvhlab/tlas.h). `bvhlab.build` makes one for a scene with insta
 
 from __future__ import annotations
 
+import copy
+
 import threading
 from collections.abc import Callable
 
@@ -102,7 +104,7 @@ class InstancedBvh:
         if made is None or made[0] != key:
             lo, hi = core.world_boxes()
             made = self._stats = (key, instanced_stats(core.stats(), list(meshes), mesh_of, lo, hi))
-        return dict(made[1])
+        return copy.deepcopy(made[1])  # its lists too: an edit of one returned changed the next
 
     @property
     def tlas(self) -> Bvh:
@@ -327,7 +329,11 @@ def _make_tlas(meshes, mesh_of, transforms, threads: int) -> tuple:
     core = [m._core for m in meshes]
     config = _core.default_tlas_config()
     config.threads = threads  # the docstring's promise (it was dropped: a TLAS was built on every thread)
-    return _core.build_two_level(core, mesh_of.view(np.uint32), transforms, config), mesh_of, transforms
+    tlas = _core.build_two_level(core, mesh_of.view(np.uint32), transforms, config)
+    # handed out as they are (InstancedBvh.instances), so read-only: an edit in place moved an
+    # instance the TLAS does not move (a helper's audit: a render then took a scene that is neither)
+    mesh_of.setflags(write=False), transforms.setflags(write=False)
+    return tlas, mesh_of, transforms
 
 
 def build_instanced(scene, config: BuildConfig, progress: Callable[[float], bool | None] | None) -> InstancedBvh:

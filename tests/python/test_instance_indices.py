@@ -40,6 +40,31 @@ def test_place_keeps_the_checked_indices():
     assert tree.stats["instances"] == 3
 
 
+def test_the_placement_handed_out_cannot_be_edited_in_place():
+    """`instances` gives the tree's own arrays, read-only (a helper's audit: an edit in place moved
+    an instance the TLAS did not move, and a render then took a scene matching neither; a mesh
+    index edited to 7 made `stats` raise IndexError). Placing is `place`'s."""
+    tris = procedural.random_triangles(20, seed=1)
+    tree = bvhlab.build(bvhlab.Scene(triangles=tris, instance_mesh=np.zeros(2, np.int32), instance_transforms=_eye(2)))
+    mesh_of, transforms = tree.instances
+    with pytest.raises(ValueError, match="read-only"):
+        transforms[1, :, 3] = (50.0, 0.0, 0.0)
+    with pytest.raises(ValueError, match="read-only"):
+        mesh_of[0] = 7
+    assert tree.stats["instances"] == 2
+
+
+def test_stats_handed_out_are_the_callers_own():
+    """Each `stats` is a copy to its lists (an edit of one returned dict's list changed the next)."""
+    tris = procedural.random_triangles(200, seed=1)
+    flat = bvhlab.build(tris)
+    flat.stats["nodes_per_depth"][0] = 12345
+    assert flat.stats["nodes_per_depth"][0] == 1
+    tree = bvhlab.build(bvhlab.Scene(triangles=tris, instance_mesh=np.zeros(2, np.int32), instance_transforms=_eye(2)))
+    tree.stats["mesh_primitives"].append(999)
+    assert tree.stats["mesh_primitives"] == [200]
+
+
 def test_a_material_index_beyond_int32_is_refused_not_wrapped():
     tris = procedural.random_triangles(4, seed=1)
     scene = bvhlab.Scene(
