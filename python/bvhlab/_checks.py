@@ -88,7 +88,10 @@ def real(name: str, value, lo: float = -math.inf, hi: float = math.inf) -> float
         value = value.item()
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise TypeError(f"{name} must be a number, got {type(value).__name__}")
-    value = float(value)
+    try:
+        value = float(value)
+    except OverflowError:  # an integer beyond float's range: ±inf, as a float literal past it reads
+        value = math.inf if value > 0 else -math.inf
     if math.isnan(value):
         raise ValueError(f"{name} must be a number, got NaN")
     if not lo <= value <= hi:

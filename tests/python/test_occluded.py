@@ -138,6 +138,17 @@ def test_a_tmax_of_no_dimensions_is_a_number(tree_and_rays):
         bvh.occluded(o, d, np.ma.masked_array(2.0, mask=True))
 
 
+def test_an_integer_beyond_float_is_infinite(tree_and_rays):
+    """10**400 is read as 1e400 is, infinity (it raised OverflowError: int too large to convert to
+    float, naming no argument: a helper's audit); -10**400 is refused naming tmax."""
+    bvh, o, d = tree_and_rays
+    np.testing.assert_array_equal(bvh.occluded(o, d, 10**400), bvh.occluded(o, d, np.inf))
+    np.testing.assert_array_equal(bvh.intersect(o, d, tmax=10**400)["t"], bvh.intersect(o, d)["t"])
+    with pytest.raises(ValueError, match="tmax must be at least 0, got -inf"):
+        bvh.occluded(o, d, -(10**400))
+    assert np.isinf(bvh.intersect(o, d, tmin=10**400)["t"]).all()  # as tmin=inf: nothing after it
+
+
 def test_bad_rays_as_for_intersect(tree_and_rays):
     bvh, o, d = tree_and_rays
     with pytest.raises(ValueError, match="differ in length"):
