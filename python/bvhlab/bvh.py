@@ -4,7 +4,6 @@ asked for: `build_config.BuildConfig`)."""
 from __future__ import annotations
 
 import copy
-
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 

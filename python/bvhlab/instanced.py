@@ -5,7 +5,6 @@ core_cpp/include/bvhlab/tlas.h). `bvhlab.build` makes one for a scene with insta
 from __future__ import annotations
 
 import copy
-
 import threading
 from collections.abc import Callable
 
