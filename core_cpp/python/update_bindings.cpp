@@ -25,13 +25,23 @@ nb::dict update(PyBvh& self, const Triangles& tris, const std::optional<Spheres>
                                     " spheres: pass them (or an empty (0, 4) array to remove them)");
     const GeometryView g = view_of(tris, spheres);
     UpdateStats stats;
-    {
+    // Ctrl-C stops a rebuild (its progress) and, wherever it came, keeps the tree as it was: it is
+    // looked for once more before the new version is published (it was raised after the update,
+    // the tree changed and its stats lost: a helper's audit)
+    PyStopCheck stop;
+    UpdateConfig cfg = config;
+    cfg.progress = [&stop](double done) { return !stop(done); };
+    try {
         const LongRelease release;
         self.replace([&](const TreeVersion& old) {
             auto built = std::make_shared<NodeCostArray>();
-            Bvh tree = update_bvh(old.bvh, *old.built_costs(), g, config, *built, &stats);
+            Bvh tree = update_bvh(old.bvh, *old.built_costs(), g, cfg, *built, &stats);
+            if (stop(1.0)) throw BuildCancelled();
             return std::pair{std::move(tree), CostsPtr(std::move(built))};
         });
+    } catch (const BuildCancelled&) {
+        stop.rethrow();  // the KeyboardInterrupt, as itself
+        throw;
     }
     nb::dict d;
     d["policy"] = to_string(stats.policy), d["ms"] = stats.ms, d["sah_cost"] = stats.sah_cost;

@@ -230,3 +230,40 @@ def test_restructuring_resumes_after_the_geometry_collapsed(knot, policy, collap
         stats = squashed.update(frame(k), policy=policy, measure_fresh=True)
     assert stats.sah_cost <= 1.3 * stats.fresh_sah_cost, (stats.policy, stats.sah_cost, stats.fresh_sah_cost)
     _expect_valid_with_fresh_hits(grown, frame(10), seed=5)
+
+
+def test_ctrl_c_during_an_update_keeps_the_tree_as_it_was():
+    """Ctrl-C while an update rebuilds: KeyboardInterrupt, and the tree and its revision are as they
+    were (it was raised after the update had been published: the tree changed, its stats lost; a
+    helper's audit). A Ctrl-C that comes once the update has returned is the caller's, after it."""
+    import _thread
+    import sys
+    import threading
+    import time
+    import traceback
+
+    for count in (1_000_000, 4_000_000):  # larger where the update was done before the Ctrl-C
+        tris = procedural.random_triangles(count, seed=3)
+        moved = np.ascontiguousarray(tris[::-1])
+        tree = bvhlab.build(tris)
+        origins, dirs = procedural.random_rays(tris, 2000, seed=4)
+        before = tree.intersect(origins, dirs)["t"]
+        started = threading.Event()
+
+        def press():
+            started.wait()
+            time.sleep(0.01)
+            _thread.interrupt_main()
+
+        threading.Thread(target=press).start()
+        try:
+            started.set()
+            tree.update(moved, policy="rebuild")
+            time.sleep(5)  # the Ctrl-C lands here where the update was quicker
+        except KeyboardInterrupt:
+            if traceback.extract_tb(sys.exc_info()[2])[-1].name != "update":
+                continue  # it came after the update: try a larger one
+            assert tree.revision == 0
+            np.testing.assert_array_equal(tree.intersect(origins, dirs)["t"], before)
+            return
+    pytest.fail("no Ctrl-C landed inside an update")

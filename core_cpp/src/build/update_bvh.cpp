@@ -214,8 +214,10 @@ Bvh update_bvh(const Bvh& old, const NodeCostArray& built, const GeometryView& g
     UpdateStats stats;
     stats.policy = config.policy;
     Bvh tree;
+    BuildConfig whole = old.config;  // a whole build's config: the tree's own, with the update's progress
+    whole.progress = config.progress;
     auto rebuild = [&] {
-        tree = build_bvh(g, old.config);
+        tree = build_bvh(g, whole);
         const NodeCosts fresh = node_costs(tree);
         built_out = fresh.cost;
         stats.sah_cost = tree.empty() ? 0.0 : fresh.root_cost;
@@ -286,7 +288,7 @@ Bvh update_bvh(const Bvh& old, const NodeCostArray& built, const GeometryView& g
     built_out[tree.nodes.size() + 1] = float(ref.primitives);
     stats.ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     if (config.measure_fresh) {  // not part of the update's time
-        const Bvh fresh = stats.policy == UpdatePolicy::Rebuild ? Bvh{} : build_bvh(g, old.config);
+        const Bvh fresh = stats.policy == UpdatePolicy::Rebuild ? Bvh{} : build_bvh(g, whole);
         stats.fresh_sah_cost = stats.policy == UpdatePolicy::Rebuild ? stats.sah_cost : sah_cost(fresh);
     }
     if (stats_out) *stats_out = stats;
