@@ -250,7 +250,7 @@ def test_ctrl_c_during_an_update_keeps_the_tree_as_it_was():
         before = tree.intersect(origins, dirs)["t"]
         started = threading.Event()
 
-        def press():
+        def press(started=started):
             started.wait()
             time.sleep(0.01)
             _thread.interrupt_main()
