@@ -144,13 +144,29 @@ struct ShearedTriangle {
     float u, v, w;
 };
 
+/// a·b − fl(a·b), the rounding error of a product, exactly (no overflow or underflow inside), by
+/// Dekker's product: Veltkamp's split of each factor into halves of 12 bits, whose products are
+/// exact (Dekker 1971). Products, sums and differences alone, none contracted (PRECISE): a GPU may
+/// split an fma into a multiply and an add (SPIR-V gives Fma no NoContraction), which made it 0.
+INLINE float product_error(float a, float b, float p) {
+    PRECISE float ca = 4097.0f * a;
+    PRECISE float ah = ca - (ca - a);
+    PRECISE float al = a - ah;
+    PRECISE float cb = 4097.0f * b;
+    PRECISE float bh = cb - (cb - b);
+    PRECISE float bl = b - bh;
+    PRECISE float e = ((ah * bh - p) + (ah * bl + al * bh)) + al * bl;
+    return e;
+}
+
 /// a·b − c·d exactly, rounded once to float, where the float a·b − c·d is 0 (its two products
-/// rounded to one float): the difference of the products' rounding errors, each exact by fma (Woop
-/// et al. redo such an edge function in double, whose products of floats are exact too).
+/// rounded to one float): the difference of the products' rounding errors (Woop et al. redo such an
+/// edge function in double, whose products of floats are exact too). A shared edge's is the other
+/// triangle's exactly negated (the same products, their errors by symmetric sums).
 INLINE float exact_edge(float a, float b, float c, float d) {
     PRECISE float p = a * b;
     PRECISE float q = c * d;
-    PRECISE float exact = fma(a, b, -p) - fma(c, d, -q);
+    PRECISE float exact = product_error(a, b, p) - product_error(c, d, q);
     return exact;
 }
 
@@ -168,13 +184,12 @@ INLINE ShearedTriangle sheared_triangle(vec3 p0, vec3 p1, vec3 p2, TraceRay r) {
     s.u = s.cx * s.by - s.cy * s.bx;
     s.v = s.ax * s.cy - s.ay * s.cx;
     s.w = s.bx * s.ay - s.by * s.ax;
-    // one or two of them 0: made again exactly (all three 0, a triangle that is one point to the
-    // ray's float arithmetic, stays so: det = 0 refuses it, as an empty packet lane of the wide walks)
-    if ((s.u == 0.0f || s.v == 0.0f || s.w == 0.0f) && (s.u != 0.0f || s.v != 0.0f || s.w != 0.0f)) {
-        if (s.u == 0.0f) s.u = exact_edge(s.cx, s.by, s.cy, s.bx);
-        if (s.v == 0.0f) s.v = exact_edge(s.ax, s.cy, s.ay, s.cx);
-        if (s.w == 0.0f) s.w = exact_edge(s.bx, s.ay, s.by, s.ax);
-    }
+    // a zero made again exactly, all three too: a sliver whose third vertex is half an ulp off its
+    // long edge rounds all three to 0 where they are not (the review: refused, with its neighbours'
+    // shared edges now exact, a ray inside it fell through). A triangle stored as one point stays 0.
+    if (s.u == 0.0f) s.u = exact_edge(s.cx, s.by, s.cy, s.bx);
+    if (s.v == 0.0f) s.v = exact_edge(s.ax, s.cy, s.ay, s.cx);
+    if (s.w == 0.0f) s.w = exact_edge(s.bx, s.ay, s.by, s.ax);
     return s;
 }
 

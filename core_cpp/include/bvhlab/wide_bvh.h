@@ -34,8 +34,8 @@ static_assert(sizeof(WideNode) == 256);
 /// Four primitives of one kind, structure of arrays (192 bytes, three cache lines):
 /// v[vertex][axis][lane]. Triangles: the three vertices, as PackedPrim has them (the watertight
 /// test reads vertices, so the kernel loads each axis by the ray's axis order). Spheres: centre in
-/// v[0], radius in v[1][0]. An empty lane has ref = kNoHit and all vertices 0 (a triangle that is
-/// one point is never hit). `slot` is each lane's position in Bvh::prims (finish_hit), in the
+/// v[0], radius in v[1][0]. An empty lane has ref = kNoHit and NaN vertices (the triangle test's
+/// sign test fails on NaN, before it would make a point's zero edge functions again). `slot` is each lane's position in Bvh::prims (finish_hit), in the
 /// packet because a packet takes three lines whether it holds it or not.
 struct alignas(64) PrimPacket {
     float v[3][3][4];

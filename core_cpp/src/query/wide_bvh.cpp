@@ -57,7 +57,13 @@ std::uint32_t pack_leaf(const Bvh& bvh, std::uint32_t first, std::uint32_t n, Wi
         PrimPacket q{};
         int lane = 0;
         auto flush = [&] {
-            for (int l = lane; l < 4; ++l) q.ref[l] = kNoHit, q.slot[l] = kNoHit;
+            // an empty lane: NaN vertices, which fail the triangle test's sign test (wide_ray.inl)
+            // before its zero edge functions would be made again exactly, as a point's are
+            for (int l = lane; l < 4; ++l) {
+                q.ref[l] = kNoHit, q.slot[l] = kNoHit;
+                for (auto& vertex : q.v)
+                    for (auto& axis : vertex) axis[l] = std::numeric_limits<float>::quiet_NaN();
+            }
             q.more = 1;
             const std::size_t at = wide.lines.size();
             wide.lines.resize(at + kPacketLines);

@@ -120,12 +120,17 @@ bool closer(float t, std::uint32_t ref, const Hit& hit) {
     return t < hit.t || (t == hit.t && hit.ref != kNoHit && ref < hit.ref);
 }
 
-/// geometry.glsl exact_edge: a·b − c·d exactly, rounded once, by the products' rounding errors
-/// (__builtin_fmaf, not std::fma: an inline function of a header compiled here for AVX2 could be
-/// the copy the linker keeps for the portable path, wide_traverse.inl's note).
+/// geometry.glsl product_error and exact_edge, the same operations (plain functions of this file:
+/// an inline function of a header compiled here for AVX2 could be the copy the linker keeps for
+/// the portable path, wide_traverse.inl's note).
+inline float product_error(float a, float b, float p) {
+    const float ca = 4097.0f * a, ah = ca - (ca - a), al = a - ah;
+    const float cb = 4097.0f * b, bh = cb - (cb - b), bl = b - bh;
+    return ((ah * bh - p) + (ah * bl + al * bh)) + al * bl;
+}
 inline float exact_edge(float a, float b, float c, float d) {
     const float p = a * b, q = c * d;
-    return __builtin_fmaf(a, b, -p) - __builtin_fmaf(c, d, -q);
+    return product_error(a, b, p) - product_error(c, d, q);
 }
 
 /// The edge functions u, v, w of the lanes in `lanes` that are 0 made again exactly (exact_edge).
@@ -164,22 +169,22 @@ template <bool kAnyHit>
     const L4 cx = (L4::load(at(c, kx)) - ox) - sx * cz, cy = (L4::load(at(c, ky)) - oy) - sy * cz;
     L4 u = cx * by - cy * bx, v = ax * cy - ay * cx, w = bx * ay - by * ax;
     const L4 zero = L4::splat(0.0f);
-    // "not (some negative and some positive)"; a NaN lane has a NaN t and fails below
-    M4 one_sign = (lower(lower(u, v), w) >= zero) | (raise(raise(u, v), w) <= zero);
-    L4 det = (u + v) + w;
-    M4 inside = one_sign & (det != zero);
-    if (!bits(inside)) return;  // most packets a ray reaches: no division to wait for
-    // A lane that passes with an edge function of 0 (one or two of them: det ≠ 0; a product that
-    // underflows only sends a lane here for nothing): those made again exactly, as geometry.glsl
-    // sheared_triangle does (exact_edge). A lane that fails keeps failing (its other two differ in
-    // sign), and an empty lane (all three 0) is refused by det, as there.
-    if (const int zeros = bits(inside) & ~bits((u * v) * w != zero)) [[unlikely]] {
+    // "not (some negative and some positive)"; a NaN lane (an empty one: make_wide) fails here
+    L4 low = lower(lower(u, v), w), high = raise(raise(u, v), w);
+    M4 one_sign = (low >= zero) | (high <= zero);
+    if (!bits(one_sign)) return;  // most packets a ray reaches: nothing more to work out
+    // A lane with an edge function of 0 (one, two or all three), which then passes the sign test
+    // (its least or greatest is that 0): those made again exactly, as geometry.glsl
+    // sheared_triangle does (exact_edge). A lane that fails keeps failing (its other two differ
+    // in sign); a NaN lane has no 0 to find.
+    if (const int zeros = 15 & ~bits((low != zero) & (high != zero))) [[unlikely]] {
         redo_zero_edges(zeros, ax, ay, bx, by, cx, cy, u, v, w);
-        one_sign = (lower(lower(u, v), w) >= zero) | (raise(raise(u, v), w) <= zero);
-        det = (u + v) + w;
-        inside = one_sign & (det != zero);
-        if (!bits(inside)) return;
+        low = lower(lower(u, v), w), high = raise(raise(u, v), w);
+        one_sign = (low >= zero) | (high <= zero);
     }
+    const L4 det = (u + v) + w;
+    const M4 inside = one_sign & (det != zero);
+    if (!bits(inside)) return;  // no division to wait for
     const L4 t = (((u * az + v * bz) + w * cz) / det) * L4::splat(q.shear[2]);
     if constexpr (kAnyHit) {
         // no hit yet (the walk ends at the first): closer() is t < hit.t, the ray's tmax
