@@ -91,7 +91,6 @@ inline vec3 clamp(vec3 x, float lo, float hi) { return {clamp(x.x, lo, hi), clam
 inline float abs(float x) { return std::fabs(x); }
 inline vec3 abs(vec3 v) { return {std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)}; }
 inline float sqrt(float x) { return std::sqrt(x); }
-inline float fma(float a, float b, float c) { return std::fma(a, b, c); }  // one rounding, as GLSL's precise fma
 inline float pow(float x, float y) { return std::pow(x, y); }
 inline float floor(float x) { return std::floor(x); }
 inline float fract(float x) { return x - std::floor(x); }
