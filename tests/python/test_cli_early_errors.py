@@ -224,6 +224,8 @@ def test_render_counter_checks_the_files_beside_out_before_any_work(tmp_path, si
     [
         (["render", "gen:five_spheres", "--counter", "box_tests", "--film-transparent", "--out", "{d}/r.png"],
          "--film-transparent is for the shaded image"),
+        (["render", "gen:five_spheres", "--counter", "box_tests", "--bvh-depth", "0:3", "--out", "{d}/r.png"],
+         "--bvh-depth draws boxes over the shaded image"),
         (["compare", "gen:five_spheres", "--counter", "prim_hits", "--out", "{d}/c"],
          "--counter is the counter of --counter-diff A,B"),
         (["animate", "{blend}", "--size", "7", "--out", "{d}/a"], "--size sizes the generated animations"),
@@ -231,8 +233,8 @@ def test_render_counter_checks_the_files_beside_out_before_any_work(tmp_path, si
     ],
 )  # fmt: skip
 def test_options_that_would_be_ignored_are_refused(tmp_path, args, message):
-    """The probe's cases, each accepted and ignored: a counter's image with --film-transparent came
-    out byte for byte the same, compare --counter without --counter-diff ran the whole comparison,
+    """The probes' cases, each accepted and ignored: a counter's image with --film-transparent or
+    --bvh-depth came out byte for byte the same, compare --counter without --counter-diff ran the whole comparison,
     animate --size on a .blend was written into animate.json as if used."""
     from bvhlab.library import bundled_dir
 
@@ -250,3 +252,19 @@ def test_sweep_refuses_a_fifo_spec_without_hanging(tmp_path):
     assert code == 2 and last_line(err) == (
         f"bvhlab sweep: error: {fifo} is not a regular file (a FIFO, device or socket), not a sweep spec"
     )
+
+
+@pytest.mark.parametrize("closed", [1, 2])
+def test_a_closed_stdout_or_stderr_loses_nothing(tmp_path, closed):
+    """Started with stdout or stderr closed (`>&-`, `2>&-`, as cron and daemons run), Python has no
+    sys.stdout or sys.stderr: every command failed with 1, a traceback or nothing, and wrote nothing
+    (a helper's audit). It does its work now; what it would print goes nowhere."""
+    out = tmp_path / "stats.json"
+    done = subprocess.run(
+        [sys.executable, "-m", "bvhlab", "build", "gen:five_spheres", "--json", str(out)],
+        preexec_fn=lambda: os.close(closed),
+        stdout=subprocess.DEVNULL if closed == 2 else None,
+        stderr=subprocess.DEVNULL if closed == 1 else None,
+        timeout=120,
+    )
+    assert done.returncode == 0 and out.stat().st_size > 0

@@ -54,6 +54,9 @@ def main(argv=None) -> int:
     line `bvhlab CMD: error: ...` and returns 2; Ctrl-C prints `bvhlab CMD: interrupted` and
     returns 130 (the shell's code for SIGINT); neither shows a traceback."""
     argv = sys.argv[1:] if argv is None else list(argv)
+    for name in ("stdout", "stderr"):  # closed (`2>&-`): None in Python, which every print then failed on
+        if getattr(sys, name) is None:
+            setattr(sys, name, open(os.devnull, "w"))  # noqa: SIM115 (the process's own, as sys.stdout is)
     try:  # its checks of paths may fail too ("File name too long") or be interrupted
         args = parser().parse_args(options.join_dash_values(argv))
     except KeyboardInterrupt:

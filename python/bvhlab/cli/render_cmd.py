@@ -136,6 +136,8 @@ def _counter(args) -> str | None:
         raise ValueError("--range needs --counter")
     if args.film_transparent and (args.counter or args.heatmap):  # a counter's image has no sky to clear
         raise ValueError("--film-transparent is for the shaded image; a counter's image has no transparency")
+    if args.bvh_depth and (args.counter or args.heatmap):  # the counter's image draws no boxes
+        raise ValueError("--bvh-depth draws boxes over the shaded image; a counter's image has none")
     return "box_tests" if args.heatmap else args.counter
 
 
