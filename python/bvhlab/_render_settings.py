@@ -32,20 +32,26 @@ def render_settings(
     return s
 
 
+def default_camera(scene: Scene) -> Camera:
+    """bvhlab.defaults' fallback camera, framing the scene; ValueError saying why where it cannot be
+    placed (a scene reaching near ±MAX_COORDINATE, which Scene leaves without one)."""
+    from .defaults import camera_placement
+
+    position, target, up, fov = camera_placement(scene.world_bounds())
+    try:
+        return Camera(position, target, up, fov)
+    except ValueError as e:
+        raise ValueError(
+            f"the default camera, which frames the whole scene, cannot be placed ({e}); "
+            "give one: the scene's camera, or the render's camera=bvhlab.Camera(position, look_at)"
+        ) from None
+
+
 def _camera(scene: Scene, camera) -> Camera | View:
     """The Camera or View a render looks through: `camera`, else the scene's, else one framing it."""
     camera = scene.camera if camera is None else camera
     if camera is None:  # nothing to frame: bvhlab.defaults' fallback camera
-        from .defaults import camera_placement
-
-        position, target, up, fov = camera_placement(scene.world_bounds())
-        try:
-            camera = Camera(position, target, up, fov)
-        except ValueError as e:  # a scene reaching near ±MAX_COORDINATE: Scene left it without one
-            raise ValueError(
-                f"the default camera, which frames the whole scene, cannot be placed ({e}); "
-                "give one: camera=bvhlab.Camera(position, look_at)"
-            ) from None
+        camera = default_camera(scene)
     if not isinstance(camera, (Camera, View)):
         raise TypeError(f"camera must be a bvhlab.Camera or bvhlab.View, got {type(camera).__name__}")
     return camera

@@ -37,7 +37,7 @@ def test_an_instance_moved_near_the_range_limit_is_made_and_takes_rays():
 def test_a_render_without_a_camera_asks_for_one_and_renders_with_one():
     scene = bvhlab.Scene(triangles=_wide_triangle())
     bvh = bvhlab.build(scene)
-    with pytest.raises(ValueError, match="default camera.*give one: camera=bvhlab.Camera"):
+    with pytest.raises(ValueError, match="default camera.*give one: the scene's camera, or the render's camera="):
         bvhlab.render(scene, bvh, 4, 3, backend="cpu")
     camera = bvhlab.Camera((0.0, -1e11, 1e11), (0.0, 0.0, 0.0))
     image, _ = bvhlab.render(scene, bvh, 4, 3, backend="cpu", camera=camera)
@@ -113,3 +113,22 @@ def test_the_default_light_depends_on_the_view_not_on_the_lengths_of_its_vectors
     view = bvhlab.View((1e8, 1e8 - 20.0, 1e8), (0.0, 1.0, 0.0))
     image, _ = bvhlab.render(far, bvhlab.build(far), 8, 6, backend="cpu", camera=view)
     assert np.isfinite(image).all()
+
+
+def test_a_snapshot_without_a_camera_says_why(tmp_path):
+    """The snapshot gave "snapshot failed: AttributeError: 'NoneType' object has no attribute
+    'position'" from its child process (a helper's audit); the render's reason now, before any work."""
+    import subprocess
+    import sys
+
+    path = tmp_path / "far.npz"
+    bvhlab.Scene(triangles=_wide_triangle()).save(path)
+    done = subprocess.run(
+        [sys.executable, "-m", "bvhlab", "snapshot", str(path), "--out", str(tmp_path / "s.png")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+    assert "the default camera, which frames the whole scene, cannot be placed" in done.stderr
+    assert not (tmp_path / "s.png").exists()
