@@ -253,6 +253,7 @@ def bad_scene_files(tmp_path_factory):
         (["render", "{d}/good.npz", "--out", "{d}/a_folder"], "a_folder is a folder"),
         (["render", "{d}/good.npz", "--out", "{d}/a_file/r.png"], "a_file is a file, not a folder"),
         (["render", "{d}/good.npz", "--bvh-depth", "-1:2", "--out", "{d}/r.png"], "depth range -1:2: need 0 <= A <= B"),
+        (["snapshot", "{d}/good.npz", "--bvh-depth", "300:301", "--out", "{d}/s.png"], "depths go up to 255"),
         (["inspect", "{d}/good.npz", "--pixel", "-1,5"], "pixel -1,5: coordinates must be >= 0"),
         (["inspect", "{d}/good.npz", "--pixel", "3,-2"], "pixel 3,-2: coordinates must be >= 0"),
         (
