@@ -3,7 +3,10 @@ Sandén's report (median, mean, binned SAH) and more (midpoint, full-sweep SAH, 
 
 import atexit as _atexit
 
-from . import _core
+from . import (
+    _as_main,  # first: Ctrl-C while `python -m bvhlab` loads the rest
+    _core,
+)
 from ._core import BuildCancelled
 from .build_config import AXES, METHODS, BuildConfig
 from .bvh import NODE_DTYPE, Bvh, build
@@ -66,3 +69,5 @@ __all__ = [
 #: thread that took the GIL back during finalization was ended in a way that aborted the process
 #: (Blender quit while one rendered).
 _atexit.register(_core._finish_long_calls, 10.0)
+
+_as_main.loaded()
