@@ -181,9 +181,14 @@ INLINE ShearedTriangle sheared_triangle(vec3 p0, vec3 p1, vec3 p2, TraceRay r) {
     s.by = s.b.y - r.shear.y * s.b.z;
     s.cx = s.c.x - r.shear.x * s.c.z;
     s.cy = s.c.y - r.shear.y * s.c.z;
-    s.u = s.cx * s.by - s.cy * s.bx;
-    s.v = s.ax * s.cy - s.ay * s.cx;
-    s.w = s.bx * s.ay - s.by * s.ax;
+    // uncontracted (PRECISE) as the C++ paths compute them: a 0 is the same 0 there, and a shared
+    // edge's value the other triangle's negated
+    PRECISE float u = s.cx * s.by - s.cy * s.bx;
+    PRECISE float v = s.ax * s.cy - s.ay * s.cx;
+    PRECISE float w = s.bx * s.ay - s.by * s.ax;
+    s.u = u;
+    s.v = v;
+    s.w = w;
     // a zero made again exactly, all three too: a sliver whose third vertex is half an ulp off its
     // long edge rounds all three to 0 where they are not (the review: refused, with its neighbours'
     // shared edges now exact, a ray inside it fell through). A triangle stored as one point stays 0.

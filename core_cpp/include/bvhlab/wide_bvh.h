@@ -35,8 +35,9 @@ static_assert(sizeof(WideNode) == 256);
 /// v[vertex][axis][lane]. Triangles: the three vertices, as PackedPrim has them (the watertight
 /// test reads vertices, so the kernel loads each axis by the ray's axis order). Spheres: centre in
 /// v[0], radius in v[1][0]. An empty lane has ref = kNoHit and NaN vertices (the triangle test's
-/// sign test fails on NaN, before it would make a point's zero edge functions again). `slot` is each lane's position in Bvh::prims (finish_hit), in the
-/// packet because a packet takes three lines whether it holds it or not.
+/// sign test fails on NaN, before it would make a point's zero edge functions again). `slot` is
+/// each lane's position in Bvh::prims (finish_hit), in the packet because a packet takes three
+/// lines whether it holds it or not.
 struct alignas(64) PrimPacket {
     float v[3][3][4];
     std::uint32_t ref[4];
