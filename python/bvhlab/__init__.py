@@ -3,10 +3,8 @@ Sandén's report (median, mean, binned SAH) and more (midpoint, full-sweep SAH, 
 
 import atexit as _atexit
 
-from . import (
-    _as_main,  # first: Ctrl-C while `python -m bvhlab` loads the rest
-    _core,
-)
+from . import _as_main  # isort: skip  (first: Ctrl-C while `python -m bvhlab` loads the rest)
+from . import _core
 from ._core import BuildCancelled
 from .build_config import AXES, METHODS, BuildConfig
 from .bvh import NODE_DTYPE, Bvh, build
@@ -70,4 +68,4 @@ __all__ = [
 #: (Blender quit while one rendered).
 _atexit.register(_core._finish_long_calls, 10.0)
 
-_as_main.loaded()
+_as_main.loaded()  # (where an import above fails, its ImportError ends `python -m` anyway)

@@ -2,7 +2,8 @@ import sys
 
 try:
     from .cli import main
-except KeyboardInterrupt:  # Ctrl-C while numpy and the core load: no traceback either
+except KeyboardInterrupt:  # Ctrl-C while the commands load (the package itself: bvhlab._as_main)
+    print("bvhlab: interrupted", file=sys.stderr)
     sys.exit(130)
 
 sys.exit(main())

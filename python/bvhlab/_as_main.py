@@ -5,20 +5,27 @@ quietly with the command's 130, and `loaded()` gives Ctrl-C back to KeyboardInte
 
 from __future__ import annotations
 
+import os
 import signal
 import sys
 import threading
 
 
 def _interrupted(*_) -> None:
-    sys.stderr.write("bvhlab: interrupted\n")
-    raise SystemExit(130)
+    if sys.stderr is not None:  # None where it was closed (2>&-)
+        sys.stderr.write("bvhlab: interrupted\n")
+        sys.stderr.flush()
+    # not SystemExit: a C extension's import (numpy's) turns what it meets into an ImportError
+    os._exit(130)
 
 
-#: `python -m bvhlab` (sys.argv[0] is "-m" while runpy finds the module), on the main thread, with
-#: Python's own Ctrl-C handler (one ignored or set by the embedding program is left as it is).
+#: `python -m bvhlab` itself (sys.argv[0] is "-m" while runpy finds the module, and the command
+#: line names bvhlab: not its own `-m bvhlab.snapshot.worker`, nor another package's `-m` that
+#: imports it), on the main thread, with Python's own Ctrl-C handler (one ignored or set by the
+#: embedding program is left as it is).
 ACTIVE = (
     sys.argv[:1] == ["-m"]
+    and getattr(sys, "orig_argv", [])[-len(sys.argv) :][:1] == ["bvhlab"]  # where argv[0] stands
     and threading.current_thread() is threading.main_thread()
     and signal.getsignal(signal.SIGINT) is signal.default_int_handler
 )
@@ -27,6 +34,7 @@ if ACTIVE:
 
 
 def loaded() -> None:
-    """The package has loaded: Ctrl-C raises KeyboardInterrupt again (__main__'s and the commands')."""
-    if ACTIVE:
+    """The package has loaded, or failed to: Ctrl-C raises KeyboardInterrupt again (__main__'s and
+    the commands'), unless something else set its own handler meanwhile."""
+    if ACTIVE and signal.getsignal(signal.SIGINT) is _interrupted:
         signal.signal(signal.SIGINT, signal.default_int_handler)
