@@ -54,12 +54,16 @@ def integer(name: str, value, lo: float, hi: float) -> int:
     return value
 
 
+#: The deepest depth a range may name: a tree's depths are below 256.
+MAX_DEPTH = 255
+
+
 def depth_range(depth_min, depth_max) -> tuple[int, int]:
     """A range of tree depths for boxes (Bvh.boxes, InstancedBvh.tlas_boxes): depth_max None is
     every depth; a depth_min above depth_max raises ValueError, as the overlay's range does (it gave
     no boxes, silently)."""
-    lo = integer("depth_min", depth_min, 0, 255)
-    hi = 255 if depth_max is None else integer("depth_max", depth_max, 0, 255)
+    lo = integer("depth_min", depth_min, 0, MAX_DEPTH)
+    hi = MAX_DEPTH if depth_max is None else integer("depth_max", depth_max, 0, MAX_DEPTH)
     if lo > hi:
         raise ValueError(f"depth_min {lo} is greater than depth_max {hi}")
     return lo, hi

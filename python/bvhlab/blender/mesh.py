@@ -145,10 +145,9 @@ def check_world_positions(world: np.ndarray, name: str, corners: np.ndarray | No
     inside = (np.abs(world) <= MAX_COORDINATE).all(1)  # False for NaN
     if inside.all():
         return
-    first = _first_used(~inside, corners) if corners is not None else int(np.flatnonzero(~inside)[0])
-    if first is None:
+    bad = _first_used(~inside, corners) if corners is not None else int(np.flatnonzero(~inside)[0])
+    if bad is None:
         return
-    bad = first
     where = f"vertex {bad} at {tuple(float(x) for x in world[bad])}"
     if np.isnan(world[bad]).any():
         raise ExportError(

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import _core
-from .._checks import OutputPathError, output_file
+from .._checks import MAX_DEPTH, OutputPathError, output_file
 from .._progress import ProgressBar, Ticker
 from ..build_config import (
     AXES,
@@ -243,14 +243,10 @@ def depth_range(text: str) -> tuple[int, int]:
         raise argparse.ArgumentTypeError(f"depth range must look like A:B (e.g. 8:9), got '{text}'") from None
     if lo < 0 or hi < lo:
         raise argparse.ArgumentTypeError(f"depth range {text}: need 0 <= A <= B")
-    if hi > _MAX_DEPTH:  # the boxes' and the overlay's bound, checked before any work (it came after
+    if hi > MAX_DEPTH:  # the boxes' and the overlay's bound, checked before any work (it came after
         # the scene's load and build, as "depth_min must be between 0 and 255": a helper's audit)
-        raise argparse.ArgumentTypeError(f"depth range {text}: depths go up to {_MAX_DEPTH}")
+        raise argparse.ArgumentTypeError(f"depth range {text}: depths go up to {MAX_DEPTH}")
     return lo, hi
-
-
-#: The deepest depth a range may name (_checks.depth_range: a tree's depths are below 256).
-_MAX_DEPTH = 255
 
 
 def whole_number(text: str, lo: int | None = None, hi: int | None = None, unit: str = "") -> int:

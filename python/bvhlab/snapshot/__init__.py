@@ -56,11 +56,11 @@ def _run(scene_spec: str, build_kwargs: dict, out: Path, extra: list[str]) -> Pa
     scene, name = load_scene(scene_spec)
     if not scene.has_geometry:
         raise ValueError(f"scene '{name}' has no geometry")
-    if scene.camera is None:  # a scene reaching near ±2^40, left without one: the render's message
-        from .._render_settings import default_camera
+    from .._render_settings import default_camera
 
-        default_camera(scene)  # raises, saying why ("snapshot failed: AttributeError" in its child)
-    projection = scene.camera.projection if scene.camera is not None else "perspective"
+    # a scene reaching near ±2^40 is left without one: default_camera raises the render's reason
+    # ("snapshot failed: AttributeError" in the child before)
+    projection = (scene.camera or default_camera(scene)).projection
     if projection not in RASTER_PROJECTIONS:  # before the child process: its error would come back late
         raise ValueError(
             f"scene '{name}': its camera is {projection}; the snapshot draws {' and '.join(RASTER_PROJECTIONS)} "
