@@ -56,7 +56,7 @@ def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     for name in ("stdout", "stderr"):  # closed (`2>&-`): None in Python, which every print then failed on
         if getattr(sys, name) is None:
-            setattr(sys, name, open(os.devnull, "w"))  # noqa: SIM115 (the process's own, as sys.stdout is)
+            setattr(sys, name, os.fdopen(os.open(os.devnull, os.O_WRONLY), "w"))  # no file of the user's
     try:  # its checks of paths may fail too ("File name too long") or be interrupted
         args = parser().parse_args(options.join_dash_values(argv))
     except KeyboardInterrupt:
