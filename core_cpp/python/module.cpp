@@ -158,6 +158,16 @@ void bind_bvh(nb::module_& m) {
         .def(
             "fork", [](const PyBvh& b) { return new PyBvh(b.current()); }, nb::rv_policy::take_ownership,
             "a new tree at this one's current version (shared, not copied): updates of either leave the other")
+        .def(
+            "restore",
+            [](PyBvh& b, const PyBvh& earlier) {
+                TreePtr tree = earlier.current();
+                const LongRelease release;
+                b.replace([&](const TreeVersion&) { return std::pair{Bvh(tree->bvh), tree->built_costs()}; });
+            },
+            "earlier"_a,
+            "publishes a copy of `earlier`'s current version (a fork taken before a change) as a new revision: a "
+            "change undone without reusing a revision number that caches may have seen")
         .def_prop_ro("geometry_fingerprint", [](const PyBvh& b) { return b.current()->bvh.fingerprint(); })
         .def("nodes_bytes",
              [](const PyBvh& b) {

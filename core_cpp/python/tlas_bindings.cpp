@@ -60,6 +60,15 @@ PyTwoLevel* build_two_level(const std::vector<const PyBvh*>& meshes, const MeshI
     return new PyTwoLevel(std::move(versions), std::move(tlas));
 }
 
+void py_check_placement(const PyBvh& mesh, const MeshIndices& index, const Transforms& transforms) {
+    const std::size_t n = index.shape(0);
+    if (transforms.shape(0) != n) throw std::invalid_argument("one transform per instance");
+    std::vector<Transform> placed(n);
+    for (std::size_t i = 0; i < n; ++i) std::copy_n(transforms.data() + 12 * i, 12, placed[i].m.begin());
+    TreePtr tree = mesh.current();
+    check_placement(tree->bvh, index.data(), placed.data(), n);
+}
+
 void py_intersect(const PyTwoLevel& self, const Vectors& origins, const Vectors& dirs, float tmin, float tmax,
                   const std::string& traversal, std::uint32_t threads, Out1D<float> t, Out1D<std::int32_t> prim,
                   Out1D<std::uint8_t> kind, Out1D<float> u, Out1D<float> v, std::optional<Out1D<std::uint32_t>> visited,
@@ -206,5 +215,8 @@ void bind_tlas(nb::module_& m) {
     m.def("build_two_level", &build_two_level, "meshes"_a, "mesh_of"_a.noconvert(), "transforms"_a.noconvert(),
           "config"_a,
           "A TLAS over instances (mesh_of[i] placed by transforms[i], 3×4 object-to-world) of the meshes' trees.");
+    m.def("check_placement", &py_check_placement, "mesh"_a, "index"_a.noconvert(), "transforms"_a.noconvert(),
+          "ValueError, naming index[i], where transforms[i] would place the mesh's current version as build_two_level "
+          "refuses (outside the coordinate range)");
     m.def("default_tlas_config", &default_tlas_config);
 }

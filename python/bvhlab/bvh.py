@@ -4,6 +4,7 @@ asked for: `build_config.BuildConfig`)."""
 from __future__ import annotations
 
 import copy
+import weakref
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
@@ -114,6 +115,9 @@ class Bvh:
         self._stats: tuple[int, dict] | None = None  # (revision, stats)
         self._node_data: tuple[int, NodeData] | None = None  # (revision, data)
         self._node_structure: tuple[int, NodeData] | None = None  # (revision, data without EPO)
+        # the InstancedBvhs this tree is a mesh of (_checked_change): a change through `meshes[k]`
+        # must leave their instances in the coordinate range
+        self._placed_by: weakref.WeakSet[InstancedBvh] = weakref.WeakSet()
 
     def _snapshot(self) -> Bvh:
         """This tree's current version, for a reading in several steps (a pick's boxes and its hit,
@@ -324,7 +328,8 @@ class Bvh:
             raise TypeError(f"config must be a bvhlab.UpdateConfig, got {type(config).__name__}")
         if changes:
             config = config.replace(**changes)
-        stats = _core.update_bvh(self._core, triangles, spheres, config.core())
+        core_config = config.core()
+        stats = self._checked_change(lambda: _core.update_bvh(self._core, triangles, spheres, core_config))
         return UpdateStats(**stats)
 
     def optimize(
@@ -362,7 +367,28 @@ class Bvh:
         triangles = _checks.float32_array("triangles", triangles, (3, 3))
         if spheres is not None:
             spheres = _checks.float32_array("spheres", spheres, (4,))
-        self._core.refit(triangles, spheres)
+        self._checked_change(lambda: self._core.refit(triangles, spheres))
+
+    def _checked_change(self, change: Callable[[], object]):
+        """Runs `change` (a refit or update of this tree) and returns what it returns. Where this
+        tree is a mesh of an InstancedBvh (changed through its `meshes[k]`), that tree's instances
+        of it are checked with the new version as its next TLAS will be (not made now: a caller
+        changing several meshes makes one); where one is refused (moved outside the coordinate
+        range), the change is undone (the version before it published again, as a new revision)
+        and the ValueError raised: the InstancedBvh kept the change, and every later read of it
+        raised, `meshes` too, so it could not be changed back (a helper's audit)."""
+        owners = [o for o in list(self._placed_by) if o._places(self)]
+        if not owners:
+            return change()
+        before = self._core.fork()
+        result = change()
+        try:
+            for owner in owners:
+                owner._check_placement(self)
+        except ValueError as e:
+            self._core.restore(before)
+            raise ValueError(f"change refused, the tree kept as it was (an InstancedBvh places it): {e}") from None
+        return result
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:

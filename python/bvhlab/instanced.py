@@ -45,6 +45,19 @@ class InstancedBvh:
         self._tlas: tuple | None = None  # (the core TLAS, it as a Bvh)
         self._tlas_data: tuple | None = None  # (the TLAS it was made of, NodeData, leaf_first, refs)
         self._analysed: tuple | None = None  # (_analysis_key(), TwoLevelNodeData)
+        _placing(self, meshes)
+
+    def _check_placement(self, tree: Bvh) -> None:
+        """ValueError where this tree's next TLAS would refuse an instance of `tree` as it is now
+        (Bvh._checked_change)."""
+        _, mesh_of, transforms, meshes, _ = self._state
+        for k in (k for k, m in enumerate(meshes) if m is tree):
+            of_k = np.flatnonzero(mesh_of == k).astype(np.uint32)
+            _core.check_placement(tree._core, of_k, np.ascontiguousarray(transforms[of_k]))
+
+    def _places(self, tree: Bvh) -> bool:
+        """Whether `tree` is one of the meshes this (not a snapshot) places now (Bvh._checked_change)."""
+        return not self._frozen and any(m is tree for m in self._state[3])
 
     @property
     def meshes(self) -> tuple[Bvh, ...]:
@@ -245,6 +258,7 @@ class InstancedBvh:
         meshes = meshes[:k] + (tree,) + meshes[k + 1 :]
         # the new mesh and the TLAS over it in one swap
         self._state = _make_state(meshes, self._state[1], self._state[2], self.config.threads)
+        _placing(self, (tree,))
         return stats
 
     def world_boxes(self) -> tuple[np.ndarray, np.ndarray]:
@@ -291,6 +305,12 @@ class InstancedBvh:
         """As `Bvh.occluded`, through both levels: the walk ends at the first instance with a hit
         before tmax (exactly `intersect(...)["t"] < tmax`)."""
         return run_occluded_query(self._core, origins, directions, tmin, tmax, traversal, threads)
+
+
+def _placing(owner: InstancedBvh, meshes) -> None:
+    """Tells each of `meshes` that `owner` places it (Bvh._checked_change)."""
+    for m in meshes:
+        m._placed_by.add(owner)
 
 
 def _version_key(core: _core.TwoLevel, meshes: list[Bvh]) -> tuple:

@@ -99,6 +99,12 @@ BigVector<LeafInstance> make_leaf_instances(const Bvh& tree, const BigVector<Ins
 
 }  // namespace
 
+void check_placement(const Bvh& blas, const std::uint32_t* index, const Transform* transforms, std::size_t count) {
+    const std::vector<Aabb> boxes = top_boxes(blas);
+    const std::vector<BoxesToMove> tops{BoxesToMove(boxes.data(), boxes.size())};
+    for (std::size_t i = 0; i < count; ++i) make_instance(tops, 0, transforms[i], index[i]);
+}
+
 Tlas build_tlas(const std::vector<const Bvh*>& blases, const std::vector<std::uint32_t>& blas_of,
                 const std::vector<Transform>& transforms, const BuildConfig& config) {
     if (blas_of.size() != transforms.size())
