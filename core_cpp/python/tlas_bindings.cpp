@@ -50,6 +50,9 @@ PyTwoLevel* build_two_level(const std::vector<const PyBvh*>& meshes, const MeshI
     for (const PyBvh* m : meshes) {
         if (!m) throw std::invalid_argument("a mesh of the scene has no tree (None)");
         versions.push_back(m->current());
+        // a TLAS as a tree (InstancedBvh.tlas) has instance indices for references: walked as a
+        // mesh, its leaves read primitives that are not there (a segfault: a helper's audit)
+        require_geometry(versions.back()->bvh, ("mesh " + std::to_string(versions.size() - 1)).c_str());
         blases.push_back(&versions.back()->bvh);
     }
     std::vector<std::uint32_t> blas_of(mesh_of.data(), mesh_of.data() + n);
@@ -60,13 +63,13 @@ PyTwoLevel* build_two_level(const std::vector<const PyBvh*>& meshes, const MeshI
     return new PyTwoLevel(std::move(versions), std::move(tlas));
 }
 
-void py_check_placement(const PyBvh& mesh, const MeshIndices& index, const Transforms& transforms) {
+void py_check_placement(const PyBvh& tree, std::uint32_t mesh, const MeshIndices& index, const Transforms& transforms) {
     const std::size_t n = index.shape(0);
     if (transforms.shape(0) != n) throw std::invalid_argument("one transform per instance");
     std::vector<Transform> placed(n);
     for (std::size_t i = 0; i < n; ++i) std::copy_n(transforms.data() + 12 * i, 12, placed[i].m.begin());
-    TreePtr tree = mesh.current();
-    check_placement(tree->bvh, index.data(), placed.data(), n);
+    TreePtr version = tree.current();
+    check_placement(version->bvh, mesh, index.data(), placed.data(), n);
 }
 
 void py_intersect(const PyTwoLevel& self, const Vectors& origins, const Vectors& dirs, float tmin, float tmax,
@@ -215,8 +218,8 @@ void bind_tlas(nb::module_& m) {
     m.def("build_two_level", &build_two_level, "meshes"_a, "mesh_of"_a.noconvert(), "transforms"_a.noconvert(),
           "config"_a,
           "A TLAS over instances (mesh_of[i] placed by transforms[i], 3×4 object-to-world) of the meshes' trees.");
-    m.def("check_placement", &py_check_placement, "mesh"_a, "index"_a.noconvert(), "transforms"_a.noconvert(),
-          "ValueError, naming index[i], where transforms[i] would place the mesh's current version as build_two_level "
-          "refuses (outside the coordinate range)");
+    m.def("check_placement", &py_check_placement, "tree"_a, "mesh"_a, "index"_a.noconvert(), "transforms"_a.noconvert(),
+          "ValueError, naming index[i] and mesh, where transforms[i] would place the tree's current version (mesh "
+          "`mesh` of a two-level tree) as build_two_level refuses (outside the coordinate range)");
     m.def("default_tlas_config", &default_tlas_config);
 }

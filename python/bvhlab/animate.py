@@ -163,9 +163,14 @@ class _TwoLevel:
         changed = [k for k in range(scene.mesh_count) if not self._same(k, scene)]
         start = time.perf_counter()
         for k in changed:
+            counts = (len(self.meshes[k]), len(self.spheres) if k == 0 else 0)
             self.meshes[k] = scene.mesh_triangles(k)
             self.spheres = scene.spheres
-            self.tree.meshes[k].update(self.meshes[k], scene.spheres if k == 0 else None)  # place() follows it
+            spheres = scene.spheres if k == 0 else None
+            if counts == (len(self.meshes[k]), len(scene.spheres) if k == 0 else 0):
+                self.tree.meshes[k].update(self.meshes[k], spheres)  # place() follows it
+            else:  # one mesh gained what another lost (the frame's total the same): its tree anew
+                self.tree.update_mesh(k, self.meshes[k], spheres)
         self.tree.place(*scene.instances())
         ms = (time.perf_counter() - start) * 1e3
         ran = "tlas" + (f"+{len(changed)} meshes" if changed else "")  # the meshes updated: no subtrees

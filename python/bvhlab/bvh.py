@@ -317,18 +317,12 @@ class Bvh:
         Costs are compared with the nodes' costs when they were built (this tree as built, or as
         the last rebuild of each subtree left it). A tree with spheres needs them given (an empty
         (0, 4) array removes them, where the policy allows other counts)."""
-        from .update import UpdateConfig, UpdateStats
+        from .update import UpdateStats, update_config
 
         triangles = _checks.float32_array("triangles", triangles, (3, 3))
         if spheres is not None:  # None on a tree with spheres raises ValueError (the core checks)
             spheres = _checks.float32_array("spheres", spheres, (4,))
-        if config is None:
-            config = UpdateConfig()
-        elif not isinstance(config, UpdateConfig):
-            raise TypeError(f"config must be a bvhlab.UpdateConfig, got {type(config).__name__}")
-        if changes:
-            config = config.replace(**changes)
-        core_config = config.core()
+        core_config = update_config(config, changes).core()
         stats = self._checked_change(lambda: _core.update_bvh(self._core, triangles, spheres, core_config))
         return UpdateStats(**stats)
 

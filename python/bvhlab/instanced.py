@@ -17,7 +17,7 @@ from .inspect.node_data import NodeData
 from .inspect.two_level_data import TwoLevelNodeData
 from .ray_query import run_occluded_query, run_ray_query
 from .two_level_stats import instanced_stats
-from .update import UpdateStats
+from .update import UpdateStats, update_config
 
 
 class InstancedBvh:
@@ -52,8 +52,10 @@ class InstancedBvh:
         (Bvh._checked_change)."""
         _, mesh_of, transforms, meshes, _ = self._state
         for k in (k for k, m in enumerate(meshes) if m is tree):
+            if k and tree._core.primitive_counts[1]:  # Bvh.update with spheres, which update_mesh refuses
+                raise _spheres_beyond_mesh_0(k)
             of_k = np.flatnonzero(mesh_of == k).astype(np.uint32)
-            _core.check_placement(tree._core, of_k, np.ascontiguousarray(transforms[of_k]))
+            _core.check_placement(tree._core, k, of_k, np.ascontiguousarray(transforms[of_k]))
 
     def _places(self, tree: Bvh) -> bool:
         """Whether `tree` is one of the meshes this (not a snapshot) places now (Bvh._checked_change)."""
@@ -223,10 +225,10 @@ class InstancedBvh:
         self, k: int, triangles: np.ndarray, spheres: np.ndarray | None = None, config=None, **changes
     ) -> UpdateStats:
         """Mesh k moved or changed: with the same counts its tree is updated as `Bvh.update` does
-        (`config`/`changes`: an UpdateConfig), with other counts it is rebuilt; the other meshes'
-        trees are not touched. Then the TLAS is made again over the same instances (their world
-        boxes follow the mesh). Returns what ran on mesh k. Spheres only for mesh 0, as a Scene has
-        them (ValueError for another)."""
+        (`config`/`changes`: an UpdateConfig, checked whatever the counts), with other counts it
+        is rebuilt; the other meshes' trees are not touched. Then the TLAS is made again over the
+        same instances (their world boxes follow the mesh). Returns what ran on mesh k. Spheres
+        only for mesh 0, as a Scene has them (ValueError for another)."""
         self._writable()
         with self._lock:  # writers one at a time: a second update_mesh kept the first one's mesh out
             return self._update_mesh(k, triangles, spheres, config, **changes)
@@ -235,6 +237,8 @@ class InstancedBvh:
         meshes = self._state[3]
         k = _checks.integer("mesh", k, 0, len(meshes) - 1)
         triangles = _checks.float32_array("triangles", triangles, (3, 3))
+        config = update_config(config, changes)  # checked also where the counts change (a rebuild)
+        config.core()
         # the counts alone: the stats (a pass over every node) cost a 1M-triangle mesh 43 ms a frame
         old_triangles, old_spheres = meshes[k]._core.primitive_counts
         if spheres is None and old_spheres:  # as Bvh.update: removing them must be asked for
@@ -243,21 +247,22 @@ class InstancedBvh:
             spheres = _checks.float32_array("spheres", spheres, (4,))
         n_spheres = 0 if spheres is None else len(spheres)
         if k and n_spheres:  # a tree no Scene describes: its renders refused the scene as another's
-            raise ValueError(
-                f"mesh {k} cannot hold spheres: only mesh 0 (the scene's own geometry) has them in a Scene"
-            )
+            raise _spheres_beyond_mesh_0(k)
         if len(triangles) == old_triangles and n_spheres == old_spheres:
             # a new tree object from the current version (copy-on-write): a snapshot taken before
             # keeps the mesh tree its TLAS was made over
             tree = Bvh(meshes[k]._core.fork(), meshes[k].config)
-            stats = tree.update(triangles, spheres, config, **changes)
+            stats = tree.update(triangles, spheres, config)
         else:  # another count: a new tree for this mesh alone
             tree = Bvh(_core.build(triangles, spheres, self.config.core(), None), self.config)
             s = tree.stats
             stats = UpdateStats("rebuild", s["build_ms"], s["sah_cost"], 1, s["primitives"])
         meshes = meshes[:k] + (tree,) + meshes[k + 1 :]
         # the new mesh and the TLAS over it in one swap
-        self._state = _make_state(meshes, self._state[1], self._state[2], self.config.threads)
+        try:
+            self._state = _make_state(meshes, self._state[1], self._state[2], self.config.threads)
+        except ValueError as e:  # the instances did not change: mesh k's new geometry did
+            raise ValueError(f"mesh {k}'s new geometry refused, the tree kept as it was: {e}") from None
         _placing(self, (tree,))
         return stats
 
@@ -305,6 +310,10 @@ class InstancedBvh:
         """As `Bvh.occluded`, through both levels: the walk ends at the first instance with a hit
         before tmax (exactly `intersect(...)["t"] < tmax`)."""
         return run_occluded_query(self._core, origins, directions, tmin, tmax, traversal, threads)
+
+
+def _spheres_beyond_mesh_0(k: int) -> ValueError:
+    return ValueError(f"mesh {k} cannot hold spheres: only mesh 0 (the scene's own geometry) has them in a Scene")
 
 
 def _placing(owner: InstancedBvh, meshes) -> None:

@@ -101,8 +101,9 @@ def instanced_stats(core_stats: dict, meshes: list, mesh_of: np.ndarray, lo: np.
     d["primitives_flattened"] = int(sum(s["primitives"] * int(n) for s, n in zip(per_mesh, uses)))
     d["nodes"] = d["tlas_nodes"] + sum(d["mesh_nodes"])
     d["leaves"] = sum(s["leaves"] for s in per_mesh)
-    # levels a ray may descend: the TLAS's, then the deepest BLAS's
-    d["height"] = d["tlas_height"] + max(d["mesh_height"], default=0)
+    # levels a ray may descend: the TLAS's, then the deepest BLAS an instance places (a mesh of no
+    # instance is reached by no ray: it counted, 25 levels for a TLAS of 1 and a placed mesh of 2)
+    d["height"] = d["tlas_height"] + max((h for h, n in zip(d["mesh_height"], uses) if n), default=0)
     d["memory_bytes"] = d["tlas_memory_bytes"] + d["meshes_memory_bytes"]
     d["sah_cost"] = two_level_sah_cost(d["tlas_sah_cost"], lo, hi, mesh_of, d["mesh_sah_cost"])
     d["build_ms"] = d["tlas_build_ms"] + sum(s["build_ms"] for s in per_mesh)

@@ -79,6 +79,16 @@ class UpdateConfig:
         return dataclasses.replace(self, **changes)
 
 
+def update_config(config: UpdateConfig | None, changes: dict) -> UpdateConfig:
+    """The UpdateConfig an update call asks for: `config` (None: the defaults) with `changes` (its
+    fields by name) on top; TypeError or ValueError naming what is wrong."""
+    if config is None:
+        config = UpdateConfig()
+    elif not isinstance(config, UpdateConfig):
+        raise TypeError(f"config must be a bvhlab.UpdateConfig, got {type(config).__name__}")
+    return config.replace(**changes) if changes else config
+
+
 @dataclass(frozen=True)
 class UpdateStats:
     """What one update did: the policy that ran (adaptive's choice), its wall time, the SAH cost

@@ -46,7 +46,7 @@ TEST(Tlas, BadInstancesAreRefusedByName) {
     expect_refused({0, 0}, {Transform{}, nan}, "instance 1: the transform has a NaN");
     expect_refused({0}, {zero_axis}, "instance 0: the transform cannot be inverted");
     expect_refused({0}, {flat_axes}, "instance 0: the transform cannot be inverted");
-    expect_refused({0}, {far}, "instance 0: the transform moves the mesh outside");
+    expect_refused({0}, {far}, "instance 0 would place mesh 0 outside");
     expect_refused({0, 0}, {Transform{}}, "one transform per instance");
 }
 

@@ -94,3 +94,64 @@ def test_a_snapshot_does_not_refuse_changes():
     tree.meshes[1].refit(MESH + np.float32(1e7))
     assert view.world_boxes()[1][2, 0] == pytest.approx(8.0, rel=1e-5)
     assert tree.world_boxes()[1][2, 0] == pytest.approx(1e7 + 8, rel=1e-5)
+
+
+def test_a_tlas_is_refused_as_a_mesh():
+    """`InstancedBvh([tree.tlas], ...)`: its references are instances, not primitives; its walk as a
+    mesh read primitives that are not there (a segfault: a helper's audit)."""
+    tree = bvhlab.build(_scene(scale=1.0))
+    mesh_of, transforms = tree.instances
+    with pytest.raises(ValueError, match="mesh 1: this tree holds no geometry"):
+        bvhlab.InstancedBvh([tree.meshes[0], tree.tlas], mesh_of, transforms, tree.config)
+
+
+def test_update_mesh_checks_its_config_whatever_the_counts():
+    tree = bvhlab.build(_scene(scale=1.0))
+    more = np.concatenate([MESH, TRIANGLE + 5])  # another count: a rebuild, which took any config
+    with pytest.raises(ValueError, match="policy"):
+        tree.update_mesh(1, more, policy="bogus")
+    with pytest.raises(TypeError, match="nosuch"):
+        tree.update_mesh(1, more, nosuch=1)
+    with pytest.raises(TypeError, match="config must be a bvhlab.UpdateConfig"):
+        tree.update_mesh(1, more, config="adaptive")
+    assert tree.meshes[1].stats["primitives"] == 2
+    assert tree.update_mesh(1, more, policy="adaptive").policy == "rebuild"
+    assert tree.meshes[1].stats["primitives"] == 3
+
+
+def test_spheres_given_to_a_mesh_other_than_0_through_meshes_k_are_refused():
+    """update_mesh refuses spheres beyond mesh 0 (no Scene describes such a tree); `meshes[k].update`
+    with policy "rebuild" took them, and the tree answered sphere hits in mesh 1."""
+    tree = bvhlab.build(_scene(scale=1.0))
+    spheres = np.array([[0, 0, 0, 0.5]], np.float32)
+    with pytest.raises(ValueError, match="mesh 1 cannot hold spheres"):
+        tree.meshes[1].update(MESH, spheres, policy="rebuild")
+    assert tree.meshes[1]._core.primitive_counts == (2, 0)
+    hits = tree.intersect(np.float32([[0.2, 0.2, 5]]), np.float32([[0, 0, -1]]))
+    assert hits["kind"][0] == 0  # a triangle
+
+
+def test_update_mesh_names_the_new_geometry_for_an_instance_it_moves_out_of_range():
+    tree = bvhlab.build(_scene())
+    with pytest.raises(ValueError, match=r"mesh 1's new geometry refused.*instance 2 would place mesh 1 outside"):
+        tree.update_mesh(1, MESH + np.float32(1e7))
+
+
+def test_a_transform_with_nearly_parallel_axes_names_the_measure_it_failed():
+    """A shear of determinant 1 with nearly parallel axes: "determinant 1" alone read as a
+    contradiction; the message gives the ratio the test compares."""
+    transforms = np.zeros((1, 3, 4), np.float32)
+    transforms[0, :, :3] = [[1, 1e6, 0], [0, 1, 0], [0, 0, 1]]
+    scene = bvhlab.Scene(meshes=[MESH], instance_mesh=np.array([1]), instance_transforms=transforms)
+    with pytest.raises(ValueError, match=r"\|determinant\| 1 is 1e-06 of the product of its axes' lengths"):
+        bvhlab.build(scene)
+
+
+def test_height_counts_only_placed_meshes():
+    deep = np.random.default_rng(5).uniform(-1, 1, (3000, 3, 3)).astype(np.float32)
+    transforms = np.zeros((1, 3, 4), np.float32)
+    transforms[0, :, :3] = np.eye(3)
+    scene = bvhlab.Scene(meshes=[deep, MESH], instance_mesh=np.array([2]), instance_transforms=transforms)
+    stats = bvhlab.build(scene).stats
+    assert stats["mesh_height"][1] > 5
+    assert stats["height"] == stats["tlas_height"] + stats["mesh_height"][2]

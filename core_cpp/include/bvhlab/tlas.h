@@ -86,10 +86,12 @@ BuildConfig default_tlas_config();
 Tlas build_tlas(const std::vector<const Bvh*>& blases, const std::vector<std::uint32_t>& blas_of,
                 const std::vector<Transform>& transforms, const BuildConfig& config = default_tlas_config());
 
-/// Checks instances of one BLAS as build_tlas does (transforms[i] places instance index[i]):
-/// throws its std::invalid_argument, naming index[i], for the first it would refuse. What a change
-/// of a BLAS's geometry must pass before the TLASes over it are made again.
-void check_placement(const Bvh& blas, const std::uint32_t* index, const Transform* transforms, std::size_t count);
+/// Checks instances of one BLAS, BLAS index `mesh`, as build_tlas does (transforms[i] places
+/// instance index[i]): throws its std::invalid_argument, naming index[i] and `mesh`, for the first
+/// it would refuse. What a change of a BLAS's geometry must pass before the TLASes over it are
+/// made again.
+void check_placement(const Bvh& blas, std::uint32_t mesh, const std::uint32_t* index, const Transform* transforms,
+                     std::size_t count);
 
 /// The closest hit of a two-level query: the primitive (Hit, ref and slot in the instance's BLAS)
 /// and the instance. t is in world units (the ray is moved into the instance's space with its

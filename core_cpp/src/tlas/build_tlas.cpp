@@ -56,9 +56,8 @@ Instance make_instance(const std::vector<BoxesToMove>& tops, std::uint32_t blas,
     inst.identity = t.is_identity();
     inst.world_box = transform_boxes(t, tops[blas]);
     if (!inst.world_box.empty() && !(in_coordinate_range(inst.world_box.lo) && in_coordinate_range(inst.world_box.hi)))
-        throw std::invalid_argument(what() +
-                                    ": the transform moves the mesh outside the supported coordinate range "
-                                    "[-2^40, 2^40] (±1.0995e12)");
+        throw std::invalid_argument(what() + " would place mesh " + std::to_string(blas) +
+                                    " outside the supported coordinate range [-2^40, 2^40] (±1.0995e12)");
     return inst;
 }
 
@@ -99,10 +98,12 @@ BigVector<LeafInstance> make_leaf_instances(const Bvh& tree, const BigVector<Ins
 
 }  // namespace
 
-void check_placement(const Bvh& blas, const std::uint32_t* index, const Transform* transforms, std::size_t count) {
+void check_placement(const Bvh& blas, std::uint32_t mesh, const std::uint32_t* index, const Transform* transforms,
+                     std::size_t count) {
     const std::vector<Aabb> boxes = top_boxes(blas);
-    const std::vector<BoxesToMove> tops{BoxesToMove(boxes.data(), boxes.size())};
-    for (std::size_t i = 0; i < count; ++i) make_instance(tops, 0, transforms[i], index[i]);
+    std::vector<BoxesToMove> tops(mesh, BoxesToMove(nullptr, 0));  // mesh's at its index, as build_tlas has them
+    tops.emplace_back(boxes.data(), boxes.size());
+    for (std::size_t i = 0; i < count; ++i) make_instance(tops, mesh, transforms[i], index[i]);
 }
 
 Tlas build_tlas(const std::vector<const Bvh*>& blases, const std::vector<std::uint32_t>& blas_of,

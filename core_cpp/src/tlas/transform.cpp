@@ -70,11 +70,16 @@ void validate_transform(const Transform& t, const char* what) {
         if (!std::isfinite(x))
             throw std::invalid_argument(std::string(what) + ": the transform has a NaN or infinite entry");
     const double det = det3(t);
-    if (!determinant_invertible(t, det))
+    if (!determinant_invertible(t, det)) {
+        // the determinant relative to its bound (Hadamard), which the test compares: a shear with
+        // determinant 1 can have axes too nearly parallel ("determinant 1" alone read as a contradiction)
+        const double bound = column_length(t, 0) * column_length(t, 1) * column_length(t, 2);
         throw std::invalid_argument(std::string(what) +
                                     ": the transform cannot be inverted (a zero-scale axis, or axes "
-                                    "(nearly) parallel: determinant " +
-                                    number_text(det) + ")");
+                                    "(nearly) parallel: |determinant| " +
+                                    number_text(std::fabs(det)) + " is " + number_text(float(std::fabs(det) / bound)) +
+                                    " of the product of its axes' lengths, which must be above 1e-6)");
+    }
     throw std::invalid_argument(std::string(what) +
                                 ": the transform scales by more than 2^76 (7.6e22) or less than 2^-76 (1.3e-23) "
                                 "along some axis, beyond what float32 rays can follow into the mesh");
