@@ -19,6 +19,7 @@
 #include "ray_batch.h"
 #include "walk.h"
 #include "wide_kernel.h"
+#include "wide_kernels.h"
 
 namespace bvhlab {
 namespace {
@@ -105,9 +106,12 @@ bool any_of_leaf(const Tlas& tlas, std::uint32_t first, Visit&& visit) {
 struct NoSteps {
     static constexpr bool kRecorded = false;
     void box(std::uint32_t, bool) {}
+    /// The BLAS walk of `mode`, the wide one by kernel set K (wide_kernels.h: picked once a query)
+    template <class K>
     Hit enter(std::uint32_t, std::uint32_t, const BlasView& blas, const Ray& ray, Traversal mode,
               std::uint32_t* visited) {
-        return intersect_blas(blas, ray, mode, visited);
+        return mode == Traversal::Wide ? intersect_wide_with<K>(blas, ray, visited)
+                                       : intersect(*blas.bvh, ray, mode, visited);
     }
     void entered(bool, float) {}
 };
@@ -115,6 +119,7 @@ struct RecordedSteps {
     static constexpr bool kRecorded = true;
     TwoLevelRecorder& r;
     void box(std::uint32_t node, bool hit) { r.box(node, hit); }
+    template <class>
     Hit enter(std::uint32_t leaf, std::uint32_t index, const BlasView& blas, const Ray& ray, Traversal mode,
               std::uint32_t* visited) {
         return r.instance(leaf, index, blas, ray, mode, visited);
@@ -146,15 +151,15 @@ private:
 };
 
 /// Tests instance `inst` with the world ray, whose closest hit so far is `best` (t in the world
-/// ray's scaled units).
-template <class Steps>
+/// ray's scaled units), its wide walk by kernel set K.
+template <class K, class Steps>
 void test_instance(const TwoLevel& scene, const LeafInstance& inst, const WorldRay& world, Traversal mode,
                    InstanceHit& best, std::uint32_t& visited, Steps& steps) {
     Ray ray;
     float t_scale;
     if (!object_ray(inst, world.ray, best.hit.t, ray, t_scale)) return;
     std::uint32_t count = 0;
-    Hit h = steps.enter(inst.leaf, inst.instance, scene.blases[inst.blas], ray, mode, &count);
+    Hit h = steps.template enter<K>(inst.leaf, inst.instance, scene.blases[inst.blas], ray, mode, &count);
     visited += count;
     if (h.ref == kNoHit) return steps.entered(false, t_scale * world.t_scale);
     h.t *= t_scale;
@@ -163,12 +168,14 @@ void test_instance(const TwoLevel& scene, const LeafInstance& inst, const WorldR
     if (closer) best.hit = h, best.instance = inst.instance;
 }
 
-/// Whether instance `inst` holds a hit of the world ray before its tmax.
+/// Whether instance `inst` holds a hit of the world ray before its tmax (the wide walk by kernel set K).
+template <class K>
 bool instance_occludes(const TwoLevel& scene, const LeafInstance& inst, const WorldRay& world, Traversal mode) {
     const BlasView& blas = scene.blases[inst.blas];
     Ray ray;
     float t_scale;
-    return object_ray(inst, world.ray, world.ray.tmax, ray, t_scale) && occluded_blas(blas, ray, mode);
+    if (!object_ray(inst, world.ray, world.ray.tmax, ray, t_scale)) return false;
+    return mode == Traversal::Wide ? K::any(view_of(*blas.wide), ray) : occluded(*blas.bvh, ray, mode);
 }
 
 /// The TLAS walk of `mode` (stackless for Traversal::Stackless, else with a stack) up to `hit_t`,
@@ -202,10 +209,10 @@ void check_two_level(const TwoLevel& scene, Traversal mode) {
 
 namespace {
 
-/// The closest-hit walk of both levels. The one-identity-instance case is the recorder's alone:
-/// intersect_two_level answers it inline (tlas.h) before intersect_through_tlas, so the query's
-/// walk does not test it again.
-template <class Steps>
+/// The closest-hit walk of both levels, the wide walks by kernel set K. The one-identity-instance
+/// case is the recorder's alone: intersect_two_level answers it inline (tlas.h) before
+/// intersect_through_tlas, so the query's walk does not test it again.
+template <class K, class Steps>
 InstanceHit intersect_two_level_with(const TwoLevel& scene, const Ray& ray, Traversal mode,
                                      std::uint32_t* nodes_visited, Steps& steps) {
     const Tlas& tlas = *scene.tlas;
@@ -214,7 +221,7 @@ InstanceHit intersect_two_level_with(const TwoLevel& scene, const Ray& ray, Trav
     std::uint32_t visited = 0;
     if (Steps::kRecorded && one_identity_instance(tlas)) {
         // One mesh where it was modelled: the flat query, no TLAS box in the way.
-        best.hit = steps.enter(kNoHit, 0, scene.blases[tlas.instances[0].blas], ray, mode, &visited);
+        best.hit = steps.template enter<K>(kNoHit, 0, scene.blases[tlas.instances[0].blas], ray, mode, &visited);
         steps.entered(best.hit.ref != kNoHit, 1.0f);
         if (best.hit.ref != kNoHit) best.instance = 0;
     } else if (!tlas.tree.empty()) {
@@ -222,16 +229,16 @@ InstanceHit intersect_two_level_with(const TwoLevel& scene, const Ray& ray, Trav
         best.hit.t = world.ray.tmax;
         auto leaf_from = [&](std::uint32_t first) {
             any_of_leaf(tlas, first, [&](const LeafInstance& inst) {
-                test_instance(scene, inst, world, mode, best, visited, steps);
+                test_instance<K>(scene, inst, world, mode, best, visited, steps);
                 return false;
             });
         };
         if (mode == Traversal::Wide) {
             TlasWalk walk;
-            start_tlas_walk(world.ray, walk);
+            K::start_tlas(world.ray, walk);
             auto walk_to_end = [&](WideRecorder* record) {
-                for (std::uint32_t k; (k = next_tlas_leaf(tlas.wide, walk, best.hit.t, record)) != kNoHit;)
-                    leaf_from(k);
+                const WideView view = view_of(tlas.wide);
+                for (std::uint32_t k; (k = K::next_tlas(view, walk, best.hit.t, record)) != kNoHit;) leaf_from(k);
             };
             if constexpr (Steps::kRecorded) {
                 WideTlasBoxes boxes(tlas, steps.r);
@@ -257,13 +264,15 @@ InstanceHit intersect_two_level_with(const TwoLevel& scene, const Ray& ray, Trav
 InstanceHit detail::intersect_through_tlas(const TwoLevel& scene, const Ray& ray, Traversal mode,
                                            std::uint32_t* nodes_visited) {
     NoSteps none;
-    return intersect_two_level_with(scene, ray, mode, nodes_visited, none);
+    return with_wide_kernels(
+        [&](auto k) { return intersect_two_level_with<decltype(k)>(scene, ray, mode, nodes_visited, none); });
 }
 
 InstanceHit detail::intersect_two_level_recorded(const TwoLevel& scene, const Ray& ray, Traversal mode,
                                                  TwoLevelRecorder& recorder, std::uint32_t* nodes_visited) {
     RecordedSteps steps{recorder};
-    return intersect_two_level_with(scene, ray, mode, nodes_visited, steps);
+    return with_wide_kernels(
+        [&](auto k) { return intersect_two_level_with<decltype(k)>(scene, ray, mode, nodes_visited, steps); });
 }
 
 void intersect_batch_two_level(const TwoLevel& scene, const RayBatch& rays, const HitBatch& hits,
@@ -313,24 +322,35 @@ void intersect_batch_two_level(const TwoLevel& scene, const RayBatch& rays, cons
 
 namespace bvhlab {
 
-bool detail::occluded_through_tlas(const TwoLevel& scene, const Ray& ray, Traversal mode) {
+namespace {
+
+/// occluded_through_tlas by kernel set K (wide_kernels.h).
+template <class K>
+bool occluded_through_tlas_with(const TwoLevel& scene, const Ray& ray, Traversal mode) {
     const Tlas& tlas = *scene.tlas;
     if (tlas.tree.empty()) return false;
     const WorldRay world(ray);
     auto leaf_from = [&](std::uint32_t first) {
         return any_of_leaf(tlas, first,
-                           [&](const LeafInstance& inst) { return instance_occludes(scene, inst, world, mode); });
+                           [&](const LeafInstance& inst) { return instance_occludes<K>(scene, inst, world, mode); });
     };
     if (mode == Traversal::Wide) {  // the closest-hit walk of the wide TLAS, its far limit tmax throughout
         TlasWalk walk;
-        start_tlas_walk(world.ray, walk);
-        for (std::uint32_t k; (k = next_tlas_leaf(tlas.wide, walk, world.ray.tmax)) != kNoHit;)
+        K::start_tlas(world.ray, walk);
+        const WideView view = view_of(tlas.wide);
+        for (std::uint32_t k; (k = K::next_tlas(view, walk, world.ray.tmax, nullptr)) != kNoHit;)
             if (leaf_from(k)) return true;
         return false;
     }
     bool found = false;
     walk_tlas(tlas, world.boxes(), world.ray.tmax, mode, [&](const BvhNode& n) { return found = leaf_from(n.index); });
     return found;
+}
+
+}  // namespace
+
+bool detail::occluded_through_tlas(const TwoLevel& scene, const Ray& ray, Traversal mode) {
+    return with_wide_kernels([&](auto k) { return occluded_through_tlas_with<decltype(k)>(scene, ray, mode); });
 }
 
 void occluded_batch_two_level(const TwoLevel& scene, const RayBatch& rays, bool* occluded, Traversal mode,
