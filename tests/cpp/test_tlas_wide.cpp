@@ -96,10 +96,10 @@ void expect_wide_copy_of(const Tlas& tlas) {
             EXPECT_EQ(e.instance, tree.refs[k]);
             EXPECT_EQ(e.blas, inst.blas);
             // the inverse's linear part, and in its fourth column the object's origin in the world
-            EXPECT_EQ(e.to_object.m, object_map(inst.object_to_world, inst.world_to_object).m);
-            for (int r = 0; r < 3; ++r) {
-                EXPECT_EQ(e.to_object.m[4 * r + 3], inst.object_to_world.m[4 * r + 3]);
-                for (int c = 0; c < 3; ++c) EXPECT_EQ(e.to_object.m[4 * r + c], inst.world_to_object.m[4 * r + c]);
+            EXPECT_EQ(e.to_object.c, ObjectColumns(object_map(inst.object_to_world, inst.world_to_object)).c);
+            for (int r = 0; r < 3; ++r) {  // by columns: column 3 the origin, 0-2 the inverse's
+                EXPECT_EQ(e.to_object.c[9 + r], inst.object_to_world.m[4 * r + 3]);
+                for (int c = 0; c < 3; ++c) EXPECT_EQ(e.to_object.c[3 * c + r], inst.world_to_object.m[4 * r + c]);
             }
             EXPECT_EQ(e.identity, inst.identity);
             EXPECT_EQ(e.leaf, i);

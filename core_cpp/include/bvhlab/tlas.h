@@ -31,7 +31,7 @@ struct Instance {
 /// 480-triangle knot: 72% of the leaf code's samples on two of them, over a quarter of a shadow ray's
 /// time).
 struct alignas(64) LeafInstance {
-    ObjectMap to_object;  ///< world to object space (transform.h)
+    ObjectColumns to_object;  ///< world to object space (transform.h), by columns
     std::uint32_t blas = 0;
     std::uint32_t instance = 0;  ///< its index in Tlas::instances
     std::uint32_t leaf = 0;      ///< the binary TLAS leaf that holds it (tree.nodes; the inspector's name)

@@ -16,6 +16,7 @@
 #include "bvhlab/tlas.h"
 #include "bvhlab/two_level_record.h"
 #include "bvhlab/wide_bvh.h"
+#include "object_ray.h"
 #include "ray_batch.h"
 #include "walk.h"
 #include "wide_kernel.h"
@@ -69,25 +70,6 @@ struct WorldRay {
         return TlasQuery(o, inv, ray.tmin);
     }
 };
-
-/// The world ray (scaled, WorldRay) up to `tmax` in the object space of instance `inst` (as a
-/// TLAS leaf holds it, tlas.h LeafInstance), rescaled as the batch scales world rays
-/// (coordinate_range.h), its scale in `t_scale`: an identity instance walks the world ray as it is
-/// (no transform, nothing to rescale: the one-mesh-and-movers layout of blender/motion.py, whose
-/// mesh 0 is such an instance). The transform is the instance's ObjectMap (inverted once when
-/// placed, not per ray; the origin moved relative to the object's, transform.h). False where the moved direction cannot be scaled (too long or
-/// short for float), which cannot hit what lies within the range.
-bool object_ray(const LeafInstance& inst, const Ray& world, float tmax, Ray& ray, float& t_scale) {
-    ray = world;
-    ray.tmax = tmax;
-    t_scale = 1.0f;
-    if (inst.identity) return true;
-    ray.origin = inst.to_object.point(world.origin);
-    ray.dir = inst.to_object.vector(world.dir);
-    if (!direction_in_range(ray.dir)) return false;
-    t_scale = scale_ray(ray);
-    return true;
-}
 
 /// Calls `visit(inst)` for the instances of the TLAS leaf whose first is at `first` in
 /// tlas.leaf_instances (where a wide TLAS leaf word points, a binary leaf's index), in their order,

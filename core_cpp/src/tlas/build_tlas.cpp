@@ -86,7 +86,7 @@ BigVector<LeafInstance> make_leaf_instances(const Bvh& tree, const BigVector<Ins
         }
         const std::uint32_t i = tree.refs[k];
         const Instance& inst = instances[i];
-        out[k] = {object_map(inst.object_to_world, inst.world_to_object),
+        out[k] = {ObjectColumns(object_map(inst.object_to_world, inst.world_to_object)),
                   inst.blas,
                   i,
                   leaf_of[k] & ~kLast,
