@@ -1,10 +1,12 @@
 // The two-level walks' move of a ray into an instance's space (src/query/object_ray.h): four
 // lanes by columns, bit for bit what ObjectMap's scalar rows give (transform.h), over random
 // transforms and rays, rays starting next to the object's origin (p - P exact, Sterbenz), signed
-// zeros, and scales from 2^-20 to 2^20.
+// zeros, and scales from 2^-20 to 2^20; and its range test and rescaling, one pass over the bits,
+// against coordinate_range.h's direction_in_range and scale_ray.
 #include <gtest/gtest.h>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <random>
 
 #include "bvhlab/transform.h"
@@ -74,6 +76,35 @@ TEST(ObjectRay, IdentityAndAxisAlignedKeepZerosSigns) {
     ObjectMap identity;
     for (float x : {0.0f, -0.0f, 1.0f, -3.5f})
         for (float y : {0.0f, -0.0f, 2.0f}) expect_same(identity, {{x, y, -0.0f}, {y, x, -0.0f}});
+}
+
+/// scale_in_range against direction_in_range then scale_ray, the two calls it replaces.
+void expect_same_scaling(Vec3 d) {
+    Ray a{{1, 2, 3}, d, 0.5f, 7.0f}, b = a;
+    float t_scale = 0.0f;
+    const bool in = scale_in_range(a, t_scale);
+    ASSERT_EQ(in, direction_in_range(b.dir)) << d.x << " " << d.y << " " << d.z;
+    if (!in) return;
+    const float expected = scale_ray(b);
+    EXPECT_EQ(std::memcmp(&a, &b, sizeof a), 0);
+    EXPECT_EQ(t_scale, expected);
+}
+
+TEST(ObjectRay, ScaleInRangeIsTheRangeTestAndScaleRay) {
+    const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
+    const float edges[] = {0.0f,    -0.0f,          1.0f,          -0.75f, 0x1p-80f, -0x1p-80f, 0x1.fffffep-81f,
+                           0x1p80f, 0x1.000002p80f, -0x1p80f,      1e-40f, 3e38f,    inf,       -inf,
+                           nan,     0.5f,           0x1.fffffep-1f};
+    for (float x : edges)
+        for (float y : edges)
+            for (float z : edges) expect_same_scaling({x, y, z});
+    std::mt19937 rng(35);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    std::uniform_int_distribution<int> e(-100, 100);
+    for (int i = 0; i < 20000; ++i) {
+        const float s = std::ldexp(1.0f, e(rng));
+        expect_same_scaling({s * u(rng), s * u(rng), s * std::ldexp(u(rng), e(rng) / 4)});
+    }
 }
 
 }  // namespace

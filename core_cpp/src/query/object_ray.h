@@ -2,7 +2,10 @@
 // traverse_two_level.cpp): origin and direction by the instance's ObjectColumns (transform.h),
 // four lanes at once, and rescaled as every ray is (coordinate_range.h scale_ray).
 #pragma once
+#include <algorithm>
 #include <cstddef>
+#include <cstdint>
+#include <cstring>
 
 #include "bvhlab/coordinate_range.h"
 #include "bvhlab/ray.h"
@@ -33,6 +36,23 @@ inline void move_ray(const ObjectColumns& map, const Ray& world, Ray& ray) {
     dir.store(&ray.dir.x);
 }
 
+/// direction_in_range and scale_ray (coordinate_range.h) of a moved ray in one pass over its
+/// direction's bits: the largest |component|'s bits are the largest of the three |component|s'
+/// bits as integers (their order is the magnitudes' for finite floats, and an infinity's or NaN's
+/// lie above every finite one's, above kMaxDirectionBits), so one integer maximum gives both the
+/// range test (one unsigned comparison) and scale_ray_by's exponent, where the two functions
+/// found the largest component twice, by float maxima and five comparisons. False (the ray as it
+/// was) where the direction is out of range; else `t_scale` is scale_ray's return.
+inline bool scale_in_range(Ray& ray, float& t_scale) {
+    std::uint32_t b[3];
+    std::memcpy(b, &ray.dir, sizeof b);
+    constexpr std::uint32_t kAbs = 0x7fffffffu;
+    const std::uint32_t largest = std::max(b[0] & kAbs, std::max(b[1] & kAbs, b[2] & kAbs));
+    if (largest - kMinDirectionBits > kMaxDirectionBits - kMinDirectionBits) return false;
+    t_scale = scale_ray_by(ray, largest);
+    return true;
+}
+
 /// The world ray (scaled already) up to `tmax` in the object space of instance `inst` (as a TLAS
 /// leaf holds it, tlas.h LeafInstance), rescaled as the batch scales world rays, its scale in
 /// `t_scale`: an identity instance walks the world ray as it is (no transform, nothing to
@@ -47,9 +67,7 @@ inline bool object_ray(const LeafInstance& inst, const Ray& world, float tmax, R
     }
     move_ray(inst.to_object, world, ray);
     ray.tmin = world.tmin, ray.tmax = tmax;
-    if (!direction_in_range(ray.dir)) return false;
-    t_scale = scale_ray(ray);
-    return true;
+    return scale_in_range(ray, t_scale);
 }
 
 }  // namespace bvhlab
