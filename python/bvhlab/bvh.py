@@ -4,6 +4,7 @@ asked for: `build_config.BuildConfig`)."""
 from __future__ import annotations
 
 import copy
+import threading
 import weakref
 from collections.abc import Callable
 from typing import TYPE_CHECKING
@@ -118,6 +119,10 @@ class Bvh:
         # the InstancedBvhs this tree is a mesh of (_checked_change): a change through `meshes[k]`
         # must leave their instances in the coordinate range
         self._placed_by: weakref.WeakSet[InstancedBvh] = weakref.WeakSet()
+        # a checked change and its undoing, one at a time: an undo put back the version before
+        # its own change, over another thread's change made meanwhile (re-entrant: the core
+        # refuses a change from within one, ReentrantCall, rather than this lock waiting on itself)
+        self._changing = threading.RLock()
 
     def _snapshot(self) -> Bvh:
         """This tree's current version, for a reading in several steps (a pick's boxes and its hit,
@@ -374,15 +379,16 @@ class Bvh:
         owners = [o for o in list(self._placed_by) if o._places(self)]
         if not owners:
             return change()
-        before = self._core.fork()
-        result = change()
-        try:
-            for owner in owners:
-                owner._check_placement(self)
-        except ValueError as e:
-            self._core.restore(before)
-            raise ValueError(f"change refused, the tree kept as it was (an InstancedBvh places it): {e}") from None
-        return result
+        with self._changing:
+            before = self._core.fork()
+            result = change()
+            try:
+                for owner in owners:
+                    owner._check_placement(self)
+            except ValueError as e:
+                self._core.restore(before)
+                raise ValueError(f"change refused, the tree kept as it was (an InstancedBvh places it): {e}") from None
+            return result
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:
