@@ -10,12 +10,12 @@ layout(set = 0, binding = BINDING_FRAME, std430) readonly buffer FrameBlock { Fr
 
 #include "tracer/overlay.glsl"
 
-layout(location = 0) in vec3 world_position;
+layout(location = 0) in vec3 from_camera;  // the corner relative to the camera (overlay.vert)
 layout(location = 1) flat in vec3 line_color;
 layout(location = 0) out vec4 color_distance;
 
 void main() {
-    float d = overlay_distance(world_position - frame.camera_position);
+    float d = overlay_distance(from_camera);
     color_distance = vec4(line_color, d);
     gl_FragDepth = overlay_line_depth(d);  // the lines' own test (overlay.glsl), as the CPU reference's
 }
