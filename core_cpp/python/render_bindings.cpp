@@ -74,11 +74,23 @@ struct PyRenderJob {
     }
 };
 
+/// One material index per triangle and per sphere (`of`: which mesh, or empty), else an error naming
+/// the counts (a scene's triangles replaced after its tri_material: a render said only "one
+/// material index per triangle and per sphere is needed", naming neither: a helper's audit).
+void check_material_counts(const Indices& tri_material, const Indices& sphere_material, const GeometryView& g,
+                           const std::string& of) {
+    auto say = [&](const char* what, std::size_t indices, std::size_t count) {
+        throw std::invalid_argument("one material index per " + std::string(what) + " is needed" + of + ": got " +
+                                    std::to_string(indices) + " for " + std::to_string(count) + " " + what + "s");
+    };
+    if (tri_material.shape(0) != g.triangle_count) say("triangle", tri_material.shape(0), g.triangle_count);
+    if (sphere_material.shape(0) != g.sphere_count) say("sphere", sphere_material.shape(0), g.sphere_count);
+}
+
 RenderScene make_scene(const TreeVersion& tree, const Triangles& tris, const std::optional<Spheres>& spheres,
                        const Materials& materials, const Indices& tri_material, const Indices& sphere_material) {
     GeometryView g = view_of(tris, spheres);
-    if (tri_material.shape(0) != g.triangle_count || sphere_material.shape(0) != g.sphere_count)
-        throw std::invalid_argument("one material index per triangle and per sphere is needed");
+    check_material_counts(tri_material, sphere_material, g, "");
     MaterialView mv{materials.data(), materials.shape(0), tri_material.data(), sphere_material.data()};
     const LongRelease release;
     return make_render_scene(tree.bvh, g, mv);
@@ -97,10 +109,7 @@ PyRenderScene make_two_level_scene(const PyTwoLevel& two, const std::vector<Tria
     for (std::size_t k = 0; k < n; ++k) {
         meshes[k].bvh = &two.meshes()[k]->bvh;
         meshes[k].geometry = view_of(tris[k], spheres[k]);
-        if (tri_material[k].shape(0) != meshes[k].geometry.triangle_count ||
-            sphere_material[k].shape(0) != meshes[k].geometry.sphere_count)
-            throw std::invalid_argument("one material index per triangle and per sphere is needed (mesh " +
-                                        std::to_string(k) + ")");
+        check_material_counts(tri_material[k], sphere_material[k], meshes[k].geometry, " of mesh " + std::to_string(k));
         meshes[k].triangle_material = tri_material[k].data();
         meshes[k].sphere_material = sphere_material[k].data();
     }

@@ -87,8 +87,9 @@ class RenderJob:
         """The images of the samples so far (see RenderResult). `cost` and `heat` need a job that
         keeps the cost (Renderer.start's keep_cost; `cost` None: where it does), `counters` one
         started with traversal_counters=True (ValueError otherwise)."""
-        if cost is None:
-            cost = bool(self._settings.keep_cost)
+        color, depth = _checks.flag("color", color), _checks.flag("depth", depth)  # "no" read as True
+        heat, counters = _checks.flag("heat", heat), _checks.flag("counters", counters)
+        cost = bool(self._settings.keep_cost) if cost is None else _checks.flag("cost", cost)
         h, w = self._settings.height, self._settings.width
         images = (
             np.empty((h, w, 4), np.float32) if color else None,

@@ -8,6 +8,7 @@ refine it, a long render shows progress and stops on Ctrl-C or when its progress
 
 from __future__ import annotations
 
+import numbers
 import threading
 import time
 
@@ -107,6 +108,9 @@ class Renderer:
     ):
         _checks.choice("backend", backend, BACKENDS)
         self.threads = _checks.integer("threads", threads, 0, 4096)
+        device = _device(backend, device)
+        validation = None if validation is None else _checks.flag("validation", validation)  # "no" read as True
+        force_staging = _checks.flag("force_staging", force_staging)
         self._vulkan, self.backend, self.reason = _choose_backend(backend, device, validation, force_staging)
         self._validation, self._force_staging = validation, force_staging  # for like()
         self._cache = SceneCache()
@@ -248,6 +252,21 @@ class Renderer:
         job.run(progress=progress)
         result = job.result(depth=False, cost=False)
         return result.color, result.timings
+
+
+def _device(backend: str, device) -> str | None:
+    """The Vulkan device asked for: None, a name substring, or an index (an int, or its digits).
+    TypeError for another type (an int was refused in nanobind's words); ValueError with the CPU
+    backend, which has none (it was ignored)."""
+    if device is None:
+        return None
+    if isinstance(device, numbers.Integral) and not isinstance(device, bool):
+        device = str(_checks.integer("device", device, 0, 2**31 - 1))
+    if not isinstance(device, str):
+        raise TypeError(f"device must be a Vulkan device's index or a part of its name, got {type(device).__name__}")
+    if backend == "cpu" and device:
+        raise ValueError(f"device {device!r} names a Vulkan device, and the backend is 'cpu'")
+    return device
 
 
 def _choose_backend(backend: str, device, validation, force_staging):

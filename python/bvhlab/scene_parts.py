@@ -44,6 +44,12 @@ def _radiance(name: str, value) -> tuple[float, float, float]:
     return v
 
 
+def _in_range(name: str, point: tuple[float, float, float]) -> None:
+    """ValueError where `point` lies outside the supported coordinate range (±MAX_COORDINATE)."""
+    if max(abs(x) for x in point) > MAX_COORDINATE:
+        raise ValueError(f"{name} {point} lies outside the supported coordinate range ±{MAX_COORDINATE:.5g} (2^40)")
+
+
 def _row3(row: np.ndarray, first: int) -> tuple[float, float, float]:
     """Three numbers of a saved row, from `first`."""
     return float(row[first]), float(row[first + 1]), float(row[first + 2])
@@ -268,11 +274,7 @@ class Camera(Lens):
             object.__setattr__(self, name, _vec3(f"camera {name}", getattr(self, name)))
         object.__setattr__(self, "fov_y", _real("camera fov_y", self.fov_y))
         self._check_lens()
-        if max(abs(x) for x in self.position) > MAX_COORDINATE:
-            raise ValueError(
-                f"camera position {self.position} lies outside the supported coordinate range "
-                f"±{MAX_COORDINATE:.5g} (2^40)"
-            )
+        _in_range("camera position", self.position)
         # the tracer works in float32: the two points must differ there, not only in float64
         look_at, position = np.array(self.look_at, np.float32), np.array(self.position, np.float32)
         if not np.any(look_at != position):
@@ -320,6 +322,7 @@ class View(Lens):
             object.__setattr__(self, name, _reals(f"camera {name}", getattr(self, name), 3))
         object.__setattr__(self, "fov_y", _real("camera fov_y", self.fov_y))
         self._check_lens()
+        _in_range("camera position", self.position)  # as Camera's (a render named the default light's instead)
         self.core().validate()
 
     def core(self):
@@ -347,11 +350,7 @@ class Light:
             raise ValueError(
                 f"light color × intensity must be at most {MAX_RADIANCE:g}, got {self.color} × {self.intensity}"
             )
-        if max(abs(x) for x in self.position) > MAX_COORDINATE:
-            raise ValueError(
-                f"light position {self.position} lies outside the supported coordinate range "
-                f"±{MAX_COORDINATE:.5g} (2^40)"
-            )
+        _in_range("light position", self.position)
 
     def as_row(self) -> list[float]:
         return [*self.position, *self.color, float(self.intensity)]

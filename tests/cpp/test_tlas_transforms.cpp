@@ -44,8 +44,8 @@ TEST(Tlas, BadInstancesAreRefusedByName) {
     far.m[3] = 0x1p41f;                             // moved beyond the coordinate range
     expect_refused({0, 3}, {Transform{}, Transform{}}, "instance 1 refers to mesh 3, but the scene has 1 mesh");
     expect_refused({0, 0}, {Transform{}, nan}, "instance 1: the transform has a NaN");
-    expect_refused({0}, {zero_axis}, "instance 0: the transform cannot be inverted");
-    expect_refused({0}, {flat_axes}, "instance 0: the transform cannot be inverted");
+    expect_refused({0}, {zero_axis}, "instance 0: the transform cannot be inverted (an axis of length 0");
+    expect_refused({0}, {flat_axes}, "instance 0: the transform cannot be inverted (a zero-scale axis, or axes");
     expect_refused({0}, {far}, "instance 0 would place mesh 0 outside");
     expect_refused({0, 0}, {Transform{}}, "one transform per instance");
 }

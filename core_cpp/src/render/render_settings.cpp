@@ -58,7 +58,7 @@ void validate_light(const RenderSettings& s) {
 
 void validate_work(const RenderSettings& s) {
     if (s.samples_per_axis < 1 || s.samples_per_axis > gpu::MAX_SAMPLES_PER_AXIS)
-        fail("samples per pixel axis must be 1.." + std::to_string(gpu::MAX_SAMPLES_PER_AXIS));
+        fail("samples_per_axis (samples per pixel axis) must be 1.." + std::to_string(gpu::MAX_SAMPLES_PER_AXIS));
     if (s.max_ray_depth > gpu::MAX_RAY_DEPTH)
         fail("max_ray_depth must be at most " + std::to_string(gpu::MAX_RAY_DEPTH));
     if (s.traversal == Traversal::Wide && s.traversal_counters)

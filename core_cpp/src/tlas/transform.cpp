@@ -74,6 +74,9 @@ void validate_transform(const Transform& t, const char* what) {
         // the determinant relative to its bound (Hadamard), which the test compares: a shear with
         // determinant 1 can have axes too nearly parallel ("determinant 1" alone read as a contradiction)
         const double bound = column_length(t, 0) * column_length(t, 1) * column_length(t, 2);
+        if (!(bound > 0))
+            throw std::invalid_argument(std::string(what) +
+                                        ": the transform cannot be inverted (an axis of length 0: a zero scale)");
         throw std::invalid_argument(std::string(what) +
                                     ": the transform cannot be inverted (a zero-scale axis, or axes "
                                     "(nearly) parallel: |determinant| " +
