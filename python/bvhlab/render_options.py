@@ -8,7 +8,6 @@ when the options are made."""
 from __future__ import annotations
 
 import dataclasses
-import math
 import numbers
 from dataclasses import dataclass, fields
 
