@@ -132,3 +132,19 @@ def test_a_snapshot_without_a_camera_says_why(tmp_path):
     assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
     assert "the default camera, which frames the whole scene, cannot be placed" in done.stderr
     assert not (tmp_path / "s.png").exists()
+
+
+def test_the_default_camera_frames_a_tiny_scene_as_a_large_one():
+    """A knot 1.6e-8 across (scenes build down to ~2e-10) was framed from an absolute 1e-6 minimum
+    radius: 0 of its pixels showed it (a helper's audit). The same picture at every scale now."""
+    from bvhlab.library import procedural
+
+    def shown(span: float) -> int:
+        scene = bvhlab.Scene(triangles=procedural.torus_knot(2000) * np.float32(span / 4))
+        image, _ = bvhlab.render(scene, bvhlab.build(scene), 80, 60, backend="cpu")
+        return int((np.abs(image[..., :3] - np.float32(scene.sky)).max(-1) > 1e-3).sum())
+
+    large = shown(1.0)
+    assert large > 300
+    for span in (1e-9, 1.6e-8, 1.6e-7):
+        assert shown(span) == large, span

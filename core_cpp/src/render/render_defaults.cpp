@@ -42,9 +42,11 @@ CameraPlacement default_camera(const Aabb& bounds) {
     const D3 lo = d3(bounds.lo), hi = d3(bounds.hi);
     const D3 center{(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2};
     // A point-like scene still gets a camera some way off, measurably so in float32 even far from
-    // the origin (at 1e12 a float32 step is 65536).
+    // the origin (at 1e12 a float32 step is 65536). The floor is for a point at the origin alone:
+    // an absolute 1e-6 put the camera of a scene 1.6e-8 across (it builds down to ~2e-10) so far
+    // back that it showed none of it (a helper's audit).
     const double far_out = std::max({std::fabs(center[0]), std::fabs(center[1]), std::fabs(center[2])});
-    const double radius = std::max({norm(sub(hi, lo)) / 2, 1e-6, 1e-5 * far_out});
+    const double radius = std::max({norm(sub(hi, lo)) / 2, 1e-30, 1e-5 * far_out});
     D3 direction{0.35, -1.0, 0.7};
     const double n = norm(direction);
     direction = {direction[0] / n, direction[1] / n, direction[2] / n};
