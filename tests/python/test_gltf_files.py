@@ -59,6 +59,16 @@ def _set(path: list, value):
         ({"f": _set(["meshes", 0, "primitives", 0, "mode"], 6)}, "triangle fans"),
         # a skinned mesh was placed by its node (skinning ignores it): 100 units off Blender's import
         ({"k": _set(["nodes", 0, "skin"], 0)}, "skinned mesh"),
+        # a helper's audit: overlapping vertices, an offset from the buffer's end, all but the last
+        ({"b": _set(["bufferViews", 0, "byteStride"], 4)}, "byteStride 4 is not 12 to 252 bytes"),
+        ({"o": _set(["bufferViews", 0, "byteOffset"], -60)}, "byteOffset is -60, not a count of 0 or more"),
+        ({"c": _set(["accessors", 0, "count"], -1)}, "accessor 0's count is -1"),
+        # zeros: 30M of them took 4.7 GB; degenerate triangles at the origin where it is POSITION
+        (
+            {"z": lambda d: d["accessors"].append({"componentType": 5126, "count": 30_000_000, "type": "VEC3"})},
+            "accessor 1 declares 30000000 elements of zeros",
+        ),
+        ({"p": lambda d: d["accessors"][0].pop("bufferView")}, "positions have no buffer view"),
     ],
 )
 def test_gltf_that_trimesh_would_read_wrong_is_refused(tmp_path, changes, message):

@@ -17,6 +17,7 @@ from pathlib import Path
 from urllib.parse import unquote
 
 from .._npz import SceneFileError
+from .gltf_nodes import flatten_deep_nodes
 
 #: Required extensions that leave the geometry as the core format says (materials, textures,
 #: lights, metadata) or that trimesh reads (KHR_mesh_quantization's non-normalized positions).
@@ -56,15 +57,18 @@ def check_gltf(path: Path) -> tuple[str, bytes | None]:
     kind, text = found
     try:
         doc = json.loads(text.decode("utf-8-sig"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as e:
-        raise SceneFileError(f"{path} is not glTF: its JSON cannot be read ({e})") from None
+    except (UnicodeDecodeError, ValueError, RecursionError) as e:
+        # ValueError: JSONDecodeError, and an integer of more than 4,300 digits; RecursionError:
+        # 100,000 nested brackets (both escaped as themselves, naming no file: a helper's audit)
+        raise SceneFileError(f"{path} is not glTF: its JSON cannot be read ({type(e).__name__}: {e})") from None
     if not isinstance(doc, dict) or not isinstance(doc.get("asset"), dict):
         raise SceneFileError(f"{path} is not glTF: no 'asset' object")
     try:
         _check(path, doc, _buffer_sizes(path, kind, doc, len(text)))
     except (TypeError, AttributeError, KeyError, IndexError) as e:  # a value of the wrong JSON type
         raise SceneFileError(f"{path} is not glTF: {type(e).__name__}: {e}") from None
-    mended = without_cameras(path, kind, doc, len(text))
+    flattened = flatten_deep_nodes(path, doc)  # after _check, which reads the nodes as the file has them
+    mended = without_cameras(path, kind, doc, len(text), flattened)
     if mended is None and kind == "gltf" and text.startswith(_BOM):
         # read above as utf-8-sig; trimesh's JSON parse failed on it and it looked for a
         # "model.gltf" instead ("refers to model.gltf, which is missing": a helper's probe)
@@ -72,14 +76,15 @@ def check_gltf(path: Path) -> tuple[str, bytes | None]:
     return kind, mended
 
 
-def without_cameras(path: Path, kind: str, doc: dict, json_bytes: int) -> bytes | None:
-    """The file with no node holding a camera (None where none does): trimesh 5 takes the first
+def without_cameras(path: Path, kind: str, doc: dict, json_bytes: int, changed: bool = False) -> bytes | None:
+    """The file with no node holding a camera (None where none does and `doc` was not `changed`
+    otherwise): trimesh 5 takes the first
     node with a camera for the camera alone, leaving out the mesh on that node and every node
     below it ("No path from world->1" where a mesh is parented to a camera). A camera places no
     geometry, so bvhlab reads the file without them: a .gltf's JSON (its buffers found beside it
     by the caller's resolver), or a GLB with its JSON chunk replaced and its binary chunk kept."""
     nodes = _list(doc, "nodes")
-    if not any("camera" in node for node in nodes):
+    if not changed and not any("camera" in node for node in nodes):
         return None
     for node in nodes:
         node.pop("camera", None)
@@ -115,6 +120,7 @@ def _check(path: Path, doc: dict, sizes: list[int | None]) -> None:
     if _list(doc, "meshes") and not _list(doc, "scenes"):  # trimesh read no triangles: "0 faces"
         raise SceneFileError(f"{path} has meshes but no scenes that place them (glTF 2.0: nothing to show)")
     meshes, tables = _list(doc, "meshes"), {key: _list(doc, key) for key in ("accessors", "bufferViews", "buffers")}
+    _check_zero_accessors(path, tables["accessors"], sizes)
     for n, node in enumerate(_list(doc, "nodes")):  # trimesh read "0 faces" for a mesh not there
         if "mesh" in node:
             _item(path, meshes, node["mesh"], "mesh", f"node {n}")
@@ -135,6 +141,9 @@ def _check(path: Path, doc: dict, sizes: list[int | None]) -> None:
                     f"{path}: {where} is compressed by {compressed[0]} without uncompressed data, which bvhlab "
                     "does not read (export it without compression)"
                 )
+            if position and "bufferView" not in position and not compressed:
+                # all zeros (§3.6.2.3): degenerate triangles at the origin, as many as it says
+                raise SceneFileError(f"{path}: {where}'s positions have no buffer view (all zeros)")
             if position.get("normalized"):
                 raise SceneFileError(f"{path}: {where}: normalized positions (KHR_mesh_quantization) are not read")
             if "sparse" in position or "sparse" in indices:
@@ -176,6 +185,8 @@ def _primitive_accessor(path: Path, tables: dict, sizes: list[int | None], index
     view = _item(path, tables["bufferViews"], v, "buffer view", f"accessor {index}")
     buffer = _item(path, tables["buffers"], view.get("buffer"), "buffer", f"buffer view {v}")
     start, length, room = view.get("byteOffset", 0), view.get("byteLength", 0), buffer.get("byteLength", 0)
+    for name, value in (("byteOffset", start), ("byteLength", length)):
+        _natural(path, f"buffer view {v}'s {name}", value)  # -60 was read from the buffer's end
     if start + length > room:
         raise SceneFileError(
             f"{path}: buffer view {v} ({start} + {length} bytes) runs past the end of buffer "
@@ -189,14 +200,45 @@ def _primitive_accessor(path: Path, tables: dict, sizes: list[int | None], index
         )
     size = _COMPONENT_BYTES.get(component, 0) if isinstance(component, int) else 0
     size *= _TYPE_COMPONENTS.get(kind, 0) if isinstance(kind, str) else 0
-    count = accessor.get("count", 0)
-    end = accessor.get("byteOffset", 0) + (count - 1) * view.get("byteStride", size) + size if count else 0
+    count, offset = accessor.get("count", 0), accessor.get("byteOffset", 0)
+    stride = view.get("byteStride", size)
+    _natural(path, f"accessor {index}'s count", count)  # -1 read every vertex but the last
+    _natural(path, f"accessor {index}'s byteOffset", offset)
+    if not isinstance(stride, int) or not size <= stride <= 252:  # §3.6.2.4 (4 overlapped a VEC3's floats)
+        raise SceneFileError(
+            f"{path}: buffer view {v}'s byteStride {stride!r} is not {size} to 252 bytes (accessor {index}'s "
+            f"elements are {size} bytes)"
+        )
+    end = offset + (count - 1) * stride + size if count else 0
     if end > length:
         raise SceneFileError(
             f"{path}: accessor {index} ({count} elements, {end} bytes) runs past the end of buffer view {v} "
             f"({length} bytes)"
         )
     return accessor
+
+
+def _natural(path: Path, what: str, value) -> None:
+    if not isinstance(value, int) or value < 0:
+        raise SceneFileError(f"{path}: {what} is {value!r}, not a count of 0 or more")
+
+
+def _check_zero_accessors(path: Path, accessors: list[dict], sizes: list[int | None]) -> None:
+    """An accessor without a buffer view is zeros (§3.6.2.3), which trimesh makes for every one of
+    them, used or not: refused where it holds more bytes than the file's buffers do (600 bytes of
+    JSON declaring 30M positions took 4.7 GB; 2^40 ran out of memory: a helper's audit)."""
+    held = sum(size for size in sizes if size is not None)
+    for k, accessor in enumerate(accessors):
+        if "bufferView" in accessor:
+            continue
+        count, kind = accessor.get("count", 0), accessor.get("type")
+        _natural(path, f"accessor {k}'s count", count)
+        size = _COMPONENT_BYTES.get(accessor.get("componentType"), 4) * _TYPE_COMPONENTS.get(kind, 16)
+        if count * size > max(held, 1 << 16):
+            raise SceneFileError(
+                f"{path}: accessor {k} declares {count} elements of zeros (no buffer view), {count * size} bytes, "
+                f"more than the file's buffers hold ({held})"
+            )
 
 
 def _buffer_sizes(path: Path, kind: str, doc: dict, json_bytes: int) -> list[int | None]:
