@@ -231,9 +231,10 @@ def _check_zero_accessors(path: Path, accessors: list[dict], sizes: list[int | N
     for k, accessor in enumerate(accessors):
         if "bufferView" in accessor:
             continue
-        count, kind = accessor.get("count", 0), accessor.get("type")
+        count, component, kind = accessor.get("count", 0), accessor.get("componentType"), accessor.get("type")
         _natural(path, f"accessor {k}'s count", count)
-        size = _COMPONENT_BYTES.get(accessor.get("componentType"), 4) * _TYPE_COMPONENTS.get(kind, 16)
+        size = _COMPONENT_BYTES.get(component, 4) if isinstance(component, int) else 4
+        size *= _TYPE_COMPONENTS.get(kind, 16) if isinstance(kind, str) else 16
         if count * size > max(held, 1 << 16):
             raise SceneFileError(
                 f"{path}: accessor {k} declares {count} elements of zeros (no buffer view), {count * size} bytes, "
