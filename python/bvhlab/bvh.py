@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from . import _checks, _core
+from ._mesh_changes import checked_change
 from .build_config import BuildConfig
 from .inspect.node_data import NodeData
 from .ray_query import run_occluded_query, run_ray_query
@@ -116,7 +117,7 @@ class Bvh:
         self._stats: tuple[int, dict] | None = None  # (revision, stats)
         self._node_data: tuple[int, NodeData] | None = None  # (revision, data)
         self._node_structure: tuple[int, NodeData] | None = None  # (revision, data without EPO)
-        # the InstancedBvhs this tree is a mesh of (_checked_change): a change through `meshes[k]`
+        # the InstancedBvhs this tree is a mesh of (_mesh_changes): a change through `meshes[k]`
         # must leave their instances in the coordinate range
         self._placed_by: weakref.WeakSet[InstancedBvh] = weakref.WeakSet()
         # a checked change and its undoing, one at a time: an undo put back the version before
@@ -328,7 +329,7 @@ class Bvh:
         if spheres is not None:  # None on a tree with spheres raises ValueError (the core checks)
             spheres = _checks.float32_array("spheres", spheres, (4,))
         core_config = update_config(config, changes).core()
-        stats = self._checked_change(lambda: _core.update_bvh(self._core, triangles, spheres, core_config))
+        stats = checked_change(self, lambda: _core.update_bvh(self._core, triangles, spheres, core_config))
         return UpdateStats(**stats)
 
     def optimize(
@@ -356,39 +357,20 @@ class Bvh:
             config = config.replace(**changes)
         if progress is not None and not callable(progress):
             raise TypeError("progress must be callable (fraction -> bool) or None")
-        stats = _core.optimize_bvh(self._core, config.core(), progress)
+        core_config = config.core()
+        stats = checked_change(self, lambda: _core.optimize_bvh(self._core, core_config, progress))
         return OptimizeStats(**stats)
 
     def refit(self, triangles: np.ndarray, spheres: np.ndarray | None = None) -> None:
         """Move the geometry (same counts) and recompute every box, keeping the topology. An SBVH
         (method "sbvh") is rebuilt with its settings instead: its leaf boxes hold clipped parts of
-        triangles, which a refit cannot clip again."""
+        triangles, which a refit cannot clip again. A mesh of an InstancedBvh (`meshes[k]`) whose
+        new geometry an instance would place outside the coordinate range: ValueError, the tree
+        as it was (a new revision), as for `update` and `optimize`."""
         triangles = _checks.float32_array("triangles", triangles, (3, 3))
         if spheres is not None:
             spheres = _checks.float32_array("spheres", spheres, (4,))
-        self._checked_change(lambda: self._core.refit(triangles, spheres))
-
-    def _checked_change(self, change: Callable[[], object]):
-        """Runs `change` (a refit or update of this tree) and returns what it returns. Where this
-        tree is a mesh of an InstancedBvh (changed through its `meshes[k]`), that tree's instances
-        of it are checked with the new version as its next TLAS will be (not made now: a caller
-        changing several meshes makes one); where one is refused (moved outside the coordinate
-        range), the change is undone (the version before it published again, as a new revision)
-        and the ValueError raised: the InstancedBvh kept the change, and every later read of it
-        raised, `meshes` too, so it could not be changed back (a helper's audit)."""
-        owners = [o for o in list(self._placed_by) if o._places(self)]
-        if not owners:
-            return change()
-        with self._changing:
-            before = self._core.fork()
-            result = change()
-            try:
-                for owner in owners:
-                    owner._check_placement(self)
-            except ValueError as e:
-                self._core.restore(before)
-                raise ValueError(f"change refused, the tree kept as it was (an InstancedBvh places it): {e}") from None
-            return result
+        checked_change(self, lambda: self._core.refit(triangles, spheres))
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:

@@ -11,6 +11,7 @@ from collections.abc import Callable
 import numpy as np
 
 from . import _checks, _core
+from ._mesh_changes import placing
 from .build_config import BuildConfig
 from .bvh import Bvh
 from .inspect.node_data import NodeData
@@ -45,11 +46,11 @@ class InstancedBvh:
         self._tlas: tuple | None = None  # (the core TLAS, it as a Bvh)
         self._tlas_data: tuple | None = None  # (the TLAS it was made of, NodeData, leaf_first, refs)
         self._analysed: tuple | None = None  # (_analysis_key(), TwoLevelNodeData)
-        _placing(self, meshes)
+        placing(self, meshes)
 
     def _check_placement(self, tree: Bvh) -> None:
         """ValueError where this tree's next TLAS would refuse an instance of `tree` as it is now
-        (Bvh._checked_change)."""
+        (_mesh_changes)."""
         _, mesh_of, transforms, meshes, _ = self._state
         for k in (k for k, m in enumerate(meshes) if m is tree):
             if k and tree._core.primitive_counts[1]:  # Bvh.update with spheres, which update_mesh refuses
@@ -58,14 +59,15 @@ class InstancedBvh:
             _core.check_placement(tree._core, k, of_k, np.ascontiguousarray(transforms[of_k]))
 
     def _places(self, tree: Bvh) -> bool:
-        """Whether `tree` is one of the meshes this (not a snapshot) places now (Bvh._checked_change)."""
+        """Whether `tree` is one of the meshes this (not a snapshot) places now (_mesh_changes)."""
         return not self._frozen and any(m is tree for m in self._state[3])
 
     @property
     def meshes(self) -> tuple[Bvh, ...]:
         """The meshes' trees, mesh k's at k (a tuple: `update_mesh` replaces one). A tree updated
         through it (`meshes[k].update(...)`) is followed: the next query, render or figure makes
-        the TLAS again over it (it kept answering for the old geometry)."""
+        the TLAS again over it (it kept answering for the old geometry). Such a change that an
+        instance would place outside the coordinate range is refused (ValueError) and undone."""
         return self._current()[3]
 
     def snapshot(self) -> InstancedBvh:
@@ -263,7 +265,7 @@ class InstancedBvh:
             self._state = _make_state(meshes, self._state[1], self._state[2], self.config.threads)
         except ValueError as e:  # the instances did not change: mesh k's new geometry did
             raise ValueError(f"mesh {k}'s new geometry refused, the tree kept as it was: {e}") from None
-        _placing(self, (tree,))
+        placing(self, (tree,))
         return stats
 
     def world_boxes(self) -> tuple[np.ndarray, np.ndarray]:
@@ -314,12 +316,6 @@ class InstancedBvh:
 
 def _spheres_beyond_mesh_0(k: int) -> ValueError:
     return ValueError(f"mesh {k} cannot hold spheres: only mesh 0 (the scene's own geometry) has them in a Scene")
-
-
-def _placing(owner: InstancedBvh, meshes) -> None:
-    """Tells each of `meshes` that `owner` places it (Bvh._checked_change)."""
-    for m in meshes:
-        m._placed_by.add(owner)
 
 
 def _version_key(core: _core.TwoLevel, meshes: list[Bvh]) -> tuple:

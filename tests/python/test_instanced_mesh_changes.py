@@ -88,11 +88,13 @@ def test_every_instanced_tree_placing_the_mesh_is_asked():
 
 
 def test_a_snapshot_does_not_refuse_changes():
-    """A snapshot keeps the TLAS it was taken with; it places nothing new, so it asks nothing."""
-    tree = bvhlab.build(_scene(scale=1.0))
+    """A snapshot keeps the TLAS it was taken with and places nothing new: a change its placement
+    would refuse is taken where the live tree's placement allows it."""
+    tree = bvhlab.build(_scene())  # instance 2 scaled by 1e6
     view = tree.snapshot()
-    tree.meshes[1].refit(MESH + np.float32(1e7))
-    assert view.world_boxes()[1][2, 0] == pytest.approx(8.0, rel=1e-5)
+    tree.place(*_scene(scale=1.0).instances())
+    tree.meshes[1].refit(MESH + np.float32(1e7))  # ×1e6 past 2^40 in the snapshot's placement
+    assert view.world_boxes()[1][2, 0] == pytest.approx(3e6 + 5, rel=1e-5)
     assert tree.world_boxes()[1][2, 0] == pytest.approx(1e7 + 8, rel=1e-5)
 
 
@@ -155,3 +157,32 @@ def test_height_counts_only_placed_meshes():
     stats = bvhlab.build(scene).stats
     assert stats["mesh_height"][1] > 5
     assert stats["height"] == stats["tlas_height"] + stats["mesh_height"][2]
+
+
+def test_an_optimisation_that_moves_an_instance_out_of_range_is_refused_and_undone():
+    """Optimising reshapes the tree, and with it the top boxes a TLAS moves into the world: a
+    rotated instance placed just inside -2^40 left it, and every later read raised (the review)."""
+    from bvhlab.library import procedural
+
+    tris = procedural.random_triangles(2000, size=0.05, seed=29)
+    c, s = np.cos(0.7), np.sin(0.7)
+
+    def placed(tx: float):
+        transform = np.float32([[c * 1e9, -s * 1e9, 0, tx], [s * 1e9, c * 1e9, 0, 0], [0, 0, 1e9, 0]])
+        return bvhlab.build(
+            bvhlab.Scene(
+                triangles=tris[:1], meshes=[tris], instance_mesh=np.array([1]), instance_transforms=transform[None]
+            )
+        )
+
+    probe = placed(0.0)
+    lo0 = probe.world_boxes()[0][0, 0]
+    probe.meshes[1].optimize(iterations=50)
+    grown = float(lo0 - probe.world_boxes()[0][0, 0])
+    assert grown > 0  # the optimised tree's top boxes reach further out
+    tree = placed(-(2.0**40) - float(lo0) + grown / 2)  # inside before, outside after
+    revision = tree.meshes[1].revision
+    with pytest.raises(ValueError, match="change refused.*instance 0 would place mesh 1 outside"):
+        tree.meshes[1].optimize(iterations=50)
+    assert tree.meshes[1].revision == revision + 2
+    assert tree.world_boxes()[0][0, 0] >= -(2.0**40)
