@@ -13,7 +13,7 @@ from dataclasses import dataclass, fields
 
 from . import _checks, _core
 from .overlay_levels import LEVELS
-from .scene_parts import MAX_RADIANCE
+from .scene_parts import _radiance
 
 #: The core's defaults, read while the module loads (deleted after: a nanobind object still alive
 #: when the interpreter ends is reported as a leak, which Blender 4.3 and bpy printed at every exit).
@@ -154,13 +154,9 @@ def _triple(name: str, value) -> tuple[float, float, float]:
         v = tuple(_real(name, x) for x in value)
     except TypeError:
         raise TypeError(f"{name} must be three numbers, got {value!r}") from None
-    if len(v) != 3:
-        raise ValueError(f"{name} must be three numbers, got {len(v)}")
-    # a colour as a material's (scene_parts._radiance): a negative one drew pixels below 0, 3e38
-    # infinite ones where samples were summed (a helper's audit); NaN is bad input too
-    if not all(0.0 <= x <= MAX_RADIANCE for x in v):
-        raise ValueError(f"{name} must be three numbers in [0, {MAX_RADIANCE:g}], got {v}")
-    return v
+    # three, and a colour as a material's: a negative one drew pixels below 0, 3e38 infinite ones where
+    # samples were summed (a helper's audit); NaN is bad input too
+    return _radiance(name, v)
 
 
 def _set_overlay(s, overlay_depth) -> None:

@@ -10,9 +10,9 @@ import bvhlab
 
 @pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
 def test_a_line_color_that_is_not_finite_is_refused(bad):
-    with pytest.raises(ValueError, match=r"line_color must be three numbers in \[0, 1e\+30\]"):
+    with pytest.raises(ValueError, match="line_color must be finite"):
         bvhlab.RenderOptions(overlay_depth=(0, 3), line_color=(1.0, bad, 0.0))
-    with pytest.raises(ValueError, match=r"line_color must be three numbers in \[0, 1e\+30\]"):
+    with pytest.raises(ValueError, match="line_color must be finite"):
         bvhlab.RenderOptions().replace(line_color=(bad, 0, 0))
 
 

@@ -66,23 +66,16 @@ def _knot_boxes_deep():
 
 
 def _whitted_far(offset: float = 1e4):
-    """whitted moved 1e4 along x and y, camera and light with it: its overlay's lines took another
-    box's colour on Vulkan than on the CPU on 106 of 1,221 line pixels (9%) at 160×120, the world
-    position interpolated and made relative to the camera in the fragment shader (a helper's
-    audit; 1 of 1,221 since)."""
-    s = showcase.whitted()
-    o = np.float32([offset, offset, 0])
-    c, light = s.camera, s.light
-    return bvhlab.Scene(
-        triangles=s.triangles + o,
-        spheres=np.concatenate([s.spheres[:, :3] + o, s.spheres[:, 3:]], 1),
-        materials=s.materials,
-        tri_material=s.tri_material,
-        sphere_material=s.sphere_material,
-        camera=dataclasses.replace(c, position=tuple(np.add(c.position, o)), look_at=tuple(np.add(c.look_at, o))),
-        light=bvhlab.Light(tuple(np.add(light.position, o)), light.color, light.intensity),
-        sky=s.sky,
+    """whitted 1e4 from the origin: 106 of its 1,221 line pixels took another box's colour on Vulkan
+    (the world position interpolated, made relative in the fragment shader: a helper's audit)."""
+    s, o = showcase.whitted(), np.float32([offset, offset, 0])
+    moved = dict(position=tuple(np.add(s.camera.position, o)), look_at=tuple(np.add(s.camera.look_at, o)))
+    s.camera, s.light = (
+        dataclasses.replace(s.camera, **moved),
+        dataclasses.replace(s.light, position=tuple(np.add(s.light.position, o))),
     )
+    s.triangles, s.spheres = s.triangles + o, np.concatenate([s.spheres[:, :3] + o, s.spheres[:, 3:]], 1)
+    return s
 
 
 #: (scene, overlay depths, image size): odd sizes put an edge through the camera's axis on a pixel

@@ -71,9 +71,8 @@ struct ObjectMap {
 
 /// An ObjectMap by columns, as the two-level walks read it (tlas.h LeafInstance): L's columns at
 /// c[0, 3), c[3, 6), c[6, 9) and P at c[9, 12), so that a ray is moved four lanes at once, a column
-/// times one component at a time (object_ray.h), where by rows each output is a sum across lanes.
-/// point and vector are ObjectMap's operations in its order, so the same bits (object_ray.h moves
-/// a ray by the same operations, lane by lane).
+/// times one component at a time (object_ray.h move_ray: ObjectMap's operations in its order, lane
+/// by lane, so the same bits), where by rows each output is a sum across lanes.
 struct ObjectColumns {
     std::array<float, 12> c{1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};
 
@@ -81,11 +80,6 @@ struct ObjectColumns {
     explicit ObjectColumns(const ObjectMap& map) {
         for (int col = 0; col < 4; ++col)
             for (int row = 0; row < 3; ++row) c[3 * col + row] = map.m[4 * row + col];
-    }
-    Vec3 point(Vec3 p) const { return vector({p.x - c[9], p.y - c[10], p.z - c[11]}); }
-    Vec3 vector(Vec3 d) const {
-        return {c[0] * d.x + c[3] * d.y + c[6] * d.z, c[1] * d.x + c[4] * d.y + c[7] * d.z,
-                c[2] * d.x + c[5] * d.y + c[8] * d.z};
     }
 };
 

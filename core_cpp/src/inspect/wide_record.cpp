@@ -129,7 +129,7 @@ WideNames name_wide_nodes(const Bvh& bvh, const WideBvh& wide) {
 
 Hit detail::intersect_wide_recorded(const Bvh& bvh, const WideBvh& wide, const WideNames& names, const Ray& ray,
                                     TraversalRecord& record) {
-    const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
+    const WideView view = view_of(wide);
     Recorder recorder(bvh, wide, names, ray, record);
     // The kernel intersect_wide runs (isa.h): both visit the same nodes in the same order anyway
 #if defined(BVHLAB_AVX2_KERNELS)

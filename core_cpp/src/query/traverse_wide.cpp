@@ -225,7 +225,7 @@ inline void finish_wide_hit(const Bvh& bvh, const Ray& ray, Hit& hit) {
 }  // namespace
 
 Hit intersect_wide(const WideBvh& wide, const Bvh& bvh, const Ray& ray, std::uint32_t* nodes_visited) {
-    const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
+    const WideView view = view_of(wide);
 #if defined(BVHLAB_AVX2_KERNELS)
     Hit hit = active_isa() == Isa::Avx2 ? avx2::intersect_wide_kernel(view, ray, nodes_visited)
                                         : portable::intersect_wide_kernel(view, ray, nodes_visited);
@@ -257,7 +257,7 @@ void group_by_octant(const Ray* rays, std::uint32_t count, std::uint32_t* order,
 
 void intersect_wide_grouped(const WideBvh& wide, const Ray* rays, const std::uint32_t* order,
                             const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited, WideWalk walk) {
-    const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
+    const WideView view = view_of(wide);
     if (walk == WideWalk::Interleaved) detail::interleaved_pieces.fetch_add(1, std::memory_order_relaxed);
 #if defined(BVHLAB_AVX2_KERNELS)
     if (active_isa() == Isa::Avx2)
@@ -270,7 +270,7 @@ void intersect_wide_grouped(const WideBvh& wide, const Ray* rays, const std::uin
 
 void occluded_wide_grouped(const WideBvh& wide, const Ray* rays, const std::uint32_t* order, const std::uint32_t* start,
                            bool* occluded) {
-    const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
+    const WideView view = view_of(wide);
 #if defined(BVHLAB_AVX2_KERNELS)
     if (active_isa() == Isa::Avx2) avx2::occluded_wide_batch_kernel(view, rays, order, start, occluded);
     else portable::occluded_wide_batch_kernel(view, rays, order, start, occluded);
@@ -301,7 +301,7 @@ void occluded_wide_batch(const WideBvh& wide, const Ray* rays, std::size_t count
 }
 
 bool occluded_wide(const WideBvh& wide, const Ray& ray) {
-    const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
+    const WideView view = view_of(wide);
 #if defined(BVHLAB_AVX2_KERNELS)
     if (active_isa() == Isa::Avx2) return avx2::occluded_wide_kernel(view, ray);
 #endif
@@ -316,7 +316,7 @@ void start_tlas_walk(const Ray& ray, TlasWalk& walk) {
 }
 
 std::uint32_t next_tlas_leaf(const WideBvh& wide, TlasWalk& walk, float hit_t, WideRecorder* record) {
-    const WideView view{wide.lines.empty() ? nullptr : wide.lines.data()->bytes};
+    const WideView view = view_of(wide);
 #if defined(BVHLAB_AVX2_KERNELS)
     if (active_isa() == Isa::Avx2) return avx2::next_tlas_leaf(view, walk, hit_t, record);
 #endif

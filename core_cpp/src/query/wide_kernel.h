@@ -14,6 +14,9 @@ struct WideView {
     const unsigned char* lines;
 };
 
+/// A WideBvh as the kernels see it (null lines for an empty tree).
+inline WideView view_of(const WideBvh& wide) { return {wide.lines.empty() ? nullptr : wide.lines.data()->bytes}; }
+
 /// hit_sphere (ray.h) on lane `lane` of a sphere packet; updates hit (t, ref) as it does.
 bool hit_packet_sphere(const PrimPacket& k, int lane, const Ray& ray, Hit& hit);
 

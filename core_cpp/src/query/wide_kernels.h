@@ -13,9 +13,6 @@
 
 namespace bvhlab {
 
-/// A WideBvh as the kernels see it (WideView: null for an empty tree).
-inline WideView view_of(const WideBvh& wide) { return {wide.lines.empty() ? nullptr : wide.lines.data()->bytes}; }
-
 /// The portable kernels (plain C++ or SSE) under the names every kernel set has.
 struct PortableKernels {
     static Hit closest(const WideView& w, const Ray& r, std::uint32_t* visited) {
