@@ -69,6 +69,17 @@ def _set(path: list, value):
             "accessor 1 declares 30000000 elements of zeros",
         ),
         ({"p": lambda d: d["accessors"][0].pop("bufferView")}, "positions have no buffer view"),
+        ({"v": _set(["accessors", 0, "type"], "VEC2")}, "positions are 'VEC2', not VEC3"),
+        (
+            {
+                "i": lambda d: (
+                    d["accessors"].append({"bufferView": 1, "componentType": 5121, "count": 8, "type": "SCALAR"}),
+                    d["bufferViews"].append({"buffer": 0, "byteLength": 8}),
+                    d["meshes"][0]["primitives"][0].__setitem__("indices", 1),
+                )
+            },
+            "has 8 indices of triangles, not a multiple of 3",
+        ),
     ],
 )
 def test_gltf_that_trimesh_would_read_wrong_is_refused(tmp_path, changes, message):

@@ -133,6 +133,10 @@ def _check(path: Path, doc: dict, sizes: list[int | None]) -> None:
                 path, tables, sizes, _dict(primitive, "attributes").get("POSITION"), where, False
             )
             indices = _primitive_accessor(path, tables, sizes, primitive.get("indices"), where, True)
+            if primitive.get("mode", 4) == 4 and indices.get("count", 0) % 3:  # "cannot reshape array of size 8"
+                raise SceneFileError(
+                    f"{path}: {where} has {indices['count']} indices of triangles, not a multiple of 3"
+                )
             compressed = [name for name in _COMPRESSED if name in _dict(primitive, "extensions")]
             if compressed and position and "bufferView" not in position:
                 # an extension the file uses but does not require (the Draco extension's rules ask
@@ -179,6 +183,8 @@ def _primitive_accessor(path: Path, tables: dict, sizes: list[int | None], index
             f"{path}: {where}'s indices have component type {component!r}: glTF indices are unsigned bytes, "
             "shorts or ints (5121, 5123, 5125)"
         )
+    if not indices and kind != "VEC3":  # VEC2: "triangles must have shape (N, 3, 3)"; VEC4: "a face refers to..."
+        raise SceneFileError(f"{path}: {where}'s positions are {kind!r}, not VEC3 (glTF 2.0 §3.7.2.1)")
     if "bufferView" not in accessor:
         return accessor  # all zeros (glTF 2.0 §3.6.2.3)
     v = accessor["bufferView"]
