@@ -37,11 +37,6 @@ def _random_hierarchy(rng, count: int) -> list[dict]:
     return nodes
 
 
-def _sorted(triangles: np.ndarray) -> np.ndarray:
-    flat = triangles.reshape(len(triangles), -1).astype(np.float64)
-    return flat[np.lexsort(np.round(flat, 3).T[::-1])]
-
-
 def test_a_deep_hierarchy_is_flattened_to_the_triangles_trimesh_composes(tmp_path, monkeypatch):
     rng = np.random.default_rng(7)
     text = gltf(nodes=_random_hierarchy(rng, 40))
@@ -49,7 +44,25 @@ def test_a_deep_hierarchy_is_flattened_to_the_triangles_trimesh_composes(tmp_pat
     monkeypatch.setattr(gltf_nodes, "FLAT_DEPTH", 10**9)  # trimesh composes the paths itself
     reference = load(tmp_path, "as_is.gltf", text)
     assert len(flattened) == len(reference) > 15
-    np.testing.assert_allclose(_sorted(flattened), _sorted(reference), rtol=1e-5, atol=1e-5)
+    # in trimesh's order too: a primitive's index is the same either way (the review)
+    np.testing.assert_allclose(flattened, reference, rtol=1e-5, atol=1e-5)
+
+
+@pytest.mark.parametrize(
+    "rotation, roots",
+    [((1e-9, 0, 0, 0), [0]), ((2e-8, 0, 0, 0), [0]), ((0, 0, 0, 0), [0]), ((0, 0, 0.3, 1), [0, 0])],
+)
+def test_flattening_follows_trimesh_on_its_edge_cases(tmp_path, monkeypatch, rotation, roots):
+    """A quaternion of squared length below 4 ε is none for trimesh (1e-9 was a turn of 180°
+    flattened); a root listed twice is placed once (its triangles came twice: the review)."""
+    nodes = [{"children": [n + 1], "rotation": list(rotation)} for n in range(12)] + [{"mesh": 0}]
+    nodes[12]["children"] = [13]
+    nodes.append({"mesh": 0, "translation": [0, 0, 1]})
+    text = gltf(nodes=nodes, scenes=[{"nodes": roots}])
+    flattened = load(tmp_path, "deep.gltf", text)
+    monkeypatch.setattr(gltf_nodes, "FLAT_DEPTH", 10**9)
+    reference = load(tmp_path, "as_is.gltf", text)
+    np.testing.assert_allclose(flattened, reference, rtol=1e-6, atol=1e-6)
 
 
 def test_a_chain_of_thousands_of_nodes_is_read_at_once(tmp_path):
@@ -86,6 +99,19 @@ def test_nodes_that_are_not_a_forest_are_refused(tmp_path, nodes, message):
     a cycle read as "Iteration limit exceeded!"."""
     with pytest.raises(SceneFileError, match=message):
         load(tmp_path, "model.gltf", gltf(nodes=nodes, scenes=[{"nodes": [0]}]))
+
+
+@pytest.mark.parametrize(
+    "scenes, message",
+    [
+        ([{"nodes": [0, 5]}], "scene 0 lists node 5 and its ancestor 0"),  # placed once by trimesh
+        ([{"nodes": 5}], r"scene 0's nodes 5 are not nodes of the file"),  # a TypeError, deep only
+    ],
+)
+def test_deep_scenes_that_are_not_lists_of_roots_are_refused(tmp_path, scenes, message):
+    nodes = [{"children": [n + 1]} for n in range(12)] + [{"mesh": 0}]
+    with pytest.raises(SceneFileError, match=message):
+        load(tmp_path, "model.gltf", gltf(nodes=nodes, scenes=scenes))
 
 
 @pytest.mark.parametrize("text", ["[" * 100_000, '{"asset": {"version": "2.0"}, "n": ' + "7" * 5000 + "}"])

@@ -4,9 +4,11 @@ it reads it: extensions the file requires that change its geometry or that bvhla
 sparse accessors (their values ignored), normalized quantized positions (read unscaled), triangle
 fans (read as no triangles), skinned meshes (placed by their node, which skinning ignores), morph
 targets given weight (read in their base shape); and a file that is not glTF at all (not JSON,
-empty) named as such rather than as a missing file. One thing it reads wrong is mended instead
-(`without_cameras`): trimesh skips the first node with a camera, and the mesh on it and the nodes
-below it with it (a mesh parented to a camera), so trimesh is given the file without its cameras."""
+empty) named as such rather than as a missing file. Two things it reads wrong are mended instead:
+trimesh skips the first node with a camera, and the mesh on it and the nodes below it with it (a
+mesh parented to a camera), so trimesh is given the file without its cameras (`without_cameras`);
+and it composes deep hierarchies in time cubic in their depth, so those are flattened first
+(gltf_nodes.py)."""
 
 from __future__ import annotations
 
@@ -49,9 +51,9 @@ def _json_text(path: Path, any_suffix: bool = True) -> tuple[str, bytes] | None:
 
 def check_gltf(path: Path) -> tuple[str, bytes | None]:
     """("glb" or "gltf" by the file's contents (a GLB named .gltf is read as GLB), the file as
-    trimesh should read it: None for the file itself, else its bytes without cameras
-    (without_cameras)); raises SceneFileError for a file bvhlab would read wrong (see the module's
-    docstring)."""
+    trimesh should read it: None for the file itself, else its bytes without cameras and with a
+    deep node hierarchy flattened (without_cameras, gltf_nodes)); raises SceneFileError for a file
+    bvhlab would read wrong (see the module's docstring)."""
     found = _json_text(path)
     assert found is not None  # every suffix is read
     kind, text = found
@@ -65,9 +67,9 @@ def check_gltf(path: Path) -> tuple[str, bytes | None]:
         raise SceneFileError(f"{path} is not glTF: no 'asset' object")
     try:
         _check(path, doc, _buffer_sizes(path, kind, doc, len(text)))
+        flattened = flatten_deep_nodes(path, doc)  # after _check, which reads the nodes as the file has them
     except (TypeError, AttributeError, KeyError, IndexError) as e:  # a value of the wrong JSON type
         raise SceneFileError(f"{path} is not glTF: {type(e).__name__}: {e}") from None
-    flattened = flatten_deep_nodes(path, doc)  # after _check, which reads the nodes as the file has them
     mended = without_cameras(path, kind, doc, len(text), flattened)
     if mended is None and kind == "gltf" and text.startswith(_BOM):
         # read above as utf-8-sig; trimesh's JSON parse failed on it and it looked for a
@@ -77,9 +79,9 @@ def check_gltf(path: Path) -> tuple[str, bytes | None]:
 
 
 def without_cameras(path: Path, kind: str, doc: dict, json_bytes: int, changed: bool = False) -> bytes | None:
-    """The file with no node holding a camera (None where none does and `doc` was not `changed`
-    otherwise): trimesh 5 takes the first
-    node with a camera for the camera alone, leaving out the mesh on that node and every node
+    """The file as `doc` holds it, with no node holding a camera; None where no node holds one and
+    `doc` was not `changed` otherwise (flattened). trimesh 5 takes the first node with a camera for
+    the camera alone, leaving out the mesh on that node and every node
     below it ("No path from world->1" where a mesh is parented to a camera). A camera places no
     geometry, so bvhlab reads the file without them: a .gltf's JSON (its buffers found beside it
     by the caller's resolver), or a GLB with its JSON chunk replaced and its binary chunk kept."""

@@ -21,9 +21,10 @@ FLAT_DEPTH = 8
 
 def flatten_deep_nodes(path: Path, doc: dict) -> bool:
     """Checks the node forest of `doc` (the parsed glTF JSON) and, where some scene's hierarchy is
-    deeper than FLAT_DEPTH, replaces its nodes with one node a placed mesh, in the same order as a
-    walk of the original (its meshes' triangles come out in the same order). Returns whether `doc`
-    changed. SceneFileError for a cycle, a node with two parents, or one with a matrix and TRS."""
+    deeper than FLAT_DEPTH, replaces its nodes with one node a placed mesh, in the order trimesh
+    reads them (its meshes' triangles come out in the same order). Returns whether `doc` changed.
+    SceneFileError for a cycle, a node with two parents, a node with a matrix and TRS, or a scene
+    that lists a node and one of its ancestors (trimesh placed such a node once; flattened, twice)."""
     nodes = doc.get("nodes")
     if not isinstance(nodes, list) or not nodes:
         return False
@@ -41,14 +42,30 @@ def flatten_deep_nodes(path: Path, doc: dict) -> bool:
     if max(depth) < FLAT_DEPTH:
         return False
     flat: list[dict] = []
-    for scene in scenes:
-        roots = [r for r in scene.get("nodes") or [] if isinstance(r, int) and 0 <= r < len(nodes)]
+    for k, scene in enumerate(scenes):
+        listed = scene.get("nodes") or []
+        if not isinstance(listed, list) or not all(isinstance(r, int) and 0 <= r < len(nodes) for r in listed):
+            raise SceneFileError(f"{path}: scene {k}'s nodes {listed!r} are not nodes of the file ({len(nodes)})")
+        roots = list(dict.fromkeys(listed))  # one placement a node, as trimesh's
+        _check_roots(path, k, roots, parent)
+        placed = _placed(path, nodes, children, roots)
         first = len(flat)
-        for root in roots:
-            _place(path, nodes, children, root, np.eye(4), flat)
+        flat.extend(reversed(placed))  # trimesh reads a flat list from its end, as it walks a tree
         scene["nodes"] = list(range(first, len(flat)))
     doc["nodes"] = flat
     return True
+
+
+def _check_roots(path: Path, k: int, roots: list[int], parent: list[int]) -> None:
+    listed = set(roots)
+    for r in roots:
+        above = parent[r]
+        while above != -1:
+            if above in listed:
+                raise SceneFileError(
+                    f"{path}: scene {k} lists node {r} and its ancestor {above} (a scene's nodes are roots, §3.5.1)"
+                )
+            above = parent[above]
 
 
 def _children(path: Path, nodes: list, n: int) -> list[int]:
@@ -77,25 +94,28 @@ def _depths(path: Path, children: list[list[int]], parent: list[int]) -> list[in
     return depth
 
 
-def _place(path: Path, nodes: list, children: list[list[int]], root: int, above: np.ndarray, flat: list) -> None:
-    """Appends to `flat` a node for each mesh in the subtree of `root` (depth first, children in
-    order, as trimesh walks it), placed by its world matrix; `above`: the root's parent's."""
-    stack = [(root, above)]
+def _placed(path: Path, nodes: list, children: list[list[int]], roots: list[int]) -> list[dict]:
+    """A node for each mesh below `roots`, placed by its world matrix, in the order of trimesh's
+    walk (a stack: the last root first, then each node's last child first)."""
+    placed = []
+    stack = [(r, np.eye(4)) for r in roots]
     while stack:
         n, world = stack.pop()
         node = nodes[n] if isinstance(nodes[n], dict) else {}
         world = world @ _local(path, n, node)
         if "mesh" in node:
-            placed = {"mesh": node["mesh"], "matrix": [float(x) for x in world.T.reshape(-1)]}
+            mesh = {"mesh": node["mesh"], "matrix": [float(x) for x in world.T.reshape(-1)]}
             if "weights" in node:
-                placed["weights"] = node["weights"]
-            flat.append(placed)
-        stack.extend((c, world) for c in reversed(children[n]))
+                mesh["weights"] = node["weights"]
+            placed.append(mesh)
+        stack.extend((c, world) for c in children[n])
+    return placed
 
 
 def _local(path: Path, n: int, node: dict) -> np.ndarray:
     """A node's local transform (§3.5.2): its column-major matrix, else T · R · S (a quaternion
-    x, y, z, w, normalised as trimesh does; all zeros: none)."""
+    x, y, z, w, normalised; none where its squared length is below 4 ε, as trimesh's
+    quaternion_matrix: 1e-9 was a turn of 180°)."""
     try:
         if "matrix" in node:
             m = np.asarray(node["matrix"], np.float64)
@@ -117,9 +137,10 @@ def _local(path: Path, n: int, node: dict) -> np.ndarray:
 
 
 def _rotation(x: float, y: float, z: float, w: float) -> np.ndarray:
-    norm = math.sqrt(x * x + y * y + z * z + w * w)
-    if not norm > 0:
+    squared = x * x + y * y + z * z + w * w
+    if not squared >= 4 * np.finfo(np.float64).eps:  # NaN too: none, as trimesh's
         return np.eye(3)
+    norm = math.sqrt(squared)
     x, y, z, w = x / norm, y / norm, z / norm, w / norm
     return np.array(
         [
