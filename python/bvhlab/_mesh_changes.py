@@ -6,6 +6,7 @@ audit)."""
 
 from __future__ import annotations
 
+import contextlib
 import threading
 from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING, TypeVar
@@ -42,23 +43,17 @@ def checked_change(tree: Bvh, change: Callable[[], T]) -> T:
         owners = sorted((o for o in tree._placed_by if o._places(tree)), key=id)
     if not owners:
         return change()
-    with tree._changing:
+    with tree._changing, contextlib.ExitStack() as held:  # a Ctrl-C between two takes leaves none held
         for owner in owners:
-            owner._lock.acquire()
+            held.enter_context(owner._lock)
+        before = tree._core.fork()
+        result = change()
         try:
-            before = tree._core.fork()
-            result = change()
-            try:
-                for owner in owners:
-                    owner._check_placement(tree)
-            except BaseException as e:
-                tree._core.restore(before)
-                if isinstance(e, ValueError):
-                    raise ValueError(
-                        f"change refused, the tree kept as it was (an InstancedBvh places it): {e}"
-                    ) from None
-                raise
-            return result
-        finally:
-            for owner in reversed(owners):
-                owner._lock.release()
+            for owner in owners:
+                owner._check_placement(tree)
+        except BaseException as e:
+            tree._core.restore(before)
+            if isinstance(e, ValueError):
+                raise ValueError(f"change refused, the tree kept as it was (an InstancedBvh places it): {e}") from None
+            raise
+        return result

@@ -344,6 +344,8 @@ class Bvh:
         `optimize(iterations=20, time_budget_ms=50)`). Leaves move whole (sizes kept) and no
         geometry is needed. Publishes a new version of the tree, as refit does, never of a higher
         SAH cost, the same whatever the number of threads; returns what it did (OptimizeStats).
+        A mesh of an InstancedBvh is optimised holding its InstancedBvhs' locks (checked as
+        `refit` is): a `progress` callable must not wait on another thread using them.
         `progress(fraction)` (of the iteration bound, or of the time budget where that is further;
         1.0 once done) and Ctrl-C stop it as they stop a build (BuildCancelled, or what the callable
         raised), the tree left as it was."""
