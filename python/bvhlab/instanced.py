@@ -39,14 +39,23 @@ class InstancedBvh:
         # instances or meshes (stats keyed by the one, made of the other, were kept; figures and
         # boxes read in several steps mixed two TLASes); snapshot() holds one for helpers that read
         # in several steps
-        self._state = _make_state(tuple(meshes), mesh_of, transforms, config.threads)
         self._frozen = False
         self._lock = threading.RLock()  # writers (place, update_mesh, a TLAS made again) one at a time
         self._stats: tuple | None = None  # (what they were made of, stats)
         self._tlas: tuple | None = None  # (the core TLAS, it as a Bvh)
         self._tlas_data: tuple | None = None  # (the TLAS it was made of, NodeData, leaf_first, refs)
         self._analysed: tuple | None = None  # (_analysis_key(), TwoLevelNodeData)
-        placing(self, meshes)
+        trees = tuple(meshes)
+        # its meshes told before its TLAS is made, under its lock: a change of one of them meanwhile
+        # waits for it and is checked against its instances (it went unchecked: the review)
+        with self._lock:
+            self._state: tuple = (None, None, None, trees, None)
+            placing(self, trees)
+            try:
+                self._state = _make_state(trees, mesh_of, transforms, config.threads)
+            except BaseException:
+                self._state = (None, None, None, (), ())  # places nothing (the caller never gets it)
+                raise
 
     def _check_placement(self, tree: Bvh) -> None:
         """ValueError where this tree's next TLAS would refuse an instance of `tree` as it is now

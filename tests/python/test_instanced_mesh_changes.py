@@ -186,3 +186,38 @@ def test_an_optimisation_that_moves_an_instance_out_of_range_is_refused_and_undo
         tree.meshes[1].optimize(iterations=50)
     assert tree.meshes[1].revision == revision + 2
     assert tree.world_boxes()[0][0, 0] >= -(2.0**40)
+
+
+def test_a_change_while_an_instanced_tree_is_made_over_the_mesh_is_checked(monkeypatch):
+    """A refit of a mesh between an InstancedBvh's TLAS and its learning of its meshes went
+    unchecked, and the new tree's next read raised (the review). It waits for the tree now."""
+    import threading
+
+    import bvhlab.instanced as instanced
+
+    base = bvhlab.build(_scene(scale=1.0))
+    meshes = list(base.meshes)
+    mesh_of, transforms = _scene().instances()  # instance 2 scaled by 1e6
+    refused: list = []
+    started: list = []
+    made = instanced._make_tlas
+
+    def refit_meanwhile(*args, **kwargs):
+        def refit():
+            try:
+                meshes[1].refit(MESH + np.float32(1e7))
+            except ValueError as e:
+                refused.append(e)
+
+        thread = threading.Thread(target=refit)
+        thread.start()
+        started.append(thread)
+        thread.join(0.2)  # it waits for the tree being made (a deadlock would fail below)
+        return made(*args, **kwargs)
+
+    monkeypatch.setattr(instanced, "_make_tlas", refit_meanwhile)
+    tree = bvhlab.InstancedBvh(meshes, mesh_of, transforms, base.config)
+    monkeypatch.setattr(instanced, "_make_tlas", made)
+    started[0].join(10)
+    assert refused and "instance 2 would place mesh 1 outside" in str(refused[0])
+    assert tree.stats["instances"] == 3
