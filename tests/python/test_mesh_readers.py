@@ -352,6 +352,20 @@ def test_ascii_stl_of_a_long_run_of_blanks_is_refused_at_once(tmp_path):
     assert "no facets" in out.stdout, out.stdout + out.stderr
 
 
+@pytest.mark.parametrize(
+    "header, message",
+    [
+        ("format ascii 1.0\nformat binary_little_endian 1.0\n", "two 'format' lines"),  # read as "truncated"
+        ("format ascii 2.0\n", "PLY version '2.0'; bvhlab reads version 1.0"),  # read as 1.0
+    ],
+)
+def test_ply_format_lines_are_checked(tmp_path, header, message):
+    text = "ply\n" + header + "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+    text += "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"
+    with pytest.raises(SceneFileError, match=message):
+        load(tmp_path, "model.ply", text)
+
+
 def test_ply_names_it_does_not_read_may_repeat(tmp_path):
     """The review's case: names the reader skips (a second `element edge`, a repeated `property
     uchar red`) were read right before the refusal of names declared twice, and still are."""

@@ -86,6 +86,10 @@ def _header(path: Path, data: bytes) -> tuple[str, list[_Element], int]:
             continue
         try:
             if words[0] == "format":
+                if fmt is not None:  # the second replaced the first, then "truncated" (a helper's audit)
+                    raise SceneFileError(f"{path}: two 'format' lines")
+                if len(words) > 2 and float(words[2]) != 1.0:  # the only version; "2.0" was read as it
+                    raise SceneFileError(f"{path}: PLY version {words[2]!r}; bvhlab reads version 1.0")
                 fmt = words[1]
             elif words[0] == "element":
                 elements.append(_Element(words[1], int(words[2])))
@@ -93,6 +97,8 @@ def _header(path: Path, data: bytes) -> tuple[str, list[_Element], int]:
                 elements[-1].properties.append(_Property(words[4], _TYPES[words[3]], _TYPES[words[2]]))
             elif words[0] == "property":
                 elements[-1].properties.append(_Property(words[2], _TYPES[words[1]]))
+        except SceneFileError:
+            raise
         except (IndexError, KeyError, ValueError):
             raise SceneFileError(f"{path}: header line {line.strip()!r} is not PLY") from None
     if fmt not in ("ascii", "binary_little_endian", "binary_big_endian"):
