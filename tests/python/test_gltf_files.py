@@ -182,6 +182,9 @@ def test_gltf_buffers_are_read_where_their_uris_say(tmp_path):
             load(tmp_path / "A", "model.gltf", with_uri(uri))
     with pytest.raises(SceneFileError, match="missing"):
         load(tmp_path / "A", "model.gltf", with_uri("../elsewhere/buf.bin"))
+    # a data: URI that is not base64: its start, not its whole payload (a helper's audit)
+    with pytest.raises(SceneFileError, match=r"'data:application/octet-stream,0{30}\.\.\. \(100030 characters\)'"):
+        load(tmp_path / "A", "model.gltf", with_uri("data:application/octet-stream," + "0" * 100_000))
 
 
 @pytest.mark.parametrize(

@@ -103,8 +103,9 @@ def _uri_resolver(trimesh, path: Path):
     class Exact(trimesh.resolvers.FilePathResolver):
         def get(self, name: str):
             where = referenced_path(path, name)
-            if where is None:
-                raise SceneFileError(f"it refers to {name!r}, a URL: only files are read")
+            if where is None:  # a data: URI that is not base64 holds the buffer: its start names it
+                shown = name if len(name) <= 80 else name[:60] + f"... ({len(name)} characters)"
+                raise SceneFileError(f"it refers to {shown!r}, a URL: only files are read")
             return where.read_bytes()  # FileNotFoundError: "refers to ..., which is missing"
 
     return Exact(str(path))
