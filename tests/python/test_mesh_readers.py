@@ -366,6 +366,15 @@ def test_ply_format_lines_are_checked(tmp_path, header, message):
         load(tmp_path, "model.ply", text)
 
 
+@pytest.mark.parametrize("kind, value", [("uchar", "-1000"), ("uchar", "256"), ("int", "0.5"), ("char", "128")])
+def test_ply_ascii_values_outside_their_declared_type_are_refused(tmp_path, kind, value):
+    """`uchar x` of -1000 and `int x` of 0.5 were read as written (a helper's audit)."""
+    text = f"ply\nformat ascii 1.0\nelement vertex 3\nproperty {kind} x\nproperty float y\nproperty float z\n"
+    text += f"element face 1\nproperty list uchar int vertex_indices\nend_header\n{value} 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"
+    with pytest.raises(SceneFileError, match=rf"vertex 0's x is {value}, not a"):
+        load(tmp_path, "model.ply", text)
+
+
 def test_ply_names_it_does_not_read_may_repeat(tmp_path):
     """The review's case: names the reader skips (a second `element edge`, a repeated `property
     uchar red`) were read right before the refusal of names declared twice, and still are."""

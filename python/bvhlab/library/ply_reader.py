@@ -141,6 +141,8 @@ def _read_ascii(path: Path, body: bytes, elements: list[_Element]) -> dict[str, 
             if at + n > len(words):
                 raise SceneFileError(f"{path}: the file ends inside its {e.name} elements (truncated?)")
             table = np.array(words[at : at + n], dtype=np.float64).reshape(e.count, len(e.properties))
+            for i, p in enumerate(e.properties):
+                _check_integers(path, e.name, p, table[:, i])
             out[e.name] = {p.name: table[:, i] for i, p in enumerate(e.properties)}
             at += n
             continue
@@ -168,6 +170,20 @@ def _read_ascii(path: Path, body: bytes, elements: list[_Element]) -> dict[str, 
     if at != len(words):
         raise SceneFileError(f"{path}: {len(words) - at} values after the elements the header declares")
     return out
+
+
+def _check_integers(path: Path, element: str, p: _Property, values: np.ndarray) -> None:
+    """An ASCII column of an integer type holds integers within it: `uchar x` of -1000 and `int x`
+    of 0.5 were read as they were written, as floats (a helper's audit)."""
+    if p.type[0] not in "iu":
+        return
+    info = np.iinfo(np.dtype(p.type))
+    bad = np.flatnonzero((values != np.floor(values)) | (values < info.min) | (values > info.max))
+    if len(bad):
+        raise SceneFileError(
+            f"{path}: {element} {bad[0]}'s {p.name} is {values[bad[0]]:g}, not a {np.dtype(p.type).name} "
+            "(the type its header declares)"
+        )
 
 
 def _read_binary(path: Path, data: bytes, at: int, elements: list[_Element], order: str) -> dict:
