@@ -68,8 +68,9 @@ class InstancedBvh:
             _core.check_placement(tree._core, k, of_k, np.ascontiguousarray(transforms[of_k]))
 
     def _places(self, tree: Bvh) -> bool:
-        """Whether `tree` is one of the meshes this (not a snapshot) places now (_mesh_changes)."""
-        return not self._frozen and any(m is tree for m in self._state[3])
+        """Whether `tree` is one of the meshes this places now (_mesh_changes; a snapshot, which
+        places nothing new, is in no mesh's `_placed_by`)."""
+        return any(m is tree for m in self._state[3])
 
     @property
     def meshes(self) -> tuple[Bvh, ...]:
@@ -248,8 +249,7 @@ class InstancedBvh:
         meshes = self._state[3]
         k = _checks.integer("mesh", k, 0, len(meshes) - 1)
         triangles = _checks.float32_array("triangles", triangles, (3, 3))
-        config = update_config(config, changes)  # checked also where the counts change (a rebuild)
-        config.core()
+        config = update_config(config, changes)  # checked (as it is made) also where the counts change
         # the counts alone: the stats (a pass over every node) cost a 1M-triangle mesh 43 ms a frame
         old_triangles, old_spheres = meshes[k]._core.primitive_counts
         if spheres is None and old_spheres:  # as Bvh.update: removing them must be asked for

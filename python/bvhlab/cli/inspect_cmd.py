@@ -180,14 +180,13 @@ def _report(args, scene, name: str, bvh, two_level: bool) -> dict:
     """Prints the tree's line and what was asked (a node, a pixel, the costliest subtrees);
     returns the same as the report --json writes."""
     stats = bvh.stats
+    # --pixel needs no node figures (their EPO pass took 17 s of a 15,000-triangle soup's pixel)
+    data = _node_data(bvh) if args.pixel is None else None
     if two_level:
         keys = ("instances", "meshes", "tlas_nodes", "tlas_height", "tlas_sah_cost", "nodes", "sah_cost")
         tree = {"method": stats["method"], **{k: stats[k] for k in keys}}
-        data = _node_data(bvh) if args.pixel is None else None
         print(f"{name}: {stats['triangles_flattened']} triangles flattened, stored once per mesh; " + _pairs(tree))
     else:
-        # --pixel needs no node figures (their EPO pass took 17 s of a 15,000-triangle soup's pixel)
-        data = _node_data(bvh) if args.pixel is None else None
         tree = {"method": stats["method"], "nodes": stats["nodes"], "height": stats["height"]}
         tree |= {"sah_cost": data.sah_cost, "epo_cost": data.epo_cost} if data else {"sah_cost": stats["sah_cost"]}
         print(f"{name}: {stats['triangles']} triangles, {stats['spheres']} spheres; " + _pairs(tree))
