@@ -215,15 +215,6 @@ inline int leaf_bits(const WideNode& node) {
 }  // namespace portable
 
 #ifndef BVHLAB_RECORDED_WIDE_WALK
-namespace {
-/// A hit of the wide walk made what every entry point returns: a miss's t is infinity; finish_hit's
-/// work is a sphere's u, v, so a triangle's hit (or a miss) skips the call.
-inline void finish_wide_hit(const Bvh& bvh, const Ray& ray, Hit& hit) {
-    if (hit.ref == kNoHit) hit.t = kInfinity;
-    else if (hit.ref & gpu::REF_SPHERE_BIT) [[unlikely]] finish_hit(bvh, ray, hit);
-}
-}  // namespace
-
 Hit intersect_wide(const WideBvh& wide, const Bvh& bvh, const Ray& ray, std::uint32_t* nodes_visited) {
     const WideView view = view_of(wide);
 #if defined(BVHLAB_AVX2_KERNELS)

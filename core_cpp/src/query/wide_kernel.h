@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstring>
 
+#include "bvhlab/traverse.h"
 #include "bvhlab/wide_bvh.h"
 
 namespace bvhlab {
@@ -16,6 +17,13 @@ struct WideView {
 
 /// A WideBvh as the kernels see it (null lines for an empty tree).
 inline WideView view_of(const WideBvh& wide) { return {wide.lines.empty() ? nullptr : wide.lines.data()->bytes}; }
+
+/// A hit of the wide walk made what every entry point returns: a miss's t is infinity; finish_hit's
+/// work is a sphere's u, v, so a triangle's hit (or a miss) skips the call.
+inline void finish_wide_hit(const Bvh& bvh, const Ray& ray, Hit& hit) {
+    if (hit.ref == kNoHit) hit.t = kInfinity;
+    else if (hit.ref & gpu::REF_SPHERE_BIT) [[unlikely]] finish_hit(bvh, ray, hit);
+}
 
 /// hit_sphere (ray.h) on lane `lane` of a sphere packet; updates hit (t, ref) as it does.
 bool hit_packet_sphere(const PrimPacket& k, int lane, const Ray& ray, Hit& hit);

@@ -47,13 +47,11 @@ decltype(auto) with_wide_kernels(F&& f) {
     return f(PortableKernels{});
 }
 
-/// intersect_wide (wide_bvh.h) by kernel set K: the BLAS walk of a two-level query, a miss's t
-/// left as the ray's tmax (the caller reads t only for a hit) and a sphere's u, v made.
+/// intersect_wide (wide_bvh.h) by kernel set K: the BLAS walk of a two-level query.
 template <class K>
 Hit intersect_wide_with(const BlasView& blas, const Ray& ray, std::uint32_t* visited) {
     Hit hit = K::closest(view_of(*blas.wide), ray, visited);
-    if (hit.ref != kNoHit && (hit.ref & gpu::REF_SPHERE_BIT)) [[unlikely]]
-        finish_hit(*blas.bvh, ray, hit);
+    finish_wide_hit(*blas.bvh, ray, hit);
     return hit;
 }
 
