@@ -112,6 +112,9 @@ class _Worker:
 
 _worker = _Worker()
 
+#: The panel's warning while the tree does not follow; a sync that succeeds takes it away.
+_NOT_FOLLOWED = "The boxes no longer follow the scene"
+
 
 def _update(job: _Job):
     """Update the job's tree (any thread; no bpy). Never raises: an error is said in the panel."""
@@ -122,7 +125,7 @@ def _update(job: _Job):
     try:
         update = job.built.tree.update(job.scene, job.refittable, threads=UI_WORK_THREADS, policy=job.policy)
     except Exception as error:  # said in the panel, never raised into Blender
-        state.messages[job.key] = ("WARNING", f"The boxes no longer follow the scene: {error}")
+        state.messages[job.key] = ("WARNING", f"{_NOT_FOLLOWED}: {error}")
         job.built.behind = job.built.behind or state.NOT_FOLLOWED
         return None
     return update
@@ -181,7 +184,7 @@ def follow(scene, depsgraph):
             warnings.simplefilter("ignore", SubstituteWarning)  # a tree needs no camera or light (as Build)
             report = live.sync(depsgraph, scene, depsgraph.view_layer)
     except (ExportError, ValueError) as error:  # said in the panel, never raised into Blender
-        state.messages[key] = ("WARNING", f"The boxes no longer follow the scene: {error}")
+        state.messages[key] = ("WARNING", f"{_NOT_FOLLOWED}: {error}")
         _failed.add(live_key)
         # the tree is the scene's no longer: Export Stats builds again (it wrote the old tree's
         # stats), the panel says so (a helper's probe)
@@ -191,6 +194,8 @@ def follow(scene, depsgraph):
         _busy[0] = False
     built.behind = ""
     _failed.discard(live_key)
+    if state.messages.get(key, ("", ""))[1].startswith(_NOT_FOLLOWED):  # the panel kept it (an audit)
+        del state.messages[key]
     if not report.placed_only:  # walked: objects may have come or gone
         _shown[key, depsgraph.view_layer.name, built.key.scope] = _shown_objects(depsgraph.view_layer, built.key.scope)
     if not report.geometry and not report.full:
