@@ -1,11 +1,16 @@
 """Polygons of mesh files into triangles: a fan where the polygon is convex (its corners all turn
 the same way about its normal), ear clipping where it is not (Eberly, "Triangulation by Ear
 Clipping", 2002) — a fan over a concave polygon covers space outside it (a concave pentagon of
-area 2.5 became triangles of area 3.5). Both give n − 2 triangles of the polygon's own corners."""
+area 2.5 became triangles of area 3.5). Both give n − 2 triangles of the polygon's own corners.
+Polygons of at most _SMALL corners are clipped along Eberly's walk (_ear_clip_small: the next ear
+along the outline); larger ones smallest ear first (_ear_clip), whose triangles differ from the
+walk's: the walk was quadratic on spiky outlines (a 160,000-corner star: 21 s, ~6 s since; a
+160,000-corner comb of long teeth: minutes, ~1.3 s)."""
 
 from __future__ import annotations
 
 import bisect
+import heapq
 from collections.abc import Sequence
 
 import numpy as np
@@ -24,7 +29,10 @@ def triangulate(corners, positions: np.ndarray) -> list[tuple[int, int, int]]:
     turns = _turns(p[None], normal[None])[0]  # < 0 where convex
     if not (turns > 0).any() or not np.any(normal):  # convex, or no area to clip ears from
         return _fan(corners)
-    return _ear_clip(corners, _projected(p, normal)) or _fan(corners)
+    xy = _projected(p, normal)
+    if n <= _SMALL:  # the triangles of triangulate_all's clipping of small polygons
+        return _ear_clip_small(corners, xy.astype(np.float64).tolist()) or _fan(corners)
+    return _ear_clip(corners, xy) or _fan(corners)
 
 
 def triangulate_all(polygons: Sequence[Sequence[int] | np.ndarray], positions: np.ndarray) -> np.ndarray:
@@ -98,9 +106,10 @@ _SMALL = 32
 
 
 def _ear_clip_small(corners: list[int], xy: list[list[float]]) -> list[tuple[int, int, int]] | None:
-    """_ear_clip of a small polygon in Python floats: the same ears in the same order, by the same
-    IEEE double operations (its grid only leaves out corners that cannot block; here every corner
-    that can is tested), without numpy's cost on a handful of corners (~300 µs a concave hexagon:
+    """Ear clipping of a small polygon in Python floats along Eberly's walk (the next ear from the
+    last one clipped), the clipping of every polygon of at most _SMALL corners, by triangulate and
+    triangulate_all alike (the same triangles; the blocking corners' test by _Blockers.is_ear's IEEE
+    double operations), without numpy's cost on a handful of corners (~300 µs a concave hexagon:
     150,000 of them took 49 s in an OBJ, a helper's probe)."""
     n = len(corners)
     nxt, prv = [*range(1, n), 0], [n - 1, *range(n - 1)]
@@ -127,8 +136,7 @@ def _ear_clip_small(corners: list[int], xy: list[list[float]]) -> list[tuple[int
     out = []
     b, left = 0, n
     while left > 3:
-        # _ear_clip's walk: the next ear from b on, else the first (its 64-corner window holds a
-        # whole small polygon)
+        # the walk: the next ear from b on, else the first
         found = next((k for k in [*range(b, n), *range(b)] if ear[k] and alive[k]), None)
         if found is None:
             return None
@@ -205,134 +213,172 @@ def _projected_all(p: np.ndarray, normal: np.ndarray) -> np.ndarray:
 
 
 def _ear_clip(corners: list[int], xy: np.ndarray) -> list[tuple[int, int, int]] | None:
-    """Ear clipping of a counter-clockwise simple polygon; None where it finds no ear. Each corner's
-    ear test is kept and done again only for the two neighbours of a clipped ear (the rest keep
-    theirs), and only corners that are not strictly convex can lie in an ear (Eberly §2), looked
-    up on a grid (`_Blockers`): an ear reads the corners near it, not all of them (a 32,000-corner
-    zigzag outline, half its corners reflex: 11.1 s with every such corner tested for every ear,
-    3.1-3.6 s now; the same triangles)."""
+    """Ear clipping of a counter-clockwise simple polygon (Eberly, "Triangulation by Ear Clipping",
+    2002: only corners that are not strictly convex can lie in an ear, §2, looked up on a grid,
+    `_Blockers`; a corner's ear test is done again only where a clip changed its triangle, the
+    two neighbours'); None where it finds no ear. The smallest ear first (its triangle's bounding
+    box, half its perimeter; ties by corner), each tested when it comes up: a corner that only
+    a long thin ear would clip waits for the small ones (Eberly's walk, the next ear along the
+    outline, fanned from one corner across a spiky outline, each long ear reading the corners
+    along its box, and re-tested such an ear after every clip of its neighbour: a 160,000-corner
+    star, half its corners reflex, took 21 s and a comb of long teeth minutes; the test of a
+    corner that blocks no more is no cost: blocking corners that turn convex leave the grid).
+    Since, other triangles than the walk's for polygons of more than _SMALL corners: `triangulate`
+    clips smaller ones by _ear_clip_small, the walk's."""
     n = len(corners)
     xy = np.asarray(xy, np.float64)
-    nxt, prv = np.roll(np.arange(n), -1), np.roll(np.arange(n), 1)
-    alive = np.ones(n, bool)
-    blocking = _turn(xy[prv], xy, xy[nxt]) <= 0  # reflex or flat: the only corners an ear can hold
-    grid = _Blockers(xy, blocking)
-    ear = np.array([grid.is_ear(prv[b], b, nxt[b], blocking) for b in range(n)])
+    nxt, prv = [*range(1, n), 0], [n - 1, *range(n - 1)]
+    grid = _Blockers(xy, _turn(xy[prv], xy, xy[nxt]) <= 0)  # reflex or flat: all an ear can hold
+    p = grid.xy
+
+    def size(b: int) -> float:
+        (ax, ay), (bx, by), (cx, cy) = p[prv[b]], p[b], p[nxt[b]]
+        return max(ax, bx, cx) - min(ax, bx, cx) + max(ay, by, cy) - min(ay, by, cy)
+
+    convex = np.flatnonzero(_turn(xy[prv], xy, xy[nxt]) > 0).tolist()
+    version = [0] * n
+    heap = [(size(b), b, 0) for b in convex]
+    heapq.heapify(heap)
+    alive = [True] * n
     out = []
-    b, left = 0, n
+    left = n
     while left > 3:
-        # the next ear on from the last one clipped (the walk Eberly's ear list makes): mostly
-        # within a few corners, so looked for there before in the whole polygon
-        near = np.flatnonzero(ear[b : b + 64] & alive[b : b + 64])
-        if len(near):
-            b += int(near[0])
-        else:
-            candidates = np.flatnonzero(ear & alive)
-            if not len(candidates):
-                return None
-            after = candidates[candidates >= b]
-            b = int(after[0] if len(after) else candidates[0])
+        if not heap:
+            return None
+        _, b, seen = heapq.heappop(heap)
+        if seen != version[b] or not alive[b] or not grid.is_ear(prv[b], b, nxt[b]):
+            continue  # clipped, changed since, or no ear: tested again where a neighbour is clipped
         a, c = prv[b], nxt[b]
         out.append((corners[a], corners[b], corners[c]))
-        alive[b] = blocking[b] = ear[b] = False
+        alive[b] = False
         nxt[a], prv[c] = c, a
         left -= 1
+        grid.exclude(b)
         for v in (a, c):  # only the neighbours' corners changed
-            blocking[v] = _turn(xy[prv[v]], xy[v], xy[nxt[v]]) <= 0
-            grid.include(v, blocking[v])
-        for v in (a, c):
-            ear[v] = grid.is_ear(prv[v], v, nxt[v], blocking)
-        b = c
-    a = int(np.flatnonzero(alive)[0])
+            turn = _turn1(p[prv[v]], p[v], p[nxt[v]])
+            grid.include(v, turn <= 0)
+            version[v] += 1
+            if turn > 0:
+                heapq.heappush(heap, (size(v), v, version[v]))
+    a = alive.index(True)
     out.append((corners[a], corners[nxt[a]], corners[nxt[nxt[a]]]))
     return out
 
 
+def _turn1(o: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:
+    """_turn of one corner in Python floats: the same IEEE double operations."""
+    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+
 class _Blockers:
-    """The corners that can block an ear, on a uniform grid of about n cells over the polygon's
-    bounds, sorted by cell: the corners whose cell lies in an ear's bounding box (or next to it:
-    near) are all that can lie in the ear. A cell is a monotone function of a point, so a point
-    inside a box has its cell within the box's corners' cells: the test's answers are those of a
-    test of every corner.
-    Clipping ears turns corners convex, never reflex, in a simple polygon (Eberly §2); a corner
-    that does turn reflex (a degenerate or self-intersecting outline) joins a list read by every
-    ear. Corners that stopped blocking stay on the grid and are passed over by the caller."""
+    """The corners that can block an ear (blocking ones) on a uniform grid over the polygon's
+    bounds, about four cells a blocking corner and as square as the bounds allow, each row's
+    corners sorted by cell: the corners whose cell meets an ear's bounding box (grown by a margin)
+    are all that can lie in the ear. A cell is a monotone function of a point, so a point inside a
+    box has its cell within the box's corners' cells: the test's answers are those of a test of
+    every corner. A corner that stops blocking leaves its row; one that starts (a degenerate or
+    self-intersecting outline: clipping ears turns corners convex, never reflex, in a simple
+    polygon, Eberly §2) joins it."""
 
     def __init__(self, xy: np.ndarray, blocking: np.ndarray):
         self.points = xy
-        #: the corners as Python floats: an ear's own test in scalars (~100,000 ears in a large
-        #: outline), the same IEEE double operations as `_turn`'s
+        #: the corners as Python floats: an ear's own test in scalars, `_turn`'s operations
         self.xy = [(float(x), float(y)) for x, y in xy]
+        #: which corners block, as a list (scalar reads) and an array (numpy's)
+        self.mask, self.blocks = blocking.copy(), blocking.tolist()
+        self.count = int(blocking.sum())
         with np.errstate(over="ignore", invalid="ignore"):
             span = xy.max(axis=0) - xy.min(axis=0)
         # one cell where the bounds are not finite (corners near ±1e308: the reader refuses them
         # after; a grid of them raised "cannot convert float NaN to integer" first)
-        self.cells = max(1, int(np.sqrt(len(xy)))) if np.isfinite(span).all() else 1
-        self.lo = [float(v) for v in xy.min(axis=0)] if self.cells > 1 else [0.0, 0.0]
-        self.size = [float(v / self.cells) if v > 0 else 1.0 for v in span] if self.cells > 1 else [1.0, 1.0]
-        cell = (
-            np.clip(((xy - self.lo) / self.size).astype(np.int64), 0, self.cells - 1)
-            if self.cells > 1
-            else np.zeros((len(xy), 2), np.int64)
-        )
-        keys = cell[:, 1] * self.cells + cell[:, 0]
-        on_grid = np.flatnonzero(blocking)
-        self.order = on_grid[np.argsort(keys[on_grid], kind="stable")]
-        self.keys = keys[self.order].tolist()
-        self.on_grid = blocking.copy()
-        self.extra: list[int] = []
+        self.lo, self.size, self.shape = [0.0, 0.0], [1.0, 1.0], [1, 1]
+        cells = 4 * self.count  # a corner to about four cells
+        if np.isfinite(span).all() and self.count > 1:
+            w, h = (float(v) for v in span)
+            side = max(np.sqrt(w * h / cells), w / cells, h / cells)
+            self.shape = [min(max(int(v / side), 1), cells) if side > 0 else 1 for v in (w, h)]
+            self.lo = [float(v) for v in xy.min(axis=0)]
+            self.size = [v / k if v > 0 else 1.0 for v, k in zip((w, h), self.shape, strict=True)]
+        #: 2^-32 of the corners' largest coordinate: far more than the rounding of the turn tests
+        big = float(np.abs(xy).max()) if len(xy) else 0.0
+        self.margin = big * 2.0**-32 if np.isfinite(big) else 0.0
+        #: each row's blocking corners, as x cell × n + corner, sorted: a box's are a slice a row
+        self.rows: list[list[int]] = [[] for _ in range(self.shape[1])]
+        for v in np.flatnonzero(blocking).tolist():
+            self.rows[self._cell(self.xy[v][1], 1)].append(self._code(v))
+        for row in self.rows:
+            row.sort()
 
     def _cell(self, x: float, axis: int) -> int:
-        """The cell of coordinate x along axis, as __init__ computes it for every corner."""
-        if self.cells == 1:
-            return 0
-        return min(max(int((x - self.lo[axis]) / self.size[axis]), 0), self.cells - 1)
+        """The cell of coordinate x along axis."""
+        k = self.shape[axis]
+        return 0 if k == 1 else min(max(int((x - self.lo[axis]) / self.size[axis]), 0), k - 1)
+
+    def _code(self, v: int) -> int:
+        return self._cell(self.xy[v][0], 0) * len(self.xy) + v
 
     def include(self, v: int, blocks: bool) -> None:
-        if blocks and not self.on_grid[v]:
-            self.on_grid[v] = True
-            self.extra.append(v)
+        """Corner v blocks (`blocks`) or not since a neighbour was clipped."""
+        if not blocks:
+            self.exclude(v)
+        elif not self.blocks[v]:
+            self.blocks[v] = self.mask[v] = True
+            bisect.insort(self.rows[self._cell(self.xy[v][1], 1)], self._code(v))
+            self.count += 1
 
-    def near(self, x0: float, y0: float, x1: float, y1: float) -> list[np.ndarray]:
-        """The corners on the grid whose cells meet the box [x0, x1] × [y0, y1] or a cell next to
-        it, and the extra ones, as arrays. One cell more on every side: the turn tests, in floating
-        point, can take a corner a rounding outside the box as inside the triangle (review: a
-        corner 2^-53 off the box's edge, in the next cell, made an ear the test of every corner
-        refuses)."""
-        cx0, cx1 = max(self._cell(x0, 0) - 1, 0), min(self._cell(x1, 0) + 1, self.cells - 1)
-        rows = range(max(self._cell(y0, 1) - 1, 0), min(self._cell(y1, 1) + 1, self.cells - 1) + 1)
-        parts = []
-        for row in rows:
-            start = bisect.bisect_left(self.keys, row * self.cells + cx0)
-            end = bisect.bisect_right(self.keys, row * self.cells + cx1, lo=start)
-            if end > start:
-                parts.append(self.order[start:end])
-        if self.extra:
-            parts.append(np.array(self.extra, np.int64))
-        return parts
+    def exclude(self, v: int) -> None:
+        """Corner v is clipped or turned convex: off the grid."""
+        if self.blocks[v]:
+            self.blocks[v] = self.mask[v] = False
+            row = self.rows[self._cell(self.xy[v][1], 1)]
+            del row[bisect.bisect_left(row, self._code(v))]
+            self.count -= 1
 
-    def is_ear(self, a: int, b: int, c: int, blocking: np.ndarray) -> bool:
+    def near(self, x0: float, y0: float, x1: float, y1: float) -> list[int]:
+        """The corners on the grid whose cells meet the box [x0, x1] × [y0, y1] grown by `margin`
+        on every side: the turn tests, in floating point, can take a corner a rounding outside the
+        box as inside the triangle (review: a corner 2^-53 off the box's edge, in the next cell,
+        made an ear the test of every corner refuses; a whole cell more on every side read ~45
+        corners of a 160,000-corner star's inner circle a cell, ~5 times the time)."""
+        n, d = len(self.xy), self.margin
+        lo, hi = self._cell(x0 - d, 0) * n, (self._cell(x1 + d, 0) + 1) * n
+        out: list[int] = []
+        for row in self.rows[self._cell(y0 - d, 1) : self._cell(y1 + d, 1) + 1]:
+            if row:
+                out += row[bisect.bisect_left(row, lo) : bisect.bisect_left(row, hi)]
+        return [code % n for code in out]
+
+    def is_ear(self, a: int, b: int, c: int) -> bool:
         """Whether corner b (between a and c) is an ear: convex, and no other corner that can
         block lies in the closed triangle abc. A corner at one of the ear's own corners (a
         polygon bridged to its hole, a "keyhole", repeats them) does not block: it fanned over
         the hole."""
-        (ax, ay), (bx, by), (cx, cy) = self.xy[a], self.xy[b], self.xy[c]
+        pa, pb, pc = self.xy[a], self.xy[b], self.xy[c]
+        (ax, ay), (bx, by), (cx, cy) = pa, pb, pc
         if (bx - ax) * (cy - ay) - (by - ay) * (cx - ax) <= 0:
             return False  # a reflex or flat corner is no ear
-        parts = self.near(min(ax, bx, cx), min(ay, by, cy), max(ax, bx, cx), max(ay, by, cy))
-        if not parts:
+        if not self.count:
             return True
-        others = parts[0] if len(parts) == 1 else np.concatenate(parts)
-        others = others[blocking[others] & (others != a) & (others != b) & (others != c)]
-        if not len(others):
-            return True
-        pa, pb, pc = self.points[a], self.points[b], self.points[c]
-        p = self.points[others]
-        inside = (_turn(pa, pb, p) >= 0) & (_turn(pb, pc, p) >= 0) & (_turn(pc, pa, p) >= 0)
-        at_corner = np.zeros(len(p), bool)
-        for q in (pa, pb, pc):
-            at_corner |= (p[:, 0] == q[0]) & (p[:, 1] == q[1])
-        return not np.any(inside & ~at_corner)
+        others = self.near(min(ax, bx, cx), min(ay, by, cy), max(ax, bx, cx), max(ay, by, cy))
+        if len(others) > 64:  # in numpy
+            idx = np.array(others, np.int64)
+            idx = idx[self.mask[idx] & (idx != a) & (idx != b) & (idx != c)]
+            p = self.points[idx]
+            qa, qb, qc = self.points[a], self.points[b], self.points[c]
+            inside = (_turn(qa, qb, p) >= 0) & (_turn(qb, qc, p) >= 0) & (_turn(qc, qa, p) >= 0)
+            at_corner = np.zeros(len(p), bool)
+            for q in (qa, qb, qc):
+                at_corner |= (p[:, 0] == q[0]) & (p[:, 1] == q[1])
+            return not np.any(inside & ~at_corner)
+        xy, blocks = self.xy, self.blocks
+        for v in others:
+            if v == a or v == b or v == c or not blocks[v]:
+                continue
+            q = xy[v]
+            if _turn1(pa, pb, q) >= 0 and _turn1(pb, pc, q) >= 0 and _turn1(pc, pa, q) >= 0:
+                if not any(q[0] == r[0] and q[1] == r[1] for r in (pa, pb, pc)):
+                    return False
+        return True
 
 
 def _turn(o: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
