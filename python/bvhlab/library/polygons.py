@@ -9,17 +9,22 @@ walk's: the walk was quadratic on spiky outlines (a 160,000-corner star: 21 s, ~
 
 from __future__ import annotations
 
-import bisect
 import heapq
+import math
 from collections.abc import Sequence
 
 import numpy as np
+
+from .ear_grid import Blockers as _Blockers
+from .ear_grid import turn as _turn
+from .ear_grid import turn1 as _turn1
 
 
 def triangulate(corners, positions: np.ndarray) -> list[tuple[int, int, int]]:
     """Triangles (vertex indices) covering the polygon whose vertices are `corners` (indices into
     `positions`, float (V, 3)), in the polygon's winding. Degenerate polygons (collinear, repeated
-    or self-intersecting corners, where no ear is found) fall back to a fan."""
+    or self-intersecting corners, where no ear is found) fall back to a fan; large ones whose ear
+    tests keep failing (self-intersecting) fan the corners left after the ears clipped."""
     corners = list(corners)
     n = len(corners)
     if n == 3:
@@ -104,6 +109,16 @@ def _larger(faces: np.ndarray, positions: np.ndarray) -> np.ndarray:
 #: blocking corner tested: O(n²)); larger ones by _ear_clip (numpy, a grid of the blockers).
 _SMALL = 32
 
+#: _ear_clip's limit on wasted work: _BUDGET · n · log2(n) + _BUDGET_FLOOR corners and grid rows
+#: read by ear tests that found no ear. Smallest ear first, a simple polygon's tests seldom fail:
+#: none on stars (regular, random radii, random-walk radii), combs, spirals (also rotated), ~0.19 ·
+#: n · log2(n) on maze outlines (10,000 to 170,000 corners, a helper's measurements), ~10× below;
+#: a random self-intersecting one's fail on most corners, each reading a large part of the grid
+#: (160,000 corners: 103 s, ~1 s with the limit). The floor (~0.1 s) keeps every polygon of up to
+#: ~1,000 corners clear of the limit, whatever its shape.
+_BUDGET = 2.0
+_BUDGET_FLOOR = 1 << 20
+
 
 def _ear_clip_small(corners: list[int], xy: list[list[float]]) -> list[tuple[int, int, int]] | None:
     """Ear clipping of a small polygon in Python floats along Eberly's walk (the next ear from the
@@ -133,7 +148,7 @@ def _ear_clip_small(corners: list[int], xy: list[list[float]]) -> list[tuple[int
     alive = [True] * n
     blocking = [turn(xy[prv[v]], xy[v], xy[nxt[v]]) <= 0 for v in range(n)]
     ear = [is_ear(prv[b], b, nxt[b]) for b in range(n)]
-    out = []
+    out: list[tuple[int, int, int]] = []
     b, left = 0, n
     while left > 3:
         # the walk: the next ear from b on, else the first
@@ -224,7 +239,11 @@ def _ear_clip(corners: list[int], xy: np.ndarray) -> list[tuple[int, int, int]] 
     star, half its corners reflex, took 21 s and a comb of long teeth minutes; the test of a
     corner that blocks no more is no cost: blocking corners that turn convex leave the grid).
     Since, other triangles than the walk's for polygons of more than _SMALL corners: `triangulate`
-    clips smaller ones by _ear_clip_small, the walk's."""
+    clips smaller ones by _ear_clip_small, the walk's. Where the tests that find no ear have read
+    more than _BUDGET allows (a polygon that is not simple: ears are rare and large; Eberly's
+    argument that one is always found, the two ears theorem, needs a simple polygon), the corners
+    left are fanned, the ears clipped kept: n − 2 triangles of its corners, as a self-intersecting
+    outline has no triangulation (random ones of 160,000 corners took 103 s, ~1 s since)."""
     n = len(corners)
     xy = np.asarray(xy, np.float64)
     nxt, prv = [*range(1, n), 0], [n - 1, *range(n - 1)]
@@ -240,14 +259,24 @@ def _ear_clip(corners: list[int], xy: np.ndarray) -> list[tuple[int, int, int]] 
     heap = [(size(b), b, 0) for b in convex]
     heapq.heapify(heap)
     alive = [True] * n
-    out = []
+    out: list[tuple[int, int, int]] = []
     left = n
+    budget, wasted = _BUDGET * n * math.log2(n) + _BUDGET_FLOOR, 0
     while left > 3:
         if not heap:
             return None
         _, b, seen = heapq.heappop(heap)
-        if seen != version[b] or not alive[b] or not grid.is_ear(prv[b], b, nxt[b]):
-            continue  # clipped, changed since, or no ear: tested again where a neighbour is clipped
+        if seen != version[b] or not alive[b]:
+            continue  # clipped, or changed since
+        work = grid.reads
+        if not grid.is_ear(prv[b], b, nxt[b]):  # tested again where a neighbour is clipped
+            wasted += grid.reads - work
+            if wasted > budget:  # not simple: the rest by a fan (any n - 2 triangles will do)
+                rest = [alive.index(True)]
+                while nxt[rest[-1]] != rest[0]:
+                    rest.append(nxt[rest[-1]])
+                return out + _fan([corners[v] for v in rest])
+            continue
         a, c = prv[b], nxt[b]
         out.append((corners[a], corners[b], corners[c]))
         alive[b] = False
@@ -263,124 +292,3 @@ def _ear_clip(corners: list[int], xy: np.ndarray) -> list[tuple[int, int, int]] 
     a = alive.index(True)
     out.append((corners[a], corners[nxt[a]], corners[nxt[nxt[a]]]))
     return out
-
-
-def _turn1(o: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:
-    """_turn of one corner in Python floats: the same IEEE double operations."""
-    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
-
-
-class _Blockers:
-    """The corners that can block an ear (blocking ones) on a uniform grid over the polygon's
-    bounds, about four cells a blocking corner and as square as the bounds allow, each row's
-    corners sorted by cell: the corners whose cell meets an ear's bounding box (grown by a margin)
-    are all that can lie in the ear. A cell is a monotone function of a point, so a point inside a
-    box has its cell within the box's corners' cells: the test's answers are those of a test of
-    every corner. A corner that stops blocking leaves its row; one that starts (a degenerate or
-    self-intersecting outline: clipping ears turns corners convex, never reflex, in a simple
-    polygon, Eberly §2) joins it."""
-
-    def __init__(self, xy: np.ndarray, blocking: np.ndarray):
-        self.points = xy
-        #: the corners as Python floats: an ear's own test in scalars, `_turn`'s operations
-        self.xy = [(float(x), float(y)) for x, y in xy]
-        #: which corners block, as a list (scalar reads) and an array (numpy's)
-        self.mask, self.blocks = blocking.copy(), blocking.tolist()
-        self.count = int(blocking.sum())
-        with np.errstate(over="ignore", invalid="ignore"):
-            span = xy.max(axis=0) - xy.min(axis=0)
-        # one cell where the bounds are not finite (corners near ±1e308: the reader refuses them
-        # after; a grid of them raised "cannot convert float NaN to integer" first)
-        self.lo, self.size, self.shape = [0.0, 0.0], [1.0, 1.0], [1, 1]
-        cells = 4 * self.count  # a corner to about four cells
-        if np.isfinite(span).all() and self.count > 1:
-            w, h = (float(v) for v in span)
-            side = max(np.sqrt(w * h / cells), w / cells, h / cells)
-            self.shape = [min(max(int(v / side), 1), cells) if side > 0 else 1 for v in (w, h)]
-            self.lo = [float(v) for v in xy.min(axis=0)]
-            self.size = [v / k if v > 0 else 1.0 for v, k in zip((w, h), self.shape, strict=True)]
-        #: 2^-32 of the corners' largest coordinate: far more than the rounding of the turn tests
-        big = float(np.abs(xy).max()) if len(xy) else 0.0
-        self.margin = big * 2.0**-32 if np.isfinite(big) else 0.0
-        #: each row's blocking corners, as x cell × n + corner, sorted: a box's are a slice a row
-        self.rows: list[list[int]] = [[] for _ in range(self.shape[1])]
-        for v in np.flatnonzero(blocking).tolist():
-            self.rows[self._cell(self.xy[v][1], 1)].append(self._code(v))
-        for row in self.rows:
-            row.sort()
-
-    def _cell(self, x: float, axis: int) -> int:
-        """The cell of coordinate x along axis."""
-        k = self.shape[axis]
-        return 0 if k == 1 else min(max(int((x - self.lo[axis]) / self.size[axis]), 0), k - 1)
-
-    def _code(self, v: int) -> int:
-        return self._cell(self.xy[v][0], 0) * len(self.xy) + v
-
-    def include(self, v: int, blocks: bool) -> None:
-        """Corner v blocks (`blocks`) or not since a neighbour was clipped."""
-        if not blocks:
-            self.exclude(v)
-        elif not self.blocks[v]:
-            self.blocks[v] = self.mask[v] = True
-            bisect.insort(self.rows[self._cell(self.xy[v][1], 1)], self._code(v))
-            self.count += 1
-
-    def exclude(self, v: int) -> None:
-        """Corner v is clipped or turned convex: off the grid."""
-        if self.blocks[v]:
-            self.blocks[v] = self.mask[v] = False
-            row = self.rows[self._cell(self.xy[v][1], 1)]
-            del row[bisect.bisect_left(row, self._code(v))]
-            self.count -= 1
-
-    def near(self, x0: float, y0: float, x1: float, y1: float) -> list[int]:
-        """The corners on the grid whose cells meet the box [x0, x1] × [y0, y1] grown by `margin`
-        on every side: the turn tests, in floating point, can take a corner a rounding outside the
-        box as inside the triangle (review: a corner 2^-53 off the box's edge, in the next cell,
-        made an ear the test of every corner refuses; a whole cell more on every side read ~45
-        corners of a 160,000-corner star's inner circle a cell, ~5 times the time)."""
-        n, d = len(self.xy), self.margin
-        lo, hi = self._cell(x0 - d, 0) * n, (self._cell(x1 + d, 0) + 1) * n
-        out: list[int] = []
-        for row in self.rows[self._cell(y0 - d, 1) : self._cell(y1 + d, 1) + 1]:
-            if row:
-                out += row[bisect.bisect_left(row, lo) : bisect.bisect_left(row, hi)]
-        return [code % n for code in out]
-
-    def is_ear(self, a: int, b: int, c: int) -> bool:
-        """Whether corner b (between a and c) is an ear: convex, and no other corner that can
-        block lies in the closed triangle abc. A corner at one of the ear's own corners (a
-        polygon bridged to its hole, a "keyhole", repeats them) does not block: it fanned over
-        the hole."""
-        pa, pb, pc = self.xy[a], self.xy[b], self.xy[c]
-        (ax, ay), (bx, by), (cx, cy) = pa, pb, pc
-        if (bx - ax) * (cy - ay) - (by - ay) * (cx - ax) <= 0:
-            return False  # a reflex or flat corner is no ear
-        if not self.count:
-            return True
-        others = self.near(min(ax, bx, cx), min(ay, by, cy), max(ax, bx, cx), max(ay, by, cy))
-        if len(others) > 64:  # in numpy
-            idx = np.array(others, np.int64)
-            idx = idx[self.mask[idx] & (idx != a) & (idx != b) & (idx != c)]
-            p = self.points[idx]
-            qa, qb, qc = self.points[a], self.points[b], self.points[c]
-            inside = (_turn(qa, qb, p) >= 0) & (_turn(qb, qc, p) >= 0) & (_turn(qc, qa, p) >= 0)
-            at_corner = np.zeros(len(p), bool)
-            for q in (qa, qb, qc):
-                at_corner |= (p[:, 0] == q[0]) & (p[:, 1] == q[1])
-            return not np.any(inside & ~at_corner)
-        xy, blocks = self.xy, self.blocks
-        for v in others:
-            if v == a or v == b or v == c or not blocks[v]:
-                continue
-            q = xy[v]
-            if _turn1(pa, pb, q) >= 0 and _turn1(pb, pc, q) >= 0 and _turn1(pc, pa, q) >= 0:
-                if not any(q[0] == r[0] and q[1] == r[1] for r in (pa, pb, pc)):
-                    return False
-        return True
-
-
-def _turn(o: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """The cross product (a − o) × (b − o) in 2D, row by row: > 0 where o, a, b turn left."""
-    return (a[..., 0] - o[..., 0]) * (b[..., 1] - o[..., 1]) - (a[..., 1] - o[..., 1]) * (b[..., 0] - o[..., 0])
