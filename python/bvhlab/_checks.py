@@ -119,17 +119,26 @@ def _range_text(lo: float, hi: float) -> str:
     return f"between {text(lo)} and {text(hi)}"
 
 
-#: The largest finite float32 (numpy.finfo(numpy.float32).max).
+#: The largest finite float32 (numpy.finfo(numpy.float32).max) and the smallest normal one
+#: (numpy.finfo(numpy.float32).tiny).
 FLOAT32_MAX = 3.4028234663852886e38
+FLOAT32_TINY = 1.1754943508222875e-38
 
 
 def setting(name: str, value, lo: float = -math.inf, hi: float = math.inf) -> float:
     """real(...) for a float32 field of a core config struct: a finite number beyond float32's range
-    is refused too (1e300 would arrive as inf and be reported as "got inf"). Ray limits (tmin, tmax)
-    stay real(): beyond float32's range is inf there, which is what such a limit means."""
+    is refused too (1e300 would arrive as inf and be reported as "got inf"), and so is one other than
+    0 that float32 holds only as 0 or a denormal (sbvh_alpha 1e-46 arrived as 0 and was taken; a
+    camera aspect of 1e-50 as 0, "the image's"). Ray limits (tmin, tmax) stay real(): beyond
+    float32's range is inf there, which is what such a limit means."""
     value = real(name, value, lo, hi)
     if math.isfinite(value) and abs(value) > FLOAT32_MAX:
         raise ValueError(f"{name} must be within float32's range (±{FLOAT32_MAX:.7g}), got {value:g}")
+    if value != 0 and abs(float(np.float32(value))) < FLOAT32_TINY:
+        raise ValueError(
+            f"{name} must be 0 or of magnitude {FLOAT32_TINY:.7g} to {FLOAT32_MAX:.7g} "
+            f"(a normal float32), got {value:g}"
+        )
     return value
 
 

@@ -180,11 +180,8 @@ class Lens:
         object.__setattr__(self, "fisheye_fov", _real("camera fisheye_fov", self.fisheye_fov))
         for name in ("ortho_scale", "aspect"):
             if getattr(self, name) is not None:
+                # (one float32 would hold only as 0, "not given", is refused by setting: probe)
                 value = _checks.setting(f"camera {name}", _real(f"camera {name}", getattr(self, name)))
-                if value != 0 and np.float32(value) == 0:  # it would arrive as 0: "not given" (probe)
-                    raise ValueError(
-                        f"camera {name} must be 0 or None (not given) or a number float32 holds, got {value:g}"
-                    )
                 object.__setattr__(self, name, value)
         object.__setattr__(self, "latitude", _reals("camera latitude", self.latitude, 2))
         object.__setattr__(self, "longitude", _reals("camera longitude", self.longitude, 2))

@@ -32,6 +32,33 @@ def test_settings_beyond_float32_are_refused_with_the_value_given():
         bvhlab.UpdateConfig(tree_growth=-1e39)
 
 
+@pytest.mark.parametrize("tiny", [1e-46, 1e-40, -1e-46])
+def test_settings_float32_holds_only_as_0_or_a_denormal_are_refused(tiny):
+    """sbvh_alpha=1e-46 arrived in the core's float32 as 0 (1e-40 as a denormal) and was taken
+    silently; batch_fraction and tree_growth were refused as "got 0". Refused by their own value."""
+    import numpy as np
+
+    tris = np.arange(36, dtype=np.float32).reshape(4, 3, 3)
+    message = rf"must be 0 or of magnitude 1\.175494e-38 to 3\.402823e\+38 .*got {tiny:g}$"
+    with pytest.raises(ValueError, match="sbvh_alpha " + message):
+        bvhlab.build(tris, method="sbvh", sbvh_alpha=tiny)
+    with pytest.raises(ValueError, match="sbvh_alpha " + message):
+        bvhlab.BuildConfig(method="sbvh", sbvh_alpha=tiny)
+    with pytest.raises(ValueError, match="batch_fraction " + message):
+        bvhlab.OptimizeConfig(batch_fraction=tiny)
+    with pytest.raises(ValueError, match="tree_growth " + message):
+        bvhlab.UpdateConfig(tree_growth=tiny)
+
+
+def test_zero_and_the_smallest_normal_float32_are_taken():
+    import numpy as np
+
+    smallest = float(np.finfo(np.float32).tiny)
+    assert bvhlab.BuildConfig(method="sbvh", sbvh_alpha=0.0).sbvh_alpha == 0.0
+    assert bvhlab.BuildConfig(method="sbvh", sbvh_alpha=smallest).core().sbvh_alpha == smallest
+    assert bvhlab.BuildConfig(method="sbvh", sbvh_alpha=-0.0).sbvh_alpha == 0.0
+
+
 @pytest.mark.parametrize("name", ["film_transparent", "color_by_depth", "traversal_counters"])
 @pytest.mark.parametrize("bad", ["False", 0, 1, 0.5, None])
 def test_switches_are_true_or_false_not_truthy(name, bad):
@@ -74,7 +101,7 @@ def test_a_camera_value_float32_cannot_hold_is_refused_as_given(name):
     """aspect=1e-40 was refused (its range), but 1e-50 arrived as 0, "the image's", and rendered as
     the default (probe); 1e39 arrived as inf. Both are refused by their own value now."""
     projection = "orthographic" if name == "ortho_scale" else "perspective"
-    with pytest.raises(ValueError, match=f"camera {name} must be 0 or None .*got 1e-50"):
+    with pytest.raises(ValueError, match=f"camera {name} must be 0 or of magnitude .*got 1e-50"):
         bvhlab.View((0, 0, 0), (0, 1, 0), projection=projection, **{name: 1e-50})
     with pytest.raises(ValueError, match=rf"camera {name} must be within float32's range .*got 1e\+39"):
         bvhlab.Camera((0, 0, 0), (0, 1, 0), projection=projection, **{name: 1e39})

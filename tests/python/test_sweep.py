@@ -66,6 +66,8 @@ def test_spec_grid_is_every_combination(tmp_path, models):
         # a seed past int64: every cell ran, then writing the table failed (OverflowError), every rerun
         ("seed = 9223372036854775808", "seed must be at most"),
         ("[rays]\nseed = 9223372036854775808", "seed must be a whole number from 0"),
+        # float32 held it as 0, and the cells were built with sbvh_alpha 0
+        ("method = 'sbvh'\nsbvh_alpha = 1e-46", r"\[grid\] sbvh_alpha must be 0 or of magnitude .*got 1e-46"),
     ],
 )
 def test_bad_grid_is_refused_naming_the_setting(tmp_path, grid, message):
