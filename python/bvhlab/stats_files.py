@@ -51,11 +51,13 @@ def stats_json(stats: dict, about: dict) -> str:
 def stats_csv(stats: dict) -> str:
     """Long format, one value per row: `metric,index,value`. Single values leave `index` empty;
     nodes_per_depth and leaves_per_depth have the depth as index, leaf_size_histogram the leaf size,
-    the mesh_* lists of a two-level tree the mesh."""
+    the mesh_* lists of a two-level tree the mesh. A value the JSON writes as null (None, NaN, ±inf:
+    strict_json.plain) is an empty field, as CSV readers take a missing value (pandas: NaN); it was
+    written `nan` (None empty)."""
     text = io.StringIO()
     out = csv.writer(text)
     out.writerow(["metric", "index", "value"])
-    for name, value in stats.items():
+    for name, value in strict_json.plain(stats).items():
         if name in LIST_METRICS:
             out.writerows([name, i, v] for i, v in enumerate(value))
         else:

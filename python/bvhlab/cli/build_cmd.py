@@ -26,7 +26,7 @@ def add_parser(sub) -> None:
         "--csv",
         type=options.output_file_type(".csv", "stats file"),
         metavar="PATH",
-        help="also write the stats to this CSV file (metric,index,value)",
+        help="also write the stats to this CSV file (metric,index,value; a value the JSON has as null is empty)",
     )
     p.set_defaults(run=run)
 
