@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import bpy
 
+from bvhlab.build_config import BINNED_METHODS
+
 from . import state
 from .overlay import is_two_level, scene_batch
 from .text_layout import wrapped_label
@@ -13,7 +15,7 @@ def draw_build_settings(col, settings) -> None:
     """The tree's settings, as the sidebar and the engine's BVH panel show them."""
     col.prop(settings, "method")
     binned = col.column()
-    binned.enabled = settings.method == "sah"
+    binned.enabled = settings.method in BINNED_METHODS  # sah and sbvh
     binned.prop(settings, "bins")
     binned.prop(settings, "bin_bounds")
     col.prop(settings, "axis")

@@ -16,6 +16,7 @@
 #include "bvhlab/coordinate_range.h"
 #include "bvhlab/depth_order.h"
 #include "bvhlab/render_settings.h"
+#include "bvhlab/split.h"
 #include "bvhlab/stats.h"
 #include "bvhlab/transform.h"
 #include "bvhlab/traverse.h"
@@ -48,8 +49,12 @@ nb::dict stats_dict(const Bvh& bvh) {
     d["leaf_size_histogram"] = s.leaf_size_histogram;
     d["memory_bytes"] = s.memory_bytes;
     d["method"] = to_string(bvh.config.method), d["axis"] = to_string(bvh.config.axis);
-    d["bins"] = bvh.config.bins, d["max_leaf_size_config"] = bvh.config.max_leaf_size;
-    d["bin_bounds"] = to_string(bvh.config.bin_bounds), d["sah_block"] = bvh.config.sah_block;
+    // bins and bin_bounds only where the method bins (None: a median tree of "12 bins" used none)
+    const bool binned = method_info(bvh.config.method).binned;
+    d["bins"] = binned ? nb::cast(bvh.config.bins) : nb::none();
+    d["max_leaf_size_config"] = bvh.config.max_leaf_size;
+    d["bin_bounds"] = binned ? nb::cast(to_string(bvh.config.bin_bounds)) : nb::none();
+    d["sah_block"] = bvh.config.sah_block;
     return d;
 }
 
@@ -249,11 +254,14 @@ void bind_build_names(nb::module_& m) {
     // The build's names and defaults, one definition (build_config.h, split_methods.cpp): Python's
     // build() and the add-on's properties read these.
     const BuildConfig defaults;
-    nb::list methods, axes, bin_bounds;
+    nb::list methods, binned, axes, bin_bounds;
     for (std::string_view name : split_method_names()) methods.append(std::string(name));
+    for (const SplitMethodInfo& info : split_methods())
+        if (info.binned) binned.append(std::string(info.name));
     for (std::string_view name : axis_policy_names()) axes.append(std::string(name));
     for (std::string_view name : bin_bounds_names()) bin_bounds.append(std::string(name));
     m.attr("SPLIT_METHODS") = nb::tuple(methods);
+    m.attr("BINNED_METHODS") = nb::tuple(binned);
     m.attr("AXIS_POLICIES") = nb::tuple(axes);
     m.attr("BIN_BOUNDS") = nb::tuple(bin_bounds);
     m.attr("DEFAULT_METHOD") = to_string(defaults.method);

@@ -14,6 +14,9 @@ from . import _checks, _core
 #: Split methods and axis policies as the C++ core names them (its table of methods), and the
 #: defaults and limits of a build: one definition, in core_cpp/include/bvhlab/build_config.h.
 METHODS = tuple(_core.SPLIT_METHODS)
+#: The methods that divide nodes into `bins` buckets over `bin_bounds` (sah, sbvh): the only ones
+#: those settings change, and whose stats report them (None for the rest).
+BINNED_METHODS = tuple(_core.BINNED_METHODS)
 AXES = tuple(_core.AXIS_POLICIES)
 BIN_BOUNDS = tuple(_core.BIN_BOUNDS)
 _CORE_DEFAULTS = _core.BuildConfig()

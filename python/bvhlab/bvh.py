@@ -52,15 +52,15 @@ def build(
     (`build(scene, method="median")`):
     `method` is one of METHODS, `axis` one of AXES ("auto": all three axes for the SAH methods,
     the largest centroid extent for the others; "lbvh" and "sbvh", which split on all three axes
-    their own way, ignore it); `bins` (MIN_BINS..MAX_BINS) is used by "sah",
-    whose equal buckets divide the node's box (`bin_bounds="box"`) or its centroid bounds
-    ("centroids", the report's §2.3.2); leaves hold at most `max_leaf_size` primitives, and the SAH
-    methods may stop earlier when a leaf is cheaper. `sah_block` (a power of two up to
-    MAX_SAH_BLOCK) makes the SAH count primitives in whole blocks of that many above a node of one
-    block, as the wide CPU traversal tests four triangles at once (Embree's sahBlockSize); 1 is the
-    report's SAH. The defaults give a fast tree for little build time; the report's Table 1
-    settings are method="sah", bins=12, bin_bounds="centroids", axis="largest", max_leaf_size=1,
-    sah_block=1. `threads` = 0 uses every core; the tree never depends on it.
+    their own way, ignore it); `bins` (MIN_BINS..MAX_BINS) is used by the binned methods
+    (BINNED_METHODS: "sah" and "sbvh"), whose equal buckets divide the node's box
+    (`bin_bounds="box"`) or its centroid bounds ("centroids", the report's §2.3.2); leaves hold at
+    most `max_leaf_size` primitives, and the SAH methods may stop earlier when a leaf is cheaper.
+    `sah_block` (a power of two up to MAX_SAH_BLOCK) makes the SAH count primitives in whole blocks
+    of that many above a node of one block, as the wide CPU traversal tests four triangles at once
+    (Embree's sahBlockSize); 1 is the report's SAH. The defaults give a fast tree for little build
+    time; the report's Table 1 settings are method="sah", bins=12, bin_bounds="centroids",
+    axis="largest", max_leaf_size=1, sah_block=1. `threads` = 0 uses every core; the tree never depends on it.
     Bad input raises TypeError or ValueError; a vertex or sphere outside ±MAX_COORDINATE (2^40 ≈
     1.1e12, where float32 ray tests would overflow), a sphere radius below MIN_RADIUS (2^-60,
     where its square underflows) and triangles in a scene less than 2^-32 (2.3e-10) units across
@@ -148,7 +148,8 @@ class Bvh:
         SBVH, whose references repeat), nodes, leaves, height (largest leaf depth + 1, root depth 0),
         sah_cost (Σ_internal A/A_root + Σ_leaf A/A_root·N), build_ms, avg_leaf_size, max_leaf_size,
         nodes_per_depth, leaves_per_depth, leaf_size_histogram ([k] = leaves with k primitives),
-        memory_bytes, and the build settings."""
+        memory_bytes, and the build settings (bins and bin_bounds None where the method does not
+        bin: BINNED_METHODS)."""
         cached = self._stats
         revision = self._core.revision
         if cached is None or cached[0] != revision:

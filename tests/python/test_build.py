@@ -165,6 +165,35 @@ def test_sah_block_fills_whole_blocks(method):
     assert built[4].stats["sah_cost"] < 1.03 * built[1].stats["sah_cost"]
 
 
+#: The methods whose builders read `bins` and `bin_bounds` (split_binned_sah, the SBVH builder).
+BINNING = {"sah", "sbvh"}
+
+
+@pytest.mark.parametrize("method", bvhlab.METHODS)
+def test_stats_report_bins_only_where_the_method_bins(method):
+    """A median tree's stats said bins 12 (and bin_bounds "box"), settings its build never read:
+    they are None for a method that does not bin, and the JSON null and the CSV empty with them."""
+    tris = procedural.random_triangles(300, seed=5)
+    stats = bvhlab.build(tris, method=method, bins=7, bin_bounds="centroids").stats
+    if method in BINNING:
+        assert (stats["bins"], stats["bin_bounds"]) == (7, "centroids")
+    else:
+        assert (stats["bins"], stats["bin_bounds"]) == (None, None)
+    assert stats["method"] == method and stats["max_leaf_size_config"] == 4
+
+
+def test_bins_change_the_trees_of_the_binned_methods_alone():
+    """BINNED_METHODS (the core's table) against what the builders read: only those methods' trees
+    depend on bins and bin_bounds."""
+    assert set(bvhlab.build_config.BINNED_METHODS) == BINNING
+    tris = procedural.model_in_room(3000, seed=6)
+    for method in bvhlab.METHODS:
+        few = bvhlab.build(tris, method=method, bins=2, bin_bounds="box", threads=1)
+        many = bvhlab.build(tris, method=method, bins=64, bin_bounds="centroids", threads=1)
+        same = few.nodes.tobytes() == many.nodes.tobytes() and np.array_equal(few.refs, many.refs)
+        assert same == (method not in BINNING), method
+
+
 def test_method_quality_ordering_on_non_uniform_scene():
     tris = procedural.model_in_room(60000)
     cost = {m: bvhlab.build(tris, method=m).stats["sah_cost"] for m in ("median", "mean", "sah", "sweep_sah")}

@@ -136,6 +136,9 @@ struct SplitMethodInfo {
     bool needs_morton_presort;  ///< the references are sorted by Morton code before the build
     bool bottom_up_boxes;       ///< splits without looking at bounds: node boxes are made from the
                                 ///< leaves up after the build (NodeBounds stay empty meanwhile)
+    bool binned;                ///< divides nodes into config.bins buckets over config.bin_bounds:
+                                ///< the methods bins and bin_bounds apply to (the stats report
+                                ///< them for these only)
 };
 std::span<const SplitMethodInfo> split_methods();
 const SplitMethodInfo& method_info(SplitMethod method);

@@ -8,16 +8,17 @@
 namespace bvhlab {
 namespace {
 
-//     method                name         function          all axes  SAH    sum    Morton bottom-up
+//     method                name         function          all axes  SAH    sum    Morton bottom-up binned
 constexpr std::array<SplitMethodInfo, 7> kMethods{{
-    {SplitMethod::Median, "median", split_median, false, false, false, false, false},
-    {SplitMethod::Mean, "mean", split_mean, false, false, true, false, false},
-    {SplitMethod::Midpoint, "midpoint", split_midpoint, false, false, false, false, false},
-    {SplitMethod::Sah, "sah", split_binned_sah, true, true, false, false, false},
-    {SplitMethod::SweepSah, "sweep_sah", split_sweep_sah, true, true, false, false, false},
-    {SplitMethod::Lbvh, "lbvh", split_lbvh, true, false, false, true, true},
-    // its own builder (sbvh/sbvh_builder.h), which build_bvh calls instead of the split function's
-    {SplitMethod::Sbvh, "sbvh", split_binned_sah, true, true, false, false, false},
+    {SplitMethod::Median, "median", split_median, false, false, false, false, false, false},
+    {SplitMethod::Mean, "mean", split_mean, false, false, true, false, false, false},
+    {SplitMethod::Midpoint, "midpoint", split_midpoint, false, false, false, false, false, false},
+    {SplitMethod::Sah, "sah", split_binned_sah, true, true, false, false, false, true},
+    {SplitMethod::SweepSah, "sweep_sah", split_sweep_sah, true, true, false, false, false, false},
+    {SplitMethod::Lbvh, "lbvh", split_lbvh, true, false, false, true, true, false},
+    // its own builder (sbvh/sbvh_builder.h), which build_bvh calls instead of the split function's:
+    // binned SAH object splits and binned spatial splits
+    {SplitMethod::Sbvh, "sbvh", split_binned_sah, true, true, false, false, false, true},
 }};
 
 }  // namespace
@@ -33,6 +34,14 @@ const SplitMethodInfo& method_info(SplitMethod method) {
 static_assert([] {
     for (std::size_t i = 0; i < kMethods.size(); ++i)
         if (static_cast<std::size_t>(kMethods[i].method) != i) return false;
+    return true;
+}());
+
+// the binned methods are those whose splits are the binned SAH's (the only reader of config.bins
+// but the SBVH builder, whose row names it too)
+static_assert([] {
+    for (const SplitMethodInfo& m : kMethods)
+        if (m.binned != (m.split == split_binned_sah)) return false;
     return true;
 }());
 

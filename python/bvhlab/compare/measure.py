@@ -6,6 +6,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
+from ..build_config import BINNED_METHODS
 from ..build_config import method_from_label as method_kwargs  # 'sah32' → sah with 32 bins
 from ..bvh import build
 from ..instanced import InstancedBvh
@@ -172,7 +173,7 @@ def _row(label, settings, bvh, timings) -> dict:
     row = {
         "method": label,
         "split_method": settings["method"],
-        "bins": settings["bins"] if settings["method"] == "sah" else None,
+        "bins": settings["bins"] if settings["method"] in BINNED_METHODS else None,  # as Bvh.stats
         "build_settings": settings,
         "height": stats["height"],
         "sah_cost": stats["sah_cost"],
