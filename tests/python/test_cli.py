@@ -73,7 +73,11 @@ def test_build_json_and_csv_equal_the_api(tmp_path, capsys):
     rows = list(csv.DictReader(table.open()))
     assert [int(r["value"]) for r in rows if r["metric"] == "nodes_per_depth"] == api["nodes_per_depth"]
     assert float(next(r["value"] for r in rows if r["metric"] == "sah_cost")) == pytest.approx(api["sah_cost"])
-    assert "nodes/depth" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "nodes/depth" in out and "  bins          32" in out
+    assert main(["build", "gen:whitted", "--method", "median"]) == 0
+    out = capsys.readouterr().out  # a median tree has no bins: no line (it printed "bins None")
+    assert "  method        median" in out and "bins" not in out
 
 
 def line_pixels(png_path, depth: int) -> int:

@@ -77,6 +77,8 @@ def _print_flat(name: str, stats: dict) -> None:
         "memory_bytes",
     ):
         value = stats[key]
+        if value is None:  # bins of a method that does not bin: no line (it printed "None")
+            continue
         print(f"  {key:<14}{value:.3f}" if isinstance(value, float) else f"  {key:<14}{value}")
     print(f"  {'nodes/depth':<14}{' '.join(str(n) for n in stats['nodes_per_depth'])}")
 
