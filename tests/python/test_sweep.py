@@ -93,6 +93,23 @@ def test_glob_takes_the_scene_files_it_matches(tmp_path, models):
         read_spec(_write_spec(tmp_path, ["*.txt"]))
 
 
+def test_globs_read_under_the_spec_folder_whatever_its_name(tmp_path):
+    """An audit's cases: a spec in "exp[2]" swept exp2's models (its folder's name read as a
+    pattern); "scan[1].obj", a file, was read as the glob matching scan1.obj; a folder a glob
+    matched ("parts.obj") became a failed cell."""
+    own, other = tmp_path / "exp[2]", tmp_path / "exp2"
+    for folder in (own / "models", other / "models"):
+        folder.mkdir(parents=True)
+    trimesh.creation.box().export(own / "models" / "mine.obj")
+    trimesh.creation.box().export(other / "models" / "other.obj")
+    (own / "models" / "parts.obj").mkdir()
+    trimesh.creation.box().export(own / "scan[1].obj")
+    trimesh.creation.box().export(own / "scan1.obj")
+    spec = read_spec(_write_spec(own, ["models/*.obj", "scan[1].obj"]))
+    assert spec.scenes == (str(own.resolve() / "models" / "mine.obj"), str(own.resolve() / "scan[1].obj"))
+    assert read_spec(_write_spec(own, ["scan[0-9].obj"])).scenes == (str(own.resolve() / "scan1.obj"),)
+
+
 def test_grid_methods_are_read_as_the_cli_reads_them(tmp_path):
     """`method = 'sah12'` was refused in a spec, where `--method sah12` builds method sah with 12 bins."""
     spec = read_spec(_write_spec(tmp_path, ["gen:five_spheres"], "method = ['median', 'sah20']"))

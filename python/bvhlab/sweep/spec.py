@@ -17,13 +17,15 @@
     baseline = "median"       # the method the summary's ratios divide by (default: the grid's first)
 
 Settings a grid leaves out keep BuildConfig's defaults. Globs and relative paths are relative to the
-spec's folder; a glob takes the scene files it matches (mesh files, .blend, .npz), and one that
-matches none is an error (ValueError naming it)."""
+spec's folder; a glob takes the scene files it matches (mesh files, .blend, .npz; not folders),
+and one that matches none is an error (ValueError naming it). A name that is a file is that file,
+even where it reads as a glob ("scan[1].obj")."""
 
 from __future__ import annotations
 
 import glob
 import itertools
+import os
 import tomllib
 from dataclasses import dataclass, fields
 from pathlib import Path
@@ -124,17 +126,22 @@ def _scenes(path: Path, entries) -> tuple[str, ...]:
     if not entries or not isinstance(entries, list) or not all(isinstance(e, str) for e in entries):
         raise ValueError(f"{path}: scenes must be a non-empty list of names, files or globs")
     out: list[str] = []
+    folder = path.parent.resolve()
     for entry in entries:
-        if glob.has_magic(entry):
-            found = sorted(glob.glob(str(path.parent.resolve() / entry), recursive=True))
-            # the scene files among them ("models/*" beside a readme.txt made a row "no scene")
-            matches = [m for m in found if is_scene_file(m)]
+        # a file of that name is that file, brackets and all ("scan[1].obj" read scan1.obj: an audit)
+        if glob.has_magic(entry) and not (folder / entry).is_file():
+            # matched under the spec's folder, whose own name is no pattern (a spec in "exp[2]"
+            # swept exp2's files, or none: an audit)
+            found = sorted(str(folder / m) for m in glob.glob(entry, root_dir=folder, recursive=True))
+            # the scene files among them ("models/*" beside a readme.txt made a row "no scene"; a
+            # folder named "parts.obj" a row "is a folder")
+            matches = [m for m in found if is_scene_file(m) and os.path.isfile(m)]
             if not matches:
                 what = f"no scene file (of {len(found)} files)" if found else "no file"
                 raise ValueError(f"{path}: the scene glob '{entry}' matches {what}")
             out.extend(matches)
         elif is_scene_file(entry):
-            out.append(str(path.parent.resolve() / entry))  # a missing file becomes the cell's error row
+            out.append(str(folder / entry))  # a missing file becomes the cell's error row
         else:
             out.append(entry)
     return tuple(dict.fromkeys(out))  # each scene once, in the order given
