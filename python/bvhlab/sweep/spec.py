@@ -144,6 +144,12 @@ def _scenes(path: Path, entries) -> tuple[str, ...]:
             out.append(str(folder / entry))  # a missing file becomes the cell's error row
         else:
             out.append(entry)
+    for scene in out:  # the table and summary are UTF-8: refused now, not after every cell ran (an audit)
+        try:
+            scene.encode("utf-8")
+        except UnicodeEncodeError:
+            shown = os.fsencode(scene).decode("utf-8", "backslashreplace")
+            raise ValueError(f"{path}: the scene file name '{shown}' is not UTF-8: rename it") from None
     return tuple(dict.fromkeys(out))  # each scene once, in the order given
 
 
