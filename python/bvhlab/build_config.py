@@ -112,3 +112,15 @@ def method_from_label(label: str) -> dict:
     if label not in METHODS:
         raise ValueError(f"unknown method '{label}'; expected one of: {', '.join(METHODS)}, or sah<B> such as sah32")
     return {"method": label}
+
+
+def label_settings(label: str, bins: int | None = None) -> dict:
+    """method_from_label(label) with `bins` given apart (--bins, a sweep grid's bins) where not None:
+    refused where the label gives the bins too ('sah32' with --bins 8 built 8 bins and was called
+    sah32: an audit)."""
+    settings = method_from_label(label)
+    if bins is not None:
+        if "bins" in settings:
+            raise ValueError(f"method '{label}' gives the bins; give bins or sah<B>, not both")
+        settings["bins"] = bins
+    return settings

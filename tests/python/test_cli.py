@@ -282,6 +282,8 @@ def bad_scene_files(tmp_path_factory):
         (["sweep", "{d}/spec.toml", "--scheduler", " ", "--out", "{d}/w"], "the scheduler's address is empty"),
         # the messages named int64's bounds, the API's name, numpy's overflow warning before the image
         (["build", "{d}/good.npz", "--method", "sah99999999999999999999"], "bins must be between 2 and 256, got"),
+        # sah32's bins were dropped for --bins' (an audit): refused as a sweep spec refuses them
+        (["build", "{d}/good.npz", "--method", "sah32", "--bins", "8"], "'sah32' gives the bins; give bins or sah<B>"),
         (["build", "{d}/good.npz", "--method", "sah²"], "unknown method 'sah²'"),
         (["build", "{d}/good.npz", "--optimize", "2", "--optimize-ms", "1e308"], "--optimize-ms must be within"),
         (

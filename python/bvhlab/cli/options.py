@@ -27,7 +27,7 @@ from ..build_config import (
     MAX_SAH_BLOCK,
     METHODS,
     MIN_BINS,
-    method_from_label,
+    label_settings,
 )
 from ..bvh import (
     Bvh,
@@ -181,8 +181,10 @@ def fill_build_defaults(args) -> dict:
     and values: `sah32` gives method and bins), the rest set to add_build's defaults in `args`."""
     typed: dict = {}
     if args.method is not None:
-        typed |= method_kwargs(args.method)
-    for name in ("bins", "axis", "bin_bounds", "max_leaf_size", "sah_block"):
+        typed |= label_settings(args.method, args.bins)
+    elif args.bins is not None:
+        typed["bins"] = args.bins
+    for name in ("axis", "bin_bounds", "max_leaf_size", "sah_block"):
         if getattr(args, name) is not None:
             typed[name] = getattr(args, name)
     for name, default in BUILD_DEFAULTS.items():
@@ -193,9 +195,7 @@ def fill_build_defaults(args) -> dict:
 
 def build_kwargs(args) -> dict:
     """The build arguments of the command line, checked (ValueError) before any work is done."""
-    kw = method_kwargs(args.method)
-    if args.bins is not None:
-        kw["bins"] = args.bins
+    kw = label_settings(args.method, args.bins)
     return checked_build_kwargs(
         {
             **kw,
@@ -213,9 +213,6 @@ def checked_build_kwargs(kwargs: dict) -> dict:
     measurement starts, and no second copy of its limits can drift from the first."""
     build(np.zeros((0, 3, 3), np.float32), **kwargs)
     return kwargs
-
-
-method_kwargs = method_from_label
 
 
 def add_image_size(p: argparse.ArgumentParser, defaults: bool = True) -> None:

@@ -31,7 +31,7 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 
 from .. import _checks
-from ..build_config import BuildConfig, method_from_label
+from ..build_config import BuildConfig, label_settings
 from ..library import is_scene_file
 from ..ray_query import TRAVERSALS
 
@@ -98,7 +98,7 @@ def _baseline(path: Path, report, settings: tuple[Setting, ...]) -> str:
     baseline = report.get("baseline", methods[0])
     if baseline not in methods:
         try:  # a label of a method with its bins ("sah32")
-            named = isinstance(baseline, str) and "bins" in method_from_label(baseline)
+            named = isinstance(baseline, str) and "bins" in label_settings(baseline)
         except ValueError:
             named = False
         hint = " (the baseline is a method, 'sah', whose cells the summary divides by)" if named else ""
@@ -159,10 +159,7 @@ def _settings(values: dict) -> dict:
     method = values.get("method")
     if not isinstance(method, str):
         return values
-    label = method_from_label(method)
-    if "bins" in label and "bins" in values:
-        raise ValueError(f"method '{method}' gives the bins; give bins or sah<B>, not both")
-    return {**values, **label}
+    return {**values, **label_settings(method, values.get("bins"))}
 
 
 def _grid(path: Path, grid) -> tuple[Setting, ...]:
