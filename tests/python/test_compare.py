@@ -11,7 +11,7 @@ import bvhlab
 from bvhlab import _render_scene
 from bvhlab.compare import build_settings, charts, measure_methods, overlay, protocol, report_checks
 from bvhlab.compare.measure import samples_columns
-from bvhlab.compare.report import finding, markdown, ranking
+from bvhlab.compare.report import finding, markdown, ranking, write_csv
 from bvhlab.compare.tree_stats import sah_cost_per_depth
 
 VERDICTS = {protocol.HOLDS, protocol.FAILS, protocol.INCONCLUSIVE}
@@ -335,3 +335,10 @@ def test_overlay_measurement_times_three_settings_and_reports(knot_mesh):
         },
         [],
     )
+
+
+def test_table_csv_is_empty_where_table_json_has_null(tmp_path):
+    """NaN and ±inf are null in table.json (strict JSON): empty fields in table.csv (inf was "inf")."""
+    row = {"method": "median", "frame_ms": math.inf, "frame_ms_lo": math.nan, "frame_ms_hi": -math.inf, "height": 3}
+    lines = write_csv([row], tmp_path / "table.csv").read_text().splitlines()
+    assert lines[1].startswith("median,,,,") and "inf" not in lines[1] and ",3," in lines[1] + ","

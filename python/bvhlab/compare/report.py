@@ -202,6 +202,6 @@ def _spread(r: dict, key: str) -> str:
 
 
 def _cell(v):
-    if isinstance(v, float):
-        return "" if math.isnan(v) else f"{v:.4g}"
+    if isinstance(v, float):  # empty where table.json has null (inf was written "inf": an audit)
+        return "" if not math.isfinite(v) else f"{v:.4g}"
     return "" if v is None else v
