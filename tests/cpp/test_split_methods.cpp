@@ -210,3 +210,12 @@ TEST(PositionSplits, LeftHoldsTheCentroidsBelowThePosition) {
 }
 
 }  // namespace
+
+TEST(SplitMethodTable, TheBinnedMethodsAreThoseOfTheBinnedSahSplit) {
+    int binned = 0;
+    for (const SplitMethodInfo& m : split_methods()) {
+        EXPECT_EQ(m.binned, m.split == split_binned_sah) << m.name;
+        binned += m.binned;
+    }
+    EXPECT_EQ(binned, 2);  // sah and sbvh
+}
