@@ -16,6 +16,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from .ear_grid import Blockers as _Blockers
+from .ear_grid import inside as _inside
 from .ear_grid import turn as _turn
 from .ear_grid import turn1 as _turn1
 
@@ -105,14 +106,16 @@ def _larger(faces: np.ndarray, positions: np.ndarray) -> np.ndarray:
     return out.reshape(-1, 3)
 
 
-#: Polygons of at most this many corners are ear-clipped by _ear_clip_small (Python floats, every
-#: blocking corner tested: O(n²)); larger ones by _ear_clip (numpy, a grid of the blockers).
+#: Polygons of at most this many corners are ear-clipped by _ear_clip_small (Eberly's walk, every
+#: blocking corner tested: O(n²)); larger ones by _ear_clip (smallest ear first, a grid of the
+#: blockers).
 _SMALL = 32
 
 #: _ear_clip's limit on wasted work: _BUDGET · n · log2(n) + _BUDGET_FLOOR corners and grid rows
 #: read by ear tests that found no ear. Smallest ear first, a simple polygon's tests seldom fail:
 #: none on stars (regular, random radii, random-walk radii), combs, spirals (also rotated), ~0.19 ·
-#: n · log2(n) on maze outlines (10,000 to 170,000 corners, a helper's measurements), ~10× below;
+#: n · log2(n) on maze outlines (10,000 to 170,000 corners, a helper's measurements), 0.25 on a
+#: Hilbert curve's (a review's), an eighth of it;
 #: a random self-intersecting one's fail on most corners, each reading a large part of the grid
 #: (160,000 corners: 103 s, ~1 s with the limit). The floor (~0.1 s) keeps every polygon of up to
 #: ~1,000 corners clear of the limit, whatever its shape.
@@ -123,30 +126,20 @@ _BUDGET_FLOOR = 1 << 20
 def _ear_clip_small(corners: list[int], xy: list[list[float]]) -> list[tuple[int, int, int]] | None:
     """Ear clipping of a small polygon in Python floats along Eberly's walk (the next ear from the
     last one clipped), the clipping of every polygon of at most _SMALL corners, by triangulate and
-    triangulate_all alike (the same triangles; the blocking corners' test by _Blockers.is_ear's IEEE
-    double operations), without numpy's cost on a handful of corners (~300 µs a concave hexagon:
+    triangulate_all alike (the same triangles; the turn tests exact in sign, ear_grid's, as
+    _Blockers.is_ear's), without numpy's cost on a handful of corners (~300 µs a concave hexagon:
     150,000 of them took 49 s in an OBJ, a helper's probe)."""
     n = len(corners)
     nxt, prv = [*range(1, n), 0], [n - 1, *range(n - 1)]
 
-    def turn(o: list[float], a: list[float], b: list[float]) -> float:  # _turn's operations
-        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
-
     def is_ear(a: int, b: int, c: int) -> bool:  # _Blockers.is_ear over every blocking corner
         pa, pb, pc = xy[a], xy[b], xy[c]
-        if turn(pa, pb, pc) <= 0:
+        if _turn1(pa, pb, pc) <= 0:
             return False
-        for v in range(n):
-            if not blocking[v] or v == a or v == b or v == c:
-                continue
-            q = xy[v]
-            if turn(pa, pb, q) >= 0 and turn(pb, pc, q) >= 0 and turn(pc, pa, q) >= 0:
-                if not any(q[0] == r[0] and q[1] == r[1] for r in (pa, pb, pc)):
-                    return False
-        return True
+        return not any(_inside(pa, pb, pc, xy[v]) for v in range(n) if blocking[v] and v != a and v != b and v != c)
 
     alive = [True] * n
-    blocking = [turn(xy[prv[v]], xy[v], xy[nxt[v]]) <= 0 for v in range(n)]
+    blocking = [_turn1(xy[prv[v]], xy[v], xy[nxt[v]]) <= 0 for v in range(n)]
     ear = [is_ear(prv[b], b, nxt[b]) for b in range(n)]
     out: list[tuple[int, int, int]] = []
     b, left = 0, n
@@ -162,7 +155,7 @@ def _ear_clip_small(corners: list[int], xy: list[list[float]]) -> list[tuple[int
         nxt[a], prv[c] = c, a
         left -= 1
         for v in (a, c):
-            blocking[v] = turn(xy[prv[v]], xy[v], xy[nxt[v]]) <= 0
+            blocking[v] = _turn1(xy[prv[v]], xy[v], xy[nxt[v]]) <= 0
         for v in (a, c):
             ear[v] = is_ear(prv[v], v, nxt[v])
         b = c
@@ -247,14 +240,15 @@ def _ear_clip(corners: list[int], xy: np.ndarray) -> list[tuple[int, int, int]] 
     n = len(corners)
     xy = np.asarray(xy, np.float64)
     nxt, prv = [*range(1, n), 0], [n - 1, *range(n - 1)]
-    grid = _Blockers(xy, _turn(xy[prv], xy, xy[nxt]) <= 0)  # reflex or flat: all an ear can hold
+    turns = _turn(xy[prv], xy, xy[nxt])
+    grid = _Blockers(xy, turns <= 0)  # reflex or flat: all an ear can hold
     p = grid.xy
 
     def size(b: int) -> float:
         (ax, ay), (bx, by), (cx, cy) = p[prv[b]], p[b], p[nxt[b]]
         return max(ax, bx, cx) - min(ax, bx, cx) + max(ay, by, cy) - min(ay, by, cy)
 
-    convex = np.flatnonzero(_turn(xy[prv], xy, xy[nxt]) > 0).tolist()
+    convex = np.flatnonzero(turns > 0).tolist()
     version = [0] * n
     heap = [(size(b), b, 0) for b in convex]
     heapq.heapify(heap)
