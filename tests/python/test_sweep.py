@@ -108,6 +108,8 @@ def test_globs_read_under_the_spec_folder_whatever_its_name(tmp_path):
     spec = read_spec(_write_spec(own, ["models/*.obj", "scan[1].obj"]))
     assert spec.scenes == (str(own.resolve() / "models" / "mine.obj"), str(own.resolve() / "scan[1].obj"))
     assert read_spec(_write_spec(own, ["scan[0-9].obj"])).scenes == (str(own.resolve() / "scan1.obj"),)
+    with pytest.raises(ValueError, match="matches no file"):  # no file of so long a name: an OSError was raised
+        read_spec(_write_spec(own, ["x" * 5000 + "*.obj"]))
     # a name that is not UTF-8 is refused before any cell runs (every cell ran, then the table failed)
     trimesh.creation.box().export(os.fsdecode(bytes(own / "models") + b"/m\xff.obj"))
     with pytest.raises(ValueError, match=r"m\\xff\.obj' is not UTF-8: rename it"):

@@ -129,7 +129,7 @@ def _scenes(path: Path, entries) -> tuple[str, ...]:
     folder = path.parent.resolve()
     for entry in entries:
         # a file of that name is that file, brackets and all ("scan[1].obj" read scan1.obj: an audit)
-        if glob.has_magic(entry) and not (folder / entry).is_file():
+        if glob.has_magic(entry) and not os.path.isfile(folder / entry):  # (False for a name too long)
             # matched under the spec's folder, whose own name is no pattern (a spec in "exp[2]"
             # swept exp2's files, or none: an audit)
             found = sorted(str(folder / m) for m in glob.glob(entry, root_dir=folder, recursive=True))
