@@ -10,6 +10,7 @@ outside an ear's box could test inside it."""
 from __future__ import annotations
 
 import bisect
+from collections.abc import Sequence
 from fractions import Fraction
 
 import numpy as np
@@ -30,7 +31,7 @@ def _exact(o, a, b) -> float:
     return float((det > 0) - (det < 0))
 
 
-def turn1(o: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:
+def turn1(o: Sequence[float], a: Sequence[float], b: Sequence[float]) -> float:
     """(a − o) × (b − o) of one corner in Python floats, of the exact sign: > 0 where o, a, b turn
     left, 0 where they are collinear (the value itself only where its sign is certain)."""
     left = (a[0] - o[0]) * (b[1] - o[1])
