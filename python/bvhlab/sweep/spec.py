@@ -31,7 +31,7 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 
 from .. import _checks
-from ..build_config import BuildConfig, label_settings
+from ..build_config import BuildConfig, label_settings, method_from_label
 from ..library import is_scene_file
 from ..ray_query import TRAVERSALS
 
@@ -98,7 +98,7 @@ def _baseline(path: Path, report, settings: tuple[Setting, ...]) -> str:
     baseline = report.get("baseline", methods[0])
     if baseline not in methods:
         try:  # a label of a method with its bins ("sah32")
-            named = isinstance(baseline, str) and "bins" in label_settings(baseline)
+            named = isinstance(baseline, str) and "bins" in method_from_label(baseline)
         except ValueError:
             named = False
         hint = " (the baseline is a method, 'sah', whose cells the summary divides by)" if named else ""
