@@ -33,12 +33,14 @@ def _simple(p: list[tuple[int, int]]) -> bool:
     if len(set(p)) < n:
         return False
 
+    def between(u, v, w) -> bool:  # v in the box of segment u, w
+        return min(u[0], w[0]) <= v[0] <= max(u[0], w[0]) and min(u[1], w[1]) <= v[1] <= max(u[1], w[1])
+
     def touches(a, b, c, d) -> bool:
         s = [_orient(c, d, a), _orient(c, d, b), _orient(a, b, c), _orient(a, b, d)]
         if s[0] * s[1] < 0 and s[2] * s[3] < 0:
             return True
-        box = lambda u, v, w: min(u[0], w[0]) <= v[0] <= max(u[0], w[0]) and min(u[1], w[1]) <= v[1] <= max(u[1], w[1])  # noqa: E731
-        return any(z == 0 and box(*e) for z, e in zip(s, [(c, a, d), (c, b, d), (a, c, b), (a, d, b)], strict=True))
+        return any(z == 0 and between(*e) for z, e in zip(s, [(c, a, d), (c, b, d), (a, c, b), (a, d, b)], strict=True))
 
     edges = [(p[i], p[(i + 1) % n]) for i in range(n)]
     for i in range(n):
