@@ -19,22 +19,65 @@ from .text_bytes import refuse_nul, refuse_odd_numbers, utf8_bytes
 
 
 def read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
-    """float64 (V, 3) positions and int64 (T, 3) triangles of the OBJ file at `path`. One pass
-    over the lines sorts out the statements; numbers are parsed in numpy (a million-triangle file
-    in a few seconds)."""
+    """float64 (V, 3) positions and int64 (T, 3) triangles of the OBJ file at `path`. The text is
+    read in runs of whole lines (CHUNK characters): each run's statements are sorted out and their
+    numbers parsed in numpy (a million-triangle file in a few seconds), so that the lines as Python
+    strings never exist all at once: a 157 MB file of a million vertices took 1.6 GB read whole
+    (ten times the file), 0.47 GB in runs. The first wrong vertex index of the file is named, as
+    read whole; of errors of other kinds (a vertex without three numbers, a face of words that are
+    not indices) that of the earliest run is, in a file larger than CHUNK."""
+    text = _text(path)
+    vertices: list[np.ndarray] = []
+    faces = _Faces()
+    first, count = 1, 0  # the file's line number of the run's first line; vertices before it
+    for run in _runs(text, CHUNK):
+        vertex_lines, face_lines, face_numbers, defined = _statements(run, first, count)
+        vertices.append(_vertices(path, vertex_lines, count))
+        faces.add(path, face_lines, face_numbers, defined)
+        first, count = first + run.count("\n"), count + len(vertex_lines)
+    positions = np.concatenate(vertices) if vertices else np.zeros((0, 3))
+    resolved, sizes = faces.resolved(path, text, len(positions))
+    if len(sizes) and (sizes == 3).all():  # triangles only
+        return positions, resolved.reshape(-1, 3)
+    return positions, triangulate_runs(resolved, sizes, positions)
+
+
+#: Characters of text read at once (lines are not split: a run ends at the first line end after).
+CHUNK = 1 << 23
+
+
+def _text(path: Path) -> str:
+    """The file as text whose lines end at \\n: CR LF and CR made LF, odd spaces spaces, a line
+    continued by a backslash joined to the next."""
     data = utf8_bytes(path, path.read_bytes())
     refuse_nul(path, data, "OBJ")
     text = data.decode("utf-8", errors="replace").lstrip("\ufeff")
+    del data
     text = text.replace("\r\n", "\n").replace("\r", "\n")  # lines end at \n, \r\n or \r only
     if _ODD_SPACE.search(text):  # \v, \f, no-break or line-separator spaces: spaces, not line ends
         text = _ODD_SPACE.sub(" ", text)
-    text = _CONTINUED.sub(" ", text)
+    return _CONTINUED.sub(" ", text)
+
+
+def _runs(text: str, size: int):
+    """`text` in runs of whole lines, each of at least `size` characters but the last."""
+    start = 0
+    while start < len(text):
+        end = text.find("\n", start + size)
+        end = len(text) if end < 0 else end + 1
+        yield text[start:end]
+        start = end
+
+
+def _statements(run: str, first: int, vertices_before: int) -> tuple[list[str], list[str], list[int], list[int]]:
+    """The `v` lines, the `f` lines, each face's line number and the vertices defined before each
+    face (negative indices count back from there) of a run of lines numbered from `first`."""
     vertex_lines: list[str] = []
     face_lines: list[str] = []
-    face_numbers: list[int] = []  # the file's line of each face
-    defined: list[int] = []  # vertices defined before each face (negative indices count from there)
-    comments = "#" in text
-    for number, line in enumerate(text.split("\n"), 1):
+    face_numbers: list[int] = []
+    defined: list[int] = []
+    comments = "#" in run
+    for number, line in enumerate(run.split("\n"), first):
         if comments:
             line = line.split("#", 1)[0]
         line = line.strip()
@@ -45,35 +88,72 @@ def read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
         elif line[0] == "f":
             face_lines.append(line)
             face_numbers.append(number)
-            defined.append(len(vertex_lines))
-    vertices = _vertices(path, vertex_lines)
-    sizes = _word_counts(face_lines) - 1  # corners of each face
-    # each corner's vertex index: `v`, `v/vt`, `v//vn` or `v/vt/vn`
-    index = _numbers(re.sub(r"/\S*", "", " ".join(line[1:] for line in face_lines)), np.int64)
-    if index is None or index.size != sizes.sum():
-        for line, number in zip(face_lines, face_numbers):  # the line to name
-            if not all(_is_index(w) for w in line.split()[1:]):
-                raise SceneFileError(f"{path}, line {number}: {line!r} is not vertex indices")
-        raise SceneFileError(f"{path}: faces that are not vertex indices")  # not reached: a line fails above
-    face_of = np.repeat(np.arange(len(face_lines)), sizes)
-    resolved = np.where(index > 0, index - 1, np.asarray(defined, np.int64)[face_of] + index)
-    wrong = (index == 0) | (resolved < 0) | (resolved >= len(vertices))
-    if wrong.any():
-        k = int(np.argmax(wrong))
-        face = int(face_of[k])
-        at, i = face_numbers[face], int(index[k])
-        # the index as written (numpy's parse saturates one past int64 at 2^63 - 1)
-        written = face_lines[face].split()[1 + k - int(np.cumsum(sizes)[face] - sizes[face])].split("/")[0]
-        if i == 0:
-            raise SceneFileError(f"{path}, line {at}: vertex index 0 (OBJ counts vertices from 1)")
-        if i < 0:
-            raise SceneFileError(
-                f"{path}, line {at}: vertex {written} does not exist ({defined[face]} defined before it)"
-            )
-        raise SceneFileError(f"{path}, line {at}: vertex {written} does not exist (the file has {len(vertices)})")
-    if len(sizes) and (sizes == 3).all():  # triangles only
-        return vertices, resolved.reshape(-1, 3)
-    return vertices, triangulate_runs(resolved, sizes, vertices)
+            defined.append(vertices_before + len(vertex_lines))
+    return vertex_lines, face_lines, face_numbers, defined
+
+
+class _Faces:
+    """The faces of the runs read so far: each corner's vertex, resolved (a negative index counted
+    back from the vertices defined before its face), the corners of each face and its line. A
+    wrong index (0, before the first vertex, past the file's last: a face may name a vertex defined
+    after it) is refused once every vertex is read, the first in the file named."""
+
+    def __init__(self) -> None:
+        self.corners: list[np.ndarray] = []
+        self.sizes: list[np.ndarray] = []
+        self.numbers: list[np.ndarray] = []
+        self.wrong: tuple[int, str] | None = None  # the first corner refused so far, and why
+
+    def add(self, path: Path, face_lines: list[str], face_numbers: list[int], defined: list[int]) -> None:
+        sizes = _word_counts(face_lines) - 1  # corners of each face
+        # each corner's vertex index: `v`, `v/vt`, `v//vn` or `v/vt/vn`
+        index = _numbers(re.sub(r"/\S*", "", " ".join(line[1:] for line in face_lines)), np.int64)
+        if index is None or index.size != sizes.sum():
+            for line, number in zip(face_lines, face_numbers):  # the line to name
+                if not all(_is_index(w) for w in line.split()[1:]):
+                    raise SceneFileError(f"{path}, line {number}: {line!r} is not vertex indices")
+            raise SceneFileError(f"{path}: faces that are not vertex indices")  # not reached: a line fails above
+        face_of = np.repeat(np.arange(len(face_lines)), sizes)
+        before = np.asarray(defined, np.int64)[face_of]
+        resolved = np.where(index > 0, index - 1, before + index)
+        wrong = (index == 0) | (resolved < 0)
+        if wrong.any() and self.wrong is None:
+            k = int(np.argmax(wrong))
+            face = int(face_of[k])
+            at, i = face_numbers[face], int(index[k])
+            if i == 0:
+                message = f"{path}, line {at}: vertex index 0 (OBJ counts vertices from 1)"
+            else:
+                written = _written(face_lines[face], k - int(np.cumsum(sizes)[face] - sizes[face]))
+                message = f"{path}, line {at}: vertex {written} does not exist ({defined[face]} defined before it)"
+            self.wrong = (sum(len(c) for c in self.corners) + k, message)
+        self.corners.append(resolved)
+        self.sizes.append(sizes)
+        self.numbers.append(np.asarray(face_numbers, np.int64))
+
+    def resolved(self, path: Path, text: str, vertex_count: int) -> tuple[np.ndarray, np.ndarray]:
+        """Every corner's vertex and every face's corner count, with none past the last vertex."""
+        resolved = np.concatenate(self.corners) if self.corners else np.zeros(0, np.int64)
+        sizes = np.concatenate(self.sizes) if self.sizes else np.zeros(0, np.int64)
+        past = resolved >= vertex_count
+        first_past = int(np.argmax(past)) if past.any() else len(resolved)
+        if self.wrong is not None and self.wrong[0] <= first_past:
+            raise SceneFileError(self.wrong[1])
+        if first_past < len(resolved):
+            k = first_past
+            ends = np.cumsum(sizes)
+            face = int(np.searchsorted(ends, k, side="right"))
+            at = int(np.concatenate(self.numbers)[face])
+            line = text.split("\n", at)[at - 1].split("#", 1)[0].strip()
+            written = _written(line, k - int(ends[face] - sizes[face]))
+            raise SceneFileError(f"{path}, line {at}: vertex {written} does not exist (the file has {vertex_count})")
+        return resolved, sizes
+
+
+def _written(line: str, corner: int) -> str:
+    """A face line's corner's vertex index as written (numpy's parse saturates one past int64 at
+    2^63 - 1)."""
+    return line.split()[1 + corner].split("/")[0]
 
 
 #: Whitespace other than a space, a tab or a line end (Python's \s: \v, \f, U+0085, U+00A0,
@@ -83,8 +163,9 @@ _ODD_SPACE = re.compile(r"[^\S\n \t]")
 _CONTINUED = re.compile(r"\\[ \t]*(?:\n|$)")
 
 
-def _vertices(path: Path, lines: list[str]) -> np.ndarray:
-    """float64 (V, 3): x, y, z of each `v` line (w or a colour after them ignored)."""
+def _vertices(path: Path, lines: list[str], before: int) -> np.ndarray:
+    """float64 (V, 3): x, y, z of each `v` line (w or a colour after them ignored); `before`
+    vertices precede the first (for the message)."""
     counts = _word_counts(lines) - 1
     values = _numbers(" ".join(line[1:] for line in lines), np.float64) if (counts == 3).all() else None
     if values is not None and values.size == 3 * len(lines):  # the usual file: "v x y z" on every line
@@ -92,7 +173,7 @@ def _vertices(path: Path, lines: list[str]) -> np.ndarray:
     rows = [line.split()[1:4] for line in lines]
     short = next((i for i, r in enumerate(rows) if len(r) < 3), None)
     if short is not None:
-        raise SceneFileError(f"{path}: vertex {short + 1} needs x, y and z, got {lines[short]!r}")
+        raise SceneFileError(f"{path}: vertex {before + short + 1} needs x, y and z, got {lines[short]!r}")
     # float() reads "1_0" as 10 and "１" as 1, where the fast parse refuses both
     refuse_odd_numbers(path, " ".join(" ".join(r) for r in rows).encode(), "a vertex coordinate")
     try:
