@@ -8,14 +8,13 @@ from the file's end), and 0 is no index (refused). Polygons are triangulated by 
 from __future__ import annotations
 
 import re
-import warnings
 from pathlib import Path
 
 import numpy as np
 
 from .._npz import SceneFileError
 from .polygons import triangulate_runs
-from .text_bytes import refuse_nul, refuse_odd_numbers, utf8_bytes
+from .text_bytes import numbers, refuse_nul, refuse_odd_numbers, utf8_bytes
 
 
 def read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -37,8 +36,6 @@ def read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
         first, count = first + run.count("\n"), count + len(vertex_lines)
     positions = np.concatenate(vertices) if vertices else np.zeros((0, 3))
     resolved, sizes = faces.resolved(path, text, len(positions))
-    if len(sizes) and (sizes == 3).all():  # triangles only
-        return positions, resolved.reshape(-1, 3)
     return positions, triangulate_runs(resolved, sizes, positions)
 
 
@@ -107,7 +104,7 @@ class _Faces:
     def add(self, path: Path, face_lines: list[str], face_numbers: list[int], defined: list[int]) -> None:
         sizes = _word_counts(face_lines) - 1  # corners of each face
         # each corner's vertex index: `v`, `v/vt`, `v//vn` or `v/vt/vn`
-        index = _numbers(re.sub(r"/\S*", "", " ".join(line[1:] for line in face_lines)), np.int64)
+        index = numbers(re.sub(r"/\S*", "", " ".join(line[1:] for line in face_lines)), np.int64)
         if index is None or index.size != sizes.sum():
             for line, number in zip(face_lines, face_numbers):  # the line to name
                 if not all(_is_index(w) for w in line.split()[1:]):
@@ -167,7 +164,7 @@ def _vertices(path: Path, lines: list[str], before: int) -> np.ndarray:
     """float64 (V, 3): x, y, z of each `v` line (w or a colour after them ignored); `before`
     vertices precede the first (for the message)."""
     counts = _word_counts(lines) - 1
-    values = _numbers(" ".join(line[1:] for line in lines), np.float64) if (counts == 3).all() else None
+    values = numbers(" ".join(line[1:] for line in lines), np.float64) if (counts == 3).all() else None
     if values is not None and values.size == 3 * len(lines):  # the usual file: "v x y z" on every line
         return values.reshape(-1, 3)
     rows = [line.split()[1:4] for line in lines]
@@ -191,16 +188,6 @@ def _word_counts(lines: list[str]) -> np.ndarray:
     starts = np.flatnonzero(~space & np.concatenate([[True], space[:-1]]))
     line_of = np.searchsorted(np.flatnonzero(text == 10), starts)  # newlines before each word
     return np.bincount(line_of, minlength=len(lines)).astype(np.int64)
-
-
-def _numbers(text: str, dtype) -> np.ndarray | None:
-    """The whitespace-separated numbers of `text` parsed in C; None if one is not a number."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("error", DeprecationWarning)  # numpy < 2.x: a partial read warns
-        try:
-            return np.fromstring(text, dtype=dtype, sep=" ")
-        except (ValueError, DeprecationWarning):
-            return None
 
 
 def _is_index(word: str) -> bool:

@@ -7,15 +7,15 @@ are the file's: a file that ends early or goes on after its last element is refu
 from __future__ import annotations
 
 import re
-import struct
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from .._npz import SceneFileError
-from .polygons import triangulate_all
-from .text_bytes import refuse_odd_numbers, utf8_bytes
+from .ply_lists import Lists, ascii_element, binary_element
+from .polygons import triangulate_runs
+from .text_bytes import numbers, refuse_odd_numbers, utf8_bytes
 
 #: PLY's scalar type names (both spellings) → numpy's.
 _TYPES = {
@@ -60,10 +60,8 @@ def read_ply(path: Path) -> tuple[np.ndarray, np.ndarray]:
     if kind.count_type is None:
         raise SceneFileError(f"{path}: the face element's {name} must be a list of vertex indices")
     lists = face[name]
-    if kind.type[0] == "f":  # indices written as floats (rare writers): whole numbers only
-        if not all(float(c).is_integer() for corners in lists for c in corners):
-            raise SceneFileError(f"{path}: the face element's {name} holds numbers that are not indices")
-        lists = [[int(c) for c in corners] for corners in lists]
+    if kind.type[0] == "f" and not (np.floor(lists.items) == lists.items).all():  # indices written as floats (rare)
+        raise SceneFileError(f"{path}: the face element's {name} holds numbers that are not indices")
     return positions, _triangles(path, lists, positions)
 
 
@@ -132,56 +130,42 @@ def _header(path: Path, data: bytes) -> tuple[str, list[_Element], int]:
 
 def _read_ascii(path: Path, body: bytes, elements: list[_Element]) -> dict[str, dict]:
     refuse_odd_numbers(path, body, "its elements")  # float() and int() below would read "1_0" as 10
-    words = body.split()
+    values = numbers(body, np.float64)
+    if values is None:
+        word = next(w for w in body.split() if numbers(w, np.float64) is None)  # a broken file: the word
+        raise SceneFileError(f"{path}: {word.decode('ascii', errors='replace')!r} is not a number")
     at = 0
     out: dict[str, dict] = {}  # element → property → values
     for e in elements:
         if all(p.count_type is None for p in e.properties):  # a table of numbers
             n = e.count * len(e.properties)
-            if at + n > len(words):
+            if at + n > len(values):
                 raise SceneFileError(f"{path}: the file ends inside its {e.name} elements (truncated?)")
-            table = np.array(words[at : at + n], dtype=np.float64).reshape(e.count, len(e.properties))
-            for i, p in enumerate(e.properties):
-                _check_integers(path, e.name, p, table[:, i])
+            table = values[at : at + n].reshape(e.count, len(e.properties))
             out[e.name] = {p.name: table[:, i] for i, p in enumerate(e.properties)}
             at += n
-            continue
-        columns: dict[str, list] = {p.name: [] for p in e.properties}
-        try:
-            for _ in range(e.count):
-                for p in e.properties:
-                    if p.count_type is None:
-                        columns[p.name].append(float(words[at]))
-                        at += 1
-                    else:
-                        k = int(words[at])
-                        if k < 0:
-                            raise ValueError(f"a list of {k} items")
-                        number = float if p.type[0] == "f" else int  # texture coordinates are lists too
-                        columns[p.name].append([number(w) for w in words[at + 1 : at + 1 + k]])
-                        if len(columns[p.name][-1]) < k:
-                            raise IndexError
-                        at += 1 + k
-        except IndexError:
-            raise SceneFileError(f"{path}: the file ends inside its {e.name} elements (truncated?)") from None
-        except ValueError as err:
-            raise SceneFileError(f"{path}: a {e.name} element is not PLY ({err})") from None
-        out[e.name] = columns
-    if at != len(words):
-        raise SceneFileError(f"{path}: {len(words) - at} values after the elements the header declares")
+        else:
+            out[e.name], at = ascii_element(path, values, at, e)
+        for p in e.properties:
+            _check_integers(path, e.name, p, out[e.name][p.name])
+    if at != len(values):
+        raise SceneFileError(f"{path}: {len(values) - at} values after the elements the header declares")
     return out
 
 
-def _check_integers(path: Path, element: str, p: _Property, values: np.ndarray) -> None:
-    """An ASCII column of an integer type holds integers within it: `uchar x` of -1000 and `int x`
-    of 0.5 were read as they were written, as floats (a helper's audit)."""
+def _check_integers(path: Path, element: str, p: _Property, column: np.ndarray | Lists) -> None:
+    """An ASCII column (or list) of an integer type holds integers within it: `uchar x` of -1000
+    and `int x` of 0.5 were read as they were written, as floats (a helper's audit)."""
     if p.type[0] not in "iu":
         return
+    values = column.items if isinstance(column, Lists) else column
     info = np.iinfo(np.dtype(p.type))
     bad = np.flatnonzero((values != np.floor(values)) | (values < info.min) | (values > info.max))
     if len(bad):
+        k = int(bad[0])
+        at = int(np.searchsorted(np.cumsum(column.sizes), k, side="right")) if isinstance(column, Lists) else k
         raise SceneFileError(
-            f"{path}: {element} {bad[0]}'s {p.name} is {values[bad[0]]:g}, not a {np.dtype(p.type).name} "
+            f"{path}: {element} {at}'s {p.name} is {values[k]:g}, not a {np.dtype(p.type).name} "
             "(the type its header declares)"
         )
 
@@ -198,47 +182,17 @@ def _read_binary(path: Path, data: bytes, at: int, elements: list[_Element], ord
             out[e.name] = {p.name: table[f"p{i}"] for i, p in enumerate(e.properties)}
             at += size
         else:
-            out[e.name], at = _binary_lists(path, data, at, e, order)
+            out[e.name], at = binary_element(path, data, at, e, order)
     if at != len(data):
         raise SceneFileError(f"{path}: {len(data) - at} bytes after the elements the header declares")
     return out
 
 
-def _binary_lists(path: Path, data: bytes, at: int, e: _Element, order: str) -> tuple[dict, int]:
-    """An element with lists, record by record (each list's length is in the data)."""
-    columns: dict[str, list] = {p.name: [] for p in e.properties}
-    steps = [
-        (
-            columns[p.name],
-            struct.Struct(order + np.dtype(p.type).char),  # numpy's type codes are struct's
-            p.count_type and struct.Struct(order + np.dtype(p.count_type).char),
-        )
-        for p in e.properties
-    ]
-    lists: dict[tuple[str, int], struct.Struct] = {}
-    try:
-        for _ in range(e.count):
-            for column, item, count in steps:
-                if not count:
-                    column.append(item.unpack_from(data, at)[0])
-                    at += item.size
-                    continue
-                (k,) = count.unpack_from(data, at)
-                at += count.size
-                if k < 0:
-                    raise SceneFileError(f"{path}: a {e.name} element has a list of {k} items")
-                items = lists.get((item.format, k)) or lists.setdefault(
-                    (item.format, k), struct.Struct(f"{order}{k}{item.format[-1]}")
-                )
-                column.append(items.unpack_from(data, at))
-                at += items.size
-    except struct.error:  # past the end
-        raise SceneFileError(f"{path}: the file ends inside its {e.name} elements (truncated?)") from None
-    return columns, at
-
-
-def _triangles(path: Path, lists, positions: np.ndarray) -> np.ndarray:
-    for i, corners in enumerate(lists):  # points and edges (fewer than 3 corners) are dropped unread
-        if len(corners) >= 3 and (min(corners) < 0 or max(corners) >= len(positions)):
-            raise SceneFileError(f"{path}: face {i} refers to a vertex that does not exist (have {len(positions)})")
-    return triangulate_all([c for c in lists if len(c) >= 3], positions)  # points and edges: no surface
+def _triangles(path: Path, lists: Lists, positions: np.ndarray) -> np.ndarray:
+    """The faces' triangles; points and edges (fewer than 3 corners) are dropped unread."""
+    corners = lists.items.astype(np.int64)
+    wrong = ((corners < 0) | (corners >= len(positions))) & np.repeat(lists.sizes >= 3, lists.sizes)
+    if wrong.any():
+        face = int(np.searchsorted(np.cumsum(lists.sizes), int(np.argmax(wrong)), side="right"))
+        raise SceneFileError(f"{path}: face {face} refers to a vertex that does not exist (have {len(positions)})")
+    return triangulate_runs(corners, lists.sizes, positions)

@@ -58,7 +58,10 @@ def triangulate_runs(corners: np.ndarray, sizes: np.ndarray, positions: np.ndarr
     """triangulate_all of polygons laid end to end: polygon k is the sizes[k] corners of `corners`
     (int64) after those of the polygons before it; those of fewer than 3 corners (a file's points
     and edges) make no triangles. The same triangles in the same order, without a Python object
-    for each polygon (an OBJ of 490,000 quads peaked at 710 MiB through triangulate_all)."""
+    for each polygon (an OBJ of 490,000 quads peaked at 710 MiB through triangulate_all); a mesh of
+    triangles alone is `corners` as they are."""
+    if len(sizes) and (sizes == 3).all():
+        return corners.reshape(-1, 3)
     starts = np.cumsum(sizes) - sizes
     out = [np.zeros((0, 3), np.int64)]
     for size in np.unique(sizes[sizes >= 3]).tolist():  # ascending

@@ -5,7 +5,10 @@ an ASCII file is NUL: read as UTF-8, such a file has no statements at all ("0 fa
 from __future__ import annotations
 
 import re
+import warnings
 from pathlib import Path
+
+import numpy as np
 
 from .._npz import SceneFileError
 
@@ -53,3 +56,14 @@ def refuse_odd_numbers(path: Path, text: bytes, where: str) -> None:
         start = max(text.rfind(space, 0, found.start()) for space in (b" ", b"\t", b"\n", b"\r")) + 1
         word = text[start : found.end() + 8].split()[0].decode("utf-8", errors="replace")
         raise SceneFileError(f"{path}: {where}: {word!r} is not a number (ASCII digits, no '_')")
+
+
+def numbers(text: str | bytes, dtype) -> np.ndarray | None:
+    """The numbers of `text`, separated by any whitespace, parsed in C (as Python's float() and
+    int() read them, but for refuse_odd_numbers' words); None if a word is not a number."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DeprecationWarning)  # numpy < 2.x: a partial read warns
+        try:
+            return np.fromstring(text, dtype=dtype, sep=" ")
+        except (ValueError, DeprecationWarning):
+            return None
