@@ -96,7 +96,7 @@ RayTask camera_ray(uvec2 p, uint sample_index) {
     if (projection == PROJECTION_FISHEYE_EQUIDISTANT) dir = fisheye_dir(s);
     bool ray = dot(dir, dir) > 0.0f;
     if (ray && frame.aperture_radius > 0.0f) thin_lens(origin, dir, p, sample_index);
-    return ray_task(origin, ray ? normalize(dir) : dir, vec3(1.0f), 0u, RAY_CAMERA);
+    return ray_task(origin, ray ? unit_vector(dir) : dir, vec3(1.0f), 0u, RAY_CAMERA);
 }
 
 /// Whether `task` is a ray: camera_ray's direction is zero where the projection has none.

@@ -23,6 +23,18 @@ struct TraceRay {
     vec3 hi_on_plane;  ///< the same for the hi plane (0, or -lo_on_plane)
 };
 
+/// `v` (not 0) at length 1 whatever its size: normalize squares the components, so a triangle's
+/// cross product (its edges' lengths multiplied) past ~1.8e19 overflowed to inf, below ~1e-19
+/// underflowed to 0, and the normal came out 0 (a floor of 16e9 units unlit, a mirror of it
+/// reflecting nothing, where its instance at that scale was lit; a thin lens's ray towards a focus
+/// distance past ~1e19 had no direction: an audit). Such a vector is first divided by its largest
+/// component; others are normalised as before, bit for bit.
+INLINE vec3 unit_vector(vec3 v) {
+    float m = max(max(abs(v.x), abs(v.y)), abs(v.z));
+    if (m > 1.15292150e18f || (m < 8.67361738e-19f && m > 0.0f)) v = v / m;  // 2^60, 2^-60
+    return normalize(v);
+}
+
 /// 1/d, with a signed infinity for d = ±0 (said explicitly rather than left to the division).
 INLINE float inverse_or_infinity(float d) {
     float inf = uintBitsToFloat(0x7f800000u);

@@ -122,7 +122,7 @@ Surface surface_at(RayTask task, Hit hit) {
                         (err0 + err1) * hit.u + (err0 + err2) * hit.v;
         }
     }
-    n = normalize(moved ? normal_to_world(inst, n) : n);
+    n = unit_vector(moved ? normal_to_world(inst, n) : n);
     s.entering = dot(n, task.dir) < 0.0f;
     s.facing = s.entering ? n : -n;
     s.m = load_material(material);

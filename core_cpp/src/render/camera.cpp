@@ -3,6 +3,7 @@
 // (intern/cycles/blender/camera.cpp), the panoramic ranges Cycles' Camera::update
 // (intern/cycles/scene/camera.cpp: equirectangular_range).
 #include "../platform/number_text.h"
+#include "bvhlab/coordinate_range.h"
 #include "camera_frame.h"
 
 #include <algorithm>
@@ -80,6 +81,14 @@ void validate_lens(const Camera& c) {
         fail("camera clipping must be 0 <= clip_start < clip_end, got " + number_text(c.clip_start) + ", " +
              number_text(c.clip_end));
     if (c.aperture_radius < 0) fail("camera aperture_radius must be >= 0 (0: no depth of field)");
+    // the lens's points are ray origins: within the coordinate range, as the position is (an
+    // aperture of 1e20 was taken and rendered black: an audit)
+    const double lens_reach =
+        std::max({std::fabs(double(c.position.x)), std::fabs(double(c.position.y)), std::fabs(double(c.position.z))}) +
+        double(c.aperture_radius);
+    if (!(lens_reach <= double(kMaxCoordinate)))
+        fail("camera aperture_radius must keep the lens within the coordinate range ±2^40 (" +
+             number_text(kMaxCoordinate) + "), got " + number_text(c.aperture_radius));
     // within what float32 rays hold: an aspect of 1e20 or a shift of -1e20 overflowed the ray
     // directions to inf, and half the image or all of it came out black. Blender's widest frame
     // (65,536 × 4 pixels at a pixel aspect of 200) is 3.3e6 wide; its shifts are within ±10.
