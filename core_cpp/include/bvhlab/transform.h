@@ -39,7 +39,9 @@ inline constexpr double kMaxTransformEntry = 0x1p76;
 /// Throws std::invalid_argument, naming `what`, for a transform with a NaN or infinite entry, one
 /// that cannot be inverted (a zero-scale axis, or axes so nearly parallel that the inverse would
 /// be noise: |det| below 1e-6 of the product of its columns' lengths, Hadamard's bound), or one
-/// whose linear part or inverse has an entry beyond kMaxTransformEntry.
+/// whose linear part or inverse has an entry beyond kMaxTransformEntry. An accepted transform of
+/// nearly parallel axes still moves rays into the mesh with float32's rounding times its
+/// condition: hits near a triangle's outer edge may be lost (design.md, "Two-level trees").
 void validate_transform(const Transform& t, const char* what);
 
 /// What validate_transform accepts, without a message.
