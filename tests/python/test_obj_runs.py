@@ -23,6 +23,7 @@ FILES = {
     "past": "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 0\nv 1 1 1\nf 1 2 \\\n 5\n",
     "past first": "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 7\nv 1 1 1\nf -9 1 2\n",
     "words": "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nv 1 1 1\nf 1 2 x\n",
+    "last line": "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 4",  # no line end after the wrong index
 }
 
 
@@ -42,13 +43,14 @@ def test_runs_of_any_length_read_as_one(tmp_path, monkeypatch, name):
     for size in (1, 2, 5, 11, 17, 40):
         monkeypatch.setattr(obj_reader, "CHUNK", size)
         assert read(path) == whole, size
-    if name in ("zero", "negative", "past", "past first", "words"):
+    if name in ("zero", "negative", "past", "past first", "words", "last line"):
         expected = {
             "zero": "line 5: vertex 5 does not exist (the file has 4)",
             "negative": "line 5: vertex 9 does not exist (the file has 4)",
             "past": "line 5: vertex index 0",
             "past first": "line 5: vertex 7 does not exist (the file has 4)",
             "words": "line 6: 'f 1 2 x' is not vertex indices",
+            "last line": "line 5: vertex 4 does not exist (the file has 3)",
         }[name]
         assert isinstance(whole, str) and expected in whole
     else:

@@ -141,10 +141,21 @@ class _Faces:
             ends = np.cumsum(sizes)
             face = int(np.searchsorted(ends, k, side="right"))
             at = int(np.concatenate(self.numbers)[face])
-            line = text.split("\n", at)[at - 1].split("#", 1)[0].strip()
-            written = _written(line, k - int(ends[face] - sizes[face]))
+            written = _written(_line(text, at), k - int(ends[face] - sizes[face]))
             raise SceneFileError(f"{path}, line {at}: vertex {written} does not exist (the file has {vertex_count})")
         return resolved, sizes
+
+
+def _line(text: str, number: int) -> str:
+    """Line `number` (from 1) of `text`, its comment cut: found run by run (splitting the whole
+    text would make every line a string)."""
+    first = 1
+    for run in _runs(text, CHUNK):
+        ends = run.count("\n")
+        if number < first + ends + (not run.endswith("\n")):  # the lines this run holds
+            return run.split("\n")[number - first].split("#", 1)[0].strip()
+        first += ends
+    raise IndexError(number)
 
 
 def _written(line: str, corner: int) -> str:
