@@ -132,8 +132,13 @@ def _read_ascii(path: Path, body: bytes, elements: list[_Element]) -> dict[str, 
     refuse_odd_numbers(path, body, "its elements")  # float() and int() below would read "1_0" as 10
     values = numbers(body, np.float64)
     if values is None:
-        word = next(w for w in body.split() if numbers(w, np.float64) is None)  # a broken file: the word
-        raise SceneFileError(f"{path}: {word.decode('ascii', errors='replace')!r} is not a number")
+        word = next((w for w in body.split() if numbers(w, np.float64) is None), None)  # a broken file: the word
+        shown = (
+            "its elements are not all numbers"
+            if word is None
+            else f"{word.decode('ascii', 'replace')!r} is not a number"
+        )
+        raise SceneFileError(f"{path}: {shown}")
     at = 0
     out: dict[str, dict] = {}  # element → property → values
     for e in elements:
