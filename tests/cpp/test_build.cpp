@@ -63,7 +63,7 @@ TEST_P(EveryConfig, SameTreeOnEveryInstructionSet) {
     const Isa before = active_isa();
     set_isa(Isa::Portable);
     Bvh portable = build_bvh(scene.view(), config(method, axis, leaf, 2));
-    for (Isa isa : {Isa::Avx2}) {
+    for (Isa isa : {Isa::Avx2, Isa::Avx512}) {
         if (!isa_supported(isa)) continue;
         set_isa(isa);
         EXPECT_TRUE(same_tree(portable, build_bvh(scene.view(), config(method, axis, leaf, 2)))) << isa_name(isa);

@@ -34,11 +34,11 @@ TEST(RayKeys, OfRaysEqualsEachRaysKeyOnEveryPath) {
     const auto n = std::uint32_t(o.size() / 3);
     const Isa before = active_isa();
     std::uint32_t compared = 0, paths = 0;  // the instruction sets this build and CPU have
-    for (Isa isa : {Isa::Portable, Isa::Avx2}) paths += isa_supported(isa);
+    for (Isa isa : {Isa::Portable, Isa::Avx2, Isa::Avx512}) paths += isa_supported(isa);
     for (const Aabb& box : {Aabb{{0, 0, 0}, {16, 16, 16}}, Aabb{{-1, 2, 5}, {9, 3, 5}}, Aabb{}})
         for (std::size_t rays : {std::size_t(kOrderLeast), 16 * kOrderLeast}) {
             const RayKeys keys(box, rays);
-            for (Isa isa : {Isa::Portable, Isa::Avx2}) {
+            for (Isa isa : {Isa::Portable, Isa::Avx2, Isa::Avx512}) {
                 if (!isa_supported(isa)) continue;
                 set_isa(isa);
                 for (std::uint32_t count : {n, n - 3, 7u, 8u, 0u}) {

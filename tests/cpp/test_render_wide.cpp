@@ -62,7 +62,7 @@ struct EachIsa {
     std::vector<Isa> isas;
     Isa before = active_isa();
     EachIsa() {
-        for (Isa isa : {Isa::Portable, Isa::Avx2})
+        for (Isa isa : {Isa::Portable, Isa::Avx2, Isa::Avx512})
             if (isa_supported(isa)) isas.push_back(isa);
     }
     ~EachIsa() { set_isa(before); }
@@ -91,7 +91,7 @@ void expect_wide_is_stack(const RenderScene& scene, const RenderSettings& settin
             EXPECT_TRUE(same_bits(stack.color, packets.color)) << threads << " threads, ahead, " << isa_name(isa);
             EXPECT_TRUE(same_bits(stack.depth, packets.depth)) << threads << " threads, ahead, " << isa_name(isa);
             const double answered = double(packets.timings.camera_rays_ahead);
-            if (isa == Isa::Avx2) EXPECT_GE(answered, ahead * camera_rays) << threads << " threads";
+            if (isa >= Isa::Avx2) EXPECT_GE(answered, ahead * camera_rays) << threads << " threads";
             else EXPECT_EQ(answered, 0.0) << isa_name(isa);
             EXPECT_LE(answered, camera_rays);
         }
@@ -138,7 +138,7 @@ TEST(RenderWide, TransparentSurfacesReflectionsAndSamplesGiveTheStackWalksImage)
     // ray answered from them (on the AVX2 path: the packets')
     const Images ahead = render(s->render, without_cost(cut), Traversal::Wide, 2);
     EXPECT_TRUE(same_bits(ahead.color, wide.color));
-    if (active_isa() == Isa::Avx2)
+    if (active_isa() >= Isa::Avx2)
         EXPECT_EQ(ahead.timings.camera_rays_ahead, std::uint64_t(s->settings.width) * s->settings.height * 4);
 }
 
@@ -157,7 +157,7 @@ TEST(RenderWide, CameraRaysAheadInSamplePassesAndAfterACancelGiveTheWholeRenders
         for (std::uint32_t samples : {1u, 3u, 9u}) job->run(samples);
         job->resolve({color.data(), nullptr, nullptr, nullptr});
         EXPECT_TRUE(same_bits(color, whole.color)) << threads << " threads, in passes";
-        if (active_isa() == Isa::Avx2) EXPECT_EQ(job->timings().camera_rays_ahead, 9 * n);
+        if (active_isa() >= Isa::Avx2) EXPECT_EQ(job->timings().camera_rays_ahead, 9 * n);
         // cancelled at the calling thread's third look (some rows and pixels done, some not: each
         // pixel's own samples so far), then run again
         std::unique_ptr<RenderJob> cut = start_cpu(s->render, without_cost(settings), threads);

@@ -64,7 +64,7 @@ struct RayArrays {
 /// The instruction set paths this CPU can run (isa.h).
 inline std::vector<Isa> supported_isas() {
     std::vector<Isa> out;
-    for (Isa isa : {Isa::Portable, Isa::Avx2})
+    for (Isa isa : {Isa::Portable, Isa::Avx2, Isa::Avx512})
         if (isa_supported(isa)) out.push_back(isa);
     return out;
 }

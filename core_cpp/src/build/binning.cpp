@@ -42,14 +42,14 @@ void merge_buckets(Bucket* into, const Bucket* other, std::size_t n);
 
 void BinSet::reset() const {
 #if defined(BVHLAB_AVX2_KERNELS)
-    if (active_isa() == Isa::Avx2) return avx2::reset_buckets(bucket, 3 * std::size_t(bins), Bucket::empty());
+    if (active_isa() >= Isa::Avx2) return avx2::reset_buckets(bucket, 3 * std::size_t(bins), Bucket::empty());
 #endif
     std::fill(bucket, bucket + 3 * std::size_t(bins), Bucket::empty());
 }
 
 void BinSet::merge(const BinSet& other) const {
 #if defined(BVHLAB_AVX2_KERNELS)
-    if (active_isa() == Isa::Avx2) return avx2::merge_buckets(bucket, other.bucket, 3 * std::size_t(bins));
+    if (active_isa() >= Isa::Avx2) return avx2::merge_buckets(bucket, other.bucket, 3 * std::size_t(bins));
 #endif
     for (std::size_t i = 0; i < 3 * std::size_t(bins); ++i) {
         Bucket& b = bucket[i];
@@ -113,7 +113,7 @@ void bin_refs(const PrimRef* refs, Range r, const BinFrame& f, const BinSet copi
 
 void bin_refs(const PrimRef* refs, Range r, const BinFrame& f, const BinSet copies[2]) {
 #if defined(BVHLAB_AVX2_KERNELS)
-    if (active_isa() == Isa::Avx2) return avx2::bin_refs(refs, r, f, copies);
+    if (active_isa() >= Isa::Avx2) return avx2::bin_refs(refs, r, f, copies);
 #endif
     portable::bin_refs(refs, r, f, copies);
 }
@@ -259,7 +259,7 @@ std::uint32_t partition_and_bin(const PrimRef* src, PrimRef* dst, Range r, std::
                                 const BinFrame& parent, const BinSplit& split, const ChildBinning child[2],
                                 CentroidBounds sides[2]) {
 #if defined(BVHLAB_AVX2_KERNELS)
-    if (active_isa() == Isa::Avx2)
+    if (active_isa() >= Isa::Avx2)
         return avx2::partition_and_bin(src, dst, r, left, right, parent, split, child, sides);
 #endif
     return portable::partition_and_bin(src, dst, r, left, right, parent, split, child, sides);

@@ -27,7 +27,7 @@ struct BucketUnion {
 AxisCuts cheapest_bin_cuts(const Bucket* bucket, std::uint32_t bins, const SahCost& sah, float inv_parent_area) {
     AxisCuts best;
 #if defined(BVHLAB_AVX2_KERNELS)
-    if (active_isa() == Isa::Avx2) {
+    if (active_isa() >= Isa::Avx2) {
         std::uint32_t total = bucket[0].count();  // every reference of axis 0's buckets
         for (std::uint32_t j = 1; j < bins; ++j) total += bucket[j].count();
         alignas(16) float cost[4], last_left[4];

@@ -32,7 +32,7 @@ struct SmallSet {
             ref[i] = in[i].ref;
         }
 #if defined(BVHLAB_AVX2_KERNELS)
-        if (active_isa() == Isa::Avx2) {
+        if (active_isa() >= Isa::Avx2) {
             avx2::small_ranks(reinterpret_cast<const float*>(c2), n, order);
             return;
         }
@@ -176,7 +176,7 @@ private:
     /// gives kAllAxes whatever the node), so choose_axis need not be asked per node.
     const bool all_axes_;
     /// The AVX2 sweep, asked once a subtree (active_isa() is a call and an atomic load).
-    const bool avx2_ = active_isa() == Isa::Avx2;
+    const bool avx2_ = active_isa() >= Isa::Avx2;
     const std::uint32_t begin_;
     SmallSet set_;
     const bool pack_here_;

@@ -200,7 +200,7 @@ void run_bounds(const PrimRef* refs, Range r, bool with_sum, RunBounds& out);
 
 void run_bounds(const PrimRef* refs, Range r, bool with_sum, RunBounds& out) {
 #if defined(BVHLAB_AVX2_KERNELS)
-    if (active_isa() == Isa::Avx2) return avx2::run_bounds(refs, r, with_sum, out);
+    if (active_isa() >= Isa::Avx2) return avx2::run_bounds(refs, r, with_sum, out);
 #endif
     with_sum ? portable_run_bounds<true>(refs, r, out) : portable_run_bounds<false>(refs, r, out);
 }
@@ -223,7 +223,7 @@ std::uint32_t scatter_tagged(const PrimRef* src, PrimRef* dst, Range r, std::uin
 std::uint32_t scatter_below(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
                             int axis, float twice, bool contained) {
 #if defined(BVHLAB_AVX2_KERNELS)
-    if (active_isa() == Isa::Avx2) return avx2::scatter_below(src, dst, r, left, right, axis, twice, contained);
+    if (active_isa() >= Isa::Avx2) return avx2::scatter_below(src, dst, r, left, right, axis, twice, contained);
 #endif
     const BelowTwice below{axis, twice};
     return contained ? scatter<true, MoveBytes>(src, dst, r, left, right, below)
@@ -233,7 +233,7 @@ std::uint32_t scatter_below(const PrimRef* src, PrimRef* dst, Range r, std::uint
 std::uint32_t scatter_tagged(const PrimRef* src, PrimRef* dst, Range r, std::uint32_t left, std::uint32_t right,
                              const SideTags& tags, bool contained) {
 #if defined(BVHLAB_AVX2_KERNELS)
-    if (active_isa() == Isa::Avx2) return avx2::scatter_tagged(src, dst, r, left, right, tags, contained);
+    if (active_isa() >= Isa::Avx2) return avx2::scatter_tagged(src, dst, r, left, right, tags, contained);
 #endif
     const TaggedLeft below{tags};
     return contained ? scatter<true, MoveBytes>(src, dst, r, left, right, below)

@@ -123,7 +123,7 @@ void count_buckets(const PrimRef* src, Range r, const Bucketing& b, std::uint16_
 
 void count_buckets(const PrimRef* src, Range r, const Bucketing& b, std::uint16_t* tag, std::uint32_t* count) {
 #if defined(BVHLAB_AVX2_KERNELS)
-    if (active_isa() == Isa::Avx2) return avx2::count_buckets(src, r, b, tag, count);
+    if (active_isa() >= Isa::Avx2) return avx2::count_buckets(src, r, b, tag, count);
 #endif
     for (std::uint32_t i = r.begin; i < r.end; ++i) {
         const PrimRef& p = src[i];

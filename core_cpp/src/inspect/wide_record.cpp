@@ -132,12 +132,16 @@ Hit detail::intersect_wide_recorded(const Bvh& bvh, const WideBvh& wide, const W
     const WideView view = view_of(wide);
     Recorder recorder(bvh, wide, names, ray, record);
     // The kernel intersect_wide runs (isa.h): both visit the same nodes in the same order anyway
-#if defined(BVHLAB_AVX2_KERNELS)
-    Hit hit = active_isa() == Isa::Avx2 ? avx2::record_wide_kernel(view, ray, recorder, &record.nodes_visited)
-                                        : portable::record_wide_kernel(view, ray, recorder, &record.nodes_visited);
-#else
-    Hit hit = portable::record_wide_kernel(view, ray, recorder, &record.nodes_visited);
+    const auto walk = [&] {
+#if defined(BVHLAB_AVX512_KERNELS)
+        if (active_isa() == Isa::Avx512) return avx512::record_wide_kernel(view, ray, recorder, &record.nodes_visited);
 #endif
+#if defined(BVHLAB_AVX2_KERNELS)
+        if (active_isa() == Isa::Avx2) return avx2::record_wide_kernel(view, ray, recorder, &record.nodes_visited);
+#endif
+        return portable::record_wide_kernel(view, ray, recorder, &record.nodes_visited);
+    };
+    Hit hit = walk();
     if (hit.ref == kNoHit) hit.t = kInfinity;
     else if (hit.ref & gpu::REF_SPHERE_BIT) finish_hit(bvh, ray, hit);
     return hit;

@@ -21,11 +21,26 @@ std::uint32_t ray_keys(const float* origins, const float* directions, std::uint3
                        const float scale[3], float top, int bits, std::uint16_t* key);
 }  // namespace avx2
 #endif
+#if defined(BVHLAB_AVX512_KERNELS)
+namespace avx512 {
+std::uint32_t prepare_rays_vector(const float* origins, const float* directions, const float* tmax_of, float tmin,
+                                  float tmax, std::uint32_t n, Ray* rays, float* t_scale, std::uint8_t* octant,
+                                  std::uint32_t& refused);
+std::uint32_t write_hits(float* t, std::int32_t* prim, std::uint8_t* kind, float* u, float* v,
+                         std::uint32_t* nodes_visited, std::uint32_t n, const Hit* hits, const std::uint32_t* visited,
+                         const float* t_scale);
+std::uint32_t ray_keys(const float* origins, const float* directions, std::uint32_t n, const float lo[3],
+                       const float scale[3], float top, int bits, std::uint16_t* key);
+}  // namespace avx512
+#endif
 
 void RayKeys::of_rays(const float* origins, const float* directions, std::uint32_t n, std::uint16_t* key) const {
     std::uint32_t j = 0;
 #if defined(BVHLAB_AVX2_KERNELS)
     if (active_isa() == Isa::Avx2) j = avx2::ray_keys(origins, directions, n, lo, scale, top, bits, key);
+#endif
+#if defined(BVHLAB_AVX512_KERNELS)
+    if (active_isa() == Isa::Avx512) j = avx512::ray_keys(origins, directions, n, lo, scale, top, bits, key);
 #endif
     for (; j < n; ++j) key[j] = std::uint16_t((*this)(origins + 3 * std::size_t(j), directions + 3 * std::size_t(j)));
 }
@@ -33,6 +48,10 @@ void RayKeys::of_rays(const float* origins, const float* directions, std::uint32
 std::uint32_t prepare_rays_vector(const float* origins, const float* directions, const float* tmax_of, float tmin,
                                   float tmax, std::uint32_t n, Ray* rays, float* t_scale, std::uint8_t* octant,
                                   std::uint32_t& refused) {
+#if defined(BVHLAB_AVX512_KERNELS)
+    if (active_isa() == Isa::Avx512)
+        return avx512::prepare_rays_vector(origins, directions, tmax_of, tmin, tmax, n, rays, t_scale, octant, refused);
+#endif
 #if defined(BVHLAB_AVX2_KERNELS)
     if (active_isa() == Isa::Avx2)
         return avx2::prepare_rays_vector(origins, directions, tmax_of, tmin, tmax, n, rays, t_scale, octant, refused);
@@ -45,9 +64,14 @@ std::uint32_t prepare_rays_vector(const float* origins, const float* directions,
 std::uint32_t write_hits_vector(const HitBatch& out, std::size_t begin, std::uint32_t n, const Hit* hits,
                                 const std::uint32_t* visited, const float* t_scale) {
 #if defined(BVHLAB_AVX2_KERNELS)
-    if (active_isa() == Isa::Avx2) {
+    if (active_isa() >= Isa::Avx2) {
         n = n < 256 ? n : 256;  // a bit an eight in the answer: the rest to the scalar loop
         const auto at = [begin](auto* p) { return p ? p + begin : p; };
+#if defined(BVHLAB_AVX512_KERNELS)
+        if (active_isa() == Isa::Avx512)
+            return avx512::write_hits(out.t + begin, out.prim + begin, at(out.kind), at(out.u), at(out.v),
+                                      at(out.nodes_visited), n, hits, visited, t_scale);
+#endif
         return avx2::write_hits(out.t + begin, out.prim + begin, at(out.kind), at(out.u), at(out.v),
                                 at(out.nodes_visited), n, hits, visited, t_scale);
     }

@@ -14,7 +14,11 @@
 #include "gpu_types.h"
 #include "transpose_avx2.h"
 
-namespace bvhlab::avx2 {
+// avx2, or avx512 where a *_avx512.cpp file includes this one (isa.h)
+#ifndef BVHLAB_KERNEL_NS
+#define BVHLAB_KERNEL_NS avx2
+#endif
+namespace bvhlab::BVHLAB_KERNEL_NS {
 namespace {
 
 static_assert(sizeof(Ray) == 8 * sizeof(float) && offsetof(Ray, origin) == 0 && offsetof(Ray, dir) == 12 &&
@@ -169,4 +173,4 @@ std::uint32_t write_hits(float* t, std::int32_t* prim, std::uint8_t* kind, float
     return written;
 }
 
-}  // namespace bvhlab::avx2
+}  // namespace bvhlab::BVHLAB_KERNEL_NS

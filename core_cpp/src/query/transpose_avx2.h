@@ -5,7 +5,11 @@
 #pragma once
 #include <immintrin.h>
 
-namespace bvhlab::avx2 {
+// the namespace of the file that includes it (avx2, or avx512 for the *_avx512.cpp builds)
+#ifndef BVHLAB_KERNEL_NS
+#define BVHLAB_KERNEL_NS avx2
+#endif
+namespace bvhlab::BVHLAB_KERNEL_NS {
 
 /// r[i] lane k becomes r[k] lane i.
 static inline void transpose8(__m256 (&r)[8]) {
@@ -27,4 +31,4 @@ static inline void transpose8(__m256 (&r)[8]) {
     r[6] = _mm256_permute2f128_ps(u2, u6, 0x31), r[7] = _mm256_permute2f128_ps(u3, u7, 0x31);
 }
 
-}  // namespace bvhlab::avx2
+}  // namespace bvhlab::BVHLAB_KERNEL_NS

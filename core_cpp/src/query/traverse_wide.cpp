@@ -13,6 +13,7 @@
 #include "bvhlab/simd.h"
 #include "bvhlab/traverse.h"
 #include "wide_kernel.h"
+#include "wide_kernels.h"
 #ifdef __SSSE3__
 #include <tmmintrin.h>
 #endif
@@ -217,12 +218,7 @@ inline int leaf_bits(const WideNode& node) {
 #ifndef BVHLAB_RECORDED_WIDE_WALK
 Hit intersect_wide(const WideBvh& wide, const Bvh& bvh, const Ray& ray, std::uint32_t* nodes_visited) {
     const WideView view = view_of(wide);
-#if defined(BVHLAB_AVX2_KERNELS)
-    Hit hit = active_isa() == Isa::Avx2 ? avx2::intersect_wide_kernel(view, ray, nodes_visited)
-                                        : portable::intersect_wide_kernel(view, ray, nodes_visited);
-#else
-    Hit hit = portable::intersect_wide_kernel(view, ray, nodes_visited);
-#endif
+    Hit hit = with_wide_kernels([&](auto k) { return decltype(k)::closest(view, ray, nodes_visited); });
     finish_wide_hit(bvh, ray, hit);
     return hit;
 }
@@ -250,24 +246,13 @@ void intersect_wide_grouped(const WideBvh& wide, const Ray* rays, const std::uin
                             const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited, WideWalk walk) {
     const WideView view = view_of(wide);
     if (walk == WideWalk::Interleaved) detail::interleaved_pieces.fetch_add(1, std::memory_order_relaxed);
-#if defined(BVHLAB_AVX2_KERNELS)
-    if (active_isa() == Isa::Avx2)
-        avx2::intersect_wide_batch_kernel(view, rays, order, start, hits, nodes_visited, walk);
-    else portable::intersect_wide_batch_kernel(view, rays, order, start, hits, nodes_visited, walk);
-#else
-    portable::intersect_wide_batch_kernel(view, rays, order, start, hits, nodes_visited, walk);
-#endif
+    with_wide_kernels([&](auto k) { decltype(k)::closest_batch(view, rays, order, start, hits, nodes_visited, walk); });
 }
 
 void occluded_wide_grouped(const WideBvh& wide, const Ray* rays, const std::uint32_t* order, const std::uint32_t* start,
                            bool* occluded) {
     const WideView view = view_of(wide);
-#if defined(BVHLAB_AVX2_KERNELS)
-    if (active_isa() == Isa::Avx2) avx2::occluded_wide_batch_kernel(view, rays, order, start, occluded);
-    else portable::occluded_wide_batch_kernel(view, rays, order, start, occluded);
-#else
-    portable::occluded_wide_batch_kernel(view, rays, order, start, occluded);
-#endif
+    with_wide_kernels([&](auto k) { decltype(k)::any_batch(view, rays, order, start, occluded); });
 }
 
 void intersect_wide_batch(const WideBvh& wide, const Bvh& bvh, const Ray* rays, std::size_t count, Hit* hits,
@@ -293,25 +278,16 @@ void occluded_wide_batch(const WideBvh& wide, const Ray* rays, std::size_t count
 
 bool occluded_wide(const WideBvh& wide, const Ray& ray) {
     const WideView view = view_of(wide);
-#if defined(BVHLAB_AVX2_KERNELS)
-    if (active_isa() == Isa::Avx2) return avx2::occluded_wide_kernel(view, ray);
-#endif
-    return portable::occluded_wide_kernel(view, ray);
+    return with_wide_kernels([&](auto k) { return decltype(k)::any(view, ray); });
 }
 
 void start_tlas_walk(const Ray& ray, TlasWalk& walk) {
-#if defined(BVHLAB_AVX2_KERNELS)
-    if (active_isa() == Isa::Avx2) return avx2::start_tlas_walk(ray, walk);
-#endif
-    portable::start_tlas_walk(ray, walk);
+    with_wide_kernels([&](auto k) { decltype(k)::start_tlas(ray, walk); });
 }
 
 std::uint32_t next_tlas_leaf(const WideBvh& wide, TlasWalk& walk, float hit_t, WideRecorder* record) {
     const WideView view = view_of(wide);
-#if defined(BVHLAB_AVX2_KERNELS)
-    if (active_isa() == Isa::Avx2) return avx2::next_tlas_leaf(view, walk, hit_t, record);
-#endif
-    return portable::next_tlas_leaf(view, walk, hit_t, record);
+    return with_wide_kernels([&](auto k) { return decltype(k)::next_tlas(view, walk, hit_t, record); });
 }
 
 #endif

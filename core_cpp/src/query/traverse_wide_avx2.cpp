@@ -15,7 +15,11 @@
 #include "transpose_avx2.h"
 #include "wide_kernel.h"
 
-namespace bvhlab::avx2 {
+// avx2, or avx512 where a *_avx512.cpp file includes this one (isa.h)
+#ifndef BVHLAB_KERNEL_NS
+#define BVHLAB_KERNEL_NS avx2
+#endif
+namespace bvhlab::BVHLAB_KERNEL_NS {
 
 struct M4 {
     __m128 m;
@@ -173,4 +177,4 @@ inline int leaf_bits(const WideNode& node) {
 #define BVHLAB_WIDE_PACKETS
 #include "wide_traverse.inl"
 
-}  // namespace bvhlab::avx2
+}  // namespace bvhlab::BVHLAB_KERNEL_NS

@@ -117,6 +117,12 @@ void intersect_wide_batch_kernel(const WideView& wide, const Ray* rays, const st
 void occluded_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
                                 const std::uint32_t* start, bool* occluded);
 }  // namespace avx2
+namespace avx512 {
+void intersect_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
+                                 const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited, WideWalk walk);
+void occluded_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
+                                const std::uint32_t* start, bool* occluded);
+}  // namespace avx512
 
 namespace portable {
 Hit intersect_wide_kernel(const WideView& wide, const Ray& ray, std::uint32_t* nodes_visited);
@@ -132,6 +138,13 @@ bool occluded_wide_kernel(const WideView& wide, const Ray& ray);
 void start_tlas_walk(const Ray& ray, TlasWalk& walk);
 std::uint32_t next_tlas_leaf(const WideView& wide, TlasWalk& walk, float hit_t, WideRecorder* record);
 }  // namespace avx2
+namespace avx512 {
+Hit intersect_wide_kernel(const WideView& wide, const Ray& ray, std::uint32_t* nodes_visited);
+Hit record_wide_kernel(const WideView& wide, const Ray& ray, WideRecorder& record, std::uint32_t* nodes_visited);
+bool occluded_wide_kernel(const WideView& wide, const Ray& ray);
+void start_tlas_walk(const Ray& ray, TlasWalk& walk);
+std::uint32_t next_tlas_leaf(const WideView& wide, TlasWalk& walk, float hit_t, WideRecorder* record);
+}  // namespace avx512
 
 /// The wide TLAS walk on the active instruction set (isa.h): start_tlas_walk sets `walk` up for
 /// the (scaled) world ray; each next_tlas_leaf goes on to the next TLAS leaf the ray enters before

@@ -182,7 +182,7 @@ public:
     /// (trace_camera_rays): where the batch walk has packets (the AVX2 path, wide_packet.inl;
     /// elsewhere it would walk them alone all the same).
     bool traces_camera_rays_ahead() const {
-        return wide_ != nullptr && wide_->wide != nullptr && active_isa() == Isa::Avx2;
+        return wide_ != nullptr && wide_->wide != nullptr && active_isa() >= Isa::Avx2;
     }
 
     /// Traces ahead the camera queries of pixels [x0, x1) of row y, each pixel's samples from
