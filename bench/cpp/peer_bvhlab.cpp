@@ -4,7 +4,8 @@
 // bins=, span=box|centroids, leaf= (max leaf size), block= (sah_block), trav= and isect= (the
 // SAH's costs), alpha=, budget=, unsplit=0|1 (method sbvh); query=stack|stackless|wide; batch=1 traces each set by the
 // batch queries users call (intersect_batch, occluded_batch: checked, scaled, grouped by octant)
-// on one thread rather than ray by ray; opt=N
+// on one thread rather than ray by ray; isa=portable|avx2|avx512 traces on that path (isa.h; the
+// build runs on the library's choice), so that one run interleaves the paths; opt=N
 // optimises the built tree by reinsertion for at
 // most N batches (optimize.h), part of the build's time.
 #include <sstream>
@@ -13,6 +14,7 @@
 
 #include "bench_data.h"
 #include "bvhlab/bvh.h"
+#include "bvhlab/isa.h"
 #include "bvhlab/optimize.h"
 #include "bvhlab/render_settings.h"
 #include "bvhlab/stats.h"
@@ -22,9 +24,9 @@
 namespace bench {
 namespace {
 
-/// The traversal of query= in `options` (wide without one) and whether batch=1 is there, both
-/// taken out of `options`.
-bvhlab::Traversal take_query(std::string& options, bool& batch) {
+/// The traversal of query= in `options` (wide without one), whether batch=1 is there and the
+/// value of isa= (empty without one), all taken out of `options`.
+bvhlab::Traversal take_query(std::string& options, bool& batch, std::string& isa) {
     std::stringstream ss(options);
     std::string rest;
     bvhlab::Traversal query = bvhlab::Traversal::Wide;
@@ -32,6 +34,7 @@ bvhlab::Traversal take_query(std::string& options, bool& batch) {
     for (std::string kv; std::getline(ss, kv, ',');) {
         if (kv.rfind("query=", 0) == 0) query = bvhlab::parse_traversal(kv.substr(6));
         else if (kv.rfind("batch=", 0) == 0) batch = kv.substr(6) != "0";
+        else if (kv.rfind("isa=", 0) == 0) isa = kv.substr(4);
         else rest += (rest.empty() ? "" : ",") + kv;
     }
     options = rest;
@@ -73,7 +76,14 @@ class BvhlabPeer : public Peer {
 public:
     BvhlabPeer(const std::string& options, unsigned threads) : options_(options) {
         std::string build_options = options;
-        query_ = take_query(build_options, batch_);
+        std::string isa;
+        query_ = take_query(build_options, batch_, isa);
+        if (isa.empty()) isa_ = bvhlab::active_isa();
+        else if (isa == "portable") isa_ = bvhlab::Isa::Portable;
+        else if (isa == "avx2") isa_ = bvhlab::Isa::Avx2;
+        else if (isa == "avx512") isa_ = bvhlab::Isa::Avx512;
+        else throw std::invalid_argument("unknown isa '" + isa + "'");
+        if (!bvhlab::isa_supported(isa_)) throw std::invalid_argument("isa " + isa + " is not available here");
         config_ = parse_options(build_options, threads);
     }
     std::string name() const override { return "bvhlab " + (options_.empty() ? std::string("defaults") : options_); }
@@ -101,6 +111,7 @@ public:
         return b;
     }
     void trace(const Rays& rays, float* t, std::uint32_t* prim) override {
+        const OnIsa on(isa_);
         if (batch_) {
             bvhlab::HitBatch hits;
             hits.t = t, hits.prim = reinterpret_cast<std::int32_t*>(prim);  // -1 on a miss: ~0u
@@ -116,6 +127,7 @@ public:
     }
     void occluded(const Rays& rays, std::uint8_t* out) override {
         static_assert(sizeof(bool) == sizeof(std::uint8_t));
+        const OnIsa on(isa_);
         if (batch_) return bvhlab::occluded_batch(bvh_, batch(rays), reinterpret_cast<bool*>(out), query_, 1, &wide_);
         for (std::size_t i = 0; i < rays.count(); ++i) {
             const float* r = rays.od.data() + 6 * i;
@@ -126,6 +138,13 @@ public:
     }
 
 private:
+    /// The path of isa= for the lifetime of one trace (set_isa: one load more a ray set).
+    struct OnIsa {
+        bvhlab::Isa before = bvhlab::active_isa();
+        explicit OnIsa(bvhlab::Isa isa) { bvhlab::set_isa(isa); }
+        ~OnIsa() { bvhlab::set_isa(before); }
+    };
+
     std::uint64_t digest() const {
         std::uint64_t h = 0xcbf29ce484222325ull;
         auto add = [&](const void* data, std::size_t bytes) {
@@ -140,6 +159,7 @@ private:
     std::string options_;
     bvhlab::Traversal query_;
     bool batch_ = false;
+    bvhlab::Isa isa_ = bvhlab::Isa::Portable;  ///< the trace's path (isa=, else the library's choice)
     std::vector<float> origins_, directions_;  ///< batch=1: the ray set's, split (prepare_rays)
     Options config_;
     bvhlab::Bvh bvh_;
