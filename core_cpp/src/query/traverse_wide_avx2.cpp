@@ -70,7 +70,25 @@ inline int le_bits(L8 a, L8 b) { return _mm256_movemask_ps(_mm256_cmp_ps(a.v, b.
 /// of kTakesMax keep the larger key.
 template <int kTakesMax>
 inline __m256i exchange(__m256i v, __m256i partner) {
+#if defined(__AVX512VL__)
+    // the AVX-512 build (traverse_wide_avx512.cpp): the max written into the min's lanes of
+    // kTakesMax by a mask, two instructions rather than three
+    return _mm256_mask_max_epi32(_mm256_min_epi32(v, partner), kTakesMax, v, partner);
+#else
     return _mm256_blend_epi32(_mm256_min_epi32(v, partner), _mm256_max_epi32(v, partner), kTakesMax);
+#endif
+}
+
+/// `b` where `mask` has the lane's bit, else `other` (AVX-512: one masked blend; AVX2: the
+/// lanes' bits tested by a shift, a compare and a byte blend).
+inline __m256i select_lanes(int mask, __m256i b, __m256i other) {
+#if defined(__AVX512VL__)
+    return _mm256_mask_blend_epi32(__mmask8(mask), other, b);
+#else
+    const __m256i bit = _mm256_sllv_epi32(_mm256_set1_epi32(1), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+    const __m256i in = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(mask), bit), bit);
+    return _mm256_blendv_epi8(other, b, in);
+#endif
 }
 
 /// push_children for two entered slots (the commonest case after one, which never gets here):
@@ -106,12 +124,18 @@ inline int push_children(const WideNode& node, L8 t0, L8 t1, int mask, std::uint
     b = _mm256_or_si256(_mm256_slli_epi32(_mm256_srli_epi32(b, 3), 3), lane);
     const int rest = mask & (mask - 1);
     if (!(rest & (rest - 1))) return push_two(node, t0, b, mask, index, t);
+#if defined(__AVX512VL__)
+    // mask is le_bits(t0, t1): its lanes as a mask register rather than the compare made again
+    const auto entered_or = [&](__m256i other) { return select_lanes(mask, b, other); };
+#else
     const __m256i entered = _mm256_castps_si256(_mm256_cmp_ps(t0.v, t1.v, _CMP_LE_OS));
-    __m256i m = _mm256_blendv_epi8(_mm256_set1_epi32(INT_MAX), b, entered);
+    const auto entered_or = [&](__m256i other) { return _mm256_blendv_epi8(other, b, entered); };
+#endif
+    __m256i m = entered_or(_mm256_set1_epi32(INT_MAX));
     m = _mm256_min_epi32(m, _mm256_shuffle_epi32(m, _MM_SHUFFLE(2, 3, 0, 1)));
     m = _mm256_min_epi32(m, _mm256_shuffle_epi32(m, _MM_SHUFFLE(1, 0, 3, 2)));
     m = _mm256_min_epi32(m, _mm256_permute2x128_si256(m, m, 1));
-    __m256i v = _mm256_blendv_epi8(_mm256_add_epi32(_mm256_set1_epi32(INT_MIN), lane), b, entered);
+    __m256i v = entered_or(_mm256_add_epi32(_mm256_set1_epi32(INT_MIN), lane));
     v = exchange<0b00110011>(v, _mm256_shuffle_epi32(v, _MM_SHUFFLE(1, 0, 3, 2)));      // (0,2) (1,3) (4,6) (5,7)
     v = exchange<0b00001111>(v, _mm256_permute2x128_si256(v, v, 1));                    // (0,4) (1,5) (2,6) (3,7)
     v = exchange<0b01010101>(v, _mm256_shuffle_epi32(v, _MM_SHUFFLE(2, 3, 0, 1)));      // (0,1) (2,3) (4,5) (6,7)
@@ -136,9 +160,7 @@ inline int farthest_slot(L8 t0, L8 t1, int mask) {
     __m256i b = _mm256_castps_si256(_mm256_add_ps(t0.v, t1.v));
     b = _mm256_xor_si256(b, _mm256_srli_epi32(_mm256_srai_epi32(b, 31), 1));
     b = _mm256_or_si256(_mm256_slli_epi32(_mm256_srli_epi32(b, 3), 3), lane);
-    const __m256i bit = _mm256_sllv_epi32(_mm256_set1_epi32(1), lane);
-    const __m256i in = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(mask), bit), bit);
-    __m256i m = _mm256_blendv_epi8(_mm256_set1_epi32(INT_MIN), b, in);
+    __m256i m = select_lanes(mask, b, _mm256_set1_epi32(INT_MIN));
     m = _mm256_max_epi32(m, _mm256_shuffle_epi32(m, _MM_SHUFFLE(2, 3, 0, 1)));
     m = _mm256_max_epi32(m, _mm256_shuffle_epi32(m, _MM_SHUFFLE(1, 0, 3, 2)));
     m = _mm256_max_epi32(m, _mm256_permute2x128_si256(m, m, 1));
@@ -162,9 +184,16 @@ constexpr CompressTable kCompress;
 /// push_entered (traverse_wide.cpp says what it writes) by one permute of the child words: all
 /// eight written, the entered first.
 inline void push_entered(const WideNode& node, int mask, std::uint32_t* index) {
+#if defined(__AVX512VL__)
+    // the AVX-512 build: vpcompressd into a register (its form that writes memory is microcoded
+    // on Zen 4 and 5), the rest zero
+    const __m256i children = _mm256_load_si256(reinterpret_cast<const __m256i*>(node.child));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(index), _mm256_maskz_compress_epi32(__mmask8(mask), children));
+#else
     const __m256i order = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(static_cast<long long>(kCompress.lanes[mask])));
     const __m256i children = _mm256_load_si256(reinterpret_cast<const __m256i*>(node.child));
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(index), _mm256_permutevar8x32_epi32(children, order));
+#endif
 }
 
 /// Bit k set where slot k of `node` is a leaf: the child words' bit 31 (kLeafChild) is their
