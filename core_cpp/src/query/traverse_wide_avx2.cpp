@@ -68,15 +68,12 @@ inline int le_bits(L8 a, L8 b) { return _mm256_movemask_ps(_mm256_cmp_ps(a.v, b.
 
 /// One layer of the sorting network: each lane meets lane `partner` of the same layer; the lanes
 /// of kTakesMax keep the larger key.
+/// (The AVX-512 build's min then masked max, two instructions for three, and the entered lanes
+/// below from le_bits' mask rather than a second compare, were slower: design.md, "An AVX-512
+/// path".)
 template <int kTakesMax>
 inline __m256i exchange(__m256i v, __m256i partner) {
-#if defined(__AVX512VL__)
-    // the AVX-512 build (traverse_wide_avx512.cpp): the max written into the min's lanes of
-    // kTakesMax by a mask, two instructions rather than three
-    return _mm256_mask_max_epi32(_mm256_min_epi32(v, partner), kTakesMax, v, partner);
-#else
     return _mm256_blend_epi32(_mm256_min_epi32(v, partner), _mm256_max_epi32(v, partner), kTakesMax);
-#endif
 }
 
 /// `b` where `mask` has the lane's bit, else `other` (AVX-512: one masked blend; AVX2: the
@@ -124,18 +121,12 @@ inline int push_children(const WideNode& node, L8 t0, L8 t1, int mask, std::uint
     b = _mm256_or_si256(_mm256_slli_epi32(_mm256_srli_epi32(b, 3), 3), lane);
     const int rest = mask & (mask - 1);
     if (!(rest & (rest - 1))) return push_two(node, t0, b, mask, index, t);
-#if defined(__AVX512VL__)
-    // mask is le_bits(t0, t1): its lanes as a mask register rather than the compare made again
-    const auto entered_or = [&](__m256i other) { return select_lanes(mask, b, other); };
-#else
     const __m256i entered = _mm256_castps_si256(_mm256_cmp_ps(t0.v, t1.v, _CMP_LE_OS));
-    const auto entered_or = [&](__m256i other) { return _mm256_blendv_epi8(other, b, entered); };
-#endif
-    __m256i m = entered_or(_mm256_set1_epi32(INT_MAX));
+    __m256i m = _mm256_blendv_epi8(_mm256_set1_epi32(INT_MAX), b, entered);
     m = _mm256_min_epi32(m, _mm256_shuffle_epi32(m, _MM_SHUFFLE(2, 3, 0, 1)));
     m = _mm256_min_epi32(m, _mm256_shuffle_epi32(m, _MM_SHUFFLE(1, 0, 3, 2)));
     m = _mm256_min_epi32(m, _mm256_permute2x128_si256(m, m, 1));
-    __m256i v = entered_or(_mm256_add_epi32(_mm256_set1_epi32(INT_MIN), lane));
+    __m256i v = _mm256_blendv_epi8(_mm256_add_epi32(_mm256_set1_epi32(INT_MIN), lane), b, entered);
     v = exchange<0b00110011>(v, _mm256_shuffle_epi32(v, _MM_SHUFFLE(1, 0, 3, 2)));      // (0,2) (1,3) (4,6) (5,7)
     v = exchange<0b00001111>(v, _mm256_permute2x128_si256(v, v, 1));                    // (0,4) (1,5) (2,6) (3,7)
     v = exchange<0b01010101>(v, _mm256_shuffle_epi32(v, _MM_SHUFFLE(2, 3, 0, 1)));      // (0,1) (2,3) (4,5) (6,7)
