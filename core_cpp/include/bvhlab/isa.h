@@ -6,7 +6,8 @@
 // Every path does the same IEEE arithmetic in the same order (no fused multiply-adds), so trees
 // and hits are bit-identical whichever runs; the tests force each path and compare. The wide
 // traversal and the batch's vector passes also exist compiled a third time, for AVX-512 (F, VL,
-// BW, DQ: 256-bit vectors with the mask registers); the builder runs its AVX2 kernels there.
+// BW, DQ: 256-bit vectors with the mask registers; 1-5% faster batches than AVX2 on a Zen 5,
+// docs/design.md "An AVX-512 path"); the builder runs its AVX2 kernels there.
 #pragma once
 #include <atomic>
 #include <string_view>

@@ -1,5 +1,6 @@
 // transpose_avx2.h — an 8 × 8 transpose of floats held in eight AVX registers, for the files
-// compiled with -mavx2 alone (ray_piece_avx2.cpp, traverse_wide_avx2.cpp): the batch's rays as
+// compiled with -mavx2 (ray_piece_avx2.cpp, traverse_wide_avx2.cpp, and their AVX-512 builds
+// *_avx512.cpp, in namespace avx512 with their own copy): the batch's rays as
 // rows (a Ray is eight floats) to a vector a field and back. Internal linkage (static), so that no
 // other file's build of it can be picked by the linker (binning_avx2.cpp says why that matters).
 #pragma once

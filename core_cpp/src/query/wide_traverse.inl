@@ -16,7 +16,7 @@
 // in `mask` to index[0 .. popcount(mask)) in slot order (and may write up to eight), and
 // leaf_bits(node) (bit k set where slot k is a leaf).
 // traverse_wide.cpp includes it for the portable path (SSE or plain C++), traverse_wide_avx2.cpp
-// for AVX2. Both compute, lane by lane, exactly what hit_box (ray.h) and the watertight
+// for AVX2 (and, built again, for AVX-512: traverse_wide_avx512.cpp). Both compute, lane by lane, exactly what hit_box (ray.h) and the watertight
 // hit_triangle (shaders/tracer/geometry.glsl) compute, so every path returns the same hit as the
 // binary traversals and the brute force. Only plain data and functions of the including file are
 // used here (an inline function of another header compiled for AVX2 could be picked by the
