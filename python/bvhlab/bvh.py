@@ -206,8 +206,9 @@ class Bvh:
 
     @property
     def revision(self) -> int:
-        """0 when built; each refit makes a new version of the tree and adds 1. Arrays taken from an
-        older version stay valid (and unchanged)."""
+        """0 when built; each refit, update and optimisation that changes the tree publishes a new
+        version of it and adds 1 (a refused one adds none). Arrays taken from an older version stay
+        valid (and unchanged)."""
         return self._core.revision
 
     # -- the tree as arrays ------------------------------------------------------------------
@@ -330,7 +331,7 @@ class Bvh:
         if spheres is not None:  # None on a tree with spheres raises ValueError (the core checks)
             spheres = _checks.float32_array("spheres", spheres, (4,))
         core_config = update_config(config, changes).core()
-        stats = checked_change(self, lambda: _core.update_bvh(self._core, triangles, spheres, core_config))
+        stats = checked_change(self, lambda core: _core.update_bvh(core, triangles, spheres, core_config))
         return UpdateStats(**stats)
 
     def optimize(
@@ -361,7 +362,7 @@ class Bvh:
         if progress is not None and not callable(progress):
             raise TypeError("progress must be callable (fraction -> bool) or None")
         core_config = config.core()
-        stats = checked_change(self, lambda: _core.optimize_bvh(self._core, core_config, progress))
+        stats = checked_change(self, lambda core: _core.optimize_bvh(core, core_config, progress))
         return OptimizeStats(**stats)
 
     def refit(self, triangles: np.ndarray, spheres: np.ndarray | None = None) -> None:
@@ -369,11 +370,11 @@ class Bvh:
         (method "sbvh") is rebuilt with its settings instead: its leaf boxes hold clipped parts of
         triangles, which a refit cannot clip again. A mesh of an InstancedBvh (`meshes[k]`) whose
         new geometry an instance would place outside the coordinate range: ValueError, the tree
-        as it was (a new revision), as for `update` and `optimize`."""
+        as it was (and its revision), as for `update` and `optimize`."""
         triangles = _checks.float32_array("triangles", triangles, (3, 3))
         if spheres is not None:
             spheres = _checks.float32_array("spheres", spheres, (4,))
-        checked_change(self, lambda: self._core.refit(triangles, spheres))
+        checked_change(self, lambda core: core.refit(triangles, spheres))
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:

@@ -45,27 +45,30 @@ class InstancedBvh:
         self._tlas: tuple | None = None  # (the core TLAS, it as a Bvh)
         self._tlas_data: tuple | None = None  # (the TLAS it was made of, NodeData, leaf_first, refs)
         self._analysed: tuple | None = None  # (_analysis_key(), TwoLevelNodeData)
-        trees = tuple(meshes)
-        # its meshes told before its TLAS is made, under its lock: a change of one of them meanwhile
-        # waits for it and is checked against its instances (it went unchecked: the review)
+        trees = _checked_meshes(meshes)
+        if not isinstance(config, BuildConfig):
+            raise TypeError(f"config must be a bvhlab.BuildConfig, got {type(config).__name__}")
+        # its meshes told before its TLAS is made, under its lock (a change of one meanwhile went
+        # unchecked: the review); refused, it places nothing (one told the trees before a bad
+        # argument broke their changes while its error was kept: an audit)
         with self._lock:
             self._state: tuple = (None, None, None, trees, None)
-            placing(self, trees)
             try:
+                placing(self, trees)
                 self._state = _make_state(trees, mesh_of, transforms, config.threads)
             except BaseException:
-                self._state = (None, None, None, (), ())  # places nothing (the caller never gets it)
+                self._state = (None, None, None, (), ())
                 raise
 
-    def _check_placement(self, tree: Bvh) -> None:
-        """ValueError where this tree's next TLAS would refuse an instance of `tree` as it is now
-        (_mesh_changes)."""
+    def _check_placement(self, tree: Bvh, version: _core.Bvh) -> None:
+        """ValueError where this tree's next TLAS would refuse an instance of `tree` were it at
+        `version` (a fork of it changed: _mesh_changes)."""
         _, mesh_of, transforms, meshes, _ = self._state
         for k in (k for k, m in enumerate(meshes) if m is tree):
-            if k and tree._core.primitive_counts[1]:  # Bvh.update with spheres, which update_mesh refuses
+            if k and version.primitive_counts[1]:  # Bvh.update with spheres, which update_mesh refuses
                 raise _spheres_beyond_mesh_0(k)
             of_k = np.flatnonzero(mesh_of == k).astype(np.uint32)
-            _core.check_placement(tree._core, k, of_k, np.ascontiguousarray(transforms[of_k]))
+            _core.check_placement(version, k, of_k, np.ascontiguousarray(transforms[of_k]))
 
     def _places(self, tree: Bvh) -> bool:
         """Whether `tree` is one of the meshes this places now (_mesh_changes; a snapshot, which
@@ -380,3 +383,17 @@ def build_instanced(scene, config: BuildConfig, progress: Callable[[float], bool
         core = _core.build(scene.mesh_triangles(k), spheres, config.core(), part)
         trees.append(Bvh(core, config))
     return InstancedBvh(trees, mesh_of, transforms, config)
+
+
+def _checked_meshes(meshes) -> tuple[Bvh, ...]:
+    """`meshes` as a tuple of flat trees (TypeError naming the first that is not one: an ndarray
+    or an InstancedBvh was an AttributeError about `_placed_by`)."""
+    try:
+        trees = tuple(meshes)
+    except TypeError:
+        raise TypeError(f"meshes must be a sequence of bvhlab.Bvh trees, got {type(meshes).__name__}") from None
+    for k, tree in enumerate(trees):
+        if not isinstance(tree, Bvh):
+            hint = " (two-level trees do not nest)" if isinstance(tree, InstancedBvh) else ""
+            raise TypeError(f"meshes[{k}] must be a bvhlab.Bvh (a flat tree), got {type(tree).__name__}{hint}")
+    return trees

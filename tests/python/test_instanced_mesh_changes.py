@@ -48,8 +48,9 @@ def test_a_change_that_moves_an_instance_out_of_range_is_refused_and_undone(how)
     }[how]
     with pytest.raises(ValueError, match=r"change refused, the tree kept as it was.*instance 2.*coordinate range"):
         change()
-    # the tree as it was, as a new revision (a cache of the undone one is never taken for it)
-    assert mesh.revision == revision + 2
+    # the tree as it was, and its revision: the change was made on a fork, never published (it
+    # was published, then undone as a new revision)
+    assert mesh.revision == revision
     np.testing.assert_array_equal(mesh.refs, tree.meshes[1].refs)
     assert float(mesh.nodes["hi"].max()) == pytest.approx(3.0)
     after = tree.intersect(origins, dirs)
@@ -184,7 +185,7 @@ def test_an_optimisation_that_moves_an_instance_out_of_range_is_refused_and_undo
     revision = tree.meshes[1].revision
     with pytest.raises(ValueError, match="change refused.*instance 0 would place mesh 1 outside"):
         tree.meshes[1].optimize(iterations=50)
-    assert tree.meshes[1].revision == revision + 2
+    assert tree.meshes[1].revision == revision
     assert tree.world_boxes()[0][0, 0] >= -(2.0**40)
 
 
@@ -221,3 +222,66 @@ def test_a_change_while_an_instanced_tree_is_made_over_the_mesh_is_checked(monke
     started[0].join(10)
     assert refused and "instance 2 would place mesh 1 outside" in str(refused[0])
     assert tree.stats["instances"] == 3
+
+
+def test_a_refused_change_is_never_seen_by_the_trees_readers():
+    """Published first and undone after the check, a refused refit was seen by another thread's
+    reads of the mesh tree (about half of them: an audit); each refusal cost two revisions."""
+    import threading
+    import time
+
+    tree = bvhlab.build(_scene())
+    mesh = tree.meshes[1]
+    far = MESH + np.float32(1e7)  # refused: instance 2 (scaled by 1e6) would leave the range
+    origin, down = np.float32([[1e7 + 0.25, 1e7 + 0.25, 1e7 + 5]]), np.float32([[0, 0, -1]])
+    assert np.isfinite(bvhlab.build(far).intersect(origin, down)["t"][0])  # the ray hits `far`
+    revision, stop, seen, refused = mesh.revision, time.monotonic() + 1.5, [], []
+
+    def refit():
+        while time.monotonic() < stop:
+            with pytest.raises(ValueError, match="change refused"):
+                mesh.refit(far)
+            refused.append(1)
+
+    def read():
+        while time.monotonic() < stop:
+            seen.append(bool(np.isfinite(mesh.intersect(origin, down, threads=1)["t"][0])))
+
+    threads = [threading.Thread(target=refit), threading.Thread(target=read)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(refused) > 20 and len(seen) > 20
+    assert not any(seen), f"{sum(seen)} of {len(seen)} reads saw the refused geometry"
+    assert mesh.revision == revision
+
+
+@pytest.mark.parametrize(
+    "meshes, config, message",
+    [
+        ("good and none", "config", r"meshes\[1\] must be a bvhlab.Bvh \(a flat tree\), got NoneType"),
+        ("good and array", "config", r"meshes\[1\] must be a bvhlab.Bvh \(a flat tree\), got ndarray"),
+        ("good and two-level", "config", r"meshes\[1\] must be .*got InstancedBvh \(two-level trees do not nest\)"),
+        ("good", None, "config must be a bvhlab.BuildConfig, got NoneType"),
+        ("good", {}, "config must be a bvhlab.BuildConfig, got dict"),
+    ],
+)
+def test_an_instanced_tree_refused_for_its_arguments_leaves_the_meshes_alone(meshes, config, message):
+    """A refused InstancedBvh(...) told the good trees before the bad one that it placed them, and
+    while its exception was kept (a REPL's last error, a logged one) their changes failed with a
+    TypeError of its own; a mesh that was not a tree, or config None, was an AttributeError (an
+    audit)."""
+    good = bvhlab.build(MESH)
+    other = {"good": [], "good and none": [None], "good and array": [MESH], "good and two-level": None}[meshes]
+    if other is None:
+        other = [bvhlab.build(_scene())]
+    transforms = np.tile(np.eye(3, 4, dtype=np.float32), (2, 1, 1))
+    with pytest.raises(TypeError, match=message) as kept:
+        bvhlab.InstancedBvh([good, *other], np.zeros(2, np.int32), transforms, good.config if config else config)
+    assert kept.value is not None  # held while the tree is changed
+    revision = good.revision
+    good.refit(MESH + 1)
+    good.update(MESH + 2)
+    good.optimize()
+    assert good.revision == revision + 3
