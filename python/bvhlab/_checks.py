@@ -125,18 +125,19 @@ FLOAT32_MAX = 3.4028234663852886e38
 FLOAT32_TINY = 1.1754943508222875e-38
 
 
-def setting(name: str, value, lo: float = -math.inf, hi: float = math.inf) -> float:
+def setting(name: str, value, lo: float = -math.inf, hi: float = math.inf, zero_ok: bool = True) -> float:
     """real(...) for a float32 field of a core config struct: a finite number beyond float32's range
     is refused too (1e300 would arrive as inf and be reported as "got inf"), and so is one other than
     0 that float32 holds only as 0 or a denormal (sbvh_alpha 1e-46 arrived as 0 and was taken; a
     camera aspect of 1e-50 as 0, "the image's"). Ray limits (tmin, tmax) stay real(): beyond
-    float32's range is inf there, which is what such a limit means."""
+    float32's range is inf there, which is what such a limit means. `zero_ok` False: the message
+    does not offer 0 (restructure_share 1e-50 was told "must be 0 or ...", and 0 is refused)."""
     value = real(name, value, lo, hi)
     if math.isfinite(value) and abs(value) > FLOAT32_MAX:
         raise ValueError(f"{name} must be within float32's range (±{FLOAT32_MAX:.7g}), got {value:g}")
     if value != 0 and abs(float(np.float32(value))) < FLOAT32_TINY:
         raise ValueError(
-            f"{name} must be 0 or of magnitude {FLOAT32_TINY:.7g} to {FLOAT32_MAX:.7g} "
+            f"{name} must be {'0 or ' if zero_ok else ''}of magnitude {FLOAT32_TINY:.7g} to {FLOAT32_MAX:.7g} "
             f"(a normal float32), got {value:g}"
         )
     return value

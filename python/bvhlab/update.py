@@ -60,13 +60,13 @@ class UpdateConfig:
     def core(self) -> _core.UpdateConfig:
         c = _core.UpdateConfig()
         c.policy = _checks.choice("policy", self.policy, UPDATE_POLICIES)
-        c.subtree_growth = _checks.setting("subtree_growth", self.subtree_growth)
-        c.tree_growth = _checks.setting("tree_growth", self.tree_growth)
-        c.target_growth = _checks.setting("target_growth", self.target_growth)
-        c.restructure_share = _checks.setting("restructure_share", self.restructure_share)
+        c.subtree_growth = _checks.setting("subtree_growth", self.subtree_growth, lo=1)
+        c.tree_growth = _checks.setting("tree_growth", self.tree_growth, lo=1)
+        c.target_growth = _checks.setting("target_growth", self.target_growth, lo=1)
+        c.restructure_share = _checks.setting("restructure_share", self.restructure_share, 0, 1, zero_ok=False)
         c.min_subtree_primitives = _checks.integer("min_subtree_primitives", self.min_subtree_primitives, 0, 2**32 - 1)
         c.top_cut_primitives = _checks.integer("top_cut_primitives", self.top_cut_primitives, 0, 2**32 - 1)
-        c.top_growth = _checks.setting("top_growth", self.top_growth)
+        c.top_growth = _checks.setting("top_growth", self.top_growth, lo=1)
         c.top_intact_primitives = _checks.integer("top_intact_primitives", self.top_intact_primitives, 0, 2**32 - 1)
         c.top_coarse_cut_primitives = _checks.integer(
             "top_coarse_cut_primitives", self.top_coarse_cut_primitives, 0, 2**32 - 1
