@@ -270,8 +270,12 @@ def _device(backend: str, device) -> str | None:
 
 
 def _choose_backend(backend: str, device, validation, force_staging):
-    """(Vulkan renderer or None, "vulkan" or "cpu", why)."""
+    """(Vulkan renderer or None, "vulkan" or "cpu", why). Vulkan's settings asked of the CPU
+    backend are refused, as `device` is (they were ignored: an audit)."""
     if backend == "cpu":
+        for name, value in (("validation", validation), ("force_staging", force_staging)):
+            if value:
+                raise ValueError(f"{name}=True is a Vulkan setting, and the backend is 'cpu'")
         return None, "cpu", "requested"
     try:
         vulkan = _make_vulkan(device, validation, force_staging)

@@ -345,3 +345,11 @@ def test_auto_backend_prefers_a_gpu_and_says_which_device_and_why():
         assert t["backend"] == "vulkan" and t["device"] == device.device_name
     assert t["device"].startswith("CPU reference") == (t["backend"] == "cpu")
     assert ("fallback" in t) == (t["backend"] == "cpu")
+
+
+def test_vulkan_settings_are_refused_on_the_cpu_backend():
+    """validation and force_staging were ignored by the CPU backend, where `device` is refused."""
+    for kwargs in (dict(validation=True), dict(force_staging=True)):
+        with pytest.raises(ValueError, match="=True is a Vulkan setting, and the backend is 'cpu'"):
+            bvhlab.Renderer("cpu", **kwargs)
+    assert bvhlab.Renderer("cpu", validation=False).backend == "cpu"
