@@ -51,6 +51,21 @@ def test_progress_is_reported_and_false_cancels_then_the_job_goes_on(renderer):
     np.testing.assert_array_equal(job.result().color, whole)
 
 
+def test_a_stop_answered_to_the_last_report_keeps_the_finished_render(renderer):
+    """The CPU reference reports 1.0 when every sample is traced: a False then raised
+    RenderCancelled ("at 16 of 16 samples") and render() lost the finished image (an audit)."""
+    scene = showcase.whitted()
+    bvh = bvhlab.build(scene)
+    whole, _ = renderer.render(scene, bvh, 48, 32, samples_per_axis=4)
+    job = renderer.start(scene, bvh, 48, 32, samples_per_axis=4)
+    seen: list[float] = []
+    job.run(progress=lambda f: seen.append(f) or f < 1.0)  # stop, once all is done
+    assert seen[-1] == 1.0 and job.done
+    np.testing.assert_array_equal(job.result().color, whole)
+    image, _ = renderer.render(scene, bvh, 48, 32, samples_per_axis=4, progress=lambda f: f < 1.0)
+    np.testing.assert_array_equal(image, whole)
+
+
 def test_an_exception_in_progress_propagates_as_itself(renderer):
     scene = showcase.five_spheres()
     job = renderer.start(scene, bvhlab.build(scene), 16, 12)
