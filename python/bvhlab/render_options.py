@@ -102,7 +102,9 @@ class RenderOptions:
     def apply(self, s: _core.RenderSettings) -> None:
         """Write these options into the core's RenderSettings (types checked here; values by its
         validate)."""
-        s.samples_per_axis = _checks.integer("samples_per_axis", self.samples_per_axis, 0, 2**31)
+        s.samples_per_axis = _checks.integer(
+            "samples_per_axis", self.samples_per_axis, 1, int(_core.MAX_SAMPLES_PER_AXIS)
+        )
         s.max_ray_depth = _checks.integer("max_depth", self.max_depth, 0, int(_core.MAX_RAY_DEPTH))
         _set_overlay(s, self.overlay_depth)
         s.overlay_color_by_depth = _checks.flag("color_by_depth", self.color_by_depth)

@@ -19,12 +19,17 @@ MAX_COORDINATE = float(_core.MAX_COORDINATE)
 
 
 def _vec3(name: str, value) -> tuple[float, float, float]:
+    """Three finite numbers (numpy's too; not strings or bools: "abc" was a ValueError naming no
+    field, ("0", "-5", "1") was taken: an audit)."""
     try:
-        v = tuple(float(x) for x in value)
+        items = tuple(value) if not isinstance(value, (str, bytes)) else None
     except TypeError:
-        raise TypeError(f"{name} must be three numbers, got {value!r}") from None
-    if len(v) != 3:
-        raise ValueError(f"{name} must be three numbers, got {len(v)}")
+        items = None
+    if items is None or not all(isinstance(x, numbers.Real) and not isinstance(x, bool) for x in items):
+        raise TypeError(f"{name} must be three numbers, got {value!r}")
+    if len(items) != 3:
+        raise ValueError(f"{name} must be three numbers, got {len(items)}")
+    v = (float(items[0]), float(items[1]), float(items[2]))
     if not all(math.isfinite(x) for x in v):
         raise ValueError(f"{name} must be finite, got {v}")
     return v
@@ -341,8 +346,12 @@ class Light:
     def __post_init__(self):
         object.__setattr__(self, "position", _vec3("light position", self.position))
         object.__setattr__(self, "color", _radiance("light color", self.color))
-        if not (math.isfinite(self.intensity) and 0 <= self.intensity <= MAX_RADIANCE):
-            raise ValueError(f"light intensity must be a number in [0, {MAX_RADIANCE:g}], got {self.intensity}")
+        intensity = _checks.real(
+            "light intensity", self.intensity
+        )  # "1" and True were taken, or a TypeError naming nothing
+        if not 0 <= intensity <= MAX_RADIANCE:
+            raise ValueError(f"light intensity must be a number in [0, {MAX_RADIANCE:g}], got {intensity}")
+        object.__setattr__(self, "intensity", intensity)
         if max(self.color) * self.intensity > MAX_RADIANCE:
             raise ValueError(
                 f"light color × intensity must be at most {MAX_RADIANCE:g}, got {self.color} × {self.intensity}"

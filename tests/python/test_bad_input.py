@@ -184,6 +184,26 @@ def test_values_a_float32_tracer_cannot_hold_are_refused():
             make()
 
 
+@pytest.mark.parametrize(
+    "make, message",
+    [
+        (lambda: bvhlab.Camera("abc", (0, 0, 0)), "camera position must be three numbers, got 'abc'"),
+        (lambda: bvhlab.Camera(("0", "-5", "1"), (0, 0, 0)), "camera position must be three numbers, got"),
+        (lambda: bvhlab.Camera((0, True, 1), (0, 0, 0)), "camera position must be three numbers"),
+        (lambda: setattr(bvhlab.Scene(), "sky", "blue"), "sky must be three numbers, got 'blue'"),
+        (lambda: bvhlab.Light((0, 0, 5), intensity="1"), "light intensity must be a number, got str"),
+        (lambda: bvhlab.Light((0, 0, 5), intensity=True), "light intensity must be a number, got bool"),
+    ],
+)
+def test_vectors_and_intensities_of_other_types_are_refused_by_name(make, message):
+    """A string was a ValueError naming no field ("could not convert string to float"), strings of
+    digits and a bool intensity were taken (an audit)."""
+    with pytest.raises(TypeError, match=message):
+        make()
+    assert bvhlab.Camera(np.float32([0, -5, 1]), (0, 0, 0)).position == (0.0, -5.0, 1.0)  # numpy numbers are numbers
+    assert bvhlab.Light((0, 0, 5), intensity=np.float64(2)).intensity == 2.0
+
+
 def test_a_masked_array_is_refused():
     tris = np.ma.masked_array(np.zeros((2, 3, 3), np.float32), mask=[[[0] * 3] * 3, [[1] * 3] * 3])
     with pytest.raises(TypeError, match="masked array"):

@@ -289,8 +289,8 @@ def test_supersampling_averages_samples():
     [
         (dict(width=0), "width"),
         (dict(height=-3), "height"),
-        (dict(samples_per_axis=0), "samples per pixel axis"),
-        (dict(samples_per_axis=17), "samples per pixel axis"),
+        (dict(samples_per_axis=0), "samples_per_axis must be between 1 and 16"),
+        (dict(samples_per_axis=17), "samples_per_axis must be between 1 and 16"),
         (dict(max_depth=99), r"max_depth must be between 0 and 15, got 99"),  # the option's name and its range
         (dict(max_depth=-1), r"max_depth must be between 0 and 15, got -1"),
         (dict(overlay_depth=(5, 2)), "greater"),

@@ -65,7 +65,9 @@ def test_a_device_index_may_be_an_int():
     assert renderer.validation_errors == 0
 
 
-def test_samples_per_axis_is_named():
+@pytest.mark.parametrize("n", [17, 0, -1])
+def test_samples_per_axis_is_named_with_its_range(n):
+    """-1 was told "must be between 0 and 2147483648" (an audit): the range is 1 to 16."""
     scene = showcase.whitted()
-    with pytest.raises(ValueError, match=r"samples_per_axis \(samples per pixel axis\) must be 1..16"):
-        bvhlab.render(scene, bvhlab.build(scene), 4, 4, backend="cpu", samples_per_axis=17)
+    with pytest.raises(ValueError, match=rf"samples_per_axis must be between 1 and 16, got {n}"):
+        bvhlab.render(scene, bvhlab.build(scene), 4, 4, backend="cpu", samples_per_axis=n)
