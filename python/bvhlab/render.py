@@ -18,6 +18,7 @@ from ._render_scene import SceneCache
 from ._render_settings import View, render_settings
 from .bvh import Bvh
 from .instanced import InstancedBvh
+from .overlay_levels import traced_cap_note
 from .render_options import DEFAULT_HEIGHT, DEFAULT_WIDTH, RenderOptions, options_from
 from .scene import Camera, Scene
 
@@ -69,7 +70,10 @@ def render(
     material, or one hidden from shadow rays: shadow rays whose nearest crossing was opaque,
     answered by it, and glass or hidden, left to the stack walk; 0 elsewhere), camera_rays_ahead
     (the CPU's wide walk of a flat scene: camera rays traced ahead, eight at a time where they run
-    together, as a render that returns no cost image traces them; 0 elsewhere).
+    together, as a render that returns no cost image traces them; 0 elsewhere), and overlay_note
+    where the overlay of a two-level tree's BLAS boxes ("blas", "both") leaves boxes out (at most
+    MAX_OVERLAY_BOXES are drawn: which instances' boxes are, in words; the key is absent when none
+    is left out).
 
     backend: "auto" (a Vulkan GPU if there is one, else the CPU reference: on a CPU Vulkan
     driver such as lavapipe the CPU reference is several times faster), "vulkan" or "cpu".
@@ -232,6 +236,9 @@ class Renderer:
         }
         if self.fallback or wide_on_cpu:
             timings["fallback"] = timings["reason"]
+        overlay_note = traced_cap_note(bvh, options)  # the cap was said in the add-on's sidebar alone (an audit)
+        if overlay_note:
+            timings["overlay_note"] = overlay_note
         return RenderJob(job, settings, timings)
 
     def render(

@@ -35,3 +35,22 @@ def test_tlas_boxes_are_capped_shallowest_first_and_said(level):
     assert np.array_equal(capped.lo, full.lo[: len(capped.lo)])  # the shallowest ones
     assert "TLAS" in capped.note
     assert levels.cap_note(bvh, level, 0, 63, cap=100) == capped.note
+
+
+def test_a_render_whose_overlay_leaves_boxes_out_says_so():
+    """render(..., overlay_level="blas") over 40 instances of a 20,000-triangle knot drew the boxes
+    of 8 instances and said nothing (the note reached the add-on's sidebar alone: an audit)."""
+    from bvhlab.library import procedural
+
+    n = 40
+    transforms = np.tile(np.eye(3, 4, dtype=np.float32), (n, 1, 1))
+    transforms[:, 0, 3] = np.arange(n) * 4.0
+    knot = procedural.torus_knot(20000).astype(np.float32)
+    scene = bvhlab.Scene(triangles=knot, instance_mesh=np.zeros(n, np.int32), instance_transforms=transforms)
+    tree = bvhlab.build(scene)
+    options = dict(backend="cpu", overlay_depth=(0, 40))
+    _, timings = bvhlab.render(scene, tree, 40, 8, overlay_level="blas", **options)
+    assert timings["overlay_note"] == "BLAS boxes of 8 of 40 instances (at most 200,000 boxes)"
+    assert timings["overlay_note"] == levels.cap_note(tree, "blas", 0, 40)
+    _, timings = bvhlab.render(scene, tree, 40, 8, overlay_level="tlas", **options)  # every TLAS box drawn
+    assert "overlay_note" not in timings
