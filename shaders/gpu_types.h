@@ -252,7 +252,8 @@ struct FrameParams {
     uint film_transparent;     ///< 1: a camera ray that shows nothing adds no colour and does not cover the
                                ///< pixel (RenderSettings::film_transparent; count_covered says it is counted)
     float overlay_line_width;  ///< whole pixels across the overlay's lines (RenderSettings::line_width rounded,
-                               ///< as the rasterizers draw it): the trace pass's slope bias (line_on_surface)
+                               ///< as the rasterizers draw it): whether the trace pass's query stops at the line
+                               ///< (query_stops_at_line: one pixel wide)
     uint hidden_materials;     ///< 1: a material hides from some rays (GpuMaterial.transparent_ior.w): the walks
                                ///< look at each hit's material (0: every surface is seen by every ray)
     uint reserved;             ///< unused (keeps `addr` on 8 bytes, as GLSL's std430 puts it)
@@ -262,7 +263,7 @@ struct FrameParams {
 // ---- bindings, workgroups, limits ------------------------------------------------------
 
 BVHLAB_CONST uint BINDING_FRAME = 0u;    ///< FrameParams, read-only storage buffer (trace and overlay)
-BVHLAB_CONST uint BINDING_OVERLAY = 1u;  ///< rgba32f storage image: the overlay pass's lines (trace reads)
+BVHLAB_CONST uint BINDING_OVERLAY = 1u;  ///< rgba32f storage image: the overlay pass's line points (trace reads)
 BVHLAB_CONST uint TRACE_GROUP_X = 8u;    ///< trace.comp's workgroup: 8×8 pixels of a tile
 BVHLAB_CONST uint TRACE_GROUP_Y = 8u;
 /// Entries of the Whitted ray stack: each bounce pops one ray and pushes at most two, so at most

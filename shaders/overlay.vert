@@ -14,20 +14,20 @@ layout(set = 0, binding = BINDING_FRAME, std430) readonly buffer FrameBlock { Fr
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer BoxArray { GpuBox v[]; };
 
 #include "tracer/overlay.glsl"
-#include "tracer/shade_colors.glsl"
 
 // The corner relative to the camera, interpolated as the CPU reference's rasterizer interpolates
 // it (overlay_cpu.cpp): a world position interpolated and then made relative in the fragment
 // shader rounded at the scene's magnitude, and 7-15% of whitted's line pixels 1e3-1e5 from the
 // origin took another box's colour than the CPU's (a helper's audit).
 layout(location = 0) out vec3 from_camera;
-layout(location = 1) flat out vec3 line_color;
+// The box's depth in the tree: the trace pass colours the line (line_color in shade.glsl).
+layout(location = 1) flat out uint box_depth;
 
 void main() {
     GpuBox box = BoxArray(frame.addr.boxes).v[gl_InstanceIndex];
     uint depth = uint(box.lo_depth.w);
     vec3 corner = corner_position(box.lo_depth.xyz, box.hi.xyz, box_corner(uint(gl_VertexIndex)));
     from_camera = corner - frame.camera_position;
-    line_color = frame.overlay_color_by_depth != 0u ? depth_color(depth) : frame.overlay_color.xyz;
+    box_depth = depth;
     gl_Position = overlay_clip(corner);
 }

@@ -4,7 +4,7 @@
 // where it stands in its slot; the host dispatches again until every pixel of the tile has traced
 // its samples of the pass (issue 8: no dispatch holds unbounded work). The scene, the per-pixel
 // sums and the slots are read through buffer device addresses, so no binding limit (128 MiB on
-// lavapipe) caps their size. The overlay pass's lines (rgb + distance) come in the storage image.
+// lavapipe) caps their size. The overlay pass's lines (each pixel's line point and box depth) come in the storage image.
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_buffer_reference_uvec2 : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
@@ -110,6 +110,8 @@ void store_sums(uvec2 p) {
 }
 
 #include "tracer/geometry.glsl"
+#include "tracer/shade_colors.glsl"
+#include "tracer/overlay.glsl"
 #include "tracer/traverse.glsl"
 #include "tracer/shade.glsl"
 #include "tracer/state.glsl"

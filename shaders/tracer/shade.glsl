@@ -51,7 +51,7 @@ struct TraceState {
     Hit hit;          ///< its result so far
     Hit closest;      ///< the closest hit of `task`, kept while its shadow ray is walked
     RayTask task;     ///< the ray being traced
-    vec4 overlay;     ///< the overlay pass's line at this pixel: rgb, distance (w = 0: none)
+    vec4 overlay;     ///< the overlay pass's line at this pixel: its point from the camera, box depth + 1 (w = 0: none)
     vec3 color;       ///< of this sample so far
     TraversalCounts counts;  ///< of this sample's primary ray's closest-hit walk (issue 35: secondary and
                              ///< shadow rays are not counted, so a pixel's counters describe the tree
@@ -101,28 +101,46 @@ RayTask pop_ray(INOUT(TraceState) s) {
                     vec3(uintBitsToFloat(c.x), uintBitsToFloat(c.y), uintBitsToFloat(c.z)), a.w, b.w);
 }
 
+/// The distance along the primary ray of the overlay's line at a pixel (`overlay`: the line's point
+/// relative to the camera in xyz, its box's depth + 1 in w; 0 where no line): overlay_distance of
+/// that point, as the overlay pass depth-tests it (overlay.frag, overlay_cpu.cpp).
+float line_distance(vec4 overlay) { return overlay.w > 0.0f ? overlay_distance(xyz(overlay)) : 0.0f; }
+
+/// The colour of the overlay's line at a pixel: its box's depth colour, or the one colour.
+vec3 line_color(vec4 overlay) {
+    return frame.overlay_color_by_depth != 0u ? depth_color(uint(overlay.w) - 1u) : xyz(frame.overlay_color);
+}
+
 /// A line lying on a surface (a box's face on a floor or a wall) is not lost to rounding: the
 /// primary ray's query stops 2^-12 of the line's distance short of it (a hit from there on counts
 /// as behind it), far above the rounding of the two rasterizers and of the tracer (compared
 /// exactly, whichever last bits each had hid some of its pixels, differently on the GPU and the
 /// CPU reference). Where the pixel's centre meets
 /// the surface farther in front of the line (a surface at a grazing angle, the centre up to half
-/// the line's width off it), line_on_surface decides.
+/// the line's width off it), line_on_surface decides by the line's own point.
 LOCAL_CONST float LINE_ON_SURFACE = 1.0f - 1.0f / 4096.0f;
 
+/// Whether a primary ray's query at a line pixel stops at the line (LINE_ON_SURFACE): only where
+/// lines are a pixel wide. A pixel of a wider line lies up to half its width off the line, and the
+/// surface its ray meets beyond the line may still hide it (a box's edge under a floor, the pixel
+/// on the far side of the edge: the floor there is farther than the edge): the query walks on to
+/// the surface, and line_on_surface decides by the line's point.
+bool query_stops_at_line() { return frame.overlay_line_width <= 1.0f; }
+
 /// The tmin and tmax of the closest-hit query of `task` (start_closest), `overlay` the pixel's
-/// overlay (its line's distance in w).
+/// overlay (line_distance).
 vec2 query_span(RayTask task, vec4 overlay) {
     bool primary = task.depth == 0u;
     bool measured = frame.mode == MODE_HEATMAP || frame.count_traversal != 0u;
-    bool line = primary && overlay.w > 0.0f && !measured;
+    bool line = primary && overlay.w > 0.0f && !measured && query_stops_at_line();
     float k = primary ? clip_scale(task.dir) : 0.0f;  // camera rays see between the clipping planes
     return vec2(primary ? frame.clip_start * k : 0.0f,
-                min(line ? overlay.w * LINE_ON_SURFACE : FAR_AWAY, primary ? frame.clip_end * k : FAR_AWAY));
+                min(line ? line_distance(overlay) * LINE_ON_SURFACE : FAR_AWAY, primary ? frame.clip_end * k : FAR_AWAY));
 }
 
 /// Starts the closest-hit query of `task`. Where the overlay drew a line in front of the primary
-/// ray's surface, the line wins: the query only looks up to the line's distance (report §3.3) —
+/// ray's surface, the line wins: the query of a one-pixel line's pixel only looks up to the line's
+/// distance (report §3.3; a wider line's walks on: query_stops_at_line) —
 /// unless the render measures the walks (the heatmap mode, the traversal counters): then it walks
 /// to the surface and after_closest puts the line in front of a surface behind it, the same
 /// picture, but box tests that do not change with the boxes drawn (cut at the line, a pixel's 21
@@ -201,21 +219,31 @@ void finish_shading(INOUT(TraceState) s, Surface f) {
     }
 }
 
-/// Whether the overlay's line at a pixel (`overlay`: colour, distance) lies on the surface `hit`
-/// that the pixel's primary ray `task` met in front of it: the line is behind the hit by no more
-/// than the surface's distance along the ray changes over half the line's width and half a pixel
-/// across it — a bias by the surface's slope, as polygon offset's (the pixel's footprint there
-/// times the tangent of the angle between the ray and the surface's normal; the half pixel for
-/// the curvature of that change at a grazing angle). A floor's own box seen at a grazing angle
-/// lost the pixels of its far edges whose centres meet the floor in front of the line.
+/// Whether the overlay's line at a pixel (`overlay`) lies on the surface `hit` that the pixel's
+/// primary ray `task` met in front of it. The overlay pass stores, per line pixel, the point P of
+/// the line segment that the fragment was drawn for (the rasterizer's interpolation at the
+/// fragment: where the fragment's centre projects onto the segment on the GPU, where the segment
+/// crosses the pixel's column (row) on the CPU reference), so a pixel of a wide line knows where
+/// the line's centre is, up to half the width away. The line shows where P lies in front of the
+/// plane of the surface at the pixel (its point S = origin + t·dir, its normal) or behind it by at
+/// most a slope bias of a pixel's worth, as polygon offset's (the pixel's footprint at S times the
+/// tangent of the angle between the ray and the normal, the depth the surface spans across one
+/// pixel; measured along the normal, times its cosine), for the rounding of the rasterizers and
+/// of the tracer. For a planar surface that is exact at every width: a box's edge on a floor keeps
+/// its whole width, one under it stays hidden (a bias that grew with the width let the edges of a
+/// box 0.3 under a floor seen 8.5° from above show through at widths 3-16).
 bool line_on_surface(RayTask task, Hit hit, vec4 overlay) {
     Surface f = surface_at(task, hit);
     float c = abs(dot(f.facing, task.dir));
     // at most 64 (a surface within 0.9° of edge-on), as polygon offset's slope is bounded: a
     // sphere's rim or a silhouette seen edge-on let lines far behind it show
     float slope = min(sqrt(max(1.0f - c * c, 0.0f)) / c, 64.0f);
-    float slack = pixel_footprint(task.dir, hit.t) * 0.5f * (frame.overlay_line_width + 1.0f) * slope;
-    return overlay.w - hit.t <= slack;
+    float slack = pixel_footprint(task.dir, hit.t) * slope * c;
+    // P − S, both relative to the camera (the ray's origin is on the lens or the orthographic
+    // camera's plane): no rounding at the scene's magnitude
+    vec3 s_from_camera = (task.origin - frame.camera_position) + task.dir * hit.t;
+    vec3 to_line = xyz(overlay) - s_from_camera;
+    return -dot(to_line, f.facing) <= slack;  // facing: the normal on the ray's side
 }
 
 /// The closest-hit query of `task` is answered: the primary ray's traversal counters and depth; the sky
@@ -224,15 +252,16 @@ bool line_on_surface(RayTask task, Hit hit, vec4 overlay) {
 bool after_closest(INOUT(TraceState) s) {
     bool line = s.task.depth == 0u && s.overlay.w > 0.0f;
     if (line && s.hit.ref != NO_HIT &&
-        (s.hit.t >= s.overlay.w * LINE_ON_SURFACE || line_on_surface(s.task, s.hit, s.overlay)))
+        ((query_stops_at_line() && s.hit.t >= line_distance(s.overlay) * LINE_ON_SURFACE) ||
+         line_on_surface(s.task, s.hit, s.overlay)))
         s.hit.ref = NO_HIT;
     if (s.task.depth == 0u) {
         s.counts = s.hit.counts;
-        s.depth = s.hit.ref != NO_HIT ? camera_depth(s.task, s.hit.t) : (line ? camera_depth(s.task, s.overlay.w) : infinity());
+        s.depth = s.hit.ref != NO_HIT ? camera_depth(s.task, s.hit.t) : (line ? camera_depth(s.task, line_distance(s.overlay)) : infinity());
     }
     if (s.hit.ref != NO_HIT) return true;
     bool transparent = s.task.depth == 0u && frame.film_transparent != 0u;  // Film ▸ Transparent: no colour
-    s.color += s.task.weight * (line ? xyz(s.overlay) : (transparent ? vec3(0.0f) : frame.sky));
+    s.color += s.task.weight * (line ? line_color(s.overlay) : (transparent ? vec3(0.0f) : frame.sky));
     s.phase = PHASE_NEXT_RAY;
     return false;
 }

@@ -1,5 +1,6 @@
 // The overlay pass on the CPU (report §3.3): the boxes of a depth range as lines
-// frame.overlay_line_width pixels wide with a depth test, colour in rgb and camera distance in alpha — what overlay.vert/.frag make the GPU's
+// frame.overlay_line_width pixels wide with a depth test, the line's point relative to the camera in xyz and its box's depth + 1
+// in w (shade.glsl's line_distance, line_color, line_on_surface read them) — what overlay.vert/.frag make the GPU's
 // rasterizer do. The projection is the shared overlay_clip(); only clipping and stepping are local.
 #include <algorithm>
 #include <cmath>
@@ -14,7 +15,7 @@ using gpu::vec3;
 using gpu::vec4;
 
 struct Target {
-    std::vector<vec4>& color;  // rgb + distance along the primary ray
+    std::vector<vec4>& color;  // the line's point relative to the camera + its box's depth + 1
     std::vector<float>& depth;
     std::uint32_t width, height;
     int line_width;          // whole pixels across the line, in its minor direction
@@ -96,7 +97,7 @@ bool inside_diamond(float major, float minor, float centre_major, float centre_m
 /// between two (floor took the one after: a vertical edge at the image's centre moved one pixel
 /// against lavapipe; the diamond test alone would draw neither, the spec perturbing such lines
 /// off the edge). The Vulkan spec leaves wide Bresenham lines' pixels to the device.
-void draw_line(Target& t, Segment s, vec3 color) {
+void draw_line(Target& t, Segment s, float depth_key) {
     if (!clip_to_view(s)) return;
     const vec4 a = s.a, b = s.b;
     float ax = (a.x / a.w + 1) * 0.5f * t.width, ay = (a.y / a.w + 1) * 0.5f * t.height;
@@ -134,7 +135,7 @@ void draw_line(Target& t, Segment s, vec3 color) {
             std::size_t k = std::size_t(py) * t.width + std::size_t(px);
             if (!(line_depth < t.depth[k])) continue;  // NaN: not drawn, as the GPU's LESS test
             t.depth[k] = line_depth;
-            t.color[k] = vec4(color, distance);
+            t.color[k] = vec4(p, depth_key);  // the line's point at this column: line_on_surface
         }
     }
 }
@@ -153,13 +154,11 @@ std::vector<gpu::vec4> rasterize_overlay(const RenderScene& scene, const gpu::Fr
     for (std::uint32_t b = frame.overlay_first_box; b < frame.overlay_last_box; ++b) {
         const gpu::GpuBox& box = scene.boxes[b];
         vec3 lo = gpu::xyz(box.lo_depth), hi = gpu::xyz(box.hi);
-        vec3 line_color = frame.overlay_color_by_depth
-                              ? tracer.depth_color(gpu::uint(box.lo_depth.w))
-                              : gpu::vec3(frame.overlay_color.x, frame.overlay_color.y, frame.overlay_color.z);
+        const float depth_key = float(gpu::uint(box.lo_depth.w) + 1u);  // as overlay.frag's
         for (gpu::uint v = 0; v < 24; v += 2) {
             vec3 pa = tracer.corner_position(lo, hi, tracer.box_corner(v));
             vec3 pb = tracer.corner_position(lo, hi, tracer.box_corner(v + 1));
-            draw_line(target, {tracer.overlay_clip(pa), tracer.overlay_clip(pb), pa - cam, pb - cam}, line_color);
+            draw_line(target, {tracer.overlay_clip(pa), tracer.overlay_clip(pb), pa - cam, pb - cam}, depth_key);
         }
     }
     return color;
