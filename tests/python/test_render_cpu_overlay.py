@@ -82,22 +82,26 @@ def test_overlay_line_width_widens_every_line_in_its_minor_direction(width):
     assert near.max() <= n // 2
 
 
-@pytest.mark.parametrize("height", [4.0, 0.6], ids=["above", "grazing"])
-@pytest.mark.parametrize("width", [1, 3])
-def test_a_box_edge_lying_on_a_surface_is_drawn_and_one_under_it_is_not(height, width):
+@pytest.mark.parametrize("place", [(6.0, 4.0), (6.0, 0.6), (20.0, 3.0)], ids=["above", "grazing", "far"])
+@pytest.mark.parametrize("width", [1, 3, 8, 16])
+def test_a_box_edge_lying_on_a_surface_is_drawn_and_one_under_it_is_not(place, width):
     """The overlay's lines over a floor whose own box lies on it (a flat root box), against the
     same box's edges over the sky (two specks at the floor's corners give the same box): the floor
     hides no line pixel the sky shows but a few where it is seen almost edge-on. Compared exactly,
     rounding hid some (201 of 292 pixels shown); stopping the query 2^-12 short of the line
     (LINE_ON_SURFACE) 218: the far edge's pixels whose centres meet the floor in front of the line
     (up to half the line's width off it) were hidden until the slope bias (line_on_surface,
-    shade.glsl). Boxes 0.3 under a floor stay hidden: the bias is about a pixel's worth of depth
-    (as polygon offset's, lines less deep under a surface than that may show)."""
+    shade.glsl), at widths 1 and 3; from width 8 on, pixels of a wide line lie farther off its
+    centre than the slope bias of a pixel reaches: line_on_surface tests the line's own point (the
+    overlay pass's, per pixel) against the floor's plane. Boxes 0.3 under a floor stay hidden: the
+    bias is a pixel's worth of depth (as polygon offset's, lines less deep under a surface than
+    that may show); test_box_edges_under_a_floor_stay_hidden_at_every_width."""
+    distance, height = place
     floor = showcase.quad((-2, -2, 0), (2, -2, 0), (2, 2, 0), (-2, 2, 0))
     specks = np.array(
         [[(-2, -2, 0), (-1.99, -2, 0), (-2, -1.99, 0)], [(2, 2, 0), (2, 1.99, 0), (1.99, 2, 0)]], np.float32
     )
-    camera = bvhlab.Camera((0.3, -6.0, height), (0.0, 0.0, 0.0), fov_y=50.0)
+    camera = bvhlab.Camera((0.3, -distance, height), (0.0, 0.0, 0.0), fov_y=50.0)
     options = dict(
         overlay_depth=(0, 0), color_by_depth=False, line_color=(1.0, 0.0, 1.0), traversal="stack", line_width=width
     )
@@ -108,7 +112,7 @@ def test_a_box_edge_lying_on_a_surface_is_drawn_and_one_under_it_is_not(height, 
         return np.all(image[..., :3] == (1.0, 0.0, 1.0), -1)
 
     on_floor, over_sky = line_pixels(floor), line_pixels(specks)
-    assert over_sky.sum() > 250 * width, "the box's edges are drawn"
+    assert over_sky.sum() > 60 * min(width, 3), "the box's edges are drawn"
     assert not (on_floor & ~over_sky).any()
     assert on_floor.sum() >= 0.97 * over_sky.sum(), (on_floor.sum(), over_sky.sum())
     # the specks' boxes 0.3 under a floor beyond the clipping distance everywhere but under them
@@ -123,3 +127,34 @@ def test_a_box_edge_lying_on_a_surface_is_drawn_and_one_under_it_is_not(height, 
     image, _ = bvhlab.render(scene, bvh, 200, 150, backend="cpu", **{**options, "overlay_depth": all_depths})
     under = np.all(image[..., :3] == (1.0, 0.0, 1.0), -1)
     assert not under.any(), under.sum()
+
+
+def lines_over_a_floor(render, under, width):
+    """The line pixels of a 2×2×0.5 box `under` units under a wide opaque floor (None: no box), in
+    the window around it, seen from 20 units 8.5° above the floor at 160×120 (a helper's audit).
+    `render(scene, bvh, width, height, **options)` is a backend's."""
+    floor = showcase.quad((-50, -50, 0), (50, -50, 0), (50, 50, 0), (-50, 50, 0))
+    triangles = (
+        floor if under is None else np.concatenate([floor, showcase.box_mesh((-1, -1, -under - 0.5), (1, 1, -under))])
+    )
+    camera = bvhlab.Camera((0.0, -20.0, 3.0), (0.0, 0.0, 0.0), fov_y=45.0)
+    scene = bvhlab.Scene(triangles=triangles.astype(np.float32), camera=camera, light=bvhlab.Light((5.0, -10.0, 10.0)))
+    bvh = bvhlab.build(scene, max_leaf_size=1)
+    options = dict(overlay_depth=(0, 10), line_width=width, color_by_depth=False, line_color=(1.0, 0.0, 1.0))
+    image, _ = render(scene, bvh, 160, 120, **options)
+    return int(np.all(image[56:76, 66:94, :3] == (1.0, 0.0, 1.0), -1).sum())
+
+
+@pytest.mark.parametrize("width", [1, 3, 8, 16])
+def test_box_edges_under_a_floor_stay_hidden_at_every_width(width):
+    """A box 0.3 (1.0) under a floor seen from 20 units 8.5° above it: none of its edges shows at
+    any line width. A slope bias that grew with the width (half the width's depth across the floor)
+    let 29, 150 and 271 of its line pixels through at widths 3, 8 and 16 (0.3 under), 28 and 131 at
+    8 and 16 (1.0 under); line_on_surface tests the line's own point against the floor's plane."""
+
+    def render(*args, **options):
+        return bvhlab.render(*args, backend="cpu", **options)
+
+    assert lines_over_a_floor(render, None, width) == 0
+    assert lines_over_a_floor(render, 0.3, width) == 0
+    assert lines_over_a_floor(render, 1.0, width) == 0

@@ -124,6 +124,18 @@ def test_vulkan_overlay_lines_are_the_cpus(vulkan, case, width):
     assert differ.sum() <= 0.004 * lines_cpu.sum(), (differ.sum(), lines_cpu.sum())
 
 
+@pytest.mark.parametrize("width", [1, 3, 8, 16])
+def test_vulkan_box_edges_under_a_floor_stay_hidden_at_every_width(vulkan, width):
+    """As test_render_cpu_overlay's: the line pixels of a box 0.3 (1.0) under a floor, on Vulkan (the
+    overlay pass's line point per pixel, overlay.frag; 29/150/271 at widths 3/8/16 with the slope
+    bias that grew with the width)."""
+    from test_render_cpu_overlay import lines_over_a_floor
+
+    for under in (None, 0.3, 1.0):
+        assert lines_over_a_floor(vulkan.render, under, width) == 0, under
+    assert vulkan.validation_errors == 0, vulkan.validation_messages()
+
+
 def test_vulkan_bad_sizes(vulkan):
     scene = showcase.five_spheres()
     bvh = bvhlab.build(scene)
