@@ -9,30 +9,21 @@
 
 namespace bvhlab {
 
-#if defined(BVHLAB_AVX2_KERNELS)
-namespace avx2 {
-std::uint32_t prepare_rays_vector(const float* origins, const float* directions, const float* tmax_of, float tmin,
-                                  float tmax, std::uint32_t n, Ray* rays, float* t_scale, std::uint8_t* octant,
-                                  std::uint32_t& refused);
-std::uint32_t write_hits(float* t, std::int32_t* prim, std::uint8_t* kind, float* u, float* v,
-                         std::uint32_t* nodes_visited, std::uint32_t n, const Hit* hits, const std::uint32_t* visited,
-                         const float* t_scale);
-std::uint32_t ray_keys(const float* origins, const float* directions, std::uint32_t n, const float lo[3],
-                       const float scale[3], float top, int bits, std::uint16_t* key);
-}  // namespace avx2
-#endif
-#if defined(BVHLAB_AVX512_KERNELS)
-namespace avx512 {
-std::uint32_t prepare_rays_vector(const float* origins, const float* directions, const float* tmax_of, float tmin,
-                                  float tmax, std::uint32_t n, Ray* rays, float* t_scale, std::uint8_t* octant,
-                                  std::uint32_t& refused);
-std::uint32_t write_hits(float* t, std::int32_t* prim, std::uint8_t* kind, float* u, float* v,
-                         std::uint32_t* nodes_visited, std::uint32_t n, const Hit* hits, const std::uint32_t* visited,
-                         const float* t_scale);
-std::uint32_t ray_keys(const float* origins, const float* directions, std::uint32_t n, const float lo[3],
-                       const float scale[3], float top, int bits, std::uint16_t* key);
-}  // namespace avx512
-#endif
+/// The batch's vector passes of ray_piece_avx2.cpp's builds, in namespace `ns` (avx2, avx512).
+#define BVHLAB_DECLARE_RAY_PIECE(ns)                                                                                   \
+    namespace ns {                                                                                                     \
+    std::uint32_t prepare_rays_vector(const float* origins, const float* directions, const float* tmax_of, float tmin, \
+                                      float tmax, std::uint32_t n, Ray* rays, float* t_scale, std::uint8_t* octant,    \
+                                      std::uint32_t& refused);                                                         \
+    std::uint32_t write_hits(float* t, std::int32_t* prim, std::uint8_t* kind, float* u, float* v,                     \
+                             std::uint32_t* nodes_visited, std::uint32_t n, const Hit* hits,                           \
+                             const std::uint32_t* visited, const float* t_scale);                                      \
+    std::uint32_t ray_keys(const float* origins, const float* directions, std::uint32_t n, const float lo[3],          \
+                           const float scale[3], float top, int bits, std::uint16_t* key);                             \
+    }
+BVHLAB_DECLARE_RAY_PIECE(avx2)
+BVHLAB_DECLARE_RAY_PIECE(avx512)
+#undef BVHLAB_DECLARE_RAY_PIECE
 
 void RayKeys::of_rays(const float* origins, const float* directions, std::uint32_t n, std::uint16_t* key) const {
     std::uint32_t j = 0;

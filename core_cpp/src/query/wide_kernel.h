@@ -102,49 +102,28 @@ void intersect_wide_grouped(const WideBvh& wide, const Ray* rays, const std::uin
 void occluded_wide_grouped(const WideBvh& wide, const Ray* rays, const std::uint32_t* order, const std::uint32_t* start,
                            bool* occluded);
 
-/// The batch kernels (wide_batch.inl): the rays grouped by group_by_octant, each group through
-/// its octant's walk, results in each ray's slot (hits[i], nodes_visited[i] where not null,
-/// occluded[i]); a miss's t is the ray's tmax, as intersect_wide_kernel's.
-namespace portable {
-void intersect_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
-                                 const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited, WideWalk walk);
-void occluded_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
-                                const std::uint32_t* start, bool* occluded);
-}  // namespace portable
-namespace avx2 {
-void intersect_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
-                                 const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited, WideWalk walk);
-void occluded_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
-                                const std::uint32_t* start, bool* occluded);
-}  // namespace avx2
-namespace avx512 {
-void intersect_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
-                                 const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited, WideWalk walk);
-void occluded_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,
-                                const std::uint32_t* start, bool* occluded);
-}  // namespace avx512
-
-namespace portable {
-Hit intersect_wide_kernel(const WideView& wide, const Ray& ray, std::uint32_t* nodes_visited);
-Hit record_wide_kernel(const WideView& wide, const Ray& ray, WideRecorder& record, std::uint32_t* nodes_visited);
-bool occluded_wide_kernel(const WideView& wide, const Ray& ray);
-void start_tlas_walk(const Ray& ray, TlasWalk& walk);
-std::uint32_t next_tlas_leaf(const WideView& wide, TlasWalk& walk, float hit_t, WideRecorder* record);
-}  // namespace portable
-namespace avx2 {
-Hit intersect_wide_kernel(const WideView& wide, const Ray& ray, std::uint32_t* nodes_visited);
-Hit record_wide_kernel(const WideView& wide, const Ray& ray, WideRecorder& record, std::uint32_t* nodes_visited);
-bool occluded_wide_kernel(const WideView& wide, const Ray& ray);
-void start_tlas_walk(const Ray& ray, TlasWalk& walk);
-std::uint32_t next_tlas_leaf(const WideView& wide, TlasWalk& walk, float hit_t, WideRecorder* record);
-}  // namespace avx2
-namespace avx512 {
-Hit intersect_wide_kernel(const WideView& wide, const Ray& ray, std::uint32_t* nodes_visited);
-Hit record_wide_kernel(const WideView& wide, const Ray& ray, WideRecorder& record, std::uint32_t* nodes_visited);
-bool occluded_wide_kernel(const WideView& wide, const Ray& ray);
-void start_tlas_walk(const Ray& ray, TlasWalk& walk);
-std::uint32_t next_tlas_leaf(const WideView& wide, TlasWalk& walk, float hit_t, WideRecorder* record);
-}  // namespace avx512
+/// The kernels of one instruction set's build of wide_traverse.inl, in namespace `ns` (portable,
+/// avx2, avx512): the single-ray walks, the recorded walk, the TLAS walk's steps, and the batch
+/// kernels (wide_batch.inl: the rays grouped by group_by_octant, each group through its octant's
+/// walk, results in each ray's slot (hits[i], nodes_visited[i] where not null, occluded[i]); a
+/// miss's t is the ray's tmax, as intersect_wide_kernel's).
+#define BVHLAB_DECLARE_WIDE_KERNELS(ns)                                                                               \
+    namespace ns {                                                                                                    \
+    Hit intersect_wide_kernel(const WideView& wide, const Ray& ray, std::uint32_t* nodes_visited);                    \
+    Hit record_wide_kernel(const WideView& wide, const Ray& ray, WideRecorder& record, std::uint32_t* nodes_visited); \
+    bool occluded_wide_kernel(const WideView& wide, const Ray& ray);                                                  \
+    void start_tlas_walk(const Ray& ray, TlasWalk& walk);                                                             \
+    std::uint32_t next_tlas_leaf(const WideView& wide, TlasWalk& walk, float hit_t, WideRecorder* record);            \
+    void intersect_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,               \
+                                     const std::uint32_t* start, Hit* hits, std::uint32_t* nodes_visited,             \
+                                     WideWalk walk);                                                                  \
+    void occluded_wide_batch_kernel(const WideView& wide, const Ray* rays, const std::uint32_t* order,                \
+                                    const std::uint32_t* start, bool* occluded);                                      \
+    }
+BVHLAB_DECLARE_WIDE_KERNELS(portable)
+BVHLAB_DECLARE_WIDE_KERNELS(avx2)
+BVHLAB_DECLARE_WIDE_KERNELS(avx512)
+#undef BVHLAB_DECLARE_WIDE_KERNELS
 
 /// The wide TLAS walk on the active instruction set (isa.h): start_tlas_walk sets `walk` up for
 /// the (scaled) world ray; each next_tlas_leaf goes on to the next TLAS leaf the ray enters before
